@@ -1,0 +1,356 @@
+//! The parameter blob written to the device's flash.
+//!
+//! Layout (all little-endian):
+//!
+//! ```text
+//! offset 0   4 bytes  magic "ACAL"
+//! offset 4   u16      format version (BLOB_FORMAT_VERSION)
+//! offset 6   u16      payload length n
+//! offset 8   n bytes  postcard payload: unit id, the paper-form parameters (f64), lever arms,
+//!                     reference point, gravity, creation time
+//! offset 8+n u32      CRC-32/ISO-HDLC of bytes 0..8+n
+//! ```
+//!
+//! Decoding checks every layer (length, magic, version, CRC, postcard, then the physics: finite values,
+//! scale factors away from zero, `K·A` invertible with a sane condition number, plausible gravity and
+//! lever arms) and returns a typed [`BlobError`] for each failure. It never panics on any byte string
+//! (property-tested). [`decode_for_unit`] also refuses a blob made for another unit.
+
+use crate::compensator::{Compensator, CompensatorError, LeverMode};
+use crate::params::{
+    Calibration, LeverArms, OutputUnit, ParamsError, ReferencePoint, StaticParams,
+};
+use crate::units::UnitId;
+use postcard::experimental::max_size::MaxSize;
+use serde::{Deserialize, Serialize};
+
+/// First four bytes of every blob.
+pub const BLOB_MAGIC: [u8; 4] = *b"ACAL";
+/// Current format version. Bump when the payload changes; older versions are refused, not guessed.
+pub const BLOB_FORMAT_VERSION: u16 = 1;
+const HEADER_LEN: usize = 8;
+const CRC_LEN: usize = 4;
+/// Largest encoded blob, from the payload type's postcard bound.
+pub const BLOB_MAX_LEN: usize = HEADER_LEN + Payload::POSTCARD_MAX_SIZE + CRC_LEN;
+/// Largest accepted |r_i| component, metres: no accelerometer unit is a metre across.
+pub const MAX_LEVER_ARM_M: f64 = 1.0;
+
+const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// A calibration bound to one unit, as stored on the device.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParameterBlob {
+    /// The unit this calibration was made for.
+    pub unit_id: UnitId,
+    /// The calibration.
+    pub calibration: Calibration,
+    /// When it was made, seconds since the Unix epoch (0 if unknown).
+    pub created_unix_s: u64,
+}
+
+/// Why a blob was refused. Fieldless, so it also travels on the wire.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum BlobError {
+    /// Fewer bytes than a header and a CRC.
+    TooShort,
+    /// The first four bytes are not "ACAL": not a calibration blob (erased flash reads 0xFF…).
+    BadMagic,
+    /// A format version this build does not read.
+    UnsupportedVersion,
+    /// The payload length in the header disagrees with the byte count.
+    LengthMismatch,
+    /// The CRC does not match: the blob is corrupt.
+    CrcMismatch,
+    /// The payload does not decode.
+    Malformed,
+    /// A value is NaN or infinite.
+    NonFinite,
+    /// A scale factor or sensing direction is zero.
+    DegenerateAxis,
+    /// `K·A` is singular or badly conditioned.
+    IllConditioned,
+    /// Local gravity is implausible.
+    BadGravity,
+    /// A lever arm component exceeds [`MAX_LEVER_ARM_M`].
+    LeverArmOutOfRange,
+    /// The blob was made for another unit.
+    ForeignUnit,
+    /// The output buffer is smaller than the blob.
+    BufferTooSmall,
+}
+
+impl core::fmt::Display for BlobError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let s = match self {
+            BlobError::TooShort => "too short to be a calibration blob",
+            BlobError::BadMagic => "not a calibration blob (bad magic)",
+            BlobError::UnsupportedVersion => "calibration blob of an unsupported format version",
+            BlobError::LengthMismatch => "calibration blob length does not match its header",
+            BlobError::CrcMismatch => "calibration blob is corrupt (CRC mismatch)",
+            BlobError::Malformed => "calibration blob payload does not decode",
+            BlobError::NonFinite => "calibration contains NaN or infinite values",
+            BlobError::DegenerateAxis => "calibration has a zero scale factor or sensing direction",
+            BlobError::IllConditioned => "calibration's K·A matrix is singular or ill-conditioned",
+            BlobError::BadGravity => "calibration's local gravity is implausible",
+            BlobError::LeverArmOutOfRange => "calibration's lever arms exceed 1 m",
+            BlobError::ForeignUnit => "calibration was made for another unit",
+            BlobError::BufferTooSmall => "buffer too small for the calibration blob",
+        };
+        f.write_str(s)
+    }
+}
+
+impl From<CompensatorError> for BlobError {
+    fn from(e: CompensatorError) -> Self {
+        match e {
+            CompensatorError::Params(ParamsError::NonFinite) => BlobError::NonFinite,
+            CompensatorError::Params(ParamsError::DegenerateAxis { .. }) => {
+                BlobError::DegenerateAxis
+            }
+            CompensatorError::IllConditioned { .. } => BlobError::IllConditioned,
+            CompensatorError::Gravity => BlobError::BadGravity,
+        }
+    }
+}
+
+/// The postcard payload; plain arrays only (row-major), no nalgebra types.
+#[derive(Serialize, Deserialize, MaxSize)]
+struct Payload {
+    unit_id: UnitId,
+    output_unit: OutputUnit,
+    zero_bias_out: [f64; 3],
+    scale_out_per_g: [f64; 3],
+    installation_angles_deg: [[f64; 3]; 3],
+    lever_arms_m: [[f64; 3]; 3],
+    reference: ReferencePoint,
+    gravity_m_s2: f64,
+    created_unix_s: u64,
+}
+
+impl ParameterBlob {
+    /// Checks the physics: everything the compensator needs, plus plausible lever arms.
+    pub fn validate(&self) -> Result<(), BlobError> {
+        let cal = &self.calibration;
+        if let ReferencePoint::BodyPoint { offset_m } = cal.reference {
+            if !offset_m.iter().all(|v| v.is_finite()) {
+                return Err(BlobError::NonFinite);
+            }
+        }
+        Compensator::new(cal, LeverMode::RateAndAcceleration)?;
+        if cal
+            .lever_arms
+            .r_m
+            .iter()
+            .flatten()
+            .any(|v| v.abs() > MAX_LEVER_ARM_M)
+        {
+            return Err(BlobError::LeverArmOutOfRange);
+        }
+        if cal.statics.scale_out_per_g.iter().any(|k| *k <= 0.0) {
+            return Err(BlobError::DegenerateAxis);
+        }
+        Ok(())
+    }
+
+    /// Encodes into `out`, returning the number of bytes written. Refuses an invalid calibration.
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, BlobError> {
+        self.validate()?;
+        if out.len() < HEADER_LEN + CRC_LEN {
+            return Err(BlobError::BufferTooSmall);
+        }
+        let cal = &self.calibration;
+        let payload = Payload {
+            unit_id: self.unit_id,
+            output_unit: cal.statics.output_unit,
+            zero_bias_out: cal.statics.zero_bias_out,
+            scale_out_per_g: cal.statics.scale_out_per_g,
+            installation_angles_deg: cal.statics.installation_angles_deg,
+            lever_arms_m: cal.lever_arms.r_m,
+            reference: cal.reference,
+            gravity_m_s2: cal.gravity_m_s2,
+            created_unix_s: self.created_unix_s,
+        };
+        let body_end = out.len() - CRC_LEN;
+        let n = postcard::to_slice(&payload, &mut out[HEADER_LEN..body_end])
+            .map_err(|_| BlobError::BufferTooSmall)?
+            .len();
+        out[0..4].copy_from_slice(&BLOB_MAGIC);
+        out[4..6].copy_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
+        out[6..8].copy_from_slice(&(n as u16).to_le_bytes());
+        let crc = CRC.checksum(&out[..HEADER_LEN + n]);
+        out[HEADER_LEN + n..HEADER_LEN + n + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
+        Ok(HEADER_LEN + n + CRC_LEN)
+    }
+
+    /// Encodes into a fixed-size array (length in the second value).
+    pub fn to_bytes(&self) -> Result<([u8; BLOB_MAX_LEN], usize), BlobError> {
+        let mut buf = [0u8; BLOB_MAX_LEN];
+        let n = self.encode(&mut buf)?;
+        Ok((buf, n))
+    }
+}
+
+/// Decodes and validates a blob of exactly `bytes.len()` bytes, for any unit.
+pub fn decode(bytes: &[u8]) -> Result<ParameterBlob, BlobError> {
+    if bytes.len() < HEADER_LEN + CRC_LEN {
+        return Err(BlobError::TooShort);
+    }
+    if bytes[0..4] != BLOB_MAGIC {
+        return Err(BlobError::BadMagic);
+    }
+    if u16::from_le_bytes([bytes[4], bytes[5]]) != BLOB_FORMAT_VERSION {
+        return Err(BlobError::UnsupportedVersion);
+    }
+    let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
+    if bytes.len() != HEADER_LEN + n + CRC_LEN {
+        return Err(BlobError::LengthMismatch);
+    }
+    let (body, crc_bytes) = bytes.split_at(HEADER_LEN + n);
+    let stored = u32::from_le_bytes([crc_bytes[0], crc_bytes[1], crc_bytes[2], crc_bytes[3]]);
+    if CRC.checksum(body) != stored {
+        return Err(BlobError::CrcMismatch);
+    }
+    let (p, rest): (Payload, _) =
+        postcard::take_from_bytes(&body[HEADER_LEN..]).map_err(|_| BlobError::Malformed)?;
+    if !rest.is_empty() {
+        return Err(BlobError::Malformed);
+    }
+    let blob = ParameterBlob {
+        unit_id: p.unit_id,
+        calibration: Calibration {
+            statics: StaticParams {
+                output_unit: p.output_unit,
+                zero_bias_out: p.zero_bias_out,
+                scale_out_per_g: p.scale_out_per_g,
+                installation_angles_deg: p.installation_angles_deg,
+            },
+            lever_arms: LeverArms {
+                r_m: p.lever_arms_m,
+            },
+            reference: p.reference,
+            gravity_m_s2: p.gravity_m_s2,
+        },
+        created_unix_s: p.created_unix_s,
+    };
+    blob.validate()?;
+    Ok(blob)
+}
+
+/// Decodes, validates, and checks that the blob was made for `unit`.
+pub fn decode_for_unit(bytes: &[u8], unit: UnitId) -> Result<ParameterBlob, BlobError> {
+    let blob = decode(bytes)?;
+    if blob.unit_id != unit {
+        return Err(BlobError::ForeignUnit);
+    }
+    Ok(blob)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::tests::paper_unit;
+    use proptest::prelude::*;
+
+    const UNIT: UnitId = UnitId([1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
+
+    fn paper_blob() -> ParameterBlob {
+        ParameterBlob {
+            unit_id: UNIT,
+            calibration: paper_unit(),
+            created_unix_s: 1_790_000_000,
+        }
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let (buf, n) = paper_blob().to_bytes().unwrap();
+        assert!(n <= BLOB_MAX_LEN);
+        assert_eq!(&buf[0..4], b"ACAL");
+        assert_eq!(decode_for_unit(&buf[..n], UNIT).unwrap(), paper_blob());
+    }
+
+    #[test]
+    fn each_layer_has_its_error() {
+        let (buf, n) = paper_blob().to_bytes().unwrap();
+        let good = &buf[..n];
+        assert_eq!(decode(&good[..5]), Err(BlobError::TooShort));
+        assert_eq!(decode(&[0xFF; 64]), Err(BlobError::BadMagic));
+        let mut v = good.to_vec();
+        v[4] = 2;
+        assert_eq!(decode(&v), Err(BlobError::UnsupportedVersion));
+        assert_eq!(decode(&good[..n - 1]), Err(BlobError::LengthMismatch));
+        let mut v = good.to_vec();
+        v[20] ^= 0x40;
+        assert_eq!(decode(&v), Err(BlobError::CrcMismatch));
+        assert_eq!(
+            decode_for_unit(good, UnitId([9; 12])),
+            Err(BlobError::ForeignUnit)
+        );
+    }
+
+    #[test]
+    fn invalid_physics_is_refused_on_both_sides() {
+        let mut b = paper_blob();
+        b.calibration.statics.installation_angles_deg[2] =
+            b.calibration.statics.installation_angles_deg[0];
+        assert_eq!(
+            b.encode(&mut [0; BLOB_MAX_LEN]),
+            Err(BlobError::IllConditioned)
+        );
+        let mut b = paper_blob();
+        b.calibration.lever_arms.r_m[0][0] = 2.0;
+        assert_eq!(
+            b.encode(&mut [0; BLOB_MAX_LEN]),
+            Err(BlobError::LeverArmOutOfRange)
+        );
+        let mut b = paper_blob();
+        b.calibration.statics.zero_bias_out[1] = f64::NAN;
+        assert_eq!(b.encode(&mut [0; BLOB_MAX_LEN]), Err(BlobError::NonFinite));
+
+        // A blob whose CRC is right but whose physics is wrong (written by a buggy or foreign tool)
+        // is still refused on decode: re-sign a corrupted payload by hand.
+        let (mut buf, n) = paper_blob().to_bytes().unwrap();
+        let payload_len = n - HEADER_LEN - CRC_LEN;
+        let mut p: Payload =
+            postcard::from_bytes(&buf[HEADER_LEN..HEADER_LEN + payload_len]).unwrap();
+        p.scale_out_per_g[0] = 0.0;
+        let m = postcard::to_slice(&p, &mut buf[HEADER_LEN..])
+            .unwrap()
+            .len();
+        assert_eq!(m, payload_len);
+        let crc = CRC.checksum(&buf[..HEADER_LEN + m]);
+        buf[HEADER_LEN + m..HEADER_LEN + m + 4].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(decode(&buf[..n]), Err(BlobError::DegenerateAxis));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 5000, ..ProptestConfig::default() })]
+
+        /// Any byte string decodes to a typed result, never a panic.
+        #[test]
+        fn random_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
+            let _ = decode(&bytes);
+        }
+
+        /// Random bytes behind a valid header (so decoding reaches the CRC and postcard layers).
+        #[test]
+        fn random_payloads_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..300)) {
+            let mut v = std::vec::Vec::from(*b"ACAL");
+            v.extend_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
+            v.extend_from_slice(&(bytes.len().saturating_sub(4) as u16).to_le_bytes());
+            v.extend_from_slice(&bytes);
+            let _ = decode(&v);
+        }
+
+        /// Every truncation and every single-byte corruption of a valid blob is refused.
+        #[test]
+        fn truncated_or_flipped_blobs_are_refused(cut in 0usize..400, at in 0usize..400, bit in 0u8..8) {
+            let (buf, n) = paper_blob().to_bytes().unwrap();
+            let cut = cut % n;
+            prop_assert!(decode(&buf[..cut]).is_err());
+            let mut v = buf[..n].to_vec();
+            v[at % n] ^= 1 << bit;
+            prop_assert!(decode(&v).is_err());
+        }
+    }
+}

@@ -1,0 +1,30 @@
+//! The `no_std` core of the accelerometer calibrator, shared by the host calibrator and the firmware.
+//!
+//! It holds the measurement model of `MODEL.md` and nothing that does I/O or allocates:
+//!
+//! - [`units`]: the quantities that cross module boundaries, each carrying its unit and frame;
+//! - [`params`]: the calibration in the paper's form (Table 1 and Table 3) and in the fitted form
+//!   `M = K·A`, with the conversions of `MODEL.md` §2;
+//! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
+//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `MODEL.md` "Inverse model");
+//! - [`omega_dot`]: the filtered angular-acceleration estimator of `MODEL.md` §6;
+//! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
+//! - [`wire`]: the host↔device messages and their COBS framing.
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
+#![deny(missing_docs)]
+
+pub mod blob;
+pub mod compensator;
+pub mod forward;
+pub mod linalg;
+pub mod omega_dot;
+pub mod params;
+pub mod units;
+pub mod wire;
+
+pub use compensator::{Compensator, LeverMode};
+pub use params::{Calibration, FittedStatic, LeverArms, OutputUnit, ReferencePoint, StaticParams};
+pub use units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs, UnitId};
+
+/// Standard gravity (m/s²), the default when the user gives no local value (`MODEL.md` "Signs").
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;

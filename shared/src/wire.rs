@@ -1,0 +1,487 @@
+//! Host↔device messages and their framing.
+//!
+//! Every frame is one postcard-serialised message, COBS-encoded and terminated by a zero byte
+//! ([`encode_frame`]); a receiver collects bytes with postcard's [`CobsAccumulator`] (re-exported), which
+//! resynchronises on the next zero after garbage. Message enums are named by direction
+//! ([`HostToDevice`], [`DeviceToHost`]); all payloads are fixed-size, so the largest frame of each
+//! direction is a constant computed from the types ([`HOST_FRAME_MAX`], [`DEVICE_FRAME_MAX`]).
+//!
+//! Vectors are plain `[f32; 3]` in body axes (or sensor axes for raw outputs), with the unit in the field
+//! name; matrices never travel (the calibration goes as a [`crate::blob`] in [`BlobChunk`]s).
+//!
+//! A UART cannot carry every sample at 10 kHz, so the device accumulates windows of a length the host
+//! chooses ([`StreamRequest::window_samples`]) and sends count, mean and variance; single decimated
+//! samples are available too.
+
+use crate::blob::BlobError;
+use crate::compensator::LeverMode;
+use crate::units::UnitId;
+use postcard::experimental::max_size::MaxSize;
+use serde::{de::DeserializeOwned, Deserialize, Serialize};
+
+pub use postcard::accumulator::{CobsAccumulator, FeedResult};
+
+/// Version of this protocol; a host refuses a device that speaks another.
+pub const PROTOCOL_VERSION: u16 = 1;
+/// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
+pub const BLOB_CHUNK_LEN: usize = 32;
+
+/// Bytes COBS needs for a message of at most `n` bytes, including the terminating zero.
+pub const fn cobs_frame_len(n: usize) -> usize {
+    n + n / 254 + 2
+}
+/// Largest frame the host sends.
+pub const HOST_FRAME_MAX: usize = cobs_frame_len(HostToDevice::POSTCARD_MAX_SIZE);
+/// Largest frame the device sends.
+pub const DEVICE_FRAME_MAX: usize = cobs_frame_len(DeviceToHost::POSTCARD_MAX_SIZE);
+// Small enough to size UART buffers with: checked at compile time.
+const _: () = assert!(DEVICE_FRAME_MAX < 128 && HOST_FRAME_MAX < 128);
+
+/// One piece of a parameter blob, for writing or reading it over a small-frame link.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct BlobChunk {
+    /// Byte offset of `data[0]` in the blob.
+    pub offset: u16,
+    /// Length of the whole blob.
+    pub total_len: u16,
+    /// Valid bytes in `data` (≤ [`BLOB_CHUNK_LEN`]).
+    pub len: u8,
+    /// Bytes `offset .. offset + len` of the blob; the rest is zero.
+    pub data: [u8; BLOB_CHUNK_LEN],
+}
+
+/// What the device should stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum StreamKind {
+    /// [`RawWindow`]s: statistics of the uncompensated outputs and the gyro (for calibration).
+    RawWindows,
+    /// [`CompensatedWindow`]s: statistics of the compensated specific force (for verification).
+    CompensatedWindows,
+    /// One [`RawSample`] every `window_samples` samples.
+    RawDecimated,
+    /// One [`CompensatedSample`] every `window_samples` samples.
+    CompensatedDecimated,
+}
+
+/// Start a stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct StreamRequest {
+    /// What to send.
+    pub kind: StreamKind,
+    /// Samples per window (or decimation factor), ≥ 1.
+    pub window_samples: u32,
+}
+
+/// The state of the virtual rate table of a simulated or emulated device.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct VirtualTable {
+    /// "Up" in body axes (unit vector).
+    pub up_b: [f32; 3],
+    /// Table rate about the vertical, rad/s.
+    pub rate_rad_s: f32,
+    /// Table angular acceleration about the vertical, rad/s² (the rate ramps from `rate_rad_s`).
+    pub accel_rad_s2: f32,
+}
+
+/// Messages from the host to the device.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub enum HostToDevice {
+    /// Ask for an [`Identity`].
+    Identify,
+    /// Start (or change) the stream.
+    Stream(StreamRequest),
+    /// Stop streaming.
+    StopStream,
+    /// One chunk of a new calibration blob; the device validates and stores the blob when the last
+    /// chunk arrives (answering [`Ack::CalibrationStored`] or an error).
+    WriteCalibration(BlobChunk),
+    /// Ask for the chunk of the stored blob at this offset.
+    ReadCalibration {
+        /// Byte offset.
+        offset: u16,
+    },
+    /// Choose which lever-arm terms the device applies.
+    SetLeverMode(LeverMode),
+    /// Set the virtual table (simulated and QEMU devices only).
+    SetVirtualTable(VirtualTable),
+    /// Restart the device (it reloads the calibration from storage).
+    Reset,
+}
+
+/// Which board the device is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum Board {
+    /// The host's in-process simulated device.
+    Simulated,
+    /// The firmware on QEMU's mps2-an386 with its virtual sensor.
+    QemuMps2An386,
+    /// The firmware on an STM32F4 board with real sensors.
+    Stm32f4,
+}
+
+/// What the device holds as its calibration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum CalibrationState {
+    /// A valid calibration for this unit is applied.
+    Valid {
+        /// Its creation time, seconds since the Unix epoch.
+        created_unix_s: u64,
+    },
+    /// No calibration stored: outputs are uncalibrated.
+    Missing,
+    /// A stored calibration was refused at boot for this reason: outputs are uncalibrated.
+    Rejected(BlobError),
+}
+
+/// Answer to [`HostToDevice::Identify`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct Identity {
+    /// [`PROTOCOL_VERSION`] of the device.
+    pub protocol_version: u16,
+    /// Firmware version (major, minor, patch).
+    pub firmware_version: [u8; 3],
+    /// The unit's identifier.
+    pub unit_id: UnitId,
+    /// Which board.
+    pub board: Board,
+    /// Calibration status.
+    pub calibration: CalibrationState,
+    /// Lever-arm mode in force.
+    pub lever_mode: LeverMode,
+    /// Sampling rate of the accelerometers and gyro, Hz.
+    pub sample_rate_hz: u32,
+}
+
+/// Per-frame status bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct SampleFlags(pub u8);
+
+impl SampleFlags {
+    /// No valid calibration: compensated values are raw outputs passed through the identity.
+    pub const UNCALIBRATED: u8 = 1;
+    /// At least one sample in the frame was saturated (at the ADC's or gyro's range limit).
+    pub const SATURATED: u8 = 2;
+    /// At least one sample was NaN/infinite and was left out of the statistics.
+    pub const NON_FINITE: u8 = 4;
+    /// Output frames were dropped since the previous frame (the link was too slow).
+    pub const FRAMES_DROPPED: u8 = 8;
+
+    /// True when `bit` is set.
+    pub fn has(self, bit: u8) -> bool {
+        self.0 & bit != 0
+    }
+}
+
+/// Statistics of a window of raw samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct RawWindow {
+    /// Index of the window's first sample since boot.
+    pub first_sample: u64,
+    /// Samples in the statistics (saturated and non-finite ones are left out).
+    pub count: u32,
+    /// Mean of the accelerometer outputs, sensor axes, output unit.
+    pub mean_raw: [f32; 3],
+    /// Variance of the outputs, output unit².
+    pub var_raw: [f32; 3],
+    /// Mean gyro rate, body axes, rad/s.
+    pub mean_rate_rad_s: [f32; 3],
+    /// Variance of the gyro rate, (rad/s)².
+    pub var_rate_rad2_s2: [f32; 3],
+    /// Samples left out because saturated or non-finite.
+    pub rejected: u32,
+    /// Output frames dropped since boot.
+    pub dropped_frames: u32,
+    /// Status bits.
+    pub flags: SampleFlags,
+}
+
+/// Statistics of a window of compensated samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct CompensatedWindow {
+    /// Index of the window's first sample since boot.
+    pub first_sample: u64,
+    /// Samples in the statistics.
+    pub count: u32,
+    /// Mean specific force at the reference point, body axes, m/s².
+    pub mean_m_s2: [f32; 3],
+    /// Its variance, (m/s²)².
+    pub var_m2_s4: [f32; 3],
+    /// Mean gyro rate, body axes, rad/s.
+    pub mean_rate_rad_s: [f32; 3],
+    /// Samples left out because saturated or non-finite.
+    pub rejected: u32,
+    /// Output frames dropped since boot.
+    pub dropped_frames: u32,
+    /// Status bits.
+    pub flags: SampleFlags,
+}
+
+/// One raw sample.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct RawSample {
+    /// Sample index since boot.
+    pub index: u64,
+    /// Accelerometer outputs, sensor axes, output unit.
+    pub raw: [f32; 3],
+    /// Gyro rate, body axes, rad/s.
+    pub rate_rad_s: [f32; 3],
+    /// Status bits.
+    pub flags: SampleFlags,
+}
+
+/// One compensated sample.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct CompensatedSample {
+    /// Sample index since boot.
+    pub index: u64,
+    /// Specific force at the reference point, body axes, m/s².
+    pub specific_force_m_s2: [f32; 3],
+    /// Gyro rate, body axes, rad/s.
+    pub rate_rad_s: [f32; 3],
+    /// Status bits.
+    pub flags: SampleFlags,
+}
+
+/// Positive answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum Ack {
+    /// The stream started.
+    StreamStarted,
+    /// The stream stopped.
+    StreamStopped,
+    /// A calibration chunk was buffered; send the next one.
+    ChunkReceived {
+        /// Bytes of the blob received so far.
+        received: u16,
+    },
+    /// The whole blob was validated and stored; it is applied from now on.
+    CalibrationStored,
+    /// The lever-arm mode was changed.
+    LeverModeSet,
+    /// The virtual table was set.
+    TableSet,
+    /// The device is about to restart.
+    Resetting,
+}
+
+/// Typed errors the device answers with. It keeps running after every one of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum DeviceError {
+    /// The frame did not decode (bad COBS, unknown message, wrong length).
+    MalformedFrame,
+    /// A frame longer than [`HOST_FRAME_MAX`] was discarded.
+    FrameTooLong,
+    /// A calibration chunk out of order or with an inconsistent length; the write restarts at offset 0.
+    UnexpectedChunk,
+    /// The assembled blob was refused; the previous calibration stays in force.
+    BlobRejected(BlobError),
+    /// Storage failed to write; the previous calibration stays in force.
+    StorageFailed,
+    /// No calibration is stored (answer to a read).
+    NoCalibration,
+    /// This board does not support the request (e.g. a virtual table on a real board).
+    Unsupported,
+    /// A window length of zero or beyond the device's limit.
+    BadWindow,
+}
+
+/// Messages from the device to the host.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub enum DeviceToHost {
+    /// Answer to `Identify`.
+    Identity(Identity),
+    /// Streamed raw statistics.
+    RawWindow(RawWindow),
+    /// Streamed compensated statistics.
+    CompensatedWindow(CompensatedWindow),
+    /// Streamed raw sample.
+    RawSample(RawSample),
+    /// Streamed compensated sample.
+    CompensatedSample(CompensatedSample),
+    /// A chunk of the stored calibration blob.
+    CalibrationChunk(BlobChunk),
+    /// A positive answer.
+    Ack(Ack),
+    /// A typed error.
+    Error(DeviceError),
+}
+
+impl core::fmt::Display for DeviceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DeviceError::MalformedFrame => f.write_str("device could not decode a frame"),
+            DeviceError::FrameTooLong => f.write_str("device discarded an over-long frame"),
+            DeviceError::UnexpectedChunk => f.write_str("calibration chunk out of order"),
+            DeviceError::BlobRejected(e) => write!(f, "device refused the calibration: {e}"),
+            DeviceError::StorageFailed => f.write_str("device failed to store the calibration"),
+            DeviceError::NoCalibration => f.write_str("device holds no calibration"),
+            DeviceError::Unsupported => f.write_str("request not supported by this board"),
+            DeviceError::BadWindow => f.write_str("window length out of range"),
+        }
+    }
+}
+
+/// Why a frame could not be encoded or decoded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WireError {
+    /// The buffer is smaller than the frame.
+    BufferTooSmall,
+    /// The bytes are not a valid frame of the expected message type.
+    Malformed,
+}
+
+impl core::fmt::Display for WireError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            WireError::BufferTooSmall => f.write_str("frame buffer too small"),
+            WireError::Malformed => f.write_str("malformed frame"),
+        }
+    }
+}
+
+/// Serialises `msg` as one COBS frame ending in a zero byte; returns the used part of `buf`.
+pub fn encode_frame<'a, T: Serialize>(
+    msg: &T,
+    buf: &'a mut [u8],
+) -> Result<&'a mut [u8], WireError> {
+    postcard::to_slice_cobs(msg, buf).map_err(|_| WireError::BufferTooSmall)
+}
+
+/// Decodes one COBS frame (with or without its terminating zero), in place.
+pub fn decode_frame<T: DeserializeOwned>(frame: &mut [u8]) -> Result<T, WireError> {
+    postcard::from_bytes_cobs(frame).map_err(|_| WireError::Malformed)
+}
+
+/// Splits a blob into the chunks of a write.
+pub fn blob_chunks(blob: &[u8]) -> impl Iterator<Item = BlobChunk> + '_ {
+    let total_len = blob.len() as u16;
+    blob.chunks(BLOB_CHUNK_LEN)
+        .enumerate()
+        .map(move |(i, part)| {
+            let mut data = [0u8; BLOB_CHUNK_LEN];
+            data[..part.len()].copy_from_slice(part);
+            BlobChunk {
+                offset: (i * BLOB_CHUNK_LEN) as u16,
+                total_len,
+                len: part.len() as u8,
+                data,
+            }
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn sample_messages() -> std::vec::Vec<HostToDevice> {
+        std::vec![
+            HostToDevice::Identify,
+            HostToDevice::Stream(StreamRequest {
+                kind: StreamKind::RawWindows,
+                window_samples: u32::MAX
+            }),
+            HostToDevice::WriteCalibration(BlobChunk {
+                offset: u16::MAX,
+                total_len: u16::MAX,
+                len: 32,
+                data: [0xFF; 32]
+            }),
+            HostToDevice::SetVirtualTable(VirtualTable {
+                up_b: [f32::MAX; 3],
+                rate_rad_s: -1.0,
+                accel_rad_s2: f32::NAN
+            }),
+            HostToDevice::Reset,
+        ]
+    }
+
+    #[test]
+    fn frames_round_trip_and_fit_the_computed_bound() {
+        let mut buf = [0u8; HOST_FRAME_MAX];
+        for m in sample_messages() {
+            let frame = encode_frame(&m, &mut buf).unwrap();
+            assert!(frame.len() <= HOST_FRAME_MAX);
+            assert_eq!(*frame.last().unwrap(), 0);
+            let back: HostToDevice = decode_frame(frame).unwrap();
+            // NaN != NaN: compare the re-encoding instead.
+            assert_eq!(std::format!("{back:?}"), std::format!("{m:?}"));
+        }
+        let worst = DeviceToHost::RawWindow(RawWindow {
+            first_sample: u64::MAX,
+            count: u32::MAX,
+            mean_raw: [1.0; 3],
+            var_raw: [1.0; 3],
+            mean_rate_rad_s: [1.0; 3],
+            var_rate_rad2_s2: [1.0; 3],
+            rejected: u32::MAX,
+            dropped_frames: u32::MAX,
+            flags: SampleFlags(0xFF),
+        });
+        let mut dbuf = [0u8; DEVICE_FRAME_MAX];
+        let n = encode_frame(&worst, &mut dbuf).unwrap().len();
+        assert!(n <= DEVICE_FRAME_MAX, "{n} > {DEVICE_FRAME_MAX}");
+    }
+
+    #[test]
+    fn accumulator_resynchronises_after_garbage() {
+        let mut acc = CobsAccumulator::<{ HOST_FRAME_MAX }>::new();
+        let mut buf = [0u8; HOST_FRAME_MAX];
+        let frame = encode_frame(&HostToDevice::Identify, &mut buf)
+            .unwrap()
+            .to_vec();
+        let mut stream = std::vec![0x55, 0x13, 0x00]; // garbage, then a terminator
+        stream.extend_from_slice(&frame);
+        let mut got = std::vec::Vec::new();
+        let mut window: &[u8] = &stream;
+        while !window.is_empty() {
+            window = match acc.feed::<HostToDevice>(window) {
+                FeedResult::Consumed => break,
+                FeedResult::OverFull(rest) | FeedResult::DeserError(rest) => rest,
+                FeedResult::Success { data, remaining } => {
+                    got.push(data);
+                    remaining
+                }
+            };
+        }
+        assert_eq!(got, std::vec![HostToDevice::Identify]);
+    }
+
+    #[test]
+    fn blob_chunks_cover_the_blob() {
+        let blob: std::vec::Vec<u8> = (0..100u8).collect();
+        let chunks: std::vec::Vec<_> = blob_chunks(&blob).collect();
+        assert_eq!(chunks.len(), 4);
+        let mut again = std::vec::Vec::new();
+        for c in &chunks {
+            assert_eq!(usize::from(c.offset), again.len());
+            again.extend_from_slice(&c.data[..usize::from(c.len)]);
+        }
+        assert_eq!(again, blob);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 5000, ..ProptestConfig::default() })]
+        /// Random and truncated frames decode to a typed error or a message, never a panic.
+        #[test]
+        fn random_frames_never_panic(mut bytes in prop::collection::vec(any::<u8>(), 0..200)) {
+            let mut copy = bytes.clone();
+            let _ = decode_frame::<HostToDevice>(&mut bytes);
+            let _ = decode_frame::<DeviceToHost>(&mut copy);
+        }
+
+        #[test]
+        fn truncated_frames_never_decode_to_garbage_silently(cut in 0usize..40) {
+            let mut buf = [0u8; HOST_FRAME_MAX];
+            let m = HostToDevice::Stream(StreamRequest { kind: StreamKind::CompensatedWindows, window_samples: 1000 });
+            let frame = encode_frame(&m, &mut buf).unwrap();
+            let n = frame.len();
+            let cut = cut % (n - 1);
+            let mut part = frame[..cut].to_vec();
+            // A cut frame must either fail or (never) equal the original.
+            if let Ok(back) = decode_frame::<HostToDevice>(&mut part) {
+                prop_assert_ne!(back, m);
+            }
+        }
+    }
+}
