@@ -1,1 +1,5 @@
+//! The PC calibrator: recording format, simulator, estimator, reports and the device link.
+//! The binary (`src/main.rs`) is a thin clap layer over this library.
 
+pub mod recording;
+pub mod unit_file;

@@ -1,0 +1,347 @@
+//! The unit file: a unit's parameters in the paper's layout, as TOML. The same schema serves the
+//! simulator's truth (`../shared/reference/paper-unit.toml` is the default) and the calibrator's result
+//! (`calibration.toml`, which adds 1σ uncertainties), so `host simulate --unit calibration.toml`
+//! round-trips.
+//!
+//! ```toml
+//! g_m_s2 = 9.80665
+//! unit_id = "000102030405060708090a0b"   # optional, 24 hex digits
+//! output_unit = "V"                        # optional, "V" (default) or "LSB"
+//! [static]
+//! zero_bias_v = [..]            # or zero_bias_lsb for LSB units
+//! scale_v_per_g = [..]          # or scale_lsb_per_g
+//! installation_angles_deg = [[..], [..], [..]]
+//! [dynamic]
+//! lever_arms_m = [[..], [..], [..]]
+//! reference = "table-axis"      # or "centroid", or "body-point" with reference_offset_m = [..]
+//! [uncertainty]                 # optional, 1σ, same units as the values
+//! zero_bias_1sigma = [..]
+//! scale_per_g_1sigma = [..]
+//! installation_angles_deg_1sigma = [[..], ..]
+//! lever_arms_m_1sigma = [[..], ..]
+//! lever_arms_observable = [[true, ..], ..]
+//! ```
+//! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
+
+use crate::recording::OutputUnitName;
+use serde::{Deserialize, Serialize};
+use shared::linalg::RowMajor3;
+use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};
+use std::path::{Path, PathBuf};
+
+/// The paper's unit (Tables 1 and 3), built in.
+pub const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
+
+/// A unit file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UnitFile {
+    /// Local gravity, m/s².
+    pub g_m_s2: f64,
+    /// Unit identifier, 24 hex digits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit_id: Option<String>,
+    /// Output unit (default V).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_unit: Option<OutputUnitName>,
+    /// Table 1.
+    #[serde(rename = "static")]
+    pub statics: StaticSection,
+    /// Table 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dynamic: Option<DynamicSection>,
+    /// 1σ uncertainties of an estimate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<Uncertainty>,
+    /// Any other tables, kept as they are.
+    #[serde(flatten)]
+    pub other: toml::Table,
+}
+
+/// `[static]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StaticSection {
+    /// Zero-bias outputs, V.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_v: Option<[f64; 3]>,
+    /// Zero-bias outputs, LSB.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_lsb: Option<[f64; 3]>,
+    /// Scale factors, V/g.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_v_per_g: Option<[f64; 3]>,
+    /// Scale factors, LSB/g.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_lsb_per_g: Option<[f64; 3]>,
+    /// θ_ij, degrees.
+    pub installation_angles_deg: RowMajor3,
+}
+
+/// `[dynamic]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DynamicSection {
+    /// Row i = r_i, body axes, m.
+    pub lever_arms_m: RowMajor3,
+    /// "table-axis" (default), "centroid" or "body-point".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
+    /// With reference = "body-point": the point, body axes, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_offset_m: Option<[f64; 3]>,
+}
+
+/// `[uncertainty]`: 1σ of each estimated value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Uncertainty {
+    /// Zero-bias outputs, output unit.
+    pub zero_bias_1sigma: [f64; 3],
+    /// Scale factors, output unit per g.
+    pub scale_per_g_1sigma: [f64; 3],
+    /// Installation angles, degrees.
+    pub installation_angles_deg_1sigma: RowMajor3,
+    /// Lever arms, m.
+    pub lever_arms_m_1sigma: RowMajor3,
+    /// Which lever-arm components the plan determined (false: the value is not a measurement).
+    pub lever_arms_observable: [[bool; 3]; 3],
+}
+
+/// Why a unit file is unusable.
+#[derive(Debug)]
+pub enum UnitFileError {
+    /// Not readable.
+    Io(PathBuf, std::io::Error),
+    /// Not valid TOML or wrong fields (message names line and column).
+    Syntax(PathBuf, String),
+    /// Semantically wrong (message names the field and the fix).
+    Invalid(PathBuf, String),
+}
+
+impl std::fmt::Display for UnitFileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            UnitFileError::Io(p, e) => write!(f, "cannot read unit file {}: {e}", p.display()),
+            UnitFileError::Syntax(p, e) => write!(f, "unit file {} is not valid: {e}", p.display()),
+            UnitFileError::Invalid(p, e) => write!(f, "unit file {}: {e}", p.display()),
+        }
+    }
+}
+
+impl std::error::Error for UnitFileError {}
+
+impl UnitFile {
+    /// The built-in paper unit.
+    pub fn paper_unit() -> UnitFile {
+        toml::from_str(PAPER_UNIT_TOML).expect("the built-in unit file parses")
+    }
+
+    /// Reads a unit file.
+    pub fn load(path: &Path) -> Result<UnitFile, UnitFileError> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| UnitFileError::Io(path.to_path_buf(), e))?;
+        let file: UnitFile = toml::from_str(&text)
+            .map_err(|e| UnitFileError::Syntax(path.to_path_buf(), e.to_string()))?;
+        file.to_calibration()
+            .map_err(|m| UnitFileError::Invalid(path.to_path_buf(), m))?;
+        Ok(file)
+    }
+
+    /// The unit id, if the file has a valid one.
+    pub fn unit_id(&self) -> Result<Option<UnitId>, String> {
+        match &self.unit_id {
+            None => Ok(None),
+            Some(s) => UnitId::parse_hex(s)
+                .map(Some)
+                .ok_or_else(|| format!("unit_id '{s}' must be 24 hexadecimal digits")),
+        }
+    }
+
+    /// The calibration this file describes.
+    pub fn to_calibration(&self) -> Result<Calibration, String> {
+        let unit = self.output_unit.unwrap_or(OutputUnitName::V);
+        let s = &self.statics;
+        let (bias, scale, b_name, k_name) = match unit {
+            OutputUnitName::V => (
+                s.zero_bias_v,
+                s.scale_v_per_g,
+                "zero_bias_v",
+                "scale_v_per_g",
+            ),
+            OutputUnitName::Lsb => (
+                s.zero_bias_lsb,
+                s.scale_lsb_per_g,
+                "zero_bias_lsb",
+                "scale_lsb_per_g",
+            ),
+        };
+        let wrong_unit = match unit {
+            OutputUnitName::V => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
+            OutputUnitName::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
+        };
+        if wrong_unit {
+            return Err(format!(
+                "[static] mixes units: with output_unit = \"{}\" use {b_name} and {k_name}",
+                unit.symbol()
+            ));
+        }
+        let bias = bias.ok_or_else(|| format!("[static] needs {b_name}"))?;
+        let scale = scale.ok_or_else(|| format!("[static] needs {k_name}"))?;
+        let statics = StaticParams {
+            output_unit: unit.into(),
+            zero_bias_out: bias,
+            scale_out_per_g: scale,
+            installation_angles_deg: s.installation_angles_deg,
+        };
+        let (lever_arms, reference) = match &self.dynamic {
+            None => (LeverArms::default(), ReferencePoint::TableAxis),
+            Some(d) => {
+                let reference = match (d.reference.as_deref(), d.reference_offset_m) {
+                    (None | Some("table-axis"), None) => ReferencePoint::TableAxis,
+                    (Some("centroid"), None) => ReferencePoint::Centroid,
+                    (Some("body-point"), Some(offset_m)) => ReferencePoint::BodyPoint { offset_m },
+                    (r, o) => {
+                        return Err(format!(
+                            "[dynamic] reference = {r:?} with reference_offset_m = {o:?}: use \"table-axis\", \
+                             \"centroid\", or \"body-point\" together with reference_offset_m"
+                        ))
+                    }
+                };
+                (
+                    LeverArms {
+                        r_m: d.lever_arms_m,
+                    },
+                    reference,
+                )
+            }
+        };
+        let cal = Calibration {
+            statics,
+            lever_arms,
+            reference,
+            gravity_m_s2: self.g_m_s2,
+        };
+        self.unit_id()?;
+        shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)
+            .map_err(|e| e.to_string())?;
+        Ok(cal)
+    }
+
+    /// A unit file for a calibration (the inverse of [`UnitFile::to_calibration`]).
+    pub fn from_calibration(
+        cal: &Calibration,
+        unit_id: Option<UnitId>,
+        uncertainty: Option<Uncertainty>,
+    ) -> UnitFile {
+        let unit: OutputUnitName = cal.statics.output_unit.into();
+        let (v, lsb) = match unit {
+            OutputUnitName::V => (true, false),
+            OutputUnitName::Lsb => (false, true),
+        };
+        let s = &cal.statics;
+        let (reference, reference_offset_m) = match cal.reference {
+            ReferencePoint::TableAxis => ("table-axis", None),
+            ReferencePoint::Centroid => ("centroid", None),
+            ReferencePoint::BodyPoint { offset_m } => ("body-point", Some(offset_m)),
+        };
+        UnitFile {
+            g_m_s2: cal.gravity_m_s2,
+            unit_id: unit_id.map(|u| u.to_string()),
+            output_unit: Some(unit),
+            statics: StaticSection {
+                zero_bias_v: v.then_some(s.zero_bias_out),
+                zero_bias_lsb: lsb.then_some(s.zero_bias_out),
+                scale_v_per_g: v.then_some(s.scale_out_per_g),
+                scale_lsb_per_g: lsb.then_some(s.scale_out_per_g),
+                installation_angles_deg: s.installation_angles_deg,
+            },
+            dynamic: Some(DynamicSection {
+                lever_arms_m: cal.lever_arms.r_m,
+                reference: Some(reference.into()),
+                reference_offset_m,
+            }),
+            uncertainty,
+            other: toml::Table::new(),
+        }
+    }
+
+    /// TOML text.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("a unit file always serialises")
+    }
+}
+
+impl OutputUnitName {
+    /// "V" or "LSB".
+    pub fn symbol(self) -> &'static str {
+        match self {
+            OutputUnitName::V => "V",
+            OutputUnitName::Lsb => "LSB",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_unit_reads_with_table_values() {
+        let f = UnitFile::paper_unit();
+        let cal = f.to_calibration().unwrap();
+        assert_eq!(cal.statics.zero_bias_out, [2.405098, 2.380978, 2.435503]);
+        assert_eq!(cal.lever_arms.r_m[1], [-0.00256, -0.00893, -0.00026]);
+        assert!(f.other.contains_key("expected"));
+    }
+
+    #[test]
+    fn round_trips_through_toml_with_lsb_and_uncertainty() {
+        let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+        cal.statics.output_unit = shared::OutputUnit::Lsb;
+        cal.statics.scale_out_per_g = [4096.0, 4100.0, 4090.0];
+        cal.statics.zero_bias_out = [12.0, -40.0, 3.5];
+        cal.reference = ReferencePoint::BodyPoint {
+            offset_m: [0.001, 0.0, -0.002],
+        };
+        let unc = Uncertainty {
+            zero_bias_1sigma: [0.1; 3],
+            scale_per_g_1sigma: [0.2; 3],
+            installation_angles_deg_1sigma: [[1e-3; 3]; 3],
+            lever_arms_m_1sigma: [[1e-5; 3]; 3],
+            lever_arms_observable: [[true, false, true]; 3],
+        };
+        let id = UnitId([7; 12]);
+        let text = UnitFile::from_calibration(&cal, Some(id), Some(unc.clone())).to_toml();
+        assert!(
+            text.contains("scale_lsb_per_g") && !text.contains("scale_v_per_g"),
+            "{text}"
+        );
+        let back: UnitFile = toml::from_str(&text).unwrap();
+        assert_eq!(back.to_calibration().unwrap(), cal);
+        assert_eq!(back.unit_id().unwrap(), Some(id));
+        assert_eq!(back.uncertainty, Some(unc));
+    }
+
+    #[test]
+    fn bad_files_get_messages_naming_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("u.toml");
+        std::fs::write(
+            &p,
+            PAPER_UNIT_TOML.replace("scale_v_per_g", "scale_lsb_per_g"),
+        )
+        .unwrap();
+        let e = UnitFile::load(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("mixes units") || e.contains("needs scale_v_per_g"),
+            "{e}"
+        );
+        std::fs::write(&p, "g_m_s2 = 9.8\n[static]\nzero_bias_v = [1, 2]\n").unwrap();
+        let e = UnitFile::load(&p).unwrap_err().to_string();
+        assert!(e.contains("line"), "{e}");
+        let e = UnitFile::load(&dir.path().join("missing.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot read"), "{e}");
+    }
+}
