@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs every test of the project, installing what it needs (the Rust target, QEMU) when missing.
+# This is the README's test command and exactly what .ci/run calls.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
+rustup target add thumbv7em-none-eabihf >/dev/null
+rustup component add rustfmt clippy >/dev/null
+
+step "format"
+cargo fmt --all -- --check
+cargo fmt --manifest-path firmware/Cargo.toml --all -- --check
+
+step "clippy (PC workspace)"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "shared builds for the Cortex-M4F without std"
+CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-D warnings" \
+  cargo build -p accel-cal-shared --no-default-features --target thumbv7em-none-eabihf
+
+step "PC tests (shared, host, end-to-end)"
+cargo test --workspace
+
+step "firmware: PC tests of the device logic, both boards, QEMU on-target tests"
+bash firmware/scripts/test.sh
+
+echo
+echo "test-all: every step passed"
