@@ -1,5 +1,7 @@
 //! The PC calibrator: recording format, simulator, estimator, reports and the device link.
 //! The binary (`src/main.rs`) is a thin clap layer over this library.
 
+pub mod convert;
+pub mod navigation;
 pub mod recording;
 pub mod unit_file;
