@@ -1,0 +1,791 @@
+//! Reading and writing a session directory (`plan.toml` + `samples.csv`, `docs/recording-format.md`).
+//!
+//! The reader streams: it holds one line and one [`SegmentAccumulator`] per plan segment, never the
+//! rows, so a session of 10⁷ rows is reduced in one pass in constant memory. The CSV dialect is the
+//! one the writer produces (no quoting needed: segment names cannot contain commas or quotes), read
+//! tolerantly: CRLF line ends, a UTF-8 byte-order mark, blank lines, spaces around fields and
+//! double-quoted fields are accepted. Everything else that is wrong is an error naming the line and
+//! column, except a final line without a line end, which is a recording cut short: it is skipped with
+//! a warning (its last number may be cut mid-digits and still parse, so it is never trusted).
+
+use super::plan::{Plan, PlanError};
+use super::stats::{SegmentAccumulator, SegmentStats};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+/// The plan file inside a session directory.
+pub const PLAN_FILE: &str = "plan.toml";
+/// The samples file inside a session directory.
+pub const SAMPLES_FILE: &str = "samples.csv";
+/// The only header `samples.csv` version 1 has.
+pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
+/// Column names, in order.
+pub const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];
+
+/// Why a session cannot be read or written. Every message names the file, the place and the fix.
+#[derive(Debug)]
+pub enum RecordingError {
+    /// `plan.toml` is missing or unusable.
+    Plan(PlanError),
+    /// An I/O failure on `path`.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The first line is not [`SAMPLES_HEADER`].
+    Header {
+        /// The file.
+        path: PathBuf,
+        /// The line found.
+        found: String,
+        /// 1-based column of the first difference.
+        column: usize,
+    },
+    /// A row without exactly eight fields.
+    FieldCount {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+        /// Fields found.
+        found: usize,
+    },
+    /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
+    Number {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+        /// 1-based column number.
+        column: usize,
+        /// The text found (shortened).
+        text: String,
+    },
+    /// A row names a segment the plan does not have.
+    UnknownSegment {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number of its first row.
+        line: u64,
+        /// The segment name.
+        name: String,
+    },
+    /// The file has a header but no usable row.
+    NoRows(PathBuf),
+    /// [`SessionWriter`] was asked for a segment the plan does not have.
+    WriterSegment(String),
+    /// [`SessionWriter::create`] would overwrite an existing recording.
+    Exists(PathBuf),
+}
+
+impl std::fmt::Display for RecordingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RecordingError::Plan(e) => write!(f, "{e}"),
+            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            RecordingError::Header {
+                path,
+                found,
+                column,
+            } => write!(
+                f,
+                "{} line 1, column {column}: the header is '{}' but must be exactly '{SAMPLES_HEADER}' \
+                 (recording format 1); fix the first line",
+                path.display(),
+                shorten(found)
+            ),
+            RecordingError::FieldCount { path, line, found } => write!(
+                f,
+                "{} line {line}: {found} fields, expected 8 ({SAMPLES_HEADER}); \
+                 fix or delete the line",
+                path.display()
+            ),
+            RecordingError::Number {
+                path,
+                line,
+                column,
+                text,
+            } => write!(
+                f,
+                "{} line {line}, column {column} ({}): '{}' is not a number; \
+                 fix the value or write NaN to have the row left out",
+                path.display(),
+                COLUMNS.get(column.wrapping_sub(1)).copied().unwrap_or("?"),
+                text
+            ),
+            RecordingError::UnknownSegment { path, line, name } => write!(
+                f,
+                "{} line {line}: segment '{name}' is not in {PLAN_FILE}; add a [[segment]] with \
+                 name = \"{name}\" to the plan, or remove its rows",
+                path.display()
+            ),
+            RecordingError::NoRows(path) => write!(
+                f,
+                "{} has no data rows after its header: nothing to calibrate from",
+                path.display()
+            ),
+            RecordingError::WriterSegment(name) => write!(
+                f,
+                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
+            ),
+            RecordingError::Exists(path) => write!(
+                f,
+                "{} already exists; choose another directory or allow overwriting (--force)",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RecordingError {}
+
+impl From<PlanError> for RecordingError {
+    fn from(e: PlanError) -> Self {
+        RecordingError::Plan(e)
+    }
+}
+
+fn shorten(s: &str) -> String {
+    if s.chars().count() > 60 {
+        format!("{}…", s.chars().take(60).collect::<String>())
+    } else {
+        s.to_string()
+    }
+}
+
+/// How to read a session.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReadOptions {
+    /// Never draw a progress bar (it is drawn only on a terminal anyway).
+    pub quiet: bool,
+}
+
+/// What the reader saw besides the statistics.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReadReport {
+    /// Data rows read (including rejected ones).
+    pub rows: u64,
+    /// Bytes of `samples.csv` read.
+    pub bytes: u64,
+    /// Rows left out because a value was NaN or infinite, all segments.
+    pub rejected_rows: u64,
+    /// Plan segments with no usable row (they are absent from the statistics).
+    pub segments_without_rows: Vec<String>,
+    /// Line number of a final line without a line end, which was skipped.
+    pub skipped_partial_line: Option<u64>,
+    /// Human-readable warnings, one per problem.
+    pub warnings: Vec<String>,
+}
+
+/// A session reduced to its statistics.
+#[derive(Clone, Debug)]
+pub struct Session {
+    /// The plan.
+    pub plan: Plan,
+    /// One entry per plan segment that has usable rows, in plan order.
+    pub stats: Vec<SegmentStats>,
+    /// What else the reader found.
+    pub report: ReadReport,
+}
+
+/// Reads `dir/plan.toml` and reduces `dir/samples.csv` to per-segment statistics, streaming.
+pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, RecordingError> {
+    let plan = Plan::load(&dir.join(PLAN_FILE))?;
+    let path = dir.join(SAMPLES_FILE);
+    let io = |source| RecordingError::Io {
+        path: path.clone(),
+        source,
+    };
+    let file = File::open(&path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let bar = progress_bar(len, "reading samples.csv", options.quiet);
+    let reader = BufReader::with_capacity(1 << 20, bar.wrap_read(file));
+    let result = read_samples(reader, &plan, &path);
+    bar.finish_and_clear();
+    let (stats, report) = result?;
+    Ok(Session {
+        plan,
+        stats,
+        report,
+    })
+}
+
+/// A byte-count progress bar on stderr, hidden unless stderr is a terminal and `quiet` is false.
+pub fn progress_bar(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template(
+        "{msg} [{bar:40}] {bytes}/{total_bytes} ({bytes_per_sec}, {eta} left)",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_message(message);
+    bar
+}
+
+/// Trims ASCII spaces/tabs and one pair of surrounding double quotes.
+#[inline]
+fn clean(field: &[u8]) -> &[u8] {
+    let f = field.trim_ascii();
+    match f {
+        [b'"', inner @ .., b'"'] => inner.trim_ascii(),
+        _ => f,
+    }
+}
+
+#[inline]
+fn parse_f64(field: &[u8]) -> Option<f64> {
+    std::str::from_utf8(clean(field)).ok()?.parse::<f64>().ok()
+}
+
+/// Reduces the rows of `samples.csv` (header included) to statistics per plan segment.
+/// `path` is only used in messages.
+pub fn read_samples<R: BufRead>(
+    mut reader: R,
+    plan: &Plan,
+    path: &Path,
+) -> Result<(Vec<SegmentStats>, ReadReport), RecordingError> {
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut report = ReadReport::default();
+    let mut line: Vec<u8> = Vec::with_capacity(256);
+
+    // Header (with an optional UTF-8 byte-order mark and CR).
+    let n = reader.read_until(b'\n', &mut line).map_err(io)?;
+    report.bytes += n as u64;
+    let header = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&line);
+    let header = String::from_utf8_lossy(header.trim_ascii_end()).into_owned();
+    let found: Vec<&str> = header
+        .split(',')
+        .map(|h| h.trim().trim_matches('"'))
+        .collect();
+    if found != COLUMNS {
+        let column = (0..COLUMNS.len().max(found.len()))
+            .find(|&i| found.get(i) != COLUMNS.get(i))
+            .map_or(1, |i| i + 1);
+        return Err(RecordingError::Header {
+            path: path.to_path_buf(),
+            found: header,
+            column,
+        });
+    }
+
+    let mut accs: Vec<SegmentAccumulator> = plan
+        .segments
+        .iter()
+        .map(|s| SegmentAccumulator::new(s.name.clone()))
+        .collect();
+    let mut first_rejected: Vec<Option<u64>> = vec![None; accs.len()];
+    let names: Vec<&[u8]> = plan.segments.iter().map(|s| s.name.as_bytes()).collect();
+    let mut current: Option<usize> = None;
+    let mut line_no: u64 = 1;
+
+    loop {
+        line.clear();
+        let n = reader.read_until(b'\n', &mut line).map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        line_no += 1;
+        report.bytes += n as u64;
+        let Some(body) = line.strip_suffix(b"\n") else {
+            // Only the last line of a file can lack its line end.
+            if !line.trim_ascii().is_empty() {
+                report.skipped_partial_line = Some(line_no);
+                report.warnings.push(format!(
+                    "{} line {line_no}: the last line has no line end (recording cut short?); \
+                     skipped",
+                    path.display()
+                ));
+            }
+            break;
+        };
+        let body = body.strip_suffix(b"\r").unwrap_or(body);
+        if body.trim_ascii().is_empty() {
+            continue;
+        }
+        let mut fields: [&[u8]; 8] = [&[]; 8];
+        let mut count = 0usize;
+        for f in body.split(|&b| b == b',') {
+            if count < 8 {
+                fields[count] = f;
+            }
+            count += 1;
+        }
+        if count != 8 {
+            return Err(RecordingError::FieldCount {
+                path: path.to_path_buf(),
+                line: line_no,
+                found: count,
+            });
+        }
+        let name = clean(fields[0]);
+        let idx = match current {
+            Some(i) if names[i] == name => i,
+            _ => {
+                let Some(i) = names.iter().position(|n| *n == name) else {
+                    return Err(RecordingError::UnknownSegment {
+                        path: path.to_path_buf(),
+                        line: line_no,
+                        name: String::from_utf8_lossy(name).into_owned(),
+                    });
+                };
+                current = Some(i);
+                i
+            }
+        };
+        let mut v = [0.0f64; 7];
+        for (k, slot) in v.iter_mut().enumerate() {
+            *slot = match parse_f64(fields[k + 1]) {
+                Some(x) => x,
+                None => {
+                    return Err(RecordingError::Number {
+                        path: path.to_path_buf(),
+                        line: line_no,
+                        column: k + 2,
+                        text: shorten(&String::from_utf8_lossy(clean(fields[k + 1]))),
+                    })
+                }
+            };
+        }
+        report.rows += 1;
+        let acc = &mut accs[idx];
+        let before = acc.count();
+        acc.push(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]]);
+        if acc.count() == before {
+            report.rejected_rows += 1;
+            first_rejected[idx].get_or_insert(line_no);
+        }
+    }
+    if report.rows == 0 {
+        return Err(RecordingError::NoRows(path.to_path_buf()));
+    }
+
+    let mut stats = Vec::with_capacity(accs.len());
+    for ((acc, seg), first_bad) in accs.iter().zip(&plan.segments).zip(&first_rejected) {
+        let st = acc.finish();
+        if let Some(line) = first_bad {
+            let rejected = st.as_ref().map_or(0, |s| s.rejected_rows);
+            report.warnings.push(format!(
+                "segment '{}': rows with NaN or infinite values left out (first at line {line}{})",
+                seg.name,
+                if rejected > 0 {
+                    format!(", {rejected} in all")
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        match st {
+            None => {
+                report.segments_without_rows.push(seg.name.clone());
+                report.warnings.push(format!(
+                    "segment '{}' of the plan has no usable rows in {}: it is left out",
+                    seg.name,
+                    path.display()
+                ));
+            }
+            Some(s) => {
+                if let Some(d) = seg.duration_s {
+                    let expected = d * plan.sample_rate_hz;
+                    if (s.count as f64) < 0.5 * expected {
+                        report.warnings.push(format!(
+                            "segment '{}' has {} usable rows; the plan expects about {:.0} \
+                             ({d} s at {} Hz): was it cut short?",
+                            seg.name, s.count, expected, plan.sample_rate_hz
+                        ));
+                    }
+                }
+                stats.push(s);
+            }
+        }
+    }
+    Ok((stats, report))
+}
+
+/// Writes a session directory: `plan.toml` first, then `samples.csv` row by row through a buffer that
+/// is flushed to the disk at every segment end, so that whatever happens later, the segments recorded
+/// so far are on disk and readable (a crash mid-segment leaves at most a partial last line, which the
+/// reader skips with a warning).
+pub struct SessionWriter {
+    dir: PathBuf,
+    samples_path: PathBuf,
+    out: BufWriter<File>,
+    names: Vec<String>,
+    current: Option<usize>,
+    rows: u64,
+    line: Vec<u8>,
+    float: ryu::Buffer,
+}
+
+impl SessionWriter {
+    /// Creates `dir` (and parents) if needed, writes and syncs `plan.toml`, and starts `samples.csv`.
+    /// Refuses to replace an existing `samples.csv` unless `overwrite`.
+    pub fn create(
+        dir: &Path,
+        plan: &Plan,
+        overwrite: bool,
+    ) -> Result<SessionWriter, RecordingError> {
+        plan.validate()?;
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| RecordingError::Io { path, source }
+        };
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let samples_path = dir.join(SAMPLES_FILE);
+        if !overwrite && samples_path.exists() {
+            return Err(RecordingError::Exists(samples_path));
+        }
+        let plan_path = dir.join(PLAN_FILE);
+        write_synced(&plan_path, plan.to_toml().as_bytes()).map_err(io(&plan_path))?;
+        let file = File::create(&samples_path).map_err(io(&samples_path))?;
+        let mut out = BufWriter::with_capacity(1 << 20, file);
+        out.write_all(SAMPLES_HEADER.as_bytes())
+            .and_then(|_| out.write_all(b"\n"))
+            .and_then(|_| out.flush())
+            .map_err(io(&samples_path))?;
+        Ok(SessionWriter {
+            dir: dir.to_path_buf(),
+            samples_path,
+            out,
+            names: plan.segments.iter().map(|s| s.name.clone()).collect(),
+            current: None,
+            rows: 0,
+            line: Vec::with_capacity(256),
+            float: ryu::Buffer::new(),
+        })
+    }
+
+    /// The session directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Appends one sample of `segment`. Changing segment ends the previous one (flush to disk).
+    /// Floats are written in their shortest exact form, so they read back bit for bit.
+    pub fn write_row(
+        &mut self,
+        segment: &str,
+        t_s: f64,
+        u: &[f64; 3],
+        w_rad_s: &[f64; 3],
+    ) -> Result<(), RecordingError> {
+        let idx = match self.current {
+            Some(i) if self.names[i] == segment => i,
+            previous => {
+                let i = self
+                    .names
+                    .iter()
+                    .position(|n| n == segment)
+                    .ok_or_else(|| RecordingError::WriterSegment(segment.to_string()))?;
+                if previous.is_some() {
+                    self.end_segment()?;
+                }
+                self.current = Some(i);
+                i
+            }
+        };
+        self.line.clear();
+        self.line.extend_from_slice(self.names[idx].as_bytes());
+        for v in std::iter::once(&t_s).chain(u).chain(w_rad_s) {
+            self.line.push(b',');
+            self.line
+                .extend_from_slice(self.float.format(*v).as_bytes());
+        }
+        self.line.push(b'\n');
+        self.out
+            .write_all(&self.line)
+            .map_err(|source| RecordingError::Io {
+                path: self.samples_path.clone(),
+                source,
+            })?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Ends the current segment: everything written so far goes to the disk.
+    pub fn end_segment(&mut self) -> Result<(), RecordingError> {
+        self.current = None;
+        self.out
+            .flush()
+            .and_then(|_| self.out.get_ref().sync_data())
+            .map_err(|source| RecordingError::Io {
+                path: self.samples_path.clone(),
+                source,
+            })
+    }
+
+    /// Ends the recording; returns the number of rows written.
+    pub fn finish(mut self) -> Result<u64, RecordingError> {
+        self.end_segment()?;
+        Ok(self.rows)
+    }
+}
+
+fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = File::create(path)?;
+    f.write_all(bytes)?;
+    f.sync_all()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PLAN: &str = r#"
+output_unit = "V"
+sample_rate_hz = 100
+[[segment]]
+name = "x+"
+up_b = [1, 0, 0]
+duration_s = 1
+[[segment]]
+name = "x+ 200"
+up_b = [1, 0, 0]
+rate_deg_s = 200
+[[segment]]
+name = "z-"
+up_b = [0, 0, -1]
+"#;
+
+    fn plan() -> Plan {
+        Plan::parse(PLAN).unwrap()
+    }
+
+    type Row = (&'static str, f64, [f64; 3], [f64; 3]);
+
+    /// Rows of the three segments, with "x+" split in two runs around "x+ 200" (non-contiguous).
+    fn rows() -> Vec<Row> {
+        let mut v = Vec::new();
+        for k in 0..300 {
+            let seg = match k {
+                0..=99 | 200..=229 => "x+",
+                100..=199 => "x+ 200",
+                _ => "z-",
+            };
+            let t = k as f64 * 0.01 + 1e3;
+            let x = (k as f64 * 0.731).sin();
+            let y = (k as f64 * 1.37).cos();
+            v.push((
+                seg,
+                t,
+                [2.4 + 4e-4 * x, 2.38 - 3e-4 * y, 2.43 + 1e-4 * x * y],
+                [3.49 + 0.01 * y, 1e-3 * x, -2e-3 * x * y],
+            ));
+        }
+        v
+    }
+
+    fn write_session(dir: &Path, rows: &[Row]) {
+        let mut w = SessionWriter::create(dir, &plan(), false).unwrap();
+        for (s, t, u, g) in rows {
+            w.write_row(s, *t, u, g).unwrap();
+        }
+        assert_eq!(w.finish().unwrap(), rows.len() as u64);
+    }
+
+    fn read_text(text: &str) -> Result<(Vec<SegmentStats>, ReadReport), RecordingError> {
+        read_samples(text.as_bytes(), &plan(), Path::new("samples.csv"))
+    }
+
+    #[test]
+    fn round_trip_matches_two_pass_statistics() {
+        let dir = tempfile::tempdir().unwrap();
+        let rows = rows();
+        write_session(dir.path(), &rows);
+        let session = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        assert_eq!(session.plan, plan());
+        assert_eq!(session.report.rows, 300);
+        assert!(session.report.warnings.is_empty(), "{:?}", session.report);
+        assert_eq!(session.stats.len(), 3);
+        for st in &session.stats {
+            let mine: Vec<&Row> = rows.iter().filter(|r| r.0 == st.name).collect();
+            let n = mine.len() as f64;
+            assert_eq!(st.count, mine.len() as u64);
+            assert_eq!(st.t_first_s, mine[0].1);
+            assert_eq!(st.t_last_s, mine[mine.len() - 1].1);
+            for i in 0..3 {
+                let mu = mine.iter().map(|r| r.2[i]).sum::<f64>() / n;
+                let mw = mine.iter().map(|r| r.3[i]).sum::<f64>() / n;
+                assert!((st.mean_u[i] - mu).abs() < 1e-13, "{}", st.name);
+                assert!((st.mean_w_rad_s[i] - mw).abs() < 1e-13);
+                for j in 0..3 {
+                    let muj = mine.iter().map(|r| r.2[j]).sum::<f64>() / n;
+                    let mwj = mine.iter().map(|r| r.3[j]).sum::<f64>() / n;
+                    let cu = mine
+                        .iter()
+                        .map(|r| (r.2[i] - mu) * (r.2[j] - muj))
+                        .sum::<f64>()
+                        / (n - 1.0);
+                    let cw = mine
+                        .iter()
+                        .map(|r| (r.3[i] - mw) * (r.3[j] - mwj))
+                        .sum::<f64>()
+                        / (n - 1.0);
+                    let wwt = mine.iter().map(|r| r.3[i] * r.3[j]).sum::<f64>() / n;
+                    assert!((st.cov_u[i][j] - cu).abs() < 1e-17, "{} {cu}", st.name);
+                    assert!((st.cov_w[i][j] - cw).abs() < 1e-15);
+                    assert!((st.mean_wwt[i][j] - wwt).abs() < 1e-12);
+                }
+            }
+        }
+        // Bit-exact floats: the file re-read row by row equals what was written.
+        let text = std::fs::read_to_string(dir.path().join(SAMPLES_FILE)).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some(SAMPLES_HEADER));
+        for (line, r) in lines.zip(&rows) {
+            let f: Vec<&str> = line.split(',').collect();
+            assert_eq!(f[0], r.0);
+            assert_eq!(f[1].parse::<f64>().unwrap(), r.1);
+            assert_eq!(f[2].parse::<f64>().unwrap(), r.2[0]);
+            assert_eq!(f[7].parse::<f64>().unwrap(), r.3[2]);
+        }
+        // The plan was written first and is what the reader got; no overwriting without asking.
+        let e = SessionWriter::create(dir.path(), &plan(), false)
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("already exists"), "{e}");
+    }
+
+    #[test]
+    fn tolerant_of_crlf_bom_quotes_spaces_and_blank_lines() {
+        let text = "\u{feff}segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\r\n\
+                    \"x+\", 0.0, 2.4, 2.38, 2.43, 0, 0, 0\r\n\
+                    \r\n\
+                    x+,0.01,2.5,2.38,2.43,0,0,0\r\n";
+        let (stats, report) = read_text(text).unwrap();
+        assert_eq!(report.rows, 2);
+        assert!((stats[0].mean_u[0] - 2.45).abs() < 1e-12);
+    }
+
+    #[test]
+    fn truncated_last_line_is_skipped_with_a_warning_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        write_session(dir.path(), &rows());
+        let path = dir.path().join(SAMPLES_FILE);
+        let full = std::fs::read(&path).unwrap();
+        // Cut in the middle of the last line.
+        std::fs::write(&path, &full[..full.len() - 9]).unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        assert_eq!(s.report.rows, 299);
+        assert_eq!(s.report.skipped_partial_line, Some(301));
+        let w = s.report.warnings.join("\n");
+        assert!(w.contains("line 301") && w.contains("cut short"), "{w}");
+        // A cut that leaves a short line in the middle (e.g. two files glued) is an error.
+        let mut glued = full[..full.len() - 60].to_vec();
+        glued.extend_from_slice(b"\nz-,1,2,3,4,5,6,7\n");
+        std::fs::write(&path, glued).unwrap();
+        let e = read_session(dir.path(), &ReadOptions { quiet: true })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 301") && e.contains("fields, expected 8"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn nan_rows_are_counted_left_out_and_reported() {
+        let text = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n\
+                    x+,0,2.4,2.38,2.43,0,0,0\n\
+                    x+,0.01,NaN,2.38,2.43,0,0,0\n\
+                    x+,0.02,2.6,2.38,2.43,0,0,inf\n\
+                    x+,0.03,2.6,2.38,2.43,0,0,0\n";
+        let (stats, report) = read_text(text).unwrap();
+        assert_eq!((stats[0].count, stats[0].rejected_rows), (2, 2));
+        assert_eq!((report.rows, report.rejected_rows), (4, 2));
+        let w = report.warnings.join("\n");
+        assert!(w.contains("'x+'") && w.contains("first at line 3"), "{w}");
+        assert!((stats[0].mean_u[0] - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn wrong_header_names_the_column_and_the_expected_header() {
+        let e = read_text("segment,t,u_x,u_y,u_z,w_x,w_y,w_z\nx+,0,1,1,1,0,0,0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 1, column 2") && e.contains(SAMPLES_HEADER),
+            "{e}"
+        );
+        let e = read_text("").unwrap_err().to_string();
+        assert!(e.contains("line 1, column 1"), "{e}");
+    }
+
+    #[test]
+    fn non_numeric_field_names_line_and_column() {
+        let text = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n\
+                    x+,0,2.4,2.38,2.43,0,0,0\n\
+                    x+,0.01,2.4,2.3x8,2.43,0,0,0\n";
+        let e = read_text(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 3, column 4 (u_y)") && e.contains("'2.3x8' is not a number"),
+            "{e}"
+        );
+        let e = read_text(&text.replace("2.3x8", ""))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 3, column 4"), "{e}");
+    }
+
+    #[test]
+    fn segment_missing_from_the_plan_is_an_error_naming_it_and_the_fix() {
+        let text = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n\
+                    x+,0,2.4,2.38,2.43,0,0,0\n\
+                    y+,0.01,2.4,2.38,2.43,0,0,0\n";
+        let e = read_text(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 3") && e.contains("'y+' is not in plan.toml") && e.contains("add a"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn plan_segment_without_rows_is_flagged_and_left_out() {
+        let text = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n\
+                    x+,0,2.4,2.38,2.43,0,0,0\n\
+                    z-,0.01,2.4,2.38,2.43,0,0,0\n";
+        let (stats, report) = read_text(text).unwrap();
+        assert_eq!(stats.len(), 2);
+        assert_eq!(report.segments_without_rows, vec!["x+ 200".to_string()]);
+        let w = report.warnings.join("\n");
+        assert!(
+            w.contains("'x+ 200'") && w.contains("no usable rows"),
+            "{w}"
+        );
+        // "x+" plans 1 s at 100 Hz but has one row.
+        assert!(w.contains("'x+' has 1 usable rows"), "{w}");
+        let e = read_text("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no data rows"), "{e}");
+    }
+
+    #[test]
+    fn writer_refuses_unknown_segments_and_flushes_each_segment() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = SessionWriter::create(dir.path(), &plan(), false).unwrap();
+        w.write_row("x+", 0.0, &[1.0; 3], &[0.0; 3]).unwrap();
+        w.write_row("z-", 0.01, &[1.0; 3], &[0.0; 3]).unwrap();
+        // Changing segment flushed "x+": it is on disk while the writer is still open.
+        let text = std::fs::read_to_string(dir.path().join(SAMPLES_FILE)).unwrap();
+        assert_eq!(text.lines().count(), 2, "{text}");
+        let e = w.write_row("nope", 0.02, &[1.0; 3], &[0.0; 3]).unwrap_err();
+        assert!(e.to_string().contains("'nope'"), "{e}");
+        drop(w);
+    }
+}
