@@ -4,4 +4,5 @@
 pub mod convert;
 pub mod navigation;
 pub mod recording;
+pub mod simulate;
 pub mod unit_file;

@@ -1,0 +1,665 @@
+//! The virtual unit on a virtual rate table: `host simulate`.
+//!
+//! Every sample goes through the one forward model of the shared crate
+//! (`TableState::motion` → `ForwardModel::outputs`), then through the noise model: accelerometer white
+//! noise, bias random walk and ADC quantisation; table attitude error (a random tilt per mount) and
+//! rate error (scale and offset); gyro white noise and bias. The random numbers come from xoshiro256++
+//! seeded by SplitMix64 with one stream per noise source, and the normal deviates from the polar method
+//! with `libm`'s logarithm: the bytes of a simulated session depend only on the inputs and the seed,
+//! not on the platform or on a dependency's version, and switching one noise source on or off does not
+//! change the draws of the others.
+
+use crate::recording::csv_io::{RecordingError, SessionWriter};
+use crate::recording::{Plan, PlanError};
+use crate::unit_file::UnitFile;
+use serde::{Deserialize, Serialize};
+use shared::forward::{ForwardModel, TableState};
+use shared::linalg;
+use shared::Calibration;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The file a simulated session's truth is written to.
+pub const TRUTH_FILE: &str = "truth.toml";
+
+/// What noise to add. Every field has a default (`[noise]` in a unit file may give any subset).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NoiseModel {
+    /// Accelerometer white noise per sample, 1σ, mg (converted with each axis's scale factor).
+    pub accel_white_mg: f64,
+    /// ADC quantisation step, output unit (V or LSB); 0 = none.
+    pub accel_quantum_out: f64,
+    /// Accelerometer bias random walk, mg/√s (each axis starts at 0 at the session's start).
+    pub accel_bias_walk_mg_sqrt_s: f64,
+    /// Table attitude error: each mount's "up" is tilted by a random angle, 1σ per tilt axis, degrees.
+    pub table_tilt_deg: f64,
+    /// Table rate scale error (fraction; 1e-4 = 100 ppm), applied to spinning segments.
+    pub table_rate_scale: f64,
+    /// Table rate offset, °/s, applied to spinning segments.
+    pub table_rate_offset_deg_s: f64,
+    /// Gyro white noise per sample, 1σ, °/s.
+    pub gyro_white_deg_s: f64,
+    /// Gyro bias, body axes, °/s.
+    pub gyro_bias_deg_s: [f64; 3],
+}
+
+impl Default for NoiseModel {
+    /// 1 mg accelerometer white noise, 0.05 °/s gyro white noise, nothing else.
+    fn default() -> Self {
+        NoiseModel {
+            accel_white_mg: 1.0,
+            accel_quantum_out: 0.0,
+            accel_bias_walk_mg_sqrt_s: 0.0,
+            table_tilt_deg: 0.0,
+            table_rate_scale: 0.0,
+            table_rate_offset_deg_s: 0.0,
+            gyro_white_deg_s: 0.05,
+            gyro_bias_deg_s: [0.0; 3],
+        }
+    }
+}
+
+impl NoiseModel {
+    /// No noise and no table error at all: the outputs are exactly the forward model's.
+    pub fn none() -> Self {
+        NoiseModel {
+            accel_white_mg: 0.0,
+            gyro_white_deg_s: 0.0,
+            ..NoiseModel::default()
+        }
+    }
+
+    /// The `[noise]` table of a unit file, over the defaults; `None` when there is none.
+    pub fn from_unit_file(unit: &UnitFile) -> Result<Option<NoiseModel>, SimulateError> {
+        match unit.other.get("noise") {
+            None => Ok(None),
+            Some(v) => v
+                .clone()
+                .try_into::<NoiseModel>()
+                .map(Some)
+                .map_err(|e| SimulateError::Noise(format!("[noise] in the unit file: {e}"))),
+        }
+    }
+
+    /// Checks that every value is finite and every σ non-negative.
+    pub fn validate(&self) -> Result<(), SimulateError> {
+        let sigmas = [
+            ("accel_white_mg", self.accel_white_mg),
+            ("accel_quantum_out", self.accel_quantum_out),
+            ("accel_bias_walk_mg_sqrt_s", self.accel_bias_walk_mg_sqrt_s),
+            ("table_tilt_deg", self.table_tilt_deg),
+            ("gyro_white_deg_s", self.gyro_white_deg_s),
+        ];
+        for (name, v) in sigmas {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SimulateError::Noise(format!(
+                    "{name} = {v} must be a finite number ≥ 0"
+                )));
+            }
+        }
+        let others = [self.table_rate_scale, self.table_rate_offset_deg_s]
+            .into_iter()
+            .chain(self.gyro_bias_deg_s);
+        if others.into_iter().any(|v| !v.is_finite()) {
+            return Err(SimulateError::Noise(
+                "table_rate_scale, table_rate_offset_deg_s and gyro_bias_deg_s must be finite"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why a simulation cannot run.
+#[derive(Debug)]
+pub enum SimulateError {
+    /// The unit's parameters are unusable.
+    Unit(String),
+    /// The plan is unusable for simulation.
+    Plan(PlanError),
+    /// A noise parameter is wrong.
+    Noise(String),
+    /// Writing the session failed.
+    Recording(RecordingError),
+}
+
+impl std::fmt::Display for SimulateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SimulateError::Unit(m) => write!(f, "the unit to simulate is not usable: {m}"),
+            SimulateError::Plan(e) => write!(f, "{e}"),
+            SimulateError::Noise(m) => write!(f, "noise model: {m}"),
+            SimulateError::Recording(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for SimulateError {}
+
+impl From<RecordingError> for SimulateError {
+    fn from(e: RecordingError) -> Self {
+        SimulateError::Recording(e)
+    }
+}
+
+/// What a simulation did, beyond the samples.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SimulationSummary {
+    /// The seed.
+    pub seed: u64,
+    /// Rows produced.
+    pub rows: u64,
+    /// The "up" actually used for each mount (after the drawn tilt), body axes.
+    pub mount_up_b: BTreeMap<String, [f64; 3]>,
+    /// The tilt drawn for each mount, degrees.
+    pub mount_tilt_deg: BTreeMap<String, f64>,
+    /// Notes for the user (e.g. the plan's output unit was changed to the unit's).
+    #[serde(skip)]
+    pub notes: Vec<String>,
+}
+
+/// xoshiro256++ (Blackman and Vigna), seeded through SplitMix64: small, fast, and fixed forever, so
+/// that a seed names the same session on every machine.
+#[derive(Clone, Debug)]
+pub struct Rng {
+    s: [u64; 4],
+    spare: Option<f64>,
+}
+
+fn splitmix64(x: &mut u64) -> u64 {
+    *x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *x;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl Rng {
+    /// Stream `stream` of seed `seed` (different streams are independent for all practical purposes).
+    pub fn new(seed: u64, stream: u64) -> Rng {
+        let mut x = seed ^ stream.wrapping_mul(0xD605_BBB5_8C8A_BBDD);
+        let s = [
+            splitmix64(&mut x),
+            splitmix64(&mut x),
+            splitmix64(&mut x),
+            splitmix64(&mut x),
+        ];
+        Rng { s, spare: None }
+    }
+
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        let s = &mut self.s;
+        let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
+        let t = s[1] << 17;
+        s[2] ^= s[0];
+        s[3] ^= s[1];
+        s[1] ^= s[2];
+        s[0] ^= s[3];
+        s[2] ^= t;
+        s[3] = s[3].rotate_left(45);
+        result
+    }
+
+    /// Uniform on (−1, 1), never exactly 0 or ±1.
+    fn symmetric(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) * (2.0 / (1u64 << 53) as f64) - 1.0
+    }
+
+    /// A standard normal deviate (Marsaglia's polar method).
+    pub fn normal(&mut self) -> f64 {
+        if let Some(z) = self.spare.take() {
+            return z;
+        }
+        loop {
+            let a = self.symmetric();
+            let b = self.symmetric();
+            let s = a * a + b * b;
+            if s < 1.0 && s > 0.0 {
+                let f = libm::sqrt(-2.0 * libm::log(s) / s);
+                self.spare = Some(b * f);
+                return a * f;
+            }
+        }
+    }
+}
+
+const STREAM_ACCEL: u64 = 1;
+const STREAM_GYRO: u64 = 2;
+const STREAM_WALK: u64 = 3;
+const STREAM_TILT: u64 = 4;
+
+/// `up` tilted by small angles (radians) about two axes perpendicular to it, renormalised.
+fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+    // A vector not parallel to `up`, then two unit vectors perpendicular to it.
+    let pick = if up[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = linalg::cross(&up, &pick);
+    let e1 = e1.map(|c| c / linalg::norm(&e1));
+    let e2 = linalg::cross(&up, &e1);
+    let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e1[j] + n2 * e2[j]);
+    let n = linalg::norm(&v);
+    v.map(|c| c / n)
+}
+
+/// Simulates `plan` on `cal`, handing each row to `sink(segment, t_s, u, w_rad_s)`.
+/// Time runs on across segments from 0 at `1 / sample_rate_hz` per row.
+pub fn simulate_rows<E>(
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    seed: u64,
+    mut sink: impl FnMut(&str, f64, &[f64; 3], &[f64; 3]) -> Result<(), E>,
+) -> Result<Result<SimulationSummary, E>, SimulateError> {
+    plan.validate().map_err(SimulateError::Plan)?;
+    noise.validate()?;
+    let model = ForwardModel::new(cal).map_err(|e| SimulateError::Unit(e.to_string()))?;
+    if let Some(s) = plan.segments.iter().find(|s| s.duration_s.is_none()) {
+        return Err(SimulateError::Plan(PlanError::Invalid(format!(
+            "segment '{}' has no duration_s; simulate needs one for every segment",
+            s.name
+        ))));
+    }
+    let rate = plan.sample_rate_hz;
+    let dt = 1.0 / rate;
+    // Noise in output units, per axis: mg × the axis's scale factor (‖row_i(M)‖).
+    let k: [f64; 3] = std::array::from_fn(|i| linalg::norm(&model.m_out_per_g[i]));
+    let white: [f64; 3] = k.map(|k| noise.accel_white_mg * 1e-3 * k);
+    let walk: [f64; 3] = k.map(|k| noise.accel_bias_walk_mg_sqrt_s * 1e-3 * k * dt.sqrt());
+    let gyro_sigma = noise.gyro_white_deg_s.to_radians();
+    let gyro_bias = noise.gyro_bias_deg_s.map(f64::to_radians);
+    let q = noise.accel_quantum_out;
+
+    let mut rng_accel = Rng::new(seed, STREAM_ACCEL);
+    let mut rng_gyro = Rng::new(seed, STREAM_GYRO);
+    let mut rng_walk = Rng::new(seed, STREAM_WALK);
+    let mut rng_tilt = Rng::new(seed, STREAM_TILT);
+
+    let mut summary = SimulationSummary {
+        seed,
+        rows: 0,
+        mount_up_b: BTreeMap::new(),
+        mount_tilt_deg: BTreeMap::new(),
+        notes: Vec::new(),
+    };
+    let mut drift = [0.0f64; 3];
+    let mut index: u64 = 0;
+    for seg in &plan.segments {
+        let mount = seg.mount_name();
+        let up = match summary.mount_up_b.get(&mount) {
+            Some(up) => *up,
+            None => {
+                let sigma = noise.table_tilt_deg.to_radians();
+                let up = if sigma > 0.0 {
+                    let (n1, n2) = (rng_tilt.normal() * sigma, rng_tilt.normal() * sigma);
+                    summary
+                        .mount_tilt_deg
+                        .insert(mount.clone(), n1.hypot(n2).to_degrees());
+                    tilt(seg.up_b, n1, n2)
+                } else {
+                    seg.up_b
+                };
+                summary.mount_up_b.insert(mount.clone(), up);
+                up
+            }
+        };
+        let duration = seg.duration_s.unwrap_or(0.0);
+        let n = (duration * rate).round() as u64;
+        let r0 = seg.rate_deg_s;
+        let r1 = seg.rate_end_deg_s.unwrap_or(r0);
+        let spinning = !seg.is_static();
+        let accel_deg_s2 = (r1 - r0) / duration;
+        let mut table = TableState {
+            up_b: up,
+            rate_rad_s: 0.0,
+            accel_rad_s2: 0.0,
+            centre_m: seg.table_centre_m.unwrap_or([0.0; 3]),
+        };
+        for j in 0..n {
+            let t_local = j as f64 * dt;
+            if spinning {
+                let cmd = r0 + accel_deg_s2 * t_local;
+                table.rate_rad_s = (cmd * (1.0 + noise.table_rate_scale)
+                    + noise.table_rate_offset_deg_s)
+                    .to_radians();
+                table.accel_rad_s2 = (accel_deg_s2 * (1.0 + noise.table_rate_scale)).to_radians();
+            }
+            let motion = table.motion(plan.gravity_m_s2);
+            let mut u = model.outputs(&motion).raw;
+            for i in 0..3 {
+                if walk[i] > 0.0 {
+                    drift[i] += walk[i] * rng_walk.normal();
+                    u[i] += drift[i];
+                }
+                if white[i] > 0.0 {
+                    u[i] += white[i] * rng_accel.normal();
+                }
+                if q > 0.0 {
+                    u[i] = (u[i] / q).round() * q;
+                }
+            }
+            let mut w = motion.omega.rad_s;
+            for i in 0..3 {
+                w[i] += gyro_bias[i];
+                if gyro_sigma > 0.0 {
+                    w[i] += gyro_sigma * rng_gyro.normal();
+                }
+            }
+            let t = index as f64 * dt;
+            if let Err(e) = sink(&seg.name, t, &u, &w) {
+                return Ok(Err(e));
+            }
+            index += 1;
+        }
+    }
+    summary.rows = index;
+    Ok(Ok(summary))
+}
+
+/// Simulates `plan` on `unit` into the session directory `dir` (`plan.toml`, `samples.csv`,
+/// `truth.toml`). The plan written is `plan` with the unit's output unit (and its unit id when the
+/// plan has none), so that the session is self-consistent.
+pub fn simulate_to_dir(
+    dir: &Path,
+    unit: &UnitFile,
+    plan: &Plan,
+    noise: &NoiseModel,
+    seed: u64,
+    overwrite: bool,
+) -> Result<SimulationSummary, SimulateError> {
+    let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
+    let mut notes = Vec::new();
+    let (fitted, normalisation) = cal
+        .statics
+        .to_fitted()
+        .map_err(|e| SimulateError::Unit(e.to_string()))?;
+    if normalisation.needs_warning() {
+        notes.push(format!(
+            "the unit's installation angles are inconsistent (row norms {:.7?}); simulated with each \
+             sensing direction normalised (MODEL.md §2), as written to truth.toml",
+            normalisation.row_norms
+        ));
+    }
+    let mut plan = plan.clone();
+    let unit_name = cal.statics.output_unit.into();
+    if plan.output_unit != unit_name {
+        notes.push(format!(
+            "the plan's output_unit {} was changed to the unit's, {}",
+            plan.output_unit.symbol(),
+            unit_name.symbol()
+        ));
+        plan.output_unit = unit_name;
+    }
+    if plan.unit_id.is_none() {
+        plan.unit_id.clone_from(&unit.unit_id);
+    }
+
+    let mut writer = SessionWriter::create(dir, &plan, overwrite)?;
+    let result = simulate_rows(&cal, &plan, noise, seed, |seg, t, u, w| {
+        writer.write_row(seg, t, u, w)
+    })?;
+    let mut summary = result?;
+    writer.finish()?;
+    summary.notes = notes;
+
+    // truth.toml: the unit as simulated (normalised angles), the noise and what was drawn.
+    let truth_cal = Calibration {
+        statics: fitted
+            .to_paper()
+            .map_err(|e| SimulateError::Unit(e.to_string()))?,
+        ..cal
+    };
+    let unit_id = unit.unit_id().map_err(SimulateError::Unit)?;
+    let mut truth = UnitFile::from_calibration(&truth_cal, unit_id, None);
+    truth.other = unit.other.clone();
+    truth.other.insert("noise".into(), to_value(noise));
+    let mut sim = toml::Table::new();
+    sim.insert("seed".into(), toml::Value::Integer(seed as i64));
+    sim.insert("rows".into(), toml::Value::Integer(summary.rows as i64));
+    sim.insert("mount_up_b".into(), to_value(&summary.mount_up_b));
+    sim.insert("mount_tilt_deg".into(), to_value(&summary.mount_tilt_deg));
+    truth
+        .other
+        .insert("simulation".into(), toml::Value::Table(sim));
+    let text = format!(
+        "# Written by `host simulate`: the simulated unit (installation angles normalised as the forward\n\
+         # model uses them, MODEL.md §2), the [noise] model and the seed. `host simulate --unit` reads it.\n{}",
+        truth.to_toml()
+    );
+    let path = dir.join(TRUTH_FILE);
+    std::fs::write(&path, text).map_err(|source| RecordingError::Io { path, source })?;
+    Ok(summary)
+}
+
+/// [`simulate_to_dir`] for a calibration (no `[noise]` table, no unit id).
+pub fn simulate_calibration_to_dir(
+    dir: &Path,
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    seed: u64,
+) -> Result<SimulationSummary, SimulateError> {
+    let unit = UnitFile::from_calibration(cal, None, None);
+    simulate_to_dir(dir, &unit, plan, noise, seed, true)
+}
+
+/// A TOML value of a plain serialisable value (the types used here always convert).
+fn to_value<T: Serialize>(v: &T) -> toml::Value {
+    toml::Value::try_from(v).unwrap_or_else(|e| toml::Value::String(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::builtin::builtin_plan;
+    use crate::recording::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
+
+    fn paper() -> UnitFile {
+        UnitFile::paper_unit()
+    }
+
+    fn plan(text: &str) -> Plan {
+        Plan::parse(&format!(
+            "output_unit = \"V\"\nsample_rate_hz = 1000\n{text}"
+        ))
+        .unwrap()
+    }
+
+    /// Rows of a session's samples.csv, parsed.
+    fn rows(dir: &Path) -> Vec<(String, [f64; 7])> {
+        let text = std::fs::read_to_string(dir.join(SAMPLES_FILE)).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                (
+                    f[0].to_string(),
+                    std::array::from_fn(|k| f[k + 1].parse().unwrap()),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn same_seed_same_bytes_other_seed_other_bytes() {
+        let short = builtin_plan("short").unwrap().unwrap();
+        let noise = NoiseModel {
+            accel_bias_walk_mg_sqrt_s: 0.01,
+            table_tilt_deg: 0.01,
+            ..NoiseModel::default()
+        };
+        let run = |seed| {
+            let dir = tempfile::tempdir().unwrap();
+            simulate_to_dir(dir.path(), &paper(), &short, &noise, seed, false).unwrap();
+            let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+            (read(SAMPLES_FILE), read(TRUTH_FILE), read("plan.toml"))
+        };
+        let a = run(7);
+        assert_eq!(a, run(7));
+        let b = run(8);
+        assert_ne!(a.0, b.0);
+        assert_eq!(a.2, b.2);
+        // The truth file reads back as a unit file with the noise model that was used.
+        let truth: UnitFile = toml::from_str(std::str::from_utf8(&a.1).unwrap()).unwrap();
+        assert_eq!(NoiseModel::from_unit_file(&truth).unwrap(), Some(noise));
+        assert_eq!(truth.other["simulation"]["seed"].as_integer(), Some(7));
+    }
+
+    #[test]
+    fn measured_noise_matches_the_requested_sigma() {
+        let p = plan(
+            "[[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nduration_s = 20\n\
+             [[segment]]\nname = \"z+ 200\"\nup_b = [0, 0, 1]\nrate_deg_s = 200\nduration_s = 5\n",
+        );
+        let noise = NoiseModel {
+            accel_white_mg: 1.0,
+            gyro_white_deg_s: 0.05,
+            gyro_bias_deg_s: [0.1, -0.2, 0.3],
+            table_rate_scale: 1e-3,
+            table_rate_offset_deg_s: 0.5,
+            ..NoiseModel::default()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &paper(), &p, &noise, 1, false).unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let k = paper().to_calibration().unwrap().statics.scale_out_per_g;
+        let st = &s.stats[0];
+        assert_eq!(st.count, 20_000);
+        for i in 0..3 {
+            let mg = st.std_u()[i] / k[i] * 1e3;
+            assert!((mg - 1.0).abs() < 0.03, "axis {i}: {mg} mg");
+            let gyro = st.std_w()[i].to_degrees();
+            assert!((gyro - 0.05).abs() < 0.0015, "gyro {i}: {gyro} °/s");
+            let bias = st.mean_w_rad_s[i].to_degrees();
+            assert!((bias - noise.gyro_bias_deg_s[i]).abs() < 2e-3, "{bias}");
+        }
+        // The table spins at 200·(1 + 1e-3) + 0.5 °/s; the gyro sees that plus its bias.
+        let spin = s.stats[1].mean_w_rad_s[2].to_degrees();
+        assert!((spin - (200.2 + 0.5 + 0.3)).abs() < 3e-3, "{spin}");
+    }
+
+    #[test]
+    fn bias_walk_and_quantisation_have_the_requested_size() {
+        let p = plan("[[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\nduration_s = 20\n");
+        let noise = NoiseModel {
+            accel_bias_walk_mg_sqrt_s: 0.1,
+            ..NoiseModel::none()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &paper(), &p, &noise, 3, false).unwrap();
+        let r = rows(dir.path());
+        let k = paper().to_calibration().unwrap().statics.scale_out_per_g;
+        for i in 0..3 {
+            let d: Vec<f64> = r
+                .windows(2)
+                .map(|w| w[1].1[1 + i] - w[0].1[1 + i])
+                .collect();
+            let sd = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+            let want = 0.1e-3 * k[i] * (1e-3f64).sqrt();
+            assert!((sd / want - 1.0).abs() < 0.03, "axis {i}: {sd} vs {want}");
+        }
+        let q = 1e-3;
+        let noise = NoiseModel {
+            accel_quantum_out: q,
+            ..NoiseModel::default()
+        };
+        simulate_to_dir(dir.path(), &paper(), &p, &noise, 3, true).unwrap();
+        let r = rows(dir.path());
+        let mut levels = std::collections::BTreeSet::new();
+        for (_, v) in &r {
+            for u in &v[1..4] {
+                assert!(((u / q) - (u / q).round()).abs() < 1e-6, "{u}");
+                levels.insert((u / q).round() as i64);
+            }
+        }
+        // 1 mg ≈ 0.4 mV of noise on a 1 mV step: a handful of levels per axis, not one.
+        assert!(levels.len() > 6, "{levels:?}");
+    }
+
+    #[test]
+    fn noise_free_simulation_is_exactly_the_shared_forward_model() {
+        let p = plan(
+            "[[segment]]\nname = \"y-\"\nup_b = [0, -1, 0]\nduration_s = 0.05\n\
+             [[segment]]\nname = \"oblique ramp\"\nup_b = [0.7071067811865475, 0, 0.7071067811865475]\n\
+             rate_deg_s = -50\nrate_end_deg_s = 300\nduration_s = 0.2\ntable_centre_m = [0.01, -0.02, 0.003]\n\
+             [[segment]]\nname = \"z+ 150\"\nup_b = [0, 0, 1]\nrate_deg_s = 150\nduration_s = 0.1\n",
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let unit = paper();
+        let summary =
+            simulate_to_dir(dir.path(), &unit, &p, &NoiseModel::none(), 5, false).unwrap();
+        assert_eq!(summary.rows, 350);
+        let model = ForwardModel::new(&unit.to_calibration().unwrap()).unwrap();
+        let r = rows(dir.path());
+        let mut start = 0;
+        for seg in &p.segments {
+            let n = (seg.duration_s.unwrap() * 1000.0).round() as usize;
+            let r0 = seg.rate_deg_s;
+            let a = (seg.rate_end_deg_s.unwrap_or(r0) - r0) / seg.duration_s.unwrap();
+            for j in 0..n {
+                let (name, v) = &r[start + j];
+                assert_eq!(name, &seg.name);
+                let t = j as f64 * 1e-3;
+                let table = TableState {
+                    up_b: seg.up_b,
+                    rate_rad_s: (r0 + a * t).to_radians(),
+                    accel_rad_s2: a.to_radians(),
+                    centre_m: seg.table_centre_m.unwrap_or([0.0; 3]),
+                };
+                let m = table.motion(9.80665);
+                assert_eq!(v[0], (start + j) as f64 * 1e-3);
+                assert_eq!(&v[1..4], &model.outputs(&m).raw[..], "{name} row {j}");
+                assert_eq!(&v[4..7], &m.omega.rad_s[..]);
+            }
+            start += n;
+        }
+        assert_eq!(start, r.len());
+    }
+
+    #[test]
+    fn table_tilt_is_drawn_per_mount_and_recorded() {
+        let short = builtin_plan("short").unwrap().unwrap();
+        let noise = NoiseModel {
+            table_tilt_deg: 0.01,
+            ..NoiseModel::none()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let s = simulate_to_dir(dir.path(), &paper(), &short, &noise, 11, false).unwrap();
+        // Six mounts (the spins share the "+" mounts with the static segments).
+        assert_eq!(s.mount_tilt_deg.len(), 6);
+        assert!(s.mount_tilt_deg.values().all(|t| *t > 0.0 && *t < 0.06));
+        let st = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let model = ForwardModel::new(&paper().to_calibration().unwrap()).unwrap();
+        let want = model.outputs(&TableState::at_rest(s.mount_up_b["x+"]).motion(9.80665));
+        for i in 0..3 {
+            assert!((st.stats[0].mean_u[i] - want.raw[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let p = plan("[[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\n");
+        let dir = tempfile::tempdir().unwrap();
+        let e = simulate_to_dir(dir.path(), &paper(), &p, &NoiseModel::none(), 1, false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'x+' has no duration_s"), "{e}");
+        let bad = NoiseModel {
+            accel_white_mg: -1.0,
+            ..NoiseModel::default()
+        };
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains("accel_white_mg"), "{e}");
+        let mut unit = paper();
+        unit.other.insert(
+            "noise".into(),
+            toml::Value::Table(toml::from_str("accel_white_mgg = 2").unwrap()),
+        );
+        let e = NoiseModel::from_unit_file(&unit).unwrap_err().to_string();
+        assert!(e.contains("accel_white_mgg"), "{e}");
+    }
+}
