@@ -2,6 +2,7 @@
 //! The binary (`src/main.rs`) is a thin clap layer over this library.
 
 pub mod convert;
+pub mod device;
 pub mod navigation;
 pub mod recording;
 pub mod simulate;

@@ -1,0 +1,319 @@
+//! The host side of the protocol (`shared::wire`): request/response over any byte [`Transport`],
+//! resynchronising on garbage, with a deadline on every wait so that a device that stops answering
+//! becomes a [`LinkError::Timeout`] naming what was awaited — never a hang.
+
+use shared::wire::{
+    self, Ack, CobsAccumulator, DeviceToHost, FeedResult, HostToDevice, Identity, RawWindow, StreamKind,
+    StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX, PROTOCOL_VERSION,
+};
+use shared::LeverMode;
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+/// A byte link to a device: a serial port, a pty to QEMU, or the in-process simulated device.
+pub trait Transport {
+    /// Sends all of `bytes`.
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError>;
+    /// Reads what is available into `buf`, waiting at most `timeout`; `Ok(0)` when nothing came.
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, LinkError>;
+}
+
+/// What went wrong on the link.
+#[derive(Debug)]
+pub enum LinkError {
+    /// The port could not be opened or failed.
+    Io(String, std::io::Error),
+    /// Nothing valid arrived in time.
+    Timeout {
+        /// What we were waiting for.
+        waiting_for: &'static str,
+        /// How long we waited.
+        after: Duration,
+    },
+    /// The device answered with a typed error.
+    Device(shared::wire::DeviceError),
+    /// The device answered something that does not fit the request.
+    Unexpected {
+        /// What we were waiting for.
+        waiting_for: &'static str,
+        /// What came.
+        got: String,
+    },
+    /// The device speaks another protocol version.
+    ProtocolVersion {
+        /// The device's version.
+        device: u16,
+    },
+    /// A calibration read back from the device is incomplete or inconsistent.
+    BadReadBack(String),
+}
+
+impl std::fmt::Display for LinkError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinkError::Io(what, e) => write!(f, "{what}: {e}"),
+            LinkError::Timeout { waiting_for, after } => write!(
+                f,
+                "the device stopped answering: no {waiting_for} within {:.1} s (check the cable, the port \
+                 name and that the firmware is running; power-cycle the board and retry)",
+                after.as_secs_f64()
+            ),
+            LinkError::Device(e) => write!(f, "the device refused: {e}"),
+            LinkError::Unexpected { waiting_for, got } => {
+                write!(f, "protocol error: expected {waiting_for}, the device sent {got}")
+            }
+            LinkError::ProtocolVersion { device } => write!(
+                f,
+                "the device speaks protocol version {device}, this host speaks {PROTOCOL_VERSION}: \
+                 flash the matching firmware"
+            ),
+            LinkError::BadReadBack(m) => write!(f, "calibration read back from the device is bad: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for LinkError {}
+
+/// A connected device.
+pub struct DeviceClient<T: Transport> {
+    transport: T,
+    accumulator: Box<CobsAccumulator<{ 2 * DEVICE_FRAME_MAX }>>,
+    /// Bytes received but not yet fed to the accumulator.
+    unread: Vec<u8>,
+    inbox: VecDeque<DeviceToHost>,
+    timeout: Duration,
+    /// Frames that did not decode (garbage on the line), since connecting.
+    pub garbage_frames: u64,
+}
+
+impl<T: Transport> DeviceClient<T> {
+    /// Wraps a transport; `timeout` bounds every wait for an answer.
+    pub fn new(transport: T, timeout: Duration) -> Self {
+        DeviceClient {
+            transport,
+            accumulator: Box::new(CobsAccumulator::new()),
+            unread: Vec::new(),
+            inbox: VecDeque::new(),
+            timeout,
+            garbage_frames: 0,
+        }
+    }
+
+    /// The transport (e.g. to inject faults in tests).
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.transport
+    }
+
+    /// Changes the answer timeout.
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
+    /// Sends one message.
+    pub fn send(&mut self, msg: &HostToDevice) -> Result<(), LinkError> {
+        let mut buf = [0u8; HOST_FRAME_MAX];
+        let frame = wire::encode_frame(msg, &mut buf).map_err(|_| LinkError::Unexpected {
+            waiting_for: "an encodable message",
+            got: format!("{msg:?}"),
+        })?;
+        self.transport.send(frame)
+    }
+
+    /// The next message from the device, waiting until `deadline`.
+    pub fn next_message(&mut self, waiting_for: &'static str, wait: Duration) -> Result<DeviceToHost, LinkError> {
+        let start = Instant::now();
+        loop {
+            if let Some(m) = self.inbox.pop_front() {
+                return Ok(m);
+            }
+            self.drain_unread();
+            if let Some(m) = self.inbox.pop_front() {
+                return Ok(m);
+            }
+            let elapsed = start.elapsed();
+            if elapsed >= wait {
+                return Err(LinkError::Timeout { waiting_for, after: wait });
+            }
+            let mut buf = [0u8; 4096];
+            let n = self.transport.receive(&mut buf, (wait - elapsed).min(Duration::from_millis(200)))?;
+            self.unread.extend_from_slice(&buf[..n]);
+        }
+    }
+
+    fn drain_unread(&mut self) {
+        let bytes = std::mem::take(&mut self.unread);
+        let mut window: &[u8] = &bytes;
+        while !window.is_empty() {
+            window = match self.accumulator.feed::<DeviceToHost>(window) {
+                FeedResult::Consumed => break,
+                FeedResult::OverFull(rest) | FeedResult::DeserError(rest) => {
+                    self.garbage_frames += 1;
+                    rest
+                }
+                FeedResult::Success { data, remaining } => {
+                    self.inbox.push_back(data);
+                    remaining
+                }
+            };
+        }
+    }
+
+    /// Sends `msg` and waits for the first answer that `pick` accepts, skipping stream frames.
+    /// A device error is returned as [`LinkError::Device`].
+    fn request<R>(
+        &mut self,
+        msg: &HostToDevice,
+        waiting_for: &'static str,
+        mut pick: impl FnMut(&DeviceToHost) -> Option<R>,
+    ) -> Result<R, LinkError> {
+        self.send(msg)?;
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let m = self.next_message(waiting_for, left)?;
+            if let Some(r) = pick(&m) {
+                return Ok(r);
+            }
+            match m {
+                DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
+                DeviceToHost::RawWindow(_)
+                | DeviceToHost::CompensatedWindow(_)
+                | DeviceToHost::RawSample(_)
+                | DeviceToHost::CompensatedSample(_) => continue,
+                other => {
+                    return Err(LinkError::Unexpected {
+                        waiting_for,
+                        got: format!("{other:?}"),
+                    })
+                }
+            }
+        }
+    }
+
+    /// Asks who the device is; checks the protocol version. Retries a few times, because a device
+    /// that just booted (or a QEMU pty that was just opened) may miss the first frame.
+    pub fn identify(&mut self) -> Result<Identity, LinkError> {
+        let mut last = None;
+        for _ in 0..3 {
+            match self.request(&HostToDevice::Identify, "an identity", |m| match m {
+                DeviceToHost::Identity(id) => Some(*id),
+                _ => None,
+            }) {
+                Ok(id) if id.protocol_version != PROTOCOL_VERSION => {
+                    return Err(LinkError::ProtocolVersion { device: id.protocol_version })
+                }
+                Ok(id) => return Ok(id),
+                Err(e @ LinkError::Timeout { .. }) => last = Some(e),
+                Err(LinkError::Unexpected { .. }) => continue,
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last.unwrap_or(LinkError::Timeout { waiting_for: "an identity", after: self.timeout }))
+    }
+
+    fn expect_ack(&mut self, msg: &HostToDevice, waiting_for: &'static str, want: Ack) -> Result<(), LinkError> {
+        self.request(msg, waiting_for, |m| match m {
+            DeviceToHost::Ack(a) if *a == want => Some(()),
+            _ => None,
+        })
+    }
+
+    /// Starts a stream of `kind` with `window_samples` per window.
+    pub fn start_stream(&mut self, kind: StreamKind, window_samples: u32) -> Result<(), LinkError> {
+        self.expect_ack(
+            &HostToDevice::Stream(StreamRequest { kind, window_samples }),
+            "a stream acknowledgement",
+            Ack::StreamStarted,
+        )
+    }
+
+    /// Stops streaming and discards what was queued.
+    pub fn stop_stream(&mut self) -> Result<(), LinkError> {
+        self.expect_ack(&HostToDevice::StopStream, "a stop acknowledgement", Ack::StreamStopped)?;
+        self.inbox.clear();
+        Ok(())
+    }
+
+    /// The next raw window of a running stream.
+    pub fn next_raw_window(&mut self) -> Result<RawWindow, LinkError> {
+        loop {
+            match self.next_message("a raw window", self.timeout)? {
+                DeviceToHost::RawWindow(w) => return Ok(w),
+                DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
+                _ => continue,
+            }
+        }
+    }
+
+    /// The next compensated window of a running stream.
+    pub fn next_compensated_window(&mut self) -> Result<wire::CompensatedWindow, LinkError> {
+        loop {
+            match self.next_message("a compensated window", self.timeout)? {
+                DeviceToHost::CompensatedWindow(w) => return Ok(w),
+                DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
+                _ => continue,
+            }
+        }
+    }
+
+    /// Sets the virtual table (simulated and QEMU devices).
+    pub fn set_table(&mut self, table: VirtualTable) -> Result<(), LinkError> {
+        self.expect_ack(&HostToDevice::SetVirtualTable(table), "a table acknowledgement", Ack::TableSet)
+    }
+
+    /// Chooses which lever-arm terms the device applies.
+    pub fn set_lever_mode(&mut self, mode: LeverMode) -> Result<(), LinkError> {
+        self.expect_ack(&HostToDevice::SetLeverMode(mode), "a lever-mode acknowledgement", Ack::LeverModeSet)
+    }
+
+    /// Writes a calibration blob chunk by chunk; the device validates and stores it at the end.
+    pub fn write_calibration(&mut self, blob: &[u8]) -> Result<(), LinkError> {
+        let chunks: Vec<_> = wire::blob_chunks(blob).collect();
+        let last = chunks.len().saturating_sub(1);
+        for (i, chunk) in chunks.into_iter().enumerate() {
+            let want_end = usize::from(chunk.offset) + usize::from(chunk.len);
+            self.request(&HostToDevice::WriteCalibration(chunk), "a calibration-write answer", |m| match m {
+                DeviceToHost::Ack(Ack::CalibrationStored) if i == last => Some(()),
+                DeviceToHost::Ack(Ack::ChunkReceived { received })
+                    if i != last && usize::from(*received) == want_end =>
+                {
+                    Some(())
+                }
+                _ => None,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Reads the stored calibration blob.
+    pub fn read_calibration(&mut self) -> Result<Vec<u8>, LinkError> {
+        let mut blob = Vec::new();
+        loop {
+            let offset = blob.len() as u16;
+            let chunk = self.request(&HostToDevice::ReadCalibration { offset }, "a calibration chunk", |m| match m {
+                DeviceToHost::CalibrationChunk(c) => Some(*c),
+                _ => None,
+            })?;
+            if chunk.offset != offset || usize::from(chunk.len) > wire::BLOB_CHUNK_LEN {
+                return Err(LinkError::BadReadBack(format!(
+                    "asked for offset {offset}, got offset {} length {}",
+                    chunk.offset, chunk.len
+                )));
+            }
+            blob.extend_from_slice(&chunk.data[..usize::from(chunk.len)]);
+            if blob.len() >= usize::from(chunk.total_len) || chunk.len == 0 {
+                blob.truncate(usize::from(chunk.total_len));
+                return Ok(blob);
+            }
+        }
+    }
+
+    /// Restarts the device and waits until it identifies again.
+    pub fn reset(&mut self) -> Result<Identity, LinkError> {
+        self.expect_ack(&HostToDevice::Reset, "a reset acknowledgement", Ack::Resetting)?;
+        self.inbox.clear();
+        self.unread.clear();
+        self.accumulator = Box::new(CobsAccumulator::new());
+        self.identify()
+    }
+}

@@ -1,0 +1,8 @@
+//! The link to a device: the protocol client, and the transports it runs over (a serial port, or the
+//! in-process simulated device).
+
+pub mod client;
+pub mod serial;
+pub mod sim;
+
+pub use client::{DeviceClient, LinkError, Transport};

@@ -1,0 +1,265 @@
+//! The simulated device: the firmware's own device-agnostic logic (request handler, sampling pipeline,
+//! A/B parameter store, virtual sensor) running in-process on virtual time, behind a [`Transport`].
+//!
+//! It is the same code the QEMU board runs, so `--port sim` exercises the real protocol handling,
+//! chunked blob writes, validation against the unit id, storage and reset; only the UART and the
+//! interrupt are replaced. Time is virtual: samples are produced as fast as the host asks for them,
+//! so a 15-minute plan runs in seconds. The line is rate-limited like a 921 600 Bd UART (about 92 bytes
+//! per millisecond), so a window too short for the link shows up as dropped frames, as on a board.
+//!
+//! Fault injection for the end-to-end tests: [`SimDevice::stop_answering_after_samples`] (a device that
+//! dies mid-segment) and [`SimDevice::inject_line_garbage`] (noise on the device→host line).
+
+use super::client::{LinkError, Transport};
+use firmware::pipeline::Pipeline;
+use firmware::protocol::{BoardEvent, Controller, DeviceInfo, LinkService};
+use firmware::storage::{AbStore, RamNorFlash};
+use firmware::virtual_sensor::VirtualSensor;
+use firmware::ByteLink;
+use shared::wire::Board;
+use shared::{Calibration, LeverMode, UnitId};
+use std::collections::VecDeque;
+use std::time::Duration;
+
+/// The simulated device's unit identifier.
+pub const SIM_UNIT_ID: UnitId = UnitId(*b"SIM-PAPER-01");
+/// Its sampling rate, Hz.
+pub const SIM_SAMPLE_RATE_HZ: u32 = 1000;
+/// UART bytes per sample at 921 600 Bd (10 bits per byte) and 1 kHz.
+const LINE_BYTES_PER_SAMPLE: u32 = 92;
+/// Virtual time the device may run inside one `receive` call before reporting silence.
+const MAX_SAMPLES_PER_RECEIVE: u32 = 20_000;
+const FLASH_ERASE: usize = 4096;
+const OUTPUT_QUEUE: usize = 16;
+
+type Store = AbStore<RamNorFlash<'static, FLASH_ERASE>>;
+
+/// Byte queues standing in for the UART.
+#[derive(Default)]
+struct Line {
+    to_device: VecDeque<u8>,
+    to_host: VecDeque<u8>,
+    budget: u32,
+}
+
+impl ByteLink for Line {
+    fn try_read(&mut self) -> Option<u8> {
+        self.to_device.pop_front()
+    }
+    fn try_write(&mut self, byte: u8) -> bool {
+        if self.budget == 0 {
+            return false;
+        }
+        self.budget -= 1;
+        self.to_host.push_back(byte);
+        true
+    }
+}
+
+/// The in-process device.
+pub struct SimDevice {
+    info: DeviceInfo,
+    truth: Calibration,
+    service: Option<LinkService<Store>>,
+    pipeline: Pipeline<OUTPUT_QUEUE>,
+    sensor: VirtualSensor,
+    line: Line,
+    samples: u64,
+    dies_at_sample: Option<u64>,
+    resets: u32,
+}
+
+/// Why a simulated device cannot be built.
+#[derive(Debug)]
+pub enum SimError {
+    /// The truth calibration is unusable for the forward model.
+    BadUnit,
+    /// The simulated flash could not be formatted.
+    Storage,
+}
+
+impl std::fmt::Display for SimError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SimError::BadUnit => f.write_str("the simulated unit's parameters are unusable"),
+            SimError::Storage => f.write_str("the simulated flash could not be set up"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+impl SimDevice {
+    /// A device whose sensor is the unit `truth` (noise on), with empty flash.
+    pub fn new(truth: Calibration) -> Result<SimDevice, SimError> {
+        Self::with_unit_id(truth, SIM_UNIT_ID)
+    }
+
+    /// The same with another unit identifier.
+    pub fn with_unit_id(truth: Calibration, unit_id: UnitId) -> Result<SimDevice, SimError> {
+        // The flash lives as long as the process, like a board's; 8 KiB per simulated device.
+        let mem: &'static mut [u8] = Box::leak(vec![0xFFu8; 2 * FLASH_ERASE].into_boxed_slice());
+        let store = AbStore::new(RamNorFlash::new(mem), 0, FLASH_ERASE as u32).map_err(|_| SimError::Storage)?;
+        let info = DeviceInfo {
+            unit_id,
+            board: Board::Simulated,
+            sample_rate_hz: SIM_SAMPLE_RATE_HZ,
+            virtual_table: true,
+        };
+        let sensor = VirtualSensor::new(&truth, SIM_SAMPLE_RATE_HZ, true).ok_or(SimError::BadUnit)?;
+        let mut dev = SimDevice {
+            info,
+            truth,
+            service: None,
+            pipeline: Pipeline::new(SIM_SAMPLE_RATE_HZ),
+            sensor,
+            line: Line::default(),
+            samples: 0,
+            dies_at_sample: None,
+            resets: 0,
+        };
+        dev.boot(store);
+        Ok(dev)
+    }
+
+    fn boot(&mut self, store: Store) {
+        let controller = Controller::boot(self.info, store, LeverMode::RateAndAcceleration);
+        self.pipeline = Pipeline::new(SIM_SAMPLE_RATE_HZ);
+        if let Some(c) = controller.compensator() {
+            self.pipeline.apply(firmware::pipeline::PipelineCommand::Compensator(Some(c)));
+        }
+        self.service = Some(LinkService::new(controller));
+    }
+
+    /// The unit the sensor simulates (the truth the tests compare against).
+    pub fn truth(&self) -> &Calibration {
+        &self.truth
+    }
+
+    /// Samples produced since power-on.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// How many times the device restarted.
+    pub fn resets(&self) -> u32 {
+        self.resets
+    }
+
+    /// After `n` more samples the device goes silent for good (as if unplugged).
+    pub fn stop_answering_after_samples(&mut self, n: u64) {
+        self.dies_at_sample = Some(self.samples + n);
+    }
+
+    /// Puts `bytes` on the device→host line, between frames.
+    pub fn inject_line_garbage(&mut self, bytes: &[u8]) {
+        self.line.to_host.extend(bytes);
+    }
+
+    fn dead(&self) -> bool {
+        self.dies_at_sample.is_some_and(|d| self.samples >= d)
+    }
+
+    /// One main-loop round: answer requests, move output to the line, act on board events.
+    fn poll(&mut self) {
+        let Some(service) = self.service.as_mut() else { return };
+        match service.poll(&mut self.line, &mut self.pipeline) {
+            Some(BoardEvent::SetTable(t)) => {
+                // Already checked by the controller; a refusal cannot happen here.
+                let _ = self.sensor.set_table(&t);
+            }
+            Some(BoardEvent::Reset) => {
+                self.line.budget = self.line.budget.max(256);
+                service.flush(&mut self.line, 1024);
+                if let Some(old) = self.service.take() {
+                    let store = old.controller.into_store();
+                    self.resets += 1;
+                    self.line.to_device.clear();
+                    self.boot(store);
+                }
+            }
+            None => {}
+        }
+    }
+
+    /// Runs one sample period.
+    fn step(&mut self) {
+        let s = self.sensor.sample();
+        self.pipeline.on_sample(&s);
+        self.samples += 1;
+        self.line.budget = (self.line.budget + LINE_BYTES_PER_SAMPLE).min(4 * LINE_BYTES_PER_SAMPLE);
+        self.poll();
+    }
+}
+
+impl Transport for SimDevice {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        if !self.dead() {
+            self.line.to_device.extend(bytes);
+        }
+        Ok(())
+    }
+
+    fn receive(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, LinkError> {
+        let mut ran = 0;
+        while self.line.to_host.is_empty() && ran < MAX_SAMPLES_PER_RECEIVE && !self.dead() {
+            self.step();
+            ran += 1;
+        }
+        let n = buf.len().min(self.line.to_host.len());
+        for (slot, byte) in buf.iter_mut().zip(self.line.to_host.drain(..n)) {
+            *slot = byte;
+        }
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::client::DeviceClient;
+    use crate::unit_file::UnitFile;
+    use shared::blob::ParameterBlob;
+    use shared::wire::{CalibrationState, StreamKind, VirtualTable};
+
+    fn client() -> DeviceClient<SimDevice> {
+        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        DeviceClient::new(SimDevice::new(truth).unwrap(), Duration::from_millis(300))
+    }
+
+    #[test]
+    fn identifies_streams_stores_and_survives_reset() {
+        let mut c = client();
+        let id = c.identify().unwrap();
+        assert_eq!(id.unit_id, SIM_UNIT_ID);
+        assert_eq!(id.calibration, CalibrationState::Missing);
+
+        // x up at rest: the raw window mean is the forward model's output (noise averages out).
+        c.set_table(VirtualTable { up_b: [1.0, 0.0, 0.0], rate_rad_s: 0.0, accel_rad_s2: 0.0 }).unwrap();
+        c.start_stream(StreamKind::RawWindows, 1000).unwrap();
+        let w = c.next_raw_window().unwrap();
+        c.stop_stream().unwrap();
+        assert_eq!(w.count, 1000);
+        let truth = c.transport_mut().truth().statics;
+        let want_x = truth.zero_bias_out[0] + truth.scale_out_per_g[0] * 0.999912;
+        assert!((f64::from(w.mean_raw[0]) - want_x).abs() < 1e-4, "{} vs {want_x}", w.mean_raw[0]);
+
+        // Write the true calibration, reset, and read it back.
+        let blob = ParameterBlob { unit_id: SIM_UNIT_ID, calibration: *c.transport_mut().truth(), created_unix_s: 42 };
+        let (bytes, n) = blob.to_bytes().unwrap();
+        c.write_calibration(&bytes[..n]).unwrap();
+        let id = c.reset().unwrap();
+        assert_eq!(id.calibration, CalibrationState::Valid { created_unix_s: 42 });
+        assert_eq!(c.read_calibration().unwrap(), bytes[..n].to_vec());
+        assert_eq!(c.transport_mut().resets(), 1);
+    }
+
+    #[test]
+    fn a_dead_device_times_out_with_a_clear_error() {
+        let mut c = client();
+        c.identify().unwrap();
+        c.transport_mut().stop_answering_after_samples(0);
+        let e = c.identify().unwrap_err().to_string();
+        assert!(e.contains("stopped answering"), "{e}");
+    }
+}
