@@ -4,6 +4,8 @@
 pub mod convert;
 pub mod device;
 pub mod navigation;
+pub mod estimate;
 pub mod recording;
+pub mod report;
 pub mod simulate;
 pub mod unit_file;

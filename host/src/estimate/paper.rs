@@ -1,0 +1,126 @@
+//! The paper's own lever-arm identification (eq. 21–24), implemented as published, for comparison.
+//!
+//! With the x, y and z axes up in turn and the table spinning at a constant ω0, the bias- and
+//! scale-corrected output of accelerometer `i`, minus its static value `f_i0 = g a_i·up`, is
+//! (eq. 21–23, `W = −ω0² (I − n nᵀ)`):
+//!
+//! ```text
+//! D_i^x = −ω0² (a_iy r_iy + a_iz r_iz),  D_i^y = −ω0² (a_ix r_ix + a_iz r_iz),  D_i^z = −ω0² (a_ix r_ix + a_iy r_iy)
+//! ```
+//!
+//! and eq. 24 solves `r_ix = (D^x − D^y − D^z) / (2 ω0² cos θ_ix)` and cyclically. This module does
+//! exactly that (the sign convention checks out against eq. 21–23), with the deviations and pitfalls:
+//!
+//! - **Division by the small cosines.** For the across-axis components (`j ≠ i`) `cos θ_ij` is ~0.01,
+//!   so the noise of the three differences is amplified ~100× (`MODEL.md` §4); the paper tilts the
+//!   table to escape it. We do not tilt: the point is to show the effect.
+//! - `f_i0` is the static fit's prediction `g·a_i·up` (the paper's eq. 2), not a separate static
+//!   segment; `a_i`, `k_i`, `u0_i` come from our static least squares (the exact, non-orthogonal `A`).
+//! - ω0 is the plan's nominal table rate (as in the paper), not the gyro's: a table rate error goes
+//!   straight into `r` (the joint method uses the measured `E[ω ωᵀ]`).
+//! - The table centre is assumed on the spin axis (p = 0), as in the paper.
+//! - Several rates (100/150/200 °/s) are combined by an inverse-variance weighted mean (the paper
+//!   says "mean values"); only +x, +y, +z-up constant-rate segments are used.
+
+use super::model::{self, idx_r, SegModel, NP};
+use super::{solve, EstimateError, SegmentKind, SessionSeg};
+use crate::recording::Plan;
+use nalgebra::DMatrix;
+use shared::linalg;
+use std::collections::BTreeMap;
+
+pub(crate) struct PaperResult {
+    pub theta: [f64; NP],
+    pub cov: DMatrix<f64>,
+    pub notes: Vec<String>,
+}
+
+pub(crate) fn eq24(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    models: &[SegModel],
+    static_fit: &solve::Fit,
+) -> Result<PaperResult, EstimateError> {
+    let m = model::m_of(&static_fit.theta);
+    let u0 = model::u0_of(&static_fit.theta);
+    let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m[i]));
+    let a: [[f64; 3]; 3] = core::array::from_fn(|i| m[i].map(|v| v / k[i]));
+    let g = plan.gravity_m_s2;
+    // rate (0.01 °/s) → model index of the x-, y-, z-up segment.
+    let mut groups: BTreeMap<i64, [Option<usize>; 3]> = BTreeMap::new();
+    let cos1 = 1f64.to_radians().cos();
+    for (q, md) in models.iter().enumerate() {
+        let s = &segs[md.seg];
+        if s.kind != SegmentKind::ConstantRate {
+            continue;
+        }
+        let sp = &plan.segments[s.plan_idx];
+        let Some(axis) = (0..3).find(|&c| sp.up_b[c] > cos1) else {
+            continue;
+        };
+        let key = (sp.rate_deg_s.abs() * 100.0).round() as i64;
+        let e = groups.entry(key).or_insert([None; 3]);
+        if e[axis].is_none() {
+            e[axis] = Some(q);
+        }
+    }
+    let mut num = [[0.0; 3]; 3];
+    let mut wsum = [[0.0; 3]; 3];
+    let mut rates_used = Vec::new();
+    for (key, trio) in &groups {
+        let [Some(qx), Some(qy), Some(qz)] = *trio else {
+            continue;
+        };
+        let w0 = (*key as f64 / 100.0).to_radians();
+        rates_used.push(*key as f64 / 100.0);
+        let q = [qx, qy, qz];
+        for i in 0..3 {
+            // D^c and its variance, m/s².
+            let d: [f64; 3] = core::array::from_fn(|c| {
+                g * ((models[q[c]].mean_u[i] - u0[i]) / k[i] - a[i][c])
+            });
+            let var: f64 = (0..3)
+                .map(|c| g * g * models[q[c]].se_cov[i][i] / (k[i] * k[i]))
+                .sum();
+            for j in 0..3 {
+                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+                let n = d[j] - d[j1] - d[j2];
+                let den = 2.0 * w0 * w0 * a[i][j];
+                let r = n / den;
+                let vr = var / (den * den);
+                num[i][j] += r / vr;
+                wsum[i][j] += 1.0 / vr;
+            }
+        }
+    }
+    if rates_used.is_empty() {
+        return Err(EstimateError::PlanCannotObserve {
+            parameters: (0..9)
+                .map(|p| format!("r{}{}", p / 3 + 1, shared::params::axis_name(p % 3)))
+                .collect(),
+            hint: "the paper's eq. 24 needs constant-rate segments with +x, +y and +z up at a common rate"
+                .into(),
+        });
+    }
+    let mut theta = static_fit.theta;
+    let mut cov = static_fit.cov.clone();
+    for i in 0..3 {
+        for j in 0..3 {
+            theta[idx_r(i, j)] = num[i][j] / wsum[i][j];
+            cov[(idx_r(i, j), idx_r(i, j))] = 1.0 / wsum[i][j];
+        }
+    }
+    let worst_cos = a
+        .iter()
+        .enumerate()
+        .flat_map(|(i, row)| row.iter().enumerate().filter(move |(j, _)| *j != i).map(|(_, c)| c.abs()))
+        .fold(f64::INFINITY, f64::min);
+    let notes = vec![format!(
+        "paper eq. 24 at {:?} °/s (nominal rates, p = 0): the across-axis components are divided by \
+         cos θ_ij as small as {:.4}, amplifying their noise up to {:.0}×",
+        rates_used,
+        worst_cos,
+        1.0 / worst_cos
+    )];
+    Ok(PaperResult { theta, cov, notes })
+}

@@ -1,0 +1,501 @@
+//! Matching plan and data, screening segments (empty, saturated, moving, wrong rate, wrong attitude),
+//! building the segment models and the static least squares.
+
+use super::model::{self, idx_m, idx_u0, SegModel, NP};
+use super::{
+    solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
+    SegmentKind, SessionSeg,
+};
+use crate::recording::{Plan, SegmentPlan, SegmentStats};
+use shared::linalg::{self, RowMajor3};
+use shared::params::axis_name;
+use shared::ReferencePoint;
+use std::collections::HashMap;
+
+fn kind_of(sp: &SegmentPlan) -> SegmentKind {
+    if sp.is_static() {
+        SegmentKind::Static
+    } else if sp.rate_end_deg_s.is_some_and(|e| e != sp.rate_deg_s) {
+        SegmentKind::Ramp
+    } else {
+        SegmentKind::ConstantRate
+    }
+}
+
+/// Pairs plan segments with their statistics, in plan order.
+pub(crate) fn match_plan(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<SessionSeg>, EstimateError> {
+    let mut by_name: HashMap<&str, &SegmentStats> = HashMap::new();
+    for s in stats {
+        if by_name.contains_key(s.name.as_str()) {
+            excluded.push(Exclusion {
+                name: s.name.clone(),
+                reason: ExclusionReason::Duplicate,
+            });
+            continue;
+        }
+        by_name.insert(s.name.as_str(), s);
+        if plan.segment(&s.name).is_none() {
+            if options.strict_segments {
+                return Err(EstimateError::UnknownSegment {
+                    name: s.name.clone(),
+                });
+            }
+            warnings.push(format!(
+                "segment '{}' is in the data but not in the plan: ignored (add it to plan.toml to use it)",
+                s.name
+            ));
+            excluded.push(Exclusion {
+                name: s.name.clone(),
+                reason: ExclusionReason::NotInPlan,
+            });
+        }
+    }
+    let mut out = Vec::new();
+    for (plan_idx, sp) in plan.segments.iter().enumerate() {
+        match by_name.get(sp.name.as_str()) {
+            Some(st) => out.push(SessionSeg {
+                plan_idx,
+                stats: (*st).clone(),
+                kind: kind_of(sp),
+                used: true,
+            }),
+            None => {
+                if options.strict_segments {
+                    return Err(EstimateError::MissingSegment {
+                        name: sp.name.clone(),
+                    });
+                }
+                warnings.push(format!(
+                    "segment '{}' is in the plan but has no rows in the data: left out (record it, or \
+                     remove it from plan.toml)",
+                    sp.name
+                ));
+                excluded.push(Exclusion {
+                    name: sp.name.clone(),
+                    reason: ExclusionReason::MissingFromData,
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn finite_stats(s: &SegmentStats) -> bool {
+    s.mean_u
+        .iter()
+        .chain(s.mean_w_rad_s.iter())
+        .chain(s.wdot_rad_s2.iter())
+        .chain(s.cov_u.iter().flatten())
+        .chain(s.cov_w.iter().flatten())
+        .chain(s.mean_wwt.iter().flatten())
+        .all(|v| v.is_finite())
+}
+
+fn exclude(segs: &mut [SessionSeg], k: usize, plan: &Plan, reason: ExclusionReason, out: &mut Vec<Exclusion>) {
+    segs[k].used = false;
+    out.push(Exclusion {
+        name: plan.segments[segs[k].plan_idx].name.clone(),
+        reason,
+    });
+}
+
+/// Leaves out empty, non-finite, saturated and moving segments and rates that contradict the plan.
+pub(crate) fn screen(
+    plan: &Plan,
+    segs: &mut [SessionSeg],
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+) {
+    for k in 0..segs.len() {
+        let st = &segs[k].stats;
+        if st.count < 2 {
+            let reason = ExclusionReason::Empty {
+                rows: st.count,
+                rejected: st.rejected_rows,
+            };
+            exclude(segs, k, plan, reason, excluded);
+            continue;
+        }
+        if !finite_stats(st) {
+            exclude(segs, k, plan, ExclusionReason::NonFinite, excluded);
+            continue;
+        }
+        let mut saturated = None;
+        for i in 0..3 {
+            if st.max_u[i] == st.min_u[i] {
+                saturated = Some((
+                    i,
+                    format!(
+                        "output constant at {} for all {} rows (stuck, or clipped at a rail)",
+                        st.max_u[i], st.count
+                    ),
+                ));
+                break;
+            }
+            if let Some([lo, hi]) = options.output_range {
+                if st.min_u[i] <= lo || st.max_u[i] >= hi {
+                    saturated = Some((
+                        i,
+                        format!(
+                            "output reaches the range limit [{lo}, {hi}] (min {}, max {})",
+                            st.min_u[i], st.max_u[i]
+                        ),
+                    ));
+                    break;
+                }
+            }
+        }
+        if let Some((axis, detail)) = saturated {
+            exclude(segs, k, plan, ExclusionReason::Saturated { axis, detail }, excluded);
+        }
+    }
+
+    // Static segments that moved: compared with the other static segments (the gyro's bias and the
+    // accelerometers' noise are whatever the static majority shows).
+    let statics: Vec<usize> = (0..segs.len())
+        .filter(|&k| segs[k].used && segs[k].kind == SegmentKind::Static)
+        .collect();
+    if !statics.is_empty() {
+        let med_w: [f64; 3] = core::array::from_fn(|j| {
+            median(statics.iter().map(|&k| segs[k].stats.mean_w_rad_s[j]).collect())
+        });
+        let med_sw: [f64; 3] = core::array::from_fn(|j| {
+            median(statics.iter().map(|&k| segs[k].stats.std_w()[j]).collect())
+        });
+        let med_su: [f64; 3] = core::array::from_fn(|j| {
+            median(statics.iter().map(|&k| segs[k].stats.std_u()[j]).collect())
+        });
+        let enough = statics.len() >= 3;
+        for &k in &statics {
+            let st = &segs[k].stats;
+            let dw: [f64; 3] = core::array::from_fn(|j| st.mean_w_rad_s[j] - med_w[j]);
+            let rate = linalg::norm(&dw);
+            let mut detail = None;
+            if rate > options.motion_rate_threshold_rad_s {
+                detail = Some(format!(
+                    "mean gyro rate {:.3} °/s above the static segments' ({:.3} °/s allowed)",
+                    rate.to_degrees(),
+                    options.motion_rate_threshold_rad_s.to_degrees()
+                ));
+            } else if enough {
+                let sw = st.std_w();
+                let su = st.std_u();
+                for j in 0..3 {
+                    let floor = 0.01f64.to_radians();
+                    if sw[j] > options.motion_noise_ratio * med_sw[j] && sw[j] > floor {
+                        detail = Some(format!(
+                            "gyro {} noise {:.3} °/s is {:.1}× the other static segments'",
+                            axis_name(j),
+                            sw[j].to_degrees(),
+                            sw[j] / med_sw[j]
+                        ));
+                        break;
+                    }
+                    if med_su[j] > 0.0 && su[j] > options.motion_noise_ratio * med_su[j] {
+                        detail = Some(format!(
+                            "accelerometer {} noise is {:.1}× the other static segments' (vibration or motion)",
+                            axis_name(j),
+                            su[j] / med_su[j]
+                        ));
+                        break;
+                    }
+                }
+            }
+            if let Some(detail) = detail {
+                exclude(segs, k, plan, ExclusionReason::Motion { detail }, excluded);
+            }
+        }
+    }
+
+    // Rotating segments whose gyro contradicts the plan's rate.
+    for k in 0..segs.len() {
+        if !segs[k].used || segs[k].kind == SegmentKind::Static {
+            continue;
+        }
+        let sp = &plan.segments[segs[k].plan_idx];
+        let planned = 0.5 * (sp.rate_deg_s + sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s));
+        let measured = linalg::dot(&segs[k].stats.mean_w_rad_s, &sp.up_b).to_degrees();
+        if (measured - planned).abs() > 0.1 * planned.abs() + 1.0 {
+            let reason = ExclusionReason::RateContradiction {
+                measured_deg_s: measured,
+                planned_deg_s: planned,
+            };
+            exclude(segs, k, plan, reason, excluded);
+        }
+    }
+}
+
+/// Per-sample noise seen on the used static segments.
+pub(crate) struct Noise {
+    /// Mean output covariance, output unit².
+    pub out_cov: RowMajor3,
+    /// Mean gyro covariance, (rad/s)².
+    pub gyro_cov: RowMajor3,
+}
+
+pub(crate) fn pooled_noise(segs: &[SessionSeg]) -> Noise {
+    let statics: Vec<&SessionSeg> = segs
+        .iter()
+        .filter(|s| s.used && s.kind == SegmentKind::Static)
+        .collect();
+    let n = statics.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&SegmentStats) -> RowMajor3| -> RowMajor3 {
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| statics.iter().map(|s| f(&s.stats)[i][j]).sum::<f64>() / n)
+        })
+    };
+    Noise {
+        out_cov: mean(&|s| s.cov_u),
+        gyro_cov: mean(&|s| s.cov_w),
+    }
+}
+
+/// Segment models of the used segments. Ramps are weighted with the static noise (their own output
+/// variance includes the ramp's signal).
+pub(crate) fn build_models(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    noise: &Noise,
+    options: &EstimateOptions,
+) -> Vec<SegModel> {
+    let g = plan.gravity_m_s2;
+    let mut out = Vec::new();
+    for (k, s) in segs.iter().enumerate() {
+        if !s.used {
+            continue;
+        }
+        let sp = &plan.segments[s.plan_idx];
+        let st = &s.stats;
+        let ew = model::mean_lever_matrix(
+            &st.mean_wwt,
+            &st.wdot_rad_s2,
+            &noise.gyro_cov,
+            options.use_omega_dot,
+        );
+        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
+        let wp = linalg::mat_vec(&ew, &p);
+        let f = core::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
+        let e = ew.map(|row| row.map(|v| v / g));
+        let per_sample = if s.kind == SegmentKind::Ramp {
+            noise.out_cov
+        } else {
+            st.cov_u
+        };
+        let n = st.count as f64;
+        let mut se: RowMajor3 = per_sample.map(|row| row.map(|v| v / n));
+        for i in 0..3 {
+            let floor = (1e-9 * st.mean_u[i].abs().max(1e-3)).powi(2);
+            se[i][i] = se[i][i].max(floor);
+        }
+        if let Some(m) = SegModel::new(k, f, e, st.mean_u, se) {
+            out.push(m);
+        }
+    }
+    out
+}
+
+/// Directions along which the attitudes `ups` do not spread (empty when they span 3-D affinely).
+pub(crate) fn missing_directions(ups: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let n = ups.len() as f64;
+    let mean: [f64; 3] = core::array::from_fn(|j| ups.iter().map(|u| u[j]).sum::<f64>() / n.max(1.0));
+    let scatter = nalgebra::Matrix3::from_fn(|a, b| {
+        ups.iter()
+            .map(|u| (u[a] - mean[a]) * (u[b] - mean[b]))
+            .sum::<f64>()
+            / n.max(1.0)
+    });
+    let eig = scatter.symmetric_eigen();
+    (0..3)
+        .filter(|&c| eig.eigenvalues[c] < 0.02)
+        .map(|c| {
+            let v = eig.eigenvectors.column(c);
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+fn static_free() -> [bool; NP] {
+    let mut free = [false; NP];
+    for i in 0..3 {
+        for j in 0..3 {
+            free[idx_m(i, j)] = true;
+        }
+        free[idx_u0(i)] = true;
+    }
+    free
+}
+
+fn static_start(models: &[&SegModel]) -> [f64; NP] {
+    // Any non-degenerate start: the static model is linear, Gauss–Newton solves it in one step.
+    let mut t = [0.0; NP];
+    for i in 0..3 {
+        let mean: f64 = models.iter().map(|m| m.mean_u[i]).sum::<f64>() / models.len().max(1) as f64;
+        t[idx_u0(i)] = mean;
+        t[idx_m(i, i)] = 1.0;
+    }
+    t
+}
+
+/// Static least squares on the given models (lever arms fixed at 0: static segments do not see them).
+pub(crate) fn static_fit(models: &[&SegModel]) -> Result<solve::Fit, EstimateError> {
+    let owned: Vec<SegModel> = models.iter().map(|m| (*m).clone()).collect();
+    solve::fit(&owned, static_start(models), static_free(), "static least squares")
+}
+
+/// The static fit, after leaving out static segments whose attitude contradicts the plan
+/// (leave-one-out: each static segment is predicted from the others).
+pub(crate) fn static_fit_with_attitude_check(
+    plan: &Plan,
+    segs: &mut [SessionSeg],
+    models: &mut Vec<SegModel>,
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+    planned_static: usize,
+) -> Result<solve::Fit, EstimateError> {
+    let tol_g = options.attitude_tolerance_deg.to_radians();
+    loop {
+        let statics: Vec<usize> = (0..models.len())
+            .filter(|&k| segs[models[k].seg].kind == SegmentKind::Static)
+            .collect();
+        if statics.is_empty() {
+            return Err(EstimateError::NoStaticSegments {
+                planned: planned_static,
+            });
+        }
+        let ups: Vec<[f64; 3]> = statics
+            .iter()
+            .map(|&k| plan.segments[segs[models[k].seg].plan_idx].up_b)
+            .collect();
+        let missing = missing_directions(&ups);
+        if !missing.is_empty() || ups.len() < 4 {
+            return Err(EstimateError::TooFewAttitudes {
+                attitudes: ups.len(),
+                needed_directions: missing,
+            });
+        }
+        let mut worst: Option<(usize, f64)> = None;
+        if statics.len() >= 5 {
+            for (a, &k) in statics.iter().enumerate() {
+                let mut rest_ups = ups.clone();
+                rest_ups.remove(a);
+                if !missing_directions(&rest_ups).is_empty() {
+                    continue;
+                }
+                let rest: Vec<&SegModel> = statics
+                    .iter()
+                    .filter(|&&q| q != k)
+                    .map(|&q| &models[q])
+                    .collect();
+                let Ok(fit) = static_fit(&rest) else { continue };
+                let m = model::m_of(&fit.theta);
+                let u0 = model::u0_of(&fit.theta);
+                let Some(minv) = linalg::inverse(&m) else { continue };
+                let du: [f64; 3] = core::array::from_fn(|i| models[k].mean_u[i] - u0[i]);
+                let d = linalg::mat_vec(&minv, &du);
+                let up = ups[a];
+                let err = linalg::norm(&core::array::from_fn(|j| d[j] - up[j]));
+                if worst.is_none_or(|w| err > w.1) {
+                    worst = Some((k, err));
+                }
+            }
+        }
+        match worst {
+            Some((k, err)) if err > tol_g => {
+                let seg = models[k].seg;
+                segs[seg].used = false;
+                excluded.push(Exclusion {
+                    name: plan.segments[segs[seg].plan_idx].name.clone(),
+                    reason: ExclusionReason::AttitudeContradiction {
+                        angle_deg: err.to_degrees(),
+                    },
+                });
+                models.remove(k);
+            }
+            _ => {
+                let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
+                return static_fit(&refs);
+            }
+        }
+    }
+}
+
+/// How the fit's lever arms map to the reported ones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Shift {
+    None,
+    Centroid,
+    Point([f64; 3]),
+}
+
+/// The reported reference point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Frame {
+    pub reference: ReferencePoint,
+    pub shift: Shift,
+}
+
+/// The frame of the reported lever arms (`MODEL.md` §5).
+pub(crate) fn reference_frame(
+    plan: &Plan,
+    options: &EstimateOptions,
+    warnings: &mut Vec<String>,
+) -> Frame {
+    let centres: Vec<[f64; 3]> = plan.segments.iter().filter_map(|s| s.table_centre_m).collect();
+    let common = centres.first().copied();
+    if centres.is_empty() {
+        if options.reference == ReferenceChoice::TableAxis {
+            warnings.push(
+                "the plan gives no table centre: the lever arms are relative to the point on the table's \
+                 spin axis (the paper's assumption p = 0); only differences r_i − r_j are free of it"
+                    .into(),
+            );
+        }
+    } else if centres.iter().any(|c| Some(*c) != common) || centres.len() < plan.segments.len() {
+        warnings.push(
+            "the table centre differs between segments (or is missing for some): the lever arms are \
+             relative to the plan's body origin"
+                .into(),
+        );
+    }
+    let p = common.unwrap_or([0.0; 3]);
+    let neg = |o: [f64; 3]| -> [f64; 3] { core::array::from_fn(|j| o[j] - p[j]) };
+    match options.reference {
+        ReferenceChoice::TableAxis if centres.is_empty() => Frame {
+            reference: ReferencePoint::TableAxis,
+            shift: Shift::None,
+        },
+        ReferenceChoice::TableAxis => Frame {
+            reference: ReferencePoint::BodyPoint {
+                offset_m: neg([0.0; 3]),
+            },
+            shift: Shift::None,
+        },
+        ReferenceChoice::Centroid => Frame {
+            reference: ReferencePoint::Centroid,
+            shift: Shift::Centroid,
+        },
+        ReferenceChoice::BodyPoint(o) => Frame {
+            reference: ReferencePoint::BodyPoint { offset_m: neg(o) },
+            shift: Shift::Point(o),
+        },
+    }
+}
