@@ -1,0 +1,1 @@
+//! STM32F446RE Nucleo-64 board.

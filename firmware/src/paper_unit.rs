@@ -1,0 +1,89 @@
+//! The paper's unit (`reference/paper-unit.toml`, Tables 1 and 3): the QEMU board's virtual unit and
+//! the source of the on-target test vectors. A PC test checks these constants against the file.
+
+use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
+
+/// Unit identifier of the QEMU board's virtual unit (reported by `Identify`; blobs are bound to it).
+pub const QEMU_UNIT_ID: UnitId = UnitId(*b"QEMU-AN386-1");
+
+/// Standard gravity of the reference file, m/s².
+pub const GRAVITY_M_S2: f64 = 9.80665;
+
+/// Table 1 and Table 3 of the paper as a [`Calibration`] (volts; lever arms about the table axis).
+pub fn calibration() -> Calibration {
+    Calibration {
+        statics: StaticParams {
+            output_unit: OutputUnit::Volts,
+            zero_bias_out: [2.405098, 2.380978, 2.435503],
+            scale_out_per_g: [0.39496, 0.39808, 0.40024],
+            installation_angles_deg: [
+                [0.75997, 90.71425, 89.74038],
+                [89.25516, 0.74486, 90.5630],
+                [90.52202, 89.17706, 0.97456],
+            ],
+        },
+        lever_arms: LeverArms {
+            r_m: [
+                [-0.00834, -0.00042, -0.00132],
+                [-0.00256, -0.00893, -0.00026],
+                [-0.00060, -0.00050, -0.00824],
+            ],
+        },
+        reference: ReferencePoint::TableAxis,
+        gravity_m_s2: GRAVITY_M_S2,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// All numbers of a TOML section's arrays, in order (the file is simple: `key = [..]` lines).
+    fn numbers(section: &str, key: &str) -> std::vec::Vec<f64> {
+        let text = include_str!("../../reference/paper-unit.toml");
+        let start = text.find(&std::format!("[{section}]")).unwrap();
+        let body = &text[start..];
+        let k = body.find(&std::format!("{key} = [")).unwrap();
+        let mut depth = 0;
+        let mut out = std::string::String::new();
+        for ch in body[k..].chars().skip(key.len() + 4) {
+            match ch {
+                '[' => depth += 1,
+                ']' if depth == 0 => break,
+                ']' => depth -= 1,
+                _ => out.push(ch),
+            }
+        }
+        out.lines()
+            .map(|l| l.split('#').next().unwrap())
+            .flat_map(|l| l.split(','))
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse().unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn constants_match_the_reference_file() {
+        let c = calibration();
+        assert_eq!(
+            numbers("static", "zero_bias_v"),
+            c.statics.zero_bias_out.to_vec()
+        );
+        assert_eq!(
+            numbers("static", "scale_v_per_g"),
+            c.statics.scale_out_per_g.to_vec()
+        );
+        let angles: std::vec::Vec<f64> = c
+            .statics
+            .installation_angles_deg
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        assert_eq!(numbers("static", "installation_angles_deg"), angles);
+        let arms: std::vec::Vec<f64> = c.lever_arms.r_m.iter().flatten().copied().collect();
+        assert_eq!(numbers("dynamic", "lever_arms_m"), arms);
+        assert!(include_str!("../../reference/paper-unit.toml").contains("g_m_s2 = 9.80665"));
+    }
+}

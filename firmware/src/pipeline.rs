@@ -1,0 +1,507 @@
+//! The per-sample path: ω̇ estimate, compensation, window statistics and the output queue.
+//!
+//! [`Pipeline::on_sample`] runs at sampling priority (a timer interrupt) for every sample. It never
+//! touches the link: finished frames go into a fixed-size queue ([`Pipeline::pop_output`] is called by
+//! the link service in the main loop). When the queue is full the *frame* is dropped and counted
+//! (`dropped_frames`, and [`SampleFlags::FRAMES_DROPPED`] on the next frame that gets through);
+//! samples are never dropped. Saturated and non-finite samples are flagged and left out of the
+//! statistics; a non-finite gyro sample also restarts the ω̇ estimator so NaN never enters its state.
+
+use heapless::Deque;
+use shared::compensator::{Compensator, LeverMode};
+use shared::omega_dot::OmegaDotEstimator;
+use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
+use shared::wire::{
+    CompensatedSample, CompensatedWindow, DeviceToHost, RawSample, RawWindow, SampleFlags,
+    StreamKind, StreamRequest,
+};
+
+use crate::stats::WindowAccumulator;
+
+/// Corner frequency of the ω̇ filter as a fraction of the sample rate (20 Hz at 1 kHz, `MODEL.md` §6).
+pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;
+/// Largest accepted window (or decimation factor): 2²⁴ samples, 28 minutes at 10 kHz.
+pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;
+
+/// One sample as read from the sensors.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Accelerometer outputs, sensor axes, output unit (V or LSB).
+    pub raw: [f32; 3],
+    /// Gyro rate, body axes, rad/s.
+    pub rate_rad_s: [f32; 3],
+    /// Some channel sat at its range limit.
+    pub saturated: bool,
+}
+
+impl Sample {
+    /// All six values are finite.
+    #[inline(always)]
+    #[allow(clippy::eq_op)] // `x - x` is the point: 0 for finite x, NaN otherwise
+    pub fn is_finite(&self) -> bool {
+        // `x - x == 0` is false exactly for NaN and ±inf; one comparison chain, no library call.
+        let (r, w) = (&self.raw, &self.rate_rad_s);
+        let s = (r[0] - r[0])
+            + (r[1] - r[1])
+            + (r[2] - r[2])
+            + (w[0] - w[0])
+            + (w[1] - w[1])
+            + (w[2] - w[2]);
+        s == 0.0
+    }
+}
+
+/// A change to the pipeline, decided by the request handler in the main loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PipelineCommand {
+    /// Start or change the stream (the window restarts).
+    Stream(StreamRequest),
+    /// Stop streaming.
+    StopStream,
+    /// Apply this compensator from now on (`None`: uncalibrated). The window restarts.
+    Compensator(Option<Compensator>),
+}
+
+/// The per-sample state. `Q` is the output queue length in frames.
+pub struct Pipeline<const Q: usize> {
+    compensator: Option<Compensator>,
+    omega_dot: OmegaDotEstimator,
+    stream: Option<StreamRequest>,
+    index: u64,
+    window_first: u64,
+    in_window: u32,
+    rejected: u32,
+    window_flags: u8,
+    acc: WindowAccumulator<6>,
+    out: Deque<DeviceToHost, Q>,
+    dropped: u32,
+    drop_pending: bool,
+}
+
+impl<const Q: usize> Pipeline<Q> {
+    /// A pipeline for samples at `sample_rate_hz` (≥ 100 Hz), uncalibrated and not streaming.
+    pub fn new(sample_rate_hz: u32) -> Self {
+        let fs = sample_rate_hz.max(100) as f32;
+        let omega_dot = match OmegaDotEstimator::new(fs, fs * OMEGA_DOT_CORNER_FRACTION) {
+            Ok(e) => e,
+            // Unreachable for fs ≥ 100: the corner is 2 % of fs. Keep a valid fallback anyway.
+            Err(_) => OmegaDotEstimator::new(1000.0, 20.0).unwrap_or_else(|_| unreachable()),
+        };
+        Pipeline {
+            compensator: None,
+            omega_dot,
+            stream: None,
+            index: 0,
+            window_first: 0,
+            in_window: 0,
+            rejected: 0,
+            window_flags: 0,
+            acc: WindowAccumulator::new(),
+            out: Deque::new(),
+            dropped: 0,
+            drop_pending: false,
+        }
+    }
+
+    /// Applies a command from the request handler.
+    pub fn apply(&mut self, cmd: PipelineCommand) {
+        match cmd {
+            PipelineCommand::Stream(req) => self.stream = Some(req),
+            PipelineCommand::StopStream => self.stream = None,
+            PipelineCommand::Compensator(c) => self.compensator = c,
+        }
+        self.restart_window();
+    }
+
+    fn restart_window(&mut self) {
+        self.in_window = 0;
+        self.rejected = 0;
+        self.window_flags = 0;
+        self.window_first = self.index;
+        self.acc = WindowAccumulator::new();
+    }
+
+    /// True when a calibration is applied.
+    pub fn is_calibrated(&self) -> bool {
+        self.compensator.is_some()
+    }
+
+    /// Samples processed since boot.
+    pub fn samples(&self) -> u64 {
+        self.index
+    }
+
+    /// Output frames dropped since boot because the queue was full.
+    pub fn dropped_frames(&self) -> u32 {
+        self.dropped
+    }
+
+    /// The next queued output frame.
+    pub fn pop_output(&mut self) -> Option<DeviceToHost> {
+        self.out.pop_front()
+    }
+
+    /// Frames waiting in the output queue.
+    pub fn queued(&self) -> usize {
+        self.out.len()
+    }
+
+    /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
+    /// when uncalibrated.
+    #[inline(always)]
+    fn compensate(&self, s: &Sample, omega_dot: &[f32; 3]) -> [f32; 3] {
+        match &self.compensator {
+            Some(c) if c.mode() == LeverMode::Off => {
+                c.compensate_static(&SensorOutputs { raw: s.raw }).m_s2
+            }
+            Some(c) => {
+                c.compensate(
+                    &SensorOutputs { raw: s.raw },
+                    &BodyRate {
+                        rad_s: s.rate_rad_s,
+                    },
+                    &BodyAngularAccel { rad_s2: *omega_dot },
+                )
+                .m_s2
+            }
+            None => s.raw,
+        }
+    }
+
+    #[inline(always)]
+    fn frame_flags(&self) -> SampleFlags {
+        let mut f = self.window_flags;
+        if self.compensator.is_none() {
+            f |= SampleFlags::UNCALIBRATED;
+        }
+        if self.drop_pending {
+            f |= SampleFlags::FRAMES_DROPPED;
+        }
+        SampleFlags(f)
+    }
+
+    #[inline(never)]
+    fn emit(&mut self, msg: DeviceToHost) {
+        if self.out.push_back(msg).is_err() {
+            self.dropped = self.dropped.wrapping_add(1);
+            self.drop_pending = true;
+        } else {
+            self.drop_pending = false;
+        }
+    }
+
+    /// Processes one sample. Cost: ω̇ update, at most one compensation, one accumulation; a frame is
+    /// built only when a window closes.
+    #[inline]
+    pub fn on_sample(&mut self, s: &Sample) {
+        let index = self.index;
+        self.index += 1;
+        let finite = s.is_finite();
+        let omega_dot = if finite {
+            self.omega_dot.update(&s.rate_rad_s)
+        } else {
+            self.omega_dot.reset();
+            [0.0; 3]
+        };
+        let Some(req) = self.stream else {
+            return;
+        };
+        let good = finite && !s.saturated;
+        let mut sample_flags = 0u8;
+        if !finite {
+            sample_flags |= SampleFlags::NON_FINITE;
+        }
+        if s.saturated {
+            sample_flags |= SampleFlags::SATURATED;
+        }
+        match req.kind {
+            StreamKind::RawWindows | StreamKind::CompensatedWindows => {
+                if good {
+                    let v = if req.kind == StreamKind::RawWindows {
+                        s.raw
+                    } else {
+                        self.compensate(s, &omega_dot)
+                    };
+                    let r = s.rate_rad_s;
+                    self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
+                } else {
+                    self.rejected += 1;
+                    self.window_flags |= sample_flags;
+                }
+                self.in_window += 1;
+                if self.in_window >= req.window_samples {
+                    self.close_window(req.kind);
+                }
+            }
+            StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
+                if self.in_window == 0 {
+                    self.window_flags = sample_flags;
+                    let flags = self.frame_flags();
+                    let msg = if req.kind == StreamKind::RawDecimated {
+                        DeviceToHost::RawSample(RawSample {
+                            index,
+                            raw: s.raw,
+                            rate_rad_s: s.rate_rad_s,
+                            flags,
+                        })
+                    } else {
+                        let f = if finite {
+                            self.compensate(s, &omega_dot)
+                        } else {
+                            s.raw
+                        };
+                        DeviceToHost::CompensatedSample(CompensatedSample {
+                            index,
+                            specific_force_m_s2: f,
+                            rate_rad_s: s.rate_rad_s,
+                            flags,
+                        })
+                    };
+                    self.emit(msg);
+                    self.window_flags = 0;
+                }
+                self.in_window += 1;
+                if self.in_window >= req.window_samples {
+                    self.in_window = 0;
+                }
+            }
+        }
+    }
+
+    #[inline(never)]
+    fn close_window(&mut self, kind: StreamKind) {
+        let st = self.acc.finish();
+        let flags = self.frame_flags();
+        let m = st.mean;
+        let v = st.var;
+        let msg = if kind == StreamKind::RawWindows {
+            DeviceToHost::RawWindow(RawWindow {
+                first_sample: self.window_first,
+                count: st.count,
+                mean_raw: [m[0], m[1], m[2]],
+                var_raw: [v[0], v[1], v[2]],
+                mean_rate_rad_s: [m[3], m[4], m[5]],
+                var_rate_rad2_s2: [v[3], v[4], v[5]],
+                rejected: self.rejected,
+                dropped_frames: self.dropped,
+                flags,
+            })
+        } else {
+            DeviceToHost::CompensatedWindow(CompensatedWindow {
+                first_sample: self.window_first,
+                count: st.count,
+                mean_m_s2: [m[0], m[1], m[2]],
+                var_m2_s4: [v[0], v[1], v[2]],
+                mean_rate_rad_s: [m[3], m[4], m[5]],
+                rejected: self.rejected,
+                dropped_frames: self.dropped,
+                flags,
+            })
+        };
+        self.emit(msg);
+        self.in_window = 0;
+        self.rejected = 0;
+        self.window_flags = 0;
+        self.window_first = self.index;
+    }
+}
+
+#[cold]
+fn unreachable() -> ! {
+    loop {
+        core::hint::spin_loop();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::paper_unit;
+
+    fn calibrated(mode: LeverMode) -> Pipeline<8> {
+        let mut p = Pipeline::<8>::new(1000);
+        let c = Compensator::new(&paper_unit::calibration(), mode).unwrap();
+        p.apply(PipelineCommand::Compensator(Some(c)));
+        p
+    }
+
+    fn stream(p: &mut Pipeline<8>, kind: StreamKind, n: u32) {
+        p.apply(PipelineCommand::Stream(StreamRequest {
+            kind,
+            window_samples: n,
+        }));
+    }
+
+    const S: Sample = Sample {
+        raw: [2.8, 2.4, 2.4],
+        rate_rad_s: [0.5, -0.25, 0.125],
+        saturated: false,
+    };
+
+    #[test]
+    fn raw_window_counts_and_excludes_bad_samples() {
+        let mut p = calibrated(LeverMode::RateOnly);
+        stream(&mut p, StreamKind::RawWindows, 10);
+        for i in 0..10 {
+            let mut s = S;
+            if i == 3 {
+                s.raw[1] = f32::NAN;
+            }
+            if i == 7 {
+                s.saturated = true;
+            }
+            p.on_sample(&s);
+        }
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!("no window");
+        };
+        assert_eq!(w.count, 8);
+        assert_eq!(w.rejected, 2);
+        assert_eq!(w.first_sample, 0);
+        assert_eq!(w.mean_raw, S.raw);
+        assert_eq!(w.var_raw, [0.0; 3]);
+        assert_eq!(w.mean_rate_rad_s, S.rate_rad_s);
+        assert!(w.flags.has(SampleFlags::NON_FINITE) && w.flags.has(SampleFlags::SATURATED));
+        assert!(!w.flags.has(SampleFlags::UNCALIBRATED));
+        assert!(p.pop_output().is_none());
+        // The next window is clean and starts at sample 10.
+        for _ in 0..10 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(
+            (w.first_sample, w.count, w.rejected, w.flags.0),
+            (10, 10, 0, 0)
+        );
+    }
+
+    #[test]
+    fn compensated_window_equals_the_shared_compensator() {
+        let mode = LeverMode::RateOnly;
+        let mut p = calibrated(mode);
+        stream(&mut p, StreamKind::CompensatedWindows, 4);
+        for _ in 0..4 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        let c = Compensator::new(&paper_unit::calibration(), mode).unwrap();
+        let want = c.compensate(
+            &SensorOutputs { raw: S.raw },
+            &BodyRate {
+                rad_s: S.rate_rad_s,
+            },
+            &BodyAngularAccel::default(),
+        );
+        assert_eq!(w.mean_m_s2, want.m_s2);
+        assert_eq!(w.count, 4);
+    }
+
+    #[test]
+    fn uncalibrated_flag_on_every_frame_and_identity_passthrough() {
+        let mut p = Pipeline::<8>::new(1000);
+        stream(&mut p, StreamKind::CompensatedDecimated, 2);
+        for _ in 0..4 {
+            p.on_sample(&S);
+        }
+        for _ in 0..2 {
+            let Some(DeviceToHost::CompensatedSample(s)) = p.pop_output() else {
+                panic!()
+            };
+            assert!(s.flags.has(SampleFlags::UNCALIBRATED));
+            assert_eq!(s.specific_force_m_s2, S.raw);
+        }
+        assert!(p.pop_output().is_none());
+        stream(&mut p, StreamKind::RawWindows, 1);
+        p.on_sample(&S);
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(w.flags.has(SampleFlags::UNCALIBRATED));
+    }
+
+    #[test]
+    fn decimation_sends_every_nth_sample_with_its_index() {
+        let mut p = calibrated(LeverMode::Off);
+        p.on_sample(&S); // before the stream: index 0, no output
+        stream(&mut p, StreamKind::RawDecimated, 3);
+        for _ in 0..7 {
+            p.on_sample(&S);
+        }
+        let idx: std::vec::Vec<u64> = core::iter::from_fn(|| p.pop_output())
+            .map(|m| match m {
+                DeviceToHost::RawSample(s) => s.index,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(idx, [1, 4, 7]);
+    }
+
+    #[test]
+    fn full_queue_drops_frames_not_samples_and_reports_it() {
+        let mut p = calibrated(LeverMode::RateOnly);
+        stream(&mut p, StreamKind::RawWindows, 1);
+        for _ in 0..20 {
+            p.on_sample(&S);
+        }
+        assert_eq!(p.samples(), 20);
+        assert_eq!(p.queued(), 8);
+        assert_eq!(p.dropped_frames(), 12);
+        // The queued frames predate the drops.
+        let first: std::vec::Vec<_> = core::iter::from_fn(|| p.pop_output()).collect();
+        assert_eq!(first.len(), 8);
+        // The next frame carries the flag and the count; the one after it is clean again.
+        p.on_sample(&S);
+        p.on_sample(&S);
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(w.flags.has(SampleFlags::FRAMES_DROPPED));
+        assert_eq!(w.dropped_frames, 12);
+        assert_eq!(w.first_sample, 20);
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(!w.flags.has(SampleFlags::FRAMES_DROPPED));
+        assert_eq!(w.dropped_frames, 12);
+    }
+
+    #[test]
+    fn nan_gyro_does_not_poison_the_omega_dot_state() {
+        let mut p = calibrated(LeverMode::RateAndAcceleration);
+        stream(&mut p, StreamKind::CompensatedWindows, 1);
+        let mut bad = S;
+        bad.rate_rad_s[2] = f32::INFINITY;
+        p.on_sample(&bad);
+        for _ in 0..5 {
+            p.on_sample(&S);
+        }
+        let frames: std::vec::Vec<_> = core::iter::from_fn(|| p.pop_output()).collect();
+        assert_eq!(frames.len(), 6);
+        for f in &frames[1..] {
+            let DeviceToHost::CompensatedWindow(w) = f else {
+                panic!()
+            };
+            assert!(w.mean_m_s2.iter().all(|v| v.is_finite()), "{w:?}");
+            assert_eq!(w.count, 1);
+        }
+    }
+
+    #[test]
+    fn is_finite_matches_std() {
+        for v in [0.0, -1.0, 3e38, f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for slot in 0..6 {
+                let mut s = S;
+                if slot < 3 {
+                    s.raw[slot] = v;
+                } else {
+                    s.rate_rad_s[slot - 3] = v;
+                }
+                assert_eq!(s.is_finite(), v.is_finite(), "{v} at {slot}");
+            }
+        }
+    }
+}

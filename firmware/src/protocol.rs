@@ -1,0 +1,525 @@
+//! The host link: frame reception, the request handler and the non-blocking link service.
+//!
+//! Frames are the shared wire types (`shared::wire`), postcard + COBS, zero-terminated. The receiver
+//! ([`FrameReceiver`]) ignores empty frames, answers a frame longer than `HOST_FRAME_MAX` with one
+//! `FrameTooLong` (after discarding up to the next zero) and a frame that does not decode with
+//! `MalformedFrame`. Every decoded request gets exactly one answer ([`Controller::handle`]).
+//!
+//! The [`LinkService`] runs in the main loop: it reads a bounded number of bytes per call, answers
+//! requests, and moves answers (first) and queued stream frames to the link only as fast as the link
+//! accepts them. Nothing here waits for the link, and sampling never waits for any of it.
+
+use heapless::Deque;
+use shared::blob::{decode_for_unit, BlobError, BLOB_MAX_LEN};
+use shared::compensator::{Compensator, LeverMode};
+use shared::units::UnitId;
+use shared::wire::{
+    decode_frame, encode_frame, Ack, BlobChunk, Board, CalibrationState, DeviceError, DeviceToHost,
+    HostToDevice, Identity, VirtualTable, BLOB_CHUNK_LEN, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
+    PROTOCOL_VERSION,
+};
+use shared::Calibration;
+
+use crate::pipeline::{Pipeline, PipelineCommand, MAX_WINDOW_SAMPLES};
+use crate::storage::CalStore;
+use crate::virtual_sensor::VirtualSensor;
+use crate::{ByteLink, FIRMWARE_VERSION};
+
+/// What the request handler needs to know about the board.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeviceInfo {
+    /// The unit's identifier (blobs for other units are refused).
+    pub unit_id: UnitId,
+    /// Which board.
+    pub board: Board,
+    /// Sampling rate, Hz.
+    pub sample_rate_hz: u32,
+    /// The board has a virtual table (`SetVirtualTable` is accepted).
+    pub virtual_table: bool,
+}
+
+/// Something only the board can do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoardEvent {
+    /// Set the virtual table (already checked and normalised).
+    SetTable(VirtualTable),
+    /// Restart the device after the pending answers are sent.
+    Reset,
+}
+
+/// Result of one request.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outcome {
+    /// The answer to send.
+    pub reply: DeviceToHost,
+    /// A change for the sampling pipeline.
+    pub pipeline: Option<PipelineCommand>,
+    /// A board action.
+    pub board: Option<BoardEvent>,
+}
+
+impl Outcome {
+    fn reply(reply: DeviceToHost) -> Self {
+        Outcome {
+            reply,
+            pipeline: None,
+            board: None,
+        }
+    }
+    fn error(e: DeviceError) -> Self {
+        Self::reply(DeviceToHost::Error(e))
+    }
+    fn ack(a: Ack) -> Self {
+        Self::reply(DeviceToHost::Ack(a))
+    }
+}
+
+/// The request handler: identity, calibration state and storage, lever mode, chunk assembly.
+pub struct Controller<S> {
+    info: DeviceInfo,
+    store: S,
+    state: CalibrationState,
+    calibration: Option<Calibration>,
+    lever_mode: LeverMode,
+    stored: [u8; BLOB_MAX_LEN],
+    stored_len: usize,
+    assembly: [u8; BLOB_MAX_LEN],
+    assembly_len: usize,
+    assembly_total: usize,
+}
+
+impl<S: CalStore> Controller<S> {
+    /// Loads and validates the stored calibration. An invalid, corrupt or foreign blob (or a storage
+    /// error) leaves the device uncalibrated with the reason in [`Self::calibration_state`].
+    pub fn boot(info: DeviceInfo, mut store: S, lever_mode: LeverMode) -> Self {
+        let mut stored = [0u8; BLOB_MAX_LEN];
+        let (stored_len, state, calibration) = match store.load(&mut stored) {
+            Ok(Some(n)) => match decode_for_unit(&stored[..n], info.unit_id) {
+                Ok(blob) => (
+                    n,
+                    CalibrationState::Valid {
+                        created_unix_s: blob.created_unix_s,
+                    },
+                    Some(blob.calibration),
+                ),
+                Err(e) => {
+                    warn_rejected(e);
+                    (n, CalibrationState::Rejected(e), None)
+                }
+            },
+            Ok(None) => {
+                #[cfg(target_os = "none")]
+                defmt::warn!("no calibration stored: running uncalibrated");
+                (0, CalibrationState::Missing, None)
+            }
+            Err(_) => {
+                #[cfg(target_os = "none")]
+                defmt::warn!("calibration storage unreadable: running uncalibrated");
+                (0, CalibrationState::Missing, None)
+            }
+        };
+        Controller {
+            info,
+            store,
+            state,
+            calibration,
+            lever_mode,
+            stored,
+            stored_len,
+            assembly: [0; BLOB_MAX_LEN],
+            assembly_len: 0,
+            assembly_total: 0,
+        }
+    }
+
+    /// The compensator for the current calibration and lever mode (`None`: uncalibrated).
+    pub fn compensator(&self) -> Option<Compensator> {
+        self.calibration
+            .as_ref()
+            .and_then(|c| Compensator::new(c, self.lever_mode).ok())
+    }
+
+    /// What the device holds as its calibration.
+    pub fn calibration_state(&self) -> CalibrationState {
+        self.state
+    }
+
+    /// The lever-arm mode in force.
+    pub fn lever_mode(&self) -> LeverMode {
+        self.lever_mode
+    }
+
+    /// The store (for tests and boards that inspect it).
+    pub fn store_mut(&mut self) -> &mut S {
+        &mut self.store
+    }
+
+    /// Gives the store back (to boot again from it).
+    pub fn into_store(self) -> S {
+        self.store
+    }
+
+    /// Answers one request.
+    pub fn handle(&mut self, msg: HostToDevice) -> Outcome {
+        match msg {
+            HostToDevice::Identify => Outcome::reply(DeviceToHost::Identity(Identity {
+                protocol_version: PROTOCOL_VERSION,
+                firmware_version: FIRMWARE_VERSION,
+                unit_id: self.info.unit_id,
+                board: self.info.board,
+                calibration: self.state,
+                lever_mode: self.lever_mode,
+                sample_rate_hz: self.info.sample_rate_hz,
+            })),
+            HostToDevice::Stream(req) => {
+                if req.window_samples == 0 || req.window_samples > MAX_WINDOW_SAMPLES {
+                    return Outcome::error(DeviceError::BadWindow);
+                }
+                Outcome {
+                    pipeline: Some(PipelineCommand::Stream(req)),
+                    ..Outcome::ack(Ack::StreamStarted)
+                }
+            }
+            HostToDevice::StopStream => Outcome {
+                pipeline: Some(PipelineCommand::StopStream),
+                ..Outcome::ack(Ack::StreamStopped)
+            },
+            HostToDevice::WriteCalibration(chunk) => self.write_chunk(&chunk),
+            HostToDevice::ReadCalibration { offset } => {
+                let off = usize::from(offset);
+                if self.stored_len == 0 {
+                    return Outcome::error(DeviceError::NoCalibration);
+                }
+                if off >= self.stored_len {
+                    return Outcome::error(DeviceError::UnexpectedChunk);
+                }
+                let len = (self.stored_len - off).min(BLOB_CHUNK_LEN);
+                let mut data = [0u8; BLOB_CHUNK_LEN];
+                data[..len].copy_from_slice(&self.stored[off..off + len]);
+                Outcome::reply(DeviceToHost::CalibrationChunk(BlobChunk {
+                    offset,
+                    total_len: self.stored_len as u16,
+                    len: len as u8,
+                    data,
+                }))
+            }
+            HostToDevice::SetLeverMode(mode) => {
+                self.lever_mode = mode;
+                let pipeline = self
+                    .calibration
+                    .is_some()
+                    .then(|| PipelineCommand::Compensator(self.compensator()));
+                Outcome {
+                    pipeline,
+                    ..Outcome::ack(Ack::LeverModeSet)
+                }
+            }
+            HostToDevice::SetVirtualTable(t) => {
+                if !self.info.virtual_table {
+                    return Outcome::error(DeviceError::Unsupported);
+                }
+                match VirtualSensor::check_table(&t) {
+                    Ok(t) => Outcome {
+                        board: Some(BoardEvent::SetTable(t)),
+                        ..Outcome::ack(Ack::TableSet)
+                    },
+                    Err(_) => Outcome::error(DeviceError::Unsupported),
+                }
+            }
+            HostToDevice::Reset => Outcome {
+                board: Some(BoardEvent::Reset),
+                ..Outcome::ack(Ack::Resetting)
+            },
+        }
+    }
+
+    fn write_chunk(&mut self, c: &BlobChunk) -> Outcome {
+        let (off, len, total) = (
+            usize::from(c.offset),
+            usize::from(c.len),
+            usize::from(c.total_len),
+        );
+        if off == 0 {
+            // A chunk at offset 0 always starts a new write.
+            self.assembly_len = 0;
+            self.assembly_total = total;
+        }
+        if total > BLOB_MAX_LEN {
+            self.assembly_total = 0;
+            return Outcome::error(DeviceError::BlobRejected(BlobError::BufferTooSmall));
+        }
+        let consistent = total > 0
+            && len > 0
+            && len <= BLOB_CHUNK_LEN
+            && total == self.assembly_total
+            && off == self.assembly_len
+            && off + len <= total;
+        if !consistent {
+            self.assembly_len = 0;
+            self.assembly_total = 0;
+            return Outcome::error(DeviceError::UnexpectedChunk);
+        }
+        self.assembly[off..off + len].copy_from_slice(&c.data[..len]);
+        self.assembly_len += len;
+        if self.assembly_len < total {
+            return Outcome::ack(Ack::ChunkReceived {
+                received: self.assembly_len as u16,
+            });
+        }
+        self.assembly_len = 0;
+        self.assembly_total = 0;
+        let blob = match decode_for_unit(&self.assembly[..total], self.info.unit_id) {
+            Ok(b) => b,
+            Err(e) => {
+                warn_rejected(e);
+                return Outcome::error(DeviceError::BlobRejected(e));
+            }
+        };
+        let compensator = match Compensator::new(&blob.calibration, self.lever_mode) {
+            Ok(c) => c,
+            Err(e) => return Outcome::error(DeviceError::BlobRejected(e.into())),
+        };
+        if self.store.store(&self.assembly[..total]).is_err() {
+            #[cfg(target_os = "none")]
+            defmt::warn!("storing the calibration failed; the previous one stays in force");
+            return Outcome::error(DeviceError::StorageFailed);
+        }
+        self.stored[..total].copy_from_slice(&self.assembly[..total]);
+        self.stored_len = total;
+        self.calibration = Some(blob.calibration);
+        self.state = CalibrationState::Valid {
+            created_unix_s: blob.created_unix_s,
+        };
+        Outcome {
+            pipeline: Some(PipelineCommand::Compensator(Some(compensator))),
+            ..Outcome::ack(Ack::CalibrationStored)
+        }
+    }
+}
+
+fn warn_rejected(e: BlobError) {
+    #[cfg(target_os = "none")]
+    defmt::warn!(
+        "calibration blob refused (BlobError #{=u8}): running uncalibrated",
+        e as u8
+    );
+    let _ = e;
+}
+
+/// What a completed frame was.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Received {
+    /// A request.
+    Message(HostToDevice),
+    /// A frame that could not be used, with the error to answer.
+    Error(DeviceError),
+}
+
+/// Collects COBS frames byte by byte.
+pub struct FrameReceiver {
+    buf: [u8; HOST_FRAME_MAX],
+    len: usize,
+    overflow: bool,
+}
+
+impl Default for FrameReceiver {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FrameReceiver {
+    /// Empty.
+    pub const fn new() -> Self {
+        FrameReceiver {
+            buf: [0; HOST_FRAME_MAX],
+            len: 0,
+            overflow: false,
+        }
+    }
+
+    /// Feeds one byte; a zero completes a frame.
+    pub fn push(&mut self, byte: u8) -> Option<Received> {
+        if byte != 0 {
+            if self.len < self.buf.len() {
+                self.buf[self.len] = byte;
+                self.len += 1;
+            } else {
+                self.overflow = true;
+            }
+            return None;
+        }
+        let (len, overflow) = (self.len, self.overflow);
+        self.len = 0;
+        self.overflow = false;
+        if overflow {
+            return Some(Received::Error(DeviceError::FrameTooLong));
+        }
+        if len == 0 {
+            return None; // empty frame: line idle / resynchronisation
+        }
+        Some(match decode_frame::<HostToDevice>(&mut self.buf[..len]) {
+            Ok(m) => Received::Message(m),
+            Err(_) => Received::Error(DeviceError::MalformedFrame),
+        })
+    }
+}
+
+/// Encodes one frame at a time and hands its bytes to the link as it accepts them.
+pub struct Transmitter {
+    buf: [u8; DEVICE_FRAME_MAX],
+    len: usize,
+    pos: usize,
+}
+
+impl Default for Transmitter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Transmitter {
+    /// Idle.
+    pub const fn new() -> Self {
+        Transmitter {
+            buf: [0; DEVICE_FRAME_MAX],
+            len: 0,
+            pos: 0,
+        }
+    }
+
+    /// Nothing left to send.
+    pub fn is_idle(&self) -> bool {
+        self.pos >= self.len
+    }
+
+    /// Encodes `msg` (the previous frame must be finished).
+    pub fn load(&mut self, msg: &DeviceToHost) {
+        self.pos = 0;
+        self.len = encode_frame(msg, &mut self.buf).map_or(0, |f| f.len());
+    }
+
+    /// Sends as many bytes as the link takes; true when the frame is finished.
+    pub fn pump<L: ByteLink>(&mut self, link: &mut L) -> bool {
+        while self.pos < self.len {
+            if !link.try_write(self.buf[self.pos]) {
+                return false;
+            }
+            self.pos += 1;
+        }
+        true
+    }
+}
+
+/// The main loop's access to the sampling pipeline (which a board may keep behind a critical section).
+pub trait PipelineAccess {
+    /// Applies a command.
+    fn apply(&mut self, cmd: PipelineCommand);
+    /// Takes the next queued output frame.
+    fn pop_output(&mut self) -> Option<DeviceToHost>;
+}
+
+impl<const Q: usize> PipelineAccess for Pipeline<Q> {
+    fn apply(&mut self, cmd: PipelineCommand) {
+        Pipeline::apply(self, cmd)
+    }
+    fn pop_output(&mut self) -> Option<DeviceToHost> {
+        Pipeline::pop_output(self)
+    }
+}
+
+/// Answers waiting to be sent (requests are not read while it is full: back-pressure, not loss).
+const REPLY_QUEUE: usize = 4;
+/// Bytes read per [`LinkService::poll`] call, so that transmission keeps up.
+const RX_BURST: usize = 64;
+
+/// Receives requests and transmits answers and stream frames, never waiting for the link.
+pub struct LinkService<S> {
+    /// The request handler.
+    pub controller: Controller<S>,
+    rx: FrameReceiver,
+    tx: Transmitter,
+    replies: Deque<DeviceToHost, REPLY_QUEUE>,
+}
+
+impl<S: CalStore> LinkService<S> {
+    /// Around a booted controller.
+    pub fn new(controller: Controller<S>) -> Self {
+        LinkService {
+            controller,
+            rx: FrameReceiver::new(),
+            tx: Transmitter::new(),
+            replies: Deque::new(),
+        }
+    }
+
+    /// One round: read and answer requests, then send what the link accepts. Returns a board action
+    /// (its answer is already queued; for [`BoardEvent::Reset`] call [`Self::flush`] first).
+    pub fn poll<L: ByteLink, P: PipelineAccess>(
+        &mut self,
+        link: &mut L,
+        pipeline: &mut P,
+    ) -> Option<BoardEvent> {
+        let mut event = None;
+        for _ in 0..RX_BURST {
+            if self.replies.is_full() || event.is_some() {
+                break;
+            }
+            let Some(byte) = link.try_read() else {
+                break;
+            };
+            let reply = match self.rx.push(byte) {
+                None => continue,
+                Some(Received::Error(e)) => DeviceToHost::Error(e),
+                Some(Received::Message(m)) => {
+                    let o = self.controller.handle(m);
+                    if let Some(c) = o.pipeline {
+                        pipeline.apply(c);
+                    }
+                    event = o.board;
+                    o.reply
+                }
+            };
+            // Cannot fail: checked `is_full` above and one reply per frame.
+            let _ = self.replies.push_back(reply);
+        }
+        self.transmit(link, pipeline);
+        event
+    }
+
+    fn transmit<L: ByteLink, P: PipelineAccess>(&mut self, link: &mut L, pipeline: &mut P) {
+        loop {
+            if self.tx.is_idle() {
+                match self.replies.pop_front().or_else(|| pipeline.pop_output()) {
+                    Some(m) => self.tx.load(&m),
+                    None => return,
+                }
+            }
+            if !self.tx.pump(link) {
+                return;
+            }
+        }
+    }
+
+    /// Sends the pending answers (not stream frames), giving up after `max_spins` refused bytes.
+    pub fn flush<L: ByteLink>(&mut self, link: &mut L, max_spins: u32) {
+        let mut spins = 0;
+        loop {
+            if self.tx.is_idle() {
+                match self.replies.pop_front() {
+                    Some(m) => self.tx.load(&m),
+                    None => return,
+                }
+            }
+            if !self.tx.pump(link) {
+                spins += 1;
+                if spins > max_spins {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
