@@ -9,3 +9,5 @@ pub mod recording;
 pub mod report;
 pub mod simulate;
 pub mod unit_file;
+pub mod calibration_files;
+pub mod procedure;

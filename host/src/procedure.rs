@@ -1,0 +1,625 @@
+//! `host calibrate --port`: the whole loop against a device.
+//!
+//! Identify → for each plan segment, tell the operator what to do (or drive the virtual table of a
+//! simulated or emulated device) → record raw windows with a live check that the data match the plan →
+//! save the recording as it goes (the documented session format, readable by `host calibrate --input`) →
+//! estimate → write `calibration.toml`/`.bin` → write the blob to the device → reset it → read it back →
+//! verify the compensated output on held-out positions → one pass/fail line.
+//!
+//! A device streams window statistics, not every sample (a UART cannot carry 10 kHz of samples), so the
+//! recording holds one row per window: the window's mean outputs and rates, with `sample_rate_hz` set to
+//! the window rate. The estimator's weights stay right: the spread of the window means is the sample
+//! noise divided by the window length, and there are that many times fewer rows.
+
+use crate::calibration_files::{self, OutputError, WrittenCalibration};
+use crate::device::{DeviceClient, LinkError, Transport};
+use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions, ReferenceChoice};
+use crate::recording::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use shared::wire::{Board, CalibrationState, Identity, SampleFlags, StreamKind, VirtualTable};
+use std::io::{BufRead, Write};
+use std::path::{Path, PathBuf};
+
+/// Who turns the table: a person at a terminal, or nobody (the device's virtual table is driven).
+pub trait Operator {
+    /// Shows a line of progress.
+    fn say(&mut self, text: &str);
+    /// Asks for a set-up step and waits until it is done.
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError>;
+    /// A live check failed: keep the segment anyway (`true`) or stop (`false`)?
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
+}
+
+/// An operator at the terminal: instructions on stdout, Enter on stdin.
+pub struct TerminalOperator;
+
+impl Operator for TerminalOperator {
+    fn say(&mut self, text: &str) {
+        println!("{text}");
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        print!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
+        std::io::stdout().flush().map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        let n = std::io::stdin().lock().read_line(&mut line).map_err(ProcedureError::Terminal)?;
+        if n == 0 {
+            return Err(ProcedureError::Aborted("standard input closed".into()));
+        }
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        println!("segment '{segment}' does not match the plan:");
+        for p in problems {
+            println!("  - {p}");
+        }
+        print!("keep it anyway (the estimator will screen it)? [y/N] ");
+        std::io::stdout().flush().map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        std::io::stdin().lock().read_line(&mut line).map_err(ProcedureError::Terminal)?;
+        Ok(line.trim().eq_ignore_ascii_case("y"))
+    }
+}
+
+/// No person: instructions are printed (unless quiet), nothing is waited for, and segments that fail a
+/// live check are kept with a warning (the estimator screens them).
+pub struct AutomaticOperator {
+    /// Print progress lines.
+    pub verbose: bool,
+    /// Warnings collected from live checks.
+    pub warnings: Vec<String>,
+}
+
+impl Operator for AutomaticOperator {
+    fn say(&mut self, text: &str) {
+        if self.verbose {
+            println!("{text}");
+        }
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        self.say(instruction);
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        for p in problems {
+            let w = format!("segment '{segment}': {p}");
+            self.say(&format!("warning: {w}"));
+            self.warnings.push(w);
+        }
+        Ok(true)
+    }
+}
+
+/// Settings of the procedure.
+#[derive(Clone, Debug)]
+pub struct ProcedureOptions {
+    /// The plan to run (durations default to 60 s per segment).
+    pub plan: Plan,
+    /// Where the recording and the result go (`OUT/recording/`, `OUT/calibration.toml`, `.bin`).
+    pub out_dir: PathBuf,
+    /// Samples per streamed window; default: a 50th of the sampling rate (20 windows per second).
+    pub window_samples: Option<u32>,
+    /// Time discarded after each set-up (table settling, ω̇ filter), s.
+    pub settle_s: f64,
+    /// Estimator settings.
+    pub estimate: EstimateOptions,
+    /// Largest compensated error accepted at a verification position, mg.
+    pub verify_tolerance_mg: f64,
+    /// Seconds of data per verification position.
+    pub verify_seconds: f64,
+    /// No progress bars.
+    pub quiet: bool,
+}
+
+impl ProcedureOptions {
+    /// Defaults for `plan` into `out_dir`.
+    pub fn new(plan: Plan, out_dir: PathBuf) -> Self {
+        ProcedureOptions {
+            plan,
+            out_dir,
+            window_samples: None,
+            settle_s: 0.5,
+            estimate: EstimateOptions::default(),
+            verify_tolerance_mg: 1.0,
+            verify_seconds: 2.0,
+            quiet: false,
+        }
+    }
+}
+
+/// One verification position.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VerificationPoint {
+    /// What it is.
+    pub label: String,
+    /// Up, body axes.
+    pub up_b: [f64; 3],
+    /// Table rate, °/s.
+    pub rate_deg_s: f64,
+    /// Mean compensated specific force, g.
+    pub measured_g: [f64; 3],
+    /// What it should be, g.
+    pub expected_g: [f64; 3],
+    /// Largest axis error, mg.
+    pub error_mg: f64,
+    /// Within the tolerance.
+    pub pass: bool,
+}
+
+/// Everything the procedure produced.
+#[derive(Debug)]
+pub struct ProcedureOutcome {
+    /// Who the device said it was.
+    pub identity: Identity,
+    /// The saved recording.
+    pub recording_dir: PathBuf,
+    /// The estimate.
+    pub outcome: CalibrationOutcome,
+    /// The files written.
+    pub written: WrittenCalibration,
+    /// The device's state after the reset.
+    pub state_after_reset: CalibrationState,
+    /// Verification positions.
+    pub verification: Vec<VerificationPoint>,
+    /// Live-check warnings.
+    pub warnings: Vec<String>,
+    /// Output frames the device dropped (link too slow for the window length).
+    pub dropped_frames: u32,
+    /// All checks passed.
+    pub passed: bool,
+}
+
+/// Why the procedure stopped.
+#[derive(Debug)]
+pub enum ProcedureError {
+    /// The link failed; what was recorded so far is saved at `recording` (if anything was).
+    Link {
+        /// The link error.
+        source: LinkError,
+        /// The saved recording and its row count.
+        recording: Option<(PathBuf, u64)>,
+    },
+    /// The recording could not be written or read back.
+    Recording(RecordingError),
+    /// No calibration could be estimated from the recording.
+    Estimate {
+        /// Why.
+        source: EstimateError,
+        /// The saved recording.
+        recording: PathBuf,
+    },
+    /// The result could not be written.
+    Output(OutputError),
+    /// The device did not apply the calibration after the reset.
+    NotApplied(CalibrationState),
+    /// The calibration read back differs from the one written.
+    ReadBackMismatch,
+    /// The operator stopped.
+    Aborted(String),
+    /// The terminal failed.
+    Terminal(std::io::Error),
+}
+
+impl std::fmt::Display for ProcedureError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ProcedureError::Link { source, recording: Some((dir, rows)) } => write!(
+                f,
+                "{source}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
+                 can be estimated with `host calibrate --input {}`",
+                dir.display(),
+                dir.display()
+            ),
+            ProcedureError::Link { source, recording: None } => write!(f, "{source}"),
+            ProcedureError::Recording(e) => write!(f, "{e}"),
+            ProcedureError::Estimate { source, recording } => write!(
+                f,
+                "{source}\n(the recording is saved in {})",
+                recording.display()
+            ),
+            ProcedureError::Output(e) => write!(f, "{e}"),
+            ProcedureError::NotApplied(state) => write!(
+                f,
+                "after the reset the device reports its calibration as {state:?}, not the one written: \
+                 the write did not take; retry, and check the device's storage"
+            ),
+            ProcedureError::ReadBackMismatch => f.write_str(
+                "the calibration read back from the device differs from the one written: retry the write",
+            ),
+            ProcedureError::Aborted(why) => write!(f, "stopped by the operator ({why})"),
+            ProcedureError::Terminal(e) => write!(f, "terminal error: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ProcedureError {}
+
+impl From<RecordingError> for ProcedureError {
+    fn from(e: RecordingError) -> Self {
+        ProcedureError::Recording(e)
+    }
+}
+
+/// The device can set its own table.
+pub fn has_virtual_table(identity: &Identity) -> bool {
+    matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
+}
+
+fn describe_up(up: &[f64; 3]) -> String {
+    let names = ["x", "y", "z"];
+    for (i, n) in names.iter().enumerate() {
+        if (up[i].abs() - 1.0).abs() < 1e-9 {
+            return format!("{}-axis {}", n, if up[i] > 0.0 { "up" } else { "down" });
+        }
+    }
+    format!("tilted, up = ({:+.3}, {:+.3}, {:+.3}) in body axes", up[0], up[1], up[2])
+}
+
+fn instruction(seg: &SegmentPlan) -> String {
+    let mount = describe_up(&seg.up_b);
+    match (seg.rate_deg_s, seg.rate_end_deg_s) {
+        (r, None) if r == 0.0 => format!("[{}] mount the unit {mount}, table at rest", seg.name),
+        (r, None) => format!("[{}] mount the unit {mount}, set the table to {r:+.0} °/s about the vertical", seg.name),
+        (r0, Some(r1)) => format!(
+            "[{}] mount the unit {mount}, ramp the table from {r0:+.0} to {r1:+.0} °/s about the vertical",
+            seg.name
+        ),
+    }
+}
+
+fn table_for(seg: &SegmentPlan) -> VirtualTable {
+    let duration = seg.duration_s.unwrap_or(60.0);
+    let accel = seg.rate_end_deg_s.map_or(0.0, |r1| (r1 - seg.rate_deg_s) / duration);
+    VirtualTable {
+        up_b: seg.up_b.map(|v| v as f32),
+        rate_rad_s: seg.rate_deg_s.to_radians() as f32,
+        accel_rad_s2: accel.to_radians() as f32,
+    }
+}
+
+/// The live check of one recorded segment against its plan (`MODEL.md` "Signs": ω = rate·up).
+pub fn live_check(seg: &SegmentPlan, stats: &recording::SegmentStats, rejected_samples: u64) -> Vec<String> {
+    let mut problems = Vec::new();
+    let w = stats.mean_w_rad_s;
+    let along = shared::linalg::dot(&w, &seg.up_b);
+    let across: [f64; 3] = std::array::from_fn(|j| w[j] - along * seg.up_b[j]);
+    let across_deg_s = shared::linalg::norm(&across).to_degrees();
+    let planned = 0.5 * (seg.rate_deg_s + seg.rate_end_deg_s.unwrap_or(seg.rate_deg_s));
+    let along_deg_s = along.to_degrees();
+    if seg.is_static() {
+        let spread = stats.std_w().iter().fold(0.0f64, |a, b| a.max(*b)).to_degrees();
+        if shared::linalg::norm(&w).to_degrees() > 1.0 || spread > 1.0 {
+            problems.push(format!(
+                "the unit should be at rest but the gyro reads {:.2} °/s (spread {spread:.2} °/s): wait for the \
+                 table to stop and do not touch the unit",
+                shared::linalg::norm(&w).to_degrees()
+            ));
+        }
+    } else {
+        let tol = (0.05 * planned.abs()).max(2.0);
+        if (along_deg_s - planned).abs() > tol {
+            if (along_deg_s + planned).abs() <= tol {
+                problems.push(format!(
+                    "the unit turns at {along_deg_s:+.1} °/s about the plan's up direction, the plan says \
+                     {planned:+.1} °/s: it is mounted upside down, or the table turns the other way"
+                ));
+            } else {
+                problems.push(format!(
+                    "the rate about the plan's up direction is {along_deg_s:+.1} °/s, the plan says {planned:+.1} °/s: \
+                     set the table rate"
+                ));
+            }
+        }
+        if across_deg_s > (0.09 * planned.abs()).max(2.0) {
+            problems.push(format!(
+                "the rotation axis is {across_deg_s:.1} °/s off the plan's up direction ({}): check the mount",
+                describe_up(&seg.up_b)
+            ));
+        }
+    }
+    if rejected_samples > 0 {
+        problems.push(format!(
+            "{rejected_samples} samples were saturated or invalid and left out: check the range and the wiring"
+        ));
+    }
+    problems
+}
+
+/// Runs the whole procedure.
+pub fn run<T: Transport>(
+    client: &mut DeviceClient<T>,
+    opts: &ProcedureOptions,
+    op: &mut dyn Operator,
+) -> Result<ProcedureOutcome, ProcedureError> {
+    let link = |source| ProcedureError::Link { source, recording: None };
+    let identity = client.identify().map_err(link)?;
+    op.say(&format!(
+        "device: {:?}, firmware {}.{}.{}, unit {}, {} Hz, calibration {:?}",
+        identity.board,
+        identity.firmware_version[0],
+        identity.firmware_version[1],
+        identity.firmware_version[2],
+        identity.unit_id,
+        identity.sample_rate_hz,
+        identity.calibration
+    ));
+    let fs = f64::from(identity.sample_rate_hz.max(1));
+    let window = opts.window_samples.unwrap_or((identity.sample_rate_hz / 50).max(1));
+    let window_rate = fs / f64::from(window);
+    let drive = has_virtual_table(&identity);
+
+    let mut plan = opts.plan.clone();
+    plan.sample_rate_hz = window_rate;
+    plan.unit_id = Some(identity.unit_id.to_string());
+    let recording_dir = opts.out_dir.join("recording");
+    let mut writer = SessionWriter::create(&recording_dir, &plan, true)?;
+    let mut warnings = Vec::new();
+    let mut dropped = 0u32;
+
+    let segments = plan.segments.clone();
+    for seg in &segments {
+        let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
+        let result = record_segment(client, op, seg, drive, window, window_rate, opts, &mut writer);
+        match result {
+            Ok((stats, rejected, drops)) => {
+                dropped = dropped.max(drops);
+                let problems = live_check(seg, &stats, rejected);
+                if !problems.is_empty() && !op.keep_despite(&seg.name, &problems)? {
+                    writer.end_segment()?;
+                    return Err(ProcedureError::Aborted(format!(
+                        "segment '{}' failed its live check; the recording so far is in {}",
+                        seg.name,
+                        recording_dir.display()
+                    )));
+                }
+                warnings.extend(problems.into_iter().map(|p| format!("segment '{}': {p}", seg.name)));
+            }
+            Err(source) => {
+                // Whatever was recorded reaches the disk before the error is reported.
+                writer.end_segment()?;
+                return Err(ProcedureError::Link { source, recording: saved(&writer) });
+            }
+        }
+        writer.end_segment()?;
+    }
+    writer.finish()?;
+    if dropped > 0 {
+        warnings.push(format!(
+            "the device dropped {dropped} output frames: the link is too slow for {window}-sample windows; \
+             use a longer --window"
+        ));
+    }
+
+    // Estimate from the saved recording, exactly as `host calibrate --input` would.
+    let session = recording::read_session(&recording_dir, &recording::ReadOptions { quiet: opts.quiet })?;
+    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate).map_err(
+        |source| ProcedureError::Estimate { source, recording: recording_dir.clone() },
+    )?;
+    op.say(&crate::report::render(&outcome));
+
+    let created = calibration_files::now_unix_s();
+    let written = calibration_files::write_calibration_files(&opts.out_dir, &outcome, identity.unit_id, created)
+        .map_err(ProcedureError::Output)?;
+    op.say(&format!(
+        "wrote {} and {}",
+        written.toml_path.display(),
+        written.bin_path.display()
+    ));
+
+    client.stop_stream().map_err(link)?;
+    client.write_calibration(&written.blob).map_err(link)?;
+    op.say("calibration written to the device; resetting it");
+    let after = client.reset().map_err(link)?;
+    if after.calibration != (CalibrationState::Valid { created_unix_s: created }) {
+        return Err(ProcedureError::NotApplied(after.calibration));
+    }
+    let back = client.read_calibration().map_err(link)?;
+    if back != written.blob {
+        return Err(ProcedureError::ReadBackMismatch);
+    }
+    op.say("read back: identical");
+
+    let verification = verify(client, op, &plan, drive, opts, fs).map_err(link)?;
+    let passed = verification.iter().all(|v| v.pass);
+    for v in &verification {
+        op.say(&format!(
+            "verify {:<28} error {:7.4} mg  {}",
+            v.label,
+            v.error_mg,
+            if v.pass { "ok" } else { "FAIL" }
+        ));
+    }
+    Ok(ProcedureOutcome {
+        identity,
+        recording_dir,
+        outcome,
+        written,
+        state_after_reset: after.calibration,
+        verification,
+        warnings,
+        dropped_frames: dropped,
+        passed,
+    })
+}
+
+/// Sets up and records one segment; returns its statistics, rejected samples and dropped frames.
+#[allow(clippy::too_many_arguments)]
+fn record_segment<T: Transport>(
+    client: &mut DeviceClient<T>,
+    op: &mut dyn Operator,
+    seg: &SegmentPlan,
+    drive: bool,
+    window: u32,
+    window_rate: f64,
+    opts: &ProcedureOptions,
+    writer: &mut SessionWriter,
+) -> Result<(recording::SegmentStats, u64, u32), LinkError> {
+    if drive {
+        op.say(&format!("{} (virtual table driven)", instruction(seg)));
+        client.set_table(table_for(seg))?;
+    } else {
+        op.wait_ready(&instruction(seg)).map_err(|e| LinkError::Unexpected {
+            waiting_for: "the operator",
+            got: e.to_string(),
+        })?;
+    }
+    let duration = seg.duration_s.unwrap_or(60.0);
+    let n_windows = (duration * window_rate).round().max(1.0) as u64;
+    let settle = (opts.settle_s * window_rate).round() as u64;
+    client.start_stream(StreamKind::RawWindows, window)?;
+    for _ in 0..settle {
+        client.next_raw_window()?;
+    }
+    let bar = recording::csv_io::progress_bar(n_windows, "recording", opts.quiet);
+    bar.set_message(seg.name.clone());
+    let mut acc = recording::SegmentAccumulator::new(seg.name.clone());
+    let mut rejected = 0u64;
+    let mut dropped = 0u32;
+    let fs = window_rate * f64::from(window);
+    for _ in 0..n_windows {
+        let w = client.next_raw_window()?;
+        let t = (w.first_sample as f64 + f64::from(w.count) / 2.0) / fs;
+        let u = w.mean_raw.map(f64::from);
+        let rate = w.mean_rate_rad_s.map(f64::from);
+        rejected += u64::from(w.rejected);
+        dropped = dropped.max(w.dropped_frames);
+        if w.count > 0 {
+            writer.write_row(&seg.name, t, &u, &rate).map_err(|e| LinkError::Unexpected {
+                waiting_for: "a writable recording",
+                got: e.to_string(),
+            })?;
+            acc.push(t, &u, &rate);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    client.stop_stream()?;
+    let stats = acc.finish().ok_or(LinkError::Unexpected {
+        waiting_for: "usable windows",
+        got: "only empty windows".into(),
+    })?;
+    Ok((stats, rejected, dropped))
+}
+
+/// Verification positions: held-out attitudes and a fast spin on a virtual table; on a real table the
+/// plan's first static positions and its fastest constant-rate segment, set up by the operator.
+fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f64)> {
+    if drive {
+        let n = |v: [f64; 3]| {
+            let k = shared::linalg::norm(&v);
+            v.map(|x| x / k)
+        };
+        return vec![
+            ("held-out (1,1,1) at rest".into(), n([1.0, 1.0, 1.0]), 0.0),
+            ("held-out (-1,0.5,-0.3) at rest".into(), n([-1.0, 0.5, -0.3]), 0.0),
+            ("held-out (0.2,-0.9,0.4) at rest".into(), n([0.2, -0.9, 0.4]), 0.0),
+            ("x up at 200 °/s".into(), [1.0, 0.0, 0.0], 200.0),
+            ("(1,-1,1) up at -150 °/s".into(), n([1.0, -1.0, 1.0]), -150.0),
+        ];
+    }
+    let mut v: Vec<_> = plan
+        .segments
+        .iter()
+        .filter(|s| s.is_static())
+        .take(3)
+        .map(|s| (format!("{} at rest", s.name), s.up_b, 0.0))
+        .collect();
+    if let Some(s) = plan
+        .segments
+        .iter()
+        .filter(|s| !s.is_static() && s.rate_end_deg_s.is_none())
+        .max_by(|a, b| a.rate_deg_s.abs().total_cmp(&b.rate_deg_s.abs()))
+    {
+        v.push((format!("{} spinning", s.name), s.up_b, s.rate_deg_s));
+    }
+    v
+}
+
+fn verify<T: Transport>(
+    client: &mut DeviceClient<T>,
+    op: &mut dyn Operator,
+    plan: &Plan,
+    drive: bool,
+    opts: &ProcedureOptions,
+    sample_rate_hz: f64,
+) -> Result<Vec<VerificationPoint>, LinkError> {
+    let g = plan.gravity_m_s2;
+    let mut points = Vec::new();
+    // The expected specific force at the reference point O is g·up − W c, with c the reference point
+    // relative to the table axis (`MODEL.md` §5); spinning checks need c, known for these references.
+    let c = match opts.estimate.reference {
+        ReferenceChoice::TableAxis => Some([0.0; 3]),
+        ReferenceChoice::BodyPoint(p) => Some(p),
+        ReferenceChoice::Centroid => None,
+    };
+    for (label, up, rate) in verification_positions(plan, drive) {
+        let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {
+            op.say(&format!("verify {label}: skipped (the centroid reference has no fixed table-axis offset)"));
+            continue;
+        };
+        let seg = SegmentPlan {
+            name: label.clone(),
+            up_b: up,
+            rate_deg_s: rate,
+            rate_end_deg_s: None,
+            duration_s: Some(opts.verify_seconds),
+            table_centre_m: None,
+            mount: None,
+        };
+        if drive {
+            client.set_table(table_for(&seg))?;
+        } else {
+            op.wait_ready(&format!("verification: {}", instruction(&seg))).map_err(|e| {
+                LinkError::Unexpected { waiting_for: "the operator", got: e.to_string() }
+            })?;
+        }
+        let window = ((sample_rate_hz / 10.0).round() as u32).max(1);
+        client.start_stream(StreamKind::CompensatedWindows, window)?;
+        let per_s = sample_rate_hz / f64::from(window);
+        for _ in 0..(opts.settle_s * per_s).round() as u64 {
+            client.next_compensated_window()?;
+        }
+        let n = (opts.verify_seconds * per_s).round().max(1.0) as u64;
+        let mut sum = [0.0f64; 3];
+        let mut count = 0.0f64;
+        let mut uncalibrated = false;
+        for _ in 0..n {
+            let w = client.next_compensated_window()?;
+            uncalibrated |= w.flags.has(SampleFlags::UNCALIBRATED);
+            let k = f64::from(w.count);
+            for j in 0..3 {
+                sum[j] += f64::from(w.mean_m_s2[j]) * k;
+            }
+            count += k;
+        }
+        client.stop_stream()?;
+        let omega = up.map(|u| u * rate.to_radians());
+        let wc = shared::linalg::mat_vec(&shared::linalg::lever_matrix(&omega, &[0.0; 3]), &c);
+        let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
+        let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
+        let error_mg = (0..3).map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3).fold(0.0, f64::max);
+        points.push(VerificationPoint {
+            label,
+            up_b: up,
+            rate_deg_s: rate,
+            measured_g,
+            expected_g,
+            error_mg,
+            pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
+        });
+    }
+    Ok(points)
+}
+
+/// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
+/// lever-arm components), the paper's plan otherwise (no fixture beyond the paper's is needed).
+pub fn default_plan(identity: &Identity) -> Result<Plan, recording::PlanError> {
+    recording::builtin::load_plan(if has_virtual_table(identity) { "oblique" } else { "paper" })
+}
+
+/// `OUT` for a run: the given directory, or `calibration-<unit id>` in the current directory.
+pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
+    out.map_or_else(|| PathBuf::from(format!("calibration-{}", identity.unit_id)), Path::to_path_buf)
+}
