@@ -361,6 +361,24 @@ pub(crate) fn static_fit(models: &[&SegModel]) -> Result<solve::Fit, EstimateErr
     solve::fit(&owned, static_start(models), static_free(), "static least squares")
 }
 
+/// |M⁻¹(ū − u0) − up| of each static segment under a fit, g.
+fn attitude_errors(fit: &solve::Fit, models: &[&SegModel], ups: &[[f64; 3]]) -> Vec<f64> {
+    let m = model::m_of(&fit.theta);
+    let u0 = model::u0_of(&fit.theta);
+    let Some(minv) = linalg::inverse(&m) else {
+        return vec![f64::INFINITY; models.len()];
+    };
+    models
+        .iter()
+        .zip(ups)
+        .map(|(md, up)| {
+            let du: [f64; 3] = core::array::from_fn(|i| md.mean_u[i] - u0[i]);
+            let d = linalg::mat_vec(&minv, &du);
+            linalg::norm(&core::array::from_fn(|j| d[j] - up[j]))
+        })
+        .collect()
+}
+
 /// The static fit, after leaving out static segments whose attitude contradicts the plan
 /// (leave-one-out: each static segment is predicted from the others).
 pub(crate) fn static_fit_with_attitude_check(
@@ -391,6 +409,14 @@ pub(crate) fn static_fit_with_attitude_check(
                 attitudes: ups.len(),
                 needed_directions: missing,
             });
+        }
+        // Fast path: when the fit on all static segments leaves every one within a tenth of the
+        // tolerance, no segment can hide a wrong attitude (its leverage is < 1 − 1/10).
+        let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
+        let all = static_fit(&refs)?;
+        let all_err = attitude_errors(&all, &refs, &ups);
+        if all_err.iter().all(|e| *e < 0.1 * tol_g) {
+            return Ok(all);
         }
         let mut worst: Option<(usize, f64)> = None;
         if statics.len() >= 5 {
@@ -430,10 +456,7 @@ pub(crate) fn static_fit_with_attitude_check(
                 });
                 models.remove(k);
             }
-            _ => {
-                let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
-                return static_fit(&refs);
-            }
+            _ => return Ok(all),
         }
     }
 }

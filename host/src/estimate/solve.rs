@@ -33,10 +33,12 @@ pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
     let scaled = DMatrix::from_fn(k, k, |i, j| n[(i, j)] * s[i] * s[j]);
     // Reject near-singular systems: the smallest eigenvalue of the scaled matrix is a conditioning
     // measure independent of units.
-    let eig = scaled.clone().symmetric_eigen();
-    let min = eig.eigenvalues.iter().copied().fold(f64::INFINITY, f64::min);
-    if !(min > min_eigen) {
-        return None;
+    if min_eigen > 0.0 {
+        let eig = scaled.clone().symmetric_eigen();
+        let min = eig.eigenvalues.iter().copied().fold(f64::INFINITY, f64::min);
+        if !(min > min_eigen) {
+            return None;
+        }
     }
     let inv = scaled.cholesky()?.inverse();
     Some(DMatrix::from_fn(k, k, |i, j| inv[(i, j)] * s[i] * s[j]))
@@ -126,8 +128,13 @@ pub fn fit(
     let mut t = t0;
     for _ in 0..30 {
         let (n, b, _) = normal_equations(segs, &t, &idx, None);
-        let inv = invert_spd(&n, 1e-14).ok_or(EstimateError::Singular { what })?;
-        let step = inv * b;
+        // Cholesky alone while iterating; the rank check runs once, on the final covariance.
+        let d: Vec<f64> = (0..n.nrows()).map(|i| 1.0 / n[(i, i)].max(1e-300).sqrt()).collect();
+        let scaled = DMatrix::from_fn(n.nrows(), n.ncols(), |i, j| n[(i, j)] * d[i] * d[j]);
+        let chol = scaled.cholesky().ok_or(EstimateError::Singular { what })?;
+        let bs = DVector::from_fn(b.len(), |i, _| b[i] * d[i]);
+        let x = chol.solve(&bs);
+        let step = DVector::from_fn(b.len(), |i, _| x[i] * d[i]);
         let mut rel = 0.0f64;
         for (c, &p) in idx.iter().enumerate() {
             t[p] += step[c];
@@ -137,7 +144,7 @@ pub fn fit(
         if !step.iter().all(|v| v.is_finite()) {
             return Err(EstimateError::Singular { what });
         }
-        if rel < 1e-12 {
+        if rel < 1e-10 {
             break;
         }
     }
