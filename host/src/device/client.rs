@@ -3,8 +3,9 @@
 //! becomes a [`LinkError::Timeout`] naming what was awaited — never a hang.
 
 use shared::wire::{
-    self, Ack, CobsAccumulator, DeviceToHost, FeedResult, HostToDevice, Identity, RawWindow, StreamKind,
-    StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX, PROTOCOL_VERSION,
+    self, Ack, CobsAccumulator, DeviceError, DeviceToHost, FeedResult, HostToDevice, Identity,
+    RawWindow, StreamKind, StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
+    PROTOCOL_VERSION,
 };
 use shared::LeverMode;
 use std::collections::VecDeque;
@@ -120,7 +121,11 @@ impl<T: Transport> DeviceClient<T> {
     }
 
     /// The next message from the device, waiting until `deadline`.
-    pub fn next_message(&mut self, waiting_for: &'static str, wait: Duration) -> Result<DeviceToHost, LinkError> {
+    pub fn next_message(
+        &mut self,
+        waiting_for: &'static str,
+        wait: Duration,
+    ) -> Result<DeviceToHost, LinkError> {
         let start = Instant::now();
         loop {
             if let Some(m) = self.inbox.pop_front() {
@@ -132,10 +137,15 @@ impl<T: Transport> DeviceClient<T> {
             }
             let elapsed = start.elapsed();
             if elapsed >= wait {
-                return Err(LinkError::Timeout { waiting_for, after: wait });
+                return Err(LinkError::Timeout {
+                    waiting_for,
+                    after: wait,
+                });
             }
             let mut buf = [0u8; 4096];
-            let n = self.transport.receive(&mut buf, (wait - elapsed).min(Duration::from_millis(200)))?;
+            let n = self
+                .transport
+                .receive(&mut buf, (wait - elapsed).min(Duration::from_millis(200)))?;
             self.unread.extend_from_slice(&buf[..n]);
         }
     }
@@ -175,17 +185,22 @@ impl<T: Transport> DeviceClient<T> {
                 return Ok(r);
             }
             match m {
+                // The answer to a garbled frame (line noise, or a request of ours that was corrupted):
+                // not the answer to this request. Keep waiting; the deadline bounds it.
+                DeviceToHost::Error(DeviceError::MalformedFrame | DeviceError::FrameTooLong) => {
+                    self.garbage_frames += 1;
+                    continue;
+                }
                 DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
+                // Stream frames, and answers to earlier requests that nobody waited for (a write
+                // abandoned half-way, say): stale, not this request's answer.
                 DeviceToHost::RawWindow(_)
                 | DeviceToHost::CompensatedWindow(_)
                 | DeviceToHost::RawSample(_)
-                | DeviceToHost::CompensatedSample(_) => continue,
-                other => {
-                    return Err(LinkError::Unexpected {
-                        waiting_for,
-                        got: format!("{other:?}"),
-                    })
-                }
+                | DeviceToHost::CompensatedSample(_)
+                | DeviceToHost::Ack(_)
+                | DeviceToHost::Identity(_)
+                | DeviceToHost::CalibrationChunk(_) => continue,
             }
         }
     }
@@ -200,7 +215,9 @@ impl<T: Transport> DeviceClient<T> {
                 _ => None,
             }) {
                 Ok(id) if id.protocol_version != PROTOCOL_VERSION => {
-                    return Err(LinkError::ProtocolVersion { device: id.protocol_version })
+                    return Err(LinkError::ProtocolVersion {
+                        device: id.protocol_version,
+                    })
                 }
                 Ok(id) => return Ok(id),
                 Err(e @ LinkError::Timeout { .. }) => last = Some(e),
@@ -208,10 +225,18 @@ impl<T: Transport> DeviceClient<T> {
                 Err(e) => return Err(e),
             }
         }
-        Err(last.unwrap_or(LinkError::Timeout { waiting_for: "an identity", after: self.timeout }))
+        Err(last.unwrap_or(LinkError::Timeout {
+            waiting_for: "an identity",
+            after: self.timeout,
+        }))
     }
 
-    fn expect_ack(&mut self, msg: &HostToDevice, waiting_for: &'static str, want: Ack) -> Result<(), LinkError> {
+    fn expect_ack(
+        &mut self,
+        msg: &HostToDevice,
+        waiting_for: &'static str,
+        want: Ack,
+    ) -> Result<(), LinkError> {
         self.request(msg, waiting_for, |m| match m {
             DeviceToHost::Ack(a) if *a == want => Some(()),
             _ => None,
@@ -221,7 +246,10 @@ impl<T: Transport> DeviceClient<T> {
     /// Starts a stream of `kind` with `window_samples` per window.
     pub fn start_stream(&mut self, kind: StreamKind, window_samples: u32) -> Result<(), LinkError> {
         self.expect_ack(
-            &HostToDevice::Stream(StreamRequest { kind, window_samples }),
+            &HostToDevice::Stream(StreamRequest {
+                kind,
+                window_samples,
+            }),
             "a stream acknowledgement",
             Ack::StreamStarted,
         )
@@ -229,7 +257,11 @@ impl<T: Transport> DeviceClient<T> {
 
     /// Stops streaming and discards what was queued.
     pub fn stop_stream(&mut self) -> Result<(), LinkError> {
-        self.expect_ack(&HostToDevice::StopStream, "a stop acknowledgement", Ack::StreamStopped)?;
+        self.expect_ack(
+            &HostToDevice::StopStream,
+            "a stop acknowledgement",
+            Ack::StreamStopped,
+        )?;
         self.inbox.clear();
         Ok(())
     }
@@ -258,12 +290,20 @@ impl<T: Transport> DeviceClient<T> {
 
     /// Sets the virtual table (simulated and QEMU devices).
     pub fn set_table(&mut self, table: VirtualTable) -> Result<(), LinkError> {
-        self.expect_ack(&HostToDevice::SetVirtualTable(table), "a table acknowledgement", Ack::TableSet)
+        self.expect_ack(
+            &HostToDevice::SetVirtualTable(table),
+            "a table acknowledgement",
+            Ack::TableSet,
+        )
     }
 
     /// Chooses which lever-arm terms the device applies.
     pub fn set_lever_mode(&mut self, mode: LeverMode) -> Result<(), LinkError> {
-        self.expect_ack(&HostToDevice::SetLeverMode(mode), "a lever-mode acknowledgement", Ack::LeverModeSet)
+        self.expect_ack(
+            &HostToDevice::SetLeverMode(mode),
+            "a lever-mode acknowledgement",
+            Ack::LeverModeSet,
+        )
     }
 
     /// Writes a calibration blob chunk by chunk; the device validates and stores it at the end.
@@ -272,15 +312,19 @@ impl<T: Transport> DeviceClient<T> {
         let last = chunks.len().saturating_sub(1);
         for (i, chunk) in chunks.into_iter().enumerate() {
             let want_end = usize::from(chunk.offset) + usize::from(chunk.len);
-            self.request(&HostToDevice::WriteCalibration(chunk), "a calibration-write answer", |m| match m {
-                DeviceToHost::Ack(Ack::CalibrationStored) if i == last => Some(()),
-                DeviceToHost::Ack(Ack::ChunkReceived { received })
-                    if i != last && usize::from(*received) == want_end =>
-                {
-                    Some(())
-                }
-                _ => None,
-            })?;
+            self.request(
+                &HostToDevice::WriteCalibration(chunk),
+                "a calibration-write answer",
+                |m| match m {
+                    DeviceToHost::Ack(Ack::CalibrationStored) if i == last => Some(()),
+                    DeviceToHost::Ack(Ack::ChunkReceived { received })
+                        if i != last && usize::from(*received) == want_end =>
+                    {
+                        Some(())
+                    }
+                    _ => None,
+                },
+            )?;
         }
         Ok(())
     }
@@ -290,10 +334,14 @@ impl<T: Transport> DeviceClient<T> {
         let mut blob = Vec::new();
         loop {
             let offset = blob.len() as u16;
-            let chunk = self.request(&HostToDevice::ReadCalibration { offset }, "a calibration chunk", |m| match m {
-                DeviceToHost::CalibrationChunk(c) => Some(*c),
-                _ => None,
-            })?;
+            let chunk = self.request(
+                &HostToDevice::ReadCalibration { offset },
+                "a calibration chunk",
+                |m| match m {
+                    DeviceToHost::CalibrationChunk(c) => Some(*c),
+                    _ => None,
+                },
+            )?;
             if chunk.offset != offset || usize::from(chunk.len) > wire::BLOB_CHUNK_LEN {
                 return Err(LinkError::BadReadBack(format!(
                     "asked for offset {offset}, got offset {} length {}",
@@ -310,7 +358,11 @@ impl<T: Transport> DeviceClient<T> {
 
     /// Restarts the device and waits until it identifies again.
     pub fn reset(&mut self) -> Result<Identity, LinkError> {
-        self.expect_ack(&HostToDevice::Reset, "a reset acknowledgement", Ack::Resetting)?;
+        self.expect_ack(
+            &HostToDevice::Reset,
+            "a reset acknowledgement",
+            Ack::Resetting,
+        )?;
         self.inbox.clear();
         self.unread.clear();
         self.accumulator = Box::new(CobsAccumulator::new());
