@@ -27,5 +27,8 @@ cargo test --workspace
 step "firmware: PC tests of the device logic, both boards, QEMU on-target tests"
 bash firmware/scripts/test.sh
 
+step "end to end: host calibrate over the pty of the firmware running in QEMU"
+cargo test -p e2e --test qemu_loop -- --ignored
+
 echo
 echo "test-all: every step passed"

@@ -8,7 +8,9 @@ use std::time::Duration;
 
 /// The paper's unit (the simulated device's truth).
 pub fn paper_unit() -> Calibration {
-    UnitFile::paper_unit().to_calibration().expect("built-in unit is valid")
+    UnitFile::paper_unit()
+        .to_calibration()
+        .expect("built-in unit is valid")
 }
 
 /// A client connected to a fresh simulated device of the paper's unit.
@@ -24,3 +26,5 @@ pub fn max_abs_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
         .map(|(i, j)| (a[i][j] - b[i][j]).abs())
         .fold(0.0, f64::max)
 }
+
+pub mod qemu;

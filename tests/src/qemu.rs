@@ -1,0 +1,117 @@
+//! Runs the QEMU firmware (`mps2-an386`) with its UART on a pty, for host-in-the-loop tests.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// The repository root.
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Builds the QEMU firmware (release) and returns the ELF path. Runs from the repository root so that
+/// the root `.cargo/config.toml` (linker scripts) applies.
+pub fn build_firmware() -> Result<PathBuf, String> {
+    let root = repo_root();
+    let status = Command::new(env!("CARGO"))
+        .current_dir(&root)
+        .args([
+            "build",
+            "--manifest-path",
+            "firmware/Cargo.toml",
+            "--release",
+            "--no-default-features",
+            "--features",
+            "board-qemu",
+            "--bin",
+            "qemu",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ])
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err(
+            "building the QEMU firmware failed (is the thumbv7em-none-eabihf target installed?)"
+                .into(),
+        );
+    }
+    Ok(root.join("firmware/target/thumbv7em-none-eabihf/release/qemu"))
+}
+
+/// A running emulated board.
+pub struct Qemu {
+    child: Child,
+    /// The pty its UART0 is connected to.
+    pub pty: String,
+}
+
+impl Qemu {
+    /// Starts `elf` on `mps2-an386` with UART0 on a new pty and waits for QEMU to name the pty.
+    pub fn start(elf: &Path) -> Result<Qemu, String> {
+        let mut child = Command::new("qemu-system-arm")
+            .args([
+                "-machine",
+                "mps2-an386",
+                "-cpu",
+                "cortex-m4",
+                "-display",
+                "none",
+                "-monitor",
+                "none",
+                "-semihosting-config",
+                "enable=on,target=native",
+                "-serial",
+                "pty",
+                "-kernel",
+            ])
+            .arg(elf)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("cannot start qemu-system-arm ({e}): install it with `apt-get install qemu-system-arm`"))?;
+        // QEMU names the pty on stdout ("char device redirected to /dev/pts/N (label serial0)"); keep
+        // draining both streams so that it never blocks on a full pipe.
+        let (tx, rx) = mpsc::channel();
+        let stdout = child.stdout.take().ok_or("no stdout from QEMU")?;
+        let stderr = child.stderr.take().ok_or("no stderr from QEMU")?;
+        let readers: [Box<dyn std::io::Read + Send>; 2] = [Box::new(stdout), Box::new(stderr)];
+        for stream in readers {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                    if let Some(pos) = line.find("/dev/pts/") {
+                        let pty = line[pos..]
+                            .split_whitespace()
+                            .next()
+                            .unwrap_or_default()
+                            .to_string();
+                        let _ = tx.send(pty);
+                    }
+                }
+            });
+        }
+        match rx.recv_timeout(Duration::from_secs(20)) {
+            Ok(pty) => Ok(Qemu { child, pty }),
+            Err(_) => {
+                let _ = child.kill();
+                Err("QEMU did not report its serial pty within 20 s".into())
+            }
+        }
+    }
+
+    /// True while QEMU runs.
+    pub fn running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
