@@ -104,11 +104,7 @@ pub fn render(o: &CalibrationOutcome) -> String {
     }
     if let Some(c) = &o.comparison {
         let _ = writeln!(s);
-        let _ = writeln!(
-            s,
-            "Lever arms by method (mm): {} | {}",
-            o.method, c.method
-        );
+        let _ = writeln!(s, "Lever arms by method (mm): {} | {}", o.method, c.method);
         for i in 0..3 {
             for j in 0..3 {
                 let _ = writeln!(
@@ -218,7 +214,11 @@ pub fn render_prediction(p: &Prediction) -> String {
             (
                 format!("{:.d$}", p.values[k]),
                 format!("{:.d$}", p.sigma[k]),
-                if k < 3 { sym.to_string() } else { format!("{sym}/g") },
+                if k < 3 {
+                    sym.to_string()
+                } else {
+                    format!("{sym}/g")
+                },
             )
         } else if k < 15 {
             (
@@ -247,11 +247,7 @@ pub fn render_prediction(p: &Prediction) -> String {
         };
         let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}");
     }
-    let _ = writeln!(
-        s,
-        "Lever-arm threshold: {:.0} µm",
-        p.threshold_m * 1e6
-    );
+    let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }

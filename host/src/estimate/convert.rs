@@ -86,7 +86,9 @@ pub(crate) fn convert(
         let m: [f64; 3] = core::array::from_fn(|j| theta[idx_m(i, j)]);
         let k = shared::linalg::norm(&m);
         if !(k > 0.0 && k.is_finite()) {
-            return Err(EstimateError::Params(ParamsError::DegenerateAxis { axis: i as u8 }));
+            return Err(EstimateError::Params(ParamsError::DegenerateAxis {
+                axis: i as u8,
+            }));
         }
         values[3 + i] = k;
         let a: [f64; 3] = m.map(|v| v / k);

@@ -475,7 +475,14 @@ pub fn calibrate_session_stats(
 
     let (main_theta, main_cov, fixed, fit_chi2, fit_dof, notes_main) = match options.method {
         Method::Joint => {
-            let j = joint(plan, &mut segs, &mut models, &static_fit, options, &mut excluded)?;
+            let j = joint(
+                plan,
+                &mut segs,
+                &mut models,
+                &static_fit,
+                options,
+                &mut excluded,
+            )?;
             (j.theta, j.cov, j.fixed, j.chi2, j.dof, Vec::new())
         }
         Method::Paper => {
@@ -562,13 +569,22 @@ pub fn calibrate_session_stats(
     };
     let calibration = Calibration {
         statics: fitted.to_paper()?,
-        lever_arms: LeverArms { r_m: conv.lever_arms },
+        lever_arms: LeverArms {
+            r_m: conv.lever_arms,
+        },
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
     };
     let segments = diagnostics(plan, &segs, &models, &main_theta);
     let comparison = if options.compare_methods {
-        compare(plan, &mut segs.clone(), &mut models.clone(), &static_fit, options, &frame_note)
+        compare(
+            plan,
+            &mut segs.clone(),
+            &mut models.clone(),
+            &static_fit,
+            options,
+            &frame_note,
+        )
     } else {
         None
     };
@@ -610,11 +626,21 @@ pub fn calibrate_session_stats(
     })
 }
 
+/// The angle between two unit vectors `chord` apart (|a − b| = 2 sin(θ/2)), degrees.
+pub(crate) fn chord_to_angle_deg(chord: f64) -> f64 {
+    (2.0 * (0.5 * chord).min(1.0).asin()).to_degrees()
+}
+
 /// χ² of all models at θ, and dof for `n_params` parameters.
 fn chi2_of(models: &[SegModel], theta: &[f64; NP], n_params: usize) -> (f64, i64) {
     let chi2 = models
         .iter()
-        .map(|m| m.whitened_residual(theta).iter().map(|v| v * v).sum::<f64>())
+        .map(|m| {
+            m.whitened_residual(theta)
+                .iter()
+                .map(|v| v * v)
+                .sum::<f64>()
+        })
         .sum();
     (chi2, 3 * models.len() as i64 - n_params as i64)
 }
@@ -659,7 +685,7 @@ fn joint(
                 what: "scale/misalignment matrix",
             });
         };
-        let tol_g = options.attitude_tolerance_deg.to_radians();
+        let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
         let worst = models
             .iter()
             .enumerate()
@@ -681,7 +707,7 @@ fn joint(
                 excluded.push(Exclusion {
                     name: plan.segments[segs[seg].plan_idx].name.clone(),
                     reason: ExclusionReason::AttitudeContradiction {
-                        angle_deg: err.to_degrees(),
+                        angle_deg: chord_to_angle_deg(err),
                     },
                 });
                 models.remove(k);

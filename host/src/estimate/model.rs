@@ -83,7 +83,11 @@ pub fn mean_lever_matrix(
     let tr = s[0][0] + s[1][1] + s[2][2];
     let wd = if use_omega_dot { *wdot } else { [0.0; 3] };
     // [ω̇×] = [[0, −ω̇z, ω̇y], [ω̇z, 0, −ω̇x], [−ω̇y, ω̇x, 0]]
-    let skew = [[0.0, -wd[2], wd[1]], [wd[2], 0.0, -wd[0]], [-wd[1], wd[0], 0.0]];
+    let skew = [
+        [0.0, -wd[2], wd[1]],
+        [wd[2], 0.0, -wd[0]],
+        [-wd[1], wd[0], 0.0],
+    ];
     core::array::from_fn(|i| {
         core::array::from_fn(|j| skew[i][j] + s[i][j] - if i == j { tr } else { 0.0 })
     })
@@ -215,10 +219,20 @@ mod tests {
         let wp = linalg::mat_vec(&ew, &st.centre_m);
         let f = core::array::from_fn(|j| st.up_b[j] - wp[j] / g);
         let e = ew.map(|row| row.map(|v| v / g));
-        let seg = SegModel::new(0, f, e, u, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-            .unwrap();
+        let seg = SegModel::new(
+            0,
+            f,
+            e,
+            u,
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        )
+        .unwrap();
         let (fitted, _) = cal.statics.to_fitted().unwrap();
-        let t = theta_from(&fitted.m_out_per_g, &fitted.zero_bias_out, &cal.lever_arms.r_m);
+        let t = theta_from(
+            &fitted.m_out_per_g,
+            &fitted.zero_bias_out,
+            &cal.lever_arms.r_m,
+        );
         let p = seg.predict(&t);
         for i in 0..3 {
             assert!((p[i] - u[i]).abs() < 1e-12, "{p:?} vs {u:?}");

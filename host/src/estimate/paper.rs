@@ -76,9 +76,8 @@ pub(crate) fn eq24(
         let q = [qx, qy, qz];
         for i in 0..3 {
             // D^c and its variance, m/s².
-            let d: [f64; 3] = core::array::from_fn(|c| {
-                g * ((models[q[c]].mean_u[i] - u0[i]) / k[i] - a[i][c])
-            });
+            let d: [f64; 3] =
+                core::array::from_fn(|c| g * ((models[q[c]].mean_u[i] - u0[i]) / k[i] - a[i][c]));
             let var: f64 = (0..3)
                 .map(|c| g * g * models[q[c]].se_cov[i][i] / (k[i] * k[i]))
                 .sum();
@@ -113,7 +112,12 @@ pub(crate) fn eq24(
     let worst_cos = a
         .iter()
         .enumerate()
-        .flat_map(|(i, row)| row.iter().enumerate().filter(move |(j, _)| *j != i).map(|(_, c)| c.abs()))
+        .flat_map(|(i, row)| {
+            row.iter()
+                .enumerate()
+                .filter(move |(j, _)| *j != i)
+                .map(|(_, c)| c.abs())
+        })
         .fold(f64::INFINITY, f64::min);
     let notes = vec![format!(
         "paper eq. 24 at {:?} °/s (nominal rates, p = 0): the across-axis components are divided by \

@@ -84,7 +84,9 @@ pub fn predict(
     let mut truth_in_frame = *truth;
     truth_in_frame.lever_arms = match options.reference {
         ReferenceChoice::TableAxis => truth.lever_arms,
-        ReferenceChoice::Centroid => truth.lever_arms.re_referenced(truth.lever_arms.centroid_m()),
+        ReferenceChoice::Centroid => truth
+            .lever_arms
+            .re_referenced(truth.lever_arms.centroid_m()),
         ReferenceChoice::BodyPoint(o) => truth.lever_arms.re_referenced(o),
     };
     Ok(Prediction {

@@ -110,7 +110,13 @@ fn finite_stats(s: &SegmentStats) -> bool {
         .all(|v| v.is_finite())
 }
 
-fn exclude(segs: &mut [SessionSeg], k: usize, plan: &Plan, reason: ExclusionReason, out: &mut Vec<Exclusion>) {
+fn exclude(
+    segs: &mut [SessionSeg],
+    k: usize,
+    plan: &Plan,
+    reason: ExclusionReason,
+    out: &mut Vec<Exclusion>,
+) {
     segs[k].used = false;
     out.push(Exclusion {
         name: plan.segments[segs[k].plan_idx].name.clone(),
@@ -165,7 +171,13 @@ pub(crate) fn screen(
             }
         }
         if let Some((axis, detail)) = saturated {
-            exclude(segs, k, plan, ExclusionReason::Saturated { axis, detail }, excluded);
+            exclude(
+                segs,
+                k,
+                plan,
+                ExclusionReason::Saturated { axis, detail },
+                excluded,
+            );
         }
     }
 
@@ -176,7 +188,12 @@ pub(crate) fn screen(
         .collect();
     if !statics.is_empty() {
         let med_w: [f64; 3] = core::array::from_fn(|j| {
-            median(statics.iter().map(|&k| segs[k].stats.mean_w_rad_s[j]).collect())
+            median(
+                statics
+                    .iter()
+                    .map(|&k| segs[k].stats.mean_w_rad_s[j])
+                    .collect(),
+            )
         });
         let med_sw: [f64; 3] = core::array::from_fn(|j| {
             median(statics.iter().map(|&k| segs[k].stats.std_w()[j]).collect())
@@ -316,7 +333,8 @@ pub(crate) fn build_models(
 /// Directions along which the attitudes `ups` do not spread (empty when they span 3-D affinely).
 pub(crate) fn missing_directions(ups: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let n = ups.len() as f64;
-    let mean: [f64; 3] = core::array::from_fn(|j| ups.iter().map(|u| u[j]).sum::<f64>() / n.max(1.0));
+    let mean: [f64; 3] =
+        core::array::from_fn(|j| ups.iter().map(|u| u[j]).sum::<f64>() / n.max(1.0));
     let scatter = nalgebra::Matrix3::from_fn(|a, b| {
         ups.iter()
             .map(|u| (u[a] - mean[a]) * (u[b] - mean[b]))
@@ -348,7 +366,8 @@ fn static_start(models: &[&SegModel]) -> [f64; NP] {
     // Any non-degenerate start: the static model is linear, Gauss–Newton solves it in one step.
     let mut t = [0.0; NP];
     for i in 0..3 {
-        let mean: f64 = models.iter().map(|m| m.mean_u[i]).sum::<f64>() / models.len().max(1) as f64;
+        let mean: f64 =
+            models.iter().map(|m| m.mean_u[i]).sum::<f64>() / models.len().max(1) as f64;
         t[idx_u0(i)] = mean;
         t[idx_m(i, i)] = 1.0;
     }
@@ -358,7 +377,12 @@ fn static_start(models: &[&SegModel]) -> [f64; NP] {
 /// Static least squares on the given models (lever arms fixed at 0: static segments do not see them).
 pub(crate) fn static_fit(models: &[&SegModel]) -> Result<solve::Fit, EstimateError> {
     let owned: Vec<SegModel> = models.iter().map(|m| (*m).clone()).collect();
-    solve::fit(&owned, static_start(models), static_free(), "static least squares")
+    solve::fit(
+        &owned,
+        static_start(models),
+        static_free(),
+        "static least squares",
+    )
 }
 
 /// |M⁻¹(ū − u0) − up| of each static segment under a fit, g.
@@ -389,7 +413,7 @@ pub(crate) fn static_fit_with_attitude_check(
     excluded: &mut Vec<Exclusion>,
     planned_static: usize,
 ) -> Result<solve::Fit, EstimateError> {
-    let tol_g = options.attitude_tolerance_deg.to_radians();
+    let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
     loop {
         let statics: Vec<usize> = (0..models.len())
             .filter(|&k| segs[models[k].seg].kind == SegmentKind::Static)
@@ -418,7 +442,9 @@ pub(crate) fn static_fit_with_attitude_check(
         if all_err.iter().all(|e| *e < 0.1 * tol_g) {
             return Ok(all);
         }
-        let mut worst: Option<(usize, f64)> = None;
+        // Leave one out: the segment whose removal makes the others consistent is the suspect; it is
+        // excluded when the others' fit puts it further than the tolerance from its planned attitude.
+        let mut best: Option<(usize, f64, f64)> = None; // (model index, rest's worst error, its own error)
         if statics.len() >= 5 {
             for (a, &k) in statics.iter().enumerate() {
                 let mut rest_ups = ups.clone();
@@ -432,18 +458,16 @@ pub(crate) fn static_fit_with_attitude_check(
                     .map(|&q| &models[q])
                     .collect();
                 let Ok(fit) = static_fit(&rest) else { continue };
-                let m = model::m_of(&fit.theta);
-                let u0 = model::u0_of(&fit.theta);
-                let Some(minv) = linalg::inverse(&m) else { continue };
-                let du: [f64; 3] = core::array::from_fn(|i| models[k].mean_u[i] - u0[i]);
-                let d = linalg::mat_vec(&minv, &du);
-                let up = ups[a];
-                let err = linalg::norm(&core::array::from_fn(|j| d[j] - up[j]));
-                if worst.is_none_or(|w| err > w.1) {
-                    worst = Some((k, err));
+                let rest_worst = attitude_errors(&fit, &rest, &rest_ups)
+                    .into_iter()
+                    .fold(0.0, f64::max);
+                let own = attitude_errors(&fit, &[&models[k]], &[ups[a]])[0];
+                if best.is_none_or(|b| rest_worst < b.1) {
+                    best = Some((k, rest_worst, own));
                 }
             }
         }
+        let worst = best.map(|(k, _, own)| (k, own));
         match worst {
             Some((k, err)) if err > tol_g => {
                 let seg = models[k].seg;
@@ -451,7 +475,7 @@ pub(crate) fn static_fit_with_attitude_check(
                 excluded.push(Exclusion {
                     name: plan.segments[segs[seg].plan_idx].name.clone(),
                     reason: ExclusionReason::AttitudeContradiction {
-                        angle_deg: err.to_degrees(),
+                        angle_deg: super::chord_to_angle_deg(err),
                     },
                 });
                 models.remove(k);
@@ -482,7 +506,11 @@ pub(crate) fn reference_frame(
     options: &EstimateOptions,
     warnings: &mut Vec<String>,
 ) -> Frame {
-    let centres: Vec<[f64; 3]> = plan.segments.iter().filter_map(|s| s.table_centre_m).collect();
+    let centres: Vec<[f64; 3]> = plan
+        .segments
+        .iter()
+        .filter_map(|s| s.table_centre_m)
+        .collect();
     let common = centres.first().copied();
     if centres.is_empty() {
         if options.reference == ReferenceChoice::TableAxis {

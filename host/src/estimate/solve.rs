@@ -35,7 +35,11 @@ pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
     // measure independent of units.
     if min_eigen > 0.0 {
         let eig = scaled.clone().symmetric_eigen();
-        let min = eig.eigenvalues.iter().copied().fold(f64::INFINITY, f64::min);
+        let min = eig
+            .eigenvalues
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
         if !(min > min_eigen) {
             return None;
         }
@@ -129,7 +133,9 @@ pub fn fit(
     for _ in 0..30 {
         let (n, b, _) = normal_equations(segs, &t, &idx, None);
         // Cholesky alone while iterating; the rank check runs once, on the final covariance.
-        let d: Vec<f64> = (0..n.nrows()).map(|i| 1.0 / n[(i, i)].max(1e-300).sqrt()).collect();
+        let d: Vec<f64> = (0..n.nrows())
+            .map(|i| 1.0 / n[(i, i)].max(1e-300).sqrt())
+            .collect();
         let scaled = DMatrix::from_fn(n.nrows(), n.ncols(), |i, j| n[(i, j)] * d[i] * d[j]);
         let chol = scaled.cholesky().ok_or(EstimateError::Singular { what })?;
         let bs = DVector::from_fn(b.len(), |i, _| b[i] * d[i]);
@@ -138,7 +144,11 @@ pub fn fit(
         let mut rel = 0.0f64;
         for (c, &p) in idx.iter().enumerate() {
             t[p] += step[c];
-            let scale = if p % 7 >= 4 { 1e-3 } else { t[p].abs().max(1e-9) };
+            let scale = if p % 7 >= 4 {
+                1e-3
+            } else {
+                t[p].abs().max(1e-9)
+            };
             rel = rel.max(step[c].abs() / scale);
         }
         if !step.iter().all(|v| v.is_finite()) {

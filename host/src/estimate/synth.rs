@@ -104,7 +104,12 @@ pub fn segment_stats(
         mean_u,
         cov_u: core::array::from_fn(|i| {
             core::array::from_fn(|j| {
-                sig_cov[i][j] + if i == j { noise.out_1sigma[i].powi(2) } else { 0.0 }
+                sig_cov[i][j]
+                    + if i == j {
+                        noise.out_1sigma[i].powi(2)
+                    } else {
+                        0.0
+                    }
             })
         }),
         min_u: core::array::from_fn(|i| lo[i] - 4.5 * noise.out_1sigma[i]),

@@ -73,7 +73,11 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
         for sgn in [1.0, -1.0] {
             let mut up = [0.0; 3];
             up[a] = sgn;
-            segments.push(seg(&format!("{n}{}", if sgn > 0.0 { "+" } else { "-" }), up, 0.0));
+            segments.push(seg(
+                &format!("{n}{}", if sgn > 0.0 { "+" } else { "-" }),
+                up,
+                0.0,
+            ));
         }
     }
     for (a, n) in ["x", "y", "z"].iter().enumerate() {
@@ -99,7 +103,11 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
 pub fn better_plan(unit: OutputUnitName) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
-    for (n, up) in [("xy", [h, h, 0.0]), ("yz", [0.0, h, h]), ("zx", [h, 0.0, h])] {
+    for (n, up) in [
+        ("xy", [h, h, 0.0]),
+        ("yz", [0.0, h, h]),
+        ("zx", [h, 0.0, h]),
+    ] {
         for r in [200.0, -200.0] {
             p.segments.push(seg(&format!("{n} {r}"), up, r));
         }
