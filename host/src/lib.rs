@@ -1,13 +1,14 @@
 //! The PC calibrator: recording format, simulator, estimator, reports and the device link.
 //! The binary (`src/main.rs`) is a thin clap layer over this library.
 
+pub mod calibration_files;
+pub mod cli;
 pub mod convert;
 pub mod device;
-pub mod navigation;
 pub mod estimate;
+pub mod navigation;
+pub mod procedure;
 pub mod recording;
 pub mod report;
 pub mod simulate;
 pub mod unit_file;
-pub mod calibration_files;
-pub mod procedure;

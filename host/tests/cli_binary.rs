@@ -1,0 +1,59 @@
+//! The `host` binary itself: errors go to stderr as `error: ...` with a non-zero exit status, results
+//! to stdout.
+
+use std::process::Command;
+
+fn host(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_host"))
+        .args(args)
+        .output()
+        .expect("the host binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn simulate_and_calibrate_through_the_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("s");
+    let s = session.to_str().unwrap();
+    let (ok, stdout, stderr) = host(&["simulate", "--out", s, "--plan", "short", "--seed", "4"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("simulated 30000 rows"), "{stdout}");
+    // Simulating again into the same directory is refused, not silently overwritten.
+    let (ok, _, stderr) = host(&["simulate", "--out", s, "--plan", "short"]);
+    assert!(
+        !ok && stderr.starts_with("error: ") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("Table 1") && stdout.contains("calibration.bin"),
+        "{stdout}"
+    );
+    assert!(stderr.contains("no unit_id"), "{stderr}");
+    assert!(session.join("calibration.toml").exists());
+}
+
+#[test]
+fn bad_input_is_an_error_line_and_a_failure_status() {
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("s");
+    let s = session.to_str().unwrap();
+    let (ok, _, stderr) = host(&["calibrate", "--input", s]);
+    assert!(
+        !ok && stderr.starts_with("error: ") && stderr.contains("plan.toml"),
+        "{stderr}"
+    );
+    assert!(host(&["simulate", "--out", s, "--plan", "short"]).0);
+    let csv = session.join("samples.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    std::fs::write(&csv, text.replacen("x+,0.001,", "x+,0.001x,", 1)).unwrap();
+    let (ok, _, stderr) = host(&["calibrate", "--input", s]);
+    assert!(!ok, "{stderr}");
+    assert!(stderr.contains("line 3, column 2 (t_s)"), "{stderr}");
+}
