@@ -49,11 +49,10 @@ pub fn render(o: &CalibrationOutcome) -> String {
     let _ = writeln!(s, "Table 1. Static calibration");
     let _ = writeln!(
         s,
-        "{:<4} {:>26} {:>26}   {}",
+        "{:<4} {:>26} {:>26}   Installation angles θ_ix, θ_iy, θ_iz (°)",
         "No.",
         format!("Zero bias ({sym})"),
         format!("Scale factor ({sym}/g)"),
-        "Installation angles θ_ix, θ_iy, θ_iz (°)"
     );
     for i in 0..3 {
         let angles: Vec<String> = (0..3)
@@ -210,7 +209,7 @@ pub fn render_prediction(p: &Prediction) -> String {
     let _ = writeln!(s, "Predicted 1σ (Cramér–Rao bound) for this plan:");
     for k in 0..PAPER_LEN {
         let label = &p.labels[k];
-        let (value, sigma, unit) = if k < 6 {
+        let (value, sigma, unit, mark) = if k < 6 {
             (
                 format!("{:.d$}", p.values[k]),
                 format!("{:.d$}", p.sigma[k]),
@@ -219,12 +218,14 @@ pub fn render_prediction(p: &Prediction) -> String {
                 } else {
                     format!("{sym}/g")
                 },
+                "",
             )
         } else if k < 15 {
             (
                 format!("{:.5}", p.values[k]),
                 format!("{:.6}", p.sigma[k]),
                 "°".to_string(),
+                "",
             )
         } else {
             let (i, j) = ((k - 15) / 3, (k - 15) % 3);
@@ -238,18 +239,92 @@ pub fn render_prediction(p: &Prediction) -> String {
             (
                 format!("{:+.4}", p.values[k] * 1e3),
                 if p.sigma[k].is_finite() {
-                    format!("{:.4}{mark}", p.sigma[k] * 1e3)
+                    format!("{:.4}", p.sigma[k] * 1e3)
                 } else {
-                    format!("∞{mark}")
+                    "∞".to_string()
                 },
                 "mm".to_string(),
+                mark,
             )
         };
-        let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}");
+        let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}{mark}");
     }
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::estimate::synth::{self, SynthNoise};
+    use crate::estimate::{calibrate_session_stats, EstimateOptions};
+    use crate::recording::Plan;
+
+    const PLAN: &str = r#"
+output_unit = "V"
+sample_rate_hz = 1000
+[[segment]]
+name = "x+"
+up_b = [1, 0, 0]
+[[segment]]
+name = "x-"
+up_b = [-1, 0, 0]
+[[segment]]
+name = "y+"
+up_b = [0, 1, 0]
+[[segment]]
+name = "y-"
+up_b = [0, -1, 0]
+[[segment]]
+name = "z+"
+up_b = [0, 0, 1]
+[[segment]]
+name = "z-"
+up_b = [0, 0, -1]
+[[segment]]
+name = "x+ 200"
+up_b = [1, 0, 0]
+rate_deg_s = 200
+[[segment]]
+name = "y+ 200"
+up_b = [0, 1, 0]
+rate_deg_s = 200
+[[segment]]
+name = "z+ 200"
+up_b = [0, 0, 1]
+rate_deg_s = 200
+"#;
+
+    #[test]
+    fn report_has_the_paper_tables_and_the_comparison() {
+        let plan = Plan::parse(PLAN).unwrap();
+        let truth = crate::unit_file::UnitFile::paper_unit()
+            .to_calibration()
+            .unwrap();
+        let unit = shared::forward::ForwardModel::new(&truth).unwrap();
+        let noise = SynthNoise {
+            out_1sigma: [4e-4; 3],
+            gyro_1sigma_rad_s: 0.0,
+            sample_rate_hz: 1000.0,
+        };
+        let stats = synth::plan_stats(&plan, &unit, &noise, 60.0);
+        let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+        let text = super::render(&out);
+        eprintln!("{text}");
+        for want in [
+            "Table 1",
+            "Zero bias (V)",
+            "Table 3",
+            "n.d.",
+            "Lever arms by method",
+            "paper eq. 24",
+            "x+ 200",
+            "χ²",
+            "Warnings",
+        ] {
+            assert!(text.contains(want), "missing {want}");
+        }
+    }
 }

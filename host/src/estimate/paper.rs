@@ -35,6 +35,43 @@ pub(crate) struct PaperResult {
     pub notes: Vec<String>,
 }
 
+/// Eq. 24 for the static parameters in `t` (its lever arms ignored): the inverse-variance weighted
+/// lever arms over the rate groups, and their variance from the spin segments' noise.
+fn solve_eq24(
+    t: &[f64; NP],
+    g: f64,
+    trios: &[(f64, [usize; 3])],
+    models: &[SegModel],
+) -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
+    let m = model::m_of(t);
+    let u0 = model::u0_of(t);
+    let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m[i]));
+    let a: [[f64; 3]; 3] = core::array::from_fn(|i| m[i].map(|v| v / k[i]));
+    let mut num = [[0.0; 3]; 3];
+    let mut wsum = [[0.0; 3]; 3];
+    for (w0, q) in trios {
+        for i in 0..3 {
+            // D^c = f_i^c − f_i0^c (m/s²) and its variance.
+            let d: [f64; 3] =
+                core::array::from_fn(|c| g * ((models[q[c]].mean_u[i] - u0[i]) / k[i] - a[i][c]));
+            let var: f64 = (0..3)
+                .map(|c| g * g * models[q[c]].se_cov[i][i] / (k[i] * k[i]))
+                .sum();
+            for j in 0..3 {
+                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+                let n = d[j] - d[j1] - d[j2];
+                let den = 2.0 * w0 * w0 * a[i][j];
+                let vr = var / (den * den);
+                num[i][j] += n / den / vr;
+                wsum[i][j] += 1.0 / vr;
+            }
+        }
+    }
+    let r = core::array::from_fn(|i| core::array::from_fn(|j| num[i][j] / wsum[i][j]));
+    let v = core::array::from_fn(|i| core::array::from_fn(|j| 1.0 / wsum[i][j]));
+    (r, v)
+}
+
 pub(crate) fn eq24(
     plan: &Plan,
     segs: &[SessionSeg],
@@ -42,7 +79,6 @@ pub(crate) fn eq24(
     static_fit: &solve::Fit,
 ) -> Result<PaperResult, EstimateError> {
     let m = model::m_of(&static_fit.theta);
-    let u0 = model::u0_of(&static_fit.theta);
     let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m[i]));
     let a: [[f64; 3]; 3] = core::array::from_fn(|i| m[i].map(|v| v / k[i]));
     let g = plan.gravity_m_s2;
@@ -64,35 +100,15 @@ pub(crate) fn eq24(
             e[axis] = Some(q);
         }
     }
-    let mut num = [[0.0; 3]; 3];
-    let mut wsum = [[0.0; 3]; 3];
-    let mut rates_used = Vec::new();
-    for (key, trio) in &groups {
-        let [Some(qx), Some(qy), Some(qz)] = *trio else {
-            continue;
-        };
-        let w0 = (*key as f64 / 100.0).to_radians();
-        rates_used.push(*key as f64 / 100.0);
-        let q = [qx, qy, qz];
-        for i in 0..3 {
-            // D^c and its variance, m/s².
-            let d: [f64; 3] =
-                core::array::from_fn(|c| g * ((models[q[c]].mean_u[i] - u0[i]) / k[i] - a[i][c]));
-            let var: f64 = (0..3)
-                .map(|c| g * g * models[q[c]].se_cov[i][i] / (k[i] * k[i]))
-                .sum();
-            for j in 0..3 {
-                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-                let n = d[j] - d[j1] - d[j2];
-                let den = 2.0 * w0 * w0 * a[i][j];
-                let r = n / den;
-                let vr = var / (den * den);
-                num[i][j] += r / vr;
-                wsum[i][j] += 1.0 / vr;
-            }
-        }
-    }
-    if rates_used.is_empty() {
+    let trios: Vec<(f64, [usize; 3])> = groups
+        .iter()
+        .filter_map(|(key, t)| match *t {
+            [Some(x), Some(y), Some(z)] => Some(((*key as f64 / 100.0).to_radians(), [x, y, z])),
+            _ => None,
+        })
+        .collect();
+    let rates_used: Vec<f64> = trios.iter().map(|(w, _)| w.to_degrees()).collect();
+    if trios.is_empty() {
         return Err(EstimateError::PlanCannotObserve {
             parameters: (0..9)
                 .map(|p| format!("r{}{}", p / 3 + 1, shared::params::axis_name(p % 3)))
@@ -101,12 +117,52 @@ pub(crate) fn eq24(
                 .into(),
         });
     }
+    let (r, var_noise) = solve_eq24(&static_fit.theta, g, &trios, models);
+    // The static fit's own errors enter through u0, k and a (numerical Jacobian, central differences).
+    let mut jac = [[[0.0; NP]; 3]; 3];
+    for p in 0..NP {
+        if p % 7 >= 4 {
+            continue;
+        }
+        let h = 1e-6 * static_fit.theta[p].abs().max(1e-3 * k[p / 7]);
+        let mut tp = static_fit.theta;
+        let mut tm = static_fit.theta;
+        tp[p] += h;
+        tm[p] -= h;
+        let (rp, _) = solve_eq24(&tp, g, &trios, models);
+        let (rm, _) = solve_eq24(&tm, g, &trios, models);
+        for i in 0..3 {
+            for j in 0..3 {
+                jac[i][j][p] = (rp[i][j] - rm[i][j]) / (2.0 * h);
+            }
+        }
+    }
     let mut theta = static_fit.theta;
     let mut cov = static_fit.cov.clone();
-    for i in 0..3 {
-        for j in 0..3 {
-            theta[idx_r(i, j)] = num[i][j] / wsum[i][j];
-            cov[(idx_r(i, j), idx_r(i, j))] = 1.0 / wsum[i][j];
+    let rows: Vec<(usize, usize)> = (0..9).map(|q| (q / 3, q % 3)).collect();
+    for &(i, j) in &rows {
+        theta[idx_r(i, j)] = r[i][j];
+    }
+    for &(i, j) in &rows {
+        for &(i2, j2) in &rows {
+            let mut c = 0.0;
+            for p in 0..NP {
+                for q in 0..NP {
+                    c += jac[i][j][p] * static_fit.cov[(p, q)] * jac[i2][j2][q];
+                }
+            }
+            if (i, j) == (i2, j2) {
+                c += var_noise[i][j];
+            }
+            cov[(idx_r(i, j), idx_r(i2, j2))] = c;
+        }
+        // Cross-covariance with the static parameters.
+        for p in 0..NP {
+            if p % 7 < 4 {
+                let c: f64 = (0..NP).map(|q| jac[i][j][q] * static_fit.cov[(q, p)]).sum();
+                cov[(idx_r(i, j), p)] = c;
+                cov[(p, idx_r(i, j))] = c;
+            }
         }
     }
     let worst_cos = a

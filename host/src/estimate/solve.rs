@@ -40,7 +40,7 @@ pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
             .iter()
             .copied()
             .fold(f64::INFINITY, f64::min);
-        if !(min > min_eigen) {
+        if min.is_nan() || min <= min_eigen {
             return None;
         }
     }
@@ -180,10 +180,7 @@ pub fn structurally_unobservable(
     limit_m: f64,
 ) -> Vec<(usize, usize)> {
     let mut fixed = Vec::new();
-    loop {
-        let Some(cov) = covariance(segs, t, free, Some(1.0)) else {
-            break;
-        };
+    while let Some(cov) = covariance(segs, t, free, Some(1.0)) {
         let worst = (0..3)
             .flat_map(|i| (0..3).map(move |j| (i, j)))
             .filter(|&(i, j)| free[idx_r(i, j)])

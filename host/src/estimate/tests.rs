@@ -269,7 +269,7 @@ fn better_plan_determines_all_nine_lever_arm_components() {
             }))
         })
         .collect();
-    let paper: Vec<f64> = mc.other_lever_err.iter().flat_map(|e| across(e)).collect();
+    let paper: Vec<f64> = mc.other_lever_err.iter().flat_map(across).collect();
     assert_eq!(mc.other_lever_err.len(), mc.err.len());
     let (rj, rp) = (rms(joint.into_iter()), rms(paper.into_iter()));
     eprintln!(
