@@ -7,9 +7,10 @@ use crate::estimate::{
     PredictSettings, ReferenceChoice,
 };
 use crate::recording::builtin::{load_plan, paper_plan};
+use crate::recording::csv_io::progress_bar;
 use crate::recording::csv_io::{read_session, ReadOptions, RecordingError, Session};
 use crate::recording::{Plan, PlanError};
-use crate::simulate::{simulate_to_dir, NoiseModel, SimulateError};
+use crate::simulate::{simulate_to_dir_with_progress, NoiseModel, SimulateError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, Parser, Subcommand};
 use shared::UnitId;
@@ -214,7 +215,7 @@ impl From<SimulateError> for CliError {
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
-        Command::Simulate(a) => simulate(&a).map(|_| ()),
+        Command::Simulate(a) => simulate(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate(&a, cli.quiet).map(|_| ()),
         Command::Plan(a) => plan_check(&a).map(|_| ()),
     }
@@ -257,14 +258,19 @@ pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, 
 }
 
 /// `host simulate`.
-pub fn simulate(a: &SimulateArgs) -> Result<crate::simulate::SimulationSummary, CliError> {
+pub fn simulate(
+    a: &SimulateArgs,
+    quiet: bool,
+) -> Result<crate::simulate::SimulationSummary, CliError> {
     let unit = load_unit(a.unit.as_deref())?;
     let plan = match &a.plan {
         Some(spec) => load_plan(spec)?,
         None => paper_plan(),
     };
     let noise = noise_from_args(a, &unit)?;
-    let summary = simulate_to_dir(&a.out, &unit, &plan, &noise, a.seed, a.force)?;
+    let bar = progress_bar(0, "simulating", quiet);
+    let summary =
+        simulate_to_dir_with_progress(&a.out, &unit, &plan, &noise, a.seed, a.force, &bar)?;
     for note in &summary.notes {
         eprintln!("note: {note}");
     }
@@ -498,7 +504,7 @@ mod tests {
         else {
             panic!()
         };
-        simulate(&s).unwrap();
+        simulate(&s, true).unwrap();
         let out = dir.path().join("out");
         let Command::Calibrate(c) = parse(&[
             "calibrate",

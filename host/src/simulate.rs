@@ -371,6 +371,20 @@ pub fn simulate_to_dir(
     seed: u64,
     overwrite: bool,
 ) -> Result<SimulationSummary, SimulateError> {
+    let hidden = indicatif::ProgressBar::hidden();
+    simulate_to_dir_with_progress(dir, unit, plan, noise, seed, overwrite, &hidden)
+}
+
+/// [`simulate_to_dir`], advancing `bar` by rows (its length is set here).
+pub fn simulate_to_dir_with_progress(
+    dir: &Path,
+    unit: &UnitFile,
+    plan: &Plan,
+    noise: &NoiseModel,
+    seed: u64,
+    overwrite: bool,
+    bar: &indicatif::ProgressBar,
+) -> Result<SimulationSummary, SimulateError> {
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
     let (fitted, normalisation) = cal
@@ -399,9 +413,19 @@ pub fn simulate_to_dir(
     }
 
     let mut writer = SessionWriter::create(dir, &plan, overwrite)?;
+    let total: f64 = plan
+        .segments
+        .iter()
+        .map(|s| (s.duration_s.unwrap_or(0.0) * plan.sample_rate_hz).round())
+        .sum();
+    bar.set_length(total as u64);
     let result = simulate_rows(&cal, &plan, noise, seed, |seg, t, u, w| {
+        if writer.rows() % 65_536 == 0 {
+            bar.set_position(writer.rows());
+        }
         writer.write_row(seg, t, u, w)
     })?;
+    bar.finish_and_clear();
     let mut summary = result?;
     writer.finish()?;
     summary.notes = notes;

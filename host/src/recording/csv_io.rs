@@ -202,7 +202,7 @@ pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, Record
     };
     let file = File::open(&path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
-    let bar = progress_bar(len, "reading samples.csv", options.quiet);
+    let bar = progress_bar_bytes(len, "reading samples.csv", options.quiet);
     let reader = BufReader::with_capacity(1 << 20, bar.wrap_read(file));
     let result = read_samples(reader, &plan, &path);
     bar.finish_and_clear();
@@ -214,17 +214,35 @@ pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, Record
     })
 }
 
-/// A byte-count progress bar on stderr, hidden unless stderr is a terminal and `quiet` is false.
+/// A progress bar counting items (rows, windows) on stderr, hidden unless stderr is a terminal and
+/// `quiet` is false.
 pub fn progress_bar(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
+    styled_bar(
+        total,
+        message,
+        quiet,
+        "{msg} [{bar:40}] {human_pos}/{human_len} ({eta} left)",
+    )
+}
+
+/// A progress bar counting bytes on stderr, hidden unless stderr is a terminal and `quiet` is false.
+pub fn progress_bar_bytes(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
+    styled_bar(
+        total,
+        message,
+        quiet,
+        "{msg} [{bar:40}] {bytes}/{total_bytes} ({bytes_per_sec}, {eta} left)",
+    )
+}
+
+fn styled_bar(total: u64, message: &'static str, quiet: bool, template: &str) -> ProgressBar {
     if quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-    let style = ProgressStyle::with_template(
-        "{msg} [{bar:40}] {bytes}/{total_bytes} ({bytes_per_sec}, {eta} left)",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar())
-    .progress_chars("=> ");
+    let style = ProgressStyle::with_template(template)
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
     bar.set_style(style);
     bar.set_message(message);
     bar
