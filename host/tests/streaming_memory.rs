@@ -1,0 +1,99 @@
+//! The reader streams: its peak heap use does not grow with the number of rows. Measured with a
+//! counting global allocator (this test binary only) while reading rows generated on the fly.
+
+use host::recording::{read_samples, Plan};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::io::{BufReader, Read};
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let now = CURRENT.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        PEAK.fetch_max(now, Ordering::Relaxed);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: Counting = Counting;
+
+/// `samples.csv` text of `rows` rows, produced as it is read.
+struct Rows {
+    left: u64,
+    k: u64,
+    pending: Vec<u8>,
+    at: usize,
+}
+
+impl Read for Rows {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.at == self.pending.len() {
+            self.pending.clear();
+            self.at = 0;
+            if self.k == 0 {
+                self.pending
+                    .extend_from_slice(b"segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n");
+            }
+            while self.left > 0 && self.pending.len() < 4096 {
+                let t = self.k as f64 * 1e-3;
+                let x = (self.k as f64 * 0.37).sin();
+                let line = format!(
+                    "x+,{t},{},{},{},{},{},{}\n",
+                    2.4 + 1e-3 * x,
+                    2.38,
+                    2.43 - 1e-3 * x,
+                    1e-3 * x,
+                    0.0,
+                    -1e-3
+                );
+                self.pending.extend_from_slice(line.as_bytes());
+                self.left -= 1;
+                self.k += 1;
+            }
+        }
+        let n = buf.len().min(self.pending.len() - self.at);
+        buf[..n].copy_from_slice(&self.pending[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+fn peak_while_reading(rows: u64, plan: &Plan) -> usize {
+    let reader = BufReader::with_capacity(
+        1 << 16,
+        Rows {
+            left: rows,
+            k: 0,
+            pending: Vec::with_capacity(8192),
+            at: 0,
+        },
+    );
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let (stats, report) = read_samples(reader, plan, Path::new("generated")).unwrap();
+    assert_eq!((stats[0].count, report.rows), (rows, rows));
+    PEAK.load(Ordering::Relaxed) - base
+}
+
+#[test]
+fn peak_memory_does_not_grow_with_rows() {
+    let plan = Plan::parse(
+        "output_unit = \"V\"\nsample_rate_hz = 1000\n[[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\n",
+    )
+    .unwrap();
+    let small = peak_while_reading(20_000, &plan);
+    let large = peak_while_reading(200_000, &plan);
+    eprintln!("peak heap while reading: {small} bytes for 20 000 rows, {large} for 200 000");
+    // 10× the rows (~10 MB of text): the same working set, well under the text's size.
+    assert!(large < 512 * 1024, "peak {large} bytes");
+    assert!(large <= small + 16 * 1024, "{small} → {large} bytes");
+}
