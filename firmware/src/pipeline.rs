@@ -51,6 +51,43 @@ impl Sample {
     }
 }
 
+/// Raw sensor codes as a board reads them: three ADC conversions and a gyro's three 16-bit words.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RawCodes {
+    /// ADC codes of the x, y, z accelerometers.
+    pub adc: [u16; 3],
+    /// Gyro words of the x, y, z body rates.
+    pub gyro: [i16; 3],
+}
+
+/// Conversion of [`RawCodes`] to a [`Sample`]: volts per ADC code, rad/s per gyro LSB.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scaling {
+    /// Volts per ADC code (V_ref / 4095 for a 12-bit ADC).
+    pub volts_per_code: f32,
+    /// Largest ADC code (a code at 0 or here is saturated).
+    pub adc_max: u16,
+    /// rad/s per gyro LSB.
+    pub rad_s_per_lsb: f32,
+}
+
+impl Scaling {
+    /// The sample of these codes; a code at either end of its range marks it saturated.
+    #[inline(always)]
+    pub fn sample(&self, c: &RawCodes) -> Sample {
+        let mut sat = false;
+        for j in 0..3 {
+            sat |= c.adc[j] == 0 || c.adc[j] >= self.adc_max;
+            sat |= c.gyro[j] == i16::MIN || c.gyro[j] == i16::MAX;
+        }
+        Sample {
+            raw: c.adc.map(|v| f32::from(v) * self.volts_per_code),
+            rate_rad_s: c.gyro.map(|v| f32::from(v) * self.rad_s_per_lsb),
+            saturated: sat,
+        }
+    }
+}
+
 /// A change to the pipeline, decided by the request handler in the main loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PipelineCommand {
@@ -487,6 +524,42 @@ mod tests {
             };
             assert!(w.mean_m_s2.iter().all(|v| v.is_finite()), "{w:?}");
             assert_eq!(w.count, 1);
+        }
+    }
+
+    #[test]
+    fn scaling_converts_and_flags_range_ends() {
+        let k = Scaling {
+            volts_per_code: 3.3 / 4095.0,
+            adc_max: 4095,
+            rad_s_per_lsb: 0.001,
+        };
+        let s = k.sample(&RawCodes {
+            adc: [2048, 1, 4094],
+            gyro: [-1000, 0, 32766],
+        });
+        assert!(!s.saturated);
+        assert_eq!(s.raw[0], 2048.0 * (3.3 / 4095.0));
+        assert_eq!(s.rate_rad_s[0], -1.0);
+        for c in [
+            RawCodes {
+                adc: [0, 1, 1],
+                gyro: [0; 3],
+            },
+            RawCodes {
+                adc: [1, 4095, 1],
+                gyro: [0; 3],
+            },
+            RawCodes {
+                adc: [1; 3],
+                gyro: [0, i16::MIN, 0],
+            },
+            RawCodes {
+                adc: [1; 3],
+                gyro: [0, 0, i16::MAX],
+            },
+        ] {
+            assert!(k.sample(&c).saturated, "{c:?}");
         }
     }
 

@@ -91,6 +91,7 @@ pub struct Controller<S> {
 impl<S: CalStore> Controller<S> {
     /// Loads and validates the stored calibration. An invalid, corrupt or foreign blob (or a storage
     /// error) leaves the device uncalibrated with the reason in [`Self::calibration_state`].
+    #[inline(never)]
     pub fn boot(info: DeviceInfo, mut store: S, lever_mode: LeverMode) -> Self {
         let mut stored = [0u8; BLOB_MAX_LEN];
         let (stored_len, state, calibration) = match store.load(&mut stored) {
@@ -160,6 +161,7 @@ impl<S: CalStore> Controller<S> {
     }
 
     /// Answers one request.
+    #[inline(never)]
     pub fn handle(&mut self, msg: HostToDevice) -> Outcome {
         match msg {
             HostToDevice::Identify => Outcome::reply(DeviceToHost::Identity(Identity {
@@ -233,6 +235,7 @@ impl<S: CalStore> Controller<S> {
         }
     }
 
+    #[inline(never)]
     fn write_chunk(&mut self, c: &BlobChunk) -> Outcome {
         let (off, len, total) = (
             usize::from(c.offset),
@@ -394,6 +397,7 @@ impl Transmitter {
     }
 
     /// Encodes `msg` (the previous frame must be finished).
+    #[inline(never)]
     pub fn load(&mut self, msg: &DeviceToHost) {
         self.pos = 0;
         self.len = encode_frame(msg, &mut self.buf).map_or(0, |f| f.len());

@@ -20,7 +20,7 @@ use firmware::virtual_sensor::VirtualSensor;
 use firmware::{paper_unit, BoardEvent, Controller, EioLink, LinkService, Pipeline};
 
 static PIPELINE: SharedPipeline<OUTPUT_QUEUE> = Mutex::new(RefCell::new(None));
-static SENSOR: Mutex<RefCell<Option<VirtualSensor>>> = Mutex::new(RefCell::new(None));
+static SENSOR: Mutex<RefCell<Option<&'static mut VirtualSensor>>> = Mutex::new(RefCell::new(None));
 
 #[entry]
 fn main() -> ! {
@@ -30,12 +30,15 @@ fn main() -> ! {
     // SAFETY: called once.
     let store = unsafe { qemu::store() }.unwrap_or_else(|| halt());
     let controller = Controller::boot(qemu::INFO, store, qemu::BOOT_LEVER_MODE);
-    let mut pipeline = Pipeline::new(SAMPLE_RATE_HZ);
+    let pipeline = cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(SAMPLE_RATE_HZ))
+        .unwrap_or_else(|| halt());
     pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
-    let sensor = VirtualSensor::new(&paper_unit::calibration(), SAMPLE_RATE_HZ, true);
+    let sensor = VirtualSensor::new(&paper_unit::calibration(), SAMPLE_RATE_HZ, true)
+        .unwrap_or_else(|| halt());
+    let sensor = cortex_m::singleton!(: VirtualSensor = sensor).unwrap_or_else(|| halt());
     interrupt::free(|cs| {
         PIPELINE.borrow(cs).replace(Some(pipeline));
-        SENSOR.borrow(cs).replace(sensor);
+        SENSOR.borrow(cs).replace(Some(sensor));
     });
     defmt::info!(
         "accel-cal firmware on mps2-an386: {=u32} Hz virtual sensor, UART0 protocol",

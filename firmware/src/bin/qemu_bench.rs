@@ -1,2 +1,220 @@
+//! Cost of the per-sample path on QEMU mps2-an386, in instructions.
+//!
+//! Run under `-icount shift=0,align=off,sleep=off` (scripts/bench-qemu.sh): SysTick then counts
+//! executed instructions, one tick per 40 instructions (25 MHz tick, 1 ns per instruction). Each
+//! measurement runs `N` iterations over 16 varied inputs, subtracts an empty loop, and divides by `N`.
+//! A block of 1000 `nop`s is measured first to show the conversion. These are instruction counts, not
+//! Cortex-M4F cycles (use DWT CYCCNT on a board for cycles).
 #![no_std]
 #![no_main]
+
+use core::hint::black_box;
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use defmt_semihosting as _;
+
+use firmware::paper_unit;
+use firmware::pipeline::{PipelineCommand, RawCodes, Scaling};
+use firmware::stats::WindowAccumulator;
+use firmware::virtual_sensor::VirtualSensor;
+use firmware::Pipeline;
+use shared::omega_dot::OmegaDotEstimator;
+use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
+use shared::wire::{StreamKind, StreamRequest};
+use shared::{Compensator, LeverMode};
+
+const N: u32 = 4096;
+const INSTR_PER_TICK: u32 = 40;
+
+/// 100 `nop`s (out of line, so that no literal pool lands beyond their reach).
+#[inline(never)]
+fn hundred_nops() {
+    // SAFETY: nops only.
+    unsafe {
+        core::arch::asm!(
+            ".rept 100",
+            "nop",
+            ".endr",
+            options(nomem, nostack, preserves_flags)
+        )
+    };
+}
+
+fn ticks<F: FnMut(usize)>(n: u32, mut f: F) -> u32 {
+    let start = SYST::get_current();
+    for i in 0..n as usize {
+        f(i);
+    }
+    let end = SYST::get_current();
+    start.wrapping_sub(end) & 0x00FF_FFFF
+}
+
+/// Tenths of an instruction per iteration, with the empty loop removed.
+fn per_iter_x10(t: u32, empty: u32, n: u32) -> u32 {
+    (t.saturating_sub(empty) * INSTR_PER_TICK * 10 + n / 2) / n
+}
+
+fn line(name: &str, x10: u32, note: &str) {
+    hprintln!(
+        "bench: {:<46} {:>5}.{} instructions/sample  {}",
+        name,
+        x10 / 10,
+        x10 % 10,
+        note
+    );
+}
+
+#[entry]
+fn main() -> ! {
+    let mut cp = cortex_m::Peripherals::take().unwrap();
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00FF_FFFF);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+
+    let cal = paper_unit::calibration();
+    let c_off = Compensator::new(&cal, LeverMode::Off).unwrap();
+    let c_full = Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
+    let mut sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
+    let mut u = [SensorOutputs::default(); 16];
+    let mut w = [BodyRate::default(); 16];
+    let mut wd = [BodyAngularAccel::default(); 16];
+    let mut codes = [RawCodes::default(); 16];
+    for k in 0..16 {
+        let s = sensor.sample();
+        u[k].raw = s.raw;
+        w[k].rad_s = [0.5 + k as f32 * 0.01, -0.2, 3.0 - k as f32 * 0.1];
+        wd[k].rad_s2 = [1.0, k as f32, -2.5];
+        codes[k] = RawCodes {
+            adc: s.raw.map(|v| (v / (3.3 / 4095.0)) as u16),
+            gyro: [100 + k as i16, -300, 2000 - 10 * k as i16],
+        };
+    }
+    let scaling = Scaling {
+        volts_per_code: 3.3 / 4095.0,
+        adc_max: 4095,
+        rad_s_per_lsb: 0.001,
+    };
+
+    // Conversion check: 10 × 100 nops.
+    let nop_empty = ticks(10, |i| {
+        black_box(i);
+    });
+    let nops = ticks(10, |i| {
+        black_box(i);
+        hundred_nops();
+    });
+    hprintln!(
+        "bench: 10 calls of 100 nops measured as {} instructions (+ 2 per call) (SysTick ticks x {}; QEMU -icount shift=0)",
+        nops.saturating_sub(nop_empty) * INSTR_PER_TICK,
+        INSTR_PER_TICK
+    );
+
+    let empty = ticks(N, |i| {
+        black_box(i);
+    });
+    let st = ticks(N, |i| {
+        black_box(c_off.compensate_static(black_box(&u[i & 15])));
+    });
+    line(
+        "compensation, static only",
+        per_iter_x10(st, empty, N),
+        "(floor: 12 multiply-adds)",
+    );
+    let full = ticks(N, |i| {
+        black_box(c_full.compensate(
+            black_box(&u[i & 15]),
+            black_box(&w[i & 15]),
+            black_box(&wd[i & 15]),
+        ));
+    });
+    line(
+        "compensation, static + lever arms + omega-dot",
+        per_iter_x10(full, empty, N),
+        "(floor: 51 multiply-adds; goal <= 150)",
+    );
+    let mut est = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
+    let od = ticks(N, |i| {
+        black_box(est.update(black_box(&w[i & 15].rad_s)));
+    });
+    line("omega-dot estimator update", per_iter_x10(od, empty, N), "");
+    let mut acc = WindowAccumulator::<6>::new();
+    let ac = ticks(N, |i| {
+        let x = black_box(&u[i & 15].raw);
+        let r = &w[i & 15].rad_s;
+        acc.add(&[x[0], x[1], x[2], r[0], r[1], r[2]]);
+    });
+    black_box(acc.finish());
+    line(
+        "window accumulation (6 channels)",
+        per_iter_x10(ac, empty, N),
+        "",
+    );
+    let rd = ticks(N, |i| {
+        black_box(scaling.sample(black_box(&codes[i & 15])));
+    });
+    line(
+        "sample read (ADC codes + gyro words -> f32)",
+        per_iter_x10(rd, empty, N),
+        "",
+    );
+
+    for (name, kind, mode, goal) in [
+        (
+            "whole path: read + omega-dot + full comp. + window",
+            StreamKind::CompensatedWindows,
+            LeverMode::RateAndAcceleration,
+            "(goal <= 400)",
+        ),
+        (
+            "whole path: read + omega-dot + static comp. + window",
+            StreamKind::CompensatedWindows,
+            LeverMode::Off,
+            "",
+        ),
+        (
+            "whole path: read + omega-dot + raw window",
+            StreamKind::RawWindows,
+            LeverMode::RateAndAcceleration,
+            "",
+        ),
+    ] {
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(
+            Compensator::new(&cal, mode).ok(),
+        ));
+        p.apply(PipelineCommand::Stream(StreamRequest {
+            kind,
+            window_samples: 1000,
+        }));
+        let t = ticks(N, |i| {
+            let s = scaling.sample(black_box(&codes[i & 15]));
+            p.on_sample(&s);
+        });
+        black_box(p.pop_output());
+        line(name, per_iter_x10(t, empty, N), goal);
+    }
+    let vs = ticks(256, |_| {
+        black_box(sensor.sample());
+    });
+    let vs_empty = ticks(256, |i| {
+        black_box(i);
+    });
+    line(
+        "QEMU virtual sensor sample (f64 soft-float model)",
+        per_iter_x10(vs, vs_empty, 256),
+        "(QEMU board only; replaces the read)",
+    );
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("bench: PANIC {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}

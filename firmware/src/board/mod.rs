@@ -14,8 +14,9 @@ pub mod qemu;
 #[cfg(feature = "board-stm32f4")]
 pub mod stm32f4;
 
-/// The pipeline shared between the sampling interrupt and the main loop.
-pub type SharedPipeline<const Q: usize> = Mutex<RefCell<Option<Pipeline<Q>>>>;
+/// The pipeline shared between the sampling interrupt and the main loop. It holds a reference (to a
+/// `cortex_m::singleton!`), so that the static is all zeros and lives in `.bss`, not in flash.
+pub type SharedPipeline<const Q: usize> = Mutex<RefCell<Option<&'static mut Pipeline<Q>>>>;
 
 /// The main loop's handle on a [`SharedPipeline`]: each access is one short critical section.
 pub struct PipelineHandle<const Q: usize>(pub &'static SharedPipeline<Q>);
