@@ -35,7 +35,10 @@ pub enum OutputError {
 impl std::fmt::Display for OutputError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            OutputError::Blob(e) => write!(f, "the estimated calibration cannot be stored on a device: {e}"),
+            OutputError::Blob(e) => write!(
+                f,
+                "the estimated calibration cannot be stored on a device: {e}"
+            ),
             OutputError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
         }
     }
@@ -51,7 +54,11 @@ pub fn now_unix_s() -> u64 {
 }
 
 /// The blob of an outcome for `unit_id`.
-pub fn blob_bytes(outcome: &CalibrationOutcome, unit_id: UnitId, created_unix_s: u64) -> Result<Vec<u8>, BlobError> {
+pub fn blob_bytes(
+    outcome: &CalibrationOutcome,
+    unit_id: UnitId,
+    created_unix_s: u64,
+) -> Result<Vec<u8>, BlobError> {
     let blob = ParameterBlob {
         unit_id,
         calibration: outcome.calibration,
@@ -71,10 +78,18 @@ pub fn write_calibration_files(
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
     let toml_path = out_dir.join(CALIBRATION_TOML);
-    let text = UnitFile::from_calibration(&outcome.calibration, Some(unit_id), Some(outcome.uncertainty.clone()))
-        .to_toml();
+    let text = UnitFile::from_calibration(
+        &outcome.calibration,
+        Some(unit_id),
+        Some(outcome.uncertainty.clone()),
+    )
+    .to_toml();
     std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
     let bin_path = out_dir.join(CALIBRATION_BIN);
     std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;
-    Ok(WrittenCalibration { toml_path, bin_path, blob })
+    Ok(WrittenCalibration {
+        toml_path,
+        bin_path,
+        blob,
+    })
 }

@@ -5,6 +5,7 @@ pub mod calibration_files;
 pub mod cli;
 pub mod convert;
 pub mod device;
+pub mod device_cli;
 pub mod estimate;
 pub mod navigation;
 pub mod procedure;

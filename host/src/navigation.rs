@@ -22,12 +22,12 @@ pub struct Drift {
 impl Drift {
     /// Norm of the final position error, m.
     pub fn final_position_error_m(&self) -> f64 {
-        self.position_m.last().map_or(0.0, |p| norm(p))
+        self.position_m.last().map_or(0.0, norm)
     }
 
     /// Norm of the final velocity error, m/s.
     pub fn final_velocity_error_m_s(&self) -> f64 {
-        self.velocity_m_s.last().map_or(0.0, |v| norm(v))
+        self.velocity_m_s.last().map_or(0.0, norm)
     }
 }
 

@@ -39,9 +39,14 @@ impl Operator for TerminalOperator {
 
     fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
         print!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
-        std::io::stdout().flush().map_err(ProcedureError::Terminal)?;
+        std::io::stdout()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
-        let n = std::io::stdin().lock().read_line(&mut line).map_err(ProcedureError::Terminal)?;
+        let n = std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
         if n == 0 {
             return Err(ProcedureError::Aborted("standard input closed".into()));
         }
@@ -54,9 +59,14 @@ impl Operator for TerminalOperator {
             println!("  - {p}");
         }
         print!("keep it anyway (the estimator will screen it)? [y/N] ");
-        std::io::stdout().flush().map_err(ProcedureError::Terminal)?;
+        std::io::stdout()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
-        std::io::stdin().lock().read_line(&mut line).map_err(ProcedureError::Terminal)?;
+        std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
         Ok(line.trim().eq_ignore_ascii_case("y"))
     }
 }
@@ -254,13 +264,16 @@ fn describe_up(up: &[f64; 3]) -> String {
             return format!("{}-axis {}", n, if up[i] > 0.0 { "up" } else { "down" });
         }
     }
-    format!("tilted, up = ({:+.3}, {:+.3}, {:+.3}) in body axes", up[0], up[1], up[2])
+    format!(
+        "tilted, up = ({:+.3}, {:+.3}, {:+.3}) in body axes",
+        up[0], up[1], up[2]
+    )
 }
 
 fn instruction(seg: &SegmentPlan) -> String {
     let mount = describe_up(&seg.up_b);
     match (seg.rate_deg_s, seg.rate_end_deg_s) {
-        (r, None) if r == 0.0 => format!("[{}] mount the unit {mount}, table at rest", seg.name),
+        (0.0, None) => format!("[{}] mount the unit {mount}, table at rest", seg.name),
         (r, None) => format!("[{}] mount the unit {mount}, set the table to {r:+.0} °/s about the vertical", seg.name),
         (r0, Some(r1)) => format!(
             "[{}] mount the unit {mount}, ramp the table from {r0:+.0} to {r1:+.0} °/s about the vertical",
@@ -271,7 +284,9 @@ fn instruction(seg: &SegmentPlan) -> String {
 
 fn table_for(seg: &SegmentPlan) -> VirtualTable {
     let duration = seg.duration_s.unwrap_or(60.0);
-    let accel = seg.rate_end_deg_s.map_or(0.0, |r1| (r1 - seg.rate_deg_s) / duration);
+    let accel = seg
+        .rate_end_deg_s
+        .map_or(0.0, |r1| (r1 - seg.rate_deg_s) / duration);
     VirtualTable {
         up_b: seg.up_b.map(|v| v as f32),
         rate_rad_s: seg.rate_deg_s.to_radians() as f32,
@@ -280,7 +295,11 @@ fn table_for(seg: &SegmentPlan) -> VirtualTable {
 }
 
 /// The live check of one recorded segment against its plan (`MODEL.md` "Signs": ω = rate·up).
-pub fn live_check(seg: &SegmentPlan, stats: &recording::SegmentStats, rejected_samples: u64) -> Vec<String> {
+pub fn live_check(
+    seg: &SegmentPlan,
+    stats: &recording::SegmentStats,
+    rejected_samples: u64,
+) -> Vec<String> {
     let mut problems = Vec::new();
     let w = stats.mean_w_rad_s;
     let along = shared::linalg::dot(&w, &seg.up_b);
@@ -289,7 +308,11 @@ pub fn live_check(seg: &SegmentPlan, stats: &recording::SegmentStats, rejected_s
     let planned = 0.5 * (seg.rate_deg_s + seg.rate_end_deg_s.unwrap_or(seg.rate_deg_s));
     let along_deg_s = along.to_degrees();
     if seg.is_static() {
-        let spread = stats.std_w().iter().fold(0.0f64, |a, b| a.max(*b)).to_degrees();
+        let spread = stats
+            .std_w()
+            .iter()
+            .fold(0.0f64, |a, b| a.max(*b))
+            .to_degrees();
         if shared::linalg::norm(&w).to_degrees() > 1.0 || spread > 1.0 {
             problems.push(format!(
                 "the unit should be at rest but the gyro reads {:.2} °/s (spread {spread:.2} °/s): wait for the \
@@ -333,7 +356,10 @@ pub fn run<T: Transport>(
     opts: &ProcedureOptions,
     op: &mut dyn Operator,
 ) -> Result<ProcedureOutcome, ProcedureError> {
-    let link = |source| ProcedureError::Link { source, recording: None };
+    let link = |source| ProcedureError::Link {
+        source,
+        recording: None,
+    };
     let identity = client.identify().map_err(link)?;
     op.say(&format!(
         "device: {:?}, firmware {}.{}.{}, unit {}, {} Hz, calibration {:?}",
@@ -346,7 +372,9 @@ pub fn run<T: Transport>(
         identity.calibration
     ));
     let fs = f64::from(identity.sample_rate_hz.max(1));
-    let window = opts.window_samples.unwrap_or((identity.sample_rate_hz / 50).max(1));
+    let window = opts
+        .window_samples
+        .unwrap_or((identity.sample_rate_hz / 50).max(1));
     let window_rate = fs / f64::from(window);
     let drive = has_virtual_table(&identity);
 
@@ -361,7 +389,16 @@ pub fn run<T: Transport>(
     let segments = plan.segments.clone();
     for seg in &segments {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
-        let result = record_segment(client, op, seg, drive, window, window_rate, opts, &mut writer);
+        let result = record_segment(
+            client,
+            op,
+            seg,
+            drive,
+            window,
+            window_rate,
+            opts,
+            &mut writer,
+        );
         match result {
             Ok((stats, rejected, drops)) => {
                 dropped = dropped.max(drops);
@@ -374,12 +411,19 @@ pub fn run<T: Transport>(
                         recording_dir.display()
                     )));
                 }
-                warnings.extend(problems.into_iter().map(|p| format!("segment '{}': {p}", seg.name)));
+                warnings.extend(
+                    problems
+                        .into_iter()
+                        .map(|p| format!("segment '{}': {p}", seg.name)),
+                );
             }
             Err(source) => {
                 // Whatever was recorded reaches the disk before the error is reported.
                 writer.end_segment()?;
-                return Err(ProcedureError::Link { source, recording: saved(&writer) });
+                return Err(ProcedureError::Link {
+                    source,
+                    recording: saved(&writer),
+                });
             }
         }
         writer.end_segment()?;
@@ -393,15 +437,25 @@ pub fn run<T: Transport>(
     }
 
     // Estimate from the saved recording, exactly as `host calibrate --input` would.
-    let session = recording::read_session(&recording_dir, &recording::ReadOptions { quiet: opts.quiet })?;
-    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate).map_err(
-        |source| ProcedureError::Estimate { source, recording: recording_dir.clone() },
+    let session = recording::read_session(
+        &recording_dir,
+        &recording::ReadOptions { quiet: opts.quiet },
     )?;
+    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate)
+        .map_err(|source| ProcedureError::Estimate {
+            source,
+            recording: recording_dir.clone(),
+        })?;
     op.say(&crate::report::render(&outcome));
 
     let created = calibration_files::now_unix_s();
-    let written = calibration_files::write_calibration_files(&opts.out_dir, &outcome, identity.unit_id, created)
-        .map_err(ProcedureError::Output)?;
+    let written = calibration_files::write_calibration_files(
+        &opts.out_dir,
+        &outcome,
+        identity.unit_id,
+        created,
+    )
+    .map_err(ProcedureError::Output)?;
     op.say(&format!(
         "wrote {} and {}",
         written.toml_path.display(),
@@ -412,7 +466,11 @@ pub fn run<T: Transport>(
     client.write_calibration(&written.blob).map_err(link)?;
     op.say("calibration written to the device; resetting it");
     let after = client.reset().map_err(link)?;
-    if after.calibration != (CalibrationState::Valid { created_unix_s: created }) {
+    if after.calibration
+        != (CalibrationState::Valid {
+            created_unix_s: created,
+        })
+    {
         return Err(ProcedureError::NotApplied(after.calibration));
     }
     let back = client.read_calibration().map_err(link)?;
@@ -460,10 +518,11 @@ fn record_segment<T: Transport>(
         op.say(&format!("{} (virtual table driven)", instruction(seg)));
         client.set_table(table_for(seg))?;
     } else {
-        op.wait_ready(&instruction(seg)).map_err(|e| LinkError::Unexpected {
-            waiting_for: "the operator",
-            got: e.to_string(),
-        })?;
+        op.wait_ready(&instruction(seg))
+            .map_err(|e| LinkError::Unexpected {
+                waiting_for: "the operator",
+                got: e.to_string(),
+            })?;
     }
     let duration = seg.duration_s.unwrap_or(60.0);
     let n_windows = (duration * window_rate).round().max(1.0) as u64;
@@ -486,10 +545,12 @@ fn record_segment<T: Transport>(
         rejected += u64::from(w.rejected);
         dropped = dropped.max(w.dropped_frames);
         if w.count > 0 {
-            writer.write_row(&seg.name, t, &u, &rate).map_err(|e| LinkError::Unexpected {
-                waiting_for: "a writable recording",
-                got: e.to_string(),
-            })?;
+            writer
+                .write_row(&seg.name, t, &u, &rate)
+                .map_err(|e| LinkError::Unexpected {
+                    waiting_for: "a writable recording",
+                    got: e.to_string(),
+                })?;
             acc.push(t, &u, &rate);
         }
         bar.inc(1);
@@ -513,10 +574,22 @@ fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f6
         };
         return vec![
             ("held-out (1,1,1) at rest".into(), n([1.0, 1.0, 1.0]), 0.0),
-            ("held-out (-1,0.5,-0.3) at rest".into(), n([-1.0, 0.5, -0.3]), 0.0),
-            ("held-out (0.2,-0.9,0.4) at rest".into(), n([0.2, -0.9, 0.4]), 0.0),
+            (
+                "held-out (-1,0.5,-0.3) at rest".into(),
+                n([-1.0, 0.5, -0.3]),
+                0.0,
+            ),
+            (
+                "held-out (0.2,-0.9,0.4) at rest".into(),
+                n([0.2, -0.9, 0.4]),
+                0.0,
+            ),
             ("x up at 200 °/s".into(), [1.0, 0.0, 0.0], 200.0),
-            ("(1,-1,1) up at -150 °/s".into(), n([1.0, -1.0, 1.0]), -150.0),
+            (
+                "(1,-1,1) up at -150 °/s".into(),
+                n([1.0, -1.0, 1.0]),
+                -150.0,
+            ),
         ];
     }
     let mut v: Vec<_> = plan
@@ -556,7 +629,9 @@ fn verify<T: Transport>(
     };
     for (label, up, rate) in verification_positions(plan, drive) {
         let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {
-            op.say(&format!("verify {label}: skipped (the centroid reference has no fixed table-axis offset)"));
+            op.say(&format!(
+                "verify {label}: skipped (the centroid reference has no fixed table-axis offset)"
+            ));
             continue;
         };
         let seg = SegmentPlan {
@@ -571,9 +646,11 @@ fn verify<T: Transport>(
         if drive {
             client.set_table(table_for(&seg))?;
         } else {
-            op.wait_ready(&format!("verification: {}", instruction(&seg))).map_err(|e| {
-                LinkError::Unexpected { waiting_for: "the operator", got: e.to_string() }
-            })?;
+            op.wait_ready(&format!("verification: {}", instruction(&seg)))
+                .map_err(|e| LinkError::Unexpected {
+                    waiting_for: "the operator",
+                    got: e.to_string(),
+                })?;
         }
         let window = ((sample_rate_hz / 10.0).round() as u32).max(1);
         client.start_stream(StreamKind::CompensatedWindows, window)?;
@@ -599,7 +676,9 @@ fn verify<T: Transport>(
         let wc = shared::linalg::mat_vec(&shared::linalg::lever_matrix(&omega, &[0.0; 3]), &c);
         let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
         let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
-        let error_mg = (0..3).map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3).fold(0.0, f64::max);
+        let error_mg = (0..3)
+            .map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3)
+            .fold(0.0, f64::max);
         points.push(VerificationPoint {
             label,
             up_b: up,
@@ -616,10 +695,17 @@ fn verify<T: Transport>(
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
 /// lever-arm components), the paper's plan otherwise (no fixture beyond the paper's is needed).
 pub fn default_plan(identity: &Identity) -> Result<Plan, recording::PlanError> {
-    recording::builtin::load_plan(if has_virtual_table(identity) { "oblique" } else { "paper" })
+    recording::builtin::load_plan(if has_virtual_table(identity) {
+        "oblique"
+    } else {
+        "paper"
+    })
 }
 
 /// `OUT` for a run: the given directory, or `calibration-<unit id>` in the current directory.
 pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
-    out.map_or_else(|| PathBuf::from(format!("calibration-{}", identity.unit_id)), Path::to_path_buf)
+    out.map_or_else(
+        || PathBuf::from(format!("calibration-{}", identity.unit_id)),
+        Path::to_path_buf,
+    )
 }

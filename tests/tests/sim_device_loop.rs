@@ -10,14 +10,23 @@ use shared::wire::CalibrationState;
 fn calibrate_flash_verify_against_the_simulated_device() {
     let out = tempfile::tempdir().unwrap();
     let mut client = sim_client();
-    let mut opts = ProcedureOptions::new(load_plan("short-oblique").unwrap(), out.path().to_path_buf());
+    let mut opts = ProcedureOptions::new(
+        load_plan("short-oblique").unwrap(),
+        out.path().to_path_buf(),
+    );
     opts.quiet = true;
     opts.verify_tolerance_mg = 0.1;
-    let mut op = AutomaticOperator { verbose: false, warnings: Vec::new() };
+    let mut op = AutomaticOperator {
+        verbose: false,
+        warnings: Vec::new(),
+    };
     let result = procedure::run(&mut client, &opts, &mut op).unwrap();
 
     assert!(result.passed, "verification: {:#?}", result.verification);
-    assert!(matches!(result.state_after_reset, CalibrationState::Valid { .. }));
+    assert!(matches!(
+        result.state_after_reset,
+        CalibrationState::Valid { .. }
+    ));
     assert_eq!(result.verification.len(), 5);
     assert!(result.warnings.is_empty(), "{:?}", result.warnings);
 
@@ -37,5 +46,8 @@ fn calibrate_flash_verify_against_the_simulated_device() {
     // Everything the procedure promised is on disk: the recording and both result files.
     assert!(result.recording_dir.join("samples.csv").exists());
     assert!(out.path().join("calibration.toml").exists());
-    assert_eq!(std::fs::read(out.path().join("calibration.bin")).unwrap(), result.written.blob);
+    assert_eq!(
+        std::fs::read(out.path().join("calibration.bin")).unwrap(),
+        result.written.blob
+    );
 }

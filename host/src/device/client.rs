@@ -365,7 +365,7 @@ impl<T: Transport> DeviceClient<T> {
         )?;
         self.inbox.clear();
         self.unread.clear();
-        self.accumulator = Box::new(CobsAccumulator::new());
+        *self.accumulator = CobsAccumulator::new();
         self.identify()
     }
 }

@@ -25,7 +25,10 @@ impl SerialTransport {
                     std::io::Error::other(e),
                 )
             })?;
-        Ok(SerialTransport { port, name: path.to_string() })
+        Ok(SerialTransport {
+            port,
+            name: path.to_string(),
+        })
     }
 }
 
@@ -40,10 +43,20 @@ impl Transport for SerialTransport {
     fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, LinkError> {
         self.port
             .set_timeout(timeout.max(Duration::from_millis(1)))
-            .map_err(|e| LinkError::Io(format!("configuring {}", self.name), std::io::Error::other(e)))?;
+            .map_err(|e| {
+                LinkError::Io(
+                    format!("configuring {}", self.name),
+                    std::io::Error::other(e),
+                )
+            })?;
         match self.port.read(buf) {
             Ok(n) => Ok(n),
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut || e.kind() == std::io::ErrorKind::WouldBlock => Ok(0),
+            Err(e)
+                if e.kind() == std::io::ErrorKind::TimedOut
+                    || e.kind() == std::io::ErrorKind::WouldBlock =>
+            {
+                Ok(0)
+            }
             Err(e) => Err(LinkError::Io(format!("reading from {}", self.name), e)),
         }
     }

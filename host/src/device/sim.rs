@@ -99,14 +99,16 @@ impl SimDevice {
     pub fn with_unit_id(truth: Calibration, unit_id: UnitId) -> Result<SimDevice, SimError> {
         // The flash lives as long as the process, like a board's; 8 KiB per simulated device.
         let mem: &'static mut [u8] = Box::leak(vec![0xFFu8; 2 * FLASH_ERASE].into_boxed_slice());
-        let store = AbStore::new(RamNorFlash::new(mem), 0, FLASH_ERASE as u32).map_err(|_| SimError::Storage)?;
+        let store = AbStore::new(RamNorFlash::new(mem), 0, FLASH_ERASE as u32)
+            .map_err(|_| SimError::Storage)?;
         let info = DeviceInfo {
             unit_id,
             board: Board::Simulated,
             sample_rate_hz: SIM_SAMPLE_RATE_HZ,
             virtual_table: true,
         };
-        let sensor = VirtualSensor::new(&truth, SIM_SAMPLE_RATE_HZ, true).ok_or(SimError::BadUnit)?;
+        let sensor =
+            VirtualSensor::new(&truth, SIM_SAMPLE_RATE_HZ, true).ok_or(SimError::BadUnit)?;
         let mut dev = SimDevice {
             info,
             truth,
@@ -126,7 +128,8 @@ impl SimDevice {
         let controller = Controller::boot(self.info, store, LeverMode::RateAndAcceleration);
         self.pipeline = Pipeline::new(SIM_SAMPLE_RATE_HZ);
         if let Some(c) = controller.compensator() {
-            self.pipeline.apply(firmware::pipeline::PipelineCommand::Compensator(Some(c)));
+            self.pipeline
+                .apply(firmware::pipeline::PipelineCommand::Compensator(Some(c)));
         }
         self.service = Some(LinkService::new(controller));
     }
@@ -162,7 +165,9 @@ impl SimDevice {
 
     /// One main-loop round: answer requests, move output to the line, act on board events.
     fn poll(&mut self) {
-        let Some(service) = self.service.as_mut() else { return };
+        let Some(service) = self.service.as_mut() else {
+            return;
+        };
         match service.poll(&mut self.line, &mut self.pipeline) {
             Some(BoardEvent::SetTable(t)) => {
                 // Already checked by the controller; a refusal cannot happen here.
@@ -187,7 +192,8 @@ impl SimDevice {
         let s = self.sensor.sample();
         self.pipeline.on_sample(&s);
         self.samples += 1;
-        self.line.budget = (self.line.budget + LINE_BYTES_PER_SAMPLE).min(4 * LINE_BYTES_PER_SAMPLE);
+        self.line.budget =
+            (self.line.budget + LINE_BYTES_PER_SAMPLE).min(4 * LINE_BYTES_PER_SAMPLE);
         self.poll();
     }
 }
@@ -235,21 +241,37 @@ mod tests {
         assert_eq!(id.calibration, CalibrationState::Missing);
 
         // x up at rest: the raw window mean is the forward model's output (noise averages out).
-        c.set_table(VirtualTable { up_b: [1.0, 0.0, 0.0], rate_rad_s: 0.0, accel_rad_s2: 0.0 }).unwrap();
+        c.set_table(VirtualTable {
+            up_b: [1.0, 0.0, 0.0],
+            rate_rad_s: 0.0,
+            accel_rad_s2: 0.0,
+        })
+        .unwrap();
         c.start_stream(StreamKind::RawWindows, 1000).unwrap();
         let w = c.next_raw_window().unwrap();
         c.stop_stream().unwrap();
         assert_eq!(w.count, 1000);
         let truth = c.transport_mut().truth().statics;
         let want_x = truth.zero_bias_out[0] + truth.scale_out_per_g[0] * 0.999912;
-        assert!((f64::from(w.mean_raw[0]) - want_x).abs() < 1e-4, "{} vs {want_x}", w.mean_raw[0]);
+        assert!(
+            (f64::from(w.mean_raw[0]) - want_x).abs() < 1e-4,
+            "{} vs {want_x}",
+            w.mean_raw[0]
+        );
 
         // Write the true calibration, reset, and read it back.
-        let blob = ParameterBlob { unit_id: SIM_UNIT_ID, calibration: *c.transport_mut().truth(), created_unix_s: 42 };
+        let blob = ParameterBlob {
+            unit_id: SIM_UNIT_ID,
+            calibration: *c.transport_mut().truth(),
+            created_unix_s: 42,
+        };
         let (bytes, n) = blob.to_bytes().unwrap();
         c.write_calibration(&bytes[..n]).unwrap();
         let id = c.reset().unwrap();
-        assert_eq!(id.calibration, CalibrationState::Valid { created_unix_s: 42 });
+        assert_eq!(
+            id.calibration,
+            CalibrationState::Valid { created_unix_s: 42 }
+        );
         assert_eq!(c.read_calibration().unwrap(), bytes[..n].to_vec());
         assert_eq!(c.transport_mut().resets(), 1);
     }
