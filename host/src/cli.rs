@@ -2,6 +2,7 @@
 //! and prints the error; everything else is here, testable.
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
+use crate::device_cli::{self, CalibratePortOptions, DeviceCliError, PortArgs};
 use crate::estimate::{
     calibrate_session_stats, predict, CalibrationOutcome, EstimateError, EstimateOptions, Method,
     PredictSettings, ReferenceChoice,
@@ -34,10 +35,41 @@ pub struct Cli {
 pub enum Command {
     /// Simulate a session: a virtual unit on a virtual rate table, written as a recording.
     Simulate(SimulateArgs),
-    /// Estimate the calibration from a recorded session.
+    /// Estimate the calibration from a recorded session (--input), or live from a device (--port).
     Calibrate(CalibrateArgs),
     /// Check a plan: its segments and the predicted 1σ of every parameter (Cramér–Rao bound).
     Plan(PlanArgs),
+    /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
+    /// reset it and check that it applied it.
+    Flash {
+        /// How to reach the device.
+        #[command(flatten)]
+        port: PortArgs,
+        /// calibration.bin or calibration.toml.
+        #[arg(long, value_name = "FILE")]
+        calibration: PathBuf,
+    },
+    /// Read the calibration stored on a device, as a unit file (stdout, or --out FILE).
+    Read {
+        /// How to reach the device.
+        #[command(flatten)]
+        port: PortArgs,
+        /// Where to write it (default: stdout).
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+    /// Show a device's live compensated output.
+    Monitor {
+        /// How to reach the device.
+        #[command(flatten)]
+        port: PortArgs,
+        /// Samples averaged per line.
+        #[arg(long, default_value_t = 100)]
+        window: u32,
+        /// Stop after this many lines (default: run until interrupted).
+        #[arg(long)]
+        count: Option<u64>,
+    },
 }
 
 /// `host simulate`.
@@ -94,12 +126,34 @@ pub struct SimulateArgs {
     pub gyro_bias_deg_s: Option<Vec<f64>>,
 }
 
-/// `host calibrate`.
+/// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", conflicts_with = "port")]
     pub input: Option<PathBuf>,
+    /// Calibrate a device live: its serial port (or QEMU's pty), or `sim` for the built-in simulated
+    /// device. Records the session, estimates, writes the files, flashes, resets and verifies.
+    #[arg(long, value_name = "PORT|sim")]
+    pub port: Option<String>,
+    /// With --port: baud rate of the serial port.
+    #[arg(long, default_value_t = crate::device::serial::DEFAULT_BAUD, requires = "port")]
+    pub baud: u32,
+    /// With --port: seconds to wait for each answer of the device.
+    #[arg(long, default_value_t = 5.0, requires = "port")]
+    pub timeout_s: f64,
+    /// With --port sim: the simulated unit's parameters (default: the paper's unit).
+    #[arg(long, value_name = "FILE", requires = "port")]
+    pub sim_unit: Option<PathBuf>,
+    /// With --port: plan file or built-in name (default: oblique with a virtual table, else paper).
+    #[arg(long, value_name = "FILE|NAME", requires = "port")]
+    pub plan: Option<String>,
+    /// With --port: samples per streamed window (default: a 50th of the device's rate).
+    #[arg(long, requires = "port")]
+    pub window: Option<u32>,
+    /// With --port: largest compensated error accepted at a verification position, mg.
+    #[arg(long, default_value_t = 1.0, requires = "port")]
+    pub verify_tolerance_mg: f64,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
     #[arg(long, value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
@@ -161,6 +215,8 @@ pub enum CliError {
     Estimate(EstimateError),
     /// Writing the result.
     Output(OutputError),
+    /// A command talking to a device.
+    Device(DeviceCliError),
     /// The command line is incomplete.
     Usage(String),
 }
@@ -174,6 +230,7 @@ impl std::fmt::Display for CliError {
             CliError::Simulate(e) => write!(f, "{e}"),
             CliError::Estimate(e) => write!(f, "{e}"),
             CliError::Output(e) => write!(f, "{e}"),
+            CliError::Device(e) => write!(f, "{e}"),
             CliError::Usage(m) => write!(f, "{m}"),
         }
     }
@@ -201,6 +258,11 @@ impl From<EstimateError> for CliError {
         CliError::Estimate(e)
     }
 }
+impl From<DeviceCliError> for CliError {
+    fn from(e: DeviceCliError) -> Self {
+        CliError::Device(e)
+    }
+}
 impl From<OutputError> for CliError {
     fn from(e: OutputError) -> Self {
         CliError::Output(e)
@@ -216,8 +278,16 @@ impl From<SimulateError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Simulate(a) => simulate(&a, cli.quiet).map(|_| ()),
+        Command::Calibrate(a) if a.port.is_some() => calibrate_live(&a, cli.quiet),
         Command::Calibrate(a) => calibrate(&a, cli.quiet).map(|_| ()),
         Command::Plan(a) => plan_check(&a).map(|_| ()),
+        Command::Flash { port, calibration } => Ok(device_cli::flash(&port, &calibration)?),
+        Command::Read { port, out } => Ok(device_cli::read(&port, out.as_deref())?),
+        Command::Monitor {
+            port,
+            window,
+            count,
+        } => Ok(device_cli::monitor(&port, window, count)?),
     }
 }
 
@@ -321,14 +391,42 @@ pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
     }
 }
 
+/// `host calibrate --port PORT`: the live procedure (`crate::procedure`) against a device.
+pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+    let port = PortArgs {
+        port: a.port.clone().unwrap_or_default(),
+        baud: a.baud,
+        timeout_s: a.timeout_s,
+        sim_unit: a.sim_unit.clone(),
+    };
+    let options = CalibratePortOptions {
+        plan: a.plan.clone(),
+        out_dir: a.out_dir.clone(),
+        window: a.window,
+        estimate: estimate_options(a),
+        verify_tolerance_mg: a.verify_tolerance_mg,
+        quiet,
+    };
+    Ok(device_cli::calibrate_port(&port, &options)?)
+}
+
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write
 /// `OUT/calibration.toml` and `OUT/calibration.bin`.
 pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, CliError> {
     let input = a.input.as_deref().ok_or_else(|| {
         CliError::Usage(
-            "calibrate needs --input DIR, a session directory (plan.toml + samples.csv)".into(),
+            "calibrate needs --input DIR (a recorded session: plan.toml + samples.csv) or \
+             --port PORT (a device; `--port sim` for the built-in simulated one)"
+                .into(),
         )
     })?;
+    if a.plan.is_some() || a.window.is_some() || a.sim_unit.is_some() {
+        return Err(CliError::Usage(
+            "--plan, --window and --sim-unit are for --port; a recorded session is read with its own \
+             plan.toml (edit that file to change the plan)"
+                .into(),
+        ));
+    }
     let started = Instant::now();
     let session = read_session_verbose(input, quiet)?;
     let read_s = started.elapsed().as_secs_f64();
@@ -462,6 +560,36 @@ mod tests {
         };
         assert_eq!(estimate_options(&c).method, Method::Paper);
         assert!(Cli::try_parse_from(["host", "calibrate", "--method", "best"]).is_err());
+        let Command::Calibrate(c) =
+            parse(&["calibrate", "--input", "d", "--plan", "paper"]).command
+        else {
+            panic!("not calibrate")
+        };
+        let e = calibrate(&c, true).unwrap_err().to_string();
+        assert!(e.contains("--plan") && e.contains("plan.toml"), "{e}");
+        let Command::Calibrate(c) = parse(&[
+            "calibrate",
+            "--port",
+            "sim",
+            "--plan",
+            "short",
+            "--window",
+            "20",
+        ])
+        .command
+        else {
+            panic!("not calibrate")
+        };
+        assert_eq!((c.port.as_deref(), c.window), (Some("sim"), Some(20)));
+        let Command::Flash { port, calibration } =
+            parse(&["flash", "--port", "/dev/ttyACM0", "--calibration", "c.bin"]).command
+        else {
+            panic!("not flash")
+        };
+        assert_eq!(
+            (port.port.as_str(), calibration),
+            ("/dev/ttyACM0", PathBuf::from("c.bin"))
+        );
     }
 
     #[test]

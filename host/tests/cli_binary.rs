@@ -57,3 +57,25 @@ fn bad_input_is_an_error_line_and_a_failure_status() {
     assert!(!ok, "{stderr}");
     assert!(stderr.contains("line 3, column 2 (t_s)"), "{stderr}");
 }
+
+#[test]
+fn calibrate_live_against_the_simulated_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("live");
+    let (ok, stdout, stderr) = host(&[
+        "-q",
+        "calibrate",
+        "--port",
+        "sim",
+        "--plan",
+        "short-oblique",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(stdout.contains("PASS"), "{stdout}");
+    assert!(out.join("calibration.bin").exists());
+    // --input and --port are exclusive; port-only flags need --port.
+    let (ok, _, stderr) = host(&["calibrate", "--input", "x", "--port", "sim"]);
+    assert!(!ok && stderr.contains("cannot be used with"), "{stderr}");
+}
