@@ -10,6 +10,7 @@
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
+//! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.
 //! - [`testvectors`]: PC-computed compensation vectors, checked bit for bit on the target.
 //!
@@ -17,6 +18,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod gyro;
 pub mod paper_unit;
 pub mod pipeline;
 pub mod protocol;
@@ -85,6 +87,23 @@ where
 
     fn try_write(&mut self, byte: u8) -> bool {
         self.0.write_ready().unwrap_or(false) && matches!(self.0.write(&[byte]), Ok(1))
+    }
+}
+
+/// Any `embedded-hal-nb` serial port (e.g. an `stm32f4xx-hal` USART) is a [`ByteLink`]. Receive
+/// errors (overrun, framing) read as "no byte"; the frame they break is answered as malformed.
+pub struct NbLink<T>(pub T);
+
+impl<T> ByteLink for NbLink<T>
+where
+    T: embedded_hal_nb::serial::Read<u8> + embedded_hal_nb::serial::Write<u8>,
+{
+    fn try_read(&mut self) -> Option<u8> {
+        self.0.read().ok()
+    }
+
+    fn try_write(&mut self, byte: u8) -> bool {
+        self.0.write(byte).is_ok()
     }
 }
 

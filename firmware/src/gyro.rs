@@ -1,0 +1,248 @@
+//! Driver of an ST L3GD20H / I3G4250D 3-axis gyro over SPI, generic over
+//! `embedded_hal::spi::SpiDevice` (chip select handled by the device), with typed errors.
+//!
+//! Register map (both parts): WHO_AM_I 0x0F (0xD7 L3GD20H, 0xD3 I3G4250D); CTRL1 0x20 (ODR, power,
+//! axis enables); CTRL4 0x23 (full scale); OUT_X_L 0x28 .. OUT_Z_H 0x2D, little-endian. SPI address
+//! byte: bit 7 = read, bit 6 = auto-increment. At ±2000 °/s the sensitivity is 70 m°/s per LSB.
+
+use embedded_hal::spi::{Operation, SpiDevice};
+
+use crate::Gyro;
+
+const WHO_AM_I: u8 = 0x0F;
+const CTRL1: u8 = 0x20;
+const CTRL4: u8 = 0x23;
+const OUT_X_L: u8 = 0x28;
+const READ: u8 = 0x80;
+const AUTO_INC: u8 = 0x40;
+/// Identities accepted.
+pub const WHO_AM_I_VALUES: [u8; 2] = [0xD7, 0xD3];
+/// rad/s per LSB at ±2000 °/s (70 m°/s).
+pub const RAD_S_PER_LSB_2000DPS: f32 = 0.070 * core::f32::consts::PI / 180.0;
+
+/// Gyro errors, generic over the SPI error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Error<CommE> {
+    /// The SPI transfer failed.
+    Comm(CommE),
+    /// WHO_AM_I returned this value: not a supported gyro (or nothing on the bus).
+    WrongDevice(u8),
+}
+
+/// The gyro.
+pub struct L3gd20<SPI> {
+    spi: SPI,
+}
+
+impl<SPI: SpiDevice> L3gd20<SPI> {
+    /// Checks the identity and starts the gyro: 800 Hz output rate, all axes, ±2000 °/s.
+    pub fn new(spi: SPI) -> Result<Self, Error<SPI::Error>> {
+        let mut g = L3gd20 { spi };
+        let id = g.read_reg(WHO_AM_I)?;
+        if !WHO_AM_I_VALUES.contains(&id) {
+            return Err(Error::WrongDevice(id));
+        }
+        g.write_reg(CTRL4, 0x20)?; // FS = 2000 dps
+        g.write_reg(CTRL1, 0xFF)?; // ODR 800 Hz, bandwidth max, power on, X/Y/Z on
+        Ok(g)
+    }
+
+    fn read_reg(&mut self, reg: u8) -> Result<u8, Error<SPI::Error>> {
+        let mut v = [0u8];
+        self.spi
+            .transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(&mut v)])
+            .map_err(Error::Comm)?;
+        Ok(v[0])
+    }
+
+    fn write_reg(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
+        self.spi.write(&[reg, v]).map_err(Error::Comm)
+    }
+
+    /// The raw 16-bit rate words of x, y, z.
+    pub fn read_raw(&mut self) -> Result<[i16; 3], Error<SPI::Error>> {
+        let mut b = [0u8; 6];
+        self.spi
+            .transaction(&mut [
+                Operation::Write(&[OUT_X_L | READ | AUTO_INC]),
+                Operation::Read(&mut b),
+            ])
+            .map_err(Error::Comm)?;
+        Ok(core::array::from_fn(|i| {
+            i16::from_le_bytes([b[2 * i], b[2 * i + 1]])
+        }))
+    }
+
+    /// Gives the SPI device back.
+    pub fn release(self) -> SPI {
+        self.spi
+    }
+}
+
+impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
+    type Error = Error<SPI::Error>;
+
+    fn read_rate(&mut self) -> Result<([f32; 3], bool), Self::Error> {
+        let w = self.read_raw()?;
+        let saturated = w.iter().any(|v| *v == i16::MIN || *v == i16::MAX);
+        Ok((w.map(|v| f32::from(v) * RAD_S_PER_LSB_2000DPS), saturated))
+    }
+}
+
+/// An [`SpiDevice`] from a bus and a chip-select pin (active low) that nobody else uses.
+pub struct CsDevice<BUS, CS> {
+    bus: BUS,
+    cs: CS,
+}
+
+impl<BUS, CS> CsDevice<BUS, CS> {
+    /// Owns the bus and the pin (set the pin high before).
+    pub fn new(bus: BUS, cs: CS) -> Self {
+        CsDevice { bus, cs }
+    }
+}
+
+/// Error of [`CsDevice`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsError<BusE, PinE> {
+    /// The bus failed.
+    Bus(BusE),
+    /// The chip-select pin failed.
+    Pin(PinE),
+}
+
+impl<BusE: core::fmt::Debug, PinE: core::fmt::Debug> embedded_hal::spi::Error
+    for CsError<BusE, PinE>
+{
+    fn kind(&self) -> embedded_hal::spi::ErrorKind {
+        embedded_hal::spi::ErrorKind::Other
+    }
+}
+
+impl<BUS, CS> embedded_hal::spi::ErrorType for CsDevice<BUS, CS>
+where
+    BUS: embedded_hal::spi::ErrorType,
+    CS: embedded_hal::digital::OutputPin,
+{
+    type Error = CsError<BUS::Error, CS::Error>;
+}
+
+impl<BUS, CS> SpiDevice for CsDevice<BUS, CS>
+where
+    BUS: embedded_hal::spi::SpiBus,
+    CS: embedded_hal::digital::OutputPin,
+{
+    fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), Self::Error> {
+        self.cs.set_low().map_err(CsError::Pin)?;
+        let mut result = Ok(());
+        for op in ops.iter_mut() {
+            result = match op {
+                Operation::Read(b) => self.bus.read(b),
+                Operation::Write(b) => self.bus.write(b),
+                Operation::Transfer(r, w) => self.bus.transfer(r, w),
+                Operation::TransferInPlace(b) => self.bus.transfer_in_place(b),
+                Operation::DelayNs(ns) => {
+                    // Roughly: a few cycles per iteration on a 180 MHz core.
+                    for _ in 0..(*ns / 16) {
+                        core::hint::spin_loop();
+                    }
+                    Ok(())
+                }
+            };
+            if result.is_err() {
+                break;
+            }
+        }
+        let flushed = self.bus.flush();
+        let released = self.cs.set_high();
+        result.map_err(CsError::Bus)?;
+        flushed.map_err(CsError::Bus)?;
+        released.map_err(CsError::Pin)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_hal::spi::{ErrorKind, ErrorType};
+
+    /// A register-file gyro behind a mock SPI device.
+    struct Mock {
+        regs: [u8; 0x40],
+        fail: bool,
+    }
+    #[derive(Debug, PartialEq)]
+    struct BusError;
+    impl embedded_hal::spi::Error for BusError {
+        fn kind(&self) -> ErrorKind {
+            ErrorKind::Other
+        }
+    }
+    impl ErrorType for Mock {
+        type Error = BusError;
+    }
+    impl SpiDevice for Mock {
+        fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), BusError> {
+            if self.fail {
+                return Err(BusError);
+            }
+            let mut addr = None;
+            for op in ops {
+                match op {
+                    Operation::Write(w) => {
+                        let a = (w[0] & 0x3F) as usize;
+                        if w[0] & READ == 0 {
+                            for (k, v) in w[1..].iter().enumerate() {
+                                self.regs[a + k] = *v;
+                            }
+                        }
+                        addr = Some((a, w[0] & AUTO_INC != 0));
+                    }
+                    Operation::Read(r) => {
+                        let (a, inc) = addr.unwrap();
+                        for (k, v) in r.iter_mut().enumerate() {
+                            *v = self.regs[if inc { a + k } else { a }];
+                        }
+                    }
+                    _ => unreachable!(),
+                }
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn configures_reads_and_scales() {
+        let mut m = Mock {
+            regs: [0; 0x40],
+            fail: false,
+        };
+        m.regs[WHO_AM_I as usize] = 0xD7;
+        let raw: [i16; 3] = [1000, -2000, i16::MAX];
+        for (i, v) in raw.iter().enumerate() {
+            m.regs[0x28 + 2 * i..0x2A + 2 * i].copy_from_slice(&v.to_le_bytes());
+        }
+        let mut g = L3gd20::new(m).unwrap();
+        let (w, sat) = g.read_rate().unwrap();
+        assert!(sat);
+        assert!((w[0] - 70f32.to_radians()).abs() < 1e-4, "{w:?}");
+        assert!((w[1] + 140f32.to_radians()).abs() < 1e-4);
+        let m = g.release();
+        assert_eq!(m.regs[CTRL1 as usize], 0xFF);
+        assert_eq!(m.regs[CTRL4 as usize], 0x20);
+    }
+
+    #[test]
+    fn typed_errors() {
+        let m = Mock {
+            regs: [0; 0x40],
+            fail: false,
+        };
+        assert_eq!(L3gd20::new(m).err(), Some(Error::WrongDevice(0)));
+        let m = Mock {
+            regs: [0; 0x40],
+            fail: true,
+        };
+        assert_eq!(L3gd20::new(m).err(), Some(Error::Comm(BusError)));
+    }
+}
