@@ -13,13 +13,13 @@
 //!   point). Kalibr itself writes `M` in a lower-triangular parameterisation tied to its IMU frame; ours is
 //!   the same map expressed in the body frame.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use shared::params::ParamsError;
 use shared::Calibration;
 
 /// The plain `K_A`, `∇_b` of the paper, plus the lever arms.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlainMatrices {
     /// `K_A = (K A)⁻¹`, g per output unit, row-major.
     pub k_a_g_per_out: RowMajor3,
@@ -32,7 +32,7 @@ pub struct PlainMatrices {
 }
 
 /// x-io Fusion's inertial calibration triple.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FusionStyle {
     /// `A⁻¹`, row-major (Fusion's `FusionMatrix` is row-major too).
     pub misalignment: RowMajor3,
@@ -43,7 +43,7 @@ pub struct FusionStyle {
 }
 
 /// Kalibr-style scale-misalignment-size-effect parameters.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct KalibrStyle {
     /// `M = K·A/g`, output unit per m/s², row-major.
     pub m: RowMajor3,
@@ -58,7 +58,7 @@ pub struct KalibrStyle {
 }
 
 /// All three forms.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Conversions {
     /// The paper's matrices.
     pub plain: PlainMatrices,

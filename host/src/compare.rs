@@ -1,0 +1,460 @@
+//! `host compare` (two calibrations of one unit side by side, each difference in units of its
+//! combined 1σ) and `host export` (our calibration in the conventions of other tools, as TOML).
+//!
+//! Intended CLI (wired by `cli.rs`):
+//!
+//! ```text
+//! host compare A.toml B.toml
+//!     → compare(a, b) ; prints ComparisonTable::render()
+//! host export --calibration calibration.toml --format plain|fusion|kalibr|all [--out FILE]
+//!     → export(&calibration, format) ; writes the string to FILE or stdout
+//! ```
+
+use crate::convert::{convert, Conversions};
+use crate::estimate::{paper_labels, paper_values, PAPER_LEN};
+use crate::unit_file::{UnitFile, UnitFileError};
+use shared::Calibration;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One parameter of [`ComparisonTable`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ComparisonRow {
+    /// Name, e.g. "bias x", "θxy", "r1z".
+    pub label: String,
+    /// Display unit.
+    pub unit: String,
+    /// Value in A (display unit).
+    pub a: f64,
+    /// Value in B.
+    pub b: f64,
+    /// 1σ of A, when A has an `[uncertainty]`.
+    pub sigma_a: Option<f64>,
+    /// 1σ of B.
+    pub sigma_b: Option<f64>,
+    /// `b − a`.
+    pub diff: f64,
+    /// `(b − a) / √(σa² + σb²)` (missing σ count as 0; `None` when neither has one or it is ∞).
+    pub diff_sigma: Option<f64>,
+    /// A lever-arm component that A or B did not determine.
+    pub undetermined: bool,
+}
+
+/// Two calibrations side by side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ComparisonTable {
+    /// Name of A (its path).
+    pub a_name: String,
+    /// Name of B.
+    pub b_name: String,
+    /// Biases, scale factors, nine angles, nine lever arms.
+    pub rows: Vec<ComparisonRow>,
+    /// Things to know (reference points, missing σ, …).
+    pub notes: Vec<String>,
+}
+
+impl ComparisonTable {
+    /// The row with the largest |difference|/σ among the determined ones.
+    pub fn worst(&self) -> Option<&ComparisonRow> {
+        self.rows
+            .iter()
+            .filter(|r| !r.undetermined && r.diff_sigma.is_some())
+            .max_by(|x, y| {
+                let f = |r: &ComparisonRow| r.diff_sigma.map_or(0.0, f64::abs);
+                f(x).total_cmp(&f(y))
+            })
+    }
+
+    /// The terminal table.
+    pub fn render(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "A: {}", self.a_name);
+        let _ = writeln!(s, "B: {}", self.b_name);
+        let _ = writeln!(
+            s,
+            "{:<9} {:>7} {:>15} {:>12} {:>15} {:>12} {:>13} {:>9}",
+            "param", "unit", "A", "1σ A", "B", "1σ B", "B − A", "(B−A)/σ"
+        );
+        for r in &self.rows {
+            let sig = |v: Option<f64>| match v {
+                Some(v) if v.is_finite() => format!("{v:.3e}"),
+                Some(_) => "∞".into(),
+                None => "no σ".into(),
+            };
+            let ds = match r.diff_sigma {
+                Some(d) => format!("{d:+.1}σ"),
+                None => "no σ".into(),
+            };
+            let _ = writeln!(
+                s,
+                "{:<9} {:>7} {:>15.7} {:>12} {:>15.7} {:>12} {:>13.3e} {:>9}{}",
+                r.label,
+                r.unit,
+                r.a,
+                sig(r.sigma_a),
+                r.b,
+                sig(r.sigma_b),
+                r.diff,
+                ds,
+                if r.undetermined { "  n.d." } else { "" }
+            );
+        }
+        if let Some(w) = self.worst() {
+            let _ = writeln!(
+                s,
+                "Largest difference: {} at {:+.1}σ",
+                w.label,
+                w.diff_sigma.unwrap_or(0.0)
+            );
+        }
+        for n in &self.notes {
+            let _ = writeln!(s, "note: {n}");
+        }
+        s
+    }
+}
+
+/// Why two files cannot be compared.
+#[derive(Debug)]
+pub enum CompareError {
+    /// A file could not be read.
+    Unit(UnitFileError),
+    /// They cannot be compared (message says why).
+    Incompatible(String),
+}
+
+impl std::fmt::Display for CompareError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CompareError::Unit(e) => e.fmt(f),
+            CompareError::Incompatible(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for CompareError {}
+
+/// `host compare`: reads two calibration (unit) files and compares them.
+pub fn compare(a_toml: &Path, b_toml: &Path) -> Result<ComparisonTable, CompareError> {
+    let a = UnitFile::load(a_toml).map_err(CompareError::Unit)?;
+    let b = UnitFile::load(b_toml).map_err(CompareError::Unit)?;
+    compare_units(
+        &a,
+        &a_toml.display().to_string(),
+        &b,
+        &b_toml.display().to_string(),
+    )
+}
+
+/// The 1σ of a unit file in [`paper_values`] order, when it has them.
+fn sigmas(u: &UnitFile) -> Option<[f64; PAPER_LEN]> {
+    let s = u.uncertainty.as_ref()?;
+    let mut v = [0.0; PAPER_LEN];
+    for i in 0..3 {
+        v[i] = s.zero_bias_1sigma[i];
+        v[3 + i] = s.scale_per_g_1sigma[i];
+        for j in 0..3 {
+            v[6 + 3 * i + j] = s.installation_angles_deg_1sigma[i][j];
+            v[15 + 3 * i + j] = s.lever_arms_m_1sigma[i][j];
+        }
+    }
+    Some(v)
+}
+
+/// Compares two unit files (values as [`paper_values`] gives them: angles normalised).
+pub fn compare_units(
+    a: &UnitFile,
+    a_name: &str,
+    b: &UnitFile,
+    b_name: &str,
+) -> Result<ComparisonTable, CompareError> {
+    let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
+    let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
+    let (ua, ub) = (ca.statics.output_unit, cb.statics.output_unit);
+    if ua != ub {
+        return Err(CompareError::Incompatible(format!(
+            "A is in {} and B in {}: the biases and scale factors are not comparable",
+            ua.symbol(),
+            ub.symbol()
+        )));
+    }
+    let bad = |e: shared::params::ParamsError| CompareError::Incompatible(e.to_string());
+    let va = paper_values(&ca).map_err(bad)?;
+    let vb = paper_values(&cb).map_err(bad)?;
+    let (sa, sb) = (sigmas(a), sigmas(b));
+    let obs = |u: &UnitFile, i: usize, j: usize| {
+        u.uncertainty
+            .as_ref()
+            .is_none_or(|s| s.lever_arms_observable[i][j])
+    };
+    let labels = paper_labels();
+    let sym = ua.symbol();
+    let mut rows = Vec::with_capacity(PAPER_LEN);
+    for k in 0..PAPER_LEN {
+        let (unit, scale) = match k {
+            0..=2 => (sym.to_string(), 1.0),
+            3..=5 => (format!("{sym}/g"), 1.0),
+            6..=14 => ("°".to_string(), 1.0),
+            _ => ("mm".to_string(), 1e3),
+        };
+        let sig_a = sa.map(|s| s[k] * scale);
+        let sig_b = sb.map(|s| s[k] * scale);
+        let diff = (vb[k] - va[k]) * scale;
+        let combined = match (sig_a, sig_b) {
+            (None, None) => None,
+            (x, y) => Some((x.unwrap_or(0.0).powi(2) + y.unwrap_or(0.0).powi(2)).sqrt()),
+        };
+        let diff_sigma = match combined {
+            Some(c) if c.is_finite() && c > 0.0 => Some(diff / c),
+            Some(c) if c == 0.0 && diff == 0.0 => Some(0.0),
+            _ => None,
+        };
+        let undetermined = k >= 15 && {
+            let (i, j) = ((k - 15) / 3, (k - 15) % 3);
+            !obs(a, i, j) || !obs(b, i, j)
+        };
+        rows.push(ComparisonRow {
+            label: labels[k].clone(),
+            unit,
+            a: va[k] * scale,
+            b: vb[k] * scale,
+            sigma_a: sig_a,
+            sigma_b: sig_b,
+            diff,
+            diff_sigma,
+            undetermined,
+        });
+    }
+    let mut notes = Vec::new();
+    match (sa.is_some(), sb.is_some()) {
+        (false, false) => notes.push(
+            "neither file has an [uncertainty] table: differences are not in units of σ".into(),
+        ),
+        (true, false) | (false, true) => notes.push(format!(
+            "only {} has an [uncertainty] table: σ is that file's alone",
+            if sa.is_some() { "A" } else { "B" }
+        )),
+        _ => {}
+    }
+    if ca.reference != cb.reference {
+        notes.push(format!(
+            "the lever arms are relative to different reference points ({:?} vs {:?}): only their \
+             differences r_i − r_j compare",
+            ca.reference, cb.reference
+        ));
+    }
+    if (ca.gravity_m_s2 - cb.gravity_m_s2).abs() > 1e-9 {
+        notes.push(format!(
+            "different local gravity: {} vs {} m/s² (scale factors per g differ by that ratio)",
+            ca.gravity_m_s2, cb.gravity_m_s2
+        ));
+    }
+    if rows.iter().any(|r| r.undetermined) {
+        notes.push(
+            "n.d.: a lever-arm component one of the calibrations did not determine (its value is \
+             not a measurement)"
+                .into(),
+        );
+    }
+    Ok(ComparisonTable {
+        a_name: a_name.to_string(),
+        b_name: b_name.to_string(),
+        rows,
+        notes,
+    })
+}
+
+/// The conventions [`export`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExportFormat {
+    /// The paper's `K_A`, `∇_b` and the lever arms ([`crate::convert::PlainMatrices`]).
+    Plain,
+    /// x-io Fusion's misalignment, sensitivity, offset ([`crate::convert::FusionStyle`]).
+    Fusion,
+    /// Kalibr-style `M`, bias, `rx/ry/rz` ([`crate::convert::KalibrStyle`]).
+    Kalibr,
+    /// All three, as the tables `[plain]`, `[fusion]`, `[kalibr]`.
+    All,
+}
+
+impl std::str::FromStr for ExportFormat {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "plain" => Ok(ExportFormat::Plain),
+            "fusion" => Ok(ExportFormat::Fusion),
+            "kalibr" => Ok(ExportFormat::Kalibr),
+            "all" => Ok(ExportFormat::All),
+            _ => Err(format!(
+                "unknown export format '{s}': use plain, fusion, kalibr or all"
+            )),
+        }
+    }
+}
+
+const HEADER_PLAIN: &str = "\
+# Plain matrices (paper eq. 16): f_b[g] = K_A·U − ∇_b − f_L^b, with f_L^b = K_A·(K d),
+# (K d)_i = row_i(K_A⁻¹)·(W r_i)/g and W = [ω̇×] + [ω×]². K_A in g per output unit, row-major;
+# ∇_b in g; lever_arms_m row i = r_i (m, body axes, from the reference point).
+";
+const HEADER_FUSION: &str = "\
+# x-io Fusion FusionCalibrationInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
+# misalignment = A⁻¹ (row-major), sensitivity = 1/k_i (g per output unit), offset = u0. No lever arms:
+# static compensation only.
+";
+const HEADER_KALIBR: &str = "\
+# Kalibr-style scale-misalignment-size-effect model, general form, in the body frame:
+# u_i = row_i(m)·(f + W r_i) + bias_i, m = K·A/g (output unit per m/s², row-major), bias = u0,
+# rx, ry, rz = sensing points of the x, y, z accelerometers (m). Solve for f (m/s²).
+";
+
+/// Why a calibration cannot be exported.
+#[derive(Debug)]
+pub struct ExportError(pub String);
+
+impl std::fmt::Display for ExportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "cannot export the calibration: {}", self.0)
+    }
+}
+
+impl std::error::Error for ExportError {}
+
+/// `host export`: the calibration in another tool's convention, as TOML (with a comment header that
+/// states the convention).
+pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String, ExportError> {
+    let c: Conversions = convert(calibration).map_err(|e| ExportError(e.to_string()))?;
+    let ser = |r: Result<String, toml::ser::Error>| r.map_err(|e| ExportError(e.to_string()));
+    Ok(match format {
+        ExportFormat::Plain => format!("{HEADER_PLAIN}{}", ser(toml::to_string(&c.plain))?),
+        ExportFormat::Fusion => format!("{HEADER_FUSION}{}", ser(toml::to_string(&c.fusion))?),
+        ExportFormat::Kalibr => format!("{HEADER_KALIBR}{}", ser(toml::to_string(&c.kalibr))?),
+        ExportFormat::All => format!(
+            "{HEADER_PLAIN}{HEADER_FUSION}{HEADER_KALIBR}{}",
+            ser(toml::to_string(&c))?
+        ),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::convert::{FusionStyle, KalibrStyle, PlainMatrices};
+    use crate::unit_file::Uncertainty;
+    use shared::forward::{BodyMotion, ForwardModel};
+    use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
+
+    fn with_sigma() -> UnitFile {
+        let mut u = UnitFile::paper_unit();
+        u.uncertainty = Some(Uncertainty {
+            zero_bias_1sigma: [1e-4; 3],
+            scale_per_g_1sigma: [2e-5; 3],
+            installation_angles_deg_1sigma: [[1e-3; 3]; 3],
+            lever_arms_m_1sigma: [[5e-6; 3]; 3],
+            lever_arms_observable: [[true; 3]; 3],
+        });
+        u
+    }
+
+    #[test]
+    fn identical_files_differ_by_zero_sigma() {
+        let u = with_sigma();
+        let t = compare_units(&u, "a", &u, "b").unwrap();
+        assert_eq!(t.rows.len(), 24);
+        assert!(t.rows.iter().all(|r| r.diff_sigma == Some(0.0)), "{t:?}");
+        assert!(t.render().contains("+0.0σ"));
+    }
+
+    #[test]
+    fn a_bias_shifted_by_three_sigma_shows_three_sigma() {
+        let a = with_sigma();
+        let mut b = a.clone();
+        // Combined σ = √2·1e-4 V: shift by 3 of those.
+        let shift = 3.0 * (2.0f64).sqrt() * 1e-4;
+        b.statics.zero_bias_v.as_mut().unwrap()[1] += shift;
+        let t = compare_units(&a, "a", &b, "b").unwrap();
+        let row = t.rows.iter().find(|r| r.label == "bias y").unwrap();
+        assert!((row.diff_sigma.unwrap() - 3.0).abs() < 1e-9, "{row:?}");
+        assert_eq!(t.worst().unwrap().label, "bias y");
+        assert!(t.render().contains("+3.0σ"), "{}", t.render());
+        // The other parameters did not move.
+        assert!(t
+            .rows
+            .iter()
+            .filter(|r| r.label != "bias y")
+            .all(|r| r.diff_sigma == Some(0.0)));
+    }
+
+    #[test]
+    fn without_uncertainty_says_no_sigma() {
+        let a = UnitFile::paper_unit();
+        let t = compare_units(&a, "a", &a, "b").unwrap();
+        assert!(t.rows.iter().all(|r| r.diff_sigma.is_none()));
+        assert!(t.render().contains("no σ"));
+        assert!(t.notes[0].contains("neither file"));
+    }
+
+    /// Each exported form, read back from its TOML, compensates like the device's compensator.
+    #[test]
+    fn every_exported_form_reads_back_and_compensates_the_same() {
+        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let plain: PlainMatrices =
+            toml::from_str(&export(&cal, ExportFormat::Plain).unwrap()).unwrap();
+        let fusion: FusionStyle =
+            toml::from_str(&export(&cal, ExportFormat::Fusion).unwrap()).unwrap();
+        let kalibr: KalibrStyle =
+            toml::from_str(&export(&cal, ExportFormat::Kalibr).unwrap()).unwrap();
+        let all: Conversions = toml::from_str(&export(&cal, ExportFormat::All).unwrap()).unwrap();
+        assert_eq!(all, convert(&cal).unwrap());
+        assert_eq!(
+            (&plain, &fusion, &kalibr),
+            (&all.plain, &all.fusion, &all.kalibr)
+        );
+        let model = ForwardModel::new(&cal).unwrap();
+        let g = cal.gravity_m_s2;
+        for k in 0..50 {
+            let x = k as f64;
+            let f = [9.0 * (0.3 * x).sin(), -4.0 + 0.1 * x, 9.8 * (0.2 * x).cos()];
+            let motion = BodyMotion {
+                f_o: BodySpecificForce { m_s2: f },
+                omega: BodyRate {
+                    rad_s: [3.0 * (0.5 * x).cos(), 1.0, -0.02 * x],
+                },
+                omega_dot: BodyAngularAccel {
+                    rad_s2: [0.0, 4.0 * (0.1 * x).sin(), 2.0],
+                },
+            };
+            let u = model.outputs(&motion).raw;
+            let (w, wd) = (motion.omega.rad_s, motion.omega_dot.rad_s2);
+            let p = plain.compensate(u, w, wd);
+            let kk = kalibr.compensate(u, w, wd);
+            let still = BodyMotion {
+                omega: BodyRate::default(),
+                omega_dot: BodyAngularAccel::default(),
+                ..motion
+            };
+            let fu = fusion
+                .compensate_static_g(model.outputs(&still).raw)
+                .map(|v| v * g);
+            for j in 0..3 {
+                assert!(
+                    (p[j] - f[j]).abs() < 1e-9,
+                    "plain {j}: {} vs {}",
+                    p[j],
+                    f[j]
+                );
+                assert!((kk[j] - f[j]).abs() < 1e-9, "kalibr {j}");
+                assert!((fu[j] - f[j]).abs() < 1e-9, "fusion {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn export_format_names() {
+        assert_eq!("kalibr".parse::<ExportFormat>(), Ok(ExportFormat::Kalibr));
+        assert!("yaml"
+            .parse::<ExportFormat>()
+            .unwrap_err()
+            .contains("plain"));
+    }
+}

@@ -1,0 +1,570 @@
+//! Figures of the calibration report, drawn with plotters to PNG and SVG.
+//!
+//! A figure is described as data first ([`Figure`]: panels of named series), so that what is plotted
+//! can be compared with the tables printed next to it (the report's tests do exactly that), and only
+//! then rendered by [`render`].
+//!
+//! Text needs a font. plotters is built without `font-kit` (no system font libraries), with `ab_glyph`
+//! and a TrueType file found at run time ([`ensure_font`]: `ACCEL_CAL_FONT`, then common system paths).
+//! Without a font the figures are still written, as SVG only and without any text (axes, labels and
+//! legends need text measurement), and [`RenderOutcome::warnings`] says so.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// Environment variable naming a TrueType font file to use for the figures' text.
+pub const FONT_ENV: &str = "ACCEL_CAL_FONT";
+
+/// Where a sans-serif TrueType font is commonly found (Debian/Ubuntu, Arch, Fedora, macOS, Windows).
+pub const FONT_CANDIDATES: [&str; 8] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf",
+    "/System/Library/Fonts/Supplemental/Arial.ttf",
+    "C:\\Windows\\Fonts\\arial.ttf",
+];
+
+const FAMILY: &str = "sans-serif";
+
+/// Registers a font for the figures once per process; the path of the font used, or `None`.
+pub fn ensure_font() -> Option<&'static Path> {
+    static FONT: OnceLock<Option<PathBuf>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        let from_env = std::env::var_os(FONT_ENV).map(PathBuf::from);
+        let candidates = from_env
+            .into_iter()
+            .chain(FONT_CANDIDATES.iter().map(PathBuf::from));
+        for path in candidates {
+            let Ok(bytes) = std::fs::read(&path) else {
+                continue;
+            };
+            // plotters keeps a 'static reference: the font lives as long as the process (once).
+            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+            if plotters::style::register_font(FAMILY, FontStyle::Normal, bytes).is_ok() {
+                return Some(path);
+            }
+        }
+        None
+    })
+    .as_deref()
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeriesStyle {
+    /// A line through the points (one SVG `<polyline>`).
+    Line,
+    /// A line with a circle on every point.
+    LineAndMarkers,
+    /// Circles only, with vertical ±error bars when the series has them.
+    Markers,
+}
+
+/// One plotted series.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// (x, y) points, in the panel's units.
+    pub points: Vec<(f64, f64)>,
+    /// Symmetric error (±) of each point, same units as y; drawn as vertical bars.
+    pub error: Option<Vec<f64>>,
+    /// Drawing style.
+    pub style: SeriesStyle,
+    /// Colour index into the figure palette.
+    pub colour: usize,
+}
+
+/// One panel (a set of axes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Panel {
+    /// Title above the panel.
+    pub title: String,
+    /// x-axis description.
+    pub x_desc: String,
+    /// y-axis description.
+    pub y_desc: String,
+    /// Category names for x = 0, 1, 2, …; `None`: a numeric x axis.
+    pub x_categories: Option<Vec<String>>,
+    /// Logarithmic y axis (points with y ≤ 0 are left out).
+    pub log_y: bool,
+    /// The series.
+    pub series: Vec<Series>,
+}
+
+/// A figure: panels stacked in a grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figure {
+    /// File stem (`outputs` → `outputs.png`, `outputs.svg`).
+    pub stem: String,
+    /// Caption of the whole figure.
+    pub title: String,
+    /// Grid, (rows, columns); panels fill it row by row.
+    pub grid: (usize, usize),
+    /// Size, pixels.
+    pub size: (u32, u32),
+    /// The panels.
+    pub panels: Vec<Panel>,
+}
+
+/// What [`render`] wrote.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderOutcome {
+    /// Files written.
+    pub files: Vec<PathBuf>,
+    /// Why something was not written or not drawn (e.g. no font: no PNG, no text).
+    pub warnings: Vec<String>,
+}
+
+/// Why a figure could not be drawn.
+#[derive(Debug)]
+pub struct FigureError {
+    /// The file.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for FigureError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "cannot draw {}: {}", self.path.display(), self.message)
+    }
+}
+
+impl std::error::Error for FigureError {}
+
+/// Which files to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Formats {
+    /// PNG (needs a font).
+    pub png: bool,
+    /// SVG.
+    pub svg: bool,
+}
+
+impl Default for Formats {
+    fn default() -> Self {
+        Formats {
+            png: true,
+            svg: true,
+        }
+    }
+}
+
+/// The palette: before (red), static-only (orange), full (blue), truth/reference (black), then more.
+pub const PALETTE: [RGBColor; 6] = [
+    RGBColor(200, 30, 30),
+    RGBColor(230, 140, 0),
+    RGBColor(20, 90, 200),
+    RGBColor(0, 0, 0),
+    RGBColor(40, 150, 60),
+    RGBColor(130, 60, 170),
+];
+
+/// Draws `fig` into `dir` as `<stem>.png` and/or `<stem>.svg`.
+pub fn render(fig: &Figure, dir: &Path, formats: Formats) -> Result<RenderOutcome, FigureError> {
+    let text = ensure_font().is_some();
+    render_with(fig, dir, formats, text)
+}
+
+/// [`render`] with text on or off (off: no font needed; PNG is then not written).
+pub fn render_with(
+    fig: &Figure,
+    dir: &Path,
+    formats: Formats,
+    text: bool,
+) -> Result<RenderOutcome, FigureError> {
+    let mut out = RenderOutcome::default();
+    if formats.svg {
+        let path = dir.join(format!("{}.svg", fig.stem));
+        let root = SVGBackend::new(&path, fig.size).into_drawing_area();
+        draw(fig, &root, text).map_err(|message| FigureError {
+            path: path.clone(),
+            message,
+        })?;
+        root.present().map_err(|e| FigureError {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        drop(root);
+        out.files.push(path);
+        if !text {
+            out.warnings.push(format!(
+                "no TrueType font found (set {FONT_ENV}, or install DejaVu Sans): {}.svg has no text",
+                fig.stem
+            ));
+        }
+    }
+    if formats.png {
+        let path = dir.join(format!("{}.png", fig.stem));
+        if text {
+            let root = BitMapBackend::new(&path, fig.size).into_drawing_area();
+            draw(fig, &root, text).map_err(|message| FigureError {
+                path: path.clone(),
+                message,
+            })?;
+            root.present().map_err(|e| FigureError {
+                path: path.clone(),
+                message: e.to_string(),
+            })?;
+            drop(root);
+            out.files.push(path);
+        } else {
+            out.warnings.push(format!(
+                "no TrueType font found (set {FONT_ENV}, or install DejaVu Sans): {} not written",
+                path.display()
+            ));
+        }
+    }
+    Ok(out)
+}
+
+fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("{e:?}")
+}
+
+fn draw<DB: DrawingBackend>(
+    fig: &Figure,
+    root: &DrawingArea<DB, Shift>,
+    text: bool,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let area = if text {
+        root.titled(&fig.title, (FAMILY, 22)).map_err(err)?
+    } else {
+        root.margin(10, 10, 10, 10)
+    };
+    let cells = area.split_evenly(fig.grid);
+    for (panel, cell) in fig.panels.iter().zip(cells.iter()) {
+        draw_panel(panel, cell, text)?;
+    }
+    Ok(())
+}
+
+/// The y range of a panel, padded; log panels use positive values only.
+fn y_range(panel: &Panel) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for s in &panel.series {
+        for (k, &(_, y)) in s.points.iter().enumerate() {
+            let e = s
+                .error
+                .as_ref()
+                .and_then(|e| e.get(k))
+                .copied()
+                .unwrap_or(0.0);
+            for v in [y - e, y + e] {
+                if !v.is_finite() || (panel.log_y && v <= 0.0) {
+                    continue;
+                }
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        return if panel.log_y {
+            (1e-6, 1.0)
+        } else {
+            (-1.0, 1.0)
+        };
+    }
+    if panel.log_y {
+        (lo / 2.0, hi * 2.0)
+    } else {
+        let span = (hi - lo).max(1e-12 * hi.abs().max(lo.abs()).max(1e-12));
+        (lo - 0.08 * span, hi + 0.08 * span)
+    }
+}
+
+fn x_range(panel: &Panel) -> (f64, f64) {
+    if let Some(c) = &panel.x_categories {
+        return (-0.5, c.len().max(1) as f64 - 0.5);
+    }
+    let xs = panel
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.0));
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+        (a.min(x), b.max(x))
+    });
+    if lo.is_finite() && hi > lo {
+        (lo, hi)
+    } else {
+        (0.0, 1.0)
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    panel: &Panel,
+    area: &DrawingArea<DB, Shift>,
+    text: bool,
+) -> Result<(), String> {
+    let (x0, x1) = x_range(panel);
+    let (y0, y1) = y_range(panel);
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(8);
+    if text {
+        builder
+            .caption(&panel.title, (FAMILY, 16))
+            .x_label_area_size(if panel.x_categories.is_some() { 40 } else { 32 })
+            .y_label_area_size(72);
+    }
+    if panel.log_y {
+        let mut chart = builder
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+            .map_err(err)?;
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc(&panel.x_desc)
+                .y_desc(&panel.y_desc)
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .label_style((FAMILY, 12))
+                .max_light_lines(0)
+                .draw()
+                .map_err(err)?;
+        }
+        draw_series(&mut chart, panel, text, true)
+    } else {
+        let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?;
+        if text {
+            let cats = panel.x_categories.clone();
+            let fmt = move |x: &f64| match &cats {
+                Some(c) => {
+                    let k = x.round();
+                    if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < c.len() {
+                        c[k as usize].clone()
+                    } else {
+                        String::new()
+                    }
+                }
+                None => format!("{x}"),
+            };
+            let mut mesh = chart.configure_mesh();
+            mesh.x_desc(&panel.x_desc)
+                .y_desc(&panel.y_desc)
+                .label_style((FAMILY, 12))
+                .max_light_lines(0)
+                .x_label_formatter(&fmt);
+            if let Some(c) = &panel.x_categories {
+                mesh.x_labels(c.len() + 1);
+            }
+            mesh.draw().map_err(err)?;
+        }
+        draw_series(&mut chart, panel, text, false)
+    }
+}
+
+fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    panel: &Panel,
+    text: bool,
+    log_y: bool,
+) -> Result<(), String>
+where
+    X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+{
+    for s in &panel.series {
+        let colour = PALETTE[s.colour % PALETTE.len()];
+        let keep = |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0);
+        let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
+        let anno = match s.style {
+            SeriesStyle::Line => chart
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+                .map_err(err)?,
+            SeriesStyle::LineAndMarkers => chart
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)).point_size(3))
+                .map_err(err)?,
+            SeriesStyle::Markers => {
+                if let Some(e) = &s.error {
+                    let bars = s
+                        .points
+                        .iter()
+                        .zip(e)
+                        .filter(|(p, e)| keep(p) && e.is_finite())
+                        .map(|(&(x, y), &e)| {
+                            PathElement::new(vec![(x, y - e), (x, y + e)], colour.stroke_width(1))
+                        });
+                    chart.draw_series(bars).map_err(err)?;
+                }
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                    .map_err(err)?
+            }
+        };
+        if text {
+            anno.label(s.label.clone()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+            });
+        }
+    }
+    if text && !panel.series.is_empty() {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FAMILY, 12))
+            .position(if log_y {
+                SeriesLabelPosition::LowerRight
+            } else {
+                SeriesLabelPosition::UpperLeft
+            })
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Checks a PNG file's signature and reads its IHDR size, (width, height).
+pub fn png_dimensions(bytes: &[u8]) -> Option<(u32, u32)> {
+    const SIG: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    if bytes.len() < 24 || bytes[..8] != SIG || &bytes[12..16] != b"IHDR" {
+        return None;
+    }
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    Some((be(&bytes[16..20]), be(&bytes[20..24])))
+}
+
+/// A `<polyline>` of an SVG file: its stroke colour (`#RRGGBB`), stroke width and number of points.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SvgPolyline {
+    /// Stroke colour as written, e.g. `#145AC8`.
+    pub stroke: String,
+    /// Stroke width as written.
+    pub width: String,
+    /// Number of points.
+    pub points: usize,
+}
+
+/// The `<polyline>` elements of an SVG document written by [`render`] (for checking what was drawn).
+pub fn svg_polylines(svg: &str) -> Vec<SvgPolyline> {
+    let attr = |tag: &str, name: &str| -> String {
+        let key = format!("{name}=\"");
+        tag.find(&key)
+            .map(|k| {
+                let rest = &tag[k + key.len()..];
+                rest[..rest.find('"').unwrap_or(rest.len())].to_string()
+            })
+            .unwrap_or_default()
+    };
+    svg.split("<polyline")
+        .skip(1)
+        .map(|rest| {
+            let tag = &rest[..rest.find('>').unwrap_or(rest.len())];
+            SvgPolyline {
+                stroke: attr(tag, "stroke"),
+                width: attr(tag, "stroke-width"),
+                points: attr(tag, "points").split_whitespace().count(),
+            }
+        })
+        .collect()
+}
+
+/// The SVG colour string of palette entry `i`.
+pub fn palette_hex(i: usize) -> String {
+    let c = PALETTE[i % PALETTE.len()];
+    format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn figure() -> Figure {
+        Figure {
+            stem: "t".into(),
+            title: "test figure".into(),
+            grid: (1, 2),
+            size: (600, 300),
+            panels: vec![
+                Panel {
+                    title: "lines".into(),
+                    x_desc: "t (s)".into(),
+                    y_desc: "m".into(),
+                    x_categories: None,
+                    log_y: true,
+                    series: vec![
+                        Series {
+                            label: "a".into(),
+                            points: (0..10).map(|k| (k as f64, (k * k) as f64)).collect(),
+                            error: None,
+                            style: SeriesStyle::Line,
+                            colour: 0,
+                        },
+                        Series {
+                            label: "b".into(),
+                            points: (0..10).map(|k| (k as f64, k as f64)).collect(),
+                            error: None,
+                            style: SeriesStyle::Line,
+                            colour: 1,
+                        },
+                    ],
+                },
+                Panel {
+                    title: "markers".into(),
+                    x_desc: "segment".into(),
+                    y_desc: "µg".into(),
+                    x_categories: Some(vec!["x+".into(), "x−".into(), "y+".into()]),
+                    log_y: false,
+                    series: vec![Series {
+                        label: "c".into(),
+                        points: vec![(0.0, 1.0), (1.0, -2.0), (2.0, 0.5)],
+                        error: Some(vec![0.5, 0.5, 0.5]),
+                        style: SeriesStyle::Markers,
+                        colour: 2,
+                    }],
+                },
+            ],
+        }
+    }
+
+    #[test]
+    fn renders_png_and_svg_and_without_font_svg_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let fig = figure();
+        let out = render(&fig, dir.path(), Formats::default()).unwrap();
+        assert!(
+            ensure_font().is_some(),
+            "the test machines have DejaVu Sans"
+        );
+        assert_eq!(out.files.len(), 2, "{out:?}");
+        let png = std::fs::read(dir.path().join("t.png")).unwrap();
+        assert_eq!(png_dimensions(&png), Some((600, 300)));
+        let svg = std::fs::read_to_string(dir.path().join("t.svg")).unwrap();
+        assert!(svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        // Two line series of 9 drawable points (log axis: y = 0 left out), each also as a legend sample.
+        let lines = svg_polylines(&svg);
+        for c in [0, 1] {
+            let mine: Vec<usize> = lines
+                .iter()
+                .filter(|p| p.stroke == palette_hex(c) && p.width == "2")
+                .map(|p| p.points)
+                .collect();
+            assert_eq!(mine, vec![9, 2], "colour {c}");
+        }
+        // Three markers, three error bars (error bars are 2-point polylines).
+        assert_eq!(svg.matches("<circle").count(), 3);
+        assert!(svg.contains("test figure") && svg.contains("µg"));
+
+        let bare = tempfile::tempdir().unwrap();
+        let out = render_with(&fig, bare.path(), Formats::default(), false).unwrap();
+        assert_eq!(out.files, vec![bare.path().join("t.svg")]);
+        assert_eq!(out.warnings.len(), 2);
+        let svg = std::fs::read_to_string(bare.path().join("t.svg")).unwrap();
+        assert!(!svg.contains("<text"));
+        assert_eq!(svg.matches("<circle").count(), 3);
+        assert!(!bare.path().join("t.png").exists());
+    }
+
+    #[test]
+    fn png_dimensions_rejects_non_png() {
+        assert_eq!(png_dimensions(b"GIF89a............................"), None);
+    }
+}
