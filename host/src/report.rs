@@ -17,8 +17,16 @@ fn out_digits(unit: OutputUnit) -> usize {
     }
 }
 
+/// `v ± s` with at least `digits` decimals, and more when needed to show two significant digits of
+/// the 1σ (a bias known to 0.1 µV must not print as "± 0.000000").
 fn pm(v: f64, s: f64, digits: usize) -> String {
     if s.is_finite() {
+        let needed = if s > 0.0 {
+            (1.0 - s.log10().floor()).max(0.0) as usize
+        } else {
+            0
+        };
+        let digits = digits.max(needed).min(10);
         format!("{v:.digits$} ± {s:.digits$}")
     } else {
         format!("{v:.digits$} ± ∞")
@@ -326,5 +334,15 @@ rate_deg_s = 200
         ] {
             assert!(text.contains(want), "missing {want}");
         }
+    }
+}
+
+#[cfg(test)]
+mod pm_tests {
+    #[test]
+    fn sigma_keeps_two_significant_digits() {
+        assert_eq!(super::pm(2.405098123, 1.3e-7, 6), "2.40509812 ± 0.00000013");
+        assert_eq!(super::pm(0.39496, 2.0e-3, 6), "0.394960 ± 0.002000");
+        assert_eq!(super::pm(1.0, f64::INFINITY, 3), "1.000 ± ∞");
     }
 }

@@ -69,7 +69,7 @@ fn garbage_and_truncated_frames_are_survived_in_both_directions() {
     let dev = client.transport_mut();
     use host::device::Transport;
     dev.send(&[0x13, 0x37, 0x00, 0xFF, 0xFE, 0x00]).unwrap();
-    dev.send(&vec![0x42; 3 * HOST_FRAME_MAX]).unwrap();
+    dev.send(&[0x42; 3 * HOST_FRAME_MAX]).unwrap();
     dev.send(&[0x00]).unwrap();
     dev.send(&identify[..identify.len() / 2]).unwrap();
     dev.send(&[0x00]).unwrap();
