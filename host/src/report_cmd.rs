@@ -1522,6 +1522,50 @@ mod tests {
     }
 
     #[test]
+    fn a_ramp_is_compensated_at_its_rms_rate() {
+        // 0 → 200 °/s in 2 s about x: the mean of ω² is not ω̄² (the difference is ~0.8 mg of
+        // centripetal term on 8 mm lever arms), so the rate used must be the RMS one.
+        let plan = Plan::parse(
+            "output_unit = \"V\"\nsample_rate_hz = 1000\n\
+             [[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\nduration_s = 1\n\
+             [[segment]]\nname = \"ramp\"\nup_b = [1, 0, 0]\nrate_deg_s = 0\n\
+             rate_end_deg_s = 200\nduration_s = 2\n",
+        )
+        .unwrap();
+        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
+        let rows = segment_rows(&plan, &stats, &truth).unwrap();
+        let ramp = &rows[1];
+        assert_eq!(ramp.kind, SegmentKind::Ramp);
+        assert!(ramp.omega_rad_s[0] > 1.05 * stats[1].mean_w_rad_s[0]);
+        let e = ramp.error_g(Compensation::Full);
+        assert!(e.iter().all(|v| v.abs() < 3e-6), "{e:?}");
+        assert!(ramp.error_g(Compensation::Static)[1].abs() > 1e-3);
+    }
+
+    #[test]
+    fn navigation_check_prints_the_issues_figures() {
+        // The short plan keeps this fast; the paper's plan is what the command runs by default.
+        let dir = tempfile::tempdir().unwrap();
+        let check = navigation_check(&NavigationCheckArgs {
+            plan: short(),
+            out_dir: Some(dir.path().to_path_buf()),
+            ..NavigationCheckArgs::default()
+        })
+        .unwrap();
+        let text = check.render();
+        assert!(
+            text.contains("static run 'x+', 60 s: without compensation"),
+            "{text}"
+        );
+        assert!(
+            text.contains("200 °/s run 'x+ 200', 60 s: static-only"),
+            "{text}"
+        );
+        assert!(dir.path().join(REPORT_HTML).exists());
+    }
+
+    #[test]
     fn a_named_run_must_exist() {
         let plan = short();
         let truth = UnitFile::paper_unit().to_calibration().unwrap();
