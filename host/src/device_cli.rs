@@ -340,3 +340,50 @@ pub fn monitor(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), D
     client.stop_stream()?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::sim::SIM_UNIT_ID;
+    use shared::wire::DeviceError;
+    use shared::UnitId;
+
+    fn sim() -> PortArgs {
+        PortArgs { port: SIM_PORT.into(), baud: DEFAULT_BAUD, timeout_s: 1.0, sim_unit: None }
+    }
+
+    fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
+        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let (bytes, n) = ParameterBlob { unit_id: unit, calibration: cal, created_unix_s: 5 }.to_bytes().unwrap();
+        let p = dir.join("calibration.bin");
+        std::fs::write(&p, &bytes[..n]).unwrap();
+        p
+    }
+
+    #[test]
+    fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
+        let dir = tempfile::tempdir().unwrap();
+        flash(&sim(), &blob_file(dir.path(), SIM_UNIT_ID)).unwrap();
+        let e = flash(&sim(), &blob_file(dir.path(), UnitId(*b"ANOTHER-UNIT"))).unwrap_err();
+        assert!(matches!(e, DeviceCliError::WrongUnit { .. }), "{e}");
+        assert!(e.to_string().contains("made for unit"), "{e}");
+        // A corrupt file is refused before anything reaches the device.
+        std::fs::write(dir.path().join("bad.bin"), b"ACAL garbage").unwrap();
+        let e = flash(&sim(), &dir.path().join("bad.bin")).unwrap_err();
+        assert!(matches!(e, DeviceCliError::Blob(..)), "{e}");
+    }
+
+    #[test]
+    fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
+        let e = read(&sim(), None).unwrap_err();
+        assert!(matches!(e, DeviceCliError::Link(LinkError::Device(DeviceError::NoCalibration))), "{e}");
+        monitor(&sim(), 100, Some(3)).unwrap();
+    }
+
+    #[test]
+    fn a_missing_serial_port_names_the_port_and_the_fix() {
+        let args = PortArgs { port: "/dev/does-not-exist".into(), ..sim() };
+        let e = connect(&args).err().unwrap().to_string();
+        assert!(e.contains("/dev/does-not-exist") && e.contains("plugged in"), "{e}");
+    }
+}
