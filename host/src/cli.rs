@@ -2,6 +2,7 @@
 //! and prints the error; everything else is here, testable.
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
+use crate::compare::{compare, export, CompareError, ExportError, ExportFormat};
 use crate::device_cli::{self, CalibratePortOptions, DeviceCliError, PortArgs};
 use crate::estimate::{
     calibrate_session_stats, predict, CalibrationOutcome, EstimateError, EstimateOptions, Method,
@@ -11,6 +12,9 @@ use crate::recording::builtin::{load_plan, paper_plan};
 use crate::recording::csv_io::progress_bar;
 use crate::recording::csv_io::{read_session, ReadOptions, RecordingError, Session};
 use crate::recording::{Plan, PlanError};
+use crate::report_cmd::{
+    navigation_check, report, NavigationCheckArgs, ReportError, ReportOptions,
+};
 use crate::simulate::{simulate_to_dir_with_progress, NoiseModel, SimulateError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, Parser, Subcommand};
@@ -39,6 +43,31 @@ pub enum Command {
     Calibrate(CalibrateArgs),
     /// Check a plan: its segments and the predicted 1σ of every parameter (Cramér–Rao bound).
     Plan(PlanArgs),
+    /// Write the report of a session calibrated by a calibration: figures (PNG, SVG) and
+    /// report.html / report.md with Tables 1–4 and the navigation replay.
+    Report(ReportArgs),
+    /// The paper's navigation check on a simulated session of its unit: position drift without
+    /// compensation, with static and with static + dynamic compensation.
+    NavigationCheck(NavigationCheckCliArgs),
+    /// Two calibrations of one unit side by side, each difference in units of its combined 1σ.
+    Compare {
+        /// First calibration.toml.
+        a: PathBuf,
+        /// Second calibration.toml.
+        b: PathBuf,
+    },
+    /// A calibration in the conventions of other tools (TOML).
+    Export {
+        /// The calibration (a unit file, e.g. calibration.toml).
+        #[arg(long, value_name = "FILE")]
+        calibration: PathBuf,
+        /// plain (the paper's K_A, ∇_b, lever arms), fusion, kalibr, or all.
+        #[arg(long, default_value = "all")]
+        format: ExportFormat,
+        /// Where to write it (default: stdout).
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
     /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
     /// reset it and check that it applied it.
     Flash {
@@ -183,6 +212,52 @@ pub enum ReferenceArg {
     Centroid,
 }
 
+/// `host report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// Session directory (plan.toml + samples.csv).
+    #[arg(long, value_name = "DIR")]
+    pub input: PathBuf,
+    /// The calibration to judge (calibration.toml; default: DIR/calibration.toml).
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
+    /// Where to write the figures and pages (default: DIR/report).
+    #[arg(long, value_name = "OUT")]
+    pub out_dir: Option<PathBuf>,
+    /// The static segment to replay for the navigation check (default: the first static one).
+    #[arg(long, value_name = "NAME")]
+    pub static_run: Option<String>,
+    /// The rotating segment to replay (default: the fastest constant-rate one).
+    #[arg(long, value_name = "NAME")]
+    pub rate_run: Option<String>,
+    /// Length of the replayed navigation runs, s.
+    #[arg(long, default_value_t = 60.0)]
+    pub duration_s: f64,
+    /// No PNG figures (SVG only).
+    #[arg(long)]
+    pub no_png: bool,
+}
+
+/// `host navigation-check`.
+#[derive(Debug, Args)]
+pub struct NavigationCheckCliArgs {
+    /// Seed of the simulated session's noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Length of the replayed navigation runs, s.
+    #[arg(long, default_value_t = 60.0)]
+    pub duration_s: f64,
+    /// Where to write the figures and pages (default: nothing written).
+    #[arg(long, value_name = "OUT")]
+    pub out_dir: Option<PathBuf>,
+    /// Unit file of the simulated unit (default: the paper's unit).
+    #[arg(long, value_name = "FILE")]
+    pub unit: Option<PathBuf>,
+    /// Plan file or built-in name (default: paper).
+    #[arg(long, value_name = "FILE|NAME")]
+    pub plan: Option<String>,
+}
+
 /// `host plan`.
 #[derive(Debug, Args)]
 pub struct PlanArgs {
@@ -217,6 +292,12 @@ pub enum CliError {
     Output(OutputError),
     /// A command talking to a device.
     Device(DeviceCliError),
+    /// `host report` / `host navigation-check`.
+    Report(ReportError),
+    /// `host compare`.
+    Compare(CompareError),
+    /// `host export`.
+    Export(ExportError),
     /// The command line is incomplete.
     Usage(String),
 }
@@ -231,6 +312,9 @@ impl std::fmt::Display for CliError {
             CliError::Estimate(e) => write!(f, "{e}"),
             CliError::Output(e) => write!(f, "{e}"),
             CliError::Device(e) => write!(f, "{e}"),
+            CliError::Report(e) => write!(f, "{e}"),
+            CliError::Compare(e) => write!(f, "{e}"),
+            CliError::Export(e) => write!(f, "{e}"),
             CliError::Usage(m) => write!(f, "{m}"),
         }
     }
@@ -258,6 +342,21 @@ impl From<EstimateError> for CliError {
         CliError::Estimate(e)
     }
 }
+impl From<ReportError> for CliError {
+    fn from(e: ReportError) -> Self {
+        CliError::Report(e)
+    }
+}
+impl From<CompareError> for CliError {
+    fn from(e: CompareError) -> Self {
+        CliError::Compare(e)
+    }
+}
+impl From<ExportError> for CliError {
+    fn from(e: ExportError) -> Self {
+        CliError::Export(e)
+    }
+}
 impl From<DeviceCliError> for CliError {
     fn from(e: DeviceCliError) -> Self {
         CliError::Device(e)
@@ -281,6 +380,17 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Calibrate(a) if a.port.is_some() => calibrate_live(&a, cli.quiet),
         Command::Calibrate(a) => calibrate(&a, cli.quiet).map(|_| ()),
         Command::Plan(a) => plan_check(&a).map(|_| ()),
+        Command::Report(a) => report_command(&a),
+        Command::NavigationCheck(a) => navigation_check_command(&a),
+        Command::Compare { a, b } => {
+            print!("{}", compare(&a, &b)?.render());
+            Ok(())
+        }
+        Command::Export {
+            calibration,
+            format,
+            out,
+        } => export_command(&calibration, format, out.as_deref()),
         Command::Flash { port, calibration } => Ok(device_cli::flash(&port, &calibration)?),
         Command::Read { port, out } => Ok(device_cli::read(&port, out.as_deref())?),
         Command::Monitor {
@@ -463,6 +573,69 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     Ok(outcome)
 }
 
+/// `host report`.
+pub fn report_command(a: &ReportArgs) -> Result<(), CliError> {
+    let calibration = a
+        .calibration
+        .clone()
+        .unwrap_or_else(|| a.input.join(crate::calibration_files::CALIBRATION_TOML));
+    let out_dir = a.out_dir.clone().unwrap_or_else(|| a.input.join("report"));
+    let mut options = ReportOptions {
+        navigation_duration_s: a.duration_s,
+        static_run: a.static_run.clone(),
+        rate_run: a.rate_run.clone(),
+        ..ReportOptions::default()
+    };
+    options.formats.png = !a.no_png;
+    let summary = report(&a.input, &calibration, &out_dir, &options)?;
+    print!("{}", summary.render());
+    Ok(())
+}
+
+/// `host navigation-check`.
+pub fn navigation_check_command(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+    let mut args = NavigationCheckArgs {
+        seed: a.seed,
+        out_dir: a.out_dir.clone(),
+        ..NavigationCheckArgs::default()
+    };
+    args.report.navigation_duration_s = a.duration_s;
+    if let Some(p) = &a.unit {
+        args.unit = UnitFile::load(p)?;
+    }
+    if let Some(spec) = &a.plan {
+        args.plan = load_plan(spec)?;
+    }
+    print!("{}", navigation_check(&args)?.render());
+    Ok(())
+}
+
+/// `host export`.
+pub fn export_command(
+    calibration: &Path,
+    format: ExportFormat,
+    out: Option<&Path>,
+) -> Result<(), CliError> {
+    let unit = UnitFile::load(calibration)?;
+    let cal = unit
+        .to_calibration()
+        .map_err(|m| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), m)))?;
+    let text = export(&cal, format)?;
+    match out {
+        Some(p) => {
+            std::fs::write(p, &text).map_err(|e| {
+                CliError::Output(crate::calibration_files::OutputError::Io(
+                    p.to_path_buf(),
+                    e,
+                ))
+            })?;
+            println!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}
+
 /// `host plan --check`: the plan's segments and the predicted 1σ of every parameter.
 pub fn plan_check(a: &PlanArgs) -> Result<crate::estimate::Prediction, CliError> {
     let plan = load_plan(&a.check)?;
@@ -590,6 +763,33 @@ mod tests {
             (port.port.as_str(), calibration),
             ("/dev/ttyACM0", PathBuf::from("c.bin"))
         );
+    }
+
+    #[test]
+    fn report_compare_export_and_navigation_check_parse() {
+        let Command::Report(r) = parse(&["report", "--input", "s", "--no-png"]).command else {
+            panic!("not report")
+        };
+        assert!(r.no_png && r.calibration.is_none() && r.duration_s == 60.0);
+        let Command::Compare { a, b } = parse(&["compare", "a.toml", "b.toml"]).command else {
+            panic!("not compare")
+        };
+        assert_eq!((a, b), (PathBuf::from("a.toml"), PathBuf::from("b.toml")));
+        let Command::Export { format, .. } =
+            parse(&["export", "--calibration", "c.toml", "--format", "fusion"]).command
+        else {
+            panic!("not export")
+        };
+        assert_eq!(format, ExportFormat::Fusion);
+        assert!(
+            Cli::try_parse_from(["host", "export", "--calibration", "c", "--format", "x"]).is_err()
+        );
+        let Command::NavigationCheck(n) =
+            parse(&["navigation-check", "--seed", "3", "--plan", "short"]).command
+        else {
+            panic!("not navigation-check")
+        };
+        assert_eq!((n.seed, n.plan.as_deref()), (3, Some("short")));
     }
 
     #[test]
