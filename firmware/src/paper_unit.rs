@@ -1,7 +1,7 @@
 //! The paper's unit (`reference/paper-unit.toml`, Tables 1 and 3): the QEMU board's virtual unit and
 //! the source of the on-target test vectors. A PC test checks these constants against the file.
 
-use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
+use shared::{Calibration, UnitId};
 
 /// Unit identifier of the QEMU board's virtual unit (reported by `Identify`; blobs are bound to it).
 pub const QEMU_UNIT_ID: UnitId = UnitId(*b"QEMU-AN386-1");
@@ -9,29 +9,10 @@ pub const QEMU_UNIT_ID: UnitId = UnitId(*b"QEMU-AN386-1");
 /// Standard gravity of the reference file, m/s².
 pub const GRAVITY_M_S2: f64 = 9.80665;
 
-/// Table 1 and Table 3 of the paper as a [`Calibration`] (volts; lever arms about the table axis).
+/// Table 1 and Table 3 of the paper as a [`Calibration`] (volts; lever arms about the table axis):
+/// `shared::params::PAPER_UNIT`, which a shared test checks against the reference file.
 pub fn calibration() -> Calibration {
-    Calibration {
-        statics: StaticParams {
-            output_unit: OutputUnit::Volts,
-            zero_bias_out: [2.405098, 2.380978, 2.435503],
-            scale_out_per_g: [0.39496, 0.39808, 0.40024],
-            installation_angles_deg: [
-                [0.75997, 90.71425, 89.74038],
-                [89.25516, 0.74486, 90.5630],
-                [90.52202, 89.17706, 0.97456],
-            ],
-        },
-        lever_arms: LeverArms {
-            r_m: [
-                [-0.00834, -0.00042, -0.00132],
-                [-0.00256, -0.00893, -0.00026],
-                [-0.00060, -0.00050, -0.00824],
-            ],
-        },
-        reference: ReferencePoint::TableAxis,
-        gravity_m_s2: GRAVITY_M_S2,
-    }
+    shared::params::PAPER_UNIT
 }
 
 #[cfg(test)]

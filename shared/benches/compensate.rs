@@ -6,34 +6,9 @@
 
 use shared::forward::{ForwardModel, TableState};
 use shared::omega_dot::OmegaDotEstimator;
-use shared::params::{LeverArms, OutputUnit, ReferencePoint, StaticParams};
-use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
+use shared::{BodyAngularAccel, BodyRate, Compensator, LeverMode, SensorOutputs};
 use std::hint::black_box;
 use std::time::Instant;
-
-fn paper_unit() -> Calibration {
-    Calibration {
-        statics: StaticParams {
-            output_unit: OutputUnit::Volts,
-            zero_bias_out: [2.405098, 2.380978, 2.435503],
-            scale_out_per_g: [0.39496, 0.39808, 0.40024],
-            installation_angles_deg: [
-                [0.75997, 90.71425, 89.74038],
-                [89.25516, 0.74486, 90.5630],
-                [90.52202, 89.17706, 0.97456],
-            ],
-        },
-        lever_arms: LeverArms {
-            r_m: [
-                [-0.00834, -0.00042, -0.00132],
-                [-0.00256, -0.00893, -0.00026],
-                [-0.00060, -0.00050, -0.00824],
-            ],
-        },
-        reference: ReferencePoint::TableAxis,
-        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
-    }
-}
 
 fn time_per_call(n: u32, mut f: impl FnMut(u32)) -> f64 {
     let start = Instant::now();
@@ -44,7 +19,7 @@ fn time_per_call(n: u32, mut f: impl FnMut(u32)) -> f64 {
 }
 
 fn main() {
-    let cal = paper_unit();
+    let cal = shared::params::PAPER_UNIT;
     let mut t = TableState::at_rest([1.0, 0.0, 0.0]);
     t.rate_rad_s = 200f64.to_radians();
     let motion = t.motion(cal.gravity_m_s2);

@@ -258,6 +258,30 @@ pub struct Calibration {
     pub gravity_m_s2: f64,
 }
 
+/// The paper's unit (Table 1 and Table 3; `reference/paper-unit.toml`, checked by a test): volts,
+/// lever arms about the table axis, standard gravity. The default truth of every simulator.
+pub const PAPER_UNIT: Calibration = Calibration {
+    statics: StaticParams {
+        output_unit: OutputUnit::Volts,
+        zero_bias_out: [2.405098, 2.380978, 2.435503],
+        scale_out_per_g: [0.39496, 0.39808, 0.40024],
+        installation_angles_deg: [
+            [0.75997, 90.71425, 89.74038],
+            [89.25516, 0.74486, 90.5630],
+            [90.52202, 89.17706, 0.97456],
+        ],
+    },
+    lever_arms: LeverArms {
+        r_m: [
+            [-0.00834, -0.00042, -0.00132],
+            [-0.00256, -0.00893, -0.00026],
+            [-0.00060, -0.00050, -0.00824],
+        ],
+    },
+    reference: ReferencePoint::TableAxis,
+    gravity_m_s2: crate::STANDARD_GRAVITY_M_S2,
+};
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -327,6 +351,11 @@ pub(crate) mod tests {
         if let Ok(original) = std::fs::read_to_string(path) {
             assert_eq!(original, include_str!("../../reference/paper-unit.toml"));
         }
+    }
+
+    #[test]
+    fn the_built_in_paper_unit_is_the_reference_file() {
+        assert_eq!(PAPER_UNIT, paper_unit());
     }
 
     #[test]
