@@ -349,12 +349,23 @@ mod tests {
     use shared::UnitId;
 
     fn sim() -> PortArgs {
-        PortArgs { port: SIM_PORT.into(), baud: DEFAULT_BAUD, timeout_s: 1.0, sim_unit: None }
+        PortArgs {
+            port: SIM_PORT.into(),
+            baud: DEFAULT_BAUD,
+            timeout_s: 1.0,
+            sim_unit: None,
+        }
     }
 
     fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
         let cal = UnitFile::paper_unit().to_calibration().unwrap();
-        let (bytes, n) = ParameterBlob { unit_id: unit, calibration: cal, created_unix_s: 5 }.to_bytes().unwrap();
+        let (bytes, n) = ParameterBlob {
+            unit_id: unit,
+            calibration: cal,
+            created_unix_s: 5,
+        }
+        .to_bytes()
+        .unwrap();
         let p = dir.join("calibration.bin");
         std::fs::write(&p, &bytes[..n]).unwrap();
         p
@@ -376,14 +387,26 @@ mod tests {
     #[test]
     fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
         let e = read(&sim(), None).unwrap_err();
-        assert!(matches!(e, DeviceCliError::Link(LinkError::Device(DeviceError::NoCalibration))), "{e}");
+        assert!(
+            matches!(
+                e,
+                DeviceCliError::Link(LinkError::Device(DeviceError::NoCalibration))
+            ),
+            "{e}"
+        );
         monitor(&sim(), 100, Some(3)).unwrap();
     }
 
     #[test]
     fn a_missing_serial_port_names_the_port_and_the_fix() {
-        let args = PortArgs { port: "/dev/does-not-exist".into(), ..sim() };
+        let args = PortArgs {
+            port: "/dev/does-not-exist".into(),
+            ..sim()
+        };
         let e = connect(&args).err().unwrap().to_string();
-        assert!(e.contains("/dev/does-not-exist") && e.contains("plugged in"), "{e}");
+        assert!(
+            e.contains("/dev/does-not-exist") && e.contains("plugged in"),
+            "{e}"
+        );
     }
 }
