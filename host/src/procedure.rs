@@ -350,6 +350,33 @@ pub fn live_check(
     problems
 }
 
+/// "Right side up" for a static segment, without a calibration: if its mean outputs equal those of an
+/// earlier static segment whose planned attitude differs by more than 10°, the unit was not re-mounted
+/// (a 10° change moves some output by about 0.17 g, thousands of noise σ of a segment mean).
+pub fn remount_check(
+    seg: &SegmentPlan,
+    stats: &recording::SegmentStats,
+    earlier: &[(SegmentPlan, recording::SegmentStats)],
+) -> Option<String> {
+    let cos_10_deg = 10f64.to_radians().cos();
+    earlier.iter().find_map(|(other, o)| {
+        let different = shared::linalg::dot(&seg.up_b, &other.up_b) < cos_10_deg;
+        // Outputs within 20 standard errors of each other on every axis: the same attitude.
+        let same = (0..3).all(|i| {
+            let se = (stats.cov_u[i][i] / stats.count as f64 + o.cov_u[i][i] / o.count as f64).sqrt();
+            (stats.mean_u[i] - o.mean_u[i]).abs() <= 20.0 * se.max(1e-12)
+        });
+        (different && same).then(|| {
+            format!(
+                "the outputs are those of segment '{}' ({}), not of {}: the unit was not re-mounted",
+                other.name,
+                describe_up(&other.up_b),
+                describe_up(&seg.up_b)
+            )
+        })
+    })
+}
+
 /// Runs the whole procedure.
 pub fn run<T: Transport>(
     client: &mut DeviceClient<T>,
@@ -387,6 +414,7 @@ pub fn run<T: Transport>(
     let mut dropped = 0u32;
 
     let segments = plan.segments.clone();
+    let mut static_done: Vec<(SegmentPlan, recording::SegmentStats)> = Vec::new();
     for seg in &segments {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
         let result = record_segment(
@@ -402,7 +430,11 @@ pub fn run<T: Transport>(
         match result {
             Ok((stats, rejected, drops)) => {
                 dropped = dropped.max(drops);
-                let problems = live_check(seg, &stats, rejected);
+                let mut problems = live_check(seg, &stats, rejected);
+                if seg.is_static() {
+                    problems.extend(remount_check(seg, &stats, &static_done));
+                    static_done.push((seg.clone(), stats.clone()));
+                }
                 if !problems.is_empty() && !op.keep_despite(&seg.name, &problems)? {
                     writer.end_segment()?;
                     return Err(ProcedureError::Aborted(format!(
@@ -708,4 +740,101 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
         || PathBuf::from(format!("calibration-{}", identity.unit_id)),
         Path::to_path_buf,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::SegmentAccumulator;
+
+    fn seg(up: [f64; 3], rate: f64) -> SegmentPlan {
+        SegmentPlan {
+            name: "s".into(),
+            up_b: up,
+            rate_deg_s: rate,
+            rate_end_deg_s: None,
+            duration_s: Some(1.0),
+            table_centre_m: None,
+            mount: None,
+        }
+    }
+
+    /// Statistics of 200 windows with outputs `u` (± a small alternating noise) and gyro rate `w`.
+    fn stats(u: [f64; 3], w_deg_s: [f64; 3]) -> recording::SegmentStats {
+        let mut acc = SegmentAccumulator::new("s");
+        for k in 0..200 {
+            let n = if k % 2 == 0 { 1e-5 } else { -1e-5 };
+            acc.push(
+                k as f64 * 0.02,
+                &u.map(|v| v + n),
+                &w_deg_s.map(f64::to_radians),
+            );
+        }
+        acc.finish().unwrap()
+    }
+
+    #[test]
+    fn matching_segments_pass() {
+        assert!(live_check(
+            &seg([1.0, 0.0, 0.0], 0.0),
+            &stats([2.8, 2.4, 2.4], [0.0; 3]),
+            0
+        )
+        .is_empty());
+        let spin = stats([2.8, 2.4, 2.4], [200.0, 0.0, 0.0]);
+        assert!(live_check(&seg([1.0, 0.0, 0.0], 200.0), &spin, 0).is_empty());
+    }
+
+    #[test]
+    fn motion_wrong_rate_upside_down_and_wrong_axis_are_named() {
+        let moving = live_check(
+            &seg([1.0, 0.0, 0.0], 0.0),
+            &stats([2.8, 2.4, 2.4], [0.0, 3.0, 0.0]),
+            0,
+        );
+        assert!(moving[0].contains("should be at rest"), "{moving:?}");
+        let slow = live_check(
+            &seg([1.0, 0.0, 0.0], 200.0),
+            &stats([2.8; 3], [150.0, 0.0, 0.0]),
+            0,
+        );
+        assert!(slow[0].contains("the plan says +200.0"), "{slow:?}");
+        let flipped = live_check(
+            &seg([1.0, 0.0, 0.0], 200.0),
+            &stats([2.8; 3], [-200.0, 0.0, 0.0]),
+            0,
+        );
+        assert!(flipped[0].contains("upside down"), "{flipped:?}");
+        let tilted = live_check(
+            &seg([0.0, 0.0, 1.0], 100.0),
+            &stats([2.8; 3], [0.0, 100.0, 0.0]),
+            0,
+        );
+        assert!(
+            tilted.iter().any(|p| p.contains("rotation axis")),
+            "{tilted:?}"
+        );
+        let saturated = live_check(&seg([1.0, 0.0, 0.0], 0.0), &stats([2.8; 3], [0.0; 3]), 12);
+        assert!(
+            saturated[0].contains("12 samples were saturated"),
+            "{saturated:?}"
+        );
+    }
+
+    #[test]
+    fn a_unit_left_in_the_previous_mount_is_caught() {
+        let x_up = (
+            seg([1.0, 0.0, 0.0], 0.0),
+            stats([2.80, 2.39, 2.43], [0.0; 3]),
+        );
+        let y_up = seg([0.0, 1.0, 0.0], 0.0);
+        let same = stats([2.80, 2.39, 2.43], [0.0; 3]);
+        let p = remount_check(&y_up, &same, std::slice::from_ref(&x_up)).unwrap();
+        assert!(
+            p.contains("not re-mounted") && p.contains("x-axis up"),
+            "{p}"
+        );
+        let moved = stats([2.41, 2.78, 2.43], [0.0; 3]);
+        assert!(remount_check(&y_up, &moved, &[x_up]).is_none());
+    }
 }
