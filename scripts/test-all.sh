@@ -6,6 +6,11 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n==> %s\n' "$*"; }
 
+# Test output is also kept in a log, so that the closing line can count every test that ran.
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+tests() { "$@" 2>&1 | tee -a "$log"; }
+
 step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
 rustup target add thumbv7em-none-eabihf >/dev/null
 rustup component add rustfmt clippy >/dev/null
@@ -22,13 +27,17 @@ CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-D warnings" \
   cargo build -p accel-cal-shared --no-default-features --target thumbv7em-none-eabihf
 
 step "PC tests (shared, host, end-to-end)"
-cargo test --workspace
+tests cargo test --workspace
 
 step "firmware: PC tests of the device logic, both boards, QEMU on-target tests"
-bash firmware/scripts/test.sh
+tests bash firmware/scripts/test.sh
 
 step "end to end: host calibrate over the pty of the firmware running in QEMU"
-cargo test -p e2e --test qemu_loop -- --ignored
+tests cargo test -p e2e --test qemu_loop -- --ignored
 
+count() {
+  grep -E "^test result: |qemu-target-tests: " "$log" | grep -oE "[0-9]+ $1" | awk '{s += $1} END {print s + 0}'
+}
 echo
-echo "test-all: every step passed"
+echo "every step passed (cargo test and the QEMU on-target tests, summed):"
+echo "test-all: $(count passed) passed, $(count failed) failed"
