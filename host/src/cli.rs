@@ -111,7 +111,7 @@ pub struct SimulateArgs {
     /// replaces the default noise; the flags below override both.
     #[arg(long, value_name = "FILE")]
     pub unit: Option<PathBuf>,
-    /// Plan file, or a built-in plan's name: paper (default), oblique, short, short-oblique.
+    /// Plan file, or a built-in plan's name: paper (default), oblique, short, short-oblique, quick-oblique.
     #[arg(long, value_name = "FILE|NAME")]
     pub plan: Option<String>,
     /// Seed of the noise.

@@ -7,70 +7,9 @@ use e2e::{max_abs_diff, paper_unit};
 use host::device::serial::{SerialTransport, DEFAULT_BAUD};
 use host::device::DeviceClient;
 use host::procedure::{self, AutomaticOperator, ProcedureOptions};
-use host::recording::Plan;
+use host::recording::builtin::load_plan;
 use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 use std::time::Duration;
-
-/// A short plan for the emulated board: the six static positions, a spin about each axis and one about
-/// each 45° diagonal, one second each (the firmware's virtual sensor runs on QEMU's clock).
-const PLAN: &str = r#"
-output_unit = "V"
-sample_rate_hz = 1000
-[[segment]]
-name = "x+"
-up_b = [1, 0, 0]
-duration_s = 1
-[[segment]]
-name = "x-"
-up_b = [-1, 0, 0]
-duration_s = 1
-[[segment]]
-name = "y+"
-up_b = [0, 1, 0]
-duration_s = 1
-[[segment]]
-name = "y-"
-up_b = [0, -1, 0]
-duration_s = 1
-[[segment]]
-name = "z+"
-up_b = [0, 0, 1]
-duration_s = 1
-[[segment]]
-name = "z-"
-up_b = [0, 0, -1]
-duration_s = 1
-[[segment]]
-name = "x+ 200"
-up_b = [1, 0, 0]
-rate_deg_s = 200
-duration_s = 1
-[[segment]]
-name = "y+ 200"
-up_b = [0, 1, 0]
-rate_deg_s = 200
-duration_s = 1
-[[segment]]
-name = "z+ 200"
-up_b = [0, 0, 1]
-rate_deg_s = 200
-duration_s = 1
-[[segment]]
-name = "xy 200"
-up_b = [0.7071067811865475, 0.7071067811865475, 0]
-rate_deg_s = 200
-duration_s = 1
-[[segment]]
-name = "yz -200"
-up_b = [0, 0.7071067811865475, 0.7071067811865475]
-rate_deg_s = -200
-duration_s = 1
-[[segment]]
-name = "zx 200"
-up_b = [0.7071067811865475, 0, 0.7071067811865475]
-rate_deg_s = 200
-duration_s = 1
-"#;
 
 fn connect(qemu: &Qemu) -> DeviceClient<SerialTransport> {
     let port = SerialTransport::open(&qemu.pty, DEFAULT_BAUD).expect("open the QEMU pty");
@@ -88,7 +27,10 @@ fn calibrate_the_emulated_board_over_its_pty_and_survive_a_reset() {
     assert_eq!(id.calibration, CalibrationState::Missing);
 
     let out = tempfile::tempdir().unwrap();
-    let mut opts = ProcedureOptions::new(Plan::parse(PLAN).unwrap(), out.path().to_path_buf());
+    let mut opts = ProcedureOptions::new(
+        load_plan("quick-oblique").unwrap(),
+        out.path().to_path_buf(),
+    );
     opts.quiet = true;
     opts.verify_tolerance_mg = 0.1;
     let mut op = AutomaticOperator {

@@ -4,13 +4,17 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub const BUILTIN_PLANS: [(&str, &str); 4] = [
+pub const BUILTIN_PLANS: [(&str, &str); 5] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
     (
         "short-oblique",
         include_str!("../../plans/short-oblique.toml"),
+    ),
+    (
+        "quick-oblique",
+        include_str!("../../plans/quick-oblique.toml"),
     ),
 ];
 
