@@ -182,16 +182,12 @@ pub fn render_with(
     let mut out = RenderOutcome::default();
     if formats.svg {
         let path = dir.join(format!("{}.svg", fig.stem));
-        let root = SVGBackend::new(&path, fig.size).into_drawing_area();
-        draw(fig, &root, text).map_err(|message| FigureError {
-            path: path.clone(),
-            message,
-        })?;
-        root.present().map_err(|e| FigureError {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
-        drop(root);
+        draw_to_file(
+            fig,
+            SVGBackend::new(&path, fig.size).into_drawing_area(),
+            &path,
+            text,
+        )?;
         out.files.push(path);
         if !text {
             out.warnings.push(format!(
@@ -203,16 +199,12 @@ pub fn render_with(
     if formats.png {
         let path = dir.join(format!("{}.png", fig.stem));
         if text {
-            let root = BitMapBackend::new(&path, fig.size).into_drawing_area();
-            draw(fig, &root, text).map_err(|message| FigureError {
-                path: path.clone(),
-                message,
-            })?;
-            root.present().map_err(|e| FigureError {
-                path: path.clone(),
-                message: e.to_string(),
-            })?;
-            drop(root);
+            draw_to_file(
+                fig,
+                BitMapBackend::new(&path, fig.size).into_drawing_area(),
+                &path,
+                text,
+            )?;
             out.files.push(path);
         } else {
             out.warnings.push(format!(
@@ -222,6 +214,21 @@ pub fn render_with(
         }
     }
     Ok(out)
+}
+
+/// Draws `fig` on a backend's root area and writes it out (the backend is dropped, closing the file).
+fn draw_to_file<DB: DrawingBackend>(
+    fig: &Figure,
+    root: DrawingArea<DB, Shift>,
+    path: &Path,
+    text: bool,
+) -> Result<(), FigureError> {
+    let fail = |message: String| FigureError {
+        path: path.to_path_buf(),
+        message,
+    };
+    draw(fig, &root, text).map_err(fail)?;
+    root.present().map_err(|e| fail(e.to_string()))
 }
 
 fn err<E: std::fmt::Debug>(e: E) -> String {
