@@ -494,7 +494,6 @@ pub fn run<T: Transport>(
         written.bin_path.display()
     ));
 
-    client.stop_stream().map_err(link)?;
     client.write_calibration(&written.blob).map_err(link)?;
     op.say("calibration written to the device; resetting it");
     let after = client.reset().map_err(link)?;
