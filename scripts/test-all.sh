@@ -32,7 +32,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 
 step "shared builds for the Cortex-M4F without std"
 CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-D warnings" \
-  cargo build -p accel-cal-shared --no-default-features --target thumbv7em-none-eabihf
+  cargo build -p shared --no-default-features --target thumbv7em-none-eabihf
 
 step "PC tests (shared, host, end-to-end)"
 tests cargo test --workspace

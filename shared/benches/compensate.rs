@@ -1,4 +1,4 @@
-//! Host time per compensated sample: `cargo bench -p accel-cal-shared --bench compensate`.
+//! Host time per compensated sample: `cargo bench -p shared --bench compensate`.
 //!
 //! Prints nanoseconds per call of the full path (lever arms + ω̇), the static-only path and the ω̇
 //! estimator, each over 10⁷ samples of the paper's unit spinning at 200 °/s. The operation count of the
