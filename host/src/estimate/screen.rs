@@ -6,7 +6,7 @@ use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
-use crate::recording::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::linalg::{self, RowMajor3};
 use shared::params::axis_name;
 use shared::ReferencePoint;
