@@ -4,7 +4,7 @@
 //! form turns the same samples into the same specific force as `shared::Compensator`.
 //!
 //! - [`PlainMatrices`]: the paper's eq. 6 / 16 matrices, `f_b[g] = K_A·U − ∇_b − f_L^b`.
-//! - [`FusionStyle`]: x-io Fusion's `FusionCalibrationInertial`:
+//! - [`FusionStyle`]: x-io Fusion's `FusionModelInertial`:
 //!   `f[g] = misalignment · ((U − offset) ∘ sensitivity)`, with `misalignment = A⁻¹`,
 //!   `sensitivity = 1/k` (g per output unit) and `offset = u0`. Fusion has no lever-arm terms.
 //! - [`KalibrStyle`]: Kalibr's "scale-misalignment-size-effect" accelerometer model in its general
@@ -115,7 +115,7 @@ impl PlainMatrices {
 }
 
 impl FusionStyle {
-    /// `FusionCalibrationInertial`, in g; static only.
+    /// `FusionModelInertial`, in g; static only.
     pub fn compensate_static_g(&self, u: [f64; 3]) -> [f64; 3] {
         let scaled: [f64; 3] =
             std::array::from_fn(|i| (u[i] - self.offset[i]) * self.sensitivity[i]);

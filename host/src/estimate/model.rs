@@ -8,7 +8,7 @@
 //! ū_i = m_i · (F + E r_i) + u0_i,      F = f_O / g,  E = E[W] / g,  f_O = g·up − E[W] p
 //! ```
 //!
-//! with `m_i` = row `i` of `M = K·A`, `r_i` the lever arm and `p` the table centre (`MODEL.md` §5).
+//! with `m_i` = row `i` of `M = K·A`, `r_i` the lever arm and `p` the table centre (`docs/model.md` §5).
 //! The parameter vector θ has 21 entries, 7 per accelerometer: `m_i` (3), `u0_i`, `r_i` (3).
 
 use shared::linalg::{self, RowMajor3};
@@ -70,7 +70,7 @@ pub fn r_of(t: &[f64; NP]) -> RowMajor3 {
     core::array::from_fn(|i| core::array::from_fn(|j| t[idx_r(i, j)]))
 }
 
-/// `E[W]` from a segment's gyro statistics, rad/s², optionally without the ω̇ term (`MODEL.md` §6)
+/// `E[W]` from a segment's gyro statistics, rad/s², optionally without the ω̇ term (`docs/model.md` §6)
 /// and with the gyro's own noise covariance removed from `E[ω ωᵀ]`.
 pub fn mean_lever_matrix(
     mean_wwt: &RowMajor3,

@@ -298,7 +298,7 @@ const HEADER_PLAIN: &str = "\
 # ∇_b in g; lever_arms_m row i = r_i (m, body axes, from the reference point).
 ";
 const HEADER_FUSION: &str = "\
-# x-io Fusion FusionCalibrationInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
+# x-io Fusion FusionModelInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
 # misalignment = A⁻¹ (row-major), sensitivity = 1/k_i (g per output unit), offset = u0. No lever arms:
 # static compensation only.
 ";

@@ -1168,10 +1168,10 @@ pub struct NavigationCheck {
 }
 
 impl NavigationCheck {
-    /// What the CLI prints: the issue's figures.
+    /// What the CLI prints: the navigation table and the position errors against their targets.
     pub fn render(&self) -> String {
         let mut s = render_navigation(&self.data.navigation);
-        s.push_str(&render_issue_figures(&self.data.navigation));
+        s.push_str(&render_position_targets(&self.data.navigation));
         if let Some(w) = &self.written {
             let _ = writeln!(s, "Report: {}", w.page.display());
         }
@@ -1179,15 +1179,15 @@ impl NavigationCheck {
     }
 }
 
-/// The position errors issue 6 asks for, with its targets, one line per run.
-pub fn render_issue_figures(runs: &[NavigationRun]) -> String {
+/// The final position errors of the static and the rotating run against their targets (tens of metres uncompensated, under 0.3 m after static calibration, under 1 m after static + dynamic), one line per run.
+pub fn render_position_targets(runs: &[NavigationRun]) -> String {
     let mut s = String::new();
     let pos = |run: &NavigationRun, c| run.case(c).drift.final_position_error_m();
     if let Some(st) = runs.iter().find(|r| r.rate_deg_s.abs() < 0.5) {
         let _ = writeln!(
             s,
-            "static run '{}', {:.0} s: without compensation {:.1} m (issue: tens of metres or more; \
-             paper: about 100 m); after static calibration {:.3} m (issue: under 0.3 m)",
+            "static run '{}', {:.0} s: without compensation {:.1} m (target: tens of metres or more; \
+             paper: about 100 m); after static calibration {:.3} m (target: under 0.3 m)",
             st.segment,
             st.duration_s,
             pos(st, Compensation::BiasScale),
@@ -1197,8 +1197,8 @@ pub fn render_issue_figures(runs: &[NavigationRun]) -> String {
     if let Some(rt) = runs.iter().find(|r| r.rate_deg_s.abs() >= 0.5) {
         let _ = writeln!(
             s,
-            "{:.0} °/s run '{}', {:.0} s: static-only {:.1} m (issue: tens of metres); static+dynamic \
-             {:.3} m (issue: under 1 m)",
+            "{:.0} °/s run '{}', {:.0} s: static-only {:.1} m (target: tens of metres); static+dynamic \
+             {:.3} m (target: under 1 m)",
             rt.rate_deg_s,
             rt.segment,
             rt.duration_s,
@@ -1261,7 +1261,7 @@ pub fn simulate_stats(
 
 /// `host navigation-check`: the paper's unit simulated with its plan (1 mg white noise, fixed seed),
 /// calibrated with the joint method, and the navigation replay of a static and the fastest rotating
-/// segment. Prints (via [`NavigationCheck::render`]) the position errors issue 6 asks for.
+/// segment. Prints (via [`NavigationCheck::render`]) the final position errors against their targets.
 pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, ReportError> {
     let truth = args
         .unit
@@ -1342,7 +1342,7 @@ mod tests {
 
     #[test]
     fn noise_free_true_calibration_gives_the_papers_numbers() {
-        // MODEL.md: x up, bias+scale only → (0.99991, 0.01300, −0.00911) g; static-only at 200 °/s
+        // docs/model.md §6: x up, bias+scale only → (0.99991, 0.01300, −0.00911) g; static-only at 200 °/s
         // about x leaves (0.09, 11.2, 10.1) mg.
         let plan = short();
         let truth = UnitFile::paper_unit().to_calibration().unwrap();
@@ -1544,7 +1544,7 @@ mod tests {
     }
 
     #[test]
-    fn navigation_check_prints_the_issues_figures() {
+    fn navigation_check_prints_the_position_errors_against_targets() {
         // The short plan keeps this fast; the paper's plan is what the command runs by default.
         let dir = tempfile::tempdir().unwrap();
         let check = navigation_check(&NavigationCheckArgs {
