@@ -13,10 +13,10 @@ use crate::report::document::{
     navigation_check, report, NavigationCheckArgs, ReportError, ReportOptions,
 };
 use crate::session::builtin::{load_plan, paper_plan};
-use crate::session::csv_io::progress_bar;
-use crate::session::csv_io::{read_session, ReadOptions, RecordingError, Session};
+use crate::session::{read_session, ReadOptions, RecordingError, Session};
 use crate::session::{Plan, PlanError};
 use crate::sim::{simulate_to_dir_with_progress, NoiseModel, SimulateError};
+use crate::ui::progress_bar;
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, Parser, Subcommand};
 use device::{CalibratePortOptions, DeviceCliError, PortArgs};

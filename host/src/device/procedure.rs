@@ -560,7 +560,7 @@ fn record_segment<T: Transport>(
     for _ in 0..settle {
         client.next_raw_window()?;
     }
-    let bar = session::csv_io::progress_bar(n_windows, "recording", opts.quiet);
+    let bar = crate::ui::progress_bar(n_windows, "recording", opts.quiet);
     bar.set_message(seg.name.clone());
     let mut acc = session::SegmentAccumulator::new(seg.name.clone());
     let mut rejected = 0u64;
