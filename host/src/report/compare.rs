@@ -339,8 +339,8 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::Uncertainty;
     use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
-    use crate::unit_file::Uncertainty;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 
