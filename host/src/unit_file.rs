@@ -24,10 +24,9 @@
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
 use crate::estimate::Uncertainty;
-use crate::session::OutputUnitName;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
-use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};
+use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
 use std::path::{Path, PathBuf};
 
 /// The paper's unit (Tables 1 and 3), built in.
@@ -43,7 +42,7 @@ pub struct UnitFile {
     pub unit_id: Option<String>,
     /// Output unit (default V).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub output_unit: Option<OutputUnitName>,
+    pub output_unit: Option<OutputUnit>,
     /// Table 1.
     #[serde(rename = "static")]
     pub statics: StaticSection,
@@ -144,16 +143,16 @@ impl UnitFile {
 
     /// The calibration this file describes.
     pub fn to_calibration(&self) -> Result<Calibration, String> {
-        let unit = self.output_unit.unwrap_or(OutputUnitName::V);
+        let unit = self.output_unit.unwrap_or(OutputUnit::Volts);
         let s = &self.statics;
         let (bias, scale, b_name, k_name) = match unit {
-            OutputUnitName::V => (
+            OutputUnit::Volts => (
                 s.zero_bias_v,
                 s.scale_v_per_g,
                 "zero_bias_v",
                 "scale_v_per_g",
             ),
-            OutputUnitName::Lsb => (
+            OutputUnit::Lsb => (
                 s.zero_bias_lsb,
                 s.scale_lsb_per_g,
                 "zero_bias_lsb",
@@ -161,8 +160,8 @@ impl UnitFile {
             ),
         };
         let wrong_unit = match unit {
-            OutputUnitName::V => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
-            OutputUnitName::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
+            OutputUnit::Volts => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
+            OutputUnit::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
         };
         if wrong_unit {
             return Err(format!(
@@ -173,7 +172,7 @@ impl UnitFile {
         let bias = bias.ok_or_else(|| format!("[static] needs {b_name}"))?;
         let scale = scale.ok_or_else(|| format!("[static] needs {k_name}"))?;
         let statics = StaticParams {
-            output_unit: unit.into(),
+            output_unit: unit,
             zero_bias_out: bias,
             scale_out_per_g: scale,
             installation_angles_deg: s.installation_angles_deg,
@@ -218,10 +217,10 @@ impl UnitFile {
         unit_id: Option<UnitId>,
         uncertainty: Option<Uncertainty>,
     ) -> UnitFile {
-        let unit: OutputUnitName = cal.statics.output_unit.into();
+        let unit = cal.statics.output_unit;
         let (v, lsb) = match unit {
-            OutputUnitName::V => (true, false),
-            OutputUnitName::Lsb => (false, true),
+            OutputUnit::Volts => (true, false),
+            OutputUnit::Lsb => (false, true),
         };
         let s = &cal.statics;
         let (reference, reference_offset_m) = match cal.reference {
@@ -253,16 +252,6 @@ impl UnitFile {
     /// TOML text.
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).expect("a unit file always serialises")
-    }
-}
-
-impl OutputUnitName {
-    /// "V" or "LSB".
-    pub fn symbol(self) -> &'static str {
-        match self {
-            OutputUnitName::V => "V",
-            OutputUnitName::Lsb => "LSB",
-        }
     }
 }
 

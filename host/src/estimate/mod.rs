@@ -550,7 +550,7 @@ pub fn calibrate_session_stats(
         }
     }
 
-    let output_unit: OutputUnit = plan.output_unit.into();
+    let output_unit: OutputUnit = plan.output_unit;
     let fitted = FittedStatic {
         output_unit,
         m_out_per_g: model::m_of(&main_theta),
