@@ -266,11 +266,13 @@ mod tests {
         assert_eq!(cal.statics.zero_bias_out, [2.405098, 2.380978, 2.435503]);
         assert_eq!(cal.lever_arms.r_m[1], [-0.00256, -0.00893, -0.00026]);
         assert!(f.other.contains_key("expected"));
+        // The file form and the built-in constant are one unit.
+        assert_eq!(cal, shared::params::PAPER_UNIT);
     }
 
     #[test]
     fn round_trips_through_toml_with_lsb_and_uncertainty() {
-        let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let mut cal = shared::params::PAPER_UNIT;
         cal.statics.output_unit = shared::OutputUnit::Lsb;
         cal.statics.scale_out_per_g = [4096.0, 4100.0, 4090.0];
         cal.statics.zero_bias_out = [12.0, -40.0, 3.5];

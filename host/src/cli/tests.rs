@@ -231,7 +231,7 @@ fn sim() -> PortArgs {
 }
 
 fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
-    let cal = UnitFile::paper_unit().to_calibration().unwrap();
+    let cal = shared::params::PAPER_UNIT;
     let (bytes, n) = ParameterBlob {
         unit_id: unit,
         calibration: cal,

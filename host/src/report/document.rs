@@ -1313,7 +1313,7 @@ mod tests {
     /// The short plan on the paper unit, calibrated from its own noisy data.
     fn noisy_report() -> ReportData {
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::default(), 7).unwrap();
         let outcome = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
         build_report(
@@ -1340,7 +1340,7 @@ mod tests {
         // docs/model.md §6: x up, bias+scale only → (0.99991, 0.01300, −0.00911) g; static-only at 200 °/s
         // about x leaves (0.09, 11.2, 10.1) mg.
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let rows = segment_rows(&plan, &stats, &truth).unwrap();
         assert_eq!(rows.len(), 15);
@@ -1527,7 +1527,7 @@ mod tests {
              rate_end_deg_s = 200\nduration_s = 2\n",
         )
         .unwrap();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let rows = segment_rows(&plan, &stats, &truth).unwrap();
         let ramp = &rows[1];
@@ -1563,7 +1563,7 @@ mod tests {
     #[test]
     fn a_named_run_must_exist() {
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let options = ReportOptions {
             rate_run: Some("x+ 999".into()),

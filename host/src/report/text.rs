@@ -316,9 +316,7 @@ rate_deg_s = 200
     #[test]
     fn report_has_the_paper_tables_and_the_comparison() {
         let plan = Plan::parse(PLAN).unwrap();
-        let truth = crate::unit_file::UnitFile::paper_unit()
-            .to_calibration()
-            .unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let unit = shared::forward::ForwardModel::new(&truth).unwrap();
         let noise = SynthNoise {
             out_1sigma: [4e-4; 3],

@@ -122,9 +122,7 @@ pub fn better_plan(unit: OutputUnit) -> Plan {
 
 /// The paper's unit.
 pub fn paper_unit() -> Calibration {
-    crate::unit_file::UnitFile::paper_unit()
-        .to_calibration()
-        .expect("the paper unit is valid")
+    shared::params::PAPER_UNIT
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.
