@@ -1,4 +1,12 @@
-//! The per-sample path: ω̇ estimate, compensation, window statistics and the output queue.
+//! The per-sample path: gyro correction, ω̇ estimate, compensation, window statistics and the output
+//! queue (docs/model.md §10).
+//!
+//! The gyro's rate is corrected first (`ω = G⁻¹(w − b)`, docs/model.md §8), and the corrected rate
+//! feeds the ω̇ estimator, the lever-arm terms and the compensated frames; raw frames keep the gyro's
+//! own output, which is what the host calibrates the gyro from. Temperature readings arrive at the
+//! board's pace through [`Pipeline::set_temperature`] (not per sample): each is averaged into the
+//! window's `mean_temp_c`, and at most [`TEMPERATURE_REFRESH_HZ`] times a second it refreshes the
+//! compensator's temperature-dependent terms (docs/model.md §9).
 //!
 //! [`Pipeline::on_sample`] runs at sampling priority (a timer interrupt) for every sample. It never
 //! touches the link: finished frames go into a fixed-size queue ([`Pipeline::pop_output`] is called by
@@ -22,6 +30,9 @@ use crate::stats::WindowAccumulator;
 pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;
 /// Largest accepted window (or decimation factor): 2²⁴ samples, 28 minutes at 10 kHz.
 pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;
+/// Most compensator refreshes per second from temperature readings: a unit's temperature changes
+/// over seconds, and a refresh (about 150 instructions with 3 divisions) need not run per sample.
+pub const TEMPERATURE_REFRESH_HZ: u32 = 4;
 
 /// One sample as read from the sensors.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -113,6 +124,11 @@ pub struct Pipeline<const Q: usize> {
     out: Deque<DeviceToHost, Q>,
     dropped: u32,
     drop_pending: bool,
+    temp_sum_c: f32,
+    temp_readings: u32,
+    latest_temp_c: f32,
+    refresh_interval: u64,
+    last_refresh: Option<u64>,
 }
 
 impl<const Q: usize> Pipeline<Q> {
@@ -137,7 +153,38 @@ impl<const Q: usize> Pipeline<Q> {
             out: Deque::new(),
             dropped: 0,
             drop_pending: false,
+            temp_sum_c: 0.0,
+            temp_readings: 0,
+            latest_temp_c: f32::NAN,
+            refresh_interval: u64::from(sample_rate_hz.max(100) / TEMPERATURE_REFRESH_HZ),
+            last_refresh: None,
         }
+    }
+
+    /// A temperature reading of the unit, °C (board pace, a few per second; NaN for a failed read).
+    /// It enters the current window's mean, and refreshes the compensator when the last refresh is
+    /// at least `1/TEMPERATURE_REFRESH_HZ` old (always for the first reading after a calibration
+    /// change).
+    pub fn set_temperature(&mut self, temp_c: f32) {
+        if temp_c.is_finite() {
+            self.temp_sum_c += temp_c;
+            self.temp_readings += 1;
+        }
+        self.latest_temp_c = temp_c;
+        let due = self
+            .last_refresh
+            .is_none_or(|t| self.index.wrapping_sub(t) >= self.refresh_interval);
+        if let (true, Some(c)) = (due, self.compensator.as_mut()) {
+            if c.refresh(temp_c).is_flagged() {
+                self.window_flags |= SampleFlags::TEMPERATURE;
+            }
+            self.last_refresh = Some(self.index);
+        }
+    }
+
+    /// The compensator in force (`None`: uncalibrated), e.g. to read its temperature state.
+    pub fn compensator(&self) -> Option<&Compensator> {
+        self.compensator.as_ref()
     }
 
     /// Applies a command from the request handler.
@@ -145,7 +192,16 @@ impl<const Q: usize> Pipeline<Q> {
         match cmd {
             PipelineCommand::Stream(req) => self.stream = Some(req),
             PipelineCommand::StopStream => self.stream = None,
-            PipelineCommand::Compensator(c) => self.compensator = c,
+            PipelineCommand::Compensator(c) => {
+                self.compensator = c;
+                self.last_refresh = None;
+                // Refresh at once at the latest temperature rather than run at the reference.
+                if let (Some(c), true) = (self.compensator.as_mut(), self.latest_temp_c.is_finite())
+                {
+                    c.refresh(self.latest_temp_c);
+                    self.last_refresh = Some(self.index);
+                }
+            }
         }
         self.restart_window();
     }
@@ -156,6 +212,17 @@ impl<const Q: usize> Pipeline<Q> {
         self.window_flags = 0;
         self.window_first = self.index;
         self.acc = WindowAccumulator::new();
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
+    }
+
+    /// The window's mean temperature: its readings' mean, else the latest reading (NaN if none).
+    fn window_temp_c(&self) -> f32 {
+        if self.temp_readings > 0 {
+            self.temp_sum_c / self.temp_readings as f32
+        } else {
+            self.latest_temp_c
+        }
     }
 
     /// True when a calibration is applied.
@@ -186,7 +253,7 @@ impl<const Q: usize> Pipeline<Q> {
     /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
     /// when uncalibrated.
     #[inline(always)]
-    fn compensate(&self, s: &Sample, omega_dot: &[f32; 3]) -> [f32; 3] {
+    fn compensate(&self, s: &Sample, rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
             Some(c) if c.mode() == LeverMode::Off => {
                 c.compensate_static(&SensorOutputs { raw: s.raw }).m_s2
@@ -194,9 +261,7 @@ impl<const Q: usize> Pipeline<Q> {
             Some(c) => {
                 c.compensate(
                     &SensorOutputs { raw: s.raw },
-                    &BodyRate {
-                        rad_s: s.rate_rad_s,
-                    },
+                    &BodyRate { rad_s: *rate },
                     &BodyAngularAccel { rad_s2: *omega_dot },
                 )
                 .m_s2
@@ -205,11 +270,25 @@ impl<const Q: usize> Pipeline<Q> {
         }
     }
 
+    /// The body rate: the gyro's output corrected by the calibration (raw when uncalibrated).
     #[inline(always)]
-    fn frame_flags(&self) -> SampleFlags {
+    fn body_rate(&self, s: &Sample) -> [f32; 3] {
+        match &self.compensator {
+            Some(c) => c.correct_rate(&s.rate_rad_s).rad_s,
+            None => s.rate_rad_s,
+        }
+    }
+
+    #[inline(always)]
+    fn frame_flags(&self, compensated: bool) -> SampleFlags {
         let mut f = self.window_flags;
-        if self.compensator.is_none() {
-            f |= SampleFlags::UNCALIBRATED;
+        match &self.compensator {
+            None => f |= SampleFlags::UNCALIBRATED,
+            Some(c) if c.temperature_state().is_flagged() => f |= SampleFlags::TEMPERATURE,
+            Some(_) => {}
+        }
+        if !compensated {
+            f &= !SampleFlags::TEMPERATURE;
         }
         if self.drop_pending {
             f |= SampleFlags::FRAMES_DROPPED;
@@ -234,8 +313,9 @@ impl<const Q: usize> Pipeline<Q> {
         let index = self.index;
         self.index += 1;
         let finite = s.is_finite();
+        let rate = self.body_rate(s);
         let omega_dot = if finite {
-            self.omega_dot.update(&s.rate_rad_s)
+            self.omega_dot.update(&rate)
         } else {
             self.omega_dot.reset();
             [0.0; 3]
@@ -254,12 +334,11 @@ impl<const Q: usize> Pipeline<Q> {
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
                 if good {
-                    let v = if req.kind == StreamKind::RawWindows {
-                        s.raw
+                    let (v, r) = if req.kind == StreamKind::RawWindows {
+                        (s.raw, s.rate_rad_s)
                     } else {
-                        self.compensate(s, &omega_dot)
+                        (self.compensate(s, &rate, &omega_dot), rate)
                     };
-                    let r = s.rate_rad_s;
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
                     self.rejected += 1;
@@ -273,7 +352,7 @@ impl<const Q: usize> Pipeline<Q> {
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
                     self.window_flags = sample_flags;
-                    let flags = self.frame_flags();
+                    let flags = self.frame_flags(req.kind == StreamKind::CompensatedDecimated);
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {
                             index,
@@ -283,14 +362,14 @@ impl<const Q: usize> Pipeline<Q> {
                         })
                     } else {
                         let f = if finite {
-                            self.compensate(s, &omega_dot)
+                            self.compensate(s, &rate, &omega_dot)
                         } else {
                             s.raw
                         };
                         DeviceToHost::CompensatedSample(CompensatedSample {
                             index,
                             specific_force_m_s2: f,
-                            rate_rad_s: s.rate_rad_s,
+                            rate_rad_s: rate,
                             flags,
                         })
                     };
@@ -308,7 +387,8 @@ impl<const Q: usize> Pipeline<Q> {
     #[inline(never)]
     fn close_window(&mut self, kind: StreamKind) {
         let st = self.acc.finish();
-        let flags = self.frame_flags();
+        let flags = self.frame_flags(kind == StreamKind::CompensatedWindows);
+        let mean_temp_c = self.window_temp_c();
         let m = st.mean;
         let v = st.var;
         let msg = if kind == StreamKind::RawWindows {
@@ -319,6 +399,7 @@ impl<const Q: usize> Pipeline<Q> {
                 var_raw: [v[0], v[1], v[2]],
                 mean_rate_rad_s: [m[3], m[4], m[5]],
                 var_rate_rad2_s2: [v[3], v[4], v[5]],
+                mean_temp_c,
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
                 flags,
@@ -330,6 +411,7 @@ impl<const Q: usize> Pipeline<Q> {
                 mean_m_s2: [m[0], m[1], m[2]],
                 var_m2_s4: [v[0], v[1], v[2]],
                 mean_rate_rad_s: [m[3], m[4], m[5]],
+                mean_temp_c,
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
                 flags,
@@ -340,6 +422,8 @@ impl<const Q: usize> Pipeline<Q> {
         self.rejected = 0;
         self.window_flags = 0;
         self.window_first = self.index;
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
     }
 }
 

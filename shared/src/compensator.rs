@@ -212,6 +212,8 @@ pub struct Compensator {
     gyro_inv: [[f32; 3]; 3],
     /// `b(T)`, rad/s, gyro axes.
     gyro_bias_rad_s: [f32; 3],
+    /// False for a perfect gyro without temperature drift: [`Compensator::correct_rate`] is skipped.
+    gyro_corrected: bool,
     mode: LeverMode,
     thermal: Option<Thermal>,
     temperature: TemperatureState,
@@ -282,6 +284,10 @@ impl Compensator {
             s: device_f32_3(&s)?,
             gyro_inv: device_gain_33(&gyro_inv)?,
             gyro_bias_rad_s: device_f32_3(&gyro.bias_rad_s)?,
+            gyro_corrected: cal.gyro.is_some()
+                || cal
+                    .temperature
+                    .is_some_and(|t| t.gyro_bias_rad_s_per_c.is_some()),
             mode,
             thermal: None,
             temperature: TemperatureState::NotModelled,
@@ -356,21 +362,27 @@ impl Compensator {
     }
 
     /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8): 3 subtractions and
-    /// 9 multiply-adds. For a perfect gyro it returns `w` exactly (and NaN stays NaN).
+    /// 9 multiply-adds, skipped for a perfect gyro (a configuration branch, not a data branch), which
+    /// therefore passes `w` through bit for bit.
     #[inline(always)]
     pub fn correct_rate(&self, w_rad_s: &[f32; 3]) -> BodyRate {
+        if !self.gyro_corrected {
+            return BodyRate { rad_s: *w_rad_s };
+        }
         let b = &self.gyro_bias_rad_s;
         let v = [w_rad_s[0] - b[0], w_rad_s[1] - b[1], w_rad_s[2] - b[2]];
-        let m = &self.gyro_inv;
         BodyRate {
-            rad_s: core::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2]),
+            rad_s: mat_vec32(&self.gyro_inv, &v),
         }
     }
 
     /// Specific force at the reference point from outputs, the (corrected) body rate and angular
     /// acceleration (paper eq. 16). With [`LeverMode::Off`] the gyro inputs have no effect (their
     /// constants are 0).
-    #[inline]
+    ///
+    /// Written out per axis (not as a loop) so that it is straight-line code at any optimisation level:
+    /// the firmware builds this crate for size.
+    #[inline(always)]
     pub fn compensate(
         &self,
         u: &SensorOutputs,
@@ -378,35 +390,56 @@ impl Compensator {
         omega_dot: &BodyAngularAccel,
     ) -> BodySpecificForce {
         let w = &omega.rad_s;
-        let wd = &omega_dot.rad_s2;
         let w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-        let v: [f32; 3] = core::array::from_fn(|i| {
-            let p = &self.p[i];
-            let q = &self.q[i];
-            let a = &self.a[i];
-            let tangential = wd[0] * p[0] + wd[1] * p[1] + wd[2] * p[2];
-            let a_w = a[0] * w[0] + a[1] * w[1] + a[2] * w[2];
-            let q_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
-            let k_d = tangential + a_w * q_w - w2 * self.s[i];
-            u.raw[i] - self.zero_bias_out[i] - k_d
-        });
-        self.apply_ka(&v)
+        let v = [
+            self.lever_corrected(0, u, w, &omega_dot.rad_s2, w2),
+            self.lever_corrected(1, u, w, &omega_dot.rad_s2, w2),
+            self.lever_corrected(2, u, w, &omega_dot.rad_s2, w2),
+        ];
+        BodySpecificForce {
+            m_s2: mat_vec32(&self.ka_m_s2_per_out, &v),
+        }
+    }
+
+    /// `U_i − u0_i − k_i d_i` with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i`.
+    #[inline(always)]
+    fn lever_corrected(
+        &self,
+        i: usize,
+        u: &SensorOutputs,
+        w: &[f32; 3],
+        wd: &[f32; 3],
+        w2: f32,
+    ) -> f32 {
+        let p = &self.p[i];
+        let q = &self.q[i];
+        let a = &self.a[i];
+        let tangential = wd[0] * p[0] + wd[1] * p[1] + wd[2] * p[2];
+        let a_w = a[0] * w[0] + a[1] * w[1] + a[2] * w[2];
+        let q_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
+        let k_d = tangential + a_w * q_w - w2 * self.s[i];
+        u.raw[i] - self.zero_bias_out[i] - k_d
     }
 
     /// Static-only compensation, `f_O = g·K_A (U − u0)` (paper eq. 6): no gyro needed.
-    #[inline]
-    pub fn compensate_static(&self, u: &SensorOutputs) -> BodySpecificForce {
-        let v: [f32; 3] = core::array::from_fn(|i| u.raw[i] - self.zero_bias_out[i]);
-        self.apply_ka(&v)
-    }
-
     #[inline(always)]
-    fn apply_ka(&self, v: &[f32; 3]) -> BodySpecificForce {
-        let m = &self.ka_m_s2_per_out;
+    pub fn compensate_static(&self, u: &SensorOutputs) -> BodySpecificForce {
+        let z = &self.zero_bias_out;
+        let v = [u.raw[0] - z[0], u.raw[1] - z[1], u.raw[2] - z[2]];
         BodySpecificForce {
-            m_s2: core::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2]),
+            m_s2: mat_vec32(&self.ka_m_s2_per_out, &v),
         }
     }
+}
+
+/// `m · v` in `f32`, rows written out.
+#[inline(always)]
+fn mat_vec32(m: &[[f32; 3]; 3], v: &[f32; 3]) -> [f32; 3] {
+    [
+        m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
+        m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
+        m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2],
+    ]
 }
 
 #[cfg(test)]

@@ -94,14 +94,14 @@ impl Sim {
     fn run(&mut self, samples: u32) {
         for _ in 0..samples.max(1) {
             if samples > 0 {
-                let s = self.sensor.sample();
-                self.pipeline.on_sample(&s);
+                self.sensor.step(&mut self.pipeline);
             }
             if let Some(b) = self.link.budget.as_mut() {
                 *b = 12;
             }
             match self.service.poll(&mut self.link, &mut self.pipeline) {
                 Some(BoardEvent::SetTable(t)) => self.sensor.set_table(&t).unwrap(),
+                Some(BoardEvent::SetTemperature(t)) => self.sensor.set_temperature(t),
                 Some(BoardEvent::Reset) => {
                     self.service.flush(&mut self.link, 1000);
                     self.reboot();
