@@ -86,20 +86,29 @@ impl Scaling {
     /// The sample of these codes; a code at either end of its range marks it saturated.
     #[inline(always)]
     pub fn sample(&self, c: &RawCodes) -> Sample {
-        let mut sat = false;
-        for j in 0..3 {
-            sat |= c.adc[j] == 0 || c.adc[j] >= self.adc_max;
-            sat |= c.gyro[j] == i16::MIN || c.gyro[j] == i16::MAX;
-        }
+        // Written out per channel: straight-line code at opt-level "s" (the firmware's).
+        let adc_sat = |v: u16| v == 0 || v >= self.adc_max;
+        let gyro_sat = |v: i16| v == i16::MIN || v == i16::MAX;
+        let (a, g) = (&c.adc, &c.gyro);
+        let volts = |v: u16| f32::from(v) * self.volts_per_code;
+        let rad_s = |v: i16| f32::from(v) * self.rad_s_per_lsb;
         Sample {
-            raw: c.adc.map(|v| f32::from(v) * self.volts_per_code),
-            rate_rad_s: c.gyro.map(|v| f32::from(v) * self.rad_s_per_lsb),
-            saturated: sat,
+            raw: [volts(a[0]), volts(a[1]), volts(a[2])],
+            rate_rad_s: [rad_s(g[0]), rad_s(g[1]), rad_s(g[2])],
+            saturated: adc_sat(a[0])
+                | adc_sat(a[1])
+                | adc_sat(a[2])
+                | gyro_sat(g[0])
+                | gyro_sat(g[1])
+                | gyro_sat(g[2]),
         }
     }
 }
 
 /// A change to the pipeline, decided by the request handler in the main loop.
+// The compensator travels by value (no allocator on the device to box it), once per calibration or
+// lever-mode change: the size difference costs stack there, never per sample.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PipelineCommand {
     /// Start or change the stream (the window restarts).
@@ -438,6 +447,7 @@ fn unreachable() -> ! {
 mod tests {
     use super::*;
     use crate::paper_unit;
+    use shared::compensator::TemperatureState;
 
     fn calibrated(mode: LeverMode) -> Pipeline<8> {
         let mut p = Pipeline::<8>::new(1000);
@@ -609,6 +619,95 @@ mod tests {
             assert!(w.mean_m_s2.iter().all(|v| v.is_finite()), "{w:?}");
             assert_eq!(w.count, 1);
         }
+    }
+
+    #[test]
+    fn temperature_readings_average_into_windows_refresh_at_most_4_hz_and_flag_compensated_frames()
+    {
+        let cal = shared::Calibration {
+            temperature: Some(paper_unit::typical_thermal_model()),
+            ..paper_unit::calibration()
+        };
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(
+            Compensator::new(&cal, LeverMode::RateOnly).ok(),
+        ));
+        let state = |p: &Pipeline<8>| p.compensator().unwrap().temperature_state();
+        assert_eq!(state(&p), TemperatureState::NoReading);
+        stream(&mut p, StreamKind::CompensatedWindows, 500);
+        p.set_temperature(30.0);
+        assert_eq!(state(&p), TemperatureState::InRange);
+        for k in 0..500 {
+            if k == 100 {
+                // Within 250 samples of the last refresh: averaged, not applied.
+                p.set_temperature(80.0);
+                assert_eq!(state(&p), TemperatureState::InRange);
+            }
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(w.mean_temp_c, 55.0);
+        assert!(!w.flags.has(SampleFlags::TEMPERATURE), "{w:?}");
+        // The next reading is due: clamped, flagged on compensated frames only.
+        p.set_temperature(80.0);
+        assert_eq!(state(&p), TemperatureState::Clamped);
+        for _ in 0..500 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(w.flags.has(SampleFlags::TEMPERATURE));
+        assert_eq!(w.mean_temp_c, 80.0);
+        stream(&mut p, StreamKind::RawWindows, 10);
+        for _ in 0..10 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(!w.flags.has(SampleFlags::TEMPERATURE));
+        // No reading in a window: the latest one; a board without a sensor: NaN.
+        assert_eq!(w.mean_temp_c, 80.0);
+        let mut bare = Pipeline::<8>::new(1000);
+        stream(&mut bare, StreamKind::RawWindows, 1);
+        bare.on_sample(&S);
+        let Some(DeviceToHost::RawWindow(w)) = bare.pop_output() else {
+            panic!()
+        };
+        assert!(w.mean_temp_c.is_nan());
+    }
+
+    #[test]
+    fn compensated_frames_carry_the_corrected_rate_and_raw_frames_the_gyros_own() {
+        let cal = shared::Calibration {
+            gyro: Some(paper_unit::typical_gyro()),
+            ..paper_unit::calibration()
+        };
+        let c = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(Some(c)));
+        stream(&mut p, StreamKind::CompensatedDecimated, 1);
+        p.on_sample(&S);
+        let Some(DeviceToHost::CompensatedSample(x)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(x.rate_rad_s, c.correct_rate(&S.rate_rad_s).rad_s);
+        assert_ne!(x.rate_rad_s, S.rate_rad_s);
+        let want = c.compensate(
+            &SensorOutputs { raw: S.raw },
+            &c.correct_rate(&S.rate_rad_s),
+            &BodyAngularAccel::default(),
+        );
+        assert_eq!(x.specific_force_m_s2, want.m_s2);
+        stream(&mut p, StreamKind::RawDecimated, 1);
+        p.on_sample(&S);
+        let Some(DeviceToHost::RawSample(x)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(x.rate_rad_s, S.rate_rad_s);
     }
 
     #[test]

@@ -104,7 +104,6 @@ impl VirtualSensor {
 
     fn at_temperature(mut self, t: f32) -> Self {
         self.set_temperature(t);
-        self.sensor_temp_c = self.die_temp_c;
         self
     }
 
@@ -126,6 +125,9 @@ impl VirtualSensor {
             return;
         };
         self.die_temp_c = f64::from(t);
+        if self.lag_step >= 1.0 {
+            self.sensor_temp_c = self.die_temp_c; // no lag: the sensor reads the die
+        }
         let m = self.thermal;
         let dt = m.map_or(0.0, |m| self.die_temp_c - m.reference_c);
         for i in 0..3 {
@@ -304,6 +306,45 @@ mod tests {
             (st.m_s2[1].abs() / 9.80665 * 1e3 - 11.19).abs() < 0.05,
             "{st:?}"
         );
+    }
+
+    #[test]
+    fn gyro_errors_thermal_model_and_sensor_lag() {
+        let truth = crate::testvectors::imperfect_unit();
+        let mut s = VirtualSensor::new(&truth, 1000, false).unwrap();
+        assert_eq!(s.temperature_c(), POWER_ON_TEMPERATURE_C);
+        // At rest, z up, at the reference temperature: the gyro reads its bias, the outputs the truth.
+        let x = s.sample();
+        let b = truth.gyro.unwrap().bias_rad_s;
+        for j in 0..3 {
+            assert!((f64::from(x.rate_rad_s[j]) - b[j]).abs() < 1e-6, "{x:?}");
+        }
+        let at_ref = x.raw;
+        // Heated by 20 °C: z (1 g up) moves by its bias tempco and quadratic term plus 150 ppm/°C
+        // of its 0.4 V; x and y (0 g) by their bias terms only.
+        s.set_temperature(45.0);
+        let hot = s.sample().raw;
+        let m = truth.temperature.unwrap();
+        for j in 0..3 {
+            let c = m.zero_bias_out_per_c[j];
+            let k = m.scale_rel_per_c[j][0];
+            let g_part = f64::from(at_ref[j]) - truth.statics.zero_bias_out[j];
+            let want = c[0] * 20.0 + c[1] * 400.0 + k * 20.0 * g_part;
+            let got = f64::from(hot[j]) - f64::from(at_ref[j]);
+            assert!((got - want).abs() < 1e-6, "axis {j}: {got} vs {want}");
+        }
+        // A 2 s sensor lag: after 2 s the reading has closed 1 − 1/e of a 20 °C step.
+        s.set_thermal_lag_s(2.0);
+        s.set_temperature(65.0);
+        assert_eq!(s.temperature_c(), 45.0);
+        for _ in 0..2000 {
+            s.sample();
+        }
+        let closed = (s.temperature_c() - 45.0) / 20.0;
+        assert!((closed - (1.0 - (-1.0f32).exp())).abs() < 1e-3, "{closed}");
+        assert_eq!(s.die_temperature_c(), 65.0);
+        assert!(VirtualSensor::check_temperature(f32::NAN).is_err());
+        assert!(VirtualSensor::check_temperature(500.0).is_err());
     }
 
     #[test]
