@@ -147,7 +147,7 @@ fn main() -> ! {
     line(
         "gyro correction, G^-1 (w - b)",
         per_iter_x10(gc, empty, N),
-        "(floor: 12 multiply-adds; goal <= 15)",
+        "(12 FP ops + 12 constant loads; goal <= 15)",
     );
     let mut est = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
     let od = ticks(N, |i| {
