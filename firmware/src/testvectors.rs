@@ -123,6 +123,7 @@ fn compensators() -> Option<[Compensator; 3]> {
 }
 
 /// Compensation in the three modes against the table (the compensators are built here, in f64).
+#[inline(never)]
 pub fn check_compensation() -> [Check; 3] {
     let mut out = [Check::default(); 3];
     let Some([off, rate, full]) = compensators() else {
@@ -150,6 +151,7 @@ fn gyro_temp_compensator() -> Option<Compensator> {
 
 /// Gyro correction and full compensation after a temperature refresh, against the table (the
 /// compensator is built here, in f64, and refreshed in f32 on each case's temperature).
+#[inline(never)]
 pub fn check_gyro_temperature() -> [Check; 2] {
     let mut out = [Check::default(); 2];
     let Some(mut c) = gyro_temp_compensator() else {
@@ -192,6 +194,7 @@ pub struct HeatedResult {
 /// `n` times (noise on) through the whole pipeline (`VirtualSensor::step`: temperature readings, gyro
 /// correction, refresh, full compensation), compensated by its own calibration — with or without the
 /// temperature model. The truth is `g·up` (the reference point is on the table axis).
+#[inline(never)]
 pub fn heated_unit(temp_c: f32, with_model: bool, n: u32) -> Option<HeatedResult> {
     let truth = imperfect_unit();
     let mut sensor = VirtualSensor::new(&truth, 1000, true)?;

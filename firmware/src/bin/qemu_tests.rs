@@ -163,6 +163,7 @@ fn info() -> DeviceInfo {
     qemu::INFO
 }
 
+#[inline(never)]
 fn pipeline_on_virtual_table(t: &mut Tally) {
     // 200 °/s about x with x up: full compensation returns (g, 0, 0); static-only leaves ~11 mg on y.
     let cal = paper_unit::calibration();
@@ -214,6 +215,7 @@ fn pipeline_on_virtual_table(t: &mut Tally) {
 /// The virtual unit with gyro errors and a thermal model, heated in software, through the whole
 /// pipeline on the target: within 50 µg with its temperature model, milli-g without, flagged outside
 /// the calibrated range.
+#[inline(never)] // its frame (sensor, pipeline) only while it runs
 fn heated_board(t: &mut Tally) {
     for temp in [0.0f32, 45.0] {
         let with = testvectors::heated_unit(temp, true, 4000);
