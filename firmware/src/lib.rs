@@ -10,6 +10,7 @@
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
+//! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
 //! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.
 //! - [`testvectors`]: PC-computed compensation vectors, checked bit for bit on the target.
@@ -18,6 +19,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod die_temperature;
 pub mod gyro;
 pub mod paper_unit;
 pub mod pipeline;

@@ -1,7 +1,7 @@
 //! The paper's unit (`reference/paper-unit.toml`, Tables 1 and 3): the QEMU board's virtual unit and
 //! the source of the on-target test vectors. A PC test checks these constants against the file.
 
-use shared::{Calibration, UnitId};
+use shared::{Calibration, GyroCorrection, TemperatureModel, UnitId};
 
 /// Unit identifier of the QEMU board's virtual unit (reported by `Identify`; blobs are bound to it).
 pub const QEMU_UNIT_ID: UnitId = UnitId(*b"QEMU-AN386-1");
@@ -13,6 +13,39 @@ pub const GRAVITY_M_S2: f64 = 9.80665;
 /// `shared::params::PAPER_UNIT`, which a shared test checks against the reference file.
 pub fn calibration() -> Calibration {
     shared::params::PAPER_UNIT
+}
+
+/// A typical MEMS gyro's errors (0.5 % scale, 0.5° misalignment, 0.5 °/s bias; docs/model.md §8): the
+/// gyro of the on-target test vectors and the benchmark.
+pub fn typical_gyro() -> GyroCorrection {
+    let m = 0.5f64.to_radians();
+    let b = 0.5f64.to_radians();
+    GyroCorrection {
+        matrix: [[1.005, m, -m], [-m, 0.995, m], [m, -m, 1.005]],
+        bias_rad_s: [b, -b, 0.6 * b],
+    }
+}
+
+/// A thermal model of the size a MEMS accelerometer shows (docs/model.md §9): zero-bias tempco
+/// 0.3 mg/°C at the paper's 0.4 V/g (1.2·10⁻⁴ V/°C) with a quadratic term, scale tempco 150 ppm/°C,
+/// gyro bias drift 0.01 °/s/°C, referred to 25 °C and valid over −20..60 °C.
+pub fn typical_thermal_model() -> TemperatureModel {
+    let gyro_drift = 0.01f64.to_radians();
+    TemperatureModel {
+        reference_c: 25.0,
+        valid_range_c: [-20.0, 60.0],
+        zero_bias_out_per_c: [
+            [1.2e-4, 1.5e-6, 0.0],
+            [-1.1e-4, 1.0e-6, 0.0],
+            [1.3e-4, -1.2e-6, 0.0],
+        ],
+        scale_rel_per_c: [[150e-6, 0.0, 0.0], [-140e-6, 0.0, 0.0], [160e-6, 0.0, 0.0]],
+        gyro_bias_rad_s_per_c: Some([
+            [gyro_drift, 0.0, 0.0],
+            [-gyro_drift, 0.0, 0.0],
+            [0.5 * gyro_drift, 0.0, 0.0],
+        ]),
+    }
 }
 
 #[cfg(test)]

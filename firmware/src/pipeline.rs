@@ -1,4 +1,12 @@
-//! The per-sample path: ω̇ estimate, compensation, window statistics and the output queue.
+//! The per-sample path: gyro correction, ω̇ estimate, compensation, window statistics and the output
+//! queue (docs/model.md §10).
+//!
+//! The gyro's rate is corrected first (`ω = G⁻¹(w − b)`, docs/model.md §8), and the corrected rate
+//! feeds the ω̇ estimator, the lever-arm terms and the compensated frames; raw frames keep the gyro's
+//! own output, which is what the host calibrates the gyro from. Temperature readings arrive at the
+//! board's pace through [`Pipeline::set_temperature`] (not per sample): each is averaged into the
+//! window's `mean_temp_c`, and at most [`TEMPERATURE_REFRESH_HZ`] times a second it refreshes the
+//! compensator's temperature-dependent terms (docs/model.md §9).
 //!
 //! [`Pipeline::on_sample`] runs at sampling priority (a timer interrupt) for every sample. It never
 //! touches the link: finished frames go into a fixed-size queue ([`Pipeline::pop_output`] is called by
@@ -22,6 +30,9 @@ use crate::stats::WindowAccumulator;
 pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;
 /// Largest accepted window (or decimation factor): 2²⁴ samples, 28 minutes at 10 kHz.
 pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;
+/// Most compensator refreshes per second from temperature readings: a unit's temperature changes
+/// over seconds, and a refresh (about 150 instructions with 3 divisions) need not run per sample.
+pub const TEMPERATURE_REFRESH_HZ: u32 = 4;
 
 /// One sample as read from the sensors.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,20 +86,29 @@ impl Scaling {
     /// The sample of these codes; a code at either end of its range marks it saturated.
     #[inline(always)]
     pub fn sample(&self, c: &RawCodes) -> Sample {
-        let mut sat = false;
-        for j in 0..3 {
-            sat |= c.adc[j] == 0 || c.adc[j] >= self.adc_max;
-            sat |= c.gyro[j] == i16::MIN || c.gyro[j] == i16::MAX;
-        }
+        // Written out per channel: straight-line code at opt-level "s" (the firmware's).
+        let adc_sat = |v: u16| v == 0 || v >= self.adc_max;
+        let gyro_sat = |v: i16| v == i16::MIN || v == i16::MAX;
+        let (a, g) = (&c.adc, &c.gyro);
+        let volts = |v: u16| f32::from(v) * self.volts_per_code;
+        let rad_s = |v: i16| f32::from(v) * self.rad_s_per_lsb;
         Sample {
-            raw: c.adc.map(|v| f32::from(v) * self.volts_per_code),
-            rate_rad_s: c.gyro.map(|v| f32::from(v) * self.rad_s_per_lsb),
-            saturated: sat,
+            raw: [volts(a[0]), volts(a[1]), volts(a[2])],
+            rate_rad_s: [rad_s(g[0]), rad_s(g[1]), rad_s(g[2])],
+            saturated: adc_sat(a[0])
+                | adc_sat(a[1])
+                | adc_sat(a[2])
+                | gyro_sat(g[0])
+                | gyro_sat(g[1])
+                | gyro_sat(g[2]),
         }
     }
 }
 
 /// A change to the pipeline, decided by the request handler in the main loop.
+// The compensator travels by value (no allocator on the device to box it), once per calibration or
+// lever-mode change: the size difference costs stack there, never per sample.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PipelineCommand {
     /// Start or change the stream (the window restarts).
@@ -113,6 +133,11 @@ pub struct Pipeline<const Q: usize> {
     out: Deque<DeviceToHost, Q>,
     dropped: u32,
     drop_pending: bool,
+    temp_sum_c: f32,
+    temp_readings: u32,
+    latest_temp_c: f32,
+    refresh_interval: u64,
+    last_refresh: Option<u64>,
 }
 
 impl<const Q: usize> Pipeline<Q> {
@@ -137,7 +162,38 @@ impl<const Q: usize> Pipeline<Q> {
             out: Deque::new(),
             dropped: 0,
             drop_pending: false,
+            temp_sum_c: 0.0,
+            temp_readings: 0,
+            latest_temp_c: f32::NAN,
+            refresh_interval: u64::from(sample_rate_hz.max(100) / TEMPERATURE_REFRESH_HZ),
+            last_refresh: None,
         }
+    }
+
+    /// A temperature reading of the unit, °C (board pace, a few per second; NaN for a failed read).
+    /// It enters the current window's mean, and refreshes the compensator when the last refresh is
+    /// at least `1/TEMPERATURE_REFRESH_HZ` old (always for the first reading after a calibration
+    /// change).
+    pub fn set_temperature(&mut self, temp_c: f32) {
+        if temp_c.is_finite() {
+            self.temp_sum_c += temp_c;
+            self.temp_readings += 1;
+        }
+        self.latest_temp_c = temp_c;
+        let due = self
+            .last_refresh
+            .is_none_or(|t| self.index.wrapping_sub(t) >= self.refresh_interval);
+        if let (true, Some(c)) = (due, self.compensator.as_mut()) {
+            if c.refresh(temp_c).is_flagged() {
+                self.window_flags |= SampleFlags::TEMPERATURE;
+            }
+            self.last_refresh = Some(self.index);
+        }
+    }
+
+    /// The compensator in force (`None`: uncalibrated), e.g. to read its temperature state.
+    pub fn compensator(&self) -> Option<&Compensator> {
+        self.compensator.as_ref()
     }
 
     /// Applies a command from the request handler.
@@ -145,7 +201,16 @@ impl<const Q: usize> Pipeline<Q> {
         match cmd {
             PipelineCommand::Stream(req) => self.stream = Some(req),
             PipelineCommand::StopStream => self.stream = None,
-            PipelineCommand::Compensator(c) => self.compensator = c,
+            PipelineCommand::Compensator(c) => {
+                self.compensator = c;
+                self.last_refresh = None;
+                // Refresh at once at the latest temperature rather than run at the reference.
+                if let (Some(c), true) = (self.compensator.as_mut(), self.latest_temp_c.is_finite())
+                {
+                    c.refresh(self.latest_temp_c);
+                    self.last_refresh = Some(self.index);
+                }
+            }
         }
         self.restart_window();
     }
@@ -156,6 +221,17 @@ impl<const Q: usize> Pipeline<Q> {
         self.window_flags = 0;
         self.window_first = self.index;
         self.acc = WindowAccumulator::new();
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
+    }
+
+    /// The window's mean temperature: its readings' mean, else the latest reading (NaN if none).
+    fn window_temp_c(&self) -> f32 {
+        if self.temp_readings > 0 {
+            self.temp_sum_c / self.temp_readings as f32
+        } else {
+            self.latest_temp_c
+        }
     }
 
     /// True when a calibration is applied.
@@ -186,7 +262,7 @@ impl<const Q: usize> Pipeline<Q> {
     /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
     /// when uncalibrated.
     #[inline(always)]
-    fn compensate(&self, s: &Sample, omega_dot: &[f32; 3]) -> [f32; 3] {
+    fn compensate(&self, s: &Sample, rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
             Some(c) if c.mode() == LeverMode::Off => {
                 c.compensate_static(&SensorOutputs { raw: s.raw }).m_s2
@@ -194,9 +270,7 @@ impl<const Q: usize> Pipeline<Q> {
             Some(c) => {
                 c.compensate(
                     &SensorOutputs { raw: s.raw },
-                    &BodyRate {
-                        rad_s: s.rate_rad_s,
-                    },
+                    &BodyRate { rad_s: *rate },
                     &BodyAngularAccel { rad_s2: *omega_dot },
                 )
                 .m_s2
@@ -205,11 +279,25 @@ impl<const Q: usize> Pipeline<Q> {
         }
     }
 
+    /// The body rate: the gyro's output corrected by the calibration (raw when uncalibrated).
     #[inline(always)]
-    fn frame_flags(&self) -> SampleFlags {
+    fn body_rate(&self, s: &Sample) -> [f32; 3] {
+        match &self.compensator {
+            Some(c) => c.correct_rate(&s.rate_rad_s).rad_s,
+            None => s.rate_rad_s,
+        }
+    }
+
+    #[inline(always)]
+    fn frame_flags(&self, compensated: bool) -> SampleFlags {
         let mut f = self.window_flags;
-        if self.compensator.is_none() {
-            f |= SampleFlags::UNCALIBRATED;
+        match &self.compensator {
+            None => f |= SampleFlags::UNCALIBRATED,
+            Some(c) if c.temperature_state().is_flagged() => f |= SampleFlags::TEMPERATURE,
+            Some(_) => {}
+        }
+        if !compensated {
+            f &= !SampleFlags::TEMPERATURE;
         }
         if self.drop_pending {
             f |= SampleFlags::FRAMES_DROPPED;
@@ -234,8 +322,9 @@ impl<const Q: usize> Pipeline<Q> {
         let index = self.index;
         self.index += 1;
         let finite = s.is_finite();
+        let rate = self.body_rate(s);
         let omega_dot = if finite {
-            self.omega_dot.update(&s.rate_rad_s)
+            self.omega_dot.update(&rate)
         } else {
             self.omega_dot.reset();
             [0.0; 3]
@@ -254,12 +343,11 @@ impl<const Q: usize> Pipeline<Q> {
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
                 if good {
-                    let v = if req.kind == StreamKind::RawWindows {
-                        s.raw
+                    let (v, r) = if req.kind == StreamKind::RawWindows {
+                        (s.raw, s.rate_rad_s)
                     } else {
-                        self.compensate(s, &omega_dot)
+                        (self.compensate(s, &rate, &omega_dot), rate)
                     };
-                    let r = s.rate_rad_s;
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
                     self.rejected += 1;
@@ -273,7 +361,7 @@ impl<const Q: usize> Pipeline<Q> {
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
                     self.window_flags = sample_flags;
-                    let flags = self.frame_flags();
+                    let flags = self.frame_flags(req.kind == StreamKind::CompensatedDecimated);
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {
                             index,
@@ -283,14 +371,14 @@ impl<const Q: usize> Pipeline<Q> {
                         })
                     } else {
                         let f = if finite {
-                            self.compensate(s, &omega_dot)
+                            self.compensate(s, &rate, &omega_dot)
                         } else {
                             s.raw
                         };
                         DeviceToHost::CompensatedSample(CompensatedSample {
                             index,
                             specific_force_m_s2: f,
-                            rate_rad_s: s.rate_rad_s,
+                            rate_rad_s: rate,
                             flags,
                         })
                     };
@@ -308,7 +396,8 @@ impl<const Q: usize> Pipeline<Q> {
     #[inline(never)]
     fn close_window(&mut self, kind: StreamKind) {
         let st = self.acc.finish();
-        let flags = self.frame_flags();
+        let flags = self.frame_flags(kind == StreamKind::CompensatedWindows);
+        let mean_temp_c = self.window_temp_c();
         let m = st.mean;
         let v = st.var;
         let msg = if kind == StreamKind::RawWindows {
@@ -319,6 +408,7 @@ impl<const Q: usize> Pipeline<Q> {
                 var_raw: [v[0], v[1], v[2]],
                 mean_rate_rad_s: [m[3], m[4], m[5]],
                 var_rate_rad2_s2: [v[3], v[4], v[5]],
+                mean_temp_c,
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
                 flags,
@@ -330,6 +420,7 @@ impl<const Q: usize> Pipeline<Q> {
                 mean_m_s2: [m[0], m[1], m[2]],
                 var_m2_s4: [v[0], v[1], v[2]],
                 mean_rate_rad_s: [m[3], m[4], m[5]],
+                mean_temp_c,
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
                 flags,
@@ -340,6 +431,8 @@ impl<const Q: usize> Pipeline<Q> {
         self.rejected = 0;
         self.window_flags = 0;
         self.window_first = self.index;
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
     }
 }
 
@@ -354,6 +447,7 @@ fn unreachable() -> ! {
 mod tests {
     use super::*;
     use crate::paper_unit;
+    use shared::compensator::TemperatureState;
 
     fn calibrated(mode: LeverMode) -> Pipeline<8> {
         let mut p = Pipeline::<8>::new(1000);
@@ -525,6 +619,95 @@ mod tests {
             assert!(w.mean_m_s2.iter().all(|v| v.is_finite()), "{w:?}");
             assert_eq!(w.count, 1);
         }
+    }
+
+    #[test]
+    fn temperature_readings_average_into_windows_refresh_at_most_4_hz_and_flag_compensated_frames()
+    {
+        let cal = shared::Calibration {
+            temperature: Some(paper_unit::typical_thermal_model()),
+            ..paper_unit::calibration()
+        };
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(
+            Compensator::new(&cal, LeverMode::RateOnly).ok(),
+        ));
+        let state = |p: &Pipeline<8>| p.compensator().unwrap().temperature_state();
+        assert_eq!(state(&p), TemperatureState::NoReading);
+        stream(&mut p, StreamKind::CompensatedWindows, 500);
+        p.set_temperature(30.0);
+        assert_eq!(state(&p), TemperatureState::InRange);
+        for k in 0..500 {
+            if k == 100 {
+                // Within 250 samples of the last refresh: averaged, not applied.
+                p.set_temperature(80.0);
+                assert_eq!(state(&p), TemperatureState::InRange);
+            }
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(w.mean_temp_c, 55.0);
+        assert!(!w.flags.has(SampleFlags::TEMPERATURE), "{w:?}");
+        // The next reading is due: clamped, flagged on compensated frames only.
+        p.set_temperature(80.0);
+        assert_eq!(state(&p), TemperatureState::Clamped);
+        for _ in 0..500 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(w.flags.has(SampleFlags::TEMPERATURE));
+        assert_eq!(w.mean_temp_c, 80.0);
+        stream(&mut p, StreamKind::RawWindows, 10);
+        for _ in 0..10 {
+            p.on_sample(&S);
+        }
+        let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
+            panic!()
+        };
+        assert!(!w.flags.has(SampleFlags::TEMPERATURE));
+        // No reading in a window: the latest one; a board without a sensor: NaN.
+        assert_eq!(w.mean_temp_c, 80.0);
+        let mut bare = Pipeline::<8>::new(1000);
+        stream(&mut bare, StreamKind::RawWindows, 1);
+        bare.on_sample(&S);
+        let Some(DeviceToHost::RawWindow(w)) = bare.pop_output() else {
+            panic!()
+        };
+        assert!(w.mean_temp_c.is_nan());
+    }
+
+    #[test]
+    fn compensated_frames_carry_the_corrected_rate_and_raw_frames_the_gyros_own() {
+        let cal = shared::Calibration {
+            gyro: Some(paper_unit::typical_gyro()),
+            ..paper_unit::calibration()
+        };
+        let c = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(Some(c)));
+        stream(&mut p, StreamKind::CompensatedDecimated, 1);
+        p.on_sample(&S);
+        let Some(DeviceToHost::CompensatedSample(x)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(x.rate_rad_s, c.correct_rate(&S.rate_rad_s).rad_s);
+        assert_ne!(x.rate_rad_s, S.rate_rad_s);
+        let want = c.compensate(
+            &SensorOutputs { raw: S.raw },
+            &c.correct_rate(&S.rate_rad_s),
+            &BodyAngularAccel::default(),
+        );
+        assert_eq!(x.specific_force_m_s2, want.m_s2);
+        stream(&mut p, StreamKind::RawDecimated, 1);
+        p.on_sample(&S);
+        let Some(DeviceToHost::RawSample(x)) = p.pop_output() else {
+            panic!()
+        };
+        assert_eq!(x.rate_rad_s, S.rate_rad_s);
     }
 
     #[test]

@@ -43,6 +43,8 @@ pub struct DeviceInfo {
 pub enum BoardEvent {
     /// Set the virtual table (already checked and normalised).
     SetTable(VirtualTable),
+    /// Set the virtual unit's die temperature, °C (already checked).
+    SetTemperature(f32),
     /// Restart the device after the pending answers are sent.
     Reset,
 }
@@ -224,6 +226,18 @@ impl<S: CalStore> Controller<S> {
                     Ok(t) => Outcome {
                         board: Some(BoardEvent::SetTable(t)),
                         ..Outcome::ack(Ack::TableSet)
+                    },
+                    Err(_) => Outcome::error(DeviceError::Unsupported),
+                }
+            }
+            HostToDevice::SetVirtualTemperature { temp_c } => {
+                if !self.info.virtual_table {
+                    return Outcome::error(DeviceError::Unsupported);
+                }
+                match VirtualSensor::check_temperature(temp_c) {
+                    Ok(t) => Outcome {
+                        board: Some(BoardEvent::SetTemperature(t)),
+                        ..Outcome::ack(Ack::TemperatureSet)
                     },
                     Err(_) => Outcome::error(DeviceError::Unsupported),
                 }

@@ -14,8 +14,12 @@ use shared::compensator::{Compensator, LeverMode};
 use shared::omega_dot::OmegaDotEstimator;
 use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
 
+use shared::wire::{DeviceToHost, SampleFlags, StreamKind, StreamRequest, VirtualTable};
+
 use crate::paper_unit;
+use crate::pipeline::{Pipeline, PipelineCommand};
 use crate::stats::WindowAccumulator;
+use crate::virtual_sensor::VirtualSensor;
 
 /// One compensation case: inputs and the three modes' outputs, as f32 bit patterns.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +35,25 @@ pub struct CompCase {
     /// `compensate` with [`LeverMode::RateOnly`].
     pub out_rate: [u32; 3],
     /// `compensate` with [`LeverMode::RateAndAcceleration`].
+    pub out_full: [u32; 3],
+}
+
+/// One case of the gyro correction and the temperature refresh: the paper's unit with
+/// [`paper_unit::typical_gyro`] and [`paper_unit::typical_thermal_model`], refreshed at `temp_c`, then
+/// the gyro's output corrected and the outputs fully compensated with the corrected rate.
+#[derive(Clone, Copy, Debug)]
+pub struct GyroTempCase {
+    /// Temperature given to `refresh`, °C (some outside the valid range: clamped).
+    pub temp_c: u32,
+    /// Outputs, V.
+    pub u: [u32; 3],
+    /// The gyro's output, rad/s.
+    pub w: [u32; 3],
+    /// Angular acceleration, rad/s².
+    pub wd: [u32; 3],
+    /// `correct_rate(w)`.
+    pub rate: [u32; 3],
+    /// `compensate(u, rate, wd)` with [`LeverMode::RateAndAcceleration`].
     pub out_full: [u32; 3],
 }
 
@@ -100,6 +123,7 @@ fn compensators() -> Option<[Compensator; 3]> {
 }
 
 /// Compensation in the three modes against the table (the compensators are built here, in f64).
+#[inline(never)]
 pub fn check_compensation() -> [Check; 3] {
     let mut out = [Check::default(); 3];
     let Some([off, rate, full]) = compensators() else {
@@ -114,6 +138,103 @@ pub fn check_compensation() -> [Check; 3] {
         out[2].add3(&full.compensate(&u, &w, &wd).m_s2, &c.out_full);
     }
     out
+}
+
+fn gyro_temp_compensator() -> Option<Compensator> {
+    let cal = shared::Calibration {
+        gyro: Some(paper_unit::typical_gyro()),
+        temperature: Some(paper_unit::typical_thermal_model()),
+        ..paper_unit::calibration()
+    };
+    Compensator::new(&cal, LeverMode::RateAndAcceleration).ok()
+}
+
+/// Gyro correction and full compensation after a temperature refresh, against the table (the
+/// compensator is built here, in f64, and refreshed in f32 on each case's temperature).
+#[inline(never)]
+pub fn check_gyro_temperature() -> [Check; 2] {
+    let mut out = [Check::default(); 2];
+    let Some(mut c) = gyro_temp_compensator() else {
+        return out;
+    };
+    for k in GYRO_TEMP_CASES {
+        c.refresh(f32::from_bits(k.temp_c));
+        let rate = c.correct_rate(&f(&k.w));
+        out[0].add3(&rate.rad_s, &k.rate);
+        let u = SensorOutputs { raw: f(&k.u) };
+        let wd = BodyAngularAccel { rad_s2: f(&k.wd) };
+        out[1].add3(&c.compensate(&u, &rate, &wd).m_s2, &k.out_full);
+    }
+    out
+}
+
+/// The paper's unit with [`paper_unit::typical_gyro`] and [`paper_unit::typical_thermal_model`]: the
+/// virtual unit of the heated-board checks.
+pub fn imperfect_unit() -> shared::Calibration {
+    shared::Calibration {
+        gyro: Some(paper_unit::typical_gyro()),
+        temperature: Some(paper_unit::typical_thermal_model()),
+        ..paper_unit::calibration()
+    }
+}
+
+/// What [`heated_unit`] measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeatedResult {
+    /// Largest axis error of the window's mean specific force, µg.
+    pub error_ug: f32,
+    /// The window's flags.
+    pub flags: SampleFlags,
+    /// The window's mean temperature, °C.
+    pub mean_temp_c: f32,
+}
+
+/// The heated board, run the same way on the PC and on the target: [`imperfect_unit`] on the virtual
+/// table, spinning at 200 °/s about a tilted axis, its die heated to `temp_c` in software, sampled
+/// `n` times (noise on) through the whole pipeline (`VirtualSensor::step`: temperature readings, gyro
+/// correction, refresh, full compensation), compensated by its own calibration — with or without the
+/// temperature model. The truth is `g·up` (the reference point is on the table axis).
+#[inline(never)]
+pub fn heated_unit(temp_c: f32, with_model: bool, n: u32) -> Option<HeatedResult> {
+    let truth = imperfect_unit();
+    let mut sensor = VirtualSensor::new(&truth, 1000, true)?;
+    let up = [0.6f32, -0.48, 0.64];
+    sensor
+        .set_table(&VirtualTable {
+            up_b: up,
+            rate_rad_s: 200f32.to_radians(),
+            accel_rad_s2: 0.0,
+        })
+        .ok()?;
+    sensor.set_temperature(temp_c);
+    let cal = shared::Calibration {
+        temperature: if with_model { truth.temperature } else { None },
+        ..truth
+    };
+    let mut p = Pipeline::<2>::new(1000);
+    p.apply(PipelineCommand::Compensator(Some(
+        Compensator::new(&cal, LeverMode::RateAndAcceleration).ok()?,
+    )));
+    p.apply(PipelineCommand::Stream(StreamRequest {
+        kind: StreamKind::CompensatedWindows,
+        window_samples: n,
+    }));
+    for _ in 0..n {
+        sensor.step(&mut p);
+    }
+    let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() else {
+        return None;
+    };
+    let g = paper_unit::GRAVITY_M_S2 as f32;
+    let mut error_ug = 0.0f32;
+    for j in 0..3 {
+        error_ug = error_ug.max((w.mean_m_s2[j] - g * up[j]).abs() / g * 1e6);
+    }
+    Some(HeatedResult {
+        error_ug,
+        flags: w.flags,
+        mean_temp_c: w.mean_temp_c,
+    })
 }
 
 /// The ω̇ estimator over the gyro sequence against the table.
@@ -216,6 +337,33 @@ mod tests {
             ];
             writeln!(s, "    ({}, {}),", bits(w), bits(e.update(&w))).unwrap();
         }
+        s.push_str("];\n\n/// Gyro correction and compensation after a temperature refresh.\npub const GYRO_TEMP_CASES: &[GyroTempCase] = &[\n");
+        let mut c = gyro_temp_compensator().unwrap();
+        for n in 0..24 {
+            // −30..70 °C: the valid range is −20..60, so a few cases are clamped.
+            let temp = -30.0 + 100.0 * (n as f32) / 23.0;
+            c.refresh(temp);
+            let u = [0; 3].map(|_| rng.range(0.4, 4.4));
+            let w = [0; 3].map(|_| rng.range(-10.0, 10.0));
+            let wd = [0; 3].map(|_| rng.range(-50.0, 50.0));
+            let rate = c.correct_rate(&w);
+            let full = c.compensate(
+                &SensorOutputs { raw: u },
+                &rate,
+                &BodyAngularAccel { rad_s2: wd },
+            );
+            writeln!(
+                s,
+                "    GyroTempCase {{ temp_c: 0x{:08x}, u: {}, w: {}, wd: {}, rate: {}, out_full: {} }},",
+                temp.to_bits(),
+                bits(u),
+                bits(w),
+                bits(wd),
+                bits(rate.rad_s),
+                bits(full.m_s2),
+            )
+            .unwrap();
+        }
         let mut acc = WindowAccumulator::<3>::new();
         for _ in 0..STATS_REPEAT {
             for u in &inputs {
@@ -251,7 +399,27 @@ mod tests {
             assert!(c.passed() && c.values == 72, "{c:?}");
         }
         assert!(check_omega_dot().passed());
+        for c in check_gyro_temperature() {
+            assert!(c.passed() && c.values == 72, "{c:?}");
+        }
         assert!(check_window_stats().passed());
+    }
+
+    #[test]
+    fn heated_unit_is_compensated_within_50_ug_with_the_model_and_flagged_outside_its_range() {
+        for temp in [0.0, 25.0, 45.0] {
+            let r = heated_unit(temp, true, 4000).unwrap();
+            assert!(r.error_ug < 50.0, "{temp} °C: {r:?}");
+            assert!(!r.flags.has(SampleFlags::TEMPERATURE), "{r:?}");
+            assert!((r.mean_temp_c - temp).abs() < 1e-3, "{r:?}");
+            if temp != 25.0 {
+                // Without the model: milli-g (0.3 mg/°C bias tempco, 150 ppm/°C scale).
+                let stale = heated_unit(temp, false, 4000).unwrap();
+                assert!(stale.error_ug > 3000.0, "{temp} °C: {stale:?}");
+            }
+        }
+        let hot = heated_unit(70.0, true, 1000).unwrap();
+        assert!(hot.flags.has(SampleFlags::TEMPERATURE), "{hot:?}");
     }
 
     #[test]

@@ -5,12 +5,25 @@
 //!
 //! The table turns about the vertical, so "up" is constant in body axes and `ω = rate(t)·up` with
 //! `rate(t) = rate₀ + α·t`, t counted in samples since the table was set (virtual time).
+//!
+//! The unit's imperfections are those of its [`Calibration`] (the truth): the gyro outputs
+//! `w = G ω + b(T)` with its `gyro` section (docs/model.md §8), and with a `temperature` section the
+//! outputs follow the thermal model of docs/model.md §9 at the die temperature,
+//! `U(T) = u0 + P(ΔT) + diag(1 + s(T))·(U_ref − u0)` — bias tempco with quadratic terms, scale tempco,
+//! gyro bias drift. The die temperature is set in software ([`VirtualSensor::set_temperature`],
+//! `HostToDevice::SetVirtualTemperature`); the unit's temperature *sensor* reads it through a
+//! first-order lag ([`VirtualSensor::set_thermal_lag_s`], none by default), as a sensor beside the die
+//! does.
 
 use shared::forward::{ForwardModel, TableState};
+use shared::linalg;
+use shared::sensor_models::{
+    poly_no_constant, GyroCorrection, TemperatureModel, TEMPERATURE_LIMITS_C,
+};
 use shared::wire::VirtualTable;
 use shared::Calibration;
 
-use crate::pipeline::Sample;
+use crate::pipeline::{Pipeline, Sample, TEMPERATURE_REFRESH_HZ};
 
 /// Output range of the virtual accelerometers, volts (a 0–5 V analog part).
 pub const OUTPUT_RANGE_V: (f32, f32) = (0.0, 5.0);
@@ -23,6 +36,9 @@ pub const GYRO_NOISE_RAD_S: f32 = 1.0e-3;
 /// Largest table rate accepted, rad/s (the rate ramp is clamped here too).
 pub const MAX_TABLE_RATE_RAD_S: f32 = 30.0;
 
+/// Die temperature at power-on, °C.
+pub const POWER_ON_TEMPERATURE_C: f32 = 25.0;
+
 /// A unit on a virtual rate table.
 pub struct VirtualSensor {
     model: ForwardModel,
@@ -31,28 +47,134 @@ pub struct VirtualSensor {
     sample_period_s: f64,
     noise_state: u32,
     noise_on: bool,
+    gyro: GyroCorrection,
+    thermal: Option<TemperatureModel>,
+    zero_bias_out: [f64; 3],
+    die_temp_c: f64,
+    sensor_temp_c: f64,
+    /// Fraction of the die–sensor difference the sensor closes per sample (1: no lag).
+    lag_step: f64,
+    /// `P(ΔT)`, `1 + s(T)`, `b(T)` at the die temperature.
+    bias_shift_out: [f64; 3],
+    gain: [f64; 3],
+    gyro_bias_rad_s: [f64; 3],
+    samples: u32,
+    sample_rate_hz: u32,
 }
 
 /// Why a table setting was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BadTable;
 
+/// Why a temperature setting was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BadTemperature;
+
 impl VirtualSensor {
     /// The unit `cal` at rest with z up, sampled at `sample_rate_hz`; `None` if `cal` is unusable.
     pub fn new(cal: &Calibration, sample_rate_hz: u32, noise: bool) -> Option<Self> {
         let model = ForwardModel::new(cal).ok()?;
-        Some(VirtualSensor {
-            model,
-            table: VirtualTable {
-                up_b: [0.0, 0.0, 1.0],
-                rate_rad_s: 0.0,
-                accel_rad_s2: 0.0,
-            },
-            samples_since_set: 0,
-            sample_period_s: 1.0 / f64::from(sample_rate_hz.max(1)),
-            noise_state: 0x1234_5678,
-            noise_on: noise,
-        })
+        Some(
+            VirtualSensor {
+                model,
+                table: VirtualTable {
+                    up_b: [0.0, 0.0, 1.0],
+                    rate_rad_s: 0.0,
+                    accel_rad_s2: 0.0,
+                },
+                samples_since_set: 0,
+                sample_period_s: 1.0 / f64::from(sample_rate_hz.max(1)),
+                noise_state: 0x1234_5678,
+                noise_on: noise,
+                gyro: cal.gyro.unwrap_or(GyroCorrection::PERFECT),
+                thermal: cal.temperature,
+                zero_bias_out: cal.statics.zero_bias_out,
+                die_temp_c: 0.0,
+                sensor_temp_c: f64::from(POWER_ON_TEMPERATURE_C),
+                lag_step: 1.0,
+                bias_shift_out: [0.0; 3],
+                gain: [1.0; 3],
+                gyro_bias_rad_s: [0.0; 3],
+                samples: 0,
+                sample_rate_hz: sample_rate_hz.max(1),
+            }
+            .at_temperature(POWER_ON_TEMPERATURE_C),
+        )
+    }
+
+    fn at_temperature(mut self, t: f32) -> Self {
+        self.set_temperature(t);
+        self
+    }
+
+    /// Checks a die temperature: finite and within `TEMPERATURE_LIMITS_C`.
+    pub fn check_temperature(temp_c: f32) -> Result<f32, BadTemperature> {
+        let t = f64::from(temp_c);
+        if t.is_finite() && (TEMPERATURE_LIMITS_C.0..=TEMPERATURE_LIMITS_C.1).contains(&t) {
+            Ok(temp_c)
+        } else {
+            Err(BadTemperature)
+        }
+    }
+
+    /// Heats or cools the die to `temp_c` at once (the temperature sensor follows with the lag).
+    /// Outside the truth model's valid range the polynomials are extrapolated: the unit does drift
+    /// there, only the calibration does not know how.
+    pub fn set_temperature(&mut self, temp_c: f32) {
+        let Ok(t) = Self::check_temperature(temp_c) else {
+            return;
+        };
+        self.die_temp_c = f64::from(t);
+        if self.lag_step >= 1.0 {
+            self.sensor_temp_c = self.die_temp_c; // no lag: the sensor reads the die
+        }
+        let m = self.thermal;
+        let dt = m.map_or(0.0, |m| self.die_temp_c - m.reference_c);
+        for i in 0..3 {
+            let (shift, scale, drift) = m.map_or((0.0, 0.0, 0.0), |m| {
+                (
+                    poly_no_constant(&m.zero_bias_out_per_c[i], dt),
+                    poly_no_constant(&m.scale_rel_per_c[i], dt),
+                    poly_no_constant(&m.gyro_bias_polynomials()[i], dt),
+                )
+            });
+            self.bias_shift_out[i] = shift;
+            self.gain[i] = 1.0 + scale;
+            self.gyro_bias_rad_s[i] = self.gyro.bias_rad_s[i] + drift;
+        }
+    }
+
+    /// The time constant of the temperature sensor's lag behind the die, seconds (0: none).
+    pub fn set_thermal_lag_s(&mut self, tau_s: f32) {
+        let tau = f64::from(tau_s);
+        // Exact discretisation of dT/dt = (T_die − T)/τ over one sample period.
+        self.lag_step = if tau > 0.0 {
+            1.0 - libm::exp(-self.sample_period_s / tau)
+        } else {
+            1.0
+        };
+    }
+
+    /// The die temperature, °C (what the unit's parameters follow).
+    pub fn die_temperature_c(&self) -> f32 {
+        self.die_temp_c as f32
+    }
+
+    /// What the unit's temperature sensor reads, °C.
+    pub fn temperature_c(&self) -> f32 {
+        self.sensor_temp_c as f32
+    }
+
+    /// One sample period of a board: the next sample through the pipeline, and every
+    /// `1/TEMPERATURE_REFRESH_HZ` s a temperature reading first (as the QEMU board and the host's
+    /// simulated device do).
+    pub fn step<const Q: usize>(&mut self, pipeline: &mut Pipeline<Q>) {
+        let every = (self.sample_rate_hz / TEMPERATURE_REFRESH_HZ).max(1);
+        if self.samples % every == 0 {
+            pipeline.set_temperature(self.temperature_c());
+        }
+        let s = self.sample();
+        pipeline.on_sample(&s);
     }
 
     /// Checks and normalises a table setting: `up_b` finite and not zero, rates finite and bounded.
@@ -125,14 +247,19 @@ impl VirtualSensor {
         };
         let motion = state.motion(self.model.gravity_m_s2);
         let u = self.model.outputs(&motion);
+        self.samples = self.samples.wrapping_add(1);
+        self.sensor_temp_c += (self.die_temp_c - self.sensor_temp_c) * self.lag_step;
+        let gw = linalg::mat_vec(&self.gyro.matrix, &motion.omega.rad_s);
         let mut saturated = false;
         let mut raw = [0.0f32; 3];
         let mut rate_out = [0.0f32; 3];
         for i in 0..3 {
-            let v = u.raw[i] as f32 + OUTPUT_NOISE_V * self.noise();
+            let u0 = self.zero_bias_out[i];
+            let u_t = u0 + self.bias_shift_out[i] + self.gain[i] * (u.raw[i] - u0);
+            let v = u_t as f32 + OUTPUT_NOISE_V * self.noise();
             raw[i] = v.clamp(OUTPUT_RANGE_V.0, OUTPUT_RANGE_V.1);
             saturated |= raw[i] != v;
-            let w = motion.omega.rad_s[i] as f32 + GYRO_NOISE_RAD_S * self.noise();
+            let w = (gw[i] + self.gyro_bias_rad_s[i]) as f32 + GYRO_NOISE_RAD_S * self.noise();
             rate_out[i] = w.clamp(-GYRO_RANGE_RAD_S, GYRO_RANGE_RAD_S);
             saturated |= rate_out[i] != w;
         }
@@ -179,6 +306,45 @@ mod tests {
             (st.m_s2[1].abs() / 9.80665 * 1e3 - 11.19).abs() < 0.05,
             "{st:?}"
         );
+    }
+
+    #[test]
+    fn gyro_errors_thermal_model_and_sensor_lag() {
+        let truth = crate::testvectors::imperfect_unit();
+        let mut s = VirtualSensor::new(&truth, 1000, false).unwrap();
+        assert_eq!(s.temperature_c(), POWER_ON_TEMPERATURE_C);
+        // At rest, z up, at the reference temperature: the gyro reads its bias, the outputs the truth.
+        let x = s.sample();
+        let b = truth.gyro.unwrap().bias_rad_s;
+        for j in 0..3 {
+            assert!((f64::from(x.rate_rad_s[j]) - b[j]).abs() < 1e-6, "{x:?}");
+        }
+        let at_ref = x.raw;
+        // Heated by 20 °C: z (1 g up) moves by its bias tempco and quadratic term plus 150 ppm/°C
+        // of its 0.4 V; x and y (0 g) by their bias terms only.
+        s.set_temperature(45.0);
+        let hot = s.sample().raw;
+        let m = truth.temperature.unwrap();
+        for j in 0..3 {
+            let c = m.zero_bias_out_per_c[j];
+            let k = m.scale_rel_per_c[j][0];
+            let g_part = f64::from(at_ref[j]) - truth.statics.zero_bias_out[j];
+            let want = c[0] * 20.0 + c[1] * 400.0 + k * 20.0 * g_part;
+            let got = f64::from(hot[j]) - f64::from(at_ref[j]);
+            assert!((got - want).abs() < 1e-6, "axis {j}: {got} vs {want}");
+        }
+        // A 2 s sensor lag: after 2 s the reading has closed 1 − 1/e of a 20 °C step.
+        s.set_thermal_lag_s(2.0);
+        s.set_temperature(65.0);
+        assert_eq!(s.temperature_c(), 45.0);
+        for _ in 0..2000 {
+            s.sample();
+        }
+        let closed = (s.temperature_c() - 45.0) / 20.0;
+        assert!((closed - (1.0 - (-1.0f32).exp())).abs() < 1e-3, "{closed}");
+        assert_eq!(s.die_temperature_c(), 65.0);
+        assert!(VirtualSensor::check_temperature(f32::NAN).is_err());
+        assert!(VirtualSensor::check_temperature(500.0).is_err());
     }
 
     #[test]

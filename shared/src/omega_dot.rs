@@ -74,19 +74,26 @@ impl OmegaDotEstimator {
 
     /// Feeds one gyro sample and returns the current `ω̇` estimate (rad/s²). The first sample only
     /// primes the difference (the single branch is on state, not on data).
-    #[inline]
+    #[inline(always)]
     pub fn update(&mut self, omega_rad_s: &[f32; 3]) -> [f32; 3] {
         if !self.primed {
             self.previous_rad_s = *omega_rad_s;
             self.primed = true;
         }
-        for j in 0..3 {
-            let x = (omega_rad_s[j] - self.previous_rad_s[j]) * self.sample_rate_hz;
-            self.stage1[j] += self.beta * (x - self.stage1[j]);
-            self.stage2[j] += self.beta * (self.stage1[j] - self.stage2[j]);
-        }
+        // Per axis written out: straight-line code at any optimisation level (the firmware builds
+        // this crate for size).
+        self.axis(0, omega_rad_s[0]);
+        self.axis(1, omega_rad_s[1]);
+        self.axis(2, omega_rad_s[2]);
         self.previous_rad_s = *omega_rad_s;
         self.stage2
+    }
+
+    #[inline(always)]
+    fn axis(&mut self, j: usize, omega_rad_s: f32) {
+        let x = (omega_rad_s - self.previous_rad_s[j]) * self.sample_rate_hz;
+        self.stage1[j] += self.beta * (x - self.stage1[j]);
+        self.stage2[j] += self.beta * (self.stage1[j] - self.stage2[j]);
     }
 
     /// Restarts from no history (after a gap in the stream).

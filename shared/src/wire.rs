@@ -21,8 +21,13 @@ use serde::{de::DeserializeOwned, Deserialize, Serialize};
 
 pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 
-/// Version of this protocol; a host refuses a device that speaks another.
-pub const PROTOCOL_VERSION: u16 = 1;
+/// Version of this protocol; a host refuses a device that speaks another (the [`Identity`] that
+/// carries it keeps its layout across versions, so the refusal is always readable).
+///
+/// - 1: the first protocol.
+/// - 2: windows carry the mean temperature (`mean_temp_c`); [`SampleFlags::TEMPERATURE`];
+///   [`HostToDevice::SetVirtualTemperature`]; blob errors for the gyro, temperature and `f32` range.
+pub const PROTOCOL_VERSION: u16 = 2;
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
 
@@ -106,6 +111,12 @@ pub enum HostToDevice {
     SetVirtualTable(VirtualTable),
     /// Restart the device (it reloads the calibration from storage).
     Reset,
+    /// Heat or cool the virtual unit to this die temperature, °C (simulated and QEMU devices only);
+    /// its temperature sensor follows with the board's thermal lag.
+    SetVirtualTemperature {
+        /// Die temperature, °C.
+        temp_c: f32,
+    },
 }
 
 /// Which board the device is.
@@ -165,6 +176,10 @@ impl SampleFlags {
     pub const NON_FINITE: u8 = 4;
     /// Output frames were dropped since the previous frame (the link was too slow).
     pub const FRAMES_DROPPED: u8 = 8;
+    /// Compensated frames only: the calibration's temperature model was not applied at the unit's
+    /// actual temperature in this frame — outside the calibrated range (the nearest end was used),
+    /// or no valid temperature reading yet (the reference values were used).
+    pub const TEMPERATURE: u8 = 16;
 
     /// True when `bit` is set.
     pub fn has(self, bit: u8) -> bool {
@@ -187,6 +202,9 @@ pub struct RawWindow {
     pub mean_rate_rad_s: [f32; 3],
     /// Variance of the gyro rate, (rad/s)².
     pub var_rate_rad2_s2: [f32; 3],
+    /// Mean of the unit's temperature readings during the window, °C (the latest reading when none
+    /// fell in the window; NaN when the board has no temperature sensor).
+    pub mean_temp_c: f32,
     /// Samples left out because saturated or non-finite.
     pub rejected: u32,
     /// Output frames dropped since boot.
@@ -206,8 +224,10 @@ pub struct CompensatedWindow {
     pub mean_m_s2: [f32; 3],
     /// Its variance, (m/s²)².
     pub var_m2_s4: [f32; 3],
-    /// Mean gyro rate, body axes, rad/s.
+    /// Mean gyro rate, body axes, rad/s (corrected with the calibration's gyro model).
     pub mean_rate_rad_s: [f32; 3],
+    /// Mean temperature, °C, as in [`RawWindow::mean_temp_c`].
+    pub mean_temp_c: f32,
     /// Samples left out because saturated or non-finite.
     pub rejected: u32,
     /// Output frames dropped since boot.
@@ -236,7 +256,7 @@ pub struct CompensatedSample {
     pub index: u64,
     /// Specific force at the reference point, body axes, m/s².
     pub specific_force_m_s2: [f32; 3],
-    /// Gyro rate, body axes, rad/s.
+    /// Gyro rate, body axes, rad/s (corrected with the calibration's gyro model).
     pub rate_rad_s: [f32; 3],
     /// Status bits.
     pub flags: SampleFlags,
@@ -262,6 +282,8 @@ pub enum Ack {
     TableSet,
     /// The device is about to restart.
     Resetting,
+    /// The virtual unit's temperature was set.
+    TemperatureSet,
 }
 
 /// Typed errors the device answers with. It keeps running after every one of them.
@@ -414,6 +436,7 @@ mod tests {
             var_raw: [1.0; 3],
             mean_rate_rad_s: [1.0; 3],
             var_rate_rad2_s2: [1.0; 3],
+            mean_temp_c: 1.0,
             rejected: u32::MAX,
             dropped_frames: u32::MAX,
             flags: SampleFlags(0xFF),
@@ -421,6 +444,67 @@ mod tests {
         let mut dbuf = [0u8; DEVICE_FRAME_MAX];
         let n = encode_frame(&worst, &mut dbuf).unwrap().len();
         assert!(n <= DEVICE_FRAME_MAX, "{n} > {DEVICE_FRAME_MAX}");
+    }
+
+    fn plain<T: Serialize>(m: &T) -> std::vec::Vec<u8> {
+        let mut buf = [0u8; 256];
+        postcard::to_slice(m, &mut buf).unwrap().to_vec()
+    }
+
+    /// COBS by its definition (no run reaches 254 bytes here): each zero, and the start, becomes the
+    /// distance to the next zero; a terminating zero ends the frame.
+    fn cobs(data: &[u8]) -> std::vec::Vec<u8> {
+        let mut out = std::vec::Vec::new();
+        for run in data.split(|b| *b == 0) {
+            assert!(run.len() < 254);
+            out.push(run.len() as u8 + 1);
+            out.extend_from_slice(run);
+        }
+        out.push(0);
+        out
+    }
+
+    /// Version 2 frames byte for byte, written out by hand from postcard's format (variant index as a
+    /// varint, integers as varints, f32 little-endian, fields in order), then COBS.
+    #[test]
+    fn version_2_window_and_temperature_frames_match_hand_encoded_vectors() {
+        let w = DeviceToHost::RawWindow(RawWindow {
+            first_sample: 300,
+            count: 2,
+            mean_raw: [1.0, 2.0, -1.0],
+            var_raw: [0.5; 3],
+            mean_rate_rad_s: [0.25, 0.0, 4.0],
+            var_rate_rad2_s2: [1.0; 3],
+            mean_temp_c: 25.5,
+            rejected: 1,
+            dropped_frames: 0,
+            flags: SampleFlags(SampleFlags::TEMPERATURE),
+        });
+        let f = |v: f32| v.to_le_bytes();
+        let mut payload = std::vec![0x01, 0xAC, 0x02, 0x02]; // RawWindow, 300, 2
+        for v in [1.0, 2.0, -1.0, 0.5, 0.5, 0.5, 0.25, 0.0, 4.0, 1.0, 1.0, 1.0] {
+            payload.extend_from_slice(&f(v));
+        }
+        assert_eq!(f(25.5), [0x00, 0x00, 0xCC, 0x41]);
+        payload.extend_from_slice(&[0x00, 0x00, 0xCC, 0x41, 0x01, 0x00, 0x10]);
+        assert_eq!(plain(&w), payload);
+        let mut buf = [0u8; DEVICE_FRAME_MAX];
+        let frame = encode_frame(&w, &mut buf).unwrap().to_vec();
+        assert_eq!(frame, cobs(&payload));
+        assert!(frame.len() <= DEVICE_FRAME_MAX);
+        let mut back = frame.clone();
+        assert_eq!(decode_frame::<DeviceToHost>(&mut back).unwrap(), w);
+
+        // SetVirtualTemperature is HostToDevice variant 8: tag, then the f32.
+        let m = HostToDevice::SetVirtualTemperature { temp_c: -20.0 };
+        assert_eq!(plain(&m), [0x08, 0x00, 0x00, 0xA0, 0xC1]);
+        // COBS of 08 00 00 A0 C1: each zero becomes the distance to the next one.
+        let mut buf = [0u8; HOST_FRAME_MAX];
+        assert_eq!(
+            encode_frame(&m, &mut buf).unwrap(),
+            [0x02, 0x08, 0x01, 0x03, 0xA0, 0xC1, 0x00]
+        );
+        assert_eq!(plain(&DeviceToHost::Ack(Ack::TemperatureSet)), [0x06, 0x07]);
     }
 
     #[test]

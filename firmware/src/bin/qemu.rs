@@ -61,6 +61,11 @@ fn main() -> ! {
                     let _ = s.set_table(&t);
                 }
             }),
+            Some(BoardEvent::SetTemperature(t)) => interrupt::free(|cs| {
+                if let Some(s) = SENSOR.borrow(cs).borrow_mut().as_mut() {
+                    s.set_temperature(t);
+                }
+            }),
             Some(BoardEvent::Reset) => {
                 defmt::info!("reset requested by the host");
                 service.flush(&mut link, 10_000_000);
@@ -71,15 +76,15 @@ fn main() -> ! {
     }
 }
 
-/// One sample per SysTick: the virtual sensor, then the whole per-sample path.
+/// One sample per SysTick: the virtual sensor (with its temperature a few times a second), then the
+/// whole per-sample path.
 #[exception]
 fn SysTick() {
     interrupt::free(|cs| {
         let mut sensor = SENSOR.borrow(cs).borrow_mut();
         let mut pipeline = PIPELINE.borrow(cs).borrow_mut();
         if let (Some(s), Some(p)) = (sensor.as_mut(), pipeline.as_mut()) {
-            let sample = s.sample();
-            p.on_sample(&sample);
+            s.step(p);
         }
     });
 }

@@ -27,7 +27,7 @@ use firmware::{paper_unit, ByteLink, Controller, LinkService, Pipeline};
 use shared::blob::ParameterBlob;
 use shared::wire::{
     blob_chunks, decode_frame, encode_frame, Ack, CalibrationState, DeviceToHost, HostToDevice,
-    StreamKind, StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
+    SampleFlags, StreamKind, StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
 };
 use shared::LeverMode;
 
@@ -163,6 +163,7 @@ fn info() -> DeviceInfo {
     qemu::INFO
 }
 
+#[inline(never)]
 fn pipeline_on_virtual_table(t: &mut Tally) {
     // 200 °/s about x with x up: full compensation returns (g, 0, 0); static-only leaves ~11 mg on y.
     let cal = paper_unit::calibration();
@@ -211,6 +212,35 @@ fn pipeline_on_virtual_table(t: &mut Tally) {
     t.failed += u32::from(!ok);
 }
 
+/// The virtual unit with gyro errors and a thermal model, heated in software, through the whole
+/// pipeline on the target: within 50 µg with its temperature model, milli-g without, flagged outside
+/// the calibrated range.
+#[inline(never)] // its frame (sensor, pipeline) only while it runs
+fn heated_board(t: &mut Tally) {
+    for temp in [0.0f32, 45.0] {
+        let with = testvectors::heated_unit(temp, true, 4000);
+        let without = testvectors::heated_unit(temp, false, 4000);
+        let ok = matches!((with, without), (Some(a), Some(b))
+            if a.error_ug < 50.0 && b.error_ug > 3000.0
+                && !a.flags.has(SampleFlags::TEMPERATURE));
+        hprintln!(
+            "test heated_board_{}C_compensated ... {} (with the model: {} ug, without: {} ug)",
+            temp as i32,
+            if ok { "ok" } else { "FAILED" },
+            with.map_or(f32::NAN, |r| r.error_ug),
+            without.map_or(f32::NAN, |r| r.error_ug)
+        );
+        t.passed += u32::from(ok);
+        t.failed += u32::from(!ok);
+    }
+    let hot = testvectors::heated_unit(70.0, true, 1000);
+    t.report(
+        "heated_board_70C_flagged",
+        hot.is_some_and(|r| r.flags.has(SampleFlags::TEMPERATURE)),
+        "(outside the calibrated -20..60 C)",
+    );
+}
+
 fn first_boot(t: &mut Tally) -> ! {
     paint_stack();
     hprintln!("qemu-target-tests: boot 1 (Cortex-M4F FPU, mps2-an386)");
@@ -220,7 +250,11 @@ fn first_boot(t: &mut Tally) -> ! {
     t.check("compensation_full_matches_pc", full);
     t.check("omega_dot_matches_pc", testvectors::check_omega_dot());
     t.check("window_stats_match_pc", testvectors::check_window_stats());
+    let [rate, full] = testvectors::check_gyro_temperature();
+    t.check("gyro_correction_matches_pc", rate);
+    t.check("compensation_after_temperature_refresh_matches_pc", full);
     pipeline_on_virtual_table(t);
+    heated_board(t);
 
     // The protocol handler on the board's real storage region: write the paper unit's calibration.
     // SAFETY: only place the store is created in this binary.

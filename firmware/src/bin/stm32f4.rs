@@ -10,12 +10,13 @@ use cortex_m_rt::entry;
 use defmt_rtt as _;
 use panic_probe as _;
 use stm32f4xx_hal::adc::config::{AdcConfig, SampleTime};
-use stm32f4xx_hal::adc::Adc;
+use stm32f4xx_hal::adc::{Adc, Temperature};
 use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::gpio::{Analog, Output, PushPull, PA0, PA1, PA4, PB6};
 use stm32f4xx_hal::pac::{self, interrupt, Interrupt, ADC1, SPI1, TIM2};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config;
+use stm32f4xx_hal::signature::{VtempCal110, VtempCal30};
 use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
 use stm32f4xx_hal::timer::{CounterHz, Event};
 
@@ -35,7 +36,12 @@ struct Sampler {
     pins: (PA0<Analog>, PA1<Analog>, PA4<Analog>),
     gyro: Option<GyroDev>,
     scaling: Scaling,
+    /// Samples until the next temperature reading.
+    until_temperature: u32,
 }
+
+/// Samples between on-chip temperature readings (4 per second, the pipeline's refresh rate).
+const TEMPERATURE_EVERY: u32 = SAMPLE_RATE_HZ / firmware::pipeline::TEMPERATURE_REFRESH_HZ;
 
 static PIPELINE: SharedPipeline<OUTPUT_QUEUE> = Mutex::new(RefCell::new(None));
 static SAMPLER: Mutex<RefCell<Option<&'static mut Sampler>>> = Mutex::new(RefCell::new(None));
@@ -79,7 +85,8 @@ fn main() -> ! {
         }
     };
 
-    let adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
+    let mut adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
+    adc.enable_temperature_and_vref();
     let pins = (
         gpioa.pa0.into_analog(),
         gpioa.pa1.into_analog(),
@@ -102,6 +109,7 @@ fn main() -> ! {
             adc_max: 4095,
             rad_s_per_lsb: firmware::gyro::RAD_S_PER_LSB_2000DPS,
         },
+        until_temperature: 0,
     })
     .unwrap();
     free(|cs| {
@@ -121,8 +129,8 @@ fn main() -> ! {
                 service.flush(&mut link, 10_000_000);
                 cortex_m::peripheral::SCB::sys_reset();
             }
-            // Refused by the request handler on this board (no virtual table).
-            Some(BoardEvent::SetTable(_)) | None => {}
+            // Refused by the request handler on this board (no virtual unit).
+            Some(BoardEvent::SetTable(_)) | Some(BoardEvent::SetTemperature(_)) | None => {}
         }
     }
 }
@@ -142,6 +150,18 @@ fn TIM2() {
             s.adc.convert(&s.pins.1, t),
             s.adc.convert(&s.pins.2, t),
         ];
+        if s.until_temperature == 0 {
+            // The sensor needs ≥ 10 µs of sampling (480 ADC cycles ≈ 21 µs), 4 times a second.
+            s.until_temperature = TEMPERATURE_EVERY;
+            let code = s.adc.convert(&Temperature, SampleTime::Cycles_480);
+            p.set_temperature(firmware::die_temperature::from_code(
+                code,
+                VtempCal30::get().read(),
+                VtempCal110::get().read(),
+                board::VREF_V,
+            ));
+        }
+        s.until_temperature -= 1;
         let mut sample = s.scaling.sample(&RawCodes { adc, gyro: [0; 3] });
         if let Some(g) = s.gyro.as_mut() {
             match g.read_rate() {

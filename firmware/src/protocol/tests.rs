@@ -94,14 +94,14 @@ impl Sim {
     fn run(&mut self, samples: u32) {
         for _ in 0..samples.max(1) {
             if samples > 0 {
-                let s = self.sensor.sample();
-                self.pipeline.on_sample(&s);
+                self.sensor.step(&mut self.pipeline);
             }
             if let Some(b) = self.link.budget.as_mut() {
                 *b = 12;
             }
             match self.service.poll(&mut self.link, &mut self.pipeline) {
                 Some(BoardEvent::SetTable(t)) => self.sensor.set_table(&t).unwrap(),
+                Some(BoardEvent::SetTemperature(t)) => self.sensor.set_temperature(t),
                 Some(BoardEvent::Reset) => {
                     self.service.flush(&mut self.link, 1000);
                     self.reboot();
@@ -425,6 +425,76 @@ fn storage_failure_is_reported_and_nothing_changes() {
     assert!(c.compensator().is_none());
 }
 
+/// A version 1 blob of the paper unit for the QEMU unit: a version 2 blob without sections is the
+/// version 1 payload followed by two `None` bytes, so drop them and re-sign it under version 1.
+fn version_1_blob() -> Vec<u8> {
+    let v2 = blob_for(QEMU_UNIT_ID, 77);
+    let n = v2.len() - 4 - 8 - 2;
+    assert_eq!(&v2[8 + n..8 + n + 2], &[0, 0]);
+    let mut v1 = v2[..8 + n].to_vec();
+    v1[4..6].copy_from_slice(&1u16.to_le_bytes());
+    v1[6..8].copy_from_slice(&(n as u16).to_le_bytes());
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&v1);
+    v1.extend_from_slice(&crc.to_le_bytes());
+    v1
+}
+
+#[test]
+fn a_version_1_blob_flashes_and_works_as_a_perfect_gyro() {
+    let mut sim = Sim::new();
+    assert_eq!(
+        last(&sim.write_blob(&version_1_blob())),
+        DeviceToHost::Ack(Ack::CalibrationStored)
+    );
+    assert_eq!(
+        sim.identity().calibration,
+        CalibrationState::Valid { created_unix_s: 77 }
+    );
+    sim.request(&HostToDevice::SetVirtualTable(VirtualTable {
+        up_b: [1.0, 0.0, 0.0],
+        rate_rad_s: 200f32.to_radians(),
+        accel_rad_s2: 0.0,
+    }));
+    let w = compensated_window(&mut sim, 2000);
+    // The perfect virtual gyro and a perfect-gyro calibration: back to (g, 0, 0) within noise.
+    assert!((w.mean_m_s2[0] - 9.80665).abs() < 5e-4, "{w:?}");
+    assert!(
+        w.mean_m_s2[1].abs() < 5e-4 && w.mean_m_s2[2].abs() < 5e-4,
+        "{w:?}"
+    );
+    assert!(
+        (w.mean_rate_rad_s[0] - 200f32.to_radians()).abs() < 1e-3,
+        "{w:?}"
+    );
+}
+
+#[test]
+fn heating_the_virtual_unit_shows_in_the_window_temperature() {
+    let mut sim = Sim::new();
+    assert_eq!(
+        sim.request(&HostToDevice::SetVirtualTemperature { temp_c: 41.5 }),
+        [DeviceToHost::Ack(Ack::TemperatureSet)]
+    );
+    assert_eq!(
+        sim.request(&HostToDevice::Stream(StreamRequest {
+            kind: StreamKind::RawWindows,
+            window_samples: 500,
+        })),
+        [DeviceToHost::Ack(Ack::StreamStarted)]
+    );
+    sim.run(500);
+    let windows: Vec<_> = sim
+        .take()
+        .into_iter()
+        .filter_map(|m| match m {
+            DeviceToHost::RawWindow(w) => Some(w),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(windows.len(), 1);
+    assert_eq!(windows[0].mean_temp_c, 41.5);
+}
+
 #[test]
 fn bad_requests_get_typed_errors() {
     let mut sim = Sim::new();
@@ -458,6 +528,14 @@ fn bad_requests_get_typed_errors() {
         accel_rad_s2: 0.0,
     }));
     assert_eq!(o.reply, DeviceToHost::Error(DeviceError::Unsupported));
+    let o = real.handle(HostToDevice::SetVirtualTemperature { temp_c: 30.0 });
+    assert_eq!(o.reply, DeviceToHost::Error(DeviceError::Unsupported));
+    for temp_c in [f32::NAN, 1e9] {
+        assert_eq!(
+            sim.request(&HostToDevice::SetVirtualTemperature { temp_c }),
+            [DeviceToHost::Error(DeviceError::Unsupported)]
+        );
+    }
     // Garbage, an over-long frame, and empty frames.
     sim.link.rx.extend([0x42, 0x42, 0x42, 0x00, 0x00, 0x00]);
     sim.link

@@ -173,6 +173,7 @@ impl SimDevice {
                 // Already checked by the controller; a refusal cannot happen here.
                 let _ = self.sensor.set_table(&t);
             }
+            Some(BoardEvent::SetTemperature(t)) => self.sensor.set_temperature(t),
             Some(BoardEvent::Reset) => {
                 self.line.budget = self.line.budget.max(256);
                 service.flush(&mut self.line, 1024);
@@ -189,8 +190,7 @@ impl SimDevice {
 
     /// Runs one sample period.
     fn step(&mut self) {
-        let s = self.sensor.sample();
-        self.pipeline.on_sample(&s);
+        self.sensor.step(&mut self.pipeline);
         self.samples += 1;
         self.line.budget =
             (self.line.budget + LINE_BYTES_PER_SAMPLE).min(4 * LINE_BYTES_PER_SAMPLE);
