@@ -150,6 +150,12 @@ fn main() {
         "calibration written and stored",
     );
 
+    check(
+        port.request(&HostToDevice::SetVirtualTemperature { temp_c: 38.5 })
+            == DeviceToHost::Ack(Ack::TemperatureSet),
+        "virtual unit heated to 38.5 C",
+    );
+
     let t0 = Instant::now();
     port.send(&HostToDevice::Stream(StreamRequest {
         kind: StreamKind::CompensatedWindows,
@@ -177,6 +183,13 @@ fn main() {
     check(
         w.flags.0 == 0 && err_mg.iter().all(|e| *e < 0.5),
         &format!("compensated window is (g, 0, 0) within 0.5 mg (errors {err_mg:?} mg)"),
+    );
+    check(
+        w.mean_temp_c == 38.5,
+        &format!(
+            "window carries the unit's temperature ({} C)",
+            w.mean_temp_c
+        ),
     );
     port.send(&HostToDevice::StopStream);
     check(

@@ -546,9 +546,10 @@ pub(crate) mod tests {
 
         /// Random bytes behind a valid header (so decoding reaches the CRC and postcard layers).
         #[test]
-        fn random_payloads_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..300)) {
+        fn random_payloads_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..700), v1 in any::<bool>()) {
             let mut v = std::vec::Vec::from(*b"ACAL");
-            v.extend_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
+            let version = if v1 { BLOB_FORMAT_VERSION_V1 } else { BLOB_FORMAT_VERSION };
+            v.extend_from_slice(&version.to_le_bytes());
             v.extend_from_slice(&(bytes.len().saturating_sub(4) as u16).to_le_bytes());
             v.extend_from_slice(&bytes);
             let _ = decode(&v);

@@ -24,7 +24,7 @@ pub mod sensor_models;
 pub mod units;
 pub mod wire;
 
-pub use compensator::{Compensator, LeverMode};
+pub use compensator::{Compensator, LeverMode, TemperatureState};
 pub use params::{Calibration, FittedStatic, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 pub use sensor_models::{GyroCorrection, TemperatureModel};
 pub use units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs, UnitId};
