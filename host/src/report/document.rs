@@ -42,6 +42,7 @@ use crate::estimate::Uncertainty;
 use crate::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind,
 };
+use crate::report::format::{out_digits, pm_opt};
 use crate::report::navigation::{integrate_drift, Drift};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
 use crate::session::builtin::paper_plan;
@@ -659,19 +660,11 @@ pub enum Block {
     Pre(String),
 }
 
-fn pm(v: f64, s: Option<f64>, digits: usize) -> String {
-    match s {
-        Some(s) if s.is_finite() => format!("{v:.digits$} ± {s:.digits$}"),
-        Some(_) => format!("{v:.digits$} ± ∞"),
-        None => format!("{v:.digits$} (no σ)"),
-    }
-}
-
 /// Table 1 (zero bias, scale factor, installation angles with 1σ) as table rows.
 pub fn table1(data: &ReportData) -> Block {
     let st = &data.calibration.statics;
     let u = data.uncertainty.as_ref();
-    let d = if data.unit_symbol == "V" { 6 } else { 3 };
+    let d = out_digits(data.calibration.statics.output_unit);
     let sym = &data.unit_symbol;
     Block::Table {
         header: vec![
@@ -686,11 +679,11 @@ pub fn table1(data: &ReportData) -> Block {
             .map(|i| {
                 let mut row = vec![
                     format!("{}", i + 1),
-                    pm(st.zero_bias_out[i], u.map(|u| u.zero_bias_1sigma[i]), d),
-                    pm(st.scale_out_per_g[i], u.map(|u| u.scale_per_g_1sigma[i]), d),
+                    pm_opt(st.zero_bias_out[i], u.map(|u| u.zero_bias_1sigma[i]), d),
+                    pm_opt(st.scale_out_per_g[i], u.map(|u| u.scale_per_g_1sigma[i]), d),
                 ];
                 for j in 0..3 {
-                    row.push(pm(
+                    row.push(pm_opt(
                         st.installation_angles_deg[i][j],
                         u.map(|u| u.installation_angles_deg_1sigma[i][j]),
                         5,
@@ -712,7 +705,7 @@ pub fn table3(data: &ReportData) -> Block {
             .map(|i| {
                 let mut row = vec![format!("r{}", i + 1)];
                 for j in 0..3 {
-                    let cell = pm(
+                    let cell = pm_opt(
                         r[i][j] * 1e3,
                         u.map(|u| u.lever_arms_m_1sigma[i][j] * 1e3),
                         4,

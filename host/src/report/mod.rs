@@ -4,6 +4,7 @@
 
 pub mod compare;
 pub mod document;
+pub mod format;
 pub mod navigation;
 pub mod plot;
 pub mod text;
