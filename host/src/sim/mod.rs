@@ -5,6 +5,7 @@
 
 pub mod rng;
 pub mod session;
+pub mod stats;
 pub mod synth;
 #[cfg(test)]
 pub(crate) mod testkit;
@@ -14,3 +15,4 @@ pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_to_dir, simulate_to_dir_with_progress,
     NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
 };
+pub use stats::simulate_stats;
