@@ -8,7 +8,7 @@
 //! | `calibrate --port` | [`calibrate`] | [`crate::device::procedure`] over [`port`] |
 //! | `plan --check` | [`plan`] | [`crate::estimate::predict`] |
 //! | `report` | [`report`] | [`crate::report::document`] over [`crate::report::data`] |
-//! | `navigation-check` | [`navigation_check`] | [`crate::report::navigation_check`] on [`crate::sim`] |
+//! | `navigation-check` | [`navigation_check`] | [`mod@crate::report::navigation_check`] on [`crate::sim`] |
 //! | `compare` | [`compare`] | [`crate::report::compare`] |
 //! | `export` | [`export`] | [`crate::export`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |

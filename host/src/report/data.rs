@@ -31,7 +31,7 @@ use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
 
-/// Settings of [`report`] and [`build_report`].
+/// Settings of [`super::report`] and [`build_report`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReportOptions {
     /// Estimator settings for the session's own fit (χ², excluded segments, observability).

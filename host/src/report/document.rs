@@ -12,6 +12,7 @@ use crate::unit_file::UnitFile;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// File name of the Markdown page.
 pub const REPORT_MD: &str = "report.md";
 /// File name of the HTML page (same content).
 pub const REPORT_HTML: &str = "report.html";

@@ -1,13 +1,13 @@
 //! What a person reads.
 //!
-//! - [`text`]: the terminal text of a calibration and of a plan's prediction, with [`format`] (the one
+//! - [`text`]: the terminal text of a calibration and of a plan's prediction, with [`mod@format`] (the one
 //!   `± 1σ` formatter).
 //! - The HTML/Markdown report of `host report`: [`data`] (the numbers: segments before and after
 //!   compensation, χ², navigation replays) → [`figures`] (what each figure shows) and [`page`] (the
 //!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG) and [`markup`] (Markdown, HTML) →
 //!   [`document`] (the files).
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
-//!   [`navigation_check`]: `host navigation-check` on a simulated session.
+//!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
 //! - [`compare`]: two calibrations side by side, and the `host export` text.
 
 pub mod compare;
