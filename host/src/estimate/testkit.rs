@@ -63,6 +63,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
         duration_s: Some(60.0),
         table_centre_m: None,
         mount: None,
+        ..SegmentPlan::default()
     }
 }
 
@@ -90,7 +91,8 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
         }
     }
     Plan {
-        format_version: 1,
+        format_version: 2,
+        attitude_sigma_deg: Some(0.0),
         output_unit: unit,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
