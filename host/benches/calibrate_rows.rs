@@ -8,9 +8,9 @@
 //! `calibrate` path (read + statistics + joint estimate with the paper-method comparison) is timed too.
 
 use host::estimate::{calibrate_session_stats, EstimateOptions};
-use host::recording::builtin::paper_plan;
-use host::recording::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
-use host::simulate::{simulate_to_dir, NoiseModel};
+use host::session::builtin::paper_plan;
+use host::session::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
+use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
 use std::time::Instant;
 

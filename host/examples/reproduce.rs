@@ -12,12 +12,12 @@
 //! (OUT defaults to `target/paper-reproduction`).
 
 use host::calibration_files::write_calibration_files;
-use host::compare::{compare, export, ExportFormat};
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::recording::builtin::paper_plan;
-use host::recording::{read_session, ReadOptions};
-use host::report_cmd::{render_issue_figures, report, ReportOptions};
-use host::simulate::{simulate_to_dir, NoiseModel};
+use host::report::compare::{compare, export, ExportFormat};
+use host::report::document::{render_issue_figures, report, ReportOptions};
+use host::session::builtin::paper_plan;
+use host::session::{read_session, ReadOptions};
+use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
 use shared::UnitId;
 use std::path::PathBuf;

@@ -3,16 +3,10 @@
 
 pub mod calibration_files;
 pub mod cli;
-pub mod compare;
-pub mod convert;
 pub mod device;
-pub mod device_cli;
 pub mod estimate;
-pub mod figures;
-pub mod navigation;
-pub mod procedure;
-pub mod recording;
+pub mod export;
 pub mod report;
-pub mod report_cmd;
-pub mod simulate;
+pub mod session;
+pub mod sim;
 pub mod unit_file;

@@ -23,7 +23,7 @@
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
-use crate::recording::OutputUnitName;
+use crate::session::OutputUnitName;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
 use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};

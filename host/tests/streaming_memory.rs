@@ -1,7 +1,7 @@
 //! The reader streams: its peak heap use does not grow with the number of rows. Measured with a
 //! counting global allocator (this test binary only) while reading rows generated on the fly.
 
-use host::recording::{read_samples, Plan};
+use host::session::{read_samples, Plan};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::{BufReader, Read};
 use std::path::Path;

@@ -2,10 +2,10 @@
 //! a reset in the middle of a calibration write, and a blob made for another unit.
 
 use e2e::{paper_unit, sim_client};
+use host::device::procedure::{self, AutomaticOperator, ProcedureError, ProcedureOptions};
 use host::device::LinkError;
-use host::procedure::{self, AutomaticOperator, ProcedureError, ProcedureOptions};
-use host::recording::builtin::load_plan;
-use host::recording::{read_session, ReadOptions};
+use host::session::builtin::load_plan;
+use host::session::{read_session, ReadOptions};
 use shared::blob::{BlobError, ParameterBlob};
 use shared::wire::{self, CalibrationState, DeviceError, HostToDevice, StreamKind, HOST_FRAME_MAX};
 use shared::UnitId;

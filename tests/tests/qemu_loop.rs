@@ -4,10 +4,10 @@
 
 use e2e::qemu::{build_firmware, Qemu};
 use e2e::{max_abs_diff, paper_unit};
+use host::device::procedure::{self, AutomaticOperator, ProcedureOptions};
 use host::device::serial::{SerialTransport, DEFAULT_BAUD};
 use host::device::DeviceClient;
-use host::procedure::{self, AutomaticOperator, ProcedureOptions};
-use host::recording::builtin::load_plan;
+use host::session::builtin::load_plan;
 use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 use std::time::Duration;
 

@@ -2,13 +2,13 @@
 //! calibration written as `calibration.toml`, then the report and the comparison read those files.
 
 use host::calibration_files::write_calibration_files;
-use host::compare::{compare, export, ExportFormat};
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::figures::png_dimensions;
-use host::recording::builtin::load_plan;
-use host::recording::{read_session, ReadOptions};
-use host::report_cmd::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
-use host::simulate::{simulate_to_dir, NoiseModel};
+use host::report::compare::{compare, export, ExportFormat};
+use host::report::document::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
+use host::report::plot::png_dimensions;
+use host::session::builtin::load_plan;
+use host::session::{read_session, ReadOptions};
+use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
 use shared::UnitId;
 

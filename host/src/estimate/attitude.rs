@@ -5,7 +5,7 @@
 use super::model::{self, idx_m, idx_tilt, idx_u0};
 use super::solve::{self, Problem};
 use super::{EstimateError, SegmentKind, SessionSeg};
-use crate::recording::Plan;
+use crate::session::Plan;
 use nalgebra::{DMatrix, Matrix3};
 use shared::linalg::{self, RowMajor3};
 

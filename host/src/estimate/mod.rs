@@ -11,26 +11,23 @@
 //!   covariance, propagated to the paper's form; a χ² check per segment; the observability of every
 //!   lever-arm component.
 //! - [`predict`]: the Cramér–Rao 1σ of every parameter for a plan and a noise level, before any data.
-//! - [`synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
+//! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
 
 pub mod attitude;
-mod convert;
 pub mod model;
 mod paper;
+mod paper_angles;
 mod predict;
 mod screen;
 mod solve;
-pub mod synth;
-#[cfg(test)]
-mod testkit;
 #[cfg(test)]
 mod tests;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
-pub use convert::{paper_labels, paper_values, PAPER_LEN};
+pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 
-use crate::recording::{Plan, SegmentStats};
+use crate::session::{Plan, SegmentStats};
 use crate::unit_file::Uncertainty;
 use model::{idx_r, SegModel};
 use shared::linalg::{self, RowMajor3};
@@ -561,7 +558,7 @@ pub fn calibrate_session_stats(
     }
 
     let frame_note = screen::reference_frame(plan, options, &mut warnings);
-    let conv = convert::convert(&main_theta, &main_cov, scale2, &fixed, options, &frame_note)?;
+    let conv = paper_angles::convert(&main_theta, &main_cov, scale2, &fixed, options, &frame_note)?;
     let mut observability = conv.observability(options);
     if options.method == Method::Paper {
         observability.fixed_at_zero = [[false; 3]; 3];
@@ -818,7 +815,7 @@ fn compare(
             (Method::Joint, j.theta, j.cov, j.fixed, Vec::new())
         }
     };
-    let conv = convert::convert(&theta, &cov, 1.0, &fixed, options, frame).ok()?;
+    let conv = paper_angles::convert(&theta, &cov, 1.0, &fixed, options, frame).ok()?;
     Some(MethodComparison {
         method,
         lever_arms: LeverArms {

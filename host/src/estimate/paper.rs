@@ -24,7 +24,7 @@
 
 use super::model::{self, idx_r, SegModel, NI as NP};
 use super::{solve, EstimateError, SegmentKind, SessionSeg};
-use crate::recording::Plan;
+use crate::session::Plan;
 use nalgebra::DMatrix;
 use shared::linalg;
 use std::collections::BTreeMap;

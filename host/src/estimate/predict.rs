@@ -1,15 +1,15 @@
 //! The Cramér–Rao prediction of a plan, before any data (`host plan --check FILE`): the estimator's
-//! information matrix evaluated on noise-free statistics of a given unit ([`super::synth`]), with each
+//! information matrix evaluated on noise-free statistics of a given unit ([`crate::sim::synth`]), with each
 //! segment's weight from the given per-sample noise and its duration. For white noise and this
 //! (nearly linear) model the weighted least squares attains the bound, so these are the 1σ values a
 //! real session of this plan will report.
 
-use super::synth::{self, SynthNoise};
 use super::{
     calibrate_session_stats, paper_labels, paper_values, ChiSquareScaling, EstimateError,
     EstimateOptions, ReferenceChoice, PAPER_LEN,
 };
-use crate::recording::Plan;
+use crate::session::Plan;
+use crate::sim::synth::{self, SynthNoise};
 use shared::forward::ForwardModel;
 use shared::{Calibration, OutputUnit};
 

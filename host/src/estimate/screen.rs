@@ -7,7 +7,7 @@ use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
-use crate::recording::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::linalg::{self, RowMajor3};
 use shared::params::axis_name;
 use shared::ReferencePoint;
@@ -395,7 +395,7 @@ pub(crate) fn static_gyro(segs: &[SessionSeg]) -> [f64; 3] {
 /// its per-axis 1σ of the mean (rad/s): `None` below 1 °/s.
 fn spin_axis(
     s: &SessionSeg,
-    sp: &crate::recording::SegmentPlan,
+    sp: &crate::session::SegmentPlan,
     noise: &Noise,
     bias: &[f64; 3],
 ) -> Option<([f64; 3], f64, RowMajor3)> {

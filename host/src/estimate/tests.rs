@@ -1,8 +1,9 @@
 //! Estimator tests against the generator's known truth (`testkit`).
 
-use super::testkit::{self, Rng, TableErrors};
 use super::*;
-use crate::recording::OutputUnitName;
+use crate::session::OutputUnitName;
+use crate::sim::synth;
+use crate::sim::testkit::{self, Rng, TableErrors};
 use shared::ReferencePoint;
 
 const MG: f64 = 1e-3;

@@ -39,13 +39,13 @@
 //! (the fastest constant-rate segment, 200 °/s in the paper's plan) are replayed.
 
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions, SegmentKind};
-use crate::figures::{self, Figure, Formats, Panel, Series, SeriesStyle};
-use crate::navigation::{integrate_drift, Drift};
-use crate::recording::builtin::paper_plan;
-use crate::recording::{
+use crate::report::navigation::{integrate_drift, Drift};
+use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
+use crate::session::builtin::paper_plan;
+use crate::session::{
     read_session, Plan, ReadOptions, RecordingError, SegmentAccumulator, SegmentStats,
 };
-use crate::simulate::{simulate_rows, NoiseModel, SimulateError};
+use crate::sim::{simulate_rows, NoiseModel, SimulateError};
 use crate::unit_file::{Uncertainty, UnitFile, UnitFileError};
 use shared::linalg;
 use shared::params::axis_name;
@@ -101,7 +101,7 @@ pub enum ReportError {
     /// A requested segment is not in the session, or the session has none to use.
     Segment(String),
     /// A figure could not be drawn.
-    Figure(figures::FigureError),
+    Figure(plot::FigureError),
     /// A file could not be written.
     Io(PathBuf, std::io::Error),
     /// The simulation of the navigation check failed.
@@ -127,8 +127,8 @@ impl std::fmt::Display for ReportError {
 
 impl std::error::Error for ReportError {}
 
-impl From<figures::FigureError> for ReportError {
-    fn from(e: figures::FigureError) -> Self {
+impl From<plot::FigureError> for ReportError {
+    fn from(e: plot::FigureError) -> Self {
         ReportError::Figure(e)
     }
 }
@@ -1059,7 +1059,7 @@ pub fn write_report(
     let mut warnings = data.warnings.clone();
     let mut png = formats.png;
     for f in &figs {
-        let out = figures::render(f, out_dir, formats)?;
+        let out = plot::render(f, out_dir, formats)?;
         files.extend(out.files);
         png &= out.warnings.is_empty();
         for w in out.warnings {
@@ -1308,8 +1308,8 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::figures::{palette_hex, png_dimensions, svg_polylines};
-    use crate::recording::builtin::builtin_plan;
+    use crate::report::plot::{palette_hex, png_dimensions, svg_polylines};
+    use crate::session::builtin::builtin_plan;
 
     fn short() -> Plan {
         builtin_plan("short").unwrap().unwrap()

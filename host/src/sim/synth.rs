@@ -1,12 +1,12 @@
 //! Noise-free segment statistics of a known unit on a rate table: what [`SegmentStats`] a long
-//! recording converges to. Backs the Cramér–Rao prediction ([`super::predict`]) and the tests.
+//! recording converges to. Backs the Cramér–Rao prediction ([`crate::estimate::predict`]) and the tests.
 //!
 //! The outputs' means come from `shared::forward` (independent of the estimator's own model): the
 //! model is linear in `W`, so the mean over a linear ramp `ω(t) = n (ω_a + (ω_b − ω_a) t/T)` is the
 //! output at `E[ω²] = (ω_a² + ω_a ω_b + ω_b²)/3` and `ω̇ = (ω_b − ω_a)/T`. The outputs' covariance is
 //! the white noise plus, for a ramp, the spread of the signal itself.
 
-use crate::recording::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg::RowMajor3;
 

@@ -3,7 +3,7 @@
 //! optional table errors (attitude per mount, rate scale) — all seeded.
 
 use super::synth::{self, ActualSegment, SynthNoise};
-use crate::recording::{OutputUnitName, Plan, SegmentPlan, SegmentStats};
+use crate::session::{OutputUnitName, Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 

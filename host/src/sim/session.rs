@@ -9,8 +9,8 @@
 //! not on the platform or on a dependency's version, and switching one noise source on or off does not
 //! change the draws of the others.
 
-use crate::recording::csv_io::{RecordingError, SessionWriter};
-use crate::recording::{Plan, PlanError};
+use crate::session::csv_io::{RecordingError, SessionWriter};
+use crate::session::{Plan, PlanError};
 use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::forward::{ForwardModel, TableState};
@@ -479,8 +479,8 @@ fn to_value<T: Serialize>(v: &T) -> toml::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::builtin::builtin_plan;
-    use crate::recording::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
+    use crate::session::builtin::builtin_plan;
+    use crate::session::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
 
     fn paper() -> UnitFile {
         UnitFile::paper_unit()

@@ -266,9 +266,9 @@ pub fn render_prediction(p: &Prediction) -> String {
 
 #[cfg(test)]
 mod tests {
-    use crate::estimate::synth::{self, SynthNoise};
     use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::recording::Plan;
+    use crate::session::Plan;
+    use crate::sim::synth::{self, SynthNoise};
 
     const PLAN: &str = r#"
 output_unit = "V"

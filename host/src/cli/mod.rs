@@ -1,23 +1,25 @@
 //! The command line: `host simulate`, `host calibrate`, `host plan --check`. `main.rs` only parses
 //! and prints the error; everything else is here, testable.
 
+pub mod device;
+
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
-use crate::compare::{compare, export, CompareError, ExportError, ExportFormat};
-use crate::device_cli::{self, CalibratePortOptions, DeviceCliError, PortArgs};
 use crate::estimate::{
     calibrate_session_stats, predict, CalibrationOutcome, EstimateError, EstimateOptions, Method,
     PredictSettings, ReferenceChoice,
 };
-use crate::recording::builtin::{load_plan, paper_plan};
-use crate::recording::csv_io::progress_bar;
-use crate::recording::csv_io::{read_session, ReadOptions, RecordingError, Session};
-use crate::recording::{Plan, PlanError};
-use crate::report_cmd::{
+use crate::report::compare::{compare, export, CompareError, ExportError, ExportFormat};
+use crate::report::document::{
     navigation_check, report, NavigationCheckArgs, ReportError, ReportOptions,
 };
-use crate::simulate::{simulate_to_dir_with_progress, NoiseModel, SimulateError};
+use crate::session::builtin::{load_plan, paper_plan};
+use crate::session::csv_io::progress_bar;
+use crate::session::csv_io::{read_session, ReadOptions, RecordingError, Session};
+use crate::session::{Plan, PlanError};
+use crate::sim::{simulate_to_dir_with_progress, NoiseModel, SimulateError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, Parser, Subcommand};
+use device::{CalibratePortOptions, DeviceCliError, PortArgs};
 use shared::UnitId;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -391,13 +393,13 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
             format,
             out,
         } => export_command(&calibration, format, out.as_deref()),
-        Command::Flash { port, calibration } => Ok(device_cli::flash(&port, &calibration)?),
-        Command::Read { port, out } => Ok(device_cli::read(&port, out.as_deref())?),
+        Command::Flash { port, calibration } => Ok(device::flash(&port, &calibration)?),
+        Command::Read { port, out } => Ok(device::read(&port, out.as_deref())?),
         Command::Monitor {
             port,
             window,
             count,
-        } => Ok(device_cli::monitor(&port, window, count)?),
+        } => Ok(device::monitor(&port, window, count)?),
     }
 }
 
@@ -438,10 +440,7 @@ pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, 
 }
 
 /// `host simulate`.
-pub fn simulate(
-    a: &SimulateArgs,
-    quiet: bool,
-) -> Result<crate::simulate::SimulationSummary, CliError> {
+pub fn simulate(a: &SimulateArgs, quiet: bool) -> Result<crate::sim::SimulationSummary, CliError> {
     let unit = load_unit(a.unit.as_deref())?;
     let plan = match &a.plan {
         Some(spec) => load_plan(spec)?,
@@ -501,7 +500,7 @@ pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
     }
 }
 
-/// `host calibrate --port PORT`: the live procedure (`crate::procedure`) against a device.
+/// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device.
 pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     let port = PortArgs {
         port: a.port.clone().unwrap_or_default(),
@@ -517,7 +516,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         verify_tolerance_mg: a.verify_tolerance_mg,
         quiet,
     };
-    Ok(device_cli::calibrate_port(&port, &options)?)
+    Ok(device::calibrate_port(&port, &options)?)
 }
 
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write

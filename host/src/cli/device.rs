@@ -5,14 +5,14 @@
 //! firmware running in QEMU).
 
 use crate::calibration_files::{self, OutputError};
+use crate::device::procedure::{
+    self, AutomaticOperator, Operator, ProcedureError, ProcedureOptions, TerminalOperator,
+};
 use crate::device::serial::{SerialTransport, DEFAULT_BAUD};
 use crate::device::sim::SimDevice;
 use crate::device::{DeviceClient, LinkError, Transport};
 use crate::estimate::EstimateOptions;
-use crate::procedure::{
-    self, AutomaticOperator, Operator, ProcedureError, ProcedureOptions, TerminalOperator,
-};
-use crate::recording::{self, PlanError};
+use crate::session::{self, PlanError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use shared::blob::{self, BlobError, ParameterBlob};
 use shared::wire::{SampleFlags, StreamKind};
@@ -173,7 +173,7 @@ pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), D
     let mut client = connect(port)?;
     let identity = client.identify()?;
     let plan = match &a.plan {
-        Some(spec) => recording::builtin::load_plan(spec),
+        Some(spec) => session::builtin::load_plan(spec),
         None => procedure::default_plan(&identity),
     }
     .map_err(DeviceCliError::Plan)?;

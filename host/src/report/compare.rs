@@ -10,8 +10,8 @@
 //!     → export(&calibration, format) ; writes the string to FILE or stdout
 //! ```
 
-use crate::convert::{convert, Conversions};
 use crate::estimate::{paper_labels, paper_values, PAPER_LEN};
+use crate::export::{convert, Conversions};
 use crate::unit_file::{UnitFile, UnitFileError};
 use shared::Calibration;
 use std::fmt::Write as _;
@@ -267,11 +267,11 @@ pub fn compare_units(
 /// The conventions [`export`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExportFormat {
-    /// The paper's `K_A`, `∇_b` and the lever arms ([`crate::convert::PlainMatrices`]).
+    /// The paper's `K_A`, `∇_b` and the lever arms ([`crate::export::PlainMatrices`]).
     Plain,
-    /// x-io Fusion's misalignment, sensitivity, offset ([`crate::convert::FusionStyle`]).
+    /// x-io Fusion's misalignment, sensitivity, offset ([`crate::export::FusionStyle`]).
     Fusion,
-    /// Kalibr-style `M`, bias, `rx/ry/rz` ([`crate::convert::KalibrStyle`]).
+    /// Kalibr-style `M`, bias, `rx/ry/rz` ([`crate::export::KalibrStyle`]).
     Kalibr,
     /// All three, as the tables `[plain]`, `[fusion]`, `[kalibr]`.
     All,
@@ -339,7 +339,7 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::convert::{FusionStyle, KalibrStyle, PlainMatrices};
+    use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
     use crate::unit_file::Uncertainty;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};

@@ -14,7 +14,7 @@
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::device::{DeviceClient, LinkError, Transport};
 use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions, ReferenceChoice};
-use crate::recording::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use shared::wire::{Board, CalibrationState, Identity, SampleFlags, StreamKind, VirtualTable};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -297,7 +297,7 @@ fn table_for(seg: &SegmentPlan) -> VirtualTable {
 /// The live check of one recorded segment against its plan (`MODEL.md` "Signs": ω = rate·up).
 pub fn live_check(
     seg: &SegmentPlan,
-    stats: &recording::SegmentStats,
+    stats: &session::SegmentStats,
     rejected_samples: u64,
 ) -> Vec<String> {
     let mut problems = Vec::new();
@@ -355,8 +355,8 @@ pub fn live_check(
 /// (a 10° change moves some output by about 0.17 g, thousands of noise σ of a segment mean).
 pub fn remount_check(
     seg: &SegmentPlan,
-    stats: &recording::SegmentStats,
-    earlier: &[(SegmentPlan, recording::SegmentStats)],
+    stats: &session::SegmentStats,
+    earlier: &[(SegmentPlan, session::SegmentStats)],
 ) -> Option<String> {
     let cos_10_deg = 10f64.to_radians().cos();
     earlier.iter().find_map(|(other, o)| {
@@ -414,7 +414,7 @@ pub fn run<T: Transport>(
     let mut dropped = 0u32;
 
     let segments = plan.segments.clone();
-    let mut static_done: Vec<(SegmentPlan, recording::SegmentStats)> = Vec::new();
+    let mut static_done: Vec<(SegmentPlan, session::SegmentStats)> = Vec::new();
     for seg in &segments {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
         let result = record_segment(
@@ -469,10 +469,8 @@ pub fn run<T: Transport>(
     }
 
     // Estimate from the saved recording, exactly as `host calibrate --input` would.
-    let session = recording::read_session(
-        &recording_dir,
-        &recording::ReadOptions { quiet: opts.quiet },
-    )?;
+    let session =
+        session::read_session(&recording_dir, &session::ReadOptions { quiet: opts.quiet })?;
     let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate)
         .map_err(|source| ProcedureError::Estimate {
             source,
@@ -544,7 +542,7 @@ fn record_segment<T: Transport>(
     window_rate: f64,
     opts: &ProcedureOptions,
     writer: &mut SessionWriter,
-) -> Result<(recording::SegmentStats, u64, u32), LinkError> {
+) -> Result<(session::SegmentStats, u64, u32), LinkError> {
     if drive {
         op.say(&format!("{} (virtual table driven)", instruction(seg)));
         client.set_table(table_for(seg))?;
@@ -562,9 +560,9 @@ fn record_segment<T: Transport>(
     for _ in 0..settle {
         client.next_raw_window()?;
     }
-    let bar = recording::csv_io::progress_bar(n_windows, "recording", opts.quiet);
+    let bar = session::csv_io::progress_bar(n_windows, "recording", opts.quiet);
     bar.set_message(seg.name.clone());
-    let mut acc = recording::SegmentAccumulator::new(seg.name.clone());
+    let mut acc = session::SegmentAccumulator::new(seg.name.clone());
     let mut rejected = 0u64;
     let mut dropped = 0u32;
     let fs = window_rate * f64::from(window);
@@ -726,8 +724,8 @@ fn verify<T: Transport>(
 
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
 /// lever-arm components), the paper's plan otherwise (no fixture beyond the paper's is needed).
-pub fn default_plan(identity: &Identity) -> Result<Plan, recording::PlanError> {
-    recording::builtin::load_plan(if has_virtual_table(identity) {
+pub fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
+    session::builtin::load_plan(if has_virtual_table(identity) {
         "oblique"
     } else {
         "paper"
@@ -745,7 +743,7 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::SegmentAccumulator;
+    use crate::session::SegmentAccumulator;
 
     fn seg(up: [f64; 3], rate: f64) -> SegmentPlan {
         SegmentPlan {
@@ -761,7 +759,7 @@ mod tests {
     }
 
     /// Statistics of 200 windows with outputs `u` (± a small alternating noise) and gyro rate `w`.
-    fn stats(u: [f64; 3], w_deg_s: [f64; 3]) -> recording::SegmentStats {
+    fn stats(u: [f64; 3], w_deg_s: [f64; 3]) -> session::SegmentStats {
         let mut acc = SegmentAccumulator::new("s");
         for k in 0..200 {
             let n = if k % 2 == 0 { 1e-5 } else { -1e-5 };
