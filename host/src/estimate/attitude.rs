@@ -107,15 +107,16 @@ pub fn rotation_vector(q: &RowMajor3) -> [f64; 3] {
     ]
 }
 
-/// The split's values of `(M, u0)`: biases (g), log scale factors, non-orthogonality (rad) and the
-/// alignment rotation (rad), 12 in all.
-fn split_values(m: &RowMajor3, u0: &[f64; 3]) -> [f64; 12] {
+/// The split's values of `(M, u0)`: biases (g, as the zero-g output error `δu0_i / k_i` at the
+/// estimate's scale `k0`), log scale factors, non-orthogonality (rad) and the alignment rotation
+/// (rad), 12 in all.
+fn split_values(m: &RowMajor3, u0: &[f64; 3], k0: &[f64; 3]) -> [f64; 12] {
     let (l, q) = lq(m);
     let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&l[i]));
     let rot = rotation_vector(&q);
     let mut v = [0.0; 12];
     for i in 0..3 {
-        v[i] = u0[i] / k[i];
+        v[i] = u0[i] / k0[i];
         v[3 + i] = k[i].ln();
         v[9 + i] = rot[i];
     }
@@ -130,7 +131,9 @@ pub fn static_split(theta: &[f64], cov: &DMatrix<f64>, frame: BodyFrame) -> Stat
     let idx: Vec<usize> = (0..3)
         .flat_map(|i| [idx_m(i, 0), idx_m(i, 1), idx_m(i, 2), idx_u0(i)])
         .collect();
-    let base = |t: &[f64]| split_values(&model::m_of(t), &model::u0_of(t));
+    let m0 = model::m_of(theta);
+    let k0: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m0[i]));
+    let base = |t: &[f64]| split_values(&model::m_of(t), &model::u0_of(t), &k0);
     let mut jac = DMatrix::<f64>::zeros(12, idx.len());
     for (c, &p) in idx.iter().enumerate() {
         let h = 1e-7 * theta[p].abs().max(1e-6 * theta[idx_m(p / 7, p / 7)].abs());

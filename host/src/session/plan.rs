@@ -397,4 +397,36 @@ rate_deg_s = 100
         let e = Plan::parse(&format!("format_version = 9\n{GOOD}")).unwrap_err();
         assert!(matches!(e, PlanError::Version(9)));
     }
+
+    #[test]
+    fn format_2_attitudes_and_format_1_still_read() {
+        // A format 1 plan reads as before, with the default fixture accuracy.
+        let p = Plan::parse(&format!("format_version = 1\n{GOOD}")).unwrap();
+        assert_eq!(p.attitude_sigma_deg(), DEFAULT_ATTITUDE_SIGMA_DEG);
+        assert_eq!(p.mount_sigma_deg(&p.segments[0]), Some(0.05));
+        // Format 2: a plan-level σ, a per-segment σ and a free segment without up_b.
+        let v2 = format!(
+            "format_version = 2\nattitude_sigma_deg = 0.1\n{GOOD}\
+             [[segment]]\nname = \"hand\"\nattitude = \"free\"\nduration_s = 5\n\
+             [[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nattitude_sigma_deg = 0\n"
+        );
+        let p = Plan::parse(&v2).unwrap();
+        assert_eq!(p.mount_sigma_deg(&p.segments[0]), Some(0.1));
+        assert!(p.segments[2].is_free() && !p.segments[2].has_up());
+        assert_eq!(p.mount_sigma_deg(&p.segments[2]), None);
+        assert_eq!(p.mount_sigma_deg(&p.segments[3]), Some(0.0));
+        assert_eq!(Plan::parse(&p.to_toml()).unwrap(), p);
+        // The new keys in a format 1 plan, a missing up_b on a fixture segment, a mount whose
+        // segments disagree: each named.
+        let e = Plan::parse(&v2.replace("format_version = 2", "format_version = 1")).unwrap_err();
+        assert!(e.to_string().contains("format_version = 2"), "{e}");
+        let e = Plan::parse(&v2.replace("attitude = \"free\"\n", "")).unwrap_err();
+        assert!(e.to_string().contains("'hand' has no up_b"), "{e}");
+        let e = Plan::parse(&v2.replace(
+            "name = \"x+ 100\"\n",
+            "name = \"x+ 100\"\nattitude_sigma_deg = 0.3\n",
+        ))
+        .unwrap_err();
+        assert!(e.to_string().contains("share mount"), "{e}");
+    }
 }

@@ -662,6 +662,20 @@ mod tests {
         for i in 0..3 {
             assert!((st.stats[0].mean_u[i] - want.raw[i]).abs() < 1e-12);
         }
+        // The mount's spin segments turn about the same tilted up: the noise-free gyro reads
+        // rate × that up, and the tilt is not along the nominal axis.
+        let up = s.mount_up_b["x+"];
+        assert!(up[1].abs() + up[2].abs() > 1e-6, "{up:?}");
+        for seg in st.stats.iter().filter(|x| x.name.starts_with("x+ ")) {
+            let rate: f64 = seg.name[3..].parse::<f64>().unwrap().to_radians();
+            for j in 0..3 {
+                assert!(
+                    (seg.mean_w_rad_s[j] - rate * up[j]).abs() < 1e-12,
+                    "{}",
+                    seg.name
+                );
+            }
+        }
     }
 
     #[test]
