@@ -6,6 +6,7 @@
 //! (free attitudes may start tens of degrees off). Normal equations are solved after scaling every
 //! column to unit diagonal: the parameters span ten orders of magnitude (V/g against metres).
 
+use super::gyro::{self, GyroBlock, NG};
 use super::model::{is_lever, Mount, SegModel, TiltGeometry, NI};
 use super::EstimateError;
 use nalgebra::{DMatrix, DVector};
@@ -44,20 +45,25 @@ pub struct Problem {
     pub models: Vec<SegModel>,
     /// The mounts (tilt unknowns and priors), in θ order.
     pub mounts: Vec<Mount>,
-    /// Gyro axis directions of the used spinning segments.
+    /// Gyro axis directions of the used spinning segments (a gyro taken as perfect).
     pub gyro: Vec<GyroDirection>,
+    /// The gyro model `w = G ω + b`, when estimated (docs/model.md §8).
+    pub gyro_block: Option<GyroBlock>,
 }
 
 impl Problem {
     /// Length of θ.
     pub fn n_params(&self) -> usize {
-        NI + 2 * self.mounts.len()
+        NI + 2 * self.mounts.len() + if self.gyro_block.is_some() { NG } else { 0 }
     }
 
     /// Removes the segment `seg` (its outputs and gyro axis).
     pub fn remove_segment(&mut self, seg: usize) {
         self.models.retain(|m| m.seg != seg);
         self.gyro.retain(|g| g.seg != seg);
+        if let Some(b) = &mut self.gyro_block {
+            b.means.retain(|m| m.seg != seg);
+        }
     }
 
     /// Moves mount `k`'s nominal up (a free attitude's starting guess) and its tilt axes.
@@ -70,6 +76,11 @@ impl Problem {
         for o in self.gyro.iter_mut().filter(|o| o.tilt.index == g.index) {
             o.tilt = g;
         }
+        if let Some(b) = &mut self.gyro_block {
+            for o in b.means.iter_mut().filter(|o| o.tilt.index == g.index) {
+                o.tilt = g;
+            }
+        }
     }
 
     /// Number of observations: 3 per segment, 2 per gyro axis, 2 per mount prior.
@@ -79,7 +90,11 @@ impl Problem {
             .iter()
             .filter(|m| matches!(m.prior_rad, Some(s) if s > 0.0) && free[m.geometry.index])
             .count();
-        3 * self.models.len() as i64 + 2 * self.gyro.len() as i64 + 2 * priors as i64
+        let gyro = self
+            .gyro_block
+            .as_ref()
+            .map_or(0, |b| 3 * b.means.len() as i64 + 10);
+        3 * self.models.len() as i64 + 2 * self.gyro.len() as i64 + 2 * priors as i64 + gyro
     }
 
     /// χ² at θ (outputs, gyro axes and priors).
@@ -187,6 +202,38 @@ fn normal_equations(
             add(&cols, res[c] * w, &mut n, &mut b);
         }
     }
+    if let Some(blk) = &p.gyro_block {
+        for g in &blk.means {
+            let jac = g.jacobian(t, blk.base);
+            let res = g.whitened_residual(t, blk.base);
+            chi2 += res.iter().map(|v| v * v).sum::<f64>();
+            for a in 0..3 {
+                let cols: Vec<(usize, f64)> = jac
+                    .iter()
+                    .filter(|(q, _)| col_of[*q] != usize::MAX)
+                    .map(|(q, d)| (col_of[*q], (0..3).map(|r| g.whiten[a][r] * d[r]).sum()))
+                    .collect();
+                add(&cols, res[a], &mut n, &mut b);
+            }
+        }
+        // Priors: each G entry about the identity (weak), the table's rate scale about 0.
+        let mut priors: Vec<(usize, f64, f64)> = (0..9)
+            .map(|k| {
+                let q = gyro::idx_g(blk.base, k / 3, k % 3);
+                (q, if k % 4 == 0 { 1.0 } else { 0.0 }, gyro::G_PRIOR_SIGMA)
+            })
+            .collect();
+        priors.push((gyro::idx_rate(blk.base), 0.0, blk.rate_sigma_rel));
+        for (q, mean, sig) in priors {
+            if col_of[q] == usize::MAX {
+                continue;
+            }
+            let r = (mean - t[q]) / sig;
+            chi2 += r * r;
+            n[(col_of[q], col_of[q])] += 1.0 / (sig * sig);
+            b[col_of[q]] += r / sig;
+        }
+    }
     for m in &p.mounts {
         let Some(sig) = m.prior_rad.filter(|s| *s > 0.0) else {
             continue;
@@ -277,9 +324,7 @@ pub fn fit(
         }
         let mut rel = 0.0f64;
         for (c, &q) in idx.iter().enumerate() {
-            let scale = if is_lever(q) {
-                1e-3
-            } else if q >= NI {
+            let scale = if is_lever(q) || q >= NI {
                 1e-3
             } else {
                 t[q].abs().max(1e-9)

@@ -37,6 +37,7 @@ fn case(
         generator,
         options: EstimateOptions::default(),
         norm_only: false,
+        gyro: None,
     });
     r.print();
     r
@@ -135,6 +136,7 @@ fn hand_positions(seeds: u64, g: Generator) {
         generator: g,
         options: EstimateOptions::default(),
         norm_only: true,
+        gyro: None,
     });
     r.print();
     assert!(

@@ -42,6 +42,28 @@ pub struct NoiseModel {
     pub gyro_white_deg_s: f64,
     /// Gyro bias, body axes, °/s.
     pub gyro_bias_deg_s: [f64; 3],
+    /// Gyro scale and misalignment: the gyro reads `G ω + bias` (docs/model.md §8); identity =
+    /// perfect. A unit file's `[gyro]` table sets it (and adds its bias).
+    pub gyro_matrix: [[f64; 3]; 3],
+}
+
+/// The identity, the perfect gyro's matrix.
+pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
+/// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
+/// non-orthogonality, so no change of body frame absorbs it).
+pub fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
+    const SIGN: [[f64; 3]; 3] = [[0.0, 1.0, -1.0], [1.0, 0.0, 1.0], [-1.0, -1.0, 0.0]];
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            if i == j {
+                1.0 + scale[i]
+            } else {
+                SIGN[i][j] * misalignment_rad
+            }
+        })
+    })
 }
 
 impl Default for NoiseModel {
@@ -56,6 +78,7 @@ impl Default for NoiseModel {
             table_rate_offset_deg_s: 0.0,
             gyro_white_deg_s: 0.05,
             gyro_bias_deg_s: [0.0; 3],
+            gyro_matrix: IDENTITY,
         }
     }
 }
@@ -100,10 +123,11 @@ impl NoiseModel {
         }
         let others = [self.table_rate_scale, self.table_rate_offset_deg_s]
             .into_iter()
-            .chain(self.gyro_bias_deg_s);
+            .chain(self.gyro_bias_deg_s)
+            .chain(self.gyro_matrix.into_iter().flatten());
         if others.into_iter().any(|v| !v.is_finite()) {
             return Err(SimulateError::Noise(
-                "table_rate_scale, table_rate_offset_deg_s and gyro_bias_deg_s must be finite"
+                "table_rate_scale, table_rate_offset_deg_s, gyro_bias_deg_s and gyro_matrix must be finite"
                     .into(),
             ));
         }
@@ -342,7 +366,7 @@ pub fn simulate_rows<E>(
                     u[i] = (u[i] / q).round() * q;
                 }
             }
-            let mut w = motion.omega.rad_s;
+            let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
             for i in 0..3 {
                 w[i] += gyro_bias[i];
                 if gyro_sigma > 0.0 {
@@ -387,6 +411,16 @@ pub fn simulate_to_dir_with_progress(
 ) -> Result<SimulationSummary, SimulateError> {
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
+    // The unit's [gyro] table is the simulated gyro: its matrix replaces the noise model's, its bias
+    // adds to the noise model's.
+    let mut noise = noise.clone();
+    if let Some(g) = &unit.gyro {
+        noise.gyro_matrix = g.matrix;
+        for i in 0..3 {
+            noise.gyro_bias_deg_s[i] += g.bias_rad_s[i].to_degrees();
+        }
+    }
+    let noise = &noise;
     let (fitted, normalisation) = cal
         .statics
         .to_fitted()

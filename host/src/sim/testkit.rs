@@ -55,6 +55,37 @@ pub struct TableErrors {
     pub rate_rel: f64,
     /// Gyro white noise per sample, rad/s (0: a noise-free gyro mean).
     pub gyro_noise_rad_s: f64,
+    /// The gyro reads `G ω + b`: `(G, b)`, b in rad/s (`None`: a perfect gyro).
+    pub gyro: Option<([[f64; 3]; 3], [f64; 3])>,
+}
+
+/// Gyro statistics of a perfect gyro turned into those of a gyro reading `G ω + b`.
+fn through_gyro(st: &mut SegmentStats, g: &[[f64; 3]; 3], b: &[f64; 3], sg2: f64) {
+    use shared::linalg::mat_vec;
+    let w = st.mean_w_rad_s;
+    let gw = mat_vec(g, &w);
+    let id = |i: usize, j: usize| if i == j { sg2 } else { 0.0 };
+    let conj = |m: &[[f64; 3]; 3]| -> [[f64; 3]; 3] {
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                (0..3)
+                    .map(|k| (0..3).map(|l| g[i][k] * m[k][l] * g[j][l]).sum::<f64>())
+                    .sum()
+            })
+        })
+    };
+    let wwt: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.mean_wwt[i][j] - id(i, j)));
+    let cw: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.cov_w[i][j] - id(i, j)));
+    let gwwt = conj(&wwt);
+    st.mean_wwt = core::array::from_fn(|i| {
+        core::array::from_fn(|j| gwwt[i][j] + gw[i] * b[j] + b[i] * gw[j] + b[i] * b[j] + id(i, j))
+    });
+    let gcw = conj(&cw);
+    st.cov_w = core::array::from_fn(|i| core::array::from_fn(|j| gcw[i][j] + id(i, j)));
+    st.mean_w_rad_s = core::array::from_fn(|i| gw[i] + b[i]);
+    st.wdot_rad_s2 = mat_vec(g, &st.wdot_rad_s2);
 }
 
 fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
@@ -96,6 +127,7 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
     Plan {
         format_version: 2,
         attitude_sigma_deg: Some(0.0),
+        table_rate_sigma_ppm: None,
         output_unit: unit,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -194,10 +226,15 @@ pub fn noisy_stats(
                 actual.rate_end_rad_s *= f;
             }
             let mut st = synth::segment_stats(&sp.name, &actual, &unit, &noise);
+            if let Some((g, b)) = &errors.gyro {
+                through_gyro(&mut st, g, b, errors.gyro_noise_rad_s.powi(2));
+            }
             let n = st.count as f64;
             for i in 0..3 {
                 st.mean_u[i] += noise_out / n.sqrt() * rng.normal();
-                st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
+                if errors.gyro_noise_rad_s > 0.0 {
+                    st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
+                }
             }
             st
         })
