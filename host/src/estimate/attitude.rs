@@ -262,6 +262,8 @@ pub(crate) fn free_static_fit(
         mounts: problem.mounts.clone(),
         gyro: Vec::new(),
         gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     super::screen::seed_free_mounts(plan, segs, noise, &mut sub, &t);
     let frame = body_frame(&sub);

@@ -122,6 +122,10 @@ pub struct EstimateOptions {
     /// The gyro: estimated with the accelerometers (`w = G ω + b`, docs/model.md §8) or taken as
     /// perfect.
     pub gyro_model: GyroModel,
+    /// The static parameters from the rest segments alone: a spin whose mount has a rest segment
+    /// enters as its difference from it (docs/model.md §7), so a misfit of the dynamic model (a gyro
+    /// error, an unmodelled ω̇) cannot move them.
+    pub static_from_rest: bool,
 }
 
 /// How the estimator treats the gyro.
@@ -154,6 +158,7 @@ impl Default for EstimateOptions {
             // axes are not calibrated should set its misalignment here, or `None`.
             gyro_axis_sigma_rad: Some(1e-6),
             gyro_model: GyroModel::Estimate,
+            static_from_rest: true,
         }
     }
 }
@@ -505,6 +510,8 @@ pub fn calibrate_session_stats(
         mounts,
         gyro: Vec::new(),
         gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     let static_fit = match screen::static_fit_with_attitude_check(
         plan,
@@ -541,6 +548,15 @@ pub fn calibrate_session_stats(
             screen::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
     }
     let frame = attitude::body_frame(&problem);
+    let group = options.static_from_rest && options.method == Method::Joint;
+    let is_rest = |seg: usize| segs[seg].kind == SegmentKind::Static;
+    let rests: Vec<bool> = (0..segs.len()).map(is_rest).collect();
+    let regroup = |p: &mut Problem| {
+        if group {
+            p.group_spins(&|seg| rests[seg]);
+        }
+    };
+    regroup(&mut problem);
     let mut start = static_fit.theta.clone();
     if gyro_on {
         start.resize(problem.n_params(), 0.0);
@@ -562,6 +578,7 @@ pub fn calibrate_session_stats(
                     // on corrected rates.
                     let gyro_only = Problem {
                         models: Vec::new(),
+                        groups: Vec::new(),
                         ..problem.clone()
                     };
                     let mut free = vec![false; start.len()];
@@ -582,6 +599,8 @@ pub fn calibrate_session_stats(
                             &seg_mount,
                             Some(&c),
                         );
+                        problem.groups.clear();
+                        regroup(&mut problem);
                         start[gyro_base..].copy_from_slice(&f.theta[gyro_base..]);
                     }
                 }
@@ -607,6 +626,8 @@ pub fn calibrate_session_stats(
                         &seg_mount,
                         Some(&c),
                     );
+                    problem.groups.clear();
+                    regroup(&mut problem);
                     j = joint(
                         plan,
                         &mut segs,
@@ -713,7 +734,7 @@ pub fn calibrate_session_stats(
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
     };
-    let segments = diagnostics(plan, &segs, &problem.models, &main_theta);
+    let segments = diagnostics(plan, &segs, &problem.all_models(), &main_theta);
     let comparison = if options.compare_methods {
         compare(
             plan,
@@ -850,7 +871,7 @@ fn joint(
             });
         };
         let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
-        let models = &problem.models;
+        let models = &problem.all_models();
         let worst = models
             .iter()
             .enumerate()
@@ -907,7 +928,7 @@ fn compare(
 ) -> Option<MethodComparison> {
     let (method, theta, cov, fixed, notes) = match options.method {
         Method::Joint => {
-            let p = paper::eq24(plan, segs, &problem.models, static_fit).ok()?;
+            let p = paper::eq24(plan, segs, &problem.all_models(), static_fit).ok()?;
             (Method::Paper, p.theta, p.cov, [[false; 3]; 3], p.notes)
         }
         Method::Paper => {

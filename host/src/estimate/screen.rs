@@ -614,6 +614,8 @@ pub(crate) fn static_fit(
         mounts: mounts.to_vec(),
         gyro: Vec::new(),
         gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     let n = problem.n_params();
     solve::fit(

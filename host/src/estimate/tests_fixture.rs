@@ -38,6 +38,7 @@ fn case(
         options: EstimateOptions::default(),
         norm_only: false,
         gyro: None,
+        table_rate_error: false,
     });
     r.print();
     r
@@ -137,6 +138,7 @@ fn hand_positions(seeds: u64, g: Generator) {
         options: EstimateOptions::default(),
         norm_only: true,
         gyro: None,
+        table_rate_error: false,
     });
     r.print();
     assert!(

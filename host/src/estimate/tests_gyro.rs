@@ -31,6 +31,7 @@ fn run_case(
     model: GyroModel,
     seeds: u64,
     g: Generator,
+    table_rate_error: bool,
 ) -> CaseResult {
     let r = run(&Case {
         title: title.into(),
@@ -44,19 +45,28 @@ fn run_case(
         },
         norm_only: false,
         gyro,
+        table_rate_error,
     });
     r.print();
     r
 }
 
 fn gyro_figures(seeds: u64, g: Generator) {
-    let perfect = run_case("oblique, perfect gyro", None, GyroModel::Estimate, seeds, g);
+    let perfect = run_case(
+        "oblique, perfect gyro",
+        None,
+        GyroModel::Estimate,
+        seeds,
+        g,
+        false,
+    );
     let mems = run_case(
         "oblique, gyro 0.5 % scale, 0.5° misalignment, 0.5 °/s bias, estimated",
         Some(mems_gyro()),
         GyroModel::Estimate,
         seeds,
         g,
+        false,
     );
     let ignored = run_case(
         "oblique, the same gyro taken as perfect",
@@ -64,6 +74,7 @@ fn gyro_figures(seeds: u64, g: Generator) {
         GyroModel::Perfect,
         seeds,
         g,
+        false,
     );
     let [s, m, b] = mems.gyro_figures().unwrap();
     let (si, mi) = mems.gyro_intrinsic().unwrap();
@@ -87,7 +98,102 @@ fn gyro_figures(seeds: u64, g: Generator) {
     assert!(mems.dyn300_ug() <= 1.2 * perfect.dyn300_ug());
 }
 
+/// The reported 1σ against the spread, with the table's rate error drawn from the plan's own
+/// accuracy (100 ppm): the gyro's scale factors cannot be better than the table's rate.
+fn gyro_sigma(seeds: u64, g: Generator) -> [(f64, f64); 3] {
+    let r = run_case(
+        "oblique, the same gyro, table rate error drawn with 100 ppm 1σ",
+        Some(mems_gyro()),
+        GyroModel::Estimate,
+        seeds,
+        g,
+        true,
+    );
+    r.gyro_figures().unwrap()
+}
+
+#[test]
+#[ignore = "Monte Carlo, 20 seeds through the simulator: run with --release (see the module docs)"]
+fn gyro_full() {
+    gyro_figures(20, Generator::Rows);
+    let [s, m, b] = gyro_sigma(20, Generator::Rows);
+    for (name, (_, ratio)) in [("scale", s), ("misalignment", m), ("bias", b)] {
+        assert!((0.7..=1.3).contains(&ratio), "{name}: spread/σ {ratio:.2}");
+    }
+}
+
 #[test]
 fn gyro_short() {
     gyro_figures(6, Generator::Stats);
+}
+
+/// A dynamic model that misfits (the spin-ups' tangential term `ω̇ × r` left out) must not move the
+/// static parameters beyond their 1σ: their information comes from the rest segments, and a spin
+/// whose mount has a rest segment enters as its difference from it.
+#[test]
+fn a_dynamic_misfit_does_not_move_the_static_parameters() {
+    use crate::estimate::{calibrate_session_stats, paper_labels, paper_values};
+    use crate::sim::testkit::{self, TableErrors};
+    // The oblique plan plus a spin-up of 20 → 200 °/s in 3 s on each oblique mount (ω̇ ≈ 1 rad/s²,
+    // a tangential term of about 1 mg), which has a rest segment.
+    let mut plan = declared(&builtin_plan("oblique").unwrap().unwrap(), 0.05, 1.0);
+    let obliques: Vec<crate::session::SegmentPlan> = plan
+        .segments
+        .iter()
+        .filter(|s| s.is_static() && s.up_b.iter().filter(|c| c.abs() > 0.5).count() == 2)
+        .cloned()
+        .collect();
+    assert_eq!(obliques.len(), 3);
+    for o in obliques {
+        plan.segments.push(crate::session::SegmentPlan {
+            name: format!("{} ramp", o.name),
+            rate_deg_s: 20.0,
+            rate_end_deg_s: Some(200.0),
+            duration_s: Some(3.0),
+            ..o
+        });
+    }
+    let truth = testkit::paper_unit();
+    let moved = |options: &EstimateOptions| {
+        let mut worst = 0.0f64;
+        for seed in 0..4 {
+            let errors = TableErrors {
+                attitude_deg: 0.05,
+                gyro_noise_rad_s: 0.05f64.to_radians(),
+                gyro: Some(mems_gyro()),
+                ..TableErrors::default()
+            };
+            let mut rng = testkit::Rng::new(500 + seed);
+            let noise = 1e-3 * truth.statics.scale_out_per_g[0];
+            let stats = testkit::noisy_stats(&plan, &truth, noise, errors, &mut rng);
+            let good = calibrate_session_stats(&plan, &stats, options).unwrap();
+            let misfit = EstimateOptions {
+                use_omega_dot: false,
+                ..options.clone()
+            };
+            let bad = calibrate_session_stats(&plan, &stats, &misfit).unwrap();
+            assert!(
+                bad.fit.reduced_chi2 > 1.5,
+                "the misfit is visible: {:?}",
+                bad.fit
+            );
+            let a = paper_values(&good.calibration).unwrap();
+            let b = paper_values(&bad.calibration).unwrap();
+            for p in 0..15 {
+                let z = (a[p] - b[p]).abs() / good.covariance[p][p].sqrt();
+                if z > worst {
+                    eprintln!("seed {seed} {}: moved {z:.2}σ", paper_labels()[p]);
+                }
+                worst = worst.max(z);
+            }
+        }
+        worst
+    };
+    let joint = moved(&EstimateOptions {
+        static_from_rest: false,
+        ..EstimateOptions::default()
+    });
+    let rest = moved(&EstimateOptions::default());
+    eprintln!("worst static move: {rest:.2}σ (all segments in the static fit: {joint:.2}σ)");
+    assert!(rest <= 1.0, "{rest}");
 }

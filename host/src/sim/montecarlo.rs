@@ -44,6 +44,9 @@ pub struct Case {
     pub norm_only: bool,
     /// The simulated gyro reads `G ω + b` (b in rad/s); `None`: perfect.
     pub gyro: Option<(RowMajor3, [f64; 3])>,
+    /// Draw the table's rate scale error per seed with the plan's `table_rate_sigma_ppm` (else the
+    /// table's rate is exact).
+    pub table_rate_error: bool,
 }
 
 /// One seed's errors.
@@ -335,6 +338,11 @@ pub fn run(case: &Case) -> CaseResult {
     let noise_out = 1e-3 * truth.statics.scale_out_per_g[0];
     let seeds = (0..case.seeds)
         .map(|seed| {
+            let rate_scale = if case.table_rate_error {
+                case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed).normal()
+            } else {
+                0.0
+            };
             let stats = match case.generator {
                 Generator::Rows => {
                     let mut noise = NoiseModel {
@@ -347,6 +355,7 @@ pub fn run(case: &Case) -> CaseResult {
                         noise.gyro_matrix = g;
                         noise.gyro_bias_deg_s = b.map(f64::to_degrees);
                     }
+                    noise.table_rate_scale = rate_scale;
                     simulated_stats(&case.plan, &truth, &noise, seed)
                 }
                 Generator::Stats => {
@@ -354,6 +363,7 @@ pub fn run(case: &Case) -> CaseResult {
                         attitude_deg: case.true_tilt_deg,
                         gyro_noise_rad_s: 0.05f64.to_radians(),
                         gyro: case.gyro,
+                        rate_scale,
                         ..TableErrors::default()
                     };
                     let mut rng = testkit::Rng::new(1000 + seed);

@@ -57,6 +57,8 @@ pub struct TableErrors {
     pub gyro_noise_rad_s: f64,
     /// The gyro reads `G ω + b`: `(G, b)`, b in rad/s (`None`: a perfect gyro).
     pub gyro: Option<([[f64; 3]; 3], [f64; 3])>,
+    /// The table's rate scale error, common to every rotating segment.
+    pub rate_scale: f64,
 }
 
 /// Gyro statistics of a perfect gyro turned into those of a gyro reading `G ω + b`.
@@ -219,6 +221,10 @@ pub fn noisy_stats(
                     .entry(sp.mount_name())
                     .or_insert_with(|| [sigma * rng.normal(), sigma * rng.normal()]);
                 actual.up_b = crate::sim::session::tilt(actual.up_b, n1, n2);
+            }
+            if !sp.is_static() {
+                actual.rate_start_rad_s *= 1.0 + errors.rate_scale;
+                actual.rate_end_rad_s *= 1.0 + errors.rate_scale;
             }
             if errors.rate_rel > 0.0 && !sp.is_static() {
                 let f = 1.0 + errors.rate_rel * rng.normal();
