@@ -9,7 +9,7 @@
 
 use host::estimate::{calibrate_session_stats, EstimateOptions};
 use host::session::builtin::paper_plan;
-use host::session::csv_io::{read_session, ReadOptions, SAMPLES_FILE};
+use host::session::{read_session, ReadOptions, SAMPLES_FILE};
 use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
 use std::time::Instant;

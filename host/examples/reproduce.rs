@@ -1,5 +1,5 @@
-//! Reproduces the paper's story with the tool, through the library, and prints the figures issue 6
-//! asks for (`docs/paper-reproduction.md`, `docs/reproduce.sh`):
+//! Reproduces the paper's story with the tool, through the library, and prints the navigation
+//! position errors against their targets (`docs/paper-reproduction.md`, `docs/reproduce.sh`):
 //!
 //! 1. simulate the paper's unit (`reference/paper-unit.toml`) on the paper's plan, 1 mg white noise,
 //!    seed 1, into `OUT/session` (what `host simulate` does);
@@ -14,7 +14,7 @@
 use host::calibration_files::write_calibration_files;
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
 use host::report::compare::{compare, export, ExportFormat};
-use host::report::document::{render_issue_figures, report, ReportOptions};
+use host::report::document::{render_position_targets, report, ReportOptions};
 use host::session::builtin::paper_plan;
 use host::session::{read_session, ReadOptions};
 use host::sim::{simulate_to_dir, NoiseModel};
@@ -73,7 +73,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &ReportOptions::default(),
     )?;
     println!("{}", summary.render());
-    println!("{}", render_issue_figures(&summary.data.navigation));
+    println!("{}", render_position_targets(&summary.data.navigation));
 
     let conversions = out.join("calibration").join("conversions.toml");
     std::fs::write(&conversions, export(&joint.calibration, ExportFormat::All)?)?;

@@ -4,7 +4,7 @@
 //! form turns the same samples into the same specific force as `shared::Compensator`.
 //!
 //! - [`PlainMatrices`]: the paper's eq. 6 / 16 matrices, `f_b[g] = K_A·U − ∇_b − f_L^b`.
-//! - [`FusionStyle`]: x-io Fusion's `FusionCalibrationInertial`:
+//! - [`FusionStyle`]: x-io Fusion's `FusionModelInertial`:
 //!   `f[g] = misalignment · ((U − offset) ∘ sensitivity)`, with `misalignment = A⁻¹`,
 //!   `sensitivity = 1/k` (g per output unit) and `offset = u0`. Fusion has no lever-arm terms.
 //! - [`KalibrStyle`]: Kalibr's "scale-misalignment-size-effect" accelerometer model in its general
@@ -115,7 +115,7 @@ impl PlainMatrices {
 }
 
 impl FusionStyle {
-    /// `FusionCalibrationInertial`, in g; static only.
+    /// `FusionModelInertial`, in g; static only.
     pub fn compensate_static_g(&self, u: [f64; 3]) -> [f64; 3] {
         let scaled: [f64; 3] =
             std::array::from_fn(|i| (u[i] - self.offset[i]) * self.sensitivity[i]);
@@ -139,7 +139,6 @@ impl KalibrStyle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::unit_file::UnitFile;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{
         BodyAngularAccel, BodyRate, BodySpecificForce, Compensator, LeverMode, SensorOutputs,
@@ -147,7 +146,7 @@ mod tests {
 
     #[test]
     fn every_form_compensates_like_the_device() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let conv = convert(&cal).unwrap();
         let model = ForwardModel::new(&cal).unwrap();
         let full = Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
@@ -205,7 +204,7 @@ mod tests {
 
     #[test]
     fn plain_matrices_are_the_reference_k_a() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let c = convert(&cal).unwrap();
         // paper-unit.toml [expected]: K_A[0][0] = 2.53161061 g/V, ∇_b = (6.13688643, …) g.
         assert!((c.plain.k_a_g_per_out[0][0] - 2.53161061).abs() < 1e-7);

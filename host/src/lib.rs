@@ -9,4 +9,5 @@ pub mod export;
 pub mod report;
 pub mod session;
 pub mod sim;
+pub mod ui;
 pub mod unit_file;

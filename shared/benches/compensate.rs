@@ -2,7 +2,7 @@
 //!
 //! Prints nanoseconds per call of the full path (lever arms + ω̇), the static-only path and the ω̇
 //! estimator, each over 10⁷ samples of the paper's unit spinning at 200 °/s. The operation count of the
-//! per-sample path is in the `compensator` module docs (51 multiply-adds against MODEL.md's ~50).
+//! per-sample path is in the `compensator` module docs (51 multiply-adds against docs/model.md §10's ~50).
 
 use shared::forward::{ForwardModel, TableState};
 use shared::omega_dot::OmegaDotEstimator;
@@ -54,7 +54,7 @@ fn main() {
         black_box(est.update(black_box(&wi)));
     });
     println!("host time per compensated sample (paper unit, 200 °/s, 10^7 samples):");
-    println!("  full (lever arms + ω̇)   {ns_full:6.2} ns/sample   (51 multiply-adds; MODEL.md floor ~50)");
+    println!("  full (lever arms + ω̇)   {ns_full:6.2} ns/sample   (51 multiply-adds; docs/model.md §10 floor ~50)");
     println!("  static only              {ns_static:6.2} ns/sample   (12 multiply-adds)");
     println!("  ω̇ estimator update       {ns_wdot:6.2} ns/sample");
 }

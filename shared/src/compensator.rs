@@ -1,10 +1,10 @@
-//! Per-sample compensation: the inverse model of `MODEL.md` (paper eq. 16–17).
+//! Per-sample compensation: the inverse model of `docs/model.md` §3 (paper eq. 16–17).
 //!
 //! Built once from a [`Calibration`] (settings → precomputed state → one call per sample, as in x-io
 //! Fusion): every square root, trigonometric function and division happens in [`Compensator::new`],
 //! in `f64`, and the per-sample call is straight-line `f32` multiply-adds with no branch on data.
 //!
-//! Per sample, with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i` (`MODEL.md` "cheap per-sample form"):
+//! Per sample, with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i` (`docs/model.md` §10):
 //!
 //! ```text
 //! f_O = g·K_A · (U − u0 − K d)          K_A = (K A)⁻¹, the exact inverse (never a transpose)
@@ -13,13 +13,13 @@
 //! Operation count of [`Compensator::compensate`]: `U − u0` 3 subtractions; `|ω|²` 3; per axis
 //! `ω̇·p_i` 3, `a_i·ω` 3, `q_i·ω` 3, two products and one subtraction, and the subtraction from `U − u0`
 //! (12 per axis, 36); `K_A·v` 9. Total 51 multiply-adds (48 fused-multiply-add-able), against the ~50 of
-//! `MODEL.md`. The static-only path [`Compensator::compensate_static`] is 12.
+//! `docs/model.md` §10. The static-only path [`Compensator::compensate_static`] is 12.
 
 use crate::linalg::{self, RowMajor3};
 use crate::params::{Calibration, ParamsError};
 use crate::units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs};
 
-/// Which lever-arm terms the per-sample path applies (`MODEL.md` §6: the ω̇ term must be switchable).
+/// Which lever-arm terms the per-sample path applies (`docs/model.md` §6: the ω̇ term must be switchable).
 #[derive(
     Clone,
     Copy,

@@ -1,5 +1,5 @@
 //! The forward model: what an accelerometer unit outputs for a given motion (paper eq. 11–15,
-//! `MODEL.md` "Forward model"). Every simulator (the host's virtual unit, the firmware's virtual
+//! `docs/model.md` §2). Every simulator (the host's virtual unit, the firmware's virtual
 //! sensor, the tests) uses this one implementation.
 
 use crate::linalg::{self, RowMajor3};
@@ -26,7 +26,7 @@ pub struct TableState {
     pub rate_rad_s: f64,
     /// Table angular acceleration about the vertical, rad/s².
     pub accel_rad_s2: f64,
-    /// Position of the table's spin axis point P relative to O, body axes, metres (`MODEL.md` §5).
+    /// Position of the table's spin axis point P relative to O, body axes, metres (`docs/model.md` §5).
     pub centre_m: [f64; 3],
 }
 

@@ -1,13 +1,13 @@
 //! The `no_std` core of the accelerometer calibrator, shared by the host calibrator and the firmware.
 //!
-//! It holds the measurement model of `MODEL.md` and nothing that does I/O or allocates:
+//! It holds the measurement model of `docs/model.md` and nothing that does I/O or allocates:
 //!
 //! - [`units`]: the quantities that cross module boundaries, each carrying its unit and frame;
 //! - [`params`]: the calibration in the paper's form (Table 1 and Table 3) and in the fitted form
-//!   `M = K·A`, with the conversions of `MODEL.md` §2;
+//!   `M = K·A`, with the conversions of `docs/model.md` §2;
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
-//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `MODEL.md` "Inverse model");
-//! - [`omega_dot`]: the filtered angular-acceleration estimator of `MODEL.md` §6;
+//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3);
+//! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §6;
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
 //! - [`wire`]: the host↔device messages and their COBS framing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -26,5 +26,5 @@ pub use compensator::{Compensator, LeverMode};
 pub use params::{Calibration, FittedStatic, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 pub use units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs, UnitId};
 
-/// Standard gravity (m/s²), the default when the user gives no local value (`MODEL.md` "Signs").
+/// Standard gravity (m/s²), the default when the user gives no local value (`docs/model.md` §5).
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;

@@ -1,7 +1,7 @@
 //! Quantities with their unit and frame in the type and field names.
 //!
 //! Body axes are the unit's orthogonal b-frame; sensor axes are the three (non-orthogonal) sensing
-//! directions `a_i` (`MODEL.md` "Frames and symbols"). Each type is generic over the float so that the
+//! directions `a_i` (`docs/model.md` §1). Each type is generic over the float so that the
 //! host can use `f64` and the device `f32` (the default) with the same names.
 
 use serde::{Deserialize, Serialize};
@@ -28,7 +28,7 @@ pub struct BodyAngularAccel<T = f32> {
     pub rad_s2: [T; 3],
 }
 
-/// Specific force (`MODEL.md` "Signs": +1 g up at rest), in body axes, m/s².
+/// Specific force (`docs/model.md` §5: +1 g up at rest), in body axes, m/s².
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BodySpecificForce<T = f32> {
     /// Specific force in body axes, m/s².

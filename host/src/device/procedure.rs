@@ -294,7 +294,7 @@ fn table_for(seg: &SegmentPlan) -> VirtualTable {
     }
 }
 
-/// The live check of one recorded segment against its plan (`MODEL.md` "Signs": ω = rate·up).
+/// The live check of one recorded segment against its plan (`docs/model.md` §5: ω = rate·up).
 pub fn live_check(
     seg: &SegmentPlan,
     stats: &session::SegmentStats,
@@ -560,7 +560,7 @@ fn record_segment<T: Transport>(
     for _ in 0..settle {
         client.next_raw_window()?;
     }
-    let bar = session::csv_io::progress_bar(n_windows, "recording", opts.quiet);
+    let bar = crate::ui::progress_bar(n_windows, "recording", opts.quiet);
     bar.set_message(seg.name.clone());
     let mut acc = session::SegmentAccumulator::new(seg.name.clone());
     let mut rejected = 0u64;
@@ -650,7 +650,7 @@ fn verify<T: Transport>(
     let g = plan.gravity_m_s2;
     let mut points = Vec::new();
     // The expected specific force at the reference point O is g·up − W c, with c the reference point
-    // relative to the table axis (`MODEL.md` §5); spinning checks need c, known for these references.
+    // relative to the table axis (`docs/model.md` §5); spinning checks need c, known for these references.
     let c = match opts.estimate.reference {
         ReferenceChoice::TableAxis => Some([0.0; 3]),
         ReferenceChoice::BodyPoint(p) => Some(p),

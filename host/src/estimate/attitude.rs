@@ -230,7 +230,7 @@ pub(crate) fn recentre_free(problem: &mut Problem, theta: &mut [f64]) {
 pub(crate) fn free_static_fit(
     plan: &Plan,
     segs: &[SessionSeg],
-    noise: &super::screen::Noise,
+    noise: &super::Noise,
     problem: &mut Problem,
     fallback: EstimateError,
 ) -> Result<(solve::Fit, BodyFrame), EstimateError> {

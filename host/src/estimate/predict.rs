@@ -29,7 +29,7 @@ pub struct PredictSettings {
 }
 
 impl PredictSettings {
-    /// The reference case: 1σ per sample `noise` (output unit) on each axis, 60 s segments.
+    /// The reference case: 1σ per sample `noise` (output unit) on each axis, 60 s segments.
     pub fn white(noise: f64) -> PredictSettings {
         PredictSettings {
             noise_out_per_sample_1sigma: [noise; 3],
@@ -116,10 +116,4 @@ pub fn predict(
         mount_tilts: out.mount_tilts,
         gyro: out.gyro,
     })
-}
-
-impl std::fmt::Display for Prediction {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::report::render_prediction(self))
-    }
 }

@@ -298,7 +298,7 @@ const HEADER_PLAIN: &str = "\
 # ∇_b in g; lever_arms_m row i = r_i (m, body axes, from the reference point).
 ";
 const HEADER_FUSION: &str = "\
-# x-io Fusion FusionCalibrationInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
+# x-io Fusion FusionModelInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
 # misalignment = A⁻¹ (row-major), sensitivity = 1/k_i (g per output unit), offset = u0. No lever arms:
 # static compensation only.
 ";
@@ -339,8 +339,8 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::Uncertainty;
     use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
-    use crate::unit_file::Uncertainty;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 
@@ -397,7 +397,7 @@ mod tests {
     /// Each exported form, read back from its TOML, compensates like the device's compensator.
     #[test]
     fn every_exported_form_reads_back_and_compensates_the_same() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let plain: PlainMatrices =
             toml::from_str(&export(&cal, ExportFormat::Plain).unwrap()).unwrap();
         let fusion: FusionStyle =

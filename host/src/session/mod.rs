@@ -1,14 +1,30 @@
 //! The recording of a calibration session: `plan.toml` + `samples.csv` in a directory
 //! (format documented in `docs/recording-format.md`).
+//!
+//! - [`plan`]: the plan file (segments, attitudes, rates) and its checks; [`builtin`]: the plans
+//!   shipped with the tool.
+//! - [`stats`]: the per-segment sufficient statistics everything downstream works on.
+//! - [`reader`]: the streaming `samples.csv` reader (constant memory, one pass); [`writer`]: the
+//!   writer that syncs at every segment end; [`error`]: what can go wrong with either.
 
 pub mod builtin;
-pub mod csv_io;
+pub mod error;
 pub mod plan;
+pub mod reader;
 pub mod stats;
+pub mod writer;
 
-pub use csv_io::{
-    read_samples, read_session, ReadOptions, ReadReport, RecordingError, Session, SessionWriter,
-    PLAN_FILE, SAMPLES_FILE, SAMPLES_HEADER,
-};
-pub use plan::{OutputUnitName, Plan, PlanError, SegmentPlan};
+pub use error::RecordingError;
+pub use plan::{Plan, PlanError, SegmentPlan};
+pub use reader::{read_samples, read_session, ReadOptions, ReadReport, Session};
 pub use stats::{SegmentAccumulator, SegmentStats};
+pub use writer::SessionWriter;
+
+/// The plan file inside a session directory.
+pub const PLAN_FILE: &str = "plan.toml";
+/// The samples file inside a session directory.
+pub const SAMPLES_FILE: &str = "samples.csv";
+/// The only header `samples.csv` version 1 has.
+pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
+/// Column names, in order.
+pub const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];

@@ -43,34 +43,6 @@ fn is_zero3(v: &[f64; 3]) -> bool {
     *v == [0.0; 3]
 }
 
-/// Output unit as spelled in files: "V" or "LSB".
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum OutputUnitName {
-    /// Volts.
-    V,
-    /// ADC counts.
-    #[serde(rename = "LSB")]
-    Lsb,
-}
-
-impl From<OutputUnitName> for OutputUnit {
-    fn from(u: OutputUnitName) -> Self {
-        match u {
-            OutputUnitName::V => OutputUnit::Volts,
-            OutputUnitName::Lsb => OutputUnit::Lsb,
-        }
-    }
-}
-
-impl From<OutputUnit> for OutputUnitName {
-    fn from(u: OutputUnit) -> Self {
-        match u {
-            OutputUnit::Volts => OutputUnitName::V,
-            OutputUnit::Lsb => OutputUnitName::Lsb,
-        }
-    }
-}
-
 fn default_version() -> u32 {
     PLAN_FORMAT_VERSION
 }
@@ -86,7 +58,7 @@ pub struct Plan {
     #[serde(default = "default_version")]
     pub format_version: u32,
     /// Unit of the accelerometer outputs in `samples.csv`.
-    pub output_unit: OutputUnitName,
+    pub output_unit: OutputUnit,
     /// Sample rate of `samples.csv`, Hz.
     pub sample_rate_hz: f64,
     /// Local gravity, m/s².
@@ -136,7 +108,7 @@ pub struct SegmentPlan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duration_s: Option<f64>,
     /// Position of the table's spin-axis point relative to the body origin, body axes, m
-    /// (`MODEL.md` §5). Absent: unknown (the estimator treats it per `mount`).
+    /// (`docs/model.md` §5). Absent: unknown (the estimator treats it per `mount`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table_centre_m: Option<[f64; 3]>,
     /// Name of the physical mount; segments with the same mount share one table centre.

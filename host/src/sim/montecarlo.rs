@@ -339,7 +339,7 @@ pub fn run(case: &Case) -> CaseResult {
     let seeds = (0..case.seeds)
         .map(|seed| {
             let rate_scale = if case.table_rate_error {
-                case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed).normal()
+                case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed, 0).normal()
             } else {
                 0.0
             };
@@ -366,13 +366,13 @@ pub fn run(case: &Case) -> CaseResult {
                         rate_scale,
                         ..TableErrors::default()
                     };
-                    let mut rng = testkit::Rng::new(1000 + seed);
+                    let mut rng = testkit::Rng::new(1000 + seed, 0);
                     testkit::noisy_stats(&case.plan, &truth, noise_out, errors, &mut rng)
                 }
             };
             let out = calibrate_session_stats(&case.plan, &stats, &case.options)
                 .unwrap_or_else(|e| panic!("{}: seed {seed}: {e}", case.title));
-            let mut rng = testkit::Rng::new(77 + seed);
+            let mut rng = testkit::Rng::new(77 + seed, 0);
             let st = static_errors(&truth, &out.fitted, &mut rng);
             let rot = st.rotation;
             let gy = case.gyro.as_ref();
@@ -407,7 +407,7 @@ pub fn run(case: &Case) -> CaseResult {
                     .map(|(_, st)| st.mean_u)
                     .collect();
                 let f = norm_only(&means).expect("norm-only converges");
-                let e = static_errors(&truth, &f, &mut testkit::Rng::new(77 + seed));
+                let e = static_errors(&truth, &f, &mut testkit::Rng::new(77 + seed, 0));
                 (e.worst_ug, e.rms_ug)
             });
             SeedResult {
@@ -678,7 +678,7 @@ pub fn many_mounts_plan() -> Plan {
     }
     Plan {
         format_version: 2,
-        output_unit: crate::session::OutputUnitName::V,
+        output_unit: shared::OutputUnit::Volts,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,

@@ -1,4 +1,4 @@
-//! Reading and writing a session directory (`plan.toml` + `samples.csv`, `docs/recording-format.md`).
+//! Reading a session directory (`plan.toml` + `samples.csv`, `docs/recording-format.md`).
 //!
 //! The reader streams: it holds one line and one [`SegmentAccumulator`] per plan segment, never the
 //! rows, so a session of 10⁷ rows is reduced in one pass in constant memory. The CSV dialect is the
@@ -8,154 +8,13 @@
 //! column, except a final line without a line end, which is a recording cut short: it is skipped with
 //! a warning (its last number may be cut mid-digits and still parse, so it is never trusted).
 
-use super::plan::{Plan, PlanError};
+use super::error::shorten;
+use super::plan::Plan;
 use super::stats::{SegmentAccumulator, SegmentStats};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use super::{RecordingError, COLUMNS, PLAN_FILE, SAMPLES_FILE};
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, IsTerminal, Write};
-use std::path::{Path, PathBuf};
-
-/// The plan file inside a session directory.
-pub const PLAN_FILE: &str = "plan.toml";
-/// The samples file inside a session directory.
-pub const SAMPLES_FILE: &str = "samples.csv";
-/// The only header `samples.csv` version 1 has.
-pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
-/// Column names, in order.
-pub const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];
-
-/// Why a session cannot be read or written. Every message names the file, the place and the fix.
-#[derive(Debug)]
-pub enum RecordingError {
-    /// `plan.toml` is missing or unusable.
-    Plan(PlanError),
-    /// An I/O failure on `path`.
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What failed.
-        source: std::io::Error,
-    },
-    /// The first line is not [`SAMPLES_HEADER`].
-    Header {
-        /// The file.
-        path: PathBuf,
-        /// The line found.
-        found: String,
-        /// 1-based column of the first difference.
-        column: usize,
-    },
-    /// A row without exactly eight fields.
-    FieldCount {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number.
-        line: u64,
-        /// Fields found.
-        found: usize,
-    },
-    /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
-    Number {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number.
-        line: u64,
-        /// 1-based column number.
-        column: usize,
-        /// The text found (shortened).
-        text: String,
-    },
-    /// A row names a segment the plan does not have.
-    UnknownSegment {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number of its first row.
-        line: u64,
-        /// The segment name.
-        name: String,
-    },
-    /// The file has a header but no usable row.
-    NoRows(PathBuf),
-    /// [`SessionWriter`] was asked for a segment the plan does not have.
-    WriterSegment(String),
-    /// [`SessionWriter::create`] would overwrite an existing recording.
-    Exists(PathBuf),
-}
-
-impl std::fmt::Display for RecordingError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RecordingError::Plan(e) => write!(f, "{e}"),
-            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            RecordingError::Header {
-                path,
-                found,
-                column,
-            } => write!(
-                f,
-                "{} line 1, column {column}: the header is '{}' but must be exactly '{SAMPLES_HEADER}' \
-                 (recording format 1); fix the first line",
-                path.display(),
-                shorten(found)
-            ),
-            RecordingError::FieldCount { path, line, found } => write!(
-                f,
-                "{} line {line}: {found} fields, expected 8 ({SAMPLES_HEADER}); \
-                 fix or delete the line",
-                path.display()
-            ),
-            RecordingError::Number {
-                path,
-                line,
-                column,
-                text,
-            } => write!(
-                f,
-                "{} line {line}, column {column} ({}): '{}' is not a number; \
-                 fix the value or write NaN to have the row left out",
-                path.display(),
-                COLUMNS.get(column.wrapping_sub(1)).copied().unwrap_or("?"),
-                text
-            ),
-            RecordingError::UnknownSegment { path, line, name } => write!(
-                f,
-                "{} line {line}: segment '{name}' is not in {PLAN_FILE}; add a [[segment]] with \
-                 name = \"{name}\" to the plan, or remove its rows",
-                path.display()
-            ),
-            RecordingError::NoRows(path) => write!(
-                f,
-                "{} has no data rows after its header: nothing to calibrate from",
-                path.display()
-            ),
-            RecordingError::WriterSegment(name) => write!(
-                f,
-                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
-            ),
-            RecordingError::Exists(path) => write!(
-                f,
-                "{} already exists; choose another directory or allow overwriting (--force)",
-                path.display()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for RecordingError {}
-
-impl From<PlanError> for RecordingError {
-    fn from(e: PlanError) -> Self {
-        RecordingError::Plan(e)
-    }
-}
-
-fn shorten(s: &str) -> String {
-    if s.chars().count() > 60 {
-        format!("{}…", s.chars().take(60).collect::<String>())
-    } else {
-        s.to_string()
-    }
-}
+use std::io::{BufRead, BufReader};
+use std::path::Path;
 
 /// How to read a session.
 #[derive(Clone, Copy, Debug, Default)]
@@ -202,7 +61,7 @@ pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, Record
     };
     let file = File::open(&path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
-    let bar = progress_bar_bytes(len, "reading samples.csv", options.quiet);
+    let bar = crate::ui::progress_bar_bytes(len, "reading samples.csv", options.quiet);
     let reader = BufReader::with_capacity(1 << 20, bar.wrap_read(file));
     let result = read_samples(reader, &plan, &path);
     bar.finish_and_clear();
@@ -212,40 +71,6 @@ pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, Record
         stats,
         report,
     })
-}
-
-/// A progress bar counting items (rows, windows) on stderr, hidden unless stderr is a terminal and
-/// `quiet` is false.
-pub fn progress_bar(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
-    styled_bar(
-        total,
-        message,
-        quiet,
-        "{msg} [{bar:40}] {human_pos}/{human_len} ({eta} left)",
-    )
-}
-
-/// A progress bar counting bytes on stderr, hidden unless stderr is a terminal and `quiet` is false.
-pub fn progress_bar_bytes(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
-    styled_bar(
-        total,
-        message,
-        quiet,
-        "{msg} [{bar:40}] {bytes}/{total_bytes} ({bytes_per_sec}, {eta} left)",
-    )
-}
-
-fn styled_bar(total: u64, message: &'static str, quiet: bool, template: &str) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-    let style = ProgressStyle::with_template(template)
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-    bar.set_style(style);
-    bar.set_message(message);
-    bar
 }
 
 /// Trims ASCII spaces/tabs and one pair of surrounding double quotes.
@@ -539,140 +364,11 @@ fn collect_stats(red: &Reducer<'_>, plan: &Plan, report: &mut ReadReport) -> Vec
     }
     stats
 }
-
-/// Writes a session directory: `plan.toml` first, then `samples.csv` row by row through a buffer that
-/// is flushed to the disk at every segment end, so that whatever happens later, the segments recorded
-/// so far are on disk and readable (a crash mid-segment leaves at most a partial last line, which the
-/// reader skips with a warning).
-pub struct SessionWriter {
-    dir: PathBuf,
-    samples_path: PathBuf,
-    out: BufWriter<File>,
-    names: Vec<String>,
-    current: Option<usize>,
-    rows: u64,
-    line: Vec<u8>,
-    float: ryu::Buffer,
-}
-
-impl SessionWriter {
-    /// Creates `dir` (and parents) if needed, writes and syncs `plan.toml`, and starts `samples.csv`.
-    /// Refuses to replace an existing `samples.csv` unless `overwrite`.
-    pub fn create(
-        dir: &Path,
-        plan: &Plan,
-        overwrite: bool,
-    ) -> Result<SessionWriter, RecordingError> {
-        plan.validate()?;
-        let io = |path: &Path| {
-            let path = path.to_path_buf();
-            move |source| RecordingError::Io { path, source }
-        };
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
-        let samples_path = dir.join(SAMPLES_FILE);
-        if !overwrite && samples_path.exists() {
-            return Err(RecordingError::Exists(samples_path));
-        }
-        let plan_path = dir.join(PLAN_FILE);
-        write_synced(&plan_path, plan.to_toml().as_bytes()).map_err(io(&plan_path))?;
-        let file = File::create(&samples_path).map_err(io(&samples_path))?;
-        let mut out = BufWriter::with_capacity(1 << 20, file);
-        out.write_all(SAMPLES_HEADER.as_bytes())
-            .and_then(|_| out.write_all(b"\n"))
-            .and_then(|_| out.flush())
-            .map_err(io(&samples_path))?;
-        Ok(SessionWriter {
-            dir: dir.to_path_buf(),
-            samples_path,
-            out,
-            names: plan.segments.iter().map(|s| s.name.clone()).collect(),
-            current: None,
-            rows: 0,
-            line: Vec::with_capacity(256),
-            float: ryu::Buffer::new(),
-        })
-    }
-
-    /// The session directory.
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
-    /// Rows written so far.
-    pub fn rows(&self) -> u64 {
-        self.rows
-    }
-
-    /// Appends one sample of `segment`. Changing segment ends the previous one (flush to disk).
-    /// Floats are written in their shortest exact form, so they read back bit for bit.
-    pub fn write_row(
-        &mut self,
-        segment: &str,
-        t_s: f64,
-        u: &[f64; 3],
-        w_rad_s: &[f64; 3],
-    ) -> Result<(), RecordingError> {
-        let idx = match self.current {
-            Some(i) if self.names[i] == segment => i,
-            previous => {
-                let i = self
-                    .names
-                    .iter()
-                    .position(|n| n == segment)
-                    .ok_or_else(|| RecordingError::WriterSegment(segment.to_string()))?;
-                if previous.is_some() {
-                    self.end_segment()?;
-                }
-                self.current = Some(i);
-                i
-            }
-        };
-        self.line.clear();
-        self.line.extend_from_slice(self.names[idx].as_bytes());
-        for v in std::iter::once(&t_s).chain(u).chain(w_rad_s) {
-            self.line.push(b',');
-            self.line
-                .extend_from_slice(self.float.format(*v).as_bytes());
-        }
-        self.line.push(b'\n');
-        self.out
-            .write_all(&self.line)
-            .map_err(|source| RecordingError::Io {
-                path: self.samples_path.clone(),
-                source,
-            })?;
-        self.rows += 1;
-        Ok(())
-    }
-
-    /// Ends the current segment: everything written so far goes to the disk.
-    pub fn end_segment(&mut self) -> Result<(), RecordingError> {
-        self.current = None;
-        self.out
-            .flush()
-            .and_then(|_| self.out.get_ref().sync_data())
-            .map_err(|source| RecordingError::Io {
-                path: self.samples_path.clone(),
-                source,
-            })
-    }
-
-    /// Ends the recording; returns the number of rows written.
-    pub fn finish(mut self) -> Result<u64, RecordingError> {
-        self.end_segment()?;
-        Ok(self.rows)
-    }
-}
-
-fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut f = File::create(path)?;
-    f.write_all(bytes)?;
-    f.sync_all()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::session::{SessionWriter, SAMPLES_HEADER};
+    use std::path::Path;
 
     const PLAN: &str = r#"
 output_unit = "V"

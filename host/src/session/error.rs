@@ -1,0 +1,139 @@
+//! Why a session cannot be read or written.
+
+use super::plan::PlanError;
+use super::{COLUMNS, PLAN_FILE, SAMPLES_HEADER};
+use std::path::PathBuf;
+
+/// Why a session cannot be read or written. Every message names the file, the place and the fix.
+#[derive(Debug)]
+pub enum RecordingError {
+    /// `plan.toml` is missing or unusable.
+    Plan(PlanError),
+    /// An I/O failure on `path`.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The first line is not [`SAMPLES_HEADER`].
+    Header {
+        /// The file.
+        path: PathBuf,
+        /// The line found.
+        found: String,
+        /// 1-based column of the first difference.
+        column: usize,
+    },
+    /// A row without exactly eight fields.
+    FieldCount {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+        /// Fields found.
+        found: usize,
+    },
+    /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
+    Number {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+        /// 1-based column number.
+        column: usize,
+        /// The text found (shortened).
+        text: String,
+    },
+    /// A row names a segment the plan does not have.
+    UnknownSegment {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number of its first row.
+        line: u64,
+        /// The segment name.
+        name: String,
+    },
+    /// The file has a header but no usable row.
+    NoRows(PathBuf),
+    /// [`SessionWriter`] was asked for a segment the plan does not have.
+    WriterSegment(String),
+    /// [`SessionWriter::create`] would overwrite an existing recording.
+    Exists(PathBuf),
+}
+
+impl std::fmt::Display for RecordingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RecordingError::Plan(e) => write!(f, "{e}"),
+            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            RecordingError::Header {
+                path,
+                found,
+                column,
+            } => write!(
+                f,
+                "{} line 1, column {column}: the header is '{}' but must be exactly '{SAMPLES_HEADER}' \
+                 (recording format 1); fix the first line",
+                path.display(),
+                shorten(found)
+            ),
+            RecordingError::FieldCount { path, line, found } => write!(
+                f,
+                "{} line {line}: {found} fields, expected 8 ({SAMPLES_HEADER}); \
+                 fix or delete the line",
+                path.display()
+            ),
+            RecordingError::Number {
+                path,
+                line,
+                column,
+                text,
+            } => write!(
+                f,
+                "{} line {line}, column {column} ({}): '{}' is not a number; \
+                 fix the value or write NaN to have the row left out",
+                path.display(),
+                COLUMNS.get(column.wrapping_sub(1)).copied().unwrap_or("?"),
+                text
+            ),
+            RecordingError::UnknownSegment { path, line, name } => write!(
+                f,
+                "{} line {line}: segment '{name}' is not in {PLAN_FILE}; add a [[segment]] with \
+                 name = \"{name}\" to the plan, or remove its rows",
+                path.display()
+            ),
+            RecordingError::NoRows(path) => write!(
+                f,
+                "{} has no data rows after its header: nothing to calibrate from",
+                path.display()
+            ),
+            RecordingError::WriterSegment(name) => write!(
+                f,
+                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
+            ),
+            RecordingError::Exists(path) => write!(
+                f,
+                "{} already exists; choose another directory or allow overwriting (--force)",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RecordingError {}
+
+impl From<PlanError> for RecordingError {
+    fn from(e: PlanError) -> Self {
+        RecordingError::Plan(e)
+    }
+}
+
+/// A field as quoted in a message: at most 60 characters.
+pub(crate) fn shorten(s: &str) -> String {
+    if s.chars().count() > 60 {
+        format!("{}…", s.chars().take(60).collect::<String>())
+    } else {
+        s.to_string()
+    }
+}
