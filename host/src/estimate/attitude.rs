@@ -265,7 +265,7 @@ pub(crate) fn free_static_fit(
         groups: Vec::new(),
         rest_segments: Vec::new(),
     };
-    super::screen::seed_free_mounts(plan, segs, noise, &mut sub, &t);
+    super::build::seed_free_mounts(plan, segs, noise, &mut sub, &t);
     let frame = body_frame(&sub);
     let mut free = super::screen::static_free(n);
     tilt_free(&sub, &mut free);

@@ -14,7 +14,9 @@
 //! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
 
 pub mod attitude;
+mod build;
 pub mod gyro;
+mod joint;
 pub mod model;
 mod paper;
 mod paper_angles;
@@ -497,8 +499,8 @@ pub fn calibrate_session_stats(
     screen::screen(plan, &mut segs, options, &mut excluded);
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let noise = screen::pooled_noise(&segs);
-    let (mounts, seg_mount) = screen::build_mounts(plan, &segs);
-    let models = screen::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
+    let (mounts, seg_mount) = build::build_mounts(plan, &segs);
+    let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem {
         models,
         mounts,
@@ -516,7 +518,7 @@ pub fn calibrate_session_stats(
         planned_static,
     ) {
         Ok(fit) => {
-            screen::seed_free_mounts(plan, &segs, &noise, &mut problem, &fit.theta);
+            build::seed_free_mounts(plan, &segs, &noise, &mut problem, &fit.theta);
             fit
         }
         Err(
@@ -529,7 +531,7 @@ pub fn calibrate_session_stats(
         options.gyro_model == GyroModel::Estimate && spins && options.method == Method::Joint;
     let gyro_base = problem.n_params();
     if gyro_on {
-        problem.gyro_block = Some(screen::build_gyro_block(
+        problem.gyro_block = Some(build::build_gyro_block(
             plan,
             &segs,
             &noise,
@@ -538,23 +540,19 @@ pub fn calibrate_session_stats(
             gyro_base,
         ));
     } else {
-        problem.gyro =
-            screen::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
+        problem.gyro = build::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
     }
     let frame = attitude::body_frame(&problem);
     let group = options.static_from_rest && options.method == Method::Joint;
     let is_rest = |seg: usize| segs[seg].kind == SegmentKind::Static;
     let rests: Vec<bool> = (0..segs.len()).map(is_rest).collect();
-    let regroup = |p: &mut Problem| {
-        if group {
-            p.group_spins(&|seg| rests[seg]);
-        }
-    };
-    regroup(&mut problem);
+    if group {
+        problem.group_spins(&|seg| rests[seg]);
+    }
     let mut start = static_fit.theta.clone();
     if gyro_on {
         start.resize(problem.n_params(), 0.0);
-        let b = screen::static_gyro(&segs);
+        let b = build::static_gyro(&segs);
         for i in 0..3 {
             start[gyro::idx_g(gyro_base, i, i)] = 1.0;
             start[gyro::idx_b(gyro_base, i)] = b[i];
@@ -565,76 +563,23 @@ pub fn calibrate_session_stats(
     let (main_theta, main_cov, main_free, fixed, fit_chi2, fit_dof, notes_main) =
         match options.method {
             Method::Joint => {
-                let mut start = start;
-                if gyro_on {
-                    // The lever terms need the body's rate: first the gyro model from the gyro alone
-                    // (nominal ups within their priors), so that the first joint pass already runs
-                    // on corrected rates.
-                    let gyro_only = Problem {
-                        models: Vec::new(),
-                        groups: Vec::new(),
-                        ..problem.clone()
-                    };
-                    let mut free = vec![false; start.len()];
-                    for (p, f) in free.iter_mut().enumerate().skip(gyro_base) {
-                        *f = true;
-                        let _ = p;
-                    }
-                    attitude::tilt_free(&gyro_only, &mut free);
-                    let f = solve::fit(&gyro_only, start.clone(), free, "gyro model")?;
-                    let est = GyroEstimate::from_fit(&f.theta, &f.cov, gyro_base);
-                    if let Some(c) = est.correction() {
-                        problem.models = screen::build_models(
-                            plan,
-                            &segs,
-                            &noise,
-                            options,
-                            &problem.mounts,
-                            &seg_mount,
-                            Some(&c),
-                        );
-                        problem.groups.clear();
-                        regroup(&mut problem);
-                        start[gyro_base..].copy_from_slice(&f.theta[gyro_base..]);
-                    }
-                }
-                let mut j = joint(
+                let ctx = joint::Context {
                     plan,
+                    noise: &noise,
+                    options,
+                    seg_mount: &seg_mount,
+                    rests: group.then_some(rests.as_slice()),
+                };
+                let (j, g) = joint::with_gyro(
+                    &ctx,
                     &mut segs,
                     &mut problem,
                     start,
-                    options,
                     &mut excluded,
                     frame,
+                    gyro_on.then_some(gyro_base),
                 )?;
-                // Again with the body's rate through the joint estimate (G is then known to ppm).
-                for _ in 0..usize::from(gyro_on) * 2 {
-                    let est = GyroEstimate::from_fit(&j.theta, &j.cov, gyro_base);
-                    let Some(c) = est.correction() else { break };
-                    problem.models = screen::build_models(
-                        plan,
-                        &segs,
-                        &noise,
-                        options,
-                        &problem.mounts,
-                        &seg_mount,
-                        Some(&c),
-                    );
-                    problem.groups.clear();
-                    regroup(&mut problem);
-                    j = joint(
-                        plan,
-                        &mut segs,
-                        &mut problem,
-                        j.theta.clone(),
-                        options,
-                        &mut excluded,
-                        frame,
-                    )?;
-                }
-                if gyro_on {
-                    gyro_estimate = Some(GyroEstimate::from_fit(&j.theta, &j.cov, gyro_base));
-                }
+                gyro_estimate = g;
                 (j.theta, j.cov, j.free, j.fixed, j.chi2, j.dof, Vec::new())
             }
             Method::Paper => {
@@ -819,97 +764,6 @@ fn chi2_of(models: &[SegModel], theta: &[f64], n_params: usize) -> (f64, i64) {
     (chi2, 3 * models.len() as i64 - n_params as i64)
 }
 
-/// The joint fit's result.
-struct JointFit {
-    theta: Vec<f64>,
-    cov: nalgebra::DMatrix<f64>,
-    free: Vec<bool>,
-    fixed: [[bool; 3]; 3],
-    chi2: f64,
-    dof: i64,
-}
-
-/// Joint fit over all used segments, the gyro's spin axes and the mounts' attitude priors,
-/// excluding segments whose residual shows a wrong attitude.
-fn joint(
-    plan: &Plan,
-    segs: &mut [SessionSeg],
-    problem: &mut Problem,
-    start: Vec<f64>,
-    options: &EstimateOptions,
-    excluded: &mut Vec<Exclusion>,
-    frame: BodyFrame,
-) -> Result<JointFit, EstimateError> {
-    loop {
-        let n = problem.n_params();
-        let mut free = vec![true; n];
-        attitude::tilt_free(problem, &mut free);
-        if frame == BodyFrame::Convention {
-            for p in attitude::CONVENTION_FIXED {
-                free[p] = false;
-            }
-        }
-        let t0 = start.clone();
-        let fixed_list = solve::structurally_unobservable(
-            problem,
-            &t0,
-            &mut free,
-            options.lever_arm_structural_limit_m,
-        );
-        let fit = solve::fit(problem, t0, free, "joint least squares")?;
-        // A residual of more than the attitude tolerance (in g) means the segment is not what the plan says.
-        let m = model::m_of(&fit.theta);
-        let Some(minv) = linalg::inverse(&m) else {
-            return Err(EstimateError::Singular {
-                what: "scale/misalignment matrix",
-            });
-        };
-        let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
-        let models = &problem.all_models();
-        let worst = models
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| !plan.segments[segs[s.seg].plan_idx].is_free())
-            .map(|(k, s)| {
-                let p = s.predict(&fit.theta);
-                let res: [f64; 3] = core::array::from_fn(|i| s.mean_u[i] - p[i]);
-                (k, linalg::norm(&linalg::mat_vec(&minv, &res)))
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((k, err)) = worst {
-            let is_static = segs[models[k].seg].kind == SegmentKind::Static;
-            let statics_left = models
-                .iter()
-                .filter(|s| segs[s.seg].kind == SegmentKind::Static)
-                .count();
-            if err > tol_g && (!is_static || statics_left > 4) {
-                let seg = models[k].seg;
-                segs[seg].used = false;
-                excluded.push(Exclusion {
-                    name: plan.segments[segs[seg].plan_idx].name.clone(),
-                    reason: ExclusionReason::AttitudeContradiction {
-                        angle_deg: chord_to_angle_deg(err),
-                    },
-                });
-                problem.remove_segment(seg);
-                continue;
-            }
-        }
-        let mut fixed = [[false; 3]; 3];
-        for (i, j) in fixed_list {
-            fixed[i][j] = true;
-        }
-        return Ok(JointFit {
-            theta: fit.theta,
-            cov: fit.cov,
-            free: fit.free,
-            fixed,
-            chi2: fit.chi2,
-            dof: fit.dof,
-        });
-    }
-}
-
 /// The other method's lever arms, when it can run.
 fn compare(
     plan: &Plan,
@@ -927,7 +781,7 @@ fn compare(
         }
         Method::Paper => {
             let mut ex = Vec::new();
-            let j = joint(
+            let j = joint::joint(
                 plan,
                 segs,
                 problem,
