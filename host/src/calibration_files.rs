@@ -102,3 +102,51 @@ pub fn write_calibration_files(
         blob,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::{calibrate_session_stats, EstimateOptions};
+    use crate::session::builtin::builtin_plan;
+    use crate::sim::testkit::{self, TableErrors};
+
+    #[test]
+    fn the_calibration_file_carries_the_estimated_gyro() {
+        let plan = builtin_plan("short-oblique").unwrap().unwrap();
+        let truth = testkit::paper_unit();
+        let g = crate::sim::session::gyro_matrix([5e-3, -5e-3, 5e-3], 0.5f64.to_radians());
+        let b = [0.008, -0.008, 0.008];
+        let errors = TableErrors {
+            gyro_noise_rad_s: 0.05f64.to_radians(),
+            gyro: Some((g, b)),
+            ..TableErrors::default()
+        };
+        let mut rng = testkit::Rng::new(3, 0);
+        let noise = 1e-3 * truth.statics.scale_out_per_g[0];
+        let stats = testkit::noisy_stats(&plan, &truth, noise, errors, &mut rng);
+        let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let id = UnitId::parse_hex("000102030405060708090a0b").unwrap();
+        let w = write_calibration_files(dir.path(), &out, id, 0).unwrap();
+        let text = std::fs::read_to_string(&w.toml_path).unwrap();
+        assert!(
+            text.contains("[gyro]")
+                && text.contains("bias_rad_s = [")
+                && text.contains("matrix = ["),
+            "{text}"
+        );
+        let back = UnitFile::load(&w.toml_path).unwrap().gyro.unwrap();
+        let sb = back.bias_rad_s_1sigma.unwrap();
+        let sg = back.matrix_1sigma.unwrap();
+        for i in 0..3 {
+            assert!((back.bias_rad_s[i] - b[i]).abs() < 5.0 * sb[i], "b{i}");
+            for j in 0..3 {
+                // Within 5σ (the misalignment's 1σ includes the body frame's alignment).
+                assert!(
+                    (back.matrix[i][j] - g[i][j]).abs() < 5.0 * sg[i][j],
+                    "G{i}{j}"
+                );
+            }
+        }
+    }
+}

@@ -503,6 +503,37 @@ mod tests {
     }
 
     #[test]
+    fn the_gyro_reads_its_matrix_times_the_rate_plus_its_bias() {
+        // The unit file's [gyro] table is the simulated gyro; its bias adds to the noise model's.
+        let p = plan(
+            "[[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nduration_s = 0.2\n\
+             [[segment]]\nname = \"zx 200\"\nup_b = [0.6, 0, 0.8]\nrate_deg_s = 200\nduration_s = 0.2\n",
+        );
+        let g = gyro_matrix([5e-3, -5e-3, 2e-3], 0.5f64.to_radians());
+        let mut unit = paper();
+        unit.gyro = Some(crate::unit_file::GyroSection {
+            bias_rad_s: [0.01, -0.02, 0.005],
+            matrix: g,
+            bias_rad_s_1sigma: None,
+            matrix_1sigma: None,
+        });
+        let noise = NoiseModel {
+            gyro_bias_deg_s: [0.1, 0.0, 0.0],
+            ..NoiseModel::none()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &unit, &p, &noise, 1, false).unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let bias = [0.01 + 0.1f64.to_radians(), -0.02, 0.005];
+        let rate = 200f64.to_radians();
+        let gw = linalg::mat_vec(&g, &[0.6 * rate, 0.0, 0.8 * rate]);
+        for i in 0..3 {
+            assert!((s.stats[0].mean_w_rad_s[i] - bias[i]).abs() < 1e-12);
+            assert!((s.stats[1].mean_w_rad_s[i] - gw[i] - bias[i]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
     fn measured_noise_matches_the_requested_sigma() {
         let p = plan(
             "[[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nduration_s = 20\n\
