@@ -9,7 +9,7 @@ use crate::device::serial::DEFAULT_BAUD;
 use crate::device::sim::SIM_UNIT_ID;
 use crate::device::LinkError;
 use crate::estimate::Method;
-use crate::report::compare::ExportFormat;
+use crate::export::ExportFormat;
 use crate::sim::NoiseModel;
 use clap::CommandFactory;
 use shared::blob::ParameterBlob;

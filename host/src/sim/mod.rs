@@ -7,6 +7,7 @@
 pub(crate) mod montecarlo;
 pub mod rng;
 pub mod session;
+pub mod stats;
 pub mod synth;
 #[cfg(test)]
 pub(crate) mod testkit;
@@ -16,3 +17,4 @@ pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_to_dir, simulate_to_dir_with_progress,
     NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
 };
+pub use stats::simulate_stats;

@@ -6,15 +6,14 @@
 
 use crate::estimate::attitude::{lq, rotation_vector};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
-use crate::session::{Plan, SegmentAccumulator, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan};
 use crate::sim::testkit::{self, TableErrors};
-use crate::sim::{simulate_rows, NoiseModel};
+use crate::sim::NoiseModel;
 use nalgebra::Matrix3;
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::linalg::{self, RowMajor3};
 use shared::units::{BodyAngularAccel, BodyRate, BodySpecificForce};
 use shared::{Calibration, FittedStatic};
-use std::collections::HashMap;
 
 /// How a session's statistics are made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,27 +84,6 @@ pub struct CaseResult {
     pub title: String,
     /// Per seed.
     pub seeds: Vec<SeedResult>,
-}
-
-/// The simulator's session statistics, row by row.
-pub fn simulated_stats(
-    plan: &Plan,
-    truth: &Calibration,
-    noise: &NoiseModel,
-    seed: u64,
-) -> Vec<SegmentStats> {
-    let mut accs: HashMap<String, SegmentAccumulator> = HashMap::new();
-    let run = simulate_rows(truth, plan, noise, seed, |seg, t, u, w| {
-        accs.entry(seg.to_string())
-            .or_insert_with(|| SegmentAccumulator::new(seg))
-            .push(t, u, w);
-        Ok::<(), ()>(())
-    });
-    run.expect("valid simulation").expect("sink never fails");
-    plan.segments
-        .iter()
-        .filter_map(|s| accs.get(&s.name).and_then(|a| a.finish()))
-        .collect()
 }
 
 /// A uniformly random unit vector.
@@ -356,7 +334,8 @@ pub fn run(case: &Case) -> CaseResult {
                         noise.gyro_bias_deg_s = b.map(f64::to_degrees);
                     }
                     noise.table_rate_scale = rate_scale;
-                    simulated_stats(&case.plan, &truth, &noise, seed)
+                    crate::sim::stats::simulate_stats(&truth, &case.plan, &noise, seed)
+                        .expect("valid simulation")
                 }
                 Generator::Stats => {
                     let errors = TableErrors {
