@@ -126,7 +126,7 @@ fn split_values(m: &RowMajor3, u0: &[f64; 3], k0: &[f64; 3]) -> [f64; 12] {
     v
 }
 
-/// The split of the static 1σ, by the numerical Jacobian of [`split_values`] through θ's covariance.
+/// The split of the static 1σ, by the numerical Jacobian of the split values through θ's covariance.
 pub fn static_split(theta: &[f64], cov: &DMatrix<f64>, frame: BodyFrame) -> StaticSplit {
     let idx: Vec<usize> = (0..3)
         .flat_map(|i| [idx_m(i, 0), idx_m(i, 1), idx_m(i, 2), idx_u0(i)])

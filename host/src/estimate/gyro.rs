@@ -152,7 +152,7 @@ pub struct GyroEstimate {
     pub bias_rad_s_1sigma: [f64; 3],
     /// The table's rate scale error, and its 1σ.
     pub table_rate_scale: (f64, f64),
-    /// Names of the `G` entries the plan does not determine (e.g. "G[x][z]").
+    /// Names of the `G` entries the plan does not determine (e.g. `G[x][z]`).
     pub undetermined: Vec<String>,
 }
 
