@@ -78,12 +78,21 @@ pub fn write_calibration_files(
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
     let toml_path = out_dir.join(CALIBRATION_TOML);
-    let text = UnitFile::from_calibration(
+    let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         Some(unit_id),
         Some(outcome.uncertainty.clone()),
-    )
-    .to_toml();
+    );
+    file.gyro = outcome
+        .gyro
+        .as_ref()
+        .map(|g| crate::unit_file::GyroSection {
+            bias_rad_s: g.bias_rad_s,
+            matrix: g.matrix,
+            bias_rad_s_1sigma: Some(g.bias_rad_s_1sigma),
+            matrix_1sigma: Some(g.matrix_1sigma),
+        });
+    let text = file.to_toml();
     std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
     let bin_path = out_dir.join(CALIBRATION_BIN);
     std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;
@@ -92,4 +101,52 @@ pub fn write_calibration_files(
         bin_path,
         blob,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::{calibrate_session_stats, EstimateOptions};
+    use crate::session::builtin::builtin_plan;
+    use crate::sim::testkit::{self, TableErrors};
+
+    #[test]
+    fn the_calibration_file_carries_the_estimated_gyro() {
+        let plan = builtin_plan("short-oblique").unwrap().unwrap();
+        let truth = testkit::paper_unit();
+        let g = crate::sim::session::gyro_matrix([5e-3, -5e-3, 5e-3], 0.5f64.to_radians());
+        let b = [0.008, -0.008, 0.008];
+        let errors = TableErrors {
+            gyro_noise_rad_s: 0.05f64.to_radians(),
+            gyro: Some((g, b)),
+            ..TableErrors::default()
+        };
+        let mut rng = testkit::Rng::new(3, 0);
+        let noise = 1e-3 * truth.statics.scale_out_per_g[0];
+        let stats = testkit::noisy_stats(&plan, &truth, noise, errors, &mut rng);
+        let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let id = UnitId::parse_hex("000102030405060708090a0b").unwrap();
+        let w = write_calibration_files(dir.path(), &out, id, 0).unwrap();
+        let text = std::fs::read_to_string(&w.toml_path).unwrap();
+        assert!(
+            text.contains("[gyro]")
+                && text.contains("bias_rad_s = [")
+                && text.contains("matrix = ["),
+            "{text}"
+        );
+        let back = UnitFile::load(&w.toml_path).unwrap().gyro.unwrap();
+        let sb = back.bias_rad_s_1sigma.unwrap();
+        let sg = back.matrix_1sigma.unwrap();
+        for i in 0..3 {
+            assert!((back.bias_rad_s[i] - b[i]).abs() < 5.0 * sb[i], "b{i}");
+            for j in 0..3 {
+                // Within 5σ (the misalignment's 1σ includes the body frame's alignment).
+                assert!(
+                    (back.matrix[i][j] - g[i][j]).abs() < 5.0 * sg[i][j],
+                    "G{i}{j}"
+                );
+            }
+        }
+    }
 }

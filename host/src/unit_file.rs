@@ -20,6 +20,11 @@
 //! installation_angles_deg_1sigma = [[..], ..]
 //! lever_arms_m_1sigma = [[..], ..]
 //! lever_arms_observable = [[true, ..], ..]
+//! [gyro]                        # optional: w = matrix · ω_body + bias (absent: a perfect gyro)
+//! bias_rad_s = [..]
+//! matrix = [[..], [..], [..]]
+//! bias_rad_s_1sigma = [..]      # optional, an estimate's 1σ
+//! matrix_1sigma = [[..], ..]    # optional; entries above 1e-3: not determined by the plan
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
@@ -52,6 +57,9 @@ pub struct UnitFile {
     /// 1σ uncertainties of an estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<Uncertainty>,
+    /// The gyro model (absent: a perfect gyro).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro: Option<GyroSection>,
     /// Any other tables, kept as they are.
     #[serde(flatten)]
     pub other: toml::Table,
@@ -89,6 +97,22 @@ pub struct DynamicSection {
     /// With reference = "body-point": the point, body axes, m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_offset_m: Option<[f64; 3]>,
+}
+
+/// `[gyro]`: the gyro reads `w = matrix · ω_body + bias` (docs/model.md §8).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GyroSection {
+    /// Bias, gyro axes, rad/s.
+    pub bias_rad_s: [f64; 3],
+    /// Scale and misalignment (rows: gyro axes, columns: body axes).
+    pub matrix: RowMajor3,
+    /// 1σ of `bias_rad_s` (an estimate's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bias_rad_s_1sigma: Option<[f64; 3]>,
+    /// 1σ of `matrix` (an estimate's; entries above 1e-3 are not determined by the plan).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix_1sigma: Option<RowMajor3>,
 }
 
 /// Why a unit file is unusable.
@@ -247,6 +271,7 @@ impl UnitFile {
                 reference_offset_m,
             }),
             uncertainty,
+            gyro: None,
             other: toml::Table::new(),
         }
     }

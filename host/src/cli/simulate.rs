@@ -62,6 +62,18 @@ pub struct SimulateArgs {
         allow_hyphen_values = true
     )]
     pub gyro_bias_deg_s: Option<Vec<f64>>,
+    /// Gyro scale errors, ppm, as X,Y,Z (with --gyro-misalignment-deg: the gyro matrix) [default: 0].
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        num_args = 1,
+        allow_hyphen_values = true
+    )]
+    pub gyro_scale_ppm: Option<Vec<f64>>,
+    /// Gyro misalignment: every off-diagonal entry of the gyro matrix, degrees [default: 0].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub gyro_misalignment_deg: Option<f64>,
 }
 
 /// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
@@ -88,6 +100,16 @@ pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, 
             .as_slice()
             .try_into()
             .map_err(|_| CliError::Usage("--gyro-bias-deg-s takes three values: X,Y,Z".into()))?;
+    }
+    if a.gyro_scale_ppm.is_some() || a.gyro_misalignment_deg.is_some() {
+        let scale: [f64; 3] = match &a.gyro_scale_ppm {
+            Some(v) => <[f64; 3]>::try_from(v.as_slice())
+                .map_err(|_| CliError::Usage("--gyro-scale-ppm takes three values: X,Y,Z".into()))?
+                .map(|p| p * 1e-6),
+            None => [0.0; 3],
+        };
+        let mis = a.gyro_misalignment_deg.unwrap_or(0.0).to_radians();
+        n.gyro_matrix = crate::sim::session::gyro_matrix(scale, mis);
     }
     n.validate()?;
     Ok(n)

@@ -1,13 +1,14 @@
 //! Matching plan and data, screening segments (empty, saturated, moving, wrong rate, wrong attitude),
 //! building the segment models and the static least squares.
 
-use super::model::{self, idx_m, idx_u0, SegModel, NP};
+use super::model::{self, idx_m, idx_u0, Mount, SegModel};
+use super::solve::Problem;
 use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, Noise, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
 use crate::session::{Plan, SegmentStats};
-use shared::linalg::{self, RowMajor3};
+use shared::linalg;
 use shared::params::axis_name;
 use shared::ReferencePoint;
 use std::collections::HashMap;
@@ -76,7 +77,7 @@ pub(crate) fn match_plan(
     Ok(out)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
@@ -240,7 +241,13 @@ pub(crate) fn screen(
         }
         let sp = &plan.segments[segs[k].plan_idx];
         let planned = 0.5 * (sp.rate_deg_s + sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s));
-        let measured = linalg::dot(&segs[k].stats.mean_w_rad_s, &sp.up_b).to_degrees();
+        let w = &segs[k].stats.mean_w_rad_s;
+        let measured = if sp.is_free() {
+            // The axis is unknown: only the magnitude can contradict the plan.
+            linalg::norm(w).to_degrees() * planned.signum()
+        } else {
+            linalg::dot(w, &sp.up_b).to_degrees()
+        };
         if (measured - planned).abs() > 0.1 * planned.abs() + 1.0 {
             let reason = ExclusionReason::RateContradiction {
                 measured_deg_s: measured,
@@ -258,50 +265,6 @@ pub(crate) fn pooled_noise(segs: &[SessionSeg]) -> Noise {
             .filter(|s| s.used && s.kind == SegmentKind::Static)
             .map(|s| &s.stats),
     )
-}
-
-/// Segment models of the used segments. Ramps are weighted with the static noise (their own output
-/// variance includes the ramp's signal).
-pub(crate) fn build_models(
-    plan: &Plan,
-    segs: &[SessionSeg],
-    noise: &Noise,
-    options: &EstimateOptions,
-) -> Vec<SegModel> {
-    let g = plan.gravity_m_s2;
-    let mut out = Vec::new();
-    for (k, s) in segs.iter().enumerate() {
-        if !s.used {
-            continue;
-        }
-        let sp = &plan.segments[s.plan_idx];
-        let st = &s.stats;
-        let ew = model::mean_lever_matrix(
-            &st.mean_wwt,
-            &st.wdot_rad_s2,
-            &noise.gyro_cov,
-            options.use_omega_dot,
-        );
-        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
-        let wp = linalg::mat_vec(&ew, &p);
-        let f = core::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
-        let e = ew.map(|row| row.map(|v| v / g));
-        let per_sample = if s.kind == SegmentKind::Ramp {
-            noise.out_cov
-        } else {
-            st.cov_u
-        };
-        let n = st.count as f64;
-        let mut se: RowMajor3 = per_sample.map(|row| row.map(|v| v / n));
-        for i in 0..3 {
-            let floor = (1e-9 * st.mean_u[i].abs().max(1e-3)).powi(2);
-            se[i][i] = se[i][i].max(floor);
-        }
-        if let Some(m) = SegModel::new(k, f, e, st.mean_u, se) {
-            out.push(m);
-        }
-    }
-    out
 }
 
 /// Directions along which the attitudes `ups` do not spread (empty when they span 3-D affinely).
@@ -325,8 +288,8 @@ pub(crate) fn missing_directions(ups: &[[f64; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-fn static_free() -> [bool; NP] {
-    let mut free = [false; NP];
+pub(crate) fn static_free(n_params: usize) -> Vec<bool> {
+    let mut free = vec![false; n_params];
     for i in 0..3 {
         for j in 0..3 {
             free[idx_m(i, j)] = true;
@@ -336,9 +299,9 @@ fn static_free() -> [bool; NP] {
     free
 }
 
-fn static_start(models: &[&SegModel]) -> [f64; NP] {
+fn static_start(models: &[&SegModel], n_params: usize) -> Vec<f64> {
     // Any non-degenerate start: the static model is linear, Gauss–Newton solves it in one step.
-    let mut t = [0.0; NP];
+    let mut t = vec![0.0; n_params];
     for i in 0..3 {
         let mean: f64 =
             models.iter().map(|m| m.mean_u[i]).sum::<f64>() / models.len().max(1) as f64;
@@ -349,12 +312,23 @@ fn static_start(models: &[&SegModel]) -> [f64; NP] {
 }
 
 /// Static least squares on the given models (lever arms fixed at 0: static segments do not see them).
-pub(crate) fn static_fit(models: &[&SegModel]) -> Result<solve::Fit, EstimateError> {
-    let owned: Vec<SegModel> = models.iter().map(|m| (*m).clone()).collect();
+pub(crate) fn static_fit(
+    models: &[&SegModel],
+    mounts: &[Mount],
+) -> Result<solve::Fit, EstimateError> {
+    let problem = Problem {
+        models: models.iter().map(|m| (*m).clone()).collect(),
+        mounts: mounts.to_vec(),
+        gyro: Vec::new(),
+        gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
+    };
+    let n = problem.n_params();
     solve::fit(
-        &owned,
-        static_start(models),
-        static_free(),
+        &problem,
+        static_start(models, n),
+        static_free(n),
         "static least squares",
     )
 }
@@ -377,20 +351,25 @@ fn attitude_errors(fit: &solve::Fit, models: &[&SegModel], ups: &[[f64; 3]]) -> 
         .collect()
 }
 
-/// The static fit, after leaving out static segments whose attitude contradicts the plan
-/// (leave-one-out: each static segment is predicted from the others).
+/// The static fit on the fixture's (known-attitude) static segments, after leaving out those whose
+/// attitude contradicts the plan (leave-one-out: each static segment is predicted from the others).
 pub(crate) fn static_fit_with_attitude_check(
     plan: &Plan,
     segs: &mut [SessionSeg],
-    models: &mut Vec<SegModel>,
+    problem: &mut Problem,
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
     planned_static: usize,
 ) -> Result<solve::Fit, EstimateError> {
     let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
+    let mounts = problem.mounts.clone();
     loop {
+        let models = &problem.models;
         let statics: Vec<usize> = (0..models.len())
-            .filter(|&k| segs[models[k].seg].kind == SegmentKind::Static)
+            .filter(|&k| {
+                let sp = &plan.segments[segs[models[k].seg].plan_idx];
+                segs[models[k].seg].kind == SegmentKind::Static && !sp.is_free()
+            })
             .collect();
         if statics.is_empty() {
             return Err(EstimateError::NoStaticSegments {
@@ -411,7 +390,7 @@ pub(crate) fn static_fit_with_attitude_check(
         // Fast path: when the fit on all static segments leaves every one within a tenth of the
         // tolerance, no segment can hide a wrong attitude (its leverage is < 1 − 1/10).
         let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
-        let all = static_fit(&refs)?;
+        let all = static_fit(&refs, &mounts)?;
         let all_err = attitude_errors(&all, &refs, &ups);
         if all_err.iter().all(|e| *e < 0.1 * tol_g) {
             return Ok(all);
@@ -431,7 +410,9 @@ pub(crate) fn static_fit_with_attitude_check(
                     .filter(|&&q| q != k)
                     .map(|&q| &models[q])
                     .collect();
-                let Ok(fit) = static_fit(&rest) else { continue };
+                let Ok(fit) = static_fit(&rest, &mounts) else {
+                    continue;
+                };
                 let rest_worst = attitude_errors(&fit, &rest, &rest_ups)
                     .into_iter()
                     .fold(0.0, f64::max);
@@ -452,7 +433,7 @@ pub(crate) fn static_fit_with_attitude_check(
                         angle_deg: super::chord_to_angle_deg(err),
                     },
                 });
-                models.remove(k);
+                problem.remove_segment(seg);
             }
             _ => return Ok(all),
         }

@@ -1,6 +1,7 @@
 //! Estimator tests against the generator's known truth (`testkit`).
 
 use super::*;
+use crate::sim::montecarlo::{percentile, rms};
 use crate::sim::synth;
 use crate::sim::testkit::{self, Rng, TableErrors};
 use shared::OutputUnit;
@@ -114,21 +115,6 @@ fn monte_carlo(
         mc.outcomes.push(out);
     }
     mc
-}
-
-fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
-    v[k]
-}
-
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0.0);
-    for x in v {
-        s += x * x;
-        n += 1.0;
-    }
-    (s / n).sqrt()
 }
 
 impl Mc {
@@ -385,6 +371,7 @@ fn table_errors_are_covered_by_the_scaled_sigma_or_named() {
     let errors = TableErrors {
         attitude_deg: 0.01,
         rate_rel: 1e-3,
+        ..TableErrors::default()
     };
     let mc = monte_carlo(
         60,

@@ -5,7 +5,8 @@
 
 use super::format::{out_digits, pm};
 use crate::estimate::{
-    CalibrationOutcome, Method, Prediction, SegmentDiagnostic, SegmentKind, PAPER_LEN,
+    CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
+    SegmentKind, StaticSplit, PAPER_LEN,
 };
 use shared::params::axis_name;
 use std::fmt::Write;
@@ -30,6 +31,9 @@ pub fn render(o: &CalibrationOutcome) -> String {
     render_table1(&mut s, o);
     render_table3(&mut s, o);
     render_comparison(&mut s, o);
+    let _ = writeln!(s);
+    render_attitudes(&mut s, &o.static_split, &o.mount_tilts);
+    render_gyro(&mut s, o.gyro.as_ref());
     let _ = writeln!(s);
     let _ = writeln!(
         s,
@@ -204,6 +208,103 @@ fn render_segment(s: &mut String, d: &SegmentDiagnostic) {
     }
 }
 
+/// The static 1σ split into intrinsic and body-frame parts, what fixes the frame, and each mount's
+/// estimated attitude (docs/model.md §7).
+fn render_attitudes(s: &mut String, split: &StaticSplit, tilts: &[MountTilt]) {
+    let ug = |v: [f64; 3]| v.map(|x| format!("{:.2}", x * 1e6)).join(", ");
+    let _ = writeln!(
+        s,
+        "Static 1σ, intrinsic part and body-frame alignment part:"
+    );
+    let _ = writeln!(
+        s,
+        "  biases (µg)                          {}",
+        ug(split.bias_1sigma_g)
+    );
+    let _ = writeln!(
+        s,
+        "  scale factors (ppm)                  {}",
+        ug(split.scale_1sigma_rel)
+    );
+    let _ = writeln!(
+        s,
+        "  non-orthogonality y|x, z|x, z|y (µrad) {}",
+        ug(split.nonorthogonality_1sigma_rad)
+    );
+    let _ = writeln!(
+        s,
+        "  body-frame alignment about x, y, z (µrad) {}",
+        ug(split.alignment_1sigma_rad)
+    );
+    let _ = writeln!(s, "  {}", split.frame);
+    if tilts.iter().all(|t| !t.estimated) {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "Mount attitudes: angle of the estimated up from the nominal (free: from the starting guess), 1σ per axis"
+    );
+    for t in tilts.iter().filter(|t| t.estimated) {
+        let prior = match t.prior_deg {
+            Some(p) => format!("prior {p:.3}°"),
+            None => "free".to_string(),
+        };
+        let flag = if t.prior_deg.is_some_and(|p| t.tilt_deg > 3.0 * p) {
+            "  > 3× prior"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "  {:<22} up [{:+.5}, {:+.5}, {:+.5}]  tilt {:.4}° ± {:.4}°  ({prior}){flag}",
+            t.name, t.up_b[0], t.up_b[1], t.up_b[2], t.tilt_deg, t.sigma_deg
+        );
+    }
+}
+
+/// The gyro model with 1σ, and what the plan leaves undetermined (docs/model.md §8).
+fn render_gyro(s: &mut String, g: Option<&GyroEstimate>) {
+    let Some(g) = g else {
+        return;
+    };
+    let _ = writeln!(s, "Gyro, w = G·ω + b (1σ):");
+    for i in 0..3 {
+        let row: Vec<String> = (0..3)
+            .map(|j| {
+                if g.matrix_1sigma[i][j] > crate::estimate::gyro::UNDETERMINED_SIGMA {
+                    format!("{:>24}", "n.d.")
+                } else {
+                    format!(
+                        "{:>24}",
+                        format!("{:+.6} ± {:.6}", g.matrix[i][j], g.matrix_1sigma[i][j])
+                    )
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  G[{}]  {}   b {:+.5} ± {:.5} °/s",
+            axis_name(i),
+            row.join(" "),
+            g.bias_rad_s[i].to_degrees(),
+            g.bias_rad_s_1sigma[i].to_degrees()
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  table rate scale error {:+.1} ± {:.1} ppm (its prior is the plan's table_rate_sigma_ppm: the gyro's scale cannot be better)",
+        g.table_rate_scale.0 * 1e6,
+        g.table_rate_scale.1 * 1e6
+    );
+    if !g.undetermined.is_empty() {
+        let _ = writeln!(
+            s,
+            "  not determined by this plan: {} (spin about at least three non-coplanar axes to determine all of G)",
+            g.undetermined.join(", ")
+        );
+    }
+}
+
 /// The Cramér–Rao prediction of a plan (`host plan --check`).
 pub fn render_prediction(p: &Prediction) -> String {
     let mut s = String::new();
@@ -253,6 +354,8 @@ pub fn render_prediction(p: &Prediction) -> String {
         let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}{mark}");
     }
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
+    render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
+    render_gyro(&mut s, p.gyro.as_ref());
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }

@@ -3,6 +3,8 @@
 //! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), and the one
 //! random number generator ([`rng`]).
 
+#[cfg(test)]
+pub(crate) mod montecarlo;
 pub mod rng;
 pub mod session;
 pub mod stats;

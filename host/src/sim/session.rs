@@ -43,6 +43,28 @@ pub struct NoiseModel {
     pub gyro_white_deg_s: f64,
     /// Gyro bias, body axes, °/s.
     pub gyro_bias_deg_s: [f64; 3],
+    /// Gyro scale and misalignment: the gyro reads `G ω + bias` (docs/model.md §8); identity =
+    /// perfect. A unit file's `[gyro]` table sets it (and adds its bias).
+    pub gyro_matrix: [[f64; 3]; 3],
+}
+
+/// The identity, the perfect gyro's matrix.
+pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
+/// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
+/// non-orthogonality, so no change of body frame absorbs it).
+pub fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
+    const SIGN: [[f64; 3]; 3] = [[0.0, 1.0, -1.0], [1.0, 0.0, 1.0], [-1.0, -1.0, 0.0]];
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            if i == j {
+                1.0 + scale[i]
+            } else {
+                SIGN[i][j] * misalignment_rad
+            }
+        })
+    })
 }
 
 impl Default for NoiseModel {
@@ -57,6 +79,7 @@ impl Default for NoiseModel {
             table_rate_offset_deg_s: 0.0,
             gyro_white_deg_s: 0.05,
             gyro_bias_deg_s: [0.0; 3],
+            gyro_matrix: IDENTITY,
         }
     }
 }
@@ -101,10 +124,11 @@ impl NoiseModel {
         }
         let others = [self.table_rate_scale, self.table_rate_offset_deg_s]
             .into_iter()
-            .chain(self.gyro_bias_deg_s);
+            .chain(self.gyro_bias_deg_s)
+            .chain(self.gyro_matrix.into_iter().flatten());
         if others.into_iter().any(|v| !v.is_finite()) {
             return Err(SimulateError::Noise(
-                "table_rate_scale, table_rate_offset_deg_s and gyro_bias_deg_s must be finite"
+                "table_rate_scale, table_rate_offset_deg_s, gyro_bias_deg_s and gyro_matrix must be finite"
                     .into(),
             ));
         }
@@ -165,18 +189,11 @@ const STREAM_GYRO: u64 = 2;
 const STREAM_WALK: u64 = 3;
 const STREAM_TILT: u64 = 4;
 
-/// `up` tilted by small angles (radians) about two axes perpendicular to it, renormalised.
-fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
-    // A vector not parallel to `up`, then two unit vectors perpendicular to it.
-    let pick = if up[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let e1 = linalg::cross(&up, &pick);
-    let e1 = e1.map(|c| c / linalg::norm(&e1));
-    let e2 = linalg::cross(&up, &e1);
-    let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e1[j] + n2 * e2[j]);
+/// `up` tilted by small angles (radians) about the two axes perpendicular to it that the estimator
+/// uses for a mount's tilt unknowns (`estimate::model::tilt_basis`), renormalised.
+pub fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+    let e = crate::estimate::model::tilt_basis(&up);
+    let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e[0][j] + n2 * e[1][j]);
     let n = linalg::norm(&v);
     v.map(|c| c / n)
 }
@@ -193,6 +210,13 @@ pub fn simulate_rows<E>(
     plan.validate().map_err(SimulateError::Plan)?;
     noise.validate()?;
     let model = ForwardModel::new(cal).map_err(|e| SimulateError::Unit(e.to_string()))?;
+    if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
+        return Err(SimulateError::Plan(PlanError::Invalid(format!(
+            "segment '{}' has no up_b; simulate needs the true attitude of every segment (a free \
+             attitude's up_b is where the simulated hand holds the unit)",
+            s.name
+        ))));
+    }
     if let Some(s) = plan.segments.iter().find(|s| s.duration_s.is_none()) {
         return Err(SimulateError::Plan(PlanError::Invalid(format!(
             "segment '{}' has no duration_s; simulate needs one for every segment",
@@ -277,7 +301,7 @@ pub fn simulate_rows<E>(
                     u[i] = (u[i] / q).round() * q;
                 }
             }
-            let mut w = motion.omega.rad_s;
+            let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
             for i in 0..3 {
                 w[i] += gyro_bias[i];
                 if gyro_sigma > 0.0 {
@@ -322,6 +346,16 @@ pub fn simulate_to_dir_with_progress(
 ) -> Result<SimulationSummary, SimulateError> {
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
+    // The unit's [gyro] table is the simulated gyro: its matrix replaces the noise model's, its bias
+    // adds to the noise model's.
+    let mut noise = noise.clone();
+    if let Some(g) = &unit.gyro {
+        noise.gyro_matrix = g.matrix;
+        for i in 0..3 {
+            noise.gyro_bias_deg_s[i] += g.bias_rad_s[i].to_degrees();
+        }
+    }
+    let noise = &noise;
     let (fitted, normalisation) = cal
         .statics
         .to_fitted()
@@ -469,6 +503,37 @@ mod tests {
     }
 
     #[test]
+    fn the_gyro_reads_its_matrix_times_the_rate_plus_its_bias() {
+        // The unit file's [gyro] table is the simulated gyro; its bias adds to the noise model's.
+        let p = plan(
+            "[[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nduration_s = 0.2\n\
+             [[segment]]\nname = \"zx 200\"\nup_b = [0.6, 0, 0.8]\nrate_deg_s = 200\nduration_s = 0.2\n",
+        );
+        let g = gyro_matrix([5e-3, -5e-3, 2e-3], 0.5f64.to_radians());
+        let mut unit = paper();
+        unit.gyro = Some(crate::unit_file::GyroSection {
+            bias_rad_s: [0.01, -0.02, 0.005],
+            matrix: g,
+            bias_rad_s_1sigma: None,
+            matrix_1sigma: None,
+        });
+        let noise = NoiseModel {
+            gyro_bias_deg_s: [0.1, 0.0, 0.0],
+            ..NoiseModel::none()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &unit, &p, &noise, 1, false).unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let bias = [0.01 + 0.1f64.to_radians(), -0.02, 0.005];
+        let rate = 200f64.to_radians();
+        let gw = linalg::mat_vec(&g, &[0.6 * rate, 0.0, 0.8 * rate]);
+        for i in 0..3 {
+            assert!((s.stats[0].mean_w_rad_s[i] - bias[i]).abs() < 1e-12);
+            assert!((s.stats[1].mean_w_rad_s[i] - gw[i] - bias[i]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
     fn measured_noise_matches_the_requested_sigma() {
         let p = plan(
             "[[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nduration_s = 20\n\
@@ -596,6 +661,20 @@ mod tests {
         let want = model.outputs(&TableState::at_rest(s.mount_up_b["x+"]).motion(9.80665));
         for i in 0..3 {
             assert!((st.stats[0].mean_u[i] - want.raw[i]).abs() < 1e-12);
+        }
+        // The mount's spin segments turn about the same tilted up: the noise-free gyro reads
+        // rate × that up, and the tilt is not along the nominal axis.
+        let up = s.mount_up_b["x+"];
+        assert!(up[1].abs() + up[2].abs() > 1e-6, "{up:?}");
+        for seg in st.stats.iter().filter(|x| x.name.starts_with("x+ ")) {
+            let rate: f64 = seg.name[3..].parse::<f64>().unwrap().to_radians();
+            for j in 0..3 {
+                assert!(
+                    (seg.mean_w_rad_s[j] - rate * up[j]).abs() < 1e-12,
+                    "{}",
+                    seg.name
+                );
+            }
         }
     }
 

@@ -12,10 +12,46 @@ pub use super::rng::Rng;
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TableErrors {
-    /// 1σ tilt of each mount, degrees (random direction).
+    /// 1σ tilt of each mount about each of the two axes perpendicular to its up, degrees (as
+    /// `host simulate --tilt-deg`).
     pub attitude_deg: f64,
     /// 1σ relative rate error of each rotating segment.
     pub rate_rel: f64,
+    /// Gyro white noise per sample, rad/s (0: a noise-free gyro mean).
+    pub gyro_noise_rad_s: f64,
+    /// The gyro reads `G ω + b`: `(G, b)`, b in rad/s (`None`: a perfect gyro).
+    pub gyro: Option<([[f64; 3]; 3], [f64; 3])>,
+    /// The table's rate scale error, common to every rotating segment.
+    pub rate_scale: f64,
+}
+
+/// Gyro statistics of a perfect gyro turned into those of a gyro reading `G ω + b`.
+fn through_gyro(st: &mut SegmentStats, g: &[[f64; 3]; 3], b: &[f64; 3], sg2: f64) {
+    use shared::linalg::mat_vec;
+    let w = st.mean_w_rad_s;
+    let gw = mat_vec(g, &w);
+    let id = |i: usize, j: usize| if i == j { sg2 } else { 0.0 };
+    let conj = |m: &[[f64; 3]; 3]| -> [[f64; 3]; 3] {
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                (0..3)
+                    .map(|k| (0..3).map(|l| g[i][k] * m[k][l] * g[j][l]).sum::<f64>())
+                    .sum()
+            })
+        })
+    };
+    let wwt: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.mean_wwt[i][j] - id(i, j)));
+    let cw: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.cov_w[i][j] - id(i, j)));
+    let gwwt = conj(&wwt);
+    st.mean_wwt = core::array::from_fn(|i| {
+        core::array::from_fn(|j| gwwt[i][j] + gw[i] * b[j] + b[i] * gw[j] + b[i] * b[j] + id(i, j))
+    });
+    let gcw = conj(&cw);
+    st.cov_w = core::array::from_fn(|i| core::array::from_fn(|j| gcw[i][j] + id(i, j)));
+    st.mean_w_rad_s = core::array::from_fn(|i| gw[i] + b[i]);
+    st.wdot_rad_s2 = mat_vec(g, &st.wdot_rad_s2);
 }
 
 fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
@@ -27,6 +63,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
         duration_s: Some(60.0),
         table_centre_m: None,
         mount: None,
+        ..SegmentPlan::default()
     }
 }
 
@@ -54,7 +91,9 @@ pub fn paper_plan(unit: OutputUnit) -> Plan {
         }
     }
     Plan {
-        format_version: 1,
+        format_version: 2,
+        attitude_sigma_deg: Some(0.0),
+        table_rate_sigma_ppm: None,
         output_unit: unit,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -131,25 +170,25 @@ pub fn noisy_stats(
     let unit = ForwardModel::new(truth).expect("valid truth");
     let noise = SynthNoise {
         out_1sigma: [noise_out; 3],
-        gyro_1sigma_rad_s: 0.0,
+        gyro_1sigma_rad_s: errors.gyro_noise_rad_s,
         sample_rate_hz: plan.sample_rate_hz,
     };
-    let mut mount_tilts: std::collections::HashMap<String, [f64; 3]> = Default::default();
+    let mut mount_tilts: std::collections::HashMap<String, [f64; 2]> = Default::default();
     plan.segments
         .iter()
         .map(|sp| {
             let mut actual = ActualSegment::from_plan(sp, 60.0);
             if errors.attitude_deg > 0.0 {
-                // Small rotation of "up" per mount: up' = up + δ × up.
-                let delta = *mount_tilts.entry(sp.mount_name()).or_insert_with(|| {
-                    let v = rng.unit_vector();
-                    let a = errors.attitude_deg.to_radians() * rng.normal();
-                    v.map(|c| c * a)
-                });
-                let c = shared::linalg::cross(&delta, &actual.up_b);
-                let up: [f64; 3] = core::array::from_fn(|j| actual.up_b[j] + c[j]);
-                let n = shared::linalg::norm(&up);
-                actual.up_b = up.map(|v| v / n);
+                // One tilt per mount, shared by its segments at rest and spinning.
+                let sigma = errors.attitude_deg.to_radians();
+                let [n1, n2] = *mount_tilts
+                    .entry(sp.mount_name())
+                    .or_insert_with(|| [sigma * rng.normal(), sigma * rng.normal()]);
+                actual.up_b = crate::sim::session::tilt(actual.up_b, n1, n2);
+            }
+            if !sp.is_static() {
+                actual.rate_start_rad_s *= 1.0 + errors.rate_scale;
+                actual.rate_end_rad_s *= 1.0 + errors.rate_scale;
             }
             if errors.rate_rel > 0.0 && !sp.is_static() {
                 let f = 1.0 + errors.rate_rel * rng.normal();
@@ -157,9 +196,15 @@ pub fn noisy_stats(
                 actual.rate_end_rad_s *= f;
             }
             let mut st = synth::segment_stats(&sp.name, &actual, &unit, &noise);
+            if let Some((g, b)) = &errors.gyro {
+                through_gyro(&mut st, g, b, errors.gyro_noise_rad_s.powi(2));
+            }
             let n = st.count as f64;
             for i in 0..3 {
                 st.mean_u[i] += noise_out / n.sqrt() * rng.normal();
+                if errors.gyro_noise_rad_s > 0.0 {
+                    st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
+                }
             }
             st
         })
