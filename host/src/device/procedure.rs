@@ -671,6 +671,7 @@ fn verify<T: Transport>(
             duration_s: Some(opts.verify_seconds),
             table_centre_m: None,
             mount: None,
+            ..SegmentPlan::default()
         };
         if drive {
             client.set_table(table_for(&seg))?;
@@ -753,6 +754,7 @@ mod tests {
             duration_s: Some(1.0),
             table_centre_m: None,
             mount: None,
+            ..SegmentPlan::default()
         }
     }
 

@@ -13,6 +13,7 @@
 //! - [`predict`]: the Cramér–Rao 1σ of every parameter for a plan and a noise level, before any data.
 //! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
 
+pub mod attitude;
 pub mod model;
 mod paper;
 mod paper_angles;
@@ -21,16 +22,20 @@ mod screen;
 mod solve;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_fixture;
 
+pub use attitude::{BodyFrame, MountTilt, StaticSplit};
 pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 
 use crate::session::{Plan, SegmentStats};
 use crate::unit_file::Uncertainty;
-use model::{idx_r, SegModel, NP};
+use model::{idx_r, SegModel};
 use shared::linalg::{self, RowMajor3};
 use shared::params::{axis_name, ParamsError};
 use shared::{Calibration, FittedStatic, LeverArms, OutputUnit};
+use solve::Problem;
 
 /// Which estimator gives the result.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,6 +111,10 @@ pub struct EstimateOptions {
     pub strict_segments: bool,
     /// Fail with [`EstimateError::PlanCannotObserve`] when any lever-arm component is not determined.
     pub require_lever_arms: bool,
+    /// Use the gyro's mean axis during a spin as a measurement of the mount's true up, with this
+    /// floor on its 1σ (how well the gyro's axes are taken to agree with the body frame), rad;
+    /// `None`: do not (docs/model.md §7).
+    pub gyro_axis_sigma_rad: Option<f64>,
 }
 
 impl Default for EstimateOptions {
@@ -124,6 +133,10 @@ impl Default for EstimateOptions {
             motion_noise_ratio: 2.0,
             strict_segments: false,
             require_lever_arms: false,
+            // 1 µrad: the gyro is taken as perfect (its axes are the body frame's), so the spin
+            // axis's own noise weighs it (0.05 °/s over 60 s at 200 °/s is about 1 µrad). A gyro whose
+            // axes are not calibrated should set its misalignment here, or `None`.
+            gyro_axis_sigma_rad: Some(1e-6),
         }
     }
 }
@@ -437,6 +450,12 @@ pub struct CalibrationOutcome {
     pub warnings: Vec<String>,
     /// The fitted form and lever arms in the fit's frame (before re-referencing).
     pub fitted: FittedStatic,
+    /// Each mount's estimated attitude (docs/model.md §7).
+    pub mount_tilts: Vec<MountTilt>,
+    /// The static 1σ split into intrinsic and body-frame alignment parts, and what fixes the frame.
+    pub static_split: StaticSplit,
+    /// Every fitted parameter (intrinsic, then two tilts per mount): name, value, 1σ (0 when fixed).
+    pub parameters: Vec<(String, f64, f64)>,
 }
 
 /// A segment of the session after matching plan and data.
@@ -460,34 +479,54 @@ pub fn calibrate_session_stats(
     screen::screen(plan, &mut segs, options, &mut excluded);
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let noise = screen::pooled_noise(&segs);
-    let mut models = screen::build_models(plan, &segs, &noise, options);
-    let static_fit = screen::static_fit_with_attitude_check(
+    let (mounts, seg_mount) = screen::build_mounts(plan, &segs);
+    let models = screen::build_models(plan, &segs, &noise, options, &mounts, &seg_mount);
+    let mut problem = Problem {
+        models,
+        mounts,
+        gyro: Vec::new(),
+    };
+    let static_fit = match screen::static_fit_with_attitude_check(
         plan,
         &mut segs,
-        &mut models,
+        &mut problem,
         options,
         &mut excluded,
         planned_static,
-    )?;
-
-    let (main_theta, main_cov, fixed, fit_chi2, fit_dof, notes_main) = match options.method {
-        Method::Joint => {
-            let j = joint(
-                plan,
-                &mut segs,
-                &mut models,
-                &static_fit,
-                options,
-                &mut excluded,
-            )?;
-            (j.theta, j.cov, j.fixed, j.chi2, j.dof, Vec::new())
+    ) {
+        Ok(fit) => {
+            screen::seed_free_mounts(plan, &segs, &noise, &mut problem, &fit.theta);
+            fit
         }
-        Method::Paper => {
-            let p = paper::eq24(plan, &segs, &models, &static_fit)?;
-            let (chi2, dof) = chi2_of(&models, &p.theta, 12 + 9);
-            (p.theta, p.cov, [[false; 3]; 3], chi2, dof, p.notes)
-        }
+        Err(
+            e @ (EstimateError::NoStaticSegments { .. } | EstimateError::TooFewAttitudes { .. }),
+        ) => attitude::free_static_fit(plan, &segs, &noise, &mut problem, e)?.0,
+        Err(e) => return Err(e),
     };
+    problem.gyro = screen::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
+    let frame = attitude::body_frame(&problem);
+
+    let (main_theta, main_cov, main_free, fixed, fit_chi2, fit_dof, notes_main) =
+        match options.method {
+            Method::Joint => {
+                let j = joint(
+                    plan,
+                    &mut segs,
+                    &mut problem,
+                    &static_fit,
+                    options,
+                    &mut excluded,
+                    frame,
+                )?;
+                (j.theta, j.cov, j.free, j.fixed, j.chi2, j.dof, Vec::new())
+            }
+            Method::Paper => {
+                let p = paper::eq24(plan, &segs, &problem.models, &static_fit)?;
+                let (chi2, dof) = chi2_of(&problem.models, &p.theta, 12 + 9);
+                let free = static_fit.free.clone();
+                (p.theta, p.cov, free, [[false; 3]; 3], chi2, dof, p.notes)
+            }
+        };
     warnings.extend(notes_main);
 
     // χ² and its scaling.
@@ -572,19 +611,36 @@ pub fn calibrate_session_stats(
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
     };
-    let segments = diagnostics(plan, &segs, &models, &main_theta);
+    let segments = diagnostics(plan, &segs, &problem.models, &main_theta);
     let comparison = if options.compare_methods {
         compare(
             plan,
             &mut segs.clone(),
-            &mut models.clone(),
+            &mut problem.clone(),
             &static_fit,
             options,
             &frame_note,
+            frame,
         )
     } else {
         None
     };
+    let scaled_cov = &main_cov * scale2;
+    let mount_tilts = attitude::mount_tilts(&problem, &main_theta, &scaled_cov, &main_free);
+    warnings.extend(attitude::tilt_warnings(&mount_tilts));
+    if frame == BodyFrame::Convention {
+        warnings.push(format!("{frame}"));
+    }
+    let static_split = attitude::static_split(&main_theta, &scaled_cov, frame);
+    let parameters = (0..main_theta.len())
+        .map(|p| {
+            (
+                model::theta_label(p, &problem.mounts),
+                main_theta[p],
+                scaled_cov[(p, p)].max(0.0).sqrt(),
+            )
+        })
+        .collect();
     let flagged: Vec<&SegmentDiagnostic> = segments.iter().filter(|d| d.chi2_flagged).collect();
     if !flagged.is_empty() {
         let statics = flagged.iter().any(|d| d.kind == SegmentKind::Static);
@@ -620,6 +676,9 @@ pub fn calibrate_session_stats(
         comparison,
         warnings,
         fitted,
+        mount_tilts,
+        static_split,
+        parameters,
     })
 }
 
@@ -629,7 +688,7 @@ pub(crate) fn chord_to_angle_deg(chord: f64) -> f64 {
 }
 
 /// χ² of all models at θ, and dof for `n_params` parameters.
-fn chi2_of(models: &[SegModel], theta: &[f64; NP], n_params: usize) -> (f64, i64) {
+fn chi2_of(models: &[SegModel], theta: &[f64], n_params: usize) -> (f64, i64) {
     let chi2 = models
         .iter()
         .map(|m| {
@@ -644,37 +703,47 @@ fn chi2_of(models: &[SegModel], theta: &[f64; NP], n_params: usize) -> (f64, i64
 
 /// The joint fit's result.
 struct JointFit {
-    theta: [f64; NP],
+    theta: Vec<f64>,
     cov: nalgebra::DMatrix<f64>,
+    free: Vec<bool>,
     fixed: [[bool; 3]; 3],
     chi2: f64,
     dof: i64,
 }
 
-/// Joint fit over all used segments, excluding segments whose residual shows a wrong attitude.
+/// Joint fit over all used segments, the gyro's spin axes and the mounts' attitude priors,
+/// excluding segments whose residual shows a wrong attitude.
 fn joint(
     plan: &Plan,
     segs: &mut [SessionSeg],
-    models: &mut Vec<SegModel>,
+    problem: &mut Problem,
     static_fit: &solve::Fit,
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
+    frame: BodyFrame,
 ) -> Result<JointFit, EstimateError> {
     loop {
-        let mut free = [true; NP];
-        let mut t0 = static_fit.theta;
+        let n = problem.n_params();
+        let mut free = vec![true; n];
+        attitude::tilt_free(problem, &mut free);
+        if frame == BodyFrame::Convention {
+            for p in attitude::CONVENTION_FIXED {
+                free[p] = false;
+            }
+        }
+        let mut t0 = static_fit.theta.clone();
         for i in 0..3 {
             for j in 0..3 {
                 t0[idx_r(i, j)] = 0.0;
             }
         }
         let fixed_list = solve::structurally_unobservable(
-            models,
+            problem,
             &t0,
             &mut free,
             options.lever_arm_structural_limit_m,
         );
-        let fit = solve::fit(models, t0, free, "joint least squares")?;
+        let fit = solve::fit(problem, t0, free, "joint least squares")?;
         // A residual of more than the attitude tolerance (in g) means the segment is not what the plan says.
         let m = model::m_of(&fit.theta);
         let Some(minv) = linalg::inverse(&m) else {
@@ -683,9 +752,11 @@ fn joint(
             });
         };
         let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
+        let models = &problem.models;
         let worst = models
             .iter()
             .enumerate()
+            .filter(|(_, s)| !plan.segments[segs[s.seg].plan_idx].is_free())
             .map(|(k, s)| {
                 let p = s.predict(&fit.theta);
                 let res: [f64; 3] = core::array::from_fn(|i| s.mean_u[i] - p[i]);
@@ -707,7 +778,7 @@ fn joint(
                         angle_deg: chord_to_angle_deg(err),
                     },
                 });
-                models.remove(k);
+                problem.remove_segment(seg);
                 continue;
             }
         }
@@ -718,6 +789,7 @@ fn joint(
         return Ok(JointFit {
             theta: fit.theta,
             cov: fit.cov,
+            free: fit.free,
             fixed,
             chi2: fit.chi2,
             dof: fit.dof,
@@ -729,19 +801,20 @@ fn joint(
 fn compare(
     plan: &Plan,
     segs: &mut [SessionSeg],
-    models: &mut Vec<SegModel>,
+    problem: &mut Problem,
     static_fit: &solve::Fit,
     options: &EstimateOptions,
     frame: &screen::Frame,
+    body: BodyFrame,
 ) -> Option<MethodComparison> {
     let (method, theta, cov, fixed, notes) = match options.method {
         Method::Joint => {
-            let p = paper::eq24(plan, segs, models, static_fit).ok()?;
+            let p = paper::eq24(plan, segs, &problem.models, static_fit).ok()?;
             (Method::Paper, p.theta, p.cov, [[false; 3]; 3], p.notes)
         }
         Method::Paper => {
             let mut ex = Vec::new();
-            let j = joint(plan, segs, models, static_fit, options, &mut ex).ok()?;
+            let j = joint(plan, segs, problem, static_fit, options, &mut ex, body).ok()?;
             (Method::Joint, j.theta, j.cov, j.fixed, Vec::new())
         }
     };
@@ -761,7 +834,7 @@ fn diagnostics(
     plan: &Plan,
     segs: &[SessionSeg],
     models: &[SegModel],
-    theta: &[f64; NP],
+    theta: &[f64],
 ) -> Vec<SegmentDiagnostic> {
     let m = model::m_of(theta);
     let u0 = model::u0_of(theta);
@@ -776,7 +849,9 @@ fn diagnostics(
         .map(|(idx, s)| {
             let sp = &plan.segments[s.plan_idx];
             let st = &s.stats;
-            let up = sp.up_b;
+            let up = models_by_seg
+                .get(&idx)
+                .map_or(sp.up_b, |md| md.tilt.up(theta));
             let rate = linalg::dot(&st.mean_w_rad_s, &up).to_degrees();
             let du: [f64; 3] = core::array::from_fn(|i| st.mean_u[i] - u0[i]);
             let before = core::array::from_fn(|i| du[i] / k[i]);
@@ -787,7 +862,7 @@ fn diagnostics(
                     let dl: [f64; 3] = core::array::from_fn(|i| du[i] - lever[i]);
                     let noise = core::array::from_fn(|i| md.se_cov[i][i].sqrt() / k[i]);
                     let c2: f64 = md.whitened_residual(theta).iter().map(|v| v * v).sum();
-                    (md.f, linalg::mat_vec(&minv, &dl), noise, Some(c2))
+                    (md.f(theta), linalg::mat_vec(&minv, &dl), noise, Some(c2))
                 }
                 None => (up, after_static, [f64::NAN; 3], None),
             };

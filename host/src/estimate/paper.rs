@@ -22,7 +22,7 @@
 //! - Several rates (100/150/200 °/s) are combined by an inverse-variance weighted mean (the paper
 //!   says "mean values"); only +x, +y, +z-up constant-rate segments are used.
 
-use super::model::{self, idx_r, SegModel, NP};
+use super::model::{self, idx_r, SegModel, NI as NP};
 use super::{solve, EstimateError, SegmentKind, SessionSeg};
 use crate::session::Plan;
 use nalgebra::DMatrix;
@@ -30,7 +30,7 @@ use shared::linalg;
 use std::collections::BTreeMap;
 
 pub(crate) struct PaperResult {
-    pub theta: [f64; NP],
+    pub theta: Vec<f64>,
     pub cov: DMatrix<f64>,
     pub notes: Vec<String>,
 }
@@ -38,7 +38,7 @@ pub(crate) struct PaperResult {
 /// Eq. 24 for the static parameters in `t` (its lever arms ignored): the inverse-variance weighted
 /// lever arms over the rate groups, and their variance from the spin segments' noise.
 fn solve_eq24(
-    t: &[f64; NP],
+    t: &[f64],
     g: f64,
     trios: &[(f64, [usize; 3])],
     models: &[SegModel],
@@ -91,7 +91,7 @@ pub(crate) fn eq24(
             continue;
         }
         let sp = &plan.segments[s.plan_idx];
-        let Some(axis) = (0..3).find(|&c| sp.up_b[c] > cos1) else {
+        let Some(axis) = (0..3).find(|&c| sp.up_b[c] > cos1 && !sp.is_free()) else {
             continue;
         };
         let key = (sp.rate_deg_s.abs() * 100.0).round() as i64;
@@ -125,8 +125,8 @@ pub(crate) fn eq24(
             continue;
         }
         let h = 1e-6 * static_fit.theta[p].abs().max(1e-3 * k[p / 7]);
-        let mut tp = static_fit.theta;
-        let mut tm = static_fit.theta;
+        let mut tp = static_fit.theta.clone();
+        let mut tm = static_fit.theta.clone();
         tp[p] += h;
         tm[p] -= h;
         let (rp, _) = solve_eq24(&tp, g, &trios, models);
@@ -137,7 +137,7 @@ pub(crate) fn eq24(
             }
         }
     }
-    let mut theta = static_fit.theta;
+    let mut theta = static_fit.theta.clone();
     let mut cov = static_fit.cov.clone();
     let rows: Vec<(usize, usize)> = (0..9).map(|q| (q / 3, q % 3)).collect();
     for &(i, j) in &rows {

@@ -2,7 +2,7 @@
 //! covariance, by the exact Jacobian of the conversion (`docs/model.md` §2):
 //! `k_i = ‖m_i‖`, `θ_ij = acos(m_ij / k_i)`, `r'_i = r_i − c` (c = 0, the centroid or a given point).
 
-use super::model::{idx_m, idx_r, idx_u0, NP};
+use super::model::{idx_m, idx_r, idx_u0, NI as NP};
 use super::screen::{Frame, Shift};
 use super::{EstimateError, EstimateOptions, Observability};
 use crate::unit_file::Uncertainty;
@@ -63,7 +63,7 @@ pub(crate) struct Converted {
 
 /// Converts θ and its covariance (scaled by `scale2`).
 pub(crate) fn convert(
-    theta: &[f64; NP],
+    theta: &[f64],
     cov: &DMatrix<f64>,
     scale2: f64,
     fixed: &[[bool; 3]; 3],
@@ -121,6 +121,7 @@ pub(crate) fn convert(
     for (p, u) in undetermined.iter_mut().enumerate() {
         *u = (0..3).any(|i| (0..3).any(|j| fixed[i][j] && g[(p, idx_r(i, j))] != 0.0));
     }
+    let cov = cov.view((0, 0), (NP, NP));
     let mut c = &g * cov * g.transpose() * scale2;
     for (p, u) in undetermined.iter().enumerate() {
         if *u {

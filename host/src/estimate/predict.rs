@@ -60,6 +60,10 @@ pub struct Prediction {
     pub threshold_m: f64,
     /// Warnings from the estimator (e.g. what the plan does not determine).
     pub warnings: Vec<String>,
+    /// The static 1σ split into intrinsic and body-frame parts (docs/model.md §7).
+    pub static_split: super::StaticSplit,
+    /// Each mount's attitude 1σ (tilts of the noise-free data are zero).
+    pub mount_tilts: Vec<super::MountTilt>,
 }
 
 /// The predicted 1σ of every parameter for `plan` run on `truth` with the given noise.
@@ -68,6 +72,14 @@ pub fn predict(
     truth: &Calibration,
     settings: &PredictSettings,
 ) -> Result<Prediction, EstimateError> {
+    if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
+        return Err(EstimateError::PlanCannotObserve {
+            parameters: vec![format!("the prediction for segment '{}'", s.name)],
+            hint: "a prediction needs every segment's up_b (for a free attitude, where it will \
+                   roughly be): add it"
+                .into(),
+        });
+    }
     let unit = ForwardModel::new(truth)?;
     let noise = SynthNoise {
         out_1sigma: settings.noise_out_per_sample_1sigma,
@@ -98,6 +110,8 @@ pub fn predict(
         lever_arms_fixed: out.observability.fixed_at_zero,
         threshold_m: out.observability.threshold_m,
         warnings: out.warnings,
+        static_split: out.static_split,
+        mount_tilts: out.mount_tilts,
     })
 }
 

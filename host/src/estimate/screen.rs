@@ -1,7 +1,8 @@
 //! Matching plan and data, screening segments (empty, saturated, moving, wrong rate, wrong attitude),
 //! building the segment models and the static least squares.
 
-use super::model::{self, idx_m, idx_u0, SegModel, NP};
+use super::model::{self, idx_m, idx_u0, Mount, SegModel, TiltGeometry};
+use super::solve::{GyroDirection, Problem};
 use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
     SegmentKind, SessionSeg,
@@ -250,7 +251,13 @@ pub(crate) fn screen(
         }
         let sp = &plan.segments[segs[k].plan_idx];
         let planned = 0.5 * (sp.rate_deg_s + sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s));
-        let measured = linalg::dot(&segs[k].stats.mean_w_rad_s, &sp.up_b).to_degrees();
+        let w = &segs[k].stats.mean_w_rad_s;
+        let measured = if sp.is_free() {
+            // The axis is unknown: only the magnitude can contradict the plan.
+            linalg::norm(w).to_degrees() * planned.signum()
+        } else {
+            linalg::dot(w, &sp.up_b).to_degrees()
+        };
         if (measured - planned).abs() > 0.1 * planned.abs() + 1.0 {
             let reason = ExclusionReason::RateContradiction {
                 measured_deg_s: measured,
@@ -286,6 +293,47 @@ pub(crate) fn pooled_noise(segs: &[SessionSeg]) -> Noise {
     }
 }
 
+/// The mounts of the used segments (one attitude each, docs/model.md §7) and each session
+/// segment's mount index. A mount is keyed by its name and nominal up; a free mount without an up
+/// starts at +z until [`seed_free_mounts`] sets it from the data.
+pub(crate) fn build_mounts(plan: &Plan, segs: &[SessionSeg]) -> (Vec<Mount>, Vec<usize>) {
+    let mut mounts: Vec<Mount> = Vec::new();
+    let mut keys: Vec<String> = Vec::new();
+    let mut of_seg = Vec::with_capacity(segs.len());
+    for s in segs {
+        let sp = &plan.segments[s.plan_idx];
+        let key = format!(
+            "{}|{:?}",
+            sp.mount_name(),
+            sp.up_b.map(|v| (v * 1e4).round())
+        );
+        let k = match keys.iter().position(|q| *q == key) {
+            Some(k) => k,
+            None => {
+                let up = if sp.has_up() {
+                    sp.up_b
+                } else {
+                    [0.0, 0.0, 1.0]
+                };
+                keys.push(key);
+                mounts.push(Mount {
+                    name: sp.mount_name(),
+                    geometry: TiltGeometry::new(up, mounts.len()),
+                    prior_rad: plan.mount_sigma_deg(sp).map(f64::to_radians),
+                    up_given: sp.has_up(),
+                    spins: false,
+                });
+                mounts.len() - 1
+            }
+        };
+        if s.used && s.kind != SegmentKind::Static {
+            mounts[k].spins = true;
+        }
+        of_seg.push(k);
+    }
+    (mounts, of_seg)
+}
+
 /// Segment models of the used segments. Ramps are weighted with the static noise (their own output
 /// variance includes the ramp's signal).
 pub(crate) fn build_models(
@@ -293,6 +341,8 @@ pub(crate) fn build_models(
     segs: &[SessionSeg],
     noise: &Noise,
     options: &EstimateOptions,
+    mounts: &[Mount],
+    seg_mount: &[usize],
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
     let mut out = Vec::new();
@@ -310,7 +360,7 @@ pub(crate) fn build_models(
         );
         let p = sp.table_centre_m.unwrap_or([0.0; 3]);
         let wp = linalg::mat_vec(&ew, &p);
-        let f = core::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
+        let centre = core::array::from_fn(|j| -wp[j] / g);
         let e = ew.map(|row| row.map(|v| v / g));
         let per_sample = if s.kind == SegmentKind::Ramp {
             noise.out_cov
@@ -323,11 +373,133 @@ pub(crate) fn build_models(
             let floor = (1e-9 * st.mean_u[i].abs().max(1e-3)).powi(2);
             se[i][i] = se[i][i].max(floor);
         }
-        if let Some(m) = SegModel::new(k, f, e, st.mean_u, se) {
+        let tilt = mounts[seg_mount[k]].geometry;
+        if let Some(m) = SegModel::new(k, tilt, centre, e, st.mean_u, se) {
             out.push(m);
         }
     }
     out
+}
+
+/// The gyro's static reading (its bias as the static majority shows it), rad/s.
+pub(crate) fn static_gyro(segs: &[SessionSeg]) -> [f64; 3] {
+    let statics: Vec<&SessionSeg> = segs
+        .iter()
+        .filter(|s| s.used && s.kind == SegmentKind::Static)
+        .collect();
+    core::array::from_fn(|j| median(statics.iter().map(|s| s.stats.mean_w_rad_s[j]).collect()))
+        .map(|v: f64| if v.is_finite() { v } else { 0.0 })
+}
+
+/// The measured rotation axis of a spinning segment (bias removed), signed as the planned rate, and
+/// its per-axis 1σ of the mean (rad/s): `None` below 1 °/s.
+fn spin_axis(
+    s: &SessionSeg,
+    sp: &crate::session::SegmentPlan,
+    noise: &Noise,
+    bias: &[f64; 3],
+) -> Option<([f64; 3], f64, RowMajor3)> {
+    let w: [f64; 3] = core::array::from_fn(|j| s.stats.mean_w_rad_s[j] - bias[j]);
+    let n = linalg::norm(&w);
+    if n < 1f64.to_radians() {
+        return None;
+    }
+    let planned = sp.rate_deg_s + sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s);
+    let sign = if sp.has_up() && !sp.is_free() {
+        linalg::dot(&w, &sp.up_b).signum()
+    } else {
+        planned.signum()
+    };
+    let cov = if s.kind == SegmentKind::Ramp {
+        noise.gyro_cov
+    } else {
+        s.stats.cov_w
+    };
+    Some((w.map(|v| v * sign / n), n, cov))
+}
+
+/// The gyro axis directions of the used spinning segments (docs/model.md §7): each mean axis,
+/// weighted by its noise with a floor of `options.gyro_axis_sigma_rad` (how well the gyro's axes are
+/// taken to agree with the body frame).
+pub(crate) fn build_gyro(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    noise: &Noise,
+    options: &EstimateOptions,
+    mounts: &[Mount],
+    seg_mount: &[usize],
+) -> Vec<GyroDirection> {
+    let Some(floor) = options.gyro_axis_sigma_rad else {
+        return Vec::new();
+    };
+    let bias = static_gyro(segs);
+    let mut out = Vec::new();
+    for (k, s) in segs.iter().enumerate() {
+        if !s.used || s.kind == SegmentKind::Static {
+            continue;
+        }
+        let sp = &plan.segments[s.plan_idx];
+        let Some((axis, rate, cov)) = spin_axis(s, sp, noise, &bias) else {
+            continue;
+        };
+        let tilt = mounts[seg_mount[k]].geometry;
+        let n = s.stats.count.max(1) as f64;
+        let e = tilt.basis;
+        out.push(GyroDirection {
+            seg: k,
+            tilt,
+            measured: core::array::from_fn(|c| linalg::dot(&axis, &e[c])),
+            sigma: core::array::from_fn(|c| {
+                let v = linalg::dot(&e[c], &linalg::mat_vec(&cov, &e[c])) / n;
+                (v / (rate * rate) + floor * floor).sqrt()
+            }),
+        });
+    }
+    out
+}
+
+/// Starting ups of free mounts given without one (or with a rough one): from the static fit's
+/// compensated mean output of their first static segment, else from the gyro's axis.
+pub(crate) fn seed_free_mounts(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    noise: &Noise,
+    problem: &mut Problem,
+    theta: &[f64],
+) {
+    let m = model::m_of(theta);
+    let u0 = model::u0_of(theta);
+    let minv = linalg::inverse(&m);
+    let bias = static_gyro(segs);
+    for k in 0..problem.mounts.len() {
+        if problem.mounts[k].prior_rad.is_some() {
+            continue;
+        }
+        let idx = problem.mounts[k].geometry.index;
+        let from_static = problem
+            .models
+            .iter()
+            .find(|md| md.tilt.index == idx && segs[md.seg].kind == SegmentKind::Static)
+            .and_then(|md| {
+                let du: [f64; 3] = core::array::from_fn(|i| md.mean_u[i] - u0[i]);
+                minv.map(|mi| linalg::mat_vec(&mi, &du))
+            });
+        let from_gyro = || {
+            problem
+                .models
+                .iter()
+                .find(|md| md.tilt.index == idx && segs[md.seg].kind != SegmentKind::Static)
+                .and_then(|md| {
+                    let s = &segs[md.seg];
+                    spin_axis(s, &plan.segments[s.plan_idx], noise, &bias).map(|a| a.0)
+                })
+        };
+        if let Some(up) = from_static.or_else(from_gyro) {
+            if linalg::norm(&up) > 0.1 {
+                problem.set_nominal(k, up);
+            }
+        }
+    }
 }
 
 /// Directions along which the attitudes `ups` do not spread (empty when they span 3-D affinely).
@@ -351,8 +523,8 @@ pub(crate) fn missing_directions(ups: &[[f64; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-fn static_free() -> [bool; NP] {
-    let mut free = [false; NP];
+pub(crate) fn static_free(n_params: usize) -> Vec<bool> {
+    let mut free = vec![false; n_params];
     for i in 0..3 {
         for j in 0..3 {
             free[idx_m(i, j)] = true;
@@ -362,9 +534,9 @@ fn static_free() -> [bool; NP] {
     free
 }
 
-fn static_start(models: &[&SegModel]) -> [f64; NP] {
+fn static_start(models: &[&SegModel], n_params: usize) -> Vec<f64> {
     // Any non-degenerate start: the static model is linear, Gauss–Newton solves it in one step.
-    let mut t = [0.0; NP];
+    let mut t = vec![0.0; n_params];
     for i in 0..3 {
         let mean: f64 =
             models.iter().map(|m| m.mean_u[i]).sum::<f64>() / models.len().max(1) as f64;
@@ -375,12 +547,20 @@ fn static_start(models: &[&SegModel]) -> [f64; NP] {
 }
 
 /// Static least squares on the given models (lever arms fixed at 0: static segments do not see them).
-pub(crate) fn static_fit(models: &[&SegModel]) -> Result<solve::Fit, EstimateError> {
-    let owned: Vec<SegModel> = models.iter().map(|m| (*m).clone()).collect();
+pub(crate) fn static_fit(
+    models: &[&SegModel],
+    mounts: &[Mount],
+) -> Result<solve::Fit, EstimateError> {
+    let problem = Problem {
+        models: models.iter().map(|m| (*m).clone()).collect(),
+        mounts: mounts.to_vec(),
+        gyro: Vec::new(),
+    };
+    let n = problem.n_params();
     solve::fit(
-        &owned,
-        static_start(models),
-        static_free(),
+        &problem,
+        static_start(models, n),
+        static_free(n),
         "static least squares",
     )
 }
@@ -403,20 +583,25 @@ fn attitude_errors(fit: &solve::Fit, models: &[&SegModel], ups: &[[f64; 3]]) -> 
         .collect()
 }
 
-/// The static fit, after leaving out static segments whose attitude contradicts the plan
-/// (leave-one-out: each static segment is predicted from the others).
+/// The static fit on the fixture's (known-attitude) static segments, after leaving out those whose
+/// attitude contradicts the plan (leave-one-out: each static segment is predicted from the others).
 pub(crate) fn static_fit_with_attitude_check(
     plan: &Plan,
     segs: &mut [SessionSeg],
-    models: &mut Vec<SegModel>,
+    problem: &mut Problem,
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
     planned_static: usize,
 ) -> Result<solve::Fit, EstimateError> {
     let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
+    let mounts = problem.mounts.clone();
     loop {
+        let models = &problem.models;
         let statics: Vec<usize> = (0..models.len())
-            .filter(|&k| segs[models[k].seg].kind == SegmentKind::Static)
+            .filter(|&k| {
+                let sp = &plan.segments[segs[models[k].seg].plan_idx];
+                segs[models[k].seg].kind == SegmentKind::Static && !sp.is_free()
+            })
             .collect();
         if statics.is_empty() {
             return Err(EstimateError::NoStaticSegments {
@@ -437,7 +622,7 @@ pub(crate) fn static_fit_with_attitude_check(
         // Fast path: when the fit on all static segments leaves every one within a tenth of the
         // tolerance, no segment can hide a wrong attitude (its leverage is < 1 − 1/10).
         let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
-        let all = static_fit(&refs)?;
+        let all = static_fit(&refs, &mounts)?;
         let all_err = attitude_errors(&all, &refs, &ups);
         if all_err.iter().all(|e| *e < 0.1 * tol_g) {
             return Ok(all);
@@ -457,7 +642,9 @@ pub(crate) fn static_fit_with_attitude_check(
                     .filter(|&&q| q != k)
                     .map(|&q| &models[q])
                     .collect();
-                let Ok(fit) = static_fit(&rest) else { continue };
+                let Ok(fit) = static_fit(&rest, &mounts) else {
+                    continue;
+                };
                 let rest_worst = attitude_errors(&fit, &rest, &rest_ups)
                     .into_iter()
                     .fold(0.0, f64::max);
@@ -478,7 +665,7 @@ pub(crate) fn static_fit_with_attitude_check(
                         angle_deg: super::chord_to_angle_deg(err),
                     },
                 });
-                models.remove(k);
+                problem.remove_segment(seg);
             }
             _ => return Ok(all),
         }

@@ -1,24 +1,107 @@
-//! Weighted least squares (Gauss–Newton) over the segment models, with a free-parameter mask.
+//! Weighted least squares (Gauss–Newton) over the segment models, the gyro's rotation-axis
+//! directions and the mounts' attitude priors, with a free-parameter mask.
 //!
-//! The model is bilinear (`m_i · E r_i`), so Gauss–Newton from the static solution with `r = 0`
-//! converges in a few iterations. Normal equations are solved after scaling every column to unit
-//! diagonal: the parameters span ten orders of magnitude (V/g against metres).
+//! The model is bilinear (`m_i · E r_i`) and nearly linear in the small tilts, so Gauss–Newton from
+//! the static solution with `r = 0` converges in a few iterations; a step that raises χ² is halved
+//! (free attitudes may start tens of degrees off). Normal equations are solved after scaling every
+//! column to unit diagonal: the parameters span ten orders of magnitude (V/g against metres).
 
-use super::model::{idx_r, SegModel, NP};
+use super::model::{is_lever, Mount, SegModel, TiltGeometry, NI};
 use super::EstimateError;
 use nalgebra::{DMatrix, DVector};
+
+/// During a spin the gyro measures the rotation axis, which is the mount's true up
+/// (docs/model.md §7): the components of the measured axis on the mount's tilt axes.
+#[derive(Clone, Debug)]
+pub struct GyroDirection {
+    /// Index into the session's segment list.
+    pub seg: usize,
+    /// The mount's attitude unknowns.
+    pub tilt: TiltGeometry,
+    /// Measured unit axis (sign of the nominal up) · each tilt axis.
+    pub measured: [f64; 2],
+    /// 1σ of `measured`.
+    pub sigma: [f64; 2],
+}
+
+impl GyroDirection {
+    /// Residuals and their derivatives by (α, β), unweighted.
+    fn residual(&self, t: &[f64]) -> ([f64; 2], [[f64; 2]; 2]) {
+        let (up, d) = self.tilt.up_and_derivatives(t);
+        let e = &self.tilt.basis;
+        let dot = shared::linalg::dot;
+        (
+            core::array::from_fn(|c| self.measured[c] - dot(&up, &e[c])),
+            core::array::from_fn(|c| core::array::from_fn(|k| dot(&d[k], &e[c]))),
+        )
+    }
+}
+
+/// Everything the fit sees.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// Mean outputs of the used segments.
+    pub models: Vec<SegModel>,
+    /// The mounts (tilt unknowns and priors), in θ order.
+    pub mounts: Vec<Mount>,
+    /// Gyro axis directions of the used spinning segments.
+    pub gyro: Vec<GyroDirection>,
+}
+
+impl Problem {
+    /// Length of θ.
+    pub fn n_params(&self) -> usize {
+        NI + 2 * self.mounts.len()
+    }
+
+    /// Removes the segment `seg` (its outputs and gyro axis).
+    pub fn remove_segment(&mut self, seg: usize) {
+        self.models.retain(|m| m.seg != seg);
+        self.gyro.retain(|g| g.seg != seg);
+    }
+
+    /// Moves mount `k`'s nominal up (a free attitude's starting guess) and its tilt axes.
+    pub fn set_nominal(&mut self, k: usize, up: [f64; 3]) {
+        let g = TiltGeometry::new(up, k);
+        self.mounts[k].geometry = g;
+        for m in self.models.iter_mut().filter(|m| m.tilt.index == g.index) {
+            m.tilt = g;
+        }
+        for o in self.gyro.iter_mut().filter(|o| o.tilt.index == g.index) {
+            o.tilt = g;
+        }
+    }
+
+    /// Number of observations: 3 per segment, 2 per gyro axis, 2 per mount prior.
+    fn observations(&self, free: &[bool]) -> i64 {
+        let priors = self
+            .mounts
+            .iter()
+            .filter(|m| matches!(m.prior_rad, Some(s) if s > 0.0) && free[m.geometry.index])
+            .count();
+        3 * self.models.len() as i64 + 2 * self.gyro.len() as i64 + 2 * priors as i64
+    }
+
+    /// χ² at θ (outputs, gyro axes and priors).
+    pub fn chi2(&self, t: &[f64], free: &[bool]) -> f64 {
+        let idx = free_indices(free);
+        normal_equations(self, t, &idx, None).2
+    }
+}
 
 /// A converged fit.
 #[derive(Clone, Debug)]
 pub struct Fit {
     /// The estimate (fixed entries keep their starting value).
-    pub theta: [f64; NP],
-    /// Covariance of θ from the weights alone (not scaled by χ²), 21 × 21, zero rows for fixed entries.
+    pub theta: Vec<f64>,
+    /// Covariance of θ from the weights alone (not scaled by χ²), zero rows for fixed entries.
     pub cov: DMatrix<f64>,
-    /// Σ of whitened residuals².
+    /// Σ of whitened residuals² (priors included).
     pub chi2: f64,
     /// Observations − free parameters.
     pub dof: i64,
+    /// Which entries were estimated.
+    pub free: Vec<bool>,
 }
 
 /// Inverse of a symmetric positive-definite matrix via Jacobi scaling and Cholesky; `None` when it
@@ -48,139 +131,188 @@ pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
     Some(DMatrix::from_fn(k, k, |i, j| inv[(i, j)] * s[i] * s[j]))
 }
 
-/// Information matrix `Jᵀ Σ⁻¹ J` over the free entries (plus an optional prior of 1σ = `prior_r_m`
-/// on every free lever-arm component), and `Jᵀ Σ⁻¹ res`.
+/// Information matrix `Jᵀ Σ⁻¹ J` over the free entries (with the mounts' attitude priors, and an
+/// optional prior of 1σ = `prior_r_m` on every free lever-arm component), `Jᵀ Σ⁻¹ res`, and χ².
 fn normal_equations(
-    segs: &[SegModel],
-    t: &[f64; NP],
+    p: &Problem,
+    t: &[f64],
     free_idx: &[usize],
     prior_r_m: Option<f64>,
 ) -> (DMatrix<f64>, DVector<f64>, f64) {
     let k = free_idx.len();
+    let mut col_of = vec![usize::MAX; t.len()];
+    for (c, &q) in free_idx.iter().enumerate() {
+        col_of[q] = c;
+    }
     let mut n = DMatrix::<f64>::zeros(k, k);
     let mut b = DVector::<f64>::zeros(k);
     let mut chi2 = 0.0;
-    for s in segs {
+    let add = |cols: &[(usize, f64)], res: f64, n: &mut DMatrix<f64>, b: &mut DVector<f64>| {
+        for &(c1, v1) in cols {
+            b[c1] += v1 * res;
+            for &(c2, v2) in cols {
+                n[(c1, c2)] += v1 * v2;
+            }
+        }
+    };
+    for s in &p.models {
         let jac = s.jacobian(t);
         let res = s.whitened_residual(t);
         chi2 += res.iter().map(|v| v * v).sum::<f64>();
         // Whitened Jacobian rows: L⁻¹ J, restricted to the free columns.
-        let mut wj = vec![[0.0; 3]; k];
-        for (c, &p) in free_idx.iter().enumerate() {
-            for a in 0..3 {
-                wj[c][a] = (0..3).map(|q| s.whiten[a][q] * jac[q][p]).sum();
+        for a in 0..3 {
+            let mut cols: Vec<(usize, f64)> = Vec::with_capacity(jac.len());
+            for (q, d) in &jac {
+                let c = col_of[*q];
+                if c == usize::MAX {
+                    continue;
+                }
+                let v: f64 = (0..3).map(|r| s.whiten[a][r] * d[r]).sum();
+                if v != 0.0 {
+                    cols.push((c, v));
+                }
             }
-        }
-        for c1 in 0..k {
-            b[c1] += (0..3).map(|a| wj[c1][a] * res[a]).sum::<f64>();
-            for c2 in c1..k {
-                let v: f64 = (0..3).map(|a| wj[c1][a] * wj[c2][a]).sum();
-                n[(c1, c2)] += v;
-            }
+            add(&cols, res[a], &mut n, &mut b);
         }
     }
-    for c1 in 0..k {
-        for c2 in 0..c1 {
-            n[(c1, c2)] = n[(c2, c1)];
+    for g in &p.gyro {
+        let (res, d) = g.residual(t);
+        for c in 0..2 {
+            let w = 1.0 / g.sigma[c];
+            chi2 += (res[c] * w).powi(2);
+            let cols: Vec<(usize, f64)> = (0..2)
+                .filter(|&q| col_of[g.tilt.index + q] != usize::MAX)
+                .map(|q| (col_of[g.tilt.index + q], d[c][q] * w))
+                .collect();
+            add(&cols, res[c] * w, &mut n, &mut b);
+        }
+    }
+    for m in &p.mounts {
+        let Some(sig) = m.prior_rad.filter(|s| *s > 0.0) else {
+            continue;
+        };
+        for c in 0..2 {
+            let q = m.geometry.index + c;
+            if col_of[q] == usize::MAX {
+                continue;
+            }
+            chi2 += (t[q] / sig).powi(2);
+            n[(col_of[q], col_of[q])] += 1.0 / (sig * sig);
+            // The prior pulls towards the nominal up.
+            b[col_of[q]] -= t[q] / (sig * sig);
         }
     }
     if let Some(sig) = prior_r_m {
-        for (c, &p) in free_idx.iter().enumerate() {
-            if (p % 7) >= 4 {
+        for (c, &q) in free_idx.iter().enumerate() {
+            if is_lever(q) {
                 n[(c, c)] += 1.0 / (sig * sig);
-                // The prior pulls towards 0.
-                b[c] -= t[p] / (sig * sig);
+                b[c] -= t[q] / (sig * sig);
             }
         }
     }
     (n, b, chi2)
 }
 
-fn free_indices(free: &[bool; NP]) -> Vec<usize> {
-    (0..NP).filter(|&p| free[p]).collect()
+fn free_indices(free: &[bool]) -> Vec<usize> {
+    (0..free.len()).filter(|&p| free[p]).collect()
 }
 
-/// Covariance (21 × 21, zeros for fixed entries) of θ at `t`, or `None` if singular.
+/// Covariance (zeros for fixed entries) of θ at `t`, or `None` if singular.
 pub fn covariance(
-    segs: &[SegModel],
-    t: &[f64; NP],
-    free: &[bool; NP],
+    p: &Problem,
+    t: &[f64],
+    free: &[bool],
     prior_r_m: Option<f64>,
 ) -> Option<DMatrix<f64>> {
     let idx = free_indices(free);
-    let (n, _, _) = normal_equations(segs, t, &idx, prior_r_m);
+    let (n, _, _) = normal_equations(p, t, &idx, prior_r_m);
     // With a prior the matrix is positive definite by construction; without, reject rank deficiency.
     let min_eigen = if prior_r_m.is_some() { 0.0 } else { 1e-14 };
     let inv = invert_spd(&n, min_eigen)?;
-    let mut cov = DMatrix::<f64>::zeros(NP, NP);
-    for (a, &p) in idx.iter().enumerate() {
-        for (b, &q) in idx.iter().enumerate() {
-            cov[(p, q)] = inv[(a, b)];
+    let np = t.len();
+    let mut cov = DMatrix::<f64>::zeros(np, np);
+    for (a, &q) in idx.iter().enumerate() {
+        for (b, &r) in idx.iter().enumerate() {
+            cov[(q, r)] = inv[(a, b)];
         }
     }
     Some(cov)
 }
 
+/// One Gauss–Newton step over the free columns, or `None` when the normal equations are singular.
+fn step(n: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+    let d: Vec<f64> = (0..n.nrows())
+        .map(|i| 1.0 / n[(i, i)].max(1e-300).sqrt())
+        .collect();
+    let scaled = DMatrix::from_fn(n.nrows(), n.ncols(), |i, j| n[(i, j)] * d[i] * d[j]);
+    let chol = scaled.cholesky()?;
+    let bs = DVector::from_fn(b.len(), |i, _| b[i] * d[i]);
+    let x = chol.solve(&bs);
+    let s = DVector::from_fn(b.len(), |i, _| x[i] * d[i]);
+    s.iter().all(|v| v.is_finite()).then_some(s)
+}
+
 /// Gauss–Newton from `t0`, estimating the entries marked in `free`.
 pub fn fit(
-    segs: &[SegModel],
-    t0: [f64; NP],
-    free: [bool; NP],
+    p: &Problem,
+    t0: Vec<f64>,
+    free: Vec<bool>,
     what: &'static str,
 ) -> Result<Fit, EstimateError> {
     let idx = free_indices(&free);
     let mut t = t0;
-    for _ in 0..30 {
-        let (n, b, _) = normal_equations(segs, &t, &idx, None);
-        // Cholesky alone while iterating; the rank check runs once, on the final covariance.
-        let d: Vec<f64> = (0..n.nrows())
-            .map(|i| 1.0 / n[(i, i)].max(1e-300).sqrt())
-            .collect();
-        let scaled = DMatrix::from_fn(n.nrows(), n.ncols(), |i, j| n[(i, j)] * d[i] * d[j]);
-        let chol = scaled.cholesky().ok_or(EstimateError::Singular { what })?;
-        let bs = DVector::from_fn(b.len(), |i, _| b[i] * d[i]);
-        let x = chol.solve(&bs);
-        let step = DVector::from_fn(b.len(), |i, _| x[i] * d[i]);
+    for _ in 0..60 {
+        let (n, b, chi2) = normal_equations(p, &t, &idx, None);
+        let s = step(&n, &b).ok_or(EstimateError::Singular { what })?;
+        let mut h = 1.0;
+        let mut trial = t.clone();
+        for _ in 0..12 {
+            for (c, &q) in idx.iter().enumerate() {
+                trial[q] = t[q] + h * s[c];
+            }
+            if p.chi2(&trial, &free) <= chi2 * (1.0 + 1e-12) + 1e-9 {
+                break;
+            }
+            h *= 0.5;
+        }
         let mut rel = 0.0f64;
-        for (c, &p) in idx.iter().enumerate() {
-            t[p] += step[c];
-            let scale = if p % 7 >= 4 {
+        for (c, &q) in idx.iter().enumerate() {
+            let scale = if is_lever(q) {
+                1e-3
+            } else if q >= NI {
                 1e-3
             } else {
-                t[p].abs().max(1e-9)
+                t[q].abs().max(1e-9)
             };
-            rel = rel.max(step[c].abs() / scale);
+            rel = rel.max((h * s[c]).abs() / scale);
         }
-        if !step.iter().all(|v| v.is_finite()) {
-            return Err(EstimateError::Singular { what });
-        }
+        t = trial;
         if rel < 1e-10 {
             break;
         }
     }
-    let cov = covariance(segs, &t, &free, None).ok_or(EstimateError::Singular { what })?;
-    let chi2 = segs
-        .iter()
-        .map(|s| s.whitened_residual(&t).iter().map(|v| v * v).sum::<f64>())
-        .sum();
+    let cov = covariance(p, &t, &free, None).ok_or(EstimateError::Singular { what })?;
+    let chi2 = p.chi2(&t, &free);
     Ok(Fit {
+        dof: p.observations(&free) - idx.len() as i64,
         theta: t,
         cov,
         chi2,
-        dof: 3 * segs.len() as i64 - idx.len() as i64,
+        free,
     })
 }
 
 /// Lever-arm components the segments cannot determine at all (1σ above `limit_m` even with a weak
 /// 1 m prior), removed one at a time, worst first: the remaining ones are estimable.
 pub fn structurally_unobservable(
-    segs: &[SegModel],
-    t: &[f64; NP],
-    free: &mut [bool; NP],
+    p: &Problem,
+    t: &[f64],
+    free: &mut [bool],
     limit_m: f64,
 ) -> Vec<(usize, usize)> {
+    use super::model::idx_r;
     let mut fixed = Vec::new();
-    while let Some(cov) = covariance(segs, t, free, Some(1.0)) {
+    while let Some(cov) = covariance(p, t, free, Some(1.0)) {
         let worst = (0..3)
             .flat_map(|i| (0..3).map(move |j| (i, j)))
             .filter(|&(i, j)| free[idx_r(i, j)])

@@ -385,6 +385,7 @@ fn table_errors_are_covered_by_the_scaled_sigma_or_named() {
     let errors = TableErrors {
         attitude_deg: 0.01,
         rate_rel: 1e-3,
+        ..TableErrors::default()
     };
     let mc = monte_carlo(
         60,

@@ -4,7 +4,8 @@
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
 use crate::estimate::{
-    CalibrationOutcome, Method, Prediction, SegmentDiagnostic, SegmentKind, PAPER_LEN,
+    CalibrationOutcome, Method, MountTilt, Prediction, SegmentDiagnostic, SegmentKind, StaticSplit,
+    PAPER_LEN,
 };
 use shared::params::axis_name;
 use shared::OutputUnit;
@@ -143,6 +144,8 @@ pub fn render(o: &CalibrationOutcome) -> String {
         }
     }
     let _ = writeln!(s);
+    render_attitudes(&mut s, &o.static_split, &o.mount_tilts);
+    let _ = writeln!(s);
     let _ = writeln!(
         s,
         "Residuals per segment (g), like Tables 2 and 4: theoretical | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
@@ -209,6 +212,60 @@ fn render_segment(s: &mut String, d: &SegmentDiagnostic) {
     }
 }
 
+/// The static 1σ split into intrinsic and body-frame parts, what fixes the frame, and each mount's
+/// estimated attitude (docs/model.md §7).
+fn render_attitudes(s: &mut String, split: &StaticSplit, tilts: &[MountTilt]) {
+    let ug = |v: [f64; 3]| v.map(|x| format!("{:.2}", x * 1e6)).join(", ");
+    let _ = writeln!(
+        s,
+        "Static 1σ, intrinsic part and body-frame alignment part:"
+    );
+    let _ = writeln!(
+        s,
+        "  biases (µg)                          {}",
+        ug(split.bias_1sigma_g)
+    );
+    let _ = writeln!(
+        s,
+        "  scale factors (ppm)                  {}",
+        ug(split.scale_1sigma_rel)
+    );
+    let _ = writeln!(
+        s,
+        "  non-orthogonality y|x, z|x, z|y (µrad) {}",
+        ug(split.nonorthogonality_1sigma_rad)
+    );
+    let _ = writeln!(
+        s,
+        "  body-frame alignment about x, y, z (µrad) {}",
+        ug(split.alignment_1sigma_rad)
+    );
+    let _ = writeln!(s, "  {}", split.frame);
+    if tilts.iter().all(|t| !t.estimated) {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "Mount attitudes: angle of the estimated up from the nominal (free: from the starting guess), 1σ per axis"
+    );
+    for t in tilts.iter().filter(|t| t.estimated) {
+        let prior = match t.prior_deg {
+            Some(p) => format!("prior {p:.3}°"),
+            None => "free".to_string(),
+        };
+        let flag = if t.prior_deg.is_some_and(|p| t.tilt_deg > 3.0 * p) {
+            "  > 3× prior"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "  {:<22} up [{:+.5}, {:+.5}, {:+.5}]  tilt {:.4}° ± {:.4}°  ({prior}){flag}",
+            t.name, t.up_b[0], t.up_b[1], t.up_b[2], t.tilt_deg, t.sigma_deg
+        );
+    }
+}
+
 /// The Cramér–Rao prediction of a plan (`host plan --check`).
 pub fn render_prediction(p: &Prediction) -> String {
     let mut s = String::new();
@@ -258,6 +315,7 @@ pub fn render_prediction(p: &Prediction) -> String {
         let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}{mark}");
     }
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
+    render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }

@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub const BUILTIN_PLANS: [(&str, &str); 5] = [
+pub const BUILTIN_PLANS: [(&str, &str); 6] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -16,6 +16,7 @@ pub const BUILTIN_PLANS: [(&str, &str); 5] = [
         "quick-oblique",
         include_str!("../../plans/quick-oblique.toml"),
     ),
+    ("hand", include_str!("../../plans/hand.toml")),
 ];
 
 /// The built-in plan called `name`, if any.
@@ -71,6 +72,12 @@ mod tests {
             .segments
             .iter()
             .any(|s| s.up_b[0] > 0.7 && s.up_b[1] > 0.7 && s.rate_deg_s == -200.0));
+        let hand = builtin_plan("hand").unwrap().unwrap();
+        assert_eq!(hand.segments.len(), 24);
+        assert!(hand
+            .segments
+            .iter()
+            .all(|s| s.is_static() && s.is_free() && s.duration_s == Some(5.0)));
         assert!(load_plan("no-such-plan")
             .unwrap_err()
             .to_string()

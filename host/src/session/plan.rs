@@ -5,8 +5,39 @@ use shared::OutputUnit;
 use std::collections::HashSet;
 use std::path::Path;
 
-/// Current plan format version.
-pub const PLAN_FORMAT_VERSION: u32 = 1;
+/// Current plan format version (2 adds the fixture's attitude accuracy and free attitudes; version 1
+/// plans are still read).
+pub const PLAN_FORMAT_VERSION: u32 = 2;
+
+/// The oldest plan format version this build reads.
+pub const PLAN_FORMAT_VERSION_MIN: u32 = 1;
+
+/// 1σ of each mount's tilt (per axis perpendicular to the nominal up) when the plan says nothing,
+/// degrees. A machined fixture on a levelled rate table is good to a few arc-minutes at best once the
+/// unit's own seating on the fixture is counted; 0.05° (3 arc-minutes) is the order of a good
+/// commercial fixture and its seating repeatability. Taking it as exact instead costs ~1 mg at this
+/// level (docs/model.md §7), while a prior that is somewhat too wide costs almost nothing.
+pub const DEFAULT_ATTITUDE_SIGMA_DEG: f64 = 0.05;
+
+/// How a segment's attitude is known.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Attitude {
+    /// On the fixture: `up_b` is the nominal up, with the mount's `attitude_sigma_deg` prior.
+    #[default]
+    Fixture,
+    /// Unknown (e.g. held by hand): `up_b`, when given, is only a rough guess; the direction is
+    /// estimated from the data with no prior.
+    Free,
+}
+
+fn is_fixture(a: &Attitude) -> bool {
+    *a == Attitude::Fixture
+}
+
+fn is_zero3(v: &[f64; 3]) -> bool {
+    *v == [0.0; 3]
+}
 
 /// Output unit as spelled in files: "V" or "LSB".
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -61,19 +92,32 @@ pub struct Plan {
     /// identity). The calibration blob is bound to it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit_id: Option<String>,
+    /// 1σ of each mount's tilt away from its nominal up, per axis, degrees (format 2). Absent:
+    /// [`DEFAULT_ATTITUDE_SIGMA_DEG`]; 0: the fixture is taken as exact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attitude_sigma_deg: Option<f64>,
     /// The segments, in the order they are run.
     #[serde(rename = "segment")]
     pub segments: Vec<SegmentPlan>,
 }
 
 /// One segment: a fixed mount ("up" direction) at rest, at a constant table rate, or ramping.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SegmentPlan {
     /// Unique name; `samples.csv` rows refer to it.
     pub name: String,
-    /// Direction of "up" (the +1 g specific force at rest) in body axes; unit vector.
+    /// Direction of "up" (the +1 g specific force at rest) in body axes; unit vector. May be left out
+    /// (all zero) only for a free attitude.
+    #[serde(default, skip_serializing_if = "is_zero3")]
     pub up_b: [f64; 3],
+    /// Whether `up_b` is a fixture's nominal or unknown (format 2).
+    #[serde(default, skip_serializing_if = "is_fixture")]
+    pub attitude: Attitude,
+    /// This segment's mount tilt 1σ, degrees, over the plan's (format 2; all segments of a mount
+    /// must agree).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attitude_sigma_deg: Option<f64>,
     /// Table rate about the vertical at the segment's start, °/s, signed; 0 for static.
     #[serde(default)]
     pub rate_deg_s: f64,
@@ -99,8 +143,22 @@ impl SegmentPlan {
         self.rate_deg_s == 0.0 && self.rate_end_deg_s.is_none_or(|r| r == 0.0)
     }
 
-    /// The mount this segment belongs to.
+    /// The attitude is unknown (estimated with no prior).
+    pub fn is_free(&self) -> bool {
+        self.attitude == Attitude::Free
+    }
+
+    /// `up_b` was given (always for a fixture segment).
+    pub fn has_up(&self) -> bool {
+        !is_zero3(&self.up_b)
+    }
+
+    /// The mount this segment belongs to: its `mount`, else its own name for a free attitude (each
+    /// hand-held position is its own mount), else named after `up_b`.
     pub fn mount_name(&self) -> String {
+        if self.mount.is_none() && self.is_free() {
+            return format!("free '{}'", self.name);
+        }
         self.mount.clone().unwrap_or_else(|| {
             format!(
                 "up({:+.4},{:+.4},{:+.4})",
@@ -130,8 +188,8 @@ impl std::fmt::Display for PlanError {
             PlanError::Syntax(p, e) => write!(f, "plan {} is not valid: {e}", p.display()),
             PlanError::Version(v) => write!(
                 f,
-                "plan format_version {v} is not supported (this build reads {PLAN_FORMAT_VERSION}); \
-                 upgrade the tool or rewrite the plan"
+                "plan format_version {v} is not supported (this build reads \
+                 {PLAN_FORMAT_VERSION_MIN} to {PLAN_FORMAT_VERSION}); upgrade the tool or rewrite the plan"
             ),
             PlanError::Invalid(m) => write!(f, "plan is not usable: {m}"),
         }
@@ -161,9 +219,10 @@ impl Plan {
 
     /// Semantic checks: version, positive rate, unique names, unit `up_b`, finite numbers.
     pub fn validate(&self) -> Result<(), PlanError> {
-        if self.format_version != PLAN_FORMAT_VERSION {
+        if !(PLAN_FORMAT_VERSION_MIN..=PLAN_FORMAT_VERSION).contains(&self.format_version) {
             return Err(PlanError::Version(self.format_version));
         }
+        self.validate_attitudes()?;
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
             return Err(PlanError::Invalid(
                 "sample_rate_hz must be a positive number".into(),
@@ -200,7 +259,13 @@ impl Plan {
                 )));
             }
             let n = shared::linalg::norm(&s.up_b);
-            if !n.is_finite() || (n - 1.0).abs() > 1e-3 {
+            if !s.has_up() && !s.is_free() {
+                return Err(PlanError::Invalid(format!(
+                    "segment '{}' has no up_b: give it, or set attitude = \"free\" to estimate it",
+                    s.name
+                )));
+            }
+            if s.has_up() && (!n.is_finite() || (n - 1.0).abs() > 1e-3) {
                 return Err(PlanError::Invalid(format!(
                     "segment '{}': up_b {:?} is not a unit vector (norm {n:.4})",
                     s.name, s.up_b
@@ -216,6 +281,65 @@ impl Plan {
                     "segment '{}': rates must be finite and duration_s positive",
                     s.name
                 )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The plan-level mount tilt 1σ, degrees (the default when absent).
+    pub fn attitude_sigma_deg(&self) -> f64 {
+        self.attitude_sigma_deg
+            .unwrap_or(DEFAULT_ATTITUDE_SIGMA_DEG)
+    }
+
+    /// The tilt 1σ of the mount `seg` belongs to, degrees; `None` for a free attitude.
+    pub fn mount_sigma_deg(&self, seg: &SegmentPlan) -> Option<f64> {
+        if seg.is_free() {
+            return None;
+        }
+        Some(seg.attitude_sigma_deg.unwrap_or(self.attitude_sigma_deg()))
+    }
+
+    /// Format 2 keys need format 2; σ finite ≥ 0; a mount's segments agree on attitude and σ.
+    fn validate_attitudes(&self) -> Result<(), PlanError> {
+        let uses_v2 = self.attitude_sigma_deg.is_some()
+            || self
+                .segments
+                .iter()
+                .any(|s| s.is_free() || s.attitude_sigma_deg.is_some() || !s.has_up());
+        if uses_v2 && self.format_version < 2 {
+            return Err(PlanError::Invalid(
+                "attitude, attitude_sigma_deg and a missing up_b need format_version = 2".into(),
+            ));
+        }
+        let sigmas = self.attitude_sigma_deg.iter().chain(
+            self.segments
+                .iter()
+                .filter_map(|s| s.attitude_sigma_deg.as_ref()),
+        );
+        for v in sigmas {
+            if !(v.is_finite() && (0.0..=10.0).contains(v)) {
+                return Err(PlanError::Invalid(format!(
+                    "attitude_sigma_deg = {v} must be between 0 and 10 degrees (use attitude = \"free\" \
+                     for an unknown attitude)"
+                )));
+            }
+        }
+        let mut by_mount: std::collections::HashMap<String, (&SegmentPlan, Option<f64>)> =
+            Default::default();
+        for s in &self.segments {
+            let key = s.mount_name();
+            let sigma = self.mount_sigma_deg(s);
+            if let Some((first, first_sigma)) = by_mount.get(&key) {
+                if first.is_free() != s.is_free() || *first_sigma != sigma {
+                    return Err(PlanError::Invalid(format!(
+                        "segments '{}' and '{}' share mount '{key}' but not its attitude / \
+                         attitude_sigma_deg: give them the same, or different mounts",
+                        first.name, s.name
+                    )));
+                }
+            } else {
+                by_mount.insert(key, (s, sigma));
             }
         }
         Ok(())
@@ -272,5 +396,37 @@ rate_deg_s = 100
         assert!(e.to_string().contains("line"), "{e}");
         let e = Plan::parse(&format!("format_version = 9\n{GOOD}")).unwrap_err();
         assert!(matches!(e, PlanError::Version(9)));
+    }
+
+    #[test]
+    fn format_2_attitudes_and_format_1_still_read() {
+        // A format 1 plan reads as before, with the default fixture accuracy.
+        let p = Plan::parse(&format!("format_version = 1\n{GOOD}")).unwrap();
+        assert_eq!(p.attitude_sigma_deg(), DEFAULT_ATTITUDE_SIGMA_DEG);
+        assert_eq!(p.mount_sigma_deg(&p.segments[0]), Some(0.05));
+        // Format 2: a plan-level σ, a per-segment σ and a free segment without up_b.
+        let v2 = format!(
+            "format_version = 2\nattitude_sigma_deg = 0.1\n{GOOD}\
+             [[segment]]\nname = \"hand\"\nattitude = \"free\"\nduration_s = 5\n\
+             [[segment]]\nname = \"z+\"\nup_b = [0, 0, 1]\nattitude_sigma_deg = 0\n"
+        );
+        let p = Plan::parse(&v2).unwrap();
+        assert_eq!(p.mount_sigma_deg(&p.segments[0]), Some(0.1));
+        assert!(p.segments[2].is_free() && !p.segments[2].has_up());
+        assert_eq!(p.mount_sigma_deg(&p.segments[2]), None);
+        assert_eq!(p.mount_sigma_deg(&p.segments[3]), Some(0.0));
+        assert_eq!(Plan::parse(&p.to_toml()).unwrap(), p);
+        // The new keys in a format 1 plan, a missing up_b on a fixture segment, a mount whose
+        // segments disagree: each named.
+        let e = Plan::parse(&v2.replace("format_version = 2", "format_version = 1")).unwrap_err();
+        assert!(e.to_string().contains("format_version = 2"), "{e}");
+        let e = Plan::parse(&v2.replace("attitude = \"free\"\n", "")).unwrap_err();
+        assert!(e.to_string().contains("'hand' has no up_b"), "{e}");
+        let e = Plan::parse(&v2.replace(
+            "name = \"x+ 100\"\n",
+            "name = \"x+ 100\"\nattitude_sigma_deg = 0.3\n",
+        ))
+        .unwrap_err();
+        assert!(e.to_string().contains("share mount"), "{e}");
     }
 }

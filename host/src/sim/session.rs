@@ -230,18 +230,11 @@ const STREAM_GYRO: u64 = 2;
 const STREAM_WALK: u64 = 3;
 const STREAM_TILT: u64 = 4;
 
-/// `up` tilted by small angles (radians) about two axes perpendicular to it, renormalised.
-fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
-    // A vector not parallel to `up`, then two unit vectors perpendicular to it.
-    let pick = if up[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let e1 = linalg::cross(&up, &pick);
-    let e1 = e1.map(|c| c / linalg::norm(&e1));
-    let e2 = linalg::cross(&up, &e1);
-    let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e1[j] + n2 * e2[j]);
+/// `up` tilted by small angles (radians) about the two axes perpendicular to it that the estimator
+/// uses for a mount's tilt unknowns (`estimate::model::tilt_basis`), renormalised.
+pub fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+    let e = crate::estimate::model::tilt_basis(&up);
+    let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e[0][j] + n2 * e[1][j]);
     let n = linalg::norm(&v);
     v.map(|c| c / n)
 }
@@ -258,6 +251,13 @@ pub fn simulate_rows<E>(
     plan.validate().map_err(SimulateError::Plan)?;
     noise.validate()?;
     let model = ForwardModel::new(cal).map_err(|e| SimulateError::Unit(e.to_string()))?;
+    if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
+        return Err(SimulateError::Plan(PlanError::Invalid(format!(
+            "segment '{}' has no up_b; simulate needs the true attitude of every segment (a free \
+             attitude's up_b is where the simulated hand holds the unit)",
+            s.name
+        ))));
+    }
     if let Some(s) = plan.segments.iter().find(|s| s.duration_s.is_none()) {
         return Err(SimulateError::Plan(PlanError::Invalid(format!(
             "segment '{}' has no duration_s; simulate needs one for every segment",
@@ -661,6 +661,20 @@ mod tests {
         let want = model.outputs(&TableState::at_rest(s.mount_up_b["x+"]).motion(9.80665));
         for i in 0..3 {
             assert!((st.stats[0].mean_u[i] - want.raw[i]).abs() < 1e-12);
+        }
+        // The mount's spin segments turn about the same tilted up: the noise-free gyro reads
+        // rate × that up, and the tilt is not along the nominal axis.
+        let up = s.mount_up_b["x+"];
+        assert!(up[1].abs() + up[2].abs() > 1e-6, "{up:?}");
+        for seg in st.stats.iter().filter(|x| x.name.starts_with("x+ ")) {
+            let rate: f64 = seg.name[3..].parse::<f64>().unwrap().to_radians();
+            for j in 0..3 {
+                assert!(
+                    (seg.mean_w_rad_s[j] - rate * up[j]).abs() < 1e-12,
+                    "{}",
+                    seg.name
+                );
+            }
         }
     }
 

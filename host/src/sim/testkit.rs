@@ -48,10 +48,13 @@ impl Rng {
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TableErrors {
-    /// 1σ tilt of each mount, degrees (random direction).
+    /// 1σ tilt of each mount about each of the two axes perpendicular to its up, degrees (as
+    /// `host simulate --tilt-deg`).
     pub attitude_deg: f64,
     /// 1σ relative rate error of each rotating segment.
     pub rate_rel: f64,
+    /// Gyro white noise per sample, rad/s (0: a noise-free gyro mean).
+    pub gyro_noise_rad_s: f64,
 }
 
 fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
@@ -63,6 +66,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
         duration_s: Some(60.0),
         table_centre_m: None,
         mount: None,
+        ..SegmentPlan::default()
     }
 }
 
@@ -90,7 +94,8 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
         }
     }
     Plan {
-        format_version: 1,
+        format_version: 2,
+        attitude_sigma_deg: Some(0.0),
         output_unit: unit,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -167,25 +172,21 @@ pub fn noisy_stats(
     let unit = ForwardModel::new(truth).expect("valid truth");
     let noise = SynthNoise {
         out_1sigma: [noise_out; 3],
-        gyro_1sigma_rad_s: 0.0,
+        gyro_1sigma_rad_s: errors.gyro_noise_rad_s,
         sample_rate_hz: plan.sample_rate_hz,
     };
-    let mut mount_tilts: std::collections::HashMap<String, [f64; 3]> = Default::default();
+    let mut mount_tilts: std::collections::HashMap<String, [f64; 2]> = Default::default();
     plan.segments
         .iter()
         .map(|sp| {
             let mut actual = ActualSegment::from_plan(sp, 60.0);
             if errors.attitude_deg > 0.0 {
-                // Small rotation of "up" per mount: up' = up + δ × up.
-                let delta = *mount_tilts.entry(sp.mount_name()).or_insert_with(|| {
-                    let v = rng.unit_vector();
-                    let a = errors.attitude_deg.to_radians() * rng.normal();
-                    v.map(|c| c * a)
-                });
-                let c = shared::linalg::cross(&delta, &actual.up_b);
-                let up: [f64; 3] = core::array::from_fn(|j| actual.up_b[j] + c[j]);
-                let n = shared::linalg::norm(&up);
-                actual.up_b = up.map(|v| v / n);
+                // One tilt per mount, shared by its segments at rest and spinning.
+                let sigma = errors.attitude_deg.to_radians();
+                let [n1, n2] = *mount_tilts
+                    .entry(sp.mount_name())
+                    .or_insert_with(|| [sigma * rng.normal(), sigma * rng.normal()]);
+                actual.up_b = crate::sim::session::tilt(actual.up_b, n1, n2);
             }
             if errors.rate_rel > 0.0 && !sp.is_static() {
                 let f = 1.0 + errors.rate_rel * rng.normal();
@@ -196,6 +197,7 @@ pub fn noisy_stats(
             let n = st.count as f64;
             for i in 0..3 {
                 st.mean_u[i] += noise_out / n.sqrt() * rng.normal();
+                st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
             }
             st
         })
