@@ -17,14 +17,22 @@ pub enum OutputUnit {
     Volts,
     /// Raw counts of a digital part or of the ADC (least significant bits).
     Lsb,
+    /// A logger's output already in m/s², kept as recorded so that bias and scale stay in the
+    /// logger's unit (a hand-held recording imported by `host segment`). Appended: older blobs keep
+    /// their variant indices.
+    MetresPerSecondSquared,
+    /// A logger's output in g (standard gravity), kept as recorded.
+    StandardGravity,
 }
 
 impl OutputUnit {
-    /// Short unit name for reports ("V" or "LSB").
+    /// Short unit name for reports and files ("V", "LSB", "m/s2" or "g").
     pub fn symbol(self) -> &'static str {
         match self {
             OutputUnit::Volts => "V",
             OutputUnit::Lsb => "LSB",
+            OutputUnit::MetresPerSecondSquared => "m/s2",
+            OutputUnit::StandardGravity => "g",
         }
     }
 }

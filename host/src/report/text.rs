@@ -15,6 +15,8 @@ fn out_digits(unit: OutputUnit) -> usize {
     match unit {
         OutputUnit::Volts => 6,
         OutputUnit::Lsb => 3,
+        OutputUnit::MetresPerSecondSquared => 6,
+        OutputUnit::StandardGravity => 7,
     }
 }
 

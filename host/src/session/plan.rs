@@ -39,7 +39,7 @@ fn is_zero3(v: &[f64; 3]) -> bool {
     *v == [0.0; 3]
 }
 
-/// Output unit as spelled in files: "V" or "LSB".
+/// Output unit as spelled in files: "V", "LSB", "m/s2" or "g".
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum OutputUnitName {
     /// Volts.
@@ -47,6 +47,12 @@ pub enum OutputUnitName {
     /// ADC counts.
     #[serde(rename = "LSB")]
     Lsb,
+    /// A logger's m/s², kept as recorded.
+    #[serde(rename = "m/s2")]
+    MetresPerSecondSquared,
+    /// A logger's g, kept as recorded.
+    #[serde(rename = "g")]
+    StandardGravity,
 }
 
 impl From<OutputUnitName> for OutputUnit {
@@ -54,6 +60,8 @@ impl From<OutputUnitName> for OutputUnit {
         match u {
             OutputUnitName::V => OutputUnit::Volts,
             OutputUnitName::Lsb => OutputUnit::Lsb,
+            OutputUnitName::MetresPerSecondSquared => OutputUnit::MetresPerSecondSquared,
+            OutputUnitName::StandardGravity => OutputUnit::StandardGravity,
         }
     }
 }
@@ -63,6 +71,8 @@ impl From<OutputUnit> for OutputUnitName {
         match u {
             OutputUnit::Volts => OutputUnitName::V,
             OutputUnit::Lsb => OutputUnitName::Lsb,
+            OutputUnit::MetresPerSecondSquared => OutputUnitName::MetresPerSecondSquared,
+            OutputUnit::StandardGravity => OutputUnitName::StandardGravity,
         }
     }
 }
