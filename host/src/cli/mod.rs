@@ -2,6 +2,7 @@
 //! and prints the error; everything else is here, testable.
 
 pub mod device;
+pub mod segment;
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
 use crate::estimate::{
@@ -43,6 +44,9 @@ pub enum Command {
     Simulate(SimulateArgs),
     /// Estimate the calibration from a recorded session (--input), or live from a device (--port).
     Calibrate(CalibrateArgs),
+    /// Cut one continuous logger recording (a hand-held session) into a session for
+    /// `calibrate --input`: still intervals, a table and a figure, and the gyro from the hand turns.
+    Segment(segment::SegmentArgs),
     /// Check a plan: its segments and the predicted 1σ of every parameter (Cramér–Rao bound).
     Plan(PlanArgs),
     /// Write the report of a session calibrated by a calibration: figures (PNG, SVG) and
@@ -382,6 +386,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Calibrate(a) if a.port.is_some() => calibrate_live(&a, cli.quiet),
         Command::Calibrate(a) => calibrate(&a, cli.quiet).map(|_| ()),
         Command::Plan(a) => plan_check(&a).map(|_| ()),
+        Command::Segment(a) => segment::segment(&a).map(|_| ()),
         Command::Report(a) => report_command(&a),
         Command::NavigationCheck(a) => navigation_check_command(&a),
         Command::Compare { a, b } => {
@@ -906,3 +911,6 @@ mod tests {
         assert!(e.contains("--input DIR"), "{e}");
     }
 }
+
+#[cfg(test)]
+mod segment_tests;

@@ -14,6 +14,7 @@
 //! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
 
 pub mod attitude;
+pub mod handheld_gyro;
 pub mod model;
 mod paper;
 mod paper_angles;

@@ -9,6 +9,7 @@
 
 pub mod builtin;
 pub mod error;
+pub mod from_recording;
 pub mod import;
 pub mod plan;
 pub mod reader;

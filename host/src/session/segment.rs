@@ -476,3 +476,53 @@ impl Coverage {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+
+    /// The simulated session as the importer would deliver it.
+    pub(crate) fn recording(spec: &HandSpec, unit: shared::OutputUnit) -> Recording {
+        let s = simulate_hand(&logger_unit(unit), spec);
+        Recording {
+            t_s: s.rows.iter().map(|r| r.0).collect(),
+            acc: s.rows.iter().map(|r| r.1).collect(),
+            gyro_rad_s: s.rows.iter().map(|r| r.2).collect(),
+            acc_unit: Some(unit.into()),
+            rate_hz: spec.rate_hz,
+            skipped_rows: 0,
+        }
+    }
+
+    #[test]
+    fn finds_every_hand_position_and_no_false_one() {
+        for seed in [1, 2, 3] {
+            let spec = HandSpec::standard(seed);
+            let sim = simulate_hand(
+                &logger_unit(shared::OutputUnit::MetresPerSecondSquared),
+                &spec,
+            );
+            let rec = recording(&spec, shared::OutputUnit::MetresPerSecondSquared);
+            let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+            assert_eq!(seg.stills.len(), sim.holds.len(), "seed {seed}");
+            assert!(seg.spins.is_empty());
+            for (s, (t0, t1, up)) in seg.stills.iter().zip(&sim.holds) {
+                let (a, b) = (s.start_s, s.start_s + s.duration_s);
+                assert!(
+                    a >= *t0 && b <= *t1,
+                    "seed {seed}: {a}..{b} not inside {t0}..{t1}"
+                );
+                assert!(
+                    s.duration_s > 0.6 * (t1 - t0),
+                    "seed {seed}: {a}..{b} of {t0}..{t1}"
+                );
+                assert!(angle_deg(&s.direction, up) < 3.0);
+            }
+            let cov = coverage(&seg.stills, 10.0);
+            assert_eq!(cov.distinct, 24);
+            assert!(cov.missing_faces.is_empty());
+            assert!(cov.check(24, 10.0).is_ok());
+        }
+    }
+}
