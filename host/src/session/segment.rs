@@ -38,7 +38,7 @@ impl Default for SegmentOptions {
         SegmentOptions {
             window_s: 0.4,
             min_still_s: 1.0,
-            trim_s: 0.15,
+            trim_s: 0.4,
             threshold_factor: 3.0,
             quiet_percentile: 0.1,
             spin_min_rate_deg_s: 10.0,
@@ -113,9 +113,11 @@ pub enum SegmentError {
     #[error(
         "no still interval: the quietest stretch of the recording moves ({acc_mg:.1} mg, \
          {gyro_deg_s:.2} °/s rms) or no quiet run lasts {min_s} s; hold the unit still for 3–5 s in \
-         each of about {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them"
+         each of about {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{hint}"
     )]
     NoStill {
+        /// A likelier cause, if the data suggest one.
+        hint: String,
         /// Quietest accelerometer noise, mg (of the measured gravity).
         acc_mg: f64,
         /// Quietest gyro noise, °/s.
@@ -213,7 +215,14 @@ pub fn find_intervals(
         .iter()
         .map(|&i| pg.var(i - half, i + half + 1))
         .collect();
-    let no_still = |acc_mg, gyro_deg_s| SegmentError::NoStill {
+    let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
+        // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
+        hint: if acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0 {
+            "; but the accelerometer is still there: if the gyro logs deg/s, give --gyro-unit deg/s"
+                .into()
+        } else {
+            String::new()
+        },
         acc_mg,
         gyro_deg_s,
         min_s: options.min_still_s,
