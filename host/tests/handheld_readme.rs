@@ -1,7 +1,6 @@
-//! The README's hand-held section, run as written: its two commands on a simulated hand session
-//! written as the README's `raw.csv`, with the `host` binary in a fresh directory.
+//! The README's hand-held section, run as written: its commands (simulate a hand session, segment it,
+//! calibrate it) with the `host` binary in a fresh directory.
 
-use host::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use std::process::Command;
 
 #[test]
@@ -18,18 +17,11 @@ fn readme_hand_held_commands_work_as_written() {
         .lines()
         .filter_map(|l| l.strip_prefix(prefix))
         .collect();
-    assert_eq!(commands.len(), 2, "{commands:?}");
-    assert!(commands[0].starts_with("segment ") && commands[1].starts_with("calibrate "));
+    assert_eq!(commands.len(), 3, "{commands:?}");
+    assert!(commands[0].starts_with("simulate-hand "));
+    assert!(commands[1].starts_with("segment ") && commands[2].starts_with("calibrate "));
 
     let dir = tempfile::tempdir().unwrap();
-    let truth = logger_unit(shared::OutputUnit::MetresPerSecondSquared);
-    let sim = simulate_hand(&truth, &HandSpec::standard(31));
-    write_logger_csv(
-        &dir.path().join("raw.csv"),
-        &sim.rows,
-        &LoggerLayout::default(),
-    )
-    .unwrap();
     for c in &commands {
         let out = Command::new(env!("CARGO_BIN_EXE_host"))
             .args(c.split_whitespace())
@@ -48,6 +40,7 @@ fn readme_hand_held_commands_work_as_written() {
         }
     }
     for f in [
+        "raw.truth.toml",
         "hand-session/gyro.toml",
         "hand-session/segments.svg",
         "hand-calibration/calibration.toml",

@@ -47,6 +47,8 @@ pub enum Command {
     /// Cut one continuous logger recording (a hand-held session) into a session for
     /// `calibrate --input`: still intervals, a table and a figure, and the gyro from the hand turns.
     Segment(segment::SegmentArgs),
+    /// Write a simulated hand-held session as one logger CSV (to try `host segment` without a unit).
+    SimulateHand(segment::SimulateHandArgs),
     /// Check a plan: its segments and the predicted 1σ of every parameter (Cramér–Rao bound).
     Plan(PlanArgs),
     /// Write the report of a session calibrated by a calibration: figures (PNG, SVG) and
@@ -387,6 +389,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Calibrate(a) => calibrate(&a, cli.quiet).map(|_| ()),
         Command::Plan(a) => plan_check(&a).map(|_| ()),
         Command::Segment(a) => segment::segment(&a).map(|_| ()),
+        Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
         Command::Report(a) => report_command(&a),
         Command::NavigationCheck(a) => navigation_check_command(&a),
         Command::Compare { a, b } => {

@@ -72,7 +72,8 @@ impl HandGyroFit {
         let mut v = Vec::new();
         for i in 0..3 {
             for j in 0..3 {
-                if !(self.matrix_1sigma[i][j] <= DETERMINED_1SIGMA) {
+                let s = self.matrix_1sigma[i][j];
+                if s.is_nan() || s > DETERMINED_1SIGMA {
                     v.push(format!("G[{},{}]", ax[i], ax[j]));
                 }
             }

@@ -321,7 +321,7 @@ pub fn write_logger_csv(
             w[2] * k
         )?;
     }
-    out.flush()
+    out.into_inner().map_err(|e| e.into_error())?.sync_all()
 }
 
 /// A MEMS-like unit whose outputs are in `unit` (m/s², g or counts at 4096 per g): scale errors of
