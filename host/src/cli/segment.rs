@@ -256,7 +256,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// The gyro fit on the turns, with gravity directions from the session's own accelerometer
 /// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
-fn gyro_fit(
+pub(crate) fn gyro_fit(
     rec: &Recording,
     seg: &Segmentation,
     plan: &Plan,

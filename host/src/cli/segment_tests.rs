@@ -110,6 +110,11 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
     assert!(tmp.path().join("s/segments.svg").exists());
 }
 
+/// Bound on one seed's intrinsic rms error in the logger-format tests (which test reading the format):
+/// the 20-seed run of the stated session (`hand_sessions_many_seeds`) has a mean of 21 µg and a
+/// maximum of 31 µg, so one seed is held to 1.5 × the 30 µg average requirement.
+const SINGLE_SEED_UG: f64 = 45.0;
+
 /// Segments `dir/raw.csv` with the given flags and calibrates the session; returns the stills found
 /// and the intrinsic rms error, µg.
 fn segment_and_calibrate(dir: &Path, truth: &Calibration, flags: &str) -> (usize, f64) {
@@ -154,7 +159,7 @@ fn logger_m_s2_deg_s_at_102_4_hz_with_a_sample_index() {
     println!("102.4 Hz: intrinsic rms {rms:.1} µg");
     // This test is about the format. The 30 µg figure is for the stated 200 Hz session; at 102.4 Hz
     // each position has half the samples, so the noise-limited error is √(200/102.4) ≈ 1.4× larger.
-    assert!(rms <= 1.4 * 30.0 * 1.5, "{rms} µg at 102.4 Hz");
+    assert!(rms <= 1.4 * SINGLE_SEED_UG, "{rms} µg at 102.4 Hz");
 }
 
 #[test]
@@ -175,7 +180,7 @@ fn logger_g_rad_s_with_a_time_column_other_names_and_an_extra_column() {
     );
     assert_eq!(n, 24);
     println!("intrinsic rms {rms:.1} µg");
-    assert!(rms <= 30.0, "{rms} µg");
+    assert!(rms <= SINGLE_SEED_UG, "{rms} µg");
     let plan = std::fs::read_to_string(tmp.path().join("s/plan.toml")).unwrap();
     assert!(plan.contains("output_unit = \"g\""), "{plan}");
 }
@@ -195,7 +200,7 @@ fn logger_raw_counts() {
     );
     assert_eq!(n, 24);
     println!("intrinsic rms {rms:.1} µg");
-    assert!(rms <= 30.0, "{rms} µg");
+    assert!(rms <= SINGLE_SEED_UG, "{rms} µg");
     let cal = std::fs::read_to_string(tmp.path().join("cal/calibration.toml")).unwrap();
     assert!(cal.contains("scale_lsb_per_g"), "{cal}");
 }
@@ -317,4 +322,105 @@ fn bad_columns_and_units_get_a_message_naming_the_fix() {
         !tmp.path().join("s/samples.csv").exists(),
         "no session from bad input"
     );
+}
+
+/// One simulated hand session through detection, calibration and the gyro fit, in memory:
+/// (stills found == holds, intrinsic rms µg, intrinsic worst µg, worst gyro scale error, worst gyro
+/// axis error °).
+fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
+    use crate::estimate::{calibrate_session_stats, EstimateOptions};
+    use crate::session::from_recording::{plan_for, stats_for};
+    use crate::session::import::Recording;
+    use crate::session::segment::{find_intervals, SegmentOptions};
+    let unit = OutputUnit::MetresPerSecondSquared;
+    let truth = logger_unit(unit);
+    let sim = simulate_hand(&truth, spec);
+    let rec = Recording {
+        t_s: sim.rows.iter().map(|r| r.0).collect(),
+        acc: sim.rows.iter().map(|r| r.1).collect(),
+        gyro_rad_s: sim.rows.iter().map(|r| r.2).collect(),
+        acc_unit: Some(unit.into()),
+        rate_hz: spec.rate_hz,
+        skipped_rows: 0,
+    };
+    let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+    let found_all = seg.stills.len() == sim.holds.len()
+        && seg
+            .stills
+            .iter()
+            .zip(&sim.holds)
+            .all(|(s, h)| s.start_s >= h.0 && s.start_s + s.duration_s <= h.1);
+    let plan = plan_for(&rec, &seg);
+    let options = EstimateOptions {
+        compare_methods: false,
+        ..EstimateOptions::default()
+    };
+    let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
+    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed));
+    let fit = super::segment::gyro_fit(&rec, &seg, &plan)
+        .unwrap()
+        .unwrap();
+    let want = gyro_in_convention(&truth, &spec.gyro.matrix);
+    let (mut scale, mut axis) = (0.0f64, 0.0f64);
+    for i in 0..3 {
+        let (ne, nw) = (linalg::norm(&fit.matrix[i]), linalg::norm(&want[i]));
+        scale = scale.max((ne / nw - 1.0).abs());
+        let c = (linalg::dot(&fit.matrix[i], &want[i]) / ne / nw).clamp(-1.0, 1.0);
+        axis = axis.max(c.acos().to_degrees());
+    }
+    (found_all, e.rms_ug, e.worst_ug, scale, axis)
+}
+
+/// The stated hand session over many seeds: every position found, the intrinsic error and the gyro.
+/// `cargo test -p host --release --lib hand_sessions_many_seeds -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn hand_sessions_many_seeds() {
+    many_seeds(100..120, 200.0);
+}
+
+/// The short run of [`hand_sessions_many_seeds`].
+#[test]
+fn hand_sessions_two_seeds() {
+    many_seeds(100..102, 200.0);
+}
+
+fn many_seeds(seeds: std::ops::Range<u64>, rate_hz: f64) {
+    let mut rows = Vec::new();
+    for seed in seeds {
+        let spec = HandSpec {
+            rate_hz,
+            ..HandSpec::standard(seed)
+        };
+        let r = hand_case(&spec);
+        println!(
+            "seed {seed}: positions {} | intrinsic rms {:5.1} µg, worst {:5.1} µg | gyro scale {:.4} %, axis {:.4}°",
+            if r.0 { "all found" } else { "MISSED" },
+            r.1,
+            r.2,
+            r.3 * 100.0,
+            r.4
+        );
+        rows.push(r);
+    }
+    let n = rows.len() as f64;
+    let mut rms: Vec<f64> = rows.iter().map(|r| r.1).collect();
+    rms.sort_by(f64::total_cmp);
+    let mean_rms = rms.iter().sum::<f64>() / n;
+    let worst_scale = rows.iter().map(|r| r.3).fold(0.0, f64::max);
+    let worst_axis = rows.iter().map(|r| r.4).fold(0.0, f64::max);
+    println!(
+        "{} sessions at {rate_hz} Hz: all positions found in {}; intrinsic rms mean {mean_rms:.1} µg, max {:.1} µg; \
+         gyro worst scale error {:.4} %, worst axis error {:.4}°",
+        rows.len(),
+        rows.iter().filter(|r| r.0).count(),
+        rms[rms.len() - 1],
+        worst_scale * 100.0,
+        worst_axis
+    );
+    assert!(rows.iter().all(|r| r.0));
+    // The intrinsic error is noise-limited (about 50 µg per position mean, 24 positions): 30 µg is
+    // met on average over seeds, not by every seed (20 seeds: mean 21.0 µg, max 31.4 µg).
+    assert!(mean_rms <= 30.0, "mean {mean_rms:.1} µg");
+    assert!(worst_scale <= 1e-3 && worst_axis <= 0.1);
 }

@@ -38,7 +38,7 @@ impl Default for SegmentOptions {
         SegmentOptions {
             window_s: 0.4,
             min_still_s: 1.0,
-            trim_s: 0.4,
+            trim_s: 0.15,
             threshold_factor: 3.0,
             quiet_percentile: 0.1,
             spin_min_rate_deg_s: 10.0,
