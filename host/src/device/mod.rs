@@ -2,6 +2,7 @@
 //! in-process simulated device).
 
 pub mod client;
+pub mod handheld;
 pub mod procedure;
 pub mod serial;
 pub mod sim;
