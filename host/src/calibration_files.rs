@@ -78,12 +78,21 @@ pub fn write_calibration_files(
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
     let toml_path = out_dir.join(CALIBRATION_TOML);
-    let text = UnitFile::from_calibration(
+    let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         Some(unit_id),
         Some(outcome.uncertainty.clone()),
-    )
-    .to_toml();
+    );
+    file.gyro = outcome
+        .gyro
+        .as_ref()
+        .map(|g| crate::unit_file::GyroSection {
+            bias_rad_s: g.bias_rad_s,
+            matrix: g.matrix,
+            bias_rad_s_1sigma: Some(g.bias_rad_s_1sigma),
+            matrix_1sigma: Some(g.matrix_1sigma),
+        });
+    let text = file.to_toml();
     std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
     let bin_path = out_dir.join(CALIBRATION_BIN);
     std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;

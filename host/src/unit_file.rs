@@ -20,13 +20,18 @@
 //! installation_angles_deg_1sigma = [[..], ..]
 //! lever_arms_m_1sigma = [[..], ..]
 //! lever_arms_observable = [[true, ..], ..]
+//! [gyro]                        # optional: w = matrix · ω_body + bias (absent: a perfect gyro)
+//! bias_rad_s = [..]
+//! matrix = [[..], [..], [..]]
+//! bias_rad_s_1sigma = [..]      # optional, an estimate's 1σ
+//! matrix_1sigma = [[..], ..]    # optional; entries above 1e-3: not determined by the plan
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
-use crate::session::OutputUnitName;
+use crate::estimate::Uncertainty;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
-use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};
+use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
 use std::path::{Path, PathBuf};
 
 /// The paper's unit (Tables 1 and 3), built in.
@@ -42,7 +47,7 @@ pub struct UnitFile {
     pub unit_id: Option<String>,
     /// Output unit (default V).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub output_unit: Option<OutputUnitName>,
+    pub output_unit: Option<OutputUnit>,
     /// Table 1.
     #[serde(rename = "static")]
     pub statics: StaticSection,
@@ -52,6 +57,9 @@ pub struct UnitFile {
     /// 1σ uncertainties of an estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<Uncertainty>,
+    /// The gyro model (absent: a perfect gyro).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro: Option<GyroSection>,
     /// Any other tables, kept as they are.
     #[serde(flatten)]
     pub other: toml::Table,
@@ -103,20 +111,20 @@ pub struct DynamicSection {
     pub reference_offset_m: Option<[f64; 3]>,
 }
 
-/// `[uncertainty]`: 1σ of each estimated value.
+/// `[gyro]`: the gyro reads `w = matrix · ω_body + bias` (docs/model.md §8).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Uncertainty {
-    /// Zero-bias outputs, output unit.
-    pub zero_bias_1sigma: [f64; 3],
-    /// Scale factors, output unit per g.
-    pub scale_per_g_1sigma: [f64; 3],
-    /// Installation angles, degrees.
-    pub installation_angles_deg_1sigma: RowMajor3,
-    /// Lever arms, m.
-    pub lever_arms_m_1sigma: RowMajor3,
-    /// Which lever-arm components the plan determined (false: the value is not a measurement).
-    pub lever_arms_observable: [[bool; 3]; 3],
+pub struct GyroSection {
+    /// Bias, gyro axes, rad/s.
+    pub bias_rad_s: [f64; 3],
+    /// Scale and misalignment (rows: gyro axes, columns: body axes).
+    pub matrix: RowMajor3,
+    /// 1σ of `bias_rad_s` (an estimate's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bias_rad_s_1sigma: Option<[f64; 3]>,
+    /// 1σ of `matrix` (an estimate's; entries above 1e-3 are not determined by the plan).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix_1sigma: Option<RowMajor3>,
 }
 
 /// Why a unit file is unusable.
@@ -171,7 +179,7 @@ impl UnitFile {
 
     /// The calibration this file describes.
     pub fn to_calibration(&self) -> Result<Calibration, String> {
-        let unit = self.output_unit.unwrap_or(OutputUnitName::V);
+        let unit = self.output_unit.unwrap_or(OutputUnit::Volts);
         let s = &self.statics;
         let (_, bias, scale, b_name, k_name) = s
             .by_unit()
@@ -191,7 +199,7 @@ impl UnitFile {
         let bias = bias.ok_or_else(|| format!("[static] needs {b_name}"))?;
         let scale = scale.ok_or_else(|| format!("[static] needs {k_name}"))?;
         let statics = StaticParams {
-            output_unit: unit.into(),
+            output_unit: unit,
             zero_bias_out: bias,
             scale_out_per_g: scale,
             installation_angles_deg: s.installation_angles_deg,
@@ -236,12 +244,12 @@ impl UnitFile {
         unit_id: Option<UnitId>,
         uncertainty: Option<Uncertainty>,
     ) -> UnitFile {
-        let unit: OutputUnitName = cal.statics.output_unit.into();
-        let is = |u: OutputUnitName| unit == u;
-        let (v, lsb) = (is(OutputUnitName::V), is(OutputUnitName::Lsb));
+        let unit = cal.statics.output_unit;
+        let is = |u: OutputUnit| unit == u;
+        let (v, lsb) = (is(OutputUnit::Volts), is(OutputUnit::Lsb));
         let (ms2, g) = (
-            is(OutputUnitName::MetresPerSecondSquared),
-            is(OutputUnitName::StandardGravity),
+            is(OutputUnit::MetresPerSecondSquared),
+            is(OutputUnit::StandardGravity),
         );
         let s = &cal.statics;
         let (reference, reference_offset_m) = match cal.reference {
@@ -270,6 +278,7 @@ impl UnitFile {
                 reference_offset_m,
             }),
             uncertainty,
+            gyro: None,
             other: toml::Table::new(),
         }
     }
@@ -280,16 +289,9 @@ impl UnitFile {
     }
 }
 
-impl OutputUnitName {
-    /// "V", "LSB", "m/s2" or "g".
-    pub fn symbol(self) -> &'static str {
-        shared::OutputUnit::from(self).symbol()
-    }
-}
-
 /// One unit's pair of `[static]` keys: (unit, zero bias, scale, their key names).
 type UnitKeys = (
-    OutputUnitName,
+    OutputUnit,
     Option<[f64; 3]>,
     Option<[f64; 3]>,
     &'static str,
@@ -301,28 +303,28 @@ impl StaticSection {
     fn by_unit(&self) -> [UnitKeys; 4] {
         [
             (
-                OutputUnitName::V,
+                OutputUnit::Volts,
                 self.zero_bias_v,
                 self.scale_v_per_g,
                 "zero_bias_v",
                 "scale_v_per_g",
             ),
             (
-                OutputUnitName::Lsb,
+                OutputUnit::Lsb,
                 self.zero_bias_lsb,
                 self.scale_lsb_per_g,
                 "zero_bias_lsb",
                 "scale_lsb_per_g",
             ),
             (
-                OutputUnitName::MetresPerSecondSquared,
+                OutputUnit::MetresPerSecondSquared,
                 self.zero_bias_m_s2,
                 self.scale_m_s2_per_g,
                 "zero_bias_m_s2",
                 "scale_m_s2_per_g",
             ),
             (
-                OutputUnitName::StandardGravity,
+                OutputUnit::StandardGravity,
                 self.zero_bias_g,
                 self.scale_g_per_g,
                 "zero_bias_g",
@@ -343,11 +345,13 @@ mod tests {
         assert_eq!(cal.statics.zero_bias_out, [2.405098, 2.380978, 2.435503]);
         assert_eq!(cal.lever_arms.r_m[1], [-0.00256, -0.00893, -0.00026]);
         assert!(f.other.contains_key("expected"));
+        // The file form and the built-in constant are one unit.
+        assert_eq!(cal, shared::params::PAPER_UNIT);
     }
 
     #[test]
     fn round_trips_through_toml_with_lsb_and_uncertainty() {
-        let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let mut cal = shared::params::PAPER_UNIT;
         cal.statics.output_unit = shared::OutputUnit::Lsb;
         cal.statics.scale_out_per_g = [4096.0, 4100.0, 4090.0];
         cal.statics.zero_bias_out = [12.0, -40.0, 3.5];

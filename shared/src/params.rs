@@ -10,18 +10,23 @@ use crate::linalg::{self, RowMajor3};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
-/// What the accelerometer outputs are measured in.
+/// What the accelerometer outputs are measured in. Files spell it "V", "LSB", "m/s2" or "g" (the names only matter
+/// to self-describing formats: postcard encodes the variant's index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum OutputUnit {
     /// Analog parts read by an ADC and converted to volts (the paper's MS9005.D).
+    #[serde(rename = "V")]
     Volts,
     /// Raw counts of a digital part or of the ADC (least significant bits).
+    #[serde(rename = "LSB")]
     Lsb,
     /// A logger's output already in m/s², kept as recorded so that bias and scale stay in the
     /// logger's unit (a hand-held recording imported by `host segment`). Appended: older blobs keep
     /// their variant indices.
+    #[serde(rename = "m/s2")]
     MetresPerSecondSquared,
     /// A logger's output in g (standard gravity), kept as recorded.
+    #[serde(rename = "g")]
     StandardGravity,
 }
 

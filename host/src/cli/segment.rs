@@ -3,6 +3,8 @@
 //! bias from the hand turns (`gyro.toml`).
 
 use super::CliError;
+use crate::estimate::gyro::GyroEstimate;
+use crate::estimate::handheld_gyro::DETERMINED_1SIGMA;
 use crate::estimate::handheld_gyro::{
     fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn,
 };
@@ -13,11 +15,13 @@ use crate::session::import::{
     parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
 };
 use crate::session::segment::{coverage, find_intervals, Coverage, SegmentOptions, Segmentation};
-use crate::session::{OutputUnitName, Plan};
+use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
+use crate::unit_file::GyroSection;
 use crate::unit_file::UnitFile;
 use clap::Args;
 use shared::linalg;
+use shared::OutputUnit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -88,7 +92,7 @@ pub struct SimulateHandArgs {
 /// misalignment and 0.5 °/s bias. Returns the number of rows.
 pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let unit = parse_acc_unit(&a.acc_unit)
-        .filter(|u| *u != OutputUnitName::V)
+        .filter(|u| *u != OutputUnit::Volts)
         .ok_or_else(|| CliError::Usage(format!("--acc-unit {}: use m/s2, g or LSB", a.acc_unit)))?;
     let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
         CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
@@ -108,11 +112,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let truth = logger_unit(unit.into());
     let spec = HandSpec {
         rate_hz: a.rate_hz,
-        acc_step: if unit == OutputUnitName::Lsb {
-            1.0
-        } else {
-            0.0
-        },
+        acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
         ..HandSpec::standard(a.seed)
     };
     let sim = simulate_hand(&truth, &spec);
@@ -144,6 +144,36 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         truth_path.display()
     );
     Ok(sim.rows.len())
+}
+
+/// The gyro `host segment` fitted from the hand turns (`DIR/gyro.toml`), as the estimator's gyro
+/// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
+pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let path = dir.join(GYRO_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(None);
+    };
+    let f: File = toml::from_str(&text)
+        .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;
+    let g = f.gyro;
+    let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
+    let names = ["x", "y", "z"];
+    let undetermined = (0..9)
+        .filter(|&k| !(matrix_1sigma[k / 3][k % 3] <= DETERMINED_1SIGMA))
+        .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
+        .collect();
+    Ok(Some(GyroEstimate {
+        matrix: g.matrix,
+        matrix_1sigma,
+        bias_rad_s: g.bias_rad_s,
+        bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
+        table_rate_scale: (0.0, 0.0),
+        undetermined,
+    }))
 }
 
 /// What `host segment` found and wrote.

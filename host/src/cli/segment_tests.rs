@@ -61,7 +61,7 @@ fn run_session(
     )))
     .unwrap();
     let cal = match args(&format!("host calibrate --input {d}/s --out-dir {d}/cal")) {
-        Command::Calibrate(a) => calibrate(&a, true).unwrap(),
+        Command::Calibrate(a) => calibrate::calibrate(&a, true).unwrap(),
         c => panic!("{c:?}"),
     };
     (truth, out, cal)
@@ -73,7 +73,7 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
     let spec = HandSpec::standard(7);
     let (truth, out, cal) = run_session(tmp.path(), OutputUnit::MetresPerSecondSquared, &spec);
     assert_eq!(out.segmentation.stills.len(), spec.ups.len());
-    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(3));
+    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(3, 0));
     println!(
         "hand session: intrinsic (worst after the best common rotation) {:.1} µg, rms {:.1} µg",
         e.worst_ug, e.rms_ug
@@ -108,6 +108,11 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
     let v: toml::Table = toml::from_str(&text).unwrap();
     assert!(v["gyro"].get("matrix").is_some() && v["gyro"].get("bias_rad_s").is_some());
     assert!(tmp.path().join("s/segments.svg").exists());
+    // `host calibrate --input` carries the hand gyro into calibration.toml with the same keys.
+    let cal_file =
+        crate::unit_file::UnitFile::load(&tmp.path().join("cal/calibration.toml")).unwrap();
+    let g = cal_file.gyro.expect("[gyro] in calibration.toml");
+    assert_eq!(g.matrix, fit.matrix);
 }
 
 /// Bound on one seed's intrinsic rms error in the logger-format tests (which test reading the format):
@@ -124,10 +129,10 @@ fn segment_and_calibrate(dir: &Path, truth: &Calibration, flags: &str) -> (usize
     )))
     .unwrap();
     let cal = match args(&format!("host calibrate --input {d}/s --out-dir {d}/cal")) {
-        Command::Calibrate(a) => calibrate(&a, true).unwrap(),
+        Command::Calibrate(a) => calibrate::calibrate(&a, true).unwrap(),
         c => panic!("{c:?}"),
     };
-    let e = static_errors(truth, &cal.fitted, &mut testkit::Rng::new(5));
+    let e = static_errors(truth, &cal.fitted, &mut testkit::Rng::new(5, 0));
     (out.segmentation.stills.len(), e.rms_ug)
 }
 
@@ -356,7 +361,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         ..EstimateOptions::default()
     };
     let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
-    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed));
+    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed, 0));
     let fit = super::segment::gyro_fit(&rec, &seg, &plan)
         .unwrap()
         .unwrap();

@@ -164,7 +164,12 @@ pub(crate) fn tilt_free(problem: &Problem, free: &mut [bool]) {
     for (k, m) in problem.mounts.iter().enumerate() {
         let idx = m.geometry.index;
         let seen = problem.models.iter().any(|s| s.tilt.index == idx)
-            || problem.gyro.iter().any(|g| g.tilt.index == idx);
+            || problem.gyro.iter().any(|g| g.tilt.index == idx)
+            || problem.gyro_block.as_ref().is_some_and(|b| {
+                b.means
+                    .iter()
+                    .any(|g| g.rate_rad_s != 0.0 && g.tilt.index == idx)
+            });
         let on = seen && m.prior_rad != Some(0.0);
         free[idx_tilt(k, 0)] = on;
         free[idx_tilt(k, 1)] = on;
@@ -225,7 +230,7 @@ pub(crate) fn recentre_free(problem: &mut Problem, theta: &mut [f64]) {
 pub(crate) fn free_static_fit(
     plan: &Plan,
     segs: &[SessionSeg],
-    noise: &super::screen::Noise,
+    noise: &super::Noise,
     problem: &mut Problem,
     fallback: EstimateError,
 ) -> Result<(solve::Fit, BodyFrame), EstimateError> {
@@ -256,6 +261,9 @@ pub(crate) fn free_static_fit(
         models: statics.iter().map(|&k| problem.models[k].clone()).collect(),
         mounts: problem.mounts.clone(),
         gyro: Vec::new(),
+        gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     super::screen::seed_free_mounts(plan, segs, noise, &mut sub, &t);
     let frame = body_frame(&sub);

@@ -9,6 +9,7 @@
 //! accelerometer calibration's body frame; an uncalibrated accelerometer's percent-level errors would
 //! otherwise enter `G` directly.
 
+use crate::unit_file::GyroSection;
 use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 use shared::linalg::{self, RowMajor3};
 
@@ -81,24 +82,32 @@ impl HandGyroFit {
         v
     }
 
-    /// The `[gyro]` section of a calibration file (same keys as the table gyro calibration).
+    /// The `[gyro]` section of a calibration file (the keys of the table gyro calibration).
+    pub fn to_section(&self) -> GyroSection {
+        GyroSection {
+            bias_rad_s: self.bias_rad_s,
+            matrix: self.matrix,
+            bias_rad_s_1sigma: Some(self.bias_1sigma_rad_s),
+            matrix_1sigma: Some(self.matrix_1sigma),
+        }
+    }
+
+    /// `gyro.toml`: the `[gyro]` table with a comment saying where it comes from.
     pub fn to_toml(&self) -> String {
-        let row = |r: &[f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", r[0], r[1], r[2]);
+        #[derive(serde::Serialize)]
+        struct File {
+            gyro: GyroSection,
+        }
         format!(
-            "# Gyro from hand turns between still positions: w = matrix·ω_body + bias (docs/model.md \
-             §8), body axes of the accelerometer calibration of the same session.\n[gyro]\n\
-             matrix = [{}, {}, {}]\nbias_rad_s = {}\n\n[gyro.uncertainty]\nmatrix_1sigma = [{}, {}, {}]\n\
-             bias_1sigma_rad_s = {}\nturns = {}\nrms_residual_deg = {:.4}\n",
-            row(&self.matrix[0]),
-            row(&self.matrix[1]),
-            row(&self.matrix[2]),
-            row(&self.bias_rad_s),
-            row(&self.matrix_1sigma[0]),
-            row(&self.matrix_1sigma[1]),
-            row(&self.matrix_1sigma[2]),
-            row(&self.bias_1sigma_rad_s),
+            "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
+             # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
+             # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
             self.turns,
-            self.rms_residual_deg
+            self.rms_residual_deg,
+            toml::to_string_pretty(&File {
+                gyro: self.to_section()
+            })
+            .unwrap_or_default()
         )
     }
 }

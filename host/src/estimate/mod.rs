@@ -14,25 +14,32 @@
 //! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
 
 pub mod attitude;
+pub mod gyro;
 pub mod handheld_gyro;
 pub mod model;
 mod paper;
 mod paper_angles;
 mod predict;
 mod screen;
+mod segment;
 mod solve;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod tests_fixture;
+#[cfg(test)]
+mod tests_gyro;
+mod uncertainty;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
+pub use gyro::GyroEstimate;
 pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
+pub use segment::{Noise, SegmentKind};
+pub use uncertainty::Uncertainty;
 
 use crate::session::{Plan, SegmentStats};
-use crate::unit_file::Uncertainty;
-use model::{idx_r, SegModel};
+use model::SegModel;
 use shared::linalg::{self, RowMajor3};
 use shared::params::{axis_name, ParamsError};
 use shared::{Calibration, FittedStatic, LeverArms, OutputUnit};
@@ -116,6 +123,24 @@ pub struct EstimateOptions {
     /// floor on its 1σ (how well the gyro's axes are taken to agree with the body frame), rad;
     /// `None`: do not (docs/model.md §7).
     pub gyro_axis_sigma_rad: Option<f64>,
+    /// The gyro: estimated with the accelerometers (`w = G ω + b`, docs/model.md §8) or taken as
+    /// perfect.
+    pub gyro_model: GyroModel,
+    /// The static parameters from the rest segments alone: a spin whose mount has a rest segment
+    /// enters as its difference from it (docs/model.md §7), so a misfit of the dynamic model (a gyro
+    /// error, an unmodelled ω̇) cannot move them. Off by default: with the mounts' tilts shared by
+    /// their rest and spin segments and the gyro modelled, the joint fit already keeps a 1 mg misfit
+    /// to a third of a 1σ move (tested), and it is twice as precise on the lever arms.
+    pub static_from_rest: bool,
+}
+
+/// How the estimator treats the gyro.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GyroModel {
+    /// Its readings are the body's rate (then its spin axis measures each spinning mount's up).
+    Perfect,
+    /// `w = G ω + b` estimated from the same session when it has spins.
+    Estimate,
 }
 
 impl Default for EstimateOptions {
@@ -138,6 +163,8 @@ impl Default for EstimateOptions {
             // axis's own noise weighs it (0.05 °/s over 60 s at 200 °/s is about 1 µrad). A gyro whose
             // axes are not calibrated should set its misalignment here, or `None`.
             gyro_axis_sigma_rad: Some(1e-6),
+            gyro_model: GyroModel::Estimate,
+            static_from_rest: false,
         }
     }
 }
@@ -236,17 +263,6 @@ impl From<ParamsError> for EstimateError {
     fn from(e: ParamsError) -> Self {
         EstimateError::Params(e)
     }
-}
-
-/// What a segment does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SegmentKind {
-    /// At rest.
-    Static,
-    /// Constant table rate.
-    ConstantRate,
-    /// Spin-up or spin-down.
-    Ramp,
 }
 
 /// Why a segment was left out.
@@ -457,6 +473,8 @@ pub struct CalibrationOutcome {
     pub static_split: StaticSplit,
     /// Every fitted parameter (intrinsic, then two tilts per mount): name, value, 1σ (0 when fixed).
     pub parameters: Vec<(String, f64, f64)>,
+    /// The gyro model, when estimated.
+    pub gyro: Option<GyroEstimate>,
 }
 
 /// A segment of the session after matching plan and data.
@@ -481,11 +499,14 @@ pub fn calibrate_session_stats(
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let noise = screen::pooled_noise(&segs);
     let (mounts, seg_mount) = screen::build_mounts(plan, &segs);
-    let models = screen::build_models(plan, &segs, &noise, options, &mounts, &seg_mount);
+    let models = screen::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem {
         models,
         mounts,
         gyro: Vec::new(),
+        gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     let static_fit = match screen::static_fit_with_attitude_check(
         plan,
@@ -504,21 +525,117 @@ pub fn calibrate_session_stats(
         ) => attitude::free_static_fit(plan, &segs, &noise, &mut problem, e)?.0,
         Err(e) => return Err(e),
     };
-    problem.gyro = screen::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
+    let spins = segs.iter().any(|s| s.used && s.kind != SegmentKind::Static);
+    let gyro_on =
+        options.gyro_model == GyroModel::Estimate && spins && options.method == Method::Joint;
+    let gyro_base = problem.n_params();
+    if gyro_on {
+        problem.gyro_block = Some(screen::build_gyro_block(
+            plan,
+            &segs,
+            &noise,
+            &problem.mounts,
+            &seg_mount,
+            gyro_base,
+        ));
+    } else {
+        problem.gyro =
+            screen::build_gyro(plan, &segs, &noise, options, &problem.mounts, &seg_mount);
+    }
     let frame = attitude::body_frame(&problem);
+    let group = options.static_from_rest && options.method == Method::Joint;
+    let is_rest = |seg: usize| segs[seg].kind == SegmentKind::Static;
+    let rests: Vec<bool> = (0..segs.len()).map(is_rest).collect();
+    let regroup = |p: &mut Problem| {
+        if group {
+            p.group_spins(&|seg| rests[seg]);
+        }
+    };
+    regroup(&mut problem);
+    let mut start = static_fit.theta.clone();
+    if gyro_on {
+        start.resize(problem.n_params(), 0.0);
+        let b = screen::static_gyro(&segs);
+        for i in 0..3 {
+            start[gyro::idx_g(gyro_base, i, i)] = 1.0;
+            start[gyro::idx_b(gyro_base, i)] = b[i];
+        }
+    }
+    let mut gyro_estimate = None;
 
     let (main_theta, main_cov, main_free, fixed, fit_chi2, fit_dof, notes_main) =
         match options.method {
             Method::Joint => {
-                let j = joint(
+                let mut start = start;
+                if gyro_on {
+                    // The lever terms need the body's rate: first the gyro model from the gyro alone
+                    // (nominal ups within their priors), so that the first joint pass already runs
+                    // on corrected rates.
+                    let gyro_only = Problem {
+                        models: Vec::new(),
+                        groups: Vec::new(),
+                        ..problem.clone()
+                    };
+                    let mut free = vec![false; start.len()];
+                    for (p, f) in free.iter_mut().enumerate().skip(gyro_base) {
+                        *f = true;
+                        let _ = p;
+                    }
+                    attitude::tilt_free(&gyro_only, &mut free);
+                    let f = solve::fit(&gyro_only, start.clone(), free, "gyro model")?;
+                    let est = GyroEstimate::from_fit(&f.theta, &f.cov, gyro_base);
+                    if let Some(c) = est.correction() {
+                        problem.models = screen::build_models(
+                            plan,
+                            &segs,
+                            &noise,
+                            options,
+                            &problem.mounts,
+                            &seg_mount,
+                            Some(&c),
+                        );
+                        problem.groups.clear();
+                        regroup(&mut problem);
+                        start[gyro_base..].copy_from_slice(&f.theta[gyro_base..]);
+                    }
+                }
+                let mut j = joint(
                     plan,
                     &mut segs,
                     &mut problem,
-                    &static_fit,
+                    start,
                     options,
                     &mut excluded,
                     frame,
                 )?;
+                // Again with the body's rate through the joint estimate (G is then known to ppm).
+                for _ in 0..usize::from(gyro_on) * 2 {
+                    let est = GyroEstimate::from_fit(&j.theta, &j.cov, gyro_base);
+                    let Some(c) = est.correction() else { break };
+                    problem.models = screen::build_models(
+                        plan,
+                        &segs,
+                        &noise,
+                        options,
+                        &problem.mounts,
+                        &seg_mount,
+                        Some(&c),
+                    );
+                    problem.groups.clear();
+                    regroup(&mut problem);
+                    j = joint(
+                        plan,
+                        &mut segs,
+                        &mut problem,
+                        j.theta.clone(),
+                        options,
+                        &mut excluded,
+                        frame,
+                    )?;
+                }
+                if gyro_on {
+                    gyro_estimate = Some(GyroEstimate::from_fit(&j.theta, &j.cov, gyro_base));
+                }
                 (j.theta, j.cov, j.free, j.fixed, j.chi2, j.dof, Vec::new())
             }
             Method::Paper => {
@@ -598,7 +715,7 @@ pub fn calibrate_session_stats(
         }
     }
 
-    let output_unit: OutputUnit = plan.output_unit.into();
+    let output_unit: OutputUnit = plan.output_unit;
     let fitted = FittedStatic {
         output_unit,
         m_out_per_g: model::m_of(&main_theta),
@@ -612,7 +729,7 @@ pub fn calibrate_session_stats(
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
     };
-    let segments = diagnostics(plan, &segs, &problem.models, &main_theta);
+    let segments = diagnostics(plan, &segs, &problem.all_models(), &main_theta);
     let comparison = if options.compare_methods {
         compare(
             plan,
@@ -680,6 +797,7 @@ pub fn calibrate_session_stats(
         mount_tilts,
         static_split,
         parameters,
+        gyro: gyro_estimate,
     })
 }
 
@@ -718,7 +836,7 @@ fn joint(
     plan: &Plan,
     segs: &mut [SessionSeg],
     problem: &mut Problem,
-    static_fit: &solve::Fit,
+    start: Vec<f64>,
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
     frame: BodyFrame,
@@ -732,12 +850,7 @@ fn joint(
                 free[p] = false;
             }
         }
-        let mut t0 = static_fit.theta.clone();
-        for i in 0..3 {
-            for j in 0..3 {
-                t0[idx_r(i, j)] = 0.0;
-            }
-        }
+        let t0 = start.clone();
         let fixed_list = solve::structurally_unobservable(
             problem,
             &t0,
@@ -753,7 +866,7 @@ fn joint(
             });
         };
         let tol_g = 2.0 * (0.5 * options.attitude_tolerance_deg.to_radians()).sin();
-        let models = &problem.models;
+        let models = &problem.all_models();
         let worst = models
             .iter()
             .enumerate()
@@ -810,12 +923,21 @@ fn compare(
 ) -> Option<MethodComparison> {
     let (method, theta, cov, fixed, notes) = match options.method {
         Method::Joint => {
-            let p = paper::eq24(plan, segs, &problem.models, static_fit).ok()?;
+            let p = paper::eq24(plan, segs, &problem.all_models(), static_fit).ok()?;
             (Method::Paper, p.theta, p.cov, [[false; 3]; 3], p.notes)
         }
         Method::Paper => {
             let mut ex = Vec::new();
-            let j = joint(plan, segs, problem, static_fit, options, &mut ex, body).ok()?;
+            let j = joint(
+                plan,
+                segs,
+                problem,
+                static_fit.theta.clone(),
+                options,
+                &mut ex,
+                body,
+            )
+            .ok()?;
             (Method::Joint, j.theta, j.cov, j.fixed, Vec::new())
         }
     };

@@ -64,6 +64,8 @@ pub struct Prediction {
     pub static_split: super::StaticSplit,
     /// Each mount's attitude 1σ (tilts of the noise-free data are zero).
     pub mount_tilts: Vec<super::MountTilt>,
+    /// The gyro model's 1σ (a perfect gyro's values), when the plan has spins.
+    pub gyro: Option<super::GyroEstimate>,
 }
 
 /// The predicted 1σ of every parameter for `plan` run on `truth` with the given noise.
@@ -112,11 +114,6 @@ pub fn predict(
         warnings: out.warnings,
         static_split: out.static_split,
         mount_tilts: out.mount_tilts,
+        gyro: out.gyro,
     })
-}
-
-impl std::fmt::Display for Prediction {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::report::render_prediction(self))
-    }
 }

@@ -4,24 +4,14 @@
 use super::model::{self, idx_m, idx_u0, Mount, SegModel, TiltGeometry};
 use super::solve::{GyroDirection, Problem};
 use super::{
-    solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
+    solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, Noise, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
-use crate::session::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentStats};
 use shared::linalg::{self, RowMajor3};
 use shared::params::axis_name;
 use shared::ReferencePoint;
 use std::collections::HashMap;
-
-fn kind_of(sp: &SegmentPlan) -> SegmentKind {
-    if sp.is_static() {
-        SegmentKind::Static
-    } else if sp.rate_end_deg_s.is_some_and(|e| e != sp.rate_deg_s) {
-        SegmentKind::Ramp
-    } else {
-        SegmentKind::ConstantRate
-    }
-}
 
 /// Pairs plan segments with their statistics, in plan order.
 pub(crate) fn match_plan(
@@ -63,7 +53,7 @@ pub(crate) fn match_plan(
             Some(st) => out.push(SessionSeg {
                 plan_idx,
                 stats: (*st).clone(),
-                kind: kind_of(sp),
+                kind: SegmentKind::of(sp),
                 used: true,
             }),
             None => {
@@ -269,28 +259,12 @@ pub(crate) fn screen(
 }
 
 /// Per-sample noise seen on the used static segments.
-pub(crate) struct Noise {
-    /// Mean output covariance, output unit².
-    pub out_cov: RowMajor3,
-    /// Mean gyro covariance, (rad/s)².
-    pub gyro_cov: RowMajor3,
-}
-
 pub(crate) fn pooled_noise(segs: &[SessionSeg]) -> Noise {
-    let statics: Vec<&SessionSeg> = segs
-        .iter()
-        .filter(|s| s.used && s.kind == SegmentKind::Static)
-        .collect();
-    let n = statics.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&SegmentStats) -> RowMajor3| -> RowMajor3 {
-        core::array::from_fn(|i| {
-            core::array::from_fn(|j| statics.iter().map(|s| f(&s.stats)[i][j]).sum::<f64>() / n)
-        })
-    };
-    Noise {
-        out_cov: mean(&|s| s.cov_u),
-        gyro_cov: mean(&|s| s.cov_w),
-    }
+    Noise::pooled(
+        segs.iter()
+            .filter(|s| s.used && s.kind == SegmentKind::Static)
+            .map(|s| &s.stats),
+    )
 }
 
 /// The mounts of the used segments (one attitude each, docs/model.md §7) and each session
@@ -343,6 +317,7 @@ pub(crate) fn build_models(
     options: &EstimateOptions,
     mounts: &[Mount],
     seg_mount: &[usize],
+    correction: Option<&(RowMajor3, [f64; 3])>,
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
     let mut out = Vec::new();
@@ -352,12 +327,25 @@ pub(crate) fn build_models(
         }
         let sp = &plan.segments[s.plan_idx];
         let st = &s.stats;
-        let ew = model::mean_lever_matrix(
-            &st.mean_wwt,
-            &st.wdot_rad_s2,
-            &noise.gyro_cov,
-            options.use_omega_dot,
-        );
+        let ew = match correction {
+            // The body's rate through the estimated gyro model (docs/model.md §8).
+            Some(c) => {
+                let (wwt, wdot) = super::gyro::corrected_moments(
+                    &st.mean_wwt,
+                    &st.mean_w_rad_s,
+                    &st.wdot_rad_s2,
+                    &noise.gyro_cov,
+                    c,
+                );
+                model::mean_lever_matrix(&wwt, &wdot, &[[0.0; 3]; 3], options.use_omega_dot)
+            }
+            None => model::mean_lever_matrix(
+                &st.mean_wwt,
+                &st.wdot_rad_s2,
+                &noise.gyro_cov,
+                options.use_omega_dot,
+            ),
+        };
         let p = sp.table_centre_m.unwrap_or([0.0; 3]);
         let wp = linalg::mat_vec(&ew, &p);
         let centre = core::array::from_fn(|j| -wp[j] / g);
@@ -458,6 +446,50 @@ pub(crate) fn build_gyro(
     out
 }
 
+/// The gyro means of the used segments for the gyro model (docs/model.md §8): rest segments at
+/// rate 0, spins at the plan's mean table rate. A ramp's own gyro spread is its signal, so it is
+/// weighted with the static noise.
+pub(crate) fn build_gyro_block(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    noise: &Noise,
+    mounts: &[Mount],
+    seg_mount: &[usize],
+    base: usize,
+) -> super::gyro::GyroBlock {
+    let mut means = Vec::new();
+    for (k, s) in segs.iter().enumerate() {
+        if !s.used {
+            continue;
+        }
+        let sp = &plan.segments[s.plan_idx];
+        let rate = if s.kind == SegmentKind::Static {
+            0.0
+        } else {
+            (0.5 * (sp.rate_deg_s + sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s))).to_radians()
+        };
+        let per_sample = if s.kind == SegmentKind::Ramp {
+            noise.gyro_cov
+        } else {
+            s.stats.cov_w
+        };
+        let n = s.stats.count.max(1) as f64;
+        // A floor of 0.1 µrad/s keeps a noise-free (predicted) session's weights finite.
+        let se: RowMajor3 = core::array::from_fn(|i| {
+            core::array::from_fn(|j| per_sample[i][j] / n + if i == j { 1e-14 } else { 0.0 })
+        });
+        let tilt = mounts[seg_mount[k]].geometry;
+        if let Some(m) = super::gyro::GyroMean::new(k, tilt, rate, s.stats.mean_w_rad_s, se) {
+            means.push(m);
+        }
+    }
+    super::gyro::GyroBlock {
+        base,
+        means,
+        rate_sigma_rel: plan.table_rate_sigma_ppm() * 1e-6,
+    }
+}
+
 /// Starting ups of free mounts given without one (or with a rough one): from the static fit's
 /// compensated mean output of their first static segment, else from the gyro's axis.
 pub(crate) fn seed_free_mounts(
@@ -555,6 +587,9 @@ pub(crate) fn static_fit(
         models: models.iter().map(|m| (*m).clone()).collect(),
         mounts: mounts.to_vec(),
         gyro: Vec::new(),
+        gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
     };
     let n = problem.n_params();
     solve::fit(

@@ -6,6 +6,7 @@
 //! (free attitudes may start tens of degrees off). Normal equations are solved after scaling every
 //! column to unit diagonal: the parameters span ten orders of magnitude (V/g against metres).
 
+use super::gyro::{self, GyroBlock, NG};
 use super::model::{is_lever, Mount, SegModel, TiltGeometry, NI};
 use super::EstimateError;
 use nalgebra::{DMatrix, DVector};
@@ -37,6 +38,80 @@ impl GyroDirection {
     }
 }
 
+/// A mount's spinning segments as differences from its rest segment (docs/model.md §7): the mount's
+/// gravity, its tilt and the biases cancel, so the spins inform the lever arms (and, weakly, `M`
+/// through `M E r`) but not the static parameters, which come from the rest segments alone; a misfit
+/// of the dynamic model then cannot move them. The differences share the rest's noise, so they are
+/// whitened together.
+#[derive(Clone, Debug)]
+pub struct DiffGroup {
+    /// The rest segment (also an observation of its own in [`Problem::models`]).
+    pub rest: SegModel,
+    /// The spins.
+    pub spins: Vec<SegModel>,
+    /// `L⁻¹` of the stacked differences' covariance (3k × 3k).
+    pub whiten: DMatrix<f64>,
+}
+
+impl DiffGroup {
+    /// Groups `spins` with `rest`; `None` when the covariance is not positive definite.
+    pub fn new(rest: SegModel, spins: Vec<SegModel>) -> Option<DiffGroup> {
+        let k = spins.len();
+        let c = DMatrix::from_fn(3 * k, 3 * k, |a, b| {
+            let (i, j) = (a / 3, b / 3);
+            let own = if i == j {
+                spins[i].se_cov[a % 3][b % 3]
+            } else {
+                0.0
+            };
+            own + rest.se_cov[a % 3][b % 3]
+        });
+        let whiten = c.cholesky()?.l().try_inverse()?;
+        Some(DiffGroup {
+            rest,
+            spins,
+            whiten,
+        })
+    }
+
+    /// Residuals (measured − predicted differences) and the Jacobian columns, both unwhitened.
+    fn residual(&self, t: &[f64]) -> (DVector<f64>, Vec<(usize, DVector<f64>)>) {
+        let k = self.spins.len();
+        let pr = self.rest.predict(t);
+        let mut r = DVector::zeros(3 * k);
+        let mut cols: Vec<(usize, DVector<f64>)> = Vec::new();
+        let add = |q: usize, row: usize, v: f64, cols: &mut Vec<(usize, DVector<f64>)>| match cols
+            .iter_mut()
+            .find(|(p, _)| *p == q)
+        {
+            Some((_, c)) => c[row] += v,
+            None => {
+                let mut c = DVector::zeros(3 * k);
+                c[row] = v;
+                cols.push((q, c));
+            }
+        };
+        let jr = self.rest.jacobian(t);
+        for (j, s) in self.spins.iter().enumerate() {
+            let ps = s.predict(t);
+            for a in 0..3 {
+                r[3 * j + a] = (s.mean_u[a] - self.rest.mean_u[a]) - (ps[a] - pr[a]);
+            }
+            for (q, d) in s.jacobian(t) {
+                for a in 0..3 {
+                    add(q, 3 * j + a, d[a], &mut cols);
+                }
+            }
+            for (q, d) in &jr {
+                for a in 0..3 {
+                    add(*q, 3 * j + a, -d[a], &mut cols);
+                }
+            }
+        }
+        (r, cols)
+    }
+}
+
 /// Everything the fit sees.
 #[derive(Clone, Debug)]
 pub struct Problem {
@@ -44,20 +119,87 @@ pub struct Problem {
     pub models: Vec<SegModel>,
     /// The mounts (tilt unknowns and priors), in θ order.
     pub mounts: Vec<Mount>,
-    /// Gyro axis directions of the used spinning segments.
+    /// Gyro axis directions of the used spinning segments (a gyro taken as perfect).
     pub gyro: Vec<GyroDirection>,
+    /// The gyro model `w = G ω + b`, when estimated (docs/model.md §8).
+    pub gyro_block: Option<GyroBlock>,
+    /// Spins taken as differences from their mount's rest segment.
+    pub groups: Vec<DiffGroup>,
+    /// The segments at rest when the spins were grouped (to regroup after a removal).
+    pub rest_segments: Vec<usize>,
 }
 
 impl Problem {
     /// Length of θ.
     pub fn n_params(&self) -> usize {
-        NI + 2 * self.mounts.len()
+        NI + 2 * self.mounts.len() + if self.gyro_block.is_some() { NG } else { 0 }
+    }
+
+    /// Every segment model: the plain ones and the grouped spins.
+    pub fn all_models(&self) -> Vec<SegModel> {
+        let mut v = self.models.clone();
+        v.extend(self.groups.iter().flat_map(|g| g.spins.iter().cloned()));
+        v
+    }
+
+    /// Moves every spin whose mount has a used rest segment into a [`DiffGroup`] with it (`is_rest`
+    /// says which segments are at rest).
+    pub fn group_spins(&mut self, is_rest: &dyn Fn(usize) -> bool) {
+        self.ungroup();
+        let mut keep = Vec::new();
+        let mut spins: Vec<SegModel> = Vec::new();
+        self.rest_segments.clear();
+        for m in std::mem::take(&mut self.models) {
+            if is_rest(m.seg) {
+                self.rest_segments.push(m.seg);
+                keep.push(m);
+            } else {
+                spins.push(m);
+            }
+        }
+        let mut loose = Vec::new();
+        let mut by_rest: Vec<(usize, Vec<SegModel>)> = Vec::new();
+        for s in spins {
+            match keep.iter().position(|r| r.tilt.index == s.tilt.index) {
+                Some(r) => match by_rest.iter_mut().find(|(q, _)| *q == r) {
+                    Some((_, v)) => v.push(s),
+                    None => by_rest.push((r, vec![s])),
+                },
+                None => loose.push(s),
+            }
+        }
+        for (r, v) in by_rest {
+            match DiffGroup::new(keep[r].clone(), v.clone()) {
+                Some(g) => self.groups.push(g),
+                None => loose.extend(v),
+            }
+        }
+        keep.extend(loose);
+        self.models = keep;
+    }
+
+    /// Returns grouped spins to the plain models.
+    pub fn ungroup(&mut self) {
+        for g in std::mem::take(&mut self.groups) {
+            self.models.extend(g.spins);
+        }
     }
 
     /// Removes the segment `seg` (its outputs and gyro axis).
     pub fn remove_segment(&mut self, seg: usize) {
+        let grouped = !self.groups.is_empty();
+        if grouped {
+            self.ungroup();
+        }
         self.models.retain(|m| m.seg != seg);
         self.gyro.retain(|g| g.seg != seg);
+        if let Some(b) = &mut self.gyro_block {
+            b.means.retain(|m| m.seg != seg);
+        }
+        if grouped {
+            let rests: Vec<usize> = self.rest_segments.clone();
+            self.group_spins(&|s| rests.contains(&s));
+        }
     }
 
     /// Moves mount `k`'s nominal up (a free attitude's starting guess) and its tilt axes.
@@ -70,6 +212,19 @@ impl Problem {
         for o in self.gyro.iter_mut().filter(|o| o.tilt.index == g.index) {
             o.tilt = g;
         }
+        for grp in &mut self.groups {
+            for m in std::iter::once(&mut grp.rest)
+                .chain(grp.spins.iter_mut())
+                .filter(|m| m.tilt.index == g.index)
+            {
+                m.tilt = g;
+            }
+        }
+        if let Some(b) = &mut self.gyro_block {
+            for o in b.means.iter_mut().filter(|o| o.tilt.index == g.index) {
+                o.tilt = g;
+            }
+        }
     }
 
     /// Number of observations: 3 per segment, 2 per gyro axis, 2 per mount prior.
@@ -79,7 +234,15 @@ impl Problem {
             .iter()
             .filter(|m| matches!(m.prior_rad, Some(s) if s > 0.0) && free[m.geometry.index])
             .count();
-        3 * self.models.len() as i64 + 2 * self.gyro.len() as i64 + 2 * priors as i64
+        let gyro = self
+            .gyro_block
+            .as_ref()
+            .map_or(0, |b| 3 * b.means.len() as i64 + 10);
+        let spins: usize = self.groups.iter().map(|g| g.spins.len()).sum();
+        3 * (self.models.len() + spins) as i64
+            + 2 * self.gyro.len() as i64
+            + 2 * priors as i64
+            + gyro
     }
 
     /// χ² at θ (outputs, gyro axes and priors).
@@ -175,6 +338,24 @@ fn normal_equations(
             add(&cols, res[a], &mut n, &mut b);
         }
     }
+    for grp in &p.groups {
+        let (r, cols) = grp.residual(t);
+        let rw = &grp.whiten * r;
+        chi2 += rw.norm_squared();
+        let wcols: Vec<(usize, DVector<f64>)> = cols
+            .into_iter()
+            .filter(|(q, _)| col_of[*q] != usize::MAX)
+            .map(|(q, c)| (col_of[q], &grp.whiten * c))
+            .collect();
+        for row in 0..rw.len() {
+            let cs: Vec<(usize, f64)> = wcols
+                .iter()
+                .filter(|(_, c)| c[row] != 0.0)
+                .map(|(q, c)| (*q, c[row]))
+                .collect();
+            add(&cs, rw[row], &mut n, &mut b);
+        }
+    }
     for g in &p.gyro {
         let (res, d) = g.residual(t);
         for c in 0..2 {
@@ -185,6 +366,38 @@ fn normal_equations(
                 .map(|q| (col_of[g.tilt.index + q], d[c][q] * w))
                 .collect();
             add(&cols, res[c] * w, &mut n, &mut b);
+        }
+    }
+    if let Some(blk) = &p.gyro_block {
+        for g in &blk.means {
+            let jac = g.jacobian(t, blk.base);
+            let res = g.whitened_residual(t, blk.base);
+            chi2 += res.iter().map(|v| v * v).sum::<f64>();
+            for a in 0..3 {
+                let cols: Vec<(usize, f64)> = jac
+                    .iter()
+                    .filter(|(q, _)| col_of[*q] != usize::MAX)
+                    .map(|(q, d)| (col_of[*q], (0..3).map(|r| g.whiten[a][r] * d[r]).sum()))
+                    .collect();
+                add(&cols, res[a], &mut n, &mut b);
+            }
+        }
+        // Priors: each G entry about the identity (weak), the table's rate scale about 0.
+        let mut priors: Vec<(usize, f64, f64)> = (0..9)
+            .map(|k| {
+                let q = gyro::idx_g(blk.base, k / 3, k % 3);
+                (q, if k % 4 == 0 { 1.0 } else { 0.0 }, gyro::G_PRIOR_SIGMA)
+            })
+            .collect();
+        priors.push((gyro::idx_rate(blk.base), 0.0, blk.rate_sigma_rel));
+        for (q, mean, sig) in priors {
+            if col_of[q] == usize::MAX {
+                continue;
+            }
+            let r = (mean - t[q]) / sig;
+            chi2 += r * r;
+            n[(col_of[q], col_of[q])] += 1.0 / (sig * sig);
+            b[col_of[q]] += r / sig;
         }
     }
     for m in &p.mounts {
@@ -277,9 +490,7 @@ pub fn fit(
         }
         let mut rel = 0.0f64;
         for (c, &q) in idx.iter().enumerate() {
-            let scale = if is_lever(q) {
-                1e-3
-            } else if q >= NI {
+            let scale = if is_lever(q) || q >= NI {
                 1e-3
             } else {
                 t[q].abs().max(1e-9)

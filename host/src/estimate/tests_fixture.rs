@@ -37,6 +37,8 @@ fn case(
         generator,
         options: EstimateOptions::default(),
         norm_only: false,
+        gyro: None,
+        table_rate_error: false,
     });
     r.print();
     r
@@ -135,6 +137,8 @@ fn hand_positions(seeds: u64, g: Generator) {
         generator: g,
         options: EstimateOptions::default(),
         norm_only: true,
+        gyro: None,
+        table_rate_error: false,
     });
     r.print();
     assert!(

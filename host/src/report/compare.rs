@@ -339,8 +339,8 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::Uncertainty;
     use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
-    use crate::unit_file::Uncertainty;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 
@@ -397,7 +397,7 @@ mod tests {
     /// Each exported form, read back from its TOML, compensates like the device's compensator.
     #[test]
     fn every_exported_form_reads_back_and_compensates_the_same() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let plain: PlainMatrices =
             toml::from_str(&export(&cal, ExportFormat::Plain).unwrap()).unwrap();
         let fusion: FusionStyle =

@@ -4,8 +4,8 @@
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
 use crate::estimate::{
-    CalibrationOutcome, Method, MountTilt, Prediction, SegmentDiagnostic, SegmentKind, StaticSplit,
-    PAPER_LEN,
+    CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
+    SegmentKind, StaticSplit, PAPER_LEN,
 };
 use shared::params::axis_name;
 use shared::OutputUnit;
@@ -147,6 +147,7 @@ pub fn render(o: &CalibrationOutcome) -> String {
     }
     let _ = writeln!(s);
     render_attitudes(&mut s, &o.static_split, &o.mount_tilts);
+    render_gyro(&mut s, o.gyro.as_ref());
     let _ = writeln!(s);
     let _ = writeln!(
         s,
@@ -268,6 +269,49 @@ fn render_attitudes(s: &mut String, split: &StaticSplit, tilts: &[MountTilt]) {
     }
 }
 
+/// The gyro model with 1σ, and what the plan leaves undetermined (docs/model.md §8).
+fn render_gyro(s: &mut String, g: Option<&GyroEstimate>) {
+    let Some(g) = g else {
+        return;
+    };
+    let _ = writeln!(s, "Gyro, w = G·ω + b (1σ):");
+    for i in 0..3 {
+        let row: Vec<String> = (0..3)
+            .map(|j| {
+                if g.matrix_1sigma[i][j] > crate::estimate::gyro::UNDETERMINED_SIGMA {
+                    format!("{:>24}", "n.d.")
+                } else {
+                    format!(
+                        "{:>24}",
+                        format!("{:+.6} ± {:.6}", g.matrix[i][j], g.matrix_1sigma[i][j])
+                    )
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  G[{}]  {}   b {:+.5} ± {:.5} °/s",
+            axis_name(i),
+            row.join(" "),
+            g.bias_rad_s[i].to_degrees(),
+            g.bias_rad_s_1sigma[i].to_degrees()
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  table rate scale error {:+.1} ± {:.1} ppm (its prior is the plan's table_rate_sigma_ppm: the gyro's scale cannot be better)",
+        g.table_rate_scale.0 * 1e6,
+        g.table_rate_scale.1 * 1e6
+    );
+    if !g.undetermined.is_empty() {
+        let _ = writeln!(
+            s,
+            "  not determined by this plan: {} (spin about at least three non-coplanar axes to determine all of G)",
+            g.undetermined.join(", ")
+        );
+    }
+}
+
 /// The Cramér–Rao prediction of a plan (`host plan --check`).
 pub fn render_prediction(p: &Prediction) -> String {
     let mut s = String::new();
@@ -318,10 +362,19 @@ pub fn render_prediction(p: &Prediction) -> String {
     }
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
     render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
+    render_gyro(&mut s, p.gyro.as_ref());
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }
     s
+}
+
+/// A prediction prints as [`render_prediction`] (here, so that the estimator does not depend on the
+/// report).
+impl std::fmt::Display for Prediction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&render_prediction(self))
+    }
 }
 
 #[cfg(test)]
@@ -368,9 +421,7 @@ rate_deg_s = 200
     #[test]
     fn report_has_the_paper_tables_and_the_comparison() {
         let plan = Plan::parse(PLAN).unwrap();
-        let truth = crate::unit_file::UnitFile::paper_unit()
-            .to_calibration()
-            .unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let unit = shared::forward::ForwardModel::new(&truth).unwrap();
         let noise = SynthNoise {
             out_1sigma: [4e-4; 3],

@@ -50,11 +50,12 @@ fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
 pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
     Plan {
         format_version: 2,
-        output_unit: rec.acc_unit.unwrap_or(crate::session::OutputUnitName::Lsb),
+        output_unit: rec.acc_unit.unwrap_or(shared::OutputUnit::Lsb),
         sample_rate_hz: (rec.rate_hz * 1e6).round() / 1e6,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         attitude_sigma_deg: None,
+        table_rate_sigma_ppm: None,
         segments: seg
             .stills
             .iter()

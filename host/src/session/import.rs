@@ -7,7 +7,7 @@
 //! session format's unit. The whole recording is held in memory (the gyro fit integrates every turn),
 //! so the number of rows is capped ([`MAX_ROWS`]) and every line is bounded ([`MAX_LINE_BYTES`]).
 
-use crate::session::OutputUnitName;
+use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -58,12 +58,12 @@ impl GyroUnit {
 }
 
 /// Parses an accelerometer unit as the command line spells it: "m/s2", "g", "LSB" or "V".
-pub fn parse_acc_unit(s: &str) -> Option<OutputUnitName> {
+pub fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
     match s {
-        "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnitName::MetresPerSecondSquared),
-        "g" => Some(OutputUnitName::StandardGravity),
-        "LSB" | "lsb" | "counts" => Some(OutputUnitName::Lsb),
-        "V" | "v" => Some(OutputUnitName::V),
+        "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnit::MetresPerSecondSquared),
+        "g" => Some(OutputUnit::StandardGravity),
+        "LSB" | "lsb" | "counts" => Some(OutputUnit::Lsb),
+        "V" | "v" => Some(OutputUnit::Volts),
         _ => None,
     }
 }
@@ -85,14 +85,14 @@ pub struct ImportOptions {
     /// Time stamps.
     pub time: TimeSource,
     /// The accelerometer's unit (kept as the output unit).
-    pub acc_unit: OutputUnitName,
+    pub acc_unit: OutputUnit,
     /// The gyro's unit (converted to rad/s).
     pub gyro_unit: GyroUnit,
 }
 
 impl ImportOptions {
     /// The default column names with the given time source and units.
-    pub fn new(time: TimeSource, acc_unit: OutputUnitName, gyro_unit: GyroUnit) -> ImportOptions {
+    pub fn new(time: TimeSource, acc_unit: OutputUnit, gyro_unit: GyroUnit) -> ImportOptions {
         ImportOptions {
             columns: DEFAULT_COLUMNS.map(String::from),
             time,
@@ -112,7 +112,7 @@ pub struct Recording {
     /// Gyro rates, rad/s, gyro axes.
     pub gyro_rad_s: Vec<[f64; 3]>,
     /// The accelerometer's unit.
-    pub acc_unit: Option<OutputUnitName>,
+    pub acc_unit: Option<OutputUnit>,
     /// Median sample rate, Hz.
     pub rate_hz: f64,
     /// Rows left out because a value was NaN or infinite.
@@ -400,11 +400,11 @@ fn median_rate(t_s: &[f64]) -> f64 {
 
 /// Gravity's magnitude must be about 1 g in the stated unit (for m/s² and g; LSB and V have no
 /// expected value). The median over all rows is gravity's: a hand-held recording is mostly still.
-fn check_gravity(rec: &Recording, unit: OutputUnitName) -> Result<(), ImportError> {
+fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
     let expected = match unit {
-        OutputUnitName::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
-        OutputUnitName::StandardGravity => 1.0,
-        OutputUnitName::Lsb | OutputUnitName::V => return Ok(()),
+        OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
+        OutputUnit::StandardGravity => 1.0,
+        OutputUnit::Lsb | OutputUnit::Volts => return Ok(()),
     };
     let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
     mags.sort_by(f64::total_cmp);
@@ -451,7 +451,7 @@ mod tests {
         );
         let o = ImportOptions::new(
             TimeSource::Column("time".into()),
-            OutputUnitName::StandardGravity,
+            OutputUnit::StandardGravity,
             GyroUnit::RadPerS,
         );
         let rec = read(&text, &o).unwrap();
@@ -469,7 +469,7 @@ mod tests {
         );
         let o = ImportOptions::new(
             TimeSource::RateHz(102.4),
-            OutputUnitName::MetresPerSecondSquared,
+            OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
         );
         let rec = read(&text, &o).unwrap();
@@ -482,7 +482,7 @@ mod tests {
     fn bad_input_names_the_problem_and_the_fix() {
         let ms2 = ImportOptions::new(
             TimeSource::RateHz(100.0),
-            OutputUnitName::MetresPerSecondSquared,
+            OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
         );
         let missing = read("acc_x,acc_y,gyr_x,gyr_y,gyr_z\n1,2,3,4,5\n", &ms2).unwrap_err();
@@ -496,7 +496,7 @@ mod tests {
         let m = read(&g_values, &ms2).unwrap_err().to_string();
         assert!(m.contains("--acc-unit g"), "{m}");
         let as_g = ImportOptions {
-            acc_unit: OutputUnitName::StandardGravity,
+            acc_unit: OutputUnit::StandardGravity,
             ..ms2.clone()
         };
         let ms2_values = format!(

@@ -19,6 +19,10 @@ pub const PLAN_FORMAT_VERSION_MIN: u32 = 1;
 /// level (docs/model.md §7), while a prior that is somewhat too wide costs almost nothing.
 pub const DEFAULT_ATTITUDE_SIGMA_DEG: f64 = 0.05;
 
+/// 1σ of a rate table's relative rate error when the plan says nothing, ppm: 0.01 %, a good
+/// servo-controlled table's rate accuracy (averaged over whole turns).
+pub const DEFAULT_TABLE_RATE_SIGMA_PPM: f64 = 100.0;
+
 /// How a segment's attitude is known.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -39,44 +43,6 @@ fn is_zero3(v: &[f64; 3]) -> bool {
     *v == [0.0; 3]
 }
 
-/// Output unit as spelled in files: "V", "LSB", "m/s2" or "g".
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum OutputUnitName {
-    /// Volts.
-    V,
-    /// ADC counts.
-    #[serde(rename = "LSB")]
-    Lsb,
-    /// A logger's m/s², kept as recorded.
-    #[serde(rename = "m/s2")]
-    MetresPerSecondSquared,
-    /// A logger's g, kept as recorded.
-    #[serde(rename = "g")]
-    StandardGravity,
-}
-
-impl From<OutputUnitName> for OutputUnit {
-    fn from(u: OutputUnitName) -> Self {
-        match u {
-            OutputUnitName::V => OutputUnit::Volts,
-            OutputUnitName::Lsb => OutputUnit::Lsb,
-            OutputUnitName::MetresPerSecondSquared => OutputUnit::MetresPerSecondSquared,
-            OutputUnitName::StandardGravity => OutputUnit::StandardGravity,
-        }
-    }
-}
-
-impl From<OutputUnit> for OutputUnitName {
-    fn from(u: OutputUnit) -> Self {
-        match u {
-            OutputUnit::Volts => OutputUnitName::V,
-            OutputUnit::Lsb => OutputUnitName::Lsb,
-            OutputUnit::MetresPerSecondSquared => OutputUnitName::MetresPerSecondSquared,
-            OutputUnit::StandardGravity => OutputUnitName::StandardGravity,
-        }
-    }
-}
-
 fn default_version() -> u32 {
     PLAN_FORMAT_VERSION
 }
@@ -92,7 +58,7 @@ pub struct Plan {
     #[serde(default = "default_version")]
     pub format_version: u32,
     /// Unit of the accelerometer outputs in `samples.csv`.
-    pub output_unit: OutputUnitName,
+    pub output_unit: OutputUnit,
     /// Sample rate of `samples.csv`, Hz.
     pub sample_rate_hz: f64,
     /// Local gravity, m/s².
@@ -106,6 +72,10 @@ pub struct Plan {
     /// [`DEFAULT_ATTITUDE_SIGMA_DEG`]; 0: the fixture is taken as exact.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attitude_sigma_deg: Option<f64>,
+    /// 1σ of the rate table's relative rate error, ppm (format 2): the gyro's scale factors cannot
+    /// be better. Absent: [`DEFAULT_TABLE_RATE_SIGMA_PPM`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table_rate_sigma_ppm: Option<f64>,
     /// The segments, in the order they are run.
     #[serde(rename = "segment")]
     pub segments: Vec<SegmentPlan>,
@@ -296,6 +266,12 @@ impl Plan {
         Ok(())
     }
 
+    /// The table's relative rate 1σ, ppm (the default when absent).
+    pub fn table_rate_sigma_ppm(&self) -> f64 {
+        self.table_rate_sigma_ppm
+            .unwrap_or(DEFAULT_TABLE_RATE_SIGMA_PPM)
+    }
+
     /// The plan-level mount tilt 1σ, degrees (the default when absent).
     pub fn attitude_sigma_deg(&self) -> f64 {
         self.attitude_sigma_deg
@@ -312,7 +288,15 @@ impl Plan {
 
     /// Format 2 keys need format 2; σ finite ≥ 0; a mount's segments agree on attitude and σ.
     fn validate_attitudes(&self) -> Result<(), PlanError> {
+        if let Some(v) = self.table_rate_sigma_ppm {
+            if !(v.is_finite() && v > 0.0 && v <= 1e5) {
+                return Err(PlanError::Invalid(format!(
+                    "table_rate_sigma_ppm = {v} must be a positive number of ppm (100 = 0.01 %)"
+                )));
+            }
+        }
         let uses_v2 = self.attitude_sigma_deg.is_some()
+            || self.table_rate_sigma_ppm.is_some()
             || self
                 .segments
                 .iter()

@@ -11,8 +11,8 @@
 //! data instead of a user's guess.
 
 use super::import::Recording;
-use crate::session::OutputUnitName;
 use shared::linalg;
+use shared::OutputUnit;
 
 /// Detection settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -330,7 +330,7 @@ fn still_bias(rec: &Recording, runs: &[(usize, usize)]) -> [f64; 3] {
 /// Zero for m/s², g and LSB (their zero is zero force); for volts, the mid-range of the quiet outputs
 /// (an analog part's zero is mid-supply).
 fn acc_centre(rec: &Recording) -> [f64; 3] {
-    if rec.acc_unit != Some(OutputUnitName::V) {
+    if rec.acc_unit != Some(OutputUnit::Volts) {
         return [0.0; 3];
     }
     core::array::from_fn(|j| {

@@ -42,6 +42,11 @@ pub struct Case {
     pub options: EstimateOptions,
     /// Also run the norm-only method on the static segments.
     pub norm_only: bool,
+    /// The simulated gyro reads `G ω + b` (b in rad/s); `None`: perfect.
+    pub gyro: Option<(RowMajor3, [f64; 3])>,
+    /// Draw the table's rate scale error per seed with the plan's `table_rate_sigma_ppm` (else the
+    /// table's rate is exact).
+    pub table_rate_error: bool,
 }
 
 /// One seed's errors.
@@ -67,6 +72,11 @@ pub struct SeedResult {
     pub tilt_warning: bool,
     /// The norm-only method's static error after its best rotation (worst, rms), µg.
     pub norm_only_static_ug: Option<(f64, f64)>,
+    /// The gyro estimate's errors and reported 1σ: (G − G_true, b − b_true, σ_G, σ_b).
+    pub gyro_err: Option<(RowMajor3, [f64; 3], RowMajor3, [f64; 3])>,
+    /// `G` − `G_true` after removing the body frame's common rotation (the gyro relative to the
+    /// accelerometer triad).
+    pub gyro_err_rotated: Option<RowMajor3>,
 }
 
 /// All seeds of a case.
@@ -196,6 +206,7 @@ pub fn static_errors(
 fn dynamic_error(
     truth: &Calibration,
     out: &CalibrationOutcome,
+    gyro: Option<&(RowMajor3, [f64; 3])>,
     rot: &Matrix3<f64>,
     rng: &mut testkit::Rng,
     rate_deg_s: &dyn Fn(&mut testkit::Rng) -> f64,
@@ -222,9 +233,30 @@ fn dynamic_error(
             },
         };
         let u = unit_model.outputs(&m).raw;
+        // What the device sees: the gyro's reading, corrected with the estimated model when there is one.
+        let seen = match gyro {
+            None => m,
+            Some((gt, bt)) => {
+                let w = linalg::mat_vec(gt, &m.omega.rad_s);
+                let w: [f64; 3] = core::array::from_fn(|i| w[i] + bt[i]);
+                let wd = linalg::mat_vec(gt, &m.omega_dot.rad_s2);
+                let (w, wd) = match out.gyro.as_ref().and_then(|e| e.correction()) {
+                    Some((gi, b)) => (
+                        linalg::mat_vec(&gi, &core::array::from_fn(|i| w[i] - b[i])),
+                        linalg::mat_vec(&gi, &wd),
+                    ),
+                    None => (w, wd),
+                };
+                BodyMotion {
+                    f_o: m.f_o,
+                    omega: BodyRate { rad_s: w },
+                    omega_dot: BodyAngularAccel { rad_s2: wd },
+                }
+            }
+        };
         let f = apply(
             rot,
-            &compensate(&out.fitted, &out.calibration.lever_arms.r_m, g, &u, &m),
+            &compensate(&out.fitted, &out.calibration.lever_arms.r_m, g, &u, &seen),
         );
         s += (0..3).map(|i| (f[i] - up[i]).powi(2)).sum::<f64>();
     }
@@ -306,33 +338,62 @@ pub fn run(case: &Case) -> CaseResult {
     let noise_out = 1e-3 * truth.statics.scale_out_per_g[0];
     let seeds = (0..case.seeds)
         .map(|seed| {
+            let rate_scale = if case.table_rate_error {
+                case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed, 0).normal()
+            } else {
+                0.0
+            };
             let stats = match case.generator {
                 Generator::Rows => {
-                    let noise = NoiseModel {
+                    let mut noise = NoiseModel {
                         accel_white_mg: 1.0,
                         gyro_white_deg_s: 0.05,
                         table_tilt_deg: case.true_tilt_deg,
                         ..NoiseModel::none()
                     };
+                    if let Some((g, b)) = case.gyro {
+                        noise.gyro_matrix = g;
+                        noise.gyro_bias_deg_s = b.map(f64::to_degrees);
+                    }
+                    noise.table_rate_scale = rate_scale;
                     simulated_stats(&case.plan, &truth, &noise, seed)
                 }
                 Generator::Stats => {
                     let errors = TableErrors {
                         attitude_deg: case.true_tilt_deg,
                         gyro_noise_rad_s: 0.05f64.to_radians(),
+                        gyro: case.gyro,
+                        rate_scale,
                         ..TableErrors::default()
                     };
-                    let mut rng = testkit::Rng::new(1000 + seed);
+                    let mut rng = testkit::Rng::new(1000 + seed, 0);
                     testkit::noisy_stats(&case.plan, &truth, noise_out, errors, &mut rng)
                 }
             };
             let out = calibrate_session_stats(&case.plan, &stats, &case.options)
                 .unwrap_or_else(|e| panic!("{}: seed {seed}: {e}", case.title));
-            let mut rng = testkit::Rng::new(77 + seed);
+            let mut rng = testkit::Rng::new(77 + seed, 0);
             let st = static_errors(&truth, &out.fitted, &mut rng);
             let rot = st.rotation;
-            let dyn200_ug = dynamic_error(&truth, &out, &rot, &mut rng, &|_| 200.0);
-            let dyn300_ug = dynamic_error(&truth, &out, &rot, &mut rng, &|r| r.range(0.0, 300.0));
+            let gy = case.gyro.as_ref();
+            let dyn200_ug = dynamic_error(&truth, &out, gy, &rot, &mut rng, &|_| 200.0);
+            let dyn300_ug =
+                dynamic_error(&truth, &out, gy, &rot, &mut rng, &|r| r.range(0.0, 300.0));
+            let (gt, bt) = case
+                .gyro
+                .unwrap_or((crate::sim::session::IDENTITY, [0.0; 3]));
+            let gyro_err_rotated = out.gyro.as_ref().map(|e| {
+                let g = Matrix3::from_fn(|i, j| e.matrix[i][j]) * rot.transpose();
+                core::array::from_fn(|i| core::array::from_fn(|j| g[(i, j)] - gt[i][j]))
+            });
+            let gyro_err = out.gyro.as_ref().map(|e| {
+                (
+                    core::array::from_fn(|i| core::array::from_fn(|j| e.matrix[i][j] - gt[i][j])),
+                    core::array::from_fn(|i| e.bias_rad_s[i] - bt[i]),
+                    e.matrix_1sigma,
+                    e.bias_rad_s_1sigma,
+                )
+            });
             let (tf, _) = truth.statics.to_fitted().expect("valid truth");
             let q_true = rotation_vector(&lq(&tf.m_out_per_g).1);
             let q_est = rotation_vector(&lq(&out.fitted.m_out_per_g).1);
@@ -346,7 +407,7 @@ pub fn run(case: &Case) -> CaseResult {
                     .map(|(_, st)| st.mean_u)
                     .collect();
                 let f = norm_only(&means).expect("norm-only converges");
-                let e = static_errors(&truth, &f, &mut testkit::Rng::new(77 + seed));
+                let e = static_errors(&truth, &f, &mut testkit::Rng::new(77 + seed, 0));
                 (e.worst_ug, e.rms_ug)
             });
             SeedResult {
@@ -367,6 +428,8 @@ pub fn run(case: &Case) -> CaseResult {
                     .iter()
                     .any(|w| w.contains("3× the plan's attitude_sigma_deg")),
                 norm_only_static_ug,
+                gyro_err,
+                gyro_err_rotated,
             }
         })
         .collect();
@@ -451,8 +514,72 @@ impl CaseResult {
             )
         })
     }
+    /// Gyro figures: rms error and spread/mean 1σ of the scale entries (diagonal, ppm), the
+    /// misalignment entries (off-diagonal, µrad) and the biases (°/s).
+    pub fn gyro_figures(&self) -> Option<[(f64, f64); 3]> {
+        let e: Vec<&(RowMajor3, [f64; 3], RowMajor3, [f64; 3])> = self
+            .seeds
+            .iter()
+            .filter_map(|s| s.gyro_err.as_ref())
+            .collect();
+        if e.is_empty() {
+            return None;
+        }
+        let pick = |diag: bool| {
+            let err = rms(e.iter().flat_map(|x| {
+                (0..9)
+                    .filter(move |k| (k % 4 == 0) == diag)
+                    .map(move |k| x.0[k / 3][k % 3])
+            }));
+            let sig = rms(e.iter().flat_map(|x| {
+                (0..9)
+                    .filter(move |k| (k % 4 == 0) == diag)
+                    .map(move |k| x.2[k / 3][k % 3])
+            }));
+            (err, err / sig)
+        };
+        let (s, m) = (pick(true), pick(false));
+        let b = rms(e.iter().flat_map(|x| x.1));
+        let bs = rms(e.iter().flat_map(|x| x.3));
+        Some([(s.0 * 1e6, s.1), (m.0 * 1e6, m.1), (b.to_degrees(), b / bs)])
+    }
+
+    /// RMS of the scale (diagonal, ppm) and misalignment (off-diagonal, µrad) errors of `G` after
+    /// removing the common rotation.
+    pub fn gyro_intrinsic(&self) -> Option<(f64, f64)> {
+        let e: Vec<&RowMajor3> = self
+            .seeds
+            .iter()
+            .filter_map(|s| s.gyro_err_rotated.as_ref())
+            .collect();
+        if e.is_empty() {
+            return None;
+        }
+        let pick = |diag: bool| {
+            rms(e.iter().flat_map(|x| {
+                (0..9)
+                    .filter(move |k| (k % 4 == 0) == diag)
+                    .map(move |k| x[k / 3][k % 3])
+            })) * 1e6
+        };
+        Some((pick(true), pick(false)))
+    }
+
     /// One line per figure.
     pub fn print(&self) {
+        if let Some((s, m)) = self.gyro_intrinsic() {
+            eprintln!(
+                "   gyro relative to the accelerometers (common rotation removed): scale rms {s:.1} ppm, \
+                 misalignment rms {m:.1} µrad"
+            );
+        }
+        if let Some([s, m, b]) = self.gyro_figures() {
+            eprintln!(
+                "   gyro as estimated (body frame of the fixture): scale rms {:.1} ppm (spread/σ {:.2}), \
+                 misalignment rms {:.1} µrad (spread/σ {:.2}), bias rms {:.5} °/s (spread/σ {:.2})",
+                s.0, s.1, m.0, m.1, b.0, b.1
+            );
+        }
         eprintln!("== {} ({} seeds)", self.title, self.seeds.len());
         eprintln!(
             "   static worst error (95th pct): {:.1} µg as is, {:.1} µg after the best common rotation \
@@ -551,11 +678,12 @@ pub fn many_mounts_plan() -> Plan {
     }
     Plan {
         format_version: 2,
-        output_unit: crate::session::OutputUnitName::V,
+        output_unit: shared::OutputUnit::Volts,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         attitude_sigma_deg: None,
+        table_rate_sigma_ppm: None,
         segments,
     }
 }

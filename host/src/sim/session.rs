@@ -9,6 +9,7 @@
 //! not on the platform or on a dependency's version, and switching one noise source on or off does not
 //! change the draws of the others.
 
+use super::rng::Rng;
 use crate::session::{Plan, PlanError};
 use crate::session::{RecordingError, SessionWriter};
 use crate::unit_file::UnitFile;
@@ -42,6 +43,28 @@ pub struct NoiseModel {
     pub gyro_white_deg_s: f64,
     /// Gyro bias, body axes, °/s.
     pub gyro_bias_deg_s: [f64; 3],
+    /// Gyro scale and misalignment: the gyro reads `G ω + bias` (docs/model.md §8); identity =
+    /// perfect. A unit file's `[gyro]` table sets it (and adds its bias).
+    pub gyro_matrix: [[f64; 3]; 3],
+}
+
+/// The identity, the perfect gyro's matrix.
+pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
+/// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
+/// non-orthogonality, so no change of body frame absorbs it).
+pub fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
+    const SIGN: [[f64; 3]; 3] = [[0.0, 1.0, -1.0], [1.0, 0.0, 1.0], [-1.0, -1.0, 0.0]];
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            if i == j {
+                1.0 + scale[i]
+            } else {
+                SIGN[i][j] * misalignment_rad
+            }
+        })
+    })
 }
 
 impl Default for NoiseModel {
@@ -56,6 +79,7 @@ impl Default for NoiseModel {
             table_rate_offset_deg_s: 0.0,
             gyro_white_deg_s: 0.05,
             gyro_bias_deg_s: [0.0; 3],
+            gyro_matrix: IDENTITY,
         }
     }
 }
@@ -100,10 +124,11 @@ impl NoiseModel {
         }
         let others = [self.table_rate_scale, self.table_rate_offset_deg_s]
             .into_iter()
-            .chain(self.gyro_bias_deg_s);
+            .chain(self.gyro_bias_deg_s)
+            .chain(self.gyro_matrix.into_iter().flatten());
         if others.into_iter().any(|v| !v.is_finite()) {
             return Err(SimulateError::Noise(
-                "table_rate_scale, table_rate_offset_deg_s and gyro_bias_deg_s must be finite"
+                "table_rate_scale, table_rate_offset_deg_s, gyro_bias_deg_s and gyro_matrix must be finite"
                     .into(),
             ));
         }
@@ -157,72 +182,6 @@ pub struct SimulationSummary {
     /// Notes for the user (e.g. the plan's output unit was changed to the unit's).
     #[serde(skip)]
     pub notes: Vec<String>,
-}
-
-/// xoshiro256++ (Blackman and Vigna), seeded through SplitMix64: small, fast, and fixed forever, so
-/// that a seed names the same session on every machine.
-#[derive(Clone, Debug)]
-pub struct Rng {
-    s: [u64; 4],
-    spare: Option<f64>,
-}
-
-fn splitmix64(x: &mut u64) -> u64 {
-    *x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *x;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-impl Rng {
-    /// Stream `stream` of seed `seed` (different streams are independent for all practical purposes).
-    pub fn new(seed: u64, stream: u64) -> Rng {
-        let mut x = seed ^ stream.wrapping_mul(0xD605_BBB5_8C8A_BBDD);
-        let s = [
-            splitmix64(&mut x),
-            splitmix64(&mut x),
-            splitmix64(&mut x),
-            splitmix64(&mut x),
-        ];
-        Rng { s, spare: None }
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        let s = &mut self.s;
-        let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
-        let t = s[1] << 17;
-        s[2] ^= s[0];
-        s[3] ^= s[1];
-        s[1] ^= s[2];
-        s[0] ^= s[3];
-        s[2] ^= t;
-        s[3] = s[3].rotate_left(45);
-        result
-    }
-
-    /// Uniform on (−1, 1), never exactly 0 or ±1.
-    fn symmetric(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) * (2.0 / (1u64 << 53) as f64) - 1.0
-    }
-
-    /// A standard normal deviate (Marsaglia's polar method).
-    pub fn normal(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        loop {
-            let a = self.symmetric();
-            let b = self.symmetric();
-            let s = a * a + b * b;
-            if s < 1.0 && s > 0.0 {
-                let f = libm::sqrt(-2.0 * libm::log(s) / s);
-                self.spare = Some(b * f);
-                return a * f;
-            }
-        }
-    }
 }
 
 const STREAM_ACCEL: u64 = 1;
@@ -342,7 +301,7 @@ pub fn simulate_rows<E>(
                     u[i] = (u[i] / q).round() * q;
                 }
             }
-            let mut w = motion.omega.rad_s;
+            let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
             for i in 0..3 {
                 w[i] += gyro_bias[i];
                 if gyro_sigma > 0.0 {
@@ -387,6 +346,16 @@ pub fn simulate_to_dir_with_progress(
 ) -> Result<SimulationSummary, SimulateError> {
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
+    // The unit's [gyro] table is the simulated gyro: its matrix replaces the noise model's, its bias
+    // adds to the noise model's.
+    let mut noise = noise.clone();
+    if let Some(g) = &unit.gyro {
+        noise.gyro_matrix = g.matrix;
+        for i in 0..3 {
+            noise.gyro_bias_deg_s[i] += g.bias_rad_s[i].to_degrees();
+        }
+    }
+    let noise = &noise;
     let (fitted, normalisation) = cal
         .statics
         .to_fitted()
@@ -399,7 +368,7 @@ pub fn simulate_to_dir_with_progress(
         ));
     }
     let mut plan = plan.clone();
-    let unit_name = cal.statics.output_unit.into();
+    let unit_name = cal.statics.output_unit;
     if plan.output_unit != unit_name {
         notes.push(format!(
             "the plan's output_unit {} was changed to the unit's, {}",

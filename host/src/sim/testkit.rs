@@ -3,47 +3,11 @@
 //! optional table errors (attitude per mount, rate scale) — all seeded.
 
 use super::synth::{self, ActualSegment, SynthNoise};
-use crate::session::{OutputUnitName, Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 
-/// SplitMix64 with Box–Muller normals.
-pub struct Rng(u64, Option<f64>);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x9E37_79B9_7F4A_7C15, None)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in (0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    pub fn normal(&mut self) -> f64 {
-        if let Some(z) = self.1.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let a = 2.0 * std::f64::consts::PI * u2;
-        self.1 = Some(r * a.sin());
-        r * a.cos()
-    }
-    pub fn unit_vector(&mut self) -> [f64; 3] {
-        let v = [self.normal(), self.normal(), self.normal()];
-        let n = shared::linalg::norm(&v);
-        v.map(|c| c / n)
-    }
-}
+pub use super::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
@@ -55,6 +19,39 @@ pub struct TableErrors {
     pub rate_rel: f64,
     /// Gyro white noise per sample, rad/s (0: a noise-free gyro mean).
     pub gyro_noise_rad_s: f64,
+    /// The gyro reads `G ω + b`: `(G, b)`, b in rad/s (`None`: a perfect gyro).
+    pub gyro: Option<([[f64; 3]; 3], [f64; 3])>,
+    /// The table's rate scale error, common to every rotating segment.
+    pub rate_scale: f64,
+}
+
+/// Gyro statistics of a perfect gyro turned into those of a gyro reading `G ω + b`.
+fn through_gyro(st: &mut SegmentStats, g: &[[f64; 3]; 3], b: &[f64; 3], sg2: f64) {
+    use shared::linalg::mat_vec;
+    let w = st.mean_w_rad_s;
+    let gw = mat_vec(g, &w);
+    let id = |i: usize, j: usize| if i == j { sg2 } else { 0.0 };
+    let conj = |m: &[[f64; 3]; 3]| -> [[f64; 3]; 3] {
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                (0..3)
+                    .map(|k| (0..3).map(|l| g[i][k] * m[k][l] * g[j][l]).sum::<f64>())
+                    .sum()
+            })
+        })
+    };
+    let wwt: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.mean_wwt[i][j] - id(i, j)));
+    let cw: [[f64; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| st.cov_w[i][j] - id(i, j)));
+    let gwwt = conj(&wwt);
+    st.mean_wwt = core::array::from_fn(|i| {
+        core::array::from_fn(|j| gwwt[i][j] + gw[i] * b[j] + b[i] * gw[j] + b[i] * b[j] + id(i, j))
+    });
+    let gcw = conj(&cw);
+    st.cov_w = core::array::from_fn(|i| core::array::from_fn(|j| gcw[i][j] + id(i, j)));
+    st.mean_w_rad_s = core::array::from_fn(|i| gw[i] + b[i]);
+    st.wdot_rad_s2 = mat_vec(g, &st.wdot_rad_s2);
 }
 
 fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
@@ -71,7 +68,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
 }
 
 /// The paper's plan: ±1 g per axis static, 60 s; 100/150/200 °/s about x, y, z with that axis up.
-pub fn paper_plan(unit: OutputUnitName) -> Plan {
+pub fn paper_plan(unit: OutputUnit) -> Plan {
     let mut segments = Vec::new();
     for (a, n) in ["x", "y", "z"].iter().enumerate() {
         for sgn in [1.0, -1.0] {
@@ -96,6 +93,7 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
     Plan {
         format_version: 2,
         attitude_sigma_deg: Some(0.0),
+        table_rate_sigma_ppm: None,
         output_unit: unit,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -105,7 +103,7 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
 }
 
 /// The paper's plan plus three 45° oblique mounts spun at ±200 °/s and a spin-up per oblique mount.
-pub fn better_plan(unit: OutputUnitName) -> Plan {
+pub fn better_plan(unit: OutputUnit) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for (n, up) in [
@@ -127,9 +125,7 @@ pub fn better_plan(unit: OutputUnitName) -> Plan {
 
 /// The paper's unit.
 pub fn paper_unit() -> Calibration {
-    crate::unit_file::UnitFile::paper_unit()
-        .to_calibration()
-        .expect("the paper unit is valid")
+    shared::params::PAPER_UNIT
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.
@@ -188,16 +184,25 @@ pub fn noisy_stats(
                     .or_insert_with(|| [sigma * rng.normal(), sigma * rng.normal()]);
                 actual.up_b = crate::sim::session::tilt(actual.up_b, n1, n2);
             }
+            if !sp.is_static() {
+                actual.rate_start_rad_s *= 1.0 + errors.rate_scale;
+                actual.rate_end_rad_s *= 1.0 + errors.rate_scale;
+            }
             if errors.rate_rel > 0.0 && !sp.is_static() {
                 let f = 1.0 + errors.rate_rel * rng.normal();
                 actual.rate_start_rad_s *= f;
                 actual.rate_end_rad_s *= f;
             }
             let mut st = synth::segment_stats(&sp.name, &actual, &unit, &noise);
+            if let Some((g, b)) = &errors.gyro {
+                through_gyro(&mut st, g, b, errors.gyro_noise_rad_s.powi(2));
+            }
             let n = st.count as f64;
             for i in 0..3 {
                 st.mean_u[i] += noise_out / n.sqrt() * rng.normal();
-                st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
+                if errors.gyro_noise_rad_s > 0.0 {
+                    st.mean_w_rad_s[i] += errors.gyro_noise_rad_s / n.sqrt() * rng.normal();
+                }
             }
             st
         })
