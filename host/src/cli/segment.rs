@@ -109,7 +109,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
             )));
         }
     }
-    let truth = logger_unit(unit.into());
+    let truth = logger_unit(unit);
     let spec = HandSpec {
         rate_hz: a.rate_hz,
         acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
@@ -163,7 +163,10 @@ pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
     let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
     let names = ["x", "y", "z"];
     let undetermined = (0..9)
-        .filter(|&k| !(matrix_1sigma[k / 3][k % 3] <= DETERMINED_1SIGMA))
+        .filter(|&k| {
+            let s = matrix_1sigma[k / 3][k % 3];
+            s.is_nan() || s > DETERMINED_1SIGMA
+        })
         .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
         .collect();
     Ok(Some(GyroEstimate {

@@ -117,7 +117,7 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
 
 /// Bound on one seed's intrinsic rms error in the logger-format tests (which test reading the format):
 /// the 20-seed run of the stated session (`hand_sessions_many_seeds`) has a mean of 21 µg and a
-/// maximum of 31 µg, so one seed is held to 1.5 × the 30 µg average requirement.
+/// maximum of 30 µg, so one seed is held to 1.5 × the 30 µg average requirement.
 const SINGLE_SEED_UG: f64 = 45.0;
 
 /// Segments `dir/raw.csv` with the given flags and calibrates the session; returns the stills found
@@ -344,7 +344,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         t_s: sim.rows.iter().map(|r| r.0).collect(),
         acc: sim.rows.iter().map(|r| r.1).collect(),
         gyro_rad_s: sim.rows.iter().map(|r| r.2).collect(),
-        acc_unit: Some(unit.into()),
+        acc_unit: Some(unit),
         rate_hz: spec.rate_hz,
         skipped_rows: 0,
     };
@@ -425,7 +425,7 @@ fn many_seeds(seeds: std::ops::Range<u64>, rate_hz: f64) {
     );
     assert!(rows.iter().all(|r| r.0));
     // The intrinsic error is noise-limited (about 50 µg per position mean, 24 positions): 30 µg is
-    // met on average over seeds, not by every seed (20 seeds: mean 21.0 µg, max 31.4 µg).
+    // met on average over seeds; one seed may exceed it (20 seeds 100–119: mean 20.8 µg, max 29.5 µg).
     assert!(mean_rms <= 30.0, "mean {mean_rms:.1} µg");
     assert!(worst_scale <= 1e-3 && worst_axis <= 0.1);
 }

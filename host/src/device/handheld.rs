@@ -273,7 +273,7 @@ pub fn verify_magnitude<T: Transport>(
     sample_rate_hz: f64,
 ) -> Result<Vec<VerificationPoint>, LinkError> {
     let g = plan.gravity_m_s2;
-    let mut watcher = PositionWatcher::new(plan.output_unit.into(), window_rate_hz, 10.0);
+    let mut watcher = PositionWatcher::new(plan.output_unit, window_rate_hz, 10.0);
     let mut points = Vec::new();
     for k in 1..=3 {
         let label = format!("hand-held check {k}");

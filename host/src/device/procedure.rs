@@ -417,7 +417,7 @@ pub fn run<T: Transport>(
     let hand = !drive && handheld::is_hand_held(&plan);
     let planned_free = segments.iter().filter(|s| s.is_free()).count();
     let mut watcher = handheld::PositionWatcher::new(
-        plan.output_unit.into(),
+        plan.output_unit,
         window_rate,
         crate::session::segment::SegmentOptions::default().same_position_deg,
     );

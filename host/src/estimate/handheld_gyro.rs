@@ -67,7 +67,7 @@ impl HandGyroFit {
         })
     }
 
-    /// Entries of `G` not determined to [`DETERMINED_1SIGMA`], as "G[x,y]" names.
+    /// Entries of `G` not determined to [`DETERMINED_1SIGMA`], named like `G[x][y]`.
     pub fn undetermined(&self) -> Vec<String> {
         let ax = ["x", "y", "z"];
         let mut v = Vec::new();
@@ -75,7 +75,7 @@ impl HandGyroFit {
             for j in 0..3 {
                 let s = self.matrix_1sigma[i][j];
                 if s.is_nan() || s > DETERMINED_1SIGMA {
-                    v.push(format!("G[{},{}]", ax[i], ax[j]));
+                    v.push(format!("G[{}][{}]", ax[i], ax[j]));
                 }
             }
         }

@@ -97,3 +97,41 @@ pub fn write_session(
     }
     w.finish()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::segment::IntervalKind;
+
+    fn interval(direction: [f64; 3]) -> Interval {
+        Interval {
+            kind: IntervalKind::Still,
+            start: 0,
+            end: 10,
+            start_s: 0.0,
+            duration_s: 4.0,
+            mean_acc: direction,
+            std_acc: [1e-3; 3],
+            mean_gyro_rad_s: [0.0; 3],
+            std_gyro_rad_s: [1e-3; 3],
+            direction,
+        }
+    }
+
+    #[test]
+    fn a_position_near_a_face_gets_the_axis_with_a_prior_others_are_free() {
+        let tilt = |deg: f64| {
+            let r = deg.to_radians();
+            [r.sin(), -r.cos(), 0.0]
+        };
+        let near = segment_for(0, &interval(tilt(1.0)));
+        assert_eq!(near.up_b, [0.0, -1.0, 0.0]);
+        assert!(!near.is_free());
+        assert_eq!(near.attitude_sigma_deg, Some(FACE_PRIOR_DEG));
+        assert_eq!(near.mount.as_deref(), Some("still 01"));
+        let far = segment_for(1, &interval(tilt(5.0)));
+        assert!(far.is_free());
+        assert!((far.up_b[0] - 5f64.to_radians().sin()).abs() < 1e-6);
+        assert_eq!(far.attitude_sigma_deg, None);
+    }
+}

@@ -498,7 +498,7 @@ mod tests {
             t_s: s.rows.iter().map(|r| r.0).collect(),
             acc: s.rows.iter().map(|r| r.1).collect(),
             gyro_rad_s: s.rows.iter().map(|r| r.2).collect(),
-            acc_unit: Some(unit.into()),
+            acc_unit: Some(unit),
             rate_hz: spec.rate_hz,
             skipped_rows: 0,
         }
@@ -533,5 +533,39 @@ mod tests {
             assert!(cov.missing_faces.is_empty());
             assert!(cov.check(24, 10.0).is_ok());
         }
+    }
+
+    #[test]
+    fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
+        let mut rng = crate::sim::Rng::new(5, 0);
+        let mut rec = Recording {
+            acc_unit: Some(shared::OutputUnit::StandardGravity),
+            rate_hz: 200.0,
+            ..Recording::default()
+        };
+        // 4 s still z up, 4 s spinning at 90 °/s about the vertical (z), 4 s still x up.
+        let parts = [
+            ([0.0, 0.0, 1.0], 0.0),
+            ([0.0, 0.0, 1.0], 90.0),
+            ([1.0, 0.0, 0.0], 0.0),
+        ];
+        for (k, (up, rate)) in parts.iter().enumerate() {
+            for i in 0..800 {
+                rec.t_s.push((k * 800 + i) as f64 / 200.0);
+                rec.acc
+                    .push(core::array::from_fn(|j| up[j] + 1e-3 * rng.normal()));
+                let w: [f64; 3] = core::array::from_fn(|j| {
+                    (if j == 2 { *rate } else { 0.0 } + 0.05 * rng.normal()).to_radians()
+                });
+                rec.gyro_rad_s.push(w);
+            }
+        }
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 2);
+        assert_eq!(seg.spins.len(), 1);
+        let spin = &seg.spins[0];
+        assert!((linalg::norm(&spin.mean_gyro_rad_s).to_degrees() - 90.0).abs() < 0.1);
+        assert!(spin.start_s > 4.0 && spin.start_s + spin.duration_s < 8.0);
+        assert!(angle_deg(&seg.stills[1].direction, &[1.0, 0.0, 0.0]) < 0.5);
     }
 }
