@@ -81,6 +81,18 @@ pub struct StaticSection {
     /// Scale factors, LSB/g.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale_lsb_per_g: Option<[f64; 3]>,
+    /// Zero-bias outputs, m/s² (a logger's unit kept as recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_m_s2: Option<[f64; 3]>,
+    /// Scale factors, (m/s²)/g.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_m_s2_per_g: Option<[f64; 3]>,
+    /// Zero-bias outputs, g (a logger's unit kept as recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_g: Option<[f64; 3]>,
+    /// Scale factors, g/g.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_g_per_g: Option<[f64; 3]>,
     /// θ_ij, degrees.
     pub installation_angles_deg: RowMajor3,
 }
@@ -169,24 +181,15 @@ impl UnitFile {
     pub fn to_calibration(&self) -> Result<Calibration, String> {
         let unit = self.output_unit.unwrap_or(OutputUnit::Volts);
         let s = &self.statics;
-        let (bias, scale, b_name, k_name) = match unit {
-            OutputUnit::Volts => (
-                s.zero_bias_v,
-                s.scale_v_per_g,
-                "zero_bias_v",
-                "scale_v_per_g",
-            ),
-            OutputUnit::Lsb => (
-                s.zero_bias_lsb,
-                s.scale_lsb_per_g,
-                "zero_bias_lsb",
-                "scale_lsb_per_g",
-            ),
-        };
-        let wrong_unit = match unit {
-            OutputUnit::Volts => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
-            OutputUnit::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
-        };
+        let (_, bias, scale, b_name, k_name) = s
+            .by_unit()
+            .into_iter()
+            .find(|k| k.0 == unit)
+            .ok_or_else(|| format!("output_unit \"{}\" has no [static] keys", unit.symbol()))?;
+        let wrong_unit = s
+            .by_unit()
+            .iter()
+            .any(|(u, b, k, ..)| *u != unit && (b.is_some() || k.is_some()));
         if wrong_unit {
             return Err(format!(
                 "[static] mixes units: with output_unit = \"{}\" use {b_name} and {k_name}",
@@ -244,10 +247,12 @@ impl UnitFile {
         uncertainty: Option<Uncertainty>,
     ) -> UnitFile {
         let unit = cal.statics.output_unit;
-        let (v, lsb) = match unit {
-            OutputUnit::Volts => (true, false),
-            OutputUnit::Lsb => (false, true),
-        };
+        let is = |u: OutputUnit| unit == u;
+        let (v, lsb) = (is(OutputUnit::Volts), is(OutputUnit::Lsb));
+        let (ms2, g) = (
+            is(OutputUnit::MetresPerSecondSquared),
+            is(OutputUnit::StandardGravity),
+        );
         let s = &cal.statics;
         let (reference, reference_offset_m) = match cal.reference {
             ReferencePoint::TableAxis => ("table-axis", None),
@@ -263,6 +268,10 @@ impl UnitFile {
                 zero_bias_lsb: lsb.then_some(s.zero_bias_out),
                 scale_v_per_g: v.then_some(s.scale_out_per_g),
                 scale_lsb_per_g: lsb.then_some(s.scale_out_per_g),
+                zero_bias_m_s2: ms2.then_some(s.zero_bias_out),
+                scale_m_s2_per_g: ms2.then_some(s.scale_out_per_g),
+                zero_bias_g: g.then_some(s.zero_bias_out),
+                scale_g_per_g: g.then_some(s.scale_out_per_g),
                 installation_angles_deg: s.installation_angles_deg,
             },
             dynamic: Some(DynamicSection {
@@ -279,6 +288,51 @@ impl UnitFile {
     /// TOML text.
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).expect("a unit file always serialises")
+    }
+}
+
+/// One unit's pair of `[static]` keys: (unit, zero bias, scale, their key names).
+type UnitKeys = (
+    OutputUnit,
+    Option<[f64; 3]>,
+    Option<[f64; 3]>,
+    &'static str,
+    &'static str,
+);
+
+impl StaticSection {
+    /// The bias and scale keys of every output unit.
+    fn by_unit(&self) -> [UnitKeys; 4] {
+        [
+            (
+                OutputUnit::Volts,
+                self.zero_bias_v,
+                self.scale_v_per_g,
+                "zero_bias_v",
+                "scale_v_per_g",
+            ),
+            (
+                OutputUnit::Lsb,
+                self.zero_bias_lsb,
+                self.scale_lsb_per_g,
+                "zero_bias_lsb",
+                "scale_lsb_per_g",
+            ),
+            (
+                OutputUnit::MetresPerSecondSquared,
+                self.zero_bias_m_s2,
+                self.scale_m_s2_per_g,
+                "zero_bias_m_s2",
+                "scale_m_s2_per_g",
+            ),
+            (
+                OutputUnit::StandardGravity,
+                self.zero_bias_g,
+                self.scale_g_per_g,
+                "zero_bias_g",
+                "scale_g_per_g",
+            ),
+        ]
     }
 }
 

@@ -11,7 +11,7 @@ use crate::sensor_models::{GyroCorrection, TemperatureModel};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
-/// What the accelerometer outputs are measured in. Files spell it "V" or "LSB" (the names only matter
+/// What the accelerometer outputs are measured in. Files spell it "V", "LSB", "m/s2" or "g" (the names only matter
 /// to self-describing formats: postcard encodes the variant's index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum OutputUnit {
@@ -21,14 +21,24 @@ pub enum OutputUnit {
     /// Raw counts of a digital part or of the ADC (least significant bits).
     #[serde(rename = "LSB")]
     Lsb,
+    /// A logger's output already in m/s², kept as recorded so that bias and scale stay in the
+    /// logger's unit (a hand-held recording imported by `host segment`). Appended: older blobs keep
+    /// their variant indices.
+    #[serde(rename = "m/s2")]
+    MetresPerSecondSquared,
+    /// A logger's output in g (standard gravity), kept as recorded.
+    #[serde(rename = "g")]
+    StandardGravity,
 }
 
 impl OutputUnit {
-    /// Short unit name for reports ("V" or "LSB").
+    /// Short unit name for reports and files ("V", "LSB", "m/s2" or "g").
     pub fn symbol(self) -> &'static str {
         match self {
             OutputUnit::Volts => "V",
             OutputUnit::Lsb => "LSB",
+            OutputUnit::MetresPerSecondSquared => "m/s2",
+            OutputUnit::StandardGravity => "g",
         }
     }
 }

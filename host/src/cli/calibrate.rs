@@ -134,7 +134,16 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         read_s,
         session.report.rows as f64 / read_s.max(1e-9) / 1e6
     );
-    let outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
+    let mut outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
+    if outcome.gyro.is_none() {
+        outcome.gyro = super::segment::session_hand_gyro(input)?;
+        if outcome.gyro.is_some() {
+            println!(
+                "gyro: from the hand turns ({})",
+                input.join(super::segment::GYRO_FILE).display()
+            );
+        }
+    }
     println!();
     print!("{}", crate::report::render(&outcome));
     let unit_id = match &session.plan.unit_id {

@@ -7,6 +7,7 @@
 //! | `calibrate --input` | [`calibrate`] | [`crate::session::reader`] → [`crate::estimate`] → [`crate::report::text`], [`crate::calibration_files`] |
 //! | `calibrate --port` | [`calibrate`] | [`crate::device::procedure`] over [`port`] |
 //! | `plan --check` | [`plan`] | [`crate::estimate::predict`] |
+//! | `segment`, `simulate-hand` | [`segment`] | [`crate::session::import`] → [`crate::session::segment`] → [`crate::session::from_recording`], [`crate::estimate::handheld_gyro`]; [`crate::sim::handheld`] |
 //! | `report` | [`report`] | [`crate::report::document`] over [`crate::report::data`] |
 //! | `navigation-check` | [`navigation_check`] | [`mod@crate::report::navigation_check`] on [`crate::sim`] |
 //! | `compare` | [`compare`] | [`crate::report::compare`] |
@@ -26,6 +27,9 @@ pub mod plan;
 pub mod port;
 pub mod read;
 pub mod report;
+pub mod segment;
+#[cfg(test)]
+mod segment_tests;
 pub mod simulate;
 #[cfg(test)]
 mod tests;
@@ -55,6 +59,11 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Estimate the calibration from a recorded session (--input), or live from a device (--port).
     Calibrate(calibrate::CalibrateArgs),
+    /// Cut one continuous logger recording (a hand-held session) into a session for
+    /// `calibrate --input`: still intervals, a table and a figure, and the gyro from the hand turns.
+    Segment(segment::SegmentArgs),
+    /// Write a simulated hand-held session as one logger CSV (to try `host segment` without a unit).
+    SimulateHand(segment::SimulateHandArgs),
     /// Check a plan: its segments and the predicted 1σ of every parameter (Cramér–Rao bound).
     Plan(plan::PlanArgs),
     /// Write the report of a session calibrated by a calibration: figures (PNG, SVG) and
@@ -82,6 +91,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Simulate(a) => simulate::run(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate::run(&a, cli.quiet),
         Command::Plan(a) => plan::run(&a).map(|_| ()),
+        Command::Segment(a) => segment::segment(&a).map(|_| ()),
+        Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
         Command::Report(a) => report::run(&a),
         Command::NavigationCheck(a) => navigation_check::run(&a),
         Command::Compare(a) => compare::run(&a),

@@ -3,6 +3,7 @@
 //! ([`procedure`]) with its operator prompts ([`operator`]).
 
 pub mod client;
+pub mod handheld;
 pub mod operator;
 pub mod procedure;
 pub mod serial;

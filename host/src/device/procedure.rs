@@ -13,7 +13,7 @@
 
 use super::operator::Operator;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
-use crate::device::{DeviceClient, LinkError, Transport};
+use crate::device::{handheld, DeviceClient, LinkError, Transport};
 use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions, ReferenceChoice};
 use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use shared::wire::{Board, CalibrationState, Identity, SampleFlags, StreamKind, VirtualTable};
@@ -362,7 +362,13 @@ pub fn run<T: Transport>(
 
     let after = store_on_device(client, op, &written, created)?;
 
-    let verification = verify(client, op, &plan, drive, opts, fs).map_err(link)?;
+    let hand = !drive && handheld::is_hand_held(&plan);
+    let verification = if hand {
+        handheld::verify_magnitude(client, op, &plan, window, window_rate, opts, fs)
+    } else {
+        verify(client, op, &plan, drive, opts, fs)
+    }
+    .map_err(link)?;
     let passed = verification.iter().all(|v| v.pass);
     for v in &verification {
         op.say(&format!(
@@ -408,9 +414,30 @@ fn record_plan<T: Transport>(
     let mut warnings = Vec::new();
     let mut dropped = 0u32;
 
+    let hand = !drive && handheld::is_hand_held(plan);
+    let planned_free = plan.segments.iter().filter(|s| s.is_free()).count();
+    let mut watcher = handheld::PositionWatcher::new(
+        plan.output_unit,
+        window_rate,
+        crate::session::segment::SegmentOptions::default().same_position_deg,
+    );
     let mut static_done: Vec<(SegmentPlan, session::SegmentStats)> = Vec::new();
     for seg in &plan.segments {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
+        if hand && seg.is_free() {
+            handheld::wait_for_new_position(
+                client,
+                op,
+                &mut watcher,
+                window,
+                window_rate,
+                &seg.name,
+            )
+            .map_err(|source| ProcedureError::Link {
+                source,
+                recording: saved(&writer),
+            })?;
+        }
         let result = record_segment(
             client,
             op,
@@ -425,7 +452,10 @@ fn record_plan<T: Transport>(
             Ok((stats, rejected, drops)) => {
                 dropped = dropped.max(drops);
                 let mut problems = live_check(seg, &stats, rejected);
-                if seg.is_static() {
+                if hand && seg.is_free() {
+                    watcher.accept(stats.mean_u, stats.mean_w_rad_s);
+                    op.say(&watcher.guidance(planned_free));
+                } else if seg.is_static() {
                     problems.extend(remount_check(seg, &stats, &static_done));
                     static_done.push((seg.clone(), stats.clone()));
                 }
@@ -508,6 +538,8 @@ fn record_segment<T: Transport>(
     if drive {
         op.say(&format!("{} (virtual table driven)", instruction(seg)));
         client.set_table(table_for(seg))?;
+    } else if seg.is_free() && seg.is_static() {
+        // Hand-held: the unit was already found still at a new position.
     } else {
         op.wait_ready(&instruction(seg))
             .map_err(|e| LinkError::Unexpected {

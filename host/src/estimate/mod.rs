@@ -16,6 +16,7 @@
 pub mod attitude;
 mod build;
 pub mod gyro;
+pub mod handheld_gyro;
 mod joint;
 pub mod model;
 mod paper;

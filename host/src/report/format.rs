@@ -2,11 +2,14 @@
 
 use shared::OutputUnit;
 
-/// Decimals of a value in the output unit: µV in volts, thousandths of a count in LSB.
+/// Decimals of a value in the output unit: µV in volts, thousandths of a count in LSB, µm/s² in m/s²,
+/// 0.1 µg in g.
 pub fn out_digits(unit: OutputUnit) -> usize {
     match unit {
         OutputUnit::Volts => 6,
         OutputUnit::Lsb => 3,
+        OutputUnit::MetresPerSecondSquared => 6,
+        OutputUnit::StandardGravity => 7,
     }
 }
 

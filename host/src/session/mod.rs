@@ -9,8 +9,11 @@
 
 pub mod builtin;
 pub mod error;
+pub mod from_recording;
+pub mod import;
 pub mod plan;
 pub mod reader;
+pub mod segment;
 pub mod stats;
 pub mod writer;
 

@@ -1,0 +1,479 @@
+//! `host segment`: one continuous logger recording (a hand-held session) → a session directory that
+//! `host calibrate --input` reads, a table and a figure of what was found, and the gyro's `G` and
+//! bias from the hand turns (`gyro.toml`).
+
+use super::CliError;
+use crate::estimate::gyro::GyroEstimate;
+use crate::estimate::handheld_gyro::DETERMINED_1SIGMA;
+use crate::estimate::handheld_gyro::{
+    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn,
+};
+use crate::estimate::{calibrate_session_stats, EstimateOptions};
+use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
+use crate::session::from_recording::{plan_for, stats_for, write_session};
+use crate::session::import::{
+    parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
+};
+use crate::session::segment::{coverage, find_intervals, Coverage, SegmentOptions, Segmentation};
+use crate::session::Plan;
+use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
+use crate::unit_file::GyroSection;
+use crate::unit_file::UnitFile;
+use clap::Args;
+use shared::linalg;
+use shared::OutputUnit;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The gyro result's file in the session directory.
+pub const GYRO_FILE: &str = "gyro.toml";
+
+/// `host segment`.
+#[derive(Debug, Args)]
+pub struct SegmentArgs {
+    /// The logger's CSV (a header line naming the columns).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Session directory to write (plan.toml, samples.csv, gyro.toml, segments.svg/png).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Accelerometer x,y,z and gyro x,y,z column names, in that order.
+    #[arg(
+        long,
+        value_name = "AX,AY,AZ,GX,GY,GZ",
+        default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
+    )]
+    pub columns: String,
+    /// Column with the time in seconds (else --rate-hz).
+    #[arg(long, value_name = "NAME")]
+    pub time_column: Option<String>,
+    /// Sample rate, Hz, when the file has no time column (a sample index is ignored).
+    #[arg(long, value_name = "HZ")]
+    pub rate_hz: Option<f64>,
+    /// The accelerometer's unit: m/s2, g, LSB or V (kept as the calibration's output unit).
+    #[arg(long, value_name = "UNIT")]
+    pub acc_unit: String,
+    /// The gyro's unit: deg/s or rad/s.
+    #[arg(long, value_name = "UNIT")]
+    pub gyro_unit: String,
+    /// Shortest still interval kept, s.
+    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    pub min_still_s: f64,
+    /// Replace an existing session in DIR.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `host simulate-hand`.
+#[derive(Debug, Args)]
+pub struct SimulateHandArgs {
+    /// The CSV to write (a `.truth.toml` with the simulated unit and gyro is written next to it).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Sample rate, Hz.
+    #[arg(long, default_value_t = 200.0, value_name = "HZ")]
+    pub rate_hz: f64,
+    /// Accelerometer unit written: m/s2, g or LSB (4096 per g, quantised).
+    #[arg(long, default_value = "m/s2", value_name = "UNIT")]
+    pub acc_unit: String,
+    /// Gyro unit written: deg/s or rad/s.
+    #[arg(long, default_value = "deg/s", value_name = "UNIT")]
+    pub gyro_unit: String,
+    /// Replace an existing file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Writes a simulated hand-held session as a logger CSV (`t,acc_x,…,gyr_z`): 24 positions held 3–5 s
+/// with hand tremor, turns of 1–3 s up to 180 °/s, 1 mg noise, a gyro with 0.5 % scale, 0.5°
+/// misalignment and 0.5 °/s bias. Returns the number of rows.
+pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
+    let unit = parse_acc_unit(&a.acc_unit)
+        .filter(|u| *u != OutputUnit::Volts)
+        .ok_or_else(|| CliError::Usage(format!("--acc-unit {}: use m/s2, g or LSB", a.acc_unit)))?;
+    let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
+        CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
+    })?;
+    if !(a.rate_hz.is_finite() && (20.0..=10_000.0).contains(&a.rate_hz)) {
+        return Err(CliError::Usage("--rate-hz must be within 20..10000".into()));
+    }
+    let truth_path = a.out.with_extension("truth.toml");
+    for p in [&a.out, &truth_path] {
+        if p.exists() && !a.force {
+            return Err(CliError::Usage(format!(
+                "{} exists: choose another --out or add --force to replace it",
+                p.display()
+            )));
+        }
+    }
+    let truth = logger_unit(unit);
+    let spec = HandSpec {
+        rate_hz: a.rate_hz,
+        acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
+        ..HandSpec::standard(a.seed)
+    };
+    let sim = simulate_hand(&truth, &spec);
+    let layout = LoggerLayout {
+        gyro_deg_s: gyro_unit == GyroUnit::DegPerS,
+        ..LoggerLayout::default()
+    };
+    let io = |p: &Path| {
+        let p = p.display().to_string();
+        move |e: std::io::Error| CliError::Usage(format!("cannot write {p}: {e}"))
+    };
+    write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
+    let g = &spec.gyro;
+    let text = format!(
+        "{}\n# The simulated gyro: w = matrix·ω_body + bias (true body axes).\n[gyro]\nmatrix = {:?}\nbias_rad_s = {:?}\n",
+        UnitFile::from_calibration(&truth, None, None).to_toml(),
+        g.matrix,
+        g.bias_rad_s
+    );
+    write_atomic(&truth_path, text.as_bytes()).map_err(io(&truth_path))?;
+    println!(
+        "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",
+        a.out.display(),
+        sim.rows.len(),
+        sim.holds.len(),
+        a.rate_hz,
+        unit.symbol(),
+        gyro_unit.symbol(),
+        truth_path.display()
+    );
+    Ok(sim.rows.len())
+}
+
+/// The gyro `host segment` fitted from the hand turns (`DIR/gyro.toml`), as the estimator's gyro
+/// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
+pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let path = dir.join(GYRO_FILE);
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(None);
+    };
+    let f: File = toml::from_str(&text)
+        .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;
+    let g = f.gyro;
+    let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
+    let names = ["x", "y", "z"];
+    let undetermined = (0..9)
+        .filter(|&k| {
+            let s = matrix_1sigma[k / 3][k % 3];
+            s.is_nan() || s > DETERMINED_1SIGMA
+        })
+        .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
+        .collect();
+    Ok(Some(GyroEstimate {
+        matrix: g.matrix,
+        matrix_1sigma,
+        bias_rad_s: g.bias_rad_s,
+        bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
+        table_rate_scale: (0.0, 0.0),
+        undetermined,
+    }))
+}
+
+/// What `host segment` found and wrote.
+pub struct SegmentOutcome {
+    /// The recording.
+    pub recording: Recording,
+    /// The intervals.
+    pub segmentation: Segmentation,
+    /// The session plan written.
+    pub plan: Plan,
+    /// The gyro fit, or why there is none.
+    pub gyro: Result<HandGyroFit, HandGyroError>,
+}
+
+fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
+    let names: Vec<String> = a.columns.split(',').map(|s| s.trim().to_string()).collect();
+    let columns: [String; 6] = names.try_into().map_err(|_| {
+        CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
+    })?;
+    let time = match (&a.time_column, a.rate_hz) {
+        (Some(c), None) => TimeSource::Column(c.clone()),
+        (None, Some(hz)) => TimeSource::RateHz(hz),
+        _ => {
+            return Err(CliError::Usage(
+                "give exactly one of --time-column NAME (seconds) or --rate-hz HZ".into(),
+            ))
+        }
+    };
+    let acc_unit = parse_acc_unit(&a.acc_unit).ok_or_else(|| {
+        CliError::Usage(format!("--acc-unit {}: use m/s2, g, LSB or V", a.acc_unit))
+    })?;
+    let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
+        CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
+    })?;
+    Ok(ImportOptions {
+        columns,
+        time,
+        acc_unit,
+        gyro_unit,
+    })
+}
+
+/// Runs `host segment`, printing the table and the gyro result to stdout.
+pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
+    let options = import_options(a)?;
+    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
+    if rec.skipped_rows > 0 {
+        eprintln!(
+            "warning: {} row(s) with NaN or infinite values left out",
+            rec.skipped_rows
+        );
+    }
+    let seg_options = SegmentOptions {
+        min_still_s: a.min_still_s,
+        ..SegmentOptions::default()
+    };
+    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let cov = coverage(&seg.stills, seg_options.same_position_deg);
+    print!("{}", table(&rec, &seg, &cov));
+    cov.check(seg.stills.len(), seg_options.same_position_deg)
+        .map_err(|e| CliError::Usage(e.to_string()))?;
+    if let Some(advice) = cov.advice() {
+        println!("advice: {advice}");
+    }
+    let gyro_path = a.out.join(GYRO_FILE);
+    if gyro_path.exists() && !a.force {
+        return Err(CliError::Usage(format!(
+            "{} exists: choose another --out or add --force to replace the session",
+            gyro_path.display()
+        )));
+    }
+    let plan = plan_for(&rec, &seg);
+    let gyro = gyro_fit(&rec, &seg, &plan)?;
+    let rows = write_session(&a.out, &rec, &seg, &plan, a.force)?;
+    match &gyro {
+        Ok(fit) => {
+            print!("{}", gyro_text(fit));
+            write_atomic(&gyro_path, fit.to_toml().as_bytes()).map_err(|e| {
+                CliError::Usage(format!("cannot write {}: {e}", gyro_path.display()))
+            })?;
+        }
+        Err(e) => println!("gyro: not calibrated: {e}"),
+    }
+    let fig = figure(&rec, &seg);
+    match plot::render(&fig, &a.out, Formats::default()) {
+        Ok(o) => o.warnings.iter().for_each(|w| eprintln!("warning: {w}")),
+        Err(e) => eprintln!("warning: {e}"),
+    }
+    println!(
+        "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
+        a.out.display(),
+        rows,
+        plan.segments.len(),
+        fig.stem,
+        a.out.display()
+    );
+    Ok(SegmentOutcome {
+        recording: rec,
+        segmentation: seg,
+        plan,
+        gyro,
+    })
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = path.with_extension("toml.tmp");
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path)
+}
+
+/// The gyro fit on the turns, with gravity directions from the session's own accelerometer
+/// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
+pub(crate) fn gyro_fit(
+    rec: &Recording,
+    seg: &Segmentation,
+    plan: &Plan,
+) -> Result<Result<HandGyroFit, HandGyroError>, CliError> {
+    let stats = stats_for(rec, seg, plan);
+    let options = EstimateOptions {
+        compare_methods: false,
+        ..EstimateOptions::default()
+    };
+    let outcome = calibrate_session_stats(plan, &stats, &options)?;
+    let m = outcome.fitted.m_out_per_g;
+    let minv =
+        linalg::inverse(&m).ok_or_else(|| CliError::Usage("singular accelerometer fit".into()))?;
+    let up = |iv: &crate::session::segment::Interval| {
+        let d: [f64; 3] =
+            core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
+        let f = linalg::mat_vec(&minv, &d);
+        let n = linalg::norm(&f);
+        f.map(|c| c / n)
+    };
+    let turns: Vec<Turn> = seg
+        .stills
+        .windows(2)
+        .map(|w| Turn {
+            from_row: w[0].end - 1,
+            to_row: w[1].start,
+            up_before_b: up(&w[0]),
+            up_after_b: up(&w[1]),
+        })
+        .collect();
+    let means: Vec<([f64; 3], usize)> = seg
+        .stills
+        .iter()
+        .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
+        .collect();
+    match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
+        Err(e @ HandGyroError::UnitMismatch { .. }) => Err(CliError::Usage(e.to_string())),
+        r => Ok(r),
+    }
+}
+
+/// The table of intervals.
+pub fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
+    let unit = rec.acc_unit.map_or("", |u| u.symbol());
+    let mut s = format!(
+        "{} still interval(s), {} spin(s), {} short quiet run(s) dropped; thresholds: accelerometer \
+         {:.3} mg, gyro {:.3} °/s (window std, from the quietest stretch)\n",
+        seg.stills.len(),
+        seg.spins.len(),
+        seg.short_dropped,
+        seg.acc_threshold / seg.gravity_out * 1e3,
+        seg.gyro_threshold_rad_s.to_degrees()
+    );
+    let _ = writeln!(
+        s,
+        "  #   start s  duration s   mean direction (x, y, z)     acc noise mg  gyro noise °/s  note"
+    );
+    for (k, iv) in seg.stills.iter().chain(&seg.spins).enumerate() {
+        let acc_mg = linalg::norm(&iv.std_acc) / seg.gravity_out * 1e3;
+        let gyro = linalg::norm(&iv.std_gyro_rad_s).to_degrees();
+        let note = if k >= seg.stills.len() {
+            format!(
+                "spin at {:.1} °/s (listed, not used)",
+                linalg::norm(&iv.mean_gyro_rad_s).to_degrees()
+            )
+        } else {
+            cov.repeats[k]
+                .map(|r| format!("same position as #{}", r + 1))
+                .unwrap_or_default()
+        };
+        let _ = writeln!(
+            s,
+            "{:>3} {:>9.2} {:>11.2}   ({:+.4}, {:+.4}, {:+.4})   {:>11.3} {:>15.3}  {note}",
+            k + 1,
+            iv.start_s,
+            iv.duration_s,
+            iv.direction[0],
+            iv.direction[1],
+            iv.direction[2],
+            acc_mg,
+            gyro
+        );
+    }
+    let _ = writeln!(
+        s,
+        "{} distinct positions (gravity {:.5} {unit} measured)",
+        cov.distinct, seg.gravity_out
+    );
+    s
+}
+
+fn gyro_text(fit: &HandGyroFit) -> String {
+    let sc = fit.scale_rel();
+    let mis = fit.misalignment_deg();
+    let mut s = format!(
+        "gyro from {} hand turns (w = G·ω + b, body axes of this session's accelerometer \
+         calibration), rms misfit {:.4}°:\n",
+        fit.turns, fit.rms_residual_deg
+    );
+    for i in 0..3 {
+        let _ = writeln!(
+            s,
+            "  {}: scale {:+.4} % ± {:.4} %, misalignment {:+.4}°, {:+.4}°, bias {:+.4} ± {:.4} °/s",
+            ["x", "y", "z"][i],
+            sc[i] * 100.0,
+            fit.matrix_1sigma[i][i] * 100.0,
+            mis[i][(i + 1) % 3],
+            mis[i][(i + 2) % 3],
+            fit.bias_rad_s[i].to_degrees(),
+            fit.bias_1sigma_rad_s[i].to_degrees()
+        );
+    }
+    let und = fit.undetermined();
+    if und.is_empty() {
+        let _ = writeln!(s, "  every entry of G determined to better than 0.1 % (1σ)");
+    } else {
+        let _ = writeln!(
+            s,
+            "  not determined to 0.1 % by these turns: {} (turn about more varied axes)",
+            und.join(", ")
+        );
+    }
+    s
+}
+
+/// The recording (|acc| and |gyro|) with the still intervals marked.
+fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
+    let step = (rec.len() / 4000).max(1);
+    let series = |label: &str, f: &dyn Fn(usize) -> f64, colour| Series {
+        label: label.into(),
+        points: (0..rec.len())
+            .step_by(step)
+            .map(|i| (rec.t_s[i], f(i)))
+            .collect(),
+        error: None,
+        style: SeriesStyle::Line,
+        colour,
+    };
+    let marks = |y: f64| Series {
+        label: "still intervals".into(),
+        points: seg
+            .stills
+            .iter()
+            .flat_map(|iv| {
+                (iv.start..iv.end)
+                    .step_by(step.max(10))
+                    .map(move |i| (i, y))
+            })
+            .map(|(i, y)| (rec.t_s[i], y))
+            .collect(),
+        error: None,
+        style: SeriesStyle::Markers,
+        colour: 4,
+    };
+    let unit = rec.acc_unit.map_or("", |u| u.symbol());
+    let g = seg.gravity_out;
+    Figure {
+        stem: "segments".into(),
+        title: "Recording and the still intervals found".into(),
+        grid: (2, 1),
+        size: (1400, 900),
+        panels: vec![
+            Panel {
+                title: "accelerometer magnitude".into(),
+                x_desc: "t (s)".into(),
+                y_desc: format!("|a| ({unit})"),
+                x_categories: None,
+                log_y: false,
+                series: vec![
+                    series("|a|", &|i| linalg::norm(&rec.acc[i]), 2),
+                    marks(g * 1.05),
+                ],
+            },
+            Panel {
+                title: "gyro magnitude".into(),
+                x_desc: "t (s)".into(),
+                y_desc: "|w| (°/s)".into(),
+                x_categories: None,
+                log_y: false,
+                series: vec![
+                    series("|w|", &|i| linalg::norm(&rec.gyro_rad_s[i]).to_degrees(), 0),
+                    marks(0.0),
+                ],
+            },
+        ],
+    }
+}

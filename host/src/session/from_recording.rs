@@ -1,0 +1,137 @@
+//! A session (plan + samples) from one continuous recording cut by [`super::segment`]: every still
+//! interval becomes a static segment whose attitude is free, or the nearest body axis with a prior
+//! when it is within [`AXIS_SNAP_DEG`] of one (a unit set down on its faces, docs/model.md §7).
+
+use super::import::Recording;
+use super::segment::{angle_deg, Interval, Segmentation};
+use super::{Plan, RecordingError, SegmentAccumulator, SegmentPlan, SegmentStats, SessionWriter};
+use crate::session::plan::Attitude;
+use std::path::Path;
+
+/// A still position this close to a body axis is taken as set down on that face, degrees.
+pub const AXIS_SNAP_DEG: f64 = 2.0;
+/// Prior 1σ of such a face position about each axis, degrees: a cube's face on a bench that is level
+/// to a fraction of a degree, with the direction measured before calibration (scale and axis errors
+/// of about 1 % and 0.5° move it by as much).
+pub const FACE_PRIOR_DEG: f64 = 1.0;
+
+/// The nearest body axis (±x, ±y, ±z) if within `deg`.
+fn nearest_axis(d: &[f64; 3], deg: f64) -> Option<[f64; 3]> {
+    (0..3)
+        .flat_map(|j| {
+            [1.0, -1.0].map(|s| {
+                let mut a = [0.0; 3];
+                a[j] = s;
+                a
+            })
+        })
+        .find(|a| angle_deg(d, a) < deg)
+}
+
+fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
+    let name = format!("still {:02}", k + 1);
+    let axis = nearest_axis(&iv.direction, AXIS_SNAP_DEG);
+    SegmentPlan {
+        up_b: axis.unwrap_or(iv.direction.map(|c| (c * 1e6).round() / 1e6)),
+        attitude: if axis.is_some() {
+            Attitude::default()
+        } else {
+            Attitude::Free
+        },
+        attitude_sigma_deg: axis.map(|_| FACE_PRIOR_DEG),
+        duration_s: Some((iv.duration_s * 1e3).round() / 1e3),
+        mount: Some(name.clone()),
+        name,
+        ..SegmentPlan::default()
+    }
+}
+
+/// The plan of the session: one static segment per still interval, format 2.
+pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
+    Plan {
+        format_version: 2,
+        output_unit: rec.acc_unit.unwrap_or(shared::OutputUnit::Lsb),
+        sample_rate_hz: (rec.rate_hz * 1e6).round() / 1e6,
+        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        unit_id: None,
+        attitude_sigma_deg: None,
+        table_rate_sigma_ppm: None,
+        segments: seg
+            .stills
+            .iter()
+            .enumerate()
+            .map(|(k, iv)| segment_for(k, iv))
+            .collect(),
+    }
+}
+
+/// The per-segment statistics, as reading the written session would give them.
+pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
+    seg.stills
+        .iter()
+        .zip(&plan.segments)
+        .filter_map(|(iv, sp)| {
+            let mut acc = SegmentAccumulator::new(sp.name.clone());
+            for i in iv.start..iv.end {
+                acc.push(rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+            }
+            acc.finish()
+        })
+        .collect()
+}
+
+/// Writes `dir/plan.toml` and `dir/samples.csv` (refuses an existing session unless `overwrite`).
+pub fn write_session(
+    dir: &Path,
+    rec: &Recording,
+    seg: &Segmentation,
+    plan: &Plan,
+    overwrite: bool,
+) -> Result<u64, RecordingError> {
+    let mut w = SessionWriter::create(dir, plan, overwrite)?;
+    for (iv, sp) in seg.stills.iter().zip(&plan.segments) {
+        for i in iv.start..iv.end {
+            w.write_row(&sp.name, rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i])?;
+        }
+        w.end_segment()?;
+    }
+    w.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::segment::IntervalKind;
+
+    fn interval(direction: [f64; 3]) -> Interval {
+        Interval {
+            kind: IntervalKind::Still,
+            start: 0,
+            end: 10,
+            start_s: 0.0,
+            duration_s: 4.0,
+            mean_acc: direction,
+            std_acc: [1e-3; 3],
+            mean_gyro_rad_s: [0.0; 3],
+            std_gyro_rad_s: [1e-3; 3],
+            direction,
+        }
+    }
+
+    #[test]
+    fn a_position_near_a_face_gets_the_axis_with_a_prior_others_are_free() {
+        let tilt = |deg: f64| {
+            let r = deg.to_radians();
+            [r.sin(), -r.cos(), 0.0]
+        };
+        let near = segment_for(0, &interval(tilt(1.0)));
+        assert_eq!(near.up_b, [0.0, -1.0, 0.0]);
+        assert!(!near.is_free());
+        assert_eq!(near.attitude_sigma_deg, Some(FACE_PRIOR_DEG));
+        assert_eq!(near.mount.as_deref(), Some("still 01"));
+        let far = segment_for(1, &interval(tilt(5.0)));
+        assert!(far.is_free());
+        assert!((far.up_b[0] - 5f64.to_radians().sin()).abs() < 1e-6);
+        assert_eq!(far.attitude_sigma_deg, None);
+    }
+}

@@ -1,0 +1,556 @@
+//! A real logger's CSV: one continuous, unlabelled recording (a hand-held session) with a header row,
+//! named columns in any order, extra columns ignored, time from a column or from a sample rate, and the
+//! units the user states. `host segment` cuts it into a session (`super::segment`).
+//!
+//! The accelerometer's values are kept in the logger's own unit (it becomes the session's
+//! `output_unit`, so the fitted bias and scale are in that unit); the gyro is converted to rad/s, the
+//! session format's unit. The whole recording is held in memory (the gyro fit integrates every turn),
+//! so the number of rows is capped ([`MAX_ROWS`]) and every line is bounded ([`MAX_LINE_BYTES`]).
+
+use shared::OutputUnit;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// Longest accepted line, bytes: a logger's row is well under 1 KiB; a file with no line ends (or a
+/// binary file) must not be read into memory whole.
+pub const MAX_LINE_BYTES: usize = 64 * 1024;
+/// Most rows held: 4 million rows (about 190 MB) is 67 minutes at 1 kHz, far more than a hand-held
+/// session needs.
+pub const MAX_ROWS: usize = 4_000_000;
+/// The default accelerometer and gyro column names, x y z each.
+pub const DEFAULT_COLUMNS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
+
+/// The gyro's unit in the logger's file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GyroUnit {
+    /// Degrees per second.
+    DegPerS,
+    /// Radians per second.
+    RadPerS,
+}
+
+impl GyroUnit {
+    /// Parses "deg/s" or "rad/s".
+    pub fn parse(s: &str) -> Option<GyroUnit> {
+        match s {
+            "deg/s" | "dps" | "°/s" => Some(GyroUnit::DegPerS),
+            "rad/s" => Some(GyroUnit::RadPerS),
+            _ => None,
+        }
+    }
+
+    /// rad/s per unit.
+    pub fn to_rad_s(self) -> f64 {
+        match self {
+            GyroUnit::DegPerS => std::f64::consts::PI / 180.0,
+            GyroUnit::RadPerS => 1.0,
+        }
+    }
+
+    /// "deg/s" or "rad/s".
+    pub fn symbol(self) -> &'static str {
+        match self {
+            GyroUnit::DegPerS => "deg/s",
+            GyroUnit::RadPerS => "rad/s",
+        }
+    }
+}
+
+/// Parses an accelerometer unit as the command line spells it: "m/s2", "g", "LSB" or "V".
+pub fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
+    match s {
+        "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnit::MetresPerSecondSquared),
+        "g" => Some(OutputUnit::StandardGravity),
+        "LSB" | "lsb" | "counts" => Some(OutputUnit::Lsb),
+        "V" | "v" => Some(OutputUnit::Volts),
+        _ => None,
+    }
+}
+
+/// Where each sample's time comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TimeSource {
+    /// A column holding seconds.
+    Column(String),
+    /// Row number / rate (any index column is then ignored).
+    RateHz(f64),
+}
+
+/// How to read a logger's CSV.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportOptions {
+    /// acc x, y, z, gyro x, y, z column names.
+    pub columns: [String; 6],
+    /// Time stamps.
+    pub time: TimeSource,
+    /// The accelerometer's unit (kept as the output unit).
+    pub acc_unit: OutputUnit,
+    /// The gyro's unit (converted to rad/s).
+    pub gyro_unit: GyroUnit,
+}
+
+impl ImportOptions {
+    /// The default column names with the given time source and units.
+    pub fn new(time: TimeSource, acc_unit: OutputUnit, gyro_unit: GyroUnit) -> ImportOptions {
+        ImportOptions {
+            columns: DEFAULT_COLUMNS.map(String::from),
+            time,
+            acc_unit,
+            gyro_unit,
+        }
+    }
+}
+
+/// A continuous recording in memory.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Recording {
+    /// Time of each row, s.
+    pub t_s: Vec<f64>,
+    /// Accelerometer outputs, the logger's unit.
+    pub acc: Vec<[f64; 3]>,
+    /// Gyro rates, rad/s, gyro axes.
+    pub gyro_rad_s: Vec<[f64; 3]>,
+    /// The accelerometer's unit.
+    pub acc_unit: Option<OutputUnit>,
+    /// Median sample rate, Hz.
+    pub rate_hz: f64,
+    /// Rows left out because a value was NaN or infinite.
+    pub skipped_rows: usize,
+}
+
+impl Recording {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+}
+
+/// Why a logger's file cannot be imported; each says what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// Not readable.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// No header line.
+    #[error("{0} is empty: a logger's CSV needs a header line naming its columns")]
+    Empty(PathBuf),
+    /// A needed column is not in the header.
+    #[error(
+        "column '{name}' is not in the header ({found}); name the file's columns with \
+         --columns ACC_X,ACC_Y,ACC_Z,GYR_X,GYR_Y,GYR_Z (and --time-column NAME)"
+    )]
+    MissingColumn {
+        /// The column asked for.
+        name: String,
+        /// The header's columns.
+        found: String,
+    },
+    /// A line longer than [`MAX_LINE_BYTES`].
+    #[error(
+        "line {line} is longer than {MAX_LINE_BYTES} bytes: not a logger's CSV (or no line ends)"
+    )]
+    LineTooLong {
+        /// 1-based line.
+        line: u64,
+    },
+    /// A field is not a number.
+    #[error("line {line}, column '{column}': '{text}' is not a number; fix or delete the line")]
+    NotANumber {
+        /// 1-based line.
+        line: u64,
+        /// Column name.
+        column: String,
+        /// The field.
+        text: String,
+    },
+    /// A row with fewer fields than the header.
+    #[error("line {line} has {fields} fields, the header {header}; fix or delete the line")]
+    ShortRow {
+        /// 1-based line.
+        line: u64,
+        /// Fields found.
+        fields: usize,
+        /// Header fields.
+        header: usize,
+    },
+    /// Time does not increase.
+    #[error(
+        "line {line}: time {t_s} s does not increase (previous {previous_s} s); give the time column \
+         in seconds, or --rate-hz instead of --time-column"
+    )]
+    TimeNotIncreasing {
+        /// 1-based line.
+        line: u64,
+        /// This row's time.
+        t_s: f64,
+        /// The previous row's.
+        previous_s: f64,
+    },
+    /// Too many rows.
+    #[error(
+        "more than {MAX_ROWS} rows: cut the recording (a hand-held session needs a few minutes)"
+    )]
+    TooManyRows,
+    /// Too few rows.
+    #[error(
+        "only {0} usable rows: a hand-held session needs minutes of data (24 positions of 3–5 s)"
+    )]
+    TooFewRows(usize),
+    /// The rate is not a positive finite number.
+    #[error(
+        "--rate-hz {0} is not a sample rate: give the logger's rate in Hz, e.g. --rate-hz 102.4"
+    )]
+    BadRate(f64),
+    /// Gravity's magnitude does not fit the stated accelerometer unit.
+    #[error(
+        "the accelerometer's median magnitude is {median} {unit}, but gravity is {expected} {unit}: \
+         the unit is wrong{hint}; give the right --acc-unit (m/s2, g, LSB or V)"
+    )]
+    UnitMismatch {
+        /// Median |acc|.
+        median: f64,
+        /// The stated unit.
+        unit: &'static str,
+        /// Gravity in that unit.
+        expected: f64,
+        /// A guess at the right unit.
+        hint: String,
+    },
+}
+
+/// Reads a logger's CSV (see the module docs).
+pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording, ImportError> {
+    let io = |source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = File::open(path).map_err(io)?;
+    read_logger(BufReader::with_capacity(1 << 20, file), path, options)
+}
+
+/// Reads the next line (without its line end) into `buf`; `Ok(false)` at the end of the input.
+fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool, ImportError> {
+    buf.clear();
+    let n = r
+        .by_ref()
+        .take(MAX_LINE_BYTES as u64 + 1)
+        .read_until(b'\n', buf)
+        .map_err(|source| ImportError::Io {
+            path: PathBuf::new(),
+            source,
+        })?;
+    if n == 0 {
+        return Ok(false);
+    }
+    if buf.last() == Some(&b'\n') {
+        buf.pop();
+    } else if buf.len() > MAX_LINE_BYTES {
+        return Err(ImportError::LineTooLong { line });
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    Ok(true)
+}
+
+/// The field separator: a comma, else a semicolon or tab if the header uses one.
+fn separator(header: &str) -> char {
+    [',', ';', '\t']
+        .into_iter()
+        .find(|c| header.contains(*c))
+        .unwrap_or(',')
+}
+
+fn clean(field: &str) -> &str {
+    field.trim().trim_matches('"').trim()
+}
+
+/// [`read_logger_csv`] on any reader (`path` only names it in messages).
+pub fn read_logger<R: BufRead>(
+    mut r: R,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<Recording, ImportError> {
+    let mut buf = Vec::new();
+    if !next_line(&mut r, &mut buf, 1)? {
+        return Err(ImportError::Empty(path.to_path_buf()));
+    }
+    let header_text = String::from_utf8_lossy(&buf)
+        .trim_start_matches('\u{feff}')
+        .to_string();
+    let sep = separator(&header_text);
+    let header: Vec<String> = header_text
+        .split(sep)
+        .map(|f| clean(f).to_string())
+        .collect();
+    let find = |name: &str| {
+        header
+            .iter()
+            .position(|h| h.eq_ignore_ascii_case(name))
+            .ok_or_else(|| ImportError::MissingColumn {
+                name: name.to_string(),
+                found: header.join(", "),
+            })
+    };
+    let mut idx = [0usize; 6];
+    for (k, name) in options.columns.iter().enumerate() {
+        idx[k] = find(name)?;
+    }
+    /// The resolved time source.
+    enum Time {
+        Column(usize),
+        RateHz(f64),
+    }
+    let time = match &options.time {
+        TimeSource::Column(name) => Time::Column(find(name)?),
+        TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
+        TimeSource::RateHz(hz) => return Err(ImportError::BadRate(*hz)),
+    };
+    let gyro_scale = options.gyro_unit.to_rad_s();
+    let mut rec = Recording {
+        acc_unit: Some(options.acc_unit),
+        ..Recording::default()
+    };
+    let mut line = 1u64;
+    let mut row_index = 0u64;
+    loop {
+        line += 1;
+        if !next_line(&mut r, &mut buf, line)? {
+            break;
+        }
+        let text = String::from_utf8_lossy(&buf);
+        if text.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = text.split(sep).map(clean).collect();
+        if fields.len() < header.len() {
+            return Err(ImportError::ShortRow {
+                line,
+                fields: fields.len(),
+                header: header.len(),
+            });
+        }
+        let number = |i: usize| -> Result<f64, ImportError> {
+            fields[i]
+                .parse::<f64>()
+                .map_err(|_| ImportError::NotANumber {
+                    line,
+                    column: header[i].clone(),
+                    text: fields[i].chars().take(40).collect(),
+                })
+        };
+        let v: [f64; 6] = [
+            number(idx[0])?,
+            number(idx[1])?,
+            number(idx[2])?,
+            number(idx[3])?,
+            number(idx[4])?,
+            number(idx[5])?,
+        ];
+        let t_s = match time {
+            Time::Column(i) => number(i)?,
+            Time::RateHz(hz) => row_index as f64 / hz,
+        };
+        row_index += 1;
+        if !v.iter().all(|x| x.is_finite()) || !t_s.is_finite() {
+            rec.skipped_rows += 1;
+            continue;
+        }
+        if let Some(&previous_s) = rec.t_s.last() {
+            if t_s <= previous_s {
+                return Err(ImportError::TimeNotIncreasing {
+                    line,
+                    t_s,
+                    previous_s,
+                });
+            }
+        }
+        if rec.t_s.len() >= MAX_ROWS {
+            return Err(ImportError::TooManyRows);
+        }
+        rec.t_s.push(t_s);
+        rec.acc.push([v[0], v[1], v[2]]);
+        rec.gyro_rad_s
+            .push([v[3] * gyro_scale, v[4] * gyro_scale, v[5] * gyro_scale]);
+    }
+    if rec.len() < 100 {
+        return Err(ImportError::TooFewRows(rec.len()));
+    }
+    rec.rate_hz = median_rate(&rec.t_s);
+    check_gravity(&rec, options.acc_unit)?;
+    Ok(rec)
+}
+
+fn median_rate(t_s: &[f64]) -> f64 {
+    let mut dt: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    dt.sort_by(f64::total_cmp);
+    1.0 / dt[dt.len() / 2]
+}
+
+/// Gravity's magnitude must be about 1 g in the stated unit (for m/s² and g; LSB and V have no
+/// expected value). The median over all rows is gravity's: a hand-held recording is mostly still.
+fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
+    let expected = match unit {
+        OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
+        OutputUnit::StandardGravity => 1.0,
+        OutputUnit::Lsb | OutputUnit::Volts => return Ok(()),
+    };
+    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+    mags.sort_by(f64::total_cmp);
+    let median = mags[mags.len() / 2];
+    let ratio = median / expected;
+    if (0.8..=1.25).contains(&ratio) {
+        return Ok(());
+    }
+    let hint = if (ratio * shared::STANDARD_GRAVITY_M_S2 - 1.0).abs() < 0.2 {
+        " (the values look like g: --acc-unit g)".to_string()
+    } else if (ratio / shared::STANDARD_GRAVITY_M_S2 - 1.0).abs() < 0.2 {
+        " (the values look like m/s²: --acc-unit m/s2)".to_string()
+    } else {
+        " (raw counts or volts? --acc-unit LSB or V)".to_string()
+    };
+    Err(ImportError::UnitMismatch {
+        median,
+        unit: unit.symbol(),
+        expected,
+        hint,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str, options: &ImportOptions) -> Result<Recording, ImportError> {
+        read_logger(text.as_bytes(), Path::new("test.csv"), options)
+    }
+
+    fn rows(n: usize, f: impl Fn(usize) -> String) -> String {
+        (0..n).map(|i| f(i) + "\n").collect()
+    }
+
+    #[test]
+    fn columns_in_any_order_extra_ignored_time_column_g_and_rad_s() {
+        let text = format!(
+            "temp;gyr_z;time;acc_z;acc_y;acc_x;gyr_y;gyr_x\n{}",
+            rows(200, |i| format!(
+                "25.0;0.5;{};1.0;0.01;0.02;0.25;0.125",
+                i as f64 * 0.01
+            ))
+        );
+        let o = ImportOptions::new(
+            TimeSource::Column("time".into()),
+            OutputUnit::StandardGravity,
+            GyroUnit::RadPerS,
+        );
+        let rec = read(&text, &o).unwrap();
+        assert_eq!(rec.len(), 200);
+        assert_eq!(rec.acc[3], [0.02, 0.01, 1.0]);
+        assert_eq!(rec.gyro_rad_s[3], [0.125, 0.25, 0.5]);
+        assert!((rec.rate_hz - 100.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn sample_index_and_rate_deg_s_converted() {
+        let text = format!(
+            "sample,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(300, |i| format!("{i},0,0,9.81,180,0,-90"))
+        );
+        let o = ImportOptions::new(
+            TimeSource::RateHz(102.4),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::DegPerS,
+        );
+        let rec = read(&text, &o).unwrap();
+        assert_eq!(rec.t_s[102], 102.0 / 102.4);
+        assert!((rec.gyro_rad_s[0][0] - std::f64::consts::PI).abs() < 1e-12);
+        assert!((rec.gyro_rad_s[0][2] + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_input_names_the_problem_and_the_fix() {
+        let ms2 = ImportOptions::new(
+            TimeSource::RateHz(100.0),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::DegPerS,
+        );
+        let missing = read("acc_x,acc_y,gyr_x,gyr_y,gyr_z\n1,2,3,4,5\n", &ms2).unwrap_err();
+        let m = missing.to_string();
+        assert!(m.contains("'acc_z'") && m.contains("--columns"), "{m}");
+
+        let g_values = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |_| "0,0,1.0,0,0,0".into())
+        );
+        let m = read(&g_values, &ms2).unwrap_err().to_string();
+        assert!(m.contains("--acc-unit g"), "{m}");
+        let as_g = ImportOptions {
+            acc_unit: OutputUnit::StandardGravity,
+            ..ms2.clone()
+        };
+        let ms2_values = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |_| "0,0,9.8,0,0,0".into())
+        );
+        let m = read(&ms2_values, &as_g).unwrap_err().to_string();
+        assert!(m.contains("--acc-unit m/s2"), "{m}");
+        let tiny = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |_| "0,0,0.1,0,0,0".into())
+        );
+        assert!(matches!(
+            read(&tiny, &as_g),
+            Err(ImportError::UnitMismatch { .. })
+        ));
+        let hundred = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |_| "0,0,100,0,0,0".into())
+        );
+        assert!(matches!(
+            read(&hundred, &as_g),
+            Err(ImportError::UnitMismatch { .. })
+        ));
+
+        let word = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n0,0,9.8,0,zero,0\n";
+        let m = read(word, &ms2).unwrap_err().to_string();
+        assert!(m.contains("line 2, column 'gyr_y'"), "{m}");
+
+        let long = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            "1".repeat(70_000)
+        );
+        assert!(matches!(
+            read(&long, &ms2),
+            Err(ImportError::LineTooLong { line: 2 })
+        ));
+
+        let back = "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n0.1,0,0,9.8,0,0,0\n0.1,0,0,9.8,0,0,0\n";
+        let timed = ImportOptions {
+            time: TimeSource::Column("t".into()),
+            ..ms2.clone()
+        };
+        assert!(matches!(
+            read(back, &timed),
+            Err(ImportError::TimeNotIncreasing { line: 3, .. })
+        ));
+        let no_rate = ImportOptions {
+            time: TimeSource::RateHz(0.0),
+            ..ms2
+        };
+        assert!(matches!(
+            read(&ms2_values, &no_rate),
+            Err(ImportError::BadRate(_))
+        ));
+    }
+}

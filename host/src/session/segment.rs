@@ -1,0 +1,571 @@
+//! Still intervals (and constant-rate spins) in one continuous recording, and what they are worth:
+//! the detection behind `host segment`.
+//!
+//! A sample is quiet when the variance of the accelerometer and of the gyro over a centred sliding
+//! window are both below thresholds learnt from the recording itself: a multiple of the window
+//! variance of its quietest stretch (a low percentile over all windows, so one lucky window does not
+//! set it). Quiet runs with a steady gyro near the still bias are still positions; quiet runs turning
+//! steadily faster than [`SegmentOptions::spin_min_rate_deg_s`] are spins. Runs split by a short
+//! disturbance in the same direction are joined, edges are trimmed, and runs shorter than the
+//! minimum are dropped (counted). This is how imu_tk's static detector works, with thresholds from the
+//! data instead of a user's guess.
+
+use super::import::Recording;
+use shared::linalg;
+use shared::OutputUnit;
+
+/// Detection settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentOptions {
+    /// Sliding window, s.
+    pub window_s: f64,
+    /// Shortest still interval kept (after trimming), s.
+    pub min_still_s: f64,
+    /// Trimmed from each end of an interval, s.
+    pub trim_s: f64,
+    /// Threshold = this² × the quietest stretch's window variance.
+    pub threshold_factor: f64,
+    /// Percentile of the window variances taken as the quietest stretch's.
+    pub quiet_percentile: f64,
+    /// A quiet run whose mean rate exceeds the still bias by this much is a spin, °/s.
+    pub spin_min_rate_deg_s: f64,
+    /// Two positions closer than this are the same position, degrees.
+    pub same_position_deg: f64,
+}
+
+impl Default for SegmentOptions {
+    fn default() -> Self {
+        SegmentOptions {
+            window_s: 0.4,
+            min_still_s: 1.0,
+            trim_s: 0.15,
+            threshold_factor: 3.0,
+            quiet_percentile: 0.1,
+            spin_min_rate_deg_s: 10.0,
+            same_position_deg: 10.0,
+        }
+    }
+}
+
+/// Fewest distinct still positions for the intrinsic parameters from gravity's magnitude alone (nine
+/// unknowns: 3 biases, 3 scales, 3 non-orthogonalities; docs/model.md §7).
+pub const MIN_POSITIONS: usize = 9;
+/// Recommended number of positions (the built-in `hand` plan).
+pub const RECOMMENDED_POSITIONS: usize = 24;
+/// A body direction (±x, ±y, ±z) with no position within this angle is missing, degrees.
+pub const FACE_COVERAGE_DEG: f64 = 50.0;
+
+/// What an interval is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntervalKind {
+    /// Held still.
+    Still,
+    /// Turning steadily about a fixed axis.
+    Spin,
+}
+
+/// One detected interval.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interval {
+    /// Still or spin.
+    pub kind: IntervalKind,
+    /// First row.
+    pub start: usize,
+    /// One past the last row.
+    pub end: usize,
+    /// Time of the first row, s.
+    pub start_s: f64,
+    /// Last minus first row's time, s.
+    pub duration_s: f64,
+    /// Mean accelerometer output, output unit.
+    pub mean_acc: [f64; 3],
+    /// Its standard deviation per axis, output unit.
+    pub std_acc: [f64; 3],
+    /// Mean gyro rate, rad/s.
+    pub mean_gyro_rad_s: [f64; 3],
+    /// Its standard deviation per axis, rad/s.
+    pub std_gyro_rad_s: [f64; 3],
+    /// Rough direction of gravity ("up"), unit vector from the uncalibrated outputs.
+    pub direction: [f64; 3],
+}
+
+/// The detection's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Segmentation {
+    /// Still intervals, in time order.
+    pub stills: Vec<Interval>,
+    /// Spins, in time order.
+    pub spins: Vec<Interval>,
+    /// Quiet runs dropped for being shorter than the minimum.
+    pub short_dropped: usize,
+    /// Accelerometer threshold, standard deviation (sum over axes), output unit.
+    pub acc_threshold: f64,
+    /// Gyro threshold, standard deviation (sum over axes), rad/s.
+    pub gyro_threshold_rad_s: f64,
+    /// Gravity's magnitude in the output unit (median over quiet windows, from the unit's zero).
+    pub gravity_out: f64,
+}
+
+/// Why the recording cannot be made into a session; each says what to record instead.
+#[derive(Debug, thiserror::Error)]
+pub enum SegmentError {
+    /// Nothing in the recording is still.
+    #[error(
+        "no still interval: the quietest stretch of the recording moves ({acc_mg:.1} mg, \
+         {gyro_deg_s:.2} °/s rms) or no quiet run lasts {min_s} s; hold the unit still for 3–5 s in \
+         each of about {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{hint}"
+    )]
+    NoStill {
+        /// A likelier cause, if the data suggest one.
+        hint: String,
+        /// Quietest accelerometer noise, mg (of the measured gravity).
+        acc_mg: f64,
+        /// Quietest gyro noise, °/s.
+        gyro_deg_s: f64,
+        /// Minimum still duration, s.
+        min_s: f64,
+    },
+    /// Too few distinct positions.
+    #[error(
+        "{found} still interval(s) in {distinct} distinct position(s): at least {MIN_POSITIONS} \
+         distinct positions are needed ({RECOMMENDED_POSITIONS} recommended); record {more} more, \
+         each at least {same_deg:.0}° from the others{faces}"
+    )]
+    TooFewPositions {
+        /// Still intervals found.
+        found: usize,
+        /// Distinct positions among them.
+        distinct: usize,
+        /// How many more to record for the minimum.
+        more: usize,
+        /// Same-position angle, degrees.
+        same_deg: f64,
+        /// Which directions are missing, as text.
+        faces: String,
+    },
+}
+
+/// Running sums for window statistics in O(1) per window.
+struct Prefix {
+    s: Vec<[f64; 3]>,
+    s2: Vec<[f64; 3]>,
+}
+
+impl Prefix {
+    fn new(x: &[[f64; 3]]) -> Prefix {
+        let x0 = x.first().copied().unwrap_or([0.0; 3]);
+        let mut s = Vec::with_capacity(x.len() + 1);
+        let mut s2 = Vec::with_capacity(x.len() + 1);
+        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+        s.push(a);
+        s2.push(b);
+        for v in x {
+            for j in 0..3 {
+                let d = v[j] - x0[j];
+                a[j] += d;
+                b[j] += d * d;
+            }
+            s.push(a);
+            s2.push(b);
+        }
+        Prefix { s, s2 }
+    }
+
+    /// Sum over axes of the variance of rows `lo..hi`.
+    fn var(&self, lo: usize, hi: usize) -> f64 {
+        let n = (hi - lo) as f64;
+        (0..3)
+            .map(|j| {
+                let m = (self.s[hi][j] - self.s[lo][j]) / n;
+                ((self.s2[hi][j] - self.s2[lo][j]) / n - m * m).max(0.0)
+            })
+            .sum()
+    }
+}
+
+fn percentile(v: &[f64], q: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let n = x.len() as f64;
+    let m: [f64; 3] = core::array::from_fn(|j| x.iter().map(|v| v[j]).sum::<f64>() / n);
+    let s = core::array::from_fn(|j| {
+        (x.iter().map(|v| (v[j] - m[j]).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt()
+    });
+    (m, s)
+}
+
+/// Finds the still intervals and spins of `rec`.
+pub fn find_intervals(
+    rec: &Recording,
+    options: &SegmentOptions,
+) -> Result<Segmentation, SegmentError> {
+    let n = rec.len();
+    let half = ((options.window_s * rec.rate_hz / 2.0).round() as usize).max(2);
+    let (pa, pg) = (Prefix::new(&rec.acc), Prefix::new(&rec.gyro_rad_s));
+    let centres: Vec<usize> = (half..n.saturating_sub(half)).collect();
+    let var_a: Vec<f64> = centres
+        .iter()
+        .map(|&i| pa.var(i - half, i + half + 1))
+        .collect();
+    let var_g: Vec<f64> = centres
+        .iter()
+        .map(|&i| pg.var(i - half, i + half + 1))
+        .collect();
+    let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
+        // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
+        hint: if acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0 {
+            "; but the accelerometer is still there: if the gyro logs deg/s, give --gyro-unit deg/s"
+                .into()
+        } else {
+            String::new()
+        },
+        acc_mg,
+        gyro_deg_s,
+        min_s: options.min_still_s,
+    };
+    if centres.is_empty() {
+        return Err(no_still(f64::NAN, f64::NAN));
+    }
+    let quiet_a = percentile(&var_a, options.quiet_percentile);
+    let quiet_g = percentile(&var_g, options.quiet_percentile);
+    let centre = acc_centre(rec);
+    let mut mags: Vec<f64> = centres
+        .iter()
+        .zip(&var_a)
+        .filter(|(_, &v)| v <= quiet_a * 4.0)
+        .map(|(&i, _)| linalg::norm(&core::array::from_fn(|j| rec.acc[i][j] - centre[j])))
+        .collect();
+    mags.sort_by(f64::total_cmp);
+    let gravity_out = mags[mags.len() / 2];
+    let g_scale = gravity_out.max(f64::MIN_POSITIVE);
+    let (acc_mg, gyro_deg_s) = (quiet_a.sqrt() / g_scale * 1e3, quiet_g.sqrt().to_degrees());
+    // A still hand-held MEMS unit is far quieter than 20 mg and 1 °/s: above that nothing is still.
+    if acc_mg > 20.0 || gyro_deg_s > 1.0 {
+        return Err(no_still(acc_mg, gyro_deg_s));
+    }
+    let f2 = options.threshold_factor.powi(2);
+    let thr_a = (quiet_a * f2).max((1e-4 * g_scale).powi(2));
+    let thr_g = (quiet_g * f2).max(0.01f64.to_radians().powi(2));
+    let quiet: Vec<bool> = var_a
+        .iter()
+        .zip(&var_g)
+        .map(|(a, g)| *a < thr_a && *g < thr_g)
+        .collect();
+    let runs = quiet_runs(&quiet, half);
+    let still_bias = still_bias(rec, &runs);
+    let trim = (options.trim_s * rec.rate_hz).round() as usize;
+    let min_len = (options.min_still_s * rec.rate_hz).round() as usize;
+    let spin_min = options.spin_min_rate_deg_s.to_radians();
+    let mut stills: Vec<Interval> = Vec::new();
+    let mut spins = Vec::new();
+    let mut short_dropped = 0;
+    for (lo, hi) in runs {
+        let (lo, hi) = (lo + trim, hi.saturating_sub(trim));
+        if hi <= lo || hi - lo < min_len {
+            short_dropped += 1;
+            continue;
+        }
+        let iv = interval(rec, lo, hi, &centre, &still_bias, spin_min);
+        let list = match iv.kind {
+            IntervalKind::Still => &mut stills,
+            IntervalKind::Spin => &mut spins,
+        };
+        match list.last_mut() {
+            Some(prev) if prev.end + 2 * (half + trim) >= lo && same(prev, &iv, 2.0) => {
+                *prev = interval(rec, prev.start, hi, &centre, &still_bias, spin_min);
+            }
+            _ => list.push(iv),
+        }
+    }
+    if stills.is_empty() {
+        return Err(no_still(acc_mg, gyro_deg_s));
+    }
+    Ok(Segmentation {
+        stills,
+        spins,
+        short_dropped,
+        acc_threshold: thr_a.sqrt(),
+        gyro_threshold_rad_s: thr_g.sqrt(),
+        gravity_out,
+    })
+}
+
+/// Rows `lo..hi` of runs of quiet window centres (indices into the recording).
+fn quiet_runs(quiet: &[bool], half: usize) -> Vec<(usize, usize)> {
+    let mut runs = Vec::new();
+    let mut start = None;
+    for (k, &q) in quiet.iter().chain([false].iter()).enumerate() {
+        match (q, start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                runs.push((s + half, k + half));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    runs
+}
+
+/// The gyro's mean over all quiet runs, weighted by length (its bias when most runs are still).
+fn still_bias(rec: &Recording, runs: &[(usize, usize)]) -> [f64; 3] {
+    let mut means: Vec<[f64; 3]> = runs
+        .iter()
+        .map(|&(lo, hi)| mean_std(&rec.gyro_rad_s[lo..hi]).0)
+        .collect();
+    if means.is_empty() {
+        return [0.0; 3];
+    }
+    core::array::from_fn(|j| {
+        let mut v: Vec<f64> = means.iter_mut().map(|m| m[j]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    })
+}
+
+/// Zero for m/s², g and LSB (their zero is zero force); for volts, the mid-range of the quiet outputs
+/// (an analog part's zero is mid-supply).
+fn acc_centre(rec: &Recording) -> [f64; 3] {
+    if rec.acc_unit != Some(OutputUnit::Volts) {
+        return [0.0; 3];
+    }
+    core::array::from_fn(|j| {
+        let (lo, hi) = rec
+            .acc
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v[j]), hi.max(v[j]))
+            });
+        0.5 * (lo + hi)
+    })
+}
+
+fn interval(
+    rec: &Recording,
+    lo: usize,
+    hi: usize,
+    centre: &[f64; 3],
+    still_bias: &[f64; 3],
+    spin_min_rad_s: f64,
+) -> Interval {
+    let (mean_acc, std_acc) = mean_std(&rec.acc[lo..hi]);
+    let (mean_gyro_rad_s, std_gyro_rad_s) = mean_std(&rec.gyro_rad_s[lo..hi]);
+    let rel: [f64; 3] = core::array::from_fn(|j| mean_gyro_rad_s[j] - still_bias[j]);
+    let kind = if linalg::norm(&rel) > spin_min_rad_s {
+        IntervalKind::Spin
+    } else {
+        IntervalKind::Still
+    };
+    let d: [f64; 3] = core::array::from_fn(|j| mean_acc[j] - centre[j]);
+    let dn = linalg::norm(&d).max(f64::MIN_POSITIVE);
+    Interval {
+        kind,
+        start: lo,
+        end: hi,
+        start_s: rec.t_s[lo],
+        duration_s: rec.t_s[hi - 1] - rec.t_s[lo],
+        mean_acc,
+        std_acc,
+        mean_gyro_rad_s,
+        std_gyro_rad_s,
+        direction: d.map(|c| c / dn),
+    }
+}
+
+/// Angle between two unit vectors, degrees.
+pub fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    linalg::dot(a, b).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+fn same(a: &Interval, b: &Interval, deg: f64) -> bool {
+    angle_deg(&a.direction, &b.direction) < deg
+}
+
+/// How well a set of still positions serves a calibration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coverage {
+    /// Distinct positions (closer than the same-position angle count once).
+    pub distinct: usize,
+    /// For each still interval, the earlier one it repeats, if any.
+    pub repeats: Vec<Option<usize>>,
+    /// Body directions (+x, −x, …) with no position within [`FACE_COVERAGE_DEG`].
+    pub missing_faces: Vec<&'static str>,
+}
+
+const FACES: [(&str, [f64; 3]); 6] = [
+    ("x up", [1.0, 0.0, 0.0]),
+    ("x down", [-1.0, 0.0, 0.0]),
+    ("y up", [0.0, 1.0, 0.0]),
+    ("y down", [0.0, -1.0, 0.0]),
+    ("z up", [0.0, 0.0, 1.0]),
+    ("z down", [0.0, 0.0, -1.0]),
+];
+
+/// Distinct positions and the directions they miss.
+pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
+    let mut firsts: Vec<usize> = Vec::new();
+    let repeats = stills
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let earlier = firsts
+                .iter()
+                .copied()
+                .find(|&f| angle_deg(&stills[f].direction, &s.direction) < same_position_deg);
+            if earlier.is_none() {
+                firsts.push(k);
+            }
+            earlier
+        })
+        .collect();
+    let missing_faces = FACES
+        .iter()
+        .filter(|(_, axis)| {
+            stills
+                .iter()
+                .all(|s| angle_deg(&s.direction, axis) > FACE_COVERAGE_DEG)
+        })
+        .map(|(name, _)| *name)
+        .collect();
+    Coverage {
+        distinct: firsts.len(),
+        repeats,
+        missing_faces,
+    }
+}
+
+impl Coverage {
+    /// Refuses fewer than [`MIN_POSITIONS`] distinct positions, saying how many more of which kind.
+    pub fn check(&self, found: usize, same_position_deg: f64) -> Result<(), SegmentError> {
+        if self.distinct >= MIN_POSITIONS {
+            return Ok(());
+        }
+        Err(SegmentError::TooFewPositions {
+            found,
+            distinct: self.distinct,
+            more: MIN_POSITIONS - self.distinct,
+            same_deg: same_position_deg,
+            faces: self.faces_text(),
+        })
+    }
+
+    /// "; include x down, z up" or "".
+    pub fn faces_text(&self) -> String {
+        if self.missing_faces.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; include positions with {} (no position within {FACE_COVERAGE_DEG:.0}° of them yet)",
+                self.missing_faces.join(", ")
+            )
+        }
+    }
+
+    /// Advice when the positions suffice but are fewer than recommended or leave directions out.
+    pub fn advice(&self) -> Option<String> {
+        if self.distinct >= RECOMMENDED_POSITIONS && self.missing_faces.is_empty() {
+            return None;
+        }
+        let more = RECOMMENDED_POSITIONS.saturating_sub(self.distinct);
+        Some(format!(
+            "{} distinct positions{}: {} more, spread over the whole sphere{}, would make the \
+             calibration more robust",
+            self.distinct,
+            if self.missing_faces.is_empty() {
+                ""
+            } else {
+                " leaving directions out"
+            },
+            more.max(self.missing_faces.len()),
+            self.faces_text()
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+
+    /// The simulated session as the importer would deliver it.
+    pub(crate) fn recording(spec: &HandSpec, unit: shared::OutputUnit) -> Recording {
+        let s = simulate_hand(&logger_unit(unit), spec);
+        Recording {
+            t_s: s.rows.iter().map(|r| r.0).collect(),
+            acc: s.rows.iter().map(|r| r.1).collect(),
+            gyro_rad_s: s.rows.iter().map(|r| r.2).collect(),
+            acc_unit: Some(unit),
+            rate_hz: spec.rate_hz,
+            skipped_rows: 0,
+        }
+    }
+
+    #[test]
+    fn finds_every_hand_position_and_no_false_one() {
+        for seed in [1, 2, 3] {
+            let spec = HandSpec::standard(seed);
+            let sim = simulate_hand(
+                &logger_unit(shared::OutputUnit::MetresPerSecondSquared),
+                &spec,
+            );
+            let rec = recording(&spec, shared::OutputUnit::MetresPerSecondSquared);
+            let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+            assert_eq!(seg.stills.len(), sim.holds.len(), "seed {seed}");
+            assert!(seg.spins.is_empty());
+            for (s, (t0, t1, up)) in seg.stills.iter().zip(&sim.holds) {
+                let (a, b) = (s.start_s, s.start_s + s.duration_s);
+                assert!(
+                    a >= *t0 && b <= *t1,
+                    "seed {seed}: {a}..{b} not inside {t0}..{t1}"
+                );
+                assert!(
+                    s.duration_s > 0.6 * (t1 - t0),
+                    "seed {seed}: {a}..{b} of {t0}..{t1}"
+                );
+                assert!(angle_deg(&s.direction, up) < 3.0);
+            }
+            let cov = coverage(&seg.stills, 10.0);
+            assert_eq!(cov.distinct, 24);
+            assert!(cov.missing_faces.is_empty());
+            assert!(cov.check(24, 10.0).is_ok());
+        }
+    }
+
+    #[test]
+    fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
+        let mut rng = crate::sim::Rng::new(5, 0);
+        let mut rec = Recording {
+            acc_unit: Some(shared::OutputUnit::StandardGravity),
+            rate_hz: 200.0,
+            ..Recording::default()
+        };
+        // 4 s still z up, 4 s spinning at 90 °/s about the vertical (z), 4 s still x up.
+        let parts = [
+            ([0.0, 0.0, 1.0], 0.0),
+            ([0.0, 0.0, 1.0], 90.0),
+            ([1.0, 0.0, 0.0], 0.0),
+        ];
+        for (k, (up, rate)) in parts.iter().enumerate() {
+            for i in 0..800 {
+                rec.t_s.push((k * 800 + i) as f64 / 200.0);
+                rec.acc
+                    .push(core::array::from_fn(|j| up[j] + 1e-3 * rng.normal()));
+                let w: [f64; 3] = core::array::from_fn(|j| {
+                    (if j == 2 { *rate } else { 0.0 } + 0.05 * rng.normal()).to_radians()
+                });
+                rec.gyro_rad_s.push(w);
+            }
+        }
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 2);
+        assert_eq!(seg.spins.len(), 1);
+        let spin = &seg.spins[0];
+        assert!((linalg::norm(&spin.mean_gyro_rad_s).to_degrees() - 90.0).abs() < 0.1);
+        assert!(spin.start_s > 4.0 && spin.start_s + spin.duration_s < 8.0);
+        assert!(angle_deg(&seg.stills[1].direction, &[1.0, 0.0, 0.0]) < 0.5);
+    }
+}

@@ -1,0 +1,361 @@
+//! A continuous hand-held session: a person holds the unit still in a series of positions and turns it
+//! by hand between them, everything logged in one unlabelled CSV as a real logger would write it. The
+//! test bed of `host segment` and of the gyro fit without a table (`estimate::handheld_gyro`).
+//!
+//! Positions are the built-in `hand` plan's 24 well-spread ups, each with a random heading. A turn is
+//! one rotation about a fixed axis with a raised-cosine rate profile (rate 0 at both ends, peak
+//! `2θ/T`). The hand's tremor is a sum of sinusoids (3–9 Hz) in angular rate and in linear
+//! acceleration, present all the time; the gravity direction in body axes follows the integrated
+//! tremor. Outputs come from the shared forward model (lever arms included); the gyro reads
+//! `w = G·ω + b` plus white noise (docs/model.md §8).
+
+use crate::session::builtin::builtin_plan;
+use crate::sim::Rng;
+use nalgebra::{UnitQuaternion, Vector3};
+use shared::forward::{BodyMotion, ForwardModel};
+use shared::linalg::{self, RowMajor3};
+use shared::units::{BodyAngularAccel, BodyRate, BodySpecificForce};
+use shared::Calibration;
+use std::f64::consts::PI;
+use std::io::Write;
+use std::path::Path;
+
+/// The gyro's truth: `w = matrix·ω_body + bias_rad_s` (docs/model.md §8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GyroTruth {
+    /// `G`, gyro output per body rate.
+    pub matrix: RowMajor3,
+    /// `b`, rad/s.
+    pub bias_rad_s: [f64; 3],
+}
+
+impl GyroTruth {
+    /// Scale errors `scale_rel` per axis and small rotations of each gyro axis by the angles
+    /// `misalign_rad` (row i's off-diagonals), bias `bias_rad_s`.
+    pub fn new(scale_rel: [f64; 3], misalign_rad: RowMajor3, bias_rad_s: [f64; 3]) -> GyroTruth {
+        let matrix = core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                let e = if i == j { 1.0 } else { misalign_rad[i][j] };
+                (1.0 + scale_rel[i]) * e
+            })
+        });
+        GyroTruth { matrix, bias_rad_s }
+    }
+
+    /// The stated test gyro: 0.5 % scale, 0.5° misalignment, 0.5 °/s bias (signs mixed).
+    pub fn half_percent() -> GyroTruth {
+        let m = 0.5f64.to_radians();
+        GyroTruth::new(
+            [0.005, -0.005, 0.004],
+            [[0.0, m, -m], [-m, 0.0, m], [m, m, 0.0]],
+            [0.5, -0.5, 0.4].map(|d: f64| d.to_radians()),
+        )
+    }
+}
+
+/// What to simulate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HandSpec {
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Up directions of the positions, body axes (the `hand` plan's by default).
+    pub ups: Vec<[f64; 3]>,
+    /// Hold duration range, s.
+    pub hold_s: (f64, f64),
+    /// Turn duration range, s.
+    pub turn_s: (f64, f64),
+    /// Peak turn rate, °/s.
+    pub max_rate_deg_s: f64,
+    /// Accelerometer white noise per sample, g.
+    pub noise_g: f64,
+    /// Tremor, rms of the linear acceleration per axis, g.
+    pub tremor_g: f64,
+    /// Tremor, rms of the angular rate per axis, °/s.
+    pub tremor_deg_s: f64,
+    /// Gyro white noise per sample, °/s.
+    pub gyro_noise_deg_s: f64,
+    /// The gyro.
+    pub gyro: GyroTruth,
+    /// Quantisation step of the accelerometer output (raw counts: 1), output unit; 0 = none.
+    pub acc_step: f64,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl HandSpec {
+    /// The stated hand session: 24 positions held 3–5 s, turns of 1–3 s up to 180 °/s, 1 mg noise
+    /// at 200 Hz, tremor 1 mg and 0.2 °/s, gyro [`GyroTruth::half_percent`] with 0.05 °/s noise.
+    pub fn standard(seed: u64) -> HandSpec {
+        let ups = builtin_plan("hand")
+            .and_then(Result::ok)
+            .map(|p| p.segments.iter().map(|s| s.up_b).collect())
+            .unwrap_or_default();
+        HandSpec {
+            rate_hz: 200.0,
+            ups,
+            hold_s: (3.0, 5.0),
+            turn_s: (1.0, 3.0),
+            max_rate_deg_s: 180.0,
+            noise_g: 1e-3,
+            tremor_g: 1e-3,
+            tremor_deg_s: 0.2,
+            gyro_noise_deg_s: 0.05,
+            gyro: GyroTruth::half_percent(),
+            acc_step: 0.0,
+            seed,
+        }
+    }
+}
+
+/// One logged row: time, accelerometer (output unit), gyro (rad/s).
+pub type HandRow = (f64, [f64; 3], [f64; 3]);
+
+/// The simulated recording and where the holds really were.
+pub struct HandSession {
+    /// The rows.
+    pub rows: Vec<HandRow>,
+    /// Each hold's first and last time, s, and its up, body axes.
+    pub holds: Vec<(f64, f64, [f64; 3])>,
+}
+
+/// Tremor: three sinusoids per axis with random frequency and phase, scaled to an rms.
+struct Tremor {
+    parts: Vec<[(f64, f64, f64); 3]>,
+}
+
+impl Tremor {
+    fn new(rng: &mut Rng, rms: f64) -> Tremor {
+        // Three equal sinusoids of amplitude A have rms A·√(3/2).
+        let a = rms / 1.5f64.sqrt();
+        let parts = (0..3)
+            .map(|_| {
+                core::array::from_fn(|_| {
+                    let f = 3.0 + 6.0 * uniform(rng);
+                    (a, 2.0 * PI * f, 2.0 * PI * uniform(rng))
+                })
+            })
+            .collect();
+        Tremor { parts }
+    }
+
+    /// Value, derivative and integral (from −∞, zero mean) at `t`.
+    fn at(&self, t: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (mut v, mut d, mut i) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+        for p in &self.parts {
+            for j in 0..3 {
+                let (a, w, ph) = p[j];
+                v[j] += a * (w * t + ph).sin();
+                d[j] += a * w * (w * t + ph).cos();
+                i[j] -= a / w * (w * t + ph).cos();
+            }
+        }
+        (v, d, i)
+    }
+}
+
+fn uniform(rng: &mut Rng) -> f64 {
+    ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+}
+
+/// Body-to-world attitude with body `up` along world z and heading `psi`.
+fn attitude(up: [f64; 3], psi: f64) -> UnitQuaternion<f64> {
+    let level = UnitQuaternion::rotation_between(&Vector3::from(up), &Vector3::z())
+        .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI));
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), psi) * level
+}
+
+/// Simulates the session for a unit `truth` (its output unit is the file's).
+pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
+    let model = ForwardModel::new(truth).expect("a valid simulated unit");
+    let g = truth.gravity_m_s2;
+    let mut rng = Rng::new(spec.seed, 11);
+    let tremor_w = Tremor::new(&mut rng, spec.tremor_deg_s.to_radians());
+    let tremor_a = Tremor::new(&mut rng, spec.tremor_g * g);
+    let dt = 1.0 / spec.rate_hz;
+    let fitted = truth.statics.to_fitted().expect("a valid simulated unit").0;
+    let scales = fitted.m_out_per_g.map(|row| linalg::norm(&row));
+    let max_rate = spec.max_rate_deg_s.to_radians();
+    let mut rows = Vec::new();
+    let mut holds = Vec::new();
+    let mut t = 0.0;
+    let mut k = 0u64;
+    let mut q = attitude(spec.ups[0], 2.0 * PI * uniform(&mut rng));
+    let sample =
+        |t: f64, q: &UnitQuaternion<f64>, w_turn: [f64; 3], wd_turn: [f64; 3], rng: &mut Rng| {
+            let (tw, twd, tint) = tremor_w.at(t);
+            let (ta, _, _) = tremor_a.at(t);
+            let up0 = q.inverse_transform_vector(&Vector3::z());
+            // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
+            let up0 = [up0.x, up0.y, up0.z];
+            let turn = linalg::cross(&tint, &up0);
+            let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
+            let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
+            let motion = BodyMotion {
+                f_o: BodySpecificForce {
+                    m_s2: core::array::from_fn(|j| g * up[j] + ta[j]),
+                },
+                omega: BodyRate { rad_s: omega },
+                omega_dot: BodyAngularAccel {
+                    rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
+                },
+            };
+            let raw = model.outputs(&motion).raw;
+            let acc = core::array::from_fn(|i| {
+                let u = raw[i] + spec.noise_g * scales[i] * rng.normal();
+                if spec.acc_step > 0.0 {
+                    (u / spec.acc_step).round() * spec.acc_step
+                } else {
+                    u
+                }
+            });
+            let gw = linalg::mat_vec(&spec.gyro.matrix, &omega);
+            let gyro = core::array::from_fn(|i| {
+                gw[i] + spec.gyro.bias_rad_s[i] + spec.gyro_noise_deg_s.to_radians() * rng.normal()
+            });
+            (acc, gyro)
+        };
+    for (p, up) in spec.ups.iter().enumerate() {
+        let hold = spec.hold_s.0 + (spec.hold_s.1 - spec.hold_s.0) * uniform(&mut rng);
+        let t0 = t;
+        while t < t0 + hold {
+            let (a, w) = sample(t, &q, [0.0; 3], [0.0; 3], &mut rng);
+            rows.push((t, a, w));
+            k += 1;
+            t = k as f64 * dt;
+        }
+        let t_last = rows.last().map_or(t0, |r| r.0);
+        holds.push((t0, t_last, *up));
+        let Some(next_up) = spec.ups.get(p + 1) else {
+            break;
+        };
+        let q1 = attitude(*next_up, 2.0 * PI * uniform(&mut rng));
+        let delta = q1 * q.inverse();
+        let (axis_w, angle) = delta.axis_angle().unwrap_or((Vector3::z_axis(), 0.0));
+        let drawn = spec.turn_s.0 + (spec.turn_s.1 - spec.turn_s.0) * uniform(&mut rng);
+        let dur = drawn.max(2.0 * angle / max_rate);
+        let t0 = t;
+        let q0 = q;
+        while t < t0 + dur {
+            let s = (t - t0) / dur;
+            let th = angle * (s - (2.0 * PI * s).sin() / (2.0 * PI));
+            let rate = angle / dur * (1.0 - (2.0 * PI * s).cos());
+            let acc = angle / (dur * dur) * 2.0 * PI * (2.0 * PI * s).sin();
+            let qt = UnitQuaternion::from_axis_angle(&axis_w, th) * q0;
+            let ab = qt.inverse_transform_vector(&axis_w);
+            let (a, w) = sample(
+                t,
+                &qt,
+                [ab.x * rate, ab.y * rate, ab.z * rate],
+                [ab.x * acc, ab.y * acc, ab.z * acc],
+                &mut rng,
+            );
+            rows.push((t, a, w));
+            k += 1;
+            t = k as f64 * dt;
+        }
+        q = q1;
+    }
+    HandSession { rows, holds }
+}
+
+/// How the CSV is laid out, as a logger would.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoggerLayout {
+    /// Header names of acc x y z, gyro x y z.
+    pub columns: [String; 6],
+    /// Time column name (seconds), or `None` for a sample-index column named `sample`.
+    pub time_column: Option<String>,
+    /// Gyro written in °/s (else rad/s).
+    pub gyro_deg_s: bool,
+    /// An extra column (temperature) written first.
+    pub extra_column: bool,
+}
+
+impl Default for LoggerLayout {
+    fn default() -> Self {
+        LoggerLayout {
+            columns: crate::session::import::DEFAULT_COLUMNS.map(String::from),
+            time_column: Some("t".into()),
+            gyro_deg_s: true,
+            extra_column: false,
+        }
+    }
+}
+
+/// Writes `rows` as one unlabelled CSV.
+pub fn write_logger_csv(
+    path: &Path,
+    rows: &[HandRow],
+    layout: &LoggerLayout,
+) -> std::io::Result<()> {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut header: Vec<String> = Vec::new();
+    if layout.extra_column {
+        header.push("temp_c".into());
+    }
+    header.push(
+        layout
+            .time_column
+            .clone()
+            .unwrap_or_else(|| "sample".into()),
+    );
+    header.extend(layout.columns.iter().cloned());
+    writeln!(out, "{}", header.join(","))?;
+    let k = if layout.gyro_deg_s { 180.0 / PI } else { 1.0 };
+    for (i, (t, a, w)) in rows.iter().enumerate() {
+        if layout.extra_column {
+            write!(out, "25.0,")?;
+        }
+        match layout.time_column {
+            Some(_) => write!(out, "{t}")?,
+            None => write!(out, "{i}")?,
+        }
+        writeln!(
+            out,
+            ",{},{},{},{},{},{}",
+            a[0],
+            a[1],
+            a[2],
+            w[0] * k,
+            w[1] * k,
+            w[2] * k
+        )?;
+    }
+    out.into_inner().map_err(|e| e.into_error())?.sync_all()
+}
+
+/// A MEMS-like unit whose outputs are in `unit` (m/s², g or counts at 4096 per g): scale errors of
+/// about 1 %, biases of about 5–20 mg, sensing axes 0.3–0.7° off the body axes, lever arms of a few
+/// millimetres.
+pub fn logger_unit(unit: shared::OutputUnit) -> Calibration {
+    let per_g = match unit {
+        shared::OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
+        shared::OutputUnit::StandardGravity => 1.0,
+        shared::OutputUnit::Lsb => 4096.0,
+        shared::OutputUnit::Volts => 0.4,
+    };
+    let zero = if unit == shared::OutputUnit::Volts {
+        2.5
+    } else {
+        0.0
+    };
+    Calibration {
+        statics: shared::StaticParams {
+            output_unit: unit,
+            zero_bias_out: [0.012, -0.02, 0.005].map(|b| zero + b * per_g),
+            scale_out_per_g: [1.011, 0.992, 1.006].map(|k| k * per_g),
+            installation_angles_deg: [[0.6, 90.4, 89.7], [89.5, 0.55, 90.3], [90.35, 89.45, 0.45]],
+        },
+        lever_arms: shared::LeverArms {
+            r_m: [
+                [0.004, 0.001, -0.002],
+                [-0.001, 0.005, 0.001],
+                [0.002, -0.002, 0.003],
+            ],
+        },
+        reference: shared::ReferencePoint::TableAxis,
+        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        gyro: None,
+        temperature: None,
+    }
+}
