@@ -83,15 +83,11 @@ pub fn write_calibration_files(
         Some(unit_id),
         Some(outcome.uncertainty.clone()),
     );
-    file.gyro = outcome
-        .gyro
-        .as_ref()
-        .map(|g| crate::unit_file::GyroSection {
-            bias_rad_s: g.bias_rad_s,
-            matrix: g.matrix,
-            bias_rad_s_1sigma: Some(g.bias_rad_s_1sigma),
-            matrix_1sigma: Some(g.matrix_1sigma),
-        });
+    // The estimate's 1σ beside the values that `from_calibration` wrote.
+    if let (Some(section), Some(g)) = (file.gyro.as_mut(), outcome.gyro.as_ref()) {
+        section.bias_rad_s_1sigma = Some(g.bias_rad_s_1sigma);
+        section.matrix_1sigma = Some(g.matrix_1sigma);
+    }
     let text = file.to_toml();
     std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
     let bin_path = out_dir.join(CALIBRATION_BIN);

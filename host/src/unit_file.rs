@@ -231,7 +231,10 @@ impl UnitFile {
             lever_arms,
             reference,
             gravity_m_s2: self.g_m_s2,
-            gyro: None,
+            gyro: self.gyro.as_ref().map(|g| shared::GyroCorrection {
+                matrix: g.matrix,
+                bias_rad_s: g.bias_rad_s,
+            }),
             temperature: None,
         };
         self.unit_id()?;
@@ -280,7 +283,12 @@ impl UnitFile {
                 reference_offset_m,
             }),
             uncertainty,
-            gyro: None,
+            gyro: cal.gyro.map(|g| GyroSection {
+                bias_rad_s: g.bias_rad_s,
+                matrix: g.matrix,
+                bias_rad_s_1sigma: None,
+                matrix_1sigma: None,
+            }),
             other: toml::Table::new(),
         }
     }

@@ -673,7 +673,12 @@ pub fn calibrate_session_stats(
         },
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
-        gyro: None,
+        // The device corrects its rate with the estimated gyro (docs/model.md §8); a session that did
+        // not estimate it leaves the device's gyro taken as perfect.
+        gyro: gyro_estimate.as_ref().map(|g| shared::GyroCorrection {
+            matrix: g.matrix,
+            bias_rad_s: g.bias_rad_s,
+        }),
         temperature: None,
     };
     let segments = diagnostics(plan, &segs, &problem.all_models(), &main_theta);
