@@ -7,7 +7,8 @@ use crate::calibration_files::{now_unix_s, write_calibration_files};
 use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
 use crate::estimate::{
-    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice,
+    calibrate_session_stats, CalibrationOutcome, EstimateOptions, GyroEstimate, Method,
+    ReferenceChoice,
 };
 use crate::session::{self, read_session, ReadOptions, Session};
 use clap::Args;
@@ -137,6 +138,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     let mut outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
     if outcome.gyro.is_none() {
         outcome.gyro = super::segment::session_hand_gyro(input)?;
+        outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
         if outcome.gyro.is_some() {
             println!(
                 "gyro: from the hand turns ({})",

@@ -184,6 +184,14 @@ impl GyroEstimate {
         }
     }
 
+    /// The estimate as the calibration the device applies (`ω = G⁻¹ (w − b)`, docs/model.md §8).
+    pub fn device_correction(&self) -> shared::GyroCorrection {
+        shared::GyroCorrection {
+            matrix: self.matrix,
+            bias_rad_s: self.bias_rad_s,
+        }
+    }
+
     /// `(G⁻¹, b)`: what turns a gyro reading into the body rate.
     pub fn correction(&self) -> Option<(RowMajor3, [f64; 3])> {
         linalg::inverse(&self.matrix).map(|gi| (gi, self.bias_rad_s))

@@ -675,10 +675,7 @@ pub fn calibrate_session_stats(
         gravity_m_s2: plan.gravity_m_s2,
         // The device corrects its rate with the estimated gyro (docs/model.md §8); a session that did
         // not estimate it leaves the device's gyro taken as perfect.
-        gyro: gyro_estimate.as_ref().map(|g| shared::GyroCorrection {
-            matrix: g.matrix,
-            bias_rad_s: g.bias_rad_s,
-        }),
+        gyro: gyro_estimate.as_ref().map(GyroEstimate::device_correction),
         temperature: None,
     };
     let segments = diagnostics(plan, &segs, &problem.all_models(), &main_theta);
