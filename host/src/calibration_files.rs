@@ -30,6 +30,8 @@ pub enum OutputError {
     Blob(BlobError),
     /// A file could not be written.
     Io(PathBuf, std::io::Error),
+    /// A calibration is already there and `--force` was not given.
+    Exists(PathBuf),
 }
 
 impl std::fmt::Display for OutputError {
@@ -40,6 +42,11 @@ impl std::fmt::Display for OutputError {
                 "the estimated calibration cannot be stored on a device: {e}"
             ),
             OutputError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
+            OutputError::Exists(p) => write!(
+                f,
+                "{} already exists: choose another output directory (--out-dir) or replace it (--force)",
+                p.display()
+            ),
         }
     }
 }
@@ -68,28 +75,66 @@ pub fn blob_bytes(
     Ok(bytes[..n].to_vec())
 }
 
-/// Writes both files into `out_dir` (created if needed).
+/// Refuses to go on when `out_dir` already holds a calibration and `force` is false: called before
+/// any work (reading a session, recording, flashing), so a run is never wasted on a refusal at its end.
+pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
+    if force {
+        return Ok(());
+    }
+    for name in [CALIBRATION_TOML, CALIBRATION_BIN] {
+        let p = out_dir.join(name);
+        if p.exists() {
+            return Err(OutputError::Exists(p));
+        }
+    }
+    Ok(())
+}
+
+/// Writes both files into `out_dir` (created if needed), as a pair: both are written beside their
+/// final names (`.calibration.toml.new`, `.calibration.bin.new`) and renamed only when both are
+/// complete, so a failure (a full disk) leaves the old pair or no pair, never a new `.toml` beside an
+/// old `.bin`. An existing pair is replaced only with `force`.
 pub fn write_calibration_files(
     out_dir: &Path,
     outcome: &CalibrationOutcome,
     unit_id: UnitId,
     created_unix_s: u64,
+    force: bool,
 ) -> Result<WrittenCalibration, OutputError> {
+    refuse_overwrite(out_dir, force)?;
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
-    let toml_path = out_dir.join(CALIBRATION_TOML);
     let text = UnitFile::from_calibration(
         &outcome.calibration,
         Some(unit_id),
         Some(outcome.uncertainty.clone()),
     )
     .to_toml();
-    std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
+    let toml_path = out_dir.join(CALIBRATION_TOML);
     let bin_path = out_dir.join(CALIBRATION_BIN);
-    std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;
+    let toml_new = out_dir.join(format!(".{CALIBRATION_TOML}.new"));
+    let bin_new = out_dir.join(format!(".{CALIBRATION_BIN}.new"));
+    let staged = write_synced(&toml_new, text.as_bytes())
+        .and_then(|()| write_synced(&bin_new, &blob))
+        .and_then(|()| std::fs::rename(&bin_new, &bin_path).map_err(|e| (bin_path.clone(), e)))
+        .and_then(|()| std::fs::rename(&toml_new, &toml_path).map_err(|e| (toml_path.clone(), e)));
+    if let Err((p, e)) = staged {
+        let _ = std::fs::remove_file(&toml_new);
+        let _ = std::fs::remove_file(&bin_new);
+        return Err(OutputError::Io(p, e));
+    }
     Ok(WrittenCalibration {
         toml_path,
         bin_path,
         blob,
     })
+}
+
+/// Writes and syncs one file, naming it in the error.
+fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Error)> {
+    use std::io::Write;
+    let io = |e| (path.to_path_buf(), e);
+    let mut f = std::fs::File::create(path).map_err(io)?;
+    f.write_all(bytes).map_err(io)?;
+    f.sync_all().map_err(io)
 }

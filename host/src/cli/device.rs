@@ -53,6 +53,8 @@ pub struct CalibratePortOptions {
     pub estimate: EstimateOptions,
     /// Largest compensated error accepted at a verification position, mg.
     pub verify_tolerance_mg: f64,
+    /// Replace an existing recording and calibration in `out_dir`.
+    pub force: bool,
     /// No progress bars or progress lines.
     pub quiet: bool,
 }
@@ -85,6 +87,8 @@ pub enum DeviceCliError {
     Usage(String),
     /// The procedure ran but the verification failed.
     VerificationFailed,
+    /// Standard output is closed or full; the device and the files were written before it.
+    Stdout(std::io::Error),
 }
 
 impl std::fmt::Display for DeviceCliError {
@@ -103,6 +107,10 @@ impl std::fmt::Display for DeviceCliError {
             DeviceCliError::Io(p, e) => write!(f, "{}: {e}", p.display()),
             DeviceCliError::Output(e) => e.fmt(f),
             DeviceCliError::Usage(m) => f.write_str(m),
+            DeviceCliError::Stdout(e) => write!(
+                f,
+                "cannot write to standard output ({e}); the files and the device were written before this"
+            ),
             DeviceCliError::VerificationFailed => f.write_str(
                 "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
                  at some verification positions (see above)",
@@ -112,6 +120,12 @@ impl std::fmt::Display for DeviceCliError {
 }
 
 impl std::error::Error for DeviceCliError {}
+
+impl From<std::io::Error> for DeviceCliError {
+    fn from(e: std::io::Error) -> Self {
+        DeviceCliError::Stdout(e)
+    }
+}
 
 impl From<LinkError> for DeviceCliError {
     fn from(e: LinkError) -> Self {
@@ -142,8 +156,43 @@ impl Transport for AnyTransport {
     }
 }
 
+fn usage(e: crate::limits::RangeError) -> DeviceCliError {
+    DeviceCliError::Usage(e.to_string())
+}
+
+impl PortArgs {
+    /// Checks the numbers before anything is opened or written.
+    pub fn validate(&self) -> Result<(), DeviceCliError> {
+        crate::limits::positive_at_most(
+            "--timeout-s",
+            self.timeout_s,
+            crate::limits::MAX_TIMEOUT_S,
+        )
+        .map_err(usage)?;
+        Ok(())
+    }
+}
+
+impl CalibratePortOptions {
+    /// Checks the numbers before anything is opened, recorded or flashed.
+    pub fn validate(&self) -> Result<(), DeviceCliError> {
+        use crate::limits::{count_in, positive_at_most, MAX_TOLERANCE_MG, MAX_WINDOW};
+        if let Some(w) = self.window {
+            count_in("--window", w, MAX_WINDOW).map_err(usage)?;
+        }
+        positive_at_most(
+            "--verify-tolerance-mg",
+            self.verify_tolerance_mg,
+            MAX_TOLERANCE_MG,
+        )
+        .map_err(usage)?;
+        Ok(())
+    }
+}
+
 /// Opens the device named by `--port`.
 pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, DeviceCliError> {
+    args.validate()?;
     let transport = if args.port == SIM_PORT {
         let unit = match &args.sim_unit {
             Some(p) => UnitFile::load(p).map_err(DeviceCliError::Unit)?,
@@ -157,11 +206,6 @@ pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, DeviceCliE
     } else {
         AnyTransport::Serial(SerialTransport::open(&args.port, args.baud)?)
     };
-    if !(args.timeout_s.is_finite() && args.timeout_s > 0.0) {
-        return Err(DeviceCliError::Usage(
-            "--timeout-s must be a positive number of seconds".into(),
-        ));
-    }
     Ok(DeviceClient::new(
         transport,
         Duration::from_secs_f64(args.timeout_s),
@@ -170,6 +214,7 @@ pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, DeviceCliE
 
 /// `host calibrate --port`: runs the whole procedure and ends with a pass/fail line.
 pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), DeviceCliError> {
+    a.validate()?;
     let mut client = connect(port)?;
     let identity = client.identify()?;
     let plan = match &a.plan {
@@ -182,6 +227,7 @@ pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), D
     opts.window_samples = a.window;
     opts.estimate = a.estimate.clone();
     opts.verify_tolerance_mg = a.verify_tolerance_mg;
+    opts.force = a.force;
     opts.quiet = a.quiet;
     let mut auto = AutomaticOperator {
         verbose: !a.quiet,
@@ -195,7 +241,7 @@ pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), D
     };
     let result = procedure::run(&mut client, &opts, op).map_err(DeviceCliError::Procedure)?;
     for w in &result.warnings {
-        println!("warning: {w}");
+        crate::outln!("warning: {w}")?;
     }
     let worst = result
         .verification
@@ -203,20 +249,20 @@ pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), D
         .map(|v| v.error_mg)
         .fold(0.0, f64::max);
     if result.passed {
-        println!(
+        crate::outln!(
             "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
              results in {}",
             result.identity.unit_id,
             result.verification.len(),
             opts.verify_tolerance_mg,
             opts.out_dir.display()
-        );
+        )?;
         Ok(())
     } else {
-        println!(
+        crate::outln!(
             "FAIL: worst verification error {worst:.3} mg > {} mg",
             opts.verify_tolerance_mg
-        );
+        )?;
         Err(DeviceCliError::VerificationFailed)
     }
 }
@@ -224,10 +270,24 @@ pub fn calibrate_port(port: &PortArgs, a: &CalibratePortOptions) -> Result<(), D
 /// `host flash --port P --calibration FILE`: writes `calibration.bin` (or a `calibration.toml`, encoded
 /// for the connected unit), resets the device and checks it applied it.
 pub fn flash(port: &PortArgs, calibration: &Path) -> Result<(), DeviceCliError> {
+    // The file is read and checked before the device is touched.
+    let is_toml = calibration.extension().is_some_and(|e| e == "toml");
+    let unit = if is_toml {
+        Some(UnitFile::load(calibration).map_err(DeviceCliError::Unit)?)
+    } else {
+        None
+    };
+    let file_bytes = if is_toml {
+        Vec::new()
+    } else {
+        let bytes = crate::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)
+            .map_err(|e| DeviceCliError::Io(calibration.to_path_buf(), e))?;
+        blob::decode(&bytes).map_err(|e| DeviceCliError::Blob(calibration.to_path_buf(), e))?;
+        bytes
+    };
     let mut client = connect(port)?;
     let identity = client.identify()?;
-    let bytes = if calibration.extension().is_some_and(|e| e == "toml") {
-        let unit = UnitFile::load(calibration).map_err(DeviceCliError::Unit)?;
+    let bytes = if let Some(unit) = unit {
         if let Ok(Some(id)) = unit.unit_id() {
             if id != identity.unit_id {
                 return Err(DeviceCliError::WrongUnit {
@@ -247,8 +307,7 @@ pub fn flash(port: &PortArgs, calibration: &Path) -> Result<(), DeviceCliError> 
             .map_err(|e| DeviceCliError::Blob(calibration.to_path_buf(), e))?;
         buf[..n].to_vec()
     } else {
-        let bytes = std::fs::read(calibration)
-            .map_err(|e| DeviceCliError::Io(calibration.to_path_buf(), e))?;
+        let bytes = file_bytes;
         let decoded =
             blob::decode(&bytes).map_err(|e| DeviceCliError::Blob(calibration.to_path_buf(), e))?;
         if decoded.unit_id != identity.unit_id {
@@ -265,12 +324,12 @@ pub fn flash(port: &PortArgs, calibration: &Path) -> Result<(), DeviceCliError> 
     if back != bytes {
         return Err(DeviceCliError::Procedure(ProcedureError::ReadBackMismatch));
     }
-    println!(
+    crate::outln!(
         "flashed {} bytes to unit {}; after reset: {:?}",
         bytes.len(),
         identity.unit_id,
         after.calibration
-    );
+    )?;
     Ok(())
 }
 
@@ -285,26 +344,30 @@ pub fn read(port: &PortArgs, out: Option<&Path>) -> Result<(), DeviceCliError> {
     match out {
         Some(p) => {
             std::fs::write(p, &text).map_err(|e| DeviceCliError::Io(p.to_path_buf(), e))?;
-            println!(
+            crate::outln!(
                 "wrote the calibration of unit {} to {}",
                 blob.unit_id,
                 p.display()
-            );
+            )?;
         }
-        None => print!("{text}"),
+        None => crate::out!("{text}")?,
     }
     Ok(())
 }
 
 /// `host monitor --port P [--window N] [--count N]`: live compensated output with its flags.
 pub fn monitor(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), DeviceCliError> {
+    crate::limits::count_in("--window", window, crate::limits::MAX_WINDOW).map_err(usage)?;
     let mut client = connect(port)?;
     let identity = client.identify()?;
     let g = shared::STANDARD_GRAVITY_M_S2;
-    println!(
+    crate::outln!(
         "unit {} ({:?}), calibration {:?}; compensated specific force in g, {} samples per line",
-        identity.unit_id, identity.board, identity.calibration, window
-    );
+        identity.unit_id,
+        identity.board,
+        identity.calibration,
+        window
+    )?;
     client.start_stream(StreamKind::CompensatedWindows, window.max(1))?;
     let mut n = 0u64;
     while count.is_none_or(|c| n < c) {
@@ -320,7 +383,7 @@ pub fn monitor(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), D
         .map(|(_, name)| *name)
         .collect::<Vec<_>>()
         .join(",");
-        println!(
+        crate::outln!(
             "{:10.3} s  f = ({:+.6}, {:+.6}, {:+.6}) g  ω = ({:+8.2}, {:+8.2}, {:+8.2}) °/s  {}",
             w.first_sample as f64 / f64::from(identity.sample_rate_hz.max(1)),
             f64::from(w.mean_m_s2[0]) / g,
@@ -334,7 +397,7 @@ pub fn monitor(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), D
             } else {
                 &flags
             }
-        );
+        )?;
         n += 1;
     }
     client.stop_stream()?;

@@ -8,7 +8,7 @@ use crate::estimate::{
     calibrate_session_stats, predict, CalibrationOutcome, EstimateError, EstimateOptions, Method,
     PredictSettings, ReferenceChoice,
 };
-use crate::report::compare::{compare, export, CompareError, ExportError, ExportFormat};
+use crate::report::compare::{compare, export_marked, CompareError, ExportError, ExportFormat};
 use crate::report::document::{
     navigation_check, report, NavigationCheckArgs, ReportError, ReportOptions,
 };
@@ -185,9 +185,13 @@ pub struct CalibrateArgs {
     /// With --port: largest compensated error accepted at a verification position, mg.
     #[arg(long, default_value_t = 1.0, requires = "port")]
     pub verify_tolerance_mg: f64,
-    /// Where to write calibration.toml and calibration.bin (default: the session directory).
+    /// Where to write calibration.toml and calibration.bin (default: the session directory; with
+    /// --port: a new time-stamped directory calibration-<unit id>-<UTC time>).
     #[arg(long, value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
+    /// Replace an existing calibration (and, with --port, an existing recording) in the output directory.
+    #[arg(long)]
+    pub force: bool,
     /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
     pub method: MethodArg,
@@ -302,6 +306,8 @@ pub enum CliError {
     Export(ExportError),
     /// The command line is incomplete.
     Usage(String),
+    /// Standard output is closed or full (`| head`, `> /dev/full`); files were written before it.
+    Stdout(std::io::Error),
 }
 
 impl std::fmt::Display for CliError {
@@ -318,12 +324,21 @@ impl std::fmt::Display for CliError {
             CliError::Compare(e) => write!(f, "{e}"),
             CliError::Export(e) => write!(f, "{e}"),
             CliError::Usage(m) => write!(f, "{m}"),
+            CliError::Stdout(e) => write!(
+                f,
+                "cannot write to standard output ({e}); any files were written before this"
+            ),
         }
     }
 }
 
 impl std::error::Error for CliError {}
 
+impl From<std::io::Error> for CliError {
+    fn from(e: std::io::Error) -> Self {
+        CliError::Stdout(e)
+    }
+}
 impl From<RecordingError> for CliError {
     fn from(e: RecordingError) -> Self {
         CliError::Recording(e)
@@ -385,7 +400,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Report(a) => report_command(&a),
         Command::NavigationCheck(a) => navigation_check_command(&a),
         Command::Compare { a, b } => {
-            print!("{}", compare(&a, &b)?.render());
+            crate::out!("{}", compare(&a, &b)?.render())?;
             Ok(())
         }
         Command::Export {
@@ -453,15 +468,15 @@ pub fn simulate(a: &SimulateArgs, quiet: bool) -> Result<crate::sim::SimulationS
     for note in &summary.notes {
         eprintln!("note: {note}");
     }
-    println!(
+    crate::outln!(
         "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
         summary.rows,
         plan.segments.len(),
         plan.sample_rate_hz,
         a.seed,
         a.out.display()
-    );
-    println!(
+    )?;
+    crate::outln!(
         "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
          rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
         noise.accel_white_mg,
@@ -472,7 +487,7 @@ pub fn simulate(a: &SimulateArgs, quiet: bool) -> Result<crate::sim::SimulationS
         noise.table_rate_offset_deg_s,
         noise.gyro_white_deg_s,
         noise.gyro_bias_deg_s
-    );
+    )?;
     Ok(summary)
 }
 
@@ -514,6 +529,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         window: a.window,
         estimate: estimate_options(a),
         verify_tolerance_mg: a.verify_tolerance_mg,
+        force: a.force,
         quiet,
     };
     Ok(device::calibrate_port(&port, &options)?)
@@ -536,21 +552,13 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         ));
     }
+    let out_dir = a.out_dir.as_deref().unwrap_or(input);
+    // Refused before the (possibly long) read, not after it.
+    crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
     let started = Instant::now();
     let session = read_session_verbose(input, quiet)?;
     let read_s = started.elapsed().as_secs_f64();
-    println!(
-        "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
-        session.report.rows,
-        session.report.bytes as f64 / 1e6,
-        session.stats.len(),
-        input.display(),
-        read_s,
-        session.report.rows as f64 / read_s.max(1e-9) / 1e6
-    );
     let outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
-    println!();
-    print!("{}", crate::report::render(&outcome));
     let unit_id = match &session.plan.unit_id {
         Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
         None => {
@@ -561,19 +569,31 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
             UnitId::default()
         }
     };
-    let out_dir = a.out_dir.as_deref().unwrap_or(input);
-    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s())?;
-    println!(
+    // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
+    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
+    crate::outln!(
+        "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
+        session.report.rows,
+        session.report.bytes as f64 / 1e6,
+        session.stats.len(),
+        input.display(),
+        read_s,
+        session.report.rows as f64 / read_s.max(1e-9) / 1e6
+    )?;
+    crate::outln!()?;
+    crate::out!("{}", crate::report::render(&outcome))?;
+    crate::outln!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
         written.toml_path.display(),
         written.bin_path.display(),
         written.blob.len()
-    );
+    )?;
     Ok(outcome)
 }
 
 /// `host report`.
 pub fn report_command(a: &ReportArgs) -> Result<(), CliError> {
+    navigation_duration(a.duration_s)?;
     let calibration = a
         .calibration
         .clone()
@@ -587,12 +607,23 @@ pub fn report_command(a: &ReportArgs) -> Result<(), CliError> {
     };
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
-    print!("{}", summary.render());
+    crate::out!("{}", summary.render())?;
     Ok(())
+}
+
+/// `--duration-s` sizes the navigation replay (samples = duration × rate): checked before any work.
+fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
+    crate::limits::positive_at_most(
+        "--duration-s",
+        duration_s,
+        crate::limits::MAX_NAVIGATION_DURATION_S,
+    )
+    .map_err(|e| CliError::Usage(e.to_string()))
 }
 
 /// `host navigation-check`.
 pub fn navigation_check_command(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+    navigation_duration(a.duration_s)?;
     let mut args = NavigationCheckArgs {
         seed: a.seed,
         out_dir: a.out_dir.clone(),
@@ -605,7 +636,7 @@ pub fn navigation_check_command(a: &NavigationCheckCliArgs) -> Result<(), CliErr
     if let Some(spec) = &a.plan {
         args.plan = load_plan(spec)?;
     }
-    print!("{}", navigation_check(&args)?.render());
+    crate::out!("{}", navigation_check(&args)?.render())?;
     Ok(())
 }
 
@@ -619,7 +650,8 @@ pub fn export_command(
     let cal = unit
         .to_calibration()
         .map_err(|m| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), m)))?;
-    let text = export(&cal, format)?;
+    let observable = unit.uncertainty.as_ref().map(|u| &u.lever_arms_observable);
+    let text = export_marked(&cal, format, observable)?;
     match out {
         Some(p) => {
             std::fs::write(p, &text).map_err(|e| {
@@ -628,9 +660,9 @@ pub fn export_command(
                     e,
                 ))
             })?;
-            println!("wrote {}", p.display());
+            crate::outln!("wrote {}", p.display())?;
         }
-        None => print!("{text}"),
+        None => crate::out!("{text}")?,
     }
     Ok(())
 }
@@ -651,7 +683,7 @@ pub fn plan_check(a: &PlanArgs) -> Result<crate::estimate::Prediction, CliError>
             a.noise_mg
         )));
     }
-    print_plan(&plan);
+    print_plan(&plan)?;
     let k = truth.statics.scale_out_per_g;
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
@@ -659,30 +691,31 @@ pub fn plan_check(a: &PlanArgs) -> Result<crate::estimate::Prediction, CliError>
         ..PredictSettings::white(0.0)
     };
     let prediction = predict(&plan, &truth, &settings)?;
-    println!();
-    println!(
+    crate::outln!()?;
+    crate::outln!(
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",
-        a.noise_mg, a.gyro_noise_deg_s
-    );
-    print!("{}", crate::report::render_prediction(&prediction));
+        a.noise_mg,
+        a.gyro_noise_deg_s
+    )?;
+    crate::out!("{}", crate::report::render_prediction(&prediction))?;
     Ok(prediction)
 }
 
-fn print_plan(plan: &Plan) {
-    println!(
+fn print_plan(plan: &Plan) -> std::io::Result<()> {
+    crate::outln!(
         "{} segments at {} Hz, output unit {}, g = {} m/s²",
         plan.segments.len(),
         plan.sample_rate_hz,
         plan.output_unit.symbol(),
         plan.gravity_m_s2
-    );
+    )?;
     for s in &plan.segments {
         let rate = match s.rate_end_deg_s {
             Some(r1) if r1 != s.rate_deg_s => format!("{} → {} °/s", s.rate_deg_s, r1),
             _ if s.is_static() => "static".to_string(),
             _ => format!("{} °/s", s.rate_deg_s),
         };
-        println!(
+        crate::outln!(
             "  {:<14} up_b = [{:+.4}, {:+.4}, {:+.4}]  {:<16} {}",
             s.name,
             s.up_b[0],
@@ -691,8 +724,9 @@ fn print_plan(plan: &Plan) {
             rate,
             s.duration_s
                 .map_or("(no duration)".into(), |d| format!("{d} s"))
-        );
+        )?;
     }
+    Ok(())
 }
 
 #[cfg(test)]

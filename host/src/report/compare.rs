@@ -13,6 +13,7 @@
 use crate::estimate::{paper_labels, paper_values, PAPER_LEN};
 use crate::export::{convert, Conversions};
 use crate::unit_file::{UnitFile, UnitFileError};
+use shared::params::axis_name;
 use shared::Calibration;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -168,6 +169,8 @@ pub fn compare_units(
     b: &UnitFile,
     b_name: &str,
 ) -> Result<ComparisonTable, CompareError> {
+    a.check_same_unit(b.unit_id.as_deref(), "B")
+        .map_err(|m| CompareError::Incompatible(format!("A ({a_name}) and B ({b_name}): {m}")))?;
     let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
     let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
     let (ua, ub) = (ca.statics.output_unit, cb.statics.output_unit);
@@ -334,6 +337,36 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
             ser(toml::to_string(&c))?
         ),
     })
+}
+
+/// [`export`] of a calibration file's values, with the lever-arm components its plan did not
+/// determine (`lever_arms_observable = false` in `[uncertainty]`) written as `nan` and listed in a
+/// comment: a consumer must not take an undetermined component (often exactly 0) for a measurement.
+pub fn export_marked(
+    calibration: &Calibration,
+    format: ExportFormat,
+    observable: Option<&[[bool; 3]; 3]>,
+) -> Result<String, ExportError> {
+    let mut cal = *calibration;
+    let mut names = Vec::new();
+    if let Some(obs) = observable {
+        for i in 0..3 {
+            for j in 0..3 {
+                if !obs[i][j] {
+                    cal.lever_arms.r_m[i][j] = f64::NAN;
+                    names.push(format!("r{}{}", i + 1, axis_name(j)));
+                }
+            }
+        }
+    }
+    let text = export(&cal, format)?;
+    if names.is_empty() {
+        return Ok(text);
+    }
+    Ok(format!(
+        "# NOT DETERMINED by the calibration's plan, written as nan (not a measurement): {}\n{text}",
+        names.join(", ")
+    ))
 }
 
 #[cfg(test)]

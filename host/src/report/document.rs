@@ -108,6 +108,8 @@ pub enum ReportError {
     Simulate(SimulateError),
     /// The calibration of the navigation check failed.
     Estimate(crate::estimate::EstimateError),
+    /// The calibration is of another unit than the session.
+    WrongUnit(String),
 }
 
 impl std::fmt::Display for ReportError {
@@ -121,6 +123,7 @@ impl std::fmt::Display for ReportError {
             ReportError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
             ReportError::Simulate(e) => e.fmt(f),
             ReportError::Estimate(e) => e.fmt(f),
+            ReportError::WrongUnit(m) => f.write_str(m),
         }
     }
 }
@@ -1103,9 +1106,11 @@ pub fn report(
     out_dir: &Path,
     options: &ReportOptions,
 ) -> Result<ReportSummary, ReportError> {
+    let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
     let session =
         read_session(input_dir, &ReadOptions { quiet: true }).map_err(ReportError::Recording)?;
-    let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
+    unit.check_same_unit(session.plan.unit_id.as_deref(), "the session")
+        .map_err(ReportError::WrongUnit)?;
     let cal = unit.to_calibration().map_err(ReportError::Calibration)?;
     let mut data = build_report(
         &session.plan,
