@@ -52,11 +52,13 @@ pub struct RangeError {
 
 impl std::fmt::Display for RangeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} = {} is out of range: give a number in {}",
-            self.name, self.value, self.range
-        )
+        let v = self.value;
+        if v.is_finite() && v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+            write!(f, "{} = {v:e}", self.name)?;
+        } else {
+            write!(f, "{} = {v}", self.name)?;
+        }
+        write!(f, " is out of range: give a number in {}", self.range)
     }
 }
 

@@ -257,7 +257,10 @@ pub fn read_samples<R: BufRead>(
         .read_until(b'\n', &mut line)
         .map_err(io)?;
     if n > MAX_LINE_BYTES {
-        return Err(red.line_too_long());
+        return Err(RecordingError::LineTooLong {
+            path: path.to_path_buf(),
+            line: 1,
+        });
     }
     red.report.bytes += n as u64;
     let header = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&line);
