@@ -23,6 +23,7 @@
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
+use crate::estimate::Uncertainty;
 use crate::session::OutputUnitName;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
@@ -115,22 +116,6 @@ pub struct DynamicSection {
     /// With reference = "body-point": the point, body axes, m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_offset_m: Option<[f64; 3]>,
-}
-
-/// `[uncertainty]`: 1σ of each estimated value.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Uncertainty {
-    /// Zero-bias outputs, output unit.
-    pub zero_bias_1sigma: [f64; 3],
-    /// Scale factors, output unit per g.
-    pub scale_per_g_1sigma: [f64; 3],
-    /// Installation angles, degrees.
-    pub installation_angles_deg_1sigma: RowMajor3,
-    /// Lever arms, m.
-    pub lever_arms_m_1sigma: RowMajor3,
-    /// Which lever-arm components the plan determined (false: the value is not a measurement).
-    pub lever_arms_observable: [[bool; 3]; 3],
 }
 
 /// Why a unit file is unusable.

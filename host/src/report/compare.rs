@@ -372,8 +372,8 @@ pub fn export_marked(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::Uncertainty;
     use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
-    use crate::unit_file::Uncertainty;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 

@@ -38,7 +38,10 @@
 //! leaves; replaying the means shows exactly that error, `½·e·t²`. One static run and one rotating run
 //! (the fastest constant-rate segment, 200 °/s in the paper's plan) are replayed.
 
-use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions, SegmentKind};
+use crate::estimate::Uncertainty;
+use crate::estimate::{
+    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind,
+};
 use crate::report::navigation::{integrate_drift, Drift};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
 use crate::session::builtin::paper_plan;
@@ -46,7 +49,7 @@ use crate::session::{
     read_session, Plan, ReadOptions, RecordingError, SegmentAccumulator, SegmentStats,
 };
 use crate::sim::{simulate_rows, NoiseModel, SimulateError};
-use crate::unit_file::{Uncertainty, UnitFile, UnitFileError};
+use crate::unit_file::{UnitFile, UnitFileError};
 use shared::linalg;
 use shared::params::axis_name;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
@@ -294,28 +297,20 @@ pub fn segment_rows(
     let k = cal.statics.scale_out_per_g;
     let trace = |m: &[[f64; 3]; 3]| m[0][0] + m[1][1] + m[2][2];
     // Gyro noise variance (trace), from the static segments.
-    let statics: Vec<f64> = stats
-        .iter()
-        .filter(|s| plan.segment(&s.name).is_some_and(|p| p.is_static()))
-        .map(|s| trace(&s.cov_w))
-        .collect();
-    let gyro_noise = if statics.is_empty() {
-        0.0
-    } else {
-        statics.iter().sum::<f64>() / statics.len() as f64
-    };
+    let gyro_noise = trace(
+        &Noise::pooled(
+            stats
+                .iter()
+                .filter(|s| plan.segment(&s.name).is_some_and(|p| p.is_static())),
+        )
+        .gyro_cov,
+    );
     let mut rows = Vec::new();
     for st in stats {
         let Some(sp) = plan.segment(&st.name) else {
             continue;
         };
-        let kind = if sp.is_static() {
-            SegmentKind::Static
-        } else if sp.rate_end_deg_s.is_some_and(|r| r != sp.rate_deg_s) {
-            SegmentKind::Ramp
-        } else {
-            SegmentKind::ConstantRate
-        };
+        let kind = SegmentKind::of(sp);
         let mean_w = st.mean_w_rad_s;
         let w2 = linalg::dot(&mean_w, &mean_w);
         let omega = if kind == SegmentKind::Ramp && w2 > 0.0 {
