@@ -138,3 +138,48 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Erro
     f.write_all(bytes).map_err(io)?;
     f.sync_all().map_err(io)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::{calibrate_session_stats, EstimateOptions};
+    use crate::session::OutputUnitName;
+    use crate::sim::testkit::{self, Rng, TableErrors};
+
+    fn outcome() -> CalibrationOutcome {
+        let plan = testkit::better_plan(OutputUnitName::V);
+        let stats = testkit::noisy_stats(
+            &plan,
+            &testkit::paper_unit(),
+            1e-4,
+            TableErrors::default(),
+            &mut Rng::new(3),
+        );
+        calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap()
+    }
+
+    /// A pair is replaced only with `force`; a failure half-way (here the `.bin` cannot take its
+    /// name) leaves no new `.toml` beside the old `.bin` and no staged files.
+    #[test]
+    fn the_pair_is_written_whole_or_not_at_all_and_never_over_one_without_force() {
+        let o = outcome();
+        let dir = tempfile::tempdir().unwrap();
+        let first = write_calibration_files(dir.path(), &o, UnitId([1; 12]), 1, false).unwrap();
+        let e = write_calibration_files(dir.path(), &o, UnitId([2; 12]), 2, false).unwrap_err();
+        assert!(matches!(e, OutputError::Exists(_)), "{e}");
+        assert_eq!(std::fs::read(&first.bin_path).unwrap(), first.blob);
+        let second = write_calibration_files(dir.path(), &o, UnitId([2; 12]), 2, true).unwrap();
+        assert_eq!(std::fs::read(&second.bin_path).unwrap(), second.blob);
+
+        let broken = tempfile::tempdir().unwrap();
+        std::fs::create_dir(broken.path().join(CALIBRATION_BIN)).unwrap();
+        std::fs::write(broken.path().join(CALIBRATION_BIN).join("x"), b"keep").unwrap();
+        let e = write_calibration_files(broken.path(), &o, UnitId([3; 12]), 3, true).unwrap_err();
+        assert!(matches!(e, OutputError::Io(..)), "{e}");
+        let names: Vec<String> = std::fs::read_dir(broken.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, vec![CALIBRATION_BIN.to_string()], "{names:?}");
+    }
+}
