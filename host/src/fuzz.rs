@@ -106,14 +106,14 @@ x+,0.01,2.806,2.381,2.43,0,-0.002,0\n\
 z- 100,0.02,2.4,2.38,2.03,0,0,-1.745\n\
 z- 100,0.03,2.4,2.38,2.03,0,0,-1.746\n";
 
-fn fuzz_plan() -> Plan {
-    Plan::parse(FUZZ_PLAN).expect("the fuzz plan is valid")
+fn fuzz_plan() -> &'static Plan {
+    static PLAN: std::sync::OnceLock<Plan> = std::sync::OnceLock::new();
+    PLAN.get_or_init(|| Plan::parse(FUZZ_PLAN).expect("the fuzz plan is valid"))
 }
 
 /// `samples.csv`: the reader returns statistics or an error naming a line; statistics are of rows.
 pub fn samples_csv(data: &[u8]) {
-    let plan = fuzz_plan();
-    if let Ok((stats, report)) = read_samples(data, &plan, Path::new("samples.csv")) {
+    if let Ok((stats, report)) = read_samples(data, fuzz_plan(), Path::new("samples.csv")) {
         let counted: u64 = stats.iter().map(|s| s.count + s.rejected_rows).sum();
         assert!(counted <= report.rows, "{counted} > {}", report.rows);
         assert!(report.bytes <= data.len() as u64);
@@ -375,7 +375,7 @@ mod tests {
 
     #[test]
     fn the_corpora_are_valid_inputs() {
-        assert!(read_samples(SAMPLES.as_bytes(), &fuzz_plan(), Path::new("s")).is_ok());
+        assert!(read_samples(SAMPLES.as_bytes(), fuzz_plan(), Path::new("s")).is_ok());
         assert!(Plan::parse(FUZZ_PLAN).is_ok());
         assert!(shared::blob::decode(&paper_blob()).is_ok());
         assert!(UnitFile::parse(crate::unit_file::PAPER_UNIT_TOML).is_ok());
