@@ -80,7 +80,11 @@ impl Target {
                     .unwrap_or_default(),
             ],
             Target::UnitFile => vec![crate::unit_file::PAPER_UNIT_TOML.as_bytes().to_vec()],
-            Target::Blob => vec![paper_blob()],
+            Target::Blob => {
+                let b = paper_blob();
+                let payload = b.get(8..b.len().saturating_sub(4)).unwrap_or_default().to_vec();
+                vec![b, payload]
+            }
             Target::Wire => wire_corpus(),
         }
     }
@@ -146,14 +150,30 @@ pub fn unit_file(data: &[u8]) {
     }
 }
 
-/// A blob: one that decodes re-encodes to the same bytes and makes a compensator.
+/// A blob: one that decodes re-encodes to the same calibration and makes a compensator. The bytes are
+/// tried as they are and as a payload behind a valid header and CRC, so that mutations reach the
+/// payload's decoding and range checks rather than stopping at the CRC.
 pub fn blob(data: &[u8]) {
-    if let Ok(b) = shared::blob::decode(data) {
-        let (bytes, n) = b.to_bytes().expect("a decoded blob re-encodes");
-        assert_eq!(&bytes[..n], data);
+    check_blob(data);
+    if let Ok(n) = u16::try_from(data.len()) {
+        let mut sealed = Vec::with_capacity(data.len() + 12);
+        sealed.extend_from_slice(&shared::blob::BLOB_MAGIC);
+        sealed.extend_from_slice(&shared::blob::BLOB_FORMAT_VERSION.to_le_bytes());
+        sealed.extend_from_slice(&n.to_le_bytes());
+        sealed.extend_from_slice(data);
+        let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&sealed);
+        sealed.extend_from_slice(&crc.to_le_bytes());
+        check_blob(&sealed);
+    }
+}
+
+fn check_blob(bytes: &[u8]) {
+    if let Ok(b) = shared::blob::decode(bytes) {
+        let (again, n) = b.to_bytes().expect("a decoded blob re-encodes");
+        assert_eq!(shared::blob::decode(&again[..n]), Ok(b));
         assert!(
-            shared::Compensator::new(&b.calibration, shared::LeverMode::RateAndAcceleration)
-                .is_ok()
+            shared::Compensator::new(&b.calibration, shared::LeverMode::RateAndAcceleration).is_ok(),
+            "the device cannot use a blob its decoder accepts: {b:?}"
         );
     }
 }
