@@ -82,7 +82,10 @@ impl Target {
             Target::UnitFile => vec![crate::unit_file::PAPER_UNIT_TOML.as_bytes().to_vec()],
             Target::Blob => {
                 let b = paper_blob();
-                let payload = b.get(8..b.len().saturating_sub(4)).unwrap_or_default().to_vec();
+                let payload = b
+                    .get(8..b.len().saturating_sub(4))
+                    .unwrap_or_default()
+                    .to_vec();
                 vec![b, payload]
             }
             Target::Wire => wire_corpus(),
@@ -172,7 +175,8 @@ fn check_blob(bytes: &[u8]) {
         let (again, n) = b.to_bytes().expect("a decoded blob re-encodes");
         assert_eq!(shared::blob::decode(&again[..n]), Ok(b));
         assert!(
-            shared::Compensator::new(&b.calibration, shared::LeverMode::RateAndAcceleration).is_ok(),
+            shared::Compensator::new(&b.calibration, shared::LeverMode::RateAndAcceleration)
+                .is_ok(),
             "the device cannot use a blob its decoder accepts: {b:?}"
         );
     }

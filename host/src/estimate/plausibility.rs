@@ -61,7 +61,8 @@ pub(crate) fn check(
 fn triad_problems(m: &linalg::RowMajor3) -> Vec<String> {
     let mut problems = Vec::new();
     let det = linalg::to_na(m).determinant();
-    if !(det > 0.0) {
+    // NaN (a degenerate fit) fails too.
+    if det.is_nan() || det <= 0.0 {
         problems.push(format!(
             "the fitted sensing axes form a left-handed (or degenerate) triad (det M = {det:.3e}): \
              a segment pair is probably recorded under each other's label (e.g. x+ and x−)"
@@ -71,7 +72,7 @@ fn triad_problems(m: &linalg::RowMajor3) -> Vec<String> {
         let n = linalg::norm(row);
         let cos = if n > 0.0 { row[i] / n } else { f64::NAN };
         let angle = cos.clamp(-1.0, 1.0).acos().to_degrees();
-        if !(angle <= MAX_AXIS_ANGLE_DEG) {
+        if angle.is_nan() || angle > MAX_AXIS_ANGLE_DEG {
             problems.push(format!(
                 "accelerometer {} senses {angle:.1}° away from body axis {} (at most \
                  {MAX_AXIS_ANGLE_DEG}° is plausible): the plan's labels do not match the recording",
@@ -117,7 +118,7 @@ pub(crate) fn label_contradictions(plan: &Plan, stats: &[SegmentStats]) -> Vec<S
         u0[i] = 0.5 * (hi + lo);
         k[i] = 0.5 * (hi - lo);
     }
-    if k.iter().any(|v| !(*v > 0.0)) {
+    if k.iter().any(|v| v.is_nan() || *v <= 0.0) {
         return Vec::new();
     }
     let mut out = Vec::new();
