@@ -143,17 +143,16 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Erro
 mod tests {
     use super::*;
     use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::session::OutputUnitName;
     use crate::sim::testkit::{self, Rng, TableErrors};
 
     fn outcome() -> CalibrationOutcome {
-        let plan = testkit::better_plan(OutputUnitName::V);
+        let plan = testkit::better_plan(shared::OutputUnit::Volts);
         let stats = testkit::noisy_stats(
             &plan,
             &testkit::paper_unit(),
             1e-4,
             TableErrors::default(),
-            &mut Rng::new(3),
+            &mut Rng::new(3, 0),
         );
         calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap()
     }

@@ -3,9 +3,10 @@
 
 use host::calibration_files::write_calibration_files;
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::report::compare::{compare, export, ExportFormat};
-use host::report::document::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
+use host::export::{export, ExportFormat};
+use host::report::compare::compare;
 use host::report::plot::png_dimensions;
+use host::report::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
 use host::session::builtin::load_plan;
 use host::session::{read_session, ReadOptions};
 use host::sim::{simulate_to_dir, NoiseModel};

@@ -1,7 +1,7 @@
 //! `host export`: a calibration in the conventions of other tools (TOML).
 
 use super::CliError;
-use crate::report::compare::{export_marked, ExportFormat};
+use crate::export::{export_marked, ExportFormat};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use std::path::PathBuf;

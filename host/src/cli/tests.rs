@@ -9,7 +9,7 @@ use crate::device::serial::DEFAULT_BAUD;
 use crate::device::sim::SIM_UNIT_ID;
 use crate::device::LinkError;
 use crate::estimate::Method;
-use crate::report::compare::ExportFormat;
+use crate::export::ExportFormat;
 use crate::sim::NoiseModel;
 use clap::CommandFactory;
 use shared::blob::ParameterBlob;
@@ -231,7 +231,7 @@ fn sim() -> PortArgs {
 }
 
 fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
-    let cal = UnitFile::paper_unit().to_calibration().unwrap();
+    let cal = shared::params::PAPER_UNIT;
     let (bytes, n) = ParameterBlob {
         unit_id: unit,
         calibration: cal,

@@ -573,7 +573,7 @@ fn fit_session(
         }
     }
 
-    let output_unit: OutputUnit = plan.output_unit.into();
+    let output_unit: OutputUnit = plan.output_unit;
     let fitted = FittedStatic {
         output_unit,
         m_out_per_g: model::m_of(&main_theta),

@@ -3,35 +3,12 @@
 //! (like Tables 2 and 4) with the χ² check, the excluded segments, the method comparison and the
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
+use super::format::{out_digits, pm};
 use crate::estimate::{
     CalibrationOutcome, Method, Prediction, SegmentDiagnostic, SegmentKind, PAPER_LEN,
 };
 use shared::params::axis_name;
-use shared::OutputUnit;
 use std::fmt::Write;
-
-fn out_digits(unit: OutputUnit) -> usize {
-    match unit {
-        OutputUnit::Volts => 6,
-        OutputUnit::Lsb => 3,
-    }
-}
-
-/// `v ± s` with at least `digits` decimals, and more when needed to show two significant digits of
-/// the 1σ (a bias known to 0.1 µV must not print as "± 0.000000").
-fn pm(v: f64, s: f64, digits: usize) -> String {
-    if s.is_finite() {
-        let needed = if s > 0.0 {
-            (1.0 - s.log10().floor()).max(0.0) as usize
-        } else {
-            0
-        };
-        let digits = digits.max(needed).min(10);
-        format!("{v:.digits$} ± {s:.digits$}")
-    } else {
-        format!("{v:.digits$} ± ∞")
-    }
-}
 
 /// Lever arm in mm with its 1σ, marked when not determined.
 fn lever_cell(r: f64, s: f64, observable: bool, fixed: bool) -> String {
@@ -316,9 +293,7 @@ rate_deg_s = 200
     #[test]
     fn report_has_the_paper_tables_and_the_comparison() {
         let plan = Plan::parse(PLAN).unwrap();
-        let truth = crate::unit_file::UnitFile::paper_unit()
-            .to_calibration()
-            .unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let unit = shared::forward::ForwardModel::new(&truth).unwrap();
         let noise = SynthNoise {
             out_1sigma: [4e-4; 3],
@@ -342,15 +317,5 @@ rate_deg_s = 200
         ] {
             assert!(text.contains(want), "missing {want}");
         }
-    }
-}
-
-#[cfg(test)]
-mod pm_tests {
-    #[test]
-    fn sigma_keeps_two_significant_digits() {
-        assert_eq!(super::pm(2.405098123, 1.3e-7, 6), "2.40509812 ± 0.00000013");
-        assert_eq!(super::pm(0.39496, 2.0e-3, 6), "0.394960 ± 0.002000");
-        assert_eq!(super::pm(1.0, f64::INFINITY, 3), "1.000 ± ∞");
     }
 }

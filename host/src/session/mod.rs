@@ -15,7 +15,7 @@ pub mod stats;
 pub mod writer;
 
 pub use error::RecordingError;
-pub use plan::{OutputUnitName, Plan, PlanError, SegmentPlan};
+pub use plan::{Plan, PlanError, SegmentPlan};
 pub use reader::{read_samples, read_session, ReadOptions, ReadReport, Session};
 pub use stats::{SegmentAccumulator, SegmentStats};
 pub use writer::SessionWriter;

@@ -3,47 +3,11 @@
 //! optional table errors (attitude per mount, rate scale) — all seeded.
 
 use super::synth::{self, ActualSegment, SynthNoise};
-use crate::session::{OutputUnitName, Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 
-/// SplitMix64 with Box–Muller normals.
-pub struct Rng(u64, Option<f64>);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x9E37_79B9_7F4A_7C15, None)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in (0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    pub fn normal(&mut self) -> f64 {
-        if let Some(z) = self.1.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let a = 2.0 * std::f64::consts::PI * u2;
-        self.1 = Some(r * a.sin());
-        r * a.cos()
-    }
-    pub fn unit_vector(&mut self) -> [f64; 3] {
-        let v = [self.normal(), self.normal(), self.normal()];
-        let n = shared::linalg::norm(&v);
-        v.map(|c| c / n)
-    }
-}
+pub use super::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
@@ -67,7 +31,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
 }
 
 /// The paper's plan: ±1 g per axis static, 60 s; 100/150/200 °/s about x, y, z with that axis up.
-pub fn paper_plan(unit: OutputUnitName) -> Plan {
+pub fn paper_plan(unit: OutputUnit) -> Plan {
     let mut segments = Vec::new();
     for (a, n) in ["x", "y", "z"].iter().enumerate() {
         for sgn in [1.0, -1.0] {
@@ -100,7 +64,7 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
 }
 
 /// The paper's plan plus three 45° oblique mounts spun at ±200 °/s and a spin-up per oblique mount.
-pub fn better_plan(unit: OutputUnitName) -> Plan {
+pub fn better_plan(unit: OutputUnit) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for (n, up) in [
@@ -122,9 +86,7 @@ pub fn better_plan(unit: OutputUnitName) -> Plan {
 
 /// The paper's unit.
 pub fn paper_unit() -> Calibration {
-    crate::unit_file::UnitFile::paper_unit()
-        .to_calibration()
-        .expect("the paper unit is valid")
+    shared::params::PAPER_UNIT
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.
