@@ -16,7 +16,7 @@
 pub mod model;
 mod paper;
 mod paper_angles;
-mod plausibility;
+pub mod plausibility;
 mod predict;
 mod screen;
 mod segment;
