@@ -1,0 +1,91 @@
+//! Who turns the table during the live procedure: a person at the terminal (instructions on stdout,
+//! Enter on stdin), or nobody when the device drives its own virtual table.
+
+use super::procedure::ProcedureError;
+use std::io::{BufRead, Write};
+
+/// Who turns the table: a person at a terminal, or nobody (the device's virtual table is driven).
+pub trait Operator {
+    /// Shows a line of progress.
+    fn say(&mut self, text: &str);
+    /// Asks for a set-up step and waits until it is done.
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError>;
+    /// A live check failed: keep the segment anyway (`true`) or stop (`false`)?
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
+}
+
+/// An operator at the terminal: instructions on stdout, Enter on stdin.
+pub struct TerminalOperator;
+
+impl Operator for TerminalOperator {
+    fn say(&mut self, text: &str) {
+        // A closed or full stdout must not stop a procedure between recording and flashing; the
+        // command's own closing line reports it.
+        let _ = crate::outln!("{text}");
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        let _ = crate::out!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
+        std::io::stdout()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        let n = std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
+        if n == 0 {
+            return Err(ProcedureError::Aborted("standard input closed".into()));
+        }
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        let _ = crate::outln!("segment '{segment}' does not match the plan:");
+        for p in problems {
+            let _ = crate::outln!("  - {p}");
+        }
+        let _ = crate::out!("keep it anyway (the estimator will screen it)? [y/N] ");
+        std::io::stdout()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
+        Ok(line.trim().eq_ignore_ascii_case("y"))
+    }
+}
+
+/// No person: instructions are printed (unless quiet), nothing is waited for, and segments that fail a
+/// live check are kept with a warning (the estimator screens them).
+pub struct AutomaticOperator {
+    /// Print progress lines.
+    pub verbose: bool,
+    /// Warnings collected from live checks.
+    pub warnings: Vec<String>,
+}
+
+impl Operator for AutomaticOperator {
+    fn say(&mut self, text: &str) {
+        if self.verbose {
+            // As for the terminal operator: the command's closing line reports a closed stdout.
+            let _ = crate::outln!("{text}");
+        }
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        self.say(instruction);
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        for p in problems {
+            let w = format!("segment '{segment}': {p}");
+            self.say(&format!("warning: {w}"));
+            self.warnings.push(w);
+        }
+        Ok(true)
+    }
+}
