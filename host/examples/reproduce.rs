@@ -48,7 +48,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let s = read_session(&session, &ReadOptions { quiet: true })?;
     let unit_id = UnitId([0; 12]);
     let joint = calibrate_session_stats(&s.plan, &s.stats, &EstimateOptions::default())?;
-    let joint_files = write_calibration_files(&out.join("calibration"), &joint, unit_id, 0)?;
+    // The example regenerates its own output directory on every run: replacing is its purpose.
+    let joint_files = write_calibration_files(&out.join("calibration"), &joint, unit_id, 0, true)?;
     let eq24 = calibrate_session_stats(
         &s.plan,
         &s.stats,
@@ -57,7 +58,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..EstimateOptions::default()
         },
     )?;
-    let eq24_files = write_calibration_files(&out.join("calibration-eq24"), &eq24, unit_id, 0)?;
+    let eq24_files =
+        write_calibration_files(&out.join("calibration-eq24"), &eq24, unit_id, 0, true)?;
     println!("\n{}", host::report::render(&joint));
 
     println!("Joint least squares (A) against the paper's eq. 24 (B):");

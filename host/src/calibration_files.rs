@@ -30,6 +30,8 @@ pub enum OutputError {
     Blob(BlobError),
     /// A file could not be written.
     Io(PathBuf, std::io::Error),
+    /// A calibration is already there and `--force` was not given.
+    Exists(PathBuf),
 }
 
 impl std::fmt::Display for OutputError {
@@ -40,6 +42,11 @@ impl std::fmt::Display for OutputError {
                 "the estimated calibration cannot be stored on a device: {e}"
             ),
             OutputError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
+            OutputError::Exists(p) => write!(
+                f,
+                "{} already exists: choose another output directory (--out-dir) or replace it (--force)",
+                p.display()
+            ),
         }
     }
 }
@@ -68,16 +75,35 @@ pub fn blob_bytes(
     Ok(bytes[..n].to_vec())
 }
 
-/// Writes both files into `out_dir` (created if needed).
+/// Refuses to go on when `out_dir` already holds a calibration and `force` is false: called before
+/// any work (reading a session, recording, flashing), so a run is never wasted on a refusal at its end.
+pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
+    if force {
+        return Ok(());
+    }
+    for name in [CALIBRATION_TOML, CALIBRATION_BIN] {
+        let p = out_dir.join(name);
+        if p.exists() {
+            return Err(OutputError::Exists(p));
+        }
+    }
+    Ok(())
+}
+
+/// Writes both files into `out_dir` (created if needed), as a pair: both are written beside their
+/// final names (`.calibration.toml.new`, `.calibration.bin.new`) and renamed only when both are
+/// complete, so a failure (a full disk) leaves the old pair or no pair, never a new `.toml` beside an
+/// old `.bin`. An existing pair is replaced only with `force`.
 pub fn write_calibration_files(
     out_dir: &Path,
     outcome: &CalibrationOutcome,
     unit_id: UnitId,
     created_unix_s: u64,
+    force: bool,
 ) -> Result<WrittenCalibration, OutputError> {
+    refuse_overwrite(out_dir, force)?;
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
-    let toml_path = out_dir.join(CALIBRATION_TOML);
     let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         Some(unit_id),
@@ -89,9 +115,19 @@ pub fn write_calibration_files(
         section.matrix_1sigma = Some(g.matrix_1sigma);
     }
     let text = file.to_toml();
-    std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
+    let toml_path = out_dir.join(CALIBRATION_TOML);
     let bin_path = out_dir.join(CALIBRATION_BIN);
-    std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;
+    let toml_new = out_dir.join(format!(".{CALIBRATION_TOML}.new"));
+    let bin_new = out_dir.join(format!(".{CALIBRATION_BIN}.new"));
+    let staged = write_synced(&toml_new, text.as_bytes())
+        .and_then(|()| write_synced(&bin_new, &blob))
+        .and_then(|()| std::fs::rename(&bin_new, &bin_path).map_err(|e| (bin_path.clone(), e)))
+        .and_then(|()| std::fs::rename(&toml_new, &toml_path).map_err(|e| (toml_path.clone(), e)));
+    if let Err((p, e)) = staged {
+        let _ = std::fs::remove_file(&toml_new);
+        let _ = std::fs::remove_file(&bin_new);
+        return Err(OutputError::Io(p, e));
+    }
     Ok(WrittenCalibration {
         toml_path,
         bin_path,
@@ -99,16 +135,62 @@ pub fn write_calibration_files(
     })
 }
 
+/// Writes and syncs one file, naming it in the error.
+fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Error)> {
+    use std::io::Write;
+    let io = |e| (path.to_path_buf(), e);
+    let mut f = std::fs::File::create(path).map_err(io)?;
+    f.write_all(bytes).map_err(io)?;
+    f.sync_all().map_err(io)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::session::builtin::builtin_plan;
-    use crate::sim::testkit::{self, TableErrors};
+    use crate::sim::testkit::{self, Rng, TableErrors};
+
+    fn outcome() -> CalibrationOutcome {
+        let plan = testkit::better_plan(shared::OutputUnit::Volts);
+        let stats = testkit::noisy_stats(
+            &plan,
+            &testkit::paper_unit(),
+            1e-4,
+            TableErrors::default(),
+            &mut Rng::new(3, 0),
+        );
+        calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap()
+    }
+
+    /// A pair is replaced only with `force`; a failure half-way (here the `.bin` cannot take its
+    /// name) leaves no new `.toml` beside the old `.bin` and no staged files.
+    #[test]
+    fn the_pair_is_written_whole_or_not_at_all_and_never_over_one_without_force() {
+        let o = outcome();
+        let dir = tempfile::tempdir().unwrap();
+        let first = write_calibration_files(dir.path(), &o, UnitId([1; 12]), 1, false).unwrap();
+        let e = write_calibration_files(dir.path(), &o, UnitId([2; 12]), 2, false).unwrap_err();
+        assert!(matches!(e, OutputError::Exists(_)), "{e}");
+        assert_eq!(std::fs::read(&first.bin_path).unwrap(), first.blob);
+        let second = write_calibration_files(dir.path(), &o, UnitId([2; 12]), 2, true).unwrap();
+        assert_eq!(std::fs::read(&second.bin_path).unwrap(), second.blob);
+
+        let broken = tempfile::tempdir().unwrap();
+        std::fs::create_dir(broken.path().join(CALIBRATION_BIN)).unwrap();
+        std::fs::write(broken.path().join(CALIBRATION_BIN).join("x"), b"keep").unwrap();
+        let e = write_calibration_files(broken.path(), &o, UnitId([3; 12]), 3, true).unwrap_err();
+        assert!(matches!(e, OutputError::Io(..)), "{e}");
+        let names: Vec<String> = std::fs::read_dir(broken.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, vec![CALIBRATION_BIN.to_string()], "{names:?}");
+    }
+
 
     #[test]
     fn the_calibration_file_carries_the_estimated_gyro() {
-        let plan = builtin_plan("short-oblique").unwrap().unwrap();
+        let plan = crate::session::builtin::builtin_plan("short-oblique").unwrap().unwrap();
         let truth = testkit::paper_unit();
         let g = crate::sim::session::gyro_matrix([5e-3, -5e-3, 5e-3], 0.5f64.to_radians());
         let b = [0.008, -0.008, 0.008];
@@ -117,13 +199,13 @@ mod tests {
             gyro: Some((g, b)),
             ..TableErrors::default()
         };
-        let mut rng = testkit::Rng::new(3, 0);
+        let mut rng = Rng::new(3, 0);
         let noise = 1e-3 * truth.statics.scale_out_per_g[0];
         let stats = testkit::noisy_stats(&plan, &truth, noise, errors, &mut rng);
         let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let id = UnitId::parse_hex("000102030405060708090a0b").unwrap();
-        let w = write_calibration_files(dir.path(), &out, id, 0).unwrap();
+        let w = write_calibration_files(dir.path(), &out, id, 0, false).unwrap();
         let text = std::fs::read_to_string(&w.toml_path).unwrap();
         assert!(
             text.contains("[gyro]")

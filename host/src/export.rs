@@ -208,6 +208,36 @@ pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String,
     })
 }
 
+/// [`export`] of a calibration file's values, with the lever-arm components its plan did not
+/// determine (`lever_arms_observable = false` in `[uncertainty]`) written as `nan` and listed in a
+/// comment: a consumer must not take an undetermined component (often exactly 0) for a measurement.
+pub fn export_marked(
+    calibration: &Calibration,
+    format: ExportFormat,
+    observable: Option<&[[bool; 3]; 3]>,
+) -> Result<String, ExportError> {
+    let mut cal = *calibration;
+    let mut names = Vec::new();
+    if let Some(obs) = observable {
+        for i in 0..3 {
+            for j in 0..3 {
+                if !obs[i][j] {
+                    cal.lever_arms.r_m[i][j] = f64::NAN;
+                    names.push(format!("r{}{}", i + 1, shared::params::axis_name(j)));
+                }
+            }
+        }
+    }
+    let text = export(&cal, format)?;
+    if names.is_empty() {
+        return Ok(text);
+    }
+    Ok(format!(
+        "# NOT DETERMINED by the calibration's plan, written as nan (not a measurement): {}\n{text}",
+        names.join(", ")
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

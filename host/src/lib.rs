@@ -29,6 +29,8 @@ pub mod cli;
 pub mod device;
 pub mod estimate;
 pub mod export;
+pub mod fuzz;
+pub mod limits;
 pub mod report;
 pub mod session;
 pub mod sim;

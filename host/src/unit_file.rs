@@ -37,6 +37,32 @@ use std::path::{Path, PathBuf};
 /// The paper's unit (Tables 1 and 3), built in.
 pub const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
 
+/// Top-level tables a unit file may have besides the ones it interprets: kept as they are in
+/// [`UnitFile::other`] (the paper's `[procedure]` and `[expected]`, the simulator's `[noise]` and
+/// `[simulation]` in `truth.toml`).
+pub const KNOWN_EXTRA_TABLES: &[&str] = &["procedure", "expected", "noise", "simulation"];
+
+/// Line and column (1-based) where top-level `key` is written: a `[key]` header or a `key =` line.
+fn key_position(text: &str, key: &str) -> (usize, usize) {
+    for (n, line) in text.lines().enumerate() {
+        let t = line.trim_start();
+        let col = line.len() - t.len() + 1;
+        let bare = t.trim_start_matches('[').trim_start();
+        let rest = bare.strip_prefix(key).or_else(|| {
+            bare.strip_prefix('"')
+                .and_then(|b| b.strip_prefix(key))
+                .and_then(|b| b.strip_prefix('"'))
+        });
+        if let Some(rest) = rest {
+            let rest = rest.trim_start();
+            if rest.starts_with(['=', ']', '.']) {
+                return (n + 1, col);
+            }
+        }
+    }
+    (1, 1)
+}
+
 /// A unit file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct UnitFile {
@@ -158,12 +184,35 @@ impl UnitFile {
 
     /// Reads a unit file.
     pub fn load(path: &Path) -> Result<UnitFile, UnitFileError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| UnitFileError::Io(path.to_path_buf(), e))?;
-        let file: UnitFile = toml::from_str(&text)
-            .map_err(|e| UnitFileError::Syntax(path.to_path_buf(), e.to_string()))?;
+        let text = crate::limits::read_text_bounded(path)
+            .map_err(|e| UnitFileError::Io(path.to_path_buf(), e))?;
+        let file =
+            UnitFile::parse(&text).map_err(|e| UnitFileError::Syntax(path.to_path_buf(), e))?;
         file.to_calibration()
             .map_err(|m| UnitFileError::Invalid(path.to_path_buf(), m))?;
+        Ok(file)
+    }
+
+    /// Parses unit-file text strictly: an unknown key or table (a typo such as `[dynamc]`, which would
+    /// otherwise silently mean zero lever arms) is an error naming its line and column.
+    pub fn parse(text: &str) -> Result<UnitFile, String> {
+        let file: UnitFile = toml::from_str(text).map_err(|e| e.to_string())?;
+        if let Some(key) = file
+            .other
+            .keys()
+            .find(|k| !KNOWN_EXTRA_TABLES.contains(&k.as_str()))
+        {
+            let (line, column) = key_position(text, key);
+            return Err(format!(
+                "line {line}, column {column}: unknown key or table '{key}'; a unit file has g_m_s2, \
+                 unit_id, output_unit, [static], [dynamic], [uncertainty] and the tables {}",
+                KNOWN_EXTRA_TABLES
+                    .iter()
+                    .map(|t| format!("[{t}]"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
         Ok(file)
     }
 
@@ -174,6 +223,22 @@ impl UnitFile {
             Some(s) => UnitId::parse_hex(s)
                 .map(Some)
                 .ok_or_else(|| format!("unit_id '{s}' must be 24 hexadecimal digits")),
+        }
+    }
+
+    /// Checks that this calibration belongs to the unit `other` names (a plan's, a device's or another
+    /// file's `unit_id`). An absent or all-zero id (a session recorded without one) binds nothing.
+    pub fn check_same_unit(&self, other: Option<&str>, other_what: &str) -> Result<(), String> {
+        let known = |s: Option<&str>| {
+            s.and_then(UnitId::parse_hex)
+                .filter(|id| *id != UnitId::default())
+        };
+        match (known(self.unit_id.as_deref()), known(other)) {
+            (Some(a), Some(b)) if a != b => Err(format!(
+                "the calibration is of unit {a} but {other_what} is of unit {b}: use the calibration \
+                 of this unit"
+            )),
+            _ => Ok(()),
         }
     }
 

@@ -30,7 +30,7 @@ fn report_and_compare_from_files() {
     let s = read_session(&session, &ReadOptions { quiet: true }).unwrap();
     let joint = calibrate_session_stats(&s.plan, &s.stats, &EstimateOptions::default()).unwrap();
     let id = UnitId([7; 12]);
-    let a = write_calibration_files(&tmp.path().join("joint"), &joint, id, 0).unwrap();
+    let a = write_calibration_files(&tmp.path().join("joint"), &joint, id, 0, false).unwrap();
 
     let out = tmp.path().join("report");
     let summary = report(&session, &a.toml_path, &out, &ReportOptions::default()).unwrap();
@@ -69,7 +69,7 @@ fn report_and_compare_from_files() {
         },
     )
     .unwrap();
-    let b = write_calibration_files(&tmp.path().join("eq24"), &eq24, id, 0).unwrap();
+    let b = write_calibration_files(&tmp.path().join("eq24"), &eq24, id, 0, false).unwrap();
     let t = compare(&a.toml_path, &b.toml_path).unwrap();
     let worst = t.worst().unwrap();
     assert!(worst.diff_sigma.unwrap().abs() < 5.0, "{}", t.render());

@@ -47,6 +47,10 @@ pub struct CalibrateArgs {
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
     #[arg(long, value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
+    /// Replace an existing calibration (and, with --port, an existing recording) in the output
+    /// directory.
+    #[arg(long)]
+    pub force: bool,
     /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
     pub method: MethodArg,
@@ -123,31 +127,18 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         ));
     }
+    let out_dir = a.out_dir.as_deref().unwrap_or(input);
+    // Refused before the (possibly long) read, not after it.
+    crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
     let started = Instant::now();
     let session = read_session_verbose(input, quiet)?;
     let read_s = started.elapsed().as_secs_f64();
-    println!(
-        "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
-        session.report.rows,
-        session.report.bytes as f64 / 1e6,
-        session.stats.len(),
-        input.display(),
-        read_s,
-        session.report.rows as f64 / read_s.max(1e-9) / 1e6
-    );
     let mut outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
-    if outcome.gyro.is_none() {
+    let hand_gyro = outcome.gyro.is_none() && {
         outcome.gyro = super::segment::session_hand_gyro(input)?;
         outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
-        if outcome.gyro.is_some() {
-            println!(
-                "gyro: from the hand turns ({})",
-                input.join(super::segment::GYRO_FILE).display()
-            );
-        }
-    }
-    println!();
-    print!("{}", crate::report::render(&outcome));
+        outcome.gyro.is_some()
+    };
     let unit_id = match &session.plan.unit_id {
         Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
         None => {
@@ -158,14 +149,31 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
             UnitId::default()
         }
     };
-    let out_dir = a.out_dir.as_deref().unwrap_or(input);
-    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s())?;
-    println!(
+    // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
+    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
+    crate::outln!(
+        "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
+        session.report.rows,
+        session.report.bytes as f64 / 1e6,
+        session.stats.len(),
+        input.display(),
+        read_s,
+        session.report.rows as f64 / read_s.max(1e-9) / 1e6
+    )?;
+    if hand_gyro {
+        crate::outln!(
+            "gyro: from the hand turns ({})",
+            input.join(super::segment::GYRO_FILE).display()
+        )?;
+    }
+    crate::outln!()?;
+    crate::out!("{}", crate::report::render(&outcome))?;
+    crate::outln!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
         written.toml_path.display(),
         written.bin_path.display(),
         written.blob.len()
-    );
+    )?;
     Ok(outcome)
 }
 
@@ -178,6 +186,14 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         timeout_s: a.timeout_s,
         sim_unit: a.sim_unit.clone(),
     };
+    if let Some(w) = a.window {
+        crate::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
+    }
+    crate::limits::positive_at_most(
+        "--verify-tolerance-mg",
+        a.verify_tolerance_mg,
+        crate::limits::MAX_TOLERANCE_MG,
+    )?;
     let mut client = connect(&port)?;
     let identity = client.identify()?;
     let plan = match &a.plan {
@@ -189,6 +205,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     opts.window_samples = a.window;
     opts.estimate = estimate_options(a);
     opts.verify_tolerance_mg = a.verify_tolerance_mg;
+    opts.force = a.force;
     opts.quiet = quiet;
     let mut auto = AutomaticOperator {
         verbose: !quiet,
@@ -202,7 +219,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     };
     let result = procedure::run(&mut client, &opts, op)?;
     for w in &result.warnings {
-        println!("warning: {w}");
+        crate::outln!("warning: {w}")?;
     }
     let worst = result
         .verification
@@ -210,20 +227,20 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         .map(|v| v.error_mg)
         .fold(0.0, f64::max);
     if result.passed {
-        println!(
+        crate::outln!(
             "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
              results in {}",
             result.identity.unit_id,
             result.verification.len(),
             opts.verify_tolerance_mg,
             opts.out_dir.display()
-        );
+        )?;
         Ok(())
     } else {
-        println!(
+        crate::outln!(
             "FAIL: worst verification error {worst:.3} mg > {} mg",
             opts.verify_tolerance_mg
-        );
+        )?;
         Err(CliError::VerificationFailed)
     }
 }

@@ -17,6 +17,6 @@ pub struct CompareArgs {
 
 /// Prints the comparison table.
 pub fn run(a: &CompareArgs) -> Result<(), CliError> {
-    print!("{}", compare(&a.a, &a.b)?.render());
+    crate::out!("{}", compare(&a.a, &a.b)?.render())?;
     Ok(())
 }

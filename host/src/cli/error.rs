@@ -76,4 +76,16 @@ pub enum CliError {
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
+    /// Standard output is closed or full (`| head`, `> /dev/full`); files and devices were written
+    /// before it.
+    #[error(
+        "cannot write to standard output ({0}); any files (and a device) were written before this"
+    )]
+    Stdout(#[from] std::io::Error),
+}
+
+impl From<crate::limits::RangeError> for CliError {
+    fn from(e: crate::limits::RangeError) -> Self {
+        CliError::Usage(e.to_string())
+    }
 }

@@ -1,7 +1,7 @@
 //! `host export`: a calibration in the conventions of other tools (TOML).
 
 use super::CliError;
-use crate::export::{export, ExportFormat};
+use crate::export::{export_marked, ExportFormat};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use std::path::PathBuf;
@@ -27,7 +27,8 @@ pub fn run(a: &ExportArgs) -> Result<(), CliError> {
     let cal = unit
         .to_calibration()
         .map_err(|m| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), m)))?;
-    let text = export(&cal, format)?;
+    let observable = unit.uncertainty.as_ref().map(|u| &u.lever_arms_observable);
+    let text = export_marked(&cal, format, observable)?;
     match out {
         Some(p) => {
             std::fs::write(p, &text).map_err(|e| {
@@ -36,9 +37,9 @@ pub fn run(a: &ExportArgs) -> Result<(), CliError> {
                     e,
                 ))
             })?;
-            println!("wrote {}", p.display());
+            crate::outln!("wrote {}", p.display())?;
         }
-        None => print!("{text}"),
+        None => crate::out!("{text}")?,
     }
     Ok(())
 }

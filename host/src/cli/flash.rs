@@ -23,10 +23,25 @@ pub struct FlashArgs {
 /// `host flash --port P --calibration FILE`: writes `calibration.bin` (or a `calibration.toml`, encoded
 /// for the connected unit), resets the device and checks it applied it.
 pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
+    // The file is read (bounded: `/dev/zero` is refused at once) and checked before the device is
+    // touched.
+    let is_toml = calibration.extension().is_some_and(|e| e == "toml");
+    let unit = if is_toml {
+        Some(UnitFile::load(calibration).map_err(CliError::Unit)?)
+    } else {
+        None
+    };
+    let file_bytes = if is_toml {
+        Vec::new()
+    } else {
+        let bytes = crate::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)
+            .map_err(|e| CliError::Io(calibration.to_path_buf(), e))?;
+        blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
+        bytes
+    };
     let mut client = connect(port)?;
     let identity = client.identify()?;
-    let bytes = if calibration.extension().is_some_and(|e| e == "toml") {
-        let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
+    let bytes = if let Some(unit) = unit {
         if let Ok(Some(id)) = unit.unit_id() {
             if id != identity.unit_id {
                 return Err(CliError::WrongUnit {
@@ -46,8 +61,7 @@ pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
             .map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
         buf[..n].to_vec()
     } else {
-        let bytes =
-            std::fs::read(calibration).map_err(|e| CliError::Io(calibration.to_path_buf(), e))?;
+        let bytes = file_bytes;
         let decoded =
             blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
         if decoded.unit_id != identity.unit_id {
@@ -64,11 +78,11 @@ pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
     if back != bytes {
         return Err(CliError::Procedure(ProcedureError::ReadBackMismatch));
     }
-    println!(
+    crate::outln!(
         "flashed {} bytes to unit {}; after reset: {:?}",
         bytes.len(),
         identity.unit_id,
         after.calibration
-    );
+    )?;
     Ok(())
 }

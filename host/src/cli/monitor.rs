@@ -21,13 +21,17 @@ pub struct MonitorArgs {
 
 /// `host monitor --port P [--window N] [--count N]`: live compensated output with its flags.
 pub fn run(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), CliError> {
+    crate::limits::count_in("--window", window, crate::limits::MAX_WINDOW)?;
     let mut client = connect(port)?;
     let identity = client.identify()?;
     let g = shared::STANDARD_GRAVITY_M_S2;
-    println!(
+    crate::outln!(
         "unit {} ({:?}), calibration {:?}; compensated specific force in g, {} samples per line",
-        identity.unit_id, identity.board, identity.calibration, window
-    );
+        identity.unit_id,
+        identity.board,
+        identity.calibration,
+        window
+    )?;
     client.start_stream(StreamKind::CompensatedWindows, window.max(1))?;
     let mut n = 0u64;
     while count.is_none_or(|c| n < c) {
@@ -43,7 +47,7 @@ pub fn run(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), CliEr
         .map(|(_, name)| *name)
         .collect::<Vec<_>>()
         .join(",");
-        println!(
+        crate::outln!(
             "{:10.3} s  f = ({:+.6}, {:+.6}, {:+.6}) g  ω = ({:+8.2}, {:+8.2}, {:+8.2}) °/s  {}",
             w.first_sample as f64 / f64::from(identity.sample_rate_hz.max(1)),
             f64::from(w.mean_m_s2[0]) / g,
@@ -57,7 +61,7 @@ pub fn run(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), CliEr
             } else {
                 &flags
             }
-        );
+        )?;
         n += 1;
     }
     client.stop_stream()?;

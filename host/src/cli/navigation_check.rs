@@ -29,6 +29,7 @@ pub struct NavigationCheckCliArgs {
 
 /// `host navigation-check`.
 pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+    super::report::navigation_duration(a.duration_s)?;
     let mut args = NavigationCheckArgs {
         seed: a.seed,
         out_dir: a.out_dir.clone(),
@@ -41,6 +42,6 @@ pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
     if let Some(spec) = &a.plan {
         args.plan = load_plan(spec)?;
     }
-    print!("{}", navigation_check(&args)?.render());
+    crate::out!("{}", navigation_check(&args)?.render())?;
     Ok(())
 }

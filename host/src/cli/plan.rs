@@ -42,7 +42,7 @@ pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
             a.noise_mg
         )));
     }
-    print_plan(&plan);
+    print_plan(&plan)?;
     let k = truth.statics.scale_out_per_g;
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
@@ -50,30 +50,31 @@ pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
         ..PredictSettings::white(0.0)
     };
     let prediction = predict(&plan, &truth, &settings)?;
-    println!();
-    println!(
+    crate::outln!()?;
+    crate::outln!(
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",
-        a.noise_mg, a.gyro_noise_deg_s
-    );
-    print!("{}", crate::report::render_prediction(&prediction));
+        a.noise_mg,
+        a.gyro_noise_deg_s
+    )?;
+    crate::out!("{}", crate::report::render_prediction(&prediction))?;
     Ok(prediction)
 }
 
-fn print_plan(plan: &Plan) {
-    println!(
+fn print_plan(plan: &Plan) -> std::io::Result<()> {
+    crate::outln!(
         "{} segments at {} Hz, output unit {}, g = {} m/s²",
         plan.segments.len(),
         plan.sample_rate_hz,
         plan.output_unit.symbol(),
         plan.gravity_m_s2
-    );
+    )?;
     for s in &plan.segments {
         let rate = match s.rate_end_deg_s {
             Some(r1) if r1 != s.rate_deg_s => format!("{} → {} °/s", s.rate_deg_s, r1),
             _ if s.is_static() => "static".to_string(),
             _ => format!("{} °/s", s.rate_deg_s),
         };
-        println!(
+        crate::outln!(
             "  {:<14} up_b = [{:+.4}, {:+.4}, {:+.4}]  {:<16} {}",
             s.name,
             s.up_b[0],
@@ -82,6 +83,7 @@ fn print_plan(plan: &Plan) {
             rate,
             s.duration_s
                 .map_or("(no duration)".into(), |d| format!("{d} s"))
-        );
+        )?;
     }
+    Ok(())
 }

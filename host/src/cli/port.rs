@@ -31,8 +31,21 @@ pub struct PortArgs {
     pub sim_unit: Option<PathBuf>,
 }
 
+impl PortArgs {
+    /// Checks the numbers before anything is opened or written.
+    pub fn validate(&self) -> Result<(), CliError> {
+        crate::limits::positive_at_most(
+            "--timeout-s",
+            self.timeout_s,
+            crate::limits::MAX_TIMEOUT_S,
+        )?;
+        Ok(())
+    }
+}
+
 /// Opens the device named by `--port`.
 pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> {
+    args.validate()?;
     let transport = if args.port == SIM_PORT {
         let unit = match &args.sim_unit {
             Some(p) => UnitFile::load(p).map_err(CliError::Unit)?,
@@ -46,11 +59,6 @@ pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> 
     } else {
         AnyTransport::Serial(SerialTransport::open(&args.port, args.baud)?)
     };
-    if !(args.timeout_s.is_finite() && args.timeout_s > 0.0) {
-        return Err(CliError::Usage(
-            "--timeout-s must be a positive number of seconds".into(),
-        ));
-    }
     Ok(DeviceClient::new(
         transport,
         Duration::from_secs_f64(args.timeout_s),

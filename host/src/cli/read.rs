@@ -29,13 +29,13 @@ pub fn run(port: &PortArgs, out: Option<&Path>) -> Result<(), CliError> {
     match out {
         Some(p) => {
             std::fs::write(p, &text).map_err(|e| CliError::Io(p.to_path_buf(), e))?;
-            println!(
+            crate::outln!(
                 "wrote the calibration of unit {} to {}",
                 blob.unit_id,
                 p.display()
-            );
+            )?;
         }
-        None => print!("{text}"),
+        None => crate::out!("{text}")?,
     }
     Ok(())
 }

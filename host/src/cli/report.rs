@@ -33,6 +33,7 @@ pub struct ReportArgs {
 
 /// `host report`.
 pub fn run(a: &ReportArgs) -> Result<(), CliError> {
+    navigation_duration(a.duration_s)?;
     let calibration = a
         .calibration
         .clone()
@@ -46,6 +47,15 @@ pub fn run(a: &ReportArgs) -> Result<(), CliError> {
     };
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
-    print!("{}", summary.render());
+    crate::out!("{}", summary.render())?;
     Ok(())
+}
+
+/// `--duration-s` sizes the navigation replay (samples = duration ÷ step): checked before any work.
+pub fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
+    Ok(crate::limits::positive_at_most(
+        "--duration-s",
+        duration_s,
+        crate::limits::MAX_NAVIGATION_DURATION_S,
+    )?)
 }

@@ -129,15 +129,15 @@ pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError>
     for note in &summary.notes {
         eprintln!("note: {note}");
     }
-    println!(
+    crate::outln!(
         "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
         summary.rows,
         plan.segments.len(),
         plan.sample_rate_hz,
         a.seed,
         a.out.display()
-    );
-    println!(
+    )?;
+    crate::outln!(
         "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
          rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
         noise.accel_white_mg,
@@ -148,6 +148,6 @@ pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError>
         noise.table_rate_offset_deg_s,
         noise.gyro_white_deg_s,
         noise.gyro_bias_deg_s
-    );
+    )?;
     Ok(summary)
 }

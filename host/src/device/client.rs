@@ -55,7 +55,7 @@ impl std::fmt::Display for LinkError {
             LinkError::Io(what, e) => write!(f, "{what}: {e}"),
             LinkError::Timeout { waiting_for, after } => write!(
                 f,
-                "the device stopped answering: no {waiting_for} within {:.1} s (check the cable, the port \
+                "the device stopped answering: waited {:.1} s for {waiting_for} and got nothing (check the cable, the port \
                  name and that the firmware is running; power-cycle the board and retry)",
                 after.as_secs_f64()
             ),

@@ -19,11 +19,13 @@ pub struct TerminalOperator;
 
 impl Operator for TerminalOperator {
     fn say(&mut self, text: &str) {
-        println!("{text}");
+        // A closed or full stdout must not stop a procedure between recording and flashing; the
+        // command's own closing line reports it.
+        let _ = crate::outln!("{text}");
     }
 
     fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
-        print!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
+        let _ = crate::out!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
         std::io::stdout()
             .flush()
             .map_err(ProcedureError::Terminal)?;
@@ -39,11 +41,11 @@ impl Operator for TerminalOperator {
     }
 
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
-        println!("segment '{segment}' does not match the plan:");
+        let _ = crate::outln!("segment '{segment}' does not match the plan:");
         for p in problems {
-            println!("  - {p}");
+            let _ = crate::outln!("  - {p}");
         }
-        print!("keep it anyway (the estimator will screen it)? [y/N] ");
+        let _ = crate::out!("keep it anyway (the estimator will screen it)? [y/N] ");
         std::io::stdout()
             .flush()
             .map_err(ProcedureError::Terminal)?;
@@ -68,7 +70,8 @@ pub struct AutomaticOperator {
 impl Operator for AutomaticOperator {
     fn say(&mut self, text: &str) {
         if self.verbose {
-            println!("{text}");
+            // As for the terminal operator: the command's closing line reports a closed stdout.
+            let _ = crate::outln!("{text}");
         }
     }
 

@@ -36,6 +36,8 @@ pub struct ProcedureOptions {
     pub verify_tolerance_mg: f64,
     /// Seconds of data per verification position.
     pub verify_seconds: f64,
+    /// Replace an existing recording and calibration in `out_dir`.
+    pub force: bool,
     /// No progress bars.
     pub quiet: bool,
 }
@@ -51,6 +53,7 @@ impl ProcedureOptions {
             estimate: EstimateOptions::default(),
             verify_tolerance_mg: 1.0,
             verify_seconds: 2.0,
+            force: false,
             quiet: false,
         }
     }
@@ -304,6 +307,9 @@ pub fn run<T: Transport>(
         source,
         recording: None,
     };
+    // Nothing is recorded over, and no run is wasted on a refusal at its end.
+    calibration_files::refuse_overwrite(&opts.out_dir, opts.force)
+        .map_err(ProcedureError::Output)?;
     let identity = client.identify().map_err(link)?;
     op.say(&format!(
         "device: {:?}, firmware {}.{}.{}, unit {}, {} Hz, calibration {:?}",
@@ -352,6 +358,7 @@ pub fn run<T: Transport>(
         &outcome,
         identity.unit_id,
         created,
+        opts.force,
     )
     .map_err(ProcedureError::Output)?;
     op.say(&format!(
@@ -410,7 +417,7 @@ fn record_plan<T: Transport>(
     opts: &ProcedureOptions,
     recording_dir: &Path,
 ) -> Result<Recorded, ProcedureError> {
-    let mut writer = SessionWriter::create(recording_dir, plan, true)?;
+    let mut writer = SessionWriter::create(recording_dir, plan, opts.force)?;
     let mut warnings = Vec::new();
     let mut dropped = 0u32;
 
@@ -535,9 +542,20 @@ fn record_segment<T: Transport>(
     opts: &ProcedureOptions,
     writer: &mut SessionWriter,
 ) -> Result<(session::SegmentStats, u64, u32), LinkError> {
+    let ramp = seg.rate_end_deg_s.is_some_and(|r1| r1 != seg.rate_deg_s);
     if drive {
         op.say(&format!("{} (virtual table driven)", instruction(seg)));
-        client.set_table(table_for(seg))?;
+        let table = table_for(seg);
+        if ramp {
+            // Settle at the ramp's start rate, then start the ramp with the recording: settling after
+            // the ramp had begun would record a later, faster part than the plan's.
+            client.set_table(VirtualTable {
+                accel_rad_s2: 0.0,
+                ..table
+            })?;
+            settle_windows(client, window, (opts.settle_s * window_rate).round() as u64)?;
+        }
+        client.set_table(table)?;
     } else if seg.is_free() && seg.is_static() {
         // Hand-held: the unit was already found still at a new position.
     } else {
@@ -549,7 +567,11 @@ fn record_segment<T: Transport>(
     }
     let duration = seg.duration_s.unwrap_or(60.0);
     let n_windows = (duration * window_rate).round().max(1.0) as u64;
-    let settle = (opts.settle_s * window_rate).round() as u64;
+    let settle = if ramp && drive {
+        0
+    } else {
+        (opts.settle_s * window_rate).round() as u64
+    };
     client.start_stream(StreamKind::RawWindows, window)?;
     for _ in 0..settle {
         client.next_raw_window()?;
@@ -585,6 +607,19 @@ fn record_segment<T: Transport>(
         got: "only empty windows".into(),
     })?;
     Ok((stats, rejected, dropped))
+}
+
+/// Streams and discards `n` windows (the table settling at a new set-up).
+fn settle_windows<T: Transport>(
+    client: &mut DeviceClient<T>,
+    window: u32,
+    n: u64,
+) -> Result<(), LinkError> {
+    client.start_stream(StreamKind::RawWindows, window)?;
+    for _ in 0..n {
+        client.next_raw_window()?;
+    }
+    client.stop_stream()
 }
 
 /// Verification positions: held-out attitudes and a fast spin on a virtual table; on a real table the
@@ -726,11 +761,46 @@ pub fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
     })
 }
 
-/// `OUT` for a run: the given directory, or `calibration-<unit id>` in the current directory.
+/// `OUT` for a run: the given directory, or a new one per run in the current directory,
+/// `calibration-<unit id>-<UTC time>` (a suffix `-2`, `-3`, … if that exists), so that a second run
+/// never records over the first.
 pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
-    out.map_or_else(
-        || PathBuf::from(format!("calibration-{}", identity.unit_id)),
-        Path::to_path_buf,
+    if let Some(dir) = out {
+        return dir.to_path_buf();
+    }
+    let base = format!(
+        "calibration-{}-{}",
+        identity.unit_id,
+        utc_stamp(calibration_files::now_unix_s())
+    );
+    let mut dir = PathBuf::from(&base);
+    let mut n = 2;
+    while dir.exists() {
+        dir = PathBuf::from(format!("{base}-{n}"));
+        n += 1;
+    }
+    dir
+}
+
+/// `YYYYMMDDTHHMMSSZ` of a Unix time (the proleptic Gregorian calendar, H. Hinnant's
+/// days-to-civil algorithm).
+pub fn utc_stamp(unix_s: u64) -> String {
+    let days = (unix_s / 86_400) as i64;
+    let secs = unix_s % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}{m:02}{d:02}T{:02}{:02}{:02}Z",
+        secs / 3600,
+        secs / 60 % 60,
+        secs % 60
     )
 }
 

@@ -21,6 +21,7 @@ mod joint;
 pub mod model;
 mod paper;
 mod paper_angles;
+pub mod plausibility;
 mod predict;
 mod screen;
 mod segment;
@@ -178,6 +179,8 @@ pub enum EstimateError {
     NoStaticSegments {
         /// How many static segments the plan has (all excluded when > 0).
         planned: usize,
+        /// Why each was excluded ("'x+': …").
+        reasons: Vec<String>,
     },
     /// The usable static attitudes do not span 3-D (the bias and `M` need ≥ 4 attitudes not on a plane).
     TooFewAttitudes {
@@ -210,18 +213,24 @@ pub enum EstimateError {
     },
     /// The estimate is not a valid calibration.
     Params(ParamsError),
+    /// The fit ran but its result is not a plausible unit (see [`plausibility`]).
+    Implausible {
+        /// Each problem, naming the segments or axes.
+        problems: Vec<String>,
+    },
 }
 
 impl std::fmt::Display for EstimateError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            EstimateError::NoStaticSegments { planned: 0 } => write!(
+            EstimateError::NoStaticSegments { planned: 0, .. } => write!(
                 f,
                 "the plan has no static segment: add at least four static attitudes (e.g. ±1 g on each axis)"
             ),
-            EstimateError::NoStaticSegments { planned } => write!(
+            EstimateError::NoStaticSegments { planned, reasons } => write!(
                 f,
-                "all {planned} static segments were excluded (see the reasons above); re-record them"
+                "all {planned} static segments were excluded; re-record them. Reasons:\n  - {}",
+                reasons.join("\n  - ")
             ),
             EstimateError::TooFewAttitudes {
                 attitudes,
@@ -255,6 +264,11 @@ impl std::fmt::Display for EstimateError {
                 "segment '{name}' is in the data but not in the plan: add it to plan.toml (up_b, rate_deg_s) or drop its rows"
             ),
             EstimateError::Params(e) => write!(f, "the estimate is not a valid calibration: {e}"),
+            EstimateError::Implausible { problems } => write!(
+                f,
+                "no calibration written: the result is not plausible:\n  - {}",
+                problems.join("\n  - ")
+            ),
         }
     }
 }
@@ -488,8 +502,17 @@ pub(crate) struct SessionSeg {
     pub used: bool,
 }
 
-/// Calibrates from a plan and its segments' statistics.
+/// Calibrates from a plan and its segments' statistics; a result that fails the plausibility checks
+/// ([`plausibility`]) is an error.
 pub fn calibrate_session_stats(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    options: &EstimateOptions,
+) -> Result<CalibrationOutcome, EstimateError> {
+    plausibility::check(plan, stats, fit_session(plan, stats, options))
+}
+
+fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
     options: &EstimateOptions,

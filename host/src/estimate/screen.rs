@@ -115,6 +115,25 @@ fn exclude(
     });
 }
 
+/// Output `i` of segment `k` is constant over the segment and that is a fault: the other outputs of
+/// the segment vary (so the recording has noise), or another segment shows the very same constant
+/// (the output does not respond to attitude). A noise-free recording (a simulation without noise, or
+/// outputs averaged over long windows) is constant everywhere without being stuck.
+fn stuck(segs: &[SessionSeg], k: usize, i: usize) -> bool {
+    let st = &segs[k].stats;
+    if st.max_u[i] != st.min_u[i] {
+        return false;
+    }
+    let others_vary = (0..3).any(|j| st.max_u[j] != st.min_u[j]);
+    let same_elsewhere = segs.iter().enumerate().any(|(m, o)| {
+        m != k
+            && o.stats.count >= 2
+            && o.stats.max_u[i] == o.stats.min_u[i]
+            && o.stats.max_u[i] == st.max_u[i]
+    });
+    others_vary || same_elsewhere
+}
+
 /// Leaves out empty, non-finite, saturated and moving segments and rates that contradict the plan.
 pub(crate) fn screen(
     plan: &Plan,
@@ -138,7 +157,7 @@ pub(crate) fn screen(
         }
         let mut saturated = None;
         for i in 0..3 {
-            if st.max_u[i] == st.min_u[i] {
+            if stuck(segs, k, i) {
                 saturated = Some((
                     i,
                     format!(
@@ -374,6 +393,10 @@ pub(crate) fn static_fit_with_attitude_check(
         if statics.is_empty() {
             return Err(EstimateError::NoStaticSegments {
                 planned: planned_static,
+                reasons: excluded
+                    .iter()
+                    .map(|e| format!("'{}': {}", e.name, e.reason))
+                    .collect(),
             });
         }
         let ups: Vec<[f64; 3]> = statics

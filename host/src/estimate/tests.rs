@@ -591,7 +591,13 @@ fn attitudes_that_do_not_span_3d_say_which_directions_are_missing() {
     plan.segments.retain(|s| !s.is_static());
     let (_, stats) = clean_session(&plan, 3);
     let e = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap_err();
-    assert_eq!(e, EstimateError::NoStaticSegments { planned: 0 });
+    assert_eq!(
+        e,
+        EstimateError::NoStaticSegments {
+            planned: 0,
+            reasons: vec![]
+        }
+    );
 }
 
 #[test]

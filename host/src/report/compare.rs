@@ -153,6 +153,8 @@ pub fn compare_units(
     b: &UnitFile,
     b_name: &str,
 ) -> Result<ComparisonTable, CompareError> {
+    a.check_same_unit(b.unit_id.as_deref(), "B")
+        .map_err(|m| CompareError::Incompatible(format!("A ({a_name}) and B ({b_name}): {m}")))?;
     let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
     let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
     let (ua, ub) = (ca.statics.output_unit, cb.statics.output_unit);

@@ -81,6 +81,8 @@ pub enum ReportError {
     Simulate(SimulateError),
     /// The calibration of the navigation check failed.
     Estimate(crate::estimate::EstimateError),
+    /// The calibration is of another unit than the session.
+    WrongUnit(String),
 }
 
 impl std::fmt::Display for ReportError {
@@ -94,6 +96,7 @@ impl std::fmt::Display for ReportError {
             ReportError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
             ReportError::Simulate(e) => e.fmt(f),
             ReportError::Estimate(e) => e.fmt(f),
+            ReportError::WrongUnit(m) => f.write_str(m),
         }
     }
 }

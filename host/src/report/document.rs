@@ -103,9 +103,11 @@ pub fn report(
     out_dir: &Path,
     options: &ReportOptions,
 ) -> Result<ReportSummary, ReportError> {
+    let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
     let session =
         read_session(input_dir, &ReadOptions { quiet: true }).map_err(ReportError::Recording)?;
-    let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
+    unit.check_same_unit(session.plan.unit_id.as_deref(), "the session")
+        .map_err(ReportError::WrongUnit)?;
     let cal = unit.to_calibration().map_err(ReportError::Calibration)?;
     let mut data = build_report(
         &session.plan,

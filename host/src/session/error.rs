@@ -45,6 +45,20 @@ pub enum RecordingError {
         /// The text found (shortened).
         text: String,
     },
+    /// A line longer than [`crate::limits::MAX_LINE_BYTES`] (not a recording, or a damaged one).
+    LineTooLong {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+    },
+    /// Bytes that are not UTF-8 text.
+    NotText {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: u64,
+    },
     /// A row names a segment the plan does not have.
     UnknownSegment {
         /// The file.
@@ -96,6 +110,19 @@ impl std::fmt::Display for RecordingError {
                 path.display(),
                 COLUMNS.get(column.wrapping_sub(1)).copied().unwrap_or("?"),
                 text
+            ),
+            RecordingError::LineTooLong { path, line } => write!(
+                f,
+                "{} line {line} is longer than {} bytes without a line end: this is not a recording \
+                 ({SAMPLES_HEADER}, one row per line); check the file",
+                path.display(),
+                crate::limits::MAX_LINE_BYTES
+            ),
+            RecordingError::NotText { path, line } => write!(
+                f,
+                "{} line {line} has bytes that are not UTF-8 text: the file is damaged or is not a \
+                 recording; check the file",
+                path.display()
             ),
             RecordingError::UnknownSegment { path, line, name } => write!(
                 f,

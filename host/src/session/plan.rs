@@ -181,8 +181,8 @@ impl std::error::Error for PlanError {}
 impl Plan {
     /// Reads and validates a plan file.
     pub fn load(path: &Path) -> Result<Plan, PlanError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| PlanError::Io(path.to_path_buf(), e))?;
+        let text = crate::limits::read_text_bounded(path)
+            .map_err(|e| PlanError::Io(path.to_path_buf(), e))?;
         Plan::parse(&text).map_err(|e| match e {
             PlanError::Syntax(_, m) => PlanError::Syntax(path.to_path_buf(), m),
             other => other,
@@ -203,11 +203,12 @@ impl Plan {
             return Err(PlanError::Version(self.format_version));
         }
         self.validate_attitudes()?;
-        if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
-            return Err(PlanError::Invalid(
-                "sample_rate_hz must be a positive number".into(),
-            ));
-        }
+        crate::limits::positive_at_most(
+            "sample_rate_hz",
+            self.sample_rate_hz,
+            crate::limits::MAX_SAMPLE_RATE_HZ,
+        )
+        .map_err(|e| PlanError::Invalid(e.to_string()))?;
         if !(9.7..=9.9).contains(&self.gravity_m_s2) {
             return Err(PlanError::Invalid(format!(
                 "gravity_m_s2 = {} is not a local gravity (9.7..9.9 m/s²)",
@@ -261,6 +262,71 @@ impl Plan {
                     "segment '{}': rates must be finite and duration_s positive",
                     s.name
                 )));
+            }
+            self.validate_sizes(s)?;
+        }
+        self.validate_mounts()
+    }
+
+    /// Rates, durations and table centres within what a rate table and the tools can carry: a typo
+    /// like `rate_deg_s = 1e9` or `duration_s = 1e12` is named here, not met later as a "singular" fit
+    /// or a recording that grows without bound.
+    fn validate_sizes(&self, s: &SegmentPlan) -> Result<(), PlanError> {
+        use crate::limits::{MAX_RATE_DEG_S, MAX_SEGMENT_DURATION_S, MAX_SEGMENT_ROWS};
+        let invalid = |m: String| PlanError::Invalid(format!("segment '{}': {m}", s.name));
+        for (field, r) in [
+            ("rate_deg_s", Some(s.rate_deg_s)),
+            ("rate_end_deg_s", s.rate_end_deg_s),
+        ] {
+            if let Some(r) = r.filter(|r| r.abs() > MAX_RATE_DEG_S) {
+                return Err(invalid(format!(
+                    "{field} = {r} is beyond any rate table (at most ±{MAX_RATE_DEG_S} °/s)"
+                )));
+            }
+        }
+        if let Some(d) = s.duration_s {
+            if d > MAX_SEGMENT_DURATION_S || d * self.sample_rate_hz > MAX_SEGMENT_ROWS {
+                return Err(invalid(format!(
+                    "duration_s = {d} at {} Hz is too long (at most {MAX_SEGMENT_DURATION_S} s and                      {MAX_SEGMENT_ROWS:e} rows per segment)",
+                    self.sample_rate_hz
+                )));
+            }
+        }
+        if let Some(c) = s.table_centre_m {
+            if c.iter().any(|v| !v.is_finite() || v.abs() > 10.0) {
+                return Err(invalid(format!(
+                    "table_centre_m = {c:?} must be three finite distances within ±10 m"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// One mount is one physical fixing: all its segments share one `up_b` and one table centre.
+    fn validate_mounts(&self) -> Result<(), PlanError> {
+        let mut seen: std::collections::HashMap<String, &SegmentPlan> = Default::default();
+        for s in &self.segments {
+            let mount = s.mount_name();
+            let Some(first) = seen.get(&mount) else {
+                seen.insert(mount, s);
+                continue;
+            };
+            let diff = (0..3)
+                .map(|j| (first.up_b[j] - s.up_b[j]).abs())
+                .fold(0.0, f64::max);
+            if diff > 1e-4 {
+                return Err(PlanError::Invalid(format!(
+                    "mount '{mount}' is used by segment '{}' with up_b {:?} and by segment '{}' with                      up_b {:?}: one mount has one up_b; give the segments different mount names",
+                    first.name, first.up_b, s.name, s.up_b
+                )));
+            }
+            if let (Some(a), Some(b)) = (first.table_centre_m, s.table_centre_m) {
+                if a != b {
+                    return Err(PlanError::Invalid(format!(
+                        "mount '{mount}': segment '{}' has table_centre_m {a:?} but segment '{}' has                          {b:?}; one mount has one table centre",
+                        first.name, s.name
+                    )));
+                }
             }
         }
         Ok(())

@@ -6,14 +6,17 @@
 //! tolerantly: CRLF line ends, a UTF-8 byte-order mark, blank lines, spaces around fields and
 //! double-quoted fields are accepted. Everything else that is wrong is an error naming the line and
 //! column, except a final line without a line end, which is a recording cut short: it is skipped with
-//! a warning (its last number may be cut mid-digits and still parse, so it is never trusted).
+//! a warning (its last number may be cut mid-digits and still parse, so it is never trusted). A line
+//! longer than [`MAX_LINE_BYTES`] is an error, so memory stays bounded whatever the file holds (a link
+//! to `/dev/zero` is refused after 4 KiB).
 
 use super::error::shorten;
 use super::plan::Plan;
 use super::stats::{SegmentAccumulator, SegmentStats};
 use super::{RecordingError, COLUMNS, PLAN_FILE, SAMPLES_FILE};
+use crate::limits::MAX_LINE_BYTES;
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 /// How to read a session.
@@ -174,6 +177,14 @@ impl<'a> Reducer<'a> {
         Ok(())
     }
 
+    /// The line after the last complete one has more than [`MAX_LINE_BYTES`] bytes.
+    fn line_too_long(&self) -> RecordingError {
+        RecordingError::LineTooLong {
+            path: self.path.to_path_buf(),
+            line: self.line_no + 1,
+        }
+    }
+
     fn field_count(&self, found: usize) -> RecordingError {
         RecordingError::FieldCount {
             path: self.path.to_path_buf(),
@@ -191,11 +202,9 @@ impl<'a> Reducer<'a> {
                     .iter()
                     .filter(|&&b| b == b'\n')
                     .count() as u64;
-                return Err(RecordingError::Number {
+                return Err(RecordingError::NotText {
                     path: self.path.to_path_buf(),
                     line: self.line_no + 1 + bad_line,
-                    column: 1,
-                    text: "(bytes that are not UTF-8 text)".into(),
                 });
             }
         };
@@ -243,7 +252,16 @@ pub fn read_samples<R: BufRead>(
 
     // Header (with an optional UTF-8 byte-order mark and CR).
     let mut line: Vec<u8> = Vec::with_capacity(256);
-    let n = reader.read_until(b'\n', &mut line).map_err(io)?;
+    let n = (&mut reader)
+        .take(MAX_LINE_BYTES as u64 + 1)
+        .read_until(b'\n', &mut line)
+        .map_err(io)?;
+    if n > MAX_LINE_BYTES {
+        return Err(RecordingError::LineTooLong {
+            path: path.to_path_buf(),
+            line: 1,
+        });
+    }
     red.report.bytes += n as u64;
     let header = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&line);
     let header = String::from_utf8_lossy(header.trim_ascii_end()).into_owned();
@@ -283,6 +301,9 @@ pub fn read_samples<R: BufRead>(
                     start = p + 1;
                 }
                 None => {
+                    if carry.len() + len > MAX_LINE_BYTES {
+                        return Err(red.line_too_long());
+                    }
                     carry.extend_from_slice(buf);
                     reader.consume(len);
                     continue;
@@ -295,6 +316,9 @@ pub fn read_samples<R: BufRead>(
             .rposition(|&b| b == b'\n')
             .map_or(0, |p| p + 1);
         red.lines(&buf_rest[..complete])?;
+        if buf_rest.len() - complete > MAX_LINE_BYTES {
+            return Err(red.line_too_long());
+        }
         carry.extend_from_slice(&buf_rest[complete..]);
         reader.consume(len);
     }
