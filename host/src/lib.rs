@@ -1,11 +1,13 @@
 //! The PC calibrator: recording format, simulator, estimator, reports and the device link.
 //! The binary (`src/main.rs`) is a thin clap layer over this library.
 
+pub mod apply;
 pub mod calibration_files;
 pub mod cli;
 pub mod device;
 pub mod estimate;
 pub mod export;
+pub mod output_file;
 pub mod report;
 pub mod session;
 pub mod sim;

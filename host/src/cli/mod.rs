@@ -1,6 +1,7 @@
 //! The command line: `host simulate`, `host calibrate`, `host plan --check`. `main.rs` only parses
 //! and prints the error; everything else is here, testable.
 
+pub mod apply;
 pub mod device;
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
@@ -70,6 +71,9 @@ pub enum Command {
         #[arg(long, value_name = "FILE")]
         out: Option<PathBuf>,
     },
+    /// Apply a calibration to a recording with the device's own compensation code: CSV of the
+    /// specific force per row (segment,t_s,f_x_g,f_y_g,f_z_g).
+    Apply(apply::ApplyArgs),
     /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
     /// reset it and check that it applied it.
     Flash {
@@ -300,6 +304,8 @@ pub enum CliError {
     Compare(CompareError),
     /// `host export`.
     Export(ExportError),
+    /// `host apply`.
+    Apply(crate::apply::ApplyError),
     /// The command line is incomplete.
     Usage(String),
 }
@@ -317,6 +323,7 @@ impl std::fmt::Display for CliError {
             CliError::Report(e) => write!(f, "{e}"),
             CliError::Compare(e) => write!(f, "{e}"),
             CliError::Export(e) => write!(f, "{e}"),
+            CliError::Apply(e) => write!(f, "{e}"),
             CliError::Usage(m) => write!(f, "{m}"),
         }
     }
@@ -354,6 +361,12 @@ impl From<CompareError> for CliError {
         CliError::Compare(e)
     }
 }
+impl From<crate::apply::ApplyError> for CliError {
+    fn from(e: crate::apply::ApplyError) -> Self {
+        CliError::Apply(e)
+    }
+}
+
 impl From<ExportError> for CliError {
     fn from(e: ExportError) -> Self {
         CliError::Export(e)
@@ -393,6 +406,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
             format,
             out,
         } => export_command(&calibration, format, out.as_deref()),
+        Command::Apply(a) => apply::apply_command(&a, cli.quiet),
         Command::Flash { port, calibration } => Ok(device::flash(&port, &calibration)?),
         Command::Read { port, out } => Ok(device::read(&port, out.as_deref())?),
         Command::Monitor {
