@@ -13,7 +13,8 @@
 
 use host::calibration_files::write_calibration_files;
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::report::compare::{compare, export, ExportFormat};
+use host::export::{toml_forms::render as export, ExportFormat};
+use host::report::compare::compare;
 use host::report::document::{render_position_targets, report, ReportOptions};
 use host::session::builtin::paper_plan;
 use host::session::{read_session, ReadOptions};

@@ -7,6 +7,7 @@ pub mod cli;
 pub mod device;
 pub mod estimate;
 pub mod export;
+pub mod noise;
 pub mod output_file;
 pub mod report;
 pub mod session;

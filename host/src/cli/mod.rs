@@ -3,13 +3,16 @@
 
 pub mod apply;
 pub mod device;
+pub mod export;
+pub mod noise;
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, OutputError};
 use crate::estimate::{
     calibrate_session_stats, predict, CalibrationOutcome, EstimateError, EstimateOptions, Method,
     PredictSettings, ReferenceChoice,
 };
-use crate::report::compare::{compare, export, CompareError, ExportError, ExportFormat};
+use crate::export::ExportError;
+use crate::report::compare::{compare, CompareError};
 use crate::report::document::{
     navigation_check, report, NavigationCheckArgs, ReportError, ReportOptions,
 };
@@ -59,21 +62,15 @@ pub enum Command {
         /// Second calibration.toml.
         b: PathBuf,
     },
-    /// A calibration in the conventions of other tools (TOML).
-    Export {
-        /// The calibration (a unit file, e.g. calibration.toml).
-        #[arg(long, value_name = "FILE")]
-        calibration: PathBuf,
-        /// plain (the paper's K_A, ∇_b, lever arms), fusion, kalibr, or all.
-        #[arg(long, default_value = "all")]
-        format: ExportFormat,
-        /// Where to write it (default: stdout).
-        #[arg(long, value_name = "FILE")]
-        out: Option<PathBuf>,
-    },
+    /// A calibration in another tool's format: kalibr, fusion-c, c-header, json, px4, ardupilot
+    /// (or the TOML conversions plain, fusion, all).
+    Export(export::ExportArgs),
     /// Apply a calibration to a recording with the device's own compensation code: CSV of the
     /// specific force per row (segment,t_s,f_x_g,f_y_g,f_z_g).
     Apply(apply::ApplyArgs),
+    /// Noise of a still recording: overlapping Allan deviation per axis, fitted white noise density,
+    /// bias instability and random walk; table, figure, and the figures Kalibr needs (noise.json).
+    Noise(noise::NoiseArgs),
     /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
     /// reset it and check that it applied it.
     Flash {
@@ -306,6 +303,10 @@ pub enum CliError {
     Export(ExportError),
     /// `host apply`.
     Apply(crate::apply::ApplyError),
+    /// `host noise`.
+    Noise(crate::noise::NoiseError),
+    /// A result file could not be written.
+    Written(crate::output_file::OutputFileError),
     /// The command line is incomplete.
     Usage(String),
 }
@@ -324,6 +325,8 @@ impl std::fmt::Display for CliError {
             CliError::Compare(e) => write!(f, "{e}"),
             CliError::Export(e) => write!(f, "{e}"),
             CliError::Apply(e) => write!(f, "{e}"),
+            CliError::Noise(e) => write!(f, "{e}"),
+            CliError::Written(e) => write!(f, "{e}"),
             CliError::Usage(m) => write!(f, "{m}"),
         }
     }
@@ -401,12 +404,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
             print!("{}", compare(&a, &b)?.render());
             Ok(())
         }
-        Command::Export {
-            calibration,
-            format,
-            out,
-        } => export_command(&calibration, format, out.as_deref()),
+        Command::Export(a) => export::export_command(&a, cli.quiet),
         Command::Apply(a) => apply::apply_command(&a, cli.quiet),
+        Command::Noise(a) => noise::noise_command(&a, cli.quiet),
         Command::Flash { port, calibration } => Ok(device::flash(&port, &calibration)?),
         Command::Read { port, out } => Ok(device::read(&port, out.as_deref())?),
         Command::Monitor {
@@ -623,32 +623,6 @@ pub fn navigation_check_command(a: &NavigationCheckCliArgs) -> Result<(), CliErr
     Ok(())
 }
 
-/// `host export`.
-pub fn export_command(
-    calibration: &Path,
-    format: ExportFormat,
-    out: Option<&Path>,
-) -> Result<(), CliError> {
-    let unit = UnitFile::load(calibration)?;
-    let cal = unit
-        .to_calibration()
-        .map_err(|m| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), m)))?;
-    let text = export(&cal, format)?;
-    match out {
-        Some(p) => {
-            std::fs::write(p, &text).map_err(|e| {
-                CliError::Output(crate::calibration_files::OutputError::Io(
-                    p.to_path_buf(),
-                    e,
-                ))
-            })?;
-            println!("wrote {}", p.display());
-        }
-        None => print!("{text}"),
-    }
-    Ok(())
-}
-
 /// `host plan --check`: the plan's segments and the predicted 1σ of every parameter.
 pub fn plan_check(a: &PlanArgs) -> Result<crate::estimate::Prediction, CliError> {
     let plan = load_plan(&a.check)?;
@@ -788,12 +762,12 @@ mod tests {
             panic!("not compare")
         };
         assert_eq!((a, b), (PathBuf::from("a.toml"), PathBuf::from("b.toml")));
-        let Command::Export { format, .. } =
+        let Command::Export(export::ExportArgs { format, .. }) =
             parse(&["export", "--calibration", "c.toml", "--format", "fusion"]).command
         else {
             panic!("not export")
         };
-        assert_eq!(format, ExportFormat::Fusion);
+        assert_eq!(format, crate::export::ExportFormat::Fusion);
         assert!(
             Cli::try_parse_from(["host", "export", "--calibration", "c", "--format", "x"]).is_err()
         );

@@ -1,19 +1,8 @@
-//! `host compare` (two calibrations of one unit side by side, each difference in units of its
-//! combined 1σ) and `host export` (our calibration in the conventions of other tools, as TOML).
-//!
-//! Intended CLI (wired by `cli.rs`):
-//!
-//! ```text
-//! host compare A.toml B.toml
-//!     → compare(a, b) ; prints ComparisonTable::render()
-//! host export --calibration calibration.toml --format plain|fusion|kalibr|all [--out FILE]
-//!     → export(&calibration, format) ; writes the string to FILE or stdout
-//! ```
+//! `host compare`: two calibrations of one unit side by side, each difference in units of its
+//! combined 1σ (`compare(a, b)`, printed by `ComparisonTable::render()`).
 
 use crate::estimate::{paper_labels, paper_values, PAPER_LEN};
-use crate::export::{convert, Conversions};
 use crate::unit_file::{UnitFile, UnitFileError};
-use shared::Calibration;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -264,85 +253,10 @@ pub fn compare_units(
     })
 }
 
-/// The conventions [`export`] writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExportFormat {
-    /// The paper's `K_A`, `∇_b` and the lever arms ([`crate::export::PlainMatrices`]).
-    Plain,
-    /// x-io Fusion's misalignment, sensitivity, offset ([`crate::export::FusionStyle`]).
-    Fusion,
-    /// Kalibr-style `M`, bias, `rx/ry/rz` ([`crate::export::KalibrStyle`]).
-    Kalibr,
-    /// All three, as the tables `[plain]`, `[fusion]`, `[kalibr]`.
-    All,
-}
-
-impl std::str::FromStr for ExportFormat {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "plain" => Ok(ExportFormat::Plain),
-            "fusion" => Ok(ExportFormat::Fusion),
-            "kalibr" => Ok(ExportFormat::Kalibr),
-            "all" => Ok(ExportFormat::All),
-            _ => Err(format!(
-                "unknown export format '{s}': use plain, fusion, kalibr or all"
-            )),
-        }
-    }
-}
-
-const HEADER_PLAIN: &str = "\
-# Plain matrices (paper eq. 16): f_b[g] = K_A·U − ∇_b − f_L^b, with f_L^b = K_A·(K d),
-# (K d)_i = row_i(K_A⁻¹)·(W r_i)/g and W = [ω̇×] + [ω×]². K_A in g per output unit, row-major;
-# ∇_b in g; lever_arms_m row i = r_i (m, body axes, from the reference point).
-";
-const HEADER_FUSION: &str = "\
-# x-io Fusion FusionModelInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
-# misalignment = A⁻¹ (row-major), sensitivity = 1/k_i (g per output unit), offset = u0. No lever arms:
-# static compensation only.
-";
-const HEADER_KALIBR: &str = "\
-# Kalibr-style scale-misalignment-size-effect model, general form, in the body frame:
-# u_i = row_i(m)·(f + W r_i) + bias_i, m = K·A/g (output unit per m/s², row-major), bias = u0,
-# rx, ry, rz = sensing points of the x, y, z accelerometers (m). Solve for f (m/s²).
-";
-
-/// Why a calibration cannot be exported.
-#[derive(Debug)]
-pub struct ExportError(pub String);
-
-impl std::fmt::Display for ExportError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "cannot export the calibration: {}", self.0)
-    }
-}
-
-impl std::error::Error for ExportError {}
-
-/// `host export`: the calibration in another tool's convention, as TOML (with a comment header that
-/// states the convention).
-pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String, ExportError> {
-    let c: Conversions = convert(calibration).map_err(|e| ExportError(e.to_string()))?;
-    let ser = |r: Result<String, toml::ser::Error>| r.map_err(|e| ExportError(e.to_string()));
-    Ok(match format {
-        ExportFormat::Plain => format!("{HEADER_PLAIN}{}", ser(toml::to_string(&c.plain))?),
-        ExportFormat::Fusion => format!("{HEADER_FUSION}{}", ser(toml::to_string(&c.fusion))?),
-        ExportFormat::Kalibr => format!("{HEADER_KALIBR}{}", ser(toml::to_string(&c.kalibr))?),
-        ExportFormat::All => format!(
-            "{HEADER_PLAIN}{HEADER_FUSION}{HEADER_KALIBR}{}",
-            ser(toml::to_string(&c))?
-        ),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::export::{FusionStyle, KalibrStyle, PlainMatrices};
     use crate::unit_file::Uncertainty;
-    use shared::forward::{BodyMotion, ForwardModel};
-    use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 
     fn with_sigma() -> UnitFile {
         let mut u = UnitFile::paper_unit();
@@ -392,69 +306,5 @@ mod tests {
         assert!(t.rows.iter().all(|r| r.diff_sigma.is_none()));
         assert!(t.render().contains("no σ"));
         assert!(t.notes[0].contains("neither file"));
-    }
-
-    /// Each exported form, read back from its TOML, compensates like the device's compensator.
-    #[test]
-    fn every_exported_form_reads_back_and_compensates_the_same() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
-        let plain: PlainMatrices =
-            toml::from_str(&export(&cal, ExportFormat::Plain).unwrap()).unwrap();
-        let fusion: FusionStyle =
-            toml::from_str(&export(&cal, ExportFormat::Fusion).unwrap()).unwrap();
-        let kalibr: KalibrStyle =
-            toml::from_str(&export(&cal, ExportFormat::Kalibr).unwrap()).unwrap();
-        let all: Conversions = toml::from_str(&export(&cal, ExportFormat::All).unwrap()).unwrap();
-        assert_eq!(all, convert(&cal).unwrap());
-        assert_eq!(
-            (&plain, &fusion, &kalibr),
-            (&all.plain, &all.fusion, &all.kalibr)
-        );
-        let model = ForwardModel::new(&cal).unwrap();
-        let g = cal.gravity_m_s2;
-        for k in 0..50 {
-            let x = k as f64;
-            let f = [9.0 * (0.3 * x).sin(), -4.0 + 0.1 * x, 9.8 * (0.2 * x).cos()];
-            let motion = BodyMotion {
-                f_o: BodySpecificForce { m_s2: f },
-                omega: BodyRate {
-                    rad_s: [3.0 * (0.5 * x).cos(), 1.0, -0.02 * x],
-                },
-                omega_dot: BodyAngularAccel {
-                    rad_s2: [0.0, 4.0 * (0.1 * x).sin(), 2.0],
-                },
-            };
-            let u = model.outputs(&motion).raw;
-            let (w, wd) = (motion.omega.rad_s, motion.omega_dot.rad_s2);
-            let p = plain.compensate(u, w, wd);
-            let kk = kalibr.compensate(u, w, wd);
-            let still = BodyMotion {
-                omega: BodyRate::default(),
-                omega_dot: BodyAngularAccel::default(),
-                ..motion
-            };
-            let fu = fusion
-                .compensate_static_g(model.outputs(&still).raw)
-                .map(|v| v * g);
-            for j in 0..3 {
-                assert!(
-                    (p[j] - f[j]).abs() < 1e-9,
-                    "plain {j}: {} vs {}",
-                    p[j],
-                    f[j]
-                );
-                assert!((kk[j] - f[j]).abs() < 1e-9, "kalibr {j}");
-                assert!((fu[j] - f[j]).abs() < 1e-9, "fusion {j}");
-            }
-        }
-    }
-
-    #[test]
-    fn export_format_names() {
-        assert_eq!("kalibr".parse::<ExportFormat>(), Ok(ExportFormat::Kalibr));
-        assert!("yaml"
-            .parse::<ExportFormat>()
-            .unwrap_err()
-            .contains("plain"));
     }
 }

@@ -2,6 +2,7 @@
 //! model with a seeded noise model ([`session`], `host simulate`), and its noise-free segment
 //! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests).
 
+pub mod flicker;
 pub mod session;
 pub mod synth;
 #[cfg(test)]

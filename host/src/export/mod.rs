@@ -1,7 +1,13 @@
-//! Our calibration in the conventions other tools use, so a result can be taken elsewhere and checked.
+//! Our calibration in the formats other tools read (`host export --format F`), and the conversions
+//! between our model and each tool's convention.
 //!
-//! Each form comes with its own `compensate`, written in that tool's convention; a test checks that every
-//! form turns the same samples into the same specific force as `shared::Compensator`.
+//! Formats: [`ExportFormat`]. Each writer states the conventions it assumes in the file it writes, and
+//! marks what the target cannot hold or what the calibration did not determine (never a silent zero).
+//! Each is checked by its own consumer in the tests: gcc for the C outputs (run against the Rust
+//! compensator), a YAML parser for Kalibr's file, a JSON parser for the JSON document.
+//!
+//! The conversions (each with its own `compensate`, written in that tool's convention; a test checks
+//! that every form turns the same samples into the same specific force as `shared::Compensator`):
 //!
 //! - [`PlainMatrices`]: the paper's eq. 6 / 16 matrices, `f_b[g] = K_A·U − ∇_b − f_L^b`.
 //! - [`FusionStyle`]: x-io Fusion's `FusionModelInertial`:
@@ -10,9 +16,16 @@
 //! - [`KalibrStyle`]: Kalibr's "scale-misalignment-size-effect" accelerometer model in its general
 //!   form: the measurement of axis `i` is `row_i(M)·f(r_i) + b_i` with `M = K·A/g` (output unit per m/s²),
 //!   `b = u0`, and the sensing point of axis x, y, z at `rx`, `ry`, `rz` (m, relative to the reference
-//!   point). Kalibr itself writes `M` in a lower-triangular parameterisation tied to its IMU frame; ours is
-//!   the same map expressed in the body frame.
+//!   point). Kalibr itself writes `M` lower-triangular after a rotation into its IMU frame
+//!   ([`kalibr`] does that factorisation).
 
+pub mod c;
+pub mod json;
+pub mod kalibr;
+pub mod params;
+pub mod toml_forms;
+
+use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use shared::params::ParamsError;
@@ -66,6 +79,107 @@ pub struct Conversions {
     pub fusion: FusionStyle,
     /// Kalibr's model.
     pub kalibr: KalibrStyle,
+}
+
+/// The formats `host export` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExportFormat {
+    /// Kalibr's IMU YAML (imu.yaml): topic, rate, noise densities and random walks, plus the
+    /// accelerometer intrinsics in Kalibr's scale-misalignment-size-effect parameterisation.
+    Kalibr,
+    /// A C header with x-io Fusion `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`.
+    FusionC,
+    /// A C header: the calibration as a plain struct initialiser, the device's precomputed
+    /// compensator constants, and the blob as a byte array (decode it with export/c/acal_blob.c).
+    CHeader,
+    /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
+    Json,
+    /// A PX4 parameter file (QGroundControl format): CAL_ACC0_{X,Y,Z}{OFF,SCALE}.
+    Px4,
+    /// An ArduPilot parameter file: INS_ACCOFFS_{X,Y,Z}, INS_ACCSCAL_{X,Y,Z}.
+    Ardupilot,
+    /// The paper's K_A, ∇_b and lever arms, as TOML.
+    Plain,
+    /// Fusion's misalignment, sensitivity and offset, as TOML.
+    Fusion,
+    /// The plain, Fusion and general Kalibr-style forms together, as TOML.
+    All,
+}
+
+/// Why a calibration cannot be exported.
+#[derive(Debug)]
+pub enum ExportError {
+    /// The parameters do not convert (degenerate axis, singular matrix…).
+    Params(ParamsError),
+    /// The compensator refuses the parameters.
+    Compensator(shared::compensator::CompensatorError),
+    /// The blob cannot be encoded.
+    Blob(shared::blob::BlobError),
+    /// The calibration file has no valid unit id, which the blob needs.
+    UnitId(String),
+    /// Serialising failed.
+    Serialise(String),
+}
+
+impl std::fmt::Display for ExportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ExportError::Params(e) => write!(f, "cannot export the calibration: {e}"),
+            ExportError::Compensator(e) => write!(f, "cannot export the calibration: {e}"),
+            ExportError::Blob(e) => write!(f, "cannot export the calibration's blob: {e}"),
+            ExportError::UnitId(m) => write!(f, "cannot export the calibration's blob: {m}"),
+            ExportError::Serialise(m) => write!(f, "cannot export the calibration: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for ExportError {}
+
+impl From<ParamsError> for ExportError {
+    fn from(e: ParamsError) -> Self {
+        ExportError::Params(e)
+    }
+}
+
+/// What an export is made from.
+#[derive(Clone, Debug)]
+pub struct ExportInput<'a> {
+    /// The calibration file as read (uncertainty, unit id and observability included).
+    pub unit: &'a UnitFile,
+    /// Its calibration.
+    pub cal: Calibration,
+    /// Noise figures from `host noise`, if any (Kalibr needs them).
+    pub noise: Option<&'a kalibr::KalibrNoise>,
+    /// Kalibr's `rostopic`.
+    pub rostopic: &'a str,
+    /// m/s² per output unit of the driver the PX4/ArduPilot/Kalibr user runs (their raw
+    /// accelerometer reading is `U × this`); `None`: `g / mean(k_i)`, a nominal scale.
+    pub driver_scale_m_s2_per_out: Option<f64>,
+}
+
+impl ExportInput<'_> {
+    /// The driver's scale: as given, or `g / mean(k_i)`.
+    pub fn driver_scale(&self) -> f64 {
+        self.driver_scale_m_s2_per_out.unwrap_or_else(|| {
+            let k = self.cal.statics.scale_out_per_g;
+            self.cal.gravity_m_s2 * 3.0 / (k[0] + k[1] + k[2])
+        })
+    }
+}
+
+/// Writes `input` in `format`.
+pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
+    match format {
+        ExportFormat::Kalibr => kalibr::render(input),
+        ExportFormat::FusionC => c::render_fusion(input),
+        ExportFormat::CHeader => c::render_header(input),
+        ExportFormat::Json => json::render(input),
+        ExportFormat::Px4 => params::render_px4(input),
+        ExportFormat::Ardupilot => params::render_ardupilot(input),
+        ExportFormat::Plain | ExportFormat::Fusion | ExportFormat::All => {
+            toml_forms::render(&input.cal, format)
+        }
+    }
 }
 
 /// Converts a calibration to every form.
