@@ -23,10 +23,10 @@
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
-use crate::session::OutputUnitName;
+use crate::estimate::Uncertainty;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
-use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};
+use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
 use std::path::{Path, PathBuf};
 
 /// The paper's unit (Tables 1 and 3), built in.
@@ -42,7 +42,7 @@ pub struct UnitFile {
     pub unit_id: Option<String>,
     /// Output unit (default V).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub output_unit: Option<OutputUnitName>,
+    pub output_unit: Option<OutputUnit>,
     /// Table 1.
     #[serde(rename = "static")]
     pub statics: StaticSection,
@@ -89,22 +89,6 @@ pub struct DynamicSection {
     /// With reference = "body-point": the point, body axes, m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_offset_m: Option<[f64; 3]>,
-}
-
-/// `[uncertainty]`: 1σ of each estimated value.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Uncertainty {
-    /// Zero-bias outputs, output unit.
-    pub zero_bias_1sigma: [f64; 3],
-    /// Scale factors, output unit per g.
-    pub scale_per_g_1sigma: [f64; 3],
-    /// Installation angles, degrees.
-    pub installation_angles_deg_1sigma: RowMajor3,
-    /// Lever arms, m.
-    pub lever_arms_m_1sigma: RowMajor3,
-    /// Which lever-arm components the plan determined (false: the value is not a measurement).
-    pub lever_arms_observable: [[bool; 3]; 3],
 }
 
 /// Why a unit file is unusable.
@@ -159,16 +143,16 @@ impl UnitFile {
 
     /// The calibration this file describes.
     pub fn to_calibration(&self) -> Result<Calibration, String> {
-        let unit = self.output_unit.unwrap_or(OutputUnitName::V);
+        let unit = self.output_unit.unwrap_or(OutputUnit::Volts);
         let s = &self.statics;
         let (bias, scale, b_name, k_name) = match unit {
-            OutputUnitName::V => (
+            OutputUnit::Volts => (
                 s.zero_bias_v,
                 s.scale_v_per_g,
                 "zero_bias_v",
                 "scale_v_per_g",
             ),
-            OutputUnitName::Lsb => (
+            OutputUnit::Lsb => (
                 s.zero_bias_lsb,
                 s.scale_lsb_per_g,
                 "zero_bias_lsb",
@@ -176,8 +160,8 @@ impl UnitFile {
             ),
         };
         let wrong_unit = match unit {
-            OutputUnitName::V => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
-            OutputUnitName::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
+            OutputUnit::Volts => s.zero_bias_lsb.is_some() || s.scale_lsb_per_g.is_some(),
+            OutputUnit::Lsb => s.zero_bias_v.is_some() || s.scale_v_per_g.is_some(),
         };
         if wrong_unit {
             return Err(format!(
@@ -188,7 +172,7 @@ impl UnitFile {
         let bias = bias.ok_or_else(|| format!("[static] needs {b_name}"))?;
         let scale = scale.ok_or_else(|| format!("[static] needs {k_name}"))?;
         let statics = StaticParams {
-            output_unit: unit.into(),
+            output_unit: unit,
             zero_bias_out: bias,
             scale_out_per_g: scale,
             installation_angles_deg: s.installation_angles_deg,
@@ -233,10 +217,10 @@ impl UnitFile {
         unit_id: Option<UnitId>,
         uncertainty: Option<Uncertainty>,
     ) -> UnitFile {
-        let unit: OutputUnitName = cal.statics.output_unit.into();
+        let unit = cal.statics.output_unit;
         let (v, lsb) = match unit {
-            OutputUnitName::V => (true, false),
-            OutputUnitName::Lsb => (false, true),
+            OutputUnit::Volts => (true, false),
+            OutputUnit::Lsb => (false, true),
         };
         let s = &cal.statics;
         let (reference, reference_offset_m) = match cal.reference {
@@ -271,16 +255,6 @@ impl UnitFile {
     }
 }
 
-impl OutputUnitName {
-    /// "V" or "LSB".
-    pub fn symbol(self) -> &'static str {
-        match self {
-            OutputUnitName::V => "V",
-            OutputUnitName::Lsb => "LSB",
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,11 +266,13 @@ mod tests {
         assert_eq!(cal.statics.zero_bias_out, [2.405098, 2.380978, 2.435503]);
         assert_eq!(cal.lever_arms.r_m[1], [-0.00256, -0.00893, -0.00026]);
         assert!(f.other.contains_key("expected"));
+        // The file form and the built-in constant are one unit.
+        assert_eq!(cal, shared::params::PAPER_UNIT);
     }
 
     #[test]
     fn round_trips_through_toml_with_lsb_and_uncertainty() {
-        let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let mut cal = shared::params::PAPER_UNIT;
         cal.statics.output_unit = shared::OutputUnit::Lsb;
         cal.statics.scale_out_per_g = [4096.0, 4100.0, 4090.0];
         cal.statics.zero_bias_out = [12.0, -40.0, 3.5];

@@ -10,12 +10,15 @@ use crate::linalg::{self, RowMajor3};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
-/// What the accelerometer outputs are measured in.
+/// What the accelerometer outputs are measured in. Files spell it "V" or "LSB" (the names only matter
+/// to self-describing formats: postcard encodes the variant's index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum OutputUnit {
     /// Analog parts read by an ADC and converted to volts (the paper's MS9005.D).
+    #[serde(rename = "V")]
     Volts,
     /// Raw counts of a digital part or of the ADC (least significant bits).
+    #[serde(rename = "LSB")]
     Lsb,
 }
 

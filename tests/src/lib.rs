@@ -2,15 +2,12 @@
 
 use host::device::sim::SimDevice;
 use host::device::DeviceClient;
-use host::unit_file::UnitFile;
 use shared::Calibration;
 use std::time::Duration;
 
 /// The paper's unit (the simulated device's truth).
 pub fn paper_unit() -> Calibration {
-    UnitFile::paper_unit()
-        .to_calibration()
-        .expect("built-in unit is valid")
+    shared::params::PAPER_UNIT
 }
 
 /// A client connected to a fresh simulated device of the paper's unit.

@@ -54,7 +54,7 @@ impl From<LeverArg> for LeverMode {
 }
 
 /// Runs `host apply`; the CSV goes to `--out` (atomically) or stdout, the summary to stderr.
-pub fn apply_command(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;

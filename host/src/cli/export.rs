@@ -36,7 +36,7 @@ pub struct ExportArgs {
 }
 
 /// Runs `host export`.
-pub fn export_command(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;

@@ -30,7 +30,7 @@ pub struct NoiseArgs {
 }
 
 /// Runs `host noise`.
-pub fn noise_command(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
     let plain = match &a.calibration {
         Some(p) => {
             let unit = UnitFile::load(p)?;

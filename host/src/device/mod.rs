@@ -7,3 +7,30 @@ pub mod serial;
 pub mod sim;
 
 pub use client::{DeviceClient, LinkError, Transport};
+
+use serial::SerialTransport;
+use sim::SimDevice;
+use std::time::Duration;
+
+/// Either kind of device link.
+pub enum AnyTransport {
+    /// The in-process simulated device.
+    Sim(Box<SimDevice>),
+    /// A serial port or pty.
+    Serial(SerialTransport),
+}
+
+impl Transport for AnyTransport {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        match self {
+            AnyTransport::Sim(d) => d.send(bytes),
+            AnyTransport::Serial(s) => s.send(bytes),
+        }
+    }
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, LinkError> {
+        match self {
+            AnyTransport::Sim(d) => d.receive(buf, timeout),
+            AnyTransport::Serial(s) => s.receive(buf, timeout),
+        }
+    }
+}

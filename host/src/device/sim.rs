@@ -224,12 +224,11 @@ impl Transport for SimDevice {
 mod tests {
     use super::*;
     use crate::device::client::DeviceClient;
-    use crate::unit_file::UnitFile;
     use shared::blob::ParameterBlob;
     use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 
     fn client() -> DeviceClient<SimDevice> {
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         DeviceClient::new(SimDevice::new(truth).unwrap(), Duration::from_millis(300))
     }
 

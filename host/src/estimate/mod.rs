@@ -18,15 +18,18 @@ mod paper;
 mod paper_angles;
 mod predict;
 mod screen;
+mod segment;
 mod solve;
 #[cfg(test)]
 mod tests;
+mod uncertainty;
 
 pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
+pub use segment::{Noise, SegmentKind};
+pub use uncertainty::Uncertainty;
 
 use crate::session::{Plan, SegmentStats};
-use crate::unit_file::Uncertainty;
 use model::{idx_r, SegModel, NP};
 use shared::linalg::{self, RowMajor3};
 use shared::params::{axis_name, ParamsError};
@@ -222,17 +225,6 @@ impl From<ParamsError> for EstimateError {
     fn from(e: ParamsError) -> Self {
         EstimateError::Params(e)
     }
-}
-
-/// What a segment does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SegmentKind {
-    /// At rest.
-    Static,
-    /// Constant table rate.
-    ConstantRate,
-    /// Spin-up or spin-down.
-    Ramp,
 }
 
 /// Why a segment was left out.
@@ -558,7 +550,7 @@ pub fn calibrate_session_stats(
         }
     }
 
-    let output_unit: OutputUnit = plan.output_unit.into();
+    let output_unit: OutputUnit = plan.output_unit;
     let fitted = FittedStatic {
         output_unit,
         m_out_per_g: model::m_of(&main_theta),

@@ -200,9 +200,7 @@ mod tests {
 
     #[test]
     fn model_matches_the_shared_forward_model() {
-        let cal = crate::unit_file::UnitFile::paper_unit()
-            .to_calibration()
-            .unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let fm = ForwardModel::new(&cal).unwrap();
         let g = cal.gravity_m_s2;
         let st = TableState {

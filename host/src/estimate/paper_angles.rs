@@ -4,8 +4,7 @@
 
 use super::model::{idx_m, idx_r, idx_u0, NP};
 use super::screen::{Frame, Shift};
-use super::{EstimateError, EstimateOptions, Observability};
-use crate::unit_file::Uncertainty;
+use super::{EstimateError, EstimateOptions, Observability, Uncertainty};
 use nalgebra::DMatrix;
 use shared::linalg::RowMajor3;
 use shared::params::{axis_name, ParamsError};

@@ -100,9 +100,3 @@ pub fn predict(
         warnings: out.warnings,
     })
 }
-
-impl std::fmt::Display for Prediction {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::report::render_prediction(self))
-    }
-}

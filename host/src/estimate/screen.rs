@@ -3,24 +3,14 @@
 
 use super::model::{self, idx_m, idx_u0, SegModel, NP};
 use super::{
-    solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, ReferenceChoice,
+    solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, Noise, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
-use crate::session::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentStats};
 use shared::linalg::{self, RowMajor3};
 use shared::params::axis_name;
 use shared::ReferencePoint;
 use std::collections::HashMap;
-
-fn kind_of(sp: &SegmentPlan) -> SegmentKind {
-    if sp.is_static() {
-        SegmentKind::Static
-    } else if sp.rate_end_deg_s.is_some_and(|e| e != sp.rate_deg_s) {
-        SegmentKind::Ramp
-    } else {
-        SegmentKind::ConstantRate
-    }
-}
 
 /// Pairs plan segments with their statistics, in plan order.
 pub(crate) fn match_plan(
@@ -62,7 +52,7 @@ pub(crate) fn match_plan(
             Some(st) => out.push(SessionSeg {
                 plan_idx,
                 stats: (*st).clone(),
-                kind: kind_of(sp),
+                kind: SegmentKind::of(sp),
                 used: true,
             }),
             None => {
@@ -262,28 +252,12 @@ pub(crate) fn screen(
 }
 
 /// Per-sample noise seen on the used static segments.
-pub(crate) struct Noise {
-    /// Mean output covariance, output unit².
-    pub out_cov: RowMajor3,
-    /// Mean gyro covariance, (rad/s)².
-    pub gyro_cov: RowMajor3,
-}
-
 pub(crate) fn pooled_noise(segs: &[SessionSeg]) -> Noise {
-    let statics: Vec<&SessionSeg> = segs
-        .iter()
-        .filter(|s| s.used && s.kind == SegmentKind::Static)
-        .collect();
-    let n = statics.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&SegmentStats) -> RowMajor3| -> RowMajor3 {
-        core::array::from_fn(|i| {
-            core::array::from_fn(|j| statics.iter().map(|s| f(&s.stats)[i][j]).sum::<f64>() / n)
-        })
-    };
-    Noise {
-        out_cov: mean(&|s| s.cov_u),
-        gyro_cov: mean(&|s| s.cov_w),
-    }
+    Noise::pooled(
+        segs.iter()
+            .filter(|s| s.used && s.kind == SegmentKind::Static)
+            .map(|s| &s.stats),
+    )
 }
 
 /// Segment models of the used segments. Ramps are weighted with the static noise (their own output

@@ -1,9 +1,9 @@
 //! Estimator tests against the generator's known truth (`testkit`).
 
 use super::*;
-use crate::session::OutputUnitName;
 use crate::sim::synth;
 use crate::sim::testkit::{self, Rng, TableErrors};
+use shared::OutputUnit;
 use shared::ReferencePoint;
 
 const MG: f64 = 1e-3;
@@ -16,7 +16,7 @@ fn paper_noise(truth: &Calibration) -> f64 {
 #[test]
 fn noise_free_paper_session_recovers_the_unit_exactly() {
     let truth = testkit::paper_unit();
-    let plan = testkit::paper_plan(OutputUnitName::V);
+    let plan = testkit::paper_plan(OutputUnit::Volts);
     let unit = shared::forward::ForwardModel::new(&truth).unwrap();
     let noise = synth::SynthNoise {
         out_1sigma: [paper_noise(&truth); 3],
@@ -170,7 +170,7 @@ impl Mc {
 
 #[test]
 fn paper_unit_paper_plan_monte_carlo() {
-    let plan = testkit::paper_plan(OutputUnitName::V);
+    let plan = testkit::paper_plan(OutputUnit::Volts);
     let truth = testkit::paper_unit();
     let mc = monte_carlo(
         120,
@@ -217,7 +217,7 @@ fn paper_unit_paper_plan_monte_carlo() {
 
 #[test]
 fn better_plan_determines_all_nine_lever_arm_components() {
-    let plan = testkit::better_plan(OutputUnitName::V);
+    let plan = testkit::better_plan(OutputUnit::Volts);
     let truth = testkit::paper_unit();
     let mc = monte_carlo(
         100,
@@ -283,7 +283,7 @@ fn better_plan_determines_all_nine_lever_arm_components() {
 
 #[test]
 fn random_digital_units_are_recovered_equally_well() {
-    let plan = testkit::better_plan(OutputUnitName::Lsb);
+    let plan = testkit::better_plan(OutputUnit::Lsb);
     let mc = monte_carlo(
         100,
         &plan,
@@ -313,7 +313,7 @@ fn random_digital_units_are_recovered_equally_well() {
 
 #[test]
 fn paper_method_runs_beside_the_joint_on_the_paper_plan() {
-    let plan = testkit::paper_plan(OutputUnitName::V);
+    let plan = testkit::paper_plan(OutputUnit::Volts);
     let truth = testkit::paper_unit();
     let mc = monte_carlo(
         50,
@@ -380,7 +380,7 @@ fn paper_method_runs_beside_the_joint_on_the_paper_plan() {
 
 #[test]
 fn table_errors_are_covered_by_the_scaled_sigma_or_named() {
-    let plan = testkit::better_plan(OutputUnitName::V);
+    let plan = testkit::better_plan(OutputUnit::Volts);
     let truth = testkit::paper_unit();
     let errors = TableErrors {
         attitude_deg: 0.01,
@@ -436,7 +436,7 @@ fn clean_session(plan: &Plan, seed: u64) -> (Calibration, Vec<SegmentStats>) {
 
 #[test]
 fn missing_and_unknown_segments_are_named() {
-    let plan = testkit::paper_plan(OutputUnitName::V);
+    let plan = testkit::paper_plan(OutputUnit::Volts);
     let (_, mut stats) = clean_session(&plan, 1);
     let removed = stats.remove(7); // "x+ 150"
     let mut extra = stats[0].clone();
@@ -479,7 +479,7 @@ fn missing_and_unknown_segments_are_named() {
 #[test]
 fn bad_segments_are_excluded_with_reasons() {
     // The paper's plan plus six oblique static attitudes, so that the fit survives five bad statics.
-    let mut plan = testkit::paper_plan(OutputUnitName::V);
+    let mut plan = testkit::paper_plan(OutputUnit::Volts);
     let s3 = 1.0 / 3f64.sqrt();
     for (k, up) in [
         [s3, s3, s3],
@@ -578,7 +578,7 @@ fn bad_segments_are_excluded_with_reasons() {
 
 #[test]
 fn attitudes_that_do_not_span_3d_say_which_directions_are_missing() {
-    let mut plan = testkit::paper_plan(OutputUnitName::V);
+    let mut plan = testkit::paper_plan(OutputUnit::Volts);
     // Only x+, x−, y+, y−: nothing along z.
     plan.segments
         .retain(|s| !(s.is_static() && s.up_b[2] != 0.0));
@@ -610,7 +610,7 @@ fn attitudes_that_do_not_span_3d_say_which_directions_are_missing() {
 #[test]
 fn plans_that_cannot_observe_lever_arms_flag_them() {
     // Static only: no lever arm is observable; they are fixed at 0 and flagged.
-    let mut plan = testkit::paper_plan(OutputUnitName::V);
+    let mut plan = testkit::paper_plan(OutputUnit::Volts);
     plan.segments.retain(|s| s.is_static());
     let (_, stats) = clean_session(&plan, 4);
     let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
@@ -643,7 +643,7 @@ fn plans_that_cannot_observe_lever_arms_flag_them() {
 
     // Only the z axis spun: the z components are not seen at all, nor the x/y across-components of
     // accelerometers x and y; the along-axis r1x, r2y still are.
-    let mut plan = testkit::paper_plan(OutputUnitName::V);
+    let mut plan = testkit::paper_plan(OutputUnit::Volts);
     plan.segments.retain(|s| s.is_static() || s.up_b[2] > 0.5);
     let (truth, stats) = clean_session(&plan, 5);
     let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
@@ -664,8 +664,8 @@ fn plans_that_cannot_observe_lever_arms_flag_them() {
 fn cramer_rao_prediction_matches_model_md_and_the_fit() {
     let truth = testkit::paper_unit();
     let settings = PredictSettings::white(paper_noise(&truth));
-    let paper = predict(&testkit::paper_plan(OutputUnitName::V), &truth, &settings).unwrap();
-    let better = predict(&testkit::better_plan(OutputUnitName::V), &truth, &settings).unwrap();
+    let paper = predict(&testkit::paper_plan(OutputUnit::Volts), &truth, &settings).unwrap();
+    let better = predict(&testkit::better_plan(OutputUnit::Volts), &truth, &settings).unwrap();
     let lever = |p: &Prediction, i: usize, j: usize| p.sigma[15 + 3 * i + j];
     for i in 0..3 {
         for j in 0..3 {
@@ -692,7 +692,7 @@ fn cramer_rao_prediction_matches_model_md_and_the_fit() {
     );
     eprintln!("{text}");
     // The static 1σ predicted equals what a noisy session reports.
-    let plan = testkit::paper_plan(OutputUnitName::V);
+    let plan = testkit::paper_plan(OutputUnit::Volts);
     let (_, stats) = clean_session(&plan, 9);
     let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
     for p in 0..PAPER_LEN {
@@ -707,7 +707,7 @@ fn cramer_rao_prediction_matches_model_md_and_the_fit() {
 
 #[test]
 fn lever_arms_can_be_referred_to_the_centroid_or_a_point() {
-    let plan = testkit::better_plan(OutputUnitName::V);
+    let plan = testkit::better_plan(OutputUnit::Volts);
     let (truth, stats) = clean_session(&plan, 6);
     let options = EstimateOptions {
         reference: ReferenceChoice::Centroid,
@@ -751,7 +751,7 @@ fn lever_arms_can_be_referred_to_the_centroid_or_a_point() {
 #[test]
 fn a_known_table_centre_is_removed() {
     // The unit sits 3 cm off the spin axis on every mount; the plan says so.
-    let mut plan = testkit::better_plan(OutputUnitName::V);
+    let mut plan = testkit::better_plan(OutputUnit::Volts);
     let p = [0.03, -0.01, 0.02];
     for s in &mut plan.segments {
         s.table_centre_m = Some(p);

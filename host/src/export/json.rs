@@ -55,8 +55,9 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::Uncertainty;
     use crate::export::Conversions;
-    use crate::unit_file::{Uncertainty, UnitFile};
+    use crate::unit_file::UnitFile;
 
     #[test]
     fn json_parses_back_to_the_same_calibration_and_marks_the_undetermined() {

@@ -253,7 +253,6 @@ impl KalibrStyle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::unit_file::UnitFile;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{
         BodyAngularAccel, BodyRate, BodySpecificForce, Compensator, LeverMode, SensorOutputs,
@@ -261,7 +260,7 @@ mod tests {
 
     #[test]
     fn every_form_compensates_like_the_device() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let conv = convert(&cal).unwrap();
         let model = ForwardModel::new(&cal).unwrap();
         let full = Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
@@ -319,7 +318,7 @@ mod tests {
 
     #[test]
     fn plain_matrices_are_the_reference_k_a() {
-        let cal = UnitFile::paper_unit().to_calibration().unwrap();
+        let cal = shared::params::PAPER_UNIT;
         let c = convert(&cal).unwrap();
         // paper-unit.toml [expected]: K_A[0][0] = 2.53161061 g/V, ∇_b = (6.13688643, …) g.
         assert!((c.plain.k_a_g_per_out[0][0] - 2.53161061).abs() < 1e-7);

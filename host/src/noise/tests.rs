@@ -10,7 +10,7 @@ use std::process::Command;
 fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
     Plan {
         format_version: crate::session::plan::PLAN_FORMAT_VERSION,
-        output_unit: crate::session::OutputUnitName::V,
+        output_unit: shared::OutputUnit::Volts,
         sample_rate_hz: rate_hz,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,

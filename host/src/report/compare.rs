@@ -256,7 +256,7 @@ pub fn compare_units(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::unit_file::Uncertainty;
+    use crate::estimate::Uncertainty;
 
     fn with_sigma() -> UnitFile {
         let mut u = UnitFile::paper_unit();

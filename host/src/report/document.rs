@@ -38,7 +38,10 @@
 //! leaves; replaying the means shows exactly that error, `½·e·t²`. One static run and one rotating run
 //! (the fastest constant-rate segment, 200 °/s in the paper's plan) are replayed.
 
-use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions, SegmentKind};
+use crate::estimate::Uncertainty;
+use crate::estimate::{
+    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind,
+};
 use crate::report::navigation::{integrate_drift, Drift};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
 use crate::session::builtin::paper_plan;
@@ -46,7 +49,7 @@ use crate::session::{
     read_session, Plan, ReadOptions, RecordingError, SegmentAccumulator, SegmentStats,
 };
 use crate::sim::{simulate_rows, NoiseModel, SimulateError};
-use crate::unit_file::{Uncertainty, UnitFile, UnitFileError};
+use crate::unit_file::{UnitFile, UnitFileError};
 use shared::linalg;
 use shared::params::axis_name;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
@@ -291,28 +294,20 @@ pub fn segment_rows(
     let k = cal.statics.scale_out_per_g;
     let trace = |m: &[[f64; 3]; 3]| m[0][0] + m[1][1] + m[2][2];
     // Gyro noise variance (trace), from the static segments.
-    let statics: Vec<f64> = stats
-        .iter()
-        .filter(|s| plan.segment(&s.name).is_some_and(|p| p.is_static()))
-        .map(|s| trace(&s.cov_w))
-        .collect();
-    let gyro_noise = if statics.is_empty() {
-        0.0
-    } else {
-        statics.iter().sum::<f64>() / statics.len() as f64
-    };
+    let gyro_noise = trace(
+        &Noise::pooled(
+            stats
+                .iter()
+                .filter(|s| plan.segment(&s.name).is_some_and(|p| p.is_static())),
+        )
+        .gyro_cov,
+    );
     let mut rows = Vec::new();
     for st in stats {
         let Some(sp) = plan.segment(&st.name) else {
             continue;
         };
-        let kind = if sp.is_static() {
-            SegmentKind::Static
-        } else if sp.rate_end_deg_s.is_some_and(|r| r != sp.rate_deg_s) {
-            SegmentKind::Ramp
-        } else {
-            SegmentKind::ConstantRate
-        };
+        let kind = SegmentKind::of(sp);
         let mean_w = st.mean_w_rad_s;
         let w2 = linalg::dot(&mean_w, &mean_w);
         let omega = if kind == SegmentKind::Ramp && w2 > 0.0 {
@@ -1318,7 +1313,7 @@ mod tests {
     /// The short plan on the paper unit, calibrated from its own noisy data.
     fn noisy_report() -> ReportData {
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::default(), 7).unwrap();
         let outcome = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
         build_report(
@@ -1345,7 +1340,7 @@ mod tests {
         // docs/model.md §6: x up, bias+scale only → (0.99991, 0.01300, −0.00911) g; static-only at 200 °/s
         // about x leaves (0.09, 11.2, 10.1) mg.
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let rows = segment_rows(&plan, &stats, &truth).unwrap();
         assert_eq!(rows.len(), 15);
@@ -1532,7 +1527,7 @@ mod tests {
              rate_end_deg_s = 200\nduration_s = 2\n",
         )
         .unwrap();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let rows = segment_rows(&plan, &stats, &truth).unwrap();
         let ramp = &rows[1];
@@ -1568,7 +1563,7 @@ mod tests {
     #[test]
     fn a_named_run_must_exist() {
         let plan = short();
-        let truth = UnitFile::paper_unit().to_calibration().unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
         let options = ReportOptions {
             rate_run: Some("x+ 999".into()),

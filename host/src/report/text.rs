@@ -264,6 +264,14 @@ pub fn render_prediction(p: &Prediction) -> String {
     s
 }
 
+/// A prediction prints as [`render_prediction`] (here, so that the estimator does not depend on the
+/// report).
+impl std::fmt::Display for Prediction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&render_prediction(self))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::estimate::{calibrate_session_stats, EstimateOptions};
@@ -308,9 +316,7 @@ rate_deg_s = 200
     #[test]
     fn report_has_the_paper_tables_and_the_comparison() {
         let plan = Plan::parse(PLAN).unwrap();
-        let truth = crate::unit_file::UnitFile::paper_unit()
-            .to_calibration()
-            .unwrap();
+        let truth = shared::params::PAPER_UNIT;
         let unit = shared::forward::ForwardModel::new(&truth).unwrap();
         let noise = SynthNoise {
             out_1sigma: [4e-4; 3],

@@ -15,7 +15,7 @@ pub mod stats;
 pub mod writer;
 
 pub use error::RecordingError;
-pub use plan::{OutputUnitName, Plan, PlanError, SegmentPlan};
+pub use plan::{Plan, PlanError, SegmentPlan};
 pub use reader::{
     read_samples, read_samples_each, read_session, ReadOptions, ReadReport, Row, Session,
 };

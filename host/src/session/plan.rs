@@ -8,34 +8,6 @@ use std::path::Path;
 /// Current plan format version.
 pub const PLAN_FORMAT_VERSION: u32 = 1;
 
-/// Output unit as spelled in files: "V" or "LSB".
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum OutputUnitName {
-    /// Volts.
-    V,
-    /// ADC counts.
-    #[serde(rename = "LSB")]
-    Lsb,
-}
-
-impl From<OutputUnitName> for OutputUnit {
-    fn from(u: OutputUnitName) -> Self {
-        match u {
-            OutputUnitName::V => OutputUnit::Volts,
-            OutputUnitName::Lsb => OutputUnit::Lsb,
-        }
-    }
-}
-
-impl From<OutputUnit> for OutputUnitName {
-    fn from(u: OutputUnit) -> Self {
-        match u {
-            OutputUnit::Volts => OutputUnitName::V,
-            OutputUnit::Lsb => OutputUnitName::Lsb,
-        }
-    }
-}
-
 fn default_version() -> u32 {
     PLAN_FORMAT_VERSION
 }
@@ -51,7 +23,7 @@ pub struct Plan {
     #[serde(default = "default_version")]
     pub format_version: u32,
     /// Unit of the accelerometer outputs in `samples.csv`.
-    pub output_unit: OutputUnitName,
+    pub output_unit: OutputUnit,
     /// Sample rate of `samples.csv`, Hz.
     pub sample_rate_hz: f64,
     /// Local gravity, m/s².

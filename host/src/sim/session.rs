@@ -443,7 +443,7 @@ pub fn simulate_to_dir_with_progress(
         ));
     }
     let mut plan = plan.clone();
-    let unit_name = cal.statics.output_unit.into();
+    let unit_name = cal.statics.output_unit;
     if plan.output_unit != unit_name {
         notes.push(format!(
             "the plan's output_unit {} was changed to the unit's, {}",

@@ -3,7 +3,7 @@
 //! optional table errors (attitude per mount, rate scale) — all seeded.
 
 use super::synth::{self, ActualSegment, SynthNoise};
-use crate::session::{OutputUnitName, Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 
@@ -67,7 +67,7 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
 }
 
 /// The paper's plan: ±1 g per axis static, 60 s; 100/150/200 °/s about x, y, z with that axis up.
-pub fn paper_plan(unit: OutputUnitName) -> Plan {
+pub fn paper_plan(unit: OutputUnit) -> Plan {
     let mut segments = Vec::new();
     for (a, n) in ["x", "y", "z"].iter().enumerate() {
         for sgn in [1.0, -1.0] {
@@ -100,7 +100,7 @@ pub fn paper_plan(unit: OutputUnitName) -> Plan {
 }
 
 /// The paper's plan plus three 45° oblique mounts spun at ±200 °/s and a spin-up per oblique mount.
-pub fn better_plan(unit: OutputUnitName) -> Plan {
+pub fn better_plan(unit: OutputUnit) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for (n, up) in [
@@ -122,9 +122,7 @@ pub fn better_plan(unit: OutputUnitName) -> Plan {
 
 /// The paper's unit.
 pub fn paper_unit() -> Calibration {
-    crate::unit_file::UnitFile::paper_unit()
-        .to_calibration()
-        .expect("the paper unit is valid")
+    shared::params::PAPER_UNIT
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.

@@ -1,0 +1,219 @@
+//! `host calibrate`: from a recorded session (`--input DIR`), or live from a device (`--port`, the
+//! procedure of [`crate::device::procedure`]).
+
+use super::port::{connect, PortArgs};
+use super::CliError;
+use crate::calibration_files::{now_unix_s, write_calibration_files};
+use crate::device::procedure::{
+    self, AutomaticOperator, Operator, ProcedureOptions, TerminalOperator,
+};
+use crate::estimate::{
+    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice,
+};
+use crate::session::{self, read_session, ReadOptions, Session};
+use clap::Args;
+use shared::UnitId;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// Session directory (plan.toml + samples.csv).
+    #[arg(long, value_name = "DIR", conflicts_with = "port")]
+    pub input: Option<PathBuf>,
+    /// Calibrate a device live: its serial port (or QEMU's pty), or `sim` for the built-in simulated
+    /// device. Records the session, estimates, writes the files, flashes, resets and verifies.
+    #[arg(long, value_name = "PORT|sim")]
+    pub port: Option<String>,
+    /// With --port: baud rate of the serial port.
+    #[arg(long, default_value_t = crate::device::serial::DEFAULT_BAUD, requires = "port")]
+    pub baud: u32,
+    /// With --port: seconds to wait for each answer of the device.
+    #[arg(long, default_value_t = 5.0, requires = "port")]
+    pub timeout_s: f64,
+    /// With --port sim: the simulated unit's parameters (default: the paper's unit).
+    #[arg(long, value_name = "FILE", requires = "port")]
+    pub sim_unit: Option<PathBuf>,
+    /// With --port: plan file or built-in name (default: oblique with a virtual table, else paper).
+    #[arg(long, value_name = "FILE|NAME", requires = "port")]
+    pub plan: Option<String>,
+    /// With --port: samples per streamed window (default: a 50th of the device's rate).
+    #[arg(long, requires = "port")]
+    pub window: Option<u32>,
+    /// With --port: largest compensated error accepted at a verification position, mg.
+    #[arg(long, default_value_t = 1.0, requires = "port")]
+    pub verify_tolerance_mg: f64,
+    /// Where to write calibration.toml and calibration.bin (default: the session directory).
+    #[arg(long, value_name = "OUT")]
+    pub out_dir: Option<PathBuf>,
+    /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
+    #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
+    pub method: MethodArg,
+    /// Point the lever arms are given relative to: the table axis (paper) or the sensing points' centroid.
+    #[arg(long, value_enum, default_value_t = ReferenceArg::TableAxis)]
+    pub reference: ReferenceArg,
+}
+
+/// `--method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Static part and lever arms in one weighted least-squares fit.
+    Joint,
+    /// The paper's two steps: static fit, then eq. 24 per lever-arm component.
+    Paper,
+}
+
+/// `--reference`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReferenceArg {
+    /// The point of the body on the table's spin axis (the paper's assumption).
+    TableAxis,
+    /// The centroid of the three sensing points.
+    Centroid,
+}
+
+/// Runs `host calibrate`: live with `--port`, else from `--input`.
+pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+    if a.port.is_some() {
+        calibrate_live(a, quiet)
+    } else {
+        calibrate(a, quiet).map(|_| ())
+    }
+}
+
+/// Reads a session with the progress bar, printing the reader's warnings to stderr.
+pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError> {
+    let session = read_session(dir, &ReadOptions { quiet })?;
+    for w in &session.report.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(session)
+}
+
+/// The estimator options of `host calibrate`'s flags.
+pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
+    EstimateOptions {
+        method: match a.method {
+            MethodArg::Joint => Method::Joint,
+            MethodArg::Paper => Method::Paper,
+        },
+        reference: match a.reference {
+            ReferenceArg::TableAxis => ReferenceChoice::TableAxis,
+            ReferenceArg::Centroid => ReferenceChoice::Centroid,
+        },
+        ..EstimateOptions::default()
+    }
+}
+
+/// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write
+/// `OUT/calibration.toml` and `OUT/calibration.bin`.
+pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, CliError> {
+    let input = a.input.as_deref().ok_or_else(|| {
+        CliError::Usage(
+            "calibrate needs --input DIR (a recorded session: plan.toml + samples.csv) or \
+             --port PORT (a device; `--port sim` for the built-in simulated one)"
+                .into(),
+        )
+    })?;
+    if a.plan.is_some() || a.window.is_some() || a.sim_unit.is_some() {
+        return Err(CliError::Usage(
+            "--plan, --window and --sim-unit are for --port; a recorded session is read with its own \
+             plan.toml (edit that file to change the plan)"
+                .into(),
+        ));
+    }
+    let started = Instant::now();
+    let session = read_session_verbose(input, quiet)?;
+    let read_s = started.elapsed().as_secs_f64();
+    println!(
+        "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
+        session.report.rows,
+        session.report.bytes as f64 / 1e6,
+        session.stats.len(),
+        input.display(),
+        read_s,
+        session.report.rows as f64 / read_s.max(1e-9) / 1e6
+    );
+    let outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
+    println!();
+    print!("{}", crate::report::render(&outcome));
+    let unit_id = match &session.plan.unit_id {
+        Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
+        None => {
+            eprintln!(
+                "warning: plan.toml has no unit_id: calibration.bin is bound to the all-zero unit id; \
+                 add unit_id = \"<24 hex digits>\" to plan.toml to bind it to the unit"
+            );
+            UnitId::default()
+        }
+    };
+    let out_dir = a.out_dir.as_deref().unwrap_or(input);
+    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s())?;
+    println!(
+        "wrote {} and {} ({} bytes, unit {unit_id})",
+        written.toml_path.display(),
+        written.bin_path.display(),
+        written.blob.len()
+    );
+    Ok(outcome)
+}
+
+/// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
+/// runs the whole procedure and ends with a pass/fail line.
+pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+    let port = PortArgs {
+        port: a.port.clone().unwrap_or_default(),
+        baud: a.baud,
+        timeout_s: a.timeout_s,
+        sim_unit: a.sim_unit.clone(),
+    };
+    let mut client = connect(&port)?;
+    let identity = client.identify()?;
+    let plan = match &a.plan {
+        Some(spec) => session::builtin::load_plan(spec),
+        None => procedure::default_plan(&identity),
+    }?;
+    let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
+    let mut opts = ProcedureOptions::new(plan, out_dir);
+    opts.window_samples = a.window;
+    opts.estimate = estimate_options(a);
+    opts.verify_tolerance_mg = a.verify_tolerance_mg;
+    opts.quiet = quiet;
+    let mut auto = AutomaticOperator {
+        verbose: !quiet,
+        warnings: Vec::new(),
+    };
+    let mut person = TerminalOperator;
+    let op: &mut dyn Operator = if procedure::has_virtual_table(&identity) {
+        &mut auto
+    } else {
+        &mut person
+    };
+    let result = procedure::run(&mut client, &opts, op)?;
+    for w in &result.warnings {
+        println!("warning: {w}");
+    }
+    let worst = result
+        .verification
+        .iter()
+        .map(|v| v.error_mg)
+        .fold(0.0, f64::max);
+    if result.passed {
+        println!(
+            "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
+             results in {}",
+            result.identity.unit_id,
+            result.verification.len(),
+            opts.verify_tolerance_mg,
+            opts.out_dir.display()
+        );
+        Ok(())
+    } else {
+        println!(
+            "FAIL: worst verification error {worst:.3} mg > {} mg",
+            opts.verify_tolerance_mg
+        );
+        Err(CliError::VerificationFailed)
+    }
+}

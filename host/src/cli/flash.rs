@@ -1,0 +1,74 @@
+//! `host flash`: write a calibration to a device, reset it and check that it applied it.
+
+use super::port::{connect, PortArgs};
+use super::CliError;
+use crate::calibration_files;
+use crate::device::procedure::ProcedureError;
+use crate::unit_file::UnitFile;
+use clap::Args;
+use shared::blob::{self, ParameterBlob};
+use std::path::{Path, PathBuf};
+
+/// `host flash`.
+#[derive(Debug, Args)]
+pub struct FlashArgs {
+    /// How to reach the device.
+    #[command(flatten)]
+    pub port: PortArgs,
+    /// calibration.bin or calibration.toml.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: PathBuf,
+}
+
+/// `host flash --port P --calibration FILE`: writes `calibration.bin` (or a `calibration.toml`, encoded
+/// for the connected unit), resets the device and checks it applied it.
+pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
+    let mut client = connect(port)?;
+    let identity = client.identify()?;
+    let bytes = if calibration.extension().is_some_and(|e| e == "toml") {
+        let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
+        if let Ok(Some(id)) = unit.unit_id() {
+            if id != identity.unit_id {
+                return Err(CliError::WrongUnit {
+                    blob: id.to_string(),
+                    device: identity.unit_id.to_string(),
+                });
+            }
+        }
+        let cal = unit.to_calibration().map_err(CliError::Usage)?;
+        let blob = ParameterBlob {
+            unit_id: identity.unit_id,
+            calibration: cal,
+            created_unix_s: calibration_files::now_unix_s(),
+        };
+        let (buf, n) = blob
+            .to_bytes()
+            .map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
+        buf[..n].to_vec()
+    } else {
+        let bytes =
+            std::fs::read(calibration).map_err(|e| CliError::Io(calibration.to_path_buf(), e))?;
+        let decoded =
+            blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
+        if decoded.unit_id != identity.unit_id {
+            return Err(CliError::WrongUnit {
+                blob: decoded.unit_id.to_string(),
+                device: identity.unit_id.to_string(),
+            });
+        }
+        bytes
+    };
+    client.write_calibration(&bytes)?;
+    let after = client.reset()?;
+    let back = client.read_calibration()?;
+    if back != bytes {
+        return Err(CliError::Procedure(ProcedureError::ReadBackMismatch));
+    }
+    println!(
+        "flashed {} bytes to unit {}; after reset: {:?}",
+        bytes.len(),
+        identity.unit_id,
+        after.calibration
+    );
+    Ok(())
+}

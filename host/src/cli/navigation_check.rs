@@ -1,0 +1,46 @@
+//! `host navigation-check`: the paper's navigation check on a simulated session of its unit.
+
+use super::CliError;
+use crate::report::document::{navigation_check, NavigationCheckArgs};
+use crate::session::builtin::load_plan;
+use crate::unit_file::UnitFile;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `host navigation-check`.
+#[derive(Debug, Args)]
+pub struct NavigationCheckCliArgs {
+    /// Seed of the simulated session's noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Length of the replayed navigation runs, s.
+    #[arg(long, default_value_t = 60.0)]
+    pub duration_s: f64,
+    /// Where to write the figures and pages (default: nothing written).
+    #[arg(long, value_name = "OUT")]
+    pub out_dir: Option<PathBuf>,
+    /// Unit file of the simulated unit (default: the paper's unit).
+    #[arg(long, value_name = "FILE")]
+    pub unit: Option<PathBuf>,
+    /// Plan file or built-in name (default: paper).
+    #[arg(long, value_name = "FILE|NAME")]
+    pub plan: Option<String>,
+}
+
+/// `host navigation-check`.
+pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+    let mut args = NavigationCheckArgs {
+        seed: a.seed,
+        out_dir: a.out_dir.clone(),
+        ..NavigationCheckArgs::default()
+    };
+    args.report.navigation_duration_s = a.duration_s;
+    if let Some(p) = &a.unit {
+        args.unit = UnitFile::load(p)?;
+    }
+    if let Some(spec) = &a.plan {
+        args.plan = load_plan(spec)?;
+    }
+    print!("{}", navigation_check(&args)?.render());
+    Ok(())
+}

@@ -1,0 +1,87 @@
+//! `host plan --check`: a plan's segments and the predicted 1σ of every parameter (Cramér–Rao bound),
+//! before any data.
+
+use super::{load_unit, CliError};
+use crate::estimate::{predict, PredictSettings, Prediction};
+use crate::session::builtin::load_plan;
+use crate::session::Plan;
+use crate::unit_file::UnitFileError;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `host plan`.
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// Plan file (or built-in plan name) to check.
+    #[arg(long, value_name = "FILE|NAME")]
+    pub check: String,
+    /// Accelerometer white noise per sample, 1σ, mg.
+    #[arg(long, value_name = "MG", default_value_t = 1.0)]
+    pub noise_mg: f64,
+    /// Gyro white noise per sample, 1σ, °/s.
+    #[arg(long, value_name = "DEG_S", default_value_t = 0.05)]
+    pub gyro_noise_deg_s: f64,
+    /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit).
+    #[arg(long, value_name = "FILE")]
+    pub unit: Option<PathBuf>,
+}
+
+/// `host plan --check`: the plan's segments and the predicted 1σ of every parameter.
+pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
+    let plan = load_plan(&a.check)?;
+    let unit = load_unit(a.unit.as_deref())?;
+    let truth = unit.to_calibration().map_err(|m| {
+        CliError::Unit(UnitFileError::Invalid(
+            a.unit.clone().unwrap_or_else(|| "<paper unit>".into()),
+            m,
+        ))
+    })?;
+    if !(a.noise_mg.is_finite() && a.noise_mg > 0.0) {
+        return Err(CliError::Usage(format!(
+            "--noise-mg {} must be a positive number",
+            a.noise_mg
+        )));
+    }
+    print_plan(&plan);
+    let k = truth.statics.scale_out_per_g;
+    let settings = PredictSettings {
+        noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
+        gyro_noise_rad_s: a.gyro_noise_deg_s.to_radians(),
+        ..PredictSettings::white(0.0)
+    };
+    let prediction = predict(&plan, &truth, &settings)?;
+    println!();
+    println!(
+        "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",
+        a.noise_mg, a.gyro_noise_deg_s
+    );
+    print!("{}", crate::report::render_prediction(&prediction));
+    Ok(prediction)
+}
+
+fn print_plan(plan: &Plan) {
+    println!(
+        "{} segments at {} Hz, output unit {}, g = {} m/s²",
+        plan.segments.len(),
+        plan.sample_rate_hz,
+        plan.output_unit.symbol(),
+        plan.gravity_m_s2
+    );
+    for s in &plan.segments {
+        let rate = match s.rate_end_deg_s {
+            Some(r1) if r1 != s.rate_deg_s => format!("{} → {} °/s", s.rate_deg_s, r1),
+            _ if s.is_static() => "static".to_string(),
+            _ => format!("{} °/s", s.rate_deg_s),
+        };
+        println!(
+            "  {:<14} up_b = [{:+.4}, {:+.4}, {:+.4}]  {:<16} {}",
+            s.name,
+            s.up_b[0],
+            s.up_b[1],
+            s.up_b[2],
+            rate,
+            s.duration_s
+                .map_or("(no duration)".into(), |d| format!("{d} s"))
+        );
+    }
+}

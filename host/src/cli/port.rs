@@ -1,0 +1,58 @@
+//! `--port`: how the device commands reach a device. `--port sim` is the simulated device in-process
+//! (the paper's unit on a virtual table, running the firmware's own logic); any other value is a serial
+//! port (a board's UART bridge, or the pty of the firmware running in QEMU).
+
+use super::CliError;
+use crate::device::serial::{SerialTransport, DEFAULT_BAUD};
+use crate::device::sim::SimDevice;
+use crate::device::{AnyTransport, DeviceClient};
+use crate::unit_file::UnitFile;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The spelling of the simulated device.
+pub const SIM_PORT: &str = "sim";
+
+/// How to reach the device.
+#[derive(clap::Args, Clone, Debug)]
+pub struct PortArgs {
+    /// Serial port of the device (e.g. /dev/ttyACM0, or the pty QEMU prints), or `sim` for the built-in
+    /// simulated device.
+    #[arg(long)]
+    pub port: String,
+    /// Baud rate of the serial port (no effect on a pty or on `sim`).
+    #[arg(long, default_value_t = DEFAULT_BAUD)]
+    pub baud: u32,
+    /// Seconds to wait for each answer before declaring the device silent.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout_s: f64,
+    /// With `--port sim`: the simulated unit's parameters (unit file; default: the paper's unit).
+    #[arg(long)]
+    pub sim_unit: Option<PathBuf>,
+}
+
+/// Opens the device named by `--port`.
+pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> {
+    let transport = if args.port == SIM_PORT {
+        let unit = match &args.sim_unit {
+            Some(p) => UnitFile::load(p).map_err(CliError::Unit)?,
+            None => UnitFile::paper_unit(),
+        };
+        let truth = unit
+            .to_calibration()
+            .map_err(|m| CliError::Usage(format!("--sim-unit: {m}")))?;
+        let dev = SimDevice::new(truth).map_err(|e| CliError::Usage(e.to_string()))?;
+        AnyTransport::Sim(Box::new(dev))
+    } else {
+        AnyTransport::Serial(SerialTransport::open(&args.port, args.baud)?)
+    };
+    if !(args.timeout_s.is_finite() && args.timeout_s > 0.0) {
+        return Err(CliError::Usage(
+            "--timeout-s must be a positive number of seconds".into(),
+        ));
+    }
+    Ok(DeviceClient::new(
+        transport,
+        Duration::from_secs_f64(args.timeout_s),
+    ))
+}

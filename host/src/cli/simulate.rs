@@ -1,0 +1,129 @@
+//! `host simulate`: a virtual unit on a virtual rate table, written as a recording.
+
+use super::{load_unit, CliError};
+use crate::session::builtin::{load_plan, paper_plan};
+use crate::sim::{simulate_to_dir_with_progress, NoiseModel, SimulationSummary};
+use crate::ui::progress_bar;
+use crate::unit_file::UnitFile;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `host simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Session directory to write (plan.toml, samples.csv, truth.toml).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Unit file of the unit to simulate (default: the paper's unit). Its [noise] table, if any,
+    /// replaces the default noise; the flags below override both.
+    #[arg(long, value_name = "FILE")]
+    pub unit: Option<PathBuf>,
+    /// Plan file, or a built-in plan's name: paper (default), oblique, short, short-oblique, quick-oblique.
+    #[arg(long, value_name = "FILE|NAME")]
+    pub plan: Option<String>,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Replace an existing samples.csv in DIR.
+    #[arg(long)]
+    pub force: bool,
+    /// Start from no noise at all (then add what the flags below ask for).
+    #[arg(long)]
+    pub no_noise: bool,
+    /// Accelerometer white noise per sample, 1σ, mg [default: 1].
+    #[arg(long, value_name = "MG")]
+    pub noise_mg: Option<f64>,
+    /// ADC quantisation step in the output unit (V or LSB); 0 = none [default: 0].
+    #[arg(long, value_name = "STEP")]
+    pub lsb: Option<f64>,
+    /// Accelerometer bias random walk, mg/√s [default: 0].
+    #[arg(long, value_name = "MG_SQRT_S")]
+    pub drift_mg_sqrt_s: Option<f64>,
+    /// Table attitude error: random tilt of each mount, 1σ per axis, degrees [default: 0].
+    #[arg(long, value_name = "DEG")]
+    pub tilt_deg: Option<f64>,
+    /// Table rate scale error, fraction (1e-4 = 100 ppm) [default: 0].
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
+    pub rate_scale: Option<f64>,
+    /// Table rate offset, °/s [default: 0].
+    #[arg(long, value_name = "DEG_S", allow_hyphen_values = true)]
+    pub rate_offset_deg_s: Option<f64>,
+    /// Gyro white noise per sample, 1σ, °/s [default: 0.05].
+    #[arg(long, value_name = "DEG_S")]
+    pub gyro_noise_deg_s: Option<f64>,
+    /// Gyro bias, body axes, °/s, as X,Y,Z [default: 0,0,0].
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        num_args = 1,
+        allow_hyphen_values = true
+    )]
+    pub gyro_bias_deg_s: Option<Vec<f64>>,
+}
+
+/// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
+pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, CliError> {
+    let mut n = if a.no_noise {
+        NoiseModel::none()
+    } else {
+        NoiseModel::from_unit_file(unit)?.unwrap_or_default()
+    };
+    let set = |dst: &mut f64, v: Option<f64>| {
+        if let Some(v) = v {
+            *dst = v;
+        }
+    };
+    set(&mut n.accel_white_mg, a.noise_mg);
+    set(&mut n.accel_quantum_out, a.lsb);
+    set(&mut n.accel_bias_walk_mg_sqrt_s, a.drift_mg_sqrt_s);
+    set(&mut n.table_tilt_deg, a.tilt_deg);
+    set(&mut n.table_rate_scale, a.rate_scale);
+    set(&mut n.table_rate_offset_deg_s, a.rate_offset_deg_s);
+    set(&mut n.gyro_white_deg_s, a.gyro_noise_deg_s);
+    if let Some(b) = &a.gyro_bias_deg_s {
+        n.gyro_bias_deg_s = b
+            .as_slice()
+            .try_into()
+            .map_err(|_| CliError::Usage("--gyro-bias-deg-s takes three values: X,Y,Z".into()))?;
+    }
+    n.validate()?;
+    Ok(n)
+}
+
+/// `host simulate`.
+pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError> {
+    let unit = load_unit(a.unit.as_deref())?;
+    let plan = match &a.plan {
+        Some(spec) => load_plan(spec)?,
+        None => paper_plan(),
+    };
+    let noise = noise_from_args(a, &unit)?;
+    let bar = progress_bar(0, "simulating", quiet);
+    let summary =
+        simulate_to_dir_with_progress(&a.out, &unit, &plan, &noise, a.seed, a.force, &bar)?;
+    for note in &summary.notes {
+        eprintln!("note: {note}");
+    }
+    println!(
+        "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
+        summary.rows,
+        plan.segments.len(),
+        plan.sample_rate_hz,
+        a.seed,
+        a.out.display()
+    );
+    println!(
+        "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
+         rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
+        noise.accel_white_mg,
+        noise.accel_bias_walk_mg_sqrt_s,
+        noise.accel_quantum_out,
+        noise.table_tilt_deg,
+        noise.table_rate_scale,
+        noise.table_rate_offset_deg_s,
+        noise.gyro_white_deg_s,
+        noise.gyro_bias_deg_s
+    );
+    Ok(summary)
+}

@@ -1,0 +1,284 @@
+//! Tests of the command line: parsing, and each command run end to end on the simulator or the
+//! simulated device.
+
+use super::calibrate::{calibrate, estimate_options};
+use super::port::{connect, PortArgs, SIM_PORT};
+use super::simulate::noise_from_args;
+use super::*;
+use crate::device::serial::DEFAULT_BAUD;
+use crate::device::sim::SIM_UNIT_ID;
+use crate::device::LinkError;
+use crate::estimate::Method;
+use crate::export::ExportFormat;
+use crate::sim::NoiseModel;
+use clap::CommandFactory;
+use shared::blob::ParameterBlob;
+use shared::wire::DeviceError;
+use shared::UnitId;
+use std::path::PathBuf;
+
+fn parse(args: &[&str]) -> Cli {
+    Cli::try_parse_from(std::iter::once("host").chain(args.iter().copied())).unwrap()
+}
+
+#[test]
+fn the_command_line_is_well_formed() {
+    Cli::command().debug_assert();
+    let cli = parse(&[
+        "simulate",
+        "--out",
+        "d",
+        "--seed",
+        "9",
+        "--gyro-bias-deg-s",
+        "0.1,-0.2,0.3",
+        "--rate-offset-deg-s",
+        "-0.5",
+    ]);
+    let Command::Simulate(a) = cli.command else {
+        panic!("not simulate")
+    };
+    let n = noise_from_args(&a, &UnitFile::paper_unit()).unwrap();
+    assert_eq!(n.gyro_bias_deg_s, [0.1, -0.2, 0.3]);
+    assert_eq!(n.table_rate_offset_deg_s, -0.5);
+    assert_eq!(n.accel_white_mg, 1.0);
+    let Command::Calibrate(c) = parse(&["calibrate", "--input", "x", "--method", "paper"]).command
+    else {
+        panic!("not calibrate")
+    };
+    assert_eq!(estimate_options(&c).method, Method::Paper);
+    assert!(Cli::try_parse_from(["host", "calibrate", "--method", "best"]).is_err());
+    let Command::Calibrate(c) = parse(&["calibrate", "--input", "d", "--plan", "paper"]).command
+    else {
+        panic!("not calibrate")
+    };
+    let e = calibrate(&c, true).unwrap_err().to_string();
+    assert!(e.contains("--plan") && e.contains("plan.toml"), "{e}");
+    let Command::Calibrate(c) = parse(&[
+        "calibrate",
+        "--port",
+        "sim",
+        "--plan",
+        "short",
+        "--window",
+        "20",
+    ])
+    .command
+    else {
+        panic!("not calibrate")
+    };
+    assert_eq!((c.port.as_deref(), c.window), (Some("sim"), Some(20)));
+    let Command::Flash(flash::FlashArgs { port, calibration }) =
+        parse(&["flash", "--port", "/dev/ttyACM0", "--calibration", "c.bin"]).command
+    else {
+        panic!("not flash")
+    };
+    assert_eq!(
+        (port.port.as_str(), calibration),
+        ("/dev/ttyACM0", PathBuf::from("c.bin"))
+    );
+}
+
+#[test]
+fn report_compare_export_and_navigation_check_parse() {
+    let Command::Report(r) = parse(&["report", "--input", "s", "--no-png"]).command else {
+        panic!("not report")
+    };
+    assert!(r.no_png && r.calibration.is_none() && r.duration_s == 60.0);
+    let Command::Compare(compare::CompareArgs { a, b }) =
+        parse(&["compare", "a.toml", "b.toml"]).command
+    else {
+        panic!("not compare")
+    };
+    assert_eq!((a, b), (PathBuf::from("a.toml"), PathBuf::from("b.toml")));
+    let Command::Export(export::ExportArgs { format, .. }) =
+        parse(&["export", "--calibration", "c.toml", "--format", "fusion"]).command
+    else {
+        panic!("not export")
+    };
+    assert_eq!(format, ExportFormat::Fusion);
+    assert!(
+        Cli::try_parse_from(["host", "export", "--calibration", "c", "--format", "x"]).is_err()
+    );
+    let Command::NavigationCheck(n) =
+        parse(&["navigation-check", "--seed", "3", "--plan", "short"]).command
+    else {
+        panic!("not navigation-check")
+    };
+    assert_eq!((n.seed, n.plan.as_deref()), (3, Some("short")));
+}
+
+#[test]
+fn noise_flags_override_the_unit_files_noise_table() {
+    let mut unit = UnitFile::paper_unit();
+    unit.other.insert(
+        "noise".into(),
+        toml::Value::Table(toml::from_str("accel_white_mg = 2.0\ntable_tilt_deg = 0.01").unwrap()),
+    );
+    let Command::Simulate(a) = parse(&["simulate", "--out", "d", "--noise-mg", "0.5"]).command
+    else {
+        panic!()
+    };
+    let n = noise_from_args(&a, &unit).unwrap();
+    assert_eq!((n.accel_white_mg, n.table_tilt_deg), (0.5, 0.01));
+    let Command::Simulate(a) = parse(&["simulate", "--out", "d", "--no-noise"]).command else {
+        panic!()
+    };
+    assert_eq!(noise_from_args(&a, &unit).unwrap(), NoiseModel::none());
+}
+
+/// simulate (short oblique plan, the paper's unit, 1 mg) → calibrate → every parameter within
+/// 5 reported σ of the truth, the σ of the right size, and the files readable.
+#[test]
+fn simulate_then_calibrate_recovers_the_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("session");
+    let Command::Simulate(s) = parse(&[
+        "simulate",
+        "--out",
+        session.to_str().unwrap(),
+        "--plan",
+        "short-oblique",
+        "--seed",
+        "21",
+    ])
+    .command
+    else {
+        panic!()
+    };
+    simulate::run(&s, true).unwrap();
+    let out = dir.path().join("out");
+    let Command::Calibrate(c) = parse(&[
+        "calibrate",
+        "--input",
+        session.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ])
+    .command
+    else {
+        panic!()
+    };
+    let o = calibrate(&c, true).unwrap();
+    let truth = UnitFile::load(&session.join("truth.toml"))
+        .unwrap()
+        .to_calibration()
+        .unwrap();
+    let (est, u) = (&o.calibration, &o.uncertainty);
+    for i in 0..3 {
+        let db = est.statics.zero_bias_out[i] - truth.statics.zero_bias_out[i];
+        assert!(db.abs() < 5.0 * u.zero_bias_1sigma[i], "bias {i}: {db}");
+        let dk = est.statics.scale_out_per_g[i] - truth.statics.scale_out_per_g[i];
+        assert!(dk.abs() < 5.0 * u.scale_per_g_1sigma[i], "scale {i}: {dk}");
+        for j in 0..3 {
+            let da = est.statics.installation_angles_deg[i][j]
+                - truth.statics.installation_angles_deg[i][j];
+            assert!(
+                da.abs() < 5.0 * u.installation_angles_deg_1sigma[i][j],
+                "θ{i}{j}: {da}"
+            );
+            let dr = est.lever_arms.r_m[i][j] - truth.lever_arms.r_m[i][j];
+            let sr = u.lever_arms_m_1sigma[i][j];
+            assert!(u.lever_arms_observable[i][j], "r{i}{j} observable");
+            assert!(dr.abs() < 5.0 * sr && sr < 60e-6, "r{i}{j}: {dr} ± {sr}");
+        }
+    }
+    // The files: calibration.toml reads back as a unit file (so `simulate --unit` round-trips),
+    // calibration.bin decodes for the (all-zero) unit id of a plan without one.
+    let back = UnitFile::load(&out.join("calibration.toml")).unwrap();
+    assert!(back.uncertainty.is_some());
+    let bin = std::fs::read(out.join("calibration.bin")).unwrap();
+    let blob = shared::blob::decode_for_unit(&bin, UnitId::default()).unwrap();
+    assert_eq!(blob.calibration, o.calibration);
+}
+
+#[test]
+fn plan_check_predicts_what_the_oblique_plan_adds() {
+    let check = |plan: &str| {
+        let Command::Plan(a) = parse(&["plan", "--check", plan]).command else {
+            panic!()
+        };
+        plan::run(&a).unwrap()
+    };
+    let paper = check("paper");
+    let oblique = check("oblique");
+    // r1y (across axis x): ~0.3 mm with the paper's plan, ~15 µm or better with the oblique mounts.
+    let k = paper.labels.iter().position(|l| l == "r1y").unwrap();
+    assert!(paper.sigma[k] > 1e-4 && !paper.lever_arms_observable[0][1]);
+    assert!(oblique.sigma[k] < 2e-5 && oblique.lever_arms_observable[0][1]);
+    let Command::Plan(a) = parse(&["plan", "--check", "nope.toml"]).command else {
+        panic!()
+    };
+    assert!(plan::run(&a).unwrap_err().to_string().contains("built-in"));
+}
+
+#[test]
+fn calibrate_without_input_says_what_to_give() {
+    let Command::Calibrate(c) = parse(&["calibrate"]).command else {
+        panic!()
+    };
+    let e = calibrate(&c, true).unwrap_err().to_string();
+    assert!(e.contains("--input DIR"), "{e}");
+}
+
+fn sim() -> PortArgs {
+    PortArgs {
+        port: SIM_PORT.into(),
+        baud: DEFAULT_BAUD,
+        timeout_s: 1.0,
+        sim_unit: None,
+    }
+}
+
+fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
+    let cal = shared::params::PAPER_UNIT;
+    let (bytes, n) = ParameterBlob {
+        unit_id: unit,
+        calibration: cal,
+        created_unix_s: 5,
+    }
+    .to_bytes()
+    .unwrap();
+    let p = dir.join("calibration.bin");
+    std::fs::write(&p, &bytes[..n]).unwrap();
+    p
+}
+
+#[test]
+fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
+    let dir = tempfile::tempdir().unwrap();
+    flash::run(&sim(), &blob_file(dir.path(), SIM_UNIT_ID)).unwrap();
+    let e = flash::run(&sim(), &blob_file(dir.path(), UnitId(*b"ANOTHER-UNIT"))).unwrap_err();
+    assert!(matches!(e, CliError::WrongUnit { .. }), "{e}");
+    assert!(e.to_string().contains("made for unit"), "{e}");
+    // A corrupt file is refused before anything reaches the device.
+    std::fs::write(dir.path().join("bad.bin"), b"ACAL garbage").unwrap();
+    let e = flash::run(&sim(), &dir.path().join("bad.bin")).unwrap_err();
+    assert!(matches!(e, CliError::Blob(..)), "{e}");
+}
+
+#[test]
+fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
+    let e = read::run(&sim(), None).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            CliError::Link(LinkError::Device(DeviceError::NoCalibration))
+        ),
+        "{e}"
+    );
+    monitor::run(&sim(), 100, Some(3)).unwrap();
+}
+
+#[test]
+fn a_missing_serial_port_names_the_port_and_the_fix() {
+    let args = PortArgs {
+        port: "/dev/does-not-exist".into(),
+        ..sim()
+    };
+    let e = connect(&args).err().unwrap().to_string();
+    assert!(
+        e.contains("/dev/does-not-exist") && e.contains("plugged in"),
+        "{e}"
+    );
+}
