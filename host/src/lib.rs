@@ -12,5 +12,6 @@ pub mod output_file;
 pub mod report;
 pub mod session;
 pub mod sim;
+pub mod summary;
 pub mod ui;
 pub mod unit_file;

@@ -58,6 +58,8 @@ pub enum CliError {
     Noise(crate::noise::NoiseError),
     /// A result file could not be written.
     Written(crate::output_file::OutputFileError),
+    /// A result failed its pass/fail limits (the failed checks, one line).
+    ChecksFailed(String),
     /// The command line is incomplete or an option is unusable.
     Usage(String),
 }
@@ -75,6 +77,7 @@ impl std::fmt::Display for CliError {
             CliError::Compare(e) => e.fmt(f),
             CliError::Export(e) => e.fmt(f),
             CliError::Apply(e) => e.fmt(f),
+            CliError::ChecksFailed(m) => write!(f, "FAIL: {m}"),
             CliError::Noise(e) => e.fmt(f),
             CliError::Written(e) => e.fmt(f),
             CliError::Link(e) => e.fmt(f),

@@ -26,6 +26,7 @@ pub mod flash;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;
+pub mod output;
 pub mod plan;
 pub mod port;
 pub mod read;
@@ -92,10 +93,10 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Simulate(a) => simulate::run(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate::run(&a, cli.quiet),
-        Command::Plan(a) => plan::run(&a).map(|_| ()),
+        Command::Plan(a) => plan::run(&a, cli.quiet).map(|_| ()),
         Command::Report(a) => report::run(&a),
         Command::NavigationCheck(a) => navigation_check::run(&a),
-        Command::Compare(a) => compare::run(&a),
+        Command::Compare(a) => compare::run(&a, cli.quiet),
         Command::Export(a) => export::run(&a, cli.quiet),
         Command::Apply(a) => apply::run(&a, cli.quiet),
         Command::Noise(a) => noise::run(&a, cli.quiet),

@@ -105,25 +105,27 @@ pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError>
     for note in &summary.notes {
         eprintln!("note: {note}");
     }
-    println!(
-        "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
-        summary.rows,
-        plan.segments.len(),
-        plan.sample_rate_hz,
-        a.seed,
-        a.out.display()
-    );
-    println!(
-        "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
-         rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
-        noise.accel_white_mg,
-        noise.accel_bias_walk_mg_sqrt_s,
-        noise.accel_quantum_out,
-        noise.table_tilt_deg,
-        noise.table_rate_scale,
-        noise.table_rate_offset_deg_s,
-        noise.gyro_white_deg_s,
-        noise.gyro_bias_deg_s
-    );
+    if !quiet {
+        println!(
+            "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
+            summary.rows,
+            plan.segments.len(),
+            plan.sample_rate_hz,
+            a.seed,
+            a.out.display()
+        );
+        println!(
+            "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
+             rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
+            noise.accel_white_mg,
+            noise.accel_bias_walk_mg_sqrt_s,
+            noise.accel_quantum_out,
+            noise.table_tilt_deg,
+            noise.table_rate_scale,
+            noise.table_rate_offset_deg_s,
+            noise.gyro_white_deg_s,
+            noise.gyro_bias_deg_s
+        );
+    }
     Ok(summary)
 }

@@ -198,7 +198,7 @@ fn plan_check_predicts_what_the_oblique_plan_adds() {
         let Command::Plan(a) = parse(&["plan", "--check", plan]).command else {
             panic!()
         };
-        plan::run(&a).unwrap()
+        plan::run(&a, true).unwrap()
     };
     let paper = check("paper");
     let oblique = check("oblique");
@@ -209,7 +209,10 @@ fn plan_check_predicts_what_the_oblique_plan_adds() {
     let Command::Plan(a) = parse(&["plan", "--check", "nope.toml"]).command else {
         panic!()
     };
-    assert!(plan::run(&a).unwrap_err().to_string().contains("built-in"));
+    assert!(plan::run(&a, true)
+        .unwrap_err()
+        .to_string()
+        .contains("built-in"));
 }
 
 #[test]

@@ -29,17 +29,18 @@ pub trait Operator {
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
 }
 
-/// An operator at the terminal: instructions on stdout, Enter on stdin.
+/// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
+/// Enter on stdin.
 pub struct TerminalOperator;
 
 impl Operator for TerminalOperator {
     fn say(&mut self, text: &str) {
-        println!("{text}");
+        eprintln!("{text}");
     }
 
     fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
-        print!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
-        std::io::stdout()
+        eprint!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
+        std::io::stderr()
             .flush()
             .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
@@ -54,12 +55,12 @@ impl Operator for TerminalOperator {
     }
 
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
-        println!("segment '{segment}' does not match the plan:");
+        eprintln!("segment '{segment}' does not match the plan:");
         for p in problems {
-            println!("  - {p}");
+            eprintln!("  - {p}");
         }
-        print!("keep it anyway (the estimator will screen it)? [y/N] ");
-        std::io::stdout()
+        eprint!("keep it anyway (the estimator will screen it)? [y/N] ");
+        std::io::stderr()
             .flush()
             .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
@@ -83,7 +84,7 @@ pub struct AutomaticOperator {
 impl Operator for AutomaticOperator {
     fn say(&mut self, text: &str) {
         if self.verbose {
-            println!("{text}");
+            eprintln!("{text}");
         }
     }
 
