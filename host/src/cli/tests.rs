@@ -85,7 +85,7 @@ fn report_compare_export_and_navigation_check_parse() {
         panic!("not report")
     };
     assert!(r.no_png && r.calibration.is_none() && r.duration_s == 60.0);
-    let Command::Compare(compare::CompareArgs { a, b }) =
+    let Command::Compare(compare::CompareArgs { a, b, .. }) =
         parse(&["compare", "a.toml", "b.toml"]).command
     else {
         panic!("not compare")
