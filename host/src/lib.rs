@@ -2,6 +2,7 @@
 //! The binary (`src/main.rs`) is a thin clap layer over this library.
 
 pub mod apply;
+pub mod batch;
 pub mod calibration_files;
 pub mod cli;
 pub mod device;

@@ -58,7 +58,8 @@ pub struct Limits {
     /// Fail when χ²/dof exceeds this (a misfit: table errors, a moved unit, a bad sensor).
     #[arg(long, value_name = "X")]
     pub max_chi2_per_dof: Option<f64>,
-    /// Fail when any zero bias u0/k exceeds this, mg.
+    /// Fail when any zero bias B = u0/k (paper eq. 1) exceeds this, mg. Meaningful for outputs that
+    /// read 0 at 0 g (digital); a mid-rail analog output's u0/k is its offset, not a bias.
     #[arg(long, value_name = "MG")]
     pub max_bias_mg: Option<f64>,
     /// Fail when any sensing axis is further than this from its body axis, degrees.

@@ -102,12 +102,17 @@ pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError
 
 /// The estimator options of `host calibrate`'s flags.
 pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
+    estimate_options_of(a.method, a.reference)
+}
+
+/// The estimator options of a `--method` and a `--reference`.
+pub fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
     EstimateOptions {
-        method: match a.method {
+        method: match method {
             MethodArg::Joint => Method::Joint,
             MethodArg::Paper => Method::Paper,
         },
-        reference: match a.reference {
+        reference: match reference {
             ReferenceArg::TableAxis => ReferenceChoice::TableAxis,
             ReferenceArg::Centroid => ReferenceChoice::Centroid,
         },

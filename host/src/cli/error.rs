@@ -58,6 +58,8 @@ pub enum CliError {
     Noise(crate::noise::NoiseError),
     /// A result file could not be written.
     Written(crate::output_file::OutputFileError),
+    /// `host batch` could not run.
+    Batch(crate::batch::BatchError),
     /// A result failed its pass/fail limits (the failed checks, one line).
     ChecksFailed(String),
     /// The command line is incomplete or an option is unusable.
@@ -78,6 +80,7 @@ impl std::fmt::Display for CliError {
             CliError::Export(e) => e.fmt(f),
             CliError::Apply(e) => e.fmt(f),
             CliError::ChecksFailed(m) => write!(f, "FAIL: {m}"),
+            CliError::Batch(e) => e.fmt(f),
             CliError::Noise(e) => e.fmt(f),
             CliError::Written(e) => e.fmt(f),
             CliError::Link(e) => e.fmt(f),

@@ -13,11 +13,13 @@
 //! | `export` | [`export`] | [`crate::export`] |
 //! | `apply` | [`apply`] | [`crate::apply`] over [`crate::session::reader`] |
 //! | `noise` | [`noise`] | [`crate::noise`] |
+//! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
 //!
 //! Every command fails with the one [`CliError`].
 
 pub mod apply;
+pub mod batch;
 pub mod calibrate;
 pub mod compare;
 pub mod error;
@@ -79,6 +81,9 @@ pub enum Command {
     /// Noise of a still recording: overlapping Allan deviation per axis, fitted white noise density,
     /// bias instability and random walk; table, figure, and the figures Kalibr needs (noise.json).
     Noise(noise::NoiseArgs),
+    /// Calibrate a production lot (a directory of sessions) in parallel: one summary (CSV, JSON) with
+    /// each unit's parameters, 1σ, χ² and pass/fail; outlier units of the lot flagged.
+    Batch(batch::BatchArgs),
     /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
     /// reset it and check that it applied it.
     Flash(flash::FlashArgs),
@@ -100,6 +105,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Export(a) => export::run(&a, cli.quiet),
         Command::Apply(a) => apply::run(&a, cli.quiet),
         Command::Noise(a) => noise::run(&a, cli.quiet),
+        Command::Batch(a) => batch::run(&a, cli.quiet),
         Command::Flash(a) => flash::run(&a.port, &a.calibration),
         Command::Read(a) => read::run(&a.port, a.out.as_deref()),
         Command::Monitor(a) => monitor::run(&a.port, a.window, a.count),
