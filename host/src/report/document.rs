@@ -489,18 +489,21 @@ pub fn outputs_figure(data: &ReportData) -> Figure {
             y_desc: "mg".into(),
             x_categories: Some(cats.clone()),
             log_y: false,
+            // Segments are categories: markers only (a line between them would suggest an order
+            // in between), each compensation shifted a little so that none hides another.
             series: Compensation::ALL
                 .iter()
-                .map(|&c| Series {
+                .enumerate()
+                .map(|(n, &c)| Series {
                     label: c.label().into(),
                     points: data
                         .segments
                         .iter()
                         .enumerate()
-                        .map(|(k, r)| (k as f64, r.error_g(c)[j] * 1e3))
+                        .map(|(k, r)| (k as f64 + 0.15 * (n as f64 - 1.0), r.error_g(c)[j] * 1e3))
                         .collect(),
                     error: None,
-                    style: SeriesStyle::LineAndMarkers,
+                    style: SeriesStyle::Markers,
                     colour: c.colour(),
                 })
                 .collect(),
@@ -1303,7 +1306,7 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::plot::{palette_hex, png_dimensions, svg_polylines};
+    use crate::report::plot::{line_width, palette_hex, png_dimensions, svg_polylines};
     use crate::session::builtin::builtin_plan;
 
     fn short() -> Plan {
@@ -1415,10 +1418,16 @@ mod tests {
         }
         for (j, panel) in fig.panels.iter().enumerate() {
             assert_eq!(panel.series.len(), 3);
-            for (c, series) in Compensation::ALL.iter().zip(&panel.series) {
+            for (m, (c, series)) in Compensation::ALL.iter().zip(&panel.series).enumerate() {
                 assert_eq!(series.points.len(), n);
+                assert_eq!(
+                    series.style,
+                    SeriesStyle::Markers,
+                    "segments are categories"
+                );
                 for (k, r) in data.segments.iter().enumerate() {
-                    assert_eq!(series.points[k], (k as f64, r.error_g(*c)[j] * 1e3));
+                    let x = k as f64 + 0.15 * (m as f64 - 1.0);
+                    assert_eq!(series.points[k], (x, r.error_g(*c)[j] * 1e3));
                 }
             }
         }
@@ -1486,7 +1495,13 @@ mod tests {
             assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
             let lines = svg_polylines(&svg);
             for p in &f.panels {
-                for s in p.series.iter().filter(|s| s.style != SeriesStyle::Markers) {
+                let line_series: Vec<_> = p
+                    .series
+                    .iter()
+                    .filter(|s| s.style != SeriesStyle::Markers)
+                    .collect();
+                for (i, s) in line_series.iter().enumerate() {
+                    let width = line_width(i, line_series.len()).to_string();
                     let drawable = s
                         .points
                         .iter()
@@ -1494,7 +1509,7 @@ mod tests {
                         .count();
                     assert!(
                         lines.iter().any(|l| l.stroke == palette_hex(s.colour)
-                            && l.width == "2"
+                            && l.width == width
                             && l.points == drawable),
                         "{}: '{}' with {drawable} points not drawn",
                         f.stem,
