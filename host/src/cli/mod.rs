@@ -50,7 +50,8 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
-    /// No progress bars (they are drawn only on a terminal anyway).
+    /// Quiet: no progress bars and no human-readable results (warnings and errors still go to
+    /// stderr; --json documents still go to stdout).
     #[arg(long, short, global = true)]
     pub quiet: bool,
 }
@@ -99,8 +100,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Simulate(a) => simulate::run(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate::run(&a, cli.quiet),
         Command::Plan(a) => plan::run(&a, cli.quiet).map(|_| ()),
-        Command::Report(a) => report::run(&a),
-        Command::NavigationCheck(a) => navigation_check::run(&a),
+        Command::Report(a) => report::run(&a, cli.quiet),
+        Command::NavigationCheck(a) => navigation_check::run(&a, cli.quiet),
         Command::Compare(a) => compare::run(&a, cli.quiet),
         Command::Export(a) => export::run(&a, cli.quiet),
         Command::Apply(a) => apply::run(&a, cli.quiet),

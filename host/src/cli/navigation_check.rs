@@ -28,7 +28,7 @@ pub struct NavigationCheckCliArgs {
 }
 
 /// `host navigation-check`.
-pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+pub fn run(a: &NavigationCheckCliArgs, quiet: bool) -> Result<(), CliError> {
     let mut args = NavigationCheckArgs {
         seed: a.seed,
         out_dir: a.out_dir.clone(),
@@ -41,6 +41,9 @@ pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
     if let Some(spec) = &a.plan {
         args.plan = load_plan(spec)?;
     }
-    print!("{}", navigation_check(&args)?.render());
+    let result = navigation_check(&args)?;
+    if !quiet {
+        print!("{}", result.render());
+    }
     Ok(())
 }

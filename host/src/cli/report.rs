@@ -33,7 +33,7 @@ pub struct ReportArgs {
 }
 
 /// `host report`.
-pub fn run(a: &ReportArgs) -> Result<(), CliError> {
+pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     let calibration = match &a.calibration {
         Some(c) => c.clone(),
         None => default_calibration(&a.input),
@@ -47,7 +47,9 @@ pub fn run(a: &ReportArgs) -> Result<(), CliError> {
     };
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
-    print!("{}", summary.render());
+    if !quiet {
+        print!("{}", summary.render());
+    }
     Ok(())
 }
 

@@ -60,6 +60,15 @@ pub struct SimulateArgs {
         allow_hyphen_values = true
     )]
     pub gyro_bias_deg_s: Option<Vec<f64>>,
+    /// Accelerometer flicker (1/f) bias noise as its bias instability B, mg [default: 0].
+    #[arg(long, value_name = "MG")]
+    pub flicker_mg: Option<f64>,
+    /// Gyro bias random walk, °/s/√s [default: 0].
+    #[arg(long, value_name = "DEG_S_SQRT_S")]
+    pub gyro_drift_deg_s_sqrt_s: Option<f64>,
+    /// Gyro flicker (1/f) bias noise as its bias instability B, °/s [default: 0].
+    #[arg(long, value_name = "DEG_S")]
+    pub gyro_flicker_deg_s: Option<f64>,
 }
 
 /// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
@@ -81,6 +90,12 @@ pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, 
     set(&mut n.table_rate_scale, a.rate_scale);
     set(&mut n.table_rate_offset_deg_s, a.rate_offset_deg_s);
     set(&mut n.gyro_white_deg_s, a.gyro_noise_deg_s);
+    set(&mut n.accel_flicker_mg, a.flicker_mg);
+    set(
+        &mut n.gyro_bias_walk_deg_s_sqrt_s,
+        a.gyro_drift_deg_s_sqrt_s,
+    );
+    set(&mut n.gyro_flicker_deg_s, a.gyro_flicker_deg_s);
     if let Some(b) = &a.gyro_bias_deg_s {
         n.gyro_bias_deg_s = b
             .as_slice()
