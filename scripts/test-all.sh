@@ -30,6 +30,9 @@ cargo fmt --manifest-path firmware/Cargo.toml --all -- --check
 step "clippy (PC workspace)"
 cargo clippy --workspace --all-targets -- -D warnings
 
+step "documentation (PC workspace): every public item documented, every link resolved"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
+
 step "shared builds for the Cortex-M4F without std"
 CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-D warnings" \
   cargo build -p shared --no-default-features --target thumbv7em-none-eabihf

@@ -3,11 +3,12 @@
 # flash/RAM use of the QEMU firmware image.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=qemu-board.sh
+source scripts/qemu-board.sh
 target=thumbv7em-none-eabihf
 cargo build --quiet --release --no-default-features --features board-qemu \
     --bin qemu-bench --bin qemu --target "$target"
-timeout 120 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none \
-    -semihosting-config enable=on,target=native -icount shift=0,align=off,sleep=off \
+timeout 120 "${QEMU_BOARD[@]}" -icount shift=0,align=off,sleep=off \
     -serial null -kernel "target/$target/release/qemu-bench"
 
 elf="target/$target/release/qemu"

@@ -12,6 +12,8 @@
 # a second: open the pty, send first, and allow >= 2 s for the first answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=qemu-board.sh
+source scripts/qemu-board.sh
 
 fg=0
 icount=()
@@ -30,9 +32,7 @@ run_dir=${QEMU_RUN_DIR:-target/qemu-run}
 mkdir -p "$run_dir"
 : >"$run_dir/qemu.out"
 
-qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none \
-    -semihosting-config enable=on,target=native "${icount[@]}" \
-    -serial pty -kernel "$elf" >"$run_dir/qemu.out" 2>"$run_dir/qemu.log" &
+"${QEMU_BOARD[@]}" "${icount[@]}" -serial pty -kernel "$elf" >"$run_dir/qemu.out" 2>"$run_dir/qemu.log" &
 pid=$!
 echo "$pid" >"$run_dir/qemu.pid"
 

@@ -12,6 +12,8 @@
 # Set SKIP_STM32=1 to skip the (slow to compile) STM32 build, SKIP_BENCH=1 to skip step 7.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=qemu-board.sh
+source scripts/qemu-board.sh
 target=thumbv7em-none-eabihf
 host=$(rustc -vV | sed -n 's/^host: //p')
 step() { printf '\n=== firmware: %s\n' "$*"; }
@@ -56,9 +58,7 @@ if [ "${SKIP_STM32:-0}" != 1 ]; then
 fi
 
 step "on-target tests in QEMU"
-timeout 120 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none \
-    -semihosting-config enable=on,target=native -serial null \
-    -kernel "target/$target/release/qemu-tests"
+timeout 120 "${QEMU_BOARD[@]}" -serial null -kernel "target/$target/release/qemu-tests"
 
 step "end-to-end over the serial pty"
 cargo build --quiet --example pty_smoke --target "$host"

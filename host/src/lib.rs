@@ -1,5 +1,28 @@
-//! The PC calibrator: recording format, simulator, estimator, reports and the device link.
-//! The binary (`src/main.rs`) is a thin clap layer over this library.
+//! The PC calibrator: recording format, simulator, estimator, reports and the device link. The binary
+//! (`src/main.rs`) is a thin clap layer over this library.
+//!
+//! # Module map
+//!
+//! Each subcommand is one file of [`cli`]; it calls the domain modules below, which never call back
+//! up (no cycles: `estimate` knows nothing of `report`, `session` nothing of the terminal).
+//!
+//! - [`cli`]: one file per subcommand (its argument struct and `run`), the one [`cli::CliError`].
+//! - [`session`]: a recorded session — the plan (and the built-in plans), the per-segment statistics,
+//!   the streaming `samples.csv` reader and the writer (`docs/recording-format.md`).
+//! - [`estimate`]: from a plan and segment statistics to a calibration, its [`estimate::Uncertainty`]
+//!   and what the plan could not determine; the Cramér–Rao prediction of a plan (`docs/model.md`
+//!   §2–§4).
+//! - [`sim`]: the virtual unit on a virtual rate table (`host simulate`), its noise-free statistics,
+//!   and the one random number generator.
+//! - [`device`]: the protocol client, its transports (serial port, in-process simulated device), and
+//!   the live procedure with its operator prompts (`host calibrate --port`).
+//! - [`report`]: what a person reads — terminal text, the HTML/Markdown report with its figures and
+//!   tables, the navigation replay, the comparison of two calibrations.
+//! - [`export`]: a calibration in other tools' conventions (paper matrices, x-io Fusion, Kalibr).
+//! - [`unit_file`]: a unit's parameters as TOML (the simulator's truth, the calibrator's result);
+//!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`.
+//! - [`ui`]: progress bars on a terminal.
+#![deny(missing_docs)]
 
 pub mod apply;
 pub mod batch;

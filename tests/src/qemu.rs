@@ -49,30 +49,33 @@ pub struct Qemu {
 }
 
 impl Qemu {
-    /// Starts `elf` on `mps2-an386` with UART0 on a new pty and waits for QEMU to name the pty.
+    /// Starts `elf` on `mps2-an386` with UART0 on a new pty and waits for QEMU to name the pty. The
+    /// board's arguments come from `firmware/scripts/qemu-board.sh`, which the firmware's scripts
+    /// source too: one definition of the emulated board.
     pub fn start(elf: &Path) -> Result<Qemu, String> {
-        let mut child = Command::new("qemu-system-arm")
+        let missing = |e: std::io::Error| {
+            format!("cannot start qemu-system-arm ({e}): install it with `apt-get install qemu-system-arm`")
+        };
+        Command::new("qemu-system-arm")
+            .arg("--version")
+            .stdout(Stdio::null())
+            .status()
+            .map_err(missing)?;
+        let board = repo_root().join("firmware/scripts/qemu-board.sh");
+        let mut child = Command::new("bash")
             .args([
-                "-machine",
-                "mps2-an386",
-                "-cpu",
-                "cortex-m4",
-                "-display",
-                "none",
-                "-monitor",
-                "none",
-                "-semihosting-config",
-                "enable=on,target=native",
-                "-serial",
-                "pty",
-                "-kernel",
+                "-c",
+                r#"source "$1" && shift && exec "${QEMU_BOARD[@]}" "$@""#,
+                "qemu-board",
             ])
+            .arg(&board)
+            .args(["-serial", "pty", "-kernel"])
             .arg(elf)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
-            .map_err(|e| format!("cannot start qemu-system-arm ({e}): install it with `apt-get install qemu-system-arm`"))?;
+            .map_err(missing)?;
         // QEMU names the pty on stdout ("char device redirected to /dev/pts/N (label serial0)"); keep
         // draining both streams so that it never blocks on a full pipe.
         let (tx, rx) = mpsc::channel();

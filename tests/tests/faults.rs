@@ -2,7 +2,8 @@
 //! a reset in the middle of a calibration write, and a blob made for another unit.
 
 use e2e::{paper_unit, sim_client};
-use host::device::procedure::{self, AutomaticOperator, ProcedureError, ProcedureOptions};
+use host::device::operator::AutomaticOperator;
+use host::device::procedure::{self, ProcedureError, ProcedureOptions};
 use host::device::LinkError;
 use host::session::builtin::load_plan;
 use host::session::{read_session, ReadOptions};

@@ -4,7 +4,8 @@
 
 use e2e::qemu::{build_firmware, Qemu};
 use e2e::{max_abs_diff, paper_unit};
-use host::device::procedure::{self, AutomaticOperator, ProcedureOptions};
+use host::device::operator::AutomaticOperator;
+use host::device::procedure::{self, ProcedureOptions};
 use host::device::serial::{SerialTransport, DEFAULT_BAUD};
 use host::device::DeviceClient;
 use host::session::builtin::load_plan;

@@ -2,7 +2,8 @@
 //! firmware's own protocol, pipeline and storage code.
 
 use e2e::{max_abs_diff, paper_unit, sim_client};
-use host::device::procedure::{self, AutomaticOperator, ProcedureOptions};
+use host::device::operator::AutomaticOperator;
+use host::device::procedure::{self, ProcedureOptions};
 use host::session::builtin::load_plan;
 use shared::wire::CalibrationState;
 

@@ -5,9 +5,8 @@ use super::output::Output;
 use super::port::{connect, PortArgs};
 use super::CliError;
 use crate::calibration_files::{now_unix_s, write_calibration_files};
-use crate::device::procedure::{
-    self, AutomaticOperator, Operator, ProcedureOptions, TerminalOperator,
-};
+use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
+use crate::device::procedure::{self, ProcedureOptions};
 use crate::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice,
 };

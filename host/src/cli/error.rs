@@ -1,5 +1,5 @@
 //! The one error type of the command line: every command's failure, each message naming the problem
-//! and, where there is one, the fix.
+//! and, where there is one, the fix (the wrapped errors' own messages, unchanged).
 
 use crate::calibration_files::OutputError;
 use crate::device::procedure::ProcedureError;
@@ -7,7 +7,7 @@ use crate::device::LinkError;
 use crate::estimate::EstimateError;
 use crate::export::ExportError;
 use crate::report::compare::CompareError;
-use crate::report::document::ReportError;
+use crate::report::ReportError;
 use crate::session::{PlanError, RecordingError};
 use crate::sim::SimulateError;
 use crate::unit_file::UnitFileError;
@@ -15,33 +15,49 @@ use shared::blob::BlobError;
 use std::path::PathBuf;
 
 /// Why a command failed.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum CliError {
     /// Reading or writing a session.
-    Recording(RecordingError),
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
     /// A plan.
-    Plan(PlanError),
+    #[error(transparent)]
+    Plan(#[from] PlanError),
     /// A unit file.
-    Unit(UnitFileError),
+    #[error(transparent)]
+    Unit(#[from] UnitFileError),
     /// The simulator.
-    Simulate(SimulateError),
+    #[error(transparent)]
+    Simulate(#[from] SimulateError),
     /// The estimator.
-    Estimate(EstimateError),
+    #[error(transparent)]
+    Estimate(#[from] EstimateError),
     /// Writing the result.
-    Output(OutputError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
     /// `host report` / `host navigation-check`.
-    Report(ReportError),
+    #[error(transparent)]
+    Report(#[from] ReportError),
     /// `host compare`.
-    Compare(CompareError),
+    #[error(transparent)]
+    Compare(#[from] CompareError),
     /// `host export`.
-    Export(ExportError),
+    #[error(transparent)]
+    Export(#[from] ExportError),
     /// The link to a device.
-    Link(LinkError),
+    #[error(transparent)]
+    Link(#[from] LinkError),
     /// The live procedure.
-    Procedure(ProcedureError),
+    #[error(transparent)]
+    Procedure(#[from] ProcedureError),
     /// A blob file.
+    #[error("{}: {}", .0.display(), .1)]
     Blob(PathBuf, BlobError),
     /// A blob made for another unit.
+    #[error(
+        "this calibration was made for unit {blob}, the device is unit {device}: calibrate this \
+         unit, or flash its own calibration"
+    )]
     WrongUnit {
         /// The blob's unit.
         blob: String,
@@ -49,84 +65,30 @@ pub enum CliError {
         device: String,
     },
     /// A file.
+    #[error("{}: {}", .0.display(), .1)]
     Io(PathBuf, std::io::Error),
     /// The live procedure ran but the verification failed.
+    #[error(
+        "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
+         at some verification positions (see above)"
+    )]
     VerificationFailed,
     /// `host apply`.
-    Apply(crate::apply::ApplyError),
+    #[error(transparent)]
+    Apply(#[from] crate::apply::ApplyError),
     /// `host noise`.
-    Noise(crate::noise::NoiseError),
+    #[error(transparent)]
+    Noise(#[from] crate::noise::NoiseError),
     /// A result file could not be written.
-    Written(crate::output_file::OutputFileError),
+    #[error(transparent)]
+    Written(#[from] crate::output_file::OutputFileError),
     /// `host batch` could not run.
+    #[error(transparent)]
     Batch(crate::batch::BatchError),
     /// A result failed its pass/fail limits (the failed checks, one line).
+    #[error("FAIL: {0}")]
     ChecksFailed(String),
     /// The command line is incomplete or an option is unusable.
+    #[error("{0}")]
     Usage(String),
 }
-
-impl std::fmt::Display for CliError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CliError::Recording(e) => e.fmt(f),
-            CliError::Plan(e) => e.fmt(f),
-            CliError::Unit(e) => e.fmt(f),
-            CliError::Simulate(e) => e.fmt(f),
-            CliError::Estimate(e) => e.fmt(f),
-            CliError::Output(e) => e.fmt(f),
-            CliError::Report(e) => e.fmt(f),
-            CliError::Compare(e) => e.fmt(f),
-            CliError::Export(e) => e.fmt(f),
-            CliError::Apply(e) => e.fmt(f),
-            CliError::ChecksFailed(m) => write!(f, "FAIL: {m}"),
-            CliError::Batch(e) => e.fmt(f),
-            CliError::Noise(e) => e.fmt(f),
-            CliError::Written(e) => e.fmt(f),
-            CliError::Link(e) => e.fmt(f),
-            CliError::Procedure(e) => e.fmt(f),
-            CliError::Blob(p, e) => write!(f, "{}: {e}", p.display()),
-            CliError::WrongUnit { blob, device } => write!(
-                f,
-                "this calibration was made for unit {blob}, the device is unit {device}: calibrate this \
-                 unit, or flash its own calibration"
-            ),
-            CliError::Io(p, e) => write!(f, "{}: {e}", p.display()),
-            CliError::VerificationFailed => f.write_str(
-                "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
-                 at some verification positions (see above)",
-            ),
-            CliError::Usage(m) => f.write_str(m),
-        }
-    }
-}
-
-impl std::error::Error for CliError {}
-
-/// `From` for each wrapped error, so that commands can use `?`.
-macro_rules! from_error {
-    ($($variant:ident($ty:ty)),* $(,)?) => {
-        $(impl From<$ty> for CliError {
-            fn from(e: $ty) -> Self {
-                CliError::$variant(e)
-            }
-        })*
-    };
-}
-
-from_error!(
-    Recording(RecordingError),
-    Plan(PlanError),
-    Unit(UnitFileError),
-    Simulate(SimulateError),
-    Estimate(EstimateError),
-    Output(OutputError),
-    Report(ReportError),
-    Compare(CompareError),
-    Export(ExportError),
-    Link(LinkError),
-    Procedure(ProcedureError),
-    Apply(crate::apply::ApplyError),
-    Noise(crate::noise::NoiseError),
-    Written(crate::output_file::OutputFileError),
-);

@@ -7,8 +7,8 @@
 //! | `calibrate --input` | [`calibrate`] | [`crate::session::reader`] → [`crate::estimate`] → [`crate::report::text`], [`crate::calibration_files`] |
 //! | `calibrate --port` | [`calibrate`] | [`crate::device::procedure`] over [`port`] |
 //! | `plan --check` | [`plan`] | [`crate::estimate::predict`] |
-//! | `report` | [`report`] | [`crate::report::document`] |
-//! | `navigation-check` | [`navigation_check`] | [`crate::report::document`] on [`crate::sim`] |
+//! | `report` | [`report`] | [`crate::report::document`] over [`crate::report::data`] |
+//! | `navigation-check` | [`navigation_check`] | [`mod@crate::report::navigation_check`] on [`crate::sim`] |
 //! | `compare` | [`compare`] | [`crate::report::compare`] |
 //! | `export` | [`export`] | [`crate::export`] |
 //! | `apply` | [`apply`] | [`crate::apply`] over [`crate::session::reader`] |

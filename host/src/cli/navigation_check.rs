@@ -1,7 +1,7 @@
 //! `host navigation-check`: the paper's navigation check on a simulated session of its unit.
 
 use super::CliError;
-use crate::report::document::{navigation_check, NavigationCheckArgs};
+use crate::report::{navigation_check, NavigationCheckArgs};
 use crate::session::builtin::load_plan;
 use crate::unit_file::UnitFile;
 use clap::Args;

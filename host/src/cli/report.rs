@@ -1,7 +1,7 @@
 //! `host report`: the report of a session judged by a calibration (figures, `report.html`, `report.md`).
 
 use super::CliError;
-use crate::report::document::{report, ReportOptions};
+use crate::report::{report, ReportOptions};
 use clap::Args;
 use std::path::PathBuf;
 

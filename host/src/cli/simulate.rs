@@ -14,6 +14,8 @@ pub struct SimulateArgs {
     /// Session directory to write (plan.toml, samples.csv, truth.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    // The `[noise]` below is the TOML table's name in the --help text, not a link.
+    #[allow(rustdoc::broken_intra_doc_links)]
     /// Unit file of the unit to simulate (default: the paper's unit). Its [noise] table, if any,
     /// replaces the default noise; the flags below override both.
     #[arg(long, value_name = "FILE")]

@@ -1,7 +1,9 @@
-//! The link to a device: the protocol client, and the transports it runs over (a serial port, or the
-//! in-process simulated device).
+//! The link to a device: the protocol client ([`client`]), the transports it runs over (a serial port,
+//! [`serial`], or the in-process simulated device, [`sim`]), and the live calibration procedure
+//! ([`procedure`]) with its operator prompts ([`operator`]).
 
 pub mod client;
+pub mod operator;
 pub mod procedure;
 pub mod serial;
 pub mod sim;

@@ -11,97 +11,13 @@
 //! the window rate. The estimator's weights stay right: the spread of the window means is the sample
 //! noise divided by the window length, and there are that many times fewer rows.
 
+use super::operator::Operator;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::device::{DeviceClient, LinkError, Transport};
 use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions, ReferenceChoice};
 use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use shared::wire::{Board, CalibrationState, Identity, SampleFlags, StreamKind, VirtualTable};
-use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
-
-/// Who turns the table: a person at a terminal, or nobody (the device's virtual table is driven).
-pub trait Operator {
-    /// Shows a line of progress.
-    fn say(&mut self, text: &str);
-    /// Asks for a set-up step and waits until it is done.
-    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError>;
-    /// A live check failed: keep the segment anyway (`true`) or stop (`false`)?
-    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
-}
-
-/// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
-/// Enter on stdin.
-pub struct TerminalOperator;
-
-impl Operator for TerminalOperator {
-    fn say(&mut self, text: &str) {
-        eprintln!("{text}");
-    }
-
-    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
-        eprint!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
-        std::io::stderr()
-            .flush()
-            .map_err(ProcedureError::Terminal)?;
-        let mut line = String::new();
-        let n = std::io::stdin()
-            .lock()
-            .read_line(&mut line)
-            .map_err(ProcedureError::Terminal)?;
-        if n == 0 {
-            return Err(ProcedureError::Aborted("standard input closed".into()));
-        }
-        Ok(())
-    }
-
-    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
-        eprintln!("segment '{segment}' does not match the plan:");
-        for p in problems {
-            eprintln!("  - {p}");
-        }
-        eprint!("keep it anyway (the estimator will screen it)? [y/N] ");
-        std::io::stderr()
-            .flush()
-            .map_err(ProcedureError::Terminal)?;
-        let mut line = String::new();
-        std::io::stdin()
-            .lock()
-            .read_line(&mut line)
-            .map_err(ProcedureError::Terminal)?;
-        Ok(line.trim().eq_ignore_ascii_case("y"))
-    }
-}
-
-/// No person: instructions are printed (unless quiet), nothing is waited for, and segments that fail a
-/// live check are kept with a warning (the estimator screens them).
-pub struct AutomaticOperator {
-    /// Print progress lines.
-    pub verbose: bool,
-    /// Warnings collected from live checks.
-    pub warnings: Vec<String>,
-}
-
-impl Operator for AutomaticOperator {
-    fn say(&mut self, text: &str) {
-        if self.verbose {
-            eprintln!("{text}");
-        }
-    }
-
-    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
-        self.say(instruction);
-        Ok(())
-    }
-
-    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
-        for p in problems {
-            let w = format!("segment '{segment}': {p}");
-            self.say(&format!("warning: {w}"));
-            self.warnings.push(w);
-        }
-        Ok(true)
-    }
-}
 
 /// Settings of the procedure.
 #[derive(Clone, Debug)]
@@ -410,13 +326,90 @@ pub fn run<T: Transport>(
     plan.sample_rate_hz = window_rate;
     plan.unit_id = Some(identity.unit_id.to_string());
     let recording_dir = opts.out_dir.join("recording");
-    let mut writer = SessionWriter::create(&recording_dir, &plan, true)?;
+    let Recorded { warnings, dropped } = record_plan(
+        client,
+        op,
+        &plan,
+        drive,
+        (window, window_rate),
+        opts,
+        &recording_dir,
+    )?;
+
+    // Estimate from the saved recording, exactly as `host calibrate --input` would.
+    let session =
+        session::read_session(&recording_dir, &session::ReadOptions { quiet: opts.quiet })?;
+    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate)
+        .map_err(|source| ProcedureError::Estimate {
+            source,
+            recording: recording_dir.clone(),
+        })?;
+    op.say(&crate::report::render(&outcome));
+
+    let created = calibration_files::now_unix_s();
+    let written = calibration_files::write_calibration_files(
+        &opts.out_dir,
+        &outcome,
+        identity.unit_id,
+        created,
+    )
+    .map_err(ProcedureError::Output)?;
+    op.say(&format!(
+        "wrote {} and {}",
+        written.toml_path.display(),
+        written.bin_path.display()
+    ));
+
+    let after = store_on_device(client, op, &written, created)?;
+
+    let verification = verify(client, op, &plan, drive, opts, fs).map_err(link)?;
+    let passed = verification.iter().all(|v| v.pass);
+    for v in &verification {
+        op.say(&format!(
+            "verify {:<28} error {:7.4} mg  {}",
+            v.label,
+            v.error_mg,
+            if v.pass { "ok" } else { "FAIL" }
+        ));
+    }
+    Ok(ProcedureOutcome {
+        identity,
+        recording_dir,
+        outcome,
+        written,
+        state_after_reset: after.calibration,
+        verification,
+        warnings,
+        dropped_frames: dropped,
+        passed,
+    })
+}
+
+/// What recording the plan leaves besides the files: the live checks' warnings and the most frames
+/// the device dropped.
+struct Recorded {
+    warnings: Vec<String>,
+    dropped: u32,
+}
+
+/// Records every segment of `plan` into `recording_dir` (synced at each segment end), with the live
+/// check of each; stops, with the recording so far on disk, at a link error or when the operator
+/// does not keep a segment that failed its check.
+fn record_plan<T: Transport>(
+    client: &mut DeviceClient<T>,
+    op: &mut dyn Operator,
+    plan: &Plan,
+    drive: bool,
+    (window, window_rate): (u32, f64),
+    opts: &ProcedureOptions,
+    recording_dir: &Path,
+) -> Result<Recorded, ProcedureError> {
+    let mut writer = SessionWriter::create(recording_dir, plan, true)?;
     let mut warnings = Vec::new();
     let mut dropped = 0u32;
 
-    let segments = plan.segments.clone();
     let mut static_done: Vec<(SegmentPlan, session::SegmentStats)> = Vec::new();
-    for seg in &segments {
+    for seg in &plan.segments {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
         let result = record_segment(
             client,
@@ -468,31 +461,20 @@ pub fn run<T: Transport>(
              use a longer --window"
         ));
     }
+    Ok(Recorded { warnings, dropped })
+}
 
-    // Estimate from the saved recording, exactly as `host calibrate --input` would.
-    let session =
-        session::read_session(&recording_dir, &session::ReadOptions { quiet: opts.quiet })?;
-    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate)
-        .map_err(|source| ProcedureError::Estimate {
-            source,
-            recording: recording_dir.clone(),
-        })?;
-    op.say(&crate::report::render(&outcome));
-
-    let created = calibration_files::now_unix_s();
-    let written = calibration_files::write_calibration_files(
-        &opts.out_dir,
-        &outcome,
-        identity.unit_id,
-        created,
-    )
-    .map_err(ProcedureError::Output)?;
-    op.say(&format!(
-        "wrote {} and {}",
-        written.toml_path.display(),
-        written.bin_path.display()
-    ));
-
+/// Writes the blob, resets the device and checks that it applied it and reads it back unchanged.
+fn store_on_device<T: Transport>(
+    client: &mut DeviceClient<T>,
+    op: &mut dyn Operator,
+    written: &WrittenCalibration,
+    created: u64,
+) -> Result<Identity, ProcedureError> {
+    let link = |source| ProcedureError::Link {
+        source,
+        recording: None,
+    };
     client.write_calibration(&written.blob).map_err(link)?;
     op.say("calibration written to the device; resetting it");
     let after = client.reset().map_err(link)?;
@@ -508,28 +490,7 @@ pub fn run<T: Transport>(
         return Err(ProcedureError::ReadBackMismatch);
     }
     op.say("read back: identical");
-
-    let verification = verify(client, op, &plan, drive, opts, fs).map_err(link)?;
-    let passed = verification.iter().all(|v| v.pass);
-    for v in &verification {
-        op.say(&format!(
-            "verify {:<28} error {:7.4} mg  {}",
-            v.label,
-            v.error_mg,
-            if v.pass { "ok" } else { "FAIL" }
-        ));
-    }
-    Ok(ProcedureOutcome {
-        identity,
-        recording_dir,
-        outcome,
-        written,
-        state_after_reset: after.calibration,
-        verification,
-        warnings,
-        dropped_frames: dropped,
-        passed,
-    })
+    Ok(after)
 }
 
 /// Sets up and records one segment; returns its statistics, rejected samples and dropped frames.

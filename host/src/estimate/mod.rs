@@ -24,7 +24,7 @@ mod solve;
 mod tests;
 mod uncertainty;
 
-pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
+pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 pub use segment::{Noise, SegmentKind};
 pub use uncertainty::Uncertainty;

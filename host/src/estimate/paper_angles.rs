@@ -38,16 +38,32 @@ pub fn paper_labels() -> Vec<String> {
 /// A calibration's paper-form values (angles from normalised rows, so consistent with an estimate).
 pub fn paper_values(cal: &Calibration) -> Result<[f64; PAPER_LEN], ParamsError> {
     let paper = cal.statics.to_fitted()?.0.to_paper()?;
+    Ok(paper_order(
+        &paper.zero_bias_out,
+        &paper.scale_out_per_g,
+        &paper.installation_angles_deg,
+        &cal.lever_arms.r_m,
+    ))
+}
+
+/// Values (or their 1σ) laid out in [`paper_labels`] order: zero biases, scale factors, installation
+/// angles row by row, lever arms row by row.
+pub fn paper_order(
+    bias: &[f64; 3],
+    scale: &[f64; 3],
+    angles: &RowMajor3,
+    lever_arms: &RowMajor3,
+) -> [f64; PAPER_LEN] {
     let mut v = [0.0; PAPER_LEN];
     for i in 0..3 {
-        v[i] = paper.zero_bias_out[i];
-        v[3 + i] = paper.scale_out_per_g[i];
+        v[i] = bias[i];
+        v[3 + i] = scale[i];
         for j in 0..3 {
-            v[6 + 3 * i + j] = paper.installation_angles_deg[i][j];
-            v[15 + 3 * i + j] = cal.lever_arms.r_m[i][j];
+            v[6 + 3 * i + j] = angles[i][j];
+            v[15 + 3 * i + j] = lever_arms[i][j];
         }
     }
-    Ok(v)
+    v
 }
 
 /// The converted estimate.

@@ -155,29 +155,51 @@ fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
     })
 }
 
-/// A bare samples.csv: the longest run of one segment's rows; the rate from the time stamps.
+/// A bare samples.csv: the longest run of one segment's rows; the rate from the time stamps. It is
+/// read by the session reader (same parser, same checks) with a plan made of the segment names the
+/// file uses (a first pass over the names only).
 fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
-    let bad = |m: String| NoiseError::File(path.to_path_buf(), m);
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| bad(e.to_string()))?;
-    let header: Vec<String> = rdr
-        .headers()
-        .map_err(|e| bad(e.to_string()))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    if header != crate::session::COLUMNS {
-        return Err(bad(format!(
-            "header must be {}, found {}",
-            crate::session::SAMPLES_HEADER,
-            header.join(",")
-        )));
+    use std::io::BufRead as _;
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut names: Vec<String> = Vec::new();
+    let file = std::fs::File::open(path).map_err(io)?;
+    for line in BufReader::new(file).lines().skip(1) {
+        let line = line.map_err(io)?;
+        let name = line
+            .split(',')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .trim_matches('"');
+        if !name.is_empty() && !names.iter().any(|n| n == name) {
+            names.push(name.to_string());
+        }
     }
-    let (mut best, mut cur): (Option<Signals>, Option<(Signals, f64, f64)>) = (None, None);
-    let finish = |run: Option<(Signals, f64, f64)>, best: &mut Option<Signals>| {
-        if let Some((mut s, t0, t1)) = run {
+    let plan = Plan {
+        format_version: crate::session::plan::PLAN_FORMAT_VERSION,
+        output_unit: shared::OutputUnit::Volts,
+        sample_rate_hz: 1.0,
+        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        unit_id: None,
+        segments: names
+            .iter()
+            .map(|n| crate::session::SegmentPlan {
+                name: n.clone(),
+                up_b: [0.0, 0.0, 1.0],
+                rate_deg_s: 0.0,
+                rate_end_deg_s: None,
+                duration_s: None,
+                table_centre_m: None,
+                mount: None,
+            })
+            .collect(),
+    };
+    type Run = (Signals, usize, f64, f64);
+    let finish = |run: Option<Run>, best: &mut Option<Signals>| {
+        if let Some((mut s, _, t0, t1)) = run {
             let n = s.data[0].len();
             if n > 1 {
                 s.rate_hz = (n - 1) as f64 / (t1 - t0);
@@ -187,47 +209,38 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
             }
         }
     };
-    for (line, rec) in rdr.records().enumerate() {
-        let rec = rec.map_err(|e| bad(e.to_string()))?;
-        let num = |k: usize| -> Result<f64, NoiseError> {
-            rec[k].parse::<f64>().map_err(|_| {
-                bad(format!(
-                    "line {}: column {} is not a number",
-                    line + 2,
-                    k + 1
-                ))
-            })
-        };
-        let v = [
-            num(1)?,
-            num(2)?,
-            num(3)?,
-            num(4)?,
-            num(5)?,
-            num(6)?,
-            num(7)?,
-        ];
-        if cur.as_ref().is_none_or(|(s, _, _)| s.segment != rec[0]) {
-            finish(cur.take(), &mut best);
-            let s = Signals {
-                segment: rec[0].to_string(),
-                rate_hz: 0.0,
-                data: Default::default(),
-                cut: false,
-            };
-            cur = Some((s, v[0], v[0]));
-        }
-        if let Some((s, _, t1)) = cur.as_mut() {
-            if s.data[0].len() >= MAX_SAMPLES {
-                s.cut = true;
-            } else if v.iter().all(|x| x.is_finite()) {
-                for j in 0..6 {
-                    s.data[j].push(v[1 + j]);
-                }
-                *t1 = v[0];
+    let (mut best, mut cur): (Option<Signals>, Option<Run>) = (None, None);
+    let file = std::fs::File::open(path).map_err(io)?;
+    read_samples_each(
+        BufReader::with_capacity(1 << 20, file),
+        &plan,
+        path,
+        |row| {
+            if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
+                finish(cur.take(), &mut best);
+                let s = Signals {
+                    segment: row.segment.to_string(),
+                    rate_hz: 0.0,
+                    data: Default::default(),
+                    cut: false,
+                };
+                cur = Some((s, row.segment_index, row.t_s, row.t_s));
             }
-        }
-    }
+            if let Some((s, _, _, t1)) = cur.as_mut() {
+                let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
+                if s.data[0].len() >= MAX_SAMPLES {
+                    s.cut = true;
+                } else if finite && row.t_s.is_finite() {
+                    for j in 0..3 {
+                        s.data[j].push(row.u[j]);
+                        s.data[3 + j].push(row.w_rad_s[j]);
+                    }
+                    *t1 = row.t_s;
+                }
+            }
+            Ok(())
+        },
+    )?;
     finish(cur.take(), &mut best);
     best.ok_or_else(|| NoiseError::NoStillData(format!("{} has no rows", path.display())))
 }

@@ -1,7 +1,7 @@
-//! `host compare`: two calibrations of one unit side by side, each difference in units of its
-//! combined 1σ (`compare(a, b)`, printed by `ComparisonTable::render()`).
+//! Two calibrations of one unit side by side (`host compare`), each difference in units of its
+//! combined 1σ: [`compare`] reads the files, [`ComparisonTable::render`] prints the table.
 
-use crate::estimate::{paper_labels, paper_values, PAPER_LEN};
+use crate::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
 use crate::unit_file::{UnitFile, UnitFileError};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -138,16 +138,12 @@ pub fn compare(a_toml: &Path, b_toml: &Path) -> Result<ComparisonTable, CompareE
 /// The 1σ of a unit file in [`paper_values`] order, when it has them.
 fn sigmas(u: &UnitFile) -> Option<[f64; PAPER_LEN]> {
     let s = u.uncertainty.as_ref()?;
-    let mut v = [0.0; PAPER_LEN];
-    for i in 0..3 {
-        v[i] = s.zero_bias_1sigma[i];
-        v[3 + i] = s.scale_per_g_1sigma[i];
-        for j in 0..3 {
-            v[6 + 3 * i + j] = s.installation_angles_deg_1sigma[i][j];
-            v[15 + 3 * i + j] = s.lever_arms_m_1sigma[i][j];
-        }
-    }
-    Some(v)
+    Some(paper_order(
+        &s.zero_bias_1sigma,
+        &s.scale_per_g_1sigma,
+        &s.installation_angles_deg_1sigma,
+        &s.lever_arms_m_1sigma,
+    ))
 }
 
 /// Compares two unit files (values as [`paper_values`] gives them: angles normalised).

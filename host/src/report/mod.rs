@@ -1,11 +1,31 @@
-//! What a person reads: the terminal text of a calibration ([`text`]), the HTML/Markdown report with
-//! its figures and the navigation replay ([`document`], [`plot`], [`navigation`]), and two
-//! calibrations side by side ([`compare`]).
+//! What a person reads.
+//!
+//! - [`text`]: the terminal text of a calibration and of a plan's prediction, with [`mod@format`] (the one
+//!   `± 1σ` formatter).
+//! - The HTML/Markdown report of `host report`: [`data`] (the numbers: segments before and after
+//!   compensation, χ², navigation replays) → [`figures`] (what each figure shows) and [`page`] (the
+//!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG) and [`markup`] (Markdown, HTML) →
+//!   [`document`] (the files).
+//! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
+//!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
+//! - [`compare`]: two calibrations side by side, and the `host export` text.
 
 pub mod compare;
+pub mod data;
 pub mod document;
+pub mod figures;
+pub mod format;
+pub mod markup;
 pub mod navigation;
+pub mod navigation_check;
+pub mod page;
 pub mod plot;
+#[cfg(test)]
+mod tests;
 pub mod text;
 
+pub use data::{build_report, Compensation, ReportData, ReportError, ReportOptions, SegmentRow};
+pub use document::{report, ReportSummary, REPORT_HTML, REPORT_MD};
+pub use navigation::render_position_targets;
+pub use navigation_check::{navigation_check, NavigationCheck, NavigationCheckArgs};
 pub use text::{render, render_prediction};

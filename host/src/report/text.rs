@@ -3,35 +3,12 @@
 //! (like Tables 2 and 4) with the χ² check, the excluded segments, the method comparison and the
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
+use super::format::{out_digits, pm};
 use crate::estimate::{
     CalibrationOutcome, Method, Prediction, SegmentDiagnostic, SegmentKind, PAPER_LEN,
 };
 use shared::params::axis_name;
-use shared::OutputUnit;
 use std::fmt::Write;
-
-fn out_digits(unit: OutputUnit) -> usize {
-    match unit {
-        OutputUnit::Volts => 6,
-        OutputUnit::Lsb => 3,
-    }
-}
-
-/// `v ± s` with at least `digits` decimals, and more when needed to show two significant digits of
-/// the 1σ (a bias known to 0.1 µV must not print as "± 0.000000").
-fn pm(v: f64, s: f64, digits: usize) -> String {
-    if s.is_finite() {
-        let needed = if s > 0.0 {
-            (1.0 - s.log10().floor()).max(0.0) as usize
-        } else {
-            0
-        };
-        let digits = digits.max(needed).min(10);
-        format!("{v:.digits$} ± {s:.digits$}")
-    } else {
-        format!("{v:.digits$} ± ∞")
-    }
-}
 
 /// Lever arm in mm with its 1σ, marked when not determined.
 fn lever_cell(r: f64, s: f64, observable: bool, fixed: bool) -> String {
@@ -44,16 +21,52 @@ fn lever_cell(r: f64, s: f64, observable: bool, fixed: bool) -> String {
     }
 }
 
-/// The full report.
+/// The full report: Tables 1 and 3, the methods compared, the per-segment residuals, the fit, the
+/// excluded segments and the warnings.
 pub fn render(o: &CalibrationOutcome) -> String {
     let mut s = String::new();
+    let _ = writeln!(s, "Calibration ({}), 1σ{}", o.method, sigma_note(o));
+    let _ = writeln!(s);
+    render_table1(&mut s, o);
+    render_table3(&mut s, o);
+    render_comparison(&mut s, o);
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "Residuals per segment (g), like Tables 2 and 4: theoretical | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
+    );
+    for dgn in &o.segments {
+        render_segment(&mut s, dgn);
+    }
+    let _ = writeln!(
+        s,
+        "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
+        o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
+    );
+    if !o.excluded.is_empty() {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "Excluded segments:");
+        for e in &o.excluded {
+            let _ = writeln!(s, "  '{}': {}", e.name, e.reason);
+        }
+    }
+    if !o.warnings.is_empty() {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "Warnings:");
+        for w in &o.warnings {
+            let _ = writeln!(s, "  - {w}");
+        }
+    }
+    s
+}
+
+/// Table 1: zero bias, scale factor and installation angles with their 1σ.
+fn render_table1(s: &mut String, o: &CalibrationOutcome) {
     let unit = o.calibration.statics.output_unit;
     let sym = unit.symbol();
     let d = out_digits(unit);
     let st = &o.calibration.statics;
     let u = &o.uncertainty;
-    let _ = writeln!(s, "Calibration ({}), 1σ{}", o.method, sigma_note(o));
-    let _ = writeln!(s);
     let _ = writeln!(s, "Table 1. Static calibration");
     let _ = writeln!(
         s,
@@ -81,6 +94,11 @@ pub fn render(o: &CalibrationOutcome) -> String {
             angles.join(", ")
         );
     }
+}
+
+/// Table 3: the lever arms in mm, marked where the plan did not determine them.
+fn render_table3(s: &mut String, o: &CalibrationOutcome) {
+    let u = &o.uncertainty;
     let _ = writeln!(s);
     let _ = writeln!(
         s,
@@ -109,6 +127,11 @@ pub fn render(o: &CalibrationOutcome) -> String {
             cells[2]
         );
     }
+}
+
+/// The lever arms of both methods side by side, when the other method was run too.
+fn render_comparison(s: &mut String, o: &CalibrationOutcome) {
+    let u = &o.uncertainty;
     if let Some(c) = &o.comparison {
         let _ = writeln!(s);
         let _ = writeln!(s, "Lever arms by method (mm): {} | {}", o.method, c.method);
@@ -142,34 +165,6 @@ pub fn render(o: &CalibrationOutcome) -> String {
             );
         }
     }
-    let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "Residuals per segment (g), like Tables 2 and 4: theoretical | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
-    );
-    for dgn in &o.segments {
-        render_segment(&mut s, dgn);
-    }
-    let _ = writeln!(
-        s,
-        "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
-        o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
-    );
-    if !o.excluded.is_empty() {
-        let _ = writeln!(s);
-        let _ = writeln!(s, "Excluded segments:");
-        for e in &o.excluded {
-            let _ = writeln!(s, "  '{}': {}", e.name, e.reason);
-        }
-    }
-    if !o.warnings.is_empty() {
-        let _ = writeln!(s);
-        let _ = writeln!(s, "Warnings:");
-        for w in &o.warnings {
-            let _ = writeln!(s, "  - {w}");
-        }
-    }
-    s
 }
 
 fn sigma_note(o: &CalibrationOutcome) -> String {
@@ -340,15 +335,5 @@ rate_deg_s = 200
         ] {
             assert!(text.contains(want), "missing {want}");
         }
-    }
-}
-
-#[cfg(test)]
-mod pm_tests {
-    #[test]
-    fn sigma_keeps_two_significant_digits() {
-        assert_eq!(super::pm(2.405098123, 1.3e-7, 6), "2.40509812 ± 0.00000013");
-        assert_eq!(super::pm(0.39496, 2.0e-3, 6), "0.394960 ± 0.002000");
-        assert_eq!(super::pm(1.0, f64::INFINITY, 3), "1.000 ± ∞");
     }
 }

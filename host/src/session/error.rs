@@ -56,9 +56,9 @@ pub enum RecordingError {
     },
     /// The file has a header but no usable row.
     NoRows(PathBuf),
-    /// [`SessionWriter`] was asked for a segment the plan does not have.
+    /// [`super::SessionWriter`] was asked for a segment the plan does not have.
     WriterSegment(String),
-    /// [`SessionWriter::create`] would overwrite an existing recording.
+    /// [`super::SessionWriter::create`] would overwrite an existing recording.
     Exists(PathBuf),
 }
 

@@ -1,14 +1,19 @@
 //! The virtual unit: a known calibration on a virtual rate table, sampled through the shared forward
 //! model with a seeded noise model ([`session`], `host simulate`), and its noise-free segment
-//! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests).
+//! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), and the one
+//! random number generator ([`rng`]).
 
 pub mod flicker;
+pub mod rng;
 pub mod session;
+pub mod stats;
 pub mod synth;
 #[cfg(test)]
 pub(crate) mod testkit;
 
+pub use rng::Rng;
 pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_to_dir, simulate_to_dir_with_progress,
-    NoiseModel, Rng, SimulateError, SimulationSummary, TRUTH_FILE,
+    NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
 };
+pub use stats::simulate_stats;

@@ -7,43 +7,7 @@ use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 
-/// SplitMix64 with Box–Muller normals.
-pub struct Rng(u64, Option<f64>);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x9E37_79B9_7F4A_7C15, None)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in (0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    pub fn normal(&mut self) -> f64 {
-        if let Some(z) = self.1.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let a = 2.0 * std::f64::consts::PI * u2;
-        self.1 = Some(r * a.sin());
-        r * a.cos()
-    }
-    pub fn unit_vector(&mut self) -> [f64; 3] {
-        let v = [self.normal(), self.normal(), self.normal()];
-        let n = shared::linalg::norm(&v);
-        v.map(|c| c / n)
-    }
-}
+pub use super::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]

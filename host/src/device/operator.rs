@@ -1,0 +1,89 @@
+//! Who turns the table during the live procedure: a person at the terminal (instructions on stderr,
+//! so that stdout stays for results such as `--json`; Enter on stdin), or nobody when the device drives its own virtual table.
+
+use super::procedure::ProcedureError;
+use std::io::{BufRead, Write};
+
+/// Who turns the table: a person at a terminal, or nobody (the device's virtual table is driven).
+pub trait Operator {
+    /// Shows a line of progress.
+    fn say(&mut self, text: &str);
+    /// Asks for a set-up step and waits until it is done.
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError>;
+    /// A live check failed: keep the segment anyway (`true`) or stop (`false`)?
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
+}
+
+/// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
+/// Enter on stdin.
+pub struct TerminalOperator;
+
+impl Operator for TerminalOperator {
+    fn say(&mut self, text: &str) {
+        eprintln!("{text}");
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        eprint!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
+        std::io::stderr()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        let n = std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
+        if n == 0 {
+            return Err(ProcedureError::Aborted("standard input closed".into()));
+        }
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        eprintln!("segment '{segment}' does not match the plan:");
+        for p in problems {
+            eprintln!("  - {p}");
+        }
+        eprint!("keep it anyway (the estimator will screen it)? [y/N] ");
+        std::io::stderr()
+            .flush()
+            .map_err(ProcedureError::Terminal)?;
+        let mut line = String::new();
+        std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .map_err(ProcedureError::Terminal)?;
+        Ok(line.trim().eq_ignore_ascii_case("y"))
+    }
+}
+
+/// No person: instructions are printed (unless quiet), nothing is waited for, and segments that fail a
+/// live check are kept with a warning (the estimator screens them).
+pub struct AutomaticOperator {
+    /// Print progress lines.
+    pub verbose: bool,
+    /// Warnings collected from live checks.
+    pub warnings: Vec<String>,
+}
+
+impl Operator for AutomaticOperator {
+    fn say(&mut self, text: &str) {
+        if self.verbose {
+            eprintln!("{text}");
+        }
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        self.say(instruction);
+        Ok(())
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        for p in problems {
+            let w = format!("segment '{segment}': {p}");
+            self.say(&format!("warning: {w}"));
+            self.warnings.push(w);
+        }
+        Ok(true)
+    }
+}

@@ -1,0 +1,385 @@
+//! The report's numbers, computed before anything is drawn or written: for every segment the true
+//! specific force and the outputs before and after compensation, the χ² of the residuals, and the
+//! navigation replays. The one per-segment before/after table of the report is built from [`SegmentRow`].
+//!
+//! For every segment of the session, from its mean outputs `ū` and mean gyro rate, with the given
+//! calibration:
+//!
+//! - the true specific force at the reference point, `g·up_b − W p` (`p` = the plan's `table_centre_m`,
+//!   0 when absent; `W = [ω̇×] + [ω×]²` from the measured rate);
+//! - "before": bias and scale removed only, `(ū_i − u0_i)/k_i` (the paper's Tables 2 and 4 "before");
+//! - "after, static": `shared::Compensator` with [`LeverMode::Off`] (paper eq. 6);
+//! - "after, static + dynamic": `shared::Compensator` with [`LeverMode::RateAndAcceleration`] at the
+//!   segment's mean rate and angular acceleration (paper eq. 16). On a ramp the mean of `ω ωᵀ` is not
+//!   `ω̄ ω̄ᵀ`; the rate used there is `ω̄` scaled so that `|ω|²` is the segment's mean `|ω|²` less the gyro
+//!   noise (seen on the static segments), which makes the compensated mean exact for a ramp about a
+//!   fixed axis.
+//!
+//! The 1σ band of the residuals is the standard error of the segment's mean (its own noise): a
+//! calibration that fits leaves residuals inside it. The calibration's own 1σ is in Tables 1 and 3.
+//!
+
+use super::navigation::{replay, NavigationRun};
+use super::plot::{self, Formats};
+use crate::estimate::{
+    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind, Uncertainty,
+};
+use crate::session::{Plan, RecordingError, SegmentStats};
+use crate::sim::SimulateError;
+use crate::unit_file::UnitFileError;
+use shared::linalg;
+use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
+use std::path::PathBuf;
+
+/// Settings of [`super::report`] and [`build_report`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReportOptions {
+    /// Estimator settings for the session's own fit (χ², excluded segments, observability).
+    pub estimate: EstimateOptions,
+    /// Length of the replayed navigation runs, s.
+    pub navigation_duration_s: f64,
+    /// Integration step of the replay, s.
+    pub navigation_step_s: f64,
+    /// The static segment to replay; `None`: the first static segment.
+    pub static_run: Option<String>,
+    /// The rotating segment to replay; `None`: the constant-rate segment with the fastest planned rate
+    /// (the first of equals).
+    pub rate_run: Option<String>,
+    /// Which figure files to write.
+    pub formats: Formats,
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        ReportOptions {
+            estimate: EstimateOptions::default(),
+            navigation_duration_s: 60.0,
+            navigation_step_s: 0.1,
+            static_run: None,
+            rate_run: None,
+            formats: Formats::default(),
+        }
+    }
+}
+
+/// Why no report could be made.
+#[derive(Debug)]
+pub enum ReportError {
+    /// The session could not be read.
+    Recording(RecordingError),
+    /// The calibration file could not be read.
+    Unit(UnitFileError),
+    /// The calibration cannot compensate (message says why).
+    Calibration(String),
+    /// A requested segment is not in the session, or the session has none to use.
+    Segment(String),
+    /// A figure could not be drawn.
+    Figure(plot::FigureError),
+    /// A file could not be written.
+    Io(PathBuf, std::io::Error),
+    /// The simulation of the navigation check failed.
+    Simulate(SimulateError),
+    /// The calibration of the navigation check failed.
+    Estimate(crate::estimate::EstimateError),
+}
+
+impl std::fmt::Display for ReportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReportError::Recording(e) => e.fmt(f),
+            ReportError::Unit(e) => e.fmt(f),
+            ReportError::Calibration(m) => write!(f, "the calibration cannot compensate: {m}"),
+            ReportError::Segment(m) => f.write_str(m),
+            ReportError::Figure(e) => e.fmt(f),
+            ReportError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
+            ReportError::Simulate(e) => e.fmt(f),
+            ReportError::Estimate(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for ReportError {}
+
+impl From<plot::FigureError> for ReportError {
+    fn from(e: plot::FigureError) -> Self {
+        ReportError::Figure(e)
+    }
+}
+
+/// A compensation level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compensation {
+    /// Bias and scale only (the paper's "before compensation").
+    BiasScale,
+    /// Static compensation (`K_A`, `∇_b`), no lever arms.
+    Static,
+    /// Static and dynamic (lever arms, ω and ω̇).
+    Full,
+}
+
+impl Compensation {
+    /// All three, in report order.
+    pub const ALL: [Compensation; 3] = [
+        Compensation::BiasScale,
+        Compensation::Static,
+        Compensation::Full,
+    ];
+
+    /// Short label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Compensation::BiasScale => "before (bias+scale only)",
+            Compensation::Static => "after, static only",
+            Compensation::Full => "after, static+dynamic",
+        }
+    }
+
+    /// Palette index of its series.
+    pub fn colour(self) -> usize {
+        match self {
+            Compensation::BiasScale => 0,
+            Compensation::Static => 1,
+            Compensation::Full => 2,
+        }
+    }
+}
+
+/// One segment's outputs before and after compensation (Tables 2 and 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SegmentRow {
+    /// Segment name.
+    pub name: String,
+    /// What it does.
+    pub kind: SegmentKind,
+    /// The plan's up.
+    pub up_b: [f64; 3],
+    /// Measured mean rate about `up_b`, °/s.
+    pub rate_deg_s: f64,
+    /// The plan's rate (at the segment's start), °/s.
+    pub planned_rate_deg_s: f64,
+    /// Rows.
+    pub count: u64,
+    /// Rate used for compensation, body axes, rad/s (see the module doc for ramps).
+    pub omega_rad_s: [f64; 3],
+    /// Angular acceleration used, rad/s².
+    pub omega_dot_rad_s2: [f64; 3],
+    /// True specific force at the reference point, g.
+    pub truth_g: [f64; 3],
+    /// Bias and scale removed only, g.
+    pub before_g: [f64; 3],
+    /// Static compensation, g.
+    pub after_static_g: [f64; 3],
+    /// Static and dynamic compensation, g.
+    pub after_g: [f64; 3],
+    /// Standard error of the segment's mean, per axis, g.
+    pub sigma_g: [f64; 3],
+}
+
+impl SegmentRow {
+    /// The output at a compensation level, g.
+    pub fn output_g(&self, c: Compensation) -> [f64; 3] {
+        match c {
+            Compensation::BiasScale => self.before_g,
+            Compensation::Static => self.after_static_g,
+            Compensation::Full => self.after_g,
+        }
+    }
+
+    /// Output minus truth, g.
+    pub fn error_g(&self, c: Compensation) -> [f64; 3] {
+        let o = self.output_g(c);
+        std::array::from_fn(|j| o[j] - self.truth_g[j])
+    }
+}
+
+/// Everything the report shows, computed (no files).
+#[derive(Clone, Debug)]
+pub struct ReportData {
+    /// The calibration reported on.
+    pub calibration: Calibration,
+    /// Its 1σ, when the file has them.
+    pub uncertainty: Option<Uncertainty>,
+    /// Output unit symbol (V or LSB).
+    pub unit_symbol: String,
+    /// Per segment, in plan order.
+    pub segments: Vec<SegmentRow>,
+    /// Σ over segments and axes of ((after − truth)/σ)², for this calibration on this session.
+    pub chi2: f64,
+    /// Number of terms of `chi2`.
+    pub chi2_terms: usize,
+    /// The static and the rotating replay (either may be absent when the plan has none).
+    pub navigation: Vec<NavigationRun>,
+    /// The session's own fit (χ², excluded segments, observability), or why it failed.
+    pub session_fit: Result<CalibrationOutcome, String>,
+    /// Warnings for the reader.
+    pub warnings: Vec<String>,
+}
+
+/// The true specific force, rates and the three compensated outputs of every segment.
+pub fn segment_rows(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    cal: &Calibration,
+) -> Result<Vec<SegmentRow>, ReportError> {
+    let g = cal.gravity_m_s2;
+    let stat = Compensator::new(cal, LeverMode::Off)
+        .map_err(|e| ReportError::Calibration(e.to_string()))?;
+    let full = Compensator::new(cal, LeverMode::RateAndAcceleration)
+        .map_err(|e| ReportError::Calibration(e.to_string()))?;
+    let u0 = cal.statics.zero_bias_out;
+    let k = cal.statics.scale_out_per_g;
+    let trace = |m: &[[f64; 3]; 3]| m[0][0] + m[1][1] + m[2][2];
+    // Gyro noise variance (trace), from the static segments.
+    let gyro_noise = trace(
+        &Noise::pooled(
+            stats
+                .iter()
+                .filter(|s| plan.segment(&s.name).is_some_and(|p| p.is_static())),
+        )
+        .gyro_cov,
+    );
+    let mut rows = Vec::new();
+    for st in stats {
+        let Some(sp) = plan.segment(&st.name) else {
+            continue;
+        };
+        let kind = SegmentKind::of(sp);
+        let mean_w = st.mean_w_rad_s;
+        let w2 = linalg::dot(&mean_w, &mean_w);
+        let omega = if kind == SegmentKind::Ramp && w2 > 0.0 {
+            let target = (trace(&st.mean_wwt) - gyro_noise).max(w2);
+            mean_w.map(|v| v * (target / w2).sqrt())
+        } else {
+            mean_w
+        };
+        let omega_dot = st.wdot_rad_s2;
+        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
+        let wp = linalg::mat_vec(&linalg::lever_matrix(&omega, &omega_dot), &p);
+        let truth_g: [f64; 3] = std::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
+        let u = SensorOutputs {
+            raw: st.mean_u.map(|v| v as f32),
+        };
+        let after_static = stat.compensate_static(&u).to_f64().m_s2.map(|v| v / g);
+        let after = full
+            .compensate(
+                &u,
+                &BodyRate {
+                    rad_s: omega.map(|v| v as f32),
+                },
+                &BodyAngularAccel {
+                    rad_s2: omega_dot.map(|v| v as f32),
+                },
+            )
+            .to_f64()
+            .m_s2
+            .map(|v| v / g);
+        let n = st.count.max(1) as f64;
+        rows.push(SegmentRow {
+            name: st.name.clone(),
+            kind,
+            up_b: sp.up_b,
+            rate_deg_s: linalg::dot(&mean_w, &sp.up_b).to_degrees(),
+            planned_rate_deg_s: sp.rate_deg_s,
+            count: st.count,
+            omega_rad_s: omega,
+            omega_dot_rad_s2: omega_dot,
+            truth_g,
+            before_g: std::array::from_fn(|i| (st.mean_u[i] - u0[i]) / k[i]),
+            after_static_g: after_static,
+            after_g: after,
+            sigma_g: std::array::from_fn(|i| (st.cov_u[i][i].max(0.0) / n).sqrt() / k[i].abs()),
+        });
+    }
+    Ok(rows)
+}
+
+/// Computes everything the report shows. `session_fit`: the session's own fit when the caller has it
+/// (else it is run here with `options.estimate`).
+pub fn build_report(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    cal: &Calibration,
+    uncertainty: Option<&Uncertainty>,
+    session_fit: Option<CalibrationOutcome>,
+    options: &ReportOptions,
+) -> Result<ReportData, ReportError> {
+    let segments = segment_rows(plan, stats, cal)?;
+    if segments.is_empty() {
+        return Err(ReportError::Segment(
+            "the session has no segment of its plan with data: nothing to report".into(),
+        ));
+    }
+    let mut warnings = Vec::new();
+    if plan.output_unit.symbol() != cal.statics.output_unit.symbol() {
+        warnings.push(format!(
+            "the session records {} but the calibration is in {}: the outputs cannot be compared",
+            plan.output_unit.symbol(),
+            cal.statics.output_unit.symbol()
+        ));
+    }
+    let (mut chi2, mut terms) = (0.0, 0usize);
+    for r in &segments {
+        let e = r.error_g(Compensation::Full);
+        for j in 0..3 {
+            if r.sigma_g[j] > 0.0 && e[j].is_finite() {
+                chi2 += (e[j] / r.sigma_g[j]).powi(2);
+                terms += 1;
+            }
+        }
+    }
+    let find = |name: &str| {
+        segments
+            .iter()
+            .find(|r| r.name == name)
+            .ok_or_else(|| ReportError::Segment(format!("segment '{name}' is not in the session")))
+    };
+    let static_row = match &options.static_run {
+        Some(n) => Some(find(n)?),
+        None => segments.iter().find(|r| r.kind == SegmentKind::Static),
+    };
+    let rate_row = match &options.rate_run {
+        Some(n) => Some(find(n)?),
+        None => segments
+            .iter()
+            .filter(|r| r.kind == SegmentKind::ConstantRate)
+            .fold(None::<&SegmentRow>, |best, r| match best {
+                Some(b) if b.planned_rate_deg_s.abs() >= r.planned_rate_deg_s.abs() => Some(b),
+                _ => Some(r),
+            }),
+    };
+    if static_row.is_none() {
+        warnings.push("no static segment: the static navigation replay is left out".into());
+    }
+    if rate_row.is_none() {
+        warnings
+            .push("no constant-rate segment: the rotating navigation replay is left out".into());
+    }
+    let g = cal.gravity_m_s2;
+    let navigation = [static_row, rate_row]
+        .into_iter()
+        .flatten()
+        .map(|r| {
+            replay(
+                r,
+                g,
+                options.navigation_duration_s,
+                options.navigation_step_s,
+            )
+        })
+        .collect();
+    let session_fit = match session_fit {
+        Some(o) => Ok(o),
+        None => calibrate_session_stats(plan, stats, &options.estimate).map_err(|e| e.to_string()),
+    };
+    Ok(ReportData {
+        calibration: *cal,
+        uncertainty: uncertainty.cloned(),
+        unit_symbol: cal.statics.output_unit.symbol().to_string(),
+        segments,
+        chi2,
+        chi2_terms: terms,
+        navigation,
+        session_fit,
+        warnings,
+    })
+}

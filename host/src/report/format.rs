@@ -1,0 +1,47 @@
+//! The one way a value and its 1σ are printed, in the terminal text and in the report's tables.
+
+use shared::OutputUnit;
+
+/// Decimals of a value in the output unit: µV in volts, thousandths of a count in LSB.
+pub fn out_digits(unit: OutputUnit) -> usize {
+    match unit {
+        OutputUnit::Volts => 6,
+        OutputUnit::Lsb => 3,
+    }
+}
+
+/// `v ± s` with at least `digits` decimals, and more when needed to show two significant digits of
+/// the 1σ (a bias known to 0.1 µV must not print as "± 0.000000").
+pub fn pm(v: f64, s: f64, digits: usize) -> String {
+    if s.is_finite() {
+        let needed = if s > 0.0 {
+            (1.0 - s.log10().floor()).max(0.0) as usize
+        } else {
+            0
+        };
+        let digits = digits.max(needed).min(10);
+        format!("{v:.digits$} ± {s:.digits$}")
+    } else {
+        format!("{v:.digits$} ± ∞")
+    }
+}
+
+/// [`pm`] when the 1σ is known; the value alone, marked, when it is not (a calibration file without
+/// an `[uncertainty]` table).
+pub fn pm_opt(v: f64, s: Option<f64>, digits: usize) -> String {
+    match s {
+        Some(s) => pm(v, s, digits),
+        None => format!("{v:.digits$} (no σ)"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn sigma_keeps_two_significant_digits() {
+        assert_eq!(super::pm(2.405098123, 1.3e-7, 6), "2.40509812 ± 0.00000013");
+        assert_eq!(super::pm(0.39496, 2.0e-3, 6), "0.394960 ± 0.002000");
+        assert_eq!(super::pm(1.0, f64::INFINITY, 3), "1.000 ± ∞");
+        assert_eq!(super::pm_opt(1.0, None, 3), "1.000 (no σ)");
+    }
+}

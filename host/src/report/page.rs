@@ -1,0 +1,265 @@
+//! The report page as one document model ([`Block`]s): Tables 1 and 3, the before/after tables
+//! (the paper's Tables 2 and 4), the navigation table, the figures; [`super::markup`] writes it as
+//! Markdown and HTML.
+
+use super::data::{Compensation, ReportData};
+use super::figures::fmt_rate;
+use super::format::{out_digits, pm_opt};
+use super::navigation::NavigationRun;
+use crate::estimate::SegmentKind;
+use shared::linalg;
+use shared::params::axis_name;
+
+/// A block of the report page.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Block {
+    /// Heading of a level (1..3).
+    Heading(u8, String),
+    /// A paragraph.
+    Para(String),
+    /// A table.
+    Table {
+        /// Column headers.
+        header: Vec<String>,
+        /// Rows of cells.
+        rows: Vec<Vec<String>>,
+    },
+    /// An image (relative path).
+    Image {
+        /// Relative path.
+        src: String,
+        /// Alternative text.
+        alt: String,
+    },
+    /// Preformatted text.
+    Pre(String),
+}
+
+/// Table 1 (zero bias, scale factor, installation angles with 1σ) as table rows.
+pub fn table1(data: &ReportData) -> Block {
+    let st = &data.calibration.statics;
+    let u = data.uncertainty.as_ref();
+    let d = out_digits(data.calibration.statics.output_unit);
+    let sym = &data.unit_symbol;
+    Block::Table {
+        header: vec![
+            "No.".into(),
+            format!("Zero bias ({sym})"),
+            format!("Scale factor ({sym}/g)"),
+            "θ_ix (°)".into(),
+            "θ_iy (°)".into(),
+            "θ_iz (°)".into(),
+        ],
+        rows: (0..3)
+            .map(|i| {
+                let mut row = vec![
+                    format!("{}", i + 1),
+                    pm_opt(st.zero_bias_out[i], u.map(|u| u.zero_bias_1sigma[i]), d),
+                    pm_opt(st.scale_out_per_g[i], u.map(|u| u.scale_per_g_1sigma[i]), d),
+                ];
+                for j in 0..3 {
+                    row.push(pm_opt(
+                        st.installation_angles_deg[i][j],
+                        u.map(|u| u.installation_angles_deg_1sigma[i][j]),
+                        5,
+                    ));
+                }
+                row
+            })
+            .collect(),
+    }
+}
+
+/// Table 3 (lever arms, mm, with 1σ; "n.d." where the plan did not determine the component).
+pub fn table3(data: &ReportData) -> Block {
+    let r = &data.calibration.lever_arms.r_m;
+    let u = data.uncertainty.as_ref();
+    Block::Table {
+        header: vec!["".into(), "x (mm)".into(), "y (mm)".into(), "z (mm)".into()],
+        rows: (0..3)
+            .map(|i| {
+                let mut row = vec![format!("r{}", i + 1)];
+                for j in 0..3 {
+                    let cell = pm_opt(
+                        r[i][j] * 1e3,
+                        u.map(|u| u.lever_arms_m_1sigma[i][j] * 1e3),
+                        4,
+                    );
+                    let nd = u.is_some_and(|u| !u.lever_arms_observable[i][j]);
+                    row.push(if nd { format!("({cell}) n.d.") } else { cell });
+                }
+                row
+            })
+            .collect(),
+    }
+}
+
+/// Tables 2 and 4: per segment and axis, theoretical, before, after static, after full (g), the
+/// residual and the segment's 1σ (µg). `rotating`: the rotating segments (Table 4) or the static ones.
+pub fn before_after_table(data: &ReportData, rotating: bool) -> Block {
+    let mut rows = Vec::new();
+    for r in data
+        .segments
+        .iter()
+        .filter(|r| (r.kind != SegmentKind::Static) == rotating)
+    {
+        for j in 0..3 {
+            rows.push(vec![
+                if j == 0 {
+                    r.name.clone()
+                } else {
+                    String::new()
+                },
+                axis_name(j).to_string(),
+                format!("{:+.6}", r.truth_g[j]),
+                format!("{:+.6}", r.before_g[j]),
+                format!("{:+.6}", r.after_static_g[j]),
+                format!("{:+.6}", r.after_g[j]),
+                format!("{:+.1}", r.error_g(Compensation::Full)[j] * 1e6),
+                format!("{:.1}", r.sigma_g[j] * 1e6),
+            ]);
+        }
+    }
+    Block::Table {
+        header: [
+            "segment",
+            "axis",
+            "theoretical (g)",
+            "before: bias+scale (g)",
+            "after: static (g)",
+            "after: static+dynamic (g)",
+            "residual (µg)",
+            "1σ (µg)",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    }
+}
+
+/// The navigation table: final velocity and position error of each replayed run and level.
+pub fn navigation_table(runs: &[NavigationRun]) -> Block {
+    let mut rows = Vec::new();
+    for run in runs {
+        for c in &run.cases {
+            rows.push(vec![
+                run.segment.clone(),
+                format!("{}", fmt_rate(run.rate_deg_s)),
+                c.compensation.label().into(),
+                format!("{:.3}", linalg::norm(&c.error_g) * 1e3),
+                format!("{:.4}", c.drift.final_velocity_error_m_s()),
+                format!("{:.3}", c.drift.final_position_error_m()),
+            ]);
+        }
+    }
+    Block::Table {
+        header: [
+            "run",
+            "rate (°/s)",
+            "compensation",
+            "|error| (mg)",
+            "final |v| error (m/s)",
+            "final |p| error (m)",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    }
+}
+
+/// The whole page.
+pub fn page(
+    data: &ReportData,
+    session: &str,
+    calibration: &str,
+    figure_stems: &[String],
+) -> Vec<Block> {
+    let mut b = Vec::new();
+    b.push(Block::Heading(1, "Calibration report".into()));
+    b.push(Block::Para(format!(
+        "Session `{session}`, calibration `{calibration}`. Values with their 1σ; 1σ of the \
+         residuals is the standard error of each segment's mean (its own noise)."
+    )));
+    for w in &data.warnings {
+        b.push(Block::Para(format!("**Warning:** {w}")));
+    }
+    b.push(Block::Heading(2, "Table 1. Static calibration".into()));
+    b.push(table1(data));
+    b.push(Block::Heading(2, "Table 3. Lever arms".into()));
+    b.push(Block::Para(format!(
+        "Reference point: {:?}. n.d. = not determined by the calibrating plan.",
+        data.calibration.reference
+    )));
+    b.push(table3(data));
+    b.push(Block::Heading(
+        2,
+        "Outputs before and after compensation (like Tables 2 and 4)".into(),
+    ));
+    b.push(Block::Heading(3, "Static segments (Table 2)".into()));
+    b.push(before_after_table(data, false));
+    b.push(Block::Heading(3, "Rotating segments (Table 4)".into()));
+    b.push(before_after_table(data, true));
+    b.push(Block::Para(format!(
+        "χ² of this calibration on this session (residual after full compensation over each segment's \
+         own noise): {:.1} for {} values.",
+        data.chi2, data.chi2_terms
+    )));
+    for stem in figure_stems.iter().filter(|s| !s.starts_with("navigation")) {
+        b.push(Block::Image {
+            src: format!("{stem}.png"),
+            alt: stem.clone(),
+        });
+    }
+    b.push(Block::Heading(
+        2,
+        "Navigation check (paper Figs. 6/7, 9/10)".into(),
+    ));
+    b.push(Block::Para(
+        "Noise-free replay: each run holds the segment's recorded mean outputs for the whole run, \
+         compensates them, removes the true specific force and integrates twice in body axes."
+            .into(),
+    ));
+    b.push(navigation_table(&data.navigation));
+    for stem in figure_stems.iter().filter(|s| s.starts_with("navigation")) {
+        b.push(Block::Image {
+            src: format!("{stem}.png"),
+            alt: stem.clone(),
+        });
+    }
+    b.push(Block::Heading(2, "This session's own fit".into()));
+    match &data.session_fit {
+        Ok(o) => {
+            b.push(Block::Para(format!(
+                "Method: {}. χ² = {:.1}, dof = {}, χ²/dof = {:.2}. Excluded segments: {}. Lever-arm \
+                 components not determined to {:.0} µm: {}.",
+                o.method,
+                o.fit.chi2,
+                o.fit.dof,
+                o.fit.reduced_chi2,
+                if o.excluded.is_empty() {
+                    "none".to_string()
+                } else {
+                    o.excluded
+                        .iter()
+                        .map(|e| format!("'{}' ({})", e.name, e.reason))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                },
+                o.observability.threshold_m * 1e6,
+                {
+                    let u = o.observability.undetermined();
+                    if u.is_empty() {
+                        "none".to_string()
+                    } else {
+                        u.join(", ")
+                    }
+                }
+            )));
+            b.push(Block::Pre(crate::report::render(o)));
+        }
+        Err(e) => b.push(Block::Para(format!(
+            "The session alone does not calibrate: {e}"
+        ))),
+    }
+    b
+}

@@ -1,0 +1,300 @@
+//! Tests of the report: its numbers against the paper's and the simulator's truth, its figures against
+//! its tables, its pages and files.
+
+use super::data::*;
+use super::document::*;
+use super::figures::*;
+use super::navigation_check::*;
+use super::page::*;
+use super::plot::{Formats, SeriesStyle};
+use crate::estimate::{calibrate_session_stats, EstimateOptions, SegmentKind};
+use crate::report::plot::{line_width, palette_hex, png_dimensions, svg_polylines};
+use crate::session::builtin::builtin_plan;
+use crate::session::Plan;
+use crate::sim::{simulate_stats, NoiseModel};
+
+fn short() -> Plan {
+    builtin_plan("short").unwrap().unwrap()
+}
+
+/// The short plan on the paper unit, calibrated from its own noisy data.
+fn noisy_report() -> ReportData {
+    let plan = short();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::default(), 7).unwrap();
+    let outcome = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+    build_report(
+        &plan,
+        &stats,
+        &outcome.calibration,
+        Some(&outcome.uncertainty),
+        Some(outcome.clone()),
+        &ReportOptions::default(),
+    )
+    .unwrap()
+}
+
+/// Cells of a table block, parsed as numbers where they are.
+fn cells(b: &Block) -> &Vec<Vec<String>> {
+    match b {
+        Block::Table { rows, .. } => rows,
+        _ => panic!("not a table"),
+    }
+}
+
+#[test]
+fn noise_free_true_calibration_gives_the_papers_numbers() {
+    // docs/model.md §6: x up, bias+scale only → (0.99991, 0.01300, −0.00911) g; static-only at 200 °/s
+    // about x leaves (0.09, 11.2, 10.1) mg.
+    let plan = short();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
+    let rows = segment_rows(&plan, &stats, &truth).unwrap();
+    assert_eq!(rows.len(), 15);
+    let x = &rows[0];
+    assert_eq!(x.name, "x+");
+    for (v, want) in x.before_g.iter().zip([0.99991, 0.01300, -0.00911]) {
+        assert!((v - want).abs() < 1e-5, "{:?}", x.before_g);
+    }
+    let x200 = rows.iter().find(|r| r.name == "x+ 200").unwrap();
+    assert_eq!(x200.kind, SegmentKind::ConstantRate);
+    let e = x200.error_g(Compensation::Static).map(|v| v.abs() * 1e3);
+    for (v, want) in e.iter().zip([0.09, 11.2, 10.1]) {
+        assert!((v - want).abs() < 0.06, "{e:?}");
+    }
+    // The device's f32 compensation with the true parameters leaves only rounding.
+    for r in &rows {
+        let e = r.error_g(Compensation::Full);
+        assert!(e.iter().all(|v| v.abs() < 2e-6), "{}: {e:?}", r.name);
+    }
+}
+
+#[test]
+fn replay_is_half_a_t_squared_of_the_table_error() {
+    let data = noisy_report();
+    assert_eq!(data.navigation.len(), 2);
+    assert_eq!(data.navigation[0].segment, "x+");
+    assert_eq!(data.navigation[1].segment, "x+ 200");
+    let g = data.calibration.gravity_m_s2;
+    for run in &data.navigation {
+        let row = data
+            .segments
+            .iter()
+            .find(|r| r.name == run.segment)
+            .unwrap();
+        for c in &run.cases {
+            let e = row.error_g(c.compensation);
+            assert_eq!(c.error_g, e);
+            let p = c.drift.position_m.last().unwrap();
+            let v = c.drift.velocity_m_s.last().unwrap();
+            for j in 0..3 {
+                assert!((p[j] - 0.5 * e[j] * g * 3600.0).abs() < 1e-9 * (1.0 + p[j].abs()));
+                assert!((v[j] - e[j] * g * 60.0).abs() < 1e-9 * (1.0 + v[j].abs()));
+            }
+        }
+    }
+    // The story: static-only is fine at rest, and leaves tens of metres at 200 °/s.
+    let rate = &data.navigation[1];
+    assert!(
+        rate.case(Compensation::Static)
+            .drift
+            .final_position_error_m()
+            > 100.0
+    );
+}
+
+#[test]
+fn figures_plot_the_numbers_in_the_tables_and_render() {
+    let data = noisy_report();
+    let n = data.segments.len();
+    // (a) The outputs figure: panel j, series c, point k = segment k's error in mg, and the
+    // table's printed outputs give the same error to their printed precision.
+    let fig = outputs_figure(&data);
+    let statics = before_after_table(&data, false);
+    let rotating = before_after_table(&data, true);
+    let table_rows: Vec<&Vec<String>> = cells(&statics).iter().chain(cells(&rotating)).collect();
+    assert_eq!(table_rows.len(), 3 * n);
+    let mut seg_of_row = Vec::new();
+    for r in &data.segments {
+        let s = data.segments.iter().position(|x| x.name == r.name).unwrap();
+        seg_of_row.push(s);
+    }
+    for (j, panel) in fig.panels.iter().enumerate() {
+        assert_eq!(panel.series.len(), 3);
+        for (m, (c, series)) in Compensation::ALL.iter().zip(&panel.series).enumerate() {
+            assert_eq!(series.points.len(), n);
+            assert_eq!(
+                series.style,
+                SeriesStyle::Markers,
+                "segments are categories"
+            );
+            for (k, r) in data.segments.iter().enumerate() {
+                let x = k as f64 + 0.15 * (m as f64 - 1.0);
+                assert_eq!(series.points[k], (x, r.error_g(*c)[j] * 1e3));
+            }
+        }
+    }
+    // Every table row (segment, axis) against the plotted value.
+    let mut current = String::new();
+    for row in &table_rows {
+        if !row[0].is_empty() {
+            current = row[0].clone();
+        }
+        let k = data
+            .segments
+            .iter()
+            .position(|r| r.name == current)
+            .unwrap();
+        let j = ["x", "y", "z"].iter().position(|a| *a == row[1]).unwrap();
+        let num = |s: &str| s.parse::<f64>().unwrap();
+        let truth = num(&row[2]);
+        for (col, c) in [(3, 0usize), (4, 1), (5, 2)] {
+            let plotted = fig.panels[j].series[c].points[k].1 * 1e-3;
+            assert!(
+                (num(&row[col]) - truth - plotted).abs() < 1.1e-6,
+                "{current} {j} col {col}"
+            );
+        }
+        // (b) The residual figure's point and band are the table's residual and 1σ (µg).
+        let res = &residuals_figure(&data).panels[j].series[0];
+        assert!((num(&row[6]) - res.points[k].1).abs() < 0.051);
+        assert!((num(&row[7]) - res.error.as_ref().unwrap()[k]).abs() < 0.051);
+    }
+    // (c) The navigation figures end at the navigation table's final errors.
+    let nav = navigation_table(&data.navigation);
+    let figs = report_figures(&data);
+    let stems: Vec<&str> = figs.iter().map(|f| f.stem.as_str()).collect();
+    assert_eq!(
+        stems,
+        [
+            "outputs",
+            "residuals",
+            "navigation_static",
+            "navigation_xp_200"
+        ]
+    );
+    for (r, run) in data.navigation.iter().enumerate() {
+        let f = &figs[2 + r];
+        for (c, case) in run.cases.iter().enumerate() {
+            let row = &cells(&nav)[3 * r + c];
+            let vel_end = f.panels[0].series[c].points.last().unwrap().1;
+            let pos_end = f.panels[1].series[c].points.last().unwrap().1;
+            assert_eq!(pos_end, case.drift.final_position_error_m());
+            assert!((row[4].parse::<f64>().unwrap() - vel_end).abs() <= 5e-5);
+            assert!((row[5].parse::<f64>().unwrap() - pos_end).abs() <= 5e-4);
+        }
+    }
+
+    // Rendered: valid PNGs of the figure's size, SVGs with one polyline per line series holding
+    // every drawable point, and the page referring to every figure.
+    let dir = tempfile::tempdir().unwrap();
+    let summary = write_report(&data, dir.path(), "s", "c", Formats::default()).unwrap();
+    assert!(summary.warnings.is_empty(), "{:?}", summary.warnings);
+    assert_eq!(summary.files.len(), 2 * figs.len() + 2);
+    for f in &figs {
+        let png = std::fs::read(dir.path().join(format!("{}.png", f.stem))).unwrap();
+        assert_eq!(png_dimensions(&png), Some(f.size), "{}", f.stem);
+        let svg = std::fs::read_to_string(dir.path().join(format!("{}.svg", f.stem))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        let lines = svg_polylines(&svg);
+        for p in &f.panels {
+            let line_series: Vec<_> = p
+                .series
+                .iter()
+                .filter(|s| s.style != SeriesStyle::Markers)
+                .collect();
+            for (i, s) in line_series.iter().enumerate() {
+                let width = line_width(i, line_series.len()).to_string();
+                let drawable = s
+                    .points
+                    .iter()
+                    .filter(|(_, y)| !p.log_y || *y > 0.0)
+                    .count();
+                assert!(
+                    lines.iter().any(|l| l.stroke == palette_hex(s.colour)
+                        && l.width == width
+                        && l.points == drawable),
+                    "{}: '{}' with {drawable} points not drawn",
+                    f.stem,
+                    s.label
+                );
+            }
+        }
+        if f.stem == "residuals" {
+            assert_eq!(svg.matches("<circle").count(), 3 * n);
+        }
+    }
+    let md = std::fs::read_to_string(dir.path().join(REPORT_MD)).unwrap();
+    let html = std::fs::read_to_string(&summary.page).unwrap();
+    for f in &figs {
+        assert!(md.contains(&format!("]({}.png)", f.stem)));
+        assert!(html.contains(&format!("src=\"{}.png\"", f.stem)));
+    }
+    assert!(md.contains("Table 1. Static calibration") && md.contains("χ²"));
+    assert!(html.starts_with("<!DOCTYPE html>") && html.contains("<table>"));
+}
+
+#[test]
+fn a_ramp_is_compensated_at_its_rms_rate() {
+    // 0 → 200 °/s in 2 s about x: the mean of ω² is not ω̄² (the difference is ~0.8 mg of
+    // centripetal term on 8 mm lever arms), so the rate used must be the RMS one.
+    let plan = Plan::parse(
+        "output_unit = \"V\"\nsample_rate_hz = 1000\n\
+             [[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\nduration_s = 1\n\
+             [[segment]]\nname = \"ramp\"\nup_b = [1, 0, 0]\nrate_deg_s = 0\n\
+             rate_end_deg_s = 200\nduration_s = 2\n",
+    )
+    .unwrap();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
+    let rows = segment_rows(&plan, &stats, &truth).unwrap();
+    let ramp = &rows[1];
+    assert_eq!(ramp.kind, SegmentKind::Ramp);
+    assert!(ramp.omega_rad_s[0] > 1.05 * stats[1].mean_w_rad_s[0]);
+    let e = ramp.error_g(Compensation::Full);
+    assert!(e.iter().all(|v| v.abs() < 3e-6), "{e:?}");
+    assert!(ramp.error_g(Compensation::Static)[1].abs() > 1e-3);
+}
+
+#[test]
+fn navigation_check_prints_the_position_errors_against_targets() {
+    // The short plan keeps this fast; the paper's plan is what the command runs by default.
+    let dir = tempfile::tempdir().unwrap();
+    let check = navigation_check(&NavigationCheckArgs {
+        plan: short(),
+        out_dir: Some(dir.path().to_path_buf()),
+        ..NavigationCheckArgs::default()
+    })
+    .unwrap();
+    let text = check.render();
+    assert!(
+        text.contains("static run 'x+', 60 s: without compensation"),
+        "{text}"
+    );
+    assert!(
+        text.contains("200 °/s run 'x+ 200', 60 s: static-only"),
+        "{text}"
+    );
+    assert!(dir.path().join(REPORT_HTML).exists());
+}
+
+#[test]
+fn a_named_run_must_exist() {
+    let plan = short();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
+    let options = ReportOptions {
+        rate_run: Some("x+ 999".into()),
+        ..ReportOptions::default()
+    };
+    let e = build_report(&plan, &stats, &truth, None, None, &options).unwrap_err();
+    assert!(e.to_string().contains("'x+ 999'"));
+    let options = ReportOptions {
+        rate_run: Some("y+ 100".into()),
+        ..ReportOptions::default()
+    };
+    let d = build_report(&plan, &stats, &truth, None, None, &options).unwrap();
+    assert_eq!(d.navigation[1].segment, "y+ 100");
+    // Without [uncertainty], Table 1 says so.
+    assert!(cells(&table1(&d))[0][1].contains("no σ"));
+}
