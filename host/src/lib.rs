@@ -18,7 +18,12 @@
 //!   the live procedure with its operator prompts (`host calibrate --port`).
 //! - [`report`]: what a person reads — terminal text, the HTML/Markdown report with its figures and
 //!   tables, the navigation replay, the comparison of two calibrations.
-//! - [`export`]: a calibration in other tools' conventions (paper matrices, x-io Fusion, Kalibr).
+//! - [`export`]: a calibration in other tools' formats (Kalibr YAML, Fusion and plain C headers with a
+//!   C blob decoder, JSON, PX4, ArduPilot, the TOML conversions).
+//! - [`apply`]: a calibration applied to a recording with the device's own code (`host apply`);
+//!   [`noise`]: Allan deviation and noise terms (`host noise`); [`batch`]: a lot calibrated in
+//!   parallel (`host batch`); [`summary`]: the machine-readable result with pass/fail limits.
+//! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`unit_file`]: a unit's parameters as TOML (the simulator's truth, the calibrator's result);
 //!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`.
 //! - [`ui`]: progress bars on a terminal.
