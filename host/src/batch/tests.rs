@@ -112,3 +112,63 @@ fn fifty_units_one_bad_one_flagged() {
     let again = run_batch(&sessions[..1], &out, &opts, &ProgressBar::hidden()).unwrap();
     assert!(again.units[0].error.as_deref().unwrap().contains("--force"));
 }
+
+fn unit_with(value: f64, sigma: f64) -> UnitResult {
+    UnitResult {
+        session: format!("{value}"),
+        rows: 1,
+        summary: Some(CalibrationSummary {
+            unit_id: None,
+            parameters: vec![crate::summary::Parameter {
+                name: "bias_x".into(),
+                unit: "V".into(),
+                value,
+                sigma: Some(sigma),
+            }],
+            chi2: 1.0,
+            dof: 1,
+            chi2_per_dof: 1.0,
+            checks: Vec::new(),
+            passed: true,
+            warnings: Vec::new(),
+        }),
+        error: None,
+        outliers: Vec::new(),
+        passed: false,
+    }
+}
+
+#[test]
+fn a_small_lot_of_equal_units_is_not_screened_below_its_own_noise() {
+    // Six units whose values differ by noise of 1σ = 1.0: by chance the MAD is tiny (0.01), which
+    // alone would make the 1.5σ unit a 100-z outlier; the 1σ floor keeps it a 1.5-z unit.
+    let mut lot: Vec<UnitResult> = [0.0, 0.01, -0.01, 0.02, -0.02, 1.5]
+        .iter()
+        .map(|&v| unit_with(v, 1.0))
+        .collect();
+    flag_outliers(&mut lot, 5.0);
+    assert!(
+        lot.iter().all(|u| u.passed),
+        "{:?}",
+        lot.iter().map(|u| &u.outliers).collect::<Vec<_>>()
+    );
+    // A unit 10σ off is flagged.
+    lot.push(unit_with(10.0, 1.0));
+    for u in &mut lot {
+        u.outliers.clear();
+    }
+    flag_outliers(&mut lot, 5.0);
+    let flagged: Vec<&str> = lot
+        .iter()
+        .filter(|u| !u.passed)
+        .map(|u| u.session.as_str())
+        .collect();
+    assert_eq!(flagged, vec!["10"]);
+    // Fewer than MIN_LOT units: no screening.
+    let mut small: Vec<UnitResult> = [0.0, 0.0, 100.0]
+        .iter()
+        .map(|&v| unit_with(v, 1.0))
+        .collect();
+    flag_outliers(&mut small, 5.0);
+    assert!(small.iter().all(|u| u.passed));
+}
