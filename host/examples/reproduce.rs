@@ -13,7 +13,7 @@
 
 use host::calibration_files::write_calibration_files;
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::export::{export, ExportFormat};
+use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::{render_position_targets, report, ReportOptions};
 use host::session::builtin::paper_plan;

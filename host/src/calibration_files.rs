@@ -187,10 +187,11 @@ mod tests {
         assert_eq!(names, vec![CALIBRATION_BIN.to_string()], "{names:?}");
     }
 
-
     #[test]
     fn the_calibration_file_carries_the_estimated_gyro() {
-        let plan = crate::session::builtin::builtin_plan("short-oblique").unwrap().unwrap();
+        let plan = crate::session::builtin::builtin_plan("short-oblique")
+            .unwrap()
+            .unwrap();
         let truth = testkit::paper_unit();
         let g = crate::sim::session::gyro_matrix([5e-3, -5e-3, 5e-3], 0.5f64.to_radians());
         let b = [0.008, -0.008, 0.008];

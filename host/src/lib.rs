@@ -18,12 +18,19 @@
 //!   the live procedure with its operator prompts (`host calibrate --port`).
 //! - [`report`]: what a person reads — terminal text, the HTML/Markdown report with its figures and
 //!   tables, the navigation replay, the comparison of two calibrations.
-//! - [`export`]: a calibration in other tools' conventions (paper matrices, x-io Fusion, Kalibr).
+//! - [`export`]: a calibration in other tools' formats (Kalibr YAML, Fusion and plain C headers with a
+//!   C blob decoder, JSON, PX4, ArduPilot, the TOML conversions).
+//! - [`apply`]: a calibration applied to a recording with the device's own code (`host apply`);
+//!   [`noise`]: Allan deviation and noise terms (`host noise`); [`batch`]: a lot calibrated in
+//!   parallel (`host batch`); [`summary`]: the machine-readable result with pass/fail limits.
+//! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`unit_file`]: a unit's parameters as TOML (the simulator's truth, the calibrator's result);
 //!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`.
 //! - [`ui`]: progress bars on a terminal.
 #![deny(missing_docs)]
 
+pub mod apply;
+pub mod batch;
 pub mod calibration_files;
 pub mod cli;
 pub mod device;
@@ -31,8 +38,11 @@ pub mod estimate;
 pub mod export;
 pub mod fuzz;
 pub mod limits;
+pub mod noise;
+pub mod output_file;
 pub mod report;
 pub mod session;
 pub mod sim;
+pub mod summary;
 pub mod ui;
 pub mod unit_file;

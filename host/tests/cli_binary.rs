@@ -29,7 +29,7 @@ fn simulate_and_calibrate_through_the_binary() {
         !ok && stderr.starts_with("error: ") && stderr.contains("--force"),
         "{stderr}"
     );
-    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s]);
+    let (ok, stdout, stderr) = host(&["calibrate", "--input", s]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("Table 1") && stdout.contains("calibration.bin"),

@@ -251,6 +251,23 @@ fn thermal_polynomials(
     ))
 }
 
+/// A copy of a [`Compensator`]'s precomputed constants (see its fields for the meaning of each).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompensatorConstants {
+    /// `u0`, output unit.
+    pub zero_bias_out: [f32; 3],
+    /// `g·(K A)⁻¹`, m/s² per output unit, row-major.
+    pub ka_m_s2_per_out: [[f32; 3]; 3],
+    /// `a_i`, unit sensing directions.
+    pub a: [[f32; 3]; 3],
+    /// `p_i = k_i (r_i × a_i)/g`, zero unless the ω̇ term is on.
+    pub p: [[f32; 3]; 3],
+    /// `q_i = k_i r_i / g`, zero when the lever terms are off.
+    pub q: [[f32; 3]; 3],
+    /// `s_i = k_i (a_i·r_i)/g`, zero when the lever terms are off.
+    pub s: [f32; 3],
+}
+
 impl Compensator {
     /// Precomputes the inverse model. Fails on unusable parameters (including values the device's
     /// `f32` arithmetic cannot carry) instead of producing NaN or ∞ later.
@@ -424,6 +441,19 @@ impl Compensator {
         let q_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
         let k_d = tangential + a_w * q_w - w2 * self.s[i];
         u.raw[i] - self.zero_bias_out[i] - k_d
+    }
+
+    /// The precomputed `f32` constants, for code generators that reproduce this per-sample path in
+    /// another language (the host's C export) and must hold exactly these values.
+    pub fn constants(&self) -> CompensatorConstants {
+        CompensatorConstants {
+            zero_bias_out: self.zero_bias_out,
+            ka_m_s2_per_out: self.ka_m_s2_per_out,
+            a: self.a,
+            p: self.p,
+            q: self.q,
+            s: self.s,
+        }
     }
 
     /// Static-only compensation, `f_O = g·K_A (U − u0)` (paper eq. 6): no gyro needed.

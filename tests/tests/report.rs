@@ -3,7 +3,7 @@
 
 use host::calibration_files::write_calibration_files;
 use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
-use host::export::{export, ExportFormat};
+use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::plot::png_dimensions;
 use host::report::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};

@@ -1,6 +1,7 @@
 //! `host calibrate`: from a recorded session (`--input DIR`), or live from a device (`--port`, the
 //! procedure of [`crate::device::procedure`]).
 
+use super::output::Output;
 use super::port::{connect, PortArgs};
 use super::CliError;
 use crate::calibration_files::{now_unix_s, write_calibration_files};
@@ -11,6 +12,7 @@ use crate::estimate::{
     ReferenceChoice,
 };
 use crate::session::{self, read_session, ReadOptions, Session};
+use crate::summary::{CalibrationSummary, Limits};
 use clap::Args;
 use shared::UnitId;
 use std::path::{Path, PathBuf};
@@ -57,6 +59,13 @@ pub struct CalibrateArgs {
     /// Point the lever arms are given relative to: the table axis (paper) or the sensing points' centroid.
     #[arg(long, value_enum, default_value_t = ReferenceArg::TableAxis)]
     pub reference: ReferenceArg,
+    /// Print the result as one JSON document on stdout (parameters, 1σ, χ², checks); the report and
+    /// progress go to stderr.
+    #[arg(long)]
+    pub json: bool,
+    /// Pass/fail limits: a failed check exits nonzero (after writing the files).
+    #[command(flatten)]
+    pub limits: Limits,
 }
 
 /// `--method`.
@@ -97,12 +106,17 @@ pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError
 
 /// The estimator options of `host calibrate`'s flags.
 pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
+    estimate_options_of(a.method, a.reference)
+}
+
+/// The estimator options of a `--method` and a `--reference`.
+pub fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
     EstimateOptions {
-        method: match a.method {
+        method: match method {
             MethodArg::Joint => Method::Joint,
             MethodArg::Paper => Method::Paper,
         },
-        reference: match a.reference {
+        reference: match reference {
             ReferenceArg::TableAxis => ReferenceChoice::TableAxis,
             ReferenceArg::Centroid => ReferenceChoice::Centroid,
         },
@@ -127,6 +141,10 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         ));
     }
+    let out = Output {
+        json: a.json,
+        quiet,
+    };
     let out_dir = a.out_dir.as_deref().unwrap_or(input);
     // Refused before the (possibly long) read, not after it.
     crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
@@ -142,16 +160,16 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     let unit_id = match &session.plan.unit_id {
         Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
         None => {
-            eprintln!(
-                "warning: plan.toml has no unit_id: calibration.bin is bound to the all-zero unit id; \
-                 add unit_id = \"<24 hex digits>\" to plan.toml to bind it to the unit"
+            out.warn(
+                "plan.toml has no unit_id: calibration.bin is bound to the all-zero unit id; \
+                 add unit_id = \"<24 hex digits>\" to plan.toml to bind it to the unit",
             );
             UnitId::default()
         }
     };
     // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
     let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
-    crate::outln!(
+    out.line(format_args!(
         "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
         session.report.rows,
         session.report.bytes as f64 / 1e6,
@@ -159,21 +177,26 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         input.display(),
         read_s,
         session.report.rows as f64 / read_s.max(1e-9) / 1e6
-    )?;
+    ))?;
     if hand_gyro {
-        crate::outln!(
+        out.line(format_args!(
             "gyro: from the hand turns ({})",
             input.join(super::segment::GYRO_FILE).display()
-        )?;
+        ))?;
     }
-    crate::outln!()?;
-    crate::out!("{}", crate::report::render(&outcome))?;
-    crate::outln!(
+    out.line("")?;
+    out.human(crate::report::render(&outcome))?;
+    out.line(format_args!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
         written.toml_path.display(),
         written.bin_path.display(),
         written.blob.len()
-    )?;
+    ))?;
+    let summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
+    out.document(&summary)?;
+    if !summary.passed {
+        return Err(CliError::ChecksFailed(summary.failures()));
+    }
     Ok(outcome)
 }
 
@@ -219,28 +242,46 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     };
     let result = procedure::run(&mut client, &opts, op)?;
     for w in &result.warnings {
-        crate::outln!("warning: {w}")?;
+        eprintln!("warning: {w}");
     }
     let worst = result
         .verification
         .iter()
         .map(|v| v.error_mg)
         .fold(0.0, f64::max);
-    if result.passed {
-        crate::outln!(
-            "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
-             results in {}",
-            result.identity.unit_id,
-            result.verification.len(),
-            opts.verify_tolerance_mg,
-            opts.out_dir.display()
-        )?;
-        Ok(())
-    } else {
-        crate::outln!(
+    let out = Output {
+        json: a.json,
+        quiet: false,
+    };
+    let summary = CalibrationSummary::new(
+        &result.outcome,
+        Some(result.identity.unit_id.to_string()),
+        &a.limits,
+    );
+    out.document(&serde_json::json!({
+        "calibration": summary,
+        "verification_worst_error_mg": worst,
+        "verification_tolerance_mg": opts.verify_tolerance_mg,
+        "verified": result.passed,
+        "results_dir": opts.out_dir.display().to_string(),
+    }))?;
+    if !result.passed {
+        out.line(format_args!(
             "FAIL: worst verification error {worst:.3} mg > {} mg",
             opts.verify_tolerance_mg
-        )?;
-        Err(CliError::VerificationFailed)
+        ))?;
+        return Err(CliError::VerificationFailed);
     }
+    out.line(format_args!(
+        "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
+         results in {}",
+        result.identity.unit_id,
+        result.verification.len(),
+        opts.verify_tolerance_mg,
+        opts.out_dir.display()
+    ))?;
+    if !summary.passed {
+        return Err(CliError::ChecksFailed(summary.failures()));
+    }
+    Ok(())
 }

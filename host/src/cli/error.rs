@@ -73,6 +73,21 @@ pub enum CliError {
          at some verification positions (see above)"
     )]
     VerificationFailed,
+    /// `host apply`.
+    #[error(transparent)]
+    Apply(#[from] crate::apply::ApplyError),
+    /// `host noise`.
+    #[error(transparent)]
+    Noise(#[from] crate::noise::NoiseError),
+    /// A result file could not be written.
+    #[error(transparent)]
+    Written(#[from] crate::output_file::OutputFileError),
+    /// `host batch` could not run.
+    #[error(transparent)]
+    Batch(crate::batch::BatchError),
+    /// A result failed its pass/fail limits (the failed checks, one line).
+    #[error("FAIL: {0}")]
+    ChecksFailed(String),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),

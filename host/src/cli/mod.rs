@@ -12,10 +12,15 @@
 //! | `navigation-check` | [`navigation_check`] | [`mod@crate::report::navigation_check`] on [`crate::sim`] |
 //! | `compare` | [`compare`] | [`crate::report::compare`] |
 //! | `export` | [`export`] | [`crate::export`] |
+//! | `apply` | [`apply`] | [`crate::apply`] over [`crate::session::reader`] |
+//! | `noise` | [`noise`] | [`crate::noise`] |
+//! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
 //!
 //! Every command fails with the one [`CliError`].
 
+pub mod apply;
+pub mod batch;
 pub mod calibrate;
 pub mod compare;
 pub mod error;
@@ -23,6 +28,8 @@ pub mod export;
 pub mod flash;
 pub mod monitor;
 pub mod navigation_check;
+pub mod noise;
+pub mod output;
 pub mod plan;
 pub mod port;
 pub mod read;
@@ -47,7 +54,8 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
-    /// No progress bars (they are drawn only on a terminal anyway).
+    /// Quiet: no progress bars and no human-readable results (warnings and errors still go to
+    /// stderr; --json documents still go to stdout).
     #[arg(long, short, global = true)]
     pub quiet: bool,
 }
@@ -74,8 +82,18 @@ pub enum Command {
     NavigationCheck(navigation_check::NavigationCheckCliArgs),
     /// Two calibrations of one unit side by side, each difference in units of its combined 1σ.
     Compare(compare::CompareArgs),
-    /// A calibration in the conventions of other tools (TOML).
+    /// A calibration in another tool's format: kalibr, fusion-c, c-header, json, px4, ardupilot
+    /// (or the TOML conversions plain, fusion, all).
     Export(export::ExportArgs),
+    /// Apply a calibration to a recording with the device's own compensation code: CSV of the
+    /// specific force per row (segment,t_s,f_x_g,f_y_g,f_z_g).
+    Apply(apply::ApplyArgs),
+    /// Noise of a still recording: overlapping Allan deviation per axis, fitted white noise density,
+    /// bias instability and random walk; table, figure, and the figures Kalibr needs (noise.json).
+    Noise(noise::NoiseArgs),
+    /// Calibrate a production lot (a directory of sessions) in parallel: one summary (CSV, JSON) with
+    /// each unit's parameters, 1σ, χ² and pass/fail; outlier units of the lot flagged.
+    Batch(batch::BatchArgs),
     /// Write a calibration (calibration.bin, or a calibration.toml encoded for the unit) to a device,
     /// reset it and check that it applied it.
     Flash(flash::FlashArgs),
@@ -90,13 +108,16 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Simulate(a) => simulate::run(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate::run(&a, cli.quiet),
-        Command::Plan(a) => plan::run(&a).map(|_| ()),
+        Command::Plan(a) => plan::run(&a, cli.quiet).map(|_| ()),
+        Command::Report(a) => report::run(&a, cli.quiet),
+        Command::NavigationCheck(a) => navigation_check::run(&a, cli.quiet),
+        Command::Compare(a) => compare::run(&a, cli.quiet),
+        Command::Export(a) => export::run(&a, cli.quiet),
+        Command::Apply(a) => apply::run(&a, cli.quiet),
+        Command::Noise(a) => noise::run(&a, cli.quiet),
+        Command::Batch(a) => batch::run(&a, cli.quiet),
         Command::Segment(a) => segment::segment(&a).map(|_| ()),
         Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
-        Command::Report(a) => report::run(&a),
-        Command::NavigationCheck(a) => navigation_check::run(&a),
-        Command::Compare(a) => compare::run(&a),
-        Command::Export(a) => export::run(&a),
         Command::Flash(a) => flash::run(&a.port, &a.calibration),
         Command::Read(a) => read::run(&a.port, a.out.as_deref()),
         Command::Monitor(a) => monitor::run(&a.port, a.window, a.count),

@@ -28,7 +28,7 @@ pub struct NavigationCheckCliArgs {
 }
 
 /// `host navigation-check`.
-pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
+pub fn run(a: &NavigationCheckCliArgs, quiet: bool) -> Result<(), CliError> {
     super::report::navigation_duration(a.duration_s)?;
     let mut args = NavigationCheckArgs {
         seed: a.seed,
@@ -42,6 +42,9 @@ pub fn run(a: &NavigationCheckCliArgs) -> Result<(), CliError> {
     if let Some(spec) = &a.plan {
         args.plan = load_plan(spec)?;
     }
-    crate::out!("{}", navigation_check(&args)?.render())?;
+    let result = navigation_check(&args)?;
+    if !quiet {
+        crate::out!("{}", result.render())?;
+    }
     Ok(())
 }

@@ -1,12 +1,15 @@
 //! `host plan --check`: a plan's segments and the predicted 1σ of every parameter (Cramér–Rao bound),
 //! before any data.
 
+use super::output::Output;
 use super::{load_unit, CliError};
 use crate::estimate::{predict, PredictSettings, Prediction};
 use crate::session::builtin::load_plan;
 use crate::session::Plan;
+use crate::summary::{parameter_keys, parameter_unit};
 use crate::unit_file::UnitFileError;
 use clap::Args;
+use serde_json::json;
 use std::path::PathBuf;
 
 /// `host plan`.
@@ -24,10 +27,17 @@ pub struct PlanArgs {
     /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit).
     #[arg(long, value_name = "FILE")]
     pub unit: Option<PathBuf>,
+    /// Print the prediction as one JSON document on stdout (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `host plan --check`: the plan's segments and the predicted 1σ of every parameter.
-pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
+pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
+    let out = Output {
+        json: a.json,
+        quiet,
+    };
     let plan = load_plan(&a.check)?;
     let unit = load_unit(a.unit.as_deref())?;
     let truth = unit.to_calibration().map_err(|m| {
@@ -42,7 +52,7 @@ pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
             a.noise_mg
         )));
     }
-    print_plan(&plan)?;
+    print_plan(&plan, &out)?;
     let k = truth.statics.scale_out_per_g;
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
@@ -50,31 +60,55 @@ pub fn run(a: &PlanArgs) -> Result<Prediction, CliError> {
         ..PredictSettings::white(0.0)
     };
     let prediction = predict(&plan, &truth, &settings)?;
-    crate::outln!()?;
-    crate::outln!(
+    out.line("")?;
+    out.line(format_args!(
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",
-        a.noise_mg,
-        a.gyro_noise_deg_s
-    )?;
-    crate::out!("{}", crate::report::render_prediction(&prediction))?;
+        a.noise_mg, a.gyro_noise_deg_s
+    ))?;
+    out.human(crate::report::render_prediction(&prediction))?;
+    let unit = prediction.output_unit.symbol();
+    let parameters: Vec<_> = parameter_keys()
+        .into_iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let s = prediction.sigma[i];
+            json!({
+                "name": name,
+                "unit": parameter_unit(i, unit),
+                "value": prediction.values[i],
+                "predicted_sigma": s.is_finite().then_some(s),
+            })
+        })
+        .collect();
+    out.document(&json!({
+        "plan": a.check,
+        "segments": plan.segments.len(),
+        "sample_rate_hz": plan.sample_rate_hz,
+        "noise_mg": a.noise_mg,
+        "gyro_noise_deg_s": a.gyro_noise_deg_s,
+        "parameters": parameters,
+        "lever_arms_observable": prediction.lever_arms_observable,
+        "lever_arms_fixed": prediction.lever_arms_fixed,
+        "warnings": prediction.warnings,
+    }))?;
     Ok(prediction)
 }
 
-fn print_plan(plan: &Plan) -> std::io::Result<()> {
-    crate::outln!(
+fn print_plan(plan: &Plan, out: &Output) -> Result<(), CliError> {
+    out.line(format_args!(
         "{} segments at {} Hz, output unit {}, g = {} m/s²",
         plan.segments.len(),
         plan.sample_rate_hz,
         plan.output_unit.symbol(),
         plan.gravity_m_s2
-    )?;
+    ))?;
     for s in &plan.segments {
         let rate = match s.rate_end_deg_s {
             Some(r1) if r1 != s.rate_deg_s => format!("{} → {} °/s", s.rate_deg_s, r1),
             _ if s.is_static() => "static".to_string(),
             _ => format!("{} °/s", s.rate_deg_s),
         };
-        crate::outln!(
+        out.line(format_args!(
             "  {:<14} up_b = [{:+.4}, {:+.4}, {:+.4}]  {:<16} {}",
             s.name,
             s.up_b[0],
@@ -83,7 +117,7 @@ fn print_plan(plan: &Plan) -> std::io::Result<()> {
             rate,
             s.duration_s
                 .map_or("(no duration)".into(), |d| format!("{d} s"))
-        )?;
+        ))?;
     }
     Ok(())
 }

@@ -11,7 +11,8 @@ pub struct ReportArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR")]
     pub input: PathBuf,
-    /// The calibration to judge (calibration.toml; default: DIR/calibration.toml).
+    /// The calibration to judge (default: DIR/calibration.toml, else DIR/../calibration.toml, where
+    /// `calibrate --port` writes it next to its OUT/recording).
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<PathBuf>,
     /// Where to write the figures and pages (default: DIR/report).
@@ -32,12 +33,12 @@ pub struct ReportArgs {
 }
 
 /// `host report`.
-pub fn run(a: &ReportArgs) -> Result<(), CliError> {
+pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     navigation_duration(a.duration_s)?;
-    let calibration = a
-        .calibration
-        .clone()
-        .unwrap_or_else(|| a.input.join(crate::calibration_files::CALIBRATION_TOML));
+    let calibration = match &a.calibration {
+        Some(c) => c.clone(),
+        None => default_calibration(&a.input),
+    };
     let out_dir = a.out_dir.clone().unwrap_or_else(|| a.input.join("report"));
     let mut options = ReportOptions {
         navigation_duration_s: a.duration_s,
@@ -47,7 +48,9 @@ pub fn run(a: &ReportArgs) -> Result<(), CliError> {
     };
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
-    crate::out!("{}", summary.render())?;
+    if !quiet {
+        crate::out!("{}", summary.render())?;
+    }
     Ok(())
 }
 
@@ -58,4 +61,43 @@ pub fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
         duration_s,
         crate::limits::MAX_NAVIGATION_DURATION_S,
     )?)
+}
+
+/// `DIR/calibration.toml` when it exists, else the one beside the recording (`DIR/..`), else
+/// `DIR/calibration.toml` (so that the error names the expected place).
+pub fn default_calibration(input: &std::path::Path) -> PathBuf {
+    let own = input.join(crate::calibration_files::CALIBRATION_TOML);
+    if own.exists() {
+        return own;
+    }
+    match input.parent() {
+        Some(parent)
+            if parent
+                .join(crate::calibration_files::CALIBRATION_TOML)
+                .exists() =>
+        {
+            parent.join(crate::calibration_files::CALIBRATION_TOML)
+        }
+        _ => own,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_the_calibration_beside_a_live_recording() {
+        let dir = tempfile::tempdir().unwrap();
+        let rec = dir.path().join("recording");
+        std::fs::create_dir_all(&rec).unwrap();
+        assert_eq!(default_calibration(&rec), rec.join("calibration.toml"));
+        std::fs::write(dir.path().join("calibration.toml"), "x").unwrap();
+        assert_eq!(
+            default_calibration(&rec),
+            dir.path().join("calibration.toml")
+        );
+        std::fs::write(rec.join("calibration.toml"), "x").unwrap();
+        assert_eq!(default_calibration(&rec), rec.join("calibration.toml"));
+    }
 }

@@ -74,6 +74,15 @@ pub struct SimulateArgs {
     /// Gyro misalignment: every off-diagonal entry of the gyro matrix, degrees [default: 0].
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub gyro_misalignment_deg: Option<f64>,
+    /// Accelerometer flicker (1/f) bias noise as its bias instability B, mg [default: 0].
+    #[arg(long, value_name = "MG")]
+    pub flicker_mg: Option<f64>,
+    /// Gyro bias random walk, °/s/√s [default: 0].
+    #[arg(long, value_name = "DEG_S_SQRT_S")]
+    pub gyro_drift_deg_s_sqrt_s: Option<f64>,
+    /// Gyro flicker (1/f) bias noise as its bias instability B, °/s [default: 0].
+    #[arg(long, value_name = "DEG_S")]
+    pub gyro_flicker_deg_s: Option<f64>,
 }
 
 /// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
@@ -95,6 +104,12 @@ pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, 
     set(&mut n.table_rate_scale, a.rate_scale);
     set(&mut n.table_rate_offset_deg_s, a.rate_offset_deg_s);
     set(&mut n.gyro_white_deg_s, a.gyro_noise_deg_s);
+    set(&mut n.accel_flicker_mg, a.flicker_mg);
+    set(
+        &mut n.gyro_bias_walk_deg_s_sqrt_s,
+        a.gyro_drift_deg_s_sqrt_s,
+    );
+    set(&mut n.gyro_flicker_deg_s, a.gyro_flicker_deg_s);
     if let Some(b) = &a.gyro_bias_deg_s {
         n.gyro_bias_deg_s = b
             .as_slice()
@@ -129,25 +144,27 @@ pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError>
     for note in &summary.notes {
         eprintln!("note: {note}");
     }
-    crate::outln!(
-        "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
-        summary.rows,
-        plan.segments.len(),
-        plan.sample_rate_hz,
-        a.seed,
-        a.out.display()
-    )?;
-    crate::outln!(
-        "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
-         rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
-        noise.accel_white_mg,
-        noise.accel_bias_walk_mg_sqrt_s,
-        noise.accel_quantum_out,
-        noise.table_tilt_deg,
-        noise.table_rate_scale,
-        noise.table_rate_offset_deg_s,
-        noise.gyro_white_deg_s,
-        noise.gyro_bias_deg_s
-    )?;
+    if !quiet {
+        crate::outln!(
+            "simulated {} rows ({} segments, {} Hz, seed {}) into {}",
+            summary.rows,
+            plan.segments.len(),
+            plan.sample_rate_hz,
+            a.seed,
+            a.out.display()
+        )?;
+        crate::outln!(
+            "noise: {:.3} mg white, {:.3} mg/√s bias walk, quantum {}, tilt {} °, rate scale {}, \
+             rate offset {} °/s, gyro {:.3} °/s white, gyro bias {:?} °/s",
+            noise.accel_white_mg,
+            noise.accel_bias_walk_mg_sqrt_s,
+            noise.accel_quantum_out,
+            noise.table_tilt_deg,
+            noise.table_rate_scale,
+            noise.table_rate_offset_deg_s,
+            noise.gyro_white_deg_s,
+            noise.gyro_bias_deg_s
+        )?;
+    }
     Ok(summary)
 }

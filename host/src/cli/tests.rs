@@ -85,7 +85,7 @@ fn report_compare_export_and_navigation_check_parse() {
         panic!("not report")
     };
     assert!(r.no_png && r.calibration.is_none() && r.duration_s == 60.0);
-    let Command::Compare(compare::CompareArgs { a, b }) =
+    let Command::Compare(compare::CompareArgs { a, b, .. }) =
         parse(&["compare", "a.toml", "b.toml"]).command
     else {
         panic!("not compare")
@@ -198,7 +198,7 @@ fn plan_check_predicts_what_the_oblique_plan_adds() {
         let Command::Plan(a) = parse(&["plan", "--check", plan]).command else {
             panic!()
         };
-        plan::run(&a).unwrap()
+        plan::run(&a, true).unwrap()
     };
     let paper = check("paper");
     let oblique = check("oblique");
@@ -209,7 +209,10 @@ fn plan_check_predicts_what_the_oblique_plan_adds() {
     let Command::Plan(a) = parse(&["plan", "--check", "nope.toml"]).command else {
         panic!()
     };
-    assert!(plan::run(&a).unwrap_err().to_string().contains("built-in"));
+    assert!(plan::run(&a, true)
+        .unwrap_err()
+        .to_string()
+        .contains("built-in"));
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! Who turns the table during the live procedure: a person at the terminal (instructions on stdout,
-//! Enter on stdin), or nobody when the device drives its own virtual table.
+//! Who turns the table during the live procedure: a person at the terminal (instructions on stderr,
+//! so that stdout stays for results such as `--json`; Enter on stdin), or nobody when the device drives its own virtual table.
 
 use super::procedure::ProcedureError;
 use std::io::{BufRead, Write};
@@ -14,19 +14,21 @@ pub trait Operator {
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
 }
 
-/// An operator at the terminal: instructions on stdout, Enter on stdin.
+/// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
+/// Enter on stdin.
 pub struct TerminalOperator;
 
 impl Operator for TerminalOperator {
     fn say(&mut self, text: &str) {
-        // A closed or full stdout must not stop a procedure between recording and flashing; the
-        // command's own closing line reports it.
-        let _ = crate::outln!("{text}");
+        let _ = writeln!(std::io::stderr(), "{text}");
     }
 
     fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
-        let _ = crate::out!("{instruction} — press Enter when ready (Ctrl-C to stop) ");
-        std::io::stdout()
+        let _ = write!(
+            std::io::stderr(),
+            "{instruction} — press Enter when ready (Ctrl-C to stop) "
+        );
+        std::io::stderr()
             .flush()
             .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
@@ -41,12 +43,18 @@ impl Operator for TerminalOperator {
     }
 
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
-        let _ = crate::outln!("segment '{segment}' does not match the plan:");
+        let _ = writeln!(
+            std::io::stderr(),
+            "segment '{segment}' does not match the plan:"
+        );
         for p in problems {
-            let _ = crate::outln!("  - {p}");
+            let _ = writeln!(std::io::stderr(), "  - {p}");
         }
-        let _ = crate::out!("keep it anyway (the estimator will screen it)? [y/N] ");
-        std::io::stdout()
+        let _ = write!(
+            std::io::stderr(),
+            "keep it anyway (the estimator will screen it)? [y/N] "
+        );
+        std::io::stderr()
             .flush()
             .map_err(ProcedureError::Terminal)?;
         let mut line = String::new();
@@ -70,8 +78,7 @@ pub struct AutomaticOperator {
 impl Operator for AutomaticOperator {
     fn say(&mut self, text: &str) {
         if self.verbose {
-            // As for the terminal operator: the command's closing line reports a closed stdout.
-            let _ = crate::outln!("{text}");
+            let _ = writeln!(std::io::stderr(), "{text}");
         }
     }
 

@@ -18,18 +18,21 @@ pub fn outputs_figure(data: &ReportData) -> Figure {
             y_desc: "mg".into(),
             x_categories: Some(cats.clone()),
             log_y: false,
+            // Segments are categories: markers only (a line between them would suggest an order
+            // in between), each compensation shifted a little so that none hides another.
             series: Compensation::ALL
                 .iter()
-                .map(|&c| Series {
+                .enumerate()
+                .map(|(n, &c)| Series {
                     label: c.label().into(),
                     points: data
                         .segments
                         .iter()
                         .enumerate()
-                        .map(|(k, r)| (k as f64, r.error_g(c)[j] * 1e3))
+                        .map(|(k, r)| (k as f64 + 0.15 * (n as f64 - 1.0), r.error_g(c)[j] * 1e3))
                         .collect(),
                     error: None,
-                    style: SeriesStyle::LineAndMarkers,
+                    style: SeriesStyle::Markers,
                     colour: c.colour(),
                 })
                 .collect(),

@@ -156,6 +156,12 @@ impl Default for Formats {
     }
 }
 
+/// Stroke width of the `index`-th of `count` line series of a panel: 2 for the last, 2 more for each
+/// one before it.
+pub fn line_width(index: usize, count: usize) -> u32 {
+    2 + 2 * count.saturating_sub(index + 1) as u32
+}
+
 /// The palette: before (red), static-only (orange), full (blue), truth/reference (black), then more.
 pub const PALETTE: [RGBColor; 6] = [
     RGBColor(200, 30, 30),
@@ -315,7 +321,8 @@ fn draw_panel<DB: DrawingBackend>(
     let (x0, x1) = x_range(panel);
     let (y0, y1) = y_range(panel);
     let mut builder = ChartBuilder::on(area);
-    builder.margin(8);
+    // The right margin leaves room for the last x tick's label, which is centred on the axis end.
+    builder.margin(8).margin_right(28);
     if text {
         builder
             .caption(&panel.title, (FAMILY, 16))
@@ -378,16 +385,28 @@ where
     X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
     Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
 {
+    let n_lines = panel
+        .series
+        .iter()
+        .filter(|s| s.style != SeriesStyle::Markers)
+        .count();
+    let mut line_no = 0;
     for s in &panel.series {
         let colour = PALETTE[s.colour % PALETTE.len()];
+        // Earlier lines are drawn wider, so a later line with the same data (static and full
+        // compensation of a run without rotation) does not hide an earlier one.
+        let width = line_width(line_no, n_lines);
+        if s.style != SeriesStyle::Markers {
+            line_no += 1;
+        }
         let keep = |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0);
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
         let anno = match s.style {
             SeriesStyle::Line => chart
-                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)))
                 .map_err(err)?,
             SeriesStyle::LineAndMarkers => chart
-                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)).point_size(3))
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)).point_size(3))
                 .map_err(err)?,
             SeriesStyle::Markers => {
                 if let Some(e) = &s.error {
@@ -546,16 +565,19 @@ mod tests {
         assert_eq!(png_dimensions(&png), Some((600, 300)));
         let svg = std::fs::read_to_string(dir.path().join("t.svg")).unwrap();
         assert!(svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        // Two line series of 9 drawable points (log axis: y = 0 left out), each also as a legend sample.
+        // Two line series of 9 drawable points (log axis: y = 0 left out), the first drawn wider so
+        // that the second cannot hide it, each also as a legend sample (width 2).
         let lines = svg_polylines(&svg);
         for c in [0, 1] {
-            let mine: Vec<usize> = lines
+            let width = line_width(c, 2).to_string();
+            let mine: Vec<(usize, &str)> = lines
                 .iter()
-                .filter(|p| p.stroke == palette_hex(c) && p.width == "2")
-                .map(|p| p.points)
+                .filter(|p| p.stroke == palette_hex(c))
+                .map(|p| (p.points, p.width.as_str()))
                 .collect();
-            assert_eq!(mine, vec![9, 2], "colour {c}");
+            assert_eq!(mine, vec![(9, width.as_str()), (2, "2")], "colour {c}");
         }
+        assert_eq!((line_width(0, 2), line_width(1, 2)), (4, 2));
         // Three markers, three error bars (error bars are 2-point polylines).
         assert_eq!(svg.matches("<circle").count(), 3);
         assert!(svg.contains("test figure") && svg.contains("µg"));

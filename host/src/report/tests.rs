@@ -8,7 +8,7 @@ use super::navigation_check::*;
 use super::page::*;
 use super::plot::{Formats, SeriesStyle};
 use crate::estimate::{calibrate_session_stats, EstimateOptions, SegmentKind};
-use crate::report::plot::{palette_hex, png_dimensions, svg_polylines};
+use crate::report::plot::{line_width, palette_hex, png_dimensions, svg_polylines};
 use crate::session::builtin::builtin_plan;
 use crate::session::Plan;
 use crate::sim::{simulate_stats, NoiseModel};
@@ -121,10 +121,16 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
     }
     for (j, panel) in fig.panels.iter().enumerate() {
         assert_eq!(panel.series.len(), 3);
-        for (c, series) in Compensation::ALL.iter().zip(&panel.series) {
+        for (m, (c, series)) in Compensation::ALL.iter().zip(&panel.series).enumerate() {
             assert_eq!(series.points.len(), n);
+            assert_eq!(
+                series.style,
+                SeriesStyle::Markers,
+                "segments are categories"
+            );
             for (k, r) in data.segments.iter().enumerate() {
-                assert_eq!(series.points[k], (k as f64, r.error_g(*c)[j] * 1e3));
+                let x = k as f64 + 0.15 * (m as f64 - 1.0);
+                assert_eq!(series.points[k], (x, r.error_g(*c)[j] * 1e3));
             }
         }
     }
@@ -192,7 +198,13 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         let lines = svg_polylines(&svg);
         for p in &f.panels {
-            for s in p.series.iter().filter(|s| s.style != SeriesStyle::Markers) {
+            let line_series: Vec<_> = p
+                .series
+                .iter()
+                .filter(|s| s.style != SeriesStyle::Markers)
+                .collect();
+            for (i, s) in line_series.iter().enumerate() {
+                let width = line_width(i, line_series.len()).to_string();
                 let drawable = s
                     .points
                     .iter()
@@ -200,7 +212,7 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
                     .count();
                 assert!(
                     lines.iter().any(|l| l.stroke == palette_hex(s.colour)
-                        && l.width == "2"
+                        && l.width == width
                         && l.points == drawable),
                     "{}: '{}' with {drawable} points not drawn",
                     f.stem,

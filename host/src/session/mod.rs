@@ -19,7 +19,9 @@ pub mod writer;
 
 pub use error::RecordingError;
 pub use plan::{Plan, PlanError, SegmentPlan};
-pub use reader::{read_samples, read_session, ReadOptions, ReadReport, Session};
+pub use reader::{
+    read_samples, read_samples_each, read_session, ReadOptions, ReadReport, Row, Session,
+};
 pub use stats::{SegmentAccumulator, SegmentStats};
 pub use writer::SessionWriter;
 

@@ -86,8 +86,25 @@ fn clean(field: &str) -> &str {
     }
 }
 
-/// The per-segment reduction, fed one line at a time.
-struct Reducer<'a> {
+/// One data row as parsed, handed to the callback of [`read_samples_each`] (the tools that need
+/// every row, such as `apply` and the noise analysis, read through the same parser as the statistics).
+#[derive(Clone, Copy, Debug)]
+pub struct Row<'r> {
+    /// Segment name.
+    pub segment: &'r str,
+    /// Index of the segment in the plan.
+    pub segment_index: usize,
+    /// Time, s.
+    pub t_s: f64,
+    /// Accelerometer outputs, output unit.
+    pub u: [f64; 3],
+    /// Gyro rate, body axes, rad/s.
+    pub w_rad_s: [f64; 3],
+}
+
+/// The per-segment reduction, fed one line at a time; every parsed row also goes to `sink`.
+struct Reducer<'a, S> {
+    sink: S,
     path: &'a Path,
     names: Vec<&'a str>,
     accs: Vec<SegmentAccumulator>,
@@ -97,9 +114,10 @@ struct Reducer<'a> {
     report: ReadReport,
 }
 
-impl<'a> Reducer<'a> {
-    fn new(plan: &'a Plan, path: &'a Path) -> Self {
+impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
+    fn new(plan: &'a Plan, path: &'a Path, sink: S) -> Self {
         Reducer {
+            sink,
             path,
             names: plan.segments.iter().map(|s| s.name.as_str()).collect(),
             accs: plan
@@ -167,6 +185,13 @@ impl<'a> Reducer<'a> {
             };
         }
         self.report.rows += 1;
+        (self.sink)(&Row {
+            segment: self.names[idx],
+            segment_index: idx,
+            t_s: v[0],
+            u: [v[1], v[2], v[3]],
+            w_rad_s: [v[4], v[5], v[6]],
+        })?;
         let acc = &mut self.accs[idx];
         let before = acc.count();
         acc.push(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]]);
@@ -240,15 +265,26 @@ impl<'a> Reducer<'a> {
 /// Reduces the rows of `samples.csv` (header included) to statistics per plan segment.
 /// `path` is only used in messages.
 pub fn read_samples<R: BufRead>(
+    reader: R,
+    plan: &Plan,
+    path: &Path,
+) -> Result<(Vec<SegmentStats>, ReadReport), RecordingError> {
+    read_samples_each(reader, plan, path, |_| Ok(()))
+}
+
+/// [`read_samples`], handing every parsed row (finite or not, in file order) to `each` as well; an
+/// error from `each` stops the reading. Memory stays constant: rows are not kept.
+pub fn read_samples_each<R: BufRead>(
     mut reader: R,
     plan: &Plan,
     path: &Path,
+    each: impl FnMut(&Row<'_>) -> Result<(), RecordingError>,
 ) -> Result<(Vec<SegmentStats>, ReadReport), RecordingError> {
     let io = |source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let mut red = Reducer::new(plan, path);
+    let mut red = Reducer::new(plan, path, each);
 
     // Header (with an optional UTF-8 byte-order mark and CR).
     let mut line: Vec<u8> = Vec::with_capacity(256);
@@ -328,7 +364,7 @@ pub fn read_samples<R: BufRead>(
 }
 
 /// The final partial line (if any) and the no-rows check.
-fn finish_report(red: &mut Reducer<'_>, carry: &[u8]) -> Result<ReadReport, RecordingError> {
+fn finish_report<S>(red: &mut Reducer<'_, S>, carry: &[u8]) -> Result<ReadReport, RecordingError> {
     let mut report = std::mem::take(&mut red.report);
     if !carry.trim_ascii().is_empty() {
         // Only the last line of a file can lack its line end.
@@ -345,7 +381,11 @@ fn finish_report(red: &mut Reducer<'_>, carry: &[u8]) -> Result<ReadReport, Reco
     Ok(report)
 }
 
-fn collect_stats(red: &Reducer<'_>, plan: &Plan, report: &mut ReadReport) -> Vec<SegmentStats> {
+fn collect_stats<S>(
+    red: &Reducer<'_, S>,
+    plan: &Plan,
+    report: &mut ReadReport,
+) -> Vec<SegmentStats> {
     let path = red.path;
     let mut stats = Vec::with_capacity(red.accs.len());
     for ((acc, seg), first_bad) in red.accs.iter().zip(&plan.segments).zip(&red.first_rejected) {

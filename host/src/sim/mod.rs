@@ -3,6 +3,7 @@
 //! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), and the one
 //! random number generator ([`rng`]).
 
+pub mod flicker;
 pub mod handheld;
 #[cfg(test)]
 pub(crate) mod montecarlo;

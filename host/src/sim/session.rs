@@ -9,6 +9,7 @@
 //! not on the platform or on a dependency's version, and switching one noise source on or off does not
 //! change the draws of the others.
 
+use super::flicker::Flicker;
 use super::rng::Rng;
 use crate::session::{Plan, PlanError};
 use crate::session::{RecordingError, SessionWriter};
@@ -46,6 +47,12 @@ pub struct NoiseModel {
     /// Gyro scale and misalignment: the gyro reads `G ω + bias` (docs/model.md §8); identity =
     /// perfect. A unit file's `[gyro]` table sets it (and adds its bias).
     pub gyro_matrix: [[f64; 3]; 3],
+    /// Accelerometer flicker (1/f) bias noise, as its bias instability B, mg (Allan floor 0.664 B).
+    pub accel_flicker_mg: f64,
+    /// Gyro bias random walk, °/s/√s (each axis starts at 0 at the session's start).
+    pub gyro_bias_walk_deg_s_sqrt_s: f64,
+    /// Gyro flicker (1/f) bias noise, as its bias instability B, °/s.
+    pub gyro_flicker_deg_s: f64,
 }
 
 /// The identity, the perfect gyro's matrix.
@@ -80,6 +87,9 @@ impl Default for NoiseModel {
             gyro_white_deg_s: 0.05,
             gyro_bias_deg_s: [0.0; 3],
             gyro_matrix: IDENTITY,
+            accel_flicker_mg: 0.0,
+            gyro_bias_walk_deg_s_sqrt_s: 0.0,
+            gyro_flicker_deg_s: 0.0,
         }
     }
 }
@@ -114,6 +124,12 @@ impl NoiseModel {
             ("accel_bias_walk_mg_sqrt_s", self.accel_bias_walk_mg_sqrt_s),
             ("table_tilt_deg", self.table_tilt_deg),
             ("gyro_white_deg_s", self.gyro_white_deg_s),
+            ("accel_flicker_mg", self.accel_flicker_mg),
+            (
+                "gyro_bias_walk_deg_s_sqrt_s",
+                self.gyro_bias_walk_deg_s_sqrt_s,
+            ),
+            ("gyro_flicker_deg_s", self.gyro_flicker_deg_s),
         ];
         for (name, v) in sigmas {
             if !(v.is_finite() && v >= 0.0) {
@@ -188,6 +204,8 @@ const STREAM_ACCEL: u64 = 1;
 const STREAM_GYRO: u64 = 2;
 const STREAM_WALK: u64 = 3;
 const STREAM_TILT: u64 = 4;
+const STREAM_FLICKER: u64 = 5;
+const STREAM_GYRO_WALK: u64 = 6;
 
 /// `up` tilted by small angles (radians) about the two axes perpendicular to it that the estimator
 /// uses for a mount's tilt unknowns (`estimate::model::tilt_basis`), renormalised.
@@ -246,6 +264,22 @@ pub fn simulate_rows<E>(
         notes: Vec::new(),
     };
     let mut drift = [0.0f64; 3];
+    // Bias walk and flicker of the gyro and flicker of the accelerometer (their own streams, drawn
+    // only when enabled, so sessions without them are unchanged).
+    let mut rng_flicker = Rng::new(seed, STREAM_FLICKER);
+    let mut rng_gyro_walk = Rng::new(seed, STREAM_GYRO_WALK);
+    let accel_flicker_b = k.map(|k| noise.accel_flicker_mg * 1e-3 * k);
+    let mut accel_flicker: Vec<Flicker> = (0..3)
+        .filter(|_| noise.accel_flicker_mg > 0.0)
+        .map(|i| Flicker::new(accel_flicker_b[i], dt, &mut rng_flicker))
+        .collect();
+    let gyro_flicker_b = noise.gyro_flicker_deg_s.to_radians();
+    let mut gyro_flicker: Vec<Flicker> = (0..3)
+        .filter(|_| gyro_flicker_b > 0.0)
+        .map(|_| Flicker::new(gyro_flicker_b, dt, &mut rng_flicker))
+        .collect();
+    let gyro_walk = noise.gyro_bias_walk_deg_s_sqrt_s.to_radians() * dt.sqrt();
+    let mut gyro_drift = [0.0f64; 3];
     let mut index: u64 = 0;
     for seg in &plan.segments {
         let mount = seg.mount_name();
@@ -294,6 +328,9 @@ pub fn simulate_rows<E>(
                     drift[i] += walk[i] * rng_walk.normal();
                     u[i] += drift[i];
                 }
+                if let Some(fl) = accel_flicker.get_mut(i) {
+                    u[i] += fl.next(&mut rng_flicker);
+                }
                 if white[i] > 0.0 {
                     u[i] += white[i] * rng_accel.normal();
                 }
@@ -304,6 +341,13 @@ pub fn simulate_rows<E>(
             let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
             for i in 0..3 {
                 w[i] += gyro_bias[i];
+                if gyro_walk > 0.0 {
+                    gyro_drift[i] += gyro_walk * rng_gyro_walk.normal();
+                    w[i] += gyro_drift[i];
+                }
+                if let Some(fl) = gyro_flicker.get_mut(i) {
+                    w[i] += fl.next(&mut rng_flicker);
+                }
                 if gyro_sigma > 0.0 {
                     w[i] += gyro_sigma * rng_gyro.normal();
                 }

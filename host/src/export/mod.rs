@@ -1,7 +1,13 @@
-//! Our calibration in the conventions other tools use, so a result can be taken elsewhere and checked.
+//! Our calibration in the formats other tools read (`host export --format F`), and the conversions
+//! between our model and each tool's convention.
 //!
-//! Each form comes with its own `compensate`, written in that tool's convention; a test checks that every
-//! form turns the same samples into the same specific force as `shared::Compensator`.
+//! Formats: [`ExportFormat`]. Each writer states the conventions it assumes in the file it writes, and
+//! marks what the target cannot hold or what the calibration did not determine (never a silent zero).
+//! Each is checked by its own consumer in the tests: gcc for the C outputs (run against the Rust
+//! compensator), a YAML parser for Kalibr's file, a JSON parser for the JSON document.
+//!
+//! The conversions (each with its own `compensate`, written in that tool's convention; a test checks
+//! that every form turns the same samples into the same specific force as `shared::Compensator`):
 //!
 //! - [`PlainMatrices`]: the paper's eq. 6 / 16 matrices, `f_b[g] = K_A·U − ∇_b − f_L^b`.
 //! - [`FusionStyle`]: x-io Fusion's `FusionModelInertial`:
@@ -10,9 +16,16 @@
 //! - [`KalibrStyle`]: Kalibr's "scale-misalignment-size-effect" accelerometer model in its general
 //!   form: the measurement of axis `i` is `row_i(M)·f(r_i) + b_i` with `M = K·A/g` (output unit per m/s²),
 //!   `b = u0`, and the sensing point of axis x, y, z at `rx`, `ry`, `rz` (m, relative to the reference
-//!   point). Kalibr itself writes `M` in a lower-triangular parameterisation tied to its IMU frame; ours is
-//!   the same map expressed in the body frame.
+//!   point). Kalibr itself writes `M` lower-triangular after a rotation into its IMU frame
+//!   ([`kalibr`] does that factorisation).
 
+pub mod c;
+pub mod json;
+pub mod kalibr;
+pub mod params;
+pub mod toml_forms;
+
+use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use shared::params::ParamsError;
@@ -66,6 +79,112 @@ pub struct Conversions {
     pub fusion: FusionStyle,
     /// Kalibr's model.
     pub kalibr: KalibrStyle,
+}
+
+/// The formats `host export` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExportFormat {
+    /// Kalibr's IMU YAML (imu.yaml): topic, rate, noise densities and random walks, plus the
+    /// accelerometer intrinsics in Kalibr's scale-misalignment-size-effect parameterisation.
+    Kalibr,
+    /// A C header with x-io Fusion `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`.
+    FusionC,
+    /// A C header: the calibration as a plain struct initialiser, the device's precomputed
+    /// compensator constants, and the blob as a byte array (decode it with export/c/acal_blob.c).
+    CHeader,
+    /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
+    Json,
+    /// A PX4 parameter file (QGroundControl format): CAL_ACC0_{X,Y,Z}{OFF,SCALE}.
+    Px4,
+    /// An ArduPilot parameter file: INS_ACCOFFS_{X,Y,Z}, INS_ACCSCAL_{X,Y,Z}.
+    Ardupilot,
+    /// The paper's K_A, ∇_b and lever arms, as TOML.
+    Plain,
+    /// Fusion's misalignment, sensitivity and offset, as TOML.
+    Fusion,
+    /// The plain, Fusion and general Kalibr-style forms together, as TOML.
+    All,
+}
+
+/// Why a calibration cannot be exported.
+#[derive(Debug)]
+pub enum ExportError {
+    /// The parameters do not convert (degenerate axis, singular matrix…).
+    Params(ParamsError),
+    /// The compensator refuses the parameters.
+    Compensator(shared::compensator::CompensatorError),
+    /// The blob cannot be encoded.
+    Blob(shared::blob::BlobError),
+    /// The calibration file has no valid unit id, which the blob needs.
+    UnitId(String),
+    /// Serialising failed.
+    Serialise(String),
+}
+
+impl std::fmt::Display for ExportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ExportError::Params(e) => write!(f, "cannot export the calibration: {e}"),
+            ExportError::Compensator(e) => write!(f, "cannot export the calibration: {e}"),
+            ExportError::Blob(e) => write!(f, "cannot export the calibration's blob: {e}"),
+            ExportError::UnitId(m) => write!(f, "cannot export the calibration's blob: {m}"),
+            ExportError::Serialise(m) => write!(f, "cannot export the calibration: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for ExportError {}
+
+impl From<ParamsError> for ExportError {
+    fn from(e: ParamsError) -> Self {
+        ExportError::Params(e)
+    }
+}
+
+/// What an export is made from.
+#[derive(Clone, Debug)]
+pub struct ExportInput<'a> {
+    /// The calibration file as read (uncertainty, unit id and observability included).
+    pub unit: &'a UnitFile,
+    /// Its calibration.
+    pub cal: Calibration,
+    /// Noise figures from `host noise`, if any (Kalibr needs them).
+    pub noise: Option<&'a kalibr::KalibrNoise>,
+    /// Kalibr's `rostopic`.
+    pub rostopic: &'a str,
+    /// m/s² per output unit of the driver the PX4/ArduPilot/Kalibr user runs (their raw
+    /// accelerometer reading is `U × this`); `None`: `g / mean(k_i)`, a nominal scale.
+    pub driver_scale_m_s2_per_out: Option<f64>,
+}
+
+impl ExportInput<'_> {
+    /// The driver's scale: as given, or `g / mean(k_i)`.
+    pub fn driver_scale(&self) -> f64 {
+        self.driver_scale_m_s2_per_out.unwrap_or_else(|| {
+            let k = self.cal.statics.scale_out_per_g;
+            self.cal.gravity_m_s2 * 3.0 / (k[0] + k[1] + k[2])
+        })
+    }
+}
+
+/// Writes `input` in `format`.
+pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
+    match format {
+        ExportFormat::Kalibr => kalibr::render(input),
+        ExportFormat::FusionC => c::render_fusion(input),
+        ExportFormat::CHeader => c::render_header(input),
+        ExportFormat::Json => json::render(input),
+        ExportFormat::Px4 => params::render_px4(input),
+        ExportFormat::Ardupilot => params::render_ardupilot(input),
+        ExportFormat::Plain | ExportFormat::Fusion | ExportFormat::All => {
+            let observable = input.unit.uncertainty.as_ref();
+            toml_forms::render_marked(
+                &input.cal,
+                format,
+                observable.map(|u| &u.lever_arms_observable),
+            )
+        }
+    }
 }
 
 /// Converts a calibration to every form.
@@ -134,108 +253,6 @@ impl KalibrStyle {
         let inv = linalg::inverse(&self.m).unwrap_or([[0.0; 3]; 3]);
         linalg::mat_vec(&inv, &rhs)
     }
-}
-
-/// The conventions [`export`] writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExportFormat {
-    /// The paper's `K_A`, `∇_b` and the lever arms ([`crate::export::PlainMatrices`]).
-    Plain,
-    /// x-io Fusion's misalignment, sensitivity, offset ([`crate::export::FusionStyle`]).
-    Fusion,
-    /// Kalibr-style `M`, bias, `rx/ry/rz` ([`crate::export::KalibrStyle`]).
-    Kalibr,
-    /// All three, as the tables `[plain]`, `[fusion]`, `[kalibr]`.
-    All,
-}
-
-impl std::str::FromStr for ExportFormat {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "plain" => Ok(ExportFormat::Plain),
-            "fusion" => Ok(ExportFormat::Fusion),
-            "kalibr" => Ok(ExportFormat::Kalibr),
-            "all" => Ok(ExportFormat::All),
-            _ => Err(format!(
-                "unknown export format '{s}': use plain, fusion, kalibr or all"
-            )),
-        }
-    }
-}
-
-const HEADER_PLAIN: &str = "\
-# Plain matrices (paper eq. 16): f_b[g] = K_A·U − ∇_b − f_L^b, with f_L^b = K_A·(K d),
-# (K d)_i = row_i(K_A⁻¹)·(W r_i)/g and W = [ω̇×] + [ω×]². K_A in g per output unit, row-major;
-# ∇_b in g; lever_arms_m row i = r_i (m, body axes, from the reference point).
-";
-const HEADER_FUSION: &str = "\
-# x-io Fusion FusionModelInertial: f[g] = misalignment·((U − offset) ∘ sensitivity).
-# misalignment = A⁻¹ (row-major), sensitivity = 1/k_i (g per output unit), offset = u0. No lever arms:
-# static compensation only.
-";
-const HEADER_KALIBR: &str = "\
-# Kalibr-style scale-misalignment-size-effect model, general form, in the body frame:
-# u_i = row_i(m)·(f + W r_i) + bias_i, m = K·A/g (output unit per m/s², row-major), bias = u0,
-# rx, ry, rz = sensing points of the x, y, z accelerometers (m). Solve for f (m/s²).
-";
-
-/// Why a calibration cannot be exported.
-#[derive(Debug)]
-pub struct ExportError(pub String);
-
-impl std::fmt::Display for ExportError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "cannot export the calibration: {}", self.0)
-    }
-}
-
-impl std::error::Error for ExportError {}
-
-/// `host export`: the calibration in another tool's convention, as TOML (with a comment header that
-/// states the convention).
-pub fn export(calibration: &Calibration, format: ExportFormat) -> Result<String, ExportError> {
-    let c: Conversions = convert(calibration).map_err(|e| ExportError(e.to_string()))?;
-    let ser = |r: Result<String, toml::ser::Error>| r.map_err(|e| ExportError(e.to_string()));
-    Ok(match format {
-        ExportFormat::Plain => format!("{HEADER_PLAIN}{}", ser(toml::to_string(&c.plain))?),
-        ExportFormat::Fusion => format!("{HEADER_FUSION}{}", ser(toml::to_string(&c.fusion))?),
-        ExportFormat::Kalibr => format!("{HEADER_KALIBR}{}", ser(toml::to_string(&c.kalibr))?),
-        ExportFormat::All => format!(
-            "{HEADER_PLAIN}{HEADER_FUSION}{HEADER_KALIBR}{}",
-            ser(toml::to_string(&c))?
-        ),
-    })
-}
-
-/// [`export`] of a calibration file's values, with the lever-arm components its plan did not
-/// determine (`lever_arms_observable = false` in `[uncertainty]`) written as `nan` and listed in a
-/// comment: a consumer must not take an undetermined component (often exactly 0) for a measurement.
-pub fn export_marked(
-    calibration: &Calibration,
-    format: ExportFormat,
-    observable: Option<&[[bool; 3]; 3]>,
-) -> Result<String, ExportError> {
-    let mut cal = *calibration;
-    let mut names = Vec::new();
-    if let Some(obs) = observable {
-        for i in 0..3 {
-            for j in 0..3 {
-                if !obs[i][j] {
-                    cal.lever_arms.r_m[i][j] = f64::NAN;
-                    names.push(format!("r{}{}", i + 1, shared::params::axis_name(j)));
-                }
-            }
-        }
-    }
-    let text = export(&cal, format)?;
-    if names.is_empty() {
-        return Ok(text);
-    }
-    Ok(format!(
-        "# NOT DETERMINED by the calibration's plan, written as nan (not a measurement): {}\n{text}",
-        names.join(", ")
-    ))
 }
 
 #[cfg(test)]
@@ -311,69 +328,5 @@ mod tests {
         // paper-unit.toml [expected]: K_A[0][0] = 2.53161061 g/V, ∇_b = (6.13688643, …) g.
         assert!((c.plain.k_a_g_per_out[0][0] - 2.53161061).abs() < 1e-7);
         assert!((c.plain.nabla_b_g[0] - 6.13688643).abs() < 1e-7);
-    }
-
-    /// Each exported form, read back from its TOML, compensates like the device's compensator.
-    #[test]
-    fn every_exported_form_reads_back_and_compensates_the_same() {
-        let cal = shared::params::PAPER_UNIT;
-        let plain: PlainMatrices =
-            toml::from_str(&export(&cal, ExportFormat::Plain).unwrap()).unwrap();
-        let fusion: FusionStyle =
-            toml::from_str(&export(&cal, ExportFormat::Fusion).unwrap()).unwrap();
-        let kalibr: KalibrStyle =
-            toml::from_str(&export(&cal, ExportFormat::Kalibr).unwrap()).unwrap();
-        let all: Conversions = toml::from_str(&export(&cal, ExportFormat::All).unwrap()).unwrap();
-        assert_eq!(all, convert(&cal).unwrap());
-        assert_eq!(
-            (&plain, &fusion, &kalibr),
-            (&all.plain, &all.fusion, &all.kalibr)
-        );
-        let model = ForwardModel::new(&cal).unwrap();
-        let g = cal.gravity_m_s2;
-        for k in 0..50 {
-            let x = k as f64;
-            let f = [9.0 * (0.3 * x).sin(), -4.0 + 0.1 * x, 9.8 * (0.2 * x).cos()];
-            let motion = BodyMotion {
-                f_o: BodySpecificForce { m_s2: f },
-                omega: BodyRate {
-                    rad_s: [3.0 * (0.5 * x).cos(), 1.0, -0.02 * x],
-                },
-                omega_dot: BodyAngularAccel {
-                    rad_s2: [0.0, 4.0 * (0.1 * x).sin(), 2.0],
-                },
-            };
-            let u = model.outputs(&motion).raw;
-            let (w, wd) = (motion.omega.rad_s, motion.omega_dot.rad_s2);
-            let p = plain.compensate(u, w, wd);
-            let kk = kalibr.compensate(u, w, wd);
-            let still = BodyMotion {
-                omega: BodyRate::default(),
-                omega_dot: BodyAngularAccel::default(),
-                ..motion
-            };
-            let fu = fusion
-                .compensate_static_g(model.outputs(&still).raw)
-                .map(|v| v * g);
-            for j in 0..3 {
-                assert!(
-                    (p[j] - f[j]).abs() < 1e-9,
-                    "plain {j}: {} vs {}",
-                    p[j],
-                    f[j]
-                );
-                assert!((kk[j] - f[j]).abs() < 1e-9, "kalibr {j}");
-                assert!((fu[j] - f[j]).abs() < 1e-9, "fusion {j}");
-            }
-        }
-    }
-
-    #[test]
-    fn export_format_names() {
-        assert_eq!("kalibr".parse::<ExportFormat>(), Ok(ExportFormat::Kalibr));
-        assert!("yaml"
-            .parse::<ExportFormat>()
-            .unwrap_err()
-            .contains("plain"));
     }
 }

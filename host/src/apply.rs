@@ -1,0 +1,401 @@
+//! Applying a calibration to a recording offline, with the device's own per-sample code.
+//!
+//! Each row goes through exactly what the firmware's pipeline does with a sample: the gyro rate
+//! into `shared::omega_dot::OmegaDotEstimator` (same sample rate, same corner fraction
+//! `firmware::pipeline::OMEGA_DOT_CORNER_FRACTION`), then `shared::Compensator::compensate` in `f32`
+//! (`docs/model.md` §3, §10). The result is therefore bit for bit what a device with this calibration
+//! would output for the same outputs and rates. Two differences from a device, both because a
+//! recording is not one continuous stream: the ω̇ estimator restarts at every segment change (the
+//! unit was remounted in between, so a difference across the gap means nothing), and a row with a
+//! non-finite value restarts it too (as on the device) and gives `NaN` outputs instead of a number.
+//!
+//! Output: `segment,t_s,f_x_g,f_y_g,f_z_g` — the specific force at the body origin, body axes, in g
+//! (the compensator's m/s² divided by the calibration's gravity, in f64).
+
+use crate::output_file::OutputFileError;
+use crate::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
+use crate::session::{PLAN_FILE, SAMPLES_FILE};
+use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
+use shared::compensator::{Compensator, CompensatorError, LeverMode};
+use shared::omega_dot::{OmegaDotError, OmegaDotEstimator};
+use shared::{BodyAngularAccel, BodyRate, Calibration, SensorOutputs, UnitId};
+use std::io::{BufReader, Write};
+use std::path::Path;
+
+/// The header of the output, exactly.
+pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g";
+
+/// Why a calibration could not be applied.
+#[derive(Debug)]
+pub enum ApplyError {
+    /// The calibration does not give a compensator.
+    Compensator(CompensatorError),
+    /// The recording's sample rate does not give an ω̇ estimator.
+    SampleRate(f64, OmegaDotError),
+    /// The recording and the calibration are of different units.
+    UnitMismatch {
+        /// Unit id in the calibration.
+        calibration: UnitId,
+        /// Unit id in the recording's plan.
+        recording: String,
+    },
+    /// The recording could not be read.
+    Recording(RecordingError),
+    /// The output could not be written.
+    Output(OutputFileError),
+}
+
+impl std::fmt::Display for ApplyError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ApplyError::Compensator(e) => write!(f, "the calibration cannot be applied: {e}"),
+            ApplyError::SampleRate(hz, e) => write!(
+                f,
+                "the recording's sample_rate_hz = {hz} cannot be used for the ω̇ estimate: {e}"
+            ),
+            ApplyError::UnitMismatch {
+                calibration,
+                recording,
+            } => write!(
+                f,
+                "the calibration is of unit {calibration} but the recording is of unit {recording}; \
+                 use that unit's calibration (or --ignore-unit-id if the recording's id is wrong)"
+            ),
+            ApplyError::Recording(e) => e.fmt(f),
+            ApplyError::Output(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for ApplyError {}
+
+impl From<RecordingError> for ApplyError {
+    fn from(e: RecordingError) -> Self {
+        ApplyError::Recording(e)
+    }
+}
+
+/// The device's per-sample state for one recording.
+#[derive(Clone, Debug)]
+pub struct Applier {
+    compensator: Compensator,
+    omega_dot: OmegaDotEstimator,
+    segment: Option<usize>,
+}
+
+impl Applier {
+    /// The compensator of `cal` in `mode` and the device's ω̇ estimator for `sample_rate_hz`.
+    pub fn new(
+        cal: &Calibration,
+        mode: LeverMode,
+        sample_rate_hz: f64,
+    ) -> Result<Self, ApplyError> {
+        let compensator = Compensator::new(cal, mode).map_err(ApplyError::Compensator)?;
+        let fs = sample_rate_hz as f32;
+        let omega_dot = OmegaDotEstimator::new(fs, fs * OMEGA_DOT_CORNER_FRACTION)
+            .map_err(|e| ApplyError::SampleRate(sample_rate_hz, e))?;
+        Ok(Applier {
+            compensator,
+            omega_dot,
+            segment: None,
+        })
+    }
+
+    /// One sample exactly as the device treats it: specific force, m/s², `f32`; `None` for a sample
+    /// with a non-finite value (which also restarts the ω̇ estimate).
+    pub fn sample(&mut self, u: &[f32; 3], w_rad_s: &[f32; 3]) -> Option<[f32; 3]> {
+        if !u.iter().chain(w_rad_s).all(|v| v.is_finite()) {
+            self.omega_dot.reset();
+            return None;
+        }
+        let wd = self.omega_dot.update(w_rad_s);
+        Some(self.compensate(u, w_rad_s, &wd))
+    }
+
+    /// The compensation step alone, with a given ω̇ (the firmware pipeline's `compensate`).
+    pub fn compensate(&self, u: &[f32; 3], w_rad_s: &[f32; 3], wd_rad_s2: &[f32; 3]) -> [f32; 3] {
+        let u = SensorOutputs { raw: *u };
+        let f = if self.compensator.mode() == LeverMode::Off {
+            self.compensator.compensate_static(&u)
+        } else {
+            self.compensator.compensate(
+                &u,
+                &BodyRate { rad_s: *w_rad_s },
+                &BodyAngularAccel { rad_s2: *wd_rad_s2 },
+            )
+        };
+        f.m_s2
+    }
+
+    /// The ω̇ estimator's state (its last output is what the next [`Applier::sample`] builds on).
+    pub fn omega_dot_estimator(&self) -> &OmegaDotEstimator {
+        &self.omega_dot
+    }
+
+    /// One recorded row: restarts the ω̇ estimate on a segment change, then [`Applier::sample`].
+    pub fn row(&mut self, row: &Row<'_>) -> Option<[f32; 3]> {
+        if self.segment != Some(row.segment_index) {
+            self.omega_dot.reset();
+            self.segment = Some(row.segment_index);
+        }
+        self.sample(&row.u.map(|v| v as f32), &row.w_rad_s.map(|v| v as f32))
+    }
+}
+
+/// What [`apply_session`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ApplySummary {
+    /// Rows written (one per input row).
+    pub rows: u64,
+    /// Rows written as `NaN` because an input value was not finite.
+    pub non_finite_rows: u64,
+    /// Warnings of the reader (cut-short last line, empty segments, …).
+    pub warnings: Vec<String>,
+}
+
+/// Checks the unit ids when both sides have one.
+pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
+    if let (Some(c), Some(r)) = (cal_unit, plan.unit_id.as_deref()) {
+        if UnitId::parse_hex(r) != Some(c) {
+            return Err(ApplyError::UnitMismatch {
+                calibration: c,
+                recording: r.to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Applies `cal` to the session in `dir`, writing the CSV to `out` (streaming, constant memory).
+/// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`.
+pub fn apply_session(
+    dir: &Path,
+    cal: &Calibration,
+    cal_unit: Option<UnitId>,
+    mode: LeverMode,
+    out: &mut dyn Write,
+) -> Result<ApplySummary, ApplyError> {
+    let plan = Plan::load(&dir.join(PLAN_FILE))
+        .map_err(|e: PlanError| ApplyError::from(RecordingError::from(e)))?;
+    check_unit(cal_unit, &plan)?;
+    let mut applier = Applier::new(cal, mode, plan.sample_rate_hz)?;
+    let path = dir.join(SAMPLES_FILE);
+    let file = std::fs::File::open(&path).map_err(|source| RecordingError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let write_err = |source: std::io::Error| RecordingError::Io {
+        path: Path::new("(output)").to_path_buf(),
+        source,
+    };
+    writeln!(out, "{APPLY_HEADER}").map_err(write_err)?;
+    let g = cal.gravity_m_s2;
+    let mut summary = ApplySummary::default();
+    let mut fmt = ryu::Buffer::new();
+    let (_, report) = read_samples_each(
+        BufReader::with_capacity(1 << 20, file),
+        &plan,
+        &path,
+        |row| {
+            let f = applier.row(row);
+            summary.rows += 1;
+            let f_g = match f {
+                Some(f) => f.map(|v| f64::from(v) / g),
+                None => {
+                    summary.non_finite_rows += 1;
+                    [f64::NAN; 3]
+                }
+            };
+            let mut line = String::with_capacity(96);
+            line.push_str(row.segment);
+            line.push(',');
+            line.push_str(fmt.format(row.t_s));
+            for v in f_g {
+                line.push(',');
+                line.push_str(if v.is_finite() { fmt.format(v) } else { "NaN" });
+            }
+            line.push('\n');
+            out.write_all(line.as_bytes()).map_err(write_err)
+        },
+    )?;
+    summary.warnings = report.warnings;
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::builtin::builtin_plan;
+    use crate::sim::{simulate_to_dir, NoiseModel};
+    use crate::unit_file::UnitFile;
+    use firmware::testvectors::{COMP_CASES, OMEGA_DOT_RATE_CORNER_HZ, OMEGA_DOT_SEQ};
+    use shared::forward::TableState;
+
+    fn f(bits: &[u32; 3]) -> [f32; 3] {
+        bits.map(f32::from_bits)
+    }
+
+    /// Parses the output CSV: (segment, t_s, f_g) per row.
+    fn parse(csv: &str) -> Vec<(String, f64, [f64; 3])> {
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some(APPLY_HEADER));
+        lines
+            .map(|l| {
+                let v: Vec<&str> = l.split(',').collect();
+                assert_eq!(v.len(), 5, "{l}");
+                let n = |k: usize| v[k].parse::<f64>().unwrap();
+                (v[0].to_string(), n(1), [n(2), n(3), n(4)])
+            })
+            .collect()
+    }
+
+    /// A session directory holding `rows` (u, w) of the firmware's test vectors at 1 kHz.
+    fn vector_session(dir: &Path, rows: &[([f32; 3], [f32; 3])]) {
+        let plan = "output_unit = \"V\"\nsample_rate_hz = 1000\n[[segment]]\nname = \"v\"\n\
+                    up_b = [0, 0, 1]\nrate_deg_s = 100\n";
+        std::fs::write(dir.join(PLAN_FILE), plan).unwrap();
+        let mut s = String::from(crate::session::SAMPLES_HEADER);
+        s.push('\n');
+        for (k, (u, w)) in rows.iter().enumerate() {
+            // f64 of an f32 prints exactly and parses back to the same f32.
+            let d = |x: f32| f64::from(x).to_string();
+            s.push_str(&format!(
+                "v,{},{},{},{},{},{},{}\n",
+                k as f64 * 1e-3,
+                d(u[0]),
+                d(u[1]),
+                d(u[2]),
+                d(w[0]),
+                d(w[1]),
+                d(w[2])
+            ));
+        }
+        std::fs::write(dir.join(SAMPLES_FILE), s).unwrap();
+    }
+
+    #[test]
+    fn bit_for_bit_with_the_firmware_test_vectors() {
+        let cal = firmware::paper_unit::calibration();
+        let g = cal.gravity_m_s2;
+        let (fs, fc) = OMEGA_DOT_RATE_CORNER_HZ;
+        assert_eq!(fc, fs * OMEGA_DOT_CORNER_FRACTION);
+        // The compensation step in the three modes.
+        let modes = [
+            LeverMode::Off,
+            LeverMode::RateOnly,
+            LeverMode::RateAndAcceleration,
+        ];
+        let appliers = modes.map(|m| Applier::new(&cal, m, f64::from(fs)).unwrap());
+        for c in COMP_CASES {
+            let (u, w, wd) = (f(&c.u), f(&c.w), f(&c.wd));
+            let want = [c.out_static, c.out_rate, c.out_full];
+            for (a, want) in appliers.iter().zip(want) {
+                assert_eq!(a.compensate(&u, &w, &wd).map(f32::to_bits), want);
+            }
+        }
+        // The ω̇ estimator built from the recording's sample rate, over the firmware's gyro sequence.
+        let mut a = Applier::new(&cal, LeverMode::RateAndAcceleration, f64::from(fs)).unwrap();
+        for (w, want) in OMEGA_DOT_SEQ {
+            let w = f(w);
+            assert_eq!(
+                a.omega_dot_estimator().clone().update(&w).map(f32::to_bits),
+                *want
+            );
+            assert!(a.sample(&[1.0; 3], &w).is_some());
+        }
+        // And through the files: session → CSV → the same f32 values (divided by g in f64).
+        let dir = tempfile::tempdir().unwrap();
+        let rows: Vec<_> = COMP_CASES.iter().map(|c| (f(&c.u), f(&c.w))).collect();
+        vector_session(dir.path(), &rows);
+        for (mode, pick) in [(LeverMode::Off, 0), (LeverMode::RateOnly, 1)] {
+            let mut out = Vec::new();
+            let s = apply_session(dir.path(), &cal, None, mode, &mut out).unwrap();
+            assert_eq!(s.rows, COMP_CASES.len() as u64);
+            let parsed = parse(std::str::from_utf8(&out).unwrap());
+            for (c, (_, _, f_g)) in COMP_CASES.iter().zip(&parsed) {
+                let want =
+                    [c.out_static, c.out_rate][pick].map(|b| f64::from(f32::from_bits(b)) / g);
+                assert_eq!(*f_g, want);
+            }
+        }
+    }
+
+    #[test]
+    fn recovers_the_simulated_specific_force() {
+        let unit = UnitFile::paper_unit();
+        let cal = unit.to_calibration().unwrap();
+        let mut plan = builtin_plan("quick-oblique").unwrap().unwrap();
+        // A spin-up, so that the ω̇ estimate and the tangential term are exercised too.
+        plan.segments.push(crate::session::SegmentPlan {
+            attitude: Default::default(),
+            attitude_sigma_deg: None,
+            name: "ramp".into(),
+            up_b: [0.6, 0.0, 0.8],
+            rate_deg_s: 0.0,
+            rate_end_deg_s: Some(400.0),
+            duration_s: Some(1.0),
+            table_centre_m: Some([0.03, -0.02, 0.01]),
+            mount: None,
+        });
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &unit, &plan, &NoiseModel::none(), 3, false).unwrap();
+        let mut out = Vec::new();
+        let s = apply_session(
+            dir.path(),
+            &cal,
+            None,
+            LeverMode::RateAndAcceleration,
+            &mut out,
+        )
+        .unwrap();
+        let rows = parse(std::str::from_utf8(&out).unwrap());
+        assert_eq!(rows.len() as u64, s.rows);
+        let g = cal.gravity_m_s2;
+        let dt = 1.0 / plan.sample_rate_hz;
+        let (mut worst_g, mut checked) = (0.0f64, 0);
+        let mut seg_start = (String::new(), 0.0);
+        for (name, t, f_g) in &rows {
+            if *name != seg_start.0 {
+                seg_start = (name.clone(), *t);
+            }
+            let sp = plan.segments.iter().find(|p| p.name == *name).unwrap();
+            let t_local = t - seg_start.1;
+            // The ω̇ filter settles in ~10 of its 15-sample lags.
+            if t_local < 0.15 {
+                continue;
+            }
+            let d = sp.duration_s.unwrap();
+            let r1 = sp.rate_end_deg_s.unwrap_or(sp.rate_deg_s);
+            let accel = (r1 - sp.rate_deg_s) / d;
+            let table = TableState {
+                up_b: sp.up_b,
+                rate_rad_s: (sp.rate_deg_s + accel * (t_local / dt).round() * dt).to_radians(),
+                accel_rad_s2: accel.to_radians(),
+                centre_m: sp.table_centre_m.unwrap_or([0.0; 3]),
+            };
+            let truth = table.motion(g).f_o.m_s2.map(|v| v / g);
+            for j in 0..3 {
+                worst_g = worst_g.max((f_g[j] - truth[j]).abs());
+            }
+            checked += 1;
+        }
+        assert!(checked > rows.len() / 2, "{checked} of {}", rows.len());
+        // f32 arithmetic on ~2 V outputs resolves ~0.3 µg; the lever terms at 200 °/s add rounding.
+        assert!(worst_g < 5e-6, "worst error {worst_g} g");
+    }
+
+    #[test]
+    fn refuses_another_units_calibration() {
+        let unit = UnitFile::paper_unit();
+        let cal = unit.to_calibration().unwrap();
+        let mut plan = builtin_plan("quick-oblique").unwrap().unwrap();
+        plan.unit_id = Some("00112233445566778899aabb".into());
+        let other = UnitId::parse_hex("ffeeddccbbaa998877665544").unwrap();
+        let err = check_unit(Some(other), &plan).unwrap_err();
+        assert!(err.to_string().contains("--ignore-unit-id"), "{err}");
+        let same = UnitId::parse_hex("00112233445566778899AABB");
+        assert!(check_unit(same, &plan).is_ok());
+        assert!(check_unit(None, &plan).is_ok());
+        let _ = cal;
+    }
+}

@@ -1,0 +1,79 @@
+//! `host noise`: Allan deviation and noise terms of a still recording.
+
+use super::CliError;
+use crate::export::convert;
+use crate::noise::{analyse, NoiseError};
+use crate::output_file::write_atomic;
+use crate::report::plot::{render, Formats};
+use crate::unit_file::{UnitFile, UnitFileError};
+use clap::Args;
+use std::path::PathBuf;
+
+/// `host noise`.
+#[derive(Debug, Args)]
+pub struct NoiseArgs {
+    /// A session directory (its longest static segment is used) or a samples.csv.
+    #[arg(long, value_name = "SESSION_DIR|samples.csv")]
+    pub input: PathBuf,
+    /// A calibration, to analyse the accelerometer in m/s² (needed for Kalibr's accelerometer figures).
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
+    /// Directory for noise.json, allan.csv and the figure allan.svg/.png.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Replace existing files in --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the result as one JSON document on stdout (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `host noise`.
+pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
+    let plain = match &a.calibration {
+        Some(p) => {
+            let unit = UnitFile::load(p)?;
+            let cal = unit
+                .to_calibration()
+                .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
+            Some(convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain)
+        }
+        None => None,
+    };
+    let report = analyse(&a.input, plain.as_ref(), quiet).map_err(CliError::Noise)?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    let json = serde_json::to_string_pretty(&report)
+        .map_err(|e| CliError::Noise(NoiseError::File(a.input.clone(), e.to_string())))?;
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::Written(crate::output_file::OutputFileError::Io(dir.clone(), e))
+        })?;
+        write_atomic(&dir.join("noise.json"), json.as_bytes(), a.force)
+            .map_err(CliError::Written)?;
+        write_atomic(&dir.join("allan.csv"), report.csv().as_bytes(), a.force)
+            .map_err(CliError::Written)?;
+        let fig = render(&report.figure(), dir, Formats::default())
+            .map_err(|e| CliError::Noise(NoiseError::File(dir.clone(), e.to_string())))?;
+        for w in &fig.warnings {
+            eprintln!("warning: {w}");
+        }
+        if !quiet {
+            eprintln!(
+                "wrote noise.json, allan.csv and the figure into {}",
+                dir.display()
+            );
+        }
+    }
+    if a.json {
+        println!("{json}");
+        if !quiet {
+            eprint!("{}", report.render());
+        }
+    } else if !quiet {
+        print!("{}", report.render());
+    }
+    Ok(())
+}

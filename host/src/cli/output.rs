@@ -1,0 +1,54 @@
+//! Where a command's output goes: with `--json` one JSON document on stdout and everything for
+//! people on stderr (so `host calibrate --json | jq .` works while progress bars and prompts still
+//! show); without it the human text on stdout. `--quiet` silences the human text (warnings and
+//! errors still go to stderr).
+
+use super::CliError;
+use serde::Serialize;
+use std::fmt::Display;
+use std::io::Write;
+
+/// The output channels of one command.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Output {
+    /// `--json`: stdout carries only the JSON document.
+    pub json: bool,
+    /// `--quiet`.
+    pub quiet: bool,
+}
+
+impl Output {
+    /// Text for people (a result table, a summary line). A closed or full stdout is an error of the
+    /// command, never a panic; a closed stderr (where the text goes with `--json`) is ignored.
+    pub fn human(&self, text: impl Display) -> Result<(), CliError> {
+        if self.quiet {
+            return Ok(());
+        }
+        if self.json {
+            let _ = write!(std::io::stderr(), "{text}");
+            Ok(())
+        } else {
+            crate::out!("{text}").map_err(CliError::Stdout)
+        }
+    }
+
+    /// [`Output::human`] with a line end.
+    pub fn line(&self, text: impl Display) -> Result<(), CliError> {
+        self.human(format_args!("{text}\n"))
+    }
+
+    /// A warning: always on stderr.
+    pub fn warn(&self, text: impl Display) {
+        let _ = writeln!(std::io::stderr(), "warning: {text}");
+    }
+
+    /// The JSON document, when `--json` was given.
+    pub fn document<T: Serialize>(&self, value: &T) -> Result<(), CliError> {
+        if self.json {
+            let text = serde_json::to_string_pretty(value)
+                .map_err(|e| CliError::Usage(format!("cannot write the JSON result: {e}")))?;
+            crate::outln!("{text}").map_err(CliError::Stdout)?;
+        }
+        Ok(())
+    }
+}

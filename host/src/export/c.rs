@@ -1,0 +1,179 @@
+//! C headers: the calibration for a C firmware (`c-header`) and for x-io Fusion (`fusion-c`).
+//!
+//! `c-header` holds three things: the calibration as a plain `struct acal_calibration` initialiser,
+//! the device's precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
+//! `shared::Compensator`, so `acal_compensate` in `export/c/acal_blob.c` gives the device's results bit
+//! for bit), and the blob as a byte array that `acal_decode` checks and decodes. The decoder and the
+//! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`).
+//!
+//! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`
+//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]); Fusion has no lever-arm terms,
+//! and the gyroscope is not part of this calibration (the header says so instead of writing an identity).
+
+use super::{convert, ExportError, ExportInput};
+use shared::blob::ParameterBlob;
+use shared::compensator::{Compensator, LeverMode};
+use shared::params::ReferencePoint;
+use std::fmt::Write as _;
+
+/// The decoder's header.
+pub const DECODER_H: &str = include_str!("c/acal_blob.h");
+/// The decoder and the compensation.
+pub const DECODER_C: &str = include_str!("c/acal_blob.c");
+
+/// An `f32` as a C `float` literal that converts back to the same bits (shortest round-trip form).
+fn c_f32(v: f32) -> String {
+    format!("{v:e}f")
+}
+
+/// An `f64` as a C `double` literal that converts back to the same bits.
+fn c_f64(v: f64) -> String {
+    format!("{v:e}")
+}
+
+fn list<T: Copy>(v: &[T], f: impl Fn(T) -> String) -> String {
+    let items: Vec<String> = v.iter().map(|x| f(*x)).collect();
+    format!("{{{}}}", items.join(", "))
+}
+
+fn matrix<T: Copy>(m: &[[T; 3]; 3], f: impl Fn(T) -> String + Copy) -> String {
+    let rows: Vec<String> = m.iter().map(|r| list(r, f)).collect();
+    format!("{{{}}}", rows.join(", "))
+}
+
+/// Lines naming the lever-arm components the calibration did not determine.
+fn undetermined_lever_arms(input: &ExportInput<'_>) -> Option<String> {
+    let u = input.unit.uncertainty.as_ref()?;
+    let names: Vec<String> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| !u.lever_arms_observable[i][j])
+        .map(|(i, j)| format!("lever_arms_m[{i}][{j}]"))
+        .collect();
+    (!names.is_empty()).then(|| {
+        format!(
+            " * UNDETERMINED (not observed by the calibration plan; the value is not a measurement):\n *   {}\n",
+            names.join(", ")
+        )
+    })
+}
+
+/// The `c-header` text.
+pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    let cal = &input.cal;
+    let unit_id = input
+        .unit
+        .unit_id()
+        .map_err(ExportError::UnitId)?
+        .ok_or_else(|| {
+            ExportError::UnitId(
+                "the calibration file has no unit_id, and a blob is bound to one unit; calibrate \
+                 with the unit's id (or add unit_id = \"…24 hex digits…\")"
+                    .into(),
+            )
+        })?;
+    let blob = ParameterBlob {
+        unit_id,
+        calibration: *cal,
+        created_unix_s: 0,
+    };
+    let (bytes, n) = blob.to_bytes().map_err(ExportError::Blob)?;
+    let comp = Compensator::new(cal, LeverMode::RateAndAcceleration)
+        .map_err(ExportError::Compensator)?
+        .constants();
+    let s = &cal.statics;
+    let (reference, offset) = match cal.reference {
+        ReferencePoint::TableAxis => (0, [0.0; 3]),
+        ReferencePoint::Centroid => (1, [0.0; 3]),
+        ReferencePoint::BodyPoint { offset_m } => (2, offset_m),
+    };
+    let mut w = String::new();
+    let _ = write!(
+        w,
+        "/*\n * Accelerometer calibration of unit {unit_id} (host export --format c-header).\n\
+         * Decode ACAL_BLOB with acal_decode() and compensate with acal_compensate() from\n\
+         * acal_blob.h / acal_blob.c (host/src/export/c/). The blob's creation time is 0 (unknown).\n\
+         * ACAL_COMPENSATOR holds the device's precomputed f32 constants (all lever-arm terms on).\n"
+    );
+    if let Some(u) = undetermined_lever_arms(input) {
+        w.push_str(&u);
+    }
+    let _ = writeln!(
+        w,
+        " */\n#ifndef ACAL_CALIBRATION_H\n#define ACAL_CALIBRATION_H\n\n#include <stdint.h>\n#include \"acal_blob.h\"\n"
+    );
+    let _ = writeln!(
+        w,
+        "static const struct acal_calibration ACAL_CALIBRATION = {{\n    .unit_id = {},\n    \
+         .output_unit = {},\n    .zero_bias_out = {},\n    .scale_out_per_g = {},\n    \
+         .installation_angles_deg = {},\n    .lever_arms_m = {},\n    .reference = {reference},\n    \
+         .reference_offset_m = {},\n    .gravity_m_s2 = {},\n    .created_unix_s = 0,\n}};\n",
+        list(&unit_id.0, |b| format!("0x{b:02x}")),
+        u8::from(s.output_unit == shared::OutputUnit::Lsb),
+        list(&s.zero_bias_out, c_f64),
+        list(&s.scale_out_per_g, c_f64),
+        matrix(&s.installation_angles_deg, c_f64),
+        matrix(&cal.lever_arms.r_m, c_f64),
+        list(&offset, c_f64),
+        c_f64(cal.gravity_m_s2),
+    );
+    let _ = writeln!(
+        w,
+        "static const struct acal_compensator ACAL_COMPENSATOR = {{\n    .zero_bias_out = {},\n    \
+         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n}};\n",
+        list(&comp.zero_bias_out, c_f32),
+        matrix(&comp.ka_m_s2_per_out, c_f32),
+        matrix(&comp.a, c_f32),
+        matrix(&comp.p, c_f32),
+        matrix(&comp.q, c_f32),
+        list(&comp.s, c_f32),
+    );
+    let _ = writeln!(
+        w,
+        "#define ACAL_BLOB_LEN {n}u\nstatic const uint8_t ACAL_BLOB[ACAL_BLOB_LEN] = {{"
+    );
+    for chunk in bytes[..n].chunks(16) {
+        let items: Vec<String> = chunk.iter().map(|b| format!("0x{b:02x}")).collect();
+        let _ = writeln!(w, "    {},", items.join(", "));
+    }
+    let _ = writeln!(w, "}};\n\n#endif /* ACAL_CALIBRATION_H */");
+    Ok(w)
+}
+
+/// The `fusion-c` text.
+pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    let f = convert(&input.cal)?.fusion;
+    let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
+    let mut w = String::new();
+    let _ = write!(
+        w,
+        "/*\n * x-io Fusion calibration (host export --format fusion-c), for\n\
+         *   accelerometer = FusionModelInertial(uncalibrated, accelerometerMisalignment,\n\
+         *                                       accelerometerSensitivity, accelerometerOffset);\n\
+         * uncalibrated in the unit's output unit ({}), result in g, body axes:\n\
+         * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n\
+         * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n\
+         * Gyroscope: UNDETERMINED, this calibration has no gyro model; no gyroscope initialisers\n\
+         * are written (an identity would look like a calibration).\n */\n\
+         #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n",
+        input.cal.statics.output_unit.symbol()
+    );
+    let _ = writeln!(
+        w,
+        "static const FusionMatrix accelerometerMisalignment = {{ .array = {} }};",
+        list(&m, c_f32)
+    );
+    let _ = writeln!(
+        w,
+        "static const FusionVector accelerometerSensitivity = {{ .array = {} }};",
+        list(&f.sensitivity.map(|v| v as f32), c_f32)
+    );
+    let _ = writeln!(
+        w,
+        "static const FusionVector accelerometerOffset = {{ .array = {} }};\n\n#endif",
+        list(&f.offset.map(|v| v as f32), c_f32)
+    );
+    Ok(w)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,464 @@
+//! Noise characterisation (`host noise`): the overlapping Allan deviation of each accelerometer and
+//! gyro axis over the longest still segment of a recording, the fitted white noise density, bias
+//! instability and random walk ([`allan`]), a table, a log-log figure, and the figures Kalibr needs.
+//!
+//! Input: a session directory (the longest static segment of its plan is used) or a bare
+//! `samples.csv` (its longest run of rows of one segment is used, assumed still). Accelerometer
+//! outputs are turned into m/s² when a calibration is given (`f = g·K_A·(U − u0)`, paper eq. 6);
+//! otherwise they stay in the output unit and Kalibr's accelerometer figures are undetermined.
+//!
+//! Memory: two passes over the file; the second keeps only the chosen segment's rows, at most
+//! [`MAX_SAMPLES`] of them (6 × 8 bytes each) — a longer segment is cut, with a warning.
+
+pub mod allan;
+
+use crate::export::kalibr::KalibrNoise;
+use crate::export::PlainMatrices;
+use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
+use crate::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
+use crate::session::{PLAN_FILE, SAMPLES_FILE};
+use allan::{fit, octave_sizes, overlapping_adev, AllanPoint, NoiseTerms};
+use serde::{Deserialize, Serialize};
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+
+/// Largest number of rows analysed (2²¹: 35 min at 1 kHz, 100 MB).
+pub const MAX_SAMPLES: usize = 1 << 21;
+/// Fewest rows that give an Allan curve worth fitting.
+pub const MIN_SAMPLES: usize = 64;
+
+/// The axes, in the order of [`NoiseReport::axes`].
+pub const AXES: [&str; 6] = [
+    "accel_x", "accel_y", "accel_z", "gyro_x", "gyro_y", "gyro_z",
+];
+
+/// Why the analysis failed.
+#[derive(Debug)]
+pub enum NoiseError {
+    /// The recording could not be read.
+    Recording(RecordingError),
+    /// No still segment with enough rows.
+    NoStillData(String),
+    /// A noise file could not be read or parsed.
+    File(PathBuf, String),
+}
+
+impl std::fmt::Display for NoiseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NoiseError::Recording(e) => e.fmt(f),
+            NoiseError::NoStillData(m) => write!(f, "no noise analysis possible: {m}"),
+            NoiseError::File(p, m) => write!(f, "cannot use noise file {}: {m}", p.display()),
+        }
+    }
+}
+
+impl std::error::Error for NoiseError {}
+
+impl From<RecordingError> for NoiseError {
+    fn from(e: RecordingError) -> Self {
+        NoiseError::Recording(e)
+    }
+}
+
+/// One axis's analysis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxisNoise {
+    /// `accel_x` … `gyro_z`.
+    pub axis: String,
+    /// Unit of the signal (`m/s^2`, `V`, `LSB`, `rad/s`); N is in unit/√Hz, K in unit/√s.
+    pub unit: String,
+    /// The Allan deviation curve.
+    pub points: Vec<AllanPoint>,
+    /// The fitted terms.
+    pub terms: NoiseTerms,
+}
+
+/// The result of `host noise`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseReport {
+    /// What was read.
+    pub source: String,
+    /// The segment analysed.
+    pub segment: String,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Rows analysed.
+    pub samples: u64,
+    /// Per axis, in [`AXES`] order.
+    pub axes: Vec<AxisNoise>,
+    /// The figures for Kalibr (worst axis of each sensor).
+    pub kalibr: KalibrNoise,
+    /// Warnings (segment cut, accelerometer not in m/s², …).
+    pub warnings: Vec<String>,
+}
+
+/// The rows of one segment as six signals.
+struct Signals {
+    segment: String,
+    rate_hz: f64,
+    data: [Vec<f64>; 6],
+    cut: bool,
+}
+
+fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
+    let session = read_session(dir, &ReadOptions { quiet })?;
+    let plan: &Plan = &session.plan;
+    let best = session
+        .stats
+        .iter()
+        .filter(|s| {
+            plan.segments
+                .iter()
+                .any(|p| p.name == s.name && p.is_static())
+        })
+        .max_by_key(|s| s.count)
+        .ok_or_else(|| {
+            NoiseError::NoStillData(format!("{} has no static segment", dir.display()))
+        })?;
+    let index = plan
+        .segments
+        .iter()
+        .position(|p| p.name == best.name)
+        .unwrap_or(0);
+    let mut data: [Vec<f64>; 6] = Default::default();
+    let mut cut = false;
+    let path = dir.join(SAMPLES_FILE);
+    let file = std::fs::File::open(&path).map_err(|source| RecordingError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    read_samples_each(
+        BufReader::with_capacity(1 << 20, file),
+        plan,
+        &path,
+        |row| {
+            let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
+            if row.segment_index == index && finite {
+                if data[0].len() >= MAX_SAMPLES {
+                    cut = true;
+                } else {
+                    for j in 0..3 {
+                        data[j].push(row.u[j]);
+                        data[3 + j].push(row.w_rad_s[j]);
+                    }
+                }
+            }
+            Ok(())
+        },
+    )?;
+    Ok(Signals {
+        segment: best.name.clone(),
+        rate_hz: plan.sample_rate_hz,
+        data,
+        cut,
+    })
+}
+
+/// A bare samples.csv: the longest run of one segment's rows; the rate from the time stamps. It is
+/// read by the session reader (same parser, same checks) with a plan made of the segment names the
+/// file uses (a first pass over the names only).
+fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
+    use std::io::BufRead as _;
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut names: Vec<String> = Vec::new();
+    let file = std::fs::File::open(path).map_err(io)?;
+    for line in BufReader::new(file).lines().skip(1) {
+        let line = line.map_err(io)?;
+        let name = line
+            .split(',')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .trim_matches('"');
+        if !name.is_empty() && !names.iter().any(|n| n == name) {
+            names.push(name.to_string());
+        }
+    }
+    let plan = Plan {
+        attitude_sigma_deg: None,
+        table_rate_sigma_ppm: None,
+        format_version: crate::session::plan::PLAN_FORMAT_VERSION,
+        output_unit: shared::OutputUnit::Volts,
+        sample_rate_hz: 1.0,
+        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        unit_id: None,
+        segments: names
+            .iter()
+            .map(|n| crate::session::SegmentPlan {
+                attitude: Default::default(),
+                attitude_sigma_deg: None,
+                name: n.clone(),
+                up_b: [0.0, 0.0, 1.0],
+                rate_deg_s: 0.0,
+                rate_end_deg_s: None,
+                duration_s: None,
+                table_centre_m: None,
+                mount: None,
+            })
+            .collect(),
+    };
+    type Run = (Signals, usize, f64, f64);
+    let finish = |run: Option<Run>, best: &mut Option<Signals>| {
+        if let Some((mut s, _, t0, t1)) = run {
+            let n = s.data[0].len();
+            if n > 1 {
+                s.rate_hz = (n - 1) as f64 / (t1 - t0);
+            }
+            if best.as_ref().is_none_or(|b| b.data[0].len() < n) {
+                *best = Some(s);
+            }
+        }
+    };
+    let (mut best, mut cur): (Option<Signals>, Option<Run>) = (None, None);
+    let file = std::fs::File::open(path).map_err(io)?;
+    read_samples_each(
+        BufReader::with_capacity(1 << 20, file),
+        &plan,
+        path,
+        |row| {
+            if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
+                finish(cur.take(), &mut best);
+                let s = Signals {
+                    segment: row.segment.to_string(),
+                    rate_hz: 0.0,
+                    data: Default::default(),
+                    cut: false,
+                };
+                cur = Some((s, row.segment_index, row.t_s, row.t_s));
+            }
+            if let Some((s, _, _, t1)) = cur.as_mut() {
+                let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
+                if s.data[0].len() >= MAX_SAMPLES {
+                    s.cut = true;
+                } else if finite && row.t_s.is_finite() {
+                    for j in 0..3 {
+                        s.data[j].push(row.u[j]);
+                        s.data[3 + j].push(row.w_rad_s[j]);
+                    }
+                    *t1 = row.t_s;
+                }
+            }
+            Ok(())
+        },
+    )?;
+    finish(cur.take(), &mut best);
+    best.ok_or_else(|| NoiseError::NoStillData(format!("{} has no rows", path.display())))
+}
+
+/// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
+/// outputs into m/s².
+pub fn analyse(
+    input: &Path,
+    calibration: Option<&PlainMatrices>,
+    quiet: bool,
+) -> Result<NoiseReport, NoiseError> {
+    let mut s = if input.is_dir() {
+        if !input.join(PLAN_FILE).exists() {
+            return Err(NoiseError::NoStillData(format!(
+                "{} has no {PLAN_FILE}; give a session directory or a samples.csv",
+                input.display()
+            )));
+        }
+        collect_session(input, quiet)?
+    } else {
+        collect_csv(input)?
+    };
+    let n = s.data[0].len();
+    if n < MIN_SAMPLES || !(s.rate_hz.is_finite() && s.rate_hz > 0.0) {
+        return Err(NoiseError::NoStillData(format!(
+            "the longest still segment ('{}') has {n} usable rows at {} Hz; at least {MIN_SAMPLES} \
+             are needed (record a long still segment)",
+            s.segment, s.rate_hz
+        )));
+    }
+    let mut warnings = Vec::new();
+    if s.cut {
+        warnings.push(format!(
+            "segment '{}' is longer than {MAX_SAMPLES} rows; only its first {MAX_SAMPLES} are analysed",
+            s.segment
+        ));
+    }
+    let accel_unit = match calibration {
+        Some(pm) => {
+            let g = pm.gravity_m_s2;
+            for k in 0..n {
+                let u = [s.data[0][k], s.data[1][k], s.data[2][k]];
+                let f = shared::linalg::mat_vec(&pm.k_a_g_per_out, &u);
+                for j in 0..3 {
+                    s.data[j][k] = (f[j] - pm.nabla_b_g[j]) * g;
+                }
+            }
+            "m/s^2"
+        }
+        None => {
+            warnings.push(
+                "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
+                 accelerometer figures are undetermined"
+                    .into(),
+            );
+            "output unit"
+        }
+    };
+    let sizes = octave_sizes(n);
+    let axes: Vec<AxisNoise> = AXES
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let points = overlapping_adev(&s.data[j], s.rate_hz, &sizes);
+            AxisNoise {
+                axis: (*name).into(),
+                unit: if j < 3 {
+                    accel_unit.into()
+                } else {
+                    "rad/s".into()
+                },
+                terms: fit(&points),
+                points,
+            }
+        })
+        .collect();
+    let worst = |r: std::ops::Range<usize>, f: fn(&NoiseTerms) -> Option<f64>| -> Option<f64> {
+        let v: Option<Vec<f64>> = axes[r].iter().map(|a| f(&a.terms)).collect();
+        v.map(|v| v.into_iter().fold(0.0, f64::max))
+    };
+    let accel_known = calibration.is_some();
+    let kalibr = KalibrNoise {
+        update_rate_hz: Some(s.rate_hz),
+        accelerometer_noise_density: worst(0..3, |t| t.white_density).filter(|_| accel_known),
+        accelerometer_random_walk: worst(0..3, |t| t.random_walk).filter(|_| accel_known),
+        gyroscope_noise_density: worst(3..6, |t| t.white_density),
+        gyroscope_random_walk: worst(3..6, |t| t.random_walk),
+    };
+    Ok(NoiseReport {
+        source: input.display().to_string(),
+        segment: s.segment,
+        sample_rate_hz: s.rate_hz,
+        samples: n as u64,
+        axes,
+        kalibr,
+        warnings,
+    })
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("undetermined".into(), |v| format!("{v:.4e}"))
+}
+
+impl NoiseReport {
+    /// The human table.
+    pub fn render(&self) -> String {
+        let mut s = format!(
+            "Allan deviation of '{}' ({} rows at {} Hz)\n{:<8} {:>12} {:>12} {:>12} {:>12}  unit\n",
+            self.segment,
+            self.samples,
+            self.sample_rate_hz,
+            "axis",
+            "N (/√Hz)",
+            "B",
+            "K (/√s)",
+            "min σ"
+        );
+        for a in &self.axes {
+            let min = a
+                .points
+                .iter()
+                .map(|p| p.adev)
+                .fold(f64::INFINITY, f64::min);
+            s += &format!(
+                "{:<8} {:>12} {:>12} {:>12} {:>12.4e}  {}\n",
+                a.axis,
+                opt(a.terms.white_density),
+                opt(a.terms.bias_instability),
+                opt(a.terms.random_walk),
+                min,
+                a.unit
+            );
+        }
+        s
+    }
+
+    /// The Allan curves and fitted lines, x = log10 τ, y logarithmic.
+    pub fn figure(&self) -> Figure {
+        let panel = |range: std::ops::Range<usize>, title: &str, unit: &str| Panel {
+            title: title.into(),
+            x_desc: "log10(τ / s)".into(),
+            y_desc: format!("Allan deviation [{unit}]"),
+            x_categories: None,
+            log_y: true,
+            series: self.axes[range]
+                .iter()
+                .enumerate()
+                .flat_map(|(c, a)| {
+                    let measured = Series {
+                        label: a.axis.clone(),
+                        points: a.points.iter().map(|p| (p.tau_s.log10(), p.adev)).collect(),
+                        error: None,
+                        style: SeriesStyle::Markers,
+                        colour: c,
+                    };
+                    let fitted = Series {
+                        label: format!("{} fit", a.axis),
+                        points: a
+                            .points
+                            .iter()
+                            .map(|p| (p.tau_s.log10(), a.terms.adev(p.tau_s)))
+                            .collect(),
+                        error: None,
+                        style: SeriesStyle::Line,
+                        colour: c,
+                    };
+                    [measured, fitted]
+                })
+                .collect(),
+        };
+        let accel_unit = self
+            .axes
+            .first()
+            .map_or("m/s^2".to_string(), |a| a.unit.clone());
+        Figure {
+            stem: "allan".into(),
+            title: "Allan deviation".into(),
+            grid: (1, 2),
+            size: (1400, 600),
+            panels: vec![
+                panel(0..3, "accelerometer", &accel_unit),
+                panel(3..6, "gyro", "rad/s"),
+            ],
+        }
+    }
+
+    /// `axis,tau_s,adev,fit_adev,terms` rows.
+    pub fn csv(&self) -> String {
+        let mut s = String::from("axis,tau_s,adev,fit_adev,terms\n");
+        for a in &self.axes {
+            for p in &a.points {
+                s += &format!(
+                    "{},{:e},{:e},{:e},{}\n",
+                    a.axis,
+                    p.tau_s,
+                    p.adev,
+                    a.terms.adev(p.tau_s),
+                    p.terms
+                );
+            }
+        }
+        s
+    }
+}
+
+/// Kalibr's figures from a `noise.json` written by `host noise`.
+pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
+    let report: NoiseReport = serde_json::from_str(&text).map_err(|e| {
+        NoiseError::File(path.into(), format!("not a noise.json of host noise: {e}"))
+    })?;
+    Ok(report.kalibr)
+}
+
+#[cfg(test)]
+mod tests;
