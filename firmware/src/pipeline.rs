@@ -26,7 +26,7 @@ use shared::wire::{
 
 use crate::stats::WindowAccumulator;
 
-/// Corner frequency of the ω̇ filter as a fraction of the sample rate (20 Hz at 1 kHz, `docs/model.md` §6).
+/// Corner frequency of the ω̇ filter as a fraction of the sample rate (20 Hz at 1 kHz, `docs/model.md` §4.6).
 pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;
 /// Largest accepted window (or decimation factor): 2²⁴ samples, 28 minutes at 10 kHz.
 pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;

@@ -108,11 +108,15 @@ impl Applier {
             self.omega_dot.reset();
             return None;
         }
-        let wd = self.omega_dot.update(w_rad_s);
-        Some(self.compensate(u, w_rad_s, &wd))
+        // As on the device: the gyro's reading corrected to the body rate (docs/model.md §8) feeds both
+        // the ω̇ estimator and the lever-arm terms; a calibration without a gyro leaves it untouched.
+        let w = self.compensator.correct_rate(w_rad_s).rad_s;
+        let wd = self.omega_dot.update(&w);
+        Some(self.compensate(u, &w, &wd))
     }
 
-    /// The compensation step alone, with a given ω̇ (the firmware pipeline's `compensate`).
+    /// The compensation step alone, with a given (corrected) body rate and ω̇ (the firmware pipeline's
+    /// `compensate`).
     pub fn compensate(&self, u: &[f32; 3], w_rad_s: &[f32; 3], wd_rad_s2: &[f32; 3]) -> [f32; 3] {
         let u = SensorOutputs { raw: *u };
         let f = if self.compensator.mode() == LeverMode::Off {
@@ -397,5 +401,47 @@ mod tests {
         assert!(check_unit(same, &plan).is_ok());
         assert!(check_unit(None, &plan).is_ok());
         let _ = cal;
+    }
+
+    /// A calibration that carries the gyro's errors: the applier turns the gyro's reading into the
+    /// body rate as the device does, so a spin with a 0.5 %, 0.5°, 0.5 °/s gyro is compensated to the
+    /// truth; reading the gyro as perfect leaves milli-g.
+    #[test]
+    fn the_gyro_correction_is_applied_before_the_lever_arm_terms() {
+        use shared::forward::{BodyMotion, ForwardModel};
+        use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
+        let mut cal = shared::params::PAPER_UNIT;
+        let gyro = firmware::paper_unit::typical_gyro();
+        cal.gyro = Some(gyro);
+        let model = ForwardModel::new(&cal).unwrap();
+        let omega = [2.0, -1.5, 3.0];
+        let f = [3.0, -4.0, 8.0];
+        let u = model
+            .outputs(&BodyMotion {
+                f_o: BodySpecificForce { m_s2: f },
+                omega: BodyRate { rad_s: omega },
+                omega_dot: BodyAngularAccel { rad_s2: [0.0; 3] },
+            })
+            .raw
+            .map(|v| v as f32);
+        let g = shared::linalg::mat_vec(&gyro.matrix, &omega);
+        let w: [f32; 3] = core::array::from_fn(|i| (g[i] + gyro.bias_rad_s[i]) as f32);
+        let mut perfect_cal = cal;
+        perfect_cal.gyro = None;
+        let mut with = Applier::new(&cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
+        let mut without =
+            Applier::new(&perfect_cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
+        let (mut a, mut b) = ([0.0f32; 3], [0.0f32; 3]);
+        for _ in 0..200 {
+            a = with.sample(&u, &w).unwrap();
+            b = without.sample(&u, &w).unwrap();
+        }
+        let err = |x: [f32; 3]| {
+            (0..3)
+                .map(|i| (f64::from(x[i]) - f[i]).abs() / shared::STANDARD_GRAVITY_M_S2)
+                .fold(0.0, f64::max)
+        };
+        assert!(err(a) < 20e-6, "corrected: {} g", err(a));
+        assert!(err(b) > 1e-3, "uncorrected: {} g", err(b));
     }
 }

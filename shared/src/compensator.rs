@@ -34,7 +34,7 @@ use crate::sensor_models::{
 };
 use crate::units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs};
 
-/// Which lever-arm terms the per-sample path applies (docs/model.md §4: the ω̇ term must be switchable).
+/// Which lever-arm terms the per-sample path applies (docs/model.md §4.6: the ω̇ term must be switchable).
 #[derive(
     Clone,
     Copy,

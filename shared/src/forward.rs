@@ -26,7 +26,7 @@ pub struct TableState {
     pub rate_rad_s: f64,
     /// Table angular acceleration about the vertical, rad/s².
     pub accel_rad_s2: f64,
-    /// Position of the table's spin axis point P relative to O, body axes, metres (`docs/model.md` §5).
+    /// Position of the table's spin axis point P relative to O, body axes, metres (`docs/model.md` §4.5).
     pub centre_m: [f64; 3],
 }
 

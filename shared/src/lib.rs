@@ -4,11 +4,11 @@
 //!
 //! - [`units`]: the quantities that cross module boundaries, each carrying its unit and frame;
 //! - [`params`]: the calibration in the paper's form (Table 1 and Table 3) and in the fitted form
-//!   `M = K·A`, with the conversions of `docs/model.md` §2;
+//!   `M = K·A`, with the conversions of `docs/model.md` §4.2;
 //! - [`sensor_models`]: the gyro's correction and the temperature model (docs/model.md §8, §9);
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
 //! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3);
-//! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §6;
+//! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §4.6;
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
 //! - [`wire`]: the host↔device messages and their COBS framing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]

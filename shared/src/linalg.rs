@@ -50,7 +50,7 @@ pub fn lever_matrix(omega: &[f64; 3], omega_dot: &[f64; 3]) -> RowMajor3 {
     from_na(&m)
 }
 
-/// The exact inverse, or `None` when the matrix is singular (never a transpose: `docs/model.md` §1).
+/// The exact inverse, or `None` when the matrix is singular (never a transpose: `docs/model.md` §4.1).
 pub fn inverse(m: &RowMajor3) -> Option<RowMajor3> {
     to_na(m).try_inverse().map(|inv| from_na(&inv))
 }

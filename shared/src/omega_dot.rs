@@ -1,4 +1,4 @@
-//! Angular-acceleration estimate `ω̇` from a gyro stream at a fixed rate (`docs/model.md` §6).
+//! Angular-acceleration estimate `ω̇` from a gyro stream at a fixed rate (`docs/model.md` §4.6).
 //!
 //! Differencing gyro samples at kHz rates amplifies their noise by `f_s·√2`, so the difference is
 //! smoothed by two cascaded one-pole low-pass sections with the same coefficient `β`:
@@ -17,7 +17,7 @@
 //!   is `σ · f_s · β² · √(Σ h_k²)` with `h` the impulse response of `(1 − z⁻¹)/(1 − (1−β) z⁻¹)²`; see
 //!   [`OmegaDotEstimator::noise_gain_per_s`]. At 1 kHz with f_c = 20 Hz it is about 22 /s, so 0.1 °/s of
 //!   gyro noise becomes 0.04 rad/s² of ω̇ noise: times a 1 cm lever arm, 40 µg (against a few mg for
-//!   the raw difference, `docs/model.md` §6). The latency there is 15.4 samples (15 ms).
+//!   the raw difference, `docs/model.md` §4.6). The latency there is 15.4 samples (15 ms).
 //!
 //! Per sample: 3 axes × (1 subtraction, 1 multiplication, 2 × (1 subtraction + 1 multiply-add)), no
 //! division and no branch on data. To turn the ω̇ term off, build the compensator with

@@ -1,4 +1,4 @@
-//! The calibration parameters, in the paper's form and in the fitted form (`docs/model.md` §2).
+//! The calibration parameters, in the paper's form and in the fitted form (`docs/model.md` §4.2).
 //!
 //! The paper's form is what people read and compare (Table 1: zero bias, scale factor, nine
 //! installation angles; Table 3: lever arms). The fitted form `M = K·A` is what an estimator fits and
@@ -56,7 +56,7 @@ pub struct StaticParams {
     pub installation_angles_deg: RowMajor3,
 }
 
-/// The static parameters in the fitted form: `U = M f/g + u0` with `M = K·A` (`docs/model.md` §2).
+/// The static parameters in the fitted form: `U = M f/g + u0` with `M = K·A` (`docs/model.md` §4.2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FittedStatic {
     /// Unit of the outputs.
@@ -68,7 +68,7 @@ pub struct FittedStatic {
 }
 
 /// How far the rows of a direction-cosine matrix read from angles were from unit length
-/// (`docs/model.md` §2: paper Table 1 row 2 has ‖a_2‖ = 1.0000483).
+/// (`docs/model.md` §4.2: paper Table 1 row 2 has ‖a_2‖ = 1.0000483).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Normalisation {
     /// ‖(cos θ_i1, cos θ_i2, cos θ_i3)‖ before normalising, per accelerometer.
@@ -131,7 +131,7 @@ impl StaticParams {
         core::array::from_fn(|i| self.zero_bias_out[i] / self.scale_out_per_g[i])
     }
 
-    /// The unit sensing directions `a_i` (rows of `A`) from the angles, normalised (`docs/model.md` §2).
+    /// The unit sensing directions `a_i` (rows of `A`) from the angles, normalised (`docs/model.md` §4.2).
     pub fn sensing_directions(&self) -> Result<(RowMajor3, Normalisation), ParamsError> {
         let flat = self.installation_angles_deg.iter().flatten().copied();
         if !all_finite(flat) {
@@ -183,7 +183,7 @@ impl StaticParams {
 }
 
 impl FittedStatic {
-    /// `k_i = ‖row_i(M)‖` and `a_i = row_i(M)/k_i` (`docs/model.md` §2).
+    /// `k_i = ‖row_i(M)‖` and `a_i = row_i(M)/k_i` (`docs/model.md` §4.2).
     pub fn decompose(&self) -> Result<([f64; 3], RowMajor3), ParamsError> {
         if !all_finite(
             self.m_out_per_g
@@ -228,7 +228,7 @@ pub struct LeverArms {
 
 impl LeverArms {
     /// The same sensing points seen from a new origin at `new_origin_m` (in the current frame):
-    /// `r_i' = r_i − o`. Rotations measure `r_i − p` for the table centre p (`docs/model.md` §5), so this is
+    /// `r_i' = r_i − o`. Rotations measure `r_i − p` for the table centre p (`docs/model.md` §4.5), so this is
     /// how an estimate made about the table centre is moved to the reference the user wants.
     pub fn re_referenced(&self, new_origin_m: [f64; 3]) -> LeverArms {
         LeverArms {
@@ -244,7 +244,7 @@ impl LeverArms {
     }
 }
 
-/// Which point the compensated specific force refers to (`docs/model.md` §5). The lever arms in a
+/// Which point the compensated specific force refers to (`docs/model.md` §4.5). The lever arms in a
 /// [`Calibration`] are always relative to this point.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 pub enum ReferencePoint {
@@ -393,7 +393,7 @@ pub(crate) mod tests {
             norm.row_norms
         );
         assert!(norm.needs_warning());
-        // The diagonal angle implied by the off-diagonal ones (docs/model.md §2): ≈ 0.934°, not 0.745°.
+        // The diagonal angle implied by the off-diagonal ones (docs/model.md §4.2): ≈ 0.934°, not 0.745°.
         let back = cal.statics.to_fitted().unwrap().0.to_paper().unwrap();
         assert!((back.installation_angles_deg[1][1] - 0.934).abs() < 1e-3);
     }

@@ -679,7 +679,7 @@ fn verify<T: Transport>(
     let g = plan.gravity_m_s2;
     let mut points = Vec::new();
     // The expected specific force at the reference point O is g·up − W c, with c the reference point
-    // relative to the table axis (`docs/model.md` §5); spinning checks need c, known for these references.
+    // relative to the table axis (`docs/model.md` §4.5); spinning checks need c, known for these references.
     let c = match opts.estimate.reference {
         ReferenceChoice::TableAxis => Some([0.0; 3]),
         ReferenceChoice::BodyPoint(p) => Some(p),

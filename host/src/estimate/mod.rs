@@ -1,5 +1,5 @@
 //! The estimator: from a plan and the per-segment statistics of a recording to a calibration, its
-//! uncertainty, and what the plan could not determine (`docs/model.md` §2–§4).
+//! uncertainty, and what the plan could not determine (`docs/model.md` §4.2–§4.4).
 //!
 //! Everything works on [`SegmentStats`], the sufficient statistics of each segment, so the estimator
 //! never sees sample rows and costs microseconds whatever the session's length.
@@ -66,7 +66,7 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// Where the reported lever arms are measured from (`docs/model.md` §5).
+/// Where the reported lever arms are measured from (`docs/model.md` §4.5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ReferenceChoice {
     /// The point on the table's spin axis (the paper's p = 0), or the plan's body origin when the
@@ -99,7 +99,7 @@ pub struct EstimateOptions {
     pub compare_methods: bool,
     /// Reference point of the reported lever arms.
     pub reference: ReferenceChoice,
-    /// Use the measured ω̇ (the slope of ω over each segment); `false` turns the term off (`docs/model.md` §6).
+    /// Use the measured ω̇ (the slope of ω over each segment); `false` turns the term off (`docs/model.md` §4.6).
     pub use_omega_dot: bool,
     /// χ² scaling of the covariance.
     pub chi2_scaling: ChiSquareScaling,
@@ -666,7 +666,7 @@ fn fit_session(
             .collect();
         warnings.push(format!(
             "the plan does not determine lever-arm component(s) {} to {:.0} µm{}; add rotations about \
-             oblique axes (tilted mounts) and/or spin-up segments (docs/model.md §4)",
+             oblique axes (tilted mounts) and/or spin-up segments (docs/model.md §4.4)",
             undetermined.join(", "),
             options.lever_arm_threshold_m * 1e6,
             if fixed_names.is_empty() {

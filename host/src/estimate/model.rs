@@ -8,7 +8,7 @@
 //! ū_i = m_i · (F + E r_i) + u0_i,      F = f_O / g,  E = E[W] / g,  f_O = g·up − E[W] p
 //! ```
 //!
-//! with `m_i` = row `i` of `M = K·A`, `r_i` the lever arm and `p` the table centre (`docs/model.md` §5).
+//! with `m_i` = row `i` of `M = K·A`, `r_i` the lever arm and `p` the table centre (`docs/model.md` §4.5).
 //! `up` is the mount's true up: its nominal one tilted by two small unknowns perpendicular to it,
 //! shared by every segment of the mount (docs/model.md §7).
 //!
@@ -165,7 +165,7 @@ pub struct Mount {
     pub spins: bool,
 }
 
-/// `E[W]` from a segment's gyro statistics, rad/s², optionally without the ω̇ term (`docs/model.md` §6)
+/// `E[W]` from a segment's gyro statistics, rad/s², optionally without the ω̇ term (`docs/model.md` §4.6)
 /// and with the gyro's own noise covariance removed from `E[ω ωᵀ]`.
 pub fn mean_lever_matrix(
     mean_wwt: &RowMajor3,

@@ -12,7 +12,7 @@
 //! exactly that (the sign convention checks out against eq. 21–23), with the deviations and pitfalls:
 //!
 //! - **Division by the small cosines.** For the across-axis components (`j ≠ i`) `cos θ_ij` is ~0.01,
-//!   so the noise of the three differences is amplified ~100× (`docs/model.md` §4); the paper tilts the
+//!   so the noise of the three differences is amplified ~100× (`docs/model.md` §4.4); the paper tilts the
 //!   table to escape it. We do not tilt: the point is to show the effect.
 //! - `f_i0` is the static fit's prediction `g·a_i·up` (the paper's eq. 2), not a separate static
 //!   segment; `a_i`, `k_i`, `u0_i` come from our static least squares (the exact, non-orthogonal `A`).

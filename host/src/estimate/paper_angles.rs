@@ -1,5 +1,5 @@
 //! From the fitted parameters (θ: `M`, `u0`, `r`) to the paper's form (Table 1 and Table 3) with its
-//! covariance, by the exact Jacobian of the conversion (`docs/model.md` §2):
+//! covariance, by the exact Jacobian of the conversion (`docs/model.md` §4.2):
 //! `k_i = ‖m_i‖`, `θ_ij = acos(m_ij / k_i)`, `r'_i = r_i − c` (c = 0, the centroid or a given point).
 
 use super::model::{idx_m, idx_r, idx_u0, NI as NP};

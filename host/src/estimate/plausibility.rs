@@ -3,7 +3,7 @@
 //! A least-squares fit always returns numbers; these checks catch the numbers no real unit has, which
 //! come from a plan whose labels do not match the recording (two mounts swapped, `x+` recorded as
 //! `x−`), not from the unit:
-//! - the sensing directions (rows of `M = K·A`, `docs/model.md` §2) form a right-handed triad, each
+//! - the sensing directions (rows of `M = K·A`, `docs/model.md` §4.2) form a right-handed triad, each
 //!   within [`MAX_AXIS_ANGLE_DEG`] of its nominal body axis;
 //! - at least one residual degree of freedom remains, so that χ²/dof is defined and the fit is checked
 //!   by the data at all;

@@ -478,7 +478,7 @@ pub(crate) struct Frame {
     pub shift: Shift,
 }
 
-/// The frame of the reported lever arms (`docs/model.md` §5).
+/// The frame of the reported lever arms (`docs/model.md` §4.5).
 pub(crate) fn reference_frame(
     plan: &Plan,
     options: &EstimateOptions,

@@ -674,7 +674,7 @@ fn cramer_rao_prediction_matches_model_md_and_the_fit() {
     for i in 0..3 {
         for j in 0..3 {
             if i == j {
-                // docs/model.md §4: along-axis ≈ 5 µm.
+                // docs/model.md §4.4: along-axis ≈ 5 µm.
                 assert!(lever(&paper, i, j) < 6e-6, "{}", lever(&paper, i, j));
             } else {
                 // Across-axis: a few tenths of a mm to 0.8 mm with the paper's plan …

@@ -108,7 +108,7 @@ pub struct SegmentPlan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duration_s: Option<f64>,
     /// Position of the table's spin-axis point relative to the body origin, body axes, m
-    /// (`docs/model.md` §5). Absent: unknown (the estimator treats it per `mount`).
+    /// (`docs/model.md` §4.5). Absent: unknown (the estimator treats it per `mount`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table_centre_m: Option<[f64; 3]>,
     /// Name of the physical mount; segments with the same mount share one table centre.

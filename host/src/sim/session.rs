@@ -407,7 +407,7 @@ pub fn simulate_to_dir_with_progress(
     if normalisation.needs_warning() {
         notes.push(format!(
             "the unit's installation angles are inconsistent (row norms {:.7?}); simulated with each \
-             sensing direction normalised (docs/model.md §2), as written to truth.toml",
+             sensing direction normalised (docs/model.md §4.2), as written to truth.toml",
             normalisation.row_norms
         ));
     }
@@ -464,7 +464,7 @@ pub fn simulate_to_dir_with_progress(
         .insert("simulation".into(), toml::Value::Table(sim));
     let text = format!(
         "# Written by `host simulate`: the simulated unit (installation angles normalised as the forward\n\
-         # model uses them, docs/model.md §2), the [noise] model and the seed. `host simulate --unit` reads it.\n{}",
+         # model uses them, docs/model.md §4.2), the [noise] model and the seed. `host simulate --unit` reads it.\n{}",
         truth.to_toml()
     );
     let path = dir.join(TRUTH_FILE);
