@@ -498,18 +498,18 @@ mod tests {
 
     #[test]
     fn power_cut_at_every_step_byte_writes() {
-        power_cut_at_every_step::<1, 512>();
+        power_cut_at_every_step::<1, 1024>();
     }
 
     #[test]
     fn power_cut_at_every_step_word_writes() {
-        power_cut_at_every_step::<8, 1024>();
+        power_cut_at_every_step::<8, 2048>();
     }
 
     #[test]
     fn sequence_numbers_wrap() {
         let [a, b, _] = blobs();
-        let mut s = AbStore::new(CutFlash::<4, 512>::new(2), 0, 512).unwrap();
+        let mut s = AbStore::new(CutFlash::<4, 1024>::new(2), 0, 1024).unwrap();
         s.store(&a).unwrap();
         // Forge slot 0's sequence to u32::MAX (re-sign the CRC), then store b: it gets seq 0 and wins.
         let mut mem = s.into_inner().mem;
@@ -518,40 +518,40 @@ mod tests {
         d.update(&mem[..12]);
         d.update(&a);
         mem[12..16].copy_from_slice(&d.finalize().to_le_bytes());
-        assert_eq!(boot::<4, 512>(&mem).as_deref(), Some(&a[..]));
+        assert_eq!(boot::<4, 1024>(&mem).as_deref(), Some(&a[..]));
         let mut s = AbStore::new(
-            CutFlash::<4, 512> {
+            CutFlash::<4, 1024> {
                 mem,
                 budget: None,
                 steps: 0,
             },
             0,
-            512,
+            1024,
         )
         .unwrap();
         s.store(&b).unwrap();
         let mem = s.into_inner().mem;
         assert_eq!(
-            u32::from_le_bytes(mem[512 + 4..512 + 8].try_into().unwrap()),
+            u32::from_le_bytes(mem[1024 + 4..1024 + 8].try_into().unwrap()),
             0
         );
-        assert_eq!(boot::<4, 512>(&mem).as_deref(), Some(&b[..]));
+        assert_eq!(boot::<4, 1024>(&mem).as_deref(), Some(&b[..]));
     }
 
     #[test]
     fn bad_lengths_and_geometry_are_refused() {
-        let mut s = AbStore::new(CutFlash::<4, 512>::new(2), 0, 512).unwrap();
+        let mut s = AbStore::new(CutFlash::<4, 1024>::new(2), 0, 1024).unwrap();
         assert_eq!(s.store(&[]), Err(StoreError::BadLength));
         assert_eq!(s.store(&[0; BLOB_MAX_LEN + 1]), Err(StoreError::BadLength));
         assert!(AbStore::new(CutFlash::<4, 128>::new(4), 0, 128).is_err()); // slot too small
-        assert!(AbStore::new(CutFlash::<4, 512>::new(1), 0, 512).is_err()); // no room for B
+        assert!(AbStore::new(CutFlash::<4, 1024>::new(1), 0, 1024).is_err()); // no room for B
     }
 
     #[test]
     fn ram_flash_has_nor_semantics() {
-        let mut mem = [0u8; 2048];
-        let mut f = RamNorFlash::<1024>::new(&mut mem);
-        f.erase(0, 1024).unwrap();
+        let mut mem = [0u8; 4096];
+        let mut f = RamNorFlash::<2048>::new(&mut mem);
+        f.erase(0, 2048).unwrap();
         f.write(0, &[0xF0, 0x0F, 0xFF, 0x00]).unwrap();
         f.write(0, &[0x3C, 0xFF, 0xFF, 0xFF]).unwrap();
         let mut b = [0u8; 4];
@@ -559,8 +559,8 @@ mod tests {
         assert_eq!(b, [0x30, 0x0F, 0xFF, 0x00]);
         assert!(f.write(2, &[0; 4]).is_err());
         assert!(f.erase(0, 100).is_err());
-        assert!(f.read(2046, &mut b).is_err());
-        let mut s = AbStore::new(f, 0, 1024).unwrap();
+        assert!(f.read(4094, &mut b).is_err());
+        let mut s = AbStore::new(f, 0, 2048).unwrap();
         let [a, _, _] = blobs();
         s.store(&a).unwrap();
         let mut out = [0u8; BLOB_MAX_LEN];

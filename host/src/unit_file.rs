@@ -220,6 +220,8 @@ impl UnitFile {
             lever_arms,
             reference,
             gravity_m_s2: self.g_m_s2,
+            gyro: None,
+            temperature: None,
         };
         self.unit_id()?;
         shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)

@@ -6,32 +6,45 @@
 //! offset 0   4 bytes  magic "ACAL"
 //! offset 4   u16      format version (BLOB_FORMAT_VERSION)
 //! offset 6   u16      payload length n
-//! offset 8   n bytes  postcard payload: unit id, the paper-form parameters (f64), lever arms,
-//!                     reference point, gravity, creation time
+//! offset 8   n bytes  postcard payload
 //! offset 8+n u32      CRC-32/ISO-HDLC of bytes 0..8+n
 //! ```
 //!
+//! Payload versions:
+//!
+//! - **1**: unit id, the paper-form parameters (f64), lever arms, reference point, gravity, creation
+//!   time. Still read: as a perfect gyro without a temperature model.
+//! - **2** (written now): version 1's fields followed by two optional sections, each a postcard
+//!   `Option` (one byte 0 when absent): the gyro correction (`G` row-major, bias in rad/s;
+//!   docs/model.md §8) and the temperature model (reference, valid range, polynomial coefficients;
+//!   docs/model.md §9).
+//!
 //! Decoding checks every layer (length, magic, version, CRC, postcard, then the physics: finite values,
-//! scale factors away from zero, `K·A` invertible with a sane condition number, plausible gravity and
-//! lever arms) and returns a typed [`BlobError`] for each failure. It never panics on any byte string
-//! (property-tested). [`decode_for_unit`] also refuses a blob made for another unit.
+//! scale factors away from zero, `K·A` and `G` invertible with sane condition numbers, plausible
+//! gravity, lever arms, gyro bias and temperature model, and every value within the range of the
+//! device's `f32` arithmetic) and returns a typed [`BlobError`] for each failure. It never panics on
+//! any byte string (property-tested). [`decode_for_unit`] also refuses a blob made for another unit.
 
 use crate::compensator::{Compensator, CompensatorError, LeverMode};
 use crate::params::{
     Calibration, LeverArms, OutputUnit, ParamsError, ReferencePoint, StaticParams,
 };
+use crate::sensor_models::{GyroCorrection, TemperatureModel};
 use crate::units::UnitId;
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
 /// First four bytes of every blob.
 pub const BLOB_MAGIC: [u8; 4] = *b"ACAL";
-/// Current format version. Bump when the payload changes; older versions are refused, not guessed.
-pub const BLOB_FORMAT_VERSION: u16 = 1;
+/// Format version written. Bump when the payload changes; [`decode`] reads every version listed in
+/// the module documentation and refuses any other.
+pub const BLOB_FORMAT_VERSION: u16 = 2;
+/// The first format version (no gyro, no temperature section), still read.
+pub const BLOB_FORMAT_VERSION_V1: u16 = 1;
 const HEADER_LEN: usize = 8;
 const CRC_LEN: usize = 4;
 /// Largest encoded blob, from the payload type's postcard bound.
-pub const BLOB_MAX_LEN: usize = HEADER_LEN + Payload::POSTCARD_MAX_SIZE + CRC_LEN;
+pub const BLOB_MAX_LEN: usize = HEADER_LEN + PayloadV2::POSTCARD_MAX_SIZE + CRC_LEN;
 /// Largest accepted |r_i| component, metres: no accelerometer unit is a metre across.
 pub const MAX_LEVER_ARM_M: f64 = 1.0;
 
@@ -77,6 +90,12 @@ pub enum BlobError {
     ForeignUnit,
     /// The output buffer is smaller than the blob.
     BufferTooSmall,
+    /// The gyro correction is implausible (scale, condition, bias or non-finite values).
+    BadGyro,
+    /// The temperature model is implausible (range, scale over the range, non-finite values).
+    BadTemperatureModel,
+    /// A value is beyond the range of the device's `f32` arithmetic (e.g. a bias of 1e300).
+    OutOfDeviceRange,
 }
 
 impl core::fmt::Display for BlobError {
@@ -95,6 +114,11 @@ impl core::fmt::Display for BlobError {
             BlobError::LeverArmOutOfRange => "calibration's lever arms exceed 1 m",
             BlobError::ForeignUnit => "calibration was made for another unit",
             BlobError::BufferTooSmall => "buffer too small for the calibration blob",
+            BlobError::BadGyro => "calibration's gyro correction is implausible",
+            BlobError::BadTemperatureModel => "calibration's temperature model is implausible",
+            BlobError::OutOfDeviceRange => {
+                "calibration holds a value beyond the device's f32 range"
+            }
         };
         f.write_str(s)
     }
@@ -109,11 +133,14 @@ impl From<CompensatorError> for BlobError {
             }
             CompensatorError::IllConditioned { .. } => BlobError::IllConditioned,
             CompensatorError::Gravity => BlobError::BadGravity,
+            CompensatorError::Gyro(_) => BlobError::BadGyro,
+            CompensatorError::Temperature(_) => BlobError::BadTemperatureModel,
+            CompensatorError::OutOfDeviceRange => BlobError::OutOfDeviceRange,
         }
     }
 }
 
-/// The postcard payload; plain arrays only (row-major), no nalgebra types.
+/// The version 1 payload; plain arrays only (row-major), no nalgebra types.
 #[derive(Serialize, Deserialize, MaxSize)]
 struct Payload {
     unit_id: UnitId,
@@ -125,6 +152,15 @@ struct Payload {
     reference: ReferencePoint,
     gravity_m_s2: f64,
     created_unix_s: u64,
+}
+
+/// The version 2 payload: version 1's fields (postcard writes a nested struct's fields in place), then
+/// the optional sections.
+#[derive(Serialize, Deserialize, MaxSize)]
+struct PayloadV2 {
+    v1: Payload,
+    gyro: Option<GyroCorrection>,
+    temperature: Option<TemperatureModel>,
 }
 
 impl ParameterBlob {
@@ -159,7 +195,7 @@ impl ParameterBlob {
             return Err(BlobError::BufferTooSmall);
         }
         let cal = &self.calibration;
-        let payload = Payload {
+        let v1 = Payload {
             unit_id: self.unit_id,
             output_unit: cal.statics.output_unit,
             zero_bias_out: cal.statics.zero_bias_out,
@@ -169,6 +205,11 @@ impl ParameterBlob {
             reference: cal.reference,
             gravity_m_s2: cal.gravity_m_s2,
             created_unix_s: self.created_unix_s,
+        };
+        let payload = PayloadV2 {
+            v1,
+            gyro: cal.gyro,
+            temperature: cal.temperature,
         };
         let body_end = out.len() - CRC_LEN;
         let n = postcard::to_slice(&payload, &mut out[HEADER_LEN..body_end])
@@ -198,7 +239,8 @@ pub fn decode(bytes: &[u8]) -> Result<ParameterBlob, BlobError> {
     if bytes[0..4] != BLOB_MAGIC {
         return Err(BlobError::BadMagic);
     }
-    if u16::from_le_bytes([bytes[4], bytes[5]]) != BLOB_FORMAT_VERSION {
+    let version = u16::from_le_bytes([bytes[4], bytes[5]]);
+    if version != BLOB_FORMAT_VERSION && version != BLOB_FORMAT_VERSION_V1 {
         return Err(BlobError::UnsupportedVersion);
     }
     let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
@@ -210,11 +252,27 @@ pub fn decode(bytes: &[u8]) -> Result<ParameterBlob, BlobError> {
     if CRC.checksum(body) != stored {
         return Err(BlobError::CrcMismatch);
     }
-    let (p, rest): (Payload, _) =
-        postcard::take_from_bytes(&body[HEADER_LEN..]).map_err(|_| BlobError::Malformed)?;
+    let payload = &body[HEADER_LEN..];
+    let (p, rest) = if version == BLOB_FORMAT_VERSION_V1 {
+        let (v1, rest): (Payload, _) =
+            postcard::take_from_bytes(payload).map_err(|_| BlobError::Malformed)?;
+        let v2 = PayloadV2 {
+            v1,
+            gyro: None,
+            temperature: None,
+        };
+        (v2, rest)
+    } else {
+        postcard::take_from_bytes::<PayloadV2>(payload).map_err(|_| BlobError::Malformed)?
+    };
     if !rest.is_empty() {
         return Err(BlobError::Malformed);
     }
+    let PayloadV2 {
+        v1: p,
+        gyro,
+        temperature,
+    } = p;
     let blob = ParameterBlob {
         unit_id: p.unit_id,
         calibration: Calibration {
@@ -229,6 +287,8 @@ pub fn decode(bytes: &[u8]) -> Result<ParameterBlob, BlobError> {
             },
             reference: p.reference,
             gravity_m_s2: p.gravity_m_s2,
+            gyro,
+            temperature,
         },
         created_unix_s: p.created_unix_s,
     };
@@ -246,7 +306,7 @@ pub fn decode_for_unit(bytes: &[u8], unit: UnitId) -> Result<ParameterBlob, Blob
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::params::tests::paper_unit;
     use proptest::prelude::*;
@@ -276,7 +336,9 @@ mod tests {
         assert_eq!(decode(&good[..5]), Err(BlobError::TooShort));
         assert_eq!(decode(&[0xFF; 64]), Err(BlobError::BadMagic));
         let mut v = good.to_vec();
-        v[4] = 2;
+        v[4] = 3;
+        assert_eq!(decode(&v), Err(BlobError::UnsupportedVersion));
+        v[4] = 0;
         assert_eq!(decode(&v), Err(BlobError::UnsupportedVersion));
         assert_eq!(decode(&good[..n - 1]), Err(BlobError::LengthMismatch));
         let mut v = good.to_vec();
@@ -308,19 +370,169 @@ mod tests {
         assert_eq!(b.encode(&mut [0; BLOB_MAX_LEN]), Err(BlobError::NonFinite));
 
         // A blob whose CRC is right but whose physics is wrong (written by a buggy or foreign tool)
-        // is still refused on decode: re-sign a corrupted payload by hand.
-        let (mut buf, n) = paper_blob().to_bytes().unwrap();
-        let payload_len = n - HEADER_LEN - CRC_LEN;
-        let mut p: Payload =
-            postcard::from_bytes(&buf[HEADER_LEN..HEADER_LEN + payload_len]).unwrap();
-        p.scale_out_per_g[0] = 0.0;
-        let m = postcard::to_slice(&p, &mut buf[HEADER_LEN..])
-            .unwrap()
-            .len();
-        assert_eq!(m, payload_len);
-        let crc = CRC.checksum(&buf[..HEADER_LEN + m]);
-        buf[HEADER_LEN + m..HEADER_LEN + m + 4].copy_from_slice(&crc.to_le_bytes());
-        assert_eq!(decode(&buf[..n]), Err(BlobError::DegenerateAxis));
+        // is still refused on decode.
+        let mut p = payload_of(&paper_blob());
+        p.v1.scale_out_per_g[0] = 0.0;
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::DegenerateAxis));
+    }
+
+    mod v1 {
+        include!("blob_v1_vectors.rs");
+    }
+
+    /// A gyro with 0.5 % scale errors, 0.5° misalignment and 0.5 °/s biases, and a temperature model.
+    pub(crate) fn gyro_and_temperature() -> (GyroCorrection, TemperatureModel) {
+        let m = 0.5f64.to_radians();
+        let gyro = GyroCorrection {
+            matrix: [[1.005, m, -m], [-m, 0.995, m], [m, -m, 1.004]],
+            bias_rad_s: [
+                0.5f64.to_radians(),
+                -0.5f64.to_radians(),
+                0.3f64.to_radians(),
+            ],
+        };
+        let temperature = TemperatureModel {
+            reference_c: 25.0,
+            valid_range_c: [-20.0, 60.0],
+            zero_bias_out_per_c: [
+                [1.2e-4, 2e-7, 0.0],
+                [-0.9e-4, 0.0, 0.0],
+                [1e-4, -1e-7, 1e-9],
+            ],
+            scale_rel_per_c: [[150e-6, 0.0, 0.0], [-120e-6, 1e-7, 0.0], [100e-6, 0.0, 0.0]],
+            gyro_bias_rad_s_per_c: Some([[1e-4, 0.0, 0.0], [0.0, -2e-4, 0.0], [5e-5, 1e-6, 0.0]]),
+        };
+        (gyro, temperature)
+    }
+
+    /// Re-signs `p` in place of the payload of a valid version 2 blob (a buggy or foreign writer).
+    fn resigned(p: &PayloadV2) -> std::vec::Vec<u8> {
+        let mut buf = [0u8; BLOB_MAX_LEN];
+        let n = postcard::to_slice(p, &mut buf[HEADER_LEN..]).unwrap().len();
+        buf[0..4].copy_from_slice(&BLOB_MAGIC);
+        buf[4..6].copy_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
+        buf[6..8].copy_from_slice(&(n as u16).to_le_bytes());
+        let crc = CRC.checksum(&buf[..HEADER_LEN + n]);
+        buf[HEADER_LEN + n..HEADER_LEN + n + 4].copy_from_slice(&crc.to_le_bytes());
+        buf[..HEADER_LEN + n + CRC_LEN].to_vec()
+    }
+
+    fn payload_of(b: &ParameterBlob) -> PayloadV2 {
+        let (buf, n) = b.to_bytes().unwrap();
+        postcard::from_bytes(&buf[HEADER_LEN..n - CRC_LEN]).unwrap()
+    }
+
+    #[test]
+    fn version_1_blobs_still_decode_as_a_perfect_gyro_without_temperature_model() {
+        assert_eq!(u16::from_le_bytes([v1::V1_PAPER[4], v1::V1_PAPER[5]]), 1);
+        let b = decode_for_unit(v1::V1_PAPER, UnitId(*b"V1-BLOB-UNIT")).unwrap();
+        assert_eq!(b.calibration, crate::params::PAPER_UNIT);
+        assert_eq!(b.calibration.gyro, None);
+        assert_eq!(b.calibration.temperature, None);
+        assert_eq!(b.created_unix_s, 1_790_000_000);
+        let b2 = decode(v1::V1_LSB_BODY_POINT).unwrap();
+        assert_eq!(b2.calibration.statics.output_unit, OutputUnit::Lsb);
+        assert_eq!(
+            b2.calibration.reference,
+            ReferencePoint::BodyPoint {
+                offset_m: [0.01, -0.02, 0.003]
+            }
+        );
+        // Applied as a perfect gyro: the rate passes through bit for bit; nothing to refresh.
+        let mut c = Compensator::new(&b.calibration, LeverMode::RateAndAcceleration).unwrap();
+        let w = [0.3f32, -1.7, 2.5e-3];
+        assert_eq!(c.correct_rate(&w).rad_s, w);
+        assert_eq!(
+            c.refresh(80.0),
+            crate::compensator::TemperatureState::NotModelled
+        );
+        // Re-encoding writes version 2 and the content survives.
+        let (buf, n) = b.to_bytes().unwrap();
+        assert_eq!(u16::from_le_bytes([buf[4], buf[5]]), BLOB_FORMAT_VERSION);
+        assert_eq!(
+            n,
+            v1::V1_PAPER.len() + 2,
+            "two absent sections cost one byte each"
+        );
+        assert_eq!(decode(&buf[..n]).unwrap(), b);
+        // A version 1 header on a version 2 payload (or the reverse) is refused, never misread.
+        let mut v = v1::V1_PAPER.to_vec();
+        v[4] = 2;
+        assert_eq!(decode(&v), Err(BlobError::CrcMismatch));
+    }
+
+    #[test]
+    fn gyro_and_temperature_sections_round_trip() {
+        let (gyro, temperature) = gyro_and_temperature();
+        let mut b = paper_blob();
+        b.calibration.gyro = Some(gyro);
+        b.calibration.temperature = Some(temperature);
+        let (buf, n) = b.to_bytes().unwrap();
+        assert!(n <= BLOB_MAX_LEN);
+        assert_eq!(decode_for_unit(&buf[..n], UNIT).unwrap(), b);
+        // Only the gyro, only the temperature model.
+        for (g, t) in [(Some(gyro), None), (None, Some(temperature))] {
+            b.calibration.gyro = g;
+            b.calibration.temperature = t;
+            let (buf, n) = b.to_bytes().unwrap();
+            assert_eq!(decode(&buf[..n]).unwrap(), b);
+        }
+    }
+
+    #[test]
+    fn values_beyond_the_devices_f32_range_are_refused() {
+        // The hostile tester's blob: CRC-valid, a zero bias of 1e300 (f64-finite, f32-infinite).
+        let mut p = payload_of(&paper_blob());
+        p.v1.zero_bias_out[1] = 1e300;
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::OutOfDeviceRange));
+        // Scale factors so large that the lever-arm terms k·r/g overflow the device's range, while
+        // K·A stays invertible: refused on both sides.
+        let mut b = paper_blob();
+        b.calibration.statics.scale_out_per_g = [1e24; 3];
+        b.calibration.statics.zero_bias_out = [0.0; 3];
+        assert_eq!(
+            b.encode(&mut [0; BLOB_MAX_LEN]),
+            Err(BlobError::OutOfDeviceRange)
+        );
+        // Scale factors so large that g·K_A would underflow f32's normal range (an axis would vanish).
+        let mut b = paper_blob();
+        b.calibration.statics.scale_out_per_g = [1e35; 3];
+        b.calibration.statics.zero_bias_out = [0.0; 3];
+        b.calibration.lever_arms = LeverArms::default();
+        assert_eq!(
+            b.encode(&mut [0; BLOB_MAX_LEN]),
+            Err(BlobError::OutOfDeviceRange)
+        );
+        // A temperature polynomial whose f32 coefficients overflow.
+        let (_, mut t) = gyro_and_temperature();
+        t.zero_bias_out_per_c[0][2] = 1e39;
+        let mut p = payload_of(&paper_blob());
+        p.temperature = Some(t);
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::OutOfDeviceRange));
+    }
+
+    #[test]
+    fn implausible_gyro_and_temperature_sections_are_refused() {
+        let (gyro, temperature) = gyro_and_temperature();
+        let mut p = payload_of(&paper_blob());
+        let mut g = gyro;
+        g.matrix[2] = g.matrix[0];
+        p.gyro = Some(g);
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::BadGyro));
+        let mut g = gyro;
+        g.bias_rad_s[0] = f64::NAN;
+        p.gyro = Some(g);
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::BadGyro));
+        p.gyro = Some(gyro);
+        let mut t = temperature;
+        t.valid_range_c = [30.0, 20.0];
+        p.temperature = Some(t);
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::BadTemperatureModel));
+        // A gyro bias drift that exceeds the bias limit at the range's end.
+        let mut t = temperature;
+        t.gyro_bias_rad_s_per_c = Some([[0.05, 0.0, 0.0]; 3]);
+        p.temperature = Some(t);
+        assert_eq!(decode(&resigned(&p)), Err(BlobError::BadGyro));
     }
 
     proptest! {
@@ -344,8 +556,12 @@ mod tests {
 
         /// Every truncation and every single-byte corruption of a valid blob is refused.
         #[test]
-        fn truncated_or_flipped_blobs_are_refused(cut in 0usize..400, at in 0usize..400, bit in 0u8..8) {
-            let (buf, n) = paper_blob().to_bytes().unwrap();
+        fn truncated_or_flipped_blobs_are_refused(cut in 0usize..700, at in 0usize..700, bit in 0u8..8) {
+            let (gyro, temperature) = gyro_and_temperature();
+            let mut b = paper_blob();
+            b.calibration.gyro = Some(gyro);
+            b.calibration.temperature = Some(temperature);
+            let (buf, n) = b.to_bytes().unwrap();
             let cut = cut % n;
             prop_assert!(decode(&buf[..cut]).is_err());
             let mut v = buf[..n].to_vec();

@@ -1,25 +1,40 @@
-//! Per-sample compensation: the inverse model of `docs/model.md` §3 (paper eq. 16–17).
+//! Per-sample compensation: the inverse model of docs/model.md §3 (paper eq. 16–17), with the gyro's
+//! correction (§8) and the temperature model (§9), in the per-sample form of §10.
 //!
 //! Built once from a [`Calibration`] (settings → precomputed state → one call per sample, as in x-io
 //! Fusion): every square root, trigonometric function and division happens in [`Compensator::new`],
-//! in `f64`, and the per-sample call is straight-line `f32` multiply-adds with no branch on data.
+//! in `f64`, or in [`Compensator::refresh`] (a few times a second, `f32`), and the per-sample calls
+//! are straight-line `f32` multiply-adds with no branch on data.
 //!
-//! Per sample, with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i` (`docs/model.md` §10):
+//! Per sample, with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i` (docs/model.md §10):
 //!
 //! ```text
+//! ω   = G⁻¹ (w − b)                      gyro correction (§8), G⁻¹ precomputed: 12 multiply-adds
 //! f_O = g·K_A · (U − u0 − K d)          K_A = (K A)⁻¹, the exact inverse (never a transpose)
 //! ```
 //!
 //! Operation count of [`Compensator::compensate`]: `U − u0` 3 subtractions; `|ω|²` 3; per axis
 //! `ω̇·p_i` 3, `a_i·ω` 3, `q_i·ω` 3, two products and one subtraction, and the subtraction from `U − u0`
 //! (12 per axis, 36); `K_A·v` 9. Total 51 multiply-adds (48 fused-multiply-add-able), against the ~50 of
-//! `docs/model.md` §10. The static-only path [`Compensator::compensate_static`] is 12.
+//! docs/model.md §10. The static-only path [`Compensator::compensate_static`] is 12, the gyro
+//! correction [`Compensator::correct_rate`] 12 (3 subtractions, 9 multiply-adds).
+//!
+//! Temperature (§9): `u0(T) = u0 + P(ΔT)`, `M(T) = diag(1 + s(T))·M`, so `K_A(T) = K_A·diag(1/(1+s))`
+//! (column `j` scaled) and `k_i(T) = k_i (1 + s_i)` scales the lever-arm terms `p_i, q_i, s_i` of
+//! accelerometer `i`; the gyro bias is `b(T) = b + B(ΔT)`. [`Compensator::refresh`] recomputes exactly
+//! these from the reference values (3 divisions); outside the valid range it evaluates the polynomials
+//! at the nearest end (a fitted cubic is not extrapolated) and reports [`TemperatureState::Clamped`],
+//! which the firmware turns into a flag on its outputs.
 
 use crate::linalg::{self, RowMajor3};
 use crate::params::{Calibration, ParamsError};
+use crate::sensor_models::{
+    poly_no_constant, GyroError, TemperatureModel, TemperatureModelError, MAX_GYRO_BIAS_RAD_S,
+    MAX_TEMPERATURE_DEGREE,
+};
 use crate::units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs};
 
-/// Which lever-arm terms the per-sample path applies (`docs/model.md` §6: the ω̇ term must be switchable).
+/// Which lever-arm terms the per-sample path applies (docs/model.md §4: the ω̇ term must be switchable).
 #[derive(
     Clone,
     Copy,
@@ -51,6 +66,12 @@ pub enum CompensatorError {
     },
     /// The gravity value is not a plausible local gravity (m/s²).
     Gravity,
+    /// The gyro correction is unusable.
+    Gyro(GyroError),
+    /// The temperature model is unusable.
+    Temperature(TemperatureModelError),
+    /// A value the device computes with does not fit its `f32` arithmetic (see [`MAX_DEVICE_MAGNITUDE`]).
+    OutOfDeviceRange,
 }
 
 impl core::fmt::Display for CompensatorError {
@@ -65,6 +86,12 @@ impl core::fmt::Display for CompensatorError {
                 f,
                 "local gravity outside {MIN_GRAVITY_M_S2}..{MAX_GRAVITY_M_S2} m/s²"
             ),
+            CompensatorError::Gyro(e) => e.fmt(f),
+            CompensatorError::Temperature(e) => e.fmt(f),
+            CompensatorError::OutOfDeviceRange => write!(
+                f,
+                "a calibration value is beyond what the device's f32 arithmetic carries (magnitudes {MIN_DEVICE_MAGNITUDE:e}..{MAX_DEVICE_MAGNITUDE:e})"
+            ),
         }
     }
 }
@@ -76,13 +103,102 @@ pub const MAX_CONDITION: f64 = 100.0;
 pub const MIN_GRAVITY_M_S2: f64 = 9.7;
 /// See [`MIN_GRAVITY_M_S2`].
 pub const MAX_GRAVITY_M_S2: f64 = 9.9;
+/// Largest magnitude of any precomputed `f32` constant (and of the zero biases). The per-sample path
+/// multiplies a constant by at most two inputs (`s_i·|ω|²`, with |ω| ≤ 10³ rad/s; outputs ≤ 2²⁴ LSB),
+/// so 10²⁰ keeps every intermediate below 10³² — far from `f32::MAX` ≈ 3.4·10³⁸ — while no real unit
+/// comes near it. A CRC-valid blob with a bias of 10³⁰⁰ is refused instead of turning into ∞.
+pub const MAX_DEVICE_MAGNITUDE: f64 = 1e20;
+/// Smallest magnitude of a non-zero entry of `g·K_A` and `G⁻¹`: below it `f32` loses precision
+/// (subnormals start at 1.2·10⁻³⁸) or flushes to zero, which would silently drop an axis.
+pub const MIN_DEVICE_MAGNITUDE: f64 = 1e-30;
+
+/// `v` as `f32`, or an error when it is non-finite or beyond [`MAX_DEVICE_MAGNITUDE`].
+fn device_f32(v: f64) -> Result<f32, CompensatorError> {
+    if v.is_finite() && v.abs() <= MAX_DEVICE_MAGNITUDE {
+        Ok(v as f32)
+    } else {
+        Err(CompensatorError::OutOfDeviceRange)
+    }
+}
+
+fn device_f32_3(v: &[f64; 3]) -> Result<[f32; 3], CompensatorError> {
+    Ok([device_f32(v[0])?, device_f32(v[1])?, device_f32(v[2])?])
+}
+
+fn device_f32_33(m: &RowMajor3) -> Result<[[f32; 3]; 3], CompensatorError> {
+    Ok([
+        device_f32_3(&m[0])?,
+        device_f32_3(&m[1])?,
+        device_f32_3(&m[2])?,
+    ])
+}
+
+/// A gain matrix whose non-zero entries must also stay clear of `f32` underflow.
+fn device_gain_33(m: &RowMajor3) -> Result<[[f32; 3]; 3], CompensatorError> {
+    let tiny = m
+        .iter()
+        .flatten()
+        .any(|v| *v != 0.0 && v.abs() < MIN_DEVICE_MAGNITUDE);
+    if tiny {
+        return Err(CompensatorError::OutOfDeviceRange);
+    }
+    device_f32_33(m)
+}
+
+/// Where the temperature model stands after the latest [`Compensator::refresh`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TemperatureState {
+    /// The calibration has no temperature model: nothing to refresh, nothing to flag.
+    NotModelled,
+    /// A model exists but no valid temperature has been given yet: the reference values apply.
+    NoReading,
+    /// Refreshed at a temperature within the valid range.
+    InRange,
+    /// The temperature was outside the valid range: refreshed at the nearest end of the range.
+    Clamped,
+}
+
+impl TemperatureState {
+    /// True when outputs should carry a temperature flag (a model exists but was not applied at the
+    /// actual temperature).
+    pub fn is_flagged(self) -> bool {
+        matches!(
+            self,
+            TemperatureState::NoReading | TemperatureState::Clamped
+        )
+    }
+}
+
+type Poly32 = [[f32; MAX_TEMPERATURE_DEGREE]; 3];
+
+/// The reference values and polynomials [`Compensator::refresh`] starts from (all `f32`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Thermal {
+    reference_c: f32,
+    range_c: [f32; 2],
+    zero_bias_out: [f32; 3],
+    ka_m_s2_per_out: [[f32; 3]; 3],
+    p: [[f32; 3]; 3],
+    q: [[f32; 3]; 3],
+    s: [f32; 3],
+    gyro_bias_rad_s: [f32; 3],
+    zero_bias_poly: Poly32,
+    scale_poly: Poly32,
+    gyro_bias_poly: Poly32,
+}
+
+/// `c1·x + c2·x² + c3·x³` in `f32` (Horner), the device's form of [`poly_no_constant`].
+#[inline(always)]
+fn poly32(c: &[f32; MAX_TEMPERATURE_DEGREE], x: f32) -> f32 {
+    x * (c[0] + x * (c[1] + x * c[2]))
+}
 
 /// Precomputed state of the inverse model. `f32` throughout, fixed size, `Copy`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Compensator {
-    /// `u0`, output unit.
+    /// `u0(T)`, output unit.
     zero_bias_out: [f32; 3],
-    /// `g·(K A)⁻¹`, m/s² per output unit, row-major.
+    /// `g·(K A)⁻¹` at the current temperature, m/s² per output unit, row-major.
     ka_m_s2_per_out: [[f32; 3]; 3],
     /// `a_i`, unit sensing directions.
     a: [[f32; 3]; 3],
@@ -92,11 +208,45 @@ pub struct Compensator {
     q: [[f32; 3]; 3],
     /// `s_i = k_i (a_i·r_i)/g`, output unit per (rad/s)².
     s: [f32; 3],
+    /// `G⁻¹` of the gyro (identity for a perfect gyro).
+    gyro_inv: [[f32; 3]; 3],
+    /// `b(T)`, rad/s, gyro axes.
+    gyro_bias_rad_s: [f32; 3],
     mode: LeverMode,
+    thermal: Option<Thermal>,
+    temperature: TemperatureState,
+}
+
+/// The temperature model's parts in `f32`, checked over the valid range against the gyro bias limit
+/// and the device's range.
+fn thermal_polynomials(
+    t: &TemperatureModel,
+    gyro_bias_rad_s: &[f64; 3],
+) -> Result<(Poly32, Poly32, Poly32), CompensatorError> {
+    t.check().map_err(CompensatorError::Temperature)?;
+    let gb = t.gyro_bias_polynomials();
+    for temp in t.check_points() {
+        for j in 0..3 {
+            let b = gyro_bias_rad_s[j] + poly_no_constant(&gb[j], temp - t.reference_c);
+            if b.abs() > MAX_GYRO_BIAS_RAD_S {
+                return Err(CompensatorError::Gyro(GyroError::BiasOutOfRange));
+            }
+            device_f32(poly_no_constant(
+                &t.zero_bias_out_per_c[j],
+                temp - t.reference_c,
+            ))?;
+        }
+    }
+    Ok((
+        device_f32_33(&t.zero_bias_out_per_c)?,
+        device_f32_33(&t.scale_rel_per_c)?,
+        device_f32_33(&gb)?,
+    ))
 }
 
 impl Compensator {
-    /// Precomputes the inverse model. Fails on unusable parameters instead of producing NaN later.
+    /// Precomputes the inverse model. Fails on unusable parameters (including values the device's
+    /// `f32` arithmetic cannot carry) instead of producing NaN or ∞ later.
     pub fn new(cal: &Calibration, mode: LeverMode) -> Result<Compensator, CompensatorError> {
         let g = cal.gravity_m_s2;
         if !(MIN_GRAVITY_M_S2..=MAX_GRAVITY_M_S2).contains(&g) {
@@ -112,6 +262,8 @@ impl Compensator {
             Some(inv) if condition <= MAX_CONDITION => inv,
             _ => return Err(CompensatorError::IllConditioned { condition }),
         };
+        let gyro = cal.gyro.unwrap_or(crate::GyroCorrection::PERFECT);
+        let gyro_inv = gyro.checked_inverse().map_err(CompensatorError::Gyro)?;
         let lever_on = mode != LeverMode::Off;
         let tangential_on = mode == LeverMode::RateAndAcceleration;
         let r = &cal.lever_arms.r_m;
@@ -121,16 +273,38 @@ impl Compensator {
         });
         let q: RowMajor3 = core::array::from_fn(|i| r[i].map(|v| v * scale(i, lever_on)));
         let s: [f64; 3] = core::array::from_fn(|i| linalg::dot(&a[i], &r[i]) * scale(i, lever_on));
-        let to32 = |m: &RowMajor3| m.map(|row| row.map(|v| v as f32));
-        Ok(Compensator {
-            zero_bias_out: fitted.zero_bias_out.map(|v| v as f32),
-            ka_m_s2_per_out: to32(&inv.map(|row| row.map(|v| v * g))),
-            a: to32(&a),
-            p: to32(&p),
-            q: to32(&q),
-            s: s.map(|v| v as f32),
+        let mut c = Compensator {
+            zero_bias_out: device_f32_3(&fitted.zero_bias_out)?,
+            ka_m_s2_per_out: device_gain_33(&inv.map(|row| row.map(|v| v * g)))?,
+            a: device_f32_33(&a)?,
+            p: device_f32_33(&p)?,
+            q: device_f32_33(&q)?,
+            s: device_f32_3(&s)?,
+            gyro_inv: device_gain_33(&gyro_inv)?,
+            gyro_bias_rad_s: device_f32_3(&gyro.bias_rad_s)?,
             mode,
-        })
+            thermal: None,
+            temperature: TemperatureState::NotModelled,
+        };
+        if let Some(t) = &cal.temperature {
+            let (zero_bias_poly, scale_poly, gyro_bias_poly) =
+                thermal_polynomials(t, &gyro.bias_rad_s)?;
+            c.thermal = Some(Thermal {
+                reference_c: t.reference_c as f32,
+                range_c: t.valid_range_c.map(|v| v as f32),
+                zero_bias_out: c.zero_bias_out,
+                ka_m_s2_per_out: c.ka_m_s2_per_out,
+                p: c.p,
+                q: c.q,
+                s: c.s,
+                gyro_bias_rad_s: c.gyro_bias_rad_s,
+                zero_bias_poly,
+                scale_poly,
+                gyro_bias_poly,
+            });
+            c.temperature = TemperatureState::NoReading;
+        }
+        Ok(c)
     }
 
     /// The lever-arm mode this compensator was built with.
@@ -138,8 +312,64 @@ impl Compensator {
         self.mode
     }
 
-    /// Specific force at the reference point from outputs, gyro rate and angular acceleration
-    /// (paper eq. 16). With [`LeverMode::Off`] the gyro inputs have no effect (their constants are 0).
+    /// Where the temperature model stands (see [`TemperatureState`]).
+    pub fn temperature_state(&self) -> TemperatureState {
+        self.temperature
+    }
+
+    /// Recomputes the temperature-dependent terms for the unit's temperature `temp_c` (°C): zero
+    /// biases, the columns of `K_A`, the lever-arm terms and the gyro bias (docs/model.md §9, §10).
+    /// Call it a few times a second, not per sample; it divides three times. Without a temperature
+    /// model it does nothing. A non-finite temperature leaves the terms unchanged and returns
+    /// [`TemperatureState::NoReading`]; one outside the valid range is clamped to it and returns
+    /// [`TemperatureState::Clamped`]. Never produces a non-finite term: the polynomials were checked
+    /// over the whole range when the calibration loaded.
+    pub fn refresh(&mut self, temp_c: f32) -> TemperatureState {
+        let Some(th) = &self.thermal else {
+            return TemperatureState::NotModelled;
+        };
+        if !temp_c.is_finite() {
+            self.temperature = TemperatureState::NoReading;
+            return self.temperature;
+        }
+        let [lo, hi] = th.range_c;
+        let clamped = temp_c.clamp(lo, hi);
+        let dt = clamped - th.reference_c;
+        for i in 0..3 {
+            self.zero_bias_out[i] = th.zero_bias_out[i] + poly32(&th.zero_bias_poly[i], dt);
+            self.gyro_bias_rad_s[i] = th.gyro_bias_rad_s[i] + poly32(&th.gyro_bias_poly[i], dt);
+            let gain = 1.0 + poly32(&th.scale_poly[i], dt);
+            let inv_gain = 1.0 / gain;
+            for r in 0..3 {
+                self.ka_m_s2_per_out[r][i] = th.ka_m_s2_per_out[r][i] * inv_gain;
+                self.p[i][r] = th.p[i][r] * gain;
+                self.q[i][r] = th.q[i][r] * gain;
+            }
+            self.s[i] = th.s[i] * gain;
+        }
+        self.temperature = if clamped == temp_c {
+            TemperatureState::InRange
+        } else {
+            TemperatureState::Clamped
+        };
+        self.temperature
+    }
+
+    /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8): 3 subtractions and
+    /// 9 multiply-adds. For a perfect gyro it returns `w` exactly (and NaN stays NaN).
+    #[inline(always)]
+    pub fn correct_rate(&self, w_rad_s: &[f32; 3]) -> BodyRate {
+        let b = &self.gyro_bias_rad_s;
+        let v = [w_rad_s[0] - b[0], w_rad_s[1] - b[1], w_rad_s[2] - b[2]];
+        let m = &self.gyro_inv;
+        BodyRate {
+            rad_s: core::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2]),
+        }
+    }
+
+    /// Specific force at the reference point from outputs, the (corrected) body rate and angular
+    /// acceleration (paper eq. 16). With [`LeverMode::Off`] the gyro inputs have no effect (their
+    /// constants are 0).
     #[inline]
     pub fn compensate(
         &self,
@@ -185,6 +415,7 @@ mod tests {
     use crate::forward::{BodyMotion, ForwardModel, TableState};
     use crate::params::tests::{expected, paper_unit};
     use crate::params::{LeverArms, OutputUnit, ReferencePoint, StaticParams};
+    use crate::sensor_models::poly_no_constant;
     use proptest::prelude::*;
 
     fn f32_inputs(
@@ -341,6 +572,160 @@ mod tests {
         ));
     }
 
+    /// The true gyro output `w = G ω + b(T)` of a body rate (docs/model.md §8), rounded to f32.
+    fn gyro_output(
+        g: &crate::GyroCorrection,
+        t: Option<&TemperatureModel>,
+        temp_c: f64,
+        omega: &[f64; 3],
+    ) -> [f32; 3] {
+        let gw = linalg::mat_vec(&g.matrix, omega);
+        core::array::from_fn(|i| {
+            let drift = t.map_or(0.0, |t| {
+                poly_no_constant(&t.gyro_bias_polynomials()[i], temp_c - t.reference_c)
+            });
+            (gw[i] + g.bias_rad_s[i] + drift) as f32
+        })
+    }
+
+    /// The true outputs at temperature `temp_c` (docs/model.md §9), from the forward model at the
+    /// reference: `U(T) = u0 + P(ΔT) + diag(1 + s(T)) (U_ref − u0)`.
+    fn outputs_at(
+        cal: &Calibration,
+        t: &TemperatureModel,
+        temp_c: f64,
+        m: &BodyMotion,
+    ) -> [f32; 3] {
+        let u = ForwardModel::new(cal).unwrap().outputs(m);
+        let u0 = cal.statics.zero_bias_out;
+        let dt = temp_c - t.reference_c;
+        core::array::from_fn(|i| {
+            let gain = 1.0 + poly_no_constant(&t.scale_rel_per_c[i], dt);
+            (u0[i] + poly_no_constant(&t.zero_bias_out_per_c[i], dt) + gain * (u.raw[i] - u0[i]))
+                as f32
+        })
+    }
+
+    fn spinning_motion(cal: &Calibration) -> BodyMotion {
+        let mut t = TableState::at_rest([0.6, -0.48, 0.64]);
+        t.rate_rad_s = 250f64.to_radians();
+        t.motion(cal.gravity_m_s2)
+    }
+
+    #[test]
+    fn gyro_correction_recovers_the_body_rate_and_the_compensation() {
+        let (gyro, _) = crate::blob::tests::gyro_and_temperature();
+        let mut cal = paper_unit();
+        cal.gyro = Some(gyro);
+        let motion = spinning_motion(&cal);
+        let w = gyro_output(&gyro, None, 25.0, &motion.omega.rad_s);
+        let c = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        let omega = c.correct_rate(&w);
+        for j in 0..3 {
+            // f32 rounding of a 4.4 rad/s rate: a few 1e-7 rad/s.
+            assert!(
+                (f64::from(omega.rad_s[j]) - motion.omega.rad_s[j]).abs() < 2e-6,
+                "{omega:?}"
+            );
+        }
+        let u = ForwardModel::new(&cal).unwrap().outputs(&motion);
+        let u = SensorOutputs {
+            raw: u.raw.map(|v| v as f32),
+        };
+        let corrected = c.compensate(&u, &omega, &BodyAngularAccel::default());
+        let naive = c.compensate(&u, &BodyRate { rad_s: w }, &BodyAngularAccel::default());
+        let err_g = |f: &BodySpecificForce, j: usize| {
+            (f64::from(f.m_s2[j]) - motion.f_o.m_s2[j]).abs() / cal.gravity_m_s2
+        };
+        for j in 0..3 {
+            assert!(err_g(&corrected, j) < 2e-6, "axis {j}: {corrected:?}");
+        }
+        // Without the correction this gyro leaves tens of µg (the size of the effect being fixed).
+        assert!((0..3).map(|j| err_g(&naive, j)).fold(0.0, f64::max) > 2e-5);
+    }
+
+    #[test]
+    fn refresh_follows_the_temperature_model() {
+        let (gyro, t) = crate::blob::tests::gyro_and_temperature();
+        let mut cal = paper_unit();
+        cal.gyro = Some(gyro);
+        cal.temperature = Some(t);
+        let motion = spinning_motion(&cal);
+        let fresh = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        assert_eq!(fresh.temperature_state(), TemperatureState::NoReading);
+        for temp in [-20.0, 0.0, 25.0, 45.0, 60.0] {
+            let mut c = fresh;
+            assert_eq!(c.refresh(temp as f32), TemperatureState::InRange);
+            let u = SensorOutputs {
+                raw: outputs_at(&cal, &t, temp, &motion),
+            };
+            let w = gyro_output(&gyro, Some(&t), temp, &motion.omega.rad_s);
+            let omega = c.correct_rate(&w);
+            let f = c.compensate(&u, &omega, &BodyAngularAccel::default());
+            let stale = fresh.compensate(&u, &fresh.correct_rate(&w), &BodyAngularAccel::default());
+            let mut worst = [0.0f64; 2];
+            for j in 0..3 {
+                assert!((f64::from(omega.rad_s[j]) - motion.omega.rad_s[j]).abs() < 2e-6);
+                let e = |f: &BodySpecificForce| {
+                    (f64::from(f.m_s2[j]) - motion.f_o.m_s2[j]).abs() / cal.gravity_m_s2
+                };
+                worst = [worst[0].max(e(&f)), worst[1].max(e(&stale))];
+            }
+            assert!(worst[0] < 3e-6, "{temp} °C: {} µg", worst[0] * 1e6);
+            if temp != 25.0 {
+                // Without the refresh the reference values are off by milli-g.
+                assert!(worst[1] > 1e-3, "{temp} °C: {}", worst[1]);
+            }
+        }
+        // At the reference the refresh changes nothing, bit for bit.
+        let mut c = fresh;
+        c.refresh(25.0);
+        assert_eq!(
+            (
+                c.zero_bias_out,
+                c.ka_m_s2_per_out,
+                c.p,
+                c.q,
+                c.s,
+                c.gyro_bias_rad_s
+            ),
+            (
+                fresh.zero_bias_out,
+                fresh.ka_m_s2_per_out,
+                fresh.p,
+                fresh.q,
+                fresh.s,
+                fresh.gyro_bias_rad_s
+            )
+        );
+    }
+
+    #[test]
+    fn refresh_clamps_out_of_range_and_keeps_terms_on_a_bad_reading() {
+        let (_, t) = crate::blob::tests::gyro_and_temperature();
+        let mut cal = paper_unit();
+        cal.temperature = Some(t);
+        let mut c = Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
+        let mut at_end = c;
+        assert_eq!(at_end.refresh(60.0), TemperatureState::InRange);
+        assert_eq!(c.refresh(95.0), TemperatureState::Clamped);
+        assert!(c.temperature_state().is_flagged());
+        assert_eq!(c, {
+            let mut e = at_end;
+            e.temperature = TemperatureState::Clamped;
+            e
+        });
+        assert_eq!(c.refresh(f32::NAN), TemperatureState::NoReading);
+        assert_eq!(c.ka_m_s2_per_out, at_end.ka_m_s2_per_out);
+        assert_eq!(at_end.refresh(f32::INFINITY), TemperatureState::NoReading);
+        // Without a model nothing happens and nothing is flagged.
+        let mut plain = Compensator::new(&paper_unit(), LeverMode::RateOnly).unwrap();
+        let before = plain;
+        assert_eq!(plain.refresh(-60.0), TemperatureState::NotModelled);
+        assert!(!plain.temperature_state().is_flagged());
+        assert_eq!(plain, before);
+    }
+
     /// A random but plausible unit: biases, scales in V/g or LSB/g, axes tilted up to 3°, lever arms up
     /// to 3 cm.
     pub(crate) fn arb_unit() -> impl Strategy<Value = Calibration> {
@@ -376,6 +761,8 @@ mod tests {
                     lever_arms: LeverArms { r_m: r },
                     reference: ReferencePoint::TableAxis,
                     gravity_m_s2: g,
+                    gyro: None,
+                    temperature: None,
                 }
             })
     }

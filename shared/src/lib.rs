@@ -5,6 +5,7 @@
 //! - [`units`]: the quantities that cross module boundaries, each carrying its unit and frame;
 //! - [`params`]: the calibration in the paper's form (Table 1 and Table 3) and in the fitted form
 //!   `M = K·A`, with the conversions of `docs/model.md` §2;
+//! - [`sensor_models`]: the gyro's correction and the temperature model (docs/model.md §8, §9);
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
 //! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3);
 //! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §6;
@@ -19,11 +20,13 @@ pub mod forward;
 pub mod linalg;
 pub mod omega_dot;
 pub mod params;
+pub mod sensor_models;
 pub mod units;
 pub mod wire;
 
 pub use compensator::{Compensator, LeverMode};
 pub use params::{Calibration, FittedStatic, LeverArms, OutputUnit, ReferencePoint, StaticParams};
+pub use sensor_models::{GyroCorrection, TemperatureModel};
 pub use units::{BodyAngularAccel, BodyRate, BodySpecificForce, SensorOutputs, UnitId};
 
 /// Standard gravity (m/s²), the default when the user gives no local value (`docs/model.md` §5).

@@ -7,6 +7,7 @@
 //! row and reports how far the input was from unit length.
 
 use crate::linalg::{self, RowMajor3};
+use crate::sensor_models::{GyroCorrection, TemperatureModel};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
@@ -256,6 +257,13 @@ pub struct Calibration {
     pub reference: ReferencePoint,
     /// Local gravity used to express the output in m/s², m/s².
     pub gravity_m_s2: f64,
+    /// The gyro's correction `w = G·ω_body + b` (docs/model.md §8); `None`: a perfect gyro.
+    #[serde(default)]
+    pub gyro: Option<GyroCorrection>,
+    /// How the zero biases, scale factors and gyro bias move with temperature (docs/model.md §9);
+    /// `None`: constant.
+    #[serde(default)]
+    pub temperature: Option<TemperatureModel>,
 }
 
 /// The paper's unit (Table 1 and Table 3; `reference/paper-unit.toml`, checked by a test): volts,
@@ -280,6 +288,8 @@ pub const PAPER_UNIT: Calibration = Calibration {
     },
     reference: ReferencePoint::TableAxis,
     gravity_m_s2: crate::STANDARD_GRAVITY_M_S2,
+    gyro: None,
+    temperature: None,
 };
 
 #[cfg(test)]
@@ -319,6 +329,8 @@ pub(crate) mod tests {
             },
             reference: ReferencePoint::TableAxis,
             gravity_m_s2: f.g_m_s2,
+            gyro: None,
+            temperature: None,
         }
     }
 

@@ -571,6 +571,8 @@ pub fn calibrate_session_stats(
         },
         reference: frame_note.reference,
         gravity_m_s2: plan.gravity_m_s2,
+        gyro: None,
+        temperature: None,
     };
     let segments = diagnostics(plan, &segs, &models, &main_theta);
     let comparison = if options.compare_methods {

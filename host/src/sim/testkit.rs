@@ -153,6 +153,8 @@ pub fn random_digital_unit(rng: &mut Rng) -> Calibration {
         },
         reference: ReferencePoint::TableAxis,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        gyro: None,
+        temperature: None,
     }
 }
 
