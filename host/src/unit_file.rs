@@ -20,12 +20,19 @@
 //! installation_angles_deg_1sigma = [[..], ..]
 //! lever_arms_m_1sigma = [[..], ..]
 //! lever_arms_observable = [[true, ..], ..]
+//! [temperature]                 # optional: docs/model.md §9
+//! reference_c = 25.0
+//! valid_range_c = [-20.0, 60.0]
+//! zero_bias_out_per_c = [[c1, c2, c3], ..]   # per axis, output unit per °C, °C², °C³
+//! scale_rel_per_c = [[c1, c2, c3], ..]       # per axis, relative scale per °C, °C², °C³
+//! # an estimate adds zero_bias_degree, scale_degree and the 1σ of every coefficient
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
 use crate::session::OutputUnitName;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
+use shared::sensor_models::TemperatureModel;
 use shared::{Calibration, LeverArms, ReferencePoint, StaticParams, UnitId};
 use std::path::{Path, PathBuf};
 
@@ -52,6 +59,9 @@ pub struct UnitFile {
     /// 1σ uncertainties of an estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<Uncertainty>,
+    /// How the biases and scale factors move with temperature.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature: Option<TemperatureSection>,
     /// Any other tables, kept as they are.
     #[serde(flatten)]
     pub other: toml::Table,
@@ -105,6 +115,63 @@ pub struct Uncertainty {
     pub lever_arms_m_1sigma: RowMajor3,
     /// Which lever-arm components the plan determined (false: the value is not a measurement).
     pub lever_arms_observable: [[bool; 3]; 3],
+}
+
+/// `[temperature]`: the temperature model (docs/model.md §9) and, for an estimate, how it was chosen.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureSection {
+    /// `T_ref`, °C: the static values hold there.
+    pub reference_c: f64,
+    /// The temperatures the calibration covers, °C.
+    pub valid_range_c: [f64; 2],
+    /// Zero-bias change per axis, output unit per °C, °C², °C³.
+    pub zero_bias_out_per_c: [[f64; 3]; 3],
+    /// Relative scale change per axis, per °C, °C², °C³.
+    pub scale_rel_per_c: [[f64; 3]; 3],
+    /// Gyro bias change per axis, rad/s per °C, °C², °C³.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_rad_s_per_c: Option<[[f64; 3]; 3]>,
+    /// The degree of each zero-bias polynomial the data chose (an estimate's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_degree: Option<[usize; 3]>,
+    /// The degree of each scale polynomial the data chose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_degree: Option<[usize; 3]>,
+    /// 1σ of `zero_bias_out_per_c` (0 for a coefficient the chosen degree leaves out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_out_per_c_1sigma: Option<[[f64; 3]; 3]>,
+    /// 1σ of `scale_rel_per_c`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_rel_per_c_1sigma: Option<[[f64; 3]; 3]>,
+}
+
+impl TemperatureSection {
+    /// The model alone.
+    pub fn model(&self) -> TemperatureModel {
+        TemperatureModel {
+            reference_c: self.reference_c,
+            valid_range_c: self.valid_range_c,
+            zero_bias_out_per_c: self.zero_bias_out_per_c,
+            scale_rel_per_c: self.scale_rel_per_c,
+            gyro_bias_rad_s_per_c: self.gyro_bias_rad_s_per_c,
+        }
+    }
+
+    /// The section of a model, without an estimate's extras.
+    pub fn from_model(m: &TemperatureModel) -> TemperatureSection {
+        TemperatureSection {
+            reference_c: m.reference_c,
+            valid_range_c: m.valid_range_c,
+            zero_bias_out_per_c: m.zero_bias_out_per_c,
+            scale_rel_per_c: m.scale_rel_per_c,
+            gyro_bias_rad_s_per_c: m.gyro_bias_rad_s_per_c,
+            zero_bias_degree: None,
+            scale_degree: None,
+            zero_bias_out_per_c_1sigma: None,
+            scale_rel_per_c_1sigma: None,
+        }
+    }
 }
 
 /// Why a unit file is unusable.
@@ -221,7 +288,7 @@ impl UnitFile {
             reference,
             gravity_m_s2: self.g_m_s2,
             gyro: None,
-            temperature: None,
+            temperature: self.temperature.as_ref().map(TemperatureSection::model),
         };
         self.unit_id()?;
         shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)
@@ -263,6 +330,7 @@ impl UnitFile {
                 reference_offset_m,
             }),
             uncertainty,
+            temperature: cal.temperature.as_ref().map(TemperatureSection::from_model),
             other: toml::Table::new(),
         }
     }

@@ -671,6 +671,8 @@ fn verify<T: Transport>(
             duration_s: Some(opts.verify_seconds),
             table_centre_m: None,
             mount: None,
+            temp_c: None,
+            temp_end_c: None,
         };
         if drive {
             client.set_table(table_for(&seg))?;
@@ -753,6 +755,8 @@ mod tests {
             duration_s: Some(1.0),
             table_centre_m: None,
             mount: None,
+            temp_c: None,
+            temp_end_c: None,
         }
     }
 

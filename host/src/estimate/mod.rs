@@ -21,6 +21,9 @@ mod screen;
 mod solve;
 #[cfg(test)]
 mod tests;
+pub mod thermal;
+#[cfg(test)]
+mod thermal_tests;
 
 pub use paper_angles::{paper_labels, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
@@ -167,11 +170,17 @@ pub enum EstimateError {
     },
     /// The estimate is not a valid calibration.
     Params(ParamsError),
+    /// The temperature model cannot be fitted or is implausible (the message says why).
+    Temperature(String),
 }
 
 impl std::fmt::Display for EstimateError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            EstimateError::Temperature(why) => write!(
+                f,
+                "temperature model: {why}; check the recording's temp_c column and the soak steps"
+            ),
             EstimateError::NoStaticSegments { planned: 0 } => write!(
                 f,
                 "the plan has no static segment: add at least four static attitudes (e.g. ±1 g on each axis)"
@@ -437,6 +446,8 @@ pub struct CalibrationOutcome {
     pub warnings: Vec<String>,
     /// The fitted form and lever arms in the fit's frame (before re-referencing).
     pub fitted: FittedStatic,
+    /// The temperature fit, when the session was recorded over a temperature range.
+    pub thermal: Option<thermal::ThermalFit>,
 }
 
 /// A segment of the session after matching plan and data.
@@ -448,8 +459,27 @@ pub(crate) struct SessionSeg {
     pub used: bool,
 }
 
-/// Calibrates from a plan and its segments' statistics.
+/// Calibrates from a plan and its segments' statistics. A session recorded over a temperature range
+/// first gets its temperature model ([`thermal`]); the rest is estimated from the statistics referred
+/// to the reference temperature.
 pub fn calibrate_session_stats(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    options: &EstimateOptions,
+) -> Result<CalibrationOutcome, EstimateError> {
+    let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
+    let mut outcome = match &fit {
+        None => calibrate_at_reference(plan, stats, options)?,
+        Some(fit) => calibrate_at_reference(plan, &fit.refer_to_reference(stats), options)?,
+    };
+    outcome.warnings.extend(notes);
+    outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
+    outcome.thermal = fit;
+    Ok(outcome)
+}
+
+/// [`calibrate_session_stats`] for statistics at one temperature.
+fn calibrate_at_reference(
     plan: &Plan,
     stats: &[SegmentStats],
     options: &EstimateOptions,
@@ -622,6 +652,7 @@ pub fn calibrate_session_stats(
         comparison,
         warnings,
         fitted,
+        thermal: None,
     })
 }
 

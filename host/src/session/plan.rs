@@ -5,8 +5,10 @@ use shared::OutputUnit;
 use std::collections::HashSet;
 use std::path::Path;
 
-/// Current plan format version.
+/// Plan format version 1: `samples.csv` without temperature (the default when absent).
 pub const PLAN_FORMAT_VERSION: u32 = 1;
+/// Plan format version 2: `samples.csv` ends with the unit's temperature, `temp_c`.
+pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = 2;
 
 /// Output unit as spelled in files: "V" or "LSB".
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,6 +93,13 @@ pub struct SegmentPlan {
     /// Absent: the segment's own `up_b` names its mount.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mount: Option<String>,
+    /// Thermal chamber set-point at the segment's start, °C (a soak step; docs/model.md §9). Absent:
+    /// no chamber. The estimator uses the recorded `temp_c`, never this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temp_c: Option<f64>,
+    /// Set-point at the segment's end for a slow ramp, °C. Absent: constant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temp_end_c: Option<f64>,
 }
 
 impl SegmentPlan {
@@ -130,8 +139,8 @@ impl std::fmt::Display for PlanError {
             PlanError::Syntax(p, e) => write!(f, "plan {} is not valid: {e}", p.display()),
             PlanError::Version(v) => write!(
                 f,
-                "plan format_version {v} is not supported (this build reads {PLAN_FORMAT_VERSION}); \
-                 upgrade the tool or rewrite the plan"
+                "plan format_version {v} is not supported (this build reads {PLAN_FORMAT_VERSION} and \
+                 {PLAN_FORMAT_VERSION_TEMPERATURE}); upgrade the tool or rewrite the plan"
             ),
             PlanError::Invalid(m) => write!(f, "plan is not usable: {m}"),
         }
@@ -161,7 +170,7 @@ impl Plan {
 
     /// Semantic checks: version, positive rate, unique names, unit `up_b`, finite numbers.
     pub fn validate(&self) -> Result<(), PlanError> {
-        if self.format_version != PLAN_FORMAT_VERSION {
+        if ![PLAN_FORMAT_VERSION, PLAN_FORMAT_VERSION_TEMPERATURE].contains(&self.format_version) {
             return Err(PlanError::Version(self.format_version));
         }
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
@@ -217,8 +226,50 @@ impl Plan {
                     s.name
                 )));
             }
+            self.validate_temperatures(s)?;
         }
         Ok(())
+    }
+
+    /// Chamber set-points are plausible and recorded: a plan that sets them must record `temp_c`.
+    fn validate_temperatures(&self, s: &SegmentPlan) -> Result<(), PlanError> {
+        let (lo, hi) = shared::sensor_models::TEMPERATURE_LIMITS_C;
+        for t in [s.temp_c, s.temp_end_c].into_iter().flatten() {
+            if !(lo..=hi).contains(&t) {
+                return Err(PlanError::Invalid(format!(
+                    "segment '{}': temperature {t} °C is outside {lo}..{hi} °C",
+                    s.name
+                )));
+            }
+        }
+        if s.temp_end_c.is_some() && s.temp_c.is_none() {
+            return Err(PlanError::Invalid(format!(
+                "segment '{}': temp_end_c needs temp_c (the ramp's start)",
+                s.name
+            )));
+        }
+        if s.temp_c.is_some() && !self.has_temperature() {
+            return Err(PlanError::Invalid(format!(
+                "segment '{}' sets a chamber temperature but the recording would not hold it: \
+                 set format_version = {PLAN_FORMAT_VERSION_TEMPERATURE} (samples.csv with temp_c)",
+                s.name
+            )));
+        }
+        Ok(())
+    }
+
+    /// True when `samples.csv` carries the unit's temperature (format version 2).
+    pub fn has_temperature(&self) -> bool {
+        self.format_version == PLAN_FORMAT_VERSION_TEMPERATURE
+    }
+
+    /// The columns of this plan's `samples.csv`.
+    pub fn columns(&self) -> &'static [&'static str] {
+        if self.has_temperature() {
+            &super::COLUMNS_TEMPERATURE
+        } else {
+            &super::COLUMNS
+        }
     }
 
     /// The segment called `name`.
@@ -272,5 +323,23 @@ rate_deg_s = 100
         assert!(e.to_string().contains("line"), "{e}");
         let e = Plan::parse(&format!("format_version = 9\n{GOOD}")).unwrap_err();
         assert!(matches!(e, PlanError::Version(9)));
+    }
+
+    #[test]
+    fn chamber_temperatures_need_format_version_2() {
+        let with_temp = GOOD.replace("duration_s = 60", "duration_s = 60\ntemp_c = -20");
+        let e = Plan::parse(&with_temp).unwrap_err();
+        assert!(e.to_string().contains("format_version = 2"), "{e}");
+        let p = Plan::parse(&format!("format_version = 2\n{with_temp}")).unwrap();
+        assert!(p.has_temperature());
+        assert_eq!(p.segments[0].temp_c, Some(-20.0));
+        assert_eq!(p.columns().last(), Some(&"temp_c"));
+        assert_eq!(Plan::parse(&p.to_toml()).unwrap(), p);
+        let hot = with_temp.replace("temp_c = -20", "temp_c = 500");
+        let e = Plan::parse(&format!("format_version = 2\n{hot}")).unwrap_err();
+        assert!(e.to_string().contains("500"), "{e}");
+        let ramp = with_temp.replace("temp_c = -20", "temp_end_c = 20");
+        let e = Plan::parse(&format!("format_version = 2\n{ramp}")).unwrap_err();
+        assert!(e.to_string().contains("needs temp_c"), "{e}");
     }
 }

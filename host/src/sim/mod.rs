@@ -6,8 +6,9 @@ pub mod session;
 pub mod synth;
 #[cfg(test)]
 pub(crate) mod testkit;
+pub mod thermal;
 
 pub use session::{
-    simulate_calibration_to_dir, simulate_rows, simulate_to_dir, simulate_to_dir_with_progress,
-    NoiseModel, Rng, SimulateError, SimulationSummary, TRUTH_FILE,
+    simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
+    simulate_to_dir_with_progress, NoiseModel, Rng, SimulateError, SimulationSummary, TRUTH_FILE,
 };

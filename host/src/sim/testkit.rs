@@ -63,6 +63,8 @@ fn seg(name: &str, up: [f64; 3], rate: f64) -> SegmentPlan {
         duration_s: Some(60.0),
         table_centre_m: None,
         mount: None,
+        temp_c: None,
+        temp_end_c: None,
     }
 }
 
