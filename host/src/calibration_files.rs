@@ -78,12 +78,18 @@ pub fn write_calibration_files(
     let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
     std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
     let toml_path = out_dir.join(CALIBRATION_TOML);
-    let text = UnitFile::from_calibration(
+    let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         Some(unit_id),
         Some(outcome.uncertainty.clone()),
-    )
-    .to_toml();
+    );
+    if let (Some(section), Some(fit)) = (file.temperature.as_mut(), &outcome.thermal) {
+        section.zero_bias_degree = Some(fit.zero_bias_degree);
+        section.scale_degree = Some(fit.scale_degree);
+        section.zero_bias_out_per_c_1sigma = Some(fit.zero_bias_sigma);
+        section.scale_rel_per_c_1sigma = Some(fit.scale_sigma);
+    }
+    let text = file.to_toml();
     std::fs::write(&toml_path, text).map_err(|e| OutputError::Io(toml_path.clone(), e))?;
     let bin_path = out_dir.join(CALIBRATION_BIN);
     std::fs::write(&bin_path, &blob).map_err(|e| OutputError::Io(bin_path.clone(), e))?;

@@ -5,28 +5,19 @@ use super::{calibrate_session_stats, EstimateOptions};
 use crate::session::{OutputUnitName, Plan, SegmentAccumulator, SegmentPlan, SegmentStats};
 use crate::sim::thermal::{outputs_at, ThermalSim};
 use crate::sim::{simulate_rows_with_temperature, NoiseModel};
+use crate::unit_file::UnitFile;
 use shared::forward::{ForwardModel, TableState};
-use shared::sensor_models::TemperatureModel;
 use shared::{Calibration, Compensator, LeverMode, SensorOutputs};
 
-/// The paper's unit with tempcos of MEMS size: bias 0.25..0.35 mg/°C plus a quadratic term, scale
-/// 100..150 ppm/°C, in the unit's volts (k ≈ 0.4 V/g).
+/// `host/units/thermal-mems.toml`: the paper's unit with tempcos of MEMS size (bias 0.25..0.35
+/// mg/°C plus a quadratic term, scale 100..150 ppm/°C).
+pub(crate) fn hot_unit_file() -> UnitFile {
+    toml::from_str(include_str!("../../units/thermal-mems.toml")).unwrap()
+}
+
+/// [`hot_unit_file`] as a calibration.
 pub(crate) fn hot_unit() -> Calibration {
-    let mut cal = crate::sim::testkit::paper_unit();
-    let k = cal.statics.scale_out_per_g;
-    let mg = |i: usize, v: f64| v * 1e-3 * k[i];
-    cal.temperature = Some(TemperatureModel {
-        reference_c: 25.0,
-        valid_range_c: [-40.0, 85.0],
-        zero_bias_out_per_c: [
-            [mg(0, 0.30), mg(0, 3e-3), 0.0],
-            [mg(1, -0.25), mg(1, -2e-3), 0.0],
-            [mg(2, 0.35), mg(2, 1.5e-3), 0.0],
-        ],
-        scale_rel_per_c: [[150e-6, 0.0, 0.0], [-120e-6, 0.0, 0.0], [100e-6, 0.0, 0.0]],
-        gyro_bias_rad_s_per_c: None,
-    });
-    cal
+    hot_unit_file().to_calibration().unwrap()
 }
 
 /// Six positions (±1 g per axis) at each chamber set-point, `seconds` each.
@@ -207,4 +198,50 @@ fn a_session_at_one_temperature_gets_no_model() {
         "{:?}",
         out.warnings
     );
+}
+
+#[test]
+fn slow_ramps_at_rest_calibrate_as_well_as_soak_steps() {
+    let truth = hot_unit();
+    let plan = crate::session::builtin::builtin_plan("thermal-ramp")
+        .unwrap()
+        .unwrap();
+    let stats = simulate_stats(&truth, &plan, &nuisances(), &ThermalSim::default(), 11);
+    let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+    let fit = out.thermal.as_ref().expect("a temperature model");
+    assert_eq!(fit.scale_degree, [1; 3], "{:?}", fit.notes);
+    for temp in [0.0, 45.0] {
+        let with = worst_error_ug(&truth, &out.calibration, temp, &HELD_OUT_UPS);
+        println!("ramps, held-out at {temp} °C: worst error {with:.1} µg");
+        assert!(with <= 30.0, "{temp} °C: {with} µg");
+    }
+}
+
+#[test]
+fn a_sensor_lagging_the_die_shows_in_the_ramp_residuals() {
+    // Up and down sweeps with a sensor 5 s behind the die: the same reading means different die
+    // temperatures on the way up and down, which the χ² sees (the soak steps do not suffer this).
+    let truth = hot_unit();
+    let plan = crate::session::builtin::builtin_plan("thermal-ramp")
+        .unwrap()
+        .unwrap();
+    let lagging = ThermalSim {
+        sensor_lag_s: 5.0,
+        ..ThermalSim::default()
+    };
+    let chi2 = |sim: &ThermalSim| {
+        let stats = simulate_stats(&truth, &plan, &nuisances(), sim, 11);
+        let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+        let fit = out.thermal.unwrap();
+        fit.chi2.map(|(c, dof)| c / dof as f64)
+    };
+    // χ²/dof of 360 000 rows has a spread of √(2/dof) ≈ 0.0024: settled data sit within 8 of those
+    // of 1, the lag lifts it by far more than that.
+    let settled = chi2(&ThermalSim::default());
+    let lagged = chi2(&lagging);
+    println!("χ²/dof of the ramp fit: settled {settled:.4?}, sensor lagging by 5 s {lagged:.4?}");
+    for i in 0..3 {
+        assert!((settled[i] - 1.0).abs() < 0.02, "{settled:?}");
+        assert!(lagged[i] > 1.05, "{lagged:?}");
+    }
 }

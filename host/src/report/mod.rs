@@ -7,5 +7,6 @@ pub mod document;
 pub mod navigation;
 pub mod plot;
 pub mod text;
+pub mod thermal;
 
 pub use text::{render, render_prediction};

@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub const BUILTIN_PLANS: [(&str, &str); 5] = [
+pub const BUILTIN_PLANS: [(&str, &str); 7] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -15,6 +15,14 @@ pub const BUILTIN_PLANS: [(&str, &str); 5] = [
     (
         "quick-oblique",
         include_str!("../../plans/quick-oblique.toml"),
+    ),
+    (
+        "thermal-soak",
+        include_str!("../../plans/thermal-soak.toml"),
+    ),
+    (
+        "thermal-ramp",
+        include_str!("../../plans/thermal-ramp.toml"),
     ),
 ];
 
@@ -71,6 +79,10 @@ mod tests {
             .segments
             .iter()
             .any(|s| s.up_b[0] > 0.7 && s.up_b[1] > 0.7 && s.rate_deg_s == -200.0));
+        let soak = builtin_plan("thermal-soak").unwrap().unwrap();
+        assert!(soak.has_temperature() && soak.segments.len() == 30);
+        let ramp = builtin_plan("thermal-ramp").unwrap().unwrap();
+        assert!(ramp.segments.iter().all(|s| s.temp_end_c.is_some()));
         assert!(load_plan("no-such-plan")
             .unwrap_err()
             .to_string()

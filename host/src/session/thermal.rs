@@ -196,3 +196,60 @@ mod tests {
         assert_eq!(binomial(3, 2), 3.0);
     }
 }
+
+#[cfg(test)]
+mod recording_tests {
+    use crate::session::{read_session, Plan, ReadOptions, SessionWriter};
+
+    const PLAN_V2: &str = r#"
+format_version = 2
+output_unit = "V"
+sample_rate_hz = 100
+[[segment]]
+name = "x+"
+up_b = [1, 0, 0]
+temp_c = 10
+[[segment]]
+name = "x-"
+up_b = [-1, 0, 0]
+"#;
+
+    #[test]
+    fn version_2_round_trips_with_temperature_and_version_1_is_told_apart() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = Plan::parse(PLAN_V2).unwrap();
+        let mut w = SessionWriter::create(dir.path(), &plan, false).unwrap();
+        // A version 2 recording refuses rows without temperature.
+        assert!(w.write_row("x+", 0.0, &[1.0; 3], &[0.0; 3]).is_err());
+        for k in 0..10 {
+            let t = 10.0 + k as f64;
+            w.write_row_with_temperature("x+", k as f64 * 0.01, &[2.0 + 1e-3 * t; 3], &[0.0; 3], t)
+                .unwrap();
+        }
+        w.write_row_with_temperature("x-", 0.2, &[1.0; 3], &[0.0; 3], f64::NAN)
+            .unwrap();
+        w.write_row_with_temperature("x-", 0.3, &[1.0; 3], &[0.0; 3], 20.0)
+            .unwrap();
+        w.finish().unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let th = s.stats[0].thermal.as_ref().unwrap();
+        assert_eq!((th.count, th.min_c, th.max_c), (10, 10.0, 19.0));
+        assert!((th.mean_c() - 14.5).abs() < 1e-12);
+        // The row with a NaN temperature is left out whole and counted.
+        assert_eq!((s.stats[1].count, s.stats[1].rejected_rows), (1, 1));
+        assert!(s.report.warnings.iter().any(|w| w.contains("'x-'")));
+
+        // The same samples under a version 1 plan: the header names the fix.
+        let v1 = PLAN_V2
+            .replace("format_version = 2", "")
+            .replace("temp_c = 10", "");
+        std::fs::write(dir.path().join("plan.toml"), v1).unwrap();
+        let e = read_session(dir.path(), &ReadOptions { quiet: true })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("column 9") && e.contains("format_version = 2"),
+            "{e}"
+        );
+    }
+}
