@@ -113,6 +113,11 @@ pub struct Pipeline<const Q: usize> {
     out: Deque<DeviceToHost, Q>,
     dropped: u32,
     drop_pending: bool,
+    /// The latest temperature reading, °C (NaN: none yet).
+    temp_c: f32,
+    /// Sum and count of the readings given during the current window.
+    temp_sum_c: f32,
+    temp_readings: u32,
 }
 
 impl<const Q: usize> Pipeline<Q> {
@@ -137,6 +142,9 @@ impl<const Q: usize> Pipeline<Q> {
             out: Deque::new(),
             dropped: 0,
             drop_pending: false,
+            temp_c: f32::NAN,
+            temp_sum_c: 0.0,
+            temp_readings: 0,
         }
     }
 
@@ -145,9 +153,38 @@ impl<const Q: usize> Pipeline<Q> {
         match cmd {
             PipelineCommand::Stream(req) => self.stream = Some(req),
             PipelineCommand::StopStream => self.stream = None,
-            PipelineCommand::Compensator(c) => self.compensator = c,
+            PipelineCommand::Compensator(c) => {
+                self.compensator = c;
+                if let Some(c) = &mut self.compensator {
+                    c.refresh(self.temp_c);
+                }
+            }
         }
         self.restart_window();
+    }
+
+    /// A new reading of the unit's temperature, °C, a few times a second (not per sample): the
+    /// compensator's bias and scale terms are refreshed for it (docs/model.md §9; three divisions),
+    /// and it enters the window's mean temperature. A NaN reading (a failed sensor) leaves the terms
+    /// as they were and flags the outputs when the calibration has a temperature model.
+    pub fn on_temperature(&mut self, temp_c: f32) {
+        self.temp_c = temp_c;
+        if let Some(c) = &mut self.compensator {
+            c.refresh(temp_c);
+        }
+        if temp_c.is_finite() {
+            self.temp_sum_c += temp_c;
+            self.temp_readings += 1;
+        }
+    }
+
+    /// The window's mean temperature reading, or the latest reading when none came in the window.
+    fn window_temperature_c(&self) -> f32 {
+        if self.temp_readings > 0 {
+            self.temp_sum_c / self.temp_readings as f32
+        } else {
+            self.temp_c
+        }
     }
 
     fn restart_window(&mut self) {
@@ -156,6 +193,8 @@ impl<const Q: usize> Pipeline<Q> {
         self.window_flags = 0;
         self.window_first = self.index;
         self.acc = WindowAccumulator::new();
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
     }
 
     /// True when a calibration is applied.
@@ -208,8 +247,10 @@ impl<const Q: usize> Pipeline<Q> {
     #[inline(always)]
     fn frame_flags(&self) -> SampleFlags {
         let mut f = self.window_flags;
-        if self.compensator.is_none() {
-            f |= SampleFlags::UNCALIBRATED;
+        match &self.compensator {
+            None => f |= SampleFlags::UNCALIBRATED,
+            Some(c) if c.temperature_state().is_flagged() => f |= SampleFlags::TEMPERATURE,
+            Some(_) => {}
         }
         if self.drop_pending {
             f |= SampleFlags::FRAMES_DROPPED;
@@ -321,6 +362,7 @@ impl<const Q: usize> Pipeline<Q> {
                 var_rate_rad2_s2: [v[3], v[4], v[5]],
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
+                mean_temp_c: self.window_temperature_c(),
                 flags,
             })
         } else {
@@ -332,6 +374,7 @@ impl<const Q: usize> Pipeline<Q> {
                 mean_rate_rad_s: [m[3], m[4], m[5]],
                 rejected: self.rejected,
                 dropped_frames: self.dropped,
+                mean_temp_c: self.window_temperature_c(),
                 flags,
             })
         };
@@ -340,6 +383,8 @@ impl<const Q: usize> Pipeline<Q> {
         self.rejected = 0;
         self.window_flags = 0;
         self.window_first = self.index;
+        self.temp_sum_c = 0.0;
+        self.temp_readings = 0;
     }
 }
 

@@ -5,8 +5,14 @@
 //!
 //! The table turns about the vertical, so "up" is constant in body axes and `ω = rate(t)·up` with
 //! `rate(t) = rate₀ + α·t`, t counted in samples since the table was set (virtual time).
+//!
+//! Temperature (docs/model.md §9): the unit sits in a virtual chamber whose temperature the board
+//! sets ([`VirtualSensor::set_ambient_c`], "heating in software"); the die follows it with a
+//! first-order lag of [`DIE_TIME_CONSTANT_S`], the unit's temperature sensor reads the die, and a
+//! calibration with a temperature model moves the outputs' biases and scale factors with the die.
 
 use shared::forward::{ForwardModel, TableState};
+use shared::sensor_models::{poly_no_constant, TemperatureModel, TEMPERATURE_LIMITS_C};
 use shared::wire::VirtualTable;
 use shared::Calibration;
 
@@ -22,6 +28,10 @@ pub const OUTPUT_NOISE_V: f32 = 2.0e-4;
 pub const GYRO_NOISE_RAD_S: f32 = 1.0e-3;
 /// Largest table rate accepted, rad/s (the rate ramp is clamped here too).
 pub const MAX_TABLE_RATE_RAD_S: f32 = 30.0;
+/// Time constant of the die following the chamber, s.
+pub const DIE_TIME_CONSTANT_S: f64 = 2.0;
+/// The chamber's temperature at start, °C.
+pub const START_TEMPERATURE_C: f32 = 25.0;
 
 /// A unit on a virtual rate table.
 pub struct VirtualSensor {
@@ -31,6 +41,11 @@ pub struct VirtualSensor {
     sample_period_s: f64,
     noise_state: u32,
     noise_on: bool,
+    thermal: Option<TemperatureModel>,
+    ambient_c: f64,
+    die_c: f64,
+    /// Fraction of the chamber–die difference the die closes per sample.
+    die_follow: f64,
 }
 
 /// Why a table setting was refused.
@@ -41,7 +56,12 @@ impl VirtualSensor {
     /// The unit `cal` at rest with z up, sampled at `sample_rate_hz`; `None` if `cal` is unusable.
     pub fn new(cal: &Calibration, sample_rate_hz: u32, noise: bool) -> Option<Self> {
         let model = ForwardModel::new(cal).ok()?;
+        let period_s = 1.0 / f64::from(sample_rate_hz.max(1));
         Some(VirtualSensor {
+            thermal: cal.temperature,
+            ambient_c: f64::from(START_TEMPERATURE_C),
+            die_c: f64::from(START_TEMPERATURE_C),
+            die_follow: (period_s / DIE_TIME_CONSTANT_S).min(1.0),
             model,
             table: VirtualTable {
                 up_b: [0.0, 0.0, 1.0],
@@ -87,6 +107,22 @@ impl VirtualSensor {
         self.table
     }
 
+    /// Sets the chamber's temperature, °C; the die follows it. Refuses a value outside
+    /// [`TEMPERATURE_LIMITS_C`] or not finite.
+    pub fn set_ambient_c(&mut self, temp_c: f32) -> Result<(), BadTable> {
+        let t = f64::from(temp_c);
+        if !(TEMPERATURE_LIMITS_C.0..=TEMPERATURE_LIMITS_C.1).contains(&t) {
+            return Err(BadTable);
+        }
+        self.ambient_c = t;
+        Ok(())
+    }
+
+    /// The unit's temperature sensor: the die's temperature, °C.
+    pub fn temperature_c(&self) -> f32 {
+        self.die_c as f32
+    }
+
     fn uniform(&mut self) -> f32 {
         // xorshift32: deterministic, cheap; maps to [-0.5, 0.5).
         let mut x = self.noise_state;
@@ -124,7 +160,18 @@ impl VirtualSensor {
             centre_m: [0.0; 3],
         };
         let motion = state.motion(self.model.gravity_m_s2);
-        let u = self.model.outputs(&motion);
+        let mut u = self.model.outputs(&motion);
+        self.die_c += (self.ambient_c - self.die_c) * self.die_follow;
+        if let Some(th) = &self.thermal {
+            // U(T) = u0 + P(ΔT) + (1 + S(ΔT))·(U_ref − u0): the scale moves every term of the row.
+            let dt = self.die_c - th.reference_c;
+            for i in 0..3 {
+                let u0 = self.model.zero_bias_out[i];
+                let gain = 1.0 + poly_no_constant(&th.scale_rel_per_c[i], dt);
+                u.raw[i] =
+                    u0 + poly_no_constant(&th.zero_bias_out_per_c[i], dt) + gain * (u.raw[i] - u0);
+            }
+        }
         let mut saturated = false;
         let mut raw = [0.0f32; 3];
         let mut rate_out = [0.0f32; 3];
@@ -221,5 +268,85 @@ mod tests {
         })
         .unwrap();
         assert!(!s.sample().saturated);
+    }
+
+    /// Runs `seconds` of samples through `p`, reading the temperature four times a second, and
+    /// returns the last compensated window.
+    fn run(
+        s: &mut VirtualSensor,
+        p: &mut crate::Pipeline<8>,
+        seconds: u32,
+        read_temperature: bool,
+    ) -> shared::wire::CompensatedWindow {
+        let mut last = None;
+        for k in 0..seconds * 1000 {
+            if read_temperature && k % 250 == 0 {
+                p.on_temperature(s.temperature_c());
+            }
+            p.on_sample(&s.sample());
+            while let Some(m) = p.pop_output() {
+                if let shared::wire::DeviceToHost::CompensatedWindow(w) = m {
+                    last = Some(w);
+                }
+            }
+        }
+        last.unwrap()
+    }
+
+    #[test]
+    fn heated_unit_is_compensated_within_50_ug_and_flagged_outside_its_range() {
+        use crate::pipeline::PipelineCommand;
+        use shared::wire::{SampleFlags, StreamKind, StreamRequest};
+        let cal = paper_unit::hot_calibration();
+        let mut s = VirtualSensor::new(&cal, 1000, true).unwrap();
+        let up = [0.6f32, 0.0, -0.8];
+        s.set_table(&VirtualTable {
+            up_b: up,
+            rate_rad_s: 0.0,
+            accel_rad_s2: 0.0,
+        })
+        .unwrap();
+        let mut p = crate::Pipeline::<8>::new(1000);
+        let c = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        p.apply(PipelineCommand::Compensator(Some(c)));
+        p.apply(PipelineCommand::Stream(StreamRequest {
+            kind: StreamKind::CompensatedWindows,
+            window_samples: 4000,
+        }));
+        // Without a temperature reading the model cannot be applied: flagged.
+        let w = run(&mut s, &mut p, 4, false);
+        assert!(w.flags.has(SampleFlags::TEMPERATURE), "{w:?}");
+        assert!(w.mean_temp_c.is_nan());
+        let g = paper_unit::GRAVITY_M_S2 as f32;
+        let error_ug = |w: &shared::wire::CompensatedWindow| {
+            let e: [f32; 3] = core::array::from_fn(|j| w.mean_m_s2[j] / g - up[j]);
+            (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e6
+        };
+        let mut plain = Compensator::new(&cal, LeverMode::RateOnly).unwrap();
+        for (ambient, in_range) in [(45.0f32, true), (0.0, true), (70.0, false)] {
+            s.set_ambient_c(ambient).unwrap();
+            // Ten die time constants to settle, then one window.
+            let w = run(&mut s, &mut p, 24, true);
+            assert!((w.mean_temp_c - ambient).abs() < 0.01, "{w:?}");
+            assert_eq!(!w.flags.has(SampleFlags::TEMPERATURE), in_range, "{w:?}");
+            std::println!(
+                "heated to {ambient} °C: window mean error {:.1} µg, flagged {}",
+                error_ug(&w),
+                w.flags.has(SampleFlags::TEMPERATURE)
+            );
+            if in_range {
+                assert!(error_ug(&w) < 50.0, "{ambient} °C: {} µg", error_ug(&w));
+                // The same data without the temperature refresh is off by milli-g.
+                plain.refresh(25.0);
+                let raw = s.sample();
+                let f = plain.compensate_static(&SensorOutputs { raw: raw.raw });
+                let e = (0..3)
+                    .map(|j| (f.m_s2[j] / g - up[j]).powi(2))
+                    .sum::<f32>()
+                    .sqrt();
+                assert!(e > 3e-3, "{ambient} °C: {e}");
+            }
+        }
+        assert!(s.set_ambient_c(f32::NAN).is_err());
     }
 }

@@ -21,8 +21,9 @@ use serde::{de::DeserializeOwned, Deserialize, Serialize};
 
 pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 
-/// Version of this protocol; a host refuses a device that speaks another.
-pub const PROTOCOL_VERSION: u16 = 1;
+/// Version of this protocol; a host refuses a device that speaks another. Version 2: windows carry
+/// the unit's mean temperature, and [`SampleFlags::TEMPERATURE`].
+pub const PROTOCOL_VERSION: u16 = 2;
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
 
@@ -165,6 +166,10 @@ impl SampleFlags {
     pub const NON_FINITE: u8 = 4;
     /// Output frames were dropped since the previous frame (the link was too slow).
     pub const FRAMES_DROPPED: u8 = 8;
+    /// The calibration's temperature model was not applied at the unit's actual temperature: it was
+    /// outside the calibrated range (the nearest end was used) or no reading has come yet
+    /// (docs/model.md §9).
+    pub const TEMPERATURE: u8 = 16;
 
     /// True when `bit` is set.
     pub fn has(self, bit: u8) -> bool {
@@ -191,6 +196,8 @@ pub struct RawWindow {
     pub rejected: u32,
     /// Output frames dropped since boot.
     pub dropped_frames: u32,
+    /// Mean of the unit's temperature readings during the window, °C; NaN: no sensor or no reading.
+    pub mean_temp_c: f32,
     /// Status bits.
     pub flags: SampleFlags,
 }
@@ -212,6 +219,8 @@ pub struct CompensatedWindow {
     pub rejected: u32,
     /// Output frames dropped since boot.
     pub dropped_frames: u32,
+    /// Mean of the unit's temperature readings during the window, °C; NaN: no sensor or no reading.
+    pub mean_temp_c: f32,
     /// Status bits.
     pub flags: SampleFlags,
 }
@@ -416,6 +425,7 @@ mod tests {
             var_rate_rad2_s2: [1.0; 3],
             rejected: u32::MAX,
             dropped_frames: u32::MAX,
+            mean_temp_c: 1.0,
             flags: SampleFlags(0xFF),
         });
         let mut dbuf = [0u8; DEVICE_FRAME_MAX];

@@ -33,7 +33,8 @@ fn main() -> ! {
     let pipeline = cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(SAMPLE_RATE_HZ))
         .unwrap_or_else(|| halt());
     pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
-    let sensor = VirtualSensor::new(&paper_unit::calibration(), SAMPLE_RATE_HZ, true)
+    // The paper's unit with MEMS-sized tempcos: at the virtual chamber's 25 °C it is the paper's unit.
+    let sensor = VirtualSensor::new(&paper_unit::hot_calibration(), SAMPLE_RATE_HZ, true)
         .unwrap_or_else(|| halt());
     let sensor = cortex_m::singleton!(: VirtualSensor = sensor).unwrap_or_else(|| halt());
     interrupt::free(|cs| {
@@ -71,13 +72,28 @@ fn main() -> ! {
     }
 }
 
-/// One sample per SysTick: the virtual sensor, then the whole per-sample path.
+/// Samples between two temperature readings: four a second (docs/model.md §9: the temperature
+/// terms are refreshed a few times a second, never per sample).
+const TEMPERATURE_PERIOD_SAMPLES: u32 = SAMPLE_RATE_HZ / 4;
+
+/// One sample per SysTick: the virtual sensor, then the whole per-sample path; every
+/// [`TEMPERATURE_PERIOD_SAMPLES`] the unit's temperature too.
 #[exception]
 fn SysTick() {
+    static mut UNTIL_TEMPERATURE: u32 = 0;
+    let read_temperature = *UNTIL_TEMPERATURE == 0;
+    *UNTIL_TEMPERATURE = if read_temperature {
+        TEMPERATURE_PERIOD_SAMPLES - 1
+    } else {
+        *UNTIL_TEMPERATURE - 1
+    };
     interrupt::free(|cs| {
         let mut sensor = SENSOR.borrow(cs).borrow_mut();
         let mut pipeline = PIPELINE.borrow(cs).borrow_mut();
         if let (Some(s), Some(p)) = (sensor.as_mut(), pipeline.as_mut()) {
+            if read_temperature {
+                p.on_temperature(s.temperature_c());
+            }
             let sample = s.sample();
             p.on_sample(&sample);
         }

@@ -211,6 +211,70 @@ fn pipeline_on_virtual_table(t: &mut Tally) {
     t.failed += u32::from(!ok);
 }
 
+/// The heated unit (docs/model.md §9): the paper's unit with MEMS tempcos in a virtual chamber
+/// heated in software, its temperature read four times a second; the compensated window mean is
+/// within 50 µg of gravity at 45 °C and 0 °C, and flagged at 70 °C, outside the calibrated range.
+fn pipeline_heated_unit(t: &mut Tally) {
+    let cal = paper_unit::hot_calibration();
+    let mut sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
+    let up = [0.6f32, 0.0, -0.8];
+    let table_ok = sensor
+        .set_table(&VirtualTable {
+            up_b: up,
+            rate_rad_s: 0.0,
+            accel_rad_s2: 0.0,
+        })
+        .is_ok();
+    let mut p = Pipeline::<4>::new(1000);
+    p.apply(PipelineCommand::Compensator(
+        shared::Compensator::new(&cal, LeverMode::RateOnly).ok(),
+    ));
+    p.apply(PipelineCommand::Stream(StreamRequest {
+        kind: StreamKind::CompensatedWindows,
+        window_samples: 4000,
+    }));
+    for (ambient, in_range) in [(45.0f32, true), (0.0, true), (70.0, false)] {
+        let mut ok = table_ok && sensor.set_ambient_c(ambient).is_ok();
+        let mut last = None;
+        for k in 0..20_000u32 {
+            if k % 250 == 0 {
+                p.on_temperature(sensor.temperature_c());
+            }
+            p.on_sample(&sensor.sample());
+            while let Some(m) = p.pop_output() {
+                if let DeviceToHost::CompensatedWindow(w) = m {
+                    last = Some(w);
+                }
+            }
+        }
+        let (error_ug, flagged, temp) = match last {
+            Some(w) => {
+                let e: [f32; 3] = core::array::from_fn(|j| w.mean_m_s2[j] / 9.80665 - up[j]);
+                (
+                    libm::sqrtf(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * 1e6,
+                    w.flags.has(shared::wire::SampleFlags::TEMPERATURE),
+                    w.mean_temp_c,
+                )
+            }
+            None => (f32::NAN, false, f32::NAN),
+        };
+        ok &= flagged != in_range && (temp - ambient).abs() < 0.05;
+        if in_range {
+            ok &= error_ug < 50.0;
+        }
+        hprintln!(
+            "test pipeline_heated_unit_{}c ... {} (error {} µg, die {} °C, flagged {})",
+            ambient as i32,
+            if ok { "ok" } else { "FAILED" },
+            error_ug,
+            temp,
+            flagged
+        );
+        t.passed += u32::from(ok);
+        t.failed += u32::from(!ok);
+    }
+}
+
 fn first_boot(t: &mut Tally) -> ! {
     paint_stack();
     hprintln!("qemu-target-tests: boot 1 (Cortex-M4F FPU, mps2-an386)");
@@ -221,6 +285,7 @@ fn first_boot(t: &mut Tally) -> ! {
     t.check("omega_dot_matches_pc", testvectors::check_omega_dot());
     t.check("window_stats_match_pc", testvectors::check_window_stats());
     pipeline_on_virtual_table(t);
+    pipeline_heated_unit(t);
 
     // The protocol handler on the board's real storage region: write the paper unit's calibration.
     // SAFETY: only place the store is created in this binary.
