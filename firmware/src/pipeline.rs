@@ -88,7 +88,9 @@ impl Scaling {
     }
 }
 
-/// A change to the pipeline, decided by the request handler in the main loop.
+/// A change to the pipeline, decided by the request handler in the main loop. The compensator is
+/// carried by value (no allocator to box it; a command is built once per calibration change).
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PipelineCommand {
     /// Start or change the stream (the window restarts).

@@ -118,3 +118,35 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
     let decoded = shared::blob::decode(&blob).unwrap();
     assert_eq!(decoded.calibration.temperature, Some(t.model()));
 }
+
+#[test]
+fn a_live_recording_with_format_version_2_carries_the_device_temperature() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("plan.toml");
+    let text = include_str!("../plans/quick-oblique.toml");
+    std::fs::write(
+        &plan,
+        text.replace("format_version = 1", "format_version = 2"),
+    )
+    .unwrap();
+    let out = dir.path().join("live");
+    let (ok, stdout, stderr) = host(&[
+        "-q",
+        "calibrate",
+        "--port",
+        "sim",
+        "--plan",
+        plan.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let csv = std::fs::read_to_string(out.join("recording/samples.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c")
+    );
+    // The simulated device's chamber stays at 25 °C: every window's mean reading.
+    assert!(lines.all(|l| l.ends_with(",25.0")), "{csv}");
+}

@@ -187,8 +187,11 @@ impl SimDevice {
         }
     }
 
-    /// Runs one sample period.
+    /// Runs one sample period; four times a second the unit's temperature too, as the boards do.
     fn step(&mut self) {
+        if self.samples % u64::from(SIM_SAMPLE_RATE_HZ / 4) == 0 {
+            self.pipeline.on_temperature(self.sensor.temperature_c());
+        }
         let s = self.sensor.sample();
         self.pipeline.on_sample(&s);
         self.samples += 1;

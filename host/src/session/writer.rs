@@ -74,6 +74,11 @@ impl SessionWriter {
         &self.dir
     }
 
+    /// True when rows carry the unit's temperature (format version 2).
+    pub fn has_temperature(&self) -> bool {
+        self.temperature
+    }
+
     /// Rows written so far.
     pub fn rows(&self) -> u64 {
         self.rows
