@@ -60,6 +60,10 @@ pub struct ThermalFit {
     pub zero_bias_sigma: [[f64; DEG]; 3],
     /// 1σ of `model.scale_rel_per_c`.
     pub scale_sigma: [[f64; DEG]; 3],
+    /// Covariance of each axis's zero-bias coefficients (for the 1σ band of `P_i(T)`).
+    pub zero_bias_cov: [[[f64; DEG]; DEG]; 3],
+    /// Covariance of each axis's scale coefficients.
+    pub scale_cov: [[[f64; DEG]; DEG]; 3],
     /// χ², degrees of freedom, per axis, of the chosen model.
     pub chi2: [(f64, usize); 3],
     /// Residuals per static segment.
@@ -127,6 +131,8 @@ pub fn fit_session(
         scale_degree: [0; 3],
         zero_bias_sigma: [[0.0; DEG]; 3],
         scale_sigma: [[0.0; DEG]; 3],
+        zero_bias_cov: [[[0.0; DEG]; DEG]; 3],
+        scale_cov: [[[0.0; DEG]; DEG]; 3],
         chi2: [(0.0, 0); 3],
         steps: obs
             .iter()
@@ -334,6 +340,18 @@ fn fit_axis(obs: &[Obs], axis: usize, fit: &mut ThermalFit) -> Result<(), String
         fit.zero_bias_sigma[axis][k] = sd(4 + k);
         fit.scale_sigma[axis][k] = sd(4 + DEG + k);
     }
+    let pos = |p: usize| best.idx.iter().position(|&q| q == p);
+    for a in 0..DEG {
+        for b in 0..DEG {
+            let per_c = SCALE_C.powi(a as i32 + 1) * SCALE_C.powi(b as i32 + 1);
+            let c = |first: usize| match (pos(first + a), pos(first + b)) {
+                (Some(i), Some(j)) => best.cov[(i, j)] * scale2 / per_c,
+                _ => 0.0,
+            };
+            fit.zero_bias_cov[axis][a][b] = c(4);
+            fit.scale_cov[axis][a][b] = c(4 + DEG);
+        }
+    }
     for (o, step) in obs.iter().zip(&mut fit.steps) {
         let (bp, _) = model_poly(&best.theta, &o.up_b, o.ts.u_shift[axis]);
         let beta: [f64; TERMS] = std::array::from_fn(|j| (0..TERMS).map(|m| d[j][m] * bp[m]).sum());
@@ -346,6 +364,18 @@ fn fit_axis(obs: &[Obs], axis: usize, fit: &mut ThermalFit) -> Result<(), String
 }
 
 impl ThermalFit {
+    /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
+    pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
+        let dt = temp_c - self.model.reference_c;
+        let g = [dt, dt * dt, dt * dt * dt];
+        let value = (0..DEG).map(|k| c[k] * g[k]).sum();
+        let var: f64 = (0..DEG)
+            .flat_map(|a| (0..DEG).map(move |b| (a, b)))
+            .map(|(a, b)| g[a] * cov[a][b] * g[b])
+            .sum();
+        (value, var.max(0.0).sqrt())
+    }
+
     /// The statistics referred to `T_ref`: each segment's mean outputs with the model's bias change
     /// removed and its scale change divided out (exact at rest, where `m_i·f` is constant:
     /// `E[U] = (1 + E[S])·m·f + u0 + E[P]`).

@@ -7,6 +7,7 @@ use crate::sim::thermal::{outputs_at, ThermalSim};
 use crate::sim::{simulate_rows_with_temperature, NoiseModel};
 use crate::unit_file::UnitFile;
 use shared::forward::{ForwardModel, TableState};
+use shared::sensor_models::poly_no_constant;
 use shared::{Calibration, Compensator, LeverMode, SensorOutputs};
 
 /// `host/units/thermal-mems.toml`: the paper's unit with tempcos of MEMS size (bias 0.25..0.35
@@ -178,6 +179,41 @@ fn soak_steps_calibrate_bias_and_scale_over_temperature() {
         assert!(with <= 30.0, "{temp} °C: {with} µg");
         assert!(plain > 3000.0, "{temp} °C: {plain} µg without the model");
     }
+    // The fitted curves' 1σ bands hold the truth, and the figure draws them.
+    for i in 0..3 {
+        for temp in [0.0, 45.0] {
+            let dt = temp - th.reference_c;
+            for (c, cov, truth) in [
+                (
+                    &fit.model.zero_bias_out_per_c[i],
+                    &fit.zero_bias_cov[i],
+                    poly_no_constant(&th.zero_bias_out_per_c[i], dt),
+                ),
+                (
+                    &fit.model.scale_rel_per_c[i],
+                    &fit.scale_cov[i],
+                    poly_no_constant(&th.scale_rel_per_c[i], dt),
+                ),
+            ] {
+                let (y, sd) = fit.curve(c, cov, temp);
+                assert!(
+                    sd > 0.0 && (y - truth).abs() < 4.0 * sd,
+                    "{i} {temp}: {y} ± {sd} vs {truth}"
+                );
+            }
+        }
+    }
+    let fig = crate::report::thermal::figure(&out).unwrap();
+    assert_eq!(fig.panels.len(), 3);
+    assert_eq!(fig.panels[2].series[0].points.len(), plan.segments.len());
+    let dir = tempfile::tempdir().unwrap();
+    let formats = crate::report::plot::Formats {
+        png: false,
+        svg: true,
+    };
+    let drawn = crate::report::plot::render(&fig, dir.path(), formats).unwrap();
+    assert!(dir.path().join("temperature.svg").exists(), "{drawn:?}");
+
     // Outside the range: clamped and flagged.
     let mut comp = Compensator::new(&out.calibration, LeverMode::Off).unwrap();
     assert!(comp.refresh(70.0).is_flagged());

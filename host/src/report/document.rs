@@ -328,6 +328,13 @@ pub fn segment_rows(
         let u = SensorOutputs {
             raw: st.mean_u.map(|v| v as f32),
         };
+        // A calibration with a temperature model is applied at the segment's mean temperature, as
+        // the device applies it (docs/model.md §9).
+        let (mut stat, mut full) = (stat, full);
+        if let Some(ts) = &st.thermal {
+            stat.refresh(ts.mean_c() as f32);
+            full.refresh(ts.mean_c() as f32);
+        }
         let after_static = stat.compensate_static(&u).to_f64().m_s2.map(|v| v / g);
         let after = full
             .compensate(
@@ -605,6 +612,14 @@ pub fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
 /// All figures of a report: outputs, residuals, then one per navigation run.
 pub fn report_figures(data: &ReportData) -> Vec<Figure> {
     let mut v = vec![outputs_figure(data), residuals_figure(data)];
+    if let Some(f) = data
+        .session_fit
+        .as_ref()
+        .ok()
+        .and_then(super::thermal::figure)
+    {
+        v.push(f);
+    }
     for (k, run) in data.navigation.iter().enumerate() {
         let stem = if k == 0 && run.rate_deg_s.abs() < 0.5 {
             "navigation_static".to_string()

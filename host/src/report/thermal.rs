@@ -2,6 +2,7 @@
 //! in g-based units (so a bias tempco reads in mg/°C whatever the output unit), the degrees the data
 //! chose, and the residual of every static segment against its temperature.
 
+use super::plot::{Figure, Panel, Series, SeriesStyle};
 use crate::estimate::thermal::ThermalFit;
 use crate::estimate::CalibrationOutcome;
 use std::fmt::Write as _;
@@ -86,5 +87,103 @@ fn render_steps(s: &mut String, fit: &ThermalFit, k: &[f64; 3]) {
             step.mean_c,
             cells.join("  ")
         );
+    }
+}
+
+/// Points drawn per fitted curve.
+const CURVE_POINTS: usize = 81;
+
+/// The figure `temperature`: zero-bias and scale change against temperature (fitted curve and its
+/// 1σ band per axis, in mg and ppm), and every static segment's residual (µg) at its temperature.
+pub fn figure(o: &CalibrationOutcome) -> Option<Figure> {
+    let fit = o.thermal.as_ref()?;
+    let k = o.calibration.statics.scale_out_per_g;
+    let [lo, hi] = fit.model.valid_range_c;
+    let temps: Vec<f64> = (0..CURVE_POINTS)
+        .map(|j| lo + (hi - lo) * j as f64 / (CURVE_POINTS - 1) as f64)
+        .collect();
+    let curves = |bias: bool| -> Vec<Series> {
+        let mut v = Vec::new();
+        for i in 0..3 {
+            let (c, cov, unit) = if bias {
+                (
+                    &fit.model.zero_bias_out_per_c[i],
+                    &fit.zero_bias_cov[i],
+                    1e3 / k[i],
+                )
+            } else {
+                (&fit.model.scale_rel_per_c[i], &fit.scale_cov[i], 1e6)
+            };
+            let pts: Vec<(f64, f64, f64)> = temps
+                .iter()
+                .map(|&t| {
+                    let (y, s) = fit.curve(c, cov, t);
+                    (t, y * unit, s * unit)
+                })
+                .collect();
+            let name = shared::params::axis_name(i);
+            v.push(line(name.to_string(), pts.iter().map(|p| (p.0, p.1)), i));
+            v.push(line(
+                format!("{name} +1σ"),
+                pts.iter().map(|p| (p.0, p.1 + p.2)),
+                i,
+            ));
+            v.push(line(
+                format!("{name} −1σ"),
+                pts.iter().map(|p| (p.0, p.1 - p.2)),
+                i,
+            ));
+        }
+        v
+    };
+    let residuals = (0..3)
+        .map(|i| Series {
+            label: shared::params::axis_name(i).to_string(),
+            points: fit
+                .steps
+                .iter()
+                .map(|s| (s.mean_c, s.residual_out[i] / k[i] * 1e6))
+                .collect(),
+            error: Some(
+                fit.steps
+                    .iter()
+                    .map(|s| s.sigma_out[i] / k[i] * 1e6)
+                    .collect(),
+            ),
+            style: SeriesStyle::Markers,
+            colour: i,
+        })
+        .collect();
+    let panel = |title: &str, y_desc: &str, series| Panel {
+        title: title.into(),
+        x_desc: "temperature (°C)".into(),
+        y_desc: y_desc.into(),
+        x_categories: None,
+        log_y: false,
+        series,
+    };
+    Some(Figure {
+        stem: "temperature".into(),
+        title: format!(
+            "Temperature model (reference {:.1} °C): fitted change with its 1σ band, and residuals",
+            fit.model.reference_c
+        ),
+        grid: (3, 1),
+        size: (900, 1100),
+        panels: vec![
+            panel("Zero-bias change", "mg", curves(true)),
+            panel("Relative scale change", "ppm", curves(false)),
+            panel("Residual per static segment", "µg", residuals),
+        ],
+    })
+}
+
+fn line(label: String, points: impl Iterator<Item = (f64, f64)>, colour: usize) -> Series {
+    Series {
+        label,
+        points: points.collect(),
+        error: None,
+        style: SeriesStyle::Line,
+        colour,
     }
 }
