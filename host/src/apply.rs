@@ -340,6 +340,7 @@ mod tests {
             duration_s: Some(1.0),
             table_centre_m: Some([0.03, -0.02, 0.01]),
             mount: None,
+            ..Default::default()
         });
         let dir = tempfile::tempdir().unwrap();
         simulate_to_dir(dir.path(), &unit, &plan, &NoiseModel::none(), 3, false).unwrap();

@@ -114,6 +114,12 @@ pub fn write_calibration_files(
         section.bias_rad_s_1sigma = Some(g.bias_rad_s_1sigma);
         section.matrix_1sigma = Some(g.matrix_1sigma);
     }
+    if let (Some(section), Some(fit)) = (file.temperature.as_mut(), &outcome.thermal) {
+        section.zero_bias_degree = Some(fit.zero_bias_degree);
+        section.scale_degree = Some(fit.scale_degree);
+        section.zero_bias_out_per_c_1sigma = Some(fit.zero_bias_sigma);
+        section.scale_rel_per_c_1sigma = Some(fit.scale_sigma);
+    }
     let text = file.to_toml();
     let toml_path = out_dir.join(CALIBRATION_TOML);
     let bin_path = out_dir.join(CALIBRATION_BIN);

@@ -25,12 +25,19 @@
 //! matrix = [[..], [..], [..]]
 //! bias_rad_s_1sigma = [..]      # optional, an estimate's 1σ
 //! matrix_1sigma = [[..], ..]    # optional; entries above 1e-3: not determined by the plan
+//! [temperature]                 # optional: docs/model.md §9
+//! reference_c = 25.0
+//! valid_range_c = [-20.0, 60.0]
+//! zero_bias_out_per_c = [[c1, c2, c3], ..]   # per axis, output unit per °C, °C², °C³
+//! scale_rel_per_c = [[c1, c2, c3], ..]       # per axis, relative scale per °C, °C², °C³
+//! # an estimate adds zero_bias_degree, scale_degree and the 1σ of every coefficient
 //! ```
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
 use crate::estimate::Uncertainty;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
+use shared::sensor_models::TemperatureModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, UnitId};
 use std::path::{Path, PathBuf};
 
@@ -86,6 +93,9 @@ pub struct UnitFile {
     /// The gyro model (absent: a perfect gyro).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gyro: Option<GyroSection>,
+    /// How the biases and scale factors move with temperature.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature: Option<TemperatureSection>,
     /// Any other tables, kept as they are.
     #[serde(flatten)]
     pub other: toml::Table,
@@ -151,6 +161,63 @@ pub struct GyroSection {
     /// 1σ of `matrix` (an estimate's; entries above 1e-3 are not determined by the plan).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub matrix_1sigma: Option<RowMajor3>,
+}
+
+/// `[temperature]`: the temperature model (docs/model.md §9) and, for an estimate, how it was chosen.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureSection {
+    /// `T_ref`, °C: the static values hold there.
+    pub reference_c: f64,
+    /// The temperatures the calibration covers, °C.
+    pub valid_range_c: [f64; 2],
+    /// Zero-bias change per axis, output unit per °C, °C², °C³.
+    pub zero_bias_out_per_c: [[f64; 3]; 3],
+    /// Relative scale change per axis, per °C, °C², °C³.
+    pub scale_rel_per_c: [[f64; 3]; 3],
+    /// Gyro bias change per axis, rad/s per °C, °C², °C³.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_rad_s_per_c: Option<[[f64; 3]; 3]>,
+    /// The degree of each zero-bias polynomial the data chose (an estimate's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_degree: Option<[usize; 3]>,
+    /// The degree of each scale polynomial the data chose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_degree: Option<[usize; 3]>,
+    /// 1σ of `zero_bias_out_per_c` (0 for a coefficient the chosen degree leaves out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zero_bias_out_per_c_1sigma: Option<[[f64; 3]; 3]>,
+    /// 1σ of `scale_rel_per_c`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_rel_per_c_1sigma: Option<[[f64; 3]; 3]>,
+}
+
+impl TemperatureSection {
+    /// The model alone.
+    pub fn model(&self) -> TemperatureModel {
+        TemperatureModel {
+            reference_c: self.reference_c,
+            valid_range_c: self.valid_range_c,
+            zero_bias_out_per_c: self.zero_bias_out_per_c,
+            scale_rel_per_c: self.scale_rel_per_c,
+            gyro_bias_rad_s_per_c: self.gyro_bias_rad_s_per_c,
+        }
+    }
+
+    /// The section of a model, without an estimate's extras.
+    pub fn from_model(m: &TemperatureModel) -> TemperatureSection {
+        TemperatureSection {
+            reference_c: m.reference_c,
+            valid_range_c: m.valid_range_c,
+            zero_bias_out_per_c: m.zero_bias_out_per_c,
+            scale_rel_per_c: m.scale_rel_per_c,
+            gyro_bias_rad_s_per_c: m.gyro_bias_rad_s_per_c,
+            zero_bias_degree: None,
+            scale_degree: None,
+            zero_bias_out_per_c_1sigma: None,
+            scale_rel_per_c_1sigma: None,
+        }
+    }
 }
 
 /// Why a unit file is unusable.
@@ -300,7 +367,7 @@ impl UnitFile {
                 matrix: g.matrix,
                 bias_rad_s: g.bias_rad_s,
             }),
-            temperature: None,
+            temperature: self.temperature.as_ref().map(TemperatureSection::model),
         };
         self.unit_id()?;
         shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)
@@ -354,6 +421,7 @@ impl UnitFile {
                 bias_rad_s_1sigma: None,
                 matrix_1sigma: None,
             }),
+            temperature: cal.temperature.as_ref().map(TemperatureSection::from_model),
             other: toml::Table::new(),
         }
     }

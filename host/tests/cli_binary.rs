@@ -79,3 +79,74 @@ fn calibrate_live_against_the_simulated_device() {
     let (ok, _, stderr) = host(&["calibrate", "--input", "x", "--port", "sim"]);
     assert!(!ok && stderr.contains("cannot be used with"), "{stderr}");
 }
+
+#[test]
+fn a_soak_session_calibrates_over_temperature_through_the_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("soak");
+    let s = session.to_str().unwrap();
+    let unit = concat!(env!("CARGO_MANIFEST_DIR"), "/units/thermal-mems.toml");
+    let (ok, _, stderr) = host(&[
+        "-q",
+        "simulate",
+        "--out",
+        s,
+        "--unit",
+        unit,
+        "--plan",
+        "thermal-soak",
+        "--seed",
+        "5",
+    ]);
+    assert!(ok, "{stderr}");
+    let csv = std::fs::read_to_string(session.join("samples.csv")).unwrap();
+    assert!(csv.starts_with("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c\nx+ @-20,"));
+    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("Temperature model") && stdout.contains("x+ @60"),
+        "{stdout}"
+    );
+    let toml = std::fs::read_to_string(session.join("calibration.toml")).unwrap();
+    let cal: host::unit_file::UnitFile = toml::from_str(&toml).unwrap();
+    let t = cal.temperature.expect("a [temperature] section");
+    assert_eq!(t.zero_bias_degree, Some([2; 3]), "{toml}");
+    assert_eq!(t.scale_degree, Some([1; 3]), "{toml}");
+    assert!(t.zero_bias_out_per_c_1sigma.is_some());
+    // The blob carries the model to the device.
+    let blob = std::fs::read(session.join("calibration.bin")).unwrap();
+    let decoded = shared::blob::decode(&blob).unwrap();
+    assert_eq!(decoded.calibration.temperature, Some(t.model()));
+}
+
+#[test]
+fn a_live_recording_with_format_version_2_carries_the_device_temperature() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("plan.toml");
+    let text = include_str!("../plans/quick-oblique.toml");
+    std::fs::write(
+        &plan,
+        text.replace("format_version = 1", "format_version = 2"),
+    )
+    .unwrap();
+    let out = dir.path().join("live");
+    let (ok, stdout, stderr) = host(&[
+        "-q",
+        "calibrate",
+        "--port",
+        "sim",
+        "--plan",
+        plan.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let csv = std::fs::read_to_string(out.join("recording/samples.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c")
+    );
+    // The simulated device's chamber stays at 25 °C: every window's mean reading.
+    assert!(lines.all(|l| l.ends_with(",25.0")), "{csv}");
+}

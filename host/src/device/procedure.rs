@@ -192,13 +192,24 @@ fn describe_up(up: &[f64; 3]) -> String {
 
 fn instruction(seg: &SegmentPlan) -> String {
     let mount = describe_up(&seg.up_b);
-    match (seg.rate_deg_s, seg.rate_end_deg_s) {
+    let motion = match (seg.rate_deg_s, seg.rate_end_deg_s) {
         (0.0, None) => format!("[{}] mount the unit {mount}, table at rest", seg.name),
         (r, None) => format!("[{}] mount the unit {mount}, set the table to {r:+.0} °/s about the vertical", seg.name),
         (r0, Some(r1)) => format!(
             "[{}] mount the unit {mount}, ramp the table from {r0:+.0} to {r1:+.0} °/s about the vertical",
             seg.name
         ),
+    };
+    match (seg.temp_c, seg.temp_end_c) {
+        (None, _) => motion,
+        (Some(t), None) => {
+            format!(
+                "{motion}; chamber at {t:+.1} °C, soaked until the unit's temperature is steady"
+            )
+        }
+        (Some(t0), Some(t1)) => {
+            format!("{motion}; ramp the chamber from {t0:+.1} to {t1:+.1} °C during the segment")
+        }
     }
 }
 
@@ -590,13 +601,20 @@ fn record_segment<T: Transport>(
         rejected += u64::from(w.rejected);
         dropped = dropped.max(w.dropped_frames);
         if w.count > 0 {
-            writer
-                .write_row(&seg.name, t, &u, &rate)
-                .map_err(|e| LinkError::Unexpected {
-                    waiting_for: "a writable recording",
-                    got: e.to_string(),
-                })?;
-            acc.push(t, &u, &rate);
+            // A recording with temperature (format version 2) takes the window's mean reading; a
+            // device without a sensor sends NaN, which the reader leaves out and reports.
+            let temp_c = f64::from(w.mean_temp_c);
+            let written = if writer.has_temperature() {
+                acc.push_with_temperature(t, &u, &rate, temp_c);
+                writer.write_row_with_temperature(&seg.name, t, &u, &rate, temp_c)
+            } else {
+                acc.push(t, &u, &rate);
+                writer.write_row(&seg.name, t, &u, &rate)
+            };
+            written.map_err(|e| LinkError::Unexpected {
+                waiting_for: "a writable recording",
+                got: e.to_string(),
+            })?;
         }
         bar.inc(1);
     }

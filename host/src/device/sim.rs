@@ -188,7 +188,7 @@ impl SimDevice {
         }
     }
 
-    /// Runs one sample period.
+    /// Runs one sample period; four times a second the unit's temperature too, as the boards do.
     fn step(&mut self) {
         self.sensor.step(&mut self.pipeline);
         self.samples += 1;

@@ -32,6 +32,9 @@ mod tests;
 mod tests_fixture;
 #[cfg(test)]
 mod tests_gyro;
+pub mod thermal;
+#[cfg(test)]
+mod thermal_tests;
 mod uncertainty;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
@@ -218,11 +221,17 @@ pub enum EstimateError {
         /// Each problem, naming the segments or axes.
         problems: Vec<String>,
     },
+    /// The temperature model cannot be fitted or is implausible (the message says why).
+    Temperature(String),
 }
 
 impl std::fmt::Display for EstimateError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            EstimateError::Temperature(why) => write!(
+                f,
+                "temperature model: {why}; check the recording's temp_c column and the soak steps"
+            ),
             EstimateError::NoStaticSegments { planned: 0, .. } => write!(
                 f,
                 "the plan has no static segment: add at least four static attitudes (e.g. ±1 g on each axis)"
@@ -491,6 +500,8 @@ pub struct CalibrationOutcome {
     pub parameters: Vec<(String, f64, f64)>,
     /// The gyro model, when estimated.
     pub gyro: Option<GyroEstimate>,
+    /// The temperature fit, when the session was recorded over a temperature range.
+    pub thermal: Option<thermal::ThermalFit>,
 }
 
 /// A segment of the session after matching plan and data.
@@ -503,15 +514,29 @@ pub(crate) struct SessionSeg {
 }
 
 /// Calibrates from a plan and its segments' statistics; a result that fails the plausibility checks
-/// ([`plausibility`]) is an error.
+/// ([`plausibility`]) is an error. A session recorded over a temperature range first gets its
+/// temperature model ([`thermal`]); the rest is estimated from the statistics referred to the reference
+/// temperature.
 pub fn calibrate_session_stats(
     plan: &Plan,
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
-    plausibility::check(plan, stats, fit_session(plan, stats, options))
+    let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
+    let mut outcome = match &fit {
+        None => plausibility::check(plan, stats, fit_session(plan, stats, options))?,
+        Some(fit) => {
+            let referred = fit.refer_to_reference(stats);
+            plausibility::check(plan, &referred, fit_session(plan, &referred, options))?
+        }
+    };
+    outcome.warnings.extend(notes);
+    outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
+    outcome.thermal = fit;
+    Ok(outcome)
 }
 
+/// [`calibrate_session_stats`] for statistics at one temperature, before the plausibility checks.
 fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
@@ -770,6 +795,7 @@ fn fit_session(
         static_split,
         parameters,
         gyro: gyro_estimate,
+        thermal: None,
     })
 }
 

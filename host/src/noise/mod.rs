@@ -198,6 +198,7 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
                 duration_s: None,
                 table_centre_m: None,
                 mount: None,
+                ..Default::default()
             })
             .collect(),
     };

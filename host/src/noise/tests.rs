@@ -27,6 +27,7 @@ fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
                 duration_s: Some(5.0),
                 table_centre_m: None,
                 mount: None,
+                ..Default::default()
             },
             SegmentPlan {
                 attitude: Default::default(),
@@ -38,6 +39,7 @@ fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
                 duration_s: Some(duration_s),
                 table_centre_m: None,
                 mount: None,
+                ..Default::default()
             },
         ],
     }

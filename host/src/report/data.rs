@@ -262,6 +262,13 @@ pub fn segment_rows(
         let u = SensorOutputs {
             raw: st.mean_u.map(|v| v as f32),
         };
+        // A calibration with a temperature model is applied at the segment's mean temperature, as
+        // the device applies it (docs/model.md §9).
+        let (mut stat, mut full) = (stat, full);
+        if let Some(ts) = &st.thermal {
+            stat.refresh(ts.mean_c() as f32);
+            full.refresh(ts.mean_c() as f32);
+        }
         let after_static = stat.compensate_static(&u).to_f64().m_s2.map(|v| v / g);
         let after = full
             .compensate(

@@ -23,6 +23,7 @@ pub mod plot;
 #[cfg(test)]
 mod tests;
 pub mod text;
+pub mod thermal;
 
 pub use data::{build_report, Compensation, ReportData, ReportError, ReportOptions, SegmentRow};
 pub use document::{report, ReportSummary, REPORT_HTML, REPORT_MD};

@@ -47,6 +47,7 @@ pub fn render(o: &CalibrationOutcome) -> String {
         "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
         o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
     );
+    super::thermal::render(&mut s, o);
     if !o.excluded.is_empty() {
         let _ = writeln!(s);
         let _ = writeln!(s, "Excluded segments:");

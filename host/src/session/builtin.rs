@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub const BUILTIN_PLANS: [(&str, &str); 6] = [
+pub const BUILTIN_PLANS: [(&str, &str); 8] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -17,6 +17,14 @@ pub const BUILTIN_PLANS: [(&str, &str); 6] = [
         include_str!("../../plans/quick-oblique.toml"),
     ),
     ("hand", include_str!("../../plans/hand.toml")),
+    (
+        "thermal-soak",
+        include_str!("../../plans/thermal-soak.toml"),
+    ),
+    (
+        "thermal-ramp",
+        include_str!("../../plans/thermal-ramp.toml"),
+    ),
 ];
 
 /// The built-in plan called `name`, if any.
@@ -78,6 +86,10 @@ mod tests {
             .segments
             .iter()
             .all(|s| s.is_static() && s.is_free() && s.duration_s == Some(5.0)));
+        let soak = builtin_plan("thermal-soak").unwrap().unwrap();
+        assert!(soak.has_temperature() && soak.segments.len() == 30);
+        let ramp = builtin_plan("thermal-ramp").unwrap().unwrap();
+        assert!(ramp.segments.iter().all(|s| s.temp_end_c.is_some()));
         assert!(load_plan("no-such-plan")
             .unwrap_err()
             .to_string()

@@ -1,7 +1,7 @@
 //! Why a session cannot be read or written.
 
 use super::plan::PlanError;
-use super::{COLUMNS, PLAN_FILE, SAMPLES_HEADER};
+use super::{COLUMNS_TEMPERATURE, PLAN_FILE, SAMPLES_HEADER, SAMPLES_HEADER_TEMPERATURE};
 use std::path::PathBuf;
 
 /// Why a session cannot be read or written. Every message names the file, the place and the fix.
@@ -24,8 +24,10 @@ pub enum RecordingError {
         found: String,
         /// 1-based column of the first difference.
         column: usize,
+        /// The plan says format version 2 (with `temp_c`).
+        temperature: bool,
     },
-    /// A row without exactly eight fields.
+    /// A row without exactly eight fields (nine in format version 2).
     FieldCount {
         /// The file.
         path: PathBuf,
@@ -33,6 +35,8 @@ pub enum RecordingError {
         line: u64,
         /// Fields found.
         found: usize,
+        /// The plan says format version 2 (with `temp_c`).
+        temperature: bool,
     },
     /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
     Number {
@@ -72,6 +76,11 @@ pub enum RecordingError {
     NoRows(PathBuf),
     /// [`super::SessionWriter`] was asked for a segment the plan does not have.
     WriterSegment(String),
+    /// A row written with (or without) a temperature to a recording whose plan says otherwise.
+    WriterTemperature {
+        /// The plan's recording has `temp_c`.
+        temperature: bool,
+    },
     /// [`super::SessionWriter::create`] would overwrite an existing recording.
     Exists(PathBuf),
 }
@@ -85,19 +94,38 @@ impl std::fmt::Display for RecordingError {
                 path,
                 found,
                 column,
-            } => write!(
-                f,
-                "{} line 1, column {column}: the header is '{}' but must be exactly '{SAMPLES_HEADER}' \
-                 (recording format 1); fix the first line",
-                path.display(),
-                shorten(found)
-            ),
-            RecordingError::FieldCount { path, line, found } => write!(
-                f,
-                "{} line {line}: {found} fields, expected 8 ({SAMPLES_HEADER}); \
-                 fix or delete the line",
-                path.display()
-            ),
+                temperature,
+            } => {
+                let (expected, version) = header(*temperature);
+                write!(
+                    f,
+                    "{} line 1, column {column}: the header is '{}' but must be exactly '{expected}' \
+                     (recording format {version}, from {PLAN_FILE}'s format_version); fix the first \
+                     line{}",
+                    path.display(),
+                    shorten(found),
+                    match (temperature, found.ends_with(",temp_c")) {
+                        (false, true) => ", or set format_version = 2 in the plan to read temp_c",
+                        (true, false) => ", or set format_version = 1 in the plan (no temperature)",
+                        _ => "",
+                    }
+                )
+            }
+            RecordingError::FieldCount {
+                path,
+                line,
+                found,
+                temperature,
+            } => {
+                let (expected, _) = header(*temperature);
+                write!(
+                    f,
+                    "{} line {line}: {found} fields, expected {} ({expected}); \
+                     fix or delete the line",
+                    path.display(),
+                    expected.split(',').count()
+                )
+            }
             RecordingError::Number {
                 path,
                 line,
@@ -108,7 +136,10 @@ impl std::fmt::Display for RecordingError {
                 "{} line {line}, column {column} ({}): '{}' is not a number; \
                  fix the value or write NaN to have the row left out",
                 path.display(),
-                COLUMNS.get(column.wrapping_sub(1)).copied().unwrap_or("?"),
+                COLUMNS_TEMPERATURE
+                    .get(column.wrapping_sub(1))
+                    .copied()
+                    .unwrap_or("?"),
                 text
             ),
             RecordingError::LineTooLong { path, line } => write!(
@@ -139,6 +170,12 @@ impl std::fmt::Display for RecordingError {
                 f,
                 "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
             ),
+            RecordingError::WriterTemperature { temperature } => f.write_str(if *temperature {
+                "this recording's plan has format_version = 2: every row needs the unit's temperature"
+            } else {
+                "this recording's plan has format_version 1, which holds no temperature: set \
+                 format_version = 2 to record temp_c"
+            }),
             RecordingError::Exists(path) => write!(
                 f,
                 "{} already exists; choose another directory or allow overwriting (--force)",
@@ -149,6 +186,15 @@ impl std::fmt::Display for RecordingError {
 }
 
 impl std::error::Error for RecordingError {}
+
+/// The header a plan's version expects, and the version.
+fn header(temperature: bool) -> (&'static str, u32) {
+    if temperature {
+        (SAMPLES_HEADER_TEMPERATURE, 2)
+    } else {
+        (SAMPLES_HEADER, 1)
+    }
+}
 
 impl From<PlanError> for RecordingError {
     fn from(e: PlanError) -> Self {

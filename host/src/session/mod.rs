@@ -15,6 +15,7 @@ pub mod plan;
 pub mod reader;
 pub mod segment;
 pub mod stats;
+pub mod thermal;
 pub mod writer;
 
 pub use error::RecordingError;
@@ -33,3 +34,9 @@ pub const SAMPLES_FILE: &str = "samples.csv";
 pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
 /// Column names, in order.
 pub const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];
+/// The header of `samples.csv` version 2: version 1's and the unit's temperature, °C.
+pub const SAMPLES_HEADER_TEMPERATURE: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c";
+/// Column names of version 2, in order.
+pub const COLUMNS_TEMPERATURE: [&str; 9] = [
+    "segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z", "temp_c",
+];

@@ -8,6 +8,9 @@ use std::path::Path;
 /// Current plan format version (2 adds the fixture's attitude accuracy and free attitudes; version 1
 /// plans are still read).
 pub const PLAN_FORMAT_VERSION: u32 = 2;
+/// Plan format version 3: format 2, and `samples.csv` ends with the unit's temperature, `temp_c`
+/// (docs/model.md §9). Versions 1 and 2 record no temperature.
+pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = 3;
 
 /// The oldest plan format version this build reads.
 pub const PLAN_FORMAT_VERSION_MIN: u32 = 1;
@@ -115,6 +118,13 @@ pub struct SegmentPlan {
     /// Absent: the segment's own `up_b` names its mount.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mount: Option<String>,
+    /// Thermal chamber set-point at the segment's start, °C (a soak step; docs/model.md §9). Absent:
+    /// no chamber. The estimator uses the recorded `temp_c`, never this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temp_c: Option<f64>,
+    /// Set-point at the segment's end for a slow ramp, °C. Absent: constant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temp_end_c: Option<f64>,
 }
 
 impl SegmentPlan {
@@ -169,7 +179,7 @@ impl std::fmt::Display for PlanError {
             PlanError::Version(v) => write!(
                 f,
                 "plan format_version {v} is not supported (this build reads \
-                 {PLAN_FORMAT_VERSION_MIN} to {PLAN_FORMAT_VERSION}); upgrade the tool or rewrite the plan"
+                 {PLAN_FORMAT_VERSION_MIN} to {PLAN_FORMAT_VERSION_TEMPERATURE}); upgrade the tool or rewrite the plan"
             ),
             PlanError::Invalid(m) => write!(f, "plan is not usable: {m}"),
         }
@@ -199,7 +209,9 @@ impl Plan {
 
     /// Semantic checks: version, positive rate, unique names, unit `up_b`, finite numbers.
     pub fn validate(&self) -> Result<(), PlanError> {
-        if !(PLAN_FORMAT_VERSION_MIN..=PLAN_FORMAT_VERSION).contains(&self.format_version) {
+        if !(PLAN_FORMAT_VERSION_MIN..=PLAN_FORMAT_VERSION_TEMPERATURE)
+            .contains(&self.format_version)
+        {
             return Err(PlanError::Version(self.format_version));
         }
         self.validate_attitudes()?;
@@ -264,6 +276,7 @@ impl Plan {
                 )));
             }
             self.validate_sizes(s)?;
+            self.validate_temperatures(s)?;
         }
         self.validate_mounts()
     }
@@ -405,6 +418,47 @@ impl Plan {
         Ok(())
     }
 
+    /// Chamber set-points are plausible and recorded: a plan that sets them must record `temp_c`.
+    fn validate_temperatures(&self, s: &SegmentPlan) -> Result<(), PlanError> {
+        let (lo, hi) = shared::sensor_models::TEMPERATURE_LIMITS_C;
+        for t in [s.temp_c, s.temp_end_c].into_iter().flatten() {
+            if !(lo..=hi).contains(&t) {
+                return Err(PlanError::Invalid(format!(
+                    "segment '{}': temperature {t} °C is outside {lo}..{hi} °C",
+                    s.name
+                )));
+            }
+        }
+        if s.temp_end_c.is_some() && s.temp_c.is_none() {
+            return Err(PlanError::Invalid(format!(
+                "segment '{}': temp_end_c needs temp_c (the ramp's start)",
+                s.name
+            )));
+        }
+        if s.temp_c.is_some() && !self.has_temperature() {
+            return Err(PlanError::Invalid(format!(
+                "segment '{}' sets a chamber temperature but the recording would not hold it: \
+                 set format_version = {PLAN_FORMAT_VERSION_TEMPERATURE} (samples.csv with temp_c)",
+                s.name
+            )));
+        }
+        Ok(())
+    }
+
+    /// True when `samples.csv` carries the unit's temperature (format version 2).
+    pub fn has_temperature(&self) -> bool {
+        self.format_version >= PLAN_FORMAT_VERSION_TEMPERATURE
+    }
+
+    /// The columns of this plan's `samples.csv`.
+    pub fn columns(&self) -> &'static [&'static str] {
+        if self.has_temperature() {
+            &super::COLUMNS_TEMPERATURE
+        } else {
+            &super::COLUMNS
+        }
+    }
+
     /// The segment called `name`.
     pub fn segment(&self, name: &str) -> Option<&SegmentPlan> {
         self.segments.iter().find(|s| s.name == name)
@@ -488,5 +542,23 @@ rate_deg_s = 100
         ))
         .unwrap_err();
         assert!(e.to_string().contains("share mount"), "{e}");
+    }
+
+    #[test]
+    fn chamber_temperatures_need_format_version_3() {
+        let with_temp = GOOD.replace("duration_s = 60", "duration_s = 60\ntemp_c = -20");
+        let e = Plan::parse(&with_temp).unwrap_err();
+        assert!(e.to_string().contains("format_version = 3"), "{e}");
+        let p = Plan::parse(&format!("format_version = 3\n{with_temp}")).unwrap();
+        assert!(p.has_temperature());
+        assert_eq!(p.segments[0].temp_c, Some(-20.0));
+        assert_eq!(p.columns().last(), Some(&"temp_c"));
+        assert_eq!(Plan::parse(&p.to_toml()).unwrap(), p);
+        let hot = with_temp.replace("temp_c = -20", "temp_c = 500");
+        let e = Plan::parse(&format!("format_version = 3\n{hot}")).unwrap_err();
+        assert!(e.to_string().contains("500"), "{e}");
+        let ramp = with_temp.replace("temp_c = -20", "temp_end_c = 20");
+        let e = Plan::parse(&format!("format_version = 3\n{ramp}")).unwrap_err();
+        assert!(e.to_string().contains("needs temp_c"), "{e}");
     }
 }

@@ -13,7 +13,7 @@
 use super::error::shorten;
 use super::plan::Plan;
 use super::stats::{SegmentAccumulator, SegmentStats};
-use super::{RecordingError, COLUMNS, PLAN_FILE, SAMPLES_FILE};
+use super::{RecordingError, PLAN_FILE, SAMPLES_FILE};
 use crate::limits::MAX_LINE_BYTES;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -112,6 +112,8 @@ struct Reducer<'a, S> {
     current: usize,
     line_no: u64,
     report: ReadReport,
+    /// Format version 2: a ninth column, `temp_c`.
+    temperature: bool,
 }
 
 impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
@@ -129,6 +131,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             current: 0,
             line_no: 1,
             report: ReadReport::default(),
+            temperature: plan.has_temperature(),
         }
     }
 
@@ -141,7 +144,8 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         commas: &[usize; 8],
         n_commas: usize,
     ) -> Result<(), RecordingError> {
-        if n_commas != 7 {
+        let last = if self.temperature { 8 } else { 7 };
+        if n_commas != last {
             if line.trim_ascii().is_empty() {
                 return Ok(());
             }
@@ -151,7 +155,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         let end = line.strip_suffix('\r').map_or(line.len(), str::len);
         let field = |k: usize| -> &str {
             let from = if k == 0 { 0 } else { commas[k - 1] + 1 };
-            let to = if k == 7 { end } else { commas[k] };
+            let to = if k == last { end } else { commas[k] };
             &line[from..to]
         };
         let name = clean(field(0));
@@ -168,8 +172,8 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             self.current = i;
             i
         };
-        let mut v = [0.0f64; 7];
-        for (k, slot) in v.iter_mut().enumerate() {
+        let mut v = [0.0f64; 8];
+        for (k, slot) in v[..last].iter_mut().enumerate() {
             let text = field(k + 1);
             *slot = match text.parse::<f64>() {
                 Ok(x) => x,
@@ -194,7 +198,11 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         })?;
         let acc = &mut self.accs[idx];
         let before = acc.count();
-        acc.push(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]]);
+        if self.temperature {
+            acc.push_with_temperature(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]], v[7]);
+        } else {
+            acc.push(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]]);
+        }
         if acc.count() == before {
             self.report.rejected_rows += 1;
             self.first_rejected[idx].get_or_insert(self.line_no);
@@ -215,6 +223,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             path: self.path.to_path_buf(),
             line: self.line_no,
             found,
+            temperature: self.temperature,
         }
     }
 
@@ -305,14 +314,16 @@ pub fn read_samples_each<R: BufRead>(
         .split(',')
         .map(|h| h.trim().trim_matches('"'))
         .collect();
-    if found != COLUMNS {
-        let column = (0..COLUMNS.len().max(found.len()))
-            .find(|&i| found.get(i) != COLUMNS.get(i))
+    let columns = plan.columns();
+    if found != columns {
+        let column = (0..columns.len().max(found.len()))
+            .find(|&i| found.get(i) != columns.get(i))
             .map_or(1, |i| i + 1);
         return Err(RecordingError::Header {
             path: path.to_path_buf(),
             found: header,
             column,
+            temperature: plan.has_temperature(),
         });
     }
 

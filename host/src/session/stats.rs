@@ -6,6 +6,8 @@
 //! mean and covariance (their noise level gives each segment's weight and the χ² check).
 //! Sums are shifted by the segment's first sample, which keeps them exact over long segments.
 
+use super::thermal::{ThermalAccumulator, ThermalStats};
+
 /// Statistics of one segment.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SegmentStats {
@@ -35,6 +37,8 @@ pub struct SegmentStats {
     pub cov_w: [[f64; 3]; 3],
     /// Least-squares slope of ω against time: the segment's mean angular acceleration, rad/s².
     pub wdot_rad_s2: [f64; 3],
+    /// Temperature moments (docs/model.md §9), when the recording has a `temp_c` column.
+    pub thermal: Option<ThermalStats>,
 }
 
 impl SegmentStats {
@@ -73,6 +77,7 @@ pub struct SegmentAccumulator {
     stw: [f64; 3],
     min_u: [f64; 3],
     max_u: [f64; 3],
+    thermal: Option<ThermalAccumulator>,
 }
 
 impl SegmentAccumulator {
@@ -95,6 +100,7 @@ impl SegmentAccumulator {
             stw: [0.0; 3],
             min_u: [f64::INFINITY; 3],
             max_u: [f64::NEG_INFINITY; 3],
+            thermal: None,
         }
     }
 
@@ -137,6 +143,30 @@ impl SegmentAccumulator {
                 self.suu[i][j] += du[i] * du[j];
                 self.sww[i][j] += dw[i] * dw[j];
             }
+        }
+    }
+
+    /// Adds one row with the unit's temperature, °C. A row whose temperature is NaN or infinite is
+    /// rejected whole, like any other non-finite value, so the temperature moments and the rest
+    /// describe the same rows.
+    #[inline]
+    pub fn push_with_temperature(
+        &mut self,
+        t_s: f64,
+        u: &[f64; 3],
+        w_rad_s: &[f64; 3],
+        temp_c: f64,
+    ) {
+        if !temp_c.is_finite() {
+            self.rejected += 1;
+            return;
+        }
+        let before = self.n;
+        self.push(t_s, u, w_rad_s);
+        if self.n > before {
+            self.thermal
+                .get_or_insert_with(Default::default)
+                .push(u, temp_c);
         }
     }
 
@@ -189,6 +219,7 @@ impl SegmentAccumulator {
             mean_wwt,
             cov_w,
             wdot_rad_s2: wdot,
+            thermal: self.thermal.as_ref().and_then(ThermalAccumulator::finish),
         })
     }
 }

@@ -1,7 +1,9 @@
 //! Writing a session directory (`plan.toml` + `samples.csv`, `docs/recording-format.md`) as it is
 //! recorded or simulated.
 
-use super::{Plan, RecordingError, PLAN_FILE, SAMPLES_FILE, SAMPLES_HEADER};
+use super::{
+    Plan, RecordingError, PLAN_FILE, SAMPLES_FILE, SAMPLES_HEADER, SAMPLES_HEADER_TEMPERATURE,
+};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -19,6 +21,8 @@ pub struct SessionWriter {
     rows: u64,
     line: Vec<u8>,
     float: ryu::Buffer,
+    /// Format version 2: rows end with `temp_c`.
+    temperature: bool,
 }
 
 impl SessionWriter {
@@ -43,7 +47,12 @@ impl SessionWriter {
         write_synced(&plan_path, plan.to_toml().as_bytes()).map_err(io(&plan_path))?;
         let file = File::create(&samples_path).map_err(io(&samples_path))?;
         let mut out = BufWriter::with_capacity(1 << 20, file);
-        out.write_all(SAMPLES_HEADER.as_bytes())
+        let header = if plan.has_temperature() {
+            SAMPLES_HEADER_TEMPERATURE
+        } else {
+            SAMPLES_HEADER
+        };
+        out.write_all(header.as_bytes())
             .and_then(|_| out.write_all(b"\n"))
             .and_then(|_| out.flush())
             .map_err(io(&samples_path))?;
@@ -56,6 +65,7 @@ impl SessionWriter {
             rows: 0,
             line: Vec::with_capacity(256),
             float: ryu::Buffer::new(),
+            temperature: plan.has_temperature(),
         })
     }
 
@@ -64,19 +74,54 @@ impl SessionWriter {
         &self.dir
     }
 
+    /// True when rows carry the unit's temperature (format version 2).
+    pub fn has_temperature(&self) -> bool {
+        self.temperature
+    }
+
     /// Rows written so far.
     pub fn rows(&self) -> u64 {
         self.rows
     }
 
-    /// Appends one sample of `segment`. Changing segment ends the previous one (flush to disk).
-    /// Floats are written in their shortest exact form, so they read back bit for bit.
+    /// Appends one sample of `segment` to a recording without temperature (format version 1).
+    /// Changing segment ends the previous one (flush to disk). Floats are written in their shortest
+    /// exact form, so they read back bit for bit.
     pub fn write_row(
         &mut self,
         segment: &str,
         t_s: f64,
         u: &[f64; 3],
         w_rad_s: &[f64; 3],
+    ) -> Result<(), RecordingError> {
+        if self.temperature {
+            return Err(RecordingError::WriterTemperature { temperature: true });
+        }
+        self.append(segment, t_s, u, w_rad_s, None)
+    }
+
+    /// Appends one sample of `segment` with the unit's temperature, °C (format version 2).
+    pub fn write_row_with_temperature(
+        &mut self,
+        segment: &str,
+        t_s: f64,
+        u: &[f64; 3],
+        w_rad_s: &[f64; 3],
+        temp_c: f64,
+    ) -> Result<(), RecordingError> {
+        if !self.temperature {
+            return Err(RecordingError::WriterTemperature { temperature: false });
+        }
+        self.append(segment, t_s, u, w_rad_s, Some(temp_c))
+    }
+
+    fn append(
+        &mut self,
+        segment: &str,
+        t_s: f64,
+        u: &[f64; 3],
+        w_rad_s: &[f64; 3],
+        temp_c: Option<f64>,
     ) -> Result<(), RecordingError> {
         let idx = match self.current {
             Some(i) if self.names[i] == segment => i,
@@ -95,7 +140,7 @@ impl SessionWriter {
         };
         self.line.clear();
         self.line.extend_from_slice(self.names[idx].as_bytes());
-        for v in std::iter::once(&t_s).chain(u).chain(w_rad_s) {
+        for v in std::iter::once(&t_s).chain(u).chain(w_rad_s).chain(&temp_c) {
             self.line.push(b',');
             self.line
                 .extend_from_slice(self.float.format(*v).as_bytes());

@@ -13,10 +13,11 @@ pub mod stats;
 pub mod synth;
 #[cfg(test)]
 pub(crate) mod testkit;
+pub mod thermal;
 
 pub use rng::Rng;
 pub use session::{
-    simulate_calibration_to_dir, simulate_rows, simulate_to_dir, simulate_to_dir_with_progress,
-    NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
+    simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
+    simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
 };
 pub use stats::simulate_stats;

@@ -11,6 +11,7 @@
 
 use super::flicker::Flicker;
 use super::rng::Rng;
+use super::thermal::{ThermalSim, ThermalState};
 use crate::session::{Plan, PlanError};
 use crate::session::{RecordingError, SessionWriter};
 use crate::unit_file::UnitFile;
@@ -206,6 +207,8 @@ const STREAM_WALK: u64 = 3;
 const STREAM_TILT: u64 = 4;
 const STREAM_FLICKER: u64 = 5;
 const STREAM_GYRO_WALK: u64 = 6;
+/// The temperature sensor's noise (a high stream number, clear of any new noise source's).
+const STREAM_TEMPERATURE: u64 = 16;
 
 /// `up` tilted by small angles (radians) about the two axes perpendicular to it that the estimator
 /// uses for a mount's tilt unknowns (`estimate::model::tilt_basis`), renormalised.
@@ -225,8 +228,26 @@ pub fn simulate_rows<E>(
     seed: u64,
     mut sink: impl FnMut(&str, f64, &[f64; 3], &[f64; 3]) -> Result<(), E>,
 ) -> Result<Result<SimulationSummary, E>, SimulateError> {
+    let thermal = ThermalSim::default();
+    simulate_rows_with_temperature(cal, plan, noise, &thermal, seed, |seg, t, u, w, _| {
+        sink(seg, t, u, w)
+    })
+}
+
+/// [`simulate_rows`] with the unit's temperature (`sink`'s last argument, the sensor's reading, °C):
+/// the chamber follows the plan's set-points and `cal.temperature`, when present, moves the biases
+/// and scale factors with the die's temperature ([`super::thermal`]).
+pub fn simulate_rows_with_temperature<E>(
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    thermal: &ThermalSim,
+    seed: u64,
+    mut sink: impl FnMut(&str, f64, &[f64; 3], &[f64; 3], f64) -> Result<(), E>,
+) -> Result<Result<SimulationSummary, E>, SimulateError> {
     plan.validate().map_err(SimulateError::Plan)?;
     noise.validate()?;
+    thermal.validate()?;
     let model = ForwardModel::new(cal).map_err(|e| SimulateError::Unit(e.to_string()))?;
     if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
         return Err(SimulateError::Plan(PlanError::Invalid(format!(
@@ -255,6 +276,8 @@ pub fn simulate_rows<E>(
     let mut rng_gyro = Rng::new(seed, STREAM_GYRO);
     let mut rng_walk = Rng::new(seed, STREAM_WALK);
     let mut rng_tilt = Rng::new(seed, STREAM_TILT);
+    let first_c = plan.segments.iter().find_map(|s| s.temp_c);
+    let mut temperature = ThermalState::new(thermal, first_c, Rng::new(seed, STREAM_TEMPERATURE));
 
     let mut summary = SimulationSummary {
         seed,
@@ -323,6 +346,10 @@ pub fn simulate_rows<E>(
             }
             let motion = table.motion(plan.gravity_m_s2);
             let mut u = model.outputs(&motion).raw;
+            let (die_c, temp_c) = temperature.step(super::thermal::chamber_c(seg, t_local), dt);
+            if let Some(th) = &cal.temperature {
+                u = super::thermal::outputs_at(th, &model.zero_bias_out, &u, die_c);
+            }
             for i in 0..3 {
                 if walk[i] > 0.0 {
                     drift[i] += walk[i] * rng_walk.normal();
@@ -353,7 +380,7 @@ pub fn simulate_rows<E>(
                 }
             }
             let t = index as f64 * dt;
-            if let Err(e) = sink(&seg.name, t, &u, &w) {
+            if let Err(e) = sink(&seg.name, t, &u, &w, temp_c) {
                 return Ok(Err(e));
             }
             index += 1;
@@ -432,12 +459,25 @@ pub fn simulate_to_dir_with_progress(
         .map(|s| (s.duration_s.unwrap_or(0.0) * plan.sample_rate_hz).round())
         .sum();
     bar.set_length(total as u64);
-    let result = simulate_rows(&cal, &plan, noise, seed, |seg, t, u, w| {
-        if writer.rows() % 65_536 == 0 {
-            bar.set_position(writer.rows());
-        }
-        writer.write_row(seg, t, u, w)
-    })?;
+    let thermal = ThermalSim::from_unit_file(unit)?;
+    let with_temperature = plan.has_temperature();
+    let result = simulate_rows_with_temperature(
+        &cal,
+        &plan,
+        noise,
+        &thermal,
+        seed,
+        |seg, t, u, w, temp| {
+            if writer.rows() % 65_536 == 0 {
+                bar.set_position(writer.rows());
+            }
+            if with_temperature {
+                writer.write_row_with_temperature(seg, t, u, w, temp)
+            } else {
+                writer.write_row(seg, t, u, w)
+            }
+        },
+    )?;
     bar.finish_and_clear();
     let mut summary = result?;
     writer.finish()?;

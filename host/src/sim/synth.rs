@@ -118,6 +118,7 @@ pub fn segment_stats(
         mean_wwt: outer(mean_w2, sg2),
         cov_w: outer(var_rate, sg2),
         wdot_rad_s2: up.map(|u| u * accel),
+        thermal: None,
     }
 }
 

@@ -1,0 +1,422 @@
+//! The temperature fit (docs/model.md §9): zero biases and scale factors as polynomials in
+//! `ΔT = T − T_ref`, the misalignment constant, from the static segments of a session recorded at
+//! several temperatures (a chamber's soak steps, slow ramps at rest, or both).
+//!
+//! Each accelerometer `i` is fitted on its own, because with a constant misalignment the model of
+//! output `i` involves only row `i` of `M`:
+//!
+//! ```text
+//! U_i = (1 + S_i(ΔT))·m_i·f + u0_i + P_i(ΔT),   S_i, P_i polynomials without constant term
+//! ```
+//!
+//! It is fitted by Gauss–Newton over every sample at once through the segments' temperature moments
+//! ([`crate::session::thermal`]), with the degrees of `P_i` and `S_i` (0..=3 each) chosen by the
+//! Bayesian information criterion, the χ² first divided by the largest model's χ²/dof when that
+//! exceeds 1 (noise the segments' own scatter does not show would otherwise buy higher degrees).
+//! The result then refers every segment's statistics to `T_ref`, and the usual estimator runs on
+//! them unchanged: its biases, scale factors and angles are the values at `T_ref`.
+
+use super::solve::invert_spd;
+use crate::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
+use crate::session::{Plan, SegmentStats};
+use nalgebra::{DMatrix, DVector};
+use shared::sensor_models::{TemperatureModel, MAX_TEMPERATURE_DEGREE as DEG};
+
+/// Smallest temperature span of the static segments for a temperature model, °C.
+pub const MIN_SPAN_C: f64 = 5.0;
+/// The reference temperature when the data cover it, °C.
+pub const PREFERRED_REFERENCE_C: f64 = 25.0;
+/// Segments whose temperature moves less than this are treated as soaks: their own scatter is noise.
+const SOAK_SPAN_C: f64 = 1.0;
+/// Parameters per axis: `m_i` (3), `u0_i`, `p_1..p_3`, `s_1..s_3`.
+const NPAR: usize = 4 + 2 * DEG;
+const GAUSS_NEWTON_STEPS: usize = 8;
+
+/// One segment's residual after the fit, like a soak step's row of a table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThermalStep {
+    /// Segment name.
+    pub segment: String,
+    /// Mean temperature, °C.
+    pub mean_c: f64,
+    /// Mean residual per output (data − model), output unit.
+    pub residual_out: [f64; 3],
+    /// 1σ of that mean from the segment's noise, output unit.
+    pub sigma_out: [f64; 3],
+}
+
+/// The temperature fit's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThermalFit {
+    /// The model to apply (docs/model.md §9).
+    pub model: TemperatureModel,
+    /// The zero biases at `T_ref` this fit found, output unit (the main estimate's agree to noise).
+    pub zero_bias_ref_out: [f64; 3],
+    /// The degree of each `P_i` the data chose.
+    pub zero_bias_degree: [usize; 3],
+    /// The degree of each `S_i` the data chose.
+    pub scale_degree: [usize; 3],
+    /// 1σ of `model.zero_bias_out_per_c` (0 where the degree leaves a coefficient out).
+    pub zero_bias_sigma: [[f64; DEG]; 3],
+    /// 1σ of `model.scale_rel_per_c`.
+    pub scale_sigma: [[f64; DEG]; 3],
+    /// Covariance of each axis's zero-bias coefficients (for the 1σ band of `P_i(T)`).
+    pub zero_bias_cov: [[[f64; DEG]; DEG]; 3],
+    /// Covariance of each axis's scale coefficients.
+    pub scale_cov: [[[f64; DEG]; DEG]; 3],
+    /// χ², degrees of freedom, per axis, of the chosen model.
+    pub chi2: [(f64, usize); 3],
+    /// Residuals per static segment.
+    pub steps: Vec<ThermalStep>,
+    /// How each degree was chosen, for the report.
+    pub notes: Vec<String>,
+}
+
+/// A static segment as the fit sees it.
+struct Obs<'a> {
+    name: &'a str,
+    up_b: [f64; 3],
+    ts: &'a ThermalStats,
+    /// Per-sample noise variance per output, output unit².
+    var: [f64; 3],
+}
+
+/// Fits the temperature model when the static segments span at least [`MIN_SPAN_C`]; `Ok(None)`
+/// otherwise (with a note when temperatures were recorded at all).
+pub fn fit_session(
+    plan: &Plan,
+    stats: &[SegmentStats],
+) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+    let obs: Vec<Obs> = stats
+        .iter()
+        .filter_map(|st| {
+            let seg = plan.segment(&st.name)?;
+            let ts = st.thermal.as_ref()?;
+            seg.is_static().then(|| Obs {
+                name: &st.name,
+                up_b: seg.up_b,
+                ts,
+                var: noise_variance(st, ts),
+            })
+        })
+        .collect();
+    if obs.is_empty() {
+        return Ok((None, Vec::new()));
+    }
+    let lo = obs.iter().map(|o| o.ts.min_c).fold(f64::INFINITY, f64::min);
+    let hi = obs
+        .iter()
+        .map(|o| o.ts.max_c)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if hi - lo < MIN_SPAN_C {
+        return Ok((
+            None,
+            vec![format!(
+                "the static segments span {lo:.1}..{hi:.1} °C, less than {MIN_SPAN_C} °C: no \
+                 temperature model (record soak steps or a ramp to calibrate over temperature)"
+            )],
+        ));
+    }
+    let reference_c = PREFERRED_REFERENCE_C.clamp(lo, hi);
+    let mut fit = ThermalFit {
+        model: TemperatureModel {
+            reference_c,
+            valid_range_c: [lo, hi],
+            zero_bias_out_per_c: [[0.0; DEG]; 3],
+            scale_rel_per_c: [[0.0; DEG]; 3],
+            gyro_bias_rad_s_per_c: None,
+        },
+        zero_bias_ref_out: [0.0; 3],
+        zero_bias_degree: [0; 3],
+        scale_degree: [0; 3],
+        zero_bias_sigma: [[0.0; DEG]; 3],
+        scale_sigma: [[0.0; DEG]; 3],
+        zero_bias_cov: [[[0.0; DEG]; DEG]; 3],
+        scale_cov: [[[0.0; DEG]; DEG]; 3],
+        chi2: [(0.0, 0); 3],
+        steps: obs
+            .iter()
+            .map(|o| ThermalStep {
+                segment: o.name.to_string(),
+                mean_c: o.ts.mean_c(),
+                residual_out: [0.0; 3],
+                sigma_out: [0.0; 3],
+            })
+            .collect(),
+        notes: Vec::new(),
+    };
+    for axis in 0..3 {
+        fit_axis(&obs, axis, &mut fit)?;
+    }
+    fit.model.check().map_err(|e| e.to_string())?;
+    Ok((Some(fit), Vec::new()))
+}
+
+/// Per-sample noise variance: a soak's own scatter, or a ramp's scatter about its own cubic.
+fn noise_variance(st: &SegmentStats, ts: &ThermalStats) -> [f64; 3] {
+    std::array::from_fn(|i| {
+        let soak = st.cov_u[i][i].max(f64::MIN_POSITIVE);
+        if ts.max_c - ts.min_c < SOAK_SPAN_C || ts.count <= 2 * TERMS as u64 {
+            return soak;
+        }
+        let g = DMatrix::from_fn(TERMS, TERMS, |j, k| ts.gram()[j][k]);
+        let b = DVector::from_fn(TERMS, |k, _| ts.sum_u_x_pow[i][k]);
+        match g.cholesky() {
+            Some(c) => {
+                let beta = c.solve(&b);
+                let rss = ts.sum_u2[i] - beta.dot(&b);
+                (rss / (ts.count as f64 - TERMS as f64)).max(f64::MIN_POSITIVE)
+            }
+            None => soak,
+        }
+    })
+}
+
+/// Which of the [`NPAR`] parameters a degree pair uses.
+fn active(db: usize, ds: usize) -> Vec<usize> {
+    (0..4)
+        .chain((0..db).map(|k| 4 + k))
+        .chain((0..ds).map(|k| 4 + DEG + k))
+        .collect()
+}
+
+/// `β'` (the model polynomial in `x' = (T − T_ref)/SCALE_C`) of one segment and its Jacobian.
+fn model_poly(
+    theta: &[f64; NPAR],
+    f: &[f64; 3],
+    shift: f64,
+) -> ([f64; TERMS], [[f64; NPAR]; TERMS]) {
+    let mf = theta[0] * f[0] + theta[1] * f[1] + theta[2] * f[2];
+    let mut beta = [0.0; TERMS];
+    let mut jac = [[0.0; NPAR]; TERMS];
+    beta[0] = mf + theta[3] - shift;
+    jac[0][..3].copy_from_slice(f);
+    jac[0][3] = 1.0;
+    for k in 1..TERMS {
+        let (p, s) = (4 + k - 1, 4 + DEG + k - 1);
+        beta[k] = theta[p] + theta[s] * mf;
+        for j in 0..3 {
+            jac[k][j] = theta[s] * f[j];
+        }
+        jac[k][p] = 1.0;
+        jac[k][s] = mf;
+    }
+    (beta, jac)
+}
+
+/// `D` with `β = D β'`: a polynomial in `x' = x − d` re-expanded in `x`.
+fn shift_matrix(reference_c: f64) -> [[f64; TERMS]; TERMS] {
+    let d = (reference_c - ORIGIN_C) / SCALE_C;
+    std::array::from_fn(|j| {
+        std::array::from_fn(|k| {
+            if k >= j {
+                binomial(k, j) * (-d).powi((k - j) as i32)
+            } else {
+                0.0
+            }
+        })
+    })
+}
+
+struct AxisResult {
+    theta: [f64; NPAR],
+    cov: DMatrix<f64>,
+    chi2: f64,
+    dof: i64,
+    idx: Vec<usize>,
+}
+
+/// Gauss–Newton for one axis and one degree pair, from `start`.
+fn solve_axis(
+    obs: &[Obs],
+    axis: usize,
+    idx: &[usize],
+    d: &[[f64; TERMS]; TERMS],
+    start: [f64; NPAR],
+) -> Option<AxisResult> {
+    let mut theta = start;
+    let rows: u64 = obs.iter().map(|o| o.ts.count).sum();
+    let dof = rows as i64 - idx.len() as i64;
+    for step in 0..=GAUSS_NEWTON_STEPS {
+        let (n, g, chi2) = normal_equations(obs, axis, idx, d, &theta);
+        let inv = invert_spd(&n, 1e-13)?;
+        if step == GAUSS_NEWTON_STEPS {
+            return Some(AxisResult {
+                theta,
+                cov: inv,
+                chi2,
+                dof,
+                idx: idx.to_vec(),
+            });
+        }
+        let delta = &inv * &g;
+        for (a, &p) in idx.iter().enumerate() {
+            theta[p] += delta[a];
+        }
+    }
+    None
+}
+
+/// `JᵀWJ`, `JᵀW r` and χ² over all samples, from the moments.
+fn normal_equations(
+    obs: &[Obs],
+    axis: usize,
+    idx: &[usize],
+    d: &[[f64; TERMS]; TERMS],
+    theta: &[f64; NPAR],
+) -> (DMatrix<f64>, DVector<f64>, f64) {
+    let k = idx.len();
+    let mut n = DMatrix::zeros(k, k);
+    let mut g = DVector::zeros(k);
+    let mut chi2 = 0.0;
+    for o in obs {
+        let (bp, jp) = model_poly(theta, &o.up_b, o.ts.u_shift[axis]);
+        let beta: [f64; TERMS] = std::array::from_fn(|j| (0..TERMS).map(|m| d[j][m] * bp[m]).sum());
+        let jac = DMatrix::from_fn(TERMS, k, |j, a| {
+            (0..TERMS).map(|m| d[j][m] * jp[m][idx[a]]).sum()
+        });
+        let gram = DMatrix::from_fn(TERMS, TERMS, |j, m| o.ts.gram()[j][m]);
+        let b = DVector::from_fn(TERMS, |j, _| o.ts.sum_u_x_pow[axis][j]);
+        let r = b - &gram * DVector::from_row_slice(&beta);
+        let w = 1.0 / o.var[axis];
+        n += jac.transpose() * &gram * &jac * w;
+        g += jac.transpose() * r * w;
+        chi2 += o.ts.residual_sum_squares(axis, &beta) * w;
+    }
+    (n, g, chi2)
+}
+
+/// Fits axis `axis` at every degree pair, starting from the fit without temperature terms, keeps
+/// the pair of least BIC and writes it into `fit`.
+fn fit_axis(obs: &[Obs], axis: usize, fit: &mut ThermalFit) -> Result<(), String> {
+    let d = shift_matrix(fit.model.reference_c);
+    let base = solve_axis(obs, axis, &active(0, 0), &d, [0.0; NPAR])
+        .ok_or_else(|| format!("accelerometer {}: the static segments do not determine its bias and scale (too few attitudes)", shared::params::axis_name(axis)))?;
+    let rows: u64 = obs.iter().map(|o| o.ts.count).sum();
+    let mut results = Vec::new();
+    for db in 0..=DEG {
+        for ds in 0..=DEG {
+            if let Some(r) = solve_axis(obs, axis, &active(db, ds), &d, base.theta) {
+                results.push(((db, ds), r));
+            }
+        }
+    }
+    let largest = results
+        .iter()
+        .max_by_key(|((db, ds), _)| db + ds)
+        .map(|(_, r)| (r.chi2 / r.dof.max(1) as f64).max(1.0))
+        .unwrap_or(1.0);
+    let bic = |r: &AxisResult| r.chi2 / largest + r.idx.len() as f64 * (rows as f64).ln();
+    let ((db, ds), best) = results
+        .into_iter()
+        .min_by(|a, b| bic(&a.1).total_cmp(&bic(&b.1)))
+        .ok_or_else(|| "no temperature model can be fitted".to_string())?;
+    let scale2 = (best.chi2 / best.dof.max(1) as f64).max(1.0);
+    let name = shared::params::axis_name(axis);
+    fit.notes.push(format!(
+        "accelerometer {name}: zero bias degree {db}, scale degree {ds} (least BIC of 16 pairs; \
+         χ²/dof {:.2}{})",
+        best.chi2 / best.dof.max(1) as f64,
+        if scale2 > 1.0 {
+            ", 1σ scaled by √(χ²/dof)"
+        } else {
+            ""
+        }
+    ));
+    fit.zero_bias_degree[axis] = db;
+    fit.scale_degree[axis] = ds;
+    fit.zero_bias_ref_out[axis] = best.theta[3];
+    fit.chi2[axis] = (best.chi2, best.dof.max(0) as usize);
+    for k in 0..DEG {
+        let per_c = SCALE_C.powi(k as i32 + 1);
+        let sd = |p: usize| {
+            best.idx
+                .iter()
+                .position(|&q| q == p)
+                .map_or(0.0, |a| (best.cov[(a, a)] * scale2).sqrt() / per_c)
+        };
+        fit.model.zero_bias_out_per_c[axis][k] = best.theta[4 + k] / per_c;
+        fit.model.scale_rel_per_c[axis][k] = best.theta[4 + DEG + k] / per_c;
+        fit.zero_bias_sigma[axis][k] = sd(4 + k);
+        fit.scale_sigma[axis][k] = sd(4 + DEG + k);
+    }
+    let pos = |p: usize| best.idx.iter().position(|&q| q == p);
+    for a in 0..DEG {
+        for b in 0..DEG {
+            let per_c = SCALE_C.powi(a as i32 + 1) * SCALE_C.powi(b as i32 + 1);
+            let c = |first: usize| match (pos(first + a), pos(first + b)) {
+                (Some(i), Some(j)) => best.cov[(i, j)] * scale2 / per_c,
+                _ => 0.0,
+            };
+            fit.zero_bias_cov[axis][a][b] = c(4);
+            fit.scale_cov[axis][a][b] = c(4 + DEG);
+        }
+    }
+    for (o, step) in obs.iter().zip(&mut fit.steps) {
+        let (bp, _) = model_poly(&best.theta, &o.up_b, o.ts.u_shift[axis]);
+        let beta: [f64; TERMS] = std::array::from_fn(|j| (0..TERMS).map(|m| d[j][m] * bp[m]).sum());
+        let n = o.ts.count as f64;
+        let predicted: f64 = (0..TERMS).map(|j| beta[j] * o.ts.sum_x_pow[j]).sum::<f64>() / n;
+        step.residual_out[axis] = o.ts.sum_u_x_pow[axis][0] / n - predicted;
+        step.sigma_out[axis] = (o.var[axis] / n).sqrt();
+    }
+    Ok(())
+}
+
+impl ThermalFit {
+    /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
+    pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
+        let dt = temp_c - self.model.reference_c;
+        let g = [dt, dt * dt, dt * dt * dt];
+        let value = (0..DEG).map(|k| c[k] * g[k]).sum();
+        let var: f64 = (0..DEG)
+            .flat_map(|a| (0..DEG).map(move |b| (a, b)))
+            .map(|(a, b)| g[a] * cov[a][b] * g[b])
+            .sum();
+        (value, var.max(0.0).sqrt())
+    }
+
+    /// The statistics referred to `T_ref`: each segment's mean outputs with the model's bias change
+    /// removed and its scale change divided out (exact at rest, where `m_i·f` is constant:
+    /// `E[U] = (1 + E[S])·m·f + u0 + E[P]`).
+    pub fn refer_to_reference(&self, stats: &[SegmentStats]) -> Vec<SegmentStats> {
+        let m = &self.model;
+        stats
+            .iter()
+            .map(|st| {
+                let Some(ts) = &st.thermal else {
+                    return st.clone();
+                };
+                let ex = ts.mean_powers_about(m.reference_c);
+                let mean_poly = |c: &[f64; DEG]| {
+                    (0..DEG)
+                        .map(|k| c[k] * SCALE_C.powi(k as i32 + 1) * ex[k + 1])
+                        .sum::<f64>()
+                };
+                let mut out = st.clone();
+                let var = noise_variance(st, ts);
+                let ramp = ts.max_c - ts.min_c >= SOAK_SPAN_C;
+                let gain: [f64; 3] =
+                    std::array::from_fn(|i| 1.0 + mean_poly(&m.scale_rel_per_c[i]));
+                for i in 0..3 {
+                    let u0 = self.zero_bias_ref_out[i];
+                    let p = mean_poly(&m.zero_bias_out_per_c[i]);
+                    let refer = |u: f64| u0 + (u - u0 - p) / gain[i];
+                    out.mean_u[i] = refer(st.mean_u[i]);
+                    out.min_u[i] = refer(st.min_u[i]);
+                    out.max_u[i] = refer(st.max_u[i]);
+                    for j in 0..3 {
+                        // A ramp's own scatter includes the drift the model explains: use the
+                        // scatter about its own cubic instead, without correlations.
+                        out.cov_u[i][j] = match (ramp, i == j) {
+                            (true, true) => var[i] / (gain[i] * gain[i]),
+                            (true, false) => 0.0,
+                            (false, _) => st.cov_u[i][j] / (gain[i] * gain[j]),
+                        };
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,255 @@
+//! Temperature statistics of one segment (docs/model.md §9): the moments that let the temperature fit
+//! be an exact least-squares fit over every sample, in one streaming pass and constant memory.
+//!
+//! At a fixed attitude the model of each output is a polynomial of degree ≤ 3 in the temperature
+//! (`U_i = (1 + S_i(ΔT))·m_i·f + u0_i + P_i(ΔT)`), so the sum of squared residuals of any such
+//! polynomial `β` in `x` is `Σu² − 2βᵀb + βᵀGβ`, with `G_jk = Σ x^(j+k)` and `b_k = Σ u x^k`. Those
+//! sums are kept. `x = (T − ORIGIN_C)/SCALE_C` keeps the powers near 1 so the sums stay well
+//! conditioned; outputs are shifted by the segment's first sample like [`super::stats`].
+
+/// The fixed origin of the accumulated powers, °C.
+pub const ORIGIN_C: f64 = 25.0;
+/// The scale of the accumulated powers, °C: `x = (T − ORIGIN_C)/SCALE_C`.
+pub const SCALE_C: f64 = 50.0;
+/// Number of polynomial coefficients (degree 3 and the constant).
+pub const TERMS: usize = 4;
+
+/// The temperature moments of one segment's accepted rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThermalStats {
+    /// Rows with a temperature.
+    pub count: u64,
+    /// The outputs of the first row, subtracted from every output before summing, output unit.
+    pub u_shift: [f64; 3],
+    /// `Σ x^k`, `k = 0..=6`.
+    pub sum_x_pow: [f64; 2 * TERMS - 1],
+    /// `Σ (u_i − u_shift_i) x^k`, `k = 0..=3`, per output.
+    pub sum_u_x_pow: [[f64; TERMS]; 3],
+    /// `Σ (u_i − u_shift_i)²`, per output.
+    pub sum_u2: [f64; 3],
+    /// Lowest and highest temperature read, °C.
+    pub min_c: f64,
+    /// See `min_c`.
+    pub max_c: f64,
+}
+
+impl ThermalStats {
+    /// The mean temperature, °C.
+    pub fn mean_c(&self) -> f64 {
+        ORIGIN_C + SCALE_C * self.sum_x_pow[1] / self.sum_x_pow[0]
+    }
+
+    /// The Gram matrix `G_jk = Σ x^(j+k)`.
+    pub fn gram(&self) -> [[f64; TERMS]; TERMS] {
+        std::array::from_fn(|j| std::array::from_fn(|k| self.sum_x_pow[j + k]))
+    }
+
+    /// `Σ (u_i − shift − β(x))²` for a polynomial `β` in `x` (coefficients of `x^0..x^3`) of output
+    /// `i`, the shift included in `β_0` by the caller.
+    pub fn residual_sum_squares(&self, i: usize, beta: &[f64; TERMS]) -> f64 {
+        let g = self.gram();
+        let b = &self.sum_u_x_pow[i];
+        let mut quad = 0.0;
+        for j in 0..TERMS {
+            for k in 0..TERMS {
+                quad += beta[j] * g[j][k] * beta[k];
+            }
+        }
+        let lin: f64 = (0..TERMS).map(|k| beta[k] * b[k]).sum();
+        self.sum_u2[i] - 2.0 * lin + quad
+    }
+
+    /// The mean of `x'^k`, `k = 0..=3`, with `x' = (T − reference_c)/SCALE_C`.
+    pub fn mean_powers_about(&self, reference_c: f64) -> [f64; TERMS] {
+        let d = (reference_c - ORIGIN_C) / SCALE_C;
+        let n = self.sum_x_pow[0];
+        // E[(x − d)^k] = Σ_j C(k, j) E[x^j] (−d)^(k−j).
+        std::array::from_fn(|k| {
+            (0..=k)
+                .map(|j| binomial(k, j) * self.sum_x_pow[j] / n * (-d).powi((k - j) as i32))
+                .sum()
+        })
+    }
+}
+
+/// `C(n, k)` for the small `n` of a cubic.
+pub fn binomial(n: usize, k: usize) -> f64 {
+    (0..k).fold(1.0, |acc, j| acc * (n - j) as f64 / (j + 1) as f64)
+}
+
+/// Streaming accumulator for [`ThermalStats`].
+#[derive(Clone, Debug)]
+pub struct ThermalAccumulator {
+    n: u64,
+    u_shift: [f64; 3],
+    sx: [f64; 2 * TERMS - 1],
+    sux: [[f64; TERMS]; 3],
+    suu: [f64; 3],
+    min_c: f64,
+    max_c: f64,
+}
+
+impl Default for ThermalAccumulator {
+    fn default() -> Self {
+        ThermalAccumulator {
+            n: 0,
+            u_shift: [0.0; 3],
+            sx: [0.0; 2 * TERMS - 1],
+            sux: [[0.0; TERMS]; 3],
+            suu: [0.0; 3],
+            min_c: f64::INFINITY,
+            max_c: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl ThermalAccumulator {
+    /// Adds one row; the caller has checked that every value is finite.
+    #[inline]
+    pub fn push(&mut self, u: &[f64; 3], temp_c: f64) {
+        if self.n == 0 {
+            self.u_shift = *u;
+        }
+        self.n += 1;
+        self.min_c = self.min_c.min(temp_c);
+        self.max_c = self.max_c.max(temp_c);
+        let x = (temp_c - ORIGIN_C) / SCALE_C;
+        let mut p = 1.0;
+        let mut powers = [0.0; 2 * TERMS - 1];
+        for (slot, sum) in powers.iter_mut().zip(&mut self.sx) {
+            *slot = p;
+            *sum += p;
+            p *= x;
+        }
+        for i in 0..3 {
+            let du = u[i] - self.u_shift[i];
+            self.suu[i] += du * du;
+            for k in 0..TERMS {
+                self.sux[i][k] += du * powers[k];
+            }
+        }
+    }
+
+    /// The statistics, or `None` when no row had a temperature.
+    pub fn finish(&self) -> Option<ThermalStats> {
+        (self.n > 0).then_some(ThermalStats {
+            count: self.n,
+            u_shift: self.u_shift,
+            sum_x_pow: self.sx,
+            sum_u_x_pow: self.sux,
+            sum_u2: self.suu,
+            min_c: self.min_c,
+            max_c: self.max_c,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows of a ramp from 0 to 50 °C whose output 0 is an exact cubic in T.
+    fn ramp() -> (ThermalStats, [f64; TERMS]) {
+        // u = 2 + 0.01 x + 0.002 x² − 0.0005 x³ with x = (T − 25)/50.
+        let beta = [2.0, 0.01, 0.002, -0.0005];
+        let mut acc = ThermalAccumulator::default();
+        for k in 0..=500 {
+            let t = k as f64 * 0.1;
+            let x = (t - ORIGIN_C) / SCALE_C;
+            let u0 = beta[0] + x * (beta[1] + x * (beta[2] + x * beta[3]));
+            acc.push(&[u0, 1.0, 0.0], t);
+        }
+        (acc.finish().unwrap(), beta)
+    }
+
+    #[test]
+    fn an_exact_polynomial_has_zero_residual_and_a_wrong_one_does_not() {
+        let (st, mut beta) = ramp();
+        beta[0] -= st.u_shift[0];
+        let rss = st.residual_sum_squares(0, &beta);
+        assert!(rss.abs() < 1e-12, "{rss}");
+        // Off by 1e-3 in the constant: 501 rows × 1e-6.
+        beta[0] += 1e-3;
+        let rss = st.residual_sum_squares(0, &beta);
+        assert!((rss - 501e-6).abs() < 1e-9, "{rss}");
+        assert_eq!(st.count, 501);
+        assert_eq!((st.min_c, st.max_c), (0.0, 50.0));
+        assert!((st.mean_c() - 25.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn mean_powers_shift_to_another_reference() {
+        let (st, _) = ramp();
+        // About 5 °C: x' = (T − 5)/50 over T = 0..50 in steps of 0.1.
+        let direct: Vec<f64> = (0..TERMS)
+            .map(|k| {
+                (0..=500)
+                    .map(|j| ((j as f64 * 0.1 - 5.0) / SCALE_C).powi(k as i32))
+                    .sum::<f64>()
+                    / 501.0
+            })
+            .collect();
+        let shifted = st.mean_powers_about(5.0);
+        for k in 0..TERMS {
+            assert!((shifted[k] - direct[k]).abs() < 1e-12, "k {k}");
+        }
+        assert_eq!(binomial(3, 2), 3.0);
+    }
+}
+
+#[cfg(test)]
+mod recording_tests {
+    use crate::session::{read_session, Plan, ReadOptions, SessionWriter};
+
+    const PLAN_V2: &str = r#"
+format_version = 2
+output_unit = "V"
+sample_rate_hz = 100
+[[segment]]
+name = "x+"
+up_b = [1, 0, 0]
+temp_c = 10
+[[segment]]
+name = "x-"
+up_b = [-1, 0, 0]
+"#;
+
+    #[test]
+    fn version_2_round_trips_with_temperature_and_version_1_is_told_apart() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = Plan::parse(PLAN_V2).unwrap();
+        let mut w = SessionWriter::create(dir.path(), &plan, false).unwrap();
+        // A version 2 recording refuses rows without temperature.
+        assert!(w.write_row("x+", 0.0, &[1.0; 3], &[0.0; 3]).is_err());
+        for k in 0..10 {
+            let t = 10.0 + k as f64;
+            w.write_row_with_temperature("x+", k as f64 * 0.01, &[2.0 + 1e-3 * t; 3], &[0.0; 3], t)
+                .unwrap();
+        }
+        w.write_row_with_temperature("x-", 0.2, &[1.0; 3], &[0.0; 3], f64::NAN)
+            .unwrap();
+        w.write_row_with_temperature("x-", 0.3, &[1.0; 3], &[0.0; 3], 20.0)
+            .unwrap();
+        w.finish().unwrap();
+        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+        let th = s.stats[0].thermal.as_ref().unwrap();
+        assert_eq!((th.count, th.min_c, th.max_c), (10, 10.0, 19.0));
+        assert!((th.mean_c() - 14.5).abs() < 1e-12);
+        // The row with a NaN temperature is left out whole and counted.
+        assert_eq!((s.stats[1].count, s.stats[1].rejected_rows), (1, 1));
+        assert!(s.report.warnings.iter().any(|w| w.contains("'x-'")));
+
+        // The same samples under a version 1 plan: the header names the fix.
+        let v1 = PLAN_V2
+            .replace("format_version = 2", "")
+            .replace("temp_c = 10", "");
+        std::fs::write(dir.path().join("plan.toml"), v1).unwrap();
+        let e = read_session(dir.path(), &ReadOptions { quiet: true })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("column 9") && e.contains("format_version = 2"),
+            "{e}"
+        );
+    }
+}
