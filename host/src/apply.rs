@@ -81,6 +81,12 @@ pub struct Applier {
     compensator: Compensator,
     omega_dot: OmegaDotEstimator,
     segment: Option<usize>,
+    /// Rows between two temperature refreshes (the device refreshes a few times a second).
+    refresh_rows: u64,
+    /// Rows since the last refresh (`None`: none yet).
+    since_refresh: Option<u64>,
+    /// Rows compensated outside the calibration's valid temperature range (the device flags them).
+    flagged_rows: u64,
 }
 
 impl Applier {
@@ -98,6 +104,10 @@ impl Applier {
             compensator,
             omega_dot,
             segment: None,
+            refresh_rows: (sample_rate_hz / f64::from(firmware::pipeline::TEMPERATURE_REFRESH_HZ))
+                .max(1.0) as u64,
+            since_refresh: None,
+            flagged_rows: 0,
         })
     }
 
@@ -136,11 +146,23 @@ impl Applier {
         &self.omega_dot
     }
 
-    /// One recorded row: restarts the ω̇ estimate on a segment change, then [`Applier::sample`].
+    /// One recorded row: restarts the ω̇ estimate on a segment change, refreshes the temperature model
+    /// with the row's temperature at the device's pace (docs/model.md §9), then [`Applier::sample`].
     pub fn row(&mut self, row: &Row<'_>) -> Option<[f32; 3]> {
         if self.segment != Some(row.segment_index) {
             self.omega_dot.reset();
             self.segment = Some(row.segment_index);
+        }
+        if let Some(t) = row.temp_c {
+            let due = self.since_refresh.is_none_or(|n| n >= self.refresh_rows);
+            if due {
+                self.compensator.refresh(t as f32);
+                self.since_refresh = Some(0);
+            }
+            self.since_refresh = self.since_refresh.map(|n| n + 1);
+            if self.compensator.temperature_state().is_flagged() {
+                self.flagged_rows += 1;
+            }
         }
         self.sample(&row.u.map(|v| v as f32), &row.w_rad_s.map(|v| v as f32))
     }
@@ -153,7 +175,8 @@ pub struct ApplySummary {
     pub rows: u64,
     /// Rows written as `NaN` because an input value was not finite.
     pub non_finite_rows: u64,
-    /// Warnings of the reader (cut-short last line, empty segments, …).
+    /// Warnings of the reader (cut-short last line, empty segments, …), and rows outside the
+    /// calibration's temperature range.
     pub warnings: Vec<String>,
 }
 
@@ -223,6 +246,14 @@ pub fn apply_session(
         },
     )?;
     summary.warnings = report.warnings;
+    if applier.flagged_rows > 0 {
+        summary.warnings.push(format!(
+            "{} rows were recorded outside the calibration's valid temperature range (or without a \
+             temperature reading): their compensation uses the nearest end of the range, and the device \
+             flags such outputs",
+            applier.flagged_rows
+        ));
+    }
     Ok(summary)
 }
 
@@ -406,7 +437,7 @@ mod tests {
 
     /// A calibration that carries the gyro's errors: the applier turns the gyro's reading into the
     /// body rate as the device does, so a spin with a 0.5 %, 0.5°, 0.5 °/s gyro is compensated to the
-    /// truth; reading the gyro as perfect leaves milli-g.
+    /// truth; reading the gyro as perfect leaves a quarter of a milli-g at this rate.
     #[test]
     fn the_gyro_correction_is_applied_before_the_lever_arm_terms() {
         use shared::forward::{BodyMotion, ForwardModel};
@@ -443,6 +474,61 @@ mod tests {
                 .fold(0.0, f64::max)
         };
         assert!(err(a) < 20e-6, "corrected: {} g", err(a));
-        assert!(err(b) > 1e-3, "uncorrected: {} g", err(b));
+        assert!(err(b) > 200e-6, "uncorrected: {} g", err(b));
+    }
+
+    /// A calibration with a temperature model: rows recorded at 45 °C are compensated at 45 °C (the
+    /// model of docs/model.md §9 applied by the device's refresh), not at the reference; rows outside
+    /// the valid range are counted for the warning.
+    #[test]
+    fn rows_are_compensated_at_their_temperature() {
+        use shared::sensor_models::poly_no_constant;
+        let mut cal = shared::params::PAPER_UNIT;
+        let thermal = firmware::paper_unit::typical_thermal_model();
+        cal.temperature = Some(thermal);
+        let (fitted, _) = cal.statics.to_fitted().unwrap();
+        let f_g = [0.3, -0.5, 0.81];
+        // The outputs of the unit at temperature t, static (docs/model.md §9).
+        let outputs = |t: f64| -> [f32; 3] {
+            let dt = t - thermal.reference_c;
+            let mf = shared::linalg::mat_vec(&fitted.m_out_per_g, &f_g);
+            core::array::from_fn(|i| {
+                (fitted.zero_bias_out[i]
+                    + poly_no_constant(&thermal.zero_bias_out_per_c[i], dt)
+                    + (1.0 + poly_no_constant(&thermal.scale_rel_per_c[i], dt)) * mf[i])
+                    as f32
+            })
+        };
+        let err_ug = |f: [f32; 3]| {
+            (0..3)
+                .map(|i| (f64::from(f[i]) / cal.gravity_m_s2 - f_g[i]).abs() * 1e6)
+                .fold(0.0, f64::max)
+        };
+        let run = |t: f64, with_temp: bool| {
+            let mut a = Applier::new(&cal, LeverMode::Off, 1000.0).unwrap();
+            let u = outputs(t);
+            let mut last = [0.0f32; 3];
+            for k in 0..10 {
+                let row = Row {
+                    segment: "s",
+                    segment_index: 0,
+                    t_s: k as f64 * 1e-3,
+                    u: u.map(f64::from),
+                    w_rad_s: [0.0; 3],
+                    temp_c: with_temp.then_some(t),
+                };
+                last = a.row(&row).unwrap();
+            }
+            (err_ug(last), a.flagged_rows)
+        };
+        let (at_45, flagged) = run(45.0, true);
+        assert!(
+            at_45 < 2.0 && flagged == 0,
+            "45 °C: {at_45} µg, {flagged} flagged"
+        );
+        let (ignored, _) = run(45.0, false);
+        assert!(ignored > 1000.0, "without the temperature: {ignored} µg");
+        let (_, flagged) = run(90.0, true);
+        assert_eq!(flagged, 10);
     }
 }

@@ -47,7 +47,8 @@ pub const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml"
 /// Top-level tables a unit file may have besides the ones it interprets: kept as they are in
 /// [`UnitFile::other`] (the paper's `[procedure]` and `[expected]`, the simulator's `[noise]` and
 /// `[simulation]` in `truth.toml`).
-pub const KNOWN_EXTRA_TABLES: &[&str] = &["procedure", "expected", "noise", "simulation"];
+pub const KNOWN_EXTRA_TABLES: &[&str] =
+    &["procedure", "expected", "noise", "simulation", "thermal"];
 
 /// Line and column (1-based) where top-level `key` is written: a `[key]` header or a `key =` line.
 fn key_position(text: &str, key: &str) -> (usize, usize) {
@@ -272,7 +273,7 @@ impl UnitFile {
             let (line, column) = key_position(text, key);
             return Err(format!(
                 "line {line}, column {column}: unknown key or table '{key}'; a unit file has g_m_s2, \
-                 unit_id, output_unit, [static], [dynamic], [uncertainty] and the tables {}",
+                 unit_id, output_unit, [static], [dynamic], [uncertainty], [gyro], [temperature] and the tables {}",
                 KNOWN_EXTRA_TABLES
                     .iter()
                     .map(|t| format!("[{t}]"))

@@ -101,7 +101,7 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
     assert!(ok, "{stderr}");
     let csv = std::fs::read_to_string(session.join("samples.csv")).unwrap();
     assert!(csv.starts_with("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c\nx+ @-20,"));
-    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s]);
+    let (ok, stdout, stderr) = host(&["calibrate", "--input", s]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("Temperature model") && stdout.contains("x+ @60"),
@@ -120,13 +120,13 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
 }
 
 #[test]
-fn a_live_recording_with_format_version_2_carries_the_device_temperature() {
+fn a_live_recording_with_format_version_3_carries_the_device_temperature() {
     let dir = tempfile::tempdir().unwrap();
     let plan = dir.path().join("plan.toml");
     let text = include_str!("../plans/quick-oblique.toml");
     std::fs::write(
         &plan,
-        text.replace("format_version = 1", "format_version = 2"),
+        text.replace("format_version = 1", "format_version = 3"),
     )
     .unwrap();
     let out = dir.path().join("live");

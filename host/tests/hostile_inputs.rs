@@ -352,7 +352,7 @@ fn unknown_tables_in_unit_and_calibration_files_are_errors_with_line_and_column(
 fn noise_free_sessions_calibrate_and_exclusions_come_with_reasons() {
     let dir = tempfile::tempdir().unwrap();
     let clean = session(dir.path(), "clean", "short", &["--no-noise"]);
-    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s(&clean)]);
+    let (ok, stdout, stderr) = host(&["calibrate", "--input", s(&clean)]);
     assert!(ok, "{stdout}{stderr}");
     assert!(!stdout.contains("stuck"), "{stdout}");
     // A stuck output (one channel frozen, the others noisy) is still excluded, and when that leaves
@@ -389,7 +389,7 @@ fn closed_or_full_stdout_is_an_error_after_the_files_are_written() {
     let a = session(dir.path(), "a", "short", &[]);
     // A pipe whose reader is gone (`| head` that has exited).
     let mut child = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["-q", "calibrate", "--input", s(&a)])
+        .args(["calibrate", "--input", s(&a)])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -403,7 +403,7 @@ fn closed_or_full_stdout_is_an_error_after_the_files_are_written() {
     // A full disk.
     let b = session(dir.path(), "b", "short", &[]);
     let out = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["-q", "calibrate", "--input", s(&b)])
+        .args(["calibrate", "--input", s(&b)])
         .stdout(std::fs::File::create("/dev/full").unwrap())
         .output()
         .unwrap();
@@ -564,7 +564,7 @@ fn a_silent_device_is_reported_in_plain_words() {
 fn exports_mark_lever_arms_the_plan_did_not_determine() {
     let dir = tempfile::tempdir().unwrap();
     let a = session(dir.path(), "a", "short", &[]);
-    let (ok, stdout, stderr) = host(&["-q", "calibrate", "--input", s(&a)]);
+    let (ok, stdout, stderr) = host(&["calibrate", "--input", s(&a)]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("n.d.") || stdout.contains("n.o."),

@@ -44,6 +44,7 @@ fn calibrate_compare_plan_and_noise_print_one_json_document() {
         "--input",
         s,
         "--json",
+        "--force",
         "--max-bias-mg",
         "0.001",
     ]);

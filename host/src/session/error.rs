@@ -105,8 +105,8 @@ impl std::fmt::Display for RecordingError {
                     path.display(),
                     shorten(found),
                     match (temperature, found.ends_with(",temp_c")) {
-                        (false, true) => ", or set format_version = 2 in the plan to read temp_c",
-                        (true, false) => ", or set format_version = 1 in the plan (no temperature)",
+                        (false, true) => ", or set format_version = 3 in the plan to read temp_c",
+                        (true, false) => ", or set format_version = 2 in the plan (no temperature)",
                         _ => "",
                     }
                 )
@@ -171,10 +171,10 @@ impl std::fmt::Display for RecordingError {
                 "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
             ),
             RecordingError::WriterTemperature { temperature } => f.write_str(if *temperature {
-                "this recording's plan has format_version = 2: every row needs the unit's temperature"
+                "this recording's plan has format_version = 3: every row needs the unit's temperature"
             } else {
-                "this recording's plan has format_version 1, which holds no temperature: set \
-                 format_version = 2 to record temp_c"
+                "this recording's plan has format_version 1 or 2, which holds no temperature: set \
+                 format_version = 3 to record temp_c"
             }),
             RecordingError::Exists(path) => write!(
                 f,

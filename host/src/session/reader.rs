@@ -100,6 +100,8 @@ pub struct Row<'r> {
     pub u: [f64; 3],
     /// Gyro rate, body axes, rad/s.
     pub w_rad_s: [f64; 3],
+    /// The unit's temperature, °C (format 3 recordings only).
+    pub temp_c: Option<f64>,
 }
 
 /// The per-segment reduction, fed one line at a time; every parsed row also goes to `sink`.
@@ -195,6 +197,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             t_s: v[0],
             u: [v[1], v[2], v[3]],
             w_rad_s: [v[4], v[5], v[6]],
+            temp_c: self.temperature.then(|| v[7]),
         })?;
         let acc = &mut self.accs[idx];
         let before = acc.count();

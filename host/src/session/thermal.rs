@@ -202,7 +202,7 @@ mod recording_tests {
     use crate::session::{read_session, Plan, ReadOptions, SessionWriter};
 
     const PLAN_V2: &str = r#"
-format_version = 2
+format_version = 3
 output_unit = "V"
 sample_rate_hz = 100
 [[segment]]
@@ -215,11 +215,11 @@ up_b = [-1, 0, 0]
 "#;
 
     #[test]
-    fn version_2_round_trips_with_temperature_and_version_1_is_told_apart() {
+    fn version_3_round_trips_with_temperature_and_version_1_is_told_apart() {
         let dir = tempfile::tempdir().unwrap();
         let plan = Plan::parse(PLAN_V2).unwrap();
         let mut w = SessionWriter::create(dir.path(), &plan, false).unwrap();
-        // A version 2 recording refuses rows without temperature.
+        // A version 3 recording refuses rows without temperature.
         assert!(w.write_row("x+", 0.0, &[1.0; 3], &[0.0; 3]).is_err());
         for k in 0..10 {
             let t = 10.0 + k as f64;
@@ -241,14 +241,14 @@ up_b = [-1, 0, 0]
 
         // The same samples under a version 1 plan: the header names the fix.
         let v1 = PLAN_V2
-            .replace("format_version = 2", "")
+            .replace("format_version = 3", "")
             .replace("temp_c = 10", "");
         std::fs::write(dir.path().join("plan.toml"), v1).unwrap();
         let e = read_session(dir.path(), &ReadOptions { quiet: true })
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("column 9") && e.contains("format_version = 2"),
+            e.contains("column 9") && e.contains("format_version = 3"),
             "{e}"
         );
     }
