@@ -4,16 +4,20 @@
 //! the device's precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
 //! `shared::Compensator`, so `acal_compensate` in `export/c/acal_blob.c` gives the device's results bit
 //! for bit), and the blob as a byte array that `acal_decode` checks and decodes. The decoder and the
-//! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`).
+//! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`); the decoder reads
+//! blob versions 1 and 2 and fills the optional gyro and temperature sections with presence flags.
 //!
 //! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`
-//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]); Fusion has no lever-arm terms,
-//! and the gyroscope is not part of this calibration (the header says so instead of writing an identity).
+//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]); Fusion has no lever-arm terms
+//! nor temperature model. With a gyro correction it also holds the gyroscope's triple (`offset = b`,
+//! `misalignment = G⁻¹`, `sensitivity = 1`, in °/s); without one the header says so instead of writing
+//! an identity.
 
 use super::{convert, ExportError, ExportInput};
 use shared::blob::ParameterBlob;
-use shared::compensator::{Compensator, LeverMode};
-use shared::params::ReferencePoint;
+use shared::compensator::{Compensator, CompensatorError, LeverMode};
+use shared::params::{OutputUnit, ReferencePoint};
+use shared::{Calibration, GyroCorrection, TemperatureModel};
 use std::fmt::Write as _;
 
 /// The decoder's header.
@@ -41,6 +45,16 @@ fn matrix<T: Copy>(m: &[[T; 3]; 3], f: impl Fn(T) -> String + Copy) -> String {
     format!("{{{}}}", rows.join(", "))
 }
 
+/// The output unit as postcard's variant index, which `acal_blob.h` documents.
+fn output_unit_index(u: OutputUnit) -> u8 {
+    match u {
+        OutputUnit::Volts => 0,
+        OutputUnit::Lsb => 1,
+        OutputUnit::MetresPerSecondSquared => 2,
+        OutputUnit::StandardGravity => 3,
+    }
+}
+
 /// Lines naming the lever-arm components the calibration did not determine.
 fn undetermined_lever_arms(input: &ExportInput<'_>) -> Option<String> {
     let u = input.unit.uncertainty.as_ref()?;
@@ -55,6 +69,83 @@ fn undetermined_lever_arms(input: &ExportInput<'_>) -> Option<String> {
             names.join(", ")
         )
     })
+}
+
+/// The `struct acal_calibration` values of the optional sections, as `acal_decode` fills them: an
+/// absent gyro is a perfect one (`G = I`, `b = 0`), an absent temperature model all zeros.
+fn sections_initialiser(cal: &Calibration) -> String {
+    let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
+    let zeros = [[0.0; 3]; 3];
+    let t = cal.temperature.unwrap_or(TemperatureModel {
+        reference_c: 0.0,
+        valid_range_c: [0.0; 2],
+        zero_bias_out_per_c: zeros,
+        scale_rel_per_c: zeros,
+        gyro_bias_rad_s_per_c: None,
+    });
+    format!(
+        "    .has_gyro = {}, /* {} */
+    .gyro = {{
+        .matrix = {},
+                 .bias_rad_s = {},
+    }},
+    .has_temperature = {}, /* {} */
+    .temperature = {{
+                 .reference_c = {},
+        .valid_range_c = {},
+        .zero_bias_out_per_c = {},
+                 .scale_rel_per_c = {},
+        .has_gyro_bias_per_c = {},
+                 .gyro_bias_rad_s_per_c = {},
+    }},
+",
+        u8::from(cal.gyro.is_some()),
+        if cal.gyro.is_some() {
+            "present: w = G omega + b"
+        } else {
+            "ABSENT: a perfect gyro, G = I, b = 0"
+        },
+        matrix(&gyro.matrix, c_f64),
+        list(&gyro.bias_rad_s, c_f64),
+        u8::from(cal.temperature.is_some()),
+        if cal.temperature.is_some() {
+            "present"
+        } else {
+            "ABSENT: no temperature model, zeros"
+        },
+        c_f64(t.reference_c),
+        list(&t.valid_range_c, c_f64),
+        matrix(&t.zero_bias_out_per_c, c_f64),
+        matrix(&t.scale_rel_per_c, c_f64),
+        u8::from(t.gyro_bias_rad_s_per_c.is_some()),
+        matrix(&t.gyro_bias_polynomials(), c_f64),
+    )
+}
+
+/// Header comment lines saying which optional sections the calibration holds.
+fn sections_comment(cal: &Calibration) -> String {
+    let gyro = match cal.gyro {
+        Some(_) => {
+            " * Gyro correction: present (w = G omega + b, docs/model.md section 8); acal_compensate
+                    *   takes the corrected rate omega = G^-1 (w - b), which the caller computes.
+"
+            .to_string()
+        }
+        None => " * Gyro correction: ABSENT (the gyro is taken as perfect: G = I, b = 0).
+"
+        .to_string(),
+    };
+    let temperature = match cal.temperature {
+        Some(t) => format!(
+            " * Temperature model: present (docs/model.md section 9), reference {} degC, valid {}..{} degC;
+             *   ACAL_COMPENSATOR holds the constants at the reference temperature.
+",
+            t.reference_c, t.valid_range_c[0], t.valid_range_c[1]
+        ),
+        None => " * Temperature model: ABSENT.
+".to_string(),
+    };
+    gyro + &temperature
 }
 
 /// The `c-header` text.
@@ -94,6 +185,7 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
          * acal_blob.h / acal_blob.c (host/src/export/c/). The blob's creation time is 0 (unknown).\n\
          * ACAL_COMPENSATOR holds the device's precomputed f32 constants (all lever-arm terms on).\n"
     );
+    w.push_str(&sections_comment(cal));
     if let Some(u) = undetermined_lever_arms(input) {
         w.push_str(&u);
     }
@@ -106,15 +198,16 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
         "static const struct acal_calibration ACAL_CALIBRATION = {{\n    .unit_id = {},\n    \
          .output_unit = {},\n    .zero_bias_out = {},\n    .scale_out_per_g = {},\n    \
          .installation_angles_deg = {},\n    .lever_arms_m = {},\n    .reference = {reference},\n    \
-         .reference_offset_m = {},\n    .gravity_m_s2 = {},\n    .created_unix_s = 0,\n}};\n",
+         .reference_offset_m = {},\n    .gravity_m_s2 = {},\n    .created_unix_s = 0,\n{}}};\n",
         list(&unit_id.0, |b| format!("0x{b:02x}")),
-        u8::from(s.output_unit == shared::OutputUnit::Lsb),
+        output_unit_index(s.output_unit),
         list(&s.zero_bias_out, c_f64),
         list(&s.scale_out_per_g, c_f64),
         matrix(&s.installation_angles_deg, c_f64),
         matrix(&cal.lever_arms.r_m, c_f64),
         list(&offset, c_f64),
         c_f64(cal.gravity_m_s2),
+        sections_initialiser(cal),
     );
     let _ = writeln!(
         w,
@@ -139,10 +232,44 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     Ok(w)
 }
 
+/// Fusion's gyroscope triple from `w = G·ω + b` (docs/model.md §8), in °/s, Fusion's gyroscope unit.
+///
+/// Fusion evaluates `misalignment·((w − offset) ∘ sensitivity)`, and the device `ω = G⁻¹(w − b)`, so
+/// `offset = b` and `misalignment·diag(sensitivity) = G⁻¹`. The split is not unique; the scale
+/// factors are left inside `G⁻¹` (`sensitivity = 1`, `misalignment = G⁻¹`, the exact inverse), which
+/// keeps a general `G` (scale, cross-axis and alignment terms together) exact. `G` is dimensionless,
+/// so only `b` takes the unit: `b·180/π` °/s.
+fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<(Vec<f32>, [f32; 3]), ExportError> {
+    let inv = gyro
+        .checked_inverse()
+        .map_err(|e| ExportError::Compensator(CompensatorError::Gyro(e)))?;
+    let m = inv.iter().flatten().map(|v| *v as f32).collect();
+    Ok((m, gyro.bias_rad_s.map(|b| b.to_degrees() as f32)))
+}
+
 /// The `fusion-c` text.
 pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let f = convert(&input.cal)?.fusion;
     let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
+    let gyroscope = input.cal.gyro.as_ref().map(fusion_gyroscope).transpose()?;
+    let gyro_note = if gyroscope.is_some() {
+        " *   gyroscope = FusionModelInertial(uncalibrated, gyroscopeMisalignment,\n\
+         *                                   gyroscopeSensitivity, gyroscopeOffset);\n\
+         * uncalibrated and result in deg/s (Fusion's unit; a gyro read in rad/s: multiply by 180/pi\n\
+         * first), result in body axes. From w = G omega + b (docs/model.md 8): offset = b,\n\
+         * misalignment = G^-1 (the exact inverse, scale factors included), sensitivity = 1.\n"
+    } else {
+        " * Gyroscope: UNDETERMINED, this calibration has no gyro model; no gyroscope initialisers\n\
+         * are written (an identity would look like a calibration).\n"
+    };
+    let temperature_note = match input.cal.temperature {
+        Some(t) => format!(
+            " * NOT HELD by FusionModelInertial: the temperature model; these are the values at its\n\
+             * reference temperature, {} degC.\n",
+            t.reference_c
+        ),
+        None => String::new(),
+    };
     let mut w = String::new();
     let _ = write!(
         w,
@@ -152,8 +279,7 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
          * uncalibrated in the unit's output unit ({}), result in g, body axes:\n\
          * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n\
          * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n\
-         * Gyroscope: UNDETERMINED, this calibration has no gyro model; no gyroscope initialisers\n\
-         * are written (an identity would look like a calibration).\n */\n\
+         {gyro_note}{temperature_note} */\n\
          #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n",
         input.cal.statics.output_unit.symbol()
     );
@@ -169,9 +295,21 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     );
     let _ = writeln!(
         w,
-        "static const FusionVector accelerometerOffset = {{ .array = {} }};\n\n#endif",
+        "static const FusionVector accelerometerOffset = {{ .array = {} }};",
         list(&f.offset.map(|v| v as f32), c_f32)
     );
+    if let Some((misalignment, offset)) = gyroscope {
+        let _ = writeln!(
+            w,
+            "static const FusionMatrix gyroscopeMisalignment = {{ .array = {} }};\n\
+             static const FusionVector gyroscopeSensitivity = {{ .array = {} }};\n\
+             static const FusionVector gyroscopeOffset = {{ .array = {} }};",
+            list(&misalignment, c_f32),
+            list(&[1.0f32; 3], c_f32),
+            list(&offset, c_f32)
+        );
+    }
+    let _ = writeln!(w, "\n#endif");
     Ok(w)
 }
 

@@ -52,21 +52,41 @@ static double take_f64(struct reader *r) {
     return v;
 }
 
-/* postcard varint (LEB128), at most 10 bytes for a u64. */
-static uint64_t take_varint(struct reader *r) {
+/*
+ * postcard varint (LEB128) of a type of max_bytes bytes' worth: postcard refuses a varint longer than
+ * max_bytes or whose last byte carries bits beyond the type (last_max), and so does this.
+ * u32 (enum variants): 5 bytes, last byte <= 0x0F; u64: 10 bytes, last byte <= 0x01.
+ */
+static uint64_t take_varint(struct reader *r, int max_bytes, uint8_t last_max) {
     uint64_t v = 0;
-    for (int shift = 0; shift < 70; shift += 7) {
+    for (int i = 0; i < max_bytes; i++) {
         uint8_t b = take_u8(r);
         if (!r->ok) {
             return 0;
         }
-        v |= (uint64_t)(b & 0x7Fu) << shift;
+        v |= (uint64_t)(b & 0x7Fu) << (7 * i);
         if ((b & 0x80u) == 0) {
+            if (i == max_bytes - 1 && b > last_max) {
+                break;
+            }
             return v;
         }
     }
     r->ok = 0;
     return 0;
+}
+
+static uint64_t take_variant(struct reader *r) {
+    return take_varint(r, 5, 0x0Fu);
+}
+
+/* postcard Option tag: 0 absent, 1 present, anything else malformed. */
+static uint8_t take_option(struct reader *r) {
+    uint8_t tag = take_u8(r);
+    if (tag > 1) {
+        r->ok = 0;
+    }
+    return tag;
 }
 
 static void take_f64s(struct reader *r, double *out, int n) {
@@ -84,18 +104,71 @@ static int all_finite(const double *v, int n) {
     return 1;
 }
 
+static void zero(double *v, int n) {
+    for (int i = 0; i < n; i++) {
+        v[i] = 0.0;
+    }
+}
+
+/* Version 2's optional sections; absent ones are a perfect gyro and an all-zero temperature model. */
+static void take_sections(struct reader *r, struct acal_calibration *out) {
+    struct acal_gyro *g = &out->gyro;
+    struct acal_temperature *t = &out->temperature;
+    out->has_gyro = take_option(r);
+    if (out->has_gyro == 1) {
+        take_f64s(r, &g->matrix[0][0], 9);
+        take_f64s(r, g->bias_rad_s, 3);
+    }
+    out->has_temperature = r->ok ? take_option(r) : 0;
+    if (out->has_temperature == 1) {
+        t->reference_c = take_f64(r);
+        take_f64s(r, t->valid_range_c, 2);
+        take_f64s(r, &t->zero_bias_out_per_c[0][0], 9);
+        take_f64s(r, &t->scale_rel_per_c[0][0], 9);
+        t->has_gyro_bias_per_c = take_option(r);
+        if (t->has_gyro_bias_per_c == 1) {
+            take_f64s(r, &t->gyro_bias_rad_s_per_c[0][0], 9);
+        }
+    }
+}
+
+static void set_absent_sections(struct acal_calibration *out) {
+    struct acal_temperature *t = &out->temperature;
+    out->has_gyro = 0;
+    zero(&out->gyro.matrix[0][0], 9);
+    out->gyro.matrix[0][0] = out->gyro.matrix[1][1] = out->gyro.matrix[2][2] = 1.0;
+    zero(out->gyro.bias_rad_s, 3);
+    out->has_temperature = 0;
+    t->reference_c = 0.0;
+    zero(t->valid_range_c, 2);
+    zero(&t->zero_bias_out_per_c[0][0], 9);
+    zero(&t->scale_rel_per_c[0][0], 9);
+    t->has_gyro_bias_per_c = 0;
+    zero(&t->gyro_bias_rad_s_per_c[0][0], 9);
+}
+
+static int sections_finite(const struct acal_calibration *c) {
+    const struct acal_temperature *t = &c->temperature;
+    return all_finite(&c->gyro.matrix[0][0], 9) && all_finite(c->gyro.bias_rad_s, 3) &&
+           isfinite(t->reference_c) && all_finite(t->valid_range_c, 2) &&
+           all_finite(&t->zero_bias_out_per_c[0][0], 9) && all_finite(&t->scale_rel_per_c[0][0], 9) &&
+           all_finite(&t->gyro_bias_rad_s_per_c[0][0], 9);
+}
+
 enum acal_error acal_decode(const uint8_t *blob, size_t len, struct acal_calibration *out) {
     struct reader r;
     size_t n;
     uint32_t stored;
     uint64_t unit, reference;
+    uint16_t version;
     if (len < 12) {
         return ACAL_TOO_SHORT;
     }
     if (blob[0] != 'A' || blob[1] != 'C' || blob[2] != 'A' || blob[3] != 'L') {
         return ACAL_BAD_MAGIC;
     }
-    if ((uint16_t)(blob[4] | (blob[5] << 8)) != ACAL_BLOB_VERSION) {
+    version = (uint16_t)(blob[4] | (blob[5] << 8));
+    if (version != ACAL_BLOB_VERSION && version != ACAL_BLOB_VERSION_1) {
         return ACAL_UNSUPPORTED_VERSION;
     }
     n = (size_t)(blob[6] | (blob[7] << 8));
@@ -113,27 +186,31 @@ enum acal_error acal_decode(const uint8_t *blob, size_t len, struct acal_calibra
     for (int i = 0; i < 12; i++) {
         out->unit_id[i] = take_u8(&r);
     }
-    unit = take_varint(&r);
+    unit = take_variant(&r);
     out->output_unit = (uint8_t)unit;
     take_f64s(&r, out->zero_bias_out, 3);
     take_f64s(&r, out->scale_out_per_g, 3);
     take_f64s(&r, &out->installation_angles_deg[0][0], 9);
     take_f64s(&r, &out->lever_arms_m[0][0], 9);
-    reference = take_varint(&r);
+    reference = take_variant(&r);
     out->reference = (uint8_t)reference;
     out->reference_offset_m[0] = out->reference_offset_m[1] = out->reference_offset_m[2] = 0.0;
     if (reference == 2) {
         take_f64s(&r, out->reference_offset_m, 3);
     }
     out->gravity_m_s2 = take_f64(&r);
-    out->created_unix_s = take_varint(&r);
-    if (!r.ok || r.left != 0 || unit > 1 || reference > 2) {
+    out->created_unix_s = take_varint(&r, 10, 0x01u);
+    set_absent_sections(out);
+    if (version == ACAL_BLOB_VERSION && r.ok) {
+        take_sections(&r, out);
+    }
+    if (!r.ok || r.left != 0 || unit > 3 || reference > 2) {
         return ACAL_MALFORMED;
     }
     if (!all_finite(out->zero_bias_out, 3) || !all_finite(out->scale_out_per_g, 3) ||
         !all_finite(&out->installation_angles_deg[0][0], 9) ||
         !all_finite(&out->lever_arms_m[0][0], 9) || !all_finite(out->reference_offset_m, 3) ||
-        !isfinite(out->gravity_m_s2)) {
+        !isfinite(out->gravity_m_s2) || !sections_finite(out)) {
         return ACAL_NON_FINITE;
     }
     return ACAL_OK;

@@ -4,8 +4,10 @@
 use super::*;
 use crate::unit_file::UnitFile;
 use firmware::testvectors::COMP_CASES;
+use shared::blob::ParameterBlob;
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
+use shared::{Calibration, GyroCorrection, ReferencePoint, UnitId};
 use std::io::Write as _;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -59,18 +61,96 @@ fn run(dir: &Path, stdin: &str) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
-const MAIN_C: &str = r#"
+/// Prints every field of a `struct acal_calibration`: the integers, then the doubles (`%.17g`
+/// round-trips an f64) in the order of [`expected_fields`].
+const PRINT_CAL_C: &str = r#"
 #include <stdio.h>
+#include "acal_blob.h"
+static void print_doubles(const double *v, int n) {
+    for (int i = 0; i < n; i++) printf(" %.17g", v[i]);
+}
+static void print_cal(const char *tag, const struct acal_calibration *c) {
+    const struct acal_temperature *t = &c->temperature;
+    printf("%s %d %d %d %d %d %llu ", tag, c->output_unit, c->reference, c->has_gyro, c->has_temperature,
+           t->has_gyro_bias_per_c, (unsigned long long)c->created_unix_s);
+    for (int i = 0; i < 12; i++) printf("%02x", c->unit_id[i]);
+    print_doubles(c->zero_bias_out, 3);
+    print_doubles(c->scale_out_per_g, 3);
+    print_doubles(&c->installation_angles_deg[0][0], 9);
+    print_doubles(&c->lever_arms_m[0][0], 9);
+    print_doubles(c->reference_offset_m, 3);
+    print_doubles(&c->gravity_m_s2, 1);
+    print_doubles(&c->gyro.matrix[0][0], 9);
+    print_doubles(c->gyro.bias_rad_s, 3);
+    print_doubles(&t->reference_c, 1);
+    print_doubles(t->valid_range_c, 2);
+    print_doubles(&t->zero_bias_out_per_c[0][0], 9);
+    print_doubles(&t->scale_rel_per_c[0][0], 9);
+    print_doubles(&t->gyro_bias_rad_s_per_c[0][0], 9);
+    printf("\n");
+}
+"#;
+
+/// What `print_cal` prints for `cal`, following `acal_blob.h`: an absent gyro is `G = I`, `b = 0`, an
+/// absent temperature model zeros. Built from the Rust values, field by field.
+fn expected_fields(cal: &Calibration, unit: UnitId, created_unix_s: u64) -> String {
+    let s = &cal.statics;
+    let (reference, offset) = match cal.reference {
+        ReferencePoint::TableAxis => (0, [0.0; 3]),
+        ReferencePoint::Centroid => (1, [0.0; 3]),
+        ReferencePoint::BodyPoint { offset_m } => (2, offset_m),
+    };
+    let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
+    let t = cal.temperature;
+    let zeros = [[0.0; 3]; 3];
+    let mut v: Vec<f64> = Vec::new();
+    v.extend(s.zero_bias_out);
+    v.extend(s.scale_out_per_g);
+    v.extend(s.installation_angles_deg.iter().flatten());
+    v.extend(cal.lever_arms.r_m.iter().flatten());
+    v.extend(offset);
+    v.push(cal.gravity_m_s2);
+    v.extend(gyro.matrix.iter().flatten());
+    v.extend(gyro.bias_rad_s);
+    v.push(t.map_or(0.0, |t| t.reference_c));
+    v.extend(t.map_or([0.0; 2], |t| t.valid_range_c));
+    v.extend(t.map_or(zeros, |t| t.zero_bias_out_per_c).iter().flatten());
+    v.extend(t.map_or(zeros, |t| t.scale_rel_per_c).iter().flatten());
+    v.extend(
+        t.map_or(zeros, |t| t.gyro_bias_polynomials())
+            .iter()
+            .flatten(),
+    );
+    let unit_index = s.output_unit as u8;
+    let flags = [
+        u8::from(cal.gyro.is_some()),
+        u8::from(t.is_some()),
+        u8::from(t.is_some_and(|t| t.gyro_bias_rad_s_per_c.is_some())),
+    ];
+    let doubles: Vec<String> = v.iter().map(|x| format!("{x:e}")).collect();
+    format!(
+        "{unit_index} {reference} {} {} {} {created_unix_s} {unit} {}",
+        flags[0],
+        flags[1],
+        flags[2],
+        doubles.join(" ")
+    )
+}
+
+/// Normalises a `print_cal` line (after its tag) to [`expected_fields`]' form: the doubles parsed
+/// (exact, `%.17g` round-trips) and re-printed in Rust's shortest form.
+fn normalised(line: &str) -> String {
+    let f: Vec<&str> = line.split(' ').skip(1).collect();
+    let doubles: Vec<String> = f[7..]
+        .iter()
+        .map(|x| format!("{:e}", x.parse::<f64>().unwrap()))
+        .collect();
+    format!("{} {}", f[..7].join(" "), doubles.join(" "))
+}
+
+const MAIN_C: &str = r#"
 #include <string.h>
 #include "calibration.h"
-
-static void print_cal(const char *tag, const struct acal_calibration *c) {
-    printf("%s %d %d", tag, c->output_unit, c->reference);
-    for (int i = 0; i < 3; i++) printf(" %.17g %.17g", c->zero_bias_out[i], c->scale_out_per_g[i]);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) printf(" %.17g %.17g", c->installation_angles_deg[i][j], c->lever_arms_m[i][j]);
-    printf(" %.17g %02x%02x\n", c->gravity_m_s2, c->unit_id[0], c->unit_id[11]);
-}
 
 int main(void) {
     struct acal_calibration d;
@@ -130,7 +210,7 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
     .unwrap();
     std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
     std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
-    std::fs::write(dir.path().join("main.c"), MAIN_C).unwrap();
+    std::fs::write(dir.path().join("main.c"), format!("{PRINT_CAL_C}{MAIN_C}")).unwrap();
     compile(dir.path(), &["main.c", "acal_blob.c"]);
     let stdin: String = COMP_CASES
         .iter()
@@ -157,27 +237,13 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
     assert_eq!(line("crc-bit"), "crc-bit 5");
     assert_eq!(line("truncated"), "truncated 4");
     assert_eq!(line("magic"), "magic 2");
-    // Decoded and initialiser values equal the calibration's exactly (%.17g round-trips f64).
-    let s = &cal.statics;
-    let mut want = vec![0.0, 0.0];
-    for i in 0..3 {
-        want.extend([s.zero_bias_out[i], s.scale_out_per_g[i]]);
-    }
-    for i in 0..3 {
-        for j in 0..3 {
-            want.extend([s.installation_angles_deg[i][j], cal.lever_arms.r_m[i][j]]);
-        }
-    }
-    want.push(cal.gravity_m_s2);
+    // Decoded and initialiser values equal the calibration's exactly (%.17g round-trips f64); the
+    // absent sections read as a perfect gyro and no temperature model.
+    let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
+    let want = expected_fields(&cal, unit_id, 0);
+    assert!(want.starts_with("0 0 0 0 0 0 a1b2c3d4e5f60718293a4b5c "));
     for tag in ["decoded", "initialiser"] {
-        let l = line(tag);
-        let f: Vec<&str> = l.split(' ').skip(1).collect();
-        let got: Vec<f64> = f[..f.len() - 1]
-            .iter()
-            .map(|x| x.parse().unwrap())
-            .collect();
-        assert_eq!(got, want, "{tag}");
-        assert_eq!(f[f.len() - 1], "a15c", "{tag}: unit id bytes");
+        assert_eq!(normalised(&line(tag)), want, "{tag}");
     }
     // The compensation, bit for bit with the firmware's vectors (static and full modes).
     let outs: Vec<&str> = out.lines().filter(|l| l.starts_with("out ")).collect();
@@ -190,6 +256,281 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
             .collect();
         assert_eq!(&bits[..3], &c.out_static, "static");
         assert_eq!(&bits[3..], &c.out_full, "full");
+    }
+}
+
+/// Blobs written by the version 1 encoder, kept byte for byte in `shared`.
+mod v1 {
+    include!("../../../../shared/src/blob_v1_vectors.rs");
+}
+
+/// Reads one blob per line in hex and prints `rc N` and, when it decodes, its fields. A line
+/// `sweep HEX` decodes every truncation and every single-bit flip of the blob and prints how many were
+/// accepted.
+const DECODE_MAIN_C: &str = r#"
+#include <stdlib.h>
+#include <string.h>
+static size_t parse_hex(const char *s, uint8_t *out, size_t cap) {
+    size_t n = 0;
+    while (s[0] && s[1] && n < cap) {
+        char b[3] = {s[0], s[1], 0};
+        out[n++] = (uint8_t)strtoul(b, NULL, 16);
+        s += 2;
+    }
+    return n;
+}
+int main(void) {
+    static char text[8192];
+    static uint8_t blob[4096];
+    struct acal_calibration d;
+    while (scanf("%8191s", text) == 1) {
+        if (strcmp(text, "sweep") == 0) {
+            size_t n, accepted = 0;
+            if (scanf("%8191s", text) != 1) return 1;
+            n = parse_hex(text, blob, sizeof blob);
+            for (size_t cut = 0; cut < n; cut++) accepted += acal_decode(blob, cut, &d) == ACAL_OK;
+            for (size_t i = 0; i < n; i++) {
+                for (int bit = 0; bit < 8; bit++) {
+                    blob[i] ^= (uint8_t)(1u << bit);
+                    accepted += acal_decode(blob, n, &d) == ACAL_OK;
+                    blob[i] ^= (uint8_t)(1u << bit);
+                }
+            }
+            printf("sweep %zu %zu\n", n, accepted);
+            continue;
+        }
+        {
+            const size_t n = parse_hex(text, blob, sizeof blob);
+            const int rc = (int)acal_decode(blob, n, &d);
+            printf("rc %d\n", rc);
+            if (rc == 0) print_cal("cal", &d);
+        }
+    }
+    return 0;
+}
+"#;
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A blob around `payload` with header `version`, its length and a correct CRC (as any writer, buggy
+/// or not, would sign it).
+fn signed(version: u16, payload: &[u8]) -> Vec<u8> {
+    let mut v = b"ACAL".to_vec();
+    v.extend(version.to_le_bytes());
+    v.extend((payload.len() as u16).to_le_bytes());
+    v.extend(payload);
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&v);
+    v.extend(crc.to_le_bytes());
+    v
+}
+
+fn le_f64s<'a>(v: impl IntoIterator<Item = &'a f64>) -> Vec<u8> {
+    v.into_iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// Decodes each blob with the C decoder; returns one `rc` line per blob, followed by its fields
+/// normalised when it decodes.
+fn c_decode(dir: &Path, blobs: &[Vec<u8>]) -> Vec<String> {
+    let stdin: String = blobs.iter().map(|b| hex(b) + "\n").collect();
+    let out = run(dir, &stdin);
+    let mut lines = out.lines().peekable();
+    let mut results = Vec::new();
+    while let Some(rc) = lines.next() {
+        let mut r = rc.to_string();
+        if rc == "rc 0" {
+            r += " ";
+            r += &normalised(lines.next().unwrap());
+        }
+        results.push(r);
+    }
+    assert_eq!(results.len(), blobs.len(), "{out}");
+    results
+}
+
+#[test]
+fn c_decoder_reads_version_2_sections_and_version_1_exactly_and_refuses_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
+    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    std::fs::write(
+        dir.path().join("main.c"),
+        format!("{PRINT_CAL_C}{DECODE_MAIN_C}"),
+    )
+    .unwrap();
+    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    let unit = UnitId(*b"C-DECODER-V2");
+    let gyro = firmware::paper_unit::typical_gyro();
+    let thermal = firmware::paper_unit::typical_thermal_model();
+    let mut no_gyro_drift = thermal;
+    no_gyro_drift.gyro_bias_rad_s_per_c = None;
+    // Version 2 blobs from the Rust encoder: both sections, each alone, the inner Option absent.
+    let mut cases = Vec::new();
+    for (g, t, reference) in [
+        (Some(gyro), Some(thermal), ReferencePoint::TableAxis),
+        (Some(gyro), None, ReferencePoint::Centroid),
+        (
+            None,
+            Some(no_gyro_drift),
+            ReferencePoint::BodyPoint {
+                offset_m: [0.01, -0.02, 0.003],
+            },
+        ),
+        (None, None, ReferencePoint::TableAxis),
+    ] {
+        let mut cal = firmware::paper_unit::calibration();
+        cal.gyro = g;
+        cal.temperature = t;
+        cal.reference = reference;
+        let blob = ParameterBlob {
+            unit_id: unit,
+            calibration: cal,
+            created_unix_s: 1_790_000_123,
+        };
+        let (buf, n) = blob.to_bytes().unwrap();
+        assert_eq!(u16::from_le_bytes([buf[4], buf[5]]), 2);
+        cases.push((
+            buf[..n].to_vec(),
+            expected_fields(&cal, unit, 1_790_000_123),
+        ));
+    }
+    // Version 1 blobs (the old encoder's bytes): the paper unit, and LSB with a body point.
+    let v1_unit = UnitId(*b"V1-BLOB-UNIT");
+    cases.push((
+        v1::V1_PAPER.to_vec(),
+        expected_fields(&shared::params::PAPER_UNIT, v1_unit, 1_790_000_000),
+    ));
+    let mut lsb = shared::params::PAPER_UNIT;
+    lsb.statics.output_unit = shared::OutputUnit::Lsb;
+    lsb.reference = ReferencePoint::BodyPoint {
+        offset_m: [0.01, -0.02, 0.003],
+    };
+    cases.push((
+        v1::V1_LSB_BODY_POINT.to_vec(),
+        expected_fields(&lsb, v1_unit, 1_790_000_000),
+    ));
+    // Version 2 built by hand from the version 1 payload, postcard's encoding spelled out: both
+    // Options absent (0, 0); a gyro section (1, 12 f64 LE) and no temperature model (0).
+    let v1_payload = &v1::V1_PAPER[8..v1::V1_PAPER.len() - 4];
+    let absent = [v1_payload, &[0, 0]].concat();
+    cases.push((
+        signed(2, &absent),
+        expected_fields(&shared::params::PAPER_UNIT, v1_unit, 1_790_000_000),
+    ));
+    let gyro_bytes = le_f64s(gyro.matrix.iter().flatten().chain(&gyro.bias_rad_s));
+    let with_gyro = [v1_payload, &[1], &gyro_bytes, &[0]].concat();
+    let mut paper_gyro = shared::params::PAPER_UNIT;
+    paper_gyro.gyro = Some(gyro);
+    cases.push((
+        signed(2, &with_gyro),
+        expected_fields(&paper_gyro, v1_unit, 1_790_000_000),
+    ));
+    let blobs: Vec<Vec<u8>> = cases.iter().map(|(b, _)| b.clone()).collect();
+    let got = c_decode(dir.path(), &blobs);
+    for ((blob, want), got) in cases.iter().zip(&got) {
+        // The Rust decoder reads the same blob as the same calibration (independent of the C).
+        let rust = shared::blob::decode(blob).unwrap();
+        assert_eq!(
+            expected_fields(&rust.calibration, rust.unit_id, rust.created_unix_s),
+            *want
+        );
+        assert_eq!(*got, format!("rc 0 {want}"));
+    }
+
+    // Refused, each with its layer's error, where the Rust decoder refuses too.
+    // ACAL_UNSUPPORTED_VERSION = 3, ACAL_CRC_MISMATCH = 5, ACAL_MALFORMED = 6, ACAL_NON_FINITE = 7.
+    let full = &cases[0].0;
+    let full_payload = &full[8..full.len() - 4];
+    let mut v3 = full.clone();
+    v3[4] = 3;
+    let mut v0 = full.clone();
+    v0[4] = 0;
+    let mut v1_header = full.clone();
+    v1_header[4] = 1;
+    let mut nan_gyro = with_gyro.clone();
+    let at = v1_payload.len() + 1 + 8 * 9;
+    nan_gyro[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    // The output unit's variant (a u32 varint, one byte 0x00 here) respelled: 6 bytes, or 5 whose last
+    // carries bits beyond 32. Postcard refuses both.
+    let respelled_unit =
+        |varint: &[u8]| [&v1_payload[..12], varint, &v1_payload[13..], &[0, 0]].concat();
+    assert_eq!(v1_payload[12], 0);
+    // The creation time (a u64 varint, the payload's last 5 bytes) as 10 bytes whose last carries a
+    // bit beyond 64.
+    let created_at = v1_payload.len() - 5;
+    let respelled_created = [&v1_payload[..created_at], &[0x80; 9][..], &[0x02, 0, 0][..]].concat();
+    let refused = [
+        (signed(2, &respelled_created), 6),
+        (v3, 3),
+        (v0, 3),
+        (v1_header, 5),
+        (signed(1, full_payload), 6),
+        (signed(2, v1_payload), 6),
+        (signed(2, &[v1_payload, &[2, 0]].concat()), 6),
+        (signed(2, &[v1_payload, &[0, 2]].concat()), 6),
+        (signed(2, &[v1_payload, &[0, 0, 0]].concat()), 6),
+        (signed(2, &with_gyro[..with_gyro.len() - 1]), 6),
+        (
+            signed(2, &respelled_unit(&[0x80, 0x80, 0x80, 0x80, 0x80, 0x00])),
+            6,
+        ),
+        (
+            signed(2, &respelled_unit(&[0x80, 0x80, 0x80, 0x80, 0x10])),
+            6,
+        ),
+        (signed(2, &nan_gyro), 7),
+    ];
+    let blobs: Vec<Vec<u8>> = refused.iter().map(|(b, _)| b.clone()).collect();
+    let got = c_decode(dir.path(), &blobs);
+    for ((blob, rc), got) in refused.iter().zip(&got) {
+        assert!(shared::blob::decode(blob).is_err(), "Rust accepts {rc}");
+        assert_eq!(*got, format!("rc {rc}"));
+    }
+
+    // Every truncation and every single-bit flip of the full version 2 blob is refused.
+    let out = run(dir.path(), &format!("sweep {}\n", hex(full)));
+    assert_eq!(out.trim(), format!("sweep {} 0", full.len()));
+}
+
+#[test]
+fn c_header_with_gyro_and_temperature_model_initialises_what_it_decodes() {
+    let unit = paper_input_unit();
+    let mut cal = firmware::paper_unit::calibration();
+    cal.gyro = Some(firmware::paper_unit::typical_gyro());
+    cal.temperature = Some(firmware::paper_unit::typical_thermal_model());
+    let input = ExportInput {
+        unit: &unit,
+        cal,
+        noise: None,
+        rostopic: "/imu0",
+        driver_scale_m_s2_per_out: None,
+    };
+    let text = render_header(&input).unwrap();
+    assert!(text.contains("Gyro correction: present"), "{text}");
+    assert!(text.contains("Temperature model: present"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("calibration.h"), text).unwrap();
+    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
+    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    std::fs::write(dir.path().join("main.c"), format!("{PRINT_CAL_C}{MAIN_C}")).unwrap();
+    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    let out = run(dir.path(), "");
+    let line = |tag: &str| {
+        out.lines()
+            .find(|l| l.split(' ').next() == Some(tag))
+            .unwrap_or_else(|| panic!("no '{tag}' in {out}"))
+            .to_string()
+    };
+    assert_eq!(line("decode"), "decode 0");
+    let want = expected_fields(
+        &cal,
+        UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap(),
+        0,
+    );
+    assert!(want.starts_with("0 0 1 1 1 0 "), "{want}");
+    for tag in ["decoded", "initialiser"] {
+        assert_eq!(normalised(&line(tag)), want, "{tag}");
     }
 }
 
@@ -263,6 +604,7 @@ fn fusion_header_compiles_and_its_model_recovers_the_specific_force() {
     };
     let text = render_fusion(&input).unwrap();
     assert!(text.contains("Gyroscope: UNDETERMINED"));
+    assert!(!text.contains("gyroscopeOffset"));
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("Fusion.h"), FUSION_STUB).unwrap();
     std::fs::write(dir.path().join("fusion_calibration.h"), text).unwrap();
@@ -299,4 +641,92 @@ fn fusion_header_compiles_and_its_model_recovers_the_specific_force() {
             assert!((r[j] - t[j]).abs() < 5e-6, "{r:?} vs {t:?}");
         }
     }
+}
+
+const FUSION_GYRO_MAIN: &str = r#"
+#include <stdio.h>
+#include "Fusion.h"
+#include "fusion_calibration.h"
+int main(void) {
+    FusionVector w;
+    while (scanf("%f %f %f", &w.array[0], &w.array[1], &w.array[2]) == 3) {
+        const FusionVector omega = FusionModelInertial(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
+        printf("%.9g %.9g %.9g\n", omega.axis.x, omega.axis.y, omega.axis.z);
+    }
+    return 0;
+}
+"#;
+
+#[test]
+fn fusion_header_with_a_gyro_recovers_the_body_rate() {
+    let unit = UnitFile::paper_unit();
+    let mut cal = unit.to_calibration().unwrap();
+    // A typical MEMS gyro (0.5 % scale, 0.5° misalignment, 0.5 °/s bias) and a temperature model.
+    let gyro = firmware::paper_unit::typical_gyro();
+    cal.gyro = Some(gyro);
+    cal.temperature = Some(firmware::paper_unit::typical_thermal_model());
+    let input = ExportInput {
+        unit: &unit,
+        cal,
+        noise: None,
+        rostopic: "/imu0",
+        driver_scale_m_s2_per_out: None,
+    };
+    let text = render_fusion(&input).unwrap();
+    assert!(!text.contains("UNDETERMINED"), "{text}");
+    assert!(text.contains("NOT HELD by FusionModelInertial: the temperature model"));
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("Fusion.h"), FUSION_STUB).unwrap();
+    std::fs::write(dir.path().join("fusion_calibration.h"), text).unwrap();
+    std::fs::write(dir.path().join("main.c"), FUSION_GYRO_MAIN).unwrap();
+    compile(dir.path(), &["main.c"]);
+    // Body rates up to ±300 °/s; the gyro reads w = G·ω + b (docs/model.md §8), fed in °/s.
+    let mut truth = Vec::new();
+    let mut stdin = String::new();
+    for k in 0..40 {
+        let x = f64::from(k);
+        let omega_rad_s = [
+            (0.37 * x).sin() * 5.0,
+            (0.61 * x).cos() * 3.0,
+            0.2 - 0.13 * x,
+        ];
+        let w_rad_s: Vec<f64> = (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|j| gyro.matrix[i][j] * omega_rad_s[j])
+                    .sum::<f64>()
+                    + gyro.bias_rad_s[i]
+            })
+            .collect();
+        let w_deg_s: Vec<String> = w_rad_s
+            .iter()
+            .map(|v| format!("{:e}", v.to_degrees() as f32))
+            .collect();
+        stdin += &(w_deg_s.join(" ") + "\n");
+        truth.push(omega_rad_s.map(f64::to_degrees));
+    }
+    let out = run(dir.path(), &stdin);
+    let rows: Vec<Vec<f64>> = out
+        .lines()
+        .map(|l| l.split(' ').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), truth.len());
+    let mut worst: f64 = 0.0;
+    for (r, t) in rows.iter().zip(&truth) {
+        for j in 0..3 {
+            worst = worst.max((r[j] - t[j]).abs());
+        }
+    }
+    // f32 inputs of up to ~300 °/s carry ≤ 1.5e-5 °/s of rounding each; the f32 subtraction, product
+    // and three-term sum add a few more ulps. The uncorrected gyro is off by up to ~2 °/s here.
+    assert!(worst < 1e-4, "worst error {worst} deg/s");
+    let uncorrected = truth
+        .iter()
+        .zip(stdin.lines())
+        .map(|(t, l)| {
+            let w: Vec<f64> = l.split(' ').map(|v| v.parse().unwrap()).collect();
+            (0..3).map(|j| (w[j] - t[j]).abs()).fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert!(uncorrected > 0.5, "the test gyro must need its correction");
 }
