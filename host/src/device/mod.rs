@@ -4,6 +4,7 @@
 
 pub mod client;
 pub mod handheld;
+pub mod live_check;
 pub mod operator;
 pub mod procedure;
 pub mod serial;
