@@ -59,7 +59,9 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         gyro_noise_rad_s: a.gyro_noise_deg_s.to_radians(),
         ..PredictSettings::white(0.0)
     };
-    let prediction = predict(&plan, &truth, &settings)?;
+    let stats = crate::sim::synth::prediction_stats(&plan, &truth, &settings)
+        .map_err(crate::estimate::EstimateError::from)?;
+    let prediction = predict(&plan, &truth, &stats, &settings)?;
     out.line("")?;
     out.line(format_args!(
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",

@@ -254,7 +254,7 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
     match &gyro {
         Ok(fit) => {
             print!("{}", gyro_text(fit));
-            write_atomic(&gyro_path, fit.to_toml().as_bytes()).map_err(|e| {
+            write_atomic(&gyro_path, gyro_file_text(fit).as_bytes()).map_err(|e| {
                 CliError::Usage(format!("cannot write {}: {e}", gyro_path.display()))
             })?;
         }
@@ -476,4 +476,27 @@ fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
             },
         ],
     }
+}
+
+/// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a
+/// comment saying where it comes from.
+fn gyro_file_text(fit: &HandGyroFit) -> String {
+    #[derive(serde::Serialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let gyro = GyroSection {
+        bias_rad_s: fit.bias_rad_s,
+        matrix: fit.matrix,
+        bias_rad_s_1sigma: Some(fit.bias_1sigma_rad_s),
+        matrix_1sigma: Some(fit.matrix_1sigma),
+    };
+    format!(
+        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
+         # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
+         # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
+        fit.turns,
+        fit.rms_residual_deg,
+        toml::to_string_pretty(&File { gyro }).unwrap_or_default()
+    )
 }

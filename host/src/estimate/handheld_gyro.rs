@@ -9,7 +9,6 @@
 //! accelerometer calibration's body frame; an uncalibrated accelerometer's percent-level errors would
 //! otherwise enter `G` directly.
 
-use crate::unit_file::GyroSection;
 use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 use shared::linalg::{self, RowMajor3};
 
@@ -80,35 +79,6 @@ impl HandGyroFit {
             }
         }
         v
-    }
-
-    /// The `[gyro]` section of a calibration file (the keys of the table gyro calibration).
-    pub fn to_section(&self) -> GyroSection {
-        GyroSection {
-            bias_rad_s: self.bias_rad_s,
-            matrix: self.matrix,
-            bias_rad_s_1sigma: Some(self.bias_1sigma_rad_s),
-            matrix_1sigma: Some(self.matrix_1sigma),
-        }
-    }
-
-    /// `gyro.toml`: the `[gyro]` table with a comment saying where it comes from.
-    pub fn to_toml(&self) -> String {
-        #[derive(serde::Serialize)]
-        struct File {
-            gyro: GyroSection,
-        }
-        format!(
-            "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
-             # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
-             # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
-            self.turns,
-            self.rms_residual_deg,
-            toml::to_string_pretty(&File {
-                gyro: self.to_section()
-            })
-            .unwrap_or_default()
-        )
     }
 }
 

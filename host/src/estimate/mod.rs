@@ -11,7 +11,7 @@
 //!   covariance, propagated to the paper's form; a χ² check per segment; the observability of every
 //!   lever-arm component.
 //! - [`predict`]: the Cramér–Rao 1σ of every parameter for a plan and a noise level, before any data.
-//! - [`crate::sim::synth`]: noise-free statistics of a plan run on a known unit (used by [`predict`] and the tests).
+//! - `crate::sim::synth`: noise-free statistics of a plan run on a known unit (the input of [`predict`], and the tests').
 
 pub mod attitude;
 mod build;

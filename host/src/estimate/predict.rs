@@ -1,6 +1,7 @@
 //! The Cramér–Rao prediction of a plan, before any data (`host plan --check FILE`): the estimator's
-//! information matrix evaluated on noise-free statistics of a given unit ([`crate::sim::synth`]), with each
-//! segment's weight from the given per-sample noise and its duration. For white noise and this
+//! information matrix evaluated on noise-free statistics of a given unit (made by the caller, e.g.
+//! `crate::sim::synth::prediction_stats`, so that the estimator does not depend on the simulator), with
+//! each segment's weight from the given per-sample noise and its duration. For white noise and this
 //! (nearly linear) model the weighted least squares attains the bound, so these are the 1σ values a
 //! real session of this plan will report.
 
@@ -8,9 +9,7 @@ use super::{
     calibrate_session_stats, paper_labels, paper_values, ChiSquareScaling, EstimateError,
     EstimateOptions, ReferenceChoice, PAPER_LEN,
 };
-use crate::session::Plan;
-use crate::sim::synth::{self, SynthNoise};
-use shared::forward::ForwardModel;
+use crate::session::{Plan, SegmentStats};
 use shared::{Calibration, OutputUnit};
 
 /// Noise level and durations for [`predict`].
@@ -68,10 +67,12 @@ pub struct Prediction {
     pub gyro: Option<super::GyroEstimate>,
 }
 
-/// The predicted 1σ of every parameter for `plan` run on `truth` with the given noise.
+/// The predicted 1σ of every parameter for `plan` run on `truth` with the given noise: `stats` are the
+/// noise-free statistics of that run, with the noise of `settings` in their covariances.
 pub fn predict(
     plan: &Plan,
     truth: &Calibration,
+    stats: &[SegmentStats],
     settings: &PredictSettings,
 ) -> Result<Prediction, EstimateError> {
     if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
@@ -82,18 +83,11 @@ pub fn predict(
                 .into(),
         });
     }
-    let unit = ForwardModel::new(truth)?;
-    let noise = SynthNoise {
-        out_1sigma: settings.noise_out_per_sample_1sigma,
-        gyro_1sigma_rad_s: settings.gyro_noise_rad_s,
-        sample_rate_hz: settings.sample_rate_hz.unwrap_or(plan.sample_rate_hz),
-    };
-    let stats = synth::plan_stats(plan, &unit, &noise, settings.default_duration_s);
     let mut options = settings.options.clone();
     options.chi2_scaling = ChiSquareScaling::Never;
     options.compare_methods = false;
     options.require_lever_arms = false;
-    let out = calibrate_session_stats(plan, &stats, &options)?;
+    let out = calibrate_session_stats(plan, stats, &options)?;
     let sigma = core::array::from_fn(|p| out.covariance[p][p].max(0.0).sqrt());
     let mut truth_in_frame = *truth;
     truth_in_frame.lever_arms = match options.reference {

@@ -668,8 +668,12 @@ fn plans_that_cannot_observe_lever_arms_flag_them() {
 fn cramer_rao_prediction_matches_model_md_and_the_fit() {
     let truth = testkit::paper_unit();
     let settings = PredictSettings::white(paper_noise(&truth));
-    let paper = predict(&testkit::paper_plan(OutputUnit::Volts), &truth, &settings).unwrap();
-    let better = predict(&testkit::better_plan(OutputUnit::Volts), &truth, &settings).unwrap();
+    let run = |plan: &crate::session::Plan| {
+        let stats = crate::sim::synth::prediction_stats(plan, &truth, &settings).unwrap();
+        predict(plan, &truth, &stats, &settings).unwrap()
+    };
+    let paper = run(&testkit::paper_plan(OutputUnit::Volts));
+    let better = run(&testkit::better_plan(OutputUnit::Volts));
     let lever = |p: &Prediction, i: usize, j: usize| p.sigma[15 + 3 * i + j];
     for i in 0..3 {
         for j in 0..3 {

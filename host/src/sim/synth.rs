@@ -141,3 +141,19 @@ pub fn plan_stats(
         })
         .collect()
 }
+
+/// The noise-free statistics of `plan` run on `truth` with the noise and durations of `settings`: the
+/// input of [`crate::estimate::predict`].
+pub fn prediction_stats(
+    plan: &Plan,
+    truth: &shared::Calibration,
+    settings: &crate::estimate::PredictSettings,
+) -> Result<Vec<SegmentStats>, shared::params::ParamsError> {
+    let unit = ForwardModel::new(truth)?;
+    let noise = SynthNoise {
+        out_1sigma: settings.noise_out_per_sample_1sigma,
+        gyro_1sigma_rad_s: settings.gyro_noise_rad_s,
+        sample_rate_hz: settings.sample_rate_hz.unwrap_or(plan.sample_rate_hz),
+    };
+    Ok(plan_stats(plan, &unit, &noise, settings.default_duration_s))
+}
