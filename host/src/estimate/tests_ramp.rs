@@ -113,3 +113,78 @@ fn ramp_only_plan_fixes_unseen_lever_arms_without_biasing_the_others() {
     }
     eprintln!("worst |err|/σ {worst_z:.2}, worst shift from the fixed truth {worst_shift:.2}σ");
 }
+
+/// The joint fit started from a θ in which the z components are nonzero (as the previous gyro pass
+/// can leave a component that was still free there): the ones it finds not observable are held at
+/// 0 in the model and the result, and the estimated ones are those of a start at 0.
+#[test]
+fn a_fixed_lever_arm_component_does_not_keep_its_start_value() {
+    let plan = ramp_only_plan();
+    let truth = testkit::paper_unit();
+    let mut rng = Rng::new(7, 0);
+    let noise_v = 1e-3 * truth.statics.scale_out_per_g[0];
+    // A misaligned gyro, not modelled here: the measured rate and ω̇ leave the z axis, so the
+    // z column of E is not 0 and a z component held at a nonzero value would move the fit.
+    let errors = TableErrors {
+        gyro: Some((
+            [[1.0, 2e-3, -3e-3], [-2e-3, 1.0, 3e-3], [3e-3, -2e-3, 1.0]],
+            [0.0; 3],
+        )),
+        ..TableErrors::default()
+    };
+    let stats = testkit::noisy_stats(&plan, &truth, noise_v, errors, &mut rng);
+    let options = EstimateOptions {
+        gyro_model: GyroModel::Perfect,
+        ..EstimateOptions::default()
+    };
+    let (mut warnings, mut excluded) = (Vec::new(), Vec::new());
+    let mut segs =
+        screen::match_plan(&plan, &stats, &options, &mut excluded, &mut warnings).unwrap();
+    screen::screen(&plan, &mut segs, &options, &mut excluded);
+    let noise = screen::pooled_noise(&segs);
+    let (mounts, seg_mount) = build::build_mounts(&plan, &segs);
+    let models = build::build_models(&plan, &segs, &noise, &options, &mounts, &seg_mount, None);
+    let mut problem = solve::Problem {
+        models,
+        mounts,
+        gyro: Vec::new(),
+        gyro_block: None,
+        groups: Vec::new(),
+        rest_segments: Vec::new(),
+    };
+    let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
+    let static_fit = screen::static_fit_with_attitude_check(
+        &plan,
+        &mut segs,
+        &mut problem,
+        &options,
+        &mut excluded,
+        planned_static,
+    )
+    .unwrap();
+    problem.gyro = build::build_gyro(&plan, &segs, &noise, &options, &problem.mounts, &seg_mount);
+    let frame = attitude::body_frame(&problem);
+    let run = |start: Vec<f64>| {
+        let (mut s, mut p, mut ex) = (segs.clone(), problem.clone(), Vec::new());
+        joint::joint(&plan, &mut s, &mut p, start, &options, &mut ex, frame).unwrap()
+    };
+    let clean = run(static_fit.theta.clone());
+    let mut dirty_start = static_fit.theta.clone();
+    for i in 0..3 {
+        dirty_start[model::idx_r(i, 2)] = 0.02;
+    }
+    let dirty = run(dirty_start);
+    assert_eq!(dirty.fixed, clean.fixed);
+    for i in 0..3 {
+        for j in 0..3 {
+            let q = model::idx_r(i, j);
+            if dirty.fixed[i][j] {
+                assert_eq!(dirty.theta[q], 0.0, "r{}{} fixed at 0", i + 1, j);
+            } else {
+                let s = clean.cov[(q, q)].sqrt();
+                let d = (dirty.theta[q] - clean.theta[q]) / s;
+                assert!(d.abs() < 1e-3, "r{}{} moved {d:.3}σ", i + 1, j);
+            }
+        }
+    }
+}
