@@ -57,7 +57,7 @@ fn ramp_only_plan_fixes_unseen_lever_arms_without_biasing_the_others() {
     let plan = ramp_only_plan();
     let truth = testkit::paper_unit();
     // The same unit with the never-seen (z) components set to 0.
-    let mut zeroed = truth.clone();
+    let mut zeroed = truth;
     for r in &mut zeroed.lever_arms.r_m {
         r[2] = 0.0;
     }
