@@ -124,10 +124,10 @@ pub(crate) fn joint(
                 free[p] = false;
             }
         }
-        let t0 = start.clone();
+        let mut t0 = start.clone();
         let fixed_list = solve::structurally_unobservable(
             problem,
-            &t0,
+            &mut t0,
             &mut free,
             options.lever_arm_structural_limit_m,
         );

@@ -32,6 +32,8 @@ mod tests;
 mod tests_fixture;
 #[cfg(test)]
 mod tests_gyro;
+#[cfg(test)]
+mod tests_ramp;
 pub mod thermal;
 #[cfg(test)]
 mod thermal_tests;

@@ -514,10 +514,17 @@ pub fn fit(
 }
 
 /// Lever-arm components the segments cannot determine at all (1σ above `limit_m` even with a weak
-/// 1 m prior), removed one at a time, worst first: the remaining ones are estimable.
+/// 1 m prior), removed one at a time, worst first: the remaining ones are estimable. Each one
+/// removed is also set to 0 in `t`, the fit's start.
+///
+/// A fixed entry keeps its start value in every term of the model (`E r_i` holds the ω̇ term
+/// `[ω̇×] r_i` beside the centripetal one, docs/model.md §4.4, §4.6), and the start of a later
+/// joint pass is the previous pass's estimate, in which the component may still have been free:
+/// without the reset a component reported "fixed at 0" would enter the fit, and the report, at
+/// that value.
 pub fn structurally_unobservable(
     p: &Problem,
-    t: &[f64],
+    t: &mut [f64],
     free: &mut [bool],
     limit_m: f64,
 ) -> Vec<(usize, usize)> {
@@ -532,6 +539,7 @@ pub fn structurally_unobservable(
         match worst {
             Some(((i, j), s)) if s > limit_m => {
                 free[idx_r(i, j)] = false;
+                t[idx_r(i, j)] = 0.0;
                 fixed.push((i, j));
             }
             _ => break,
