@@ -100,3 +100,92 @@ fn compare_fails_on_a_difference_beyond_the_limit() {
     let (ok, _, stderr) = host(&["compare", &cals[0], &cals[1], "--max-sigma", "6"]);
     assert!(ok, "{stderr}");
 }
+
+#[test]
+fn segment_prints_one_json_document_with_every_position_and_the_gyro() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = dir.path().join("raw.csv");
+    let raw = raw.to_str().unwrap();
+    let (ok, stdout, stderr) = host(&["simulate-hand", "--out", raw]);
+    assert!(ok, "{stderr}");
+    // "wrote raw.csv (N rows, P positions, …)": the simulator's own count of held positions.
+    let positions: usize = stdout
+        .split(" positions")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("the number of positions in {stdout}"));
+
+    let session = dir.path().join("s");
+    let session = session.to_str().unwrap();
+    let (ok, stdout, stderr) = host(&[
+        "segment",
+        "--input",
+        raw,
+        "--out",
+        session,
+        "--time-column",
+        "t",
+        "--acc-unit",
+        "m/s2",
+        "--gyro-unit",
+        "deg/s",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("stdout is one JSON document");
+    let intervals = v["intervals"].as_array().unwrap();
+    let stills: Vec<_> = intervals.iter().filter(|i| i["kind"] == "static").collect();
+    assert_eq!(stills.len(), positions, "{stdout}");
+    assert_eq!(v["still_intervals"], positions);
+    assert_eq!(
+        intervals.len(),
+        positions + v["spins"].as_u64().unwrap() as usize
+    );
+    for (k, iv) in intervals.iter().enumerate() {
+        assert_eq!(iv["index"], k + 1);
+        assert!(iv["duration_s"].as_f64().unwrap() >= 1.0, "{iv}");
+        let d: Vec<f64> = (0..3)
+            .map(|j| iv["mean_direction"][j].as_f64().unwrap())
+            .collect();
+        assert!((d.iter().map(|c| c * c).sum::<f64>().sqrt() - 1.0).abs() < 1e-9);
+        assert!(iv["acc_noise_mg"].as_f64().unwrap() > 0.0);
+    }
+    for iv in &stills {
+        let att = &iv["attitude"];
+        match att["kind"].as_str().unwrap() {
+            "free" => assert!(att["prior_1sigma_deg"].is_null(), "{att}"),
+            "axis" => assert!(att["prior_1sigma_deg"].as_f64().unwrap() > 0.0, "{att}"),
+            k => panic!("attitude kind {k}"),
+        }
+    }
+    assert_eq!(v["acc_unit"], "m/s2");
+    // Measured from the time column: the simulated 200 Hz.
+    assert!((v["sample_rate_hz"].as_f64().unwrap() - 200.0).abs() < 1e-6);
+    assert_eq!(v["out_dir"], session);
+    // The simulated gyro (raw.truth.toml): bias within 5σ of the fit's own 1σ; scale (the diagonal,
+    // which a small rotation between the true and the calibrated body axes moves only at second
+    // order) within 0.1 %.
+    let truth: toml::Value =
+        toml::from_str(&std::fs::read_to_string(dir.path().join("raw.truth.toml")).unwrap())
+            .unwrap();
+    let num = |x: &toml::Value| x.as_float().unwrap();
+    let g = &v["gyro"];
+    for i in 0..3 {
+        let b = g["bias_rad_s"][i].as_f64().unwrap();
+        let b_sigma = g["bias_rad_s_1sigma"][i].as_f64().unwrap();
+        let b_true = num(&truth["gyro"]["bias_rad_s"][i]);
+        assert!(b_sigma > 0.0 && (b - b_true).abs() < 5.0 * b_sigma, "{g}");
+        let m = g["matrix"][i][i].as_f64().unwrap();
+        let m_true = num(&truth["gyro"]["matrix"][i][i]);
+        assert!((m - m_true).abs() < 1e-3, "{g}");
+    }
+    assert!(g["undetermined"].as_array().unwrap().is_empty(), "{g}");
+    // The human table and the gyro text went to stderr.
+    assert!(
+        stderr.contains(&format!("{positions} still interval(s)")),
+        "{stderr}"
+    );
+    assert!(stderr.contains("gyro from"), "{stderr}");
+    assert!(std::path::Path::new(session).join("gyro.toml").exists());
+}

@@ -116,7 +116,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Apply(a) => apply::run(&a, cli.quiet),
         Command::Noise(a) => noise::run(&a, cli.quiet),
         Command::Batch(a) => batch::run(&a, cli.quiet),
-        Command::Segment(a) => segment::segment(&a).map(|_| ()),
+        Command::Segment(a) => segment::run(&a, cli.quiet),
         Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
         Command::Flash(a) => flash::run(&a.port, &a.calibration),
         Command::Read(a) => read::run(&a.port, a.out.as_deref()),

@@ -2,6 +2,7 @@
 //! `host calibrate --input` reads, a table and a figure of what was found, and the gyro's `G` and
 //! bias from the hand turns (`gyro.toml`).
 
+use super::output::Output;
 use super::CliError;
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::DETERMINED_1SIGMA;
@@ -14,12 +15,16 @@ use crate::session::from_recording::{plan_for, stats_for, write_session};
 use crate::session::import::{
     parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
 };
-use crate::session::segment::{coverage, find_intervals, Coverage, SegmentOptions, Segmentation};
+use crate::session::plan::Attitude;
+use crate::session::segment::{
+    coverage, find_intervals, Coverage, IntervalKind, SegmentOptions, Segmentation,
+};
 use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use crate::unit_file::GyroSection;
 use crate::unit_file::UnitFile;
 use clap::Args;
+use serde::Serialize;
 use shared::linalg;
 use shared::OutputUnit;
 use std::fmt::Write as _;
@@ -62,6 +67,10 @@ pub struct SegmentArgs {
     /// Replace an existing session in DIR.
     #[arg(long)]
     pub force: bool,
+    /// One JSON document on stdout (the intervals, the attitudes given, the gyro fit); the table
+    /// and everything else for people on stderr.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `host simulate-hand`.
@@ -219,15 +228,36 @@ fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
     })
 }
 
-/// Runs `host segment`, printing the table and the gyro result to stdout.
+/// Runs `host segment` from the command line (`--quiet` silences the human text).
+pub fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
+    let out = Output {
+        json: a.json,
+        quiet,
+    };
+    segment_to(a, &out).map(|_| ())
+}
+
+/// Runs `host segment`, printing the table and the gyro result (to stdout, or stderr with `--json`).
 pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
+    segment_to(
+        a,
+        &Output {
+            json: a.json,
+            quiet: false,
+        },
+    )
+}
+
+fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let options = import_options(a)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {
-        eprintln!(
-            "warning: {} row(s) with NaN or infinite values left out",
+        let w = format!(
+            "{} row(s) with NaN or infinite values left out",
             rec.skipped_rows
         );
+        warn(out, &mut warnings, w);
     }
     let seg_options = SegmentOptions {
         min_still_s: a.min_still_s,
@@ -235,11 +265,12 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
     };
     let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Usage(e.to_string()))?;
     let cov = coverage(&seg.stills, seg_options.same_position_deg);
-    print!("{}", table(&rec, &seg, &cov));
+    out.human(table(&rec, &seg, &cov))?;
     cov.check(seg.stills.len(), seg_options.same_position_deg)
         .map_err(|e| CliError::Usage(e.to_string()))?;
-    if let Some(advice) = cov.advice() {
-        println!("advice: {advice}");
+    let advice = cov.advice();
+    if let Some(advice) = &advice {
+        out.line(format_args!("advice: {advice}"))?;
     }
     let gyro_path = a.out.join(GYRO_FILE);
     if gyro_path.exists() && !a.force {
@@ -253,32 +284,192 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
     let rows = write_session(&a.out, &rec, &seg, &plan, a.force)?;
     match &gyro {
         Ok(fit) => {
-            print!("{}", gyro_text(fit));
+            out.human(gyro_text(fit))?;
             write_atomic(&gyro_path, gyro_file_text(fit).as_bytes()).map_err(|e| {
                 CliError::Usage(format!("cannot write {}: {e}", gyro_path.display()))
             })?;
         }
-        Err(e) => println!("gyro: not calibrated: {e}"),
+        Err(e) => out.line(format_args!("gyro: not calibrated: {e}"))?,
     }
     let fig = figure(&rec, &seg);
     match plot::render(&fig, &a.out, Formats::default()) {
-        Ok(o) => o.warnings.iter().for_each(|w| eprintln!("warning: {w}")),
-        Err(e) => eprintln!("warning: {e}"),
+        Ok(o) => o
+            .warnings
+            .into_iter()
+            .for_each(|w| warn(out, &mut warnings, w)),
+        Err(e) => warn(out, &mut warnings, e.to_string()),
     }
-    println!(
+    out.line(format_args!(
         "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
         a.out.display(),
         rows,
         plan.segments.len(),
         fig.stem,
         a.out.display()
-    );
-    Ok(SegmentOutcome {
+    ))?;
+    let outcome = SegmentOutcome {
         recording: rec,
         segmentation: seg,
         plan,
         gyro,
-    })
+    };
+    let written = Written {
+        rows,
+        advice,
+        warnings,
+    };
+    out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
+    Ok(outcome)
+}
+
+/// A warning on stderr, kept for the JSON document.
+fn warn(out: &Output, warnings: &mut Vec<String>, text: String) {
+    out.warn(&text);
+    warnings.push(text);
+}
+
+/// What was written and said besides the intervals and the fit, for the JSON document.
+struct Written {
+    rows: u64,
+    advice: Option<String>,
+    warnings: Vec<String>,
+}
+
+/// The `--json` document of `host segment`.
+#[derive(Serialize)]
+struct SegmentDocument {
+    input: String,
+    sample_rate_hz: f64,
+    /// The accelerometer's unit (the calibration's output unit): `acc_noise` is in it.
+    acc_unit: &'static str,
+    /// The gyro unit of the input; the document's rates are in rad/s and °/s as named.
+    gyro_unit: &'static str,
+    /// |mean accelerometer output| at rest, acc_unit.
+    gravity_out: f64,
+    acc_threshold_mg: f64,
+    gyro_threshold_deg_s: f64,
+    still_intervals: usize,
+    spins: usize,
+    short_dropped: usize,
+    distinct_positions: usize,
+    intervals: Vec<IntervalDocument>,
+    gyro: Option<GyroDocument>,
+    gyro_not_calibrated: Option<String>,
+    advice: Option<String>,
+    warnings: Vec<String>,
+    out_dir: String,
+    rows_written: u64,
+}
+
+#[derive(Serialize)]
+struct IntervalDocument {
+    /// 1-based, as in the table.
+    index: usize,
+    kind: &'static str,
+    start_s: f64,
+    duration_s: f64,
+    /// Rough up direction from the uncalibrated outputs (unit vector, body axes).
+    mean_direction: [f64; 3],
+    acc_noise_mg: f64,
+    gyro_noise_deg_s: f64,
+    /// Spins: the mean rate.
+    rate_deg_s: Option<f64>,
+    /// Still intervals: the earlier interval (1-based) at the same position.
+    same_position_as: Option<usize>,
+    /// Still intervals: the attitude given to the session's segment.
+    attitude: Option<AttitudeDocument>,
+}
+
+/// `free` (no prior, docs/model.md §7) or `axis` (set down on a face: `up_b` with a prior).
+#[derive(Serialize)]
+struct AttitudeDocument {
+    segment: String,
+    kind: &'static str,
+    up_b: [f64; 3],
+    prior_1sigma_deg: Option<f64>,
+}
+
+/// The gyro fit; a `null` 1σ is an entry the turns do not determine.
+#[derive(Serialize)]
+struct GyroDocument {
+    turns: usize,
+    rms_residual_deg: f64,
+    matrix: [[f64; 3]; 3],
+    matrix_1sigma: [[f64; 3]; 3],
+    bias_rad_s: [f64; 3],
+    bias_rad_s_1sigma: [f64; 3],
+    undetermined: Vec<String>,
+}
+
+fn document(
+    a: &SegmentArgs,
+    gyro_unit: GyroUnit,
+    o: &SegmentOutcome,
+    cov: &Coverage,
+    w: &Written,
+) -> SegmentDocument {
+    let (rec, seg) = (&o.recording, &o.segmentation);
+    let intervals = seg
+        .stills
+        .iter()
+        .chain(&seg.spins)
+        .enumerate()
+        .map(|(k, iv)| {
+            let sp = o.plan.segments.get(k).filter(|_| k < seg.stills.len());
+            IntervalDocument {
+                index: k + 1,
+                kind: match iv.kind {
+                    IntervalKind::Still => "static",
+                    IntervalKind::Spin => "spin",
+                },
+                start_s: iv.start_s,
+                duration_s: iv.duration_s,
+                mean_direction: iv.direction,
+                acc_noise_mg: linalg::norm(&iv.std_acc) / seg.gravity_out * 1e3,
+                gyro_noise_deg_s: linalg::norm(&iv.std_gyro_rad_s).to_degrees(),
+                rate_deg_s: (iv.kind == IntervalKind::Spin)
+                    .then(|| linalg::norm(&iv.mean_gyro_rad_s).to_degrees()),
+                same_position_as: cov.repeats.get(k).copied().flatten().map(|r| r + 1),
+                attitude: sp.map(|sp| AttitudeDocument {
+                    segment: sp.name.clone(),
+                    kind: match sp.attitude {
+                        Attitude::Free => "free",
+                        Attitude::Fixture => "axis",
+                    },
+                    up_b: sp.up_b,
+                    prior_1sigma_deg: sp.attitude_sigma_deg,
+                }),
+            }
+        })
+        .collect();
+    SegmentDocument {
+        input: a.input.display().to_string(),
+        sample_rate_hz: rec.rate_hz,
+        acc_unit: rec.acc_unit.map_or("", |u| u.symbol()),
+        gyro_unit: gyro_unit.symbol(),
+        gravity_out: seg.gravity_out,
+        acc_threshold_mg: seg.acc_threshold / seg.gravity_out * 1e3,
+        gyro_threshold_deg_s: seg.gyro_threshold_rad_s.to_degrees(),
+        still_intervals: seg.stills.len(),
+        spins: seg.spins.len(),
+        short_dropped: seg.short_dropped,
+        distinct_positions: cov.distinct,
+        intervals,
+        gyro: o.gyro.as_ref().ok().map(|f| GyroDocument {
+            turns: f.turns,
+            rms_residual_deg: f.rms_residual_deg,
+            matrix: f.matrix,
+            matrix_1sigma: f.matrix_1sigma,
+            bias_rad_s: f.bias_rad_s,
+            bias_rad_s_1sigma: f.bias_1sigma_rad_s,
+            undetermined: f.undetermined(),
+        }),
+        gyro_not_calibrated: o.gyro.as_ref().err().map(|e| e.to_string()),
+        advice: w.advice.clone(),
+        warnings: w.warnings.clone(),
+        out_dir: a.out.display().to_string(),
+        rows_written: w.rows,
+    }
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
