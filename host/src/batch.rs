@@ -10,7 +10,7 @@
 //! spread and no 1σ (a lever-arm component no plan determines) are skipped.
 
 use crate::calibration_files::{now_unix_s, write_calibration_files, CALIBRATION_TOML};
-use crate::estimate::{calibrate_session_stats, EstimateOptions};
+use crate::estimate::{calibrate_session_stats, median, EstimateOptions};
 use crate::session::{read_session, ReadOptions, PLAN_FILE};
 use crate::summary::{CalibrationSummary, Limits};
 use indicatif::ProgressBar;
@@ -168,16 +168,6 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
     r
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Flags the outliers of the lot (see the module documentation) and sets `passed`.
 pub fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     let n_params = units
@@ -200,11 +190,11 @@ pub fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
         if pairs.len() < MIN_LOT {
             continue;
         }
-        let mut xs: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-        let m = median(&mut xs);
-        let mut dev: Vec<f64> = xs.iter().map(|x| (x - m).abs()).collect();
-        let mad_scale = 1.4826 * median(&mut dev);
-        let mut sigmas: Vec<f64> = pairs
+        let xs: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+        let m = median(xs.clone());
+        let dev: Vec<f64> = xs.iter().map(|x| (x - m).abs()).collect();
+        let mad_scale = 1.4826 * median(dev);
+        let sigmas: Vec<f64> = pairs
             .iter()
             .filter_map(|p| p.1)
             .filter(|s| s.is_finite())
@@ -212,7 +202,7 @@ pub fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
         let sigma = if sigmas.is_empty() {
             0.0
         } else {
-            median(&mut sigmas)
+            median(sigmas)
         };
         let scale = mad_scale.max(sigma);
         if scale <= 0.0 {

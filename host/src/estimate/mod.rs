@@ -43,6 +43,7 @@ pub use attitude::{BodyFrame, MountTilt, StaticSplit};
 pub use gyro::GyroEstimate;
 pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
+pub use screen::median;
 pub use segment::{Noise, SegmentKind};
 pub use uncertainty::Uncertainty;
 

@@ -77,7 +77,8 @@ pub(crate) fn match_plan(
     Ok(out)
 }
 
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+/// The median (the mean of the two middle values for an even count); NaN when empty.
+pub fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
