@@ -213,6 +213,12 @@ pub fn run<T: Transport>(
     let mut plan = opts.plan.clone();
     plan.sample_rate_hz = window_rate;
     plan.unit_id = Some(identity.unit_id.to_string());
+    if drive && plan.attitude_sigma_deg.is_none() {
+        // A virtual table puts the unit exactly where the plan says: its fixture is exact
+        // (docs/model.md §7), unless the plan says otherwise.
+        plan.attitude_sigma_deg = Some(0.0);
+        plan.format_version = plan.format_version.max(2);
+    }
     let recording_dir = opts.out_dir.join("recording");
     let Recorded { warnings, dropped } = record_plan(
         client,
