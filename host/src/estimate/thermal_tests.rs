@@ -324,6 +324,25 @@ fn soak_steps_calibrate_the_gyro_bias_over_temperature() {
         );
         assert!(sd < 0.05 * t.abs(), "1σ {sd} vs {t}");
     }
+    // The calibration file carries the polynomial, its degrees and 1σ, and reads back.
+    let dir = tempfile::tempdir().unwrap();
+    crate::calibration_files::write_calibration_files(
+        dir.path(),
+        &out,
+        Default::default(),
+        0,
+        false,
+    )
+    .unwrap();
+    let back =
+        UnitFile::load(&dir.path().join(crate::calibration_files::CALIBRATION_TOML)).unwrap();
+    let section = back.temperature.expect("a [temperature] section");
+    assert_eq!(section.gyro_bias_rad_s_per_c, Some(got));
+    assert_eq!(section.gyro_bias_degree, Some([1; 3]));
+    assert_eq!(
+        section.gyro_bias_rad_s_per_c_1sigma,
+        Some(fit.gyro_bias_sigma)
+    );
     // Referred to T_ref, every soak's mean rate is the constant bias (the bias walk, ~4e-4 °/s
     // over the session, and 5e-4 °/s of noise per mean aside); unreferred they span 0.8 °/s.
     let bias = gyro_nuisances().gyro_bias_deg_s;
