@@ -119,6 +119,9 @@ pub fn write_calibration_files(
         section.scale_degree = Some(fit.scale_degree);
         section.zero_bias_out_per_c_1sigma = Some(fit.zero_bias_sigma);
         section.scale_rel_per_c_1sigma = Some(fit.scale_sigma);
+        section.gyro_bias_degree = fit.gyro_bias_degree;
+        section.gyro_bias_rad_s_per_c_1sigma =
+            fit.model.gyro_bias_rad_s_per_c.map(|_| fit.gyro_bias_sigma);
     }
     let text = file.to_toml();
     let toml_path = out_dir.join(CALIBRATION_TOML);

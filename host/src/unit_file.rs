@@ -191,6 +191,12 @@ pub struct TemperatureSection {
     /// 1σ of `scale_rel_per_c`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale_rel_per_c_1sigma: Option<[[f64; 3]; 3]>,
+    /// The degree of each gyro bias polynomial the data chose (0: no dependence shown).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_degree: Option<[usize; 3]>,
+    /// 1σ of `gyro_bias_rad_s_per_c`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_rad_s_per_c_1sigma: Option<[[f64; 3]; 3]>,
 }
 
 impl TemperatureSection {
@@ -217,6 +223,8 @@ impl TemperatureSection {
             scale_degree: None,
             zero_bias_out_per_c_1sigma: None,
             scale_rel_per_c_1sigma: None,
+            gyro_bias_degree: None,
+            gyro_bias_rad_s_per_c_1sigma: None,
         }
     }
 }

@@ -35,6 +35,8 @@ mod tests_gyro;
 #[cfg(test)]
 mod tests_ramp;
 pub mod thermal;
+mod thermal_gyro;
+mod thermal_misalignment;
 #[cfg(test)]
 mod thermal_tests;
 mod uncertainty;

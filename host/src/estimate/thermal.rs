@@ -15,6 +15,10 @@
 //! exceeds 1 (noise the segments' own scatter does not show would otherwise buy higher degrees).
 //! The result then refers every segment's statistics to `T_ref`, and the usual estimator runs on
 //! them unchanged: its biases, scale factors and angles are the values at `T_ref`.
+//!
+//! The gyro bias gets its polynomial from the same static segments ([`super::thermal_gyro`]), and
+//! the misalignment held constant is tested across the soak temperatures
+//! ([`super::thermal_misalignment`]): a significant change is a warning, not a model term.
 
 use super::solve::invert_spd;
 use crate::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
@@ -68,6 +72,11 @@ pub struct ThermalFit {
     pub chi2: [(f64, usize); 3],
     /// Residuals per static segment.
     pub steps: Vec<ThermalStep>,
+    /// The degree of each gyro axis's bias polynomial the data chose; `None` when the recording has
+    /// no gyro readings.
+    pub gyro_bias_degree: Option<[usize; 3]>,
+    /// 1σ of `model.gyro_bias_rad_s_per_c` (0 where the degree leaves a coefficient out).
+    pub gyro_bias_sigma: [[f64; DEG]; 3],
     /// How each degree was chosen, for the report.
     pub notes: Vec<String>,
 }
@@ -143,13 +152,37 @@ pub fn fit_session(
                 sigma_out: [0.0; 3],
             })
             .collect(),
+        gyro_bias_degree: None,
+        gyro_bias_sigma: [[0.0; DEG]; 3],
         notes: Vec::new(),
     };
     for axis in 0..3 {
         fit_axis(&obs, axis, &mut fit)?;
     }
+    let statics: Vec<(&SegmentStats, &ThermalStats, [f64; 3])> = stats
+        .iter()
+        .filter_map(|st| {
+            let seg = plan.segment(&st.name)?;
+            let ts = st.thermal.as_ref()?;
+            seg.is_static().then_some((st, ts, seg.up_b))
+        })
+        .collect();
+    let pairs: Vec<(&SegmentStats, &ThermalStats)> =
+        statics.iter().map(|(st, ts, _)| (*st, *ts)).collect();
+    if let Some(g) = super::thermal_gyro::fit(&pairs, reference_c) {
+        // Degree 0 everywhere: the data show no dependence, and the model carries none.
+        fit.model.gyro_bias_rad_s_per_c = g.degree.iter().any(|&d| d > 0).then_some(g.per_c);
+        fit.gyro_bias_degree = Some(g.degree);
+        fit.gyro_bias_sigma = g.sigma;
+        fit.notes.extend(g.notes);
+    }
+    let soaks: Vec<_> = statics
+        .into_iter()
+        .filter(|(_, ts, _)| ts.max_c - ts.min_c < SOAK_SPAN_C)
+        .collect();
+    let warnings = super::thermal_misalignment::check(&soaks);
     fit.model.check().map_err(|e| e.to_string())?;
-    Ok((Some(fit), Vec::new()))
+    Ok((Some(fit), warnings))
 }
 
 /// Per-sample noise variance: a soak's own scatter, or a ramp's scatter about its own cubic.
@@ -398,6 +431,19 @@ impl ThermalFit {
                 let ramp = ts.max_c - ts.min_c >= SOAK_SPAN_C;
                 let gain: [f64; 3] =
                     std::array::from_fn(|i| 1.0 + mean_poly(&m.scale_rel_per_c[i]));
+                if let Some(b) = &m.gyro_bias_rad_s_per_c {
+                    // At rest the mean rate is the bias: remove its mean change over the segment
+                    // (`E[ωωᵀ]` shifts with it; the scatter is the drift the model explains).
+                    let d: [f64; 3] = std::array::from_fn(|i| mean_poly(&b[i]));
+                    let w = st.mean_w_rad_s;
+                    for i in 0..3 {
+                        out.mean_w_rad_s[i] = w[i] - d[i];
+                        for j in 0..3 {
+                            out.mean_wwt[i][j] =
+                                st.mean_wwt[i][j] - d[i] * w[j] - w[i] * d[j] + d[i] * d[j];
+                        }
+                    }
+                }
                 for i in 0..3 {
                     let u0 = self.zero_bias_ref_out[i];
                     let p = mean_poly(&m.zero_bias_out_per_c[i]);

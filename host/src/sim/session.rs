@@ -366,8 +366,14 @@ pub fn simulate_rows_with_temperature<E>(
                 }
             }
             let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
+            // The gyro bias follows the die too (docs/model.md §9).
+            let gyro_thermal: [f64; 3] = cal.temperature.as_ref().map_or([0.0; 3], |th| {
+                let b = th.gyro_bias_polynomials();
+                let dt = die_c - th.reference_c;
+                std::array::from_fn(|i| shared::sensor_models::poly_no_constant(&b[i], dt))
+            });
             for i in 0..3 {
-                w[i] += gyro_bias[i];
+                w[i] += gyro_bias[i] + gyro_thermal[i];
                 if gyro_walk > 0.0 {
                     gyro_drift[i] += gyro_walk * rng_gyro_walk.normal();
                     w[i] += gyro_drift[i];
