@@ -135,6 +135,7 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
          # body origin = the calibration's reference point, IMU origin = the x sensing point (rx_i = 0).\n\
          # A value .nan is UNDETERMINED: Kalibr will refuse it; give --noise NOISE.json from host noise."
     );
+    w.push_str(&super::temperature_not_held(&input.cal, "Kalibr"));
     let _ = writeln!(w, "rostopic: {}", input.rostopic);
     let fields = [
         ("update_rate", noise.update_rate_hz, "Hz"),

@@ -167,6 +167,19 @@ impl ExportInput<'_> {
     }
 }
 
+/// A `#` comment for the formats that cannot hold a temperature model (Kalibr, the TOML forms): their
+/// values are the calibration's at its reference temperature (docs/model.md §9).
+pub(crate) fn temperature_not_held(cal: &Calibration, format: &str) -> String {
+    match &cal.temperature {
+        Some(t) => format!(
+            "# NOT HELD by {format}: the temperature model ([temperature] in the calibration file); these \
+             values hold at {} °C (valid {}..{} °C); use host apply or the c-header export for the model.\n",
+            t.reference_c, t.valid_range_c[0], t.valid_range_c[1]
+        ),
+        None => String::new(),
+    }
+}
+
 /// Writes `input` in `format`.
 pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
     match format {
@@ -257,6 +270,21 @@ impl KalibrStyle {
 
 #[cfg(test)]
 mod tests {
+    /// A format that cannot hold the temperature model says so instead of dropping it silently.
+    #[test]
+    fn formats_without_a_temperature_model_say_so() {
+        let mut cal = shared::params::PAPER_UNIT;
+        let plain = toml_forms::render_marked(&cal, ExportFormat::Plain, None).unwrap();
+        assert!(!plain.contains("NOT HELD"), "{plain}");
+        cal.temperature = Some(firmware::paper_unit::typical_thermal_model());
+        let plain = toml_forms::render_marked(&cal, ExportFormat::Plain, None).unwrap();
+        assert!(
+            plain.starts_with("# NOT HELD by these forms: the temperature model")
+                && plain.contains("hold at 25 °C"),
+            "{plain}"
+        );
+    }
+
     use super::*;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{

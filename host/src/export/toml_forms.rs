@@ -56,7 +56,7 @@ pub fn render_marked(
             }
         }
     }
-    let text = render(&cal, format)?;
+    let text = super::temperature_not_held(calibration, "these forms") + &render(&cal, format)?;
     if names.is_empty() {
         return Ok(text);
     }
