@@ -16,9 +16,9 @@
 //! The result then refers every segment's statistics to `T_ref`, and the usual estimator runs on
 //! them unchanged: its biases, scale factors and angles are the values at `T_ref`.
 //!
-//! The gyro bias gets its polynomial from the same static segments ([`super::thermal_gyro`]), and
+//! The gyro bias gets its polynomial from the same static segments (`thermal_gyro`), and
 //! the misalignment held constant is tested across the soak temperatures
-//! ([`super::thermal_misalignment`]): a significant change is a warning, not a model term.
+//! (`thermal_misalignment`): a significant change is a warning, not a model term.
 
 use super::solve::invert_spd;
 use crate::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
