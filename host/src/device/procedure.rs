@@ -666,7 +666,7 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
     let base = format!(
         "calibration-{}-{}",
         identity.unit_id,
-        utc_stamp(calibration_files::now_unix_s())
+        calibration_files::utc_stamp(calibration_files::now_unix_s())
     );
     let mut dir = PathBuf::from(&base);
     let mut n = 2;
@@ -675,28 +675,6 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
         n += 1;
     }
     dir
-}
-
-/// `YYYYMMDDTHHMMSSZ` of a Unix time (the proleptic Gregorian calendar, H. Hinnant's
-/// days-to-civil algorithm).
-pub fn utc_stamp(unix_s: u64) -> String {
-    let days = (unix_s / 86_400) as i64;
-    let secs = unix_s % 86_400;
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}{m:02}{d:02}T{:02}{:02}{:02}Z",
-        secs / 3600,
-        secs / 60 % 60,
-        secs % 60
-    )
 }
 
 #[cfg(test)]
