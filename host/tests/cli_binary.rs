@@ -1,19 +1,8 @@
 //! The `host` binary itself: errors go to stderr as `error: ...` with a non-zero exit status, results
 //! to stdout.
 
-use std::process::Command;
-
-fn host(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(args)
-        .output()
-        .expect("the host binary runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::host;
 
 #[test]
 fn simulate_and_calibrate_through_the_binary() {

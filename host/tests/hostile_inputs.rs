@@ -6,23 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn host_in(cwd: Option<&Path>, args: &[&str]) -> (bool, String, String) {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_host"));
-    cmd.args(args);
-    if let Some(d) = cwd {
-        cmd.current_dir(d);
-    }
-    let out = cmd.output().expect("the host binary runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn host(args: &[&str]) -> (bool, String, String) {
-    host_in(None, args)
-}
+mod common;
+use common::{host, host_in};
 
 /// A simulated session of `plan` in `dir/name`.
 fn session(dir: &Path, name: &str, plan: &str, extra: &[&str]) -> PathBuf {

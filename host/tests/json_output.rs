@@ -1,19 +1,8 @@
 //! `--json`: one JSON document on stdout, everything for people on stderr; `--quiet` is quiet;
 //! pass/fail limits give a nonzero exit.
 
-use std::process::Command;
-
-fn host(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(args)
-        .output()
-        .expect("the host binary runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::host;
 
 #[test]
 fn calibrate_compare_plan_and_noise_print_one_json_document() {
