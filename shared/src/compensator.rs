@@ -468,9 +468,16 @@ impl Compensator {
 }
 
 impl GyroInverse {
-    /// `G⁻¹(w − b)`: 3 subtractions, 9 multiply-adds. (An Arm inline-assembly form loading the twelve
-    /// constants with one `vldmia` was measured and dropped: without FPU register operands on stable
-    /// Rust its operands go through memory, and it saved 2 instructions in the whole path.)
+    /// `G⁻¹(w − b)`: 3 subtractions, 9 multiply-adds. The floor of compiled code is the twelve
+    /// constant loads (one `vldr` each) plus the arithmetic: 24 instructions per sample on the
+    /// Cortex-M4F. Alternatives measured with scripts/bench-qemu.sh and dropped: the affine form
+    /// `G⁻¹w + c` (9 multiply-adds, `c = −G⁻¹b` precomputed) costs 25 on its own and moved the whole path
+    /// from 379 to 391 (the larger state pushes fields out of `vldr` offset reach); an out-of-line
+    /// assembly routine with one `vldmia` costs 23.6 in place (call, moves, clobbered registers);
+    /// inline assembly cannot take FPU register operands on stable Rust for this single-precision
+    /// target (the `sreg` class requires `vfp2`, which implies double precision); a block of 16
+    /// corrected at once keeps the constants in registers but costs 21.5 per sample in loads, stores
+    /// and loop.
     #[inline(always)]
     fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
         let b = &self.bias_rad_s;
