@@ -99,10 +99,10 @@ fn gyro_figures(seeds: u64, g: Generator) {
 }
 
 /// The reported 1σ against the spread, with the table's rate error drawn from the plan's own
-/// accuracy (100 ppm): the gyro's scale factors cannot be better than the table's rate.
+/// accuracy (the default, 10 ppm): the gyro's scale factors cannot be better than the table's rate.
 fn gyro_sigma(seeds: u64, g: Generator) -> [(f64, f64); 3] {
     let r = run_case(
-        "oblique, the same gyro, table rate error drawn with 100 ppm 1σ",
+        "oblique, the same gyro, table rate error drawn with the plan's 1σ",
         Some(mems_gyro()),
         GyroModel::Estimate,
         seeds,

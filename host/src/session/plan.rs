@@ -22,9 +22,11 @@ pub const PLAN_FORMAT_VERSION_MIN: u32 = 1;
 /// level (docs/model.md §7), while a prior that is somewhat too wide costs almost nothing.
 pub const DEFAULT_ATTITUDE_SIGMA_DEG: f64 = 0.05;
 
-/// 1σ of a rate table's relative rate error when the plan says nothing, ppm: 0.01 %, a good
-/// servo-controlled table's rate accuracy (averaged over whole turns).
-pub const DEFAULT_TABLE_RATE_SIGMA_PPM: f64 = 100.0;
+/// 1σ of a rate table's relative rate error when the plan says nothing, ppm: 0.001 %, a good
+/// precision rate table's rate accuracy averaged over whole turns (such tables quote 1–10 ppm; a
+/// plain turntable without an encoder-locked servo is worse, and its plan should say so). The gyro's
+/// scale factors cannot be better than this.
+pub const DEFAULT_TABLE_RATE_SIGMA_PPM: f64 = 10.0;
 
 /// How a segment's attitude is known.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
