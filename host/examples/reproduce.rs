@@ -60,7 +60,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let eq24_files =
         write_calibration_files(&out.join("calibration-eq24"), &eq24, unit_id, 0, true)?;
-    println!("\n{}", host::report::render(&joint));
+    println!(
+        "\n{}",
+        host::report::render_session(&joint, &s.plan, &s.stats)
+    );
 
     println!("Joint least squares (A) against the paper's eq. 24 (B):");
     println!(

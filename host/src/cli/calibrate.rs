@@ -185,7 +185,11 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         ))?;
     }
     out.line("")?;
-    out.human(crate::report::render(&outcome))?;
+    out.human(crate::report::render_session(
+        &outcome,
+        &session.plan,
+        &session.stats,
+    ))?;
     out.line(format_args!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
         written.toml_path.display(),

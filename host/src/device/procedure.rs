@@ -238,7 +238,11 @@ pub fn run<T: Transport>(
             source,
             recording: recording_dir.clone(),
         })?;
-    op.say(&crate::report::render(&outcome));
+    op.say(&crate::report::render_session(
+        &outcome,
+        &session.plan,
+        &session.stats,
+    ));
 
     let created = calibration_files::now_unix_s();
     let written = calibration_files::write_calibration_files(

@@ -386,7 +386,9 @@ pub struct Exclusion {
     pub reason: ExclusionReason,
 }
 
-/// Per-segment residuals, like the paper's Tables 2 and 4, and the χ² check.
+/// The fit's view of one segment: its fitted up, the specific force the fitted model predicts and
+/// the χ² check. The outputs before and after compensation (the paper's Tables 2 and 4) are the one
+/// table of [`crate::report::segment_rows`], which the terminal text shows beside these.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SegmentDiagnostic {
     /// Segment name.
@@ -401,14 +403,8 @@ pub struct SegmentDiagnostic {
     pub rate_deg_s: f64,
     /// Whether the fit used it.
     pub used: bool,
-    /// The specific force at the reference point per the plan (and measured rates), g.
+    /// The specific force the fitted model gives at the calibration's reference point, g.
     pub theoretical_g: [f64; 3],
-    /// Bias and scale removed only, `(ū_i − u0_i)/k_i`, g.
-    pub before_g: [f64; 3],
-    /// Static compensation only, `M⁻¹(ū − u0)`, g.
-    pub after_static_g: [f64; 3],
-    /// Full compensation including the lever arms, `M⁻¹(ū − u0 − K d)`, g.
-    pub after_g: [f64; 3],
     /// Standard error of the segment's means, g.
     pub noise_g: [f64; 3],
     /// Whitened residual² (3 outputs); `None` when not used.
@@ -731,7 +727,13 @@ fn fit_session(
         gyro: gyro_estimate.as_ref().map(GyroEstimate::device_correction),
         temperature: None,
     };
-    let segments = diagnostics(plan, &segs, &problem.all_models(), &main_theta);
+    let segments = diagnostics(
+        plan,
+        &segs,
+        &problem.all_models(),
+        &main_theta,
+        &conv.centre_m,
+    );
     let comparison = if options.compare_methods {
         compare(
             plan,
@@ -864,16 +866,16 @@ fn compare(
     })
 }
 
-/// Tables 2 and 4: theoretical, before, after; χ² per segment.
+/// Per segment: the fitted up, the model's specific force at the calibration's reference point
+/// `centre_m` (where the device's compensated output is), the noise and the χ² (docs/model.md §6).
 fn diagnostics(
     plan: &Plan,
     segs: &[SessionSeg],
     models: &[SegModel],
     theta: &[f64],
+    centre_m: &[f64; 3],
 ) -> Vec<SegmentDiagnostic> {
     let m = model::m_of(theta);
-    let u0 = model::u0_of(theta);
-    let minv = linalg::inverse(&m).unwrap_or([[0.0; 3]; 3]);
     let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m[i]));
     let models_by_seg: std::collections::HashMap<usize, &SegModel> =
         models.iter().map(|s| (s.seg, s)).collect();
@@ -888,18 +890,19 @@ fn diagnostics(
                 .get(&idx)
                 .map_or(sp.up_b, |md| md.tilt.up(theta));
             let rate = linalg::dot(&st.mean_w_rad_s, &up).to_degrees();
-            let du: [f64; 3] = core::array::from_fn(|i| st.mean_u[i] - u0[i]);
-            let before = core::array::from_fn(|i| du[i] / k[i]);
-            let after_static = linalg::mat_vec(&minv, &du);
-            let (theoretical, after, noise, chi2) = match models_by_seg.get(&idx) {
+            let (theoretical, noise, chi2) = match models_by_seg.get(&idx) {
                 Some(md) => {
-                    let lever = md.lever_term(theta);
-                    let dl: [f64; 3] = core::array::from_fn(|i| du[i] - lever[i]);
                     let noise = core::array::from_fn(|i| md.se_cov[i][i].sqrt() / k[i]);
                     let c2: f64 = md.whitened_residual(theta).iter().map(|v| v * v).sum();
-                    (md.f(theta), linalg::mat_vec(&minv, &dl), noise, Some(c2))
+                    let f = md.f(theta);
+                    let at_reference = linalg::mat_vec(&md.e, centre_m);
+                    (
+                        core::array::from_fn(|j| f[j] + at_reference[j]),
+                        noise,
+                        Some(c2),
+                    )
                 }
-                None => (up, after_static, [f64::NAN; 3], None),
+                None => (up, [f64::NAN; 3], None),
             };
             SegmentDiagnostic {
                 name: sp.name.clone(),
@@ -909,9 +912,6 @@ fn diagnostics(
                 rate_deg_s: rate,
                 used: s.used,
                 theoretical_g: theoretical,
-                before_g: before,
-                after_static_g: after_static,
-                after_g: after,
                 noise_g: noise,
                 chi2,
                 chi2_flagged: chi2.is_some_and(|c| c > CHI2_3_999),

@@ -266,13 +266,6 @@ impl SegModel {
         core::array::from_fn(|i| linalg::dot(&m[i], &self.force_at(&f, &r[i])) + t[idx_u0(i)])
     }
 
-    /// Lever term `m_i · E r_i` of each output (output unit).
-    pub fn lever_term(&self, t: &[f64]) -> [f64; 3] {
-        let m = m_of(t);
-        let r = r_of(t);
-        core::array::from_fn(|i| linalg::dot(&m[i], &linalg::mat_vec(&self.e, &r[i])))
-    }
-
     /// Jacobian of the predicted outputs as (θ index, ∂ū/∂θ) pairs: the nonzero columns only.
     pub fn jacobian(&self, t: &[f64]) -> Vec<(usize, [f64; 3])> {
         let m = m_of(t);

@@ -74,6 +74,8 @@ pub(crate) struct Converted {
     pub undetermined: [bool; PAPER_LEN],
     pub fixed: [[bool; 3]; 3],
     pub lever_arms: RowMajor3,
+    /// The calibration's reference point in the fit's frame, m: `lever_arms[i] = r_i − centre_m`.
+    pub centre_m: [f64; 3],
 }
 
 /// Converts θ and its covariance (scaled by `scale2`).
@@ -149,6 +151,7 @@ pub(crate) fn convert(
         undetermined,
         fixed: *fixed,
         lever_arms,
+        centre_m: centre,
     })
 }
 

@@ -44,7 +44,7 @@ fn noise_free_paper_session_recovers_the_unit_exactly() {
             assert_eq!(out.observability.observable[i][j], i == j, "r{i}{j}");
         }
     }
-    let text = crate::report::render(&out);
+    let text = crate::report::render_session(&out, &plan, &stats);
     assert!(text.contains("Table 1") && text.contains("n.d."), "{text}");
 }
 
@@ -338,7 +338,7 @@ fn paper_method_runs_beside_the_joint_on_the_paper_plan() {
     assert!(ja < pa, "joint {ja} vs paper {pa}");
     assert!(jl < 10.0 && pl < 20.0);
     // The report prints both.
-    let text = crate::report::render(&mc.outcomes[0]);
+    let text = crate::report::render(&mc.outcomes[0], &[]);
     assert!(
         text.contains("paper eq. 24") && text.contains("joint"),
         "{text}"
@@ -441,7 +441,7 @@ fn missing_and_unknown_segments_are_named() {
         .warnings
         .iter()
         .any(|w| w.contains(&removed.name) && w.contains("plan.toml")));
-    let text = crate::report::render(&out);
+    let text = crate::report::render_session(&out, &plan, &stats);
     assert!(
         text.contains("Excluded segments") && text.contains("'bonus'"),
         "{text}"
@@ -532,7 +532,7 @@ fn bad_segments_are_excluded_with_reasons() {
         Some(ExclusionReason::RateContradiction { .. })
     ));
     assert_eq!(out.excluded.len(), 6, "{:?}", out.excluded);
-    let text = crate::report::render(&out);
+    let text = crate::report::render_session(&out, &plan, &stats);
     assert!(
         text.contains("planned static but moved") && text.contains("from the plan's up_b"),
         "{text}"
@@ -615,7 +615,7 @@ fn plans_that_cannot_observe_lever_arms_flag_them() {
         "{:?}",
         out.warnings
     );
-    let text = crate::report::render(&out);
+    let text = crate::report::render_session(&out, &plan, &stats);
     assert!(text.contains("fixed at 0 (n.o.)"), "{text}");
     let require = EstimateOptions {
         require_lever_arms: true,

@@ -214,6 +214,9 @@ pub struct ReportData {
     pub navigation: Vec<NavigationRun>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
     pub session_fit: Result<CalibrationOutcome, String>,
+    /// The session's segments through the session fit's own calibration (empty when it failed or its
+    /// compensator cannot be built: the text then shows the fit's values only).
+    pub session_fit_segments: Vec<SegmentRow>,
     /// Warnings for the reader.
     pub warnings: Vec<String>,
 }
@@ -228,6 +231,11 @@ pub fn segment_rows(
     let stat = Compensator::new(cal, LeverMode::Off)
         .map_err(|e| ReportError::Calibration(e.to_string()))?;
     let full = Compensator::new(cal, LeverMode::RateAndAcceleration)
+        .map_err(|e| ReportError::Calibration(e.to_string()))?;
+    let gyro_inv = cal
+        .gyro
+        .unwrap_or(shared::GyroCorrection::PERFECT)
+        .checked_inverse()
         .map_err(|e| ReportError::Calibration(e.to_string()))?;
     let u0 = cal.statics.zero_bias_out;
     let k = cal.statics.scale_out_per_g;
@@ -255,13 +263,6 @@ pub fn segment_rows(
         } else {
             mean_w
         };
-        let omega_dot = st.wdot_rad_s2;
-        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
-        let wp = linalg::mat_vec(&linalg::lever_matrix(&omega, &omega_dot), &p);
-        let truth_g: [f64; 3] = std::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
-        let u = SensorOutputs {
-            raw: st.mean_u.map(|v| v as f32),
-        };
         // A calibration with a temperature model is applied at the segment's mean temperature, as
         // the device applies it (docs/model.md §9).
         let (mut stat, mut full) = (stat, full);
@@ -269,6 +270,19 @@ pub fn segment_rows(
             stat.refresh(ts.mean_c() as f32);
             full.refresh(ts.mean_c() as f32);
         }
+        // The body's rate and angular acceleration through the calibration's gyro correction, as the
+        // device computes them (docs/model.md §8): `ω = G⁻¹(w − b(T))`, `ω̇ = G⁻¹ẇ`.
+        let omega = full
+            .correct_rate(&omega.map(|v| v as f32))
+            .rad_s
+            .map(f64::from);
+        let omega_dot = linalg::mat_vec(&gyro_inv, &st.wdot_rad_s2);
+        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
+        let wp = linalg::mat_vec(&linalg::lever_matrix(&omega, &omega_dot), &p);
+        let truth_g: [f64; 3] = std::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
+        let u = SensorOutputs {
+            raw: st.mean_u.map(|v| v as f32),
+        };
         let after_static = stat.compensate_static(&u).to_f64().m_s2.map(|v| v / g);
         let after = full
             .compensate(
@@ -381,6 +395,10 @@ pub fn build_report(
         Some(o) => Ok(o),
         None => calibrate_session_stats(plan, stats, &options.estimate).map_err(|e| e.to_string()),
     };
+    let session_fit_segments = match &session_fit {
+        Ok(o) => segment_rows(plan, stats, &o.calibration).unwrap_or_default(),
+        Err(_) => Vec::new(),
+    };
     Ok(ReportData {
         calibration: *cal,
         uncertainty: uncertainty.cloned(),
@@ -390,6 +408,7 @@ pub fn build_report(
         chi2_terms: terms,
         navigation,
         session_fit,
+        session_fit_segments,
         warnings,
     })
 }

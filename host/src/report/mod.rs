@@ -25,8 +25,10 @@ mod tests;
 pub mod text;
 pub mod thermal;
 
-pub use data::{build_report, Compensation, ReportData, ReportError, ReportOptions, SegmentRow};
+pub use data::{
+    build_report, segment_rows, Compensation, ReportData, ReportError, ReportOptions, SegmentRow,
+};
 pub use document::{report, ReportSummary, REPORT_HTML, REPORT_MD};
 pub use navigation::render_position_targets;
 pub use navigation_check::{navigation_check, NavigationCheck, NavigationCheckArgs};
-pub use text::{render, render_prediction};
+pub use text::{render, render_prediction, render_session};

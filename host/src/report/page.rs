@@ -255,7 +255,10 @@ pub fn page(
                     }
                 }
             )));
-            b.push(Block::Pre(crate::report::render(o)));
+            b.push(Block::Pre(crate::report::render(
+                o,
+                &data.session_fit_segments,
+            )));
         }
         Err(e) => b.push(Block::Para(format!(
             "The session alone does not calibrate: {e}"

@@ -298,3 +298,76 @@ fn a_named_run_must_exist() {
     // Without [uncertainty], Table 1 says so.
     assert!(cells(&table1(&d))[0][1].contains("no σ"));
 }
+
+/// The table's outputs correct the gyro's rate before the lever-arm terms, as the device does
+/// (docs/model.md §8): a noise-free session whose gyro reads 0.5 % high, 0.5° misaligned and 0.5 °/s
+/// off, compensated with the true unit and that gyro, gives every segment's true specific force; the
+/// same unit with its gyro taken as perfect misses on the spinning segments.
+#[test]
+fn segment_rows_correct_the_rate_with_the_calibrations_gyro() {
+    use crate::sim::session::gyro_matrix;
+    use crate::sim::testkit::{self, TableErrors};
+    let plan = builtin_plan("short-oblique").unwrap().unwrap();
+    let unit = testkit::paper_unit();
+    let gyro = shared::GyroCorrection {
+        matrix: gyro_matrix([5e-3, -5e-3, 5e-3], 0.5f64.to_radians()),
+        bias_rad_s: [
+            0.5f64.to_radians(),
+            -0.5f64.to_radians(),
+            0.5f64.to_radians(),
+        ],
+    };
+    let errors = TableErrors {
+        gyro: Some((gyro.matrix, gyro.bias_rad_s)),
+        ..TableErrors::default()
+    };
+    let stats = testkit::noisy_stats(&plan, &unit, 0.0, errors, &mut testkit::Rng::new(1, 0));
+    let worst = |cal: &shared::Calibration| {
+        let rows = segment_rows(&plan, &stats, cal).unwrap();
+        assert_eq!(rows.len(), plan.segments.len());
+        rows.iter()
+            .flat_map(|r| r.error_g(Compensation::Full))
+            .fold(0.0f64, |m, e| m.max(e.abs()))
+    };
+    let with_gyro = shared::Calibration {
+        gyro: Some(gyro),
+        ..unit
+    };
+    let corrected = worst(&with_gyro);
+    let ignored = worst(&unit);
+    eprintln!("worst |after − truth|: gyro corrected {corrected:.2e} g, ignored {ignored:.2e} g");
+    // f32 arithmetic on outputs of ~2.4 V: a few 10⁻⁷ g.
+    assert!(corrected < 2e-6, "{corrected:e}");
+    assert!(ignored > 20.0 * corrected.max(1e-6), "{ignored:e}");
+}
+
+/// The terminal text puts the fit's specific force beside this table's outputs: both must be at the
+/// calibration's reference point. Lever arms referred to the centroid move the output away from the
+/// fit's own origin by millig at 200 °/s; on a noise-free session the two still agree to f32 rounding.
+#[test]
+fn the_fits_specific_force_is_at_the_calibrations_reference_point() {
+    use crate::estimate::ReferenceChoice;
+    let plan = builtin_plan("short-oblique").unwrap().unwrap();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 3).unwrap();
+    for reference in [
+        ReferenceChoice::TableAxis,
+        ReferenceChoice::Centroid,
+        ReferenceChoice::BodyPoint([0.01, -0.02, 0.005]),
+    ] {
+        let options = EstimateOptions {
+            reference,
+            ..EstimateOptions::default()
+        };
+        let out = calibrate_session_stats(&plan, &stats, &options).unwrap();
+        let rows = segment_rows(&plan, &stats, &out.calibration).unwrap();
+        let mut worst = 0.0f64;
+        for d in out.segments.iter().filter(|d| d.used) {
+            let row = rows.iter().find(|r| r.name == d.name).unwrap();
+            for j in 0..3 {
+                worst = worst.max((d.theoretical_g[j] - row.after_g[j]).abs());
+            }
+        }
+        assert!(worst < 2e-6, "{reference:?}: {worst:e} g");
+    }
+}

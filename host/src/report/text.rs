@@ -1,13 +1,15 @@
 //! The terminal report of a calibration: the paper's Table 1 (zero bias, scale factor, installation
-//! angles) and Table 3 (lever arms) with 1σ, the per-segment residuals before and after compensation
-//! (like Tables 2 and 4) with the χ² check, the excluded segments, the method comparison and the
+//! angles) and Table 3 (lever arms) with 1σ, the per-segment outputs before and after compensation
+//! (like Tables 2 and 4, from the one table [`super::segment_rows`]) with the fit's χ² check, the excluded segments, the method comparison and the
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
 use super::format::{out_digits, pm};
+use super::SegmentRow;
 use crate::estimate::{
     CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
     SegmentKind, StaticSplit, PAPER_LEN,
 };
+use crate::session::{Plan, SegmentStats};
 use shared::params::axis_name;
 use std::fmt::Write;
 
@@ -22,9 +24,10 @@ fn lever_cell(r: f64, s: f64, observable: bool, fixed: bool) -> String {
     }
 }
 
-/// The full report: Tables 1 and 3, the methods compared, the per-segment residuals, the fit, the
-/// excluded segments and the warnings.
-pub fn render(o: &CalibrationOutcome) -> String {
+/// The full report: Tables 1 and 3, the methods compared, the per-segment outputs, the fit, the
+/// excluded segments and the warnings. `segments`: the outputs of the session's segments through
+/// this calibration ([`super::segment_rows`]); a segment without a row shows the fit's values only.
+pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "Calibration ({}), 1σ{}", o.method, sigma_note(o));
     let _ = writeln!(s);
@@ -40,7 +43,7 @@ pub fn render(o: &CalibrationOutcome) -> String {
         "Residuals per segment (g), like Tables 2 and 4: theoretical | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
     );
     for dgn in &o.segments {
-        render_segment(&mut s, dgn);
+        render_segment(&mut s, dgn, segments.iter().find(|r| r.name == dgn.name));
     }
     let _ = writeln!(
         s,
@@ -172,6 +175,17 @@ fn render_comparison(s: &mut String, o: &CalibrationOutcome) {
     }
 }
 
+/// [`render`] with the session's segments through the outcome's own calibration.
+pub fn render_session(o: &CalibrationOutcome, plan: &Plan, stats: &[SegmentStats]) -> String {
+    match super::segment_rows(plan, stats, &o.calibration) {
+        Ok(rows) => render(o, &rows),
+        Err(e) => format!(
+            "{}(the outputs after compensation cannot be shown: {e})\n",
+            render(o, &[])
+        ),
+    }
+}
+
 fn sigma_note(o: &CalibrationOutcome) -> String {
     if o.fit.sigma_scale > 1.0 {
         format!(" (scaled by √(χ²/dof) = {:.2})", o.fit.sigma_scale)
@@ -180,7 +194,7 @@ fn sigma_note(o: &CalibrationOutcome) -> String {
     }
 }
 
-fn render_segment(s: &mut String, d: &SegmentDiagnostic) {
+fn render_segment(s: &mut String, d: &SegmentDiagnostic, row: Option<&SegmentRow>) {
     let kind = match d.kind {
         SegmentKind::Static => "static".to_string(),
         SegmentKind::ConstantRate => format!("{:+.1} °/s", d.rate_deg_s),
@@ -195,15 +209,16 @@ fn render_segment(s: &mut String, d: &SegmentDiagnostic) {
         "  {} — up [{:+.3}, {:+.3}, {:+.3}], {kind}, {} rows, {chi}",
         d.name, d.up_b[0], d.up_b[1], d.up_b[2], d.count
     );
+    let cell = |v: Option<f64>| v.map_or("        —".to_string(), |v| format!("{v:+.6}"));
     for i in 0..3 {
         let _ = writeln!(
             s,
-            "    {}  {:+.6} | {:+.6} | {:+.6} | {:+.6}   (σ {:.1} µg)",
+            "    {}  {:+.6} | {} | {} | {}   (σ {:.1} µg)",
             axis_name(i),
             d.theoretical_g[i],
-            d.before_g[i],
-            d.after_static_g[i],
-            d.after_g[i],
+            cell(row.map(|r| r.before_g[i])),
+            cell(row.map(|r| r.after_static_g[i])),
+            cell(row.map(|r| r.after_g[i])),
             d.noise_g[i] * 1e6
         );
     }
@@ -424,7 +439,7 @@ rate_deg_s = 200
         };
         let stats = synth::plan_stats(&plan, &unit, &noise, 60.0);
         let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
-        let text = super::render(&out);
+        let text = super::render_session(&out, &plan, &stats);
         eprintln!("{text}");
         for want in [
             "Table 1",
