@@ -67,6 +67,199 @@ fn line(name: &str, x10: u32, note: &str) {
     );
 }
 
+/// The inputs every measurement cycles through: 16 varied samples.
+struct Inputs {
+    u: [SensorOutputs; 16],
+    w: [BodyRate; 16],
+    wd: [BodyAngularAccel; 16],
+    codes: [RawCodes; 16],
+}
+
+/// The board's conversion: a 12-bit ADC on 3.3 V and a gyro of 1 mrad/s per LSB.
+const SCALING: Scaling = Scaling {
+    volts_per_code: 3.3 / 4095.0,
+    adc_max: 4095,
+    rad_s_per_lsb: 0.001,
+};
+
+impl Inputs {
+    fn new(sensor: &mut VirtualSensor) -> Inputs {
+        let mut x = Inputs {
+            u: [SensorOutputs::default(); 16],
+            w: [BodyRate::default(); 16],
+            wd: [BodyAngularAccel::default(); 16],
+            codes: [RawCodes::default(); 16],
+        };
+        for k in 0..16 {
+            let s = sensor.sample();
+            x.u[k].raw = s.raw;
+            x.w[k].rad_s = [0.5 + k as f32 * 0.01, -0.2, 3.0 - k as f32 * 0.1];
+            x.wd[k].rad_s2 = [1.0, k as f32, -2.5];
+            x.codes[k] = RawCodes {
+                adc: s.raw.map(|v| (v / SCALING.volts_per_code) as u16),
+                gyro: [100 + k as i16, -300, 2000 - 10 * k as i16],
+            };
+        }
+        x
+    }
+}
+
+/// Shows the tick-to-instruction conversion on 10 × 100 `nop`s.
+fn conversion_check() {
+    let nop_empty = ticks(10, |i| {
+        black_box(i);
+    });
+    let nops = ticks(10, |i| {
+        black_box(i);
+        hundred_nops();
+    });
+    hprintln!(
+        "bench: 10 calls of 100 nops measured as {} instructions (+ 2 per call) (SysTick ticks x {}; QEMU -icount shift=0)",
+        nops.saturating_sub(nop_empty) * INSTR_PER_TICK,
+        INSTR_PER_TICK
+    );
+}
+
+/// Each per-sample piece on its own. `empty`: the empty loop's ticks.
+fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
+    let c_off = Compensator::new(cal, LeverMode::Off).unwrap();
+    let c_full = Compensator::new(cal, LeverMode::RateAndAcceleration).unwrap();
+    let st = ticks(N, |i| {
+        black_box(c_off.compensate_static(black_box(&x.u[i & 15])));
+    });
+    line(
+        "compensation, static only",
+        per_iter_x10(st, empty, N),
+        "(floor: 12 multiply-adds)",
+    );
+    let full = ticks(N, |i| {
+        black_box(c_full.compensate(
+            black_box(&x.u[i & 15]),
+            black_box(&x.w[i & 15]),
+            black_box(&x.wd[i & 15]),
+        ));
+    });
+    line(
+        "compensation, static + lever arms + omega-dot",
+        per_iter_x10(full, empty, N),
+        "(floor: 51 multiply-adds; goal <= 150)",
+    );
+    let gc = ticks(N, |i| {
+        black_box(c_full.correct_rate(black_box(&x.w[i & 15].rad_s)));
+    });
+    line(
+        "gyro correction, G^-1 (w - b)",
+        per_iter_x10(gc, empty, N),
+        "(12 FP ops + 12 constant loads; goal <= 15)",
+    );
+    let mut est = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
+    let od = ticks(N, |i| {
+        black_box(est.update(black_box(&x.w[i & 15].rad_s)));
+    });
+    line("omega-dot estimator update", per_iter_x10(od, empty, N), "");
+    let mut acc = WindowAccumulator::<6>::new();
+    let ac = ticks(N, |i| {
+        let u = black_box(&x.u[i & 15].raw);
+        let r = &x.w[i & 15].rad_s;
+        acc.add(&[u[0], u[1], u[2], r[0], r[1], r[2]]);
+    });
+    black_box(acc.finish());
+    line(
+        "window accumulation (6 channels)",
+        per_iter_x10(ac, empty, N),
+        "",
+    );
+    let rd = ticks(N, |i| {
+        black_box(SCALING.sample(black_box(&x.codes[i & 15])));
+    });
+    line(
+        "sample read (ADC codes + gyro words -> f32)",
+        per_iter_x10(rd, empty, N),
+        "",
+    );
+}
+
+/// The whole path as the sampling interrupt runs it. The first two differ only in the gyro: the
+/// difference is the correction's cost in place (its inputs and outputs stay in registers there).
+fn bench_whole_paths(cal: &shared::Calibration, x: &Inputs, empty: u32) {
+    let perfect_gyro = paper_unit::calibration();
+    for (name, kind, mode, unit, goal) in [
+        (
+            "whole path: read + gyro corr. + omega-dot + full comp. + window",
+            StreamKind::CompensatedWindows,
+            LeverMode::RateAndAcceleration,
+            cal,
+            "(goal <= 400)",
+        ),
+        (
+            "whole path as above, perfect gyro (correction skipped)",
+            StreamKind::CompensatedWindows,
+            LeverMode::RateAndAcceleration,
+            &perfect_gyro,
+            "",
+        ),
+        (
+            "whole path: read + gyro corr. + omega-dot + static comp. + window",
+            StreamKind::CompensatedWindows,
+            LeverMode::Off,
+            cal,
+            "",
+        ),
+        (
+            "whole path: read + gyro corr. + omega-dot + raw window",
+            StreamKind::RawWindows,
+            LeverMode::RateAndAcceleration,
+            cal,
+            "",
+        ),
+    ] {
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(
+            Compensator::new(unit, mode).ok(),
+        ));
+        p.apply(PipelineCommand::Stream(StreamRequest {
+            kind,
+            window_samples: 1000,
+        }));
+        let t = ticks(N, |i| {
+            let s = SCALING.sample(black_box(&x.codes[i & 15]));
+            p.on_sample(&s);
+        });
+        black_box(p.pop_output());
+        line(name, per_iter_x10(t, empty, N), goal);
+    }
+}
+
+/// What does not run per sample: a temperature refresh (4 per second) and the QEMU board's virtual
+/// sensor (which replaces the read there).
+fn bench_occasional(cal: &shared::Calibration, sensor: &mut VirtualSensor) {
+    let thermal = shared::Calibration {
+        temperature: Some(paper_unit::typical_thermal_model()),
+        ..*cal
+    };
+    let r_empty = ticks(256, |i| {
+        black_box(i);
+    });
+    if let Ok(mut c) = Compensator::new(&thermal, LeverMode::RateAndAcceleration) {
+        let r = ticks(256, |i| {
+            black_box(c.refresh(black_box(20.0 + (i & 15) as f32)));
+        });
+        line(
+            "temperature refresh (u0, K_A columns, lever terms, gyro bias)",
+            per_iter_x10(r, r_empty, 256),
+            "(per refresh, 4 per second: not per sample)",
+        );
+    }
+    let vs = ticks(256, |_| {
+        black_box(sensor.sample());
+    });
+    line(
+        "QEMU virtual sensor sample (f64 soft-float model)",
+        per_iter_x10(vs, r_empty, 256),
+        "(QEMU board only; replaces the read)",
+    );
+}
+
 #[entry]
 fn main() -> ! {
     let mut cp = cortex_m::Peripherals::take().unwrap();
@@ -81,177 +274,15 @@ fn main() -> ! {
         gyro: Some(paper_unit::typical_gyro()),
         ..paper_unit::calibration()
     };
-    let c_off = Compensator::new(&cal, LeverMode::Off).unwrap();
-    let c_full = Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
     let mut sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
-    let mut u = [SensorOutputs::default(); 16];
-    let mut w = [BodyRate::default(); 16];
-    let mut wd = [BodyAngularAccel::default(); 16];
-    let mut codes = [RawCodes::default(); 16];
-    for k in 0..16 {
-        let s = sensor.sample();
-        u[k].raw = s.raw;
-        w[k].rad_s = [0.5 + k as f32 * 0.01, -0.2, 3.0 - k as f32 * 0.1];
-        wd[k].rad_s2 = [1.0, k as f32, -2.5];
-        codes[k] = RawCodes {
-            adc: s.raw.map(|v| (v / (3.3 / 4095.0)) as u16),
-            gyro: [100 + k as i16, -300, 2000 - 10 * k as i16],
-        };
-    }
-    let scaling = Scaling {
-        volts_per_code: 3.3 / 4095.0,
-        adc_max: 4095,
-        rad_s_per_lsb: 0.001,
-    };
-
-    // Conversion check: 10 × 100 nops.
-    let nop_empty = ticks(10, |i| {
-        black_box(i);
-    });
-    let nops = ticks(10, |i| {
-        black_box(i);
-        hundred_nops();
-    });
-    hprintln!(
-        "bench: 10 calls of 100 nops measured as {} instructions (+ 2 per call) (SysTick ticks x {}; QEMU -icount shift=0)",
-        nops.saturating_sub(nop_empty) * INSTR_PER_TICK,
-        INSTR_PER_TICK
-    );
-
+    let inputs = Inputs::new(&mut sensor);
+    conversion_check();
     let empty = ticks(N, |i| {
         black_box(i);
     });
-    let st = ticks(N, |i| {
-        black_box(c_off.compensate_static(black_box(&u[i & 15])));
-    });
-    line(
-        "compensation, static only",
-        per_iter_x10(st, empty, N),
-        "(floor: 12 multiply-adds)",
-    );
-    let full = ticks(N, |i| {
-        black_box(c_full.compensate(
-            black_box(&u[i & 15]),
-            black_box(&w[i & 15]),
-            black_box(&wd[i & 15]),
-        ));
-    });
-    line(
-        "compensation, static + lever arms + omega-dot",
-        per_iter_x10(full, empty, N),
-        "(floor: 51 multiply-adds; goal <= 150)",
-    );
-    let gc = ticks(N, |i| {
-        black_box(c_full.correct_rate(black_box(&w[i & 15].rad_s)));
-    });
-    line(
-        "gyro correction, G^-1 (w - b)",
-        per_iter_x10(gc, empty, N),
-        "(12 FP ops + 12 constant loads; goal <= 15)",
-    );
-    let mut est = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
-    let od = ticks(N, |i| {
-        black_box(est.update(black_box(&w[i & 15].rad_s)));
-    });
-    line("omega-dot estimator update", per_iter_x10(od, empty, N), "");
-    let mut acc = WindowAccumulator::<6>::new();
-    let ac = ticks(N, |i| {
-        let x = black_box(&u[i & 15].raw);
-        let r = &w[i & 15].rad_s;
-        acc.add(&[x[0], x[1], x[2], r[0], r[1], r[2]]);
-    });
-    black_box(acc.finish());
-    line(
-        "window accumulation (6 channels)",
-        per_iter_x10(ac, empty, N),
-        "",
-    );
-    let rd = ticks(N, |i| {
-        black_box(scaling.sample(black_box(&codes[i & 15])));
-    });
-    line(
-        "sample read (ADC codes + gyro words -> f32)",
-        per_iter_x10(rd, empty, N),
-        "",
-    );
-
-    // The whole path as the sampling interrupt runs it. The first two differ only in the gyro: the
-    // difference is the correction's cost in place (its inputs and outputs stay in registers there).
-    let perfect_gyro = paper_unit::calibration();
-    for (name, kind, mode, unit, goal) in [
-        (
-            "whole path: read + gyro corr. + omega-dot + full comp. + window",
-            StreamKind::CompensatedWindows,
-            LeverMode::RateAndAcceleration,
-            &cal,
-            "(goal <= 400)",
-        ),
-        (
-            "whole path as above, perfect gyro (correction skipped)",
-            StreamKind::CompensatedWindows,
-            LeverMode::RateAndAcceleration,
-            &perfect_gyro,
-            "",
-        ),
-        (
-            "whole path: read + gyro corr. + omega-dot + static comp. + window",
-            StreamKind::CompensatedWindows,
-            LeverMode::Off,
-            &cal,
-            "",
-        ),
-        (
-            "whole path: read + gyro corr. + omega-dot + raw window",
-            StreamKind::RawWindows,
-            LeverMode::RateAndAcceleration,
-            &cal,
-            "",
-        ),
-    ] {
-        let mut p = Pipeline::<8>::new(1000);
-        p.apply(PipelineCommand::Compensator(
-            Compensator::new(unit, mode).ok(),
-        ));
-        p.apply(PipelineCommand::Stream(StreamRequest {
-            kind,
-            window_samples: 1000,
-        }));
-        let t = ticks(N, |i| {
-            let s = scaling.sample(black_box(&codes[i & 15]));
-            p.on_sample(&s);
-        });
-        black_box(p.pop_output());
-        line(name, per_iter_x10(t, empty, N), goal);
-    }
-    // A temperature refresh (4 per second, not per sample): the calibration with a thermal model.
-    let thermal = shared::Calibration {
-        temperature: Some(paper_unit::typical_thermal_model()),
-        ..cal
-    };
-    if let Ok(mut c) = Compensator::new(&thermal, LeverMode::RateAndAcceleration) {
-        let r = ticks(256, |i| {
-            black_box(c.refresh(black_box(20.0 + (i & 15) as f32)));
-        });
-        let r_empty = ticks(256, |i| {
-            black_box(i);
-        });
-        line(
-            "temperature refresh (u0, K_A columns, lever terms, gyro bias)",
-            per_iter_x10(r, r_empty, 256),
-            "(per refresh, 4 per second: not per sample)",
-        );
-    }
-    let vs = ticks(256, |_| {
-        black_box(sensor.sample());
-    });
-    let vs_empty = ticks(256, |i| {
-        black_box(i);
-    });
-    line(
-        "QEMU virtual sensor sample (f64 soft-float model)",
-        per_iter_x10(vs, vs_empty, 256),
-        "(QEMU board only; replaces the read)",
-    );
+    bench_parts(&cal, &inputs, empty);
+    bench_whole_paths(&cal, &inputs, empty);
+    bench_occasional(&cal, &mut sensor);
     debug::exit(debug::EXIT_SUCCESS);
     loop {
         cortex_m::asm::wfi();
