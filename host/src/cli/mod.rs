@@ -17,7 +17,8 @@
 //! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
 //!
-//! Every command fails with the one [`CliError`].
+//! Every command fails with the one [`CliError`] ([`error`]); [`output`] decides where its output goes
+//! (`--json`, `--quiet`).
 
 pub mod apply;
 pub mod batch;

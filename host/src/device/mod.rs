@@ -1,6 +1,7 @@
 //! The link to a device: the protocol client ([`client`]), the transports it runs over (a serial port,
 //! [`serial`], or the in-process simulated device, [`sim`]), and the live calibration procedure
-//! ([`procedure`]) with its operator prompts ([`operator`]).
+//! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
+//! segment ([`live_check`]), and hand-held mode ([`handheld`]).
 
 pub mod client;
 pub mod handheld;

@@ -12,6 +12,16 @@
 //!   lever-arm component.
 //! - [`predict`]: the Cramér–Rao 1σ of every parameter for a plan and a noise level, before any data.
 //! - `crate::sim::synth`: noise-free statistics of a plan run on a known unit (the input of [`predict`], and the tests').
+//!
+//! The modules, in the order a fit runs through them: `screen` (plan ↔ data, screening, the static
+//! least squares), `segment` (segment kind, pooled static noise), [`model`] (one segment's mean
+//! outputs, the parameter layout), `build` (segment models, mounts, the gyro's observations),
+//! [`attitude`] (each mount's tilt unknowns and prior, docs/model.md §7), [`gyro`] (the gyro model,
+//! §8), `solve` and `joint` (the weighted least squares), `paper` (the paper's eq. 24, for
+//! comparison), `paper_angles` (θ to the paper's angles with their covariance), `uncertainty`,
+//! [`plausibility`] (checks before any file is written); [`thermal`], `thermal_gyro` and
+//! `thermal_misalignment` (the temperature model, §9); [`handheld_gyro`] (the gyro from hand turns);
+//! [`predict`] (Cramér–Rao).
 
 pub mod attitude;
 mod build;

@@ -1,7 +1,9 @@
 //! Our calibration in the formats other tools read (`host export --format F`), and the conversions
 //! between our model and each tool's convention.
 //!
-//! Formats: [`ExportFormat`]. Each writer states the conventions it assumes in the file it writes, and
+//! Formats: [`ExportFormat`], one module each: [`kalibr`] (YAML), [`c`] (C headers, with the portable
+//! C blob decoder in `c/`), [`json`], [`params`] (PX4 and ArduPilot), [`toml_forms`] (the conversions
+//! below as TOML). Each writer states the conventions it assumes in the file it writes, and
 //! marks what the target cannot hold or what the calibration did not determine (never a silent zero).
 //! Each is checked by its own consumer in the tests: gcc for the C outputs (run against the Rust
 //! compensator), a YAML parser for Kalibr's file, a JSON parser for the JSON document.

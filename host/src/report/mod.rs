@@ -1,7 +1,9 @@
 //! What a person reads.
 //!
 //! - [`text`]: the terminal text of a calibration and of a plan's prediction, with [`mod@format`] (the one
-//!   `± 1σ` formatter).
+//!   `± 1σ` formatter) and [`thermal`] (the temperature model's part).
+//! - [`segment_rows`]: the one table of each segment's outputs before and after compensation, through
+//!   the device's own compensator (the terminal text and the report both show it).
 //! - The HTML/Markdown report of `host report`: [`data`] (the numbers: segments before and after
 //!   compensation, χ², navigation replays) → [`figures`] (what each figure shows) and [`page`] (the
 //!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG) and [`markup`] (Markdown, HTML) →

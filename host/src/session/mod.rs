@@ -5,7 +5,11 @@
 //!   shipped with the tool.
 //! - [`stats`]: the per-segment sufficient statistics everything downstream works on.
 //! - [`reader`]: the streaming `samples.csv` reader (constant memory, one pass); [`writer`]: the
-//!   writer that syncs at every segment end; [`error`]: what can go wrong with either.
+//!   writer that syncs at every segment end; [`error`]: what can go wrong with either;
+//!   [`thermal`]: the optional `temp_c` column and its per-segment statistics.
+//! - A logger's file without a plan: [`import`] reads its CSV (units, columns, sample rate),
+//!   [`segment`] finds the still positions and the spins in it (`host segment`), and
+//!   [`from_recording`] turns what was found into a plan and statistics for the estimator.
 
 pub mod builtin;
 pub mod error;

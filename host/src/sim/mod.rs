@@ -2,6 +2,13 @@
 //! model with a seeded noise model ([`session`], `host simulate`), and its noise-free segment
 //! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), and the one
 //! random number generator ([`rng`]).
+//!
+//! - [`session`]: the virtual unit on a virtual table, row by row, with the table's and the gyro's
+//!   errors, drift and quantisation; [`stats`]: its statistics without writing rows.
+//! - [`handheld`]: a hand-held session (`host simulate-hand`); [`thermal`]: temperature profiles and
+//!   the unit's thermal model; [`flicker`]: 1/f noise.
+//! - Test-only: `testkit` (the tests' noisy statistics with table errors) and `montecarlo` (the
+//!   Monte Carlo runs behind the accuracy figures).
 
 pub mod flicker;
 pub mod handheld;
