@@ -1,0 +1,57 @@
+//! The README's layout table and each module's own map name every source file of `host/src`'s
+//! module folders, so that a reader who looks a piece up by its name finds it.
+
+use std::path::Path;
+
+/// The `.rs` files of a module folder that are not tests and not `mod.rs`, without the extension.
+fn modules(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().into_string().unwrap();
+            let stem = name.strip_suffix(".rs")?.to_string();
+            (stem != "mod" && !stem.contains("tests")).then_some(stem)
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn readme_and_module_maps_name_every_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("../README.md")).unwrap();
+    let layout = &readme[readme.find("## Layout").unwrap()..];
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(root.join("src")).unwrap() {
+        let dir = entry.unwrap().path();
+        let Ok(map) = std::fs::read_to_string(dir.join("mod.rs")) else {
+            continue;
+        };
+        let folder = dir.file_name().unwrap().to_str().unwrap().to_string();
+        let doc: String = map
+            .lines()
+            .take_while(|l| l.starts_with("//!"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let row = layout
+            .lines()
+            .find(|l| l.starts_with(&format!("| `host/src/{folder}/`")));
+        for m in modules(&dir) {
+            if !doc.contains(&format!("`{m}`")) && !doc.contains(&format!("`mod@{m}`")) {
+                missing.push(format!("{folder}/mod.rs's module map does not name {m}"));
+            }
+            // Folders the README describes in a shared row (e.g. `noise/`) are named as a whole.
+            if let Some(row) = row {
+                if !row.contains(&format!("`{m}.rs`"))
+                    && !(folder == "cli" && row.contains("one file per subcommand"))
+                {
+                    missing.push(format!(
+                        "README's layout row for host/src/{folder}/ does not name {m}.rs"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
