@@ -474,8 +474,10 @@ impl GyroInverse {
     /// `G⁻¹w + c` (9 multiply-adds, `c = −G⁻¹b` precomputed) costs 25 on its own and moved the whole path
     /// from 379 to 391 (the larger state pushes fields out of `vldr` offset reach); an out-of-line
     /// assembly routine with one `vldmia` costs 23.6 in place (call, moves, clobbered registers);
-    /// inline assembly cannot take FPU register operands on stable Rust for this single-precision
-    /// target (the `sreg` class requires `vfp2`, which implies double precision); a block of 16
+    /// inline assembly cannot take FPU register operands with this toolchain (Rust 1.95) for this
+    /// single-precision target: the `sreg` class requires the `vfp2` feature, which the M4F's
+    /// `vfp4d16sp` does not imply (relaxed to `fpregs` in rustc after 1.95: rust-lang/rust#159988;
+    /// with it, one `vldmia` and nine `vmla.f32` in line would cost about 10); a block of 16
     /// corrected at once keeps the constants in registers but costs 21.5 per sample in loads, stores
     /// and loop.
     #[inline(always)]
