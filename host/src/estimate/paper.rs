@@ -72,6 +72,8 @@ fn solve_eq24(
     (r, v)
 }
 
+/// The paper's lever arms (eq. 24) on top of the static fit, with their covariance: the spin
+/// segments' noise plus the static fit's own errors carried through.
 pub(crate) fn eq24(
     plan: &Plan,
     segs: &[SessionSeg],
@@ -82,6 +84,34 @@ pub(crate) fn eq24(
     let k: [f64; 3] = core::array::from_fn(|i| linalg::norm(&m[i]));
     let a: [[f64; 3]; 3] = core::array::from_fn(|i| m[i].map(|v| v / k[i]));
     let g = plan.gravity_m_s2;
+    let trios = rate_trios(plan, segs, models);
+    let rates_used: Vec<f64> = trios.iter().map(|(w, _)| w.to_degrees()).collect();
+    if trios.is_empty() {
+        return Err(EstimateError::PlanCannotObserve {
+            parameters: (0..9)
+                .map(|p| format!("r{}{}", p / 3 + 1, shared::params::axis_name(p % 3)))
+                .collect(),
+            hint: "the paper's eq. 24 needs constant-rate segments with +x, +y and +z up at a common rate"
+                .into(),
+        });
+    }
+    let (r, var_noise) = solve_eq24(&static_fit.theta, g, &trios, models);
+    let jac = static_jacobian(&static_fit.theta, &k, g, &trios, models);
+    let (theta, cov) = with_lever_arms(static_fit, &r, &var_noise, &jac);
+    let worst_cos = smallest_cross_cosine(&a);
+    let notes = vec![format!(
+        "paper eq. 24 at {:?} °/s (nominal rates, p = 0): the across-axis components are divided by \
+         cos θ_ij as small as {:.4}, amplifying their noise up to {:.0}×",
+        rates_used,
+        worst_cos,
+        1.0 / worst_cos
+    )];
+    Ok(PaperResult { theta, cov, notes })
+}
+
+/// The +x-, +y- and +z-up constant-rate segments (model indices) for each rate that has all three,
+/// with the rate (rad/s), in increasing rate; the first segment of each attitude and rate is used.
+fn rate_trios(plan: &Plan, segs: &[SessionSeg], models: &[SegModel]) -> Vec<(f64, [usize; 3])> {
     // rate (0.01 °/s) → model index of the x-, y-, z-up segment.
     let mut groups: BTreeMap<i64, [Option<usize>; 3]> = BTreeMap::new();
     let cos1 = 1f64.to_radians().cos();
@@ -100,43 +130,54 @@ pub(crate) fn eq24(
             e[axis] = Some(q);
         }
     }
-    let trios: Vec<(f64, [usize; 3])> = groups
+    groups
         .iter()
         .filter_map(|(key, t)| match *t {
             [Some(x), Some(y), Some(z)] => Some(((*key as f64 / 100.0).to_radians(), [x, y, z])),
             _ => None,
         })
-        .collect();
-    let rates_used: Vec<f64> = trios.iter().map(|(w, _)| w.to_degrees()).collect();
-    if trios.is_empty() {
-        return Err(EstimateError::PlanCannotObserve {
-            parameters: (0..9)
-                .map(|p| format!("r{}{}", p / 3 + 1, shared::params::axis_name(p % 3)))
-                .collect(),
-            hint: "the paper's eq. 24 needs constant-rate segments with +x, +y and +z up at a common rate"
-                .into(),
-        });
-    }
-    let (r, var_noise) = solve_eq24(&static_fit.theta, g, &trios, models);
-    // The static fit's own errors enter through u0, k and a (numerical Jacobian, central differences).
+        .collect()
+}
+
+/// ∂r_ij/∂θ_p of eq. 24 by central differences over `M` and `u0` (eq. 24 sees them through u0, k
+/// and a), zero for the lever arms; `k`, the static fit's scale factors, set the steps.
+fn static_jacobian(
+    theta: &[f64],
+    k: &[f64; 3],
+    g: f64,
+    trios: &[(f64, [usize; 3])],
+    models: &[SegModel],
+) -> [[[f64; NP]; 3]; 3] {
     let mut jac = [[[0.0; NP]; 3]; 3];
     for p in 0..NP {
         if p % 7 >= 4 {
             continue;
         }
-        let h = 1e-6 * static_fit.theta[p].abs().max(1e-3 * k[p / 7]);
-        let mut tp = static_fit.theta.clone();
-        let mut tm = static_fit.theta.clone();
+        let h = 1e-6 * theta[p].abs().max(1e-3 * k[p / 7]);
+        let mut tp = theta.to_vec();
+        let mut tm = theta.to_vec();
         tp[p] += h;
         tm[p] -= h;
-        let (rp, _) = solve_eq24(&tp, g, &trios, models);
-        let (rm, _) = solve_eq24(&tm, g, &trios, models);
+        let (rp, _) = solve_eq24(&tp, g, trios, models);
+        let (rm, _) = solve_eq24(&tm, g, trios, models);
         for i in 0..3 {
             for j in 0..3 {
                 jac[i][j][p] = (rp[i][j] - rm[i][j]) / (2.0 * h);
             }
         }
     }
+    jac
+}
+
+/// The static fit's θ and covariance with the lever arms `r` put in: their covariance is the static
+/// fit's propagated through `jac` plus the spin noise `var_noise`, and their cross-covariance with
+/// the static parameters is propagated the same way.
+fn with_lever_arms(
+    static_fit: &solve::Fit,
+    r: &[[f64; 3]; 3],
+    var_noise: &[[f64; 3]; 3],
+    jac: &[[[f64; NP]; 3]; 3],
+) -> (Vec<f64>, DMatrix<f64>) {
     let mut theta = static_fit.theta.clone();
     let mut cov = static_fit.cov.clone();
     let rows: Vec<(usize, usize)> = (0..9).map(|q| (q / 3, q % 3)).collect();
@@ -165,8 +206,12 @@ pub(crate) fn eq24(
             }
         }
     }
-    let worst_cos = a
-        .iter()
+    (theta, cov)
+}
+
+/// The smallest |cos θ_ij| over the across-axis directions (`j ≠ i`): eq. 24's worst divisor.
+fn smallest_cross_cosine(a: &[[f64; 3]; 3]) -> f64 {
+    a.iter()
         .enumerate()
         .flat_map(|(i, row)| {
             row.iter()
@@ -174,13 +219,5 @@ pub(crate) fn eq24(
                 .filter(move |(j, _)| *j != i)
                 .map(|(_, c)| c.abs())
         })
-        .fold(f64::INFINITY, f64::min);
-    let notes = vec![format!(
-        "paper eq. 24 at {:?} °/s (nominal rates, p = 0): the across-axis components are divided by \
-         cos θ_ij as small as {:.4}, amplifying their noise up to {:.0}×",
-        rates_used,
-        worst_cos,
-        1.0 / worst_cos
-    )];
-    Ok(PaperResult { theta, cov, notes })
+        .fold(f64::INFINITY, f64::min)
 }

@@ -142,6 +142,18 @@ pub(crate) fn screen(
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
 ) {
+    screen_unusable(plan, segs, options, excluded);
+    screen_motion(plan, segs, options, excluded);
+    screen_rates(plan, segs, excluded);
+}
+
+/// Leaves out segments with too few rows, non-finite statistics or a saturated output.
+fn screen_unusable(
+    plan: &Plan,
+    segs: &mut [SessionSeg],
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+) {
     for k in 0..segs.len() {
         let st = &segs[k].stats;
         if st.count < 2 {
@@ -156,32 +168,7 @@ pub(crate) fn screen(
             exclude(segs, k, plan, ExclusionReason::NonFinite, excluded);
             continue;
         }
-        let mut saturated = None;
-        for i in 0..3 {
-            if stuck(segs, k, i) {
-                saturated = Some((
-                    i,
-                    format!(
-                        "output constant at {} for all {} rows (stuck, or clipped at a rail)",
-                        st.max_u[i], st.count
-                    ),
-                ));
-                break;
-            }
-            if let Some([lo, hi]) = options.output_range {
-                if st.min_u[i] <= lo || st.max_u[i] >= hi {
-                    saturated = Some((
-                        i,
-                        format!(
-                            "output reaches the range limit [{lo}, {hi}] (min {}, max {})",
-                            st.min_u[i], st.max_u[i]
-                        ),
-                    ));
-                    break;
-                }
-            }
-        }
-        if let Some((axis, detail)) = saturated {
+        if let Some((axis, detail)) = saturation(segs, k, options) {
             exclude(
                 segs,
                 k,
@@ -191,14 +178,53 @@ pub(crate) fn screen(
             );
         }
     }
+}
 
-    // Static segments that moved: compared with the other static segments (the gyro's bias and the
-    // accelerometers' noise are whatever the static majority shows).
-    let statics: Vec<usize> = (0..segs.len())
-        .filter(|&k| segs[k].used && segs[k].kind == SegmentKind::Static)
-        .collect();
-    if !statics.is_empty() {
-        let med_w: [f64; 3] = core::array::from_fn(|j| {
+/// The first output of segment `k` that is stuck or reaches the configured range, with the reason.
+fn saturation(segs: &[SessionSeg], k: usize, options: &EstimateOptions) -> Option<(usize, String)> {
+    let st = &segs[k].stats;
+    for i in 0..3 {
+        if stuck(segs, k, i) {
+            return Some((
+                i,
+                format!(
+                    "output constant at {} for all {} rows (stuck, or clipped at a rail)",
+                    st.max_u[i], st.count
+                ),
+            ));
+        }
+        if let Some([lo, hi]) = options.output_range {
+            if st.min_u[i] <= lo || st.max_u[i] >= hi {
+                return Some((
+                    i,
+                    format!(
+                        "output reaches the range limit [{lo}, {hi}] (min {}, max {})",
+                        st.min_u[i], st.max_u[i]
+                    ),
+                ));
+            }
+        }
+    }
+    None
+}
+
+/// Per-axis medians over the used static segments: the gyro's mean rate, the gyro's and the
+/// accelerometers' noise.
+struct StaticMedians {
+    /// Median mean gyro rate (the gyro's bias as the static majority shows it).
+    w: [f64; 3],
+    /// Median gyro noise.
+    sw: [f64; 3],
+    /// Median accelerometer noise.
+    su: [f64; 3],
+    /// Whether there are enough static segments (three) to judge noise against the others.
+    enough: bool,
+}
+
+impl StaticMedians {
+    /// The medians over the segments `statics`.
+    fn of(segs: &[SessionSeg], statics: &[usize]) -> StaticMedians {
+        let w: [f64; 3] = core::array::from_fn(|j| {
             median(
                 statics
                     .iter()
@@ -206,55 +232,82 @@ pub(crate) fn screen(
                     .collect(),
             )
         });
-        let med_sw: [f64; 3] = core::array::from_fn(|j| {
+        let sw: [f64; 3] = core::array::from_fn(|j| {
             median(statics.iter().map(|&k| segs[k].stats.std_w()[j]).collect())
         });
-        let med_su: [f64; 3] = core::array::from_fn(|j| {
+        let su: [f64; 3] = core::array::from_fn(|j| {
             median(statics.iter().map(|&k| segs[k].stats.std_u()[j]).collect())
         });
-        let enough = statics.len() >= 3;
-        for &k in &statics {
-            let st = &segs[k].stats;
-            let dw: [f64; 3] = core::array::from_fn(|j| st.mean_w_rad_s[j] - med_w[j]);
-            let rate = linalg::norm(&dw);
-            let mut detail = None;
-            if rate > options.motion_rate_threshold_rad_s {
-                detail = Some(format!(
-                    "mean gyro rate {:.3} °/s above the static segments' ({:.3} °/s allowed)",
-                    rate.to_degrees(),
-                    options.motion_rate_threshold_rad_s.to_degrees()
-                ));
-            } else if enough {
-                let sw = st.std_w();
-                let su = st.std_u();
-                for j in 0..3 {
-                    let floor = 0.01f64.to_radians();
-                    if sw[j] > options.motion_noise_ratio * med_sw[j] && sw[j] > floor {
-                        detail = Some(format!(
-                            "gyro {} noise {:.3} °/s is {:.1}× the other static segments'",
-                            axis_name(j),
-                            sw[j].to_degrees(),
-                            sw[j] / med_sw[j]
-                        ));
-                        break;
-                    }
-                    if med_su[j] > 0.0 && su[j] > options.motion_noise_ratio * med_su[j] {
-                        detail = Some(format!(
-                            "accelerometer {} noise is {:.1}× the other static segments' (vibration or motion)",
-                            axis_name(j),
-                            su[j] / med_su[j]
-                        ));
-                        break;
-                    }
-                }
-            }
-            if let Some(detail) = detail {
-                exclude(segs, k, plan, ExclusionReason::Motion { detail }, excluded);
-            }
+        StaticMedians {
+            w,
+            sw,
+            su,
+            enough: statics.len() >= 3,
         }
     }
+}
 
-    // Rotating segments whose gyro contradicts the plan's rate.
+/// Leaves out static segments that moved: compared with the other static segments (the gyro's bias
+/// and the accelerometers' noise are whatever the static majority shows).
+fn screen_motion(
+    plan: &Plan,
+    segs: &mut [SessionSeg],
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+) {
+    let statics: Vec<usize> = (0..segs.len())
+        .filter(|&k| segs[k].used && segs[k].kind == SegmentKind::Static)
+        .collect();
+    if statics.is_empty() {
+        return;
+    }
+    let med = StaticMedians::of(segs, &statics);
+    for &k in &statics {
+        if let Some(detail) = motion(&segs[k].stats, &med, options) {
+            exclude(segs, k, plan, ExclusionReason::Motion { detail }, excluded);
+        }
+    }
+}
+
+/// Why a static segment's statistics `st` show motion against the static medians, if they do.
+fn motion(st: &SegmentStats, med: &StaticMedians, options: &EstimateOptions) -> Option<String> {
+    let dw: [f64; 3] = core::array::from_fn(|j| st.mean_w_rad_s[j] - med.w[j]);
+    let rate = linalg::norm(&dw);
+    if rate > options.motion_rate_threshold_rad_s {
+        return Some(format!(
+            "mean gyro rate {:.3} °/s above the static segments' ({:.3} °/s allowed)",
+            rate.to_degrees(),
+            options.motion_rate_threshold_rad_s.to_degrees()
+        ));
+    }
+    if !med.enough {
+        return None;
+    }
+    let sw = st.std_w();
+    let su = st.std_u();
+    for j in 0..3 {
+        let floor = 0.01f64.to_radians();
+        if sw[j] > options.motion_noise_ratio * med.sw[j] && sw[j] > floor {
+            return Some(format!(
+                "gyro {} noise {:.3} °/s is {:.1}× the other static segments'",
+                axis_name(j),
+                sw[j].to_degrees(),
+                sw[j] / med.sw[j]
+            ));
+        }
+        if med.su[j] > 0.0 && su[j] > options.motion_noise_ratio * med.su[j] {
+            return Some(format!(
+                "accelerometer {} noise is {:.1}× the other static segments' (vibration or motion)",
+                axis_name(j),
+                su[j] / med.su[j]
+            ));
+        }
+    }
+    None
+}
+
+/// Leaves out rotating segments whose gyro contradicts the plan's rate.
+fn screen_rates(plan: &Plan, segs: &mut [SessionSeg], excluded: &mut Vec<Exclusion>) {
     for k in 0..segs.len() {
         if !segs[k].used || segs[k].kind == SegmentKind::Static {
             continue;

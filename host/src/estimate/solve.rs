@@ -296,90 +296,142 @@ pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
 
 /// Information matrix `Jᵀ Σ⁻¹ J` over the free entries (with the mounts' attitude priors, and an
 /// optional prior of 1σ = `prior_r_m` on every free lever-arm component), `Jᵀ Σ⁻¹ res`, and χ².
+///
+/// The blocks are accumulated in a fixed order (outputs, grouped spins, gyro axes, gyro model, mount
+/// priors, lever-arm prior): the sums, and so the fit's numbers, depend on it.
 fn normal_equations(
     p: &Problem,
     t: &[f64],
     free_idx: &[usize],
     prior_r_m: Option<f64>,
 ) -> (DMatrix<f64>, DVector<f64>, f64) {
-    let k = free_idx.len();
-    let mut col_of = vec![usize::MAX; t.len()];
-    for (c, &q) in free_idx.iter().enumerate() {
-        col_of[q] = c;
-    }
-    let mut n = DMatrix::<f64>::zeros(k, k);
-    let mut b = DVector::<f64>::zeros(k);
-    let mut chi2 = 0.0;
-    let add = |cols: &[(usize, f64)], res: f64, n: &mut DMatrix<f64>, b: &mut DVector<f64>| {
-        for &(c1, v1) in cols {
-            b[c1] += v1 * res;
-            for &(c2, v2) in cols {
-                n[(c1, c2)] += v1 * v2;
-            }
-        }
-    };
-    for s in &p.models {
-        let jac = s.jacobian(t);
-        let res = s.whitened_residual(t);
-        chi2 += res.iter().map(|v| v * v).sum::<f64>();
-        // Whitened Jacobian rows: L⁻¹ J, restricted to the free columns.
-        for a in 0..3 {
-            let mut cols: Vec<(usize, f64)> = Vec::with_capacity(jac.len());
-            for (q, d) in &jac {
-                let c = col_of[*q];
-                if c == usize::MAX {
-                    continue;
-                }
-                let v: f64 = (0..3).map(|r| s.whiten[a][r] * d[r]).sum();
-                if v != 0.0 {
-                    cols.push((c, v));
-                }
-            }
-            add(&cols, res[a], &mut n, &mut b);
-        }
-    }
-    for grp in &p.groups {
-        let (r, cols) = grp.residual(t);
-        let rw = &grp.whiten * r;
-        chi2 += rw.norm_squared();
-        let wcols: Vec<(usize, DVector<f64>)> = cols
-            .into_iter()
-            .filter(|(q, _)| col_of[*q] != usize::MAX)
-            .map(|(q, c)| (col_of[q], &grp.whiten * c))
-            .collect();
-        for row in 0..rw.len() {
-            let cs: Vec<(usize, f64)> = wcols
-                .iter()
-                .filter(|(_, c)| c[row] != 0.0)
-                .map(|(q, c)| (*q, c[row]))
-                .collect();
-            add(&cs, rw[row], &mut n, &mut b);
-        }
-    }
-    for g in &p.gyro {
-        let (res, d) = g.residual(t);
-        for c in 0..2 {
-            let w = 1.0 / g.sigma[c];
-            chi2 += (res[c] * w).powi(2);
-            let cols: Vec<(usize, f64)> = (0..2)
-                .filter(|&q| col_of[g.tilt.index + q] != usize::MAX)
-                .map(|q| (col_of[g.tilt.index + q], d[c][q] * w))
-                .collect();
-            add(&cols, res[c] * w, &mut n, &mut b);
-        }
-    }
+    let mut ne = NormalSystem::new(t.len(), free_idx);
+    ne.add_models(&p.models, t);
+    ne.add_groups(&p.groups, t);
+    ne.add_gyro_directions(&p.gyro, t);
     if let Some(blk) = &p.gyro_block {
+        ne.add_gyro_block(blk, t);
+    }
+    ne.add_mount_priors(&p.mounts, t);
+    if let Some(sig) = prior_r_m {
+        ne.add_lever_prior(sig, t, free_idx);
+    }
+    (ne.n, ne.b, ne.chi2)
+}
+
+/// The normal equations being accumulated, one block of observations at a time.
+struct NormalSystem {
+    /// Column of each θ entry in `n` and `b` (`usize::MAX` for a fixed entry).
+    col_of: Vec<usize>,
+    /// `Jᵀ Σ⁻¹ J` so far.
+    n: DMatrix<f64>,
+    /// `Jᵀ Σ⁻¹ res` so far.
+    b: DVector<f64>,
+    /// Σ of whitened residuals² so far.
+    chi2: f64,
+}
+
+impl NormalSystem {
+    /// Empty normal equations over the free entries `free_idx` of a θ of length `np`.
+    fn new(np: usize, free_idx: &[usize]) -> NormalSystem {
+        let k = free_idx.len();
+        let mut col_of = vec![usize::MAX; np];
+        for (c, &q) in free_idx.iter().enumerate() {
+            col_of[q] = c;
+        }
+        NormalSystem {
+            col_of,
+            n: DMatrix::<f64>::zeros(k, k),
+            b: DVector::<f64>::zeros(k),
+            chi2: 0.0,
+        }
+    }
+
+    /// Adds one whitened row: its free columns `(column, value)` and its residual.
+    fn add_row(&mut self, cols: &[(usize, f64)], res: f64) {
+        for &(c1, v1) in cols {
+            self.b[c1] += v1 * res;
+            for &(c2, v2) in cols {
+                self.n[(c1, c2)] += v1 * v2;
+            }
+        }
+    }
+
+    /// The segments' mean outputs (docs/model.md §4).
+    fn add_models(&mut self, models: &[SegModel], t: &[f64]) {
+        for s in models {
+            let jac = s.jacobian(t);
+            let res = s.whitened_residual(t);
+            self.chi2 += res.iter().map(|v| v * v).sum::<f64>();
+            // Whitened Jacobian rows: L⁻¹ J, restricted to the free columns.
+            for a in 0..3 {
+                let mut cols: Vec<(usize, f64)> = Vec::with_capacity(jac.len());
+                for (q, d) in &jac {
+                    let c = self.col_of[*q];
+                    if c == usize::MAX {
+                        continue;
+                    }
+                    let v: f64 = (0..3).map(|r| s.whiten[a][r] * d[r]).sum();
+                    if v != 0.0 {
+                        cols.push((c, v));
+                    }
+                }
+                self.add_row(&cols, res[a]);
+            }
+        }
+    }
+
+    /// The spins taken as differences from their rest segment (docs/model.md §7).
+    fn add_groups(&mut self, groups: &[DiffGroup], t: &[f64]) {
+        for grp in groups {
+            let (r, cols) = grp.residual(t);
+            let rw = &grp.whiten * r;
+            self.chi2 += rw.norm_squared();
+            let wcols: Vec<(usize, DVector<f64>)> = cols
+                .into_iter()
+                .filter(|(q, _)| self.col_of[*q] != usize::MAX)
+                .map(|(q, c)| (self.col_of[q], &grp.whiten * c))
+                .collect();
+            for row in 0..rw.len() {
+                let cs: Vec<(usize, f64)> = wcols
+                    .iter()
+                    .filter(|(_, c)| c[row] != 0.0)
+                    .map(|(q, c)| (*q, c[row]))
+                    .collect();
+                self.add_row(&cs, rw[row]);
+            }
+        }
+    }
+
+    /// The gyro's rotation-axis directions of the spins (docs/model.md §7).
+    fn add_gyro_directions(&mut self, gyro: &[GyroDirection], t: &[f64]) {
+        for g in gyro {
+            let (res, d) = g.residual(t);
+            for c in 0..2 {
+                let w = 1.0 / g.sigma[c];
+                self.chi2 += (res[c] * w).powi(2);
+                let cols: Vec<(usize, f64)> = (0..2)
+                    .filter(|&q| self.col_of[g.tilt.index + q] != usize::MAX)
+                    .map(|q| (self.col_of[g.tilt.index + q], d[c][q] * w))
+                    .collect();
+                self.add_row(&cols, res[c] * w);
+            }
+        }
+    }
+
+    /// The gyro model's mean rates and its priors (docs/model.md §8).
+    fn add_gyro_block(&mut self, blk: &GyroBlock, t: &[f64]) {
         for g in &blk.means {
             let jac = g.jacobian(t, blk.base);
             let res = g.whitened_residual(t, blk.base);
-            chi2 += res.iter().map(|v| v * v).sum::<f64>();
+            self.chi2 += res.iter().map(|v| v * v).sum::<f64>();
             for a in 0..3 {
                 let cols: Vec<(usize, f64)> = jac
                     .iter()
-                    .filter(|(q, _)| col_of[*q] != usize::MAX)
-                    .map(|(q, d)| (col_of[*q], (0..3).map(|r| g.whiten[a][r] * d[r]).sum()))
+                    .filter(|(q, _)| self.col_of[*q] != usize::MAX)
+                    .map(|(q, d)| (self.col_of[*q], (0..3).map(|r| g.whiten[a][r] * d[r]).sum()))
                     .collect();
-                add(&cols, res[a], &mut n, &mut b);
+                self.add_row(&cols, res[a]);
             }
         }
         // Priors: each G entry about the identity (weak), the table's rate scale about 0.
@@ -391,39 +443,45 @@ fn normal_equations(
             .collect();
         priors.push((gyro::idx_rate(blk.base), 0.0, blk.rate_sigma_rel));
         for (q, mean, sig) in priors {
-            if col_of[q] == usize::MAX {
+            if self.col_of[q] == usize::MAX {
                 continue;
             }
             let r = (mean - t[q]) / sig;
-            chi2 += r * r;
-            n[(col_of[q], col_of[q])] += 1.0 / (sig * sig);
-            b[col_of[q]] += r / sig;
+            self.chi2 += r * r;
+            let col = self.col_of[q];
+            self.n[(col, col)] += 1.0 / (sig * sig);
+            self.b[col] += r / sig;
         }
     }
-    for m in &p.mounts {
-        let Some(sig) = m.prior_rad.filter(|s| *s > 0.0) else {
-            continue;
-        };
-        for c in 0..2 {
-            let q = m.geometry.index + c;
-            if col_of[q] == usize::MAX {
+
+    /// The mounts' attitude priors, which pull each free tilt towards the nominal up.
+    fn add_mount_priors(&mut self, mounts: &[Mount], t: &[f64]) {
+        for m in mounts {
+            let Some(sig) = m.prior_rad.filter(|s| *s > 0.0) else {
                 continue;
+            };
+            for c in 0..2 {
+                let q = m.geometry.index + c;
+                if self.col_of[q] == usize::MAX {
+                    continue;
+                }
+                self.chi2 += (t[q] / sig).powi(2);
+                let col = self.col_of[q];
+                self.n[(col, col)] += 1.0 / (sig * sig);
+                self.b[col] -= t[q] / (sig * sig);
             }
-            chi2 += (t[q] / sig).powi(2);
-            n[(col_of[q], col_of[q])] += 1.0 / (sig * sig);
-            // The prior pulls towards the nominal up.
-            b[col_of[q]] -= t[q] / (sig * sig);
         }
     }
-    if let Some(sig) = prior_r_m {
+
+    /// A prior of 1σ = `sig` about 0 on every free lever-arm component (not counted in χ²).
+    fn add_lever_prior(&mut self, sig: f64, t: &[f64], free_idx: &[usize]) {
         for (c, &q) in free_idx.iter().enumerate() {
             if is_lever(q) {
-                n[(c, c)] += 1.0 / (sig * sig);
-                b[c] -= t[q] / (sig * sig);
+                self.n[(c, c)] += 1.0 / (sig * sig);
+                self.b[c] -= t[q] / (sig * sig);
             }
         }
     }
-    (n, b, chi2)
 }
 
 fn free_indices(free: &[bool]) -> Vec<usize> {
