@@ -257,14 +257,10 @@ pub(crate) fn free_static_fit(
         t[idx_u0(i)] = 0.5 * (lo + hi);
         t[idx_m(i, i)] = 0.5 * (hi - lo);
     }
-    let mut sub = Problem {
-        models: statics.iter().map(|&k| problem.models[k].clone()).collect(),
-        mounts: problem.mounts.clone(),
-        gyro: Vec::new(),
-        gyro_block: None,
-        groups: Vec::new(),
-        rest_segments: Vec::new(),
-    };
+    let mut sub = Problem::new(
+        statics.iter().map(|&k| problem.models[k].clone()).collect(),
+        problem.mounts.clone(),
+    );
     super::build::seed_free_mounts(plan, segs, noise, &mut sub, &t);
     let frame = body_frame(&sub);
     let mut free = super::screen::static_free(n);

@@ -561,14 +561,7 @@ fn fit_session(
     let noise = screen::pooled_noise(&segs);
     let (mounts, seg_mount) = build::build_mounts(plan, &segs);
     let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
-    let mut problem = Problem {
-        models,
-        mounts,
-        gyro: Vec::new(),
-        gyro_block: None,
-        groups: Vec::new(),
-        rest_segments: Vec::new(),
-    };
+    let mut problem = Problem::new(models, mounts);
     let static_fit = match screen::static_fit_with_attitude_check(
         plan,
         &mut segs,

@@ -389,14 +389,10 @@ pub(crate) fn static_fit(
     models: &[&SegModel],
     mounts: &[Mount],
 ) -> Result<solve::Fit, EstimateError> {
-    let problem = Problem {
-        models: models.iter().map(|m| (*m).clone()).collect(),
-        mounts: mounts.to_vec(),
-        gyro: Vec::new(),
-        gyro_block: None,
-        groups: Vec::new(),
-        rest_segments: Vec::new(),
-    };
+    let problem = Problem::new(
+        models.iter().map(|m| (*m).clone()).collect(),
+        mounts.to_vec(),
+    );
     let n = problem.n_params();
     solve::fit(
         &problem,

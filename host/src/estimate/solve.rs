@@ -130,6 +130,19 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// The accelerometers' problem alone: these segment models and mounts, the gyro taken as perfect
+    /// and not observed, no spin taken as a difference (the static fit and the first joint pass).
+    pub fn new(models: Vec<SegModel>, mounts: Vec<Mount>) -> Problem {
+        Problem {
+            models,
+            mounts,
+            gyro: Vec::new(),
+            gyro_block: None,
+            groups: Vec::new(),
+            rest_segments: Vec::new(),
+        }
+    }
+
     /// Length of θ.
     pub fn n_params(&self) -> usize {
         NI + 2 * self.mounts.len() + if self.gyro_block.is_some() { NG } else { 0 }
