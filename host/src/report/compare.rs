@@ -3,6 +3,7 @@
 
 use crate::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
 use crate::unit_file::{UnitFile, UnitFileError};
+use shared::Calibration;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -153,6 +154,47 @@ pub fn compare_units(
     b: &UnitFile,
     b_name: &str,
 ) -> Result<ComparisonTable, CompareError> {
+    let (ca, cb) = comparable_calibrations(a, a_name, b, b_name)?;
+    let bad = |e: shared::params::ParamsError| CompareError::Incompatible(e.to_string());
+    let va = paper_values(&ca).map_err(bad)?;
+    let vb = paper_values(&cb).map_err(bad)?;
+    let (sa, sb) = (sigmas(a), sigmas(b));
+    let labels = paper_labels();
+    let sym = ca.statics.output_unit.symbol();
+    let mut rows = Vec::with_capacity(PAPER_LEN);
+    for k in 0..PAPER_LEN {
+        let (unit, scale) = display_unit(k, sym);
+        let sig_a = sa.map(|s| s[k] * scale);
+        let sig_b = sb.map(|s| s[k] * scale);
+        let diff = (vb[k] - va[k]) * scale;
+        rows.push(ComparisonRow {
+            label: labels[k].clone(),
+            unit,
+            a: va[k] * scale,
+            b: vb[k] * scale,
+            sigma_a: sig_a,
+            sigma_b: sig_b,
+            diff,
+            diff_sigma: diff_in_sigma(diff, sig_a, sig_b),
+            undetermined: lever_undetermined(a, b, k),
+        });
+    }
+    let notes = comparison_notes(sa.is_some(), sb.is_some(), &ca, &cb, &rows);
+    Ok(ComparisonTable {
+        a_name: a_name.to_string(),
+        b_name: b_name.to_string(),
+        rows,
+        notes,
+    })
+}
+
+/// The calibrations of A and B, when they are of the same unit and in the same output unit.
+fn comparable_calibrations(
+    a: &UnitFile,
+    a_name: &str,
+    b: &UnitFile,
+    b_name: &str,
+) -> Result<(Calibration, Calibration), CompareError> {
     a.check_same_unit(b.unit_id.as_deref(), "B")
         .map_err(|m| CompareError::Incompatible(format!("A ({a_name}) and B ({b_name}): {m}")))?;
     let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
@@ -165,61 +207,65 @@ pub fn compare_units(
             ub.symbol()
         )));
     }
-    let bad = |e: shared::params::ParamsError| CompareError::Incompatible(e.to_string());
-    let va = paper_values(&ca).map_err(bad)?;
-    let vb = paper_values(&cb).map_err(bad)?;
-    let (sa, sb) = (sigmas(a), sigmas(b));
+    Ok((ca, cb))
+}
+
+/// The display unit of parameter `k` in [`paper_values`] order (`sym`: the output unit's symbol)
+/// and the factor from the stored value to it (lever arms: m to mm).
+fn display_unit(k: usize, sym: &str) -> (String, f64) {
+    match k {
+        0..=2 => (sym.to_string(), 1.0),
+        3..=5 => (format!("{sym}/g"), 1.0),
+        6..=14 => ("°".to_string(), 1.0),
+        _ => ("mm".to_string(), 1e3),
+    }
+}
+
+/// `diff` in units of the combined 1σ of `sig_a` and `sig_b` (a missing σ counts as 0); `None` when
+/// neither has one or the combination is not a usable scale.
+fn diff_in_sigma(diff: f64, sig_a: Option<f64>, sig_b: Option<f64>) -> Option<f64> {
+    let combined = match (sig_a, sig_b) {
+        (None, None) => None,
+        (x, y) => Some((x.unwrap_or(0.0).powi(2) + y.unwrap_or(0.0).powi(2)).sqrt()),
+    };
+    match combined {
+        Some(c) if c.is_finite() && c > 0.0 => Some(diff / c),
+        Some(c) if c == 0.0 && diff == 0.0 => Some(0.0),
+        _ => None,
+    }
+}
+
+/// Parameter `k` is a lever-arm component that A or B reports as not observable (docs/model.md
+/// §4.4); a file without an `[uncertainty]` table counts as determining every component.
+fn lever_undetermined(a: &UnitFile, b: &UnitFile, k: usize) -> bool {
     let obs = |u: &UnitFile, i: usize, j: usize| {
         u.uncertainty
             .as_ref()
             .is_none_or(|s| s.lever_arms_observable[i][j])
     };
-    let labels = paper_labels();
-    let sym = ua.symbol();
-    let mut rows = Vec::with_capacity(PAPER_LEN);
-    for k in 0..PAPER_LEN {
-        let (unit, scale) = match k {
-            0..=2 => (sym.to_string(), 1.0),
-            3..=5 => (format!("{sym}/g"), 1.0),
-            6..=14 => ("°".to_string(), 1.0),
-            _ => ("mm".to_string(), 1e3),
-        };
-        let sig_a = sa.map(|s| s[k] * scale);
-        let sig_b = sb.map(|s| s[k] * scale);
-        let diff = (vb[k] - va[k]) * scale;
-        let combined = match (sig_a, sig_b) {
-            (None, None) => None,
-            (x, y) => Some((x.unwrap_or(0.0).powi(2) + y.unwrap_or(0.0).powi(2)).sqrt()),
-        };
-        let diff_sigma = match combined {
-            Some(c) if c.is_finite() && c > 0.0 => Some(diff / c),
-            Some(c) if c == 0.0 && diff == 0.0 => Some(0.0),
-            _ => None,
-        };
-        let undetermined = k >= 15 && {
-            let (i, j) = ((k - 15) / 3, (k - 15) % 3);
-            !obs(a, i, j) || !obs(b, i, j)
-        };
-        rows.push(ComparisonRow {
-            label: labels[k].clone(),
-            unit,
-            a: va[k] * scale,
-            b: vb[k] * scale,
-            sigma_a: sig_a,
-            sigma_b: sig_b,
-            diff,
-            diff_sigma,
-            undetermined,
-        });
+    k >= 15 && {
+        let (i, j) = ((k - 15) / 3, (k - 15) % 3);
+        !obs(a, i, j) || !obs(b, i, j)
     }
+}
+
+/// The table's notes: which files have σ, different reference points or gravity, and what n.d.
+/// means when a row has it.
+fn comparison_notes(
+    a_has_sigma: bool,
+    b_has_sigma: bool,
+    ca: &Calibration,
+    cb: &Calibration,
+    rows: &[ComparisonRow],
+) -> Vec<String> {
     let mut notes = Vec::new();
-    match (sa.is_some(), sb.is_some()) {
+    match (a_has_sigma, b_has_sigma) {
         (false, false) => notes.push(
             "neither file has an [uncertainty] table: differences are not in units of σ".into(),
         ),
         (true, false) | (false, true) => notes.push(format!(
             "only {} has an [uncertainty] table: σ is that file's alone",
-            if sa.is_some() { "A" } else { "B" }
+            if a_has_sigma { "A" } else { "B" }
         )),
         _ => {}
     }
@@ -243,12 +289,7 @@ pub fn compare_units(
                 .into(),
         );
     }
-    Ok(ComparisonTable {
-        a_name: a_name.to_string(),
-        b_name: b_name.to_string(),
-        rows,
-        notes,
-    })
+    notes
 }
 
 #[cfg(test)]

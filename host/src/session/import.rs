@@ -283,10 +283,28 @@ pub fn read_logger<R: BufRead>(
     options: &ImportOptions,
 ) -> Result<Recording, ImportError> {
     let mut buf = Vec::new();
-    if !next_line(&mut r, &mut buf, 1)? {
+    let (header, sep) = read_header(&mut r, &mut buf, path)?;
+    let layout = Layout::new(header, sep, options)?;
+    let mut rec = read_rows(&mut r, &mut buf, &layout, options)?;
+    if rec.len() < 100 {
+        return Err(ImportError::TooFewRows(rec.len()));
+    }
+    rec.rate_hz = median_rate(&rec.t_s);
+    check_gravity(&rec, options.acc_unit)?;
+    Ok(rec)
+}
+
+/// Reads the header line: its column names (a byte-order mark and quotes removed) and the field
+/// separator it uses.
+fn read_header<R: BufRead>(
+    r: &mut R,
+    buf: &mut Vec<u8>,
+    path: &Path,
+) -> Result<(Vec<String>, char), ImportError> {
+    if !next_line(r, buf, 1)? {
         return Err(ImportError::Empty(path.to_path_buf()));
     }
-    let header_text = String::from_utf8_lossy(&buf)
+    let header_text = String::from_utf8_lossy(buf)
         .trim_start_matches('\u{feff}')
         .to_string();
     let sep = separator(&header_text);
@@ -294,29 +312,108 @@ pub fn read_logger<R: BufRead>(
         .split(sep)
         .map(|f| clean(f).to_string())
         .collect();
-    let find = |name: &str| {
-        header
-            .iter()
-            .position(|h| h.eq_ignore_ascii_case(name))
-            .ok_or_else(|| ImportError::MissingColumn {
-                name: name.to_string(),
-                found: header.join(", "),
-            })
-    };
-    let mut idx = [0usize; 6];
-    for (k, name) in options.columns.iter().enumerate() {
-        idx[k] = find(name)?;
+    Ok((header, sep))
+}
+
+/// The resolved time source.
+enum Time {
+    /// The column at this index holds seconds.
+    Column(usize),
+    /// Row number / rate.
+    RateHz(f64),
+}
+
+/// Where a row's values are: the header, the separator, and the columns the options name.
+struct Layout {
+    /// The header's column names.
+    header: Vec<String>,
+    /// The field separator.
+    sep: char,
+    /// acc x, y, z, gyro x, y, z column indices.
+    idx: [usize; 6],
+    /// Where the time comes from.
+    time: Time,
+}
+
+impl Layout {
+    /// Finds the columns of `options` in `header` (case-insensitively) and checks the sample rate.
+    fn new(header: Vec<String>, sep: char, options: &ImportOptions) -> Result<Layout, ImportError> {
+        let find = |name: &str| {
+            header
+                .iter()
+                .position(|h| h.eq_ignore_ascii_case(name))
+                .ok_or_else(|| ImportError::MissingColumn {
+                    name: name.to_string(),
+                    found: header.join(", "),
+                })
+        };
+        let mut idx = [0usize; 6];
+        for (k, name) in options.columns.iter().enumerate() {
+            idx[k] = find(name)?;
+        }
+        let time = match &options.time {
+            TimeSource::Column(name) => Time::Column(find(name)?),
+            TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
+            TimeSource::RateHz(hz) => return Err(ImportError::BadRate(*hz)),
+        };
+        Ok(Layout {
+            header,
+            sep,
+            idx,
+            time,
+        })
     }
-    /// The resolved time source.
-    enum Time {
-        Column(usize),
-        RateHz(f64),
+
+    /// The six values (in the logger's units) and the time of data row `row_index` (0-based),
+    /// the text of line `line`.
+    fn parse_row(
+        &self,
+        text: &str,
+        line: u64,
+        row_index: u64,
+    ) -> Result<([f64; 6], f64), ImportError> {
+        let fields: Vec<&str> = text.split(self.sep).map(clean).collect();
+        if fields.len() < self.header.len() {
+            return Err(ImportError::ShortRow {
+                line,
+                fields: fields.len(),
+                header: self.header.len(),
+            });
+        }
+        let number = |i: usize| -> Result<f64, ImportError> {
+            fields[i]
+                .parse::<f64>()
+                .map_err(|_| ImportError::NotANumber {
+                    line,
+                    column: self.header[i].clone(),
+                    text: fields[i].chars().take(40).collect(),
+                })
+        };
+        let idx = &self.idx;
+        let v: [f64; 6] = [
+            number(idx[0])?,
+            number(idx[1])?,
+            number(idx[2])?,
+            number(idx[3])?,
+            number(idx[4])?,
+            number(idx[5])?,
+        ];
+        let t_s = match self.time {
+            Time::Column(i) => number(i)?,
+            Time::RateHz(hz) => row_index as f64 / hz,
+        };
+        Ok((v, t_s))
     }
-    let time = match &options.time {
-        TimeSource::Column(name) => Time::Column(find(name)?),
-        TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
-        TimeSource::RateHz(hz) => return Err(ImportError::BadRate(*hz)),
-    };
+}
+
+/// Reads every data row after the header into a recording (blank lines ignored, rows with a value
+/// that is not finite counted and left out).
+fn read_rows<R: BufRead>(
+    r: &mut R,
+    buf: &mut Vec<u8>,
+    layout: &Layout,
+    options: &ImportOptions,
+) -> Result<Recording, ImportError> {
     let gyro_scale = options.gyro_unit.to_rad_s();
     let mut rec = Recording {
         acc_unit: Some(options.acc_unit),
@@ -326,70 +423,50 @@ pub fn read_logger<R: BufRead>(
     let mut row_index = 0u64;
     loop {
         line += 1;
-        if !next_line(&mut r, &mut buf, line)? {
+        if !next_line(r, buf, line)? {
             break;
         }
-        let text = String::from_utf8_lossy(&buf);
+        let text = String::from_utf8_lossy(buf);
         if text.trim().is_empty() {
             continue;
         }
-        let fields: Vec<&str> = text.split(sep).map(clean).collect();
-        if fields.len() < header.len() {
-            return Err(ImportError::ShortRow {
-                line,
-                fields: fields.len(),
-                header: header.len(),
-            });
-        }
-        let number = |i: usize| -> Result<f64, ImportError> {
-            fields[i]
-                .parse::<f64>()
-                .map_err(|_| ImportError::NotANumber {
-                    line,
-                    column: header[i].clone(),
-                    text: fields[i].chars().take(40).collect(),
-                })
-        };
-        let v: [f64; 6] = [
-            number(idx[0])?,
-            number(idx[1])?,
-            number(idx[2])?,
-            number(idx[3])?,
-            number(idx[4])?,
-            number(idx[5])?,
-        ];
-        let t_s = match time {
-            Time::Column(i) => number(i)?,
-            Time::RateHz(hz) => row_index as f64 / hz,
-        };
+        let (v, t_s) = layout.parse_row(&text, line, row_index)?;
         row_index += 1;
         if !v.iter().all(|x| x.is_finite()) || !t_s.is_finite() {
             rec.skipped_rows += 1;
             continue;
         }
-        if let Some(&previous_s) = rec.t_s.last() {
-            if t_s <= previous_s {
-                return Err(ImportError::TimeNotIncreasing {
-                    line,
-                    t_s,
-                    previous_s,
-                });
-            }
-        }
-        if rec.t_s.len() >= MAX_ROWS {
-            return Err(ImportError::TooManyRows);
-        }
-        rec.t_s.push(t_s);
-        rec.acc.push([v[0], v[1], v[2]]);
-        rec.gyro_rad_s
-            .push([v[3] * gyro_scale, v[4] * gyro_scale, v[5] * gyro_scale]);
+        push_row(&mut rec, v, t_s, line, gyro_scale)?;
     }
-    if rec.len() < 100 {
-        return Err(ImportError::TooFewRows(rec.len()));
-    }
-    rec.rate_hz = median_rate(&rec.t_s);
-    check_gravity(&rec, options.acc_unit)?;
     Ok(rec)
+}
+
+/// Appends a row of finite values `v` at `t_s` (line `line`) to `rec`, its gyro converted with
+/// `gyro_scale` (rad/s per unit); time must increase and the rows stay within [`MAX_ROWS`].
+fn push_row(
+    rec: &mut Recording,
+    v: [f64; 6],
+    t_s: f64,
+    line: u64,
+    gyro_scale: f64,
+) -> Result<(), ImportError> {
+    if let Some(&previous_s) = rec.t_s.last() {
+        if t_s <= previous_s {
+            return Err(ImportError::TimeNotIncreasing {
+                line,
+                t_s,
+                previous_s,
+            });
+        }
+    }
+    if rec.t_s.len() >= MAX_ROWS {
+        return Err(ImportError::TooManyRows);
+    }
+    rec.t_s.push(t_s);
+    rec.acc.push([v[0], v[1], v[2]]);
+    rec.gyro_rad_s
+        .push([v[3] * gyro_scale, v[4] * gyro_scale, v[5] * gyro_scale]);
+    Ok(())
 }
 
 fn median_rate(t_s: &[f64]) -> f64 {

@@ -15,6 +15,7 @@ pub mod handheld;
 #[cfg(test)]
 pub(crate) mod montecarlo;
 pub mod rng;
+mod sensor_noise;
 pub mod session;
 pub mod stats;
 pub mod synth;

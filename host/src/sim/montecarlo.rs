@@ -6,7 +6,7 @@
 
 use crate::estimate::attitude::{lq, rotation_vector};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
-use crate::session::{Plan, SegmentPlan};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use crate::sim::testkit::{self, TableErrors};
 use crate::sim::NoiseModel;
 use nalgebra::Matrix3;
@@ -71,12 +71,15 @@ pub struct SeedResult {
     pub tilt_warning: bool,
     /// The norm-only method's static error after its best rotation (worst, rms), µg.
     pub norm_only_static_ug: Option<(f64, f64)>,
-    /// The gyro estimate's errors and reported 1σ: (G − G_true, b − b_true, σ_G, σ_b).
-    pub gyro_err: Option<(RowMajor3, [f64; 3], RowMajor3, [f64; 3])>,
+    /// The gyro estimate's errors and reported 1σ.
+    pub gyro_err: Option<GyroErrors>,
     /// `G` − `G_true` after removing the body frame's common rotation (the gyro relative to the
     /// accelerometer triad).
     pub gyro_err_rotated: Option<RowMajor3>,
 }
+
+/// A gyro estimate's errors and reported 1σ: (G − G_true, b − b_true, σ_G, σ_b).
+pub type GyroErrors = (RowMajor3, [f64; 3], RowMajor3, [f64; 3]);
 
 /// All seeds of a case.
 pub struct CaseResult {
@@ -313,109 +316,138 @@ pub fn norm_only(means: &[[f64; 3]]) -> Option<FittedStatic> {
 /// Runs a case on the paper's unit.
 pub fn run(case: &Case) -> CaseResult {
     let truth = testkit::paper_unit();
-    let noise_out = 1e-3 * truth.statics.scale_out_per_g[0];
     let seeds = (0..case.seeds)
-        .map(|seed| {
-            let rate_scale = if case.table_rate_error {
-                case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed, 0).normal()
-            } else {
-                0.0
-            };
-            let stats = match case.generator {
-                Generator::Rows => {
-                    let mut noise = NoiseModel {
-                        accel_white_mg: 1.0,
-                        gyro_white_deg_s: 0.05,
-                        table_tilt_deg: case.true_tilt_deg,
-                        ..NoiseModel::none()
-                    };
-                    if let Some((g, b)) = case.gyro {
-                        noise.gyro_matrix = g;
-                        noise.gyro_bias_deg_s = b.map(f64::to_degrees);
-                    }
-                    noise.table_rate_scale = rate_scale;
-                    crate::sim::stats::simulate_stats(&truth, &case.plan, &noise, seed)
-                        .expect("valid simulation")
-                }
-                Generator::Stats => {
-                    let errors = TableErrors {
-                        attitude_deg: case.true_tilt_deg,
-                        gyro_noise_rad_s: 0.05f64.to_radians(),
-                        gyro: case.gyro,
-                        rate_scale,
-                        ..TableErrors::default()
-                    };
-                    let mut rng = testkit::Rng::new(1000 + seed, 0);
-                    testkit::noisy_stats(&case.plan, &truth, noise_out, errors, &mut rng)
-                }
-            };
-            let out = calibrate_session_stats(&case.plan, &stats, &case.options)
-                .unwrap_or_else(|e| panic!("{}: seed {seed}: {e}", case.title));
-            let mut rng = testkit::Rng::new(77 + seed, 0);
-            let st = static_errors(&truth, &out.fitted, &mut rng);
-            let rot = st.rotation;
-            let gy = case.gyro.as_ref();
-            let dyn200_ug = dynamic_error(&truth, &out, gy, &rot, &mut rng, &|_| 200.0);
-            let dyn300_ug =
-                dynamic_error(&truth, &out, gy, &rot, &mut rng, &|r| r.range(0.0, 300.0));
-            let (gt, bt) = case
-                .gyro
-                .unwrap_or((crate::sim::session::IDENTITY, [0.0; 3]));
-            let gyro_err_rotated = out.gyro.as_ref().map(|e| {
-                let g = Matrix3::from_fn(|i, j| e.matrix[i][j]) * rot.transpose();
-                core::array::from_fn(|i| core::array::from_fn(|j| g[(i, j)] - gt[i][j]))
-            });
-            let gyro_err = out.gyro.as_ref().map(|e| {
-                (
-                    core::array::from_fn(|i| core::array::from_fn(|j| e.matrix[i][j] - gt[i][j])),
-                    core::array::from_fn(|i| e.bias_rad_s[i] - bt[i]),
-                    e.matrix_1sigma,
-                    e.bias_rad_s_1sigma,
-                )
-            });
-            let (tf, _) = truth.statics.to_fitted().expect("valid truth");
-            let q_true = rotation_vector(&lq(&tf.m_out_per_g).1);
-            let q_est = rotation_vector(&lq(&out.fitted.m_out_per_g).1);
-            let norm_only_static_ug = case.norm_only.then(|| {
-                let means: Vec<[f64; 3]> = case
-                    .plan
-                    .segments
-                    .iter()
-                    .zip(&stats)
-                    .filter(|(s, _)| s.is_static())
-                    .map(|(_, st)| st.mean_u)
-                    .collect();
-                let f = norm_only(&means).expect("norm-only converges");
-                let e = static_errors(&truth, &f, &mut testkit::Rng::new(77 + seed, 0));
-                (e.worst_ug, e.rms_ug)
-            });
-            SeedResult {
-                static_raw_ug: st.raw_worst_ug,
-                static_ug: st.worst_ug,
-                static_rms_ug: st.rms_ug,
-                dyn200_ug,
-                dyn300_ug,
-                lever_err_m: core::array::from_fn(|i| {
-                    core::array::from_fn(|j| {
-                        out.calibration.lever_arms.r_m[i][j] - truth.lever_arms.r_m[i][j]
-                    })
-                }),
-                body_err_rad: core::array::from_fn(|c| q_est[c] - q_true[c]),
-                body_sigma_rad: out.static_split.alignment_1sigma_rad,
-                tilt_warning: out
-                    .warnings
-                    .iter()
-                    .any(|w| w.contains("3× the plan's attitude_sigma_deg")),
-                norm_only_static_ug,
-                gyro_err,
-                gyro_err_rotated,
-            }
-        })
+        .map(|seed| seed_result(case, &truth, seed))
         .collect();
     CaseResult {
         title: case.title.clone(),
         seeds,
     }
+}
+
+/// One seed of `case`: its session's statistics, the calibration of them and that calibration's
+/// errors against `truth`.
+fn seed_result(case: &Case, truth: &Calibration, seed: u64) -> SeedResult {
+    let stats = seed_stats(case, truth, seed);
+    let out = calibrate_session_stats(&case.plan, &stats, &case.options)
+        .unwrap_or_else(|e| panic!("{}: seed {seed}: {e}", case.title));
+    let mut rng = testkit::Rng::new(77 + seed, 0);
+    let st = static_errors(truth, &out.fitted, &mut rng);
+    let rot = st.rotation;
+    let gy = case.gyro.as_ref();
+    let dyn200_ug = dynamic_error(truth, &out, gy, &rot, &mut rng, &|_| 200.0);
+    let dyn300_ug = dynamic_error(truth, &out, gy, &rot, &mut rng, &|r| r.range(0.0, 300.0));
+    let (gyro_err, gyro_err_rotated) = gyro_errors(&out, case.gyro, &rot);
+    let (tf, _) = truth.statics.to_fitted().expect("valid truth");
+    let q_true = rotation_vector(&lq(&tf.m_out_per_g).1);
+    let q_est = rotation_vector(&lq(&out.fitted.m_out_per_g).1);
+    let norm_only_static_ug = case
+        .norm_only
+        .then(|| norm_only_errors(&case.plan, &stats, truth, seed));
+    SeedResult {
+        static_raw_ug: st.raw_worst_ug,
+        static_ug: st.worst_ug,
+        static_rms_ug: st.rms_ug,
+        dyn200_ug,
+        dyn300_ug,
+        lever_err_m: core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                out.calibration.lever_arms.r_m[i][j] - truth.lever_arms.r_m[i][j]
+            })
+        }),
+        body_err_rad: core::array::from_fn(|c| q_est[c] - q_true[c]),
+        body_sigma_rad: out.static_split.alignment_1sigma_rad,
+        tilt_warning: out
+            .warnings
+            .iter()
+            .any(|w| w.contains("3× the plan's attitude_sigma_deg")),
+        norm_only_static_ug,
+        gyro_err,
+        gyro_err_rotated,
+    }
+}
+
+/// The segment statistics of seed `seed` of `case`, from its generator, with the table's rate scale
+/// error drawn when the case asks for one.
+fn seed_stats(case: &Case, truth: &Calibration, seed: u64) -> Vec<SegmentStats> {
+    let rate_scale = if case.table_rate_error {
+        case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed, 0).normal()
+    } else {
+        0.0
+    };
+    match case.generator {
+        Generator::Rows => {
+            let mut noise = NoiseModel {
+                accel_white_mg: 1.0,
+                gyro_white_deg_s: 0.05,
+                table_tilt_deg: case.true_tilt_deg,
+                ..NoiseModel::none()
+            };
+            if let Some((g, b)) = case.gyro {
+                noise.gyro_matrix = g;
+                noise.gyro_bias_deg_s = b.map(f64::to_degrees);
+            }
+            noise.table_rate_scale = rate_scale;
+            crate::sim::stats::simulate_stats(truth, &case.plan, &noise, seed)
+                .expect("valid simulation")
+        }
+        Generator::Stats => {
+            let noise_out = 1e-3 * truth.statics.scale_out_per_g[0];
+            let errors = TableErrors {
+                attitude_deg: case.true_tilt_deg,
+                gyro_noise_rad_s: 0.05f64.to_radians(),
+                gyro: case.gyro,
+                rate_scale,
+                ..TableErrors::default()
+            };
+            let mut rng = testkit::Rng::new(1000 + seed, 0);
+            testkit::noisy_stats(&case.plan, truth, noise_out, errors, &mut rng)
+        }
+    }
+}
+
+/// The gyro estimate's errors against the simulated gyro `gyro` (perfect when `None`): the
+/// [`SeedResult::gyro_err`] and [`SeedResult::gyro_err_rotated`] of a seed whose body frame is off by
+/// the common rotation `rot`.
+fn gyro_errors(
+    out: &CalibrationOutcome,
+    gyro: Option<(RowMajor3, [f64; 3])>,
+    rot: &Matrix3<f64>,
+) -> (Option<GyroErrors>, Option<RowMajor3>) {
+    let (gt, bt) = gyro.unwrap_or((crate::sim::session::IDENTITY, [0.0; 3]));
+    let gyro_err_rotated = out.gyro.as_ref().map(|e| {
+        let g = Matrix3::from_fn(|i, j| e.matrix[i][j]) * rot.transpose();
+        core::array::from_fn(|i| core::array::from_fn(|j| g[(i, j)] - gt[i][j]))
+    });
+    let gyro_err = out.gyro.as_ref().map(|e| {
+        (
+            core::array::from_fn(|i| core::array::from_fn(|j| e.matrix[i][j] - gt[i][j])),
+            core::array::from_fn(|i| e.bias_rad_s[i] - bt[i]),
+            e.matrix_1sigma,
+            e.bias_rad_s_1sigma,
+        )
+    });
+    (gyro_err, gyro_err_rotated)
+}
+
+/// The norm-only method's static errors (worst, rms), µg, fitted to the static segments' means of
+/// `stats`, on the same held-out attitudes as the seed's estimate.
+fn norm_only_errors(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    truth: &Calibration,
+    seed: u64,
+) -> (f64, f64) {
+    let means: Vec<[f64; 3]> = plan
+        .segments
+        .iter()
+        .zip(stats)
+        .filter(|(s, _)| s.is_static())
+        .map(|(_, st)| st.mean_u)
+        .collect();
+    let f = norm_only(&means).expect("norm-only converges");
+    let e = static_errors(truth, &f, &mut testkit::Rng::new(77 + seed, 0));
+    (e.worst_ug, e.rms_ug)
 }
 
 /// The `q` quantile (nearest rank).

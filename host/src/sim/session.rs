@@ -9,10 +9,10 @@
 //! not on the platform or on a dependency's version, and switching one noise source on or off does not
 //! change the draws of the others.
 
-use super::flicker::Flicker;
 use super::rng::Rng;
+use super::sensor_noise::SensorNoise;
 use super::thermal::{ThermalSim, ThermalState};
-use crate::session::{Plan, PlanError};
+use crate::session::{Plan, PlanError, SegmentPlan};
 use crate::session::{RecordingError, SessionWriter};
 use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
@@ -201,12 +201,14 @@ pub struct SimulationSummary {
     pub notes: Vec<String>,
 }
 
-const STREAM_ACCEL: u64 = 1;
-const STREAM_GYRO: u64 = 2;
-const STREAM_WALK: u64 = 3;
+// The random streams, one per noise source (the module docs); the sensors' are drawn from in
+// `super::sensor_noise`.
+pub(super) const STREAM_ACCEL: u64 = 1;
+pub(super) const STREAM_GYRO: u64 = 2;
+pub(super) const STREAM_WALK: u64 = 3;
 const STREAM_TILT: u64 = 4;
-const STREAM_FLICKER: u64 = 5;
-const STREAM_GYRO_WALK: u64 = 6;
+pub(super) const STREAM_FLICKER: u64 = 5;
+pub(super) const STREAM_GYRO_WALK: u64 = 6;
 /// The temperature sensor's noise (a high stream number, clear of any new noise source's).
 const STREAM_TEMPERATURE: u64 = 16;
 
@@ -245,6 +247,25 @@ pub fn simulate_rows_with_temperature<E>(
     seed: u64,
     mut sink: impl FnMut(&str, f64, &[f64; 3], &[f64; 3], f64) -> Result<(), E>,
 ) -> Result<Result<SimulationSummary, E>, SimulateError> {
+    let model = simulable_model(cal, plan, noise, thermal)?;
+    let mut sim = RowSimulator::new(cal, model, plan, noise, thermal, seed);
+    for seg in &plan.segments {
+        if let Err(e) = sim.segment(seg, &mut sink) {
+            return Ok(Err(e));
+        }
+    }
+    sim.summary.rows = sim.index;
+    Ok(Ok(sim.summary))
+}
+
+/// Checks the inputs a simulation needs (a valid plan with a true attitude and a duration for every
+/// segment, valid noise and thermal models) and returns the unit's forward model.
+fn simulable_model(
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    thermal: &ThermalSim,
+) -> Result<ForwardModel, SimulateError> {
     plan.validate().map_err(SimulateError::Plan)?;
     noise.validate()?;
     thermal.validate()?;
@@ -262,69 +283,115 @@ pub fn simulate_rows_with_temperature<E>(
             s.name
         ))));
     }
-    let rate = plan.sample_rate_hz;
-    let dt = 1.0 / rate;
-    // Noise in output units, per axis: mg × the axis's scale factor (‖row_i(M)‖).
-    let k: [f64; 3] = std::array::from_fn(|i| linalg::norm(&model.m_out_per_g[i]));
-    let white: [f64; 3] = k.map(|k| noise.accel_white_mg * 1e-3 * k);
-    let walk: [f64; 3] = k.map(|k| noise.accel_bias_walk_mg_sqrt_s * 1e-3 * k * dt.sqrt());
-    let gyro_sigma = noise.gyro_white_deg_s.to_radians();
-    let gyro_bias = noise.gyro_bias_deg_s.map(f64::to_radians);
-    let q = noise.accel_quantum_out;
+    Ok(model)
+}
 
-    let mut rng_accel = Rng::new(seed, STREAM_ACCEL);
-    let mut rng_gyro = Rng::new(seed, STREAM_GYRO);
-    let mut rng_walk = Rng::new(seed, STREAM_WALK);
-    let mut rng_tilt = Rng::new(seed, STREAM_TILT);
-    let first_c = plan.segments.iter().find_map(|s| s.temp_c);
-    let mut temperature = ThermalState::new(thermal, first_c, Rng::new(seed, STREAM_TEMPERATURE));
+/// The gyro bias's change with the die's temperature `die_c` (docs/model.md §9), rad/s; zero
+/// without a temperature model.
+fn gyro_thermal_bias(cal: &Calibration, die_c: f64) -> [f64; 3] {
+    cal.temperature.as_ref().map_or([0.0; 3], |th| {
+        let b = th.gyro_bias_polynomials();
+        let dt = die_c - th.reference_c;
+        std::array::from_fn(|i| shared::sensor_models::poly_no_constant(&b[i], dt))
+    })
+}
 
-    let mut summary = SimulationSummary {
-        seed,
-        rows: 0,
-        mount_up_b: BTreeMap::new(),
-        mount_tilt_deg: BTreeMap::new(),
-        notes: Vec::new(),
-    };
-    let mut drift = [0.0f64; 3];
-    // Bias walk and flicker of the gyro and flicker of the accelerometer (their own streams, drawn
-    // only when enabled, so sessions without them are unchanged).
-    let mut rng_flicker = Rng::new(seed, STREAM_FLICKER);
-    let mut rng_gyro_walk = Rng::new(seed, STREAM_GYRO_WALK);
-    let accel_flicker_b = k.map(|k| noise.accel_flicker_mg * 1e-3 * k);
-    let mut accel_flicker: Vec<Flicker> = (0..3)
-        .filter(|_| noise.accel_flicker_mg > 0.0)
-        .map(|i| Flicker::new(accel_flicker_b[i], dt, &mut rng_flicker))
-        .collect();
-    let gyro_flicker_b = noise.gyro_flicker_deg_s.to_radians();
-    let mut gyro_flicker: Vec<Flicker> = (0..3)
-        .filter(|_| gyro_flicker_b > 0.0)
-        .map(|_| Flicker::new(gyro_flicker_b, dt, &mut rng_flicker))
-        .collect();
-    let gyro_walk = noise.gyro_bias_walk_deg_s_sqrt_s.to_radians() * dt.sqrt();
-    let mut gyro_drift = [0.0f64; 3];
-    let mut index: u64 = 0;
-    for seg in &plan.segments {
+/// The state of a simulation running row by row through the plan's segments.
+struct RowSimulator<'a> {
+    /// The simulated unit.
+    cal: &'a Calibration,
+    /// Its forward model.
+    model: ForwardModel,
+    /// The noise model (table errors and the gyro matrix).
+    noise: &'a NoiseModel,
+    /// Local gravity, m/s².
+    gravity_m_s2: f64,
+    /// Sample rate, Hz.
+    rate: f64,
+    /// Sample interval, s.
+    dt: f64,
+    /// The sensors' noise sources.
+    sensors: SensorNoise,
+    /// Stream of the mounts' tilts.
+    rng_tilt: Rng,
+    /// Chamber, die and sensor temperatures.
+    temperature: ThermalState,
+    /// What was drawn so far.
+    summary: SimulationSummary,
+    /// Rows produced so far.
+    index: u64,
+}
+
+impl<'a> RowSimulator<'a> {
+    /// A simulation of `plan` on `cal` (checked by [`simulable_model`], whose result is `model`) at
+    /// its first row.
+    fn new(
+        cal: &'a Calibration,
+        model: ForwardModel,
+        plan: &Plan,
+        noise: &'a NoiseModel,
+        thermal: &ThermalSim,
+        seed: u64,
+    ) -> RowSimulator<'a> {
+        let rate = plan.sample_rate_hz;
+        let dt = 1.0 / rate;
+        // Noise in output units, per axis: mg × the axis's scale factor (‖row_i(M)‖).
+        let k: [f64; 3] = std::array::from_fn(|i| linalg::norm(&model.m_out_per_g[i]));
+        let first_c = plan.segments.iter().find_map(|s| s.temp_c);
+        RowSimulator {
+            cal,
+            model,
+            noise,
+            gravity_m_s2: plan.gravity_m_s2,
+            rate,
+            dt,
+            sensors: SensorNoise::new(noise, k, dt, seed),
+            rng_tilt: Rng::new(seed, STREAM_TILT),
+            temperature: ThermalState::new(thermal, first_c, Rng::new(seed, STREAM_TEMPERATURE)),
+            summary: SimulationSummary {
+                seed,
+                rows: 0,
+                mount_up_b: BTreeMap::new(),
+                mount_tilt_deg: BTreeMap::new(),
+                notes: Vec::new(),
+            },
+            index: 0,
+        }
+    }
+
+    /// The true up of `seg`'s mount: drawn (tilted, docs/model.md §7) and recorded the first time
+    /// the mount is used, the same for every later segment on it.
+    fn mount_up(&mut self, seg: &SegmentPlan) -> [f64; 3] {
         let mount = seg.mount_name();
-        let up = match summary.mount_up_b.get(&mount) {
-            Some(up) => *up,
-            None => {
-                let sigma = noise.table_tilt_deg.to_radians();
-                let up = if sigma > 0.0 {
-                    let (n1, n2) = (rng_tilt.normal() * sigma, rng_tilt.normal() * sigma);
-                    summary
-                        .mount_tilt_deg
-                        .insert(mount.clone(), n1.hypot(n2).to_degrees());
-                    tilt(seg.up_b, n1, n2)
-                } else {
-                    seg.up_b
-                };
-                summary.mount_up_b.insert(mount.clone(), up);
-                up
-            }
+        if let Some(up) = self.summary.mount_up_b.get(&mount) {
+            return *up;
+        }
+        let sigma = self.noise.table_tilt_deg.to_radians();
+        let up = if sigma > 0.0 {
+            let (n1, n2) = (
+                self.rng_tilt.normal() * sigma,
+                self.rng_tilt.normal() * sigma,
+            );
+            self.summary
+                .mount_tilt_deg
+                .insert(mount.clone(), n1.hypot(n2).to_degrees());
+            tilt(seg.up_b, n1, n2)
+        } else {
+            seg.up_b
         };
+        self.summary.mount_up_b.insert(mount, up);
+        up
+    }
+
+    /// Simulates every row of `seg`, handing each to `sink`; stops at the sink's first error.
+    fn segment<E>(
+        &mut self,
+        seg: &SegmentPlan,
+        sink: &mut impl FnMut(&str, f64, &[f64; 3], &[f64; 3], f64) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let up = self.mount_up(seg);
         let duration = seg.duration_s.unwrap_or(0.0);
-        let n = (duration * rate).round() as u64;
+        let n = (duration * self.rate).round() as u64;
         let r0 = seg.rate_deg_s;
         let r1 = seg.rate_end_deg_s.unwrap_or(r0);
         let spinning = !seg.is_static();
@@ -336,64 +403,45 @@ pub fn simulate_rows_with_temperature<E>(
             centre_m: seg.table_centre_m.unwrap_or([0.0; 3]),
         };
         for j in 0..n {
-            let t_local = j as f64 * dt;
+            let t_local = j as f64 * self.dt;
             if spinning {
                 let cmd = r0 + accel_deg_s2 * t_local;
-                table.rate_rad_s = (cmd * (1.0 + noise.table_rate_scale)
-                    + noise.table_rate_offset_deg_s)
+                table.rate_rad_s = (cmd * (1.0 + self.noise.table_rate_scale)
+                    + self.noise.table_rate_offset_deg_s)
                     .to_radians();
-                table.accel_rad_s2 = (accel_deg_s2 * (1.0 + noise.table_rate_scale)).to_radians();
+                table.accel_rad_s2 =
+                    (accel_deg_s2 * (1.0 + self.noise.table_rate_scale)).to_radians();
             }
-            let motion = table.motion(plan.gravity_m_s2);
-            let mut u = model.outputs(&motion).raw;
-            let (die_c, temp_c) = temperature.step(super::thermal::chamber_c(seg, t_local), dt);
-            if let Some(th) = &cal.temperature {
-                u = super::thermal::outputs_at(th, &model.zero_bias_out, &u, die_c);
-            }
-            for i in 0..3 {
-                if walk[i] > 0.0 {
-                    drift[i] += walk[i] * rng_walk.normal();
-                    u[i] += drift[i];
-                }
-                if let Some(fl) = accel_flicker.get_mut(i) {
-                    u[i] += fl.next(&mut rng_flicker);
-                }
-                if white[i] > 0.0 {
-                    u[i] += white[i] * rng_accel.normal();
-                }
-                if q > 0.0 {
-                    u[i] = (u[i] / q).round() * q;
-                }
-            }
-            let mut w = linalg::mat_vec(&noise.gyro_matrix, &motion.omega.rad_s);
-            // The gyro bias follows the die too (docs/model.md §9).
-            let gyro_thermal: [f64; 3] = cal.temperature.as_ref().map_or([0.0; 3], |th| {
-                let b = th.gyro_bias_polynomials();
-                let dt = die_c - th.reference_c;
-                std::array::from_fn(|i| shared::sensor_models::poly_no_constant(&b[i], dt))
-            });
-            for i in 0..3 {
-                w[i] += gyro_bias[i] + gyro_thermal[i];
-                if gyro_walk > 0.0 {
-                    gyro_drift[i] += gyro_walk * rng_gyro_walk.normal();
-                    w[i] += gyro_drift[i];
-                }
-                if let Some(fl) = gyro_flicker.get_mut(i) {
-                    w[i] += fl.next(&mut rng_flicker);
-                }
-                if gyro_sigma > 0.0 {
-                    w[i] += gyro_sigma * rng_gyro.normal();
-                }
-            }
-            let t = index as f64 * dt;
-            if let Err(e) = sink(&seg.name, t, &u, &w, temp_c) {
-                return Ok(Err(e));
-            }
-            index += 1;
+            let (u, w, temp_c) = self.row(seg, &table, t_local);
+            let t = self.index as f64 * self.dt;
+            sink(&seg.name, t, &u, &w, temp_c)?;
+            self.index += 1;
         }
+        Ok(())
     }
-    summary.rows = index;
-    Ok(Ok(summary))
+
+    /// One row `t_local` into `seg` with the table in `table`'s state: the accelerometer's outputs,
+    /// the gyro's rates and the temperature sensor's reading, each with its noise.
+    fn row(
+        &mut self,
+        seg: &SegmentPlan,
+        table: &TableState,
+        t_local: f64,
+    ) -> ([f64; 3], [f64; 3], f64) {
+        let motion = table.motion(self.gravity_m_s2);
+        let mut u = self.model.outputs(&motion).raw;
+        let chamber_c = super::thermal::chamber_c(seg, t_local);
+        let (die_c, temp_c) = self.temperature.step(chamber_c, self.dt);
+        if let Some(th) = &self.cal.temperature {
+            u = super::thermal::outputs_at(th, &self.model.zero_bias_out, &u, die_c);
+        }
+        self.sensors.add_to_accel(&mut u);
+        let mut w = linalg::mat_vec(&self.noise.gyro_matrix, &motion.omega.rad_s);
+        // The gyro bias follows the die too (docs/model.md §9).
+        self.sensors
+            .add_to_gyro(&mut w, &gyro_thermal_bias(self.cal, die_c));
+        (u, w, temp_c)
+    }
 }
 
 /// Simulates `plan` on `unit` into the session directory `dir` (`plan.toml`, `samples.csv`,
@@ -423,16 +471,7 @@ pub fn simulate_to_dir_with_progress(
 ) -> Result<SimulationSummary, SimulateError> {
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
-    // The unit's [gyro] table is the simulated gyro: its matrix replaces the noise model's, its bias
-    // adds to the noise model's.
-    let mut noise = noise.clone();
-    if let Some(g) = &unit.gyro {
-        noise.gyro_matrix = g.matrix;
-        for i in 0..3 {
-            noise.gyro_bias_deg_s[i] += g.bias_rad_s[i].to_degrees();
-        }
-    }
-    let noise = &noise;
+    let noise = &simulated_noise(unit, noise);
     let (fitted, normalisation) = cal
         .statics
         .to_fitted()
@@ -444,21 +483,61 @@ pub fn simulate_to_dir_with_progress(
             normalisation.row_norms
         ));
     }
+    let plan = session_plan(plan, unit, cal.statics.output_unit, &mut notes);
+    let writer = SessionWriter::create(dir, &plan, overwrite)?;
+    let mut summary = write_samples(writer, unit, &cal, &plan, noise, seed, bar)?;
+    summary.notes = notes;
+    write_truth(dir, unit, cal, &fitted, noise, seed, &summary)?;
+    Ok(summary)
+}
+
+/// `noise` with the unit's `[gyro]` table as the simulated gyro: its matrix replaces the noise
+/// model's, its bias adds to the noise model's.
+fn simulated_noise(unit: &UnitFile, noise: &NoiseModel) -> NoiseModel {
+    let mut noise = noise.clone();
+    if let Some(g) = &unit.gyro {
+        noise.gyro_matrix = g.matrix;
+        for i in 0..3 {
+            noise.gyro_bias_deg_s[i] += g.bias_rad_s[i].to_degrees();
+        }
+    }
+    noise
+}
+
+/// The plan to record: `plan` in the unit's output unit `output_unit` (a note says when that
+/// changed it), with the unit's id when the plan names none, so that the session is self-consistent.
+fn session_plan(
+    plan: &Plan,
+    unit: &UnitFile,
+    output_unit: shared::OutputUnit,
+    notes: &mut Vec<String>,
+) -> Plan {
     let mut plan = plan.clone();
-    let unit_name = cal.statics.output_unit;
-    if plan.output_unit != unit_name {
+    if plan.output_unit != output_unit {
         notes.push(format!(
             "the plan's output_unit {} was changed to the unit's, {}",
             plan.output_unit.symbol(),
-            unit_name.symbol()
+            output_unit.symbol()
         ));
-        plan.output_unit = unit_name;
+        plan.output_unit = output_unit;
     }
     if plan.unit_id.is_none() {
         plan.unit_id.clone_from(&unit.unit_id);
     }
+    plan
+}
 
-    let mut writer = SessionWriter::create(dir, &plan, overwrite)?;
+/// Simulates `plan` on `cal` (with the unit file's thermal model) into `writer`'s samples, advancing
+/// `bar` by rows, and finishes the file.
+fn write_samples(
+    mut writer: SessionWriter,
+    unit: &UnitFile,
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    seed: u64,
+    bar: &indicatif::ProgressBar,
+) -> Result<SimulationSummary, SimulateError> {
     let total: f64 = plan
         .segments
         .iter()
@@ -467,13 +546,8 @@ pub fn simulate_to_dir_with_progress(
     bar.set_length(total as u64);
     let thermal = ThermalSim::from_unit_file(unit)?;
     let with_temperature = plan.has_temperature();
-    let result = simulate_rows_with_temperature(
-        &cal,
-        &plan,
-        noise,
-        &thermal,
-        seed,
-        |seg, t, u, w, temp| {
+    let result =
+        simulate_rows_with_temperature(cal, plan, noise, &thermal, seed, |seg, t, u, w, temp| {
             if writer.rows() % 65_536 == 0 {
                 bar.set_position(writer.rows());
             }
@@ -482,14 +556,24 @@ pub fn simulate_to_dir_with_progress(
             } else {
                 writer.write_row(seg, t, u, w)
             }
-        },
-    )?;
+        })?;
     bar.finish_and_clear();
-    let mut summary = result?;
+    let summary = result?;
     writer.finish()?;
-    summary.notes = notes;
+    Ok(summary)
+}
 
-    // truth.toml: the unit as simulated (normalised angles), the noise and what was drawn.
+/// Writes truth.toml: the unit as simulated (`fitted`, its installation angles normalised), the
+/// unit file's other tables, the noise model and what `summary` records was drawn.
+fn write_truth(
+    dir: &Path,
+    unit: &UnitFile,
+    cal: Calibration,
+    fitted: &shared::FittedStatic,
+    noise: &NoiseModel,
+    seed: u64,
+    summary: &SimulationSummary,
+) -> Result<(), SimulateError> {
     let truth_cal = Calibration {
         statics: fitted
             .to_paper()
@@ -515,7 +599,7 @@ pub fn simulate_to_dir_with_progress(
     );
     let path = dir.join(TRUTH_FILE);
     std::fs::write(&path, text).map_err(|source| RecordingError::Io { path, source })?;
-    Ok(summary)
+    Ok(())
 }
 
 /// [`simulate_to_dir`] for a calibration (no `[noise]` table, no unit id).
