@@ -4,7 +4,8 @@
 //! random number generator ([`rng`]).
 //!
 //! - [`session`]: the virtual unit on a virtual table, row by row, with the table's and the gyro's
-//!   errors, drift and quantisation; [`stats`]: its statistics without writing rows.
+//!   errors, drift and quantisation, with `sensor_noise` (each sample's accelerometer and gyro noise);
+//!   [`stats`]: its statistics without writing rows.
 //! - [`handheld`]: a hand-held session (`host simulate-hand`); [`thermal`]: temperature profiles and
 //!   the unit's thermal model; [`flicker`]: 1/f noise.
 //! - Test-only: `testkit` (the tests' noisy statistics with table errors) and `montecarlo` (the
