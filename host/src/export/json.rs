@@ -72,13 +72,7 @@ mod tests {
             lever_arms_observable: observable,
         });
         let cal = unit.to_calibration().unwrap();
-        let input = ExportInput {
-            unit: &unit,
-            cal,
-            noise: None,
-            rostopic: "/imu0",
-            driver_scale_m_s2_per_out: None,
-        };
+        let input = ExportInput::for_tests(&unit, cal);
         let text = render(&input).unwrap();
         let v: Value = serde_json::from_str(&text).unwrap();
         let back: UnitFile = serde_json::from_value(v["calibration"].clone()).unwrap();

@@ -257,11 +257,8 @@ mod tests {
             gyroscope_random_walk: Some(1.0e-6),
         };
         let input = ExportInput {
-            unit: &unit,
-            cal,
             noise: Some(&noise),
-            rostopic: "/imu0",
-            driver_scale_m_s2_per_out: None,
+            ..ExportInput::for_tests(&unit, cal)
         };
         let text = render(&input).unwrap();
         let p: Parsed = serde_yaml::from_str(&text).unwrap();

@@ -159,6 +159,20 @@ pub struct ExportInput<'a> {
     pub driver_scale_m_s2_per_out: Option<f64>,
 }
 
+#[cfg(test)]
+impl<'a> ExportInput<'a> {
+    /// The tests' input: this unit and calibration, no noise figures, the nominal driver scale.
+    pub(crate) fn for_tests(unit: &'a UnitFile, cal: Calibration) -> ExportInput<'a> {
+        ExportInput {
+            unit,
+            cal,
+            noise: None,
+            rostopic: "/imu0",
+            driver_scale_m_s2_per_out: None,
+        }
+    }
+}
+
 impl ExportInput<'_> {
     /// The driver's scale: as given, or `g / mean(k_i)`.
     pub fn driver_scale(&self) -> f64 {

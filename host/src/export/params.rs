@@ -143,13 +143,7 @@ mod tests {
     fn both_files_parse_and_correct_within_the_stated_bound() {
         let unit = UnitFile::paper_unit();
         let cal = unit.to_calibration().unwrap();
-        let input = ExportInput {
-            unit: &unit,
-            cal,
-            noise: None,
-            rostopic: "/imu0",
-            driver_scale_m_s2_per_out: None,
-        };
+        let input = ExportInput::for_tests(&unit, cal);
         let p = per_axis(&input).unwrap();
         let c = input.driver_scale();
         let model = ForwardModel::new(&cal).unwrap();

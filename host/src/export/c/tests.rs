@@ -195,13 +195,7 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
     let unit = paper_input_unit();
     // The firmware's own paper unit: the test vectors were computed from it.
     let cal = firmware::paper_unit::calibration();
-    let input = ExportInput {
-        unit: &unit,
-        cal,
-        noise: None,
-        rostopic: "/imu0",
-        driver_scale_m_s2_per_out: None,
-    };
+    let input = ExportInput::for_tests(&unit, cal);
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
         dir.path().join("calibration.h"),
@@ -499,13 +493,7 @@ fn c_header_with_gyro_and_temperature_model_initialises_what_it_decodes() {
     let mut cal = firmware::paper_unit::calibration();
     cal.gyro = Some(firmware::paper_unit::typical_gyro());
     cal.temperature = Some(firmware::paper_unit::typical_thermal_model());
-    let input = ExportInput {
-        unit: &unit,
-        cal,
-        noise: None,
-        rostopic: "/imu0",
-        driver_scale_m_s2_per_out: None,
-    };
+    let input = ExportInput::for_tests(&unit, cal);
     let text = render_header(&input).unwrap();
     assert!(text.contains("Gyro correction: present"), "{text}");
     assert!(text.contains("Temperature model: present"), "{text}");
@@ -537,13 +525,7 @@ fn c_header_with_gyro_and_temperature_model_initialises_what_it_decodes() {
 #[test]
 fn c_header_needs_a_unit_id() {
     let unit = UnitFile::paper_unit();
-    let input = ExportInput {
-        unit: &unit,
-        cal: unit.to_calibration().unwrap(),
-        noise: None,
-        rostopic: "/imu0",
-        driver_scale_m_s2_per_out: None,
-    };
+    let input = ExportInput::for_tests(&unit, unit.to_calibration().unwrap());
     let e = render_header(&input).unwrap_err();
     assert!(e.to_string().contains("unit_id"), "{e}");
 }
@@ -595,13 +577,7 @@ int main(void) {
 fn fusion_header_compiles_and_its_model_recovers_the_specific_force() {
     let unit = UnitFile::paper_unit();
     let cal = unit.to_calibration().unwrap();
-    let input = ExportInput {
-        unit: &unit,
-        cal,
-        noise: None,
-        rostopic: "/imu0",
-        driver_scale_m_s2_per_out: None,
-    };
+    let input = ExportInput::for_tests(&unit, cal);
     let text = render_fusion(&input).unwrap();
     assert!(text.contains("Gyroscope: UNDETERMINED"));
     assert!(!text.contains("gyroscopeOffset"));
@@ -665,13 +641,7 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
     let gyro = firmware::paper_unit::typical_gyro();
     cal.gyro = Some(gyro);
     cal.temperature = Some(firmware::paper_unit::typical_thermal_model());
-    let input = ExportInput {
-        unit: &unit,
-        cal,
-        noise: None,
-        rostopic: "/imu0",
-        driver_scale_m_s2_per_out: None,
-    };
+    let input = ExportInput::for_tests(&unit, cal);
     let text = render_fusion(&input).unwrap();
     assert!(!text.contains("UNDETERMINED"), "{text}");
     assert!(text.contains("NOT HELD by FusionModelInertial: the temperature model"));
