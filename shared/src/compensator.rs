@@ -9,7 +9,7 @@
 //! Per sample, with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i` (docs/model.md §10):
 //!
 //! ```text
-//! ω   = G⁻¹ (w − b)                      gyro correction (§8), G⁻¹ precomputed: 12 multiply-adds
+//! ω   = c + G⁻¹ w,  c = −G⁻¹ b          gyro correction (§8), G⁻¹ and c precomputed: 9 multiply-adds
 //! f_O = g·K_A · (U − u0 − K d)          K_A = (K A)⁻¹, the exact inverse (never a transpose)
 //! ```
 //!
@@ -17,7 +17,7 @@
 //! `ω̇·p_i` 3, `a_i·ω` 3, `q_i·ω` 3, two products and one subtraction, and the subtraction from `U − u0`
 //! (12 per axis, 36); `K_A·v` 9. Total 51 multiply-adds (48 fused-multiply-add-able), against the ~50 of
 //! docs/model.md §10. The static-only path [`Compensator::compensate_static`] is 12, the gyro
-//! correction [`Compensator::correct_rate`] 12 (3 subtractions, 9 multiply-adds).
+//! correction [`Compensator::correct_rate`] 9 multiply-adds.
 //!
 //! Temperature (§9): `u0(T) = u0 + P(ΔT)`, `M(T) = diag(1 + s(T))·M`, so `K_A(T) = K_A·diag(1/(1+s))`
 //! (column `j` scaled) and `k_i(T) = k_i (1 + s_i)` scales the lever-arm terms `p_i, q_i, s_i` of
@@ -193,10 +193,17 @@ fn poly32(c: &[f32; MAX_TEMPERATURE_DEGREE], x: f32) -> f32 {
     x * (c[0] + x * (c[1] + x * c[2]))
 }
 
-/// The gyro's `G⁻¹` (row-major) and `b(T)` (rad/s, gyro axes).
+/// The gyro's correction in the affine form the device evaluates, `ω = c + G⁻¹ w` with
+/// `c = −G⁻¹ b(T)` (docs/model.md §8). `repr(C)`: `c` and `G⁻¹` are twelve consecutive `f32`, the
+/// order in which one block load reads them on the device.
+#[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct GyroInverse {
+    /// `c = −G⁻¹ b(T)`, rad/s, body axes.
+    offset_rad_s: [f32; 3],
+    /// `G⁻¹`, row-major.
     inv: [[f32; 3]; 3],
+    /// `b(T)`, rad/s, gyro axes: what `c` is recomputed from.
     bias_rad_s: [f32; 3],
 }
 
@@ -304,10 +311,7 @@ impl Compensator {
             p: device_f32_33(&p)?,
             q: device_f32_33(&q)?,
             s: device_f32_3(&s)?,
-            gyro: GyroInverse {
-                inv: device_gain_33(&gyro_inv)?,
-                bias_rad_s: device_f32_3(&gyro.bias_rad_s)?,
-            },
+            gyro: GyroInverse::new(device_gain_33(&gyro_inv)?, device_f32_3(&gyro.bias_rad_s)?),
             gyro_corrected: cal.gyro.is_some()
                 || cal
                     .temperature
@@ -365,9 +369,10 @@ impl Compensator {
         let [lo, hi] = th.range_c;
         let clamped = temp_c.clamp(lo, hi);
         let dt = clamped - th.reference_c;
+        let mut gyro_bias_rad_s = [0.0; 3];
         for i in 0..3 {
             self.zero_bias_out[i] = th.zero_bias_out[i] + poly32(&th.zero_bias_poly[i], dt);
-            self.gyro.bias_rad_s[i] = th.gyro_bias_rad_s[i] + poly32(&th.gyro_bias_poly[i], dt);
+            gyro_bias_rad_s[i] = th.gyro_bias_rad_s[i] + poly32(&th.gyro_bias_poly[i], dt);
             let gain = 1.0 + poly32(&th.scale_poly[i], dt);
             let inv_gain = 1.0 / gain;
             for r in 0..3 {
@@ -377,6 +382,7 @@ impl Compensator {
             }
             self.s[i] = th.s[i] * gain;
         }
+        self.gyro.set_bias(gyro_bias_rad_s);
         self.temperature = if clamped == temp_c {
             TemperatureState::InRange
         } else {
@@ -385,9 +391,9 @@ impl Compensator {
         self.temperature
     }
 
-    /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8): 3 subtractions and
-    /// 9 multiply-adds, skipped for a perfect gyro (a configuration branch, not a data branch), which
-    /// therefore passes `w` through bit for bit.
+    /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8), evaluated as
+    /// `c + G⁻¹ w` with `c = −G⁻¹ b(T)` precomputed: 9 multiply-adds, skipped for a perfect gyro (a
+    /// configuration branch, not a data branch), which therefore passes `w` through bit for bit.
     #[inline(always)]
     pub fn correct_rate(&self, w_rad_s: &[f32; 3]) -> BodyRate {
         if !self.gyro_corrected {
@@ -468,22 +474,78 @@ impl Compensator {
 }
 
 impl GyroInverse {
-    /// `G⁻¹(w − b)`: 3 subtractions, 9 multiply-adds. The floor of compiled code is the twelve
-    /// constant loads (one `vldr` each) plus the arithmetic: 24 instructions per sample on the
-    /// Cortex-M4F. Alternatives measured with scripts/bench-qemu.sh and dropped: the affine form
-    /// `G⁻¹w + c` (9 multiply-adds, `c = −G⁻¹b` precomputed) costs 25 on its own and moved the whole path
-    /// from 379 to 391 (the larger state pushes fields out of `vldr` offset reach); an out-of-line
-    /// assembly routine with one `vldmia` costs 23.6 in place (call, moves, clobbered registers);
-    /// inline assembly cannot take FPU register operands with this toolchain (Rust 1.95) for this
-    /// single-precision target: the `sreg` class requires the `vfp2` feature, which the M4F's
-    /// `vfp4d16sp` does not imply (relaxed to `fpregs` in rustc after 1.95: rust-lang/rust#159988;
-    /// with it, one `vldmia` and nine `vmla.f32` in line would cost about 10); a block of 16
-    /// corrected at once keeps the constants in registers but costs 21.5 per sample in loads, stores
-    /// and loop.
+    fn new(inv: [[f32; 3]; 3], bias_rad_s: [f32; 3]) -> GyroInverse {
+        let mut g = GyroInverse {
+            offset_rad_s: [0.0; 3],
+            inv,
+            bias_rad_s,
+        };
+        g.set_bias(bias_rad_s);
+        g
+    }
+
+    /// Sets `b(T)` and its offset `c = −G⁻¹ b(T)`, in `f32` both when a calibration loads and at each
+    /// temperature refresh, so that a refresh at the reference temperature changes nothing.
+    fn set_bias(&mut self, b: [f32; 3]) {
+        let m = &self.inv;
+        self.bias_rad_s = b;
+        self.offset_rad_s =
+            core::array::from_fn(|r| -(m[r][0] * b[0] + m[r][1] * b[1] + m[r][2] * b[2]));
+    }
+
+    /// `c + G⁻¹ w`, each row `((c_r + m_r0 w_0) + m_r1 w_1) + m_r2 w_2`: nine multiply-adds, each
+    /// product rounded before its addition (the Cortex-M4F's `vmla.f32`, not a fused multiply-add).
+    /// This is the reference for other targets and for the PC; the device's form below rounds
+    /// identically, which the QEMU test vectors check bit for bit.
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
     #[inline(always)]
     fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
-        let b = &self.bias_rad_s;
-        mat_vec32(&self.inv, &[w[0] - b[0], w[1] - b[1], w[2] - b[2]])
+        let (c, m) = (&self.offset_rad_s, &self.inv);
+        [
+            c[0] + m[0][0] * w[0] + m[0][1] * w[1] + m[0][2] * w[2],
+            c[1] + m[1][0] * w[0] + m[1][1] * w[1] + m[1][2] * w[2],
+            c[2] + m[2][0] * w[0] + m[2][1] * w[1] + m[2][2] * w[2],
+        ]
+    }
+
+    /// The same on an ARM hard-float target, in line: one block load of the twelve constants, one of
+    /// `w`, nine `vmla.f32` and one block store, 12 instructions. Compiled code needs 21 or more: one
+    /// `vldr` per constant (measured with scripts/bench-qemu.sh, as were an out-of-line routine, 23.6
+    /// in place, and correcting 16 samples at a time, 21.5 per sample). Operands pass through memory
+    /// because this toolchain's inline assembly takes no single-precision FPU register operands on
+    /// this target; the FPU registers it uses are declared clobbered, so the compiler keeps nothing
+    /// live in them across the block.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[inline(always)]
+    fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
+        let mut out = core::mem::MaybeUninit::<[f32; 3]>::uninit();
+        // SAFETY: reads the twelve `f32` at the start of `self` (`repr(C)`: `offset_rad_s` then
+        // `inv`) and the three of `w`, writes the three of `out`; all are 4-byte aligned `f32`
+        // arrays. It touches no stack and no flags; s0–s14 are declared clobbered.
+        unsafe {
+            core::arch::asm!(
+                "vldmia {g}, {{s0-s11}}",
+                "vldmia {w}, {{s12-s14}}",
+                "vmla.f32 s0, s3, s12",
+                "vmla.f32 s0, s4, s13",
+                "vmla.f32 s0, s5, s14",
+                "vmla.f32 s1, s6, s12",
+                "vmla.f32 s1, s7, s13",
+                "vmla.f32 s1, s8, s14",
+                "vmla.f32 s2, s9, s12",
+                "vmla.f32 s2, s10, s13",
+                "vmla.f32 s2, s11, s14",
+                "vstmia {out}, {{s0-s2}}",
+                g = in(reg) self as *const GyroInverse,
+                w = in(reg) w.as_ptr(),
+                out = in(reg) out.as_mut_ptr(),
+                out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
+                out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
+                out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
+                options(nostack, preserves_flags),
+            );
+            out.assume_init()
+        }
     }
 }
 
@@ -775,7 +837,7 @@ mod tests {
                 c.p,
                 c.q,
                 c.s,
-                c.gyro.bias_rad_s
+                c.gyro
             ),
             (
                 fresh.zero_bias_out,
@@ -783,7 +845,7 @@ mod tests {
                 fresh.p,
                 fresh.q,
                 fresh.s,
-                fresh.gyro.bias_rad_s
+                fresh.gyro
             )
         );
     }
