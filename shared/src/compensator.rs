@@ -831,14 +831,7 @@ mod tests {
         let mut c = fresh;
         c.refresh(25.0);
         assert_eq!(
-            (
-                c.zero_bias_out,
-                c.ka_m_s2_per_out,
-                c.p,
-                c.q,
-                c.s,
-                c.gyro
-            ),
+            (c.zero_bias_out, c.ka_m_s2_per_out, c.p, c.q, c.s, c.gyro),
             (
                 fresh.zero_bias_out,
                 fresh.ka_m_s2_per_out,
