@@ -297,6 +297,22 @@ impl<T: Transport> DeviceClient<T> {
         )
     }
 
+    /// Sets the virtual unit's die temperature, °C (simulated and QEMU devices): the chamber of a
+    /// plan's soak segment.
+    pub fn set_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
+        self.expect_ack(
+            &HostToDevice::SetVirtualTemperature { temp_c },
+            "a temperature acknowledgement",
+            Ack::TemperatureSet,
+        )
+    }
+
+    /// The same while a stream runs (a chamber ramp), without waiting: the acknowledgement arrives
+    /// among the stream's windows, which [`Self::next_raw_window`] skips.
+    pub fn send_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
+        self.send(&HostToDevice::SetVirtualTemperature { temp_c })
+    }
+
     /// Chooses which lever-arm terms the device applies.
     pub fn set_lever_mode(&mut self, mode: LeverMode) -> Result<(), LinkError> {
         self.expect_ack(

@@ -438,6 +438,9 @@ fn record_segment<T: Transport>(
     if drive {
         op.say(&format!("{} (virtual table driven)", instruction(seg)));
         let table = table_for(seg);
+        if let Some(t) = chamber_temperature_c(seg, 0.0) {
+            client.set_temperature(t)?;
+        }
         if ramp {
             // Settle at the ramp's start rate, then start the ramp with the recording: settling after
             // the ramp had begun would record a later, faster part than the plan's.
@@ -474,7 +477,13 @@ fn record_segment<T: Transport>(
     let mut rejected = 0u64;
     let mut dropped = 0u32;
     let fs = window_rate * f64::from(window);
-    for _ in 0..n_windows {
+    let chamber_ramp = drive && seg.temp_end_c.is_some();
+    for k in 0..n_windows {
+        if chamber_ramp {
+            if let Some(t) = chamber_temperature_c(seg, (k as f64 + 0.5) / n_windows as f64) {
+                client.send_temperature(t)?;
+            }
+        }
         let w = client.next_raw_window()?;
         let t = (w.first_sample as f64 + f64::from(w.count) / 2.0) / fs;
         let u = w.mean_raw.map(f64::from);
@@ -508,6 +517,15 @@ fn record_segment<T: Transport>(
     Ok((stats, rejected, dropped))
 }
 
+/// The chamber temperature a segment asks for at `fraction` (0..1) of its recording, °C: its `temp_c`,
+/// or along the ramp to `temp_end_c`. A virtual device's die follows it (the host drives it as it
+/// drives the table); the recording keeps what the unit's sensor reads.
+fn chamber_temperature_c(seg: &SegmentPlan, fraction: f64) -> Option<f32> {
+    let t0 = seg.temp_c?;
+    let t1 = seg.temp_end_c.unwrap_or(t0);
+    Some((t0 + (t1 - t0) * fraction) as f32)
+}
+
 /// Streams and discards `n` windows (the table settling at a new set-up).
 fn settle_windows<T: Transport>(
     client: &mut DeviceClient<T>,
@@ -522,9 +540,11 @@ fn settle_windows<T: Transport>(
 }
 
 /// Verification positions: held-out attitudes and a fast spin on a virtual table; on a real table the
-/// plan's first static positions and its fastest constant-rate segment, set up by the operator.
+/// plan's first static positions and its fastest constant-rate segment, set up by the operator. A plan
+/// without rotations calibrates no lever arm, so its verification does not spin.
 fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f64)> {
     if drive {
+        let spins = plan.segments.iter().any(|s| !s.is_static());
         let n = |v: [f64; 3]| {
             let k = shared::linalg::norm(&v);
             v.map(|x| x / k)
@@ -547,7 +567,10 @@ fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f6
                 n([1.0, -1.0, 1.0]),
                 -150.0,
             ),
-        ];
+        ]
+        .into_iter()
+        .filter(|(_, _, rate)| spins || *rate == 0.0)
+        .collect();
     }
     let mut v: Vec<_> = plan
         .segments
@@ -584,6 +607,9 @@ fn verify<T: Transport>(
         ReferenceChoice::BodyPoint(p) => Some(p),
         ReferenceChoice::Centroid => None,
     };
+    if plan.segments.iter().all(|s| s.is_static()) {
+        op.say("verification at rest only: the plan has no rotations, so it calibrated no lever arm");
+    }
     for (label, up, rate) in verification_positions(plan, drive) {
         let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {
             op.say(&format!(
