@@ -40,7 +40,7 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
     let _ = writeln!(s);
     let _ = writeln!(
         s,
-        "Residuals per segment (g), like Tables 2 and 4: theoretical | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
+        "Outputs per segment (g), like Tables 2 and 4: theoretical (the fitted specific force at the reference point) | bias+scale only | static compensation | full compensation; χ² of 3 outputs against the segment's own noise (* = above the 99.9 % point 16.3)"
     );
     for dgn in &o.segments {
         render_segment(&mut s, dgn, segments.iter().find(|r| r.name == dgn.name));
