@@ -141,12 +141,7 @@ pub fn check_compensation() -> [Check; 3] {
 }
 
 fn gyro_temp_compensator() -> Option<Compensator> {
-    let cal = shared::Calibration {
-        gyro: Some(paper_unit::typical_gyro()),
-        temperature: Some(paper_unit::typical_thermal_model()),
-        ..paper_unit::calibration()
-    };
-    Compensator::new(&cal, LeverMode::RateAndAcceleration).ok()
+    Compensator::new(&imperfect_unit(), LeverMode::RateAndAcceleration).ok()
 }
 
 /// Gyro correction and full compensation after a temperature refresh, against the table (the

@@ -169,22 +169,35 @@ impl TemperatureState {
     }
 }
 
-type Poly32 = [[f32; MAX_TEMPERATURE_DEGREE]; 3];
+/// Three `f32` polynomials without constant term, row `i` = `c1, c2, c3` (see [`poly_no_constant`]).
+pub type Poly32 = [[f32; MAX_TEMPERATURE_DEGREE]; 3];
 
-/// The reference values and polynomials [`Compensator::refresh`] starts from (all `f32`).
+/// The reference values and polynomials [`Compensator::refresh`] starts from (all `f32`), public for
+/// code generators that reproduce the refresh in another language (the host's C export).
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Thermal {
-    reference_c: f32,
-    range_c: [f32; 2],
-    zero_bias_out: [f32; 3],
-    ka_m_s2_per_out: [[f32; 3]; 3],
-    p: [[f32; 3]; 3],
-    q: [[f32; 3]; 3],
-    s: [f32; 3],
-    gyro_bias_rad_s: [f32; 3],
-    zero_bias_poly: Poly32,
-    scale_poly: Poly32,
-    gyro_bias_poly: Poly32,
+pub struct ThermalConstants {
+    /// `T_ref`, °C.
+    pub reference_c: f32,
+    /// The valid range, °C: a temperature outside it is clamped to it.
+    pub range_c: [f32; 2],
+    /// `u0` at `T_ref`, output unit.
+    pub zero_bias_out: [f32; 3],
+    /// `g·(K A)⁻¹` at `T_ref`, m/s² per output unit, row-major.
+    pub ka_m_s2_per_out: [[f32; 3]; 3],
+    /// `p_i` at `T_ref`.
+    pub p: [[f32; 3]; 3],
+    /// `q_i` at `T_ref`.
+    pub q: [[f32; 3]; 3],
+    /// `s_i` at `T_ref`.
+    pub s: [f32; 3],
+    /// The gyro bias `b` at `T_ref`, rad/s, gyro axes.
+    pub gyro_bias_rad_s: [f32; 3],
+    /// Row `i`: `c1, c2, c3` of the zero bias's `P_i(ΔT)`, output unit per °C^k.
+    pub zero_bias_poly: Poly32,
+    /// Row `i`: the relative scale's `S_i(ΔT)`, 1 per °C^k.
+    pub scale_poly: Poly32,
+    /// Row `j`: the gyro bias's `B_j(ΔT)`, rad/s per °C^k.
+    pub gyro_bias_poly: Poly32,
 }
 
 /// `c1·x + c2·x² + c3·x³` in `f32` (Horner), the device's form of [`poly_no_constant`].
@@ -227,7 +240,7 @@ pub struct Compensator {
     /// False for a perfect gyro without temperature drift: [`Compensator::correct_rate`] is skipped.
     gyro_corrected: bool,
     mode: LeverMode,
-    thermal: Option<Thermal>,
+    thermal: Option<ThermalConstants>,
     temperature: TemperatureState,
 }
 
@@ -273,6 +286,12 @@ pub struct CompensatorConstants {
     pub q: [[f32; 3]; 3],
     /// `s_i = k_i (a_i·r_i)/g`, zero when the lever terms are off.
     pub s: [f32; 3],
+    /// The gyro's `c = −G⁻¹ b(T)`, rad/s, body axes.
+    pub gyro_offset_rad_s: [f32; 3],
+    /// The gyro's `G⁻¹`, row-major.
+    pub gyro_inv: [[f32; 3]; 3],
+    /// False for a perfect gyro without temperature drift: the rate passes through unchanged.
+    pub gyro_corrected: bool,
 }
 
 impl Compensator {
@@ -323,7 +342,7 @@ impl Compensator {
         if let Some(t) = &cal.temperature {
             let (zero_bias_poly, scale_poly, gyro_bias_poly) =
                 thermal_polynomials(t, &gyro.bias_rad_s)?;
-            c.thermal = Some(Thermal {
+            c.thermal = Some(ThermalConstants {
                 reference_c: t.reference_c as f32,
                 range_c: t.valid_range_c.map(|v| v as f32),
                 zero_bias_out: c.zero_bias_out,
@@ -459,7 +478,15 @@ impl Compensator {
             p: self.p,
             q: self.q,
             s: self.s,
+            gyro_offset_rad_s: self.gyro.offset_rad_s,
+            gyro_inv: self.gyro.inv,
+            gyro_corrected: self.gyro_corrected,
         }
+    }
+
+    /// What [`Compensator::refresh`] starts from, when there is a temperature model.
+    pub fn thermal_constants(&self) -> Option<ThermalConstants> {
+        self.thermal
     }
 
     /// Static-only compensation, `f_O = g·K_A (U − u0)` (paper eq. 6): no gyro needed.

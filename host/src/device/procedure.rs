@@ -608,7 +608,9 @@ fn verify<T: Transport>(
         ReferenceChoice::Centroid => None,
     };
     if plan.segments.iter().all(|s| s.is_static()) {
-        op.say("verification at rest only: the plan has no rotations, so it calibrated no lever arm");
+        op.say(
+            "verification at rest only: the plan has no rotations, so it calibrated no lever arm",
+        );
     }
     for (label, up, rate) in verification_positions(plan, drive) {
         let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {

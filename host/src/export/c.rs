@@ -1,9 +1,11 @@
 //! C headers: the calibration for a C firmware (`c-header`) and for x-io Fusion (`fusion-c`).
 //!
-//! `c-header` holds three things: the calibration as a plain `struct acal_calibration` initialiser,
-//! the device's precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
-//! `shared::Compensator`, so `acal_compensate` in `export/c/acal_blob.c` gives the device's results bit
-//! for bit), and the blob as a byte array that `acal_decode` checks and decodes. The decoder and the
+//! `c-header` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
+//! precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
+//! `shared::Compensator`, so `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give
+//! the device's results bit for bit), with a temperature model what `acal_refresh` recomputes them
+//! from (`struct acal_thermal`, the device's refresh, also bit for bit), and the blob as a byte array
+//! that `acal_decode` checks and decodes. The decoder and the
 //! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`); the decoder reads
 //! blob versions 1 and 2 and fills the optional gyro and temperature sections with presence flags.
 //!
@@ -126,8 +128,8 @@ fn sections_initialiser(cal: &Calibration) -> String {
 fn sections_comment(cal: &Calibration) -> String {
     let gyro = match cal.gyro {
         Some(_) => {
-            " * Gyro correction: present (w = G omega + b, docs/model.md section 8); acal_compensate
-                    *   takes the corrected rate omega = G^-1 (w - b), which the caller computes.
+            " * Gyro correction: present (w = G omega + b, docs/model.md section 8): correct each gyro
+                    *   sample with acal_correct_rate() before acal_compensate().
 "
             .to_string()
         }
@@ -138,7 +140,8 @@ fn sections_comment(cal: &Calibration) -> String {
     let temperature = match cal.temperature {
         Some(t) => format!(
             " * Temperature model: present (docs/model.md section 9), reference {} degC, valid {}..{} degC;
-             *   ACAL_COMPENSATOR holds the constants at the reference temperature.
+             *   ACAL_COMPENSATOR holds the constants at the reference temperature: copy it and update the
+             *   copy with acal_refresh(&copy, &ACAL_THERMAL, temp_c) a few times a second.
 ",
             t.reference_c, t.valid_range_c[0], t.valid_range_c[1]
         ),
@@ -168,9 +171,9 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
         created_unix_s: 0,
     };
     let (bytes, n) = blob.to_bytes().map_err(ExportError::Blob)?;
-    let comp = Compensator::new(cal, LeverMode::RateAndAcceleration)
-        .map_err(ExportError::Compensator)?
-        .constants();
+    let compensator =
+        Compensator::new(cal, LeverMode::RateAndAcceleration).map_err(ExportError::Compensator)?;
+    let comp = compensator.constants();
     let s = &cal.statics;
     let (reference, offset) = match cal.reference {
         ReferencePoint::TableAxis => (0, [0.0; 3]),
@@ -181,8 +184,9 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = write!(
         w,
         "/*\n * Accelerometer calibration of unit {unit_id} (host export --format c-header).\n\
-         * Decode ACAL_BLOB with acal_decode() and compensate with acal_compensate() from\n\
-         * acal_blob.h / acal_blob.c (host/src/export/c/). The blob's creation time is 0 (unknown).\n\
+         * Decode ACAL_BLOB with acal_decode(); correct the gyro with acal_correct_rate() and\n\
+         * compensate with acal_compensate() from acal_blob.h / acal_blob.c (host/src/export/c/).\n\
+         * The blob's creation time is 0 (unknown).\n\
          * ACAL_COMPENSATOR holds the device's precomputed f32 constants (all lever-arm terms on).\n"
     );
     w.push_str(&sections_comment(cal));
@@ -212,14 +216,38 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = writeln!(
         w,
         "static const struct acal_compensator ACAL_COMPENSATOR = {{\n    .zero_bias_out = {},\n    \
-         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n}};\n",
+         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n    \
+         .gyro_offset_rad_s = {},\n    .gyro_inv = {},\n    .gyro_corrected = {},\n}};\n",
         list(&comp.zero_bias_out, c_f32),
         matrix(&comp.ka_m_s2_per_out, c_f32),
         matrix(&comp.a, c_f32),
         matrix(&comp.p, c_f32),
         matrix(&comp.q, c_f32),
         list(&comp.s, c_f32),
+        list(&comp.gyro_offset_rad_s, c_f32),
+        matrix(&comp.gyro_inv, c_f32),
+        u8::from(comp.gyro_corrected),
     );
+    if let Some(t) = compensator.thermal_constants() {
+        let _ = writeln!(
+            w,
+            "static const struct acal_thermal ACAL_THERMAL = {{\n    .reference_c = {},\n    \
+             .range_c = {},\n    .zero_bias_out = {},\n    .ka_m_s2_per_out = {},\n    .p = {},\n    \
+             .q = {},\n    .s = {},\n    .gyro_bias_rad_s = {},\n    .zero_bias_poly = {},\n    \
+             .scale_poly = {},\n    .gyro_bias_poly = {},\n}};\n",
+            c_f32(t.reference_c),
+            list(&t.range_c, c_f32),
+            list(&t.zero_bias_out, c_f32),
+            matrix(&t.ka_m_s2_per_out, c_f32),
+            matrix(&t.p, c_f32),
+            matrix(&t.q, c_f32),
+            list(&t.s, c_f32),
+            list(&t.gyro_bias_rad_s, c_f32),
+            matrix(&t.zero_bias_poly, c_f32),
+            matrix(&t.scale_poly, c_f32),
+            matrix(&t.gyro_bias_poly, c_f32),
+        );
+    }
     let _ = writeln!(
         w,
         "#define ACAL_BLOB_LEN {n}u\nstatic const uint8_t ACAL_BLOB[ACAL_BLOB_LEN] = {{"

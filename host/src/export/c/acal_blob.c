@@ -245,3 +245,49 @@ void acal_compensate_static(const struct acal_compensator *c, const float u[3], 
     }
     apply_ka(c, v, f_m_s2);
 }
+
+void acal_correct_rate(const struct acal_compensator *c, const float w[3], float omega[3]) {
+    if (!c->gyro_corrected) {
+        omega[0] = w[0];
+        omega[1] = w[1];
+        omega[2] = w[2];
+        return;
+    }
+    for (int r = 0; r < 3; r++) {
+        const float *m = c->gyro_inv[r];
+        omega[r] = c->gyro_offset_rad_s[r] + m[0] * w[0] + m[1] * w[1] + m[2] * w[2];
+    }
+}
+
+/* c1 x + c2 x^2 + c3 x^3 (Horner), as the device evaluates it. */
+static float poly_no_constant(const float k[3], float x) {
+    return x * (k[0] + x * (k[1] + x * k[2]));
+}
+
+enum acal_temperature_state acal_refresh(struct acal_compensator *c, const struct acal_thermal *th,
+                                         float temp_c) {
+    float t, dt, b[3];
+    if (!isfinite(temp_c)) {
+        return ACAL_TEMPERATURE_NO_READING;
+    }
+    t = temp_c < th->range_c[0] ? th->range_c[0] : temp_c;
+    t = t > th->range_c[1] ? th->range_c[1] : t;
+    dt = t - th->reference_c;
+    for (int i = 0; i < 3; i++) {
+        const float gain = 1.0f + poly_no_constant(th->scale_poly[i], dt);
+        const float inv_gain = 1.0f / gain;
+        c->zero_bias_out[i] = th->zero_bias_out[i] + poly_no_constant(th->zero_bias_poly[i], dt);
+        b[i] = th->gyro_bias_rad_s[i] + poly_no_constant(th->gyro_bias_poly[i], dt);
+        for (int r = 0; r < 3; r++) {
+            c->ka_m_s2_per_out[r][i] = th->ka_m_s2_per_out[r][i] * inv_gain;
+            c->p[i][r] = th->p[i][r] * gain;
+            c->q[i][r] = th->q[i][r] * gain;
+        }
+        c->s[i] = th->s[i] * gain;
+    }
+    for (int r = 0; r < 3; r++) {
+        const float *m = c->gyro_inv[r];
+        c->gyro_offset_rad_s[r] = -(m[0] * b[0] + m[1] * b[1] + m[2] * b[2]);
+    }
+    return t == temp_c ? ACAL_TEMPERATURE_IN_RANGE : ACAL_TEMPERATURE_CLAMPED;
+}

@@ -20,6 +20,9 @@
  *   zero-bias polynomials (9 f64), relative-scale polynomials (9 f64), then an Option of the gyro-bias
  *   polynomials (9 f64, rad/s); row i holds c_i1, c_i2, c_i3 of c_i1 dT + c_i2 dT^2 + c_i3 dT^3.
  * A version 1 blob decodes as version 2 with both sections absent.
+ *
+ * Per sample, as the device: acal_correct_rate (gyro), your angular-acceleration estimate from the
+ * corrected rate, then acal_compensate; with a temperature model, acal_refresh a few times a second.
  */
 #ifndef ACAL_BLOB_H
 #define ACAL_BLOB_H
@@ -72,7 +75,11 @@ struct acal_calibration {
     struct acal_temperature temperature;
 };
 
-/** The device's precomputed per-sample constants (f_O = g K_A (U - u0 - K d), docs/model.md 10). */
+/**
+ * The device's precomputed per-sample constants (f_O = g K_A (U - u0 - K d), docs/model.md 10) and its
+ * gyro correction (omega = c + G^-1 w, c = -G^-1 b(T), docs/model.md 8). With a temperature model,
+ * copy ACAL_COMPENSATOR into a variable and let acal_refresh() update it a few times a second.
+ */
 struct acal_compensator {
     float zero_bias_out[3];
     float ka_m_s2_per_out[3][3];
@@ -80,6 +87,34 @@ struct acal_compensator {
     float p[3][3];
     float q[3][3];
     float s[3];
+    float gyro_offset_rad_s[3];       /* c = -G^-1 b(T), rad/s, body axes */
+    float gyro_inv[3][3];             /* G^-1, row-major */
+    uint8_t gyro_corrected;           /* 0: a perfect gyro without drift, the rate passes through */
+};
+
+/**
+ * What acal_refresh() starts from (ACAL_THERMAL of a calibration with a temperature model): the
+ * constants at the reference temperature and the polynomials of docs/model.md 9 in float, row i
+ * holding c_i1, c_i2, c_i3 of c_i1 dT + c_i2 dT^2 + c_i3 dT^3.
+ */
+struct acal_thermal {
+    float reference_c;
+    float range_c[2];                 /* [low, high]: a temperature outside is clamped to it */
+    float zero_bias_out[3];
+    float ka_m_s2_per_out[3][3];
+    float p[3][3];
+    float q[3][3];
+    float s[3];
+    float gyro_bias_rad_s[3];
+    float zero_bias_poly[3][3];       /* output unit per deg C^k */
+    float scale_poly[3][3];           /* relative scale, 1 per deg C^k */
+    float gyro_bias_poly[3][3];       /* rad/s per deg C^k */
+};
+
+enum acal_temperature_state {
+    ACAL_TEMPERATURE_IN_RANGE = 0,    /* the terms are those at temp_c */
+    ACAL_TEMPERATURE_CLAMPED,         /* outside the valid range: those at its nearest end (flag it) */
+    ACAL_TEMPERATURE_NO_READING       /* temp_c not finite: the terms are unchanged (flag it) */
 };
 
 enum acal_error {
@@ -105,10 +140,23 @@ uint32_t acal_crc32(const uint8_t *data, size_t len);
 enum acal_error acal_decode(const uint8_t *blob, size_t len, struct acal_calibration *out);
 
 /**
+ * The body rate from the gyro's output, omega = G^-1 (w - b) evaluated as c + G^-1 w (9 multiply-adds;
+ * a perfect gyro passes w through). Apply it before estimating the angular acceleration.
+ */
+void acal_correct_rate(const struct acal_compensator *c, const float w_rad_s[3],
+                       float omega_rad_s[3]);
+
+/**
+ * Recomputes the temperature-dependent terms of c (zero biases, the columns of K_A, the lever-arm
+ * terms, the gyro bias and its offset) for the unit's temperature temp_c, deg C, from th. Call it a
+ * few times a second, not per sample (it divides three times).
+ */
+enum acal_temperature_state acal_refresh(struct acal_compensator *c, const struct acal_thermal *th,
+                                         float temp_c);
+
+/**
  * Full compensation: specific force at the reference point, m/s^2. w_rad_s and wd_rad_s2 are the body
- * rate and angular acceleration, i.e. the gyro's output already corrected as omega = G^-1 (w - b);
- * this file neither applies the gyro correction nor the temperature model (the constants are those
- * at the reference temperature).
+ * rate and angular acceleration, i.e. the gyro's output corrected by acal_correct_rate().
  */
 void acal_compensate(const struct acal_compensator *c, const float u[3], const float w_rad_s[3],
                      const float wd_rad_s2[3], float f_m_s2[3]);

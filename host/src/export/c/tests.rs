@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::unit_file::UnitFile;
-use firmware::testvectors::COMP_CASES;
+use firmware::testvectors::{imperfect_unit, COMP_CASES, GYRO_TEMP_CASES};
 use shared::blob::ParameterBlob;
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
@@ -250,6 +250,81 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
             .collect();
         assert_eq!(&bits[..3], &c.out_static, "static");
         assert_eq!(&bits[3..], &c.out_full, "full");
+    }
+}
+
+/// Reads `temp u[3] w[3] wd[3]` (float bits in hex) per line: refreshes a copy of ACAL_COMPENSATOR at
+/// `temp`, corrects `w` and compensates; prints the state, the rate and the specific force.
+const REFRESH_MAIN_C: &str = r#"
+#include <stdio.h>
+#include <string.h>
+#include "calibration.h"
+
+int main(void) {
+    struct acal_compensator c = ACAL_COMPENSATOR;
+    unsigned t, u[3], w[3], wd[3];
+    while (scanf("%x %x %x %x %x %x %x %x %x %x", &t, &u[0], &u[1], &u[2], &w[0], &w[1], &w[2],
+                 &wd[0], &wd[1], &wd[2]) == 10) {
+        float ft, fu[3], fw[3], fwd[3], rate[3], f[3];
+        unsigned br[3], bf[3];
+        int state;
+        memcpy(&ft, &t, sizeof ft);
+        memcpy(fu, u, sizeof fu);
+        memcpy(fw, w, sizeof fw);
+        memcpy(fwd, wd, sizeof fwd);
+        state = (int)acal_refresh(&c, &ACAL_THERMAL, ft);
+        acal_correct_rate(&c, fw, rate);
+        acal_compensate(&c, fu, rate, fwd, f);
+        memcpy(br, rate, sizeof br);
+        memcpy(bf, f, sizeof bf);
+        printf("out %d %08x %08x %08x %08x %08x %08x\n", state, br[0], br[1], br[2], bf[0], bf[1], bf[2]);
+    }
+    return 0;
+}
+"#;
+
+#[test]
+fn c_header_refreshes_with_temperature_and_corrects_the_gyro_bit_for_bit() {
+    let unit = paper_input_unit();
+    // The firmware's imperfect unit (typical gyro and thermal model): the vectors were computed from it.
+    let cal = imperfect_unit();
+    let input = ExportInput::for_tests(&unit, cal);
+    let header = render_header(&input).unwrap();
+    assert!(header.contains("ACAL_THERMAL") && header.contains(".gyro_corrected = 1"));
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("calibration.h"), header).unwrap();
+    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
+    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    std::fs::write(dir.path().join("main.c"), REFRESH_MAIN_C).unwrap();
+    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    let stdin: String = GYRO_TEMP_CASES
+        .iter()
+        .map(|c| {
+            let v: Vec<String> = std::iter::once(&c.temp_c)
+                .chain(&c.u)
+                .chain(&c.w)
+                .chain(&c.wd)
+                .map(|b| format!("{b:08x}"))
+                .collect();
+            v.join(" ") + "\n"
+        })
+        .collect();
+    let out = run(dir.path(), &stdin);
+    let outs: Vec<&str> = out.lines().filter(|l| l.starts_with("out ")).collect();
+    assert_eq!(outs.len(), GYRO_TEMP_CASES.len());
+    let (lo, hi) = (-20.0, 60.0);
+    for (c, l) in GYRO_TEMP_CASES.iter().zip(outs) {
+        let f: Vec<&str> = l.split(' ').skip(1).collect();
+        let temp = f32::from_bits(c.temp_c);
+        // 0 in range, 1 clamped (acal_temperature_state), as the device reports it.
+        let want_state = if (lo..=hi).contains(&temp) { "0" } else { "1" };
+        assert_eq!(f[0], want_state, "{temp} °C");
+        let bits: Vec<u32> = f[1..]
+            .iter()
+            .map(|h| u32::from_str_radix(h, 16).unwrap())
+            .collect();
+        assert_eq!(&bits[..3], &c.rate, "rate at {temp} °C");
+        assert_eq!(&bits[3..], &c.out_full, "full at {temp} °C");
     }
 }
 
