@@ -44,6 +44,12 @@ fn compile(dir: &Path, sources: &[&str]) {
     );
 }
 
+/// One input line for the C programs: the values as float bits in hex.
+fn hex_line<'a>(bits: impl IntoIterator<Item = &'a u32>) -> String {
+    let v: Vec<String> = bits.into_iter().map(|b| format!("{b:08x}")).collect();
+    v.join(" ") + "\n"
+}
+
 fn run(dir: &Path, stdin: &str) -> String {
     let mut child = Command::new(dir.join("prog"))
         .stdin(Stdio::piped())
@@ -208,15 +214,7 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
     compile(dir.path(), &["main.c", "acal_blob.c"]);
     let stdin: String = COMP_CASES
         .iter()
-        .map(|c| {
-            let v: Vec<String> =
-                c.u.iter()
-                    .chain(&c.w)
-                    .chain(&c.wd)
-                    .map(|b| format!("{b:08x}"))
-                    .collect();
-            v.join(" ") + "\n"
-        })
+        .map(|c| hex_line(c.u.iter().chain(&c.w).chain(&c.wd)))
         .collect();
     let out = run(dir.path(), &stdin);
     let line = |tag: &str| {
@@ -300,13 +298,12 @@ fn c_header_refreshes_with_temperature_and_corrects_the_gyro_bit_for_bit() {
     let stdin: String = GYRO_TEMP_CASES
         .iter()
         .map(|c| {
-            let v: Vec<String> = std::iter::once(&c.temp_c)
-                .chain(&c.u)
-                .chain(&c.w)
-                .chain(&c.wd)
-                .map(|b| format!("{b:08x}"))
-                .collect();
-            v.join(" ") + "\n"
+            hex_line(
+                std::iter::once(&c.temp_c)
+                    .chain(&c.u)
+                    .chain(&c.w)
+                    .chain(&c.wd),
+            )
         })
         .collect();
     let out = run(dir.path(), &stdin);
