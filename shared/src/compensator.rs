@@ -548,7 +548,8 @@ impl GyroInverse {
         let mut out = core::mem::MaybeUninit::<[f32; 3]>::uninit();
         // SAFETY: reads the twelve `f32` at the start of `self` (`repr(C)`: `offset_rad_s` then
         // `inv`) and the three of `w`, writes the three of `out`; all are 4-byte aligned `f32`
-        // arrays. It touches no stack and no flags; s0–s14 are declared clobbered.
+        // arrays. It touches no stack; s0–s14 are declared clobbered. Not `preserves_flags`: `vmla`
+        // sets the FPSCR's cumulative exception flags (inexact, overflow), which that option covers.
         unsafe {
             core::arch::asm!(
                 "vldmia {g}, {{s0-s11}}",
@@ -569,7 +570,7 @@ impl GyroInverse {
                 out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
                 out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
                 out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
-                options(nostack, preserves_flags),
+                options(nostack),
             );
             out.assume_init()
         }
