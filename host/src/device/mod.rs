@@ -1,7 +1,8 @@
 //! The link to a device: the protocol client ([`client`]), the transports it runs over (a serial port,
 //! [`serial`], or the in-process simulated device, [`sim`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
-//! segment ([`live_check`]), and hand-held mode ([`handheld`]).
+//! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), and hand-held
+//! mode ([`handheld`]).
 
 pub mod client;
 pub mod handheld;
@@ -10,6 +11,7 @@ pub mod operator;
 pub mod procedure;
 pub mod serial;
 pub mod sim;
+pub mod verify;
 
 pub use client::{DeviceClient, LinkError, Transport};
 

@@ -4,7 +4,7 @@
 //! simulated or emulated device) → record raw windows with a live check that the data match the plan →
 //! save the recording as it goes (the documented session format, readable by `host calibrate --input`) →
 //! estimate → write `calibration.toml`/`.bin` → write the blob to the device → reset it → read it back →
-//! verify the compensated output on held-out positions → one pass/fail line.
+//! verify the compensated output on held-out positions (`super::verify`) → one pass/fail line.
 //!
 //! A device streams window statistics, not every sample (a UART cannot carry 10 kHz of samples), so the
 //! recording holds one row per window: the window's mean outputs and rates, with `sample_rate_hz` set to
@@ -16,9 +16,9 @@ pub use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::device::{handheld, DeviceClient, LinkError, Transport};
-use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions, ReferenceChoice};
+use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions};
 use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
-use shared::wire::{Board, CalibrationState, Identity, SampleFlags, StreamKind, VirtualTable};
+use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
 
 /// Settings of the procedure.
@@ -61,24 +61,7 @@ impl ProcedureOptions {
     }
 }
 
-/// One verification position.
-#[derive(Clone, Debug, PartialEq)]
-pub struct VerificationPoint {
-    /// What it is.
-    pub label: String,
-    /// Up, body axes.
-    pub up_b: [f64; 3],
-    /// Table rate, °/s.
-    pub rate_deg_s: f64,
-    /// Mean compensated specific force, g.
-    pub measured_g: [f64; 3],
-    /// What it should be, g.
-    pub expected_g: [f64; 3],
-    /// Largest axis error, mg.
-    pub error_mg: f64,
-    /// Within the tolerance.
-    pub pass: bool,
-}
+pub use super::verify::VerificationPoint;
 
 /// Everything the procedure produced.
 #[derive(Debug)]
@@ -265,7 +248,7 @@ pub fn run<T: Transport>(
     let verification = if hand {
         handheld::verify_magnitude(client, op, &plan, window, window_rate, opts, fs)
     } else {
-        verify(client, op, &plan, drive, opts, fs)
+        super::verify::verify(client, op, &plan, drive, opts, fs)
     }
     .map_err(link)?;
     let passed = verification.iter().all(|v| v.pass);
@@ -537,145 +520,6 @@ fn settle_windows<T: Transport>(
         client.next_raw_window()?;
     }
     client.stop_stream()
-}
-
-/// Verification positions: held-out attitudes and a fast spin on a virtual table; on a real table the
-/// plan's first static positions and its fastest constant-rate segment, set up by the operator. A plan
-/// without rotations calibrates no lever arm, so its verification does not spin.
-fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f64)> {
-    if drive {
-        let spins = plan.segments.iter().any(|s| !s.is_static());
-        let n = |v: [f64; 3]| {
-            let k = shared::linalg::norm(&v);
-            v.map(|x| x / k)
-        };
-        return vec![
-            ("held-out (1,1,1) at rest".into(), n([1.0, 1.0, 1.0]), 0.0),
-            (
-                "held-out (-1,0.5,-0.3) at rest".into(),
-                n([-1.0, 0.5, -0.3]),
-                0.0,
-            ),
-            (
-                "held-out (0.2,-0.9,0.4) at rest".into(),
-                n([0.2, -0.9, 0.4]),
-                0.0,
-            ),
-            ("x up at 200 °/s".into(), [1.0, 0.0, 0.0], 200.0),
-            (
-                "(1,-1,1) up at -150 °/s".into(),
-                n([1.0, -1.0, 1.0]),
-                -150.0,
-            ),
-        ]
-        .into_iter()
-        .filter(|(_, _, rate)| spins || *rate == 0.0)
-        .collect();
-    }
-    let mut v: Vec<_> = plan
-        .segments
-        .iter()
-        .filter(|s| s.is_static())
-        .take(3)
-        .map(|s| (format!("{} at rest", s.name), s.up_b, 0.0))
-        .collect();
-    if let Some(s) = plan
-        .segments
-        .iter()
-        .filter(|s| !s.is_static() && s.rate_end_deg_s.is_none())
-        .max_by(|a, b| a.rate_deg_s.abs().total_cmp(&b.rate_deg_s.abs()))
-    {
-        v.push((format!("{} spinning", s.name), s.up_b, s.rate_deg_s));
-    }
-    v
-}
-
-fn verify<T: Transport>(
-    client: &mut DeviceClient<T>,
-    op: &mut dyn Operator,
-    plan: &Plan,
-    drive: bool,
-    opts: &ProcedureOptions,
-    sample_rate_hz: f64,
-) -> Result<Vec<VerificationPoint>, LinkError> {
-    let g = plan.gravity_m_s2;
-    let mut points = Vec::new();
-    // The expected specific force at the reference point O is g·up − W c, with c the reference point
-    // relative to the table axis (`docs/model.md` §4.5); spinning checks need c, known for these references.
-    let c = match opts.estimate.reference {
-        ReferenceChoice::TableAxis => Some([0.0; 3]),
-        ReferenceChoice::BodyPoint(p) => Some(p),
-        ReferenceChoice::Centroid => None,
-    };
-    if plan.segments.iter().all(|s| s.is_static()) {
-        op.say(
-            "verification at rest only: the plan has no rotations, so it calibrated no lever arm",
-        );
-    }
-    for (label, up, rate) in verification_positions(plan, drive) {
-        let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {
-            op.say(&format!(
-                "verify {label}: skipped (the centroid reference has no fixed table-axis offset)"
-            ));
-            continue;
-        };
-        let seg = SegmentPlan {
-            name: label.clone(),
-            up_b: up,
-            rate_deg_s: rate,
-            rate_end_deg_s: None,
-            duration_s: Some(opts.verify_seconds),
-            table_centre_m: None,
-            mount: None,
-            ..SegmentPlan::default()
-        };
-        if drive {
-            client.set_table(table_for(&seg))?;
-        } else {
-            op.wait_ready(&format!("verification: {}", instruction(&seg)))
-                .map_err(|e| LinkError::Unexpected {
-                    waiting_for: "the operator",
-                    got: e.to_string(),
-                })?;
-        }
-        let window = ((sample_rate_hz / 10.0).round() as u32).max(1);
-        client.start_stream(StreamKind::CompensatedWindows, window)?;
-        let per_s = sample_rate_hz / f64::from(window);
-        for _ in 0..(opts.settle_s * per_s).round() as u64 {
-            client.next_compensated_window()?;
-        }
-        let n = (opts.verify_seconds * per_s).round().max(1.0) as u64;
-        let mut sum = [0.0f64; 3];
-        let mut count = 0.0f64;
-        let mut uncalibrated = false;
-        for _ in 0..n {
-            let w = client.next_compensated_window()?;
-            uncalibrated |= w.flags.has(SampleFlags::UNCALIBRATED);
-            let k = f64::from(w.count);
-            for j in 0..3 {
-                sum[j] += f64::from(w.mean_m_s2[j]) * k;
-            }
-            count += k;
-        }
-        client.stop_stream()?;
-        let omega = up.map(|u| u * rate.to_radians());
-        let wc = shared::linalg::mat_vec(&shared::linalg::lever_matrix(&omega, &[0.0; 3]), &c);
-        let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
-        let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
-        let error_mg = (0..3)
-            .map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3)
-            .fold(0.0, f64::max);
-        points.push(VerificationPoint {
-            label,
-            up_b: up,
-            rate_deg_s: rate,
-            measured_g,
-            expected_g,
-            error_mg,
-            pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
-        });
-    }
-    Ok(points)
 }
 
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine

@@ -151,6 +151,49 @@ fn sections_comment(cal: &Calibration) -> String {
     gyro + &temperature
 }
 
+/// `ACAL_COMPENSATOR` (the per-sample constants, gyro included) and, with a temperature model,
+/// `ACAL_THERMAL` (what `acal_refresh` recomputes them from): the device's exact `f32` values.
+fn compensator_initialisers(compensator: &Compensator) -> String {
+    let comp = compensator.constants();
+    let mut w = String::new();
+    let _ = writeln!(
+        w,
+        "static const struct acal_compensator ACAL_COMPENSATOR = {{\n    .zero_bias_out = {},\n    \
+         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n    \
+         .gyro_offset_rad_s = {},\n    .gyro_inv = {},\n    .gyro_corrected = {},\n}};\n",
+        list(&comp.zero_bias_out, c_f32),
+        matrix(&comp.ka_m_s2_per_out, c_f32),
+        matrix(&comp.a, c_f32),
+        matrix(&comp.p, c_f32),
+        matrix(&comp.q, c_f32),
+        list(&comp.s, c_f32),
+        list(&comp.gyro_offset_rad_s, c_f32),
+        matrix(&comp.gyro_inv, c_f32),
+        u8::from(comp.gyro_corrected),
+    );
+    if let Some(t) = compensator.thermal_constants() {
+        let _ = writeln!(
+            w,
+            "static const struct acal_thermal ACAL_THERMAL = {{\n    .reference_c = {},\n    \
+             .range_c = {},\n    .zero_bias_out = {},\n    .ka_m_s2_per_out = {},\n    .p = {},\n    \
+             .q = {},\n    .s = {},\n    .gyro_bias_rad_s = {},\n    .zero_bias_poly = {},\n    \
+             .scale_poly = {},\n    .gyro_bias_poly = {},\n}};\n",
+            c_f32(t.reference_c),
+            list(&t.range_c, c_f32),
+            list(&t.zero_bias_out, c_f32),
+            matrix(&t.ka_m_s2_per_out, c_f32),
+            matrix(&t.p, c_f32),
+            matrix(&t.q, c_f32),
+            list(&t.s, c_f32),
+            list(&t.gyro_bias_rad_s, c_f32),
+            matrix(&t.zero_bias_poly, c_f32),
+            matrix(&t.scale_poly, c_f32),
+            matrix(&t.gyro_bias_poly, c_f32),
+        );
+    }
+    w
+}
+
 /// The `c-header` text.
 pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let cal = &input.cal;
@@ -173,7 +216,6 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let (bytes, n) = blob.to_bytes().map_err(ExportError::Blob)?;
     let compensator =
         Compensator::new(cal, LeverMode::RateAndAcceleration).map_err(ExportError::Compensator)?;
-    let comp = compensator.constants();
     let s = &cal.statics;
     let (reference, offset) = match cal.reference {
         ReferencePoint::TableAxis => (0, [0.0; 3]),
@@ -213,41 +255,7 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
         c_f64(cal.gravity_m_s2),
         sections_initialiser(cal),
     );
-    let _ = writeln!(
-        w,
-        "static const struct acal_compensator ACAL_COMPENSATOR = {{\n    .zero_bias_out = {},\n    \
-         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n    \
-         .gyro_offset_rad_s = {},\n    .gyro_inv = {},\n    .gyro_corrected = {},\n}};\n",
-        list(&comp.zero_bias_out, c_f32),
-        matrix(&comp.ka_m_s2_per_out, c_f32),
-        matrix(&comp.a, c_f32),
-        matrix(&comp.p, c_f32),
-        matrix(&comp.q, c_f32),
-        list(&comp.s, c_f32),
-        list(&comp.gyro_offset_rad_s, c_f32),
-        matrix(&comp.gyro_inv, c_f32),
-        u8::from(comp.gyro_corrected),
-    );
-    if let Some(t) = compensator.thermal_constants() {
-        let _ = writeln!(
-            w,
-            "static const struct acal_thermal ACAL_THERMAL = {{\n    .reference_c = {},\n    \
-             .range_c = {},\n    .zero_bias_out = {},\n    .ka_m_s2_per_out = {},\n    .p = {},\n    \
-             .q = {},\n    .s = {},\n    .gyro_bias_rad_s = {},\n    .zero_bias_poly = {},\n    \
-             .scale_poly = {},\n    .gyro_bias_poly = {},\n}};\n",
-            c_f32(t.reference_c),
-            list(&t.range_c, c_f32),
-            list(&t.zero_bias_out, c_f32),
-            matrix(&t.ka_m_s2_per_out, c_f32),
-            matrix(&t.p, c_f32),
-            matrix(&t.q, c_f32),
-            list(&t.s, c_f32),
-            list(&t.gyro_bias_rad_s, c_f32),
-            matrix(&t.zero_bias_poly, c_f32),
-            matrix(&t.scale_poly, c_f32),
-            matrix(&t.gyro_bias_poly, c_f32),
-        );
-    }
+    w.push_str(&compensator_initialisers(&compensator));
     let _ = writeln!(
         w,
         "#define ACAL_BLOB_LEN {n}u\nstatic const uint8_t ACAL_BLOB[ACAL_BLOB_LEN] = {{"
