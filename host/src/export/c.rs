@@ -151,45 +151,53 @@ fn sections_comment(cal: &Calibration) -> String {
     gyro + &temperature
 }
 
+/// `static const struct TYPE NAME = { .field = value, ... };` with one designated field per line.
+fn c_initialiser(ty: &str, name: &str, fields: &[(&str, String)]) -> String {
+    let mut w = format!("static const struct {ty} {name} = {{\n");
+    for (field, value) in fields {
+        let _ = writeln!(w, "    .{field} = {value},");
+    }
+    w.push_str("};\n\n");
+    w
+}
+
 /// `ACAL_COMPENSATOR` (the per-sample constants, gyro included) and, with a temperature model,
 /// `ACAL_THERMAL` (what `acal_refresh` recomputes them from): the device's exact `f32` values.
 fn compensator_initialisers(compensator: &Compensator) -> String {
-    let comp = compensator.constants();
-    let mut w = String::new();
-    let _ = writeln!(
-        w,
-        "static const struct acal_compensator ACAL_COMPENSATOR = {{\n    .zero_bias_out = {},\n    \
-         .ka_m_s2_per_out = {},\n    .a = {},\n    .p = {},\n    .q = {},\n    .s = {},\n    \
-         .gyro_offset_rad_s = {},\n    .gyro_inv = {},\n    .gyro_corrected = {},\n}};\n",
-        list(&comp.zero_bias_out, c_f32),
-        matrix(&comp.ka_m_s2_per_out, c_f32),
-        matrix(&comp.a, c_f32),
-        matrix(&comp.p, c_f32),
-        matrix(&comp.q, c_f32),
-        list(&comp.s, c_f32),
-        list(&comp.gyro_offset_rad_s, c_f32),
-        matrix(&comp.gyro_inv, c_f32),
-        u8::from(comp.gyro_corrected),
+    let c = compensator.constants();
+    let mut w = c_initialiser(
+        "acal_compensator",
+        "ACAL_COMPENSATOR",
+        &[
+            ("zero_bias_out", list(&c.zero_bias_out, c_f32)),
+            ("ka_m_s2_per_out", matrix(&c.ka_m_s2_per_out, c_f32)),
+            ("a", matrix(&c.a, c_f32)),
+            ("p", matrix(&c.p, c_f32)),
+            ("q", matrix(&c.q, c_f32)),
+            ("s", list(&c.s, c_f32)),
+            ("gyro_offset_rad_s", list(&c.gyro_offset_rad_s, c_f32)),
+            ("gyro_inv", matrix(&c.gyro_inv, c_f32)),
+            ("gyro_corrected", u8::from(c.gyro_corrected).to_string()),
+        ],
     );
     if let Some(t) = compensator.thermal_constants() {
-        let _ = writeln!(
-            w,
-            "static const struct acal_thermal ACAL_THERMAL = {{\n    .reference_c = {},\n    \
-             .range_c = {},\n    .zero_bias_out = {},\n    .ka_m_s2_per_out = {},\n    .p = {},\n    \
-             .q = {},\n    .s = {},\n    .gyro_bias_rad_s = {},\n    .zero_bias_poly = {},\n    \
-             .scale_poly = {},\n    .gyro_bias_poly = {},\n}};\n",
-            c_f32(t.reference_c),
-            list(&t.range_c, c_f32),
-            list(&t.zero_bias_out, c_f32),
-            matrix(&t.ka_m_s2_per_out, c_f32),
-            matrix(&t.p, c_f32),
-            matrix(&t.q, c_f32),
-            list(&t.s, c_f32),
-            list(&t.gyro_bias_rad_s, c_f32),
-            matrix(&t.zero_bias_poly, c_f32),
-            matrix(&t.scale_poly, c_f32),
-            matrix(&t.gyro_bias_poly, c_f32),
-        );
+        w.push_str(&c_initialiser(
+            "acal_thermal",
+            "ACAL_THERMAL",
+            &[
+                ("reference_c", c_f32(t.reference_c)),
+                ("range_c", list(&t.range_c, c_f32)),
+                ("zero_bias_out", list(&t.zero_bias_out, c_f32)),
+                ("ka_m_s2_per_out", matrix(&t.ka_m_s2_per_out, c_f32)),
+                ("p", matrix(&t.p, c_f32)),
+                ("q", matrix(&t.q, c_f32)),
+                ("s", list(&t.s, c_f32)),
+                ("gyro_bias_rad_s", list(&t.gyro_bias_rad_s, c_f32)),
+                ("zero_bias_poly", matrix(&t.zero_bias_poly, c_f32)),
+                ("scale_poly", matrix(&t.scale_poly, c_f32)),
+                ("gyro_bias_poly", matrix(&t.gyro_bias_poly, c_f32)),
+            ],
+        ));
     }
     w
 }
