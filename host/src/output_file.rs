@@ -17,6 +17,8 @@ pub enum OutputFileError {
     Exists(PathBuf),
     /// A file system operation failed.
     Io(PathBuf, std::io::Error),
+    /// `--force` would replace a directory holding files no command of this tool writes.
+    Foreign(PathBuf, Vec<String>),
 }
 
 impl std::fmt::Display for OutputFileError {
@@ -28,6 +30,14 @@ impl std::fmt::Display for OutputFileError {
                 p.display()
             ),
             OutputFileError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
+            OutputFileError::Foreign(p, names) => write!(
+                f,
+                "{} holds {} that this tool did not write ({}); --force replaces a result directory \
+                 whole, so choose another directory",
+                p.display(),
+                if names.len() == 1 { "an entry" } else { "entries" },
+                names.join(", ")
+            ),
         }
     }
 }
@@ -124,9 +134,160 @@ pub fn write_atomic(target: &Path, bytes: &[u8], force: bool) -> Result<(), Outp
     f.commit()
 }
 
+/// Extensions of the files this tool writes into a result directory (sessions, calibrations,
+/// reports, figures); anything else in a directory that `--force` would replace is refused.
+const OWN_EXTENSIONS: [&str; 8] = ["toml", "csv", "bin", "svg", "png", "html", "md", "json"];
+
+/// A result directory built beside its target and moved into place whole, so that an interrupted
+/// run (an error, Ctrl-C) leaves either the earlier directory or none, never a half-written one that
+/// a later command accepts, and `--force` leaves no stale file of an earlier run. The directory is
+/// built in `.NAME.PID.partial` next to the target; an earlier directory is moved aside and removed
+/// only after the new one is in place.
+pub struct OutputDir {
+    target: PathBuf,
+    temp: PathBuf,
+    force: bool,
+    committed: bool,
+}
+
+impl OutputDir {
+    /// Starts building `target`. Fails at once, before any work, if it exists and `force` is false,
+    /// or if it holds anything this tool does not write (a directory, a file of another kind).
+    pub fn create(target: &Path, force: bool) -> Result<OutputDir, OutputFileError> {
+        let io = |p: &Path| {
+            let p = p.to_path_buf();
+            move |e| OutputFileError::Io(p, e)
+        };
+        if target.exists() && !is_empty_dir(target) {
+            if !force {
+                return Err(OutputFileError::Exists(target.to_path_buf()));
+            }
+            let foreign = foreign_entries(target).map_err(io(target))?;
+            if !foreign.is_empty() {
+                return Err(OutputFileError::Foreign(target.to_path_buf(), foreign));
+            }
+        }
+        let name = target
+            .file_name()
+            .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+        let temp = target.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+        if temp.exists() {
+            std::fs::remove_dir_all(&temp).map_err(io(&temp))?;
+        }
+        std::fs::create_dir_all(&temp).map_err(io(&temp))?;
+        Ok(OutputDir {
+            target: target.to_path_buf(),
+            temp,
+            force,
+            committed: false,
+        })
+    }
+
+    /// Where to write the directory's files until [`OutputDir::commit`].
+    pub fn path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The final path.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Moves the built directory into place (replacing the earlier one when `force` was given).
+    pub fn commit(mut self) -> Result<(), OutputFileError> {
+        let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
+        let old = self.temp.with_extension("old");
+        if is_empty_dir(&self.target) {
+            std::fs::remove_dir(&self.target).map_err(|e| io(&self.target, e))?;
+        }
+        let replacing = self.target.exists();
+        if replacing {
+            if !self.force {
+                return Err(OutputFileError::Exists(self.target.clone()));
+            }
+            std::fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;
+        }
+        std::fs::rename(&self.temp, &self.target).map_err(|e| io(&self.target, e))?;
+        self.committed = true;
+        if replacing {
+            std::fs::remove_dir_all(&old).map_err(|e| io(&old, e))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.temp);
+        }
+    }
+}
+
+/// An existing directory with nothing in it (made ahead of the command: nothing to lose).
+fn is_empty_dir(p: &Path) -> bool {
+    std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none())
+}
+
+/// The entries of `dir` that no command of this tool writes.
+fn foreign_entries(dir: &Path) -> std::io::Result<Vec<String>> {
+    let mut foreign = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let own = entry.file_type()?.is_file()
+            && Path::new(&name)
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| OWN_EXTENSIONS.contains(&e));
+        if !own {
+            foreign.push(name);
+        }
+    }
+    foreign.sort();
+    Ok(foreign)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_directory_is_replaced_whole_or_not_at_all() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("session");
+        std::fs::create_dir(&target).unwrap();
+        // Not there yet (or empty): built aside, appears on commit.
+        let d = OutputDir::create(&target, false).unwrap();
+        std::fs::write(d.path().join("plan.toml"), "one").unwrap();
+        std::fs::write(d.path().join("gyro.toml"), "stale").unwrap();
+        assert!(!target.join("plan.toml").exists());
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"one");
+        // Without force: refused before any work.
+        assert!(matches!(
+            OutputDir::create(&target, false),
+            Err(OutputFileError::Exists(_))
+        ));
+        // Dropped before commit (an error on the way): the earlier directory is untouched.
+        let d = OutputDir::create(&target, true).unwrap();
+        std::fs::write(d.path().join("plan.toml"), "two").unwrap();
+        drop(d);
+        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"one");
+        // Replaced whole: the earlier run's other files are gone.
+        let d = OutputDir::create(&target, true).unwrap();
+        std::fs::write(d.path().join("plan.toml"), "three").unwrap();
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"three");
+        assert!(!target.join("gyro.toml").exists());
+        assert_eq!(std::fs::read_dir(root.path()).unwrap().count(), 1);
+        // A directory with files of another kind is never replaced.
+        std::fs::write(target.join("notes.txt"), "mine").unwrap();
+        match OutputDir::create(&target, true) {
+            Err(OutputFileError::Foreign(_, names)) => assert_eq!(names, ["notes.txt"]),
+            other => panic!("{:?}", other.map(|_| ())),
+        }
+    }
 
     #[test]
     fn never_overwrites_without_force_and_leaves_no_temporary() {

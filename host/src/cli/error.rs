@@ -88,6 +88,13 @@ pub enum CliError {
     /// A result failed its pass/fail limits (the failed checks, one line).
     #[error("FAIL: {0}")]
     ChecksFailed(String),
+    /// A gyro fit that no real gyro gives ([`crate::estimate::gyro_check`]): nothing was written.
+    #[error(
+        "the gyro fit is refused, nothing written:\n  - {}\nfix the columns, signs, unit or time \
+         base named above; to use the accelerometer alone, add --no-gyro",
+        .0.join("\n  - ")
+    )]
+    GyroRefused(Vec<String>),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),

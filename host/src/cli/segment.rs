@@ -9,7 +9,8 @@ use crate::estimate::handheld_gyro::DETERMINED_1SIGMA;
 use crate::estimate::handheld_gyro::{
     fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn,
 };
-use crate::estimate::{calibrate_session_stats, EstimateOptions};
+use crate::estimate::{calibrate_session_stats, gyro_check, EstimateOptions};
+use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
 use crate::session::from_recording::{plan_for, stats_for, write_session};
 use crate::session::import::{
@@ -71,6 +72,10 @@ pub struct SegmentArgs {
     /// and everything else for people on stderr.
     #[arg(long)]
     pub json: bool,
+    /// Do not fit the gyro (when its columns are known to be unusable). The accelerometer's axes are
+    /// then unchecked for a mirror image: only the gyro's turns can see one.
+    #[arg(long)]
+    pub no_gyro: bool,
 }
 
 /// `host simulate-hand`.
@@ -141,7 +146,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         g.matrix,
         g.bias_rad_s
     );
-    write_atomic(&truth_path, text.as_bytes()).map_err(io(&truth_path))?;
+    write_atomic(&truth_path, text.as_bytes(), a.force)?;
     println!(
         "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",
         a.out.display(),
@@ -250,6 +255,8 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let options = import_options(a)?;
+    // Refused before any work; built aside and moved into place whole (docs/robustness.md).
+    let dir = OutputDir::create(&a.out, a.force)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
     let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {
@@ -272,33 +279,36 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if let Some(advice) = &advice {
         out.line(format_args!("advice: {advice}"))?;
     }
-    let gyro_path = a.out.join(GYRO_FILE);
-    if gyro_path.exists() && !a.force {
-        return Err(CliError::Usage(format!(
-            "{} exists: choose another --out or add --force to replace the session",
-            gyro_path.display()
-        )));
-    }
     let plan = plan_for(&rec, &seg);
-    let gyro = gyro_fit(&rec, &seg, &plan)?;
-    let rows = write_session(&a.out, &rec, &seg, &plan, a.force)?;
+    let gyro = if a.no_gyro {
+        Err(HandGyroError::NotAsked)
+    } else {
+        gyro_fit(&rec, &seg, &plan)?
+    };
+    if let Ok(fit) = &gyro {
+        out.human(gyro_text(fit))?;
+        let problems = gyro_problems(fit);
+        if !problems.is_empty() {
+            return Err(CliError::GyroRefused(problems));
+        }
+    }
+    let rows = write_session(dir.path(), &rec, &seg, &plan, false)?;
     match &gyro {
         Ok(fit) => {
-            out.human(gyro_text(fit))?;
-            write_atomic(&gyro_path, gyro_file_text(fit).as_bytes()).map_err(|e| {
-                CliError::Usage(format!("cannot write {}: {e}", gyro_path.display()))
-            })?;
+            let path = dir.path().join(GYRO_FILE);
+            write_atomic(&path, gyro_file_text(fit).as_bytes(), false)?;
         }
         Err(e) => out.line(format_args!("gyro: not calibrated: {e}"))?,
     }
     let fig = figure(&rec, &seg);
-    match plot::render(&fig, &a.out, Formats::default()) {
+    match plot::render(&fig, dir.path(), Formats::default()) {
         Ok(o) => o
             .warnings
             .into_iter()
             .for_each(|w| warn(out, &mut warnings, w)),
         Err(e) => warn(out, &mut warnings, e.to_string()),
     }
+    dir.commit()?;
     out.line(format_args!(
         "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
         a.out.display(),
@@ -320,6 +330,16 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
     Ok(outcome)
+}
+
+/// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
+/// turns no `G` explains. Empty: accepted.
+pub fn gyro_problems(fit: &HandGyroFit) -> Vec<String> {
+    let mut problems: Vec<String> = gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns)
+        .into_iter()
+        .collect();
+    problems.extend(gyro_check::matrix_problems(&fit.matrix));
+    problems
 }
 
 /// A warning on stderr, kept for the JSON document.
@@ -470,12 +490,6 @@ fn document(
         out_dir: a.out.display().to_string(),
         rows_written: w.rows,
     }
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = path.with_extension("toml.tmp");
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path)
 }
 
 /// The gyro fit on the turns, with gravity directions from the session's own accelerometer

@@ -105,6 +105,9 @@ pub enum HandGyroError {
         /// A guess at the right unit.
         hint: &'static str,
     },
+    /// The user asked for no gyro fit (`host segment --no-gyro`).
+    #[error("not fitted (--no-gyro); the accelerometer's axes are unchecked for a mirror image")]
+    NotAsked,
     /// The fit did not give a usable `G`.
     #[error("the gyro fit gives an implausible G (row norms {norms:?}, expected near 1): {why}")]
     Implausible {

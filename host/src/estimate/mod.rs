@@ -17,7 +17,7 @@
 //! least squares), `segment` (segment kind, pooled static noise), [`model`] (one segment's mean
 //! outputs, the parameter layout), `build` (segment models, mounts, the gyro's observations),
 //! [`attitude`] (each mount's tilt unknowns and prior, docs/model.md §7), [`gyro`] (the gyro model,
-//! §8), `solve` and `joint` (the weighted least squares), `paper` (the paper's eq. 24, for
+//! §8), [`gyro_check`] (whether a fitted gyro is plausible), `solve` and `joint` (the weighted least squares), `paper` (the paper's eq. 24, for
 //! comparison), `paper_angles` (θ to the paper's angles with their covariance), `uncertainty`,
 //! [`plausibility`] (checks before any file is written); [`thermal`], `thermal_gyro` and
 //! `thermal_misalignment` (the temperature model, §9); [`handheld_gyro`] (the gyro from hand turns);
@@ -26,6 +26,7 @@
 pub mod attitude;
 mod build;
 pub mod gyro;
+pub mod gyro_check;
 pub mod handheld_gyro;
 mod joint;
 pub mod model;

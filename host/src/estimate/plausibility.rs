@@ -10,9 +10,11 @@
 //! - the static segments read like their labels: with the nominal layout (accelerometer `i` along body
 //!   axis `i`), each static segment's outputs give its "up" to within a few degrees, independently of
 //!   the fit, and a segment whose data point where another label does is named ("'y+' looks like
-//!   'z+'").
+//!   'z+'");
+//! - the gyro, when the session has one: its spins agree with the table and its `G` is a real gyro's
+//!   ([`super::gyro_check`]).
 
-use super::{CalibrationOutcome, EstimateError};
+use super::{gyro_check, CalibrationOutcome, EstimateError};
 use crate::session::{Plan, SegmentStats};
 use shared::linalg;
 
@@ -42,6 +44,7 @@ pub(crate) fn check(
         }
     };
     let mut problems = triad_problems(&outcome.fitted.m_out_per_g);
+    problems.extend(gyro_problems(plan, &outcome));
     if outcome.fit.dof < 1 {
         problems.push(format!(
             "{} residual degrees of freedom: χ²/dof is not defined, so nothing checks the fit; add \
@@ -55,6 +58,20 @@ pub(crate) fn check(
     }
     problems.extend(labels);
     Err(EstimateError::Implausible { problems })
+}
+
+/// The gyro's refusals (`gyro_check`): spins whose gyro contradicts the table systematically, or an
+/// implausible `G`. A calibration with such a gyro is not written: its numbers would be loaded as if
+/// calibrated. (`G` entries that the plan does not determine are marked by their 1σ and listed.)
+fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
+    let spins = plan.segments.iter().filter(|s| !s.is_static()).count();
+    let mut problems: Vec<String> = gyro_check::contradiction_problem(&outcome.excluded, spins)
+        .into_iter()
+        .collect();
+    if let Some(g) = &outcome.gyro {
+        problems.extend(gyro_check::matrix_problems(&g.matrix));
+    }
+    problems
 }
 
 /// Handedness and per-axis angle of the fitted sensing directions.

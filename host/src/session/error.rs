@@ -74,6 +74,24 @@ pub enum RecordingError {
     },
     /// The file has a header but no usable row.
     NoRows(PathBuf),
+    /// The last line has no line end: the recording (or its copy) was cut short.
+    CutShort {
+        /// The file.
+        path: PathBuf,
+        /// 1-based number of the unfinished line.
+        line: u64,
+    },
+    /// The time stamps step at another rate than the plan's `sample_rate_hz`.
+    TimeBase {
+        /// The file.
+        path: PathBuf,
+        /// The segment whose stamps disagree.
+        segment: String,
+        /// Rate implied by its stamps, Hz.
+        stamps_hz: f64,
+        /// The plan's rate, Hz.
+        plan_hz: f64,
+    },
     /// [`super::SessionWriter`] was asked for a segment the plan does not have.
     WriterSegment(String),
     /// A row written with (or without) a temperature to a recording whose plan says otherwise.
@@ -161,6 +179,27 @@ impl std::fmt::Display for RecordingError {
                  name = \"{name}\" to the plan, or remove its rows",
                 path.display()
             ),
+            RecordingError::CutShort { path, line } => write!(
+                f,
+                "{} line {line} has no line end: the recording (or its copy) was cut short, so its \
+                 last row may be wrong and rows may be missing; record or copy it again (or, if \
+                 every segment is complete, delete that line)",
+                path.display()
+            ),
+            RecordingError::TimeBase {
+                path,
+                segment,
+                stamps_hz,
+                plan_hz,
+            } => write!(
+                f,
+                "{}: the time stamps of segment '{segment}' step at {} Hz, the plan's \
+                 sample_rate_hz is {} Hz: the time column is in another unit or scale, or the plan's \
+                 rate is wrong; fix whichever is wrong",
+                path.display(),
+                hz(*stamps_hz),
+                hz(*plan_hz)
+            ),
             RecordingError::NoRows(path) => write!(
                 f,
                 "{} has no data rows after its header: nothing to calibrate from",
@@ -208,5 +247,15 @@ pub(crate) fn shorten(s: &str) -> String {
         format!("{}…", s.chars().take(60).collect::<String>())
     } else {
         s.to_string()
+    }
+}
+
+/// A rate for a message: plain within the range a recording has, else in exponent form (never a
+/// 300-digit number).
+fn hz(v: f64) -> String {
+    if (1e-3..1e7).contains(&v.abs()) {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.3e}")
     }
 }

@@ -37,10 +37,10 @@ pub struct ReadReport {
     pub rejected_rows: u64,
     /// Plan segments with no usable row (they are absent from the statistics).
     pub segments_without_rows: Vec<String>,
-    /// Line number of a final line without a line end, which was skipped.
-    pub skipped_partial_line: Option<u64>,
     /// Human-readable warnings, one per problem.
     pub warnings: Vec<String>,
+    /// Per plan segment, the steps between its consecutive rows' time stamps.
+    pub steps: Vec<StepCount>,
 }
 
 /// A session reduced to its statistics.
@@ -69,6 +69,7 @@ pub fn read_session(dir: &Path, options: &ReadOptions) -> Result<Session, Record
     let result = read_samples(reader, &plan, &path);
     bar.finish_and_clear();
     let (stats, report) = result?;
+    check_time_base(&stats, &report, &plan, &path)?;
     Ok(Session {
         plan,
         stats,
@@ -114,6 +115,11 @@ struct Reducer<'a, S> {
     current: usize,
     line_no: u64,
     report: ReadReport,
+    /// Per plan segment: the last row's time stamp, and the steps between rows.
+    last_t: Vec<Option<f64>>,
+    steps: Vec<StepCount>,
+    /// The plan's sample period, s.
+    period_s: f64,
     /// Format version 2: a ninth column, `temp_c`.
     temperature: bool,
 }
@@ -130,6 +136,9 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
                 .map(|s| SegmentAccumulator::new(s.name.clone()))
                 .collect(),
             first_rejected: vec![None; plan.segments.len()],
+            last_t: vec![None; plan.segments.len()],
+            steps: vec![StepCount::default(); plan.segments.len()],
+            period_s: 1.0 / plan.sample_rate_hz,
             current: 0,
             line_no: 1,
             report: ReadReport::default(),
@@ -199,6 +208,18 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             w_rad_s: [v[4], v[5], v[6]],
             temp_c: self.temperature.then(|| v[7]),
         })?;
+        if let Some(prev) = self.last_t[idx].replace(v[0]) {
+            let dt = v[0] - prev;
+            let c = &mut self.steps[idx];
+            c.steps += 1;
+            if (dt / self.period_s - 1.0).abs() <= STEP_TOLERANCE {
+                c.at_rate += 1;
+            }
+            if dt > 0.0 && dt < 100.0 * self.period_s {
+                c.short += 1;
+                c.short_sum_s += dt;
+            }
+        }
         let acc = &mut self.accs[idx];
         let before = acc.count();
         if self.temperature {
@@ -374,20 +395,73 @@ pub fn read_samples_each<R: BufRead>(
     }
     let mut report = finish_report(&mut red, carry)?;
     let stats = collect_stats(&red, plan, &mut report);
+    report.steps = red.steps;
     Ok((stats, report))
+}
+
+/// Fewest steps between a segment's consecutive rows for its time base to be checked.
+const TIME_BASE_MIN_STEPS: u64 = 100;
+
+/// A step between consecutive rows of a segment is "at the plan's rate" within this relative
+/// difference (a real clock's jitter and rounding of the stamps are far smaller).
+const STEP_TOLERANCE: f64 = 0.1;
+
+/// The time steps between consecutive rows of one segment (a segment recorded in several runs has a
+/// gap between them, which counts as one step off the rate).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepCount {
+    /// Steps seen.
+    pub steps: u64,
+    /// Of which at the plan's period, within [`STEP_TOLERANCE`].
+    pub at_rate: u64,
+    /// Sum of the positive steps shorter than 100 periods, s (the rate they imply, for a message).
+    pub short_sum_s: f64,
+    /// How many those are.
+    pub short: u64,
+}
+
+/// Each segment's time stamps step at the plan's rate, for most of their steps
+/// ([`RecordingError::TimeBase`]): the rate enters `ω̇` (docs/model.md §5) and the durations, and a
+/// mismatch means that the time column is not what it says.
+fn check_time_base(
+    stats: &[SegmentStats],
+    report: &ReadReport,
+    plan: &Plan,
+    path: &Path,
+) -> Result<(), RecordingError> {
+    for (seg, c) in plan.segments.iter().zip(&report.steps) {
+        if c.steps < TIME_BASE_MIN_STEPS || 2 * c.at_rate >= c.steps {
+            continue;
+        }
+        let span = stats
+            .iter()
+            .find(|s| s.name == seg.name)
+            .map_or(f64::NAN, |s| (s.count - 1) as f64 / (s.t_last_s - s.t_first_s));
+        let stamps_hz = if c.short > 0 {
+            c.short as f64 / c.short_sum_s
+        } else {
+            span
+        };
+        return Err(RecordingError::TimeBase {
+            path: path.to_path_buf(),
+            segment: seg.name.clone(),
+            stamps_hz,
+            plan_hz: plan.sample_rate_hz,
+        });
+    }
+    Ok(())
 }
 
 /// The final partial line (if any) and the no-rows check.
 fn finish_report<S>(red: &mut Reducer<'_, S>, carry: &[u8]) -> Result<ReadReport, RecordingError> {
-    let mut report = std::mem::take(&mut red.report);
+    let report = std::mem::take(&mut red.report);
     if !carry.trim_ascii().is_empty() {
-        // Only the last line of a file can lack its line end.
-        let line_no = red.line_no + 1;
-        report.skipped_partial_line = Some(line_no);
-        report.warnings.push(format!(
-            "{} line {line_no}: the last line has no line end (recording cut short?); skipped",
-            red.path.display()
-        ));
+        // Only the last line of a file can lack its line end: the writer ends every row with one, so
+        // the recording was cut short, and even a line that parses may have lost digits.
+        return Err(RecordingError::CutShort {
+            path: red.path.to_path_buf(),
+            line: red.line_no + 1,
+        });
     }
     if report.rows == 0 {
         return Err(RecordingError::NoRows(red.path.to_path_buf()));
@@ -574,8 +648,11 @@ up_b = [0, 0, -1]
             let got = read_samples(r, &plan(), Path::new("s")).unwrap();
             assert_eq!(got, whole, "buffer of {cap} bytes");
             let cut = std::io::BufReader::with_capacity(cap, &text[..text.len() - 5]);
-            let got = read_samples(cut, &plan(), Path::new("s")).unwrap().1;
-            assert_eq!(got.skipped_partial_line, Some(301), "buffer of {cap} bytes");
+            let got = read_samples(cut, &plan(), Path::new("s")).unwrap_err();
+            assert!(
+                matches!(got, RecordingError::CutShort { line: 301, .. }),
+                "buffer of {cap} bytes: {got}"
+            );
         }
     }
 
@@ -591,18 +668,36 @@ up_b = [0, 0, -1]
     }
 
     #[test]
-    fn truncated_last_line_is_skipped_with_a_warning_naming_it() {
+    fn time_stamps_at_another_rate_than_the_plans_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        // Scaled by 1.5 (a time column in other units): refused, naming both rates.
+        let scaled: Vec<Row> = rows()
+            .into_iter()
+            .map(|(s, t, u, g)| (s, t * 1.5, u, g))
+            .collect();
+        write_session(dir.path(), &scaled);
+        let e = read_session(dir.path(), &ReadOptions { quiet: true })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("66.667 Hz") && e.contains("100.000 Hz"), "{e}");
+        // At the plan's rate, with a segment recorded in two runs (one long step): accepted.
+        let dir = tempfile::tempdir().unwrap();
+        write_session(dir.path(), &rows());
+        read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
+    }
+
+    #[test]
+    fn truncated_last_line_is_refused_naming_it() {
         let dir = tempfile::tempdir().unwrap();
         write_session(dir.path(), &rows());
         let path = dir.path().join(SAMPLES_FILE);
         let full = std::fs::read(&path).unwrap();
         // Cut in the middle of the last line.
         std::fs::write(&path, &full[..full.len() - 9]).unwrap();
-        let s = read_session(dir.path(), &ReadOptions { quiet: true }).unwrap();
-        assert_eq!(s.report.rows, 299);
-        assert_eq!(s.report.skipped_partial_line, Some(301));
-        let w = s.report.warnings.join("\n");
-        assert!(w.contains("line 301") && w.contains("cut short"), "{w}");
+        let e = read_session(dir.path(), &ReadOptions { quiet: true })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 301") && e.contains("cut short"), "{e}");
         // A cut that leaves a short line in the middle (e.g. two files glued) is an error.
         let mut glued = full[..full.len() - 60].to_vec();
         glued.extend_from_slice(b"\nz-,1,2,3,4,5,6,7\n");

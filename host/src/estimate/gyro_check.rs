@@ -1,0 +1,265 @@
+//! Whether a fitted gyro is accepted: a least-squares fit of `w = G·ω + b` (docs/model.md §8) always
+//! returns numbers, and these checks refuse the numbers no real gyro has. A real MEMS or FOG gyro's
+//! `G` is the identity within a few percent (scale) and a few degrees (misalignment); a fit far from
+//! it, or turns that no `G` explains, come from the recording's columns or time base, not from the
+//! unit. Each refusal names the likely cause:
+//!
+//! - a diagonal entry ≤ 0: that axis's sign is reversed (or the accelerometer's axes are mirrored,
+//!   which only the gyro can see: a reflection of every still position is still a set of positions);
+//! - an off-diagonal entry larger than the diagonal one: two axes are swapped;
+//! - the same scale error on all three axes: the time base is wrong (the turns were integrated over
+//!   the wrong durations: the sample rate, or the time column's unit), or the gyro's unit;
+//! - turns that no `G` explains (a misfit far beyond the noise): a sign, a swap or a time gap.
+//!
+//! The table session's gyro is also refused when the screening left out spins because the gyro
+//! contradicts the table (`ExclusionReason::RateContradiction`): the same causes, seen before the fit.
+
+use super::{Exclusion, ExclusionReason};
+use shared::linalg::RowMajor3;
+
+/// Largest plausible |G_ii − 1|: MEMS gyros are within ±3 % of their nominal scale; 20 % leaves room
+/// for any real part while catching a wrong unit (×57.3), a time base off by ≥ 1.25× and a sign.
+pub const MAX_SCALE_ERROR: f64 = 0.2;
+
+/// Largest plausible |G_ij| (i ≠ j): 0.1 is a 5.7° misalignment, far beyond any mounted part's
+/// (≤ 1–2°) but far below a swapped axis's 1.
+pub const MAX_CROSS_AXIS: f64 = 0.1;
+
+/// Largest plausible rms misfit of hand turns, degrees. The still positions give each "up" to about
+/// 0.01–0.1° and a fitted `G` leaves only that; beyond 1° the turns contradict every linear gyro model.
+pub const MAX_TURN_MISFIT_DEG: f64 = 1.0;
+
+/// Ratio of two scale errors regarded as "the same on all three axes" (a time base or unit, not a
+/// part's own scale errors, which differ from axis to axis).
+const COMMON_SCALE_SPREAD: f64 = 0.05;
+
+/// The likely causes of an implausible `G`, one line each (empty: `G` is plausible).
+pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
+    let ax = shared::params::axis_name;
+    let mut problems = Vec::new();
+    if matrix.iter().flatten().any(|v| !v.is_finite()) {
+        return vec!["the gyro fit has non-finite entries: the recording has no usable turns".into()];
+    }
+    for i in 0..3 {
+        let (d, row) = (matrix[i][i], matrix[i]);
+        if let Some(j) = (0..3).find(|&j| j != i && row[j].abs() > d.abs()) {
+            problems.push(format!(
+                "gyro axis {} reads body axis {} (G[{}][{}] = {:+.3}, G[{}][{}] = {:+.3}): two gyro (or \
+                 accelerometer) columns are swapped; check the column order",
+                ax(i),
+                ax(j),
+                ax(i),
+                ax(j),
+                row[j],
+                ax(i),
+                ax(i),
+                d
+            ));
+        } else if d <= 0.0 {
+            problems.push(format!(
+                "gyro axis {} turns the wrong way (G[{}][{}] = {:+.3}): its sign is reversed, or one \
+                 accelerometer axis is (the turns then look mirrored); negate that column",
+                ax(i),
+                ax(i),
+                ax(i),
+                d
+            ));
+        }
+    }
+    if !problems.is_empty() {
+        return problems;
+    }
+    let scale: [f64; 3] = core::array::from_fn(|i| matrix[i][i] - 1.0);
+    if scale.iter().any(|s| s.abs() > MAX_SCALE_ERROR) {
+        problems.push(scale_cause(&scale));
+    }
+    for i in 0..3 {
+        for j in (0..3).filter(|&j| j != i) {
+            if matrix[i][j].abs() > MAX_CROSS_AXIS {
+                problems.push(format!(
+                    "G[{}][{}] = {:+.3}: a {:.1}° misalignment, beyond any mounted gyro's (at most \
+                     {MAX_CROSS_AXIS} is plausible); check the columns and the gyro's mounting",
+                    ax(i),
+                    ax(j),
+                    matrix[i][j],
+                    matrix[i][j].asin().to_degrees()
+                ));
+            }
+        }
+    }
+    problems
+}
+
+/// The cause of a scale error beyond [`MAX_SCALE_ERROR`]: a common one is the time base or unit.
+fn scale_cause(scale: &[f64; 3]) -> String {
+    let ratio: [f64; 3] = scale.map(|s| 1.0 + s);
+    let mean = ratio.iter().sum::<f64>() / 3.0;
+    let common = ratio
+        .iter()
+        .all(|r| (r / mean - 1.0).abs() < COMMON_SCALE_SPREAD);
+    let shown = format!(
+        "{:+.1} %, {:+.1} %, {:+.1} %",
+        scale[0] * 100.0,
+        scale[1] * 100.0,
+        scale[2] * 100.0
+    );
+    let deg = 180.0 / core::f64::consts::PI;
+    if common && ((mean / deg) - 1.0).abs() < 0.1 {
+        format!(
+            "gyro scale errors {shown}: the rates are {deg:.1}× too large on every axis, so the gyro \
+             is in °/s but was read as rad/s (--gyro-unit deg/s)"
+        )
+    } else if common && ((mean * deg) - 1.0).abs() < 0.1 {
+        format!(
+            "gyro scale errors {shown}: the rates are {deg:.1}× too small on every axis, so the gyro \
+             is in rad/s but was read as °/s (--gyro-unit rad/s)"
+        )
+    } else if common {
+        format!(
+            "gyro scale errors {shown}, the same on all three axes: the time base is wrong by a \
+             factor {:.3} (the sample rate given, or the time column's unit), not the gyro; check \
+             --rate-hz or --time-column",
+            1.0 / mean
+        )
+    } else {
+        format!(
+            "gyro scale errors {shown}: at most {:.0} % is plausible; check the gyro's unit and the \
+             columns",
+            MAX_SCALE_ERROR * 100.0
+        )
+    }
+}
+
+/// The refusal of turns that no gyro model explains (`rms_misfit_deg` over [`MAX_TURN_MISFIT_DEG`]).
+pub fn misfit_problem(rms_misfit_deg: f64, turns: usize) -> Option<String> {
+    (rms_misfit_deg.is_nan() || rms_misfit_deg > MAX_TURN_MISFIT_DEG).then(|| {
+        format!(
+            "the {turns} hand turns contradict every gyro model (rms misfit {rms_misfit_deg:.2}°, at \
+             most {MAX_TURN_MISFIT_DEG}° is plausible): a gyro or accelerometer axis sign is \
+             reversed, two columns are swapped, or the time stamps have a gap inside a turn"
+        )
+    })
+}
+
+/// The refusal of a table session whose spins contradict the gyro systematically: the exclusions
+/// for `RateContradiction` of a sign or unit (a ratio of −1 or 57.3^±1, which only the gyro's columns
+/// give), or of more than half of the session's `spins`. One spin that did not happen as planned is a
+/// table's slip: it stays an exclusion, and the others calibrate.
+pub fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Option<String> {
+    let ratios: Vec<(&str, f64)> = excluded
+        .iter()
+        .filter_map(|e| match e.reason {
+            ExclusionReason::RateContradiction {
+                measured_deg_s,
+                planned_deg_s,
+            } => Some((e.name.as_str(), measured_deg_s / planned_deg_s)),
+            _ => None,
+        })
+        .collect();
+    let first = ratios.first()?;
+    let deg = 180.0 / core::f64::consts::PI;
+    let near = |r: f64, x: f64| (r / x - 1.0).abs() < 0.1;
+    let systematic = ratios
+        .iter()
+        .all(|(_, r)| near(*r, -1.0) || near(*r, deg) || near(*r, 1.0 / deg));
+    if !systematic && 2 * ratios.len() <= spins {
+        return None;
+    }
+    let names: Vec<String> = ratios.iter().map(|(n, _)| format!("'{n}'")).collect();
+    let cause = if ratios.iter().all(|(_, r)| near(*r, -1.0)) {
+        "the gyro axis along those spins has its sign reversed: negate that column".to_string()
+    } else if ratios.iter().all(|(_, r)| near(*r, deg)) {
+        "the gyro reads about 57.3× the table rate: it is in °/s, and the recording must be in rad/s \
+         (docs/recording-format.md)"
+            .to_string()
+    } else if ratios.iter().all(|(_, r)| near(*r, 1.0 / deg)) {
+        "the gyro reads about 1/57.3 of the table rate: it is in rad/s where °/s was expected".into()
+    } else if ratios.iter().all(|(_, r)| r.abs() < 0.2) {
+        "the gyro axis along those spins does not see them: two gyro columns are swapped, or the \
+         unit was mounted about another axis"
+            .to_string()
+    } else {
+        format!(
+            "the gyro reads {:.3}× the table rate on '{}': check the gyro's columns, sign and unit, \
+             and the table's rate",
+            first.1, first.0
+        )
+    };
+    Some(format!(
+        "the gyro contradicts the table on {} spin segment(s) ({}): {cause}",
+        ratios.len(),
+        names.join(", ")
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const I: RowMajor3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    #[test]
+    fn a_real_gyro_passes() {
+        let g = [[1.005, 0.01, -0.008], [0.009, 0.995, 0.008], [0.008, 0.004, 1.004]];
+        assert!(matrix_problems(&g).is_empty());
+        assert!(matrix_problems(&I).is_empty());
+    }
+
+    #[test]
+    fn a_reversed_axis_is_named() {
+        let mut g = I;
+        g[2][2] = -1.0;
+        let p = matrix_problems(&g);
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert!(p[0].contains("gyro axis z turns the wrong way"), "{p:?}");
+    }
+
+    #[test]
+    fn swapped_axes_are_named() {
+        let g = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        let p = matrix_problems(&g);
+        assert!(p[0].contains("swapped"), "{p:?}");
+    }
+
+    #[test]
+    fn the_same_scale_on_every_axis_is_a_time_base() {
+        let g = [[2.0 / 3.0, 0.0, 0.0], [0.0, 0.668, 0.0], [0.0, 0.0, 0.665]];
+        let p = matrix_problems(&g);
+        assert!(p[0].contains("time base is wrong by a factor 1.5"), "{p:?}");
+        let g = I.map(|r| r.map(|v| v * 57.3));
+        assert!(matrix_problems(&g)[0].contains("--gyro-unit deg/s"));
+        // Different errors per axis: not a time base.
+        let g = [[1.3, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let p = matrix_problems(&g);
+        assert!(!p[0].contains("time base"), "{p:?}");
+    }
+
+    #[test]
+    fn a_large_misfit_is_refused() {
+        assert!(misfit_problem(0.02, 23).is_none());
+        assert!(misfit_problem(32.9, 23).unwrap().contains("sign is reversed"));
+        assert!(misfit_problem(f64::NAN, 23).is_some());
+    }
+
+    #[test]
+    fn rate_contradictions_name_their_cause() {
+        let ex = |name: &str, m: f64, p: f64| Exclusion {
+            name: name.into(),
+            reason: ExclusionReason::RateContradiction {
+                measured_deg_s: m,
+                planned_deg_s: p,
+            },
+        };
+        assert!(contradiction_problem(&[], 9).is_none());
+        let z = [ex("z 100", -100.0, 100.0), ex("z 200", -200.0, 200.0)];
+        assert!(contradiction_problem(&z, 9).unwrap().contains("sign reversed"));
+        let p = contradiction_problem(&[ex("x 100", 5729.6, 100.0)], 9).unwrap();
+        assert!(p.contains("57.3×"), "{p}");
+        // One spin that did not happen is the table's slip; most of them, the gyro's columns.
+        let still = |n: &str| ex(n, 0.0, 100.0);
+        assert!(contradiction_problem(&[still("x 100")], 9).is_none());
+        let many: Vec<Exclusion> = ["x 1", "x 2", "x 3", "y 1", "y 2"].map(still).into();
+        let p = contradiction_problem(&many, 9).unwrap();
+        assert!(p.contains("swapped"), "{p}");
+    }
+}
