@@ -18,9 +18,18 @@ use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
 use shared::compensator::{Compensator, CompensatorError, LeverMode};
 use shared::omega_dot::{OmegaDotError, OmegaDotEstimator};
-use shared::{BodyAngularAccel, BodyRate, Calibration, SensorOutputs, UnitId};
+use shared::{BodyAngularAccel, BodyRate, Calibration, OutputUnit, SensorOutputs, UnitId};
 use std::io::{BufReader, Write};
 use std::path::Path;
+
+/// Largest relative difference of a still segment's compensated |f| from 1 g for a calibration to
+/// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
+/// by tens of percent or by a factor.
+pub const MAX_STILL_G_ERROR: f64 = 0.05;
+
+/// Largest mean gyro rate of a still segment after the calibration's bias, °/s: a MEMS gyro's
+/// turn-on bias repeatability is below 1 °/s; a wrong unit (°/s read as rad/s) is 57× its bias.
+pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// The header of the output, exactly.
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g";
@@ -38,6 +47,30 @@ pub enum ApplyError {
         calibration: UnitId,
         /// Unit id in the recording's plan.
         recording: String,
+    },
+    /// The calibration's output unit is not the recording's.
+    OutputUnitMismatch {
+        /// The calibration's.
+        calibration: OutputUnit,
+        /// The recording's plan's.
+        recording: OutputUnit,
+    },
+    /// A calibration with a temperature model, a recording without temperatures, and no
+    /// temperature to assume.
+    NoTemperature,
+    /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
+    NotOneG {
+        /// The segment.
+        segment: String,
+        /// Its mean |f|, g.
+        f_g: f64,
+    },
+    /// A still segment's gyro rate after the calibration's bias is far from zero.
+    RestRate {
+        /// The segment.
+        segment: String,
+        /// Its mean |ω|, °/s.
+        deg_s: f64,
     },
     /// The recording could not be read.
     Recording(RecordingError),
@@ -60,6 +93,36 @@ impl std::fmt::Display for ApplyError {
                 f,
                 "the calibration is of unit {calibration} but the recording is of unit {recording}; \
                  use that unit's calibration (or --ignore-unit-id if the recording's id is wrong)"
+            ),
+            ApplyError::OutputUnitMismatch {
+                calibration,
+                recording,
+            } => write!(
+                f,
+                "the calibration maps outputs in {} but the recording is in {}: use a calibration \
+                 of this recording's unit and output (or record in {})",
+                calibration.symbol(),
+                recording.symbol(),
+                calibration.symbol()
+            ),
+            ApplyError::NoTemperature => write!(
+                f,
+                "the calibration has a temperature model but the recording has no temp_c column: \
+                 say which temperature to assume with --temperature-c C (the model's error grows \
+                 with the distance from the recording's real temperature)"
+            ),
+            ApplyError::NotOneG { segment, f_g } => write!(
+                f,
+                "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
+                 {:.0} % off is plausible): this calibration does not fit this recording (another \
+                 unit, output unit or scale)",
+                MAX_STILL_G_ERROR * 100.0
+            ),
+            ApplyError::RestRate { segment, deg_s } => write!(
+                f,
+                "still segment '{segment}' has a gyro rate of {deg_s:.2} °/s after the calibration's \
+                 bias (at most {MAX_REST_RATE_DEG_S} °/s is plausible): the gyro's unit or the \
+                 calibration's gyro does not fit this recording"
             ),
             ApplyError::Recording(e) => e.fmt(f),
             ApplyError::Output(e) => e.fmt(f),
@@ -193,19 +256,89 @@ pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyErro
     Ok(())
 }
 
+/// Checks that a calibration can meet a recording at all: the same unit (when both have an id), the
+/// same output unit, and a temperature for a temperature model (the recording's, or
+/// `assume_temp_c`).
+pub fn check_meeting(
+    cal: &Calibration,
+    cal_unit: Option<UnitId>,
+    plan: &Plan,
+    assume_temp_c: Option<f64>,
+) -> Result<(), ApplyError> {
+    check_unit(cal_unit, plan)?;
+    check_output_unit(cal, plan)?;
+    if cal.temperature.is_some() && !plan.has_temperature() && assume_temp_c.is_none() {
+        return Err(ApplyError::NoTemperature);
+    }
+    Ok(())
+}
+
+/// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).
+pub fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
+    if cal.statics.output_unit != plan.output_unit {
+        return Err(ApplyError::OutputUnitMismatch {
+            calibration: cal.statics.output_unit,
+            recording: plan.output_unit,
+        });
+    }
+    Ok(())
+}
+
+/// Per still segment, the compensated specific force and the corrected rate summed, for the
+/// physical check ([`ApplyError::NotOneG`], [`ApplyError::RestRate`]).
+#[derive(Clone, Debug, Default)]
+struct StillSums {
+    f_g: [f64; 3],
+    w_rad_s: [f64; 3],
+    rows: u64,
+}
+
+/// The physical check of a calibration against a recording's still segments: |f| ≈ 1 g and, when the
+/// calibration has a gyro, a rest rate near zero after its bias.
+fn check_stills(plan: &Plan, sums: &[StillSums], gyro: bool) -> Result<(), ApplyError> {
+    for (sp, s) in plan.segments.iter().zip(sums) {
+        if !sp.is_static() || s.rows < 10 {
+            continue;
+        }
+        let n = s.rows as f64;
+        let f = shared::linalg::norm(&s.f_g.map(|v| v / n));
+        if !((f - 1.0).abs() <= MAX_STILL_G_ERROR) {
+            return Err(ApplyError::NotOneG {
+                segment: sp.name.clone(),
+                f_g: f,
+            });
+        }
+        let w = shared::linalg::norm(&s.w_rad_s.map(|v| v / n)).to_degrees();
+        if gyro && !(w <= MAX_REST_RATE_DEG_S) {
+            return Err(ApplyError::RestRate {
+                segment: sp.name.clone(),
+                deg_s: w,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Applies `cal` to the session in `dir`, writing the CSV to `out` (streaming, constant memory).
-/// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`.
+/// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`;
+/// `assume_temp_c` is the temperature of a recording without one ([`check_meeting`]). The still
+/// segments are then checked to compensate to 1 g ([`MAX_STILL_G_ERROR`]).
 pub fn apply_session(
     dir: &Path,
     cal: &Calibration,
     cal_unit: Option<UnitId>,
     mode: LeverMode,
+    assume_temp_c: Option<f64>,
     out: &mut dyn Write,
 ) -> Result<ApplySummary, ApplyError> {
     let plan = Plan::load(&dir.join(PLAN_FILE))
         .map_err(|e: PlanError| ApplyError::from(RecordingError::from(e)))?;
-    check_unit(cal_unit, &plan)?;
+    check_meeting(cal, cal_unit, &plan, assume_temp_c)?;
     let mut applier = Applier::new(cal, mode, plan.sample_rate_hz)?;
+    if let (Some(t), false) = (assume_temp_c, plan.has_temperature()) {
+        applier.compensator.refresh(t as f32);
+    }
+    let mut stills = vec![StillSums::default(); plan.segments.len()];
     let path = dir.join(SAMPLES_FILE);
     let file = std::fs::File::open(&path).map_err(|source| RecordingError::Io {
         path: path.clone(),
@@ -226,6 +359,15 @@ pub fn apply_session(
         |row| {
             let f = applier.row(row);
             summary.rows += 1;
+            if let Some(f) = f {
+                let s = &mut stills[row.segment_index];
+                let w = applier.compensator.correct_rate(&row.w_rad_s.map(|v| v as f32));
+                for j in 0..3 {
+                    s.f_g[j] += f64::from(f[j]) / g;
+                    s.w_rad_s[j] += f64::from(w.rad_s[j]);
+                }
+                s.rows += 1;
+            }
             let f_g = match f {
                 Some(f) => f.map(|v| f64::from(v) / g),
                 None => {
@@ -246,6 +388,7 @@ pub fn apply_session(
         },
     )?;
     summary.warnings = report.warnings;
+    check_stills(&plan, &stills, cal.gyro.is_some())?;
     if applier.flagged_rows > 0 {
         summary.warnings.push(format!(
             "{} rows were recorded outside the calibration's valid temperature range (or without a \
@@ -344,7 +487,7 @@ mod tests {
         vector_session(dir.path(), &rows);
         for (mode, pick) in [(LeverMode::Off, 0), (LeverMode::RateOnly, 1)] {
             let mut out = Vec::new();
-            let s = apply_session(dir.path(), &cal, None, mode, &mut out).unwrap();
+            let s = apply_session(dir.path(), &cal, None, mode, None, &mut out).unwrap();
             assert_eq!(s.rows, COMP_CASES.len() as u64);
             let parsed = parse(std::str::from_utf8(&out).unwrap());
             for (c, (_, _, f_g)) in COMP_CASES.iter().zip(&parsed) {
@@ -381,6 +524,7 @@ mod tests {
             &cal,
             None,
             LeverMode::RateAndAcceleration,
+            None,
             &mut out,
         )
         .unwrap();

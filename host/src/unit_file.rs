@@ -273,6 +273,9 @@ impl UnitFile {
     /// otherwise silently mean zero lever arms) is an error naming its line and column.
     pub fn parse(text: &str) -> Result<UnitFile, String> {
         let file: UnitFile = toml::from_str(text).map_err(|e| e.to_string())?;
+        if let Some(e) = surplus_values(text, &file) {
+            return Err(e);
+        }
         if let Some(key) = file
             .other
             .keys()
@@ -486,9 +489,61 @@ impl StaticSection {
     }
 }
 
+/// Arrays in `text` longer than what `parsed` kept: serde fills a `[f64; 3]` from the first three
+/// values of a longer array and drops the rest silently (`zero_bias_v = [a, b, c, d]`, a 3×4 matrix,
+/// `up_b = [1, 0, 0, 7]`). `parsed` is serialised back and every array's length compared with the
+/// text's; the first that differs is named.
+pub(crate) fn surplus_values<T: Serialize>(text: &str, parsed: &T) -> Option<String> {
+    let original: toml::Value = toml::from_str(text).ok()?;
+    let kept = toml::Value::try_from(parsed).ok()?;
+    first_length_difference(&original, &kept, "")
+}
+
+fn first_length_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
+    match (a, b) {
+        (toml::Value::Table(ta), toml::Value::Table(tb)) => ta.iter().find_map(|(k, va)| {
+            let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+            tb.get(k).and_then(|vb| first_length_difference(va, vb, &p))
+        }),
+        (toml::Value::Array(xa), toml::Value::Array(xb)) => {
+            if xa.len() != xb.len() {
+                return Some(format!(
+                    "'{path}' has {} values, {} expected; remove the extra ones",
+                    xa.len(),
+                    xb.len()
+                ));
+            }
+            xa.iter()
+                .zip(xb)
+                .enumerate()
+                .find_map(|(i, (va, vb))| first_length_difference(va, vb, &format!("{path}[{i}]")))
+        }
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_array_longer_than_its_field_is_refused_not_cut() {
+        UnitFile::parse(PAPER_UNIT_TOML).unwrap();
+        let text = PAPER_UNIT_TOML.replace(
+            "zero_bias_v = [2.405098, 2.380978, 2.435503]",
+            "zero_bias_v = [2.405098, 2.380978, 2.435503, 9.0]",
+        );
+        let e = UnitFile::parse(&text).unwrap_err();
+        assert!(e.contains("'static.zero_bias_v' has 4 values, 3 expected"), "{e}");
+        let gyro = "\n[gyro]\nbias_rad_s = [0, 0, 0]\nmatrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]\n";
+        let e = UnitFile::parse(&format!("{PAPER_UNIT_TOML}{gyro}")).unwrap_err();
+        assert!(e.contains("'gyro.matrix[0]' has 4 values, 3 expected"), "{e}");
+        let plan = "output_unit = \"V\"\nsample_rate_hz = 100\n[[segment]]\nname = \"x+\"\n\
+                    up_b = [1, 0, 0, 7]\n";
+        let e = crate::session::Plan::parse(plan).unwrap_err().to_string();
+        assert!(e.contains("'segment[0].up_b' has 4 values, 3 expected"), "{e}");
+        crate::session::Plan::parse(&plan.replace(", 7]", "]")).unwrap();
+    }
 
     #[test]
     fn paper_unit_reads_with_table_values() {

@@ -7,7 +7,8 @@ use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, ValueEnum};
 use shared::LeverMode;
 use std::io::Write;
-use std::path::PathBuf;
+use crate::session::{PLAN_FILE, SAMPLES_FILE};
+use std::path::{Path, PathBuf};
 
 /// `host apply`.
 #[derive(Debug, Args)]
@@ -30,6 +31,10 @@ pub struct ApplyArgs {
     /// Apply even when the calibration's and the recording's unit ids differ.
     #[arg(long)]
     pub ignore_unit_id: bool,
+    /// The unit's temperature, °C, for a calibration with a temperature model applied to a recording
+    /// without a temp_c column (refused without it).
+    #[arg(long, value_name = "C", allow_negative_numbers = true)]
+    pub temperature_c: Option<f64>,
 }
 
 /// The device's lever-arm modes.
@@ -63,18 +68,26 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     } else {
         unit.unit_id().map_err(invalid)?
     };
+    if let Some(t) = a.temperature_c {
+        if !(-100.0..=200.0).contains(&t) {
+            return Err(CliError::Usage(format!(
+                "--temperature-c {t}: give the unit's temperature in °C, within -100..200"
+            )));
+        }
+    }
     let mode = a.lever.into();
     let summary = match &a.out {
         Some(path) => {
+            refuse_own_input(path, &a.input)?;
             let mut file = OutputFile::create(path, a.force).map_err(ApplyError::Output)?;
-            let s = apply_session(&a.input, &cal, cal_unit, mode, &mut file)?;
+            let s = apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut file)?;
             file.commit().map_err(ApplyError::Output)?;
             s
         }
         None => {
             let stdout = std::io::stdout();
             let mut lock = std::io::BufWriter::new(stdout.lock());
-            let s = apply_session(&a.input, &cal, cal_unit, mode, &mut lock)?;
+            let s = apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut lock)?;
             lock.flush().map_err(|e| {
                 ApplyError::Recording(crate::session::RecordingError::Io {
                     path: PathBuf::from("(stdout)"),
@@ -98,6 +111,25 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             summary.rows,
             summary.non_finite_rows
         );
+    }
+    Ok(())
+}
+
+/// `--out` must not name a file of the recording it reads (`--force` would replace the input while
+/// it is being read).
+fn refuse_own_input(out: &Path, input: &Path) -> Result<(), CliError> {
+    let dir = std::fs::canonicalize(input).unwrap_or_else(|_| input.to_path_buf());
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let out_dir = std::fs::canonicalize(parent).unwrap_or_else(|_| parent.to_path_buf());
+    let name = out.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    if out_dir == dir && [SAMPLES_FILE, PLAN_FILE].contains(&name) {
+        return Err(CliError::Usage(format!(
+            "--out {} is the recording's own {name}: write the result elsewhere",
+            out.display()
+        )));
     }
     Ok(())
 }

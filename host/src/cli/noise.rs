@@ -37,6 +37,15 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
             let cal = unit
                 .to_calibration()
                 .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
+            let plan_path = a.input.join(crate::session::PLAN_FILE);
+            if a.input.is_dir() && plan_path.exists() {
+                let plan = crate::session::Plan::load(&plan_path)?;
+                let id = unit
+                    .unit_id()
+                    .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
+                crate::apply::check_unit(id, &plan)?;
+                crate::apply::check_output_unit(&cal, &plan)?;
+            }
             Some(convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain)
         }
         None => None,

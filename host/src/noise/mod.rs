@@ -41,6 +41,11 @@ pub enum NoiseError {
     NoStillData(String),
     /// A noise file could not be read or parsed.
     File(PathBuf, String),
+    /// The calibration does not turn this still recording into 1 g: it is not this recording's.
+    NotOneG {
+        /// Mean |f| of the still data after the calibration, g.
+        f_g: f64,
+    },
 }
 
 impl std::fmt::Display for NoiseError {
@@ -49,6 +54,12 @@ impl std::fmt::Display for NoiseError {
             NoiseError::Recording(e) => e.fmt(f),
             NoiseError::NoStillData(m) => write!(f, "no noise analysis possible: {m}"),
             NoiseError::File(p, m) => write!(f, "cannot use noise file {}: {m}", p.display()),
+            NoiseError::NotOneG { f_g } => write!(
+                f,
+                "the calibration turns this still recording into |f| = {f_g:.4} g, not 1 g: it is \
+                 not this recording's calibration (another unit, output unit or scale), and its \
+                 noise figures would be off by the same factor; give the recording's own calibration"
+            ),
         }
     }
 }
@@ -286,12 +297,19 @@ pub fn analyse(
     let accel_unit = match calibration {
         Some(pm) => {
             let g = pm.gravity_m_s2;
+            let mut sum = [0.0; 3];
             for k in 0..n {
                 let u = [s.data[0][k], s.data[1][k], s.data[2][k]];
                 let f = shared::linalg::mat_vec(&pm.k_a_g_per_out, &u);
                 for j in 0..3 {
                     s.data[j][k] = (f[j] - pm.nabla_b_g[j]) * g;
+                    sum[j] += s.data[j][k];
                 }
+            }
+            // The physical check: a still recording is at 1 g (docs/robustness.md).
+            let f_g = shared::linalg::norm(&sum.map(|v| v / n as f64)) / g;
+            if !((f_g - 1.0).abs() <= crate::apply::MAX_STILL_G_ERROR) {
+                return Err(NoiseError::NotOneG { f_g });
             }
             "m/s^2"
         }

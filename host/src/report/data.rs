@@ -327,6 +327,9 @@ pub fn build_report(
     session_fit: Option<CalibrationOutcome>,
     options: &ReportOptions,
 ) -> Result<ReportData, ReportError> {
+    // A calibration in another output unit is refused before anything is computed from it.
+    crate::apply::check_output_unit(cal, plan)
+        .map_err(|e| ReportError::Segment(e.to_string()))?;
     let segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
         return Err(ReportError::Segment(
@@ -334,13 +337,6 @@ pub fn build_report(
         ));
     }
     let mut warnings = Vec::new();
-    if plan.output_unit.symbol() != cal.statics.output_unit.symbol() {
-        warnings.push(format!(
-            "the session records {} but the calibration is in {}: the outputs cannot be compared",
-            plan.output_unit.symbol(),
-            cal.statics.output_unit.symbol()
-        ));
-    }
     let (mut chi2, mut terms) = (0.0, 0usize);
     for r in &segments {
         let e = r.error_g(Compensation::Full);

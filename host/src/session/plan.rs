@@ -205,6 +205,9 @@ impl Plan {
     pub fn parse(text: &str) -> Result<Plan, PlanError> {
         let plan: Plan =
             toml::from_str(text).map_err(|e| PlanError::Syntax("<text>".into(), e.to_string()))?;
+        if let Some(e) = crate::unit_file::surplus_values(text, &plan) {
+            return Err(PlanError::Syntax("<text>".into(), e));
+        }
         plan.validate()?;
         Ok(plan)
     }

@@ -13,6 +13,7 @@
 use super::error::shorten;
 use super::plan::Plan;
 use super::stats::{SegmentAccumulator, SegmentStats};
+use super::thermal::{TempGlitchFilter, MAX_TEMP_RATE_C_PER_S};
 use super::{RecordingError, PLAN_FILE, SAMPLES_FILE};
 use crate::limits::MAX_LINE_BYTES;
 use std::fs::File;
@@ -120,6 +121,10 @@ struct Reducer<'a, S> {
     steps: Vec<StepCount>,
     /// The plan's sample period, s.
     period_s: f64,
+    /// Per plan segment: the temperature glitch filter, and the glitches left out (count, first line
+    /// and reading).
+    temp_filters: Vec<TempGlitchFilter>,
+    temp_glitches: Vec<(u64, Option<(u64, f64)>)>,
     /// Format version 2: a ninth column, `temp_c`.
     temperature: bool,
 }
@@ -139,6 +144,8 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             last_t: vec![None; plan.segments.len()],
             steps: vec![StepCount::default(); plan.segments.len()],
             period_s: 1.0 / plan.sample_rate_hz,
+            temp_filters: vec![TempGlitchFilter::default(); plan.segments.len()],
+            temp_glitches: vec![(0, None); plan.segments.len()],
             current: 0,
             line_no: 1,
             report: ReadReport::default(),
@@ -200,13 +207,19 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             };
         }
         self.report.rows += 1;
+        let glitch = self.temperature && v[7].is_finite() && !self.temp_filters[idx].accept(v[0], v[7]);
+        if glitch {
+            let g = &mut self.temp_glitches[idx];
+            g.0 += 1;
+            g.1.get_or_insert((self.line_no, v[7]));
+        }
         (self.sink)(&Row {
             segment: self.names[idx],
             segment_index: idx,
             t_s: v[0],
             u: [v[1], v[2], v[3]],
             w_rad_s: [v[4], v[5], v[6]],
-            temp_c: self.temperature.then(|| v[7]),
+            temp_c: (self.temperature && !glitch).then(|| v[7]),
         })?;
         if let Some(prev) = self.last_t[idx].replace(v[0]) {
             let dt = v[0] - prev;
@@ -222,6 +235,10 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         }
         let acc = &mut self.accs[idx];
         let before = acc.count();
+        if glitch {
+            self.report.rejected_rows += 1;
+            return Ok(());
+        }
         if self.temperature {
             acc.push_with_temperature(v[0], &[v[1], v[2], v[3]], &[v[4], v[5], v[6]], v[7]);
         } else {
@@ -476,6 +493,16 @@ fn collect_stats<S>(
 ) -> Vec<SegmentStats> {
     let path = red.path;
     let mut stats = Vec::with_capacity(red.accs.len());
+    for (seg, (n, first)) in plan.segments.iter().zip(&red.temp_glitches) {
+        if let Some((line, c)) = first {
+            report.warnings.push(format!(
+                "segment '{}': {n} row(s) whose temperature jumps faster than \
+                 {MAX_TEMP_RATE_C_PER_S} °C/s from the readings around it left out as glitches \
+                 (first at line {line}: {c} °C)",
+                seg.name
+            ));
+        }
+    }
     for ((acc, seg), first_bad) in red.accs.iter().zip(&plan.segments).zip(&red.first_rejected) {
         let st = acc.finish();
         if let Some(line) = first_bad {
