@@ -196,7 +196,9 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         written.bin_path.display(),
         written.blob.len()
     ))?;
-    let summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
+    let mut summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
+    // What the reader flagged (rows left out, gaps) belongs to the result, not only to stderr.
+    summary.warnings.extend(session.report.warnings.iter().cloned());
     out.document(&summary)?;
     if !summary.passed {
         return Err(CliError::ChecksFailed(summary.failures()));

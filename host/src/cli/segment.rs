@@ -266,6 +266,15 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         );
         warn(out, &mut warnings, w);
     }
+    if let Some(line) = rec.unterminated_line {
+        let w = format!(
+            "line {line}, the last, has no line end: the file was cut short; that line is left out"
+        );
+        warn(out, &mut warnings, w);
+    }
+    if let Some(w) = time_jumps(&rec.t_s, rec.rate_hz) {
+        warn(out, &mut warnings, w);
+    }
     let seg_options = SegmentOptions {
         min_still_s: a.min_still_s,
         ..SegmentOptions::default()
@@ -330,6 +339,26 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
     Ok(outcome)
+}
+
+/// The gaps (more than five periods), repeats and backward steps of the time stamps, with the place
+/// of the first: a turn across a gap is integrated wrongly, and the gyro fit then fails.
+fn time_jumps(t_s: &[f64], rate_hz: f64) -> Option<String> {
+    let period = 1.0 / rate_hz;
+    let bad = |w: &[f64]| {
+        let dt = w[1] - w[0];
+        !(dt > 0.0 && dt <= 5.0 * period)
+    };
+    let first = t_s.windows(2).position(bad)?;
+    let n = t_s.windows(2).filter(|w| bad(w)).count();
+    Some(format!(
+        "the time stamps jump {n} time(s) (a gap, a repeat or a step back); the first after data row \
+         {} (t = {:.3} s): {:+.3} s where the period is {:.4} s",
+        first + 1,
+        t_s[first],
+        t_s[first + 1] - t_s[first],
+        period
+    ))
 }
 
 /// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or

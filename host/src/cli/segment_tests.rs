@@ -347,6 +347,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         acc_unit: Some(unit),
         rate_hz: spec.rate_hz,
         skipped_rows: 0,
+        unterminated_line: None,
     };
     let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
     let found_all = seg.stills.len() == sim.holds.len()

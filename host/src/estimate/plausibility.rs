@@ -45,6 +45,7 @@ pub(crate) fn check(
     };
     let mut problems = triad_problems(&outcome.fitted.m_out_per_g);
     problems.extend(gyro_problems(plan, &outcome));
+    problems.extend(scale_unit_problem(plan, &outcome));
     if outcome.fit.dof < 1 {
         problems.push(format!(
             "{} residual degrees of freedom: χ²/dof is not defined, so nothing checks the fit; add \
@@ -73,6 +74,37 @@ fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
     }
     problems
 }
+
+/// A scale factor that contradicts the plan's `output_unit`: an output declared in g must measure
+/// about 1 g per g, one in m/s² about 9.8 per g (within [`MAX_UNIT_SCALE_ERROR`]); volts and counts
+/// have no nominal scale. Volt data declared as g calibrate to 0.4 "g per g" otherwise.
+fn scale_unit_problem(plan: &Plan, outcome: &CalibrationOutcome) -> Option<String> {
+    let nominal = match plan.output_unit {
+        shared::OutputUnit::StandardGravity => 1.0,
+        shared::OutputUnit::MetresPerSecondSquared => plan.gravity_m_s2,
+        _ => return None,
+    };
+    let k = outcome.calibration.statics.scale_out_per_g;
+    k.iter()
+        .any(|v| !((v / nominal - 1.0).abs() <= MAX_UNIT_SCALE_ERROR))
+        .then(|| {
+            format!(
+                "the scale factors are {:.4}, {:.4}, {:.4} {} per g, but an output in {} is about {} \
+                 per g: the recording is not in the plan's output_unit; set output_unit to the data's \
+                 unit",
+                k[0],
+                k[1],
+                k[2],
+                plan.output_unit.symbol(),
+                plan.output_unit.symbol(),
+                nominal
+            )
+        })
+}
+
+/// Largest relative difference of a scale factor from its output unit's nominal one (a MEMS part's
+/// scale is within a few percent of its data sheet's).
+pub const MAX_UNIT_SCALE_ERROR: f64 = 0.2;
 
 /// Handedness and per-axis angle of the fitted sensing directions.
 fn triad_problems(m: &linalg::RowMajor3) -> Vec<String> {

@@ -117,6 +117,8 @@ pub struct Recording {
     pub rate_hz: f64,
     /// Rows left out because a value was NaN or infinite.
     pub skipped_rows: usize,
+    /// The last line, left out because it has no line end (the file was cut short).
+    pub unterminated_line: Option<u64>,
 }
 
 impl Recording {
@@ -241,6 +243,16 @@ pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording
 
 /// Reads the next line (without its line end) into `buf`; `Ok(false)` at the end of the input.
 fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool, ImportError> {
+    Ok(next_line_end(r, buf, line)?.is_some())
+}
+
+/// [`next_line`], saying whether the line had its line end (`Some(false)`: the file's last line
+/// without one, which a cut-short recording has).
+fn next_line_end<R: BufRead>(
+    r: &mut R,
+    buf: &mut Vec<u8>,
+    line: u64,
+) -> Result<Option<bool>, ImportError> {
     buf.clear();
     let n = r
         .by_ref()
@@ -251,9 +263,10 @@ fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool
             source,
         })?;
     if n == 0 {
-        return Ok(false);
+        return Ok(None);
     }
-    if buf.last() == Some(&b'\n') {
+    let ended = buf.last() == Some(&b'\n');
+    if ended {
         buf.pop();
     } else if buf.len() > MAX_LINE_BYTES {
         return Err(ImportError::LineTooLong { line });
@@ -261,7 +274,7 @@ fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool
     if buf.last() == Some(&b'\r') {
         buf.pop();
     }
-    Ok(true)
+    Ok(Some(ended))
 }
 
 /// The field separator: a comma, else a semicolon or tab if the header uses one.
@@ -423,12 +436,18 @@ fn read_rows<R: BufRead>(
     let mut row_index = 0u64;
     loop {
         line += 1;
-        if !next_line(r, buf, line)? {
+        let Some(ended) = next_line_end(r, buf, line)? else {
             break;
-        }
+        };
         let text = String::from_utf8_lossy(buf);
         if text.trim().is_empty() {
             continue;
+        }
+        if !ended {
+            // The last line without its line end: a cut-short file, whose last number may have
+            // lost digits and still parse.
+            rec.unterminated_line = Some(line);
+            break;
         }
         let (v, t_s) = layout.parse_row(&text, line, row_index)?;
         row_index += 1;

@@ -13,7 +13,7 @@
 use super::error::shorten;
 use super::plan::Plan;
 use super::stats::{SegmentAccumulator, SegmentStats};
-use super::thermal::{TempGlitchFilter, MAX_TEMP_RATE_C_PER_S};
+use super::thermal::{is_glitch, MAX_TEMP_RATE_C_PER_S};
 use super::{RecordingError, PLAN_FILE, SAMPLES_FILE};
 use crate::limits::MAX_LINE_BYTES;
 use std::fs::File;
@@ -106,6 +106,14 @@ pub struct Row<'r> {
     pub temp_c: Option<f64>,
 }
 
+/// A parsed data row: its segment, values (`t_s`, three outputs, three rates, `temp_c`) and line.
+#[derive(Clone, Copy, Debug)]
+struct Parsed {
+    idx: usize,
+    v: [f64; 8],
+    line: u64,
+}
+
 /// The per-segment reduction, fed one line at a time; every parsed row also goes to `sink`.
 struct Reducer<'a, S> {
     sink: S,
@@ -121,9 +129,15 @@ struct Reducer<'a, S> {
     steps: Vec<StepCount>,
     /// The plan's sample period, s.
     period_s: f64,
-    /// Per plan segment: the temperature glitch filter, and the glitches left out (count, first line
-    /// and reading).
-    temp_filters: Vec<TempGlitchFilter>,
+    /// The segment of the previous row in the file.
+    previous_row: Option<usize>,
+    /// Per plan segment: steps between consecutive rows that are gaps, repeats or backward steps
+    /// (count, first line and step, s).
+    time_jumps: Vec<(u64, Option<(u64, f64)>)>,
+    /// The last accepted temperature reading (time stamp, °C), the row held back for the check
+    /// against the next one, and per plan segment the glitches left out (count, first line, °C).
+    last_temp: Option<(f64, f64)>,
+    pending: Option<Parsed>,
     temp_glitches: Vec<(u64, Option<(u64, f64)>)>,
     /// Format version 2: a ninth column, `temp_c`.
     temperature: bool,
@@ -144,7 +158,10 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             last_t: vec![None; plan.segments.len()],
             steps: vec![StepCount::default(); plan.segments.len()],
             period_s: 1.0 / plan.sample_rate_hz,
-            temp_filters: vec![TempGlitchFilter::default(); plan.segments.len()],
+            previous_row: None,
+            time_jumps: vec![(0, None); plan.segments.len()],
+            last_temp: None,
+            pending: None,
             temp_glitches: vec![(0, None); plan.segments.len()],
             current: 0,
             line_no: 1,
@@ -207,11 +224,55 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             };
         }
         self.report.rows += 1;
-        let glitch = self.temperature && v[7].is_finite() && !self.temp_filters[idx].accept(v[0], v[7]);
+        let row = Parsed {
+            idx,
+            v,
+            line: self.line_no,
+        };
+        if !self.temperature {
+            return self.process(row, false);
+        }
+        // A temperature is judged against the next one too: each row is processed one row late.
+        match self.pending.replace(row) {
+            Some(p) => {
+                let glitch = self.is_glitch(&p, Some(&row));
+                self.process(p, glitch)
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// Whether row `p`'s temperature is a glitch between the last accepted reading and `next`'s.
+    fn is_glitch(&self, p: &Parsed, next: Option<&Parsed>) -> bool {
+        p.v[7].is_finite()
+            && is_glitch(
+                self.last_temp,
+                (p.v[0], p.v[7]),
+                next.map(|n| (n.v[0], n.v[7])),
+            )
+    }
+
+    /// The row held back for the temperature check, at the end of the file.
+    fn flush(&mut self) -> Result<(), RecordingError> {
+        match self.pending.take() {
+            Some(p) => {
+                let glitch = self.is_glitch(&p, None);
+                self.process(p, glitch)
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// One parsed row into the sink, the time checks and its segment's statistics (a temperature
+    /// `glitch` leaves the row out, noted).
+    fn process(&mut self, p: Parsed, glitch: bool) -> Result<(), RecordingError> {
+        let Parsed { idx, v, line } = p;
         if glitch {
             let g = &mut self.temp_glitches[idx];
             g.0 += 1;
-            g.1.get_or_insert((self.line_no, v[7]));
+            g.1.get_or_insert((line, v[7]));
+        } else if self.temperature && v[7].is_finite() {
+            self.last_temp = Some((v[0], v[7]));
         }
         (self.sink)(&Row {
             segment: self.names[idx],
@@ -221,18 +282,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             w_rad_s: [v[4], v[5], v[6]],
             temp_c: (self.temperature && !glitch).then(|| v[7]),
         })?;
-        if let Some(prev) = self.last_t[idx].replace(v[0]) {
-            let dt = v[0] - prev;
-            let c = &mut self.steps[idx];
-            c.steps += 1;
-            if (dt / self.period_s - 1.0).abs() <= STEP_TOLERANCE {
-                c.at_rate += 1;
-            }
-            if dt > 0.0 && dt < 100.0 * self.period_s {
-                c.short += 1;
-                c.short_sum_s += dt;
-            }
-        }
+        self.time_step(idx, v[0], line);
         let acc = &mut self.accs[idx];
         let before = acc.count();
         if glitch {
@@ -246,9 +296,34 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         }
         if acc.count() == before {
             self.report.rejected_rows += 1;
-            self.first_rejected[idx].get_or_insert(self.line_no);
+            self.first_rejected[idx].get_or_insert(line);
         }
         Ok(())
+    }
+
+    /// The step from the segment's previous row to this one's time stamp `t_s` (line `line`).
+    fn time_step(&mut self, idx: usize, t_s: f64, line: u64) {
+        let follows = self.previous_row == Some(idx);
+        self.previous_row = Some(idx);
+        let Some(prev) = self.last_t[idx].replace(t_s) else {
+            return;
+        };
+        let dt = t_s - prev;
+        let off_rate = !(dt > 0.0 && dt <= GAP_PERIODS * self.period_s);
+        if follows && off_rate {
+            let g = &mut self.time_jumps[idx];
+            g.0 += 1;
+            g.1.get_or_insert((line, dt));
+        }
+        let c = &mut self.steps[idx];
+        c.steps += 1;
+        if (dt / self.period_s - 1.0).abs() <= STEP_TOLERANCE {
+            c.at_rate += 1;
+        }
+        if dt > 0.0 && dt < 100.0 * self.period_s {
+            c.short += 1;
+            c.short_sum_s += dt;
+        }
     }
 
     /// The line after the last complete one has more than [`MAX_LINE_BYTES`] bytes.
@@ -419,6 +494,9 @@ pub fn read_samples_each<R: BufRead>(
 /// Fewest steps between a segment's consecutive rows for its time base to be checked.
 const TIME_BASE_MIN_STEPS: u64 = 100;
 
+/// A step between consecutive rows longer than this many periods is a gap (rows are missing).
+const GAP_PERIODS: f64 = 5.0;
+
 /// A step between consecutive rows of a segment is "at the plan's rate" within this relative
 /// difference (a real clock's jitter and rounding of the stamps are far smaller).
 const STEP_TOLERANCE: f64 = 0.1;
@@ -470,7 +548,11 @@ fn check_time_base(
 }
 
 /// The final partial line (if any) and the no-rows check.
-fn finish_report<S>(red: &mut Reducer<'_, S>, carry: &[u8]) -> Result<ReadReport, RecordingError> {
+fn finish_report<S: FnMut(&Row<'_>) -> Result<(), RecordingError>>(
+    red: &mut Reducer<'_, S>,
+    carry: &[u8],
+) -> Result<ReadReport, RecordingError> {
+    red.flush()?;
     let report = std::mem::take(&mut red.report);
     if !carry.trim_ascii().is_empty() {
         // Only the last line of a file can lack its line end: the writer ends every row with one, so
@@ -493,6 +575,16 @@ fn collect_stats<S>(
 ) -> Vec<SegmentStats> {
     let path = red.path;
     let mut stats = Vec::with_capacity(red.accs.len());
+    for (seg, (n, first)) in plan.segments.iter().zip(&red.time_jumps) {
+        if let Some((line, dt)) = first {
+            report.warnings.push(format!(
+                "segment '{}': the time stamps jump {n} time(s) between consecutive rows (a gap, a \
+                 repeat or a step back; first at line {line}: {dt:+.6} s, the period is {:.6} s)",
+                seg.name,
+                1.0 / plan.sample_rate_hz
+            ));
+        }
+    }
     for (seg, (n, first)) in plan.segments.iter().zip(&red.temp_glitches) {
         if let Some((line, c)) = first {
             report.warnings.push(format!(

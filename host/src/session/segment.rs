@@ -501,6 +501,7 @@ mod tests {
             acc_unit: Some(unit),
             rate_hz: spec.rate_hz,
             skipped_rows: 0,
+            unterminated_line: None,
         }
     }
 

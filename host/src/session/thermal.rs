@@ -153,44 +153,21 @@ pub const MAX_TEMP_RATE_C_PER_S: f64 = 5.0;
 /// noise and quantisation).
 pub const TEMP_JUMP_FLOOR_C: f64 = 1.0;
 
-/// Consecutive readings that agree with each other but not with the last accepted one, after which
-/// the new level is accepted (a real step, e.g. a segment resumed at another soak temperature).
-pub const TEMP_STEP_CONFIRM: u32 = 3;
-
-/// One segment's filter of temperature glitches: a reading that jumps from the last accepted one by
-/// more than [`MAX_TEMP_RATE_C_PER_S`] allows is left out (its row with it), so that one glitch
-/// neither stretches the valid temperature range nor bends the temperature fit.
-#[derive(Clone, Debug, Default)]
-pub struct TempGlitchFilter {
-    /// The last accepted reading: time stamp, s, and °C.
-    last: Option<(f64, f64)>,
-    /// Consecutive rejected readings, and the last of them.
-    run: u32,
-    pending_c: f64,
-}
-
-impl TempGlitchFilter {
-    /// Whether the reading `temp_c` at `t_s` is accepted.
-    pub fn accept(&mut self, t_s: f64, temp_c: f64) -> bool {
-        let Some((t0, c0)) = self.last else {
-            self.last = Some((t_s, temp_c));
-            return true;
-        };
-        let allowed = TEMP_JUMP_FLOOR_C + MAX_TEMP_RATE_C_PER_S * (t_s - t0).abs();
-        if (temp_c - c0).abs() <= allowed {
-            self.last = Some((t_s, temp_c));
-            self.run = 0;
-            return true;
-        }
-        let agrees = self.run > 0 && (temp_c - self.pending_c).abs() <= TEMP_JUMP_FLOOR_C;
-        self.run = if agrees { self.run + 1 } else { 1 };
-        self.pending_c = temp_c;
-        if self.run >= TEMP_STEP_CONFIRM {
-            self.last = Some((t_s, temp_c));
-            self.run = 0;
-            return true;
-        }
-        false
+/// Whether the temperature reading `(t_s, °C)` is a glitch: it jumps from the readings before and
+/// after it (file order, any segment; `None` at either end) by more than [`MAX_TEMP_RATE_C_PER_S`]
+/// allows over the time between them. A real change (a soak step) is followed by the next reading;
+/// a glitch is not. Left out, one glitch neither stretches the valid temperature range nor bends
+/// the temperature fit.
+pub fn is_glitch(before: Option<(f64, f64)>, reading: (f64, f64), after: Option<(f64, f64)>) -> bool {
+    let jumps = |other: (f64, f64)| {
+        let allowed = TEMP_JUMP_FLOOR_C + MAX_TEMP_RATE_C_PER_S * (reading.0 - other.0).abs();
+        !((reading.1 - other.1).abs() <= allowed)
+    };
+    let after = after.filter(|a| a.1.is_finite());
+    match (before.map(jumps), after.map(jumps)) {
+        (Some(b), Some(a)) => b && a,
+        (None, Some(j)) | (Some(j), None) => j,
+        (None, None) => false,
     }
 }
 
@@ -200,21 +177,29 @@ mod tests {
 
     #[test]
     fn one_glitch_is_left_out_and_a_real_step_is_followed() {
-        let mut f = TempGlitchFilter::default();
-        let mut kept = Vec::new();
-        for k in 0..100 {
+        let reading = |k: usize| {
             let t = k as f64 * 0.01;
             let c = match k {
-                40 => 150.0,
+                0 | 40 => 150.0,
                 60..=99 => 45.0,
                 _ => 25.0 + 0.01 * t,
             };
-            if !f.accept(t, c) {
-                kept.push(k);
+            (t, c)
+        };
+        let mut before = None;
+        let mut glitches = Vec::new();
+        for k in 0..100 {
+            let after = (k < 99).then(|| reading(k + 1));
+            if is_glitch(before, reading(k), after) {
+                glitches.push(k);
+            } else {
+                before = Some(reading(k));
             }
         }
-        // The glitch, and the first two rows of the step before it is confirmed.
-        assert_eq!(kept, [40, 60, 61]);
+        // The first reading and the one in the middle; the step at 60 is followed.
+        assert_eq!(glitches, [0, 40]);
+        // Slow enough over a long time: no glitch.
+        assert!(!is_glitch(Some((0.0, 25.0)), (10.0, 60.0), Some((10.1, 60.0))));
     }
 
     /// Rows of a ramp from 0 to 50 °C whose output 0 is an exact cubic in T.
