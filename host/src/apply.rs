@@ -361,7 +361,9 @@ pub fn apply_session(
             summary.rows += 1;
             if let Some(f) = f {
                 let s = &mut stills[row.segment_index];
-                let w = applier.compensator.correct_rate(&row.w_rad_s.map(|v| v as f32));
+                let w = applier
+                    .compensator
+                    .correct_rate(&row.w_rad_s.map(|v| v as f32));
                 for j in 0..3 {
                     s.f_g[j] += f64::from(f[j]) / g;
                     s.w_rad_s[j] += f64::from(w.rad_s[j]);

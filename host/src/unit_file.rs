@@ -502,7 +502,11 @@ pub(crate) fn surplus_values<T: Serialize>(text: &str, parsed: &T) -> Option<Str
 fn first_length_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
     match (a, b) {
         (toml::Value::Table(ta), toml::Value::Table(tb)) => ta.iter().find_map(|(k, va)| {
-            let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+            let p = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
             tb.get(k).and_then(|vb| first_length_difference(va, vb, &p))
         }),
         (toml::Value::Array(xa), toml::Value::Array(xb)) => {
@@ -534,14 +538,23 @@ mod tests {
             "zero_bias_v = [2.405098, 2.380978, 2.435503, 9.0]",
         );
         let e = UnitFile::parse(&text).unwrap_err();
-        assert!(e.contains("'static.zero_bias_v' has 4 values, 3 expected"), "{e}");
+        assert!(
+            e.contains("'static.zero_bias_v' has 4 values, 3 expected"),
+            "{e}"
+        );
         let gyro = "\n[gyro]\nbias_rad_s = [0, 0, 0]\nmatrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]\n";
         let e = UnitFile::parse(&format!("{PAPER_UNIT_TOML}{gyro}")).unwrap_err();
-        assert!(e.contains("'gyro.matrix[0]' has 4 values, 3 expected"), "{e}");
+        assert!(
+            e.contains("'gyro.matrix[0]' has 4 values, 3 expected"),
+            "{e}"
+        );
         let plan = "output_unit = \"V\"\nsample_rate_hz = 100\n[[segment]]\nname = \"x+\"\n\
                     up_b = [1, 0, 0, 7]\n";
         let e = crate::session::Plan::parse(plan).unwrap_err().to_string();
-        assert!(e.contains("'segment[0].up_b' has 4 values, 3 expected"), "{e}");
+        assert!(
+            e.contains("'segment[0].up_b' has 4 values, 3 expected"),
+            "{e}"
+        );
         crate::session::Plan::parse(&plan.replace(", 7]", "]")).unwrap();
     }
 

@@ -165,7 +165,10 @@ fn the_untransformed_recordings_calibrate_and_pass() {
 #[test]
 fn two_accelerometer_axes_swapped() {
     let swap: Edit<'_> = &|f, c, _| f.swap(c("acc_x"), c("acc_y"));
-    assert_refused(&logger("swap_acc", ("m/s2", "deg/s"), Some(swap)), &["swapped"]);
+    assert_refused(
+        &logger("swap_acc", ("m/s2", "deg/s"), Some(swap)),
+        &["swapped"],
+    );
     let swap: Edit<'_> = &|f, c, _| f.swap(c("u_x"), c("u_y"));
     assert_refused(&table(Some(swap), None), &["not plausible"]);
 }
@@ -181,7 +184,10 @@ fn one_accelerometer_axis_negated() {
 #[test]
 fn one_gyro_axis_negated() {
     let neg: Edit<'_> = &|f, c, _| negate(f, c("gyr_z"));
-    assert_refused(&logger("neg_gyro", ("m/s2", "deg/s"), Some(neg)), &["gyro fit is refused"]);
+    assert_refused(
+        &logger("neg_gyro", ("m/s2", "deg/s"), Some(neg)),
+        &["gyro fit is refused"],
+    );
     let neg: Edit<'_> = &|f, c, _| negate(f, c("w_z"));
     assert_refused(&table(Some(neg), None), &["sign reversed"]);
 }
@@ -189,7 +195,10 @@ fn one_gyro_axis_negated() {
 #[test]
 fn two_gyro_axes_swapped() {
     let swap: Edit<'_> = &|f, c, _| f.swap(c("gyr_x"), c("gyr_y"));
-    assert_refused(&logger("swap_gyro", ("m/s2", "deg/s"), Some(swap)), &["swapped"]);
+    assert_refused(
+        &logger("swap_gyro", ("m/s2", "deg/s"), Some(swap)),
+        &["swapped"],
+    );
     let swap: Edit<'_> = &|f, c, _| f.swap(c("w_x"), c("w_y"));
     assert_refused(&table(Some(swap), None), &["swapped"]);
 }
@@ -197,7 +206,10 @@ fn two_gyro_axes_swapped() {
 #[test]
 fn time_scaled_by_one_and_a_half() {
     let slow: Edit<'_> = &|f, c, _| scale(f, c("t"), 1.5);
-    assert_refused(&logger("time", ("m/s2", "deg/s"), Some(slow)), &["time base"]);
+    assert_refused(
+        &logger("time", ("m/s2", "deg/s"), Some(slow)),
+        &["time base"],
+    );
     let slow: Edit<'_> = &|f, c, _| scale(f, c("t_s"), 1.5);
     assert_refused(&table(Some(slow), None), &["time stamps", "666.667 Hz"]);
 }
@@ -235,7 +247,10 @@ fn a_ten_second_time_gap() {
         // Inside a turn: the gyro fit is refused; inside a still position: flagged with its place.
         Outcome::Refused(m) => assert!(m.contains("gap"), "{m}"),
         Outcome::Passed { warnings, .. } => {
-            assert!(warnings.contains("jump") && warnings.contains("data row 15000"), "{warnings}");
+            assert!(
+                warnings.contains("jump") && warnings.contains("data row 15000"),
+                "{warnings}"
+            );
         }
     }
     // In the middle of a table segment: flagged with its place.
@@ -248,7 +263,10 @@ fn a_ten_second_time_gap() {
     match table(Some(gap), None) {
         Outcome::Refused(m) => eprintln!("refused: {m}"),
         Outcome::Passed { warnings, .. } => {
-            assert!(warnings.contains("jump") && warnings.contains("line 1002"), "{warnings}");
+            assert!(
+                warnings.contains("jump") && warnings.contains("line 1002"),
+                "{warnings}"
+            );
             eprintln!("flagged: {warnings}");
         }
     }
@@ -266,12 +284,24 @@ fn a_truncated_last_line() {
     cut(&csv);
     let out = dir.path().join("session");
     let (ok, _, stderr) = host(&[
-        "segment", "--input", s(&csv), "--out", s(&out), "--time-column", "t", "--acc-unit",
-        "m/s2", "--gyro-unit", "deg/s",
+        "segment",
+        "--input",
+        s(&csv),
+        "--out",
+        s(&out),
+        "--time-column",
+        "t",
+        "--acc-unit",
+        "m/s2",
+        "--gyro-unit",
+        "deg/s",
     ]);
     // The logger's CSV: the cut line is left out, flagged with its number.
     assert!(ok, "{stderr}");
-    assert!(stderr.contains("has no line end: the file was cut short"), "{stderr}");
+    assert!(
+        stderr.contains("has no line end: the file was cut short"),
+        "{stderr}"
+    );
     let session: PathBuf = dir.path().join("s");
     assert!(host(&["-q", "simulate", "--out", s(&session), "--plan", "short"]).0);
     cut(&session.join("samples.csv"));
@@ -291,7 +321,13 @@ fn a_temperature_glitch() {
     std::fs::write(&plan, text.replace("duration_s = 20", "duration_s = 2")).unwrap();
     let session = dir.path().join("s");
     let (ok, _, e) = host(&[
-        "-q", "simulate", "--out", s(&session), "--plan", s(&plan), "--unit",
+        "-q",
+        "simulate",
+        "--out",
+        s(&session),
+        "--plan",
+        s(&plan),
+        "--unit",
         concat!(env!("CARGO_MANIFEST_DIR"), "/units/thermal-mems.toml"),
     ]);
     assert!(ok, "{e}");
@@ -303,13 +339,17 @@ fn a_temperature_glitch() {
     match table_of(&session, Some(glitch), None) {
         Outcome::Passed { passed, warnings } => {
             assert!(passed, "{warnings}");
-            assert!(warnings.contains("150 °C") && warnings.contains("line 30002"), "{warnings}");
+            assert!(
+                warnings.contains("150 °C") && warnings.contains("line 30002"),
+                "{warnings}"
+            );
             eprintln!("flagged: {warnings}");
         }
         Outcome::Refused(m) => panic!("the glitch is left out, not the session: {m}"),
     }
     let cal: toml::Value =
-        toml::from_str(&std::fs::read_to_string(session.join("calibration.toml")).unwrap()).unwrap();
+        toml::from_str(&std::fs::read_to_string(session.join("calibration.toml")).unwrap())
+            .unwrap();
     let high = cal["temperature"]["valid_range_c"][1].as_float().unwrap();
     assert!(high < 61.0, "the glitch stretched the range to {high} °C");
     // The logger's importer reads no temperature column: the transformation does not apply there.

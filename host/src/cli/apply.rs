@@ -3,11 +3,11 @@
 use super::CliError;
 use crate::apply::{apply_session, ApplyError};
 use crate::output_file::OutputFile;
+use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, ValueEnum};
 use shared::LeverMode;
 use std::io::Write;
-use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use std::path::{Path, PathBuf};
 
 /// `host apply`.

@@ -198,7 +198,9 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     ))?;
     let mut summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
     // What the reader flagged (rows left out, gaps) belongs to the result, not only to stderr.
-    summary.warnings.extend(session.report.warnings.iter().cloned());
+    summary
+        .warnings
+        .extend(session.report.warnings.iter().cloned());
     out.document(&summary)?;
     if !summary.passed {
         return Err(CliError::ChecksFailed(summary.failures()));

@@ -38,7 +38,9 @@ pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();
     if matrix.iter().flatten().any(|v| !v.is_finite()) {
-        return vec!["the gyro fit has non-finite entries: the recording has no usable turns".into()];
+        return vec![
+            "the gyro fit has non-finite entries: the recording has no usable turns".into(),
+        ];
     }
     for i in 0..3 {
         let (d, row) = (matrix[i][i], matrix[i]);
@@ -173,7 +175,8 @@ pub fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Option<Str
          (docs/recording-format.md)"
             .to_string()
     } else if ratios.iter().all(|(_, r)| near(*r, 1.0 / deg)) {
-        "the gyro reads about 1/57.3 of the table rate: it is in rad/s where °/s was expected".into()
+        "the gyro reads about 1/57.3 of the table rate: it is in rad/s where °/s was expected"
+            .into()
     } else if ratios.iter().all(|(_, r)| r.abs() < 0.2) {
         "the gyro axis along those spins does not see them: two gyro columns are swapped, or the \
          unit was mounted about another axis"
@@ -200,7 +203,11 @@ mod tests {
 
     #[test]
     fn a_real_gyro_passes() {
-        let g = [[1.005, 0.01, -0.008], [0.009, 0.995, 0.008], [0.008, 0.004, 1.004]];
+        let g = [
+            [1.005, 0.01, -0.008],
+            [0.009, 0.995, 0.008],
+            [0.008, 0.004, 1.004],
+        ];
         assert!(matrix_problems(&g).is_empty());
         assert!(matrix_problems(&I).is_empty());
     }
@@ -237,7 +244,9 @@ mod tests {
     #[test]
     fn a_large_misfit_is_refused() {
         assert!(misfit_problem(0.02, 23).is_none());
-        assert!(misfit_problem(32.9, 23).unwrap().contains("sign is reversed"));
+        assert!(misfit_problem(32.9, 23)
+            .unwrap()
+            .contains("sign is reversed"));
         assert!(misfit_problem(f64::NAN, 23).is_some());
     }
 
@@ -252,7 +261,9 @@ mod tests {
         };
         assert!(contradiction_problem(&[], 9).is_none());
         let z = [ex("z 100", -100.0, 100.0), ex("z 200", -200.0, 200.0)];
-        assert!(contradiction_problem(&z, 9).unwrap().contains("sign reversed"));
+        assert!(contradiction_problem(&z, 9)
+            .unwrap()
+            .contains("sign reversed"));
         let p = contradiction_problem(&[ex("x 100", 5729.6, 100.0)], 9).unwrap();
         assert!(p.contains("57.3×"), "{p}");
         // One spin that did not happen is the table's slip; most of them, the gyro's columns.

@@ -328,8 +328,7 @@ pub fn build_report(
     options: &ReportOptions,
 ) -> Result<ReportData, ReportError> {
     // A calibration in another output unit is refused before anything is computed from it.
-    crate::apply::check_output_unit(cal, plan)
-        .map_err(|e| ReportError::Segment(e.to_string()))?;
+    crate::apply::check_output_unit(cal, plan).map_err(|e| ReportError::Segment(e.to_string()))?;
     let segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
         return Err(ReportError::Segment(

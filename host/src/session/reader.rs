@@ -531,7 +531,9 @@ fn check_time_base(
         let span = stats
             .iter()
             .find(|s| s.name == seg.name)
-            .map_or(f64::NAN, |s| (s.count - 1) as f64 / (s.t_last_s - s.t_first_s));
+            .map_or(f64::NAN, |s| {
+                (s.count - 1) as f64 / (s.t_last_s - s.t_first_s)
+            });
         let stamps_hz = if c.short > 0 {
             c.short as f64 / c.short_sum_s
         } else {

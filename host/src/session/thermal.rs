@@ -158,7 +158,11 @@ pub const TEMP_JUMP_FLOOR_C: f64 = 1.0;
 /// allows over the time between them. A real change (a soak step) is followed by the next reading;
 /// a glitch is not. Left out, one glitch neither stretches the valid temperature range nor bends
 /// the temperature fit.
-pub fn is_glitch(before: Option<(f64, f64)>, reading: (f64, f64), after: Option<(f64, f64)>) -> bool {
+pub fn is_glitch(
+    before: Option<(f64, f64)>,
+    reading: (f64, f64),
+    after: Option<(f64, f64)>,
+) -> bool {
     let jumps = |other: (f64, f64)| {
         let allowed = TEMP_JUMP_FLOOR_C + MAX_TEMP_RATE_C_PER_S * (reading.0 - other.0).abs();
         !((reading.1 - other.1).abs() <= allowed)
@@ -199,7 +203,11 @@ mod tests {
         // The first reading and the one in the middle; the step at 60 is followed.
         assert_eq!(glitches, [0, 40]);
         // Slow enough over a long time: no glitch.
-        assert!(!is_glitch(Some((0.0, 25.0)), (10.0, 60.0), Some((10.1, 60.0))));
+        assert!(!is_glitch(
+            Some((0.0, 25.0)),
+            (10.0, 60.0),
+            Some((10.1, 60.0))
+        ));
     }
 
     /// Rows of a ramp from 0 to 50 °C whose output 0 is an exact cubic in T.

@@ -1,0 +1,331 @@
+//! Where a calibration meets a recording (`apply`, `noise`, `report`), the output unit, the unit and
+//! the physics are checked first: a calibration of another output unit, a temperature model without
+//! a temperature, or a result that is not 1 g at rest is an error naming both sides and the fix,
+//! never a wrong file with exit 0. And `host segment` replaces its directory whole or not at all.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+mod common;
+use common::host;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn refused(result: (bool, String, String), needles: &[&str]) {
+    let (ok, stdout, stderr) = result;
+    assert!(!ok, "accepted: {stdout}\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "'{n}' not in: {stderr}");
+    }
+}
+
+/// A table session of the `short` plan (volts) and its calibration.
+fn table_session(dir: &Path) -> (PathBuf, PathBuf) {
+    let session = dir.join("table");
+    assert!(host(&["-q", "simulate", "--out", s(&session), "--plan", "short"]).0);
+    let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&session)]);
+    assert!(ok, "{e}");
+    let cal = session.join("calibration.toml");
+    (session, cal)
+}
+
+/// A hand-held session (m/s²) segmented from a simulated logger CSV, and its calibration.
+fn hand_session(dir: &Path) -> (PathBuf, PathBuf) {
+    let csv = dir.join("hand.csv");
+    assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
+    let session = dir.join("hand");
+    let (ok, _, e) = host(&[
+        "-q",
+        "segment",
+        "--input",
+        s(&csv),
+        "--out",
+        s(&session),
+        "--time-column",
+        "t",
+        "--acc-unit",
+        "m/s2",
+        "--gyro-unit",
+        "deg/s",
+    ]);
+    assert!(ok, "{e}");
+    let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&session)]);
+    assert!(ok, "{e}");
+    (session.clone(), session.join("calibration.toml"))
+}
+
+#[test]
+fn apply_noise_and_report_refuse_a_calibration_of_another_output_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (table, _) = table_session(dir.path());
+    let (_, hand_cal) = hand_session(dir.path());
+    let out = dir.path().join("applied.csv");
+    refused(
+        host(&[
+            "apply",
+            "--calibration",
+            s(&hand_cal),
+            "--input",
+            s(&table),
+            "--out",
+            s(&out),
+        ]),
+        &["in m/s2 but the recording is in V"],
+    );
+    assert!(!out.exists());
+    refused(
+        host(&["noise", "--input", s(&table), "--calibration", s(&hand_cal)]),
+        &["in m/s2 but the recording is in V"],
+    );
+    refused(
+        host(&[
+            "report",
+            "--input",
+            s(&table),
+            "--calibration",
+            s(&hand_cal),
+            "--out-dir",
+            s(&dir.path().join("r")),
+        ]),
+        &["in m/s2 but the recording is in V"],
+    );
+}
+
+#[test]
+fn a_calibration_that_does_not_give_one_g_at_rest_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (table, cal) = table_session(dir.path());
+    let good = host(&[
+        "apply",
+        "--calibration",
+        s(&cal),
+        "--input",
+        s(&table),
+        "--out",
+        s(&dir.path().join("a.csv")),
+    ]);
+    assert!(good.0, "{}", good.2);
+    // The same output unit, another scale (another unit's file, edited by hand): 0.8 g at rest.
+    let mut unit: toml::Value = toml::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    let k = unit["static"]["scale_v_per_g"].as_array_mut().unwrap();
+    for v in k.iter_mut() {
+        *v = toml::Value::Float(v.as_float().unwrap() * 1.25);
+    }
+    let wrong = dir.path().join("wrong.toml");
+    std::fs::write(&wrong, toml::to_string(&unit).unwrap()).unwrap();
+    refused(
+        host(&[
+            "apply",
+            "--calibration",
+            s(&wrong),
+            "--input",
+            s(&table),
+            "--out",
+            s(&dir.path().join("b.csv")),
+        ]),
+        &["not 1 g"],
+    );
+    refused(
+        host(&["noise", "--input", s(&table), "--calibration", s(&wrong)]),
+        &["not 1 g"],
+    );
+}
+
+#[test]
+fn a_temperature_model_needs_a_temperature() {
+    let dir = tempfile::tempdir().unwrap();
+    let (table, _) = table_session(dir.path());
+    let thermal = concat!(env!("CARGO_MANIFEST_DIR"), "/units/thermal-mems.toml");
+    let out = dir.path().join("a.csv");
+    refused(
+        host(&[
+            "apply",
+            "--calibration",
+            thermal,
+            "--input",
+            s(&table),
+            "--out",
+            s(&out),
+            "--ignore-unit-id",
+        ]),
+        &["no temp_c column", "--temperature-c"],
+    );
+    // Said: applied at that temperature (the unit file is the simulator's truth, not this unit's
+    // calibration, so only the refusal and its fix are checked here).
+    let (_, _, stderr) = host(&[
+        "apply",
+        "--calibration",
+        thermal,
+        "--input",
+        s(&table),
+        "--out",
+        s(&out),
+        "--ignore-unit-id",
+        "--temperature-c",
+        "25",
+    ]);
+    assert!(!stderr.contains("no temp_c column"), "{stderr}");
+    refused(
+        host(&[
+            "apply",
+            "--calibration",
+            thermal,
+            "--input",
+            s(&table),
+            "--temperature-c",
+            "NaN",
+        ]),
+        &["--temperature-c"],
+    );
+}
+
+#[test]
+fn apply_never_writes_over_its_own_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let (table, cal) = table_session(dir.path());
+    let before = std::fs::read(table.join("samples.csv")).unwrap();
+    refused(
+        host(&[
+            "apply",
+            "--calibration",
+            s(&cal),
+            "--input",
+            s(&table),
+            "--out",
+            s(&table.join("samples.csv")),
+            "--force",
+        ]),
+        &["recording's own samples.csv"],
+    );
+    assert_eq!(std::fs::read(table.join("samples.csv")).unwrap(), before);
+}
+
+#[test]
+fn a_wrong_sample_rate_is_named_as_a_time_base() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("hand.csv");
+    assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
+    // The 200 Hz log read as 300 Hz: the turns look a third shorter on every axis.
+    let out = dir.path().join("s");
+    refused(
+        host(&[
+            "segment",
+            "--input",
+            s(&csv),
+            "--out",
+            s(&out),
+            "--rate-hz",
+            "300",
+            "--acc-unit",
+            "m/s2",
+            "--gyro-unit",
+            "deg/s",
+        ]),
+        &[
+            "the same on all three axes: the time base is wrong by a factor 1.49",
+            "--rate-hz",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn segment_force_replaces_the_whole_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let (session, cal) = hand_session(dir.path());
+    assert!(cal.exists() && session.join("gyro.toml").exists());
+    // The same directory again, from a log whose gyro fit fails: refused, the old session intact.
+    let bad = dir.path().join("bad.csv");
+    let text = std::fs::read_to_string(dir.path().join("hand.csv")).unwrap();
+    let swapped: String = text
+        .lines()
+        .enumerate()
+        .map(|(k, l)| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            if k > 0 {
+                f.swap(4, 5);
+            }
+            f.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&bad, swapped).unwrap();
+    let args = |input: &Path| {
+        vec![
+            "segment".to_string(),
+            "--input".into(),
+            s(input).into(),
+            "--out".into(),
+            s(&session).into(),
+            "--time-column".into(),
+            "t".into(),
+            "--acc-unit".into(),
+            "m/s2".into(),
+            "--gyro-unit".into(),
+            "deg/s".into(),
+            "--force".into(),
+        ]
+    };
+    let run = |a: Vec<String>| host(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    refused(run(args(&bad)), &["gyro fit is refused"]);
+    assert!(
+        cal.exists(),
+        "a refused run leaves the earlier directory as it was"
+    );
+    // A good run with --force: the earlier calibration (derived from the old data) is gone.
+    let (ok, _, e) = run(args(&dir.path().join("hand.csv")));
+    assert!(ok, "{e}");
+    assert!(!cal.exists(), "a stale calibration.toml survived --force");
+    assert!(session.join("gyro.toml").exists());
+    // A directory holding something else is never replaced.
+    std::fs::write(session.join("notes.txt"), "mine").unwrap();
+    refused(run(args(&dir.path().join("hand.csv"))), &["notes.txt"]);
+}
+
+#[test]
+fn segment_interrupted_leaves_nothing_that_calibrate_accepts() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("hand.csv");
+    assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
+    for delay_ms in [20, 80, 160, 320] {
+        let out = dir.path().join(format!("s{delay_ms}"));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_host"))
+            .args([
+                "-q",
+                "segment",
+                "--input",
+                s(&csv),
+                "--out",
+                s(&out),
+                "--time-column",
+                "t",
+                "--acc-unit",
+                "m/s2",
+                "--gyro-unit",
+                "deg/s",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        // SIGINT, as Ctrl-C sends it.
+        let _ = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status();
+        let status = child.wait().unwrap();
+        if status.success() {
+            // It finished first: then the session is whole.
+            assert!(host(&["-q", "calibrate", "--input", s(&out)]).0);
+        } else {
+            assert!(
+                !out.exists(),
+                "an interrupted segment left {}",
+                out.display()
+            );
+        }
+    }
+}
