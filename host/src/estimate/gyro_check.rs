@@ -118,10 +118,9 @@ fn scale_cause(scale: &[f64; 3]) -> String {
         )
     } else if common {
         format!(
-            "gyro scale errors {shown}, the same on all three axes: the time base is wrong by a \
-             factor {:.3} (the sample rate given, or the time column's unit), not the gyro; check \
-             --rate-hz or --time-column",
-            1.0 / mean
+            "gyro scale errors {shown}, the same on all three axes: the time base is wrong, not the \
+             gyro: the time stamps span {mean:.3}× the true durations (the sample rate given, or \
+             the time column's unit); check --rate-hz or --time-column"
         )
     } else {
         format!(
@@ -232,7 +231,10 @@ mod tests {
     fn the_same_scale_on_every_axis_is_a_time_base() {
         let g = [[2.0 / 3.0, 0.0, 0.0], [0.0, 0.668, 0.0], [0.0, 0.0, 0.665]];
         let p = matrix_problems(&g);
-        assert!(p[0].contains("time base is wrong by a factor 1.5"), "{p:?}");
+        assert!(
+            p[0].contains("time base is wrong") && p[0].contains("span 0.667×"),
+            "{p:?}"
+        );
         let g = I.map(|r| r.map(|v| v * 57.3));
         assert!(matrix_problems(&g)[0].contains("--gyro-unit deg/s"));
         // Different errors per axis: not a time base.
