@@ -291,14 +291,84 @@ fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<(Vec<f32>, [f32; 3]), Expor
     Ok((m, gyro.bias_rad_s.map(|b| b.to_degrees() as f32)))
 }
 
+/// Which entries of `G⁻¹` the calibration did not determine: the first-order propagation of the
+/// calibration file's 1σ of `G` (`δ(G⁻¹) = −G⁻¹·δG·G⁻¹`, absolute values summed, so no cancellation
+/// hides one) above [`crate::estimate::gyro::UNDETERMINED_SIGMA`]. With `G ≈ I` an undetermined column
+/// of `G` (a spin axis the plan left out) is the same column of `G⁻¹`.
+pub fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 3] {
+    let (Some(gyro), Some(sigma)) = (
+        input.cal.gyro.as_ref(),
+        input.unit.gyro.as_ref().and_then(|g| g.matrix_1sigma),
+    ) else {
+        return [[false; 3]; 3];
+    };
+    let Ok(inv) = gyro.checked_inverse() else {
+        return [[true; 3]; 3];
+    };
+    std::array::from_fn(|k| {
+        std::array::from_fn(|l| {
+            let s: f64 = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| (inv[k][i] * sigma[i][j] * inv[j][l]).abs())
+                .sum();
+            s.is_nan() || s > crate::estimate::gyro::UNDETERMINED_SIGMA
+        })
+    })
+}
+
+/// A row-major `FusionMatrix` initialiser list with undetermined entries marked in a comment.
+fn marked_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
+    let items: Vec<String> = m
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let mark = if undetermined[k / 3][k % 3] {
+                " /* UNDETERMINED */"
+            } else {
+                ""
+            };
+            format!("{}{mark}", c_f32(*v))
+        })
+        .collect();
+    format!("{{{}}}", items.join(", "))
+}
+
+/// Selects Fusion's inertial model by the header it includes: `FusionCalibrationInertial` in
+/// `FusionCalibration.h` before Fusion 1.3, `FusionModelInertial` in `FusionModel.h` from 1.3
+/// (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`, `Fusion/FusionModel.h`; same arguments,
+/// same formula).
+const FUSION_VERSION_SELECT: &str =
+    "/* Fusion >= 1.3 names the model FusionModelInertial (FusionModel.h); before 1.3 it is
+ * FusionCalibrationInertial (FusionCalibration.h), same arguments and formula. */
+#if defined(FUSION_MODEL_H)
+#define ACAL_FUSION_INERTIAL FusionModelInertial
+#elif defined(FUSION_CALIBRATION_H)
+#define ACAL_FUSION_INERTIAL FusionCalibrationInertial
+#else
+#error \"Fusion.h declares neither FusionModelInertial nor FusionCalibrationInertial\"
+#endif
+";
+
 /// The `fusion-c` text.
 pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let f = convert(&input.cal)?.fusion;
     let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
     let gyroscope = input.cal.gyro.as_ref().map(fusion_gyroscope).transpose()?;
+    let undetermined = undetermined_gyro_inverse(input);
+    let names: Vec<String> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| undetermined[i][j])
+        .map(|(i, j)| format!("gyroscopeMisalignment[{i}][{j}]"))
+        .collect();
+    if gyroscope.is_some() && !names.is_empty() && !input.options.allow_undetermined {
+        return Err(ExportError::Undetermined {
+            format: "fusion-c",
+            names: names.join(", "),
+        });
+    }
     let gyro_note = if gyroscope.is_some() {
-        " *   gyroscope = FusionModelInertial(uncalibrated, gyroscopeMisalignment,\n\
-         *                                   gyroscopeSensitivity, gyroscopeOffset);\n\
+        " *   gyroscope = ACAL_FUSION_INERTIAL(uncalibrated, gyroscopeMisalignment,\n\
+         *                                    gyroscopeSensitivity, gyroscopeOffset);\n\
          * uncalibrated and result in deg/s (Fusion's unit; a gyro read in rad/s: multiply by 180/pi\n\
          * first), result in body axes. From w = G omega + b (docs/model.md 8): offset = b,\n\
          * misalignment = G^-1 (the exact inverse, scale factors included), sensitivity = 1.\n"
@@ -318,15 +388,22 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = write!(
         w,
         "/*\n * x-io Fusion calibration (host export --format fusion-c), for\n\
-         *   accelerometer = FusionModelInertial(uncalibrated, accelerometerMisalignment,\n\
-         *                                       accelerometerSensitivity, accelerometerOffset);\n\
+         *   accelerometer = ACAL_FUSION_INERTIAL(uncalibrated, accelerometerMisalignment,\n\
+         *                                        accelerometerSensitivity, accelerometerOffset);\n\
          * uncalibrated in the unit's output unit ({}), result in g, body axes:\n\
          * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n\
          * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n\
          {gyro_note}{temperature_note} */\n\
-         #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n",
+         #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n{FUSION_VERSION_SELECT}\n",
         input.cal.statics.output_unit.symbol()
     );
+    if gyroscope.is_some() && !names.is_empty() {
+        let _ = writeln!(
+            w,
+            "/* UNDETERMINED (not determined by the calibration plan; the value is not a measurement):\n *   {} */",
+            names.join(", ")
+        );
+    }
     let _ = writeln!(
         w,
         "static const FusionMatrix accelerometerMisalignment = {{ .array = {} }};",
@@ -348,7 +425,7 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
             "static const FusionMatrix gyroscopeMisalignment = {{ .array = {} }};\n\
              static const FusionVector gyroscopeSensitivity = {{ .array = {} }};\n\
              static const FusionVector gyroscopeOffset = {{ .array = {} }};",
-            list(&misalignment, c_f32),
+            marked_matrix(&misalignment, &undetermined),
             list(&[1.0f32; 3], c_f32),
             list(&offset, c_f32)
         );

@@ -607,6 +607,7 @@ fn c_header_needs_a_unit_id() {
 const FUSION_STUB: &str = r#"
 #ifndef FUSION_H
 #define FUSION_H
+#define FUSION_MODEL_H
 typedef union { float array[3]; struct { float x; float y; float z; } axis; } FusionVector;
 typedef union { float array[9]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
 static inline FusionVector FusionVectorSubtract(const FusionVector a, const FusionVector b) {
@@ -638,7 +639,7 @@ const FUSION_MAIN: &str = r#"
 int main(void) {
     FusionVector u;
     while (scanf("%f %f %f", &u.array[0], &u.array[1], &u.array[2]) == 3) {
-        const FusionVector f = FusionModelInertial(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
+        const FusionVector f = ACAL_FUSION_INERTIAL(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
         printf("%.9g %.9g %.9g\n", f.axis.x, f.axis.y, f.axis.z);
     }
     return 0;
@@ -698,7 +699,7 @@ const FUSION_GYRO_MAIN: &str = r#"
 int main(void) {
     FusionVector w;
     while (scanf("%f %f %f", &w.array[0], &w.array[1], &w.array[2]) == 3) {
-        const FusionVector omega = FusionModelInertial(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
+        const FusionVector omega = ACAL_FUSION_INERTIAL(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
         printf("%.9g %.9g %.9g\n", omega.axis.x, omega.axis.y, omega.axis.z);
     }
     return 0;
