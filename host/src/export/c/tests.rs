@@ -773,3 +773,149 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
         .fold(0.0, f64::max);
     assert!(uncorrected > 0.5, "the test gyro must need its correction");
 }
+
+/// Fusion before 1.3 (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`): the same model named
+/// `FusionCalibrationInertial`, over `FusionMatrixMultiplyVector` and `FusionVectorHadamardProduct`.
+const FUSION_OLD_STUB: &str = r#"
+#ifndef FUSION_H
+#define FUSION_H
+#define FUSION_CALIBRATION_H
+typedef union { float array[3]; struct { float x; float y; float z; } axis; } FusionVector;
+typedef union { float array[9]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
+static inline FusionVector FusionVectorSubtract(const FusionVector a, const FusionVector b) {
+    const FusionVector r = {.axis = {a.axis.x - b.axis.x, a.axis.y - b.axis.y, a.axis.z - b.axis.z}};
+    return r;
+}
+static inline FusionVector FusionVectorHadamardProduct(const FusionVector a, const FusionVector b) {
+    const FusionVector r = {.axis = {a.axis.x * b.axis.x, a.axis.y * b.axis.y, a.axis.z * b.axis.z}};
+    return r;
+}
+static inline FusionVector FusionMatrixMultiplyVector(const FusionMatrix m, const FusionVector v) {
+    const FusionVector r = {.axis = {
+        m.element.xx * v.axis.x + m.element.xy * v.axis.y + m.element.xz * v.axis.z,
+        m.element.yx * v.axis.x + m.element.yy * v.axis.y + m.element.yz * v.axis.z,
+        m.element.zx * v.axis.x + m.element.zy * v.axis.y + m.element.zz * v.axis.z}};
+    return r;
+}
+static inline FusionVector FusionCalibrationInertial(const FusionVector uncalibrated, const FusionMatrix misalignment,
+                                                     const FusionVector sensitivity, const FusionVector offset) {
+    return FusionMatrixMultiplyVector(misalignment, FusionVectorHadamardProduct(FusionVectorSubtract(uncalibrated, offset), sensitivity));
+}
+#endif
+"#;
+
+/// Reads `u[3] w[3]` (float bits in hex; w in deg/s) and prints the accelerometer (g) and the
+/// gyroscope (deg/s) as Fusion's model gives them.
+const FUSION_BOTH_MAIN: &str = r#"
+#include <stdio.h>
+#include <string.h>
+#include "Fusion.h"
+#include "fusion_calibration.h"
+int main(void) {
+    unsigned b[6];
+    while (scanf("%x %x %x %x %x %x", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) == 6) {
+        FusionVector u, w;
+        memcpy(u.array, b, sizeof u.array);
+        memcpy(w.array, b + 3, sizeof w.array);
+        const FusionVector f = ACAL_FUSION_INERTIAL(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
+        const FusionVector omega = ACAL_FUSION_INERTIAL(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
+        printf("%.9g %.9g %.9g %.9g %.9g %.9g\n", f.axis.x, f.axis.y, f.axis.z, omega.axis.x, omega.axis.y, omega.axis.z);
+    }
+    return 0;
+}
+"#;
+
+/// The fusion-c header compiled against Fusion's model as both versions name it, run on the same raw
+/// rows as `host apply`: equal to f32 rounding at rest, the lever terms (which Fusion cannot hold)
+/// in rotation; the gyro exactly held.
+#[test]
+fn fusion_header_in_both_fusion_versions_corrects_like_host_apply_within_what_it_holds() {
+    use crate::export::consumer_tests::{reference, segments};
+    let mut cal = crate::export::consumer_tests::handheld_unit();
+    cal.statics.output_unit = shared::OutputUnit::Volts;
+    cal.statics.scale_out_per_g = [0.395, 0.398, 0.400];
+    cal.statics.zero_bias_out = [2.405, 2.381, 2.436];
+    let unit = UnitFile::from_calibration(&cal, None, None);
+    let text = render_fusion(&ExportInput::for_tests(&unit, cal)).unwrap();
+    let segs = segments(&cal);
+    let want = reference(&cal, &segs);
+    let rows: Vec<_> = segs.iter().flatten().collect();
+    let stdin: String = rows
+        .iter()
+        .map(|r| {
+            let w = r.w_rad_s.map(|v| (v.to_degrees() as f32).to_bits());
+            hex_line(r.u.map(|v| (v as f32).to_bits()).iter().chain(&w))
+        })
+        .collect();
+    let g = cal.gravity_m_s2;
+    for stub in [FUSION_STUB, FUSION_OLD_STUB] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("Fusion.h"), stub).unwrap();
+        std::fs::write(dir.path().join("fusion_calibration.h"), &text).unwrap();
+        std::fs::write(dir.path().join("main.c"), FUSION_BOTH_MAIN).unwrap();
+        compile(dir.path(), &["main.c"]);
+        let out = run(dir.path(), &stdin);
+        let (mut worst_ug, mut worst_deg_s) = (0.0f64, 0.0f64);
+        for ((line, r), (f_ref, rate_ref)) in out.lines().zip(&rows).zip(want.iter().flatten()) {
+            let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+            let w2: f64 = r.omega_rad_s.iter().map(|x| x * x).sum();
+            let lever_g = w2 * 0.0095 / g;
+            for j in 0..3 {
+                let d_g = (v[j] - f64::from(f_ref[j]) / g).abs();
+                assert!(d_g <= 1.1 * lever_g + 5e-6, "{d_g} g at {r:?}");
+                worst_ug = worst_ug.max(d_g * 1e6);
+                let d = (v[3 + j] - f64::from(rate_ref[j]).to_degrees()).abs();
+                assert!(d < 1e-4, "{d} deg/s");
+                worst_deg_s = worst_deg_s.max(d);
+            }
+        }
+        eprintln!(
+            "fusion-c: largest difference from host apply {worst_ug:.1} µg, {worst_deg_s:.6} °/s"
+        );
+        assert_eq!(out.lines().count(), rows.len());
+    }
+}
+
+/// A gyro entry the plan did not determine (the z spins left out: G's z column) is refused, or
+/// written marked with --allow-undetermined.
+#[test]
+fn fusion_header_refuses_or_marks_undetermined_gyro_entries() {
+    let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+    cal.gyro = Some(firmware::paper_unit::typical_gyro());
+    let mut unit = UnitFile::from_calibration(&cal, None, None);
+    let mut sigma = [[1e-5; 3]; 3];
+    // 50 times the threshold: undetermined. (Much larger, it also reaches the other columns of
+    // G⁻¹ through the misalignments, and those are marked too.)
+    for row in &mut sigma {
+        row[2] = 0.05;
+    }
+    unit.gyro.as_mut().unwrap().matrix_1sigma = Some(sigma);
+    let mut input = ExportInput::for_tests(&unit, cal);
+    let e = render_fusion(&input).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains(
+            "gyroscopeMisalignment[0][2], gyroscopeMisalignment[1][2], gyroscopeMisalignment[2][2]"
+        ) && m.contains("--allow-undetermined"),
+        "{m}"
+    );
+    input.options.allow_undetermined = true;
+    let text = render_fusion(&input).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.contains("FusionMatrix gyroscopeMisalignment"))
+        .unwrap();
+    let marked: Vec<bool> = line
+        .split(", ")
+        .map(|item| item.contains("UNDETERMINED"))
+        .collect();
+    assert_eq!(
+        marked,
+        [false, false, true, false, false, true, false, false, true],
+        "{line}"
+    );
+    // Determined everywhere: numbers only.
+    unit.gyro.as_mut().unwrap().matrix_1sigma = Some([[1e-5; 3]; 3]);
+    let input = ExportInput::for_tests(&unit, cal);
+    assert!(!render_fusion(&input).unwrap().contains("UNDETERMINED"));
+}
