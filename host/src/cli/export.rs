@@ -3,7 +3,7 @@
 use super::CliError;
 use crate::export::kalibr::KalibrNoise;
 use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
-use crate::output_file::write_atomic;
+use crate::output_file::{write_atomic, OutputFileError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use std::path::PathBuf;
@@ -17,8 +17,8 @@ pub struct ExportArgs {
     /// The format.
     #[arg(long, value_enum, default_value_t = ExportFormat::All)]
     pub format: ExportFormat,
-    /// Where to write it (default: stdout).
-    #[arg(long, value_name = "FILE")]
+    /// Where to write it (default: stdout); for c-header a directory, where the package goes.
+    #[arg(long, value_name = "FILE|DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out file.
     #[arg(long)]
@@ -77,6 +77,9 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             compid: a.compid,
         },
     };
+    if a.format == ExportFormat::CHeader {
+        return write_c_package(a, &input, quiet);
+    }
     let text = render(&input, a.format)?;
     // What the writer accepted only because it was told to: said where a person sees it too.
     for w in text.lines().filter_map(|l| l.strip_prefix("# WARNING: ")) {
@@ -90,6 +93,39 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             }
         }
         None => crate::out!("{text}")?,
+    }
+    Ok(())
+}
+
+/// `c-header`: the self-contained C package (constants header, decoder, the device's per-sample
+/// correction) into the `--out` directory, every file atomically; nothing is written when one would
+/// replace an existing file without `--force`.
+fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Result<(), CliError> {
+    let dir = a.out.as_ref().ok_or_else(|| {
+        CliError::Usage(
+            "--format c-header writes a package of files (acal_calibration.h, the decoder and the \
+             device's per-sample correction): give --out DIR"
+                .into(),
+        )
+    })?;
+    crate::export::check_exportable(&input.cal)?;
+    let files = crate::export::c::package(input)?;
+    if !a.force {
+        if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
+            return Err(CliError::Written(OutputFileError::Exists(dir.join(name))));
+        }
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::Written(OutputFileError::Io(dir.clone(), e)))?;
+    for (name, text) in &files {
+        write_atomic(&dir.join(name), text.as_bytes(), a.force).map_err(CliError::Written)?;
+    }
+    if !quiet {
+        eprintln!(
+            "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off)",
+            files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+            dir.display()
+        );
     }
     Ok(())
 }

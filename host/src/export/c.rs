@@ -26,6 +26,24 @@ use std::fmt::Write as _;
 pub const DECODER_H: &str = include_str!("c/acal_blob.h");
 /// The decoder and the compensation.
 pub const DECODER_C: &str = include_str!("c/acal_blob.c");
+/// The device's whole per-sample correction (gyro, ω̇ estimate, lever arms, temperature refresh).
+pub const DEVICE_H: &str = include_str!("c/acal_device.h");
+/// Its implementation.
+pub const DEVICE_C: &str = include_str!("c/acal_device.c");
+/// The name of the constants header in the package.
+pub const HEADER_NAME: &str = "acal_calibration.h";
+
+/// The files of the C package `export --format c-header --out DIR` writes: the constants header, the
+/// decoder and the device's per-sample correction, self-contained (the header includes only them).
+pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
+    Ok(vec![
+        (HEADER_NAME, render_header(input)?),
+        ("acal_blob.h", DECODER_H.to_string()),
+        ("acal_blob.c", DECODER_C.to_string()),
+        ("acal_device.h", DEVICE_H.to_string()),
+        ("acal_device.c", DEVICE_C.to_string()),
+    ])
+}
 
 /// An `f32` as a C `float` literal that converts back to the same bits (shortest round-trip form).
 fn c_f32(v: f32) -> String {
@@ -234,8 +252,10 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = write!(
         w,
         "/*\n * Accelerometer calibration of unit {unit_id} (host export --format c-header).\n\
-         * Decode ACAL_BLOB with acal_decode(); correct the gyro with acal_correct_rate() and\n\
-         * compensate with acal_compensate() from acal_blob.h / acal_blob.c (host/src/export/c/).\n\
+         * Decode ACAL_BLOB with acal_decode() (acal_blob.h); run the device's whole per-sample correction\n\
+         * (gyro, angular acceleration, lever arms, temperature refresh) with acal_device.h:\n\
+         *   acal_device_init(&dev, &ACAL_COMPENSATOR, ACAL_THERMAL_OR_NULL, sample_rate_hz);\n\
+         * Build with the package's acal_blob.c and acal_device.c, -ffp-contract=off for the device's bits.\n\
          * The blob's creation time is 0 (unknown).\n\
          * ACAL_COMPENSATOR holds the device's precomputed f32 constants (all lever-arm terms on).\n"
     );
@@ -245,7 +265,7 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     }
     let _ = writeln!(
         w,
-        " */\n#ifndef ACAL_CALIBRATION_H\n#define ACAL_CALIBRATION_H\n\n#include <stdint.h>\n#include \"acal_blob.h\"\n"
+        " */\n#ifndef ACAL_CALIBRATION_H\n#define ACAL_CALIBRATION_H\n\n#include <stdint.h>\n#include \"acal_device.h\"\n"
     );
     let _ = writeln!(
         w,
@@ -264,6 +284,15 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
         sections_initialiser(cal),
     );
     w.push_str(&compensator_initialisers(&compensator));
+    let thermal = if compensator.thermal_constants().is_some() {
+        "(&ACAL_THERMAL)"
+    } else {
+        "((const struct acal_thermal *)0)"
+    };
+    let _ = writeln!(
+        w,
+        "/* What acal_device_init() takes for the temperature model. */\n#define ACAL_THERMAL_OR_NULL {thermal}\n"
+    );
     let _ = writeln!(
         w,
         "#define ACAL_BLOB_LEN {n}u\nstatic const uint8_t ACAL_BLOB[ACAL_BLOB_LEN] = {{"

@@ -95,8 +95,10 @@ pub enum ExportFormat {
     KalibrIntrinsics,
     /// A C header with x-io Fusion `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`.
     FusionC,
-    /// A C header: the calibration as a plain struct initialiser, the device's precomputed
-    /// compensator constants, and the blob as a byte array (decode it with export/c/acal_blob.c).
+    /// A C package (--out DIR): acal_calibration.h (the calibration as a struct initialiser, the
+    /// device's precomputed constants, the blob as bytes), the blob decoder acal_blob.{h,c}, and the
+    /// device's whole per-sample correction acal_device.{h,c}.
+    #[value(alias = "c")]
     CHeader,
     /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
     Json,
