@@ -1,6 +1,10 @@
-//! C headers: the calibration for a C firmware (`c-header`) and for x-io Fusion (`fusion-c`).
+//! C outputs: the calibration for a C firmware (`c-header`, a package of files, [`package`]) and for
+//! x-io Fusion (`fusion-c`).
 //!
-//! `c-header` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
+//! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the device's
+//! whole per-sample correction ([`DEVICE_H`], [`DEVICE_C`]: gyro correction, the ω̇ estimator of
+//! `shared::omega_dot`, the lever-arm compensation and the temperature refresh at the firmware's pace),
+//! so that it builds alone. `acal_calibration.h` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
 //! precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
 //! `shared::Compensator`, so `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give
 //! the device's results bit for bit), with a temperature model what `acal_refresh` recomputes them
@@ -9,11 +13,13 @@
 //! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`); the decoder reads
 //! blob versions 1 and 2 and fills the optional gyro and temperature sections with presence flags.
 //!
-//! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`
-//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]); Fusion has no lever-arm terms
-//! nor temperature model. With a gyro correction it also holds the gyroscope's triple (`offset = b`,
-//! `misalignment = G⁻¹`, `sensitivity = 1`, in °/s); without one the header says so instead of writing
-//! an identity.
+//! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for Fusion's inertial model
+//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]), named `FusionModelInertial`
+//! from Fusion 1.3 and `FusionCalibrationInertial` before (the header picks by Fusion's include guards);
+//! Fusion has no lever-arm terms nor temperature model. With a gyro correction it also holds the
+//! gyroscope's triple (`offset = b`, `misalignment = G⁻¹`, `sensitivity = 1`, in °/s), refusing entries
+//! of `G⁻¹` the plan did not determine unless allowed, then marked; without one the header says so
+//! instead of writing an identity.
 
 use super::{convert, ExportError, ExportInput};
 use shared::blob::ParameterBlob;

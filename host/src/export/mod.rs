@@ -1,12 +1,15 @@
 //! Our calibration in the formats other tools read (`host export --format F`), and the conversions
 //! between our model and each tool's convention.
 //!
-//! Formats: [`ExportFormat`], one module each: [`kalibr`] (YAML), [`c`] (C headers, with the portable
-//! C blob decoder in `c/`), [`json`], [`params`] (PX4 and ArduPilot), [`toml_forms`] (the conversions
-//! below as TOML). Each writer states the conventions it assumes in the file it writes, and
-//! marks what the target cannot hold or what the calibration did not determine (never a silent zero).
-//! Each is checked by its own consumer in the tests: gcc for the C outputs (run against the Rust
-//! compensator), a YAML parser for Kalibr's file, a JSON parser for the JSON document.
+//! Formats: [`ExportFormat`], one module each: [`kalibr`] (YAML), [`c`] (the C package, with the
+//! portable blob decoder and the device's per-sample correction in `c/`, and Fusion's header),
+//! [`json`], [`params`] (PX4 and ArduPilot), [`toml_forms`] (the conversions below as TOML). Each
+//! writer states the conventions it assumes in the file it writes, marks what the target cannot hold,
+//! and refuses (unless told) what the calibration did not determine or the target's documented range
+//! excludes (never a silent zero or a NaN). The driver scale of the formats that read m/s² follows one
+//! rule ([`ExportInput::driver_scale`]). `consumer_tests` reads each file the way its consumer does
+//! and checks the consumer's own correction, written from its source, against `host apply`; the C
+//! outputs are compiled and run against the Rust device code.
 //!
 //! The conversions (each with its own `compensate`, written in that tool's convention; a test checks
 //! that every form turns the same samples into the same specific force as `shared::Compensator`):
