@@ -31,7 +31,7 @@ pub struct ExportArgs {
     pub rostopic: String,
     /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: 1 for a
     /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
-    #[arg(long, value_name = "M_S2_PER_UNIT")]
+    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true)]
     pub driver_scale: Option<f64>,
     /// For px4: PX4's device id of the accelerometer (CAL_ACC0_ID), as the vehicle reports it.
     #[arg(long, value_name = "ID")]
