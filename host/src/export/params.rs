@@ -15,9 +15,17 @@
 //! What neither can hold, and each file says so with the size of what is dropped: the
 //! cross-axis terms of `(K·A)⁻¹` (misalignment; bounded here by the largest row sum of the dropped
 //! terms at 1 g), the gyro's scale and misalignment `G⁻¹ − I` (bounded at 100 °/s), the per-axis
-//! sensing points and the lever-arm compensation, and any temperature model (PX4's `TC_A*`,
-//! ArduPilot's `INS_TCAL*` are separate calibrations). The file also states the driver scale it
-//! assumes. ArduPilot's documented ranges (`AP_InertialSensor.cpp` parameter metadata:
+//! sensing points and the lever-arm compensation. The file also states the driver scale it assumes.
+//!
+//! A temperature model (`docs/model.md` §9) goes into the autopilots' thermal offsets ([`thermal`]):
+//! PX4's `TC_A0_*`/`TC_G0_*` (`src/modules/temperature_compensation/TemperatureCompensation.cpp`,
+//! `calc_thermal_offsets_3D`: `x0 + x1·dT + x2·dT² + x3·dT³`, `dT` from `TC_*_TREF` with the temperature
+//! clipped to `TMIN..TMAX`, subtracted before `CAL_*_xOFF`) and ArduPilot's `INS_TCAL1_*`
+//! (`AP_InertialSensor_tempcal.cpp`, `correct_sensor`: `p(T − 35) − p(T_cal − 35)` with `p` a cubic
+//! without constant whose coefficients are stored ×10⁶, `T` and `T_cal = INS_ACC1_CALTEMP` clipped to
+//! `TMIN..TMAX`, subtracted before the offsets). Both hold our zero-bias and gyro-bias polynomials
+//! exactly (ArduPilot's re-centred on 35 °C); neither holds the scale factors' temperature dependence,
+//! whose size over the valid range each file states. ArduPilot's documented ranges (`AP_InertialSensor.cpp` parameter metadata:
 //! `INS_ACCSCAL_*` 0.8..1.2, `INS_ACCOFFS_*` −3.5..3.5 m/s²) are checked: a value outside is refused
 //! unless `--allow-out-of-range`, which writes it with a `# WARNING:` line.
 
@@ -95,8 +103,7 @@ fn caveats(w: &mut String, input: &ExportInput<'_>, p: &PerAxis, tool: &str) {
          # NOT HELD by these parameters (apply them elsewhere, or accept the error):\n\
          # - accelerometer cross-axis (misalignment) terms: up to {:.3} mg at 1 g on the worst axis;\n\
          # - the gyro's scale and misalignment (G^-1 - I): up to {:.4} deg/s at 100 deg/s;\n\
-         # - the per-axis sensing points and the lever-arm (size-effect) compensation;\n\
-         # - any temperature model.",
+         # - the per-axis sensing points and the lever-arm (size-effect) compensation.",
         p.driver_scale,
         p.dropped_cross_axis_g * 1e3,
         p.dropped_gyro_deg_s_at_100
@@ -163,6 +170,7 @@ pub fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
         }
         (None, _) => {}
     }
+    values.extend(px4_thermal(input, &p, device_id, &mut s)?);
     let _ = writeln!(
         s,
         "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
@@ -179,6 +187,153 @@ pub fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
     Ok(s)
 }
 
+/// What a temperature model becomes in the autopilots' thermal offsets, in the driver's units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Thermal {
+    /// Reference temperature of our model, °C.
+    pub reference_c: f64,
+    /// Valid range, °C.
+    pub range_c: [f64; 2],
+    /// Accelerometer offset polynomials (row = axis: coefficients of dT, dT², dT³), m/s² per °C^k.
+    pub accel_m_s2: [[f64; 3]; 3],
+    /// Gyro offset polynomials, rad/s per °C^k (`None`: the model has no gyro-bias drift).
+    pub gyro_rad_s: Option<[[f64; 3]; 3]>,
+    /// Largest effect of the scale factors' temperature dependence over the range at 1 g, g.
+    pub dropped_scale_g: f64,
+}
+
+/// The per-axis thermal offsets of `input`'s temperature model: the driver's reading drifts by
+/// `c·P_i(dT)` (zero biases, docs/model.md §9) and the gyro's by `B_j(dT)`.
+pub fn thermal(input: &ExportInput<'_>, p: &PerAxis) -> Option<Thermal> {
+    let t = input.cal.temperature.as_ref()?;
+    let c = p.driver_scale;
+    let poly = |k: &[f64; 3], x: f64| x * (k[0] + x * (k[1] + x * k[2]));
+    let dropped = t
+        .check_points()
+        .map(|temp| {
+            (0..3)
+                .map(|i| poly(&t.scale_rel_per_c[i], temp - t.reference_c).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    Some(Thermal {
+        reference_c: t.reference_c,
+        range_c: t.valid_range_c,
+        accel_m_s2: t.zero_bias_out_per_c.map(|r| r.map(|v| v * c)),
+        gyro_rad_s: t.gyro_bias_rad_s_per_c,
+        dropped_scale_g: dropped,
+    })
+}
+
+fn thermal_caveat(w: &mut String, th: &Thermal) {
+    let _ = writeln!(
+        w,
+        "# Temperature model (reference {} degC, valid {}..{} degC): zero-bias and gyro-bias drift held\n\
+         # exactly; NOT HELD: the scale factors' drift, up to {:.3} mg at 1 g over the valid range.",
+        th.reference_c,
+        th.range_c[0],
+        th.range_c[1],
+        th.dropped_scale_g * 1e3
+    );
+}
+
+/// PX4's `TC_A0_*` (and with the gyro's id and a gyro-bias drift, `TC_G0_*`): `x0 = 0` (the offset
+/// at the reference is `CAL_*_xOFF`), `x1..x3` our polynomial in the driver's units.
+fn px4_thermal(
+    input: &ExportInput<'_>,
+    p: &PerAxis,
+    device_id: u32,
+    w: &mut String,
+) -> Result<Values, ExportError> {
+    let Some(th) = thermal(input, p) else {
+        return Ok(Values::new());
+    };
+    thermal_caveat(w, &th);
+    let mut v = Values::new();
+    let mut block = |prefix: &str, enable: &str, id: u32, poly: &[[f64; 3]; 3]| {
+        v.push((enable.to_string(), 1.0, true));
+        v.push((format!("{prefix}_ID"), f64::from(id as i32), true));
+        v.push((format!("{prefix}_TREF"), th.reference_c, false));
+        v.push((format!("{prefix}_TMIN"), th.range_c[0], false));
+        v.push((format!("{prefix}_TMAX"), th.range_c[1], false));
+        for k in 0..4 {
+            for (axis, row) in poly.iter().enumerate() {
+                let value = if k == 0 { 0.0 } else { row[k - 1] };
+                v.push((format!("{prefix}_X{k}_{axis}"), value, false));
+            }
+        }
+    };
+    block("TC_A0", "TC_A_ENABLE", device_id, &th.accel_m_s2);
+    match (th.gyro_rad_s, input.options.gyro_device_id) {
+        (Some(g), Some(id)) => block("TC_G0", "TC_G_ENABLE", id, &g),
+        (Some(_), None) => {
+            let _ = writeln!(
+                w,
+                "# TC_G0_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G0_ID; give --gyro-device-id."
+            );
+        }
+        (None, _) => {}
+    }
+    Ok(v)
+}
+
+/// ArduPilot's fixed reference of its thermal polynomials, °C (`TEMP_REFERENCE`).
+const ARDUPILOT_TCAL_REFERENCE_C: f64 = 35.0;
+/// ArduPilot stores the thermal coefficients multiplied by this (`SCALE_FACTOR`).
+const ARDUPILOT_TCAL_SCALE: f64 = 1e6;
+
+/// Our cubic `P(y)` (no constant, `y = T − T_ref`) as ArduPilot's `p(x)` about 35 °C, `x = T − 35`:
+/// `p(x) = P(x + d) − P(d)` with `d = 35 − T_ref`, so that `p(T − 35) − p(T_ref − 35) = P(T − T_ref)`.
+fn recentred(k: &[f64; 3], reference_c: f64) -> [f64; 3] {
+    let d = ARDUPILOT_TCAL_REFERENCE_C - reference_c;
+    [
+        k[0] + 2.0 * k[1] * d + 3.0 * k[2] * d * d,
+        k[1] + 3.0 * k[2] * d,
+        k[2],
+    ]
+}
+
+/// ArduPilot's `INS_TCAL1_*` and the calibration temperatures `INS_ACC1_CALTEMP`, `INS_GYR1_CALTEMP`
+/// (our reference: the offsets and scales hold there).
+fn ardupilot_thermal(input: &ExportInput<'_>, p: &PerAxis, w: &mut String) -> Values {
+    let Some(th) = thermal(input, p) else {
+        return Values::new();
+    };
+    thermal_caveat(w, &th);
+    let mut v: Values = vec![
+        ("INS_TCAL1_ENABLE".into(), 1.0, true),
+        ("INS_TCAL1_TMIN".into(), th.range_c[0], false),
+        ("INS_TCAL1_TMAX".into(), th.range_c[1], false),
+        ("INS_ACC1_CALTEMP".into(), th.reference_c, false),
+    ];
+    let mut polys = vec![("ACC", th.accel_m_s2)];
+    match th.gyro_rad_s {
+        Some(g) => {
+            v.push(("INS_GYR1_CALTEMP".into(), th.reference_c, false));
+            polys.push(("GYR", g));
+        }
+        None => {
+            let _ = writeln!(
+                w,
+                "# INS_TCAL1_GYR*: UNDETERMINED (the model has no gyro-bias drift); not written."
+            );
+        }
+    }
+    for (name, poly) in &polys {
+        let q: Vec<[f64; 3]> = poly.iter().map(|k| recentred(k, th.reference_c)).collect();
+        for k in 0..3 {
+            for (axis, row) in ["X", "Y", "Z"].iter().zip(&q) {
+                v.push((
+                    format!("INS_TCAL1_{name}{}_{axis}", k + 1),
+                    row[k] * ARDUPILOT_TCAL_SCALE,
+                    false,
+                ));
+            }
+        }
+    }
+    v
+}
+
 /// ArduPilot's documented range of a parameter (its `@Range` metadata in
 /// `libraries/AP_InertialSensor/AP_InertialSensor.cpp`), if any.
 fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
@@ -186,6 +341,8 @@ fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
         Some((0.8, 1.2))
     } else if name.starts_with("INS_ACCOFFS_") {
         Some((-3.5, 3.5))
+    } else if name == "INS_TCAL1_TMIN" || name == "INS_TCAL1_TMAX" {
+        Some((-70.0, 80.0))
     } else {
         None
     }
@@ -203,6 +360,7 @@ pub fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> 
             values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
         }
     }
+    values.extend(ardupilot_thermal(input, &p, &mut s));
     let mut lines = String::new();
     for (name, v, _) in &values {
         let text = f32_text(name, *v)?;
