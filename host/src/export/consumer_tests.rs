@@ -396,6 +396,90 @@ fn thermal_offsets_of_px4_and_ardupilot_follow_host_apply_over_temperature() {
     }
 }
 
+fn clip(x: f32, lo: f32, hi: f32) -> f32 {
+    x.max(lo).min(hi)
+}
+
+/// PX4's thermal offset (`calc_thermal_offsets_3D`): `x0 + x1 dT + x2 dT² + x3 dT³`, `dT` from
+/// `TREF`, the temperature clipped to `TMIN..TMAX`, in `f32`.
+fn px4_offsets(px4: &HashMap<String, f64>, prefix: &str, temp: f32) -> [f32; 3] {
+    let g = |n: &str| px4[&format!("{prefix}_{n}")] as f32;
+    let dt = clip(temp, g("TMIN"), g("TMAX")) - g("TREF");
+    let (dt2, dt3) = (dt * dt, dt * dt * dt);
+    std::array::from_fn(|i| {
+        g(&format!("X0_{i}"))
+            + g(&format!("X1_{i}")) * dt
+            + g(&format!("X2_{i}")) * dt2
+            + g(&format!("X3_{i}")) * dt3
+    })
+}
+
+/// ArduPilot's thermal correction (`TCal::correct_sensor`): `p(T − 35) − p(T_cal − 35)`,
+/// `p(x) = (c1 + (c2 + c3 x) x) x · 1e-6`, both temperatures clipped to `TMIN..TMAX`, in `f32`.
+fn ap_offsets(ap: &HashMap<String, f64>, name: &str, caltemp: &str, temp: f32) -> [f32; 3] {
+    let (lo, hi) = (ap["INS_TCAL1_TMIN"] as f32, ap["INS_TCAL1_TMAX"] as f32);
+    let c = |k: usize, a: &str| ap[&format!("INS_TCAL1_{name}{k}_{a}")] as f32;
+    let p = |x: f32, a: &str| (c(1, a) + (c(2, a) + c(3, a) * x) * x) * x * 1e-6;
+    let tc = clip(ap[caltemp] as f32, lo, hi);
+    let temp = clip(temp, lo, hi);
+    std::array::from_fn(|i| {
+        let a = ["X", "Y", "Z"][i];
+        p(temp - 35.0, a) - p(tc - 35.0, a)
+    })
+}
+
+/// The unit's raw row at rest with `up` at `temp` (the model clamped to its range, as the device
+/// is), from our forward model: outputs and the gyro's reading of a small rate.
+fn heated_row(cal: &Calibration, up: [f64; 3], temp: f64) -> RawRow {
+    let t = cal.temperature.unwrap();
+    let dt = temp.clamp(t.valid_range_c[0], t.valid_range_c[1]) - t.reference_c;
+    let poly = |k: &[f64; 3]| dt * (k[0] + dt * (k[1] + dt * k[2]));
+    let mut heated = *cal;
+    for i in 0..3 {
+        heated.statics.zero_bias_out[i] += poly(&t.zero_bias_out_per_c[i]);
+    }
+    let mut fm = ForwardModel::new(&heated).unwrap();
+    for i in 0..3 {
+        let s = 1.0 + poly(&t.scale_rel_per_c[i]);
+        fm.m_out_per_g[i] = fm.m_out_per_g[i].map(|v| v * s);
+    }
+    let omega = [0.3, -0.2, 0.1];
+    let u = fm
+        .outputs(&BodyMotion {
+            f_o: BodySpecificForce {
+                m_s2: up.map(|v| v * cal.gravity_m_s2),
+            },
+            omega: BodyRate::default(),
+            omega_dot: BodyAngularAccel::default(),
+        })
+        .raw;
+    let w_cold = gyro_reading(&cal.gyro.unwrap(), &omega);
+    RawRow {
+        u,
+        w_rad_s: std::array::from_fn(|j| w_cold[j] + poly(&t.gyro_bias_polynomials()[j])),
+        omega_rad_s: [0.0; 3],
+    }
+}
+
+/// host apply's specific force (one row at `temp`: the first row refreshes at once) and the device's
+/// corrected rate at `temp`.
+fn apply_at(cal: &Calibration, r: &RawRow, temp: f64) -> ([f64; 3], [f64; 3]) {
+    let mut a = Applier::new(cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
+    let row = crate::session::reader::Row {
+        segment: "t",
+        segment_index: 0,
+        t_s: 0.0,
+        u: r.u,
+        w_rad_s: [0.0; 3],
+        temp_c: Some(temp),
+    };
+    let f = a.row(&row).unwrap().map(f64::from);
+    let mut dev = shared::Compensator::new(cal, LeverMode::RateAndAcceleration).unwrap();
+    dev.refresh(temp as f32);
+    let rate = dev.correct_rate(&r.w_rad_s.map(|v| v as f32)).rad_s;
+    (f, rate.map(f64::from))
+}
+
 fn thermal_check(cal: Calibration) {
     let t = cal.temperature.unwrap();
     let unit = UnitFile::from_calibration(&cal, None, None);
@@ -409,97 +493,29 @@ fn thermal_check(cal: Calibration) {
     assert_eq!(px4["TC_A_ENABLE"], 1.0);
     assert_eq!(px4["TC_A0_ID"], 11.0);
     assert_eq!(ap["INS_TCAL1_ENABLE"], 1.0);
-    let clip = |x: f32, lo: f32, hi: f32| x.max(lo).min(hi);
-    // PX4: offset = x0 + x1 dT + x2 dT² + x3 dT³, dT from TREF, T clipped to TMIN..TMAX.
-    let px4_offsets = |prefix: &str, temp: f32| -> [f32; 3] {
-        let g = |n: &str| px4[&format!("{prefix}_{n}")] as f32;
-        let dt = clip(temp, g("TMIN"), g("TMAX")) - g("TREF");
-        let (dt2, dt3) = (dt * dt, dt * dt * dt);
-        std::array::from_fn(|i| {
-            g(&format!("X0_{i}"))
-                + g(&format!("X1_{i}")) * dt
-                + g(&format!("X2_{i}")) * dt2
-                + g(&format!("X3_{i}")) * dt3
-        })
-    };
-    // ArduPilot: v -= p(T − 35) − p(T_cal − 35), p(x) = (c1 + (c2 + c3 x) x) x · 1e-6.
-    let ap_offsets = |name: &str, caltemp: &str, temp: f32| -> [f32; 3] {
-        let (lo, hi) = (ap["INS_TCAL1_TMIN"] as f32, ap["INS_TCAL1_TMAX"] as f32);
-        let c = |k: usize, a: &str| ap[&format!("INS_TCAL1_{name}{k}_{a}")] as f32;
-        let p = |x: f32, a: &str| (c(1, a) + (c(2, a) + c(3, a) * x) * x) * x * 1e-6;
-        let tc = clip(ap[caltemp] as f32, lo, hi);
-        let temp = clip(temp, lo, hi);
-        std::array::from_fn(|i| {
-            let a = ["X", "Y", "Z"][i];
-            p(temp - 35.0, a) - p(tc - 35.0, a)
-        })
-    };
-    let model = ForwardModel::new(&cal).unwrap();
     let g = cal.gravity_m_s2;
-    let gyro = cal.gyro.unwrap();
     let names_px4 = names(["CAL_ACC0_#OFF", "CAL_ACC0_#SCALE", "CAL_GYRO0_#OFF"]);
     let names_ap = names(["INS_ACCOFFS_#", "INS_ACCSCAL_#", "INS_GYROFFS_#"]);
     let mut worst = [0.0f64; 4];
     for up in [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.6, 0.48, 0.64]] {
         let mut at_ref: Option<[[f64; 3]; 4]> = None;
         for temp in [25.0f64, -30.0, -20.0, 0.0, 40.0, 60.0, 75.0] {
-            // The unit's outputs at `temp` (clamped as the model is), from our forward model.
-            let dt = temp.clamp(t.valid_range_c[0], t.valid_range_c[1]) - t.reference_c;
-            let poly = |k: &[f64; 3]| dt * (k[0] + dt * (k[1] + dt * k[2]));
-            let mut heated = cal;
-            for i in 0..3 {
-                heated.statics.zero_bias_out[i] += poly(&t.zero_bias_out_per_c[i]);
-            }
-            let mut fm = ForwardModel::new(&heated).unwrap();
-            for i in 0..3 {
-                let s = 1.0 + poly(&t.scale_rel_per_c[i]);
-                fm.m_out_per_g[i] = model.m_out_per_g[i].map(|v| v * s);
-            }
-            let omega = [0.3, -0.2, 0.1];
-            let u = fm
-                .outputs(&BodyMotion {
-                    f_o: BodySpecificForce {
-                        m_s2: up.map(|v| v * g),
-                    },
-                    omega: BodyRate::default(),
-                    omega_dot: BodyAngularAccel::default(),
-                })
-                .raw;
-            let w_cold = gyro_reading(&gyro, &omega);
-            let w: [f64; 3] =
-                std::array::from_fn(|j| w_cold[j] + poly(&t.gyro_bias_polynomials()[j]));
-            // host apply: one row at `temp` (the first row refreshes at once).
-            let mut a = Applier::new(&cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
-            let row = crate::session::reader::Row {
-                segment: "t",
-                segment_index: 0,
-                t_s: 0.0,
-                u: u.map(|v| v),
-                w_rad_s: [0.0; 3],
-                temp_c: Some(temp),
-            };
-            let f_ref = a.row(&row).unwrap().map(f64::from);
-            let mut dev = shared::Compensator::new(&cal, LeverMode::RateAndAcceleration).unwrap();
-            dev.refresh(temp as f32);
-            let rate_ref = dev.correct_rate(&w.map(|v| v as f32)).rad_s.map(f64::from);
-            let raw = RawRow {
-                u,
-                w_rad_s: w,
-                omega_rad_s: [0.0; 3],
-            };
+            let raw = heated_row(&cal, up, temp);
+            let (u, w) = (raw.u, raw.w_rad_s);
+            let (f_ref, rate_ref) = apply_at(&cal, &raw, temp);
             let mut diffs = [[0.0; 3]; 4];
             for (k, (v, n, acc_off, gyr_off)) in [
                 (
                     &px4,
                     &names_px4,
-                    px4_offsets("TC_A0", temp as f32),
-                    px4_offsets("TC_G0", temp as f32),
+                    px4_offsets(&px4, "TC_A0", temp as f32),
+                    px4_offsets(&px4, "TC_G0", temp as f32),
                 ),
                 (
                     &ap,
                     &names_ap,
-                    ap_offsets("ACC", "INS_ACC1_CALTEMP", temp as f32),
-                    ap_offsets("GYR", "INS_GYR1_CALTEMP", temp as f32),
+                    ap_offsets(&ap, "ACC", "INS_ACC1_CALTEMP", temp as f32),
+                    ap_offsets(&ap, "GYR", "INS_GYR1_CALTEMP", temp as f32),
                 ),
             ]
             .into_iter()
