@@ -389,7 +389,11 @@ pub fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> 
                 if !input.options.allow_out_of_range {
                     return Err(e);
                 }
-                let _ = writeln!(s, "# WARNING: {e}");
+                let _ = writeln!(
+                    s,
+                    "# WARNING: {name} = {v} is outside ArduPilot's documented range {lo}..{hi}; written \
+                     because of --allow-out-of-range"
+                );
             }
         }
         let _ = writeln!(lines, "{name},{text}");
