@@ -187,7 +187,8 @@ fn noise_figures(
             _ => {
                 return Err(ExportError::Missing(format!(
                     "the noise analysis did not determine Kalibr's {name} (Kalibr refuses a missing or \
-                     non-positive value): run `host noise` on a longer still recording"
+                     non-positive value): run `host noise` with --calibration (the accelerometer figures \
+                     need it) on a still recording long enough to show the term"
                 )))
             }
         }
