@@ -212,6 +212,12 @@ pub enum ExportError {
          right-handed, invertible triad)"
     )]
     NoKalibrFactorisation(&'static str),
+    /// `K·A` has no inverse: the sensing directions are linearly dependent.
+    #[error(
+        "cannot export the calibration: its sensing directions are linearly dependent (K·A is \
+         singular), so no correction exists; check the installation angles"
+    )]
+    Singular,
     /// A value the target needs that only the user can give.
     #[error("{0}")]
     Missing(String),

@@ -25,9 +25,12 @@
 //! without constant whose coefficients are stored ×10⁶, `T` and `T_cal = INS_ACC1_CALTEMP` clipped to
 //! `TMIN..TMAX`, subtracted before the offsets). Both hold our zero-bias and gyro-bias polynomials
 //! exactly (ArduPilot's re-centred on 35 °C); neither holds the scale factors' temperature dependence,
-//! whose size over the valid range each file states. ArduPilot's documented ranges (`AP_InertialSensor.cpp` parameter metadata:
-//! `INS_ACCSCAL_*` 0.8..1.2, `INS_ACCOFFS_*` −3.5..3.5 m/s²) are checked: a value outside is refused
-//! unless `--allow-out-of-range`, which writes it with a `# WARNING:` line.
+//! whose size over the valid range each file states.
+//!
+//! ArduPilot's documented ranges (the `@Range` metadata of `AP_InertialSensor.cpp` and
+//! `AP_InertialSensor_tempcal.cpp`: `INS_ACCSCAL_*` 0.8..1.2, `INS_ACCOFFS_*` −3.5..3.5 m/s²,
+//! `INS_TCAL1_TMIN`/`TMAX` −70..80 °C) are checked: a value outside is refused unless
+//! `--allow-out-of-range`, which writes it with a `# WARNING:` line.
 
 use super::{as_f32, ExportError, ExportInput};
 use shared::linalg::{self, RowMajor3};
@@ -53,9 +56,7 @@ pub struct PerAxis {
 /// The per-axis form of `input` for `format` (which names the target in errors).
 pub fn per_axis(input: &ExportInput<'_>, format: &'static str) -> Result<PerAxis, ExportError> {
     let (fitted, _) = input.cal.statics.to_fitted()?;
-    let inv = linalg::inverse(&fitted.m_out_per_g).ok_or(ExportError::Params(
-        shared::params::ParamsError::DegenerateAxis { axis: 0 },
-    ))?;
+    let inv = linalg::inverse(&fitted.m_out_per_g).ok_or(ExportError::Singular)?;
     let c = input.driver_scale(format)?;
     let g = input.cal.gravity_m_s2;
     // (K·A)⁻¹ = D + E with D its diagonal; dropping E leaves E·(U − u0) = E·D⁻¹·f/g per axis.
