@@ -30,7 +30,8 @@
 //! ArduPilot's documented ranges (the `@Range` metadata of `AP_InertialSensor.cpp` and
 //! `AP_InertialSensor_tempcal.cpp`: `INS_ACCSCAL_*` 0.8..1.2, `INS_ACCOFFS_*` −3.5..3.5 m/s²,
 //! `INS_TCAL1_TMIN`/`TMAX` −70..80 °C) are checked: a value outside is refused unless
-//! `--allow-out-of-range`, which writes it with a `# WARNING:` line.
+//! `--allow-out-of-range`, which writes it with a `# WARNING:` line. PX4's parameter metadata
+//! documents no range for `CAL_ACC0_*`/`CAL_GYRO0_*`, so nothing is checked there beyond `f32`.
 
 use super::{as_f32, ExportError, ExportInput};
 use shared::linalg::{self, RowMajor3};
