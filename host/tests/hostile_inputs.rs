@@ -576,3 +576,59 @@ fn exports_mark_lever_arms_the_plan_did_not_determine() {
         "{text}"
     );
 }
+
+// 13. Exports that assumed a driver scale, wrote placeholders or files their consumer rejects.
+#[test]
+fn exports_refuse_what_their_consumer_cannot_take_and_say_what_to_give() {
+    let unit = concat!(env!("CARGO_MANIFEST_DIR"), "/../reference/paper-unit.toml");
+    let export = |args: &[&str]| {
+        let mut all = vec!["export", "--calibration", unit];
+        all.extend_from_slice(args);
+        host(&all)
+    };
+    refused(
+        export(&["--format", "ardupilot"]),
+        &["output unit is V", "--driver-scale"],
+    );
+    refused(
+        export(&["--format", "ardupilot", "--driver-scale", "1e-3"]),
+        &["INS_ACCSCAL_X", "0.8..1.2", "--allow-out-of-range"],
+    );
+    let (ok, _, stderr) = export(&[
+        "--format",
+        "ardupilot",
+        "--driver-scale",
+        "1e-3",
+        "--allow-out-of-range",
+    ]);
+    assert!(ok && stderr.contains("warning: INS_ACCSCAL_X"), "{stderr}");
+    refused(
+        export(&["--format", "px4", "--driver-scale", "24.5"]),
+        &["--device-id"],
+    );
+    refused(
+        export(&[
+            "--format",
+            "px4",
+            "--device-id",
+            "1",
+            "--driver-scale",
+            "-2",
+        ]),
+        &["--driver-scale -2 must be a positive, finite number"],
+    );
+    let e = refused(
+        export(&[
+            "--format",
+            "px4",
+            "--device-id",
+            "1",
+            "--driver-scale",
+            "1e300",
+        ]),
+        &["single-precision range"],
+    );
+    assert!(!e.contains("zero scale factor"), "{e}");
+    refused(export(&["--format", "kalibr"]), &["host noise", "--noise"]);
+    refused(export(&["--format", "c"]), &["--out DIR"]);
+}

@@ -2,8 +2,8 @@
 
 use super::CliError;
 use crate::export::kalibr::KalibrNoise;
-use crate::export::{render, ExportFormat, ExportInput};
-use crate::output_file::write_atomic;
+use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
+use crate::output_file::{write_atomic, OutputFileError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use std::path::PathBuf;
@@ -17,8 +17,8 @@ pub struct ExportArgs {
     /// The format.
     #[arg(long, value_enum, default_value_t = ExportFormat::All)]
     pub format: ExportFormat,
-    /// Where to write it (default: stdout).
-    #[arg(long, value_name = "FILE")]
+    /// Where to write it (default: stdout); for c-header a directory, where the package goes.
+    #[arg(long, value_name = "FILE|DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out file.
     #[arg(long)]
@@ -29,10 +29,28 @@ pub struct ExportArgs {
     /// Kalibr's rostopic of the IMU.
     #[arg(long, default_value = "/imu0")]
     pub rostopic: String,
-    /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: g / mean
-    /// scale factor).
-    #[arg(long, value_name = "M_S2_PER_UNIT")]
+    /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: 1 for a
+    /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
+    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true)]
     pub driver_scale: Option<f64>,
+    /// For px4: PX4's device id of the accelerometer (CAL_ACC0_ID), as the vehicle reports it.
+    #[arg(long, value_name = "ID")]
+    pub device_id: Option<u32>,
+    /// For px4: PX4's device id of the gyro (CAL_GYRO0_ID); without it no gyro offsets are written.
+    #[arg(long, value_name = "ID")]
+    pub gyro_device_id: Option<u32>,
+    /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..))]
+    pub sysid: u8,
+    /// For px4: the autopilot's MAVLink component id.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..))]
+    pub compid: u8,
+    /// Write values outside the target's documented range (with a warning) instead of refusing.
+    #[arg(long)]
+    pub allow_out_of_range: bool,
+    /// Write entries the calibration did not determine (marked UNDETERMINED) instead of refusing.
+    #[arg(long)]
+    pub allow_undetermined: bool,
 }
 
 /// Runs `host export`.
@@ -40,31 +58,33 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;
-    if let Some(c) = a.driver_scale {
-        if !(c.is_finite() && c > 0.0) {
-            return Err(CliError::Usage(format!(
-                "--driver-scale {c} must be a positive number of m/s² per output unit"
-            )));
-        }
-    }
     let noise: Option<KalibrNoise> = match &a.noise {
         Some(p) => Some(crate::noise::load_kalibr_noise(p).map_err(CliError::Noise)?),
         None => None,
     };
-    if a.format == ExportFormat::Kalibr && noise.is_none() {
-        eprintln!(
-            "warning: no --noise NOISE.json: Kalibr's noise densities and random walks are written as \
-             .nan (undetermined); run `host noise --input SESSION --out DIR` first"
-        );
-    }
     let input = ExportInput {
         unit: &unit,
         cal,
         noise: noise.as_ref(),
         rostopic: &a.rostopic,
         driver_scale_m_s2_per_out: a.driver_scale,
+        options: ExportOptions {
+            allow_out_of_range: a.allow_out_of_range,
+            allow_undetermined: a.allow_undetermined,
+            device_id: a.device_id,
+            gyro_device_id: a.gyro_device_id,
+            sysid: a.sysid,
+            compid: a.compid,
+        },
     };
+    if a.format == ExportFormat::CHeader {
+        return write_c_package(a, &input, quiet);
+    }
     let text = render(&input, a.format)?;
+    // What the writer accepted only because it was told to: said where a person sees it too.
+    for w in text.lines().filter_map(|l| l.strip_prefix("# WARNING: ")) {
+        eprintln!("warning: {w}");
+    }
     match &a.out {
         Some(p) => {
             write_atomic(p, text.as_bytes(), a.force).map_err(CliError::Written)?;
@@ -73,6 +93,39 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             }
         }
         None => crate::out!("{text}")?,
+    }
+    Ok(())
+}
+
+/// `c-header`: the self-contained C package (constants header, decoder, the device's per-sample
+/// correction) into the `--out` directory, every file atomically; nothing is written when one would
+/// replace an existing file without `--force`.
+fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Result<(), CliError> {
+    let dir = a.out.as_ref().ok_or_else(|| {
+        CliError::Usage(
+            "--format c-header writes a package of files (acal_calibration.h, the decoder and the \
+             device's per-sample correction): give --out DIR"
+                .into(),
+        )
+    })?;
+    crate::export::check_exportable(&input.cal)?;
+    let files = crate::export::c::package(input)?;
+    if !a.force {
+        if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
+            return Err(CliError::Written(OutputFileError::Exists(dir.join(name))));
+        }
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::Written(OutputFileError::Io(dir.clone(), e)))?;
+    for (name, text) in &files {
+        write_atomic(&dir.join(name), text.as_bytes(), a.force).map_err(CliError::Written)?;
+    }
+    if !quiet {
+        eprintln!(
+            "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off)",
+            files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+            dir.display()
+        );
     }
     Ok(())
 }

@@ -1,6 +1,10 @@
-//! C headers: the calibration for a C firmware (`c-header`) and for x-io Fusion (`fusion-c`).
+//! C outputs: the calibration for a C firmware (`c-header`, a package of files, [`package`]) and for
+//! x-io Fusion (`fusion-c`).
 //!
-//! `c-header` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
+//! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the device's
+//! whole per-sample correction ([`DEVICE_H`], [`DEVICE_C`]: gyro correction, the ω̇ estimator of
+//! `shared::omega_dot`, the lever-arm compensation and the temperature refresh at the firmware's pace),
+//! so that it builds alone. `acal_calibration.h` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
 //! precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
 //! `shared::Compensator`, so `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give
 //! the device's results bit for bit), with a temperature model what `acal_refresh` recomputes them
@@ -9,11 +13,13 @@
 //! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`); the decoder reads
 //! blob versions 1 and 2 and fills the optional gyro and temperature sections with presence flags.
 //!
-//! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`
-//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]); Fusion has no lever-arm terms
-//! nor temperature model. With a gyro correction it also holds the gyroscope's triple (`offset = b`,
-//! `misalignment = G⁻¹`, `sensitivity = 1`, in °/s); without one the header says so instead of writing
-//! an identity.
+//! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for Fusion's inertial model
+//! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]), named `FusionModelInertial`
+//! from Fusion 1.3 and `FusionCalibrationInertial` before (the header picks by Fusion's include guards);
+//! Fusion has no lever-arm terms nor temperature model. With a gyro correction it also holds the
+//! gyroscope's triple (`offset = b`, `misalignment = G⁻¹`, `sensitivity = 1`, in °/s), refusing entries
+//! of `G⁻¹` the plan did not determine unless allowed, then marked; without one the header says so
+//! instead of writing an identity.
 
 use super::{convert, ExportError, ExportInput};
 use shared::blob::ParameterBlob;
@@ -26,6 +32,24 @@ use std::fmt::Write as _;
 pub const DECODER_H: &str = include_str!("c/acal_blob.h");
 /// The decoder and the compensation.
 pub const DECODER_C: &str = include_str!("c/acal_blob.c");
+/// The device's whole per-sample correction (gyro, ω̇ estimate, lever arms, temperature refresh).
+pub const DEVICE_H: &str = include_str!("c/acal_device.h");
+/// Its implementation.
+pub const DEVICE_C: &str = include_str!("c/acal_device.c");
+/// The name of the constants header in the package.
+pub const HEADER_NAME: &str = "acal_calibration.h";
+
+/// The files of the C package `export --format c-header --out DIR` writes: the constants header, the
+/// decoder and the device's per-sample correction, self-contained (the header includes only them).
+pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
+    Ok(vec![
+        (HEADER_NAME, render_header(input)?),
+        ("acal_blob.h", DECODER_H.to_string()),
+        ("acal_blob.c", DECODER_C.to_string()),
+        ("acal_device.h", DEVICE_H.to_string()),
+        ("acal_device.c", DEVICE_C.to_string()),
+    ])
+}
 
 /// An `f32` as a C `float` literal that converts back to the same bits (shortest round-trip form).
 fn c_f32(v: f32) -> String {
@@ -234,8 +258,10 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = write!(
         w,
         "/*\n * Accelerometer calibration of unit {unit_id} (host export --format c-header).\n\
-         * Decode ACAL_BLOB with acal_decode(); correct the gyro with acal_correct_rate() and\n\
-         * compensate with acal_compensate() from acal_blob.h / acal_blob.c (host/src/export/c/).\n\
+         * Decode ACAL_BLOB with acal_decode() (acal_blob.h); run the device's whole per-sample correction\n\
+         * (gyro, angular acceleration, lever arms, temperature refresh) with acal_device.h:\n\
+         *   acal_device_init(&dev, &ACAL_COMPENSATOR, ACAL_THERMAL_OR_NULL, sample_rate_hz);\n\
+         * Build with the package's acal_blob.c and acal_device.c, -ffp-contract=off for the device's bits.\n\
          * The blob's creation time is 0 (unknown).\n\
          * ACAL_COMPENSATOR holds the device's precomputed f32 constants (all lever-arm terms on).\n"
     );
@@ -245,7 +271,7 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     }
     let _ = writeln!(
         w,
-        " */\n#ifndef ACAL_CALIBRATION_H\n#define ACAL_CALIBRATION_H\n\n#include <stdint.h>\n#include \"acal_blob.h\"\n"
+        " */\n#ifndef ACAL_CALIBRATION_H\n#define ACAL_CALIBRATION_H\n\n#include <stdint.h>\n#include \"acal_device.h\"\n"
     );
     let _ = writeln!(
         w,
@@ -264,6 +290,15 @@ pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
         sections_initialiser(cal),
     );
     w.push_str(&compensator_initialisers(&compensator));
+    let thermal = if compensator.thermal_constants().is_some() {
+        "(&ACAL_THERMAL)"
+    } else {
+        "((const struct acal_thermal *)0)"
+    };
+    let _ = writeln!(
+        w,
+        "/* What acal_device_init() takes for the temperature model. */\n#define ACAL_THERMAL_OR_NULL {thermal}\n"
+    );
     let _ = writeln!(
         w,
         "#define ACAL_BLOB_LEN {n}u\nstatic const uint8_t ACAL_BLOB[ACAL_BLOB_LEN] = {{"
@@ -291,14 +326,84 @@ fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<(Vec<f32>, [f32; 3]), Expor
     Ok((m, gyro.bias_rad_s.map(|b| b.to_degrees() as f32)))
 }
 
+/// Which entries of `G⁻¹` the calibration did not determine: the first-order propagation of the
+/// calibration file's 1σ of `G` (`δ(G⁻¹) = −G⁻¹·δG·G⁻¹`, absolute values summed, so no cancellation
+/// hides one) above [`crate::estimate::gyro::UNDETERMINED_SIGMA`]. With `G ≈ I` an undetermined column
+/// of `G` (a spin axis the plan left out) is the same column of `G⁻¹`.
+pub fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 3] {
+    let (Some(gyro), Some(sigma)) = (
+        input.cal.gyro.as_ref(),
+        input.unit.gyro.as_ref().and_then(|g| g.matrix_1sigma),
+    ) else {
+        return [[false; 3]; 3];
+    };
+    let Ok(inv) = gyro.checked_inverse() else {
+        return [[true; 3]; 3];
+    };
+    std::array::from_fn(|k| {
+        std::array::from_fn(|l| {
+            let s: f64 = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| (inv[k][i] * sigma[i][j] * inv[j][l]).abs())
+                .sum();
+            s.is_nan() || s > crate::estimate::gyro::UNDETERMINED_SIGMA
+        })
+    })
+}
+
+/// A row-major `FusionMatrix` initialiser list with undetermined entries marked in a comment.
+fn marked_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
+    let items: Vec<String> = m
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let mark = if undetermined[k / 3][k % 3] {
+                " /* UNDETERMINED */"
+            } else {
+                ""
+            };
+            format!("{}{mark}", c_f32(*v))
+        })
+        .collect();
+    format!("{{{}}}", items.join(", "))
+}
+
+/// Selects Fusion's inertial model by the header it includes: `FusionCalibrationInertial` in
+/// `FusionCalibration.h` before Fusion 1.3, `FusionModelInertial` in `FusionModel.h` from 1.3
+/// (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`, `Fusion/FusionModel.h`; same arguments,
+/// same formula).
+const FUSION_VERSION_SELECT: &str =
+    "/* Fusion >= 1.3 names the model FusionModelInertial (FusionModel.h); before 1.3 it is
+ * FusionCalibrationInertial (FusionCalibration.h), same arguments and formula. */
+#if defined(FUSION_MODEL_H)
+#define ACAL_FUSION_INERTIAL FusionModelInertial
+#elif defined(FUSION_CALIBRATION_H)
+#define ACAL_FUSION_INERTIAL FusionCalibrationInertial
+#else
+#error \"Fusion.h declares neither FusionModelInertial nor FusionCalibrationInertial\"
+#endif
+";
+
 /// The `fusion-c` text.
 pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let f = convert(&input.cal)?.fusion;
     let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
     let gyroscope = input.cal.gyro.as_ref().map(fusion_gyroscope).transpose()?;
+    let undetermined = undetermined_gyro_inverse(input);
+    let names: Vec<String> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| undetermined[i][j])
+        .map(|(i, j)| format!("gyroscopeMisalignment[{i}][{j}]"))
+        .collect();
+    if gyroscope.is_some() && !names.is_empty() && !input.options.allow_undetermined {
+        return Err(ExportError::Undetermined {
+            format: "fusion-c",
+            names: names.join(", "),
+        });
+    }
     let gyro_note = if gyroscope.is_some() {
-        " *   gyroscope = FusionModelInertial(uncalibrated, gyroscopeMisalignment,\n\
-         *                                   gyroscopeSensitivity, gyroscopeOffset);\n\
+        " *   gyroscope = ACAL_FUSION_INERTIAL(uncalibrated, gyroscopeMisalignment,\n\
+         *                                    gyroscopeSensitivity, gyroscopeOffset);\n\
          * uncalibrated and result in deg/s (Fusion's unit; a gyro read in rad/s: multiply by 180/pi\n\
          * first), result in body axes. From w = G omega + b (docs/model.md 8): offset = b,\n\
          * misalignment = G^-1 (the exact inverse, scale factors included), sensitivity = 1.\n"
@@ -318,15 +423,22 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let _ = write!(
         w,
         "/*\n * x-io Fusion calibration (host export --format fusion-c), for\n\
-         *   accelerometer = FusionModelInertial(uncalibrated, accelerometerMisalignment,\n\
-         *                                       accelerometerSensitivity, accelerometerOffset);\n\
+         *   accelerometer = ACAL_FUSION_INERTIAL(uncalibrated, accelerometerMisalignment,\n\
+         *                                        accelerometerSensitivity, accelerometerOffset);\n\
          * uncalibrated in the unit's output unit ({}), result in g, body axes:\n\
          * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n\
          * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n\
          {gyro_note}{temperature_note} */\n\
-         #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n",
+         #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n{FUSION_VERSION_SELECT}\n",
         input.cal.statics.output_unit.symbol()
     );
+    if gyroscope.is_some() && !names.is_empty() {
+        let _ = writeln!(
+            w,
+            "/* UNDETERMINED (not determined by the calibration plan; the value is not a measurement):\n *   {} */",
+            names.join(", ")
+        );
+    }
     let _ = writeln!(
         w,
         "static const FusionMatrix accelerometerMisalignment = {{ .array = {} }};",
@@ -348,7 +460,7 @@ pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
             "static const FusionMatrix gyroscopeMisalignment = {{ .array = {} }};\n\
              static const FusionVector gyroscopeSensitivity = {{ .array = {} }};\n\
              static const FusionVector gyroscopeOffset = {{ .array = {} }};",
-            list(&misalignment, c_f32),
+            marked_matrix(&misalignment, &undetermined),
             list(&[1.0f32; 3], c_f32),
             list(&offset, c_f32)
         );

@@ -1,25 +1,36 @@
-//! Kalibr's IMU YAML (`imu.yaml` of `kalibr_calibrate_imu_camera --imu`), with our accelerometer
-//! intrinsics in Kalibr's own scale-misalignment-size-effect parameterisation.
+//! Kalibr's IMU configuration (`imu.yaml` of `kalibr_calibrate_imu_camera --imu`), and our intrinsics
+//! in the form of Kalibr's own calibrated-IMU output, as a separate document for comparison.
 //!
-//! Kalibr reads `rostopic`, `update_rate` and the four noise figures as its input (continuous-time
-//! densities: `accelerometer_noise_density` m/s²/√Hz, `accelerometer_random_walk` m/s³/√Hz,
-//! `gyroscope_noise_density` rad/s/√Hz, `gyroscope_random_walk` rad/s²/√Hz — the Allan deviation's
-//! white-noise line at τ = 1 s and random-walk line at τ = 3 s, from `host noise`). The intrinsics are
-//! written the way Kalibr writes its own results (`model`, `T_i_b`, `accelerometers: {M, rx_i, ry_i,
-//! rz_i}`), so they can be compared with a Kalibr run or used as its initial values.
+//! What Kalibr reads from `imu.yaml` (`ethz-asl/kalibr`
+//! `aslam_offline_calibration/kalibr/python/kalibr_common/ConfigReader.py`, `ImuParameters`): `rostopic`,
+//! `update_rate` and the four noise figures, each checked to be positive — continuous-time densities
+//! `accelerometer_noise_density` m/s²/√Hz, `accelerometer_random_walk` m/s³/√Hz,
+//! `gyroscope_noise_density` rad/s/√Hz, `gyroscope_random_walk` rad/s²/√Hz (the Allan deviation's
+//! white-noise line at τ = 1 s and random-walk line at τ = 3 s, from `host noise`). Nothing else: the
+//! intrinsics model is chosen on Kalibr's command line (`--imu-models`) and estimated from identity
+//! (`kalibr/python/kalibr_imu_camera_calibration/IccSensors.py`, `addDesignVariables`), so `imu.yaml`
+//! holds no `model` or `M`, and there is never a NaN or placeholder: without every noise figure the
+//! export is refused.
 //!
-//! Conventions assumed (stated in the file too):
+//! `kalibr-intrinsics` writes what a `--imu-models scale-misalignment-size-effect` run writes in its
+//! results (`IccSensors.py`, `ScaledMisalignedImu.ImuParameters.setIntrisicsMatrices` and
+//! `ScaledMisalignedSizeEffectImu`): `model`, `T_i_b`, `accelerometers: {M, rx_i, ry_i, rz_i}`,
+//! `gyroscopes: {M, C_gyro_i}`, for comparison with such a run. Conventions (stated in the file too):
 //! - the IMU message carries `a_m = c·U` (m/s²), `U` the raw outputs and `c` the driver's scale
-//!   ([`super::ExportInput::driver_scale`]);
+//!   ([`super::ExportInput::driver_scale`]), and the gyro `w` in rad/s;
 //! - Kalibr's accelerometer model is `a_m = M·C_i_b·(f_b + lever terms) + b` with `M` lower-triangular.
 //!   Ours is `U = (K·A/g)·f + u0` (`docs/model.md` §2), so `M·C_i_b = c·K·A/g`: an RQ factorisation
 //!   (`M` lower-triangular with a positive diagonal, `C_i_b` a rotation) and `b = c·u0`;
+//! - Kalibr's gyro model is `w = M_g·C_gyro_i·C_i_b·ω_b + A·(…) + b_g`; ours `w = G·ω + b` (§8), so
+//!   `M_g·C_gyro_i = G·C_i_bᵀ` (RQ again); we have no g-sensitivity, so `A` is not written;
 //! - Kalibr's body frame is our body frame with its origin at our reference point; Kalibr's IMU frame
 //!   is rotated by `C_i_b` and, as Kalibr fixes `rx_i = 0`, placed at the x accelerometer's sensing
 //!   point: `r_b_i = r_x`, `ry_i = C_i_b·(r_y − r_x)`, `rz_i = C_i_b·(r_z − r_x)`;
 //! - Kalibr applies `M` to the axis-selected lever terms, where ours applies each sensing axis to its own
 //!   point: the two agree exactly at rest and to second order (misalignment × lever term, ~10 µg at
 //!   200 °/s with mrad misalignments and cm lever arms) in rotation.
+//! - the biases are not part of Kalibr's results (it estimates bias splines); ours are written under
+//!   `host_export_biases` for reference.
 
 use super::{ExportError, ExportInput};
 use serde::{Deserialize, Serialize};
@@ -54,6 +65,8 @@ pub struct KalibrIntrinsics {
     pub r_i_m: RowMajor3,
     /// Accelerometer bias as the driver reports it, m/s².
     pub bias_m_s2: [f64; 3],
+    /// The gyro's `(M_g, C_gyro_i, b_g)` when the calibration has a gyro correction.
+    pub gyro: Option<(RowMajor3, RowMajor3, [f64; 3])>,
 }
 
 /// RQ factorisation of `n = L·R`: `L` lower-triangular with a positive diagonal, `R` a rotation.
@@ -81,12 +94,30 @@ pub fn rq(n: &RowMajor3) -> Option<(RowMajor3, RowMajor3)> {
 /// The intrinsics of `input` in Kalibr's parameterisation.
 pub fn intrinsics(input: &ExportInput<'_>) -> Result<KalibrIntrinsics, ExportError> {
     let (fitted, _) = input.cal.statics.to_fitted()?;
-    let c = input.driver_scale();
+    let c = input.driver_scale("Kalibr")?;
     let g = input.cal.gravity_m_s2;
     let n = fitted.m_out_per_g.map(|row| row.map(|v| v * c / g));
-    let (m, c_i_b) = rq(&n).ok_or(ExportError::Params(
-        shared::params::ParamsError::DegenerateAxis { axis: 0 },
-    ))?;
+    if let Some(v) = n
+        .iter()
+        .flatten()
+        .find(|v| !(v.is_finite() && v.abs() < 1e150))
+    {
+        return Err(ExportError::NotRepresentable {
+            name: "Kalibr's c*K*A/g".into(),
+            value: *v,
+        });
+    }
+    let (m, c_i_b) = rq(&n).ok_or(ExportError::NoKalibrFactorisation("c*K*A/g"))?;
+    let gyro = match &input.cal.gyro {
+        Some(gy) => {
+            let c_b_i = linalg::from_na(&linalg::to_na(&c_i_b).transpose());
+            let n_g = linalg::from_na(&(linalg::to_na(&gy.matrix) * linalg::to_na(&c_b_i)));
+            let (m_g, c_gyro_i) =
+                rq(&n_g).ok_or(ExportError::NoKalibrFactorisation("G*C_i_b^T"))?;
+            Some((m_g, c_gyro_i, gy.bias_rad_s))
+        }
+        None => None,
+    };
     let r = input.cal.lever_arms.r_m;
     let rel = |k: usize| -> [f64; 3] {
         linalg::mat_vec(&c_i_b, &std::array::from_fn(|j| r[k][j] - r[0][j]))
@@ -97,6 +128,7 @@ pub fn intrinsics(input: &ExportInput<'_>) -> Result<KalibrIntrinsics, ExportErr
         r_b_i_m: r[0],
         r_i_m: [[0.0; 3], rel(1), rel(2)],
         bias_m_s2: fitted.zero_bias_out.map(|v| v * c),
+        gyro,
     })
 }
 
@@ -113,66 +145,93 @@ fn row(v: &[f64]) -> String {
     format!("[{}]", items.join(", "))
 }
 
-/// The YAML text.
+/// The noise figures, all of them, or why not.
+fn noise_figures(
+    input: &ExportInput<'_>,
+) -> Result<[(&'static str, f64, &'static str); 5], ExportError> {
+    let n = input.noise.ok_or_else(|| {
+        ExportError::Missing(
+            "Kalibr needs the IMU's noise densities and random walks, which only a noise analysis gives: \
+             run `host noise --input SESSION --out DIR` on a recording with a long still segment and give \
+             --noise DIR/noise.json"
+                .into(),
+        )
+    })?;
+    let fields = [
+        ("update_rate", n.update_rate_hz, "Hz"),
+        (
+            "accelerometer_noise_density",
+            n.accelerometer_noise_density,
+            "m/s^2/sqrt(Hz)",
+        ),
+        (
+            "accelerometer_random_walk",
+            n.accelerometer_random_walk,
+            "m/s^3/sqrt(Hz)",
+        ),
+        (
+            "gyroscope_noise_density",
+            n.gyroscope_noise_density,
+            "rad/s/sqrt(Hz)",
+        ),
+        (
+            "gyroscope_random_walk",
+            n.gyroscope_random_walk,
+            "rad/s^2/sqrt(Hz)",
+        ),
+    ];
+    let mut out = [("", 0.0, ""); 5];
+    for (k, (name, v, unit)) in fields.into_iter().enumerate() {
+        match v {
+            Some(v) if v.is_finite() && v > 0.0 => out[k] = (name, v, unit),
+            _ => {
+                return Err(ExportError::Missing(format!(
+                    "the noise analysis did not determine Kalibr's {name} (Kalibr refuses a missing or \
+                     non-positive value): run `host noise` with --calibration (the accelerometer figures \
+                     need it) on a still recording long enough to show the term"
+                )))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The `imu.yaml` text: only what Kalibr reads.
 pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
-    let k = intrinsics(input)?;
-    let noise = input.noise.cloned().unwrap_or_default();
+    let fields = noise_figures(input)?;
     let mut s = String::new();
     let w = &mut s;
     // Writing to a String cannot fail.
     let _ = writeln!(
         w,
-        "# Kalibr IMU configuration (host export --format kalibr)."
+        "# Kalibr IMU configuration (host export --format kalibr). Kalibr reads exactly these keys\n\
+         # (kalibr_common/ConfigReader.py, ImuParameters). Its intrinsics model comes from --imu-models\n\
+         # and is estimated from identity; ours, in the form of Kalibr's results, is the separate\n\
+         # document of host export --format kalibr-intrinsics, for comparison."
     );
+    let _ = writeln!(w, "rostopic: {}", input.rostopic);
+    for (name, v, unit) in fields {
+        let _ = writeln!(w, "{name}: {}  # {unit}", num(v));
+    }
+    Ok(s)
+}
+
+/// Our intrinsics as Kalibr's calibrated-IMU results hold them (`scale-misalignment-size-effect`).
+pub fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    let k = intrinsics(input)?;
+    let mut s = String::new();
+    let w = &mut s;
     let _ = writeln!(
         w,
-        "# Assumes the IMU topic carries a_m = c*U m/s^2 with c = {} m/s^2 per output unit;",
-        num(input.driver_scale())
-    );
-    let _ = writeln!(
-        w,
-        "# Kalibr's model a_m = M*C_i_b*f_b + b (M lower-triangular) with M*C_i_b = c*K*A/g (RQ),\n\
-         # body origin = the calibration's reference point, IMU origin = the x sensing point (rx_i = 0).\n\
-         # A value .nan is UNDETERMINED: Kalibr will refuse it; give --noise NOISE.json from host noise."
+        "# Our calibration in the form of Kalibr's results for --imu-models scale-misalignment-size-effect\n\
+         # (host export --format kalibr-intrinsics; compare with a Kalibr run's results, Kalibr does not\n\
+         # read this). Assumes the IMU topic carries a_m = c*U m/s^2 with c = {} m/s^2 per output unit\n\
+         # and the gyro in rad/s. Kalibr's model a_m = M*C_i_b*f_b + b (M lower-triangular) with\n\
+         # M*C_i_b = c*K*A/g (RQ); gyro w = M*C_gyro_i*C_i_b*omega + b with M*C_gyro_i = G*C_i_b^T;\n\
+         # body origin = the calibration's reference point, IMU origin = the x sensing point (rx_i = 0).",
+        num(input.driver_scale("Kalibr")?)
     );
     w.push_str(&super::temperature_not_held(&input.cal, "Kalibr"));
-    let _ = writeln!(w, "rostopic: {}", input.rostopic);
-    let fields = [
-        ("update_rate", noise.update_rate_hz, "Hz"),
-        (
-            "accelerometer_noise_density",
-            noise.accelerometer_noise_density,
-            "m/s^2/sqrt(Hz)",
-        ),
-        (
-            "accelerometer_random_walk",
-            noise.accelerometer_random_walk,
-            "m/s^3/sqrt(Hz)",
-        ),
-        (
-            "gyroscope_noise_density",
-            noise.gyroscope_noise_density,
-            "rad/s/sqrt(Hz)",
-        ),
-        (
-            "gyroscope_random_walk",
-            noise.gyroscope_random_walk,
-            "rad/s^2/sqrt(Hz)",
-        ),
-    ];
-    for (name, v, unit) in fields {
-        match v {
-            Some(v) if v.is_finite() => {
-                let _ = writeln!(w, "{name}: {}  # {unit}", num(v));
-            }
-            _ => {
-                let _ = writeln!(
-                    w,
-                    "{name}: .nan  # {unit}; UNDETERMINED (no noise analysis given, or its still segment was too short to show this term)"
-                );
-            }
-        }
-    }
     let _ = writeln!(w, "model: scale-misalignment-size-effect");
     let t = linalg::mat_vec(&k.c_i_b, &k.r_b_i_m).map(|v| -v);
     let _ = writeln!(w, "T_i_b:");
@@ -189,11 +248,6 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
     for r in &k.m {
         let _ = writeln!(w, "    - {}", row(r));
     }
-    let _ = writeln!(
-        w,
-        "  bias: {}  # m/s^2, as the driver reports it",
-        row(&k.bias_m_s2)
-    );
     for (name, r) in ["rx_i", "ry_i", "rz_i"].iter().zip(&k.r_i_m) {
         let _ = writeln!(w, "  {name}: {}  # m", row(r));
     }
@@ -211,119 +265,133 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
             );
         }
     }
+    match &k.gyro {
+        Some((m_g, c_gyro_i, _)) => {
+            let _ = writeln!(
+                w,
+                "gyroscopes:  # no A (g-sensitivity): our gyro model has none"
+            );
+            let _ = writeln!(w, "  M:");
+            for r in m_g {
+                let _ = writeln!(w, "    - {}", row(r));
+            }
+            let _ = writeln!(w, "  C_gyro_i:");
+            for r in c_gyro_i {
+                let _ = writeln!(w, "    - {}", row(r));
+            }
+        }
+        None => {
+            let _ = writeln!(
+                w,
+                "# gyroscopes: UNDETERMINED (the calibration has no gyro correction)"
+            );
+        }
+    }
+    let _ = writeln!(
+        w,
+        "host_export_biases:  # not in Kalibr's results (it estimates bias splines); for reference"
+    );
+    let _ = writeln!(
+        w,
+        "  accelerometer: {}  # m/s^2, as the driver reports it",
+        row(&k.bias_m_s2)
+    );
+    if let Some((_, _, b)) = &k.gyro {
+        let _ = writeln!(w, "  gyroscope: {}  # rad/s", row(b));
+    }
     Ok(s)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::consumer_tests::handheld_unit;
     use crate::unit_file::UnitFile;
-    use shared::forward::{BodyMotion, ForwardModel};
-    use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 
-    /// What a YAML parser sees (Kalibr's keys; `.nan` is YAML's NaN).
+    /// What Kalibr's ConfigReader.py reads: these keys, each positive (`checkUpdateRate`,
+    /// `checkAccelerometerStatistics`, `checkGyroStatistics`).
     #[derive(Deserialize)]
-    struct Parsed {
+    #[serde(deny_unknown_fields)]
+    struct ImuYaml {
         rostopic: String,
         update_rate: f64,
         accelerometer_noise_density: f64,
         accelerometer_random_walk: f64,
         gyroscope_noise_density: f64,
         gyroscope_random_walk: f64,
-        model: String,
-        #[serde(rename = "T_i_b")]
-        t_i_b: Vec<Vec<f64>>,
-        accelerometers: Accel,
     }
-    #[derive(Deserialize)]
-    struct Accel {
-        #[serde(rename = "M")]
-        m: Vec<Vec<f64>>,
-        bias: Vec<f64>,
-        rx_i: Vec<f64>,
-        ry_i: Vec<f64>,
-        rz_i: Vec<f64>,
+
+    fn full_noise() -> KalibrNoise {
+        KalibrNoise {
+            update_rate_hz: Some(1000.0),
+            accelerometer_noise_density: Some(3.1e-4),
+            accelerometer_random_walk: Some(4.0e-5),
+            gyroscope_noise_density: Some(2.5e-5),
+            gyroscope_random_walk: Some(1.0e-6),
+        }
     }
 
     #[test]
-    fn yaml_parses_back_and_its_model_reproduces_the_outputs() {
-        let unit = UnitFile::paper_unit();
-        let cal = unit.to_calibration().unwrap();
-        let noise = KalibrNoise {
-            update_rate_hz: Some(1000.0),
-            accelerometer_noise_density: Some(3.1e-4),
-            accelerometer_random_walk: None,
-            gyroscope_noise_density: Some(2.5e-5),
-            gyroscope_random_walk: Some(1.0e-6),
-        };
+    fn imu_yaml_holds_exactly_what_kalibr_reads_and_every_value_is_positive() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let noise = full_noise();
         let input = ExportInput {
             noise: Some(&noise),
             ..ExportInput::for_tests(&unit, cal)
         };
         let text = render(&input).unwrap();
-        let p: Parsed = serde_yaml::from_str(&text).unwrap();
+        let p: ImuYaml = serde_yaml::from_str(&text).unwrap();
         assert_eq!(p.rostopic, "/imu0");
-        assert_eq!(p.model, "scale-misalignment-size-effect");
         assert_eq!(p.update_rate, 1000.0);
         assert_eq!(p.accelerometer_noise_density, 3.1e-4);
-        assert!(
-            p.accelerometer_random_walk.is_nan(),
-            "undetermined must be marked"
-        );
-        assert!(text.contains("accelerometer_random_walk: .nan  # m/s^3/sqrt(Hz); UNDETERMINED"));
+        assert_eq!(p.accelerometer_random_walk, 4.0e-5);
         assert_eq!(p.gyroscope_noise_density, 2.5e-5);
         assert_eq!(p.gyroscope_random_walk, 1.0e-6);
-        // M lower-triangular with a positive diagonal, C_i_b a rotation.
-        let m: RowMajor3 =
-            std::array::from_fn(|i| std::array::from_fn(|j| p.accelerometers.m[i][j]));
-        let c: RowMajor3 = std::array::from_fn(|i| std::array::from_fn(|j| p.t_i_b[i][j]));
-        assert!(m[0][1] == 0.0 && m[0][2] == 0.0 && m[1][2] == 0.0);
-        assert!((0..3).all(|i| m[i][i] > 0.0));
-        let ctc = linalg::to_na(&c).transpose() * linalg::to_na(&c);
-        assert!((ctc - nalgebra::Matrix3::identity()).norm() < 1e-12);
-        // Kalibr's model, read from the file, gives the raw outputs of our forward model (at rest:
-        // the lever terms are where the two models differ, see the module documentation).
-        let model = ForwardModel::new(&cal).unwrap();
-        let cs = input.driver_scale();
-        let t = [p.t_i_b[0][3], p.t_i_b[1][3], p.t_i_b[2][3]];
-        let r_b_i =
-            linalg::mat_vec(&linalg::from_na(&linalg::to_na(&c).transpose()), &t).map(|v| -v);
-        for k in 0..3 {
-            assert!((r_b_i[k] - cal.lever_arms.r_m[0][k]).abs() < 1e-12);
-        }
-        assert_eq!(p.accelerometers.rx_i, vec![0.0; 3]);
-        let ry_b = linalg::mat_vec(
-            &linalg::from_na(&linalg::to_na(&c).transpose()),
-            &[
-                p.accelerometers.ry_i[0],
-                p.accelerometers.ry_i[1],
-                p.accelerometers.ry_i[2],
-            ],
+        assert!(
+            !text.to_lowercase().contains("nan") && !text.contains("initial"),
+            "{text}"
         );
-        for k in 0..3 {
-            assert!((ry_b[k] + r_b_i[k] - cal.lever_arms.r_m[1][k]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn kalibr_without_every_noise_figure_is_refused_with_how_to_get_it() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let e = render(&ExportInput::for_tests(&unit, cal)).unwrap_err();
+        assert!(
+            e.to_string().contains("host noise") && e.to_string().contains("--noise"),
+            "{e}"
+        );
+        let noise = KalibrNoise {
+            accelerometer_random_walk: None,
+            ..full_noise()
+        };
+        let input = ExportInput {
+            noise: Some(&noise),
+            ..ExportInput::for_tests(&unit, cal)
+        };
+        let e = render(&input).unwrap_err();
+        assert!(e.to_string().contains("accelerometer_random_walk"), "{e}");
+    }
+
+    #[test]
+    fn intrinsics_factor_into_kalibrs_triangular_and_rotation_form() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let k = intrinsics(&ExportInput::for_tests(&unit, cal)).unwrap();
+        let (m_g, c_gyro_i, _) = k.gyro.unwrap();
+        for m in [k.m, m_g] {
+            assert!(m[0][1] == 0.0 && m[0][2] == 0.0 && m[1][2] == 0.0, "{m:?}");
+            assert!((0..3).all(|i| m[i][i] > 0.0));
         }
-        assert_eq!(p.accelerometers.rz_i.len(), 3);
-        for x in 0..20 {
-            let x = f64::from(x);
-            let f = [9.0 * (0.3 * x).sin(), -4.0 + 0.4 * x, 9.8 * (0.2 * x).cos()];
-            let u = model
-                .outputs(&BodyMotion {
-                    f_o: BodySpecificForce { m_s2: f },
-                    omega: BodyRate::default(),
-                    omega_dot: BodyAngularAccel::default(),
-                })
-                .raw;
-            let a_m = linalg::mat_vec(&m, &linalg::mat_vec(&c, &f));
-            for i in 0..3 {
-                let want = cs * u[i];
-                let got = a_m[i] + p.accelerometers.bias[i];
-                assert!(
-                    (got - want).abs() < 1e-9 * want.abs().max(1.0),
-                    "{i}: {got} vs {want}"
-                );
-            }
+        for r in [k.c_i_b, c_gyro_i] {
+            let rtr = linalg::to_na(&r).transpose() * linalg::to_na(&r);
+            assert!((rtr - nalgebra::Matrix3::identity()).norm() < 1e-12);
         }
+        // M_g·C_gyro_i·C_i_b = G.
+        let g = linalg::to_na(&m_g) * linalg::to_na(&c_gyro_i) * linalg::to_na(&k.c_i_b);
+        assert!((g - linalg::to_na(&cal.gyro.unwrap().matrix)).norm() < 1e-12);
     }
 
     #[test]

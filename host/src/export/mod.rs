@@ -1,12 +1,15 @@
 //! Our calibration in the formats other tools read (`host export --format F`), and the conversions
 //! between our model and each tool's convention.
 //!
-//! Formats: [`ExportFormat`], one module each: [`kalibr`] (YAML), [`c`] (C headers, with the portable
-//! C blob decoder in `c/`), [`json`], [`params`] (PX4 and ArduPilot), [`toml_forms`] (the conversions
-//! below as TOML). Each writer states the conventions it assumes in the file it writes, and
-//! marks what the target cannot hold or what the calibration did not determine (never a silent zero).
-//! Each is checked by its own consumer in the tests: gcc for the C outputs (run against the Rust
-//! compensator), a YAML parser for Kalibr's file, a JSON parser for the JSON document.
+//! Formats: [`ExportFormat`], one module each: [`kalibr`] (YAML), [`c`] (the C package, with the
+//! portable blob decoder and the device's per-sample correction in `c/`, and Fusion's header),
+//! [`json`], [`params`] (PX4 and ArduPilot), [`toml_forms`] (the conversions below as TOML). Each
+//! writer states the conventions it assumes in the file it writes, marks what the target cannot hold,
+//! and refuses (unless told) what the calibration did not determine or the target's documented range
+//! excludes (never a silent zero or a NaN). The driver scale of the formats that read m/s² follows one
+//! rule ([`ExportInput::driver_scale`]). `consumer_tests` reads each file the way its consumer does
+//! and checks the consumer's own correction, written from its source, against `host apply`; the C
+//! outputs are compiled and run against the Rust device code.
 //!
 //! The conversions (each with its own `compensate`, written in that tool's convention; a test checks
 //! that every form turns the same samples into the same specific force as `shared::Compensator`):
@@ -22,6 +25,8 @@
 //!   ([`kalibr`] does that factorisation).
 
 pub mod c;
+#[cfg(test)]
+mod consumer_tests;
 pub mod json;
 pub mod kalibr;
 pub mod params;
@@ -31,7 +36,7 @@ use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use shared::params::ParamsError;
-use shared::Calibration;
+use shared::{Calibration, OutputUnit};
 
 /// The plain `K_A`, `∇_b` of the paper, plus the lever arms.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -86,19 +91,24 @@ pub struct Conversions {
 /// The formats `host export` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ExportFormat {
-    /// Kalibr's IMU YAML (imu.yaml): topic, rate, noise densities and random walks, plus the
-    /// accelerometer intrinsics in Kalibr's scale-misalignment-size-effect parameterisation.
+    /// Kalibr's IMU YAML (imu.yaml): topic, rate, noise densities and random walks (needs --noise).
     Kalibr,
+    /// Our accelerometer and gyro intrinsics in the form of Kalibr's scale-misalignment-size-effect
+    /// results, for comparison with a Kalibr run.
+    KalibrIntrinsics,
     /// A C header with x-io Fusion `FusionMatrix`/`FusionVector` initialisers for `FusionModelInertial`.
     FusionC,
-    /// A C header: the calibration as a plain struct initialiser, the device's precomputed
-    /// compensator constants, and the blob as a byte array (decode it with export/c/acal_blob.c).
+    /// A C package (--out DIR): acal_calibration.h (the calibration as a struct initialiser, the
+    /// device's precomputed constants, the blob as bytes), the blob decoder acal_blob.{h,c}, and the
+    /// device's whole per-sample correction acal_device.{h,c}.
+    #[value(alias = "c")]
     CHeader,
     /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
     Json,
-    /// A PX4 parameter file (QGroundControl format): CAL_ACC0_{X,Y,Z}{OFF,SCALE}.
+    /// A PX4 parameter file (QGroundControl format): CAL_ACC0_ID, CAL_ACC0_{X,Y,Z}{OFF,SCALE} and,
+    /// with --gyro-device-id, CAL_GYRO0_ID and CAL_GYRO0_{X,Y,Z}OFF.
     Px4,
-    /// An ArduPilot parameter file: INS_ACCOFFS_{X,Y,Z}, INS_ACCSCAL_{X,Y,Z}.
+    /// An ArduPilot parameter file: INS_ACCOFFS_{X,Y,Z}, INS_ACCSCAL_{X,Y,Z}, INS_GYROFFS_{X,Y,Z}.
     Ardupilot,
     /// The paper's K_A, ∇_b and lever arms, as TOML.
     Plain,
@@ -109,33 +119,109 @@ pub enum ExportFormat {
 }
 
 /// Why a calibration cannot be exported.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// The parameters do not convert (degenerate axis, singular matrix…).
+    #[error("cannot export the calibration: {0}")]
     Params(ParamsError),
     /// The compensator refuses the parameters.
+    #[error("cannot export the calibration: {0}")]
     Compensator(shared::compensator::CompensatorError),
     /// The blob cannot be encoded.
+    #[error("cannot export the calibration's blob: {0}")]
     Blob(shared::blob::BlobError),
     /// The calibration file has no valid unit id, which the blob needs.
+    #[error("cannot export the calibration's blob: {0}")]
     UnitId(String),
     /// Serialising failed.
+    #[error("cannot export the calibration: {0}")]
     Serialise(String),
+    /// A scale factor is negative: the convention (and every target's model) has positive ones.
+    #[error(
+        "cannot export the calibration: accelerometer {axis} has a negative scale factor ({value} {unit} per g); \
+         scale factors are positive by convention (a reversed axis is an installation angle near 180°): \
+         correct the calibration file or recalibrate"
+    )]
+    NegativeScale {
+        /// "x", "y" or "z".
+        axis: &'static str,
+        /// The scale factor, output unit per g.
+        value: f64,
+        /// The output unit's symbol.
+        unit: &'static str,
+    },
+    /// The target reads m/s² from its driver, and the output unit does not say how to get there.
+    #[error(
+        "{format} reads the accelerometer in m/s² from its driver, and this calibration's output unit is {unit}: \
+         give --driver-scale M_S2_PER_UNIT, the m/s² per {unit} the driver applies to the raw reading \
+         (only the driver's configuration knows it; outputs in m/s² or g need none)"
+    )]
+    DriverScaleRequired {
+        /// The format.
+        format: &'static str,
+        /// The output unit's symbol.
+        unit: &'static str,
+    },
+    /// The driver scale given is not a positive finite number.
+    #[error("--driver-scale {0} must be a positive, finite number of m/s² per output unit")]
+    DriverScale(f64),
+    /// A value of the export does not fit the target's number type (e.g. an absurd driver scale).
+    #[error(
+        "cannot export {name} = {value:e}: beyond the target's single-precision range; \
+         check --driver-scale (m/s² per output unit, e.g. 1 for a driver already in m/s²)"
+    )]
+    NotRepresentable {
+        /// The parameter.
+        name: String,
+        /// Its value.
+        value: f64,
+    },
+    /// A value lies outside the range the target documents for it.
+    #[error(
+        "{name} = {value} is outside {target}'s documented range {lo}..{hi}{hint}; \
+         the target would reject or misuse it (--allow-out-of-range writes it anyway, with a warning)"
+    )]
+    OutOfRange {
+        /// The parameter.
+        name: String,
+        /// Its value.
+        value: f64,
+        /// The target.
+        target: &'static str,
+        /// The documented lower end.
+        lo: f64,
+        /// The documented upper end.
+        hi: f64,
+        /// What probably caused it.
+        hint: String,
+    },
+    /// Values the calibration did not determine would be written as numbers.
+    #[error(
+        "{format} would hold values the calibration did not determine ({names}); calibrate with a plan \
+         that determines them, or give --allow-undetermined to write them marked UNDETERMINED"
+    )]
+    Undetermined {
+        /// The format.
+        format: &'static str,
+        /// The entries.
+        names: String,
+    },
+    /// Kalibr's form needs `c·K·A/g` (or `G·C_i_bᵀ`) as lower-triangular × rotation, which does not exist.
+    #[error(
+        "cannot write Kalibr's M*C_i_b: {0} is singular or left-handed (Kalibr's form needs a \
+         right-handed, invertible triad)"
+    )]
+    NoKalibrFactorisation(&'static str),
+    /// `K·A` has no inverse: the sensing directions are linearly dependent.
+    #[error(
+        "cannot export the calibration: its sensing directions are linearly dependent (K·A is \
+         singular), so no correction exists; check the installation angles"
+    )]
+    Singular,
+    /// A value the target needs that only the user can give.
+    #[error("{0}")]
+    Missing(String),
 }
-
-impl std::fmt::Display for ExportError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ExportError::Params(e) => write!(f, "cannot export the calibration: {e}"),
-            ExportError::Compensator(e) => write!(f, "cannot export the calibration: {e}"),
-            ExportError::Blob(e) => write!(f, "cannot export the calibration's blob: {e}"),
-            ExportError::UnitId(m) => write!(f, "cannot export the calibration's blob: {m}"),
-            ExportError::Serialise(m) => write!(f, "cannot export the calibration: {m}"),
-        }
-    }
-}
-
-impl std::error::Error for ExportError {}
 
 impl From<ParamsError> for ExportError {
     fn from(e: ParamsError) -> Self {
@@ -155,13 +241,45 @@ pub struct ExportInput<'a> {
     /// Kalibr's `rostopic`.
     pub rostopic: &'a str,
     /// m/s² per output unit of the driver the PX4/ArduPilot/Kalibr user runs (their raw
-    /// accelerometer reading is `U × this`); `None`: `g / mean(k_i)`, a nominal scale.
+    /// accelerometer reading is `U × this`); `None`: from the output unit ([`ExportInput::driver_scale`]).
     pub driver_scale_m_s2_per_out: Option<f64>,
+    /// The choices only the user can make (ids, what to allow).
+    pub options: ExportOptions,
+}
+
+/// What an export needs from the user beyond the calibration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExportOptions {
+    /// Write values outside the target's documented range (with a warning) instead of refusing.
+    pub allow_out_of_range: bool,
+    /// Write entries the calibration did not determine (marked) instead of refusing.
+    pub allow_undetermined: bool,
+    /// PX4's device id of the accelerometer (`CAL_ACC0_ID`).
+    pub device_id: Option<u32>,
+    /// PX4's device id of the gyro (`CAL_GYRO0_ID`); without it no PX4 gyro parameters are written.
+    pub gyro_device_id: Option<u32>,
+    /// MAVLink system id of the vehicle, the first column of QGroundControl's parameter file.
+    pub sysid: u8,
+    /// MAVLink component id of the autopilot, the second column.
+    pub compid: u8,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        ExportOptions {
+            allow_out_of_range: false,
+            allow_undetermined: false,
+            device_id: None,
+            gyro_device_id: None,
+            sysid: 1,
+            compid: 1,
+        }
+    }
 }
 
 #[cfg(test)]
 impl<'a> ExportInput<'a> {
-    /// The tests' input: this unit and calibration, no noise figures, the nominal driver scale.
+    /// The tests' input: this unit and calibration, no noise figures, the default driver scale.
     pub(crate) fn for_tests(unit: &'a UnitFile, cal: Calibration) -> ExportInput<'a> {
         ExportInput {
             unit,
@@ -169,16 +287,61 @@ impl<'a> ExportInput<'a> {
             noise: None,
             rostopic: "/imu0",
             driver_scale_m_s2_per_out: None,
+            options: ExportOptions::default(),
         }
     }
 }
 
+/// Standard gravity, m/s²: the value of the unit "g" a driver converts with.
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
+
 impl ExportInput<'_> {
-    /// The driver's scale: as given, or `g / mean(k_i)`.
-    pub fn driver_scale(&self) -> f64 {
-        self.driver_scale_m_s2_per_out.unwrap_or_else(|| {
-            let k = self.cal.statics.scale_out_per_g;
-            self.cal.gravity_m_s2 * 3.0 / (k[0] + k[1] + k[2])
+    /// The driver's scale `c` (m/s² per output unit) for a target that reads `c·U` in m/s², the same
+    /// rule in every format: as given; else 1 for an output already in m/s², standard gravity for one
+    /// in g; for volts and LSB only the driver knows it, so it must be given.
+    pub fn driver_scale(&self, format: &'static str) -> Result<f64, ExportError> {
+        if let Some(c) = self.driver_scale_m_s2_per_out {
+            return if c.is_finite() && c > 0.0 {
+                Ok(c)
+            } else {
+                Err(ExportError::DriverScale(c))
+            };
+        }
+        match self.cal.statics.output_unit {
+            OutputUnit::MetresPerSecondSquared => Ok(1.0),
+            OutputUnit::StandardGravity => Ok(STANDARD_GRAVITY_M_S2),
+            unit @ (OutputUnit::Volts | OutputUnit::Lsb) => Err(ExportError::DriverScaleRequired {
+                format,
+                unit: unit.symbol(),
+            }),
+        }
+    }
+}
+
+/// Refuses what no format can express faithfully: a negative scale factor.
+pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
+    let s = &cal.statics;
+    for (i, k) in s.scale_out_per_g.iter().enumerate() {
+        if *k < 0.0 {
+            return Err(ExportError::NegativeScale {
+                axis: shared::params::axis_name(i),
+                value: *k,
+                unit: s.output_unit.symbol(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `value` as the target's `f32`, refused when it does not fit.
+pub(crate) fn as_f32(name: &str, value: f64) -> Result<f32, ExportError> {
+    let v = value as f32;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ExportError::NotRepresentable {
+            name: name.to_string(),
+            value,
         })
     }
 }
@@ -198,8 +361,10 @@ pub(crate) fn temperature_not_held(cal: &Calibration, format: &str) -> String {
 
 /// Writes `input` in `format`.
 pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
+    check_exportable(&input.cal)?;
     match format {
         ExportFormat::Kalibr => kalibr::render(input),
+        ExportFormat::KalibrIntrinsics => kalibr::render_intrinsics(input),
         ExportFormat::FusionC => c::render_fusion(input),
         ExportFormat::CHeader => c::render_header(input),
         ExportFormat::Json => json::render(input),

@@ -1,40 +1,64 @@
-//! PX4 and ArduPilot accelerometer parameters.
+//! PX4 and ArduPilot accelerometer and gyro parameters.
 //!
-//! Both autopilots correct each axis alone, in the sensor frame, before their board rotation:
-//! PX4 `Correct()`: `a = R·((a_m − CAL_ACC0_xOFF) ∘ CAL_ACC0_xSCALE)`; ArduPilot
-//! `_rotate_and_correct_accel`: `a = R·((a_m − INS_ACCOFFS) ∘ INS_ACCSCAL)`, with `a_m` the driver's
-//! reading in m/s² (here `a_m = c·U`, `c` the driver's scale, [`super::ExportInput::driver_scale`]).
+//! Both autopilots correct each axis alone, in the sensor frame, before their board rotation. PX4
+//! (`PX4/PX4-Autopilot` `src/lib/sensor_calibration/Accelerometer.hpp`, `Correct()`):
+//! `a = R·((a_m − CAL_ACC0_xOFF) ∘ CAL_ACC0_xSCALE)`, and `Gyroscope.hpp`: `ω = R·(w_m − CAL_GYRO0_xOFF)`
+//! (PX4 holds no gyro scale). ArduPilot (`ArduPilot/ardupilot`
+//! `libraries/AP_InertialSensor/AP_InertialSensor_Backend.cpp`, `_rotate_and_correct_accel` and
+//! `_rotate_and_correct_gyro`): `a = R·((a_m − INS_ACCOFFS) ∘ INS_ACCSCAL)`, `ω = R·(w_m − INS_GYROFFS)`.
+//! `a_m` is the driver's reading in m/s² (here `a_m = c·U`, `c` the driver's scale,
+//! [`super::ExportInput::driver_scale`]), `w_m` the gyro's in rad/s.
 //! Our inverse model is `f = g·(K·A)⁻¹·(U − u0)` (`docs/model.md` §3), so the closest per-axis form
-//! keeps the diagonal of `g·(K·A)⁻¹`: `offset_i = c·u0_i`, `scale_i = g·[(K·A)⁻¹]_ii / c`.
+//! keeps the diagonal of `g·(K·A)⁻¹`: `offset_i = c·u0_i`, `scale_i = g·[(K·A)⁻¹]_ii / c`; the gyro's
+//! `ω = G⁻¹(w − b)` (§8) keeps `offset = b`, exact at rest.
 //!
 //! What neither can hold, and each file says so with the size of what is dropped: the
 //! cross-axis terms of `(K·A)⁻¹` (misalignment; bounded here by the largest row sum of the dropped
-//! terms at 1 g), the per-axis sensing points (size effect) and the lever-arm compensation, the device
-//! id the parameters belong to (the autopilot's own id of the sensor, which only the vehicle knows),
-//! and any temperature model (PX4's `TC_A*`, ArduPilot's `INS_TCAL*` are separate calibrations).
+//! terms at 1 g), the gyro's scale and misalignment `G⁻¹ − I` (bounded at 100 °/s), the per-axis
+//! sensing points and the lever-arm compensation. The file also states the driver scale it assumes.
+//!
+//! A temperature model (`docs/model.md` §9) goes into the autopilots' thermal offsets ([`thermal`]):
+//! PX4's `TC_A0_*`/`TC_G0_*` (`src/modules/temperature_compensation/TemperatureCompensation.cpp`,
+//! `calc_thermal_offsets_3D`: `x0 + x1·dT + x2·dT² + x3·dT³`, `dT` from `TC_*_TREF` with the temperature
+//! clipped to `TMIN..TMAX`, subtracted before `CAL_*_xOFF`) and ArduPilot's `INS_TCAL1_*`
+//! (`AP_InertialSensor_tempcal.cpp`, `correct_sensor`: `p(T − 35) − p(T_cal − 35)` with `p` a cubic
+//! without constant whose coefficients are stored ×10⁶, `T` and `T_cal = INS_ACC1_CALTEMP` clipped to
+//! `TMIN..TMAX`, subtracted before the offsets). Both hold our zero-bias and gyro-bias polynomials
+//! exactly (ArduPilot's re-centred on 35 °C); neither holds the scale factors' temperature dependence,
+//! whose size over the valid range each file states.
+//!
+//! ArduPilot's documented ranges (the `@Range` metadata of `AP_InertialSensor.cpp` and
+//! `AP_InertialSensor_tempcal.cpp`: `INS_ACCSCAL_*` 0.8..1.2, `INS_ACCOFFS_*` −3.5..3.5 m/s²,
+//! `INS_TCAL1_TMIN`/`TMAX` −70..80 °C) are checked: a value outside is refused unless
+//! `--allow-out-of-range`, which writes it with a `# WARNING:` line. PX4's parameter metadata
+//! documents no range for `CAL_ACC0_*`/`CAL_GYRO0_*`, so nothing is checked there beyond `f32`.
 
-use super::{ExportError, ExportInput};
-use shared::linalg;
+use super::{as_f32, ExportError, ExportInput};
+use shared::linalg::{self, RowMajor3};
 use std::fmt::Write as _;
 
 /// Per-axis offsets (m/s²) and scales for an autopilot, and what the per-axis form drops.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PerAxis {
+    /// The driver's scale assumed, m/s² per output unit.
+    pub driver_scale: f64,
     /// Offsets, m/s², in the driver's reading.
     pub offset_m_s2: [f64; 3],
     /// Scales (dimensionless).
     pub scale: [f64; 3],
     /// Largest error of the dropped cross-axis terms at 1 g on any axis, g.
     pub dropped_cross_axis_g: f64,
+    /// The gyro's offsets `b`, rad/s, when the calibration has a gyro correction.
+    pub gyro_offset_rad_s: Option<[f64; 3]>,
+    /// Largest error of the dropped `G⁻¹ − I` at 100 °/s on any axis, °/s.
+    pub dropped_gyro_deg_s_at_100: f64,
 }
 
-/// The per-axis form of `input`.
-pub fn per_axis(input: &ExportInput<'_>) -> Result<PerAxis, ExportError> {
+/// The per-axis form of `input` for `format` (which names the target in errors).
+pub fn per_axis(input: &ExportInput<'_>, format: &'static str) -> Result<PerAxis, ExportError> {
     let (fitted, _) = input.cal.statics.to_fitted()?;
-    let inv = linalg::inverse(&fitted.m_out_per_g).ok_or(ExportError::Params(
-        shared::params::ParamsError::DegenerateAxis { axis: 0 },
-    ))?;
-    let c = input.driver_scale();
+    let inv = linalg::inverse(&fitted.m_out_per_g).ok_or(ExportError::Singular)?;
+    let c = input.driver_scale(format)?;
     let g = input.cal.gravity_m_s2;
     // (K·A)⁻¹ = D + E with D its diagonal; dropping E leaves E·(U − u0) = E·D⁻¹·f/g per axis.
     let dropped = (0..3)
@@ -45,158 +69,500 @@ pub fn per_axis(input: &ExportInput<'_>) -> Result<PerAxis, ExportError> {
                 .sum::<f64>()
         })
         .fold(0.0, f64::max);
+    let gyro_inv = match &input.cal.gyro {
+        Some(gy) => Some(gy.checked_inverse().map_err(|e| {
+            ExportError::Compensator(shared::compensator::CompensatorError::Gyro(e))
+        })?),
+        None => None,
+    };
+    let dropped_gyro = gyro_inv.map_or(0.0, |gi: RowMajor3| {
+        (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|j| (gi[i][j] - f64::from(u8::from(i == j))).abs())
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max)
+            * 100.0
+    });
     Ok(PerAxis {
+        driver_scale: c,
         offset_m_s2: fitted.zero_bias_out.map(|v| v * c),
         scale: std::array::from_fn(|i| g * inv[i][i] / c),
         dropped_cross_axis_g: dropped,
+        gyro_offset_rad_s: input.cal.gyro.map(|gy| gy.bias_rad_s),
+        dropped_gyro_deg_s_at_100: dropped_gyro,
     })
 }
 
 fn caveats(w: &mut String, input: &ExportInput<'_>, p: &PerAxis, tool: &str) {
-    let c = input.driver_scale();
+    let unit = input.cal.statics.output_unit.symbol();
     let _ = writeln!(
         w,
-        "# Accelerometer calibration for {tool} (host export). Assumes the driver reports a_m = c*U m/s^2\n\
-         # with c = {c:?} m/s^2 per output unit, sensor axes = our body axes (board rotation: none).\n\
+        "# Accelerometer and gyro calibration for {tool} (host export). Assumes the driver reports\n\
+         # a_m = c*U m/s^2 with c = {:?} m/s^2 per {unit} (the calibration's output unit), the gyro w in\n\
+         # rad/s, and sensor axes = our body axes (board rotation: none).\n\
          # NOT HELD by these parameters (apply them elsewhere, or accept the error):\n\
-         # - cross-axis (misalignment) terms: up to {:.3} mg at 1 g on the worst axis;\n\
-         # - the per-axis sensing points and the lever-arm (size-effect) compensation;\n\
-         # - the device id of the sensor (set it on the vehicle: UNDETERMINED here);\n\
-         # - any temperature model.",
-        p.dropped_cross_axis_g * 1e3
+         # - accelerometer cross-axis (misalignment) terms: up to {:.3} mg at 1 g on the worst axis;\n\
+         # - the gyro's scale and misalignment (G^-1 - I): up to {:.4} deg/s at 100 deg/s;\n\
+         # - the per-axis sensing points and the lever-arm (size-effect) compensation.",
+        p.driver_scale,
+        p.dropped_cross_axis_g * 1e3,
+        p.dropped_gyro_deg_s_at_100
     );
+    if p.gyro_offset_rad_s.is_none() {
+        let _ = writeln!(
+            w,
+            "# Gyro offsets: UNDETERMINED (the calibration has no gyro correction); none written."
+        );
+    }
 }
 
 /// Values as the autopilots store them (IEEE single precision), shortest form.
-fn f32_text(v: f64) -> String {
-    format!("{}", v as f32)
+fn f32_text(name: &str, v: f64) -> Result<String, ExportError> {
+    Ok(format!("{}", as_f32(name, v)?))
 }
 
-/// A QGroundControl parameter file for PX4 (`vehicle component name value type`, type 9 = float).
-pub fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
-    let p = per_axis(input)?;
-    let mut s = String::new();
-    caveats(&mut s, input, &p, "PX4");
-    let _ = writeln!(
-        s,
-        "# CAL_ACC0_ID: UNDETERMINED (PX4's device id of this accelerometer); set it before loading.\n\
-         #\n# Vehicle-Id\tComponent-Id\tName\tValue\tType"
-    );
+/// The values of a parameter file, in order: `(name, value, is_integer)`.
+type Values = Vec<(String, f64, bool)>;
+
+fn accel_values(p: &PerAxis, off: &str, scl: &str) -> Values {
+    let mut v = Values::new();
     for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "1\t1\tCAL_ACC0_{axis}OFF\t{}\t9",
-            f32_text(p.offset_m_s2[i])
-        );
+        v.push((off.replace('#', axis), p.offset_m_s2[i], false));
     }
     for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-        let _ = writeln!(s, "1\t1\tCAL_ACC0_{axis}SCALE\t{}\t9", f32_text(p.scale[i]));
+        v.push((scl.replace('#', axis), p.scale[i], false));
+    }
+    v
+}
+
+/// A QGroundControl parameter file for PX4. QGroundControl's loader (`mavlink/qgroundcontrol`
+/// `src/FactSystem/ParameterManager.cc`, `readParametersFromStream`) skips `#` lines, splits the others
+/// on tabs into exactly five fields `sysid compid name value type`, refuses a file whose sysid is not
+/// the vehicle's, and converts the value by its MAVLink type (9 = REAL32, 6 = INT32).
+pub fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    let p = per_axis(input, "PX4")?;
+    let o = input.options;
+    let device_id = o.device_id.ok_or_else(|| {
+        ExportError::Missing(
+            "PX4 applies CAL_ACC0_* only to the accelerometer whose device id is CAL_ACC0_ID: give \
+             --device-id ID (the vehicle's CAL_ACC0_ID, or the device_id that `listener sensor_accel` \
+             shows on the vehicle)"
+                .into(),
+        )
+    })?;
+    let mut s = String::new();
+    caveats(&mut s, input, &p, "PX4");
+    let mut values: Values = vec![("CAL_ACC0_ID".into(), f64::from(device_id as i32), true)];
+    values.extend(accel_values(&p, "CAL_ACC0_#OFF", "CAL_ACC0_#SCALE"));
+    match (p.gyro_offset_rad_s, o.gyro_device_id) {
+        (Some(b), Some(id)) => {
+            values.push(("CAL_GYRO0_ID".into(), f64::from(id as i32), true));
+            for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
+                values.push((format!("CAL_GYRO0_{axis}OFF"), b[i], false));
+            }
+        }
+        (Some(_), None) => {
+            let _ = writeln!(
+                s,
+                "# Gyro offsets NOT WRITTEN: PX4 applies CAL_GYRO0_* only to the gyro whose device id is\n\
+                 # CAL_GYRO0_ID; give --gyro-device-id ID to write them."
+            );
+        }
+        (None, _) => {}
+    }
+    values.extend(px4_thermal(input, &p, device_id, &mut s)?);
+    let _ = writeln!(
+        s,
+        "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
+        o.sysid
+    );
+    for (name, v, int) in values {
+        let (text, ty) = if int {
+            (format!("{}", v as i64), 6)
+        } else {
+            (f32_text(&name, v)?, 9)
+        };
+        let _ = writeln!(s, "{}\t{}\t{name}\t{text}\t{ty}", o.sysid, o.compid);
     }
     Ok(s)
 }
 
+/// What a temperature model becomes in the autopilots' thermal offsets, in the driver's units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Thermal {
+    /// Reference temperature of our model, °C.
+    pub reference_c: f64,
+    /// Valid range, °C.
+    pub range_c: [f64; 2],
+    /// Accelerometer offset polynomials (row = axis: coefficients of dT, dT², dT³), m/s² per °C^k.
+    pub accel_m_s2: [[f64; 3]; 3],
+    /// Gyro offset polynomials, rad/s per °C^k (`None`: the model has no gyro-bias drift).
+    pub gyro_rad_s: Option<[[f64; 3]; 3]>,
+    /// Largest effect of the scale factors' temperature dependence over the range at 1 g, g.
+    pub dropped_scale_g: f64,
+}
+
+/// The per-axis thermal offsets of `input`'s temperature model: the driver's reading drifts by
+/// `c·P_i(dT)` (zero biases, docs/model.md §9) and the gyro's by `B_j(dT)`.
+pub fn thermal(input: &ExportInput<'_>, p: &PerAxis) -> Option<Thermal> {
+    let t = input.cal.temperature.as_ref()?;
+    let c = p.driver_scale;
+    let poly = |k: &[f64; 3], x: f64| x * (k[0] + x * (k[1] + x * k[2]));
+    let dropped = t
+        .check_points()
+        .map(|temp| {
+            (0..3)
+                .map(|i| poly(&t.scale_rel_per_c[i], temp - t.reference_c).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    Some(Thermal {
+        reference_c: t.reference_c,
+        range_c: t.valid_range_c,
+        accel_m_s2: t.zero_bias_out_per_c.map(|r| r.map(|v| v * c)),
+        gyro_rad_s: t.gyro_bias_rad_s_per_c,
+        dropped_scale_g: dropped,
+    })
+}
+
+fn thermal_caveat(w: &mut String, th: &Thermal) {
+    let _ = writeln!(
+        w,
+        "# Temperature model (reference {} degC, valid {}..{} degC): zero-bias and gyro-bias drift held\n\
+         # exactly; NOT HELD: the scale factors' drift, up to {:.3} mg at 1 g over the valid range.",
+        th.reference_c,
+        th.range_c[0],
+        th.range_c[1],
+        th.dropped_scale_g * 1e3
+    );
+}
+
+/// PX4's `TC_A0_*` (and with the gyro's id and a gyro-bias drift, `TC_G0_*`): `x0 = 0` (the offset
+/// at the reference is `CAL_*_xOFF`), `x1..x3` our polynomial in the driver's units.
+fn px4_thermal(
+    input: &ExportInput<'_>,
+    p: &PerAxis,
+    device_id: u32,
+    w: &mut String,
+) -> Result<Values, ExportError> {
+    let Some(th) = thermal(input, p) else {
+        return Ok(Values::new());
+    };
+    thermal_caveat(w, &th);
+    let mut v = Values::new();
+    let mut block = |prefix: &str, enable: &str, id: u32, poly: &[[f64; 3]; 3]| {
+        v.push((enable.to_string(), 1.0, true));
+        v.push((format!("{prefix}_ID"), f64::from(id as i32), true));
+        v.push((format!("{prefix}_TREF"), th.reference_c, false));
+        v.push((format!("{prefix}_TMIN"), th.range_c[0], false));
+        v.push((format!("{prefix}_TMAX"), th.range_c[1], false));
+        for k in 0..4 {
+            for (axis, row) in poly.iter().enumerate() {
+                let value = if k == 0 { 0.0 } else { row[k - 1] };
+                v.push((format!("{prefix}_X{k}_{axis}"), value, false));
+            }
+        }
+    };
+    block("TC_A0", "TC_A_ENABLE", device_id, &th.accel_m_s2);
+    match (th.gyro_rad_s, input.options.gyro_device_id) {
+        (Some(g), Some(id)) => block("TC_G0", "TC_G_ENABLE", id, &g),
+        (Some(_), None) => {
+            let _ = writeln!(
+                w,
+                "# TC_G0_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G0_ID; give --gyro-device-id."
+            );
+        }
+        (None, _) => {}
+    }
+    Ok(v)
+}
+
+/// ArduPilot's fixed reference of its thermal polynomials, °C (`TEMP_REFERENCE`).
+const ARDUPILOT_TCAL_REFERENCE_C: f64 = 35.0;
+/// ArduPilot stores the thermal coefficients multiplied by this (`SCALE_FACTOR`).
+const ARDUPILOT_TCAL_SCALE: f64 = 1e6;
+
+/// Our cubic `P(y)` (no constant, `y = T − T_ref`) as ArduPilot's `p(x)` about 35 °C, `x = T − 35`:
+/// `p(x) = P(x + d) − P(d)` with `d = 35 − T_ref`, so that `p(T − 35) − p(T_ref − 35) = P(T − T_ref)`.
+fn recentred(k: &[f64; 3], reference_c: f64) -> [f64; 3] {
+    let d = ARDUPILOT_TCAL_REFERENCE_C - reference_c;
+    [
+        k[0] + 2.0 * k[1] * d + 3.0 * k[2] * d * d,
+        k[1] + 3.0 * k[2] * d,
+        k[2],
+    ]
+}
+
+/// ArduPilot's `INS_TCAL1_*` and the calibration temperatures `INS_ACC1_CALTEMP`, `INS_GYR1_CALTEMP`
+/// (our reference: the offsets and scales hold there).
+fn ardupilot_thermal(input: &ExportInput<'_>, p: &PerAxis, w: &mut String) -> Values {
+    let Some(th) = thermal(input, p) else {
+        return Values::new();
+    };
+    thermal_caveat(w, &th);
+    let mut v: Values = vec![
+        ("INS_TCAL1_ENABLE".into(), 1.0, true),
+        ("INS_TCAL1_TMIN".into(), th.range_c[0], false),
+        ("INS_TCAL1_TMAX".into(), th.range_c[1], false),
+        ("INS_ACC1_CALTEMP".into(), th.reference_c, false),
+    ];
+    let mut polys = vec![("ACC", th.accel_m_s2)];
+    match th.gyro_rad_s {
+        Some(g) => {
+            v.push(("INS_GYR1_CALTEMP".into(), th.reference_c, false));
+            polys.push(("GYR", g));
+        }
+        None => {
+            let _ = writeln!(
+                w,
+                "# INS_TCAL1_GYR*: UNDETERMINED (the model has no gyro-bias drift); not written."
+            );
+        }
+    }
+    for (name, poly) in &polys {
+        let q: Vec<[f64; 3]> = poly.iter().map(|k| recentred(k, th.reference_c)).collect();
+        for k in 0..3 {
+            for (axis, row) in ["X", "Y", "Z"].iter().zip(&q) {
+                v.push((
+                    format!("INS_TCAL1_{name}{}_{axis}", k + 1),
+                    row[k] * ARDUPILOT_TCAL_SCALE,
+                    false,
+                ));
+            }
+        }
+    }
+    v
+}
+
+/// ArduPilot's documented range of a parameter (its `@Range` metadata in
+/// `libraries/AP_InertialSensor/AP_InertialSensor.cpp`), if any.
+fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
+    if name.starts_with("INS_ACCSCAL_") {
+        Some((0.8, 1.2))
+    } else if name.starts_with("INS_ACCOFFS_") {
+        Some((-3.5, 3.5))
+    } else if name == "INS_TCAL1_TMIN" || name == "INS_TCAL1_TMAX" {
+        Some((-70.0, 80.0))
+    } else {
+        None
+    }
+}
+
 /// An ArduPilot parameter file (`NAME,VALUE`, as Mission Planner saves and loads).
 pub fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
-    let p = per_axis(input)?;
+    let p = per_axis(input, "ArduPilot")?;
+    let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();
     caveats(&mut s, input, &p, "ArduPilot");
-    let _ = writeln!(
-        s,
-        "# INS_ACCSCAL_* must lie in 0.8..1.2 for ArduPilot to accept them."
-    );
-    for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-        let _ = writeln!(s, "INS_ACCOFFS_{axis},{}", f32_text(p.offset_m_s2[i]));
+    let mut values = accel_values(&p, "INS_ACCOFFS_#", "INS_ACCSCAL_#");
+    if let Some(b) = p.gyro_offset_rad_s {
+        for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
+            values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
+        }
     }
-    for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-        let _ = writeln!(s, "INS_ACCSCAL_{axis},{}", f32_text(p.scale[i]));
+    values.extend(ardupilot_thermal(input, &p, &mut s));
+    let mut lines = String::new();
+    for (name, v, _) in &values {
+        let text = f32_text(name, *v)?;
+        if let Some((lo, hi)) = ardupilot_range(name) {
+            if !(lo..=hi).contains(v) {
+                let hint = if name.starts_with("INS_ACCOFFS_") {
+                    format!(
+                        " m/s² (the driver's reading at zero specific force, c*u0 with c = {} m/s² per {unit}: \
+                         the driver must remove the output's offset, or the scale c is wrong)",
+                        p.driver_scale
+                    )
+                } else {
+                    format!(
+                        " (g*[(K*A)^-1]_ii / c with c = {} m/s² per {unit}: is --driver-scale the driver's true scale?)",
+                        p.driver_scale
+                    )
+                };
+                let e = ExportError::OutOfRange {
+                    name: name.clone(),
+                    value: *v,
+                    target: "ArduPilot",
+                    lo,
+                    hi,
+                    hint,
+                };
+                if !input.options.allow_out_of_range {
+                    return Err(e);
+                }
+                let _ = writeln!(
+                    s,
+                    "# WARNING: {name} = {v} is outside ArduPilot's documented range {lo}..{hi}; written \
+                     because of --allow-out-of-range"
+                );
+            }
+        }
+        let _ = writeln!(lines, "{name},{text}");
     }
+    s.push_str(&lines);
     Ok(s)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::consumer_tests::handheld_unit;
+    use crate::export::{render, ExportFormat, STANDARD_GRAVITY_M_S2};
     use crate::unit_file::UnitFile;
-    use shared::forward::{BodyMotion, ForwardModel};
-    use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
-    use std::collections::HashMap;
+    use shared::OutputUnit;
 
-    /// Reads `name → value` from either file format, the way each loader splits a line.
-    fn parse(text: &str, px4: bool) -> HashMap<String, f64> {
-        text.lines()
-            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-            .map(|l| {
-                if px4 {
-                    let f: Vec<&str> = l.split('\t').collect();
-                    assert_eq!(f.len(), 5, "{l}");
-                    assert_eq!(f[4], "9");
-                    (f[2].to_string(), f[3].parse().unwrap())
-                } else {
-                    let (n, v) = l.split_once(',').unwrap();
-                    (n.to_string(), v.parse().unwrap())
-                }
-            })
-            .collect()
+    /// The driver scale comes from the output unit, the same in every format: 1 for m/s², standard
+    /// gravity for g, refused without --driver-scale for V and LSB (only the driver knows it).
+    #[test]
+    fn driver_scale_follows_the_output_unit_in_every_format() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let mut input = ExportInput::for_tests(&unit, cal);
+        input.options.device_id = Some(1);
+        for format in ["PX4", "ArduPilot", "Kalibr"] {
+            assert_eq!(input.driver_scale(format).unwrap(), 1.0);
+        }
+        // CAL_ACC0_XSCALE = g·[(K·A)⁻¹]_xx: about g/k_x, not (g/k_x)·(mean k/g), 0.34 % more here.
+        let p = per_axis(&input, "PX4").unwrap();
+        let g = cal.gravity_m_s2;
+        assert!((p.scale[0] - g / 9.83).abs() < 5e-4, "{}", p.scale[0]);
+        let text = render(&input, ExportFormat::Px4).unwrap();
+        assert!(text.contains("c = 1.0 m/s^2 per m/s2"), "{text}");
+        let mut in_g = cal;
+        in_g.statics.output_unit = OutputUnit::StandardGravity;
+        in_g.statics.scale_out_per_g = [1.001, 0.998, 1.0];
+        let input_g = ExportInput::for_tests(&unit, in_g);
+        assert_eq!(input_g.driver_scale("PX4").unwrap(), STANDARD_GRAVITY_M_S2);
+        for (out_unit, symbol) in [(OutputUnit::Volts, "V"), (OutputUnit::Lsb, "LSB")] {
+            let mut raw = shared::params::PAPER_UNIT;
+            raw.statics.output_unit = out_unit;
+            let input = ExportInput {
+                options: input.options,
+                ..ExportInput::for_tests(&unit, raw)
+            };
+            for format in [
+                ExportFormat::Px4,
+                ExportFormat::Ardupilot,
+                ExportFormat::KalibrIntrinsics,
+            ] {
+                let e = render(&input, format).unwrap_err();
+                assert!(matches!(e, ExportError::DriverScaleRequired { .. }), "{e}");
+                let m = e.to_string();
+                assert!(m.contains("--driver-scale") && m.contains(symbol), "{m}");
+            }
+        }
     }
 
+    /// ArduPilot's documented ranges: a V unit's offset (c·u0 ≈ 59 m/s² at c = g/k) and an absurd
+    /// scale are refused, or written with a warning when allowed.
     #[test]
-    fn both_files_parse_and_correct_within_the_stated_bound() {
+    fn ardupilot_refuses_values_outside_its_documented_ranges() {
         let unit = UnitFile::paper_unit();
         let cal = unit.to_calibration().unwrap();
-        let input = ExportInput::for_tests(&unit, cal);
-        let p = per_axis(&input).unwrap();
-        let c = input.driver_scale();
-        let model = ForwardModel::new(&cal).unwrap();
-        let g = cal.gravity_m_s2;
-        for (px4, text) in [
-            (true, render_px4(&input).unwrap()),
-            (false, render_ardupilot(&input).unwrap()),
+        let mut input = ExportInput::for_tests(&unit, cal);
+        input.driver_scale_m_s2_per_out = Some(cal.gravity_m_s2 / 0.4);
+        let e = render_ardupilot(&input).unwrap_err();
+        assert!(
+            matches!(e, ExportError::OutOfRange { ref name, .. } if name == "INS_ACCOFFS_X"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("-3.5..3.5"), "{e}");
+        input.driver_scale_m_s2_per_out = Some(1e-3);
+        let e = render_ardupilot(&input).unwrap_err();
+        assert!(
+            matches!(e, ExportError::OutOfRange { ref name, .. } if name == "INS_ACCSCAL_X"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("0.8..1.2"), "{e}");
+        input.options.allow_out_of_range = true;
+        let text = render_ardupilot(&input).unwrap();
+        let warnings = text
+            .lines()
+            .filter(|l| l.starts_with("# WARNING: INS_ACCSCAL_"))
+            .count();
+        assert_eq!(warnings, 3, "{text}");
+    }
+
+    /// Each bad scale gets its own message, in every format: never "zero scale factor".
+    #[test]
+    fn bad_scales_are_named_for_what_they_are() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let mut input = ExportInput::for_tests(&unit, cal);
+        input.options.device_id = Some(1);
+        input.driver_scale_m_s2_per_out = Some(1e300);
+        for format in [
+            ExportFormat::Px4,
+            ExportFormat::Ardupilot,
+            ExportFormat::KalibrIntrinsics,
         ] {
-            assert!(text.contains("UNDETERMINED"));
-            let v = parse(&text, px4);
-            let (off, scl) = if px4 {
-                (
-                    ["CAL_ACC0_XOFF", "CAL_ACC0_YOFF", "CAL_ACC0_ZOFF"],
-                    ["CAL_ACC0_XSCALE", "CAL_ACC0_YSCALE", "CAL_ACC0_ZSCALE"],
-                )
-            } else {
-                (
-                    ["INS_ACCOFFS_X", "INS_ACCOFFS_Y", "INS_ACCOFFS_Z"],
-                    ["INS_ACCSCAL_X", "INS_ACCSCAL_Y", "INS_ACCSCAL_Z"],
-                )
-            };
-            assert_eq!(v.len(), 6);
-            let mut worst_g = 0.0f64;
-            for up in [
-                [1.0, 0.0, 0.0],
-                [0.0, -1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [0.6, 0.0, -0.8],
-            ] {
-                let f = up.map(|x| x * g);
-                let u = model
-                    .outputs(&BodyMotion {
-                        f_o: BodySpecificForce { m_s2: f },
-                        omega: BodyRate::default(),
-                        omega_dot: BodyAngularAccel::default(),
-                    })
-                    .raw;
-                for i in 0..3 {
-                    let corrected = (c * u[i] - v[off[i]]) * v[scl[i]];
-                    worst_g = worst_g.max((corrected - f[i]).abs() / g);
-                }
-            }
-            // The stated bound holds (plus the f32 rounding of the stored values), and is not vacuous:
-            // the paper unit's ~1° misalignments cost tens of mg in this form.
+            let e = render(&input, format).unwrap_err();
             assert!(
-                worst_g <= p.dropped_cross_axis_g + 1e-5,
-                "{worst_g} > {}",
-                p.dropped_cross_axis_g
+                matches!(e, ExportError::NotRepresentable { .. }),
+                "{format:?}: {e}"
+            );
+            assert!(!e.to_string().contains("zero scale"), "{e}");
+        }
+        for bad in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
+            input.driver_scale_m_s2_per_out = Some(bad);
+            let e = render(&input, ExportFormat::Px4).unwrap_err();
+            assert!(matches!(e, ExportError::DriverScale(_)), "{e}");
+            assert!(e.to_string().contains("positive, finite"), "{e}");
+        }
+        let mut negative = shared::params::PAPER_UNIT;
+        negative.statics.scale_out_per_g[1] = -0.398;
+        let mut unit = UnitFile::from_calibration(&negative, None, None);
+        unit.unit_id = Some("a1b2c3d4e5f60718293a4b5c".into());
+        let mut input = ExportInput::for_tests(&unit, negative);
+        input.driver_scale_m_s2_per_out = Some(24.5);
+        input.options.device_id = Some(1);
+        for format in [
+            ExportFormat::CHeader,
+            ExportFormat::FusionC,
+            ExportFormat::Json,
+            ExportFormat::Px4,
+            ExportFormat::Plain,
+        ] {
+            let e = render(&input, format).unwrap_err();
+            assert!(
+                matches!(e, ExportError::NegativeScale { axis: "y", .. }),
+                "{format:?}: {e}"
             );
             assert!(
-                worst_g > 0.3 * p.dropped_cross_axis_g && worst_g > 5e-3,
-                "{worst_g}"
+                e.to_string()
+                    .contains("negative scale factor (-0.398 V per g)"),
+                "{e}"
             );
         }
+    }
+
+    /// PX4 needs the accelerometer's device id (refused without it) and writes QGroundControl's
+    /// five columns with the vehicle's ids; gyro offsets need the gyro's id.
+    #[test]
+    fn px4_file_carries_the_device_ids_and_the_vehicles_ids() {
+        let cal = handheld_unit();
+        let unit = UnitFile::from_calibration(&cal, None, None);
+        let mut input = ExportInput::for_tests(&unit, cal);
+        let e = render_px4(&input).unwrap_err();
+        assert!(e.to_string().contains("--device-id"), "{e}");
+        input.options.device_id = Some(3_000_000_000);
+        input.options.sysid = 42;
+        input.options.compid = 1;
+        let text = render_px4(&input).unwrap();
+        assert!(
+            text.contains("42\t1\tCAL_ACC0_ID\t-1294967296\t6"),
+            "{text}"
+        );
+        assert!(!text.contains("\tCAL_GYRO0"), "{text}");
+        assert!(text.contains("--gyro-device-id"), "{text}");
+        input.options.gyro_device_id = Some(2_359_306);
+        let text = render_px4(&input).unwrap();
+        assert!(text.contains("42\t1\tCAL_GYRO0_ID\t2359306\t6"), "{text}");
+        let b = cal.gyro.unwrap().bias_rad_s[0] as f32;
+        assert!(
+            text.contains(&format!("42\t1\tCAL_GYRO0_XOFF\t{b}\t9")),
+            "{text}"
+        );
     }
 }

@@ -44,6 +44,13 @@ fn compile(dir: &Path, sources: &[&str]) {
     );
 }
 
+/// Writes the C package of `input` into `dir`, as `host export --format c-header --out DIR` does.
+fn write_package(dir: &Path, input: &ExportInput<'_>) {
+    for (name, text) in package(input).unwrap() {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+}
+
 /// One input line for the C programs: the values as float bits in hex.
 fn hex_line<'a>(bits: impl IntoIterator<Item = &'a u32>) -> String {
     let v: Vec<String> = bits.into_iter().map(|b| format!("{b:08x}")).collect();
@@ -156,7 +163,7 @@ fn normalised(line: &str) -> String {
 
 const MAIN_C: &str = r#"
 #include <string.h>
-#include "calibration.h"
+#include "acal_calibration.h"
 
 int main(void) {
     struct acal_calibration d;
@@ -203,15 +210,9 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
     let cal = firmware::paper_unit::calibration();
     let input = ExportInput::for_tests(&unit, cal);
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("calibration.h"),
-        render_header(&input).unwrap(),
-    )
-    .unwrap();
-    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
-    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    write_package(dir.path(), &input);
     std::fs::write(dir.path().join("main.c"), format!("{PRINT_CAL_C}{MAIN_C}")).unwrap();
-    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    compile(dir.path(), &["main.c", "acal_blob.c", "acal_device.c"]);
     let stdin: String = COMP_CASES
         .iter()
         .map(|c| hex_line(c.u.iter().chain(&c.w).chain(&c.wd)))
@@ -256,7 +257,7 @@ fn c_header_compiles_decodes_rejects_corruption_and_compensates_bit_for_bit() {
 const REFRESH_MAIN_C: &str = r#"
 #include <stdio.h>
 #include <string.h>
-#include "calibration.h"
+#include "acal_calibration.h"
 
 int main(void) {
     struct acal_compensator c = ACAL_COMPENSATOR;
@@ -290,11 +291,9 @@ fn c_header_refreshes_with_temperature_and_corrects_the_gyro_bit_for_bit() {
     let header = render_header(&input).unwrap();
     assert!(header.contains("ACAL_THERMAL") && header.contains(".gyro_corrected = 1"));
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("calibration.h"), header).unwrap();
-    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
-    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    write_package(dir.path(), &input);
     std::fs::write(dir.path().join("main.c"), REFRESH_MAIN_C).unwrap();
-    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    compile(dir.path(), &["main.c", "acal_blob.c", "acal_device.c"]);
     let stdin: String = GYRO_TEMP_CASES
         .iter()
         .map(|c| {
@@ -570,11 +569,9 @@ fn c_header_with_gyro_and_temperature_model_initialises_what_it_decodes() {
     assert!(text.contains("Gyro correction: present"), "{text}");
     assert!(text.contains("Temperature model: present"), "{text}");
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("calibration.h"), text).unwrap();
-    std::fs::write(dir.path().join("acal_blob.h"), DECODER_H).unwrap();
-    std::fs::write(dir.path().join("acal_blob.c"), DECODER_C).unwrap();
+    write_package(dir.path(), &input);
     std::fs::write(dir.path().join("main.c"), format!("{PRINT_CAL_C}{MAIN_C}")).unwrap();
-    compile(dir.path(), &["main.c", "acal_blob.c"]);
+    compile(dir.path(), &["main.c", "acal_blob.c", "acal_device.c"]);
     let out = run(dir.path(), "");
     let line = |tag: &str| {
         out.lines()
@@ -607,6 +604,7 @@ fn c_header_needs_a_unit_id() {
 const FUSION_STUB: &str = r#"
 #ifndef FUSION_H
 #define FUSION_H
+#define FUSION_MODEL_H
 typedef union { float array[3]; struct { float x; float y; float z; } axis; } FusionVector;
 typedef union { float array[9]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
 static inline FusionVector FusionVectorSubtract(const FusionVector a, const FusionVector b) {
@@ -638,7 +636,7 @@ const FUSION_MAIN: &str = r#"
 int main(void) {
     FusionVector u;
     while (scanf("%f %f %f", &u.array[0], &u.array[1], &u.array[2]) == 3) {
-        const FusionVector f = FusionModelInertial(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
+        const FusionVector f = ACAL_FUSION_INERTIAL(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
         printf("%.9g %.9g %.9g\n", f.axis.x, f.axis.y, f.axis.z);
     }
     return 0;
@@ -698,7 +696,7 @@ const FUSION_GYRO_MAIN: &str = r#"
 int main(void) {
     FusionVector w;
     while (scanf("%f %f %f", &w.array[0], &w.array[1], &w.array[2]) == 3) {
-        const FusionVector omega = FusionModelInertial(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
+        const FusionVector omega = ACAL_FUSION_INERTIAL(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
         printf("%.9g %.9g %.9g\n", omega.axis.x, omega.axis.y, omega.axis.z);
     }
     return 0;
@@ -771,4 +769,406 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
         })
         .fold(0.0, f64::max);
     assert!(uncorrected > 0.5, "the test gyro must need its correction");
+}
+
+/// Fusion before 1.3 (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`): the same model named
+/// `FusionCalibrationInertial`, over `FusionMatrixMultiplyVector` and `FusionVectorHadamardProduct`.
+const FUSION_OLD_STUB: &str = r#"
+#ifndef FUSION_H
+#define FUSION_H
+#define FUSION_CALIBRATION_H
+typedef union { float array[3]; struct { float x; float y; float z; } axis; } FusionVector;
+typedef union { float array[9]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
+static inline FusionVector FusionVectorSubtract(const FusionVector a, const FusionVector b) {
+    const FusionVector r = {.axis = {a.axis.x - b.axis.x, a.axis.y - b.axis.y, a.axis.z - b.axis.z}};
+    return r;
+}
+static inline FusionVector FusionVectorHadamardProduct(const FusionVector a, const FusionVector b) {
+    const FusionVector r = {.axis = {a.axis.x * b.axis.x, a.axis.y * b.axis.y, a.axis.z * b.axis.z}};
+    return r;
+}
+static inline FusionVector FusionMatrixMultiplyVector(const FusionMatrix m, const FusionVector v) {
+    const FusionVector r = {.axis = {
+        m.element.xx * v.axis.x + m.element.xy * v.axis.y + m.element.xz * v.axis.z,
+        m.element.yx * v.axis.x + m.element.yy * v.axis.y + m.element.yz * v.axis.z,
+        m.element.zx * v.axis.x + m.element.zy * v.axis.y + m.element.zz * v.axis.z}};
+    return r;
+}
+static inline FusionVector FusionCalibrationInertial(const FusionVector uncalibrated, const FusionMatrix misalignment,
+                                                     const FusionVector sensitivity, const FusionVector offset) {
+    return FusionMatrixMultiplyVector(misalignment, FusionVectorHadamardProduct(FusionVectorSubtract(uncalibrated, offset), sensitivity));
+}
+#endif
+"#;
+
+/// Reads `u[3] w[3]` (float bits in hex; w in deg/s) and prints the accelerometer (g) and the
+/// gyroscope (deg/s) as Fusion's model gives them.
+const FUSION_BOTH_MAIN: &str = r#"
+#include <stdio.h>
+#include <string.h>
+#include "Fusion.h"
+#include "fusion_calibration.h"
+int main(void) {
+    unsigned b[6];
+    while (scanf("%x %x %x %x %x %x", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) == 6) {
+        FusionVector u, w;
+        memcpy(u.array, b, sizeof u.array);
+        memcpy(w.array, b + 3, sizeof w.array);
+        const FusionVector f = ACAL_FUSION_INERTIAL(u, accelerometerMisalignment, accelerometerSensitivity, accelerometerOffset);
+        const FusionVector omega = ACAL_FUSION_INERTIAL(w, gyroscopeMisalignment, gyroscopeSensitivity, gyroscopeOffset);
+        printf("%.9g %.9g %.9g %.9g %.9g %.9g\n", f.axis.x, f.axis.y, f.axis.z, omega.axis.x, omega.axis.y, omega.axis.z);
+    }
+    return 0;
+}
+"#;
+
+/// The fusion-c header compiled against Fusion's model as both versions name it, run on the same raw
+/// rows as `host apply`: equal to f32 rounding at rest, the lever terms (which Fusion cannot hold)
+/// in rotation; the gyro exactly held.
+#[test]
+fn fusion_header_in_both_fusion_versions_corrects_like_host_apply_within_what_it_holds() {
+    use crate::export::consumer_tests::{reference, segments};
+    let mut cal = crate::export::consumer_tests::handheld_unit();
+    cal.statics.output_unit = shared::OutputUnit::Volts;
+    cal.statics.scale_out_per_g = [0.395, 0.398, 0.400];
+    cal.statics.zero_bias_out = [2.405, 2.381, 2.436];
+    let unit = UnitFile::from_calibration(&cal, None, None);
+    let text = render_fusion(&ExportInput::for_tests(&unit, cal)).unwrap();
+    let segs = segments(&cal);
+    let want = reference(&cal, &segs);
+    let rows: Vec<_> = segs.iter().flatten().collect();
+    let stdin: String = rows
+        .iter()
+        .map(|r| {
+            let w = r.w_rad_s.map(|v| (v.to_degrees() as f32).to_bits());
+            hex_line(r.u.map(|v| (v as f32).to_bits()).iter().chain(&w))
+        })
+        .collect();
+    let g = cal.gravity_m_s2;
+    for stub in [FUSION_STUB, FUSION_OLD_STUB] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("Fusion.h"), stub).unwrap();
+        std::fs::write(dir.path().join("fusion_calibration.h"), &text).unwrap();
+        std::fs::write(dir.path().join("main.c"), FUSION_BOTH_MAIN).unwrap();
+        compile(dir.path(), &["main.c"]);
+        let out = run(dir.path(), &stdin);
+        let (mut rest_ug, mut spin_ug, mut worst_deg_s) = (0.0f64, 0.0f64, 0.0f64);
+        for ((line, r), (f_ref, rate_ref)) in out.lines().zip(&rows).zip(want.iter().flatten()) {
+            let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+            let w2: f64 = r.omega_rad_s.iter().map(|x| x * x).sum();
+            let lever_g = w2 * 0.0095 / g;
+            for j in 0..3 {
+                let d_g = (v[j] - f64::from(f_ref[j]) / g).abs();
+                assert!(d_g <= 1.1 * lever_g + 5e-6, "{d_g} g at {r:?}");
+                let ug = if r.omega_rad_s == [0.0; 3] {
+                    &mut rest_ug
+                } else {
+                    &mut spin_ug
+                };
+                *ug = ug.max(d_g * 1e6);
+                let d = (v[3 + j] - f64::from(rate_ref[j]).to_degrees()).abs();
+                assert!(d < 1e-4, "{d} deg/s");
+                worst_deg_s = worst_deg_s.max(d);
+            }
+        }
+        eprintln!(
+            "fusion-c: largest difference from host apply {rest_ug:.1} µg at rest, {spin_ug:.1} µg in \
+             rotation, {worst_deg_s:.6} °/s"
+        );
+        assert_eq!(out.lines().count(), rows.len());
+    }
+}
+
+/// A gyro entry the plan did not determine (the z spins left out: G's z column) is refused, or
+/// written marked with --allow-undetermined.
+#[test]
+fn fusion_header_refuses_or_marks_undetermined_gyro_entries() {
+    let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+    cal.gyro = Some(firmware::paper_unit::typical_gyro());
+    let mut unit = UnitFile::from_calibration(&cal, None, None);
+    let mut sigma = [[1e-5; 3]; 3];
+    // 50 times the threshold: undetermined. (Much larger, it also reaches the other columns of
+    // G⁻¹ through the misalignments, and those are marked too.)
+    for row in &mut sigma {
+        row[2] = 0.05;
+    }
+    unit.gyro.as_mut().unwrap().matrix_1sigma = Some(sigma);
+    let mut input = ExportInput::for_tests(&unit, cal);
+    let e = render_fusion(&input).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains(
+            "gyroscopeMisalignment[0][2], gyroscopeMisalignment[1][2], gyroscopeMisalignment[2][2]"
+        ) && m.contains("--allow-undetermined"),
+        "{m}"
+    );
+    input.options.allow_undetermined = true;
+    let text = render_fusion(&input).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.contains("FusionMatrix gyroscopeMisalignment"))
+        .unwrap();
+    let marked: Vec<bool> = line
+        .split(", ")
+        .map(|item| item.contains("UNDETERMINED"))
+        .collect();
+    assert_eq!(
+        marked,
+        [false, false, true, false, false, true, false, false, true],
+        "{line}"
+    );
+    // Determined everywhere: numbers only.
+    unit.gyro.as_mut().unwrap().matrix_1sigma = Some([[1e-5; 3]; 3]);
+    let input = ExportInput::for_tests(&unit, cal);
+    assert!(!render_fusion(&input).unwrap().contains("UNDETERMINED"));
+}
+
+/// Drives the written package: `c u w wd` (ACAL_COMPENSATOR, static and full), `o w` (an estimator at
+/// 1000 Hz, corner 20 Hz), `g t u w wd` (a copy refreshed at t, gyro corrected, compensated), `r`
+/// (restart) and `s has_t t u w` (the device: temperature, then the sample); values as float bits.
+const PACKAGE_MAIN_C: &str = r#"
+#include <stdio.h>
+#include <string.h>
+#include "acal_calibration.h"
+static void read_floats(float *v, int n) {
+    for (int i = 0; i < n; i++) {
+        unsigned b = 0;
+        if (scanf("%x", &b) != 1) b = 0;
+        memcpy(&v[i], &b, sizeof b);
+    }
+}
+static void print_floats(const float *v, int n) {
+    for (int i = 0; i < n; i++) {
+        unsigned b;
+        memcpy(&b, &v[i], sizeof b);
+        printf(" %08x", b);
+    }
+}
+int main(void) {
+    char tag[8];
+    struct acal_device dev;
+    struct acal_omega_dot est;
+    const struct acal_thermal *th = ACAL_THERMAL_OR_NULL;
+    if (acal_device_init(&dev, &ACAL_COMPENSATOR, th, 1000.0f) != 0) return 1;
+    if (acal_omega_dot_init(&est, 1000.0f, 20.0f) != 0) return 1;
+    while (scanf("%7s", tag) == 1) {
+        float v[10], a[3], b[3];
+        if (strcmp(tag, "c") == 0) {
+            read_floats(v, 9);
+            acal_compensate_static(&ACAL_COMPENSATOR, v, a);
+            acal_compensate(&ACAL_COMPENSATOR, v, v + 3, v + 6, b);
+            printf("c");
+            print_floats(a, 3);
+            print_floats(b, 3);
+        } else if (strcmp(tag, "o") == 0) {
+            read_floats(v, 3);
+            acal_omega_dot_update(&est, v, a);
+            printf("o");
+            print_floats(a, 3);
+        } else if (strcmp(tag, "g") == 0 && th != NULL) {
+            struct acal_compensator c = ACAL_COMPENSATOR;
+            read_floats(v, 10);
+            printf("g %d", (int)acal_refresh(&c, th, v[0]));
+            acal_correct_rate(&c, v + 4, a);
+            acal_compensate(&c, v + 1, a, v + 7, b);
+            print_floats(a, 3);
+            print_floats(b, 3);
+        } else if (strcmp(tag, "r") == 0) {
+            acal_device_restart(&dev);
+            continue;
+        } else if (strcmp(tag, "s") == 0) {
+            read_floats(v, 8);
+            if (v[0] != 0.0f) acal_device_temperature(&dev, v[1]);
+            printf("s %d", acal_device_sample(&dev, v + 2, v + 5, a, b));
+            print_floats(a, 3);
+        } else {
+            return 2;
+        }
+        printf("\n");
+    }
+    return 0;
+}
+"#;
+
+/// Compiles the package in `dir` with `flags` into `dir/prog`.
+fn compile_package(dir: &Path, flags: &[&str]) {
+    let out = Command::new("cc")
+        .current_dir(dir)
+        .args(flags)
+        .args([
+            "main.c",
+            "acal_blob.c",
+            "acal_device.c",
+            "-lm",
+            "-o",
+            "prog",
+        ])
+        .output()
+        .expect("a C compiler runs");
+    assert!(
+        out.status.success(),
+        "cc {flags:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The package `host export --format c --out DIR` writes (through the command's own `run`),
+/// compiled at -O0 and strictly at -O2, run on the firmware's shared vectors and on a recording's
+/// rows: bit for bit the Rust device's and host apply's f32 path.
+#[test]
+fn c_package_written_by_the_command_is_self_contained_and_bit_exact() {
+    use crate::apply::Applier;
+    use crate::cli::export::{run as export, ExportArgs};
+    use firmware::testvectors::OMEGA_DOT_SEQ;
+    use shared::LeverMode;
+    for (cal, vectors) in [
+        (firmware::paper_unit::calibration(), "comp"),
+        (imperfect_unit(), "gyro-temp"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
+        let toml = UnitFile::from_calibration(&cal, Some(unit_id), None).to_toml();
+        let cal_path = dir.path().join("calibration.toml");
+        std::fs::write(&cal_path, toml).unwrap();
+        let out = dir.path().join("pkg");
+        let args = |force| ExportArgs {
+            calibration: cal_path.clone(),
+            format: crate::export::ExportFormat::CHeader,
+            out: Some(out.clone()),
+            force,
+            noise: None,
+            rostopic: "/imu0".into(),
+            driver_scale: None,
+            device_id: None,
+            gyro_device_id: None,
+            sysid: 1,
+            compid: 1,
+            allow_out_of_range: false,
+            allow_undetermined: false,
+        };
+        export(&args(false), true).unwrap();
+        // Never over an existing package without --force.
+        assert!(export(&args(false), true).is_err());
+        export(&args(true), true).unwrap();
+        let mut written: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        written.sort();
+        assert_eq!(
+            written,
+            [
+                "acal_blob.c",
+                "acal_blob.h",
+                "acal_calibration.h",
+                "acal_device.c",
+                "acal_device.h"
+            ]
+        );
+        // The header includes nothing the package does not hold.
+        let header = std::fs::read_to_string(out.join("acal_calibration.h")).unwrap();
+        for inc in header.lines().filter_map(|l| l.strip_prefix("#include \"")) {
+            assert!(written.iter().any(|w| inc.starts_with(w.as_str())), "{inc}");
+        }
+        std::fs::write(out.join("main.c"), PACKAGE_MAIN_C).unwrap();
+
+        let mut stdin = String::new();
+        let mut want: Vec<String> = Vec::new();
+        let bits = |v: &[u32]| v.iter().map(|b| format!(" {b:08x}")).collect::<String>();
+        if vectors == "comp" {
+            for c in COMP_CASES {
+                stdin += &format!("c {}", hex_line(c.u.iter().chain(&c.w).chain(&c.wd)));
+                want.push(format!("c{}{}", bits(&c.out_static), bits(&c.out_full)));
+            }
+            for (w, wd) in OMEGA_DOT_SEQ {
+                stdin += &format!("o {}", hex_line(w));
+                want.push(format!("o{}", bits(wd)));
+            }
+        } else {
+            for c in GYRO_TEMP_CASES {
+                let temp = f32::from_bits(c.temp_c);
+                let state = if (-20.0..=60.0).contains(&temp) { 0 } else { 1 };
+                stdin += &format!(
+                    "g {}",
+                    hex_line(
+                        std::iter::once(&c.temp_c)
+                            .chain(&c.u)
+                            .chain(&c.w)
+                            .chain(&c.wd)
+                    )
+                );
+                want.push(format!("g {state}{}{}", bits(&c.rate), bits(&c.out_full)));
+            }
+        }
+        // A recording's rows through host apply's path: spins, a rate ramp (ω̇ ≠ 0), a temperature
+        // sweep past the valid range, a non-finite row, segment changes.
+        let model = ForwardModel::new(&cal).unwrap();
+        let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
+        let mut applier = Applier::new(&cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
+        for k in 0..900usize {
+            let segment = k / 300;
+            if k > 0 && k % 300 == 0 {
+                stdin += "r\n";
+            }
+            let t = k as f64 * 1e-3;
+            let omega = [
+                3.0 * (7.0 * t).sin(),
+                -2.0 + 4.0 * t,
+                1.5 * (segment as f64),
+            ];
+            let omega_dot = [21.0 * (7.0 * t).cos(), 4.0, 0.0];
+            let f = [9.0 * (0.3 * t).cos(), 2.0, -4.0 + t];
+            let mut u = model
+                .outputs(&BodyMotion {
+                    f_o: BodySpecificForce { m_s2: f },
+                    omega: BodyRate { rad_s: omega },
+                    omega_dot: BodyAngularAccel { rad_s2: omega_dot },
+                })
+                .raw;
+            if k == 450 {
+                u[1] = f64::NAN;
+            }
+            let w: [f64; 3] = std::array::from_fn(|i| {
+                crate::export::linalg::dot(&gyro.matrix[i], &omega) + gyro.bias_rad_s[i]
+            });
+            let temp_c = (k % 3 != 2).then_some(-30.0 + 0.11 * k as f64);
+            let row = crate::session::reader::Row {
+                segment: "s",
+                segment_index: segment,
+                t_s: t,
+                u,
+                w_rad_s: w,
+                temp_c,
+            };
+            let f_ref = applier.row(&row);
+            let head = [
+                u32::from(temp_c.is_some()) * 1.0f32.to_bits(),
+                (temp_c.unwrap_or(0.0) as f32).to_bits(),
+            ];
+            let uw: Vec<u32> = u.iter().chain(&w).map(|v| (*v as f32).to_bits()).collect();
+            stdin += &format!("s {}", hex_line(head.iter().chain(&uw)));
+            want.push(match f_ref {
+                Some(f) => format!("s 0{}", bits(&f.map(f32::to_bits))),
+                None => "s -1 00000000 00000000 00000000".into(),
+            });
+        }
+        for flags in [
+            &["-O0"][..],
+            &["-O2", "-Wall", "-Wextra", "-Werror", "-std=c99"][..],
+        ] {
+            compile_package(&out, flags);
+            let got = run(&out, &stdin);
+            let got: Vec<&str> = got.lines().collect();
+            assert_eq!(got.len(), want.len(), "{flags:?}");
+            for (g, w) in got.iter().zip(&want) {
+                // A refused sample leaves the outputs as they were (the program's zeros).
+                let g = if g.starts_with("s -1") {
+                    "s -1 00000000 00000000 00000000"
+                } else {
+                    g
+                };
+                assert_eq!(g, w, "{vectors} {flags:?}");
+            }
+        }
+    }
 }
