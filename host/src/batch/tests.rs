@@ -125,6 +125,8 @@ fn unit_with(value: f64, sigma: f64) -> UnitResult {
                 value,
                 sigma: Some(sigma),
             }],
+            undetermined: Vec::new(),
+            temperature: None,
             chi2: 1.0,
             dof: 1,
             chi2_per_dof: 1.0,

@@ -1,0 +1,99 @@
+//! The machine-readable results carry the whole calibration: a
+//! simulated unit with a known gyro and temperature model, calibrated and exported.
+
+mod common;
+use common::{host, thermal_gyro_session};
+use host::summary::section_values;
+use host::unit_file::UnitFile;
+use serde_json::Value;
+use std::path::Path;
+
+/// A result's value and 1σ by parameter name.
+type Lookup<'a> = dyn Fn(&str) -> Option<(f64, Option<f64>)> + 'a;
+
+/// Every gyro and temperature value of the simulator's truth (`truth.toml` of `session`) is in
+/// `found` (name → value, 1σ) and within 5σ of truth; a coefficient with no 1σ (above the degree
+/// the data chose) is the model's 0 and the truth's is below what the data could show. Returns how
+/// many values were checked.
+fn check_against_truth(session: &Path, found: &Lookup) -> usize {
+    let truth = UnitFile::load(&session.join("truth.toml")).unwrap();
+    let values = section_values(&truth);
+    assert!(
+        values.iter().any(|v| v.name.starts_with("gyro_g_"))
+            && values.iter().any(|v| v.name.starts_with("temp_gyro_bias_")),
+        "the truth has both sections"
+    );
+    for t in &values {
+        let (v, sigma) =
+            found(&t.name).unwrap_or_else(|| panic!("{} is missing from the result", t.name));
+        match sigma {
+            Some(s) => assert!(
+                s > 0.0 && (v - t.value).abs() < 5.0 * s,
+                "{}: {v} ± {s}, truth {}",
+                t.name,
+                t.value
+            ),
+            None => assert!(
+                v == 0.0 && t.value.abs() < 1e-9,
+                "{}: {v} without 1σ, truth {}",
+                t.name,
+                t.value
+            ),
+        }
+    }
+    values.len()
+}
+
+#[test]
+fn calibrate_and_export_json_carry_the_gyro_and_the_temperature_model_within_sigma_of_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = thermal_gyro_session(dir.path(), "unit", 1);
+    let ss = s.to_str().unwrap();
+    let (ok, stdout, stderr) = host(&["calibrate", "--input", ss, "--json"]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    let params = v["parameters"].as_array().unwrap();
+    let found = |name: &str| {
+        let p = params.iter().find(|p| p["name"] == name)?;
+        Some((p["value"].as_f64().unwrap(), p["sigma"].as_f64()))
+    };
+    let n = check_against_truth(&s, &found);
+    assert_eq!(n, 12 + 27, "G, b and 27 temperature coefficients");
+    assert_eq!(params.len(), 24 + 12 + 27);
+    assert_eq!(v["temperature"]["reference_c"], 25.0);
+    let range = &v["temperature"]["valid_range_c"];
+    assert!(range[0].as_f64().unwrap() < -19.0 && range[1].as_f64().unwrap() > 59.0);
+    assert!(v["undetermined"].as_array().unwrap().is_empty(), "{v}");
+
+    // The export of the file calibrate wrote: the same sections, value for value.
+    let cal = s.join("calibration.toml");
+    let (ok, stdout, stderr) = host(&[
+        "export",
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--format",
+        "json",
+    ]);
+    assert!(ok, "{stderr}");
+    let e: Value = serde_json::from_str(&stdout).unwrap();
+    let sections: Vec<&str> = e["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        sections,
+        ["static", "dynamic", "uncertainty", "gyro", "temperature"]
+    );
+    let back: UnitFile = serde_json::from_value(e["calibration"].clone()).unwrap();
+    let file = UnitFile::load(&cal).unwrap();
+    assert_eq!(back.gyro, file.gyro);
+    assert_eq!(back.temperature, file.temperature);
+    let exported = section_values(&back);
+    let found = |name: &str| {
+        let p = exported.iter().find(|p| p.name == name)?;
+        Some((p.value, p.sigma))
+    };
+    assert_eq!(check_against_truth(&s, &found), n);
+}
