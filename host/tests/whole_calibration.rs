@@ -1,5 +1,5 @@
-//! The machine-readable results carry the whole calibration: a
-//! simulated unit with a known gyro and temperature model, calibrated and exported.
+//! The machine-readable results carry the whole calibration, and `compare` judges every section: a
+//! simulated unit with a known gyro and temperature model, calibrated, exported and compared.
 
 mod common;
 use common::{host, thermal_gyro_session};
@@ -96,4 +96,65 @@ fn calibrate_and_export_json_carry_the_gyro_and_the_temperature_model_within_sig
         Some((p.value, p.sigma))
     };
     assert_eq!(check_against_truth(&s, &found), n);
+}
+
+#[test]
+fn compare_judges_the_gyro_and_fails_a_34_percent_difference() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cals = Vec::new();
+    for seed in [1, 2] {
+        let s = thermal_gyro_session(dir.path(), &format!("seed{seed}"), seed);
+        let (ok, _, e) = host(&["-q", "calibrate", "--input", s.to_str().unwrap()]);
+        assert!(ok, "{e}");
+        cals.push(s.join("calibration.toml").to_str().unwrap().to_string());
+    }
+    // Two sessions of one unit: every section within a few σ (63 values: 6σ, as for the others).
+    let (ok, stdout, stderr) = host(&["compare", &cals[0], &cals[1], "--json", "--max-sigma", "6"]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let row = |name: &str| rows.iter().find(|r| r["name"] == name).unwrap().clone();
+    for name in [
+        "gyro_g_xx",
+        "gyro_bias_y",
+        "temp_bias_x_c1",
+        "temp_scale_z_c1",
+    ] {
+        assert!(row(name)["diff_sigma"].as_f64().is_some(), "{name}");
+    }
+    assert!(
+        stderr.contains("gyro_g_xx"),
+        "the table shows the gyro: {stderr}"
+    );
+
+    // B's gyro scale 34 % larger: a FAIL naming the gyro, in the table and the JSON.
+    let text = std::fs::read_to_string(&cals[1]).unwrap();
+    let mut b = UnitFile::parse(&text).unwrap();
+    for row in &mut b.gyro.as_mut().unwrap().matrix {
+        for g in row.iter_mut() {
+            *g *= 1.34;
+        }
+    }
+    let planted = dir.path().join("planted.toml");
+    std::fs::write(&planted, b.to_toml()).unwrap();
+    let (ok, stdout, stderr) = host(&[
+        "compare",
+        &cals[0],
+        planted.to_str().unwrap(),
+        "--json",
+        "--max-sigma",
+        "3",
+    ]);
+    assert!(!ok, "{stderr}");
+    assert!(stderr.contains("FAIL: gyro_g_"), "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["passed"], false);
+    assert!(v["worst"]["name"].as_str().unwrap().starts_with("gyro_g_"));
+    let xx = v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["name"] == "gyro_g_xx")
+        .unwrap();
+    assert!(xx["diff_sigma"].as_f64().unwrap() > 1000.0, "{xx}");
 }
