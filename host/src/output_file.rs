@@ -5,6 +5,10 @@
 //! hard link, which fails if the target appeared meanwhile, so an existing file is never replaced
 //! even by a race. An error or a drop before [`OutputFile::commit`] removes the temporary file and
 //! leaves the target as it was.
+//!
+//! A result directory ([`OutputDir`], `host batch --out`) is built the same way: whole, in a hidden
+//! directory beside the target, and renamed into place at the end, so an interrupted run (a Ctrl-C)
+//! leaves the target as it was and only a `.NAME.PID.partial` directory that no command reads.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -17,6 +21,9 @@ pub enum OutputFileError {
     Exists(PathBuf),
     /// A file system operation failed.
     Io(PathBuf, std::io::Error),
+    /// A directory to replace holds files that are not an earlier result of this command (it lacks
+    /// the named marker file): `--force` never replaces such a directory.
+    NotOurs(PathBuf, &'static str),
 }
 
 impl std::fmt::Display for OutputFileError {
@@ -28,6 +35,12 @@ impl std::fmt::Display for OutputFileError {
                 p.display()
             ),
             OutputFileError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
+            OutputFileError::NotOurs(p, marker) => write!(
+                f,
+                "{} holds files that are not an earlier result of this command (it has no {marker}); \
+                 --force replaces only such a result: choose another output directory",
+                p.display()
+            ),
         }
     }
 }
@@ -124,6 +137,123 @@ pub fn write_atomic(target: &Path, bytes: &[u8], force: bool) -> Result<(), Outp
     f.commit()
 }
 
+/// A result directory being built in a hidden directory beside its target; it appears at the
+/// target, whole, only on [`OutputDir::commit`] (see the module documentation). A drop before that
+/// removes what was built.
+pub struct OutputDir {
+    target: PathBuf,
+    temp: PathBuf,
+    force: bool,
+    marker: &'static str,
+    committed: bool,
+}
+
+/// Whether `target` may be replaced: it does not exist or is an empty directory; or `force` and it
+/// is a directory with `marker` in it (an earlier result of the same command).
+fn check_replaceable(
+    target: &Path,
+    force: bool,
+    marker: &'static str,
+) -> Result<(), OutputFileError> {
+    let io = |e| OutputFileError::Io(target.to_path_buf(), e);
+    let mut entries = match std::fs::read_dir(target) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(_) if target.exists() => return Err(OutputFileError::Exists(target.to_path_buf())),
+        Err(e) => return Err(io(e)),
+    };
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    if !force {
+        return Err(OutputFileError::Exists(target.to_path_buf()));
+    }
+    if !target.join(marker).is_file() {
+        return Err(OutputFileError::NotOurs(target.to_path_buf(), marker));
+    }
+    Ok(())
+}
+
+impl OutputDir {
+    /// Starts building `target`. Refuses at once, before any work, when `target` exists and is not
+    /// an empty directory, unless `force` and it holds `marker` (the file every result of the
+    /// command has, e.g. `summary.json`): `--force` never replaces a directory of other files.
+    pub fn create(
+        target: &Path,
+        force: bool,
+        marker: &'static str,
+    ) -> Result<OutputDir, OutputFileError> {
+        check_replaceable(target, force, marker)?;
+        let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
+        let name = target
+            .file_name()
+            .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+        let temp = target.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+        if let Some(parent) = temp.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+        }
+        // Left by an interrupted run that had this process id: that run is gone.
+        if temp.exists() {
+            std::fs::remove_dir_all(&temp).map_err(|e| io(&temp, e))?;
+        }
+        std::fs::create_dir(&temp).map_err(|e| io(&temp, e))?;
+        Ok(OutputDir {
+            target: target.to_path_buf(),
+            temp,
+            force,
+            marker,
+            committed: false,
+        })
+    }
+
+    /// Where to write the result's files now (the hidden directory).
+    pub fn path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The final path.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Moves the built directory to the target, replacing an earlier result there (moved aside
+    /// first, put back if the move fails, deleted after).
+    pub fn commit(mut self) -> Result<(), OutputFileError> {
+        let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
+        // Checked again: the target may have appeared or changed while the result was built.
+        check_replaceable(&self.target, self.force, self.marker)?;
+        let old = self.temp.with_extension("old");
+        let moved_aside = match std::fs::remove_dir(&self.target) {
+            Ok(()) => false,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
+            // Not empty: an earlier result that `check_replaceable` allowed.
+            Err(_) => {
+                std::fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;
+                true
+            }
+        };
+        if let Err(e) = std::fs::rename(&self.temp, &self.target) {
+            if moved_aside {
+                let _ = std::fs::rename(&old, &self.target);
+            }
+            return Err(io(&self.target, e));
+        }
+        self.committed = true;
+        if moved_aside {
+            std::fs::remove_dir_all(&old).map_err(|e| io(&old, e))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.temp);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,5 +276,50 @@ mod tests {
         drop(f);
         assert_eq!(std::fs::read(&p).unwrap(), b"three");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    /// A directory result appears whole or not at all; it replaces an earlier one only with `force`,
+    /// and never a directory of other files.
+    #[test]
+    fn a_directory_is_replaced_whole_and_only_when_it_is_ours() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let d = OutputDir::create(&out, false, "summary.json").unwrap();
+        std::fs::write(d.path().join("summary.json"), b"one").unwrap();
+        assert!(!out.exists(), "nothing at the target before the commit");
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), b"one");
+        // Without force: refused before any work.
+        assert!(matches!(
+            OutputDir::create(&out, false, "summary.json"),
+            Err(OutputFileError::Exists(_))
+        ));
+        // Dropped half-way (a failure): the earlier result stays, nothing else is left.
+        let d = OutputDir::create(&out, true, "summary.json").unwrap();
+        std::fs::write(d.path().join("half"), b"").unwrap();
+        drop(d);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // With force: replaced whole (the old files gone, not merged).
+        let d = OutputDir::create(&out, true, "summary.json").unwrap();
+        std::fs::write(d.path().join("summary.json"), b"two").unwrap();
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), b"two");
+        assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // A directory of other files is never replaced, even with force.
+        let other = dir.path().join("home");
+        std::fs::create_dir(&other).unwrap();
+        std::fs::write(other.join("notes.txt"), b"keep").unwrap();
+        assert!(matches!(
+            OutputDir::create(&other, true, "summary.json"),
+            Err(OutputFileError::NotOurs(..))
+        ));
+        // An empty directory is taken as it is.
+        let empty = dir.path().join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        OutputDir::create(&empty, false, "summary.json")
+            .unwrap()
+            .commit()
+            .unwrap();
     }
 }
