@@ -268,6 +268,10 @@ pub struct CalibrationSummary {
     /// The temperature model's reference and range, when the calibration has one.
     #[serde(default)]
     pub temperature: Option<TemperatureRange>,
+    /// The calibration file itself, every table as `calibration.toml` holds it (the values above are
+    /// taken from it; an undetermined 1σ, ∞ in the file, is `null` in JSON).
+    #[serde(default)]
+    pub calibration: Option<UnitFile>,
     /// Σ whitened residual².
     pub chi2: f64,
     /// Degrees of freedom.
@@ -307,7 +311,8 @@ impl CalibrationSummary {
             .map(|p| p.name.clone())
             .collect();
         // The gyro and temperature values exactly as calibration.toml holds them.
-        let file = calibration_unit_file(outcome, None);
+        let id = unit_id.as_deref().and_then(shared::UnitId::parse_hex);
+        let file = calibration_unit_file(outcome, id);
         for s in section_values(&file) {
             if s.undetermined {
                 undetermined.push(s.name.clone());
@@ -363,6 +368,7 @@ impl CalibrationSummary {
             parameters,
             undetermined,
             temperature,
+            calibration: Some(file),
             chi2: outcome.fit.chi2,
             dof: outcome.fit.dof,
             chi2_per_dof: outcome.fit.reduced_chi2,

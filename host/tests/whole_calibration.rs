@@ -64,9 +64,16 @@ fn calibrate_and_export_json_carry_the_gyro_and_the_temperature_model_within_sig
     let range = &v["temperature"]["valid_range_c"];
     assert!(range[0].as_f64().unwrap() < -19.0 && range[1].as_f64().unwrap() > 59.0);
     assert!(v["undetermined"].as_array().unwrap().is_empty(), "{v}");
+    // And the calibration file itself, table for table (the session has no unit id: the file's is
+    // the all-zero one, the summary's none).
+    let cal = s.join("calibration.toml");
+    let file = UnitFile::load(&cal).unwrap();
+    let mut carried: UnitFile = serde_json::from_value(v["calibration"].clone()).unwrap();
+    assert_eq!(carried.unit_id, None);
+    carried.unit_id = file.unit_id.clone();
+    assert_eq!(carried, file);
 
     // The export of the file calibrate wrote: the same sections, value for value.
-    let cal = s.join("calibration.toml");
     let (ok, stdout, stderr) = host(&[
         "export",
         "--calibration",
@@ -87,7 +94,6 @@ fn calibrate_and_export_json_carry_the_gyro_and_the_temperature_model_within_sig
         ["static", "dynamic", "uncertainty", "gyro", "temperature"]
     );
     let back: UnitFile = serde_json::from_value(e["calibration"].clone()).unwrap();
-    let file = UnitFile::load(&cal).unwrap();
     assert_eq!(back.gyro, file.gyro);
     assert_eq!(back.temperature, file.temperature);
     let exported = section_values(&back);

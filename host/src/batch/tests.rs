@@ -135,6 +135,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
             }],
             undetermined: Vec::new(),
             temperature: None,
+            calibration: None,
             chi2: 1.0,
             dof: 1,
             chi2_per_dof: 1.0,
