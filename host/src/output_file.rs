@@ -31,7 +31,7 @@ impl std::fmt::Display for OutputFileError {
         match self {
             OutputFileError::Exists(p) => write!(
                 f,
-                "{} already exists; choose another file or allow overwriting it (--force)",
+                "{} already exists; choose another name or allow replacing it (--force)",
                 p.display()
             ),
             OutputFileError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
@@ -159,6 +159,10 @@ fn check_replaceable(
     let mut entries = match std::fs::read_dir(target) {
         Ok(entries) => entries,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        // Not a directory (a file): never ours to replace.
+        Err(_) if target.exists() && force => {
+            return Err(OutputFileError::NotOurs(target.to_path_buf(), marker))
+        }
         Err(_) if target.exists() => return Err(OutputFileError::Exists(target.to_path_buf())),
         Err(e) => return Err(io(e)),
     };
@@ -312,6 +316,13 @@ mod tests {
         std::fs::write(other.join("notes.txt"), b"keep").unwrap();
         assert!(matches!(
             OutputDir::create(&other, true, "summary.json"),
+            Err(OutputFileError::NotOurs(..))
+        ));
+        // Nor a file.
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"keep").unwrap();
+        assert!(matches!(
+            OutputDir::create(&file, true, "summary.json"),
             Err(OutputFileError::NotOurs(..))
         ));
         // An empty directory is taken as it is.
