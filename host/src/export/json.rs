@@ -140,4 +140,35 @@ mod tests {
         );
         assert!(und.contains(&"fit_statistics.chi2_per_dof".to_string()));
     }
+
+    #[test]
+    fn the_gyro_entries_a_plan_left_undetermined_are_named() {
+        let mut unit = UnitFile::paper_unit();
+        let mut sigma = [[1e-5; 3]; 3];
+        sigma[0][2] = 2e-3;
+        unit.gyro = Some(crate::unit_file::GyroSection {
+            bias_rad_s: [0.01, 0.0, 0.0],
+            matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            bias_rad_s_1sigma: Some([1e-5; 3]),
+            matrix_1sigma: Some(sigma),
+        });
+        let cal = unit.to_calibration().unwrap();
+        let v = document(&ExportInput::for_tests(&unit, cal)).unwrap();
+        let und: Vec<String> = serde_json::from_value(v["undetermined"].clone()).unwrap();
+        let gyro: Vec<&String> = und.iter().filter(|u| u.contains("gyro")).collect();
+        assert_eq!(gyro, ["calibration.gyro.matrix[0][2]"]);
+        assert_eq!(
+            v["sections"],
+            serde_json::json!(["static", "dynamic", "gyro"])
+        );
+        assert_eq!(v["calibration"]["gyro"]["matrix_1sigma"][0][2], 2e-3);
+        // A gyro without 1σ (a simulator's truth): its 1σ named as missing, not taken as exact.
+        unit.gyro.as_mut().unwrap().matrix_1sigma = None;
+        let v = document(&ExportInput::for_tests(&unit, cal)).unwrap();
+        let und: Vec<String> = serde_json::from_value(v["undetermined"].clone()).unwrap();
+        assert!(
+            und.contains(&"calibration.gyro.matrix_1sigma".to_string()),
+            "{und:?}"
+        );
+    }
 }
