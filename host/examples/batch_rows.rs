@@ -40,11 +40,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             limits: Limits::default(),
             outlier_z: 5.0,
             jobs,
-            force: true,
         };
         let lot = run_batch(
             &sessions,
-            &dir.path().join("out"),
+            // A fresh directory each run: results are never written over earlier ones.
+            &dir.path().join(format!("out-{}", jobs.unwrap_or(0))),
             &opts,
             &ProgressBar::hidden(),
         )?;

@@ -1,24 +1,30 @@
 //! A production lot: every session of a directory calibrated in parallel (rayon, one session per
-//! task), one summary row per unit (each parameter with its 1σ, χ², pass/fail against the limits), and
-//! the units whose parameters are outliers of the lot flagged.
+//! task), one summary row per unit (each parameter with its 1σ — the accelerometer's, the gyro's and
+//! the temperature model's — χ², pass/fail against the limits), the units whose parameters are
+//! outliers of the lot flagged, and units that claim the same unit id failed.
 //!
 //! Outliers: for each parameter, the robust z-score `z = (x − median) / s` over the units that
 //! calibrated, with `s = max(1.4826·MAD, median of the units' own 1σ)` (the MAD scale of Iglewicz and
 //! Hoaglin, 1993, never below the measurement's own uncertainty: a small lot of nearly identical units
 //! has a MAD that can fall far below the noise by chance). A unit with `|z|` above the limit on any
-//! parameter is flagged. Lots of fewer than [`MIN_LOT`] units are not screened; parameters with no
-//! spread and no 1σ (a lever-arm component no plan determines) are skipped.
+//! parameter is flagged. Lots of fewer than [`MIN_LOT`] units are not screened; a value with no 1σ
+//! (a lever-arm component or gyro entry the plan did not determine, a temperature coefficient above
+//! the degree the data chose) is not screened unless the parameter has no 1σ in any unit (χ²/dof),
+//! and parameters with no spread and no 1σ are skipped.
 
-use crate::calibration_files::{now_unix_s, write_calibration_files, CALIBRATION_TOML};
+use crate::calibration_files::{now_unix_s, write_calibration_files};
 use crate::estimate::{calibrate_session_stats, median, EstimateOptions};
 use crate::session::{read_session, ReadOptions, PLAN_FILE};
-use crate::summary::{CalibrationSummary, Limits};
+use crate::summary::{all_parameter_keys, CalibrationSummary, Limits};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use shared::UnitId;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// Most worker threads `host batch --jobs` starts (a lot never uses more than it has sessions).
+pub const MAX_JOBS: usize = 256;
 
 /// Fewest calibrated units for the outlier screening.
 pub const MIN_LOT: usize = 5;
@@ -32,10 +38,8 @@ pub struct BatchOptions {
     pub limits: Limits,
     /// Robust z-score above which a parameter is an outlier of the lot.
     pub outlier_z: f64,
-    /// Worker threads (`None`: one per core).
+    /// Worker threads (`None`: one per core); never more than there are sessions.
     pub jobs: Option<usize>,
-    /// Replace existing calibration files in the output directory.
-    pub force: bool,
 }
 
 /// One unit of the lot.
@@ -51,8 +55,44 @@ pub struct UnitResult {
     pub error: Option<String>,
     /// Parameters on which the unit is an outlier of the lot, with their robust z-score.
     pub outliers: Vec<(String, f64)>,
-    /// Calibrated, within the limits, and not an outlier.
+    /// The other sessions of the lot whose unit id is this unit's (a mislabelled or repeated unit).
+    #[serde(default)]
+    pub same_unit_id_as: Vec<String>,
+    /// Calibrated, within the limits, not an outlier and its unit id not claimed twice.
     pub passed: bool,
+}
+
+impl UnitResult {
+    /// Why the unit did not pass, every reason in one line (empty when it passed).
+    pub fn why_failed(&self) -> String {
+        let mut why = Vec::new();
+        if let Some(e) = &self.error {
+            why.push(e.clone());
+        }
+        if let Some(s) = self.summary.as_ref().filter(|s| !s.passed) {
+            why.push(s.failures());
+        }
+        if !self.outliers.is_empty() {
+            let o: Vec<String> = self
+                .outliers
+                .iter()
+                .map(|(n, z)| format!("{n} z = {z:.1}"))
+                .collect();
+            why.push(format!("outlier of the lot: {}", o.join(", ")));
+        }
+        if !self.same_unit_id_as.is_empty() {
+            why.push(format!(
+                "unit id {} is also the unit of {}: each unit is calibrated once per lot; check the \
+                 sessions' plan.toml unit_id",
+                self.summary
+                    .as_ref()
+                    .and_then(|s| s.unit_id.as_deref())
+                    .unwrap_or("?"),
+                self.same_unit_id_as.join(", ")
+            ));
+        }
+        why.join("; ")
+    }
 }
 
 /// The lot.
@@ -131,16 +171,10 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
         summary: None,
         error: None,
         outliers: Vec::new(),
+        same_unit_id_as: Vec::new(),
         passed: false,
     };
     let out_dir = out.join(&session);
-    if !opts.force && out_dir.join(CALIBRATION_TOML).exists() {
-        r.error = Some(format!(
-            "{} exists; allow overwriting with --force",
-            out_dir.join(CALIBRATION_TOML).display()
-        ));
-        return r;
-    }
     let result = (|| -> Result<CalibrationSummary, String> {
         let s = read_session(dir, &ReadOptions { quiet: true }).map_err(|e| e.to_string())?;
         r.rows = s.report.rows;
@@ -168,60 +202,98 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
     r
 }
 
-/// Flags the outliers of the lot (see the module documentation) and sets `passed`.
+/// Flags the outliers of the lot (see the module documentation) and the units whose id another
+/// session claims too, and sets `passed`.
 pub fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
-    let n_params = units
-        .iter()
-        .find_map(|u| u.summary.as_ref())
-        .map_or(0, |s| s.parameters.len());
-    for k in 0..=n_params {
-        // k == n_params: χ²/dof (no 1σ of its own).
-        let value = |u: &UnitResult| -> Option<(f64, Option<f64>)> {
-            let s = u.summary.as_ref()?;
-            let (v, sigma) = if k == n_params {
-                (s.chi2_per_dof, None)
-            } else {
-                let p = s.parameters.get(k)?;
-                (p.value, p.sigma)
-            };
-            v.is_finite().then_some((v, sigma))
-        };
-        let pairs: Vec<(f64, Option<f64>)> = units.iter().filter_map(value).collect();
-        if pairs.len() < MIN_LOT {
-            continue;
-        }
-        let xs: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-        let m = median(xs.clone());
-        let dev: Vec<f64> = xs.iter().map(|x| (x - m).abs()).collect();
-        let mad_scale = 1.4826 * median(dev);
-        let sigmas: Vec<f64> = pairs
-            .iter()
-            .filter_map(|p| p.1)
-            .filter(|s| s.is_finite())
-            .collect();
-        let sigma = if sigmas.is_empty() {
-            0.0
-        } else {
-            median(sigmas)
-        };
-        let scale = mad_scale.max(sigma);
-        if scale <= 0.0 {
-            continue;
-        }
-        for u in units.iter_mut() {
-            let Some((x, _)) = value(u) else { continue };
-            let z = (x - m) / scale;
-            if z.abs() > z_limit {
-                let name = match &u.summary {
-                    Some(s) if k < n_params => s.parameters[k].name.clone(),
-                    _ => "chi2_per_dof".into(),
-                };
-                u.outliers.push((name, z));
+    let mut names = all_parameter_keys();
+    for p in units.iter().filter_map(|u| u.summary.as_ref()) {
+        for q in &p.parameters {
+            if !names.contains(&q.name) {
+                names.push(q.name.clone());
             }
         }
     }
+    // `None`: χ²/dof (no 1σ of its own).
+    for name in names.iter().map(Some).chain([None]) {
+        let value = |u: &UnitResult| -> Option<(f64, Option<f64>)> {
+            let s = u.summary.as_ref()?;
+            let (v, sigma) = match name {
+                None => (s.chi2_per_dof, None),
+                Some(n) => {
+                    let p = s.parameters.iter().find(|p| &p.name == n)?;
+                    (p.value, p.sigma)
+                }
+            };
+            v.is_finite().then_some((v, sigma))
+        };
+        let any_sigma = units.iter().filter_map(value).any(|p| p.1.is_some());
+        // A value without its 1σ (not determined, not in the model) is not screened.
+        let screened = |u: &UnitResult| value(u).filter(|p| !any_sigma || p.1.is_some());
+        let pairs: Vec<(f64, Option<f64>)> = units.iter().filter_map(screened).collect();
+        let Some((m, scale)) = robust_centre_and_scale(&pairs) else {
+            continue;
+        };
+        for u in units.iter_mut() {
+            let Some((x, _)) = screened(u) else { continue };
+            let z = (x - m) / scale;
+            if z.abs() > z_limit {
+                let label = name.map_or_else(|| "chi2_per_dof".to_string(), Clone::clone);
+                u.outliers.push((label, z));
+            }
+        }
+    }
+    flag_same_unit_ids(units);
     for u in units.iter_mut() {
-        u.passed = u.summary.as_ref().is_some_and(|s| s.passed) && u.outliers.is_empty();
+        u.passed = u.summary.as_ref().is_some_and(|s| s.passed)
+            && u.outliers.is_empty()
+            && u.same_unit_id_as.is_empty();
+    }
+}
+
+/// The median and the scale `max(1.4826·MAD, median 1σ)` of a parameter's values and 1σ; `None`
+/// for fewer than [`MIN_LOT`] values or no spread and no 1σ.
+fn robust_centre_and_scale(pairs: &[(f64, Option<f64>)]) -> Option<(f64, f64)> {
+    if pairs.len() < MIN_LOT {
+        return None;
+    }
+    let xs: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+    let m = median(xs.clone());
+    let dev: Vec<f64> = xs.iter().map(|x| (x - m).abs()).collect();
+    let mad_scale = 1.4826 * median(dev);
+    let sigmas: Vec<f64> = pairs
+        .iter()
+        .filter_map(|p| p.1)
+        .filter(|s| s.is_finite())
+        .collect();
+    let sigma = if sigmas.is_empty() {
+        0.0
+    } else {
+        median(sigmas)
+    };
+    let scale = mad_scale.max(sigma);
+    (scale > 0.0).then_some((m, scale))
+}
+
+/// Records, on each unit, the other sessions whose calibration has its unit id (an absent or
+/// all-zero id, a session recorded without one, matches nothing).
+fn flag_same_unit_ids(units: &mut [UnitResult]) {
+    let id = |u: &UnitResult| {
+        u.summary
+            .as_ref()
+            .and_then(|s| s.unit_id.as_deref())
+            .and_then(UnitId::parse_hex)
+            .filter(|id| *id != UnitId::default())
+    };
+    let ids: Vec<(Option<UnitId>, String)> =
+        units.iter().map(|u| (id(u), u.session.clone())).collect();
+    for (k, u) in units.iter_mut().enumerate() {
+        let Some(mine) = ids[k].0 else { continue };
+        u.same_unit_id_as = ids
+            .iter()
+            .enumerate()
+            .filter(|(j, (other, _))| *j != k && *other == Some(mine))
+            .map(|(_, (_, session))| session.clone())
+            .collect();
     }
 }
 
@@ -232,10 +304,10 @@ pub fn run_batch(
     opts: &BatchOptions,
     bar: &ProgressBar,
 ) -> Result<LotSummary, BatchError> {
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(j) = opts.jobs {
-        builder = builder.num_threads(j);
-    }
+    // One thread per session at most: more would only wait (and each one costs a stack).
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let threads = opts.jobs.unwrap_or(cores).clamp(1, sessions.len().max(1));
+    let builder = rayon::ThreadPoolBuilder::new().num_threads(threads);
     let pool = builder
         .build()
         .map_err(|e| BatchError::Threads(e.to_string()))?;
@@ -263,52 +335,77 @@ pub fn run_batch(
     })
 }
 
-/// The lot as CSV: one row per unit, each parameter and its 1σ.
-pub fn to_csv(lot: &LotSummary) -> String {
-    let keys = crate::summary::parameter_keys();
-    let mut s = String::from("session,unit_id,passed,within_limits,outliers,chi2,dof,chi2_per_dof");
-    for k in &keys {
-        s += &format!(",{k},{k}_sigma");
+/// A CSV cell: quoted when it holds a comma, a quote or a line end.
+fn csv_cell(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
     }
-    s += ",error\n";
+}
+
+/// The lot as CSV: one row per unit, every parameter ([`all_parameter_keys`]: the accelerometer's,
+/// the gyro's, the temperature model's) and its 1σ, the temperature model's reference and range; a
+/// unit without a gyro or a temperature model leaves those cells empty.
+pub fn to_csv(lot: &LotSummary) -> String {
+    let keys = all_parameter_keys();
+    let mut header: Vec<String> = [
+        "session",
+        "unit_id",
+        "passed",
+        "within_limits",
+        "outliers",
+        "same_unit_id_as",
+        "chi2",
+        "dof",
+        "chi2_per_dof",
+    ]
+    .map(String::from)
+    .into();
+    for k in &keys {
+        header.push(k.clone());
+        header.push(format!("{k}_sigma"));
+    }
+    header.extend(
+        [
+            "temp_reference_c",
+            "temp_valid_min_c",
+            "temp_valid_max_c",
+            "error",
+        ]
+        .map(String::from),
+    );
+    let mut s = header.join(",") + "\n";
+    let num = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
     for u in &lot.units {
         let outl: Vec<String> = u
             .outliers
             .iter()
             .map(|(n, z)| format!("{n}(z={z:.1})"))
             .collect();
-        match &u.summary {
-            Some(sm) => {
-                s += &format!(
-                    "{},{},{},{},{},{:e},{},{:e}",
-                    u.session,
-                    sm.unit_id.clone().unwrap_or_default(),
-                    u.passed,
-                    sm.passed,
-                    outl.join(" "),
-                    sm.chi2,
-                    sm.dof,
-                    sm.chi2_per_dof
-                );
-                for p in &sm.parameters {
-                    s += &format!(
-                        ",{:e},{}",
-                        p.value,
-                        p.sigma.map_or("".into(), |v| format!("{v:e}"))
-                    );
-                }
-                s += ",\n";
-            }
-            None => {
-                s += &format!("{},,false,false,,,,", u.session);
-                s += &",".repeat(2 * keys.len());
-                // Commas would split the message: it is the last column, quoted.
-                s += &format!(
-                    ",\"{}\"\n",
-                    u.error.clone().unwrap_or_default().replace('"', "'")
-                );
-            }
+        let sm = u.summary.as_ref();
+        let mut row = vec![
+            csv_cell(&u.session),
+            sm.and_then(|m| m.unit_id.clone()).unwrap_or_default(),
+            u.passed.to_string(),
+            sm.is_some_and(|m| m.passed).to_string(),
+            csv_cell(&outl.join(" ")),
+            csv_cell(&u.same_unit_id_as.join(" ")),
+            num(sm.map(|m| m.chi2)),
+            sm.map_or(String::new(), |m| m.dof.to_string()),
+            num(sm.map(|m| m.chi2_per_dof)),
+        ];
+        for k in &keys {
+            let p = sm.and_then(|m| m.parameters.iter().find(|p| &p.name == k));
+            row.push(num(p.map(|p| p.value)));
+            row.push(num(p.and_then(|p| p.sigma)));
         }
+        let t = sm.and_then(|m| m.temperature.as_ref());
+        row.push(num(t.map(|t| t.reference_c)));
+        row.push(num(t.map(|t| t.valid_range_c[0])));
+        row.push(num(t.map(|t| t.valid_range_c[1])));
+        row.push(csv_cell(u.error.as_deref().unwrap_or_default()));
+        s += &(row.join(",") + "\n");
     }
     s
 }

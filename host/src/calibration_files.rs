@@ -112,23 +112,13 @@ pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> 
     Ok(())
 }
 
-/// Writes both files into `out_dir` (created if needed), as a pair: both are written beside their
-/// final names (`.calibration.toml.new`, `.calibration.bin.new`) and renamed only when both are
-/// complete, so a failure (a full disk) leaves the old pair or no pair, never a new `.toml` beside an
-/// old `.bin`. An existing pair is replaced only with `force`.
-pub fn write_calibration_files(
-    out_dir: &Path,
-    outcome: &CalibrationOutcome,
-    unit_id: UnitId,
-    created_unix_s: u64,
-    force: bool,
-) -> Result<WrittenCalibration, OutputError> {
-    refuse_overwrite(out_dir, force)?;
-    let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
-    std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
+/// The calibration file of an outcome: the unit-file schema with every 1σ the estimate has (the
+/// accelerometer's `[uncertainty]`, the gyro's and the temperature model's), exactly what
+/// `calibration.toml` holds; the machine-readable summaries are made from it too.
+pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitId>) -> UnitFile {
     let mut file = UnitFile::from_calibration(
         &outcome.calibration,
-        Some(unit_id),
+        unit_id,
         Some(outcome.uncertainty.clone()),
     );
     // The estimate's 1σ beside the values that `from_calibration` wrote.
@@ -145,7 +135,24 @@ pub fn write_calibration_files(
         section.gyro_bias_rad_s_per_c_1sigma =
             fit.model.gyro_bias_rad_s_per_c.map(|_| fit.gyro_bias_sigma);
     }
-    let text = file.to_toml();
+    file
+}
+
+/// Writes both files into `out_dir` (created if needed), as a pair: both are written beside their
+/// final names (`.calibration.toml.new`, `.calibration.bin.new`) and renamed only when both are
+/// complete, so a failure (a full disk) leaves the old pair or no pair, never a new `.toml` beside an
+/// old `.bin`. An existing pair is replaced only with `force`.
+pub fn write_calibration_files(
+    out_dir: &Path,
+    outcome: &CalibrationOutcome,
+    unit_id: UnitId,
+    created_unix_s: u64,
+    force: bool,
+) -> Result<WrittenCalibration, OutputError> {
+    refuse_overwrite(out_dir, force)?;
+    let blob = blob_bytes(outcome, unit_id, created_unix_s).map_err(OutputError::Blob)?;
+    std::fs::create_dir_all(out_dir).map_err(|e| OutputError::Io(out_dir.to_path_buf(), e))?;
+    let text = calibration_unit_file(outcome, Some(unit_id)).to_toml();
     let toml_path = out_dir.join(CALIBRATION_TOML);
     let bin_path = out_dir.join(CALIBRATION_BIN);
     let toml_new = out_dir.join(format!(".{CALIBRATION_TOML}.new"));

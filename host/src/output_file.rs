@@ -5,6 +5,10 @@
 //! hard link, which fails if the target appeared meanwhile, so an existing file is never replaced
 //! even by a race. An error or a drop before [`OutputFile::commit`] removes the temporary file and
 //! leaves the target as it was.
+//!
+//! A result directory ([`OutputDir`], `host batch --out`) is built the same way: whole, in a hidden
+//! directory beside the target, and renamed into place at the end, so an interrupted run (a Ctrl-C)
+//! leaves the target as it was and only a `.NAME.PID.partial` directory that no command reads.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -17,7 +21,10 @@ pub enum OutputFileError {
     Exists(PathBuf),
     /// A file system operation failed.
     Io(PathBuf, std::io::Error),
-    /// `--force` would replace a directory holding files no command of this tool writes.
+    /// A directory to replace holds files that are not an earlier result of this command (it lacks
+    /// the named marker file): `--force` never replaces such a directory.
+    NotOurs(PathBuf, &'static str),
+    /// `--force` would replace a directory that also holds files no command of this tool writes.
     Foreign(PathBuf, Vec<String>),
 }
 
@@ -26,7 +33,7 @@ impl std::fmt::Display for OutputFileError {
         match self {
             OutputFileError::Exists(p) => write!(
                 f,
-                "{} already exists; choose another file or allow overwriting it (--force)",
+                "{} already exists; choose another name or allow replacing it (--force)",
                 p.display()
             ),
             OutputFileError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
@@ -35,8 +42,14 @@ impl std::fmt::Display for OutputFileError {
                 "{} holds {} that this tool did not write ({}); --force replaces a result directory \
                  whole, so choose another directory",
                 p.display(),
-                if names.len() == 1 { "an entry" } else { "entries" },
+                if names.len() == 1 { "a file" } else { "files" },
                 names.join(", ")
+            ),
+            OutputFileError::NotOurs(p, marker) => write!(
+                f,
+                "{} holds files that are not an earlier result of this command (it has no {marker}); \
+                 --force replaces only such a result: choose another output directory",
+                p.display()
             ),
         }
     }
@@ -134,56 +147,107 @@ pub fn write_atomic(target: &Path, bytes: &[u8], force: bool) -> Result<(), Outp
     f.commit()
 }
 
-/// Extensions of the files this tool writes into a result directory (sessions, calibrations,
-/// reports, figures); anything else in a directory that `--force` would replace is refused.
-const OWN_EXTENSIONS: [&str; 8] = ["toml", "csv", "bin", "svg", "png", "html", "md", "json"];
-
-/// A result directory built beside its target and moved into place whole, so that an interrupted
-/// run (an error, Ctrl-C) leaves either the earlier directory or none, never a half-written one that
-/// a later command accepts, and `--force` leaves no stale file of an earlier run. The directory is
-/// built in `.NAME.PID.partial` next to the target; an earlier directory is moved aside and removed
-/// only after the new one is in place.
+/// A result directory being built in a hidden directory beside its target; it appears at the
+/// target, whole, only on [`OutputDir::commit`] (see the module documentation). A drop before that
+/// removes what was built.
 pub struct OutputDir {
     target: PathBuf,
     temp: PathBuf,
     force: bool,
+    marker: &'static str,
     committed: bool,
 }
 
-impl OutputDir {
-    /// Starts building `target`. Fails at once, before any work, if it exists and `force` is false,
-    /// or if it holds anything this tool does not write (a directory, a file of another kind).
-    pub fn create(target: &Path, force: bool) -> Result<OutputDir, OutputFileError> {
-        let io = |p: &Path| {
-            let p = p.to_path_buf();
-            move |e| OutputFileError::Io(p, e)
-        };
-        if target.exists() && !is_empty_dir(target) {
-            if !force {
-                return Err(OutputFileError::Exists(target.to_path_buf()));
-            }
-            let foreign = foreign_entries(target).map_err(io(target))?;
-            if !foreign.is_empty() {
-                return Err(OutputFileError::Foreign(target.to_path_buf(), foreign));
-            }
+/// Whether `target` may be replaced: it does not exist or is an empty directory; or `force` and it
+/// is a directory with `marker` in it (an earlier result of the same command).
+fn check_replaceable(
+    target: &Path,
+    force: bool,
+    marker: &'static str,
+) -> Result<(), OutputFileError> {
+    let io = |e| OutputFileError::Io(target.to_path_buf(), e);
+    let mut entries = match std::fs::read_dir(target) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        // Not a directory (a file): never ours to replace.
+        Err(_) if target.exists() && force => {
+            return Err(OutputFileError::NotOurs(target.to_path_buf(), marker))
         }
+        Err(_) if target.exists() => return Err(OutputFileError::Exists(target.to_path_buf())),
+        Err(e) => return Err(io(e)),
+    };
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    if !force {
+        return Err(OutputFileError::Exists(target.to_path_buf()));
+    }
+    if !target.join(marker).is_file() {
+        return Err(OutputFileError::NotOurs(target.to_path_buf(), marker));
+    }
+    let foreign = foreign_files(target).map_err(io)?;
+    if !foreign.is_empty() {
+        return Err(OutputFileError::Foreign(target.to_path_buf(), foreign));
+    }
+    Ok(())
+}
+
+/// Extensions of the files this tool writes into a result directory (sessions, calibrations,
+/// reports, figures, summaries).
+const OWN_EXTENSIONS: [&str; 8] = ["toml", "csv", "bin", "svg", "png", "html", "md", "json"];
+
+/// The files directly in `dir` of a kind no command of this tool writes (a user's notes beside an
+/// earlier result): a directory holding one is never replaced.
+fn foreign_files(dir: &Path) -> std::io::Result<Vec<String>> {
+    let mut foreign = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let own = Path::new(&name)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| OWN_EXTENSIONS.contains(&e));
+        if entry.file_type()?.is_file() && !own {
+            foreign.push(name);
+        }
+    }
+    foreign.sort();
+    Ok(foreign)
+}
+
+impl OutputDir {
+    /// Starts building `target`. Refuses at once, before any work, when `target` exists and is not
+    /// an empty directory, unless `force` and it holds `marker` (the file every result of the
+    /// command has, e.g. `summary.json`): `--force` never replaces a directory of other files.
+    pub fn create(
+        target: &Path,
+        force: bool,
+        marker: &'static str,
+    ) -> Result<OutputDir, OutputFileError> {
+        check_replaceable(target, force, marker)?;
+        let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
         let name = target
             .file_name()
             .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
         let temp = target.with_file_name(format!(".{name}.{}.partial", std::process::id()));
-        if temp.exists() {
-            std::fs::remove_dir_all(&temp).map_err(io(&temp))?;
+        if let Some(parent) = temp.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
         }
-        std::fs::create_dir_all(&temp).map_err(io(&temp))?;
+        // Left by an interrupted run that had this process id: that run is gone.
+        if temp.exists() {
+            std::fs::remove_dir_all(&temp).map_err(|e| io(&temp, e))?;
+        }
+        std::fs::create_dir(&temp).map_err(|e| io(&temp, e))?;
         Ok(OutputDir {
             target: target.to_path_buf(),
             temp,
             force,
+            marker,
             committed: false,
         })
     }
 
-    /// Where to write the directory's files until [`OutputDir::commit`].
+    /// Where to write the result's files now (the hidden directory).
     pub fn path(&self) -> &Path {
         &self.temp
     }
@@ -193,23 +257,30 @@ impl OutputDir {
         &self.target
     }
 
-    /// Moves the built directory into place (replacing the earlier one when `force` was given).
+    /// Moves the built directory to the target, replacing an earlier result there (moved aside
+    /// first, put back if the move fails, deleted after).
     pub fn commit(mut self) -> Result<(), OutputFileError> {
         let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
+        // Checked again: the target may have appeared or changed while the result was built.
+        check_replaceable(&self.target, self.force, self.marker)?;
         let old = self.temp.with_extension("old");
-        if is_empty_dir(&self.target) {
-            std::fs::remove_dir(&self.target).map_err(|e| io(&self.target, e))?;
-        }
-        let replacing = self.target.exists();
-        if replacing {
-            if !self.force {
-                return Err(OutputFileError::Exists(self.target.clone()));
+        let moved_aside = match std::fs::remove_dir(&self.target) {
+            Ok(()) => false,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
+            // Not empty: an earlier result that `check_replaceable` allowed.
+            Err(_) => {
+                std::fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;
+                true
             }
-            std::fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;
+        };
+        if let Err(e) = std::fs::rename(&self.temp, &self.target) {
+            if moved_aside {
+                let _ = std::fs::rename(&old, &self.target);
+            }
+            return Err(io(&self.target, e));
         }
-        std::fs::rename(&self.temp, &self.target).map_err(|e| io(&self.target, e))?;
         self.committed = true;
-        if replacing {
+        if moved_aside {
             std::fs::remove_dir_all(&old).map_err(|e| io(&old, e))?;
         }
         Ok(())
@@ -224,70 +295,9 @@ impl Drop for OutputDir {
     }
 }
 
-/// An existing directory with nothing in it (made ahead of the command: nothing to lose).
-fn is_empty_dir(p: &Path) -> bool {
-    std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none())
-}
-
-/// The entries of `dir` that no command of this tool writes.
-fn foreign_entries(dir: &Path) -> std::io::Result<Vec<String>> {
-    let mut foreign = Vec::new();
-    for entry in std::fs::read_dir(dir)? {
-        let entry = entry?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let own = entry.file_type()?.is_file()
-            && Path::new(&name)
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| OWN_EXTENSIONS.contains(&e));
-        if !own {
-            foreign.push(name);
-        }
-    }
-    foreign.sort();
-    Ok(foreign)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_directory_is_replaced_whole_or_not_at_all() {
-        let root = tempfile::tempdir().unwrap();
-        let target = root.path().join("session");
-        std::fs::create_dir(&target).unwrap();
-        // Not there yet (or empty): built aside, appears on commit.
-        let d = OutputDir::create(&target, false).unwrap();
-        std::fs::write(d.path().join("plan.toml"), "one").unwrap();
-        std::fs::write(d.path().join("gyro.toml"), "stale").unwrap();
-        assert!(!target.join("plan.toml").exists());
-        d.commit().unwrap();
-        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"one");
-        // Without force: refused before any work.
-        assert!(matches!(
-            OutputDir::create(&target, false),
-            Err(OutputFileError::Exists(_))
-        ));
-        // Dropped before commit (an error on the way): the earlier directory is untouched.
-        let d = OutputDir::create(&target, true).unwrap();
-        std::fs::write(d.path().join("plan.toml"), "two").unwrap();
-        drop(d);
-        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"one");
-        // Replaced whole: the earlier run's other files are gone.
-        let d = OutputDir::create(&target, true).unwrap();
-        std::fs::write(d.path().join("plan.toml"), "three").unwrap();
-        d.commit().unwrap();
-        assert_eq!(std::fs::read(target.join("plan.toml")).unwrap(), b"three");
-        assert!(!target.join("gyro.toml").exists());
-        assert_eq!(std::fs::read_dir(root.path()).unwrap().count(), 1);
-        // A directory with files of another kind is never replaced.
-        std::fs::write(target.join("notes.txt"), "mine").unwrap();
-        match OutputDir::create(&target, true) {
-            Err(OutputFileError::Foreign(_, names)) => assert_eq!(names, ["notes.txt"]),
-            other => panic!("{:?}", other.map(|_| ())),
-        }
-    }
 
     #[test]
     fn never_overwrites_without_force_and_leaves_no_temporary() {
@@ -307,5 +317,71 @@ mod tests {
         drop(f);
         assert_eq!(std::fs::read(&p).unwrap(), b"three");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_result_directory_with_a_users_file_is_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("session");
+        let d = OutputDir::create(&out, false, "plan.toml").unwrap();
+        std::fs::write(d.path().join("plan.toml"), b"one").unwrap();
+        d.commit().unwrap();
+        std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+        match OutputDir::create(&out, true, "plan.toml") {
+            Err(OutputFileError::Foreign(_, names)) => assert_eq!(names, ["notes.txt"]),
+            other => panic!("{:?}", other.map(|_| ())),
+        }
+    }
+
+    /// A directory result appears whole or not at all; it replaces an earlier one only with `force`,
+    /// and never a directory of other files.
+    #[test]
+    fn a_directory_is_replaced_whole_and_only_when_it_is_ours() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let d = OutputDir::create(&out, false, "summary.json").unwrap();
+        std::fs::write(d.path().join("summary.json"), b"one").unwrap();
+        assert!(!out.exists(), "nothing at the target before the commit");
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), b"one");
+        // Without force: refused before any work.
+        assert!(matches!(
+            OutputDir::create(&out, false, "summary.json"),
+            Err(OutputFileError::Exists(_))
+        ));
+        // Dropped half-way (a failure): the earlier result stays, nothing else is left.
+        let d = OutputDir::create(&out, true, "summary.json").unwrap();
+        std::fs::write(d.path().join("half"), b"").unwrap();
+        drop(d);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // With force: replaced whole (the old files gone, not merged).
+        let d = OutputDir::create(&out, true, "summary.json").unwrap();
+        std::fs::write(d.path().join("summary.json"), b"two").unwrap();
+        d.commit().unwrap();
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), b"two");
+        assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // A directory of other files is never replaced, even with force.
+        let other = dir.path().join("home");
+        std::fs::create_dir(&other).unwrap();
+        std::fs::write(other.join("notes.txt"), b"keep").unwrap();
+        assert!(matches!(
+            OutputDir::create(&other, true, "summary.json"),
+            Err(OutputFileError::NotOurs(..))
+        ));
+        // Nor a file.
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"keep").unwrap();
+        assert!(matches!(
+            OutputDir::create(&file, true, "summary.json"),
+            Err(OutputFileError::NotOurs(..))
+        ));
+        // An empty directory is taken as it is.
+        let empty = dir.path().join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        OutputDir::create(&empty, false, "summary.json")
+            .unwrap()
+            .commit()
+            .unwrap();
     }
 }

@@ -1,10 +1,16 @@
-//! The machine-readable result of one calibration: every paper-form parameter with its 1σ, the fit's
-//! χ², and pass/fail against production limits. `host calibrate --json` prints it; `host batch`
-//! writes one per unit into its lot summary.
+//! The machine-readable result of one calibration: every parameter of the calibration file with its
+//! 1σ (the accelerometer's paper form, then the gyro's `G` and `b`, then the temperature model's
+//! coefficients), the fit's χ², and pass/fail against production limits. `host calibrate --json`
+//! prints it; `host batch` writes one per unit into its lot summary; `host compare` compares the
+//! same gyro and temperature values ([`section_values`]).
 
+use crate::calibration_files::calibration_unit_file;
+use crate::estimate::gyro::UNDETERMINED_SIGMA;
 use crate::estimate::{paper_values, CalibrationOutcome, PAPER_LEN};
+use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::params::axis_name;
+use shared::sensor_models::MAX_TEMPERATURE_DEGREE;
 
 /// ASCII keys of the paper-form values (same order as `estimate::paper_labels`), for CSV columns and
 /// JSON keys: `bias_x`, `scale_x`, `theta_xy`, `r1x`, …
@@ -29,6 +35,169 @@ pub fn parameter_keys() -> Vec<String> {
     v
 }
 
+/// ASCII keys of the gyro's values: `gyro_g_xx` … `gyro_g_zz` (`G`, rows gyro axes, columns body
+/// axes), then `gyro_bias_x` … (`b`, rad/s).
+pub fn gyro_keys() -> Vec<String> {
+    let mut v = Vec::with_capacity(12);
+    for i in 0..3 {
+        for j in 0..3 {
+            v.push(format!("gyro_g_{}{}", axis_name(i), axis_name(j)));
+        }
+    }
+    for i in 0..3 {
+        v.push(format!("gyro_bias_{}", axis_name(i)));
+    }
+    v
+}
+
+/// The temperature model's polynomials, in key order: (key stem, unit per °C^k of the output unit
+/// `out`).
+fn temperature_polynomials(out: &str) -> [(&'static str, String); 3] {
+    [
+        ("temp_bias", format!("{out}/degC")),
+        ("temp_scale", "1/degC".into()),
+        ("temp_gyro_bias", "rad/s/degC".into()),
+    ]
+}
+
+/// ASCII keys of the temperature model's coefficients: `temp_bias_x_c1` (the zero bias's `ΔT¹`
+/// coefficient of axis x), … `temp_scale_*`, `temp_gyro_bias_*`, `c1` to `c3` per axis.
+pub fn temperature_keys() -> Vec<String> {
+    let mut v = Vec::new();
+    for (stem, _) in temperature_polynomials("") {
+        for i in 0..3 {
+            for k in 1..=MAX_TEMPERATURE_DEGREE {
+                v.push(format!("{stem}_{}_c{k}", axis_name(i)));
+            }
+        }
+    }
+    v
+}
+
+/// Every key a summary can have, in order: [`parameter_keys`], [`gyro_keys`], [`temperature_keys`]
+/// (the lot summary's columns).
+pub fn all_parameter_keys() -> Vec<String> {
+    let mut v = parameter_keys();
+    v.extend(gyro_keys());
+    v.extend(temperature_keys());
+    v
+}
+
+/// A gyro entry with this 1σ is not determined by the plan (above [`UNDETERMINED_SIGMA`], or NaN).
+pub fn gyro_entry_undetermined(sigma: f64) -> bool {
+    sigma.is_nan() || sigma > UNDETERMINED_SIGMA
+}
+
+/// One value of a calibration file's `[gyro]` or `[temperature]` section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionValue {
+    /// Its key ([`gyro_keys`], [`temperature_keys`]).
+    pub name: String,
+    /// Its unit as stored in the file.
+    pub unit: String,
+    /// The value.
+    pub value: f64,
+    /// Its 1σ, when the file has one and the value is part of the model (a temperature coefficient
+    /// above the degree the data chose is 0 by that choice and has none).
+    pub sigma: Option<f64>,
+    /// A gyro entry the plan did not determine (1σ above [`UNDETERMINED_SIGMA`]).
+    pub undetermined: bool,
+}
+
+/// The values of `file`'s `[gyro]` and `[temperature]` sections, each with its 1σ, in key order; an
+/// absent section gives none.
+pub fn section_values(file: &UnitFile) -> Vec<SectionValue> {
+    let mut v = Vec::new();
+    let keys = gyro_keys();
+    if let Some(g) = &file.gyro {
+        for i in 0..3 {
+            for j in 0..3 {
+                let sigma = g.matrix_1sigma.map(|s| s[i][j]);
+                v.push(SectionValue {
+                    name: keys[3 * i + j].clone(),
+                    unit: "1".into(),
+                    value: g.matrix[i][j],
+                    sigma,
+                    undetermined: sigma.is_some_and(gyro_entry_undetermined),
+                });
+            }
+        }
+        for i in 0..3 {
+            v.push(SectionValue {
+                name: keys[9 + i].clone(),
+                unit: "rad/s".into(),
+                value: g.bias_rad_s[i],
+                sigma: g.bias_rad_s_1sigma.map(|s| s[i]),
+                undetermined: false,
+            });
+        }
+    }
+    let Some(t) = &file.temperature else {
+        return v;
+    };
+    let out = file
+        .output_unit
+        .unwrap_or(shared::OutputUnit::Volts)
+        .symbol();
+    let polys = [
+        (
+            Some(t.zero_bias_out_per_c),
+            t.zero_bias_out_per_c_1sigma,
+            t.zero_bias_degree,
+        ),
+        (
+            Some(t.scale_rel_per_c),
+            t.scale_rel_per_c_1sigma,
+            t.scale_degree,
+        ),
+        (
+            t.gyro_bias_rad_s_per_c,
+            t.gyro_bias_rad_s_per_c_1sigma,
+            t.gyro_bias_degree,
+        ),
+    ];
+    for ((stem, unit), (coef, sigma, degree)) in temperature_polynomials(out).into_iter().zip(polys)
+    {
+        let Some(coef) = coef else { continue };
+        for i in 0..3 {
+            for k in 1..=MAX_TEMPERATURE_DEGREE {
+                // In the model: up to the chosen degree; without one, any coefficient with a 1σ.
+                let in_model = degree.is_none_or(|d| k <= d[i]);
+                let s = sigma.map(|s| s[i][k - 1]).filter(|s| {
+                    in_model && (degree.is_some() || *s > 0.0 || coef[i][k - 1] != 0.0)
+                });
+                v.push(SectionValue {
+                    name: format!("{stem}_{}_c{k}", axis_name(i)),
+                    unit: if k == 1 {
+                        unit.clone()
+                    } else {
+                        format!("{unit}^{k}")
+                    },
+                    value: coef[i][k - 1],
+                    sigma: s,
+                    undetermined: false,
+                });
+            }
+        }
+    }
+    v
+}
+
+/// The temperature model's setting in a summary (its coefficients are parameters).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TemperatureRange {
+    /// `T_ref`, °C: the static values hold there.
+    pub reference_c: f64,
+    /// The temperatures the calibration covers, °C.
+    pub valid_range_c: [f64; 2],
+    /// The degree of each zero-bias polynomial the data chose (an estimate's).
+    pub zero_bias_degree: Option<[usize; 3]>,
+    /// The degree of each scale polynomial.
+    pub scale_degree: Option<[usize; 3]>,
+    /// The degree of each gyro bias polynomial.
+    pub gyro_bias_degree: Option<[usize; 3]>,
+}
+
 /// Units of the paper-form values, in order.
 pub fn parameter_unit(index: usize, output_unit: &str) -> String {
     match index {
@@ -48,7 +217,8 @@ pub struct Parameter {
     pub unit: String,
     /// Value.
     pub value: f64,
-    /// 1σ after χ² scaling; `None` when the plan did not determine the value.
+    /// 1σ after χ² scaling; `None` when the plan did not determine the value (named in
+    /// [`CalibrationSummary::undetermined`]) or a temperature coefficient is above its chosen degree.
     pub sigma: Option<f64>,
 }
 
@@ -88,8 +258,20 @@ pub struct Check {
 pub struct CalibrationSummary {
     /// Unit id (24 hex digits), if the recording had one.
     pub unit_id: Option<String>,
-    /// The parameters in paper form.
+    /// The parameters: the accelerometer's in paper form ([`parameter_keys`]), then the gyro's
+    /// ([`gyro_keys`]) and the temperature model's ([`temperature_keys`]) when the calibration has them.
     pub parameters: Vec<Parameter>,
+    /// The parameters the session did not determine (their `sigma` is null): lever-arm components,
+    /// gyro entries.
+    #[serde(default)]
+    pub undetermined: Vec<String>,
+    /// The temperature model's reference and range, when the calibration has one.
+    #[serde(default)]
+    pub temperature: Option<TemperatureRange>,
+    /// The calibration file itself, every table as `calibration.toml` holds it (the values above are
+    /// taken from it; an undetermined 1σ, ∞ in the file, is `null` in JSON).
+    #[serde(default)]
+    pub calibration: Option<UnitFile>,
     /// Σ whitened residual².
     pub chi2: f64,
     /// Degrees of freedom.
@@ -110,7 +292,7 @@ impl CalibrationSummary {
         let cal = &outcome.calibration;
         let values = paper_values(cal).unwrap_or([f64::NAN; PAPER_LEN]);
         let unit = cal.statics.output_unit.symbol();
-        let parameters = parameter_keys()
+        let mut parameters = parameter_keys()
             .into_iter()
             .enumerate()
             .map(|(i, name)| {
@@ -123,6 +305,32 @@ impl CalibrationSummary {
                 }
             })
             .collect::<Vec<_>>();
+        let mut undetermined: Vec<String> = parameters
+            .iter()
+            .filter(|p| p.sigma.is_none())
+            .map(|p| p.name.clone())
+            .collect();
+        // The gyro and temperature values exactly as calibration.toml holds them.
+        let id = unit_id.as_deref().and_then(shared::UnitId::parse_hex);
+        let file = calibration_unit_file(outcome, id);
+        for s in section_values(&file) {
+            if s.undetermined {
+                undetermined.push(s.name.clone());
+            }
+            parameters.push(Parameter {
+                name: s.name,
+                unit: s.unit,
+                value: s.value,
+                sigma: s.sigma.filter(|_| !s.undetermined),
+            });
+        }
+        let temperature = file.temperature.as_ref().map(|t| TemperatureRange {
+            reference_c: t.reference_c,
+            valid_range_c: t.valid_range_c,
+            zero_bias_degree: t.zero_bias_degree,
+            scale_degree: t.scale_degree,
+            gyro_bias_degree: t.gyro_bias_degree,
+        });
         let k = cal.statics.scale_out_per_g;
         let bias_mg = |i: usize| (values[i] / k[i]).abs() * 1e3;
         let mut checks = Vec::new();
@@ -158,6 +366,9 @@ impl CalibrationSummary {
         CalibrationSummary {
             unit_id,
             parameters,
+            undetermined,
+            temperature,
+            calibration: Some(file),
             chi2: outcome.fit.chi2,
             dof: outcome.fit.dof,
             chi2_per_dof: outcome.fit.reduced_chi2,

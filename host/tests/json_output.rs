@@ -19,8 +19,10 @@ fn calibrate_compare_plan_and_noise_print_one_json_document() {
     let (ok, stdout, stderr) = host(&["calibrate", "--input", s, "--json"]);
     assert!(ok, "{stderr}");
     let v: serde_json::Value = serde_json::from_str(&stdout).expect("stdout is one JSON document");
-    assert_eq!(v["parameters"].as_array().unwrap().len(), 24);
+    // The accelerometer's 24 paper-form values, then the gyro's G and b (quick-oblique spins it).
+    assert_eq!(v["parameters"].as_array().unwrap().len(), 24 + 12);
     assert_eq!(v["parameters"][0]["name"], "bias_x");
+    assert_eq!(v["parameters"][24]["name"], "gyro_g_xx");
     assert!(v["parameters"][0]["sigma"].as_f64().unwrap() > 0.0);
     assert!(v["chi2_per_dof"].as_f64().unwrap() > 0.0);
     assert_eq!(v["passed"], true);
@@ -47,7 +49,8 @@ fn calibrate_compare_plan_and_noise_print_one_json_document() {
     assert!(ok, "{stderr}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(v["passed"], true);
-    assert_eq!(v["rows"].as_array().unwrap().len(), 24);
+    // The accelerometer's 24 values and the gyro's 12.
+    assert_eq!(v["rows"].as_array().unwrap().len(), 24 + 12);
 
     let (ok, stdout, stderr) = host(&["plan", "--check", "oblique", "--json"]);
     assert!(ok, "{stderr}");

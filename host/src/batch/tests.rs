@@ -1,6 +1,8 @@
-//! A lot of 50 simulated units with unit-to-unit spread, one of them bad.
+//! A lot of 50 simulated units with unit-to-unit spread, one of them bad; a lot of six with a bad
+//! gyro; the screening of temperature coefficients and of repeated unit ids.
 
 use super::*;
+use crate::calibration_files::CALIBRATION_TOML;
 use crate::session::builtin::builtin_plan;
 use crate::sim::{simulate_to_dir, NoiseModel, Rng};
 use crate::unit_file::UnitFile;
@@ -69,7 +71,6 @@ fn fifty_units_one_bad_one_flagged() {
         },
         outlier_z: 5.0,
         jobs: Some(2),
-        force: false,
     };
     let lot = run_batch(&sessions, &out, &opts, &ProgressBar::hidden()).unwrap();
     assert_eq!(lot.units.len(), 50);
@@ -108,23 +109,33 @@ fn fifty_units_one_bad_one_flagged() {
         .find(|l| l.starts_with(&format!("unit{bad},")))
         .unwrap();
     assert!(bad_row.contains(",false,true,bias_y(z="), "{bad_row}");
+    // Every row has every column.
+    let columns = csv.lines().next().unwrap().split(',').count();
+    assert!(csv.lines().all(|l| l.split(',').count() == columns));
     // Existing results are not overwritten without --force.
     let again = run_batch(&sessions[..1], &out, &opts, &ProgressBar::hidden()).unwrap();
     assert!(again.units[0].error.as_deref().unwrap().contains("--force"));
 }
 
 fn unit_with(value: f64, sigma: f64) -> UnitResult {
+    unit_with_parameter("bias_x", value, Some(sigma))
+}
+
+fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult {
     UnitResult {
         session: format!("{value}"),
         rows: 1,
         summary: Some(CalibrationSummary {
             unit_id: None,
             parameters: vec![crate::summary::Parameter {
-                name: "bias_x".into(),
+                name: name.into(),
                 unit: "V".into(),
                 value,
-                sigma: Some(sigma),
+                sigma,
             }],
+            undetermined: Vec::new(),
+            temperature: None,
+            calibration: None,
             chi2: 1.0,
             dof: 1,
             chi2_per_dof: 1.0,
@@ -134,6 +145,7 @@ fn unit_with(value: f64, sigma: f64) -> UnitResult {
         }),
         error: None,
         outliers: Vec::new(),
+        same_unit_id_as: Vec::new(),
         passed: false,
     }
 }
@@ -171,4 +183,140 @@ fn a_small_lot_of_equal_units_is_not_screened_below_its_own_noise() {
         .collect();
     flag_outliers(&mut small, 5.0);
     assert!(small.iter().all(|u| u.passed));
+}
+
+/// Five good units and one with a 5 % gyro scale error on x and a 5 °/s gyro bias: its
+/// accelerometers are the others', so only the gyro's screening can catch it. The units are one
+/// design without a production spread (six units are too few to tell a 0.05° spread from an
+/// outlier: the MAD of six draws is itself uncertain by about half).
+#[test]
+fn six_units_one_with_a_bad_gyro_is_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lot");
+    let plan = builtin_plan("quick-oblique").unwrap().unwrap();
+    let bad = 3u64;
+    for i in 0..6u64 {
+        let mut unit = UnitFile::paper_unit();
+        unit.unit_id = Some(format!("{:024x}", 0xB000 + i));
+        if i == bad {
+            let mut matrix = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            matrix[0][0] = 1.05;
+            unit.gyro = Some(crate::unit_file::GyroSection {
+                bias_rad_s: [5f64.to_radians(), 0.0, 0.0],
+                matrix,
+                bias_rad_s_1sigma: None,
+                matrix_1sigma: None,
+            });
+        }
+        let noise = NoiseModel::default();
+        simulate_to_dir(
+            &input.join(format!("unit{i}")),
+            &unit,
+            &plan,
+            &noise,
+            40 + i,
+            false,
+        )
+        .unwrap();
+    }
+    let sessions = find_sessions(&input).unwrap();
+    let opts = BatchOptions {
+        estimate: EstimateOptions::default(),
+        limits: Limits::default(),
+        outlier_z: 5.0,
+        // More than the lot has sessions: one thread per session at most.
+        jobs: Some(64),
+    };
+    let out = dir.path().join("out");
+    let lot = run_batch(&sessions, &out, &opts, &ProgressBar::hidden()).unwrap();
+    assert_eq!(lot.threads, 6);
+    let failed: Vec<(&str, &Vec<(String, f64)>)> = lot
+        .failed()
+        .iter()
+        .map(|u| (u.session.as_str(), &u.outliers))
+        .collect();
+    assert_eq!(failed.len(), 1, "{failed:#?}");
+    assert_eq!(failed[0].0, format!("unit{bad}"));
+    let flagged: Vec<&str> = failed[0].1.iter().map(|(n, _)| n.as_str()).collect();
+    assert!(
+        flagged.contains(&"gyro_g_xx") && flagged.contains(&"gyro_bias_x"),
+        "{flagged:?}"
+    );
+    // Its accelerometers are not what flagged it.
+    assert!(
+        flagged.iter().all(|n| n.starts_with("gyro_")),
+        "{flagged:?}"
+    );
+    // The CSV has the gyro's columns with their 1σ, the bad unit's value in them.
+    let csv = to_csv(&lot);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for name in [
+        "gyro_g_xx_sigma",
+        "gyro_bias_z_sigma",
+        "temp_scale_x_c1_sigma",
+    ] {
+        col(name);
+    }
+    let bad_row: Vec<&str> = csv
+        .lines()
+        .find(|l| l.starts_with(&format!("unit{bad},")))
+        .unwrap()
+        .split(',')
+        .collect();
+    let g_xx: f64 = bad_row[col("gyro_g_xx")].parse().unwrap();
+    let g_sigma: f64 = bad_row[col("gyro_g_xx_sigma")].parse().unwrap();
+    assert!((g_xx - 1.05).abs() < 5.0 * g_sigma, "{g_xx} ± {g_sigma}");
+    // No temperature model in this lot: its cells are empty, not zero.
+    assert_eq!(bad_row[col("temp_scale_x_c1")], "");
+}
+
+#[test]
+fn temperature_coefficients_are_screened_and_values_without_sigma_are_not() {
+    let c1 = |v: f64| unit_with_parameter("temp_scale_x_c1", v, Some(2.5e-7));
+    let mut lot: Vec<UnitResult> = [1.5e-4, 1.501e-4, 1.499e-4, 1.5e-4, 1.5005e-4]
+        .iter()
+        .map(|&v| c1(v))
+        .collect();
+    // 20σ off.
+    lot.push(c1(1.5e-4 + 20.0 * 2.5e-7));
+    // Above its chosen degree (no 1σ): the model's 0, not a measurement to screen.
+    lot.push(unit_with_parameter("temp_scale_x_c1", 0.0, None));
+    flag_outliers(&mut lot, 5.0);
+    let flagged: Vec<&str> = lot
+        .iter()
+        .filter(|u| !u.passed)
+        .map(|u| u.session.as_str())
+        .collect();
+    assert_eq!(flagged, vec![format!("{}", 1.5e-4 + 20.0 * 2.5e-7)]);
+}
+
+#[test]
+fn units_claiming_one_id_fail_naming_each_other() {
+    let mut lot: Vec<UnitResult> = (0..3).map(|i| unit_with(f64::from(i), 1.0)).collect();
+    let names = ["lot/a", "lot/b", "lot/c"];
+    for (u, name) in lot.iter_mut().zip(names) {
+        u.session = name.into();
+    }
+    let id = |u: &mut UnitResult, hex: &str| u.summary.as_mut().unwrap().unit_id = Some(hex.into());
+    id(&mut lot[0], "00000000000000000000a001");
+    id(&mut lot[1], "00000000000000000000a002");
+    id(&mut lot[2], "00000000000000000000A001");
+    flag_outliers(&mut lot, 5.0);
+    assert!(lot[1].passed);
+    assert_eq!(lot[0].same_unit_id_as, vec!["lot/c"]);
+    assert_eq!(lot[2].same_unit_id_as, vec!["lot/a"]);
+    assert!(!lot[0].passed && !lot[2].passed);
+    assert!(
+        lot[0].why_failed().contains("lot/c"),
+        "{}",
+        lot[0].why_failed()
+    );
+    // Sessions recorded without an id (all zero) are not one unit.
+    let mut lot: Vec<UnitResult> = (0..2).map(|i| unit_with(f64::from(i), 1.0)).collect();
+    for u in &mut lot {
+        id(u, "000000000000000000000000");
+    }
+    flag_outliers(&mut lot, 5.0);
+    assert!(lot.iter().all(|u| u.passed));
 }

@@ -3,8 +3,8 @@
 use super::calibrate::{estimate_options_of, MethodArg, ReferenceArg};
 use super::output::Output;
 use super::CliError;
-use crate::batch::{find_sessions, run_batch, to_csv, BatchError, BatchOptions};
-use crate::output_file::write_atomic;
+use crate::batch::{find_sessions, run_batch, to_csv, BatchOptions, MAX_JOBS};
+use crate::output_file::{write_atomic, OutputDir};
 use crate::summary::Limits;
 use clap::Args;
 use std::path::PathBuf;
@@ -16,12 +16,13 @@ pub struct BatchArgs {
     #[arg(long, value_name = "DIR_OF_SESSIONS")]
     pub input: PathBuf,
     /// Output directory: one subdirectory of calibration files per unit, summary.csv, summary.json.
+    /// Built beside it and moved into place whole at the end.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Replace existing results in --out.
+    /// Replace an earlier batch's result in --out (a directory with summary.json), whole.
     #[arg(long)]
     pub force: bool,
-    /// Worker threads (default: one per core).
+    /// Worker threads, 1 to 256 (default: one per core; never more than there are sessions).
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
     /// Robust z-score above which a parameter makes a unit an outlier of the lot.
@@ -41,32 +42,53 @@ pub struct BatchArgs {
     pub json: bool,
 }
 
+/// The lot summary's CSV file in `--out`.
+pub const SUMMARY_CSV: &str = "summary.csv";
+/// The lot summary's JSON file in `--out`: its presence marks a directory as a batch result, which
+/// `--force` may replace.
+pub const SUMMARY_JSON: &str = "summary.json";
+
 /// Runs `host batch`; exits nonzero when any unit failed, is outside the limits or is an outlier.
 pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
-    if a.jobs == Some(0) || !(a.outlier_z.is_finite() && a.outlier_z > 0.0) {
-        return Err(CliError::Usage(
-            "--jobs must be at least 1 and --outlier-z a positive number".into(),
-        ));
+    // Checked before anything is read, created or started.
+    if let Some(j) = a.jobs {
+        if !(1..=MAX_JOBS).contains(&j) {
+            return Err(CliError::Usage(format!(
+                "--jobs {j}: use 1 to {MAX_JOBS} worker threads (default: one per core; a lot never \
+                 uses more threads than it has sessions)"
+            )));
+        }
+    }
+    if !(a.outlier_z.is_finite() && a.outlier_z > 0.0) {
+        return Err(CliError::Usage(format!(
+            "--outlier-z {} must be a positive number",
+            a.outlier_z
+        )));
     }
     let out = Output {
         json: a.json,
         quiet,
     };
+    // Refused here, before anything is read, when --out holds something --force may not replace.
+    let staged = OutputDir::create(&a.out, a.force, SUMMARY_JSON)?;
     let sessions = find_sessions(&a.input).map_err(CliError::Batch)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| CliError::Io(a.out.clone(), e))?;
     let opts = BatchOptions {
         estimate: estimate_options_of(a.method, a.reference),
         limits: a.limits,
         outlier_z: a.outlier_z,
         jobs: a.jobs,
-        force: a.force,
     };
     let bar = crate::ui::progress_bar(sessions.len() as u64, "calibrating", quiet);
-    let lot = run_batch(&sessions, &a.out, &opts, &bar).map_err(CliError::Batch)?;
+    let lot = run_batch(&sessions, staged.path(), &opts, &bar).map_err(CliError::Batch)?;
     let json = serde_json::to_string_pretty(&lot)
-        .map_err(|e| CliError::Batch(BatchError::Threads(e.to_string())))?;
-    write_atomic(&a.out.join("summary.csv"), to_csv(&lot).as_bytes(), a.force)?;
-    write_atomic(&a.out.join("summary.json"), json.as_bytes(), a.force)?;
+        .map_err(|e| CliError::Usage(format!("cannot write the lot summary: {e}")))?;
+    write_atomic(
+        &staged.path().join(SUMMARY_CSV),
+        to_csv(&lot).as_bytes(),
+        false,
+    )?;
+    write_atomic(&staged.path().join(SUMMARY_JSON), json.as_bytes(), false)?;
+    staged.commit()?;
     out.document(&lot)?;
     let failed = lot.failed();
     out.line(format_args!(
@@ -80,24 +102,9 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
         failed.len()
     ))?;
     for u in &failed {
-        let why = match (&u.error, &u.summary) {
-            (Some(e), _) => e.clone(),
-            (None, Some(s)) if !s.passed => s.failures(),
-            _ => {
-                let o: Vec<String> = u
-                    .outliers
-                    .iter()
-                    .map(|(n, z)| format!("{n} z = {z:.1}"))
-                    .collect();
-                format!("outlier of the lot: {}", o.join(", "))
-            }
-        };
-        out.line(format_args!("  FAIL {}: {why}", u.session))?;
+        out.line(format_args!("  FAIL {}: {}", u.session, u.why_failed()))?;
     }
-    out.line(format_args!(
-        "wrote {}",
-        a.out.join("summary.csv").display()
-    ))?;
+    out.line(format_args!("wrote {}", a.out.join(SUMMARY_CSV).display()))?;
     if failed.is_empty() {
         Ok(())
     } else {

@@ -256,7 +256,7 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let options = import_options(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
-    let dir = OutputDir::create(&a.out, a.force)?;
+    let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
     let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {

@@ -1,8 +1,13 @@
 //! The calibration as one JSON document for scripts: the calibration file as it is (every table,
-//! uncertainty included), the derived forms of [`super::convert`], and the fit statistics the file
-//! holds. What the file does not determine is `null` and named in `undetermined`, never a zero.
+//! uncertainty included: the accelerometer's, the gyro's `[gyro]` with its 1σ, the temperature
+//! model's `[temperature]` with its reference, valid range, degrees and 1σ), the derived forms of
+//! [`super::convert`], and the fit statistics the file holds. What the file does not determine is
+//! `null` or named in `undetermined` (a gyro entry whose 1σ is above 1e-3), never a silent zero;
+//! `sections` names the tables the calibration has, so a script can tell "no gyro" from "dropped".
 
 use super::{convert, ExportError, ExportInput};
+use crate::summary::gyro_entry_undetermined;
+use crate::unit_file::UnitFile;
 use serde_json::{json, Value};
 
 /// Format version of the document.
@@ -26,6 +31,7 @@ pub fn document(input: &ExportInput<'_>) -> Result<Value, ExportError> {
         }
         None => undetermined.push("fit_statistics.one_sigma".into()),
     }
+    undetermined.extend(gyro_and_temperature_undetermined(input.unit));
     if input.unit.dynamic.is_none() {
         undetermined.push("calibration.dynamic (no lever arms in the file)".into());
     }
@@ -34,6 +40,7 @@ pub fn document(input: &ExportInput<'_>) -> Result<Value, ExportError> {
     Ok(json!({
         "format": "accelerometer-calibration",
         "format_version": JSON_FORMAT_VERSION,
+        "sections": sections(input.unit),
         "calibration": serde_json::to_value(input.unit).map_err(ser)?,
         "derived": serde_json::to_value(&conv).map_err(ser)?,
         "fit_statistics": {
@@ -42,6 +49,48 @@ pub fn document(input: &ExportInput<'_>) -> Result<Value, ExportError> {
         },
         "undetermined": undetermined,
     }))
+}
+
+/// The model tables the calibration file has (`static` always; `dynamic`, `uncertainty`, `gyro`,
+/// `temperature` when present).
+fn sections(unit: &UnitFile) -> Vec<&'static str> {
+    let present = [
+        ("static", true),
+        ("dynamic", unit.dynamic.is_some()),
+        ("uncertainty", unit.uncertainty.is_some()),
+        ("gyro", unit.gyro.is_some()),
+        ("temperature", unit.temperature.is_some()),
+    ];
+    present.iter().filter(|p| p.1).map(|p| p.0).collect()
+}
+
+/// What the gyro and temperature sections leave undetermined: each `G` entry the plan did not
+/// determine, and a section's 1σ when the file has none (a simulator's truth, a hand-written file).
+fn gyro_and_temperature_undetermined(unit: &UnitFile) -> Vec<String> {
+    let mut v = Vec::new();
+    if let Some(g) = &unit.gyro {
+        match g.matrix_1sigma {
+            Some(s) => {
+                for (i, row) in s.iter().enumerate() {
+                    for (j, sigma) in row.iter().enumerate() {
+                        if gyro_entry_undetermined(*sigma) {
+                            v.push(format!("calibration.gyro.matrix[{i}][{j}]"));
+                        }
+                    }
+                }
+            }
+            None => v.push("calibration.gyro.matrix_1sigma".into()),
+        }
+        if g.bias_rad_s_1sigma.is_none() {
+            v.push("calibration.gyro.bias_rad_s_1sigma".into());
+        }
+    }
+    if let Some(t) = &unit.temperature {
+        if t.zero_bias_out_per_c_1sigma.is_none() || t.scale_rel_per_c_1sigma.is_none() {
+            v.push("calibration.temperature (no 1σ in the file)".into());
+        }
+    }
+    v
 }
 
 /// The JSON text (pretty-printed, one document).
@@ -57,7 +106,6 @@ mod tests {
     use super::*;
     use crate::estimate::Uncertainty;
     use crate::export::Conversions;
-    use crate::unit_file::UnitFile;
 
     #[test]
     fn json_parses_back_to_the_same_calibration_and_marks_the_undetermined() {
@@ -91,5 +139,36 @@ mod tests {
             "{und:?}"
         );
         assert!(und.contains(&"fit_statistics.chi2_per_dof".to_string()));
+    }
+
+    #[test]
+    fn the_gyro_entries_a_plan_left_undetermined_are_named() {
+        let mut unit = UnitFile::paper_unit();
+        let mut sigma = [[1e-5; 3]; 3];
+        sigma[0][2] = 2e-3;
+        unit.gyro = Some(crate::unit_file::GyroSection {
+            bias_rad_s: [0.01, 0.0, 0.0],
+            matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            bias_rad_s_1sigma: Some([1e-5; 3]),
+            matrix_1sigma: Some(sigma),
+        });
+        let cal = unit.to_calibration().unwrap();
+        let v = document(&ExportInput::for_tests(&unit, cal)).unwrap();
+        let und: Vec<String> = serde_json::from_value(v["undetermined"].clone()).unwrap();
+        let gyro: Vec<&String> = und.iter().filter(|u| u.contains("gyro")).collect();
+        assert_eq!(gyro, ["calibration.gyro.matrix[0][2]"]);
+        assert_eq!(
+            v["sections"],
+            serde_json::json!(["static", "dynamic", "gyro"])
+        );
+        assert_eq!(v["calibration"]["gyro"]["matrix_1sigma"][0][2], 2e-3);
+        // A gyro without 1σ (a simulator's truth): its 1σ named as missing, not taken as exact.
+        unit.gyro.as_mut().unwrap().matrix_1sigma = None;
+        let v = document(&ExportInput::for_tests(&unit, cal)).unwrap();
+        let und: Vec<String> = serde_json::from_value(v["undetermined"].clone()).unwrap();
+        assert!(
+            und.contains(&"calibration.gyro.matrix_1sigma".to_string()),
+            "{und:?}"
+        );
     }
 }

@@ -1,7 +1,10 @@
 //! Two calibrations of one unit side by side (`host compare`), each difference in units of its
-//! combined 1σ: [`compare`] reads the files, [`ComparisonTable::render`] prints the table.
+//! combined 1σ: the accelerometer's paper-form values, the gyro's `G` and `b`, and the temperature
+//! model's coefficients ([`crate::summary::section_values`]). [`compare`] reads the files,
+//! [`ComparisonTable::render`] prints the table.
 
 use crate::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
+use crate::summary::section_values;
 use crate::unit_file::{UnitFile, UnitFileError};
 use shared::Calibration;
 use std::fmt::Write as _;
@@ -10,7 +13,7 @@ use std::path::Path;
 /// One parameter of [`ComparisonTable`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ComparisonRow {
-    /// Name, e.g. "bias x", "θxy", "r1z".
+    /// Name, e.g. "bias x", "θxy", "r1z", "gyro_g_xy", "temp_bias_x_c1".
     pub label: String,
     /// Display unit.
     pub unit: String,
@@ -26,7 +29,8 @@ pub struct ComparisonRow {
     pub diff: f64,
     /// `(b − a) / √(σa² + σb²)` (missing σ count as 0; `None` when neither has one or it is ∞).
     pub diff_sigma: Option<f64>,
-    /// A lever-arm component that A or B did not determine.
+    /// A lever-arm component or gyro entry that A or B did not determine, or a temperature
+    /// coefficient of models about different reference temperatures: not a measured difference.
     pub undetermined: bool,
 }
 
@@ -37,7 +41,8 @@ pub struct ComparisonTable {
     pub a_name: String,
     /// Name of B.
     pub b_name: String,
-    /// Biases, scale factors, nine angles, nine lever arms.
+    /// Biases, scale factors, nine angles, nine lever arms; then the gyro's and the temperature
+    /// model's values both files have.
     pub rows: Vec<ComparisonRow>,
     /// Things to know (reference points, missing σ, …).
     pub notes: Vec<String>,
@@ -60,9 +65,10 @@ impl ComparisonTable {
         let mut s = String::new();
         let _ = writeln!(s, "A: {}", self.a_name);
         let _ = writeln!(s, "B: {}", self.b_name);
+        let w = self.rows.iter().map(|r| r.label.len()).fold(9, usize::max);
         let _ = writeln!(
             s,
-            "{:<9} {:>7} {:>15} {:>12} {:>15} {:>12} {:>13} {:>9}",
+            "{:<w$} {:>9} {:>15} {:>12} {:>15} {:>12} {:>13} {:>9}",
             "param", "unit", "A", "1σ A", "B", "1σ B", "B − A", "(B−A)/σ"
         );
         for r in &self.rows {
@@ -77,7 +83,7 @@ impl ComparisonTable {
             };
             let _ = writeln!(
                 s,
-                "{:<9} {:>7} {:>15.7} {:>12} {:>15.7} {:>12} {:>13.3e} {:>9}{}",
+                "{:<w$} {:>9} {:>15.7} {:>12} {:>15.7} {:>12} {:>13.3e} {:>9}{}",
                 r.label,
                 r.unit,
                 r.a,
@@ -179,7 +185,8 @@ pub fn compare_units(
             undetermined: lever_undetermined(a, b, k),
         });
     }
-    let notes = comparison_notes(sa.is_some(), sb.is_some(), &ca, &cb, &rows);
+    let mut notes = comparison_notes(sa.is_some(), sb.is_some(), &ca, &cb, &rows);
+    rows.extend(section_rows(a, b, sym, &mut notes));
     Ok(ComparisonTable {
         a_name: a_name.to_string(),
         b_name: b_name.to_string(),
@@ -218,6 +225,98 @@ fn display_unit(k: usize, sym: &str) -> (String, f64) {
         3..=5 => (format!("{sym}/g"), 1.0),
         6..=14 => ("°".to_string(), 1.0),
         _ => ("mm".to_string(), 1e3),
+    }
+}
+
+/// The rows of the gyro and temperature values both files have (by name), with a note for a section
+/// only one of them has and for temperature models about different reference temperatures (their
+/// coefficients are then not comparable and are marked n.d.).
+fn section_rows(
+    a: &UnitFile,
+    b: &UnitFile,
+    sym: &str,
+    notes: &mut Vec<String>,
+) -> Vec<ComparisonRow> {
+    for (what, in_a, in_b) in [
+        ("[gyro]", a.gyro.is_some(), b.gyro.is_some()),
+        (
+            "[temperature]",
+            a.temperature.is_some(),
+            b.temperature.is_some(),
+        ),
+    ] {
+        if in_a != in_b {
+            notes.push(format!(
+                "only {} has a {what} section: it is not compared",
+                if in_a { "A" } else { "B" }
+            ));
+        }
+    }
+    let refs_differ = match (&a.temperature, &b.temperature) {
+        (Some(x), Some(y)) if x.reference_c != y.reference_c => {
+            notes.push(format!(
+                "the temperature models are about different reference temperatures ({} vs {} °C): \
+                 their coefficients are not compared (n.d.)",
+                x.reference_c, y.reference_c
+            ));
+            true
+        }
+        _ => false,
+    };
+    let vb = section_values(b);
+    let mut rows = Vec::new();
+    for x in section_values(a) {
+        let Some(y) = vb.iter().find(|y| y.name == x.name) else {
+            continue;
+        };
+        let (unit, scale) = section_display_unit(&x.name, &x.unit, sym);
+        let sig_a = x.sigma.map(|s| s * scale);
+        let sig_b = y.sigma.map(|s| s * scale);
+        let diff = (y.value - x.value) * scale;
+        rows.push(ComparisonRow {
+            label: x.name.clone(),
+            unit,
+            a: x.value * scale,
+            b: y.value * scale,
+            sigma_a: sig_a,
+            sigma_b: sig_b,
+            diff,
+            diff_sigma: diff_in_sigma(diff, sig_a, sig_b),
+            undetermined: x.undetermined
+                || y.undetermined
+                || (refs_differ && x.name.starts_with("temp_")),
+        });
+    }
+    if rows
+        .iter()
+        .any(|r| r.undetermined && r.label.starts_with("gyro_"))
+    {
+        notes.push(
+            "n.d. on a gyro entry: one of the calibrations did not determine it (1σ above 1e-3)"
+                .into(),
+        );
+    }
+    rows
+}
+
+/// The display unit of a gyro or temperature value (`unit`: as stored, e.g. `V/degC^2`) and the
+/// factor from the stored value to it: the gyro bias in °/s, temperature coefficients in µ(output
+/// unit), ppm and m°/s per °C^k, so that the table's fixed decimals show them.
+fn section_display_unit(name: &str, unit: &str, sym: &str) -> (String, f64) {
+    let per_c = unit.split_once("/degC").map_or(String::new(), |(_, k)| {
+        format!("/°C{}", k.replace("^2", "²").replace("^3", "³"))
+    });
+    let deg_s = 180.0 / std::f64::consts::PI;
+    if name.starts_with("gyro_bias_") {
+        ("°/s".into(), deg_s)
+    } else if name.starts_with("temp_gyro_bias_") {
+        (format!("m°/s{per_c}"), 1e3 * deg_s)
+    } else if name.starts_with("temp_scale_") {
+        (format!("ppm{per_c}"), 1e6)
+    } else if name.starts_with("temp_bias_") {
+        (format!("µ{sym}{per_c}"), 1e6)
+    } else {
+        (unit.to_string(), 1.0)
     }
 }
 
@@ -345,5 +444,81 @@ mod tests {
         assert!(t.rows.iter().all(|r| r.diff_sigma.is_none()));
         assert!(t.render().contains("no σ"));
         assert!(t.notes[0].contains("neither file"));
+    }
+
+    /// A with a gyro and a temperature model, each value with a 1σ (hand-set, so that a shift of a
+    /// known number of combined σ is known exactly).
+    fn with_sections() -> UnitFile {
+        let mut u = with_sigma();
+        u.gyro = Some(crate::unit_file::GyroSection {
+            bias_rad_s: [0.01, -0.02, 0.015],
+            matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            bias_rad_s_1sigma: Some([1e-5; 3]),
+            matrix_1sigma: Some([[1e-5, 2e-3, 1e-4], [1e-4, 1e-5, 1e-4], [1e-4, 1e-4, 1e-5]]),
+        });
+        let mut t = crate::unit_file::TemperatureSection::from_model(
+            &shared::sensor_models::TemperatureModel {
+                reference_c: 25.0,
+                valid_range_c: [-20.0, 60.0],
+                zero_bias_out_per_c: [[1e-4, 4e-7, 0.0]; 3],
+                scale_rel_per_c: [[1.5e-4, 0.0, 0.0]; 3],
+                gyro_bias_rad_s_per_c: None,
+            },
+        );
+        t.zero_bias_degree = Some([2; 3]);
+        t.scale_degree = Some([1; 3]);
+        t.zero_bias_out_per_c_1sigma = Some([[6e-8, 2e-9, 0.0]; 3]);
+        t.scale_rel_per_c_1sigma = Some([[2.5e-7, 0.0, 0.0]; 3]);
+        u.temperature = Some(t);
+        u
+    }
+
+    #[test]
+    fn gyro_and_temperature_differences_are_in_combined_sigma() {
+        let a = with_sections();
+        let t = compare_units(&a, "a", &a, "b").unwrap();
+        // 24 + G and b + 9 zero-bias and 9 scale coefficients (no gyro bias polynomial).
+        assert_eq!(t.rows.len(), 24 + 12 + 18);
+        let mut b = a.clone();
+        // G yy by 4 combined σ (√2·1e-5), the y zero bias's ΔT² coefficient by −3.
+        b.gyro.as_mut().unwrap().matrix[1][1] += 4.0 * 2f64.sqrt() * 1e-5;
+        b.temperature.as_mut().unwrap().zero_bias_out_per_c[1][1] -= 3.0 * 2f64.sqrt() * 2e-9;
+        let t = compare_units(&a, "a", &b, "b").unwrap();
+        let row = |n: &str| t.rows.iter().find(|r| r.label == n).unwrap();
+        assert!((row("gyro_g_yy").diff_sigma.unwrap() - 4.0).abs() < 1e-6);
+        assert!((row("temp_bias_y_c2").diff_sigma.unwrap() + 3.0).abs() < 1e-6);
+        assert_eq!(t.worst().unwrap().label, "gyro_g_yy");
+        // The table shows them in display units: µV/°C², the bias in °/s.
+        assert_eq!(row("temp_bias_y_c2").unit, "µV/°C²");
+        assert!((row("gyro_bias_x").a - 0.01f64.to_degrees()).abs() < 1e-12);
+        assert!(t.render().contains("gyro_g_yy"), "{}", t.render());
+        // G xy's 1σ of 2e-3 is not determined: n.d., never the worst however far it moves.
+        b.gyro.as_mut().unwrap().matrix[0][1] += 1.0;
+        let t = compare_units(&a, "a", &b, "b").unwrap();
+        assert!(
+            t.rows
+                .iter()
+                .find(|r| r.label == "gyro_g_xy")
+                .unwrap()
+                .undetermined
+        );
+        assert_eq!(t.worst().unwrap().label, "gyro_g_yy");
+        // Models about different reference temperatures: coefficients not compared, and said so.
+        b.temperature.as_mut().unwrap().reference_c = 30.0;
+        let t = compare_units(&a, "a", &b, "b").unwrap();
+        assert!(t
+            .rows
+            .iter()
+            .filter(|r| r.label.starts_with("temp_"))
+            .all(|r| r.undetermined));
+        assert!(t.notes.iter().any(|n| n.contains("reference temperatures")));
+        // A section only one file has is named in a note.
+        let t = compare_units(&a, "a", &with_sigma(), "b").unwrap();
+        assert_eq!(t.rows.len(), 24);
+        assert!(
+            t.notes.iter().any(|n| n.contains("only A has a [gyro]")),
+            "{:?}",
+            t.notes
+        );
     }
 }

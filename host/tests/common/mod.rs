@@ -23,3 +23,56 @@ pub fn host_in(cwd: Option<&Path>, args: &[&str]) -> (bool, String, String) {
 pub fn host(args: &[&str]) -> (bool, String, String) {
     host_in(None, args)
 }
+
+/// The gyro of [`thermal_gyro_session`]'s unit: `[gyro]` of a unit file (w = G·ω + b, rad/s), and a
+/// gyro bias that moves with temperature (rad/s per °C, per axis).
+#[allow(dead_code)]
+pub const THERMAL_GYRO_SECTION: &str = "[gyro]\nbias_rad_s = [0.01, -0.02, 0.015]\n\
+     matrix = [[1.005, 0.002, -0.001], [0.001, 0.995, 0.003], [-0.002, 0.001, 1.01]]\n";
+
+/// Writes a session of a unit with a known gyro and temperature model into `dir/name` (seed
+/// `seed`): `host/units/thermal-mems.toml` with [`THERMAL_GYRO_SECTION`] and a gyro bias of
+/// 2e-5 rad/s/°C on x, recorded on the `thermal-soak` plan (2 s a segment) followed by
+/// `quick-oblique`'s spins at the reference temperature, so that one session calibrates the
+/// accelerometers, the lever arms, the gyro and the temperature model. Returns the session
+/// directory; the simulator's truth is its `truth.toml`.
+#[allow(dead_code)]
+pub fn thermal_gyro_session(dir: &Path, name: &str, seed: u64) -> std::path::PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
+    let soak = read("plans/thermal-soak.toml").replace("duration_s = 20", "duration_s = 2");
+    let quick = read("plans/quick-oblique.toml");
+    let spins = &quick[quick.find("[[segment]]\nname = \"x+ 200\"").unwrap()..];
+    let plan = format!(
+        "{soak}\n{}",
+        spins.replace("duration_s = 1\n", "duration_s = 1\ntemp_c = 25\n")
+    );
+    let unit = read("units/thermal-mems.toml")
+        .replace(
+            "[temperature]",
+            &format!("{THERMAL_GYRO_SECTION}\n[temperature]"),
+        )
+        .replace(
+            "[thermal]",
+            "gyro_bias_rad_s_per_c = [[2e-5, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n\n[thermal]",
+        );
+    let plan_path = dir.join(format!("{name}-plan.toml"));
+    let unit_path = dir.join(format!("{name}-unit.toml"));
+    std::fs::write(&plan_path, plan).unwrap();
+    std::fs::write(&unit_path, unit).unwrap();
+    let out = dir.join(name);
+    let (ok, _, stderr) = host(&[
+        "-q",
+        "simulate",
+        "--out",
+        out.to_str().unwrap(),
+        "--unit",
+        unit_path.to_str().unwrap(),
+        "--plan",
+        plan_path.to_str().unwrap(),
+        "--seed",
+        &seed.to_string(),
+    ]);
+    assert!(ok, "{stderr}");
+    out
+}
