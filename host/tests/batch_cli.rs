@@ -84,12 +84,12 @@ fn out_is_refused_without_force_and_replaced_whole_with_it() {
     }
 
     // With --force: every unit calibrated again and passing, the summary replaced.
-    std::fs::write(res.join("stale.txt"), b"from before").unwrap();
+    std::fs::write(res.join("stale.csv"), b"from before").unwrap();
     let (ok, stdout, stderr) = host(&["batch", "--input", input, "--out", res_s, "--force"]);
     assert!(ok, "{stdout}{stderr}");
     assert!(stdout.contains("2 passed, 0 not"), "{stdout}");
     assert!(
-        !res.join("stale.txt").exists(),
+        !res.join("stale.csv").exists(),
         "replaced whole, not merged"
     );
     assert!(res.join("unit0").join("calibration.toml").exists());

@@ -226,7 +226,8 @@ fn a_wrong_sample_rate_is_named_as_a_time_base() {
             "deg/s",
         ]),
         &[
-            "the same on all three axes: the time base is wrong by a factor 1.49",
+            "the same on all three axes: the time base is wrong",
+            "span 0.66",
             "--rate-hz",
         ],
     );

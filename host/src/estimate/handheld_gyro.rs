@@ -216,7 +216,8 @@ fn check_unit(
         }),
         r if r > 5.0 => Err(HandGyroError::UnitMismatch {
             ratio: r,
-            hint: " (the values look like deg/s: --gyro-unit deg/s)",
+            hint: " (deg/s read as rad/s gives 57×: --gyro-unit deg/s; time stamps in ms instead of s \
+                   give 1000×)",
         }),
         _ => Ok(()),
     }

@@ -214,18 +214,29 @@ pub enum ImportError {
         "--rate-hz {0} is not a sample rate: give the logger's rate in Hz, e.g. --rate-hz 102.4"
     )]
     BadRate(f64),
+    /// The time column's steps give a rate no IMU logger has: it is not in seconds.
+    #[error(
+        "the time column steps at a median rate of {rate_hz:.3e} Hz: it is not in seconds (a time in \
+         ms gives 1000× too low a rate, in µs 10⁶×); convert it to seconds, or give --rate-hz HZ \
+         instead of --time-column"
+    )]
+    TimeUnit {
+        /// The median rate the time stamps give, Hz.
+        rate_hz: f64,
+    },
     /// Gravity's magnitude does not fit the stated accelerometer unit.
     #[error(
-        "the accelerometer's median magnitude is {median} {unit}, but gravity is {expected} {unit}: \
-         the unit is wrong{hint}; give the right --acc-unit (m/s2, g, LSB or V)"
+        "the accelerometer's median magnitude is {median:.4} {unit}{}: the unit is wrong{hint}; give \
+         the right --acc-unit (m/s2, g, LSB or V)",
+        expected.map_or(String::new(), |e| format!(", but gravity is {e} {unit}"))
     )]
     UnitMismatch {
         /// Median |acc|.
         median: f64,
         /// The stated unit.
         unit: &'static str,
-        /// Gravity in that unit.
-        expected: f64,
+        /// Gravity in that unit (none for counts and volts).
+        expected: Option<f64>,
         /// A guess at the right unit.
         hint: String,
     },
@@ -303,6 +314,11 @@ pub fn read_logger<R: BufRead>(
         return Err(ImportError::TooFewRows(rec.len()));
     }
     rec.rate_hz = median_rate(&rec.t_s);
+    if !(rec.rate_hz >= MIN_RATE_HZ && rec.rate_hz <= MAX_RATE_HZ) {
+        return Err(ImportError::TimeUnit {
+            rate_hz: rec.rate_hz,
+        });
+    }
     check_gravity(&rec, options.acc_unit)?;
     Ok(rec)
 }
@@ -494,13 +510,44 @@ fn median_rate(t_s: &[f64]) -> f64 {
     1.0 / dt[dt.len() / 2]
 }
 
+/// Counts and volts have no expected gravity, but data whose gravity reads as 1 g in m/s² or in g
+/// (within 2 %) are physical units given as counts or volts: no ADC or digital part reads gravity as
+/// 9.81 or 1.00 of its own unit by chance.
+fn check_not_physical(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
+    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+    mags.sort_by(f64::total_cmp);
+    let median = mags[mags.len() / 2];
+    let near = |x: f64| (median / x - 1.0).abs() < 0.02;
+    let hint = if near(shared::STANDARD_GRAVITY_M_S2) {
+        " (the values are gravity in m/s²: --acc-unit m/s2)"
+    } else if near(1.0) {
+        " (the values are gravity in g: --acc-unit g)"
+    } else {
+        return Ok(());
+    };
+    Err(ImportError::UnitMismatch {
+        median,
+        unit: unit.symbol(),
+        expected: None,
+        hint: hint.into(),
+    })
+}
+
+/// Slowest rate of a logger's time stamps taken as seconds, Hz: an IMU log for calibration samples at
+/// tens of Hz at least; a time column in ms reads 1000× slower.
+const MIN_RATE_HZ: f64 = 5.0;
+
+/// Fastest, Hz: a time column in a unit larger than seconds (or a repeated stamp) reads faster than
+/// any IMU's output data rate.
+const MAX_RATE_HZ: f64 = 1e5;
+
 /// Gravity's magnitude must be about 1 g in the stated unit (for m/s² and g; LSB and V have no
 /// expected value). The median over all rows is gravity's: a hand-held recording is mostly still.
 fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
     let expected = match unit {
         OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
         OutputUnit::StandardGravity => 1.0,
-        OutputUnit::Lsb | OutputUnit::Volts => return Ok(()),
+        OutputUnit::Lsb | OutputUnit::Volts => return check_not_physical(rec, unit),
     };
     let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
     mags.sort_by(f64::total_cmp);
@@ -519,7 +566,7 @@ fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
     Err(ImportError::UnitMismatch {
         median,
         unit: unit.symbol(),
-        expected,
+        expected: Some(expected),
         hint,
     })
 }
@@ -572,6 +619,33 @@ mod tests {
         assert_eq!(rec.t_s[102], 102.0 / 102.4);
         assert!((rec.gyro_rad_s[0][0] - std::f64::consts::PI).abs() < 1e-12);
         assert!((rec.gyro_rad_s[0][2] + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_time_column_in_ms_and_physical_units_as_counts_are_refused() {
+        let text = |dt: f64, g: f64| {
+            format!(
+                "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+                rows(300, |i| format!("{},0,0,{g},0,0,0", i as f64 * dt))
+            )
+        };
+        let o = |unit| ImportOptions::new(TimeSource::Column("t".into()), unit, GyroUnit::DegPerS);
+        let e = read(&text(5.0, 9.81), &o(OutputUnit::MetresPerSecondSquared)).unwrap_err();
+        assert!(e.to_string().contains("not in seconds"), "{e}");
+        read(&text(0.005, 9.81), &o(OutputUnit::MetresPerSecondSquared)).unwrap();
+        let e = read(&text(0.005, 9.81), &o(OutputUnit::Lsb))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--acc-unit m/s2") && e.contains("9.8100 LSB:"),
+            "{e}"
+        );
+        let e = read(&text(0.005, 1.0), &o(OutputUnit::Volts))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--acc-unit g"), "{e}");
+        // Counts as counts: 4096 per g.
+        read(&text(0.005, 4096.0), &o(OutputUnit::Lsb)).unwrap();
     }
 
     #[test]
