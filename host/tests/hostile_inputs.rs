@@ -409,7 +409,7 @@ fn closed_or_full_stdout_is_an_error_after_the_files_are_written() {
             "--out-dir",
             s(&dir.path().join("t")),
         ]),
-        &["--timeout-s = 1e300", "out of range"],
+        &["--timeout-s", "1e300 is out of range"],
     );
 }
 
@@ -489,7 +489,7 @@ fn messages_name_the_real_problem() {
             "--out-dir",
             s(&dir.path().join("w")),
         ]),
-        &["--window = 0", "1..="],
+        &["--window", "0 is out of range", "1..="],
     );
     // The unit id wherever a calibration meets data or another calibration.
     let b = session(dir.path(), "b", "short", &["--seed", "5"]);

@@ -31,7 +31,7 @@ pub struct ExportArgs {
     pub rostopic: String,
     /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: g / mean
     /// scale factor).
-    #[arg(long, value_name = "M_S2_PER_UNIT")]
+    #[arg(long, value_name = "M_S2_PER_UNIT", value_parser = crate::limits::real(1e-9, crate::limits::MAX_LIMIT))]
     pub driver_scale: Option<f64>,
 }
 
