@@ -139,7 +139,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         g.bias_rad_s
     );
     write_atomic(&truth_path, text.as_bytes()).map_err(io(&truth_path))?;
-    println!(
+    crate::outln!(
         "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",
         a.out.display(),
         sim.rows.len(),
@@ -148,7 +148,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         unit.symbol(),
         gyro_unit.symbol(),
         truth_path.display()
-    );
+    )?;
     Ok(sim.rows.len())
 }
 
