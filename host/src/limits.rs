@@ -10,6 +10,10 @@ use std::path::Path;
 /// segment name; 4 KiB leaves room for names and spaces, and bounds the reader's carry buffer.
 pub const MAX_LINE_BYTES: usize = 4096;
 
+/// Most segments one recording may name (a real plan has hundreds); bounds what a reader keeps per
+/// segment name.
+pub const MAX_SEGMENTS: usize = 10_000;
+
 /// Largest plan, unit or calibration file, bytes. The biggest real plan (hundreds of segments) is a
 /// few tens of kB.
 pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;

@@ -160,8 +160,10 @@ pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
         gyro: GyroSection,
     }
     let path = dir.join(GYRO_FILE);
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        return Ok(None);
+    let text = match crate::limits::read_text_bounded(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(CliError::Io(path, e)),
     };
     let f: File = toml::from_str(&text)
         .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;

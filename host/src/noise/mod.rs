@@ -7,18 +7,22 @@
 //! outputs are turned into m/s² when a calibration is given (`f = g·K_A·(U − u0)`, paper eq. 6);
 //! otherwise they stay in the output unit and Kalibr's accelerometer figures are undetermined.
 //!
-//! Memory: two passes over the file; the second keeps only the chosen segment's rows, at most
-//! [`MAX_SAMPLES`] of them (6 × 8 bytes each) — a longer segment is cut, with a warning.
+//! Memory: two passes over the file, each line bounded by [`MAX_LINE_BYTES`] (an endless line is an
+//! error after a few kilobytes); the first keeps the segment names (at most [`MAX_SEGMENTS`]), the
+//! second only the rows of the segment being read and of the longest so far, at most [`MAX_SAMPLES`]
+//! of each (6 × 8 bytes a row, ≤ 2 × 100 MB) — a longer segment is cut, with a warning.
 
 pub mod allan;
 
 use crate::export::kalibr::KalibrNoise;
 use crate::export::PlainMatrices;
+use crate::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
 use crate::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use allan::{fit, octave_sizes, overlapping_adev, AllanPoint, NoiseTerms};
 use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
@@ -159,25 +163,7 @@ fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
 /// read by the session reader (same parser, same checks) with a plan made of the segment names the
 /// file uses (a first pass over the names only).
 fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
-    use std::io::BufRead as _;
-    let io = |source| RecordingError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut names: Vec<String> = Vec::new();
-    let file = std::fs::File::open(path).map_err(io)?;
-    for line in BufReader::new(file).lines().skip(1) {
-        let line = line.map_err(io)?;
-        let name = line
-            .split(',')
-            .next()
-            .unwrap_or("")
-            .trim()
-            .trim_matches('"');
-        if !name.is_empty() && !names.iter().any(|n| n == name) {
-            names.push(name.to_string());
-        }
-    }
+    let names = segment_names(path)?;
     let plan = Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
@@ -203,6 +189,10 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
             .collect(),
     };
     type Run = (Signals, usize, f64, f64);
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let finish = |run: Option<Run>, best: &mut Option<Signals>| {
         if let Some((mut s, _, t0, t1)) = run {
             let n = s.data[0].len();
@@ -248,6 +238,58 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
     )?;
     finish(cur.take(), &mut best);
     best.ok_or_else(|| NoiseError::NoStillData(format!("{} has no rows", path.display())))
+}
+
+/// The segment names a bare samples.csv uses, in the order they first appear: the first field of
+/// every line after the header. Each line is read with the session reader's bound
+/// ([`MAX_LINE_BYTES`]) and at most [`MAX_SEGMENTS`] names are kept, so an endless line
+/// (`/dev/zero`, a file without line ends) or endless names are an error naming the limit after a
+/// few kilobytes, never an unbounded allocation.
+fn segment_names(path: &Path) -> Result<Vec<String>, NoiseError> {
+    use std::io::{BufRead as _, Read as _};
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    let (mut names, mut known): (Vec<String>, HashSet<String>) = Default::default();
+    let mut line = Vec::with_capacity(256);
+    for number in 1u64.. {
+        line.clear();
+        let n = (&mut reader)
+            .take(MAX_LINE_BYTES as u64 + 1)
+            .read_until(b'\n', &mut line)
+            .map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        if n > MAX_LINE_BYTES {
+            return Err(RecordingError::LineTooLong {
+                path: path.to_path_buf(),
+                line: number,
+            }
+            .into());
+        }
+        if number == 1 {
+            continue;
+        }
+        let field = line.split(|&b| b == b',').next().unwrap_or_default();
+        let name = String::from_utf8_lossy(field.trim_ascii());
+        let name = name.trim_matches('"');
+        if name.is_empty() || names.last().is_some_and(|l| l == name) || known.contains(name) {
+            continue;
+        }
+        if names.len() >= MAX_SEGMENTS {
+            return Err(NoiseError::NoStillData(format!(
+                "{} names more than {MAX_SEGMENTS} segments (line {number}): not a samples.csv",
+                path.display()
+            )));
+        }
+        known.insert(name.to_string());
+        names.push(name.to_string());
+    }
+    Ok(names)
 }
 
 /// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
@@ -453,8 +495,8 @@ impl NoiseReport {
 
 /// Kalibr's figures from a `noise.json` written by `host noise`.
 pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
+    let text = crate::limits::read_text_bounded(path)
+        .map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
     let report: NoiseReport = serde_json::from_str(&text).map_err(|e| {
         NoiseError::File(path.into(), format!("not a noise.json of host noise: {e}"))
     })?;
