@@ -163,7 +163,24 @@ fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
 /// read by the session reader (same parser, same checks) with a plan made of the segment names the
 /// file uses (a first pass over the names only).
 fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
-    let names = segment_names(path)?;
+    let open = || {
+        std::fs::File::open(path)
+            .map(|f| BufReader::with_capacity(1 << 20, f))
+            .map_err(|source| RecordingError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+    };
+    collect_csv_from(open()?, open()?, path)
+}
+
+/// [`collect_csv`] on two readers of the same text, one per pass (`path` only names it in messages).
+fn collect_csv_from<R: std::io::BufRead>(
+    first_pass: R,
+    second_pass: R,
+    path: &Path,
+) -> Result<Signals, NoiseError> {
+    let names = segment_names(first_pass, path)?;
     let plan = Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
@@ -189,10 +206,6 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
             .collect(),
     };
     type Run = (Signals, usize, f64, f64);
-    let io = |source| RecordingError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let finish = |run: Option<Run>, best: &mut Option<Signals>| {
         if let Some((mut s, _, t0, t1)) = run {
             let n = s.data[0].len();
@@ -205,37 +218,31 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
         }
     };
     let (mut best, mut cur): (Option<Signals>, Option<Run>) = (None, None);
-    let file = std::fs::File::open(path).map_err(io)?;
-    read_samples_each(
-        BufReader::with_capacity(1 << 20, file),
-        &plan,
-        path,
-        |row| {
-            if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
-                finish(cur.take(), &mut best);
-                let s = Signals {
-                    segment: row.segment.to_string(),
-                    rate_hz: 0.0,
-                    data: Default::default(),
-                    cut: false,
-                };
-                cur = Some((s, row.segment_index, row.t_s, row.t_s));
-            }
-            if let Some((s, _, _, t1)) = cur.as_mut() {
-                let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
-                if s.data[0].len() >= MAX_SAMPLES {
-                    s.cut = true;
-                } else if finite && row.t_s.is_finite() {
-                    for j in 0..3 {
-                        s.data[j].push(row.u[j]);
-                        s.data[3 + j].push(row.w_rad_s[j]);
-                    }
-                    *t1 = row.t_s;
+    read_samples_each(second_pass, &plan, path, |row| {
+        if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
+            finish(cur.take(), &mut best);
+            let s = Signals {
+                segment: row.segment.to_string(),
+                rate_hz: 0.0,
+                data: Default::default(),
+                cut: false,
+            };
+            cur = Some((s, row.segment_index, row.t_s, row.t_s));
+        }
+        if let Some((s, _, _, t1)) = cur.as_mut() {
+            let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
+            if s.data[0].len() >= MAX_SAMPLES {
+                s.cut = true;
+            } else if finite && row.t_s.is_finite() {
+                for j in 0..3 {
+                    s.data[j].push(row.u[j]);
+                    s.data[3 + j].push(row.w_rad_s[j]);
                 }
+                *t1 = row.t_s;
             }
-            Ok(())
-        },
-    )?;
+        }
+        Ok(())
+    })?;
     finish(cur.take(), &mut best);
     best.ok_or_else(|| NoiseError::NoStillData(format!("{} has no rows", path.display())))
 }
@@ -245,14 +252,15 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
 /// ([`MAX_LINE_BYTES`]) and at most [`MAX_SEGMENTS`] names are kept, so an endless line
 /// (`/dev/zero`, a file without line ends) or endless names are an error naming the limit after a
 /// few kilobytes, never an unbounded allocation.
-fn segment_names(path: &Path) -> Result<Vec<String>, NoiseError> {
+fn segment_names<R: std::io::BufRead>(
+    mut reader: R,
+    path: &Path,
+) -> Result<Vec<String>, NoiseError> {
     use std::io::{BufRead as _, Read as _};
     let io = |source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut reader = BufReader::with_capacity(1 << 20, file);
     let (mut names, mut known): (Vec<String>, HashSet<String>) = Default::default();
     let mut line = Vec::with_capacity(256);
     for number in 1u64.. {
@@ -299,7 +307,7 @@ pub fn analyse(
     calibration: Option<&PlainMatrices>,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
-    let mut s = if input.is_dir() {
+    let s = if input.is_dir() {
         if !input.join(PLAN_FILE).exists() {
             return Err(NoiseError::NoStillData(format!(
                 "{} has no {PLAN_FILE}; give a session directory or a samples.csv",
@@ -310,6 +318,24 @@ pub fn analyse(
     } else {
         collect_csv(input)?
     };
+    analyse_signals(s, input.display().to_string(), calibration)
+}
+
+/// [`analyse`] of a bare samples.csv held in memory (`host::fuzz`'s `noise_csv` target).
+pub fn analyse_csv_bytes(
+    data: &[u8],
+    calibration: Option<&PlainMatrices>,
+) -> Result<NoiseReport, NoiseError> {
+    let s = collect_csv_from(data, data, Path::new(SAMPLES_FILE))?;
+    analyse_signals(s, SAMPLES_FILE.into(), calibration)
+}
+
+/// The Allan curves, fitted terms and Kalibr figures of one segment's signals.
+fn analyse_signals(
+    mut s: Signals,
+    source: String,
+    calibration: Option<&PlainMatrices>,
+) -> Result<NoiseReport, NoiseError> {
     let n = s.data[0].len();
     if n < MIN_SAMPLES || !(s.rate_hz.is_finite() && s.rate_hz > 0.0) {
         return Err(NoiseError::NoStillData(format!(
@@ -377,7 +403,7 @@ pub fn analyse(
         gyroscope_random_walk: worst(3..6, |t| t.random_walk),
     };
     Ok(NoiseReport {
-        source: input.display().to_string(),
+        source,
         segment: s.segment,
         sample_rate_hz: s.rate_hz,
         samples: n as u64,
