@@ -7,6 +7,7 @@
 //! session format's unit. The whole recording is held in memory (the gyro fit integrates every turn),
 //! so the number of rows is capped ([`MAX_ROWS`]) and every line is bounded ([`MAX_LINE_BYTES`]).
 
+use crate::limits::short_number;
 use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -186,8 +187,10 @@ pub enum ImportError {
     },
     /// Time does not increase.
     #[error(
-        "line {line}: time {t_s} s does not increase (previous {previous_s} s); give the time column \
-         in seconds, or --rate-hz instead of --time-column"
+        "line {line}: time {} s does not increase (previous {} s); give the time column in \
+         seconds, or --rate-hz instead of --time-column",
+        short_number(*.t_s),
+        short_number(*.previous_s)
     )]
     TimeNotIncreasing {
         /// 1-based line.
@@ -214,8 +217,10 @@ pub enum ImportError {
     BadRate(f64),
     /// Gravity's magnitude does not fit the stated accelerometer unit.
     #[error(
-        "the accelerometer's median magnitude is {median} {unit}, but gravity is {expected} {unit}: \
-         the unit is wrong{hint}; give the right --acc-unit (m/s2, g, LSB or V)"
+        "the accelerometer's median magnitude is {} {unit}, but gravity is {} {unit}: the unit is \
+         wrong{hint}; give the right --acc-unit (m/s2, g, LSB or V)",
+        short_number(*.median),
+        short_number(*.expected)
     )]
     UnitMismatch {
         /// Median |acc|.
@@ -553,6 +558,28 @@ mod tests {
         assert_eq!(rec.t_s[102], 102.0 / 102.4);
         assert!((rec.gyro_rad_s[0][0] - std::f64::consts::PI).abs() < 1e-12);
         assert!((rec.gyro_rad_s[0][2] + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn huge_numbers_in_a_file_are_printed_short() {
+        let o = ImportOptions::new(
+            TimeSource::Column("t".into()),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::DegPerS,
+        );
+        let text =
+            "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n1e300,0,0,9.81,0,0,0\n1e299,0,0,9.81,0,0,0\n";
+        let e = read(text, &o).unwrap_err().to_string();
+        assert!(
+            e.contains("time 1e299 s does not increase (previous 1e300 s)"),
+            "{e}"
+        );
+        let text = format!(
+            "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |i| format!("{i},0,0,1e100,0,0,0"))
+        );
+        let e = read(&text, &o).unwrap_err().to_string();
+        assert!(e.contains("median magnitude is 1e100 m/s2"), "{e}");
     }
 
     #[test]
