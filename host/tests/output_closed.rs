@@ -106,6 +106,18 @@ impl Fixture {
                 ]),
             ),
             (
+                "calibrate",
+                v(&[
+                    "calibrate",
+                    "--port",
+                    "sim",
+                    "--plan",
+                    "quick-oblique",
+                    "--out-dir",
+                    &self.fresh("live", run),
+                ]),
+            ),
+            (
                 "segment",
                 v(&[
                     "segment",
