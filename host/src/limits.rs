@@ -18,6 +18,9 @@ pub const MAX_SEGMENTS: usize = 10_000;
 /// few tens of kB.
 pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
 
+/// Shortest replayed navigation run (`--duration-s`), s: one step of the replay.
+pub const MIN_NAVIGATION_DURATION_S: f64 = 0.01;
+
 /// Longest replayed navigation run (`--duration-s`), s: one hour.
 pub const MAX_NAVIGATION_DURATION_S: f64 = 3600.0;
 
@@ -29,6 +32,9 @@ pub const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
 
 /// Most rows one simulated segment may have (duration × rate): 10⁹ rows ≈ 150 GB of text.
 pub const MAX_SEGMENT_ROWS: f64 = 1e9;
+
+/// Shortest wait for one answer of a device, s (below a millisecond no link answers).
+pub const MIN_TIMEOUT_S: f64 = 1e-3;
 
 /// Longest wait for one answer of a device, s.
 pub const MAX_TIMEOUT_S: f64 = 3600.0;
@@ -48,6 +54,10 @@ pub const MAX_BAUD: u32 = 12_000_000;
 
 /// Slowest serial link, baud.
 pub const MIN_BAUD: u32 = 300;
+
+/// Smallest pass/fail limit, tolerance, σ multiple or noise σ an option may give: a smaller one is
+/// zero in every printout and passes no real unit (and a σ of zero makes a prediction singular).
+pub const MIN_LIMIT: f64 = 1e-6;
 
 /// Largest pass/fail limit or σ multiple an option may give (a limit of a million mg, degrees-squared
 /// or σ checks nothing; a larger number is a typo).
@@ -71,8 +81,8 @@ pub fn short_number(v: f64) -> String {
     }
 }
 
-/// Why a command-line number is refused by one of the range parsers below ([`real`], [`positive`],
-/// [`whole_u32`], [`whole_u64`]); clap prints it after the option's name and the value given.
+/// Why a command-line number is refused by one of the range parsers below ([`real`], [`whole_u32`],
+/// [`whole_u64`]); clap prints it after the option's name and the value given.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum OptionRangeError {
     /// Not a number at all (or not a whole one, for a count).
@@ -93,13 +103,13 @@ pub enum OptionRangeError {
     },
 }
 
-/// The range of a real-valued option: `[min, max]`, or `(min, max]` when `min_open`.
+/// The range of a real-valued option, `[min, max]`. A quantity that must be > 0 (a rate, a σ, a
+/// duration) gets the smallest value that still means something as `min`, never an open 0: a
+/// `1e-300` accepted would print as three hundred digits later.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RealRange {
-    /// Lower bound.
+    /// Lower bound (included).
     pub min: f64,
-    /// The lower bound itself is refused (a σ or a rate must be > 0).
-    pub min_open: bool,
     /// Upper bound (included).
     pub max: f64,
 }
@@ -107,9 +117,7 @@ pub struct RealRange {
 impl RealRange {
     /// `value` is finite and inside.
     pub fn contains(&self, value: f64) -> bool {
-        value.is_finite()
-            && value <= self.max
-            && (value > self.min || (!self.min_open && value == self.min))
+        value.is_finite() && (self.min..=self.max).contains(&value)
     }
 
     /// Checks a value read from a file or given in code (the command line is checked by [`real`]).
@@ -139,10 +147,9 @@ impl RealRange {
 
 impl std::fmt::Display for RealRange {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let open = if self.min_open { '(' } else { '[' };
         write!(
             f,
-            "{open}{}, {}]",
+            "[{}, {}]",
             short_number(self.min),
             short_number(self.max)
         )
@@ -150,29 +157,13 @@ impl std::fmt::Display for RealRange {
 }
 
 /// The clap value parser of a real option in `[min, max]`: NaN, ±inf and values outside are a usage
-/// error (exit 2) naming the option and the range, before any work. Every real option uses this or
-/// [`positive`] (`host/tests/option_sweep.rs` refuses a plain `f64` parser).
+/// error (exit 2) naming the option and the range, before any work. Every real option uses this
+/// (`host/tests/option_sweep.rs` refuses a plain `f64` parser).
 pub fn real(
     min: f64,
     max: f64,
 ) -> impl Fn(&str) -> Result<f64, OptionRangeError> + Clone + Send + Sync + 'static {
-    let range = RealRange {
-        min,
-        min_open: false,
-        max,
-    };
-    move |text: &str| range.parse(text)
-}
-
-/// [`real`] for `(0, max]`: a rate, a duration, a σ, a tolerance.
-pub fn positive(
-    max: f64,
-) -> impl Fn(&str) -> Result<f64, OptionRangeError> + Clone + Send + Sync + 'static {
-    let range = RealRange {
-        min: 0.0,
-        min_open: true,
-        max,
-    };
+    let range = RealRange { min, max };
     move |text: &str| range.parse(text)
 }
 
@@ -219,14 +210,14 @@ pub fn whole_u32(
 }
 
 /// Gives the pass/fail limit options (declared in [`crate::summary::Limits`]) their ranges:
-/// `--max-misalignment-deg` in `(0, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
-/// `--max-bias-sigma-mg` in `(0, MAX_LIMIT]`. A command that flattens the limits applies it to its
+/// `--max-misalignment-deg` in `[MIN_LIMIT, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
+/// `--max-bias-sigma-mg` in `[MIN_LIMIT, MAX_LIMIT]`. A command that flattens the limits applies it to its
 /// arguments with `#[command(mut_args(limits::pass_fail_limits))]`; other arguments pass unchanged.
 pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
     match arg.get_id().as_str() {
-        "max_misalignment_deg" => arg.value_parser(positive(90.0)),
+        "max_misalignment_deg" => arg.value_parser(real(MIN_LIMIT, 90.0)),
         "max_chi2_per_dof" | "max_bias_mg" | "max_bias_sigma_mg" => {
-            arg.value_parser(positive(MAX_LIMIT))
+            arg.value_parser(real(MIN_LIMIT, MAX_LIMIT))
         }
         _ => arg,
     }
@@ -329,16 +320,25 @@ mod tests {
 
     #[test]
     fn range_parsers_refuse_what_is_outside_and_print_short_numbers() {
-        let rate = positive(1e5);
+        let rate = real(1e-3, 1e5);
         assert_eq!(rate("200"), Ok(200.0));
-        assert_eq!(rate("1e5"), Ok(1e5));
-        for bad in ["NaN", "inf", "-inf", "0", "-1", "1e300", "100000.1", "x"] {
+        assert_eq!((rate("1e5"), rate("0.001")), (Ok(1e5), Ok(1e-3)));
+        for bad in [
+            "NaN", "inf", "-inf", "0", "-1", "1e-300", "1e300", "100000.1", "x",
+        ] {
             let e = rate(bad).unwrap_err().to_string();
-            assert!(e.ends_with("give a number in (0, 100000]"), "{bad}: {e}");
+            assert!(
+                e.ends_with("give a number in [0.001, 100000]"),
+                "{bad}: {e}"
+            );
         }
         assert_eq!(
             rate("1e300").unwrap_err().to_string(),
-            "1e300 is out of range: give a number in (0, 100000]"
+            "1e300 is out of range: give a number in [0.001, 100000]"
+        );
+        assert_eq!(
+            rate("1e-300").unwrap_err().to_string(),
+            "1e-300 is out of range: give a number in [0.001, 100000]"
         );
         let closed = real(0.0, 45.0);
         assert_eq!((closed("0"), closed("45")), (Ok(0.0), Ok(45.0)));

@@ -43,7 +43,7 @@ pub struct CalibrateArgs {
         long,
         default_value_t = 5.0,
         requires = "port",
-        value_parser = limits::positive(limits::MAX_TIMEOUT_S)
+        value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
     )]
     pub timeout_s: f64,
     /// With --port sim: the simulated unit's parameters (default: the paper's unit).
@@ -60,7 +60,7 @@ pub struct CalibrateArgs {
         long,
         default_value_t = 1.0,
         requires = "port",
-        value_parser = limits::positive(limits::MAX_TOLERANCE_MG)
+        value_parser = limits::real(limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
     )]
     pub verify_tolerance_mg: f64,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).

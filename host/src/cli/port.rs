@@ -25,7 +25,7 @@ pub struct PortArgs {
     #[arg(long, default_value_t = DEFAULT_BAUD, value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD))]
     pub baud: u32,
     /// Seconds to wait for each answer before declaring the device silent.
-    #[arg(long, default_value_t = 5.0, value_parser = limits::positive(limits::MAX_TIMEOUT_S))]
+    #[arg(long, default_value_t = 5.0, value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S))]
     pub timeout_s: f64,
     /// With `--port sim`: the simulated unit's parameters (unit file; default: the paper's unit).
     #[arg(long)]
