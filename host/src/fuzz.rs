@@ -1,4 +1,5 @@
-//! Fuzz targets: every parser of outside input, called on arbitrary bytes. Each target must return
+//! Fuzz targets: every parser of outside input, called on arbitrary bytes (`samples.csv`, `plan.toml`,
+//! unit files, blobs, wire frames, a logger's CSV, and the bare `samples.csv` of `host noise`). Each target must return
 //! (an `Ok` or a typed error) without panicking and within bounded memory; the properties a parsed
 //! value must have are checked with `assert!`, so a violation is a crash the fuzzer reports.
 //!
@@ -9,6 +10,7 @@
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
 //!   `cargo run --release -p host --example fuzz -- all 1000000` (a short run is a unit test).
 
+use crate::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use crate::session::{read_samples, Plan};
 use crate::sim::Rng;
 use crate::unit_file::UnitFile;
@@ -27,16 +29,22 @@ pub enum Target {
     Blob,
     /// Wire frames: the device's frame receiver and request handler, and the host's decoder.
     Wire,
+    /// A logger's CSV (`host segment`'s importer), with a time column and with a sample rate.
+    LoggerCsv,
+    /// A bare `samples.csv` given to `host noise` (its two passes and the Allan analysis).
+    NoiseCsv,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 5] = [
+    pub const ALL: [Target; 7] = [
         Target::SamplesCsv,
         Target::PlanToml,
         Target::UnitFile,
         Target::Blob,
         Target::Wire,
+        Target::LoggerCsv,
+        Target::NoiseCsv,
     ];
 
     /// The name used on the command line and by `fuzz/fuzz_targets/`.
@@ -47,6 +55,8 @@ impl Target {
             Target::UnitFile => "unit_file",
             Target::Blob => "blob",
             Target::Wire => "wire",
+            Target::LoggerCsv => "logger_csv",
+            Target::NoiseCsv => "noise_csv",
         }
     }
 
@@ -63,6 +73,8 @@ impl Target {
             Target::UnitFile => unit_file(data),
             Target::Blob => blob(data),
             Target::Wire => wire(data),
+            Target::LoggerCsv => logger_csv(data),
+            Target::NoiseCsv => noise_csv(data),
         }
     }
 
@@ -89,6 +101,8 @@ impl Target {
                 vec![b, payload]
             }
             Target::Wire => wire_corpus(),
+            Target::LoggerCsv => logger_corpus(),
+            Target::NoiseCsv => vec![noise_corpus()],
         }
     }
 }
@@ -218,6 +232,100 @@ pub fn wire(data: &[u8]) {
         frame.extend_from_slice(chunk);
         let _ = decode_frame::<HostToDevice>(&mut frame);
     }
+}
+
+/// The importer's two ways to time rows: a column `t` in m/s² and °/s, and 100 Hz in g and rad/s.
+fn logger_options() -> &'static [ImportOptions; 2] {
+    static OPTIONS: std::sync::OnceLock<[ImportOptions; 2]> = std::sync::OnceLock::new();
+    OPTIONS.get_or_init(|| {
+        [
+            ImportOptions::new(
+                TimeSource::Column("t".into()),
+                shared::OutputUnit::MetresPerSecondSquared,
+                GyroUnit::DegPerS,
+            ),
+            ImportOptions::new(
+                TimeSource::RateHz(100.0),
+                shared::OutputUnit::StandardGravity,
+                GyroUnit::RadPerS,
+            ),
+        ]
+    })
+}
+
+/// A logger's CSV: a recording the importer accepts has as many times as rows, at least 100 and
+/// at most `MAX_ROWS` of them, strictly increasing times, only finite values and a positive rate.
+pub fn logger_csv(data: &[u8]) {
+    for options in logger_options() {
+        let Ok(rec) = read_logger(data, Path::new("raw.csv"), options) else {
+            continue;
+        };
+        let n = rec.len();
+        assert!((100..=MAX_ROWS).contains(&n), "{n} rows");
+        assert!(rec.acc.len() == n && rec.gyro_rad_s.len() == n);
+        assert!(
+            rec.t_s.windows(2).all(|w| w[1] > w[0]),
+            "time not increasing"
+        );
+        let values = rec.acc.iter().chain(&rec.gyro_rad_s).flatten();
+        assert!(values.chain(&rec.t_s).all(|v| v.is_finite()));
+        assert!(rec.rate_hz > 0.0, "rate {}", rec.rate_hz);
+    }
+}
+
+/// A bare `samples.csv` for `host noise`: a report it gives is of `MIN_SAMPLES..=MAX_SAMPLES` rows
+/// at a finite positive rate, six axes, one Allan point per octave cluster size.
+pub fn noise_csv(data: &[u8]) {
+    use crate::noise::{allan::octave_sizes, MAX_SAMPLES, MIN_SAMPLES};
+    if let Ok(r) = crate::noise::analyse_csv_bytes(data, None) {
+        let n = usize::try_from(r.samples).unwrap_or(usize::MAX);
+        assert!((MIN_SAMPLES..=MAX_SAMPLES).contains(&n), "{n} rows");
+        assert!(r.sample_rate_hz.is_finite() && r.sample_rate_hz > 0.0);
+        assert_eq!(r.axes.len(), 6);
+        let sizes = octave_sizes(n).len();
+        assert!(r.axes.iter().all(|a| a.points.len() == sizes));
+    }
+}
+
+/// 150 still rows at 100 Hz, as `t,acc_x,…` in m/s² and °/s, and with `;`, the columns in another
+/// order, an index and an extra column, in g and rad/s.
+fn logger_corpus() -> Vec<Vec<u8>> {
+    let mut timed = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
+    let mut indexed = String::from("n;gyr_z;ACC_X;acc_y;acc_z;gyr_x;gyr_y;temp\n");
+    for k in 0..150 {
+        let e = 1e-3 * ((k * 7 % 11) as f64 - 5.0);
+        timed += &format!(
+            "{:.2},{e},{},{},{},{e},-0.1\n",
+            k as f64 * 0.01,
+            -e,
+            9.81 + e,
+            0.5 + e
+        );
+        indexed += &format!("{k};{e};{e};0.001;{};0.002;{};25.0\n", 1.0 + e, -e);
+    }
+    vec![timed.into_bytes(), indexed.into_bytes()]
+}
+
+/// 100 rows of a still segment at 100 Hz between two short others.
+fn noise_corpus() -> Vec<u8> {
+    let mut text = String::from("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n");
+    for k in 0..110 {
+        let name = match k {
+            0..5 => "x+",
+            5..105 => "z+",
+            _ => "y-",
+        };
+        let e = 1e-4 * ((k * 13 % 17) as f64 - 8.0);
+        text += &format!(
+            "{name},{:.2},{},{},{},{e},{},0.001\n",
+            k as f64 * 0.01,
+            2.4 + e,
+            2.38 - e,
+            2.83 + e,
+            -e
+        );
+    }
+    text.into_bytes()
 }
 
 fn paper_blob() -> Vec<u8> {
@@ -403,5 +511,19 @@ mod tests {
         assert!(Plan::parse(FUZZ_PLAN).is_ok());
         assert!(shared::blob::decode(&paper_blob()).is_ok());
         assert!(UnitFile::parse(crate::unit_file::PAPER_UNIT_TOML).is_ok());
+        // Each logger entry is read with one of the two options; the noise entry gives its still
+        // segment's 100 rows at 100 Hz.
+        for (entry, options) in logger_corpus().iter().zip(logger_options()) {
+            let rec = read_logger(entry.as_slice(), Path::new("raw.csv"), options).unwrap();
+            assert_eq!(rec.len(), 150);
+            assert!((rec.rate_hz - 100.0).abs() < 1e-6, "{}", rec.rate_hz);
+        }
+        let r = crate::noise::analyse_csv_bytes(&noise_corpus(), None).unwrap();
+        assert_eq!((r.segment.as_str(), r.samples), ("z+", 100));
+        assert!(
+            (r.sample_rate_hz - 100.0).abs() < 1e-9,
+            "{}",
+            r.sample_rate_hz
+        );
     }
 }

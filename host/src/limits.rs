@@ -10,9 +10,16 @@ use std::path::Path;
 /// segment name; 4 KiB leaves room for names and spaces, and bounds the reader's carry buffer.
 pub const MAX_LINE_BYTES: usize = 4096;
 
+/// Most segments one recording may name (a real plan has hundreds); bounds what a reader keeps per
+/// segment name.
+pub const MAX_SEGMENTS: usize = 10_000;
+
 /// Largest plan, unit or calibration file, bytes. The biggest real plan (hundreds of segments) is a
 /// few tens of kB.
 pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
+
+/// Shortest replayed navigation run (`--duration-s`), s: one step of the replay.
+pub const MIN_NAVIGATION_DURATION_S: f64 = 0.01;
 
 /// Longest replayed navigation run (`--duration-s`), s: one hour.
 pub const MAX_NAVIGATION_DURATION_S: f64 = 3600.0;
@@ -25,6 +32,9 @@ pub const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
 
 /// Most rows one simulated segment may have (duration × rate): 10⁹ rows ≈ 150 GB of text.
 pub const MAX_SEGMENT_ROWS: f64 = 1e9;
+
+/// Shortest wait for one answer of a device, s (below a millisecond no link answers).
+pub const MIN_TIMEOUT_S: f64 = 1e-3;
 
 /// Longest wait for one answer of a device, s.
 pub const MAX_TIMEOUT_S: f64 = 3600.0;
@@ -39,6 +49,180 @@ pub const MAX_TOLERANCE_MG: f64 = 1000.0;
 /// lever-arm terms grow as ω², so a typo like 1e9 °/s would make every model term overflow).
 pub const MAX_RATE_DEG_S: f64 = 7200.0;
 
+/// Fastest serial link, baud (USB bridges reach 12 Mbaud).
+pub const MAX_BAUD: u32 = 12_000_000;
+
+/// Slowest serial link, baud.
+pub const MIN_BAUD: u32 = 300;
+
+/// Smallest pass/fail limit, tolerance, σ multiple or noise σ an option may give: a smaller one is
+/// zero in every printout and passes no real unit (and a σ of zero makes a prediction singular).
+pub const MIN_LIMIT: f64 = 1e-6;
+
+/// Largest pass/fail limit or σ multiple an option may give (a limit of a million mg, degrees-squared
+/// or σ checks nothing; a larger number is a typo).
+pub const MAX_LIMIT: f64 = 1e6;
+
+/// Largest simulated noise, drift or flicker level in mg or °/s: 10 g or 10 000 °/s of noise is no
+/// sensor any more.
+pub const MAX_SIM_NOISE: f64 = 1e4;
+
+/// Lowest sample rate of a logger recording, Hz (one sample every 1000 s is no hand-held session; a
+/// smaller rate is a typo that would make every time in the result astronomical).
+pub const MIN_LOGGER_RATE_HZ: f64 = 1e-3;
+
+/// A number as people read it: plain between 10⁻³ and 10⁶, else in exponent form (`1e300`, never
+/// three hundred digits).
+pub fn short_number(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Why a command-line number is refused by one of the range parsers below ([`real`], [`whole_u32`],
+/// [`whole_u64`]); clap prints it after the option's name and the value given.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OptionRangeError {
+    /// Not a number at all (or not a whole one, for a count).
+    #[error("not a {kind}: give a number in {range}")]
+    NotANumber {
+        /// "number" or "whole number".
+        kind: &'static str,
+        /// The accepted range, as text.
+        range: String,
+    },
+    /// A number outside the option's range (NaN and ±inf are outside every range).
+    #[error("{value} is out of range: give a number in {range}")]
+    OutOfRange {
+        /// The value read, as [`short_number`] prints it.
+        value: String,
+        /// The accepted range, as text.
+        range: String,
+    },
+}
+
+/// The range of a real-valued option, `[min, max]`. A quantity that must be > 0 (a rate, a σ, a
+/// duration) gets the smallest value that still means something as `min`, never an open 0: a
+/// `1e-300` accepted would print as three hundred digits later.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RealRange {
+    /// Lower bound (included).
+    pub min: f64,
+    /// Upper bound (included).
+    pub max: f64,
+}
+
+impl RealRange {
+    /// `value` is finite and inside.
+    pub fn contains(&self, value: f64) -> bool {
+        value.is_finite() && (self.min..=self.max).contains(&value)
+    }
+
+    /// Checks a value read from a file or given in code (the command line is checked by [`real`]).
+    pub fn check(&self, value: f64) -> Result<f64, OptionRangeError> {
+        if self.contains(value) {
+            Ok(value)
+        } else {
+            Err(OptionRangeError::OutOfRange {
+                value: short_number(value),
+                range: self.to_string(),
+            })
+        }
+    }
+
+    /// Parses a command-line value.
+    pub fn parse(&self, text: &str) -> Result<f64, OptionRangeError> {
+        let value: f64 = text
+            .trim()
+            .parse()
+            .map_err(|_| OptionRangeError::NotANumber {
+                kind: "number",
+                range: self.to_string(),
+            })?;
+        self.check(value)
+    }
+}
+
+impl std::fmt::Display for RealRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "[{}, {}]",
+            short_number(self.min),
+            short_number(self.max)
+        )
+    }
+}
+
+/// The clap value parser of a real option in `[min, max]`: NaN, ±inf and values outside are a usage
+/// error (exit 2) naming the option and the range, before any work. Every real option uses this
+/// (`host/tests/option_sweep.rs` refuses a plain `f64` parser).
+pub fn real(
+    min: f64,
+    max: f64,
+) -> impl Fn(&str) -> Result<f64, OptionRangeError> + Clone + Send + Sync + 'static {
+    let range = RealRange { min, max };
+    move |text: &str| range.parse(text)
+}
+
+/// Parses a whole number in `min..=max`.
+fn parse_whole(text: &str, min: u64, max: u64) -> Result<u64, OptionRangeError> {
+    let range = format!("{min}..={max}");
+    let text = text.trim();
+    match text.parse::<u64>() {
+        Ok(v) if (min..=max).contains(&v) => Ok(v),
+        Ok(v) => Err(OptionRangeError::OutOfRange {
+            value: v.to_string(),
+            range,
+        }),
+        // A number that is not a whole one in u64 (`-1`, `1e300`, `NaN`) is named as a number.
+        Err(_) => match text.parse::<f64>() {
+            Ok(v) => Err(OptionRangeError::OutOfRange {
+                value: short_number(v),
+                range,
+            }),
+            Err(_) => Err(OptionRangeError::NotANumber {
+                kind: "whole number",
+                range,
+            }),
+        },
+    }
+}
+
+/// The clap value parser of a count or an id in `min..=max` (`u64`): see [`real`].
+pub fn whole_u64(
+    min: u64,
+    max: u64,
+) -> impl Fn(&str) -> Result<u64, OptionRangeError> + Clone + Send + Sync + 'static {
+    move |text: &str| parse_whole(text, min, max)
+}
+
+/// [`whole_u64`] for a `u32` option.
+pub fn whole_u32(
+    min: u32,
+    max: u32,
+) -> impl Fn(&str) -> Result<u32, OptionRangeError> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        parse_whole(text, min.into(), max.into()).map(|v| u32::try_from(v).unwrap_or(max))
+    }
+}
+
+/// Gives the pass/fail limit options (declared in [`crate::summary::Limits`]) their ranges:
+/// `--max-misalignment-deg` in `[MIN_LIMIT, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
+/// `--max-bias-sigma-mg` in `[MIN_LIMIT, MAX_LIMIT]`. A command that flattens the limits applies it to its
+/// arguments with `#[command(mut_args(limits::pass_fail_limits))]`; other arguments pass unchanged.
+pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
+    match arg.get_id().as_str() {
+        "max_misalignment_deg" => arg.value_parser(real(MIN_LIMIT, 90.0)),
+        "max_chi2_per_dof" | "max_bias_mg" | "max_bias_sigma_mg" => {
+            arg.value_parser(real(MIN_LIMIT, MAX_LIMIT))
+        }
+        _ => arg,
+    }
+}
+
 /// Why a number is refused.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RangeError {
@@ -52,13 +236,13 @@ pub struct RangeError {
 
 impl std::fmt::Display for RangeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let v = self.value;
-        if v.is_finite() && v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
-            write!(f, "{} = {v:e}", self.name)?;
-        } else {
-            write!(f, "{} = {v}", self.name)?;
-        }
-        write!(f, " is out of range: give a number in {}", self.range)
+        write!(
+            f,
+            "{} = {} is out of range: give a number in {}",
+            self.name,
+            short_number(self.value),
+            self.range
+        )
     }
 }
 
@@ -132,6 +316,50 @@ mod tests {
         assert_eq!(positive_at_most("x", 60.0, 3600.0), Ok(60.0));
         assert!(count_in("--window", 0, 10).is_err());
         assert_eq!(count_in("--window", 10, 10), Ok(10));
+    }
+
+    #[test]
+    fn range_parsers_refuse_what_is_outside_and_print_short_numbers() {
+        let rate = real(1e-3, 1e5);
+        assert_eq!(rate("200"), Ok(200.0));
+        assert_eq!((rate("1e5"), rate("0.001")), (Ok(1e5), Ok(1e-3)));
+        for bad in [
+            "NaN", "inf", "-inf", "0", "-1", "1e-300", "1e300", "100000.1", "x",
+        ] {
+            let e = rate(bad).unwrap_err().to_string();
+            assert!(
+                e.ends_with("give a number in [0.001, 100000]"),
+                "{bad}: {e}"
+            );
+        }
+        assert_eq!(
+            rate("1e300").unwrap_err().to_string(),
+            "1e300 is out of range: give a number in [0.001, 100000]"
+        );
+        assert_eq!(
+            rate("1e-300").unwrap_err().to_string(),
+            "1e-300 is out of range: give a number in [0.001, 100000]"
+        );
+        let closed = real(0.0, 45.0);
+        assert_eq!((closed("0"), closed("45")), (Ok(0.0), Ok(45.0)));
+        assert!(closed("-0.1").is_err() && closed("45.5").is_err());
+        let count = whole_u32(1, 10);
+        assert_eq!((count("1"), count("10")), (Ok(1), Ok(10)));
+        assert_eq!(
+            count("0").unwrap_err().to_string(),
+            "0 is out of range: give a number in 1..=10"
+        );
+        assert_eq!(
+            count("1e300").unwrap_err().to_string(),
+            "1e300 is out of range: give a number in 1..=10"
+        );
+        assert_eq!(
+            count("ten").unwrap_err().to_string(),
+            "not a whole number: give a number in 1..=10"
+        );
+        assert_eq!(whole_u64(0, u64::MAX)("0"), Ok(0));
+        assert_eq!(short_number(1e-300), "1e-300");
+        assert_eq!(short_number(0.5), "0.5");
     }
 
     #[test]

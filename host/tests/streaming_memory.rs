@@ -1,5 +1,6 @@
 //! The reader streams: its peak heap use does not grow with the number of rows. Measured with a
-//! counting global allocator (this test binary only) while reading rows generated on the fly.
+//! counting global allocator (this test binary only) while reading rows generated on the fly; the
+//! tests take [`LOCK`] so that one's allocations do not count in the other's peak.
 
 use host::session::{read_samples, Plan};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -25,6 +26,17 @@ unsafe impl GlobalAlloc for Counting {
 
 #[global_allocator]
 static ALLOC: Counting = Counting;
+
+/// One measurement at a time.
+static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Peak heap growth while `f` runs, bytes.
+fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let out = f();
+    (out, PEAK.load(Ordering::Relaxed).saturating_sub(base))
+}
 
 /// `samples.csv` text of `rows` rows, produced as it is read.
 struct Rows {
@@ -77,15 +89,15 @@ fn peak_while_reading(rows: u64, plan: &Plan) -> usize {
             at: 0,
         },
     );
-    let base = CURRENT.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let (stats, report) = read_samples(reader, plan, Path::new("generated")).unwrap();
+    let ((stats, report), peak) =
+        peak_during(|| read_samples(reader, plan, Path::new("generated")).unwrap());
     assert_eq!((stats[0].count, report.rows), (rows, rows));
-    PEAK.load(Ordering::Relaxed) - base
+    peak
 }
 
 #[test]
 fn peak_memory_does_not_grow_with_rows() {
+    let _one_at_a_time = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let plan = Plan::parse(
         "output_unit = \"V\"\nsample_rate_hz = 1000\n[[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\n",
     )
@@ -96,4 +108,30 @@ fn peak_memory_does_not_grow_with_rows() {
     // 10× the rows (~10 MB of text): the same working set, well under the text's size.
     assert!(large < 512 * 1024, "peak {large} bytes");
     assert!(large <= small + 16 * 1024, "{small} → {large} bytes");
+}
+
+#[test]
+fn noise_refuses_an_endless_line_with_bounded_memory() {
+    let _one_at_a_time = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // 300 MB without a line end (a sparse file: zeros, instant to make), then an endless one.
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("no-line-end.csv");
+    std::fs::File::create(&flat)
+        .unwrap()
+        .set_len(300_000_000)
+        .unwrap();
+    for input in [flat.as_path(), Path::new("/dev/zero")] {
+        let started = std::time::Instant::now();
+        let (result, peak) = peak_during(|| host::noise::analyse(input, None, true));
+        let e = result.unwrap_err().to_string();
+        eprintln!(
+            "noise --input {}: peak heap {peak} bytes, {:.3} s: {e}",
+            input.display(),
+            started.elapsed().as_secs_f64()
+        );
+        assert!(e.contains("line 1 is longer than 4096 bytes"), "{e}");
+        // The 1 MB read buffer and one bounded line, not the file.
+        assert!(peak < 4 << 20, "peak {peak} bytes");
+        assert!(started.elapsed().as_secs_f64() < 5.0);
+    }
 }

@@ -33,7 +33,12 @@ pub struct ApplyArgs {
     pub ignore_unit_id: bool,
     /// The unit's temperature, °C, for a calibration with a temperature model applied to a recording
     /// without a temp_c column (refused without it).
-    #[arg(long, value_name = "C", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "C",
+        allow_negative_numbers = true,
+        value_parser = crate::limits::real(-100.0, 200.0)
+    )]
     pub temperature_c: Option<f64>,
 }
 
@@ -68,13 +73,6 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     } else {
         unit.unit_id().map_err(invalid)?
     };
-    if let Some(t) = a.temperature_c {
-        if !(-100.0..=200.0).contains(&t) {
-            return Err(CliError::Usage(format!(
-                "--temperature-c {t}: give the unit's temperature in °C, within -100..200"
-            )));
-        }
-    }
     let mode = a.lever.into();
     let summary = match &a.out {
         Some(path) => {
@@ -85,15 +83,18 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             s
         }
         None => {
-            let stdout = std::io::stdout();
-            let mut lock = std::io::BufWriter::new(stdout.lock());
-            let s = apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut lock)?;
-            lock.flush().map_err(|e| {
-                ApplyError::Recording(crate::session::RecordingError::Io {
-                    path: PathBuf::from("(stdout)"),
-                    source: e,
-                })
-            })?;
+            let mut stdout = StdoutCsv {
+                inner: std::io::BufWriter::new(std::io::stdout().lock()),
+                failed: None,
+            };
+            let result =
+                apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut stdout);
+            // A closed or full stdout is named as such, not as a failure of the recording.
+            if let Some(e) = stdout.failed.take() {
+                return Err(CliError::Stdout(e));
+            }
+            let s = result?;
+            stdout.flush().map_err(CliError::Stdout)?;
             s
         }
     };
@@ -132,4 +133,34 @@ fn refuse_own_input(out: &Path, input: &Path) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// Standard output for the CSV, remembering why a write failed (`| head`, `> /dev/full`), so that the
+/// command reports a closed or full stdout rather than an error of the recording.
+struct StdoutCsv<W: Write> {
+    inner: W,
+    failed: Option<std::io::Error>,
+}
+
+impl<W: Write> StdoutCsv<W> {
+    fn remember<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+        r.inspect_err(|e| {
+            self.failed.get_or_insert_with(|| match e.raw_os_error() {
+                Some(code) => std::io::Error::from_raw_os_error(code),
+                None => std::io::Error::from(e.kind()),
+            });
+        })
+    }
+}
+
+impl<W: Write> Write for StdoutCsv<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.remember(r)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.inner.flush();
+        self.remember(r)
+    }
 }

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 
 /// `host batch`.
 #[derive(Debug, Args)]
+#[command(mut_args(crate::limits::pass_fail_limits))]
 pub struct BatchArgs {
     /// Directory whose subdirectories are sessions (plan.toml + samples.csv), one per unit.
     #[arg(long, value_name = "DIR_OF_SESSIONS")]
@@ -26,7 +27,7 @@ pub struct BatchArgs {
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
     /// Robust z-score above which a parameter makes a unit an outlier of the lot.
-    #[arg(long, value_name = "Z", default_value_t = 5.0)]
+    #[arg(long, value_name = "Z", default_value_t = 5.0, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_LIMIT))]
     pub outlier_z: f64,
     /// Estimator: joint (default) or paper.
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]

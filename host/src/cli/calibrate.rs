@@ -11,6 +11,7 @@ use crate::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, GyroEstimate, Method,
     ReferenceChoice,
 };
+use crate::limits;
 use crate::session::{self, read_session, ReadOptions, Session};
 use crate::summary::{CalibrationSummary, Limits};
 use clap::Args;
@@ -20,6 +21,7 @@ use std::time::Instant;
 
 /// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
 #[derive(Debug, Args)]
+#[command(mut_args(crate::limits::pass_fail_limits))]
 pub struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR", conflicts_with = "port")]
@@ -29,10 +31,20 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "PORT|sim")]
     pub port: Option<String>,
     /// With --port: baud rate of the serial port.
-    #[arg(long, default_value_t = crate::device::serial::DEFAULT_BAUD, requires = "port")]
+    #[arg(
+        long,
+        default_value_t = crate::device::serial::DEFAULT_BAUD,
+        requires = "port",
+        value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD)
+    )]
     pub baud: u32,
     /// With --port: seconds to wait for each answer of the device.
-    #[arg(long, default_value_t = 5.0, requires = "port")]
+    #[arg(
+        long,
+        default_value_t = 5.0,
+        requires = "port",
+        value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
+    )]
     pub timeout_s: f64,
     /// With --port sim: the simulated unit's parameters (default: the paper's unit).
     #[arg(long, value_name = "FILE", requires = "port")]
@@ -41,10 +53,15 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "FILE|NAME", requires = "port")]
     pub plan: Option<String>,
     /// With --port: samples per streamed window (default: a 50th of the device's rate).
-    #[arg(long, requires = "port")]
+    #[arg(long, requires = "port", value_parser = limits::whole_u32(1, limits::MAX_WINDOW))]
     pub window: Option<u32>,
     /// With --port: largest compensated error accepted at a verification position, mg.
-    #[arg(long, default_value_t = 1.0, requires = "port")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        requires = "port",
+        value_parser = limits::real(limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
+    )]
     pub verify_tolerance_mg: f64,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
     #[arg(long, value_name = "OUT")]

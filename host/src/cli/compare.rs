@@ -16,7 +16,7 @@ pub struct CompareArgs {
     /// Second calibration.toml.
     pub b: PathBuf,
     /// Fail (exit nonzero) when any determined parameter differs by more than this many combined σ.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_LIMIT))]
     pub max_sigma: Option<f64>,
     /// Print the comparison as one JSON document on stdout (the table goes to stderr).
     #[arg(long)]

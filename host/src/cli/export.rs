@@ -31,20 +31,20 @@ pub struct ExportArgs {
     pub rostopic: String,
     /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: 1 for a
     /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
-    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true)]
+    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true, value_parser = crate::limits::real(1e-9, crate::limits::MAX_LIMIT))]
     pub driver_scale: Option<f64>,
     /// For px4: PX4's device id of the accelerometer (CAL_ACC0_ID), as the vehicle reports it.
-    #[arg(long, value_name = "ID")]
+    #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
     pub device_id: Option<u32>,
     /// For px4: PX4's device id of the gyro (CAL_GYRO0_ID); without it no gyro offsets are written.
-    #[arg(long, value_name = "ID")]
+    #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
     pub gyro_device_id: Option<u32>,
     /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..))]
-    pub sysid: u8,
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 255))]
+    pub sysid: u32,
     /// For px4: the autopilot's MAVLink component id.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..))]
-    pub compid: u8,
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 255))]
+    pub compid: u32,
     /// Write values outside the target's documented range (with a warning) instead of refusing.
     #[arg(long)]
     pub allow_out_of_range: bool,
@@ -73,8 +73,9 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             allow_undetermined: a.allow_undetermined,
             device_id: a.device_id,
             gyro_device_id: a.gyro_device_id,
-            sysid: a.sysid,
-            compid: a.compid,
+            // Within 1..=255 by their parsers.
+            sysid: u8::try_from(a.sysid).unwrap_or(u8::MAX),
+            compid: u8::try_from(a.compid).unwrap_or(u8::MAX),
         },
     };
     if a.format == ExportFormat::CHeader {

@@ -12,10 +12,10 @@ pub struct MonitorArgs {
     #[command(flatten)]
     pub port: PortArgs,
     /// Samples averaged per line.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = crate::limits::whole_u32(1, crate::limits::MAX_WINDOW))]
     pub window: u32,
     /// Stop after this many lines (default: run until interrupted).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::whole_u64(1, u64::MAX))]
     pub count: Option<u64>,
 }
 

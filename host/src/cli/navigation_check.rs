@@ -11,10 +11,10 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 pub struct NavigationCheckCliArgs {
     /// Seed of the simulated session's noise.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Length of the replayed navigation runs, s.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
     pub duration_s: f64,
     /// Where to write the figures and pages (default: nothing written).
     #[arg(long, value_name = "OUT")]

@@ -1,5 +1,6 @@
 //! `host noise`: Allan deviation and noise terms of a still recording.
 
+use super::output::Output;
 use super::CliError;
 use crate::export::convert;
 use crate::noise::{analyse, NoiseError};
@@ -76,13 +77,14 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
             );
         }
     }
+    // With --json the document goes to stdout and the table to stderr; a closed or full stdout is
+    // an error of the command (the files above are written first), never a panic.
     if a.json {
-        println!("{json}");
-        if !quiet {
-            eprint!("{}", report.render());
-        }
-    } else if !quiet {
-        print!("{}", report.render());
+        crate::outln!("{json}")?;
     }
-    Ok(())
+    let out = Output {
+        json: a.json,
+        quiet,
+    };
+    out.human(report.render())
 }

@@ -19,10 +19,10 @@ pub struct PlanArgs {
     #[arg(long, value_name = "FILE|NAME")]
     pub check: String,
     /// Accelerometer white noise per sample, 1σ, mg.
-    #[arg(long, value_name = "MG", default_value_t = 1.0)]
+    #[arg(long, value_name = "MG", default_value_t = 1.0, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
     pub noise_mg: f64,
     /// Gyro white noise per sample, 1σ, °/s.
-    #[arg(long, value_name = "DEG_S", default_value_t = 0.05)]
+    #[arg(long, value_name = "DEG_S", default_value_t = 0.05, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
     pub gyro_noise_deg_s: f64,
     /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit).
     #[arg(long, value_name = "FILE")]

@@ -6,6 +6,7 @@ use super::CliError;
 use crate::device::serial::{SerialTransport, DEFAULT_BAUD};
 use crate::device::sim::SimDevice;
 use crate::device::{AnyTransport, DeviceClient};
+use crate::limits;
 use crate::unit_file::UnitFile;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -21,10 +22,10 @@ pub struct PortArgs {
     #[arg(long)]
     pub port: String,
     /// Baud rate of the serial port (no effect on a pty or on `sim`).
-    #[arg(long, default_value_t = DEFAULT_BAUD)]
+    #[arg(long, default_value_t = DEFAULT_BAUD, value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD))]
     pub baud: u32,
     /// Seconds to wait for each answer before declaring the device silent.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S))]
     pub timeout_s: f64,
     /// With `--port sim`: the simulated unit's parameters (unit file; default: the paper's unit).
     #[arg(long)]

@@ -25,7 +25,7 @@ pub struct ReportArgs {
     #[arg(long, value_name = "NAME")]
     pub rate_run: Option<String>,
     /// Length of the replayed navigation runs, s.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
     pub duration_s: f64,
     /// No PNG figures (SVG only).
     #[arg(long)]

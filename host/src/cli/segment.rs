@@ -54,7 +54,7 @@ pub struct SegmentArgs {
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
     /// Sample rate, Hz, when the file has no time column (a sample index is ignored).
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
     pub rate_hz: Option<f64>,
     /// The accelerometer's unit: m/s2, g, LSB or V (kept as the calibration's output unit).
     #[arg(long, value_name = "UNIT")]
@@ -63,7 +63,7 @@ pub struct SegmentArgs {
     #[arg(long, value_name = "UNIT")]
     pub gyro_unit: String,
     /// Shortest still interval kept, s.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
     /// Replace an existing session in DIR.
     #[arg(long)]
@@ -85,10 +85,10 @@ pub struct SimulateHandArgs {
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Sample rate, Hz.
-    #[arg(long, default_value_t = 200.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 200.0, value_name = "HZ", value_parser = crate::limits::real(20.0, 10_000.0))]
     pub rate_hz: f64,
     /// Accelerometer unit written: m/s2, g or LSB (4096 per g, quantised).
     #[arg(long, default_value = "m/s2", value_name = "UNIT")]
@@ -111,9 +111,6 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
         CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
     })?;
-    if !(a.rate_hz.is_finite() && (20.0..=10_000.0).contains(&a.rate_hz)) {
-        return Err(CliError::Usage("--rate-hz must be within 20..10000".into()));
-    }
     let truth_path = a.out.with_extension("truth.toml");
     for p in [&a.out, &truth_path] {
         if p.exists() && !a.force {
@@ -147,7 +144,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         g.bias_rad_s
     );
     write_atomic(&truth_path, text.as_bytes(), a.force)?;
-    println!(
+    crate::outln!(
         "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",
         a.out.display(),
         sim.rows.len(),
@@ -156,7 +153,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         unit.symbol(),
         gyro_unit.symbol(),
         truth_path.display()
-    );
+    )?;
     Ok(sim.rows.len())
 }
 
@@ -168,8 +165,10 @@ pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
         gyro: GyroSection,
     }
     let path = dir.join(GYRO_FILE);
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        return Ok(None);
+    let text = match crate::limits::read_text_bounded(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(CliError::Io(path, e)),
     };
     let f: File = toml::from_str(&text)
         .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;
@@ -210,6 +209,23 @@ fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
     let columns: [String; 6] = names.try_into().map_err(|_| {
         CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
     })?;
+    // The reader matches names case-insensitively: a name given twice would read one column twice
+    // and make the fit singular, far from the cause.
+    let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
+    seen.extend(a.time_column.as_deref());
+    for (k, name) in seen.iter().enumerate() {
+        if name.is_empty() {
+            return Err(CliError::Usage(
+                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z".into(),
+            ));
+        }
+        if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
+            return Err(CliError::Usage(format!(
+                "column '{first}' is named twice in --columns/--time-column: each of acc x,y,z, \
+                 gyro x,y,z and the time must be its own column"
+            )));
+        }
+    }
     let time = match (&a.time_column, a.rate_hz) {
         (Some(c), None) => TimeSource::Column(c.clone()),
         (None, Some(hz)) => TimeSource::RateHz(hz),

@@ -7,18 +7,22 @@
 //! outputs are turned into m/s² when a calibration is given (`f = g·K_A·(U − u0)`, paper eq. 6);
 //! otherwise they stay in the output unit and Kalibr's accelerometer figures are undetermined.
 //!
-//! Memory: two passes over the file; the second keeps only the chosen segment's rows, at most
-//! [`MAX_SAMPLES`] of them (6 × 8 bytes each) — a longer segment is cut, with a warning.
+//! Memory: two passes over the file, each line bounded by [`MAX_LINE_BYTES`] (an endless line is an
+//! error after a few kilobytes); the first keeps the segment names (at most [`MAX_SEGMENTS`]), the
+//! second only the rows of the segment being read and of the longest so far, at most [`MAX_SAMPLES`]
+//! of each (6 × 8 bytes a row, ≤ 2 × 100 MB) — a longer segment is cut, with a warning.
 
 pub mod allan;
 
 use crate::export::kalibr::KalibrNoise;
 use crate::export::PlainMatrices;
+use crate::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
 use crate::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use allan::{fit, octave_sizes, overlapping_adev, AllanPoint, NoiseTerms};
 use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
@@ -170,25 +174,24 @@ fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
 /// read by the session reader (same parser, same checks) with a plan made of the segment names the
 /// file uses (a first pass over the names only).
 fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
-    use std::io::BufRead as _;
-    let io = |source| RecordingError::Io {
-        path: path.to_path_buf(),
-        source,
+    let open = || {
+        std::fs::File::open(path)
+            .map(|f| BufReader::with_capacity(1 << 20, f))
+            .map_err(|source| RecordingError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
     };
-    let mut names: Vec<String> = Vec::new();
-    let file = std::fs::File::open(path).map_err(io)?;
-    for line in BufReader::new(file).lines().skip(1) {
-        let line = line.map_err(io)?;
-        let name = line
-            .split(',')
-            .next()
-            .unwrap_or("")
-            .trim()
-            .trim_matches('"');
-        if !name.is_empty() && !names.iter().any(|n| n == name) {
-            names.push(name.to_string());
-        }
-    }
+    collect_csv_from(open()?, open()?, path)
+}
+
+/// [`collect_csv`] on two readers of the same text, one per pass (`path` only names it in messages).
+fn collect_csv_from<R: std::io::BufRead>(
+    first_pass: R,
+    second_pass: R,
+    path: &Path,
+) -> Result<Signals, NoiseError> {
+    let names = segment_names(first_pass, path)?;
     let plan = Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
@@ -226,39 +229,86 @@ fn collect_csv(path: &Path) -> Result<Signals, NoiseError> {
         }
     };
     let (mut best, mut cur): (Option<Signals>, Option<Run>) = (None, None);
-    let file = std::fs::File::open(path).map_err(io)?;
-    read_samples_each(
-        BufReader::with_capacity(1 << 20, file),
-        &plan,
-        path,
-        |row| {
-            if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
-                finish(cur.take(), &mut best);
-                let s = Signals {
-                    segment: row.segment.to_string(),
-                    rate_hz: 0.0,
-                    data: Default::default(),
-                    cut: false,
-                };
-                cur = Some((s, row.segment_index, row.t_s, row.t_s));
-            }
-            if let Some((s, _, _, t1)) = cur.as_mut() {
-                let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
-                if s.data[0].len() >= MAX_SAMPLES {
-                    s.cut = true;
-                } else if finite && row.t_s.is_finite() {
-                    for j in 0..3 {
-                        s.data[j].push(row.u[j]);
-                        s.data[3 + j].push(row.w_rad_s[j]);
-                    }
-                    *t1 = row.t_s;
+    read_samples_each(second_pass, &plan, path, |row| {
+        if cur.as_ref().is_none_or(|c| c.1 != row.segment_index) {
+            finish(cur.take(), &mut best);
+            let s = Signals {
+                segment: row.segment.to_string(),
+                rate_hz: 0.0,
+                data: Default::default(),
+                cut: false,
+            };
+            cur = Some((s, row.segment_index, row.t_s, row.t_s));
+        }
+        if let Some((s, _, _, t1)) = cur.as_mut() {
+            let finite = row.u.iter().chain(&row.w_rad_s).all(|v| v.is_finite());
+            if s.data[0].len() >= MAX_SAMPLES {
+                s.cut = true;
+            } else if finite && row.t_s.is_finite() {
+                for j in 0..3 {
+                    s.data[j].push(row.u[j]);
+                    s.data[3 + j].push(row.w_rad_s[j]);
                 }
+                *t1 = row.t_s;
             }
-            Ok(())
-        },
-    )?;
+        }
+        Ok(())
+    })?;
     finish(cur.take(), &mut best);
     best.ok_or_else(|| NoiseError::NoStillData(format!("{} has no rows", path.display())))
+}
+
+/// The segment names a bare samples.csv uses, in the order they first appear: the first field of
+/// every line after the header. Each line is read with the session reader's bound
+/// ([`MAX_LINE_BYTES`]) and at most [`MAX_SEGMENTS`] names are kept, so an endless line
+/// (`/dev/zero`, a file without line ends) or endless names are an error naming the limit after a
+/// few kilobytes, never an unbounded allocation.
+fn segment_names<R: std::io::BufRead>(
+    mut reader: R,
+    path: &Path,
+) -> Result<Vec<String>, NoiseError> {
+    use std::io::{BufRead as _, Read as _};
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (mut names, mut known): (Vec<String>, HashSet<String>) = Default::default();
+    let mut line = Vec::with_capacity(256);
+    for number in 1u64.. {
+        line.clear();
+        let n = (&mut reader)
+            .take(MAX_LINE_BYTES as u64 + 1)
+            .read_until(b'\n', &mut line)
+            .map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        if n > MAX_LINE_BYTES {
+            return Err(RecordingError::LineTooLong {
+                path: path.to_path_buf(),
+                line: number,
+            }
+            .into());
+        }
+        if number == 1 {
+            continue;
+        }
+        let field = line.split(|&b| b == b',').next().unwrap_or_default();
+        let name = String::from_utf8_lossy(field.trim_ascii());
+        let name = name.trim_matches('"');
+        if name.is_empty() || names.last().is_some_and(|l| l == name) || known.contains(name) {
+            continue;
+        }
+        if names.len() >= MAX_SEGMENTS {
+            return Err(NoiseError::NoStillData(format!(
+                "{} names more than {MAX_SEGMENTS} segments (line {number}): not a samples.csv",
+                path.display()
+            )));
+        }
+        known.insert(name.to_string());
+        names.push(name.to_string());
+    }
+    Ok(names)
 }
 
 /// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
@@ -268,7 +318,7 @@ pub fn analyse(
     calibration: Option<&PlainMatrices>,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
-    let mut s = if input.is_dir() {
+    let s = if input.is_dir() {
         if !input.join(PLAN_FILE).exists() {
             return Err(NoiseError::NoStillData(format!(
                 "{} has no {PLAN_FILE}; give a session directory or a samples.csv",
@@ -279,6 +329,24 @@ pub fn analyse(
     } else {
         collect_csv(input)?
     };
+    analyse_signals(s, input.display().to_string(), calibration)
+}
+
+/// [`analyse`] of a bare samples.csv held in memory (`host::fuzz`'s `noise_csv` target).
+pub fn analyse_csv_bytes(
+    data: &[u8],
+    calibration: Option<&PlainMatrices>,
+) -> Result<NoiseReport, NoiseError> {
+    let s = collect_csv_from(data, data, Path::new(SAMPLES_FILE))?;
+    analyse_signals(s, SAMPLES_FILE.into(), calibration)
+}
+
+/// The Allan curves, fitted terms and Kalibr figures of one segment's signals.
+fn analyse_signals(
+    mut s: Signals,
+    source: String,
+    calibration: Option<&PlainMatrices>,
+) -> Result<NoiseReport, NoiseError> {
     let n = s.data[0].len();
     if n < MIN_SAMPLES || !(s.rate_hz.is_finite() && s.rate_hz > 0.0) {
         return Err(NoiseError::NoStillData(format!(
@@ -353,7 +421,7 @@ pub fn analyse(
         gyroscope_random_walk: worst(3..6, |t| t.random_walk),
     };
     Ok(NoiseReport {
-        source: input.display().to_string(),
+        source,
         segment: s.segment,
         sample_rate_hz: s.rate_hz,
         samples: n as u64,
@@ -471,8 +539,8 @@ impl NoiseReport {
 
 /// Kalibr's figures from a `noise.json` written by `host noise`.
 pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
+    let text = crate::limits::read_text_bounded(path)
+        .map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
     let report: NoiseReport = serde_json::from_str(&text).map_err(|e| {
         NoiseError::File(path.into(), format!("not a noise.json of host noise: {e}"))
     })?;

@@ -267,3 +267,28 @@ fn a_bare_samples_csv_and_a_missing_still_segment() {
     let e = analyse(d2.path(), None, true).unwrap_err();
     assert!(e.to_string().contains("no static segment"), "{e}");
 }
+
+#[test]
+fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("samples.csv");
+    let mut text = String::from("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n");
+    for k in 0..=crate::limits::MAX_SEGMENTS {
+        text += &format!("s{k},{k},0,0,0,0,0,0\n");
+    }
+    std::fs::write(&path, &text).unwrap();
+    let e = analyse(&path, None, true).unwrap_err().to_string();
+    assert!(
+        e.contains("more than 10000 segments") && e.contains(&format!("line {}", 10_002)),
+        "{e}"
+    );
+    // One name fewer is read (and fails only for having no long still run).
+    let fewer: String = text
+        .lines()
+        .take(10_001)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&path, fewer).unwrap();
+    let e = analyse(&path, None, true).unwrap_err().to_string();
+    assert!(e.contains("usable rows"), "{e}");
+}

@@ -197,8 +197,8 @@ impl std::fmt::Display for RecordingError {
                  sample_rate_hz is {} Hz: the time column is in another unit or scale, or the plan's \
                  rate is wrong; fix whichever is wrong",
                 path.display(),
-                hz(*stamps_hz),
-                hz(*plan_hz)
+                rate_text(*stamps_hz),
+                rate_text(*plan_hz)
             ),
             RecordingError::NoRows(path) => write!(
                 f,
@@ -250,12 +250,12 @@ pub(crate) fn shorten(s: &str) -> String {
     }
 }
 
-/// A rate for a message: plain within the range a recording has, else in exponent form (never a
-/// 300-digit number).
-fn hz(v: f64) -> String {
-    if (1e-3..1e7).contains(&v.abs()) {
-        format!("{v:.3}")
+/// A rate in a message: three decimals within the range a recording has, else
+/// [`crate::limits::short_number`] (never a 300-digit number).
+fn rate_text(hz: f64) -> String {
+    if (1e-3..1e6).contains(&hz.abs()) {
+        format!("{hz:.3}")
     } else {
-        format!("{v:.3e}")
+        crate::limits::short_number(hz)
     }
 }

@@ -7,6 +7,7 @@
 //! session format's unit. The whole recording is held in memory (the gyro fit integrates every turn),
 //! so the number of rows is capped ([`MAX_ROWS`]) and every line is bounded ([`MAX_LINE_BYTES`]).
 
+use crate::limits::short_number;
 use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -188,8 +189,10 @@ pub enum ImportError {
     },
     /// Time does not increase.
     #[error(
-        "line {line}: time {t_s} s does not increase (previous {previous_s} s); give the time column \
-         in seconds, or --rate-hz instead of --time-column"
+        "line {line}: time {} s does not increase (previous {} s); give the time column in \
+         seconds, or --rate-hz instead of --time-column",
+        short_number(*.t_s),
+        short_number(*.previous_s)
     )]
     TimeNotIncreasing {
         /// 1-based line.
@@ -226,9 +229,10 @@ pub enum ImportError {
     },
     /// Gravity's magnitude does not fit the stated accelerometer unit.
     #[error(
-        "the accelerometer's median magnitude is {median:.4} {unit}{}: the unit is wrong{hint}; give \
-         the right --acc-unit (m/s2, g, LSB or V)",
-        expected.map_or(String::new(), |e| format!(", but gravity is {e} {unit}"))
+        "the accelerometer's median magnitude is {} {unit}{}: the unit is wrong{hint}; give the \
+         right --acc-unit (m/s2, g, LSB or V)",
+        short_number(*.median),
+        expected.map_or(String::new(), |e| format!(", but gravity is {} {unit}", short_number(e)))
     )]
     UnitMismatch {
         /// Median |acc|.
@@ -637,7 +641,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("--acc-unit m/s2") && e.contains("9.8100 LSB:"),
+            e.contains("--acc-unit m/s2") && e.contains("9.81 LSB:"),
             "{e}"
         );
         let e = read(&text(0.005, 1.0), &o(OutputUnit::Volts))
@@ -646,6 +650,28 @@ mod tests {
         assert!(e.contains("--acc-unit g"), "{e}");
         // Counts as counts: 4096 per g.
         read(&text(0.005, 4096.0), &o(OutputUnit::Lsb)).unwrap();
+    }
+
+    #[test]
+    fn huge_numbers_in_a_file_are_printed_short() {
+        let o = ImportOptions::new(
+            TimeSource::Column("t".into()),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::DegPerS,
+        );
+        let text =
+            "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n1e300,0,0,9.81,0,0,0\n1e299,0,0,9.81,0,0,0\n";
+        let e = read(text, &o).unwrap_err().to_string();
+        assert!(
+            e.contains("time 1e299 s does not increase (previous 1e300 s)"),
+            "{e}"
+        );
+        let text = format!(
+            "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
+            rows(200, |i| format!("{i},0,0,1e100,0,0,0"))
+        );
+        let e = read(&text, &o).unwrap_err().to_string();
+        assert!(e.contains("median magnitude is 1e100 m/s2"), "{e}");
     }
 
     #[test]
