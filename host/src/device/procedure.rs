@@ -162,6 +162,8 @@ pub fn has_virtual_table(identity: &Identity) -> bool {
     matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
 }
 
+// shape: reads better whole because it is the procedure's outline, one call per step in the order
+// the operator sees them (identify, record, estimate, write, store, verify); what is left is the glue.
 /// Runs the whole procedure.
 pub fn run<T: Transport>(
     client: &mut DeviceClient<T>,

@@ -95,30 +95,7 @@ impl std::fmt::Display for RecordingError {
                 found,
                 column,
                 version,
-            } => {
-                write!(
-                    f,
-                    "{} line 1, column {column}: the header is '{}' but must be exactly '{}' \
-                     (recording format {version}, from {PLAN_FILE}'s format_version); fix the first \
-                     line",
-                    path.display(),
-                    shorten(found),
-                    version.samples_header(),
-                )?;
-                match (version.has_temperature(), found.ends_with(",temp_c")) {
-                    (false, true) => write!(
-                        f,
-                        ", or set format_version = {} in the plan to read temp_c",
-                        RecordingVersion::V3Temperature
-                    ),
-                    (true, false) => write!(
-                        f,
-                        ", or set format_version = {} in the plan (no temperature)",
-                        RecordingVersion::V2Attitudes
-                    ),
-                    _ => Ok(()),
-                }
-            }
+            } => header_message(f, path, found, *column, *version),
             RecordingError::FieldCount {
                 path,
                 line,
@@ -199,6 +176,38 @@ impl std::fmt::Display for RecordingError {
 }
 
 impl std::error::Error for RecordingError {}
+
+/// [`RecordingError::Header`]'s message: the header the plan's version expects and, when the file
+/// looks like the other version, the plan change that would read it.
+fn header_message(
+    f: &mut std::fmt::Formatter<'_>,
+    path: &std::path::Path,
+    found: &str,
+    column: usize,
+    version: RecordingVersion,
+) -> std::fmt::Result {
+    write!(
+        f,
+        "{} line 1, column {column}: the header is '{}' but must be exactly '{}' (recording format \
+         {version}, from {PLAN_FILE}'s format_version); fix the first line",
+        path.display(),
+        shorten(found),
+        version.samples_header(),
+    )?;
+    match (version.has_temperature(), found.ends_with(",temp_c")) {
+        (false, true) => write!(
+            f,
+            ", or set format_version = {} in the plan to read temp_c",
+            RecordingVersion::V3Temperature
+        ),
+        (true, false) => write!(
+            f,
+            ", or set format_version = {} in the plan (no temperature)",
+            RecordingVersion::V2Attitudes
+        ),
+        _ => Ok(()),
+    }
+}
 
 impl From<PlanError> for RecordingError {
     fn from(e: PlanError) -> Self {
