@@ -476,7 +476,7 @@ fn record_segment<T: Transport>(
         rejected += u64::from(w.rejected);
         dropped = dropped.max(w.dropped_frames);
         if w.count > 0 {
-            // A recording with temperature (format version 2) takes the window's mean reading; a
+            // A recording with temperature (format version 3) takes the window's mean reading; a
             // device without a sensor sends NaN, which the reader leaves out and reports.
             let temp_c = f64::from(w.mean_temp_c);
             let written = if writer.has_temperature() {
