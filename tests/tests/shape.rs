@@ -409,6 +409,13 @@ fn test_files(parsed: &BTreeMap<PathBuf, syn::File>) -> BTreeSet<PathBuf> {
 /// Every function over [`FUNCTION_REPORT_LINES`] and file over [`FILE_REPORT_LINES`] of the non-test
 /// code in `sources` (path → text), or the first file that does not parse.
 fn check(sources: &BTreeMap<PathBuf, String>) -> Result<Vec<Finding>, String> {
+    Ok(check_and_list_tests(sources)?.0)
+}
+
+/// [`check`], and the files it took as test code as a whole.
+fn check_and_list_tests(
+    sources: &BTreeMap<PathBuf, String>,
+) -> Result<(Vec<Finding>, BTreeSet<PathBuf>), String> {
     let parsed = sources
         .iter()
         .map(|(path, source)| Ok((path.clone(), parse(path, source)?)))
@@ -448,7 +455,7 @@ fn check(sources: &BTreeMap<PathBuf, String>) -> Result<Vec<Finding>, String> {
         }
     }
     findings.sort_by(|a, b| b.lines.cmp(&a.lines).then(a.place.cmp(&b.place)));
-    Ok(findings)
+    Ok((findings, test))
 }
 
 /// The first line (first attribute or doc comment) of the function whose `fn` is on `fn_line`.
@@ -515,7 +522,7 @@ fn no_unexplained_long_function_or_file() {
         read_tree(&root, dir, &mut sources);
     }
     assert!(sources.len() > 100, "found only {} files", sources.len());
-    let findings = check(&sources).unwrap();
+    let (findings, test) = check_and_list_tests(&sources).unwrap();
     // Straight to the terminal: the findings are wanted whether the check passes or not.
     let mut out = std::io::stderr().lock();
     let _ = writeln!(
@@ -525,6 +532,8 @@ fn no_unexplained_long_function_or_file() {
          {FILE_LIMIT_LINES}):",
         sources.len()
     );
+    let test: Vec<String> = test.iter().map(|p| p.display().to_string()).collect();
+    let _ = writeln!(out, "  test code as a whole: {}", test.join(", "));
     for f in &findings {
         let _ = writeln!(out, "  {f}");
     }
