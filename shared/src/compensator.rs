@@ -220,6 +220,38 @@ struct GyroInverse {
     bias_rad_s: [f32; 3],
 }
 
+// The layout the device's block load in `GyroInverse::correct` relies on, checked at compile time on
+// every target (the PC build fails too, not only the board's): `vldmia` reads twelve 4-byte words from
+// the start of the struct into s0–s11 and the `vmla`s take s0–s2 as `c` and s3–s11 as `G⁻¹` row by
+// row, so `offset_rad_s` must be first, `inv` must follow it with no padding, and both must be `f32`.
+const _: () = {
+    use core::mem::{align_of, offset_of, size_of};
+    // Fails to compile if either field changes type: the block reads `f32`s, three then nine.
+    const fn block_fields(g: &GyroInverse) -> (&[f32; 3], &[[f32; 3]; 3]) {
+        (&g.offset_rad_s, &g.inv)
+    }
+    let _ = block_fields;
+    assert!(size_of::<f32>() == 4, "the block load reads 4-byte words");
+    assert!(
+        offset_of!(GyroInverse, offset_rad_s) == 0,
+        "c must be s0-s2"
+    );
+    assert!(size_of::<[f32; 3]>() == 3 * 4, "c and w are three words");
+    assert!(
+        offset_of!(GyroInverse, inv) == 3 * 4,
+        "G^-1 must be s3-s11, right after c"
+    );
+    assert!(
+        size_of::<[[f32; 3]; 3]>() == 9 * 4,
+        "G^-1 is nine words, row-major"
+    );
+    assert!(offset_of!(GyroInverse, inv) + 9 * 4 <= size_of::<GyroInverse>());
+    assert!(
+        align_of::<GyroInverse>() >= 4,
+        "vldmia needs word alignment"
+    );
+};
+
 /// Precomputed state of the inverse model. `f32` throughout, fixed size, `Copy`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Compensator {

@@ -170,7 +170,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     let read_s = started.elapsed().as_secs_f64();
     let mut outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
     let hand_gyro = outcome.gyro.is_none() && {
-        outcome.gyro = super::segment::session_hand_gyro(input)?;
+        outcome.gyro = crate::session::hand_gyro::read(input)?;
         outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
         outcome.gyro.is_some()
     };

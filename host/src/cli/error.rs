@@ -95,6 +95,9 @@ pub enum CliError {
         .0.join("\n  - ")
     )]
     GyroRefused(Vec<String>),
+    /// The hand-held session's gyro.
+    #[error(transparent)]
+    HandGyro(#[from] crate::session::hand_gyro::HandGyroFileError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),

@@ -4,15 +4,11 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::estimate::gyro::GyroEstimate;
-use crate::estimate::handheld_gyro::DETERMINED_1SIGMA;
-use crate::estimate::handheld_gyro::{
-    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn,
-};
-use crate::estimate::{calibrate_session_stats, gyro_check, EstimateOptions};
+use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
-use crate::session::from_recording::{plan_for, stats_for, write_session};
+use crate::session::from_recording::{plan_for, write_session};
+use crate::session::hand_gyro;
 use crate::session::import::{
     parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
 };
@@ -22,7 +18,6 @@ use crate::session::segment::{
 };
 use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::unit_file::GyroSection;
 use crate::unit_file::UnitFile;
 use clap::Args;
 use serde::Serialize;
@@ -31,8 +26,7 @@ use shared::OutputUnit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// The gyro result's file in the session directory.
-pub const GYRO_FILE: &str = "gyro.toml";
+pub use crate::session::hand_gyro::GYRO_FILE;
 
 /// `host segment`.
 #[derive(Debug, Args)]
@@ -157,41 +151,6 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     Ok(sim.rows.len())
 }
 
-/// The gyro `host segment` fitted from the hand turns (`DIR/gyro.toml`), as the estimator's gyro
-/// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
-pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
-    #[derive(serde::Deserialize)]
-    struct File {
-        gyro: GyroSection,
-    }
-    let path = dir.join(GYRO_FILE);
-    let text = match crate::limits::read_text_bounded(&path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(CliError::Io(path, e)),
-    };
-    let f: File = toml::from_str(&text)
-        .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;
-    let g = f.gyro;
-    let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
-    let names = ["x", "y", "z"];
-    let undetermined = (0..9)
-        .filter(|&k| {
-            let s = matrix_1sigma[k / 3][k % 3];
-            s.is_nan() || s > DETERMINED_1SIGMA
-        })
-        .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
-        .collect();
-    Ok(Some(GyroEstimate {
-        matrix: g.matrix,
-        matrix_1sigma,
-        bias_rad_s: g.bias_rad_s,
-        bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
-        table_rate_scale: (0.0, 0.0),
-        undetermined,
-    }))
-}
-
 /// What `host segment` found and wrote.
 pub struct SegmentOutcome {
     /// The recording.
@@ -288,7 +247,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         );
         warn(out, &mut warnings, w);
     }
-    if let Some(w) = time_jumps(&rec.t_s, rec.rate_hz) {
+    if let Some(w) = rec.time_jumps() {
         warn(out, &mut warnings, w);
     }
     let seg_options = SegmentOptions {
@@ -308,11 +267,11 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let gyro = if a.no_gyro {
         Err(HandGyroError::NotAsked)
     } else {
-        gyro_fit(&rec, &seg, &plan)?
+        hand_gyro::fit(&rec, &seg, &plan)?
     };
     if let Ok(fit) = &gyro {
         out.human(gyro_text(fit))?;
-        let problems = gyro_problems(fit);
+        let problems = hand_gyro::problems(fit);
         if !problems.is_empty() {
             return Err(CliError::GyroRefused(problems));
         }
@@ -321,7 +280,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     match &gyro {
         Ok(fit) => {
             let path = dir.path().join(GYRO_FILE);
-            write_atomic(&path, gyro_file_text(fit).as_bytes(), false)?;
+            write_atomic(&path, hand_gyro::file_text(fit).as_bytes(), false)?;
         }
         Err(e) => out.line(format_args!("gyro: not calibrated: {e}"))?,
     }
@@ -355,36 +314,6 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
     Ok(outcome)
-}
-
-/// The gaps (more than five periods), repeats and backward steps of the time stamps, with the place
-/// of the first: a turn across a gap is integrated wrongly, and the gyro fit then fails.
-fn time_jumps(t_s: &[f64], rate_hz: f64) -> Option<String> {
-    let period = 1.0 / rate_hz;
-    let bad = |w: &[f64]| {
-        let dt = w[1] - w[0];
-        !(dt > 0.0 && dt <= 5.0 * period)
-    };
-    let first = t_s.windows(2).position(bad)?;
-    let n = t_s.windows(2).filter(|w| bad(w)).count();
-    Some(format!(
-        "the time stamps jump {n} time(s) (a gap, a repeat or a step back); the first after data row \
-         {} (t = {:.3} s): {:+.3} s where the period is {:.4} s",
-        first + 1,
-        t_s[first],
-        t_s[first + 1] - t_s[first],
-        period
-    ))
-}
-
-/// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
-/// turns no `G` explains. Empty: accepted.
-pub fn gyro_problems(fit: &HandGyroFit) -> Vec<String> {
-    let mut problems: Vec<String> = gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns)
-        .into_iter()
-        .collect();
-    problems.extend(gyro_check::matrix_problems(&fit.matrix));
-    problems
 }
 
 /// A warning on stderr, kept for the JSON document.
@@ -537,50 +466,6 @@ fn document(
     }
 }
 
-/// The gyro fit on the turns, with gravity directions from the session's own accelerometer
-/// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
-pub(crate) fn gyro_fit(
-    rec: &Recording,
-    seg: &Segmentation,
-    plan: &Plan,
-) -> Result<Result<HandGyroFit, HandGyroError>, CliError> {
-    let stats = stats_for(rec, seg, plan);
-    let options = EstimateOptions {
-        compare_methods: false,
-        ..EstimateOptions::default()
-    };
-    let outcome = calibrate_session_stats(plan, &stats, &options)?;
-    let m = outcome.fitted.m_out_per_g;
-    let minv =
-        linalg::inverse(&m).ok_or_else(|| CliError::Usage("singular accelerometer fit".into()))?;
-    let up = |iv: &crate::session::segment::Interval| {
-        let d: [f64; 3] =
-            core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
-        let f = linalg::mat_vec(&minv, &d);
-        let n = linalg::norm(&f);
-        f.map(|c| c / n)
-    };
-    let turns: Vec<Turn> = seg
-        .stills
-        .windows(2)
-        .map(|w| Turn {
-            from_row: w[0].end - 1,
-            to_row: w[1].start,
-            up_before_b: up(&w[0]),
-            up_after_b: up(&w[1]),
-        })
-        .collect();
-    let means: Vec<([f64; 3], usize)> = seg
-        .stills
-        .iter()
-        .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
-        .collect();
-    match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
-        Err(e @ HandGyroError::UnitMismatch { .. }) => Err(CliError::Usage(e.to_string())),
-        r => Ok(r),
-    }
-}
-
 /// The table of intervals.
 pub fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
     let unit = rec.acc_unit.map_or("", |u| u.symbol());
@@ -726,27 +611,4 @@ fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
             },
         ],
     }
-}
-
-/// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a
-/// comment saying where it comes from.
-fn gyro_file_text(fit: &HandGyroFit) -> String {
-    #[derive(serde::Serialize)]
-    struct File {
-        gyro: GyroSection,
-    }
-    let gyro = GyroSection {
-        bias_rad_s: fit.bias_rad_s,
-        matrix: fit.matrix,
-        bias_rad_s_1sigma: Some(fit.bias_1sigma_rad_s),
-        matrix_1sigma: Some(fit.matrix_1sigma),
-    };
-    format!(
-        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
-         # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
-         # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
-        fit.turns,
-        fit.rms_residual_deg,
-        toml::to_string_pretty(&File { gyro }).unwrap_or_default()
-    )
 }

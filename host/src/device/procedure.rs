@@ -162,6 +162,8 @@ pub fn has_virtual_table(identity: &Identity) -> bool {
     matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
 }
 
+// shape: reads better whole because it is the procedure's outline, one call per step in the order
+// the operator sees them (identify, record, estimate, write, store, verify); what is left is the glue.
 /// Runs the whole procedure.
 pub fn run<T: Transport>(
     client: &mut DeviceClient<T>,
@@ -474,7 +476,7 @@ fn record_segment<T: Transport>(
         rejected += u64::from(w.rejected);
         dropped = dropped.max(w.dropped_frames);
         if w.count > 0 {
-            // A recording with temperature (format version 2) takes the window's mean reading; a
+            // A recording with temperature (format version 3) takes the window's mean reading; a
             // device without a sensor sends NaN, which the reader leaves out and reports.
             let temp_c = f64::from(w.mean_temp_c);
             let written = if writer.has_temperature() {

@@ -1,7 +1,7 @@
 //! Why a session cannot be read or written.
 
-use super::plan::PlanError;
-use super::{COLUMNS_TEMPERATURE, PLAN_FILE, SAMPLES_HEADER, SAMPLES_HEADER_TEMPERATURE};
+use super::plan::{PlanError, RecordingVersion};
+use super::{COLUMNS_TEMPERATURE, PLAN_FILE, SAMPLES_HEADER};
 use std::path::PathBuf;
 
 /// Why a session cannot be read or written. Every message names the file, the place and the fix.
@@ -16,7 +16,7 @@ pub enum RecordingError {
         /// What failed.
         source: std::io::Error,
     },
-    /// The first line is not [`SAMPLES_HEADER`].
+    /// The first line is not the header of the plan's version.
     Header {
         /// The file.
         path: PathBuf,
@@ -24,10 +24,10 @@ pub enum RecordingError {
         found: String,
         /// 1-based column of the first difference.
         column: usize,
-        /// The plan says format version 2 (with `temp_c`).
-        temperature: bool,
+        /// The plan's recording version, whose header was expected.
+        version: RecordingVersion,
     },
-    /// A row without exactly eight fields (nine in format version 2).
+    /// A row without exactly the plan's version's number of fields (eight, or nine with `temp_c`).
     FieldCount {
         /// The file.
         path: PathBuf,
@@ -35,8 +35,8 @@ pub enum RecordingError {
         line: u64,
         /// Fields found.
         found: usize,
-        /// The plan says format version 2 (with `temp_c`).
-        temperature: bool,
+        /// The plan's recording version.
+        version: RecordingVersion,
     },
     /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
     Number {
@@ -96,8 +96,8 @@ pub enum RecordingError {
     WriterSegment(String),
     /// A row written with (or without) a temperature to a recording whose plan says otherwise.
     WriterTemperature {
-        /// The plan's recording has `temp_c`.
-        temperature: bool,
+        /// The plan's recording version, which has `temp_c` or not.
+        version: RecordingVersion,
     },
     /// [`super::SessionWriter::create`] would overwrite an existing recording.
     Exists(PathBuf),
@@ -112,30 +112,15 @@ impl std::fmt::Display for RecordingError {
                 path,
                 found,
                 column,
-                temperature,
-            } => {
-                let (expected, version) = header(*temperature);
-                write!(
-                    f,
-                    "{} line 1, column {column}: the header is '{}' but must be exactly '{expected}' \
-                     (recording format {version}, from {PLAN_FILE}'s format_version); fix the first \
-                     line{}",
-                    path.display(),
-                    shorten(found),
-                    match (temperature, found.ends_with(",temp_c")) {
-                        (false, true) => ", or set format_version = 3 in the plan to read temp_c",
-                        (true, false) => ", or set format_version = 2 in the plan (no temperature)",
-                        _ => "",
-                    }
-                )
-            }
+                version,
+            } => header_message(f, path, found, *column, *version),
             RecordingError::FieldCount {
                 path,
                 line,
                 found,
-                temperature,
+                version,
             } => {
-                let (expected, _) = header(*temperature);
+                let expected = version.samples_header();
                 write!(
                     f,
                     "{} line {line}: {found} fields, expected {} ({expected}); \
@@ -179,6 +164,42 @@ impl std::fmt::Display for RecordingError {
                  name = \"{name}\" to the plan, or remove its rows",
                 path.display()
             ),
+            RecordingError::CutShort { .. } | RecordingError::TimeBase { .. } => {
+                self.fmt_time_or_cut(f)
+            }
+            RecordingError::NoRows(path) => write!(
+                f,
+                "{} has no data rows after its header: nothing to calibrate from",
+                path.display()
+            ),
+            RecordingError::WriterSegment(name) => write!(
+                f,
+                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
+            ),
+            RecordingError::WriterTemperature { version } if version.has_temperature() => write!(
+                f,
+                "this recording's plan has format_version = {version}: every row needs the unit's \
+                 temperature"
+            ),
+            RecordingError::WriterTemperature { version } => write!(
+                f,
+                "this recording's plan has format_version = {version}, which holds no temperature: \
+                 set format_version = {} to record temp_c",
+                RecordingVersion::V3Temperature
+            ),
+            RecordingError::Exists(path) => write!(
+                f,
+                "{} already exists; choose another directory or allow overwriting (--force)",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl RecordingError {
+    /// The messages of a recording cut short or on another clock.
+    fn fmt_time_or_cut(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
             RecordingError::CutShort { path, line } => write!(
                 f,
                 "{} line {line} has no line end: the recording (or its copy) was cut short, so its \
@@ -200,38 +221,42 @@ impl std::fmt::Display for RecordingError {
                 rate_text(*stamps_hz),
                 rate_text(*plan_hz)
             ),
-            RecordingError::NoRows(path) => write!(
-                f,
-                "{} has no data rows after its header: nothing to calibrate from",
-                path.display()
-            ),
-            RecordingError::WriterSegment(name) => write!(
-                f,
-                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
-            ),
-            RecordingError::WriterTemperature { temperature } => f.write_str(if *temperature {
-                "this recording's plan has format_version = 3: every row needs the unit's temperature"
-            } else {
-                "this recording's plan has format_version 1 or 2, which holds no temperature: set \
-                 format_version = 3 to record temp_c"
-            }),
-            RecordingError::Exists(path) => write!(
-                f,
-                "{} already exists; choose another directory or allow overwriting (--force)",
-                path.display()
-            ),
+            _ => Ok(()),
         }
     }
 }
 
 impl std::error::Error for RecordingError {}
 
-/// The header a plan's version expects, and the version.
-fn header(temperature: bool) -> (&'static str, u32) {
-    if temperature {
-        (SAMPLES_HEADER_TEMPERATURE, 2)
-    } else {
-        (SAMPLES_HEADER, 1)
+/// [`RecordingError::Header`]'s message: the header the plan's version expects and, when the file
+/// looks like the other version, the plan change that would read it.
+fn header_message(
+    f: &mut std::fmt::Formatter<'_>,
+    path: &std::path::Path,
+    found: &str,
+    column: usize,
+    version: RecordingVersion,
+) -> std::fmt::Result {
+    write!(
+        f,
+        "{} line 1, column {column}: the header is '{}' but must be exactly '{}' (recording format \
+         {version}, from {PLAN_FILE}'s format_version); fix the first line",
+        path.display(),
+        shorten(found),
+        version.samples_header(),
+    )?;
+    match (version.has_temperature(), found.ends_with(",temp_c")) {
+        (false, true) => write!(
+            f,
+            ", or set format_version = {} in the plan to read temp_c",
+            RecordingVersion::V3Temperature
+        ),
+        (true, false) => write!(
+            f,
+            ", or set format_version = {} in the plan (no temperature)",
+            RecordingVersion::V2Attitudes
+        ),
+        _ => Ok(()),
     }
 }
 

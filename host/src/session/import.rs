@@ -123,6 +123,27 @@ pub struct Recording {
 }
 
 impl Recording {
+    /// The gaps (more than five periods), repeats and backward steps of the time stamps, with the place
+    /// of the first: a turn across a gap is integrated wrongly, and the gyro fit then fails.
+    pub fn time_jumps(&self) -> Option<String> {
+        let (t_s, rate_hz) = (&self.t_s, self.rate_hz);
+        let period = 1.0 / rate_hz;
+        let bad = |w: &[f64]| {
+            let dt = w[1] - w[0];
+            !(dt > 0.0 && dt <= 5.0 * period)
+        };
+        let first = t_s.windows(2).position(bad)?;
+        let n = t_s.windows(2).filter(|w| bad(w)).count();
+        Some(format!(
+        "the time stamps jump {n} time(s) (a gap, a repeat or a step back); the first after data row \
+         {} (t = {:.3} s): {:+.3} s where the period is {:.4} s",
+        first + 1,
+        t_s[first],
+        t_s[first + 1] - t_s[first],
+        period
+    ))
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t_s.len()

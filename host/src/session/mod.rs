@@ -1,7 +1,8 @@
 //! The recording of a calibration session: `plan.toml` + `samples.csv` in a directory
 //! (format documented in `docs/recording-format.md`).
 //!
-//! - [`plan`]: the plan file (segments, attitudes, rates) and its checks; [`builtin`]: the plans
+//! - [`plan`]: the plan file (segments, attitudes, rates), its checks and its [`RecordingVersion`]
+//!   (which version holds what); [`builtin`]: the plans
 //!   shipped with the tool.
 //! - [`stats`]: the per-segment sufficient statistics everything downstream works on.
 //! - [`reader`]: the streaming `samples.csv` reader (constant memory, one pass); [`writer`]: the
@@ -9,11 +10,14 @@
 //!   [`thermal`]: the optional `temp_c` column and its per-segment statistics.
 //! - A logger's file without a plan: [`import`] reads its CSV (units, columns, sample rate),
 //!   [`segment`] finds the still positions and the spins in it (`host segment`), and
-//!   [`from_recording`] turns what was found into a plan and statistics for the estimator.
+//!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
+//!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
+//!   `gyro.toml`.
 
 pub mod builtin;
 pub mod error;
 pub mod from_recording;
+pub mod hand_gyro;
 pub mod import;
 pub mod plan;
 pub mod reader;
@@ -23,7 +27,7 @@ pub mod thermal;
 pub mod writer;
 
 pub use error::RecordingError;
-pub use plan::{Plan, PlanError, SegmentPlan};
+pub use plan::{Plan, PlanError, RecordingVersion, SegmentPlan};
 pub use reader::{
     read_samples, read_samples_each, read_session, ReadOptions, ReadReport, Row, Session,
 };
@@ -34,13 +38,14 @@ pub use writer::SessionWriter;
 pub const PLAN_FILE: &str = "plan.toml";
 /// The samples file inside a session directory.
 pub const SAMPLES_FILE: &str = "samples.csv";
-/// The only header `samples.csv` version 1 has.
+/// The header of `samples.csv` in versions 1 and 2 ([`RecordingVersion::samples_header`] says which
+/// a plan has).
 pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
 /// Column names, in order.
 pub const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];
-/// The header of `samples.csv` version 2: version 1's and the unit's temperature, °C.
+/// The header of `samples.csv` version 3: version 2's and the unit's temperature, °C.
 pub const SAMPLES_HEADER_TEMPERATURE: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c";
-/// Column names of version 2, in order.
+/// Column names of version 3, in order.
 pub const COLUMNS_TEMPERATURE: [&str; 9] = [
     "segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z", "temp_c",
 ];

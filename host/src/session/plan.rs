@@ -5,15 +5,85 @@ use shared::OutputUnit;
 use std::collections::HashSet;
 use std::path::Path;
 
-/// Current plan format version (2 adds the fixture's attitude accuracy and free attitudes; version 1
-/// plans are still read).
-pub const PLAN_FORMAT_VERSION: u32 = 2;
-/// Plan format version 3: format 2, and `samples.csv` ends with the unit's temperature, `temp_c`
-/// (docs/model.md §9). Versions 1 and 2 record no temperature.
-pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = 3;
+/// The recording format's version: `format_version` in `plan.toml`, which says what the plan may
+/// contain and which header `samples.csv` has (docs/recording-format.md). Every reader, writer and
+/// message takes its number from here, so that they cannot disagree about which version holds what.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RecordingVersion {
+    /// Version 1: every mount on the fixture, taken as exact; eight columns.
+    V1 = 1,
+    /// Version 2: version 1 plus the fixture's attitude accuracy (`attitude_sigma_deg`), free
+    /// attitudes and the table's rate accuracy (`table_rate_sigma_ppm`); eight columns.
+    V2Attitudes = 2,
+    /// Version 3: version 2 plus the unit's temperature: chamber set-points on segments and a ninth
+    /// column, `temp_c` (docs/model.md §9).
+    V3Temperature = 3,
+}
 
-/// The oldest plan format version this build reads.
-pub const PLAN_FORMAT_VERSION_MIN: u32 = 1;
+impl RecordingVersion {
+    /// The oldest version this build reads.
+    pub const OLDEST: RecordingVersion = RecordingVersion::V1;
+    /// The newest version this build reads and writes.
+    pub const NEWEST: RecordingVersion = RecordingVersion::V3Temperature;
+    /// The version a plan without `format_version` has: version 2 reads every version 1 plan
+    /// unchanged, and a plan that wants temperature has to say so.
+    pub const DEFAULT: RecordingVersion = RecordingVersion::V2Attitudes;
+
+    /// The version numbered `n`, if this build knows it.
+    pub const fn from_number(n: u32) -> Option<RecordingVersion> {
+        match n {
+            1 => Some(RecordingVersion::V1),
+            2 => Some(RecordingVersion::V2Attitudes),
+            3 => Some(RecordingVersion::V3Temperature),
+            _ => None,
+        }
+    }
+
+    /// Its number, as `format_version` writes it.
+    pub const fn number(self) -> u32 {
+        self as u32
+    }
+
+    /// True when `samples.csv` ends with the unit's temperature, `temp_c`.
+    pub const fn has_temperature(self) -> bool {
+        self.number() >= RecordingVersion::V3Temperature.number()
+    }
+
+    /// True when the plan may give attitude priors, free attitudes and the table's rate accuracy.
+    pub const fn has_attitudes(self) -> bool {
+        self.number() >= RecordingVersion::V2Attitudes.number()
+    }
+
+    /// The columns of `samples.csv`, in order.
+    pub const fn columns(self) -> &'static [&'static str] {
+        if self.has_temperature() {
+            &super::COLUMNS_TEMPERATURE
+        } else {
+            &super::COLUMNS
+        }
+    }
+
+    /// The exact first line of `samples.csv`.
+    pub const fn samples_header(self) -> &'static str {
+        if self.has_temperature() {
+            super::SAMPLES_HEADER_TEMPERATURE
+        } else {
+            super::SAMPLES_HEADER
+        }
+    }
+}
+
+/// The number only, as in `format_version = 3`, so messages can quote it as the plan spells it.
+impl std::fmt::Display for RecordingVersion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.number())
+    }
+}
+
+/// [`RecordingVersion::DEFAULT`]'s number, for plans built in code.
+pub const PLAN_FORMAT_VERSION: u32 = RecordingVersion::DEFAULT.number();
+/// [`RecordingVersion::V3Temperature`]'s number, for plans built in code that record `temp_c`.
+pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = RecordingVersion::V3Temperature.number();
 
 /// 1σ of each mount's tilt (per axis perpendicular to the nominal up) when the plan says nothing,
 /// degrees. A machined fixture on a levelled rate table is good to a few arc-minutes at best once the
@@ -180,8 +250,10 @@ impl std::fmt::Display for PlanError {
             PlanError::Syntax(p, e) => write!(f, "plan {} is not valid: {e}", p.display()),
             PlanError::Version(v) => write!(
                 f,
-                "plan format_version {v} is not supported (this build reads \
-                 {PLAN_FORMAT_VERSION_MIN} to {PLAN_FORMAT_VERSION_TEMPERATURE}); upgrade the tool or rewrite the plan"
+                "plan format_version {v} is not supported (this build reads {} to {}); upgrade \
+                 the tool or rewrite the plan",
+                RecordingVersion::OLDEST,
+                RecordingVersion::NEWEST
             ),
             PlanError::Invalid(m) => write!(f, "plan is not usable: {m}"),
         }
@@ -214,12 +286,8 @@ impl Plan {
 
     /// Semantic checks: version, positive rate, unique names, unit `up_b`, finite numbers.
     pub fn validate(&self) -> Result<(), PlanError> {
-        if !(PLAN_FORMAT_VERSION_MIN..=PLAN_FORMAT_VERSION_TEMPERATURE)
-            .contains(&self.format_version)
-        {
-            return Err(PlanError::Version(self.format_version));
-        }
-        self.validate_attitudes()?;
+        let version = self.version()?;
+        self.validate_attitudes(version)?;
         crate::limits::positive_at_most(
             "sample_rate_hz",
             self.sample_rate_hz,
@@ -371,7 +439,7 @@ impl Plan {
     }
 
     /// Format 2 keys need format 2; σ finite ≥ 0; a mount's segments agree on attitude and σ.
-    fn validate_attitudes(&self) -> Result<(), PlanError> {
+    fn validate_attitudes(&self, version: RecordingVersion) -> Result<(), PlanError> {
         if let Some(v) = self.table_rate_sigma_ppm {
             if !(v.is_finite() && v > 0.0 && v <= 1e5) {
                 return Err(PlanError::Invalid(format!(
@@ -385,10 +453,12 @@ impl Plan {
                 .segments
                 .iter()
                 .any(|s| s.is_free() || s.attitude_sigma_deg.is_some() || !s.has_up());
-        if uses_v2 && self.format_version < 2 {
-            return Err(PlanError::Invalid(
-                "attitude, attitude_sigma_deg and a missing up_b need format_version = 2".into(),
-            ));
+        if uses_v2 && !version.has_attitudes() {
+            return Err(PlanError::Invalid(format!(
+                "attitude, attitude_sigma_deg, table_rate_sigma_ppm and a missing up_b need \
+                 format_version = {}",
+                RecordingVersion::V2Attitudes
+            )));
         }
         let sigmas = self.attitude_sigma_deg.iter().chain(
             self.segments
@@ -443,25 +513,24 @@ impl Plan {
         if s.temp_c.is_some() && !self.has_temperature() {
             return Err(PlanError::Invalid(format!(
                 "segment '{}' sets a chamber temperature but the recording would not hold it: \
-                 set format_version = {PLAN_FORMAT_VERSION_TEMPERATURE} (samples.csv with temp_c)",
-                s.name
+                 set format_version = {} (samples.csv with temp_c)",
+                s.name,
+                RecordingVersion::V3Temperature
             )));
         }
         Ok(())
     }
 
-    /// True when `samples.csv` carries the unit's temperature (format version 2).
-    pub fn has_temperature(&self) -> bool {
-        self.format_version >= PLAN_FORMAT_VERSION_TEMPERATURE
+    /// The plan's recording version, or why this build cannot read it.
+    pub fn version(&self) -> Result<RecordingVersion, PlanError> {
+        RecordingVersion::from_number(self.format_version)
+            .ok_or(PlanError::Version(self.format_version))
     }
 
-    /// The columns of this plan's `samples.csv`.
-    pub fn columns(&self) -> &'static [&'static str] {
-        if self.has_temperature() {
-            &super::COLUMNS_TEMPERATURE
-        } else {
-            &super::COLUMNS
-        }
+    /// True when `samples.csv` carries the unit's temperature (format version 3 and later; false for
+    /// a version this build does not read, which [`Plan::validate`] refuses).
+    pub fn has_temperature(&self) -> bool {
+        self.version().is_ok_and(RecordingVersion::has_temperature)
     }
 
     /// The segment called `name`.
@@ -557,7 +626,7 @@ rate_deg_s = 100
         let p = Plan::parse(&format!("format_version = 3\n{with_temp}")).unwrap();
         assert!(p.has_temperature());
         assert_eq!(p.segments[0].temp_c, Some(-20.0));
-        assert_eq!(p.columns().last(), Some(&"temp_c"));
+        assert_eq!(p.version().unwrap().columns().last(), Some(&"temp_c"));
         assert_eq!(Plan::parse(&p.to_toml()).unwrap(), p);
         let hot = with_temp.replace("temp_c = -20", "temp_c = 500");
         let e = Plan::parse(&format!("format_version = 3\n{hot}")).unwrap_err();

@@ -11,7 +11,7 @@
 //! to `/dev/zero` is refused after 4 KiB).
 
 use super::error::shorten;
-use super::plan::Plan;
+use super::plan::{Plan, RecordingVersion};
 use super::stats::{SegmentAccumulator, SegmentStats};
 use super::thermal::{is_glitch, MAX_TEMP_RATE_C_PER_S};
 use super::{RecordingError, PLAN_FILE, SAMPLES_FILE};
@@ -139,12 +139,14 @@ struct Reducer<'a, S> {
     last_temp: Option<(f64, f64)>,
     pending: Option<Parsed>,
     temp_glitches: Vec<(u64, Option<(u64, f64)>)>,
-    /// Format version 2: a ninth column, `temp_c`.
+    /// The plan's version, which says the columns and names them in errors.
+    version: RecordingVersion,
+    /// `version.has_temperature()`, looked up once: a ninth column, `temp_c`.
     temperature: bool,
 }
 
 impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
-    fn new(plan: &'a Plan, path: &'a Path, sink: S) -> Self {
+    fn new(plan: &'a Plan, version: RecordingVersion, path: &'a Path, sink: S) -> Self {
         Reducer {
             sink,
             path,
@@ -166,7 +168,8 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             current: 0,
             line_no: 1,
             report: ReadReport::default(),
-            temperature: plan.has_temperature(),
+            version,
+            temperature: version.has_temperature(),
         }
     }
 
@@ -339,7 +342,7 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
             path: self.path.to_path_buf(),
             line: self.line_no,
             found,
-            temperature: self.temperature,
+            version: self.version,
         }
     }
 
@@ -409,7 +412,8 @@ pub fn read_samples_each<R: BufRead>(
         path: path.to_path_buf(),
         source,
     };
-    let mut red = Reducer::new(plan, path, each);
+    let version = plan.version()?;
+    let mut red = Reducer::new(plan, version, path, each);
 
     // Header (with an optional UTF-8 byte-order mark and CR).
     let mut line: Vec<u8> = Vec::with_capacity(256);
@@ -430,7 +434,7 @@ pub fn read_samples_each<R: BufRead>(
         .split(',')
         .map(|h| h.trim().trim_matches('"'))
         .collect();
-    let columns = plan.columns();
+    let columns = version.columns();
     if found != columns {
         let column = (0..columns.len().max(found.len()))
             .find(|&i| found.get(i) != columns.get(i))
@@ -439,7 +443,7 @@ pub fn read_samples_each<R: BufRead>(
             path: path.to_path_buf(),
             found: header,
             column,
-            temperature: plan.has_temperature(),
+            version,
         });
     }
 
@@ -858,6 +862,52 @@ up_b = [0, 0, -1]
         );
         let e = read_text("").unwrap_err().to_string();
         assert!(e.contains("line 1, column 1"), "{e}");
+    }
+
+    /// The header error names the plan's own version and the fix, with the numbers of
+    /// docs/recording-format.md: temperature is version 3; versions 1 and 2 have eight columns.
+    #[test]
+    fn header_error_names_the_plans_recording_version() {
+        let eight = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\nx+,0,1,1,1,0,0,0\n";
+        let nine = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c\nx+,0,1,1,1,0,0,0,20\n";
+        let read = |version: u32, text: &str| {
+            let plan = Plan::parse(&format!("format_version = {version}\n{PLAN}")).unwrap();
+            read_samples(text.as_bytes(), &plan, Path::new("samples.csv"))
+        };
+        let e = read(3, eight).unwrap_err().to_string();
+        assert!(
+            e.contains("recording format 3,")
+                && e.contains(&format!(
+                    "exactly '{eight_header}'",
+                    eight_header = crate::session::SAMPLES_HEADER_TEMPERATURE
+                ))
+                && e.contains("set format_version = 2 in the plan (no temperature)"),
+            "{e}"
+        );
+        assert!(read(3, nine).is_ok());
+        for version in [1, 2] {
+            let e = read(version, nine).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("recording format {version},"))
+                    && e.contains(&format!("exactly '{SAMPLES_HEADER}'"))
+                    && e.contains("set format_version = 3 in the plan to read temp_c"),
+                "{e}"
+            );
+            assert!(read(version, eight).is_ok());
+        }
+        // The writer's refusal names the version too.
+        let dir = tempfile::tempdir().unwrap();
+        let v2 = Plan::parse(&format!("format_version = 2\n{PLAN}")).unwrap();
+        let mut w = SessionWriter::create(dir.path(), &v2, false).unwrap();
+        let e = w
+            .write_row_with_temperature("x+", 0.0, &[1.0; 3], &[0.0; 3], 20.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("format_version = 2, which holds no temperature")
+                && e.contains("set format_version = 3"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -1,9 +1,8 @@
 //! Writing a session directory (`plan.toml` + `samples.csv`, `docs/recording-format.md`) as it is
 //! recorded or simulated.
 
-use super::{
-    Plan, RecordingError, PLAN_FILE, SAMPLES_FILE, SAMPLES_HEADER, SAMPLES_HEADER_TEMPERATURE,
-};
+use super::plan::RecordingVersion;
+use super::{Plan, RecordingError, PLAN_FILE, SAMPLES_FILE};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -21,8 +20,8 @@ pub struct SessionWriter {
     rows: u64,
     line: Vec<u8>,
     float: ryu::Buffer,
-    /// Format version 2: rows end with `temp_c`.
-    temperature: bool,
+    /// The plan's version: with temperature, rows end with `temp_c`.
+    version: RecordingVersion,
 }
 
 impl SessionWriter {
@@ -34,6 +33,7 @@ impl SessionWriter {
         overwrite: bool,
     ) -> Result<SessionWriter, RecordingError> {
         plan.validate()?;
+        let version = plan.version()?;
         let io = |path: &Path| {
             let path = path.to_path_buf();
             move |source| RecordingError::Io { path, source }
@@ -47,12 +47,7 @@ impl SessionWriter {
         write_synced(&plan_path, plan.to_toml().as_bytes()).map_err(io(&plan_path))?;
         let file = File::create(&samples_path).map_err(io(&samples_path))?;
         let mut out = BufWriter::with_capacity(1 << 20, file);
-        let header = if plan.has_temperature() {
-            SAMPLES_HEADER_TEMPERATURE
-        } else {
-            SAMPLES_HEADER
-        };
-        out.write_all(header.as_bytes())
+        out.write_all(version.samples_header().as_bytes())
             .and_then(|_| out.write_all(b"\n"))
             .and_then(|_| out.flush())
             .map_err(io(&samples_path))?;
@@ -65,7 +60,7 @@ impl SessionWriter {
             rows: 0,
             line: Vec::with_capacity(256),
             float: ryu::Buffer::new(),
-            temperature: plan.has_temperature(),
+            version,
         })
     }
 
@@ -74,9 +69,9 @@ impl SessionWriter {
         &self.dir
     }
 
-    /// True when rows carry the unit's temperature (format version 2).
+    /// True when rows carry the unit's temperature (the plan's version has `temp_c`).
     pub fn has_temperature(&self) -> bool {
-        self.temperature
+        self.version.has_temperature()
     }
 
     /// Rows written so far.
@@ -84,7 +79,7 @@ impl SessionWriter {
         self.rows
     }
 
-    /// Appends one sample of `segment` to a recording without temperature (format version 1).
+    /// Appends one sample of `segment` to a recording without temperature (format version 1 or 2).
     /// Changing segment ends the previous one (flush to disk). Floats are written in their shortest
     /// exact form, so they read back bit for bit.
     pub fn write_row(
@@ -94,13 +89,15 @@ impl SessionWriter {
         u: &[f64; 3],
         w_rad_s: &[f64; 3],
     ) -> Result<(), RecordingError> {
-        if self.temperature {
-            return Err(RecordingError::WriterTemperature { temperature: true });
+        if self.has_temperature() {
+            return Err(RecordingError::WriterTemperature {
+                version: self.version,
+            });
         }
         self.append(segment, t_s, u, w_rad_s, None)
     }
 
-    /// Appends one sample of `segment` with the unit's temperature, °C (format version 2).
+    /// Appends one sample of `segment` with the unit's temperature, °C (format version 3).
     pub fn write_row_with_temperature(
         &mut self,
         segment: &str,
@@ -109,8 +106,10 @@ impl SessionWriter {
         w_rad_s: &[f64; 3],
         temp_c: f64,
     ) -> Result<(), RecordingError> {
-        if !self.temperature {
-            return Err(RecordingError::WriterTemperature { temperature: false });
+        if !self.has_temperature() {
+            return Err(RecordingError::WriterTemperature {
+                version: self.version,
+            });
         }
         self.append(segment, t_s, u, w_rad_s, Some(temp_c))
     }

@@ -1,0 +1,229 @@
+//! What the estimator returns: the calibration with its uncertainty, the fit's summary, each segment's
+//! diagnostic, the segments left out and why, and what the plan could not determine.
+
+use super::{thermal, GyroEstimate, Method, MountTilt, SegmentKind, StaticSplit, Uncertainty};
+use shared::linalg::RowMajor3;
+use shared::params::axis_name;
+use shared::{Calibration, FittedStatic, LeverArms};
+
+/// Why a segment was left out.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExclusionReason {
+    /// In the plan, no rows in the data.
+    MissingFromData,
+    /// Rows in the data, not in the plan.
+    NotInPlan,
+    /// The data have the segment twice.
+    Duplicate,
+    /// Fewer than two valid rows.
+    Empty {
+        /// Valid rows.
+        rows: u64,
+        /// Rows rejected for NaN/∞.
+        rejected: u64,
+    },
+    /// A statistic is NaN or infinite.
+    NonFinite,
+    /// An output is stuck or at its rail.
+    Saturated {
+        /// Accelerometer 0..3.
+        axis: usize,
+        /// What was seen.
+        detail: String,
+    },
+    /// A static segment that moved.
+    Motion {
+        /// What was seen.
+        detail: String,
+    },
+    /// The measured rate contradicts the plan's.
+    RateContradiction {
+        /// Measured mean rate about up_b, °/s.
+        measured_deg_s: f64,
+        /// Planned mean rate, °/s.
+        planned_deg_s: f64,
+    },
+    /// The measured attitude contradicts the plan's up_b.
+    AttitudeContradiction {
+        /// Angle between measured and planned "up", degrees.
+        angle_deg: f64,
+    },
+}
+
+impl std::fmt::Display for ExclusionReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ExclusionReason::MissingFromData => write!(
+                f,
+                "in the plan but no rows in the data (record it, or remove it from plan.toml)"
+            ),
+            ExclusionReason::NotInPlan => write!(
+                f,
+                "rows in the data but not in the plan (add it to plan.toml, or drop its rows)"
+            ),
+            ExclusionReason::Duplicate => write!(f, "appears twice in the data; the first is used"),
+            ExclusionReason::Empty { rows, rejected } => write!(
+                f,
+                "only {rows} valid row(s) ({rejected} rejected as NaN/∞): re-record it"
+            ),
+            ExclusionReason::NonFinite => write!(f, "its statistics are not finite"),
+            ExclusionReason::Saturated { axis, detail } => {
+                write!(f, "accelerometer {} saturated or stuck: {detail}", axis_name(*axis))
+            }
+            ExclusionReason::Motion { detail } => {
+                write!(f, "planned static but moved: {detail}")
+            }
+            ExclusionReason::RateContradiction {
+                measured_deg_s,
+                planned_deg_s,
+            } => write!(
+                f,
+                "gyro reads {measured_deg_s:.2} °/s about up_b, the plan says {planned_deg_s:.2} °/s"
+            ),
+            ExclusionReason::AttitudeContradiction { angle_deg } => write!(
+                f,
+                "measured attitude is {angle_deg:.2}° from the plan's up_b (wrong mount, or the plan's up_b is wrong)"
+            ),
+        }
+    }
+}
+
+/// A segment left out, with the reason.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exclusion {
+    /// Segment name.
+    pub name: String,
+    /// Why.
+    pub reason: ExclusionReason,
+}
+
+/// The fit's view of one segment: its fitted up, the specific force the fitted model predicts and
+/// the χ² check. The outputs before and after compensation (the paper's Tables 2 and 4) are the one
+/// table of [`crate::report::segment_rows`], which the terminal text shows beside these.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SegmentDiagnostic {
+    /// Segment name.
+    pub name: String,
+    /// What it does.
+    pub kind: SegmentKind,
+    /// Rows.
+    pub count: u64,
+    /// The plan's up.
+    pub up_b: [f64; 3],
+    /// Measured mean rate about up_b, °/s.
+    pub rate_deg_s: f64,
+    /// Whether the fit used it.
+    pub used: bool,
+    /// The specific force the fitted model gives at the calibration's reference point, g.
+    pub theoretical_g: [f64; 3],
+    /// Standard error of the segment's means, g.
+    pub noise_g: [f64; 3],
+    /// Whitened residual² (3 outputs); `None` when not used.
+    pub chi2: Option<f64>,
+    /// χ² above its 99.9 % point.
+    pub chi2_flagged: bool,
+}
+
+/// Goodness of fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FitSummary {
+    /// Σ whitened residual².
+    pub chi2: f64,
+    /// Degrees of freedom.
+    pub dof: i64,
+    /// χ²/dof (NaN when dof ≤ 0).
+    pub reduced_chi2: f64,
+    /// The factor the 1σ values were multiplied by (√(χ²/dof) or 1).
+    pub sigma_scale: f64,
+}
+
+/// What the plan determined.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Observability {
+    /// 1σ of each lever-arm component (∞ when fixed), m.
+    pub lever_arm_sigma_m: RowMajor3,
+    /// Determined to better than the threshold.
+    pub observable: [[bool; 3]; 3],
+    /// Not estimable at all: fixed at 0 in the fit.
+    pub fixed_at_zero: [[bool; 3]; 3],
+    /// The threshold used, m.
+    pub threshold_m: f64,
+}
+
+impl Observability {
+    /// Names of the components not determined, e.g. "r1y".
+    pub fn undetermined(&self) -> Vec<String> {
+        self.names(|i, j| !self.observable[i][j])
+    }
+
+    /// Names of the components not determined because they are not estimable at all (fixed at 0),
+    /// in the order of [`Observability::undetermined`].
+    pub fn undetermined_fixed(&self) -> Vec<String> {
+        self.names(|i, j| !self.observable[i][j] && self.fixed_at_zero[i][j])
+    }
+
+    /// Names ("r1y") of the components `pick(accelerometer, axis)` selects, accelerometer by
+    /// accelerometer.
+    fn names(&self, pick: impl Fn(usize, usize) -> bool) -> Vec<String> {
+        let mut v = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                if pick(i, j) {
+                    v.push(format!("r{}{}", i + 1, axis_name(j)));
+                }
+            }
+        }
+        v
+    }
+}
+
+/// The other method's lever arms, for the report's comparison.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodComparison {
+    /// Which method.
+    pub method: Method,
+    /// Its lever arms (same reference as the main result).
+    pub lever_arms: LeverArms,
+    /// Their 1σ, m.
+    pub lever_arm_sigma_m: RowMajor3,
+    /// Notes (pitfalls, what was used).
+    pub notes: Vec<String>,
+}
+
+/// Everything `host calibrate` needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CalibrationOutcome {
+    /// The method of the result.
+    pub method: Method,
+    /// The calibration.
+    pub calibration: Calibration,
+    /// 1σ of every value (after χ² scaling, see `fit.sigma_scale`).
+    pub uncertainty: Uncertainty,
+    /// Covariance of the paper-form values ([`super::paper_labels`] order), after χ² scaling; ∞ on the
+    /// diagonal of values that depend on a fixed lever-arm component.
+    pub covariance: Vec<Vec<f64>>,
+    /// Goodness of fit.
+    pub fit: FitSummary,
+    /// Per segment, in plan order (missing ones left out).
+    pub segments: Vec<SegmentDiagnostic>,
+    /// Excluded segments with reasons.
+    pub excluded: Vec<Exclusion>,
+    /// Lever-arm observability.
+    pub observability: Observability,
+    /// The other method, when run.
+    pub comparison: Option<MethodComparison>,
+    /// Warnings for the user.
+    pub warnings: Vec<String>,
+    /// The fitted form and lever arms in the fit's frame (before re-referencing).
+    pub fitted: FittedStatic,
+    /// Each mount's estimated attitude (docs/model.md §7).
+    pub mount_tilts: Vec<MountTilt>,
+    /// The static 1σ split into intrinsic and body-frame alignment parts, and what fixes the frame.
+    pub static_split: StaticSplit,
+    /// Every fitted parameter (intrinsic, then two tilts per mount): name, value, 1σ (0 when fixed).
+    pub parameters: Vec<(String, f64, f64)>,
+    /// The gyro model, when estimated.
+    pub gyro: Option<GyroEstimate>,
+    /// The temperature fit, when the session was recorded over a temperature range.
+    pub thermal: Option<thermal::ThermalFit>,
+}

@@ -1,0 +1,163 @@
+//! The gyro of a hand-held session (docs/model.md §8): fitted from the hand turns between still
+//! positions ([`fit`]), accepted or refused ([`problems`], `estimate::gyro_check`), and kept beside
+//! the session as `gyro.toml` ([`file_text`], [`read`]) for `host calibrate --input`.
+
+use super::from_recording::stats_for;
+use super::import::Recording;
+use super::segment::Segmentation;
+use super::Plan;
+use crate::estimate::gyro::GyroEstimate;
+use crate::estimate::handheld_gyro::{
+    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn, DETERMINED_1SIGMA,
+};
+use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
+use crate::unit_file::GyroSection;
+use shared::linalg;
+use std::path::{Path, PathBuf};
+
+/// The gyro result's file in the session directory.
+pub const GYRO_FILE: &str = "gyro.toml";
+
+/// Why the hand-held gyro could not be fitted or read.
+#[derive(Debug, thiserror::Error)]
+pub enum HandGyroFileError {
+    /// The session's accelerometer fit, which gives gravity's directions, failed.
+    #[error(transparent)]
+    Estimate(#[from] EstimateError),
+    /// That fit is singular.
+    #[error("the session's accelerometer fit is singular: gravity's directions at the still positions are unknown")]
+    Singular,
+    /// The gyro's unit is wrong (the turns are 57× or 1/57 of gravity's).
+    #[error(transparent)]
+    Unit(HandGyroError),
+    /// `gyro.toml` cannot be read.
+    #[error("cannot read {}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// `gyro.toml` is not valid.
+    #[error("{} is not valid: {message}", .path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said.
+        message: String,
+    },
+}
+
+/// The gyro fit on the turns, with gravity directions from the session's own accelerometer
+/// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
+pub fn fit(
+    rec: &Recording,
+    seg: &Segmentation,
+    plan: &Plan,
+) -> Result<Result<HandGyroFit, HandGyroError>, HandGyroFileError> {
+    let stats = stats_for(rec, seg, plan);
+    let options = EstimateOptions {
+        compare_methods: false,
+        ..EstimateOptions::default()
+    };
+    let outcome = calibrate_session_stats(plan, &stats, &options)?;
+    let m = outcome.fitted.m_out_per_g;
+    let minv = linalg::inverse(&m).ok_or(HandGyroFileError::Singular)?;
+    let up = |iv: &super::segment::Interval| {
+        let d: [f64; 3] =
+            core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
+        let f = linalg::mat_vec(&minv, &d);
+        let n = linalg::norm(&f);
+        f.map(|c| c / n)
+    };
+    let turns: Vec<Turn> = seg
+        .stills
+        .windows(2)
+        .map(|w| Turn {
+            from_row: w[0].end - 1,
+            to_row: w[1].start,
+            up_before_b: up(&w[0]),
+            up_after_b: up(&w[1]),
+        })
+        .collect();
+    let means: Vec<([f64; 3], usize)> = seg
+        .stills
+        .iter()
+        .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
+        .collect();
+    match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
+        Err(e @ HandGyroError::UnitMismatch { .. }) => Err(HandGyroFileError::Unit(e)),
+        r => Ok(r),
+    }
+}
+
+/// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
+/// turns no `G` explains. Empty: accepted.
+pub fn problems(fit: &HandGyroFit) -> Vec<String> {
+    let mut problems: Vec<String> = gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns)
+        .into_iter()
+        .collect();
+    problems.extend(gyro_check::matrix_problems(&fit.matrix));
+    problems
+}
+
+/// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a
+/// comment saying where it comes from.
+pub fn file_text(fit: &HandGyroFit) -> String {
+    #[derive(serde::Serialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let gyro = GyroSection {
+        bias_rad_s: fit.bias_rad_s,
+        matrix: fit.matrix,
+        bias_rad_s_1sigma: Some(fit.bias_1sigma_rad_s),
+        matrix_1sigma: Some(fit.matrix_1sigma),
+    };
+    format!(
+        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
+         # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
+         # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
+        fit.turns,
+        fit.rms_residual_deg,
+        toml::to_string_pretty(&File { gyro }).unwrap_or_default()
+    )
+}
+
+/// The gyro `host segment` fitted from the hand turns (`DIR/gyro.toml`), as the estimator's gyro
+/// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
+pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let path = dir.join(GYRO_FILE);
+    let text = match crate::limits::read_text_bounded(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(source) => return Err(HandGyroFileError::Io { path, source }),
+    };
+    let f: File = toml::from_str(&text).map_err(|e| HandGyroFileError::Invalid {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    let g = f.gyro;
+    let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
+    let names = ["x", "y", "z"];
+    let undetermined = (0..9)
+        .filter(|&k| {
+            let s = matrix_1sigma[k / 3][k % 3];
+            s.is_nan() || s > DETERMINED_1SIGMA
+        })
+        .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
+        .collect();
+    Ok(Some(GyroEstimate {
+        matrix: g.matrix,
+        matrix_1sigma,
+        bias_rad_s: g.bias_rad_s,
+        bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
+        table_rate_scale: (0.0, 0.0),
+        undetermined,
+    }))
+}
