@@ -302,14 +302,14 @@ fn check_stills(plan: &Plan, sums: &[StillSums], gyro: bool) -> Result<(), Apply
         }
         let n = s.rows as f64;
         let f = shared::linalg::norm(&s.f_g.map(|v| v / n));
-        if !((f - 1.0).abs() <= MAX_STILL_G_ERROR) {
+        if f.is_nan() || (f - 1.0).abs() > MAX_STILL_G_ERROR {
             return Err(ApplyError::NotOneG {
                 segment: sp.name.clone(),
                 f_g: f,
             });
         }
         let w = shared::linalg::norm(&s.w_rad_s.map(|v| v / n)).to_degrees();
-        if gyro && !(w <= MAX_REST_RATE_DEG_S) {
+        if gyro && (w.is_nan() || w > MAX_REST_RATE_DEG_S) {
             return Err(ApplyError::RestRate {
                 segment: sp.name.clone(),
                 deg_s: w,

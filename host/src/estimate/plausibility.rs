@@ -86,7 +86,7 @@ fn scale_unit_problem(plan: &Plan, outcome: &CalibrationOutcome) -> Option<Strin
     };
     let k = outcome.calibration.statics.scale_out_per_g;
     k.iter()
-        .any(|v| !((v / nominal - 1.0).abs() <= MAX_UNIT_SCALE_ERROR))
+        .any(|v| v.is_nan() || (v / nominal - 1.0).abs() > MAX_UNIT_SCALE_ERROR)
         .then(|| {
             format!(
                 "the scale factors are {:.4}, {:.4}, {:.4} {} per g, but an output in {} is about {} \

@@ -376,7 +376,7 @@ fn analyse_signals(
             }
             // The physical check: a still recording is at 1 g (docs/robustness.md).
             let f_g = shared::linalg::norm(&sum.map(|v| v / n as f64)) / g;
-            if !((f_g - 1.0).abs() <= crate::apply::MAX_STILL_G_ERROR) {
+            if f_g.is_nan() || (f_g - 1.0).abs() > crate::apply::MAX_STILL_G_ERROR {
                 return Err(NoiseError::NotOneG { f_g });
             }
             "m/s^2"

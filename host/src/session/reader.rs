@@ -511,7 +511,7 @@ const STEP_TOLERANCE: f64 = 0.1;
 pub struct StepCount {
     /// Steps seen.
     pub steps: u64,
-    /// Of which at the plan's period, within [`STEP_TOLERANCE`].
+    /// Of which at the plan's period, within 10 %.
     pub at_rate: u64,
     /// Sum of the positive steps shorter than 100 periods, s (the rate they imply, for a message).
     pub short_sum_s: f64,

@@ -165,7 +165,8 @@ pub fn is_glitch(
 ) -> bool {
     let jumps = |other: (f64, f64)| {
         let allowed = TEMP_JUMP_FLOOR_C + MAX_TEMP_RATE_C_PER_S * (reading.0 - other.0).abs();
-        !((reading.1 - other.1).abs() <= allowed)
+        let jump = (reading.1 - other.1).abs();
+        jump.is_nan() || jump > allowed
     };
     let after = after.filter(|a| a.1.is_finite());
     match (before.map(jumps), after.map(jumps)) {
