@@ -8,7 +8,7 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 mod common;
-use common::host;
+use common::{hand_segment_args, host};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -38,20 +38,7 @@ fn hand_session(dir: &Path) -> (PathBuf, PathBuf) {
     let csv = dir.join("hand.csv");
     assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
     let session = dir.join("hand");
-    let (ok, _, e) = host(&[
-        "-q",
-        "segment",
-        "--input",
-        s(&csv),
-        "--out",
-        s(&session),
-        "--time-column",
-        "t",
-        "--acc-unit",
-        "m/s2",
-        "--gyro-unit",
-        "deg/s",
-    ]);
+    let (ok, _, e) = host(&hand_segment_args(s(&csv), s(&session)));
     assert!(ok, "{e}");
     let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&session)]);
     assert!(ok, "{e}");
@@ -294,20 +281,8 @@ fn segment_interrupted_leaves_nothing_that_calibrate_accepts() {
     for delay_ms in [20, 80, 160, 320] {
         let out = dir.path().join(format!("s{delay_ms}"));
         let mut child = Command::new(env!("CARGO_BIN_EXE_host"))
-            .args([
-                "-q",
-                "segment",
-                "--input",
-                s(&csv),
-                "--out",
-                s(&out),
-                "--time-column",
-                "t",
-                "--acc-unit",
-                "m/s2",
-                "--gyro-unit",
-                "deg/s",
-            ])
+            .arg("-q")
+            .args(hand_segment_args(s(&csv), s(&out)))
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::host;
+use common::{hand_segment_args, host};
 
 /// What a pipeline ended in.
 #[derive(Debug)]
@@ -283,19 +283,7 @@ fn a_truncated_last_line() {
     assert!(host(&["-q", "simulate-hand", "--out", s(&csv), "--seed", "4"]).0);
     cut(&csv);
     let out = dir.path().join("session");
-    let (ok, _, stderr) = host(&[
-        "segment",
-        "--input",
-        s(&csv),
-        "--out",
-        s(&out),
-        "--time-column",
-        "t",
-        "--acc-unit",
-        "m/s2",
-        "--gyro-unit",
-        "deg/s",
-    ]);
+    let (ok, _, stderr) = host(&hand_segment_args(s(&csv), s(&out)));
     // The logger's CSV: the cut line is left out, flagged with its number.
     assert!(ok, "{stderr}");
     assert!(

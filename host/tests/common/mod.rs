@@ -18,6 +18,24 @@ pub fn host_in(cwd: Option<&Path>, args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// `host segment` arguments for a `simulate-hand` CSV (m/s², °/s, its time column `t`) into `out`.
+#[allow(dead_code)] // not every test file uses it
+pub fn hand_segment_args<'a>(csv: &'a str, out: &'a str) -> Vec<&'a str> {
+    vec![
+        "segment",
+        "--input",
+        csv,
+        "--out",
+        out,
+        "--time-column",
+        "t",
+        "--acc-unit",
+        "m/s2",
+        "--gyro-unit",
+        "deg/s",
+    ]
+}
+
 /// Runs `host ARGS` in the current directory.
 #[allow(dead_code)] // not every test file uses both
 pub fn host(args: &[&str]) -> (bool, String, String) {
