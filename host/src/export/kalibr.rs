@@ -267,6 +267,21 @@ pub fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, ExportError>
     }
     match &k.gyro {
         Some((m_g, c_gyro_i, _)) => {
+            // Entries of G the calibration did not determine are never written as plain numbers.
+            let undetermined = super::c::undetermined_gyro_inverse(input);
+            if undetermined.iter().flatten().any(|u| *u) {
+                if !input.options.allow_undetermined {
+                    return Err(ExportError::Undetermined {
+                        format: "kalibr-intrinsics",
+                        names: "the gyroscope's M and C_gyro_i (from an undetermined G)".into(),
+                    });
+                }
+                let _ = writeln!(
+                    w,
+                    "# UNDETERMINED: the gyroscope's M and C_gyro_i come from a G with undetermined \
+                     entries (--allow-undetermined)"
+                );
+            }
             let _ = writeln!(
                 w,
                 "gyroscopes:  # no A (g-sensitivity): our gyro model has none"
@@ -305,6 +320,26 @@ pub fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, ExportError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn intrinsics_refuse_or_mark_a_gyro_with_undetermined_entries() {
+        let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
+        cal.gyro = Some(firmware::paper_unit::typical_gyro());
+        let mut unit = UnitFile::from_calibration(&cal, None, None);
+        unit.gyro.as_mut().unwrap().matrix_1sigma = Some([[1e-5; 3]; 3]);
+        let input = ExportInput::for_tests(&unit, cal.clone());
+        assert!(!render_intrinsics(&input).unwrap().contains("UNDETERMINED: the gyroscope"));
+        let mut sigma = [[1e-5; 3]; 3];
+        for row in &mut sigma {
+            row[2] = 0.05;
+        }
+        unit.gyro.as_mut().unwrap().matrix_1sigma = Some(sigma);
+        let mut input = ExportInput::for_tests(&unit, cal);
+        let e = render_intrinsics(&input).unwrap_err().to_string();
+        assert!(e.contains("--allow-undetermined"), "{e}");
+        input.options.allow_undetermined = true;
+        assert!(render_intrinsics(&input).unwrap().contains("UNDETERMINED: the gyroscope"));
+    }
     use crate::export::consumer_tests::handheld_unit;
     use crate::unit_file::UnitFile;
 
