@@ -327,18 +327,24 @@ mod tests {
         cal.gyro = Some(firmware::paper_unit::typical_gyro());
         let mut unit = UnitFile::from_calibration(&cal, None, None);
         unit.gyro.as_mut().unwrap().matrix_1sigma = Some([[1e-5; 3]; 3]);
-        let input = ExportInput::for_tests(&unit, cal.clone());
-        assert!(!render_intrinsics(&input).unwrap().contains("UNDETERMINED: the gyroscope"));
+        let mut input = ExportInput::for_tests(&unit, cal.clone());
+        input.driver_scale_m_s2_per_out = Some(24.8);
+        assert!(!render_intrinsics(&input)
+            .unwrap()
+            .contains("UNDETERMINED: the gyroscope"));
         let mut sigma = [[1e-5; 3]; 3];
         for row in &mut sigma {
             row[2] = 0.05;
         }
         unit.gyro.as_mut().unwrap().matrix_1sigma = Some(sigma);
         let mut input = ExportInput::for_tests(&unit, cal);
+        input.driver_scale_m_s2_per_out = Some(24.8);
         let e = render_intrinsics(&input).unwrap_err().to_string();
         assert!(e.contains("--allow-undetermined"), "{e}");
         input.options.allow_undetermined = true;
-        assert!(render_intrinsics(&input).unwrap().contains("UNDETERMINED: the gyroscope"));
+        assert!(render_intrinsics(&input)
+            .unwrap()
+            .contains("UNDETERMINED: the gyroscope"));
     }
     use crate::export::consumer_tests::handheld_unit;
     use crate::unit_file::UnitFile;

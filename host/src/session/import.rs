@@ -240,9 +240,10 @@ pub enum ImportError {
     BadRate(f64),
     /// The time column's steps give a rate no IMU logger has: it is not in seconds.
     #[error(
-        "the time column steps at a median rate of {rate_hz:.3e} Hz: it is not in seconds (a time in \
+        "the time column steps at a median rate of {} Hz: it is not in seconds (a time in \
          ms gives 1000× too low a rate, in µs 10⁶×); convert it to seconds, or give --rate-hz HZ \
-         instead of --time-column"
+         instead of --time-column",
+        short_number(*.rate_hz)
     )]
     TimeUnit {
         /// The median rate the time stamps give, Hz.
@@ -689,7 +690,7 @@ mod tests {
         );
         let text = format!(
             "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
-            rows(200, |i| format!("{i},0,0,1e100,0,0,0"))
+            rows(200, |i| format!("{},0,0,1e100,0,0,0", i as f64 * 0.01))
         );
         let e = read(&text, &o).unwrap_err().to_string();
         assert!(e.contains("median magnitude is 1e100 m/s2"), "{e}");
