@@ -327,7 +327,7 @@ mod tests {
         cal.gyro = Some(firmware::paper_unit::typical_gyro());
         let mut unit = UnitFile::from_calibration(&cal, None, None);
         unit.gyro.as_mut().unwrap().matrix_1sigma = Some([[1e-5; 3]; 3]);
-        let mut input = ExportInput::for_tests(&unit, cal.clone());
+        let mut input = ExportInput::for_tests(&unit, cal);
         input.driver_scale_m_s2_per_out = Some(24.8);
         assert!(!render_intrinsics(&input)
             .unwrap()
