@@ -121,7 +121,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
         Command::Flash(a) => flash::run(&a.port, &a.calibration),
         Command::Read(a) => read::run(&a.port, a.out.as_deref()),
-        Command::Monitor(a) => monitor::run(&a.port, a.window, a.count),
+        Command::Monitor(a) => monitor::run(&a, cli.quiet),
     }
 }
 

@@ -270,7 +270,23 @@ fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
         ),
         "{e}"
     );
-    monitor::run(&sim(), 100, Some(3)).unwrap();
+    let args = monitor::MonitorArgs {
+        port: sim(),
+        window: 100,
+        count: Some(3),
+        fast: true,
+    };
+    monitor::run(&args, false).unwrap();
+    // Unbounded as-fast-as-possible output is refused before anything is opened.
+    let e = monitor::run(
+        &monitor::MonitorArgs {
+            count: None,
+            ..args
+        },
+        false,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("--count"), "{e}");
 }
 
 #[test]
