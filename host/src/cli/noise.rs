@@ -51,8 +51,12 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         None => None,
     };
     let report = analyse(&a.input, plain.as_ref(), quiet).map_err(CliError::Noise)?;
+    let out = super::output::Output {
+        json: a.json,
+        quiet,
+    };
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::Noise(NoiseError::File(a.input.clone(), e.to_string())))?;
@@ -67,22 +71,18 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         let fig = render(&report.figure(), dir, Formats::default())
             .map_err(|e| CliError::Noise(NoiseError::File(dir.clone(), e.to_string())))?;
         for w in &fig.warnings {
-            eprintln!("warning: {w}");
-        }
-        if !quiet {
-            eprintln!(
-                "wrote noise.json, allan.csv and the figure into {}",
-                dir.display()
-            );
+            out.warn(w);
         }
     }
+    out.human(report.render())?;
+    if let Some(dir) = &a.out {
+        out.line(format_args!(
+            "wrote noise.json, allan.csv and the figure into {}",
+            dir.display()
+        ))?;
+    }
     if a.json {
-        println!("{json}");
-        if !quiet {
-            eprint!("{}", report.render());
-        }
-    } else if !quiet {
-        print!("{}", report.render());
+        crate::outln!("{json}")?;
     }
     Ok(())
 }

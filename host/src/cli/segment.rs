@@ -136,7 +136,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     };
     let io = |p: &Path| {
         let p = p.display().to_string();
-        move |e: std::io::Error| CliError::Usage(format!("cannot write {p}: {e}"))
+        move |e: std::io::Error| CliError::Failed(format!("cannot write {p}: {e}"))
     };
     write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
     let g = &spec.gyro;
@@ -172,7 +172,7 @@ pub fn session_hand_gyro(dir: &Path) -> Result<Option<GyroEstimate>, CliError> {
         return Ok(None);
     };
     let f: File = toml::from_str(&text)
-        .map_err(|e| CliError::Usage(format!("{} is not valid: {e}", path.display())))?;
+        .map_err(|e| CliError::Failed(format!("{} is not valid: {e}", path.display())))?;
     let g = f.gyro;
     let matrix_1sigma = g.matrix_1sigma.unwrap_or([[f64::INFINITY; 3]; 3]);
     let names = ["x", "y", "z"];
@@ -257,7 +257,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let options = import_options(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
     let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {
         let w = format!(
@@ -279,11 +279,11 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         min_still_s: a.min_still_s,
         ..SegmentOptions::default()
     };
-    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Failed(e.to_string()))?;
     let cov = coverage(&seg.stills, seg_options.same_position_deg);
     out.human(table(&rec, &seg, &cov))?;
     cov.check(seg.stills.len(), seg_options.same_position_deg)
-        .map_err(|e| CliError::Usage(e.to_string()))?;
+        .map_err(|e| CliError::Failed(e.to_string()))?;
     let advice = cov.advice();
     if let Some(advice) = &advice {
         out.line(format_args!("advice: {advice}"))?;
@@ -536,7 +536,7 @@ pub(crate) fn gyro_fit(
     let outcome = calibrate_session_stats(plan, &stats, &options)?;
     let m = outcome.fitted.m_out_per_g;
     let minv =
-        linalg::inverse(&m).ok_or_else(|| CliError::Usage("singular accelerometer fit".into()))?;
+        linalg::inverse(&m).ok_or_else(|| CliError::Failed("singular accelerometer fit".into()))?;
     let up = |iv: &crate::session::segment::Interval| {
         let d: [f64; 3] =
             core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
@@ -560,7 +560,7 @@ pub(crate) fn gyro_fit(
         .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
         .collect();
     match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
-        Err(e @ HandGyroError::UnitMismatch { .. }) => Err(CliError::Usage(e.to_string())),
+        Err(e @ HandGyroError::UnitMismatch { .. }) => Err(CliError::Failed(e.to_string())),
         r => Ok(r),
     }
 }
