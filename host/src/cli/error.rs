@@ -70,7 +70,8 @@ pub enum CliError {
     /// The live procedure ran but the verification failed.
     #[error(
         "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
-         at some verification positions (see above)"
+         at some verification positions (see above); its files are kept as calibration.FAILED.toml \
+         and calibration.FAILED.bin: flash an accepted calibration to replace it on the device"
     )]
     VerificationFailed,
     /// `host apply`.
