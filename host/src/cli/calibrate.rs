@@ -279,19 +279,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     } else {
         crate::calibration_files::mark_failed(&result.written, a.force)?
     };
-    out.line(format_args!(
-        "wrote {} and {}",
-        written.toml_path.display(),
-        written.bin_path.display()
-    ))?;
-    for v in &result.verification {
-        out.line(format_args!(
-            "verify {:<28} error {:7.4} mg  {}",
-            v.label,
-            v.error_mg,
-            if v.pass { "ok" } else { "FAIL" }
-        ))?;
-    }
+    print_written_and_verified(&out, &written, &result.verification)?;
     out.document(&serde_json::json!({
         "calibration": summary,
         "verification_worst_error_mg": worst,
@@ -316,5 +304,27 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         opts.verify_tolerance_mg,
         opts.out_dir.display()
     ))?;
+    Ok(())
+}
+
+/// The files a live calibration wrote (under their final names) and each verification position.
+fn print_written_and_verified(
+    out: &Output,
+    written: &crate::calibration_files::WrittenCalibration,
+    verification: &[procedure::VerificationPoint],
+) -> Result<(), CliError> {
+    out.line(format_args!(
+        "wrote {} and {}",
+        written.toml_path.display(),
+        written.bin_path.display()
+    ))?;
+    for v in verification {
+        out.line(format_args!(
+            "verify {:<28} error {:7.4} mg  {}",
+            v.label,
+            v.error_mg,
+            if v.pass { "ok" } else { "FAIL" }
+        ))?;
+    }
     Ok(())
 }
