@@ -15,14 +15,6 @@ step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
 rustup target add thumbv7em-none-eabihf >/dev/null
 rustup component add rustfmt clippy >/dev/null
 
-step "system packages the tests need: a TrueType font for the PNG figures"
-if [ ! -e /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] && [ -z "${ACCEL_CAL_FONT:-}" ]; then
-  sudo_cmd=()
-  [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update
-  "${sudo_cmd[@]}" apt-get install -y --no-install-recommends fonts-dejavu-core
-fi
-
 step "format"
 cargo fmt --all -- --check
 cargo fmt --manifest-path firmware/Cargo.toml --all -- --check

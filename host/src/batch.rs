@@ -326,6 +326,16 @@ pub fn run_batch(
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
     flag_outliers(&mut units, opts.outlier_z);
+    // A unit that did not pass keeps its files under names that say so (README, "Output and exit
+    // status"); one that could not be renamed says why.
+    for u in units
+        .iter_mut()
+        .filter(|u| !u.passed && u.summary.is_some())
+    {
+        if let Err(e) = crate::calibration_files::mark_failed_in(&out.join(&u.session), false) {
+            u.error = Some(e.to_string());
+        }
+    }
     Ok(LotSummary {
         rows: units.iter().map(|u| u.rows).sum(),
         units,

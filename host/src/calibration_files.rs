@@ -11,6 +11,11 @@ use std::path::{Path, PathBuf};
 pub const CALIBRATION_TOML: &str = "calibration.toml";
 /// File name of the blob.
 pub const CALIBRATION_BIN: &str = "calibration.bin";
+/// File name `calibration.toml` takes when its unit failed its checks (pass/fail limits or the
+/// device's verification): nothing that looks for an accepted calibration picks it up.
+pub const FAILED_TOML: &str = "calibration.FAILED.toml";
+/// File name `calibration.bin` takes when its unit failed its checks.
+pub const FAILED_BIN: &str = "calibration.FAILED.bin";
 
 /// What was written.
 #[derive(Clone, Debug)]
@@ -103,7 +108,7 @@ pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> 
     if force {
         return Ok(());
     }
-    for name in [CALIBRATION_TOML, CALIBRATION_BIN] {
+    for name in [CALIBRATION_TOML, CALIBRATION_BIN, FAILED_TOML, FAILED_BIN] {
         let p = out_dir.join(name);
         if p.exists() {
             return Err(OutputError::Exists(p));
@@ -171,6 +176,37 @@ pub fn write_calibration_files(
         bin_path,
         blob,
     })
+}
+
+/// Renames a written pair to [`FAILED_BIN`] and [`FAILED_TOML`] (the blob first: it is what could be
+/// flashed), because its unit failed a check: the files stay for inspection, under names that say
+/// so. An existing failed pair is replaced only with `force`.
+pub fn mark_failed(
+    written: &WrittenCalibration,
+    force: bool,
+) -> Result<WrittenCalibration, OutputError> {
+    let dir = written.bin_path.parent().unwrap_or(Path::new("."));
+    let (toml_path, bin_path) = mark_failed_in(dir, force)?;
+    Ok(WrittenCalibration {
+        toml_path,
+        bin_path,
+        blob: written.blob.clone(),
+    })
+}
+
+/// [`mark_failed`] for the pair in `dir`: the new paths of the `.toml` and the `.bin`.
+pub fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
+    let (toml_path, bin_path) = (dir.join(FAILED_TOML), dir.join(FAILED_BIN));
+    for p in [&toml_path, &bin_path] {
+        if !force && p.exists() {
+            return Err(OutputError::Exists(p.clone()));
+        }
+    }
+    for (from, to) in [(CALIBRATION_BIN, &bin_path), (CALIBRATION_TOML, &toml_path)] {
+        let from = dir.join(from);
+        std::fs::rename(&from, to).map_err(|e| OutputError::Io(from, e))?;
+    }
+    Ok((toml_path, bin_path))
 }
 
 /// Writes and syncs one file, naming it in the error.

@@ -1,4 +1,5 @@
-//! `host`: a thin clap layer over the library (`host::cli`).
+//! `host`: a thin clap layer over the library (`host::cli`). Exit status: 0 success, 1 error, 2 usage
+//! (clap's and ours), 3 a check failed ([`host::cli::CliError::exit_code`]).
 
 use clap::Parser;
 
@@ -6,6 +7,6 @@ fn main() {
     let cli = host::cli::Cli::parse();
     if let Err(e) = host::cli::run(cli) {
         eprintln!("error: {e}");
-        std::process::exit(1);
+        std::process::exit(e.exit_code());
     }
 }

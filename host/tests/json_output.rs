@@ -29,13 +29,16 @@ fn calibrate_compare_plan_and_noise_print_one_json_document() {
     // The human report went to stderr.
     assert!(stderr.contains("Table 1"), "{stderr}");
 
-    // A limit the unit cannot meet: nonzero exit, the JSON still complete, the reason on stderr.
+    // A limit the unit cannot meet: nonzero exit, the JSON still complete, the reason on stderr
+    // (its files, elsewhere, are marked FAILED; the accepted pair above stays).
+    let failed = format!("{s}/failed");
     let (ok, stdout, stderr) = host(&[
         "calibrate",
         "--input",
         s,
+        "--out-dir",
+        &failed,
         "--json",
-        "--force",
         "--max-bias-mg",
         "0.001",
     ]);

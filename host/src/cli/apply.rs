@@ -98,20 +98,24 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             s
         }
     };
+    let out = super::output::Output { json: false, quiet };
     for w in &summary.warnings {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
-    if !quiet {
-        let dest = a
-            .out
-            .as_ref()
-            .map_or("stdout".to_string(), |p| p.display().to_string());
-        eprintln!(
-            "applied {} to {} rows ({} with non-finite values written as NaN) -> {dest}",
-            a.calibration.display(),
-            summary.rows,
-            summary.non_finite_rows
-        );
+    let dest = a
+        .out
+        .as_ref()
+        .map_or("stdout".to_string(), |p| p.display().to_string());
+    let line = format!(
+        "applied {} to {} rows ({} with non-finite values written as NaN) -> {dest}",
+        a.calibration.display(),
+        summary.rows,
+        summary.non_finite_rows
+    );
+    // With the CSV on stdout the summary goes beside it, to stderr; with --out it is the result.
+    match &a.out {
+        Some(_) => out.line(line)?,
+        None => out.note(line),
     }
     Ok(())
 }

@@ -82,7 +82,7 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     let bar = crate::ui::progress_bar(sessions.len() as u64, "calibrating", quiet);
     let lot = run_batch(&sessions, staged.path(), &opts, &bar).map_err(CliError::Batch)?;
     let json = serde_json::to_string_pretty(&lot)
-        .map_err(|e| CliError::Usage(format!("cannot write the lot summary: {e}")))?;
+        .map_err(|e| CliError::Failed(format!("cannot write the lot summary: {e}")))?;
     write_atomic(
         &staged.path().join(SUMMARY_CSV),
         to_csv(&lot).as_bytes(),

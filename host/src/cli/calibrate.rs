@@ -115,8 +115,9 @@ pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
 /// Reads a session with the progress bar, printing the reader's warnings to stderr.
 pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError> {
     let session = read_session(dir, &ReadOptions { quiet })?;
+    let out = Output { json: false, quiet };
     for w in &session.report.warnings {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
     Ok(session)
 }
@@ -184,8 +185,17 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
             UnitId::default()
         }
     };
+    let mut summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
+    // What the reader flagged (rows left out, gaps) belongs to the result, not only to stderr.
+    summary
+        .warnings
+        .extend(session.report.warnings.iter().cloned());
     // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
-    let written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
+    // A unit that fails its checks keeps its files, under names that say so.
+    let mut written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
+    if !summary.passed {
+        written = crate::calibration_files::mark_failed(&written, a.force)?;
+    }
     out.line(format_args!(
         "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
         session.report.rows,
@@ -213,11 +223,6 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         written.bin_path.display(),
         written.blob.len()
     ))?;
-    let mut summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
-    // What the reader flagged (rows left out, gaps) belongs to the result, not only to stderr.
-    summary
-        .warnings
-        .extend(session.report.warnings.iter().cloned());
     out.document(&summary)?;
     if !summary.passed {
         return Err(CliError::ChecksFailed(summary.failures()));
@@ -266,36 +271,47 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         &mut person
     };
     let result = procedure::run(&mut client, &opts, op)?;
+    let out = Output {
+        json: a.json,
+        quiet,
+    };
     for w in &result.warnings {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
     let worst = result
         .verification
         .iter()
         .map(|v| v.error_mg)
         .fold(0.0, f64::max);
-    let out = Output {
-        json: a.json,
-        quiet: false,
-    };
     let summary = CalibrationSummary::new(
         &result.outcome,
         Some(result.identity.unit_id.to_string()),
         &a.limits,
     );
+    // The results, on stdout like `calibrate --input`'s; the operator's steps went to stderr.
+    out.human(&result.report)?;
+    let passed = result.passed && summary.passed;
+    let written = if passed {
+        result.written.clone()
+    } else {
+        crate::calibration_files::mark_failed(&result.written, a.force)?
+    };
+    print_written_and_verified(&out, &written, &result.verification)?;
     out.document(&serde_json::json!({
         "calibration": summary,
         "verification_worst_error_mg": worst,
         "verification_tolerance_mg": opts.verify_tolerance_mg,
         "verified": result.passed,
+        "passed": passed,
+        "calibration_toml": written.toml_path.display().to_string(),
+        "calibration_bin": written.bin_path.display().to_string(),
         "results_dir": opts.out_dir.display().to_string(),
     }))?;
     if !result.passed {
-        out.line(format_args!(
-            "FAIL: worst verification error {worst:.3} mg > {} mg",
-            opts.verify_tolerance_mg
-        ))?;
         return Err(CliError::VerificationFailed);
+    }
+    if !summary.passed {
+        return Err(CliError::ChecksFailed(summary.failures()));
     }
     out.line(format_args!(
         "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \
@@ -305,8 +321,27 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
         opts.verify_tolerance_mg,
         opts.out_dir.display()
     ))?;
-    if !summary.passed {
-        return Err(CliError::ChecksFailed(summary.failures()));
+    Ok(())
+}
+
+/// The files a live calibration wrote (under their final names) and each verification position.
+fn print_written_and_verified(
+    out: &Output,
+    written: &crate::calibration_files::WrittenCalibration,
+    verification: &[procedure::VerificationPoint],
+) -> Result<(), CliError> {
+    out.line(format_args!(
+        "wrote {} and {}",
+        written.toml_path.display(),
+        written.bin_path.display()
+    ))?;
+    for v in verification {
+        out.line(format_args!(
+            "verify {:<28} error {:7.4} mg  {}",
+            v.label,
+            v.error_mg,
+            if v.pass { "ok" } else { "FAIL" }
+        ))?;
     }
     Ok(())
 }

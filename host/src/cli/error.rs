@@ -70,7 +70,8 @@ pub enum CliError {
     /// The live procedure ran but the verification failed.
     #[error(
         "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
-         at some verification positions (see above)"
+         at some verification positions (see above); its files are kept as calibration.FAILED.toml \
+         and calibration.FAILED.bin: flash an accepted calibration to replace it on the device"
     )]
     VerificationFailed,
     /// `host apply`.
@@ -101,12 +102,38 @@ pub enum CliError {
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
+    /// An input the command cannot use, or a result it cannot produce, said in words (where no
+    /// domain error type fits).
+    #[error("{0}")]
+    Failed(String),
     /// Standard output is closed or full (`| head`, `> /dev/full`); files and devices were written
     /// before it.
     #[error(
         "cannot write to standard output ({0}); any files (and a device) were written before this"
     )]
     Stdout(#[from] std::io::Error),
+}
+
+/// Exit status of a successful command.
+pub const EXIT_OK: i32 = 0;
+/// Exit status of a command that failed (bad input, I/O, a device, an estimate refused).
+pub const EXIT_ERROR: i32 = 1;
+/// Exit status of a command line that cannot be run as given (clap's own usage errors exit 2 too).
+pub const EXIT_USAGE: i32 = 2;
+/// Exit status of a command that ran to the end but whose result failed a check (pass/fail limits,
+/// the device's verification): its files are written, marked as failed.
+pub const EXIT_CHECK_FAILED: i32 = 3;
+
+impl CliError {
+    /// The process exit status for this error: [`EXIT_USAGE`], [`EXIT_CHECK_FAILED`] or
+    /// [`EXIT_ERROR`], so that scripts tell a typo, a failed unit and a broken run apart.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            CliError::Usage(_) => EXIT_USAGE,
+            CliError::ChecksFailed(_) | CliError::VerificationFailed => EXIT_CHECK_FAILED,
+            _ => EXIT_ERROR,
+        }
+    }
 }
 
 impl From<crate::limits::RangeError> for CliError {

@@ -1,5 +1,6 @@
 //! `host export`: a calibration in another tool's format.
 
+use super::output::Output;
 use super::CliError;
 use crate::export::kalibr::KalibrNoise;
 use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
@@ -83,16 +84,16 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     }
     let text = render(&input, a.format)?;
     // What the writer accepted only because it was told to: said where a person sees it too.
+    let out = Output { json: false, quiet };
     for w in text.lines().filter_map(|l| l.strip_prefix("# WARNING: ")) {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
     match &a.out {
         Some(p) => {
             write_atomic(p, text.as_bytes(), a.force).map_err(CliError::Written)?;
-            if !quiet {
-                eprintln!("wrote {}", p.display());
-            }
+            out.line(format_args!("wrote {}", p.display()))?;
         }
+        // The export itself is the result: nothing else goes to stdout, and -q does not silence it.
         None => crate::out!("{text}")?,
     }
     Ok(())
@@ -121,12 +122,10 @@ fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Resu
     for (name, text) in &files {
         write_atomic(&dir.join(name), text.as_bytes(), a.force).map_err(CliError::Written)?;
     }
-    if !quiet {
-        eprintln!(
-            "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off)",
-            files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
-            dir.display()
-        );
-    }
+    Output { json: false, quiet }.line(format_args!(
+        "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off)",
+        files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+        dir.display()
+    ))?;
     Ok(())
 }

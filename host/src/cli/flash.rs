@@ -22,7 +22,7 @@ pub struct FlashArgs {
 
 /// `host flash --port P --calibration FILE`: writes `calibration.bin` (or a `calibration.toml`, encoded
 /// for the connected unit), resets the device and checks it applied it.
-pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
+pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliError> {
     // The file is read (bounded: `/dev/zero` is refused at once) and checked before the device is
     // touched.
     let is_toml = calibration.extension().is_some_and(|e| e == "toml");
@@ -78,11 +78,11 @@ pub fn run(port: &PortArgs, calibration: &Path) -> Result<(), CliError> {
     if back != bytes {
         return Err(CliError::Procedure(ProcedureError::ReadBackMismatch));
     }
-    crate::outln!(
+    super::output::Output { json: false, quiet }.line(format_args!(
         "flashed {} bytes to unit {}; after reset: {:?}",
         bytes.len(),
         identity.unit_id,
         after.calibration
-    )?;
+    ))?;
     Ok(())
 }

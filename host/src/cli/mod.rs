@@ -119,9 +119,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Batch(a) => batch::run(&a, cli.quiet),
         Command::Segment(a) => segment::run(&a, cli.quiet),
         Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
-        Command::Flash(a) => flash::run(&a.port, &a.calibration),
+        Command::Flash(a) => flash::run(&a.port, &a.calibration, cli.quiet),
         Command::Read(a) => read::run(&a.port, a.out.as_deref()),
-        Command::Monitor(a) => monitor::run(&a.port, a.window, a.count),
+        Command::Monitor(a) => monitor::run(&a, cli.quiet),
     }
 }
 

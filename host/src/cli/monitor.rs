@@ -17,21 +17,51 @@ pub struct MonitorArgs {
     /// Stop after this many lines (default: run until interrupted).
     #[arg(long, value_parser = crate::limits::whole_u64(1, u64::MAX))]
     pub count: Option<u64>,
+    /// With `--port sim`: run the simulated device as fast as it goes instead of at its real
+    /// sampling rate (needs --count, so that the output stays bounded).
+    #[arg(long)]
+    pub fast: bool,
 }
 
-/// `host monitor --port P [--window N] [--count N]`: live compensated output with its flags.
-pub fn run(port: &PortArgs, window: u32, count: Option<u64>) -> Result<(), CliError> {
+/// `host monitor --port P [--window N] [--count N]`: live compensated output with its flags. The
+/// simulated device runs at its real rate (one line per window's duration), as a board does, unless
+/// `--fast`; a board is paced by its own ADC.
+pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
+    let (window, count) = (a.window, a.count);
     crate::limits::count_in("--window", window, crate::limits::MAX_WINDOW)?;
-    let mut client = connect(port)?;
+    let sim = a.port.port == super::port::SIM_PORT;
+    if a.fast && !sim {
+        return Err(CliError::Usage(
+            "--fast only applies to --port sim (a board samples at its own rate): leave it out"
+                .into(),
+        ));
+    }
+    if a.fast && count.is_none() {
+        return Err(CliError::Usage(
+            "--fast without --count writes lines without end as fast as the PC can: give --count N"
+                .into(),
+        ));
+    }
+    let mut client = connect(&a.port)?;
     let identity = client.identify()?;
+    if let (crate::device::AnyTransport::Sim(dev), false) = (client.transport_mut(), a.fast) {
+        dev.pace_real_time();
+    }
+    // A window takes its own duration to arrive, on top of the answer timeout.
+    let window_s = f64::from(window) / f64::from(identity.sample_rate_hz.max(1));
+    client.set_timeout(std::time::Duration::from_secs_f64(
+        a.port.timeout_s + window_s,
+    ));
     let g = shared::STANDARD_GRAVITY_M_S2;
-    crate::outln!(
-        "unit {} ({:?}), calibration {:?}; compensated specific force in g, {} samples per line",
-        identity.unit_id,
-        identity.board,
-        identity.calibration,
-        window
-    )?;
+    if !quiet {
+        crate::outln!(
+            "unit {} ({:?}), calibration {:?}; compensated specific force in g, {} samples per line",
+            identity.unit_id,
+            identity.board,
+            identity.calibration,
+            window
+        )?;
+    }
     client.start_stream(StreamKind::CompensatedWindows, window.max(1))?;
     let mut n = 0u64;
     while count.is_none_or(|c| n < c) {

@@ -1,6 +1,5 @@
 //! `host noise`: Allan deviation and noise terms of a still recording.
 
-use super::output::Output;
 use super::CliError;
 use crate::export::convert;
 use crate::noise::{analyse, NoiseError};
@@ -52,8 +51,12 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         None => None,
     };
     let report = analyse(&a.input, plain.as_ref(), quiet).map_err(CliError::Noise)?;
+    let out = super::output::Output {
+        json: a.json,
+        quiet,
+    };
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        out.warn(w);
     }
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::Noise(NoiseError::File(a.input.clone(), e.to_string())))?;
@@ -68,23 +71,18 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         let fig = render(&report.figure(), dir, Formats::default())
             .map_err(|e| CliError::Noise(NoiseError::File(dir.clone(), e.to_string())))?;
         for w in &fig.warnings {
-            eprintln!("warning: {w}");
-        }
-        if !quiet {
-            eprintln!(
-                "wrote noise.json, allan.csv and the figure into {}",
-                dir.display()
-            );
+            out.warn(w);
         }
     }
-    // With --json the document goes to stdout and the table to stderr; a closed or full stdout is
-    // an error of the command (the files above are written first), never a panic.
+    out.human(report.render())?;
+    if let Some(dir) = &a.out {
+        out.line(format_args!(
+            "wrote noise.json, allan.csv and the figure into {}",
+            dir.display()
+        ))?;
+    }
     if a.json {
         crate::outln!("{json}")?;
     }
-    let out = Output {
-        json: a.json,
-        quiet,
-    };
-    out.human(report.render())
+    Ok(())
 }

@@ -1,7 +1,7 @@
-//! Where a command's output goes: with `--json` one JSON document on stdout and everything for
-//! people on stderr (so `host calibrate --json | jq .` works while progress bars and prompts still
-//! show); without it the human text on stdout. `--quiet` silences the human text (warnings and
-//! errors still go to stderr).
+//! Where a command's output goes, the one convention of every subcommand (README, "Output and exit
+//! status"): results on stdout — the human text, or with `--json` only the JSON document (the human
+//! text then goes to stderr, so `host calibrate --json | jq .` works); progress, prompts and warnings
+//! on stderr. `--quiet` silences everything but errors and the JSON document.
 
 use super::CliError;
 use serde::Serialize;
@@ -37,16 +37,26 @@ impl Output {
         self.human(format_args!("{text}\n"))
     }
 
-    /// A warning: always on stderr.
+    /// A warning: on stderr, unless `--quiet`.
     pub fn warn(&self, text: impl Display) {
-        let _ = writeln!(std::io::stderr(), "warning: {text}");
+        if !self.quiet {
+            let _ = writeln!(std::io::stderr(), "warning: {text}");
+        }
+    }
+
+    /// Progress or a note for the person at the terminal (not a result): on stderr, unless
+    /// `--quiet`.
+    pub fn note(&self, text: impl Display) {
+        if !self.quiet {
+            let _ = writeln!(std::io::stderr(), "{text}");
+        }
     }
 
     /// The JSON document, when `--json` was given.
     pub fn document<T: Serialize>(&self, value: &T) -> Result<(), CliError> {
         if self.json {
             let text = serde_json::to_string_pretty(value)
-                .map_err(|e| CliError::Usage(format!("cannot write the JSON result: {e}")))?;
+                .map_err(|e| CliError::Failed(format!("cannot write the JSON result: {e}")))?;
             crate::outln!("{text}").map_err(CliError::Stdout)?;
         }
         Ok(())

@@ -127,7 +127,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     };
     let io = |p: &Path| {
         let p = p.display().to_string();
-        move |e: std::io::Error| CliError::Usage(format!("cannot write {p}: {e}"))
+        move |e: std::io::Error| CliError::Failed(format!("cannot write {p}: {e}"))
     };
     write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
     let g = &spec.gyro;
@@ -232,7 +232,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let options = import_options(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
     let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {
         let w = format!(
@@ -254,11 +254,11 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         min_still_s: a.min_still_s,
         ..SegmentOptions::default()
     };
-    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Usage(e.to_string()))?;
+    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Failed(e.to_string()))?;
     let cov = coverage(&seg.stills, seg_options.same_position_deg);
     out.human(table(&rec, &seg, &cov))?;
     cov.check(seg.stills.len(), seg_options.same_position_deg)
-        .map_err(|e| CliError::Usage(e.to_string()))?;
+        .map_err(|e| CliError::Failed(e.to_string()))?;
     let advice = cov.advice();
     if let Some(advice) = &advice {
         out.line(format_args!("advice: {advice}"))?;

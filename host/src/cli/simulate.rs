@@ -144,8 +144,9 @@ pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError>
     let bar = progress_bar(0, "simulating", quiet);
     let summary =
         simulate_to_dir_with_progress(&a.out, &unit, &plan, &noise, a.seed, a.force, &bar)?;
+    let out = super::output::Output { json: false, quiet };
     for note in &summary.notes {
-        eprintln!("note: {note}");
+        out.note(format_args!("note: {note}"));
     }
     if !quiet {
         crate::outln!(

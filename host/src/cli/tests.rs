@@ -250,13 +250,18 @@ fn blob_file(dir: &Path, unit: UnitId) -> PathBuf {
 #[test]
 fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
     let dir = tempfile::tempdir().unwrap();
-    flash::run(&sim(), &blob_file(dir.path(), SIM_UNIT_ID)).unwrap();
-    let e = flash::run(&sim(), &blob_file(dir.path(), UnitId(*b"ANOTHER-UNIT"))).unwrap_err();
+    flash::run(&sim(), &blob_file(dir.path(), SIM_UNIT_ID), false).unwrap();
+    let e = flash::run(
+        &sim(),
+        &blob_file(dir.path(), UnitId(*b"ANOTHER-UNIT")),
+        false,
+    )
+    .unwrap_err();
     assert!(matches!(e, CliError::WrongUnit { .. }), "{e}");
     assert!(e.to_string().contains("made for unit"), "{e}");
     // A corrupt file is refused before anything reaches the device.
     std::fs::write(dir.path().join("bad.bin"), b"ACAL garbage").unwrap();
-    let e = flash::run(&sim(), &dir.path().join("bad.bin")).unwrap_err();
+    let e = flash::run(&sim(), &dir.path().join("bad.bin"), false).unwrap_err();
     assert!(matches!(e, CliError::Blob(..)), "{e}");
 }
 
@@ -270,7 +275,23 @@ fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
         ),
         "{e}"
     );
-    monitor::run(&sim(), 100, Some(3)).unwrap();
+    let args = monitor::MonitorArgs {
+        port: sim(),
+        window: 100,
+        count: Some(3),
+        fast: true,
+    };
+    monitor::run(&args, false).unwrap();
+    // Unbounded as-fast-as-possible output is refused before anything is opened.
+    let e = monitor::run(
+        &monitor::MonitorArgs {
+            count: None,
+            ..args
+        },
+        false,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("--count"), "{e}");
 }
 
 #[test]

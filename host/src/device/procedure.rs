@@ -72,6 +72,9 @@ pub struct ProcedureOutcome {
     pub recording_dir: PathBuf,
     /// The estimate.
     pub outcome: CalibrationOutcome,
+    /// The estimate's result tables ([`crate::report::render_session`]), for the caller to print
+    /// with its other results.
+    pub report: String,
     /// The files written.
     pub written: WrittenCalibration,
     /// The device's state after the reset.
@@ -223,11 +226,8 @@ pub fn run<T: Transport>(
             source,
             recording: recording_dir.clone(),
         })?;
-    op.say(&crate::report::render_session(
-        &outcome,
-        &session.plan,
-        &session.stats,
-    ));
+    // The result table is the caller's to print (on stdout, with the other results).
+    let report = crate::report::render_session(&outcome, &session.plan, &session.stats);
 
     let created = calibration_files::now_unix_s();
     let written = calibration_files::write_calibration_files(
@@ -238,11 +238,6 @@ pub fn run<T: Transport>(
         opts.force,
     )
     .map_err(ProcedureError::Output)?;
-    op.say(&format!(
-        "wrote {} and {}",
-        written.toml_path.display(),
-        written.bin_path.display()
-    ));
 
     let after = store_on_device(client, op, &written, created)?;
 
@@ -254,15 +249,8 @@ pub fn run<T: Transport>(
     }
     .map_err(link)?;
     let passed = verification.iter().all(|v| v.pass);
-    for v in &verification {
-        op.say(&format!(
-            "verify {:<28} error {:7.4} mg  {}",
-            v.label,
-            v.error_mg,
-            if v.pass { "ok" } else { "FAIL" }
-        ));
-    }
     Ok(ProcedureOutcome {
+        report,
         identity,
         recording_dir,
         outcome,

@@ -4,7 +4,9 @@
 //! It is the same code the QEMU board runs, so `--port sim` exercises the real protocol handling,
 //! chunked blob writes, validation against the unit id, storage and reset; only the UART and the
 //! interrupt are replaced. Time is virtual: samples are produced as fast as the host asks for them,
-//! so a 15-minute plan runs in seconds. The line is rate-limited like a 921 600 Bd UART (about 92 bytes
+//! so a 15-minute plan runs in seconds, unless [`SimDevice::pace_real_time`] holds each sample back
+//! until its real time (`host monitor`, which shows a live device and must not race through hours of
+//! virtual time and megabytes of output in a few seconds). The line is rate-limited like a 921 600 Bd UART (about 92 bytes
 //! per millisecond), so a window too short for the link shows up as dropped frames, as on a board.
 //!
 //! Fault injection for the end-to-end tests: [`SimDevice::stop_answering_after_samples`] (a device that
@@ -19,7 +21,7 @@ use firmware::ByteLink;
 use shared::wire::Board;
 use shared::{Calibration, LeverMode, UnitId};
 use std::collections::VecDeque;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// The simulated device's unit identifier.
 pub const SIM_UNIT_ID: UnitId = UnitId(*b"SIM-PAPER-01");
@@ -67,6 +69,8 @@ pub struct SimDevice {
     samples: u64,
     dies_at_sample: Option<u64>,
     resets: u32,
+    /// Real-time pacing: the wall-clock instant and sample count it started at.
+    pace: Option<(Instant, u64)>,
 }
 
 /// Why a simulated device cannot be built.
@@ -119,6 +123,7 @@ impl SimDevice {
             samples: 0,
             dies_at_sample: None,
             resets: 0,
+            pace: None,
         };
         dev.boot(store);
         Ok(dev)
@@ -157,6 +162,19 @@ impl SimDevice {
     /// Puts `bytes` on the device→host line, between frames.
     pub fn inject_line_garbage(&mut self, bytes: &[u8]) {
         self.line.to_host.extend(bytes);
+    }
+
+    /// From now on, sample `n` is produced no earlier than `n / rate` seconds of wall time after this
+    /// call, as a board's ADC would: virtual time runs at real time.
+    pub fn pace_real_time(&mut self) {
+        self.pace = Some((Instant::now(), self.samples));
+    }
+
+    /// When paced, the wall-clock instant the next sample is due.
+    fn next_sample_due(&self) -> Option<Instant> {
+        let (start, first) = self.pace?;
+        let n = self.samples + 1 - first;
+        Some(start + Duration::from_secs_f64(n as f64 / f64::from(SIM_SAMPLE_RATE_HZ)))
     }
 
     fn dead(&self) -> bool {
@@ -206,9 +224,18 @@ impl Transport for SimDevice {
         Ok(())
     }
 
-    fn receive(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, LinkError> {
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, LinkError> {
+        let give_up = Instant::now() + timeout;
         let mut ran = 0;
         while self.line.to_host.is_empty() && ran < MAX_SAMPLES_PER_RECEIVE && !self.dead() {
+            if let Some(due) = self.next_sample_due() {
+                // Paced: wait for the sample's real time, but no longer than the caller waits.
+                if due > give_up {
+                    std::thread::sleep(give_up.saturating_duration_since(Instant::now()));
+                    break;
+                }
+                std::thread::sleep(due.saturating_duration_since(Instant::now()));
+            }
             self.step();
             ran += 1;
         }
@@ -273,6 +300,28 @@ mod tests {
         );
         assert_eq!(c.read_calibration().unwrap(), bytes[..n].to_vec());
         assert_eq!(c.transport_mut().resets(), 1);
+    }
+
+    /// Paced, a second of samples takes a second of wall time (within the scheduler's slack), and
+    /// the samples produced follow the wall clock, not the host's appetite.
+    #[test]
+    fn paced_device_runs_at_real_time() {
+        let mut c = client();
+        c.identify().unwrap();
+        c.transport_mut().pace_real_time();
+        let before = c.transport_mut().samples();
+        let start = Instant::now();
+        c.start_stream(StreamKind::CompensatedWindows, 100).unwrap();
+        for _ in 0..5 {
+            c.next_compensated_window().unwrap();
+        }
+        let wall_s = start.elapsed().as_secs_f64();
+        let virtual_s = (c.transport_mut().samples() - before) as f64 / 1000.0;
+        assert!((0.5..0.75).contains(&virtual_s), "{virtual_s} s of samples");
+        assert!(
+            (wall_s - virtual_s).abs() < 0.1,
+            "wall {wall_s} s, virtual {virtual_s} s"
+        );
     }
 
     #[test]

@@ -10,11 +10,26 @@
 //! Averaging times are octave-spaced, `m = 1, 2, 4, …` while at least 4 independent clusters remain.
 //!
 //! The fit models `σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3` (white noise density N, bias instability
-//! B, random walk K): linear in (N², B², K²), solved by least squares weighted by each point's
-//! relative uncertainty (`σ²` has about `√(2/ν)` relative error with ν ≈ (N − 2m)/m clusters).
-//! A coefficient the data drive negative is not determined by them: it is dropped, reported as
-//! `None`, and the rest refitted.
+//! B, random walk K): linear in (N², B², K²), solved by least squares with each point weighted by the
+//! 1σ of its σ² (about `σ²_model(τ) · √(2/ν)` with ν ≈ (N − 2m)/m clusters; the model's σ², not the
+//! measured one, so that a low point does not pull the fit down), which also gives each coefficient's
+//! first estimate of each coefficient's 1σ. That 1σ treats the points as independent, which they are
+//! not (every τ uses the same samples, and a random walk moves all the long-τ points together), so
+//! the 1σ that decides is a parametric bootstrap's ([`bootstrap_sigma`]): [`REPLICATES`] recordings of
+//! the same length and rate simulated with the fitted terms (the project's one generator and flicker
+//! process, fixed seeds: the same input gives the same output), each fitted the same way; the spread
+//! of their coefficients is the 1σ.
+//!
+//! A term counts as determined by the recording only when its coefficient is at least
+//! [`Z_DETERMINED`] times its 1σ: on white noise alone the fitted B² and K² are noise around zero, and
+//! reporting them as values would invent a bias instability and a random walk. The least significant
+//! undetermined term is dropped and the rest refitted until every remaining one is determined. For a
+//! dropped term the fit gives its 2σ upper bound and the recording length that would determine a
+//! term that large ([`TermFit::needs_recording_s`], from the independent-point 1σ, so a lower bound).
 
+use crate::sim::flicker::Flicker;
+use crate::sim::Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// One point of an Allan deviation curve.
@@ -76,6 +91,29 @@ pub fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPo
         .collect()
 }
 
+/// A coefficient must be this many times its 1σ to count as determined (one-sided, 3σ: about one
+/// false term in 700 per axis and term on pure white noise).
+pub const Z_DETERMINED: f64 = 3.0;
+
+/// The longest recording [`TermFit::needs_recording_s`] looks for, as a multiple of the one given.
+const MAX_LENGTH_FACTOR: u32 = 1 << 16;
+
+/// How well one recording determines one noise term.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TermFit {
+    /// 1σ of the term (same unit as the term), when it is determined.
+    pub sigma: Option<f64>,
+    /// The fitted coefficient (the term squared) over its 1σ, in the last fit that included it;
+    /// determined at ≥ [`Z_DETERMINED`].
+    pub significance: f64,
+    /// Not determined: the term's 2σ upper bound from this recording (same unit as the term).
+    pub upper_bound_2sigma: Option<f64>,
+    /// Not determined: how long a still recording (s, at the same rate and noise) would at least
+    /// have to be to determine a term as large as its upper bound; `None` when determined, or when
+    /// not even 65 536 times this recording would.
+    pub needs_recording_s: Option<f64>,
+}
+
 /// The fitted noise terms of one axis; `None`: not determined by the data.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct NoiseTerms {
@@ -85,6 +123,9 @@ pub struct NoiseTerms {
     pub bias_instability: Option<f64>,
     /// Random walk K (unit/√s): the +½ slope line at τ = 3 s.
     pub random_walk: Option<f64>,
+    /// N, B and K in that order: 1σ, significance, and for a term not determined, what it would
+    /// take.
+    pub fits: [TermFit; 3],
 }
 
 impl NoiseTerms {
@@ -95,60 +136,260 @@ impl NoiseTerms {
         let k = self.random_walk.unwrap_or(0.0);
         (n * n / tau_s + FLICKER_FACTOR * b * b + k * k * tau_s / 3.0).sqrt()
     }
+
+    /// The terms in the order N, B, K.
+    pub fn values(&self) -> [Option<f64>; 3] {
+        [self.white_density, self.bias_instability, self.random_walk]
+    }
 }
 
 /// `2 ln 2 / π`: Allan variance of flicker noise per B².
 pub const FLICKER_FACTOR: f64 = 2.0 * std::f64::consts::LN_2 / std::f64::consts::PI;
 
-/// Fits [`NoiseTerms`] to a curve (needs at least 3 points).
-pub fn fit(points: &[AllanPoint]) -> NoiseTerms {
-    let basis = |tau: f64| [1.0 / tau, FLICKER_FACTOR, tau / 3.0];
-    let mut active = [true; 3];
-    loop {
-        let idx: Vec<usize> = (0..3).filter(|&i| active[i]).collect();
-        if idx.is_empty() || points.len() < idx.len() {
-            return NoiseTerms::default();
-        }
-        // Weighted normal equations on σ², weight = (1/(σ² · rel))², rel ≈ √(2m/(N−2m)).
-        let k = idx.len();
-        let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
-        let mut atb = nalgebra::DVector::<f64>::zeros(k);
-        for p in points {
-            let var = p.adev * p.adev;
-            if var.is_nan() || var <= 0.0 {
-                continue;
-            }
-            let clusters = (p.terms as f64 / (p.tau_s / points[0].tau_s)).max(1.0);
-            let w = 1.0 / (var * (2.0 / clusters).sqrt());
-            let b = basis(p.tau_s);
-            let row: Vec<f64> = idx.iter().map(|&i| b[i] * w).collect();
-            for r in 0..k {
-                atb[r] += row[r] * var * w;
-                for c in 0..k {
-                    ata[(r, c)] += row[r] * row[c];
-                }
-            }
-        }
-        let Some(sol) = ata.lu().solve(&atb) else {
-            return NoiseTerms::default();
-        };
-        if let Some(worst) = (0..k)
-            .filter(|&r| sol[r] <= 0.0)
-            .min_by(|&a, &b| sol[a].total_cmp(&sol[b]))
-        {
-            active[idx[worst]] = false;
+/// Allan variance per unit coefficient of N², B², K² at `tau`.
+fn basis(tau: f64) -> [f64; 3] {
+    [1.0 / tau, FLICKER_FACTOR, tau / 3.0]
+}
+
+/// One point of the fit: τ, measured σ², independent clusters.
+#[derive(Clone, Copy)]
+struct VarPoint {
+    tau: f64,
+    var: f64,
+    clusters: f64,
+}
+
+fn var_points(points: &[AllanPoint]) -> Vec<VarPoint> {
+    let Some(tau0) = points.first().map(|p| p.tau_s) else {
+        return Vec::new();
+    };
+    points
+        .iter()
+        .filter(|p| p.adev.is_finite() && p.adev > 0.0)
+        .map(|p| VarPoint {
+            tau: p.tau_s,
+            var: p.adev * p.adev,
+            clusters: (p.terms as f64 / (p.tau_s / tau0)).max(1.0),
+        })
+        .collect()
+}
+
+/// Σ c_i · basis_i(τ) over `idx`.
+fn model_var(tau: f64, idx: &[usize], coef: &[f64]) -> f64 {
+    let b = basis(tau);
+    idx.iter().zip(coef).map(|(&i, c)| b[i] * c).sum()
+}
+
+/// Weighted least squares of the points' σ² on the terms `idx`, each point weighted by the 1σ of
+/// its σ² under the variance `expected(τ)`: the coefficients and their covariance.
+fn solve_weighted(
+    pts: &[VarPoint],
+    idx: &[usize],
+    expected: &dyn Fn(&VarPoint) -> f64,
+) -> Option<(Vec<f64>, nalgebra::DMatrix<f64>)> {
+    let k = idx.len();
+    let mut ata = nalgebra::DMatrix::<f64>::zeros(k, k);
+    let mut atb = nalgebra::DVector::<f64>::zeros(k);
+    for p in pts {
+        let sd = expected(p) * (2.0 / p.clusters).sqrt();
+        if !(sd.is_finite() && sd > 0.0) {
             continue;
         }
-        let mut c = [None; 3];
-        for (r, &i) in idx.iter().enumerate() {
-            c[i] = Some(sol[r].sqrt());
+        let b = basis(p.tau);
+        let row: Vec<f64> = idx.iter().map(|&i| b[i] / sd).collect();
+        for r in 0..k {
+            atb[r] += row[r] * p.var / sd;
+            for c in 0..k {
+                ata[(r, c)] += row[r] * row[c];
+            }
         }
-        return NoiseTerms {
-            white_density: c[0],
-            bias_instability: c[1],
-            random_walk: c[2],
-        };
     }
+    let cov = ata.try_inverse()?;
+    let sol = &cov * atb;
+    Some((sol.iter().copied().collect(), cov))
+}
+
+/// [`solve_weighted`] reweighted by its own model: first by the measured σ², then three times by
+/// the fitted one (floored at a thousandth of the measured, should the model vanish somewhere).
+fn solve(pts: &[VarPoint], idx: &[usize]) -> Option<(Vec<f64>, nalgebra::DMatrix<f64>)> {
+    if idx.is_empty() || pts.len() < idx.len() {
+        return None;
+    }
+    let mut fit = solve_weighted(pts, idx, &|p| p.var)?;
+    for _ in 0..3 {
+        let coef = fit.0.clone();
+        fit = solve_weighted(pts, idx, &|p| {
+            model_var(p.tau, idx, &coef).max(1e-3 * p.var)
+        })?;
+    }
+    Some(fit)
+}
+
+/// Replicates of the parametric bootstrap.
+pub const REPLICATES: u64 = 16;
+/// Seed of the bootstrap's generator (fixed: `host noise` prints the same for the same input).
+const BOOTSTRAP_SEED: u64 = 0x0041_4C4C_414E;
+
+/// The recording behind a curve: samples and sample interval (from its first point, m = 1).
+fn recording(pts: &[VarPoint]) -> Option<(usize, f64)> {
+    let first = pts.first()?;
+    Some((first.clusters as usize + 1, first.tau))
+}
+
+/// 1σ of the coefficients `coef` of the terms `idx` by a parametric bootstrap: [`REPLICATES`]
+/// recordings of `n` samples at `tau0` simulated with those terms, their octave curves fitted on the
+/// same terms; the spread of the fitted coefficients.
+pub fn bootstrap_sigma(n: usize, tau0: f64, idx: &[usize], coef: &[f64]) -> Option<Vec<f64>> {
+    let mut term = [0.0f64; 3];
+    for (&i, &c) in idx.iter().zip(coef) {
+        term[i] = c.max(0.0).sqrt();
+    }
+    let [white, flicker, walk] = term;
+    let sizes = octave_sizes(n);
+    let fits: Vec<Vec<f64>> = (0..REPLICATES)
+        .into_par_iter()
+        .filter_map(|r| {
+            let mut rng = Rng::new(BOOTSTRAP_SEED, r);
+            let mut fl = (flicker > 0.0).then(|| Flicker::new(flicker, tau0, &mut rng));
+            let (sd_white, sd_step) = (white / tau0.sqrt(), walk * tau0.sqrt());
+            let mut level = 0.0;
+            let y: Vec<f64> = (0..n)
+                .map(|_| {
+                    level += sd_step * rng.normal();
+                    let f = fl.as_mut().map_or(0.0, |f| f.next(&mut rng));
+                    sd_white * rng.normal() + f + level
+                })
+                .collect();
+            let pts = var_points(&overlapping_adev(&y, 1.0 / tau0, &sizes));
+            solve(&pts, idx).map(|(c, _)| c)
+        })
+        .collect();
+    if fits.len() < 2 {
+        return None;
+    }
+    let count = fits.len() as f64;
+    Some(
+        (0..idx.len())
+            .map(|r| {
+                let mean = fits.iter().map(|f| f[r]).sum::<f64>() / count;
+                let ss = fits.iter().map(|f| (f[r] - mean).powi(2)).sum::<f64>();
+                (ss / (count - 1.0)).sqrt()
+            })
+            .collect(),
+    )
+}
+
+/// The fit on `active` with the 1σ that decides: the bootstrap's where it runs, else the
+/// independent-point one.
+fn solve_with_sigma(pts: &[VarPoint], active: &[usize]) -> Option<(Vec<f64>, Vec<f64>)> {
+    let (coef, cov) = solve(pts, active)?;
+    let analytic: Vec<f64> = (0..active.len()).map(|r| cov[(r, r)].sqrt()).collect();
+    let sigma = recording(pts)
+        .and_then(|(n, tau0)| bootstrap_sigma(n, tau0, active, &coef))
+        .unwrap_or(analytic);
+    Some((coef, sigma))
+}
+
+/// Fits [`NoiseTerms`] to a curve: only the terms the curve determines (see the module docs).
+pub fn fit(points: &[AllanPoint]) -> NoiseTerms {
+    let pts = var_points(points);
+    let mut out = NoiseTerms::default();
+    let mut active = vec![0usize, 1, 2];
+    let mut dropped: Vec<usize> = Vec::new();
+    let (coef, sigma) = loop {
+        // Drop what the independent-point 1σ already rejects (cheap), then check the rest with
+        // the bootstrap's.
+        let Some((coef, cov)) = solve(&pts, &active) else {
+            return out;
+        };
+        let z: Vec<f64> = (0..active.len())
+            .map(|r| coef[r] / cov[(r, r)].sqrt())
+            .collect();
+        if let Some(worst) = least_significant(&z) {
+            out.fits[active[worst]].significance = z[worst];
+            dropped.push(active.remove(worst));
+            continue;
+        }
+        let Some((coef, sigma)) = solve_with_sigma(&pts, &active) else {
+            return out;
+        };
+        let z: Vec<f64> = coef.iter().zip(&sigma).map(|(c, s)| c / s).collect();
+        for (r, &i) in active.iter().enumerate() {
+            out.fits[i].significance = z[r];
+        }
+        match least_significant(&z) {
+            Some(worst) => dropped.push(active.remove(worst)),
+            None => break (coef, sigma),
+        }
+    };
+    let mut values = [None; 3];
+    for (r, &i) in active.iter().enumerate() {
+        let v = coef[r].sqrt();
+        values[i] = Some(v);
+        // σ of √c from σ of c: σ_c / (2√c).
+        out.fits[i].sigma = Some(sigma[r] / (2.0 * v));
+    }
+    [out.white_density, out.bias_instability, out.random_walk] = values;
+    for &i in &dropped {
+        let fit = undetermined(&pts, &active, &coef, i);
+        out.fits[i].upper_bound_2sigma = fit.upper_bound_2sigma;
+        out.fits[i].needs_recording_s = fit.needs_recording_s;
+    }
+    out
+}
+
+/// The index of the lowest significance below [`Z_DETERMINED`] (NaN counts as below).
+fn least_significant(z: &[f64]) -> Option<usize> {
+    (0..z.len())
+        .filter(|&r| z[r].is_nan() || z[r] < Z_DETERMINED)
+        .min_by(|&a, &b| z[a].total_cmp(&z[b]))
+}
+
+/// For a term `i` the fit dropped: its 2σ upper bound (the others as fitted, `i` added back), and
+/// the recording length that would determine a term that large — found by evaluating the same
+/// fit's covariance on the octave points of longer recordings at the same rate (a doubling search).
+fn undetermined(pts: &[VarPoint], active: &[usize], coef: &[f64], i: usize) -> TermFit {
+    let mut with: Vec<usize> = active.to_vec();
+    with.push(i);
+    let Some((c, sigma)) = solve_with_sigma(pts, &with) else {
+        return TermFit::default();
+    };
+    let r = with.len() - 1;
+    let bound = c[r].max(0.0) + 2.0 * sigma[r];
+    let mut out = TermFit {
+        upper_bound_2sigma: Some(bound.sqrt()),
+        ..TermFit::default()
+    };
+    let Some((n_now, tau0)) = recording(pts) else {
+        return out;
+    };
+    let n_now = n_now as f64;
+    let mut coef_with = coef.to_vec();
+    coef_with.push(bound);
+    let expected = |p: &VarPoint| model_var(p.tau, &with, &coef_with);
+    let mut factor = 2u32;
+    while factor <= MAX_LENGTH_FACTOR {
+        let n = (n_now * f64::from(factor)) as usize;
+        let hypothetical: Vec<VarPoint> = octave_sizes(n)
+            .into_iter()
+            .map(|m| {
+                let tau = m as f64 * tau0;
+                VarPoint {
+                    tau,
+                    var: 0.0,
+                    clusters: ((n + 1 - 2 * m) as f64 / m as f64).max(1.0),
+                }
+            })
+            .collect();
+        if let Some((_, cov)) = solve_weighted(&hypothetical, &with, &expected) {
+            if bound >= Z_DETERMINED * cov[(r, r)].sqrt() {
+                out.needs_recording_s = Some(n as f64 * tau0);
+                break;
+            }
+        }
+        factor *= 2;
+    }
+    out
 }
 
 #[cfg(test)]
@@ -174,17 +415,21 @@ mod tests {
     #[test]
     fn fit_recovers_a_noise_free_model_curve_and_drops_absent_terms() {
         let truth = NoiseTerms {
-            white_density: Some(2e-3),
-            bias_instability: Some(5e-5),
-            random_walk: Some(1e-6),
+            // Each term large enough for a 2000 s recording at 100 Hz to determine it: N
+            // dominates below 0.3 s, B from 0.3 to 8 s, K above.
+            white_density: Some(1e-3),
+            bias_instability: Some(2.8e-3),
+            random_walk: Some(1.2e-3),
+            ..NoiseTerms::default()
         };
-        let pts: Vec<AllanPoint> = (0..20)
+        let pts: Vec<AllanPoint> = (0..16)
             .map(|i| {
-                let tau = 0.001 * 2f64.powi(i);
+                let tau = 0.01 * 2f64.powi(i);
                 AllanPoint {
                     tau_s: tau,
                     adev: truth.adev(tau),
-                    terms: (4_000_000.0 / 2f64.powi(i)) as u64,
+                    // A 2·10⁵-sample recording: N + 1 − 2m terms.
+                    terms: 200_001 - 2u64.pow(i as u32 + 1),
                 }
             })
             .collect();
@@ -195,6 +440,9 @@ mod tests {
             (f.random_walk, truth.random_walk),
         ] {
             assert!((a.unwrap() / b.unwrap() - 1.0).abs() < 1e-6, "{f:?}");
+        }
+        for t in f.fits {
+            assert!(t.significance >= Z_DETERMINED, "{f:?}");
         }
         // White noise only: the other two are not determined.
         let white = NoiseTerms {
@@ -217,5 +465,67 @@ mod tests {
             f.bias_instability.is_none() || f.random_walk.is_none(),
             "{f:?}"
         );
+    }
+
+    /// `n` samples at `rate_hz` of white noise of density `n_density` plus a random walk of `k`
+    /// (unit/√s), from the project's one generator.
+    fn white_and_walk(seed: u64, n: usize, rate_hz: f64, n_density: f64, k: f64) -> Vec<f64> {
+        let mut rng = crate::sim::rng::Rng::new(seed, 0);
+        let sd_white = n_density * rate_hz.sqrt();
+        let sd_step = k / rate_hz.sqrt();
+        let mut walk = 0.0;
+        (0..n)
+            .map(|_| {
+                walk += sd_step * rng.normal();
+                sd_white * rng.normal() + walk
+            })
+            .collect()
+    }
+
+    fn fit_of(y: &[f64], rate_hz: f64) -> NoiseTerms {
+        fit(&overlapping_adev(y, rate_hz, &octave_sizes(y.len())))
+    }
+
+    /// White noise alone determines N and nothing else: B and K are reported as not determined,
+    /// with an upper bound and the recording they would need (longer than this one). 8 seeds.
+    #[test]
+    fn white_noise_alone_determines_only_n() {
+        let (rate, n, density) = (100.0, 50_000, 1e-3);
+        for seed in 0..8 {
+            let f = fit_of(&white_and_walk(seed, n, rate, density, 0.0), rate);
+            let got = f.white_density.expect("N determined");
+            let sigma = f.fits[0].sigma.unwrap();
+            assert!((got - density).abs() < 3.0 * sigma, "seed {seed}: {f:?}");
+            assert_eq!(f.bias_instability, None, "seed {seed}: {f:?}");
+            assert_eq!(f.random_walk, None, "seed {seed}: {f:?}");
+            for t in &f.fits[1..] {
+                assert!(t.upper_bound_2sigma.is_some_and(|u| u > 0.0), "{f:?}");
+                assert!(t.needs_recording_s.is_some_and(|s| s > 500.0), "{f:?}");
+            }
+        }
+    }
+
+    /// White noise plus a random walk: K is determined and within 2σ of the truth (8 seeds).
+    #[test]
+    fn white_noise_and_random_walk_determine_k() {
+        let (rate, n, density, k) = (100.0, 50_000, 1e-3, 4e-4);
+        let mut within_2sigma = 0;
+        for seed in 0..8 {
+            let f = fit_of(&white_and_walk(100 + seed, n, rate, density, k), rate);
+            let got = f.random_walk.expect("K determined");
+            let sigma = f.fits[2].sigma.unwrap();
+            eprintln!(
+                "seed {seed}: K {got:.3e} ± {sigma:.1e}, {:.1}σ off",
+                (got - k) / sigma
+            );
+            assert!(
+                (got - k).abs() < 3.0 * sigma,
+                "seed {seed}: K {got} ± {sigma} vs {k}"
+            );
+            within_2sigma += usize::from((got - k).abs() < 2.0 * sigma);
+            assert!(f.white_density.is_some(), "{f:?}");
+        }
+        // 95 % of the seeds if σ is right: 7.6 of 8 expected, 5 or fewer is the 1 % tail.
+        assert!(within_2sigma >= 6, "{within_2sigma} of 8 within 2σ");
     }
 }

@@ -432,7 +432,39 @@ fn analyse_signals(
 }
 
 fn opt(v: Option<f64>) -> String {
-    v.map_or("undetermined".into(), |v| format!("{v:.4e}"))
+    v.map_or("n.d.".into(), |v| format!("{v:.4e}"))
+}
+
+/// The terms' names in the order of [`NoiseTerms::fits`].
+const TERM_NAMES: [&str; 3] = ["N", "B", "K"];
+
+/// One line per term a recording does not determine: its bound and the recording it would need.
+fn undetermined_lines(axes: &[AxisNoise], seconds: f64) -> String {
+    let mut s = String::new();
+    for a in axes {
+        for (name, (value, fit)) in TERM_NAMES
+            .iter()
+            .zip(a.terms.values().iter().zip(&a.terms.fits))
+        {
+            if value.is_some() {
+                continue;
+            }
+            let bound = fit
+                .upper_bound_2sigma
+                .map_or(String::new(), |b| format!(", ≤ {b:.2e} at 2σ"));
+            let needs = match fit.needs_recording_s {
+                Some(t) => format!(
+                    "; a still recording of at least {t:.0} s (this one: {seconds:.0} s) would determine a term that large"
+                ),
+                None => format!("; not even {:.0} s of recording would determine a term that large", seconds * 65536.0),
+            };
+            s += &format!(
+                "  {} {name}: not determined by this recording ({:.1}σ{bound}){needs}\n",
+                a.axis, fit.significance
+            );
+        }
+    }
+    s
 }
 
 impl NoiseReport {
@@ -463,6 +495,13 @@ impl NoiseReport {
                 opt(a.terms.random_walk),
                 min,
                 a.unit
+            );
+        }
+        let lines = undetermined_lines(&self.axes, self.samples as f64 / self.sample_rate_hz);
+        if !lines.is_empty() {
+            s += &format!(
+                "n.d.: a term counts only where it is at least {}× its 1σ (from a bootstrap of the fit)\n{lines}",
+                allan::Z_DETERMINED
             );
         }
         s

@@ -292,3 +292,43 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
     let e = analyse(&path, None, true).unwrap_err().to_string();
     assert!(e.contains("usable rows"), "{e}");
 }
+
+/// On white noise alone the table shows N and says, for B and K, that this recording does not
+/// determine them and how long one would have to be.
+#[test]
+fn the_table_names_what_white_noise_does_not_determine() {
+    let rate = 100.0;
+    let mut rng = crate::sim::Rng::new(3, 0);
+    let y: Vec<f64> = (0..20_000).map(|_| 1e-2 * rng.normal()).collect();
+    let points = allan::overlapping_adev(&y, rate, &allan::octave_sizes(y.len()));
+    let terms = allan::fit(&points);
+    let axis = AxisNoise {
+        axis: "gyro_x".into(),
+        unit: "rad/s".into(),
+        points,
+        terms,
+    };
+    let report = NoiseReport {
+        source: "test".into(),
+        segment: "still".into(),
+        sample_rate_hz: rate,
+        samples: y.len() as u64,
+        axes: vec![axis],
+        kalibr: KalibrNoise::default(),
+        warnings: Vec::new(),
+    };
+    let text = report.render();
+    let row = text.lines().find(|l| l.starts_with("gyro_x")).unwrap();
+    assert_eq!(row.matches("n.d.").count(), 2, "{text}");
+    for term in ["gyro_x B: not determined", "gyro_x K: not determined"] {
+        let line = text
+            .lines()
+            .find(|l| l.contains(term))
+            .unwrap_or_else(|| panic!("{text}"));
+        assert!(
+            line.contains("at least") && line.contains("this one: 200 s"),
+            "{text}"
+        );
+    }
+    assert!(!text.contains("gyro_x N: not determined"), "{text}");
+}

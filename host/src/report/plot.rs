@@ -5,53 +5,29 @@
 //! then rendered by [`render`].
 //!
 //! Text needs a font. plotters is built without `font-kit` (no system font libraries), with `ab_glyph`
-//! and a TrueType file found at run time ([`ensure_font`]: `ACCEL_CAL_FONT`, then common system paths).
-//! Without a font the figures are still written, as SVG only and without any text (axes, labels and
-//! legends need text measurement), and [`RenderOutcome::warnings`] says so.
+//! and one TrueType font compiled into the binary ([`EMBEDDED_FONT`], DejaVu Sans, licence beside it
+//! in `host/assets/fonts/`): every machine draws the same PNG and SVG, and nothing is looked up on the
+//! file system or in the environment.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-/// Environment variable naming a TrueType font file to use for the figures' text.
-pub const FONT_ENV: &str = "ACCEL_CAL_FONT";
-
-/// Where a sans-serif TrueType font is commonly found (Debian/Ubuntu, Arch, Fedora, macOS, Windows).
-pub const FONT_CANDIDATES: [&str; 8] = [
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf",
-    "/System/Library/Fonts/Supplemental/Arial.ttf",
-    "C:\\Windows\\Fonts\\arial.ttf",
-];
+/// DejaVu Sans (Bitstream Vera licence, `host/assets/fonts/LICENSE-DejaVu.txt`), the figures' only
+/// font: embedded so that a machine without fonts draws the same figures as any other.
+pub static EMBEDDED_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 const FAMILY: &str = "sans-serif";
 
-/// Registers a font for the figures once per process; the path of the font used, or `None`.
-pub fn ensure_font() -> Option<&'static Path> {
-    static FONT: OnceLock<Option<PathBuf>> = OnceLock::new();
-    FONT.get_or_init(|| {
-        let from_env = std::env::var_os(FONT_ENV).map(PathBuf::from);
-        let candidates = from_env
-            .into_iter()
-            .chain(FONT_CANDIDATES.iter().map(PathBuf::from));
-        for path in candidates {
-            let Ok(bytes) = std::fs::read(&path) else {
-                continue;
-            };
-            // plotters keeps a 'static reference: the font lives as long as the process (once).
-            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-            if plotters::style::register_font(FAMILY, FontStyle::Normal, bytes).is_ok() {
-                return Some(path);
-            }
-        }
-        None
-    })
-    .as_deref()
+/// Registers [`EMBEDDED_FONT`] for the figures once per process; the bytes registered, or `None` if
+/// plotters refused them (a corrupt build; the figures are then drawn without text, SVG only).
+pub fn ensure_font() -> Option<&'static [u8]> {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    let registered = *FONT.get_or_init(|| {
+        plotters::style::register_font(FAMILY, FontStyle::Normal, EMBEDDED_FONT).is_ok()
+    });
+    registered.then_some(EMBEDDED_FONT)
 }
 
 /// How a series is drawn.
@@ -178,7 +154,7 @@ pub fn render(fig: &Figure, dir: &Path, formats: Formats) -> Result<RenderOutcom
     render_with(fig, dir, formats, text)
 }
 
-/// [`render`] with text on or off (off: no font needed; PNG is then not written).
+/// [`render`] with text on or off (off: no font used; PNG is then not written).
 pub fn render_with(
     fig: &Figure,
     dir: &Path,
@@ -197,7 +173,7 @@ pub fn render_with(
         out.files.push(path);
         if !text {
             out.warnings.push(format!(
-                "no TrueType font found (set {FONT_ENV}, or install DejaVu Sans): {}.svg has no text",
+                "the embedded font could not be registered: {}.svg has no text",
                 fig.stem
             ));
         }
@@ -214,7 +190,7 @@ pub fn render_with(
             out.files.push(path);
         } else {
             out.warnings.push(format!(
-                "no TrueType font found (set {FONT_ENV}, or install DejaVu Sans): {} not written",
+                "the embedded font could not be registered: {} not written",
                 path.display()
             ));
         }
@@ -556,10 +532,6 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let fig = figure();
         let out = render(&fig, dir.path(), Formats::default()).unwrap();
-        assert!(
-            ensure_font().is_some(),
-            "the test machines have DejaVu Sans"
-        );
         assert_eq!(out.files.len(), 2, "{out:?}");
         let png = std::fs::read(dir.path().join("t.png")).unwrap();
         assert_eq!(png_dimensions(&png), Some((600, 300)));
@@ -590,6 +562,35 @@ mod tests {
         assert!(!svg.contains("<text"));
         assert_eq!(svg.matches("<circle").count(), 3);
         assert!(!bare.path().join("t.png").exists());
+    }
+
+    /// The PNG needs no font of the machine's: the font registered is the embedded one (the same
+    /// bytes, not a copy read from somewhere), and the non-test code of this module has no way to
+    /// look at the file system or the environment for one.
+    #[test]
+    fn png_is_drawn_with_the_embedded_font_and_no_font_lookup() {
+        let font = ensure_font().expect("the embedded font registers");
+        assert!(std::ptr::eq(font, EMBEDDED_FONT));
+        assert_eq!(&EMBEDDED_FONT[..4], &[0, 1, 0, 0], "a TrueType file");
+        let dir = tempfile::tempdir().unwrap();
+        let out = render(&figure(), dir.path(), Formats::default()).unwrap();
+        assert!(out.warnings.is_empty(), "{out:?}");
+        let png = std::fs::read(dir.path().join("t.png")).unwrap();
+        assert_eq!(png_dimensions(&png), Some((600, 300)));
+        let src = include_str!("plot.rs");
+        let code = &src[..src.find("#[cfg(test)]").unwrap()];
+        for lookup in [
+            "std::fs",
+            "fs::read",
+            "File::open",
+            "read_dir",
+            "env::var",
+            "/usr/share",
+            "/System/Library",
+            "Windows",
+        ] {
+            assert!(!code.contains(lookup), "plot.rs looks for a font: {lookup}");
+        }
     }
 
     #[test]
