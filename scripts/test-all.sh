@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every test of the project, installing what it needs (the Rust target, QEMU) when missing.
+# Runs every test of the project, installing what it needs (the Rust target, QEMU, arm-none-eabi-gcc) when missing.
 # This is the README's test command and exactly what .ci/run calls.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,6 +14,19 @@ tests() { "$@" 2>&1 | tee -a "$log"; }
 step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
 rustup target add thumbv7em-none-eabihf >/dev/null
 rustup component add rustfmt clippy >/dev/null
+
+step "system packages the tests need: arm-none-eabi-gcc, newlib and QEMU for the C package's Cortex-M4F run"
+packages=()
+command -v arm-none-eabi-gcc >/dev/null || packages+=(gcc-arm-none-eabi)
+# rdimon.specs (semihosting start-up and stdio) comes with newlib, not with the compiler.
+dpkg -s libnewlib-arm-none-eabi >/dev/null 2>&1 || packages+=(libnewlib-arm-none-eabi)
+command -v qemu-system-arm >/dev/null || packages+=(qemu-system-arm)
+if [ ${#packages[@]} -gt 0 ]; then
+  sudo_cmd=()
+  [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update
+  "${sudo_cmd[@]}" apt-get install -y --no-install-recommends "${packages[@]}"
+fi
 
 step "format"
 cargo fmt --all -- --check

@@ -1012,163 +1012,188 @@ fn compile_package(dir: &Path, flags: &[&str]) {
     );
 }
 
+/// Writes `cal` as a unit file into `dir` and exports its C package through the command's own `run`
+/// into `dir/pkg` (refused over it without --force, then forced), with [`PACKAGE_MAIN_C`] beside it
+/// as `main.c`; checks that the package is the five files and includes nothing else. Returns `dir/pkg`.
+fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
+    use crate::cli::export::{run as export, ExportArgs};
+    let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
+    let toml = UnitFile::from_calibration(cal, Some(unit_id), None).to_toml();
+    let cal_path = dir.join("calibration.toml");
+    std::fs::write(&cal_path, toml).unwrap();
+    let out = dir.join("pkg");
+    let args = |force| ExportArgs {
+        calibration: cal_path.clone(),
+        format: crate::export::ExportFormat::CHeader,
+        out: Some(out.clone()),
+        force,
+        noise: None,
+        rostopic: "/imu0".into(),
+        driver_scale: None,
+        device_id: None,
+        gyro_device_id: None,
+        sysid: 1,
+        compid: 1,
+        allow_out_of_range: false,
+        allow_undetermined: false,
+    };
+    export(&args(false), true).unwrap();
+    // Never over an existing package without --force.
+    assert!(export(&args(false), true).is_err());
+    export(&args(true), true).unwrap();
+    let mut written: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    written.sort();
+    assert_eq!(
+        written,
+        [
+            "acal_blob.c",
+            "acal_blob.h",
+            "acal_calibration.h",
+            "acal_device.c",
+            "acal_device.h"
+        ]
+    );
+    // The header includes nothing the package does not hold.
+    let header = std::fs::read_to_string(out.join("acal_calibration.h")).unwrap();
+    for inc in header.lines().filter_map(|l| l.strip_prefix("#include \"")) {
+        assert!(written.iter().any(|w| inc.starts_with(w.as_str())), "{inc}");
+    }
+    std::fs::write(out.join("main.c"), PACKAGE_MAIN_C).unwrap();
+    out
+}
+
+/// The input lines for [`PACKAGE_MAIN_C`] and the lines it must print, from the Rust `f32` path:
+/// the firmware's shared vectors named by `vectors` (`"comp"`: compensation and ω̇ estimator,
+/// `"gyro-temp"`: temperature refresh and gyro correction), then a recording's rows through host
+/// apply's path. One definition, so that every compiler and target checks the same vectors.
+fn package_vectors(cal: &Calibration, vectors: &str) -> (String, Vec<String>) {
+    use crate::apply::Applier;
+    use firmware::testvectors::OMEGA_DOT_SEQ;
+    use shared::LeverMode;
+    let mut stdin = String::new();
+    let mut want: Vec<String> = Vec::new();
+    let bits = |v: &[u32]| v.iter().map(|b| format!(" {b:08x}")).collect::<String>();
+    if vectors == "comp" {
+        for c in COMP_CASES {
+            stdin += &format!("c {}", hex_line(c.u.iter().chain(&c.w).chain(&c.wd)));
+            want.push(format!("c{}{}", bits(&c.out_static), bits(&c.out_full)));
+        }
+        for (w, wd) in OMEGA_DOT_SEQ {
+            stdin += &format!("o {}", hex_line(w));
+            want.push(format!("o{}", bits(wd)));
+        }
+    } else {
+        for c in GYRO_TEMP_CASES {
+            let temp = f32::from_bits(c.temp_c);
+            let state = if (-20.0..=60.0).contains(&temp) { 0 } else { 1 };
+            stdin += &format!(
+                "g {}",
+                hex_line(
+                    std::iter::once(&c.temp_c)
+                        .chain(&c.u)
+                        .chain(&c.w)
+                        .chain(&c.wd)
+                )
+            );
+            want.push(format!("g {state}{}{}", bits(&c.rate), bits(&c.out_full)));
+        }
+    }
+    // A recording's rows through host apply's path: spins, a rate ramp (ω̇ ≠ 0), a temperature
+    // sweep past the valid range, a non-finite row, segment changes.
+    let model = ForwardModel::new(cal).unwrap();
+    let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
+    let mut applier = Applier::new(cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
+    for k in 0..900usize {
+        let segment = k / 300;
+        if k > 0 && k % 300 == 0 {
+            stdin += "r\n";
+        }
+        let t = k as f64 * 1e-3;
+        let omega = [
+            3.0 * (7.0 * t).sin(),
+            -2.0 + 4.0 * t,
+            1.5 * (segment as f64),
+        ];
+        let omega_dot = [21.0 * (7.0 * t).cos(), 4.0, 0.0];
+        let f = [9.0 * (0.3 * t).cos(), 2.0, -4.0 + t];
+        let mut u = model
+            .outputs(&BodyMotion {
+                f_o: BodySpecificForce { m_s2: f },
+                omega: BodyRate { rad_s: omega },
+                omega_dot: BodyAngularAccel { rad_s2: omega_dot },
+            })
+            .raw;
+        if k == 450 {
+            u[1] = f64::NAN;
+        }
+        let w: [f64; 3] = std::array::from_fn(|i| {
+            crate::export::linalg::dot(&gyro.matrix[i], &omega) + gyro.bias_rad_s[i]
+        });
+        let temp_c = (k % 3 != 2).then_some(-30.0 + 0.11 * k as f64);
+        let row = crate::session::reader::Row {
+            segment: "s",
+            segment_index: segment,
+            t_s: t,
+            u,
+            w_rad_s: w,
+            temp_c,
+        };
+        let f_ref = applier.row(&row);
+        let head = [
+            u32::from(temp_c.is_some()) * 1.0f32.to_bits(),
+            (temp_c.unwrap_or(0.0) as f32).to_bits(),
+        ];
+        let uw: Vec<u32> = u.iter().chain(&w).map(|v| (*v as f32).to_bits()).collect();
+        stdin += &format!("s {}", hex_line(head.iter().chain(&uw)));
+        want.push(match f_ref {
+            Some(f) => format!("s 0{}", bits(&f.map(f32::to_bits))),
+            None => "s -1 00000000 00000000 00000000".into(),
+        });
+    }
+    (stdin, want)
+}
+
+/// Checks what [`PACKAGE_MAIN_C`] printed against [`package_vectors`]' lines, bit for bit; `what`
+/// names the run in the failure message.
+fn assert_package_output(got: &str, want: &[String], what: &str) {
+    let got: Vec<&str> = got.lines().collect();
+    assert_eq!(got.len(), want.len(), "{what}: line count");
+    for (g, w) in got.iter().zip(want) {
+        // A refused sample leaves the outputs as they were (the program's zeros).
+        let g = if g.starts_with("s -1") {
+            "s -1 00000000 00000000 00000000"
+        } else {
+            g
+        };
+        assert_eq!(g, w, "{what}");
+    }
+}
+
 /// The package `host export --format c --out DIR` writes (through the command's own `run`),
 /// compiled at -O0 and strictly at -O2, run on the firmware's shared vectors and on a recording's
 /// rows: bit for bit the Rust device's and host apply's f32 path.
 #[test]
 fn c_package_written_by_the_command_is_self_contained_and_bit_exact() {
-    use crate::apply::Applier;
-    use crate::cli::export::{run as export, ExportArgs};
-    use firmware::testvectors::OMEGA_DOT_SEQ;
-    use shared::LeverMode;
     for (cal, vectors) in [
         (firmware::paper_unit::calibration(), "comp"),
         (imperfect_unit(), "gyro-temp"),
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
-        let toml = UnitFile::from_calibration(&cal, Some(unit_id), None).to_toml();
-        let cal_path = dir.path().join("calibration.toml");
-        std::fs::write(&cal_path, toml).unwrap();
-        let out = dir.path().join("pkg");
-        let args = |force| ExportArgs {
-            calibration: cal_path.clone(),
-            format: crate::export::ExportFormat::CHeader,
-            out: Some(out.clone()),
-            force,
-            noise: None,
-            rostopic: "/imu0".into(),
-            driver_scale: None,
-            device_id: None,
-            gyro_device_id: None,
-            sysid: 1,
-            compid: 1,
-            allow_out_of_range: false,
-            allow_undetermined: false,
-        };
-        export(&args(false), true).unwrap();
-        // Never over an existing package without --force.
-        assert!(export(&args(false), true).is_err());
-        export(&args(true), true).unwrap();
-        let mut written: Vec<String> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        written.sort();
-        assert_eq!(
-            written,
-            [
-                "acal_blob.c",
-                "acal_blob.h",
-                "acal_calibration.h",
-                "acal_device.c",
-                "acal_device.h"
-            ]
-        );
-        // The header includes nothing the package does not hold.
-        let header = std::fs::read_to_string(out.join("acal_calibration.h")).unwrap();
-        for inc in header.lines().filter_map(|l| l.strip_prefix("#include \"")) {
-            assert!(written.iter().any(|w| inc.starts_with(w.as_str())), "{inc}");
-        }
-        std::fs::write(out.join("main.c"), PACKAGE_MAIN_C).unwrap();
-
-        let mut stdin = String::new();
-        let mut want: Vec<String> = Vec::new();
-        let bits = |v: &[u32]| v.iter().map(|b| format!(" {b:08x}")).collect::<String>();
-        if vectors == "comp" {
-            for c in COMP_CASES {
-                stdin += &format!("c {}", hex_line(c.u.iter().chain(&c.w).chain(&c.wd)));
-                want.push(format!("c{}{}", bits(&c.out_static), bits(&c.out_full)));
-            }
-            for (w, wd) in OMEGA_DOT_SEQ {
-                stdin += &format!("o {}", hex_line(w));
-                want.push(format!("o{}", bits(wd)));
-            }
-        } else {
-            for c in GYRO_TEMP_CASES {
-                let temp = f32::from_bits(c.temp_c);
-                let state = if (-20.0..=60.0).contains(&temp) { 0 } else { 1 };
-                stdin += &format!(
-                    "g {}",
-                    hex_line(
-                        std::iter::once(&c.temp_c)
-                            .chain(&c.u)
-                            .chain(&c.w)
-                            .chain(&c.wd)
-                    )
-                );
-                want.push(format!("g {state}{}{}", bits(&c.rate), bits(&c.out_full)));
-            }
-        }
-        // A recording's rows through host apply's path: spins, a rate ramp (ω̇ ≠ 0), a temperature
-        // sweep past the valid range, a non-finite row, segment changes.
-        let model = ForwardModel::new(&cal).unwrap();
-        let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
-        let mut applier = Applier::new(&cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
-        for k in 0..900usize {
-            let segment = k / 300;
-            if k > 0 && k % 300 == 0 {
-                stdin += "r\n";
-            }
-            let t = k as f64 * 1e-3;
-            let omega = [
-                3.0 * (7.0 * t).sin(),
-                -2.0 + 4.0 * t,
-                1.5 * (segment as f64),
-            ];
-            let omega_dot = [21.0 * (7.0 * t).cos(), 4.0, 0.0];
-            let f = [9.0 * (0.3 * t).cos(), 2.0, -4.0 + t];
-            let mut u = model
-                .outputs(&BodyMotion {
-                    f_o: BodySpecificForce { m_s2: f },
-                    omega: BodyRate { rad_s: omega },
-                    omega_dot: BodyAngularAccel { rad_s2: omega_dot },
-                })
-                .raw;
-            if k == 450 {
-                u[1] = f64::NAN;
-            }
-            let w: [f64; 3] = std::array::from_fn(|i| {
-                crate::export::linalg::dot(&gyro.matrix[i], &omega) + gyro.bias_rad_s[i]
-            });
-            let temp_c = (k % 3 != 2).then_some(-30.0 + 0.11 * k as f64);
-            let row = crate::session::reader::Row {
-                segment: "s",
-                segment_index: segment,
-                t_s: t,
-                u,
-                w_rad_s: w,
-                temp_c,
-            };
-            let f_ref = applier.row(&row);
-            let head = [
-                u32::from(temp_c.is_some()) * 1.0f32.to_bits(),
-                (temp_c.unwrap_or(0.0) as f32).to_bits(),
-            ];
-            let uw: Vec<u32> = u.iter().chain(&w).map(|v| (*v as f32).to_bits()).collect();
-            stdin += &format!("s {}", hex_line(head.iter().chain(&uw)));
-            want.push(match f_ref {
-                Some(f) => format!("s 0{}", bits(&f.map(f32::to_bits))),
-                None => "s -1 00000000 00000000 00000000".into(),
-            });
-        }
+        let out = exported_package(dir.path(), &cal);
+        let (stdin, want) = package_vectors(&cal, vectors);
         for flags in [
             &["-O0"][..],
             &["-O2", "-Wall", "-Wextra", "-Werror", "-std=c99"][..],
         ] {
             compile_package(&out, flags);
             let got = run(&out, &stdin);
-            let got: Vec<&str> = got.lines().collect();
-            assert_eq!(got.len(), want.len(), "{flags:?}");
-            for (g, w) in got.iter().zip(&want) {
-                // A refused sample leaves the outputs as they were (the program's zeros).
-                let g = if g.starts_with("s -1") {
-                    "s -1 00000000 00000000 00000000"
-                } else {
-                    g
-                };
-                assert_eq!(g, w, "{vectors} {flags:?}");
-            }
+            assert_package_output(&got, &want, &format!("{vectors} {flags:?}"));
         }
     }
 }
+
+#[path = "cross_tests.rs"]
+mod cross_tests;
