@@ -497,6 +497,10 @@ fn thermal_check(cal: Calibration) {
     let names_px4 = names(["CAL_ACC0_#OFF", "CAL_ACC0_#SCALE", "CAL_GYRO0_#OFF"]);
     let names_ap = names(["INS_ACCOFFS_#", "INS_ACCSCAL_#", "INS_GYROFFS_#"]);
     let mut worst = [0.0f64; 4];
+    // The largest difference itself at the reference and at two other temperatures, per format and
+    // quantity (µg-able g, °/s), for the table in docs/tools.md.
+    let shown = [t.reference_c, -20.0, 60.0];
+    let mut at = [[0.0f64; 3]; 4];
     for up in [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.6, 0.48, 0.64]] {
         let mut at_ref: Option<[[f64; 3]; 4]> = None;
         for temp in [25.0f64, -30.0, -20.0, 0.0, 40.0, 60.0, 75.0] {
@@ -532,6 +536,12 @@ fn thermal_check(cal: Calibration) {
                 diffs[2 * k] = std::array::from_fn(|j| (f[j] - f_ref[j]) / g);
                 diffs[2 * k + 1] = std::array::from_fn(|j| (rate[j] - rate_ref[j]).to_degrees());
             }
+            if let Some(c) = shown.iter().position(|s| *s == temp) {
+                for k in 0..4 {
+                    let m = diffs[k].iter().map(|v| v.abs()).fold(0.0, f64::max);
+                    at[k][c] = at[k][c].max(m);
+                }
+            }
             let base = *at_ref.get_or_insert(diffs);
             for (k, (d, b)) in diffs.iter().zip(&base).enumerate() {
                 let change = (0..3).map(|j| (d[j] - b[j]).abs()).fold(0.0, f64::max);
@@ -554,6 +564,21 @@ fn thermal_check(cal: Calibration) {
         worst[3],
         th.dropped_scale_g * 1e6
     );
+    for (k, name) in ["px4", "ardupilot"].iter().enumerate() {
+        eprintln!(
+            "thermal: {name} difference from host apply at {:.0} / {:.0} / {:.0} °C: {:.0} / {:.0} / \
+             {:.0} µg, {:.3} / {:.3} / {:.3} °/s",
+            shown[0],
+            shown[1],
+            shown[2],
+            at[2 * k][0] * 1e6,
+            at[2 * k][1] * 1e6,
+            at[2 * k][2] * 1e6,
+            at[2 * k + 1][0],
+            at[2 * k + 1][1],
+            at[2 * k + 1][2]
+        );
+    }
     // Not vacuous: the zero-bias drift over the range is tens of mg, the gyro's 0.4 °/s.
     let drift_g = (0..3)
         .map(|i| {
