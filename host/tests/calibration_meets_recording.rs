@@ -305,3 +305,49 @@ fn segment_interrupted_leaves_nothing_that_calibrate_accepts() {
         }
     }
 }
+
+#[test]
+fn segment_binds_the_unit_and_the_sites_gravity() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("hand.csv");
+    assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
+    let id = "0123456789abcdef01234567";
+    let mut g = Vec::new();
+    for lat in ["0", "60"] {
+        let out = dir.path().join(format!("lat{lat}"));
+        let mut args = hand_segment_args(s(&csv), s(&out));
+        args.extend(["--unit-id", id, "--latitude", lat, "-q"]);
+        let (ok, _, e) = host(&args);
+        assert!(ok, "{e}");
+        let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&out)]);
+        assert!(ok, "{e}");
+        assert!(!e.contains("no unit_id"), "{e}");
+        let cal: toml::Value =
+            toml::from_str(&std::fs::read_to_string(out.join("calibration.toml")).unwrap())
+                .unwrap();
+        assert_eq!(cal["unit_id"].as_str(), Some(id));
+        g.push(cal["g_m_s2"].as_float().unwrap());
+    }
+    // WGS 84 normal gravity at the equator and at 60°: the m/s² output scales with it.
+    assert!((g[0] - 9.780_325_3).abs() < 1e-6, "{g:?}");
+    assert!((g[1] - 9.819_177_0).abs() < 1e-6, "{g:?}");
+    assert!((g[1] / g[0] - 1.003_972_4).abs() < 1e-6, "{g:?}");
+    refused(
+        host(&[
+            "segment",
+            "--input",
+            s(&csv),
+            "--out",
+            s(&dir.path().join("x")),
+            "--time-column",
+            "t",
+            "--acc-unit",
+            "m/s2",
+            "--gyro-unit",
+            "deg/s",
+            "--unit-id",
+            "12zz",
+        ]),
+        &["--unit-id 12zz", "24 hex digits"],
+    );
+}

@@ -7,7 +7,7 @@ use super::CliError;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
-use crate::session::from_recording::{plan_for, write_session};
+use crate::session::from_recording::{normal_gravity_m_s2, plan_for, write_session};
 use crate::session::hand_gyro;
 use crate::session::import::{
     parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
@@ -70,6 +70,20 @@ pub struct SegmentArgs {
     /// then unchecked for a mirror image: only the gyro's turns can see one.
     #[arg(long)]
     pub no_gyro: bool,
+    /// The unit's id (24 hex digits), written into the session's plan so that its calibration is
+    /// bound to the unit.
+    #[arg(long, value_name = "HEX")]
+    pub unit_id: Option<String>,
+    /// Local gravity at the site, m/s² (the calibration's m/s² output is scaled by it; default
+    /// 9.80665, or from --latitude).
+    #[arg(long, value_name = "M_S2", value_parser = crate::limits::real(9.7, 9.9), conflicts_with = "latitude")]
+    pub gravity: Option<f64>,
+    /// The site's latitude, degrees: local gravity from the WGS 84 normal gravity formula.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = crate::limits::real(-90.0, 90.0))]
+    pub latitude: Option<f64>,
+    /// The site's height above the ellipsoid, m (with --latitude).
+    #[arg(long, value_name = "M", allow_negative_numbers = true, value_parser = crate::limits::real(-500.0, 9000.0))]
+    pub height_m: Option<f64>,
 }
 
 /// `host simulate-hand`.
@@ -230,6 +244,22 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let options = import_options(a)?;
+    if a.height_m.is_some() && a.latitude.is_none() {
+        return Err(CliError::Usage(
+            "--height-m needs --latitude (the site's gravity comes from both)".into(),
+        ));
+    }
+    let unit_id = match &a.unit_id {
+        Some(hex) => match shared::UnitId::parse_hex(hex) {
+            Some(_) => Some(hex.to_ascii_lowercase()),
+            None => {
+                return Err(CliError::Usage(format!(
+                    "--unit-id {hex}: give the unit's id as 24 hex digits"
+                )))
+            }
+        },
+        None => None,
+    };
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
@@ -263,7 +293,13 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if let Some(advice) = &advice {
         out.line(format_args!("advice: {advice}"))?;
     }
-    let plan = plan_for(&rec, &seg);
+    let mut plan = plan_for(&rec, &seg);
+    plan.unit_id = unit_id;
+    plan.gravity_m_s2 = match (a.gravity, a.latitude) {
+        (Some(g), _) => g,
+        (None, Some(lat)) => normal_gravity_m_s2(lat, a.height_m.unwrap_or(0.0)),
+        (None, None) => shared::STANDARD_GRAVITY_M_S2,
+    };
     let gyro = if a.no_gyro {
         Err(HandGyroError::NotAsked)
     } else {

@@ -65,6 +65,26 @@ pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
     }
 }
 
+/// Normal gravity at geodetic latitude `lat_deg` and height `height_m` above the ellipsoid, m/s²:
+/// Somigliana's closed formula on the WGS 84 ellipsoid and its second-order height correction
+/// (NIMA TR8350.2, *Department of Defense World Geodetic System 1984*, 3rd ed., eqs. 4-1 and 4-3).
+/// Within about 0.1 mg of a site's real gravity away from mountains and large anomalies; a logger's
+/// m/s² output is scaled by it (`gravity_m_s2` of the plan).
+pub fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
+    // WGS 84: equatorial normal gravity, Somigliana's constant, first eccentricity squared.
+    const GAMMA_E: f64 = 9.780_325_335_9;
+    const K: f64 = 0.001_931_852_652_41;
+    const E2: f64 = 0.006_694_379_990_13;
+    // Height correction: 2/a (1 + f + m − 2 f sin²φ) and 3/a², from a, f and m of WGS 84.
+    const A_M: f64 = 6_378_137.0;
+    const F: f64 = 1.0 / 298.257_223_563;
+    const M: f64 = 0.003_449_786_506_84;
+    let s2 = lat_deg.to_radians().sin().powi(2);
+    let gamma = GAMMA_E * (1.0 + K * s2) / (1.0 - E2 * s2).sqrt();
+    let h = height_m;
+    gamma * (1.0 - 2.0 / A_M * (1.0 + F + M - 2.0 * F * s2) * h + 3.0 / (A_M * A_M) * h * h)
+}
+
 /// The per-segment statistics, as reading the written session would give them.
 pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
     seg.stills
@@ -116,6 +136,17 @@ mod tests {
             std_gyro_rad_s: [1e-3; 3],
             direction,
         }
+    }
+
+    #[test]
+    fn normal_gravity_matches_the_wgs84_tables() {
+        // TR8350.2's table 3.4: normal gravity at the equator and at the poles (the pole's is not an
+        // input of the formula: it checks the constants), and the usual free-air gradient.
+        assert!((normal_gravity_m_s2(0.0, 0.0) - 9.780_325_335_9).abs() < 1e-9);
+        assert!((normal_gravity_m_s2(-90.0, 0.0) - 9.832_184_937_8).abs() < 1e-9);
+        assert!((normal_gravity_m_s2(90.0, 0.0) - 9.832_184_937_8).abs() < 1e-9);
+        let gradient = normal_gravity_m_s2(45.0, 1000.0) - normal_gravity_m_s2(45.0, 0.0);
+        assert!((gradient + 3.086e-3).abs() < 2e-6, "{gradient}");
     }
 
     #[test]

@@ -314,12 +314,33 @@ fn next_line_end<R: BufRead>(
     Ok(Some(ended))
 }
 
-/// The field separator: a comma, else a semicolon or tab if the header uses one.
+/// The field separator: a comma, else a semicolon or tab if the header uses one, else white space
+/// (`' '`: any run of spaces and tabs, as MATLAB's and many tools' text files have).
 fn separator(header: &str) -> char {
     [',', ';', '\t']
         .into_iter()
         .find(|c| header.contains(*c))
-        .unwrap_or(',')
+        .unwrap_or(if header.trim().contains(' ') {
+            ' '
+        } else {
+            ','
+        })
+}
+
+/// The fields of a line split at `sep` (white space: at any run of it).
+fn split_fields(text: &str, sep: char) -> Vec<&str> {
+    if sep == ' ' {
+        text.split_whitespace().map(clean).collect()
+    } else {
+        text.split(sep).map(clean).collect()
+    }
+}
+
+/// A comment line (`#` first), which a logger's file may have before its header and among its rows.
+fn is_comment(text: &str) -> bool {
+    text.trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with('#')
 }
 
 fn clean(field: &str) -> &str {
@@ -333,9 +354,9 @@ pub fn read_logger<R: BufRead>(
     options: &ImportOptions,
 ) -> Result<Recording, ImportError> {
     let mut buf = Vec::new();
-    let (header, sep) = read_header(&mut r, &mut buf, path)?;
+    let (header, sep, header_line) = read_header(&mut r, &mut buf, path)?;
     let layout = Layout::new(header, sep, options)?;
-    let mut rec = read_rows(&mut r, &mut buf, &layout, options)?;
+    let mut rec = read_rows(&mut r, &mut buf, &layout, options, header_line)?;
     if rec.len() < 100 {
         return Err(ImportError::TooFewRows(rec.len()));
     }
@@ -349,25 +370,32 @@ pub fn read_logger<R: BufRead>(
     Ok(rec)
 }
 
-/// Reads the header line: its column names (a byte-order mark and quotes removed) and the field
-/// separator it uses.
+/// Reads the header line (after any blank or `#` comment lines): its column names (a byte-order mark
+/// and quotes removed), the field separator it uses, and its line number.
 fn read_header<R: BufRead>(
     r: &mut R,
     buf: &mut Vec<u8>,
     path: &Path,
-) -> Result<(Vec<String>, char), ImportError> {
-    if !next_line(r, buf, 1)? {
-        return Err(ImportError::Empty(path.to_path_buf()));
-    }
-    let header_text = String::from_utf8_lossy(buf)
-        .trim_start_matches('\u{feff}')
-        .to_string();
+) -> Result<(Vec<String>, char, u64), ImportError> {
+    let mut line = 0u64;
+    let header_text = loop {
+        line += 1;
+        if !next_line(r, buf, line)? {
+            return Err(ImportError::Empty(path.to_path_buf()));
+        }
+        let text = String::from_utf8_lossy(buf)
+            .trim_start_matches('\u{feff}')
+            .to_string();
+        if !text.trim().is_empty() && !is_comment(&text) {
+            break text;
+        }
+    };
     let sep = separator(&header_text);
-    let header: Vec<String> = header_text
-        .split(sep)
-        .map(|f| clean(f).to_string())
+    let header: Vec<String> = split_fields(&header_text, sep)
+        .into_iter()
+        .map(str::to_string)
         .collect();
-    Ok((header, sep))
+    Ok((header, sep, line))
 }
 
 /// The resolved time source.
@@ -427,7 +455,7 @@ impl Layout {
         line: u64,
         row_index: u64,
     ) -> Result<([f64; 6], f64), ImportError> {
-        let fields: Vec<&str> = text.split(self.sep).map(clean).collect();
+        let fields = split_fields(text, self.sep);
         if fields.len() < self.header.len() {
             return Err(ImportError::ShortRow {
                 line,
@@ -468,13 +496,14 @@ fn read_rows<R: BufRead>(
     buf: &mut Vec<u8>,
     layout: &Layout,
     options: &ImportOptions,
+    header_line: u64,
 ) -> Result<Recording, ImportError> {
     let gyro_scale = options.gyro_unit.to_rad_s();
     let mut rec = Recording {
         acc_unit: Some(options.acc_unit),
         ..Recording::default()
     };
-    let mut line = 1u64;
+    let mut line = header_line;
     let mut row_index = 0u64;
     loop {
         line += 1;
@@ -482,7 +511,7 @@ fn read_rows<R: BufRead>(
             break;
         };
         let text = String::from_utf8_lossy(buf);
-        if text.trim().is_empty() {
+        if text.trim().is_empty() || is_comment(&text) {
             continue;
         }
         if !ended {
@@ -645,6 +674,43 @@ mod tests {
         assert_eq!(rec.t_s[102], 102.0 / 102.4);
         assert!((rec.gyro_rad_s[0][0] - std::f64::consts::PI).abs() < 1e-12);
         assert!((rec.gyro_rad_s[0][2] + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn white_space_separated_text_with_comment_lines_reads_like_csv() {
+        let body = |sep: &str| {
+            rows(200, |i| {
+                [
+                    format!("{}", i as f64 * 0.01),
+                    "0".into(),
+                    "0".into(),
+                    "9.81".into(),
+                ]
+                .join(sep)
+                    + &format!("{sep}0{sep}0{sep}0")
+            })
+        };
+        let o = ImportOptions::new(
+            TimeSource::Column("t".into()),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::DegPerS,
+        );
+        let csv = read(
+            &format!("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}", body(",")),
+            &o,
+        )
+        .unwrap();
+        let text = format!(
+            "# logger v2, 100 Hz\n#\n  t   acc_x acc_y  acc_z gyr_x gyr_y gyr_z\n# started\n{}",
+            body("   ").replace("\n0.5", "\n# a note\n0.5")
+        );
+        let spaced = read(&text, &o).unwrap();
+        assert_eq!(spaced.t_s, csv.t_s);
+        assert_eq!(spaced.acc, csv.acc);
+        // Line numbers count the comment lines: a bad field names its real line.
+        let bad = text.replacen("9.81", "9.8x", 1);
+        let e = read(&bad, &o).unwrap_err().to_string();
+        assert!(e.contains("line 5"), "{e}");
     }
 
     #[test]
