@@ -244,22 +244,7 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let options = import_options(a)?;
-    if a.height_m.is_some() && a.latitude.is_none() {
-        return Err(CliError::Usage(
-            "--height-m needs --latitude (the site's gravity comes from both)".into(),
-        ));
-    }
-    let unit_id = match &a.unit_id {
-        Some(hex) => match shared::UnitId::parse_hex(hex) {
-            Some(_) => Some(hex.to_ascii_lowercase()),
-            None => {
-                return Err(CliError::Usage(format!(
-                    "--unit-id {hex}: give the unit's id as 24 hex digits"
-                )))
-            }
-        },
-        None => None,
-    };
+    let unit_id = unit_and_site(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
@@ -295,11 +280,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     }
     let mut plan = plan_for(&rec, &seg);
     plan.unit_id = unit_id;
-    plan.gravity_m_s2 = match (a.gravity, a.latitude) {
-        (Some(g), _) => g,
-        (None, Some(lat)) => normal_gravity_m_s2(lat, a.height_m.unwrap_or(0.0)),
-        (None, None) => shared::STANDARD_GRAVITY_M_S2,
-    };
+    plan.gravity_m_s2 = site_gravity_m_s2(a);
     let gyro = if a.no_gyro {
         Err(HandGyroError::NotAsked)
     } else {
@@ -350,6 +331,30 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
     Ok(outcome)
+}
+
+/// The unit id given (checked, lower case) and the site options' consistency, before any work.
+fn unit_and_site(a: &SegmentArgs) -> Result<Option<String>, CliError> {
+    if a.height_m.is_some() && a.latitude.is_none() {
+        return Err(CliError::Usage(
+            "--height-m needs --latitude (the site's gravity comes from both)".into(),
+        ));
+    }
+    match &a.unit_id {
+        Some(hex) if shared::UnitId::parse_hex(hex).is_none() => Err(CliError::Usage(format!(
+            "--unit-id {hex}: give the unit's id as 24 hex digits"
+        ))),
+        id => Ok(id.as_ref().map(|h| h.to_ascii_lowercase())),
+    }
+}
+
+/// The site's gravity: given, from the latitude (WGS 84 normal gravity), or standard.
+fn site_gravity_m_s2(a: &SegmentArgs) -> f64 {
+    match (a.gravity, a.latitude) {
+        (Some(g), _) => g,
+        (None, Some(lat)) => normal_gravity_m_s2(lat, a.height_m.unwrap_or(0.0)),
+        (None, None) => shared::STANDARD_GRAVITY_M_S2,
+    }
 }
 
 /// A warning on stderr, kept for the JSON document.
