@@ -12,7 +12,8 @@
 use crate::estimate::EstimateOptions;
 use crate::session::builtin::builtin_plan;
 use crate::session::Plan;
-use crate::sim::montecarlo::{declared, many_mounts_plan, run, Case, CaseResult, Generator};
+use crate::sim::montecarlo::{run, Case, CaseResult, Generator};
+use crate::sim::testkit::{declared, many_mounts_plan};
 
 fn oblique() -> Plan {
     builtin_plan("oblique").unwrap().unwrap()

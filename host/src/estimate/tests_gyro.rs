@@ -10,8 +10,9 @@
 
 use crate::estimate::{EstimateOptions, GyroModel};
 use crate::session::builtin::builtin_plan;
-use crate::sim::montecarlo::{declared, run, Case, CaseResult, Generator};
+use crate::sim::montecarlo::{run, Case, CaseResult, Generator};
 use crate::sim::session::gyro_matrix;
+use crate::sim::testkit::declared;
 
 /// 0.5 % scale (signs differ per axis), 0.5° misalignment, 0.5 °/s bias.
 fn mems_gyro() -> ([[f64; 3]; 3], [f64; 3]) {

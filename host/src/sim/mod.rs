@@ -8,7 +8,7 @@
 //!   [`stats`]: its statistics without writing rows.
 //! - [`handheld`]: a hand-held session (`host simulate-hand`); [`thermal`]: temperature profiles and
 //!   the unit's thermal model; [`flicker`]: 1/f noise.
-//! - Test-only: `testkit` (the tests' noisy statistics with table errors) and `montecarlo` (the
+//! - Test-only: `testkit` (the tests' noisy statistics with table errors, and their plans) and `montecarlo` (the
 //!   Monte Carlo runs behind the accuracy figures).
 
 pub mod flicker;

@@ -6,7 +6,7 @@
 
 use crate::estimate::attitude::{lq, rotation_vector};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
-use crate::session::{Plan, SegmentPlan, SegmentStats};
+use crate::session::{Plan, SegmentStats};
 use crate::sim::testkit::{self, TableErrors};
 use crate::sim::NoiseModel;
 use nalgebra::Matrix3;
@@ -624,77 +624,5 @@ impl CaseResult {
                  {w:.1} µg (rms {r:.1} µg)"
             );
         }
-    }
-}
-
-/// `plan` with the declared attitude prior (`None`: free attitudes as the plan says) and every
-/// segment's duration multiplied by `scale`.
-pub fn declared(plan: &Plan, sigma_deg: f64, scale: f64) -> Plan {
-    let mut p = plan.clone();
-    p.format_version = 2;
-    p.attitude_sigma_deg = Some(sigma_deg);
-    for s in &mut p.segments {
-        s.duration_s = s.duration_s.map(|d| d * scale);
-    }
-    p
-}
-
-/// A fixture plan with more mounts: the six faces and six edge diagonals at rest (30 s), a 200 °/s
-/// spin on x+, y+ and z+ (30 s), and the four upper cube corners at rest and spun at ±200 °/s (30 s):
-/// 16 mounts.
-pub fn many_mounts_plan() -> Plan {
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    let c = 1.0 / 3f64.sqrt();
-    let mut segments = Vec::new();
-    let mut add = |name: String, up: [f64; 3], rate: f64| {
-        segments.push(SegmentPlan {
-            name,
-            up_b: up,
-            rate_deg_s: rate,
-            duration_s: Some(30.0),
-            ..SegmentPlan::default()
-        });
-    };
-    let statics: [(&str, [f64; 3]); 12] = [
-        ("x+", [1.0, 0.0, 0.0]),
-        ("x-", [-1.0, 0.0, 0.0]),
-        ("y+", [0.0, 1.0, 0.0]),
-        ("y-", [0.0, -1.0, 0.0]),
-        ("z+", [0.0, 0.0, 1.0]),
-        ("z-", [0.0, 0.0, -1.0]),
-        ("xy", [h, h, 0.0]),
-        ("x-y", [h, -h, 0.0]),
-        ("yz", [0.0, h, h]),
-        ("y-z", [0.0, h, -h]),
-        ("zx", [h, 0.0, h]),
-        ("-zx", [h, 0.0, -h]),
-    ];
-    for (n, up) in statics {
-        add(n.to_string(), up, 0.0);
-    }
-    for (n, up) in &statics[..6] {
-        if up.iter().sum::<f64>() > 0.0 {
-            add(format!("{n} 200"), *up, 200.0);
-        }
-    }
-    for (n, up) in [
-        ("ppp", [c, c, c]),
-        ("mpp", [-c, c, c]),
-        ("pmp", [c, -c, c]),
-        ("ppm", [c, c, -c]),
-    ] {
-        add(n.to_string(), up, 0.0);
-        add(format!("{n} 200"), up, 200.0);
-        add(format!("{n} -200"), up, -200.0);
-    }
-    Plan {
-        format_version: 2,
-        output_unit: shared::OutputUnit::Volts,
-        sample_rate_hz: 1000.0,
-        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
-        unit_id: None,
-        attitude_sigma_deg: None,
-        table_rate_sigma_ppm: None,
-        segments,
     }
 }
