@@ -150,6 +150,8 @@ pub struct Applier {
     since_refresh: Option<u64>,
     /// Rows compensated outside the calibration's valid temperature range (the device flags them).
     flagged_rows: u64,
+    /// The corrected body rate of the last finite sample, rad/s (what the lever-arm terms used).
+    last_rate_rad_s: [f32; 3],
 }
 
 impl Applier {
@@ -171,6 +173,7 @@ impl Applier {
                 .max(1.0) as u64,
             since_refresh: None,
             flagged_rows: 0,
+            last_rate_rad_s: [0.0; 3],
         })
     }
 
@@ -184,6 +187,7 @@ impl Applier {
         // As on the device: the gyro's reading corrected to the body rate (docs/model.md §8) feeds both
         // the ω̇ estimator and the lever-arm terms; a calibration without a gyro leaves it untouched.
         let w = self.compensator.correct_rate(w_rad_s).rad_s;
+        self.last_rate_rad_s = w;
         let wd = self.omega_dot.update(&w);
         Some(self.compensate(u, &w, &wd))
     }
@@ -361,12 +365,10 @@ pub fn apply_session(
             summary.rows += 1;
             if let Some(f) = f {
                 let s = &mut stills[row.segment_index];
-                let w = applier
-                    .compensator
-                    .correct_rate(&row.w_rad_s.map(|v| v as f32));
+                let w = applier.last_rate_rad_s;
                 for j in 0..3 {
                     s.f_g[j] += f64::from(f[j]) / g;
-                    s.w_rad_s[j] += f64::from(w.rad_s[j]);
+                    s.w_rad_s[j] += f64::from(w[j]);
                 }
                 s.rows += 1;
             }

@@ -565,13 +565,19 @@ fn median_rate(t_s: &[f64]) -> f64 {
     1.0 / dt[dt.len() / 2]
 }
 
+/// The median of |acc| over all rows: gravity's magnitude in the recording's unit (a hand-held
+/// recording is mostly still).
+fn median_magnitude(rec: &Recording) -> f64 {
+    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+    mags.sort_by(f64::total_cmp);
+    mags[mags.len() / 2]
+}
+
 /// Counts and volts have no expected gravity, but data whose gravity reads as 1 g in m/s² or in g
 /// (within 2 %) are physical units given as counts or volts: no ADC or digital part reads gravity as
 /// 9.81 or 1.00 of its own unit by chance.
 fn check_not_physical(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
-    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
-    mags.sort_by(f64::total_cmp);
-    let median = mags[mags.len() / 2];
+    let median = median_magnitude(rec);
     let near = |x: f64| (median / x - 1.0).abs() < 0.02;
     let hint = if near(shared::STANDARD_GRAVITY_M_S2) {
         " (the values are gravity in m/s²: --acc-unit m/s2)"
@@ -604,9 +610,7 @@ fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
         OutputUnit::StandardGravity => 1.0,
         OutputUnit::Lsb | OutputUnit::Volts => return check_not_physical(rec, unit),
     };
-    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
-    mags.sort_by(f64::total_cmp);
-    let median = mags[mags.len() / 2];
+    let median = median_magnitude(rec);
     let ratio = median / expected;
     if (0.8..=1.25).contains(&ratio) {
         return Ok(());
