@@ -7,14 +7,16 @@ use super::CliError;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
-use crate::session::from_recording::{normal_gravity_m_s2, plan_for, write_session};
+use crate::session::from_recording::{
+    normal_gravity_m_s2, plan_for, plan_for_faces, write_session,
+};
 use crate::session::hand_gyro;
 use crate::session::import::{
-    parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
+    parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource, TimeUnit,
 };
 use crate::session::plan::Attitude;
 use crate::session::segment::{
-    coverage, find_intervals, Coverage, IntervalKind, SegmentOptions, Segmentation,
+    coverage, find_intervals, Coverage, IntervalKind, PositionSet, SegmentOptions, Segmentation,
 };
 use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
@@ -44,18 +46,34 @@ pub struct SegmentArgs {
         default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
     )]
     pub columns: String,
-    /// Column with the time in seconds (else --rate-hz).
+    /// Column with the time stamps (else --rate-hz); their unit is detected, or --time-unit.
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
+    /// The time column's unit: s, ms, us or ns (default: detected from its median step and span).
+    #[arg(long, value_name = "UNIT")]
+    pub time_unit: Option<String>,
     /// Sample rate, Hz, when the file has no time column (a sample index is ignored).
     #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
     pub rate_hz: Option<f64>,
     /// The accelerometer's unit: m/s2, g, LSB or V (kept as the calibration's output unit).
     #[arg(long, value_name = "UNIT")]
     pub acc_unit: String,
-    /// The gyro's unit: deg/s or rad/s.
+    /// With --acc-unit LSB: the counts of zero force (an unsigned output's mid-scale, e.g. 32768),
+    /// one value or one per axis (X,Y,Z), subtracted before anything else; the calibration's biases
+    /// stay in the logger's own counts.
+    #[arg(long, value_name = "N[,NY,NZ]", allow_negative_numbers = true)]
+    pub acc_offset: Option<String>,
+    /// The gyro's unit: deg/s, rad/s, or LSB (counts, with --gyro-lsb-per-dps).
     #[arg(long, value_name = "UNIT")]
     pub gyro_unit: String,
+    /// With --gyro-unit LSB: the gyro's nominal scale, counts per °/s (from its data sheet, e.g.
+    /// 16.4 or 131); the turns fit the true scale.
+    #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
+    pub gyro_lsb_per_dps: Option<f64>,
+    /// Prior 1σ of a six-face session's faces, degrees (how well the cube sits on its faces; used
+    /// only when the still positions are the six faces of a cube).
+    #[arg(long, default_value_t = crate::session::from_recording::SIX_FACE_PRIOR_DEG, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
+    pub face_sigma_deg: f64,
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
@@ -101,9 +119,16 @@ pub struct SimulateHandArgs {
     /// Accelerometer unit written: m/s2, g or LSB (4096 per g, quantised).
     #[arg(long, default_value = "m/s2", value_name = "UNIT")]
     pub acc_unit: String,
-    /// Gyro unit written: deg/s or rad/s.
+    /// With --acc-unit LSB: counts added to every accelerometer value (an unsigned output's
+    /// mid-scale zero, e.g. 32768); the truth file's biases include it.
+    #[arg(long, value_name = "N", value_parser = crate::limits::real(0.0, 1e7))]
+    pub acc_offset: Option<f64>,
+    /// Gyro unit written: deg/s, rad/s or LSB (whole counts at --gyro-lsb-per-dps).
     #[arg(long, default_value = "deg/s", value_name = "UNIT")]
     pub gyro_unit: String,
+    /// With --gyro-unit LSB: counts per °/s written.
+    #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
+    pub gyro_lsb_per_dps: Option<f64>,
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
@@ -116,9 +141,24 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let unit = parse_acc_unit(&a.acc_unit)
         .filter(|u| *u != OutputUnit::Volts)
         .ok_or_else(|| CliError::Usage(format!("--acc-unit {}: use m/s2, g or LSB", a.acc_unit)))?;
-    let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
-        CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
-    })?;
+    let counts = matches!(a.gyro_unit.as_str(), "LSB" | "lsb" | "counts");
+    let gyro_unit = match (counts, a.gyro_lsb_per_dps) {
+        (true, Some(_)) => GyroUnit::DegPerS,
+        (false, None) => GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--gyro-unit {}: use deg/s, rad/s or LSB",
+                a.gyro_unit
+            ))
+        })?,
+        _ => {
+            return Err(CliError::Usage(
+                "--gyro-unit LSB and --gyro-lsb-per-dps X go together".into(),
+            ))
+        }
+    };
+    if a.acc_offset.is_some() && unit != OutputUnit::Lsb {
+        return Err(CliError::Usage("--acc-offset needs --acc-unit LSB".into()));
+    }
     let truth_path = a.out.with_extension("truth.toml");
     for p in [&a.out, &truth_path] {
         if p.exists() && !a.force {
@@ -128,7 +168,8 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
             )));
         }
     }
-    let truth = logger_unit(unit);
+    let mut truth = logger_unit(unit);
+    let acc_offset = a.acc_offset.unwrap_or(0.0);
     let spec = HandSpec {
         rate_hz: a.rate_hz,
         acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
@@ -137,8 +178,12 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let sim = simulate_hand(&truth, &spec);
     let layout = LoggerLayout {
         gyro_deg_s: gyro_unit == GyroUnit::DegPerS,
+        acc_offset,
+        gyro_lsb_per_dps: a.gyro_lsb_per_dps,
         ..LoggerLayout::default()
     };
+    // The file's zero force is at the offset: so is the truth's bias.
+    truth.statics.zero_bias_out = truth.statics.zero_bias_out.map(|b| b + acc_offset);
     let io = |p: &Path| {
         let p = p.display().to_string();
         move |e: std::io::Error| CliError::Failed(format!("cannot write {p}: {e}"))
@@ -159,7 +204,7 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
         sim.holds.len(),
         a.rate_hz,
         unit.symbol(),
-        gyro_unit.symbol(),
+        if counts { "LSB" } else { gyro_unit.symbol() },
         truth_path.display()
     )?;
     Ok(sim.rows.len())
@@ -204,22 +249,92 @@ fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
         (None, Some(hz)) => TimeSource::RateHz(hz),
         _ => {
             return Err(CliError::Usage(
-                "give exactly one of --time-column NAME (seconds) or --rate-hz HZ".into(),
+                "give exactly one of --time-column NAME or --rate-hz HZ".into(),
+            ))
+        }
+    };
+    let time_unit = match (&a.time_unit, &time) {
+        (None, _) => None,
+        (Some(u), TimeSource::Column(_)) => Some(
+            TimeUnit::parse(u)
+                .ok_or_else(|| CliError::Usage(format!("--time-unit {u}: use s, ms, us or ns")))?,
+        ),
+        (Some(_), TimeSource::RateHz(_)) => {
+            return Err(CliError::Usage(
+                "--time-unit applies to --time-column, not to --rate-hz".into(),
             ))
         }
     };
     let acc_unit = parse_acc_unit(&a.acc_unit).ok_or_else(|| {
         CliError::Usage(format!("--acc-unit {}: use m/s2, g, LSB or V", a.acc_unit))
     })?;
-    let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
-        CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
-    })?;
+    let (gyro_unit, gyro_lsb_per_dps) = gyro_unit(a)?;
     Ok(ImportOptions {
         columns,
         time,
         acc_unit,
         gyro_unit,
+        time_unit,
+        acc_offset: acc_offset(a, acc_unit)?,
+        gyro_lsb_per_dps,
     })
+}
+
+/// `--acc-offset`: one value for every axis or three, with `--acc-unit LSB` only.
+fn acc_offset(a: &SegmentArgs, unit: OutputUnit) -> Result<[f64; 3], CliError> {
+    let Some(text) = &a.acc_offset else {
+        return Ok([0.0; 3]);
+    };
+    if unit != OutputUnit::Lsb {
+        return Err(CliError::Usage(format!(
+            "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the unit \
+             is {})",
+            a.acc_unit
+        )));
+    }
+    let bad = || {
+        CliError::Usage(format!(
+            "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) or three \
+             (X,Y,Z)"
+        ))
+    };
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    match v[..] {
+        [n] => Ok([n; 3]),
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(bad()),
+    }
+}
+
+/// `--gyro-unit` and `--gyro-lsb-per-dps`: counts need their nominal scale, and only counts take
+/// one.
+fn gyro_unit(a: &SegmentArgs) -> Result<(GyroUnit, Option<f64>), CliError> {
+    let counts = matches!(a.gyro_unit.as_str(), "LSB" | "lsb" | "counts");
+    match (counts, a.gyro_lsb_per_dps) {
+        (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
+        (true, None) => Err(CliError::Usage(
+            "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts per \
+             °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns then fit \
+             the true scale"
+                .into(),
+        )),
+        (false, Some(_)) => Err(CliError::Usage(format!(
+            "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not {})",
+            a.gyro_unit
+        ))),
+        (false, None) => GyroUnit::parse(&a.gyro_unit)
+            .map(|u| (u, None))
+            .ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--gyro-unit {}: use deg/s, rad/s or LSB (with --gyro-lsb-per-dps)",
+                    a.gyro_unit
+                ))
+            }),
+    }
 }
 
 /// Runs `host segment` from the command line (`--quiet` silences the human text).
@@ -249,22 +364,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
     let mut warnings = Vec::new();
-    if rec.skipped_rows > 0 {
-        let w = format!(
-            "{} row(s) with NaN or infinite values left out",
-            rec.skipped_rows
-        );
-        warn(out, &mut warnings, w);
-    }
-    if let Some(line) = rec.unterminated_line {
-        let w = format!(
-            "line {line}, the last, has no line end: the file was cut short; that line is left out"
-        );
-        warn(out, &mut warnings, w);
-    }
-    if let Some(w) = rec.time_jumps() {
-        warn(out, &mut warnings, w);
-    }
+    reading_notes(out, &rec, &mut warnings);
     let seg_options = SegmentOptions {
         min_still_s: a.min_still_s,
         ..SegmentOptions::default()
@@ -272,18 +372,31 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Failed(e.to_string()))?;
     let cov = coverage(&seg.stills, seg_options.same_position_deg);
     out.human(table(&rec, &seg, &cov))?;
-    cov.check(seg.stills.len(), seg_options.same_position_deg)
+    let set = cov
+        .check(seg.stills.len(), seg_options.same_position_deg)
         .map_err(|e| CliError::Failed(e.to_string()))?;
-    let advice = cov.advice();
+    let advice = match set {
+        PositionSet::Spread => cov.advice(),
+        PositionSet::SixFaces => None,
+    };
     if let Some(advice) = &advice {
         out.line(format_args!("advice: {advice}"))?;
     }
-    let mut plan = plan_for(&rec, &seg);
+    let mut plan = match set {
+        PositionSet::Spread => plan_for(&rec, &seg),
+        PositionSet::SixFaces => {
+            out.line(format_args!("{}", six_face_text(a.face_sigma_deg)))?;
+            plan_for_faces(&rec, &seg, a.face_sigma_deg)
+        }
+    };
     plan.unit_id = unit_id;
     plan.gravity_m_s2 = site_gravity_m_s2(a);
     let gyro = if a.no_gyro {
         Err(HandGyroError::NotAsked)
     } else {
+        for d in hand_gyro::dropped_turns(&rec, &seg) {
+            warn(out, &mut warnings, d.to_string());
+        }
         hand_gyro::fit(&rec, &seg, &plan)?
     };
     if let Ok(fit) = &gyro {
@@ -328,9 +441,51 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         rows,
         advice,
         warnings,
+        six_faces: set == PositionSet::SixFaces,
     };
-    out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
+    out.document(&document(a, &options, &outcome, &cov, &written))?;
     Ok(outcome)
+}
+
+/// What reading the file left out or detected, on stderr (and into the JSON document's warnings).
+fn reading_notes(out: &Output, rec: &Recording, warnings: &mut Vec<String>) {
+    if rec.skipped_rows > 0 {
+        let w = format!(
+            "{} row(s) with NaN or infinite values left out",
+            rec.skipped_rows
+        );
+        warn(out, warnings, w);
+    }
+    if let Some(line) = rec.unterminated_line {
+        let w = format!(
+            "line {line}, the last, has no line end: the file was cut short; that line is left out"
+        );
+        warn(out, warnings, w);
+    }
+    if let Some((unit, true)) = rec.time_unit {
+        out.note(format_args!(
+            "time column read in {} (detected from its median step and span: {:.6} Hz over {:.1} \
+             s; --time-unit to say otherwise)",
+            unit.symbol(),
+            rec.rate_hz,
+            rec.t_s.last().unwrap_or(&0.0) - rec.t_s.first().unwrap_or(&0.0)
+        ));
+    }
+    if let Some(w) = rec.time_jumps() {
+        warn(out, warnings, w);
+    }
+}
+
+/// What a six-face session is taken as (stdout, with the table).
+fn six_face_text(face_sigma_deg: f64) -> String {
+    format!(
+        "six-face session: fewer than {} distinct positions, each within {}° of a body axis and \
+         all six faces present: taken as the faces of a cube, each the nominal body axis up with a \
+         {face_sigma_deg}° attitude prior (--face-sigma-deg); the prior fixes the body frame and \
+         the fit estimates each face's placement (docs/model.md §7.1)",
+        crate::session::segment::MIN_POSITIONS,
+        crate::session::segment::SIX_FACE_DEG
+    )
 }
 
 /// The unit id given (checked, lower case) and the site options' consistency, before any work.
@@ -368,6 +523,7 @@ struct Written {
     rows: u64,
     advice: Option<String>,
     warnings: Vec<String>,
+    six_faces: bool,
 }
 
 /// The `--json` document of `host segment`.
@@ -387,6 +543,13 @@ struct SegmentDocument {
     spins: usize,
     short_dropped: usize,
     distinct_positions: usize,
+    /// The positions were taken as the six faces of a cube (nominal ups with a prior).
+    six_face_session: bool,
+    /// Counts subtracted from each accelerometer axis on reading (added back in the session).
+    acc_offset: [f64; 3],
+    /// The time column's unit ("s", "ms", "µs", "ns"; null: from --rate-hz) and whether detected.
+    time_unit: Option<&'static str>,
+    time_unit_detected: bool,
     intervals: Vec<IntervalDocument>,
     gyro: Option<GyroDocument>,
     gyro_not_calibrated: Option<String>,
@@ -438,7 +601,7 @@ struct GyroDocument {
 
 fn document(
     a: &SegmentArgs,
-    gyro_unit: GyroUnit,
+    options: &ImportOptions,
     o: &SegmentOutcome,
     cov: &Coverage,
     w: &Written,
@@ -481,7 +644,10 @@ fn document(
         input: a.input.display().to_string(),
         sample_rate_hz: rec.rate_hz,
         acc_unit: rec.acc_unit.map_or("", |u| u.symbol()),
-        gyro_unit: gyro_unit.symbol(),
+        gyro_unit: match options.gyro_lsb_per_dps {
+            Some(_) => "LSB",
+            None => options.gyro_unit.symbol(),
+        },
         gravity_out: seg.gravity_out,
         acc_threshold_mg: seg.acc_threshold / seg.gravity_out * 1e3,
         gyro_threshold_deg_s: seg.gyro_threshold_rad_s.to_degrees(),
@@ -489,6 +655,10 @@ fn document(
         spins: seg.spins.len(),
         short_dropped: seg.short_dropped,
         distinct_positions: cov.distinct,
+        six_face_session: w.six_faces,
+        acc_offset: rec.acc_offset,
+        time_unit: rec.time_unit.map(|u| u.0.symbol()),
+        time_unit_detected: rec.time_unit.is_some_and(|u| u.1),
         intervals,
         gyro: o.gyro.as_ref().ok().map(|f| GyroDocument {
             turns: f.turns,
@@ -653,3 +823,7 @@ fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
         ],
     }
 }
+
+#[cfg(test)]
+#[path = "segment_faces_tests.rs"]
+mod faces_tests;

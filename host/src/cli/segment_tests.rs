@@ -176,6 +176,7 @@ fn logger_g_rad_s_with_a_time_column_other_names_and_an_extra_column() {
         time_column: Some("time".into()),
         gyro_deg_s: false,
         extra_column: true,
+        ..LoggerLayout::default()
     };
     let truth = write_raw(tmp.path(), OutputUnit::StandardGravity, &spec, &layout);
     let (n, rms) = segment_and_calibrate(
@@ -346,8 +347,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         gyro_rad_s: sim.rows.iter().map(|r| r.2).collect(),
         acc_unit: Some(unit),
         rate_hz: spec.rate_hz,
-        skipped_rows: 0,
-        unterminated_line: None,
+        ..Recording::default()
     };
     let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
     let found_all = seg.stills.len() == sim.holds.len()

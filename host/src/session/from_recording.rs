@@ -1,6 +1,7 @@
 //! A session (plan + samples) from one continuous recording cut by [`super::segment`]: every still
 //! interval becomes a static segment whose attitude is free, or the nearest body axis with a prior
-//! when it is within [`AXIS_SNAP_DEG`] of one (a unit set down on its faces, docs/model.md §7).
+//! when it is within [`AXIS_SNAP_DEG`] of one (a unit set down on its faces, docs/model.md §7); in a
+//! six-face session ([`plan_for_faces`]) every still interval is its nearest face with a prior.
 
 use super::import::Recording;
 use super::segment::{angle_deg, Interval, Segmentation};
@@ -28,9 +29,15 @@ fn nearest_axis(d: &[f64; 3], deg: f64) -> Option<[f64; 3]> {
         .find(|a| angle_deg(d, a) < deg)
 }
 
-fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
+/// Default prior 1σ of a six-face session's faces, degrees (`--face-sigma-deg`): a cube set down by
+/// hand on a bench that is level to a fraction of a degree; docs/model.md §7.1.
+pub const SIX_FACE_PRIOR_DEG: f64 = 2.0;
+
+/// Still interval `k`'s segment: its nearest axis within `snap_deg` with a prior of `prior_deg`, else
+/// free.
+fn segment_for(k: usize, iv: &Interval, snap_deg: f64, prior_deg: f64) -> SegmentPlan {
     let name = format!("still {:02}", k + 1);
-    let axis = nearest_axis(&iv.direction, AXIS_SNAP_DEG);
+    let axis = nearest_axis(&iv.direction, snap_deg);
     SegmentPlan {
         up_b: axis.unwrap_or(iv.direction.map(|c| (c * 1e6).round() / 1e6)),
         attitude: if axis.is_some() {
@@ -38,7 +45,7 @@ fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
         } else {
             Attitude::Free
         },
-        attitude_sigma_deg: axis.map(|_| FACE_PRIOR_DEG),
+        attitude_sigma_deg: axis.map(|_| prior_deg),
         duration_s: Some((iv.duration_s * 1e3).round() / 1e3),
         mount: Some(name.clone()),
         name,
@@ -48,6 +55,17 @@ fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
 
 /// The plan of the session: one static segment per still interval, format 2.
 pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
+    plan_with(rec, seg, AXIS_SNAP_DEG, FACE_PRIOR_DEG)
+}
+
+/// The plan of a six-face session (`super::segment::PositionSet::SixFaces`): every still interval is
+/// its nearest face (all within [`super::segment::SIX_FACE_DEG`]) with the prior `face_sigma_deg`,
+/// which fixes the body frame and lets the nine intrinsic parameters follow (docs/model.md §7.1).
+pub fn plan_for_faces(rec: &Recording, seg: &Segmentation, face_sigma_deg: f64) -> Plan {
+    plan_with(rec, seg, super::segment::SIX_FACE_DEG, face_sigma_deg)
+}
+
+fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64) -> Plan {
     Plan {
         format_version: 2,
         output_unit: rec.acc_unit.unwrap_or(shared::OutputUnit::Lsb),
@@ -60,7 +78,7 @@ pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
             .stills
             .iter()
             .enumerate()
-            .map(|(k, iv)| segment_for(k, iv))
+            .map(|(k, iv)| segment_for(k, iv, snap_deg, prior_deg))
             .collect(),
     }
 }
@@ -100,7 +118,9 @@ pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<Segmen
         .collect()
 }
 
-/// Writes `dir/plan.toml` and `dir/samples.csv` (refuses an existing session unless `overwrite`).
+/// Writes `dir/plan.toml` and `dir/samples.csv` (refuses an existing session unless `overwrite`), the
+/// accelerometer with the recording's offset added back: the calibration applies to the logger's own
+/// outputs, its biases in the logger's counts.
 pub fn write_session(
     dir: &Path,
     rec: &Recording,
@@ -111,7 +131,8 @@ pub fn write_session(
     let mut w = SessionWriter::create(dir, plan, overwrite)?;
     for (iv, sp) in seg.stills.iter().zip(&plan.segments) {
         for i in iv.start..iv.end {
-            w.write_row(&sp.name, rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i])?;
+            let acc: [f64; 3] = core::array::from_fn(|j| rec.acc[i][j] + rec.acc_offset[j]);
+            w.write_row(&sp.name, rec.t_s[i], &acc, &rec.gyro_rad_s[i])?;
         }
         w.end_segment()?;
     }
@@ -155,12 +176,12 @@ mod tests {
             let r = deg.to_radians();
             [r.sin(), -r.cos(), 0.0]
         };
-        let near = segment_for(0, &interval(tilt(1.0)));
+        let near = segment_for(0, &interval(tilt(1.0)), AXIS_SNAP_DEG, FACE_PRIOR_DEG);
         assert_eq!(near.up_b, [0.0, -1.0, 0.0]);
         assert!(!near.is_free());
         assert_eq!(near.attitude_sigma_deg, Some(FACE_PRIOR_DEG));
         assert_eq!(near.mount.as_deref(), Some("still 01"));
-        let far = segment_for(1, &interval(tilt(5.0)));
+        let far = segment_for(1, &interval(tilt(5.0)), AXIS_SNAP_DEG, FACE_PRIOR_DEG);
         assert!(far.is_free());
         assert!((far.up_b[0] - 5f64.to_radians().sin()).abs() < 1e-6);
         assert_eq!(far.attitude_sigma_deg, None);

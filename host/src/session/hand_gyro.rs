@@ -71,9 +71,11 @@ pub fn fit(
         let n = linalg::norm(&f);
         f.map(|c| c / n)
     };
+    let jumps = rec.jumps();
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
+        .filter(|w| Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1))
         .map(|w| Turn {
             from_row: w[0].end - 1,
             to_row: w[1].start,
@@ -90,6 +92,51 @@ pub fn fit(
         Err(e @ HandGyroError::UnitMismatch { .. }) => Err(HandGyroFileError::Unit(e)),
         r => Ok(r),
     }
+}
+
+/// A turn left out of the gyro fit because the time stamps jump during it (a gap, a repeat or a step
+/// back): its rotation cannot be integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DroppedTurn {
+    /// The still interval before it (1-based, as in the table).
+    pub after_still: usize,
+    /// The turn's start, s.
+    pub start_s: f64,
+    /// The first jump in it.
+    pub jump: crate::session::import::TimeJump,
+}
+
+impl std::fmt::Display for DroppedTurn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the turn after still interval #{} (from t = {:.3} s) is left out of the gyro fit: the \
+             time stamps jump by {:+.3} s after data row {} (t = {:.3} s) during it",
+            self.after_still,
+            self.start_s,
+            self.jump.step_s,
+            self.jump.row + 1,
+            self.jump.t_s
+        )
+    }
+}
+
+/// The turns between consecutive still intervals that [`fit`] leaves out, with their place.
+pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
+    let jumps = rec.jumps();
+    seg.stills
+        .windows(2)
+        .enumerate()
+        .filter_map(|(k, w)| {
+            let (lo, hi) = (w[0].end - 1, w[1].start + 1);
+            let jump = jumps.iter().find(|j| j.row >= lo && j.row + 1 < hi)?;
+            Some(DroppedTurn {
+                after_still: k + 1,
+                start_s: rec.t_s[lo],
+                jump: *jump,
+            })
+        })
+        .collect()
 }
 
 /// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or

@@ -10,7 +10,7 @@
 //! minimum are dropped (counted). This is how imu_tk's static detector works, with thresholds from the
 //! data instead of a user's guess.
 
-use super::import::Recording;
+use super::import::{Recording, TimeJump};
 use shared::linalg;
 use shared::OutputUnit;
 
@@ -54,6 +54,20 @@ pub const MIN_POSITIONS: usize = 9;
 pub const RECOMMENDED_POSITIONS: usize = 24;
 /// A body direction (±x, ±y, ±z) with no position within this angle is missing, degrees.
 pub const FACE_COVERAGE_DEG: f64 = 50.0;
+/// Fewer than [`MIN_POSITIONS`] positions are taken as the six faces of a cube when each lies within
+/// this angle of a body axis, degrees: a face set down on a bench, seen through an uncalibrated
+/// accelerometer (scale errors of a few %, axes a degree off) and placed to a degree or two.
+pub const SIX_FACE_DEG: f64 = 5.0;
+
+/// What the still positions are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PositionSet {
+    /// At least [`MIN_POSITIONS`] distinct positions: each free or snapped to a near axis.
+    Spread,
+    /// The six faces of a cube (each within [`SIX_FACE_DEG`] of a body axis, all six present):
+    /// nominal ups with an attitude prior, docs/model.md §7.1.
+    SixFaces,
+}
 
 /// What an interval is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,8 +142,9 @@ pub enum SegmentError {
     /// Too few distinct positions.
     #[error(
         "{found} still interval(s) in {distinct} distinct position(s): at least {MIN_POSITIONS} \
-         distinct positions are needed ({RECOMMENDED_POSITIONS} recommended); record {more} more, \
-         each at least {same_deg:.0}° from the others{faces}"
+         distinct positions are needed ({RECOMMENDED_POSITIONS} recommended), or the six faces of a \
+         cube, each within {SIX_FACE_DEG}° of a body axis; record {more} more, each at least \
+         {same_deg:.0}° from the others{faces}"
     )]
     TooFewPositions {
         /// Still intervals found.
@@ -255,7 +270,8 @@ pub fn find_intervals(
         .zip(&var_g)
         .map(|(a, g)| *a < thr_a && *g < thr_g)
         .collect();
-    let runs = quiet_runs(&quiet, half);
+    let jumps = rec.jumps();
+    let runs = split_at_jumps(quiet_runs(&quiet, half), &jumps);
     let still_bias = still_bias(rec, &runs);
     let trim = (options.trim_s * rec.rate_hz).round() as usize;
     let min_len = (options.min_still_s * rec.rate_hz).round() as usize;
@@ -275,7 +291,11 @@ pub fn find_intervals(
             IntervalKind::Spin => &mut spins,
         };
         match list.last_mut() {
-            Some(prev) if prev.end + 2 * (half + trim) >= lo && same(prev, &iv, 2.0) => {
+            Some(prev)
+                if prev.end + 2 * (half + trim) >= lo
+                    && same(prev, &iv, 2.0)
+                    && Recording::continuous(&jumps, prev.start, hi) =>
+            {
                 *prev = interval(rec, prev.start, hi, &centre, &still_bias, spin_min);
             }
             _ => list.push(iv),
@@ -309,6 +329,21 @@ fn quiet_runs(quiet: &[bool], half: usize) -> Vec<(usize, usize)> {
         }
     }
     runs
+}
+
+/// `runs` cut at the time jumps (`jumps` in row order): no still interval spans a gap, a repeat or
+/// a step back of the time stamps.
+fn split_at_jumps(runs: Vec<(usize, usize)>, jumps: &[TimeJump]) -> Vec<(usize, usize)> {
+    let mut out = Vec::with_capacity(runs.len());
+    for (lo, hi) in runs {
+        let mut start = lo;
+        for j in jumps.iter().filter(|j| j.row >= lo && j.row + 1 < hi) {
+            out.push((start, j.row + 1));
+            start = j.row + 1;
+        }
+        out.push((start, hi));
+    }
+    out
 }
 
 /// The gyro's mean over all quiet runs, weighted by length (its bias when most runs are still).
@@ -394,6 +429,8 @@ pub struct Coverage {
     pub repeats: Vec<Option<usize>>,
     /// Body directions (+x, −x, …) with no position within [`FACE_COVERAGE_DEG`].
     pub missing_faces: Vec<&'static str>,
+    /// Every position within [`SIX_FACE_DEG`] of a body axis, and all six axes' directions present.
+    pub six_faces: bool,
 }
 
 const FACES: [(&str, [f64; 3]); 6] = [
@@ -431,18 +468,31 @@ pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
         })
         .map(|(name, _)| *name)
         .collect();
+    let near_face = |s: &Interval| {
+        FACES
+            .iter()
+            .position(|(_, a)| angle_deg(&s.direction, a) < SIX_FACE_DEG)
+    };
+    let faces: Vec<Option<usize>> = stills.iter().map(near_face).collect();
+    let six_faces =
+        faces.iter().all(Option::is_some) && (0..FACES.len()).all(|f| faces.contains(&Some(f)));
     Coverage {
         distinct: firsts.len(),
         repeats,
         missing_faces,
+        six_faces,
     }
 }
 
 impl Coverage {
-    /// Refuses fewer than [`MIN_POSITIONS`] distinct positions, saying how many more of which kind.
-    pub fn check(&self, found: usize, same_position_deg: f64) -> Result<(), SegmentError> {
+    /// Refuses fewer than [`MIN_POSITIONS`] distinct positions that are not the six faces of a cube,
+    /// saying how many more of which kind.
+    pub fn check(&self, found: usize, same_position_deg: f64) -> Result<PositionSet, SegmentError> {
         if self.distinct >= MIN_POSITIONS {
-            return Ok(());
+            return Ok(PositionSet::Spread);
+        }
+        if self.six_faces {
+            return Ok(PositionSet::SixFaces);
         }
         Err(SegmentError::TooFewPositions {
             found,
@@ -500,8 +550,7 @@ mod tests {
             gyro_rad_s: s.rows.iter().map(|r| r.2).collect(),
             acc_unit: Some(unit),
             rate_hz: spec.rate_hz,
-            skipped_rows: 0,
-            unterminated_line: None,
+            ..Recording::default()
         }
     }
 
@@ -532,7 +581,7 @@ mod tests {
             let cov = coverage(&seg.stills, 10.0);
             assert_eq!(cov.distinct, 24);
             assert!(cov.missing_faces.is_empty());
-            assert!(cov.check(24, 10.0).is_ok());
+            assert_eq!(cov.check(24, 10.0).unwrap(), PositionSet::Spread);
         }
     }
 
@@ -568,5 +617,81 @@ mod tests {
         assert!((linalg::norm(&spin.mean_gyro_rad_s).to_degrees() - 90.0).abs() < 0.1);
         assert!(spin.start_s > 4.0 && spin.start_s + spin.duration_s < 8.0);
         assert!(angle_deg(&seg.stills[1].direction, &[1.0, 0.0, 0.0]) < 0.5);
+    }
+
+    fn still_at(direction: [f64; 3]) -> Interval {
+        let n = linalg::norm(&direction);
+        Interval {
+            kind: IntervalKind::Still,
+            start: 0,
+            end: 1,
+            start_s: 0.0,
+            duration_s: 4.0,
+            mean_acc: direction,
+            std_acc: [0.0; 3],
+            mean_gyro_rad_s: [0.0; 3],
+            std_gyro_rad_s: [0.0; 3],
+            direction: direction.map(|c| c / n),
+        }
+    }
+
+    #[test]
+    fn six_faces_near_the_axes_are_a_cube_other_few_positions_are_refused() {
+        let t = 3f64.to_radians().tan();
+        let faces = [
+            [1.0, t, 0.0],
+            [-1.0, 0.0, t],
+            [0.0, 1.0, -t],
+            [t, -1.0, 0.0],
+            [0.0, t, 1.0],
+            [-t, 0.0, -1.0],
+        ];
+        let stills: Vec<Interval> = faces.iter().map(|d| still_at(*d)).collect();
+        let cov = coverage(&stills, 10.0);
+        assert_eq!(cov.distinct, 6);
+        assert_eq!(cov.check(6, 10.0).unwrap(), PositionSet::SixFaces);
+        // A repeated face is still a cube.
+        let mut again = stills.clone();
+        again.push(still_at(faces[0]));
+        assert_eq!(
+            coverage(&again, 10.0).check(7, 10.0).unwrap(),
+            PositionSet::SixFaces
+        );
+        // Five faces, or one position 8° off its axis: refused, naming what is missing.
+        let e = coverage(&stills[..5], 10.0)
+            .check(5, 10.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("six faces of a cube") && e.contains("z down"),
+            "{e}"
+        );
+        let mut tilted = stills.clone();
+        tilted[2] = still_at([8f64.to_radians().tan(), 1.0, 0.0]);
+        assert!(coverage(&tilted, 10.0).check(6, 10.0).is_err());
+    }
+
+    #[test]
+    fn no_still_interval_spans_a_time_gap() {
+        let mut rng = crate::sim::Rng::new(9, 0);
+        let mut rec = Recording {
+            acc_unit: Some(shared::OutputUnit::StandardGravity),
+            rate_hz: 100.0,
+            ..Recording::default()
+        };
+        // 10 s still, z up, with 2 s of time stamps missing after 5 s.
+        for i in 0..1000 {
+            rec.t_s
+                .push(i as f64 / 100.0 + if i >= 500 { 2.0 } else { 0.0 });
+            rec.acc.push(core::array::from_fn(|j| {
+                f64::from(u8::from(j == 2)) + 1e-3 * rng.normal()
+            }));
+            rec.gyro_rad_s.push(core::array::from_fn(|_| {
+                0.01f64.to_radians() * rng.normal()
+            }));
+        }
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 2, "{:?}", seg.stills);
+        assert!(seg.stills[0].end <= 500 && seg.stills[1].start >= 500);
     }
 }
