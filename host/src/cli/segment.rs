@@ -129,6 +129,13 @@ pub struct SimulateHandArgs {
     /// With --gyro-unit LSB: counts per °/s written.
     #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
     pub gyro_lsb_per_dps: Option<f64>,
+    /// A six-face session instead: a cube set down on its six faces (each placed 1° off its body
+    /// axis), turned over by hand between them, consumer-MEMS noise (150 µg/√Hz).
+    #[arg(long)]
+    pub six_faces: bool,
+    /// With --six-faces: how many times the cube is turned over through its six faces.
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 10))]
+    pub rounds: u32,
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
@@ -173,7 +180,11 @@ pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let spec = HandSpec {
         rate_hz: a.rate_hz,
         acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
-        ..HandSpec::standard(a.seed)
+        ..if a.six_faces {
+            HandSpec::six_faces(a.seed, 1.0, a.rounds as usize)
+        } else {
+            HandSpec::standard(a.seed)
+        }
     };
     let sim = simulate_hand(&truth, &spec);
     let layout = LoggerLayout {

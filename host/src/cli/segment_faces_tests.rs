@@ -210,7 +210,7 @@ fn six_face_case(seed: u64) -> [HeldOut; 4] {
     let tmp = tempfile::tempdir().unwrap();
     let unit = OutputUnit::MetresPerSecondSquared;
     let truth = logger_unit(unit);
-    let spec = HandSpec::six_faces(seed, 1.0);
+    let spec = HandSpec::six_faces(seed, 1.0, 1);
     let sim = simulate_hand(&truth, &spec);
     write_logger_csv(
         &tmp.path().join("raw.csv"),

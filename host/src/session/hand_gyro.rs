@@ -208,3 +208,49 @@ pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
         undetermined,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::from_recording::plan_for;
+    use crate::session::segment::{find_intervals, SegmentOptions};
+    use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+    use shared::OutputUnit;
+
+    #[test]
+    fn a_turn_across_a_time_gap_is_dropped_and_said_the_others_fit() {
+        let spec = HandSpec::standard(4);
+        let unit = OutputUnit::MetresPerSecondSquared;
+        let sim = simulate_hand(&logger_unit(unit), &spec);
+        // Half a second of the first turn lost: its rows removed, the time stamps kept.
+        let (t0, t1) = (sim.holds[0].1 + 0.3, sim.holds[0].1 + 0.8);
+        let rows: Vec<_> = sim.rows.iter().filter(|r| r.0 < t0 || r.0 > t1).collect();
+        let rec = Recording {
+            t_s: rows.iter().map(|r| r.0).collect(),
+            acc: rows.iter().map(|r| r.1).collect(),
+            gyro_rad_s: rows.iter().map(|r| r.2).collect(),
+            acc_unit: Some(unit),
+            rate_hz: spec.rate_hz,
+            ..Recording::default()
+        };
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 24);
+        let dropped = dropped_turns(&rec, &seg);
+        assert_eq!(dropped.len(), 1, "{dropped:?}");
+        assert_eq!(dropped[0].after_still, 1);
+        let text = dropped[0].to_string();
+        assert!(text.contains("after still interval #1"), "{text}");
+        assert!((0.5..0.52).contains(&dropped[0].jump.step_s), "{text}");
+        let fit = fit(&rec, &seg, &plan_for(&rec, &seg)).unwrap().unwrap();
+        assert_eq!(fit.turns, 22);
+        // The gyro's truth (GyroTruth::half_percent): the remaining turns still find its scale.
+        let want = [0.005, -0.005, 0.004];
+        for i in 0..3 {
+            assert!(
+                (fit.scale_rel()[i] - want[i]).abs() < 5e-4,
+                "{:?}",
+                fit.scale_rel()
+            );
+        }
+    }
+}

@@ -113,9 +113,10 @@ impl HandSpec {
     /// A six-face session (the classic bench method, docs/model.md §7.1): a cube set down on a table
     /// on each of its six faces in turn, each face's true up `placement_deg` off its body axis in a
     /// random direction, held 6–9 s, turned over by hand in 2–3 s between faces (+z, +x, +y, −z, −x,
-    /// −y: the turns go about each body axis). Noise as a consumer MEMS unit at 200 Hz: 150 µg/√Hz
-    /// (1.5 mg per sample), gyro 0.01 °/s/√Hz (0.1 °/s per sample).
-    pub fn six_faces(seed: u64, placement_deg: f64) -> HandSpec {
+    /// −y: the turns go about each body axis), `rounds` times over (each set-down its own placement).
+    /// Noise as a consumer MEMS unit at 200 Hz: 150 µg/√Hz (1.5 mg per sample), gyro 0.01 °/s/√Hz
+    /// (0.1 °/s per sample).
+    pub fn six_faces(seed: u64, placement_deg: f64, rounds: usize) -> HandSpec {
         let mut rng = Rng::new(seed, 12);
         let faces = [
             [0.0, 0.0, 1.0],
@@ -127,6 +128,8 @@ impl HandSpec {
         ];
         let ups = faces
             .iter()
+            .cycle()
+            .take(6 * rounds.max(1))
             .map(|n: &[f64; 3]| {
                 // A random axis perpendicular to n, and the face turned about it by the placement.
                 let r: [f64; 3] = core::array::from_fn(|_| rng.normal());
