@@ -12,7 +12,8 @@ use crate::session::from_recording::{
 };
 use crate::session::hand_gyro;
 use crate::session::import::{
-    parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource, TimeUnit,
+    parse_acc_unit, read_logger_csv, six_digits, GyroUnit, ImportOptions, Recording, TimeSource,
+    TimeUnit,
 };
 use crate::session::plan::Attitude;
 use crate::session::segment::{
@@ -475,11 +476,11 @@ fn reading_notes(out: &Output, rec: &Recording, warnings: &mut Vec<String>) {
     }
     if let Some((unit, true)) = rec.time_unit {
         out.note(format_args!(
-            "time column read in {} (detected from its median step and span: {:.6} Hz over {:.1} \
-             s; --time-unit to say otherwise)",
+            "time column read in {} (detected from its median step and span: {} Hz over {} s; \
+             --time-unit to say otherwise)",
             unit.symbol(),
-            rec.rate_hz,
-            rec.t_s.last().unwrap_or(&0.0) - rec.t_s.first().unwrap_or(&0.0)
+            six_digits(rec.rate_hz),
+            six_digits(rec.t_s.last().unwrap_or(&0.0) - rec.t_s.first().unwrap_or(&0.0))
         ));
     }
     if let Some(w) = rec.time_jumps() {

@@ -242,7 +242,7 @@ impl Recording {
             return None;
         }
         let kind = |j: &TimeJump| match j.step_s {
-            s if s == 0.0 => "repeat",
+            0.0 => "repeat",
             s if s < 0.0 => "step back",
             _ => "gap",
         };
@@ -607,7 +607,7 @@ fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError {
 
 /// `x` to six significant digits, as [`short_number`] prints it (a median step of 0.01 read from
 /// text is 0.009999999999999787).
-fn six_digits(x: f64) -> String {
+pub(crate) fn six_digits(x: f64) -> String {
     short_number(format!("{x:.5e}").parse().unwrap_or(x))
 }
 
@@ -853,13 +853,13 @@ fn check_not_physical(rec: &Recording, unit: OutputUnit) -> Result<(), ImportErr
     })
 }
 
-/// Slowest rate of a logger's time stamps taken as seconds, Hz: an IMU log for calibration samples at
-/// tens of Hz at least; a time column in ms reads 1000× slower.
+/// Slowest rate a time unit may make of a logger's time stamps, Hz: an IMU log for calibration samples
+/// at tens of Hz at least; read in too large a unit, a time column reads 1000× slower.
 const MIN_RATE_HZ: f64 = 5.0;
 
-/// Fastest, Hz: a time column in a unit larger than seconds (or a repeated stamp) reads faster than
-/// any IMU's output data rate.
-const MAX_RATE_HZ: f64 = 1e5;
+/// Fastest, Hz: above the fastest IMU output data rates (32 kHz), and below 100 kHz, which a 100 Hz log
+/// in seconds would read as in ms.
+const MAX_RATE_HZ: f64 = 5e4;
 
 /// Gravity's magnitude must be about 1 g in the stated unit (for m/s² and g; LSB and V have no
 /// expected value). The median over all rows is gravity's: a hand-held recording is mostly still.
