@@ -348,6 +348,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         rate_hz: spec.rate_hz,
         skipped_rows: 0,
         unterminated_line: None,
+        temp_c: None,
     };
     let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
     let found_all = seg.stills.len() == sim.holds.len()

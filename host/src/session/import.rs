@@ -120,6 +120,8 @@ pub struct Recording {
     pub skipped_rows: usize,
     /// The last line, left out because it has no line end (the file was cut short).
     pub unterminated_line: Option<u64>,
+    /// The unit's temperature at each row, °C, where the log has it (binary logs, `super::logs`).
+    pub temp_c: Option<Vec<f64>>,
 }
 
 impl Recording {

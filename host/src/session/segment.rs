@@ -502,6 +502,7 @@ mod tests {
             rate_hz: spec.rate_hz,
             skipped_rows: 0,
             unterminated_line: None,
+            temp_c: None,
         }
     }
 
