@@ -9,9 +9,8 @@ use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Figure, Formats, Panel, Series, SeriesStyle};
 use crate::session::from_recording::{normal_gravity_m_s2, plan_for, write_session};
 use crate::session::hand_gyro;
-use crate::session::import::{
-    parse_acc_unit, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
-};
+use crate::session::import::{parse_acc_unit, GyroUnit, Recording};
+use crate::session::logs::read_log;
 use crate::session::plan::Attitude;
 use crate::session::segment::{
     coverage, find_intervals, Coverage, IntervalKind, SegmentOptions, Segmentation,
@@ -31,31 +30,16 @@ pub use crate::session::hand_gyro::GYRO_FILE;
 /// `host segment`.
 #[derive(Debug, Args)]
 pub struct SegmentArgs {
-    /// The logger's CSV (a header line naming the columns).
+    /// The logger's file: text (CSV, tab- or white-space separated, a header line naming the
+    /// columns), PX4 ULog, ArduPilot DataFlash (.bin) or ROS 2 MCAP, told by its content.
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
     /// Session directory to write (plan.toml, samples.csv, gyro.toml, segments.svg/png).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Accelerometer x,y,z and gyro x,y,z column names, in that order.
-    #[arg(
-        long,
-        value_name = "AX,AY,AZ,GX,GY,GZ",
-        default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
-    )]
-    pub columns: String,
-    /// Column with the time in seconds (else --rate-hz).
-    #[arg(long, value_name = "NAME")]
-    pub time_column: Option<String>,
-    /// Sample rate, Hz, when the file has no time column (a sample index is ignored).
-    #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
-    pub rate_hz: Option<f64>,
-    /// The accelerometer's unit: m/s2, g, LSB or V (kept as the calibration's output unit).
-    #[arg(long, value_name = "UNIT")]
-    pub acc_unit: String,
-    /// The gyro's unit: deg/s or rad/s.
-    #[arg(long, value_name = "UNIT")]
-    pub gyro_unit: String,
+    /// How to read it (text: columns, time, units; binary logs: instance, topic).
+    #[command(flatten)]
+    pub log: super::log_input::LogInputArgs,
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
@@ -177,51 +161,6 @@ pub struct SegmentOutcome {
     pub gyro: Result<HandGyroFit, HandGyroError>,
 }
 
-fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
-    let names: Vec<String> = a.columns.split(',').map(|s| s.trim().to_string()).collect();
-    let columns: [String; 6] = names.try_into().map_err(|_| {
-        CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
-    })?;
-    // The reader matches names case-insensitively: a name given twice would read one column twice
-    // and make the fit singular, far from the cause.
-    let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
-    seen.extend(a.time_column.as_deref());
-    for (k, name) in seen.iter().enumerate() {
-        if name.is_empty() {
-            return Err(CliError::Usage(
-                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z".into(),
-            ));
-        }
-        if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
-            return Err(CliError::Usage(format!(
-                "column '{first}' is named twice in --columns/--time-column: each of acc x,y,z, \
-                 gyro x,y,z and the time must be its own column"
-            )));
-        }
-    }
-    let time = match (&a.time_column, a.rate_hz) {
-        (Some(c), None) => TimeSource::Column(c.clone()),
-        (None, Some(hz)) => TimeSource::RateHz(hz),
-        _ => {
-            return Err(CliError::Usage(
-                "give exactly one of --time-column NAME (seconds) or --rate-hz HZ".into(),
-            ))
-        }
-    };
-    let acc_unit = parse_acc_unit(&a.acc_unit).ok_or_else(|| {
-        CliError::Usage(format!("--acc-unit {}: use m/s2, g, LSB or V", a.acc_unit))
-    })?;
-    let gyro_unit = GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
-        CliError::Usage(format!("--gyro-unit {}: use deg/s or rad/s", a.gyro_unit))
-    })?;
-    Ok(ImportOptions {
-        columns,
-        time,
-        acc_unit,
-        gyro_unit,
-    })
-}
-
 /// Runs `host segment` from the command line (`--quiet` silences the human text).
 pub fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
     let out = Output {
@@ -243,12 +182,16 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 }
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
-    let options = import_options(a)?;
+    let source = a.log.source()?;
     let unit_id = unit_and_site(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
+    let log = read_log(&a.input, &source).map_err(|e| CliError::Failed(e.to_string()))?;
+    let rec = log.recording;
     let mut warnings = Vec::new();
+    for w in log.warnings {
+        warn(out, &mut warnings, w);
+    }
     if rec.skipped_rows > 0 {
         let w = format!(
             "{} row(s) with NaN or infinite values left out",
@@ -329,7 +272,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         advice,
         warnings,
     };
-    out.document(&document(a, options.gyro_unit, &outcome, &cov, &written))?;
+    out.document(&document(a, a.log.gyro_unit(), &outcome, &cov, &written))?;
     Ok(outcome)
 }
 

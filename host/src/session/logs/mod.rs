@@ -186,6 +186,13 @@ pub fn read_log_from<R: BufRead>(
         option,
     };
     let p = || path.to_path_buf();
+    if format != LogFormat::Text && source.text.is_some() {
+        return Err(LogError::TextOptionOnBinary {
+            path: p(),
+            format,
+            option: "--acc-unit, --gyro-unit, --time-column and --rate-hz",
+        });
+    }
     let (recording, warnings) = match format {
         LogFormat::Text => {
             if source.instance.is_some() {
@@ -244,11 +251,6 @@ pub fn read_log_from<R: BufRead>(
         format,
         warnings,
     })
-}
-
-/// Whether `path` is a log file that [`read_log`] takes, rather than a session directory.
-pub fn is_log_file(path: &Path) -> bool {
-    path.is_file()
 }
 
 /// One IMU stream sample as a binary log holds it: time s, x y z, and the temperature if logged.

@@ -1,0 +1,124 @@
+//! The options that say how to read a logger's file, shared by `host segment`, `host apply` and
+//! `host noise` (flattened into each, so the three read a file the same way).
+
+use super::CliError;
+use crate::session::import::{parse_acc_unit, GyroUnit, ImportOptions, TimeSource};
+use crate::session::logs::LogSource;
+use clap::Args;
+
+/// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
+/// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
+#[derive(Clone, Debug, Args)]
+pub struct LogInputArgs {
+    /// Text files: the accelerometer x,y,z and gyro x,y,z column names, in that order.
+    #[arg(
+        long,
+        value_name = "AX,AY,AZ,GX,GY,GZ",
+        default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
+    )]
+    pub columns: String,
+    /// Text files: the column with the time in seconds (else --rate-hz).
+    #[arg(long, value_name = "NAME")]
+    pub time_column: Option<String>,
+    /// Text files: the sample rate, Hz, when the file has no time column (a sample index is
+    /// ignored).
+    #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
+    pub rate_hz: Option<f64>,
+    /// Text files: the accelerometer's unit, m/s2, g, LSB or V (kept as the calibration's output
+    /// unit). Binary logs are in m/s².
+    #[arg(long, value_name = "UNIT")]
+    pub acc_unit: Option<String>,
+    /// Text files: the gyro's unit, deg/s or rad/s. Binary logs are in rad/s.
+    #[arg(long, value_name = "UNIT")]
+    pub gyro_unit: Option<String>,
+    /// PX4 ULog and ArduPilot DataFlash: which IMU of a vehicle with several (ULog's multi_id,
+    /// DataFlash's I; default 0).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8))]
+    pub instance: Option<u8>,
+    /// ROS 2 MCAP: the sensor_msgs/msg/Imu topic (default: the bag's only one).
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
+}
+
+impl LogInputArgs {
+    /// What to read: the text options when any is given (checked whole), the instance and topic.
+    pub fn source(&self) -> Result<LogSource, CliError> {
+        let text_given = self.acc_unit.is_some()
+            || self.gyro_unit.is_some()
+            || self.time_column.is_some()
+            || self.rate_hz.is_some();
+        Ok(LogSource {
+            text: if text_given {
+                Some(self.import_options()?)
+            } else {
+                None
+            },
+            instance: self.instance,
+            topic: self.topic.clone(),
+        })
+    }
+
+    /// The gyro unit of the input as the user named it (binary logs: rad/s).
+    pub fn gyro_unit(&self) -> GyroUnit {
+        self.gyro_unit
+            .as_deref()
+            .and_then(GyroUnit::parse)
+            .unwrap_or(GyroUnit::RadPerS)
+    }
+
+    /// The text reader's options: six distinct column names, one time source, the units.
+    fn import_options(&self) -> Result<ImportOptions, CliError> {
+        let names: Vec<String> = self
+            .columns
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect();
+        let columns: [String; 6] = names.try_into().map_err(|_| {
+            CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
+        })?;
+        // The reader matches names case-insensitively: a name given twice would read one column
+        // twice and make the fit singular, far from the cause.
+        let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
+        seen.extend(self.time_column.as_deref());
+        for (k, name) in seen.iter().enumerate() {
+            if name.is_empty() {
+                return Err(CliError::Usage(
+                    "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z".into(),
+                ));
+            }
+            if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
+                return Err(CliError::Usage(format!(
+                    "column '{first}' is named twice in --columns/--time-column: each of acc x,y,z, \
+                     gyro x,y,z and the time must be its own column"
+                )));
+            }
+        }
+        let time =
+            match (&self.time_column, self.rate_hz) {
+                (Some(c), None) => TimeSource::Column(c.clone()),
+                (None, Some(hz)) => TimeSource::RateHz(hz),
+                _ => return Err(CliError::Usage(
+                    "a text file needs exactly one of --time-column NAME (seconds) or --rate-hz HZ"
+                        .into(),
+                )),
+            };
+        let acc = self.acc_unit.as_deref().unwrap_or("");
+        let acc_unit = parse_acc_unit(acc).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--acc-unit '{acc}': a text file needs its accelerometer unit, m/s2, g, LSB or V"
+            ))
+        })?;
+        let gyro = self.gyro_unit.as_deref().unwrap_or("");
+        let gyro_unit = GyroUnit::parse(gyro).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--gyro-unit '{gyro}': a text file needs its gyro unit, deg/s or rad/s"
+            ))
+        })?;
+        Ok(ImportOptions {
+            columns,
+            time,
+            acc_unit,
+            gyro_unit,
+        })
+    }
+}
