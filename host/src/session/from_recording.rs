@@ -4,7 +4,10 @@
 
 use super::import::Recording;
 use super::segment::{angle_deg, Interval, Segmentation};
-use super::{Plan, RecordingError, SegmentAccumulator, SegmentPlan, SegmentStats, SessionWriter};
+use super::{
+    Plan, RecordingError, RecordingVersion, SegmentAccumulator, SegmentPlan, SegmentStats,
+    SessionWriter,
+};
 use crate::session::plan::Attitude;
 use std::path::Path;
 
@@ -46,10 +49,15 @@ fn segment_for(k: usize, iv: &Interval) -> SegmentPlan {
     }
 }
 
-/// The plan of the session: one static segment per still interval, format 2.
+/// The plan of the session: one static segment per still interval, format 2, or format 3 when the
+/// recording has the unit's temperature (its `temp_c` column, docs/recording-format.md).
 pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
     Plan {
-        format_version: 2,
+        format_version: if rec.temp_c.is_some() {
+            RecordingVersion::V3Temperature.number()
+        } else {
+            RecordingVersion::V2Attitudes.number()
+        },
         output_unit: rec.acc_unit.unwrap_or(shared::OutputUnit::Lsb),
         sample_rate_hz: (rec.rate_hz * 1e6).round() / 1e6,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -93,7 +101,11 @@ pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<Segmen
         .filter_map(|(iv, sp)| {
             let mut acc = SegmentAccumulator::new(sp.name.clone());
             for i in iv.start..iv.end {
-                acc.push(rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+                let (t_s, u, w_rad_s) = (rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+                match (&rec.temp_c, plan.has_temperature()) {
+                    (Some(temp), true) => acc.push_with_temperature(t_s, u, w_rad_s, temp[i]),
+                    _ => acc.push(t_s, u, w_rad_s),
+                }
             }
             acc.finish()
         })
@@ -111,7 +123,13 @@ pub fn write_session(
     let mut w = SessionWriter::create(dir, plan, overwrite)?;
     for (iv, sp) in seg.stills.iter().zip(&plan.segments) {
         for i in iv.start..iv.end {
-            w.write_row(&sp.name, rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i])?;
+            let (t_s, u, w_rad_s) = (rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+            match (&rec.temp_c, w.has_temperature()) {
+                (Some(temp), true) => {
+                    w.write_row_with_temperature(&sp.name, t_s, u, w_rad_s, temp[i])?
+                }
+                _ => w.write_row(&sp.name, t_s, u, w_rad_s)?,
+            }
         }
         w.end_segment()?;
     }
