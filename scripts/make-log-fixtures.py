@@ -218,7 +218,7 @@ def write_mcap(path, t, acc, gyro):
     ts, a, g = [], [], []
     with open(path, "rb") as f:
         for _, _, _, m in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
-            ts.append(m.header.stamp.sec - t0 + m.header.stamp.nanosec * 1e-9)
+            ts.append(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9)
             v = m.linear_acceleration
             a.append([v.x, v.y, v.z])
             v = m.angular_velocity

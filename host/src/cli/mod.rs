@@ -27,6 +27,8 @@ pub mod compare;
 pub mod error;
 pub mod export;
 pub mod flash;
+#[cfg(test)]
+mod log_fixture_tests;
 pub mod log_input;
 pub mod monitor;
 pub mod navigation_check;
