@@ -225,6 +225,27 @@ fn every_format_calibrates_like_the_csv_and_applies() {
         let median_ug = rest[rest.len() / 2] * 1e6;
         println!("{name}: apply, median |f| − 1 g at rest {median_ug:.1} µg");
         assert!(median_ug.abs() < 200.0, "{name}: {median_ug} µg");
+        // `host noise` on the same file: its longest still interval, in m/s² through the calibration
+        // (which must turn it into 1 g).
+        let line = format!(
+            "host noise --input {} --calibration {}/cal/calibration.toml --out {}/noise",
+            fixture(name).display(),
+            dir.display(),
+            dir.display()
+        );
+        let Command::Noise(a) = command(&line) else {
+            panic!()
+        };
+        super::noise::run(&a, true).unwrap();
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("noise/noise.json")).unwrap())
+                .unwrap();
+        let samples = doc["samples"].as_u64().unwrap();
+        assert!((300..=600).contains(&samples), "{name}: {samples}");
+        assert!(
+            doc["segment"].as_str().unwrap().starts_with("still "),
+            "{doc}"
+        );
     }
 }
 

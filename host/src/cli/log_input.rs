@@ -33,8 +33,8 @@ pub struct LogInputArgs {
     pub gyro_unit: Option<String>,
     /// PX4 ULog and ArduPilot DataFlash: which IMU of a vehicle with several (ULog's multi_id,
     /// DataFlash's I; default 0).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8))]
-    pub instance: Option<u8>,
+    #[arg(long, value_name = "N", value_parser = crate::limits::whole_u32(0, u8::MAX as u32))]
+    pub instance: Option<u32>,
     /// ROS 2 MCAP: the sensor_msgs/msg/Imu topic (default: the bag's only one).
     #[arg(long, value_name = "NAME")]
     pub topic: Option<String>,
@@ -53,7 +53,8 @@ impl LogInputArgs {
             } else {
                 None
             },
-            instance: self.instance,
+            // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
+            instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
             topic: self.topic.clone(),
         })
     }

@@ -183,4 +183,44 @@ mod tests {
         assert!((far.up_b[0] - 5f64.to_radians().sin()).abs() < 1e-6);
         assert_eq!(far.attitude_sigma_deg, None);
     }
+
+    #[test]
+    fn a_recording_with_temperature_writes_format_3_with_its_temp_c_column() {
+        let n = 10;
+        let mut rec = Recording {
+            t_s: (0..n).map(|i| i as f64 * 0.01).collect(),
+            acc: vec![[0.0, 0.0, 9.81]; n],
+            gyro_rad_s: vec![[0.0; 3]; n],
+            acc_unit: Some(shared::OutputUnit::MetresPerSecondSquared),
+            rate_hz: 100.0,
+            temp_c: Some((0..n).map(|i| 20.0 + i as f64).collect()),
+            ..Recording::default()
+        };
+        let seg = Segmentation {
+            stills: vec![interval([0.0, 0.0, 1.0])],
+            spins: Vec::new(),
+            short_dropped: 0,
+            acc_threshold: 0.01,
+            gyro_threshold_rad_s: 0.01,
+            gravity_out: 9.81,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let plan = plan_for(&rec, &seg);
+        assert!(plan.has_temperature());
+        write_session(dir.path(), &rec, &seg, &plan, false).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(crate::session::SAMPLES_FILE)).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(
+            lines.next(),
+            Some(crate::session::SAMPLES_HEADER_TEMPERATURE)
+        );
+        let row = lines.nth(3).unwrap();
+        let temp: f64 = row.rsplit(',').next().unwrap().parse().unwrap();
+        assert_eq!(temp, 23.0, "{row}");
+        let stats = stats_for(&rec, &seg, &plan);
+        assert_eq!(stats[0].count, 10);
+        // Without temperature: format 2, eight columns.
+        rec.temp_c = None;
+        assert!(!plan_for(&rec, &seg).has_temperature());
+    }
 }

@@ -2,8 +2,10 @@
 //! `header.stamp` (the driver's sample time; the bag's log time is when the recorder got it).
 //!
 //! The container is read by Foxglove's `mcap` crate (the format's reference implementation) with its
-//! streaming `LinearReader`: chunks are decompressed (zstd, lz4) as they come, and every record is
-//! capped in length ([`RECORD_LIMIT`]). The message is decoded by hand ([`decode_imu`]): a CDR
+//! streaming `LinearReader`, every record capped in length ([`RECORD_LIMIT`]). Chunks come out whole
+//! and are decompressed and walked here ([`State::chunk`]): the crate's own walk of a chunk's records
+//! subtracts a record's length from what is left of the chunk unchecked, which overflows on a
+//! damaged chunk (our fuzz target found it), so the lengths are checked here instead. The message is decoded by hand ([`decode_imu`]): a CDR
 //! decoder crate would be a general serde layer for one fixed message of plain numbers, and the
 //! layout is short and fixed by the message definition (`sensor_msgs/msg/Imu.msg`,
 //! `std_msgs/msg/Header.msg`, `builtin_interfaces/msg/Time.msg`).
@@ -18,8 +20,9 @@ use std::io::Read;
 
 /// The file's first eight bytes.
 pub const MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
-/// The longest record accepted, bytes (an Imu message is about 330; a schema text a few KiB).
-pub const RECORD_LIMIT: usize = 4 << 20;
+/// The longest record accepted, bytes: a whole chunk, compressed or not (writers make chunks of
+/// about 1 MiB; an Imu message is about 330 bytes).
+pub const RECORD_LIMIT: usize = 64 << 20;
 /// The ROS 2 message type read.
 const IMU_SCHEMA: &str = "sensor_msgs/msg/Imu";
 /// Most channels remembered (for the listing in an error).
@@ -93,6 +96,17 @@ pub enum McapError {
     /// More samples than [`MAX_ROWS`].
     #[error("more than {MAX_ROWS} Imu messages: cut the bag (a hand-held session needs minutes)")]
     TooManySamples,
+    /// A chunk that does not decompress to its stated size, or whose records overrun it.
+    #[error(
+        "the chunk ending before byte {offset} is damaged ({problem}); check the bag with \
+         `mcap doctor`"
+    )]
+    Chunk {
+        /// Bytes read so far.
+        offset: u64,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 /// What is wrong with a CDR message.
@@ -240,7 +254,9 @@ struct State {
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
 pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
-    let options = LinearReaderOptions::default().with_record_length_limit(RECORD_LIMIT);
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(RECORD_LIMIT)
+        .with_emit_chunks(true);
     let mut reader = LinearReader::new_with_options(options);
     let mut st = State::default();
     let mut offset = 0u64;
@@ -257,7 +273,10 @@ pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<St
             LinearReadEvent::Record { data, opcode } => {
                 let record = ::mcap::parse_record(opcode, data)
                     .map_err(|source| McapError::Container { offset, source })?;
-                st.record(record, topic)?;
+                match record {
+                    Record::Chunk { header, data } => st.chunk(&header, &data, topic, offset)?,
+                    other => st.record(other, topic)?,
+                }
             }
         }
     }
@@ -274,6 +293,64 @@ fn read_some<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
 }
 
 impl State {
+    /// A chunk: decompressed (no more than its stated size, itself within [`RECORD_LIMIT`]) and its
+    /// records (opcode, `u64` length, body) read in turn.
+    fn chunk(
+        &mut self,
+        header: &::mcap::records::ChunkHeader,
+        data: &[u8],
+        topic: Option<&str>,
+        offset: u64,
+    ) -> Result<(), McapError> {
+        let bad = |problem: String| McapError::Chunk { offset, problem };
+        let size = usize::try_from(header.uncompressed_size)
+            .ok()
+            .filter(|&n| n <= RECORD_LIMIT)
+            .ok_or_else(|| bad(format!("{} bytes uncompressed", header.uncompressed_size)))?;
+        let owned;
+        let body: &[u8] = match header.compression.as_str() {
+            "" => data,
+            "zstd" => {
+                owned = zstd::bulk::decompress(data, size).map_err(|e| bad(e.to_string()))?;
+                &owned
+            }
+            "lz4" => {
+                let mut out = Vec::new();
+                let decoder = lz4::Decoder::new(data).map_err(|e| bad(e.to_string()))?;
+                decoder
+                    .take(size as u64 + 1)
+                    .read_to_end(&mut out)
+                    .map_err(|e| bad(e.to_string()))?;
+                owned = out;
+                &owned
+            }
+            other => return Err(bad(format!("compression '{other}' is not zstd or lz4"))),
+        };
+        if body.len() != size {
+            return Err(bad(format!(
+                "{} bytes where the chunk says {size}",
+                body.len()
+            )));
+        }
+        let mut pos = 0usize;
+        while pos < body.len() {
+            let head = body
+                .get(pos..pos + 9)
+                .ok_or_else(|| bad("a cut record".into()))?;
+            let len = u64::from_le_bytes(std::array::from_fn(|k| head[1 + k]));
+            let end = usize::try_from(len)
+                .ok()
+                .and_then(|n| (pos + 9).checked_add(n))
+                .filter(|&e| e <= body.len())
+                .ok_or_else(|| bad(format!("a record of {len} bytes overruns it")))?;
+            let record = ::mcap::parse_record(head[0], &body[pos + 9..end])
+                .map_err(|source| McapError::Container { offset, source })?;
+            self.record(record, topic)?;
+            pos = end;
+        }
+        Ok(())
+    }
+
     fn record(&mut self, record: Record<'_>, topic: Option<&str>) -> Result<(), McapError> {
         match record {
             Record::Schema { header, .. } if self.schemas.len() < MAX_CHANNELS => {
