@@ -9,10 +9,21 @@
 //! unit was remounted in between, so a difference across the gap means nothing), and a row with a
 //! non-finite value restarts it too (as on the device) and gives `NaN` outputs instead of a number.
 //!
-//! Output: `segment,t_s,f_x_g,f_y_g,f_z_g` — the specific force at the body origin, body axes, in g
-//! (the compensator's m/s² divided by the calibration's gravity, in f64).
+//! Output: `segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s` — the specific force at the
+//! body origin, body axes, in g (the compensator's m/s² divided by the calibration's gravity, in
+//! f64), and the corrected body rate the device used for it (the calibration's gyro `G⁻¹(w − b)`,
+//! docs/model.md §8; the gyro's reading where the calibration has no gyro), rad/s.
+//!
+//! A logger's file ([`apply_log`]) is read whole by `session::logs` (bounded by its row cap): it has
+//! no segments, so its rows are written with the segment `log`, and the still intervals
+//! `session::segment` finds in it are the ones checked to compensate to 1 g.
+
+mod log;
+
+pub use log::apply_log;
 
 use crate::output_file::OutputFileError;
+use crate::session::logs::LogError;
 use crate::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
@@ -32,7 +43,7 @@ pub const MAX_STILL_G_ERROR: f64 = 0.05;
 pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// The header of the output, exactly.
-pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g";
+pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";
 
 /// Why a calibration could not be applied.
 #[derive(Debug)]
@@ -76,6 +87,8 @@ pub enum ApplyError {
     Recording(RecordingError),
     /// The output could not be written.
     Output(OutputFileError),
+    /// A logger's file could not be read.
+    Log(LogError),
 }
 
 impl std::fmt::Display for ApplyError {
@@ -126,6 +139,7 @@ impl std::fmt::Display for ApplyError {
             ),
             ApplyError::Recording(e) => e.fmt(f),
             ApplyError::Output(e) => e.fmt(f),
+            ApplyError::Log(e) => e.fmt(f),
         }
     }
 }
@@ -301,26 +315,72 @@ struct StillSums {
 /// calibration has a gyro, a rest rate near zero after its bias.
 fn check_stills(plan: &Plan, sums: &[StillSums], gyro: bool) -> Result<(), ApplyError> {
     for (sp, s) in plan.segments.iter().zip(sums) {
-        if !sp.is_static() || s.rows < 10 {
-            continue;
-        }
-        let n = s.rows as f64;
-        let f = shared::linalg::norm(&s.f_g.map(|v| v / n));
-        if f.is_nan() || (f - 1.0).abs() > MAX_STILL_G_ERROR {
-            return Err(ApplyError::NotOneG {
-                segment: sp.name.clone(),
-                f_g: f,
-            });
-        }
-        let w = shared::linalg::norm(&s.w_rad_s.map(|v| v / n)).to_degrees();
-        if gyro && (w.is_nan() || w > MAX_REST_RATE_DEG_S) {
-            return Err(ApplyError::RestRate {
-                segment: sp.name.clone(),
-                deg_s: w,
-            });
+        if sp.is_static() {
+            check_still(&sp.name, s, gyro)?;
         }
     }
     Ok(())
+}
+
+/// [`check_stills`] of one still segment (fewer than 10 rows are not judged).
+fn check_still(name: &str, s: &StillSums, gyro: bool) -> Result<(), ApplyError> {
+    if s.rows < 10 {
+        return Ok(());
+    }
+    let n = s.rows as f64;
+    let f = shared::linalg::norm(&s.f_g.map(|v| v / n));
+    if f.is_nan() || (f - 1.0).abs() > MAX_STILL_G_ERROR {
+        return Err(ApplyError::NotOneG {
+            segment: name.to_string(),
+            f_g: f,
+        });
+    }
+    let w = shared::linalg::norm(&s.w_rad_s.map(|v| v / n)).to_degrees();
+    if gyro && (w.is_nan() || w > MAX_REST_RATE_DEG_S) {
+        return Err(ApplyError::RestRate {
+            segment: name.to_string(),
+            deg_s: w,
+        });
+    }
+    Ok(())
+}
+
+/// The warning for rows compensated outside the calibration's temperature range.
+fn flagged_warning(rows: u64) -> String {
+    format!(
+        "{rows} rows were recorded outside the calibration's valid temperature range (or without a \
+         temperature reading): their compensation uses the nearest end of the range, and the device \
+         flags such outputs"
+    )
+}
+
+/// One output row: segment, time, the specific force in g and the corrected rate (`NaN` for a row
+/// with a non-finite value).
+fn output_line(
+    segment: &str,
+    t_s: f64,
+    f: Option<[f32; 3]>,
+    applier: &Applier,
+    g: f64,
+    fmt: &mut ryu::Buffer,
+) -> String {
+    let (f_g, w) = match f {
+        Some(f) => (
+            f.map(|v| f64::from(v) / g),
+            applier.last_rate_rad_s.map(f64::from),
+        ),
+        None => ([f64::NAN; 3], [f64::NAN; 3]),
+    };
+    let mut line = String::with_capacity(160);
+    line.push_str(segment);
+    line.push(',');
+    line.push_str(fmt.format(t_s));
+    for v in f_g.into_iter().chain(w) {
+        line.push(',');
+        line.push_str(if v.is_finite() { fmt.format(v) } else { "NaN" });
+    }
+    line.push('\n');
+    line
 }
 
 /// Applies `cal` to the session in `dir`, writing the CSV to `out` (streaming, constant memory).
@@ -372,34 +432,17 @@ pub fn apply_session(
                 }
                 s.rows += 1;
             }
-            let f_g = match f {
-                Some(f) => f.map(|v| f64::from(v) / g),
-                None => {
-                    summary.non_finite_rows += 1;
-                    [f64::NAN; 3]
-                }
-            };
-            let mut line = String::with_capacity(96);
-            line.push_str(row.segment);
-            line.push(',');
-            line.push_str(fmt.format(row.t_s));
-            for v in f_g {
-                line.push(',');
-                line.push_str(if v.is_finite() { fmt.format(v) } else { "NaN" });
+            if f.is_none() {
+                summary.non_finite_rows += 1;
             }
-            line.push('\n');
+            let line = output_line(row.segment, row.t_s, f, &applier, g, &mut fmt);
             out.write_all(line.as_bytes()).map_err(write_err)
         },
     )?;
     summary.warnings = report.warnings;
     check_stills(&plan, &stills, cal.gyro.is_some())?;
     if applier.flagged_rows > 0 {
-        summary.warnings.push(format!(
-            "{} rows were recorded outside the calibration's valid temperature range (or without a \
-             temperature reading): their compensation uses the nearest end of the range, and the device \
-             flags such outputs",
-            applier.flagged_rows
-        ));
+        summary.warnings.push(flagged_warning(applier.flagged_rows));
     }
     Ok(summary)
 }
@@ -424,7 +467,7 @@ mod tests {
         lines
             .map(|l| {
                 let v: Vec<&str> = l.split(',').collect();
-                assert_eq!(v.len(), 5, "{l}");
+                assert_eq!(v.len(), 8, "{l}");
                 let n = |k: usize| v[k].parse::<f64>().unwrap();
                 (v[0].to_string(), n(1), [n(2), n(3), n(4)])
             })

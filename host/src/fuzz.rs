@@ -1,5 +1,6 @@
 //! Fuzz targets: every parser of outside input, called on arbitrary bytes (`samples.csv`, `plan.toml`,
-//! unit files, blobs, wire frames, a logger's CSV, and the bare `samples.csv` of `host noise`). Each target must return
+//! unit files, blobs, wire frames, a logger's CSV, the bare `samples.csv` of `host noise`, and the
+//! binary logs: PX4 ULog, ArduPilot DataFlash, MCAP). Each target must return
 //! (an `Ok` or a typed error) without panicking and within bounded memory; the properties a parsed
 //! value must have are checked with `assert!`, so a violation is a crash the fuzzer reports.
 //!
@@ -9,6 +10,8 @@
 //! - the stable driver [`drive`]: seeded mutations of a small corpus of valid inputs plus random
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
 //!   `cargo run --release -p host --example fuzz -- all 1000000` (a short run is a unit test).
+
+mod logs;
 
 use crate::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use crate::session::{read_samples, Plan};
@@ -33,11 +36,17 @@ pub enum Target {
     LoggerCsv,
     /// A bare `samples.csv` given to `host noise` (its two passes and the Allan analysis).
     NoiseCsv,
+    /// A PX4 ULog (`host segment`'s binary readers, `session::logs`).
+    Ulog,
+    /// An ArduPilot DataFlash log.
+    DataFlash,
+    /// An MCAP file (a ROS 2 bag).
+    Mcap,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 7] = [
+    pub const ALL: [Target; 10] = [
         Target::SamplesCsv,
         Target::PlanToml,
         Target::UnitFile,
@@ -45,6 +54,9 @@ impl Target {
         Target::Wire,
         Target::LoggerCsv,
         Target::NoiseCsv,
+        Target::Ulog,
+        Target::DataFlash,
+        Target::Mcap,
     ];
 
     /// The name used on the command line and by `fuzz/fuzz_targets/`.
@@ -57,6 +69,9 @@ impl Target {
             Target::Wire => "wire",
             Target::LoggerCsv => "logger_csv",
             Target::NoiseCsv => "noise_csv",
+            Target::Ulog => "ulog",
+            Target::DataFlash => "dataflash",
+            Target::Mcap => "mcap",
         }
     }
 
@@ -75,6 +90,9 @@ impl Target {
             Target::Wire => wire(data),
             Target::LoggerCsv => logger_csv(data),
             Target::NoiseCsv => noise_csv(data),
+            Target::Ulog => logs::ulog(data),
+            Target::DataFlash => logs::dataflash(data),
+            Target::Mcap => logs::mcap(data),
         }
     }
 
@@ -103,6 +121,13 @@ impl Target {
             Target::Wire => wire_corpus(),
             Target::LoggerCsv => logger_corpus(),
             Target::NoiseCsv => vec![noise_corpus()],
+            Target::Ulog => vec![logs::ulog_corpus()],
+            Target::DataFlash => vec![logs::dataflash_corpus()],
+            Target::Mcap => vec![
+                logs::mcap_corpus(None),
+                logs::mcap_corpus(Some(::mcap::Compression::Lz4)),
+                logs::mcap_corpus(Some(::mcap::Compression::Zstd)),
+            ],
         }
     }
 }

@@ -1,7 +1,7 @@
 //! `host apply`: a calibration applied to a recording with the device's own compensation code.
 
 use super::CliError;
-use crate::apply::{apply_session, ApplyError};
+use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary};
 use crate::output_file::OutputFile;
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -16,9 +16,13 @@ pub struct ApplyArgs {
     /// The calibration (calibration.toml or any unit file).
     #[arg(long, value_name = "FILE")]
     pub calibration: PathBuf,
-    /// The session directory (plan.toml + samples.csv).
-    #[arg(long, value_name = "SESSION_DIR")]
+    /// The session directory (plan.toml + samples.csv), or a logger's file (any format `host
+    /// segment` reads, with the same options).
+    #[arg(long, value_name = "SESSION_DIR|FILE")]
     pub input: PathBuf,
+    /// How to read a logger's file (not for a session directory).
+    #[command(flatten)]
+    pub log: super::log_input::LogInputArgs,
     /// Where to write the CSV (default: stdout).
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
@@ -74,11 +78,20 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
         unit.unit_id().map_err(invalid)?
     };
     let mode = a.lever.into();
-    let summary = match &a.out {
+    let source = if a.input.is_dir() {
+        None
+    } else {
+        Some(a.log.source()?)
+    };
+    let apply = |w: &mut dyn Write| match &source {
+        None => apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, w),
+        Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),
+    };
+    let summary: ApplySummary = match &a.out {
         Some(path) => {
             refuse_own_input(path, &a.input)?;
             let mut file = OutputFile::create(path, a.force).map_err(ApplyError::Output)?;
-            let s = apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut file)?;
+            let s = apply(&mut file)?;
             file.commit().map_err(ApplyError::Output)?;
             s
         }
@@ -87,8 +100,7 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
                 inner: std::io::BufWriter::new(std::io::stdout().lock()),
                 failed: None,
             };
-            let result =
-                apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, &mut stdout);
+            let result = apply(&mut stdout);
             // A closed or full stdout is named as such, not as a failure of the recording.
             if let Some(e) = stdout.failed.take() {
                 return Err(CliError::Stdout(e));
@@ -123,6 +135,13 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
 /// `--out` must not name a file of the recording it reads (`--force` would replace the input while
 /// it is being read).
 fn refuse_own_input(out: &Path, input: &Path) -> Result<(), CliError> {
+    let canonical = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    if input.is_file() && canonical(out) == canonical(input) {
+        return Err(CliError::Usage(format!(
+            "--out {} is the logger's file it reads: write the result elsewhere",
+            out.display()
+        )));
+    }
     let dir = std::fs::canonicalize(input).unwrap_or_else(|_| input.to_path_buf());
     let parent = out
         .parent()

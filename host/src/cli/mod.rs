@@ -27,6 +27,9 @@ pub mod compare;
 pub mod error;
 pub mod export;
 pub mod flash;
+#[cfg(test)]
+mod log_fixture_tests;
+pub mod log_input;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;
@@ -87,7 +90,8 @@ pub enum Command {
     /// (or the TOML conversions plain, fusion, all).
     Export(export::ExportArgs),
     /// Apply a calibration to a recording with the device's own compensation code: CSV of the
-    /// specific force per row (segment,t_s,f_x_g,f_y_g,f_z_g).
+    /// specific force and corrected rate per row
+    /// (segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s), from a session or a logger's file.
     Apply(apply::ApplyArgs),
     /// Noise of a still recording: overlapping Allan deviation per axis, fitted white noise density,
     /// bias instability and random walk; table, figure, and the figures Kalibr needs (noise.json).

@@ -2,7 +2,7 @@
 
 use super::CliError;
 use crate::export::convert;
-use crate::noise::{analyse, NoiseError};
+use crate::noise::{analyse, analyse_log, is_samples_csv, NoiseError};
 use crate::output_file::write_atomic;
 use crate::report::plot::{render, Formats};
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -12,9 +12,13 @@ use std::path::PathBuf;
 /// `host noise`.
 #[derive(Debug, Args)]
 pub struct NoiseArgs {
-    /// A session directory (its longest static segment is used) or a samples.csv.
-    #[arg(long, value_name = "SESSION_DIR|samples.csv")]
+    /// A session directory (its longest static segment is used), a samples.csv, or a logger's file
+    /// (any format `host segment` reads, with the same options; its longest still interval).
+    #[arg(long, value_name = "SESSION_DIR|samples.csv|FILE")]
     pub input: PathBuf,
+    /// How to read a logger's file.
+    #[command(flatten)]
+    pub log: super::log_input::LogInputArgs,
     /// A calibration, to analyse the accelerometer in m/s² (needed for Kalibr's accelerometer figures).
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<PathBuf>,
@@ -31,7 +35,7 @@ pub struct NoiseArgs {
 
 /// Runs `host noise`.
 pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
-    let plain = match &a.calibration {
+    let cal = match &a.calibration {
         Some(p) => {
             let unit = UnitFile::load(p)?;
             let cal = unit
@@ -46,11 +50,19 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
                 crate::apply::check_unit(id, &plan)?;
                 crate::apply::check_output_unit(&cal, &plan)?;
             }
-            Some(convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain)
+            let plain = convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain;
+            Some((plain, cal.statics.output_unit))
         }
         None => None,
     };
-    let report = analyse(&a.input, plain.as_ref(), quiet).map_err(CliError::Noise)?;
+    let plain = cal.as_ref().map(|c| &c.0);
+    let report = if a.input.is_dir() || is_samples_csv(&a.input) {
+        analyse(&a.input, plain, quiet)
+    } else {
+        let with_unit = cal.as_ref().map(|(p, u)| (p, *u));
+        analyse_log(&a.input, &a.log.source()?, with_unit)
+    }
+    .map_err(CliError::Noise)?;
     let out = super::output::Output {
         json: a.json,
         quiet,

@@ -11,10 +11,8 @@ use crate::session::from_recording::{
     normal_gravity_m_s2, plan_for, plan_for_faces, write_session,
 };
 use crate::session::hand_gyro;
-use crate::session::import::{
-    parse_acc_unit, read_logger_csv, six_digits, GyroUnit, ImportOptions, Recording, TimeSource,
-    TimeUnit,
-};
+use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
+use crate::session::logs::read_log;
 use crate::session::plan::Attitude;
 use crate::session::segment::{
     coverage, find_intervals, Coverage, IntervalKind, PositionSet, SegmentOptions, Segmentation,
@@ -34,43 +32,16 @@ pub use crate::session::hand_gyro::GYRO_FILE;
 /// `host segment`.
 #[derive(Debug, Args)]
 pub struct SegmentArgs {
-    /// The logger's CSV (a header line naming the columns).
+    /// The logger's file: text (CSV, tab- or white-space separated, a header line naming the
+    /// columns), PX4 ULog, ArduPilot DataFlash (.bin) or ROS 2 MCAP, told by its content.
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
     /// Session directory to write (plan.toml, samples.csv, gyro.toml, segments.svg/png).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Accelerometer x,y,z and gyro x,y,z column names, in that order.
-    #[arg(
-        long,
-        value_name = "AX,AY,AZ,GX,GY,GZ",
-        default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
-    )]
-    pub columns: String,
-    /// Column with the time stamps (else --rate-hz); their unit is detected, or --time-unit.
-    #[arg(long, value_name = "NAME")]
-    pub time_column: Option<String>,
-    /// The time column's unit: s, ms, us or ns (default: detected from its median step and span).
-    #[arg(long, value_name = "UNIT")]
-    pub time_unit: Option<String>,
-    /// Sample rate, Hz, when the file has no time column (a sample index is ignored).
-    #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
-    pub rate_hz: Option<f64>,
-    /// The accelerometer's unit: m/s2, g, LSB or V (kept as the calibration's output unit).
-    #[arg(long, value_name = "UNIT")]
-    pub acc_unit: String,
-    /// With --acc-unit LSB: the counts of zero force (an unsigned output's mid-scale, e.g. 32768),
-    /// one value or one per axis (X,Y,Z), subtracted before anything else; the calibration's biases
-    /// stay in the logger's own counts.
-    #[arg(long, value_name = "N[,NY,NZ]", allow_negative_numbers = true)]
-    pub acc_offset: Option<String>,
-    /// The gyro's unit: deg/s, rad/s, or LSB (counts, with --gyro-lsb-per-dps).
-    #[arg(long, value_name = "UNIT")]
-    pub gyro_unit: String,
-    /// With --gyro-unit LSB: the gyro's nominal scale, counts per °/s (from its data sheet, e.g.
-    /// 16.4 or 131); the turns fit the true scale.
-    #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
-    pub gyro_lsb_per_dps: Option<f64>,
+    /// How to read it (text: columns, time, units; binary logs: instance, topic).
+    #[command(flatten)]
+    pub log: super::log_input::LogInputArgs,
     /// Prior 1σ of a six-face session's faces, degrees (how well the cube sits on its faces; used
     /// only when the still positions are the six faces of a cube).
     #[arg(long, default_value_t = crate::session::from_recording::SIX_FACE_PRIOR_DEG, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
@@ -234,121 +205,6 @@ pub struct SegmentOutcome {
     pub gyro: Result<HandGyroFit, HandGyroError>,
 }
 
-fn import_options(a: &SegmentArgs) -> Result<ImportOptions, CliError> {
-    let names: Vec<String> = a.columns.split(',').map(|s| s.trim().to_string()).collect();
-    let columns: [String; 6] = names.try_into().map_err(|_| {
-        CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
-    })?;
-    // The reader matches names case-insensitively: a name given twice would read one column twice
-    // and make the fit singular, far from the cause.
-    let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
-    seen.extend(a.time_column.as_deref());
-    for (k, name) in seen.iter().enumerate() {
-        if name.is_empty() {
-            return Err(CliError::Usage(
-                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z".into(),
-            ));
-        }
-        if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
-            return Err(CliError::Usage(format!(
-                "column '{first}' is named twice in --columns/--time-column: each of acc x,y,z, \
-                 gyro x,y,z and the time must be its own column"
-            )));
-        }
-    }
-    let time = match (&a.time_column, a.rate_hz) {
-        (Some(c), None) => TimeSource::Column(c.clone()),
-        (None, Some(hz)) => TimeSource::RateHz(hz),
-        _ => {
-            return Err(CliError::Usage(
-                "give exactly one of --time-column NAME or --rate-hz HZ".into(),
-            ))
-        }
-    };
-    let time_unit = match (&a.time_unit, &time) {
-        (None, _) => None,
-        (Some(u), TimeSource::Column(_)) => Some(
-            TimeUnit::parse(u)
-                .ok_or_else(|| CliError::Usage(format!("--time-unit {u}: use s, ms, us or ns")))?,
-        ),
-        (Some(_), TimeSource::RateHz(_)) => {
-            return Err(CliError::Usage(
-                "--time-unit applies to --time-column, not to --rate-hz".into(),
-            ))
-        }
-    };
-    let acc_unit = parse_acc_unit(&a.acc_unit).ok_or_else(|| {
-        CliError::Usage(format!("--acc-unit {}: use m/s2, g, LSB or V", a.acc_unit))
-    })?;
-    let (gyro_unit, gyro_lsb_per_dps) = gyro_unit(a)?;
-    Ok(ImportOptions {
-        columns,
-        time,
-        acc_unit,
-        gyro_unit,
-        time_unit,
-        acc_offset: acc_offset(a, acc_unit)?,
-        gyro_lsb_per_dps,
-    })
-}
-
-/// `--acc-offset`: one value for every axis or three, with `--acc-unit LSB` only.
-fn acc_offset(a: &SegmentArgs, unit: OutputUnit) -> Result<[f64; 3], CliError> {
-    let Some(text) = &a.acc_offset else {
-        return Ok([0.0; 3]);
-    };
-    if unit != OutputUnit::Lsb {
-        return Err(CliError::Usage(format!(
-            "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the unit \
-             is {})",
-            a.acc_unit
-        )));
-    }
-    let bad = || {
-        CliError::Usage(format!(
-            "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) or three \
-             (X,Y,Z)"
-        ))
-    };
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-        .collect::<Option<_>>()
-        .ok_or_else(bad)?;
-    match v[..] {
-        [n] => Ok([n; 3]),
-        [x, y, z] => Ok([x, y, z]),
-        _ => Err(bad()),
-    }
-}
-
-/// `--gyro-unit` and `--gyro-lsb-per-dps`: counts need their nominal scale, and only counts take
-/// one.
-fn gyro_unit(a: &SegmentArgs) -> Result<(GyroUnit, Option<f64>), CliError> {
-    let counts = matches!(a.gyro_unit.as_str(), "LSB" | "lsb" | "counts");
-    match (counts, a.gyro_lsb_per_dps) {
-        (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
-        (true, None) => Err(CliError::Usage(
-            "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts per \
-             °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns then fit \
-             the true scale"
-                .into(),
-        )),
-        (false, Some(_)) => Err(CliError::Usage(format!(
-            "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not {})",
-            a.gyro_unit
-        ))),
-        (false, None) => GyroUnit::parse(&a.gyro_unit)
-            .map(|u| (u, None))
-            .ok_or_else(|| {
-                CliError::Usage(format!(
-                    "--gyro-unit {}: use deg/s, rad/s or LSB (with --gyro-lsb-per-dps)",
-                    a.gyro_unit
-                ))
-            }),
-    }
-}
-
 /// Runs `host segment` from the command line (`--quiet` silences the human text).
 pub fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
     let out = Output {
@@ -370,12 +226,16 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 }
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
-    let options = import_options(a)?;
+    let source = a.log.source()?;
     let unit_id = unit_and_site(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let rec = read_logger_csv(&a.input, &options).map_err(|e| CliError::Failed(e.to_string()))?;
+    let log = read_log(&a.input, &source).map_err(|e| CliError::Failed(e.to_string()))?;
+    let rec = log.recording;
     let mut warnings = Vec::new();
+    for w in log.warnings {
+        warn(out, &mut warnings, w);
+    }
     reading_notes(out, &rec, &mut warnings);
     let seg_options = SegmentOptions {
         min_still_s: a.min_still_s,
@@ -455,7 +315,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         warnings,
         six_faces: set == PositionSet::SixFaces,
     };
-    out.document(&document(a, &options, &outcome, &cov, &written))?;
+    out.document(&document(a, a.log.gyro_unit_symbol(), &outcome, &cov, &written))?;
     Ok(outcome)
 }
 
@@ -613,7 +473,7 @@ struct GyroDocument {
 
 fn document(
     a: &SegmentArgs,
-    options: &ImportOptions,
+    gyro_unit: &'static str,
     o: &SegmentOutcome,
     cov: &Coverage,
     w: &Written,
@@ -656,10 +516,7 @@ fn document(
         input: a.input.display().to_string(),
         sample_rate_hz: rec.rate_hz,
         acc_unit: rec.acc_unit.map_or("", |u| u.symbol()),
-        gyro_unit: match options.gyro_lsb_per_dps {
-            Some(_) => "LSB",
-            None => options.gyro_unit.symbol(),
-        },
+        gyro_unit,
         gravity_out: seg.gravity_out,
         acc_threshold_mg: seg.acc_threshold / seg.gravity_out * 1e3,
         gyro_threshold_deg_s: seg.gyro_threshold_rad_s.to_degrees(),

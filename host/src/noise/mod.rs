@@ -13,6 +13,9 @@
 //! of each (6 × 8 bytes a row, ≤ 2 × 100 MB) — a longer segment is cut, with a warning.
 
 pub mod allan;
+mod log;
+
+pub use log::{analyse_log, is_samples_csv};
 
 use crate::export::kalibr::KalibrNoise;
 use crate::export::PlainMatrices;

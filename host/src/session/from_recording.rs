@@ -5,7 +5,10 @@
 
 use super::import::Recording;
 use super::segment::{angle_deg, Interval, Segmentation};
-use super::{Plan, RecordingError, SegmentAccumulator, SegmentPlan, SegmentStats, SessionWriter};
+use super::{
+    Plan, RecordingError, RecordingVersion, SegmentAccumulator, SegmentPlan, SegmentStats,
+    SessionWriter,
+};
 use crate::session::plan::Attitude;
 use std::path::Path;
 
@@ -53,7 +56,8 @@ fn segment_for(k: usize, iv: &Interval, snap_deg: f64, prior_deg: f64) -> Segmen
     }
 }
 
-/// The plan of the session: one static segment per still interval, format 2.
+/// The plan of the session: one static segment per still interval, format 2, or format 3 when the
+/// recording has the unit's temperature (its `temp_c` column, docs/recording-format.md).
 pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
     plan_with(rec, seg, AXIS_SNAP_DEG, FACE_PRIOR_DEG)
 }
@@ -67,7 +71,11 @@ pub fn plan_for_faces(rec: &Recording, seg: &Segmentation, face_sigma_deg: f64) 
 
 fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64) -> Plan {
     Plan {
-        format_version: 2,
+        format_version: if rec.temp_c.is_some() {
+            RecordingVersion::V3Temperature.number()
+        } else {
+            RecordingVersion::V2Attitudes.number()
+        },
         output_unit: rec.acc_unit.unwrap_or(shared::OutputUnit::Lsb),
         sample_rate_hz: (rec.rate_hz * 1e6).round() / 1e6,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -111,7 +119,11 @@ pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<Segmen
         .filter_map(|(iv, sp)| {
             let mut acc = SegmentAccumulator::new(sp.name.clone());
             for i in iv.start..iv.end {
-                acc.push(rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+                let (t_s, u, w_rad_s) = (rec.t_s[i], &rec.acc[i], &rec.gyro_rad_s[i]);
+                match (&rec.temp_c, plan.has_temperature()) {
+                    (Some(temp), true) => acc.push_with_temperature(t_s, u, w_rad_s, temp[i]),
+                    _ => acc.push(t_s, u, w_rad_s),
+                }
             }
             acc.finish()
         })
@@ -131,8 +143,14 @@ pub fn write_session(
     let mut w = SessionWriter::create(dir, plan, overwrite)?;
     for (iv, sp) in seg.stills.iter().zip(&plan.segments) {
         for i in iv.start..iv.end {
-            let acc: [f64; 3] = core::array::from_fn(|j| rec.acc[i][j] + rec.acc_offset[j]);
-            w.write_row(&sp.name, rec.t_s[i], &acc, &rec.gyro_rad_s[i])?;
+            let (t_s, w_rad_s) = (rec.t_s[i], &rec.gyro_rad_s[i]);
+            let u: [f64; 3] = core::array::from_fn(|j| rec.acc[i][j] + rec.acc_offset[j]);
+            match (&rec.temp_c, w.has_temperature()) {
+                (Some(temp), true) => {
+                    w.write_row_with_temperature(&sp.name, t_s, &u, w_rad_s, temp[i])?
+                }
+                _ => w.write_row(&sp.name, t_s, &u, w_rad_s)?,
+            }
         }
         w.end_segment()?;
     }
@@ -185,5 +203,45 @@ mod tests {
         assert!(far.is_free());
         assert!((far.up_b[0] - 5f64.to_radians().sin()).abs() < 1e-6);
         assert_eq!(far.attitude_sigma_deg, None);
+    }
+
+    #[test]
+    fn a_recording_with_temperature_writes_format_3_with_its_temp_c_column() {
+        let n = 10;
+        let mut rec = Recording {
+            t_s: (0..n).map(|i| i as f64 * 0.01).collect(),
+            acc: vec![[0.0, 0.0, 9.81]; n],
+            gyro_rad_s: vec![[0.0; 3]; n],
+            acc_unit: Some(shared::OutputUnit::MetresPerSecondSquared),
+            rate_hz: 100.0,
+            temp_c: Some((0..n).map(|i| 20.0 + i as f64).collect()),
+            ..Recording::default()
+        };
+        let seg = Segmentation {
+            stills: vec![interval([0.0, 0.0, 1.0])],
+            spins: Vec::new(),
+            short_dropped: 0,
+            acc_threshold: 0.01,
+            gyro_threshold_rad_s: 0.01,
+            gravity_out: 9.81,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let plan = plan_for(&rec, &seg);
+        assert!(plan.has_temperature());
+        write_session(dir.path(), &rec, &seg, &plan, false).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(crate::session::SAMPLES_FILE)).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(
+            lines.next(),
+            Some(crate::session::SAMPLES_HEADER_TEMPERATURE)
+        );
+        let row = lines.nth(3).unwrap();
+        let temp: f64 = row.rsplit(',').next().unwrap().parse().unwrap();
+        assert_eq!(temp, 23.0, "{row}");
+        let stats = stats_for(&rec, &seg, &plan);
+        assert_eq!(stats[0].count, 10);
+        // Without temperature: format 2, eight columns.
+        rec.temp_c = None;
+        assert!(!plan_for(&rec, &seg).has_temperature());
     }
 }

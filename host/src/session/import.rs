@@ -194,6 +194,8 @@ pub struct Recording {
     pub acc_offset: [f64; 3],
     /// The time column's unit, and whether it was detected (else given); `None`: from a rate.
     pub time_unit: Option<(TimeUnit, bool)>,
+    /// The unit's temperature at each row, °C, where the log has it (binary logs, `super::logs`).
+    pub temp_c: Option<Vec<f64>>,
 }
 
 /// Where the time stamps break: a gap of more than [`GAP_PERIODS`] sample periods, a repeat or a

@@ -1,0 +1,99 @@
+//! [`apply_log`]: a calibration applied to a logger's file (any format `host segment` reads).
+
+use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
+use crate::session::logs::{read_log, LogSource};
+use crate::session::segment::{find_intervals, SegmentOptions};
+use crate::session::Row;
+use shared::compensator::LeverMode;
+use shared::{Calibration, OutputUnit};
+use std::io::Write;
+use std::path::Path;
+
+/// Applies `cal` to the logger's file at `path`, writing the CSV to `out`. The log has no unit id
+/// and no segments: the output unit and the temperature are checked as for a session, the ω̇
+/// estimate restarts at every gap in the time stamps (more than five periods), and the still
+/// intervals found in the log must compensate to 1 g (and rest, with a gyro calibration).
+pub fn apply_log(
+    path: &Path,
+    source: &LogSource,
+    cal: &Calibration,
+    mode: LeverMode,
+    assume_temp_c: Option<f64>,
+    out: &mut dyn Write,
+) -> Result<ApplySummary, ApplyError> {
+    let log = read_log(path, source).map_err(ApplyError::Log)?;
+    let rec = &log.recording;
+    let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);
+    if cal.statics.output_unit != unit {
+        return Err(ApplyError::OutputUnitMismatch {
+            calibration: cal.statics.output_unit,
+            recording: unit,
+        });
+    }
+    if cal.temperature.is_some() && rec.temp_c.is_none() && assume_temp_c.is_none() {
+        return Err(ApplyError::NoTemperature);
+    }
+    let mut applier = Applier::new(cal, mode, rec.rate_hz)?;
+    if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
+        applier.compensator.refresh(t as f32);
+    }
+    let stills = find_intervals(rec, &SegmentOptions::default())
+        .map(|s| s.stills)
+        .unwrap_or_default();
+    let mut sums = vec![StillSums::default(); stills.len()];
+    let write_err = |e: std::io::Error| {
+        ApplyError::Recording(crate::session::RecordingError::Io {
+            path: Path::new("(output)").to_path_buf(),
+            source: e,
+        })
+    };
+    writeln!(out, "{}", super::APPLY_HEADER).map_err(write_err)?;
+    let g = cal.gravity_m_s2;
+    let mut fmt = ryu::Buffer::new();
+    let mut summary = ApplySummary::default();
+    let (mut piece, mut still) = (0usize, 0usize);
+    let gap_s = 5.0 / rec.rate_hz;
+    for i in 0..rec.len() {
+        if i > 0 && rec.t_s[i] - rec.t_s[i - 1] > gap_s {
+            piece += 1;
+        }
+        let row = Row {
+            segment: "log",
+            segment_index: piece,
+            t_s: rec.t_s[i],
+            u: rec.acc[i],
+            w_rad_s: rec.gyro_rad_s[i],
+            temp_c: rec.temp_c.as_ref().map(|t| t[i]),
+        };
+        let f = applier.row(&row);
+        summary.rows += 1;
+        while still < stills.len() && stills[still].end <= i {
+            still += 1;
+        }
+        match f {
+            Some(f) if still < stills.len() && stills[still].start <= i => {
+                let s = &mut sums[still];
+                for j in 0..3 {
+                    s.f_g[j] += f64::from(f[j]) / g;
+                    s.w_rad_s[j] += f64::from(applier.last_rate_rad_s[j]);
+                }
+                s.rows += 1;
+            }
+            Some(_) => {}
+            None => summary.non_finite_rows += 1,
+        }
+        let line = output_line("log", rec.t_s[i], f, &applier, g, &mut fmt);
+        out.write_all(line.as_bytes()).map_err(write_err)?;
+    }
+    for (k, (iv, s)) in stills.iter().zip(&sums).enumerate() {
+        let name = format!("still {:02} (t = {:.1} s)", k + 1, iv.start_s);
+        check_still(&name, s, cal.gyro.is_some())?;
+    }
+    summary.warnings = log.warnings;
+    if applier.flagged_rows > 0 {
+        summary
+            .warnings
+            .push(super::flagged_warning(applier.flagged_rows));
+    }
+    Ok(summary)
+}

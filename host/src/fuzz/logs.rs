@@ -1,0 +1,200 @@
+//! The binary log readers' fuzz targets and their corpora: small valid logs of each format, built
+//! here (150 samples at 100 Hz; the MCAP ones by the `mcap` crate's writer, once uncompressed so
+//! that mutations reach the records, once in lz4 and once in zstd chunks).
+
+use crate::session::import::{Recording, MAX_ROWS};
+use crate::session::logs::{dataflash, mcap, ulog};
+
+/// A recording a reader accepts: as many times, accelerometer, gyro (and temperature) values as
+/// rows, at most `MAX_ROWS` of them, strictly increasing finite times, finite values, a positive
+/// rate where there are two rows or more.
+fn check(rec: &Recording) {
+    let n = rec.len();
+    assert!(n <= MAX_ROWS, "{n} rows");
+    assert!(rec.acc.len() == n && rec.gyro_rad_s.len() == n);
+    assert!(rec.temp_c.as_ref().is_none_or(|t| t.len() == n));
+    assert!(
+        rec.t_s.windows(2).all(|w| w[1] > w[0]),
+        "time not increasing"
+    );
+    let values = rec.acc.iter().chain(&rec.gyro_rad_s).flatten();
+    assert!(values.chain(&rec.t_s).all(|v| v.is_finite()));
+    assert!(n < 2 || rec.rate_hz > 0.0, "rate {}", rec.rate_hz);
+}
+
+/// A PX4 ULog: instance 0 and 1.
+pub fn ulog(data: &[u8]) {
+    for instance in [0, 1] {
+        if let Ok((rec, _)) = ulog::read(data, instance) {
+            check(&rec);
+        }
+    }
+}
+
+/// An ArduPilot DataFlash log: instance 0 and 1.
+pub fn dataflash(data: &[u8]) {
+    for instance in [0, 1] {
+        if let Ok((rec, _)) = dataflash::read(data, instance) {
+            check(&rec);
+        }
+    }
+}
+
+/// An MCAP file: the only Imu topic, and a topic by name.
+pub fn mcap(data: &[u8]) {
+    for topic in [None, Some("/imu")] {
+        if let Ok((rec, _)) = mcap::read(data, topic) {
+            check(&rec);
+        }
+    }
+}
+
+/// One still sample `k` of the corpora: time s, acc m/s², gyro rad/s, temperature °C.
+fn sample(k: usize) -> (f64, [f32; 3], [f32; 3], f32) {
+    let e = 1e-3 * ((k * 7 % 11) as f32 - 5.0);
+    (k as f64 * 0.01, [e, -e, 9.81 + e], [e, 0.01, -e], 25.0 + e)
+}
+
+const SAMPLES: usize = 150;
+
+/// A ULog with `sensor_accel` and `sensor_gyro` (PX4's fields) and a dropout.
+pub fn ulog_corpus() -> Vec<u8> {
+    const FORMAT: &str = "uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;\
+        float x;float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;\
+        uint8_t samples;uint8_t[4] _padding0;";
+    let mut out = ulog::MAGIC.to_vec();
+    out.push(1);
+    out.extend(0u64.to_le_bytes());
+    let mut msg = |ty: u8, body: &[u8]| {
+        out.extend((body.len() as u16).to_le_bytes());
+        out.push(ty);
+        out.extend_from_slice(body);
+    };
+    msg(b'B', &[0u8; 40]);
+    for name in ["sensor_accel", "sensor_gyro"] {
+        msg(b'F', format!("{name}:{FORMAT}").as_bytes());
+    }
+    for (id, name) in ["sensor_accel", "sensor_gyro"].iter().enumerate() {
+        let mut b = vec![0u8];
+        b.extend((id as u16).to_le_bytes());
+        b.extend(name.as_bytes());
+        msg(b'A', &b);
+    }
+    for k in 0..SAMPLES {
+        let (t, a, g, temp) = sample(k);
+        for (id, v) in [a, g].iter().enumerate() {
+            let mut b = (id as u16).to_le_bytes().to_vec();
+            let us = (t * 1e6) as u64 + 1_000_000;
+            b.extend((us + 100).to_le_bytes());
+            b.extend(us.to_le_bytes());
+            b.extend(7u32.to_le_bytes());
+            v.iter().for_each(|x| b.extend(x.to_le_bytes()));
+            b.extend(temp.to_le_bytes());
+            b.extend([0u8; 8]);
+            msg(b'D', &b);
+        }
+        if k == 75 {
+            msg(b'O', &20u16.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// A DataFlash log: `FMT` of `FMT`, `FMT` of `IMU` (ArduPilot 4.x's fields) and the samples.
+pub fn dataflash_corpus() -> Vec<u8> {
+    let fmt = |ty: u8, len: u8, name: &str, format: &str, cols: &str| {
+        let mut b = vec![0xA3, 0x95, 0x80, ty, len];
+        for (s, n) in [(name, 4), (format, 16), (cols, 64)] {
+            let mut v = s.as_bytes().to_vec();
+            v.resize(n, 0);
+            b.extend(v);
+        }
+        b
+    };
+    let mut out = fmt(0x80, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns");
+    let cols = "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz";
+    out.extend(fmt(0xA5, 54, "IMU", "QBffffffIIfBBHH", cols));
+    for k in 0..SAMPLES {
+        let (t, a, g, temp) = sample(k);
+        out.extend([0xA3, 0x95, 0xA5]);
+        out.extend(((t * 1e6) as u64).to_le_bytes());
+        out.push(0);
+        g.iter().chain(&a).for_each(|x| out.extend(x.to_le_bytes()));
+        out.extend([0u8; 8]);
+        out.extend(temp.to_le_bytes());
+        out.extend([1, 1, 100, 0, 100, 0]);
+    }
+    out
+}
+
+/// An Imu message in little-endian CDR (the layout [`mcap::decode_imu`] documents).
+fn imu_cdr(t: f64, a: [f32; 3], g: [f32; 3]) -> Vec<u8> {
+    let mut b = vec![0, 1, 0, 0];
+    b.extend((t.floor() as i32).to_le_bytes());
+    b.extend((((t - t.floor()) * 1e9) as u32).to_le_bytes());
+    b.extend(4u32.to_le_bytes());
+    b.extend(b"imu\0");
+    let mut doubles = vec![0.0, 0.0, 0.0, 1.0];
+    doubles.extend([0.0; 9]);
+    doubles.extend(g.map(f64::from));
+    doubles.extend([0.0; 9]);
+    doubles.extend(a.map(f64::from));
+    doubles.extend([0.0; 9]);
+    doubles.iter().for_each(|x| b.extend(x.to_le_bytes()));
+    b
+}
+
+/// A ROS 2 bag with one Imu topic `/imu`, written by the mcap crate.
+pub fn mcap_corpus(compression: Option<::mcap::Compression>) -> Vec<u8> {
+    let write = || -> ::mcap::McapResult<Vec<u8>> {
+        let mut cursor = std::io::Cursor::new(Vec::new());
+        let options = ::mcap::WriteOptions::new().compression(compression);
+        let mut w = options.create(&mut cursor)?;
+        let schema = w.add_schema("sensor_msgs/msg/Imu", "ros2msg", b"")?;
+        let channel = w.add_channel(schema, "/imu", "cdr", &Default::default())?;
+        for k in 0..SAMPLES {
+            let (t, a, g, _) = sample(k);
+            let header = ::mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: k as u32,
+                log_time: ((t + 100.0) * 1e9) as u64,
+                publish_time: ((t + 100.0) * 1e9) as u64,
+            };
+            w.write_to_known_channel(&header, &imu_cdr(t + 100.0, a, g))?;
+        }
+        w.finish()?;
+        drop(w);
+        Ok(cursor.into_inner())
+    };
+    write().unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_log_corpora_read_whole() {
+        let (rec, w) = ulog::read(ulog_corpus().as_slice(), 0).unwrap();
+        assert_eq!(rec.len(), SAMPLES);
+        assert!(
+            w.iter()
+                .any(|w| w.contains("dropped data 1 time(s), 20 ms")),
+            "{w:?}"
+        );
+        assert_eq!(rec.temp_c.as_ref().map(Vec::len), Some(SAMPLES));
+        let (rec, _) = dataflash::read(dataflash_corpus().as_slice(), 0).unwrap();
+        assert_eq!(rec.len(), SAMPLES);
+        assert_eq!(rec.acc[3], sample(3).1.map(f64::from));
+        for c in [
+            None,
+            Some(::mcap::Compression::Lz4),
+            Some(::mcap::Compression::Zstd),
+        ] {
+            let (rec, _) = mcap::read(mcap_corpus(c).as_slice(), None).unwrap();
+            assert_eq!(rec.len(), SAMPLES, "{c:?}");
+            assert_eq!(rec.gyro_rad_s[3], sample(3).2.map(f64::from));
+            assert!((rec.t_s[3] - 100.03).abs() < 1e-6, "{}", rec.t_s[3]);
+        }
+    }
+}

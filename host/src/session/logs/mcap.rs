@@ -1,0 +1,517 @@
+//! ROS 2 bags in MCAP: the `sensor_msgs/msg/Imu` messages of one topic, timed by each message's
+//! `header.stamp` (the driver's sample time; the bag's log time is when the recorder got it).
+//!
+//! The container is read by Foxglove's `mcap` crate (the format's reference implementation) with its
+//! streaming `LinearReader`, every record capped in length ([`RECORD_LIMIT`]). Chunks come out whole
+//! and are decompressed and walked here ([`State::chunk`]): the crate's own walk of a chunk's records
+//! subtracts a record's length from what is left of the chunk unchecked, which overflows on a
+//! damaged chunk (our fuzz target found it), so the lengths are checked here instead. The message is decoded by hand ([`decode_imu`]): a CDR
+//! decoder crate would be a general serde layer for one fixed message of plain numbers, and the
+//! layout is short and fixed by the message definition (`sensor_msgs/msg/Imu.msg`,
+//! `std_msgs/msg/Header.msg`, `builtin_interfaces/msg/Time.msg`).
+
+use super::{Stream, StreamSample, TooMany};
+use crate::session::import::{Recording, MAX_ROWS};
+use ::mcap::records::Record;
+use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use shared::OutputUnit;
+use std::collections::BTreeMap;
+use std::io::Read;
+
+/// The file's first eight bytes.
+pub const MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
+/// The longest record accepted, bytes: a whole chunk, compressed or not (writers make chunks of
+/// about 1 MiB; an Imu message is about 330 bytes).
+pub const RECORD_LIMIT: usize = 64 << 20;
+/// The ROS 2 message type read.
+const IMU_SCHEMA: &str = "sensor_msgs/msg/Imu";
+/// Most channels remembered (for the listing in an error).
+const MAX_CHANNELS: usize = 4096;
+
+/// Why an MCAP file cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum McapError {
+    /// Reading failed.
+    #[error("read error after byte {offset}: {source}")]
+    Io {
+        /// Bytes read so far.
+        offset: u64,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The container is damaged or not MCAP.
+    #[error(
+        "not a readable MCAP file (after byte {offset}): {source}; check it with `mcap doctor`"
+    )]
+    Container {
+        /// Bytes read so far.
+        offset: u64,
+        /// The mcap crate's error.
+        source: ::mcap::McapError,
+    },
+    /// No Imu topic.
+    #[error(
+        "no {IMU_SCHEMA} topic in the bag (its topics: {topics}); record the IMU's topic with \
+         `ros2 bag record -s mcap TOPIC`"
+    )]
+    NoImuTopic {
+        /// The topics found, with their types.
+        topics: String,
+    },
+    /// Several Imu topics and no `--topic`.
+    #[error("the bag has several {IMU_SCHEMA} topics ({topics}): choose one with --topic NAME")]
+    SeveralImuTopics {
+        /// The Imu topics.
+        topics: String,
+    },
+    /// The topic asked for is not an Imu topic of the bag.
+    #[error("--topic {topic}: not a {IMU_SCHEMA} topic of the bag; its Imu topics: {imu_topics}")]
+    NoSuchTopic {
+        /// The topic asked for.
+        topic: String,
+        /// The Imu topics there are.
+        imu_topics: String,
+    },
+    /// Not CDR.
+    #[error(
+        "topic {topic} is encoded as '{encoding}', not ROS 2's 'cdr': record it with a ROS 2 \
+         recorder"
+    )]
+    Encoding {
+        /// The topic.
+        topic: String,
+        /// Its message encoding.
+        encoding: String,
+    },
+    /// A message that does not decode.
+    #[error("topic {topic}, message {index} (from 1): {problem}; the bag is damaged")]
+    BadMessage {
+        /// The topic.
+        topic: String,
+        /// Which message.
+        index: u64,
+        /// What is wrong.
+        problem: CdrError,
+    },
+    /// More samples than [`MAX_ROWS`].
+    #[error("more than {MAX_ROWS} Imu messages: cut the bag (a hand-held session needs minutes)")]
+    TooManySamples,
+    /// A chunk that does not decompress to its stated size, or whose records overrun it.
+    #[error(
+        "the chunk ending before byte {offset} is damaged ({problem}); check the bag with \
+         `mcap doctor`"
+    )]
+    Chunk {
+        /// Bytes read so far.
+        offset: u64,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+/// What is wrong with a CDR message.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CdrError {
+    /// Shorter than its fields.
+    #[error("{len} bytes end inside the field '{field}'")]
+    Short {
+        /// The message's length.
+        len: usize,
+        /// The field.
+        field: &'static str,
+    },
+    /// An encapsulation other than plain CDR.
+    #[error("encapsulation {0:#06x} is not plain CDR (0x0000 big-, 0x0001 little-endian)")]
+    Encapsulation(u16),
+}
+
+/// An Imu message's time (s), angular velocity (rad/s) and linear acceleration (m/s²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuMessage {
+    /// `header.stamp` in seconds.
+    pub stamp_s: f64,
+    /// `angular_velocity`, rad/s.
+    pub gyro_rad_s: [f64; 3],
+    /// `linear_acceleration`, m/s².
+    pub acc_m_s2: [f64; 3],
+}
+
+/// Decodes a CDR-serialised `sensor_msgs/msg/Imu`.
+///
+/// The encoding is OMG plain CDR (XCDR version 1; DDS-XTypes 1.3 §7.4.1.1, the CORBA 3.4 Part 2
+/// §9.3 rules), as ROS 2's rmw layers write it: a 4-byte encapsulation header (`00 00` big-endian,
+/// `00 01` little-endian, then two option bytes), then the fields in order, each primitive aligned
+/// to its own size counted from the end of the encapsulation header; a string is a `u32` length that
+/// counts its terminating NUL, then its bytes. The message: `header` (`stamp.sec` i32,
+/// `stamp.nanosec` u32, `frame_id` string), `orientation` (4 × f64), its covariance (9 × f64),
+/// `angular_velocity` (3 × f64), its covariance, `linear_acceleration` (3 × f64), its covariance.
+pub fn decode_imu(m: &[u8]) -> Result<ImuMessage, CdrError> {
+    let head = m.get(..4).ok_or(CdrError::Short {
+        len: m.len(),
+        field: "encapsulation",
+    })?;
+    let kind = u16::from_be_bytes([head[0], head[1]]);
+    let little = match kind {
+        0x0000 => false,
+        0x0001 => true,
+        other => return Err(CdrError::Encapsulation(other)),
+    };
+    let mut c = Cdr {
+        body: &m[4..],
+        pos: 0,
+        little,
+        len: m.len(),
+    };
+    let sec = c.u32("header.stamp.sec")? as i32;
+    let nanosec = c.u32("header.stamp.nanosec")?;
+    let len = c.u32("header.frame_id")? as usize;
+    c.take(len, 1, "header.frame_id")?;
+    c.f64s::<4>("orientation")?;
+    c.f64s::<9>("orientation_covariance")?;
+    let w = c.f64s::<3>("angular_velocity")?;
+    c.f64s::<9>("angular_velocity_covariance")?;
+    let a = c.f64s::<3>("linear_acceleration")?;
+    Ok(ImuMessage {
+        stamp_s: f64::from(sec) + f64::from(nanosec) * 1e-9,
+        gyro_rad_s: w,
+        acc_m_s2: a,
+    })
+}
+
+/// A CDR body being read: the bytes after the encapsulation header, the read position (alignment
+/// counts from 0 here), the byte order, the whole message's length (for messages).
+struct Cdr<'a> {
+    body: &'a [u8],
+    pos: usize,
+    little: bool,
+    len: usize,
+}
+
+impl<'a> Cdr<'a> {
+    /// `size` bytes at the next multiple of `align`.
+    fn take(
+        &mut self,
+        size: usize,
+        align: usize,
+        field: &'static str,
+    ) -> Result<&'a [u8], CdrError> {
+        let short = CdrError::Short {
+            len: self.len,
+            field,
+        };
+        let start = self.pos.next_multiple_of(align);
+        let end = start.checked_add(size).ok_or(short.clone())?;
+        let b = self.body.get(start..end).ok_or(short)?;
+        self.pos = end;
+        Ok(b)
+    }
+
+    fn u32(&mut self, field: &'static str) -> Result<u32, CdrError> {
+        let b = self.take(4, 4, field)?;
+        let a = [b[0], b[1], b[2], b[3]];
+        Ok(if self.little {
+            u32::from_le_bytes(a)
+        } else {
+            u32::from_be_bytes(a)
+        })
+    }
+
+    fn f64s<const N: usize>(&mut self, field: &'static str) -> Result<[f64; N], CdrError> {
+        let mut out = [0.0; N];
+        for v in &mut out {
+            let b = self.take(8, 8, field)?;
+            let a: [u8; 8] = std::array::from_fn(|k| b[k]);
+            *v = if self.little {
+                f64::from_le_bytes(a)
+            } else {
+                f64::from_be_bytes(a)
+            };
+        }
+        Ok(out)
+    }
+}
+
+/// A channel: its topic, schema name and message encoding.
+#[derive(Clone, Debug)]
+struct Channel {
+    topic: String,
+    schema: String,
+    encoding: String,
+}
+
+/// The reader's state.
+#[derive(Default)]
+struct State {
+    schemas: BTreeMap<u16, String>,
+    channels: BTreeMap<u16, Channel>,
+    /// The channel read (the topic asked for, or the first Imu channel).
+    chosen: Option<u16>,
+    acc: Stream,
+    gyro: Stream,
+    messages: u64,
+    unstamped: u64,
+}
+
+/// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
+pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(RECORD_LIMIT)
+        .with_emit_chunks(true);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut st = State::default();
+    let mut offset = 0u64;
+    while let Some(event) = reader.next_event() {
+        let event = event.map_err(|source| McapError::Container { offset, source })?;
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let buf = reader.insert(need.min(RECORD_LIMIT));
+                let n =
+                    read_some(&mut r, buf).map_err(|source| McapError::Io { offset, source })?;
+                offset += n as u64;
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { data, opcode } => {
+                let record = ::mcap::parse_record(opcode, data)
+                    .map_err(|source| McapError::Container { offset, source })?;
+                match record {
+                    Record::Chunk { header, data } => st.chunk(&header, &data, topic, offset)?,
+                    other => st.record(other, topic)?,
+                }
+            }
+        }
+    }
+    st.finish(topic)
+}
+
+fn read_some<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
+    loop {
+        match r.read(buf) {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            other => return other,
+        }
+    }
+}
+
+impl State {
+    /// A chunk: decompressed (no more than its stated size, itself within [`RECORD_LIMIT`]) and its
+    /// records (opcode, `u64` length, body) read in turn.
+    fn chunk(
+        &mut self,
+        header: &::mcap::records::ChunkHeader,
+        data: &[u8],
+        topic: Option<&str>,
+        offset: u64,
+    ) -> Result<(), McapError> {
+        let bad = |problem: String| McapError::Chunk { offset, problem };
+        let size = usize::try_from(header.uncompressed_size)
+            .ok()
+            .filter(|&n| n <= RECORD_LIMIT)
+            .ok_or_else(|| bad(format!("{} bytes uncompressed", header.uncompressed_size)))?;
+        let owned;
+        let body: &[u8] = match header.compression.as_str() {
+            "" => data,
+            "zstd" => {
+                owned = zstd::bulk::decompress(data, size).map_err(|e| bad(e.to_string()))?;
+                &owned
+            }
+            "lz4" => {
+                let mut out = Vec::new();
+                let decoder = lz4::Decoder::new(data).map_err(|e| bad(e.to_string()))?;
+                decoder
+                    .take(size as u64 + 1)
+                    .read_to_end(&mut out)
+                    .map_err(|e| bad(e.to_string()))?;
+                owned = out;
+                &owned
+            }
+            other => return Err(bad(format!("compression '{other}' is not zstd or lz4"))),
+        };
+        if body.len() != size {
+            return Err(bad(format!(
+                "{} bytes where the chunk says {size}",
+                body.len()
+            )));
+        }
+        let mut pos = 0usize;
+        while pos < body.len() {
+            let head = body
+                .get(pos..pos + 9)
+                .ok_or_else(|| bad("a cut record".into()))?;
+            let len = u64::from_le_bytes(std::array::from_fn(|k| head[1 + k]));
+            let end = usize::try_from(len)
+                .ok()
+                .and_then(|n| (pos + 9).checked_add(n))
+                .filter(|&e| e <= body.len())
+                .ok_or_else(|| bad(format!("a record of {len} bytes overruns it")))?;
+            let record = ::mcap::parse_record(head[0], &body[pos + 9..end])
+                .map_err(|source| McapError::Container { offset, source })?;
+            self.record(record, topic)?;
+            pos = end;
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, record: Record<'_>, topic: Option<&str>) -> Result<(), McapError> {
+        match record {
+            Record::Schema { header, .. } if self.schemas.len() < MAX_CHANNELS => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(c) if self.channels.len() < MAX_CHANNELS => {
+                let schema = self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
+                let ch = Channel {
+                    topic: c.topic,
+                    schema,
+                    encoding: c.message_encoding,
+                };
+                let wanted = ch.schema == IMU_SCHEMA
+                    && topic.is_none_or(|t| t == ch.topic)
+                    && self.chosen.is_none();
+                if wanted {
+                    if ch.encoding != "cdr" {
+                        return Err(McapError::Encoding {
+                            topic: ch.topic,
+                            encoding: ch.encoding,
+                        });
+                    }
+                    self.chosen = Some(c.id);
+                }
+                self.channels.insert(c.id, ch);
+            }
+            Record::Message { header, data } if Some(header.channel_id) == self.chosen => {
+                self.messages += 1;
+                let m = decode_imu(&data).map_err(|problem| McapError::BadMessage {
+                    topic: self.channels[&header.channel_id].topic.clone(),
+                    index: self.messages,
+                    problem,
+                })?;
+                let t_s = if m.stamp_s == 0.0 {
+                    self.unstamped += 1;
+                    header.log_time as f64 * 1e-9
+                } else {
+                    m.stamp_s
+                };
+                let too_many = |_: TooMany| McapError::TooManySamples;
+                let s = |v| StreamSample {
+                    t_s,
+                    v,
+                    temp_c: None,
+                };
+                self.acc.push(s(m.acc_m_s2)).map_err(too_many)?;
+                self.gyro.push(s(m.gyro_rad_s)).map_err(too_many)?;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn finish(self, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+        let imu: Vec<&str> = self
+            .channels
+            .values()
+            .filter(|c| c.schema == IMU_SCHEMA)
+            .map(|c| c.topic.as_str())
+            .collect();
+        let list = |v: &[&str]| {
+            if v.is_empty() {
+                "none".to_string()
+            } else {
+                v.join(", ")
+            }
+        };
+        match (topic, self.chosen) {
+            (Some(t), None) => {
+                return Err(McapError::NoSuchTopic {
+                    topic: t.to_string(),
+                    imu_topics: list(&imu),
+                })
+            }
+            (None, None) => {
+                let all: Vec<String> = self
+                    .channels
+                    .values()
+                    .map(|c| format!("{} ({})", c.topic, c.schema))
+                    .collect();
+                let all: Vec<&str> = all.iter().map(String::as_str).collect();
+                return Err(McapError::NoImuTopic { topics: list(&all) });
+            }
+            (None, Some(_)) if imu.len() > 1 => {
+                return Err(McapError::SeveralImuTopics { topics: list(&imu) })
+            }
+            _ => {}
+        }
+        let (mut rec, mut warnings) = super::pair(&self.acc, &self.gyro, f64::INFINITY);
+        rec.acc_unit = Some(OutputUnit::MetresPerSecondSquared);
+        if self.unstamped > 0 {
+            warnings.insert(
+                0,
+                format!(
+                    "{} Imu message(s) have no header stamp (0): timed by the bag's log time, when \
+                     the recorder received them",
+                    self.unstamped
+                ),
+            );
+        }
+        Ok((rec, warnings))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hand-assembled Imu message: frame id "base" (length 5 with its NUL) ends at body offset 17,
+    /// so the first double starts at 24 after 7 bytes of padding.
+    fn message(little: bool) -> Vec<u8> {
+        let mut b: Vec<u8> = vec![0, u8::from(little), 0, 0];
+        let u32b = |v: u32| {
+            if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            }
+        };
+        let f64b = |v: f64| {
+            if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            }
+        };
+        b.extend(u32b(12));
+        b.extend(u32b(500_000_000));
+        b.extend(u32b(5));
+        b.extend(b"base\0");
+        b.extend([0; 7]);
+        let values: Vec<f64> = (0..40).map(f64::from).collect();
+        for v in values {
+            b.extend(f64b(v));
+        }
+        b
+    }
+
+    #[test]
+    fn an_imu_message_decodes_in_either_byte_order_with_its_padding() {
+        for little in [true, false] {
+            let m = decode_imu(&message(little)).unwrap();
+            assert_eq!(m.stamp_s, 12.5);
+            // orientation 0..3, its covariance 4..12, angular velocity 13..15.
+            assert_eq!(m.gyro_rad_s, [13.0, 14.0, 15.0]);
+            assert_eq!(m.acc_m_s2, [25.0, 26.0, 27.0]);
+        }
+        let m = message(true);
+        let e = decode_imu(&m[..m.len() - 8 * 13]).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                CdrError::Short {
+                    field: "linear_acceleration",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let mut xcdr2 = message(true);
+        xcdr2[1] = 0x07;
+        assert_eq!(decode_imu(&xcdr2), Err(CdrError::Encapsulation(7)));
+    }
+}

@@ -1,0 +1,388 @@
+//! The logs people have, read into one [`Recording`] (time in s, the accelerometer in m/s², the gyro
+//! in rad/s, the unit's temperature where the log has it): a logger's text file (CSV, tab- or
+//! white-space separated, [`super::import`]), a PX4 ULog ([`ulog`]), an ArduPilot DataFlash log
+//! ([`dataflash`]) and a ROS 2 bag in MCAP ([`mcap`]). The format is told by the file's first bytes,
+//! not its name: a renamed `.bin` or a `.log` that is really a ULog reads the same.
+//!
+//! Every reader streams the file once; what it keeps is capped by [`MAX_ROWS`] samples per stream,
+//! and every length field is bounded before anything is allocated for it.
+
+pub mod dataflash;
+pub mod mcap;
+pub mod ulog;
+
+use super::import::{read_logger, ImportError, ImportOptions, Recording, MAX_ROWS};
+use shared::OutputUnit;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// What to take from a log: the text reader's columns, time and units (text files only), the IMU
+/// instance (ULog's `multi_id`, DataFlash's `I`) and the MCAP topic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogSource {
+    /// How to read a text file; `None`: the log must be a binary format that states its units.
+    pub text: Option<ImportOptions>,
+    /// Which IMU of a vehicle with several (default: the first, instance 0).
+    pub instance: Option<u8>,
+    /// The MCAP topic with the `sensor_msgs/msg/Imu` messages (default: the only one).
+    pub topic: Option<String>,
+}
+
+/// The formats read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LogFormat {
+    /// A logger's text file (CSV or white-space separated).
+    Text,
+    /// PX4 ULog.
+    Ulog,
+    /// ArduPilot DataFlash (`.bin`).
+    DataFlash,
+    /// MCAP (a ROS 2 bag).
+    Mcap,
+}
+
+impl LogFormat {
+    /// The name people know the format by.
+    pub fn name(self) -> &'static str {
+        match self {
+            LogFormat::Text => "text",
+            LogFormat::Ulog => "PX4 ULog",
+            LogFormat::DataFlash => "ArduPilot DataFlash",
+            LogFormat::Mcap => "MCAP",
+        }
+    }
+
+    /// The format whose magic bytes start `head` (text when none does: the text reader then says
+    /// what is wrong with it).
+    pub fn detect(head: &[u8]) -> LogFormat {
+        if head.starts_with(&ulog::MAGIC) {
+            LogFormat::Ulog
+        } else if head.starts_with(&dataflash::MAGIC) {
+            LogFormat::DataFlash
+        } else if head.starts_with(&mcap::MAGIC) {
+            LogFormat::Mcap
+        } else {
+            LogFormat::Text
+        }
+    }
+}
+
+/// A log read: the recording, its format and what the reader noticed on the way (dropouts,
+/// damaged bytes skipped), for the user.
+#[derive(Clone, Debug)]
+pub struct LogFile {
+    /// The samples.
+    pub recording: Recording,
+    /// The file's format.
+    pub format: LogFormat,
+    /// What to tell the user.
+    pub warnings: Vec<String>,
+}
+
+/// Why a log cannot be read; each says what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// Not readable.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A text file's problem.
+    #[error(transparent)]
+    Text(#[from] ImportError),
+    /// A text file without its units and columns.
+    #[error(
+        "{0} is a text file: give its units (--acc-unit and --gyro-unit) and its time \
+         (--time-column NAME or --rate-hz HZ)"
+    )]
+    TextNeedsOptions(PathBuf),
+    /// Text options on a binary log, which states its own units.
+    #[error(
+        "{path} is a {} log, which states its own units (m/s², rad/s) and time: leave out {option}",
+        format.name()
+    )]
+    TextOptionOnBinary {
+        /// The file.
+        path: PathBuf,
+        /// Its format.
+        format: LogFormat,
+        /// The option given.
+        option: &'static str,
+    },
+    /// A ULog's problem.
+    #[error("{path}: {source}")]
+    Ulog {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: ulog::UlogError,
+    },
+    /// A DataFlash log's problem.
+    #[error("{path}: {source}")]
+    DataFlash {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: dataflash::DataFlashError,
+    },
+    /// An MCAP file's problem.
+    #[error("{path}: {source}")]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: mcap::McapError,
+    },
+    /// `--instance` or `--topic` on a format that has no such thing.
+    #[error("{path} is a {} log: {option} does not apply to it; leave it out", format.name())]
+    OptionNotForFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its format.
+        format: LogFormat,
+        /// The option given.
+        option: &'static str,
+    },
+    /// Too few samples for a session.
+    #[error(
+        "{path}: only {rows} IMU samples: a hand-held session needs minutes of data (positions \
+         of 3–5 s and the turns between them)"
+    )]
+    TooFewSamples {
+        /// The file.
+        path: PathBuf,
+        /// Samples found.
+        rows: usize,
+    },
+}
+
+/// Reads the log at `path` in whatever format its first bytes say (see the module docs).
+pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
+    let io = |e| LogError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let file = File::open(path).map_err(io)?;
+    let mut r = BufReader::with_capacity(1 << 20, file);
+    let head = r.fill_buf().map_err(io)?.to_vec();
+    read_log_from(r, &head, path, source)
+}
+
+/// [`read_log`] on any reader whose first bytes are `head` (`path` only names it in messages).
+pub fn read_log_from<R: BufRead>(
+    r: R,
+    head: &[u8],
+    path: &Path,
+    source: &LogSource,
+) -> Result<LogFile, LogError> {
+    let format = LogFormat::detect(head);
+    let not_for = |option| LogError::OptionNotForFormat {
+        path: path.to_path_buf(),
+        format,
+        option,
+    };
+    let p = || path.to_path_buf();
+    if format != LogFormat::Text && source.text.is_some() {
+        return Err(LogError::TextOptionOnBinary {
+            path: p(),
+            format,
+            option: "--acc-unit, --gyro-unit, --time-column and --rate-hz",
+        });
+    }
+    let (recording, warnings) = match format {
+        LogFormat::Text => {
+            if source.instance.is_some() {
+                return Err(not_for("--instance"));
+            }
+            if source.topic.is_some() {
+                return Err(not_for("--topic"));
+            }
+            let options = source
+                .text
+                .as_ref()
+                .ok_or_else(|| LogError::TextNeedsOptions(p()))?;
+            (read_logger(r, path, options)?, Vec::new())
+        }
+        LogFormat::Ulog => {
+            if source.topic.is_some() {
+                return Err(not_for("--topic"));
+            }
+            let imu = ulog::read(r, source.instance.unwrap_or(0)).map_err(|e| LogError::Ulog {
+                path: p(),
+                source: e,
+            })?;
+            (imu.0, imu.1)
+        }
+        LogFormat::DataFlash => {
+            if source.topic.is_some() {
+                return Err(not_for("--topic"));
+            }
+            let imu = dataflash::read(r, source.instance.unwrap_or(0)).map_err(|e| {
+                LogError::DataFlash {
+                    path: p(),
+                    source: e,
+                }
+            })?;
+            (imu.0, imu.1)
+        }
+        LogFormat::Mcap => {
+            if source.instance.is_some() {
+                return Err(not_for("--instance"));
+            }
+            let imu = mcap::read(r, source.topic.as_deref()).map_err(|e| LogError::Mcap {
+                path: p(),
+                source: e,
+            })?;
+            (imu.0, imu.1)
+        }
+    };
+    if recording.len() < 100 {
+        return Err(LogError::TooFewSamples {
+            path: p(),
+            rows: recording.len(),
+        });
+    }
+    Ok(LogFile {
+        recording,
+        format,
+        warnings,
+    })
+}
+
+/// One IMU stream sample as a binary log holds it: time s, x y z, and the temperature if logged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StreamSample {
+    pub t_s: f64,
+    pub v: [f64; 3],
+    pub temp_c: Option<f64>,
+}
+
+/// Collects one stream's samples, refusing more than [`MAX_ROWS`].
+#[derive(Debug, Default)]
+pub(crate) struct Stream {
+    pub samples: Vec<StreamSample>,
+    /// Samples left out for a value that is not finite.
+    pub non_finite: usize,
+}
+
+/// More than [`MAX_ROWS`] samples in one stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct TooMany;
+
+impl Stream {
+    pub fn push(&mut self, s: StreamSample) -> Result<(), TooMany> {
+        if !(s.t_s.is_finite() && s.v.iter().all(|x| x.is_finite())) {
+            self.non_finite += 1;
+            return Ok(());
+        }
+        if self.samples.len() >= MAX_ROWS {
+            return Err(TooMany);
+        }
+        self.samples.push(s);
+        Ok(())
+    }
+}
+
+/// The accelerometer's samples with the gyro's rate at their times (linear interpolation between
+/// the gyro's two neighbouring samples; an accelerometer sample outside the gyro's time span, or
+/// further than `max_gap_s` from a gyro sample on either side, is left out). Logs with one message
+/// for both (ULog's `sensor_combined`, DataFlash's `IMU`) give the two streams the same times, and
+/// the interpolation returns the gyro sample itself. Time must increase: samples that step back
+/// are left out and counted in the returned warnings.
+pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
+    let mut rec = Recording {
+        acc_unit: Some(OutputUnit::MetresPerSecondSquared),
+        ..Recording::default()
+    };
+    let with_temp = acc.samples.iter().any(|s| s.temp_c.is_some());
+    let mut temps = Vec::new();
+    let g = &gyro.samples;
+    let (mut j, mut back, mut unpaired) = (0usize, 0usize, 0usize);
+    for a in &acc.samples {
+        if rec.t_s.last().is_some_and(|&last| a.t_s <= last) {
+            back += 1;
+            continue;
+        }
+        while j + 1 < g.len() && g[j + 1].t_s <= a.t_s {
+            j += 1;
+        }
+        let Some(w) = interpolate(g, j, a.t_s, max_gap_s) else {
+            unpaired += 1;
+            continue;
+        };
+        rec.t_s.push(a.t_s);
+        rec.acc.push(a.v);
+        rec.gyro_rad_s.push(w);
+        temps.push(a.temp_c.unwrap_or(f64::NAN));
+    }
+    rec.skipped_rows = acc.non_finite + back + unpaired;
+    rec.rate_hz = median_rate(&rec.t_s);
+    if with_temp {
+        rec.temp_c = Some(temps);
+    }
+    let mut warnings = Vec::new();
+    if back > 0 {
+        warnings.push(format!(
+            "{back} accelerometer sample(s) whose time does not increase left out"
+        ));
+    }
+    if unpaired > 0 {
+        warnings.push(format!(
+            "{unpaired} accelerometer sample(s) with no gyro sample within {:.0} ms left out",
+            max_gap_s * 1e3
+        ));
+    }
+    if acc.non_finite + gyro.non_finite > 0 {
+        warnings.push(format!(
+            "{} sample(s) with NaN or infinite values left out",
+            acc.non_finite + gyro.non_finite
+        ));
+    }
+    (rec, warnings)
+}
+
+/// The gyro's rate at `t_s`, between `g[j]` (at or before it) and `g[j + 1]`.
+fn interpolate(g: &[StreamSample], j: usize, t_s: f64, max_gap_s: f64) -> Option<[f64; 3]> {
+    let a = g.get(j)?;
+    if a.t_s == t_s {
+        return Some(a.v);
+    }
+    let b = g.get(j + 1)?;
+    if !(a.t_s < t_s && t_s < b.t_s) || b.t_s - a.t_s > max_gap_s {
+        return None;
+    }
+    let f = (t_s - a.t_s) / (b.t_s - a.t_s);
+    Some(std::array::from_fn(|k| a.v[k] + f * (b.v[k] - a.v[k])))
+}
+
+/// The median sample rate, Hz (0 for fewer than two samples).
+pub(crate) fn median_rate(t_s: &[f64]) -> f64 {
+    let mut dt: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if dt.is_empty() {
+        return 0.0;
+    }
+    dt.sort_by(f64::total_cmp);
+    1.0 / dt[dt.len() / 2]
+}
+
+/// Reads exactly `buf.len()` bytes, `Ok(false)` at a clean end of input (no byte read).
+pub(crate) fn read_exact_or_end<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<bool> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) if got == 0 => return Ok(false),
+            Ok(0) => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(true)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,97 @@
+use super::*;
+
+fn stream(ts: &[f64], v: impl Fn(f64) -> [f64; 3], temp: Option<f64>) -> Stream {
+    let mut s = Stream::default();
+    for &t_s in ts {
+        s.push(StreamSample {
+            t_s,
+            v: v(t_s),
+            temp_c: temp,
+        })
+        .unwrap();
+    }
+    s
+}
+
+#[test]
+fn the_format_is_told_by_the_first_bytes() {
+    assert_eq!(
+        LogFormat::detect(b"ULog\x01\x12\x35\x01rest"),
+        LogFormat::Ulog
+    );
+    assert_eq!(
+        LogFormat::detect(&[0xA3, 0x95, 0x80, 0x80, 89]),
+        LogFormat::DataFlash
+    );
+    assert_eq!(LogFormat::detect(b"\x89MCAP0\r\n\x01"), LogFormat::Mcap);
+    assert_eq!(LogFormat::detect(b"t,acc_x"), LogFormat::Text);
+    // A DataFlash header followed by another message type is not taken as a log's start.
+    assert_eq!(LogFormat::detect(&[0xA3, 0x95, 0x81]), LogFormat::Text);
+}
+
+#[test]
+fn the_gyro_is_interpolated_to_the_accelerometers_times_and_gaps_are_not_bridged() {
+    // Gyro at 100 Hz with a rate linear in time; accelerometer at 100 Hz, 3 ms later.
+    let gt: Vec<f64> = (0..300).map(|i| i as f64 * 0.01).collect();
+    let mut at: Vec<f64> = gt.iter().map(|t| t + 0.003).collect();
+    let gyro = stream(&gt, |t| [t, -2.0 * t, 0.5], None);
+    // A gyro gap: the accelerometer samples inside it have no partner.
+    let gyro = Stream {
+        samples: gyro
+            .samples
+            .into_iter()
+            .filter(|s| !(1.0..1.5).contains(&s.t_s))
+            .collect(),
+        non_finite: 0,
+    };
+    at.insert(10, at[10]); // a repeated time stamp
+    let acc = stream(&at, |_| [0.0, 0.0, 9.81], Some(25.0));
+    let (rec, warnings) = pair(&acc, &gyro, 0.05);
+    let i = rec
+        .t_s
+        .iter()
+        .position(|&t| (t - 0.503).abs() < 1e-9)
+        .unwrap();
+    assert!((rec.gyro_rad_s[i][0] - 0.503).abs() < 1e-12);
+    assert!((rec.gyro_rad_s[i][1] + 1.006).abs() < 1e-12);
+    assert!(rec.t_s.iter().all(|t| !(0.995..1.5).contains(t)));
+    assert_eq!(rec.temp_c.as_ref().map(Vec::len), Some(rec.len()));
+    assert!((rec.rate_hz - 100.0).abs() < 1e-6);
+    assert!(
+        warnings.iter().any(|w| w.contains("does not increase")),
+        "{warnings:?}"
+    );
+    assert!(
+        warnings.iter().any(|w| w.contains("no gyro sample")),
+        "{warnings:?}"
+    );
+    // The last accelerometer sample lies after the last gyro sample: left out too.
+    assert!(rec.t_s.last().unwrap() < &2.99);
+}
+
+#[test]
+fn options_that_do_not_fit_the_format_are_refused() {
+    let source = LogSource {
+        text: None,
+        instance: Some(1),
+        topic: None,
+    };
+    let text = b"t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
+    let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            LogError::OptionNotForFormat {
+                option: "--instance",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let source = LogSource {
+        instance: None,
+        ..source
+    };
+    let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
+    assert!(e.to_string().contains("--acc-unit"), "{e}");
+}

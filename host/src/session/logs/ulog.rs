@@ -1,0 +1,625 @@
+//! PX4 ULog: the IMU's samples from `sensor_accel` + `sensor_gyro` (the sensors' own outputs before
+//! PX4's calibration is applied, with the sensor's temperature), else from `sensor_combined` (already
+//! corrected by PX4's calibration, no temperature).
+//!
+//! Written against PX4's "ULog File Format" (docs.px4.io, `dev_log/ulog_file_format`) and its C
+//! header `ulog_messages.h`, with pyulog's `core.py` (v1.3.0) as the reference reader: a 16-byte
+//! header (7 magic bytes, version, start time), then messages of `u16 size, u8 type, payload`,
+//! little-endian. Why our own reader: the Rust ULog crates are small, young and read the whole file
+//! into memory or panic on damaged input; this one streams once, keeps only the chosen instance's IMU
+//! topics, and bounds everything (a message is at most 65 535 bytes by its size field).
+
+use super::{median_rate, pair, read_exact_or_end, Stream, StreamSample, TooMany};
+use crate::session::import::{Recording, MAX_ROWS};
+use std::collections::{BTreeSet, HashMap};
+use std::io::Read;
+
+/// The file's first seven bytes ("ULog" 01 12 35).
+pub const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
+/// Most format definitions kept: PX4 logs a few hundred topics.
+const MAX_FORMATS: usize = 4096;
+/// Deepest nesting of a format inside another.
+const MAX_NESTING: usize = 8;
+/// `accelerometer_timestamp_relative` when the accelerometer sample is missing (PX4's
+/// `sensor_combined_s::RELATIVE_TIMESTAMP_INVALID`).
+const RELATIVE_TIMESTAMP_INVALID: i32 = 0x7fff_ffff;
+
+/// Why a ULog cannot be read; each names the byte offset where it went wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum UlogError {
+    /// Reading failed.
+    #[error("read error at byte {offset}: {source}")]
+    Io {
+        /// Where.
+        offset: u64,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Shorter than the 16-byte header.
+    #[error("the file ends inside the 16-byte ULog header: it is cut short; copy it from the vehicle again")]
+    ShortHeader,
+    /// A format definition that does not parse.
+    #[error(
+        "byte {offset}: the format definition '{text}' is not 'name:type field;…': the log is \
+         damaged; pyulog's ulog_info shows how far it reads"
+    )]
+    BadFormat {
+        /// Where.
+        offset: u64,
+        /// The definition (cut to 80 characters).
+        text: String,
+    },
+    /// A field of an IMU topic has a type no format defines, or nests too deep.
+    #[error(
+        "byte {offset}: topic '{topic}' has a field of type '{ty}' that no format defines (or \
+         nested more than {MAX_NESTING} deep): the log is damaged or of an unknown kind"
+    )]
+    UnknownType {
+        /// Where.
+        offset: u64,
+        /// The topic.
+        topic: String,
+        /// The type.
+        ty: String,
+    },
+    /// An IMU topic lacks a field this reader needs.
+    #[error(
+        "byte {offset}: topic '{topic}' has no field '{field}' (its format: {format}); this PX4 \
+         version logs it differently: convert the log to CSV with pyulog's ulog2csv and read that"
+    )]
+    MissingField {
+        /// Where.
+        offset: u64,
+        /// The topic.
+        topic: String,
+        /// The field.
+        field: &'static str,
+        /// The topic's fields.
+        format: String,
+    },
+    /// A data message shorter than its topic's fields.
+    #[error(
+        "byte {offset}: a '{topic}' message has {len} bytes, its format needs {need}: the log is damaged"
+    )]
+    ShortData {
+        /// Where.
+        offset: u64,
+        /// The topic.
+        topic: String,
+        /// Its length.
+        len: usize,
+        /// The bytes the fields read need.
+        need: usize,
+    },
+    /// Incompatible flags this reader does not know.
+    #[error(
+        "the log sets incompatible flags {flags:#x} this reader does not know (a newer ULog \
+         version): convert it with a current pyulog (ulog2csv) and read the CSV"
+    )]
+    IncompatibleFlags {
+        /// `incompat_flags` as one number (bit 0, appended data, is known).
+        flags: u64,
+    },
+    /// Too many format definitions.
+    #[error("more than {MAX_FORMATS} format definitions: not a PX4 log, or a damaged one")]
+    TooManyFormats,
+    /// No IMU topic for the instance.
+    #[error(
+        "no IMU samples for instance {instance}: the log has {found}; log sensor_accel and \
+         sensor_gyro (or sensor_combined) and choose the IMU with --instance N"
+    )]
+    NoImu {
+        /// The instance asked for.
+        instance: u8,
+        /// The IMU topics and instances found.
+        found: String,
+    },
+    /// More samples than [`MAX_ROWS`].
+    #[error(
+        "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
+    )]
+    TooManySamples(String),
+}
+
+/// A field of a format: type, array length (1 for a scalar), name.
+#[derive(Clone, Debug)]
+struct Field {
+    ty: String,
+    count: usize,
+    name: String,
+}
+
+/// Parses "name:type field;type[n] field;…" into the name and its fields.
+fn parse_format(text: &str) -> Option<(String, Vec<Field>)> {
+    let (name, rest) = text.split_once(':')?;
+    let mut fields = Vec::new();
+    for part in rest.split(';').filter(|p| !p.trim().is_empty()) {
+        let (ty, field) = part.trim().split_once(' ')?;
+        let (ty, count) = match ty.split_once('[') {
+            Some((t, n)) => (t, n.strip_suffix(']')?.parse::<usize>().ok()?),
+            None => (ty, 1),
+        };
+        if count == 0 || count > u16::MAX as usize {
+            return None;
+        }
+        fields.push(Field {
+            ty: ty.to_string(),
+            count,
+            name: field.trim().to_string(),
+        });
+    }
+    Some((name.to_string(), fields))
+}
+
+/// The size in bytes of a basic type.
+fn basic_size(ty: &str) -> Option<usize> {
+    Some(match ty {
+        "int8_t" | "uint8_t" | "bool" | "char" => 1,
+        "int16_t" | "uint16_t" => 2,
+        "int32_t" | "uint32_t" | "float" => 4,
+        "int64_t" | "uint64_t" | "double" => 8,
+        _ => return None,
+    })
+}
+
+/// The size of a type, basic or a nested format; `known` remembers the nested formats' sizes, so that
+/// a damaged log of many fields of deeply nested types costs no more than its fields.
+fn type_size(
+    ty: &str,
+    formats: &HashMap<String, Vec<Field>>,
+    depth: usize,
+    known: &mut HashMap<String, Option<usize>>,
+) -> Option<usize> {
+    if let Some(n) = basic_size(ty) {
+        return Some(n);
+    }
+    if depth >= MAX_NESTING {
+        return None;
+    }
+    if let Some(&n) = known.get(ty) {
+        return n;
+    }
+    let n = formats.get(ty).and_then(|fields| {
+        fields.iter().try_fold(0usize, |sum, f| {
+            sum.checked_add(type_size(&f.ty, formats, depth + 1, known)?.checked_mul(f.count)?)
+        })
+    });
+    known.insert(ty.to_string(), n);
+    n
+}
+
+/// Where a field is: its byte offset in the payload (after `msg_id`), its type.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    offset: usize,
+    ty: Scalar,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Scalar {
+    U64,
+    I32,
+    F32,
+}
+
+impl Place {
+    fn end(self) -> usize {
+        self.offset
+            + match self.ty {
+                Scalar::U64 => 8,
+                Scalar::I32 | Scalar::F32 => 4,
+            }
+    }
+
+    fn read(self, d: &[u8]) -> f64 {
+        let b = |n: usize| &d[self.offset..self.offset + n];
+        match self.ty {
+            Scalar::U64 => u64::from_le_bytes(b(8).try_into().unwrap_or([0; 8])) as f64,
+            Scalar::I32 => i32::from_le_bytes(b(4).try_into().unwrap_or([0; 4])) as f64,
+            Scalar::F32 => f32::from_le_bytes(b(4).try_into().unwrap_or([0; 4])) as f64,
+        }
+    }
+}
+
+/// The IMU topics this reader takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Topic {
+    Combined,
+    Accel,
+    Gyro,
+}
+
+impl Topic {
+    fn from_name(name: &str) -> Option<Topic> {
+        match name {
+            "sensor_combined" => Some(Topic::Combined),
+            "sensor_accel" => Some(Topic::Accel),
+            "sensor_gyro" => Some(Topic::Gyro),
+            _ => None,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Topic::Combined => "sensor_combined",
+            Topic::Accel => "sensor_accel",
+            Topic::Gyro => "sensor_gyro",
+        }
+    }
+}
+
+/// A subscribed IMU topic's field places.
+#[derive(Clone, Debug)]
+struct Layout {
+    topic: Topic,
+    time: Place,
+    /// `timestamp_sample` where logged (the sensor's own sample time).
+    sample_time: Option<Place>,
+    /// sensor_combined: the accelerometer's time offset.
+    relative: Option<Place>,
+    /// x, y, z (sensor_combined: the accelerometer's).
+    xyz: [Place; 3],
+    /// sensor_combined: the gyro's.
+    gyro: Option<[Place; 3]>,
+    temperature: Option<Place>,
+    need: usize,
+}
+
+/// The byte offsets of a format's top-level fields, by name (arrays: `name[i]`).
+fn places(
+    fields: &[Field],
+    formats: &HashMap<String, Vec<Field>>,
+) -> Option<HashMap<String, Place>> {
+    let mut out = HashMap::new();
+    let mut offset = 0usize;
+    let mut known = HashMap::new();
+    for f in fields {
+        let size = type_size(&f.ty, formats, 0, &mut known)?;
+        let scalar = match f.ty.as_str() {
+            "uint64_t" => Some(Scalar::U64),
+            "int32_t" => Some(Scalar::I32),
+            "float" => Some(Scalar::F32),
+            _ => None,
+        };
+        for i in 0..f.count {
+            if let Some(ty) = scalar {
+                let name = if f.count == 1 {
+                    f.name.clone()
+                } else {
+                    format!("{}[{i}]", f.name)
+                };
+                out.insert(name, Place { offset, ty });
+            }
+            offset = offset.checked_add(size)?;
+        }
+    }
+    Some(out)
+}
+
+fn layout(
+    topic: Topic,
+    fields: &[Field],
+    formats: &HashMap<String, Vec<Field>>,
+    offset: u64,
+) -> Result<Layout, UlogError> {
+    let p = places(fields, formats).ok_or_else(|| UlogError::UnknownType {
+        offset,
+        topic: topic.name().into(),
+        ty: fields
+            .iter()
+            .find(|f| type_size(&f.ty, formats, 0, &mut HashMap::new()).is_none())
+            .map_or(String::new(), |f| f.ty.clone()),
+    })?;
+    let get = |field: &'static str| {
+        p.get(field)
+            .copied()
+            .ok_or_else(|| UlogError::MissingField {
+                offset,
+                topic: topic.name().into(),
+                field,
+                format: fields
+                    .iter()
+                    .map(|f| format!("{} {}", f.ty, f.name))
+                    .collect::<Vec<_>>()
+                    .join("; "),
+            })
+    };
+    let three = |base: &'static str| -> Result<[Place; 3], UlogError> {
+        let names: [&'static str; 3] = match base {
+            "accelerometer_m_s2" => [
+                "accelerometer_m_s2[0]",
+                "accelerometer_m_s2[1]",
+                "accelerometer_m_s2[2]",
+            ],
+            "gyro_rad" => ["gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"],
+            _ => ["x", "y", "z"],
+        };
+        Ok([get(names[0])?, get(names[1])?, get(names[2])?])
+    };
+    let time = get("timestamp")?;
+    let l = match topic {
+        Topic::Combined => Layout {
+            topic,
+            time,
+            sample_time: None,
+            relative: Some(get("accelerometer_timestamp_relative")?),
+            xyz: three("accelerometer_m_s2")?,
+            gyro: Some(three("gyro_rad")?),
+            temperature: None,
+            need: 0,
+        },
+        Topic::Accel | Topic::Gyro => Layout {
+            topic,
+            time,
+            sample_time: p.get("timestamp_sample").copied(),
+            relative: None,
+            xyz: three("xyz")?,
+            gyro: None,
+            temperature: p.get("temperature").copied(),
+            need: 0,
+        },
+    };
+    let need = [Some(l.time), l.sample_time, l.relative, l.temperature]
+        .into_iter()
+        .flatten()
+        .chain(l.xyz)
+        .chain(l.gyro.into_iter().flatten())
+        .map(Place::end)
+        .max()
+        .unwrap_or(0);
+    Ok(Layout { need, ..l })
+}
+
+/// The reader's state while it streams the file.
+#[derive(Default)]
+struct State {
+    formats: HashMap<String, Vec<Field>>,
+    /// msg_id → the layout of an IMU topic of the chosen instance.
+    subscribed: HashMap<u16, Layout>,
+    /// Every IMU topic and instance seen, for the error when the chosen one is absent.
+    seen: BTreeSet<(Topic, u8)>,
+    combined_acc: Stream,
+    combined_gyro: Stream,
+    accel: Stream,
+    gyro: Stream,
+    last_t_s: f64,
+    dropouts: Vec<(u64, f64, u16)>,
+}
+
+/// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
+pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
+    let mut header = [0u8; 16];
+    match read_exact_or_end(&mut r, &mut header) {
+        Ok(true) => {}
+        Ok(false) => return Err(UlogError::ShortHeader),
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            return Err(UlogError::ShortHeader)
+        }
+        Err(source) => return Err(UlogError::Io { offset: 0, source }),
+    }
+    let mut st = State::default();
+    let mut offset = 16u64;
+    let mut payload = vec![0u8; u16::MAX as usize];
+    let mut warnings = Vec::new();
+    loop {
+        let mut h = [0u8; 3];
+        let size = match read_exact_or_end(&mut r, &mut h) {
+            Ok(false) => break,
+            Ok(true) => u16::from_le_bytes([h[0], h[1]]) as usize,
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                warnings.push(cut_short(offset));
+                break;
+            }
+            Err(source) => return Err(UlogError::Io { offset, source }),
+        };
+        match read_exact_or_end(&mut r, &mut payload[..size]) {
+            Ok(true) => {}
+            Ok(false) if size == 0 => {}
+            Ok(false) => {
+                warnings.push(cut_short(offset));
+                break;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                warnings.push(cut_short(offset));
+                break;
+            }
+            Err(source) => return Err(UlogError::Io { offset, source }),
+        }
+        st.message(h[2], &payload[..size], offset, instance)?;
+        offset += 3 + size as u64;
+    }
+    st.finish(instance, warnings)
+}
+
+fn cut_short(offset: u64) -> String {
+    format!("the log's last message (at byte {offset}) is cut short: it is left out")
+}
+
+impl State {
+    /// Handles one message of type `ty` at byte `offset`.
+    fn message(&mut self, ty: u8, p: &[u8], offset: u64, instance: u8) -> Result<(), UlogError> {
+        match ty {
+            b'B' if p.len() >= 16 => {
+                let flags = u64::from_le_bytes(p[8..16].try_into().unwrap_or([0; 8]));
+                if flags & !1 != 0 {
+                    return Err(UlogError::IncompatibleFlags { flags });
+                }
+            }
+            b'F' => {
+                let text = String::from_utf8_lossy(p);
+                let (name, fields) = parse_format(&text).ok_or_else(|| UlogError::BadFormat {
+                    offset,
+                    text: text.chars().take(80).collect(),
+                })?;
+                if self.formats.len() >= MAX_FORMATS && !self.formats.contains_key(&name) {
+                    return Err(UlogError::TooManyFormats);
+                }
+                self.formats.insert(name, fields);
+            }
+            b'A' if p.len() >= 3 => {
+                let multi_id = p[0];
+                let msg_id = u16::from_le_bytes([p[1], p[2]]);
+                let name = String::from_utf8_lossy(&p[3..]);
+                if let Some(topic) = Topic::from_name(name.trim_end_matches('\0')) {
+                    self.seen.insert((topic, multi_id));
+                    if multi_id == instance {
+                        let fields = self.formats.get(topic.name()).cloned().ok_or_else(|| {
+                            UlogError::UnknownType {
+                                offset,
+                                topic: topic.name().into(),
+                                ty: topic.name().into(),
+                            }
+                        })?;
+                        let l = layout(topic, &fields, &self.formats, offset)?;
+                        self.subscribed.insert(msg_id, l);
+                    } else {
+                        self.subscribed.remove(&msg_id);
+                    }
+                } else {
+                    self.subscribed.remove(&msg_id);
+                }
+            }
+            b'D' if p.len() >= 2 => {
+                let msg_id = u16::from_le_bytes([p[0], p[1]]);
+                if let Some(l) = self.subscribed.get(&msg_id) {
+                    let l = l.clone();
+                    self.data(&l, &p[2..], offset)?;
+                }
+            }
+            b'O' if p.len() >= 2 => {
+                let ms = u16::from_le_bytes([p[0], p[1]]);
+                self.dropouts.push((offset, self.last_t_s, ms));
+            }
+            // Info, parameters, logging, sync, removal and kinds this reader does not know: a
+            // reader skips what it does not know (the format's forward compatibility).
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// One data message of an IMU topic.
+    fn data(&mut self, l: &Layout, d: &[u8], offset: u64) -> Result<(), UlogError> {
+        if d.len() < l.need {
+            return Err(UlogError::ShortData {
+                offset,
+                topic: l.topic.name().into(),
+                len: d.len(),
+                need: l.need,
+            });
+        }
+        let us = l.sample_time.unwrap_or(l.time).read(d);
+        let t_s = us * 1e-6;
+        self.last_t_s = t_s;
+        let xyz = l.xyz.map(|p| p.read(d));
+        let temp_c = l.temperature.map(|p| p.read(d));
+        let too_many = |_: TooMany| UlogError::TooManySamples(l.topic.name().into());
+        match l.topic {
+            Topic::Combined => {
+                let rel = l.relative.map_or(0.0, |p| p.read(d));
+                if rel != f64::from(RELATIVE_TIMESTAMP_INVALID) {
+                    let s = StreamSample {
+                        t_s: (us + rel) * 1e-6,
+                        v: xyz,
+                        temp_c: None,
+                    };
+                    self.combined_acc.push(s).map_err(too_many)?;
+                }
+                let gyro = l.gyro.map(|g| g.map(|p| p.read(d))).unwrap_or_default();
+                let s = StreamSample {
+                    t_s,
+                    v: gyro,
+                    temp_c: None,
+                };
+                self.combined_gyro.push(s).map_err(too_many)?;
+            }
+            Topic::Accel => {
+                let s = StreamSample {
+                    t_s,
+                    v: xyz,
+                    temp_c,
+                };
+                self.accel.push(s).map_err(too_many)?;
+            }
+            Topic::Gyro => {
+                let s = StreamSample {
+                    t_s,
+                    v: xyz,
+                    temp_c,
+                };
+                self.gyro.push(s).map_err(too_many)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The chosen streams paired into a recording, and the dropouts said.
+    fn finish(
+        self,
+        instance: u8,
+        mut warnings: Vec<String>,
+    ) -> Result<(Recording, Vec<String>), UlogError> {
+        let (acc, gyro) = if !self.accel.samples.is_empty() && !self.gyro.samples.is_empty() {
+            (&self.accel, &self.gyro)
+        } else if !self.combined_gyro.samples.is_empty() {
+            (&self.combined_acc, &self.combined_gyro)
+        } else {
+            let found = if self.seen.is_empty() {
+                "no sensor_accel, sensor_gyro or sensor_combined topic".to_string()
+            } else {
+                self.seen
+                    .iter()
+                    .map(|(t, i)| format!("{} instance {i}", t.name()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            return Err(UlogError::NoImu { instance, found });
+        };
+        let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
+        let max_gap_s = 5.0 / median_rate(&gyro_ts).max(1.0);
+        let (rec, mut paired) = pair(acc, gyro, max_gap_s);
+        if let Some(&(offset, t_s, ms)) = self.dropouts.first() {
+            let total: u64 = self.dropouts.iter().map(|d| u64::from(d.2)).sum();
+            warnings.push(format!(
+                "the logger dropped data {} time(s), {total} ms in all; the first at byte {offset} \
+                 (t = {t_s:.3} s), {ms} ms: no still interval or turn should span a dropout",
+                self.dropouts.len()
+            ));
+        }
+        warnings.append(&mut paired);
+        Ok((rec, warnings))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_format_definition_parses_with_arrays_and_padding() {
+        let (name, f) = parse_format(
+            "sensor_combined:uint64_t timestamp;float[3] gyro_rad;uint8_t[4] _padding0;",
+        )
+        .unwrap();
+        assert_eq!(name, "sensor_combined");
+        assert_eq!(f.len(), 3);
+        assert_eq!((f[1].ty.as_str(), f[1].count), ("float", 3));
+        let formats = HashMap::new();
+        let p = places(&f, &formats).unwrap();
+        assert_eq!(p["gyro_rad[2]"].offset, 16);
+        assert!(parse_format("no colon").is_none());
+        assert!(parse_format("x:float[0] a;").is_none());
+    }
+
+    #[test]
+    fn nested_types_are_sized_and_a_loop_is_refused() {
+        let mut formats = HashMap::new();
+        formats.insert(
+            "inner".to_string(),
+            parse_format("inner:double a;uint8_t b;").unwrap().1,
+        );
+        let mut known = HashMap::new();
+        assert_eq!(type_size("inner", &formats, 0, &mut known), Some(9));
+        formats.insert("loop".to_string(), parse_format("loop:loop a;").unwrap().1);
+        assert_eq!(type_size("loop", &formats, 0, &mut HashMap::new()), None);
+    }
+}
