@@ -12,6 +12,8 @@
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
 //! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
 //! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
+//! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
+//!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.
 //! - [`testvectors`]: PC-computed compensation vectors, checked bit for bit on the target.
 //!
@@ -21,6 +23,7 @@
 
 pub mod die_temperature;
 pub mod gyro;
+pub mod imu;
 pub mod paper_unit;
 pub mod pipeline;
 pub mod protocol;
