@@ -12,6 +12,8 @@
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
 //! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
 //! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
+//! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
+//!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
 //! - [`link`]: a UART link whose receiver an interrupt drains into a queue (Nucleo board).
 //! - [`sampling`]: the sampling tasks' board-independent parts (temperature decimation, ADC scan layout).
 //! - [`stack`]: the stack high-water mark by painting.
@@ -24,6 +26,7 @@
 
 pub mod die_temperature;
 pub mod gyro;
+pub mod imu;
 pub mod link;
 pub mod paper_unit;
 pub mod pipeline;

@@ -1,0 +1,152 @@
+//! ICM-42688-P register addresses and bit fields, from the datasheet (TDK InvenSense DS-000347,
+//! revision 1.8): §13 "User bank 0 register map" and §14 its descriptions, §15–§16 banks 1 and 2,
+//! §6 the FIFO (§6.1 packet structure, §6.2 header), §5.3 the anti-alias filter table.
+//! Also shared by the register-level model (`imu::sim::icm42688`), so that model and driver read the
+//! same numbers; the tests check the values the driver writes against the datasheet's tables written
+//! out independently.
+
+/// SPI address byte: bit 7 set for a read (§9.3 "SPI interface").
+pub const READ: u8 = 0x80;
+
+// ---- User bank 0 (§13, §14) ----
+/// DEVICE_CONFIG: bit 0 SOFT_RESET_CONFIG (§14.1); the part is ready 1 ms after it.
+pub const DEVICE_CONFIG: u8 = 0x11;
+/// SOFT_RESET_CONFIG bit of DEVICE_CONFIG.
+pub const SOFT_RESET: u8 = 0x01;
+/// INT_CONFIG: INT1_MODE (bit 2, 1 = latched), INT1_DRIVE_CIRCUIT (bit 1, 1 = push-pull),
+/// INT1_POLARITY (bit 0, 1 = active high) (§14.3).
+pub const INT_CONFIG: u8 = 0x14;
+/// FIFO_CONFIG: FIFO_MODE in bits 7:6 (00 bypass, 01 stream, 10/11 stop-on-full) (§14.4).
+pub const FIFO_CONFIG: u8 = 0x16;
+/// FIFO_MODE = stop-on-full: when the FIFO is full, new packets are dropped (the oldest are kept).
+pub const FIFO_MODE_STOP_ON_FULL: u8 = 0b10 << 6;
+/// TEMP_DATA1 (high byte); then TEMP_DATA0, ACCEL_DATA_X1 .. GYRO_DATA_Z0 (§14.5–14.17), big-endian.
+pub const TEMP_DATA1: u8 = 0x1D;
+/// ACCEL_DATA_X1, first of the six accelerometer data registers.
+pub const ACCEL_DATA_X1: u8 = 0x1F;
+/// INT_STATUS: cleared on read (§14.19). Then FIFO_COUNTH, FIFO_COUNTL, FIFO_DATA follow it.
+pub const INT_STATUS: u8 = 0x2D;
+/// INT_STATUS: DATA_RDY_INT.
+pub const INT_DATA_RDY: u8 = 1 << 3;
+/// INT_STATUS: FIFO_THS_INT (the FIFO reached its watermark).
+pub const INT_FIFO_THS: u8 = 1 << 2;
+/// INT_STATUS: FIFO_FULL_INT (the FIFO filled up: packets were dropped in stop-on-full mode).
+pub const INT_FIFO_FULL: u8 = 1 << 1;
+/// INT_STATUS: RESET_DONE_INT (set after a soft reset).
+pub const INT_RESET_DONE: u8 = 1 << 4;
+/// FIFO_COUNTH (latches FIFO_COUNTL) (§14.20).
+pub const FIFO_COUNTH: u8 = 0x2E;
+/// FIFO_DATA: a burst read pops FIFO bytes (§14.22).
+pub const FIFO_DATA: u8 = 0x30;
+/// SIGNAL_PATH_RESET: bit 1 FIFO_FLUSH (§14.26).
+pub const SIGNAL_PATH_RESET: u8 = 0x4B;
+/// FIFO_FLUSH bit of SIGNAL_PATH_RESET.
+pub const FIFO_FLUSH: u8 = 1 << 1;
+/// INTF_CONFIG0 (§14.27), reset value 0x30: FIFO_HOLD_LAST_DATA_EN (7), FIFO_COUNT_REC (6: count
+/// in records), FIFO_COUNT_ENDIAN (5: big), SENSOR_DATA_ENDIAN (4: big), UI_SIFS_CFG (1:0, 11 =
+/// I²C off).
+pub const INTF_CONFIG0: u8 = 0x4C;
+/// INTF_CONFIG0: FIFO_COUNT_REC.
+pub const FIFO_COUNT_REC: u8 = 1 << 6;
+/// INTF_CONFIG0: FIFO_COUNT_ENDIAN (big-endian count).
+pub const FIFO_COUNT_ENDIAN: u8 = 1 << 5;
+/// INTF_CONFIG0: SENSOR_DATA_ENDIAN (big-endian data).
+pub const SENSOR_DATA_ENDIAN: u8 = 1 << 4;
+/// INTF_CONFIG0: UI_SIFS_CFG = 11, the I²C interface disabled (an SPI-only board).
+pub const UI_SIFS_DISABLE_I2C: u8 = 0b11;
+/// PWR_MGMT0 (§14.29): GYRO_MODE bits 3:2, ACCEL_MODE bits 1:0 (11 = low noise). After turning the
+/// gyro on, no register write for 200 µs.
+pub const PWR_MGMT0: u8 = 0x4E;
+/// PWR_MGMT0 with both sensors in low-noise mode, temperature sensor on.
+pub const PWR_LOW_NOISE: u8 = 0b1111;
+/// GYRO_CONFIG0 (§14.30): GYRO_FS_SEL bits 7:5, GYRO_ODR bits 3:0. Reset 0x06.
+pub const GYRO_CONFIG0: u8 = 0x4F;
+/// ACCEL_CONFIG0 (§14.31): ACCEL_FS_SEL bits 7:5, ACCEL_ODR bits 3:0. Reset 0x06.
+pub const ACCEL_CONFIG0: u8 = 0x50;
+/// GYRO_CONFIG1 (§14.32): TEMP_FILT_BW 7:5, GYRO_UI_FILT_ORD 3:2, GYRO_DEC2_M2_ORD 1:0. Reset 0x16.
+pub const GYRO_CONFIG1: u8 = 0x51;
+/// GYRO_ACCEL_CONFIG0 (§14.33): ACCEL_UI_FILT_BW 7:4, GYRO_UI_FILT_BW 3:0. Reset 0x11.
+pub const GYRO_ACCEL_CONFIG0: u8 = 0x52;
+/// ACCEL_CONFIG1 (§14.34): ACCEL_UI_FILT_ORD 4:3, ACCEL_DEC2_M2_ORD 2:1. Reset 0x0D.
+pub const ACCEL_CONFIG1: u8 = 0x53;
+/// TMST_CONFIG (§14.35), reset 0x23: TMST_TO_REGS_EN (4), TMST_RES (3: 0 = 1 µs), TMST_DELTA_EN
+/// (2), TMST_FSYNC_EN (1), TMST_EN (0).
+pub const TMST_CONFIG: u8 = 0x54;
+/// TMST_CONFIG: reset value with FSYNC time stamps off: absolute 1 µs ODR time stamps.
+pub const TMST_ODR_1US: u8 = 0x21;
+/// FIFO_CONFIG1 (§14.38): FIFO_RESUME_PARTIAL_RD (6), FIFO_WM_GT_TH (5), FIFO_HIRES_EN (4),
+/// FIFO_TMST_FSYNC_EN (3), FIFO_TEMP_EN (2), FIFO_GYRO_EN (1), FIFO_ACCEL_EN (0).
+pub const FIFO_CONFIG1: u8 = 0x5F;
+/// FIFO_CONFIG1: FIFO_WM_GT_TH (the watermark interrupt on every ODR while the count is above it).
+pub const FIFO_WM_GT_TH: u8 = 1 << 5;
+/// FIFO_CONFIG1: FIFO_HIRES_EN (20-bit packets, packet 4).
+pub const FIFO_HIRES_EN: u8 = 1 << 4;
+/// FIFO_CONFIG1: accel, gyro, temperature and time stamp in the FIFO (packet 3).
+pub const FIFO_PACKET3_EN: u8 = 0b1111;
+/// FIFO_CONFIG2: FIFO_WM[7:0]; FIFO_CONFIG3: FIFO_WM[11:8] (§14.39–14.40), in records with
+/// FIFO_COUNT_REC.
+pub const FIFO_CONFIG2: u8 = 0x60;
+/// FIFO_CONFIG3: FIFO_WM[11:8].
+pub const FIFO_CONFIG3: u8 = 0x61;
+/// INT_CONFIG1 (§14.43), reset 0x10: INT_ASYNC_RESET (bit 4) must be cleared for proper INT1/2
+/// operation.
+pub const INT_CONFIG1: u8 = 0x64;
+/// INT_SOURCE0 (§14.44), reset 0x10: FIFO_THS_INT1_EN (2), FIFO_FULL_INT1_EN (1), UI_DRDY_INT1_EN (3).
+pub const INT_SOURCE0: u8 = 0x65;
+/// INT_SOURCE0: the FIFO watermark and FIFO full on INT1.
+pub const INT1_FIFO_THS_FULL: u8 = (1 << 2) | (1 << 1);
+/// SELF_TEST_CONFIG (§14.48): ACCEL_ST_POWER (6), EN_AZ/AY/AX_ST (5:3), EN_GZ/GY/GX_ST (2:0).
+pub const SELF_TEST_CONFIG: u8 = 0x70;
+/// SELF_TEST_CONFIG: gyro self-test on all axes.
+pub const ST_GYRO_ALL: u8 = 0b0000_0111;
+/// SELF_TEST_CONFIG: accelerometer self-test on all axes with its power.
+pub const ST_ACCEL_ALL: u8 = 0b0111_1000;
+/// WHO_AM_I (§14.50).
+pub const WHO_AM_I: u8 = 0x75;
+/// The ICM-42688-P's WHO_AM_I.
+pub const WHO_AM_I_VALUE: u8 = 0x47;
+/// REG_BANK_SEL, in every bank (§14.51).
+pub const REG_BANK_SEL: u8 = 0x76;
+
+// ---- User bank 1 (§15) ----
+/// GYRO_CONFIG_STATIC2: GYRO_AAF_DIS (1), GYRO_NF_DIS (0). Reset 0xA0.
+pub const GYRO_CONFIG_STATIC2: u8 = 0x0B;
+/// GYRO_CONFIG_STATIC3: GYRO_AAF_DELT 5:0.
+pub const GYRO_CONFIG_STATIC3: u8 = 0x0C;
+/// GYRO_CONFIG_STATIC4: GYRO_AAF_DELTSQR[7:0].
+pub const GYRO_CONFIG_STATIC4: u8 = 0x0D;
+/// GYRO_CONFIG_STATIC5: GYRO_AAF_BITSHIFT 7:4, GYRO_AAF_DELTSQR[11:8] 3:0.
+pub const GYRO_CONFIG_STATIC5: u8 = 0x0E;
+/// XG_ST_DATA, YG_ST_DATA, ZG_ST_DATA: the factory self-test codes of the gyro.
+pub const XG_ST_DATA: u8 = 0x5F;
+
+// ---- User bank 2 (§16) ----
+/// ACCEL_CONFIG_STATIC2: ACCEL_AAF_DELT 6:1, ACCEL_AAF_DIS 0.
+pub const ACCEL_CONFIG_STATIC2: u8 = 0x03;
+/// ACCEL_CONFIG_STATIC3: ACCEL_AAF_DELTSQR[7:0].
+pub const ACCEL_CONFIG_STATIC3: u8 = 0x04;
+/// ACCEL_CONFIG_STATIC4: ACCEL_AAF_BITSHIFT 7:4, ACCEL_AAF_DELTSQR[11:8] 3:0.
+pub const ACCEL_CONFIG_STATIC4: u8 = 0x05;
+/// XA_ST_DATA, YA_ST_DATA, ZA_ST_DATA: the factory self-test codes of the accelerometer.
+pub const XA_ST_DATA: u8 = 0x3B;
+
+// ---- FIFO (§6) ----
+/// FIFO size, bytes (§6: 2 KiB).
+pub const FIFO_BYTES: usize = 2048;
+/// Header bit 7, HEADER_MSG: the FIFO is empty (the rest of the packet is not data) (§6.2).
+pub const HEADER_MSG: u8 = 0x80;
+/// Header of a packet 3 with an ODR time stamp: accel (6), gyro (5), timestamp 10 (3:2); bits 1:0
+/// (ODR changed) are not part of the check.
+pub const HEADER_PACKET3: u8 = 0b0110_1000;
+/// Header of a packet 4 (20-bit): packet 3's bits and HEADER_20 (4).
+pub const HEADER_PACKET4: u8 = 0b0111_1000;
+/// The bits a packet's header is checked on.
+pub const HEADER_CHECK_MASK: u8 = 0b1111_1100;
+/// Packet 3 length (header, accel 6, gyro 6, temperature 1, time stamp 2).
+pub const PACKET3_LEN: usize = 16;
+/// Packet 4 length (packet 3 with a 2-byte temperature and 3 extension bytes).
+pub const PACKET4_LEN: usize = 20;
+/// A 16-bit sample marked invalid (§6.1: the sensor's data are not valid, e.g. while it starts).
+pub const INVALID_16: i16 = i16::MIN;
+/// A 20-bit sample marked invalid.
+pub const INVALID_20: i32 = -524_288;

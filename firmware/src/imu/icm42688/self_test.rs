@@ -1,0 +1,191 @@
+//! Self-test (DS-000347, its self-test section; the procedure and limits of TDK's reference driver,
+//! `Icm426xxSelfTest.c` in the InvenSense eMD): with the sensor at a fixed setting (gyro ±250 °/s,
+//! accelerometer ±4 g, 1 kHz), average its output over 200 samples with self-test off and on; the
+//! response |on − off| of each axis is compared with the factory value derived from the part's
+//! self-test code (XG/YG/ZG_ST_DATA in bank 1, XA/YA/ZA_ST_DATA in bank 2):
+//!
+//! `ST_OTP = 2620 / 2^(3 − FS_SEL) · 1.01^(code − 1)` LSB (FS_SEL 3 for the gyro at ±250 °/s, 2 for
+//! the accelerometer at ±4 g).
+//!
+//! Pass: gyro response / ST_OTP > 0.5; accelerometer 0.5 < response / ST_OTP < 1.5. A code of 0
+//! (no factory value) falls back to absolute limits: gyro response ≥ 60 °/s, accelerometer 50 to
+//! 1200 mg. The gyro's offset with self-test off must also be within ±20 °/s.
+//!
+//! The evaluation is a pure function of the averages and the codes, run after the measurement
+//! (never per sample; it uses `libm::pow`).
+
+use super::regs::*;
+use super::Step;
+
+/// Samples averaged per phase.
+pub const SAMPLES: u32 = 200;
+/// Wait before each data-register read: one 1 kHz period.
+pub const SAMPLE_WAIT_NS: u32 = 1_000_000;
+/// Gyro LSB per °/s at ±250 °/s.
+pub const GYRO_ST_LSB_PER_DPS: f32 = 131.0;
+/// Accelerometer LSB per g at ±4 g.
+pub const ACCEL_ST_LSB_PER_G: f32 = 8192.0;
+
+/// Which sensor is under test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SensorUnderTest {
+    /// The gyro.
+    Gyro,
+    /// The accelerometer.
+    Accel,
+}
+
+impl SensorUnderTest {
+    /// First of its six data registers.
+    pub fn data_register(self) -> u8 {
+        match self {
+            SensorUnderTest::Gyro => ACCEL_DATA_X1 + 6,
+            SensorUnderTest::Accel => ACCEL_DATA_X1,
+        }
+    }
+    /// Bank of its self-test codes.
+    pub fn code_bank(self) -> u8 {
+        match self {
+            SensorUnderTest::Gyro => 1,
+            SensorUnderTest::Accel => 2,
+        }
+    }
+    /// First of its three self-test code registers.
+    pub fn code_register(self) -> u8 {
+        match self {
+            SensorUnderTest::Gyro => XG_ST_DATA,
+            SensorUnderTest::Accel => XA_ST_DATA,
+        }
+    }
+}
+
+/// Configure for the measurement: FIFO off, the sensor's self-test setting, low-noise mode, and
+/// the settling time (gyro 60 ms, accelerometer 25 ms).
+pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 7] {
+    let (reg, setting, settle) = match sensor {
+        // GYRO_FS_SEL 011 (±250 °/s), ODR 1 kHz.
+        SensorUnderTest::Gyro => (GYRO_CONFIG0, (3 << 5) | 6, 60_000),
+        // ACCEL_FS_SEL 010 (±4 g), ODR 1 kHz.
+        SensorUnderTest::Accel => (ACCEL_CONFIG0, (2 << 5) | 6, 25_000),
+    };
+    [
+        Step::Write(REG_BANK_SEL, 0),
+        Step::Write(FIFO_CONFIG, 0),
+        Step::Write(SELF_TEST_CONFIG, 0),
+        Step::Write(reg, setting),
+        Step::Write(PWR_MGMT0, PWR_LOW_NOISE),
+        Step::WaitUs(200),
+        Step::WaitUs(settle),
+    ]
+}
+
+/// Turn the sensor's self-test on and wait for it to settle (gyro 200 ms, accelerometer 25 ms).
+pub fn enable_steps(sensor: SensorUnderTest) -> [Step; 2] {
+    match sensor {
+        SensorUnderTest::Gyro => [
+            Step::Write(SELF_TEST_CONFIG, ST_GYRO_ALL),
+            Step::WaitUs(200_000),
+        ],
+        SensorUnderTest::Accel => [
+            Step::Write(SELF_TEST_CONFIG, ST_ACCEL_ALL),
+            Step::WaitUs(25_000),
+        ],
+    }
+}
+
+/// Sums big-endian 16-bit triples.
+#[derive(Default)]
+pub struct Averager {
+    sum: [i64; 3],
+    n: i64,
+}
+
+impl Averager {
+    /// Adds one read of the six data registers.
+    pub fn add(&mut self, b: &[u8; 6]) {
+        for i in 0..3 {
+            self.sum[i] += i64::from(i16::from_be_bytes([b[2 * i], b[2 * i + 1]]));
+        }
+        self.n += 1;
+    }
+    /// The mean, LSB (rounded toward zero).
+    pub fn mean(&self) -> [i32; 3] {
+        let n = self.n.max(1);
+        self.sum.map(|s| (s / n) as i32)
+    }
+}
+
+/// The factory self-test response for a code at a range setting `fs_sel`, LSB.
+pub fn otp_lsb(fs_sel: u8, code: u8) -> f32 {
+    if code == 0 {
+        return 0.0;
+    }
+    let base = 2620.0 / f64::from(1u32 << (3 - fs_sel.min(3)));
+    (base * libm::pow(1.01, f64::from(code) - 1.0)) as f32
+}
+
+/// One axis's result.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AxisResult {
+    /// |on − off|, LSB.
+    pub response_lsb: f32,
+    /// The factory response, LSB (0 when the part has no code).
+    pub otp_lsb: f32,
+    /// Within the limits.
+    pub pass: bool,
+}
+
+/// The self-test's findings.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SelfTestReport {
+    /// Gyro x, y, z.
+    pub gyro: [AxisResult; 3],
+    /// Gyro offset with self-test off, °/s, per axis.
+    pub gyro_offset_dps: [f32; 3],
+    /// Accelerometer x, y, z.
+    pub accel: [AxisResult; 3],
+}
+
+impl SelfTestReport {
+    /// Every axis of both sensors passed.
+    pub fn passed(&self) -> bool {
+        let offset_ok = self.gyro_offset_dps.iter().all(|o| o.abs() <= 20.0);
+        offset_ok && self.gyro.iter().chain(self.accel.iter()).all(|a| a.pass)
+    }
+
+    /// Records a sensor's measurement: the means with self-test off and on, and its codes.
+    pub fn set(&mut self, sensor: SensorUnderTest, off: [i32; 3], on: [i32; 3], codes: [u8; 3]) {
+        for i in 0..3 {
+            let response = (on[i] - off[i]).unsigned_abs() as f32;
+            let (fs_sel, otp_fallback_ok) = match sensor {
+                SensorUnderTest::Gyro => (3, response >= 60.0 * GYRO_ST_LSB_PER_DPS),
+                SensorUnderTest::Accel => {
+                    let mg = response / ACCEL_ST_LSB_PER_G * 1000.0;
+                    (2, (50.0..=1200.0).contains(&mg))
+                }
+            };
+            let otp = otp_lsb(fs_sel, codes[i]);
+            let pass = if otp > 0.0 {
+                let ratio = response / otp;
+                match sensor {
+                    SensorUnderTest::Gyro => ratio > 0.5,
+                    SensorUnderTest::Accel => ratio > 0.5 && ratio < 1.5,
+                }
+            } else {
+                otp_fallback_ok
+            };
+            let r = AxisResult {
+                response_lsb: response,
+                otp_lsb: otp,
+                pass,
+            };
+            match sensor {
+                SensorUnderTest::Gyro => {
+                    self.gyro[i] = r;
+                    self.gyro_offset_dps[i] = off[i] as f32 / GYRO_ST_LSB_PER_DPS;
+                }
+                SensorUnderTest::Accel => self.accel[i] = r,
+            }
+        }
+    }
+}

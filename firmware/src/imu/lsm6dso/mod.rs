@@ -1,0 +1,1 @@
+//! ST LSM6DSO driver (in progress).
