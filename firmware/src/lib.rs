@@ -14,6 +14,7 @@
 //! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
 //! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
 //!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
+//! - [`imu_bursts`]: the ICM-42688-P's FIFO read as a chain of DMA bursts (F405 board).
 //! - [`link`]: a UART link whose receiver an interrupt drains into a queue (Nucleo board).
 //! - [`sampling`]: the sampling tasks' board-independent parts (temperature decimation, ADC scan layout).
 //! - [`stack`]: the stack high-water mark by painting.
@@ -27,6 +28,7 @@
 pub mod die_temperature;
 pub mod gyro;
 pub mod imu;
+pub mod imu_bursts;
 pub mod link;
 pub mod paper_unit;
 pub mod pipeline;
