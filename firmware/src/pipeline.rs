@@ -191,6 +191,27 @@ impl<const Q: usize> Pipeline<Q> {
         }
     }
 
+    /// Samples were lost before the next one (a digital IMU's FIFO overflowed or was flushed): `n`
+    /// of them when the part's time stamps tell, 0 when unknown. The sample index advances by `n`
+    /// (indices stay the time base), the lost samples count as rejected in the current window, the
+    /// frame is flagged [`SampleFlags::SAMPLES_LOST`], and the ω̇ estimator restarts (a difference
+    /// across a gap is not a derivative).
+    pub fn on_samples_lost(&mut self, n: u32) {
+        self.index += u64::from(n);
+        self.omega_dot.reset();
+        let Some(req) = self.stream else {
+            return;
+        };
+        self.window_flags |= SampleFlags::SAMPLES_LOST;
+        if matches!(
+            req.kind,
+            StreamKind::RawWindows | StreamKind::CompensatedWindows
+        ) {
+            self.rejected += n;
+            self.in_window += n;
+        }
+    }
+
     /// The compensator in force (`None`: uncalibrated), e.g. to read its temperature state.
     pub fn compensator(&self) -> Option<&Compensator> {
         self.compensator.as_ref()
@@ -360,7 +381,8 @@ impl<const Q: usize> Pipeline<Q> {
             }
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
-                    self.window_flags = sample_flags;
+                    // Keeps a SAMPLES_LOST noted since the previous emitted sample.
+                    self.window_flags |= sample_flags;
                     let flags = self.frame_flags(req.kind == StreamKind::CompensatedDecimated);
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {

@@ -180,6 +180,9 @@ impl SampleFlags {
     /// actual temperature in this frame — outside the calibrated range (the nearest end was used),
     /// or no valid temperature reading yet (the reference values were used).
     pub const TEMPERATURE: u8 = 16;
+    /// Samples were lost in this frame's span (a digital IMU's FIFO overflowed or was flushed):
+    /// they count in `rejected`, and the sample indices still advance over them.
+    pub const SAMPLES_LOST: u8 = 32;
 
     /// True when `bit` is set.
     pub fn has(self, bit: u8) -> bool {

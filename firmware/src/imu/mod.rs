@@ -19,8 +19,10 @@ pub mod icm42688;
 pub mod lsm6dso;
 #[cfg(any(test, feature = "imu-sim"))]
 pub mod sim;
+#[cfg(test)]
+mod tests;
 
-use crate::pipeline::Sample;
+use crate::pipeline::{Pipeline, Sample, TEMPERATURE_REFRESH_HZ};
 
 /// Flags of one [`ImuSample`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -115,4 +117,36 @@ pub(crate) fn lost_between(previous: u16, current: u16, period: u16) -> u16 {
         return 0;
     }
     ((u32::from(dt) + u32::from(period) / 2) / u32::from(period.max(1))).saturating_sub(1) as u16
+}
+
+/// Hands decoded samples to the pipeline as a board's sampling task does: a loss first (so that
+/// the pipeline's sample index and ω̇ know of the gap), the part's temperature every
+/// `1/TEMPERATURE_REFRESH_HZ` s of samples, then the sample.
+pub struct PipelineFeed {
+    every: u32,
+    until_temperature: u32,
+}
+
+impl PipelineFeed {
+    /// For samples at `sample_rate_hz`.
+    pub fn new(sample_rate_hz: u32) -> Self {
+        PipelineFeed {
+            every: (sample_rate_hz / TEMPERATURE_REFRESH_HZ).max(1),
+            until_temperature: 0,
+        }
+    }
+
+    /// One decoded sample into the pipeline.
+    #[inline(always)]
+    pub fn push<const Q: usize>(&mut self, s: &ImuSample, p: &mut Pipeline<Q>) {
+        if s.flags.has(ImuFlags::DATA_LOST) {
+            p.on_samples_lost(u32::from(s.lost_before));
+        }
+        if self.until_temperature == 0 {
+            p.set_temperature(s.temp_c);
+            self.until_temperature = self.every;
+        }
+        self.until_temperature -= 1;
+        p.on_sample(&s.to_sample());
+    }
 }

@@ -71,6 +71,7 @@ pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
             (SampleFlags::SATURATED, "SATURATED"),
             (SampleFlags::NON_FINITE, "NON-FINITE"),
             (SampleFlags::FRAMES_DROPPED, "DROPPED"),
+            (SampleFlags::SAMPLES_LOST, "SAMPLES-LOST"),
         ]
         .iter()
         .filter(|(bit, _)| w.flags.has(*bit))

@@ -113,6 +113,11 @@ impl<SPI: SpiDevice> Icm42688<SPI> {
             .map_err(Error::Spi)
     }
 
+    /// The SPI device (e.g. a simulated part's clock, or a shared bus's settings).
+    pub fn device_mut(&mut self) -> &mut SPI {
+        &mut self.spi
+    }
+
     /// Gives the SPI device back.
     pub fn release(self) -> SPI {
         self.spi

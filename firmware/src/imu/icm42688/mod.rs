@@ -414,8 +414,8 @@ impl Core {
         (n * self.cfg.fifo.len(), usize::from(count) > n)
     }
 
-    /// Decodes the `bytes` FIFO bytes read into `buf` into `out`. On a header that is neither the
-    /// configured packet nor the empty marker, returns the header: the caller flushes the FIFO.
+    /// Decodes the `bytes` FIFO bytes read into `buf` into `out`. On a header that is not the
+    /// configured packet's, returns the header: the caller flushes the FIFO.
     pub fn decode(&mut self, bytes: usize, out: &mut [ImuSample]) -> Result<usize, u8> {
         let len = self.cfg.fifo.len();
         let want = match self.cfg.fifo {
@@ -426,9 +426,8 @@ impl Core {
         for k in 0..bytes / len {
             let p = &self.buf[k * len..(k + 1) * len];
             let header = p[0];
-            if header & HEADER_MSG != 0 {
-                break; // empty: the count was ahead of the data
-            }
+            // Within the counted packets even the empty marker (HEADER_MSG) means out of step:
+            // the count was latched before the read, and the FIFO only grows meanwhile.
             if header & HEADER_CHECK_MASK != want {
                 self.corrupted();
                 return Err(header);

@@ -1,0 +1,475 @@
+//! Register-level model of the ICM-42688-P (DS-000347; register numbers from
+//! `imu::icm42688::regs`, the behaviour written here from the datasheet's descriptions):
+//!
+//! - four banks of registers with their reset values, REG_BANK_SEL, WHO_AM_I 0x47 (settable, to
+//!   test a wrong part), soft reset (every register back to reset, FIFO emptied, RESET_DONE_INT,
+//!   no access for 1 ms), FIFO_FLUSH;
+//! - sampling while both sensors are in low-noise mode, at GYRO_CONFIG0's ODR: the data registers
+//!   (16 bits at the range registers' sensitivity, big-endian) and, unless in bypass mode, the FIFO
+//!   (packet 3, or packet 4 with FIFO_HIRES_EN: 18-bit accel and 19-bit gyro at ±16 g / ±2000 °/s,
+//!   16-bit temperature) with the absolute 1 µs time stamp; 2 KiB, stop-on-full: a packet that does
+//!   not fit is dropped, counted in [`Icm42688Model::dropped`] by its sample number, and sets
+//!   FIFO_FULL_INT; FIFO_THS_INT while the count (records with FIFO_COUNT_REC) reaches the
+//!   watermark; INT_STATUS cleared on read; INT1 as INT_SOURCE0 routes it;
+//! - the first samples after the sensors start are marked invalid (−32768 / −524288), as the part
+//!   does while they settle ([`Icm42688Model::invalid_after_start`]);
+//! - the self-test response: with SELF_TEST_CONFIG's axis bits set, the factory response for the
+//!   part's code (`2620/2^(3−FS)·1.01^(code−1)` LSB at the self-test ranges), times
+//!   [`Icm42688Model::self_test_gain`] (1 for a healthy part);
+//! - rule checks: a register write within 200 µs of starting the gyro, any access within 1 ms of a
+//!   soft reset, or a write to a read-only register counts in [`Icm42688Model::violations`].
+
+use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
+use heapless::Deque;
+
+use super::{quantize, BusFault, Generator, Truth};
+use crate::imu::icm42688::regs::*;
+
+/// Dropped sample numbers remembered (the first ones).
+pub const DROP_LOG: usize = 64;
+
+/// The model.
+pub struct Icm42688Model<G> {
+    gen: G,
+    banks: [[u8; 128]; 4],
+    bank: usize,
+    fifo: Deque<u8, FIFO_BYTES>,
+    status: u8,
+    latched_count: u16,
+    time_ns: u64,
+    next_sample_ns: u64,
+    busy_until_ns: u64,
+    no_write_until_ns: u64,
+    since_start: u32,
+    /// WHO_AM_I's value (0x47).
+    pub who_am_i: u8,
+    /// Samples marked invalid after the sensors start.
+    pub invalid_after_start: u32,
+    /// Scale of the self-test response (1: healthy; 0.3: a failing part).
+    pub self_test_gain: f64,
+    /// Self-test codes: gyro x, y, z (bank 1), accelerometer x, y, z (bank 2).
+    pub self_test_codes: [u8; 6],
+    /// Every transaction fails with [`BusFault`] while set.
+    pub fail_spi: bool,
+    /// Samples produced since the start (each one's number is its index here).
+    pub samples: u32,
+    /// Numbers of the samples dropped because the FIFO was full (the first [`DROP_LOG`]).
+    pub dropped: heapless::Vec<u32, DROP_LOG>,
+    /// Datasheet rules broken by the host (see the module doc).
+    pub violations: u32,
+    /// The last truth sampled.
+    pub last_truth: Truth,
+}
+
+fn reset_banks() -> [[u8; 128]; 4] {
+    let mut b = [[0u8; 128]; 4];
+    // Reset values of the registers the driver touches (§13, §15, §16 register maps).
+    for (reg, v) in [
+        (0x13, 0x05), // DRIVE_CONFIG
+        (INTF_CONFIG0, 0x30),
+        (0x4D, 0x91), // INTF_CONFIG1
+        (GYRO_CONFIG0, 0x06),
+        (ACCEL_CONFIG0, 0x06),
+        (GYRO_CONFIG1, 0x16),
+        (GYRO_ACCEL_CONFIG0, 0x11),
+        (ACCEL_CONFIG1, 0x0D),
+        (TMST_CONFIG, 0x23),
+        (INT_CONFIG1, 0x10),
+        (INT_SOURCE0, 0x10),
+    ] {
+        b[0][reg as usize] = v;
+    }
+    b[1][GYRO_CONFIG_STATIC2 as usize] = 0xA0;
+    b
+}
+
+impl<G: Generator> Icm42688Model<G> {
+    /// A part just powered on, sampling `gen`.
+    pub fn new(gen: G) -> Self {
+        Icm42688Model {
+            gen,
+            banks: reset_banks(),
+            bank: 0,
+            fifo: Deque::new(),
+            status: INT_RESET_DONE,
+            latched_count: 0,
+            time_ns: 0,
+            next_sample_ns: 0,
+            busy_until_ns: 0,
+            no_write_until_ns: 0,
+            since_start: 0,
+            who_am_i: WHO_AM_I_VALUE,
+            invalid_after_start: 1,
+            self_test_gain: 1.0,
+            self_test_codes: [70, 72, 68, 60, 62, 58],
+            fail_spi: false,
+            samples: 0,
+            dropped: heapless::Vec::new(),
+            violations: 0,
+            last_truth: Truth::default(),
+        }
+    }
+
+    /// The generator (e.g. to set the virtual table).
+    pub fn generator(&mut self) -> &mut G {
+        &mut self.gen
+    }
+
+    /// A register's value (bank, address), as the tests read the configuration.
+    pub fn register(&self, bank: usize, reg: u8) -> u8 {
+        self.banks[bank & 3][reg as usize & 0x7F]
+    }
+
+    /// FIFO bytes held.
+    pub fn fifo_len(&self) -> usize {
+        self.fifo.len()
+    }
+
+    /// The INT1 pin (active high, as the driver configures it): a latched status bit routed by
+    /// INT_SOURCE0 (DRDY bit 3, FIFO_THS bit 2, FIFO_FULL bit 1).
+    pub fn int1(&self) -> bool {
+        let route = self.banks[0][INT_SOURCE0 as usize];
+        let mut pending = 0;
+        if route & (1 << 3) != 0 {
+            pending |= self.status & INT_DATA_RDY;
+        }
+        if route & (1 << 2) != 0 {
+            pending |= self.status & INT_FIFO_THS;
+        }
+        if route & (1 << 1) != 0 {
+            pending |= self.status & INT_FIFO_FULL;
+        }
+        pending != 0
+    }
+
+    fn odr_period_ns(&self) -> u64 {
+        match self.banks[0][GYRO_CONFIG0 as usize] & 0x0F {
+            1 => 31_250,
+            2 => 62_500,
+            3 => 125_000,
+            4 => 250_000,
+            5 => 500_000,
+            6 => 1_000_000,
+            7 => 5_000_000,
+            8 => 10_000_000,
+            9 => 20_000_000,
+            10 => 40_000_000,
+            15 => 2_000_000,
+            _ => 1_000_000,
+        }
+    }
+
+    fn sampling(&self) -> bool {
+        self.banks[0][PWR_MGMT0 as usize] & 0x0F == PWR_LOW_NOISE
+    }
+
+    /// Lets `ns` of the part's time pass: one sample per ODR period while sampling.
+    pub fn advance_ns(&mut self, ns: u64) {
+        let end = self.time_ns + ns;
+        while self.sampling() && self.next_sample_ns <= end {
+            self.time_ns = self.next_sample_ns;
+            self.sample();
+            self.next_sample_ns += self.odr_period_ns();
+        }
+        self.time_ns = end;
+        if !self.sampling() {
+            self.next_sample_ns = end;
+        }
+    }
+
+    /// Time until the next sample, ns (a board's timer waits this long).
+    pub fn until_next_sample_ns(&self) -> u64 {
+        self.next_sample_ns.saturating_sub(self.time_ns)
+    }
+
+    fn self_test_response(&self) -> ([f64; 3], [f64; 3]) {
+        let st = self.banks[0][SELF_TEST_CONFIG as usize];
+        let otp = |fs: u32, code: u8| {
+            if code == 0 {
+                0.0
+            } else {
+                2620.0 / f64::from(1u32 << (3 - fs)) * libm::pow(1.01, f64::from(code) - 1.0)
+            }
+        };
+        let mut g = [0.0; 3];
+        let mut a = [0.0; 3];
+        for i in 0..3 {
+            if st & (1 << i) != 0 {
+                g[i] = otp(3, self.self_test_codes[i]) / 131.0 * self.self_test_gain;
+            }
+            if st & (1 << (3 + i)) != 0 {
+                a[i] = otp(2, self.self_test_codes[3 + i]) / 8192.0 * self.self_test_gain;
+            }
+        }
+        (g, a)
+    }
+
+    fn sample(&mut self) {
+        let mut t = self.gen.next();
+        self.last_truth = t;
+        let (st_g, st_a) = self.self_test_response();
+        for i in 0..3 {
+            t.gyro_dps[i] += st_g[i];
+            t.accel_g[i] += st_a[i];
+        }
+        let n = self.samples;
+        self.samples = self.samples.wrapping_add(1);
+        let invalid = self.since_start < self.invalid_after_start;
+        self.since_start = self.since_start.saturating_add(1);
+        self.write_data_registers(&t, invalid);
+        self.status |= INT_DATA_RDY;
+        if self.banks[0][FIFO_CONFIG as usize] >> 6 != 0 {
+            self.push_packet(&t, invalid, n);
+        }
+    }
+
+    fn write_data_registers(&mut self, t: &Truth, invalid: bool) {
+        let a_fs = (self.banks[0][ACCEL_CONFIG0 as usize] >> 5) & 3;
+        let g_fs = (self.banks[0][GYRO_CONFIG0 as usize] >> 5) & 7;
+        let a_lsb = 2048.0 * f64::from(1u32 << a_fs);
+        let g_lsb = [16.4, 32.8, 65.5, 131.0, 262.0, 524.3, 1048.6, 2097.2][g_fs as usize];
+        let temp = quantize((t.temp_c - 25.0) * 132.48, 32767) as i16;
+        let r = &mut self.banks[0];
+        r[TEMP_DATA1 as usize..TEMP_DATA1 as usize + 2].copy_from_slice(&temp.to_be_bytes());
+        for i in 0..3 {
+            let a = if invalid {
+                INVALID_16
+            } else {
+                quantize(t.accel_g[i] * a_lsb, 32767) as i16
+            };
+            let g = if invalid {
+                INVALID_16
+            } else {
+                quantize(t.gyro_dps[i] * g_lsb, 32767) as i16
+            };
+            let ai = ACCEL_DATA_X1 as usize + 2 * i;
+            r[ai..ai + 2].copy_from_slice(&a.to_be_bytes());
+            r[ai + 6..ai + 8].copy_from_slice(&g.to_be_bytes());
+        }
+    }
+
+    fn push_packet(&mut self, t: &Truth, invalid: bool, n: u32) {
+        let hires = self.banks[0][FIFO_CONFIG1 as usize] & FIFO_HIRES_EN != 0;
+        let mut p = [0u8; PACKET4_LEN];
+        let len = if hires { PACKET4_LEN } else { PACKET3_LEN };
+        let ts = ((self.time_ns / 1000) as u16).to_be_bytes();
+        if hires {
+            p[0] = HEADER_PACKET4;
+            for i in 0..3 {
+                let a = if invalid {
+                    INVALID_20
+                } else {
+                    quantize(t.accel_g[i] * 8192.0, 131_071) * 4
+                };
+                let g = if invalid {
+                    INVALID_20
+                } else {
+                    quantize(t.gyro_dps[i] * 131.0, 262_143) * 2
+                };
+                p[1 + 2 * i..3 + 2 * i].copy_from_slice(&((a >> 4) as i16).to_be_bytes());
+                p[7 + 2 * i..9 + 2 * i].copy_from_slice(&((g >> 4) as i16).to_be_bytes());
+                p[17 + i] = (((a & 0xF) as u8) << 4) | (g & 0xF) as u8;
+            }
+            let temp = quantize((t.temp_c - 25.0) * 132.48, 32767) as i16;
+            p[13..15].copy_from_slice(&temp.to_be_bytes());
+            p[15..17].copy_from_slice(&ts);
+        } else {
+            p[0] = HEADER_PACKET3;
+            p[1..13].copy_from_slice(&self.banks[0][ACCEL_DATA_X1 as usize..][..12]);
+            p[13] = quantize((t.temp_c - 25.0) * 2.07, 127) as i8 as u8;
+            p[14..16].copy_from_slice(&ts);
+        }
+        if FIFO_BYTES - self.fifo.len() < len {
+            self.status |= INT_FIFO_FULL;
+            let _ = self.dropped.push(n);
+        } else {
+            for b in &p[..len] {
+                let _ = self.fifo.push_back(*b);
+            }
+        }
+        let wm = u16::from_le_bytes([
+            self.banks[0][FIFO_CONFIG2 as usize],
+            self.banks[0][FIFO_CONFIG3 as usize] & 0x0F,
+        ]);
+        if wm > 0 && self.count() >= wm {
+            self.status |= INT_FIFO_THS;
+        }
+    }
+
+    fn packet_len(&self) -> usize {
+        if self.banks[0][FIFO_CONFIG1 as usize] & FIFO_HIRES_EN != 0 {
+            PACKET4_LEN
+        } else {
+            PACKET3_LEN
+        }
+    }
+
+    /// FIFO_COUNT as the part reports it: records with FIFO_COUNT_REC, else bytes.
+    fn count(&self) -> u16 {
+        if self.banks[0][INTF_CONFIG0 as usize] & FIFO_COUNT_REC != 0 {
+            (self.fifo.len() / self.packet_len()) as u16
+        } else {
+            self.fifo.len() as u16
+        }
+    }
+
+    fn read_register(&mut self, reg: u8) -> u8 {
+        match (self.bank, reg) {
+            (1, XG_ST_DATA..=0x61) => return self.self_test_codes[usize::from(reg - XG_ST_DATA)],
+            (2, XA_ST_DATA..=0x3D) => {
+                return self.self_test_codes[3 + usize::from(reg - XA_ST_DATA)]
+            }
+            (0, _) => {}
+            (b, r) => return self.banks[b][r as usize & 0x7F],
+        }
+        let big = self.banks[0][INTF_CONFIG0 as usize] & FIFO_COUNT_ENDIAN != 0;
+        match reg {
+            INT_STATUS => core::mem::take(&mut self.status),
+            FIFO_COUNTH => {
+                self.latched_count = self.count();
+                let b = self.latched_count.to_be_bytes();
+                if big {
+                    b[0]
+                } else {
+                    b[1]
+                }
+            }
+            0x2F => {
+                let b = self.latched_count.to_be_bytes();
+                if big {
+                    b[1]
+                } else {
+                    b[0]
+                }
+            }
+            FIFO_DATA => self.fifo.pop_front().unwrap_or(0xFF),
+            WHO_AM_I => self.who_am_i,
+            REG_BANK_SEL => self.bank as u8,
+            r => self.banks[0][r as usize & 0x7F],
+        }
+    }
+
+    fn write_register(&mut self, reg: u8, v: u8) {
+        if self.time_ns < self.no_write_until_ns && reg != REG_BANK_SEL {
+            self.violations += 1;
+        }
+        if reg == REG_BANK_SEL {
+            self.bank = usize::from(v & 7).min(3);
+            return;
+        }
+        if self.bank != 0 {
+            self.banks[self.bank][reg as usize & 0x7F] = v;
+            return;
+        }
+        let read_only = (TEMP_DATA1..=FIFO_DATA).contains(&reg) || reg == WHO_AM_I;
+        if read_only {
+            self.violations += 1;
+            return;
+        }
+        match reg {
+            DEVICE_CONFIG if v & SOFT_RESET != 0 => self.soft_reset(),
+            SIGNAL_PATH_RESET => {
+                if v & FIFO_FLUSH != 0 {
+                    self.fifo.clear();
+                }
+            }
+            PWR_MGMT0 => {
+                let gyro_was_off = self.banks[0][PWR_MGMT0 as usize] & 0b1100 == 0;
+                let starting = !self.sampling();
+                self.banks[0][PWR_MGMT0 as usize] = v;
+                if gyro_was_off && v & 0b1100 != 0 {
+                    self.no_write_until_ns = self.time_ns + 200_000;
+                }
+                if starting && self.sampling() {
+                    self.since_start = 0;
+                    self.next_sample_ns = self.time_ns + self.odr_period_ns();
+                }
+            }
+            r => self.banks[0][r as usize & 0x7F] = v,
+        }
+    }
+
+    fn soft_reset(&mut self) {
+        self.banks = reset_banks();
+        self.fifo.clear();
+        self.status = INT_RESET_DONE;
+        self.busy_until_ns = self.time_ns + 1_000_000;
+    }
+}
+
+impl<G> ErrorType for Icm42688Model<G> {
+    type Error = BusFault;
+}
+
+impl<G: Generator> SpiDevice for Icm42688Model<G> {
+    fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), BusFault> {
+        if self.fail_spi {
+            return Err(BusFault);
+        }
+        // (address, reading) once the first byte has been sent.
+        let mut addr: Option<(u8, bool)> = None;
+        for op in ops.iter_mut() {
+            if let Operation::DelayNs(ns) = op {
+                self.advance_ns(u64::from(*ns));
+                continue;
+            }
+            if self.time_ns < self.busy_until_ns {
+                self.violations += 1;
+            }
+            match op {
+                Operation::Write(w) => self.shift_in(&mut addr, w),
+                Operation::Read(r) => self.shift_out(&mut addr, r),
+                Operation::Transfer(r, w) => {
+                    self.shift_in(&mut addr, w);
+                    self.shift_out(&mut addr, r);
+                }
+                Operation::TransferInPlace(b) => self.shift_out(&mut addr, b),
+                Operation::DelayNs(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The async form for the async driver: the model answers at once.
+impl<G: Generator> embedded_hal_async::spi::SpiDevice for Icm42688Model<G> {
+    async fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), BusFault> {
+        SpiDevice::transaction(self, ops)
+    }
+}
+
+impl<G: Generator> Icm42688Model<G> {
+    fn shift_in(&mut self, addr: &mut Option<(u8, bool)>, bytes: &[u8]) {
+        for &b in bytes {
+            match *addr {
+                None => *addr = Some((b & !READ, b & READ != 0)),
+                Some((a, false)) => {
+                    self.write_register(a, b);
+                    *addr = Some((next_address(a), false));
+                }
+                Some((_, true)) => {} // bytes clocked out while reading are ignored
+            }
+        }
+    }
+
+    fn shift_out(&mut self, addr: &mut Option<(u8, bool)>, bytes: &mut [u8]) {
+        for b in bytes.iter_mut() {
+            *b = match *addr {
+                Some((a, true)) => {
+                    *addr = Some((next_address(a), true));
+                    self.read_register(a)
+                }
+                _ => 0xFF,
+            };
+        }
+    }
+}
+
+/// Burst accesses step through the registers, except FIFO_DATA, which a burst keeps popping.
+fn next_address(a: u8) -> u8 {
+    if a == FIFO_DATA {
+        a
+    } else {
+        (a + 1) & 0x7F
+    }
+}

@@ -1,0 +1,119 @@
+//! Configuration registers as the datasheet says (DS-000347 §14.30–14.31 for the range and rate
+//! fields, §5.3's AAF table, §14.4/§14.38 for the FIFO), written out here per setting, and the
+//! refused combinations.
+
+use super::*;
+use crate::imu::icm42688::regs::*;
+use crate::imu::icm42688::{AccelRange, AntiAlias, ConfigError, Error, FifoFormat, GyroRange, Odr};
+
+#[test]
+fn default_configuration_registers() {
+    let mut imu = started(Config::DEFAULT);
+    let m = imu.device_mut();
+    // ±2000 °/s = FS_SEL 000, ±16 g = 000, 1 kHz = ODR 0110.
+    assert_eq!(m.register(0, GYRO_CONFIG0), 0b000_0_0110);
+    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b000_0_0110);
+    // 258 Hz: DELT 6, DELTSQR 36, BITSHIFT 10 (gyro: bank 1, AAF and notch enabled).
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC2), 0xA0);
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC3), 6);
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC4), 36);
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC5), 10 << 4);
+    // Accelerometer: DELT in bits 6:1, ACCEL_AAF_DIS bit 0 clear.
+    assert_eq!(m.register(2, ACCEL_CONFIG_STATIC2), 6 << 1);
+    assert_eq!(m.register(2, ACCEL_CONFIG_STATIC3), 36);
+    assert_eq!(m.register(2, ACCEL_CONFIG_STATIC4), 10 << 4);
+    // Stop-on-full; accel, gyro, temperature, time stamp; watermark interrupt while above.
+    assert_eq!(m.register(0, FIFO_CONFIG), 0b10 << 6);
+    assert_eq!(m.register(0, FIFO_CONFIG1), 0b0010_1111);
+    assert_eq!(
+        (m.register(0, FIFO_CONFIG2), m.register(0, FIFO_CONFIG3)),
+        (1, 0)
+    );
+    // Count in records, big-endian count and data, I²C off.
+    assert_eq!(m.register(0, INTF_CONFIG0), 0b0111_0011);
+    // INT1 latched, push-pull, active high; FIFO threshold and full routed to it.
+    assert_eq!(m.register(0, INT_CONFIG), 0b111);
+    assert_eq!(
+        m.register(0, INT_CONFIG1) & (1 << 4),
+        0,
+        "INT_ASYNC_RESET cleared"
+    );
+    assert_eq!(m.register(0, INT_SOURCE0), 0b110);
+    assert_eq!(m.register(0, PWR_MGMT0), 0b1111, "both sensors low-noise");
+    assert_eq!(
+        m.violations, 0,
+        "no write within 200 µs of starting the gyro"
+    );
+}
+
+#[test]
+fn other_settings_and_high_resolution() {
+    let cfg = Config {
+        odr: Odr::Hz8000,
+        accel_range: AccelRange::G4,
+        gyro_range: GyroRange::Dps500,
+        accel_aaf: AntiAlias::Off,
+        gyro_aaf: AntiAlias::Hz997,
+        watermark_packets: 100,
+        ..Config::DEFAULT
+    };
+    let mut imu = started(cfg);
+    let m = imu.device_mut();
+    assert_eq!(m.register(0, GYRO_CONFIG0), 0b010_0_0011); // ±500 °/s, 8 kHz
+    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b010_0_0011); // ±4 g, 8 kHz
+                                                            // 997 Hz: DELT 21, DELTSQR 440 = 0x1B8, BITSHIFT 6.
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC3), 21);
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC4), 0xB8);
+    assert_eq!(m.register(1, GYRO_CONFIG_STATIC5), (6 << 4) | 0x1);
+    assert_eq!(m.register(2, ACCEL_CONFIG_STATIC2) & 1, 1, "accel AAF off");
+    assert_eq!(
+        (m.register(0, FIFO_CONFIG2), m.register(0, FIFO_CONFIG3)),
+        (100, 0)
+    );
+
+    let hires = Config {
+        fifo: FifoFormat::Packet4HighRes,
+        ..Config::DEFAULT
+    };
+    let mut imu = started(hires);
+    assert_eq!(imu.device_mut().register(0, FIFO_CONFIG1), 0b0011_1111);
+}
+
+#[test]
+fn refused_combinations() {
+    let bad = [
+        (
+            Config {
+                fifo: FifoFormat::Packet4HighRes,
+                accel_range: AccelRange::G4,
+                ..Config::DEFAULT
+            },
+            ConfigError::HighResRange,
+        ),
+        (
+            Config {
+                watermark_packets: 0,
+                ..Config::DEFAULT
+            },
+            ConfigError::Watermark,
+        ),
+        (
+            Config {
+                watermark_packets: 129, // 2048 / 16 = 128 packets
+                ..Config::DEFAULT
+            },
+            ConfigError::Watermark,
+        ),
+        (
+            Config {
+                accel_out_per_lsb: f32::NAN,
+                ..Config::DEFAULT
+            },
+            ConfigError::Unit,
+        ),
+    ];
+    for (cfg, why) in bad {
+        let r = Icm42688::new(Icm42688Model::new(TestGen::default()), cfg);
+        assert_eq!(r.err(), Some(Error::Config(why)));
+    }
+}
