@@ -282,6 +282,10 @@ mod app {
         }
         cx.shared.pipeline.lock(|p| {
             for s in &l.samples[..done.samples] {
+                if s.flags.has(ImuFlags::DATA_LOST) {
+                    // A FIFO overflow, a flushed FIFO or a failed burst: the window says so.
+                    p.on_samples_lost(u32::from(s.lost_before));
+                }
                 if let Some(t) = l.temperature.push(s.temp_c) {
                     p.set_temperature(t);
                 }

@@ -22,6 +22,8 @@ use panic_probe as _;
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
+    use core::sync::atomic::{AtomicBool, Ordering};
+
     use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
     use heapless::spsc::{Producer, Queue};
     use stm32f4xx_hal::adc::config::{
@@ -50,6 +52,9 @@ mod app {
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, Gyro, LinkService, Pipeline};
     use shared::LeverMode;
+
+    /// Scans were lost to an ADC overrun: the next sample says so (set by `adc_overrun`).
+    static SCAN_GAP: AtomicBool = AtomicBool::new(false);
 
     type ScanBuf = &'static mut [u16; ADC_SCAN_LEN];
     type ScanDma = Transfer<Stream0<DMA2>, 0, Adc<ADC1>, PeripheralToMemory, ScanBuf>;
@@ -289,7 +294,12 @@ mod app {
             board::VREF_V,
         );
         let refresh = l.temperature.push(temp_c);
+        let gap = SCAN_GAP.swap(false, Ordering::Relaxed);
         cx.shared.pipeline.lock(|p| {
+            if gap {
+                // Scans were missed while the CPU stalled (how many is not known).
+                p.on_samples_lost(0);
+            }
             if let Some(t) = refresh {
                 p.set_temperature(t);
             }
@@ -311,6 +321,7 @@ mod app {
             let _ = unsafe { t.next_transfer_with(|buf, _| (buf, ())) };
             adc.cr2().modify(|_, w| w.dma().set_bit());
         });
+        SCAN_GAP.store(true, Ordering::Relaxed);
         *cx.local.overruns += 1;
         defmt::warn!("ADC overrun #{=u32}: scan re-armed", *cx.local.overruns);
     }
