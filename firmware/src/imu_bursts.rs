@@ -14,7 +14,7 @@
 //! The same bytes the blocking driver's `drain` moves (`imu::icm42688::Icm42688`), so the register
 //! model tests of the driver cover the protocol; the tests here cover the chaining.
 
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use crate::imu::icm42688::regs::{
     FIFO_DATA, FIFO_FLUSH, INT_STATUS, PACKET4_LEN, READ, SIGNAL_PATH_RESET,
@@ -62,25 +62,55 @@ enum Phase {
     Flush,
 }
 
-/// A burst is on the wire (CS low): set by the watermark interrupt, cleared when a chain ends.
-/// An atomic, so the watermark interrupt never waits for the completion task.
-pub struct InFlight(AtomicBool);
+/// Whether a burst chain runs: set by the watermark interrupt, ended by the completion task. An
+/// atomic, so the watermark interrupt never waits for the completion task.
+///
+/// A watermark that arrives while a chain runs is remembered: INT1 is latched until INT_STATUS is
+/// read, so if the chain ended without reading it again, INT1 would stay high with no new edge and
+/// reading would stop for good. The chain then reads the status once more instead of ending.
+pub struct InFlight(AtomicU8);
+
+const IDLE: u8 = 0;
+const BUSY: u8 = 1;
+const BUSY_AND_PENDING: u8 = 2;
 
 impl InFlight {
     /// Idle.
     pub const fn new() -> Self {
-        InFlight(AtomicBool::new(false))
+        InFlight(AtomicU8::new(IDLE))
     }
 
-    /// The watermark interrupt: the status burst to start, or `None` while a chain runs (its
-    /// status read will see the new packets).
+    /// The watermark interrupt: the status burst to start, or `None` while a chain runs (it will
+    /// read the status again before it ends).
     #[inline]
     pub fn on_watermark(&self) -> Option<Burst> {
-        (!self.0.swap(true, Ordering::AcqRel)).then_some(Burst { tx: &STATUS_CMD })
+        // Single core: the completion task cannot run between the load and the store (it has a
+        // lower priority than the watermark interrupt, the only caller).
+        match self.0.load(Ordering::Acquire) {
+            IDLE => {
+                self.0.store(BUSY, Ordering::Release);
+                Some(Burst { tx: &STATUS_CMD })
+            }
+            _ => {
+                self.0.store(BUSY_AND_PENDING, Ordering::Release);
+                None
+            }
+        }
     }
 
-    fn end(&self) {
-        self.0.store(false, Ordering::Release);
+    /// The chain has nothing more to read: it ends, or goes on with a status read if a watermark
+    /// came meanwhile.
+    fn end(&self) -> Option<Burst> {
+        match self
+            .0
+            .compare_exchange(BUSY, IDLE, Ordering::AcqRel, Ordering::Acquire)
+        {
+            Ok(_) => None,
+            Err(_) => {
+                self.0.store(BUSY, Ordering::Release);
+                Some(Burst { tx: &STATUS_CMD })
+            }
+        }
     }
 }
 
@@ -135,10 +165,9 @@ impl BurstReader {
     pub fn abandon(&mut self, in_flight: &InFlight) -> Completed {
         self.core.corrupted();
         self.phase = Phase::Status;
-        in_flight.end();
         Completed {
             samples: 0,
-            next: None,
+            next: in_flight.end(),
             corrupt_header: None,
         }
     }
@@ -187,11 +216,13 @@ impl BurstReader {
             }
             Phase::Flush => None,
         };
-        if next.is_none() {
-            self.phase = Phase::Status;
-            in_flight.end();
-        }
-        done.next = next;
+        done.next = match next {
+            Some(b) => Some(b),
+            None => {
+                self.phase = Phase::Status;
+                in_flight.end()
+            }
+        };
         done
     }
 }
@@ -271,8 +302,12 @@ mod tests {
         ];
         let done = r.on_complete(&fifo_rx(&pk), &mut out, &busy);
         assert_eq!(done.samples, 3);
-        assert_eq!(done.next, None, "nothing more waited: the chain ends");
         assert_eq!(done.corrupt_header, None);
+        // The second watermark above came during the chain: one more status read, then the end.
+        let status = done.next.expect("the pending watermark's status read");
+        assert_eq!(status.tx, &STATUS_CMD[..]);
+        let last = r.on_complete(&[0xFF, 0, 0, 0], &mut [NO_SAMPLE; BATCH_PACKETS], &busy);
+        assert_eq!(last.next, None, "nothing more waited: the chain ends");
         // Counts (unit 1 per LSB), 16.4 LSB per °/s, 2.07 LSB per °C around 25 °C.
         assert_eq!(out[0].accel_out, [2048.0, -4096.0, 1.0]);
         assert!((out[0].gyro_rad_s[0] - 10f32.to_radians()).abs() < 1e-6);
@@ -305,6 +340,33 @@ mod tests {
         assert_eq!(busy.on_watermark(), None, "still the same chain");
         let next = r.on_complete(&[0xFF, 0, 0, 4], &mut out, &busy).next;
         assert_eq!(next.map(|b| b.len()), Some(1 + 4 * PACKET3_LEN));
+    }
+
+    #[test]
+    fn a_watermark_during_a_chain_gets_its_own_status_read() {
+        // INT1 is latched: a watermark that came while the chain ran must be read before the chain
+        // ends, or INT1 stays high and no edge ever comes again.
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        assert_eq!(busy.on_watermark(), None, "during the FIFO read");
+        let done = r.on_complete(
+            &fifo_rx(&[packet([0; 3], [0; 3], 0, 1000)]),
+            &mut out,
+            &busy,
+        );
+        assert_eq!(done.samples, 1);
+        assert_eq!(
+            done.next.map(|b| b.tx),
+            Some(&STATUS_CMD[..]),
+            "status read again"
+        );
+        assert_eq!(r.expected_len(), 4);
+        let done = r.on_complete(&[0xFF, 0, 0, 0], &mut out, &busy);
+        assert_eq!(done.next, None, "nothing came meanwhile: now it ends");
+        assert!(busy.on_watermark().is_some());
     }
 
     #[test]

@@ -180,6 +180,9 @@ mod app {
                 .unwrap_or_else(|_| defmt::panic!("USB strings"))
                 .build();
 
+        // INT1 is latched: if the FIFO reached its watermark before EXTI4 was armed, no edge will
+        // come until INT_STATUS is read. One read at start-up clears it.
+        rtic::pend(pac::Interrupt::EXTI4);
         defmt::info!(
             "accel-cal firmware on STM32F405: ICM-42688-P at {=u32} Hz, USB CDC-ACM",
             sample_rate_hz

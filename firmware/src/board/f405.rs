@@ -213,6 +213,15 @@ pub fn enter_bootloader_if_requested() {
     // SAFETY: right after reset no peripheral is in use; SYSCFG's clock and the memory remap are
     // what the bootloader expects (system memory at 0), then control passes to it for good.
     unsafe {
+        // No interrupt of this firmware may reach the bootloader: every NVIC line off and not
+        // pending (RTIC enables its lines before init), then interrupts globally on, as the
+        // bootloader expects after a reset.
+        let nvic = &*cortex_m::peripheral::NVIC::PTR;
+        for i in 0..nvic.icer.len() {
+            nvic.icer[i].write(u32::MAX);
+            nvic.icpr[i].write(u32::MAX);
+        }
+        cortex_m::interrupt::enable();
         let rcc = &*stm32f4xx_hal::pac::RCC::ptr();
         rcc.apb2enr().modify(|_, w| w.syscfgen().set_bit());
         let syscfg = &*stm32f4xx_hal::pac::SYSCFG::ptr();
