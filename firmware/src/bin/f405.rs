@@ -29,7 +29,8 @@ mod app {
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config;
-    use stm32f4xx_hal::spi::{Mode, Phase, Polarity};
+    use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
+    use stm32f4xx_hal::timer::SysDelay;
     use usb_device::bus::UsbBusAllocator;
     use usb_device::prelude::*;
 
@@ -110,7 +111,7 @@ mod app {
         // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
         let mut cs = gpioa.pa4.into_push_pull_output();
         cs.set_high();
-        let mut spi = dp.SPI1.spi(
+        let spi = dp.SPI1.spi(
             (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
             Mode {
                 polarity: Polarity::IdleHigh,
@@ -121,28 +122,7 @@ mod app {
         );
         let sample_rate_hz = board::IMU_CONFIG.odr.hz();
         let mut delay = cx.core.SYST.delay(&rcc.clocks);
-        let reader = match ExclusiveDevice::new(&mut spi, &mut cs, &mut delay)
-            .map_err(|_| ())
-            .and_then(|dev| Icm42688::new(dev, board::IMU_CONFIG).map_err(|_| ()))
-            .and_then(|_| Core::new(board::IMU_CONFIG).map_err(|_| ()))
-        {
-            // The part is configured and its FIFO running; the driver's state continues in the
-            // burst reader, the bus goes to the DMA streams.
-            Ok(core) => Some(BurstReader::new(core)),
-            Err(()) => {
-                defmt::error!("ICM-42688-P not answering on SPI1: no samples");
-                None
-            }
-        };
-        // Drop whatever the configuration left in the receiver (and its overrun flag), so the first
-        // byte the RX stream moves is the first of a burst.
-        // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
-        unsafe {
-            let regs = &*SPI1::ptr();
-            let _ = regs.dr().read();
-            let _ = regs.sr().read();
-        }
-        let _ = spi.use_dma().txrx();
+        let reader = init_imu(spi, &mut cs, &mut delay);
         let dma = SpiDma::new(StreamsTuple::new(dp.DMA2, &mut rcc));
         let rx = RxBuf::new(cx.local.rx_buf);
 
@@ -160,25 +140,15 @@ mod app {
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
         pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
 
-        let usb = USB::new(
-            (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
-            (gpioa.pa11, gpioa.pa12),
-            &rcc.clocks,
+        let (usb_dev, link) = init_usb(
+            USB::new(
+                (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
+                (gpioa.pa11, gpioa.pa12),
+                &rcc.clocks,
+            ),
+            cx.local.usb_bus,
+            cx.local.ep_memory,
         );
-        let bus: &'static UsbBusAllocator<UsbBusType> = cx
-            .local
-            .usb_bus
-            .insert(UsbBus::new(usb, cx.local.ep_memory));
-        let link = UsbLink::new(usbd_serial::SerialPort::new(bus));
-        let usb_dev =
-            UsbDeviceBuilder::new(bus, UsbVidPid(board::USB_VID_PID.0, board::USB_VID_PID.1))
-                .device_class(usbd_serial::USB_CLASS_CDC)
-                .strings(&[StringDescriptors::default()
-                    .manufacturer("accel-cal")
-                    .product("accel-cal F405 IMU")
-                    .serial_number("F405")])
-                .unwrap_or_else(|_| defmt::panic!("USB strings"))
-                .build();
 
         // INT1 is latched: if the FIFO reached its watermark before EXTI4 was armed, no edge will
         // come until INT_STATUS is read. One read at start-up clears it.
@@ -207,6 +177,58 @@ mod app {
                 service: Some(LinkService::new(controller)),
             },
         )
+    }
+
+    /// Configures the ICM-42688-P over the blocking bus, then hands SPI1 to its DMA streams. `None`
+    /// when the part does not answer.
+    fn init_imu(
+        mut spi: Spi<SPI1>,
+        cs: &mut PA4<Output<PushPull>>,
+        delay: &mut SysDelay,
+    ) -> Option<BurstReader> {
+        let reader = match ExclusiveDevice::new(&mut spi, cs, delay)
+            .map_err(|_| ())
+            .and_then(|dev| Icm42688::new(dev, board::IMU_CONFIG).map_err(|_| ()))
+            .and_then(|_| Core::new(board::IMU_CONFIG).map_err(|_| ()))
+        {
+            // The part is configured and its FIFO running; the driver's state continues in the
+            // burst reader, the bus goes to the DMA streams.
+            Ok(core) => Some(BurstReader::new(core)),
+            Err(()) => {
+                defmt::error!("ICM-42688-P not answering on SPI1: no samples");
+                None
+            }
+        };
+        // Drop whatever the configuration left in the receiver (and its overrun flag), so the first
+        // byte the RX stream moves is the first of a burst.
+        // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
+        unsafe {
+            let regs = &*SPI1::ptr();
+            let _ = regs.dr().read();
+            let _ = regs.sr().read();
+        }
+        let _ = spi.use_dma().txrx();
+        reader
+    }
+
+    /// The USB device with its CDC-ACM class (the link).
+    fn init_usb(
+        usb: USB,
+        bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
+        ep_memory: &'static mut [u32; 1024],
+    ) -> (UsbDevice<'static, UsbBusType>, Link) {
+        let bus: &'static UsbBusAllocator<UsbBusType> = bus.insert(UsbBus::new(usb, ep_memory));
+        let link = UsbLink::new(usbd_serial::SerialPort::new(bus));
+        let usb_dev =
+            UsbDeviceBuilder::new(bus, UsbVidPid(board::USB_VID_PID.0, board::USB_VID_PID.1))
+                .device_class(usbd_serial::USB_CLASS_CDC)
+                .strings(&[StringDescriptors::default()
+                    .manufacturer("accel-cal")
+                    .product("accel-cal F405 IMU")
+                    .serial_number("F405")])
+                .unwrap_or_else(|_| defmt::panic!("USB strings"))
+                .build();
+        (usb_dev, link)
     }
 
     /// Stack high-water mark; without an IMU, the LED blinks fast (4 Hz) from here.

@@ -33,10 +33,10 @@ mod app {
     use stm32f4xx_hal::dma::config::DmaConfig;
     use stm32f4xx_hal::dma::{PeripheralToMemory, Stream0, StreamsTuple, Transfer};
     use stm32f4xx_hal::flash::LockedFlash;
-    use stm32f4xx_hal::gpio::{Output, PushPull, PB6};
+    use stm32f4xx_hal::gpio::{Output, PushPull, PA0, PA1, PA4, PB6};
     use stm32f4xx_hal::pac::{ADC1, DMA2, SPI1, TIM2, USART2};
     use stm32f4xx_hal::prelude::*;
-    use stm32f4xx_hal::rcc::Config;
+    use stm32f4xx_hal::rcc::{Config, Rcc};
     use stm32f4xx_hal::serial::{Rx, Tx};
     use stm32f4xx_hal::signature::{VtempCal110, VtempCal30};
     use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
@@ -132,48 +132,12 @@ mod app {
             gpiob.pb6.into_push_pull_output(),
         );
 
-        // One scan per TIM2 update: x, y, z, then the temperature sensor.
-        let mut adc = Adc::new(
+        let mut scan = init_scan(
             dp.ADC1,
-            true,
-            AdcConfig::default()
-                .clock(Clock::Pclk2_div_4)
-                .scan(Scan::Enabled)
-                .continuous(Continuous::Single)
-                .dma(Dma::Continuous)
-                .external_trigger(TriggerMode::RisingEdge, ExternalTrigger::Tim_2_trgo),
+            (gpioa.pa0, gpioa.pa1, gpioa.pa4),
+            dp.DMA2,
             &mut rcc,
-        );
-        adc.configure_channel(
-            &gpioa.pa0.into_analog(),
-            Sequence::One,
-            SampleTime::Cycles_56,
-        );
-        adc.configure_channel(
-            &gpioa.pa1.into_analog(),
-            Sequence::Two,
-            SampleTime::Cycles_56,
-        );
-        adc.configure_channel(
-            &gpioa.pa4.into_analog(),
-            Sequence::Three,
-            SampleTime::Cycles_56,
-        );
-        // The temperature sensor needs ≥ 10 µs of sampling: 480 cycles at 22.5 MHz = 21 µs.
-        adc.configure_channel(&Temperature, Sequence::Four, SampleTime::Cycles_480);
-        adc.enable_temperature_and_vref();
-        // SAFETY: sets only the overrun interrupt enable of ADC1, which the HAL leaves alone.
-        unsafe { (*ADC1::ptr()).cr1().modify(|_, w| w.ovrie().set_bit()) };
-        let streams = StreamsTuple::new(dp.DMA2, &mut rcc);
-        let mut scan = Transfer::init_peripheral_to_memory(
-            streams.0,
-            adc,
             cx.local.scan_buf,
-            None,
-            DmaConfig::default()
-                .transfer_complete_interrupt(true)
-                .memory_increment(true)
-                .double_buffer(false),
         );
         scan.start(|_| {});
 
@@ -211,6 +175,52 @@ mod app {
                 service: LinkService::new(controller),
                 _timer: timer,
             },
+        )
+    }
+
+    /// ADC1 scanning x, y, z and the temperature sensor on each TIM2 trigger, into `buf` by DMA2
+    /// stream 0 (transfer-complete and overrun interrupts on).
+    fn init_scan(
+        adc1: ADC1,
+        pins: (PA0, PA1, PA4),
+        dma2: DMA2,
+        rcc: &mut Rcc,
+        buf: ScanBuf,
+    ) -> ScanDma {
+        // One scan per TIM2 update: x, y, z, then the temperature sensor.
+        let mut adc = Adc::new(
+            adc1,
+            true,
+            AdcConfig::default()
+                .clock(Clock::Pclk2_div_4)
+                .scan(Scan::Enabled)
+                .continuous(Continuous::Single)
+                .dma(Dma::Continuous)
+                .external_trigger(TriggerMode::RisingEdge, ExternalTrigger::Tim_2_trgo),
+            rcc,
+        );
+        adc.configure_channel(&pins.0.into_analog(), Sequence::One, SampleTime::Cycles_56);
+        adc.configure_channel(&pins.1.into_analog(), Sequence::Two, SampleTime::Cycles_56);
+        adc.configure_channel(
+            &pins.2.into_analog(),
+            Sequence::Three,
+            SampleTime::Cycles_56,
+        );
+        // The temperature sensor needs ≥ 10 µs of sampling: 480 cycles at 22.5 MHz = 21 µs.
+        adc.configure_channel(&Temperature, Sequence::Four, SampleTime::Cycles_480);
+        adc.enable_temperature_and_vref();
+        // SAFETY: sets only the overrun interrupt enable of ADC1, which the HAL leaves alone.
+        unsafe { (*ADC1::ptr()).cr1().modify(|_, w| w.ovrie().set_bit()) };
+        let streams = StreamsTuple::new(dma2, rcc);
+        Transfer::init_peripheral_to_memory(
+            streams.0,
+            adc,
+            buf,
+            None,
+            DmaConfig::default()
+                .transfer_complete_interrupt(true)
+                .memory_increment(true)
+                .double_buffer(false),
         )
     }
 
