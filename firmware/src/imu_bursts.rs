@@ -20,7 +20,7 @@ use crate::imu::icm42688::regs::{
     FIFO_DATA, FIFO_FLUSH, INT_STATUS, PACKET4_LEN, READ, SIGNAL_PATH_RESET,
 };
 use crate::imu::icm42688::{Core, BATCH_PACKETS};
-use crate::imu::ImuSample;
+use crate::imu::{ImuFlags, ImuSample};
 
 /// Longest burst: the address byte and a batch of the largest packets.
 pub const BURST_MAX: usize = 1 + BATCH_PACKETS * PACKET4_LEN;
@@ -35,6 +35,16 @@ pub static FIFO_CMD: [u8; BURST_MAX] = {
 };
 /// FIFO flush: a register write.
 pub static FLUSH_CMD: [u8; 2] = [SIGNAL_PATH_RESET, FIFO_FLUSH];
+
+/// An all-zero sample, to initialise the decoded-sample buffer (`ImuSample::default` is not const).
+pub const NO_SAMPLE: ImuSample = ImuSample {
+    accel_out: [0.0; 3],
+    gyro_rad_s: [0.0; 3],
+    temp_c: 0.0,
+    timestamp: 0,
+    lost_before: 0,
+    flags: ImuFlags(0),
+};
 
 /// A burst to put on the wire: `tx` out, as many bytes back into the receive buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -236,7 +246,6 @@ mod tests {
     use super::*;
     use crate::imu::icm42688::regs::{HEADER_PACKET3, INT_FIFO_FULL, INT_FIFO_THS, PACKET3_LEN};
     use crate::imu::icm42688::Config;
-    use crate::imu::ImuFlags;
 
     /// A packet 3 as the datasheet lays it out (§6.1): header, accel and gyro big-endian, 8-bit
     /// temperature, 16-bit time stamp.
@@ -268,15 +277,6 @@ mod tests {
         };
         BurstReader::new(Core::new(cfg).unwrap())
     }
-
-    const NO_SAMPLE: ImuSample = ImuSample {
-        accel_out: [0.0; 3],
-        gyro_rad_s: [0.0; 3],
-        temp_c: 0.0,
-        timestamp: 0,
-        lost_before: 0,
-        flags: ImuFlags(0),
-    };
 
     #[test]
     fn status_then_counted_fifo_read_then_idle() {

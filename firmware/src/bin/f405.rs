@@ -36,10 +36,10 @@ mod app {
 
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
     use firmware::board::stm32_common::Store;
-    use firmware::board::{paint_stack, stack_usage, LockedPipeline};
+    use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
     use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
     use firmware::imu::{ImuFlags, ImuSample};
-    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX};
+    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE};
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::PipelineAccess;
     use firmware::sampling::TemperatureMean;
@@ -83,14 +83,7 @@ mod app {
         ep_memory: [u32; 1024] = [0; 1024],
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
         rx_buf: [u8; BURST_MAX] = [0; BURST_MAX],
-        sample_buf: [ImuSample; BATCH_PACKETS] = [ImuSample {
-            accel_out: [0.0; 3],
-            gyro_rad_s: [0.0; 3],
-            temp_c: 0.0,
-            timestamp: 0,
-            lost_before: 0,
-            flags: ImuFlags(0),
-        }; BATCH_PACKETS],
+        sample_buf: [ImuSample; BATCH_PACKETS] = [NO_SAMPLE; BATCH_PACKETS],
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         board::enter_bootloader_if_requested();
@@ -236,14 +229,7 @@ mod app {
     fn idle(cx: idle::Context) -> ! {
         let mut high_water = HighWater::new();
         loop {
-            let (size, used) = stack_usage();
-            if let Some(mark) = high_water.record(used) {
-                defmt::info!(
-                    "stack high-water mark: {=usize} of {=usize} bytes",
-                    mark,
-                    size
-                );
-            }
+            log_stack_growth(&mut high_water);
             if *cx.local.imu_found {
                 cortex_m::asm::wfi();
             } else {

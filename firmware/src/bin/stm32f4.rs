@@ -44,7 +44,7 @@ mod app {
 
     use firmware::board::stm32_common::Store;
     use firmware::board::stm32f4::{self as board, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
-    use firmware::board::{paint_stack, stack_usage, LockedPipeline};
+    use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
     use firmware::gyro::{L3gd20, RAD_S_PER_LSB_2000DPS};
     use firmware::link::{on_rx_byte, RxQueueLink, RX_QUEUE};
     use firmware::pipeline::{PipelineCommand, Scaling};
@@ -254,14 +254,7 @@ mod app {
             }
             rounds = rounds.wrapping_add(1);
             if rounds % 65_536 == 0 {
-                let (size, used) = stack_usage();
-                if let Some(mark) = high_water.record(used) {
-                    defmt::info!(
-                        "stack high-water mark: {=usize} of {=usize} bytes",
-                        mark,
-                        size
-                    );
-                }
+                log_stack_growth(&mut high_water);
             }
         }
     }

@@ -97,3 +97,16 @@ pub fn stack_usage() -> (usize, usize) {
     });
     (top - bottom, used)
 }
+
+/// Measures the stack and logs the mark over defmt when it grew (`stack high-water mark: N of M
+/// bytes`); the STM32 boards call it from their idle loop.
+pub fn log_stack_growth(high_water: &mut crate::stack::HighWater) {
+    let (size, used) = stack_usage();
+    if let Some(mark) = high_water.record(used) {
+        defmt::info!(
+            "stack high-water mark: {=usize} of {=usize} bytes",
+            mark,
+            size
+        );
+    }
+}
