@@ -15,7 +15,8 @@
 //! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
 //!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
 //! - [`imu_bursts`]: the ICM-42688-P's FIFO read as a chain of DMA bursts (F405 board).
-//! - [`link`]: a UART link whose receiver an interrupt drains into a queue (Nucleo board).
+//! - [`link`]: a UART link whose receiver an interrupt drains into a queue (Nucleo board), and the
+//!   packet stager of the USB link (F405 board).
 //! - [`sampling`]: the sampling tasks' board-independent parts (temperature decimation, ADC scan layout).
 //! - [`stack`]: the stack high-water mark by painting.
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.

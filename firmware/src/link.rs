@@ -56,6 +56,59 @@ impl<TX: embedded_hal_nb::serial::Write<u8>> ByteLink for RxQueueLink<'_, TX> {
     }
 }
 
+/// Outgoing bytes staged up to one packet and handed to a packet writer in one piece (a USB class's
+/// `write`): one 64-byte packet rather than 64 one-byte packets. Order is kept and nothing is lost:
+/// a byte that finds the stage full after a flush is refused, and the link service retries it.
+pub struct PacketStager<const N: usize> {
+    buf: [u8; N],
+    len: usize,
+}
+
+impl<const N: usize> Default for PacketStager<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> PacketStager<N> {
+    /// Empty.
+    pub const fn new() -> Self {
+        PacketStager {
+            buf: [0; N],
+            len: 0,
+        }
+    }
+
+    /// Nothing staged.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Stages one byte, first flushing a full stage through `write` (which returns how many of the
+    /// bytes it took, from the front). False when the stage stays full.
+    pub fn push(&mut self, byte: u8, write: impl FnMut(&[u8]) -> usize) -> bool {
+        if self.len == N {
+            self.flush(write);
+            if self.len == N {
+                return false;
+            }
+        }
+        self.buf[self.len] = byte;
+        self.len += 1;
+        true
+    }
+
+    /// Hands the staged bytes to `write`; what it does not take stays staged, in order.
+    pub fn flush(&mut self, mut write: impl FnMut(&[u8]) -> usize) {
+        if self.len == 0 {
+            return;
+        }
+        let taken = write(&self.buf[..self.len]).min(self.len);
+        self.buf.copy_within(taken..self.len, 0);
+        self.len -= taken;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +161,44 @@ mod tests {
             "a full transmitter refuses, the caller retries"
         );
         assert_eq!(&link.tx.sent[..], &[7, 8]);
+    }
+
+    #[test]
+    fn stager_keeps_order_loses_nothing_and_refuses_when_the_writer_does() {
+        // A writer that takes at most 3 bytes per call, and nothing while `closed`.
+        let mut sent: Vec<u8> = Vec::new();
+        let mut closed = false;
+        let mut st = PacketStager::<4>::new();
+        let mut accepted = Vec::new();
+        for b in 0..20u8 {
+            if b == 10 {
+                closed = true;
+            }
+            let ok = st.push(b, |bytes| {
+                if closed {
+                    return 0;
+                }
+                let n = bytes.len().min(3);
+                sent.extend_from_slice(&bytes[..n]);
+                n
+            });
+            if ok {
+                accepted.push(b);
+            }
+            if b == 14 {
+                closed = false;
+            }
+        }
+        assert!(
+            accepted.len() < 20,
+            "a full stage with a closed writer refuses"
+        );
+        while !st.is_empty() {
+            st.flush(|bytes| {
+                sent.extend_from_slice(bytes);
+                bytes.len()
+            });
+        }
+        assert_eq!(sent, accepted, "every accepted byte sent once, in order");
     }
 }

@@ -26,6 +26,7 @@ use stm32f4xx_hal::flash::LockedFlash;
 use crate::imu::icm42688::{AccelRange, Config, Odr};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
+use crate::link::PacketStager;
 use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 use crate::ByteLink;
@@ -76,14 +77,13 @@ pub fn store(flash: LockedFlash) -> Option<Store> {
 const USB_PACKET: usize = 64;
 
 /// The CDC-ACM port as the link service's [`ByteLink`]. Outgoing bytes are staged up to a full USB
-/// packet and handed to the class in one write ([`UsbLink::flush`], after each link-service round):
-/// one 64-byte packet rather than 64 one-byte packets. Reads come from the class's own receive
-/// buffer, which `UsbDevice::poll` fills.
+/// packet ([`PacketStager`]) and handed to the class in one write ([`UsbLink::flush`], after each
+/// link-service round). Reads come from the class's own receive buffer, which `UsbDevice::poll`
+/// fills.
 pub struct UsbLink<'a, B: usb_device::bus::UsbBus> {
     /// The CDC-ACM class.
     pub serial: usbd_serial::SerialPort<'a, B>,
-    staged: [u8; USB_PACKET],
-    staged_len: usize,
+    staged: PacketStager<USB_PACKET>,
 }
 
 impl<'a, B: usb_device::bus::UsbBus> UsbLink<'a, B> {
@@ -91,20 +91,19 @@ impl<'a, B: usb_device::bus::UsbBus> UsbLink<'a, B> {
     pub fn new(serial: usbd_serial::SerialPort<'a, B>) -> Self {
         UsbLink {
             serial,
-            staged: [0; USB_PACKET],
-            staged_len: 0,
+            staged: PacketStager::new(),
         }
     }
 
     /// Hands the staged bytes to the class (as many as it takes; the rest stay staged).
     pub fn flush(&mut self) {
-        if self.staged_len == 0 {
-            return;
-        }
-        if let Ok(n) = self.serial.write(&self.staged[..self.staged_len]) {
-            self.staged.copy_within(n..self.staged_len, 0);
-            self.staged_len -= n;
-        }
+        let serial = &mut self.serial;
+        self.staged.flush(|b| serial.write(b).unwrap_or(0));
+    }
+
+    /// Nothing staged and the class's write buffer empty (the last answer is on its way out).
+    pub fn is_drained(&mut self) -> bool {
+        self.staged.is_empty() && self.serial.flush().is_ok()
     }
 }
 
@@ -115,22 +114,8 @@ impl<B: usb_device::bus::UsbBus> ByteLink for UsbLink<'_, B> {
     }
 
     fn try_write(&mut self, byte: u8) -> bool {
-        if self.staged_len == USB_PACKET {
-            self.flush();
-            if self.staged_len == USB_PACKET {
-                return false;
-            }
-        }
-        self.staged[self.staged_len] = byte;
-        self.staged_len += 1;
-        true
-    }
-}
-
-impl<B: usb_device::bus::UsbBus> UsbLink<'_, B> {
-    /// Nothing staged and the class's write buffer empty (the last answer is on its way out).
-    pub fn is_drained(&mut self) -> bool {
-        self.staged_len == 0 && self.serial.flush().is_ok()
+        let serial = &mut self.serial;
+        self.staged.push(byte, |b| serial.write(b).unwrap_or(0))
     }
 }
 
