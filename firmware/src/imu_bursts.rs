@@ -208,8 +208,7 @@ impl BurstReader {
             }
             Phase::Fifo { bytes, more } => {
                 let got = rx.len().saturating_sub(1).min(bytes);
-                self.core.buf[..got].copy_from_slice(&rx[1..1 + got]);
-                match self.core.decode(got, out) {
+                match self.core.decode(&rx[1..1 + got], out) {
                     Ok(n) => {
                         done.samples = n;
                         more.then(|| {

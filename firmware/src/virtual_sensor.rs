@@ -271,6 +271,43 @@ impl VirtualSensor {
     }
 }
 
+/// The virtual unit as the QEMU board's ICM-42688-P model samples it: its 0–5 V outputs span the
+/// part's 18-bit accelerometer codes (0 V and 5 V are the full-scale codes, so the analog clamp is
+/// the part's saturation), so that the driver's output, scaled by [`IMU_ACCEL_V_PER_LSB`] and offset
+/// by [`IMU_ACCEL_OFFSET_V`], is in volts again (19 µV per LSB, a tenth of the output noise) and the
+/// calibration and the host's truth stay those of the paper's unit. The gyro passes in °/s (the
+/// part's ±2000 °/s full scale is just beyond the virtual gyro's ±34.9 rad/s clamp).
+#[cfg(any(test, feature = "imu-sim"))]
+impl crate::imu::sim::Generator for VirtualSensor {
+    fn next(&mut self) -> crate::imu::sim::Truth {
+        let s = self.sample();
+        // g at the largest 18-bit code (131071 LSB at 8192 LSB/g).
+        let full_scale_g = 131_071.0 / 8192.0;
+        let mid = f64::from(IMU_ACCEL_OFFSET_V);
+        crate::imu::sim::Truth {
+            accel_g: s.raw.map(|v| (f64::from(v) - mid) / mid * full_scale_g),
+            gyro_dps: s.rate_rad_s.map(|w| f64::from(w).to_degrees()),
+            temp_c: f64::from(self.temperature_c()),
+        }
+    }
+}
+
+/// Volts per 18-bit accelerometer LSB of the QEMU board's virtual ICM-42688-P.
+pub const IMU_ACCEL_V_PER_LSB: f32 = 2.5 / 131_071.0;
+/// The output at a zero accelerometer code, V (the middle of the 0–5 V range).
+pub const IMU_ACCEL_OFFSET_V: f32 = 2.5;
+
+/// The QEMU board's ICM-42688-P configuration: 1 kHz, 20-bit packets, INT1 at every packet,
+/// outputs in volts.
+pub const IMU_CONFIG: crate::imu::icm42688::Config = crate::imu::icm42688::Config {
+    odr: crate::imu::icm42688::Odr::Hz1000,
+    fifo: crate::imu::icm42688::FifoFormat::Packet4HighRes,
+    watermark_packets: 1,
+    accel_out_per_lsb: IMU_ACCEL_V_PER_LSB,
+    accel_out_offset: IMU_ACCEL_OFFSET_V,
+    ..crate::imu::icm42688::Config::DEFAULT
+};
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -345,6 +382,41 @@ mod tests {
         assert_eq!(s.die_temperature_c(), 65.0);
         assert!(VirtualSensor::check_temperature(f32::NAN).is_err());
         assert!(VirtualSensor::check_temperature(500.0).is_err());
+    }
+
+    #[test]
+    fn seen_through_the_icm42688_model_the_outputs_are_volts_again() {
+        use crate::imu::icm42688::Icm42688;
+        use crate::imu::sim::Icm42688Model;
+        use crate::imu::{ImuSample, ImuSource};
+        let cal = paper_unit::calibration();
+        let mut direct = VirtualSensor::new(&cal, 1000, true).unwrap();
+        let sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
+        let mut imu = Icm42688::new(Icm42688Model::new(sensor), IMU_CONFIG).unwrap();
+        let mut buf = [ImuSample::default(); 4];
+        let mut seen = 0;
+        for k in 0..300 {
+            imu.device_mut().advance_ns(1_000_000);
+            assert!(imu.device_mut().int1(), "sample {k}: INT1 at the watermark");
+            let d = imu.drain(&mut buf).unwrap();
+            assert_eq!(d.samples, 1);
+            let want = direct.sample();
+            if k == 0 {
+                continue; // marked invalid by the part
+            }
+            let got = buf[0];
+            for i in 0..3 {
+                // One 18-bit LSB is 19 µV; the gyro's 19-bit LSB is 0.13 mrad/s.
+                assert!(
+                    (got.accel_out[i] - want.raw[i]).abs() < 2.0e-5,
+                    "{got:?} {want:?}"
+                );
+                assert!((got.gyro_rad_s[i] - want.rate_rad_s[i]).abs() < 1.0e-4);
+            }
+            assert!((got.temp_c - 25.0).abs() < 0.01);
+            seen += 1;
+        }
+        assert_eq!(seen, 299);
     }
 
     #[test]

@@ -1,4 +1,5 @@
-//! Firmware for QEMU's mps2-an386: the virtual sensor sampled at 1 kHz from SysTick, the host
+//! Firmware for QEMU's mps2-an386: the virtual sensor, seen through the ICM-42688-P model and
+//! driver, sampled at 1 kHz from SysTick, the host
 //! protocol on UART0, the calibration store in a RAM region that survives a system reset.
 //!
 //! Run with `scripts/run-qemu.sh` (prints the serial pty). Logs are defmt over semihosting.
@@ -15,12 +16,14 @@ use defmt_semihosting as _;
 use firmware::board::cmsdk_uart::{CmsdkUart, UART0_BASE};
 use firmware::board::qemu::{self, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
 use firmware::board::{PipelineHandle, SharedPipeline};
+use firmware::imu::PipelineFeed;
 use firmware::pipeline::PipelineCommand;
 use firmware::virtual_sensor::VirtualSensor;
 use firmware::{paper_unit, BoardEvent, Controller, EioLink, LinkService, Pipeline};
 
 static PIPELINE: SharedPipeline<OUTPUT_QUEUE> = Mutex::new(RefCell::new(None));
-static SENSOR: Mutex<RefCell<Option<&'static mut VirtualSensor>>> = Mutex::new(RefCell::new(None));
+static IMU: Mutex<RefCell<Option<(&'static mut qemu::Imu, PipelineFeed)>>> =
+    Mutex::new(RefCell::new(None));
 
 #[entry]
 fn main() -> ! {
@@ -35,13 +38,15 @@ fn main() -> ! {
     pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
     let sensor = VirtualSensor::new(&paper_unit::calibration(), SAMPLE_RATE_HZ, true)
         .unwrap_or_else(|| halt());
-    let sensor = cortex_m::singleton!(: VirtualSensor = sensor).unwrap_or_else(|| halt());
+    let imu = qemu::imu(sensor).unwrap_or_else(|| halt());
+    let imu = cortex_m::singleton!(: qemu::Imu = imu).unwrap_or_else(|| halt());
     interrupt::free(|cs| {
         PIPELINE.borrow(cs).replace(Some(pipeline));
-        SENSOR.borrow(cs).replace(Some(sensor));
+        IMU.borrow(cs)
+            .replace(Some((imu, PipelineFeed::new(SAMPLE_RATE_HZ))));
     });
     defmt::info!(
-        "accel-cal firmware on mps2-an386: {=u32} Hz virtual sensor, UART0 protocol",
+        "accel-cal firmware on mps2-an386: {=u32} Hz virtual sensor behind an ICM-42688-P model, UART0 protocol",
         SAMPLE_RATE_HZ
     );
 
@@ -57,13 +62,13 @@ fn main() -> ! {
     loop {
         match service.poll(&mut link, &mut shared) {
             Some(BoardEvent::SetTable(t)) => interrupt::free(|cs| {
-                if let Some(s) = SENSOR.borrow(cs).borrow_mut().as_mut() {
-                    let _ = s.set_table(&t);
+                if let Some((imu, _)) = IMU.borrow(cs).borrow_mut().as_mut() {
+                    let _ = imu.device_mut().generator().set_table(&t);
                 }
             }),
             Some(BoardEvent::SetTemperature(t)) => interrupt::free(|cs| {
-                if let Some(s) = SENSOR.borrow(cs).borrow_mut().as_mut() {
-                    s.set_temperature(t);
+                if let Some((imu, _)) = IMU.borrow(cs).borrow_mut().as_mut() {
+                    imu.device_mut().generator().set_temperature(t);
                 }
             }),
             Some(BoardEvent::Reset) => {
@@ -76,15 +81,15 @@ fn main() -> ! {
     }
 }
 
-/// One sample per SysTick: the virtual sensor (with its temperature a few times a second), then the
-/// whole per-sample path.
+/// One sample per SysTick: the virtual IMU's next packet, the driver's FIFO drain, then the whole
+/// per-sample path (with the packet's temperature a few times a second).
 #[exception]
 fn SysTick() {
     interrupt::free(|cs| {
-        let mut sensor = SENSOR.borrow(cs).borrow_mut();
+        let mut imu = IMU.borrow(cs).borrow_mut();
         let mut pipeline = PIPELINE.borrow(cs).borrow_mut();
-        if let (Some(s), Some(p)) = (sensor.as_mut(), pipeline.as_mut()) {
-            s.step(p);
+        if let (Some((imu, feed)), Some(p)) = (imu.as_mut(), pipeline.as_mut()) {
+            qemu::sample_period(imu, feed, p);
         }
     });
 }

@@ -16,10 +16,14 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_semihosting as _;
 
+use embedded_hal::spi::{Operation, SpiDevice};
+use firmware::board::qemu;
+use firmware::imu::icm42688::{regs, Core};
+use firmware::imu::{ImuSample, PipelineFeed};
 use firmware::paper_unit;
 use firmware::pipeline::{PipelineCommand, RawCodes, Scaling};
 use firmware::stats::WindowAccumulator;
-use firmware::virtual_sensor::VirtualSensor;
+use firmware::virtual_sensor::{VirtualSensor, IMU_CONFIG};
 use firmware::Pipeline;
 use shared::omega_dot::OmegaDotEstimator;
 use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
@@ -246,6 +250,107 @@ fn bench_whole_paths(cal: &shared::Calibration, x: &Inputs, empty: u32) {
     );
 }
 
+/// Packets of the IMU benchmark (64 FIFO transfers of 16).
+const IMU_SAMPLES: usize = 1024;
+const PACKET: usize = 20;
+
+/// `IMU_SAMPLES` consecutive FIFO packets (20-bit packet 4) of the QEMU board's virtual IMU, the
+/// unit spinning at 200 °/s about a tilted axis, read raw from the model's FIFO over SPI.
+fn imu_stream(cal: &shared::Calibration) -> Option<&'static mut [u8; IMU_SAMPLES * PACKET]> {
+    let stream = cortex_m::singleton!(: [u8; IMU_SAMPLES * PACKET] = [0; IMU_SAMPLES * PACKET])?;
+    let mut sensor = VirtualSensor::new(cal, 1000, true)?;
+    sensor
+        .set_table(&shared::wire::VirtualTable {
+            up_b: [0.6, -0.48, 0.64],
+            rate_rad_s: 200f32.to_radians(),
+            accel_rad_s2: 0.0,
+        })
+        .ok()?;
+    let mut imu = qemu::imu(sensor)?;
+    let m = imu.device_mut();
+    let mut filled = 0;
+    let mut skip = PACKET; // the part marks its first packet invalid
+    while filled < stream.len() {
+        m.advance_ns(50_000_000);
+        let mut status = [0u8; 3];
+        m.transaction(&mut [
+            Operation::Write(&[regs::INT_STATUS | regs::READ]),
+            Operation::Read(&mut status),
+        ])
+        .ok()?;
+        let mut bytes = usize::from(u16::from_be_bytes([status[1], status[2]])) * PACKET;
+        while bytes > 0 {
+            let mut chunk = [0u8; PACKET];
+            m.transaction(&mut [
+                Operation::Write(&[regs::FIFO_DATA | regs::READ]),
+                Operation::Read(&mut chunk),
+            ])
+            .ok()?;
+            bytes -= PACKET;
+            if skip > 0 {
+                skip -= PACKET;
+            } else if filled < stream.len() {
+                stream[filled..filled + PACKET].copy_from_slice(&chunk);
+                filled += PACKET;
+            }
+        }
+    }
+    Some(stream)
+}
+
+/// The digital IMU's path: the FIFO packet decode alone, and the whole per-sample path from FIFO
+/// bytes (decode, gap and saturation checks, the temperature reading every 250 samples, gyro
+/// correction, ω̇, full compensation with the temperature model, window) as the QEMU board runs it,
+/// in transfers of 16 packets (what one DMA read brings).
+fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]) {
+    let batches = (IMU_SAMPLES / 16) as u32;
+    let b_empty = ticks(batches, |b| {
+        black_box(&stream[b * 320..(b + 1) * 320]);
+    });
+    let Ok(mut core) = Core::new(IMU_CONFIG) else {
+        return;
+    };
+    let mut out = [ImuSample::default(); 16];
+    let dec = ticks(batches, |b| {
+        black_box(core.decode(black_box(&stream[b * 320..(b + 1) * 320]), &mut out)).ok();
+        black_box(&out);
+    });
+    line(
+        "FIFO packet decode (packet 4: 20-bit, checks)",
+        per_iter_x10(dec, b_empty, IMU_SAMPLES as u32),
+        "(sample conversion; goal <= 40)",
+    );
+    let thermal = shared::Calibration {
+        temperature: Some(paper_unit::typical_thermal_model()),
+        ..*cal
+    };
+    let Ok(mut core) = Core::new(IMU_CONFIG) else {
+        return;
+    };
+    let mut p = Pipeline::<8>::new(1000);
+    p.apply(PipelineCommand::Compensator(
+        Compensator::new(&thermal, LeverMode::RateAndAcceleration).ok(),
+    ));
+    p.apply(PipelineCommand::Stream(StreamRequest {
+        kind: StreamKind::CompensatedWindows,
+        window_samples: 1000,
+    }));
+    let mut feed = PipelineFeed::new(1000);
+    let t = ticks(batches, |b| {
+        if let Ok(n) = core.decode(black_box(&stream[b * 320..(b + 1) * 320]), &mut out) {
+            for s in &out[..n] {
+                feed.push(s, &mut p);
+            }
+        }
+    });
+    black_box(p.pop_output());
+    line(
+        "whole IMU path: decode + gyro corr. + omega-dot + full comp. (thermal) + window",
+        per_iter_x10(t, b_empty, IMU_SAMPLES as u32),
+        "(goal <= 300)",
+    );
+}
+
 /// What does not run per sample: a temperature refresh (4 per second) and the QEMU board's virtual
 /// sensor (which replaces the read there).
 fn bench_occasional(cal: &shared::Calibration, sensor: &mut VirtualSensor) {
@@ -298,6 +403,11 @@ fn main() -> ! {
     });
     bench_parts(&cal, &inputs, empty);
     bench_whole_paths(&cal, &inputs, empty);
+    if let Some(stream) = imu_stream(&cal) {
+        bench_imu_path(&cal, stream);
+    } else {
+        hprintln!("bench: FAILED to read the virtual IMU's FIFO");
+    }
     bench_occasional(&cal, &mut sensor);
     debug::exit(debug::EXIT_SUCCESS);
     loop {

@@ -19,7 +19,8 @@ use cortex_m_semihosting::{debug, hprintln};
 use defmt_semihosting as _;
 
 use firmware::board::qemu;
-use firmware::pipeline::{PipelineCommand, Sample};
+use firmware::imu::PipelineFeed;
+use firmware::pipeline::PipelineCommand;
 use firmware::protocol::{DeviceInfo, PipelineAccess};
 use firmware::testvectors::{self, Check};
 use firmware::virtual_sensor::VirtualSensor;
@@ -163,23 +164,31 @@ fn info() -> DeviceInfo {
     qemu::INFO
 }
 
+/// The virtual unit on the virtual table seen through the ICM-42688-P model and its driver (as the
+/// QEMU firmware samples it): register traffic, 20-bit FIFO decode and the pipeline on the M4F.
 #[inline(never)]
 fn pipeline_on_virtual_table(t: &mut Tally) {
     // 200 °/s about x with x up: full compensation returns (g, 0, 0); static-only leaves ~11 mg on y.
     let cal = paper_unit::calibration();
-    let mut sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
-    let ok_table = sensor
-        .set_table(&VirtualTable {
-            up_b: [1.0, 0.0, 0.0],
-            rate_rad_s: 200f32.to_radians(),
-            accel_rad_s2: 0.0,
-        })
-        .is_ok();
+    let mut ok_imu = true;
     let mut errs = [0f32; 2];
     for (k, mode) in [LeverMode::RateAndAcceleration, LeverMode::Off]
         .into_iter()
         .enumerate()
     {
+        let mut sensor = VirtualSensor::new(&cal, 1000, true).unwrap();
+        ok_imu &= sensor
+            .set_table(&VirtualTable {
+                up_b: [1.0, 0.0, 0.0],
+                rate_rad_s: 200f32.to_radians(),
+                accel_rad_s2: 0.0,
+            })
+            .is_ok();
+        let Some(mut imu) = qemu::imu(sensor) else {
+            ok_imu = false;
+            continue;
+        };
+        let mut feed = PipelineFeed::new(1000);
         let mut p = Pipeline::<4>::new(1000);
         p.apply(PipelineCommand::Compensator(
             shared::Compensator::new(&cal, mode).ok(),
@@ -189,10 +198,11 @@ fn pipeline_on_virtual_table(t: &mut Tally) {
             window_samples: 500,
         }));
         for _ in 0..500 {
-            let s: Sample = sensor.sample();
-            p.on_sample(&s);
+            ok_imu &= qemu::sample_period(&mut imu, &mut feed, &mut p) == 1;
         }
         if let Some(DeviceToHost::CompensatedWindow(w)) = p.pop_output() {
+            // The part marks its first sample invalid: 499 of 500 in the statistics.
+            ok_imu &= w.count == 499 && w.rejected == 1;
             errs[k] = w.mean_m_s2[1].abs() / 9.80665 * 1e3; // mg
             if k == 0 {
                 errs[k] = errs[k].max((w.mean_m_s2[0] - 9.80665).abs() / 9.80665 * 1e3);
@@ -201,15 +211,51 @@ fn pipeline_on_virtual_table(t: &mut Tally) {
             errs[k] = f32::NAN;
         }
     }
-    let ok = ok_table && errs[0] < 0.2 && (errs[1] - 11.19).abs() < 0.3;
+    let ok = ok_imu && errs[0] < 0.2 && (errs[1] - 11.19).abs() < 0.3;
     hprintln!(
-        "test pipeline_virtual_table_200dps ... {} (full: {} mg, static-only y: {} mg)",
+        "test pipeline_virtual_table_200dps_through_icm42688 ... {} (full: {} mg, static-only y: {} mg)",
         if ok { "ok" } else { "FAILED" },
         errs[0],
         errs[1]
     );
     t.passed += u32::from(ok);
     t.failed += u32::from(!ok);
+}
+
+/// The virtual IMU's FIFO left undrained for 121 ms holds 102 packets and drops 19: the driver
+/// flags the first sample after them, and the pipeline's sample index counts them.
+#[inline(never)]
+fn imu_overflow_on_target(t: &mut Tally) {
+    let sensor = VirtualSensor::new(&paper_unit::calibration(), 1000, true).unwrap();
+    let Some(mut imu) = qemu::imu(sensor) else {
+        t.report("imu_overflow_flagged", false, "(driver refused the model)");
+        return;
+    };
+    imu.device_mut().advance_ns(120_000_000);
+    let mut feed = PipelineFeed::new(1000);
+    let mut p = Pipeline::<4>::new(1000);
+    p.apply(PipelineCommand::Stream(StreamRequest {
+        kind: StreamKind::RawWindows,
+        window_samples: 125,
+    }));
+    // The FIFO is still full at the next period: its sample is dropped too (19 in all); the 102
+    // kept are drained.
+    let first = qemu::sample_period(&mut imu, &mut feed, &mut p);
+    let dropped = imu.device_mut().dropped.len();
+    let ok = first == 102 && dropped == 19 && p.samples() == 102 && p.pop_output().is_none();
+    // The next sample follows the gap: 19 samples of time counted, the 125-sample window closes
+    // after 4 periods with the invalid first sample and the 19 lost rejected, flagged.
+    for _ in 0..4 {
+        qemu::sample_period(&mut imu, &mut feed, &mut p);
+    }
+    let closed = p.samples() == 125
+        && matches!(p.pop_output(), Some(DeviceToHost::RawWindow(w))
+            if w.flags.has(SampleFlags::SAMPLES_LOST) && w.rejected == 1 + 19 && w.count == 105);
+    t.report(
+        "imu_overflow_flagged",
+        ok && closed,
+        "(102 packets kept, 19 dropped, counted and flagged)",
+    );
 }
 
 /// The virtual unit with gyro errors and a thermal model, heated in software, through the whole
@@ -254,6 +300,7 @@ fn first_boot(t: &mut Tally) -> ! {
     t.check("gyro_correction_matches_pc", rate);
     t.check("compensation_after_temperature_refresh_matches_pc", full);
     pipeline_on_virtual_table(t);
+    imu_overflow_on_target(t);
     heated_board(t);
 
     // The protocol handler on the board's real storage region: write the paper unit's calibration.

@@ -1,5 +1,11 @@
-//! The QEMU mps2-an386 board: CMSDK UART0, the virtual sensor sampled from SysTick, and the
-//! calibration store on a RAM region outside the ELF image.
+//! The QEMU mps2-an386 board: CMSDK UART0, the virtual sensor seen through an ICM-42688-P
+//! register model and its driver (sampled from SysTick), and the calibration store on a RAM region
+//! outside the ELF image.
+//!
+//! The virtual IMU: each SysTick lets 1 ms of the model's time pass (one 1 kHz sample of the
+//! virtual unit into its FIFO as a 20-bit packet 4); when its INT1 (FIFO watermark, 1 packet) is
+//! up, the driver drains the FIFO over the model's SPI and the samples go through the pipeline —
+//! the register traffic, FIFO decode and overflow checks of a real board, on the Cortex-M4F.
 //!
 //! The storage region `CALSTORE` (see `memory-qemu.x`) is a memory region with no output section in
 //! it, so it is not part of any loaded ELF segment: QEMU restores loaded segments on a system reset
@@ -10,9 +16,14 @@
 use shared::wire::Board;
 use shared::LeverMode;
 
+use crate::imu::icm42688::Icm42688;
+use crate::imu::sim::Icm42688Model;
+use crate::imu::{ImuSample, ImuSource, PipelineFeed};
 use crate::paper_unit::QEMU_UNIT_ID;
+use crate::pipeline::Pipeline;
 use crate::protocol::DeviceInfo;
 use crate::storage::{AbStore, RamNorFlash};
+use crate::virtual_sensor::{VirtualSensor, IMU_CONFIG};
 
 /// Sampling rate of the virtual sensor, Hz (SysTick at 25 MHz / 25 000).
 pub const SAMPLE_RATE_HZ: u32 = 1000;
@@ -51,4 +62,40 @@ pub unsafe fn store() -> Option<Store> {
     // SAFETY: the linker script reserves this region for us; nothing else is placed there.
     let mem = unsafe { core::slice::from_raw_parts_mut(start, len) };
     AbStore::new(RamNorFlash::new(mem), 0, (len / 2) as u32).ok()
+}
+
+/// The board's IMU: the virtual unit behind the ICM-42688-P model, through the driver.
+pub type Imu = Icm42688<Icm42688Model<VirtualSensor>>;
+
+/// The virtual unit behind a started driver (`None` if the driver refuses it).
+pub fn imu(sensor: VirtualSensor) -> Option<Imu> {
+    Icm42688::new(Icm42688Model::new(sensor), IMU_CONFIG).ok()
+}
+
+/// One sample period: 1 ms of the part's time, then, when INT1 is up, the FIFO drained into the
+/// pipeline. Returns the samples passed on; a driver error (a corrupt FIFO, flushed) loses the
+/// batch, and the next sample is flagged as following lost data.
+pub fn sample_period<const Q: usize>(
+    imu: &mut Imu,
+    feed: &mut PipelineFeed,
+    pipeline: &mut Pipeline<Q>,
+) -> usize {
+    imu.device_mut()
+        .advance_ns(1_000_000_000 / u64::from(SAMPLE_RATE_HZ));
+    let mut buf = [ImuSample::default(); 4];
+    let mut n = 0;
+    if !imu.device_mut().int1() {
+        return 0;
+    }
+    // The status read clears INT1: drain until the FIFO says it is empty.
+    while let Ok(d) = imu.drain(&mut buf) {
+        for s in &buf[..d.samples] {
+            feed.push(s, pipeline);
+        }
+        n += d.samples;
+        if !d.more || d.samples == 0 {
+            break;
+        }
+    }
+    n
 }

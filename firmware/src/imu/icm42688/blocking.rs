@@ -6,7 +6,8 @@ use embedded_hal::spi::{Operation, SpiDevice};
 use super::regs::*;
 use super::self_test::{self, SelfTestReport, SensorUnderTest};
 use super::{
-    check_identity, configure_steps, Config, Core, Error, Step, BATCH_PACKETS, RESET_STEPS,
+    check_identity, configure_steps, Config, Core, Error, FifoBuffer, Step, BATCH_PACKETS,
+    RESET_STEPS,
 };
 use crate::imu::{Drained, ImuSample, ImuSource};
 
@@ -14,13 +15,18 @@ use crate::imu::{Drained, ImuSample, ImuSource};
 pub struct Icm42688<SPI> {
     spi: SPI,
     core: Core,
+    buf: FifoBuffer,
 }
 
 impl<SPI: SpiDevice> Icm42688<SPI> {
     /// Resets the part, checks WHO_AM_I, configures it for `cfg` and starts the FIFO.
     pub fn new(spi: SPI, cfg: Config) -> Result<Self, Error<SPI::Error>> {
         let core = Core::new(cfg).map_err(Error::Config)?;
-        let mut imu = Icm42688 { spi, core };
+        let mut imu = Icm42688 {
+            spi,
+            core,
+            buf: [0; BATCH_PACKETS * PACKET4_LEN],
+        };
         imu.reset()?;
         check_identity(imu.who_am_i()?)?;
         imu.configure(cfg)?;
@@ -139,10 +145,10 @@ impl<SPI: SpiDevice> ImuSource for Icm42688<SPI> {
         let spi = &mut self.spi;
         spi.transaction(&mut [
             Operation::Write(&[FIFO_DATA | READ]),
-            Operation::Read(&mut self.core.buf[..bytes]),
+            Operation::Read(&mut self.buf[..bytes]),
         ])
         .map_err(Error::Spi)?;
-        match self.core.decode(bytes, out) {
+        match self.core.decode(&self.buf[..bytes], out) {
             Ok(samples) => Ok(Drained { samples, more }),
             Err(header) => {
                 self.write(SIGNAL_PATH_RESET, FIFO_FLUSH)?;

@@ -48,89 +48,117 @@ fn be20(p: &[u8], i: usize, nibble: u8) -> i32 {
     (i32::from(be16(p, i)) << 4) | i32::from(nibble & 0x0F)
 }
 
+/// True when `v` is at or beyond ±`max` — a saturated axis or the invalid marker (below −max):
+/// one add and one unsigned compare.
 #[inline(always)]
-fn flag(cond: bool, bit: u8) -> u8 {
-    (cond as u8) * bit
+fn extreme(v: i32, max: i32) -> bool {
+    (v.wrapping_add(max - 1)) as u32 > (2 * max - 2) as u32
 }
 
-/// Decodes a packet 3 (16 bytes). The header is checked by the caller.
+/// Decodes a packet 3 (16 bytes) into `out`. The header is checked by the caller.
 #[inline(always)]
-pub fn decode_packet3(p: &[u8; 16], s: &Scale) -> ImuSample {
-    let a = [be16(p, 1), be16(p, 3), be16(p, 5)];
-    let g = [be16(p, 7), be16(p, 9), be16(p, 11)];
-    let sat16 = |v: i16| v == i16::MAX || v == -i16::MAX;
-    let bad_a = (a[0] == INVALID_16) | (a[1] == INVALID_16) | (a[2] == INVALID_16);
-    let bad_g = (g[0] == INVALID_16) | (g[1] == INVALID_16) | (g[2] == INVALID_16);
-    let sat = sat16(a[0]) | sat16(a[1]) | sat16(a[2]) | sat16(g[0]) | sat16(g[1]) | sat16(g[2]);
-    let acc = |v: i16| f32::from(v) * s.accel_out_per_code + s.accel_out_offset;
-    let gyr = |v: i16| f32::from(v) * s.gyro_rad_s_per_code;
-    finish(
-        [acc(a[0]), acc(a[1]), acc(a[2])],
-        [gyr(g[0]), gyr(g[1]), gyr(g[2])],
-        f32::from(p[13] as i8) * TEMP8_C_PER_LSB + TEMP_OFFSET_C,
-        u16::from_be_bytes([p[14], p[15]]),
-        bad_a,
-        bad_g,
-        sat,
-    )
+pub fn decode_packet3(p: &[u8; 16], s: &Scale, out: &mut ImuSample) {
+    // Written out per value: straight-line code at opt-level "s" (no arrays through the stack).
+    let (a0, a1, a2) = (be16(p, 1) as i32, be16(p, 3) as i32, be16(p, 5) as i32);
+    let (g0, g1, g2) = (be16(p, 7) as i32, be16(p, 9) as i32, be16(p, 11) as i32);
+    const M: i32 = 32767;
+    let odd = extreme(a0, M)
+        | extreme(a1, M)
+        | extreme(a2, M)
+        | extreme(g0, M)
+        | extreme(g1, M)
+        | extreme(g2, M);
+    let (ka, ca, kg) = (
+        s.accel_out_per_code,
+        s.accel_out_offset,
+        s.gyro_rad_s_per_code,
+    );
+    out.accel_out = [
+        a0 as f32 * ka + ca,
+        a1 as f32 * ka + ca,
+        a2 as f32 * ka + ca,
+    ];
+    out.gyro_rad_s = [g0 as f32 * kg, g1 as f32 * kg, g2 as f32 * kg];
+    out.temp_c = f32::from(p[13] as i8) * TEMP8_C_PER_LSB + TEMP_OFFSET_C;
+    out.timestamp = u16::from_be_bytes([p[14], p[15]]);
+    out.lost_before = 0;
+    out.flags = ImuFlags(0);
+    if odd {
+        mark_extremes(
+            out,
+            &[a0, a1, a2],
+            &[g0, g1, g2],
+            i32::from(INVALID_16),
+            [M, M],
+        );
+    }
 }
 
-/// Decodes a packet 4 (20 bytes, 20-bit data). The header is checked by the caller.
+/// Decodes a packet 4 (20 bytes, 20-bit data) into `out`. The header is checked by the caller.
 #[inline(always)]
-pub fn decode_packet4(p: &[u8; 20], s: &Scale) -> ImuSample {
+pub fn decode_packet4(p: &[u8; 20], s: &Scale, out: &mut ImuSample) {
     let (ex, ey, ez) = (p[17], p[18], p[19]);
-    let a = [
+    let (a0, a1, a2) = (
         be20(p, 1, ex >> 4),
         be20(p, 3, ey >> 4),
         be20(p, 5, ez >> 4),
-    ];
-    let g = [be20(p, 7, ex), be20(p, 9, ey), be20(p, 11, ez)];
+    );
+    let (g0, g1, g2) = (be20(p, 7, ex), be20(p, 9, ey), be20(p, 11, ez));
     const A_MAX: i32 = 524_284;
     const G_MAX: i32 = 524_286;
-    let sat_a = |v: i32| (v >= A_MAX) | (v <= -A_MAX);
-    let sat_g = |v: i32| (v >= G_MAX) | (v <= -G_MAX);
-    let bad_a = (a[0] == INVALID_20) | (a[1] == INVALID_20) | (a[2] == INVALID_20);
-    let bad_g = (g[0] == INVALID_20) | (g[1] == INVALID_20) | (g[2] == INVALID_20);
-    let sat = sat_a(a[0]) | sat_a(a[1]) | sat_a(a[2]) | sat_g(g[0]) | sat_g(g[1]) | sat_g(g[2]);
+    let odd = extreme(a0, A_MAX)
+        | extreme(a1, A_MAX)
+        | extreme(a2, A_MAX)
+        | extreme(g0, G_MAX)
+        | extreme(g1, G_MAX)
+        | extreme(g2, G_MAX);
     // |v| < 2^20: exact in f32.
-    let acc = |v: i32| v as f32 * s.accel_out_per_code + s.accel_out_offset;
-    let gyr = |v: i32| v as f32 * s.gyro_rad_s_per_code;
-    finish(
-        [acc(a[0]), acc(a[1]), acc(a[2])],
-        [gyr(g[0]), gyr(g[1]), gyr(g[2])],
-        f32::from(be16(p, 13)) * TEMP16_C_PER_LSB + TEMP_OFFSET_C,
-        u16::from_be_bytes([p[15], p[16]]),
-        bad_a,
-        bad_g,
-        sat,
-    )
+    let (ka, ca, kg) = (
+        s.accel_out_per_code,
+        s.accel_out_offset,
+        s.gyro_rad_s_per_code,
+    );
+    out.accel_out = [
+        a0 as f32 * ka + ca,
+        a1 as f32 * ka + ca,
+        a2 as f32 * ka + ca,
+    ];
+    out.gyro_rad_s = [g0 as f32 * kg, g1 as f32 * kg, g2 as f32 * kg];
+    out.temp_c = f32::from(be16(p, 13)) * TEMP16_C_PER_LSB + TEMP_OFFSET_C;
+    out.timestamp = u16::from_be_bytes([p[15], p[16]]);
+    out.lost_before = 0;
+    out.flags = ImuFlags(0);
+    if odd {
+        mark_extremes(
+            out,
+            &[a0, a1, a2],
+            &[g0, g1, g2],
+            INVALID_20,
+            [A_MAX, G_MAX],
+        );
+    }
 }
 
-#[inline(always)]
-fn finish(
-    mut accel: [f32; 3],
-    mut gyro: [f32; 3],
-    temp_c: f32,
-    timestamp: u16,
-    bad_a: bool,
-    bad_g: bool,
-    sat: bool,
-) -> ImuSample {
-    // Rare (start-up only): a branch here keeps the common path short.
-    if bad_a | bad_g {
-        if bad_a {
-            accel = [f32::NAN; 3];
-        }
-        if bad_g {
-            gyro = [f32::NAN; 3];
-        }
+/// The rare path: which extreme codes are the invalid marker (that sensor's values become NaN,
+/// flagged INVALID) and which are saturated axes (flagged SATURATED).
+#[cold]
+#[inline(never)]
+fn mark_extremes(out: &mut ImuSample, a: &[i32; 3], g: &[i32; 3], invalid: i32, max: [i32; 2]) {
+    let invalid_a = a.contains(&invalid);
+    let invalid_g = g.contains(&invalid);
+    if invalid_a {
+        out.accel_out = [f32::NAN; 3];
     }
-    ImuSample {
-        accel_out: accel,
-        gyro_rad_s: gyro,
-        temp_c,
-        timestamp,
-        lost_before: 0,
-        flags: ImuFlags(flag(sat, ImuFlags::SATURATED) | flag(bad_a | bad_g, ImuFlags::INVALID)),
+    if invalid_g {
+        out.gyro_rad_s = [f32::NAN; 3];
     }
+    // Anything extreme that is not an invalid marker is at full scale.
+    let full = |v: i32, m: i32| v != invalid && (v >= m || v <= -m);
+    let saturated = a.iter().any(|&v| full(v, max[0])) || g.iter().any(|&v| full(v, max[1]));
+    out.flags.0 |= if invalid_a | invalid_g {
+        ImuFlags::INVALID
+    } else {
+        0
+    };
+    out.flags.0 |= if saturated { ImuFlags::SATURATED } else { 0 };
 }

@@ -373,14 +373,18 @@ pub struct Core {
     cfg: Config,
     scale: Scale,
     period_us: u16,
-    last_timestamp: Option<u16>,
-    /// Packets still to read before the gap of an overflow (stop-on-full keeps the oldest).
-    gap_after: Option<u16>,
+    /// The previous sample's time stamp, when there is one since the last flush.
+    last_timestamp: u16,
+    primed: bool,
+    /// Packets still to read before the gap of an overflow (stop-on-full keeps the oldest);
+    /// negative: no overflow pending.
+    gap_after: i32,
     /// The next decoded sample follows lost data.
     lost_pending: bool,
-    /// FIFO bytes of the current transfer.
-    pub buf: [u8; BATCH_PACKETS * PACKET4_LEN],
 }
+
+/// A FIFO transfer's bytes (the drivers' DMA-sized buffer).
+pub type FifoBuffer = [u8; BATCH_PACKETS * PACKET4_LEN];
 
 impl Core {
     /// State for `cfg` (checked).
@@ -390,10 +394,10 @@ impl Core {
             cfg,
             scale: cfg.scale(),
             period_us: cfg.odr.period_us(),
-            last_timestamp: None,
-            gap_after: None,
+            last_timestamp: 0,
+            primed: false,
+            gap_after: -1,
             lost_pending: false,
-            buf: [0; BATCH_PACKETS * PACKET4_LEN],
         })
     }
 
@@ -408,23 +412,33 @@ impl Core {
         let count = u16::from_be_bytes([status[1], status[2]]);
         if status[0] & INT_FIFO_FULL != 0 {
             // Stop-on-full: the `count` packets present precede the gap.
-            self.gap_after = Some(count);
+            self.gap_after = i32::from(count);
         }
         let n = usize::from(count).min(room).min(BATCH_PACKETS);
         (n * self.cfg.fifo.len(), usize::from(count) > n)
     }
 
-    /// Decodes the `bytes` FIFO bytes read into `buf` into `out`. On a header that is not the
-    /// configured packet's, returns the header: the caller flushes the FIFO.
-    pub fn decode(&mut self, bytes: usize, out: &mut [ImuSample]) -> Result<usize, u8> {
-        let len = self.cfg.fifo.len();
-        let want = match self.cfg.fifo {
-            FifoFormat::Packet3 => HEADER_PACKET3,
-            FifoFormat::Packet4HighRes => HEADER_PACKET4,
-        };
+    /// Decodes whole packets of FIFO `bytes` into `out` (as many as both hold). On a header that is
+    /// not the configured packet's, returns the header: the caller flushes the FIFO.
+    pub fn decode(&mut self, bytes: &[u8], out: &mut [ImuSample]) -> Result<usize, u8> {
+        match self.cfg.fifo {
+            FifoFormat::Packet3 => self.decode_as::<PACKET3_LEN>(bytes, out, HEADER_PACKET3),
+            FifoFormat::Packet4HighRes => self.decode_as::<PACKET4_LEN>(bytes, out, HEADER_PACKET4),
+        }
+    }
+
+    #[inline(always)]
+    fn decode_as<const N: usize>(
+        &mut self,
+        bytes: &[u8],
+        out: &mut [ImuSample],
+        want: u8,
+    ) -> Result<usize, u8> {
         let mut n = 0;
-        for k in 0..bytes / len {
-            let p = &self.buf[k * len..(k + 1) * len];
+        for (p, slot) in bytes.chunks_exact(N).zip(out.iter_mut()) {
+            let Ok(p) = <&[u8; N]>::try_from(p) else {
+                break;
+            };
             let header = p[0];
             // Within the counted packets even the empty marker (HEADER_MSG) means out of step:
             // the count was latched before the read, and the FIFO only grows meanwhile.
@@ -432,16 +446,8 @@ impl Core {
                 self.corrupted();
                 return Err(header);
             }
-            let mut s = match self.cfg.fifo {
-                FifoFormat::Packet3 => {
-                    fifo::decode_packet3(p.try_into().unwrap_or(&[0; 16]), &self.scale)
-                }
-                FifoFormat::Packet4HighRes => {
-                    fifo::decode_packet4(p.try_into().unwrap_or(&[0; 20]), &self.scale)
-                }
-            };
-            self.mark_gaps(&mut s);
-            out[n] = s;
+            decode_packet(p, &self.scale, slot);
+            self.mark_gaps(slot);
             n += 1;
         }
         Ok(n)
@@ -449,38 +455,38 @@ impl Core {
 
     #[inline(always)]
     fn mark_gaps(&mut self, s: &mut ImuSample) {
-        let lost = self
-            .last_timestamp
-            .map_or(0, |t| lost_between(t, s.timestamp, self.period_us));
-        self.last_timestamp = Some(s.timestamp);
-        let overflow = match self.gap_after {
-            Some(0) => {
-                self.gap_after = None;
-                true
-            }
-            Some(k) => {
-                self.gap_after = Some(k - 1);
-                false
-            }
-            None => false,
-        };
-        if lost > 0 || overflow || self.lost_pending {
-            s.lost_before = lost;
+        let lost = lost_between(self.last_timestamp, s.timestamp, self.period_us);
+        self.last_timestamp = s.timestamp;
+        let overflow = self.gap_after == 0;
+        self.gap_after -= (self.gap_after >= 0) as i32;
+        if (lost > 0 && self.primed) | overflow | self.lost_pending {
+            s.lost_before = if self.primed { lost } else { 0 };
             s.flags.0 |= ImuFlags::DATA_LOST;
             self.lost_pending = false;
         }
+        self.primed = true;
     }
 
     /// The FIFO was flushed: what is in it now follows a gap of unknown length.
     pub fn corrupted(&mut self) {
         self.lost_pending = true;
-        self.gap_after = None;
-        self.last_timestamp = None;
+        self.gap_after = -1;
+        self.primed = false;
     }
 
     /// The configured rate, Hz.
     pub fn sample_rate_hz(&self) -> u32 {
         self.cfg.odr.hz()
+    }
+}
+
+/// A packet of either length (the length picks the format).
+#[inline(always)]
+fn decode_packet<const N: usize>(p: &[u8; N], scale: &Scale, out: &mut ImuSample) {
+    if let Ok(p3) = <&[u8; PACKET3_LEN]>::try_from(&p[..]) {
+        fifo::decode_packet3(p3, scale, out);
+    } else if let Ok(p4) = <&[u8; PACKET4_LEN]>::try_from(&p[..]) {
+        fifo::decode_packet4(p4, scale, out);
     }
 }
 

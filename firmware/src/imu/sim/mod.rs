@@ -9,8 +9,10 @@
 //! by the `DelayNs` operations it is given and by [`Icm42688Model::advance_ns`] (a board's timer).
 
 pub mod icm42688;
+pub mod lsm6dso;
 
 pub use icm42688::Icm42688Model;
+pub use lsm6dso::Lsm6dsoModel;
 
 /// One sample of the physical quantities a part measures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

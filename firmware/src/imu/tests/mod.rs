@@ -9,6 +9,7 @@ mod icm_identify;
 mod icm_overflow;
 mod icm_self_test;
 mod icm_watermark;
+mod lsm6dso;
 
 use crate::imu::icm42688::{Config, Icm42688};
 use crate::imu::sim::{Generator, Icm42688Model, Truth};
