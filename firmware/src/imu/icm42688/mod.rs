@@ -160,7 +160,7 @@ pub enum FifoFormat {
 
 impl FifoFormat {
     /// Bytes per packet.
-    pub const fn len(self) -> usize {
+    pub const fn packet_len(self) -> usize {
         match self {
             FifoFormat::Packet3 => PACKET3_LEN,
             FifoFormat::Packet4HighRes => PACKET4_LEN,
@@ -208,7 +208,7 @@ impl Config {
 
     /// Packets the FIFO holds.
     pub const fn capacity_packets(&self) -> u16 {
-        (FIFO_BYTES / self.fifo.len()) as u16
+        (FIFO_BYTES / self.fifo.packet_len()) as u16
     }
 
     /// Checks the combination: watermark within the FIFO, packet 4 only at ±16 g / ±2000 °/s.
@@ -415,7 +415,7 @@ impl Core {
             self.gap_after = i32::from(count);
         }
         let n = usize::from(count).min(room).min(BATCH_PACKETS);
-        (n * self.cfg.fifo.len(), usize::from(count) > n)
+        (n * self.cfg.fifo.packet_len(), usize::from(count) > n)
     }
 
     /// Decodes whole packets of FIFO `bytes` into `out` (as many as both hold). On a header that is

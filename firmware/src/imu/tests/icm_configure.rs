@@ -11,9 +11,9 @@ fn default_configuration_registers() {
     let mut imu = started(Config::DEFAULT);
     let m = imu.device_mut();
     // ±2000 °/s = FS_SEL 000, ±16 g = 000, 1 kHz = ODR 0110.
-    assert_eq!(m.register(0, GYRO_CONFIG0), 0b000_0_0110);
-    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b000_0_0110);
-    // 258 Hz: DELT 6, DELTSQR 36, BITSHIFT 10 (gyro: bank 1, AAF and notch enabled).
+    assert_eq!(m.register(0, GYRO_CONFIG0), 0b0000_0110); // FS_SEL 000, ODR 0110
+    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b0000_0110); // FS_SEL 000, ODR 0110
+                                                           // 258 Hz: DELT 6, DELTSQR 36, BITSHIFT 10 (gyro: bank 1, AAF and notch enabled).
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC2), 0xA0);
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC3), 6);
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC4), 36);
@@ -59,9 +59,9 @@ fn other_settings_and_high_resolution() {
     };
     let mut imu = started(cfg);
     let m = imu.device_mut();
-    assert_eq!(m.register(0, GYRO_CONFIG0), 0b010_0_0011); // ±500 °/s, 8 kHz
-    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b010_0_0011); // ±4 g, 8 kHz
-                                                            // 997 Hz: DELT 21, DELTSQR 440 = 0x1B8, BITSHIFT 6.
+    assert_eq!(m.register(0, GYRO_CONFIG0), 0b0100_0011); // FS_SEL 010 (±500 °/s), ODR 0011 (8 kHz)
+    assert_eq!(m.register(0, ACCEL_CONFIG0), 0b0100_0011); // FS_SEL 010 (±4 g), ODR 0011 (8 kHz)
+                                                           // 997 Hz: DELT 21, DELTSQR 440 = 0x1B8, BITSHIFT 6.
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC3), 21);
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC4), 0xB8);
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC5), (6 << 4) | 0x1);

@@ -7,9 +7,12 @@ use crate::imu::icm42688::FifoFormat;
 use crate::imu::ImuFlags;
 use core::f32::consts::PI;
 
+/// Accelerometer, gyro (rad/s), temperature (°C), saturated.
+type Expected = ([f32; 3], [f32; 3], f32, bool);
+
 /// The expected sample for a truth: (accel, gyro rad/s, temperature, saturated), packet 3 at
 /// ±16 g (2048 LSB/g) and ±2000 °/s (16.4 LSB/(°/s)), 8-bit temperature (2.07 LSB/°C).
-fn expected_packet3(t: &Truth) -> ([f32; 3], [f32; 3], f32, bool) {
+fn expected_packet3(t: &Truth) -> Expected {
     let a = t.accel_g.map(|g| code(g * 2048.0, 32767));
     let w = t.gyro_dps.map(|d| code(d * 16.4, 32767));
     let sat = a.iter().chain(w.iter()).any(|c| c.abs() == 32767);
@@ -24,7 +27,7 @@ fn expected_packet3(t: &Truth) -> ([f32; 3], [f32; 3], f32, bool) {
 
 /// Packet 4: 18-bit accel at 8192 LSB/g, 19-bit gyro at 131 LSB/(°/s), 16-bit temperature
 /// (132.48 LSB/°C). The driver's unit is the 18-bit LSB; the gyro is in rad/s.
-fn expected_packet4(t: &Truth) -> ([f32; 3], [f32; 3], f32, bool) {
+fn expected_packet4(t: &Truth) -> Expected {
     let a = t.accel_g.map(|g| code(g * 8192.0, 131_071));
     let w = t.gyro_dps.map(|d| code(d * 131.0, 262_143));
     let sat = a.iter().any(|c| c.abs() == 131_071) || w.iter().any(|c| c.abs() == 262_143);
@@ -38,7 +41,7 @@ fn expected_packet4(t: &Truth) -> ([f32; 3], [f32; 3], f32, bool) {
     )
 }
 
-fn check(format: FifoFormat, expected: fn(&Truth) -> ([f32; 3], [f32; 3], f32, bool)) {
+fn check(format: FifoFormat, expected: fn(&Truth) -> Expected) {
     let cfg = Config {
         fifo: format,
         watermark_packets: 50,

@@ -40,15 +40,15 @@ fn identify_and_configuration_registers() {
     let mut imu = started();
     let m = imu.device_mut();
     // 833 Hz = 0111; ±8 g = FS_XL 11; ±2000 °/s = FS_G 11.
-    assert_eq!(m.register(CTRL1_XL), 0b0111_11_00);
-    assert_eq!(m.register(CTRL2_G), 0b0111_11_00);
+    assert_eq!(m.register(CTRL1_XL), 0b0111_1100); // ODR 0111, FS 11
+    assert_eq!(m.register(CTRL2_G), 0b0111_1100);
     assert_eq!(
         m.register(FIFO_CTRL3),
         0b0111_0111,
         "both batched at 833 Hz"
     );
     // Time stamp every batch (01), temperature at 52 Hz (11), FIFO mode 001.
-    assert_eq!(m.register(FIFO_CTRL4), 0b01_11_0_001);
+    assert_eq!(m.register(FIFO_CTRL4), 0b0111_0001); // 01, 11, 0, 001
     assert_eq!(
         (m.register(FIFO_CTRL1), m.register(FIFO_CTRL2) & 1),
         (30, 0)
