@@ -266,15 +266,16 @@ mod app {
            local = [rx, reader, samples, temperature, led_period, packets: u32 = 0])]
     fn burst_done(mut cx: burst_done::Context) {
         let l = cx.local;
-        let Some(reader) = l.reader.as_mut() else {
-            return;
-        };
+        // The stream's flags first, whatever follows: a flag left set would re-enter at once.
         let Some(end) = cx.shared.bus.lock(|(dma, cs)| {
             let end = dma.finish()?;
             cs.set_high();
             Some(end)
         }) else {
             return; // spurious: the burst is still running
+        };
+        let Some(reader) = l.reader.as_mut() else {
+            return; // no IMU answered at boot (the boot-time kick still runs one burst)
         };
         let done = match end {
             // SAFETY: the burst ended and the next starts below, after the last use of `bytes`.
