@@ -55,88 +55,77 @@ fn extreme(v: i32, max: i32) -> bool {
     (v.wrapping_add(max - 1)) as u32 > (2 * max - 2) as u32
 }
 
-/// Decodes a packet 3 (16 bytes) into `out`. The header is checked by the caller.
+/// Codes of one packet, before scaling: accelerometer and gyro x, y, z, and their full-scale codes.
+struct Codes {
+    a: (i32, i32, i32),
+    g: (i32, i32, i32),
+    max: [i32; 2],
+    invalid: i32,
+}
+
+/// Scales and checks the codes into `out` (temperature and time stamp are the caller's).
 #[inline(always)]
-pub fn decode_packet3(p: &[u8; 16], s: &Scale, out: &mut ImuSample) {
+fn scale_into(c: Codes, s: &Scale, out: &mut ImuSample) {
     // Written out per value: straight-line code at opt-level "s" (no arrays through the stack).
-    let (a0, a1, a2) = (be16(p, 1) as i32, be16(p, 3) as i32, be16(p, 5) as i32);
-    let (g0, g1, g2) = (be16(p, 7) as i32, be16(p, 9) as i32, be16(p, 11) as i32);
-    const M: i32 = 32767;
-    let odd = extreme(a0, M)
-        | extreme(a1, M)
-        | extreme(a2, M)
-        | extreme(g0, M)
-        | extreme(g1, M)
-        | extreme(g2, M);
+    let ((a0, a1, a2), (g0, g1, g2)) = (c.a, c.g);
+    let [am, gm] = c.max;
+    let odd = extreme(a0, am)
+        | extreme(a1, am)
+        | extreme(a2, am)
+        | extreme(g0, gm)
+        | extreme(g1, gm)
+        | extreme(g2, gm);
     let (ka, ca, kg) = (
         s.accel_out_per_code,
         s.accel_out_offset,
         s.gyro_rad_s_per_code,
     );
+    // |code| < 2^20: exact in f32.
     out.accel_out = [
         a0 as f32 * ka + ca,
         a1 as f32 * ka + ca,
         a2 as f32 * ka + ca,
     ];
     out.gyro_rad_s = [g0 as f32 * kg, g1 as f32 * kg, g2 as f32 * kg];
-    out.temp_c = f32::from(p[13] as i8) * TEMP8_C_PER_LSB + TEMP_OFFSET_C;
-    out.timestamp = u16::from_be_bytes([p[14], p[15]]);
     out.lost_before = 0;
     out.flags = ImuFlags(0);
     if odd {
-        mark_extremes(
-            out,
-            &[a0, a1, a2],
-            &[g0, g1, g2],
-            i32::from(INVALID_16),
-            [M, M],
-        );
+        mark_extremes(out, &[a0, a1, a2], &[g0, g1, g2], c.invalid, c.max);
     }
+}
+
+/// Decodes a packet 3 (16 bytes) into `out`. The header is checked by the caller.
+#[inline(always)]
+pub fn decode_packet3(p: &[u8; 16], s: &Scale, out: &mut ImuSample) {
+    let v = |i: usize| i32::from(be16(p, i));
+    let codes = Codes {
+        a: (v(1), v(3), v(5)),
+        g: (v(7), v(9), v(11)),
+        max: [32767, 32767],
+        invalid: i32::from(INVALID_16),
+    };
+    scale_into(codes, s, out);
+    out.temp_c = f32::from(p[13] as i8) * TEMP8_C_PER_LSB + TEMP_OFFSET_C;
+    out.timestamp = u16::from_be_bytes([p[14], p[15]]);
 }
 
 /// Decodes a packet 4 (20 bytes, 20-bit data) into `out`. The header is checked by the caller.
 #[inline(always)]
 pub fn decode_packet4(p: &[u8; 20], s: &Scale, out: &mut ImuSample) {
     let (ex, ey, ez) = (p[17], p[18], p[19]);
-    let (a0, a1, a2) = (
-        be20(p, 1, ex >> 4),
-        be20(p, 3, ey >> 4),
-        be20(p, 5, ez >> 4),
-    );
-    let (g0, g1, g2) = (be20(p, 7, ex), be20(p, 9, ey), be20(p, 11, ez));
-    const A_MAX: i32 = 524_284;
-    const G_MAX: i32 = 524_286;
-    let odd = extreme(a0, A_MAX)
-        | extreme(a1, A_MAX)
-        | extreme(a2, A_MAX)
-        | extreme(g0, G_MAX)
-        | extreme(g1, G_MAX)
-        | extreme(g2, G_MAX);
-    // |v| < 2^20: exact in f32.
-    let (ka, ca, kg) = (
-        s.accel_out_per_code,
-        s.accel_out_offset,
-        s.gyro_rad_s_per_code,
-    );
-    out.accel_out = [
-        a0 as f32 * ka + ca,
-        a1 as f32 * ka + ca,
-        a2 as f32 * ka + ca,
-    ];
-    out.gyro_rad_s = [g0 as f32 * kg, g1 as f32 * kg, g2 as f32 * kg];
+    let codes = Codes {
+        a: (
+            be20(p, 1, ex >> 4),
+            be20(p, 3, ey >> 4),
+            be20(p, 5, ez >> 4),
+        ),
+        g: (be20(p, 7, ex), be20(p, 9, ey), be20(p, 11, ez)),
+        max: [524_284, 524_286],
+        invalid: INVALID_20,
+    };
+    scale_into(codes, s, out);
     out.temp_c = f32::from(be16(p, 13)) * TEMP16_C_PER_LSB + TEMP_OFFSET_C;
     out.timestamp = u16::from_be_bytes([p[15], p[16]]);
-    out.lost_before = 0;
-    out.flags = ImuFlags(0);
-    if odd {
-        mark_extremes(
-            out,
-            &[a0, a1, a2],
-            &[g0, g1, g2],
-            INVALID_20,
-            [A_MAX, G_MAX],
-        );
-    }
 }
 
 /// The rare path: which extreme codes are the invalid marker (that sensor's values become NaN,
