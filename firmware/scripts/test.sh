@@ -4,12 +4,13 @@
 #  1. tools: the thumbv7em-none-eabihf target, qemu-system-arm and binutils-arm-none-eabi if missing
 #  2. PC unit tests of the device-agnostic library (protocol, storage power cuts, stats, pipeline)
 #  3. rustfmt --check and clippy -D warnings (library on the PC, every binary on the target)
-#  4. both boards built with -D warnings (QEMU mps2-an386; STM32F446 Nucleo, which only builds here)
+#  4. every board built with -D warnings (QEMU mps2-an386; the STM32F446 Nucleo and the STM32F405
+#     flight controller, which only build here), their flash and RAM printed
 #  5. on-target tests in QEMU (bit-exact compensation vs the PC, storage across a system reset)
 #  6. end-to-end smoke test: the QEMU firmware over its serial pty (protocol, calibration, reset)
 #  7. the benchmark (instruction counts, flash/RAM)
 #
-# Set SKIP_STM32=1 to skip the (slow to compile) STM32 build, SKIP_BENCH=1 to skip step 7.
+# Set SKIP_STM32=1 to skip the (slow to compile) STM32 builds, SKIP_BENCH=1 to skip step 7.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=qemu-board.sh
@@ -51,10 +52,22 @@ cargo clippy --release "${qemu_features[@]}" --bins --target "$target" -- -D war
 cargo build --release "${qemu_features[@]}" --bins --target "$target"
 
 if [ "${SKIP_STM32:-0}" != 1 ]; then
+    # One board at a time (each compiles the HAL for its own chip). Budgets of the F405 image:
+    # flash <= 128 KiB (also enforced by memory-f405.x), static RAM <= 32 KiB.
     step "build + clippy: STM32F446 Nucleo-64 board"
     cargo clippy --release --features board-stm32f4 --bin stm32f4 --target "$target" -- -D warnings
     cargo build --release --features board-stm32f4 --bin stm32f4 --target "$target"
     arm-none-eabi-size "target/$target/release/stm32f4"
+
+    step "build + clippy: STM32F405 flight controller (ICM-42688-P, USB CDC-ACM)"
+    f405_features=(--no-default-features --features board-f405)
+    cargo clippy --release "${f405_features[@]}" --bin f405 --target "$target" -- -D warnings
+    cargo build --release "${f405_features[@]}" --bin f405 --target "$target"
+    arm-none-eabi-size "target/$target/release/f405"
+    read -r text data bss _ < <(arm-none-eabi-size "target/$target/release/f405" | tail -n1)
+    flash=$((text + data)) ram=$((data + bss))
+    echo "F405: flash $flash bytes (budget 131072), static RAM $ram bytes (budget 32768)"
+    [ "$flash" -le 131072 ] && [ "$ram" -le 32768 ] || { echo "F405 over its budget" >&2; exit 1; }
 fi
 
 step "on-target tests in QEMU"

@@ -1,5 +1,6 @@
 //! Driver of an ST L3GD20H / I3G4250D 3-axis gyro over SPI, generic over
-//! `embedded_hal::spi::SpiDevice` (chip select handled by the device), with typed errors.
+//! `embedded_hal::spi::SpiDevice` (chip select handled by the device — on the Nucleo
+//! `embedded_hal_bus::spi::ExclusiveDevice`), with typed errors.
 //!
 //! Register map (both parts): WHO_AM_I 0x0F (0xD7 L3GD20H, 0xD3 I3G4250D); CTRL1 0x20 (ODR, power,
 //! axis enables); CTRL4 0x23 (full scale); OUT_X_L 0x28 .. OUT_Z_H 0x2D, little-endian. SPI address
@@ -86,78 +87,6 @@ impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
         let w = self.read_raw()?;
         let saturated = w.iter().any(|v| *v == i16::MIN || *v == i16::MAX);
         Ok((w.map(|v| f32::from(v) * RAD_S_PER_LSB_2000DPS), saturated))
-    }
-}
-
-/// An [`SpiDevice`] from a bus and a chip-select pin (active low) that nobody else uses.
-pub struct CsDevice<BUS, CS> {
-    bus: BUS,
-    cs: CS,
-}
-
-impl<BUS, CS> CsDevice<BUS, CS> {
-    /// Owns the bus and the pin (set the pin high before).
-    pub fn new(bus: BUS, cs: CS) -> Self {
-        CsDevice { bus, cs }
-    }
-}
-
-/// Error of [`CsDevice`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CsError<BusE, PinE> {
-    /// The bus failed.
-    Bus(BusE),
-    /// The chip-select pin failed.
-    Pin(PinE),
-}
-
-impl<BusE: core::fmt::Debug, PinE: core::fmt::Debug> embedded_hal::spi::Error
-    for CsError<BusE, PinE>
-{
-    fn kind(&self) -> embedded_hal::spi::ErrorKind {
-        embedded_hal::spi::ErrorKind::Other
-    }
-}
-
-impl<BUS, CS> embedded_hal::spi::ErrorType for CsDevice<BUS, CS>
-where
-    BUS: embedded_hal::spi::ErrorType,
-    CS: embedded_hal::digital::OutputPin,
-{
-    type Error = CsError<BUS::Error, CS::Error>;
-}
-
-impl<BUS, CS> SpiDevice for CsDevice<BUS, CS>
-where
-    BUS: embedded_hal::spi::SpiBus,
-    CS: embedded_hal::digital::OutputPin,
-{
-    fn transaction(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), Self::Error> {
-        self.cs.set_low().map_err(CsError::Pin)?;
-        let mut result = Ok(());
-        for op in ops.iter_mut() {
-            result = match op {
-                Operation::Read(b) => self.bus.read(b),
-                Operation::Write(b) => self.bus.write(b),
-                Operation::Transfer(r, w) => self.bus.transfer(r, w),
-                Operation::TransferInPlace(b) => self.bus.transfer_in_place(b),
-                Operation::DelayNs(ns) => {
-                    // Roughly: a few cycles per iteration on a 180 MHz core.
-                    for _ in 0..(*ns / 16) {
-                        core::hint::spin_loop();
-                    }
-                    Ok(())
-                }
-            };
-            if result.is_err() {
-                break;
-            }
-        }
-        let flushed = self.bus.flush();
-        let released = self.cs.set_high();
-        result.map_err(CsError::Bus)?;
-        flushed.map_err(CsError::Bus)?;
-        released.map_err(CsError::Pin)
     }
 }
 

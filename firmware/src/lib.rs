@@ -14,6 +14,11 @@
 //! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
 //! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
 //!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
+//! - [`imu_bursts`]: the ICM-42688-P's FIFO read as a chain of DMA bursts (F405 board).
+//! - [`link`]: a UART link whose receiver an interrupt drains into a queue (Nucleo board), and the
+//!   packet stager of the USB link (F405 board).
+//! - [`sampling`]: the sampling tasks' board-independent parts (temperature decimation, ADC scan layout).
+//! - [`stack`]: the stack high-water mark by painting.
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.
 //! - [`testvectors`]: PC-computed compensation vectors, checked bit for bit on the target.
 //!
@@ -24,9 +29,13 @@
 pub mod die_temperature;
 pub mod gyro;
 pub mod imu;
+pub mod imu_bursts;
+pub mod link;
 pub mod paper_unit;
 pub mod pipeline;
 pub mod protocol;
+pub mod sampling;
+pub mod stack;
 pub mod stats;
 pub mod storage;
 pub mod testvectors;
@@ -42,26 +51,12 @@ pub use storage::{AbStore, CalStore, RamNorFlash, StoreError};
 /// Firmware version reported by `Identify` (major, minor, patch).
 pub const FIRMWARE_VERSION: [u8; 3] = [0, 1, 0];
 
-/// A source of the three accelerometer outputs, in the calibration's output unit.
-pub trait AccelSource {
-    /// The latest outputs (V or LSB) and whether any channel sat at its range limit.
-    fn read_outputs(&mut self) -> ([f32; 3], bool);
-}
-
 /// A gyro giving the body rate, rad/s, in body axes.
 pub trait Gyro {
     /// Why a read failed.
     type Error;
     /// The latest rate and whether any axis sat at its range limit.
     fn read_rate(&mut self) -> Result<([f32; 3], bool), Self::Error>;
-}
-
-/// A free-running tick counter (SysTick, DWT, a timer), for time stamps and cost measurements.
-pub trait Clock {
-    /// Ticks per second.
-    const HZ: u32;
-    /// Current tick count (wrapping).
-    fn ticks(&mut self) -> u32;
 }
 
 /// A byte link that never blocks: the firmware's view of its UART.
@@ -92,35 +87,5 @@ where
 
     fn try_write(&mut self, byte: u8) -> bool {
         self.0.write_ready().unwrap_or(false) && matches!(self.0.write(&[byte]), Ok(1))
-    }
-}
-
-/// Any `embedded-hal-nb` serial port (e.g. an `stm32f4xx-hal` USART) is a [`ByteLink`]. Receive
-/// errors (overrun, framing) read as "no byte"; the frame they break is answered as malformed.
-pub struct NbLink<T>(pub T);
-
-impl<T> ByteLink for NbLink<T>
-where
-    T: embedded_hal_nb::serial::Read<u8> + embedded_hal_nb::serial::Write<u8>,
-{
-    fn try_read(&mut self) -> Option<u8> {
-        self.0.read().ok()
-    }
-
-    fn try_write(&mut self, byte: u8) -> bool {
-        self.0.write(byte).is_ok()
-    }
-}
-
-/// Reads one [`Sample`] from an accelerometer source and a gyro. A failed gyro read gives a
-/// non-finite rate, so the sample is flagged and left out of the statistics (never a panic).
-#[inline]
-pub fn read_sample<A: AccelSource, G: Gyro>(accel: &mut A, gyro: &mut G) -> Sample {
-    let (raw, sat_a) = accel.read_outputs();
-    let (rate_rad_s, sat_g) = gyro.read_rate().unwrap_or(([f32::NAN; 3], false));
-    Sample {
-        raw,
-        rate_rad_s,
-        saturated: sat_a || sat_g,
     }
 }

@@ -14,15 +14,22 @@
 //! | gyro CS              | PB6  | D10    | GPIO, active low  |
 //! | PC link TX / RX      | PA2 / PA3 | (ST-LINK VCP) | USART2, 921 600 Bd, 8N1 |
 //!
-//! Sampling: TIM2's update interrupt at [`SAMPLE_RATE_HZ`] (1–10 kHz, compile-time) starts three ADC
-//! conversions (56-cycle sample time, ~3 µs each at 21 MHz ADC clock) and one 7-byte SPI read, then
-//! runs the pipeline. The gyro's output rate is 800 Hz: above that, samples repeat its last value.
+//! Sampling (RTIC 2, see `src/bin/stm32f4.rs` and the README): TIM2's update event (TRGO) triggers
+//! one ADC1 scan — the three accelerometers (56-cycle sample time) and the on-chip temperature sensor
+//! (480 cycles, ≥ 10 µs as the datasheet asks) — which DMA2 stream 0 (channel 0) moves to memory; the
+//! stream's transfer-complete interrupt reads the gyro (7 bytes on SPI1) and runs the pipeline. The
+//! gyro's output rate is 800 Hz: above that, samples repeat its last value.
+//!
+//! ADC clock, from the clock tree: HSE 8 MHz → PLL → SYSCLK 180 MHz; APB2 is limited to 90 MHz, so
+//! PCLK2 = 180 / 2 = 90 MHz ([`PCLK2_HZ`], asked of the HAL and checked at boot); the ADC prescaler
+//! (ADC_CCR.ADCPRE) divides it by 4: 22.5 MHz ([`ADC_CLOCK_HZ`]), within the STM32F446's 36 MHz limit
+//! (datasheet DS10693, ADC characteristics, f_ADC at V_DDA 2.4–3.6 V). The HAL's default prescaler
+//! (÷2) would give 45 MHz. One scan: 3 × (56 + 12) + (480 + 12) = 696 ADC cycles = 30.9 µs.
 
-use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
-use shared::units::UnitId;
 use shared::wire::Board;
-use stm32f4xx_hal::flash::{Error as FlashError, FlashExt, LockedFlash};
+use stm32f4xx_hal::flash::LockedFlash;
 
+use super::stm32_common::{unit_id, F4Flash, Store};
 use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 
@@ -31,6 +38,19 @@ pub const SAMPLE_RATE_HZ: u32 = 1000;
 const _: () = assert!(SAMPLE_RATE_HZ >= 1000 && SAMPLE_RATE_HZ <= 10_000);
 /// Core clock, Hz.
 pub const SYSCLK_HZ: u32 = 180_000_000;
+/// APB2 clock, Hz: SYSCLK / 2 (APB2's maximum is 90 MHz).
+pub const PCLK2_HZ: u32 = 90_000_000;
+/// ADC prescaler (ADC_CCR.ADCPRE: PCLK2 divided by 4).
+pub const ADC_PRESCALER: u32 = 4;
+/// ADC clock, Hz.
+pub const ADC_CLOCK_HZ: u32 = PCLK2_HZ / ADC_PRESCALER;
+/// The STM32F446's highest ADC clock at V_DDA 2.4–3.6 V (datasheet DS10693), Hz.
+pub const ADC_CLOCK_MAX_HZ: u32 = 36_000_000;
+const _: () = assert!(ADC_CLOCK_HZ <= ADC_CLOCK_MAX_HZ);
+/// ADC cycles of one scan: three accelerometers at 56 + 12, the temperature sensor at 480 + 12.
+pub const SCAN_ADC_CYCLES: u32 = 3 * (56 + 12) + (480 + 12);
+// The scan must finish well within a sample period (here: half of it).
+const _: () = assert!(SCAN_ADC_CYCLES as u64 * SAMPLE_RATE_HZ as u64 * 2 <= ADC_CLOCK_HZ as u64);
 /// UART baud rate.
 pub const BAUD: u32 = 921_600;
 /// Output queue length, frames.
@@ -42,15 +62,6 @@ pub const SLOT_SIZE: u32 = 0x2_0000;
 /// ADC reference voltage (Nucleo: VDDA = 3.3 V).
 pub const VREF_V: f32 = 3.3;
 
-/// The chip's 96-bit unique ID (reference manual §39.1), the unit identifier.
-pub fn unit_id() -> UnitId {
-    let base = 0x1FFF_7A10 as *const u8;
-    // SAFETY: the factory-programmed, read-only unique ID area of the STM32F4.
-    UnitId(core::array::from_fn(|i| unsafe {
-        core::ptr::read_volatile(base.add(i))
-    }))
-}
-
 /// What `Identify` reports.
 pub fn info() -> DeviceInfo {
     DeviceInfo {
@@ -60,41 +71,6 @@ pub fn info() -> DeviceInfo {
         virtual_table: false,
     }
 }
-
-/// The internal flash as a NOR flash that unlocks itself for each program/erase.
-pub struct F4Flash(pub LockedFlash);
-
-impl ErrorType for F4Flash {
-    type Error = FlashError;
-}
-
-impl ReadNorFlash for F4Flash {
-    const READ_SIZE: usize = 1;
-
-    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), FlashError> {
-        ReadNorFlash::read(&mut self.0, offset, bytes)
-    }
-
-    fn capacity(&self) -> usize {
-        ReadNorFlash::capacity(&self.0)
-    }
-}
-
-impl NorFlash for F4Flash {
-    const WRITE_SIZE: usize = 1;
-    const ERASE_SIZE: usize = 128 * 1024;
-
-    fn erase(&mut self, from: u32, to: u32) -> Result<(), FlashError> {
-        NorFlash::erase(&mut self.0.unlocked(), from, to)
-    }
-
-    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), FlashError> {
-        NorFlash::write(&mut self.0.unlocked(), offset, bytes)
-    }
-}
-
-/// The board's calibration store.
-pub type Store = AbStore<F4Flash>;
 
 /// The A/B store on sectors 6 and 7.
 pub fn store(flash: LockedFlash) -> Option<Store> {

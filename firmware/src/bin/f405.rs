@@ -1,0 +1,361 @@
+//! Firmware for an STM32F405 flight controller with an ICM-42688-P (SpeedyBee F405 V4 pins, see
+//! `firmware::board::f405`). Build: `cargo build --release --no-default-features --features
+//! board-f405 --bin f405`; flash with probe-rs or DFU (README "Bring-up: STM32F405").
+//!
+//! RTIC 2 tasks, highest priority first (README "Sampling architecture"):
+//!
+//! | task | binds | priority | does |
+//! |---|---|---|---|
+//! | `imu_int` | EXTI4 (INT1 on PC4) | 3 | FIFO watermark: CS low, starts the SPI1 TX DMA (the RX stream is armed) |
+//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, runs the pipeline on each |
+//! | `usb` | OTG_FS | 1 | USB device, link service (requests, calibration store, frames out) |
+//! | `idle` | — | 0 | stack high-water mark, LED blink when the IMU is missing, `wfi` |
+//!
+//! Locks: the pipeline is shared by `burst_done` and `usb`; `usb` locks it (BASEPRI to 2) for one
+//! `pop_output`/`apply`, never around I/O. The watermark interrupt (3) is never masked by a lock.
+#![no_std]
+#![no_main]
+
+use defmt_rtt as _;
+use panic_probe as _;
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
+mod app {
+    use embedded_hal_bus::spi::ExclusiveDevice;
+    use stm32f4xx_hal::dma::StreamsTuple;
+    use stm32f4xx_hal::flash::LockedFlash;
+    use stm32f4xx_hal::gpio::{Edge, Input, Output, PushPull, PA4, PC4};
+    use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
+    use stm32f4xx_hal::pac::{self, SPI1};
+    use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::rcc::Config;
+    use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
+    use stm32f4xx_hal::timer::SysDelay;
+    use usb_device::bus::UsbBusAllocator;
+    use usb_device::prelude::*;
+
+    use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
+    use firmware::board::stm32_common::Store;
+    use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
+    use firmware::imu::{ImuFlags, ImuSample};
+    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE};
+    use firmware::pipeline::PipelineCommand;
+    use firmware::protocol::PipelineAccess;
+    use firmware::sampling::TemperatureMean;
+    use firmware::stack::HighWater;
+    use firmware::{BoardEvent, Controller, LinkService, Pipeline};
+    use shared::LeverMode;
+
+    type Link = UsbLink<'static, UsbBusType>;
+
+    /// Lever mode at boot and after a reset request.
+    const BOOT_LEVER_MODE: LeverMode = LeverMode::RateAndAcceleration;
+
+    /// A burst chain is running (set by the watermark interrupt, cleared by the completion task).
+    static IN_FLIGHT: InFlight = InFlight::new();
+
+    #[shared]
+    struct Shared {
+        pipeline: &'static mut Pipeline<OUTPUT_QUEUE>,
+        /// The SPI bus during bursts: its DMA streams and the chip select.
+        bus: (SpiDma, PA4<Output<PushPull>>),
+    }
+
+    #[local]
+    struct Local {
+        int1: PC4<Input>,
+        rx_for_int: RxBuf,
+        rx: RxBuf,
+        reader: Option<BurstReader>,
+        samples: &'static mut [ImuSample; BATCH_PACKETS],
+        temperature: TemperatureMean,
+        /// Samples between two LED updates (half a second).
+        led_period: u32,
+        sample_rate_hz: u32,
+        usb_dev: UsbDevice<'static, UsbBusType>,
+        link: Link,
+        service: Option<LinkService<Store>>,
+        imu_found: bool,
+    }
+
+    #[init(local = [
+        ep_memory: [u32; 1024] = [0; 1024],
+        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        rx_buf: [u8; BURST_MAX] = [0; BURST_MAX],
+        sample_buf: [ImuSample; BATCH_PACKETS] = [NO_SAMPLE; BATCH_PACKETS],
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        board::enter_bootloader_if_requested();
+        paint_stack();
+        let mut dp = cx.device;
+        let mut rcc = dp.RCC.freeze(
+            Config::hse(board::HSE_HZ.Hz())
+                .sysclk(board::SYSCLK_HZ.Hz())
+                .require_pll48clk(),
+        );
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let gpioc = dp.GPIOC.split(&mut rcc);
+        // The status LED (PC13, lit when low), then driven through `board::set_led`.
+        let _led = gpioc
+            .pc13
+            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+
+        // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
+        let mut cs = gpioa.pa4.into_push_pull_output();
+        cs.set_high();
+        let spi = dp.SPI1.spi(
+            (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
+            Mode {
+                polarity: Polarity::IdleHigh,
+                phase: Phase::CaptureOnSecondTransition,
+            },
+            board::SPI_HZ.Hz(),
+            &mut rcc,
+        );
+        let sample_rate_hz = board::IMU_CONFIG.odr.hz();
+        let mut delay = cx.core.SYST.delay(&rcc.clocks);
+        let reader = init_imu(spi, &mut cs, &mut delay);
+        let dma = SpiDma::new(StreamsTuple::new(dp.DMA2, &mut rcc));
+        let rx = RxBuf::new(cx.local.rx_buf);
+
+        let mut int1 = gpioc.pc4.into_pull_down_input();
+        let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
+        int1.make_interrupt_source(&mut syscfg);
+        int1.trigger_on_edge(&mut dp.EXTI, Edge::Rising);
+        int1.enable_interrupt(&mut dp.EXTI);
+
+        let store = board::store(LockedFlash::new(dp.FLASH))
+            .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
+        let controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
+        let pipeline =
+            cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(sample_rate_hz))
+                .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
+        pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
+
+        let (usb_dev, link) = init_usb(
+            USB::new(
+                (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
+                (gpioa.pa11, gpioa.pa12),
+                &rcc.clocks,
+            ),
+            cx.local.usb_bus,
+            cx.local.ep_memory,
+        );
+
+        // INT1 is latched: if the FIFO reached its watermark before EXTI4 was armed, no edge will
+        // come until INT_STATUS is read. One read at start-up clears it.
+        rtic::pend(pac::Interrupt::EXTI4);
+        defmt::info!(
+            "accel-cal firmware on STM32F405: ICM-42688-P at {=u32} Hz, USB CDC-ACM",
+            sample_rate_hz
+        );
+        (
+            Shared {
+                pipeline,
+                bus: (dma, cs),
+            },
+            Local {
+                int1,
+                rx_for_int: rx,
+                rx,
+                imu_found: reader.is_some(),
+                reader,
+                samples: cx.local.sample_buf,
+                temperature: TemperatureMean::new(sample_rate_hz),
+                led_period: sample_rate_hz / 2,
+                sample_rate_hz,
+                usb_dev,
+                link,
+                service: Some(LinkService::new(controller)),
+            },
+        )
+    }
+
+    /// Configures the ICM-42688-P over the blocking bus, then hands SPI1 to its DMA streams. `None`
+    /// when the part does not answer.
+    fn init_imu(
+        mut spi: Spi<SPI1>,
+        cs: &mut PA4<Output<PushPull>>,
+        delay: &mut SysDelay,
+    ) -> Option<BurstReader> {
+        let reader = match ExclusiveDevice::new(&mut spi, cs, delay)
+            .map_err(|_| ())
+            .and_then(|dev| Icm42688::new(dev, board::IMU_CONFIG).map_err(|_| ()))
+            .and_then(|_| Core::new(board::IMU_CONFIG).map_err(|_| ()))
+        {
+            // The part is configured and its FIFO running; the driver's state continues in the
+            // burst reader, the bus goes to the DMA streams.
+            Ok(core) => Some(BurstReader::new(core)),
+            Err(()) => {
+                defmt::error!("ICM-42688-P not answering on SPI1: no samples");
+                None
+            }
+        };
+        // Drop whatever the configuration left in the receiver (and its overrun flag), so the first
+        // byte the RX stream moves is the first of a burst.
+        // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
+        unsafe {
+            let regs = &*SPI1::ptr();
+            let _ = regs.dr().read();
+            let _ = regs.sr().read();
+        }
+        let _ = spi.use_dma().txrx();
+        reader
+    }
+
+    /// The USB device with its CDC-ACM class (the link).
+    fn init_usb(
+        usb: USB,
+        bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
+        ep_memory: &'static mut [u32; 1024],
+    ) -> (UsbDevice<'static, UsbBusType>, Link) {
+        let bus: &'static UsbBusAllocator<UsbBusType> = bus.insert(UsbBus::new(usb, ep_memory));
+        let link = UsbLink::new(usbd_serial::SerialPort::new(bus));
+        let usb_dev =
+            UsbDeviceBuilder::new(bus, UsbVidPid(board::USB_VID_PID.0, board::USB_VID_PID.1))
+                .device_class(usbd_serial::USB_CLASS_CDC)
+                .strings(&[StringDescriptors::default()
+                    .manufacturer("accel-cal")
+                    .product("accel-cal F405 IMU")
+                    .serial_number("F405")])
+                .unwrap_or_else(|_| defmt::panic!("USB strings"))
+                .build();
+        (usb_dev, link)
+    }
+
+    /// Stack high-water mark; without an IMU, the LED blinks fast (4 Hz) from here.
+    #[idle(local = [imu_found])]
+    fn idle(cx: idle::Context) -> ! {
+        let mut high_water = HighWater::new();
+        let mut wakes = 0u32;
+        loop {
+            // The scan reads the whole unused stack (≈ 0.2 ms): once per 1024 wakes (about a
+            // second at the watermark's 1 kHz), not after every interrupt.
+            if wakes % 1024 == 0 {
+                log_stack_growth(&mut high_water);
+            }
+            wakes = wakes.wrapping_add(1);
+            if *cx.local.imu_found {
+                cortex_m::asm::wfi();
+            } else {
+                cortex_m::asm::delay(board::SYSCLK_HZ / 8);
+                board::toggle_led();
+            }
+        }
+    }
+
+    /// FIFO watermark: start the chain's status burst, unless a chain runs (its status read will
+    /// see the new packets).
+    #[task(binds = EXTI4, priority = 3, shared = [bus], local = [int1, rx_for_int])]
+    fn imu_int(mut cx: imu_int::Context) {
+        cx.local.int1.clear_interrupt_pending_bit();
+        if let Some(burst) = IN_FLIGHT.on_watermark() {
+            let rx = *cx.local.rx_for_int;
+            cx.shared.bus.lock(|bus| start(bus, burst, rx));
+        }
+    }
+
+    /// CS low and both streams started.
+    fn start(bus: &mut (SpiDma, PA4<Output<PushPull>>), b: Burst, rx: RxBuf) {
+        let (dma, cs) = bus;
+        cs.set_low();
+        // SAFETY: bursts are at most the buffer's size; `rx` is read only by `burst_done` after
+        // this burst ends, and the commands are statics.
+        unsafe { dma.start(&b.tx[..b.len().min(rx.capacity())], rx.ptr()) };
+    }
+
+    /// A burst ended: CS high, the driver's decision on the received bytes (next burst of the
+    /// chain, decoded samples) outside any lock, then the pipeline on each sample — all preemptible
+    /// by the watermark interrupt. The locks cover register writes only.
+    #[task(binds = DMA2_STREAM2, priority = 2, shared = [pipeline, bus],
+           local = [rx, reader, samples, temperature, led_period, packets: u32 = 0])]
+    fn burst_done(mut cx: burst_done::Context) {
+        let l = cx.local;
+        // The stream's flags first, whatever follows: a flag left set would re-enter at once.
+        let Some(end) = cx.shared.bus.lock(|(dma, cs)| {
+            let end = dma.finish()?;
+            cs.set_high();
+            Some(end)
+        }) else {
+            return; // spurious: the burst is still running
+        };
+        let Some(reader) = l.reader.as_mut() else {
+            return; // no IMU answered at boot (the boot-time kick still runs one burst)
+        };
+        let done = match end {
+            // SAFETY: the burst ended and the next starts below, after the last use of `bytes`.
+            BurstEnd::Complete => {
+                let bytes = unsafe { l.rx.received(reader.expected_len()) };
+                reader.on_complete(bytes, l.samples, &IN_FLIGHT)
+            }
+            BurstEnd::Error => reader.abandon(&IN_FLIGHT),
+        };
+        if let Some(next) = done.next {
+            let rx = *l.rx;
+            cx.shared.bus.lock(|bus| start(bus, next, rx));
+        }
+        if let Some(h) = done.corrupt_header {
+            defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
+        }
+        cx.shared.pipeline.lock(|p| {
+            for s in &l.samples[..done.samples] {
+                if s.flags.has(ImuFlags::DATA_LOST) {
+                    // A FIFO overflow, a flushed FIFO or a failed burst: the window says so.
+                    p.on_samples_lost(u32::from(s.lost_before));
+                }
+                if let Some(t) = l.temperature.push(s.temp_c) {
+                    p.set_temperature(t);
+                }
+                p.on_sample(&s.to_sample());
+            }
+            *l.packets += done.samples as u32;
+            if *l.packets >= *l.led_period {
+                *l.packets = 0;
+                board::show_state(p.is_calibrated());
+            }
+            if p.queued() > 0 {
+                rtic::pend(pac::Interrupt::OTG_FS);
+            }
+        });
+    }
+
+    /// USB events and the link service: requests in, answers and frames out. Also pended by
+    /// `burst_done` when frames are queued.
+    #[task(binds = OTG_FS, priority = 1, shared = [pipeline],
+           local = [usb_dev, link, service, sample_rate_hz])]
+    fn usb(cx: usb::Context) {
+        let l = cx.local;
+        l.usb_dev.poll(&mut [&mut l.link.serial]);
+        if board::bootloader_requested(&l.link.serial) {
+            board::reboot_into_bootloader();
+        }
+        let Some(service) = l.service.as_mut() else {
+            return;
+        };
+        let mut pipeline = LockedPipeline(cx.shared.pipeline);
+        let event = service.poll(l.link, &mut pipeline);
+        l.link.flush();
+        if let Some(BoardEvent::Reset) = event {
+            // A soft restart: a hardware reset would re-enumerate USB and close the host's port.
+            for _ in 0..100_000 {
+                l.usb_dev.poll(&mut [&mut l.link.serial]);
+                service.flush(l.link, 1);
+                l.link.flush();
+                if l.link.is_drained() {
+                    break;
+                }
+            }
+            let Some(old) = l.service.take() else {
+                return;
+            };
+            let store = old.controller.into_store();
+            let controller =
+                Controller::boot(board::info(*l.sample_rate_hz), store, BOOT_LEVER_MODE);
+            pipeline.apply(PipelineCommand::StopStream);
+            pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
+            *l.service = Some(LinkService::new(controller));
+            defmt::info!("restarted on the host's request");
+        }
+    }
+}

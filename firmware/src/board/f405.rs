@@ -1,0 +1,351 @@
+//! An STM32F405 flight controller with an ICM-42688-P on SPI: the SpeedyBee F405 V4 (one of the most
+//! common F405 boards), pins from its Betaflight hardware definition
+//! (`betaflight/config`, `configs/SPEEDYBEEF405V4/config.h`):
+//!
+//! | signal | pin | Betaflight name | use here |
+//! |---|---|---|---|
+//! | IMU SCK / SDI (MISO) / SDO (MOSI) | PA5 / PA6 / PA7 | `SPI1_SCK_PIN`, `SPI1_SDI_PIN`, `SPI1_SDO_PIN` | SPI1, mode 3, 21 MHz |
+//! | IMU CS | PA4 | `GYRO_1_CS_PIN` | GPIO, active low |
+//! | IMU INT1 | PC4 | `GYRO_1_EXTI_PIN` | EXTI4, rising edge: FIFO watermark |
+//! | status LED | PC13 | `LED0_PIN` | GPIO, lit when low (see the README for its states) |
+//! | USB D− / D+ | PA11 / PA12 | (the F405's OTG FS pins) | USB CDC-ACM, the host link |
+//! | crystal | 8 MHz | `SYSTEM_HSE_MHZ 8` | HSE → PLL: 168 MHz core, 48 MHz USB |
+//!
+//! DMA (RM0090 Table 43, DMA2 request mapping): SPI1_RX on DMA2 stream 2 channel 3, SPI1_TX on DMA2
+//! stream 3 channel 3. Stream 0 — SPI1_RX's other choice — is left to ADC1, as the board's Betaflight
+//! definition assigns it (`ADC1_DMA_OPT 0`). Another F405 board with an ICM-42688-P works after changing
+//! the SPI bus, CS, EXTI and LED pins (and the DMA streams if the bus is not SPI1) to those of its
+//! Betaflight `config.h`: they are the only board-specific facts.
+//!
+//! Flash: sectors 0–4 (128 KiB) hold the image (`memory-f405.x`), sectors 5 and 6 (128 KiB each) the
+//! calibration A/B store.
+
+use shared::wire::Board;
+use stm32f4xx_hal::flash::LockedFlash;
+
+use crate::imu::icm42688::{AccelRange, Config, Odr};
+
+use super::stm32_common::{unit_id, F4Flash, Store};
+use crate::link::PacketStager;
+use crate::protocol::DeviceInfo;
+use crate::storage::AbStore;
+use crate::ByteLink;
+
+/// Core clock, Hz (the F405's maximum).
+pub const SYSCLK_HZ: u32 = 168_000_000;
+/// Crystal, Hz (`SYSTEM_HSE_MHZ 8`).
+pub const HSE_HZ: u32 = 8_000_000;
+/// SPI1 clock, Hz: PCLK2 84 MHz / 4; the ICM-42688-P accepts up to 24 MHz.
+pub const SPI_HZ: u32 = 21_000_000;
+/// The ICM-42688-P's configuration: 8 kHz (its highest rate), ±4 g (0.12 mg per count: hand-held
+/// and rate-table motion stay well inside it; a sample beyond it is flagged saturated) and ±2000 °/s
+/// (the protocol's table rates reach 30 rad/s ≈ 1720 °/s), 258 Hz anti-alias filters, 16-byte
+/// packets, the accelerometer in counts (the calibration's output unit on this board). A watermark of
+/// 8 packets: one FIFO read per millisecond, 8 samples each.
+pub const IMU_CONFIG: Config = Config {
+    odr: Odr::Hz8000,
+    accel_range: AccelRange::G4,
+    watermark_packets: 8,
+    ..Config::DEFAULT
+};
+/// Output queue length, frames.
+pub const OUTPUT_QUEUE: usize = 16;
+/// Flash offset (from 0x0800_0000) of the calibration store: sectors 5 and 6 (see memory-f405.x).
+pub const STORE_OFFSET: u32 = 0x2_0000;
+/// Size of one store slot: one 128 KiB sector.
+pub const SLOT_SIZE: u32 = 0x2_0000;
+/// USB vendor and product id: pid.codes' test VID/PID for open-source projects
+/// (<https://pid.codes/1209/0001/>); a product would register its own PID there.
+pub const USB_VID_PID: (u16, u16) = (0x1209, 0x0001);
+
+/// What `Identify` reports.
+pub fn info(sample_rate_hz: u32) -> DeviceInfo {
+    DeviceInfo {
+        unit_id: unit_id(),
+        board: Board::Stm32f4,
+        sample_rate_hz,
+        virtual_table: false,
+    }
+}
+
+/// The A/B store on sectors 5 and 6.
+pub fn store(flash: LockedFlash) -> Option<Store> {
+    AbStore::new(F4Flash(flash), STORE_OFFSET, SLOT_SIZE).ok()
+}
+
+/// USB full-speed bulk packet, bytes.
+const USB_PACKET: usize = 64;
+
+/// The CDC-ACM port as the link service's [`ByteLink`]. Outgoing bytes are staged up to a full USB
+/// packet ([`PacketStager`]) and handed to the class in one write ([`UsbLink::flush`], after each
+/// link-service round). Reads come from the class's own receive buffer, which `UsbDevice::poll`
+/// fills.
+pub struct UsbLink<'a, B: usb_device::bus::UsbBus> {
+    /// The CDC-ACM class.
+    pub serial: usbd_serial::SerialPort<'a, B>,
+    staged: PacketStager<USB_PACKET>,
+}
+
+impl<'a, B: usb_device::bus::UsbBus> UsbLink<'a, B> {
+    /// Around the class.
+    pub fn new(serial: usbd_serial::SerialPort<'a, B>) -> Self {
+        UsbLink {
+            serial,
+            staged: PacketStager::new(),
+        }
+    }
+
+    /// Hands the staged bytes to the class (as many as it takes; the rest stay staged).
+    pub fn flush(&mut self) {
+        let serial = &mut self.serial;
+        self.staged.flush(|b| serial.write(b).unwrap_or(0));
+    }
+
+    /// Nothing staged and the class's write buffer empty (the last answer is on its way out).
+    pub fn is_drained(&mut self) -> bool {
+        self.staged.is_empty() && self.serial.flush().is_ok()
+    }
+}
+
+impl<B: usb_device::bus::UsbBus> ByteLink for UsbLink<'_, B> {
+    fn try_read(&mut self) -> Option<u8> {
+        let mut b = [0u8; 1];
+        matches!(self.serial.read(&mut b), Ok(1)).then_some(b[0])
+    }
+
+    fn try_write(&mut self, byte: u8) -> bool {
+        let serial = &mut self.serial;
+        self.staged.push(byte, |b| serial.write(b).unwrap_or(0))
+    }
+}
+
+/// PC13's bit in the GPIOC registers.
+const LED_BIT: u32 = 1 << 13;
+
+/// Lights or darkens the status LED (PC13, lit when low) with one atomic BSRR write, so the idle
+/// loop and the sampling task may both drive it.
+pub fn set_led(lit: bool) {
+    // SAFETY: BSRR writes are atomic and touch only the bit named; PC13 is configured as an output
+    // at boot and nothing else uses it.
+    let gpioc = unsafe { &*stm32f4xx_hal::pac::GPIOC::ptr() };
+    gpioc
+        .bsrr()
+        .write(|w| unsafe { w.bits(if lit { LED_BIT << 16 } else { LED_BIT }) });
+}
+
+/// Toggles the status LED.
+pub fn toggle_led() {
+    // SAFETY: a read of GPIOC's output register.
+    let gpioc = unsafe { &*stm32f4xx_hal::pac::GPIOC::ptr() };
+    let lit = gpioc.odr().read().bits() & LED_BIT == 0;
+    set_led(!lit);
+}
+
+/// The LED's meaning while samples flow (called twice a second by the sampling task): steadily lit
+/// when a calibration is applied, blinking at 1 Hz when uncalibrated. Without samples it stays dark,
+/// or blinks at 4 Hz when the IMU did not answer at boot (idle loop).
+pub fn show_state(calibrated: bool) {
+    if calibrated {
+        set_led(true);
+    } else {
+        toggle_led();
+    }
+}
+
+/// The "1200-baud touch": a host that sets the CDC line coding to 1200 Bd (`stty -F /dev/ttyACM0
+/// 1200`) asks for the ST system bootloader (USB DFU), as Arduino's boards do. The protocol's own
+/// messages are unchanged.
+pub const BOOTLOADER_BAUD: u32 = 1200;
+
+/// Whether the host asked for the bootloader through the line coding.
+pub fn bootloader_requested<B: usb_device::bus::UsbBus>(
+    serial: &usbd_serial::SerialPort<'_, B>,
+) -> bool {
+    serial.line_coding().data_rate() == BOOTLOADER_BAUD
+}
+
+/// Survives a system reset (not zeroed by cortex-m-rt: `.uninit`): the bootloader request.
+#[link_section = ".uninit.BOOTLOADER_REQUEST"]
+static mut BOOTLOADER_REQUEST: core::mem::MaybeUninit<u32> = core::mem::MaybeUninit::uninit();
+const BOOTLOADER_MAGIC: u32 = 0xB007_10AD;
+/// The F405's system memory (ST bootloader, AN2606): its vector table.
+const SYSTEM_MEMORY: u32 = 0x1FFF_0000;
+
+/// Marks the request and resets: the next boot jumps to the bootloader from a clean chip (USB off,
+/// clocks at reset values), as the bootloader expects.
+pub fn reboot_into_bootloader() -> ! {
+    // SAFETY: a plain store to a static no other code holds a reference to.
+    unsafe {
+        core::ptr::addr_of_mut!(BOOTLOADER_REQUEST)
+            .write(core::mem::MaybeUninit::new(BOOTLOADER_MAGIC))
+    };
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// First thing at boot: if the previous run asked for the bootloader, clear the request and jump to
+/// the ST system bootloader (system memory mapped at 0, its stack pointer and reset vector).
+pub fn enter_bootloader_if_requested() {
+    let request = core::ptr::addr_of_mut!(BOOTLOADER_REQUEST).cast::<u32>();
+    // SAFETY: reads and clears a word of `.uninit` RAM (any value is a valid u32).
+    let requested = unsafe {
+        let v = core::ptr::read_volatile(request);
+        core::ptr::write_volatile(request, 0);
+        v == BOOTLOADER_MAGIC
+    };
+    if !requested {
+        return;
+    }
+    // SAFETY: right after reset no peripheral is in use; SYSCFG's clock and the memory remap are
+    // what the bootloader expects (system memory at 0), then control passes to it for good.
+    unsafe {
+        // No interrupt of this firmware may reach the bootloader: every NVIC line off and not
+        // pending (RTIC enables its lines before init), then interrupts globally on, as the
+        // bootloader expects after a reset.
+        let nvic = &*cortex_m::peripheral::NVIC::PTR;
+        for i in 0..nvic.icer.len() {
+            nvic.icer[i].write(u32::MAX);
+            nvic.icpr[i].write(u32::MAX);
+        }
+        cortex_m::interrupt::enable();
+        let rcc = &*stm32f4xx_hal::pac::RCC::ptr();
+        rcc.apb2enr().modify(|_, w| w.syscfgen().set_bit());
+        let syscfg = &*stm32f4xx_hal::pac::SYSCFG::ptr();
+        syscfg.memrmp().modify(|_, w| w.mem_mode().system_flash());
+        cortex_m::asm::bootload(SYSTEM_MEMORY as *const u32)
+    }
+}
+
+/// SPI1's two DMA2 streams, programmed per burst (RM0090 §10.5): stream 2 channel 3 receives
+/// (peripheral → memory, transfer-complete and transfer-error interrupts), stream 3 channel 3 sends
+/// (memory → peripheral, no interrupt: the receive side finishes last). Register-level because a
+/// burst's length changes with the FIFO count, while the HAL's `Transfer` takes its length from a
+/// fixed buffer type.
+pub struct SpiDma {
+    _dma: stm32f4xx_hal::dma::StreamsTuple<stm32f4xx_hal::pac::DMA2>,
+}
+
+/// Stream 2's flags in LIFCR/LISR: FEIF2, DMEIF2, TEIF2, HTIF2, TCIF2 (bits 16, 18–21).
+const STREAM2_FLAGS: u32 = 0x003D_0000;
+/// Stream 3's flags: bits 22, 24–27.
+const STREAM3_FLAGS: u32 = STREAM2_FLAGS << 6;
+const TCIF2: u32 = 1 << 21;
+const TEIF2: u32 = 1 << 19;
+/// CR: channel 3, memory increment, transfer-complete (and error) interrupt, enable.
+const CR_CHSEL3: u32 = 3 << 25;
+const CR_MINC: u32 = 1 << 10;
+const CR_DIR_M2P: u32 = 0b01 << 6;
+const CR_TCIE_TEIE: u32 = (1 << 4) | (1 << 2);
+const CR_EN: u32 = 1;
+/// Receive at high priority, send at medium: the receiver must never fall behind the sender.
+const CR_PL_HIGH: u32 = 0b10 << 16;
+const CR_PL_MEDIUM: u32 = 0b01 << 16;
+
+/// How a burst ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BurstEnd {
+    /// All bytes received.
+    Complete,
+    /// The DMA reported a bus error: the chain is abandoned (the next watermark starts again).
+    Error,
+}
+
+impl SpiDma {
+    /// Takes DMA2 (the HAL enables and resets its clock); SPI1's DMA requests must be enabled
+    /// (`Spi::use_dma().txrx()`).
+    pub fn new(dma: stm32f4xx_hal::dma::StreamsTuple<stm32f4xx_hal::pac::DMA2>) -> Self {
+        SpiDma { _dma: dma }
+    }
+
+    /// Starts a full-duplex burst: `tx` out of SPI1, as many bytes into `rx`.
+    ///
+    /// # Safety
+    /// `tx` and `rx[..tx.len()]` must stay valid, and `rx` unread and unwritten by the CPU, until
+    /// [`Self::finish`] reports the end of this burst.
+    pub unsafe fn start(&mut self, tx: &[u8], rx: *mut u8) {
+        // SAFETY (whole block): DMA2 streams 2 and 3 belong to this struct (it holds DMA2); SPI1's
+        // data register address is fixed.
+        unsafe {
+            let dma = &*stm32f4xx_hal::pac::DMA2::ptr();
+            let dr = (*stm32f4xx_hal::pac::SPI1::ptr()).dr().as_ptr() as u32;
+            let len = tx.len() as u32;
+            for s in [2usize, 3] {
+                dma.st(s).cr().write(|w| w.bits(0));
+                while dma.st(s).cr().read().bits() & CR_EN != 0 {}
+            }
+            dma.lifcr().write(|w| w.bits(STREAM2_FLAGS | STREAM3_FLAGS));
+            let rx_st = dma.st(2);
+            rx_st.par().write(|w| w.bits(dr));
+            rx_st.m0ar().write(|w| w.bits(rx as u32));
+            rx_st.ndtr().write(|w| w.bits(len));
+            rx_st
+                .cr()
+                .write(|w| w.bits(CR_CHSEL3 | CR_PL_HIGH | CR_MINC | CR_TCIE_TEIE | CR_EN));
+            let tx_st = dma.st(3);
+            tx_st.par().write(|w| w.bits(dr));
+            tx_st.m0ar().write(|w| w.bits(tx.as_ptr() as u32));
+            tx_st.ndtr().write(|w| w.bits(len));
+            // Sending starts the clock: only now does the receiver get bytes.
+            tx_st
+                .cr()
+                .write(|w| w.bits(CR_CHSEL3 | CR_PL_MEDIUM | CR_MINC | CR_DIR_M2P | CR_EN));
+        }
+    }
+
+    /// In the receive stream's interrupt: clears its flags and says how the burst ended (`None`:
+    /// a spurious interrupt, the burst is still running).
+    pub fn finish(&mut self) -> Option<BurstEnd> {
+        // SAFETY: reads and clears DMA2 stream 2/3 flags, which belong to this struct.
+        let dma = unsafe { &*stm32f4xx_hal::pac::DMA2::ptr() };
+        let flags = dma.lisr().read().bits();
+        dma.lifcr()
+            .write(|w| unsafe { w.bits(STREAM2_FLAGS | STREAM3_FLAGS) });
+        if flags & TEIF2 != 0 {
+            Some(BurstEnd::Error)
+        } else if flags & TCIF2 != 0 {
+            Some(BurstEnd::Complete)
+        } else {
+            None
+        }
+    }
+}
+
+/// The receive buffer of the bursts, seen through a raw pointer: the DMA writes it between
+/// [`SpiDma::start`] and [`SpiDma::finish`], the completion task reads it after.
+#[derive(Clone, Copy)]
+pub struct RxBuf {
+    ptr: *mut u8,
+    len: usize,
+}
+
+// SAFETY: a pointer to a 'static buffer; who touches it when is the burst protocol above.
+unsafe impl Send for RxBuf {}
+
+impl RxBuf {
+    /// Over a static buffer (consumed: from now on only the DMA and [`Self::received`] use it).
+    pub fn new<const N: usize>(buf: &'static mut [u8; N]) -> Self {
+        RxBuf {
+            ptr: buf.as_mut_ptr(),
+            len: N,
+        }
+    }
+
+    /// Where the DMA writes.
+    pub fn ptr(&self) -> *mut u8 {
+        self.ptr
+    }
+
+    /// Capacity, bytes.
+    pub fn capacity(&self) -> usize {
+        self.len
+    }
+
+    /// The first `len` bytes received.
+    ///
+    /// # Safety
+    /// Only between a burst's end ([`SpiDma::finish`]) and the next [`SpiDma::start`].
+    pub unsafe fn received(&self, len: usize) -> &[u8] {
+        core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::Acquire);
+        // SAFETY: in bounds; no DMA write is under way (caller's contract).
+        unsafe { core::slice::from_raw_parts(self.ptr, len.min(self.len)) }
+    }
+}

@@ -1,0 +1,462 @@
+//! Reading the ICM-42688-P's FIFO as a chain of full-duplex SPI bursts that DMA moves, with the
+//! driver's own decisions ([`Core`]) in between — the board only starts streams and toggles CS.
+//!
+//! Per watermark interrupt (INT1, latched until INT_STATUS is read):
+//!
+//! 1. **status**: 4 bytes from INT_STATUS — INT_STATUS, FIFO_COUNTH, FIFO_COUNTL (clears INT1;
+//!    `Core::plan_read` notes an overflow and sizes the read);
+//! 2. **FIFO**: 1 + n·packet bytes from FIFO_DATA (n ≤ [`BATCH_PACKETS`]), decoded by
+//!    `Core::decode` (time-stamp gaps and overflow flagged on the samples); if the FIFO held more,
+//!    back to 1 at once;
+//! 3. **flush** (only after a FIFO read out of step): SIGNAL_PATH_RESET ← FIFO_FLUSH; the next
+//!    sample is flagged as following lost data.
+//!
+//! The same bytes the blocking driver's `drain` moves (`imu::icm42688::Icm42688`), so the register
+//! model tests of the driver cover the protocol; the tests here cover the chaining.
+
+use core::sync::atomic::{AtomicU8, Ordering};
+
+use crate::imu::icm42688::regs::{
+    FIFO_DATA, FIFO_FLUSH, INT_STATUS, PACKET4_LEN, READ, SIGNAL_PATH_RESET,
+};
+use crate::imu::icm42688::{Core, BATCH_PACKETS};
+use crate::imu::{ImuFlags, ImuSample};
+
+/// Longest burst: the address byte and a batch of the largest packets.
+pub const BURST_MAX: usize = 1 + BATCH_PACKETS * PACKET4_LEN;
+
+/// Status burst: the address, then INT_STATUS, FIFO_COUNTH, FIFO_COUNTL come back.
+pub static STATUS_CMD: [u8; 4] = [INT_STATUS | READ, 0, 0, 0];
+/// FIFO burst (sent as its first 1 + n bytes): the address, then dummy bytes while packets come back.
+pub static FIFO_CMD: [u8; BURST_MAX] = {
+    let mut c = [0u8; BURST_MAX];
+    c[0] = FIFO_DATA | READ;
+    c
+};
+/// FIFO flush: a register write.
+pub static FLUSH_CMD: [u8; 2] = [SIGNAL_PATH_RESET, FIFO_FLUSH];
+
+/// An all-zero sample, to initialise the decoded-sample buffer (`ImuSample::default` is not const).
+pub const NO_SAMPLE: ImuSample = ImuSample {
+    accel_out: [0.0; 3],
+    gyro_rad_s: [0.0; 3],
+    temp_c: 0.0,
+    timestamp: 0,
+    lost_before: 0,
+    flags: ImuFlags(0),
+};
+
+/// A burst to put on the wire: `tx` out, as many bytes back into the receive buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Burst {
+    /// The bytes to send (a prefix of one of the command statics).
+    pub tx: &'static [u8],
+}
+
+impl Burst {
+    /// Bytes on the wire.
+    pub fn len(&self) -> usize {
+        self.tx.len()
+    }
+
+    /// Never: a burst has at least its address byte.
+    pub fn is_empty(&self) -> bool {
+        self.tx.is_empty()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    Status,
+    Fifo { bytes: usize, more: bool },
+    Flush,
+}
+
+/// Whether a burst chain runs: set by the watermark interrupt, ended by the completion task. An
+/// atomic, so the watermark interrupt never waits for the completion task.
+///
+/// A watermark that arrives while a chain runs is remembered: INT1 is latched until INT_STATUS is
+/// read, so if the chain ended without reading it again, INT1 would stay high with no new edge and
+/// reading would stop for good. The chain then reads the status once more instead of ending.
+pub struct InFlight(AtomicU8);
+
+const IDLE: u8 = 0;
+const BUSY: u8 = 1;
+const BUSY_AND_PENDING: u8 = 2;
+
+impl InFlight {
+    /// Idle.
+    pub const fn new() -> Self {
+        InFlight(AtomicU8::new(IDLE))
+    }
+
+    /// The watermark interrupt: the status burst to start, or `None` while a chain runs (it will
+    /// read the status again before it ends).
+    #[inline]
+    pub fn on_watermark(&self) -> Option<Burst> {
+        // Single core: the completion task cannot run between the load and the store (it has a
+        // lower priority than the watermark interrupt, the only caller).
+        match self.0.load(Ordering::Acquire) {
+            IDLE => {
+                self.0.store(BUSY, Ordering::Release);
+                Some(Burst { tx: &STATUS_CMD })
+            }
+            _ => {
+                self.0.store(BUSY_AND_PENDING, Ordering::Release);
+                None
+            }
+        }
+    }
+
+    /// The chain has nothing more to read: it ends, or goes on with a status read if a watermark
+    /// came meanwhile.
+    fn end(&self) -> Option<Burst> {
+        match self
+            .0
+            .compare_exchange(BUSY, IDLE, Ordering::AcqRel, Ordering::Acquire)
+        {
+            Ok(_) => None,
+            Err(_) => {
+                self.0.store(BUSY, Ordering::Release);
+                Some(Burst { tx: &STATUS_CMD })
+            }
+        }
+    }
+}
+
+impl Default for InFlight {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// What one completed burst gave.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Completed {
+    /// Samples decoded into the front of the output slice.
+    pub samples: usize,
+    /// The next burst of the chain (`None`: the chain ended, the bus is free).
+    pub next: Option<Burst>,
+    /// The FIFO read back out of step (this header); a flush burst follows.
+    pub corrupt_header: Option<u8>,
+}
+
+/// The completion side of the chain: owns the driver's [`Core`].
+pub struct BurstReader {
+    core: Core,
+    phase: Phase,
+}
+
+impl BurstReader {
+    /// Around a configured driver's state (the part already configured over the blocking bus).
+    pub fn new(core: Core) -> Self {
+        BurstReader {
+            core,
+            phase: Phase::Status,
+        }
+    }
+
+    /// The configured rate, Hz.
+    pub fn sample_rate_hz(&self) -> u32 {
+        self.core.sample_rate_hz()
+    }
+
+    /// Bytes of the burst on the wire (what [`Self::on_complete`] will want back).
+    pub fn expected_len(&self) -> usize {
+        match self.phase {
+            Phase::Status => STATUS_CMD.len(),
+            Phase::Fifo { bytes, .. } => 1 + bytes,
+            Phase::Flush => FLUSH_CMD.len(),
+        }
+    }
+
+    /// The burst failed on the bus: the chain ends, and since packets may have been lost with it,
+    /// the next sample is flagged as following lost data.
+    pub fn abandon(&mut self, in_flight: &InFlight) -> Completed {
+        self.core.corrupted();
+        self.phase = Phase::Status;
+        Completed {
+            samples: 0,
+            next: in_flight.end(),
+            corrupt_header: None,
+        }
+    }
+
+    /// A burst finished; `rx` holds the bytes that came back (as many as were sent). Decoded samples
+    /// go to `out` (room for [`BATCH_PACKETS`]).
+    pub fn on_complete(
+        &mut self,
+        rx: &[u8],
+        out: &mut [ImuSample; BATCH_PACKETS],
+        in_flight: &InFlight,
+    ) -> Completed {
+        let mut done = Completed {
+            samples: 0,
+            next: None,
+            corrupt_header: None,
+        };
+        let next = match self.phase {
+            Phase::Status => {
+                let status = [byte(rx, 1), byte(rx, 2), byte(rx, 3)];
+                let (bytes, more) = self.core.plan_read(status, BATCH_PACKETS);
+                (bytes > 0).then(|| {
+                    self.phase = Phase::Fifo { bytes, more };
+                    Burst {
+                        tx: &FIFO_CMD[..1 + bytes],
+                    }
+                })
+            }
+            Phase::Fifo { bytes, more } => {
+                let got = rx.len().saturating_sub(1).min(bytes);
+                match self.core.decode(&rx[1..1 + got], out) {
+                    Ok(n) => {
+                        done.samples = n;
+                        more.then(|| {
+                            self.phase = Phase::Status;
+                            Burst { tx: &STATUS_CMD }
+                        })
+                    }
+                    Err(header) => {
+                        done.corrupt_header = Some(header);
+                        self.phase = Phase::Flush;
+                        Some(Burst { tx: &FLUSH_CMD })
+                    }
+                }
+            }
+            Phase::Flush => None,
+        };
+        done.next = match next {
+            Some(b) => Some(b),
+            None => {
+                self.phase = Phase::Status;
+                in_flight.end()
+            }
+        };
+        done
+    }
+}
+
+fn byte(rx: &[u8], i: usize) -> u8 {
+    rx.get(i).copied().unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::imu::icm42688::regs::{HEADER_PACKET3, INT_FIFO_FULL, INT_FIFO_THS, PACKET3_LEN};
+    use crate::imu::icm42688::Config;
+
+    /// A packet 3 as the datasheet lays it out (§6.1): header, accel and gyro big-endian, 8-bit
+    /// temperature, 16-bit time stamp.
+    fn packet(accel: [i16; 3], gyro: [i16; 3], temp: i8, ts: u16) -> [u8; PACKET3_LEN] {
+        let mut p = [0u8; PACKET3_LEN];
+        p[0] = HEADER_PACKET3;
+        for i in 0..3 {
+            p[1 + 2 * i..3 + 2 * i].copy_from_slice(&accel[i].to_be_bytes());
+            p[7 + 2 * i..9 + 2 * i].copy_from_slice(&gyro[i].to_be_bytes());
+        }
+        p[13] = temp as u8;
+        p[14..16].copy_from_slice(&ts.to_be_bytes());
+        p
+    }
+
+    /// What comes back for a FIFO burst: the address byte's slot, then the packets.
+    fn fifo_rx(packets: &[[u8; PACKET3_LEN]]) -> Vec<u8> {
+        let mut rx = vec![0xFF];
+        for p in packets {
+            rx.extend_from_slice(p);
+        }
+        rx
+    }
+
+    fn reader() -> BurstReader {
+        let cfg = Config {
+            watermark_packets: 8,
+            ..Config::DEFAULT
+        };
+        BurstReader::new(Core::new(cfg).unwrap())
+    }
+
+    #[test]
+    fn status_then_counted_fifo_read_then_idle() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        let first = busy.on_watermark().expect("idle bus: a burst starts");
+        assert_eq!(first.tx, &[INT_STATUS | READ, 0, 0, 0]);
+        assert_eq!(busy.on_watermark(), None, "one chain at a time");
+        assert_eq!(r.expected_len(), 4);
+        // INT_STATUS: watermark; FIFO_COUNT = 3 records (big-endian).
+        let done = r.on_complete(&[0xFF, INT_FIFO_THS, 0, 3], &mut out, &busy);
+        assert_eq!(done.samples, 0);
+        let fifo = done.next.expect("a FIFO read of the counted packets");
+        assert_eq!(fifo.len(), 1 + 3 * PACKET3_LEN);
+        assert_eq!(fifo.tx[0], FIFO_DATA | READ);
+        assert_eq!(r.expected_len(), fifo.len());
+        // 1 kHz: time stamps 1000 µs apart.
+        let pk = [
+            packet([2048, -4096, 1], [164, 0, -164], 0, 1000),
+            packet([0, 0, 2048], [0, 0, 0], 21, 2000),
+            packet([7, 8, 9], [1, 2, 3], -21, 3000),
+        ];
+        let done = r.on_complete(&fifo_rx(&pk), &mut out, &busy);
+        assert_eq!(done.samples, 3);
+        assert_eq!(done.corrupt_header, None);
+        // The second watermark above came during the chain: one more status read, then the end.
+        let status = done.next.expect("the pending watermark's status read");
+        assert_eq!(status.tx, &STATUS_CMD[..]);
+        let last = r.on_complete(&[0xFF, 0, 0, 0], &mut [NO_SAMPLE; BATCH_PACKETS], &busy);
+        assert_eq!(last.next, None, "nothing more waited: the chain ends");
+        // Counts (unit 1 per LSB), 16.4 LSB per °/s, 2.07 LSB per °C around 25 °C.
+        assert_eq!(out[0].accel_out, [2048.0, -4096.0, 1.0]);
+        assert!((out[0].gyro_rad_s[0] - 10f32.to_radians()).abs() < 1e-6);
+        assert!((out[1].temp_c - (25.0 + 21.0 / 2.07)).abs() < 1e-4);
+        assert_eq!(out[2].timestamp, 3000);
+        assert!(out.iter().take(3).all(|s| s.flags.0 == 0));
+        assert!(busy.on_watermark().is_some(), "the bus is free again");
+    }
+
+    #[test]
+    fn a_fuller_fifo_is_read_in_batches_until_empty() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        let next = r
+            .on_complete(&[0xFF, INT_FIFO_THS, 0, 20], &mut out, &busy)
+            .next;
+        assert_eq!(next.map(|b| b.len()), Some(1 + BATCH_PACKETS * PACKET3_LEN));
+        let pk: Vec<_> = (0..BATCH_PACKETS as u16)
+            .map(|k| packet([k as i16; 3], [0; 3], 0, 1000 * (k + 1)))
+            .collect();
+        let done = r.on_complete(&fifo_rx(&pk), &mut out, &busy);
+        assert_eq!(done.samples, BATCH_PACKETS);
+        assert_eq!(
+            done.next.map(|b| b.tx),
+            Some(&STATUS_CMD[..]),
+            "4 more: status again"
+        );
+        assert_eq!(busy.on_watermark(), None, "still the same chain");
+        let next = r.on_complete(&[0xFF, 0, 0, 4], &mut out, &busy).next;
+        assert_eq!(next.map(|b| b.len()), Some(1 + 4 * PACKET3_LEN));
+    }
+
+    #[test]
+    fn a_watermark_during_a_chain_gets_its_own_status_read() {
+        // INT1 is latched: a watermark that came while the chain ran must be read before the chain
+        // ends, or INT1 stays high and no edge ever comes again.
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        assert_eq!(busy.on_watermark(), None, "during the FIFO read");
+        let done = r.on_complete(
+            &fifo_rx(&[packet([0; 3], [0; 3], 0, 1000)]),
+            &mut out,
+            &busy,
+        );
+        assert_eq!(done.samples, 1);
+        assert_eq!(
+            done.next.map(|b| b.tx),
+            Some(&STATUS_CMD[..]),
+            "status read again"
+        );
+        assert_eq!(r.expected_len(), 4);
+        let done = r.on_complete(&[0xFF, 0, 0, 0], &mut out, &busy);
+        assert_eq!(done.next, None, "nothing came meanwhile: now it ends");
+        assert!(busy.on_watermark().is_some());
+    }
+
+    #[test]
+    fn empty_status_ends_the_chain() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        let done = r.on_complete(&[0xFF, 0, 0, 0], &mut out, &busy);
+        assert_eq!(done.next, None);
+        assert!(busy.on_watermark().is_some());
+    }
+
+    #[test]
+    fn out_of_step_fifo_is_flushed_and_the_next_sample_flagged() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        let mut bad = packet([0; 3], [0; 3], 0, 1000);
+        bad[0] = 0x12; // not a packet 3 header
+        let done = r.on_complete(&fifo_rx(&[bad]), &mut out, &busy);
+        assert_eq!(done.corrupt_header, Some(0x12));
+        assert_eq!(done.next.map(|b| b.tx), Some(&FLUSH_CMD[..]));
+        assert_eq!(r.expected_len(), 2);
+        let done = r.on_complete(&[0xFF, 0xFF], &mut out, &busy);
+        assert_eq!(done.next, None, "the flush ends the chain");
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        let done = r.on_complete(
+            &fifo_rx(&[packet([1; 3], [0; 3], 0, 5000)]),
+            &mut out,
+            &busy,
+        );
+        assert_eq!(done.samples, 1);
+        assert!(
+            out[0].flags.has(ImuFlags::DATA_LOST),
+            "what follows a flush follows a gap"
+        );
+    }
+
+    #[test]
+    fn overflow_and_time_stamp_gap_are_flagged() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        // FIFO full (stop-on-full): the 2 packets present precede the gap.
+        r.on_complete(&[0xFF, INT_FIFO_FULL, 0, 2], &mut out, &busy);
+        let pk = [
+            packet([0; 3], [0; 3], 0, 1000),
+            packet([0; 3], [0; 3], 0, 2000),
+        ];
+        let done = r.on_complete(&fifo_rx(&pk), &mut out, &busy);
+        assert_eq!(done.samples, 2);
+        assert!(!out[0].flags.has(ImuFlags::DATA_LOST) && !out[1].flags.has(ImuFlags::DATA_LOST));
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        // 5 periods later: 4 samples lost.
+        let done = r.on_complete(
+            &fifo_rx(&[packet([0; 3], [0; 3], 0, 7000)]),
+            &mut out,
+            &busy,
+        );
+        assert_eq!(done.samples, 1);
+        assert!(out[0].flags.has(ImuFlags::DATA_LOST));
+        assert_eq!(out[0].lost_before, 4);
+    }
+
+    #[test]
+    fn a_failed_burst_ends_the_chain_and_flags_the_next_sample() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        let done = r.abandon(&busy);
+        assert_eq!((done.samples, done.next), (0, None));
+        assert_eq!(
+            r.expected_len(),
+            4,
+            "the next chain starts with a status read"
+        );
+        busy.on_watermark();
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        r.on_complete(
+            &fifo_rx(&[packet([0; 3], [0; 3], 0, 1000)]),
+            &mut out,
+            &busy,
+        );
+        assert!(out[0].flags.has(ImuFlags::DATA_LOST));
+    }
+}

@@ -1,0 +1,140 @@
+//! Board-independent pieces of the sampling tasks: the temperature decimator and the layout of the
+//! Nucleo's ADC scan.
+//!
+//! Both STM32 boards get a temperature with every sample (the ICM-42688-P puts its die temperature in
+//! each FIFO packet; the Nucleo's ADC scan converts the on-chip sensor with the accelerometers), but
+//! the pipeline wants a few readings a second ([`crate::pipeline::TEMPERATURE_REFRESH_HZ`]): each one
+//! enters the window mean and may refresh the compensator. [`TemperatureMean`] averages the
+//! per-sample readings over one refresh period — it adds per sample and multiplies once per period,
+//! no division on the per-sample path — so the pipeline sees a less noisy reading at its own pace.
+
+use crate::pipeline::{RawCodes, TEMPERATURE_REFRESH_HZ};
+
+/// Averages per-sample temperatures over `1/TEMPERATURE_REFRESH_HZ` s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TemperatureMean {
+    period: u32,
+    inv_period: f32,
+    seen: u32,
+    finite: u32,
+    sum_c: f32,
+}
+
+impl TemperatureMean {
+    /// For samples at `sample_rate_hz`: one mean per `sample_rate_hz / TEMPERATURE_REFRESH_HZ`
+    /// samples (at least 1).
+    pub fn new(sample_rate_hz: u32) -> Self {
+        let period = (sample_rate_hz / TEMPERATURE_REFRESH_HZ).max(1);
+        TemperatureMean {
+            period,
+            inv_period: 1.0 / period as f32,
+            seen: 0,
+            finite: 0,
+            sum_c: 0.0,
+        }
+    }
+
+    /// Samples per mean.
+    pub fn period(&self) -> u32 {
+        self.period
+    }
+
+    /// Adds one sample's temperature, °C. At the end of a period, returns the mean of its finite
+    /// readings — or NaN if any reading was not finite (a failed or implausible read must reach the
+    /// pipeline, which flags it, rather than be averaged away).
+    #[inline]
+    pub fn push(&mut self, temp_c: f32) -> Option<f32> {
+        self.seen += 1;
+        if temp_c.is_finite() {
+            self.sum_c += temp_c;
+            self.finite += 1;
+        }
+        if self.seen < self.period {
+            return None;
+        }
+        let mean = if self.finite == self.period {
+            self.sum_c * self.inv_period
+        } else {
+            f32::NAN
+        };
+        self.seen = 0;
+        self.finite = 0;
+        self.sum_c = 0.0;
+        Some(mean)
+    }
+}
+
+/// The Nucleo's regular ADC sequence, in DMA buffer order: the three accelerometers, then the
+/// on-chip temperature sensor.
+pub const ADC_SCAN_LEN: usize = 4;
+
+/// Splits one ADC scan (DMA buffer order, [`ADC_SCAN_LEN`] codes) into the accelerometer codes (with
+/// the gyro words to be filled in) and the temperature sensor's code.
+#[inline(always)]
+pub fn split_scan(scan: &[u16; ADC_SCAN_LEN], gyro: [i16; 3]) -> (RawCodes, u16) {
+    (
+        RawCodes {
+            adc: [scan[0], scan[1], scan[2]],
+            gyro,
+        },
+        scan[3],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_mean_per_refresh_period() {
+        // 8 kHz: a mean every 2000 samples (4 per second).
+        let mut t = TemperatureMean::new(8000);
+        assert_eq!(t.period(), 2000);
+        let mut means = [0.0f32; 3];
+        let mut n = 0;
+        for i in 0..6000u32 {
+            // 20 °C and 30 °C alternating: the mean is 25 °C exactly.
+            let reading = if i % 2 == 0 { 20.0 } else { 30.0 };
+            if let Some(m) = t.push(reading) {
+                means[n] = m;
+                n += 1;
+                assert_eq!((i + 1) % 2000, 0, "mean at sample {i}");
+            }
+        }
+        assert_eq!(n, 3);
+        for m in means {
+            assert!((m - 25.0).abs() < 1e-3, "{m}");
+        }
+    }
+
+    #[test]
+    fn a_bad_reading_makes_the_period_nan_and_the_next_recovers() {
+        let mut t = TemperatureMean::new(1000);
+        assert_eq!(t.period(), 250);
+        let mut out = None;
+        for i in 0..250 {
+            out = t.push(if i == 100 { f32::NAN } else { 40.0 });
+        }
+        assert!(out.is_some_and(f32::is_nan));
+        for _ in 0..250 {
+            out = t.push(41.0);
+        }
+        // f32 sum times the reciprocal of the period: a rounding or two from 41.
+        assert!(out.is_some_and(|m| (m - 41.0).abs() < 1e-4), "{out:?}");
+    }
+
+    #[test]
+    fn slow_rates_still_deliver() {
+        let mut t = TemperatureMean::new(2);
+        assert_eq!(t.period(), 1);
+        assert_eq!(t.push(5.0), Some(5.0));
+    }
+
+    #[test]
+    fn scan_order() {
+        let (c, temp) = split_scan(&[1, 2, 3, 940], [4, 5, 6]);
+        assert_eq!(c.adc, [1, 2, 3]);
+        assert_eq!(c.gyro, [4, 5, 6]);
+        assert_eq!(temp, 940);
+    }
+}
