@@ -1,17 +1,40 @@
 //! The README's hand-held section, run as written: its commands (simulate a hand session, segment it,
-//! calibrate it) with the `host` binary in a fresh directory.
+//! calibrate it; raw counts; six faces) with the `host` binary in a fresh directory.
 
+use std::path::Path;
 use std::process::Command;
 
-#[test]
-fn readme_hand_held_commands_work_as_written() {
+/// The README's hand-held section.
+fn section() -> String {
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
-    let section = readme
+    readme
         .split("## Hand-held calibration")
         .nth(1)
         .and_then(|s| s.split("\n## ").next())
-        .expect("the README has a hand-held section");
+        .expect("the README has a hand-held section")
+        .to_string()
+}
+
+/// Runs `host` with the command line `c` in `dir`; its stdout.
+fn run(dir: &Path, c: &str) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_host"))
+        .args(c.split_whitespace())
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{c}: {}\n{text}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+#[test]
+fn readme_hand_held_commands_work_as_written() {
+    let section = section();
     let prefix = "cargo run --release -p host -- ";
     let commands: Vec<&str> = section
         .lines()
@@ -23,17 +46,7 @@ fn readme_hand_held_commands_work_as_written() {
 
     let dir = tempfile::tempdir().unwrap();
     for c in &commands {
-        let out = Command::new(env!("CARGO_BIN_EXE_host"))
-            .args(c.split_whitespace())
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{c}: {}\n{text}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let text = run(dir.path(), c);
         if c.starts_with("segment") {
             assert!(text.contains("24 still interval(s)"), "{text}");
             assert!(text.contains("every entry of G determined"), "{text}");
@@ -47,4 +60,48 @@ fn readme_hand_held_commands_work_as_written() {
     ] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
+}
+
+/// The raw-count (mid-scale offset, gyro in counts) and six-face commands (`host …` lines).
+#[test]
+fn readme_counts_and_six_face_commands_work_as_written() {
+    let section = section();
+    let commands: Vec<&str> = section
+        .lines()
+        .filter_map(|l| l.strip_prefix("host "))
+        .collect();
+    assert_eq!(commands.len(), 5, "{commands:?}");
+    let dir = tempfile::tempdir().unwrap();
+    for c in &commands {
+        let text = run(dir.path(), c);
+        if c.starts_with("segment --input counts.csv") {
+            assert!(text.contains("24 still interval(s)"), "{text}");
+            assert!(text.contains("every entry of G determined"), "{text}");
+        }
+        if c.starts_with("segment --input cube.csv") {
+            assert!(text.contains("six-face session: "), "{text}");
+            assert!(text.contains("every entry of G determined"), "{text}");
+        }
+    }
+    let counts = std::fs::read_to_string(dir.path().join("counts-session/plan.toml")).unwrap();
+    assert!(counts.contains("output_unit = \"LSB\""), "{counts}");
+    // The session keeps the logger's own counts: the offset is added back.
+    let samples = std::fs::read_to_string(dir.path().join("counts-session/samples.csv")).unwrap();
+    let row: Vec<f64> = samples
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .skip(2)
+        .take(3)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert!(
+        row.iter().all(|x| (28_000.0..38_000.0).contains(x)),
+        "{row:?}"
+    );
+    assert!(dir
+        .path()
+        .join("cube-calibration/calibration.toml")
+        .exists());
 }

@@ -308,3 +308,42 @@ fn six_face_sessions_many_seeds() {
     let rows: Vec<[HeldOut; 4]> = (1..=10).map(six_face_case).collect();
     print_table(&rows);
 }
+
+#[test]
+fn count_time_and_face_options_are_checked_before_any_work() {
+    let base = "host segment --input r.csv --out o";
+    let error = |extra: &str| {
+        segment_args(&format!("{base} {extra}"))
+            .log
+            .source()
+            .unwrap_err()
+            .to_string()
+    };
+    let t = "--time-column t --acc-unit LSB";
+    let e = error(&format!("{t} --gyro-unit LSB"));
+    assert!(
+        e.contains("needs the gyro's nominal scale: add --gyro-lsb-per-dps"),
+        "{e}"
+    );
+    let e = error(&format!("{t} --gyro-unit deg/s --gyro-lsb-per-dps 16.4"));
+    assert!(e.contains("give --gyro-unit LSB"), "{e}");
+    let e = error("--time-column t --acc-unit m/s2 --gyro-unit deg/s --acc-offset 32768");
+    assert!(e.contains("--acc-offset is for raw counts"), "{e}");
+    let e = error(&format!("{t} --gyro-unit deg/s --acc-offset 1,2"));
+    assert!(e.contains("one number (e.g. 32768) or three"), "{e}");
+    let e = error("--rate-hz 100 --time-unit ms --acc-unit g --gyro-unit deg/s");
+    assert!(e.contains("applies to --time-column"), "{e}");
+    let e = error(&format!("{t} --gyro-unit deg/s --time-unit hours"));
+    assert!(e.contains("use s, ms, us or ns"), "{e}");
+    let o = segment_args(&format!(
+        "{base} {t} --time-unit us --acc-offset 32768,32768,32000 --gyro-unit LSB --gyro-lsb-per-dps 131"
+    ))
+    .log
+    .source()
+    .unwrap()
+    .text
+    .unwrap();
+    assert_eq!(o.acc_offset, [32768.0, 32768.0, 32000.0]);
+    assert_eq!(o.gyro_lsb_per_dps, Some(131.0));
+    assert_eq!(o.time_unit, Some(crate::session::import::TimeUnit::Us));
+}

@@ -186,12 +186,13 @@ impl Tremor {
         Tremor { parts }
     }
 
-    /// Value, derivative and integral (from −∞, zero mean) at `t`.
-    fn at(&self, t: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    /// Value, derivative and integral (from −∞, zero mean) at `t`, times `k`.
+    fn at(&self, t: f64, k: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
         let (mut v, mut d, mut i) = ([0.0; 3], [0.0; 3], [0.0; 3]);
         for p in &self.parts {
             for j in 0..3 {
                 let (a, w, ph) = p[j];
+                let a = a * k;
                 v[j] += a * (w * t + ph).sin();
                 d[j] += a * w * (w * t + ph).cos();
                 i[j] -= a / w * (w * t + ph).cos();
@@ -230,20 +231,14 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let mut q = attitude(spec.ups[0], 2.0 * PI * uniform(&mut rng));
     let sample =
         |t: f64, q: &UnitQuaternion<f64>, w_turn: [f64; 3], wd_turn: [f64; 3], rng: &mut Rng| {
-            let turning = w_turn != [0.0; 3];
-            let k = if spec.hold_tremor || turning {
+            // On a table (no hold tremor) the tremor is the hand's, while turning only.
+            let k = if spec.hold_tremor || w_turn != [0.0; 3] {
                 1.0
             } else {
                 0.0
             };
-            let (tw, twd, tint) = tremor_w.at(t);
-            let (ta, _, _) = tremor_a.at(t);
-            let (tw, twd, tint, ta) = (
-                tw.map(|x| k * x),
-                twd.map(|x| k * x),
-                tint.map(|x| k * x),
-                ta.map(|x| k * x),
-            );
+            let (tw, twd, tint) = tremor_w.at(t, k);
+            let (ta, _, _) = tremor_a.at(t, k);
             let up0 = q.inverse_transform_vector(&Vector3::z());
             // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
             let up0 = [up0.x, up0.y, up0.z];

@@ -1,0 +1,241 @@
+//! The time column of a logger's file: its unit, detected from the median step and the span or
+//! given ([`TimeUnit`]), and where its stamps jump ([`TimeJump`]): gaps, repeats and steps back, which
+//! no still interval spans and no turn is integrated across.
+
+use super::{ImportError, Recording};
+use crate::limits::short_number;
+
+/// The unit of a time column: detected from the median step and the span, or given
+/// (`--time-unit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeUnit {
+    /// Seconds.
+    S,
+    /// Milliseconds.
+    Ms,
+    /// Microseconds.
+    Us,
+    /// Nanoseconds.
+    Ns,
+}
+
+impl TimeUnit {
+    /// Every unit, largest first.
+    pub const ALL: [TimeUnit; 4] = [TimeUnit::S, TimeUnit::Ms, TimeUnit::Us, TimeUnit::Ns];
+
+    /// Parses "s", "ms", "us" (or "µs") or "ns".
+    pub fn parse(s: &str) -> Option<TimeUnit> {
+        match s {
+            "s" => Some(TimeUnit::S),
+            "ms" => Some(TimeUnit::Ms),
+            "us" | "µs" => Some(TimeUnit::Us),
+            "ns" => Some(TimeUnit::Ns),
+            _ => None,
+        }
+    }
+
+    /// Seconds per unit.
+    pub fn seconds(self) -> f64 {
+        match self {
+            TimeUnit::S => 1.0,
+            TimeUnit::Ms => 1e-3,
+            TimeUnit::Us => 1e-6,
+            TimeUnit::Ns => 1e-9,
+        }
+    }
+
+    /// "s", "ms", "µs" or "ns".
+    pub fn symbol(self) -> &'static str {
+        match self {
+            TimeUnit::S => "s",
+            TimeUnit::Ms => "ms",
+            TimeUnit::Us => "µs",
+            TimeUnit::Ns => "ns",
+        }
+    }
+}
+
+/// Where the time stamps break: a gap of more than [`GAP_PERIODS`] sample periods, a repeat or a
+/// step back, after row `row`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeJump {
+    /// The row before the jump (0-based data row).
+    pub row: usize,
+    /// Its time, s.
+    pub t_s: f64,
+    /// The step to the next row, s (≤ 0: a repeat or a step back).
+    pub step_s: f64,
+}
+
+/// A step longer than this many median periods is a gap: no still interval spans it and no turn is
+/// integrated across it (a dropped stretch of a turn would be integrated as a straight line).
+pub const GAP_PERIODS: f64 = 5.0;
+
+impl Recording {
+    /// The gaps (more than [`GAP_PERIODS`] periods), repeats and backward steps of the time stamps,
+    /// in order.
+    pub fn jumps(&self) -> Vec<TimeJump> {
+        let limit = GAP_PERIODS / self.rate_hz;
+        self.t_s
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| !(w[1] - w[0] > 0.0 && w[1] - w[0] <= limit))
+            .map(|(row, w)| TimeJump {
+                row,
+                t_s: w[0],
+                step_s: w[1] - w[0],
+            })
+            .collect()
+    }
+
+    /// Whether rows `lo..hi` are free of time jumps (`jumps` from [`Recording::jumps`]).
+    pub fn continuous(jumps: &[TimeJump], lo: usize, hi: usize) -> bool {
+        !jumps.iter().any(|j| j.row >= lo && j.row + 1 < hi)
+    }
+
+    /// The time jumps said with their places (the first five), or `None`: no still interval spans
+    /// one and no turn is integrated across one.
+    pub fn time_jumps(&self) -> Option<String> {
+        let jumps = self.jumps();
+        if jumps.is_empty() {
+            return None;
+        }
+        let kind = |j: &TimeJump| match j.step_s {
+            0.0 => "repeat",
+            s if s < 0.0 => "step back",
+            _ => "gap",
+        };
+        let places: Vec<String> = jumps
+            .iter()
+            .take(5)
+            .map(|j| {
+                format!(
+                    "{} of {:+.3} s after data row {} (t = {:.3} s)",
+                    kind(j),
+                    j.step_s,
+                    j.row + 1,
+                    j.t_s
+                )
+            })
+            .collect();
+        Some(format!(
+            "the time stamps jump {} time(s) (a gap of more than {GAP_PERIODS} periods of {:.4} s, \
+             a repeat or a step back): {}{}; no still interval spans one and no turn is \
+             integrated across one",
+            jumps.len(),
+            1.0 / self.rate_hz,
+            places.join("; "),
+            if jumps.len() > 5 { "; …" } else { "" }
+        ))
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+}
+
+/// Shortest recording a time unit may make of the time column, s: a hand-held session is minutes
+/// long; read in too large a unit, a 1 kHz log in µs spans 1000× too long, in too small a unit
+/// 1000× too short.
+pub(super) const MIN_SPAN_S: f64 = 0.5;
+/// Longest, days.
+pub(super) const MAX_SPAN_DAYS: f64 = 7.0;
+
+/// The median positive step and the span of raw time stamps.
+fn step_and_span(t: &[f64]) -> (f64, f64) {
+    let (lo, hi) = t
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        });
+    (1.0 / median_rate(t), hi - lo)
+}
+
+/// Whether time stamps in `unit` give a logger's rate over a plausible span.
+pub(super) fn fits_time_unit(t: &[f64], unit: TimeUnit) -> bool {
+    let (step, span) = step_and_span(t);
+    let rate_hz = 1.0 / (step * unit.seconds());
+    let span_s = span * unit.seconds();
+    (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)
+        && (MIN_SPAN_S..=MAX_SPAN_DAYS * 86_400.0).contains(&span_s)
+}
+
+/// The one time unit (s, ms, µs, ns) in which the median step is a logger's rate and the span a
+/// recording's; refused when none or several fit.
+pub fn detect_time_unit(t: &[f64]) -> Result<TimeUnit, ImportError> {
+    let fits: Vec<TimeUnit> = TimeUnit::ALL
+        .into_iter()
+        .filter(|&u| fits_time_unit(t, u))
+        .collect();
+    match fits[..] {
+        [one] => Ok(one),
+        [] => Err(time_unit_error(t, None)),
+        _ => {
+            let (step, span) = step_and_span(t);
+            Err(ImportError::TimeUnitAmbiguous {
+                step,
+                span,
+                readings: fits
+                    .iter()
+                    .map(|u| {
+                        format!(
+                            "{} Hz over {} s in {}",
+                            six_digits(1.0 / (step * u.seconds())),
+                            six_digits(span * u.seconds()),
+                            u.symbol()
+                        )
+                    })
+                    .collect(),
+            })
+        }
+    }
+}
+
+pub(super) fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError {
+    let (step, span) = step_and_span(t);
+    ImportError::TimeUnit {
+        step,
+        span,
+        given: given.map_or(String::new(), |u| {
+            format!(
+                " (--time-unit {} gives {} Hz)",
+                u.symbol(),
+                six_digits(1.0 / (step * u.seconds()))
+            )
+        }),
+    }
+}
+
+/// `x` to six significant digits, as [`short_number`] prints it (a median step of 0.01 read from
+/// text is 0.009999999999999787).
+pub(crate) fn six_digits(x: f64) -> String {
+    short_number(format!("{x:.5e}").parse().unwrap_or(x))
+}
+
+/// The median rate of the positive steps (repeats and steps back are jumps, not the rate).
+pub(super) fn median_rate(t_s: &[f64]) -> f64 {
+    let mut dt: Vec<f64> = t_s
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    if dt.is_empty() {
+        return f64::NAN;
+    }
+    dt.sort_by(f64::total_cmp);
+    1.0 / dt[dt.len() / 2]
+}
+
+/// Slowest rate a time unit may make of a logger's time stamps, Hz: an IMU log for calibration samples
+/// at tens of Hz at least; read in too large a unit, a time column reads 1000× slower.
+pub(super) const MIN_RATE_HZ: f64 = 5.0;
+
+/// Fastest, Hz: above the fastest IMU output data rates (32 kHz), and below 100 kHz, which a 100 Hz log
+/// in seconds would read as in ms.
+pub(super) const MAX_RATE_HZ: f64 = 5e4;
