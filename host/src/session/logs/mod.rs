@@ -94,6 +94,18 @@ pub enum LogError {
     /// A text file's problem.
     #[error(transparent)]
     Text(#[from] ImportError),
+    /// Binary, but none of the formats read.
+    #[error(
+        "{path} is not a format this tool reads (it starts with bytes {head}): give a text file \
+         (CSV), a PX4 ULog, an ArduPilot DataFlash .bin or a ROS 2 bag in MCAP (ROS 1 bags and \
+         sqlite3 ROS 2 bags: convert with `mcap convert`)"
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its first bytes, hex.
+        head: String,
+    },
     /// A text file without its units and columns.
     #[error(
         "{0} is a text file: give its units (--acc-unit and --gyro-unit) and its time \
@@ -200,6 +212,11 @@ pub fn read_log_from<R: BufRead>(
             }
             if source.topic.is_some() {
                 return Err(not_for("--topic"));
+            }
+            // A NUL byte early on: no text file, and none of the binary formats either.
+            if head.iter().take(4096).any(|&b| b == 0) {
+                let head = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
+                return Err(LogError::UnknownFormat { path: p(), head });
             }
             let options = source
                 .text
