@@ -11,8 +11,8 @@
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the
 //! reader streams with a window of a few hundred bytes.
 
-use super::{median_rate, pair, Stream, StreamSample, TooMany};
-use crate::session::import::{Recording, MAX_ROWS};
+use super::{list_instances, pair_streams, ImuError, Stream, StreamSample, TooMany};
+use crate::session::import::Recording;
 use std::io::Read;
 
 /// A log's first bytes: the header and the type of the `FMT` message that defines `FMT`.
@@ -49,22 +49,9 @@ pub enum DataFlashError {
         /// Its stated length.
         length: u8,
     },
-    /// No IMU messages for the instance.
-    #[error(
-        "no IMU samples for instance {instance}: the log has {found}; log IMU (LOG_BITMASK's IMU \
-         bit) and choose the IMU with --instance N"
-    )]
-    NoImu {
-        /// The instance asked for.
-        instance: u8,
-        /// The IMU messages and instances found.
-        found: String,
-    },
-    /// More samples than [`MAX_ROWS`].
-    #[error(
-        "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
-    )]
-    TooManySamples(String),
+    /// No IMU for the instance, or too many samples.
+    #[error(transparent)]
+    Imu(#[from] ImuError),
 }
 
 /// A message format: name, length, and the byte offset and type of each column.
@@ -400,7 +387,7 @@ impl State {
         }
         let t_s = get((l.time.0, l.time.1)) * l.time.2;
         let temp_c = l.temperature.map(get);
-        let too_many = |_: TooMany| DataFlashError::TooManySamples(name.into());
+        let too_many = |_: TooMany| DataFlashError::from(ImuError::TooManySamples(name.into()));
         let sample = |v: [(usize, u8); 3]| StreamSample {
             t_s,
             v: v.map(get),
@@ -437,20 +424,16 @@ impl State {
         } else if !self.acc.samples.is_empty() && !self.gyro.samples.is_empty() {
             (&self.acc, &self.gyro)
         } else {
-            let found = if self.seen.is_empty() {
-                "no IMU, ACC or GYR message".to_string()
-            } else {
-                self.seen
-                    .iter()
-                    .map(|(n, i)| format!("{n} instance {i}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            };
-            return Err(DataFlashError::NoImu { instance, found });
+            let seen = self.seen.iter().map(|(n, i)| (n.as_str(), *i));
+            let found = list_instances(seen, "no IMU, ACC or GYR message");
+            return Err(ImuError::NoImu {
+                instance,
+                found,
+                hint: "log IMU (LOG_BITMASK's IMU bit)",
+            }
+            .into());
         };
-        let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
-        let max_gap_s = 5.0 / median_rate(&gyro_ts).max(1.0);
-        let (rec, mut paired) = pair(acc, gyro, max_gap_s);
+        let (rec, mut paired) = pair_streams(acc, gyro);
         warnings.append(&mut paired);
         Ok((rec, warnings))
     }

@@ -94,6 +94,18 @@ pub enum LogError {
     /// A text file's problem.
     #[error(transparent)]
     Text(#[from] ImportError),
+    /// Binary, but none of the formats read.
+    #[error(
+        "{path} is not a format this tool reads (it starts with bytes {head}): give a text file \
+         (CSV), a PX4 ULog, an ArduPilot DataFlash .bin or a ROS 2 bag in MCAP (ROS 1 bags and \
+         sqlite3 ROS 2 bags: convert with `mcap convert`)"
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its first bytes, hex.
+        head: String,
+    },
     /// A text file without its units and columns.
     #[error(
         "{0} is a text file: give its units (--acc-unit and --gyro-unit) and its time \
@@ -160,6 +172,29 @@ pub enum LogError {
     },
 }
 
+/// The IMU a ULog or DataFlash log was asked for is not there, or has too many samples.
+#[derive(Debug, thiserror::Error)]
+pub enum ImuError {
+    /// No IMU samples for the instance.
+    #[error(
+        "no IMU samples for instance {instance}: the log has {found}; {hint} and choose the IMU \
+         with --instance N"
+    )]
+    NoImu {
+        /// The instance asked for.
+        instance: u8,
+        /// The IMU messages or topics and their instances found.
+        found: String,
+        /// What to log.
+        hint: &'static str,
+    },
+    /// More samples than [`MAX_ROWS`].
+    #[error(
+        "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
+    )]
+    TooManySamples(String),
+}
+
 /// Reads the log at `path` in whatever format its first bytes say (see the module docs).
 pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
     let io = |e| LogError::Io {
@@ -200,6 +235,11 @@ pub fn read_log_from<R: BufRead>(
             }
             if source.topic.is_some() {
                 return Err(not_for("--topic"));
+            }
+            // A NUL byte early on: no text file, and none of the binary formats either.
+            if head.iter().take(4096).any(|&b| b == 0) {
+                let head = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
+                return Err(LogError::UnknownFormat { path: p(), head });
             }
             let options = source
                 .text
@@ -343,6 +383,22 @@ pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, V
         ));
     }
     (rec, warnings)
+}
+
+/// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.
+pub(crate) fn pair_streams(acc: &Stream, gyro: &Stream) -> (Recording, Vec<String>) {
+    let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
+    pair(acc, gyro, 5.0 / median_rate(&gyro_ts).max(1.0))
+}
+
+/// "NAME instance I, …" of the IMU messages or topics a log has, or `none` when it has none.
+pub(crate) fn list_instances<'a>(seen: impl Iterator<Item = (&'a str, u8)>, none: &str) -> String {
+    let found: Vec<String> = seen.map(|(n, i)| format!("{n} instance {i}")).collect();
+    if found.is_empty() {
+        none.to_string()
+    } else {
+        found.join(", ")
+    }
 }
 
 /// The gyro's rate at `t_s`, between `g[j]` (at or before it) and `g[j + 1]`.

@@ -95,3 +95,17 @@ fn options_that_do_not_fit_the_format_are_refused() {
     let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
     assert!(e.to_string().contains("--acc-unit"), "{e}");
 }
+
+#[test]
+fn a_binary_file_of_another_format_is_named_as_such() {
+    let source = LogSource {
+        text: None,
+        instance: None,
+        topic: None,
+    };
+    let sqlite = b"SQLite format 3\0rest";
+    let e = read_log_from(&sqlite[..], sqlite, Path::new("bag.db3"), &source).unwrap_err();
+    let m = e.to_string();
+    assert!(matches!(e, LogError::UnknownFormat { .. }), "{m}");
+    assert!(m.contains("53514c69") && m.contains("mcap convert"), "{m}");
+}

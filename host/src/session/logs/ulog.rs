@@ -9,8 +9,10 @@
 //! into memory or panic on damaged input; this one streams once, keeps only the chosen instance's IMU
 //! topics, and bounds everything (a message is at most 65 535 bytes by its size field).
 
-use super::{median_rate, pair, read_exact_or_end, Stream, StreamSample, TooMany};
-use crate::session::import::{Recording, MAX_ROWS};
+use super::{
+    list_instances, pair_streams, read_exact_or_end, ImuError, Stream, StreamSample, TooMany,
+};
+use crate::session::import::Recording;
 use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
 
@@ -103,22 +105,9 @@ pub enum UlogError {
     /// Too many format definitions.
     #[error("more than {MAX_FORMATS} format definitions: not a PX4 log, or a damaged one")]
     TooManyFormats,
-    /// No IMU topic for the instance.
-    #[error(
-        "no IMU samples for instance {instance}: the log has {found}; log sensor_accel and \
-         sensor_gyro (or sensor_combined) and choose the IMU with --instance N"
-    )]
-    NoImu {
-        /// The instance asked for.
-        instance: u8,
-        /// The IMU topics and instances found.
-        found: String,
-    },
-    /// More samples than [`MAX_ROWS`].
-    #[error(
-        "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
-    )]
-    TooManySamples(String),
+    /// No IMU for the instance, or too many samples.
+    #[error(transparent)]
+    Imu(#[from] ImuError),
 }
 
 /// A field of a format: type, array length (1 for a scalar), name.
@@ -512,7 +501,8 @@ impl State {
         self.last_t_s = t_s;
         let xyz = l.xyz.map(|p| p.read(d));
         let temp_c = l.temperature.map(|p| p.read(d));
-        let too_many = |_: TooMany| UlogError::TooManySamples(l.topic.name().into());
+        let too_many =
+            |_: TooMany| UlogError::from(ImuError::TooManySamples(l.topic.name().into()));
         match l.topic {
             Topic::Combined => {
                 let rel = l.relative.map_or(0.0, |p| p.read(d));
@@ -532,21 +522,18 @@ impl State {
                 };
                 self.combined_gyro.push(s).map_err(too_many)?;
             }
-            Topic::Accel => {
+            Topic::Accel | Topic::Gyro => {
+                let stream = if l.topic == Topic::Accel {
+                    &mut self.accel
+                } else {
+                    &mut self.gyro
+                };
                 let s = StreamSample {
                     t_s,
                     v: xyz,
                     temp_c,
                 };
-                self.accel.push(s).map_err(too_many)?;
-            }
-            Topic::Gyro => {
-                let s = StreamSample {
-                    t_s,
-                    v: xyz,
-                    temp_c,
-                };
-                self.gyro.push(s).map_err(too_many)?;
+                stream.push(s).map_err(too_many)?;
             }
         }
         Ok(())
@@ -563,20 +550,19 @@ impl State {
         } else if !self.combined_gyro.samples.is_empty() {
             (&self.combined_acc, &self.combined_gyro)
         } else {
-            let found = if self.seen.is_empty() {
-                "no sensor_accel, sensor_gyro or sensor_combined topic".to_string()
-            } else {
-                self.seen
-                    .iter()
-                    .map(|(t, i)| format!("{} instance {i}", t.name()))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            };
-            return Err(UlogError::NoImu { instance, found });
+            let seen = self.seen.iter().map(|(t, i)| (t.name(), *i));
+            let found = list_instances(
+                seen,
+                "no sensor_accel, sensor_gyro or sensor_combined topic",
+            );
+            return Err(ImuError::NoImu {
+                instance,
+                found,
+                hint: "log sensor_accel and sensor_gyro (or sensor_combined)",
+            }
+            .into());
         };
-        let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
-        let max_gap_s = 5.0 / median_rate(&gyro_ts).max(1.0);
-        let (rec, mut paired) = pair(acc, gyro, max_gap_s);
+        let (rec, mut paired) = pair_streams(acc, gyro);
         if let Some(&(offset, t_s, ms)) = self.dropouts.first() {
             let total: u64 = self.dropouts.iter().map(|d| u64::from(d.2)).sum();
             warnings.push(format!(
