@@ -12,13 +12,14 @@
 //!   [`segment`] finds the still positions and the spins in it (`host segment`), and
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
 //!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
-//!   `gyro.toml`.
+//!   `gyro.toml`; [`in_memory`] does all of that without writing files (the Python package).
 
 pub mod builtin;
 pub mod error;
 pub mod from_recording;
 pub mod hand_gyro;
 pub mod import;
+pub mod in_memory;
 pub mod plan;
 pub mod reader;
 pub mod segment;
