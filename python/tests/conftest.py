@@ -60,3 +60,13 @@ def read_csv_exact(path: Path):
     header = lines[0].split(",")
     rows = [line.split(",") for line in lines[1:] if line and not line.startswith("#")]
     return header, rows
+
+
+@pytest.fixture(scope="session")
+def table(host_bin, tmp_path_factory):
+    """The command line's session on the virtual rate table (the short-oblique plan: lever arms observable)
+    and `host calibrate --input DIR --json`'s files and document."""
+    d = tmp_path_factory.mktemp("table") / "cli"
+    run(host_bin, "-q", "simulate", "--out", str(d), "--plan", "short-oblique", "--seed", "2")
+    doc = run(host_bin, "-q", "calibrate", "--input", str(d), "--json").stdout
+    return {"session": d, "summary": json.loads(doc), "toml": d / "calibration.toml"}

@@ -80,17 +80,16 @@ def test_segment_file_and_arrays_give_the_same_calibration(hand, py_cal):
     assert accelcal.calibrate(arrays).to_toml() == py_cal.to_toml()
 
 
-def test_load_and_simulate_give_host_calibrate_of_a_table_session(host_bin, tmp_path):
-    cli_dir = tmp_path / "cli"
-    run(host_bin, "-q", "simulate", "--out", str(cli_dir), "--plan", "oblique", "--seed", "2")
-    doc = json.loads(run(host_bin, "-q", "calibrate", "--input", str(cli_dir), "--json").stdout)
-    py = accelcal.simulate(tmp_path / "py", plan="oblique", seed=2)
-    for name in ["plan.toml", "samples.csv"]:
-        assert (tmp_path / "py" / name).read_bytes() == (cli_dir / name).read_bytes(), name
-    for session in [py, accelcal.load_session(cli_dir)]:
-        cal = accelcal.calibrate(session)
-        assert cal.to_toml().encode() == (cli_dir / "calibration.toml").read_bytes()
-        assert cal.summary == doc
+def test_load_and_simulate_give_host_calibrate_of_a_table_session(table, tmp_path):
+    cli_dir = table["session"]
+    with pytest.warns(UserWarning, match="no unit_id"):
+        py = accelcal.simulate(tmp_path / "py", plan="short-oblique", seed=2)
+        for name in ["plan.toml", "samples.csv"]:
+            assert (tmp_path / "py" / name).read_bytes() == (cli_dir / name).read_bytes(), name
+        for session in [py, accelcal.load_session(cli_dir)]:
+            cal = accelcal.calibrate(session)
+            assert cal.to_toml().encode() == table["toml"].read_bytes()
+            assert cal.summary == table["summary"]
 
 
 EXPORTS = [
@@ -134,22 +133,25 @@ def session_rows(session_dir):
     return {k: np.array(v) for k, v in out.items()}
 
 
-def test_apply_gives_host_applys_output(hand, host_bin):
-    cli = run(host_bin, "-q", "apply", "--input", str(hand["session"]),
-              "--calibration", str(hand["toml"]))
+@pytest.mark.parametrize("which,lever", [("hand", "full"), ("table", "full"), ("table", "rate")])
+def test_apply_gives_host_applys_output(request, host_bin, which, lever):
+    cli_session = request.getfixturevalue(which)
+    session, toml = cli_session["session"], cli_session["toml"]
+    cli = run(host_bin, "-q", "apply", "--input", str(session), "--calibration", str(toml),
+              "--lever", lever)
     lines = cli.stdout.splitlines()
     assert lines[0] == "segment,t_s,f_x_g,f_y_g,f_z_g"
     expected = {}
     for line in lines[1:]:
         f = line.split(",")
         expected.setdefault(f[0], []).append([float(v) for v in f[2:5]])
-    cal = accelcal.Calibration.load(hand["toml"])
-    rate = accelcal.load_session(hand["session"]).rate_hz
-    segments = session_rows(hand["session"])
+    cal = accelcal.Calibration.load(toml)
+    rate = accelcal.load_session(session).rate_hz
+    segments = session_rows(session)
     assert list(segments) == list(expected)
     for name, rows in segments.items():
         # host apply restarts the ω̇ estimate at each segment: one call per segment does the same.
-        f = accelcal.apply(cal, rows[:, 1:4], rows[:, 4:7], rate_hz=rate)
+        f = accelcal.apply(cal, rows[:, 1:4], rows[:, 4:7], rate_hz=rate, lever=lever)
         np.testing.assert_array_equal(f, np.array(expected[name]), err_msg=name)
 
 
