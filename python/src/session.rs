@@ -7,8 +7,8 @@ use host::cli::CliError;
 use host::estimate::gyro::GyroEstimate;
 use host::session::from_recording::normal_gravity_m_s2;
 use host::session::import::{
-    parse_acc_unit, read_logger, read_logger_csv, GyroUnit, ImportOptions, Recording, TimeSource,
-    DEFAULT_COLUMNS,
+    parse_acc_unit, read_logger, read_logger_csv, GyroUnit, ImportError, ImportOptions, Recording,
+    TimeSource, DEFAULT_COLUMNS,
 };
 use host::session::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
 use host::session::segment::{IntervalKind, SegmentOptions};
@@ -25,13 +25,7 @@ enum Inner {
     /// Segmented in memory (`segment`, `segment_file`).
     Memory(Box<SegmentedSession>),
     /// Read from a session directory (`load_session`): what `host calibrate --input` reads.
-    Read {
-        dir: PathBuf,
-        plan: Plan,
-        stats: Vec<SegmentStats>,
-        gyro: Option<GyroEstimate>,
-        warnings: Vec<String>,
-    },
+    Read { dir: PathBuf, parts: Box<Parts> },
 }
 
 /// A calibration session: the plan (one static segment per still position), the per-segment
@@ -42,6 +36,7 @@ pub struct Session {
 }
 
 /// What `calibrate` needs from a session.
+#[derive(Clone)]
 pub struct Parts {
     /// The plan.
     pub plan: Plan,
@@ -64,25 +59,14 @@ impl Session {
                 gyro: s.gyro_estimate().py_err()?,
                 reader_warnings: Vec::new(),
             }),
-            Inner::Read {
-                plan,
-                stats,
-                gyro,
-                warnings,
-                ..
-            } => Ok(Parts {
-                plan: plan.clone(),
-                stats: stats.clone(),
-                gyro: gyro.clone(),
-                reader_warnings: warnings.clone(),
-            }),
+            Inner::Read { parts, .. } => Ok((**parts).clone()),
         }
     }
 
     fn plan(&self) -> &Plan {
         match &self.inner {
             Inner::Memory(s) => &s.plan,
-            Inner::Read { plan, .. } => plan,
+            Inner::Read { parts, .. } => &parts.plan,
         }
     }
 }
@@ -121,7 +105,7 @@ impl Session {
     fn warnings(&self) -> Vec<String> {
         match &self.inner {
             Inner::Memory(s) => s.warnings.clone(),
-            Inner::Read { warnings, .. } => warnings.clone(),
+            Inner::Read { parts, .. } => parts.reader_warnings.clone(),
         }
     }
 
@@ -259,8 +243,17 @@ fn units(acc_unit: &str, gyro_unit: &str) -> PyResult<(shared::OutputUnit, GyroU
     Ok((acc, gyro))
 }
 
-fn segmented(py: Python<'_>, rec: Recording, site: &SiteArgs) -> PyResult<Session> {
+/// `host segment`'s steps after the options: the recording `read` gives (the import's checks and
+/// messages), then the intervals, plan and gyro; the GIL released meanwhile.
+fn segmented<F>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
+where
+    F: FnOnce() -> Result<Recording, ImportError> + Send,
+{
     let choices = site.choices()?;
+    let rec = py
+        .detach(read)
+        .map_err(|e| CliError::Failed(e.to_string()))
+        .py_err()?;
     let s = py.detach(|| segment_recording(rec, &choices));
     let s = s.map_err(|e| match e {
         host::session::in_memory::InMemoryError::GyroRefused(p) => CliError::GyroRefused(p),
@@ -329,6 +322,19 @@ impl Read for ArrayLines<'_> {
     }
 }
 
+/// The number of rows of an accelerometer and a gyro array, both (n, 3).
+pub fn rows_of_pair(acc: &ArrayView2<'_, f64>, gyro: &ArrayView2<'_, f64>) -> PyResult<usize> {
+    let n = acc.nrows();
+    if acc.ncols() != 3 || gyro.ncols() != 3 || gyro.nrows() != n {
+        return Err(usage(format!(
+            "acc and gyro must be arrays of shape (n, 3) with the same n (got {:?} and {:?})",
+            acc.shape(),
+            gyro.shape()
+        )));
+    }
+    Ok(n)
+}
+
 /// Cuts a hand-held recording held in arrays into a session.
 #[pyfunction]
 #[pyo3(signature = (acc, gyro, t = None, rate_hz = None, *, acc_unit, gyro_unit, min_still_s = 1.0,
@@ -352,14 +358,7 @@ pub fn segment_arrays(
     let (acc_u, gyro_u) = units(acc_unit, gyro_unit)?;
     let (acc, gyro) = (acc.as_array(), gyro.as_array());
     let t = t.as_ref().map(|t| t.as_array());
-    let n = acc.nrows();
-    if acc.ncols() != 3 || gyro.ncols() != 3 || gyro.nrows() != n {
-        return Err(usage(format!(
-            "acc and gyro must be arrays of shape (n, 3) with the same n (got {:?} and {:?})",
-            acc.shape(),
-            gyro.shape()
-        )));
-    }
+    let n = rows_of_pair(&acc, &gyro)?;
     if t.as_ref().is_some_and(|t| t.len() != n) {
         return Err(usage(format!(
             "t has {} values for {n} rows",
@@ -380,10 +379,6 @@ pub fn segment_arrays(
         line: Vec::new(),
         pos: 0,
     };
-    let rec = py
-        .detach(|| read_logger(BufReader::new(lines), Path::new("(arrays)"), &options))
-        .map_err(|e| CliError::Failed(e.to_string()))
-        .py_err()?;
     let site = SiteArgs {
         min_still_s,
         unit_id,
@@ -392,7 +387,9 @@ pub fn segment_arrays(
         height_m,
         no_gyro,
     };
-    segmented(py, rec, &site)
+    segmented(py, &site, || {
+        read_logger(BufReader::new(lines), Path::new("(arrays)"), &options)
+    })
 }
 
 /// Cuts a logger's file (every layout `host segment` reads) into a session.
@@ -432,10 +429,6 @@ pub fn segment_file(
             .try_into()
             .map_err(|_| usage("columns needs six names: acc x, y, z then gyro x, y, z"))?;
     }
-    let rec = py
-        .detach(|| read_logger_csv(&path, &options))
-        .map_err(|e| CliError::Failed(e.to_string()))
-        .py_err()?;
     let site = SiteArgs {
         min_still_s,
         unit_id,
@@ -444,7 +437,7 @@ pub fn segment_file(
         height_m,
         no_gyro,
     };
-    segmented(py, rec, &site)
+    segmented(py, &site, || read_logger_csv(&path, &options))
 }
 
 /// Reads a session directory (plan.toml + samples.csv, and gyro.toml when `host segment` wrote
@@ -460,10 +453,12 @@ pub fn load_session(py: Python<'_>, dir: PathBuf) -> PyResult<Session> {
     Ok(Session {
         inner: Inner::Read {
             dir,
-            plan: s.plan,
-            stats: s.stats,
-            gyro,
-            warnings: s.report.warnings,
+            parts: Box::new(Parts {
+                plan: s.plan,
+                stats: s.stats,
+                gyro,
+                reader_warnings: s.report.warnings,
+            }),
         },
     })
 }

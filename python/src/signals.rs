@@ -3,7 +3,7 @@
 
 use crate::calibration::Calibration;
 use crate::errors::{usage, IntoPy};
-use crate::session::{load_session, Session};
+use crate::session::{load_session, rows_of_pair, Session};
 use clap::{Parser, ValueEnum};
 use host::apply::Applier;
 use host::cli::apply::LeverArg;
@@ -47,14 +47,7 @@ pub fn apply<'py>(
         .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?
         .to_rad_s();
     let (acc, gyro) = (acc.as_array(), gyro.as_array());
-    let n = acc.nrows();
-    if acc.ncols() != 3 || gyro.ncols() != 3 || gyro.nrows() != n {
-        return Err(usage(format!(
-            "acc and gyro must be arrays of shape (n, 3) with the same n (got {:?} and {:?})",
-            acc.shape(),
-            gyro.shape()
-        )));
-    }
+    let n = rows_of_pair(&acc, &gyro)?;
     // One temperature for every row, or one per row.
     let temps: Option<Vec<f64>> = match temp_c {
         None => None,
