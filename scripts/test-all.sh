@@ -21,6 +21,8 @@ command -v arm-none-eabi-gcc >/dev/null || packages+=(gcc-arm-none-eabi)
 # rdimon.specs (semihosting start-up and stdio) comes with newlib, not with the compiler.
 dpkg -s libnewlib-arm-none-eabi >/dev/null 2>&1 || packages+=(libnewlib-arm-none-eabi)
 command -v qemu-system-arm >/dev/null || packages+=(qemu-system-arm)
+# The Python package's tests run in a fresh virtual environment (Debian splits venv/ensurepip out).
+python3 -c 'import ensurepip, venv' 2>/dev/null || packages+=(python3-venv)
 if [ ${#packages[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
@@ -51,9 +53,26 @@ tests bash firmware/scripts/test.sh
 step "end to end: host calibrate over the pty of the firmware running in QEMU"
 tests cargo test -p e2e --test qemu_loop -- --ignored
 
+step "Python package: the wheel (maturin, dev profile) in a fresh virtual environment, pytest against host"
+python3 -c 'import sys; sys.exit(0 if sys.version_info >= (3, 9) else 1)' ||
+  { echo "python3 is $(python3 --version 2>&1): the package needs 3.9 or later" >&2; exit 1; }
+cargo fmt --manifest-path python/Cargo.toml -- --check
+cargo clippy --manifest-path python/Cargo.toml -- -D warnings
+pyenv=$(mktemp -d)
+trap 'rm -f "$log"; rm -rf "$pyenv"' EXIT
+python3 -m venv "$pyenv/venv"
+# Pinned: the build tool and the test's libraries, from PyPI.
+"$pyenv/venv/bin/pip" install -q maturin==1.7.4 numpy==2.4.6 pandas==3.1.1 pytest==9.2.0
+"$pyenv/venv/bin/maturin" build -q --manifest-path python/Cargo.toml --out "$pyenv/wheel"
+"$pyenv/venv/bin/pip" install -q "$pyenv"/wheel/accelcal-*.whl
+# The tests run `host` (target/debug/host, built by the PC tests above) beside the package.
+tests "$pyenv/venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
+
 count() {
-  grep -E "^test result: |qemu-target-tests: " "$log" | grep -oE "[0-9]+ $1" | awk '{s += $1} END {print s + 0}'
+  # pytest's closing line: "N passed in T s" (after "M failed, " when some failed).
+  grep -E "^test result: |qemu-target-tests: |^([0-9]+ failed, )?[0-9]+ passed" "$log" |
+    grep -oE "[0-9]+ $1" | awk '{s += $1} END {print s + 0}'
 }
 echo
-echo "every step passed (cargo test and the QEMU on-target tests, summed):"
+echo "every step passed (cargo test, the QEMU on-target tests and pytest, summed):"
 echo "test-all: $(count passed) passed, $(count failed) failed"

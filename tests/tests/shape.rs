@@ -38,7 +38,13 @@ const FUNCTION_REPORT_LINES: usize = 80;
 const FILE_REPORT_LINES: usize = 600;
 
 /// The source folders checked, relative to the repository root.
-const ROOTS: [&str; 4] = ["shared/src", "host/src", "host/examples", "firmware/src"];
+const ROOTS: [&str; 5] = [
+    "shared/src",
+    "host/src",
+    "host/examples",
+    "firmware/src",
+    "python/src",
+];
 
 /// One function or file over its report threshold.
 #[derive(Debug)]

@@ -13,6 +13,7 @@
 //! of each (6 × 8 bytes a row, ≤ 2 × 100 MB) — a longer segment is cut, with a warning.
 
 pub mod allan;
+pub mod confidence;
 mod log;
 
 pub use log::{analyse_log, is_samples_csv};

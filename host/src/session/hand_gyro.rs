@@ -175,18 +175,24 @@ pub fn file_text(fit: &HandGyroFit) -> String {
 /// The gyro `host segment` fitted from the hand turns (`DIR/gyro.toml`), as the estimator's gyro
 /// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
 pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
-    #[derive(serde::Deserialize)]
-    struct File {
-        gyro: GyroSection,
-    }
     let path = dir.join(GYRO_FILE);
     let text = match crate::limits::read_text_bounded(&path) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(source) => return Err(HandGyroFileError::Io { path, source }),
     };
-    let f: File = toml::from_str(&text).map_err(|e| HandGyroFileError::Invalid {
-        path: path.clone(),
+    parse(&text, &path).map(Some)
+}
+
+/// The gyro estimate of a `gyro.toml` text ([`file_text`]) named `path` in messages: what [`read`]
+/// gives for that file, for a session held in memory (`super::in_memory`).
+pub fn parse(text: &str, path: &Path) -> Result<GyroEstimate, HandGyroFileError> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        gyro: GyroSection,
+    }
+    let f: File = toml::from_str(text).map_err(|e| HandGyroFileError::Invalid {
+        path: path.to_path_buf(),
         message: e.to_string(),
     })?;
     let g = f.gyro;
@@ -199,14 +205,14 @@ pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
         })
         .map(|k| format!("G[{}][{}]", names[k / 3], names[k % 3]))
         .collect();
-    Ok(Some(GyroEstimate {
+    Ok(GyroEstimate {
         matrix: g.matrix,
         matrix_1sigma,
         bias_rad_s: g.bias_rad_s,
         bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
         table_rate_scale: (0.0, 0.0),
         undetermined,
-    }))
+    })
 }
 
 #[cfg(test)]

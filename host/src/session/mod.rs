@@ -13,13 +13,15 @@
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
 //!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
 //!   `gyro.toml`; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
-//!   tells them from text by their first bytes.
+//!   tells them from text by their first bytes; [`in_memory`] does all of that without writing
+//!   files (the Python package).
 
 pub mod builtin;
 pub mod error;
 pub mod from_recording;
 pub mod hand_gyro;
 pub mod import;
+pub mod in_memory;
 pub mod logs;
 pub mod plan;
 pub mod reader;

@@ -1,0 +1,160 @@
+//! A hand-held session held in memory: `host segment`'s steps (`cli/segment.rs`) in the same order —
+//! the reader's warnings, the still intervals, the coverage check, the plan, the hand-turn gyro
+//! accepted or refused — without writing the session directory, and what `host calibrate --input`
+//! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
+//! The Python package (`python/`) calibrates from it without files.
+
+use super::from_recording::{plan_for, stats_for, write_session};
+use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
+use super::import::Recording;
+use super::segment::{
+    coverage, find_intervals, Coverage, SegmentError, SegmentOptions, Segmentation,
+};
+use super::{Plan, RecordingError, SegmentStats};
+use crate::estimate::gyro::GyroEstimate;
+use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
+use crate::output_file::{write_atomic, OutputFileError};
+use std::path::Path;
+
+/// What `host segment`'s options decide besides the recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SegmentChoices {
+    /// The interval detection (`--min-still-s`).
+    pub segment: SegmentOptions,
+    /// The unit's id, 24 lower-case hex digits (`--unit-id`, checked by the caller).
+    pub unit_id: Option<String>,
+    /// The site's gravity, m/s² (`--gravity`, `--latitude`, or standard).
+    pub gravity_m_s2: f64,
+    /// Fit the gyro from the hand turns (not with `--no-gyro`).
+    pub fit_gyro: bool,
+}
+
+/// A recording cut into still intervals, with its plan and the hand-turn gyro.
+pub struct SegmentedSession {
+    /// The recording.
+    pub recording: Recording,
+    /// The intervals found.
+    pub segmentation: Segmentation,
+    /// Which positions repeat and which faces are missing.
+    pub coverage: Coverage,
+    /// The session's plan (one static segment per still interval).
+    pub plan: Plan,
+    /// The gyro fit, or why there is none (too few turns, not asked).
+    pub gyro: Result<HandGyroFit, HandGyroError>,
+    /// The reader's warnings (rows left out, a cut-short last line, time jumps).
+    pub warnings: Vec<String>,
+    /// How to make a better session, when the positions are too few or too alike.
+    pub advice: Option<String>,
+}
+
+/// Why a recording gives no session.
+#[derive(Debug, thiserror::Error)]
+pub enum InMemoryError {
+    /// No usable still intervals, or too few distinct positions.
+    #[error(transparent)]
+    Segment(#[from] SegmentError),
+    /// The gyro fit failed in a way that says the input is wrong (its unit).
+    #[error(transparent)]
+    HandGyro(#[from] HandGyroFileError),
+    /// A gyro fit that no real gyro gives: its problems (`hand_gyro::problems`).
+    #[error("the gyro fit is refused:\n  - {}", .0.join("\n  - "))]
+    GyroRefused(Vec<String>),
+}
+
+/// The reader's warnings about a recording: rows left out, a cut-short last line, time jumps.
+pub fn recording_warnings(rec: &Recording) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if rec.skipped_rows > 0 {
+        warnings.push(format!(
+            "{} row(s) with NaN or infinite values left out",
+            rec.skipped_rows
+        ));
+    }
+    if let Some(line) = rec.unterminated_line {
+        warnings.push(format!(
+            "line {line}, the last, has no line end: the file was cut short; that line is left out"
+        ));
+    }
+    warnings.extend(rec.time_jumps());
+    warnings
+}
+
+/// `host segment` on a recording in memory, up to (not including) writing the session.
+pub fn segment_recording(
+    recording: Recording,
+    choices: &SegmentChoices,
+) -> Result<SegmentedSession, InMemoryError> {
+    let warnings = recording_warnings(&recording);
+    let same_deg = choices.segment.same_position_deg;
+    let segmentation = find_intervals(&recording, &choices.segment)?;
+    let coverage = coverage(&segmentation.stills, same_deg);
+    coverage.check(segmentation.stills.len(), same_deg)?;
+    let advice = coverage.advice();
+    let mut plan = plan_for(&recording, &segmentation);
+    plan.unit_id = choices.unit_id.clone();
+    plan.gravity_m_s2 = choices.gravity_m_s2;
+    let gyro = if choices.fit_gyro {
+        hand_gyro::fit(&recording, &segmentation, &plan)?
+    } else {
+        Err(HandGyroError::NotAsked)
+    };
+    if let Ok(fit) = &gyro {
+        let problems = hand_gyro::problems(fit);
+        if !problems.is_empty() {
+            return Err(InMemoryError::GyroRefused(problems));
+        }
+    }
+    Ok(SegmentedSession {
+        recording,
+        segmentation,
+        coverage,
+        plan,
+        gyro,
+        warnings,
+        advice,
+    })
+}
+
+impl SegmentedSession {
+    /// The per-segment statistics, as `host calibrate --input` reads them from the written session.
+    pub fn stats(&self) -> Vec<SegmentStats> {
+        stats_for(&self.recording, &self.segmentation, &self.plan)
+    }
+
+    /// The gyro estimate `host calibrate --input` takes from the session's `gyro.toml`: parsed from
+    /// the same text, so that the calibration is the same to the last bit.
+    pub fn gyro_estimate(&self) -> Result<Option<GyroEstimate>, HandGyroFileError> {
+        match &self.gyro {
+            Ok(fit) => hand_gyro::parse(&hand_gyro::file_text(fit), Path::new(GYRO_FILE)).map(Some),
+            Err(_) => Ok(None),
+        }
+    }
+
+    /// Writes the session into `dir` as `host segment` does (`plan.toml`, `samples.csv` and, with a
+    /// gyro fit, `gyro.toml`), refusing an existing session unless `overwrite`; the rows written.
+    pub fn write(&self, dir: &Path, overwrite: bool) -> Result<u64, WriteError> {
+        let rows = write_session(
+            dir,
+            &self.recording,
+            &self.segmentation,
+            &self.plan,
+            overwrite,
+        )?;
+        if let Ok(fit) = &self.gyro {
+            let text = hand_gyro::file_text(fit);
+            write_atomic(&dir.join(GYRO_FILE), text.as_bytes(), overwrite)?;
+        }
+        Ok(rows)
+    }
+}
+
+/// Why [`SegmentedSession::write`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The session files.
+    #[error(transparent)]
+    Session(#[from] RecordingError),
+    /// `gyro.toml`.
+    #[error(transparent)]
+    Gyro(#[from] OutputFileError),
+}

@@ -1,0 +1,165 @@
+"""Type stubs of accelcal (the compiled module and its Python half)."""
+
+from os import PathLike
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+_Path = Union[str, PathLike]
+_Rows3 = npt.ArrayLike  # (n, 3) float
+
+DEFAULT_COLUMNS: Tuple[str, str, str, str, str, str]
+
+class Error(Exception):
+    """Every error of accelcal; the message is the one `host` prints."""
+
+class InputError(Error):
+    """The input cannot be used as given."""
+
+class CalibrationError(Error):
+    """The data give no calibration (too few positions, a refused gyro fit, a failed check)."""
+
+class FileError(Error):
+    """A file could not be read or written."""
+
+class Session:
+    """A calibration session: plan, per-segment statistics and the hand-turn gyro."""
+
+    @property
+    def rate_hz(self) -> float: ...
+    @property
+    def acc_unit(self) -> str: ...
+    @property
+    def segments(self) -> List[str]: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def advice(self) -> Optional[str]: ...
+    def plan_toml(self) -> str: ...
+    def intervals(self) -> List[Dict[str, Any]]: ...
+    def gyro(self) -> Optional[Dict[str, Any]]: ...
+    def write(self, dir: _Path, force: bool = False) -> int: ...
+
+class Calibration:
+    """A calibration estimated by `calibrate` or read by `Calibration.load`."""
+
+    @staticmethod
+    def load(path: _Path) -> Calibration: ...
+    def to_toml(self) -> str: ...
+    def to_blob(self, created_unix_s: Optional[int] = None) -> bytes: ...
+    def save(self, dir: _Path, force: bool = False) -> Tuple[str, str]: ...
+    def export(
+        self,
+        format: str,
+        *,
+        noise: Optional[_Path] = None,
+        rostopic: str = "/imu0",
+        driver_scale: Optional[float] = None,
+        device_id: Optional[int] = None,
+        gyro_device_id: Optional[int] = None,
+        sysid: int = 1,
+        compid: int = 1,
+        allow_out_of_range: bool = False,
+        allow_undetermined: bool = False,
+    ) -> Union[str, Dict[str, str]]: ...
+    @property
+    def summary(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def file(self) -> Dict[str, Any]: ...
+    @property
+    def names(self) -> List[str]: ...
+    @property
+    def values(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def sigmas(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def units(self) -> List[str]: ...
+    @property
+    def gyro_matrix(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def gyro_matrix_1sigma(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def gyro_bias_rad_s(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def gyro_bias_rad_s_1sigma(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def temperature(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def undetermined(self) -> List[str]: ...
+    @property
+    def chi2(self) -> Optional[float]: ...
+    @property
+    def dof(self) -> Optional[int]: ...
+    @property
+    def chi2_per_dof(self) -> Optional[float]: ...
+    @property
+    def passed(self) -> Optional[bool]: ...
+    @property
+    def unit_id(self) -> str: ...
+    @property
+    def created_unix_s(self) -> Optional[int]: ...
+
+def segment(
+    acc: Any,
+    gyro: Optional[_Rows3] = None,
+    t: Optional[npt.ArrayLike] = None,
+    rate_hz: Optional[float] = None,
+    *,
+    acc_unit: str,
+    gyro_unit: str,
+    columns: Sequence[str] = ...,
+    time_column: Optional[str] = "t",
+    min_still_s: float = 1.0,
+    unit_id: Optional[str] = None,
+    gravity: Optional[float] = None,
+    latitude: Optional[float] = None,
+    height_m: Optional[float] = None,
+    no_gyro: bool = False,
+) -> Session: ...
+def segment_file(
+    path: _Path,
+    *,
+    acc_unit: str,
+    gyro_unit: str,
+    columns: Optional[Sequence[str]] = None,
+    time_column: Optional[str] = None,
+    rate_hz: Optional[float] = None,
+    min_still_s: float = 1.0,
+    unit_id: Optional[str] = None,
+    gravity: Optional[float] = None,
+    latitude: Optional[float] = None,
+    height_m: Optional[float] = None,
+    no_gyro: bool = False,
+) -> Session: ...
+def load_session(dir: _Path) -> Session: ...
+def calibrate(
+    session: Session,
+    *,
+    method: str = "joint",
+    reference: str = "table-axis",
+    limits: Optional[Dict[str, float]] = None,
+) -> Calibration: ...
+def apply(
+    calibration: Calibration,
+    acc: _Rows3,
+    gyro: _Rows3,
+    t: Optional[npt.ArrayLike] = None,
+    rate_hz: Optional[float] = None,
+    *,
+    temp_c: Union[None, float, npt.ArrayLike] = None,
+    lever: str = "full",
+    gyro_unit: str = "rad/s",
+) -> npt.NDArray[np.float64]: ...
+def allan(x: npt.ArrayLike, rate_hz: float) -> Dict[str, Any]: ...
+def simulate_hand(
+    seed: int = 1,
+    rate_hz: float = 200.0,
+    acc_unit: str = "m/s2",
+    gyro_unit: str = "deg/s",
+    *,
+    as_frame: bool = False,
+) -> Any: ...
+def simulate(out: _Path, **flags: Any) -> Session: ...

@@ -1,0 +1,447 @@
+//! `calibrate` and the `Calibration` it gives: the estimate of `host calibrate --input`, its
+//! `calibration.toml` and `calibration.bin`, the exports of `host export`, and `Calibration.load`.
+
+use crate::errors::{usage, IntoPy};
+use crate::session::Session;
+use clap::ValueEnum;
+use host::calibration_files::{
+    blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
+};
+use host::cli::calibrate::{estimate_options_of, MethodArg, ReferenceArg};
+use host::cli::CliError;
+use host::estimate::{calibrate_session_stats, paper_values, CalibrationOutcome, GyroEstimate};
+use host::export::{render, ExportFormat, ExportInput, ExportOptions};
+use host::summary::{parameter_keys, CalibrationSummary, Limits};
+use host::unit_file::{UnitFile, UnitFileError};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use shared::blob::ParameterBlob;
+use shared::UnitId;
+use std::path::PathBuf;
+
+/// A calibration: estimated by `calibrate`, or read by `Calibration.load`.
+#[pyclass(module = "accelcal", frozen)]
+pub struct Calibration {
+    /// The calibration file (`calibration.toml`'s contents).
+    unit: UnitFile,
+    /// Its parameters, as the device gets them.
+    cal: shared::Calibration,
+    /// The unit the blob is bound to.
+    unit_id: UnitId,
+    /// The estimate and its summary, for a calibration estimated here.
+    fitted: Option<Box<Fitted>>,
+    /// The creation time of a blob read by `load`.
+    created_unix_s: Option<u64>,
+}
+
+struct Fitted {
+    outcome: CalibrationOutcome,
+    summary: CalibrationSummary,
+}
+
+impl Calibration {
+    /// The device's parameters (for `apply`).
+    pub fn device(&self) -> &shared::Calibration {
+        &self.cal
+    }
+
+    fn fit_summary(&self) -> Option<&CalibrationSummary> {
+        self.fitted.as_ref().map(|f| &f.summary)
+    }
+}
+
+fn parse_enum<T: ValueEnum>(what: &str, text: &str) -> PyResult<T> {
+    T::from_str(text, false).map_err(|_| {
+        let names: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value().map(|p| p.get_name().to_string()))
+            .collect();
+        usage(format!("{what} {text}: use one of {}", names.join(", ")))
+    })
+}
+
+fn json_to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value)
+        .map_err(|e| CliError::Failed(format!("cannot write the JSON result: {e}")))
+        .py_err()?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// Estimates a calibration from a session, as `host calibrate --input` does (the same estimator,
+/// options and hand-turn gyro), without writing files. The GIL is released during the fit.
+#[pyfunction]
+#[pyo3(signature = (session, *, method = "joint", reference = "table-axis", limits = None))]
+pub fn calibrate(
+    py: Python<'_>,
+    session: &Session,
+    method: &str,
+    reference: &str,
+    limits: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Calibration> {
+    let options = estimate_options_of(
+        parse_enum::<MethodArg>("method", method)?,
+        parse_enum::<ReferenceArg>("reference", reference)?,
+    );
+    let limits: Limits = match limits {
+        Some(d) => {
+            let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
+            serde_json::from_str(&text).map_err(|e| usage(format!("limits: {e}")))?
+        }
+        None => Limits::default(),
+    };
+    let parts = py.detach(|| session.parts());
+    let parts = parts?;
+    let outcome = py.detach(|| -> Result<CalibrationOutcome, CliError> {
+        let mut outcome = calibrate_session_stats(&parts.plan, &parts.stats, &options)?;
+        // As `host calibrate --input`: the hand-turn gyro when the plan estimates none.
+        if outcome.gyro.is_none() {
+            outcome.gyro = parts.gyro.clone();
+            outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
+        }
+        Ok(outcome)
+    });
+    let outcome = outcome.py_err()?;
+    let unit_id = match &parts.plan.unit_id {
+        Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
+        None => {
+            pyo3::PyErr::warn(
+                py,
+                &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                c"the session's plan has no unit_id: the blob is bound to the all-zero unit id; give \
+                  segment(..., unit_id=\"<24 hex digits>\") to bind it to the unit",
+                1,
+            )?;
+            UnitId::default()
+        }
+    };
+    let mut summary = CalibrationSummary::new(&outcome, parts.plan.unit_id.clone(), &limits);
+    summary.warnings.extend(parts.reader_warnings);
+    Ok(Calibration {
+        unit: calibration_unit_file(&outcome, Some(unit_id)),
+        cal: outcome.calibration,
+        unit_id,
+        fitted: Some(Box::new(Fitted { outcome, summary })),
+        created_unix_s: None,
+    })
+}
+
+#[pymethods]
+impl Calibration {
+    /// Reads a calibration: `calibration.toml` (any unit file) or `calibration.bin` (a device blob).
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Calibration> {
+        if path.extension().is_some_and(|e| e == "bin") {
+            let bytes = std::fs::read(&path)
+                .map_err(|e| CliError::Io(path.clone(), e))
+                .py_err()?;
+            let blob = shared::blob::decode(&bytes)
+                .map_err(|e| CliError::Blob(path.clone(), e))
+                .py_err()?;
+            return Ok(Calibration {
+                unit: UnitFile::from_calibration(&blob.calibration, Some(blob.unit_id), None),
+                cal: blob.calibration,
+                unit_id: blob.unit_id,
+                fitted: None,
+                created_unix_s: Some(blob.created_unix_s),
+            });
+        }
+        let unit = UnitFile::load(&path).py_err()?;
+        let invalid = |m| CliError::Unit(UnitFileError::Invalid(path.clone(), m));
+        let cal = unit.to_calibration().map_err(invalid).py_err()?;
+        let unit_id = unit.unit_id().map_err(invalid).py_err()?;
+        Ok(Calibration {
+            unit,
+            cal,
+            unit_id: unit_id.unwrap_or_default(),
+            fitted: None,
+            created_unix_s: None,
+        })
+    }
+
+    /// `calibration.toml` exactly as `host calibrate` writes it.
+    fn to_toml(&self) -> String {
+        self.unit.to_toml()
+    }
+
+    /// `calibration.bin` exactly as `host calibrate` writes it, stamped `created_unix_s` (default:
+    /// now, as the command does; a loaded blob keeps its own).
+    #[pyo3(signature = (created_unix_s = None))]
+    fn to_blob<'py>(
+        &self,
+        py: Python<'py>,
+        created_unix_s: Option<u64>,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let created = created_unix_s
+            .or(self.created_unix_s)
+            .unwrap_or_else(now_unix_s);
+        let bytes = match &self.fitted {
+            Some(f) => blob_bytes(&f.outcome, self.unit_id, created),
+            None => ParameterBlob {
+                unit_id: self.unit_id,
+                calibration: self.cal,
+                created_unix_s: created,
+            }
+            .to_bytes()
+            .map(|(b, n)| b[..n].to_vec()),
+        };
+        let bytes = bytes
+            .map_err(|e| CliError::Output(host::calibration_files::OutputError::Blob(e)))
+            .py_err()?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    /// Writes `calibration.toml` and `calibration.bin` into `dir` as `host calibrate` does (as a pair,
+    /// atomically; an existing pair is replaced only with force). Returns their paths.
+    #[pyo3(signature = (dir, force = false))]
+    fn save(&self, dir: PathBuf, force: bool) -> PyResult<(PathBuf, PathBuf)> {
+        let Some(f) = &self.fitted else {
+            return Err(usage(
+                "save() writes an estimated calibration; a loaded one is already in its file",
+            ));
+        };
+        let w = write_calibration_files(&dir, &f.outcome, self.unit_id, now_unix_s(), force)
+            .py_err()?;
+        Ok((w.toml_path, w.bin_path))
+    }
+
+    /// The calibration in another tool's format, as `host export --format FORMAT` writes it (the
+    /// same keyword options as its flags). `c-header` gives a dict of file name → text.
+    #[pyo3(signature = (format, *, noise = None, rostopic = "/imu0", driver_scale = None,
+        device_id = None, gyro_device_id = None, sysid = 1, compid = 1,
+        allow_out_of_range = false, allow_undetermined = false))]
+    #[allow(clippy::too_many_arguments)]
+    fn export<'py>(
+        &self,
+        py: Python<'py>,
+        format: &str,
+        noise: Option<PathBuf>,
+        rostopic: &str,
+        driver_scale: Option<f64>,
+        device_id: Option<u32>,
+        gyro_device_id: Option<u32>,
+        sysid: u8,
+        compid: u8,
+        allow_out_of_range: bool,
+        allow_undetermined: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let format = parse_enum::<ExportFormat>("format", format)?;
+        let noise = match &noise {
+            Some(p) => Some(host::noise::load_kalibr_noise(p).py_err()?),
+            None => None,
+        };
+        let input = ExportInput {
+            unit: &self.unit,
+            cal: self.cal,
+            noise: noise.as_ref(),
+            rostopic,
+            driver_scale_m_s2_per_out: driver_scale,
+            options: ExportOptions {
+                allow_out_of_range,
+                allow_undetermined,
+                device_id,
+                gyro_device_id,
+                sysid,
+                compid,
+            },
+        };
+        if format == ExportFormat::CHeader {
+            host::export::check_exportable(&input.cal).py_err()?;
+            let files = host::export::c::package(&input).py_err()?;
+            let d = PyDict::new(py);
+            for (name, text) in files {
+                d.set_item(name, text)?;
+            }
+            return Ok(d.into_any());
+        }
+        Ok(render(&input, format)
+            .py_err()?
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// `host calibrate --json`'s document (parameters with 1σ, the calibration file, χ², checks,
+    /// warnings) as a dict; None for a loaded calibration.
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.fit_summary().map(|s| json_to_py(py, s)).transpose()
+    }
+
+    /// The calibration file's tables (`calibration.toml` as a dict).
+    #[getter]
+    fn file<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &self.unit)
+    }
+
+    /// Names of the paper-form parameters: bias_x…, scale_x…, theta_xx…, r1x… (then, estimated, the
+    /// gyro's and the temperature model's).
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        match self.fit_summary() {
+            Some(s) => s.parameters.iter().map(|p| p.name.clone()).collect(),
+            None => parameter_keys(),
+        }
+    }
+
+    /// The values, in `names` order.
+    #[getter]
+    fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let v = match self.fit_summary() {
+            Some(s) => s.parameters.iter().map(|p| p.value).collect(),
+            None => paper_values(&self.cal)
+                .map_err(|e| CliError::Export(e.into()))
+                .py_err()?
+                .to_vec(),
+        };
+        Ok(PyArray1::from_vec(py, v))
+    }
+
+    /// 1σ of each value (NaN: not determined, or a loaded calibration).
+    #[getter]
+    fn sigmas<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v = match self.fit_summary() {
+            Some(s) => s
+                .parameters
+                .iter()
+                .map(|p| p.sigma.unwrap_or(f64::NAN))
+                .collect(),
+            None => vec![f64::NAN; parameter_keys().len()],
+        };
+        PyArray1::from_vec(py, v)
+    }
+
+    /// Units of the values.
+    #[getter]
+    fn units(&self) -> Vec<String> {
+        self.fit_summary()
+            .map(|s| s.parameters.iter().map(|p| p.unit.clone()).collect())
+            .unwrap_or_default()
+    }
+
+    /// The gyro's G (w = G·ω + b), or None.
+    #[getter]
+    fn gyro_matrix<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.unit
+            .gyro
+            .as_ref()
+            .map(|g| rows(py, &g.matrix))
+            .transpose()
+    }
+
+    /// 1σ of G, or None.
+    #[getter]
+    fn gyro_matrix_1sigma<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.unit
+            .gyro
+            .as_ref()
+            .and_then(|g| g.matrix_1sigma)
+            .map(|m| rows(py, &m))
+            .transpose()
+    }
+
+    /// The gyro's bias b, rad/s, or None.
+    #[getter]
+    fn gyro_bias_rad_s<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.unit
+            .gyro
+            .as_ref()
+            .map(|g| PyArray1::from_slice(py, &g.bias_rad_s))
+    }
+
+    /// 1σ of b, rad/s, or None.
+    #[getter]
+    fn gyro_bias_rad_s_1sigma<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.unit
+            .gyro
+            .as_ref()
+            .and_then(|g| g.bias_rad_s_1sigma)
+            .map(|b| PyArray1::from_slice(py, &b))
+    }
+
+    /// The temperature model (`[temperature]` of the file as a dict), or None.
+    #[getter]
+    fn temperature<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.unit
+            .temperature
+            .as_ref()
+            .map(|t| json_to_py(py, t))
+            .transpose()
+    }
+
+    /// The estimator's warnings (and the reader's), as `host calibrate` lists them.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.fit_summary()
+            .map(|s| s.warnings.clone())
+            .unwrap_or_default()
+    }
+
+    /// The parameters the session did not determine.
+    #[getter]
+    fn undetermined(&self) -> Vec<String> {
+        self.fit_summary()
+            .map(|s| s.undetermined.clone())
+            .unwrap_or_default()
+    }
+
+    /// Σ whitened residual² of the fit (None for a loaded calibration).
+    #[getter]
+    fn chi2(&self) -> Option<f64> {
+        self.fit_summary().map(|s| s.chi2)
+    }
+
+    /// Degrees of freedom of the fit.
+    #[getter]
+    fn dof(&self) -> Option<i64> {
+        self.fit_summary().map(|s| s.dof)
+    }
+
+    /// χ²/dof.
+    #[getter]
+    fn chi2_per_dof(&self) -> Option<f64> {
+        self.fit_summary().map(|s| s.chi2_per_dof)
+    }
+
+    /// The pass/fail checks passed (all, when no limits were given).
+    #[getter]
+    fn passed(&self) -> Option<bool> {
+        self.fit_summary().map(|s| s.passed)
+    }
+
+    /// The unit id the blob is bound to (24 hex digits).
+    #[getter]
+    fn unit_id(&self) -> String {
+        self.unit_id.to_string()
+    }
+
+    /// The creation time of a loaded blob, s since the Unix epoch (else None).
+    #[getter]
+    fn created_unix_s(&self) -> Option<u64> {
+        self.created_unix_s
+    }
+
+    fn __repr__(&self) -> String {
+        match self.fit_summary() {
+            Some(s) => format!(
+                "Calibration(unit {}, {}, χ²/dof = {:.3}, {} warning(s))",
+                self.unit_id,
+                self.cal.statics.output_unit.symbol(),
+                s.chi2_per_dof,
+                s.warnings.len()
+            ),
+            None => format!(
+                "Calibration(unit {}, {}, loaded)",
+                self.unit_id,
+                self.cal.statics.output_unit.symbol()
+            ),
+        }
+    }
+}
+
+fn rows<'py>(py: Python<'py>, m: &[[f64; 3]; 3]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let v: Vec<Vec<f64>> = m.iter().map(|r| r.to_vec()).collect();
+    PyArray2::from_vec2(py, &v).map_err(|e| usage(e.to_string()))
+}

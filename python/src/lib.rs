@@ -1,0 +1,26 @@
+//! `accelcal._accelcal`: the Python package's compiled half. Every function calls the `host`
+//! library that the command line calls (no second implementation); the Python half
+//! (`accelcal/__init__.py`) adds pandas DataFrames and keyword conveniences.
+
+mod calibration;
+mod errors;
+mod session;
+mod signals;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _accelcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<session::Session>()?;
+    m.add_class::<calibration::Calibration>()?;
+    m.add_function(wrap_pyfunction!(session::segment_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(session::segment_file, m)?)?;
+    m.add_function(wrap_pyfunction!(session::load_session, m)?)?;
+    m.add_function(wrap_pyfunction!(calibration::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(signals::apply, m)?)?;
+    m.add_function(wrap_pyfunction!(signals::allan, m)?)?;
+    m.add_function(wrap_pyfunction!(signals::simulate_hand, m)?)?;
+    m.add_function(wrap_pyfunction!(signals::simulate, m)?)?;
+    Ok(())
+}

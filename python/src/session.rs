@@ -1,0 +1,464 @@
+//! `segment`, `segment_file`, `load_session` and the `Session` they give: a hand-held recording cut
+//! into still positions by `host segment`'s own steps (`host::session::in_memory`), or a recorded
+//! session directory read by `host calibrate --input`'s reader.
+
+use crate::errors::{usage, IntoPy};
+use host::cli::CliError;
+use host::estimate::gyro::GyroEstimate;
+use host::session::from_recording::normal_gravity_m_s2;
+use host::session::import::{
+    parse_acc_unit, read_logger, read_logger_csv, GyroUnit, ImportError, ImportOptions, Recording,
+    TimeSource, DEFAULT_COLUMNS,
+};
+use host::session::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
+use host::session::segment::{IntervalKind, SegmentOptions};
+use host::session::{hand_gyro, read_session, Plan, ReadOptions, SegmentStats};
+use numpy::ndarray::{ArrayView1, ArrayView2};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// What a session holds.
+enum Inner {
+    /// Segmented in memory (`segment`, `segment_file`).
+    Memory(Box<SegmentedSession>),
+    /// Read from a session directory (`load_session`): what `host calibrate --input` reads.
+    Read { dir: PathBuf, parts: Box<Parts> },
+}
+
+/// A calibration session: the plan (one static segment per still position), the per-segment
+/// statistics, and the gyro fitted from the hand turns. Give it to `calibrate`.
+#[pyclass(module = "accelcal", frozen)]
+pub struct Session {
+    inner: Inner,
+}
+
+/// What `calibrate` needs from a session.
+#[derive(Clone)]
+pub struct Parts {
+    /// The plan.
+    pub plan: Plan,
+    /// Per segment.
+    pub stats: Vec<SegmentStats>,
+    /// The hand-turn gyro (`gyro.toml`), used when the plan does not estimate the gyro.
+    pub gyro: Option<GyroEstimate>,
+    /// The reader's warnings, which `host calibrate --input` adds to its result.
+    pub reader_warnings: Vec<String>,
+}
+
+impl Session {
+    /// The plan, statistics and gyro exactly as `host calibrate --input` gets them from the session
+    /// directory `host segment` writes (the statistics are computed here, without the GIL).
+    pub fn parts(&self) -> PyResult<Parts> {
+        match &self.inner {
+            Inner::Memory(s) => Ok(Parts {
+                plan: s.plan.clone(),
+                stats: s.stats(),
+                gyro: s.gyro_estimate().py_err()?,
+                reader_warnings: Vec::new(),
+            }),
+            Inner::Read { parts, .. } => Ok((**parts).clone()),
+        }
+    }
+
+    fn plan(&self) -> &Plan {
+        match &self.inner {
+            Inner::Memory(s) => &s.plan,
+            Inner::Read { parts, .. } => &parts.plan,
+        }
+    }
+}
+
+#[pymethods]
+impl Session {
+    /// The session's plan as `plan.toml` text.
+    fn plan_toml(&self) -> String {
+        self.plan().to_toml()
+    }
+
+    /// Sample rate of the plan, Hz.
+    #[getter]
+    fn rate_hz(&self) -> f64 {
+        self.plan().sample_rate_hz
+    }
+
+    /// The accelerometer's unit (the calibration's output unit): "m/s2", "g", "LSB" or "V".
+    #[getter]
+    fn acc_unit(&self) -> &'static str {
+        self.plan().output_unit.symbol()
+    }
+
+    /// The segments' names, in plan order.
+    #[getter]
+    fn segments(&self) -> Vec<String> {
+        self.plan()
+            .segments
+            .iter()
+            .map(|s| s.name.clone())
+            .collect()
+    }
+
+    /// Warnings of the reader (rows left out, a cut-short file, time jumps).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        match &self.inner {
+            Inner::Memory(s) => s.warnings.clone(),
+            Inner::Read { parts, .. } => parts.reader_warnings.clone(),
+        }
+    }
+
+    /// How to make a better session, when the positions are too few or too alike (else None).
+    #[getter]
+    fn advice(&self) -> Option<String> {
+        match &self.inner {
+            Inner::Memory(s) => s.advice.clone(),
+            Inner::Read { .. } => None,
+        }
+    }
+
+    /// The still intervals and spins found (a segmented session; empty for a directory read): one
+    /// dict each with kind, start_s, duration_s, direction (rough up, body axes), rows.
+    fn intervals<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let Inner::Memory(s) = &self.inner else {
+            return Ok(Vec::new());
+        };
+        let seg = &s.segmentation;
+        seg.stills
+            .iter()
+            .chain(&seg.spins)
+            .map(|iv| {
+                let d = PyDict::new(py);
+                let kind = match iv.kind {
+                    IntervalKind::Still => "static",
+                    IntervalKind::Spin => "spin",
+                };
+                d.set_item("kind", kind)?;
+                d.set_item("start_s", iv.start_s)?;
+                d.set_item("duration_s", iv.duration_s)?;
+                d.set_item("direction", iv.direction.to_vec())?;
+                d.set_item("rows", iv.end - iv.start)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// The gyro fitted from the hand turns (None without one): matrix G (w = G·ω + b), its 1σ,
+    /// bias b and its 1σ in rad/s, the number of turns and the rms misfit in degrees.
+    fn gyro<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Inner::Memory(s) = &self.inner else {
+            return Ok(None);
+        };
+        let Ok(fit) = &s.gyro else { return Ok(None) };
+        let d = PyDict::new(py);
+        let m = |a: &[[f64; 3]; 3]| a.iter().map(|r| r.to_vec()).collect::<Vec<_>>();
+        d.set_item("matrix", m(&fit.matrix))?;
+        d.set_item("matrix_1sigma", m(&fit.matrix_1sigma))?;
+        d.set_item("bias_rad_s", fit.bias_rad_s.to_vec())?;
+        d.set_item("bias_rad_s_1sigma", fit.bias_1sigma_rad_s.to_vec())?;
+        d.set_item("turns", fit.turns)?;
+        d.set_item("rms_residual_deg", fit.rms_residual_deg)?;
+        Ok(Some(d))
+    }
+
+    /// Writes the session as `host segment` does (plan.toml, samples.csv, gyro.toml), for
+    /// `host calibrate --input DIR`; refuses an existing session unless force. Returns the rows written.
+    #[pyo3(signature = (dir, force = false))]
+    fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<u64> {
+        match &self.inner {
+            Inner::Memory(s) => py
+                .detach(|| s.write(&dir, force))
+                .map_err(|e| CliError::Failed(e.to_string()))
+                .py_err(),
+            Inner::Read { dir: from, .. } => Err(usage(format!(
+                "this session was read from {}: it is already written",
+                from.display()
+            ))),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        let p = self.plan();
+        format!(
+            "Session({} segments, {} Hz, {})",
+            p.segments.len(),
+            p.sample_rate_hz,
+            p.output_unit.symbol()
+        )
+    }
+}
+
+/// `host segment`'s options that do not name the input.
+pub struct SiteArgs {
+    pub min_still_s: f64,
+    pub unit_id: Option<String>,
+    pub gravity: Option<f64>,
+    pub latitude: Option<f64>,
+    pub height_m: Option<f64>,
+    pub no_gyro: bool,
+}
+
+impl SiteArgs {
+    /// The choices, checked as `host segment` checks its flags.
+    fn choices(&self) -> PyResult<SegmentChoices> {
+        if self.height_m.is_some() && self.latitude.is_none() {
+            return Err(usage(
+                "height_m needs latitude (the site's gravity comes from both)",
+            ));
+        }
+        if self.gravity.is_some() && self.latitude.is_some() {
+            return Err(usage("give gravity or latitude, not both"));
+        }
+        let unit_id = match &self.unit_id {
+            Some(hex) if shared::UnitId::parse_hex(hex).is_none() => {
+                return Err(usage(format!(
+                    "unit_id {hex}: give the unit's id as 24 hex digits"
+                )))
+            }
+            id => id.as_ref().map(|h| h.to_ascii_lowercase()),
+        };
+        let gravity_m_s2 = match (self.gravity, self.latitude) {
+            (Some(g), _) => g,
+            (None, Some(lat)) => normal_gravity_m_s2(lat, self.height_m.unwrap_or(0.0)),
+            (None, None) => shared::STANDARD_GRAVITY_M_S2,
+        };
+        Ok(SegmentChoices {
+            segment: SegmentOptions {
+                min_still_s: self.min_still_s,
+                ..SegmentOptions::default()
+            },
+            unit_id,
+            gravity_m_s2,
+            fit_gyro: !self.no_gyro,
+        })
+    }
+}
+
+fn units(acc_unit: &str, gyro_unit: &str) -> PyResult<(shared::OutputUnit, GyroUnit)> {
+    let acc = parse_acc_unit(acc_unit)
+        .ok_or_else(|| usage(format!("acc_unit {acc_unit}: use m/s2, g, LSB or V")))?;
+    let gyro = GyroUnit::parse(gyro_unit)
+        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?;
+    Ok((acc, gyro))
+}
+
+/// `host segment`'s steps after the options: the recording `read` gives (the import's checks and
+/// messages), then the intervals, plan and gyro; the GIL released meanwhile.
+fn segmented<F>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
+where
+    F: FnOnce() -> Result<Recording, ImportError> + Send,
+{
+    let choices = site.choices()?;
+    let rec = py
+        .detach(read)
+        .map_err(|e| CliError::Failed(e.to_string()))
+        .py_err()?;
+    let s = py.detach(|| segment_recording(rec, &choices));
+    let s = s.map_err(|e| match e {
+        host::session::in_memory::InMemoryError::GyroRefused(p) => CliError::GyroRefused(p),
+        host::session::in_memory::InMemoryError::HandGyro(e) => CliError::HandGyro(e),
+        e => CliError::Failed(e.to_string()),
+    });
+    Ok(Session {
+        inner: Inner::Memory(Box::new(s.py_err()?)),
+    })
+}
+
+/// The arrays as the rows of a logger's CSV, made one line at a time as the import reads them: the
+/// import's every check and message apply unchanged, and ryu's shortest form parses back to the
+/// same f64, so the recording holds exactly the arrays' values.
+struct ArrayLines<'a> {
+    acc: ArrayView2<'a, f64>,
+    gyro: ArrayView2<'a, f64>,
+    t: Option<ArrayView1<'a, f64>>,
+    row: usize,
+    line: Vec<u8>,
+    pos: usize,
+}
+
+impl ArrayLines<'_> {
+    fn next_line(&mut self) -> bool {
+        let mut fmt = ryu::Buffer::new();
+        self.line.clear();
+        self.pos = 0;
+        if self.row == 0 {
+            let mut names: Vec<&str> = self.t.iter().map(|_| "t").collect();
+            names.extend(DEFAULT_COLUMNS);
+            self.line.extend_from_slice(names.join(",").as_bytes());
+        } else {
+            let i = self.row - 1;
+            if i >= self.acc.nrows() {
+                return false;
+            }
+            let mut values = Vec::with_capacity(7);
+            if let Some(t) = &self.t {
+                values.push(t[i]);
+            }
+            values.extend((0..3).map(|j| self.acc[(i, j)]));
+            values.extend((0..3).map(|j| self.gyro[(i, j)]));
+            for (k, v) in values.into_iter().enumerate() {
+                if k > 0 {
+                    self.line.push(b',');
+                }
+                self.line.extend_from_slice(fmt.format(v).as_bytes());
+            }
+        }
+        self.line.push(b'\n');
+        self.row += 1;
+        true
+    }
+}
+
+impl Read for ArrayLines<'_> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos == self.line.len() && !self.next_line() {
+            return Ok(0);
+        }
+        let n = out.len().min(self.line.len() - self.pos);
+        out[..n].copy_from_slice(&self.line[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// The number of rows of an accelerometer and a gyro array, both (n, 3).
+pub fn rows_of_pair(acc: &ArrayView2<'_, f64>, gyro: &ArrayView2<'_, f64>) -> PyResult<usize> {
+    let n = acc.nrows();
+    if acc.ncols() != 3 || gyro.ncols() != 3 || gyro.nrows() != n {
+        return Err(usage(format!(
+            "acc and gyro must be arrays of shape (n, 3) with the same n (got {:?} and {:?})",
+            acc.shape(),
+            gyro.shape()
+        )));
+    }
+    Ok(n)
+}
+
+/// Cuts a hand-held recording held in arrays into a session.
+#[pyfunction]
+#[pyo3(signature = (acc, gyro, t = None, rate_hz = None, *, acc_unit, gyro_unit, min_still_s = 1.0,
+    unit_id = None, gravity = None, latitude = None, height_m = None, no_gyro = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn segment_arrays(
+    py: Python<'_>,
+    acc: PyReadonlyArray2<'_, f64>,
+    gyro: PyReadonlyArray2<'_, f64>,
+    t: Option<PyReadonlyArray1<'_, f64>>,
+    rate_hz: Option<f64>,
+    acc_unit: &str,
+    gyro_unit: &str,
+    min_still_s: f64,
+    unit_id: Option<String>,
+    gravity: Option<f64>,
+    latitude: Option<f64>,
+    height_m: Option<f64>,
+    no_gyro: bool,
+) -> PyResult<Session> {
+    let (acc_u, gyro_u) = units(acc_unit, gyro_unit)?;
+    let (acc, gyro) = (acc.as_array(), gyro.as_array());
+    let t = t.as_ref().map(|t| t.as_array());
+    let n = rows_of_pair(&acc, &gyro)?;
+    if t.as_ref().is_some_and(|t| t.len() != n) {
+        return Err(usage(format!(
+            "t has {} values for {n} rows",
+            t.map_or(0, |t| t.len())
+        )));
+    }
+    let time = match (&t, rate_hz) {
+        (Some(_), None) => TimeSource::Column("t".into()),
+        (None, Some(hz)) => TimeSource::RateHz(hz),
+        _ => return Err(usage("give exactly one of t (seconds) or rate_hz (Hz)")),
+    };
+    let options = ImportOptions::new(time, acc_u, gyro_u);
+    let lines = ArrayLines {
+        acc,
+        gyro,
+        t,
+        row: 0,
+        line: Vec::new(),
+        pos: 0,
+    };
+    let site = SiteArgs {
+        min_still_s,
+        unit_id,
+        gravity,
+        latitude,
+        height_m,
+        no_gyro,
+    };
+    segmented(py, &site, || {
+        read_logger(BufReader::new(lines), Path::new("(arrays)"), &options)
+    })
+}
+
+/// Cuts a logger's file (every layout `host segment` reads) into a session.
+#[pyfunction]
+#[pyo3(signature = (path, *, acc_unit, gyro_unit, columns = None, time_column = None, rate_hz = None,
+    min_still_s = 1.0, unit_id = None, gravity = None, latitude = None, height_m = None,
+    no_gyro = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn segment_file(
+    py: Python<'_>,
+    path: PathBuf,
+    acc_unit: &str,
+    gyro_unit: &str,
+    columns: Option<Vec<String>>,
+    time_column: Option<String>,
+    rate_hz: Option<f64>,
+    min_still_s: f64,
+    unit_id: Option<String>,
+    gravity: Option<f64>,
+    latitude: Option<f64>,
+    height_m: Option<f64>,
+    no_gyro: bool,
+) -> PyResult<Session> {
+    let (acc_u, gyro_u) = units(acc_unit, gyro_unit)?;
+    let time = match (time_column, rate_hz) {
+        (Some(c), None) => TimeSource::Column(c),
+        (None, Some(hz)) => TimeSource::RateHz(hz),
+        _ => {
+            return Err(usage(
+                "give exactly one of time_column (seconds) or rate_hz (Hz)",
+            ))
+        }
+    };
+    let mut options = ImportOptions::new(time, acc_u, gyro_u);
+    if let Some(c) = columns {
+        options.columns = c
+            .try_into()
+            .map_err(|_| usage("columns needs six names: acc x, y, z then gyro x, y, z"))?;
+    }
+    let site = SiteArgs {
+        min_still_s,
+        unit_id,
+        gravity,
+        latitude,
+        height_m,
+        no_gyro,
+    };
+    segmented(py, &site, || read_logger_csv(&path, &options))
+}
+
+/// Reads a session directory (plan.toml + samples.csv, and gyro.toml when `host segment` wrote
+/// one), as `host calibrate --input DIR` does.
+#[pyfunction]
+pub fn load_session(py: Python<'_>, dir: PathBuf) -> PyResult<Session> {
+    let read = py.detach(|| -> Result<_, CliError> {
+        let s = read_session(&dir, &ReadOptions { quiet: true })?;
+        let gyro = hand_gyro::read(&dir)?;
+        Ok((s, gyro))
+    });
+    let (s, gyro) = read.py_err()?;
+    Ok(Session {
+        inner: Inner::Read {
+            dir,
+            parts: Box::new(Parts {
+                plan: s.plan,
+                stats: s.stats,
+                gyro,
+                reader_warnings: s.report.warnings,
+            }),
+        },
+    })
+}

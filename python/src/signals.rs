@@ -1,0 +1,255 @@
+//! `apply` (the device's per-sample compensation, `host apply`), `allan` (`host noise`'s Allan
+//! deviation and noise terms), and the simulators of `host simulate-hand` and `host simulate`.
+
+use crate::calibration::Calibration;
+use crate::errors::{usage, IntoPy};
+use crate::session::{load_session, rows_of_pair, Session};
+use clap::{Parser, ValueEnum};
+use host::apply::Applier;
+use host::cli::apply::LeverArg;
+use host::cli::simulate::SimulateArgs;
+use host::cli::CliError;
+use host::noise::allan::{fit, octave_sizes, overlapping_adev, TermFit};
+use host::noise::confidence::relative_sigma;
+use host::session::import::{parse_acc_unit, GyroUnit};
+use host::session::Row;
+use host::sim::handheld::{logger_unit, simulate_hand as simulate_hand_rows, HandSpec};
+use host::unit_file::UnitFile;
+use numpy::ndarray::{Array2, ArrayView1};
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shared::compensator::LeverMode;
+use shared::OutputUnit;
+use std::path::PathBuf;
+
+/// The compensated specific force of each row, g, body axes: every sample through the device's
+/// own f32 path (`shared::Compensator` with the firmware's ω̇ estimator, as `host apply` does), the
+/// temperature model refreshed at the device's pace. A row with a non-finite value gives NaN and
+/// restarts the ω̇ estimate, as on the device. The gyro is in rad/s unless `gyro_unit` says deg/s.
+#[pyfunction]
+#[pyo3(signature = (calibration, acc, gyro, rate_hz, *, temp_c = None, lever = "full",
+    gyro_unit = "rad/s"))]
+#[allow(clippy::too_many_arguments)]
+pub fn apply<'py>(
+    py: Python<'py>,
+    calibration: &Calibration,
+    acc: PyReadonlyArray2<'py, f64>,
+    gyro: PyReadonlyArray2<'py, f64>,
+    rate_hz: f64,
+    temp_c: Option<&Bound<'py, PyAny>>,
+    lever: &str,
+    gyro_unit: &str,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let lever: LeverArg = LeverArg::from_str(lever, false)
+        .map_err(|_| usage(format!("lever {lever}: use off, rate or full")))?;
+    let to_rad_s = GyroUnit::parse(gyro_unit)
+        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?
+        .to_rad_s();
+    let (acc, gyro) = (acc.as_array(), gyro.as_array());
+    let n = rows_of_pair(&acc, &gyro)?;
+    // One temperature for every row, or one per row.
+    let temps: Option<Vec<f64>> = match temp_c {
+        None => None,
+        Some(t) => match t.extract::<f64>() {
+            Ok(c) => Some(vec![c; n]),
+            Err(_) => Some(
+                t.extract::<PyReadonlyArray1<'py, f64>>()?
+                    .as_array()
+                    .to_vec(),
+            ),
+        },
+    };
+    if temps.as_ref().is_some_and(|t| t.len() != n) {
+        return Err(usage(format!("temp_c has the wrong length for {n} rows")));
+    }
+    let cal = calibration.device();
+    if cal.temperature.is_some() && temps.is_none() {
+        return Err(CliError::Apply(host::apply::ApplyError::NoTemperature)).py_err();
+    }
+    let mut applier = Applier::new(cal, LeverMode::from(lever), rate_hz).py_err()?;
+    let g = cal.gravity_m_s2;
+    let out = py.detach(|| {
+        let mut out = Array2::<f64>::from_elem((n, 3), f64::NAN);
+        for i in 0..n {
+            let row = Row {
+                segment: "",
+                segment_index: 0,
+                t_s: 0.0,
+                u: [acc[(i, 0)], acc[(i, 1)], acc[(i, 2)]],
+                w_rad_s: [0, 1, 2].map(|j| gyro[(i, j)] * to_rad_s),
+                temp_c: temps.as_ref().map(|t| t[i]),
+            };
+            if let Some(f) = applier.row(&row) {
+                for j in 0..3 {
+                    out[(i, j)] = f64::from(f[j]) / g;
+                }
+            }
+        }
+        out
+    });
+    Ok(out.into_pyarray(py))
+}
+
+fn term_dict<'py>(
+    py: Python<'py>,
+    value: Option<f64>,
+    fit: &TermFit,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("value", value)?;
+    d.set_item("sigma", fit.sigma)?;
+    d.set_item("significance", fit.significance)?;
+    d.set_item("upper_bound_2sigma", fit.upper_bound_2sigma)?;
+    d.set_item("needs_recording_s", fit.needs_recording_s)?;
+    Ok(d)
+}
+
+/// The overlapping Allan deviation of one signal at octave-spaced τ, its 1σ bounds, and the fitted
+/// white noise density N, bias instability B and random walk K, each with its 1σ or, when this
+/// recording does not determine it, its 2σ upper bound (`host noise`'s analysis of one axis).
+#[pyfunction]
+pub fn allan<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    rate_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(usage(format!(
+            "rate_hz {rate_hz}: give the sample rate in Hz"
+        )));
+    }
+    let view: ArrayView1<'_, f64> = x.as_array();
+    let n = view.len();
+    if n < host::noise::MIN_SAMPLES {
+        return Err(usage(format!(
+            "{n} samples: at least {} are needed (record a long still segment)",
+            host::noise::MIN_SAMPLES
+        )));
+    }
+    // The array itself when it is contiguous; a strided view is copied once.
+    let copied;
+    let y: &[f64] = match x.as_slice() {
+        Ok(s) => s,
+        Err(_) => {
+            copied = view.to_vec();
+            &copied
+        }
+    };
+    let (points, sizes, terms) = py.detach(|| {
+        let sizes = octave_sizes(n);
+        let points = overlapping_adev(y, rate_hz, &sizes);
+        let terms = fit(&points);
+        (points, sizes, terms)
+    });
+    let rel: Vec<f64> = sizes
+        .iter()
+        .map(|&m| relative_sigma(n, m).unwrap_or(f64::NAN))
+        .collect();
+    let adev: Vec<f64> = points.iter().map(|p| p.adev).collect();
+    let d = PyDict::new(py);
+    d.set_item(
+        "tau_s",
+        PyArray1::from_iter(py, points.iter().map(|p| p.tau_s)),
+    )?;
+    d.set_item("adev", PyArray1::from_slice(py, &adev))?;
+    let bound =
+        |k: f64| PyArray1::from_iter(py, adev.iter().zip(&rel).map(|(a, r)| a * (1.0 + k * r)));
+    d.set_item("adev_low", bound(-1.0))?;
+    d.set_item("adev_high", bound(1.0))?;
+    d.set_item(
+        "terms",
+        PyArray1::from_iter(py, points.iter().map(|p| p.terms)),
+    )?;
+    d.set_item(
+        "fit_adev",
+        PyArray1::from_iter(py, points.iter().map(|p| terms.adev(p.tau_s))),
+    )?;
+    d.set_item(
+        "white_density",
+        term_dict(py, terms.white_density, &terms.fits[0])?,
+    )?;
+    d.set_item(
+        "bias_instability",
+        term_dict(py, terms.bias_instability, &terms.fits[1])?,
+    )?;
+    d.set_item(
+        "random_walk",
+        term_dict(py, terms.random_walk, &terms.fits[2])?,
+    )?;
+    Ok(d)
+}
+
+/// `host simulate-hand`'s session as arrays: t (s), acc (the unit asked), gyro (deg/s or rad/s),
+/// and the simulated unit's truth as unit-file TOML with its `[gyro]`.
+#[pyfunction]
+#[pyo3(signature = (seed = 1, rate_hz = 200.0, acc_unit = "m/s2", gyro_unit = "deg/s"))]
+pub fn simulate_hand<'py>(
+    py: Python<'py>,
+    seed: u64,
+    rate_hz: f64,
+    acc_unit: &str,
+    gyro_unit: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let unit = parse_acc_unit(acc_unit)
+        .filter(|u| *u != OutputUnit::Volts)
+        .ok_or_else(|| usage(format!("acc_unit {acc_unit}: use m/s2, g or LSB")))?;
+    let gyro_unit_parsed = GyroUnit::parse(gyro_unit)
+        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?;
+    if !(20.0..=10_000.0).contains(&rate_hz) {
+        return Err(usage(format!("rate_hz {rate_hz}: use 20 to 10000")));
+    }
+    let truth = logger_unit(unit);
+    let spec = HandSpec {
+        rate_hz,
+        acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
+        ..HandSpec::standard(seed)
+    };
+    let sim = py.detach(|| simulate_hand_rows(&truth, &spec));
+    // As the logger's file holds it (`write_logger_csv`): the gyro times the unit's factor.
+    let k = match gyro_unit_parsed {
+        GyroUnit::DegPerS => 180.0 / std::f64::consts::PI,
+        GyroUnit::RadPerS => 1.0,
+    };
+    let n = sim.rows.len();
+    let t = PyArray1::from_iter(py, sim.rows.iter().map(|r| r.0));
+    let acc = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].1[j]);
+    let gyro = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].2[j] * k);
+    let g = &spec.gyro;
+    let truth_toml = format!(
+        "{}\n# The simulated gyro: w = matrix·ω_body + bias (true body axes).\n[gyro]\nmatrix = {:?}\nbias_rad_s = {:?}\n",
+        UnitFile::from_calibration(&truth, None, None).to_toml(),
+        g.matrix,
+        g.bias_rad_s
+    );
+    let d = PyDict::new(py);
+    d.set_item("t", t)?;
+    d.set_item("acc", acc.into_pyarray(py))?;
+    d.set_item("gyro", gyro.into_pyarray(py))?;
+    d.set_item("truth_toml", truth_toml)?;
+    Ok(d)
+}
+
+/// `host simulate`'s command line, parsed by its own clap definition.
+#[derive(Parser)]
+#[command(name = "simulate")]
+struct SimulateCommand {
+    #[command(flatten)]
+    args: SimulateArgs,
+}
+
+/// Runs `host simulate --out OUT ARGS…` (a session on the virtual table: plan.toml, samples.csv,
+/// truth.toml) and reads the session back. `args` are the command's flags, e.g.
+/// `["--plan", "oblique", "--seed", "3"]`.
+#[pyfunction]
+#[pyo3(signature = (out, args = Vec::new()))]
+pub fn simulate(py: Python<'_>, out: PathBuf, args: Vec<String>) -> PyResult<Session> {
+    let mut argv = vec!["simulate".to_string(), "--out".into()];
+    argv.push(out.display().to_string());
+    argv.extend(args);
+    let parsed =
+        SimulateCommand::try_parse_from(&argv).map_err(|e| usage(e.render().to_string()))?;
+    py.detach(|| host::cli::simulate::run(&parsed.args, true))
+        .py_err()?;
+    load_session(py, out)
+}

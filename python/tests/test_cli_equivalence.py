@@ -1,0 +1,173 @@
+"""Each function of accelcal against the `host` command on the same data: the same numbers to the
+last digit `host` prints, the same files byte for byte."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import accelcal
+from conftest import UNIT_ID, read_csv_exact, run
+
+
+def frame_exact(path):
+    """The logger's CSV as a DataFrame, every number parsed exactly (Python's float)."""
+    header, rows = read_csv_exact(path)
+    return pd.DataFrame([[float(v) for v in r] for r in rows], columns=header)
+
+
+@pytest.fixture(scope="module")
+def py_session(hand):
+    return accelcal.segment(
+        frame_exact(hand["csv"]), acc_unit="m/s2", gyro_unit="deg/s", unit_id=UNIT_ID
+    )
+
+
+@pytest.fixture(scope="module")
+def py_cal(py_session):
+    return accelcal.calibrate(py_session)
+
+
+def test_simulate_hand_gives_the_rows_of_host_simulate_hand(hand):
+    d = accelcal.simulate_hand(seed=3)
+    header, rows = read_csv_exact(hand["csv"])
+    assert header == ["t", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"]
+    cli = np.array([[float(v) for v in r] for r in rows])
+    assert cli.shape[0] == d["t"].shape[0]
+    np.testing.assert_array_equal(d["t"], cli[:, 0])
+    np.testing.assert_array_equal(d["acc"], cli[:, 1:4])
+    np.testing.assert_array_equal(d["gyro"], cli[:, 4:7])
+    assert d["truth_toml"] == hand["truth"].read_text()
+
+
+def test_segment_of_a_dataframe_writes_host_segments_session(hand, py_session, tmp_path):
+    assert py_session.plan_toml() == (hand["session"] / "plan.toml").read_text()
+    py_session.write(tmp_path / "s")
+    for name in ["plan.toml", "samples.csv", "gyro.toml"]:
+        assert (tmp_path / "s" / name).read_bytes() == (hand["session"] / name).read_bytes(), name
+
+
+def test_calibrate_gives_host_calibrates_files_and_document(hand, py_cal):
+    assert py_cal.to_toml().encode() == hand["toml"].read_bytes()
+    stamp = accelcal.Calibration.load(hand["bin"]).created_unix_s
+    assert py_cal.to_blob(created_unix_s=stamp) == hand["bin"].read_bytes()
+    assert py_cal.summary == hand["summary"]
+
+
+def test_calibration_arrays_are_the_documents_parameters(hand, py_cal):
+    params = hand["summary"]["parameters"]
+    assert py_cal.names == [p["name"] for p in params]
+    np.testing.assert_array_equal(py_cal.values, [p["value"] for p in params])
+    sig = [np.nan if p["sigma"] is None else p["sigma"] for p in params]
+    np.testing.assert_array_equal(py_cal.sigmas, sig)
+    assert py_cal.chi2 == hand["summary"]["chi2"] and py_cal.dof == hand["summary"]["dof"]
+    g = hand["summary"]["calibration"]["gyro"]
+    np.testing.assert_array_equal(py_cal.gyro_matrix, g["matrix"])
+    np.testing.assert_array_equal(py_cal.gyro_bias_rad_s, g["bias_rad_s"])
+    assert py_cal.warnings == hand["summary"]["warnings"]
+
+
+def test_segment_file_and_arrays_give_the_same_calibration(hand, py_cal):
+    from_file = accelcal.segment_file(
+        hand["csv"], acc_unit="m/s2", gyro_unit="deg/s", time_column="t", unit_id=UNIT_ID
+    )
+    assert accelcal.calibrate(from_file).to_toml() == py_cal.to_toml()
+    d = accelcal.simulate_hand(seed=3)
+    arrays = accelcal.segment(
+        d["acc"], d["gyro"], d["t"], acc_unit="m/s2", gyro_unit="deg/s", unit_id=UNIT_ID
+    )
+    assert accelcal.calibrate(arrays).to_toml() == py_cal.to_toml()
+
+
+def test_load_and_simulate_give_host_calibrate_of_a_table_session(table, tmp_path):
+    cli_dir = table["session"]
+    with pytest.warns(UserWarning, match="no unit_id"):
+        py = accelcal.simulate(tmp_path / "py", plan="short-oblique", seed=2)
+        for name in ["plan.toml", "samples.csv"]:
+            assert (tmp_path / "py" / name).read_bytes() == (cli_dir / name).read_bytes(), name
+        for session in [py, accelcal.load_session(cli_dir)]:
+            cal = accelcal.calibrate(session)
+            assert cal.to_toml().encode() == table["toml"].read_bytes()
+            assert cal.summary == table["summary"]
+
+
+EXPORTS = [
+    ("json", []),
+    ("plain", []),
+    ("fusion", []),
+    ("all", []),
+    ("kalibr-intrinsics", []),
+    ("fusion-c", []),
+    ("px4", ["--device-id", "1310988", "--gyro-device-id", "2490378"]),
+    ("ardupilot", []),
+]
+
+
+@pytest.mark.parametrize("fmt,flags", EXPORTS, ids=[e[0] for e in EXPORTS])
+def test_export_writes_host_exports_text(hand, py_cal, host_bin, fmt, flags):
+    cli = run(host_bin, "-q", "export", "--calibration", str(hand["toml"]), "--format", fmt, *flags)
+    options = {}
+    if flags:
+        options = {"device_id": int(flags[1]), "gyro_device_id": int(flags[3])}
+    assert py_cal.export(fmt, **options) == cli.stdout
+    loaded = accelcal.Calibration.load(hand["toml"])
+    assert loaded.export(fmt, **options) == cli.stdout
+
+
+def test_export_c_header_writes_host_exports_package(hand, py_cal, host_bin, tmp_path):
+    run(host_bin, "-q", "export", "--calibration", str(hand["toml"]), "--format", "c-header",
+        "--out", str(tmp_path))
+    files = py_cal.export("c-header")
+    assert sorted(files) == sorted(p.name for p in tmp_path.iterdir())
+    for name, text in files.items():
+        assert text.encode() == (tmp_path / name).read_bytes(), name
+
+
+def session_rows(session_dir):
+    """samples.csv of a session as {segment: (t, u (n,3), w (n,3))}, parsed exactly."""
+    _, rows = read_csv_exact(session_dir / "samples.csv")
+    out = {}
+    for r in rows:
+        out.setdefault(r[0], []).append([float(v) for v in r[1:8]])
+    return {k: np.array(v) for k, v in out.items()}
+
+
+@pytest.mark.parametrize("which,lever", [("hand", "full"), ("table", "full"), ("table", "rate")])
+def test_apply_gives_host_applys_output(request, host_bin, which, lever):
+    cli_session = request.getfixturevalue(which)
+    session, toml = cli_session["session"], cli_session["toml"]
+    cli = run(host_bin, "-q", "apply", "--input", str(session), "--calibration", str(toml),
+              "--lever", lever)
+    lines = cli.stdout.splitlines()
+    assert lines[0] == "segment,t_s,f_x_g,f_y_g,f_z_g"
+    expected = {}
+    for line in lines[1:]:
+        f = line.split(",")
+        expected.setdefault(f[0], []).append([float(v) for v in f[2:5]])
+    cal = accelcal.Calibration.load(toml)
+    rate = accelcal.load_session(session).rate_hz
+    segments = session_rows(session)
+    assert list(segments) == list(expected)
+    for name, rows in segments.items():
+        # host apply restarts the ω̇ estimate at each segment: one call per segment does the same.
+        f = accelcal.apply(cal, rows[:, 1:4], rows[:, 4:7], rate_hz=rate, lever=lever)
+        np.testing.assert_array_equal(f, np.array(expected[name]), err_msg=name)
+
+
+def test_allan_gives_host_noises_curves_and_terms(hand, host_bin):
+    doc = json.loads(run(host_bin, "-q", "noise", "--input", str(hand["session"]), "--json").stdout)
+    rows = session_rows(hand["session"])[doc["segment"]]
+    assert rows.shape[0] == doc["samples"]
+    terms = {"white_density": "white_density", "bias_instability": "bias_instability",
+             "random_walk": "random_walk"}
+    for j, axis in enumerate(doc["axes"]):
+        a = accelcal.allan(rows[:, 1 + j], doc["sample_rate_hz"])
+        assert a["tau_s"].tolist() == [p["tau_s"] for p in axis["points"]], axis["axis"]
+        assert a["adev"].tolist() == [p["adev"] for p in axis["points"]], axis["axis"]
+        assert a["terms"].tolist() == [p["terms"] for p in axis["points"]], axis["axis"]
+        for k, key in enumerate(terms):
+            assert a[key]["value"] == axis["terms"][key], (axis["axis"], key)
+            assert a[key]["sigma"] == axis["terms"]["fits"][k]["sigma"], (axis["axis"], key)
+            assert a[key]["upper_bound_2sigma"] == axis["terms"]["fits"][k]["upper_bound_2sigma"]
+        assert np.all(a["adev_low"] < a["adev"]) and np.all(a["adev"] < a["adev_high"])

@@ -1,0 +1,37 @@
+"""The fit releases the GIL: another Python thread runs while `calibrate` works."""
+
+import threading
+import time
+
+import accelcal
+from conftest import UNIT_ID
+
+# Python may hand the GIL over one switch interval (5 ms, longer on a loaded machine) after a
+# thread asks. A call that holds the GIL lets another thread run only once it has returned (measured
+# with the GIL held: none in the first half of any call, some in the last 40 ms of each, while the
+# caller waits to take the GIL back); a call that releases it lets it run from the start.
+MARGIN_S = 0.02
+
+
+def test_other_threads_run_during_calibrate(hand):
+    session = accelcal.segment_file(
+        hand["csv"], acc_unit="m/s2", gyro_unit="deg/s", time_column="t", unit_id=UNIT_ID
+    )
+    spans = []
+
+    def fit():
+        start = time.perf_counter()
+        while time.perf_counter() - start < 1.0:
+            t0 = time.perf_counter()
+            accelcal.calibrate(session)
+            spans.append((t0 + MARGIN_S, (t0 + time.perf_counter()) / 2))
+
+    worker = threading.Thread(target=fit)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+    worker.join()
+    inside = sum(1 for t in ticks for a, b in spans if a < t < b)
+    assert sum(max(b - a, 0.0) for a, b in spans) > 0.1, spans
+    assert inside > 0, "no other thread ran during any fit: the GIL was held"
