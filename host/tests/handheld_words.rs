@@ -111,3 +111,28 @@ fn a_hand_held_calibration_and_its_report_speak_of_no_table() {
         "rms {rms} µg, worst {worst} µg"
     );
 }
+
+/// The advice for a session with enough positions but fewer than recommended reads as one sentence:
+/// how many there are, what is missing, how many more to record.
+#[test]
+fn the_coverage_advice_is_one_plain_sentence() {
+    use host::session::segment::Coverage;
+    let c = Coverage {
+        distinct: 10,
+        repeats: vec![None; 10],
+        missing_faces: vec!["x down", "z up"],
+    };
+    let a = c.advice().unwrap();
+    assert_eq!(
+        a,
+        "10 distinct positions (24 recommended), and none within 50° of x down, z up: recording 14 \
+         more, spread over the whole sphere (those directions included), would make the calibration \
+         more robust"
+    );
+    let full = Coverage {
+        distinct: 24,
+        repeats: vec![None; 24],
+        missing_faces: vec![],
+    };
+    assert_eq!(full.advice(), None);
+}
