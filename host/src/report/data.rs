@@ -237,6 +237,8 @@ pub struct ReportData {
     /// The session's segments through the session fit's own calibration (empty when it failed or its
     /// compensator cannot be built: the text then shows the fit's values only).
     pub session_fit_segments: Vec<SegmentRow>,
+    /// The temperature figure, for a session whose own fit has a temperature model.
+    pub temperature_figure: Option<super::plot::Figure>,
     /// Warnings for the reader.
     pub warnings: Vec<String>,
 }
@@ -397,7 +399,11 @@ pub fn build_report(
         Ok(o) => segment_rows(plan, stats, &o.calibration).unwrap_or_default(),
         Err(_) => Vec::new(),
     };
+    let temperature_figure = session_fit.as_ref().ok().and_then(|o| {
+        super::thermal::figure(o, Some(&super::thermal::soak_points(o, plan, stats)))
+    });
     Ok(ReportData {
+        temperature_figure,
         calibration: *cal,
         uncertainty: uncertainty.cloned(),
         unit_symbol: cal.statics.output_unit.symbol().to_string(),

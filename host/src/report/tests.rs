@@ -222,7 +222,8 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
             }
         }
         if f.stem == "residuals" {
-            assert_eq!(svg.matches("<circle").count(), 3 * n);
+            // One marker per segment and axis, and each panel's legend sample.
+            assert_eq!(svg.matches("<circle").count(), 3 * n + 3);
         }
     }
     let md = std::fs::read_to_string(dir.path().join(REPORT_MD)).unwrap();
