@@ -410,6 +410,9 @@ pub fn render_prediction(p: &Prediction) -> String {
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
     render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
     render_gyro(&mut s, p.gyro.as_ref());
+    if let Some(t) = &p.temperature {
+        super::thermal::render_prediction(&mut s, t, &p.values);
+    }
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }

@@ -65,6 +65,46 @@ pub fn render(s: &mut String, o: &CalibrationOutcome) {
     render_steps(s, fit, &k);
 }
 
+/// The predicted 1σ of the temperature model's coefficients (`host plan --check`), in the units of
+/// [`render`]; `values` are the prediction's paper-form values (scale factors at 3..6).
+pub fn render_prediction(s: &mut String, fit: &ThermalFit, values: &[f64]) {
+    let m = &fit.model;
+    let _ = writeln!(
+        s,
+        "Temperature model (docs/model.md §9), predicted 1σ over {:.1}..{:.1} °C, reference {:.1} °C:",
+        m.valid_range_c[0], m.valid_range_c[1], m.reference_c
+    );
+    let _ = writeln!(
+        s,
+        "     zero bias 1σ (mg/°C, µg/°C², µg/°C³)          relative scale 1σ (ppm/°C, ppm/°C², ppm/°C³)"
+    );
+    for i in 0..3 {
+        let k = values[3 + i].abs();
+        let g = [1e3 / k, 1e6 / k, 1e6 / k];
+        let cells = |sig: &[f64; 3], factor: [f64; 3], degree: usize| {
+            (0..3)
+                .map(|c| {
+                    if c < degree {
+                        format!("{:.2e}", sig[c] * factor[c])
+                    } else {
+                        "—".into()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            s,
+            "{:<4} {:<45} {}   (degrees {}, {})",
+            shared::params::axis_name(i),
+            cells(&fit.zero_bias_sigma[i], g, fit.zero_bias_degree[i]),
+            cells(&fit.scale_sigma[i], [1e6; 3], fit.scale_degree[i]),
+            fit.zero_bias_degree[i],
+            fit.scale_degree[i]
+        );
+    }
+}
+
 /// One line per static segment: its temperature and residual per axis, µg.
 fn render_steps(s: &mut String, fit: &ThermalFit, k: &[f64; 3]) {
     let _ = writeln!(
