@@ -299,16 +299,7 @@ pub fn segment_rows(
             .rad_s
             .map(f64::from);
         let omega_dot = linalg::mat_vec(&gyro_inv, &st.wdot_rad_s2);
-        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
-        let wp = linalg::mat_vec(&linalg::lever_matrix(&omega, &omega_dot), &p);
-        let (truth_g, theoretical) = if sp.is_free() {
-            ([f64::NAN; 3], Theoretical::Unknown)
-        } else {
-            (
-                std::array::from_fn(|j| sp.up_b[j] - wp[j] / g),
-                Theoretical::Planned,
-            )
-        };
+        let (truth_g, theoretical) = planned_theoretical(sp, &omega, &omega_dot, g);
         let u = SensorOutputs {
             raw: st.mean_u.map(|v| v as f32),
         };
@@ -346,6 +337,25 @@ pub fn segment_rows(
         });
     }
     Ok(rows)
+}
+
+/// The plan's specific force at the reference point, `g·up_b − W p` in g, for a fixture's known
+/// attitude; nothing (NaN) for a free one, whose `up_b` is only a rough guess.
+fn planned_theoretical(
+    sp: &crate::session::SegmentPlan,
+    omega: &[f64; 3],
+    omega_dot: &[f64; 3],
+    g: f64,
+) -> ([f64; 3], Theoretical) {
+    if sp.is_free() {
+        return ([f64::NAN; 3], Theoretical::Unknown);
+    }
+    let p = sp.table_centre_m.unwrap_or([0.0; 3]);
+    let wp = linalg::mat_vec(&linalg::lever_matrix(omega, omega_dot), &p);
+    (
+        std::array::from_fn(|j| sp.up_b[j] - wp[j] / g),
+        Theoretical::Planned,
+    )
 }
 
 /// Computes everything the report shows. `session_fit`: the session's own fit when the caller has it

@@ -273,6 +273,13 @@ pub fn page(
             alt: stem.clone(),
         });
     }
+    navigation_section(&mut b, data, figure_stems);
+    session_fit_section(&mut b, data);
+    b
+}
+
+/// The navigation check: its table and figures, or why it is left out.
+fn navigation_section(b: &mut Vec<Block>, data: &ReportData, figure_stems: &[String]) {
     b.push(Block::Heading(
         2,
         "Navigation check (paper Figs. 6/7, 9/10)".into(),
@@ -296,6 +303,10 @@ pub fn page(
             alt: stem.clone(),
         });
     }
+}
+
+/// The session's own fit: its χ², exclusions and what it did not determine, and its terminal text.
+fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
     b.push(Block::Heading(2, "This session's own fit".into()));
     match &data.session_fit {
         Ok(o) => {
@@ -334,5 +345,4 @@ pub fn page(
             "The session alone does not calibrate: {e}"
         ))),
     }
-    b
 }

@@ -196,53 +196,7 @@ pub fn figure(o: &CalibrationOutcome, soaks: Option<&SoakPoints>) -> Option<Figu
     let temps: Vec<f64> = (0..CURVE_POINTS)
         .map(|j| lo + (hi - lo) * j as f64 / (CURVE_POINTS - 1) as f64)
         .collect();
-    let curve = |i: usize, bias: bool| -> Vec<Series> {
-        let (c, cov, unit) = if bias {
-            (
-                &fit.model.zero_bias_out_per_c[i],
-                &fit.zero_bias_cov[i],
-                1e3 / k[i],
-            )
-        } else {
-            (&fit.model.scale_rel_per_c[i], &fit.scale_cov[i], 1e6)
-        };
-        let pts: Vec<(f64, f64, f64)> = temps
-            .iter()
-            .map(|&t| {
-                let (y, s) = fit.curve(c, cov, t);
-                (t, y * unit, s * unit)
-            })
-            .collect();
-        let band = |sign: f64| Series {
-            label: "fit ± 1σ".into(),
-            points: pts.iter().map(|p| (p.0, p.1 + sign * p.2)).collect(),
-            error: None,
-            style: SeriesStyle::Dashed,
-            colour: i,
-        };
-        let mut v = vec![
-            line("fit".into(), pts.iter().map(|p| (p.0, p.1)), i),
-            band(1.0),
-            band(-1.0),
-        ];
-        if let Some(sk) = soaks {
-            let data = if bias {
-                &sk.bias_mg[i]
-            } else {
-                &sk.scale_ppm[i]
-            };
-            if !data.is_empty() {
-                v.push(Series {
-                    label: "each soak (axis up/down pair)".into(),
-                    points: data.iter().map(|d| (d.0, d.1)).collect(),
-                    error: Some(data.iter().map(|d| d.2).collect()),
-                    style: SeriesStyle::Markers,
-                    colour: 3,
-                });
-            }
-        }
-        v
-    };
+    let curve = |i: usize, bias: bool| parameter_series(fit, &k, &temps, i, bias, soaks);
     let residual = |i: usize| Series {
         label: "data − model ± 1σ".into(),
         points: fit
@@ -303,6 +257,63 @@ pub fn figure(o: &CalibrationOutcome, soaks: Option<&SoakPoints>) -> Option<Figu
         size: (1800, 1100),
         panels,
     })
+}
+
+/// One temperature parameter of axis `i` (the zero bias, or the scale): its fitted curve over
+/// `temps`, the curve ± 1σ (dashed), and each soak's measured value when given.
+fn parameter_series(
+    fit: &ThermalFit,
+    k: &[f64; 3],
+    temps: &[f64],
+    i: usize,
+    bias: bool,
+    soaks: Option<&SoakPoints>,
+) -> Vec<Series> {
+    let (c, cov, unit) = if bias {
+        (
+            &fit.model.zero_bias_out_per_c[i],
+            &fit.zero_bias_cov[i],
+            1e3 / k[i],
+        )
+    } else {
+        (&fit.model.scale_rel_per_c[i], &fit.scale_cov[i], 1e6)
+    };
+    let pts: Vec<(f64, f64, f64)> = temps
+        .iter()
+        .map(|&t| {
+            let (y, s) = fit.curve(c, cov, t);
+            (t, y * unit, s * unit)
+        })
+        .collect();
+    let band = |sign: f64| Series {
+        label: "fit ± 1σ".into(),
+        points: pts.iter().map(|p| (p.0, p.1 + sign * p.2)).collect(),
+        error: None,
+        style: SeriesStyle::Dashed,
+        colour: i,
+    };
+    let mut v = vec![
+        line("fit".into(), pts.iter().map(|p| (p.0, p.1)), i),
+        band(1.0),
+        band(-1.0),
+    ];
+    if let Some(sk) = soaks {
+        let data = if bias {
+            &sk.bias_mg[i]
+        } else {
+            &sk.scale_ppm[i]
+        };
+        if !data.is_empty() {
+            v.push(Series {
+                label: "each soak (axis up/down pair)".into(),
+                points: data.iter().map(|d| (d.0, d.1)).collect(),
+                error: Some(data.iter().map(|d| d.2).collect()),
+                style: SeriesStyle::Markers,
+                colour: 3,
+            });
+        }
+    }
+    v
 }
 
 fn line(label: String, points: impl Iterator<Item = (f64, f64)>, colour: usize) -> Series {
