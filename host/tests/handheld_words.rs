@@ -3,23 +3,18 @@
 //! position against its fitted attitude (residuals at the positions' own noise, as the terminal
 //! shows), and leaves the navigation replay out with the reason.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Runs `host ARGS`, which must succeed: stdout, stderr.
 fn host(args: &[&str]) -> (String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(args)
-        .output()
-        .unwrap();
-    let (out, err) = (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    );
-    assert!(o.status.success(), "host {args:?}: {err}");
+    let (ok, out, err) = common::host(args);
+    assert!(ok, "host {args:?}: {err}");
     (out, err)
 }
 
@@ -60,19 +55,7 @@ fn a_hand_held_calibration_and_its_report_speak_of_no_table() {
     let cal = d.join("cal");
     let rep = d.join("rep");
     host(&["-q", "simulate-hand", "--out", s(&raw)]);
-    host(&[
-        "segment",
-        "--input",
-        s(&raw),
-        "--out",
-        s(&session),
-        "--time-column",
-        "t",
-        "--acc-unit",
-        "m/s2",
-        "--gyro-unit",
-        "deg/s",
-    ]);
+    host(&common::hand_segment_args(s(&raw), s(&session)));
     let (out, err) = host(&["calibrate", "--input", s(&session), "--out-dir", s(&cal)]);
     assert_no_table_words("calibrate", &format!("{out}{err}"));
     assert!(out.contains("Free positions"), "{out}");
