@@ -63,6 +63,16 @@ pub struct CalibrateArgs {
         value_parser = limits::real(limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
     )]
     pub verify_tolerance_mg: f64,
+    /// With --port: verify again, at rest, at this temperature, °C: `--port sim` sets its virtual
+    /// chamber there; with a real board the operator brings it there (a hot plate or a chamber) and
+    /// its temperature reading is checked to within 2 °C.
+    #[arg(
+        long,
+        value_name = "C",
+        requires = "port",
+        value_parser = limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
+    )]
+    pub verify_temp_c: Option<f64>,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
     #[arg(long, value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
@@ -258,6 +268,7 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     opts.window_samples = a.window;
     opts.estimate = estimate_options(a);
     opts.verify_tolerance_mg = a.verify_tolerance_mg;
+    opts.verify_temp_c = a.verify_temp_c;
     opts.force = a.force;
     opts.quiet = quiet;
     let mut auto = AutomaticOperator {
@@ -324,6 +335,11 @@ pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The range of `--verify-temp-c`, °C: what an industrial part and a hot plate reach.
+const VERIFY_TEMP_MIN_C: f64 = -55.0;
+/// See [`VERIFY_TEMP_MIN_C`].
+const VERIFY_TEMP_MAX_C: f64 = 125.0;
+
 /// The files a live calibration wrote (under their final names) and each verification position.
 fn print_written_and_verified(
     out: &Output,
@@ -337,8 +353,10 @@ fn print_written_and_verified(
     ))?;
     for v in verification {
         out.line(format_args!(
-            "verify {:<28} error {:7.4} mg  {}",
+            "verify {:<36} {:>9}  error {:7.4} mg  {}",
             v.label,
+            v.temp_c
+                .map_or("— °C".to_string(), |t| format!("{t:.1} °C")),
             v.error_mg,
             if v.pass { "ok" } else { "FAIL" }
         ))?;

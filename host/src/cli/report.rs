@@ -48,8 +48,10 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     };
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
-    if !quiet {
-        crate::out!("{}", summary.render())?;
+    let out = super::output::Output { json: false, quiet };
+    out.human(summary.render())?;
+    for w in &summary.warnings {
+        out.warn(w);
     }
     Ok(())
 }

@@ -306,6 +306,7 @@ pub fn verify_magnitude<T: Transport>(
             measured_g,
             expected_g: up,
             error_mg,
+            temp_c: None,
             pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
         });
     }

@@ -38,6 +38,9 @@ pub struct ProcedureOptions {
     pub verify_tolerance_mg: f64,
     /// Seconds of data per verification position.
     pub verify_seconds: f64,
+    /// A second temperature to verify at (at rest), °C: the virtual chamber is set to it, or the
+    /// operator brings a real board there and its reading is checked.
+    pub verify_temp_c: Option<f64>,
     /// Replace an existing recording and calibration in `out_dir`.
     pub force: bool,
     /// No progress bars.
@@ -55,6 +58,7 @@ impl ProcedureOptions {
             estimate: EstimateOptions::default(),
             verify_tolerance_mg: 1.0,
             verify_seconds: 2.0,
+            verify_temp_c: None,
             force: false,
             quiet: false,
         }

@@ -26,6 +26,8 @@ pub struct VerificationPoint {
     pub expected_g: [f64; 3],
     /// Largest axis error, mg.
     pub error_mg: f64,
+    /// The device's mean temperature reading over the position, °C (`None`: it reports none).
+    pub temp_c: Option<f64>,
     /// Within the tolerance.
     pub pass: bool,
 }
@@ -81,6 +83,10 @@ fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f6
     v
 }
 
+/// Largest difference between the temperature asked for a second verification and the one the
+/// device reports, °C: a board not yet there is not verified "at" that temperature.
+pub const VERIFY_TEMP_TOLERANCE_C: f64 = 2.0;
+
 pub(crate) fn verify<T: Transport>(
     client: &mut DeviceClient<T>,
     op: &mut dyn Operator,
@@ -89,8 +95,6 @@ pub(crate) fn verify<T: Transport>(
     opts: &ProcedureOptions,
     sample_rate_hz: f64,
 ) -> Result<Vec<VerificationPoint>, LinkError> {
-    let g = plan.gravity_m_s2;
-    let mut points = Vec::new();
     // The expected specific force at the reference point O is g·up − W c, with c the reference point
     // relative to the table axis (`docs/model.md` §4.5); spinning checks need c, known for these references.
     let c = match opts.estimate.reference {
@@ -103,68 +107,159 @@ pub(crate) fn verify<T: Transport>(
             "verification at rest only: the plan has no rotations, so it calibrated no lever arm",
         );
     }
-    for (label, up, rate) in verification_positions(plan, drive) {
-        let Some(c) = (if rate == 0.0 { Some([0.0; 3]) } else { c }) else {
+    let mut points = Vec::new();
+    let positions = verification_positions(plan, drive);
+    for (label, up, rate) in &positions {
+        let Some(c) = (if *rate == 0.0 { Some([0.0; 3]) } else { c }) else {
             op.say(&format!(
                 "verify {label}: skipped (the centroid reference has no fixed table-axis offset)"
             ));
             continue;
         };
-        let seg = SegmentPlan {
-            name: label.clone(),
-            up_b: up,
-            rate_deg_s: rate,
-            rate_end_deg_s: None,
-            duration_s: Some(opts.verify_seconds),
-            table_centre_m: None,
-            mount: None,
-            ..SegmentPlan::default()
+        let p = Position {
+            label: label.clone(),
+            up: *up,
+            rate_deg_s: *rate,
+            centre_m: c,
         };
+        points.push(verify_position(
+            client,
+            op,
+            plan,
+            drive,
+            opts,
+            sample_rate_hz,
+            &p,
+        )?);
+    }
+    if let Some(t) = opts.verify_temp_c {
+        // A second temperature: the temperature model (or its absence) is what is judged, at rest.
         if drive {
-            client.set_table(table_for(&seg))?;
+            op.say(&format!(
+                "verification at {t:.1} °C: the virtual chamber is set to it"
+            ));
+            client.set_temperature(t as f32)?;
         } else {
-            op.wait_ready(&format!("verification: {}", instruction(&seg)))
-                .map_err(|e| LinkError::Unexpected {
-                    waiting_for: "the operator",
-                    got: e.to_string(),
-                })?;
+            op.wait_ready(&format!(
+                "verification at {t:.1} °C: bring the board to {t:.1} °C (a hot plate or a chamber) \
+                 and hold it there until its temperature is steady"
+            ))
+            .map_err(|e| LinkError::Unexpected {
+                waiting_for: "the operator",
+                got: e.to_string(),
+            })?;
         }
-        let window = ((sample_rate_hz / 10.0).round() as u32).max(1);
-        client.start_stream(StreamKind::CompensatedWindows, window)?;
-        let per_s = sample_rate_hz / f64::from(window);
-        for _ in 0..(opts.settle_s * per_s).round() as u64 {
-            client.next_compensated_window()?;
-        }
-        let n = (opts.verify_seconds * per_s).round().max(1.0) as u64;
-        let mut sum = [0.0f64; 3];
-        let mut count = 0.0f64;
-        let mut uncalibrated = false;
-        for _ in 0..n {
-            let w = client.next_compensated_window()?;
-            uncalibrated |= w.flags.has(SampleFlags::UNCALIBRATED);
-            let k = f64::from(w.count);
-            for j in 0..3 {
-                sum[j] += f64::from(w.mean_m_s2[j]) * k;
+        for (label, up, _) in positions.iter().filter(|p| p.2 == 0.0) {
+            let p = Position {
+                label: format!("{label}, {t:.0} °C"),
+                up: *up,
+                rate_deg_s: 0.0,
+                centre_m: [0.0; 3],
+            };
+            let mut point = verify_position(client, op, plan, drive, opts, sample_rate_hz, &p)?;
+            let reached = point
+                .temp_c
+                .is_some_and(|r| (r - t).abs() <= VERIFY_TEMP_TOLERANCE_C);
+            if !reached {
+                op.say(&format!(
+                    "verify {}: the device reads {}, not within {VERIFY_TEMP_TOLERANCE_C} °C of \
+                     {t:.1} °C: not verified at that temperature",
+                    point.label,
+                    point
+                        .temp_c
+                        .map_or("no temperature".to_string(), |r| format!("{r:.1} °C"))
+                ));
+                point.pass = false;
             }
-            count += k;
+            points.push(point);
         }
-        client.stop_stream()?;
-        let omega = up.map(|u| u * rate.to_radians());
-        let wc = shared::linalg::mat_vec(&shared::linalg::lever_matrix(&omega, &[0.0; 3]), &c);
-        let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
-        let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
-        let error_mg = (0..3)
-            .map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3)
-            .fold(0.0, f64::max);
-        points.push(VerificationPoint {
-            label,
-            up_b: up,
-            rate_deg_s: rate,
-            measured_g,
-            expected_g,
-            error_mg,
-            pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
-        });
     }
     Ok(points)
+}
+
+/// One verification position: where the unit is, how it turns, and the reference point's offset
+/// from the table axis.
+struct Position {
+    label: String,
+    up: [f64; 3],
+    rate_deg_s: f64,
+    centre_m: [f64; 3],
+}
+
+/// Sets up one position (the virtual table, or the operator), streams the compensated output for
+/// `opts.verify_seconds` after the settling time, and compares its mean with the expected specific
+/// force.
+fn verify_position<T: Transport>(
+    client: &mut DeviceClient<T>,
+    op: &mut dyn Operator,
+    plan: &Plan,
+    drive: bool,
+    opts: &ProcedureOptions,
+    sample_rate_hz: f64,
+    p: &Position,
+) -> Result<VerificationPoint, LinkError> {
+    let g = plan.gravity_m_s2;
+    let (up, rate) = (p.up, p.rate_deg_s);
+    let seg = SegmentPlan {
+        name: p.label.clone(),
+        up_b: up,
+        rate_deg_s: rate,
+        rate_end_deg_s: None,
+        duration_s: Some(opts.verify_seconds),
+        table_centre_m: None,
+        mount: None,
+        ..SegmentPlan::default()
+    };
+    if drive {
+        client.set_table(table_for(&seg))?;
+    } else {
+        op.wait_ready(&format!("verification: {}", instruction(&seg)))
+            .map_err(|e| LinkError::Unexpected {
+                waiting_for: "the operator",
+                got: e.to_string(),
+            })?;
+    }
+    let window = ((sample_rate_hz / 10.0).round() as u32).max(1);
+    client.start_stream(StreamKind::CompensatedWindows, window)?;
+    let per_s = sample_rate_hz / f64::from(window);
+    for _ in 0..(opts.settle_s * per_s).round() as u64 {
+        client.next_compensated_window()?;
+    }
+    let n = (opts.verify_seconds * per_s).round().max(1.0) as u64;
+    let (mut sum, mut count, mut uncalibrated) = ([0.0f64; 3], 0.0f64, false);
+    let (mut temp_sum, mut temp_count) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let w = client.next_compensated_window()?;
+        uncalibrated |= w.flags.has(SampleFlags::UNCALIBRATED);
+        let k = f64::from(w.count);
+        for j in 0..3 {
+            sum[j] += f64::from(w.mean_m_s2[j]) * k;
+        }
+        count += k;
+        if w.mean_temp_c.is_finite() {
+            temp_sum += f64::from(w.mean_temp_c) * k;
+            temp_count += k;
+        }
+    }
+    client.stop_stream()?;
+    let omega = up.map(|u| u * rate.to_radians());
+    let wc = shared::linalg::mat_vec(
+        &shared::linalg::lever_matrix(&omega, &[0.0; 3]),
+        &p.centre_m,
+    );
+    let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
+    let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
+    let error_mg = (0..3)
+        .map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3)
+        .fold(0.0, f64::max);
+    Ok(VerificationPoint {
+        label: p.label.clone(),
+        up_b: up,
+        rate_deg_s: rate,
+        measured_g,
+        expected_g,
+        error_mg,
+        temp_c: (temp_count > 0.0).then(|| temp_sum / temp_count),
+        pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
+    })
 }

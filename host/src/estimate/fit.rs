@@ -61,7 +61,7 @@ fn fit_session(
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
-    let chi2 = chi2_scale(&main, options, &mut prepared.warnings);
+    let chi2 = chi2_scale(&main, plan, options, &mut prepared.warnings);
     let frame_note = screen::reference_frame(plan, options, &mut prepared.warnings);
     let conv = paper_angles::convert(
         &main.theta,
@@ -71,7 +71,7 @@ fn fit_session(
         options,
         &frame_note,
     )?;
-    let observability = lever_arm_observability(&conv, options, &mut prepared.warnings)?;
+    let observability = lever_arm_observability(&conv, plan, options, &mut prepared.warnings)?;
     let (fitted, calibration) = calibration_of(plan, &main, &conv, &frame_note)?;
     let comparison = if options.compare_methods {
         compare(
@@ -297,7 +297,12 @@ struct ChiSquare {
 
 /// χ²/dof, whether to scale by it ([`ChiSquareScaling`]), and a warning when it cannot be checked or
 /// is well above 1.
-fn chi2_scale(main: &MainFit, options: &EstimateOptions, warnings: &mut Vec<String>) -> ChiSquare {
+fn chi2_scale(
+    main: &MainFit,
+    plan: &Plan,
+    options: &EstimateOptions,
+    warnings: &mut Vec<String>,
+) -> ChiSquare {
     let (fit_chi2, fit_dof) = (main.chi2, main.dof);
     let reduced = if fit_dof > 0 {
         fit_chi2 / fit_dof as f64
@@ -321,10 +326,16 @@ fn chi2_scale(main: &MainFit, options: &EstimateOptions, warnings: &mut Vec<Stri
                 .into(),
         );
     } else if scale2 > 1.0 {
+        let sources = if !rotates(plan) && plan.segments.iter().all(|s| s.is_free()) {
+            "movement while held still, bias drift, a temperature change"
+        } else if !rotates(plan) {
+            "a mount tilted beyond its attitude prior, bias drift, a temperature change"
+        } else {
+            "table attitude or rate error, bias drift, a table centre off the spin axis"
+        };
         warnings.push(format!(
             "χ²/dof = {reduced:.1} (dof {fit_dof}): the residuals exceed the segments' own noise, so the \
-             model misses an error source it cannot see (table attitude or rate error, bias drift, \
-             a table centre off the spin axis); the 1σ values are scaled by {:.2}",
+             model misses an error source it cannot see ({sources}); the 1σ values are scaled by {:.2}",
             scale2.sqrt()
         ));
     }
@@ -335,6 +346,7 @@ fn chi2_scale(main: &MainFit, options: &EstimateOptions, warnings: &mut Vec<Stri
 /// observable at all), or an error when the options require every one.
 fn lever_arm_observability(
     conv: &Converted,
+    plan: &Plan,
     options: &EstimateOptions,
     warnings: &mut Vec<String>,
 ) -> Result<Observability, EstimateError> {
@@ -347,6 +359,17 @@ fn lever_arm_observability(
         return Ok(observability);
     }
     let fixed_names = observability.undetermined_fixed();
+    if !rotates(plan) {
+        // Without rotation there is nothing to add but a table: the terminal says the lever arms are
+        // not calibrated, and a plan that needs them refuses below.
+        if options.require_lever_arms {
+            return Err(EstimateError::PlanCannotObserve {
+                parameters: undetermined,
+                hint: "lever arms need rotations on a rate table (docs/model.md §4.4)".into(),
+            });
+        }
+        return Ok(observability);
+    }
     warnings.push(format!(
         "the plan does not determine lever-arm component(s) {} to {:.0} µm{}; add rotations about \
          oblique axes (tilted mounts) and/or spin-up segments (docs/model.md §4.4)",
@@ -442,7 +465,7 @@ fn outcome(
     }
     let static_split = attitude::static_split(&main.theta, &scaled_cov, s.frame);
     let parameters = parameter_table(&problem, &main.theta, &scaled_cov);
-    warnings.extend(residual_warning(&segments));
+    warnings.extend(residual_warning(plan, &segments));
     CalibrationOutcome {
         method: options.method,
         calibration: s.calibration,
@@ -488,17 +511,24 @@ fn parameter_table(
 
 /// The warning for segments whose residuals are well above their own noise, naming the error
 /// sources their kind points to.
-fn residual_warning(segments: &[SegmentDiagnostic]) -> Option<String> {
+fn residual_warning(plan: &Plan, segments: &[SegmentDiagnostic]) -> Option<String> {
     let flagged: Vec<&SegmentDiagnostic> = segments.iter().filter(|d| d.chi2_flagged).collect();
     if flagged.is_empty() {
         return None;
     }
-    let statics = flagged.iter().any(|d| d.kind == SegmentKind::Static);
+    let is_free = |d: &&&SegmentDiagnostic| plan.segment(&d.name).is_some_and(|p| p.is_free());
+    let free = flagged.iter().filter(is_free).count() > 0;
+    let statics = flagged
+        .iter()
+        .any(|d| d.kind == SegmentKind::Static && !is_free(&d));
     let rotating = flagged.iter().any(|d| d.kind != SegmentKind::Static);
     let names: Vec<&str> = flagged.iter().map(|d| d.name.as_str()).collect();
     let mut sources = Vec::new();
+    if free {
+        sources.push("movement while held still or bias drift (the attitude is fitted, the bias taken as constant)");
+    }
     if statics {
-        sources.push("table attitude error or bias drift (the model takes up_b as exact and the bias as constant)");
+        sources.push("a mount tilted beyond its attitude prior, or bias drift (the bias is taken as constant)");
     }
     if rotating {
         sources.push("rate-dependent effects outside the model (table wobble, a table centre off the spin axis, gyro scale or misalignment)");
@@ -508,6 +538,12 @@ fn residual_warning(segments: &[SegmentDiagnostic]) -> Option<String> {
         names.join(", "),
         sources.join("; ")
     ))
+}
+
+/// Whether the session turns at all (rotations or ramps): only then do lever arms, a table centre
+/// and a table's rate enter the model.
+pub(crate) fn rotates(plan: &Plan) -> bool {
+    plan.segments.iter().any(|s| !s.is_static())
 }
 
 /// The angle between two unit vectors `chord` apart (|a − b| = 2 sin(θ/2)), degrees.

@@ -150,8 +150,8 @@ pub struct GyroEstimate {
     pub bias_rad_s: [f64; 3],
     /// Its 1σ, rad/s.
     pub bias_rad_s_1sigma: [f64; 3],
-    /// The table's rate scale error, and its 1σ.
-    pub table_rate_scale: (f64, f64),
+    /// The table's rate scale error, and its 1σ; `None` for a gyro fitted from hand turns (no table).
+    pub table_rate_scale: Option<(f64, f64)>,
     /// Names of the `G` entries the plan does not determine (e.g. `G[x][z]`).
     pub undetermined: Vec<String>,
 }
@@ -179,7 +179,7 @@ impl GyroEstimate {
             matrix_1sigma,
             bias_rad_s: b_of(t, base),
             bias_rad_s_1sigma: core::array::from_fn(|i| s(idx_b(base, i))),
-            table_rate_scale: (t[idx_rate(base)], s(idx_rate(base))),
+            table_rate_scale: Some((t[idx_rate(base)], s(idx_rate(base)))),
             undetermined,
         }
     }

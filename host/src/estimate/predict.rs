@@ -65,6 +65,10 @@ pub struct Prediction {
     pub mount_tilts: Vec<super::MountTilt>,
     /// The gyro model's 1σ (a perfect gyro's values), when the plan has spins.
     pub gyro: Option<super::GyroEstimate>,
+    /// The temperature model's 1σ, when the plan's static segments span a temperature range
+    /// (docs/model.md §9): the fit at the degrees the unit's own model has (linear where it has
+    /// none) on the noise-free statistics, its `*_sigma` the Cramér–Rao bound.
+    pub temperature: Option<super::thermal::ThermalFit>,
 }
 
 /// The predicted 1σ of every parameter for `plan` run on `truth` with the given noise: `stats` are the
@@ -89,6 +93,7 @@ pub fn predict(
     options.require_lever_arms = false;
     let out = calibrate_session_stats(plan, stats, &options)?;
     let sigma = core::array::from_fn(|p| out.covariance[p][p].max(0.0).sqrt());
+    let temperature = predict_temperature(plan, truth, stats)?;
     let mut truth_in_frame = *truth;
     truth_in_frame.lever_arms = match options.reference {
         ReferenceChoice::TableAxis => truth.lever_arms,
@@ -109,5 +114,105 @@ pub fn predict(
         static_split: out.static_split,
         mount_tilts: out.mount_tilts,
         gyro: out.gyro,
+        temperature,
     })
+}
+
+/// The degrees `(zero bias, scale)` per axis of a unit's temperature model: its highest non-zero
+/// coefficient's, at least 1 (a plan is judged for at least a linear model).
+fn degrees_of(truth: &Calibration) -> [(usize, usize); 3] {
+    let degree = |c: &[f64]| c.iter().rposition(|v| *v != 0.0).map_or(1, |k| k + 1);
+    core::array::from_fn(|i| match &truth.temperature {
+        Some(t) => (
+            degree(&t.zero_bias_out_per_c[i]),
+            degree(&t.scale_rel_per_c[i]),
+        ),
+        None => (1, 1),
+    })
+}
+
+/// The temperature model's predicted 1σ: each static segment with a chamber set-point gets its
+/// noise-free temperature moments (a soak at `temp_c`, or a ramp to `temp_end_c`, one reading per
+/// sample), and the temperature fit runs at fixed degrees. `None` for a plan without temperatures
+/// or spanning too little.
+fn predict_temperature(
+    plan: &Plan,
+    truth: &Calibration,
+    stats: &[SegmentStats],
+) -> Result<Option<super::thermal::ThermalFit>, EstimateError> {
+    if !plan.segments.iter().any(|s| s.temp_c.is_some()) {
+        return Ok(None);
+    }
+    let with_temperature: Vec<SegmentStats> = stats
+        .iter()
+        .map(|st| {
+            let mut st = st.clone();
+            if let Some(sp) = plan.segment(&st.name).filter(|sp| sp.is_static()) {
+                if let Some(t0) = sp.temp_c {
+                    let t1 = sp.temp_end_c.unwrap_or(t0);
+                    let n = st.count.max(2);
+                    let mut acc = crate::session::thermal::ThermalAccumulator::default();
+                    // The noise as an alternating ±1σ: the per-sample variance the fit reads from
+                    // a soak's scatter, or a ramp's scatter about its own cubic, is exactly the
+                    // plan's, and the mean and the temperature moments are the noise-free ones.
+                    let sd: [f64; 3] = core::array::from_fn(|i| st.cov_u[i][i].max(0.0).sqrt());
+                    for k in 0..n {
+                        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                        let u: [f64; 3] = core::array::from_fn(|i| st.mean_u[i] + sign * sd[i]);
+                        acc.push(&u, t0 + (t1 - t0) * k as f64 / (n - 1) as f64);
+                    }
+                    st.thermal = acc.finish();
+                }
+            }
+            st
+        })
+        .collect();
+    let (fit, _) =
+        super::thermal::fit_session_at_degrees(plan, &with_temperature, degrees_of(truth))
+            .map_err(EstimateError::Temperature)?;
+    Ok(fit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::thermal_tests::{hot_unit, simulate_stats, soak_plan};
+    use crate::sim::thermal::ThermalSim;
+    use crate::sim::NoiseModel;
+
+    /// The predicted 1σ of the temperature coefficients is what a fit of a simulated session of the
+    /// same plan and noise reports (its own 1σ, from that session's scatter): within 25 %.
+    #[test]
+    fn predicts_the_temperature_models_sigma_of_a_simulated_soak() {
+        let truth = hot_unit();
+        let plan = soak_plan(&[-20.0, 5.0, 25.0, 40.0, 60.0], 10.0);
+        let noise = NoiseModel::default();
+        let settings = PredictSettings {
+            noise_out_per_sample_1sigma: truth
+                .statics
+                .scale_out_per_g
+                .map(|k| noise.accel_white_mg * 1e-3 * k.abs()),
+            ..PredictSettings::white(0.0)
+        };
+        let synth = crate::sim::synth::prediction_stats(&plan, &truth, &settings).unwrap();
+        let predicted = predict(&plan, &truth, &synth, &settings)
+            .unwrap()
+            .temperature
+            .expect("a temperature prediction");
+        let stats = simulate_stats(&truth, &plan, &noise, &ThermalSim::default(), 5);
+        let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+        let fit = out.thermal.expect("a temperature model");
+        assert_eq!(fit.zero_bias_degree, predicted.zero_bias_degree);
+        assert_eq!(fit.scale_degree, predicted.scale_degree);
+        for i in 0..3 {
+            for k in 0..predicted.zero_bias_degree[i] {
+                let r = predicted.zero_bias_sigma[i][k] / fit.zero_bias_sigma[i][k];
+                assert!((0.8..1.25).contains(&r), "bias {i} c{k}: ratio {r}");
+            }
+            for k in 0..predicted.scale_degree[i] {
+                let r = predicted.scale_sigma[i][k] / fit.scale_sigma[i][k];
+                assert!((0.8..1.25).contains(&r), "scale {i} c{k}: ratio {r}");
+            }
+        }
+    }
 }

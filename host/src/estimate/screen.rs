@@ -541,7 +541,8 @@ pub(crate) fn reference_frame(
         .collect();
     let common = centres.first().copied();
     if centres.is_empty() {
-        if options.reference == ReferenceChoice::TableAxis {
+        // Without rotation no lever arm is calibrated, so their reference point says nothing.
+        if options.reference == ReferenceChoice::TableAxis && super::fit::rotates(plan) {
             warnings.push(
                 "the plan gives no table centre: the lever arms are relative to the point on the table's \
                  spin axis (the paper's assumption p = 0); only differences r_i − r_j are free of it"

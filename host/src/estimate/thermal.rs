@@ -96,6 +96,24 @@ pub fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
 ) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+    fit_with(plan, stats, None)
+}
+
+/// [`fit_session`] at given degrees `(zero bias, scale)` per axis instead of the BIC's choice: on
+/// noise-free statistics its 1σ are the Cramér–Rao bound of a plan (`host plan --check`).
+pub fn fit_session_at_degrees(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    degrees: [(usize, usize); 3],
+) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+    fit_with(plan, stats, Some(degrees))
+}
+
+fn fit_with(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    degrees: Option<[(usize, usize); 3]>,
+) -> Result<(Option<ThermalFit>, Vec<String>), String> {
     let obs: Vec<Obs> = stats
         .iter()
         .filter_map(|st| {
@@ -157,7 +175,7 @@ pub fn fit_session(
         notes: Vec::new(),
     };
     for axis in 0..3 {
-        fit_axis(&obs, axis, &mut fit)?;
+        fit_axis(&obs, axis, degrees.map(|d| d[axis]), &mut fit)?;
     }
     let statics: Vec<(&SegmentStats, &ThermalStats, [f64; 3])> = stats
         .iter()
@@ -319,9 +337,14 @@ fn normal_equations(
     (n, g, chi2)
 }
 
-/// Fits axis `axis` at every degree pair, starting from the fit without temperature terms, keeps
-/// the pair of least BIC and writes it into `fit`.
-fn fit_axis(obs: &[Obs], axis: usize, fit: &mut ThermalFit) -> Result<(), String> {
+/// Fits axis `axis` at every degree pair (or only at `forced`), starting from the fit without
+/// temperature terms, keeps the pair of least BIC and writes it into `fit`.
+fn fit_axis(
+    obs: &[Obs],
+    axis: usize,
+    forced: Option<(usize, usize)>,
+    fit: &mut ThermalFit,
+) -> Result<(), String> {
     let d = shift_matrix(fit.model.reference_c);
     let base = solve_axis(obs, axis, &active(0, 0), &d, [0.0; NPAR])
         .ok_or_else(|| format!("accelerometer {}: the static segments do not determine its bias and scale (too few attitudes)", shared::params::axis_name(axis)))?;
@@ -329,6 +352,9 @@ fn fit_axis(obs: &[Obs], axis: usize, fit: &mut ThermalFit) -> Result<(), String
     let mut results = Vec::new();
     for db in 0..=DEG {
         for ds in 0..=DEG {
+            if forced.is_some_and(|f| f != (db, ds)) {
+                continue;
+            }
             if let Some(r) = solve_axis(obs, axis, &active(db, ds), &d, base.theta) {
                 results.push(((db, ds), r));
             }

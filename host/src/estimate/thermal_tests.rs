@@ -207,9 +207,24 @@ fn soak_steps_calibrate_bias_and_scale_over_temperature() {
             }
         }
     }
-    let fig = crate::report::thermal::figure(&out).unwrap();
-    assert_eq!(fig.panels.len(), 3);
-    assert_eq!(fig.panels[2].series[0].points.len(), plan.segments.len());
+    let soaks = crate::report::thermal::soak_points(&out, &plan, &stats);
+    let fig = crate::report::thermal::figure(&out, Some(&soaks)).unwrap();
+    assert_eq!(fig.panels.len(), 9);
+    assert_eq!(fig.panels[6].series[0].points.len(), plan.segments.len());
+    // Each soak's measured bias lies on the true curve within its own noise and the misalignment's
+    // share (independent truth: the simulated unit's tempco).
+    for i in 0..3 {
+        assert!(!soaks.bias_mg[i].is_empty(), "axis {i}: no soak pair");
+        for &(t, mg, sigma) in &soaks.bias_mg[i] {
+            let truth = poly_no_constant(&th.zero_bias_out_per_c[i], t - fit.model.reference_c)
+                / out.calibration.statics.scale_out_per_g[i]
+                * 1e3;
+            assert!(
+                (mg - truth).abs() < 5.0 * sigma + 0.02,
+                "axis {i} {t} °C: {mg} vs {truth} mg"
+            );
+        }
+    }
     let dir = tempfile::tempdir().unwrap();
     let formats = crate::report::plot::Formats {
         png: false,

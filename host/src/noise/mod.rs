@@ -511,13 +511,14 @@ impl NoiseReport {
         s
     }
 
-    /// The Allan curves and fitted lines, x = log10 τ, y logarithmic.
+    /// The Allan curves (markers) and fitted lines, on log–log axes with a labelled tick per decade.
     pub fn figure(&self) -> Figure {
         let panel = |range: std::ops::Range<usize>, title: &str, unit: &str| Panel {
             title: title.into(),
-            x_desc: "log10(τ / s)".into(),
+            x_desc: "τ (s)".into(),
             y_desc: format!("Allan deviation [{unit}]"),
             x_categories: None,
+            log_x: true,
             log_y: true,
             series: self.axes[range]
                 .iter()
@@ -525,7 +526,7 @@ impl NoiseReport {
                 .flat_map(|(c, a)| {
                     let measured = Series {
                         label: a.axis.clone(),
-                        points: a.points.iter().map(|p| (p.tau_s.log10(), p.adev)).collect(),
+                        points: a.points.iter().map(|p| (p.tau_s, p.adev)).collect(),
                         error: None,
                         style: SeriesStyle::Markers,
                         colour: c,
@@ -535,7 +536,7 @@ impl NoiseReport {
                         points: a
                             .points
                             .iter()
-                            .map(|p| (p.tau_s.log10(), a.terms.adev(p.tau_s)))
+                            .map(|p| (p.tau_s, a.terms.adev(p.tau_s)))
                             .collect(),
                         error: None,
                         style: SeriesStyle::Line,

@@ -370,9 +370,10 @@ fn comparison_notes(
     }
     if ca.reference != cb.reference {
         notes.push(format!(
-            "the lever arms are relative to different reference points ({:?} vs {:?}): only their \
+            "the lever arms are relative to different reference points ({} vs {}): only their \
              differences r_i − r_j compare",
-            ca.reference, cb.reference
+            super::format::reference_point(&ca.reference),
+            super::format::reference_point(&cb.reference)
         ));
     }
     if (ca.gravity_m_s2 - cb.gravity_m_s2).abs() > 1e-9 {

@@ -5,8 +5,12 @@
 //! For every segment of the session, from its mean outputs `ū` and mean gyro rate, with the given
 //! calibration:
 //!
-//! - the true specific force at the reference point, `g·up_b − W p` (`p` = the plan's `table_centre_m`,
-//!   0 when absent; `W = [ω̇×] + [ω×]²` from the measured rate);
+//! - the theoretical specific force at the calibration's reference point: the one the terminal shows,
+//!   the session's own fit's (each segment's *fitted* attitude, [`Theoretical::Fitted`]); where the
+//!   fit has no value for a segment (excluded, or the fit failed), the plan's `g·up_b − W p`
+//!   ([`Theoretical::Planned`]; `p` = the plan's `table_centre_m`, 0 when absent; `W = [ω̇×] + [ω×]²`
+//!   from the measured rate) for a fixture's known attitude, and nothing for a free (hand-held)
+//!   attitude, whose `up_b` is only a rough guess ([`Theoretical::Unknown`]: not compared);
 //! - "before": bias and scale removed only, `(ū_i − u0_i)/k_i` (the paper's Tables 2 and 4 "before");
 //! - "after, static": `shared::Compensator` with [`LeverMode::Off`] (paper eq. 6);
 //! - "after, static + dynamic": `shared::Compensator` with [`LeverMode::RateAndAcceleration`] at the
@@ -147,6 +151,18 @@ impl Compensation {
     }
 }
 
+/// Where a row's theoretical specific force comes from (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Theoretical {
+    /// The session's own fit: the segment's fitted attitude, at the calibration's reference point
+    /// (what the terminal's "Outputs per segment" shows).
+    Fitted,
+    /// The plan's nominal attitude (a fixture segment the fit has no value for).
+    Planned,
+    /// A free attitude the fit has no value for: nothing to compare against (NaN).
+    Unknown,
+}
+
 /// One segment's outputs before and after compensation (Tables 2 and 4).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SegmentRow {
@@ -154,8 +170,12 @@ pub struct SegmentRow {
     pub name: String,
     /// What it does.
     pub kind: SegmentKind,
-    /// The plan's up.
+    /// The plan's up (the fitted up once [`Theoretical::Fitted`]).
     pub up_b: [f64; 3],
+    /// Whether the plan gives the attitude only as a rough guess (hand-held).
+    pub free: bool,
+    /// Where `truth_g` comes from.
+    pub theoretical: Theoretical,
     /// Measured mean rate about `up_b`, °/s.
     pub rate_deg_s: f64,
     /// The plan's rate (at the segment's start), °/s.
@@ -166,7 +186,7 @@ pub struct SegmentRow {
     pub omega_rad_s: [f64; 3],
     /// Angular acceleration used, rad/s².
     pub omega_dot_rad_s2: [f64; 3],
-    /// True specific force at the reference point, g.
+    /// Theoretical specific force at the reference point, g (NaN when [`Theoretical::Unknown`]).
     pub truth_g: [f64; 3],
     /// Bias and scale removed only, g.
     pub before_g: [f64; 3],
@@ -217,6 +237,8 @@ pub struct ReportData {
     /// The session's segments through the session fit's own calibration (empty when it failed or its
     /// compensator cannot be built: the text then shows the fit's values only).
     pub session_fit_segments: Vec<SegmentRow>,
+    /// The temperature figure, for a session whose own fit has a temperature model.
+    pub temperature_figure: Option<super::plot::Figure>,
     /// Warnings for the reader.
     pub warnings: Vec<String>,
 }
@@ -277,9 +299,7 @@ pub fn segment_rows(
             .rad_s
             .map(f64::from);
         let omega_dot = linalg::mat_vec(&gyro_inv, &st.wdot_rad_s2);
-        let p = sp.table_centre_m.unwrap_or([0.0; 3]);
-        let wp = linalg::mat_vec(&linalg::lever_matrix(&omega, &omega_dot), &p);
-        let truth_g: [f64; 3] = std::array::from_fn(|j| sp.up_b[j] - wp[j] / g);
+        let (truth_g, theoretical) = planned_theoretical(sp, &omega, &omega_dot, g);
         let u = SensorOutputs {
             raw: st.mean_u.map(|v| v as f32),
         };
@@ -302,6 +322,8 @@ pub fn segment_rows(
             name: st.name.clone(),
             kind,
             up_b: sp.up_b,
+            free: sp.is_free(),
+            theoretical,
             rate_deg_s: linalg::dot(&mean_w, &sp.up_b).to_degrees(),
             planned_rate_deg_s: sp.rate_deg_s,
             count: st.count,
@@ -317,8 +339,27 @@ pub fn segment_rows(
     Ok(rows)
 }
 
+/// The plan's specific force at the reference point, `g·up_b − W p` in g, for a fixture's known
+/// attitude; nothing (NaN) for a free one, whose `up_b` is only a rough guess.
+fn planned_theoretical(
+    sp: &crate::session::SegmentPlan,
+    omega: &[f64; 3],
+    omega_dot: &[f64; 3],
+    g: f64,
+) -> ([f64; 3], Theoretical) {
+    if sp.is_free() {
+        return ([f64::NAN; 3], Theoretical::Unknown);
+    }
+    let p = sp.table_centre_m.unwrap_or([0.0; 3]);
+    let wp = linalg::mat_vec(&linalg::lever_matrix(omega, omega_dot), &p);
+    (
+        std::array::from_fn(|j| sp.up_b[j] - wp[j] / g),
+        Theoretical::Planned,
+    )
+}
+
 /// Computes everything the report shows. `session_fit`: the session's own fit when the caller has it
-/// (else it is run here with `options.estimate`).
+/// (else it is run here with `options.estimate`, at the calibration's reference point).
 pub fn build_report(
     plan: &Plan,
     stats: &[SegmentStats],
@@ -329,13 +370,30 @@ pub fn build_report(
 ) -> Result<ReportData, ReportError> {
     // A calibration in another output unit is refused before anything is computed from it.
     crate::apply::check_output_unit(cal, plan).map_err(|e| ReportError::Segment(e.to_string()))?;
-    let segments = segment_rows(plan, stats, cal)?;
+    let mut segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
         return Err(ReportError::Segment(
             "the session has no segment of its plan with data: nothing to report".into(),
         ));
     }
+    let session_fit = match session_fit {
+        Some(o) => Ok(o),
+        None => {
+            let estimate = EstimateOptions {
+                reference: reference_choice(&cal.reference),
+                ..options.estimate.clone()
+            };
+            calibrate_session_stats(plan, stats, &estimate).map_err(|e| e.to_string())
+        }
+    };
     let mut warnings = Vec::new();
+    match &session_fit {
+        Ok(o) => refer_to_fit(&mut segments, o),
+        Err(e) => warnings.push(format!(
+            "the session alone does not calibrate ({e}): the theoretical values are the plan's \
+             nominal attitudes, and free (hand-held) positions are not compared"
+        )),
+    }
     let (mut chi2, mut terms) = (0.0, 0usize);
     for r in &segments {
         let e = r.error_g(Compensation::Full);
@@ -346,55 +404,16 @@ pub fn build_report(
             }
         }
     }
-    let find = |name: &str| {
-        segments
-            .iter()
-            .find(|r| r.name == name)
-            .ok_or_else(|| ReportError::Segment(format!("segment '{name}' is not in the session")))
-    };
-    let static_row = match &options.static_run {
-        Some(n) => Some(find(n)?),
-        None => segments.iter().find(|r| r.kind == SegmentKind::Static),
-    };
-    let rate_row = match &options.rate_run {
-        Some(n) => Some(find(n)?),
-        None => segments
-            .iter()
-            .filter(|r| r.kind == SegmentKind::ConstantRate)
-            .fold(None::<&SegmentRow>, |best, r| match best {
-                Some(b) if b.planned_rate_deg_s.abs() >= r.planned_rate_deg_s.abs() => Some(b),
-                _ => Some(r),
-            }),
-    };
-    if static_row.is_none() {
-        warnings.push("no static segment: the static navigation replay is left out".into());
-    }
-    if rate_row.is_none() {
-        warnings
-            .push("no constant-rate segment: the rotating navigation replay is left out".into());
-    }
-    let g = cal.gravity_m_s2;
-    let navigation = [static_row, rate_row]
-        .into_iter()
-        .flatten()
-        .map(|r| {
-            replay(
-                r,
-                g,
-                options.navigation_duration_s,
-                options.navigation_step_s,
-            )
-        })
-        .collect();
-    let session_fit = match session_fit {
-        Some(o) => Ok(o),
-        None => calibrate_session_stats(plan, stats, &options.estimate).map_err(|e| e.to_string()),
-    };
+    let navigation = navigation_runs(&segments, cal.gravity_m_s2, options, &mut warnings)?;
     let session_fit_segments = match &session_fit {
         Ok(o) => segment_rows(plan, stats, &o.calibration).unwrap_or_default(),
         Err(_) => Vec::new(),
     };
+    let temperature_figure = session_fit.as_ref().ok().and_then(|o| {
+        super::thermal::figure(o, Some(&super::thermal::soak_points(o, plan, stats)))
+    });
     Ok(ReportData {
+        temperature_figure,
         calibration: *cal,
         uncertainty: uncertainty.cloned(),
         unit_symbol: cal.statics.output_unit.symbol().to_string(),
@@ -406,4 +425,99 @@ pub fn build_report(
         session_fit_segments,
         warnings,
     })
+}
+
+/// The estimator's choice of the reference point a calibration's lever arms are referred to, so
+/// that the session's own fit gives its specific force where this calibration's output is.
+fn reference_choice(r: &shared::ReferencePoint) -> crate::estimate::ReferenceChoice {
+    use crate::estimate::ReferenceChoice;
+    match *r {
+        shared::ReferencePoint::TableAxis => ReferenceChoice::TableAxis,
+        shared::ReferencePoint::Centroid => ReferenceChoice::Centroid,
+        shared::ReferencePoint::BodyPoint { offset_m } => ReferenceChoice::BodyPoint(offset_m),
+    }
+}
+
+/// Every row the fit used takes the fit's theoretical specific force and fitted up: the one meaning
+/// of "theoretical" the terminal shows too (docs/model.md §7: a mount's attitude is estimated).
+fn refer_to_fit(rows: &mut [SegmentRow], fit: &CalibrationOutcome) {
+    for r in rows.iter_mut() {
+        let Some(d) = fit
+            .segments
+            .iter()
+            .find(|d| d.name == r.name && d.used && d.theoretical_g.iter().all(|v| v.is_finite()))
+        else {
+            continue;
+        };
+        r.truth_g = d.theoretical_g;
+        r.up_b = d.up_b;
+        r.theoretical = Theoretical::Fitted;
+    }
+}
+
+/// The static and the rotating replay, where they mean something. A free (hand-held) position's
+/// attitude is fitted from the same outputs the replay would judge: its error after compensation is
+/// the fit's own residual along gravity only, so it is not replayed (and the reader is told why).
+fn navigation_runs(
+    segments: &[SegmentRow],
+    g: f64,
+    options: &ReportOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<NavigationRun>, ReportError> {
+    let find = |name: &str| {
+        segments
+            .iter()
+            .find(|r| r.name == name)
+            .ok_or_else(|| ReportError::Segment(format!("segment '{name}' is not in the session")))
+    };
+    let known = |r: &&SegmentRow| !r.free && r.theoretical != Theoretical::Unknown;
+    let static_row = match &options.static_run {
+        Some(n) => Some(find(n)?).filter(known),
+        None => segments
+            .iter()
+            .filter(known)
+            .find(|r| r.kind == SegmentKind::Static),
+    };
+    let rate_row = match &options.rate_run {
+        Some(n) => Some(find(n)?).filter(known),
+        None => segments
+            .iter()
+            .filter(known)
+            .filter(|r| r.kind == SegmentKind::ConstantRate)
+            .fold(None::<&SegmentRow>, |best, r| match best {
+                Some(b) if b.planned_rate_deg_s.abs() >= r.planned_rate_deg_s.abs() => Some(b),
+                _ => Some(r),
+            }),
+    };
+    let free = segments.iter().any(|r| r.free);
+    if static_row.is_none() {
+        warnings.push(if free {
+            "the navigation replay is left out: every position was held by hand, so its attitude is \
+             fitted from the very outputs the replay would judge (it would show the fit's own \
+             residual, not a navigator's drift); the before/after table against the fitted \
+             attitudes is the check"
+                .into()
+        } else {
+            "no static segment with a known attitude: the static navigation replay is left out".into()
+        });
+    }
+    if rate_row.is_none() && !free {
+        warnings.push(
+            "no constant-rate segment with a known attitude: the rotating navigation replay is left \
+             out"
+            .into(),
+        );
+    }
+    Ok([static_row, rate_row]
+        .into_iter()
+        .flatten()
+        .map(|r| {
+            replay(
+                r,
+                g,
+                options.navigation_duration_s,
+                options.navigation_step_s,
+            )
+        })
+        .collect())
 }

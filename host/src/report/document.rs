@@ -1,7 +1,7 @@
 //! `host report`: a recorded session judged by a calibration, written as figures (PNG, SVG) and
 //! `report.html` / `report.md` with Tables 1–4 and the navigation replay.
 
-use super::data::{build_report, ReportData, ReportError, ReportOptions};
+use super::data::{build_report, Compensation, ReportData, ReportError, ReportOptions};
 use super::figures::report_figures;
 use super::markup::{to_html, to_markdown};
 use super::navigation::render_navigation;
@@ -33,16 +33,53 @@ pub struct ReportSummary {
 }
 
 impl ReportSummary {
-    /// What the CLI prints.
+    /// What the CLI prints as its result (the warnings go to stderr, one by one).
     pub fn render(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "Report: {}", self.page.display());
-        let _ = writeln!(s, "{}", render_navigation(&self.data.navigation));
-        for w in &self.warnings {
-            let _ = writeln!(s, "warning: {w}");
+        let _ = write!(s, "{}", render_before_after(&self.data));
+        if !self.data.navigation.is_empty() {
+            let _ = writeln!(s, "{}", render_navigation(&self.data.navigation));
         }
         s
     }
+}
+
+/// One line per compensation level: the rms over segments of |output − theoretical| and the rms of
+/// the segments' own noise, so the reader sees at once whether "after" is down at the noise.
+pub fn render_before_after(data: &ReportData) -> String {
+    let compared: Vec<_> = data
+        .segments
+        .iter()
+        .filter(|r| r.truth_g.iter().all(|v| v.is_finite()))
+        .collect();
+    let mut s = String::new();
+    if compared.is_empty() {
+        return s;
+    }
+    let rms = |f: &dyn Fn(&super::SegmentRow) -> f64| {
+        (compared.iter().map(|r| f(r).powi(2)).sum::<f64>() / compared.len() as f64).sqrt()
+    };
+    let _ = writeln!(
+        s,
+        "Outputs against the theoretical (this session's fitted attitudes), rms over {} segment(s) of |output − theoretical|:",
+        compared.len()
+    );
+    for c in Compensation::ALL {
+        let _ = writeln!(
+            s,
+            "  {:<26} {:>10.1} µg",
+            c.label(),
+            rms(&|r| shared::linalg::norm(&r.error_g(c))) * 1e6
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  {:<26} {:>10.1} µg",
+        "the segments' own noise",
+        rms(&|r| shared::linalg::norm(&r.sigma_g)) * 1e6
+    );
+    s
 }
 
 /// Writes the figures and the page of `data` into `out_dir`.

@@ -7,16 +7,18 @@ use super::plot::{Figure, Panel, Series, SeriesStyle};
 use shared::linalg;
 use shared::params::axis_name;
 
-/// Figure (a), paper Figs. 5 and 8: each segment's output minus the true value, mg, before and after
+/// Figure (a), paper Figs. 5 and 8: each segment's output minus the theoretical value (the session
+/// fit's, as in the tables), mg, before and after
 /// compensation; one panel per axis.
 pub fn outputs_figure(data: &ReportData) -> Figure {
     let cats: Vec<String> = data.segments.iter().map(|r| r.name.clone()).collect();
     let panels = (0..3)
         .map(|j| Panel {
-            title: format!("{} output − true value", axis_name(j)),
+            title: format!("{} output − theoretical", axis_name(j)),
             x_desc: "segment".into(),
             y_desc: "mg".into(),
             x_categories: Some(cats.clone()),
+            log_x: false,
             log_y: false,
             // Segments are categories: markers only (a line between them would suggest an order
             // in between), each compensation shifted a little so that none hides another.
@@ -40,8 +42,9 @@ pub fn outputs_figure(data: &ReportData) -> Figure {
         .collect();
     Figure {
         stem: "outputs".into(),
-        title: "Outputs before and after compensation, minus the true value (paper Figs. 5, 8)"
-            .into(),
+        title:
+            "Outputs before and after compensation, minus the theoretical value (paper Figs. 5, 8)"
+                .into(),
         grid: (3, 1),
         size: (1200, 1000),
         panels,
@@ -60,6 +63,7 @@ pub fn residuals_figure(data: &ReportData) -> Figure {
             x_desc: "segment".into(),
             y_desc: "µg".into(),
             x_categories: Some(cats.clone()),
+            log_x: false,
             log_y: false,
             series: vec![Series {
                 label: "residual ± 1σ of the segment mean".into(),
@@ -92,6 +96,7 @@ pub fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
         x_desc: "t (s)".into(),
         y_desc: unit.into(),
         x_categories: None,
+        log_x: false,
         log_y: true,
         series: run
             .cases
@@ -132,6 +137,7 @@ pub fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
 /// All figures of a report: outputs, residuals, then one per navigation run.
 pub fn report_figures(data: &ReportData) -> Vec<Figure> {
     let mut v = vec![outputs_figure(data), residuals_figure(data)];
+    v.extend(data.temperature_figure.clone());
     for (k, run) in data.navigation.iter().enumerate() {
         let stem = if k == 0 && run.rate_deg_s.abs() < 0.5 {
             "navigation_static".to_string()

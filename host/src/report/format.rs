@@ -38,6 +38,29 @@ pub fn pm_opt(v: f64, s: Option<f64>, digits: usize) -> String {
     }
 }
 
+/// The reference point of the lever arms, in words (never a type's name).
+pub fn reference_point(r: &shared::ReferencePoint) -> String {
+    match r {
+        shared::ReferencePoint::TableAxis => "the point on the table's spin axis".into(),
+        shared::ReferencePoint::Centroid => "the centroid of the three sensing points".into(),
+        shared::ReferencePoint::BodyPoint { offset_m } => format!(
+            "the body point ({:+.3}, {:+.3}, {:+.3}) mm from the table-axis point",
+            offset_m[0] * 1e3,
+            offset_m[1] * 1e3,
+            offset_m[2] * 1e3
+        ),
+    }
+}
+
+/// A value in g to 0.1 µg, or "—" when there is none (NaN).
+pub fn g_or_dash(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:+.6}")
+    } else {
+        "—".into()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

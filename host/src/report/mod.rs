@@ -12,6 +12,7 @@
 //!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
 //! - [`compare`]: two calibrations side by side, and the `host export` text.
 
+pub mod axes;
 pub mod compare;
 pub mod data;
 pub mod document;

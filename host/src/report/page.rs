@@ -2,9 +2,10 @@
 //! (the paper's Tables 2 and 4), the navigation table, the figures; [`super::markup`] writes it as
 //! Markdown and HTML.
 
+use super::data::Theoretical;
 use super::data::{Compensation, ReportData};
 use super::figures::fmt_rate;
-use super::format::{out_digits, pm_opt};
+use super::format::{g_or_dash, out_digits, pm, pm_opt, reference_point};
 use super::navigation::NavigationRun;
 use crate::estimate::SegmentKind;
 use shared::linalg;
@@ -111,12 +112,11 @@ pub fn before_after_table(data: &ReportData, rotating: bool) -> Block {
                     String::new()
                 },
                 axis_name(j).to_string(),
-                format!("{:+.6}", r.truth_g[j]),
+                g_or_dash(r.truth_g[j]),
                 format!("{:+.6}", r.before_g[j]),
                 format!("{:+.6}", r.after_static_g[j]),
                 format!("{:+.6}", r.after_g[j]),
-                format!("{:+.1}", r.error_g(Compensation::Full)[j] * 1e6),
-                format!("{:.1}", r.sigma_g[j] * 1e6),
+                residual_cell(r.error_g(Compensation::Full)[j], r.sigma_g[j]),
             ]);
         }
     }
@@ -128,13 +128,64 @@ pub fn before_after_table(data: &ReportData, rotating: bool) -> Block {
             "before: bias+scale (g)",
             "after: static (g)",
             "after: static+dynamic (g)",
-            "residual (µg)",
-            "1σ (µg)",
+            "residual ± 1σ (µg)",
         ]
         .map(String::from)
         .to_vec(),
         rows,
     }
+}
+
+/// The residual after full compensation and the segment's own 1σ, µg, through the one ± formatter
+/// (to 0.1 µg, more when the 1σ needs it); "—" without a theoretical value.
+fn residual_cell(e_g: f64, sigma_g: f64) -> String {
+    if e_g.is_finite() {
+        pm(e_g * 1e6, sigma_g * 1e6, 1)
+    } else {
+        "—".into()
+    }
+}
+
+/// Whether the calibration carries lever arms at all (a session without rotations fixes them at 0).
+fn lever_arms_calibrated(data: &ReportData) -> bool {
+    match &data.uncertainty {
+        Some(u) => u
+            .lever_arms_m_1sigma
+            .iter()
+            .flatten()
+            .any(|s| s.is_finite()),
+        None => data
+            .calibration
+            .lever_arms
+            .r_m
+            .iter()
+            .flatten()
+            .any(|r| *r != 0.0),
+    }
+}
+
+/// What "theoretical" means in the tables and figures below.
+fn theoretical_note(data: &ReportData) -> String {
+    let count = |t| data.segments.iter().filter(|r| r.theoretical == t).count();
+    let mut s = "Theoretical: the specific force at the calibration's reference point that this \
+                 session's own fit gives, with each segment's fitted attitude (the terminal's \
+                 \"Outputs per segment\" shows the same)."
+        .to_string();
+    let planned = count(Theoretical::Planned);
+    if planned > 0 {
+        s.push_str(&format!(
+            " {planned} segment(s) the fit has no value for are compared against the plan's nominal \
+             attitude."
+        ));
+    }
+    let unknown = count(Theoretical::Unknown);
+    if unknown > 0 {
+        s.push_str(&format!(
+            " {unknown} hand-held position(s) the fit has no value for have no theoretical value \
+             (their planned attitude is only a rough guess): shown as —."
+        ));
+    }
+    s
 }
 
 /// The navigation table: final velocity and position error of each replayed run and level.
@@ -185,20 +236,32 @@ pub fn page(
     }
     b.push(Block::Heading(2, "Table 1. Static calibration".into()));
     b.push(table1(data));
-    b.push(Block::Heading(2, "Table 3. Lever arms".into()));
-    b.push(Block::Para(format!(
-        "Reference point: {:?}. n.d. = not determined by the calibrating plan.",
-        data.calibration.reference
-    )));
-    b.push(table3(data));
+    if lever_arms_calibrated(data) {
+        b.push(Block::Heading(2, "Table 3. Lever arms".into()));
+        b.push(Block::Para(format!(
+            "Reference point: {}. n.d. = not determined by the calibrating plan.",
+            reference_point(&data.calibration.reference)
+        )));
+        b.push(table3(data));
+    } else {
+        b.push(Block::Heading(2, "Lever arms".into()));
+        b.push(Block::Para(
+            "Not calibrated: the calibrating session has no rotation, so the lever arms are 0 and \
+             the device applies no size-effect correction (static compensation only)."
+                .into(),
+        ));
+    }
     b.push(Block::Heading(
         2,
         "Outputs before and after compensation (like Tables 2 and 4)".into(),
     ));
+    b.push(Block::Para(theoretical_note(data)));
     b.push(Block::Heading(3, "Static segments (Table 2)".into()));
     b.push(before_after_table(data, false));
-    b.push(Block::Heading(3, "Rotating segments (Table 4)".into()));
-    b.push(before_after_table(data, true));
+    if data.segments.iter().any(|r| r.kind != SegmentKind::Static) {
+        b.push(Block::Heading(3, "Rotating segments (Table 4)".into()));
+        b.push(before_after_table(data, true));
+    }
     b.push(Block::Para(format!(
         "χ² of this calibration on this session (residual after full compensation over each segment's \
          own noise): {:.1} for {} values.",
@@ -210,22 +273,40 @@ pub fn page(
             alt: stem.clone(),
         });
     }
+    navigation_section(&mut b, data, figure_stems);
+    session_fit_section(&mut b, data);
+    b
+}
+
+/// The navigation check: its table and figures, or why it is left out.
+fn navigation_section(b: &mut Vec<Block>, data: &ReportData, figure_stems: &[String]) {
     b.push(Block::Heading(
         2,
         "Navigation check (paper Figs. 6/7, 9/10)".into(),
     ));
-    b.push(Block::Para(
-        "Noise-free replay: each run holds the segment's recorded mean outputs for the whole run, \
-         compensates them, removes the true specific force and integrates twice in body axes."
-            .into(),
-    ));
-    b.push(navigation_table(&data.navigation));
+    if data.navigation.is_empty() {
+        b.push(Block::Para(
+            "Left out (see the warnings above for why).".into(),
+        ));
+    } else {
+        b.push(Block::Para(
+            "Noise-free replay: each run holds the segment's recorded mean outputs for the whole \
+             run, compensates them, removes the theoretical specific force and integrates twice in \
+             body axes."
+                .into(),
+        ));
+        b.push(navigation_table(&data.navigation));
+    }
     for stem in figure_stems.iter().filter(|s| s.starts_with("navigation")) {
         b.push(Block::Image {
             src: format!("{stem}.png"),
             alt: stem.clone(),
         });
     }
+}
+
+/// The session's own fit: its χ², exclusions and what it did not determine, and its terminal text.
+fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
     b.push(Block::Heading(2, "This session's own fit".into()));
     match &data.session_fit {
         Ok(o) => {
@@ -264,5 +345,4 @@ pub fn page(
             "The session alone does not calibrate: {e}"
         ))),
     }
-    b
 }

@@ -11,6 +11,10 @@
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+pub use super::axes::{category_labels, decade_label, CategoryLabels, LEGEND_WIDTH_PX};
+use super::axes::{decades, draw_legend, draw_markers, marker_shape, LABEL_PX};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -18,7 +22,8 @@ use std::sync::OnceLock;
 /// font: embedded so that a machine without fonts draws the same figures as any other.
 pub static EMBEDDED_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
-const FAMILY: &str = "sans-serif";
+/// The font family the embedded font is registered under.
+pub const FAMILY: &str = "sans-serif";
 
 /// Registers [`EMBEDDED_FONT`] for the figures once per process; the bytes registered, or `None` if
 /// plotters refused them (a corrupt build; the figures are then drawn without text, SVG only).
@@ -37,8 +42,11 @@ pub enum SeriesStyle {
     Line,
     /// A line with a circle on every point.
     LineAndMarkers,
-    /// Circles only, with vertical ±error bars when the series has them.
+    /// Markers only (a shape per series: circle, triangle, square, cross), with vertical ±error
+    /// bars when the series has them: measured data.
     Markers,
+    /// A thin dashed line: a band's edge (±1σ of a fit).
+    Dashed,
 }
 
 /// One plotted series.
@@ -67,7 +75,9 @@ pub struct Panel {
     pub y_desc: String,
     /// Category names for x = 0, 1, 2, …; `None`: a numeric x axis.
     pub x_categories: Option<Vec<String>>,
-    /// Logarithmic y axis (points with y ≤ 0 are left out).
+    /// Logarithmic x axis, ticks labelled at each decade (points with x ≤ 0 are left out).
+    pub log_x: bool,
+    /// Logarithmic y axis, ticks labelled at each decade (points with y ≤ 0 are left out).
     pub log_y: bool,
     /// The series.
     pub series: Vec<Series>,
@@ -264,7 +274,11 @@ fn y_range(panel: &Panel) -> (f64, f64) {
         };
     }
     if panel.log_y {
-        (lo / 2.0, hi * 2.0)
+        // Out to the decades around the data: a labelled tick at both ends.
+        (
+            10f64.powf((lo / 1.2).log10().floor()),
+            10f64.powf((hi * 1.2).log10().ceil()),
+        )
     } else {
         let span = (hi - lo).max(1e-12 * hi.abs().max(lo.abs()).max(1e-12));
         (lo - 0.08 * span, hi + 0.08 * span)
@@ -278,14 +292,26 @@ fn x_range(panel: &Panel) -> (f64, f64) {
     let xs = panel
         .series
         .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.0));
+        .flat_map(|s| s.points.iter().map(|p| p.0))
+        .filter(|x| x.is_finite() && (!panel.log_x || *x > 0.0));
     let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
         (a.min(x), b.max(x))
     });
-    if lo.is_finite() && hi > lo {
-        (lo, hi)
+    if !(lo.is_finite() && hi > lo) {
+        return if panel.log_x { (0.1, 10.0) } else { (0.0, 1.0) };
+    }
+    if panel.log_x {
+        // Out to the decades around the data, so that the axis has a labelled tick at both ends.
+        (
+            10f64.powf(lo.log10().floor()),
+            10f64.powf(hi.log10().ceil()),
+        )
+    } else if panel.series.iter().any(|s| s.style == SeriesStyle::Markers) {
+        // Markers at the ends are drawn whole.
+        let pad = 0.03 * (hi - lo);
+        (lo - pad, hi + pad)
     } else {
-        (0.0, 1.0)
+        (lo, hi)
     }
 }
 
@@ -296,94 +322,199 @@ fn draw_panel<DB: DrawingBackend>(
 ) -> Result<(), String> {
     let (x0, x1) = x_range(panel);
     let (y0, y1) = y_range(panel);
-    let mut builder = ChartBuilder::on(area);
+    let legend = text && !panel.series.is_empty();
+    let (plot_area, legend_area) = if legend {
+        let w = area.dim_in_pixel().0;
+        let (a, b) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH_PX) as i32);
+        (a, Some(b))
+    } else {
+        (area.clone(), None)
+    };
+    let layout = panel.x_categories.as_ref().map(|c| {
+        let w = plot_area.dim_in_pixel().0.saturating_sub(72 + 36);
+        category_labels(c, w)
+    });
+    let mut builder = ChartBuilder::on(&plot_area);
     // The right margin leaves room for the last x tick's label, which is centred on the axis end.
     builder.margin(8).margin_right(28);
     if text {
         builder
             .caption(&panel.title, (FAMILY, 16))
-            .x_label_area_size(if panel.x_categories.is_some() { 40 } else { 32 })
+            .x_label_area_size(layout.map_or(32, |l| l.area_px))
             .y_label_area_size(72);
     }
-    if panel.log_y {
-        let mut chart = builder
-            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-            .map_err(err)?;
-        if text {
-            chart
-                .configure_mesh()
-                .x_desc(&panel.x_desc)
-                .y_desc(&panel.y_desc)
-                .y_label_formatter(&|v| format!("{v:.0e}"))
-                .label_style((FAMILY, 12))
-                .max_light_lines(0)
-                .draw()
-                .map_err(err)?;
-        }
-        draw_series(&mut chart, panel, text, true)
-    } else {
-        let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?;
-        if text {
+    let axes = Axes {
+        panel,
+        text,
+        layout,
+        x: (x0, x1),
+        y: (y0, y1),
+    };
+    let a = &plot_area;
+    match (panel.log_x, panel.log_y) {
+        (false, false) => axes.draw(
+            &mut builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?,
+            a,
+        ),
+        (false, true) => axes.draw(
+            &mut builder
+                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(err)?,
+            a,
+        ),
+        (true, false) => axes.draw(
+            &mut builder
+                .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+                .map_err(err)?,
+            a,
+        ),
+        (true, true) => axes.draw(
+            &mut builder
+                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+                .map_err(err)?,
+            a,
+        ),
+    }?;
+    if let Some(l) = legend_area {
+        draw_legend(panel, &l)?;
+    }
+    Ok(())
+}
+
+/// One panel's axes, whatever their scales.
+struct Axes<'p> {
+    panel: &'p Panel,
+    text: bool,
+    layout: Option<CategoryLabels>,
+    x: (f64, f64),
+    y: (f64, f64),
+}
+
+impl Axes<'_> {
+    fn draw<'a, DB: DrawingBackend + 'a, X, Y>(
+        &self,
+        chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Result<(), String>
+    where
+        X: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+        Y: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+    {
+        let panel = self.panel;
+        if self.text {
             let cats = panel.x_categories.clone();
-            let fmt = move |x: &f64| match &cats {
+            let step = self.layout.map_or(1, |l| l.step);
+            let upright = self.layout.is_some_and(|l| l.upright);
+            let log_x = panel.log_x;
+            let xfmt = move |x: &f64| match &cats {
                 Some(c) => {
                     let k = x.round();
-                    if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < c.len() {
+                    let on_tick = (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < c.len();
+                    // Upright labels are drawn below (plotters centres a turned label on its tick).
+                    if on_tick && (k as usize) % step == 0 && !upright {
                         c[k as usize].clone()
                     } else {
                         String::new()
                     }
                 }
+                None if log_x => decade_label(*x),
                 None => format!("{x}"),
+            };
+            let log_y = panel.log_y;
+            let yfmt = move |y: &f64| {
+                if log_y {
+                    decade_label(*y)
+                } else {
+                    format!("{y}")
+                }
             };
             let mut mesh = chart.configure_mesh();
             mesh.x_desc(&panel.x_desc)
                 .y_desc(&panel.y_desc)
-                .label_style((FAMILY, 12))
+                .label_style((FAMILY, LABEL_PX))
+                .axis_desc_style((FAMILY, LABEL_PX))
                 .max_light_lines(0)
-                .x_label_formatter(&fmt);
+                .x_label_formatter(&xfmt);
+            if log_y {
+                mesh.y_label_formatter(&yfmt)
+                    .y_labels(decades(self.y.0, self.y.1) * 9);
+            }
+            if log_x {
+                mesh.x_labels(decades(self.x.0, self.x.1) * 9);
+            }
             if let Some(c) = &panel.x_categories {
                 mesh.x_labels(c.len() + 1);
             }
             mesh.draw().map_err(err)?;
+            if let (true, Some(c)) = (upright, &panel.x_categories) {
+                // Turned 90°, reading downwards from just below each tick.
+                let style = TextStyle::from((FAMILY, LABEL_PX).into_font())
+                    .transform(FontTransform::Rotate90)
+                    .pos(Pos::new(HPos::Left, VPos::Center));
+                let (bx, by) = area.get_base_pixel();
+                for (k, name) in c.iter().enumerate().step_by(step) {
+                    let (px, py) = chart.backend_coord(&(k as f64, self.y.0));
+                    area.draw(&Text::new(
+                        name.clone(),
+                        (px - bx, py - by + 8),
+                        style.clone(),
+                    ))
+                    .map_err(err)?;
+                }
+            }
         }
-        draw_series(&mut chart, panel, text, false)
+        draw_series(chart, panel)
     }
 }
 
 fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     panel: &Panel,
-    text: bool,
-    log_y: bool,
 ) -> Result<(), String>
 where
-    X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
-    Y: plotters::coord::ranged1d::Ranged<ValueType = f64>,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
 {
-    let n_lines = panel
-        .series
-        .iter()
-        .filter(|s| s.style != SeriesStyle::Markers)
-        .count();
+    let solid = |s: &Series| matches!(s.style, SeriesStyle::Line | SeriesStyle::LineAndMarkers);
+    let n_lines = panel.series.iter().filter(|s| solid(s)).count();
+    let (log_x, log_y) = (panel.log_x, panel.log_y);
     let mut line_no = 0;
+    let mut marker_no = 0;
     for s in &panel.series {
         let colour = PALETTE[s.colour % PALETTE.len()];
         // Earlier lines are drawn wider, so a later line with the same data (static and full
         // compensation of a run without rotation) does not hide an earlier one.
         let width = line_width(line_no, n_lines);
-        if s.style != SeriesStyle::Markers {
+        if solid(s) {
             line_no += 1;
         }
-        let keep = |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0);
+        let keep = |&(x, y): &(f64, f64)| {
+            x.is_finite() && y.is_finite() && (!log_y || y > 0.0) && (!log_x || x > 0.0)
+        };
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
-        let anno = match s.style {
-            SeriesStyle::Line => chart
-                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)))
-                .map_err(err)?,
-            SeriesStyle::LineAndMarkers => chart
-                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)).point_size(3))
-                .map_err(err)?,
+        match s.style {
+            SeriesStyle::Line => {
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)))
+                    .map_err(err)?;
+            }
+            SeriesStyle::Dashed => {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        pts.clone(),
+                        6,
+                        4,
+                        colour.stroke_width(1),
+                    ))
+                    .map_err(err)?;
+            }
+            SeriesStyle::LineAndMarkers => {
+                chart
+                    .draw_series(
+                        LineSeries::new(pts.clone(), colour.stroke_width(width)).point_size(3),
+                    )
+                    .map_err(err)?;
+            }
             SeriesStyle::Markers => {
                 if let Some(e) = &s.error {
                     let bars = s
@@ -396,30 +527,10 @@ where
                         });
                     chart.draw_series(bars).map_err(err)?;
                 }
-                chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
-                    .map_err(err)?
+                draw_markers(chart, &pts, marker_shape(marker_no), colour)?;
+                marker_no += 1;
             }
-        };
-        if text {
-            anno.label(s.label.clone()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-            });
         }
-    }
-    if text && !panel.series.is_empty() {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FAMILY, 12))
-            .position(if log_y {
-                SeriesLabelPosition::LowerRight
-            } else {
-                SeriesLabelPosition::UpperLeft
-            })
-            .draw()
-            .map_err(err)?;
     }
     Ok(())
 }
@@ -478,6 +589,7 @@ pub fn palette_hex(i: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::axes::CHAR_PX;
 
     fn figure() -> Figure {
         Figure {
@@ -491,6 +603,7 @@ mod tests {
                     x_desc: "t (s)".into(),
                     y_desc: "m".into(),
                     x_categories: None,
+                    log_x: false,
                     log_y: true,
                     series: vec![
                         Series {
@@ -514,6 +627,7 @@ mod tests {
                     x_desc: "segment".into(),
                     y_desc: "µg".into(),
                     x_categories: Some(vec!["x+".into(), "x−".into(), "y+".into()]),
+                    log_x: false,
                     log_y: false,
                     series: vec![Series {
                         label: "c".into(),
@@ -550,8 +664,8 @@ mod tests {
             assert_eq!(mine, vec![(9, width.as_str()), (2, "2")], "colour {c}");
         }
         assert_eq!((line_width(0, 2), line_width(1, 2)), (4, 2));
-        // Three markers, three error bars (error bars are 2-point polylines).
-        assert_eq!(svg.matches("<circle").count(), 3);
+        // Three markers and the legend's sample of them; three error bars (2-point polylines).
+        assert_eq!(svg.matches("<circle").count(), 4);
         assert!(svg.contains("test figure") && svg.contains("µg"));
 
         let bare = tempfile::tempdir().unwrap();
@@ -560,7 +674,7 @@ mod tests {
         assert_eq!(out.warnings.len(), 2);
         let svg = std::fs::read_to_string(bare.path().join("t.svg")).unwrap();
         assert!(!svg.contains("<text"));
-        assert_eq!(svg.matches("<circle").count(), 3);
+        assert_eq!(svg.matches("<circle").count(), 3, "no legend without text");
         assert!(!bare.path().join("t.png").exists());
     }
 
@@ -591,6 +705,94 @@ mod tests {
         ] {
             assert!(!code.contains(lookup), "plot.rs looks for a font: {lookup}");
         }
+    }
+
+    /// The x coordinate of the SVG `<text>` element whose content is `label`.
+    fn text_x(svg: &str, label: &str) -> Option<f64> {
+        svg.split("<text").skip(1).find_map(|t| {
+            let body = &t[t.find('>')? + 1..t.find("</text>")?];
+            if body.trim() != label {
+                return None;
+            }
+            let k = t.find(" x=\"")? + 4;
+            t[k..k + t[k..].find('"')?].parse().ok()
+        })
+    }
+
+    /// Every legend entry is in the column right of its panel, never over the data.
+    #[test]
+    fn legends_are_beside_the_data() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut fig = figure();
+        fig.size = (1200, 400);
+        render(
+            &fig,
+            dir.path(),
+            Formats {
+                png: false,
+                svg: true,
+            },
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(dir.path().join("t.svg")).unwrap();
+        let cell = 1200.0 / 2.0;
+        for (label, panel) in [("a", 0.0), ("b", 0.0), ("c", 1.0)] {
+            let x = text_x(&svg, label).unwrap_or_else(|| panic!("no legend text {label}"));
+            let column = cell * (panel + 1.0) - LEGEND_WIDTH_PX as f64;
+            assert!(x > column && x < cell * (panel + 1.0), "{label} at x {x}");
+        }
+    }
+
+    /// Category labels never run into each other: level when each fits its pitch, else upright and
+    /// thinned to one per two line heights.
+    #[test]
+    fn category_labels_never_collide() {
+        let names =
+            |n: usize, len: usize| -> Vec<String> { (0..n).map(|_| "x".repeat(len)).collect() };
+        let level = category_labels(&names(6, 4), 900);
+        assert_eq!((level.upright, level.step), (false, 1));
+        for (n, len, width) in [(30, 8, 900), (24, 8, 900), (200, 8, 900), (3, 60, 300)] {
+            let l = category_labels(&names(n, len), width);
+            let pitch = width / n as u32;
+            if l.upright {
+                assert!(pitch * l.step as u32 >= 2 * LABEL_PX, "{n} {len}: {l:?}");
+                assert!(l.area_px >= (len as u32 * CHAR_PX).min(136), "{l:?}");
+            } else {
+                assert!(pitch >= len as u32 * CHAR_PX, "{n} {len}: {l:?}");
+            }
+        }
+        assert_eq!(category_labels(&names(30, 8), 900).step, 1);
+        assert!(category_labels(&names(200, 8), 900).step > 1);
+    }
+
+    #[test]
+    fn log_axes_are_labelled_at_each_decade() {
+        assert_eq!(decade_label(1e-3), "10⁻³");
+        assert_eq!(decade_label(1.0), "10⁰");
+        assert_eq!(decade_label(100.0), "10²");
+        assert_eq!(decade_label(2e-3), "");
+        assert_eq!(decade_label(0.0), "");
+        let panel = Panel {
+            title: String::new(),
+            x_desc: String::new(),
+            y_desc: String::new(),
+            x_categories: None,
+            log_x: true,
+            log_y: true,
+            series: vec![Series {
+                label: "s".into(),
+                points: vec![(0.003, 2e-5), (40.0, 7e-4)],
+                error: None,
+                style: SeriesStyle::Markers,
+                colour: 0,
+            }],
+        };
+        assert_eq!(x_range(&panel), (1e-3, 100.0));
+        let (lo, hi) = y_range(&panel);
+        assert!(
+            (lo - 1e-5).abs() < 1e-18 && (hi - 1e-3).abs() < 1e-15,
+            "{lo} {hi}"
+        );
     }
 
     #[test]

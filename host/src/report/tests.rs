@@ -157,8 +157,9 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
         }
         // (b) The residual figure's point and band are the table's residual and 1σ (µg).
         let res = &residuals_figure(&data).panels[j].series[0];
-        assert!((num(&row[6]) - res.points[k].1).abs() < 0.051);
-        assert!((num(&row[7]) - res.error.as_ref().unwrap()[k]).abs() < 0.051);
+        let (residual, sigma) = row[6].split_once(" ± ").unwrap();
+        assert!((num(residual) - res.points[k].1).abs() < 0.051);
+        assert!((num(sigma) - res.error.as_ref().unwrap()[k]).abs() < 0.051);
     }
     // (c) The navigation figures end at the navigation table's final errors.
     let nav = navigation_table(&data.navigation);
@@ -221,7 +222,8 @@ fn figures_plot_the_numbers_in_the_tables_and_render() {
             }
         }
         if f.stem == "residuals" {
-            assert_eq!(svg.matches("<circle").count(), 3 * n);
+            // One marker per segment and axis, and each panel's legend sample.
+            assert_eq!(svg.matches("<circle").count(), 3 * n + 3);
         }
     }
     let md = std::fs::read_to_string(dir.path().join(REPORT_MD)).unwrap();
@@ -370,4 +372,40 @@ fn the_fits_specific_force_is_at_the_calibrations_reference_point() {
         }
         assert!(worst < 2e-6, "{reference:?}: {worst:e} g");
     }
+}
+
+/// The report and the terminal give one "theoretical": the session fit's specific force with each
+/// segment's fitted attitude. On a noisy table session the report, running its own fit, shows the
+/// terminal's value for every segment, and its residuals are the segments' own noise (χ² per value
+/// near 1, an independent check: the simulator's noise).
+#[test]
+fn the_report_compares_against_the_same_fitted_attitudes_as_the_terminal() {
+    let plan = short();
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::default(), 11).unwrap();
+    let outcome = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+    let data = build_report(
+        &plan,
+        &stats,
+        &outcome.calibration,
+        Some(&outcome.uncertainty),
+        None,
+        &ReportOptions::default(),
+    )
+    .unwrap();
+    for d in outcome.segments.iter().filter(|d| d.used) {
+        let row = data.segments.iter().find(|r| r.name == d.name).unwrap();
+        assert_eq!(row.theoretical, crate::report::data::Theoretical::Fitted);
+        for j in 0..3 {
+            assert!(
+                (row.truth_g[j] - d.theoretical_g[j]).abs() < 1e-12,
+                "{} {j}: report {} terminal {}",
+                d.name,
+                row.truth_g[j],
+                d.theoretical_g[j]
+            );
+        }
+    }
+    let per_value = data.chi2 / data.chi2_terms as f64;
+    assert!(per_value < 2.0, "χ²/value {per_value}");
 }

@@ -3,7 +3,7 @@
 //! (like Tables 2 and 4, from the one table [`super::segment_rows`]) with the fit's χ² check, the excluded segments, the method comparison and the
 //! warnings. Plain text, no colour, so it reads the same in a log.
 
-use super::format::{out_digits, pm};
+use super::format::{out_digits, pm, reference_point};
 use super::SegmentRow;
 use crate::estimate::{
     CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
@@ -18,9 +18,9 @@ fn lever_cell(r: f64, s: f64, observable: bool, fixed: bool) -> String {
     if fixed {
         "fixed at 0 (n.o.)".to_string()
     } else if observable {
-        format!("{:+.4} ± {:.4}", r * 1e3, s * 1e3)
+        pm(r * 1e3, s * 1e3, 4)
     } else {
-        format!("({:+.3} ± {:.3}) n.d.", r * 1e3, s * 1e3)
+        format!("({}) n.d.", pm(r * 1e3, s * 1e3, 3))
     }
 }
 
@@ -104,14 +104,22 @@ fn render_table1(s: &mut String, o: &CalibrationOutcome) {
     }
 }
 
-/// Table 3: the lever arms in mm, marked where the plan did not determine them.
+/// Table 3: the lever arms in mm, marked where the plan did not determine them; one line instead when
+/// the session has no rotation and so fixes every one at 0.
 fn render_table3(s: &mut String, o: &CalibrationOutcome) {
     let u = &o.uncertainty;
     let _ = writeln!(s);
+    if o.observability.fixed_at_zero.iter().flatten().all(|f| *f) {
+        let _ = writeln!(
+            s,
+            "Lever arms: not calibrated (the session has no rotation): 0, so the device applies no size-effect correction"
+        );
+        return;
+    }
     let _ = writeln!(
         s,
-        "Table 3. Lever arms (mm), reference: {:?}; n.d. = not determined to {:.0} µm, n.o. = not observable",
-        o.calibration.reference,
+        "Table 3. Lever arms (mm), reference: {}; n.d. = not determined to {:.0} µm, n.o. = not observable",
+        reference_point(&o.calibration.reference),
         o.observability.threshold_m * 1e6
     );
     let _ = writeln!(s, "{:<4} {:>24} {:>24} {:>24}", "", "x", "y", "z");
@@ -256,24 +264,48 @@ fn render_attitudes(s: &mut String, split: &StaticSplit, tilts: &[MountTilt]) {
     if tilts.iter().all(|t| !t.estimated) {
         return;
     }
-    let _ = writeln!(
-        s,
-        "Mount attitudes: angle of the estimated up from the nominal (free: from the starting guess), 1σ per axis"
-    );
-    for t in tilts.iter().filter(|t| t.estimated) {
-        let prior = match t.prior_deg {
-            Some(p) => format!("prior {p:.3}°"),
-            None => "free".to_string(),
-        };
-        let flag = if t.prior_deg.is_some_and(|p| t.tilt_deg > 3.0 * p) {
+    let fixture: Vec<&MountTilt> = tilts
+        .iter()
+        .filter(|t| t.estimated && t.prior_deg.is_some())
+        .collect();
+    if !fixture.is_empty() {
+        let _ = writeln!(
+            s,
+            "Mount attitudes: angle of the estimated up from the nominal, 1σ per axis"
+        );
+    }
+    for t in fixture {
+        let p = t.prior_deg.unwrap_or(0.0);
+        let flag = if t.tilt_deg > 3.0 * p {
             "  > 3× prior"
         } else {
             ""
         };
         let _ = writeln!(
             s,
-            "  {:<22} up [{:+.5}, {:+.5}, {:+.5}]  tilt {:.4}° ± {:.4}°  ({prior}){flag}",
-            t.name, t.up_b[0], t.up_b[1], t.up_b[2], t.tilt_deg, t.sigma_deg
+            "  {:<22} up [{:+.5}, {:+.5}, {:+.5}]  tilt {}°  (prior {p:.3}°){flag}",
+            t.name,
+            t.up_b[0],
+            t.up_b[1],
+            t.up_b[2],
+            pm(t.tilt_deg, t.sigma_deg, 4)
+        );
+    }
+    let free: Vec<&MountTilt> = tilts
+        .iter()
+        .filter(|t| t.estimated && t.prior_deg.is_none())
+        .collect();
+    if !free.is_empty() {
+        let _ = writeln!(
+            s,
+            "Free positions (no known attitude): the fitted up, and its 1σ per axis"
+        );
+    }
+    for t in free {
+        let _ = writeln!(
+            s,
+            "  {:<22} up [{:+.5}, {:+.5}, {:+.5}]  ± {:.4}°",
+            t.name, t.up_b[0], t.up_b[1], t.up_b[2], t.sigma_deg
         );
     }
 }
@@ -306,16 +338,22 @@ fn render_gyro(s: &mut String, g: Option<&GyroEstimate>) {
             g.bias_rad_s_1sigma[i].to_degrees()
         );
     }
-    let _ = writeln!(
-        s,
-        "  table rate scale error {:+.1} ± {:.1} ppm (its prior is the plan's table_rate_sigma_ppm: the gyro's scale cannot be better)",
-        g.table_rate_scale.0 * 1e6,
-        g.table_rate_scale.1 * 1e6
-    );
-    if !g.undetermined.is_empty() {
+    if let Some((scale, sigma)) = g.table_rate_scale {
         let _ = writeln!(
             s,
-            "  not determined by this plan: {} (spin about at least three non-coplanar axes to determine all of G)",
+            "  table rate scale error {} ppm (its prior is the plan's table_rate_sigma_ppm: the gyro's scale cannot be better)",
+            pm(scale * 1e6, sigma * 1e6, 1)
+        );
+    }
+    if !g.undetermined.is_empty() {
+        let how = if g.table_rate_scale.is_some() {
+            "spin about at least three non-coplanar axes"
+        } else {
+            "turn the unit by hand about each of its three axes"
+        };
+        let _ = writeln!(
+            s,
+            "  not determined by this plan: {} ({how} to determine all of G)",
             g.undetermined.join(", ")
         );
     }
@@ -372,6 +410,9 @@ pub fn render_prediction(p: &Prediction) -> String {
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
     render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
     render_gyro(&mut s, p.gyro.as_ref());
+    if let Some(t) = &p.temperature {
+        super::thermal::render_prediction(&mut s, t, &p.values);
+    }
     for w in &p.warnings {
         let _ = writeln!(s, "  - {w}");
     }

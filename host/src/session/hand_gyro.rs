@@ -210,7 +210,7 @@ pub fn parse(text: &str, path: &Path) -> Result<GyroEstimate, HandGyroFileError>
         matrix_1sigma,
         bias_rad_s: g.bias_rad_s,
         bias_rad_s_1sigma: g.bias_rad_s_1sigma.unwrap_or([f64::INFINITY; 3]),
-        table_rate_scale: (0.0, 0.0),
+        table_rate_scale: None,
         undetermined,
     })
 }

@@ -520,18 +520,24 @@ impl Coverage {
         if self.distinct >= RECOMMENDED_POSITIONS && self.missing_faces.is_empty() {
             return None;
         }
-        let more = RECOMMENDED_POSITIONS.saturating_sub(self.distinct);
+        let more = RECOMMENDED_POSITIONS
+            .saturating_sub(self.distinct)
+            .max(self.missing_faces.len());
+        let (gap, including) = if self.missing_faces.is_empty() {
+            (String::new(), "")
+        } else {
+            (
+                format!(
+                    ", and none within {FACE_COVERAGE_DEG:.0}° of {}",
+                    self.missing_faces.join(", ")
+                ),
+                " (those directions included)",
+            )
+        };
         Some(format!(
-            "{} distinct positions{}: {} more, spread over the whole sphere{}, would make the \
-             calibration more robust",
-            self.distinct,
-            if self.missing_faces.is_empty() {
-                ""
-            } else {
-                " leaving directions out"
-            },
-            more.max(self.missing_faces.len()),
-            self.faces_text()
+            "{} distinct positions ({RECOMMENDED_POSITIONS} recommended){gap}: recording {more} \
+             more, spread over the whole sphere{including}, would make the calibration more robust",
+            self.distinct
         ))
     }
 }

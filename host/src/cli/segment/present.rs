@@ -208,6 +208,7 @@ pub(super) fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
                 x_desc: "t (s)".into(),
                 y_desc: format!("|a| ({unit})"),
                 x_categories: None,
+                log_x: false,
                 log_y: false,
                 series: vec![
                     series("|a|", &|i| linalg::norm(&rec.acc[i]), 2),
@@ -219,6 +220,7 @@ pub(super) fn figure(rec: &Recording, seg: &Segmentation) -> Figure {
                 x_desc: "t (s)".into(),
                 y_desc: "|w| (°/s)".into(),
                 x_categories: None,
+                log_x: false,
                 log_y: false,
                 series: vec![
                     series("|w|", &|i| linalg::norm(&rec.gyro_rad_s[i]).to_degrees(), 0),
