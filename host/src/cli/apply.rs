@@ -79,6 +79,7 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     };
     let mode = a.lever.into();
     let source = if a.input.is_dir() {
+        a.log.refuse_for_session(&a.input)?;
         None
     } else {
         Some(a.log.source()?)

@@ -302,3 +302,25 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
         "{e}"
     );
 }
+
+/// A logger's file options given with a session directory would be ignored: refused instead.
+#[test]
+fn log_options_on_a_session_directory_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().display();
+    for extra in ["--topic /imu", "--instance 1", "--acc-unit g"] {
+        let Command::Noise(a) = command(&format!("host noise --input {d} {extra}")) else {
+            panic!()
+        };
+        let e = super::noise::run(&a, true).unwrap_err().to_string();
+        assert!(
+            e.contains("is a session directory") && e.contains("leave them out"),
+            "{e}"
+        );
+    }
+    let Command::Noise(a) = command(&format!("host noise --input {d}")) else {
+        panic!()
+    };
+    let e = super::noise::run(&a, true).unwrap_err().to_string();
+    assert!(!e.contains("is a session directory"), "{e}");
+}

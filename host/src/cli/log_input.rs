@@ -78,6 +78,26 @@ impl LogInputArgs {
         })
     }
 
+    /// Refuses these options for an input that is a session directory (they would be ignored).
+    pub fn refuse_for_session(&self, input: &std::path::Path) -> Result<(), CliError> {
+        let default_columns = self.columns == crate::session::import::DEFAULT_COLUMNS.join(",");
+        let given = !default_columns
+            || self.time_column.is_some()
+            || self.rate_hz.is_some()
+            || self.acc_unit.is_some()
+            || self.gyro_unit.is_some()
+            || self.instance.is_some()
+            || self.topic.is_some();
+        if given {
+            return Err(CliError::Usage(format!(
+                "{} is a session directory: the logger's file options (--columns, --time-column, \
+                 --rate-hz, --acc-unit, --gyro-unit, --instance, --topic) do not apply; leave them out",
+                input.display()
+            )));
+        }
+        Ok(())
+    }
+
     /// The gyro unit of the input as the user named it (binary logs: rad/s).
     pub fn gyro_unit(&self) -> GyroUnit {
         self.gyro_unit
