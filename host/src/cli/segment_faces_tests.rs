@@ -283,8 +283,10 @@ fn print_table(rows: &[[HeldOut; 4]]) {
             worst(&|h| h.max_rotated_mg)
         );
     }
+    let better = rows.iter().filter(|r| r[0].rms_mg <= r[2].rms_mg).count();
     println!(
-        "  ({} seed(s); rms: mean over seeds, max: over all seeds)",
+        "  ({} seed(s); rms: mean over seeds, max: over all seeds; (a) at or below (c) in rms on \
+         {better} of them)",
         rows.len()
     );
 }
