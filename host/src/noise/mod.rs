@@ -1,6 +1,7 @@
 //! Noise characterisation (`host noise`): the overlapping Allan deviation of each accelerometer and
 //! gyro axis over the longest still segment of a recording, the fitted white noise density, bias
 //! instability and random walk ([`allan`]), a table, a log-log figure, and the figures Kalibr needs.
+//! Each point's 1σ, for error bars, is [`confidence`]'s (the Python package's `allan`).
 //!
 //! Input: a session directory (the longest static segment of its plan is used) or a bare
 //! `samples.csv` (its longest run of rows of one segment is used, assumed still). Accelerometer
