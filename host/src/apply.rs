@@ -46,13 +46,19 @@ pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";
 
 /// Why a calibration could not be applied.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ApplyError {
     /// The calibration does not give a compensator.
-    Compensator(CompensatorError),
+    #[error("the calibration cannot be applied: {0}")]
+    Compensator(#[source] CompensatorError),
     /// The recording's sample rate does not give an ω̇ estimator.
-    SampleRate(f64, OmegaDotError),
+    #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate: {1}")]
+    SampleRate(f64, #[source] OmegaDotError),
     /// The recording and the calibration are of different units.
+    #[error(
+        "the calibration is of unit {calibration} but the recording is of unit {recording}; \
+         use that unit's calibration (or --ignore-unit-id if the recording's id is wrong)"
+    )]
     UnitMismatch {
         /// Unit id in the calibration.
         calibration: UnitId,
@@ -60,6 +66,13 @@ pub enum ApplyError {
         recording: String,
     },
     /// The calibration's output unit is not the recording's.
+    #[error(
+        "the calibration maps outputs in {} but the recording is in {}: use a calibration \
+         of this recording's unit and output (or record in {})",
+        .calibration.symbol(),
+        .recording.symbol(),
+        .calibration.symbol()
+    )]
     OutputUnitMismatch {
         /// The calibration's.
         calibration: OutputUnit,
@@ -68,8 +81,19 @@ pub enum ApplyError {
     },
     /// A calibration with a temperature model, a recording without temperatures, and no
     /// temperature to assume.
+    #[error(
+        "the calibration has a temperature model but the recording has no temp_c column: \
+         say which temperature to assume with --temperature-c C (the model's error grows \
+         with the distance from the recording's real temperature)"
+    )]
     NoTemperature,
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
+    #[error(
+        "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
+         {:.0} % off is plausible): this calibration does not fit this recording (another \
+         unit, output unit or scale)",
+        MAX_STILL_G_ERROR * 100.0
+    )]
     NotOneG {
         /// The segment.
         segment: String,
@@ -77,6 +101,11 @@ pub enum ApplyError {
         f_g: f64,
     },
     /// A still segment's gyro rate after the calibration's bias is far from zero.
+    #[error(
+        "still segment '{segment}' has a gyro rate of {deg_s:.2} °/s after the calibration's \
+         bias (at most {MAX_REST_RATE_DEG_S} °/s is plausible): the gyro's unit or the \
+         calibration's gyro does not fit this recording"
+    )]
     RestRate {
         /// The segment.
         segment: String,
@@ -84,72 +113,14 @@ pub enum ApplyError {
         deg_s: f64,
     },
     /// The recording could not be read.
-    Recording(RecordingError),
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
     /// The output could not be written.
+    #[error(transparent)]
     Output(OutputFileError),
     /// A logger's file could not be read.
+    #[error(transparent)]
     Log(LogError),
-}
-
-impl std::fmt::Display for ApplyError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ApplyError::Compensator(e) => write!(f, "the calibration cannot be applied: {e}"),
-            ApplyError::SampleRate(hz, e) => write!(
-                f,
-                "the recording's sample_rate_hz = {hz} cannot be used for the ω̇ estimate: {e}"
-            ),
-            ApplyError::UnitMismatch {
-                calibration,
-                recording,
-            } => write!(
-                f,
-                "the calibration is of unit {calibration} but the recording is of unit {recording}; \
-                 use that unit's calibration (or --ignore-unit-id if the recording's id is wrong)"
-            ),
-            ApplyError::OutputUnitMismatch {
-                calibration,
-                recording,
-            } => write!(
-                f,
-                "the calibration maps outputs in {} but the recording is in {}: use a calibration \
-                 of this recording's unit and output (or record in {})",
-                calibration.symbol(),
-                recording.symbol(),
-                calibration.symbol()
-            ),
-            ApplyError::NoTemperature => write!(
-                f,
-                "the calibration has a temperature model but the recording has no temp_c column: \
-                 say which temperature to assume with --temperature-c C (the model's error grows \
-                 with the distance from the recording's real temperature)"
-            ),
-            ApplyError::NotOneG { segment, f_g } => write!(
-                f,
-                "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
-                 {:.0} % off is plausible): this calibration does not fit this recording (another \
-                 unit, output unit or scale)",
-                MAX_STILL_G_ERROR * 100.0
-            ),
-            ApplyError::RestRate { segment, deg_s } => write!(
-                f,
-                "still segment '{segment}' has a gyro rate of {deg_s:.2} °/s after the calibration's \
-                 bias (at most {MAX_REST_RATE_DEG_S} °/s is plausible): the gyro's unit or the \
-                 calibration's gyro does not fit this recording"
-            ),
-            ApplyError::Recording(e) => e.fmt(f),
-            ApplyError::Output(e) => e.fmt(f),
-            ApplyError::Log(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for ApplyError {}
-
-impl From<RecordingError> for ApplyError {
-    fn from(e: RecordingError) -> Self {
-        ApplyError::Recording(e)
-    }
 }
 
 /// The device's per-sample state for one recording.

@@ -118,31 +118,21 @@ impl LotSummary {
 }
 
 /// Why a lot could not be run at all.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum BatchError {
     /// The input directory cannot be listed.
-    Io(PathBuf, std::io::Error),
+    #[error("cannot list {}: {}", .0.display(), .1)]
+    Io(PathBuf, #[source] std::io::Error),
     /// It holds no session.
+    #[error(
+        "{} holds no session directory (a subdirectory with {PLAN_FILE} and samples.csv)",
+        .0.display()
+    )]
     NoSessions(PathBuf),
     /// The thread pool could not start.
+    #[error("cannot start the worker threads: {0}")]
     Threads(String),
 }
-
-impl std::fmt::Display for BatchError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            BatchError::Io(p, e) => write!(f, "cannot list {}: {e}", p.display()),
-            BatchError::NoSessions(p) => write!(
-                f,
-                "{} holds no session directory (a subdirectory with {PLAN_FILE} and samples.csv)",
-                p.display()
-            ),
-            BatchError::Threads(m) => write!(f, "cannot start the worker threads: {m}"),
-        }
-    }
-}
-
-impl std::error::Error for BatchError {}
 
 /// The session directories directly under `dir`, sorted by name.
 pub fn find_sessions(dir: &Path) -> Result<Vec<PathBuf>, BatchError> {

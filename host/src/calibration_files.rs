@@ -29,34 +29,21 @@ pub struct WrittenCalibration {
 }
 
 /// Why the result could not be written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The calibration does not encode (it fails the device's own validation).
-    Blob(BlobError),
+    #[error("the estimated calibration cannot be stored on a device: {0}")]
+    Blob(#[source] BlobError),
     /// A file could not be written.
-    Io(PathBuf, std::io::Error),
+    #[error("cannot write {}: {}", .0.display(), .1)]
+    Io(PathBuf, #[source] std::io::Error),
     /// A calibration is already there and `--force` was not given.
+    #[error(
+        "{} already exists: choose another output directory (--out-dir) or replace it (--force)",
+        .0.display()
+    )]
     Exists(PathBuf),
 }
-
-impl std::fmt::Display for OutputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            OutputError::Blob(e) => write!(
-                f,
-                "the estimated calibration cannot be stored on a device: {e}"
-            ),
-            OutputError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
-            OutputError::Exists(p) => write!(
-                f,
-                "{} already exists: choose another output directory (--out-dir) or replace it (--force)",
-                p.display()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for OutputError {}
 
 /// Seconds since the Unix epoch (0 if the clock is before it).
 pub fn now_unix_s() -> u64 {

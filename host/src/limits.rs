@@ -224,7 +224,13 @@ pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
 }
 
 /// Why a number is refused.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "{} = {} is out of range: give a number in {}",
+    .name,
+    short_number(*.value),
+    .range
+)]
 pub struct RangeError {
     /// The option or field, as the user spells it.
     pub name: String,
@@ -233,20 +239,6 @@ pub struct RangeError {
     /// The accepted range, as text.
     pub range: String,
 }
-
-impl std::fmt::Display for RangeError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} = {} is out of range: give a number in {}",
-            self.name,
-            short_number(self.value),
-            self.range
-        )
-    }
-}
-
-impl std::error::Error for RangeError {}
 
 /// `value` must be finite and in `(0, max]`.
 pub fn positive_at_most(name: &str, value: f64, max: f64) -> Result<f64, RangeError> {

@@ -15,47 +15,36 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Why a result file could not be written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum OutputFileError {
     /// The target exists and overwriting was not allowed.
+    #[error(
+        "{} already exists; choose another name or allow replacing it (--force)",
+        .0.display()
+    )]
     Exists(PathBuf),
     /// A file system operation failed.
-    Io(PathBuf, std::io::Error),
+    #[error("cannot write {}: {}", .0.display(), .1)]
+    Io(PathBuf, #[source] std::io::Error),
     /// A directory to replace holds files that are not an earlier result of this command (it lacks
     /// the named marker file): `--force` never replaces such a directory.
+    #[error(
+        "{} holds files that are not an earlier result of this command (it has no {}); \
+         --force replaces only such a result: choose another output directory",
+        .0.display(),
+        .1
+    )]
     NotOurs(PathBuf, &'static str),
     /// `--force` would replace a directory that also holds files no command of this tool writes.
+    #[error(
+        "{} holds {} that this tool did not write ({}); --force replaces a result directory \
+         whole, so choose another directory",
+        .0.display(),
+        if .1.len() == 1 { "a file" } else { "files" },
+        .1.join(", ")
+    )]
     Foreign(PathBuf, Vec<String>),
 }
-
-impl std::fmt::Display for OutputFileError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            OutputFileError::Exists(p) => write!(
-                f,
-                "{} already exists; choose another name or allow replacing it (--force)",
-                p.display()
-            ),
-            OutputFileError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
-            OutputFileError::Foreign(p, names) => write!(
-                f,
-                "{} holds {} that this tool did not write ({}); --force replaces a result directory \
-                 whole, so choose another directory",
-                p.display(),
-                if names.len() == 1 { "a file" } else { "files" },
-                names.join(", ")
-            ),
-            OutputFileError::NotOurs(p, marker) => write!(
-                f,
-                "{} holds files that are not an earlier result of this command (it has no {marker}); \
-                 --force replaces only such a result: choose another output directory",
-                p.display()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for OutputFileError {}
 
 /// A file being written; it appears at its path only on [`OutputFile::commit`].
 pub struct OutputFile {

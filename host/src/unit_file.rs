@@ -230,27 +230,18 @@ impl TemperatureSection {
 }
 
 /// Why a unit file is unusable.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum UnitFileError {
     /// Not readable.
-    Io(PathBuf, std::io::Error),
+    #[error("cannot read unit file {}: {}", .0.display(), .1)]
+    Io(PathBuf, #[source] std::io::Error),
     /// Not valid TOML or wrong fields (message names line and column).
+    #[error("unit file {} is not valid: {}", .0.display(), .1)]
     Syntax(PathBuf, String),
     /// Semantically wrong (message names the field and the fix).
+    #[error("unit file {}: {}", .0.display(), .1)]
     Invalid(PathBuf, String),
 }
-
-impl std::fmt::Display for UnitFileError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            UnitFileError::Io(p, e) => write!(f, "cannot read unit file {}: {e}", p.display()),
-            UnitFileError::Syntax(p, e) => write!(f, "unit file {} is not valid: {e}", p.display()),
-            UnitFileError::Invalid(p, e) => write!(f, "unit file {}: {e}", p.display()),
-        }
-    }
-}
-
-impl std::error::Error for UnitFileError {}
 
 impl UnitFile {
     /// The built-in paper unit.

@@ -124,6 +124,9 @@ impl core::fmt::Display for BlobError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for BlobError {}
+
 impl From<CompensatorError> for BlobError {
     fn from(e: CompensatorError) -> Self {
         match e {

@@ -96,6 +96,9 @@ impl core::fmt::Display for CompensatorError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for CompensatorError {}
+
 /// Largest accepted 1-norm condition number of `K·A`. A near-orthogonal unit has about 1.1; 100 means
 /// sensing axes within a few degrees of each other, which no usable unit has.
 pub const MAX_CONDITION: f64 = 100.0;

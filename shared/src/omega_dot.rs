@@ -47,6 +47,9 @@ impl core::fmt::Display for OmegaDotError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for OmegaDotError {}
+
 impl OmegaDotEstimator {
     /// An estimator for gyro samples at `sample_rate_hz`, smoothing above `corner_hz`.
     pub fn new(sample_rate_hz: f32, corner_hz: f32) -> Result<Self, OmegaDotError> {

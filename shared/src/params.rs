@@ -116,6 +116,9 @@ impl core::fmt::Display for ParamsError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for ParamsError {}
+
 /// "x", "y" or "z".
 pub fn axis_name(i: usize) -> &'static str {
     ["x", "y", "z"].get(i).copied().unwrap_or("?")

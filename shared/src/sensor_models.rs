@@ -108,6 +108,9 @@ impl core::fmt::Display for GyroError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for GyroError {}
+
 /// Coefficients of a polynomial without constant term, per axis: row `i` holds `c_i1, c_i2, c_i3`, so
 /// that the value of axis `i` is `c_i1·ΔT + c_i2·ΔT² + c_i3·ΔT³` with `ΔT = T − T_ref` in °C. A lower
 /// degree has zeros at the end. The constant term is the calibration's own value at `T_ref`.

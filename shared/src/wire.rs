@@ -346,6 +346,9 @@ impl core::fmt::Display for DeviceError {
     }
 }
 
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for DeviceError {}
+
 /// Why a frame could not be encoded or decoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WireError {
@@ -363,6 +366,9 @@ impl core::fmt::Display for WireError {
         }
     }
 }
+
+/// Lets a host error name this one as its `source()`.
+impl core::error::Error for WireError {}
 
 /// Serialises `msg` as one COBS frame ending in a zero byte; returns the used part of `buf`.
 pub fn encode_frame<'a, T: Serialize>(

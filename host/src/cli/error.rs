@@ -52,7 +52,7 @@ pub enum CliError {
     Procedure(#[from] ProcedureError),
     /// A blob file.
     #[error("{}: {}", .0.display(), .1)]
-    Blob(PathBuf, BlobError),
+    Blob(PathBuf, #[source] BlobError),
     /// A blob made for another unit.
     #[error(
         "this calibration was made for unit {blob}, the device is unit {device}: calibrate this \
@@ -66,7 +66,7 @@ pub enum CliError {
     },
     /// A file.
     #[error("{}: {}", .0.display(), .1)]
-    Io(PathBuf, std::io::Error),
+    Io(PathBuf, #[source] std::io::Error),
     /// The live procedure ran but the verification failed.
     #[error(
         "FAIL: the calibration is on the device but its compensated output is outside the tolerance \
@@ -139,5 +139,82 @@ impl CliError {
 impl From<crate::limits::RangeError> for CliError {
     fn from(e: crate::limits::RangeError) -> Self {
         CliError::Usage(e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::procedure::ProcedureError;
+    use crate::session::{builtin::paper_plan, read_session, ReadOptions, PLAN_FILE};
+    use shared::params::ParamsError;
+    use std::error::Error;
+
+    /// Every error below `e`, outermost first (`source()` followed to its end).
+    fn chain(e: &dyn Error) -> Vec<String> {
+        let mut below = Vec::new();
+        let mut next = e.source();
+        while let Some(s) = next {
+            below.push(s.to_string());
+            next = s.source();
+        }
+        below
+    }
+
+    /// A session whose `samples.csv` is missing: the command's error keeps its one-line message and
+    /// hands the operating system's error to anyone who walks `source()` (a logger, `anyhow`).
+    #[test]
+    fn a_session_read_failure_keeps_its_io_error_as_source() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(PLAN_FILE), paper_plan().to_toml()).unwrap();
+        let e = CliError::from(read_session(dir.path(), &ReadOptions { quiet: true }).unwrap_err());
+        let below = chain(&e);
+        assert_eq!(below.len(), 1, "{below:?}");
+        let io = e
+            .source()
+            .unwrap()
+            .downcast_ref::<std::io::Error>()
+            .unwrap();
+        assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+        let samples = dir.path().join("samples.csv");
+        assert_eq!(e.to_string(), format!("{}: {io}", samples.display()));
+    }
+
+    /// A missing plan: three layers (command, recording, plan) down to the I/O error.
+    #[test]
+    fn a_missing_plan_reaches_its_io_error_through_three_layers() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = CliError::from(read_session(dir.path(), &ReadOptions { quiet: true }).unwrap_err());
+        assert!(e.to_string().starts_with("cannot read plan "), "{e}");
+        let io = e.source().and_then(|s| s.downcast_ref::<std::io::Error>());
+        assert_eq!(
+            io.map(|io| io.kind()),
+            Some(std::io::ErrorKind::NotFound),
+            "{e:?}"
+        );
+    }
+
+    /// A nested chain of two: the procedure's estimate failed because the parameters are invalid.
+    #[test]
+    fn a_procedure_failure_walks_to_the_parameters_error() {
+        let e = CliError::from(ProcedureError::Estimate {
+            source: EstimateError::Params(ParamsError::NonFinite),
+            recording: PathBuf::from("rec"),
+        });
+        let below = chain(&e);
+        assert_eq!(
+            below,
+            [
+                EstimateError::Params(ParamsError::NonFinite).to_string(),
+                ParamsError::NonFinite.to_string()
+            ]
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{}\n(the recording is saved in rec)",
+                EstimateError::Params(ParamsError::NonFinite)
+            )
+        );
     }
 }

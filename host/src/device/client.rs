@@ -20,11 +20,17 @@ pub trait Transport {
 }
 
 /// What went wrong on the link.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum LinkError {
     /// The port could not be opened or failed.
-    Io(String, std::io::Error),
+    #[error("{0}: {1}")]
+    Io(String, #[source] std::io::Error),
     /// Nothing valid arrived in time.
+    #[error(
+        "the device stopped answering: waited {:.1} s for {waiting_for} and got nothing (check the cable, the port \
+         name and that the firmware is running; power-cycle the board and retry)",
+        .after.as_secs_f64()
+    )]
     Timeout {
         /// What we were waiting for.
         waiting_for: &'static str,
@@ -32,8 +38,10 @@ pub enum LinkError {
         after: Duration,
     },
     /// The device answered with a typed error.
-    Device(shared::wire::DeviceError),
+    #[error("the device refused: {0}")]
+    Device(#[source] shared::wire::DeviceError),
     /// The device answered something that does not fit the request.
+    #[error("protocol error: expected {waiting_for}, the device sent {got}")]
     Unexpected {
         /// What we were waiting for.
         waiting_for: &'static str,
@@ -41,39 +49,18 @@ pub enum LinkError {
         got: String,
     },
     /// The device speaks another protocol version.
+    #[error(
+        "the device speaks protocol version {device}, this host speaks {PROTOCOL_VERSION}: \
+         flash the matching firmware"
+    )]
     ProtocolVersion {
         /// The device's version.
         device: u16,
     },
     /// A calibration read back from the device is incomplete or inconsistent.
+    #[error("calibration read back from the device is bad: {0}")]
     BadReadBack(String),
 }
-
-impl std::fmt::Display for LinkError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            LinkError::Io(what, e) => write!(f, "{what}: {e}"),
-            LinkError::Timeout { waiting_for, after } => write!(
-                f,
-                "the device stopped answering: waited {:.1} s for {waiting_for} and got nothing (check the cable, the port \
-                 name and that the firmware is running; power-cycle the board and retry)",
-                after.as_secs_f64()
-            ),
-            LinkError::Device(e) => write!(f, "the device refused: {e}"),
-            LinkError::Unexpected { waiting_for, got } => {
-                write!(f, "protocol error: expected {waiting_for}, the device sent {got}")
-            }
-            LinkError::ProtocolVersion { device } => write!(
-                f,
-                "the device speaks protocol version {device}, this host speaks {PROTOCOL_VERSION}: \
-                 flash the matching firmware"
-            ),
-            LinkError::BadReadBack(m) => write!(f, "calibration read back from the device is bad: {m}"),
-        }
-    }
-}
-
-impl std::error::Error for LinkError {}
 
 /// A connected device.
 pub struct DeviceClient<T: Transport> {

@@ -94,9 +94,10 @@ pub struct ProcedureOutcome {
 }
 
 /// Why the procedure stopped.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
     /// The link failed; what was recorded so far is saved at `recording` (if anything was).
+    #[error(fmt = link_message)]
     Link {
         /// The link error.
         source: LinkError,
@@ -104,8 +105,10 @@ pub enum ProcedureError {
         recording: Option<(PathBuf, u64)>,
     },
     /// The recording could not be written or read back.
-    Recording(RecordingError),
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
     /// No calibration could be estimated from the recording.
+    #[error("{source}\n(the recording is saved in {})", .recording.display())]
     Estimate {
         /// Why.
         source: EstimateError,
@@ -113,54 +116,42 @@ pub enum ProcedureError {
         recording: PathBuf,
     },
     /// The result could not be written.
+    #[error(transparent)]
     Output(OutputError),
     /// The device did not apply the calibration after the reset.
+    #[error(
+        "after the reset the device reports its calibration as {0:?}, not the one written: \
+         the write did not take; retry, and check the device's storage"
+    )]
     NotApplied(CalibrationState),
     /// The calibration read back differs from the one written.
+    #[error(
+        "the calibration read back from the device differs from the one written: retry the write"
+    )]
     ReadBackMismatch,
     /// The operator stopped.
+    #[error("stopped by the operator ({0})")]
     Aborted(String),
     /// The terminal failed.
-    Terminal(std::io::Error),
+    #[error("terminal error: {0}")]
+    Terminal(#[source] std::io::Error),
 }
 
-impl std::fmt::Display for ProcedureError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ProcedureError::Link { source, recording: Some((dir, rows)) } => write!(
-                f,
-                "{source}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
-                 can be estimated with `host calibrate --input {}`",
-                dir.display(),
-                dir.display()
-            ),
-            ProcedureError::Link { source, recording: None } => write!(f, "{source}"),
-            ProcedureError::Recording(e) => write!(f, "{e}"),
-            ProcedureError::Estimate { source, recording } => write!(
-                f,
-                "{source}\n(the recording is saved in {})",
-                recording.display()
-            ),
-            ProcedureError::Output(e) => write!(f, "{e}"),
-            ProcedureError::NotApplied(state) => write!(
-                f,
-                "after the reset the device reports its calibration as {state:?}, not the one written: \
-                 the write did not take; retry, and check the device's storage"
-            ),
-            ProcedureError::ReadBackMismatch => f.write_str(
-                "the calibration read back from the device differs from the one written: retry the write",
-            ),
-            ProcedureError::Aborted(why) => write!(f, "stopped by the operator ({why})"),
-            ProcedureError::Terminal(e) => write!(f, "terminal error: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for ProcedureError {}
-
-impl From<RecordingError> for ProcedureError {
-    fn from(e: RecordingError) -> Self {
-        ProcedureError::Recording(e)
+/// [`ProcedureError::Link`]'s message: the link's, and where the recording so far is kept.
+fn link_message(
+    source: &LinkError,
+    recording: &Option<(PathBuf, u64)>,
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    match recording {
+        Some((dir, rows)) => write!(
+            f,
+            "{source}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
+             can be estimated with `host calibrate --input {}`",
+            dir.display(),
+            dir.display()
+        ),
+        None => write!(f, "{source}"),
     }
 }
 

@@ -74,24 +74,15 @@ pub struct SimDevice {
 }
 
 /// Why a simulated device cannot be built.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum SimError {
     /// The truth calibration is unusable for the forward model.
+    #[error("the simulated unit's parameters are unusable")]
     BadUnit,
     /// The simulated flash could not be formatted.
+    #[error("the simulated flash could not be set up")]
     Storage,
 }
-
-impl std::fmt::Display for SimError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SimError::BadUnit => f.write_str("the simulated unit's parameters are unusable"),
-            SimError::Storage => f.write_str("the simulated flash could not be set up"),
-        }
-    }
-}
-
-impl std::error::Error for SimError {}
 
 impl SimDevice {
     /// A device whose sensor is the unit `truth` (noise on), with empty flash.

@@ -3,9 +3,10 @@
 use shared::params::ParamsError;
 
 /// Why no calibration could be made.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum EstimateError {
     /// No usable static segment.
+    #[error(fmt = no_static_segments)]
     NoStaticSegments {
         /// How many static segments the plan has (all excluded when > 0).
         planned: usize,
@@ -13,6 +14,7 @@ pub enum EstimateError {
         reasons: Vec<String>,
     },
     /// The usable static attitudes do not span 3-D (the bias and `M` need ≥ 4 attitudes not on a plane).
+    #[error(fmt = too_few_attitudes)]
     TooFewAttitudes {
         /// Usable static attitudes.
         attitudes: usize,
@@ -20,6 +22,7 @@ pub enum EstimateError {
         needed_directions: Vec<[f64; 3]>,
     },
     /// The plan cannot determine these parameters.
+    #[error("the plan cannot determine {}: {hint}", .parameters.join(", "))]
     PlanCannotObserve {
         /// The parameters.
         parameters: Vec<String>,
@@ -27,92 +30,77 @@ pub enum EstimateError {
         hint: String,
     },
     /// The normal equations are singular.
+    #[error("the {what} is singular: the segments do not determine the parameters")]
     Singular {
         /// Which fit.
         what: &'static str,
     },
     /// A plan segment has no data (strict mode).
+    #[error(
+        "segment '{name}' is in the plan but has no rows in the data: record it or remove it from plan.toml"
+    )]
     MissingSegment {
         /// Its name.
         name: String,
     },
     /// The data have a segment the plan does not list (strict mode).
+    #[error(
+        "segment '{name}' is in the data but not in the plan: add it to plan.toml (up_b, rate_deg_s) or drop its rows"
+    )]
     UnknownSegment {
         /// Its name.
         name: String,
     },
     /// The estimate is not a valid calibration.
-    Params(ParamsError),
+    #[error("the estimate is not a valid calibration: {0}")]
+    Params(#[from] ParamsError),
     /// The fit ran but its result is not a plausible unit (see [`super::plausibility`]).
+    #[error(
+        "no calibration written: the result is not plausible:\n  - {}",
+        .problems.join("\n  - ")
+    )]
     Implausible {
         /// Each problem, naming the segments or axes.
         problems: Vec<String>,
     },
     /// The temperature model cannot be fitted or is implausible (the message says why).
+    #[error("temperature model: {0}; check the recording's temp_c column and the soak steps")]
     Temperature(String),
 }
 
-impl std::fmt::Display for EstimateError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            EstimateError::Temperature(why) => write!(
-                f,
-                "temperature model: {why}; check the recording's temp_c column and the soak steps"
-            ),
-            EstimateError::NoStaticSegments { planned: 0, .. } => write!(
-                f,
-                "the plan has no static segment: add at least four static attitudes (e.g. ±1 g on each axis)"
-            ),
-            EstimateError::NoStaticSegments { planned, reasons } => write!(
-                f,
-                "all {planned} static segments were excluded; re-record them. Reasons:\n  - {}",
-                reasons.join("\n  - ")
-            ),
-            EstimateError::TooFewAttitudes {
-                attitudes,
-                needed_directions,
-            } => {
-                write!(
-                    f,
-                    "the {attitudes} usable static attitude(s) do not span 3-D, so the biases and the \
-                     scale/misalignment matrix are not determined; add static segments with up_b along"
-                )?;
-                for d in needed_directions {
-                    write!(f, " ±[{:.3}, {:.3}, {:.3}]", d[0], d[1], d[2])?;
-                }
-                Ok(())
-            }
-            EstimateError::PlanCannotObserve { parameters, hint } => write!(
-                f,
-                "the plan cannot determine {}: {hint}",
-                parameters.join(", ")
-            ),
-            EstimateError::Singular { what } => write!(
-                f,
-                "the {what} is singular: the segments do not determine the parameters"
-            ),
-            EstimateError::MissingSegment { name } => write!(
-                f,
-                "segment '{name}' is in the plan but has no rows in the data: record it or remove it from plan.toml"
-            ),
-            EstimateError::UnknownSegment { name } => write!(
-                f,
-                "segment '{name}' is in the data but not in the plan: add it to plan.toml (up_b, rate_deg_s) or drop its rows"
-            ),
-            EstimateError::Params(e) => write!(f, "the estimate is not a valid calibration: {e}"),
-            EstimateError::Implausible { problems } => write!(
-                f,
-                "no calibration written: the result is not plausible:\n  - {}",
-                problems.join("\n  - ")
-            ),
-        }
+/// [`EstimateError::NoStaticSegments`]'s message: none planned, or all excluded and why.
+fn no_static_segments(
+    planned: &usize,
+    reasons: &[String],
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    if *planned == 0 {
+        write!(
+            f,
+            "the plan has no static segment: add at least four static attitudes (e.g. ±1 g on each axis)"
+        )
+    } else {
+        write!(
+            f,
+            "all {planned} static segments were excluded; re-record them. Reasons:\n  - {}",
+            reasons.join("\n  - ")
+        )
     }
 }
 
-impl std::error::Error for EstimateError {}
-
-impl From<ParamsError> for EstimateError {
-    fn from(e: ParamsError) -> Self {
-        EstimateError::Params(e)
+/// [`EstimateError::TooFewAttitudes`]'s message, with each missing direction.
+fn too_few_attitudes(
+    attitudes: &usize,
+    needed_directions: &[[f64; 3]],
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    write!(
+        f,
+        "the {attitudes} usable static attitude(s) do not span 3-D, so the biases and the \
+         scale/misalignment matrix are not determined; add static segments with up_b along"
+    )?;
+    for d in needed_directions {
+        write!(f, " ±[{:.3}, {:.3}, {:.3}]", d[0], d[1], d[2])?;
     }
+    Ok(())
 }

@@ -123,13 +123,13 @@ pub enum ExportFormat {
 pub enum ExportError {
     /// The parameters do not convert (degenerate axis, singular matrix…).
     #[error("cannot export the calibration: {0}")]
-    Params(ParamsError),
+    Params(#[from] ParamsError),
     /// The compensator refuses the parameters.
     #[error("cannot export the calibration: {0}")]
-    Compensator(shared::compensator::CompensatorError),
+    Compensator(#[source] shared::compensator::CompensatorError),
     /// The blob cannot be encoded.
     #[error("cannot export the calibration's blob: {0}")]
-    Blob(shared::blob::BlobError),
+    Blob(#[source] shared::blob::BlobError),
     /// The calibration file has no valid unit id, which the blob needs.
     #[error("cannot export the calibration's blob: {0}")]
     UnitId(String),
@@ -221,12 +221,6 @@ pub enum ExportError {
     /// A value the target needs that only the user can give.
     #[error("{0}")]
     Missing(String),
-}
-
-impl From<ParamsError> for ExportError {
-    fn from(e: ParamsError) -> Self {
-        ExportError::Params(e)
-    }
 }
 
 /// What an export is made from.

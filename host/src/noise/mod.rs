@@ -42,43 +42,27 @@ pub const AXES: [&str; 6] = [
 ];
 
 /// Why the analysis failed.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum NoiseError {
     /// The recording could not be read.
-    Recording(RecordingError),
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
     /// No still segment with enough rows.
+    #[error("no noise analysis possible: {0}")]
     NoStillData(String),
     /// A noise file could not be read or parsed.
+    #[error("cannot use noise file {}: {}", .0.display(), .1)]
     File(PathBuf, String),
     /// The calibration does not turn this still recording into 1 g: it is not this recording's.
+    #[error(
+        "the calibration turns this still recording into |f| = {f_g:.4} g, not 1 g: it is \
+         not this recording's calibration (another unit, output unit or scale), and its \
+         noise figures would be off by the same factor; give the recording's own calibration"
+    )]
     NotOneG {
         /// Mean |f| of the still data after the calibration, g.
         f_g: f64,
     },
-}
-
-impl std::fmt::Display for NoiseError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            NoiseError::Recording(e) => e.fmt(f),
-            NoiseError::NoStillData(m) => write!(f, "no noise analysis possible: {m}"),
-            NoiseError::File(p, m) => write!(f, "cannot use noise file {}: {m}", p.display()),
-            NoiseError::NotOneG { f_g } => write!(
-                f,
-                "the calibration turns this still recording into |f| = {f_g:.4} g, not 1 g: it is \
-                 not this recording's calibration (another unit, output unit or scale), and its \
-                 noise figures would be off by the same factor; give the recording's own calibration"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for NoiseError {}
-
-impl From<RecordingError> for NoiseError {
-    fn from(e: RecordingError) -> Self {
-        NoiseError::Recording(e)
-    }
 }
 
 /// One axis's analysis.

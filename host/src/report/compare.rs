@@ -111,24 +111,15 @@ impl ComparisonTable {
 }
 
 /// Why two files cannot be compared.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum CompareError {
     /// A file could not be read.
+    #[error(transparent)]
     Unit(UnitFileError),
     /// They cannot be compared (message says why).
+    #[error("{0}")]
     Incompatible(String),
 }
-
-impl std::fmt::Display for CompareError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CompareError::Unit(e) => e.fmt(f),
-            CompareError::Incompatible(m) => f.write_str(m),
-        }
-    }
-}
-
-impl std::error::Error for CompareError {}
 
 /// `host compare`: reads two calibration (unit) files and compares them.
 pub fn compare(a_toml: &Path, b_toml: &Path) -> Result<ComparisonTable, CompareError> {

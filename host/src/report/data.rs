@@ -67,50 +67,35 @@ impl Default for ReportOptions {
 }
 
 /// Why no report could be made.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ReportError {
     /// The session could not be read.
+    #[error(transparent)]
     Recording(RecordingError),
     /// The calibration file could not be read.
+    #[error(transparent)]
     Unit(UnitFileError),
     /// The calibration cannot compensate (message says why).
+    #[error("the calibration cannot compensate: {0}")]
     Calibration(String),
     /// A requested segment is not in the session, or the session has none to use.
+    #[error("{0}")]
     Segment(String),
     /// A figure could not be drawn.
-    Figure(plot::FigureError),
+    #[error(transparent)]
+    Figure(#[from] plot::FigureError),
     /// A file could not be written.
-    Io(PathBuf, std::io::Error),
+    #[error("cannot write {}: {}", .0.display(), .1)]
+    Io(PathBuf, #[source] std::io::Error),
     /// The simulation of the navigation check failed.
+    #[error(transparent)]
     Simulate(SimulateError),
     /// The calibration of the navigation check failed.
+    #[error(transparent)]
     Estimate(crate::estimate::EstimateError),
     /// The calibration is of another unit than the session.
+    #[error("{0}")]
     WrongUnit(String),
-}
-
-impl std::fmt::Display for ReportError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ReportError::Recording(e) => e.fmt(f),
-            ReportError::Unit(e) => e.fmt(f),
-            ReportError::Calibration(m) => write!(f, "the calibration cannot compensate: {m}"),
-            ReportError::Segment(m) => f.write_str(m),
-            ReportError::Figure(e) => e.fmt(f),
-            ReportError::Io(p, e) => write!(f, "cannot write {}: {e}", p.display()),
-            ReportError::Simulate(e) => e.fmt(f),
-            ReportError::Estimate(e) => e.fmt(f),
-            ReportError::WrongUnit(m) => f.write_str(m),
-        }
-    }
-}
-
-impl std::error::Error for ReportError {}
-
-impl From<plot::FigureError> for ReportError {
-    fn from(e: plot::FigureError) -> Self {
-        ReportError::Figure(e)
-    }
 }
 
 /// A compensation level.

@@ -108,21 +108,14 @@ pub struct RenderOutcome {
 }
 
 /// Why a figure could not be drawn.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw {}: {}", .path.display(), .message)]
 pub struct FigureError {
     /// The file.
     pub path: PathBuf,
     /// What went wrong.
     pub message: String,
 }
-
-impl std::fmt::Display for FigureError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "cannot draw {}: {}", self.path.display(), self.message)
-    }
-}
-
-impl std::error::Error for FigureError {}
 
 /// Which files to write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,11 +5,13 @@ use super::{COLUMNS_TEMPERATURE, PLAN_FILE, SAMPLES_HEADER};
 use std::path::PathBuf;
 
 /// Why a session cannot be read or written. Every message names the file, the place and the fix.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
     /// `plan.toml` is missing or unusable.
-    Plan(PlanError),
+    #[error(transparent)]
+    Plan(#[from] PlanError),
     /// An I/O failure on `path`.
+    #[error("{}: {source}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -17,6 +19,7 @@ pub enum RecordingError {
         source: std::io::Error,
     },
     /// The first line is not the header of the plan's version.
+    #[error(fmt = header_message)]
     Header {
         /// The file.
         path: PathBuf,
@@ -28,6 +31,12 @@ pub enum RecordingError {
         version: RecordingVersion,
     },
     /// A row without exactly the plan's version's number of fields (eight, or nine with `temp_c`).
+    #[error(
+        "{} line {line}: {found} fields, expected {} ({}); fix or delete the line",
+        .path.display(),
+        .version.samples_header().split(',').count(),
+        .version.samples_header()
+    )]
     FieldCount {
         /// The file.
         path: PathBuf,
@@ -39,6 +48,15 @@ pub enum RecordingError {
         version: RecordingVersion,
     },
     /// A field that is not a number (NaN and inf are numbers: those rows are counted and left out).
+    #[error(
+        "{} line {line}, column {column} ({}): '{text}' is not a number; \
+         fix the value or write NaN to have the row left out",
+        .path.display(),
+        COLUMNS_TEMPERATURE
+            .get(.column.wrapping_sub(1))
+            .copied()
+            .unwrap_or("?")
+    )]
     Number {
         /// The file.
         path: PathBuf,
@@ -50,6 +68,12 @@ pub enum RecordingError {
         text: String,
     },
     /// A line longer than [`crate::limits::MAX_LINE_BYTES`] (not a recording, or a damaged one).
+    #[error(
+        "{} line {line} is longer than {} bytes without a line end: this is not a recording \
+         ({SAMPLES_HEADER}, one row per line); check the file",
+        .path.display(),
+        crate::limits::MAX_LINE_BYTES
+    )]
     LineTooLong {
         /// The file.
         path: PathBuf,
@@ -57,6 +81,11 @@ pub enum RecordingError {
         line: u64,
     },
     /// Bytes that are not UTF-8 text.
+    #[error(
+        "{} line {line} has bytes that are not UTF-8 text: the file is damaged or is not a \
+         recording; check the file",
+        .path.display()
+    )]
     NotText {
         /// The file.
         path: PathBuf,
@@ -64,6 +93,11 @@ pub enum RecordingError {
         line: u64,
     },
     /// A row names a segment the plan does not have.
+    #[error(
+        "{} line {line}: segment '{name}' is not in {PLAN_FILE}; add a [[segment]] with \
+         name = \"{name}\" to the plan, or remove its rows",
+        .path.display()
+    )]
     UnknownSegment {
         /// The file.
         path: PathBuf,
@@ -73,8 +107,18 @@ pub enum RecordingError {
         name: String,
     },
     /// The file has a header but no usable row.
+    #[error(
+        "{} has no data rows after its header: nothing to calibrate from",
+        .0.display()
+    )]
     NoRows(PathBuf),
     /// The last line has no line end: the recording (or its copy) was cut short.
+    #[error(
+        "{} line {line} has no line end: the recording (or its copy) was cut short, so its \
+         last row may be wrong and rows may be missing; record or copy it again (or, if \
+         every segment is complete, delete that line)",
+        .path.display()
+    )]
     CutShort {
         /// The file.
         path: PathBuf,
@@ -82,6 +126,14 @@ pub enum RecordingError {
         line: u64,
     },
     /// The time stamps step at another rate than the plan's `sample_rate_hz`.
+    #[error(
+        "{}: the time stamps of segment '{segment}' step at {} Hz, the plan's \
+         sample_rate_hz is {} Hz: the time column is in another unit or scale, or the plan's \
+         rate is wrong; fix whichever is wrong",
+        .path.display(),
+        rate_text(*.stamps_hz),
+        rate_text(*.plan_hz)
+    )]
     TimeBase {
         /// The file.
         path: PathBuf,
@@ -93,149 +145,53 @@ pub enum RecordingError {
         plan_hz: f64,
     },
     /// [`super::SessionWriter`] was asked for a segment the plan does not have.
+    #[error(
+        "cannot record segment '{0}': it is not in the session's plan; add it to the plan first"
+    )]
     WriterSegment(String),
     /// A row written with (or without) a temperature to a recording whose plan says otherwise.
+    #[error(fmt = writer_temperature_message)]
     WriterTemperature {
         /// The plan's recording version, which has `temp_c` or not.
         version: RecordingVersion,
     },
     /// [`super::SessionWriter::create`] would overwrite an existing recording.
+    #[error(
+        "{} already exists; choose another directory or allow overwriting (--force)",
+        .0.display()
+    )]
     Exists(PathBuf),
 }
 
-impl std::fmt::Display for RecordingError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RecordingError::Plan(e) => write!(f, "{e}"),
-            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            RecordingError::Header {
-                path,
-                found,
-                column,
-                version,
-            } => header_message(f, path, found, *column, *version),
-            RecordingError::FieldCount {
-                path,
-                line,
-                found,
-                version,
-            } => {
-                let expected = version.samples_header();
-                write!(
-                    f,
-                    "{} line {line}: {found} fields, expected {} ({expected}); \
-                     fix or delete the line",
-                    path.display(),
-                    expected.split(',').count()
-                )
-            }
-            RecordingError::Number {
-                path,
-                line,
-                column,
-                text,
-            } => write!(
-                f,
-                "{} line {line}, column {column} ({}): '{}' is not a number; \
-                 fix the value or write NaN to have the row left out",
-                path.display(),
-                COLUMNS_TEMPERATURE
-                    .get(column.wrapping_sub(1))
-                    .copied()
-                    .unwrap_or("?"),
-                text
-            ),
-            RecordingError::LineTooLong { path, line } => write!(
-                f,
-                "{} line {line} is longer than {} bytes without a line end: this is not a recording \
-                 ({SAMPLES_HEADER}, one row per line); check the file",
-                path.display(),
-                crate::limits::MAX_LINE_BYTES
-            ),
-            RecordingError::NotText { path, line } => write!(
-                f,
-                "{} line {line} has bytes that are not UTF-8 text: the file is damaged or is not a \
-                 recording; check the file",
-                path.display()
-            ),
-            RecordingError::UnknownSegment { path, line, name } => write!(
-                f,
-                "{} line {line}: segment '{name}' is not in {PLAN_FILE}; add a [[segment]] with \
-                 name = \"{name}\" to the plan, or remove its rows",
-                path.display()
-            ),
-            RecordingError::CutShort { .. } | RecordingError::TimeBase { .. } => {
-                self.fmt_time_or_cut(f)
-            }
-            RecordingError::NoRows(path) => write!(
-                f,
-                "{} has no data rows after its header: nothing to calibrate from",
-                path.display()
-            ),
-            RecordingError::WriterSegment(name) => write!(
-                f,
-                "cannot record segment '{name}': it is not in the session's plan; add it to the plan first"
-            ),
-            RecordingError::WriterTemperature { version } if version.has_temperature() => write!(
-                f,
-                "this recording's plan has format_version = {version}: every row needs the unit's \
-                 temperature"
-            ),
-            RecordingError::WriterTemperature { version } => write!(
-                f,
-                "this recording's plan has format_version = {version}, which holds no temperature: \
-                 set format_version = {} to record temp_c",
-                RecordingVersion::V3Temperature
-            ),
-            RecordingError::Exists(path) => write!(
-                f,
-                "{} already exists; choose another directory or allow overwriting (--force)",
-                path.display()
-            ),
-        }
+/// [`RecordingError::WriterTemperature`]'s message: what the plan's version asks for.
+fn writer_temperature_message(
+    version: &RecordingVersion,
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    if version.has_temperature() {
+        write!(
+            f,
+            "this recording's plan has format_version = {version}: every row needs the unit's \
+             temperature"
+        )
+    } else {
+        write!(
+            f,
+            "this recording's plan has format_version = {version}, which holds no temperature: \
+             set format_version = {} to record temp_c",
+            RecordingVersion::V3Temperature
+        )
     }
 }
-
-impl RecordingError {
-    /// The messages of a recording cut short or on another clock.
-    fn fmt_time_or_cut(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RecordingError::CutShort { path, line } => write!(
-                f,
-                "{} line {line} has no line end: the recording (or its copy) was cut short, so its \
-                 last row may be wrong and rows may be missing; record or copy it again (or, if \
-                 every segment is complete, delete that line)",
-                path.display()
-            ),
-            RecordingError::TimeBase {
-                path,
-                segment,
-                stamps_hz,
-                plan_hz,
-            } => write!(
-                f,
-                "{}: the time stamps of segment '{segment}' step at {} Hz, the plan's \
-                 sample_rate_hz is {} Hz: the time column is in another unit or scale, or the plan's \
-                 rate is wrong; fix whichever is wrong",
-                path.display(),
-                rate_text(*stamps_hz),
-                rate_text(*plan_hz)
-            ),
-            _ => Ok(()),
-        }
-    }
-}
-
-impl std::error::Error for RecordingError {}
 
 /// [`RecordingError::Header`]'s message: the header the plan's version expects and, when the file
 /// looks like the other version, the plan change that would read it.
 fn header_message(
-    f: &mut std::fmt::Formatter<'_>,
     path: &std::path::Path,
     found: &str,
-    column: usize,
-    version: RecordingVersion,
+    column: &usize,
+    version: &RecordingVersion,
+    f: &mut std::fmt::Formatter<'_>,
 ) -> std::fmt::Result {
     write!(
         f,
@@ -257,12 +213,6 @@ fn header_message(
             RecordingVersion::V2Attitudes
         ),
         _ => Ok(()),
-    }
-}
-
-impl From<PlanError> for RecordingError {
-    fn from(e: PlanError) -> Self {
-        RecordingError::Plan(e)
     }
 }
 

@@ -231,36 +231,27 @@ impl SegmentPlan {
 }
 
 /// Why a plan is unusable.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum PlanError {
     /// The file could not be read.
-    Io(std::path::PathBuf, std::io::Error),
+    #[error("cannot read plan {}: {}", .0.display(), .1)]
+    Io(std::path::PathBuf, #[source] std::io::Error),
     /// The TOML does not parse or has wrong fields (the message names line and column).
+    #[error("plan {} is not valid: {}", .0.display(), .1)]
     Syntax(std::path::PathBuf, String),
     /// A format version this build does not read.
+    #[error(
+        "plan format_version {} is not supported (this build reads {} to {}); upgrade \
+         the tool or rewrite the plan",
+        .0,
+        RecordingVersion::OLDEST,
+        RecordingVersion::NEWEST
+    )]
     Version(u32),
     /// Semantic problem, naming the segment.
+    #[error("plan is not usable: {0}")]
     Invalid(String),
 }
-
-impl std::fmt::Display for PlanError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            PlanError::Io(p, e) => write!(f, "cannot read plan {}: {e}", p.display()),
-            PlanError::Syntax(p, e) => write!(f, "plan {} is not valid: {e}", p.display()),
-            PlanError::Version(v) => write!(
-                f,
-                "plan format_version {v} is not supported (this build reads {} to {}); upgrade \
-                 the tool or rewrite the plan",
-                RecordingVersion::OLDEST,
-                RecordingVersion::NEWEST
-            ),
-            PlanError::Invalid(m) => write!(f, "plan is not usable: {m}"),
-        }
-    }
-}
-
-impl std::error::Error for PlanError {}
 
 impl Plan {
     /// Reads and validates a plan file.

@@ -154,35 +154,20 @@ impl NoiseModel {
 }
 
 /// Why a simulation cannot run.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum SimulateError {
     /// The unit's parameters are unusable.
+    #[error("the unit to simulate is not usable: {0}")]
     Unit(String),
     /// The plan is unusable for simulation.
+    #[error(transparent)]
     Plan(PlanError),
     /// A noise parameter is wrong.
+    #[error("noise model: {0}")]
     Noise(String),
     /// Writing the session failed.
-    Recording(RecordingError),
-}
-
-impl std::fmt::Display for SimulateError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SimulateError::Unit(m) => write!(f, "the unit to simulate is not usable: {m}"),
-            SimulateError::Plan(e) => write!(f, "{e}"),
-            SimulateError::Noise(m) => write!(f, "noise model: {m}"),
-            SimulateError::Recording(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for SimulateError {}
-
-impl From<RecordingError> for SimulateError {
-    fn from(e: RecordingError) -> Self {
-        SimulateError::Recording(e)
-    }
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
 }
 
 /// What a simulation did, beyond the samples.
