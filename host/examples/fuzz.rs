@@ -1,4 +1,4 @@
-//! The stable fuzz driver: `cargo run --release -p host --example fuzz -- TARGET|all [N] [SEED]`
+//! The stable fuzz driver: `cargo run --release -p host --features fuzz --example fuzz -- TARGET|all [N] [SEED]`
 //! runs N (default 10⁶) seeded mutations of each target's corpus through the same `fuzz_one` the
 //! cargo-fuzz targets in `fuzz/` call, and prints the counts. Peak memory:
 //! `/usr/bin/time -v target/release/examples/fuzz all 1000000` ("Maximum resident set size").

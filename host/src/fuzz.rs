@@ -9,7 +9,7 @@
 //!   `cargo +nightly fuzz run samples_csv -- -runs=1000000`;
 //! - the stable driver [`drive`]: seeded mutations of a small corpus of valid inputs plus random
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
-//!   `cargo run --release -p host --example fuzz -- all 1000000` (a short run is a unit test).
+//!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
 mod logs;
 

@@ -36,6 +36,9 @@ pub mod cli;
 pub mod device;
 pub mod estimate;
 pub mod export;
+/// The parsers' fuzz targets: not in the shipped library or binary (feature `fuzz`, which the `fuzz/`
+/// crate and `--example fuzz` enable); the unit tests run their short seeded runs.
+#[cfg(any(test, feature = "fuzz"))]
 pub mod fuzz;
 pub mod limits;
 pub mod noise;
