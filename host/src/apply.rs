@@ -25,14 +25,14 @@ use std::path::Path;
 /// Largest relative difference of a still segment's compensated |f| from 1 g for a calibration to
 /// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
 /// by tens of percent or by a factor.
-pub const MAX_STILL_G_ERROR: f64 = 0.05;
+pub(crate) const MAX_STILL_G_ERROR: f64 = 0.05;
 
 /// Largest mean gyro rate of a still segment after the calibration's bias, °/s: a MEMS gyro's
 /// turn-on bias repeatability is below 1 °/s; a wrong unit (°/s read as rad/s) is 57× its bias.
-pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
+pub(crate) const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// The header of the output, exactly.
-pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g";
+pub(crate) const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g";
 
 /// Why a calibration could not be applied.
 #[derive(Debug, thiserror::Error)]
@@ -208,7 +208,7 @@ impl Applier {
 
 /// What [`apply_session`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ApplySummary {
+pub(crate) struct ApplySummary {
     /// Rows written (one per input row).
     pub rows: u64,
     /// Rows written as `NaN` because an input value was not finite.
@@ -219,7 +219,7 @@ pub struct ApplySummary {
 }
 
 /// Checks the unit ids when both sides have one.
-pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
+pub(crate) fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
     if let (Some(c), Some(r)) = (cal_unit, plan.unit_id.as_deref()) {
         if UnitId::parse_hex(r) != Some(c) {
             return Err(ApplyError::UnitMismatch {
@@ -234,7 +234,7 @@ pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyErro
 /// Checks that a calibration can meet a recording at all: the same unit (when both have an id), the
 /// same output unit, and a temperature for a temperature model (the recording's, or
 /// `assume_temp_c`).
-pub fn check_meeting(
+pub(crate) fn check_meeting(
     cal: &Calibration,
     cal_unit: Option<UnitId>,
     plan: &Plan,
@@ -249,7 +249,7 @@ pub fn check_meeting(
 }
 
 /// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).
-pub fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
+pub(crate) fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
     if cal.statics.output_unit != plan.output_unit {
         return Err(ApplyError::OutputUnitMismatch {
             calibration: cal.statics.output_unit,
@@ -298,7 +298,7 @@ fn check_stills(plan: &Plan, sums: &[StillSums], gyro: bool) -> Result<(), Apply
 /// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`;
 /// `assume_temp_c` is the temperature of a recording without one ([`check_meeting`]). The still
 /// segments are then checked to compensate to 1 g ([`MAX_STILL_G_ERROR`]).
-pub fn apply_session(
+pub(crate) fn apply_session(
     dir: &Path,
     cal: &Calibration,
     cal_unit: Option<UnitId>,

@@ -46,7 +46,7 @@ impl ReportSummary {
 }
 
 /// Writes the figures and the page of `data` into `out_dir`.
-pub fn write_report(
+pub(crate) fn write_report(
     data: &ReportData,
     out_dir: &Path,
     session: &str,

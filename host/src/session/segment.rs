@@ -51,7 +51,7 @@ impl Default for SegmentOptions {
 /// unknowns: 3 biases, 3 scales, 3 non-orthogonalities; docs/model.md §7).
 pub const MIN_POSITIONS: usize = 9;
 /// Recommended number of positions (the built-in `hand` plan).
-pub const RECOMMENDED_POSITIONS: usize = 24;
+pub(crate) const RECOMMENDED_POSITIONS: usize = 24;
 /// A body direction (±x, ±y, ±z) with no position within this angle is missing, degrees.
 pub const FACE_COVERAGE_DEG: f64 = 50.0;
 
@@ -199,7 +199,7 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 }
 
 /// Finds the still intervals and spins of `rec`.
-pub fn find_intervals(
+pub(crate) fn find_intervals(
     rec: &Recording,
     options: &SegmentOptions,
 ) -> Result<Segmentation, SegmentError> {
@@ -377,7 +377,7 @@ fn interval(
 }
 
 /// Angle between two unit vectors, degrees.
-pub fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+pub(crate) fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     linalg::dot(a, b).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
@@ -406,7 +406,7 @@ const FACES: [(&str, [f64; 3]); 6] = [
 ];
 
 /// Distinct positions and the directions they miss.
-pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
+pub(crate) fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
     let mut firsts: Vec<usize> = Vec::new();
     let repeats = stills
         .iter()
@@ -454,7 +454,7 @@ impl Coverage {
     }
 
     /// "; include x down, z up" or "".
-    pub fn faces_text(&self) -> String {
+    pub(crate) fn faces_text(&self) -> String {
         if self.missing_faces.is_empty() {
             String::new()
         } else {
@@ -466,7 +466,7 @@ impl Coverage {
     }
 
     /// Advice when the positions suffice but are fewer than recommended or leave directions out.
-    pub fn advice(&self) -> Option<String> {
+    pub(crate) fn advice(&self) -> Option<String> {
         if self.distinct >= RECOMMENDED_POSITIONS && self.missing_faces.is_empty() {
             return None;
         }
