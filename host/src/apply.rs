@@ -14,13 +14,13 @@
 //! f64), and the corrected body rate the device used for it (the calibration's gyro `G⁻¹(w − b)`,
 //! docs/model.md §8; the gyro's reading where the calibration has no gyro), rad/s.
 //!
-//! A logger's file ([`apply_log`]) is read whole by `session::logs` (bounded by its row cap): it has
+//! A logger's file (`apply_log`) is read whole by `session::logs` (bounded by its row cap): it has
 //! no segments, so its rows are written with the segment `log`, and the still intervals
 //! `session::segment` finds in it are the ones checked to compensate to 1 g.
 
 mod log;
 
-pub use log::apply_log;
+pub(crate) use log::apply_log;
 
 use crate::output_file::OutputFileError;
 use crate::session::logs::LogError;
@@ -36,11 +36,11 @@ use std::path::Path;
 /// Largest relative difference of a still segment's compensated |f| from 1 g for a calibration to
 /// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
 /// by tens of percent or by a factor.
-pub const MAX_STILL_G_ERROR: f64 = 0.05;
+pub(crate) const MAX_STILL_G_ERROR: f64 = 0.05;
 
 /// Largest mean gyro rate of a still segment after the calibration's bias, °/s: a MEMS gyro's
 /// turn-on bias repeatability is below 1 °/s; a wrong unit (°/s read as rad/s) is 57× its bias.
-pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
+pub(crate) const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// The header of the output, exactly.
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";
@@ -222,7 +222,7 @@ impl Applier {
 
 /// What [`apply_session`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ApplySummary {
+pub(crate) struct ApplySummary {
     /// Rows written (one per input row).
     pub rows: u64,
     /// Rows written as `NaN` because an input value was not finite.
@@ -233,7 +233,7 @@ pub struct ApplySummary {
 }
 
 /// Checks the unit ids when both sides have one.
-pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
+pub(crate) fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
     if let (Some(c), Some(r)) = (cal_unit, plan.unit_id.as_deref()) {
         if UnitId::parse_hex(r) != Some(c) {
             return Err(ApplyError::UnitMismatch {
@@ -248,7 +248,7 @@ pub fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyErro
 /// Checks that a calibration can meet a recording at all: the same unit (when both have an id), the
 /// same output unit, and a temperature for a temperature model (the recording's, or
 /// `assume_temp_c`).
-pub fn check_meeting(
+pub(crate) fn check_meeting(
     cal: &Calibration,
     cal_unit: Option<UnitId>,
     plan: &Plan,
@@ -263,7 +263,7 @@ pub fn check_meeting(
 }
 
 /// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).
-pub fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
+pub(crate) fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
     if cal.statics.output_unit != plan.output_unit {
         return Err(ApplyError::OutputUnitMismatch {
             calibration: cal.statics.output_unit,
@@ -358,7 +358,7 @@ fn output_line(
 /// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`;
 /// `assume_temp_c` is the temperature of a recording without one ([`check_meeting`]). The still
 /// segments are then checked to compensate to 1 g ([`MAX_STILL_G_ERROR`]).
-pub fn apply_session(
+pub(crate) fn apply_session(
     dir: &Path,
     cal: &Calibration,
     cal_unit: Option<UnitId>,

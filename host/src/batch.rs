@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Most worker threads `host batch --jobs` starts (a lot never uses more than it has sessions).
-pub const MAX_JOBS: usize = 256;
+pub(crate) const MAX_JOBS: usize = 256;
 
 /// Fewest calibrated units for the outlier screening.
 pub const MIN_LOT: usize = 5;
@@ -64,7 +64,7 @@ pub struct UnitResult {
 
 impl UnitResult {
     /// Why the unit did not pass, every reason in one line (empty when it passed).
-    pub fn why_failed(&self) -> String {
+    pub(crate) fn why_failed(&self) -> String {
         let mut why = Vec::new();
         if let Some(e) = &self.error {
             why.push(e.clone());
@@ -194,7 +194,7 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
 
 /// Flags the outliers of the lot (see the module documentation) and the units whose id another
 /// session claims too, and sets `passed`.
-pub fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
+pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     let mut names = all_parameter_keys();
     for p in units.iter().filter_map(|u| u.summary.as_ref()) {
         for q in &p.parameters {
@@ -347,7 +347,7 @@ fn csv_cell(text: &str) -> String {
 /// The lot as CSV: one row per unit, every parameter ([`all_parameter_keys`]: the accelerometer's,
 /// the gyro's, the temperature model's) and its 1σ, the temperature model's reference and range; a
 /// unit without a gyro or a temperature model leaves those cells empty.
-pub fn to_csv(lot: &LotSummary) -> String {
+pub(crate) fn to_csv(lot: &LotSummary) -> String {
     let keys = all_parameter_keys();
     let mut header: Vec<String> = [
         "session",

@@ -8,14 +8,14 @@ use shared::UnitId;
 use std::path::{Path, PathBuf};
 
 /// File name of the TOML result.
-pub const CALIBRATION_TOML: &str = "calibration.toml";
+pub(crate) const CALIBRATION_TOML: &str = "calibration.toml";
 /// File name of the blob.
-pub const CALIBRATION_BIN: &str = "calibration.bin";
+pub(crate) const CALIBRATION_BIN: &str = "calibration.bin";
 /// File name `calibration.toml` takes when its unit failed its checks (pass/fail limits or the
 /// device's verification): nothing that looks for an accepted calibration picks it up.
-pub const FAILED_TOML: &str = "calibration.FAILED.toml";
+pub(crate) const FAILED_TOML: &str = "calibration.FAILED.toml";
 /// File name `calibration.bin` takes when its unit failed its checks.
-pub const FAILED_BIN: &str = "calibration.FAILED.bin";
+pub(crate) const FAILED_BIN: &str = "calibration.FAILED.bin";
 
 /// What was written.
 #[derive(Clone, Debug)]
@@ -46,7 +46,7 @@ pub enum OutputError {
 }
 
 /// Seconds since the Unix epoch (0 if the clock is before it).
-pub fn now_unix_s() -> u64 {
+pub(crate) fn now_unix_s() -> u64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs())
@@ -54,7 +54,7 @@ pub fn now_unix_s() -> u64 {
 
 /// `YYYYMMDDTHHMMSSZ` of a Unix time (the proleptic Gregorian calendar, H. Hinnant's
 /// days-to-civil algorithm).
-pub fn utc_stamp(unix_s: u64) -> String {
+pub(crate) fn utc_stamp(unix_s: u64) -> String {
     let days = (unix_s / 86_400) as i64;
     let secs = unix_s % 86_400;
     let z = days + 719_468;
@@ -75,7 +75,7 @@ pub fn utc_stamp(unix_s: u64) -> String {
 }
 
 /// The blob of an outcome for `unit_id`.
-pub fn blob_bytes(
+pub(crate) fn blob_bytes(
     outcome: &CalibrationOutcome,
     unit_id: UnitId,
     created_unix_s: u64,
@@ -91,7 +91,7 @@ pub fn blob_bytes(
 
 /// Refuses to go on when `out_dir` already holds a calibration and `force` is false: called before
 /// any work (reading a session, recording, flashing), so a run is never wasted on a refusal at its end.
-pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
+pub(crate) fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
     if force {
         return Ok(());
     }
@@ -107,7 +107,10 @@ pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> 
 /// The calibration file of an outcome: the unit-file schema with every 1σ the estimate has (the
 /// accelerometer's `[uncertainty]`, the gyro's and the temperature model's), exactly what
 /// `calibration.toml` holds; the machine-readable summaries are made from it too.
-pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitId>) -> UnitFile {
+pub(crate) fn calibration_unit_file(
+    outcome: &CalibrationOutcome,
+    unit_id: Option<UnitId>,
+) -> UnitFile {
     let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         unit_id,
@@ -168,7 +171,7 @@ pub fn write_calibration_files(
 /// Renames a written pair to [`FAILED_BIN`] and [`FAILED_TOML`] (the blob first: it is what could be
 /// flashed), because its unit failed a check: the files stay for inspection, under names that say
 /// so. An existing failed pair is replaced only with `force`.
-pub fn mark_failed(
+pub(crate) fn mark_failed(
     written: &WrittenCalibration,
     force: bool,
 ) -> Result<WrittenCalibration, OutputError> {
@@ -182,7 +185,7 @@ pub fn mark_failed(
 }
 
 /// [`mark_failed`] for the pair in `dir`: the new paths of the `.toml` and the `.bin`.
-pub fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
+pub(crate) fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
     let (toml_path, bin_path) = (dir.join(FAILED_TOML), dir.join(FAILED_BIN));
     for p in [&toml_path, &bin_path] {
         if !force && p.exists() {

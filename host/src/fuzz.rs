@@ -158,7 +158,7 @@ fn fuzz_plan() -> &'static Plan {
 }
 
 /// `samples.csv`: the reader returns statistics or an error naming a line; statistics are of rows.
-pub fn samples_csv(data: &[u8]) {
+pub(crate) fn samples_csv(data: &[u8]) {
     if let Ok((stats, report)) = read_samples(data, fuzz_plan(), Path::new("samples.csv")) {
         let counted: u64 = stats.iter().map(|s| s.count + s.rejected_rows).sum();
         assert!(counted <= report.rows, "{counted} > {}", report.rows);
@@ -167,7 +167,7 @@ pub fn samples_csv(data: &[u8]) {
 }
 
 /// `plan.toml`: a plan that parses re-serialises to itself.
-pub fn plan_toml(data: &[u8]) {
+pub(crate) fn plan_toml(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -280,7 +280,7 @@ fn logger_options() -> &'static [ImportOptions; 2] {
 
 /// A logger's CSV: a recording the importer accepts has as many times as rows, at least 100 and
 /// at most `MAX_ROWS` of them, strictly increasing times, only finite values and a positive rate.
-pub fn logger_csv(data: &[u8]) {
+pub(crate) fn logger_csv(data: &[u8]) {
     for options in logger_options() {
         let Ok(rec) = read_logger(data, Path::new("raw.csv"), options) else {
             continue;
@@ -300,7 +300,7 @@ pub fn logger_csv(data: &[u8]) {
 
 /// A bare `samples.csv` for `host noise`: a report it gives is of `MIN_SAMPLES..=MAX_SAMPLES` rows
 /// at a finite positive rate, six axes, one Allan point per octave cluster size.
-pub fn noise_csv(data: &[u8]) {
+pub(crate) fn noise_csv(data: &[u8]) {
     use crate::noise::{allan::octave_sizes, MAX_SAMPLES, MIN_SAMPLES};
     if let Ok(r) = crate::noise::analyse_csv_bytes(data, None) {
         let n = usize::try_from(r.samples).unwrap_or(usize::MAX);

@@ -16,60 +16,60 @@ pub const MAX_SEGMENTS: usize = 10_000;
 
 /// Largest plan, unit or calibration file, bytes. The biggest real plan (hundreds of segments) is a
 /// few tens of kB.
-pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
+pub(crate) const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
 
 /// Shortest replayed navigation run (`--duration-s`), s: one step of the replay.
-pub const MIN_NAVIGATION_DURATION_S: f64 = 0.01;
+pub(crate) const MIN_NAVIGATION_DURATION_S: f64 = 0.01;
 
 /// Longest replayed navigation run (`--duration-s`), s: one hour.
-pub const MAX_NAVIGATION_DURATION_S: f64 = 3600.0;
+pub(crate) const MAX_NAVIGATION_DURATION_S: f64 = 3600.0;
 
 /// Highest sample rate a plan may declare, Hz.
-pub const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
+pub(crate) const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
 
 /// Longest planned segment, s (one day).
-pub const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
+pub(crate) const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
 
 /// Most rows one simulated segment may have (duration × rate): 10⁹ rows ≈ 150 GB of text.
-pub const MAX_SEGMENT_ROWS: f64 = 1e9;
+pub(crate) const MAX_SEGMENT_ROWS: f64 = 1e9;
 
 /// Shortest wait for one answer of a device, s (below a millisecond no link answers).
-pub const MIN_TIMEOUT_S: f64 = 1e-3;
+pub(crate) const MIN_TIMEOUT_S: f64 = 1e-3;
 
 /// Longest wait for one answer of a device, s.
-pub const MAX_TIMEOUT_S: f64 = 3600.0;
+pub(crate) const MAX_TIMEOUT_S: f64 = 3600.0;
 
 /// Most samples in one streamed window.
-pub const MAX_WINDOW: u32 = 1_000_000;
+pub(crate) const MAX_WINDOW: u32 = 1_000_000;
 
 /// Largest verification tolerance, mg (a tolerance above 1 g checks nothing).
-pub const MAX_TOLERANCE_MG: f64 = 1000.0;
+pub(crate) const MAX_TOLERANCE_MG: f64 = 1000.0;
 
 /// Largest table rate a plan may name, °/s (a rate table turning 20 rev/s is already extreme; the
 /// lever-arm terms grow as ω², so a typo like 1e9 °/s would make every model term overflow).
-pub const MAX_RATE_DEG_S: f64 = 7200.0;
+pub(crate) const MAX_RATE_DEG_S: f64 = 7200.0;
 
 /// Fastest serial link, baud (USB bridges reach 12 Mbaud).
-pub const MAX_BAUD: u32 = 12_000_000;
+pub(crate) const MAX_BAUD: u32 = 12_000_000;
 
 /// Slowest serial link, baud.
-pub const MIN_BAUD: u32 = 300;
+pub(crate) const MIN_BAUD: u32 = 300;
 
 /// Smallest pass/fail limit, tolerance, σ multiple or noise σ an option may give: a smaller one is
 /// zero in every printout and passes no real unit (and a σ of zero makes a prediction singular).
-pub const MIN_LIMIT: f64 = 1e-6;
+pub(crate) const MIN_LIMIT: f64 = 1e-6;
 
 /// Largest pass/fail limit or σ multiple an option may give (a limit of a million mg, degrees-squared
 /// or σ checks nothing; a larger number is a typo).
-pub const MAX_LIMIT: f64 = 1e6;
+pub(crate) const MAX_LIMIT: f64 = 1e6;
 
 /// Largest simulated noise, drift or flicker level in mg or °/s: 10 g or 10 000 °/s of noise is no
 /// sensor any more.
-pub const MAX_SIM_NOISE: f64 = 1e4;
+pub(crate) const MAX_SIM_NOISE: f64 = 1e4;
 
 /// Lowest sample rate of a logger recording, Hz (one sample every 1000 s is no hand-held session; a
 /// smaller rate is a typo that would make every time in the result astronomical).
-pub const MIN_LOGGER_RATE_HZ: f64 = 1e-3;
+pub(crate) const MIN_LOGGER_RATE_HZ: f64 = 1e-3;
 
 /// A number as people read it: plain between 10⁻³ and 10⁶, else in exponent form (`1e300`, never
 /// three hundred digits).
@@ -107,7 +107,7 @@ pub enum OptionRangeError {
 /// duration) gets the smallest value that still means something as `min`, never an open 0: a
 /// `1e-300` accepted would print as three hundred digits later.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RealRange {
+pub(crate) struct RealRange {
     /// Lower bound (included).
     pub min: f64,
     /// Upper bound (included).
@@ -213,7 +213,7 @@ pub fn whole_u32(
 /// `--max-misalignment-deg` in `[MIN_LIMIT, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
 /// `--max-bias-sigma-mg` in `[MIN_LIMIT, MAX_LIMIT]`. A command that flattens the limits applies it to its
 /// arguments with `#[command(mut_args(limits::pass_fail_limits))]`; other arguments pass unchanged.
-pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
+pub(crate) fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
     match arg.get_id().as_str() {
         "max_misalignment_deg" => arg.value_parser(real(MIN_LIMIT, 90.0)),
         "max_chi2_per_dof" | "max_bias_mg" | "max_bias_sigma_mg" => {
@@ -231,7 +231,7 @@ pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
     short_number(*.value),
     .range
 )]
-pub struct RangeError {
+pub(crate) struct RangeError {
     /// The option or field, as the user spells it.
     pub name: String,
     /// The value given.
@@ -241,7 +241,7 @@ pub struct RangeError {
 }
 
 /// `value` must be finite and in `(0, max]`.
-pub fn positive_at_most(name: &str, value: f64, max: f64) -> Result<f64, RangeError> {
+pub(crate) fn positive_at_most(name: &str, value: f64, max: f64) -> Result<f64, RangeError> {
     if value.is_finite() && value > 0.0 && value <= max {
         Ok(value)
     } else {
@@ -254,7 +254,7 @@ pub fn positive_at_most(name: &str, value: f64, max: f64) -> Result<f64, RangeEr
 }
 
 /// `value` must be an integer in `1..=max`.
-pub fn count_in(name: &str, value: u32, max: u32) -> Result<u32, RangeError> {
+pub(crate) fn count_in(name: &str, value: u32, max: u32) -> Result<u32, RangeError> {
     if (1..=max).contains(&value) {
         Ok(value)
     } else {
@@ -268,7 +268,7 @@ pub fn count_in(name: &str, value: u32, max: u32) -> Result<u32, RangeError> {
 
 /// Reads at most `max` bytes of `path`; a longer file (or an endless one such as `/dev/zero`) is an
 /// `InvalidData` error naming the limit, after reading `max + 1` bytes only.
-pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+pub(crate) fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
     let file = std::fs::File::open(path)?;
     let mut bytes = Vec::new();
     file.take(max + 1).read_to_end(&mut bytes)?;
@@ -283,7 +283,7 @@ pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
 
 /// [`read_bounded`] with [`MAX_TEXT_FILE_BYTES`], as UTF-8 text; bytes that are not UTF-8 are an
 /// `InvalidData` error naming the line.
-pub fn read_text_bounded(path: &Path) -> std::io::Result<String> {
+pub(crate) fn read_text_bounded(path: &Path) -> std::io::Result<String> {
     let bytes = read_bounded(path, MAX_TEXT_FILE_BYTES)?;
     String::from_utf8(bytes).map_err(|e| {
         let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];

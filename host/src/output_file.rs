@@ -73,13 +73,8 @@ impl OutputFile {
         })
     }
 
-    /// The final path.
-    pub fn path(&self) -> &Path {
-        &self.target
-    }
-
     /// Maps a write error to this file's error.
-    pub fn io_error(&self, e: std::io::Error) -> OutputFileError {
+    pub(crate) fn io_error(&self, e: std::io::Error) -> OutputFileError {
         OutputFileError::Io(self.target.clone(), e)
     }
 
@@ -130,7 +125,11 @@ impl Drop for OutputFile {
 }
 
 /// Writes `bytes` to `target` atomically (see the module documentation).
-pub fn write_atomic(target: &Path, bytes: &[u8], force: bool) -> Result<(), OutputFileError> {
+pub(crate) fn write_atomic(
+    target: &Path,
+    bytes: &[u8],
+    force: bool,
+) -> Result<(), OutputFileError> {
     let mut f = OutputFile::create(target, force)?;
     f.write_all(bytes).map_err(|e| f.io_error(e))?;
     f.commit()
@@ -239,11 +238,6 @@ impl OutputDir {
     /// Where to write the result's files now (the hidden directory).
     pub fn path(&self) -> &Path {
         &self.temp
-    }
-
-    /// The final path.
-    pub fn target(&self) -> &Path {
-        &self.target
     }
 
     /// Moves the built directory to the target, replacing an earlier result there (moved aside

@@ -76,7 +76,7 @@ pub fn temperature_keys() -> Vec<String> {
 
 /// Every key a summary can have, in order: [`parameter_keys`], [`gyro_keys`], [`temperature_keys`]
 /// (the lot summary's columns).
-pub fn all_parameter_keys() -> Vec<String> {
+pub(crate) fn all_parameter_keys() -> Vec<String> {
     let mut v = parameter_keys();
     v.extend(gyro_keys());
     v.extend(temperature_keys());
@@ -84,7 +84,7 @@ pub fn all_parameter_keys() -> Vec<String> {
 }
 
 /// A gyro entry with this 1σ is not determined by the plan (above [`UNDETERMINED_SIGMA`], or NaN).
-pub fn gyro_entry_undetermined(sigma: f64) -> bool {
+pub(crate) fn gyro_entry_undetermined(sigma: f64) -> bool {
     sigma.is_nan() || sigma > UNDETERMINED_SIGMA
 }
 
@@ -199,7 +199,7 @@ pub struct TemperatureRange {
 }
 
 /// Units of the paper-form values, in order.
-pub fn parameter_unit(index: usize, output_unit: &str) -> String {
+pub(crate) fn parameter_unit(index: usize, output_unit: &str) -> String {
     match index {
         0..=2 => output_unit.to_string(),
         3..=5 => format!("{output_unit}/g"),
@@ -379,7 +379,7 @@ impl CalibrationSummary {
     }
 
     /// The failed checks as one line, e.g. "chi2_per_dof 3.1 > 2".
-    pub fn failures(&self) -> String {
+    pub(crate) fn failures(&self) -> String {
         let f: Vec<String> = self
             .checks
             .iter()

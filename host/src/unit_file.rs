@@ -42,12 +42,12 @@ use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, U
 use std::path::{Path, PathBuf};
 
 /// The paper's unit (Tables 1 and 3), built in.
-pub const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
+pub(crate) const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
 
 /// Top-level tables a unit file may have besides the ones it interprets: kept as they are in
 /// [`UnitFile::other`] (the paper's `[procedure]` and `[expected]`, the simulator's `[noise]` and
 /// `[simulation]` in `truth.toml`).
-pub const KNOWN_EXTRA_TABLES: &[&str] =
+pub(crate) const KNOWN_EXTRA_TABLES: &[&str] =
     &["procedure", "expected", "noise", "simulation", "thermal"];
 
 /// Line and column (1-based) where top-level `key` is written: a `[key]` header or a `key =` line.
@@ -212,7 +212,7 @@ impl TemperatureSection {
     }
 
     /// The section of a model, without an estimate's extras.
-    pub fn from_model(m: &TemperatureModel) -> TemperatureSection {
+    pub(crate) fn from_model(m: &TemperatureModel) -> TemperatureSection {
         TemperatureSection {
             reference_c: m.reference_c,
             valid_range_c: m.valid_range_c,
@@ -298,7 +298,11 @@ impl UnitFile {
 
     /// Checks that this calibration belongs to the unit `other` names (a plan's, a device's or another
     /// file's `unit_id`). An absent or all-zero id (a session recorded without one) binds nothing.
-    pub fn check_same_unit(&self, other: Option<&str>, other_what: &str) -> Result<(), String> {
+    pub(crate) fn check_same_unit(
+        &self,
+        other: Option<&str>,
+        other_what: &str,
+    ) -> Result<(), String> {
         let known = |s: Option<&str>| {
             s.and_then(UnitId::parse_hex)
                 .filter(|id| *id != UnitId::default())
@@ -379,7 +383,7 @@ impl UnitFile {
     }
 
     /// A unit file for a calibration (the inverse of [`UnitFile::to_calibration`]).
-    pub fn from_calibration(
+    pub(crate) fn from_calibration(
         cal: &Calibration,
         unit_id: Option<UnitId>,
         uncertainty: Option<Uncertainty>,

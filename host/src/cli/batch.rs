@@ -44,10 +44,10 @@ pub struct BatchArgs {
 }
 
 /// The lot summary's CSV file in `--out`.
-pub const SUMMARY_CSV: &str = "summary.csv";
+pub(crate) const SUMMARY_CSV: &str = "summary.csv";
 /// The lot summary's JSON file in `--out`: its presence marks a directory as a batch result, which
 /// `--force` may replace.
-pub const SUMMARY_JSON: &str = "summary.json";
+pub(crate) const SUMMARY_JSON: &str = "summary.json";
 
 /// Runs `host batch`; exits nonzero when any unit failed, is outside the limits or is an outlier.
 pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {

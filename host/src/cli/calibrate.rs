@@ -123,7 +123,7 @@ pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
 }
 
 /// Reads a session with the progress bar, printing the reader's warnings to stderr.
-pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError> {
+pub(crate) fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError> {
     let session = read_session(dir, &ReadOptions { quiet })?;
     let out = Output { json: false, quiet };
     for w in &session.report.warnings {
@@ -133,12 +133,12 @@ pub fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError
 }
 
 /// The estimator options of `host calibrate`'s flags.
-pub fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
+pub(crate) fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
     estimate_options_of(a.method, a.reference)
 }
 
 /// The estimator options of a `--method` and a `--reference`.
-pub fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
+pub(crate) fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
     EstimateOptions {
         method: match method {
             MethodArg::Joint => Method::Joint,
@@ -242,7 +242,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
 
 /// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
 /// runs the whole procedure and ends with a pass/fail line.
-pub fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     let port = PortArgs {
         port: a.port.clone().unwrap_or_default(),
         baud: a.baud,

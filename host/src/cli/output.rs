@@ -38,7 +38,7 @@ impl Output {
     }
 
     /// A warning: on stderr, unless `--quiet`.
-    pub fn warn(&self, text: impl Display) {
+    pub(crate) fn warn(&self, text: impl Display) {
         if !self.quiet {
             let _ = writeln!(std::io::stderr(), "warning: {text}");
         }

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 /// The spelling of the simulated device.
-pub const SIM_PORT: &str = "sim";
+pub(crate) const SIM_PORT: &str = "sim";
 
 /// How to reach the device.
 #[derive(clap::Args, Clone, Debug)]
@@ -34,7 +34,7 @@ pub struct PortArgs {
 
 impl PortArgs {
     /// Checks the numbers before anything is opened or written.
-    pub fn validate(&self) -> Result<(), CliError> {
+    pub(crate) fn validate(&self) -> Result<(), CliError> {
         crate::limits::positive_at_most(
             "--timeout-s",
             self.timeout_s,

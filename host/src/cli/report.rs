@@ -57,7 +57,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
 }
 
 /// `--duration-s` sizes the navigation replay (samples = duration ÷ step): checked before any work.
-pub fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
+pub(crate) fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
     Ok(crate::limits::positive_at_most(
         "--duration-s",
         duration_s,
@@ -67,7 +67,7 @@ pub fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
 
 /// `DIR/calibration.toml` when it exists, else the one beside the recording (`DIR/..`), else
 /// `DIR/calibration.toml` (so that the error names the expected place).
-pub fn default_calibration(input: &std::path::Path) -> PathBuf {
+pub(crate) fn default_calibration(input: &std::path::Path) -> PathBuf {
     let own = input.join(crate::calibration_files::CALIBRATION_TOML);
     if own.exists() {
         return own;

@@ -117,7 +117,7 @@ pub struct SimulateHandArgs {
 /// Writes a simulated hand-held session as a logger CSV (`t,acc_x,…,gyr_z`): 24 positions held 3–5 s
 /// with hand tremor, turns of 1–3 s up to 180 °/s, 1 mg noise, a gyro with 0.5 % scale, 0.5°
 /// misalignment and 0.5 °/s bias. Returns the number of rows.
-pub fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
+pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
     let unit = parse_acc_unit(&a.acc_unit)
         .filter(|u| *u != OutputUnit::Volts)
         .ok_or_else(|| CliError::Usage(format!("--acc-unit {}: use m/s2, g or LSB", a.acc_unit)))?;

@@ -89,7 +89,7 @@ pub struct SimulateArgs {
 }
 
 /// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
-pub fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, CliError> {
+pub(crate) fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, CliError> {
     let mut n = if a.no_noise {
         NoiseModel::none()
     } else {

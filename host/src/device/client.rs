@@ -93,7 +93,7 @@ impl<T: Transport> DeviceClient<T> {
     }
 
     /// Changes the answer timeout.
-    pub fn set_timeout(&mut self, timeout: Duration) {
+    pub(crate) fn set_timeout(&mut self, timeout: Duration) {
         self.timeout = timeout;
     }
 
@@ -108,7 +108,7 @@ impl<T: Transport> DeviceClient<T> {
     }
 
     /// The next message from the device, waiting until `deadline`.
-    pub fn next_message(
+    pub(crate) fn next_message(
         &mut self,
         waiting_for: &'static str,
         wait: Duration,
@@ -286,7 +286,7 @@ impl<T: Transport> DeviceClient<T> {
 
     /// Sets the virtual unit's die temperature, °C (simulated and QEMU devices): the chamber of a
     /// plan's soak segment.
-    pub fn set_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
+    pub(crate) fn set_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
         self.expect_ack(
             &HostToDevice::SetVirtualTemperature { temp_c },
             "a temperature acknowledgement",
@@ -296,7 +296,7 @@ impl<T: Transport> DeviceClient<T> {
 
     /// The same while a stream runs (a chamber ramp), without waiting: the acknowledgement arrives
     /// among the stream's windows, which [`Self::next_raw_window`] skips.
-    pub fn send_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
+    pub(crate) fn send_temperature(&mut self, temp_c: f32) -> Result<(), LinkError> {
         self.send(&HostToDevice::SetVirtualTemperature { temp_c })
     }
 

@@ -18,9 +18,9 @@ use shared::OutputUnit;
 use std::collections::VecDeque;
 
 /// Hold needed before a position is taken as still, s.
-pub const STILL_HOLD_S: f64 = 1.0;
+pub(crate) const STILL_HOLD_S: f64 = 1.0;
 /// Longest wait for a new still position, s.
-pub const MAX_WAIT_S: f64 = 300.0;
+pub(crate) const MAX_WAIT_S: f64 = 300.0;
 /// Gyro window means steadier than this over the hold: still, rad/s (0.5 °/s).
 const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Accelerometer window means steadier than this fraction of the output's magnitude: still (2 mg
@@ -87,7 +87,7 @@ impl PositionWatcher {
     }
 
     /// Records the position just taken.
-    pub fn accept(&mut self, mean_u: [f64; 3], mean_rate_rad_s: [f64; 3]) {
+    pub(crate) fn accept(&mut self, mean_u: [f64; 3], mean_rate_rad_s: [f64; 3]) {
         self.earlier.push(mean_u);
         self.bias_rad_s.get_or_insert(mean_rate_rad_s);
     }
@@ -171,7 +171,7 @@ impl PositionWatcher {
     }
 
     /// Body directions (±x, ±y, ±z) with no position within 50° yet (zero-centred outputs only).
-    pub fn missing_faces(&self) -> Vec<&'static str> {
+    pub(crate) fn missing_faces(&self) -> Vec<&'static str> {
         if !self.zero_centred {
             return Vec::new();
         }
@@ -189,7 +189,7 @@ impl PositionWatcher {
     }
 
     /// What to tell the operator after a position: how many remain, which directions are missing.
-    pub fn guidance(&self, planned: usize) -> String {
+    pub(crate) fn guidance(&self, planned: usize) -> String {
         let k = self.positions();
         let missing = self.missing_faces();
         let faces = if missing.is_empty() {
@@ -258,13 +258,13 @@ pub fn wait_for_new_position<T: Transport>(
 
 /// Whether a plan is run hand-held on a device without a table: every static segment's attitude is
 /// free and nothing spins.
-pub fn is_hand_held(plan: &Plan) -> bool {
+pub(crate) fn is_hand_held(plan: &Plan) -> bool {
     plan.segments.iter().all(|s| s.is_static() && s.is_free())
 }
 
 /// Verification without a reference attitude: at three new still positions the compensated specific
 /// force must have gravity's magnitude (the direction is what a hand cannot give).
-pub fn verify_magnitude<T: Transport>(
+pub(crate) fn verify_magnitude<T: Transport>(
     client: &mut DeviceClient<T>,
     op: &mut dyn Operator,
     plan: &Plan,

@@ -53,7 +53,7 @@ pub(crate) fn table_for(seg: &SegmentPlan) -> VirtualTable {
 }
 
 /// The live check of one recorded segment against its plan (`docs/model.md` §5: ω = rate·up).
-pub fn live_check(
+pub(crate) fn live_check(
     seg: &SegmentPlan,
     stats: &session::SegmentStats,
     rejected_samples: u64,
@@ -111,7 +111,7 @@ pub fn live_check(
 /// "Right side up" for a static segment, without a calibration: if its mean outputs equal those of an
 /// earlier static segment whose planned attitude differs by more than 10°, the unit was not re-mounted
 /// (a 10° change moves some output by about 0.17 g, thousands of noise σ of a segment mean).
-pub fn remount_check(
+pub(crate) fn remount_check(
     seg: &SegmentPlan,
     stats: &session::SegmentStats,
     earlier: &[(SegmentPlan, session::SegmentStats)],

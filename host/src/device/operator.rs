@@ -16,7 +16,7 @@ pub trait Operator {
 
 /// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
 /// Enter on stdin.
-pub struct TerminalOperator;
+pub(crate) struct TerminalOperator;
 
 impl Operator for TerminalOperator {
     fn say(&mut self, text: &str) {

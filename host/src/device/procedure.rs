@@ -12,7 +12,7 @@
 //! noise divided by the window length, and there are that many times fewer rows.
 
 use super::live_check::{instruction, table_for};
-pub use super::live_check::{live_check, remount_check};
+pub(crate) use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::device::{handheld, DeviceClient, LinkError, Transport};
@@ -156,7 +156,7 @@ fn link_message(
 }
 
 /// The device can set its own table.
-pub fn has_virtual_table(identity: &Identity) -> bool {
+pub(crate) fn has_virtual_table(identity: &Identity) -> bool {
     matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
 }
 
@@ -509,7 +509,7 @@ fn settle_windows<T: Transport>(
 
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
 /// lever-arm components), the paper's plan otherwise (no fixture beyond the paper's is needed).
-pub fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
+pub(crate) fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
     session::builtin::load_plan(if has_virtual_table(identity) {
         "oblique"
     } else {
@@ -520,7 +520,7 @@ pub fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
 /// `OUT` for a run: the given directory, or a new one per run in the current directory,
 /// `calibration-<unit id>-<UTC time>` (a suffix `-2`, `-3`, … if that exists), so that a second run
 /// never records over the first.
-pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
+pub(crate) fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
     if let Some(dir) = out {
         return dir.to_path_buf();
     }

@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 /// The simulated device's unit identifier.
 pub const SIM_UNIT_ID: UnitId = UnitId(*b"SIM-PAPER-01");
 /// Its sampling rate, Hz.
-pub const SIM_SAMPLE_RATE_HZ: u32 = 1000;
+pub(crate) const SIM_SAMPLE_RATE_HZ: u32 = 1000;
 /// UART bytes per sample at 921 600 Bd (10 bits per byte) and 1 kHz.
 const LINE_BYTES_PER_SAMPLE: u32 = 92;
 /// Virtual time the device may run inside one `receive` call before reporting silence.
@@ -91,7 +91,7 @@ impl SimDevice {
     }
 
     /// The same with another unit identifier.
-    pub fn with_unit_id(truth: Calibration, unit_id: UnitId) -> Result<SimDevice, SimError> {
+    pub(crate) fn with_unit_id(truth: Calibration, unit_id: UnitId) -> Result<SimDevice, SimError> {
         // The flash lives as long as the process, like a board's; 8 KiB per simulated device.
         let mem: &'static mut [u8] = Box::leak(vec![0xFFu8; 2 * FLASH_ERASE].into_boxed_slice());
         let store = AbStore::new(RamNorFlash::new(mem), 0, FLASH_ERASE as u32)
@@ -141,7 +141,8 @@ impl SimDevice {
     }
 
     /// How many times the device restarted.
-    pub fn resets(&self) -> u32 {
+    #[cfg(test)]
+    pub(crate) fn resets(&self) -> u32 {
         self.resets
     }
 

@@ -12,7 +12,7 @@ use shared::linalg::{self, RowMajor3};
 /// The entries of `M` fixed at 0 by the frame convention used when nothing else fixes the body
 /// frame: body x along accelerometer x's sensing axis, body y in the plane of the x and y sensing
 /// axes (`M` lower-triangular; any rotation of the body frame fits |gravity| equally well).
-pub const CONVENTION_FIXED: [usize; 3] = [idx_m(0, 1), idx_m(0, 2), idx_m(1, 2)];
+pub(crate) const CONVENTION_FIXED: [usize; 3] = [idx_m(0, 1), idx_m(0, 2), idx_m(1, 2)];
 
 /// What fixes the body frame's orientation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,7 +87,7 @@ pub struct StaticSplit {
 
 /// `M = L Q`: `L` lower-triangular with a positive diagonal, `Q` orthogonal (the rotation from the
 /// body frame to the accelerometers' own frame).
-pub fn lq(m: &RowMajor3) -> (RowMajor3, RowMajor3) {
+pub(crate) fn lq(m: &RowMajor3) -> (RowMajor3, RowMajor3) {
     let mt = Matrix3::from_fn(|i, j| m[j][i]);
     let qr = mt.qr();
     let (q, r) = (qr.q(), qr.r());
@@ -99,7 +99,7 @@ pub fn lq(m: &RowMajor3) -> (RowMajor3, RowMajor3) {
 }
 
 /// The small rotation vector of an orthogonal matrix close to the identity.
-pub fn rotation_vector(q: &RowMajor3) -> [f64; 3] {
+pub(crate) fn rotation_vector(q: &RowMajor3) -> [f64; 3] {
     [
         0.5 * (q[2][1] - q[1][2]),
         0.5 * (q[0][2] - q[2][0]),
@@ -127,7 +127,7 @@ fn split_values(m: &RowMajor3, u0: &[f64; 3], k0: &[f64; 3]) -> [f64; 12] {
 }
 
 /// The split of the static 1σ, by the numerical Jacobian of the split values through θ's covariance.
-pub fn static_split(theta: &[f64], cov: &DMatrix<f64>, frame: BodyFrame) -> StaticSplit {
+pub(crate) fn static_split(theta: &[f64], cov: &DMatrix<f64>, frame: BodyFrame) -> StaticSplit {
     let idx: Vec<usize> = (0..3)
         .flat_map(|i| [idx_m(i, 0), idx_m(i, 1), idx_m(i, 2), idx_u0(i)])
         .collect();
@@ -310,7 +310,7 @@ pub(crate) fn mount_tilts(
 }
 
 /// Warnings for mounts tilted more than 3× their declared prior.
-pub fn tilt_warnings(tilts: &[MountTilt]) -> Vec<String> {
+pub(crate) fn tilt_warnings(tilts: &[MountTilt]) -> Vec<String> {
     let bad: Vec<String> = tilts
         .iter()
         .filter(|t| t.estimated && t.prior_deg.is_some_and(|p| p > 0.0 && t.tilt_deg > 3.0 * p))

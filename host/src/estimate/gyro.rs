@@ -9,7 +9,7 @@ use super::model::TiltGeometry;
 use shared::linalg::{self, RowMajor3};
 
 /// Entries of the gyro block of θ: `G` (9, row-major), `b` (3, rad/s), table rate scale `s`.
-pub const NG: usize = 13;
+pub(crate) const NG: usize = 13;
 
 /// Index of `G[i][j]` in θ.
 pub const fn idx_g(base: usize, i: usize, j: usize) -> usize {
@@ -30,21 +30,21 @@ pub const fn idx_rate(base: usize) -> usize {
 pub const UNDETERMINED_SIGMA: f64 = 1e-3;
 
 /// 1σ of the weak prior on each `G` entry (about the identity).
-pub const G_PRIOR_SIGMA: f64 = 1.0;
+pub(crate) const G_PRIOR_SIGMA: f64 = 1.0;
 
 /// `G` of θ.
-pub fn g_of(t: &[f64], base: usize) -> RowMajor3 {
+pub(crate) fn g_of(t: &[f64], base: usize) -> RowMajor3 {
     core::array::from_fn(|i| core::array::from_fn(|j| t[idx_g(base, i, j)]))
 }
 
 /// `b` of θ.
-pub fn b_of(t: &[f64], base: usize) -> [f64; 3] {
+pub(crate) fn b_of(t: &[f64], base: usize) -> [f64; 3] {
     core::array::from_fn(|i| t[idx_b(base, i)])
 }
 
 /// One segment's mean gyro rate as the fit sees it.
 #[derive(Clone, Debug)]
-pub struct GyroMean {
+pub(crate) struct GyroMean {
     /// Index into the session's segment list.
     pub seg: usize,
     /// The mount's attitude unknowns (unused at rest).
@@ -91,7 +91,7 @@ impl GyroMean {
     }
 
     /// Nonzero Jacobian columns.
-    pub fn jacobian(&self, t: &[f64], base: usize) -> Vec<(usize, [f64; 3])> {
+    pub(crate) fn jacobian(&self, t: &[f64], base: usize) -> Vec<(usize, [f64; 3])> {
         let mut cols = Vec::with_capacity(19);
         let unit = |i: usize, v: f64| -> [f64; 3] {
             core::array::from_fn(|q| if q == i { v } else { 0.0 })
@@ -121,7 +121,7 @@ impl GyroMean {
     }
 
     /// Whitened residual.
-    pub fn whitened_residual(&self, t: &[f64], base: usize) -> [f64; 3] {
+    pub(crate) fn whitened_residual(&self, t: &[f64], base: usize) -> [f64; 3] {
         let p = self.predict(t, base);
         let r: [f64; 3] = core::array::from_fn(|i| self.mean_w_rad_s[i] - p[i]);
         linalg::mat_vec(&self.whiten, &r)
@@ -130,7 +130,7 @@ impl GyroMean {
 
 /// The gyro part of the session's fit.
 #[derive(Clone, Debug)]
-pub struct GyroBlock {
+pub(crate) struct GyroBlock {
     /// Index of the block in θ.
     pub base: usize,
     /// The segments' gyro means.
@@ -158,7 +158,7 @@ pub struct GyroEstimate {
 
 impl GyroEstimate {
     /// From θ and its covariance.
-    pub fn from_fit(t: &[f64], cov: &nalgebra::DMatrix<f64>, base: usize) -> GyroEstimate {
+    pub(crate) fn from_fit(t: &[f64], cov: &nalgebra::DMatrix<f64>, base: usize) -> GyroEstimate {
         let s = |p: usize| cov[(p, p)].max(0.0).sqrt();
         let matrix_1sigma: RowMajor3 =
             core::array::from_fn(|i| core::array::from_fn(|j| s(idx_g(base, i, j))));
@@ -185,7 +185,7 @@ impl GyroEstimate {
     }
 
     /// The estimate as the calibration the device applies (`ω = G⁻¹ (w − b)`, docs/model.md §8).
-    pub fn device_correction(&self) -> shared::GyroCorrection {
+    pub(crate) fn device_correction(&self) -> shared::GyroCorrection {
         shared::GyroCorrection {
             matrix: self.matrix,
             bias_rad_s: self.bias_rad_s,
@@ -193,14 +193,14 @@ impl GyroEstimate {
     }
 
     /// `(G⁻¹, b)`: what turns a gyro reading into the body rate.
-    pub fn correction(&self) -> Option<(RowMajor3, [f64; 3])> {
+    pub(crate) fn correction(&self) -> Option<(RowMajor3, [f64; 3])> {
         linalg::inverse(&self.matrix).map(|gi| (gi, self.bias_rad_s))
     }
 }
 
 /// `E[ω ωᵀ]` and `ω̇` of the body from a segment's gyro statistics through a correction
 /// `ω = G⁻¹ (w − b)`, the gyro's own noise `noise_cov` (gyro axes) removed.
-pub fn corrected_moments(
+pub(crate) fn corrected_moments(
     mean_wwt: &RowMajor3,
     mean_w: &[f64; 3],
     wdot: &[f64; 3],

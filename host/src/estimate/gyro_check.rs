@@ -19,22 +19,22 @@ use shared::linalg::RowMajor3;
 
 /// Largest plausible |G_ii − 1|: MEMS gyros are within ±3 % of their nominal scale; 20 % leaves room
 /// for any real part while catching a wrong unit (×57.3), a time base off by ≥ 1.25× and a sign.
-pub const MAX_SCALE_ERROR: f64 = 0.2;
+pub(crate) const MAX_SCALE_ERROR: f64 = 0.2;
 
 /// Largest plausible |G_ij| (i ≠ j): 0.1 is a 5.7° misalignment, far beyond any mounted part's
 /// (≤ 1–2°) but far below a swapped axis's 1.
-pub const MAX_CROSS_AXIS: f64 = 0.1;
+pub(crate) const MAX_CROSS_AXIS: f64 = 0.1;
 
 /// Largest plausible rms misfit of hand turns, degrees. The still positions give each "up" to about
 /// 0.01–0.1° and a fitted `G` leaves only that; beyond 1° the turns contradict every linear gyro model.
-pub const MAX_TURN_MISFIT_DEG: f64 = 1.0;
+pub(crate) const MAX_TURN_MISFIT_DEG: f64 = 1.0;
 
 /// Ratio of two scale errors regarded as "the same on all three axes" (a time base or unit, not a
 /// part's own scale errors, which differ from axis to axis).
 const COMMON_SCALE_SPREAD: f64 = 0.05;
 
 /// The likely causes of an implausible `G`, one line each (empty: `G` is plausible).
-pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
+pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();
     if matrix.iter().flatten().any(|v| !v.is_finite()) {
@@ -132,7 +132,7 @@ fn scale_cause(scale: &[f64; 3]) -> String {
 }
 
 /// The refusal of turns that no gyro model explains (`rms_misfit_deg` over [`MAX_TURN_MISFIT_DEG`]).
-pub fn misfit_problem(rms_misfit_deg: f64, turns: usize) -> Option<String> {
+pub(crate) fn misfit_problem(rms_misfit_deg: f64, turns: usize) -> Option<String> {
     (rms_misfit_deg.is_nan() || rms_misfit_deg > MAX_TURN_MISFIT_DEG).then(|| {
         format!(
             "the {turns} hand turns contradict every gyro model (rms misfit {rms_misfit_deg:.2}°, at \
@@ -146,7 +146,7 @@ pub fn misfit_problem(rms_misfit_deg: f64, turns: usize) -> Option<String> {
 /// for `RateContradiction` of a sign or unit (a ratio of −1 or 57.3^±1, which only the gyro's columns
 /// give), or of more than half of the session's `spins`. One spin that did not happen as planned is a
 /// table's slip: it stays an exclusion, and the others calibrate.
-pub fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Option<String> {
+pub(crate) fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Option<String> {
     let ratios: Vec<(&str, f64)> = excluded
         .iter()
         .filter_map(|e| match e.reason {

@@ -15,7 +15,7 @@ use shared::linalg::{self, RowMajor3};
 /// One turn: the rows from the end of one still position to the start of the next, with the two
 /// calibrated gravity ("up") directions in body axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Turn {
+pub(crate) struct Turn {
     /// Last row of the first still position.
     pub from_row: usize,
     /// First row of the next still position.
@@ -48,12 +48,12 @@ pub const DETERMINED_1SIGMA: f64 = 1e-3;
 
 impl HandGyroFit {
     /// Scale factor error of each gyro axis (row norm − 1).
-    pub fn scale_rel(&self) -> [f64; 3] {
+    pub(crate) fn scale_rel(&self) -> [f64; 3] {
         self.matrix.map(|r| linalg::norm(&r) - 1.0)
     }
 
     /// Misalignment of gyro axis i towards body axis j (i ≠ j), degrees.
-    pub fn misalignment_deg(&self) -> RowMajor3 {
+    pub(crate) fn misalignment_deg(&self) -> RowMajor3 {
         core::array::from_fn(|i| {
             let n = linalg::norm(&self.matrix[i]);
             core::array::from_fn(|j| {
@@ -156,7 +156,7 @@ fn residuals(turns: &[Turn], t_s: &[f64], w: &[[f64; 3]], p: &[f64], b: &[f64; 3
 
 /// The gyro's bias from still intervals: the mean of their mean rates weighted by their lengths, with
 /// 1σ from the spread between intervals (it includes the tremor's and the bias's own wander).
-pub fn still_bias(means_rad_s: &[([f64; 3], usize)]) -> ([f64; 3], [f64; 3]) {
+pub(crate) fn still_bias(means_rad_s: &[([f64; 3], usize)]) -> ([f64; 3], [f64; 3]) {
     let n: usize = means_rad_s.iter().map(|m| m.1).sum();
     let b: [f64; 3] = core::array::from_fn(|j| {
         means_rad_s
@@ -224,7 +224,7 @@ fn check_unit(
 }
 
 /// Fits `G` from `turns` with the bias `b` (from [`still_bias`]).
-pub fn fit_handheld_gyro(
+pub(crate) fn fit_handheld_gyro(
     turns: &[Turn],
     t_s: &[f64],
     w_rad_s: &[[f64; 3]],

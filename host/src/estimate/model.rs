@@ -18,7 +18,7 @@
 use shared::linalg::{self, RowMajor3};
 
 /// Number of intrinsic parameters (`M`, `u0`, lever arms).
-pub const NI: usize = 21;
+pub(crate) const NI: usize = 21;
 
 /// Index of `M[i][j]` in θ.
 pub const fn idx_m(i: usize, j: usize) -> usize {
@@ -46,7 +46,7 @@ pub const fn is_lever(p: usize) -> bool {
 }
 
 /// Human name of θ's entry `k` (`mounts` names the tilt entries).
-pub fn theta_label(k: usize, mounts: &[Mount]) -> String {
+pub(crate) fn theta_label(k: usize, mounts: &[Mount]) -> String {
     if k >= NI {
         let m = (k - NI) / 2;
         let name = mounts.get(m).map_or("?", |m| m.name.as_str());
@@ -62,7 +62,8 @@ pub fn theta_label(k: usize, mounts: &[Mount]) -> String {
 }
 
 /// θ from the fitted form and lever arms, with `n_mounts` zero tilts.
-pub fn theta_from(m: &RowMajor3, u0: &[f64; 3], r: &RowMajor3, n_mounts: usize) -> Vec<f64> {
+#[cfg(test)]
+pub(crate) fn theta_from(m: &RowMajor3, u0: &[f64; 3], r: &RowMajor3, n_mounts: usize) -> Vec<f64> {
     let mut t = vec![0.0; NI + 2 * n_mounts];
     for i in 0..3 {
         for j in 0..3 {
@@ -75,22 +76,22 @@ pub fn theta_from(m: &RowMajor3, u0: &[f64; 3], r: &RowMajor3, n_mounts: usize) 
 }
 
 /// `M` of θ.
-pub fn m_of(t: &[f64]) -> RowMajor3 {
+pub(crate) fn m_of(t: &[f64]) -> RowMajor3 {
     core::array::from_fn(|i| core::array::from_fn(|j| t[idx_m(i, j)]))
 }
 
 /// `u0` of θ.
-pub fn u0_of(t: &[f64]) -> [f64; 3] {
+pub(crate) fn u0_of(t: &[f64]) -> [f64; 3] {
     core::array::from_fn(|i| t[idx_u0(i)])
 }
 
 /// Lever arms of θ.
-pub fn r_of(t: &[f64]) -> RowMajor3 {
+pub(crate) fn r_of(t: &[f64]) -> RowMajor3 {
     core::array::from_fn(|i| core::array::from_fn(|j| t[idx_r(i, j)]))
 }
 
 /// Two unit vectors perpendicular to `up` and to each other: the axes of a mount's tilt unknowns.
-pub fn tilt_basis(up: &[f64; 3]) -> [[f64; 3]; 2] {
+pub(crate) fn tilt_basis(up: &[f64; 3]) -> [[f64; 3]; 2] {
     let pick = if up[0].abs() < 0.9 {
         [1.0, 0.0, 0.0]
     } else {
@@ -104,7 +105,7 @@ pub fn tilt_basis(up: &[f64; 3]) -> [[f64; 3]; 2] {
 /// A mount's nominal up and the axes of its tilt: the true up is `normalise(up + α e₁ + β e₂)`, so
 /// (α, β) are the tilt angles (radians, to first order) about `e₂` and `−e₁`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TiltGeometry {
+pub(crate) struct TiltGeometry {
     /// Nominal up, body axes (unit).
     pub up_nominal_b: [f64; 3],
     /// Tilt axes ([`tilt_basis`]).
@@ -130,7 +131,7 @@ impl TiltGeometry {
     }
 
     /// The true up at θ, and its derivatives by α and β.
-    pub fn up_and_derivatives(&self, t: &[f64]) -> ([f64; 3], [[f64; 3]; 2]) {
+    pub(crate) fn up_and_derivatives(&self, t: &[f64]) -> ([f64; 3], [[f64; 3]; 2]) {
         let [a, b] = self.tilt(t);
         let e = &self.basis;
         let v: [f64; 3] =
@@ -152,7 +153,7 @@ impl TiltGeometry {
 
 /// A mount: the segments sharing one attitude on the fixture (or one hand-held position).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Mount {
+pub(crate) struct Mount {
     /// Name (the plan's `mount`, or derived, see `SegmentPlan::mount_name`).
     pub name: String,
     /// Geometry of its tilt unknowns.
@@ -167,7 +168,7 @@ pub struct Mount {
 
 /// `E[W]` from a segment's gyro statistics, rad/s², optionally without the ω̇ term (`docs/model.md` §4.6)
 /// and with the gyro's own noise covariance removed from `E[ω ωᵀ]`.
-pub fn mean_lever_matrix(
+pub(crate) fn mean_lever_matrix(
     mean_wwt: &RowMajor3,
     wdot: &[f64; 3],
     gyro_noise_cov: &RowMajor3,
@@ -190,7 +191,7 @@ pub fn mean_lever_matrix(
 
 /// One segment as the fit sees it.
 #[derive(Clone, Debug)]
-pub struct SegModel {
+pub(crate) struct SegModel {
     /// Index into the session's segment list.
     pub seg: usize,
     /// The mount's attitude unknowns.
@@ -267,7 +268,7 @@ impl SegModel {
     }
 
     /// Jacobian of the predicted outputs as (θ index, ∂ū/∂θ) pairs: the nonzero columns only.
-    pub fn jacobian(&self, t: &[f64]) -> Vec<(usize, [f64; 3])> {
+    pub(crate) fn jacobian(&self, t: &[f64]) -> Vec<(usize, [f64; 3])> {
         let m = m_of(t);
         let r = r_of(t);
         let (up, dup) = self.tilt.up_and_derivatives(t);
@@ -295,7 +296,7 @@ impl SegModel {
     }
 
     /// Whitened residual `L⁻¹ (ū − prediction)`.
-    pub fn whitened_residual(&self, t: &[f64]) -> [f64; 3] {
+    pub(crate) fn whitened_residual(&self, t: &[f64]) -> [f64; 3] {
         let p = self.predict(t);
         let res: [f64; 3] = core::array::from_fn(|i| self.mean_u[i] - p[i]);
         linalg::mat_vec(&self.whiten, &res)

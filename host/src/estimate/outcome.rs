@@ -158,7 +158,7 @@ impl Observability {
 
     /// Names of the components not determined because they are not estimable at all (fixed at 0),
     /// in the order of [`Observability::undetermined`].
-    pub fn undetermined_fixed(&self) -> Vec<String> {
+    pub(crate) fn undetermined_fixed(&self) -> Vec<String> {
         self.names(|i, j| !self.observable[i][j] && self.fixed_at_zero[i][j])
     }
 

@@ -79,7 +79,7 @@ pub(crate) struct Converted {
 }
 
 /// Converts θ and its covariance (scaled by `scale2`).
-pub(crate) fn convert(
+pub fn convert(
     theta: &[f64],
     cov: &DMatrix<f64>,
     scale2: f64,
@@ -160,7 +160,7 @@ impl Converted {
         self.cov[(p, p)].max(0.0).sqrt()
     }
 
-    pub fn lever_sigma(&self) -> RowMajor3 {
+    pub(crate) fn lever_sigma(&self) -> RowMajor3 {
         core::array::from_fn(|i| core::array::from_fn(|j| self.sigma(15 + 3 * i + j)))
     }
 
@@ -190,7 +190,7 @@ impl Converted {
         }
     }
 
-    pub fn cov_rows(&self) -> Vec<Vec<f64>> {
+    pub(crate) fn cov_rows(&self) -> Vec<Vec<f64>> {
         (0..PAPER_LEN)
             .map(|a| (0..PAPER_LEN).map(|b| self.cov[(a, b)]).collect())
             .collect()

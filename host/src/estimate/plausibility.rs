@@ -25,7 +25,7 @@ pub const MAX_AXIS_ANGLE_DEG: f64 = 30.0;
 
 /// Angle between a static segment's measured "up" and a label's `up_b` below which the data are said
 /// to look like that label, and above which they contradict their own, degrees.
-pub const LABEL_MATCH_DEG: f64 = 20.0;
+pub(crate) const LABEL_MATCH_DEG: f64 = 20.0;
 
 /// Checks a fit's result (or adds the segments that contradict their labels to its error).
 pub(crate) fn check(
@@ -104,7 +104,7 @@ fn scale_unit_problem(plan: &Plan, outcome: &CalibrationOutcome) -> Option<Strin
 
 /// Largest relative difference of a scale factor from its output unit's nominal one (a MEMS part's
 /// scale is within a few percent of its data sheet's).
-pub const MAX_UNIT_SCALE_ERROR: f64 = 0.2;
+pub(crate) const MAX_UNIT_SCALE_ERROR: f64 = 0.2;
 
 /// Handedness and per-axis angle of the fitted sensing directions.
 fn triad_problems(m: &linalg::RowMajor3) -> Vec<String> {

@@ -14,7 +14,7 @@ use nalgebra::{DMatrix, DVector};
 /// During a spin the gyro measures the rotation axis, which is the mount's true up
 /// (docs/model.md §7): the components of the measured axis on the mount's tilt axes.
 #[derive(Clone, Debug)]
-pub struct GyroDirection {
+pub(crate) struct GyroDirection {
     /// Index into the session's segment list.
     pub seg: usize,
     /// The mount's attitude unknowns.
@@ -44,7 +44,7 @@ impl GyroDirection {
 /// of the dynamic model then cannot move them. The differences share the rest's noise, so they are
 /// whitened together.
 #[derive(Clone, Debug)]
-pub struct DiffGroup {
+pub(crate) struct DiffGroup {
     /// The rest segment (also an observation of its own in [`Problem::models`]).
     pub rest: SegModel,
     /// The spins.
@@ -114,7 +114,7 @@ impl DiffGroup {
 
 /// Everything the fit sees.
 #[derive(Clone, Debug)]
-pub struct Problem {
+pub(crate) struct Problem {
     /// Mean outputs of the used segments.
     pub models: Vec<SegModel>,
     /// The mounts (tilt unknowns and priors), in θ order.
@@ -144,12 +144,12 @@ impl Problem {
     }
 
     /// Length of θ.
-    pub fn n_params(&self) -> usize {
+    pub(crate) fn n_params(&self) -> usize {
         NI + 2 * self.mounts.len() + if self.gyro_block.is_some() { NG } else { 0 }
     }
 
     /// Every segment model: the plain ones and the grouped spins.
-    pub fn all_models(&self) -> Vec<SegModel> {
+    pub(crate) fn all_models(&self) -> Vec<SegModel> {
         let mut v = self.models.clone();
         v.extend(self.groups.iter().flat_map(|g| g.spins.iter().cloned()));
         v
@@ -157,7 +157,7 @@ impl Problem {
 
     /// Moves every spin whose mount has a used rest segment into a [`DiffGroup`] with it (`is_rest`
     /// says which segments are at rest).
-    pub fn group_spins(&mut self, is_rest: &dyn Fn(usize) -> bool) {
+    pub(crate) fn group_spins(&mut self, is_rest: &dyn Fn(usize) -> bool) {
         self.ungroup();
         let mut keep = Vec::new();
         let mut spins: Vec<SegModel> = Vec::new();
@@ -192,14 +192,14 @@ impl Problem {
     }
 
     /// Returns grouped spins to the plain models.
-    pub fn ungroup(&mut self) {
+    pub(crate) fn ungroup(&mut self) {
         for g in std::mem::take(&mut self.groups) {
             self.models.extend(g.spins);
         }
     }
 
     /// Removes the segment `seg` (its outputs and gyro axis).
-    pub fn remove_segment(&mut self, seg: usize) {
+    pub(crate) fn remove_segment(&mut self, seg: usize) {
         let grouped = !self.groups.is_empty();
         if grouped {
             self.ungroup();
@@ -216,7 +216,7 @@ impl Problem {
     }
 
     /// Moves mount `k`'s nominal up (a free attitude's starting guess) and its tilt axes.
-    pub fn set_nominal(&mut self, k: usize, up: [f64; 3]) {
+    pub(crate) fn set_nominal(&mut self, k: usize, up: [f64; 3]) {
         let g = TiltGeometry::new(up, k);
         self.mounts[k].geometry = g;
         for m in self.models.iter_mut().filter(|m| m.tilt.index == g.index) {
@@ -259,7 +259,7 @@ impl Problem {
     }
 
     /// χ² at θ (outputs, gyro axes and priors).
-    pub fn chi2(&self, t: &[f64], free: &[bool]) -> f64 {
+    pub(crate) fn chi2(&self, t: &[f64], free: &[bool]) -> f64 {
         let idx = free_indices(free);
         normal_equations(self, t, &idx, None).2
     }
@@ -267,7 +267,7 @@ impl Problem {
 
 /// A converged fit.
 #[derive(Clone, Debug)]
-pub struct Fit {
+pub(crate) struct Fit {
     /// The estimate (fixed entries keep their starting value).
     pub theta: Vec<f64>,
     /// Covariance of θ from the weights alone (not scaled by χ²), zero rows for fixed entries.
@@ -282,7 +282,7 @@ pub struct Fit {
 
 /// Inverse of a symmetric positive-definite matrix via Jacobi scaling and Cholesky; `None` when it
 /// is not numerically positive definite.
-pub fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
+pub(crate) fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64>> {
     let k = n.nrows();
     let d: Vec<f64> = (0..k).map(|i| n[(i, i)]).collect();
     if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
@@ -502,7 +502,7 @@ fn free_indices(free: &[bool]) -> Vec<usize> {
 }
 
 /// Covariance (zeros for fixed entries) of θ at `t`, or `None` if singular.
-pub fn covariance(
+pub(crate) fn covariance(
     p: &Problem,
     t: &[f64],
     free: &[bool],
@@ -593,7 +593,7 @@ pub fn fit(
 /// joint pass is the previous pass's estimate, in which the component may still have been free:
 /// without the reset a component reported "fixed at 0" would enter the fit, and the report, at
 /// that value.
-pub fn structurally_unobservable(
+pub(crate) fn structurally_unobservable(
     p: &Problem,
     t: &mut [f64],
     free: &mut [bool],

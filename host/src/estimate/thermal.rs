@@ -27,9 +27,9 @@ use nalgebra::{DMatrix, DVector};
 use shared::sensor_models::{TemperatureModel, MAX_TEMPERATURE_DEGREE as DEG};
 
 /// Smallest temperature span of the static segments for a temperature model, °C.
-pub const MIN_SPAN_C: f64 = 5.0;
+pub(crate) const MIN_SPAN_C: f64 = 5.0;
 /// The reference temperature when the data cover it, °C.
-pub const PREFERRED_REFERENCE_C: f64 = 25.0;
+pub(crate) const PREFERRED_REFERENCE_C: f64 = 25.0;
 /// Segments whose temperature moves less than this are treated as soaks: their own scatter is noise.
 const SOAK_SPAN_C: f64 = 1.0;
 /// Parameters per axis: `m_i` (3), `u0_i`, `p_1..p_3`, `s_1..s_3`.
@@ -92,7 +92,7 @@ struct Obs<'a> {
 
 /// Fits the temperature model when the static segments span at least [`MIN_SPAN_C`]; `Ok(None)`
 /// otherwise (with a note when temperatures were recorded at all).
-pub fn fit_session(
+pub(crate) fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
 ) -> Result<(Option<ThermalFit>, Vec<String>), String> {
@@ -424,7 +424,7 @@ fn fit_axis(
 
 impl ThermalFit {
     /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
-    pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
+    pub(crate) fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
         let dt = temp_c - self.model.reference_c;
         let g = [dt, dt * dt, dt * dt * dt];
         let value = (0..DEG).map(|k| c[k] * g[k]).sum();
@@ -438,7 +438,7 @@ impl ThermalFit {
     /// The statistics referred to `T_ref`: each segment's mean outputs with the model's bias change
     /// removed and its scale change divided out (exact at rest, where `m_i·f` is constant:
     /// `E[U] = (1 + E[S])·m·f + u0 + E[P]`).
-    pub fn refer_to_reference(&self, stats: &[SegmentStats]) -> Vec<SegmentStats> {
+    pub(crate) fn refer_to_reference(&self, stats: &[SegmentStats]) -> Vec<SegmentStats> {
         let m = &self.model;
         stats
             .iter()

@@ -19,7 +19,7 @@ const GROUP_WIDTH_C: f64 = 1.5;
 
 /// The gyro bias fit of one session.
 #[derive(Clone, Debug, PartialEq)]
-pub struct GyroBiasFit {
+pub(crate) struct GyroBiasFit {
     /// `c_k` per axis, rad/s per °C^k (0 where the degree leaves a coefficient out).
     pub per_c: [[f64; DEG]; 3],
     /// 1σ of `per_c`.

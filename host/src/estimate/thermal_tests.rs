@@ -58,7 +58,7 @@ pub(crate) fn soak_plan(temps_c: &[f64], seconds: f64) -> Plan {
 }
 
 /// Simulates straight into per-segment statistics (what the reader would make of the CSV).
-pub(crate) fn simulate_stats(
+pub fn simulate_stats(
     cal: &Calibration,
     plan: &Plan,
     noise: &NoiseModel,

@@ -37,7 +37,7 @@ pub const DEVICE_H: &str = include_str!("c/acal_device.h");
 /// Its implementation.
 pub const DEVICE_C: &str = include_str!("c/acal_device.c");
 /// The name of the constants header in the package.
-pub const HEADER_NAME: &str = "acal_calibration.h";
+pub(crate) const HEADER_NAME: &str = "acal_calibration.h";
 
 /// The files of the C package `export --format c-header --out DIR` writes: the constants header, the
 /// decoder and the device's per-sample correction, self-contained (the header includes only them).
@@ -227,7 +227,7 @@ fn compensator_initialisers(compensator: &Compensator) -> String {
 }
 
 /// The `c-header` text.
-pub fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
+pub(crate) fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let cal = &input.cal;
     let unit_id = input
         .unit
@@ -330,7 +330,7 @@ fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<(Vec<f32>, [f32; 3]), Expor
 /// calibration file's 1σ of `G` (`δ(G⁻¹) = −G⁻¹·δG·G⁻¹`, absolute values summed, so no cancellation
 /// hides one) above [`crate::estimate::gyro::UNDETERMINED_SIGMA`]. With `G ≈ I` an undetermined column
 /// of `G` (a spin axis the plan left out) is the same column of `G⁻¹`.
-pub fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 3] {
+pub(crate) fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 3] {
     let (Some(gyro), Some(sigma)) = (
         input.cal.gyro.as_ref(),
         input.unit.gyro.as_ref().and_then(|g| g.matrix_1sigma),
@@ -385,7 +385,7 @@ const FUSION_VERSION_SELECT: &str =
 ";
 
 /// The `fusion-c` text.
-pub fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
+pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let f = convert(&input.cal)?.fusion;
     let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
     let gyroscope = input.cal.gyro.as_ref().map(fusion_gyroscope).transpose()?;

@@ -11,7 +11,7 @@ use crate::unit_file::UnitFile;
 use serde_json::{json, Value};
 
 /// Format version of the document.
-pub const JSON_FORMAT_VERSION: u32 = 1;
+pub(crate) const JSON_FORMAT_VERSION: u32 = 1;
 
 /// The document.
 pub fn document(input: &ExportInput<'_>) -> Result<Value, ExportError> {

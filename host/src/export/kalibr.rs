@@ -54,7 +54,7 @@ pub struct KalibrNoise {
 
 /// Our intrinsics in Kalibr's parameterisation.
 #[derive(Clone, Debug, PartialEq)]
-pub struct KalibrIntrinsics {
+pub(crate) struct KalibrIntrinsics {
     /// Lower-triangular `M` (dimensionless: m/s² measured per m/s² true).
     pub m: RowMajor3,
     /// `C_i_b`, body → IMU frame rotation.
@@ -71,7 +71,7 @@ pub struct KalibrIntrinsics {
 
 /// RQ factorisation of `n = L·R`: `L` lower-triangular with a positive diagonal, `R` a rotation.
 /// `None` when `n` is singular or left-handed (then no rotation exists).
-pub fn rq(n: &RowMajor3) -> Option<(RowMajor3, RowMajor3)> {
+pub(crate) fn rq(n: &RowMajor3) -> Option<(RowMajor3, RowMajor3)> {
     // nᵀ = Q·U (QR), so n = Uᵀ·Qᵀ; signs moved so that U's diagonal is positive.
     let qr = linalg::to_na(n).transpose().qr();
     let (mut q, mut u) = (qr.q(), qr.r());
@@ -92,7 +92,7 @@ pub fn rq(n: &RowMajor3) -> Option<(RowMajor3, RowMajor3)> {
 }
 
 /// The intrinsics of `input` in Kalibr's parameterisation.
-pub fn intrinsics(input: &ExportInput<'_>) -> Result<KalibrIntrinsics, ExportError> {
+pub(crate) fn intrinsics(input: &ExportInput<'_>) -> Result<KalibrIntrinsics, ExportError> {
     let (fitted, _) = input.cal.statics.to_fitted()?;
     let c = input.driver_scale("Kalibr")?;
     let g = input.cal.gravity_m_s2;
@@ -217,7 +217,7 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
 }
 
 /// Our intrinsics as Kalibr's calibrated-IMU results hold them (`scale-misalignment-size-effect`).
-pub fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, ExportError> {
+pub(crate) fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let k = intrinsics(input)?;
     let mut s = String::new();
     let w = &mut s;

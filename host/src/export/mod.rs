@@ -287,7 +287,7 @@ impl<'a> ExportInput<'a> {
 }
 
 /// Standard gravity, m/s²: the value of the unit "g" a driver converts with.
-pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
+pub(crate) const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 
 impl ExportInput<'_> {
     /// The driver's scale `c` (m/s² per output unit) for a target that reads `c·U` in m/s², the same
@@ -313,7 +313,7 @@ impl ExportInput<'_> {
 }
 
 /// Refuses what no format can express faithfully: a negative scale factor.
-pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
+pub(crate) fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
     let s = &cal.statics;
     for (i, k) in s.scale_out_per_g.iter().enumerate() {
         if *k < 0.0 {
@@ -408,7 +408,8 @@ pub fn convert(cal: &Calibration) -> Result<Conversions, ParamsError> {
 
 impl PlainMatrices {
     /// Paper eq. 16: `f_b = K_A U − ∇_b − f_L^b`, with `f_L^b = A⁻¹ d` computed as `K_A (K d)`, in m/s².
-    pub fn compensate(&self, u: [f64; 3], omega: [f64; 3], omega_dot: [f64; 3]) -> [f64; 3] {
+    #[cfg(test)]
+    pub(crate) fn compensate(&self, u: [f64; 3], omega: [f64; 3], omega_dot: [f64; 3]) -> [f64; 3] {
         let w = linalg::lever_matrix(&omega, &omega_dot);
         let ka_u = linalg::mat_vec(&self.k_a_g_per_out, &u);
         // K d in output units needs K·A rows: K A = K_A⁻¹.
@@ -423,7 +424,8 @@ impl PlainMatrices {
 
 impl FusionStyle {
     /// `FusionModelInertial`, in g; static only.
-    pub fn compensate_static_g(&self, u: [f64; 3]) -> [f64; 3] {
+    #[cfg(test)]
+    pub(crate) fn compensate_static_g(&self, u: [f64; 3]) -> [f64; 3] {
         let scaled: [f64; 3] =
             std::array::from_fn(|i| (u[i] - self.offset[i]) * self.sensitivity[i]);
         linalg::mat_vec(&self.misalignment, &scaled)
@@ -432,7 +434,8 @@ impl FusionStyle {
 
 impl KalibrStyle {
     /// Solves `u_i = row_i(M)·(f + W r_i) + b_i` for `f` (m/s²).
-    pub fn compensate(&self, u: [f64; 3], omega: [f64; 3], omega_dot: [f64; 3]) -> [f64; 3] {
+    #[cfg(test)]
+    pub(crate) fn compensate(&self, u: [f64; 3], omega: [f64; 3], omega_dot: [f64; 3]) -> [f64; 3] {
         let w = linalg::lever_matrix(&omega, &omega_dot);
         let r = [self.rx, self.ry, self.rz];
         let rhs: [f64; 3] = std::array::from_fn(|i| {

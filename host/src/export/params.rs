@@ -55,7 +55,10 @@ pub struct PerAxis {
 }
 
 /// The per-axis form of `input` for `format` (which names the target in errors).
-pub fn per_axis(input: &ExportInput<'_>, format: &'static str) -> Result<PerAxis, ExportError> {
+pub(crate) fn per_axis(
+    input: &ExportInput<'_>,
+    format: &'static str,
+) -> Result<PerAxis, ExportError> {
     let (fitted, _) = input.cal.statics.to_fitted()?;
     let inv = linalg::inverse(&fitted.m_out_per_g).ok_or(ExportError::Singular)?;
     let c = input.driver_scale(format)?;
@@ -141,7 +144,7 @@ fn accel_values(p: &PerAxis, off: &str, scl: &str) -> Values {
 /// `src/FactSystem/ParameterManager.cc`, `readParametersFromStream`) skips `#` lines, splits the others
 /// on tabs into exactly five fields `sysid compid name value type`, refuses a file whose sysid is not
 /// the vehicle's, and converts the value by its MAVLink type (9 = REAL32, 6 = INT32).
-pub fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
+pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let p = per_axis(input, "PX4")?;
     let o = input.options;
     let device_id = o.device_id.ok_or_else(|| {
@@ -351,7 +354,7 @@ fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
 }
 
 /// An ArduPilot parameter file (`NAME,VALUE`, as Mission Planner saves and loads).
-pub fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
+pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let p = per_axis(input, "ArduPilot")?;
     let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();

@@ -39,7 +39,7 @@ pub fn render(calibration: &Calibration, format: ExportFormat) -> Result<String,
 /// [`render`] with the lever-arm components the calibration's plan did not determine
 /// (`lever_arms_observable = false` in `[uncertainty]`) written as `nan` and named in a comment: a
 /// consumer must not take an undetermined component (often exactly 0) for a measurement.
-pub fn render_marked(
+pub(crate) fn render_marked(
     calibration: &Calibration,
     format: ExportFormat,
     observable: Option<&[[bool; 3]; 3]>,

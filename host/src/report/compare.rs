@@ -145,7 +145,7 @@ fn sigmas(u: &UnitFile) -> Option<[f64; PAPER_LEN]> {
 }
 
 /// Compares two unit files (values as [`paper_values`] gives them: angles normalised).
-pub fn compare_units(
+pub(crate) fn compare_units(
     a: &UnitFile,
     a_name: &str,
     b: &UnitFile,

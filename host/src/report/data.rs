@@ -127,7 +127,7 @@ impl Compensation {
     }
 
     /// Palette index of its series.
-    pub fn colour(self) -> usize {
+    pub(crate) fn colour(self) -> usize {
         match self {
             Compensation::BiasScale => 0,
             Compensation::Static => 1,
@@ -185,7 +185,7 @@ pub struct SegmentRow {
 
 impl SegmentRow {
     /// The output at a compensation level, g.
-    pub fn output_g(&self, c: Compensation) -> [f64; 3] {
+    pub(crate) fn output_g(&self, c: Compensation) -> [f64; 3] {
         match c {
             Compensation::BiasScale => self.before_g,
             Compensation::Static => self.after_static_g,

@@ -83,7 +83,7 @@ pub fn render_before_after(data: &ReportData) -> String {
 }
 
 /// Writes the figures and the page of `data` into `out_dir`.
-pub fn write_report(
+pub(crate) fn write_report(
     data: &ReportData,
     out_dir: &Path,
     session: &str,

@@ -10,7 +10,7 @@ use shared::params::axis_name;
 /// Figure (a), paper Figs. 5 and 8: each segment's output minus the theoretical value (the session
 /// fit's, as in the tables), mg, before and after
 /// compensation; one panel per axis.
-pub fn outputs_figure(data: &ReportData) -> Figure {
+pub(crate) fn outputs_figure(data: &ReportData) -> Figure {
     let cats: Vec<String> = data.segments.iter().map(|r| r.name.clone()).collect();
     let panels = (0..3)
         .map(|j| Panel {
@@ -52,7 +52,7 @@ pub fn outputs_figure(data: &ReportData) -> Figure {
 }
 
 /// Figure (b): the residual after full compensation, µg, with the segment's ±1σ (its own noise).
-pub fn residuals_figure(data: &ReportData) -> Figure {
+pub(crate) fn residuals_figure(data: &ReportData) -> Figure {
     let cats: Vec<String> = data.segments.iter().map(|r| r.name.clone()).collect();
     let panels = (0..3)
         .map(|j| Panel {
@@ -90,7 +90,7 @@ pub fn residuals_figure(data: &ReportData) -> Figure {
 
 /// Figure (c), paper Figs. 6/7 and 9/10: velocity and position error of a replayed run (norms, log
 /// scale), before and after compensation.
-pub fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
+pub(crate) fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
     let panel = |what: &str, unit: &str, pick: &dyn Fn(&Drift, usize) -> f64| Panel {
         title: format!("{what} error |{}|", &what[..1]),
         x_desc: "t (s)".into(),
@@ -135,7 +135,7 @@ pub fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
 }
 
 /// All figures of a report: outputs, residuals, then one per navigation run.
-pub fn report_figures(data: &ReportData) -> Vec<Figure> {
+pub(crate) fn report_figures(data: &ReportData) -> Vec<Figure> {
     let mut v = vec![outputs_figure(data), residuals_figure(data)];
     v.extend(data.temperature_figure.clone());
     for (k, run) in data.navigation.iter().enumerate() {

@@ -4,7 +4,7 @@ use shared::OutputUnit;
 
 /// Decimals of a value in the output unit: µV in volts, thousandths of a count in LSB, µm/s² in m/s²,
 /// 0.1 µg in g.
-pub fn out_digits(unit: OutputUnit) -> usize {
+pub(crate) fn out_digits(unit: OutputUnit) -> usize {
     match unit {
         OutputUnit::Volts => 6,
         OutputUnit::Lsb => 3,
@@ -15,7 +15,7 @@ pub fn out_digits(unit: OutputUnit) -> usize {
 
 /// `v ± s` with at least `digits` decimals, and more when needed to show two significant digits of
 /// the 1σ (a bias known to 0.1 µV must not print as "± 0.000000").
-pub fn pm(v: f64, s: f64, digits: usize) -> String {
+pub(crate) fn pm(v: f64, s: f64, digits: usize) -> String {
     if s.is_finite() {
         let needed = if s > 0.0 {
             (1.0 - s.log10().floor()).max(0.0) as usize
@@ -31,7 +31,7 @@ pub fn pm(v: f64, s: f64, digits: usize) -> String {
 
 /// [`pm`] when the 1σ is known; the value alone, marked, when it is not (a calibration file without
 /// an `[uncertainty]` table).
-pub fn pm_opt(v: f64, s: Option<f64>, digits: usize) -> String {
+pub(crate) fn pm_opt(v: f64, s: Option<f64>, digits: usize) -> String {
     match s {
         Some(s) => pm(v, s, digits),
         None => format!("{v:.digits$} (no σ)"),

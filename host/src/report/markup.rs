@@ -8,7 +8,7 @@ fn md_cell(s: &str) -> String {
 }
 
 /// Markdown.
-pub fn to_markdown(blocks: &[Block]) -> String {
+pub(crate) fn to_markdown(blocks: &[Block]) -> String {
     let mut s = String::new();
     for b in blocks {
         match b {
@@ -70,7 +70,7 @@ fn inline_html(s: &str) -> String {
 }
 
 /// Self-contained HTML (images by relative path).
-pub fn to_html(blocks: &[Block], title: &str) -> String {
+pub(crate) fn to_html(blocks: &[Block], title: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

@@ -34,12 +34,12 @@ pub struct Drift {
 
 impl Drift {
     /// Norm of the final position error, m.
-    pub fn final_position_error_m(&self) -> f64 {
+    pub(crate) fn final_position_error_m(&self) -> f64 {
         self.position_m.last().map_or(0.0, norm)
     }
 
     /// Norm of the final velocity error, m/s.
-    pub fn final_velocity_error_m_s(&self) -> f64 {
+    pub(crate) fn final_velocity_error_m_s(&self) -> f64 {
         self.velocity_m_s.last().map_or(0.0, norm)
     }
 }
@@ -119,7 +119,7 @@ impl NavigationRun {
 }
 
 /// Replays one segment's mean outputs for `duration_s` (see the module doc).
-pub fn replay(row: &SegmentRow, g: f64, duration_s: f64, step_s: f64) -> NavigationRun {
+pub(crate) fn replay(row: &SegmentRow, g: f64, duration_s: f64, step_s: f64) -> NavigationRun {
     let steps = (duration_s / step_s).round().max(1.0) as usize;
     let truth = row.truth_g.map(|v| v * g);
     let cases = Compensation::ALL
@@ -176,7 +176,7 @@ pub fn render_position_targets(runs: &[NavigationRun]) -> String {
 }
 
 /// The navigation table as plain text.
-pub fn render_navigation(runs: &[NavigationRun]) -> String {
+pub(crate) fn render_navigation(runs: &[NavigationRun]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

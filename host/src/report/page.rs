@@ -37,7 +37,7 @@ pub enum Block {
 }
 
 /// Table 1 (zero bias, scale factor, installation angles with 1σ) as table rows.
-pub fn table1(data: &ReportData) -> Block {
+pub(crate) fn table1(data: &ReportData) -> Block {
     let st = &data.calibration.statics;
     let u = data.uncertainty.as_ref();
     let d = out_digits(data.calibration.statics.output_unit);
@@ -72,7 +72,7 @@ pub fn table1(data: &ReportData) -> Block {
 }
 
 /// Table 3 (lever arms, mm, with 1σ; "n.d." where the plan did not determine the component).
-pub fn table3(data: &ReportData) -> Block {
+pub(crate) fn table3(data: &ReportData) -> Block {
     let r = &data.calibration.lever_arms.r_m;
     let u = data.uncertainty.as_ref();
     Block::Table {
@@ -97,7 +97,7 @@ pub fn table3(data: &ReportData) -> Block {
 
 /// Tables 2 and 4: per segment and axis, theoretical, before, after static, after full (g), the
 /// residual and the segment's 1σ (µg). `rotating`: the rotating segments (Table 4) or the static ones.
-pub fn before_after_table(data: &ReportData, rotating: bool) -> Block {
+pub(crate) fn before_after_table(data: &ReportData, rotating: bool) -> Block {
     let mut rows = Vec::new();
     for r in data
         .segments
@@ -189,7 +189,7 @@ fn theoretical_note(data: &ReportData) -> String {
 }
 
 /// The navigation table: final velocity and position error of each replayed run and level.
-pub fn navigation_table(runs: &[NavigationRun]) -> Block {
+pub(crate) fn navigation_table(runs: &[NavigationRun]) -> Block {
     let mut rows = Vec::new();
     for run in runs {
         for c in &run.cases {

@@ -27,7 +27,7 @@ pub const FAMILY: &str = "sans-serif";
 
 /// Registers [`EMBEDDED_FONT`] for the figures once per process; the bytes registered, or `None` if
 /// plotters refused them (a corrupt build; the figures are then drawn without text, SVG only).
-pub fn ensure_font() -> Option<&'static [u8]> {
+pub(crate) fn ensure_font() -> Option<&'static [u8]> {
     static FONT: OnceLock<bool> = OnceLock::new();
     let registered = *FONT.get_or_init(|| {
         plotters::style::register_font(FAMILY, FontStyle::Normal, EMBEDDED_FONT).is_ok()
@@ -137,12 +137,12 @@ impl Default for Formats {
 
 /// Stroke width of the `index`-th of `count` line series of a panel: 2 for the last, 2 more for each
 /// one before it.
-pub fn line_width(index: usize, count: usize) -> u32 {
+pub(crate) fn line_width(index: usize, count: usize) -> u32 {
     2 + 2 * count.saturating_sub(index + 1) as u32
 }
 
 /// The palette: before (red), static-only (orange), full (blue), truth/reference (black), then more.
-pub const PALETTE: [RGBColor; 6] = [
+pub(crate) const PALETTE: [RGBColor; 6] = [
     RGBColor(200, 30, 30),
     RGBColor(230, 140, 0),
     RGBColor(20, 90, 200),
@@ -158,7 +158,7 @@ pub fn render(fig: &Figure, dir: &Path, formats: Formats) -> Result<RenderOutcom
 }
 
 /// [`render`] with text on or off (off: no font used; PNG is then not written).
-pub fn render_with(
+pub(crate) fn render_with(
     fig: &Figure,
     dir: &Path,
     formats: Formats,

@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub const BUILTIN_PLANS: [(&str, &str); 8] = [
+pub(crate) const BUILTIN_PLANS: [(&str, &str); 8] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -28,7 +28,7 @@ pub const BUILTIN_PLANS: [(&str, &str); 8] = [
 ];
 
 /// The built-in plan called `name`, if any.
-pub fn builtin_plan(name: &str) -> Option<Result<Plan, PlanError>> {
+pub(crate) fn builtin_plan(name: &str) -> Option<Result<Plan, PlanError>> {
     BUILTIN_PLANS
         .iter()
         .find(|(n, _)| *n == name)

@@ -17,7 +17,7 @@ pub const AXIS_SNAP_DEG: f64 = 2.0;
 /// Prior 1σ of such a face position about each axis, degrees: a cube's face on a bench that is level
 /// to a fraction of a degree, with the direction measured before calibration (scale and axis errors
 /// of about 1 % and 0.5° move it by as much).
-pub const FACE_PRIOR_DEG: f64 = 1.0;
+pub(crate) const FACE_PRIOR_DEG: f64 = 1.0;
 
 /// The nearest body axis (±x, ±y, ±z) if within `deg`.
 fn nearest_axis(d: &[f64; 3], deg: f64) -> Option<[f64; 3]> {
@@ -96,7 +96,7 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
 /// (NIMA TR8350.2, *Department of Defense World Geodetic System 1984*, 3rd ed., eqs. 4-1 and 4-3).
 /// Within about 0.1 mg of a site's real gravity away from mountains and large anomalies; a logger's
 /// m/s² output is scaled by it (`gravity_m_s2` of the plan).
-pub fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
+pub(crate) fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
     // WGS 84: equatorial normal gravity, Somigliana's constant, first eccentricity squared.
     const GAMMA_E: f64 = 9.780_325_335_9;
     const K: f64 = 0.001_931_852_652_41;
@@ -112,7 +112,7 @@ pub fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
 }
 
 /// The per-segment statistics, as reading the written session would give them.
-pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
+pub(crate) fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
     seg.stills
         .iter()
         .zip(&plan.segments)

@@ -47,7 +47,7 @@ impl GyroUnit {
     }
 
     /// rad/s per unit.
-    pub fn to_rad_s(self) -> f64 {
+    pub(crate) fn to_rad_s(self) -> f64 {
         match self {
             GyroUnit::DegPerS => std::f64::consts::PI / 180.0,
             GyroUnit::RadPerS => 1.0,
@@ -55,7 +55,7 @@ impl GyroUnit {
     }
 
     /// "deg/s" or "rad/s".
-    pub fn symbol(self) -> &'static str {
+    pub(crate) fn symbol(self) -> &'static str {
         match self {
             GyroUnit::DegPerS => "deg/s",
             GyroUnit::RadPerS => "rad/s",
@@ -64,7 +64,7 @@ impl GyroUnit {
 }
 
 /// Parses an accelerometer unit as the command line spells it: "m/s2", "g", "LSB" or "V".
-pub fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
+pub(crate) fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
     match s {
         "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnit::MetresPerSecondSquared),
         "g" => Some(OutputUnit::StandardGravity),
@@ -366,7 +366,7 @@ fn clean(field: &str) -> &str {
 }
 
 /// [`read_logger_csv`] on any reader (`path` only names it in messages).
-pub fn read_logger<R: BufRead>(
+pub(crate) fn read_logger<R: BufRead>(
     mut r: R,
     path: &Path,
     options: &ImportOptions,

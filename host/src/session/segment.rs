@@ -51,7 +51,7 @@ impl Default for SegmentOptions {
 /// unknowns: 3 biases, 3 scales, 3 non-orthogonalities; docs/model.md §7).
 pub const MIN_POSITIONS: usize = 9;
 /// Recommended number of positions (the built-in `hand` plan).
-pub const RECOMMENDED_POSITIONS: usize = 24;
+pub(crate) const RECOMMENDED_POSITIONS: usize = 24;
 /// A body direction (±x, ±y, ±z) with no position within this angle is missing, degrees.
 pub const FACE_COVERAGE_DEG: f64 = 50.0;
 /// Fewer than [`MIN_POSITIONS`] positions are taken as the six faces of a cube when each lies within
@@ -214,7 +214,7 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 }
 
 /// Finds the still intervals and spins of `rec`.
-pub fn find_intervals(
+pub(crate) fn find_intervals(
     rec: &Recording,
     options: &SegmentOptions,
 ) -> Result<Segmentation, SegmentError> {
@@ -412,7 +412,7 @@ fn interval(
 }
 
 /// Angle between two unit vectors, degrees.
-pub fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+pub(crate) fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     linalg::dot(a, b).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
@@ -443,7 +443,7 @@ const FACES: [(&str, [f64; 3]); 6] = [
 ];
 
 /// Distinct positions and the directions they miss.
-pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
+pub(crate) fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
     let mut firsts: Vec<usize> = Vec::new();
     let repeats = stills
         .iter()
@@ -504,7 +504,7 @@ impl Coverage {
     }
 
     /// "; include x down, z up" or "".
-    pub fn faces_text(&self) -> String {
+    pub(crate) fn faces_text(&self) -> String {
         if self.missing_faces.is_empty() {
             String::new()
         } else {

@@ -22,7 +22,7 @@ use std::path::Path;
 
 /// The gyro's truth: `w = matrix·ω_body + bias_rad_s` (docs/model.md §8).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GyroTruth {
+pub(crate) struct GyroTruth {
     /// `G`, gyro output per body rate.
     pub matrix: RowMajor3,
     /// `b`, rad/s.
@@ -43,7 +43,7 @@ impl GyroTruth {
     }
 
     /// The stated test gyro: 0.5 % scale, 0.5° misalignment, 0.5 °/s bias (signs mixed).
-    pub fn half_percent() -> GyroTruth {
+    pub(crate) fn half_percent() -> GyroTruth {
         let m = 0.5f64.to_radians();
         GyroTruth::new(
             [0.005, -0.005, 0.004],
@@ -55,7 +55,7 @@ impl GyroTruth {
 
 /// What to simulate.
 #[derive(Clone, Debug, PartialEq)]
-pub struct HandSpec {
+pub(crate) struct HandSpec {
     /// Sample rate, Hz.
     pub rate_hz: f64,
     /// Up directions of the positions, body axes (the `hand` plan's by default).
@@ -156,10 +156,10 @@ impl HandSpec {
 }
 
 /// One logged row: time, accelerometer (output unit), gyro (rad/s).
-pub type HandRow = (f64, [f64; 3], [f64; 3]);
+pub(crate) type HandRow = (f64, [f64; 3], [f64; 3]);
 
 /// The simulated recording and where the holds really were.
-pub struct HandSession {
+pub(crate) struct HandSession {
     /// The rows.
     pub rows: Vec<HandRow>,
     /// Each hold's first and last time, s, and its up, body axes.
@@ -214,7 +214,7 @@ fn attitude(up: [f64; 3], psi: f64) -> UnitQuaternion<f64> {
 }
 
 /// Simulates the session for a unit `truth` (its output unit is the file's).
-pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
+pub(crate) fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let model = ForwardModel::new(truth).expect("a valid simulated unit");
     let g = truth.gravity_m_s2;
     let mut rng = Rng::new(spec.seed, 11);
@@ -315,7 +315,7 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
 
 /// How the CSV is laid out, as a logger would.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LoggerLayout {
+pub(crate) struct LoggerLayout {
     /// Header names of acc x y z, gyro x y z.
     pub columns: [String; 6],
     /// Time column name (seconds), or `None` for a sample-index column named `sample`.
@@ -344,7 +344,7 @@ impl Default for LoggerLayout {
 }
 
 /// Writes `rows` as one unlabelled CSV.
-pub fn write_logger_csv(
+pub(crate) fn write_logger_csv(
     path: &Path,
     rows: &[HandRow],
     layout: &LoggerLayout,
@@ -397,7 +397,7 @@ pub fn write_logger_csv(
 /// A MEMS-like unit whose outputs are in `unit` (m/s², g or counts at 4096 per g): scale errors of
 /// about 1 %, biases of about 5–20 mg, sensing axes 0.3–0.7° off the body axes, lever arms of a few
 /// millimetres.
-pub fn logger_unit(unit: shared::OutputUnit) -> Calibration {
+pub(crate) fn logger_unit(unit: shared::OutputUnit) -> Calibration {
     let per_g = match unit {
         shared::OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
         shared::OutputUnit::StandardGravity => 1.0,

@@ -24,7 +24,7 @@ pub mod synth;
 pub(crate) mod testkit;
 pub mod thermal;
 
-pub use rng::Rng;
+pub(crate) use rng::Rng;
 pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
     simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,

@@ -57,12 +57,12 @@ pub struct NoiseModel {
 }
 
 /// The identity, the perfect gyro's matrix.
-pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+pub(crate) const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
 /// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
 /// non-orthogonality, so no change of body frame absorbs it).
-pub fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
+pub(crate) fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
     const SIGN: [[f64; 3]; 3] = [[0.0, 1.0, -1.0], [1.0, 0.0, 1.0], [-1.0, -1.0, 0.0]];
     std::array::from_fn(|i| {
         std::array::from_fn(|j| {
@@ -106,7 +106,7 @@ impl NoiseModel {
     }
 
     /// The `[noise]` table of a unit file, over the defaults; `None` when there is none.
-    pub fn from_unit_file(unit: &UnitFile) -> Result<Option<NoiseModel>, SimulateError> {
+    pub(crate) fn from_unit_file(unit: &UnitFile) -> Result<Option<NoiseModel>, SimulateError> {
         match unit.other.get("noise") {
             None => Ok(None),
             Some(v) => v
@@ -118,7 +118,7 @@ impl NoiseModel {
     }
 
     /// Checks that every value is finite and every σ non-negative.
-    pub fn validate(&self) -> Result<(), SimulateError> {
+    pub(crate) fn validate(&self) -> Result<(), SimulateError> {
         let sigmas = [
             ("accel_white_mg", self.accel_white_mg),
             ("accel_quantum_out", self.accel_quantum_out),
@@ -199,7 +199,7 @@ const STREAM_TEMPERATURE: u64 = 16;
 
 /// `up` tilted by small angles (radians) about the two axes perpendicular to it that the estimator
 /// uses for a mount's tilt unknowns (`estimate::model::tilt_basis`), renormalised.
-pub fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+pub(crate) fn tilt(up: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
     let e = crate::estimate::model::tilt_basis(&up);
     let v: [f64; 3] = std::array::from_fn(|j| up[j] + n1 * e[0][j] + n2 * e[1][j]);
     let n = linalg::norm(&v);

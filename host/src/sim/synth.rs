@@ -12,7 +12,7 @@ use shared::linalg::RowMajor3;
 
 /// What the table really does during a segment.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ActualSegment {
+pub(crate) struct ActualSegment {
     /// Up, body axes (unit).
     pub up_b: [f64; 3],
     /// Rate at the start, rad/s.
@@ -27,7 +27,7 @@ pub struct ActualSegment {
 
 impl ActualSegment {
     /// The segment as planned (no table errors).
-    pub fn from_plan(sp: &SegmentPlan, default_duration_s: f64) -> ActualSegment {
+    pub(crate) fn from_plan(sp: &SegmentPlan, default_duration_s: f64) -> ActualSegment {
         let a = sp.rate_deg_s.to_radians();
         ActualSegment {
             up_b: sp.up_b,
@@ -41,7 +41,7 @@ impl ActualSegment {
 
 /// Noise of the recorded signals, per sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SynthNoise {
+pub(crate) struct SynthNoise {
     /// Accelerometer white noise, 1σ per sample, output unit.
     pub out_1sigma: [f64; 3],
     /// Gyro white noise, 1σ per sample, rad/s.
@@ -51,7 +51,7 @@ pub struct SynthNoise {
 }
 
 /// Noise-free statistics of one segment.
-pub fn segment_stats(
+pub(crate) fn segment_stats(
     name: &str,
     seg: &ActualSegment,
     unit: &ForwardModel,
@@ -123,7 +123,7 @@ pub fn segment_stats(
 }
 
 /// Noise-free statistics of every segment of a plan run as planned on `unit`.
-pub fn plan_stats(
+pub(crate) fn plan_stats(
     plan: &Plan,
     unit: &ForwardModel,
     noise: &SynthNoise,
@@ -144,7 +144,7 @@ pub fn plan_stats(
 
 /// The noise-free statistics of `plan` run on `truth` with the noise and durations of `settings`: the
 /// input of [`crate::estimate::predict`].
-pub fn prediction_stats(
+pub(crate) fn prediction_stats(
     plan: &Plan,
     truth: &shared::Calibration,
     settings: &crate::estimate::PredictSettings,

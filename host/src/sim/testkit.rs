@@ -7,11 +7,11 @@ use crate::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::ForwardModel;
 use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
 
-pub use super::rng::Rng;
+pub(crate) use super::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct TableErrors {
+pub(crate) struct TableErrors {
     /// 1σ tilt of each mount about each of the two axes perpendicular to its up, degrees (as
     /// `host simulate --tilt-deg`).
     pub attitude_deg: f64,
@@ -103,7 +103,7 @@ pub fn paper_plan(unit: OutputUnit) -> Plan {
 }
 
 /// The paper's plan plus three 45° oblique mounts spun at ±200 °/s and a spin-up per oblique mount.
-pub fn better_plan(unit: OutputUnit) -> Plan {
+pub(crate) fn better_plan(unit: OutputUnit) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for (n, up) in [
@@ -129,7 +129,7 @@ pub fn paper_unit() -> Calibration {
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.
-pub fn random_digital_unit(rng: &mut Rng) -> Calibration {
+pub(crate) fn random_digital_unit(rng: &mut Rng) -> Calibration {
     let mut angles = [[0.0; 3]; 3];
     for i in 0..3 {
         // Tilt axis i by up to 2° in a random direction.
@@ -160,7 +160,7 @@ pub fn random_digital_unit(rng: &mut Rng) -> Calibration {
 }
 
 /// Noisy statistics of `plan` run on `truth`: each mean gets N(0, σ²/n) per axis.
-pub fn noisy_stats(
+pub(crate) fn noisy_stats(
     plan: &Plan,
     truth: &Calibration,
     noise_out: f64,
@@ -226,7 +226,7 @@ pub fn declared(plan: &Plan, sigma_deg: f64, scale: f64) -> Plan {
 /// A fixture plan with more mounts: the six faces and six edge diagonals at rest (30 s), a 200 °/s
 /// spin on x+, y+ and z+ (30 s), and the four upper cube corners at rest and spun at ±200 °/s (30 s):
 /// 16 mounts.
-pub fn many_mounts_plan() -> Plan {
+pub(crate) fn many_mounts_plan() -> Plan {
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let c = 1.0 / 3f64.sqrt();
     let mut segments = Vec::new();

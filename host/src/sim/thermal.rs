@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use shared::sensor_models::{poly_no_constant, TemperatureModel};
 
 /// The chamber temperature before the first set-point, °C.
-pub const ROOM_C: f64 = 25.0;
+pub(crate) const ROOM_C: f64 = 25.0;
 
 /// How the unit's temperature is simulated (`[thermal]` in a unit file; every field has a default).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,7 +46,7 @@ impl Default for ThermalSim {
 
 impl ThermalSim {
     /// The `[thermal]` table of a unit file, or the defaults.
-    pub fn from_unit_file(unit: &UnitFile) -> Result<ThermalSim, SimulateError> {
+    pub(crate) fn from_unit_file(unit: &UnitFile) -> Result<ThermalSim, SimulateError> {
         let sim = match unit.other.get("thermal") {
             Some(v) => v
                 .clone()
@@ -59,7 +59,7 @@ impl ThermalSim {
     }
 
     /// Every value finite and non-negative.
-    pub fn validate(&self) -> Result<(), SimulateError> {
+    pub(crate) fn validate(&self) -> Result<(), SimulateError> {
         let v = [
             self.die_time_constant_s,
             self.sensor_lag_s,
@@ -77,7 +77,7 @@ impl ThermalSim {
 }
 
 /// The chamber set-point of `seg` at `t_local_s` into it, or `None` when the segment sets none.
-pub fn chamber_c(seg: &SegmentPlan, t_local_s: f64) -> Option<f64> {
+pub(crate) fn chamber_c(seg: &SegmentPlan, t_local_s: f64) -> Option<f64> {
     let start = seg.temp_c?;
     Some(match (seg.temp_end_c, seg.duration_s) {
         (Some(end), Some(d)) if d > 0.0 => start + (end - start) * (t_local_s / d).min(1.0),
@@ -87,7 +87,7 @@ pub fn chamber_c(seg: &SegmentPlan, t_local_s: f64) -> Option<f64> {
 
 /// The chamber, die and sensor temperatures as a session runs.
 #[derive(Clone, Debug)]
-pub struct ThermalState {
+pub(crate) struct ThermalState {
     sim: ThermalSim,
     chamber_c: f64,
     die_c: f64,
@@ -139,7 +139,7 @@ impl ThermalState {
 /// The outputs of a unit whose parameters follow `model` at `die_c`, from its outputs `raw` at the
 /// reference temperature (docs/model.md §9): `U(T) = u0 + P(ΔT) + (1 + S(ΔT))·(U_ref − u0)`; the
 /// relative scale multiplies every term of row `i` of the forward model, lever-arm terms included.
-pub fn outputs_at(
+pub(crate) fn outputs_at(
     model: &TemperatureModel,
     zero_bias_out: &[f64; 3],
     raw: &[f64; 3],
