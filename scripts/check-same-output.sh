@@ -104,8 +104,11 @@ check_case() { # check_case "SIMULATE ARGS" "CALIBRATE ARGS"
   same "$dir/cal/old/calibration.toml" "$dir/cal/new/calibration.toml" "case $case_no calibrate $2: calibration.toml"
   same "$dir/cal/old/calibration.bin" "$dir/cal/new/calibration.bin" "case $case_no calibrate $2: calibration.bin"
   for format in plain fusion kalibr all; do
-    "$old" export --calibration "$dir/cal/old/calibration.toml" --format $format >"$dir/exp-old" 2>&1
-    "$new" export --calibration "$dir/cal/old/calibration.toml" --format $format >"$dir/exp-new" 2>&1
+    # A refused export (Kalibr without --noise) is compared too: its message and its exit status.
+    "$old" export --calibration "$dir/cal/old/calibration.toml" --format $format >"$dir/exp-old" 2>&1 ||
+      echo "exit status $?" >>"$dir/exp-old"
+    "$new" export --calibration "$dir/cal/old/calibration.toml" --format $format >"$dir/exp-new" 2>&1 ||
+      echo "exit status $?" >>"$dir/exp-new"
     same_text "$dir/exp-old" "$dir/exp-new" "case $case_no export --format $format"
   done
   "$old" compare "$dir/sim-old/truth.toml" "$dir/cal/old/calibration.toml" >"$dir/cmp-old" 2>&1
