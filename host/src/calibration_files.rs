@@ -46,7 +46,7 @@ pub enum OutputError {
 }
 
 /// Seconds since the Unix epoch (0 if the clock is before it).
-pub(crate) fn now_unix_s() -> u64 {
+pub fn now_unix_s() -> u64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs())
@@ -75,7 +75,7 @@ pub(crate) fn utc_stamp(unix_s: u64) -> String {
 }
 
 /// The blob of an outcome for `unit_id`.
-pub(crate) fn blob_bytes(
+pub fn blob_bytes(
     outcome: &CalibrationOutcome,
     unit_id: UnitId,
     created_unix_s: u64,
@@ -107,10 +107,7 @@ pub(crate) fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), Output
 /// The calibration file of an outcome: the unit-file schema with every 1σ the estimate has (the
 /// accelerometer's `[uncertainty]`, the gyro's and the temperature model's), exactly what
 /// `calibration.toml` holds; the machine-readable summaries are made from it too.
-pub(crate) fn calibration_unit_file(
-    outcome: &CalibrationOutcome,
-    unit_id: Option<UnitId>,
-) -> UnitFile {
+pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitId>) -> UnitFile {
     let mut file = UnitFile::from_calibration(
         &outcome.calibration,
         unit_id,

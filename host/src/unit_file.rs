@@ -383,7 +383,7 @@ impl UnitFile {
     }
 
     /// A unit file for a calibration (the inverse of [`UnitFile::to_calibration`]).
-    pub(crate) fn from_calibration(
+    pub fn from_calibration(
         cal: &Calibration,
         unit_id: Option<UnitId>,
         uncertainty: Option<Uncertainty>,

@@ -138,7 +138,7 @@ pub(crate) fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
 }
 
 /// The estimator options of a `--method` and a `--reference`.
-pub(crate) fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
+pub fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
     EstimateOptions {
         method: match method {
             MethodArg::Joint => Method::Joint,

@@ -3,9 +3,9 @@
 
 use super::CliError;
 use crate::session::import::{parse_acc_unit, GyroUnit, ImportOptions, TimeSource, TimeUnit};
-use shared::OutputUnit;
 use crate::session::logs::LogSource;
 use clap::Args;
+use shared::OutputUnit;
 
 /// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
 /// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
@@ -141,27 +141,27 @@ impl LogInputArgs {
                 )));
             }
         }
-        let time =
-            match (&self.time_column, self.rate_hz) {
-                (Some(c), None) => TimeSource::Column(c.clone()),
-                (None, Some(hz)) => TimeSource::RateHz(hz),
-                _ => return Err(CliError::Usage(
-                    "a text file needs exactly one of --time-column NAME or --rate-hz HZ"
-                        .into(),
-                )),
-            };
-        let time_unit = match (&self.time_unit, &time) {
-            (None, _) => None,
-            (Some(u), TimeSource::Column(_)) => Some(
-                TimeUnit::parse(u)
-                    .ok_or_else(|| CliError::Usage(format!("--time-unit {u}: use s, ms, us or ns")))?,
-            ),
-            (Some(_), TimeSource::RateHz(_)) => {
+        let time = match (&self.time_column, self.rate_hz) {
+            (Some(c), None) => TimeSource::Column(c.clone()),
+            (None, Some(hz)) => TimeSource::RateHz(hz),
+            _ => {
                 return Err(CliError::Usage(
-                    "--time-unit applies to --time-column, not to --rate-hz".into(),
+                    "a text file needs exactly one of --time-column NAME or --rate-hz HZ".into(),
                 ))
             }
         };
+        let time_unit =
+            match (&self.time_unit, &time) {
+                (None, _) => None,
+                (Some(u), TimeSource::Column(_)) => Some(TimeUnit::parse(u).ok_or_else(|| {
+                    CliError::Usage(format!("--time-unit {u}: use s, ms, us or ns"))
+                })?),
+                (Some(_), TimeSource::RateHz(_)) => {
+                    return Err(CliError::Usage(
+                        "--time-unit applies to --time-column, not to --rate-hz".into(),
+                    ))
+                }
+            };
         let acc = self.acc_unit.as_deref().unwrap_or("");
         let acc_unit = parse_acc_unit(acc).ok_or_else(|| {
             CliError::Usage(format!(

@@ -316,7 +316,13 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         warnings,
         six_faces: set == PositionSet::SixFaces,
     };
-    out.document(&document(a, a.log.gyro_unit_symbol(), &outcome, &cov, &written))?;
+    out.document(&document(
+        a,
+        a.log.gyro_unit_symbol(),
+        &outcome,
+        &cov,
+        &written,
+    ))?;
     Ok(outcome)
 }
 

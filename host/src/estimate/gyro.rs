@@ -185,7 +185,7 @@ impl GyroEstimate {
     }
 
     /// The estimate as the calibration the device applies (`ω = G⁻¹ (w − b)`, docs/model.md §8).
-    pub(crate) fn device_correction(&self) -> shared::GyroCorrection {
+    pub fn device_correction(&self) -> shared::GyroCorrection {
         shared::GyroCorrection {
             matrix: self.matrix,
             bias_rad_s: self.bias_rad_s,

@@ -313,7 +313,7 @@ impl ExportInput<'_> {
 }
 
 /// Refuses what no format can express faithfully: a negative scale factor.
-pub(crate) fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
+pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
     let s = &cal.statics;
     for (i, k) in s.scale_out_per_g.iter().enumerate() {
         if *k < 0.0 {

@@ -44,7 +44,7 @@ pub struct AllanPoint {
 }
 
 /// Octave-spaced cluster sizes for `n` samples.
-pub(crate) fn octave_sizes(n: usize) -> Vec<usize> {
+pub fn octave_sizes(n: usize) -> Vec<usize> {
     let mut out = Vec::new();
     let mut m = 1usize;
     while 4 * m <= n / 2 {
@@ -57,7 +57,7 @@ pub(crate) fn octave_sizes(n: usize) -> Vec<usize> {
 /// Overlapping Allan deviation of rate samples `y` at `rate_hz` for the cluster sizes `sizes`.
 /// `X` is accumulated in f64 after removing the mean, which keeps the second differences exact to
 /// rounding even for long records of a large constant (the mean cancels in the differences).
-pub(crate) fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPoint> {
+pub fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPoint> {
     let n = y.len();
     if n == 0 {
         return Vec::new();
@@ -130,7 +130,7 @@ pub struct NoiseTerms {
 
 impl NoiseTerms {
     /// The model's Allan deviation at `tau_s`.
-    pub(crate) fn adev(&self, tau_s: f64) -> f64 {
+    pub fn adev(&self, tau_s: f64) -> f64 {
         let n = self.white_density.unwrap_or(0.0);
         let b = self.bias_instability.unwrap_or(0.0);
         let k = self.random_walk.unwrap_or(0.0);

@@ -34,7 +34,7 @@ use std::path::{Path, PathBuf};
 /// Largest number of rows analysed (2²¹: 35 min at 1 kHz, 100 MB).
 pub const MAX_SAMPLES: usize = 1 << 21;
 /// Fewest rows that give an Allan curve worth fitting.
-pub(crate) const MIN_SAMPLES: usize = 64;
+pub const MIN_SAMPLES: usize = 64;
 
 /// The axes, in the order of [`NoiseReport::axes`].
 pub const AXES: [&str; 6] = [
@@ -568,7 +568,7 @@ impl NoiseReport {
 }
 
 /// Kalibr's figures from a `noise.json` written by `host noise`.
-pub(crate) fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
+pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
     let text = crate::limits::read_text_bounded(path)
         .map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
     let report: NoiseReport = serde_json::from_str(&text).map_err(|e| {

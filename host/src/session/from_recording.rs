@@ -96,7 +96,7 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
 /// (NIMA TR8350.2, *Department of Defense World Geodetic System 1984*, 3rd ed., eqs. 4-1 and 4-3).
 /// Within about 0.1 mg of a site's real gravity away from mountains and large anomalies; a logger's
 /// m/s² output is scaled by it (`gravity_m_s2` of the plan).
-pub(crate) fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
+pub fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
     // WGS 84: equatorial normal gravity, Somigliana's constant, first eccentricity squared.
     const GAMMA_E: f64 = 9.780_325_335_9;
     const K: f64 = 0.001_931_852_652_41;

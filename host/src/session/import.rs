@@ -47,7 +47,7 @@ impl GyroUnit {
     }
 
     /// rad/s per unit.
-    pub(crate) fn to_rad_s(self) -> f64 {
+    pub fn to_rad_s(self) -> f64 {
         match self {
             GyroUnit::DegPerS => std::f64::consts::PI / 180.0,
             GyroUnit::RadPerS => 1.0,
@@ -64,7 +64,7 @@ impl GyroUnit {
 }
 
 /// Parses an accelerometer unit as the command line spells it: "m/s2", "g", "LSB" or "V".
-pub(crate) fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
+pub fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
     match s {
         "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnit::MetresPerSecondSquared),
         "g" => Some(OutputUnit::StandardGravity),
@@ -366,7 +366,7 @@ fn clean(field: &str) -> &str {
 }
 
 /// [`read_logger_csv`] on any reader (`path` only names it in messages).
-pub(crate) fn read_logger<R: BufRead>(
+pub fn read_logger<R: BufRead>(
     mut r: R,
     path: &Path,
     options: &ImportOptions,

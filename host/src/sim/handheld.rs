@@ -22,7 +22,7 @@ use std::path::Path;
 
 /// The gyro's truth: `w = matrix·ω_body + bias_rad_s` (docs/model.md §8).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct GyroTruth {
+pub struct GyroTruth {
     /// `G`, gyro output per body rate.
     pub matrix: RowMajor3,
     /// `b`, rad/s.
@@ -55,7 +55,7 @@ impl GyroTruth {
 
 /// What to simulate.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct HandSpec {
+pub struct HandSpec {
     /// Sample rate, Hz.
     pub rate_hz: f64,
     /// Up directions of the positions, body axes (the `hand` plan's by default).
@@ -159,7 +159,7 @@ impl HandSpec {
 pub(crate) type HandRow = (f64, [f64; 3], [f64; 3]);
 
 /// The simulated recording and where the holds really were.
-pub(crate) struct HandSession {
+pub struct HandSession {
     /// The rows.
     pub rows: Vec<HandRow>,
     /// Each hold's first and last time, s, and its up, body axes.
@@ -214,7 +214,7 @@ fn attitude(up: [f64; 3], psi: f64) -> UnitQuaternion<f64> {
 }
 
 /// Simulates the session for a unit `truth` (its output unit is the file's).
-pub(crate) fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
+pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let model = ForwardModel::new(truth).expect("a valid simulated unit");
     let g = truth.gravity_m_s2;
     let mut rng = Rng::new(spec.seed, 11);
@@ -397,7 +397,7 @@ pub(crate) fn write_logger_csv(
 /// A MEMS-like unit whose outputs are in `unit` (m/s², g or counts at 4096 per g): scale errors of
 /// about 1 %, biases of about 5–20 mg, sensing axes 0.3–0.7° off the body axes, lever arms of a few
 /// millimetres.
-pub(crate) fn logger_unit(unit: shared::OutputUnit) -> Calibration {
+pub fn logger_unit(unit: shared::OutputUnit) -> Calibration {
     let per_g = match unit {
         shared::OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
         shared::OutputUnit::StandardGravity => 1.0,
