@@ -231,6 +231,7 @@ impl SiteArgs {
             unit_id,
             gravity_m_s2,
             fit_gyro: !self.no_gyro,
+            face_sigma_deg: host::session::from_recording::SIX_FACE_PRIOR_DEG,
         })
     }
 }
@@ -255,11 +256,7 @@ where
         .map_err(|e| CliError::Failed(e.to_string()))
         .py_err()?;
     let s = py.detach(|| segment_recording(rec, &choices));
-    let s = s.map_err(|e| match e {
-        host::session::in_memory::InMemoryError::GyroRefused(p) => CliError::GyroRefused(p),
-        host::session::in_memory::InMemoryError::HandGyro(e) => CliError::HandGyro(e),
-        e => CliError::Failed(e.to_string()),
-    });
+    let s = s.map_err(CliError::from);
     Ok(Session {
         inner: Inner::Memory(Box::new(s.py_err()?)),
     })

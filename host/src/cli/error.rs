@@ -136,6 +136,27 @@ impl CliError {
     }
 }
 
+impl From<crate::session::in_memory::InMemoryError> for CliError {
+    fn from(e: crate::session::in_memory::InMemoryError) -> Self {
+        use crate::session::in_memory::InMemoryError;
+        match e {
+            InMemoryError::GyroRefused(problems) => CliError::GyroRefused(problems),
+            InMemoryError::HandGyro(e) => CliError::HandGyro(e),
+            e @ InMemoryError::Segment(_) => CliError::Failed(e.to_string()),
+        }
+    }
+}
+
+impl From<crate::session::in_memory::WriteError> for CliError {
+    fn from(e: crate::session::in_memory::WriteError) -> Self {
+        use crate::session::in_memory::WriteError;
+        match e {
+            WriteError::Session(e) => e.into(),
+            WriteError::Gyro(e) => e.into(),
+        }
+    }
+}
+
 impl From<crate::limits::RangeError> for CliError {
     fn from(e: crate::limits::RangeError) -> Self {
         CliError::Usage(e.to_string())

@@ -7,15 +7,11 @@ use super::CliError;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Formats};
-use crate::session::from_recording::{
-    normal_gravity_m_s2, plan_for, plan_for_faces, write_session,
-};
-use crate::session::hand_gyro;
+use crate::session::from_recording::normal_gravity_m_s2;
 use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
+use crate::session::in_memory::{find, SegmentChoices};
 use crate::session::logs::read_log;
-use crate::session::segment::{
-    coverage, find_intervals, Coverage, PositionSet, SegmentOptions, Segmentation,
-};
+use crate::session::segment::{Coverage, PositionSet, SegmentOptions, Segmentation};
 use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use crate::unit_file::UnitFile;
@@ -228,66 +224,56 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let source = a.log.source()?;
-    let unit_id = unit_and_site(a)?;
+    let choices = SegmentChoices {
+        segment: SegmentOptions {
+            min_still_s: a.min_still_s,
+            ..SegmentOptions::default()
+        },
+        unit_id: unit_and_site(a)?,
+        gravity_m_s2: site_gravity_m_s2(a),
+        fit_gyro: !a.no_gyro,
+        face_sigma_deg: a.face_sigma_deg,
+    };
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let log = read_log(&a.input, &source).map_err(|e| CliError::Failed(e.to_string()))?;
-    let rec = log.recording;
+    time_unit_note(out, &log.recording);
+    let found = find(log.recording, &choices).map_err(|e| CliError::Failed(e.to_string()))?;
+    let reader_warnings = found.warnings.len();
     let mut warnings = Vec::new();
-    for w in log.warnings {
+    for w in log
+        .warnings
+        .into_iter()
+        .chain(found.warnings.iter().cloned())
+    {
         warn(out, &mut warnings, w);
     }
-    reading_notes(out, &rec, &mut warnings);
-    let seg_options = SegmentOptions {
-        min_still_s: a.min_still_s,
-        ..SegmentOptions::default()
-    };
-    let seg = find_intervals(&rec, &seg_options).map_err(|e| CliError::Failed(e.to_string()))?;
-    let cov = coverage(&seg.stills, seg_options.same_position_deg);
-    out.human(table(&rec, &seg, &cov))?;
-    let set = cov
-        .check(seg.stills.len(), seg_options.same_position_deg)
-        .map_err(|e| CliError::Failed(e.to_string()))?;
-    let advice = match set {
-        PositionSet::Spread => cov.advice(),
-        PositionSet::SixFaces => None,
-    };
-    if let Some(advice) = &advice {
+    out.human(table(
+        &found.recording,
+        &found.segmentation,
+        &found.coverage,
+    ))?;
+    let s = found.session(&choices)?;
+    for w in &s.warnings[reader_warnings..] {
+        warn(out, &mut warnings, w.clone());
+    }
+    if let Some(advice) = &s.advice {
         out.line(format_args!("advice: {advice}"))?;
     }
-    let mut plan = match set {
-        PositionSet::Spread => plan_for(&rec, &seg),
-        PositionSet::SixFaces => {
-            out.line(format_args!("{}", six_face_text(a.face_sigma_deg)))?;
-            plan_for_faces(&rec, &seg, a.face_sigma_deg)
-        }
-    };
-    plan.unit_id = unit_id;
-    plan.gravity_m_s2 = site_gravity_m_s2(a);
-    let gyro = if a.no_gyro {
-        Err(HandGyroError::NotAsked)
-    } else {
-        for d in hand_gyro::dropped_turns(&rec, &seg) {
-            warn(out, &mut warnings, d.to_string());
-        }
-        hand_gyro::fit(&rec, &seg, &plan)?
-    };
-    if let Ok(fit) = &gyro {
+    if s.position_set == PositionSet::SixFaces {
+        out.line(format_args!("{}", six_face_text(a.face_sigma_deg)))?;
+    }
+    if let Ok(fit) = &s.gyro {
         out.human(gyro_text(fit))?;
-        let problems = hand_gyro::problems(fit);
-        if !problems.is_empty() {
-            return Err(CliError::GyroRefused(problems));
-        }
     }
-    let rows = write_session(dir.path(), &rec, &seg, &plan, false)?;
-    match &gyro {
-        Ok(fit) => {
-            let path = dir.path().join(GYRO_FILE);
-            write_atomic(&path, hand_gyro::file_text(fit).as_bytes(), false)?;
-        }
-        Err(e) => out.line(format_args!("gyro: not calibrated: {e}"))?,
+    if let Some(problems) = s.gyro_problems() {
+        return Err(CliError::GyroRefused(problems));
     }
-    let fig = figure(&rec, &seg);
+    let rows = s.write(dir.path(), false)?;
+    if let Err(e) = &s.gyro {
+        out.line(format_args!("gyro: not calibrated: {e}"))?;
+    }
+    let fig = figure(&s.recording, &s.segmentation);
     match plot::render(&fig, dir.path(), Formats::default()) {
         Ok(o) => o
             .warnings
@@ -300,47 +286,35 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
         a.out.display(),
         rows,
-        plan.segments.len(),
+        s.plan.segments.len(),
         fig.stem,
         a.out.display()
     ))?;
-    let outcome = SegmentOutcome {
-        recording: rec,
-        segmentation: seg,
-        plan,
-        gyro,
-    };
     let written = Written {
         rows,
-        advice,
+        advice: s.advice.clone(),
         warnings,
-        six_faces: set == PositionSet::SixFaces,
+        six_faces: s.position_set == PositionSet::SixFaces,
+    };
+    let outcome = SegmentOutcome {
+        recording: s.recording,
+        segmentation: s.segmentation,
+        plan: s.plan,
+        gyro: s.gyro,
     };
     out.document(&document(
         a,
         a.log.gyro_unit_symbol(),
         &outcome,
-        &cov,
+        &s.coverage,
         &written,
     ))?;
     Ok(outcome)
 }
 
 /// What reading the file left out or detected, on stderr (and into the JSON document's warnings).
-fn reading_notes(out: &Output, rec: &Recording, warnings: &mut Vec<String>) {
-    if rec.skipped_rows > 0 {
-        let w = format!(
-            "{} row(s) with NaN or infinite values left out",
-            rec.skipped_rows
-        );
-        warn(out, warnings, w);
-    }
-    if let Some(line) = rec.unterminated_line {
-        let w = format!(
-            "line {line}, the last, has no line end: the file was cut short; that line is left out"
-        );
-        warn(out, warnings, w);
-    }
+/// The time column's unit, when it was detected rather than given (a note, not a warning).
+fn time_unit_note(out: &Output, rec: &Recording) {
     if let Some((unit, true)) = rec.time_unit {
         out.note(format_args!(
             "time column read in {} (detected from its median step and span: {} Hz over {} s; \
@@ -349,9 +323,6 @@ fn reading_notes(out: &Output, rec: &Recording, warnings: &mut Vec<String>) {
             six_digits(rec.rate_hz),
             six_digits(rec.t_s.last().unwrap_or(&0.0) - rec.t_s.first().unwrap_or(&0.0))
         ));
-    }
-    if let Some(w) = rec.time_jumps() {
-        warn(out, warnings, w);
     }
 }
 

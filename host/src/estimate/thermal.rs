@@ -99,7 +99,7 @@ pub(crate) fn fit_session(
     fit_with(plan, stats, None)
 }
 
-/// [`fit_session`] at given degrees `(zero bias, scale)` per axis instead of the BIC's choice: on
+/// `fit_session` at given degrees `(zero bias, scale)` per axis instead of the BIC's choice: on
 /// noise-free statistics its 1σ are the Cramér–Rao bound of a plan (`host plan --check`).
 pub fn fit_session_at_degrees(
     plan: &Plan,

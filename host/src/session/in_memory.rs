@@ -4,11 +4,11 @@
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
 
-use super::from_recording::{plan_for, stats_for, write_session};
+use super::from_recording::{plan_for, plan_for_faces, stats_for, write_session};
 use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
 use super::import::Recording;
 use super::segment::{
-    coverage, find_intervals, Coverage, SegmentError, SegmentOptions, Segmentation,
+    coverage, find_intervals, Coverage, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
 use super::{Plan, RecordingError, SegmentStats};
 use crate::estimate::gyro::GyroEstimate;
@@ -27,6 +27,21 @@ pub struct SegmentChoices {
     pub gravity_m_s2: f64,
     /// Fit the gyro from the hand turns (not with `--no-gyro`).
     pub fit_gyro: bool,
+    /// A six-face session's prior on its faces, degrees (`--face-sigma-deg`, docs/model.md §7.1).
+    pub face_sigma_deg: f64,
+}
+
+/// The first step: the recording, the reader's warnings, the intervals and their coverage, before
+/// anything is refused for too few positions (so that a caller can show what was found first).
+pub struct Found {
+    /// The recording.
+    pub recording: Recording,
+    /// The intervals found.
+    pub segmentation: Segmentation,
+    /// Which positions repeat and which faces are missing.
+    pub coverage: Coverage,
+    /// The reader's warnings (rows left out, a cut-short last line, time jumps).
+    pub warnings: Vec<String>,
 }
 
 /// A recording cut into still intervals, with its plan and the hand-turn gyro.
@@ -37,11 +52,14 @@ pub struct SegmentedSession {
     pub segmentation: Segmentation,
     /// Which positions repeat and which faces are missing.
     pub coverage: Coverage,
+    /// Spread positions, or the six faces of a cube.
+    pub position_set: PositionSet,
     /// The session's plan (one static segment per still interval).
     pub plan: Plan,
     /// The gyro fit, or why there is none (too few turns, not asked).
     pub gyro: Result<HandGyroFit, HandGyroError>,
-    /// The reader's warnings (rows left out, a cut-short last line, time jumps).
+    /// The reader's warnings (rows left out, a cut-short last line, time jumps) and the turns left
+    /// out of the gyro fit.
     pub warnings: Vec<String>,
     /// How to make a better session, when the positions are too few or too alike.
     pub advice: Option<String>,
@@ -79,43 +97,83 @@ pub fn recording_warnings(rec: &Recording) -> Vec<String> {
     warnings
 }
 
-/// `host segment` on a recording in memory, up to (not including) writing the session.
+/// `host segment` on a recording in memory, up to (not including) writing the session; a gyro fit
+/// that no real gyro gives is refused ([`SegmentedSession::gyro_problems`]).
 pub fn segment_recording(
     recording: Recording,
     choices: &SegmentChoices,
 ) -> Result<SegmentedSession, InMemoryError> {
-    let warnings = recording_warnings(&recording);
-    let same_deg = choices.segment.same_position_deg;
-    let segmentation = find_intervals(&recording, &choices.segment)?;
-    let coverage = coverage(&segmentation.stills, same_deg);
-    coverage.check(segmentation.stills.len(), same_deg)?;
-    let advice = coverage.advice();
-    let mut plan = plan_for(&recording, &segmentation);
-    plan.unit_id = choices.unit_id.clone();
-    plan.gravity_m_s2 = choices.gravity_m_s2;
-    let gyro = if choices.fit_gyro {
-        hand_gyro::fit(&recording, &segmentation, &plan)?
-    } else {
-        Err(HandGyroError::NotAsked)
-    };
-    if let Ok(fit) = &gyro {
-        let problems = hand_gyro::problems(fit);
-        if !problems.is_empty() {
-            return Err(InMemoryError::GyroRefused(problems));
-        }
+    let session = find(recording, choices)?.session(choices)?;
+    match session.gyro_problems() {
+        Some(problems) => Err(InMemoryError::GyroRefused(problems)),
+        None => Ok(session),
     }
-    Ok(SegmentedSession {
+}
+
+/// The first step of [`segment_recording`]: the intervals and their coverage.
+pub fn find(recording: Recording, choices: &SegmentChoices) -> Result<Found, SegmentError> {
+    let warnings = recording_warnings(&recording);
+    let segmentation = find_intervals(&recording, &choices.segment)?;
+    let coverage = coverage(&segmentation.stills, choices.segment.same_position_deg);
+    Ok(Found {
         recording,
         segmentation,
         coverage,
-        plan,
-        gyro,
         warnings,
-        advice,
     })
 }
 
+impl Found {
+    /// The second step: enough positions (spread, or a cube's six faces), the plan, and the gyro
+    /// from the turns that no time jump cuts (those left out are said in the warnings).
+    pub fn session(self, choices: &SegmentChoices) -> Result<SegmentedSession, InMemoryError> {
+        let Found {
+            recording,
+            segmentation,
+            coverage,
+            mut warnings,
+        } = self;
+        let position_set =
+            coverage.check(segmentation.stills.len(), choices.segment.same_position_deg)?;
+        let (advice, mut plan) = match position_set {
+            PositionSet::Spread => (coverage.advice(), plan_for(&recording, &segmentation)),
+            PositionSet::SixFaces => (
+                None,
+                plan_for_faces(&recording, &segmentation, choices.face_sigma_deg),
+            ),
+        };
+        plan.unit_id = choices.unit_id.clone();
+        plan.gravity_m_s2 = choices.gravity_m_s2;
+        let gyro = if choices.fit_gyro {
+            warnings.extend(
+                hand_gyro::dropped_turns(&recording, &segmentation)
+                    .iter()
+                    .map(ToString::to_string),
+            );
+            hand_gyro::fit(&recording, &segmentation, &plan)?
+        } else {
+            Err(HandGyroError::NotAsked)
+        };
+        Ok(SegmentedSession {
+            recording,
+            segmentation,
+            coverage,
+            position_set,
+            plan,
+            gyro,
+            warnings,
+            advice,
+        })
+    }
+}
+
 impl SegmentedSession {
+    /// Why the gyro fit is not one a real gyro gives (`hand_gyro::problems`), if it is not.
+    pub fn gyro_problems(&self) -> Option<Vec<String>> {
+        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?);
+        (!problems.is_empty()).then_some(problems)
+    }
+
     /// The per-segment statistics, as `host calibrate --input` reads them from the written session.
     pub fn stats(&self) -> Vec<SegmentStats> {
         stats_for(&self.recording, &self.segmentation, &self.plan)

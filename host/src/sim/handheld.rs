@@ -87,7 +87,7 @@ pub struct HandSpec {
 
 impl HandSpec {
     /// The stated hand session: 24 positions held 3–5 s, turns of 1–3 s up to 180 °/s, 1 mg noise
-    /// at 200 Hz, tremor 1 mg and 0.2 °/s, gyro [`GyroTruth::half_percent`] with 0.05 °/s noise.
+    /// at 200 Hz, tremor 1 mg and 0.2 °/s, gyro `GyroTruth::half_percent` with 0.05 °/s noise.
     pub fn standard(seed: u64) -> HandSpec {
         let ups = builtin_plan("hand")
             .and_then(Result::ok)

@@ -5,7 +5,7 @@
 //! Written against ArduPilot's `libraries/AP_Logger/LogStructure.h` (the `FMT` message and the
 //! format characters) with pymavlink's `DFReader.py` (`DFReader_binary`, v2.4) as the reference
 //! reader: every message is `0xA3 0x95 type payload`, its length and field types given by an earlier
-//! `FMT` message (type 128: Type, Length, Name char[4], Format char[16], Columns char[64]).
+//! `FMT` message (type 128: Type, Length, Name `char[4]`, Format `char[16]`, Columns `char[64]`).
 //! Like pymavlink, bytes that do not start a known message are skipped (logs often have damage and
 //! garbage at the end), and the skipped bytes are reported. Why our own reader: no Rust crate reads
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the

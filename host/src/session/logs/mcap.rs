@@ -3,7 +3,7 @@
 //!
 //! The container is read by Foxglove's `mcap` crate (the format's reference implementation) with its
 //! streaming `LinearReader`, every record capped in length ([`RECORD_LIMIT`]). Chunks come out whole
-//! and are decompressed and walked here ([`State::chunk`]): the crate's own walk of a chunk's records
+//! and are decompressed and walked here (`State::chunk`): the crate's own walk of a chunk's records
 //! subtracts a record's length from what is left of the chunk unchecked, which overflows on a
 //! damaged chunk (our fuzz target found it), so the lengths are checked here instead. The message is decoded by hand ([`decode_imu`]): a CDR
 //! decoder crate would be a general serde layer for one fixed message of plain numbers, and the
