@@ -177,6 +177,11 @@ impl Applier {
         Some(self.compensate(u, &w, &wd))
     }
 
+    /// The corrected body rate of the last finite sample, rad/s (`host apply`'s `w_*_rad_s` columns).
+    pub fn rate_rad_s(&self) -> [f32; 3] {
+        self.last_rate_rad_s
+    }
+
     /// The compensation step alone, with a given (corrected) body rate and ω̇ (the firmware pipeline's
     /// `compensate`).
     pub fn compensate(&self, u: &[f32; 3], w_rad_s: &[f32; 3], wd_rad_s2: &[f32; 3]) -> [f32; 3] {

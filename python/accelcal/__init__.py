@@ -128,9 +128,11 @@ def apply(
     temp_c: Any = None,
     lever: str = "full",
     gyro_unit: str = "rad/s",
-) -> np.ndarray:
+    with_rate: bool = False,
+) -> Any:
     """The compensated specific force, g, body axes, of each row (``host apply``): the device's
-    own f32 path (``shared::Compensator`` and the firmware's ω̇ estimator).
+    own f32 path (``shared::Compensator`` and the firmware's ω̇ estimator). With ``with_rate``,
+    a pair: the force and the corrected body rate of each row, rad/s (``host apply``'s ``w_*``).
 
     The sample rate is ``rate_hz``, or from ``t`` (seconds; the median step, as ``segment`` reads
     a logger's time column). ``temp_c``: one temperature, or one per row (needed when the
@@ -148,7 +150,8 @@ def apply(
     if temp_c is not None and not np.isscalar(temp_c):
         temp_c = np.ascontiguousarray(np.asarray(temp_c, dtype=np.float64))
     return _accelcal.apply(
-        calibration, acc, gyro, float(rate_hz), temp_c=temp_c, lever=lever, gyro_unit=gyro_unit
+        calibration, acc, gyro, float(rate_hz), temp_c=temp_c, lever=lever, gyro_unit=gyro_unit,
+        with_rate=with_rate,
     )
 
 

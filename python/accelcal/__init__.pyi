@@ -122,18 +122,28 @@ def segment(
 def segment_file(
     path: _Path,
     *,
-    acc_unit: str,
-    gyro_unit: str,
+    acc_unit: Optional[str] = None,
+    gyro_unit: Optional[str] = None,
     columns: Optional[Sequence[str]] = None,
     time_column: Optional[str] = None,
+    time_unit: Optional[str] = None,
     rate_hz: Optional[float] = None,
+    acc_offset: Optional[Sequence[float]] = None,
+    gyro_lsb_per_dps: Optional[float] = None,
+    instance: Optional[int] = None,
+    topic: Optional[str] = None,
     min_still_s: float = 1.0,
     unit_id: Optional[str] = None,
     gravity: Optional[float] = None,
     latitude: Optional[float] = None,
     height_m: Optional[float] = None,
     no_gyro: bool = False,
-) -> Session: ...
+    face_sigma_deg: float = 2.0,
+) -> Session:
+    """Cuts a logger's file into a session, as ``host segment`` does: text (the units and time
+    needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes; ``instance`` and
+    ``topic`` choose the IMU); raw counts with ``acc_offset`` and ``gyro_lsb_per_dps``."""
+    ...
 def load_session(dir: _Path) -> Session: ...
 def calibrate(
     session: Session,
@@ -152,7 +162,8 @@ def apply(
     temp_c: Union[None, float, npt.ArrayLike] = None,
     lever: str = "full",
     gyro_unit: str = "rad/s",
-) -> npt.NDArray[np.float64]: ...
+    with_rate: bool = False,
+) -> Any: ...
 def allan(x: npt.ArrayLike, rate_hz: float) -> Dict[str, Any]: ...
 def simulate_hand(
     seed: int = 1,

@@ -3,14 +3,15 @@
 //! session directory read by `host calibrate --input`'s reader.
 
 use crate::errors::{usage, IntoPy};
+use host::cli::log_input::LogInputArgs;
 use host::cli::CliError;
 use host::estimate::gyro::GyroEstimate;
-use host::session::from_recording::normal_gravity_m_s2;
+use host::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
 use host::session::import::{
-    parse_acc_unit, read_logger, read_logger_csv, GyroUnit, ImportError, ImportOptions, Recording,
-    TimeSource, DEFAULT_COLUMNS,
+    parse_acc_unit, read_logger, GyroUnit, ImportOptions, Recording, TimeSource, DEFAULT_COLUMNS,
 };
 use host::session::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
+use host::session::logs::read_log;
 use host::session::segment::{IntervalKind, SegmentOptions};
 use host::session::{hand_gyro, read_session, Plan, ReadOptions, SegmentStats};
 use numpy::ndarray::{ArrayView1, ArrayView2};
@@ -197,6 +198,7 @@ pub struct SiteArgs {
     pub latitude: Option<f64>,
     pub height_m: Option<f64>,
     pub no_gyro: bool,
+    pub face_sigma_deg: f64,
 }
 
 impl SiteArgs {
@@ -231,7 +233,7 @@ impl SiteArgs {
             unit_id,
             gravity_m_s2,
             fit_gyro: !self.no_gyro,
-            face_sigma_deg: host::session::from_recording::SIX_FACE_PRIOR_DEG,
+            face_sigma_deg: self.face_sigma_deg,
         })
     }
 }
@@ -246,19 +248,21 @@ fn units(acc_unit: &str, gyro_unit: &str) -> PyResult<(shared::OutputUnit, GyroU
 
 /// `host segment`'s steps after the options: the recording `read` gives (the import's checks and
 /// messages), then the intervals, plan and gyro; the GIL released meanwhile.
-fn segmented<F>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
+fn segmented<F, E>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
 where
-    F: FnOnce() -> Result<Recording, ImportError> + Send,
+    F: FnOnce() -> Result<(Recording, Vec<String>), E> + Send,
+    E: std::fmt::Display + Send,
 {
     let choices = site.choices()?;
-    let rec = py
+    let (rec, reader_warnings) = py
         .detach(read)
         .map_err(|e| CliError::Failed(e.to_string()))
         .py_err()?;
     let s = py.detach(|| segment_recording(rec, &choices));
-    let s = s.map_err(CliError::from);
+    let mut s = s.map_err(CliError::from).py_err()?;
+    s.warnings.splice(0..0, reader_warnings);
     Ok(Session {
-        inner: Inner::Memory(Box::new(s.py_err()?)),
+        inner: Inner::Memory(Box::new(s)),
     })
 }
 
@@ -383,49 +387,60 @@ pub fn segment_arrays(
         latitude,
         height_m,
         no_gyro,
+        face_sigma_deg: SIX_FACE_PRIOR_DEG,
     };
     segmented(py, &site, || {
-        read_logger(BufReader::new(lines), Path::new("(arrays)"), &options)
+        read_logger(BufReader::new(lines), Path::new("(arrays)"), &options).map(|r| (r, Vec::new()))
     })
 }
 
-/// Cuts a logger's file (every layout `host segment` reads) into a session.
+/// Cuts a logger's file into a session: every format `host segment` reads (text, PX4 ULog,
+/// ArduPilot DataFlash, ROS 2 MCAP, told by its first bytes), with the same input options, parsed
+/// and checked by the command line's own option set (`host::cli::log_input`).
 #[pyfunction]
-#[pyo3(signature = (path, *, acc_unit, gyro_unit, columns = None, time_column = None, rate_hz = None,
-    min_still_s = 1.0, unit_id = None, gravity = None, latitude = None, height_m = None,
-    no_gyro = false))]
+#[pyo3(signature = (path, *, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
+    time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None, instance = None,
+    topic = None, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
+    height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
 #[allow(clippy::too_many_arguments)]
 pub fn segment_file(
     py: Python<'_>,
     path: PathBuf,
-    acc_unit: &str,
-    gyro_unit: &str,
+    acc_unit: Option<String>,
+    gyro_unit: Option<String>,
     columns: Option<Vec<String>>,
     time_column: Option<String>,
+    time_unit: Option<String>,
     rate_hz: Option<f64>,
+    acc_offset: Option<Vec<f64>>,
+    gyro_lsb_per_dps: Option<f64>,
+    instance: Option<u32>,
+    topic: Option<String>,
     min_still_s: f64,
     unit_id: Option<String>,
     gravity: Option<f64>,
     latitude: Option<f64>,
     height_m: Option<f64>,
     no_gyro: bool,
+    face_sigma_deg: f64,
 ) -> PyResult<Session> {
-    let (acc_u, gyro_u) = units(acc_unit, gyro_unit)?;
-    let time = match (time_column, rate_hz) {
-        (Some(c), None) => TimeSource::Column(c),
-        (None, Some(hz)) => TimeSource::RateHz(hz),
-        _ => {
-            return Err(usage(
-                "give exactly one of time_column (seconds) or rate_hz (Hz)",
-            ))
-        }
-    };
-    let mut options = ImportOptions::new(time, acc_u, gyro_u);
-    if let Some(c) = columns {
-        options.columns = c
-            .try_into()
-            .map_err(|_| usage("columns needs six names: acc x, y, z then gyro x, y, z"))?;
+    if instance.is_some_and(|i| i > u32::from(u8::MAX)) {
+        return Err(usage("instance is an IMU's number in the log, 0 to 255"));
     }
+    let join = |v: Vec<String>| v.join(",");
+    let input = LogInputArgs {
+        columns: columns.map_or_else(|| DEFAULT_COLUMNS.join(","), join),
+        time_column,
+        time_unit,
+        rate_hz,
+        acc_unit,
+        acc_offset: acc_offset.map(|v| join(v.iter().map(f64::to_string).collect())),
+        gyro_unit,
+        gyro_lsb_per_dps,
+        instance,
+        topic,
+    };
+    let source = input.source().py_err()?;
     let site = SiteArgs {
         min_still_s,
         unit_id,
@@ -433,8 +448,11 @@ pub fn segment_file(
         latitude,
         height_m,
         no_gyro,
+        face_sigma_deg,
     };
-    segmented(py, &site, || read_logger_csv(&path, &options))
+    segmented(py, &site, || {
+        read_log(&path, &source).map(|log| (log.recording, log.warnings))
+    })
 }
 
 /// Reads a session directory (plan.toml + samples.csv, and gyro.toml when `host segment` wrote

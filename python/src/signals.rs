@@ -27,9 +27,10 @@ use std::path::PathBuf;
 /// own f32 path (`shared::Compensator` with the firmware's ω̇ estimator, as `host apply` does), the
 /// temperature model refreshed at the device's pace. A row with a non-finite value gives NaN and
 /// restarts the ω̇ estimate, as on the device. The gyro is in rad/s unless `gyro_unit` says deg/s.
+/// With `with_rate`, also the corrected body rate of each row, rad/s (`host apply`'s `w_*` columns).
 #[pyfunction]
 #[pyo3(signature = (calibration, acc, gyro, rate_hz, *, temp_c = None, lever = "full",
-    gyro_unit = "rad/s"))]
+    gyro_unit = "rad/s", with_rate = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn apply<'py>(
     py: Python<'py>,
@@ -40,7 +41,8 @@ pub fn apply<'py>(
     temp_c: Option<&Bound<'py, PyAny>>,
     lever: &str,
     gyro_unit: &str,
-) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    with_rate: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let lever: LeverArg = LeverArg::from_str(lever, false)
         .map_err(|_| usage(format!("lever {lever}: use off, rate or full")))?;
     let to_rad_s = GyroUnit::parse(gyro_unit)
@@ -69,8 +71,9 @@ pub fn apply<'py>(
     }
     let mut applier = Applier::new(cal, LeverMode::from(lever), rate_hz).py_err()?;
     let g = cal.gravity_m_s2;
-    let out = py.detach(|| {
+    let (out, rate) = py.detach(|| {
         let mut out = Array2::<f64>::from_elem((n, 3), f64::NAN);
+        let mut rate = Array2::<f64>::from_elem((n, 3), f64::NAN);
         for i in 0..n {
             let row = Row {
                 segment: "",
@@ -81,14 +84,21 @@ pub fn apply<'py>(
                 temp_c: temps.as_ref().map(|t| t[i]),
             };
             if let Some(f) = applier.row(&row) {
+                let w = applier.rate_rad_s();
                 for j in 0..3 {
                     out[(i, j)] = f64::from(f[j]) / g;
+                    rate[(i, j)] = f64::from(w[j]);
                 }
             }
         }
-        out
+        (out, rate)
     });
-    Ok(out.into_pyarray(py))
+    let out = out.into_pyarray(py).into_any();
+    if with_rate {
+        Ok((out, rate.into_pyarray(py)).into_pyobject(py)?.into_any())
+    } else {
+        Ok(out)
+    }
 }
 
 fn term_dict<'py>(

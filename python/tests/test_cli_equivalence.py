@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 import accelcal
-from conftest import UNIT_ID, read_csv_exact, run
+from conftest import ROOT, UNIT_ID, read_csv_exact, run
 
 
 def frame_exact(path):
@@ -140,19 +140,22 @@ def test_apply_gives_host_applys_output(request, host_bin, which, lever):
     cli = run(host_bin, "-q", "apply", "--input", str(session), "--calibration", str(toml),
               "--lever", lever)
     lines = cli.stdout.splitlines()
-    assert lines[0] == "segment,t_s,f_x_g,f_y_g,f_z_g"
-    expected = {}
+    assert lines[0] == "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s"
+    expected, expected_w = {}, {}
     for line in lines[1:]:
         f = line.split(",")
         expected.setdefault(f[0], []).append([float(v) for v in f[2:5]])
+        expected_w.setdefault(f[0], []).append([float(v) for v in f[5:8]])
     cal = accelcal.Calibration.load(toml)
     rate = accelcal.load_session(session).rate_hz
     segments = session_rows(session)
     assert list(segments) == list(expected)
     for name, rows in segments.items():
         # host apply restarts the ω̇ estimate at each segment: one call per segment does the same.
-        f = accelcal.apply(cal, rows[:, 1:4], rows[:, 4:7], rate_hz=rate, lever=lever)
+        f, w = accelcal.apply(cal, rows[:, 1:4], rows[:, 4:7], rate_hz=rate, lever=lever,
+                              with_rate=True)
         np.testing.assert_array_equal(f, np.array(expected[name]), err_msg=name)
+        np.testing.assert_array_equal(w, np.array(expected_w[name]), err_msg=name)
 
 
 def test_allan_gives_host_noises_curves_and_terms(hand, host_bin):
@@ -171,3 +174,18 @@ def test_allan_gives_host_noises_curves_and_terms(hand, host_bin):
             assert a[key]["sigma"] == axis["terms"]["fits"][k]["sigma"], (axis["axis"], key)
             assert a[key]["upper_bound_2sigma"] == axis["terms"]["fits"][k]["upper_bound_2sigma"]
         assert np.all(a["adev_low"] < a["adev"]) and np.all(a["adev"] < a["adev_high"])
+
+
+@pytest.mark.parametrize("name", ["hand.ulg", "hand.bin", "hand.mcap"])
+def test_segment_file_reads_every_log_format_as_host_segment(host_bin, tmp_path, name):
+    """A PX4 ULog, an ArduPilot DataFlash log and a ROS 2 bag (the reference tools' files of the
+    host's log tests) cut into the session `host segment` writes, byte for byte."""
+    log = ROOT / "host" / "tests" / "fixtures" / "logs" / name
+    run(host_bin, "-q", "segment", "--input", str(log), "--out", str(tmp_path / "cli"))
+    session = accelcal.segment_file(log)
+    session.write(tmp_path / "py")
+    for f in ["plan.toml", "samples.csv", "gyro.toml"]:
+        cli = tmp_path / "cli" / f
+        assert cli.exists() == (tmp_path / "py" / f).exists(), f
+        if cli.exists():
+            assert (tmp_path / "py" / f).read_bytes() == cli.read_bytes(), f

@@ -14,9 +14,10 @@ from conftest import UNIT_ID
 def cli_error(host_bin, *args):
     p = subprocess.run([str(host_bin), *args], capture_output=True, text=True)
     assert p.returncode != 0
-    line = p.stderr.strip().splitlines()
-    assert line and line[0].startswith("error: "), p.stderr
-    return p.stderr.strip()[len("error: "):]
+    # Notes (e.g. the time column's detected unit) may come first; the error is the rest.
+    at = p.stderr.find("error: ")
+    assert at == 0 or (at > 0 and p.stderr[at - 1] == "\n"), p.stderr
+    return p.stderr[at + len("error: "):].strip()
 
 
 def test_a_wrong_unit_raises_input_error_with_host_segments_message(hand, host_bin, tmp_path):

@@ -1,16 +1,19 @@
 """The fit releases the GIL: another Python thread runs while `calibrate` works."""
 
+import sys
 import threading
 import time
 
 import accelcal
 from conftest import UNIT_ID
 
-# Python may hand the GIL over one switch interval (5 ms, longer on a loaded machine) after a
-# thread asks. A call that holds the GIL lets another thread run only once it has returned (measured
-# with the GIL held: none in the first half of any call, some in the last 40 ms of each, while the
-# caller waits to take the GIL back); a call that releases it lets it run from the start.
-MARGIN_S = 0.02
+# Python may hand the GIL over one switch interval after a thread asks (set to 0.5 ms here, so
+# that a fit of a few tens of ms leaves room to look inside it). A call that holds the GIL lets
+# another thread run only once it has returned (measured with the GIL held: none in the first half
+# of any call, some just after each, while the caller waits to take the GIL back); a call that
+# releases it lets it run from the start.
+SWITCH_INTERVAL_S = 0.0005
+MARGIN_S = 0.005
 
 
 def test_other_threads_run_during_calibrate(hand):
@@ -28,10 +31,15 @@ def test_other_threads_run_during_calibrate(hand):
 
     worker = threading.Thread(target=fit)
     ticks = []
-    worker.start()
-    while worker.is_alive():
-        ticks.append(time.perf_counter())
-    worker.join()
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
+    try:
+        worker.start()
+        while worker.is_alive():
+            ticks.append(time.perf_counter())
+        worker.join()
+    finally:
+        sys.setswitchinterval(interval)
     inside = sum(1 for t in ticks for a, b in spans if a < t < b)
     assert sum(max(b - a, 0.0) for a, b in spans) > 0.1, spans
     assert inside > 0, "no other thread ran during any fit: the GIL was held"
