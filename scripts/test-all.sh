@@ -45,7 +45,7 @@ CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-D warnings" \
   cargo build -p shared --no-default-features --target thumbv7em-none-eabihf
 
 step "PC tests (shared, host, end-to-end)"
-tests cargo test --workspace
+tests cargo test --workspace --no-fail-fast
 
 step "firmware: PC tests of the device logic, both boards, QEMU on-target tests"
 tests bash firmware/scripts/test.sh

@@ -279,7 +279,8 @@ fn logger_options() -> &'static [ImportOptions; 2] {
 }
 
 /// A logger's CSV: a recording the importer accepts has as many times as rows, at least 100 and
-/// at most `MAX_ROWS` of them, strictly increasing times, only finite values and a positive rate.
+/// at most `MAX_ROWS` of them, every step back or repeat of time among its jumps, only finite values
+/// and a positive rate.
 pub(crate) fn logger_csv(data: &[u8]) {
     for options in logger_options() {
         let Ok(rec) = read_logger(data, Path::new("raw.csv"), options) else {
@@ -288,9 +289,15 @@ pub(crate) fn logger_csv(data: &[u8]) {
         let n = rec.len();
         assert!((100..=MAX_ROWS).contains(&n), "{n} rows");
         assert!(rec.acc.len() == n && rec.gyro_rad_s.len() == n);
+        // A repeat or a step back is kept, but never silently: each is one of the jumps that no
+        // still interval spans and no turn is integrated across.
+        let jumps = rec.jumps();
         assert!(
-            rec.t_s.windows(2).all(|w| w[1] > w[0]),
-            "time not increasing"
+            rec.t_s
+                .windows(2)
+                .enumerate()
+                .all(|(i, w)| w[1] > w[0] || jumps.iter().any(|j| j.row == i)),
+            "a time step back not among the recording's jumps"
         );
         let values = rec.acc.iter().chain(&rec.gyro_rad_s).flatten();
         assert!(values.chain(&rec.t_s).all(|v| v.is_finite()));
