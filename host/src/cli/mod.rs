@@ -17,6 +17,9 @@
 //! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
 //!
+//! `segment`, `apply` and `noise` read a logger's file with the one set of input options,
+//! [`log_input`].
+//!
 //! Every command fails with the one [`CliError`] ([`error`]); [`output`] decides where its output goes
 //! (`--json`, `--quiet`).
 

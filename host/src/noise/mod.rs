@@ -3,8 +3,9 @@
 //! instability and random walk ([`allan`]), a table, a log-log figure, and the figures Kalibr needs.
 //! Each point's 1σ, for error bars, is [`confidence`]'s (the Python package's `allan`).
 //!
-//! Input: a session directory (the longest static segment of its plan is used) or a bare
-//! `samples.csv` (its longest run of rows of one segment is used, assumed still). Accelerometer
+//! Input: a session directory (the longest static segment of its plan is used), a bare
+//! `samples.csv` (its longest run of rows of one segment is used, assumed still), or a logger's file
+//! in any format `host segment` reads (`log`: its longest still interval). Accelerometer
 //! outputs are turned into m/s² when a calibration is given (`f = g·K_A·(U − u0)`, paper eq. 6);
 //! otherwise they stay in the output unit and Kalibr's accelerometer figures are undetermined.
 //!

@@ -6,7 +6,8 @@
 //!   the device's own compensator (the terminal text and the report both show it).
 //! - The HTML/Markdown report of `host report`: [`data`] (the numbers: segments before and after
 //!   compensation, χ², navigation replays) → [`figures`] (what each figure shows) and [`page`] (the
-//!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG) and [`markup`] (Markdown, HTML) →
+//!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG, with [`axes`]: legends beside the
+//!   data, labels that never collide, decade ticks) and [`markup`] (Markdown, HTML) →
 //!   [`document`] (the files).
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
 //!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
