@@ -324,3 +324,95 @@ fn log_options_on_a_session_directory_are_refused() {
     let e = super::noise::run(&a, true).unwrap_err().to_string();
     assert!(!e.contains("is a session directory"), "{e}");
 }
+
+/// A public PX4 log, pyulog's own test file `test/sample_appended_multiple.ulg` (BSD-3-Clause,
+/// licence beside it): a vehicle's `sensor_combined` at 250 Hz, with data appended three times after
+/// the log was first closed. The values are pyulog 1.3's (`ULog(f).get_dataset("sensor_combined")`,
+/// the accelerometer at `timestamp + accelerometer_timestamp_relative`). A flight log is not a
+/// calibration session: `segment` must say why it cannot cut one, and `apply` must still read it.
+#[test]
+fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_session() {
+    let path = fixture("px4-sample-appended-multiple.ulg");
+    let none = LogSource {
+        text: None,
+        instance: None,
+        topic: None,
+    };
+    let log = read_log(&path, &none).unwrap();
+    assert_eq!(log.format, LogFormat::Ulog);
+    let rec = &log.recording;
+    assert_eq!(rec.len(), 2373, "pyulog reads 2373 sensor_combined samples");
+    assert!((rec.t_s[0] - 12.262822).abs() < 1e-9, "{}", rec.t_s[0]);
+    assert!(
+        (rec.t_s[2372] - 21.880422).abs() < 1e-9,
+        "{}",
+        rec.t_s[2372]
+    );
+    let first = [0.5401454567909241, 0.32172298431396484, -9.93630313873291];
+    let last = [0.5413755178451538, 0.30004557967185974, -9.923652648925781];
+    assert_eq!(rec.acc[0], first);
+    assert_eq!(rec.acc[2372], last);
+    let mut norms: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+    norms.sort_by(f64::total_cmp);
+    assert!((norms[norms.len() / 2] - 9.939994).abs() < 5e-6);
+    assert!((rec.rate_hz - 250.0).abs() < 0.5, "{}", rec.rate_hz);
+    assert_eq!(rec.temp_c, None, "sensor_combined carries no temperature");
+
+    let tmp = tempfile::tempdir().unwrap();
+    let line = format!(
+        "host segment -q --input {} --out {}/s",
+        path.display(),
+        tmp.path().display()
+    );
+    let Command::Segment(a) = command(&line) else {
+        panic!()
+    };
+    let Err(e) = segment(&a) else {
+        panic!("a flight log segmented")
+    };
+    let e = e.to_string();
+    assert!(
+        e.contains("no still interval") && e.contains("hold the unit still"),
+        "{e}"
+    );
+
+    let out = tmp.path().join("applied.csv");
+    let line = format!(
+        "host apply --calibration {} --input {} --out {}",
+        fixture("hand.truth.toml").display(),
+        path.display(),
+        out.display()
+    );
+    let Command::Apply(a) = command(&line) else {
+        panic!()
+    };
+    apply::run(&a, true).unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 1 + 2373);
+}
+
+/// A logger that stopped inside a message before data was appended: the same public log with its
+/// last message before the first appended data (a `sensor_combined` sample at byte 434 292) made to
+/// run 20 bytes into it. pyulog 1.3 drops that message and reads on at the appended data: 2372
+/// samples, the last at 21.876472 s.
+#[test]
+fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
+    let mut bytes = std::fs::read(fixture("px4-sample-appended-multiple.ulg")).unwrap();
+    bytes[434_292..434_294].copy_from_slice(&(74u16 + 20).to_le_bytes());
+    let none = LogSource {
+        text: None,
+        instance: None,
+        topic: None,
+    };
+    let log = crate::session::logs::read_log_from(&bytes[..], &bytes, Path::new("cut.ulg"), &none)
+        .unwrap();
+    assert_eq!(log.recording.len(), 2372);
+    assert!((log.recording.t_s[2371] - 21.876472).abs() < 1e-9);
+    assert!(
+        log.warnings
+            .iter()
+            .any(|w| w.contains("byte 434292 runs into the data appended at byte 434369")),
+        "{:?}",
+        log.warnings
+    );
+}

@@ -373,6 +373,8 @@ struct State {
     gyro: Stream,
     last_t_s: f64,
     dropouts: Vec<(u64, f64, u16)>,
+    /// Where data was appended after the log was first closed (the flag bits message), ascending.
+    appended: Vec<u64>,
 }
 
 /// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
@@ -391,6 +393,23 @@ pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>),
     let mut payload = vec![0u8; u16::MAX as usize];
     let mut warnings = Vec::new();
     loop {
+        if let Some(o) = st.appended.first().copied() {
+            if o <= offset || o - offset < 3 {
+                // The appended data starts here, or inside the next header.
+                st.appended.remove(0);
+                if o > offset {
+                    if !skip_to(&mut r, &mut offset, o, &mut warnings)? {
+                        break;
+                    }
+                } else if o < offset {
+                    warnings.push(format!(
+                        "the log's appended data at byte {o} lies before byte {offset}, where \
+                         reading is: ignored"
+                    ));
+                }
+                continue;
+            }
+        }
         let mut h = [0u8; 3];
         let size = match read_exact_or_end(&mut r, &mut h) {
             Ok(false) => break,
@@ -401,6 +420,22 @@ pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>),
             }
             Err(source) => return Err(UlogError::Io { offset, source }),
         };
+        let end = offset + 3 + size as u64;
+        if let Some(o) = st.appended.first().copied().filter(|&o| end > o) {
+            // As pyulog reads appended data (`core.py`, `_read_file_data(read_until=offset)`): a
+            // message running into it was cut when the logger stopped; it is dropped, and reading
+            // goes on where the appended data starts.
+            st.appended.remove(0);
+            warnings.push(format!(
+                "the message at byte {offset} runs into the data appended at byte {o} (the \
+                 logger stopped while writing it): left out"
+            ));
+            offset += 3;
+            if !skip_to(&mut r, &mut offset, o, &mut warnings)? {
+                break;
+            }
+            continue;
+        }
         match read_exact_or_end(&mut r, &mut payload[..size]) {
             Ok(true) => {}
             Ok(false) if size == 0 => {}
@@ -420,6 +455,28 @@ pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>),
     st.finish(instance, warnings)
 }
 
+/// Reads and drops the bytes from `offset` to `to`; `false` when the file ends first (said).
+fn skip_to<R: Read>(
+    r: &mut R,
+    offset: &mut u64,
+    to: u64,
+    warnings: &mut Vec<String>,
+) -> Result<bool, UlogError> {
+    let want = to - *offset;
+    let got =
+        std::io::copy(&mut r.take(want), &mut std::io::sink()).map_err(|source| UlogError::Io {
+            offset: *offset,
+            source,
+        })?;
+    *offset += got;
+    if got < want {
+        warnings.push(format!(
+            "the log ends at byte {offset} before its appended data at byte {to}"
+        ));
+    }
+    Ok(got == want)
+}
+
 fn cut_short(offset: u64) -> String {
     format!("the log's last message (at byte {offset}) is cut short: it is left out")
 }
@@ -432,6 +489,15 @@ impl State {
                 let flags = u64::from_le_bytes(p[8..16].try_into().unwrap_or([0; 8]));
                 if flags & !1 != 0 {
                     return Err(UlogError::IncompatibleFlags { flags });
+                }
+                if flags & 1 != 0 && p.len() >= 40 {
+                    // Up to three file offsets where data was appended (zero: none).
+                    self.appended = p[16..40]
+                        .chunks_exact(8)
+                        .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                        .filter(|&o| o != 0)
+                        .collect();
+                    self.appended.sort_unstable();
                 }
             }
             b'F' => {
@@ -545,9 +611,23 @@ impl State {
         instance: u8,
         mut warnings: Vec<String>,
     ) -> Result<(Recording, Vec<String>), UlogError> {
-        let (acc, gyro) = if !self.accel.samples.is_empty() && !self.gyro.samples.is_empty() {
+        let raw = self.accel.samples.len().min(self.gyro.samples.len());
+        let combined = self.combined_gyro.samples.len();
+        // The sensors' own topics are preferred (raw, with temperature), but a log often keeps them
+        // only at a few samples per second for comparison while sensor_combined runs at the
+        // estimator's rate: then the richer topic is the one a calibration can use.
+        let raw_is_sparse = raw > 0 && combined > 0 && raw < combined / 2;
+        if raw_is_sparse {
+            warnings.push(format!(
+                "sensor_accel/sensor_gyro hold only {raw} samples against sensor_combined's \
+                 {combined}: reading sensor_combined (already corrected by PX4's calibration, no \
+                 temperature); to calibrate the sensor itself, log sensor_accel and sensor_gyro at \
+                 the sensor's rate (PX4's logger_topics.txt or SDLOG_PROFILE)"
+            ));
+        }
+        let (acc, gyro) = if raw > 0 && !raw_is_sparse {
             (&self.accel, &self.gyro)
-        } else if !self.combined_gyro.samples.is_empty() {
+        } else if combined > 0 {
             (&self.combined_acc, &self.combined_gyro)
         } else {
             let seen = self.seen.iter().map(|(t, i)| (t.name(), *i));
@@ -594,6 +674,45 @@ mod tests {
         assert_eq!(p["gyro_rad[2]"].offset, 16);
         assert!(parse_format("no colon").is_none());
         assert!(parse_format("x:float[0] a;").is_none());
+    }
+
+    /// A log that keeps sensor_accel/sensor_gyro only for comparison (a few samples) and
+    /// sensor_combined at the estimator's rate is read from sensor_combined, and says so.
+    #[test]
+    fn sparse_sensor_topics_give_way_to_sensor_combined() {
+        let fill = |n: usize, temp: Option<f64>| {
+            let mut s = Stream::default();
+            for i in 0..n {
+                let t_s = i as f64 * 0.004;
+                s.push(StreamSample {
+                    t_s,
+                    v: [0.0, 0.0, -9.8],
+                    temp_c: temp,
+                })
+                .unwrap();
+            }
+            s
+        };
+        let sparse = State {
+            accel: fill(6, Some(40.0)),
+            gyro: fill(6, Some(40.0)),
+            combined_acc: fill(1000, None),
+            combined_gyro: fill(1000, None),
+            ..State::default()
+        };
+        let (rec, w) = sparse.finish(0, Vec::new()).unwrap();
+        assert!(rec.len() > 900 && rec.temp_c.is_none(), "{}", rec.len());
+        assert!(w.iter().any(|w| w.contains("only 6 samples")), "{w:?}");
+        let full = State {
+            accel: fill(800, Some(40.0)),
+            gyro: fill(800, Some(40.0)),
+            combined_acc: fill(1000, None),
+            combined_gyro: fill(1000, None),
+            ..State::default()
+        };
+        let (rec, w) = full.finish(0, Vec::new()).unwrap();
+        assert!(rec.len() == 800 && rec.temp_c.is_some(), "{}", rec.len());
+        assert!(!w.iter().any(|w| w.contains("sensor_combined")), "{w:?}");
     }
 
     #[test]
