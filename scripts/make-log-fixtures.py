@@ -17,6 +17,9 @@ temperature ramp (24.0 to 24.6 °C) where the format has one:
 - hand.bin: ArduPilot DataFlash. pymavlink has a reader (DFReader) but no writer, so the messages are
   packed here by LogStructure.h's rules (FMT, then IMU with instance I = 0) and the file is read back
   with pymavlink's DFReader_binary, which must give the same values.
+- hand-accgyr.bin: ArduPilot DataFlash as a batch-sampling log writes it: FMT, then ACC and GYR
+  (no IMU message, no temperature) for two instances, the session's first ACCGYR_ROWS rows as
+  I = 0 and the same with 0.25 m/s² added to AccX as I = 1; packed and read back as hand.bin.
 - hand.mcap: a ROS 2 bag written by mcap-ros2-support's Writer (zstd chunks, CDR), topic /imu/data,
   sensor_msgs/msg/Imu with header.stamp the sample time.
 
@@ -122,17 +125,18 @@ IMU_FORMAT = "QBffffffIIfBBHH"
 IMU_TYPE = 0xA5
 
 
+def dataflash_fmt(ty, name, form, cols):
+    length = 3 + struct.calcsize("<" + form.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
+    body = struct.pack("<BB4s16s64s", ty, length, name.encode(), form.encode(), cols.encode())
+    return bytes([0xA3, 0x95, 0x80]) + body
+
+
 def write_dataflash(path, t, acc, gyro, temp):
     from pymavlink import DFReader
 
-    def fmt(ty, name, form, cols):
-        length = 3 + struct.calcsize("<" + form.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
-        body = struct.pack("<BB4s16s64s", ty, length, name.encode(), form.encode(), cols.encode())
-        return bytes([0xA3, 0x95, 0x80]) + body
-
     out = bytearray()
-    out += fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
-    out += fmt(IMU_TYPE, "IMU", IMU_FORMAT, IMU_COLUMNS)
+    out += dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
+    out += dataflash_fmt(IMU_TYPE, "IMU", IMU_FORMAT, IMU_COLUMNS)
     us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
     for k in range(len(t)):
         body = struct.pack(
@@ -187,6 +191,46 @@ float64 z
 """
 
 
+ACCGYR_ROWS = 1500
+ACC_TYPE, GYR_TYPE = 0xA6, 0xA7
+
+
+def write_dataflash_accgyr(path, t, acc, gyro):
+    """ACC and GYR (LogStructure.h in AP_InertialSensor: "QBQfff", TimeUS,I,SampleUS,x,y,z)."""
+    from pymavlink import DFReader
+
+    t, acc, gyro = t[:ACCGYR_ROWS], acc[:ACCGYR_ROWS], gyro[:ACCGYR_ROWS]
+    out = bytearray()
+    out += dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
+    out += dataflash_fmt(ACC_TYPE, "ACC", "QBQfff", "TimeUS,I,SampleUS,AccX,AccY,AccZ")
+    out += dataflash_fmt(GYR_TYPE, "GYR", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
+    sample_us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
+    for k in range(len(t)):
+        # Written 800 µs after the sample was taken, as the batch sampler does.
+        written = int(sample_us[k]) + 800
+        for inst, dx in ((0, 0.0), (1, 0.25)):
+            a = (acc[k, 0] + dx, acc[k, 1], acc[k, 2])
+            out += bytes([0xA3, 0x95, ACC_TYPE]) + struct.pack("<QBQfff", written, inst, int(sample_us[k]), *a)
+            out += bytes([0xA3, 0x95, GYR_TYPE]) + struct.pack("<QBQfff", written, inst, int(sample_us[k]), *gyro[k])
+    path.write_bytes(bytes(out))
+    log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+    ts, a, g = [], [], []
+    while True:
+        m = log.recv_match(type=["ACC", "GYR"])
+        if m is None:
+            break
+        if m.I != 0:
+            continue
+        if m.get_type() == "ACC":
+            ts.append(m.SampleUS * 1e-6)
+            a.append([m.AccX, m.AccY, m.AccZ])
+        else:
+            g.append([m.GyrX, m.GyrY, m.GyrZ])
+    assert len(ts) == len(g) == len(t), (len(ts), len(g), len(t))
+    assert np.all(np.float32(np.array(a)) == np.float32(acc))
+    return samples(np.array(ts), np.array(a), np.array(g))
+
+
 def write_mcap(path, t, acc, gyro):
     from mcap_ros2.decoder import DecoderFactory
     from mcap_ros2.writer import Writer
@@ -234,6 +278,7 @@ def main():
     expected = {
         "hand.ulg": write_ulog(out_dir / "hand.ulg", t, acc, gyro, temp),
         "hand.bin": write_dataflash(out_dir / "hand.bin", t, acc, gyro, temp),
+        "hand-accgyr.bin": write_dataflash_accgyr(out_dir / "hand-accgyr.bin", t, acc, gyro),
         "hand.mcap": write_mcap(out_dir / "hand.mcap", t, acc, gyro),
         "rows": ROWS,
     }

@@ -416,3 +416,43 @@ fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
         log.warnings
     );
 }
+
+/// A DataFlash log with `ACC` + `GYR` (the batch sampler's raw messages) and no `IMU`, two
+/// instances: each instance reads as pymavlink reads it, the second with its 0.25 m/s² on x.
+#[test]
+fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("expected.json")).unwrap()).unwrap();
+    let want = expected["hand-accgyr.bin"].as_array().unwrap();
+    for (instance, dx) in [(0u8, 0.0f32), (1, 0.25)] {
+        let source = LogSource {
+            text: None,
+            instance: Some(instance),
+            topic: None,
+        };
+        let log = read_log(&fixture("hand-accgyr.bin"), &source).unwrap();
+        assert_eq!(log.format, LogFormat::DataFlash);
+        let rec = &log.recording;
+        assert_eq!(rec.len(), 1500);
+        assert_eq!(rec.temp_c, None, "ACC and GYR carry no temperature");
+        let n = rec.len();
+        for (w, &i) in want.iter().zip(&[0, 1, 2, n - 3, n - 2, n - 1]) {
+            // SampleUS, the sample's own time, not TimeUS (800 µs later, when it was written).
+            assert!((rec.t_s[i] - w["t_s"].as_f64().unwrap()).abs() < 1e-9);
+            let ax = w["acc"][0].as_f64().unwrap() as f32 + dx;
+            assert_eq!(rec.acc[i][0], f64::from(ax), "instance {instance} row {i}");
+            for j in 0..3 {
+                assert_eq!(rec.gyro_rad_s[i][j], w["gyro"][j].as_f64().unwrap());
+            }
+        }
+    }
+    let source = LogSource {
+        text: None,
+        instance: Some(2),
+        topic: None,
+    };
+    let e = read_log(&fixture("hand-accgyr.bin"), &source)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("ACC") && e.contains('1'), "{e}");
+}
