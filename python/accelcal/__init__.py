@@ -80,8 +80,11 @@ def segment(
     ``acc`` and ``gyro`` are (n, 3) arrays, or ``acc`` is a pandas DataFrame whose columns are named
     (``columns``: acc x, y, z then gyro x, y, z; ``time_column`` in seconds when present, else give
     ``rate_hz``). ``acc_unit`` is "m/s2", "g", "LSB" or "V" (it becomes the calibration's output
-    unit), ``gyro_unit`` "deg/s" or "rad/s". Options as ``host segment``'s flags: ``min_still_s``,
-    ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``.
+    unit), ``gyro_unit`` "deg/s", "rad/s" or "LSB". Options as ``host segment``'s flags, checked by
+    its own option set: ``time_unit`` ("s", "ms", "us", "ns"; else detected), ``acc_offset`` (raw
+    counts' zero force, one value or one per axis), ``gyro_lsb_per_dps`` (with ``gyro_unit="LSB"``),
+    ``min_still_s``, ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``,
+    ``face_sigma_deg``.
 
     C-contiguous float64 arrays are read in place (no copy); other layouts are converted once.
     """

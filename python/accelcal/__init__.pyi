@@ -112,12 +112,16 @@ def segment(
     gyro_unit: str,
     columns: Sequence[str] = ...,
     time_column: Optional[str] = "t",
+    time_unit: Optional[str] = None,
+    acc_offset: Optional[Sequence[float]] = None,
+    gyro_lsb_per_dps: Optional[float] = None,
     min_still_s: float = 1.0,
     unit_id: Optional[str] = None,
     gravity: Optional[float] = None,
     latitude: Optional[float] = None,
     height_m: Optional[float] = None,
     no_gyro: bool = False,
+    face_sigma_deg: float = 2.0,
 ) -> Session: ...
 def segment_file(
     path: _Path,

@@ -7,9 +7,7 @@ use host::cli::log_input::LogInputArgs;
 use host::cli::CliError;
 use host::estimate::gyro::GyroEstimate;
 use host::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
-use host::session::import::{
-    parse_acc_unit, read_logger, GyroUnit, ImportOptions, Recording, TimeSource, DEFAULT_COLUMNS,
-};
+use host::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
 use host::session::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
 use host::session::logs::read_log;
 use host::session::segment::{IntervalKind, SegmentOptions};
@@ -238,14 +236,6 @@ impl SiteArgs {
     }
 }
 
-fn units(acc_unit: &str, gyro_unit: &str) -> PyResult<(shared::OutputUnit, GyroUnit)> {
-    let acc = parse_acc_unit(acc_unit)
-        .ok_or_else(|| usage(format!("acc_unit {acc_unit}: use m/s2, g, LSB or V")))?;
-    let gyro = GyroUnit::parse(gyro_unit)
-        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?;
-    Ok((acc, gyro))
-}
-
 /// `host segment`'s steps after the options: the recording `read` gives (the import's checks and
 /// messages), then the intervals, plan and gyro; the GIL released meanwhile.
 fn segmented<F, E>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
@@ -336,10 +326,13 @@ pub fn rows_of_pair(acc: &ArrayView2<'_, f64>, gyro: &ArrayView2<'_, f64>) -> Py
     Ok(n)
 }
 
-/// Cuts a hand-held recording held in arrays into a session.
+/// Cuts a hand-held recording held in arrays into a session, with `host segment`'s input options
+/// (units, raw counts' offset and gyro scale, the time unit), parsed and checked by the command
+/// line's own option set as for a file.
 #[pyfunction]
-#[pyo3(signature = (acc, gyro, t = None, rate_hz = None, *, acc_unit, gyro_unit, min_still_s = 1.0,
-    unit_id = None, gravity = None, latitude = None, height_m = None, no_gyro = false))]
+#[pyo3(signature = (acc, gyro, t = None, rate_hz = None, *, acc_unit, gyro_unit, time_unit = None,
+    acc_offset = None, gyro_lsb_per_dps = None, min_still_s = 1.0, unit_id = None, gravity = None,
+    latitude = None, height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
 #[allow(clippy::too_many_arguments)]
 pub fn segment_arrays(
     py: Python<'_>,
@@ -347,16 +340,19 @@ pub fn segment_arrays(
     gyro: PyReadonlyArray2<'_, f64>,
     t: Option<PyReadonlyArray1<'_, f64>>,
     rate_hz: Option<f64>,
-    acc_unit: &str,
-    gyro_unit: &str,
+    acc_unit: String,
+    gyro_unit: String,
+    time_unit: Option<String>,
+    acc_offset: Option<Vec<f64>>,
+    gyro_lsb_per_dps: Option<f64>,
     min_still_s: f64,
     unit_id: Option<String>,
     gravity: Option<f64>,
     latitude: Option<f64>,
     height_m: Option<f64>,
     no_gyro: bool,
+    face_sigma_deg: f64,
 ) -> PyResult<Session> {
-    let (acc_u, gyro_u) = units(acc_unit, gyro_unit)?;
     let (acc, gyro) = (acc.as_array(), gyro.as_array());
     let t = t.as_ref().map(|t| t.as_array());
     let n = rows_of_pair(&acc, &gyro)?;
@@ -366,12 +362,24 @@ pub fn segment_arrays(
             t.map_or(0, |t| t.len())
         )));
     }
-    let time = match (&t, rate_hz) {
-        (Some(_), None) => TimeSource::Column("t".into()),
-        (None, Some(hz)) => TimeSource::RateHz(hz),
-        _ => return Err(usage("give exactly one of t (seconds) or rate_hz (Hz)")),
+    if t.is_some() == rate_hz.is_some() {
+        return Err(usage("give exactly one of t (seconds) or rate_hz (Hz)"));
+    }
+    let input = LogInputArgs {
+        columns: DEFAULT_COLUMNS.join(","),
+        time_column: t.map(|_| "t".to_string()),
+        time_unit,
+        rate_hz,
+        acc_unit: Some(acc_unit),
+        acc_offset: acc_offset.map(|v| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",")),
+        gyro_unit: Some(gyro_unit),
+        gyro_lsb_per_dps,
+        instance: None,
+        topic: None,
     };
-    let options = ImportOptions::new(time, acc_u, gyro_u);
+    let Some(options) = input.source().py_err()?.text else {
+        return Err(usage("acc_unit and gyro_unit are needed"));
+    };
     let lines = ArrayLines {
         acc,
         gyro,
@@ -387,7 +395,7 @@ pub fn segment_arrays(
         latitude,
         height_m,
         no_gyro,
-        face_sigma_deg: SIX_FACE_PRIOR_DEG,
+        face_sigma_deg,
     };
     segmented(py, &site, || {
         read_logger(BufReader::new(lines), Path::new("(arrays)"), &options).map(|r| (r, Vec::new()))

@@ -189,3 +189,25 @@ def test_segment_file_reads_every_log_format_as_host_segment(host_bin, tmp_path,
         assert cli.exists() == (tmp_path / "py" / f).exists(), f
         if cli.exists():
             assert (tmp_path / "py" / f).read_bytes() == cli.read_bytes(), f
+
+
+def test_segment_of_raw_count_arrays_writes_host_segments_session(host_bin, tmp_path):
+    # A 16-bit logger's raw counts: the accelerometer at mid-scale 32768, the gyro in counts.
+    csv = tmp_path / "counts.csv"
+    run(host_bin, "-q", "simulate-hand", "--out", str(csv), "--seed", "4", "--acc-unit", "LSB",
+        "--acc-offset", "32768", "--gyro-unit", "LSB", "--gyro-lsb-per-dps", "16.4")
+    cli = tmp_path / "cli"
+    run(host_bin, "-q", "segment", "--input", str(csv), "--out", str(cli), "--time-column", "t",
+        "--acc-unit", "LSB", "--acc-offset", "32768", "--gyro-unit", "LSB",
+        "--gyro-lsb-per-dps", "16.4")
+    header, rows = read_csv_exact(csv)
+    data = np.array([[float(v) for v in r] for r in rows])
+    s = accelcal.segment(data[:, 1:4], data[:, 4:7], data[:, 0], acc_unit="LSB",
+                         acc_offset=[32768.0], gyro_unit="LSB", gyro_lsb_per_dps=16.4)
+    s.write(tmp_path / "py")
+    for name in ["plan.toml", "samples.csv", "gyro.toml"]:
+        assert (tmp_path / "py" / name).read_bytes() == (cli / name).read_bytes(), name
+    # Without the offset the arrays are refused with host's hint that names it.
+    with pytest.raises(accelcal.InputError, match="32768"):
+        accelcal.segment(data[:, 1:4], data[:, 4:7], data[:, 0], acc_unit="LSB",
+                         gyro_unit="LSB", gyro_lsb_per_dps=16.4)

@@ -53,7 +53,7 @@ def test_a_still_recording_raises_calibration_error_with_host_segments_message(h
 
 def test_bad_arguments_and_files_raise_the_right_kind(hand):
     hand_toml = hand["toml"]
-    with pytest.raises(accelcal.InputError, match="acc_unit furlong"):
+    with pytest.raises(accelcal.InputError, match="acc-unit 'furlong'"):
         accelcal.segment(np.zeros((10, 3)), np.zeros((10, 3)), rate_hz=100.0,
                          acc_unit="furlong", gyro_unit="deg/s")
     with pytest.raises(accelcal.InputError, match="shape"):
