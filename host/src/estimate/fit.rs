@@ -6,15 +6,16 @@
 //! hands the next a struct, so that what a stage produces has a name.
 
 use super::model::{self, SegModel};
+use super::package::{self, PackageRefusal, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal};
 use super::{
     BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions, Exclusion,
     FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
-    SegmentDiagnostic, SegmentKind,
+    ReferenceChoice, SegmentDiagnostic, SegmentKind,
 };
-use crate::session::{Plan, SegmentStats};
+use crate::session::{Package, Plan, SegmentStats};
 use nalgebra::DMatrix;
 use shared::linalg;
 use shared::{Calibration, FittedStatic, LeverArms, OutputUnit};
@@ -37,6 +38,17 @@ pub fn calibrate_session_stats(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
+    // A plan for a single-package unit asks for its model whatever the flags (docs/model.md §4.7).
+    let with_package;
+    let options = if plan.package == Package::Single && !options.single_package {
+        with_package = EstimateOptions {
+            single_package: true,
+            ..options.clone()
+        };
+        &with_package
+    } else {
+        options
+    };
     let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
     let mut outcome = match &fit {
         None => plausibility::check(plan, stats, fit_session(plan, stats, options))?,
@@ -57,10 +69,12 @@ fn fit_session(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
+    package_options(options)?;
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
+    let package_test = package_check(plan, options, &mut prepared, &main)?;
     let chi2 = chi2_scale(&main, plan, options, &mut prepared.warnings);
     let frame_note = screen::reference_frame(plan, options, &mut prepared.warnings);
     let conv = paper_angles::convert(
@@ -73,7 +87,9 @@ fn fit_session(
     )?;
     let observability = lever_arm_observability(&conv, plan, options, &mut prepared.warnings)?;
     let (fitted, calibration) = calibration_of(plan, &main, &conv, &frame_note)?;
-    let comparison = if options.compare_methods {
+    // The paper's eq. 24 has no single-point form: its per-accelerometer values would claim the
+    // size effect the single-package model reports as not observable (docs/model.md §4.7).
+    let comparison = if options.compare_methods && !options.single_package {
         compare(
             plan,
             &mut prepared.segs.clone(),
@@ -94,8 +110,61 @@ fn fit_session(
         calibration,
         comparison,
         frame,
+        package_test,
     };
     Ok(outcome(plan, options, prepared, main, solution))
+}
+
+/// The single-package model's preconditions: the joint method, a reference other than the
+/// centroid (docs/model.md §4.7).
+fn package_options(options: &EstimateOptions) -> Result<(), EstimateError> {
+    if !options.single_package {
+        return Ok(());
+    }
+    if options.method == Method::Paper {
+        return Err(EstimateError::SinglePackage(PackageRefusal::PaperMethod));
+    }
+    if options.reference == ReferenceChoice::Centroid {
+        return Err(EstimateError::SinglePackage(
+            PackageRefusal::CentroidReference,
+        ));
+    }
+    Ok(())
+}
+
+/// The χ² test of one lever arm against three, on a joint fit of a session that turns
+/// ([`package`]): with the option, a refusal when the session resolves three different lever arms;
+/// without it, a warning naming the option when the three do not differ significantly.
+fn package_check(
+    plan: &Plan,
+    options: &EstimateOptions,
+    p: &mut Prepared,
+    main: &MainFit,
+) -> Result<Option<PackageTest>, EstimateError> {
+    if options.method != Method::Joint || !rotates(plan) {
+        return Ok(None);
+    }
+    let fitted = package::Fitted {
+        theta: &main.theta,
+        free: &main.free,
+        chi2: main.chi2,
+        dof: main.dof,
+    };
+    let Some(test) = package::test(&p.problem, &fitted, options) else {
+        if options.single_package {
+            p.warnings.push(
+                "the session cannot test whether the three accelerometers share one lever arm \
+                 (their separate lever arms are not all estimable from its rotations): the one-point \
+                 model is taken as given"
+                    .into(),
+            );
+        }
+        return Ok(None);
+    };
+    let warning =
+        package::verdict(&test, options.single_package).map_err(EstimateError::SinglePackage)?;
+    p.warnings.extend(warning);
+    Ok(Some(test))
 }
 
 /// The session matched to its plan and screened, the mounts and segment models built, and the
@@ -129,6 +198,7 @@ fn prepare(
     let (mounts, seg_mount) = build::build_mounts(plan, &segs);
     let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem::new(models, mounts);
+    problem.single_package = options.single_package;
     let static_fit = match screen::static_fit_with_attitude_check(
         plan,
         &mut segs,
@@ -431,6 +501,7 @@ struct Solution {
     calibration: Calibration,
     comparison: Option<MethodComparison>,
     frame: BodyFrame,
+    package_test: Option<PackageTest>,
 }
 
 /// The outcome: the per-segment diagnostics, each mount's tilt, the static 1σ split, the parameter
@@ -488,6 +559,8 @@ fn outcome(
         parameters,
         gyro: main.gyro,
         thermal: None,
+        single_package: options.single_package,
+        package_test: s.package_test,
     }
 }
 
