@@ -51,6 +51,8 @@ mod tests_fixture;
 #[cfg(test)]
 mod tests_gyro;
 #[cfg(test)]
+mod tests_package;
+#[cfg(test)]
 mod tests_ramp;
 pub mod thermal;
 mod thermal_gyro;
