@@ -193,12 +193,14 @@ fn single_package_many_seeds() {
     let r_true = truth.lever_arms.r_m[0];
     let seeds = 20;
     let (mut err1, mut err9) = ([0.0f64; 3], [[0.0f64; 3]; 3]);
+    let mut mean1 = [0.0f64; 3];
     let (mut sig1, mut sig9) = ([0.0f64; 3], [[0.0f64; 3]; 3]);
     let (mut warned, mut static_worst) = (0, 0.0f64);
     for seed in 0..seeds {
         let (one, nine) = both_fits(&truth, 100 + seed);
         for j in 0..3 {
             err1[j] += (one.calibration.lever_arms.r_m[0][j] - r_true[j]).powi(2);
+            mean1[j] += (one.calibration.lever_arms.r_m[0][j] - r_true[j]) / seeds as f64;
             sig1[j] += one.uncertainty.lever_arms_m_1sigma[0][j].powi(2);
             for i in 0..3 {
                 err9[i][j] += (nine.calibration.lever_arms.r_m[i][j] - r_true[j]).powi(2);
@@ -223,8 +225,90 @@ fn single_package_many_seeds() {
                 .join(" | ")
         );
     }
+    println!(
+        "  one-point fit's mean error (µm): {:.2}, {:.2}, {:.2}",
+        mean1[0] * 1e6,
+        mean1[1] * 1e6,
+        mean1[2] * 1e6
+    );
     println!("  nine-component fits warned to use the option: {warned}/{seeds}; one-point fit's worst static |error|/1σ {static_worst:.2}");
     for j in 0..3 {
         assert!(rms(err1[j]) < 1.5 * rms(sig1[j]));
+    }
+}
+
+/// The terminal text, the JSON summary and the report's Table 3 of a single-package fit say the
+/// in-package size effect is not observable and give the package's one lever arm, not three rows;
+/// a nine-component fit of the same session shows three rows and no such line.
+#[test]
+fn outputs_say_the_in_package_size_effect_is_not_observable() {
+    use crate::report::{build_report, page::page, render, ReportOptions};
+    use crate::summary::{CalibrationSummary, Limits};
+    let truth = single_unit();
+    let (one, nine) = both_fits(&truth, 3);
+    let text = render(&one, &[]);
+    assert!(
+        text.contains("in-package size effect") && text.contains("not observable"),
+        "{text}"
+    );
+    assert!(text.contains("\nr    ") && !text.contains("\nr2 ") && !text.contains("\nr3 "));
+    let text9 = render(&nine, &[]);
+    assert!(!text9.contains("in-package") && text9.contains("\nr2 "));
+    let json = |o: &CalibrationOutcome| {
+        serde_json::to_value(CalibrationSummary::new(o, None, &Limits::default())).unwrap()
+    };
+    let j = json(&one);
+    assert!(j["in_package_size_effect"]
+        .as_str()
+        .is_some_and(|s| s.contains("not observable")));
+    assert_eq!(j["calibration"]["dynamic"]["package"], "single");
+    assert!(json(&nine).get("in_package_size_effect").is_none());
+    // The HTML/Markdown report's Table 3.
+    let p = plan(Package::Single);
+    let stats = simulate_stats(&truth, &p, &mems_noise(), &ThermalSim::default(), 3);
+    let data = build_report(
+        &p,
+        &stats,
+        &one.calibration,
+        Some(&one.uncertainty),
+        Some(one.clone()),
+        &ReportOptions::default(),
+    )
+    .unwrap();
+    let blocks = format!("{:?}", page(&data, "s", "c", &[]));
+    assert!(blocks.contains("Lever arm of the package") && blocks.contains("not observable"));
+    assert!(!blocks.contains("\"r2\""), "{blocks}");
+}
+
+/// `host plan --check single-package`'s text: the common lever arm is observable, the in-package
+/// size effect is not.
+#[test]
+fn plan_check_says_the_common_lever_arm_is_observable() {
+    let truth = single_unit();
+    let p = plan(Package::Single);
+    let k = truth.statics.scale_out_per_g;
+    let settings = PredictSettings {
+        noise_out_per_sample_1sigma: k.map(|k| 1e-3 * k.abs()),
+        gyro_noise_rad_s: 0.05f64.to_radians(),
+        ..PredictSettings::white(0.0)
+    };
+    let stats = crate::sim::synth::prediction_stats(&p, &truth, &settings).unwrap();
+    let prediction = predict(&p, &truth, &stats, &settings).unwrap();
+    assert!(prediction.single_package);
+    let text = crate::report::render_prediction(&prediction);
+    assert!(
+        text.contains("Common lever arm r") && text.contains(": observable"),
+        "{text}"
+    );
+    assert!(
+        text.contains("in-package size effect") && !text.contains("  r2x"),
+        "{text}"
+    );
+    for j in 0..3 {
+        assert!(
+            prediction.sigma[15 + j] < 12e-6,
+            "{}",
+            prediction.sigma[15 + j]
+        );
     }
 }
