@@ -6,14 +6,14 @@
 //! hands the next a struct, so that what a stage produces has a name.
 
 use super::model::{self, SegModel};
-use super::package::{self, PackageRefusal, PackageTest};
+use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal};
 use super::{
     BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions, Exclusion,
     FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
-    ReferenceChoice, SegmentDiagnostic, SegmentKind,
+    SegmentDiagnostic, SegmentKind,
 };
 use crate::session::{Package, Plan, SegmentStats};
 use nalgebra::DMatrix;
@@ -39,15 +39,9 @@ pub fn calibrate_session_stats(
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
     // A plan for a single-package unit asks for its model whatever the flags (docs/model.md §4.7).
-    let with_package;
-    let options = if plan.package == Package::Single && !options.single_package {
-        with_package = EstimateOptions {
-            single_package: true,
-            ..options.clone()
-        };
-        &with_package
-    } else {
-        options
+    let options = &EstimateOptions {
+        single_package: options.single_package || plan.package == Package::Single,
+        ..options.clone()
     };
     let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
     let mut outcome = match &fit {
@@ -69,12 +63,22 @@ fn fit_session(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
-    package_options(options)?;
+    package::preconditions(options).map_err(EstimateError::SinglePackage)?;
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
-    let package_test = package_check(plan, options, &mut prepared, &main)?;
+    let fitted = package::Fitted {
+        theta: &main.theta,
+        free: &main.free,
+        chi2: main.chi2,
+        dof: main.dof,
+    };
+    let package_test = (options.method == Method::Joint && rotates(plan))
+        .then(|| package::check(&prepared.problem, &fitted, options, &mut prepared.warnings))
+        .transpose()
+        .map_err(EstimateError::SinglePackage)?
+        .flatten();
     let chi2 = chi2_scale(&main, plan, options, &mut prepared.warnings);
     let frame_note = screen::reference_frame(plan, options, &mut prepared.warnings);
     let conv = paper_angles::convert(
@@ -113,58 +117,6 @@ fn fit_session(
         package_test,
     };
     Ok(outcome(plan, options, prepared, main, solution))
-}
-
-/// The single-package model's preconditions: the joint method, a reference other than the
-/// centroid (docs/model.md §4.7).
-fn package_options(options: &EstimateOptions) -> Result<(), EstimateError> {
-    if !options.single_package {
-        return Ok(());
-    }
-    if options.method == Method::Paper {
-        return Err(EstimateError::SinglePackage(PackageRefusal::PaperMethod));
-    }
-    if options.reference == ReferenceChoice::Centroid {
-        return Err(EstimateError::SinglePackage(
-            PackageRefusal::CentroidReference,
-        ));
-    }
-    Ok(())
-}
-
-/// The χ² test of one lever arm against three, on a joint fit of a session that turns
-/// ([`package`]): with the option, a refusal when the session resolves three different lever arms;
-/// without it, a warning naming the option when the three do not differ significantly.
-fn package_check(
-    plan: &Plan,
-    options: &EstimateOptions,
-    p: &mut Prepared,
-    main: &MainFit,
-) -> Result<Option<PackageTest>, EstimateError> {
-    if options.method != Method::Joint || !rotates(plan) {
-        return Ok(None);
-    }
-    let fitted = package::Fitted {
-        theta: &main.theta,
-        free: &main.free,
-        chi2: main.chi2,
-        dof: main.dof,
-    };
-    let Some(test) = package::test(&p.problem, &fitted, options) else {
-        if options.single_package {
-            p.warnings.push(
-                "the session cannot test whether the three accelerometers share one lever arm \
-                 (their separate lever arms are not all estimable from its rotations): the one-point \
-                 model is taken as given"
-                    .into(),
-            );
-        }
-        return Ok(None);
-    };
-    let warning =
-        package::verdict(&test, options.single_package).map_err(EstimateError::SinglePackage)?;
-    p.warnings.extend(warning);
-    Ok(Some(test))
 }
 
 /// The session matched to its plan and screened, the mounts and segment models built, and the

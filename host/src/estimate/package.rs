@@ -10,7 +10,7 @@
 
 use super::model::{idx_r, r_of};
 use super::solve::{self, Problem};
-use super::EstimateOptions;
+use super::{EstimateOptions, Method, ReferenceChoice};
 
 /// The one line every output gives for a single-package unit's in-package size effect.
 pub const IN_PACKAGE_NOT_OBSERVABLE: &str =
@@ -65,6 +65,46 @@ pub struct PackageTest {
     pub dof: i64,
     /// Largest |r_i[j] − mean_i r_i[j]| of the nine-component fit, m.
     pub spread_m: f64,
+}
+
+/// The single-package model's preconditions: the joint method, a reference other than the
+/// centroid.
+pub(crate) fn preconditions(options: &EstimateOptions) -> Result<(), PackageRefusal> {
+    if !options.single_package {
+        return Ok(());
+    }
+    if options.method == Method::Paper {
+        return Err(PackageRefusal::PaperMethod);
+    }
+    if options.reference == ReferenceChoice::Centroid {
+        return Err(PackageRefusal::CentroidReference);
+    }
+    Ok(())
+}
+
+/// The χ² test of one lever arm against three on a joint fit of a session that turns: with the
+/// option, a refusal when the session resolves three different lever arms (or a warning when it
+/// cannot tell); without it, a warning naming the option when the three do not differ
+/// significantly.
+pub(crate) fn check(
+    problem: &Problem,
+    main: &Fitted<'_>,
+    options: &EstimateOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Option<PackageTest>, PackageRefusal> {
+    let Some(t) = test(problem, main, options) else {
+        if options.single_package {
+            warnings.push(
+                "the session cannot test whether the three accelerometers share one lever arm \
+                 (their separate lever arms are not all estimable from its rotations): the one-point \
+                 model is taken as given"
+                    .into(),
+            );
+        }
+        return Ok(None);
+    };
+    warnings.extend(verdict(&t, options.single_package)?);
+    Ok(Some(t))
 }
 
 /// The main fit the test starts from.
