@@ -638,4 +638,30 @@ mod tests {
             .to_string();
         assert!(e.contains("cannot read"), "{e}");
     }
+
+    /// `package = "single"` needs one point in the three rows, and a calibration file written for
+    /// a single-package fit reads back as one.
+    #[test]
+    fn a_single_package_unit_has_one_lever_arm() {
+        let text = include_str!("../units/single-package.toml");
+        let unit = UnitFile::parse(text).unwrap();
+        assert_eq!(unit.package(), Package::Single);
+        let cal = unit.to_calibration().unwrap();
+        assert_eq!(cal.lever_arms.r_m, [[0.012, -0.007, 0.025]; 3]);
+        let apart = text.replacen("[0.012, -0.007, 0.025],", "[0.0125, -0.007, 0.025],", 1);
+        let e = UnitFile::parse(&apart)
+            .unwrap()
+            .to_calibration()
+            .unwrap_err();
+        assert!(
+            e.contains("package = \"single\" needs the three rows"),
+            "{e}"
+        );
+        let mut back = UnitFile::from_calibration(&cal, None, None);
+        assert_eq!(back.package(), Package::Separate);
+        back.dynamic.as_mut().unwrap().package = Package::Single;
+        let again = UnitFile::parse(&back.to_toml()).unwrap();
+        assert_eq!(again.package(), Package::Single);
+        assert_eq!(again.to_calibration().unwrap(), cal);
+    }
 }

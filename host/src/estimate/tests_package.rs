@@ -189,7 +189,7 @@ fn the_option_is_refused_with_the_paper_method_or_the_centroid() {
 /// The figure: r's error and 1σ of both fits over 20 seeds, and how often each fit's r is within its
 /// 3σ.
 #[test]
-#[ignore = "20 simulated sessions (a minute): run with --ignored --nocapture"]
+#[ignore = "20 simulated sessions (minutes in a debug build): run with --ignored --nocapture"]
 fn single_package_many_seeds() {
     let truth = single_unit();
     let r_true = truth.lever_arms.r_m[0];
