@@ -113,6 +113,10 @@ pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitI
         unit_id,
         Some(outcome.uncertainty.clone()),
     );
+    // A single-package fit's three lever arms are one point, and the file says so (docs/model.md §4.7).
+    if let (Some(d), true) = (file.dynamic.as_mut(), outcome.single_package) {
+        d.package = crate::session::Package::Single;
+    }
     // The estimate's 1σ beside the values that `from_calibration` wrote.
     if let (Some(section), Some(g)) = (file.gyro.as_mut(), outcome.gyro.as_ref()) {
         section.bias_rad_s_1sigma = Some(g.bias_rad_s_1sigma);

@@ -284,6 +284,11 @@ pub struct CalibrationSummary {
     pub passed: bool,
     /// The estimator's warnings.
     pub warnings: Vec<String>,
+    /// For a single-package unit (one lever arm for the three accelerometers, whose `r1*`, `r2*`,
+    /// `r3*` above are that one point): why its in-package size effect is not given
+    /// (docs/model.md §4.7). Absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub in_package_size_effect: Option<String>,
 }
 
 impl CalibrationSummary {
@@ -375,6 +380,9 @@ impl CalibrationSummary {
             checks,
             passed,
             warnings: outcome.warnings.clone(),
+            in_package_size_effect: outcome
+                .single_package
+                .then(|| crate::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
         }
     }
 

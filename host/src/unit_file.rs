@@ -13,6 +13,7 @@
 //! installation_angles_deg = [[..], [..], [..]]
 //! [dynamic]
 //! lever_arms_m = [[..], [..], [..]]
+//! package = "single"           # optional: one package, the three rows equal (docs/model.md §4.7)
 //! reference = "table-axis"      # or "centroid", or "body-point" with reference_offset_m = [..]
 //! [uncertainty]                 # optional, 1σ, same units as the values
 //! zero_bias_1sigma = [..]
@@ -35,6 +36,7 @@
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
 use crate::estimate::Uncertainty;
+use crate::session::Package;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
 use shared::sensor_models::TemperatureModel;
@@ -140,6 +142,11 @@ pub struct StaticSection {
 pub struct DynamicSection {
     /// Row i = r_i, body axes, m.
     pub lever_arms_m: RowMajor3,
+    /// `"single"`: the three accelerometers share one package, so the three rows are one point
+    /// (the package's lever arm) and the in-package size effect was not measured (docs/model.md
+    /// §4.7). Absent: `"separate"`.
+    #[serde(default, skip_serializing_if = "Package::is_separate")]
+    pub package: Package,
     /// "table-axis" (default), "centroid" or "body-point".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference: Option<String>,
@@ -346,6 +353,15 @@ impl UnitFile {
         let (lever_arms, reference) = match &self.dynamic {
             None => (LeverArms::default(), ReferencePoint::TableAxis),
             Some(d) => {
+                let r = &d.lever_arms_m;
+                if d.package == Package::Single && (r[1] != r[0] || r[2] != r[0]) {
+                    return Err(
+                        "[dynamic] package = \"single\" needs the three rows of lever_arms_m \
+                         equal (one package, one lever arm): write the package's position three \
+                         times, or remove package = \"single\""
+                            .into(),
+                    );
+                }
                 let reference = match (d.reference.as_deref(), d.reference_offset_m) {
                     (None | Some("table-axis"), None) => ReferencePoint::TableAxis,
                     (Some("centroid"), None) => ReferencePoint::Centroid,
@@ -418,6 +434,7 @@ impl UnitFile {
             },
             dynamic: Some(DynamicSection {
                 lever_arms_m: cal.lever_arms.r_m,
+                package: Package::Separate,
                 reference: Some(reference.into()),
                 reference_offset_m,
             }),
@@ -431,6 +448,13 @@ impl UnitFile {
             temperature: cal.temperature.as_ref().map(TemperatureSection::from_model),
             other: toml::Table::new(),
         }
+    }
+
+    /// Where the unit's accelerometers are: one package or separate (docs/model.md §4.7).
+    pub fn package(&self) -> Package {
+        self.dynamic
+            .as_ref()
+            .map_or(Package::Separate, |d| d.package)
     }
 
     /// TOML text.
@@ -613,5 +637,31 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("cannot read"), "{e}");
+    }
+
+    /// `package = "single"` needs one point in the three rows, and a calibration file written for
+    /// a single-package fit reads back as one.
+    #[test]
+    fn a_single_package_unit_has_one_lever_arm() {
+        let text = include_str!("../units/single-package.toml");
+        let unit = UnitFile::parse(text).unwrap();
+        assert_eq!(unit.package(), Package::Single);
+        let cal = unit.to_calibration().unwrap();
+        assert_eq!(cal.lever_arms.r_m, [[0.012, -0.007, 0.025]; 3]);
+        let apart = text.replacen("[0.012, -0.007, 0.025],", "[0.0125, -0.007, 0.025],", 1);
+        let e = UnitFile::parse(&apart)
+            .unwrap()
+            .to_calibration()
+            .unwrap_err();
+        assert!(
+            e.contains("package = \"single\" needs the three rows"),
+            "{e}"
+        );
+        let mut back = UnitFile::from_calibration(&cal, None, None);
+        assert_eq!(back.package(), Package::Separate);
+        back.dynamic.as_mut().unwrap().package = Package::Single;
+        let again = UnitFile::parse(&back.to_toml()).unwrap();
+        assert_eq!(again.package(), Package::Single);
+        assert_eq!(again.to_calibration().unwrap(), cal);
     }
 }

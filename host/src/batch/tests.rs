@@ -142,6 +142,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
             checks: Vec::new(),
             passed: true,
             warnings: Vec::new(),
+            in_package_size_effect: None,
         }),
         error: None,
         outliers: Vec::new(),

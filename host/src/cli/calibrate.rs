@@ -86,6 +86,11 @@ pub struct CalibrateArgs {
     /// Point the lever arms are given relative to: the table axis (paper) or the sensing points' centroid.
     #[arg(long, value_enum, default_value_t = ReferenceArg::TableAxis)]
     pub reference: ReferenceArg,
+    /// The three accelerometers share one package (a MEMS IMU): fit one lever arm, the package's
+    /// position, for the three, and report the in-package size effect as not observable
+    /// (docs/model.md §4.7). A plan with package = "single" implies it.
+    #[arg(long)]
+    pub single_package: bool,
     /// Print the result as one JSON document on stdout (parameters, 1σ, χ², checks); the report and
     /// progress go to stderr.
     #[arg(long)]
@@ -134,7 +139,10 @@ pub(crate) fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, C
 
 /// The estimator options of `host calibrate`'s flags.
 pub(crate) fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
-    estimate_options_of(a.method, a.reference)
+    EstimateOptions {
+        single_package: a.single_package,
+        ..estimate_options_of(a.method, a.reference)
+    }
 }
 
 /// The estimator options of a `--method` and a `--reference`.

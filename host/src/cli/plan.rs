@@ -5,9 +5,13 @@ use super::output::Output;
 use super::{load_unit, CliError};
 use crate::estimate::{predict, PredictSettings, Prediction};
 use crate::session::builtin::load_plan;
+use crate::session::Package;
 use crate::session::Plan;
 use crate::summary::{parameter_keys, parameter_unit};
-use crate::unit_file::UnitFileError;
+use crate::unit_file::{UnitFile, UnitFileError};
+
+/// The MEMS IMU a single-package plan is predicted for when no unit is given.
+const SINGLE_PACKAGE_UNIT_TOML: &str = include_str!("../../units/single-package.toml");
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -24,7 +28,8 @@ pub struct PlanArgs {
     /// Gyro white noise per sample, 1σ, °/s.
     #[arg(long, value_name = "DEG_S", default_value_t = 0.05, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
     pub gyro_noise_deg_s: f64,
-    /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit).
+    /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit,
+    /// or for a plan with package = "single" `host/units/single-package.toml`, a MEMS IMU).
     #[arg(long, value_name = "FILE")]
     pub unit: Option<PathBuf>,
     /// Print the prediction as one JSON document on stdout (the table goes to stderr).
@@ -39,10 +44,18 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         quiet,
     };
     let plan = load_plan(&a.check)?;
-    let unit = load_unit(a.unit.as_deref())?;
+    let unit = match (&a.unit, plan.package) {
+        (None, Package::Single) => UnitFile::parse(SINGLE_PACKAGE_UNIT_TOML).map_err(|m| {
+            CliError::Unit(UnitFileError::Invalid("<single-package unit>".into(), m))
+        })?,
+        _ => load_unit(a.unit.as_deref())?,
+    };
     let truth = unit.to_calibration().map_err(|m| {
         CliError::Unit(UnitFileError::Invalid(
-            a.unit.clone().unwrap_or_else(|| "<paper unit>".into()),
+            a.unit.clone().unwrap_or_else(|| match plan.package {
+                Package::Single => "<single-package unit>".into(),
+                Package::Separate => "<paper unit>".into(),
+            }),
             m,
         ))
     })?;
@@ -92,6 +105,10 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "lever_arms_observable": prediction.lever_arms_observable,
         "lever_arms_fixed": prediction.lever_arms_fixed,
         "warnings": prediction.warnings,
+        "single_package": prediction.single_package,
+        "in_package_size_effect": prediction
+            .single_package
+            .then_some(crate::estimate::IN_PACKAGE_NOT_OBSERVABLE),
     }))?;
     Ok(prediction)
 }

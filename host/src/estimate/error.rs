@@ -63,6 +63,9 @@ pub enum EstimateError {
         /// Each problem, naming the segments or axes.
         problems: Vec<String>,
     },
+    /// The single-package lever-arm model was asked for where it cannot apply (docs/model.md §4.7).
+    #[error("the single-package lever-arm model: {0}")]
+    SinglePackage(super::package::PackageRefusal),
     /// The temperature model cannot be fitted or is implausible (the message says why).
     #[error("temperature model: {0}; check the recording's temp_c column and the soak steps")]
     Temperature(String),

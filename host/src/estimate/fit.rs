@@ -6,6 +6,7 @@
 //! hands the next a struct, so that what a stage produces has a name.
 
 use super::model::{self, SegModel};
+use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal};
@@ -14,7 +15,7 @@ use super::{
     FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
     SegmentDiagnostic, SegmentKind,
 };
-use crate::session::{Plan, SegmentStats};
+use crate::session::{Package, Plan, SegmentStats};
 use nalgebra::DMatrix;
 use shared::linalg;
 use shared::{Calibration, FittedStatic, LeverArms, OutputUnit};
@@ -37,6 +38,11 @@ pub fn calibrate_session_stats(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
+    // A plan for a single-package unit asks for its model whatever the flags (docs/model.md §4.7).
+    let options = &EstimateOptions {
+        single_package: options.single_package || plan.package == Package::Single,
+        ..options.clone()
+    };
     let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
     let mut outcome = match &fit {
         None => plausibility::check(plan, stats, fit_session(plan, stats, options))?,
@@ -57,10 +63,22 @@ fn fit_session(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
+    package::preconditions(options).map_err(EstimateError::SinglePackage)?;
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
+    let fitted = package::Fitted {
+        theta: &main.theta,
+        free: &main.free,
+        chi2: main.chi2,
+        dof: main.dof,
+    };
+    let package_test = (options.method == Method::Joint && rotates(plan))
+        .then(|| package::check(&prepared.problem, &fitted, options, &mut prepared.warnings))
+        .transpose()
+        .map_err(EstimateError::SinglePackage)?
+        .flatten();
     let chi2 = chi2_scale(&main, plan, options, &mut prepared.warnings);
     let frame_note = screen::reference_frame(plan, options, &mut prepared.warnings);
     let conv = paper_angles::convert(
@@ -73,7 +91,9 @@ fn fit_session(
     )?;
     let observability = lever_arm_observability(&conv, plan, options, &mut prepared.warnings)?;
     let (fitted, calibration) = calibration_of(plan, &main, &conv, &frame_note)?;
-    let comparison = if options.compare_methods {
+    // The paper's eq. 24 has no single-point form: its per-accelerometer values would claim the
+    // size effect the single-package model reports as not observable (docs/model.md §4.7).
+    let comparison = if options.compare_methods && !options.single_package {
         compare(
             plan,
             &mut prepared.segs.clone(),
@@ -94,6 +114,7 @@ fn fit_session(
         calibration,
         comparison,
         frame,
+        package_test,
     };
     Ok(outcome(plan, options, prepared, main, solution))
 }
@@ -129,6 +150,7 @@ fn prepare(
     let (mounts, seg_mount) = build::build_mounts(plan, &segs);
     let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem::new(models, mounts);
+    problem.single_package = options.single_package;
     let static_fit = match screen::static_fit_with_attitude_check(
         plan,
         &mut segs,
@@ -431,6 +453,7 @@ struct Solution {
     calibration: Calibration,
     comparison: Option<MethodComparison>,
     frame: BodyFrame,
+    package_test: Option<PackageTest>,
 }
 
 /// The outcome: the per-segment diagnostics, each mount's tilt, the static 1σ split, the parameter
@@ -488,6 +511,8 @@ fn outcome(
         parameters,
         gyro: main.gyro,
         thermal: None,
+        single_package: options.single_package,
+        package_test: s.package_test,
     }
 }
 

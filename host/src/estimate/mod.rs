@@ -36,6 +36,7 @@ mod joint;
 pub mod model;
 pub mod options;
 pub mod outcome;
+pub mod package;
 mod paper;
 mod paper_angles;
 pub mod plausibility;
@@ -49,6 +50,8 @@ mod tests;
 mod tests_fixture;
 #[cfg(test)]
 mod tests_gyro;
+#[cfg(test)]
+mod tests_package;
 #[cfg(test)]
 mod tests_ramp;
 pub mod thermal;
@@ -68,6 +71,7 @@ pub use outcome::{
     CalibrationOutcome, Exclusion, ExclusionReason, FitSummary, MethodComparison, Observability,
     SegmentDiagnostic,
 };
+pub use package::{PackageRefusal, PackageTest, IN_PACKAGE_NOT_OBSERVABLE};
 pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 pub use screen::median;

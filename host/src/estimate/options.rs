@@ -88,6 +88,10 @@ pub struct EstimateOptions {
     /// their rest and spin segments and the gyro modelled, the joint fit already keeps a 1 mg misfit
     /// to a third of a 1σ move (tested), and it is twice as precise on the lever arms.
     pub static_from_rest: bool,
+    /// The three accelerometers share one package (a MEMS IMU): one lever arm `r`, the package's
+    /// position, for all three, and the in-package differences `r_i − r` reported as not observable
+    /// (docs/model.md §4.7).
+    pub single_package: bool,
 }
 
 /// How the estimator treats the gyro.
@@ -121,6 +125,7 @@ impl Default for EstimateOptions {
             gyro_axis_sigma_rad: Some(1e-6),
             gyro_model: GyroModel::Estimate,
             static_from_rest: false,
+            single_package: false,
         }
     }
 }

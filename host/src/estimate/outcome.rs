@@ -226,4 +226,10 @@ pub struct CalibrationOutcome {
     pub gyro: Option<GyroEstimate>,
     /// The temperature fit, when the session was recorded over a temperature range.
     pub thermal: Option<thermal::ThermalFit>,
+    /// One lever arm for the three accelerometers (a single package, docs/model.md §4.7): every
+    /// `r_i` of the calibration is the package's `r`, and the in-package size effect is not
+    /// observable ([`super::package::IN_PACKAGE_NOT_OBSERVABLE`]).
+    pub single_package: bool,
+    /// The χ² test of one lever arm against three, when the session turns.
+    pub package_test: Option<super::package::PackageTest>,
 }

@@ -59,6 +59,8 @@ pub struct Prediction {
     pub threshold_m: f64,
     /// Warnings from the estimator (e.g. what the plan does not determine).
     pub warnings: Vec<String>,
+    /// One lever arm for the three accelerometers (docs/model.md §4.7): `r1` is the package's.
+    pub single_package: bool,
     /// The static 1σ split into intrinsic and body-frame parts (docs/model.md §7).
     pub static_split: super::StaticSplit,
     /// Each mount's attitude 1σ (tilts of the noise-free data are zero).
@@ -111,6 +113,7 @@ pub fn predict(
         lever_arms_fixed: out.observability.fixed_at_zero,
         threshold_m: out.observability.threshold_m,
         warnings: out.warnings,
+        single_package: out.single_package,
         static_split: out.static_split,
         mount_tilts: out.mount_tilts,
         gyro: out.gyro,

@@ -543,11 +543,16 @@ pub(crate) fn reference_frame(
     if centres.is_empty() {
         // Without rotation no lever arm is calibrated, so their reference point says nothing.
         if options.reference == ReferenceChoice::TableAxis && super::fit::rotates(plan) {
-            warnings.push(
+            warnings.push(if options.single_package {
+                // One lever arm: it is the package's distance from the table's axis (docs/model.md §4.7).
+                "the plan gives no table centre: the package's lever arm is relative to the point on \
+                 the table's spin axis (p = 0), i.e. where the package sat on the table"
+                    .into()
+            } else {
                 "the plan gives no table centre: the lever arms are relative to the point on the table's \
                  spin axis (the paper's assumption p = 0); only differences r_i − r_j are free of it"
-                    .into(),
-            );
+                    .into()
+            });
         }
     } else if centres.iter().any(|c| Some(*c) != common) || centres.len() < plan.segments.len() {
         warnings.push(

@@ -127,6 +127,9 @@ pub(crate) struct Problem {
     pub groups: Vec<DiffGroup>,
     /// The segments at rest when the spins were grouped (to regroup after a removal).
     pub rest_segments: Vec<usize>,
+    /// The three accelerometers share one package: one lever arm `r` for all three
+    /// (docs/model.md §4.7), fitted as one column per component of the normal equations.
+    pub single_package: bool,
 }
 
 impl Problem {
@@ -140,6 +143,7 @@ impl Problem {
             gyro_block: None,
             groups: Vec::new(),
             rest_segments: Vec::new(),
+            single_package: false,
         }
     }
 
@@ -260,8 +264,7 @@ impl Problem {
 
     /// χ² at θ (outputs, gyro axes and priors).
     pub(crate) fn chi2(&self, t: &[f64], free: &[bool]) -> f64 {
-        let idx = free_indices(free);
-        normal_equations(self, t, &idx, None).2
+        normal_equations(self, t, &Columns::new(free, self.single_package), None).2
     }
 }
 
@@ -315,10 +318,10 @@ pub(crate) fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64
 fn normal_equations(
     p: &Problem,
     t: &[f64],
-    free_idx: &[usize],
+    cols: &Columns,
     prior_r_m: Option<f64>,
 ) -> (DMatrix<f64>, DVector<f64>, f64) {
-    let mut ne = NormalSystem::new(t.len(), free_idx);
+    let mut ne = NormalSystem::new(cols);
     ne.add_models(&p.models, t);
     ne.add_groups(&p.groups, t);
     ne.add_gyro_directions(&p.gyro, t);
@@ -327,7 +330,7 @@ fn normal_equations(
     }
     ne.add_mount_priors(&p.mounts, t);
     if let Some(sig) = prior_r_m {
-        ne.add_lever_prior(sig, t, free_idx);
+        ne.add_lever_prior(sig, t, &cols.first);
     }
     (ne.n, ne.b, ne.chi2)
 }
@@ -345,15 +348,11 @@ struct NormalSystem {
 }
 
 impl NormalSystem {
-    /// Empty normal equations over the free entries `free_idx` of a θ of length `np`.
-    fn new(np: usize, free_idx: &[usize]) -> NormalSystem {
-        let k = free_idx.len();
-        let mut col_of = vec![usize::MAX; np];
-        for (c, &q) in free_idx.iter().enumerate() {
-            col_of[q] = c;
-        }
+    /// Empty normal equations over the columns `cols`.
+    fn new(cols: &Columns) -> NormalSystem {
+        let k = cols.first.len();
         NormalSystem {
-            col_of,
+            col_of: cols.col_of.clone(),
             n: DMatrix::<f64>::zeros(k, k),
             b: DVector::<f64>::zeros(k),
             chi2: 0.0,
@@ -486,9 +485,10 @@ impl NormalSystem {
         }
     }
 
-    /// A prior of 1σ = `sig` about 0 on every free lever-arm component (not counted in χ²).
-    fn add_lever_prior(&mut self, sig: f64, t: &[f64], free_idx: &[usize]) {
-        for (c, &q) in free_idx.iter().enumerate() {
+    /// A prior of 1σ = `sig` about 0 on every free lever-arm column (not counted in χ²); `first`
+    /// is each column's first θ entry ([`Columns::first`]).
+    fn add_lever_prior(&mut self, sig: f64, t: &[f64], first: &[usize]) {
+        for (c, &q) in first.iter().enumerate() {
             if is_lever(q) {
                 self.n[(c, c)] += 1.0 / (sig * sig);
                 self.b[c] -= t[q] / (sig * sig);
@@ -497,8 +497,64 @@ impl NormalSystem {
     }
 }
 
-fn free_indices(free: &[bool]) -> Vec<usize> {
-    (0..free.len()).filter(|&p| free[p]).collect()
+/// The normal equations' columns: which column of `n` and `b` each θ entry moves with.
+///
+/// A free entry has a column of its own, except for a single-package unit's lever arms
+/// (docs/model.md §4.7): `r_2[j]` and `r_3[j]` move with `r_1[j]`, which is the exact constraint
+/// `r_1 = r_2 = r_3 = r` written as θ = T φ. A row's entries that share a column add up in it
+/// ([`NormalSystem::add_row`] sums every pair), so the normal matrix is `Tᵀ Jᵀ Σ⁻¹ J T` and the
+/// covariance `T (Tᵀ Jᵀ Σ⁻¹ J T)⁻¹ Tᵀ`: the 1σ of `r` from three parameters, given to each `r_i`.
+/// In a tied problem `r_1[j]`'s `free` entry speaks for the three.
+#[derive(Clone, Debug)]
+pub(crate) struct Columns {
+    /// Column of each θ entry (`usize::MAX`: fixed).
+    col_of: Vec<usize>,
+    /// Each column's first θ entry (the one whose step and value stand for the column).
+    first: Vec<usize>,
+}
+
+impl Columns {
+    pub(crate) fn new(free: &[bool], single_package: bool) -> Columns {
+        use super::model::idx_r;
+        let mut col_of = vec![usize::MAX; free.len()];
+        let mut first = Vec::new();
+        for q in 0..free.len() {
+            let tied = single_package && is_lever(q) && q >= idx_r(1, 0);
+            if tied {
+                // r_i[j] with i > 0: the column of r_1[j], when that one is free.
+                col_of[q] = col_of[idx_r(0, (q % 7) - 4)];
+            } else if free[q] {
+                col_of[q] = first.len();
+                first.push(q);
+            }
+        }
+        Columns { col_of, first }
+    }
+
+    /// Number of columns (the fitted parameters).
+    pub(crate) fn len(&self) -> usize {
+        self.first.len()
+    }
+
+    /// θ moved by the step `s` (one value per column) times `h`.
+    fn stepped(&self, t: &[f64], s: &DVector<f64>, h: f64) -> Vec<f64> {
+        let mut out = t.to_vec();
+        for (q, &c) in self.col_of.iter().enumerate() {
+            if c != usize::MAX {
+                out[q] = t[q] + h * s[c];
+            }
+        }
+        out
+    }
+
+    /// θ with every tied entry set to its column's first entry (a start that satisfies the tie).
+    fn tie(&self, t: &mut [f64]) {
+        for (q, &c) in self.col_of.iter().enumerate() {
+            if c != usize::MAX {
+                t[q] = t[self.first[c]];
+            }
+        }
+    }
 }
 
 /// Covariance (zeros for fixed entries) of θ at `t`, or `None` if singular.
@@ -508,19 +564,19 @@ pub(crate) fn covariance(
     free: &[bool],
     prior_r_m: Option<f64>,
 ) -> Option<DMatrix<f64>> {
-    let idx = free_indices(free);
-    let (n, _, _) = normal_equations(p, t, &idx, prior_r_m);
+    let cols = Columns::new(free, p.single_package);
+    let (n, _, _) = normal_equations(p, t, &cols, prior_r_m);
     // With a prior the matrix is positive definite by construction; without, reject rank deficiency.
     let min_eigen = if prior_r_m.is_some() { 0.0 } else { 1e-14 };
     let inv = invert_spd(&n, min_eigen)?;
     let np = t.len();
-    let mut cov = DMatrix::<f64>::zeros(np, np);
-    for (a, &q) in idx.iter().enumerate() {
-        for (b, &r) in idx.iter().enumerate() {
-            cov[(q, r)] = inv[(a, b)];
+    // T (Tᵀ N T)⁻¹ Tᵀ: entries sharing a column share its variance and are fully correlated.
+    Some(DMatrix::from_fn(np, np, |q, r| {
+        match (cols.col_of[q], cols.col_of[r]) {
+            (a, b) if a != usize::MAX && b != usize::MAX => inv[(a, b)],
+            _ => 0.0,
         }
-    }
-    Some(cov)
+    }))
 }
 
 /// One Gauss–Newton step over the free columns, or `None` when the normal equations are singular.
@@ -543,24 +599,23 @@ pub fn fit(
     free: Vec<bool>,
     what: &'static str,
 ) -> Result<Fit, EstimateError> {
-    let idx = free_indices(&free);
+    let cols = Columns::new(&free, p.single_package);
     let mut t = t0;
+    cols.tie(&mut t);
     for _ in 0..60 {
-        let (n, b, chi2) = normal_equations(p, &t, &idx, None);
+        let (n, b, chi2) = normal_equations(p, &t, &cols, None);
         let s = step(&n, &b).ok_or(EstimateError::Singular { what })?;
         let mut h = 1.0;
-        let mut trial = t.clone();
+        let mut trial = cols.stepped(&t, &s, h);
         for _ in 0..12 {
-            for (c, &q) in idx.iter().enumerate() {
-                trial[q] = t[q] + h * s[c];
-            }
             if p.chi2(&trial, &free) <= chi2 * (1.0 + 1e-12) + 1e-9 {
                 break;
             }
             h *= 0.5;
+            trial = cols.stepped(&t, &s, h);
         }
         let mut rel = 0.0f64;
-        for (c, &q) in idx.iter().enumerate() {
+        for (c, &q) in cols.first.iter().enumerate() {
             let scale = if is_lever(q) || q >= NI {
                 1e-3
             } else {
@@ -576,7 +631,7 @@ pub fn fit(
     let cov = covariance(p, &t, &free, None).ok_or(EstimateError::Singular { what })?;
     let chi2 = p.chi2(&t, &free);
     Ok(Fit {
-        dof: p.observations(&free) - idx.len() as i64,
+        dof: p.observations(&free) - cols.len() as i64,
         theta: t,
         cov,
         chi2,
@@ -602,16 +657,21 @@ pub(crate) fn structurally_unobservable(
     use super::model::idx_r;
     let mut fixed = Vec::new();
     while let Some(cov) = covariance(p, t, free, Some(1.0)) {
-        let worst = (0..3)
+        // A single-package unit's component j is one column: r_1[j] speaks for the three.
+        let rows = if p.single_package { 1 } else { 3 };
+        let worst = (0..rows)
             .flat_map(|i| (0..3).map(move |j| (i, j)))
             .filter(|&(i, j)| free[idx_r(i, j)])
             .map(|(i, j)| ((i, j), cov[(idx_r(i, j), idx_r(i, j))].sqrt()))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         match worst {
             Some(((i, j), s)) if s > limit_m => {
-                free[idx_r(i, j)] = false;
-                t[idx_r(i, j)] = 0.0;
-                fixed.push((i, j));
+                let tied = if p.single_package { 0..3 } else { i..i + 1 };
+                for i in tied {
+                    free[idx_r(i, j)] = false;
+                    t[idx_r(i, j)] = 0.0;
+                    fixed.push((i, j));
+                }
             }
             _ => break,
         }

@@ -53,6 +53,7 @@ pub(crate) fn soak_plan(temps_c: &[f64], seconds: f64) -> Plan {
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         segments,
     }
 }

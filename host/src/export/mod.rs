@@ -356,6 +356,26 @@ pub(crate) fn temperature_not_held(cal: &Calibration, format: &str) -> String {
 /// Writes `input` in `format`.
 pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
     check_exportable(&input.cal)?;
+    let text = render_format(input, format)?;
+    // A single-package unit's rows are one point: say so where the format has comments, so that no
+    // export reads as a measured per-axis size effect (docs/model.md §4.7; the JSON form carries
+    // the calibration file's `package = "single"`).
+    let comment = match format {
+        ExportFormat::Json => None,
+        ExportFormat::FusionC | ExportFormat::CHeader => Some("//"),
+        _ => Some("#"),
+    };
+    Ok(match (input.unit.package(), comment) {
+        (crate::session::Package::Single, Some(c)) => format!(
+            "{c} single package: the three accelerometers' lever arms are one point, the package's r; \
+             their in-package differences r_i - r were not observable and are written as 0\n{text}"
+        ),
+        _ => text,
+    })
+}
+
+/// [`render`] before the single-package note.
+fn render_format(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, ExportError> {
     match format {
         ExportFormat::Kalibr => kalibr::render(input),
         ExportFormat::KalibrIntrinsics => kalibr::render_intrinsics(input),

@@ -190,6 +190,7 @@ fn collect_csv_from<R: std::io::BufRead>(
         sample_rate_hz: 1.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         segments: names
             .iter()
             .map(|n| crate::session::SegmentPlan {

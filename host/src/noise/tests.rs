@@ -16,6 +16,7 @@ fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
         sample_rate_hz: rate_hz,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         segments: vec![
             SegmentPlan {
                 attitude: Default::default(),

@@ -28,7 +28,7 @@ use super::plot::{self, Formats};
 use crate::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind, Uncertainty,
 };
-use crate::session::{Plan, RecordingError, SegmentStats};
+use crate::session::{Package, Plan, RecordingError, SegmentStats};
 use crate::sim::SimulateError;
 use crate::unit_file::UnitFileError;
 use shared::linalg;
@@ -226,6 +226,9 @@ pub struct ReportData {
     pub temperature_figure: Option<super::plot::Figure>,
     /// Warnings for the reader.
     pub warnings: Vec<String>,
+    /// The calibration's three lever arms are one package's (docs/model.md §4.7): Table 3 shows the
+    /// one lever arm and says the in-package size effect is not observable.
+    pub single_package: bool,
 }
 
 /// The true specific force, rates and the three compensated outputs of every segment.
@@ -397,7 +400,13 @@ pub fn build_report(
     let temperature_figure = session_fit.as_ref().ok().and_then(|o| {
         super::thermal::figure(o, Some(&super::thermal::soak_points(o, plan, stats)))
     });
+    let r = &cal.lever_arms.r_m;
+    let single_package = (plan.package == Package::Single
+        || session_fit.as_ref().is_ok_and(|o| o.single_package))
+        && r[1] == r[0]
+        && r[2] == r[0];
     Ok(ReportData {
+        single_package,
         temperature_figure,
         calibration: *cal,
         uncertainty: uncertainty.cloned(),

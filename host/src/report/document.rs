@@ -156,6 +156,8 @@ pub fn report(
     )?;
     data.warnings
         .extend(session.report.warnings.iter().cloned());
+    // The calibration file says so itself (its rows are then equal, checked when it was read).
+    data.single_package |= unit.package() == crate::session::Package::Single;
     write_report(
         &data,
         out_dir,

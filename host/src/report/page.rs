@@ -77,9 +77,14 @@ pub(crate) fn table3(data: &ReportData) -> Block {
     let u = data.uncertainty.as_ref();
     Block::Table {
         header: vec!["".into(), "x (mm)".into(), "y (mm)".into(), "z (mm)".into()],
-        rows: (0..3)
+        // A single package's three rows are one point: shown once (docs/model.md §4.7).
+        rows: (0..if data.single_package { 1 } else { 3 })
             .map(|i| {
-                let mut row = vec![format!("r{}", i + 1)];
+                let mut row = vec![if data.single_package {
+                    "r".to_string()
+                } else {
+                    format!("r{}", i + 1)
+                }];
                 for j in 0..3 {
                     let cell = pm_opt(
                         r[i][j] * 1e3,
@@ -236,7 +241,22 @@ pub fn page(
     }
     b.push(Block::Heading(2, "Table 1. Static calibration".into()));
     b.push(table1(data));
-    if lever_arms_calibrated(data) {
+    if lever_arms_calibrated(data) && data.single_package {
+        b.push(Block::Heading(
+            2,
+            "Table 3. Lever arm of the package".into(),
+        ));
+        b.push(Block::Para(format!(
+            "One lever arm for the three accelerometers, which share one package. Reference point: \
+             {}. n.d. = not determined by the calibrating plan.",
+            reference_point(&data.calibration.reference)
+        )));
+        b.push(table3(data));
+        b.push(Block::Para(format!(
+            "{}.",
+            crate::estimate::IN_PACKAGE_NOT_OBSERVABLE
+        )));
+    } else if lever_arms_calibrated(data) {
         b.push(Block::Heading(2, "Table 3. Lever arms".into()));
         b.push(Block::Para(format!(
             "Reference point: {}. n.d. = not determined by the calibrating plan.",

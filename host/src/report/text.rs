@@ -7,7 +7,7 @@ use super::format::{out_digits, pm, reference_point};
 use super::SegmentRow;
 use crate::estimate::{
     CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
-    SegmentKind, StaticSplit, PAPER_LEN,
+    SegmentKind, StaticSplit, IN_PACKAGE_NOT_OBSERVABLE, PAPER_LEN,
 };
 use crate::session::{Plan, SegmentStats};
 use shared::params::axis_name;
@@ -116,6 +116,10 @@ fn render_table3(s: &mut String, o: &CalibrationOutcome) {
         );
         return;
     }
+    if o.single_package {
+        render_package_lever_arm(s, o);
+        return;
+    }
     let _ = writeln!(
         s,
         "Table 3. Lever arms (mm), reference: {}; n.d. = not determined to {:.0} µm, n.o. = not observable",
@@ -143,6 +147,36 @@ fn render_table3(s: &mut String, o: &CalibrationOutcome) {
             cells[2]
         );
     }
+}
+
+/// A single-package unit's Table 3: the package's one lever arm `r` with its 1σ, and the in-package
+/// size effect in words, not numbers (docs/model.md §4.7).
+fn render_package_lever_arm(s: &mut String, o: &CalibrationOutcome) {
+    let u = &o.uncertainty;
+    let _ = writeln!(
+        s,
+        "Table 3. Lever arm of the package (mm), one for the three accelerometers, reference: {}; \
+         n.d. = not determined to {:.0} µm, n.o. = not observable",
+        reference_point(&o.calibration.reference),
+        o.observability.threshold_m * 1e6
+    );
+    let _ = writeln!(s, "{:<4} {:>24} {:>24} {:>24}", "", "x", "y", "z");
+    let cells: Vec<String> = (0..3)
+        .map(|j| {
+            lever_cell(
+                o.calibration.lever_arms.r_m[0][j],
+                u.lever_arms_m_1sigma[0][j],
+                o.observability.observable[0][j],
+                o.observability.fixed_at_zero[0][j],
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "{:<4} {:>24} {:>24} {:>24}",
+        "r", cells[0], cells[1], cells[2]
+    );
+    let _ = writeln!(s, "{IN_PACKAGE_NOT_OBSERVABLE}");
 }
 
 /// The lever arms of both methods side by side, when the other method was run too.
@@ -359,6 +393,27 @@ fn render_gyro(s: &mut String, g: Option<&GyroEstimate>) {
     }
 }
 
+/// A single-package plan's verdict on the package's lever arm `r`, and the in-package size effect
+/// in words (docs/model.md §4.7).
+fn render_package_prediction(s: &mut String, p: &Prediction) {
+    let worst = (0..3).map(|j| p.sigma[15 + j]).fold(0.0, f64::max);
+    if (0..3).all(|j| p.lever_arms_observable[0][j]) {
+        let _ = writeln!(
+            s,
+            "Common lever arm r (the package's position, one for the three accelerometers): \
+             observable, every component to {:.4} mm (1σ) or better",
+            worst * 1e3
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "Common lever arm r (the package's position): NOT determined on every axis; add spins \
+             about each body axis (docs/model.md §4.4)"
+        );
+    }
+    let _ = writeln!(s, "{IN_PACKAGE_NOT_OBSERVABLE}");
+}
+
 /// The Cramér–Rao prediction of a plan (`host plan --check`).
 pub fn render_prediction(p: &Prediction) -> String {
     let mut s = String::new();
@@ -387,6 +442,10 @@ pub fn render_prediction(p: &Prediction) -> String {
             )
         } else {
             let (i, j) = ((k - 15) / 3, (k - 15) % 3);
+            if p.single_package && i > 0 {
+                // One lever arm for the three: r1 is the package's r (docs/model.md §4.7).
+                continue;
+            }
             let mark = if p.lever_arms_fixed[i][j] {
                 "  NOT OBSERVABLE (fixed at 0)"
             } else if !p.lever_arms_observable[i][j] {
@@ -405,9 +464,16 @@ pub fn render_prediction(p: &Prediction) -> String {
                 mark,
             )
         };
+        let label = match (p.single_package, k) {
+            (true, 15..) => format!("r{}", axis_name(k - 15)),
+            _ => label.clone(),
+        };
         let _ = writeln!(s, "  {label:<10} {value:>14} ± {sigma} {unit}{mark}");
     }
     let _ = writeln!(s, "Lever-arm threshold: {:.0} µm", p.threshold_m * 1e6);
+    if p.single_package {
+        render_package_prediction(&mut s, p);
+    }
     render_attitudes(&mut s, &p.static_split, &p.mount_tilts);
     render_gyro(&mut s, p.gyro.as_ref());
     if let Some(t) = &p.temperature {

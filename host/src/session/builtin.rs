@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub(crate) const BUILTIN_PLANS: [(&str, &str); 8] = [
+pub(crate) const BUILTIN_PLANS: [(&str, &str); 9] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -17,6 +17,10 @@ pub(crate) const BUILTIN_PLANS: [(&str, &str); 8] = [
         include_str!("../../plans/quick-oblique.toml"),
     ),
     ("hand", include_str!("../../plans/hand.toml")),
+    (
+        "single-package",
+        include_str!("../../plans/single-package.toml"),
+    ),
     (
         "thermal-soak",
         include_str!("../../plans/thermal-soak.toml"),
@@ -86,6 +90,9 @@ mod tests {
             .segments
             .iter()
             .all(|s| s.is_static() && s.is_free() && s.duration_s == Some(5.0)));
+        let single = builtin_plan("single-package").unwrap().unwrap();
+        assert_eq!(single.package, crate::session::Package::Single);
+        assert_eq!(single.segments.len(), 15);
         let soak = builtin_plan("thermal-soak").unwrap().unwrap();
         assert!(soak.has_temperature() && soak.segments.len() == 30);
         let ramp = builtin_plan("thermal-ramp").unwrap().unwrap();

@@ -80,6 +80,7 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
         sample_rate_hz: (rec.rate_hz * 1e6).round() / 1e6,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
         segments: seg

@@ -31,7 +31,7 @@ pub mod thermal;
 pub mod writer;
 
 pub use error::RecordingError;
-pub use plan::{Plan, PlanError, RecordingVersion, SegmentPlan};
+pub use plan::{Package, Plan, PlanError, RecordingVersion, SegmentPlan};
 pub use reader::{
     read_samples, read_samples_each, read_session, ReadOptions, ReadReport, Row, Session,
 };

@@ -152,9 +152,31 @@ pub struct Plan {
     /// be better. Absent: [`DEFAULT_TABLE_RATE_SIGMA_PPM`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table_rate_sigma_ppm: Option<f64>,
+    /// Whether the three accelerometers share one package (`"single"`: a MEMS IMU, one lever arm for
+    /// the three, docs/model.md §4.7) or sit apart (`"separate"`, the default).
+    #[serde(default, skip_serializing_if = "Package::is_separate")]
+    pub package: Package,
     /// The segments, in the order they are run.
     #[serde(rename = "segment")]
     pub segments: Vec<SegmentPlan>,
+}
+
+/// Where a unit's three accelerometers are (docs/model.md §4.7).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Package {
+    /// Three separate sensors, each with its own lever arm (the paper's unit).
+    #[default]
+    Separate,
+    /// One package (a MEMS IMU): its sensing points are within a millimetre, one lever arm `r`.
+    Single,
+}
+
+impl Package {
+    /// Whether it is [`Package::Separate`] (the default, left out when written).
+    pub fn is_separate(&self) -> bool {
+        *self == Package::Separate
+    }
 }
 
 /// One segment: a fixed mount ("up" direction) at rest, at a constant table rate, or ramping.

@@ -98,6 +98,7 @@ pub fn paper_plan(unit: OutputUnit) -> Plan {
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         segments,
     }
 }
@@ -277,6 +278,7 @@ pub(crate) fn many_mounts_plan() -> Plan {
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
+        package: Default::default(),
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
         segments,
