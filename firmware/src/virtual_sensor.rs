@@ -27,6 +27,11 @@ use crate::pipeline::{Pipeline, Sample, TEMPERATURE_REFRESH_HZ};
 
 /// Output range of the virtual accelerometers, volts (a 0–5 V analog part).
 pub const OUTPUT_RANGE_V: (f32, f32) = (0.0, 5.0);
+/// Full scale of a virtual accelerometer whose outputs are not volts (a digital part's counts, or
+/// its m/s² or g), g either side of its zero bias: a MEMS IMU's ±16 g range.
+pub const DIGITAL_FULL_SCALE_G: f64 = 16.0;
+/// Output noise of such a part, g (the analog part's ≈ 0.5 mg).
+pub const DIGITAL_NOISE_G: f64 = 5.0e-4;
 /// Gyro range, rad/s (±2000 °/s).
 pub const GYRO_RANGE_RAD_S: f32 = 34.9;
 /// Standard deviation of the output noise, volts (≈ 0.5 mg at 0.4 V/g).
@@ -60,6 +65,10 @@ pub struct VirtualSensor {
     gyro_bias_rad_s: [f64; 3],
     samples: u32,
     sample_rate_hz: u32,
+    /// Each output's clamp (its saturation), in the unit's output unit.
+    output_range: [(f32, f32); 3],
+    /// Each output's noise σ, in the unit's output unit.
+    output_noise: [f32; 3],
 }
 
 /// Why a table setting was refused.
@@ -74,6 +83,24 @@ impl VirtualSensor {
     /// The unit `cal` at rest with z up, sampled at `sample_rate_hz`; `None` if `cal` is unusable.
     pub fn new(cal: &Calibration, sample_rate_hz: u32, noise: bool) -> Option<Self> {
         let model = ForwardModel::new(cal).ok()?;
+        // The paper's analog part swings 0–5 V; a unit calibrated in another unit is a digital
+        // part, whose range and noise follow its own scale (else its counts would all clamp).
+        let st = &cal.statics;
+        let analog = st.output_unit == shared::OutputUnit::Volts;
+        let output_range = core::array::from_fn(|i| {
+            let half = DIGITAL_FULL_SCALE_G * libm::fabs(st.scale_out_per_g[i]);
+            match analog {
+                true => OUTPUT_RANGE_V,
+                false => (
+                    (st.zero_bias_out[i] - half) as f32,
+                    (st.zero_bias_out[i] + half) as f32,
+                ),
+            }
+        });
+        let output_noise = core::array::from_fn(|i| match analog {
+            true => OUTPUT_NOISE_V,
+            false => (DIGITAL_NOISE_G * libm::fabs(st.scale_out_per_g[i])) as f32,
+        });
         Some(
             VirtualSensor {
                 model,
@@ -97,6 +124,8 @@ impl VirtualSensor {
                 gyro_bias_rad_s: [0.0; 3],
                 samples: 0,
                 sample_rate_hz: sample_rate_hz.max(1),
+                output_range,
+                output_noise,
             }
             .at_temperature(POWER_ON_TEMPERATURE_C),
         )
@@ -256,8 +285,9 @@ impl VirtualSensor {
         for i in 0..3 {
             let u0 = self.zero_bias_out[i];
             let u_t = u0 + self.bias_shift_out[i] + self.gain[i] * (u.raw[i] - u0);
-            let v = u_t as f32 + OUTPUT_NOISE_V * self.noise();
-            raw[i] = v.clamp(OUTPUT_RANGE_V.0, OUTPUT_RANGE_V.1);
+            let v = u_t as f32 + self.output_noise[i] * self.noise();
+            let (lo, hi) = self.output_range[i];
+            raw[i] = v.clamp(lo, hi);
             saturated |= raw[i] != v;
             let w = (gw[i] + self.gyro_bias_rad_s[i]) as f32 + GYRO_NOISE_RAD_S * self.noise();
             rate_out[i] = w.clamp(-GYRO_RANGE_RAD_S, GYRO_RANGE_RAD_S);
