@@ -87,20 +87,26 @@ impl Scaling {
     #[inline(always)]
     pub fn sample(&self, c: &RawCodes) -> Sample {
         // Written out per channel: straight-line code at opt-level "s" (the firmware's).
-        let adc_sat = |v: u16| v == 0 || v >= self.adc_max;
-        let gyro_sat = |v: i16| v == i16::MIN || v == i16::MAX;
+        // Each check is a value whose sign bit is set exactly when the code is at a range end, so
+        // the six fold into one OR and one sign test (two integer operations per channel, no
+        // compare-and-select): `v − 1 < 0` is code 0, `adc_max − 1 − v < 0` is a code ≥ adc_max;
+        // `w + 32767 < 0` is −32768, `32766 − w < 0` is 32767.
+        let top = i32::from(self.adc_max) - 1;
+        let adc_end = |v: u16| (i32::from(v) - 1) | (top - i32::from(v));
+        let gyro_end = |v: i16| (i32::from(v) + 32767) | (32766 - i32::from(v));
         let (a, g) = (&c.adc, &c.gyro);
         let volts = |v: u16| f32::from(v) * self.volts_per_code;
         let rad_s = |v: i16| f32::from(v) * self.rad_s_per_lsb;
+        let ends = adc_end(a[0])
+            | adc_end(a[1])
+            | adc_end(a[2])
+            | gyro_end(g[0])
+            | gyro_end(g[1])
+            | gyro_end(g[2]);
         Sample {
             raw: [volts(a[0]), volts(a[1]), volts(a[2])],
             rate_rad_s: [rad_s(g[0]), rad_s(g[1]), rad_s(g[2])],
-            saturated: adc_sat(a[0])
-                | adc_sat(a[1])
-                | adc_sat(a[2])
-                | gyro_sat(g[0])
-                | gyro_sat(g[1])
-                | gyro_sat(g[2]),
+            saturated: ends < 0,
         }
     }
 }
@@ -765,6 +771,38 @@ mod tests {
             },
         ] {
             assert!(k.sample(&c).saturated, "{c:?}");
+        }
+    }
+
+    /// The folded sign-bit checks against the plain definition, every code of each channel (the
+    /// others held mid-range), for a 12-bit and a 16-bit ADC.
+    #[test]
+    fn saturation_is_exactly_a_code_at_a_range_end() {
+        for adc_max in [4095u16, u16::MAX] {
+            let k = Scaling {
+                volts_per_code: 1e-3,
+                adc_max,
+                rad_s_per_lsb: 1e-3,
+            };
+            for slot in 0..3 {
+                for v in 0..=u16::MAX {
+                    let mut c = RawCodes {
+                        adc: [100; 3],
+                        gyro: [0; 3],
+                    };
+                    c.adc[slot] = v;
+                    assert_eq!(k.sample(&c).saturated, v == 0 || v >= adc_max, "{c:?}");
+                }
+                for w in i16::MIN..=i16::MAX {
+                    let mut c = RawCodes {
+                        adc: [100; 3],
+                        gyro: [0; 3],
+                    };
+                    c.gyro[slot] = w;
+                    let end = w == i16::MIN || w == i16::MAX;
+                    assert_eq!(k.sample(&c).saturated, end, "{c:?}");
+                }
+            }
         }
     }
 

@@ -28,10 +28,13 @@
 pub struct OmegaDotEstimator {
     sample_rate_hz: f32,
     beta: f32,
+    /// What the difference is scaled by: `f_s`, or 0 for the first sample after [`Self::new`] or
+    /// [`Self::reset`] (which only starts the difference: the stages are zero then, so they stay
+    /// zero). A factor rather than a branch or a select per axis on the per-sample path.
+    difference_gain_hz: f32,
     previous_rad_s: [f32; 3],
     stage1: [f32; 3],
     stage2: [f32; 3],
-    primed: bool,
 }
 
 /// Why an estimator cannot be built.
@@ -68,40 +71,39 @@ impl OmegaDotEstimator {
         Ok(OmegaDotEstimator {
             sample_rate_hz,
             beta: beta as f32,
+            difference_gain_hz: 0.0,
             previous_rad_s: [0.0; 3],
             stage1: [0.0; 3],
             stage2: [0.0; 3],
-            primed: false,
         })
     }
 
     /// Feeds one gyro sample and returns the current `ω̇` estimate (rad/s²). The first sample only
-    /// primes the difference (the single branch is on state, not on data).
+    /// starts the difference (its difference is scaled by 0: no branch at all).
     #[inline(always)]
     pub fn update(&mut self, omega_rad_s: &[f32; 3]) -> [f32; 3] {
-        if !self.primed {
-            self.previous_rad_s = *omega_rad_s;
-            self.primed = true;
-        }
         // Per axis written out: straight-line code at any optimisation level (the firmware builds
         // this crate for size).
-        self.axis(0, omega_rad_s[0]);
-        self.axis(1, omega_rad_s[1]);
-        self.axis(2, omega_rad_s[2]);
+        let gain = self.difference_gain_hz;
+        self.axis(0, omega_rad_s[0], gain);
+        self.axis(1, omega_rad_s[1], gain);
+        self.axis(2, omega_rad_s[2], gain);
         self.previous_rad_s = *omega_rad_s;
+        self.difference_gain_hz = self.sample_rate_hz;
         self.stage2
     }
 
     #[inline(always)]
-    fn axis(&mut self, j: usize, omega_rad_s: f32) {
-        let x = (omega_rad_s - self.previous_rad_s[j]) * self.sample_rate_hz;
+    fn axis(&mut self, j: usize, omega_rad_s: f32, gain_hz: f32) {
+        // Both finite (the pipeline resets rather than feed a non-finite rate): 0·(ω − ω₋₁) is 0.
+        let x = (omega_rad_s - self.previous_rad_s[j]) * gain_hz;
         self.stage1[j] += self.beta * (x - self.stage1[j]);
         self.stage2[j] += self.beta * (self.stage1[j] - self.stage2[j]);
     }
 
     /// Restarts from no history (after a gap in the stream).
     pub fn reset(&mut self) {
-        self.primed = false;
+        self.difference_gain_hz = 0.0;
         self.stage1 = [0.0; 3];
         self.stage2 = [0.0; 3];
     }
@@ -158,6 +160,31 @@ mod tests {
         assert!(OmegaDotEstimator::new(1000.0, 500.0).is_err());
         assert!(OmegaDotEstimator::new(f32::NAN, 10.0).is_err());
         assert!(OmegaDotEstimator::new(1000.0, 20.0).is_ok());
+    }
+
+    /// The first sample (after `new`, and after a `reset` that follows a history) gives 0 and only
+    /// starts the difference; the second gives the hand-derived `β²·f_s·(ω₁ − ω₀)`.
+    #[test]
+    fn the_first_sample_after_new_or_reset_only_starts_the_difference() {
+        let mut e = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
+        let b = f64::from(e.beta());
+        for round in 0..2 {
+            assert_eq!(e.update(&[5.0, -3.0, 0.5]), [0.0; 3], "round {round}");
+            let out = e.update(&[5.001, -3.0, 0.4995]);
+            let want = [1e-3f64, 0.0, -5e-4].map(|d| b * b * 1000.0 * d);
+            for j in 0..3 {
+                let tol = 1e-3 * want[j].abs() + 1e-9;
+                assert!(
+                    (f64::from(out[j]) - want[j]).abs() <= tol,
+                    "{out:?} vs {want:?}"
+                );
+            }
+            // A history far from the next start: the reset must not difference across it.
+            for _ in 0..50 {
+                e.update(&[-40.0, 40.0, 7.0]);
+            }
+            e.reset();
+        }
     }
 
     #[test]

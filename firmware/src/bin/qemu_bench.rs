@@ -299,7 +299,7 @@ fn imu_stream(cal: &shared::Calibration) -> Option<&'static mut [u8; IMU_SAMPLES
 }
 
 /// The digital IMU's path: the FIFO packet decode alone, and the whole per-sample path from FIFO
-/// bytes (decode, gap and saturation checks, the temperature reading every 250 samples, gyro
+/// bytes (decode, gap and saturation checks, the temperature mean of `PipelineFeed`, gyro
 /// correction, ω̇, full compensation with the temperature model, window) as the QEMU board runs it,
 /// in transfers of 16 packets (what one DMA read brings).
 fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]) {
