@@ -48,18 +48,50 @@ pub struct Sample {
 impl Sample {
     /// All six values are finite.
     #[inline(always)]
-    #[allow(clippy::eq_op)] // `x - x` is the point: 0 for finite x, NaN otherwise
     pub fn is_finite(&self) -> bool {
-        // `x - x == 0` is false exactly for NaN and ±inf; one comparison chain, no library call.
-        let (r, w) = (&self.raw, &self.rate_rad_s);
-        let s = (r[0] - r[0])
-            + (r[1] - r[1])
-            + (r[2] - r[2])
-            + (w[0] - w[0])
-            + (w[1] - w[1])
-            + (w[2] - w[2]);
-        s == 0.0
+        all_finite(&self.raw, &self.rate_rad_s)
     }
+}
+
+/// What [`Pipeline::on_sample`] reads of a sample: implemented by [`Sample`] and by a digital
+/// IMU's decoded sample (`imu::ImuSample`), so that a board hands either over as it is, without
+/// copying it into the other form on the per-sample path.
+pub trait SampleView {
+    /// Accelerometer outputs, sensor axes, output unit (V or LSB).
+    fn raw(&self) -> &[f32; 3];
+    /// Gyro rate, body axes, rad/s.
+    fn rate_rad_s(&self) -> &[f32; 3];
+    /// Some channel sat at its range limit.
+    fn saturated(&self) -> bool;
+}
+
+impl SampleView for Sample {
+    #[inline(always)]
+    fn raw(&self) -> &[f32; 3] {
+        &self.raw
+    }
+    #[inline(always)]
+    fn rate_rad_s(&self) -> &[f32; 3] {
+        &self.rate_rad_s
+    }
+    #[inline(always)]
+    fn saturated(&self) -> bool {
+        self.saturated
+    }
+}
+
+/// All six values are finite.
+#[inline(always)]
+#[allow(clippy::eq_op)] // `x - x` is the point: 0 for finite x, NaN otherwise
+fn all_finite(r: &[f32; 3], w: &[f32; 3]) -> bool {
+    // `x - x == 0` is false exactly for NaN and ±inf; one comparison chain, no library call.
+    let s = (r[0] - r[0])
+        + (r[1] - r[1])
+        + (r[2] - r[2])
+        + (w[0] - w[0])
+        + (w[1] - w[1])
+        + (w[2] - w[2]);
+    s == 0.0
 }
 
 /// Raw sensor codes as a board reads them: three ADC conversions and a gyro's three 16-bit words.
@@ -289,29 +321,29 @@ impl<const Q: usize> Pipeline<Q> {
     /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
     /// when uncalibrated.
     #[inline(always)]
-    fn compensate(&self, s: &Sample, rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
+    fn compensate(&self, raw: &[f32; 3], rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
             Some(c) if c.mode() == LeverMode::Off => {
-                c.compensate_static(&SensorOutputs { raw: s.raw }).m_s2
+                c.compensate_static(&SensorOutputs { raw: *raw }).m_s2
             }
             Some(c) => {
                 c.compensate(
-                    &SensorOutputs { raw: s.raw },
+                    &SensorOutputs { raw: *raw },
                     &BodyRate { rad_s: *rate },
                     &BodyAngularAccel { rad_s2: *omega_dot },
                 )
                 .m_s2
             }
-            None => s.raw,
+            None => *raw,
         }
     }
 
     /// The body rate: the gyro's output corrected by the calibration (raw when uncalibrated).
     #[inline(always)]
-    fn body_rate(&self, s: &Sample) -> [f32; 3] {
+    fn body_rate(&self, gyro_rad_s: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
-            Some(c) => c.correct_rate(&s.rate_rad_s).rad_s,
-            None => s.rate_rad_s,
+            Some(c) => c.correct_rate(gyro_rad_s).rad_s,
+            None => *gyro_rad_s,
         }
     }
 
@@ -345,11 +377,12 @@ impl<const Q: usize> Pipeline<Q> {
     /// Processes one sample. Cost: ω̇ update, at most one compensation, one accumulation; a frame is
     /// built only when a window closes.
     #[inline]
-    pub fn on_sample(&mut self, s: &Sample) {
+    pub fn on_sample<S: SampleView + ?Sized>(&mut self, s: &S) {
+        let (raw, gyro, saturated) = (s.raw(), s.rate_rad_s(), s.saturated());
         let index = self.index;
         self.index += 1;
-        let finite = s.is_finite();
-        let rate = self.body_rate(s);
+        let finite = all_finite(raw, gyro);
+        let rate = self.body_rate(gyro);
         let omega_dot = if finite {
             self.omega_dot.update(&rate)
         } else {
@@ -359,21 +392,21 @@ impl<const Q: usize> Pipeline<Q> {
         let Some(req) = self.stream else {
             return;
         };
-        let good = finite && !s.saturated;
+        let good = finite && !saturated;
         let mut sample_flags = 0u8;
         if !finite {
             sample_flags |= SampleFlags::NON_FINITE;
         }
-        if s.saturated {
+        if saturated {
             sample_flags |= SampleFlags::SATURATED;
         }
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
                 if good {
                     let (v, r) = if req.kind == StreamKind::RawWindows {
-                        (s.raw, s.rate_rad_s)
+                        (*raw, *gyro)
                     } else {
-                        (self.compensate(s, &rate, &omega_dot), rate)
+                        (self.compensate(raw, &rate, &omega_dot), rate)
                     };
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
@@ -393,15 +426,15 @@ impl<const Q: usize> Pipeline<Q> {
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {
                             index,
-                            raw: s.raw,
-                            rate_rad_s: s.rate_rad_s,
+                            raw: *raw,
+                            rate_rad_s: *gyro,
                             flags,
                         })
                     } else {
                         let f = if finite {
-                            self.compensate(s, &rate, &omega_dot)
+                            self.compensate(raw, &rate, &omega_dot)
                         } else {
-                            s.raw
+                            *raw
                         };
                         DeviceToHost::CompensatedSample(CompensatedSample {
                             index,

@@ -26,9 +26,13 @@ pub struct WindowAccumulator<const N: usize> {
     reference: [f32; N],
     block_sum: [f32; N],
     block_sq: [f32; N],
-    block_n: u32,
+    /// Samples the open block still takes (0: none open, or the open one is full).
+    block_left: u32,
+    /// A block is open (the window has its reference).
+    open: bool,
     sum: [f64; N],
     sq: [f64; N],
+    /// Samples in the blocks folded into `sum` and `sq`.
     count: u32,
 }
 
@@ -45,7 +49,8 @@ impl<const N: usize> WindowAccumulator<N> {
             reference: [0.0; N],
             block_sum: [0.0; N],
             block_sq: [0.0; N],
-            block_n: 0,
+            block_left: 0,
+            open: false,
             sum: [0.0; N],
             sq: [0.0; N],
             count: 0,
@@ -55,8 +60,10 @@ impl<const N: usize> WindowAccumulator<N> {
     /// Adds one sample (the caller has checked that it is finite).
     #[inline(always)]
     pub fn add(&mut self, x: &[f32; N]) {
-        if self.count == 0 && self.block_n == 0 {
-            self.reference = *x;
+        // One counter and one branch per sample: the window's first sample and each block's end
+        // take the out-of-line path.
+        if self.block_left == 0 {
+            self.next_block(x);
         }
         // Written out for the pipeline's 6 channels (and 3): straight-line code even at opt-level
         // "s", which the firmware is built with (a loop costs 45 % more instructions there).
@@ -80,9 +87,18 @@ impl<const N: usize> WindowAccumulator<N> {
                 }
             }
         }
-        self.block_n += 1;
-        if self.block_n == BLOCK {
+        self.block_left -= 1;
+    }
+
+    /// Opens the window's first block with `x` as the reference, or folds the full block.
+    #[inline(never)]
+    fn next_block(&mut self, x: &[f32; N]) {
+        if self.open {
             self.fold();
+        } else {
+            self.reference = *x;
+            self.open = true;
+            self.block_left = BLOCK;
         }
     }
 
@@ -93,7 +109,7 @@ impl<const N: usize> WindowAccumulator<N> {
         self.block_sq[j] += d * d;
     }
 
-    #[inline(never)]
+    /// Folds the open block into the f64 totals; the block goes on empty.
     fn fold(&mut self) {
         for j in 0..N {
             self.sum[j] += f64::from(self.block_sum[j]);
@@ -101,18 +117,29 @@ impl<const N: usize> WindowAccumulator<N> {
             self.block_sum[j] = 0.0;
             self.block_sq[j] = 0.0;
         }
-        self.count += self.block_n;
-        self.block_n = 0;
+        self.count += BLOCK - self.block_left;
+        self.block_left = BLOCK;
+    }
+
+    /// Samples in the open block.
+    fn in_block(&self) -> u32 {
+        if self.open {
+            BLOCK - self.block_left
+        } else {
+            0
+        }
     }
 
     /// Samples added so far.
     pub fn count(&self) -> u32 {
-        self.count + self.block_n
+        self.count + self.in_block()
     }
 
     /// The statistics of the window so far; the accumulator restarts empty.
     pub fn finish(&mut self) -> WindowStats<N> {
-        self.fold();
+        if self.open {
+            self.fold();
+        }
         let n = self.count;
         let nf = f64::from(n);
         let mut out = WindowStats {

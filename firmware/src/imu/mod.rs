@@ -22,7 +22,7 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use crate::pipeline::{Pipeline, Sample};
+use crate::pipeline::{Pipeline, SampleView};
 use crate::sampling::TemperatureMean;
 
 /// Flags of one [`ImuSample`].
@@ -64,16 +64,19 @@ pub struct ImuSample {
     pub flags: ImuFlags,
 }
 
-impl ImuSample {
-    /// The pipeline's view of it (the temperature goes to `Pipeline::set_temperature` at the
-    /// board's pace, the loss to `Pipeline::on_samples_lost`).
+/// The pipeline reads a decoded sample in place (no copy into a `pipeline::Sample` per sample).
+impl SampleView for ImuSample {
     #[inline(always)]
-    pub fn to_sample(&self) -> Sample {
-        Sample {
-            raw: self.accel_out,
-            rate_rad_s: self.gyro_rad_s,
-            saturated: self.flags.has(ImuFlags::SATURATED),
-        }
+    fn raw(&self) -> &[f32; 3] {
+        &self.accel_out
+    }
+    #[inline(always)]
+    fn rate_rad_s(&self) -> &[f32; 3] {
+        &self.gyro_rad_s
+    }
+    #[inline(always)]
+    fn saturated(&self) -> bool {
+        self.flags.has(ImuFlags::SATURATED)
     }
 }
 
@@ -144,6 +147,6 @@ impl PipelineFeed {
         if let Some(t) = self.temperature.push(s.temp_c) {
             p.set_temperature(t);
         }
-        p.on_sample(&s.to_sample());
+        p.on_sample(s);
     }
 }
