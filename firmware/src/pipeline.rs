@@ -393,13 +393,17 @@ impl<const Q: usize> Pipeline<Q> {
             return;
         };
         let good = finite && !saturated;
-        let mut sample_flags = 0u8;
-        if !finite {
-            sample_flags |= SampleFlags::NON_FINITE;
-        }
-        if saturated {
-            sample_flags |= SampleFlags::SATURATED;
-        }
+        // The flags of a sample left out: computed where one is, not on the common path.
+        let sample_flags = || {
+            let mut f = 0u8;
+            if !finite {
+                f |= SampleFlags::NON_FINITE;
+            }
+            if saturated {
+                f |= SampleFlags::SATURATED;
+            }
+            f
+        };
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
                 if good {
@@ -411,7 +415,7 @@ impl<const Q: usize> Pipeline<Q> {
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
                     self.rejected += 1;
-                    self.window_flags |= sample_flags;
+                    self.window_flags |= sample_flags();
                 }
                 self.in_window += 1;
                 if self.in_window >= req.window_samples {
@@ -421,7 +425,7 @@ impl<const Q: usize> Pipeline<Q> {
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
                     // Keeps a SAMPLES_LOST noted since the previous emitted sample.
-                    self.window_flags |= sample_flags;
+                    self.window_flags |= sample_flags();
                     let flags = self.frame_flags(req.kind == StreamKind::CompensatedDecimated);
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {

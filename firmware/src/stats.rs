@@ -62,8 +62,10 @@ impl<const N: usize> WindowAccumulator<N> {
     pub fn add(&mut self, x: &[f32; N]) {
         // One counter and one branch per sample: the window's first sample and each block's end
         // take the out-of-line path.
-        if self.block_left == 0 {
-            self.next_block(x);
+        // (`x` stays out of the call: passing its address would make the caller store the sample
+        // to memory on every call.)
+        if self.block_left == 0 && self.next_block() {
+            self.reference = *x;
         }
         // Written out for the pipeline's 6 channels (and 3): straight-line code even at opt-level
         // "s", which the firmware is built with (a loop costs 45 % more instructions there).
@@ -90,15 +92,17 @@ impl<const N: usize> WindowAccumulator<N> {
         self.block_left -= 1;
     }
 
-    /// Opens the window's first block with `x` as the reference, or folds the full block.
+    /// Folds the full block, or opens the window's first one: true when the caller's sample is
+    /// the window's first (its reference).
     #[inline(never)]
-    fn next_block(&mut self, x: &[f32; N]) {
+    fn next_block(&mut self) -> bool {
         if self.open {
             self.fold();
+            false
         } else {
-            self.reference = *x;
             self.open = true;
             self.block_left = BLOCK;
+            true
         }
     }
 
