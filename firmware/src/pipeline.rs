@@ -18,7 +18,7 @@
 use heapless::Deque;
 use shared::compensator::{Compensator, LeverMode};
 use shared::omega_dot::OmegaDotEstimator;
-use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
+use shared::units::SensorOutputs;
 use shared::wire::{
     CompensatedSample, CompensatedWindow, DeviceToHost, RawSample, RawWindow, SampleFlags,
     StreamKind, StreamRequest,
@@ -326,14 +326,7 @@ impl<const Q: usize> Pipeline<Q> {
             Some(c) if c.mode() == LeverMode::Off => {
                 c.compensate_static(&SensorOutputs { raw: *raw }).m_s2
             }
-            Some(c) => {
-                c.compensate(
-                    &SensorOutputs { raw: *raw },
-                    &BodyRate { rad_s: *rate },
-                    &BodyAngularAccel { rad_s2: *omega_dot },
-                )
-                .m_s2
-            }
+            Some(c) => c.compensate_in_place(raw, rate, omega_dot),
             None => *raw,
         }
     }
@@ -383,12 +376,13 @@ impl<const Q: usize> Pipeline<Q> {
         self.index += 1;
         let finite = all_finite(raw, gyro);
         let rate = self.body_rate(gyro);
-        let omega_dot = if finite {
-            self.omega_dot.update(&rate)
+        // The estimate stays where the estimator keeps it (0 after a reset).
+        if finite {
+            self.omega_dot.update(&rate);
         } else {
             self.omega_dot.reset();
-            [0.0; 3]
-        };
+        }
+        let omega_dot = self.omega_dot.estimate();
         let Some(req) = self.stream else {
             return;
         };
@@ -410,7 +404,7 @@ impl<const Q: usize> Pipeline<Q> {
                     let (v, r) = if req.kind == StreamKind::RawWindows {
                         (*raw, *gyro)
                     } else {
-                        (self.compensate(raw, &rate, &omega_dot), rate)
+                        (self.compensate(raw, &rate, omega_dot), rate)
                     };
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
@@ -436,7 +430,7 @@ impl<const Q: usize> Pipeline<Q> {
                         })
                     } else {
                         let f = if finite {
-                            self.compensate(raw, &rate, &omega_dot)
+                            self.compensate(raw, &rate, omega_dot)
                         } else {
                             *raw
                         };
@@ -513,6 +507,7 @@ mod tests {
     use super::*;
     use crate::paper_unit;
     use shared::compensator::TemperatureState;
+    use shared::units::{BodyAngularAccel, BodyRate};
 
     fn calibrated(mode: LeverMode) -> Pipeline<8> {
         let mut p = Pipeline::<8>::new(1000);

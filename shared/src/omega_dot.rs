@@ -101,6 +101,13 @@ impl OmegaDotEstimator {
         self.stage2[j] += self.beta * (self.stage1[j] - self.stage2[j]);
     }
 
+    /// The current `ω̇` estimate (rad/s²), what the last [`Self::update`] returned (0 after
+    /// [`Self::reset`]), in place.
+    #[inline(always)]
+    pub fn estimate(&self) -> &[f32; 3] {
+        &self.stage2
+    }
+
     /// Restarts from no history (after a gap in the stream).
     pub fn reset(&mut self) {
         self.difference_gain_hz = 0.0;
