@@ -270,6 +270,10 @@ fn first_boot(t: &mut Tally) -> ! {
     t.check("compensation_full_matches_pc", full);
     t.check("omega_dot_matches_pc", testvectors::check_omega_dot());
     t.check("window_stats_match_pc", testvectors::check_window_stats());
+    t.check(
+        "window_block_matches_reference",
+        testvectors::check_window_block(),
+    );
     let [rate, full] = testvectors::check_gyro_temperature();
     t.check("gyro_correction_matches_pc", rate);
     t.check("compensation_after_temperature_refresh_matches_pc", full);
