@@ -18,7 +18,7 @@
 use heapless::Deque;
 use shared::compensator::{Compensator, LeverMode};
 use shared::omega_dot::OmegaDotEstimator;
-use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
+use shared::units::SensorOutputs;
 use shared::wire::{
     CompensatedSample, CompensatedWindow, DeviceToHost, RawSample, RawWindow, SampleFlags,
     StreamKind, StreamRequest,
@@ -48,18 +48,50 @@ pub struct Sample {
 impl Sample {
     /// All six values are finite.
     #[inline(always)]
-    #[allow(clippy::eq_op)] // `x - x` is the point: 0 for finite x, NaN otherwise
     pub fn is_finite(&self) -> bool {
-        // `x - x == 0` is false exactly for NaN and ±inf; one comparison chain, no library call.
-        let (r, w) = (&self.raw, &self.rate_rad_s);
-        let s = (r[0] - r[0])
-            + (r[1] - r[1])
-            + (r[2] - r[2])
-            + (w[0] - w[0])
-            + (w[1] - w[1])
-            + (w[2] - w[2]);
-        s == 0.0
+        all_finite(&self.raw, &self.rate_rad_s)
     }
+}
+
+/// What [`Pipeline::on_sample`] reads of a sample: implemented by [`Sample`] and by a digital
+/// IMU's decoded sample (`imu::ImuSample`), so that a board hands either over as it is, without
+/// copying it into the other form on the per-sample path.
+pub trait SampleView {
+    /// Accelerometer outputs, sensor axes, output unit (V or LSB).
+    fn raw(&self) -> &[f32; 3];
+    /// Gyro rate, body axes, rad/s.
+    fn rate_rad_s(&self) -> &[f32; 3];
+    /// Some channel sat at its range limit.
+    fn saturated(&self) -> bool;
+}
+
+impl SampleView for Sample {
+    #[inline(always)]
+    fn raw(&self) -> &[f32; 3] {
+        &self.raw
+    }
+    #[inline(always)]
+    fn rate_rad_s(&self) -> &[f32; 3] {
+        &self.rate_rad_s
+    }
+    #[inline(always)]
+    fn saturated(&self) -> bool {
+        self.saturated
+    }
+}
+
+/// All six values are finite.
+#[inline(always)]
+#[allow(clippy::eq_op)] // `x - x` is the point: 0 for finite x, NaN otherwise
+fn all_finite(r: &[f32; 3], w: &[f32; 3]) -> bool {
+    // `x - x == 0` is false exactly for NaN and ±inf; one comparison chain, no library call.
+    let s = (r[0] - r[0])
+        + (r[1] - r[1])
+        + (r[2] - r[2])
+        + (w[0] - w[0])
+        + (w[1] - w[1])
+        + (w[2] - w[2]);
+    s == 0.0
 }
 
 /// Raw sensor codes as a board reads them: three ADC conversions and a gyro's three 16-bit words.
@@ -87,20 +119,26 @@ impl Scaling {
     #[inline(always)]
     pub fn sample(&self, c: &RawCodes) -> Sample {
         // Written out per channel: straight-line code at opt-level "s" (the firmware's).
-        let adc_sat = |v: u16| v == 0 || v >= self.adc_max;
-        let gyro_sat = |v: i16| v == i16::MIN || v == i16::MAX;
+        // Each check is a value whose sign bit is set exactly when the code is at a range end, so
+        // the six fold into one OR and one sign test (two integer operations per channel, no
+        // compare-and-select): `v − 1 < 0` is code 0, `adc_max − 1 − v < 0` is a code ≥ adc_max;
+        // `w + 32767 < 0` is −32768, `32766 − w < 0` is 32767.
+        let top = i32::from(self.adc_max) - 1;
+        let adc_end = |v: u16| (i32::from(v) - 1) | (top - i32::from(v));
+        let gyro_end = |v: i16| (i32::from(v) + 32767) | (32766 - i32::from(v));
         let (a, g) = (&c.adc, &c.gyro);
         let volts = |v: u16| f32::from(v) * self.volts_per_code;
         let rad_s = |v: i16| f32::from(v) * self.rad_s_per_lsb;
+        let ends = adc_end(a[0])
+            | adc_end(a[1])
+            | adc_end(a[2])
+            | gyro_end(g[0])
+            | gyro_end(g[1])
+            | gyro_end(g[2]);
         Sample {
             raw: [volts(a[0]), volts(a[1]), volts(a[2])],
             rate_rad_s: [rad_s(g[0]), rad_s(g[1]), rad_s(g[2])],
-            saturated: adc_sat(a[0])
-                | adc_sat(a[1])
-                | adc_sat(a[2])
-                | gyro_sat(g[0])
-                | gyro_sat(g[1])
-                | gyro_sat(g[2]),
+            saturated: ends < 0,
         }
     }
 }
@@ -283,29 +321,22 @@ impl<const Q: usize> Pipeline<Q> {
     /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
     /// when uncalibrated.
     #[inline(always)]
-    fn compensate(&self, s: &Sample, rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
+    fn compensate(&self, raw: &[f32; 3], rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
             Some(c) if c.mode() == LeverMode::Off => {
-                c.compensate_static(&SensorOutputs { raw: s.raw }).m_s2
+                c.compensate_static(&SensorOutputs { raw: *raw }).m_s2
             }
-            Some(c) => {
-                c.compensate(
-                    &SensorOutputs { raw: s.raw },
-                    &BodyRate { rad_s: *rate },
-                    &BodyAngularAccel { rad_s2: *omega_dot },
-                )
-                .m_s2
-            }
-            None => s.raw,
+            Some(c) => c.compensate_in_place(raw, rate, omega_dot),
+            None => *raw,
         }
     }
 
     /// The body rate: the gyro's output corrected by the calibration (raw when uncalibrated).
     #[inline(always)]
-    fn body_rate(&self, s: &Sample) -> [f32; 3] {
+    fn body_rate(&self, gyro_rad_s: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
-            Some(c) => c.correct_rate(&s.rate_rad_s).rad_s,
-            None => s.rate_rad_s,
+            Some(c) => c.correct_rate(gyro_rad_s).rad_s,
+            None => *gyro_rad_s,
         }
     }
 
@@ -339,40 +370,46 @@ impl<const Q: usize> Pipeline<Q> {
     /// Processes one sample. Cost: ω̇ update, at most one compensation, one accumulation; a frame is
     /// built only when a window closes.
     #[inline]
-    pub fn on_sample(&mut self, s: &Sample) {
+    pub fn on_sample<S: SampleView + ?Sized>(&mut self, s: &S) {
+        let (raw, gyro, saturated) = (s.raw(), s.rate_rad_s(), s.saturated());
         let index = self.index;
         self.index += 1;
-        let finite = s.is_finite();
-        let rate = self.body_rate(s);
-        let omega_dot = if finite {
-            self.omega_dot.update(&rate)
+        let finite = all_finite(raw, gyro);
+        let rate = self.body_rate(gyro);
+        // The estimate stays where the estimator keeps it (0 after a reset).
+        if finite {
+            self.omega_dot.update(&rate);
         } else {
             self.omega_dot.reset();
-            [0.0; 3]
-        };
+        }
+        let omega_dot = self.omega_dot.estimate();
         let Some(req) = self.stream else {
             return;
         };
-        let good = finite && !s.saturated;
-        let mut sample_flags = 0u8;
-        if !finite {
-            sample_flags |= SampleFlags::NON_FINITE;
-        }
-        if s.saturated {
-            sample_flags |= SampleFlags::SATURATED;
-        }
+        let good = finite && !saturated;
+        // The flags of a sample left out: computed where one is, not on the common path.
+        let sample_flags = || {
+            let mut f = 0u8;
+            if !finite {
+                f |= SampleFlags::NON_FINITE;
+            }
+            if saturated {
+                f |= SampleFlags::SATURATED;
+            }
+            f
+        };
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
                 if good {
                     let (v, r) = if req.kind == StreamKind::RawWindows {
-                        (s.raw, s.rate_rad_s)
+                        (*raw, *gyro)
                     } else {
-                        (self.compensate(s, &rate, &omega_dot), rate)
+                        (self.compensate(raw, &rate, omega_dot), rate)
                     };
                     self.acc.add(&[v[0], v[1], v[2], r[0], r[1], r[2]]);
                 } else {
                     self.rejected += 1;
-                    self.window_flags |= sample_flags;
+                    self.window_flags |= sample_flags();
                 }
                 self.in_window += 1;
                 if self.in_window >= req.window_samples {
@@ -382,20 +419,20 @@ impl<const Q: usize> Pipeline<Q> {
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
                     // Keeps a SAMPLES_LOST noted since the previous emitted sample.
-                    self.window_flags |= sample_flags;
+                    self.window_flags |= sample_flags();
                     let flags = self.frame_flags(req.kind == StreamKind::CompensatedDecimated);
                     let msg = if req.kind == StreamKind::RawDecimated {
                         DeviceToHost::RawSample(RawSample {
                             index,
-                            raw: s.raw,
-                            rate_rad_s: s.rate_rad_s,
+                            raw: *raw,
+                            rate_rad_s: *gyro,
                             flags,
                         })
                     } else {
                         let f = if finite {
-                            self.compensate(s, &rate, &omega_dot)
+                            self.compensate(raw, &rate, omega_dot)
                         } else {
-                            s.raw
+                            *raw
                         };
                         DeviceToHost::CompensatedSample(CompensatedSample {
                             index,
@@ -470,6 +507,7 @@ mod tests {
     use super::*;
     use crate::paper_unit;
     use shared::compensator::TemperatureState;
+    use shared::units::{BodyAngularAccel, BodyRate};
 
     fn calibrated(mode: LeverMode) -> Pipeline<8> {
         let mut p = Pipeline::<8>::new(1000);
@@ -765,6 +803,38 @@ mod tests {
             },
         ] {
             assert!(k.sample(&c).saturated, "{c:?}");
+        }
+    }
+
+    /// The folded sign-bit checks against the plain definition, every code of each channel (the
+    /// others held mid-range), for a 12-bit and a 16-bit ADC.
+    #[test]
+    fn saturation_is_exactly_a_code_at_a_range_end() {
+        for adc_max in [4095u16, u16::MAX] {
+            let k = Scaling {
+                volts_per_code: 1e-3,
+                adc_max,
+                rad_s_per_lsb: 1e-3,
+            };
+            for slot in 0..3 {
+                for v in 0..=u16::MAX {
+                    let mut c = RawCodes {
+                        adc: [100; 3],
+                        gyro: [0; 3],
+                    };
+                    c.adc[slot] = v;
+                    assert_eq!(k.sample(&c).saturated, v == 0 || v >= adc_max, "{c:?}");
+                }
+                for w in i16::MIN..=i16::MAX {
+                    let mut c = RawCodes {
+                        adc: [100; 3],
+                        gyro: [0; 3],
+                    };
+                    c.gyro[slot] = w;
+                    let end = w == i16::MIN || w == i16::MAX;
+                    assert_eq!(k.sample(&c).saturated, end, "{c:?}");
+                }
+            }
         }
     }
 

@@ -1,4 +1,5 @@
-//! Board-independent pieces of the sampling tasks: the temperature decimator and the layout of the
+//! Board-independent pieces of the sampling tasks: the temperature decimator (which the digital
+//! IMU's [`crate::imu::PipelineFeed`] and the Nucleo's ADC task both use) and the layout of the
 //! Nucleo's ADC scan.
 //!
 //! Both STM32 boards get a temperature with every sample (the ICM-42688-P puts its die temperature in
@@ -10,13 +11,17 @@
 
 use crate::pipeline::{RawCodes, TEMPERATURE_REFRESH_HZ};
 
-/// Averages per-sample temperatures over `1/TEMPERATURE_REFRESH_HZ` s.
+/// Averages per-sample temperatures over `1/TEMPERATURE_REFRESH_HZ` s. The first reading after
+/// [`TemperatureMean::new`] is passed on at once (the compensator is refreshed from the first
+/// sample rather than after a period at its reference temperature), then one mean per period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TemperatureMean {
     period: u32,
     inv_period: f32,
-    seen: u32,
-    finite: u32,
+    /// Readings still to come in the current period.
+    left: u32,
+    /// The reciprocal of the current period's length (1 for the first reading).
+    inv_current: f32,
     sum_c: f32,
 }
 
@@ -28,8 +33,8 @@ impl TemperatureMean {
         TemperatureMean {
             period,
             inv_period: 1.0 / period as f32,
-            seen: 0,
-            finite: 0,
+            left: 1,
+            inv_current: 1.0,
             sum_c: 0.0,
         }
     }
@@ -39,28 +44,34 @@ impl TemperatureMean {
         self.period
     }
 
-    /// Adds one sample's temperature, °C. At the end of a period, returns the mean of its finite
+    /// Adds one sample's temperature, °C. At the end of a period, returns the mean of its
     /// readings — or NaN if any reading was not finite (a failed or implausible read must reach the
     /// pipeline, which flags it, rather than be averaged away).
-    #[inline]
+    ///
+    /// Per sample one addition and a count: a non-finite reading makes the sum non-finite (NaN and
+    /// ±∞ propagate through addition), so the check is once per period, on the sum.
+    #[inline(always)]
     pub fn push(&mut self, temp_c: f32) -> Option<f32> {
-        self.seen += 1;
-        if temp_c.is_finite() {
-            self.sum_c += temp_c;
-            self.finite += 1;
-        }
-        if self.seen < self.period {
+        self.sum_c += temp_c;
+        self.left -= 1;
+        if self.left != 0 {
             return None;
         }
-        let mean = if self.finite == self.period {
-            self.sum_c * self.inv_period
+        Some(self.end_period())
+    }
+
+    #[inline(never)]
+    fn end_period(&mut self) -> f32 {
+        let sum = self.sum_c;
+        let mean = if sum.is_finite() {
+            sum * self.inv_current
         } else {
             f32::NAN
         };
-        self.seen = 0;
-        self.finite = 0;
+        self.left = self.period;
+        self.inv_current = self.inv_period;
         self.sum_c = 0.0;
-        Some(mean)
+        mean
     }
 }
 
@@ -86,41 +97,53 @@ mod tests {
     use super::*;
 
     #[test]
-    fn one_mean_per_refresh_period() {
+    fn the_first_reading_at_once_then_one_mean_per_refresh_period() {
         // 8 kHz: a mean every 2000 samples (4 per second).
         let mut t = TemperatureMean::new(8000);
         assert_eq!(t.period(), 2000);
         let mut means = [0.0f32; 3];
         let mut n = 0;
         for i in 0..6000u32 {
-            // 20 °C and 30 °C alternating: the mean is 25 °C exactly.
+            // 30 °C and 20 °C alternating: the first reading is 20 °C, each period after it holds
+            // 1000 of each, so its mean is 25 °C exactly.
             let reading = if i % 2 == 0 { 20.0 } else { 30.0 };
             if let Some(m) = t.push(reading) {
                 means[n] = m;
                 n += 1;
-                assert_eq!((i + 1) % 2000, 0, "mean at sample {i}");
+                assert_eq!(i % 2000, 0, "mean at sample {i}");
             }
         }
         assert_eq!(n, 3);
-        for m in means {
+        assert_eq!(means[0], 20.0);
+        for m in &means[1..] {
             assert!((m - 25.0).abs() < 1e-3, "{m}");
         }
     }
 
     #[test]
     fn a_bad_reading_makes_the_period_nan_and_the_next_recovers() {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut t = TemperatureMean::new(1000);
+            assert_eq!(t.period(), 250);
+            assert_eq!(t.push(40.0), Some(40.0));
+            let mut out = None;
+            for i in 0..250 {
+                out = t.push(if i == 100 { bad } else { 40.0 });
+            }
+            assert!(out.is_some_and(f32::is_nan), "{bad}: {out:?}");
+            for _ in 0..250 {
+                out = t.push(41.0);
+            }
+            // f32 sum times the reciprocal of the period: a rounding or two from 41.
+            assert!(out.is_some_and(|m| (m - 41.0).abs() < 1e-4), "{out:?}");
+        }
+    }
+
+    #[test]
+    fn a_bad_first_reading_is_passed_on_as_nan() {
         let mut t = TemperatureMean::new(1000);
-        assert_eq!(t.period(), 250);
-        let mut out = None;
-        for i in 0..250 {
-            out = t.push(if i == 100 { f32::NAN } else { 40.0 });
-        }
-        assert!(out.is_some_and(f32::is_nan));
-        for _ in 0..250 {
-            out = t.push(41.0);
-        }
-        // f32 sum times the reciprocal of the period: a rounding or two from 41.
-        assert!(out.is_some_and(|m| (m - 41.0).abs() < 1e-4), "{out:?}");
+        assert!(t.push(f32::NAN).is_some_and(f32::is_nan));
+        assert_eq!(t.push(30.0), None);
     }
 
     #[test]
@@ -128,6 +151,7 @@ mod tests {
         let mut t = TemperatureMean::new(2);
         assert_eq!(t.period(), 1);
         assert_eq!(t.push(5.0), Some(5.0));
+        assert_eq!(t.push(6.0), Some(6.0));
     }
 
     #[test]

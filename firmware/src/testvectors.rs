@@ -245,6 +245,29 @@ pub fn check_omega_dot() -> Check {
     out
 }
 
+/// The 6-channel window (the pipeline's) through [`WindowAccumulator::add`] against the same
+/// samples through [`WindowAccumulator::add_compiled`]: on the M4F the first is an assembly
+/// block, and both must agree bit for bit (count, means, variances; across a block fold).
+pub fn check_window_block() -> Check {
+    let (mut block, mut compiled) = (WindowAccumulator::<6>::new(), WindowAccumulator::<6>::new());
+    for _ in 0..STATS_REPEAT {
+        for c in COMP_CASES {
+            let (u, w) = (f(&c.u), f(&c.w));
+            let x = [u[0], u[1], u[2], w[0], w[1], w[2]];
+            block.add(&x);
+            compiled.add_compiled(&x);
+        }
+    }
+    let (a, b) = (block.finish(), compiled.finish());
+    let mut out = Check::default();
+    out.add(f32::from_bits(a.count), b.count);
+    for j in 0..6 {
+        out.add(a.mean[j], b.mean[j].to_bits());
+        out.add(a.var[j], b.var[j].to_bits());
+    }
+    out
+}
+
 /// Window statistics of the compensation inputs (repeated [`STATS_REPEAT`] times) against the table.
 pub fn check_window_stats() -> Check {
     let mut acc = WindowAccumulator::<3>::new();

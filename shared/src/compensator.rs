@@ -255,21 +255,29 @@ const _: () = {
     );
 };
 
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[path = "compensator_arm.rs"]
+mod arm;
+
 /// Precomputed state of the inverse model. `f32` throughout, fixed size, `Copy`.
+///
+/// `repr(C)`, the per-sample constants first and in the order the ARM form of
+/// [`Compensator::compensate`] reads them (`compensator_arm.rs`: one block load per group).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Compensator {
-    /// `u0(T)`, output unit.
-    zero_bias_out: [f32; 3],
-    /// `g·(K A)⁻¹` at the current temperature, m/s² per output unit, row-major.
-    ka_m_s2_per_out: [[f32; 3]; 3],
-    /// `a_i`, unit sensing directions.
-    a: [[f32; 3]; 3],
     /// `p_i = k_i (r_i × a_i)/g`, output unit per rad/s².
     p: [[f32; 3]; 3],
+    /// `a_i`, unit sensing directions.
+    a: [[f32; 3]; 3],
     /// `q_i = k_i r_i / g`, output unit per (rad/s)² per unit of `a_i·ω`.
     q: [[f32; 3]; 3],
     /// `s_i = k_i (a_i·r_i)/g`, output unit per (rad/s)².
     s: [f32; 3],
+    /// `u0(T)`, output unit.
+    zero_bias_out: [f32; 3],
+    /// `g·(K A)⁻¹` at the current temperature, m/s² per output unit, row-major.
+    ka_m_s2_per_out: [[f32; 3]; 3],
     /// `G⁻¹` and `b(T)` of the gyro.
     gyro: GyroInverse,
     /// False for a perfect gyro without temperature drift: [`Compensator::correct_rate`] is skipped.
@@ -471,28 +479,40 @@ impl Compensator {
         omega: &BodyRate,
         omega_dot: &BodyAngularAccel,
     ) -> BodySpecificForce {
-        let w = &omega.rad_s;
+        BodySpecificForce {
+            m_s2: self.compensate_in_place(&u.raw, &omega.rad_s, &omega_dot.rad_s2),
+        }
+    }
+
+    /// [`Compensator::compensate`] on the values where they lie (outputs in the output unit, rate
+    /// rad/s, angular acceleration rad/s²; specific force m/s²): a per-sample caller that holds them
+    /// in memory already (a decoded sample, the ω̇ estimator's state) passes them without a copy.
+    #[inline(always)]
+    pub fn compensate_in_place(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+        return self.compensate_block(u, w, wd);
+        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+        return self.compensate_reference(u, w, wd);
+    }
+
+    /// [`Compensator::compensate`] in Rust: the reference on the PC and on other targets; the ARM
+    /// form (`compensator_arm.rs`) rounds identically, which the QEMU test vectors check bit for bit.
+    /// Each sum runs left to right, each product rounded before its addition (`vmla.f32`).
+    #[cfg_attr(all(target_arch = "arm", target_abi = "eabihf"), allow(dead_code))]
+    #[inline(always)]
+    fn compensate_reference(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
         let w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
         let v = [
-            self.lever_corrected(0, u, w, &omega_dot.rad_s2, w2),
-            self.lever_corrected(1, u, w, &omega_dot.rad_s2, w2),
-            self.lever_corrected(2, u, w, &omega_dot.rad_s2, w2),
+            self.lever_corrected(0, u, w, wd, w2),
+            self.lever_corrected(1, u, w, wd, w2),
+            self.lever_corrected(2, u, w, wd, w2),
         ];
-        BodySpecificForce {
-            m_s2: mat_vec32(&self.ka_m_s2_per_out, &v),
-        }
+        mat_vec32(&self.ka_m_s2_per_out, &v)
     }
 
     /// `U_i − u0_i − k_i d_i` with `k_i d_i = ω̇·p_i + (a_i·ω)(q_i·ω) − |ω|² s_i`.
     #[inline(always)]
-    fn lever_corrected(
-        &self,
-        i: usize,
-        u: &SensorOutputs,
-        w: &[f32; 3],
-        wd: &[f32; 3],
-        w2: f32,
-    ) -> f32 {
+    fn lever_corrected(&self, i: usize, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3], w2: f32) -> f32 {
         let p = &self.p[i];
         let q = &self.q[i];
         let a = &self.a[i];
@@ -500,7 +520,7 @@ impl Compensator {
         let a_w = a[0] * w[0] + a[1] * w[1] + a[2] * w[2];
         let q_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
         let k_d = tangential + a_w * q_w - w2 * self.s[i];
-        u.raw[i] - self.zero_bias_out[i] - k_d
+        u[i] - self.zero_bias_out[i] - k_d
     }
 
     /// The precomputed `f32` constants, for code generators that reproduce this per-sample path in

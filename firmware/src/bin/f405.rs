@@ -38,11 +38,10 @@ mod app {
     use firmware::board::stm32_common::Store;
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
     use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
-    use firmware::imu::{ImuFlags, ImuSample};
+    use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE};
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::PipelineAccess;
-    use firmware::sampling::TemperatureMean;
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, LinkService, Pipeline};
     use shared::LeverMode;
@@ -69,7 +68,7 @@ mod app {
         rx: RxBuf,
         reader: Option<BurstReader>,
         samples: &'static mut [ImuSample; BATCH_PACKETS],
-        temperature: TemperatureMean,
+        feed: PipelineFeed,
         /// Samples between two LED updates (half a second).
         led_period: u32,
         sample_rate_hz: u32,
@@ -162,7 +161,7 @@ mod app {
                 imu_found: reader.is_some(),
                 reader,
                 samples: cx.local.sample_buf,
-                temperature: TemperatureMean::new(sample_rate_hz),
+                feed: PipelineFeed::new(sample_rate_hz),
                 led_period: sample_rate_hz / 2,
                 sample_rate_hz,
                 usb_dev,
@@ -269,7 +268,7 @@ mod app {
     /// chain, decoded samples) outside any lock, then the pipeline on each sample — all preemptible
     /// by the watermark interrupt. The locks cover register writes only.
     #[task(binds = DMA2_STREAM2, priority = 2, shared = [pipeline, bus],
-           local = [rx, reader, samples, temperature, led_period, packets: u32 = 0])]
+           local = [rx, reader, samples, feed, led_period, packets: u32 = 0])]
     fn burst_done(mut cx: burst_done::Context) {
         let l = cx.local;
         // The stream's flags first, whatever follows: a flag left set would re-enter at once.
@@ -300,14 +299,9 @@ mod app {
         }
         cx.shared.pipeline.lock(|p| {
             for s in &l.samples[..done.samples] {
-                if s.flags.has(ImuFlags::DATA_LOST) {
-                    // A FIFO overflow, a flushed FIFO or a failed burst: the window says so.
-                    p.on_samples_lost(u32::from(s.lost_before));
-                }
-                if let Some(t) = l.temperature.push(s.temp_c) {
-                    p.set_temperature(t);
-                }
-                p.on_sample(&s.to_sample());
+                // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through
+                // the sample's DATA_LOST flag.
+                l.feed.push(s, p);
             }
             *l.packets += done.samples as u32;
             if *l.packets >= *l.led_period {

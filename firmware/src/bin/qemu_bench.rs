@@ -299,7 +299,7 @@ fn imu_stream(cal: &shared::Calibration) -> Option<&'static mut [u8; IMU_SAMPLES
 }
 
 /// The digital IMU's path: the FIFO packet decode alone, and the whole per-sample path from FIFO
-/// bytes (decode, gap and saturation checks, the temperature reading every 250 samples, gyro
+/// bytes (decode, gap and saturation checks, the temperature mean of `PipelineFeed`, gyro
 /// correction, ω̇, full compensation with the temperature model, window) as the QEMU board runs it,
 /// in transfers of 16 packets (what one DMA read brings).
 fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]) {
@@ -324,31 +324,58 @@ fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]
         temperature: Some(paper_unit::typical_thermal_model()),
         ..*cal
     };
-    let Ok(mut core) = Core::new(IMU_CONFIG) else {
-        return;
-    };
-    let mut p = Pipeline::<8>::new(1000);
-    p.apply(PipelineCommand::Compensator(
-        Compensator::new(&thermal, LeverMode::RateAndAcceleration).ok(),
-    ));
-    p.apply(PipelineCommand::Stream(StreamRequest {
-        kind: StreamKind::CompensatedWindows,
-        window_samples: 1000,
-    }));
-    let mut feed = PipelineFeed::new(1000);
-    let t = ticks(batches, |b| {
-        if let Ok(n) = core.decode(black_box(&stream[b * 320..(b + 1) * 320]), &mut out) {
-            for s in &out[..n] {
-                feed.push(s, &mut p);
-            }
+    // The same loop with less of the pipeline on, for the per-stage table (README "Per-sample
+    // budgets"): the differences are each stage's cost in place.
+    for (name, kind, mode, goal) in [
+        (
+            "whole IMU path: decode + gyro corr. + omega-dot + full comp. (thermal) + window",
+            Some(StreamKind::CompensatedWindows),
+            LeverMode::RateAndAcceleration,
+            "(goal <= 300)",
+        ),
+        (
+            "IMU path as above, static comp. (thermal) + window",
+            Some(StreamKind::CompensatedWindows),
+            LeverMode::Off,
+            "",
+        ),
+        (
+            "IMU path as above, raw window",
+            Some(StreamKind::RawWindows),
+            LeverMode::RateAndAcceleration,
+            "",
+        ),
+        (
+            "IMU path as above, not streaming (decode + feed + gyro corr. + omega-dot)",
+            None,
+            LeverMode::RateAndAcceleration,
+            "",
+        ),
+    ] {
+        let Ok(mut core) = Core::new(IMU_CONFIG) else {
+            return;
+        };
+        let mut p = Pipeline::<8>::new(1000);
+        p.apply(PipelineCommand::Compensator(
+            Compensator::new(&thermal, mode).ok(),
+        ));
+        if let Some(kind) = kind {
+            p.apply(PipelineCommand::Stream(StreamRequest {
+                kind,
+                window_samples: 1000,
+            }));
         }
-    });
-    black_box(p.pop_output());
-    line(
-        "whole IMU path: decode + gyro corr. + omega-dot + full comp. (thermal) + window",
-        per_iter_x10(t, b_empty, IMU_SAMPLES as u32),
-        "(goal <= 300)",
-    );
+        let mut feed = PipelineFeed::new(1000);
+        let t = ticks(batches, |b| {
+            if let Ok(n) = core.decode(black_box(&stream[b * 320..(b + 1) * 320]), &mut out) {
+                for s in &out[..n] {
+                    feed.push(s, &mut p);
+                }
+            }
+        });
+        black_box(p.pop_output());
+        line(name, per_iter_x10(t, b_empty, IMU_SAMPLES as u32), goal);
+    }
 }
 
 /// What does not run per sample: a temperature refresh (4 per second) and the QEMU board's virtual

@@ -18,7 +18,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_semihosting as _;
 
-use firmware::board::qemu;
+use firmware::board::{self, qemu};
 use firmware::imu::PipelineFeed;
 use firmware::pipeline::PipelineCommand;
 use firmware::protocol::{DeviceInfo, PipelineAccess};
@@ -34,32 +34,6 @@ use shared::LeverMode;
 
 extern "C" {
     static mut _bootmark: [u32; 4];
-    /// End of .bss/.uninit (cortex-m-rt): the stack grows down towards it.
-    static mut __sheap: u32;
-    /// Top of the stack (cortex-m-rt).
-    static _stack_start: u32;
-}
-const PAINT: u32 = 0xA5A5_A5A5;
-
-/// Fills the unused stack with a pattern (from the end of the statics to 256 bytes below SP).
-fn paint_stack() {
-    let sp = cortex_m::register::msp::read() as usize;
-    let mut p = addr_of_mut!(__sheap) as usize;
-    while p + 4 <= sp - 256 {
-        // SAFETY: memory between the statics and the live stack, unused.
-        unsafe { write_volatile(p as *mut u32, PAINT) };
-        p += 4;
-    }
-}
-
-/// Deepest stack use since [`paint_stack`], bytes.
-fn stack_high_water() -> usize {
-    let mut p = addr_of_mut!(__sheap) as usize;
-    // SAFETY: as above; reads only.
-    while unsafe { read_volatile(p as *const u32) } == PAINT {
-        p += 4;
-    }
-    addr_of!(_stack_start) as usize - p
 }
 const MARK: u32 = 0xB007_1E57;
 const CREATED: u64 = 1_800_000_042;
@@ -288,7 +262,7 @@ fn heated_board(t: &mut Tally) {
 }
 
 fn first_boot(t: &mut Tally) -> ! {
-    paint_stack();
+    board::paint_stack();
     hprintln!("qemu-target-tests: boot 1 (Cortex-M4F FPU, mps2-an386)");
     let [st, rate, full] = testvectors::check_compensation();
     t.check("compensation_static_matches_pc", st);
@@ -296,6 +270,10 @@ fn first_boot(t: &mut Tally) -> ! {
     t.check("compensation_full_matches_pc", full);
     t.check("omega_dot_matches_pc", testvectors::check_omega_dot());
     t.check("window_stats_match_pc", testvectors::check_window_stats());
+    t.check(
+        "window_block_matches_reference",
+        testvectors::check_window_block(),
+    );
     let [rate, full] = testvectors::check_gyro_temperature();
     t.check("gyro_correction_matches_pc", rate);
     t.check("compensation_after_temperature_refresh_matches_pc", full);
@@ -360,7 +338,7 @@ fn first_boot(t: &mut Tally) -> ! {
 
     hprintln!(
         "qemu-target-tests: stack high-water mark {} bytes (boot, calibration write, tests)",
-        stack_high_water()
+        board::stack_usage().1
     );
 
     // Marker + results, then a real system reset.

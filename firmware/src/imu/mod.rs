@@ -22,7 +22,8 @@ pub mod sim;
 #[cfg(test)]
 mod tests;
 
-use crate::pipeline::{Pipeline, Sample, TEMPERATURE_REFRESH_HZ};
+use crate::pipeline::{Pipeline, SampleView};
+use crate::sampling::TemperatureMean;
 
 /// Flags of one [`ImuSample`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -63,16 +64,19 @@ pub struct ImuSample {
     pub flags: ImuFlags,
 }
 
-impl ImuSample {
-    /// The pipeline's view of it (the temperature goes to `Pipeline::set_temperature` at the
-    /// board's pace, the loss to `Pipeline::on_samples_lost`).
+/// The pipeline reads a decoded sample in place (no copy into a `pipeline::Sample` per sample).
+impl SampleView for ImuSample {
     #[inline(always)]
-    pub fn to_sample(&self) -> Sample {
-        Sample {
-            raw: self.accel_out,
-            rate_rad_s: self.gyro_rad_s,
-            saturated: self.flags.has(ImuFlags::SATURATED),
-        }
+    fn raw(&self) -> &[f32; 3] {
+        &self.accel_out
+    }
+    #[inline(always)]
+    fn rate_rad_s(&self) -> &[f32; 3] {
+        &self.gyro_rad_s
+    }
+    #[inline(always)]
+    fn saturated(&self) -> bool {
+        self.flags.has(ImuFlags::SATURATED)
     }
 }
 
@@ -120,19 +124,17 @@ pub(crate) fn lost_between(previous: u16, current: u16, period: u16) -> u16 {
 }
 
 /// Hands decoded samples to the pipeline as a board's sampling task does: a loss first (so that
-/// the pipeline's sample index and ω̇ know of the gap), the part's temperature every
-/// `1/TEMPERATURE_REFRESH_HZ` s of samples, then the sample.
+/// the pipeline's sample index and ω̇ know of the gap), the part's temperature averaged over each
+/// `1/TEMPERATURE_REFRESH_HZ` s of samples ([`TemperatureMean`]), then the sample.
 pub struct PipelineFeed {
-    every: u32,
-    until_temperature: u32,
+    temperature: TemperatureMean,
 }
 
 impl PipelineFeed {
     /// For samples at `sample_rate_hz`.
     pub fn new(sample_rate_hz: u32) -> Self {
         PipelineFeed {
-            every: (sample_rate_hz / TEMPERATURE_REFRESH_HZ).max(1),
-            until_temperature: 0,
+            temperature: TemperatureMean::new(sample_rate_hz),
         }
     }
 
@@ -142,11 +144,9 @@ impl PipelineFeed {
         if s.flags.has(ImuFlags::DATA_LOST) {
             p.on_samples_lost(u32::from(s.lost_before));
         }
-        if self.until_temperature == 0 {
-            p.set_temperature(s.temp_c);
-            self.until_temperature = self.every;
+        if let Some(t) = self.temperature.push(s.temp_c) {
+            p.set_temperature(t);
         }
-        self.until_temperature -= 1;
-        p.on_sample(&s.to_sample());
+        p.on_sample(s);
     }
 }

@@ -48,11 +48,12 @@ fn be20(p: &[u8], i: usize, nibble: u8) -> i32 {
     (i32::from(be16(p, i)) << 4) | i32::from(nibble & 0x0F)
 }
 
-/// True when `v` is at or beyond ±`max` — a saturated axis or the invalid marker (below −max):
-/// one add and one unsigned compare.
+/// Negative exactly when `v` is at or beyond ±`max` (a saturated axis, or the invalid marker below
+/// −max): `v + max − 1 < 0` below, `max − 1 − v < 0` above. Two operations and no compare, so that
+/// the six axes' checks fold into one OR and one sign test. (|v| < 2²⁰: no overflow.)
 #[inline(always)]
-fn extreme(v: i32, max: i32) -> bool {
-    (v.wrapping_add(max - 1)) as u32 > (2 * max - 2) as u32
+fn extreme(v: i32, max: i32) -> i32 {
+    (v + (max - 1)) | ((max - 1) - v)
 }
 
 /// Codes of one packet, before scaling: accelerometer and gyro x, y, z, and their full-scale codes.
@@ -69,12 +70,13 @@ fn scale_into(c: Codes, s: &Scale, out: &mut ImuSample) {
     // Written out per value: straight-line code at opt-level "s" (no arrays through the stack).
     let ((a0, a1, a2), (g0, g1, g2)) = (c.a, c.g);
     let [am, gm] = c.max;
-    let odd = extreme(a0, am)
+    let odd = (extreme(a0, am)
         | extreme(a1, am)
         | extreme(a2, am)
         | extreme(g0, gm)
         | extreme(g1, gm)
-        | extreme(g2, gm);
+        | extreme(g2, gm))
+        < 0;
     let (ka, ca, kg) = (
         s.accel_out_per_code,
         s.accel_out_offset,
