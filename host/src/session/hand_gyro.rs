@@ -5,10 +5,11 @@
 use super::from_recording::stats_for;
 use super::import::Recording;
 use super::segment::Segmentation;
+use super::table_turn::find_table_turns;
 use super::Plan;
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{
-    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn, DETERMINED_1SIGMA,
+    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, TableTurn, Turn, DETERMINED_1SIGMA,
 };
 use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
 use crate::unit_file::GyroSection;
@@ -49,8 +50,9 @@ pub enum HandGyroFileError {
     },
 }
 
-/// The gyro fit on the turns, with gravity directions from the session's own accelerometer
-/// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
+/// The gyro fit on the hand turns and the whole table turns ([`super::table_turn`]), with gravity
+/// directions from the session's own accelerometer calibration. A wrong gyro unit is an error; too
+/// few turns only leave the gyro uncalibrated.
 pub fn fit(
     rec: &Recording,
     seg: &Segmentation,
@@ -72,15 +74,36 @@ pub fn fit(
         f.map(|c| c / n)
     };
     let jumps = rec.jumps();
+    let whole: Vec<(usize, i32)> = find_table_turns(rec, seg)
+        .iter()
+        .filter_map(|f| Some((f.after_still, f.used()?)))
+        .collect();
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
-        .filter(|w| Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1))
-        .map(|w| Turn {
+        .enumerate()
+        .filter(|(k, w)| {
+            Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1)
+                && !whole.iter().any(|(after, _)| after == k)
+        })
+        .map(|(_, w)| Turn {
             from_row: w[0].end - 1,
             to_row: w[1].start,
             up_before_b: up(&w[0]),
             up_after_b: up(&w[1]),
+        })
+        .collect();
+    let table: Vec<TableTurn> = whole
+        .iter()
+        .map(|&(k, turns)| {
+            let (a, b) = (&seg.stills[k], &seg.stills[k + 1]);
+            let sum: [f64; 3] = core::array::from_fn(|j| up(a)[j] + up(b)[j]);
+            TableTurn {
+                from_row: a.end - 1,
+                to_row: b.start,
+                up_b: sum.map(|c| c / linalg::norm(&sum)),
+                turns,
+            }
         })
         .collect();
     let means: Vec<([f64; 3], usize)> = seg
@@ -88,10 +111,32 @@ pub fn fit(
         .iter()
         .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
         .collect();
-    match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
+    let fitted = fit_handheld_gyro(
+        &turns,
+        &table,
+        &rec.t_s,
+        &rec.gyro_rad_s,
+        still_bias(&means),
+        angle_random_walk(rec, seg),
+    );
+    match fitted {
         Err(e @ HandGyroError::UnitMismatch { .. }) => Err(HandGyroFileError::Unit(e)),
         r => Ok(r),
     }
+}
+
+/// The gyro's angle random walk, rad/√s: the median over the still intervals of their per-sample
+/// noise (rms over the axes) times the square root of the sample period, white noise assumed.
+fn angle_random_walk(rec: &Recording, seg: &Segmentation) -> f64 {
+    let mut per_sample: Vec<f64> = seg
+        .stills
+        .iter()
+        .map(|s| linalg::norm(&s.std_gyro_rad_s) / 3f64.sqrt())
+        .collect();
+    per_sample.sort_by(f64::total_cmp);
+    per_sample
+        .get(per_sample.len() / 2)
+        .map_or(0.0, |s| s / rec.rate_hz.max(f64::MIN_POSITIVE).sqrt())
 }
 
 /// A turn left out of the gyro fit because the time stamps jump during it (a gap, a repeat or a step
@@ -163,11 +208,13 @@ pub fn file_text(fit: &HandGyroFit) -> String {
         matrix_1sigma: Some(fit.matrix_1sigma),
     };
     format!(
-        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
+        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°) and {} whole turns on a\n\
+         # table (docs/model.md §7.2): w = matrix·ω_body + bias\n\
          # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
          # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
         fit.turns,
         fit.rms_residual_deg,
+        fit.table_turns,
         toml::to_string_pretty(&File { gyro }).unwrap_or_default()
     )
 }

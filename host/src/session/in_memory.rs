@@ -10,6 +10,7 @@ use super::import::Recording;
 use super::segment::{
     coverage, find_intervals, Coverage, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
+use super::table_turn::{find_table_turns, FoundTableTurn};
 use super::{Plan, RecordingError, SegmentStats};
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
@@ -58,8 +59,11 @@ pub struct SegmentedSession {
     pub plan: Plan,
     /// The gyro fit, or why there is none (too few turns, not asked).
     pub gyro: Result<HandGyroFit, HandGyroError>,
-    /// The reader's warnings (rows left out, a cut-short last line, time jumps) and the turns left
-    /// out of the gyro fit.
+    /// The whole turns on a table found between still intervals at the same position, used or not
+    /// (docs/model.md §7.2); empty without a gyro fit.
+    pub table_turns: Vec<FoundTableTurn>,
+    /// The reader's warnings (rows left out, a cut-short last line, time jumps), the turns left out
+    /// of the gyro fit and the table turns not used as whole turns.
     pub warnings: Vec<String>,
     /// How to make a better session, when the positions are too few or too alike.
     pub advice: Option<String>,
@@ -144,15 +148,25 @@ impl Found {
         };
         plan.unit_id = choices.unit_id.clone();
         plan.gravity_m_s2 = choices.gravity_m_s2;
-        let gyro = if choices.fit_gyro {
+        let (gyro, table_turns) = if choices.fit_gyro {
             warnings.extend(
                 hand_gyro::dropped_turns(&recording, &segmentation)
                     .iter()
                     .map(ToString::to_string),
             );
-            hand_gyro::fit(&recording, &segmentation, &plan)?
+            let table_turns = find_table_turns(&recording, &segmentation);
+            warnings.extend(
+                table_turns
+                    .iter()
+                    .filter(|t| t.used().is_none())
+                    .map(ToString::to_string),
+            );
+            (
+                hand_gyro::fit(&recording, &segmentation, &plan)?,
+                table_turns,
+            )
         } else {
-            Err(HandGyroError::NotAsked)
+            (Err(HandGyroError::NotAsked), Vec::new())
         };
         Ok(SegmentedSession {
             recording,
@@ -161,6 +175,7 @@ impl Found {
             position_set,
             plan,
             gyro,
+            table_turns,
             warnings,
             advice,
         })

@@ -27,6 +27,7 @@ pub mod plan;
 pub mod reader;
 pub mod segment;
 pub mod stats;
+pub mod table_turn;
 pub mod thermal;
 pub mod writer;
 

@@ -81,6 +81,9 @@ pub struct HandSpec {
     /// Tremor during the holds too (held in the hand); false: set down on a table, tremor only
     /// while turning.
     pub hold_tremor: bool,
+    /// At each position, one whole turn about the vertical on the table before moving on, the unit
+    /// set back against the same stop and held again (docs/model.md §7.2, [`TableTurnSim`]).
+    pub table_turns: bool,
     /// Seed.
     pub seed: u64,
 }
@@ -106,6 +109,7 @@ impl HandSpec {
             gyro: GyroTruth::half_percent(),
             acc_step: 0.0,
             hold_tremor: true,
+            table_turns: false,
             seed,
         }
     }
@@ -153,6 +157,22 @@ impl HandSpec {
             ..HandSpec::standard(seed)
         }
     }
+}
+
+/// How a whole turn on the table is simulated: the unit's reference point [`Self::OFFSET_M`] from the
+/// turn's axis (its centripetal and tangential acceleration reach the accelerometers), turned once,
+/// either way, in 4–6 s (raised-cosine rate, peaks of 120–180 °/s) about the vertical, rocking on
+/// the table by up to [`Self::ROCK_DEG`] about a horizontal axis in the middle of the turn (none at
+/// its ends), and set back against its stop with an error of [`Self::STOP_SIGMA_DEG`] (1σ).
+pub struct TableTurnSim;
+
+impl TableTurnSim {
+    /// Distance of the unit's reference point from the turn's axis, m.
+    pub const OFFSET_M: f64 = 0.03;
+    /// Amplitude of the rocking, degrees.
+    pub const ROCK_DEG: f64 = 0.1;
+    /// 1σ of the heading's return to the stop, degrees.
+    pub const STOP_SIGMA_DEG: f64 = 0.05;
 }
 
 /// One logged row: time, accelerometer (output unit), gyro (rad/s).
@@ -229,8 +249,13 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let mut t = 0.0;
     let mut k = 0u64;
     let mut q = attitude(spec.ups[0], 2.0 * PI * uniform(&mut rng));
-    let sample =
-        |t: f64, q: &UnitQuaternion<f64>, w_turn: [f64; 3], wd_turn: [f64; 3], rng: &mut Rng| {
+    // `a_b`: the reference point's own acceleration (a table turn's, about an axis off it), body axes.
+    let sample = |t: f64,
+                  q: &UnitQuaternion<f64>,
+                  w_turn: [f64; 3],
+                  wd_turn: [f64; 3],
+                  a_b: [f64; 3],
+                  rng: &mut Rng| {
             // On a table (no hold tremor) the tremor is the hand's, while turning only.
             let k = if spec.hold_tremor || w_turn != [0.0; 3] {
                 1.0
@@ -247,7 +272,7 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
             let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
             let motion = BodyMotion {
                 f_o: BodySpecificForce {
-                    m_s2: core::array::from_fn(|j| g * up[j] + ta[j]),
+                    m_s2: core::array::from_fn(|j| g * up[j] + ta[j] + a_b[j]),
                 },
                 omega: BodyRate { rad_s: omega },
                 omega_dot: BodyAngularAccel {
@@ -270,16 +295,33 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
             (acc, gyro)
         };
     for (p, up) in spec.ups.iter().enumerate() {
-        let hold = spec.hold_s.0 + (spec.hold_s.1 - spec.hold_s.0) * uniform(&mut rng);
-        let t0 = t;
-        while t < t0 + hold {
-            let (a, w) = sample(t, &q, [0.0; 3], [0.0; 3], &mut rng);
-            rows.push((t, a, w));
-            k += 1;
-            t = k as f64 * dt;
+        for again in [false, true] {
+            if again {
+                if !spec.table_turns {
+                    break;
+                }
+                let turn = table_turn(&q, &mut rng);
+                let t0 = t;
+                while t < t0 + turn.duration_s {
+                    let (qt, w_b, wd_b, a_b) = turn.at(t - t0);
+                    let (a, w) = sample(t, &qt, w_b, wd_b, a_b, &mut rng);
+                    rows.push((t, a, w));
+                    k += 1;
+                    t = k as f64 * dt;
+                }
+                q = turn.end();
+            }
+            let hold = spec.hold_s.0 + (spec.hold_s.1 - spec.hold_s.0) * uniform(&mut rng);
+            let t0 = t;
+            while t < t0 + hold {
+                let (a, w) = sample(t, &q, [0.0; 3], [0.0; 3], [0.0; 3], &mut rng);
+                rows.push((t, a, w));
+                k += 1;
+                t = k as f64 * dt;
+            }
+            let t_last = rows.last().map_or(t0, |r| r.0);
+            holds.push((t0, t_last, *up));
         }
-        let t_last = rows.last().map_or(t0, |r| r.0);
-        holds.push((t0, t_last, *up));
         let Some(next_up) = spec.ups.get(p + 1) else {
             break;
         };
@@ -302,6 +344,7 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
                 &qt,
                 [ab.x * rate, ab.y * rate, ab.z * rate],
                 [ab.x * acc, ab.y * acc, ab.z * acc],
+                [0.0; 3],
                 &mut rng,
             );
             rows.push((t, a, w));
@@ -311,6 +354,80 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
         q = q1;
     }
     HandSession { rows, holds }
+}
+
+/// One whole table turn from the attitude `q0` ([`TableTurnSim`]).
+struct TableTurnPath {
+    q0: UnitQuaternion<f64>,
+    /// Signed angle turned about world z (a whole turn plus the stop's error), rad.
+    angle: f64,
+    duration_s: f64,
+    /// Horizontal axis of the rocking, world.
+    rock_axis: nalgebra::Unit<Vector3<f64>>,
+    /// Rocking frequency, Hz.
+    rock_hz: f64,
+    /// Reference point from the turn's axis, body axes, m.
+    offset_b: Vector3<f64>,
+}
+
+fn table_turn(q0: &UnitQuaternion<f64>, rng: &mut Rng) -> TableTurnPath {
+    let sign = if uniform(rng) < 0.5 { -1.0 } else { 1.0 };
+    let angle = sign * 2.0 * PI + TableTurnSim::STOP_SIGMA_DEG.to_radians() * rng.normal();
+    let duration_s = 4.0 + 2.0 * uniform(rng);
+    let a = 2.0 * PI * uniform(rng);
+    let rock_axis = nalgebra::Unit::new_normalize(Vector3::new(a.cos(), a.sin(), 0.0));
+    let rock_hz = 1.0 + 2.0 * uniform(rng);
+    let b = 2.0 * PI * uniform(rng);
+    let offset_w = Vector3::new(b.cos(), b.sin(), 0.0) * TableTurnSim::OFFSET_M;
+    TableTurnPath {
+        q0: *q0,
+        angle,
+        duration_s,
+        rock_axis,
+        rock_hz,
+        offset_b: q0.inverse_transform_vector(&offset_w),
+    }
+}
+
+impl TableTurnPath {
+    /// Body-to-world attitude `s` seconds into the turn: rocked, then turned about world z.
+    fn attitude(&self, s: f64) -> UnitQuaternion<f64> {
+        let x = (s / self.duration_s).clamp(0.0, 1.0);
+        let th = self.angle * (x - (2.0 * PI * x).sin() / (2.0 * PI));
+        let rock = TableTurnSim::ROCK_DEG.to_radians()
+            * (PI * x).sin().powi(2)
+            * (2.0 * PI * self.rock_hz * s).sin();
+        UnitQuaternion::from_axis_angle(&self.rock_axis, rock)
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), th)
+            * self.q0
+    }
+
+    /// Body rate (rad/s), its derivative and the reference point's acceleration (m/s², body axes)
+    /// by central differences of the attitude (exact to far below the sensors' noise).
+    fn motion(&self, s: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let h = 1e-4;
+        let rate = |s: f64| {
+            (self.attitude(s - h).inverse() * self.attitude(s + h)).scaled_axis() / (2.0 * h)
+        };
+        let w = rate(s);
+        let wd = (rate(s + h) - rate(s - h)) / (2.0 * h);
+        let h2 = 1e-3;
+        let pos = |s: f64| self.attitude(s) * self.offset_b;
+        let a_w = (pos(s + h2) - 2.0 * pos(s) + pos(s - h2)) / (h2 * h2);
+        let a_b = self.attitude(s).inverse_transform_vector(&a_w);
+        ([w.x, w.y, w.z], [wd.x, wd.y, wd.z], [a_b.x, a_b.y, a_b.z])
+    }
+
+    /// Attitude, body rate, its derivative and the acceleration `s` seconds into the turn.
+    fn at(&self, s: f64) -> (UnitQuaternion<f64>, [f64; 3], [f64; 3], [f64; 3]) {
+        let (w, wd, a) = self.motion(s);
+        (self.attitude(s), w, wd, a)
+    }
+
+    /// The attitude after the turn, set back against the stop.
+    fn end(&self) -> UnitQuaternion<f64> {
+        self.attitude(self.duration_s)
+    }
 }
 
 /// How the CSV is laid out, as a logger would.
