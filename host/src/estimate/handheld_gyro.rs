@@ -556,3 +556,58 @@ pub(crate) fn table_sigmas(arw_rad_per_sqrt_s: f64, duration_s: f64, turns: i32)
     let across = 2.0 * PI * f64::from(turns.abs()) * TABLE_AXIS_DEG.to_radians();
     (along, (walk + across * across).sqrt())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_turns_jacobian_is_the_derivative_of_their_residual() {
+        // Two turns of 2 s at 200 Hz about a tilted up, a rate with some wobble across it.
+        let n = 401;
+        let t_s: Vec<f64> = (0..n).map(|i| i as f64 / 200.0).collect();
+        let w: Vec<[f64; 3]> = t_s
+            .iter()
+            .map(|t| [0.1 * (3.0 * t).sin(), 0.05, PI + 0.2 * t])
+            .collect();
+        let up = [0.1, -0.2, 0.97];
+        let table = [TableTurn {
+            from_row: 0,
+            to_row: n - 1,
+            up_b: up.map(|c| c / linalg::norm(&up)),
+            turns: 1,
+        }];
+        let bias = ([0.01, -0.02, 0.005], [1e-4; 3]);
+        let problem = Problem::new(&[], &table, &t_s, &w, bias, 1e-4);
+        let p = [
+            1.01, 0.02, -0.01, 0.005, 0.99, 0.03, -0.02, 0.01, 1.02, 0.012, -0.018, 0.004,
+        ];
+        let jac = problem.jacobian(&p, 1.0);
+        for c in 0..12 {
+            let (mut a, mut z) = (p.to_vec(), p.to_vec());
+            a[c] += 1e-6;
+            z[c] -= 1e-6;
+            let (ra, rz) = (problem.residuals(&a, 1.0), problem.residuals(&z, 1.0));
+            for r in 0..problem.rows() {
+                let numeric = (ra[r] - rz[r]) / 2e-6;
+                let scale = jac[(r, c)].abs().max(1.0);
+                assert!(
+                    (jac[(r, c)] - numeric).abs() < 1e-6 * scale,
+                    "row {r} column {c}: {} against {numeric}",
+                    jac[(r, c)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_table_turns_noise_is_the_stop_along_its_axis_and_the_axis_across() {
+        // No random walk: the stated stop and axis 1σ (docs/model.md §7.2); two turns: twice across.
+        let (along, across) = table_sigmas(0.0, 5.0, -2);
+        assert!((along - TABLE_STOP_DEG.to_radians()).abs() < 1e-15);
+        assert!((across - 4.0 * PI * TABLE_AXIS_DEG.to_radians()).abs() < 1e-15);
+        // 0.01 °/s/√Hz over 4 s adds 0.02° in quadrature.
+        let (along, _) = table_sigmas(0.01f64.to_radians(), 4.0, 1);
+        assert!((along.to_degrees() - 0.1f64.hypot(0.02)).abs() < 1e-12);
+    }
+}

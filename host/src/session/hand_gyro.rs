@@ -270,6 +270,56 @@ mod tests {
     use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
     use shared::OutputUnit;
 
+    /// One face round of a six-face session (1° placement) with a whole table turn on each face: the
+    /// five hand turns alone leave `G` undetermined (scale 1σ of percents); the table turns' known
+    /// angles fix each axis's scale to a few hundredths of a percent.
+    #[test]
+    fn whole_table_turns_fix_the_gyro_scale_that_one_round_of_hand_turns_leaves_open() {
+        let spec = HandSpec {
+            table_turns: true,
+            ..HandSpec::six_faces(4, 1.0, 1)
+        };
+        let unit = OutputUnit::MetresPerSecondSquared;
+        let sim = simulate_hand(&logger_unit(unit), &spec);
+        let rec = Recording {
+            t_s: sim.rows.iter().map(|r| r.0).collect(),
+            acc: sim.rows.iter().map(|r| r.1).collect(),
+            gyro_rad_s: sim.rows.iter().map(|r| r.2).collect(),
+            acc_unit: Some(unit),
+            rate_hz: spec.rate_hz,
+            ..Recording::default()
+        };
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 12);
+        let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, 2.0);
+        let fit = fit(&rec, &seg, &plan).unwrap().unwrap();
+        assert_eq!((fit.turns, fit.table_turns), (5, 6));
+        let truth = spec.gyro.matrix;
+        for i in 0..3 {
+            let (e, s) = (fit.matrix[i][i] - truth[i][i], fit.matrix_1sigma[i][i]);
+            println!(
+                "G[{i}][{i}]: error {:+.4} %, 1σ {:.4} %",
+                e * 100.0,
+                s * 100.0
+            );
+            // Each axis's scale: two turns, each good to the stop's 0.1° of 360° (0.028 %).
+            assert!(s < 3e-4 && e.abs() < 4.0 * s, "axis {i}: {e} ± {s}");
+        }
+        assert!(
+            fit.undetermined()
+                .iter()
+                .all(|g| !["G[x][x]", "G[y][y]", "G[z][z]"].contains(&g.as_str())),
+            "{:?}",
+            fit.undetermined()
+        );
+        // The table turns' angle errors are the stop's (0.05° in the simulation).
+        assert!(
+            fit.table_rms_residual_deg < 0.15,
+            "{}",
+            fit.table_rms_residual_deg
+        );
+    }
+
     #[test]
     fn a_turn_across_a_time_gap_is_dropped_and_said_the_others_fit() {
         let spec = HandSpec::standard(4);

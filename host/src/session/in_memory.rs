@@ -4,7 +4,9 @@
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
 
-use super::from_recording::{plan_for, plan_for_faces, stats_for, write_session};
+use super::from_recording::{
+    join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
+};
 use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
 use super::import::Recording;
 use super::segment::{
@@ -149,12 +151,19 @@ impl Found {
         plan.unit_id = choices.unit_id.clone();
         plan.gravity_m_s2 = choices.gravity_m_s2;
         let (gyro, table_turns) = if choices.fit_gyro {
+            let table_turns = find_table_turns(&recording, &segmentation);
+            join_table_turn_mounts(
+                &mut plan,
+                table_turns
+                    .iter()
+                    .filter(|t| t.used().is_some())
+                    .map(|t| t.after_still),
+            );
             warnings.extend(
                 hand_gyro::dropped_turns(&recording, &segmentation)
                     .iter()
                     .map(ToString::to_string),
             );
-            let table_turns = find_table_turns(&recording, &segmentation);
             warnings.extend(
                 table_turns
                     .iter()

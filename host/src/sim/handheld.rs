@@ -256,44 +256,44 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
                   wd_turn: [f64; 3],
                   a_b: [f64; 3],
                   rng: &mut Rng| {
-            // On a table (no hold tremor) the tremor is the hand's, while turning only.
-            let k = if spec.hold_tremor || w_turn != [0.0; 3] {
-                1.0
-            } else {
-                0.0
-            };
-            let (tw, twd, tint) = tremor_w.at(t, k);
-            let (ta, _, _) = tremor_a.at(t, k);
-            let up0 = q.inverse_transform_vector(&Vector3::z());
-            // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
-            let up0 = [up0.x, up0.y, up0.z];
-            let turn = linalg::cross(&tint, &up0);
-            let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
-            let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
-            let motion = BodyMotion {
-                f_o: BodySpecificForce {
-                    m_s2: core::array::from_fn(|j| g * up[j] + ta[j] + a_b[j]),
-                },
-                omega: BodyRate { rad_s: omega },
-                omega_dot: BodyAngularAccel {
-                    rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
-                },
-            };
-            let raw = model.outputs(&motion).raw;
-            let acc = core::array::from_fn(|i| {
-                let u = raw[i] + spec.noise_g * scales[i] * rng.normal();
-                if spec.acc_step > 0.0 {
-                    (u / spec.acc_step).round() * spec.acc_step
-                } else {
-                    u
-                }
-            });
-            let gw = linalg::mat_vec(&spec.gyro.matrix, &omega);
-            let gyro = core::array::from_fn(|i| {
-                gw[i] + spec.gyro.bias_rad_s[i] + spec.gyro_noise_deg_s.to_radians() * rng.normal()
-            });
-            (acc, gyro)
+        // On a table (no hold tremor) the tremor is the hand's, while turning only.
+        let k = if spec.hold_tremor || w_turn != [0.0; 3] {
+            1.0
+        } else {
+            0.0
         };
+        let (tw, twd, tint) = tremor_w.at(t, k);
+        let (ta, _, _) = tremor_a.at(t, k);
+        let up0 = q.inverse_transform_vector(&Vector3::z());
+        // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
+        let up0 = [up0.x, up0.y, up0.z];
+        let turn = linalg::cross(&tint, &up0);
+        let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
+        let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
+        let motion = BodyMotion {
+            f_o: BodySpecificForce {
+                m_s2: core::array::from_fn(|j| g * up[j] + ta[j] + a_b[j]),
+            },
+            omega: BodyRate { rad_s: omega },
+            omega_dot: BodyAngularAccel {
+                rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
+            },
+        };
+        let raw = model.outputs(&motion).raw;
+        let acc = core::array::from_fn(|i| {
+            let u = raw[i] + spec.noise_g * scales[i] * rng.normal();
+            if spec.acc_step > 0.0 {
+                (u / spec.acc_step).round() * spec.acc_step
+            } else {
+                u
+            }
+        });
+        let gw = linalg::mat_vec(&spec.gyro.matrix, &omega);
+        let gyro = core::array::from_fn(|i| {
+            gw[i] + spec.gyro.bias_rad_s[i] + spec.gyro_noise_deg_s.to_radians() * rng.normal()
+        });
+        (acc, gyro)
+    };
     for (p, up) in spec.ups.iter().enumerate() {
         for again in [false, true] {
             if again {
