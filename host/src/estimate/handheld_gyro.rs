@@ -503,8 +503,8 @@ impl<'a> Problem<'a> {
     }
 
     /// The hand turns' 1σ from their misfit at `p`: their whitened sum of squares over their share of
-    /// the redundancy (two equations per turn, less the trace of their block of the hat matrix);
-    /// `None` when they have less than one equation to spare.
+    /// the redundancy (two equations per turn, less the trace of their block of the hat matrix), at
+    /// least one as the χ²/dof of a fit without table turns had; `None` without hand turns or misfit.
     fn hand_sigma(&self, p: &[f64], sigma_hand: f64) -> Option<f64> {
         let n = 3 * self.turns.len();
         if n == 0 {
@@ -514,15 +514,12 @@ impl<'a> Problem<'a> {
         let inv = (jac.transpose() * &jac).try_inverse()?;
         let hand = jac.rows(0, n);
         let trace = (&hand * inv * hand.transpose()).trace();
-        let redundancy = 2.0 * self.turns.len() as f64 - trace;
-        if redundancy < 1.0 {
-            return None;
-        }
+        let redundancy = (2.0 * self.turns.len() as f64 - trace).max(1.0);
         let ssr: f64 = self.residuals(p, sigma_hand)[..n]
             .iter()
             .map(|x| x * x)
             .sum();
-        Some(sigma_hand * (ssr / redundancy).sqrt())
+        (ssr > 0.0).then(|| sigma_hand * (ssr / redundancy).sqrt())
     }
 
     /// RMS of the table turns' residual along their axis (the whole turn's angle error), degrees.

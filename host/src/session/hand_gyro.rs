@@ -4,7 +4,7 @@
 
 use super::from_recording::stats_for;
 use super::import::Recording;
-use super::segment::Segmentation;
+use super::segment::{PositionSet, Segmentation};
 use super::table_turn::find_table_turns;
 use super::Plan;
 use crate::estimate::gyro::GyroEstimate;
@@ -185,13 +185,32 @@ pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
 }
 
 /// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
-/// turns no `G` explains. Empty: accepted.
-pub fn problems(fit: &HandGyroFit) -> Vec<String> {
-    let mut problems: Vec<String> = gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns)
-        .into_iter()
-        .collect();
+/// turns no `G` explains (an rms misfit over `max_misfit_deg`, [`plausible_misfit_deg`]). Empty:
+/// accepted.
+pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
+    let mut problems: Vec<String> =
+        gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns, max_misfit_deg)
+            .into_iter()
+            .collect();
     problems.extend(gyro_check::matrix_problems(&fit.matrix));
     problems
+}
+
+/// The largest plausible rms misfit of the hand turns, degrees: [`gyro_check::MAX_TURN_MISFIT_DEG`],
+/// or in a six-face session its face prior when larger. Its ups are the calibrated accelerometer's,
+/// whose non-orthogonality is only as good as the faces' placement (docs/model.md §7.1): when whole
+/// table turns fix the gyro's scales, the angle between two faces can no longer be absorbed by the
+/// gyro's `G`, and the hand turns are off by that much (docs/model.md §7.2).
+pub fn plausible_misfit_deg(position_set: PositionSet, plan: &Plan) -> f64 {
+    let faces = match position_set {
+        PositionSet::SixFaces => plan
+            .segments
+            .iter()
+            .filter_map(|s| s.attitude_sigma_deg)
+            .fold(0.0, f64::max),
+        PositionSet::Spread => 0.0,
+    };
+    gyro_check::MAX_TURN_MISFIT_DEG.max(faces)
 }
 
 /// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a

@@ -194,7 +194,8 @@ impl Found {
 impl SegmentedSession {
     /// Why the gyro fit is not one a real gyro gives (`hand_gyro::problems`), if it is not.
     pub fn gyro_problems(&self) -> Option<Vec<String>> {
-        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?);
+        let max_misfit_deg = hand_gyro::plausible_misfit_deg(self.position_set, &self.plan);
+        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg);
         (!problems.is_empty()).then_some(problems)
     }
 

@@ -233,6 +233,68 @@ fn attitude(up: [f64; 3], psi: f64) -> UnitQuaternion<f64> {
     UnitQuaternion::from_axis_angle(&Vector3::z_axis(), psi) * level
 }
 
+/// One sample's outputs: the forward model, the hand's tremor and the sensors' noise.
+struct Sampler<'a> {
+    model: &'a ForwardModel,
+    spec: &'a HandSpec,
+    g: f64,
+    tremor_w: &'a Tremor,
+    tremor_a: &'a Tremor,
+    scales: [f64; 3],
+}
+
+impl Sampler<'_> {
+    /// Accelerometer and gyro at `t` in attitude `q` with the turn's body rate, its derivative and
+    /// the reference point's own acceleration (a table turn's, about an axis off it), body axes.
+    fn sample(
+        &self,
+        t: f64,
+        q: &UnitQuaternion<f64>,
+        [w_turn, wd_turn, a_b]: [[f64; 3]; 3],
+        rng: &mut Rng,
+    ) -> ([f64; 3], [f64; 3]) {
+        // On a table (no hold tremor) the tremor is the hand's, while turning only.
+        let k = if self.spec.hold_tremor || w_turn != [0.0; 3] {
+            1.0
+        } else {
+            0.0
+        };
+        let (tw, twd, tint) = self.tremor_w.at(t, k);
+        let (ta, _, _) = self.tremor_a.at(t, k);
+        let up0 = q.inverse_transform_vector(&Vector3::z());
+        // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
+        let up0 = [up0.x, up0.y, up0.z];
+        let turn = linalg::cross(&tint, &up0);
+        let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
+        let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
+        let motion = BodyMotion {
+            f_o: BodySpecificForce {
+                m_s2: core::array::from_fn(|j| self.g * up[j] + ta[j] + a_b[j]),
+            },
+            omega: BodyRate { rad_s: omega },
+            omega_dot: BodyAngularAccel {
+                rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
+            },
+        };
+        let raw = self.model.outputs(&motion).raw;
+        let acc = core::array::from_fn(|i| {
+            let u = raw[i] + self.spec.noise_g * self.scales[i] * rng.normal();
+            if self.spec.acc_step > 0.0 {
+                (u / self.spec.acc_step).round() * self.spec.acc_step
+            } else {
+                u
+            }
+        });
+        let gw = linalg::mat_vec(&self.spec.gyro.matrix, &omega);
+        let gyro = core::array::from_fn(|i| {
+            gw[i]
+                + self.spec.gyro.bias_rad_s[i]
+                + self.spec.gyro_noise_deg_s.to_radians() * rng.normal()
+        });
+        (acc, gyro)
+    }
+}
+
 /// Simulates the session for a unit `truth` (its output unit is the file's).
 pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let model = ForwardModel::new(truth).expect("a valid simulated unit");
@@ -249,50 +311,16 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let mut t = 0.0;
     let mut k = 0u64;
     let mut q = attitude(spec.ups[0], 2.0 * PI * uniform(&mut rng));
-    // `a_b`: the reference point's own acceleration (a table turn's, about an axis off it), body axes.
-    let sample = |t: f64,
-                  q: &UnitQuaternion<f64>,
-                  w_turn: [f64; 3],
-                  wd_turn: [f64; 3],
-                  a_b: [f64; 3],
-                  rng: &mut Rng| {
-        // On a table (no hold tremor) the tremor is the hand's, while turning only.
-        let k = if spec.hold_tremor || w_turn != [0.0; 3] {
-            1.0
-        } else {
-            0.0
-        };
-        let (tw, twd, tint) = tremor_w.at(t, k);
-        let (ta, _, _) = tremor_a.at(t, k);
-        let up0 = q.inverse_transform_vector(&Vector3::z());
-        // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
-        let up0 = [up0.x, up0.y, up0.z];
-        let turn = linalg::cross(&tint, &up0);
-        let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
-        let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
-        let motion = BodyMotion {
-            f_o: BodySpecificForce {
-                m_s2: core::array::from_fn(|j| g * up[j] + ta[j] + a_b[j]),
-            },
-            omega: BodyRate { rad_s: omega },
-            omega_dot: BodyAngularAccel {
-                rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
-            },
-        };
-        let raw = model.outputs(&motion).raw;
-        let acc = core::array::from_fn(|i| {
-            let u = raw[i] + spec.noise_g * scales[i] * rng.normal();
-            if spec.acc_step > 0.0 {
-                (u / spec.acc_step).round() * spec.acc_step
-            } else {
-                u
-            }
-        });
-        let gw = linalg::mat_vec(&spec.gyro.matrix, &omega);
-        let gyro = core::array::from_fn(|i| {
-            gw[i] + spec.gyro.bias_rad_s[i] + spec.gyro_noise_deg_s.to_radians() * rng.normal()
-        });
-        (acc, gyro)
+    let sampler = Sampler {
+        model: &model,
+        spec,
+        g,
+        tremor_w: &tremor_w,
+        tremor_a: &tremor_a,
+        scales,
+    };
+    let sample = |t, q: &_, w_turn, wd_turn, a_b, rng: &mut Rng| {
+        sampler.sample(t, q, [w_turn, wd_turn, a_b], rng)
     };
     for (p, up) in spec.ups.iter().enumerate() {
         for again in [false, true] {
