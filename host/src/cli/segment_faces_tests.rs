@@ -47,6 +47,15 @@ fn segment_and_calibrate(
     (out, cal)
 }
 
+/// A simulated session written as the logger's CSV (m/s², °/s) in `dir`, segmented and calibrated.
+fn segment_and_calibrate_sim(
+    dir: &Path,
+    sim: &crate::sim::handheld::HandSession,
+) -> (SegmentOutcome, crate::estimate::CalibrationOutcome) {
+    write_logger_csv(&dir.join("raw.csv"), &sim.rows, &LoggerLayout::default()).unwrap();
+    segment_and_calibrate(dir, "--acc-unit m/s2 --gyro-unit deg/s")
+}
+
 #[test]
 fn raw_counts_at_mid_scale_with_a_gyro_in_counts_calibrate_with_the_offset_and_scale() {
     let tmp = tempfile::tempdir().unwrap();
@@ -212,13 +221,7 @@ fn six_face_case(seed: u64) -> [HeldOut; 4] {
     let truth = logger_unit(unit);
     let spec = HandSpec::six_faces(seed, 1.0, 1);
     let sim = simulate_hand(&truth, &spec);
-    write_logger_csv(
-        &tmp.path().join("raw.csv"),
-        &sim.rows,
-        &LoggerLayout::default(),
-    )
-    .unwrap();
-    let (out, cal) = segment_and_calibrate(tmp.path(), "--acc-unit m/s2 --gyro-unit deg/s");
+    let (out, cal) = segment_and_calibrate_sim(tmp.path(), &sim);
     assert_eq!(out.segmentation.stills.len(), 6, "seed {seed}");
     assert!(out
         .plan
@@ -245,13 +248,7 @@ fn six_face_case(seed: u64) -> [HeldOut; 4] {
     };
     let tmp = tempfile::tempdir().unwrap();
     let sim = simulate_hand(&truth, &hand);
-    write_logger_csv(
-        &tmp.path().join("raw.csv"),
-        &sim.rows,
-        &LoggerLayout::default(),
-    )
-    .unwrap();
-    let (_, cal) = segment_and_calibrate(tmp.path(), "--acc-unit m/s2 --gyro-unit deg/s");
+    let (_, cal) = segment_and_calibrate_sim(tmp.path(), &sim);
     let hand_held = held_out(
         &truth,
         &cal.fitted.m_out_per_g,
@@ -432,13 +429,7 @@ fn table_turn_case(seed: u64) -> ([GyroErrors; 3], [HeldOut; 2]) {
             ..HandSpec::six_faces(seed, 1.0, 1)
         };
         let sim = simulate_hand(&truth, &spec);
-        write_logger_csv(
-            &tmp.path().join("raw.csv"),
-            &sim.rows,
-            &LoggerLayout::default(),
-        )
-        .unwrap();
-        let (out, cal) = segment_and_calibrate(tmp.path(), "--acc-unit m/s2 --gyro-unit deg/s");
+        let (out, cal) = segment_and_calibrate_sim(tmp.path(), &sim);
         let used = out
             .table_turns
             .iter()

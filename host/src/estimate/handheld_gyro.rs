@@ -513,7 +513,7 @@ impl<'a> Problem<'a> {
         let jac = self.jacobian(p, sigma_hand);
         let inv = (jac.transpose() * &jac).try_inverse()?;
         let hand = jac.rows(0, n);
-        let trace = (&hand * inv * hand.transpose()).trace();
+        let trace = (hand * inv * hand.transpose()).trace();
         let redundancy = (2.0 * self.turns.len() as f64 - trace).max(1.0);
         let ssr: f64 = self.residuals(p, sigma_hand)[..n]
             .iter()

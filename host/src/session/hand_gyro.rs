@@ -298,16 +298,8 @@ mod tests {
             table_turns: true,
             ..HandSpec::six_faces(4, 1.0, 1)
         };
-        let unit = OutputUnit::MetresPerSecondSquared;
-        let sim = simulate_hand(&logger_unit(unit), &spec);
-        let rec = Recording {
-            t_s: sim.rows.iter().map(|r| r.0).collect(),
-            acc: sim.rows.iter().map(|r| r.1).collect(),
-            gyro_rad_s: sim.rows.iter().map(|r| r.2).collect(),
-            acc_unit: Some(unit),
-            rate_hz: spec.rate_hz,
-            ..Recording::default()
-        };
+        let rec =
+            crate::session::segment::tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
         let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
         assert_eq!(seg.stills.len(), 12);
         let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, 2.0);
