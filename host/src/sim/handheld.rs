@@ -574,3 +574,48 @@ pub fn logger_unit(unit: shared::OutputUnit) -> Calibration {
         temperature: None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A whole turn on the table: halfway (peak rate, no angular acceleration; without rocking) the
+    /// reference point 3 cm off the axis feels only the centripetal ω²r, horizontal; over the turn
+    /// (rocking) the body rate integrates to the angle about up, to the rocking's size across it.
+    #[test]
+    fn a_table_turn_has_its_centripetal_force_and_turns_its_angle_about_up() {
+        let q0 = attitude([0.0, 0.6, 0.8], 0.7);
+        let up = q0.inverse_transform_vector(&Vector3::z());
+        let flat = TableTurnPath {
+            rock_hz: 0.0,
+            ..table_turn(&q0, &mut Rng::new(8, 0))
+        };
+        let mid = 0.5 * flat.duration_s;
+        let (w, wd, a) = flat.motion(mid);
+        let omega = Vector3::from(w).norm();
+        assert!((omega - 2.0 * flat.angle.abs() / flat.duration_s).abs() < 1e-6 * omega);
+        assert!(Vector3::from(wd).norm() < 1e-4, "{wd:?}");
+        let a = Vector3::from(a);
+        let want = omega * omega * TableTurnSim::OFFSET_M;
+        assert!((a.norm() - want).abs() < 1e-4 * want, "{a} against {want}");
+        assert!(a.dot(&up).abs() < 1e-4 * want, "{a}");
+        let path = table_turn(&q0, &mut Rng::new(8, 0));
+        let n = 4000;
+        let dt = path.duration_s / n as f64;
+        let integral: Vector3<f64> = (0..n)
+            .map(|i| Vector3::from(path.motion((i as f64 + 0.5) * dt).0) * dt)
+            .sum();
+        let along = integral.dot(&up);
+        assert!(
+            (along - path.angle).abs() < 1e-4,
+            "{along} against {}",
+            path.angle
+        );
+        let across = (integral - up * along).norm().to_degrees();
+        assert!(
+            across < 2.0 * 360.0 * TableTurnSim::ROCK_DEG.to_radians(),
+            "{across}°"
+        );
+        assert!(path.end().angle_to(&q0).to_degrees() < 0.3);
+    }
+}
