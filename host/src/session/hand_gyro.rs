@@ -329,6 +329,10 @@ mod tests {
             "{}",
             fit.table_rms_residual_deg
         );
+        // A six-face session's hand turns are judged against its face prior (2°), others against 1°.
+        assert_eq!(plausible_misfit_deg(PositionSet::SixFaces, &plan), 2.0);
+        assert_eq!(plausible_misfit_deg(PositionSet::Spread, &plan), 1.0);
+        assert!(problems(&fit, 2.0).is_empty(), "{:?}", problems(&fit, 2.0));
     }
 
     #[test]
