@@ -12,6 +12,7 @@ use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
 use crate::session::in_memory::{find, SegmentChoices};
 use crate::session::logs::read_log;
 use crate::session::segment::{Coverage, PositionSet, SegmentOptions, Segmentation};
+use crate::session::table_turn::FoundTableTurn;
 use crate::session::Plan;
 use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use crate::unit_file::UnitFile;
@@ -105,6 +106,11 @@ pub struct SimulateHandArgs {
     /// With --six-faces: how many times the cube is turned over through its six faces.
     #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 10))]
     pub rounds: u32,
+    /// At each position, one whole turn about the vertical flat on the table (either way, 4–6 s,
+    /// rocking by 0.1°, the unit 3 cm from the turn's axis), set back against its stop to 0.05° and
+    /// held again: the classic bench method's turn about each axis (docs/model.md §7.2).
+    #[arg(long)]
+    pub table_turns: bool,
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
@@ -149,6 +155,7 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
     let spec = HandSpec {
         rate_hz: a.rate_hz,
         acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
+        table_turns: a.table_turns,
         ..if a.six_faces {
             HandSpec::six_faces(a.seed, 1.0, a.rounds as usize)
         } else {
@@ -200,6 +207,8 @@ pub struct SegmentOutcome {
     pub plan: Plan,
     /// The gyro fit, or why there is none.
     pub gyro: Result<HandGyroFit, HandGyroError>,
+    /// The whole turns on the table found, used or not.
+    pub table_turns: Vec<FoundTableTurn>,
 }
 
 /// Runs `host segment` from the command line (`--quiet` silences the human text).
@@ -263,6 +272,9 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if s.position_set == PositionSet::SixFaces {
         out.line(format_args!("{}", six_face_text(a.face_sigma_deg)))?;
     }
+    if !s.table_turns.is_empty() {
+        out.line(format_args!("{}", table_turns_text(&s.table_turns)))?;
+    }
     if let Ok(fit) = &s.gyro {
         out.human(gyro_text(fit))?;
     }
@@ -301,6 +313,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         segmentation: s.segmentation,
         plan: s.plan,
         gyro: s.gyro,
+        table_turns: s.table_turns,
     };
     out.document(&document(
         a,
@@ -418,11 +431,29 @@ pub fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
     s
 }
 
+/// How many whole turns on the table were found and used (the refused ones are warnings).
+fn table_turns_text(found: &[FoundTableTurn]) -> String {
+    let used = found.iter().filter(|t| t.used().is_some()).count();
+    format!(
+        "whole turns on the table (still before and after at the same position, turned about the \
+         vertical): {} found, {used} used as known angles for the gyro (docs/model.md §7.2)",
+        found.len()
+    )
+}
+
 fn gyro_text(fit: &HandGyroFit) -> String {
     let sc = fit.scale_rel();
     let mis = fit.misalignment_deg();
+    let table = if fit.table_turns > 0 {
+        format!(
+            " and {} whole table turns (rms angle error {:.4}°)",
+            fit.table_turns, fit.table_rms_residual_deg
+        )
+    } else {
+        String::new()
+    };
     let mut s = format!(
-        "gyro from {} hand turns (w = G·ω + b, body axes of this session's accelerometer \
+        "gyro from {} hand turns{table} (w = G·ω + b, body axes of this session's accelerometer \
          calibration), rms misfit {:.4}°:\n",
         fit.turns, fit.rms_residual_deg
     );

@@ -131,12 +131,13 @@ fn scale_cause(scale: &[f64; 3]) -> String {
     }
 }
 
-/// The refusal of turns that no gyro model explains (`rms_misfit_deg` over [`MAX_TURN_MISFIT_DEG`]).
-pub(crate) fn misfit_problem(rms_misfit_deg: f64, turns: usize) -> Option<String> {
-    (rms_misfit_deg.is_nan() || rms_misfit_deg > MAX_TURN_MISFIT_DEG).then(|| {
+/// The refusal of turns that no gyro model explains (`rms_misfit_deg` over `max_deg`: usually
+/// [`MAX_TURN_MISFIT_DEG`]; a six-face session's ups are only as good as its faces, docs/model.md §7.2).
+pub(crate) fn misfit_problem(rms_misfit_deg: f64, turns: usize, max_deg: f64) -> Option<String> {
+    (rms_misfit_deg.is_nan() || rms_misfit_deg > max_deg).then(|| {
         format!(
             "the {turns} hand turns contradict every gyro model (rms misfit {rms_misfit_deg:.2}°, at \
-             most {MAX_TURN_MISFIT_DEG}° is plausible): a gyro or accelerometer axis sign is \
+             most {max_deg}° is plausible): a gyro or accelerometer axis sign is \
              reversed, two columns are swapped, or the time stamps have a gap inside a turn"
         )
     })
@@ -245,11 +246,11 @@ mod tests {
 
     #[test]
     fn a_large_misfit_is_refused() {
-        assert!(misfit_problem(0.02, 23).is_none());
-        assert!(misfit_problem(32.9, 23)
+        assert!(misfit_problem(0.02, 23, MAX_TURN_MISFIT_DEG).is_none());
+        assert!(misfit_problem(32.9, 23, MAX_TURN_MISFIT_DEG)
             .unwrap()
             .contains("sign is reversed"));
-        assert!(misfit_problem(f64::NAN, 23).is_some());
+        assert!(misfit_problem(f64::NAN, 23, MAX_TURN_MISFIT_DEG).is_some());
     }
 
     #[test]

@@ -1,16 +1,19 @@
 //! The gyro without a rate table (imu_tk's idea, Tedaldi et al. 2014): between two consecutive still
 //! positions the body-rate integral of the corrected gyro must turn the first position's gravity
 //! direction into the second's. Over all such turns this fixes the gyro's `G` (scale and misalignment,
-//! docs/model.md §8: `w = G·ω_body + b`); the still periods fix its bias `b`.
+//! docs/model.md §8: `w = G·ω_body + b`); the still periods fix its bias `b`. A whole turn on a table
+//! about the vertical (the classic six-face bench method) leaves gravity where it was and so tells
+//! nothing that way; it is used instead as a known angle: the rate integral over it is `2πk` times
+//! the up direction (docs/model.md §7.2).
 //!
-//! The unknown is `T = G⁻¹` (nine values, the correction is linear in it), fitted by Gauss–Newton
-//! with a numerical Jacobian (central differences; the residual is a rotation of a unit vector, cheap
-//! to re-integrate). The gravity directions are the *calibrated* accelerometer's, so `G` is in the
-//! accelerometer calibration's body frame; an uncalibrated accelerometer's percent-level errors would
-//! otherwise enter `G` directly.
+//! The unknowns are `T = G⁻¹` (nine values, the correction is linear in it) and `b`, fitted by
+//! Gauss–Newton on the hand turns, the table turns and the still bias together. The gravity
+//! directions are the *calibrated* accelerometer's, so `G` is in the accelerometer calibration's body
+//! frame; an uncalibrated accelerometer's percent-level errors would otherwise enter `G` directly.
 
 use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 use shared::linalg::{self, RowMajor3};
+use std::f64::consts::PI;
 
 /// One turn: the rows from the end of one still position to the start of the next, with the two
 /// calibrated gravity ("up") directions in body axes.
@@ -26,6 +29,32 @@ pub(crate) struct Turn {
     pub up_after_b: [f64; 3],
 }
 
+/// A whole turn on a table (docs/model.md §7.2): the unit turned `turns` times about the vertical and
+/// set back against the same stop, the same face down before and after.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct TableTurn {
+    /// Last row of the still position before.
+    pub from_row: usize,
+    /// First row of the still position after.
+    pub to_row: usize,
+    /// Up at that position (the turn's axis), body axes, unit.
+    pub up_b: [f64; 3],
+    /// Whole turns, signed: positive is right-handed about up (anticlockwise seen from above).
+    pub turns: i32,
+}
+
+/// 1σ of a table turn's return to its stop, degrees (docs/model.md §7.2): the unit pushed back against
+/// the same fence or corner after its whole turn repeats its heading to a few hundredths of a degree
+/// (a face's edge and a straight fence, both flat to about 0.02 mm over 20–30 mm); taken with margin
+/// for dust and a pushed-back rather than slid-back unit.
+pub const TABLE_STOP_DEG: f64 = 0.1;
+/// 1σ of a table turn's axis from the calibrated up, degrees (docs/model.md §7.2): the table's normal
+/// is off the vertical by its levelling (a bench level to 0.1–0.2°), the face rocks on dust while
+/// turned, and the calibrated up is itself a fraction of a milliradian off.
+pub const TABLE_AXIS_DEG: f64 = 0.3;
+/// A hand turn's residual 1σ per component before the turns' own misfit estimates it, degrees.
+const HAND_PRIOR_DEG: f64 = 0.05;
+
 /// The fitted gyro and what the turns determined.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HandGyroFit {
@@ -37,10 +66,15 @@ pub struct HandGyroFit {
     pub bias_rad_s: [f64; 3],
     /// 1σ of `b`, rad/s.
     pub bias_1sigma_rad_s: [f64; 3],
-    /// Turns used.
+    /// Hand turns used.
     pub turns: usize,
-    /// RMS angle between predicted and measured up after a turn, degrees.
+    /// Whole table turns used (docs/model.md §7.2).
+    pub table_turns: usize,
+    /// RMS angle between predicted and measured up after a hand turn, degrees.
     pub rms_residual_deg: f64,
+    /// RMS of the table turns' angle error (the corrected rate's integral about the axis less
+    /// `2πk`), degrees; 0 without table turns.
+    pub table_rms_residual_deg: f64,
 }
 
 /// A `G` entry whose 1σ exceeds this is reported as not determined by the turns (0.1 % / 0.06°).
@@ -87,12 +121,15 @@ impl HandGyroFit {
 pub enum HandGyroError {
     /// Fewer turns than the nine unknowns need.
     #[error(
-        "{turns} turn(s) between still positions: the gyro's scale and misalignment need at least 5 \
-         (24 recommended), turning about different axes"
+        "{turns} turn(s) between still positions and {table_turns} whole turn(s) on the table: the \
+         gyro's scale and misalignment need at least 5 turns (24 recommended), turning about \
+         different axes, or with one whole table turn on each face"
     )]
     TooFewTurns {
-        /// Turns available.
+        /// Hand turns available.
         turns: usize,
+        /// Whole table turns available.
+        table_turns: usize,
     },
     /// The integrated gyro turns far more or far less than gravity did.
     #[error(
@@ -143,15 +180,24 @@ fn integrate(
     q
 }
 
-fn residuals(turns: &[Turn], t_s: &[f64], w: &[[f64; 3]], p: &[f64], b: &[f64; 3]) -> Vec<f64> {
-    let t: RowMajor3 = core::array::from_fn(|i| core::array::from_fn(|j| p[3 * i + j]));
+/// The hand turns' residuals (measured minus predicted up after each turn, three per turn), rad.
+fn hand_residuals(turns: &[Turn], t_s: &[f64], w: &[[f64; 3]], p: &[f64]) -> Vec<f64> {
+    let (t, b) = unpack(p);
     turns
         .iter()
         .flat_map(|turn| {
-            let up = predict_up(turn, t_s, w, &t, b);
+            let up = predict_up(turn, t_s, w, &t, &b);
             (0..3).map(move |j| turn.up_after_b[j] - up[j])
         })
         .collect()
+}
+
+/// `T = G⁻¹` (row-major) and `b` from the parameter vector `p = [T₁₁ … T₃₃, b₁, b₂, b₃]`.
+fn unpack(p: &[f64]) -> (RowMajor3, [f64; 3]) {
+    (
+        core::array::from_fn(|i| core::array::from_fn(|j| p[3 * i + j])),
+        [p[9], p[10], p[11]],
+    )
 }
 
 /// The gyro's bias from still intervals: the mean of their mean rates weighted by their lengths, with
@@ -223,61 +269,41 @@ fn check_unit(
     }
 }
 
-/// Fits `G` from `turns` with the bias `b` (from [`still_bias`]).
+/// Fits `G` and `b` from the hand `turns`, the whole `table` turns and the still intervals' bias
+/// `bias` (from [`still_bias`], with its 1σ), with the gyro's angle random walk `arw_rad_per_sqrt_s`
+/// (from the still intervals' noise) in the table turns' weights.
 pub(crate) fn fit_handheld_gyro(
     turns: &[Turn],
+    table: &[TableTurn],
     t_s: &[f64],
     w_rad_s: &[[f64; 3]],
     bias: ([f64; 3], [f64; 3]),
+    arw_rad_per_sqrt_s: f64,
 ) -> Result<HandGyroFit, HandGyroError> {
-    if turns.len() < 5 {
-        return Err(HandGyroError::TooFewTurns { turns: turns.len() });
+    if 2 * turns.len() + 3 * table.len() < 10 {
+        return Err(HandGyroError::TooFewTurns {
+            turns: turns.len(),
+            table_turns: table.len(),
+        });
     }
-    let b = bias.0;
-    check_unit(turns, t_s, w_rad_s, &b)?;
+    check_unit(turns, t_s, w_rad_s, &bias.0)?;
+    let problem = Problem::new(turns, table, t_s, w_rad_s, bias, arw_rad_per_sqrt_s);
     let mut p = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-    let jacobian = |p: &[f64]| {
-        let h = 1e-6;
-        let m = 3 * turns.len();
-        let mut j = DMatrix::zeros(m, 9);
-        for c in 0..9 {
-            let (mut a, mut z) = (p.to_vec(), p.to_vec());
-            a[c] += h;
-            z[c] -= h;
-            let (ra, rz) = (
-                residuals(turns, t_s, w_rad_s, &a, &b),
-                residuals(turns, t_s, w_rad_s, &z, &b),
-            );
-            for r in 0..m {
-                j[(r, c)] = (ra[r] - rz[r]) / (2.0 * h);
-            }
-        }
-        j
-    };
-    let mut jac = jacobian(&p);
-    for _ in 0..20 {
-        let r = DVector::from_vec(residuals(turns, t_s, w_rad_s, &p, &b));
-        // J is the derivative of r itself: the step minimises |r + J·δ|².
-        let step = (jac.transpose() * &jac)
-            .try_inverse()
-            .map(|inv| -(inv * jac.transpose() * r))
-            .ok_or(HandGyroError::Implausible {
-                norms: [f64::NAN; 3],
-                why: "the turns do not determine it (all about one axis?)",
-            })?;
-        for c in 0..9 {
-            p[c] += step[c];
-        }
-        jac = jacobian(&p);
-        if step.norm() < 1e-10 {
-            break;
+    p.extend_from_slice(&bias.0);
+    // The hand turns' 1σ is not known beforehand (tremor, the six faces' frame, the accelerometer's
+    // own errors): it is estimated from their misfit, with their share of the redundancy
+    // (variance component estimation), and the fit repeated with it; the table turns' and the still
+    // bias's 1σ are stated (docs/model.md §7.2).
+    let mut sigma_hand = HAND_PRIOR_DEG.to_radians();
+    for _ in 0..3 {
+        p = problem.solve(p, sigma_hand)?;
+        match problem.hand_sigma(&p, sigma_hand) {
+            Some(s) => sigma_hand = s,
+            None => break,
         }
     }
-    let r = residuals(turns, t_s, w_rad_s, &p, &b);
-    let ssr: f64 = r.iter().map(|x| x * x).sum();
-    let dof = (2 * turns.len()).saturating_sub(9).max(1) as f64;
-    let sigma2 = ssr / dof;
-    let t: RowMajor3 = core::array::from_fn(|i| core::array::from_fn(|j| p[3 * i + j]));
+    let jac = problem.jacobian(&p, sigma_hand);
+    let (t, b) = unpack(&p);
     let g = linalg::inverse(&t).ok_or(HandGyroError::Implausible {
         norms: [f64::NAN; 3],
         why: "singular",
@@ -289,10 +315,9 @@ pub(crate) fn fit_handheld_gyro(
             why: "a gyro in the stated unit reads within a factor of two of the true rate",
         });
     }
-    let cov_t = (jac.transpose() * &jac)
+    let cov = (jac.transpose() * &jac)
         .try_inverse()
-        .unwrap_or_else(|| DMatrix::from_element(9, 9, f64::INFINITY))
-        * sigma2;
+        .unwrap_or_else(|| DMatrix::from_element(12, 12, f64::INFINITY));
     // dG = −G·dT·G: the linear map from T's entries to G's.
     let mut a = DMatrix::zeros(9, 9);
     for i in 0..3 {
@@ -304,16 +329,282 @@ pub(crate) fn fit_handheld_gyro(
             }
         }
     }
-    let cov_g = &a * cov_t * a.transpose();
+    let cov_g = &a * cov.view((0, 0), (9, 9)) * a.transpose();
     let matrix_1sigma = core::array::from_fn(|i| {
         core::array::from_fn(|j| cov_g[(3 * i + j, 3 * i + j)].max(0.0).sqrt())
     });
+    let r = hand_residuals(turns, t_s, w_rad_s, &p);
+    let ssr: f64 = r.iter().map(|x| x * x).sum();
     Ok(HandGyroFit {
         matrix: g,
         matrix_1sigma,
         bias_rad_s: b,
-        bias_1sigma_rad_s: bias.1,
+        bias_1sigma_rad_s: core::array::from_fn(|j| cov[(9 + j, 9 + j)].max(0.0).sqrt()),
         turns: turns.len(),
-        rms_residual_deg: (ssr / turns.len() as f64).sqrt().to_degrees(),
+        table_turns: table.len(),
+        rms_residual_deg: (ssr / turns.len().max(1) as f64).sqrt().to_degrees(),
+        table_rms_residual_deg: problem.table_rms_deg(&p),
     })
+}
+
+/// A whole turn's data that do not change in the fit: `S = ∫w dt` (the raw rate, midpoint rule as in
+/// [`integrate`]), the duration and the weight `W` whitening its residual.
+struct TableData {
+    turn: TableTurn,
+    integral: [f64; 3],
+    duration_s: f64,
+    weight: RowMajor3,
+}
+
+/// The whole least squares: the parameters `p = [T, b]` (twelve), the residuals whitened.
+struct Problem<'a> {
+    turns: &'a [Turn],
+    table: Vec<TableData>,
+    t_s: &'a [f64],
+    w: &'a [[f64; 3]],
+    bias: ([f64; 3], [f64; 3]),
+}
+
+impl<'a> Problem<'a> {
+    fn new(
+        turns: &'a [Turn],
+        table: &[TableTurn],
+        t_s: &'a [f64],
+        w: &'a [[f64; 3]],
+        bias: ([f64; 3], [f64; 3]),
+        arw: f64,
+    ) -> Problem<'a> {
+        let table = table
+            .iter()
+            .map(|tt| {
+                let mut integral = [0.0; 3];
+                for i in tt.from_row..tt.to_row {
+                    let dt = t_s[i + 1] - t_s[i];
+                    for (j, s) in integral.iter_mut().enumerate() {
+                        *s += 0.5 * (w[i][j] + w[i + 1][j]) * dt;
+                    }
+                }
+                let duration_s = t_s[tt.to_row] - t_s[tt.from_row];
+                let (along, across) = table_sigmas(arw, duration_s, tt.turns);
+                let u = tt.up_b;
+                let weight = core::array::from_fn(|i| {
+                    core::array::from_fn(|j| {
+                        let uu = u[i] * u[j];
+                        let delta = f64::from(u8::from(i == j));
+                        uu / along + (delta - uu) / across
+                    })
+                });
+                TableData {
+                    turn: *tt,
+                    integral,
+                    duration_s,
+                    weight,
+                }
+            })
+            .collect();
+        Problem {
+            turns,
+            table,
+            t_s,
+            w,
+            bias,
+        }
+    }
+
+    /// Number of whitened residuals: three per hand turn, three per table turn, three for the bias.
+    fn rows(&self) -> usize {
+        3 * self.turns.len() + 3 * self.table.len() + 3
+    }
+
+    /// The known-angle residual of a table turn, rad, before whitening (docs/model.md §7.2):
+    /// `T·(S − b·D) − 2πk·u`.
+    fn table_residual(d: &TableData, t: &RowMajor3, b: &[f64; 3]) -> [f64; 3] {
+        let s: [f64; 3] = core::array::from_fn(|j| d.integral[j] - b[j] * d.duration_s);
+        let ts = linalg::mat_vec(t, &s);
+        let k = 2.0 * PI * f64::from(d.turn.turns);
+        core::array::from_fn(|i| ts[i] - k * d.turn.up_b[i])
+    }
+
+    /// All residuals, whitened: the hand turns' by `sigma_hand`, the table turns' by their `W`, the
+    /// bias's by the still intervals' 1σ.
+    fn residuals(&self, p: &[f64], sigma_hand: f64) -> Vec<f64> {
+        let (t, b) = unpack(p);
+        let mut r: Vec<f64> = hand_residuals(self.turns, self.t_s, self.w, p)
+            .into_iter()
+            .map(|x| x / sigma_hand)
+            .collect();
+        for d in &self.table {
+            r.extend(linalg::mat_vec(&d.weight, &Self::table_residual(d, &t, &b)));
+        }
+        r.extend((0..3).map(|j| (b[j] - self.bias.0[j]) / bias_sigma(self.bias.1[j])));
+        r
+    }
+
+    /// The Jacobian of [`Self::residuals`]: the hand turns' by central differences (the residual is a
+    /// rotation of a unit vector, cheap to re-integrate), the table turns' and the bias's exactly
+    /// (they are linear in `T` and `b`: `∂r/∂T_ij = W·e_i·(S − b·D)_j`, `∂r/∂b = −W·T·D`).
+    fn jacobian(&self, p: &[f64], sigma_hand: f64) -> DMatrix<f64> {
+        let mut jac = DMatrix::zeros(self.rows(), 12);
+        let hand_rows = 3 * self.turns.len();
+        let h = 1e-6;
+        for c in 0..12 {
+            let (mut a, mut z) = (p.to_vec(), p.to_vec());
+            a[c] += h;
+            z[c] -= h;
+            let ra = hand_residuals(self.turns, self.t_s, self.w, &a);
+            let rz = hand_residuals(self.turns, self.t_s, self.w, &z);
+            for r in 0..hand_rows {
+                jac[(r, c)] = (ra[r] - rz[r]) / (2.0 * h * sigma_hand);
+            }
+        }
+        let (t, b) = unpack(p);
+        for (n, d) in self.table.iter().enumerate() {
+            let row = hand_rows + 3 * n;
+            let s: [f64; 3] = core::array::from_fn(|j| d.integral[j] - b[j] * d.duration_s);
+            for r in 0..3 {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        jac[(row + r, 3 * i + j)] = d.weight[r][i] * s[j];
+                    }
+                }
+                for j in 0..3 {
+                    let wt: f64 = (0..3).map(|i| d.weight[r][i] * t[i][j]).sum();
+                    jac[(row + r, 9 + j)] = -wt * d.duration_s;
+                }
+            }
+        }
+        let row = hand_rows + 3 * self.table.len();
+        for j in 0..3 {
+            jac[(row + j, 9 + j)] = 1.0 / bias_sigma(self.bias.1[j]);
+        }
+        jac
+    }
+
+    /// Gauss–Newton from `p`: each step minimises `|r + J·δ|²`.
+    fn solve(&self, mut p: Vec<f64>, sigma_hand: f64) -> Result<Vec<f64>, HandGyroError> {
+        for _ in 0..20 {
+            let jac = self.jacobian(&p, sigma_hand);
+            let r = DVector::from_vec(self.residuals(&p, sigma_hand));
+            let step = (jac.transpose() * &jac)
+                .try_inverse()
+                .map(|inv| -(inv * jac.transpose() * r))
+                .ok_or(HandGyroError::Implausible {
+                    norms: [f64::NAN; 3],
+                    why: "the turns do not determine it (all about one axis?)",
+                })?;
+            for (c, s) in step.iter().enumerate() {
+                p[c] += s;
+            }
+            if step.norm() < 1e-10 {
+                break;
+            }
+        }
+        Ok(p)
+    }
+
+    /// The hand turns' 1σ from their misfit at `p`: their whitened sum of squares over their share of
+    /// the redundancy (two equations per turn, less the trace of their block of the hat matrix), at
+    /// least one as the χ²/dof of a fit without table turns had; `None` without hand turns or misfit.
+    fn hand_sigma(&self, p: &[f64], sigma_hand: f64) -> Option<f64> {
+        let n = 3 * self.turns.len();
+        if n == 0 {
+            return None;
+        }
+        let jac = self.jacobian(p, sigma_hand);
+        let inv = (jac.transpose() * &jac).try_inverse()?;
+        let hand = jac.rows(0, n);
+        let trace = (hand * inv * hand.transpose()).trace();
+        let redundancy = (2.0 * self.turns.len() as f64 - trace).max(1.0);
+        let ssr: f64 = self.residuals(p, sigma_hand)[..n]
+            .iter()
+            .map(|x| x * x)
+            .sum();
+        (ssr > 0.0).then(|| sigma_hand * (ssr / redundancy).sqrt())
+    }
+
+    /// RMS of the table turns' residual along their axis (the whole turn's angle error), degrees.
+    fn table_rms_deg(&self, p: &[f64]) -> f64 {
+        if self.table.is_empty() {
+            return 0.0;
+        }
+        let (t, b) = unpack(p);
+        let ssr: f64 = self
+            .table
+            .iter()
+            .map(|d| linalg::dot(&Self::table_residual(d, &t, &b), &d.turn.up_b).powi(2))
+            .sum();
+        (ssr / self.table.len() as f64).sqrt().to_degrees()
+    }
+}
+
+/// The still bias's 1σ, kept above a floor so that one still interval (no spread) does not fix `b`
+/// exactly.
+fn bias_sigma(s: f64) -> f64 {
+    s.max(1e-6)
+}
+
+/// 1σ of a table turn's residual along its axis and across it, rad (docs/model.md §7.2): the angle
+/// random walk over the turn's duration, and along the axis the return to the same stop
+/// ([`TABLE_STOP_DEG`]), across it the axis's offset from the measured up ([`TABLE_AXIS_DEG`]) times
+/// the angle turned.
+pub(crate) fn table_sigmas(arw_rad_per_sqrt_s: f64, duration_s: f64, turns: i32) -> (f64, f64) {
+    let walk = arw_rad_per_sqrt_s.powi(2) * duration_s;
+    let along = (walk + TABLE_STOP_DEG.to_radians().powi(2)).sqrt();
+    let across = 2.0 * PI * f64::from(turns.abs()) * TABLE_AXIS_DEG.to_radians();
+    (along, (walk + across * across).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_turns_jacobian_is_the_derivative_of_their_residual() {
+        // Two turns of 2 s at 200 Hz about a tilted up, a rate with some wobble across it.
+        let n = 401;
+        let t_s: Vec<f64> = (0..n).map(|i| i as f64 / 200.0).collect();
+        let w: Vec<[f64; 3]> = t_s
+            .iter()
+            .map(|t| [0.1 * (3.0 * t).sin(), 0.05, PI + 0.2 * t])
+            .collect();
+        let up = [0.1, -0.2, 0.97];
+        let table = [TableTurn {
+            from_row: 0,
+            to_row: n - 1,
+            up_b: up.map(|c| c / linalg::norm(&up)),
+            turns: 1,
+        }];
+        let bias = ([0.01, -0.02, 0.005], [1e-4; 3]);
+        let problem = Problem::new(&[], &table, &t_s, &w, bias, 1e-4);
+        let p = [
+            1.01, 0.02, -0.01, 0.005, 0.99, 0.03, -0.02, 0.01, 1.02, 0.012, -0.018, 0.004,
+        ];
+        let jac = problem.jacobian(&p, 1.0);
+        for c in 0..12 {
+            let (mut a, mut z) = (p.to_vec(), p.to_vec());
+            a[c] += 1e-6;
+            z[c] -= 1e-6;
+            let (ra, rz) = (problem.residuals(&a, 1.0), problem.residuals(&z, 1.0));
+            for r in 0..problem.rows() {
+                let numeric = (ra[r] - rz[r]) / 2e-6;
+                let scale = jac[(r, c)].abs().max(1.0);
+                assert!(
+                    (jac[(r, c)] - numeric).abs() < 1e-6 * scale,
+                    "row {r} column {c}: {} against {numeric}",
+                    jac[(r, c)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_table_turns_noise_is_the_stop_along_its_axis_and_the_axis_across() {
+        // No random walk: the stated stop and axis 1σ (docs/model.md §7.2); two turns: twice across.
+        let (along, across) = table_sigmas(0.0, 5.0, -2);
+        assert!((along - TABLE_STOP_DEG.to_radians()).abs() < 1e-15);
+        assert!((across - 4.0 * PI * TABLE_AXIS_DEG.to_radians()).abs() < 1e-15);
+        // 0.01 °/s/√Hz over 4 s adds 0.02° in quadrature.
+        let (along, _) = table_sigmas(0.01f64.to_radians(), 4.0, 1);
+        assert!((along.to_degrees() - 0.1f64.hypot(0.02)).abs() < 1e-12);
+    }
 }

@@ -92,6 +92,21 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
     }
 }
 
+/// The still interval after each whole table turn (`after_still` of each, 0-based: the turn is
+/// between still `k` and `k + 1`) is the same mount as the one before: the unit was turned flat and
+/// set back against its stop, so both see the same up and share one attitude unknown (docs/model.md
+/// §7.2); only segments with a known up and a prior (not free) are joined.
+pub(crate) fn join_table_turn_mounts(plan: &mut Plan, after_still: impl Iterator<Item = usize>) {
+    for k in after_still {
+        let Some([before, after]) = plan.segments.get_mut(k..k + 2) else {
+            continue;
+        };
+        if !before.is_free() && !after.is_free() && before.up_b == after.up_b {
+            after.mount.clone_from(&before.mount);
+        }
+    }
+}
+
 /// Normal gravity at geodetic latitude `lat_deg` and height `height_m` above the ellipsoid, m/s²:
 /// Somigliana's closed formula on the WGS 84 ellipsoid and its second-order height correction
 /// (NIMA TR8350.2, *Department of Defense World Geodetic System 1984*, 3rd ed., eqs. 4-1 and 4-3).

@@ -4,11 +4,12 @@
 
 use super::from_recording::stats_for;
 use super::import::Recording;
-use super::segment::Segmentation;
+use super::segment::{PositionSet, Segmentation};
+use super::table_turn::find_table_turns;
 use super::Plan;
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{
-    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, Turn, DETERMINED_1SIGMA,
+    fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, TableTurn, Turn, DETERMINED_1SIGMA,
 };
 use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
 use crate::unit_file::GyroSection;
@@ -49,8 +50,9 @@ pub enum HandGyroFileError {
     },
 }
 
-/// The gyro fit on the turns, with gravity directions from the session's own accelerometer
-/// calibration. A wrong gyro unit is an error; too few turns only leave the gyro uncalibrated.
+/// The gyro fit on the hand turns and the whole table turns ([`super::table_turn`]), with gravity
+/// directions from the session's own accelerometer calibration. A wrong gyro unit is an error; too
+/// few turns only leave the gyro uncalibrated.
 pub fn fit(
     rec: &Recording,
     seg: &Segmentation,
@@ -72,15 +74,36 @@ pub fn fit(
         f.map(|c| c / n)
     };
     let jumps = rec.jumps();
+    let whole: Vec<(usize, i32)> = find_table_turns(rec, seg)
+        .iter()
+        .filter_map(|f| Some((f.after_still, f.used()?)))
+        .collect();
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
-        .filter(|w| Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1))
-        .map(|w| Turn {
+        .enumerate()
+        .filter(|(k, w)| {
+            Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1)
+                && !whole.iter().any(|(after, _)| after == k)
+        })
+        .map(|(_, w)| Turn {
             from_row: w[0].end - 1,
             to_row: w[1].start,
             up_before_b: up(&w[0]),
             up_after_b: up(&w[1]),
+        })
+        .collect();
+    let table: Vec<TableTurn> = whole
+        .iter()
+        .map(|&(k, turns)| {
+            let (a, b) = (&seg.stills[k], &seg.stills[k + 1]);
+            let sum: [f64; 3] = core::array::from_fn(|j| up(a)[j] + up(b)[j]);
+            TableTurn {
+                from_row: a.end - 1,
+                to_row: b.start,
+                up_b: sum.map(|c| c / linalg::norm(&sum)),
+                turns,
+            }
         })
         .collect();
     let means: Vec<([f64; 3], usize)> = seg
@@ -88,10 +111,32 @@ pub fn fit(
         .iter()
         .map(|s| (s.mean_gyro_rad_s, s.end - s.start))
         .collect();
-    match fit_handheld_gyro(&turns, &rec.t_s, &rec.gyro_rad_s, still_bias(&means)) {
+    let fitted = fit_handheld_gyro(
+        &turns,
+        &table,
+        &rec.t_s,
+        &rec.gyro_rad_s,
+        still_bias(&means),
+        angle_random_walk(rec, seg),
+    );
+    match fitted {
         Err(e @ HandGyroError::UnitMismatch { .. }) => Err(HandGyroFileError::Unit(e)),
         r => Ok(r),
     }
+}
+
+/// The gyro's angle random walk, rad/√s: the median over the still intervals of their per-sample
+/// noise (rms over the axes) times the square root of the sample period, white noise assumed.
+fn angle_random_walk(rec: &Recording, seg: &Segmentation) -> f64 {
+    let mut per_sample: Vec<f64> = seg
+        .stills
+        .iter()
+        .map(|s| linalg::norm(&s.std_gyro_rad_s) / 3f64.sqrt())
+        .collect();
+    per_sample.sort_by(f64::total_cmp);
+    per_sample
+        .get(per_sample.len() / 2)
+        .map_or(0.0, |s| s / rec.rate_hz.max(f64::MIN_POSITIVE).sqrt())
 }
 
 /// A turn left out of the gyro fit because the time stamps jump during it (a gap, a repeat or a step
@@ -140,13 +185,32 @@ pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
 }
 
 /// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
-/// turns no `G` explains. Empty: accepted.
-pub fn problems(fit: &HandGyroFit) -> Vec<String> {
-    let mut problems: Vec<String> = gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns)
-        .into_iter()
-        .collect();
+/// turns no `G` explains (an rms misfit over `max_misfit_deg`, [`plausible_misfit_deg`]). Empty:
+/// accepted.
+pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
+    let mut problems: Vec<String> =
+        gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns, max_misfit_deg)
+            .into_iter()
+            .collect();
     problems.extend(gyro_check::matrix_problems(&fit.matrix));
     problems
+}
+
+/// The largest plausible rms misfit of the hand turns, degrees: [`gyro_check::MAX_TURN_MISFIT_DEG`],
+/// or in a six-face session its face prior when larger. Its ups are the calibrated accelerometer's,
+/// whose non-orthogonality is only as good as the faces' placement (docs/model.md §7.1): when whole
+/// table turns fix the gyro's scales, the angle between two faces can no longer be absorbed by the
+/// gyro's `G`, and the hand turns are off by that much (docs/model.md §7.2).
+pub fn plausible_misfit_deg(position_set: PositionSet, plan: &Plan) -> f64 {
+    let faces = match position_set {
+        PositionSet::SixFaces => plan
+            .segments
+            .iter()
+            .filter_map(|s| s.attitude_sigma_deg)
+            .fold(0.0, f64::max),
+        PositionSet::Spread => 0.0,
+    };
+    gyro_check::MAX_TURN_MISFIT_DEG.max(faces)
 }
 
 /// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a
@@ -163,11 +227,13 @@ pub fn file_text(fit: &HandGyroFit) -> String {
         matrix_1sigma: Some(fit.matrix_1sigma),
     };
     format!(
-        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°): w = matrix·ω_body + bias\n\
+        "# The gyro from {} hand turns between still positions (rms misfit {:.4}°) and {} whole turns on a\n\
+         # table (docs/model.md §7.2): w = matrix·ω_body + bias\n\
          # (docs/model.md §8), body axes of this session's accelerometer calibration. `host calibrate\n\
          # --input` adds it to calibration.toml. 1σ entries above 1e-3: not determined by the turns.\n{}",
         fit.turns,
         fit.rms_residual_deg,
+        fit.table_turns,
         toml::to_string_pretty(&File { gyro }).unwrap_or_default()
     )
 }
@@ -222,6 +288,52 @@ mod tests {
     use crate::session::segment::{find_intervals, SegmentOptions};
     use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
     use shared::OutputUnit;
+
+    /// One face round of a six-face session (1° placement) with a whole table turn on each face: the
+    /// five hand turns alone leave `G` undetermined (scale 1σ of percents); the table turns' known
+    /// angles fix each axis's scale to a few hundredths of a percent.
+    #[test]
+    fn whole_table_turns_fix_the_gyro_scale_that_one_round_of_hand_turns_leaves_open() {
+        let spec = HandSpec {
+            table_turns: true,
+            ..HandSpec::six_faces(4, 1.0, 1)
+        };
+        let rec =
+            crate::session::segment::tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
+        let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+        assert_eq!(seg.stills.len(), 12);
+        let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, 2.0);
+        let fit = fit(&rec, &seg, &plan).unwrap().unwrap();
+        assert_eq!((fit.turns, fit.table_turns), (5, 6));
+        let truth = spec.gyro.matrix;
+        for i in 0..3 {
+            let (e, s) = (fit.matrix[i][i] - truth[i][i], fit.matrix_1sigma[i][i]);
+            println!(
+                "G[{i}][{i}]: error {:+.4} %, 1σ {:.4} %",
+                e * 100.0,
+                s * 100.0
+            );
+            // Each axis's scale: two turns, each good to the stop's 0.1° of 360° (0.028 %).
+            assert!(s < 3e-4 && e.abs() < 4.0 * s, "axis {i}: {e} ± {s}");
+        }
+        assert!(
+            fit.undetermined()
+                .iter()
+                .all(|g| !["G[x][x]", "G[y][y]", "G[z][z]"].contains(&g.as_str())),
+            "{:?}",
+            fit.undetermined()
+        );
+        // The table turns' angle errors are the stop's (0.05° in the simulation).
+        assert!(
+            fit.table_rms_residual_deg < 0.15,
+            "{}",
+            fit.table_rms_residual_deg
+        );
+        // A six-face session's hand turns are judged against its face prior (2°), others against 1°.
+        assert_eq!(plausible_misfit_deg(PositionSet::SixFaces, &plan), 2.0);
+        assert_eq!(plausible_misfit_deg(PositionSet::Spread, &plan), 1.0);
+        assert!(problems(&fit, 2.0).is_empty(), "{:?}", problems(&fit, 2.0));
+    }
 
     #[test]
     fn a_turn_across_a_time_gap_is_dropped_and_said_the_others_fit() {

@@ -4,12 +4,15 @@
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
 
-use super::from_recording::{plan_for, plan_for_faces, stats_for, write_session};
+use super::from_recording::{
+    join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
+};
 use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
 use super::import::Recording;
 use super::segment::{
     coverage, find_intervals, Coverage, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
+use super::table_turn::{find_table_turns, FoundTableTurn};
 use super::{Plan, RecordingError, SegmentStats};
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
@@ -58,8 +61,11 @@ pub struct SegmentedSession {
     pub plan: Plan,
     /// The gyro fit, or why there is none (too few turns, not asked).
     pub gyro: Result<HandGyroFit, HandGyroError>,
-    /// The reader's warnings (rows left out, a cut-short last line, time jumps) and the turns left
-    /// out of the gyro fit.
+    /// The whole turns on a table found between still intervals at the same position, used or not
+    /// (docs/model.md §7.2); empty without a gyro fit.
+    pub table_turns: Vec<FoundTableTurn>,
+    /// The reader's warnings (rows left out, a cut-short last line, time jumps), the turns left out
+    /// of the gyro fit and the table turns not used as whole turns.
     pub warnings: Vec<String>,
     /// How to make a better session, when the positions are too few or too alike.
     pub advice: Option<String>,
@@ -144,15 +150,32 @@ impl Found {
         };
         plan.unit_id = choices.unit_id.clone();
         plan.gravity_m_s2 = choices.gravity_m_s2;
-        let gyro = if choices.fit_gyro {
+        let (gyro, table_turns) = if choices.fit_gyro {
+            let table_turns = find_table_turns(&recording, &segmentation);
+            join_table_turn_mounts(
+                &mut plan,
+                table_turns
+                    .iter()
+                    .filter(|t| t.used().is_some())
+                    .map(|t| t.after_still),
+            );
             warnings.extend(
                 hand_gyro::dropped_turns(&recording, &segmentation)
                     .iter()
                     .map(ToString::to_string),
             );
-            hand_gyro::fit(&recording, &segmentation, &plan)?
+            warnings.extend(
+                table_turns
+                    .iter()
+                    .filter(|t| t.used().is_none())
+                    .map(ToString::to_string),
+            );
+            (
+                hand_gyro::fit(&recording, &segmentation, &plan)?,
+                table_turns,
+            )
         } else {
-            Err(HandGyroError::NotAsked)
+            (Err(HandGyroError::NotAsked), Vec::new())
         };
         Ok(SegmentedSession {
             recording,
@@ -161,6 +184,7 @@ impl Found {
             position_set,
             plan,
             gyro,
+            table_turns,
             warnings,
             advice,
         })
@@ -170,7 +194,8 @@ impl Found {
 impl SegmentedSession {
     /// Why the gyro fit is not one a real gyro gives (`hand_gyro::problems`), if it is not.
     pub fn gyro_problems(&self) -> Option<Vec<String>> {
-        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?);
+        let max_misfit_deg = hand_gyro::plausible_misfit_deg(self.position_set, &self.plan);
+        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg);
         (!problems.is_empty()).then_some(problems)
     }
 

@@ -12,7 +12,7 @@
 //!   [`segment`] finds the still positions and the spins in it (`host segment`), and
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
 //!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
-//!   `gyro.toml`; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
+//!   `gyro.toml`; [`table_turn`] finds the whole turns on a table the gyro fit takes as known angles; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
 //!   tells them from text by their first bytes; [`in_memory`] does all of that without writing
 //!   files (the Python package).
 
@@ -27,6 +27,7 @@ pub mod plan;
 pub mod reader;
 pub mod segment;
 pub mod stats;
+pub mod table_turn;
 pub mod thermal;
 pub mod writer;
 

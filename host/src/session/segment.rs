@@ -543,7 +543,7 @@ impl Coverage {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 

@@ -81,6 +81,9 @@ pub struct HandSpec {
     /// Tremor during the holds too (held in the hand); false: set down on a table, tremor only
     /// while turning.
     pub hold_tremor: bool,
+    /// At each position, one whole turn about the vertical on the table before moving on, the unit
+    /// set back against the same stop and held again (docs/model.md §7.2, [`TableTurnSim`]).
+    pub table_turns: bool,
     /// Seed.
     pub seed: u64,
 }
@@ -106,6 +109,7 @@ impl HandSpec {
             gyro: GyroTruth::half_percent(),
             acc_step: 0.0,
             hold_tremor: true,
+            table_turns: false,
             seed,
         }
     }
@@ -153,6 +157,22 @@ impl HandSpec {
             ..HandSpec::standard(seed)
         }
     }
+}
+
+/// How a whole turn on the table is simulated: the unit's reference point [`Self::OFFSET_M`] from the
+/// turn's axis (its centripetal and tangential acceleration reach the accelerometers), turned once,
+/// either way, in 4–6 s (raised-cosine rate, peaks of 120–180 °/s) about the vertical, rocking on
+/// the table by up to [`Self::ROCK_DEG`] about a horizontal axis in the middle of the turn (none at
+/// its ends), and set back against its stop with an error of [`Self::STOP_SIGMA_DEG`] (1σ).
+pub struct TableTurnSim;
+
+impl TableTurnSim {
+    /// Distance of the unit's reference point from the turn's axis, m.
+    pub const OFFSET_M: f64 = 0.03;
+    /// Amplitude of the rocking, degrees.
+    pub const ROCK_DEG: f64 = 0.1;
+    /// 1σ of the heading's return to the stop, degrees.
+    pub const STOP_SIGMA_DEG: f64 = 0.05;
 }
 
 /// One logged row: time, accelerometer (output unit), gyro (rad/s).
@@ -213,6 +233,68 @@ fn attitude(up: [f64; 3], psi: f64) -> UnitQuaternion<f64> {
     UnitQuaternion::from_axis_angle(&Vector3::z_axis(), psi) * level
 }
 
+/// One sample's outputs: the forward model, the hand's tremor and the sensors' noise.
+struct Sampler<'a> {
+    model: &'a ForwardModel,
+    spec: &'a HandSpec,
+    g: f64,
+    tremor_w: &'a Tremor,
+    tremor_a: &'a Tremor,
+    scales: [f64; 3],
+}
+
+impl Sampler<'_> {
+    /// Accelerometer and gyro at `t` in attitude `q` with the turn's body rate, its derivative and
+    /// the reference point's own acceleration (a table turn's, about an axis off it), body axes.
+    fn sample(
+        &self,
+        t: f64,
+        q: &UnitQuaternion<f64>,
+        [w_turn, wd_turn, a_b]: [[f64; 3]; 3],
+        rng: &mut Rng,
+    ) -> ([f64; 3], [f64; 3]) {
+        // On a table (no hold tremor) the tremor is the hand's, while turning only.
+        let k = if self.spec.hold_tremor || w_turn != [0.0; 3] {
+            1.0
+        } else {
+            0.0
+        };
+        let (tw, twd, tint) = self.tremor_w.at(t, k);
+        let (ta, _, _) = self.tremor_a.at(t, k);
+        let up0 = q.inverse_transform_vector(&Vector3::z());
+        // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
+        let up0 = [up0.x, up0.y, up0.z];
+        let turn = linalg::cross(&tint, &up0);
+        let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
+        let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
+        let motion = BodyMotion {
+            f_o: BodySpecificForce {
+                m_s2: core::array::from_fn(|j| self.g * up[j] + ta[j] + a_b[j]),
+            },
+            omega: BodyRate { rad_s: omega },
+            omega_dot: BodyAngularAccel {
+                rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
+            },
+        };
+        let raw = self.model.outputs(&motion).raw;
+        let acc = core::array::from_fn(|i| {
+            let u = raw[i] + self.spec.noise_g * self.scales[i] * rng.normal();
+            if self.spec.acc_step > 0.0 {
+                (u / self.spec.acc_step).round() * self.spec.acc_step
+            } else {
+                u
+            }
+        });
+        let gw = linalg::mat_vec(&self.spec.gyro.matrix, &omega);
+        let gyro = core::array::from_fn(|i| {
+            gw[i]
+                + self.spec.gyro.bias_rad_s[i]
+                + self.spec.gyro_noise_deg_s.to_radians() * rng.normal()
+        });
+        (acc, gyro)
+    }
+}
+
 /// Simulates the session for a unit `truth` (its output unit is the file's).
 pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let model = ForwardModel::new(truth).expect("a valid simulated unit");
@@ -229,57 +311,45 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
     let mut t = 0.0;
     let mut k = 0u64;
     let mut q = attitude(spec.ups[0], 2.0 * PI * uniform(&mut rng));
-    let sample =
-        |t: f64, q: &UnitQuaternion<f64>, w_turn: [f64; 3], wd_turn: [f64; 3], rng: &mut Rng| {
-            // On a table (no hold tremor) the tremor is the hand's, while turning only.
-            let k = if spec.hold_tremor || w_turn != [0.0; 3] {
-                1.0
-            } else {
-                0.0
-            };
-            let (tw, twd, tint) = tremor_w.at(t, k);
-            let (ta, _, _) = tremor_a.at(t, k);
-            let up0 = q.inverse_transform_vector(&Vector3::z());
-            // Small tremor rotation δ: a world vector seen in body axes becomes v − δ × v.
-            let up0 = [up0.x, up0.y, up0.z];
-            let turn = linalg::cross(&tint, &up0);
-            let up: [f64; 3] = core::array::from_fn(|j| up0[j] - turn[j]);
-            let omega: [f64; 3] = core::array::from_fn(|j| w_turn[j] + tw[j]);
-            let motion = BodyMotion {
-                f_o: BodySpecificForce {
-                    m_s2: core::array::from_fn(|j| g * up[j] + ta[j]),
-                },
-                omega: BodyRate { rad_s: omega },
-                omega_dot: BodyAngularAccel {
-                    rad_s2: core::array::from_fn(|j| wd_turn[j] + twd[j]),
-                },
-            };
-            let raw = model.outputs(&motion).raw;
-            let acc = core::array::from_fn(|i| {
-                let u = raw[i] + spec.noise_g * scales[i] * rng.normal();
-                if spec.acc_step > 0.0 {
-                    (u / spec.acc_step).round() * spec.acc_step
-                } else {
-                    u
-                }
-            });
-            let gw = linalg::mat_vec(&spec.gyro.matrix, &omega);
-            let gyro = core::array::from_fn(|i| {
-                gw[i] + spec.gyro.bias_rad_s[i] + spec.gyro_noise_deg_s.to_radians() * rng.normal()
-            });
-            (acc, gyro)
-        };
+    let sampler = Sampler {
+        model: &model,
+        spec,
+        g,
+        tremor_w: &tremor_w,
+        tremor_a: &tremor_a,
+        scales,
+    };
+    let sample = |t, q: &_, w_turn, wd_turn, a_b, rng: &mut Rng| {
+        sampler.sample(t, q, [w_turn, wd_turn, a_b], rng)
+    };
     for (p, up) in spec.ups.iter().enumerate() {
-        let hold = spec.hold_s.0 + (spec.hold_s.1 - spec.hold_s.0) * uniform(&mut rng);
-        let t0 = t;
-        while t < t0 + hold {
-            let (a, w) = sample(t, &q, [0.0; 3], [0.0; 3], &mut rng);
-            rows.push((t, a, w));
-            k += 1;
-            t = k as f64 * dt;
+        for again in [false, true] {
+            if again {
+                if !spec.table_turns {
+                    break;
+                }
+                let turn = table_turn(&q, &mut rng);
+                let t0 = t;
+                while t < t0 + turn.duration_s {
+                    let (qt, w_b, wd_b, a_b) = turn.at(t - t0);
+                    let (a, w) = sample(t, &qt, w_b, wd_b, a_b, &mut rng);
+                    rows.push((t, a, w));
+                    k += 1;
+                    t = k as f64 * dt;
+                }
+                q = turn.end();
+            }
+            let hold = spec.hold_s.0 + (spec.hold_s.1 - spec.hold_s.0) * uniform(&mut rng);
+            let t0 = t;
+            while t < t0 + hold {
+                let (a, w) = sample(t, &q, [0.0; 3], [0.0; 3], [0.0; 3], &mut rng);
+                rows.push((t, a, w));
+                k += 1;
+                t = k as f64 * dt;
+            }
+            let t_last = rows.last().map_or(t0, |r| r.0);
+            holds.push((t0, t_last, *up));
         }
-        let t_last = rows.last().map_or(t0, |r| r.0);
-        holds.push((t0, t_last, *up));
         let Some(next_up) = spec.ups.get(p + 1) else {
             break;
         };
@@ -302,6 +372,7 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
                 &qt,
                 [ab.x * rate, ab.y * rate, ab.z * rate],
                 [ab.x * acc, ab.y * acc, ab.z * acc],
+                [0.0; 3],
                 &mut rng,
             );
             rows.push((t, a, w));
@@ -311,6 +382,80 @@ pub fn simulate_hand(truth: &Calibration, spec: &HandSpec) -> HandSession {
         q = q1;
     }
     HandSession { rows, holds }
+}
+
+/// One whole table turn from the attitude `q0` ([`TableTurnSim`]).
+struct TableTurnPath {
+    q0: UnitQuaternion<f64>,
+    /// Signed angle turned about world z (a whole turn plus the stop's error), rad.
+    angle: f64,
+    duration_s: f64,
+    /// Horizontal axis of the rocking, world.
+    rock_axis: nalgebra::Unit<Vector3<f64>>,
+    /// Rocking frequency, Hz.
+    rock_hz: f64,
+    /// Reference point from the turn's axis, body axes, m.
+    offset_b: Vector3<f64>,
+}
+
+fn table_turn(q0: &UnitQuaternion<f64>, rng: &mut Rng) -> TableTurnPath {
+    let sign = if uniform(rng) < 0.5 { -1.0 } else { 1.0 };
+    let angle = sign * 2.0 * PI + TableTurnSim::STOP_SIGMA_DEG.to_radians() * rng.normal();
+    let duration_s = 4.0 + 2.0 * uniform(rng);
+    let a = 2.0 * PI * uniform(rng);
+    let rock_axis = nalgebra::Unit::new_normalize(Vector3::new(a.cos(), a.sin(), 0.0));
+    let rock_hz = 1.0 + 2.0 * uniform(rng);
+    let b = 2.0 * PI * uniform(rng);
+    let offset_w = Vector3::new(b.cos(), b.sin(), 0.0) * TableTurnSim::OFFSET_M;
+    TableTurnPath {
+        q0: *q0,
+        angle,
+        duration_s,
+        rock_axis,
+        rock_hz,
+        offset_b: q0.inverse_transform_vector(&offset_w),
+    }
+}
+
+impl TableTurnPath {
+    /// Body-to-world attitude `s` seconds into the turn: rocked, then turned about world z.
+    fn attitude(&self, s: f64) -> UnitQuaternion<f64> {
+        let x = (s / self.duration_s).clamp(0.0, 1.0);
+        let th = self.angle * (x - (2.0 * PI * x).sin() / (2.0 * PI));
+        let rock = TableTurnSim::ROCK_DEG.to_radians()
+            * (PI * x).sin().powi(2)
+            * (2.0 * PI * self.rock_hz * s).sin();
+        UnitQuaternion::from_axis_angle(&self.rock_axis, rock)
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), th)
+            * self.q0
+    }
+
+    /// Body rate (rad/s), its derivative and the reference point's acceleration (m/s², body axes)
+    /// by central differences of the attitude (exact to far below the sensors' noise).
+    fn motion(&self, s: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let h = 1e-4;
+        let rate = |s: f64| {
+            (self.attitude(s - h).inverse() * self.attitude(s + h)).scaled_axis() / (2.0 * h)
+        };
+        let w = rate(s);
+        let wd = (rate(s + h) - rate(s - h)) / (2.0 * h);
+        let h2 = 1e-3;
+        let pos = |s: f64| self.attitude(s) * self.offset_b;
+        let a_w = (pos(s + h2) - 2.0 * pos(s) + pos(s - h2)) / (h2 * h2);
+        let a_b = self.attitude(s).inverse_transform_vector(&a_w);
+        ([w.x, w.y, w.z], [wd.x, wd.y, wd.z], [a_b.x, a_b.y, a_b.z])
+    }
+
+    /// Attitude, body rate, its derivative and the acceleration `s` seconds into the turn.
+    fn at(&self, s: f64) -> (UnitQuaternion<f64>, [f64; 3], [f64; 3], [f64; 3]) {
+        let (w, wd, a) = self.motion(s);
+        (self.attitude(s), w, wd, a)
+    }
+
+    /// The attitude after the turn, set back against the stop.
+    fn end(&self) -> UnitQuaternion<f64> {
+        self.attitude(self.duration_s)
+    }
 }
 
 /// How the CSV is laid out, as a logger would.
@@ -427,5 +572,50 @@ pub fn logger_unit(unit: shared::OutputUnit) -> Calibration {
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         gyro: None,
         temperature: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A whole turn on the table: halfway (peak rate, no angular acceleration; without rocking) the
+    /// reference point 3 cm off the axis feels only the centripetal ω²r, horizontal; over the turn
+    /// (rocking) the body rate integrates to the angle about up, to the rocking's size across it.
+    #[test]
+    fn a_table_turn_has_its_centripetal_force_and_turns_its_angle_about_up() {
+        let q0 = attitude([0.0, 0.6, 0.8], 0.7);
+        let up = q0.inverse_transform_vector(&Vector3::z());
+        let flat = TableTurnPath {
+            rock_hz: 0.0,
+            ..table_turn(&q0, &mut Rng::new(8, 0))
+        };
+        let mid = 0.5 * flat.duration_s;
+        let (w, wd, a) = flat.motion(mid);
+        let omega = Vector3::from(w).norm();
+        assert!((omega - 2.0 * flat.angle.abs() / flat.duration_s).abs() < 1e-6 * omega);
+        assert!(Vector3::from(wd).norm() < 1e-4, "{wd:?}");
+        let a = Vector3::from(a);
+        let want = omega * omega * TableTurnSim::OFFSET_M;
+        assert!((a.norm() - want).abs() < 1e-4 * want, "{a} against {want}");
+        assert!(a.dot(&up).abs() < 1e-4 * want, "{a}");
+        let path = table_turn(&q0, &mut Rng::new(8, 0));
+        let n = 4000;
+        let dt = path.duration_s / n as f64;
+        let integral: Vector3<f64> = (0..n)
+            .map(|i| Vector3::from(path.motion((i as f64 + 0.5) * dt).0) * dt)
+            .sum();
+        let along = integral.dot(&up);
+        assert!(
+            (along - path.angle).abs() < 1e-4,
+            "{along} against {}",
+            path.angle
+        );
+        let across = (integral - up * along).norm().to_degrees();
+        assert!(
+            across < 2.0 * 360.0 * TableTurnSim::ROCK_DEG.to_radians(),
+            "{across}°"
+        );
+        assert!(path.end().angle_to(&q0).to_degrees() < 0.3);
     }
 }

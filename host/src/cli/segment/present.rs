@@ -43,6 +43,9 @@ pub(super) struct SegmentDocument {
     time_unit: Option<&'static str>,
     time_unit_detected: bool,
     intervals: Vec<IntervalDocument>,
+    /// Whole turns on the table found between still intervals at the same position (used or not;
+    /// the refused ones are in `warnings`).
+    table_turns_found: usize,
     gyro: Option<GyroDocument>,
     gyro_not_calibrated: Option<String>,
     advice: Option<String>,
@@ -84,6 +87,9 @@ struct AttitudeDocument {
 struct GyroDocument {
     turns: usize,
     rms_residual_deg: f64,
+    /// Whole turns on the table used as known angles (docs/model.md §7.2).
+    table_turns: usize,
+    table_rms_residual_deg: f64,
     matrix: [[f64; 3]; 3],
     matrix_1sigma: [[f64; 3]; 3],
     bias_rad_s: [f64; 3],
@@ -149,9 +155,12 @@ pub(super) fn document(
         time_unit: rec.time_unit.map(|u| u.0.symbol()),
         time_unit_detected: rec.time_unit.is_some_and(|u| u.1),
         intervals,
+        table_turns_found: o.table_turns.len(),
         gyro: o.gyro.as_ref().ok().map(|f| GyroDocument {
             turns: f.turns,
             rms_residual_deg: f.rms_residual_deg,
+            table_turns: f.table_turns,
+            table_rms_residual_deg: f.table_rms_residual_deg,
             matrix: f.matrix,
             matrix_1sigma: f.matrix_1sigma,
             bias_rad_s: f.bias_rad_s,
