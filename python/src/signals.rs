@@ -13,8 +13,7 @@ use host::noise::allan::{fit, octave_sizes, overlapping_adev, TermFit};
 use host::noise::confidence::relative_sigma;
 use host::session::import::{parse_acc_unit, GyroUnit};
 use host::session::Row;
-use host::sim::handheld::{logger_unit, simulate_hand as simulate_hand_rows, HandSpec};
-use host::unit_file::UnitFile;
+use host::sim::handheld::{logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec};
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -225,13 +224,7 @@ pub fn simulate_hand<'py>(
     let t = PyArray1::from_iter(py, sim.rows.iter().map(|r| r.0));
     let acc = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].1[j]);
     let gyro = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].2[j] * k);
-    let g = &spec.gyro;
-    let truth_toml = format!(
-        "{}\n# The simulated gyro: w = matrix·ω_body + bias (true body axes).\n[gyro]\nmatrix = {:?}\nbias_rad_s = {:?}\n",
-        UnitFile::from_calibration(&truth, None, None).to_toml(),
-        g.matrix,
-        g.bias_rad_s
-    );
+    let truth_toml = truth_toml(&truth, &spec.gyro);
     let d = PyDict::new(py);
     d.set_item("t", t)?;
     d.set_item("acc", acc.into_pyarray(py))?;

@@ -14,8 +14,9 @@ use crate::session::logs::read_log;
 use crate::session::segment::{Coverage, PositionSet, SegmentOptions, Segmentation};
 use crate::session::table_turn::FoundTableTurn;
 use crate::session::Plan;
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::unit_file::UnitFile;
+use crate::sim::handheld::{
+    logger_unit, simulate_hand, truth_toml, write_logger_csv, HandSpec, LoggerLayout,
+};
 use clap::Args;
 use shared::linalg;
 use shared::OutputUnit;
@@ -176,13 +177,7 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
         move |e: std::io::Error| CliError::Failed(format!("cannot write {p}: {e}"))
     };
     write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
-    let g = &spec.gyro;
-    let text = format!(
-        "{}\n# The simulated gyro: w = matrix·ω_body + bias (true body axes).\n[gyro]\nmatrix = {:?}\nbias_rad_s = {:?}\n",
-        UnitFile::from_calibration(&truth, None, None).to_toml(),
-        g.matrix,
-        g.bias_rad_s
-    );
+    let text = truth_toml(&truth, &spec.gyro);
     write_atomic(&truth_path, text.as_bytes(), a.force)?;
     crate::outln!(
         "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",

@@ -29,6 +29,17 @@ pub struct GyroTruth {
     pub bias_rad_s: [f64; 3],
 }
 
+/// The simulated unit's truth file: the accelerometer as a unit file, with the gyro's own table
+/// (`host simulate-hand` writes it beside the CSV; the Python package returns it as text).
+pub fn truth_toml(truth: &Calibration, gyro: &GyroTruth) -> String {
+    format!(
+        "{}\n# The simulated gyro: w = matrix·ω_body + bias (true body axes).\n[gyro]\nmatrix = {:?}\nbias_rad_s = {:?}\n",
+        crate::unit_file::UnitFile::from_calibration(truth, None, None).to_toml(),
+        gyro.matrix,
+        gyro.bias_rad_s
+    )
+}
+
 impl GyroTruth {
     /// Scale errors `scale_rel` per axis and small rotations of each gyro axis by the angles
     /// `misalign_rad` (row i's off-diagonals), bias `bias_rad_s`.
