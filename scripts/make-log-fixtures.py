@@ -14,9 +14,10 @@ temperature ramp (24.0 to 24.6 °C) where the format has one:
 - hand.ulg: PX4 ULog written by pyulog's own writer (ULog.write_ulog) from a ULog whose
   sensor_accel and sensor_gyro data were replaced by the session's (PX4's message definitions of
   those topics, multi_id 0), with one 20 ms dropout (two samples lost) at row DROP.
-- hand.bin: ArduPilot DataFlash. pymavlink has a reader (DFReader) but no writer, so the messages are
-  packed here by LogStructure.h's rules (FMT, then IMU with instance I = 0) and the file is read back
-  with pymavlink's DFReader_binary, which must give the same values.
+- hand.bin: ArduPilot DataFlash (FMT, then IMU with instance I = 0, LogStructure.h's formats), each
+  message packed by pymavlink's DFMessage.get_msgbuf (the packer mavlogdump writes .bin files with;
+  pymavlink has no log-writer class), and the file read back with pymavlink's DFReader_binary,
+  which must give the same values.
 - hand-accgyr.bin: ArduPilot DataFlash as a batch-sampling log writes it: FMT, then ACC and GYR
   (no IMU message, no temperature) for two instances, the session's first ACCGYR_ROWS rows as
   I = 0 and the same with 0.25 m/s² added to AccX as I = 1; packed and read back as hand.bin.
@@ -126,23 +127,35 @@ IMU_TYPE = 0xA5
 
 
 def dataflash_fmt(ty, name, form, cols):
+    """An FMT message for a message type, and the type's DFFormat: both pymavlink's own."""
+    from pymavlink.DFReader import DFFormat
+
     length = 3 + struct.calcsize("<" + form.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
-    body = struct.pack("<BB4s16s64s", ty, length, name.encode(), form.encode(), cols.encode())
-    return bytes([0xA3, 0x95, 0x80]) + body
+    fmt_of_fmt = DFFormat(0x80, "FMT", 89, "BBnNZ", "Type,Length,Name,Format,Columns")
+    fmt = dataflash_msg(fmt_of_fmt, [ty, length, name.encode(), form.encode(), cols.encode()])
+    return fmt, DFFormat(ty, name, length, form, cols)
+
+
+def dataflash_msg(fmt, values):
+    """One message packed by pymavlink's DFMessage.get_msgbuf (what mavlogdump writes a .bin with)."""
+    from pymavlink.DFReader import DFMessage
+
+    out = DFMessage(fmt, list(values), False, None).get_msgbuf()
+    assert out is not None, (fmt.name, values)
+    return out
 
 
 def write_dataflash(path, t, acc, gyro, temp):
     from pymavlink import DFReader
 
     out = bytearray()
-    out += dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
-    out += dataflash_fmt(IMU_TYPE, "IMU", IMU_FORMAT, IMU_COLUMNS)
+    fmt, _ = dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
+    imu_fmt, imu = dataflash_fmt(IMU_TYPE, "IMU", IMU_FORMAT, IMU_COLUMNS)
+    out += fmt + imu_fmt
     us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
     for k in range(len(t)):
-        body = struct.pack(
-            "<QBffffffIIfBBHH", int(us[k]), 0, *gyro[k], *acc[k], 0, 0, temp[k], 1, 1, 100, 100
-        )
-        out += bytes([0xA3, 0x95, IMU_TYPE]) + body
+        values = [int(us[k]), 0, *map(float, gyro[k]), *map(float, acc[k]), 0, 0, float(temp[k])]
+        out += dataflash_msg(imu, values + [1, 1, 100, 100])
     path.write_bytes(bytes(out))
     # Read back with pymavlink's DataFlash reader.
     log = DFReader.DFReader_binary(str(path), zero_time_base=True)
@@ -201,17 +214,19 @@ def write_dataflash_accgyr(path, t, acc, gyro):
 
     t, acc, gyro = t[:ACCGYR_ROWS], acc[:ACCGYR_ROWS], gyro[:ACCGYR_ROWS]
     out = bytearray()
-    out += dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
-    out += dataflash_fmt(ACC_TYPE, "ACC", "QBQfff", "TimeUS,I,SampleUS,AccX,AccY,AccZ")
-    out += dataflash_fmt(GYR_TYPE, "GYR", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
+    fmt, _ = dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
+    acc_fmt, acc_type = dataflash_fmt(ACC_TYPE, "ACC", "QBQfff", "TimeUS,I,SampleUS,AccX,AccY,AccZ")
+    gyr_fmt, gyr_type = dataflash_fmt(GYR_TYPE, "GYR", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
+    out += fmt + acc_fmt + gyr_fmt
     sample_us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
     for k in range(len(t)):
         # Written 800 µs after the sample was taken, as the batch sampler does.
         written = int(sample_us[k]) + 800
         for inst, dx in ((0, 0.0), (1, 0.25)):
-            a = (acc[k, 0] + dx, acc[k, 1], acc[k, 2])
-            out += bytes([0xA3, 0x95, ACC_TYPE]) + struct.pack("<QBQfff", written, inst, int(sample_us[k]), *a)
-            out += bytes([0xA3, 0x95, GYR_TYPE]) + struct.pack("<QBQfff", written, inst, int(sample_us[k]), *gyro[k])
+            a = (float(acc[k, 0] + dx), float(acc[k, 1]), float(acc[k, 2]))
+            head = [written, inst, int(sample_us[k])]
+            out += dataflash_msg(acc_type, head + list(a))
+            out += dataflash_msg(gyr_type, head + list(map(float, gyro[k])))
     path.write_bytes(bytes(out))
     log = DFReader.DFReader_binary(str(path), zero_time_base=True)
     ts, a, g = [], [], []
