@@ -63,7 +63,7 @@ pub struct PackageTest {
     pub delta_chi2: f64,
     /// Its degrees of freedom.
     pub dof: i64,
-    /// Largest |r_i[j] − mean_i r_i[j]| of the nine-component fit, m.
+    /// Largest |r_i\[j\] − mean_i r_i\[j\]| of the nine-component fit, m.
     pub spread_m: f64,
 }
 

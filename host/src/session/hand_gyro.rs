@@ -196,7 +196,7 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
     problems
 }
 
-/// The largest plausible rms misfit of the hand turns, degrees: [`gyro_check::MAX_TURN_MISFIT_DEG`],
+/// The largest plausible rms misfit of the hand turns, degrees: 1° (`gyro_check::MAX_TURN_MISFIT_DEG`),
 /// or in a six-face session its face prior when larger. Its ups are the calibrated accelerometer's,
 /// whose non-orthogonality is only as good as the faces' placement (docs/model.md §7.1): when whole
 /// table turns fix the gyro's scales, the angle between two faces can no longer be absorbed by the
