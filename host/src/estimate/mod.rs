@@ -23,6 +23,7 @@
 //! comparison), `paper_angles` (θ to the paper's angles with their covariance), `uncertainty`,
 //! [`plausibility`] (checks before any file is written); [`thermal`], `thermal_gyro` and
 //! `thermal_misalignment` (the temperature model, §9); [`handheld_gyro`] (the gyro from hand turns);
+//! [`package`] (a single-package unit's one lever arm: its preconditions and χ² test, §4.7);
 //! [`predict`] (Cramér–Rao).
 
 pub mod attitude;
