@@ -7,11 +7,12 @@ use super::CliError;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Formats};
+use crate::session::coverage::Coverage;
 use crate::session::from_recording::normal_gravity_m_s2;
 use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
 use crate::session::in_memory::{find, SegmentChoices};
 use crate::session::logs::read_log;
-use crate::session::segment::{Coverage, PositionSet, SegmentOptions, Segmentation};
+use crate::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use crate::session::table_turn::FoundTableTurn;
 use crate::session::Plan;
 use crate::sim::handheld::{

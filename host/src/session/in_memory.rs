@@ -4,14 +4,13 @@
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
 
+use super::coverage::{coverage, Coverage};
 use super::from_recording::{
     join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
 };
 use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
 use super::import::Recording;
-use super::segment::{
-    coverage, find_intervals, Coverage, PositionSet, SegmentError, SegmentOptions, Segmentation,
-};
+use super::segment::{find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation};
 use super::table_turn::{find_table_turns, FoundTableTurn};
 use super::{Plan, RecordingError, SegmentStats};
 use crate::estimate::gyro::GyroEstimate;

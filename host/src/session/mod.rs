@@ -9,7 +9,8 @@
 //!   writer that syncs at every segment end; [`error`]: what can go wrong with either;
 //!   [`thermal`]: the optional `temp_c` column and its per-segment statistics.
 //! - A logger's file without a plan: [`import`] reads its CSV (units, columns, sample rate),
-//!   [`segment`] finds the still positions and the spins in it (`host segment`), and
+//!   [`segment`] finds the still positions and the spins in it (`host segment`), [`coverage`]
+//!   judges the positions found (distinct, directions missed, a cube's six faces), and
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
 //!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
 //!   `gyro.toml`; [`table_turn`] finds the whole turns on a table the gyro fit takes as known angles; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
@@ -17,6 +18,7 @@
 //!   files (the Python package).
 
 pub mod builtin;
+pub mod coverage;
 pub mod error;
 pub mod from_recording;
 pub mod hand_gyro;

@@ -4,9 +4,10 @@
 use super::SegmentArgs;
 use super::SegmentOutcome;
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
+use crate::session::coverage::Coverage;
 use crate::session::import::Recording;
 use crate::session::plan::Attitude;
-use crate::session::segment::{Coverage, IntervalKind, Segmentation};
+use crate::session::segment::{IntervalKind, Segmentation};
 use serde::Serialize;
 use shared::linalg;
 
