@@ -240,7 +240,7 @@ pub fn check_omega_dot() -> Check {
         return out;
     };
     for (w, want) in OMEGA_DOT_SEQ {
-        out.add3(&e.update(&f(w)), want);
+        out.add3(e.update(&f(w)), want);
     }
     out
 }
@@ -353,7 +353,7 @@ mod tests {
                 (2.0 * (20.0 * t).sin()) as f32,
                 rng.range(-0.01, 0.01),
             ];
-            writeln!(s, "    ({}, {}),", bits(w), bits(e.update(&w))).unwrap();
+            writeln!(s, "    ({}, {}),", bits(w), bits(*e.update(&w))).unwrap();
         }
         s.push_str("];\n\n/// Gyro correction and compensation after a temperature refresh.\npub const GYRO_TEMP_CASES: &[GyroTempCase] = &[\n");
         let mut c = gyro_temp_compensator().unwrap();

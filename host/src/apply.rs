@@ -173,7 +173,7 @@ impl Applier {
         // the ω̇ estimator and the lever-arm terms; a calibration without a gyro leaves it untouched.
         let w = self.compensator.correct_rate(w_rad_s).rad_s;
         self.last_rate_rad_s = w;
-        let wd = self.omega_dot.update(&w);
+        let wd = *self.omega_dot.update(&w);
         Some(self.compensate(u, &w, &wd))
     }
 

@@ -80,15 +80,16 @@ impl OmegaDotEstimator {
         })
     }
 
-    /// Feeds one gyro sample and returns the current `ω̇` estimate (rad/s²). The first sample only
+    /// Feeds one gyro sample and returns the current `ω̇` estimate (rad/s²) where it lies, in the
+    /// estimator (a per-sample caller reads it there, without a copy). The first sample only
     /// starts the difference (its difference is scaled by 0: no branch at all).
     #[inline(always)]
-    pub fn update(&mut self, omega_rad_s: &[f32; 3]) -> [f32; 3] {
+    pub fn update(&mut self, omega_rad_s: &[f32; 3]) -> &[f32; 3] {
         #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
         self.step_block(omega_rad_s);
         #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
         self.step_reference(omega_rad_s);
-        self.stage2
+        &self.stage2
     }
 
     /// One step in Rust: the reference on the PC and on other targets; the ARM form below
@@ -254,8 +255,8 @@ mod tests {
         let mut e = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
         let b = f64::from(e.beta());
         for round in 0..2 {
-            assert_eq!(e.update(&[5.0, -3.0, 0.5]), [0.0; 3], "round {round}");
-            let out = e.update(&[5.001, -3.0, 0.4995]);
+            assert_eq!(*e.update(&[5.0, -3.0, 0.5]), [0.0; 3], "round {round}");
+            let out = *e.update(&[5.001, -3.0, 0.4995]);
             let want = [1e-3f64, 0.0, -5e-4].map(|d| b * b * 1000.0 * d);
             for j in 0..3 {
                 let tol = 1e-3 * want[j].abs() + 1e-9;
@@ -280,7 +281,7 @@ mod tests {
         let mut out = [0.0; 3];
         for n in 0..2000 {
             let t = f64::from(n) / f64::from(fs);
-            out = e.update(&alpha.map(|a| (a * t) as f32));
+            out = *e.update(&alpha.map(|a| (a * t) as f32));
         }
         for j in 0..3 {
             assert!(
@@ -361,7 +362,7 @@ mod tests {
         fn finite_in_finite_out(fs in 100.0f32..20000.0, frac in 0.001f32..0.45, w in prop::array::uniform3(-40.0f32..40.0)) {
             let mut e = OmegaDotEstimator::new(fs, fs * frac).unwrap();
             for _ in 0..10 {
-                let out = e.update(&w);
+                let out = *e.update(&w);
                 prop_assert!(out.iter().all(|v| v.is_finite()));
             }
         }
