@@ -26,6 +26,10 @@ use shared::wire::{
 
 use crate::stats::WindowAccumulator;
 
+mod run;
+#[cfg(test)]
+mod run_tests;
+
 /// Corner frequency of the ω̇ filter as a fraction of the sample rate (20 Hz at 1 kHz, `docs/model.md` §4.6).
 pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;
 /// Largest accepted window (or decimation factor): 2²⁴ samples, 28 minutes at 10 kHz.
@@ -63,6 +67,17 @@ pub trait SampleView {
     fn rate_rad_s(&self) -> &[f32; 3];
     /// Some channel sat at its range limit.
     fn saturated(&self) -> bool;
+    /// All six values are finite. A source that knows this without looking at the values (a
+    /// digital IMU's sample, finite unless the part marked it invalid) says so more cheaply.
+    #[inline(always)]
+    fn finite(&self) -> bool {
+        all_finite(self.raw(), self.rate_rad_s())
+    }
+    /// Finite, unsaturated and following no loss: a sample [`Pipeline::on_run`] takes.
+    #[inline(always)]
+    fn clean(&self) -> bool {
+        self.finite() && !self.saturated()
+    }
 }
 
 impl SampleView for Sample {
@@ -374,7 +389,7 @@ impl<const Q: usize> Pipeline<Q> {
         let (raw, gyro, saturated) = (s.raw(), s.rate_rad_s(), s.saturated());
         let index = self.index;
         self.index += 1;
-        let finite = all_finite(raw, gyro);
+        let finite = s.finite();
         let rate = self.body_rate(gyro);
         // The estimate stays where the estimator keeps it (0 after a reset).
         if finite {

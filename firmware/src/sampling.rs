@@ -60,6 +60,30 @@ impl TemperatureMean {
         Some(self.end_period())
     }
 
+    /// Readings that can be added before the one that ends the period (see
+    /// [`TemperatureMean::add_run`]).
+    #[inline(always)]
+    pub fn room(&self) -> usize {
+        self.left.saturating_sub(1) as usize
+    }
+
+    /// The current period's sum so far, °C: where a run of readings starts adding.
+    #[inline(always)]
+    pub fn sum_c(&self) -> f32 {
+        self.sum_c
+    }
+
+    /// [`TemperatureMean::push`] of `readings` readings that do not end the period (at most
+    /// [`TemperatureMean::room`]), which the caller has added one by one, in order, to
+    /// [`TemperatureMean::sum_c`] to give `sum_c`: the same sum as pushing them, kept in a register
+    /// meanwhile.
+    #[inline(always)]
+    pub fn add_run(&mut self, sum_c: f32, readings: usize) {
+        let readings = (readings as u32).min(self.left.saturating_sub(1));
+        self.sum_c = sum_c;
+        self.left -= readings;
+    }
+
     #[inline(never)]
     fn end_period(&mut self) -> f32 {
         let sum = self.sum_c;

@@ -454,8 +454,19 @@ impl Compensator {
     }
 
     /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8), evaluated as
-    /// `c + G⁻¹ w` with `c = −G⁻¹ b(T)` precomputed: 9 multiply-adds, skipped for a perfect gyro (a
-    /// configuration branch, not a data branch), which therefore passes `w` through bit for bit.
+    /// `c + G⁻¹ w` with `c = −G⁻¹ b(T)` precomputed, written to `out` (rad/s): 9 multiply-adds,
+    /// skipped for a perfect gyro (a configuration branch, not a data branch), which therefore
+    /// passes `w` through bit for bit.
+    #[inline(always)]
+    pub fn correct_rate_into(&self, w_rad_s: &[f32; 3], out: &mut [f32; 3]) {
+        if !self.gyro_corrected {
+            *out = *w_rad_s;
+            return;
+        }
+        self.gyro.correct_into(w_rad_s, out);
+    }
+
+    /// [`Compensator::correct_rate_into`] returning the body rate.
     #[inline(always)]
     pub fn correct_rate(&self, w_rad_s: &[f32; 3]) -> BodyRate {
         if !self.gyro_corrected {
@@ -485,8 +496,20 @@ impl Compensator {
     }
 
     /// [`Compensator::compensate`] on the values where they lie (outputs in the output unit, rate
-    /// rad/s, angular acceleration rad/s²; specific force m/s²): a per-sample caller that holds them
-    /// in memory already (a decoded sample, the ω̇ estimator's state) passes them without a copy.
+    /// rad/s, angular acceleration rad/s²), the specific force (m/s²) written to `out`: a per-sample
+    /// caller that holds them in memory already (a decoded sample, the ω̇ estimator's state) passes
+    /// them without a copy, and gets the result where it wants it (a window's sample).
+    #[inline(always)]
+    pub fn compensate_into(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3], out: &mut [f32; 3]) {
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+        self.compensate_block_into(u, w, wd, out);
+        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+        {
+            *out = self.compensate_reference(u, w, wd);
+        }
+    }
+
+    /// [`Compensator::compensate_into`] returning the specific force (m/s²).
     #[inline(always)]
     pub fn compensate_in_place(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
         #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
@@ -590,6 +613,13 @@ impl GyroInverse {
         ]
     }
 
+    /// [`GyroInverse::correct`] into `out`.
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    #[inline(always)]
+    fn correct_into(&self, w: &[f32; 3], out: &mut [f32; 3]) {
+        *out = self.correct(w);
+    }
+
     /// The same on an ARM hard-float target, in line: one block load of the twelve constants, one of
     /// `w`, nine `vmla.f32` and one block store, 12 instructions. Compiled code needs 21 or more: one
     /// `vldr` per constant (measured with scripts/bench-qemu.sh, as were an out-of-line routine, 23.6
@@ -601,9 +631,28 @@ impl GyroInverse {
     #[inline(always)]
     fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
         let mut out = core::mem::MaybeUninit::<[f32; 3]>::uninit();
+        // SAFETY: `out` has room for three `f32`, all written by the block.
+        unsafe {
+            self.correct_to(w, out.as_mut_ptr().cast());
+            out.assume_init()
+        }
+    }
+
+    /// [`GyroInverse::correct`] into `out` (no copy of the result).
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[inline(always)]
+    fn correct_into(&self, w: &[f32; 3], out: &mut [f32; 3]) {
+        // SAFETY: `out` is three writable, aligned `f32` that `w` cannot alias (`&mut`).
+        unsafe { self.correct_to(w, out.as_mut_ptr()) }
+    }
+
+    /// The block. Safety: `out` must point to three writable, 4-byte aligned `f32`.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[inline(always)]
+    unsafe fn correct_to(&self, w: &[f32; 3], out: *mut f32) {
         // SAFETY: reads the twelve `f32` at the start of `self` (`repr(C)`: `offset_rad_s` then
-        // `inv`) and the three of `w`, writes the three of `out`; all are 4-byte aligned `f32`
-        // arrays. It touches no stack; s0–s14 are declared clobbered. Not `preserves_flags`: `vmla`
+        // `inv`) and the three of `w`, writes the three at `out` (the caller's promise); all are
+        // 4-byte aligned. It touches no stack; s0–s14 are declared clobbered. Not `preserves_flags`: `vmla`
         // sets the FPSCR's cumulative exception flags (inexact, overflow), which that option covers.
         unsafe {
             core::arch::asm!(
@@ -621,13 +670,12 @@ impl GyroInverse {
                 "vstmia {out}, {{s0-s2}}",
                 g = in(reg) self as *const GyroInverse,
                 w = in(reg) w.as_ptr(),
-                out = in(reg) out.as_mut_ptr(),
+                out = in(reg) out,
                 out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
                 out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
                 out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
                 options(nostack),
             );
-            out.assume_init()
         }
     }
 }

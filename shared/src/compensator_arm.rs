@@ -39,8 +39,31 @@ impl Compensator {
     #[inline(always)]
     pub(super) fn compensate_block(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
         let mut out = core::mem::MaybeUninit::<[f32; 3]>::uninit();
+        // SAFETY: `out` has room for three `f32`, all written below.
+        unsafe {
+            self.compensate_to(u, w, wd, out.as_mut_ptr().cast());
+            out.assume_init()
+        }
+    }
+
+    /// [`Compensator::compensate_block`] written where the caller wants it (no copy of the result).
+    #[inline(always)]
+    pub(super) fn compensate_block_into(
+        &self,
+        u: &[f32; 3],
+        w: &[f32; 3],
+        wd: &[f32; 3],
+        out: &mut [f32; 3],
+    ) {
+        // SAFETY: `out` is three writable, aligned `f32` that no input can alias (`&mut`).
+        unsafe { self.compensate_to(u, w, wd, out.as_mut_ptr()) }
+    }
+
+    /// The block itself. Safety: `out` must point to three writable, 4-byte aligned `f32`.
+    #[inline(always)]
+    unsafe fn compensate_to(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3], out: *mut f32) {
         // SAFETY: reads the 42 `f32` at the start of `self` (checked above) and the three of each
-        // input, writes the three of `out`; all 4-byte aligned `f32` arrays. Touches no stack;
+        // input, writes the three at `out` (the caller's promise); all 4-byte aligned. Touches no stack;
         // s0–s29 are declared clobbered, and the constants' pointer register is an in-out
         // temporary (written back by the loads). Not `preserves_flags`: the arithmetic sets the
         // FPSCR's cumulative exception flags.
@@ -115,7 +138,7 @@ impl Compensator {
                 w = in(reg) w.as_ptr(),
                 wd = in(reg) wd.as_ptr(),
                 u = in(reg) u.as_ptr(),
-                out = in(reg) out.as_mut_ptr(),
+                out = in(reg) out,
                 out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
                 out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
                 out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
@@ -124,7 +147,6 @@ impl Compensator {
                 out("s25") _, out("s26") _, out("s27") _, out("s28") _, out("s29") _,
                 options(nostack),
             );
-            out.assume_init()
         }
     }
 }

@@ -298,11 +298,9 @@ mod app {
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
         }
         cx.shared.pipeline.lock(|p| {
-            for s in &l.samples[..done.samples] {
-                // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through
-                // the sample's DATA_LOST flag.
-                l.feed.push(s, p);
-            }
+            // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through the
+            // sample's DATA_LOST flag.
+            l.feed.push_all(&l.samples[..done.samples], p);
             *l.packets += done.samples as u32;
             if *l.packets >= *l.led_period {
                 *l.packets = 0;

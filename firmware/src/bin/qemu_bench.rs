@@ -164,7 +164,11 @@ fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
     let od = ticks(N, |i| {
         black_box(est.update(black_box(&x.w[i & 15].rad_s)));
     });
-    line("omega-dot estimator update", per_iter_x10(od, empty, N), "");
+    line(
+        "omega-dot estimator update",
+        per_iter_x10(od, empty, N),
+        "(budget <= 31)",
+    );
     let mut acc = WindowAccumulator::<6>::new();
     let ac = ticks(N, |i| {
         let u = black_box(&x.u[i & 15].raw);
@@ -183,7 +187,7 @@ fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
     line(
         "sample read (ADC codes + gyro words -> f32)",
         per_iter_x10(rd, empty, N),
-        "",
+        "(budget <= 40)",
     );
 }
 
@@ -318,7 +322,7 @@ fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]
     line(
         "FIFO packet decode (packet 4: 20-bit, checks)",
         per_iter_x10(dec, b_empty, IMU_SAMPLES as u32),
-        "(sample conversion; goal <= 40)",
+        "(20 bytes to a sample, checks included)",
     );
     let thermal = shared::Calibration {
         temperature: Some(paper_unit::typical_thermal_model()),
@@ -331,7 +335,7 @@ fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]
             "whole IMU path: decode + gyro corr. + omega-dot + full comp. (thermal) + window",
             Some(StreamKind::CompensatedWindows),
             LeverMode::RateAndAcceleration,
-            "(goal <= 300)",
+            "(budget <= 300)",
         ),
         (
             "IMU path as above, static comp. (thermal) + window",
@@ -368,9 +372,7 @@ fn bench_imu_path(cal: &shared::Calibration, stream: &[u8; IMU_SAMPLES * PACKET]
         let mut feed = PipelineFeed::new(1000);
         let t = ticks(batches, |b| {
             if let Ok(n) = core.decode(black_box(&stream[b * 320..(b + 1) * 320]), &mut out) {
-                for s in &out[..n] {
-                    feed.push(s, &mut p);
-                }
+                feed.push_all(&out[..n], &mut p);
             }
         });
         black_box(p.pop_output());

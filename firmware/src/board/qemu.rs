@@ -89,9 +89,7 @@ pub fn sample_period<const Q: usize>(
     }
     // The status read clears INT1: drain until the FIFO says it is empty.
     while let Ok(d) = imu.drain(&mut buf) {
-        for s in &buf[..d.samples] {
-            feed.push(s, pipeline);
-        }
+        feed.push_all(&buf[..d.samples], pipeline);
         n += d.samples;
         if !d.more || d.samples == 0 {
             break;

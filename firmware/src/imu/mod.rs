@@ -45,7 +45,8 @@ impl ImuFlags {
     }
 }
 
-/// One decoded sample.
+/// One decoded sample. Its six values are finite unless [`ImuFlags::INVALID`] is set: the pipeline
+/// reads finiteness from the flag, so a sample made by hand with a non-finite value must carry it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImuSample {
     /// Accelerometer, the part's axes, in the calibration's output unit (LSB counts times the
@@ -77,6 +78,19 @@ impl SampleView for ImuSample {
     #[inline(always)]
     fn saturated(&self) -> bool {
         self.flags.has(ImuFlags::SATURATED)
+    }
+    /// The flag, not the six values: a driver's values are integer codes times a factor whose
+    /// product with the largest code its configuration check has shown finite, so they are finite
+    /// unless the part marked them invalid (then NaN, and flagged).
+    #[inline(always)]
+    fn finite(&self) -> bool {
+        !self.flags.has(ImuFlags::INVALID)
+    }
+    /// No flag at all: finite, unsaturated, and no loss before it (which `PipelineFeed::push`
+    /// reports first).
+    #[inline(always)]
+    fn clean(&self) -> bool {
+        self.flags.0 == 0
     }
 }
 
@@ -135,6 +149,31 @@ impl PipelineFeed {
     pub fn new(sample_rate_hz: u32) -> Self {
         PipelineFeed {
             temperature: TemperatureMean::new(sample_rate_hz),
+        }
+    }
+
+    /// A transfer's decoded samples into the pipeline, oldest first: what a board's sampling task
+    /// calls once per FIFO read. Out of line, so that the pipeline and the feed stay in registers
+    /// across the batch rather than being addressed again for each sample.
+    ///
+    /// Clean samples go through [`Pipeline::on_run`] in runs that end before the temperature
+    /// period's last sample (whose push hands the period's mean to the pipeline first); the others
+    /// go one by one through [`PipelineFeed::push`]. Either way each sample gets exactly what `push`
+    /// gives it.
+    #[inline(never)]
+    pub fn push_all<const Q: usize>(&mut self, samples: &[ImuSample], p: &mut Pipeline<Q>) {
+        let mut rest = samples;
+        while let Some((first, tail)) = rest.split_first() {
+            let room = self.temperature.room().min(rest.len());
+            let mut sum_c = self.temperature.sum_c();
+            let n = p.on_run(&rest[..room], |s| sum_c += s.temp_c);
+            self.temperature.add_run(sum_c, n);
+            if n == 0 {
+                self.push(first, p);
+                rest = tail;
+            } else {
+                rest = &rest[n..];
+            }
         }
     }
 

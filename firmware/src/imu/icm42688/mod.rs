@@ -220,7 +220,10 @@ impl Config {
         if hires && (self.accel_range != AccelRange::G16 || self.gyro_range != GyroRange::Dps2000) {
             return Err(ConfigError::HighResRange);
         }
-        if !(self.accel_out_per_lsb.is_finite() && self.accel_out_offset.is_finite()) {
+        // The largest output, at the largest code (2¹⁷ LSB in packet 4's 18 bits), must be finite:
+        // the pipeline takes a sample's finiteness from its INVALID flag (`ImuSample`).
+        let largest = self.accel_out_per_lsb.abs() * 131_072.0 + self.accel_out_offset.abs();
+        if !largest.is_finite() {
             return Err(ConfigError::Unit);
         }
         Ok(())
@@ -252,7 +255,7 @@ pub enum ConfigError {
     Watermark,
     /// Packet 4 needs ±16 g and ±2000 °/s (the part ignores the range registers there).
     HighResRange,
-    /// The output unit factor or offset is not finite.
+    /// The output unit factor or offset is not finite, or the largest code's output would not be.
     Unit,
 }
 

@@ -178,6 +178,8 @@ pub enum Error<E> {
     WrongDevice(u8),
     /// The watermark is 0 or above 511 words.
     BadWatermark,
+    /// The output unit factor or offset is not finite, or the largest code's output would not be.
+    BadUnit,
 }
 
 impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
@@ -189,6 +191,10 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
             ),
             Error::WrongDevice(id) => write!(f, "LSM6DSO: WHO_AM_I reads {id:#04x}, expected 0x6c"),
             Error::BadWatermark => write!(f, "LSM6DSO: the watermark must be 1..=511 words"),
+            Error::BadUnit => write!(
+                f,
+                "LSM6DSO: the accelerometer unit factor and offset must be finite, and finite at full scale"
+            ),
         }
     }
 }
@@ -343,6 +349,11 @@ impl<SPI: SpiDevice> Lsm6dso<SPI> {
     pub fn new(spi: SPI, cfg: Config) -> Result<Self, Error<SPI::Error>> {
         if cfg.watermark_words == 0 || cfg.watermark_words > 511 {
             return Err(Error::BadWatermark);
+        }
+        // The largest code's output must be finite: the pipeline takes a sample's finiteness from
+        // its INVALID flag (`ImuSample`).
+        if !(cfg.accel_out_per_lsb.abs() * 32_768.0 + cfg.accel_out_offset.abs()).is_finite() {
+            return Err(Error::BadUnit);
         }
         let mut imu = Lsm6dso {
             spi,

@@ -111,6 +111,14 @@ fn refused_combinations() {
             },
             ConfigError::Unit,
         ),
+        // Finite, but infinite at full scale: its samples would be non-finite without the flag.
+        (
+            Config {
+                accel_out_per_lsb: 1e34,
+                ..Config::DEFAULT
+            },
+            ConfigError::Unit,
+        ),
     ];
     for (cfg, why) in bad {
         let r = Icm42688::new(Icm42688Model::new(TestGen::default()), cfg);

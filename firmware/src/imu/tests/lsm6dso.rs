@@ -68,6 +68,16 @@ fn identify_and_configuration_registers() {
     };
     let m = Lsm6dsoModel::new(TestGen::default());
     assert_eq!(Lsm6dso::new(m, bad).err(), Some(Error::BadWatermark));
+    // Finite, but infinite at full scale: its samples would be non-finite without the flag.
+    for (k, c) in [(f32::NAN, 0.0), (1e35, 0.0), (1.0, f32::INFINITY)] {
+        let bad = Config {
+            accel_out_per_lsb: k,
+            accel_out_offset: c,
+            ..Config::DEFAULT
+        };
+        let m = Lsm6dsoModel::new(TestGen::default());
+        assert_eq!(Lsm6dso::new(m, bad).err(), Some(Error::BadUnit), "{k} {c}");
+    }
 }
 
 #[test]
