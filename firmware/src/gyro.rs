@@ -21,6 +21,19 @@ pub const WHO_AM_I_VALUES: [u8; 2] = [0xD7, 0xD3];
 /// rad/s per LSB at ±2000 °/s (70 m°/s).
 pub const RAD_S_PER_LSB_2000DPS: f32 = 0.070 * core::f32::consts::PI / 180.0;
 
+/// Body rates (rad/s) of three gyro words at `rad_s_per_lsb`, and whether a word sits at either end
+/// of its range (−32768 or 32767: saturated). The one conversion of gyro words, for the driver and
+/// the benchmark's ADC path.
+#[inline(always)]
+pub fn rate_from_words(w: &[i16; 3], rad_s_per_lsb: f32) -> ([f32; 3], bool) {
+    // As `pipeline::Scaling::volts`: a value whose sign bit is set exactly at a range end,
+    // `w + 32767 < 0` for −32768 and `32766 − w < 0` for 32767, folded into one sign test.
+    let end = |v: i16| (i32::from(v) + 32767) | (32766 - i32::from(v));
+    let rad_s = |v: i16| f32::from(v) * rad_s_per_lsb;
+    let ends = end(w[0]) | end(w[1]) | end(w[2]);
+    ([rad_s(w[0]), rad_s(w[1]), rad_s(w[2])], ends < 0)
+}
+
 /// Gyro errors, generic over the SPI error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Error<CommE> {
@@ -84,9 +97,7 @@ impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
     type Error = Error<SPI::Error>;
 
     fn read_rate(&mut self) -> Result<([f32; 3], bool), Self::Error> {
-        let w = self.read_raw()?;
-        let saturated = w.iter().any(|v| *v == i16::MIN || *v == i16::MAX);
-        Ok((w.map(|v| f32::from(v) * RAD_S_PER_LSB_2000DPS), saturated))
+        Ok(rate_from_words(&self.read_raw()?, RAD_S_PER_LSB_2000DPS))
     }
 }
 
@@ -159,6 +170,21 @@ mod tests {
         let m = g.release();
         assert_eq!(m.regs[CTRL1 as usize], 0xFF);
         assert_eq!(m.regs[CTRL4 as usize], 0x20);
+    }
+
+    /// The folded sign-bit check against the plain definition, every word in each slot (the others
+    /// held at 0), and the scale.
+    #[test]
+    fn a_word_at_either_range_end_is_saturated_exactly() {
+        for slot in 0..3 {
+            for v in i16::MIN..=i16::MAX {
+                let mut w = [0i16; 3];
+                w[slot] = v;
+                let (rate, end) = rate_from_words(&w, 1e-3);
+                assert_eq!(end, v == i16::MIN || v == i16::MAX, "{w:?}");
+                assert_eq!(rate[slot], f32::from(v) * 1e-3);
+            }
+        }
     }
 
     #[test]

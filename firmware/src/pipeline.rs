@@ -109,52 +109,29 @@ fn all_finite(r: &[f32; 3], w: &[f32; 3]) -> bool {
     s == 0.0
 }
 
-/// Raw sensor codes as a board reads them: three ADC conversions and a gyro's three 16-bit words.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RawCodes {
-    /// ADC codes of the x, y, z accelerometers.
-    pub adc: [u16; 3],
-    /// Gyro words of the x, y, z body rates.
-    pub gyro: [i16; 3],
-}
-
-/// Conversion of [`RawCodes`] to a [`Sample`]: volts per ADC code, rad/s per gyro LSB.
+/// Conversion of the accelerometers' ADC codes to volts (an ADC board's sample; its gyro's words
+/// are converted by the gyro's driver, `gyro::rate_from_words`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scaling {
     /// Volts per ADC code (V_ref / 4095 for a 12-bit ADC).
     pub volts_per_code: f32,
     /// Largest ADC code (a code at 0 or here is saturated).
     pub adc_max: u16,
-    /// rad/s per gyro LSB.
-    pub rad_s_per_lsb: f32,
 }
 
 impl Scaling {
-    /// The sample of these codes; a code at either end of its range marks it saturated.
+    /// The volts of three ADC codes, and whether a code sits at either end of its range.
     #[inline(always)]
-    pub fn sample(&self, c: &RawCodes) -> Sample {
+    pub fn volts(&self, adc: &[u16; 3]) -> ([f32; 3], bool) {
         // Written out per channel: straight-line code at opt-level "s" (the firmware's).
         // Each check is a value whose sign bit is set exactly when the code is at a range end, so
-        // the six fold into one OR and one sign test (two integer operations per channel, no
-        // compare-and-select): `v − 1 < 0` is code 0, `adc_max − 1 − v < 0` is a code ≥ adc_max;
-        // `w + 32767 < 0` is −32768, `32766 − w < 0` is 32767.
+        // the three fold into one OR and one sign test (two integer operations per channel, no
+        // compare-and-select): `v − 1 < 0` is code 0, `adc_max − 1 − v < 0` is a code ≥ adc_max.
         let top = i32::from(self.adc_max) - 1;
-        let adc_end = |v: u16| (i32::from(v) - 1) | (top - i32::from(v));
-        let gyro_end = |v: i16| (i32::from(v) + 32767) | (32766 - i32::from(v));
-        let (a, g) = (&c.adc, &c.gyro);
+        let end = |v: u16| (i32::from(v) - 1) | (top - i32::from(v));
         let volts = |v: u16| f32::from(v) * self.volts_per_code;
-        let rad_s = |v: i16| f32::from(v) * self.rad_s_per_lsb;
-        let ends = adc_end(a[0])
-            | adc_end(a[1])
-            | adc_end(a[2])
-            | gyro_end(g[0])
-            | gyro_end(g[1])
-            | gyro_end(g[2]);
-        Sample {
-            raw: [volts(a[0]), volts(a[1]), volts(a[2])],
-            rate_rad_s: [rad_s(g[0]), rad_s(g[1]), rad_s(g[2])],
-            saturated: ends < 0,
-        }
+        let ends = end(adc[0]) | end(adc[1]) | end(adc[2]);
+        ([volts(adc[0]), volts(adc[1]), volts(adc[2])], ends < 0)
     }
 }
 
@@ -790,34 +767,12 @@ mod tests {
         let k = Scaling {
             volts_per_code: 3.3 / 4095.0,
             adc_max: 4095,
-            rad_s_per_lsb: 0.001,
         };
-        let s = k.sample(&RawCodes {
-            adc: [2048, 1, 4094],
-            gyro: [-1000, 0, 32766],
-        });
-        assert!(!s.saturated);
-        assert_eq!(s.raw[0], 2048.0 * (3.3 / 4095.0));
-        assert_eq!(s.rate_rad_s[0], -1.0);
-        for c in [
-            RawCodes {
-                adc: [0, 1, 1],
-                gyro: [0; 3],
-            },
-            RawCodes {
-                adc: [1, 4095, 1],
-                gyro: [0; 3],
-            },
-            RawCodes {
-                adc: [1; 3],
-                gyro: [0, i16::MIN, 0],
-            },
-            RawCodes {
-                adc: [1; 3],
-                gyro: [0, 0, i16::MAX],
-            },
-        ] {
-            assert!(k.sample(&c).saturated, "{c:?}");
+        let (v, end) = k.volts(&[2048, 1, 4094]);
+        assert!(!end);
+        assert_eq!(v[0], 2048.0 * (3.3 / 4095.0));
+        for c in [[0, 1, 1], [1, 4095, 1], [1, 1, u16::MAX]] {
+            assert!(k.volts(&c).1, "{c:?}");
         }
     }
 
@@ -829,25 +784,12 @@ mod tests {
             let k = Scaling {
                 volts_per_code: 1e-3,
                 adc_max,
-                rad_s_per_lsb: 1e-3,
             };
             for slot in 0..3 {
                 for v in 0..=u16::MAX {
-                    let mut c = RawCodes {
-                        adc: [100; 3],
-                        gyro: [0; 3],
-                    };
-                    c.adc[slot] = v;
-                    assert_eq!(k.sample(&c).saturated, v == 0 || v >= adc_max, "{c:?}");
-                }
-                for w in i16::MIN..=i16::MAX {
-                    let mut c = RawCodes {
-                        adc: [100; 3],
-                        gyro: [0; 3],
-                    };
-                    c.gyro[slot] = w;
-                    let end = w == i16::MIN || w == i16::MAX;
-                    assert_eq!(k.sample(&c).saturated, end, "{c:?}");
+                    let mut c = [100; 3];
+                    c[slot] = v;
+                    assert_eq!(k.volts(&c).1, v == 0 || v >= adc_max, "{c:?}");
                 }
             }
         }

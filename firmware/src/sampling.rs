@@ -9,7 +9,7 @@
 //! per-sample readings over one refresh period — it adds per sample and multiplies once per period,
 //! no division on the per-sample path — so the pipeline sees a less noisy reading at its own pace.
 
-use crate::pipeline::{RawCodes, TEMPERATURE_REFRESH_HZ};
+use crate::pipeline::TEMPERATURE_REFRESH_HZ;
 
 /// Averages per-sample temperatures over `1/TEMPERATURE_REFRESH_HZ` s. The first reading after
 /// [`TemperatureMean::new`] is passed on at once (the compensator is refreshed from the first
@@ -103,17 +103,11 @@ impl TemperatureMean {
 /// on-chip temperature sensor.
 pub const ADC_SCAN_LEN: usize = 4;
 
-/// Splits one ADC scan (DMA buffer order, [`ADC_SCAN_LEN`] codes) into the accelerometer codes (with
-/// the gyro words to be filled in) and the temperature sensor's code.
+/// Splits one ADC scan (DMA buffer order, [`ADC_SCAN_LEN`] codes) into the accelerometer codes and
+/// the temperature sensor's code.
 #[inline(always)]
-pub fn split_scan(scan: &[u16; ADC_SCAN_LEN], gyro: [i16; 3]) -> (RawCodes, u16) {
-    (
-        RawCodes {
-            adc: [scan[0], scan[1], scan[2]],
-            gyro,
-        },
-        scan[3],
-    )
+pub fn split_scan(scan: &[u16; ADC_SCAN_LEN]) -> ([u16; 3], u16) {
+    ([scan[0], scan[1], scan[2]], scan[3])
 }
 
 #[cfg(test)]
@@ -180,9 +174,8 @@ mod tests {
 
     #[test]
     fn scan_order() {
-        let (c, temp) = split_scan(&[1, 2, 3, 940], [4, 5, 6]);
-        assert_eq!(c.adc, [1, 2, 3]);
-        assert_eq!(c.gyro, [4, 5, 6]);
+        let (c, temp) = split_scan(&[1, 2, 3, 940]);
+        assert_eq!(c, [1, 2, 3]);
         assert_eq!(temp, 940);
     }
 }

@@ -18,10 +18,11 @@ use defmt_semihosting as _;
 
 use embedded_hal::spi::{Operation, SpiDevice};
 use firmware::board::qemu;
+use firmware::gyro::rate_from_words;
 use firmware::imu::icm42688::{regs, Core};
 use firmware::imu::{ImuSample, PipelineFeed};
 use firmware::paper_unit;
-use firmware::pipeline::{PipelineCommand, RawCodes, Scaling};
+use firmware::pipeline::{PipelineCommand, Sample, Scaling};
 use firmware::stats::WindowAccumulator;
 use firmware::virtual_sensor::{VirtualSensor, IMU_CONFIG};
 use firmware::Pipeline;
@@ -76,15 +77,28 @@ struct Inputs {
     u: [SensorOutputs; 16],
     w: [BodyRate; 16],
     wd: [BodyAngularAccel; 16],
-    codes: [RawCodes; 16],
+    adc: [[u16; 3]; 16],
+    words: [[i16; 3]; 16],
 }
 
-/// The board's conversion: a 12-bit ADC on 3.3 V and a gyro of 1 mrad/s per LSB.
+/// The board's conversion: a 12-bit ADC on 3.3 V, and a gyro of 1 mrad/s per LSB.
 const SCALING: Scaling = Scaling {
     volts_per_code: 3.3 / 4095.0,
     adc_max: 4095,
-    rad_s_per_lsb: 0.001,
 };
+const RAD_S_PER_LSB: f32 = 0.001;
+
+/// An ADC board's sample: the scan's codes and the gyro's words converted, as the Nucleo does.
+#[inline(always)]
+fn read(adc: &[u16; 3], words: &[i16; 3]) -> Sample {
+    let (raw, adc_end) = SCALING.volts(adc);
+    let (rate_rad_s, gyro_end) = rate_from_words(words, RAD_S_PER_LSB);
+    Sample {
+        raw,
+        rate_rad_s,
+        saturated: adc_end | gyro_end,
+    }
+}
 
 impl Inputs {
     fn new(sensor: &mut VirtualSensor) -> Inputs {
@@ -92,17 +106,16 @@ impl Inputs {
             u: [SensorOutputs::default(); 16],
             w: [BodyRate::default(); 16],
             wd: [BodyAngularAccel::default(); 16],
-            codes: [RawCodes::default(); 16],
+            adc: [[0; 3]; 16],
+            words: [[0; 3]; 16],
         };
         for k in 0..16 {
             let s = sensor.sample();
             x.u[k].raw = s.raw;
             x.w[k].rad_s = [0.5 + k as f32 * 0.01, -0.2, 3.0 - k as f32 * 0.1];
             x.wd[k].rad_s2 = [1.0, k as f32, -2.5];
-            x.codes[k] = RawCodes {
-                adc: s.raw.map(|v| (v / SCALING.volts_per_code) as u16),
-                gyro: [100 + k as i16, -300, 2000 - 10 * k as i16],
-            };
+            x.adc[k] = s.raw.map(|v| (v / SCALING.volts_per_code) as u16);
+            x.words[k] = [100 + k as i16, -300, 2000 - 10 * k as i16];
         }
         x
     }
@@ -181,11 +194,28 @@ fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
         per_iter_x10(ac, empty, N),
         "",
     );
-    let rd = ticks(N, |i| {
-        black_box(SCALING.sample(black_box(&x.codes[i & 15])));
+    let ad = ticks(N, |i| {
+        black_box(SCALING.volts(black_box(&x.adc[i & 15])));
     });
     line(
-        "sample read (ADC codes + gyro words -> f32)",
+        "ADC conversion (3 codes -> volts, range ends)",
+        per_iter_x10(ad, empty, N),
+        "",
+    );
+    let gw = ticks(N, |i| {
+        black_box(rate_from_words(black_box(&x.words[i & 15]), RAD_S_PER_LSB));
+    });
+    line(
+        "gyro words -> rad/s (range ends)",
+        per_iter_x10(gw, empty, N),
+        "",
+    );
+    let rd = ticks(N, |i| {
+        let (adc, words) = black_box((&x.adc[i & 15], &x.words[i & 15]));
+        black_box(read(adc, words));
+    });
+    line(
+        "sample conversion: both (ADC codes + gyro words -> f32)",
         per_iter_x10(rd, empty, N),
         "(budget <= 40)",
     );
@@ -238,7 +268,8 @@ fn bench_whole_paths(cal: &shared::Calibration, x: &Inputs, empty: u32) {
             window_samples: 1000,
         }));
         let t = ticks(N, |i| {
-            let s = SCALING.sample(black_box(&x.codes[i & 15]));
+            let (adc, words) = black_box((&x.adc[i & 15], &x.words[i & 15]));
+            let s = read(adc, words);
             p.on_sample(&s);
         });
         black_box(p.pop_output());

@@ -45,9 +45,9 @@ mod app {
     use firmware::board::stm32_common::Store;
     use firmware::board::stm32f4::{self as board, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
-    use firmware::gyro::{L3gd20, RAD_S_PER_LSB_2000DPS};
+    use firmware::gyro::L3gd20;
     use firmware::link::{on_rx_byte, RxQueueLink, RX_QUEUE};
-    use firmware::pipeline::{PipelineCommand, Scaling};
+    use firmware::pipeline::{PipelineCommand, Sample, Scaling};
     use firmware::sampling::{split_scan, TemperatureMean, ADC_SCAN_LEN};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, Gyro, LinkService, Pipeline};
@@ -165,7 +165,6 @@ mod app {
                 scaling: Scaling {
                     volts_per_code: board::VREF_V / 4095.0,
                     adc_max: 4095,
-                    rad_s_per_lsb: RAD_S_PER_LSB_2000DPS,
                 },
                 temperature: TemperatureMean::new(SAMPLE_RATE_HZ),
                 vtemp_cal: (VtempCal30::get().read(), VtempCal110::get().read()),
@@ -279,8 +278,13 @@ mod app {
             return;
         };
         let l = cx.local;
-        let (codes, temp_code) = split_scan(&scan, [0; 3]);
-        let mut sample = l.scaling.sample(&codes);
+        let (codes, temp_code) = split_scan(&scan);
+        let (raw, adc_end) = l.scaling.volts(&codes);
+        let mut sample = Sample {
+            raw,
+            rate_rad_s: [0.0; 3],
+            saturated: adc_end,
+        };
         if let Some(g) = l.gyro.as_mut() {
             match g.read_rate() {
                 Ok((w, sat)) => {
