@@ -72,6 +72,11 @@ fn line(name: &str, x10: u32, note: &str) {
     );
 }
 
+/// One benchmark line: `f` over `N` iterations, less the `baseline` loop's ticks.
+fn measure<F: FnMut(usize)>(name: &str, note: &str, baseline: u32, f: F) {
+    line(name, per_iter_x10(ticks(N, f), baseline, N), note);
+}
+
 /// The inputs every measurement cycles through: 16 varied samples.
 struct Inputs {
     u: [SensorOutputs; 16],
@@ -141,47 +146,42 @@ fn conversion_check() {
 fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
     let c_off = Compensator::new(cal, LeverMode::Off).unwrap();
     let c_full = Compensator::new(cal, LeverMode::RateAndAcceleration).unwrap();
-    let st = ticks(N, |i| {
-        black_box(c_off.compensate_static(black_box(&x.u[i & 15])));
-    });
-    line(
+    measure(
         "compensation, static only",
-        per_iter_x10(st, empty, N),
         "(floor: 12 multiply-adds)",
+        empty,
+        |i| {
+            black_box(c_off.compensate_static(black_box(&x.u[i & 15])));
+        },
     );
-    let full = ticks(N, |i| {
-        black_box(c_full.compensate(
-            black_box(&x.u[i & 15]),
-            black_box(&x.w[i & 15]),
-            black_box(&x.wd[i & 15]),
-        ));
-    });
-    line(
+    measure(
         "compensation, static + lever arms + omega-dot",
-        per_iter_x10(full, empty, N),
         "(floor: 51 multiply-adds; goal <= 150)",
+        empty,
+        |i| {
+            black_box(c_full.compensate(
+                black_box(&x.u[i & 15]),
+                black_box(&x.w[i & 15]),
+                black_box(&x.wd[i & 15]),
+            ));
+        },
     );
     // The same loop passing `w` through unchanged: what remains is what the correction adds.
     let pass = ticks(N, |i| {
         black_box(*black_box(&x.w[i & 15].rad_s));
     });
-    let gc = ticks(N, |i| {
-        black_box(c_full.correct_rate(black_box(&x.w[i & 15].rad_s)));
-    });
-    line(
+    measure(
         "gyro correction, c + G^-1 w",
-        per_iter_x10(gc, pass, N),
         "(over passing w through; 9 multiply-adds, 3 block moves; goal <= 15)",
+        pass,
+        |i| {
+            black_box(c_full.correct_rate(black_box(&x.w[i & 15].rad_s)));
+        },
     );
     let mut est = OmegaDotEstimator::new(1000.0, 20.0).unwrap();
-    let od = ticks(N, |i| {
+    measure("omega-dot estimator update", "(budget <= 31)", empty, |i| {
         black_box(est.update(black_box(&x.w[i & 15].rad_s)));
     });
-    line(
-        "omega-dot estimator update",
-        per_iter_x10(od, empty, N),
-        "(budget <= 31)",
-    );
     let mut acc = WindowAccumulator::<6>::new();
     let ac = ticks(N, |i| {
         let u = black_box(&x.u[i & 15].raw);
@@ -194,30 +194,25 @@ fn bench_parts(cal: &shared::Calibration, x: &Inputs, empty: u32) {
         per_iter_x10(ac, empty, N),
         "",
     );
-    let ad = ticks(N, |i| {
-        black_box(SCALING.volts(black_box(&x.adc[i & 15])));
-    });
-    line(
+    measure(
         "ADC conversion (3 codes -> volts, range ends)",
-        per_iter_x10(ad, empty, N),
         "",
+        empty,
+        |i| {
+            black_box(SCALING.volts(black_box(&x.adc[i & 15])));
+        },
     );
-    let gw = ticks(N, |i| {
+    measure("gyro words -> rad/s (range ends)", "", empty, |i| {
         black_box(rate_from_words(black_box(&x.words[i & 15]), RAD_S_PER_LSB));
     });
-    line(
-        "gyro words -> rad/s (range ends)",
-        per_iter_x10(gw, empty, N),
-        "",
-    );
-    let rd = ticks(N, |i| {
-        let (adc, words) = black_box((&x.adc[i & 15], &x.words[i & 15]));
-        black_box(read(adc, words));
-    });
-    line(
+    measure(
         "sample conversion: both (ADC codes + gyro words -> f32)",
-        per_iter_x10(rd, empty, N),
         "(budget <= 40)",
+        empty,
+        |i| {
+            let (adc, words) = black_box((&x.adc[i & 15], &x.words[i & 15]));
+            black_box(read(adc, words));
+        },
     );
 }
 
