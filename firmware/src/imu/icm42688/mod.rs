@@ -25,6 +25,7 @@ pub mod self_test;
 
 mod asynch;
 mod blocking;
+mod form;
 
 pub use asynch::Icm42688Async;
 pub use blocking::Icm42688;

@@ -1,0 +1,185 @@
+//! The driver's text, written once for both forms: the blocking [`Icm42688`](super::Icm42688) and
+//! the async [`Icm42688Async`](super::Icm42688Async) differ only in `async` and `.await`, so
+//! `driver!` writes each from the one text below, given the form's SPI trait, its `ImuSource`
+//! trait, the `async` keyword (or nothing) and the macro that completes an SPI call (`awaited!` or
+//! `done!`). [`Core`](super::Core) and the step lists decide everything; this only moves bytes.
+
+/// An SPI call as the blocking form makes it.
+macro_rules! done {
+    ($call:expr) => {
+        $call
+    };
+}
+
+/// An SPI call as the async form makes it.
+macro_rules! awaited {
+    ($call:expr) => {
+        $call.await
+    };
+}
+
+/// One form of the driver: `$name` over `$spi`, implementing `$source`; `$($async)?` and `$wait`
+/// say how its SPI calls complete.
+macro_rules! driver {
+    (
+        $(#[$doc:meta])*
+        $name:ident, $spi:path, $source:ident, [$($async:ident)?], $wait:ident
+    ) => {
+        $(#[$doc])*
+        pub struct $name<SPI> {
+            spi: SPI,
+            core: Core,
+            buf: FifoBuffer,
+        }
+
+        impl<SPI: $spi> $name<SPI> {
+            /// Resets the part, checks WHO_AM_I, configures it for `cfg` and starts the FIFO.
+            pub $($async)? fn new(spi: SPI, cfg: Config) -> Result<Self, Error<SPI::Error>> {
+                let core = Core::new(cfg).map_err(Error::Config)?;
+                let mut imu = $name {
+                    spi,
+                    core,
+                    buf: [0; BATCH_PACKETS * PACKET4_LEN],
+                };
+                $wait!(imu.reset())?;
+                check_identity($wait!(imu.who_am_i())?)?;
+                $wait!(imu.configure(cfg))?;
+                Ok(imu)
+            }
+
+            /// Soft reset (every register to its reset value, the FIFO emptied), 1 ms.
+            pub $($async)? fn reset(&mut self) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.run(&RESET_STEPS))
+            }
+
+            /// WHO_AM_I (0x47 for this part).
+            pub $($async)? fn who_am_i(&mut self) -> Result<u8, Error<SPI::Error>> {
+                let mut v = [0u8; 1];
+                $wait!(self.read(WHO_AM_I, &mut v))?;
+                Ok(v[0])
+            }
+
+            /// Applies a new configuration (sensors restarted, FIFO flushed: the next sample is
+            /// flagged as following lost data).
+            pub $($async)? fn configure(&mut self, cfg: Config) -> Result<(), Error<SPI::Error>> {
+                self.core = Core::new(cfg).map_err(Error::Config)?;
+                $wait!(self.run(&configure_steps(&cfg)))
+            }
+
+            /// The configuration in force.
+            pub fn config(&self) -> &Config {
+                self.core.config()
+            }
+
+            /// Runs the self-test (about 0.7 s; the FIFO is restarted after it, and the next sample
+            /// is flagged as following lost data) and reports each axis against the datasheet's
+            /// limits.
+            pub $($async)? fn self_test(&mut self) -> Result<SelfTestReport, Error<SPI::Error>> {
+                let saved = *self.core.config();
+                let mut report = SelfTestReport::default();
+                for sensor in [SensorUnderTest::Gyro, SensorUnderTest::Accel] {
+                    $wait!(self.run(&self_test::enter_steps(sensor)))?;
+                    let off = $wait!(self.average(sensor))?;
+                    $wait!(self.run(&self_test::enable_steps(sensor)))?;
+                    let on = $wait!(self.average(sensor))?;
+                    let mut codes = [0u8; 3];
+                    $wait!(self.write(REG_BANK_SEL, sensor.code_bank()))?;
+                    let read = $wait!(self.read(sensor.code_register(), &mut codes));
+                    $wait!(self.write(REG_BANK_SEL, 0))?;
+                    read?;
+                    report.set(sensor, off, on, codes);
+                }
+                $wait!(self.configure(saved))?;
+                self.core.corrupted();
+                Ok(report)
+            }
+
+            $($async)? fn average(
+                &mut self,
+                sensor: SensorUnderTest,
+            ) -> Result<[i32; 3], Error<SPI::Error>> {
+                let mut acc = self_test::Averager::default();
+                for _ in 0..self_test::SAMPLES {
+                    let mut b = [0u8; 6];
+                    $wait!(self.spi.transaction(&mut [
+                        Operation::DelayNs(self_test::SAMPLE_WAIT_NS),
+                        Operation::Write(&[sensor.data_register() | READ]),
+                        Operation::Read(&mut b),
+                    ]))
+                    .map_err(Error::Spi)?;
+                    acc.add(&b);
+                }
+                Ok(acc.mean())
+            }
+
+            $($async)? fn run(&mut self, steps: &[Step]) -> Result<(), Error<SPI::Error>> {
+                for s in steps {
+                    match *s {
+                        Step::Write(reg, v) => $wait!(self.write(reg, v))?,
+                        Step::WaitUs(0) => {}
+                        Step::WaitUs(us) => $wait!(self
+                            .spi
+                            .transaction(&mut [Operation::DelayNs(us.saturating_mul(1000))]))
+                        .map_err(Error::Spi)?,
+                    }
+                }
+                Ok(())
+            }
+
+            $($async)? fn write(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.spi.write(&[reg & !READ, v])).map_err(Error::Spi)
+            }
+
+            $($async)? fn read(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+                $wait!(self
+                    .spi
+                    .transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(buf)]))
+                .map_err(Error::Spi)
+            }
+
+            /// The SPI device (e.g. a simulated part's clock, or a shared bus's settings).
+            pub fn device_mut(&mut self) -> &mut SPI {
+                &mut self.spi
+            }
+
+            /// Gives the SPI device back.
+            pub fn release(self) -> SPI {
+                self.spi
+            }
+        }
+
+        impl<SPI: $spi> $source for $name<SPI> {
+            type Error = Error<SPI::Error>;
+
+            /// Reads INT_STATUS and the FIFO count in one burst (clearing the latched INT1), then up
+            /// to `out.len()` (at most [`BATCH_PACKETS`]) packets in a second one, and decodes them.
+            $($async)? fn drain(&mut self, out: &mut [ImuSample]) -> Result<Drained, Self::Error> {
+                let mut status = [0u8; 3];
+                $wait!(self.read(INT_STATUS, &mut status))?;
+                let (bytes, more) = self.core.plan_read(status, out.len().min(BATCH_PACKETS));
+                if bytes == 0 {
+                    return Ok(Drained { samples: 0, more });
+                }
+                let spi = &mut self.spi;
+                $wait!(spi.transaction(&mut [
+                    Operation::Write(&[FIFO_DATA | READ]),
+                    Operation::Read(&mut self.buf[..bytes]),
+                ]))
+                .map_err(Error::Spi)?;
+                match self.core.decode(&self.buf[..bytes], out) {
+                    Ok(samples) => Ok(Drained { samples, more }),
+                    Err(header) => {
+                        $wait!(self.write(SIGNAL_PATH_RESET, FIFO_FLUSH))?;
+                        Err(Error::FifoCorrupt { header })
+                    }
+                }
+            }
+
+            fn sample_rate_hz(&self) -> u32 {
+                self.core.sample_rate_hz()
+            }
+        }
+    };
+}
+
+pub(super) use {awaited, done, driver};
