@@ -154,6 +154,7 @@ def calibrate(
     *,
     method: str = "joint",
     reference: str = "table-axis",
+    single_package: bool = False,
     limits: Optional[Dict[str, float]] = None,
 ) -> Calibration: ...
 def apply(

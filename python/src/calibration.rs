@@ -9,7 +9,9 @@ use host::calibration_files::{
 };
 use host::cli::calibrate::{estimate_options_of, MethodArg, ReferenceArg};
 use host::cli::CliError;
-use host::estimate::{calibrate_session_stats, paper_values, CalibrationOutcome, GyroEstimate};
+use host::estimate::{
+    calibrate_session_stats, paper_values, CalibrationOutcome, EstimateOptions, GyroEstimate,
+};
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
 use host::summary::{parameter_keys, CalibrationSummary, Limits};
 use host::unit_file::{UnitFile, UnitFileError};
@@ -71,18 +73,26 @@ fn json_to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<B
 /// Estimates a calibration from a session, as `host calibrate --input` does (the same estimator,
 /// options and hand-turn gyro), without writing files. The GIL is released during the fit.
 #[pyfunction]
-#[pyo3(signature = (session, *, method = "joint", reference = "table-axis", limits = None))]
+#[pyo3(signature = (
+    session, *, method = "joint", reference = "table-axis", single_package = false, limits = None
+))]
 pub fn calibrate(
     py: Python<'_>,
     session: &Session,
     method: &str,
     reference: &str,
+    single_package: bool,
     limits: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Calibration> {
-    let options = estimate_options_of(
-        parse_enum::<MethodArg>("method", method)?,
-        parse_enum::<ReferenceArg>("reference", reference)?,
-    );
+    // `single_package`: host calibrate's --single-package (one lever arm for the three
+    // accelerometers of one package, docs/model.md §4.7).
+    let options = EstimateOptions {
+        single_package,
+        ..estimate_options_of(
+            parse_enum::<MethodArg>("method", method)?,
+            parse_enum::<ReferenceArg>("reference", reference)?,
+        )
+    };
     let limits: Limits = match limits {
         Some(d) => {
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;

@@ -92,6 +92,23 @@ def test_load_and_simulate_give_host_calibrate_of_a_table_session(table, tmp_pat
             assert cal.summary == table["summary"]
 
 
+def test_single_package_gives_host_calibrate_single_package(host_bin, tmp_path):
+    # A one-package unit on a plan that does not say so: only the option ties the lever arms.
+    session = tmp_path / "session"
+    unit = ROOT / "host" / "units" / "single-package.toml"
+    run(host_bin, "-q", "simulate", "--out", str(session), "--plan", "short-oblique",
+        "--unit", str(unit), "--seed", "5")
+    doc = json.loads(run(host_bin, "-q", "calibrate", "--input", str(session), "--single-package",
+                         "--json").stdout)
+    with pytest.warns(UserWarning, match="no unit_id"):
+        tied = accelcal.calibrate(accelcal.load_session(session), single_package=True)
+    assert tied.to_toml().encode() == (session / "calibration.toml").read_bytes()
+    assert tied.summary == doc
+    with pytest.warns(UserWarning, match="no unit_id"):
+        free = accelcal.calibrate(accelcal.load_session(session))
+    assert free.to_toml() != tied.to_toml()
+
+
 EXPORTS = [
     ("json", []),
     ("plain", []),

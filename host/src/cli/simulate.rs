@@ -21,7 +21,9 @@ pub struct SimulateArgs {
     /// replaces the default noise; the flags below override both.
     #[arg(long, value_name = "FILE")]
     pub unit: Option<PathBuf>,
-    /// Plan file, or a built-in plan's name: paper (default), oblique, short, short-oblique, quick-oblique.
+    /// Plan file, or a built-in plan's name: paper (default), oblique, short, short-oblique,
+    /// quick-oblique, hand, single-package, thermal-soak, thermal-ramp (`host plan --check NAME`
+    /// shows one).
     #[arg(long, value_name = "FILE|NAME")]
     pub plan: Option<String>,
     /// Seed of the noise.

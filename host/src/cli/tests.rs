@@ -21,6 +21,23 @@ fn parse(args: &[&str]) -> Cli {
     Cli::try_parse_from(std::iter::once("host").chain(args.iter().copied())).unwrap()
 }
 
+/// `host simulate --help` names every built-in plan (its list is written out in the help).
+#[test]
+fn simulate_help_names_every_built_in_plan() {
+    let mut cmd = Cli::command();
+    let help = cmd
+        .find_subcommand_mut("simulate")
+        .expect("simulate is a subcommand")
+        .render_long_help()
+        .to_string();
+    for (name, _) in crate::session::builtin::BUILTIN_PLANS {
+        assert!(
+            help.contains(name),
+            "`host simulate --help` omits the plan {name}"
+        );
+    }
+}
+
 #[test]
 fn the_command_line_is_well_formed() {
     Cli::command().debug_assert();
