@@ -57,7 +57,10 @@ impl<const Q: usize> Pipeline<Q> {
             Some(req) => (req.kind, req.window_samples),
             None => (StreamKind::RawWindows, u32::MAX), // IDLE: never read
         };
-        let mut index = self.index;
+        // The sample index and the window's count live in registers for the run, written back
+        // where `close_window` reads them and at the end.
+        let start = self.index;
+        let mut in_window = self.in_window;
         let mut n = 0;
         // Specific force (or raw outputs) then rate; the body rate of a raw window's sample apart.
         let mut x = [0f32; 6];
@@ -71,7 +74,6 @@ impl<const Q: usize> Pipeline<Q> {
             };
             each(s);
             n += 1;
-            index += 1;
             let (raw, gyro) = (s.raw(), s.rate_rad_s());
             let rate = if R == RAW_WINDOW { &mut body_rate } else { r };
             match &self.compensator {
@@ -95,13 +97,18 @@ impl<const Q: usize> Pipeline<Q> {
                 }
             }
             self.acc.add(&x);
-            self.in_window += 1;
-            if self.in_window >= window {
-                self.index = index;
+            in_window += 1;
+            if in_window >= window {
+                self.index = start + n as u64;
+                self.in_window = in_window;
                 self.close_window(kind);
+                in_window = self.in_window;
             }
         }
-        self.index = index;
+        self.index = start + n as u64;
+        if R != IDLE {
+            self.in_window = in_window;
+        }
         n
     }
 }
