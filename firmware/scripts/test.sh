@@ -3,7 +3,8 @@
 #
 #  1. tools: the thumbv7em-none-eabihf target, qemu-system-arm and binutils-arm-none-eabi if missing
 #  2. PC unit tests of the device-agnostic library (protocol, storage power cuts, stats, pipeline)
-#  3. rustfmt --check and clippy -D warnings (library on the PC, every binary on the target)
+#  3. rustfmt --check, clippy -D warnings (library on the PC, every binary on the target) and the
+#     library's rustdoc -D warnings
 #  4. every board built with -D warnings (QEMU mps2-an386; the STM32F446 Nucleo and the STM32F405
 #     flight controller, which only build here), their flash and RAM printed
 #  5. on-target tests in QEMU (bit-exact compensation vs the PC, storage across a system reset)
@@ -40,6 +41,8 @@ cargo test --lib --target "$host"
 step "format and lints"
 cargo fmt --check
 cargo clippy --lib --tests --examples --target "$host" -- -D warnings
+# The library's documentation: every link resolved (bit ranges such as \[7:0\] escaped).
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib --target "$host"
 
 # -D warnings for the target builds. Not RUSTFLAGS (it would replace the link arguments of the root
 # .cargo/config.toml): the target-scoped variable is merged with the config's array (checked with

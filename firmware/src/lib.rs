@@ -22,7 +22,7 @@
 //! - [`paper_unit`]: the paper's unit (Tables 1 and 3), the QEMU board's virtual unit.
 //! - [`testvectors`]: PC-computed compensation vectors, checked bit for bit on the target.
 //!
-//! The board modules under [`board`] exist only for `target_os = "none"` with a board feature.
+//! The board modules under `board` exist only for `target_os = "none"` with a board feature.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 

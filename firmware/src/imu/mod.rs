@@ -4,7 +4,7 @@
 //! - [`icm42688`]: TDK InvenSense ICM-42688-P over SPI (blocking and async), FIFO packets 3 and 4,
 //!   watermark interrupt on INT1, overflow detection, self-test.
 //! - [`lsm6dso`]: ST LSM6DSO over SPI, its FIFO of tagged words, the same trait.
-//! - [`sim`] (PC tests, and the QEMU board with the `imu-sim` feature): register-level models of
+//! - `sim` (PC tests, and the QEMU board with the `imu-sim` feature): register-level models of
 //!   both parts as `SpiDevice`s, fed by a sample generator.
 //!
 //! A driver hands out [`ImuSample`]s: the accelerometer in the calibration's output unit (the part's

@@ -2,8 +2,8 @@
 //! (INTF_CONFIG0 SENSOR_DATA_ENDIAN, the reset value).
 //!
 //! Packet 3, 16 bytes: header, ACCEL X1 X0 Y1 Y0 Z1 Z0, GYRO X1 .. Z0, TEMP (8 bit), TIMESTAMP H L.
-//! Packet 4, 20 bytes (FIFO_HIRES_EN): header, ACCEL [19:12] [11:4] per axis, GYRO likewise,
-//! TEMP (16 bit), TIMESTAMP H L, then one byte per axis: accel [3:0] in bits 7:4, gyro [3:0] in 3:0.
+//! Packet 4, 20 bytes (FIFO_HIRES_EN): header, ACCEL \[19:12\] \[11:4\] per axis, GYRO likewise,
+//! TEMP (16 bit), TIMESTAMP H L, then one byte per axis: accel \[3:0\] in bits 7:4, gyro \[3:0\] in 3:0.
 //! In packet 4 the accelerometer carries 18 bits (bits 1:0 are 0, 8192 LSB/g) and the gyro 19 bits
 //! (bit 0 is 0, 131 LSB/°/s), at ±16 g and ±2000 °/s whatever the range registers say (§6.1).
 //!
@@ -41,7 +41,7 @@ fn be16(p: &[u8], i: usize) -> i16 {
     i16::from_be_bytes([p[i], p[i + 1]])
 }
 
-/// A 20-bit value from its [19:12] and [11:4] bytes and the [3:0] nibble, sign-extended.
+/// A 20-bit value from its \[19:12\] and \[11:4\] bytes and the \[3:0\] nibble, sign-extended.
 #[inline(always)]
 fn be20(p: &[u8], i: usize, nibble: u8) -> i32 {
     // The 16 high bits as a signed value, shifted up by 4: sign extension for free.

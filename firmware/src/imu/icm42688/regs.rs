@@ -83,10 +83,10 @@ pub const FIFO_WM_GT_TH: u8 = 1 << 5;
 pub const FIFO_HIRES_EN: u8 = 1 << 4;
 /// FIFO_CONFIG1: accel, gyro, temperature and time stamp in the FIFO (packet 3).
 pub const FIFO_PACKET3_EN: u8 = 0b1111;
-/// FIFO_CONFIG2: FIFO_WM[7:0]; FIFO_CONFIG3: FIFO_WM[11:8] (§14.39–14.40), in records with
+/// FIFO_CONFIG2: FIFO_WM\[7:0\]; FIFO_CONFIG3: FIFO_WM\[11:8\] (§14.39–14.40), in records with
 /// FIFO_COUNT_REC.
 pub const FIFO_CONFIG2: u8 = 0x60;
-/// FIFO_CONFIG3: FIFO_WM[11:8].
+/// FIFO_CONFIG3: FIFO_WM\[11:8\].
 pub const FIFO_CONFIG3: u8 = 0x61;
 /// INT_CONFIG1 (§14.43), reset 0x10: INT_ASYNC_RESET (bit 4) must be cleared for proper INT1/2
 /// operation.
@@ -113,9 +113,9 @@ pub const REG_BANK_SEL: u8 = 0x76;
 pub const GYRO_CONFIG_STATIC2: u8 = 0x0B;
 /// GYRO_CONFIG_STATIC3: GYRO_AAF_DELT 5:0.
 pub const GYRO_CONFIG_STATIC3: u8 = 0x0C;
-/// GYRO_CONFIG_STATIC4: GYRO_AAF_DELTSQR[7:0].
+/// GYRO_CONFIG_STATIC4: GYRO_AAF_DELTSQR\[7:0\].
 pub const GYRO_CONFIG_STATIC4: u8 = 0x0D;
-/// GYRO_CONFIG_STATIC5: GYRO_AAF_BITSHIFT 7:4, GYRO_AAF_DELTSQR[11:8] 3:0.
+/// GYRO_CONFIG_STATIC5: GYRO_AAF_BITSHIFT 7:4, GYRO_AAF_DELTSQR\[11:8\] 3:0.
 pub const GYRO_CONFIG_STATIC5: u8 = 0x0E;
 /// XG_ST_DATA, YG_ST_DATA, ZG_ST_DATA: the factory self-test codes of the gyro.
 pub const XG_ST_DATA: u8 = 0x5F;
@@ -123,9 +123,9 @@ pub const XG_ST_DATA: u8 = 0x5F;
 // ---- User bank 2 (§16) ----
 /// ACCEL_CONFIG_STATIC2: ACCEL_AAF_DELT 6:1, ACCEL_AAF_DIS 0.
 pub const ACCEL_CONFIG_STATIC2: u8 = 0x03;
-/// ACCEL_CONFIG_STATIC3: ACCEL_AAF_DELTSQR[7:0].
+/// ACCEL_CONFIG_STATIC3: ACCEL_AAF_DELTSQR\[7:0\].
 pub const ACCEL_CONFIG_STATIC3: u8 = 0x04;
-/// ACCEL_CONFIG_STATIC4: ACCEL_AAF_BITSHIFT 7:4, ACCEL_AAF_DELTSQR[11:8] 3:0.
+/// ACCEL_CONFIG_STATIC4: ACCEL_AAF_BITSHIFT 7:4, ACCEL_AAF_DELTSQR\[11:8\] 3:0.
 pub const ACCEL_CONFIG_STATIC4: u8 = 0x05;
 /// XA_ST_DATA, YA_ST_DATA, ZA_ST_DATA: the factory self-test codes of the accelerometer.
 pub const XA_ST_DATA: u8 = 0x3B;

@@ -28,13 +28,13 @@ use crate::imu::{lost_between, Drained, ImuFlags, ImuSample, ImuSource};
 pub mod regs {
     /// SPI read bit.
     pub const READ: u8 = 0x80;
-    /// FIFO_CTRL1: watermark [7:0] in words.
+    /// FIFO_CTRL1: watermark \[7:0\] in words.
     pub const FIFO_CTRL1: u8 = 0x07;
     /// FIFO_CTRL2: WTM8 (bit 0).
     pub const FIFO_CTRL2: u8 = 0x08;
-    /// FIFO_CTRL3: BDR_GY [7:4], BDR_XL [3:0].
+    /// FIFO_CTRL3: BDR_GY \[7:4\], BDR_XL \[3:0\].
     pub const FIFO_CTRL3: u8 = 0x09;
-    /// FIFO_CTRL4: DEC_TS_BATCH [7:6], ODR_T_BATCH [5:4], FIFO_MODE [2:0].
+    /// FIFO_CTRL4: DEC_TS_BATCH \[7:6\], ODR_T_BATCH \[5:4\], FIFO_MODE \[2:0\].
     pub const FIFO_CTRL4: u8 = 0x0A;
     /// INT1_CTRL: INT1_FIFO_OVR (4), INT1_FIFO_TH (3).
     pub const INT1_CTRL: u8 = 0x0D;
@@ -42,9 +42,9 @@ pub mod regs {
     pub const WHO_AM_I: u8 = 0x0F;
     /// The LSM6DSO's WHO_AM_I.
     pub const WHO_AM_I_VALUE: u8 = 0x6C;
-    /// CTRL1_XL: ODR_XL [7:4], FS_XL [3:2].
+    /// CTRL1_XL: ODR_XL \[7:4\], FS_XL \[3:2\].
     pub const CTRL1_XL: u8 = 0x10;
-    /// CTRL2_G: ODR_G [7:4], FS_G [3:2].
+    /// CTRL2_G: ODR_G \[7:4\], FS_G \[3:2\].
     pub const CTRL2_G: u8 = 0x11;
     /// CTRL3_C: BDU (6), IF_INC (2), SW_RESET (0); reset value 0x04.
     pub const CTRL3_C: u8 = 0x12;
@@ -52,10 +52,10 @@ pub mod regs {
     pub const CTRL4_C: u8 = 0x13;
     /// CTRL10_C: TIMESTAMP_EN (5).
     pub const CTRL10_C: u8 = 0x19;
-    /// FIFO_STATUS1: DIFF_FIFO [7:0]; FIFO_STATUS2 follows.
+    /// FIFO_STATUS1: DIFF_FIFO \[7:0\]; FIFO_STATUS2 follows.
     pub const FIFO_STATUS1: u8 = 0x3A;
     /// FIFO_STATUS2: FIFO_WTM_IA (7), FIFO_OVR_IA (6), FIFO_FULL_IA (5), FIFO_OVR_LATCHED (3,
-    /// cleared by reading), DIFF_FIFO [9:8] (1:0).
+    /// cleared by reading), DIFF_FIFO \[9:8\] (1:0).
     pub const FIFO_STATUS2: u8 = 0x3B;
     /// FIFO_STATUS2: FIFO_OVR_LATCHED.
     pub const FIFO_OVR_LATCHED: u8 = 1 << 3;
