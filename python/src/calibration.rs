@@ -7,11 +7,9 @@ use clap::ValueEnum;
 use host::calibration_files::{
     blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
 };
-use host::cli::calibrate::{estimate_options_of, MethodArg, ReferenceArg};
+use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
 use host::cli::CliError;
-use host::estimate::{
-    calibrate_session_stats, paper_values, CalibrationOutcome, EstimateOptions, GyroEstimate,
-};
+use host::estimate::{calibrate_session_stats, paper_values, CalibrationOutcome, GyroEstimate};
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
 use host::summary::{parameter_keys, CalibrationSummary, Limits};
 use host::unit_file::{UnitFile, UnitFileError};
@@ -86,13 +84,12 @@ pub fn calibrate(
 ) -> PyResult<Calibration> {
     // `single_package`: host calibrate's --single-package (one lever arm for the three
     // accelerometers of one package, docs/model.md §4.7).
-    let options = EstimateOptions {
+    let options = EstimatorArgs {
+        method: parse_enum::<MethodArg>("method", method)?,
+        reference: parse_enum::<ReferenceArg>("reference", reference)?,
         single_package,
-        ..estimate_options_of(
-            parse_enum::<MethodArg>("method", method)?,
-            parse_enum::<ReferenceArg>("reference", reference)?,
-        )
-    };
+    }
+    .options();
     let limits: Limits = match limits {
         Some(d) => {
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;

@@ -1,6 +1,6 @@
 //! `host batch`: a production lot calibrated in parallel, with a lot summary (CSV and JSON).
 
-use super::calibrate::{estimate_options_of, MethodArg, ReferenceArg};
+use super::calibrate::EstimatorArgs;
 use super::output::Output;
 use super::CliError;
 use crate::batch::{find_sessions, run_batch, to_csv, BatchOptions, MAX_JOBS};
@@ -29,12 +29,9 @@ pub struct BatchArgs {
     /// Robust z-score above which a parameter makes a unit an outlier of the lot.
     #[arg(long, value_name = "Z", default_value_t = 5.0, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_LIMIT))]
     pub outlier_z: f64,
-    /// Estimator: joint (default) or paper.
-    #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
-    pub method: MethodArg,
-    /// Point the lever arms are given relative to.
-    #[arg(long, value_enum, default_value_t = ReferenceArg::TableAxis)]
-    pub reference: ReferenceArg,
+    /// The estimator of each unit: --method, --reference, --single-package.
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
     /// Pass/fail limits of each unit.
     #[command(flatten)]
     pub limits: Limits,
@@ -74,7 +71,7 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     let staged = OutputDir::create(&a.out, a.force, SUMMARY_JSON)?;
     let sessions = find_sessions(&a.input).map_err(CliError::Batch)?;
     let opts = BatchOptions {
-        estimate: estimate_options_of(a.method, a.reference),
+        estimate: a.estimator.options(),
         limits: a.limits,
         outlier_z: a.outlier_z,
         jobs: a.jobs,

@@ -80,6 +80,21 @@ pub struct CalibrateArgs {
     /// directory.
     #[arg(long)]
     pub force: bool,
+    /// The estimator: --method, --reference, --single-package.
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+    /// Print the result as one JSON document on stdout (parameters, 1σ, χ², checks); the report and
+    /// progress go to stderr.
+    #[arg(long)]
+    pub json: bool,
+    /// Pass/fail limits: a failed check exits nonzero (after writing the files).
+    #[command(flatten)]
+    pub limits: Limits,
+}
+
+/// The estimator's flags, shared by `host calibrate` and `host batch`.
+#[derive(Clone, Copy, Debug, Args)]
+pub struct EstimatorArgs {
     /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
     pub method: MethodArg,
@@ -91,13 +106,24 @@ pub struct CalibrateArgs {
     /// (docs/model.md §4.7). A plan with package = "single" implies it.
     #[arg(long)]
     pub single_package: bool,
-    /// Print the result as one JSON document on stdout (parameters, 1σ, χ², checks); the report and
-    /// progress go to stderr.
-    #[arg(long)]
-    pub json: bool,
-    /// Pass/fail limits: a failed check exits nonzero (after writing the files).
-    #[command(flatten)]
-    pub limits: Limits,
+}
+
+impl EstimatorArgs {
+    /// The estimator options these flags ask for.
+    pub fn options(&self) -> EstimateOptions {
+        EstimateOptions {
+            method: match self.method {
+                MethodArg::Joint => Method::Joint,
+                MethodArg::Paper => Method::Paper,
+            },
+            reference: match self.reference {
+                ReferenceArg::TableAxis => ReferenceChoice::TableAxis,
+                ReferenceArg::Centroid => ReferenceChoice::Centroid,
+            },
+            single_package: self.single_package,
+            ..EstimateOptions::default()
+        }
+    }
 }
 
 /// `--method`.
@@ -139,25 +165,7 @@ pub(crate) fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, C
 
 /// The estimator options of `host calibrate`'s flags.
 pub(crate) fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
-    EstimateOptions {
-        single_package: a.single_package,
-        ..estimate_options_of(a.method, a.reference)
-    }
-}
-
-/// The estimator options of a `--method` and a `--reference`.
-pub fn estimate_options_of(method: MethodArg, reference: ReferenceArg) -> EstimateOptions {
-    EstimateOptions {
-        method: match method {
-            MethodArg::Joint => Method::Joint,
-            MethodArg::Paper => Method::Paper,
-        },
-        reference: match reference {
-            ReferenceArg::TableAxis => ReferenceChoice::TableAxis,
-            ReferenceArg::Centroid => ReferenceChoice::Centroid,
-        },
-        ..EstimateOptions::default()
-    }
+    a.estimator.options()
 }
 
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write

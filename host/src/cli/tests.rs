@@ -64,6 +64,29 @@ fn the_command_line_is_well_formed() {
         panic!("not calibrate")
     };
     assert_eq!(estimate_options(&c).method, Method::Paper);
+    // The estimator's flags are one set, shared by calibrate and batch.
+    let Command::Calibrate(c) = parse(&["calibrate", "--input", "x", "--single-package"]).command
+    else {
+        panic!("not calibrate")
+    };
+    assert!(estimate_options(&c).single_package);
+    let Command::Batch(b) = parse(&[
+        "batch",
+        "--input",
+        "i",
+        "--out",
+        "o",
+        "--single-package",
+        "--reference",
+        "centroid",
+    ])
+    .command
+    else {
+        panic!("not batch")
+    };
+    let o = b.estimator.options();
+    assert!(o.single_package);
+    assert_eq!(o.reference, crate::estimate::ReferenceChoice::Centroid);
     assert!(Cli::try_parse_from(["host", "calibrate", "--method", "best"]).is_err());
     let Command::Calibrate(c) = parse(&["calibrate", "--input", "d", "--plan", "paper"]).command
     else {
