@@ -323,12 +323,13 @@ impl<const Q: usize> Pipeline<Q> {
         }
     }
 
-    /// The body rate: the gyro's output corrected by the calibration (raw when uncalibrated).
+    /// The body rate into `out`: the gyro's output corrected by the calibration (raw when
+    /// uncalibrated). `on_sample` and the runs (`run.rs`) both take it from here.
     #[inline(always)]
-    fn body_rate(&self, gyro_rad_s: &[f32; 3]) -> [f32; 3] {
+    fn body_rate_into(&self, gyro_rad_s: &[f32; 3], out: &mut [f32; 3]) {
         match &self.compensator {
-            Some(c) => c.correct_rate(gyro_rad_s).rad_s,
-            None => *gyro_rad_s,
+            Some(c) => c.correct_rate_into(gyro_rad_s, out),
+            None => *out = *gyro_rad_s,
         }
     }
 
@@ -367,7 +368,8 @@ impl<const Q: usize> Pipeline<Q> {
         let index = self.index;
         self.index += 1;
         let finite = s.finite();
-        let rate = self.body_rate(gyro);
+        let mut rate = [0.0; 3];
+        self.body_rate_into(gyro, &mut rate);
         // The estimate stays where the estimator keeps it (0 after a reset).
         if finite {
             self.omega_dot.update(&rate);

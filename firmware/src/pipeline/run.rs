@@ -76,10 +76,7 @@ impl<const Q: usize> Pipeline<Q> {
             n += 1;
             let (raw, gyro) = (s.raw(), s.rate_rad_s());
             let rate = if R == RAW_WINDOW { &mut body_rate } else { r };
-            match &self.compensator {
-                Some(c) => c.correct_rate_into(gyro, rate),
-                None => *rate = *gyro,
-            }
+            self.body_rate_into(gyro, rate);
             self.omega_dot.update(rate);
             match (R, &self.compensator) {
                 (IDLE, _) => continue,
