@@ -70,6 +70,33 @@ fn calibrate_live_against_the_simulated_device() {
     assert!(!ok && stderr.contains("cannot be used with"), "{stderr}");
 }
 
+/// `--port sim-hand`: no table, so the hand-held procedure (the default plan for it is `hand`), the
+/// operator's steps on stderr, the result and the three magnitude checks on stdout.
+#[test]
+fn calibrate_live_hand_held_against_the_simulated_hand() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hand");
+    let (ok, stdout, stderr) = host(&[
+        "calibrate",
+        "--port",
+        "sim-hand",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("[hand 24] still at a new position: recording")
+            && stderr.contains("24 positions recorded: enough"),
+        "{stderr}"
+    );
+    // The simulated hand brings the unit back to where it was every seventh turn: refused each
+    // time, and turned again.
+    assert_eq!(stderr.matches("again (0° away)").count(), 3, "{stderr}");
+    assert_eq!(stdout.matches("hand-held check").count(), 3, "{stdout}");
+    assert!(stdout.contains("PASS: unit"), "{stdout}");
+    assert!(out.join("calibration.bin").exists());
+}
+
 #[test]
 fn a_soak_session_calibrates_over_temperature_through_the_binary() {
     let dir = tempfile::tempdir().unwrap();

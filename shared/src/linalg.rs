@@ -37,6 +37,12 @@ pub fn norm(a: &[f64; 3]) -> f64 {
     libm::sqrt(dot(a, a))
 }
 
+/// `a / |a|`; a zero vector stays zero (divided by the smallest positive number, not by 0).
+pub fn unit(a: &[f64; 3]) -> [f64; 3] {
+    let n = norm(a).max(f64::MIN_POSITIVE);
+    a.map(|c| c / n)
+}
+
 /// `m · v` for a row-major matrix.
 pub fn mat_vec(m: &RowMajor3, v: &[f64; 3]) -> [f64; 3] {
     [dot(&m[0], v), dot(&m[1], v), dot(&m[2], v)]

@@ -128,6 +128,8 @@ pub enum Board {
     QemuMps2An386,
     /// The firmware on an STM32F4 board with real sensors.
     Stm32f4,
+    /// The host's in-process simulated device without a table, turned by a simulated hand.
+    SimulatedHand,
 }
 
 /// What the device holds as its calibration.

@@ -7,6 +7,8 @@ use super::CliError;
 use crate::calibration_files::{now_unix_s, write_calibration_files};
 use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
+use crate::device::sim_hand::HandOperator;
+use crate::device::AnyTransport;
 use crate::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, GyroEstimate, Method,
     ReferenceChoice,
@@ -26,9 +28,10 @@ pub struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR", conflicts_with = "port")]
     pub input: Option<PathBuf>,
-    /// Calibrate a device live: its serial port (or QEMU's pty), or `sim` for the built-in simulated
-    /// device. Records the session, estimates, writes the files, flashes, resets and verifies.
-    #[arg(long, value_name = "PORT|sim")]
+    /// Calibrate a device live: its serial port (or QEMU's pty), `sim` for the built-in simulated
+    /// device on its virtual table, or `sim-hand` for it held in a simulated hand (the hand-held
+    /// procedure). Records the session, estimates, writes the files, flashes, resets and verifies.
+    #[arg(long, value_name = "PORT|sim|sim-hand")]
     pub port: Option<String>,
     /// With --port: baud rate of the serial port.
     #[arg(
@@ -46,10 +49,11 @@ pub struct CalibrateArgs {
         value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
     )]
     pub timeout_s: f64,
-    /// With --port sim: the simulated unit's parameters (default: the paper's unit).
+    /// With --port sim or sim-hand: the simulated unit's parameters (default: the paper's unit).
     #[arg(long, value_name = "FILE", requires = "port")]
     pub sim_unit: Option<PathBuf>,
-    /// With --port: plan file or built-in name (default: oblique with a virtual table, else paper).
+    /// With --port: plan file or built-in name (default: oblique with a virtual table, hand for
+    /// sim-hand, else paper).
     #[arg(long, value_name = "FILE|NAME", requires = "port")]
     pub plan: Option<String>,
     /// With --port: samples per streamed window (default: a 50th of the device's rate).
@@ -292,8 +296,16 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         warnings: Vec::new(),
     };
     let mut person = TerminalOperator;
+    let hand_cue = match client.transport_mut() {
+        AnyTransport::Sim(dev) => dev.hand_cue(),
+        AnyTransport::Serial(_) => None,
+    };
+    let mut hand;
     let op: &mut dyn Operator = if procedure::has_virtual_table(&identity) {
         &mut auto
+    } else if let Some(cue) = hand_cue {
+        hand = HandOperator { inner: auto, cue };
+        &mut hand
     } else {
         &mut person
     };

@@ -26,6 +26,12 @@ const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Accelerometer window means steadier than this fraction of the output's magnitude: still (2 mg
 /// of a zero-centred output).
 const STILL_ACC_STD_REL: f64 = 2e-3;
+/// Still means a mean rate within this of the gyro's offset (read at the first position), rad/s
+/// (1 °/s: 5° over a 5 s position).
+const STILL_RATE_RAD_S: f64 = 1.0 * std::f64::consts::PI / 180.0;
+/// Before the first position the gyro's offset is unknown: a mean rate above the largest offset a
+/// MEMS gyro shows (the L3GD20H's typical zero-rate level is ±25 °/s at ±2000 °/s) is a turn, rad/s.
+const GYRO_OFFSET_MAX_RAD_S: f64 = 30.0 * std::f64::consts::PI / 180.0;
 /// A turn faster than this since the last position: the unit has moved, rad/s (10 °/s).
 const MOVED_RATE_RAD_S: f64 = 10.0 * std::f64::consts::PI / 180.0;
 
@@ -112,7 +118,7 @@ impl PositionWatcher {
     fn nearest(&self, u: &[f64; 3]) -> Option<(usize, f64)> {
         let angle = |a: &[f64; 3]| {
             if self.zero_centred {
-                angle_deg(&unit(a), &unit(u))
+                angle_deg(&linalg::unit(a), &linalg::unit(u))
             } else {
                 // Chord between the two outputs over the largest chord seen so far (≈ 2 g between
                 // opposite positions): a lower bound on the angle, so a repeat is never missed.
@@ -154,8 +160,13 @@ impl PositionWatcher {
             return None;
         }
         let (mu, su) = self.mean_std(|w| w.0);
-        let (_, sw) = self.mean_std(|w| w.1);
-        if su > STILL_ACC_STD_REL * linalg::norm(&mu) || sw > STILL_GYRO_STD_RAD_S {
+        let (mw, sw) = self.mean_std(|w| w.1);
+        // A steady turn about the vertical keeps every window alike: only the rate's mean tells it.
+        let turning = match self.bias_rad_s {
+            Some(b) => linalg::norm(&core::array::from_fn(|j| mw[j] - b[j])) > STILL_RATE_RAD_S,
+            None => linalg::norm(&mw) > GYRO_OFFSET_MAX_RAD_S,
+        };
+        if su > STILL_ACC_STD_REL * linalg::norm(&mu) || sw > STILL_GYRO_STD_RAD_S || turning {
             return None;
         }
         match self.nearest(&mu) {
@@ -182,7 +193,7 @@ impl PositionWatcher {
                 axis[f / 2] = if f % 2 == 0 { 1.0 } else { -1.0 };
                 self.earlier
                     .iter()
-                    .all(|u| angle_deg(&unit(u), &axis) > FACE_COVERAGE_DEG)
+                    .all(|u| angle_deg(&linalg::unit(u), &axis) > FACE_COVERAGE_DEG)
             })
             .map(|f| names[f])
             .collect()
@@ -213,11 +224,6 @@ impl PositionWatcher {
     }
 }
 
-fn unit(v: &[f64; 3]) -> [f64; 3] {
-    let n = linalg::norm(v).max(f64::MIN_POSITIVE);
-    v.map(|c| c / n)
-}
-
 /// Tells the operator to turn the unit to a new position, then reads windows until the watcher
 /// reports a new still position (repeating the request when it is an earlier one).
 pub fn wait_for_new_position<T: Transport>(
@@ -228,7 +234,7 @@ pub fn wait_for_new_position<T: Transport>(
     window_rate_hz: f64,
     label: &str,
 ) -> Result<[f64; 3], LinkError> {
-    op.say(&format!(
+    op.turn_unit(&format!(
         "[{label}] turn the unit to a new position (at least 10° from the earlier ones) and hold it still"
     ));
     watcher.start();
@@ -242,7 +248,7 @@ pub fn wait_for_new_position<T: Transport>(
                 op.say(&format!("[{label}] still at a new position: recording"));
                 return Ok(mean_u);
             }
-            Some(PositionEvent::SameAs { index, angle_deg }) => op.say(&format!(
+            Some(PositionEvent::SameAs { index, angle_deg }) => op.turn_unit(&format!(
                 "[{label}] this is position {} again ({angle_deg:.0}° away): turn to a different one",
                 index + 1
             )),
@@ -297,7 +303,7 @@ pub(crate) fn verify_magnitude<T: Transport>(
         }
         client.stop_stream()?;
         let measured_g: [f64; 3] = core::array::from_fn(|j| sum[j] / count.max(1.0) / g);
-        let up = unit(&measured_g);
+        let up = linalg::unit(&measured_g);
         let error_mg = (linalg::norm(&measured_g) - 1.0).abs() * 1e3;
         points.push(VerificationPoint {
             label: format!("{label} (|f| = 1 g)"),
@@ -370,6 +376,38 @@ mod tests {
             g.starts_with("13 positions recorded: enough for a calibration, 11 more"),
             "{g}"
         );
+    }
+
+    /// Turning steadily about the vertical leaves the accelerometers' output and the rate unchanged
+    /// window to window, but the unit is not still: no position is taken while it turns, whatever
+    /// the rate (here 2 °/s after a first position; before any, when the gyro's offset is not known
+    /// yet, 45 °/s), and one is taken once it stops.
+    #[test]
+    fn a_steady_turn_about_the_vertical_is_not_still() {
+        let g = [0.0, 0.0, 9.8];
+        let bias = [0.002, -0.001, 0.003];
+        let turning = |deg_s: f64| {
+            let r = deg_s.to_radians();
+            [bias[0], bias[1], bias[2] + r]
+        };
+        // Before the first position the gyro's bias is not known yet.
+        let mut w = PositionWatcher::new(OutputUnit::MetresPerSecondSquared, 50.0, 10.0);
+        w.start();
+        for k in 0..200 {
+            assert_eq!(w.push(g, turning(45.0)), None, "window {k} at 45 °/s");
+        }
+        let taken = (0..100).find_map(|_| w.push(g, bias));
+        assert!(matches!(taken, Some(PositionEvent::NewPosition { .. })));
+        w.accept(g, bias);
+        // Then a turn to a new attitude, and a steady turn about its vertical.
+        w.start();
+        let h = [9.8, 0.0, 0.0];
+        assert_eq!(w.push(h, [0.5, 0.0, 0.0]), None);
+        for k in 0..200 {
+            assert_eq!(w.push(h, turning(2.0)), None, "window {k} at 2 °/s");
+        }
+        let taken = (0..100).find_map(|_| w.push(h, bias));
+        assert!(matches!(taken, Some(PositionEvent::NewPosition { .. })));
     }
 
     #[test]

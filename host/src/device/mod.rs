@@ -1,5 +1,6 @@
 //! The link to a device: the protocol client ([`client`]), the transports it runs over (a serial port,
-//! [`serial`], or the in-process simulated device, [`sim`]), and the live calibration procedure
+//! [`serial`], or the in-process simulated device, [`sim`], perhaps held by the simulated hand of
+//! [`sim_hand`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
 //! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), and hand-held
 //! mode ([`handheld`]).
@@ -11,6 +12,7 @@ pub mod operator;
 pub mod procedure;
 pub mod serial;
 pub mod sim;
+pub mod sim_hand;
 pub mod verify;
 
 pub use client::{DeviceClient, LinkError, Transport};

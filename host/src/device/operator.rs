@@ -1,5 +1,6 @@
 //! Who turns the table during the live procedure: a person at the terminal (instructions on stderr,
-//! so that stdout stays for results such as `--json`; Enter on stdin), or nobody when the device drives its own virtual table.
+//! so that stdout stays for results such as `--json`; Enter on stdin), nobody when the device drives
+//! its own virtual table, or the simulated hand of `--port sim-hand` (`sim_hand`).
 
 use super::procedure::ProcedureError;
 use std::io::{BufRead, Write};
@@ -10,6 +11,11 @@ pub trait Operator {
     fn say(&mut self, text: &str);
     /// Asks for a set-up step and waits until it is done.
     fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError>;
+    /// Asks for the unit to be turned to a new position and held still (hand-held mode). Nothing is
+    /// waited for here: the procedure watches the device's windows until the unit is still again.
+    fn turn_unit(&mut self, instruction: &str) {
+        self.say(instruction);
+    }
     /// A live check failed: keep the segment anyway (`true`) or stop (`false`)?
     fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError>;
 }

@@ -508,10 +508,13 @@ fn settle_windows<T: Transport>(
 }
 
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
-/// lever-arm components), the paper's plan otherwise (no fixture beyond the paper's is needed).
+/// lever-arm components), the hand plan for the simulated hand (it has no table), the paper's plan
+/// otherwise (no fixture beyond the paper's is needed).
 pub(crate) fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
     session::builtin::load_plan(if has_virtual_table(identity) {
         "oblique"
+    } else if identity.board == Board::SimulatedHand {
+        "hand"
     } else {
         "paper"
     })

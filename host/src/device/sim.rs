@@ -13,6 +13,7 @@
 //! dies mid-segment) and [`SimDevice::inject_line_garbage`] (noise on the device→host line).
 
 use super::client::{LinkError, Transport};
+use super::sim_hand::{HandCue, SimHand};
 use firmware::pipeline::Pipeline;
 use firmware::protocol::{BoardEvent, Controller, DeviceInfo, LinkService};
 use firmware::storage::{AbStore, RamNorFlash};
@@ -71,6 +72,8 @@ pub struct SimDevice {
     resets: u32,
     /// Real-time pacing: the wall-clock instant and sample count it started at.
     pace: Option<(Instant, u64)>,
+    /// The hand that turns a device without a table (`SimDevice::hand_held`).
+    hand: Option<(SimHand, HandCue)>,
 }
 
 /// Why a simulated device cannot be built.
@@ -88,6 +91,25 @@ impl SimDevice {
     /// A device whose sensor is the unit `truth` (noise on), with empty flash.
     pub fn new(truth: Calibration) -> Result<SimDevice, SimError> {
         Self::with_unit_id(truth, SIM_UNIT_ID)
+    }
+
+    /// A device without a table, held in a simulated hand (`sim_hand`) that turns it when its cue
+    /// ([`SimDevice::hand_cue`]) asks: the hand-held procedure's device.
+    pub fn hand_held(truth: Calibration) -> Result<SimDevice, SimError> {
+        let mut dev = Self::with_unit_id(truth, SIM_UNIT_ID)?;
+        dev.info.board = Board::SimulatedHand;
+        dev.info.virtual_table = false;
+        dev.hand = Some(SimHand::new(SIM_SAMPLE_RATE_HZ));
+        let service = dev.service.take().map(|s| s.controller.into_store());
+        if let Some(store) = service {
+            dev.boot(store);
+        }
+        Ok(dev)
+    }
+
+    /// The cue of the hand holding the device, if one does.
+    pub fn hand_cue(&self) -> Option<HandCue> {
+        self.hand.as_ref().map(|(_, cue)| cue.clone())
     }
 
     /// The same with another unit identifier.
@@ -115,6 +137,7 @@ impl SimDevice {
             dies_at_sample: None,
             resets: 0,
             pace: None,
+            hand: None,
         };
         dev.boot(store);
         Ok(dev)
@@ -200,6 +223,12 @@ impl SimDevice {
 
     /// Runs one sample period; four times a second the unit's temperature too, as the boards do.
     fn step(&mut self) {
+        if let Some((hand, _)) = self.hand.as_mut() {
+            if let Some(t) = hand.step(&self.sensor.table()) {
+                // The hand's settings are unit vectors and bounded rates: never refused.
+                let _ = self.sensor.set_table(&t);
+            }
+        }
         self.sensor.step(&mut self.pipeline);
         self.samples += 1;
         self.line.budget =

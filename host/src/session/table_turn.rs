@@ -112,7 +112,7 @@ pub fn find_table_turns(rec: &Recording, seg: &Segmentation) -> Vec<FoundTableTu
             {
                 return None;
             }
-            let up = unit(&core::array::from_fn(|j| {
+            let up = linalg::unit(&core::array::from_fn(|j| {
                 w[0].direction[j] + w[1].direction[j]
             }));
             let mut s = [0.0; 3];
@@ -147,11 +147,6 @@ pub fn find_table_turns(rec: &Recording, seg: &Segmentation) -> Vec<FoundTableTu
             })
         })
         .collect()
-}
-
-fn unit(v: &[f64; 3]) -> [f64; 3] {
-    let n = linalg::norm(v).max(f64::MIN_POSITIVE);
-    v.map(|c| c / n)
 }
 
 #[cfg(test)]

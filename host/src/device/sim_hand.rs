@@ -1,0 +1,241 @@
+//! The simulated hand of `--port sim-hand`: the simulated device without a table, turned by a hand
+//! whenever the procedure asks the operator to turn it. The hand-held procedure (`handheld`) then runs
+//! end to end without a board, on the firmware's own logic, as it runs with a board held in the hand
+//! (an F405 flight controller on its USB cable, say).
+//!
+//! Asked to turn, the hand spins the unit about the vertical for [`TURN_S`] at [`TURN_RATE_DEG_S`]
+//! (the motion the procedure waits for before it takes a new position), then sets it down at its
+//! next attitude and lets go: the unit is still there, as on a desk (no tremor). Its attitudes are
+//! the built-in `hand` plan's well-spread ups, each [`AIM_ERROR_DEG`] off where the plan aims, in a
+//! direction that changes from position to position, as a person's aim would be. Like a person who
+//! loses count, every [`REPEAT_EVERY`]th turn brings the unit back to where it just was, which the
+//! procedure must refuse and ask again.
+
+use super::operator::{AutomaticOperator, Operator};
+use super::procedure::ProcedureError;
+use crate::session::builtin::builtin_plan;
+use shared::wire::VirtualTable;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
+
+/// How long one turn lasts, s.
+pub(crate) const TURN_S: f64 = 1.0;
+/// How fast the hand turns the unit, °/s (the procedure takes 10 °/s as moved).
+pub(crate) const TURN_RATE_DEG_S: f64 = 90.0;
+/// How far each attitude is off the plan's aim, degrees.
+pub(crate) const AIM_ERROR_DEG: f64 = 3.0;
+/// Every this many turns, the hand sets the unit down where it was before the turn.
+pub(crate) const REPEAT_EVERY: u32 = 7;
+
+/// The operator's side of the hand: each call asks it for one more turn.
+#[derive(Clone, Debug, Default)]
+pub struct HandCue(Arc<AtomicU32>);
+
+impl HandCue {
+    /// Asks the hand to turn the unit to its next attitude.
+    pub fn turn(&self) {
+        self.0.fetch_add(1, Ordering::Relaxed);
+    }
+
+    fn requested(&self) -> u32 {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// The device's side of the hand: sets the sensor's attitude and rate sample by sample.
+pub(crate) struct SimHand {
+    cue: HandCue,
+    served: u32,
+    ups: Vec<[f32; 3]>,
+    next: usize,
+    turns: u32,
+    turn_samples: u32,
+    turning_left: u32,
+}
+
+impl SimHand {
+    /// A hand for a device sampling at `sample_rate_hz`, with the cue that drives it.
+    pub(crate) fn new(sample_rate_hz: u32) -> (SimHand, HandCue) {
+        let cue = HandCue::default();
+        let plan_ups: Vec<[f64; 3]> = builtin_plan("hand")
+            .and_then(Result::ok)
+            .map(|p| p.segments.iter().map(|s| s.up_b).collect())
+            .unwrap_or_default();
+        let ups = plan_ups
+            .iter()
+            .enumerate()
+            .map(|(k, up)| off_aim(up, k))
+            .collect();
+        let hand = SimHand {
+            cue: cue.clone(),
+            served: 0,
+            ups,
+            next: 0,
+            turns: 0,
+            turn_samples: (TURN_S * f64::from(sample_rate_hz)).round().max(1.0) as u32,
+            turning_left: 0,
+        };
+        (hand, cue)
+    }
+
+    /// Before a sample: the table setting to apply now, if the hand changes it.
+    pub(crate) fn step(&mut self, current: &VirtualTable) -> Option<VirtualTable> {
+        if self.turning_left > 0 {
+            self.turning_left -= 1;
+            if self.turning_left > 0 {
+                return None;
+            }
+            self.turns += 1;
+            let up_b = if self.turns % REPEAT_EVERY == 0 && self.next > 0 {
+                *self.ups.get((self.next - 1) % self.ups.len().max(1))?
+            } else {
+                self.next += 1;
+                *self.ups.get((self.next - 1) % self.ups.len().max(1))?
+            };
+            return Some(VirtualTable {
+                up_b,
+                rate_rad_s: 0.0,
+                accel_rad_s2: 0.0,
+            });
+        }
+        if self.cue.requested() == self.served {
+            return None;
+        }
+        self.served = self.served.wrapping_add(1);
+        self.turning_left = self.turn_samples;
+        Some(VirtualTable {
+            up_b: current.up_b,
+            rate_rad_s: TURN_RATE_DEG_S.to_radians() as f32,
+            accel_rad_s2: 0.0,
+        })
+    }
+}
+
+/// `up` turned by [`AIM_ERROR_DEG`] towards a direction perpendicular to it that rotates with `k`.
+fn off_aim(up: &[f64; 3], k: usize) -> [f32; 3] {
+    // Any vector not along `up`, crossed with it, gives a perpendicular; rotate it about `up` by k
+    // times the golden angle so that successive errors point different ways.
+    let helper = if up[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = shared::linalg::unit(&shared::linalg::cross(up, &helper));
+    let e2 = shared::linalg::cross(up, &e1);
+    let phi = k as f64 * 2.399_963_229_728_653;
+    let t = AIM_ERROR_DEG.to_radians();
+    core::array::from_fn(|j| {
+        let side = phi.cos() * e1[j] + phi.sin() * e2[j];
+        (t.cos() * up[j] + t.sin() * side) as f32
+    })
+}
+
+/// The operator who holds the simulated unit: progress printed as [`AutomaticOperator`] prints it,
+/// each request to turn passed on to the hand.
+pub struct HandOperator {
+    /// Prints and keeps the warnings.
+    pub inner: AutomaticOperator,
+    /// The hand's cue.
+    pub cue: HandCue,
+}
+
+impl Operator for HandOperator {
+    fn say(&mut self, text: &str) {
+        self.inner.say(text);
+    }
+
+    fn wait_ready(&mut self, instruction: &str) -> Result<(), ProcedureError> {
+        self.inner.wait_ready(instruction)
+    }
+
+    fn turn_unit(&mut self, instruction: &str) {
+        self.inner.say(instruction);
+        self.cue.turn();
+    }
+
+    fn keep_despite(&mut self, segment: &str, problems: &[String]) -> Result<bool, ProcedureError> {
+        self.inner.keep_despite(segment, problems)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(up_b: [f32; 3]) -> VirtualTable {
+        VirtualTable {
+            up_b,
+            rate_rad_s: 0.0,
+            accel_rad_s2: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_hand_turns_only_when_asked_then_sets_the_unit_down_still() {
+        let (mut hand, cue) = SimHand::new(100);
+        let start = table([0.0, 0.0, 1.0]);
+        assert_eq!(hand.step(&start), None, "not asked: the unit stays");
+        cue.turn();
+        let spin = hand.step(&start).expect("asked: it turns");
+        assert_eq!(spin.up_b, start.up_b);
+        assert!((f64::from(spin.rate_rad_s).to_degrees() - TURN_RATE_DEG_S).abs() < 1e-3);
+        // The turn lasts TURN_S (100 samples at 100 Hz), then the unit is set down, still.
+        for _ in 0..99 {
+            assert_eq!(hand.step(&spin), None);
+        }
+        let down = hand.step(&spin).expect("set down");
+        assert_eq!(down.rate_rad_s, 0.0);
+        assert_eq!(hand.step(&down), None, "one turn per request");
+    }
+
+    /// The attitudes set down after each of `n` turns.
+    fn set_down(hand: &mut SimHand, cue: &HandCue, n: u32) -> Vec<[f32; 3]> {
+        let mut t = table([0.0, 0.0, 1.0]);
+        let mut downs = Vec::new();
+        for _ in 0..n {
+            cue.turn();
+            // A turn is 10 samples at 10 Hz; give it a few more.
+            for _ in 0..20 {
+                if let Some(next) = hand.step(&t) {
+                    t = next;
+                    if t.rate_rad_s == 0.0 {
+                        downs.push(t.up_b);
+                        break;
+                    }
+                }
+            }
+        }
+        downs
+    }
+
+    #[test]
+    fn every_seventh_turn_comes_back_to_the_position_before_it() {
+        let (mut hand, cue) = SimHand::new(10);
+        let downs = set_down(&mut hand, &cue, 15);
+        assert_eq!(downs.len(), 15);
+        for (k, d) in downs.iter().enumerate() {
+            let turn = k as u32 + 1;
+            if turn % REPEAT_EVERY == 0 {
+                assert_eq!(*d, downs[k - 1], "turn {turn} repeats");
+            } else {
+                assert!(downs[..k].iter().all(|e| e != d), "turn {turn} is new");
+            }
+        }
+        assert_eq!(downs[0], hand.ups[0]);
+        assert_eq!(downs[14], hand.ups[12], "two repeats: two positions behind");
+    }
+
+    #[test]
+    fn each_attitude_is_the_aim_error_off_the_plans_and_they_differ() {
+        let plan = builtin_plan("hand").unwrap().unwrap();
+        let (hand, _) = SimHand::new(100);
+        assert_eq!(hand.ups.len(), plan.segments.len());
+        for (seg, got) in plan.segments.iter().zip(&hand.ups) {
+            let g = got.map(f64::from);
+            let cos = shared::linalg::dot(&seg.up_b, &g) / shared::linalg::norm(&g);
+            let off_deg = cos.clamp(-1.0, 1.0).acos().to_degrees();
+            assert!((off_deg - AIM_ERROR_DEG).abs() < 1e-3, "{off_deg}°");
+            assert!((shared::linalg::norm(&g) - 1.0).abs() < 1e-6);
+        }
+    }
+}
