@@ -19,13 +19,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// How long one turn lasts, s.
-pub(crate) const TURN_S: f64 = 1.0;
+pub const TURN_S: f64 = 1.0;
 /// How fast the hand turns the unit, °/s (the procedure takes 10 °/s as moved).
-pub(crate) const TURN_RATE_DEG_S: f64 = 90.0;
+pub const TURN_RATE_DEG_S: f64 = 90.0;
 /// How far each attitude is off the plan's aim, degrees.
-pub(crate) const AIM_ERROR_DEG: f64 = 3.0;
+pub const AIM_ERROR_DEG: f64 = 3.0;
 /// Every this many turns, the hand sets the unit down where it was before the turn.
-pub(crate) const REPEAT_EVERY: u32 = 7;
+pub const REPEAT_EVERY: u32 = 7;
 
 /// The operator's side of the hand: each call asks it for one more turn.
 #[derive(Clone, Debug, Default)]
