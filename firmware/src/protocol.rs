@@ -18,7 +18,7 @@ use shared::wire::{
     HostToDevice, Identity, VirtualTable, BLOB_CHUNK_LEN, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
     PROTOCOL_VERSION,
 };
-use shared::Calibration;
+use shared::{Calibration, OutputUnit};
 
 use crate::pipeline::{Pipeline, PipelineCommand, MAX_WINDOW_SAMPLES};
 use crate::storage::CalStore;
@@ -36,6 +36,8 @@ pub struct DeviceInfo {
     pub sample_rate_hz: u32,
     /// The board has a virtual table (`SetVirtualTable` is accepted).
     pub virtual_table: bool,
+    /// What its raw outputs are measured in.
+    pub output_unit: OutputUnit,
 }
 
 /// Something only the board can do.
@@ -174,6 +176,7 @@ impl<S: CalStore> Controller<S> {
                 calibration: self.state,
                 lever_mode: self.lever_mode,
                 sample_rate_hz: self.info.sample_rate_hz,
+                output_unit: self.info.output_unit,
             })),
             HostToDevice::Stream(req) => {
                 if req.window_samples == 0 || req.window_samples > MAX_WINDOW_SAMPLES {

@@ -237,6 +237,7 @@ pub fn wire(data: &[u8]) {
         board: Board::Simulated,
         sample_rate_hz: 1000,
         virtual_table: true,
+        output_unit: shared::OutputUnit::Volts,
     };
     let mut device = Controller::boot(info, store, shared::LeverMode::RateAndAcceleration);
     let mut rx = FrameReceiver::new();

@@ -1,5 +1,5 @@
 //! The README's hand-held section, run as written: its commands (simulate a hand session, segment it,
-//! calibrate it; raw counts; six faces) with the `host` binary in a fresh directory.
+//! calibrate it; rehearse the live procedure; raw counts; six faces) with the `host` binary in a fresh directory.
 
 use std::path::Path;
 use std::process::Command;
@@ -40,9 +40,11 @@ fn readme_hand_held_commands_work_as_written() {
         .lines()
         .filter_map(|l| l.strip_prefix(prefix))
         .collect();
-    assert_eq!(commands.len(), 3, "{commands:?}");
+    assert_eq!(commands.len(), 4, "{commands:?}");
     assert!(commands[0].starts_with("simulate-hand "));
     assert!(commands[1].starts_with("segment ") && commands[2].starts_with("calibrate "));
+    // The live rehearsal: the simulated device in a simulated hand, no file in.
+    assert!(commands[3].starts_with("calibrate --port sim-hand "));
 
     let dir = tempfile::tempdir().unwrap();
     for c in &commands {
@@ -57,6 +59,8 @@ fn readme_hand_held_commands_work_as_written() {
         "hand-session/gyro.toml",
         "hand-session/segments.svg",
         "hand-calibration/calibration.toml",
+        "hand-live/calibration.toml",
+        "hand-live/recording/plan.toml",
     ] {
         assert!(dir.path().join(f).exists(), "{f}");
     }

@@ -48,3 +48,58 @@ fn a_single_package_unit_calibrates_live_on_the_simulated_device() {
         }
     }
 }
+
+/// A board whose outputs are counts (the F405's IMU) held in the hand with the `hand` plan, whose
+/// unit is volts: the host records and calibrates in the device's counts, says it replaced the
+/// plan's unit, and the calibration's biases come back in counts (the unit file's, within 3σ).
+#[test]
+fn a_device_in_counts_is_recorded_in_counts_whatever_the_plan_says() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("hand");
+    let unit = concat!(env!("CARGO_MANIFEST_DIR"), "/units/single-package.toml");
+    let o = Command::new(env!("CARGO_BIN_EXE_host"))
+        .args(["calibrate", "--port", "sim-hand", "--sim-unit", unit])
+        .args(["--plan", "hand", "--out-dir"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    let said = format!("{stdout}{stderr}");
+    assert!(
+        said.contains("the device's outputs are in LSB: the plan's V is replaced"),
+        "{said}"
+    );
+    let plan: toml::Table = std::fs::read_to_string(out_dir.join("recording/plan.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(plan["output_unit"].as_str(), Some("LSB"));
+    let cal: toml::Table = std::fs::read_to_string(out_dir.join("calibration.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let truth: toml::Table = std::fs::read_to_string(unit).unwrap().parse().unwrap();
+    assert_eq!(cal["output_unit"].as_str(), Some("LSB"), "{cal}");
+    let floats = |t: &toml::Table, table: &str, key: &str| -> Vec<f64> {
+        t[table][key]
+            .as_array()
+            .unwrap_or_else(|| panic!("[{table}] {key}"))
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    };
+    let bias = floats(&cal, "static", "zero_bias_lsb");
+    let sigma = floats(&cal, "uncertainty", "zero_bias_1sigma");
+    let true_bias = floats(&truth, "static", "zero_bias_lsb");
+    for i in 0..3 {
+        let z = (bias[i] - true_bias[i]) / sigma[i];
+        assert!(
+            z.abs() < 3.0,
+            "bias {i}: {} against {} (z = {z})",
+            bias[i],
+            true_bias[i]
+        );
+    }
+}

@@ -27,7 +27,9 @@ pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 /// - 1: the first protocol.
 /// - 2: windows carry the mean temperature (`mean_temp_c`); [`SampleFlags::TEMPERATURE`];
 ///   [`HostToDevice::SetVirtualTemperature`]; blob errors for the gyro, temperature and `f32` range.
-pub const PROTOCOL_VERSION: u16 = 2;
+/// - 3: [`Identity::output_unit`] (a board's raw outputs may be volts or counts), appended: a host
+///   reads the version of an older device before the identity's new field.
+pub const PROTOCOL_VERSION: u16 = 3;
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
 
@@ -163,6 +165,9 @@ pub struct Identity {
     pub lever_mode: LeverMode,
     /// Sampling rate of the accelerometers and gyro, Hz.
     pub sample_rate_hz: u32,
+    /// What the raw outputs are measured in (the unit of `RawWindow::mean_raw` and of the
+    /// calibration the device takes): volts for an ADC board, counts for a digital IMU.
+    pub output_unit: crate::params::OutputUnit,
 }
 
 /// Per-frame status bits.
@@ -385,6 +390,18 @@ pub fn decode_frame<T: DeserializeOwned>(frame: &mut [u8]) -> Result<T, WireErro
     postcard::from_bytes_cobs(frame).map_err(|_| WireError::Malformed)
 }
 
+/// The protocol version of a `DeviceToHost::Identity` frame that does not decode as this version's
+/// (a device of another protocol version, whose identity's later fields differ): every version's
+/// identity starts with the variant's index and the version, so the host can still name the version
+/// it refuses. `None` for any other frame.
+pub fn identity_version_of(frame: &mut [u8]) -> Option<u16> {
+    let (variant, version): (u32, u16) = decode_frame(frame).ok()?;
+    (variant == IDENTITY_VARIANT).then_some(version)
+}
+
+/// Index of `DeviceToHost::Identity` among `DeviceToHost`'s variants (postcard's encoding of it).
+const IDENTITY_VARIANT: u32 = 0;
+
 /// Splits a blob into the chunks of a write.
 pub fn blob_chunks(blob: &[u8]) -> impl Iterator<Item = BlobChunk> + '_ {
     let total_len = blob.len() as u16;
@@ -404,6 +421,41 @@ pub fn blob_chunks(blob: &[u8]) -> impl Iterator<Item = BlobChunk> + '_ {
 
 #[cfg(test)]
 mod tests {
+    /// An identity of version 2 (no output unit) and one of this version: the version is read from
+    /// either; a window frame is not an identity.
+    #[test]
+    fn the_version_of_another_versions_identity_is_readable() {
+        let mut buf = [0u8; DEVICE_FRAME_MAX];
+        let v2 = (
+            IDENTITY_VARIANT,
+            2u16,
+            [0u8, 1, 0],
+            UnitId(*b"OLD-DEVICE-1"),
+            Board::Stm32f4,
+            CalibrationState::Missing,
+            LeverMode::Off,
+            1000u32,
+        );
+        let frame = encode_frame(&v2, &mut buf).unwrap();
+        assert!(decode_frame::<DeviceToHost>(&mut frame.to_vec()).is_err());
+        assert_eq!(identity_version_of(frame), Some(2));
+        let now = DeviceToHost::Identity(Identity {
+            protocol_version: PROTOCOL_VERSION,
+            firmware_version: [0, 1, 0],
+            unit_id: UnitId(*b"NEW-DEVICE-1"),
+            board: Board::Stm32f4,
+            calibration: CalibrationState::Missing,
+            lever_mode: LeverMode::Off,
+            sample_rate_hz: 8000,
+            output_unit: crate::OutputUnit::Lsb,
+        });
+        let frame = encode_frame(&now, &mut buf).unwrap();
+        assert_eq!(identity_version_of(frame), Some(PROTOCOL_VERSION));
+        let ack = DeviceToHost::Ack(Ack::StreamStopped);
+        let frame = encode_frame(&ack, &mut buf).unwrap();
+        assert_eq!(identity_version_of(frame), None);
+    }
+
     use super::*;
     use proptest::prelude::*;
 

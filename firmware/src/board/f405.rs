@@ -21,6 +21,7 @@
 //! calibration A/B store.
 
 use shared::wire::Board;
+use shared::OutputUnit;
 use stm32f4xx_hal::flash::LockedFlash;
 
 use crate::imu::icm42688::{AccelRange, Config, Odr};
@@ -65,6 +66,8 @@ pub fn info(sample_rate_hz: u32) -> DeviceInfo {
         board: Board::Stm32f4,
         sample_rate_hz,
         virtual_table: false,
+        // IMU_CONFIG keeps the accelerometer in counts.
+        output_unit: OutputUnit::Lsb,
     }
 }
 

@@ -15,6 +15,7 @@
 
 use shared::wire::Board;
 use shared::LeverMode;
+use shared::OutputUnit;
 
 use crate::imu::icm42688::Icm42688;
 use crate::imu::sim::Icm42688Model;
@@ -42,6 +43,8 @@ pub const INFO: DeviceInfo = DeviceInfo {
     board: Board::QemuMps2An386,
     sample_rate_hz: SAMPLE_RATE_HZ,
     virtual_table: true,
+    // The virtual sensor is the paper's analog unit (its IMU path scales counts back to volts).
+    output_unit: OutputUnit::Volts,
 };
 
 extern "C" {

@@ -27,6 +27,7 @@
 //! (÷2) would give 45 MHz. One scan: 3 × (56 + 12) + (480 + 12) = 696 ADC cycles = 30.9 µs.
 
 use shared::wire::Board;
+use shared::OutputUnit;
 use stm32f4xx_hal::flash::LockedFlash;
 
 use super::stm32_common::{unit_id, F4Flash, Store};
@@ -69,6 +70,7 @@ pub fn info() -> DeviceInfo {
         board: Board::Stm32f4,
         sample_rate_hz: SAMPLE_RATE_HZ,
         virtual_table: false,
+        output_unit: OutputUnit::Volts,
     }
 }
 

@@ -9,6 +9,7 @@ use shared::blob::{ParameterBlob, BLOB_MAX_LEN};
 use shared::wire::{
     blob_chunks, CompensatedWindow, SampleFlags, StreamKind, StreamRequest, HOST_FRAME_MAX,
 };
+use shared::OutputUnit;
 use std::collections::VecDeque;
 use std::vec::Vec;
 
@@ -47,6 +48,7 @@ const INFO: DeviceInfo = DeviceInfo {
     board: Board::QemuMps2An386,
     sample_rate_hz: 1000,
     virtual_table: true,
+    output_unit: OutputUnit::Volts,
 };
 
 struct Sim {
@@ -516,6 +518,7 @@ fn bad_requests_get_typed_errors() {
     let mut real = Controller::boot(
         DeviceInfo {
             virtual_table: false,
+            output_unit: OutputUnit::Lsb,
             board: Board::Stm32f4,
             ..INFO
         },

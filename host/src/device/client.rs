@@ -72,6 +72,8 @@ pub struct DeviceClient<T: Transport> {
     timeout: Duration,
     /// Frames that did not decode (garbage on the line), since connecting.
     pub garbage_frames: u64,
+    /// The version of an identity that did not decode: a device of another protocol version.
+    foreign_version: Option<u16>,
 }
 
 impl<T: Transport> DeviceClient<T> {
@@ -84,6 +86,7 @@ impl<T: Transport> DeviceClient<T> {
             inbox: VecDeque::new(),
             timeout,
             garbage_frames: 0,
+            foreign_version: None,
         }
     }
 
@@ -143,8 +146,17 @@ impl<T: Transport> DeviceClient<T> {
         while !window.is_empty() {
             window = match self.accumulator.feed::<DeviceToHost>(window) {
                 FeedResult::Consumed => break,
-                FeedResult::OverFull(rest) | FeedResult::DeserError(rest) => {
+                FeedResult::OverFull(rest) => {
                     self.garbage_frames += 1;
+                    rest
+                }
+                FeedResult::DeserError(rest) => {
+                    self.garbage_frames += 1;
+                    // The frame just fed: an identity of another protocol version still names it.
+                    let mut frame = window[..window.len() - rest.len()].to_vec();
+                    if let Some(v) = wire::identity_version_of(&mut frame) {
+                        self.foreign_version = Some(v);
+                    }
                     rest
                 }
                 FeedResult::Success { data, remaining } => {
@@ -196,6 +208,7 @@ impl<T: Transport> DeviceClient<T> {
     /// that just booted (or a QEMU pty that was just opened) may miss the first frame.
     pub fn identify(&mut self) -> Result<Identity, LinkError> {
         let mut last = None;
+        self.foreign_version = None;
         for _ in 0..3 {
             match self.request(&HostToDevice::Identify, "an identity", |m| match m {
                 DeviceToHost::Identity(id) => Some(*id),
@@ -207,6 +220,10 @@ impl<T: Transport> DeviceClient<T> {
                     })
                 }
                 Ok(id) => return Ok(id),
+                Err(_) if self.foreign_version.is_some() => {
+                    let device = self.foreign_version.unwrap_or_default();
+                    return Err(LinkError::ProtocolVersion { device });
+                }
                 Err(e @ LinkError::Timeout { .. }) => last = Some(e),
                 Err(LinkError::Unexpected { .. }) => continue,
                 Err(e) => return Err(e),
@@ -370,5 +387,84 @@ impl<T: Transport> DeviceClient<T> {
         self.unread.clear();
         *self.accumulator = CobsAccumulator::new();
         self.identify()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shared::wire::{Board, CalibrationState};
+    use shared::UnitId;
+
+    /// A device that answers every request with `reply`.
+    struct Replies {
+        reply: Vec<u8>,
+        pending: Vec<u8>,
+    }
+
+    impl Transport for Replies {
+        fn send(&mut self, _: &[u8]) -> Result<(), LinkError> {
+            self.pending.extend_from_slice(&self.reply);
+            Ok(())
+        }
+        fn receive(&mut self, buf: &mut [u8], _: Duration) -> Result<usize, LinkError> {
+            let n = buf.len().min(self.pending.len());
+            buf[..n].copy_from_slice(&self.pending[..n]);
+            self.pending.drain(..n);
+            Ok(n)
+        }
+    }
+
+    fn client_answering<M: serde::Serialize>(reply: &M) -> DeviceClient<Replies> {
+        let mut buf = [0u8; DEVICE_FRAME_MAX];
+        let frame = wire::encode_frame(reply, &mut buf).unwrap().to_vec();
+        let t = Replies {
+            reply: frame,
+            pending: Vec::new(),
+        };
+        DeviceClient::new(t, Duration::from_millis(50))
+    }
+
+    fn identity(version: u16) -> Identity {
+        Identity {
+            protocol_version: version,
+            firmware_version: [0, 1, 0],
+            unit_id: UnitId(*b"SOME-DEVICE1"),
+            board: Board::Stm32f4,
+            calibration: CalibrationState::Missing,
+            lever_mode: LeverMode::Off,
+            sample_rate_hz: 8000,
+            output_unit: shared::OutputUnit::Lsb,
+        }
+    }
+
+    #[test]
+    fn a_device_of_another_version_is_refused_by_its_version() {
+        // Same layout, another version.
+        let mut c = client_answering(&DeviceToHost::Identity(identity(PROTOCOL_VERSION + 1)));
+        let e = c.identify().unwrap_err();
+        assert!(
+            matches!(e, LinkError::ProtocolVersion { device } if device == PROTOCOL_VERSION + 1),
+            "{e}"
+        );
+        // Version 2's identity had no output unit: it does not decode, and its version is named.
+        let id = identity(2);
+        let v2 = (
+            0u32, // the Identity variant
+            id.protocol_version,
+            id.firmware_version,
+            id.unit_id,
+            id.board,
+            id.calibration,
+            id.lever_mode,
+            id.sample_rate_hz,
+        );
+        let mut c = client_answering(&v2);
+        let e = c.identify().unwrap_err();
+        assert!(matches!(e, LinkError::ProtocolVersion { device: 2 }), "{e}");
+        assert!(e.to_string().contains("protocol version 2"), "{e}");
+        // This version's identity is taken.
+        let mut c = client_answering(&DeviceToHost::Identity(identity(PROTOCOL_VERSION)));
+        assert_eq!(c.identify().unwrap(), identity(PROTOCOL_VERSION));
     }
 }

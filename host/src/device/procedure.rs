@@ -194,6 +194,16 @@ pub fn run<T: Transport>(
     let drive = has_virtual_table(&identity);
 
     let mut plan = opts.plan.clone();
+    if plan.output_unit != identity.output_unit {
+        // The device's raw outputs are what is recorded and calibrated: a plan written for another
+        // board (the built-in plans are in volts) must not label counts as volts.
+        op.say(&format!(
+            "the device's outputs are in {}: the plan's {} is replaced",
+            identity.output_unit.symbol(),
+            plan.output_unit.symbol()
+        ));
+        plan.output_unit = identity.output_unit;
+    }
     plan.sample_rate_hz = window_rate;
     plan.unit_id = Some(identity.unit_id.to_string());
     if drive && plan.attitude_sigma_deg.is_none() {

@@ -123,6 +123,7 @@ impl SimDevice {
             board: Board::Simulated,
             sample_rate_hz: SIM_SAMPLE_RATE_HZ,
             virtual_table: true,
+            output_unit: truth.statics.output_unit,
         };
         let sensor =
             VirtualSensor::new(&truth, SIM_SAMPLE_RATE_HZ, true).ok_or(SimError::BadUnit)?;
