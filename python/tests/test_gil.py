@@ -1,5 +1,6 @@
 """The fit releases the GIL: another Python thread runs while `calibrate` works."""
 
+import bisect
 import sys
 import threading
 import time
@@ -7,13 +8,14 @@ import time
 import accelcal
 from conftest import UNIT_ID
 
-# Python may hand the GIL over one switch interval after a thread asks (set to 0.5 ms here, so
-# that a fit of a few tens of ms leaves room to look inside it). A call that holds the GIL lets
-# another thread run only once it has returned (measured with the GIL held: none in the first half
-# of any call, some just after each, while the caller waits to take the GIL back); a call that
-# releases it lets it run from the start.
-SWITCH_INTERVAL_S = 0.0005
-MARGIN_S = 0.005
+# Python may hand the GIL over one switch interval after a thread asks (set to 0.1 ms here, so
+# that a fit of a few ms leaves room to look inside it: a hand session's fit takes about 7 ms). A
+# call that holds the GIL lets another thread run only once it has returned (measured with the GIL
+# held: none in the first half of any call, some just after each, while the caller waits to take
+# the GIL back); a call that releases it lets it run from the start. The margin, ten switch
+# intervals, covers a hand-over between taking the start time and entering the call.
+SWITCH_INTERVAL_S = 0.0001
+MARGIN_S = 0.001
 
 
 def test_other_threads_run_during_calibrate(hand):
@@ -45,6 +47,7 @@ def test_other_threads_run_during_calibrate(hand):
         worker.join()
     finally:
         sys.setswitchinterval(interval)
-    inside = sum(1 for t in ticks for a, b in spans if a < t < b)
+    # The ticks are in time order: those inside a span are one slice of them.
+    inside = sum(bisect.bisect_left(ticks, b) - bisect.bisect_right(ticks, a) for a, b in spans if a < b)
     assert looked_inside() > 0.1, spans
     assert inside > 0, "no other thread ran during any fit: the GIL was held"
