@@ -127,7 +127,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Segment(a) => segment::run(&a, cli.quiet),
         Command::SimulateHand(a) => segment::simulate_hand_command(&a).map(|_| ()),
         Command::Flash(a) => flash::run(&a.port, &a.calibration, cli.quiet),
-        Command::Read(a) => read::run(&a.port, a.out.as_deref()),
+        Command::Read(a) => read::run(&a),
         Command::Monitor(a) => monitor::run(&a, cli.quiet),
     }
 }

@@ -2,10 +2,12 @@
 
 use super::port::{connect, PortArgs};
 use super::CliError;
+use crate::output_file::OutputFile;
 use crate::unit_file::UnitFile;
 use clap::Args;
 use shared::blob;
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::PathBuf;
 
 /// `host read`.
 #[derive(Debug, Args)]
@@ -16,26 +18,37 @@ pub struct ReadArgs {
     /// Where to write it (default: stdout).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Replace an existing --out file.
+    #[arg(long)]
+    pub force: bool,
 }
 
-/// `host read --port P [--out FILE]`: the calibration on the device, as `calibration.toml`.
-pub fn run(port: &PortArgs, out: Option<&Path>) -> Result<(), CliError> {
-    let mut client = connect(port)?;
+/// `host read --port P [--out FILE [--force]]`: the calibration on the device, as
+/// `calibration.toml`. An existing FILE is refused before the device is asked (a calibration is
+/// never replaced without `--force`), and the file appears whole or not at all.
+pub fn run(a: &ReadArgs) -> Result<(), CliError> {
+    let file = a
+        .out
+        .as_deref()
+        .map(|p| OutputFile::create(p, a.force))
+        .transpose()?;
+    let mut client = connect(&a.port)?;
     let identity = client.identify()?;
     let bytes = client.read_calibration()?;
     let src = PathBuf::from(format!("<device {}>", identity.unit_id));
     let blob = blob::decode(&bytes).map_err(|e| CliError::Blob(src, e))?;
     let text = UnitFile::from_calibration(&blob.calibration, Some(blob.unit_id), None).to_toml();
-    match out {
-        Some(p) => {
-            std::fs::write(p, &text).map_err(|e| CliError::Io(p.to_path_buf(), e))?;
+    match (file, &a.out) {
+        (Some(mut f), Some(p)) => {
+            f.write_all(text.as_bytes()).map_err(|e| f.io_error(e))?;
+            f.commit()?;
             crate::outln!(
                 "wrote the calibration of unit {} to {}",
                 blob.unit_id,
                 p.display()
             )?;
         }
-        None => crate::out!("{text}")?,
+        _ => crate::out!("{text}")?,
     }
     Ok(())
 }

@@ -305,9 +305,37 @@ fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
     assert!(matches!(e, CliError::Blob(..)), "{e}");
 }
 
+/// `host read --out` onto an existing calibration: refused before the device is asked unless
+/// `--force`; and when the read then fails, the file is as it was and no partial file is left.
+#[test]
+fn read_never_replaces_a_file_without_force_nor_leaves_half_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("calibration.toml");
+    std::fs::write(&p, "mine").unwrap();
+    let args = |force| read::ReadArgs {
+        port: sim(),
+        out: Some(p.clone()),
+        force,
+    };
+    let e = read::run(&args(false)).unwrap_err();
+    assert!(matches!(e, CliError::Written(_)), "{e}");
+    assert!(e.to_string().contains("--force"), "{e}");
+    // With --force the (uncalibrated) device is asked, and its refusal leaves the file alone.
+    let e = read::run(&args(true)).unwrap_err();
+    assert!(matches!(e, CliError::Link(_)), "{e}");
+    assert_eq!(std::fs::read_to_string(&p).unwrap(), "mine");
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 1, "{names:?}");
+}
+
 #[test]
 fn read_of_an_uncalibrated_device_is_a_typed_error_and_monitor_streams() {
-    let e = read::run(&sim(), None).unwrap_err();
+    let e = read::run(&read::ReadArgs {
+        port: sim(),
+        out: None,
+        force: false,
+    })
+    .unwrap_err();
     assert!(
         matches!(
             e,
