@@ -87,6 +87,9 @@ pub enum ReportError {
     /// A file could not be written.
     #[error("cannot write {}: {}", .0.display(), .1)]
     Io(PathBuf, #[source] std::io::Error),
+    /// A page of the report could not be written.
+    #[error(transparent)]
+    Written(#[from] crate::output_file::OutputFileError),
     /// The simulation of the navigation check failed.
     #[error(transparent)]
     Simulate(SimulateError),

@@ -7,6 +7,7 @@ use super::markup::{to_html, to_markdown};
 use super::navigation::render_navigation;
 use super::page::{page, Block};
 use super::plot::{self, Figure, Formats};
+use crate::output_file::write_atomic;
 use crate::session::{read_session, ReadOptions};
 use crate::unit_file::UnitFile;
 use std::fmt::Write as _;
@@ -115,11 +116,16 @@ pub(crate) fn write_report(
             }
         }
     }
+    // A report is regenerated in place (`--force` is implied: it is derived from the session),
+    // but each page appears whole: a reader never opens half of one.
     let md = out_dir.join(REPORT_MD);
-    std::fs::write(&md, to_markdown(&blocks)).map_err(|e| ReportError::Io(md.clone(), e))?;
+    write_atomic(&md, to_markdown(&blocks).as_bytes(), true)?;
     let html = out_dir.join(REPORT_HTML);
-    std::fs::write(&html, to_html(&blocks, "Calibration report"))
-        .map_err(|e| ReportError::Io(html.clone(), e))?;
+    write_atomic(
+        &html,
+        to_html(&blocks, "Calibration report").as_bytes(),
+        true,
+    )?;
     files.push(md);
     files.push(html.clone());
     Ok(ReportSummary {
