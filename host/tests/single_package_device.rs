@@ -3,22 +3,32 @@
 //! saturates at its own ±16 g, not at the analog part's 0–5 V (which would clamp every count), and
 //! the package's lever arm comes back within 3σ of the unit file's r = (12, −7, 25) mm.
 
+use std::path::Path;
 use std::process::Command;
+
+/// The unit file of the single-package MEMS unit.
+const UNIT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/units/single-package.toml");
+
+/// `host calibrate --port PORT --sim-unit UNIT --plan PLAN --out-dir OUT`, which must succeed: its
+/// stdout and stderr.
+fn calibrate_live(port: &str, plan: &str, out_dir: &Path) -> (String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_host"))
+        .args(["calibrate", "--port", port, "--sim-unit", UNIT])
+        .args(["--plan", plan, "--out-dir"])
+        .arg(out_dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+    let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    (stdout, stderr)
+}
 
 #[test]
 fn a_single_package_unit_calibrates_live_on_the_simulated_device() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("mems");
-    let unit = concat!(env!("CARGO_MANIFEST_DIR"), "/units/single-package.toml");
-    let o = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["calibrate", "--port", "sim", "--sim-unit", unit])
-        .args(["--plan", "single-package", "--out-dir"])
-        .arg(&out_dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{stdout}\n{stderr}");
+    let (stdout, _) = calibrate_live("sim", "single-package", &out_dir);
     assert!(stdout.contains("in-package size effect"), "{stdout}");
     let text = std::fs::read_to_string(out_dir.join("calibration.toml")).unwrap();
     let doc: toml::Table = text.parse().unwrap();
@@ -56,16 +66,7 @@ fn a_single_package_unit_calibrates_live_on_the_simulated_device() {
 fn a_device_in_counts_is_recorded_in_counts_whatever_the_plan_says() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("hand");
-    let unit = concat!(env!("CARGO_MANIFEST_DIR"), "/units/single-package.toml");
-    let o = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["calibrate", "--port", "sim-hand", "--sim-unit", unit])
-        .args(["--plan", "hand", "--out-dir"])
-        .arg(&out_dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{stdout}\n{stderr}");
+    let (stdout, stderr) = calibrate_live("sim-hand", "hand", &out_dir);
     let said = format!("{stdout}{stderr}");
     assert!(
         said.contains("the device's outputs are in LSB: the plan's V is replaced"),
@@ -80,7 +81,7 @@ fn a_device_in_counts_is_recorded_in_counts_whatever_the_plan_says() {
         .unwrap()
         .parse()
         .unwrap();
-    let truth: toml::Table = std::fs::read_to_string(unit).unwrap().parse().unwrap();
+    let truth: toml::Table = std::fs::read_to_string(UNIT).unwrap().parse().unwrap();
     assert_eq!(cal["output_unit"].as_str(), Some("LSB"), "{cal}");
     let floats = |t: &toml::Table, table: &str, key: &str| -> Vec<f64> {
         t[table][key]

@@ -393,8 +393,6 @@ impl<T: Transport> DeviceClient<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use shared::wire::{Board, CalibrationState};
-    use shared::UnitId;
 
     /// A device that answers every request with `reply`.
     struct Replies {
@@ -425,16 +423,18 @@ mod tests {
         DeviceClient::new(t, Duration::from_millis(50))
     }
 
+    /// The simulated device's identity (the firmware's own answer), as of protocol `version`.
     fn identity(version: u16) -> Identity {
+        let truth = crate::unit_file::UnitFile::paper_unit()
+            .to_calibration()
+            .unwrap();
+        let device = super::super::sim::SimDevice::new(truth).unwrap();
+        let id = DeviceClient::new(device, Duration::from_millis(50))
+            .identify()
+            .unwrap();
         Identity {
             protocol_version: version,
-            firmware_version: [0, 1, 0],
-            unit_id: UnitId(*b"SOME-DEVICE1"),
-            board: Board::Stm32f4,
-            calibration: CalibrationState::Missing,
-            lever_mode: LeverMode::Off,
-            sample_rate_hz: 8000,
-            output_unit: shared::OutputUnit::Lsb,
+            ..id
         }
     }
 
