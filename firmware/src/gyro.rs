@@ -8,6 +8,7 @@
 
 use embedded_hal::spi::{Operation, SpiDevice};
 
+use crate::conversion::gyro_word_from_le;
 use crate::Gyro;
 
 const WHO_AM_I: u8 = 0x0F;
@@ -20,19 +21,6 @@ const AUTO_INC: u8 = 0x40;
 pub const WHO_AM_I_VALUES: [u8; 2] = [0xD7, 0xD3];
 /// rad/s per LSB at ±2000 °/s (70 m°/s).
 pub const RAD_S_PER_LSB_2000DPS: f32 = 0.070 * core::f32::consts::PI / 180.0;
-
-/// Body rates (rad/s) of three gyro words at `rad_s_per_lsb`, and whether a word sits at either end
-/// of its range (−32768 or 32767: saturated). The one conversion of gyro words, for the driver and
-/// the benchmark's ADC path.
-#[inline(always)]
-pub fn rate_from_words(w: &[i16; 3], rad_s_per_lsb: f32) -> ([f32; 3], bool) {
-    // As `pipeline::Scaling::volts`: a value whose sign bit is set exactly at a range end,
-    // `w + 32767 < 0` for −32768 and `32766 − w < 0` for 32767, folded into one sign test.
-    let end = |v: i16| (i32::from(v) + 32767) | (32766 - i32::from(v));
-    let rad_s = |v: i16| f32::from(v) * rad_s_per_lsb;
-    let ends = end(w[0]) | end(w[1]) | end(w[2]);
-    ([rad_s(w[0]), rad_s(w[1]), rad_s(w[2])], ends < 0)
-}
 
 /// Gyro errors, generic over the SPI error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,8 +61,9 @@ impl<SPI: SpiDevice> L3gd20<SPI> {
         self.spi.write(&[reg, v]).map_err(Error::Comm)
     }
 
-    /// The raw 16-bit rate words of x, y, z.
-    pub fn read_raw(&mut self) -> Result<[i16; 3], Error<SPI::Error>> {
+    /// The rate words of x, y, z as the conversion takes them
+    /// ([`gyro_word`](crate::conversion::gyro_word)).
+    pub fn read_words(&mut self) -> Result<[i32; 3], Error<SPI::Error>> {
         let mut b = [0u8; 6];
         self.spi
             .transaction(&mut [
@@ -83,7 +72,7 @@ impl<SPI: SpiDevice> L3gd20<SPI> {
             ])
             .map_err(Error::Comm)?;
         Ok(core::array::from_fn(|i| {
-            i16::from_le_bytes([b[2 * i], b[2 * i + 1]])
+            gyro_word_from_le(b[2 * i], b[2 * i + 1])
         }))
     }
 
@@ -96,8 +85,8 @@ impl<SPI: SpiDevice> L3gd20<SPI> {
 impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
     type Error = Error<SPI::Error>;
 
-    fn read_rate(&mut self) -> Result<([f32; 3], bool), Self::Error> {
-        Ok(rate_from_words(&self.read_raw()?, RAD_S_PER_LSB_2000DPS))
+    fn read_words(&mut self) -> Result<[i32; 3], Self::Error> {
+        L3gd20::read_words(self)
     }
 }
 
@@ -163,28 +152,20 @@ mod tests {
             m.regs[0x28 + 2 * i..0x2A + 2 * i].copy_from_slice(&v.to_le_bytes());
         }
         let mut g = L3gd20::new(m).unwrap();
-        let (w, sat) = g.read_rate().unwrap();
-        assert!(sat);
-        assert!((w[0] - 70f32.to_radians()).abs() < 1e-4, "{w:?}");
-        assert!((w[1] + 140f32.to_radians()).abs() < 1e-4);
+        let words = Gyro::read_words(&mut g).unwrap();
+        assert_eq!(words, raw.map(crate::conversion::gyro_word));
+        // At ±2000 °/s: 70 m°/s per LSB, and a word at full scale is saturated.
+        let k = crate::conversion::Scaling {
+            volts_per_code: 1.0,
+            rad_s_per_lsb: RAD_S_PER_LSB_2000DPS,
+        };
+        let s = k.convert(&[2048; 3], &words, false);
+        assert!(s.saturated);
+        assert!((s.rate_rad_s[0] - 70f32.to_radians()).abs() < 1e-4, "{s:?}");
+        assert!((s.rate_rad_s[1] + 140f32.to_radians()).abs() < 1e-4);
         let m = g.release();
         assert_eq!(m.regs[CTRL1 as usize], 0xFF);
         assert_eq!(m.regs[CTRL4 as usize], 0x20);
-    }
-
-    /// The folded sign-bit check against the plain definition, every word in each slot (the others
-    /// held at 0), and the scale.
-    #[test]
-    fn a_word_at_either_range_end_is_saturated_exactly() {
-        for slot in 0..3 {
-            for v in i16::MIN..=i16::MAX {
-                let mut w = [0i16; 3];
-                w[slot] = v;
-                let (rate, end) = rate_from_words(&w, 1e-3);
-                assert_eq!(end, v == i16::MIN || v == i16::MAX, "{w:?}");
-                assert_eq!(rate[slot], f32::from(v) * 1e-3);
-            }
-        }
     }
 
     #[test]

@@ -8,6 +8,8 @@
 //! - [`protocol`]: frame reception, the request handler ([`protocol::Controller`]) and the link
 //!   service that moves queued frames to the link without blocking.
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
+//! - [`conversion`]: an ADC board's per-sample conversion of the scan's codes and the gyro's words
+//!   (Nucleo board).
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
 //! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
@@ -26,6 +28,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod conversion;
 pub mod die_temperature;
 pub mod gyro;
 pub mod imu;
@@ -51,12 +54,13 @@ pub use storage::{AbStore, CalStore, RamNorFlash, StoreError};
 /// Firmware version reported by `Identify` (major, minor, patch).
 pub const FIRMWARE_VERSION: [u8; 3] = [0, 1, 0];
 
-/// A gyro giving the body rate, rad/s, in body axes.
+/// A gyro giving its rate words in body axes, converted with the accelerometers' codes
+/// ([`conversion::Scaling::convert`]: to rad/s, range ends flagged).
 pub trait Gyro {
     /// Why a read failed.
     type Error;
-    /// The latest rate and whether any axis sat at its range limit.
-    fn read_rate(&mut self) -> Result<([f32; 3], bool), Self::Error>;
+    /// The latest words of x, y, z, each as [`conversion::gyro_word`].
+    fn read_words(&mut self) -> Result<[i32; 3], Self::Error>;
 }
 
 /// A byte link that never blocks: the firmware's view of its UART.

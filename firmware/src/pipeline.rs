@@ -38,7 +38,9 @@ pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;
 /// over seconds, and a refresh (about 150 instructions with 3 divisions) need not run per sample.
 pub const TEMPERATURE_REFRESH_HZ: u32 = 4;
 
-/// One sample as read from the sensors.
+/// One sample as read from the sensors. `repr(C)`: an ADC board's conversion
+/// ([`crate::conversion`]) writes it from an assembly block.
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Sample {
     /// Accelerometer outputs, sensor axes, output unit (V or LSB).
@@ -107,32 +109,6 @@ fn all_finite(r: &[f32; 3], w: &[f32; 3]) -> bool {
         + (w[1] - w[1])
         + (w[2] - w[2]);
     s == 0.0
-}
-
-/// Conversion of the accelerometers' ADC codes to volts (an ADC board's sample; its gyro's words
-/// are converted by the gyro's driver, `gyro::rate_from_words`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scaling {
-    /// Volts per ADC code (V_ref / 4095 for a 12-bit ADC).
-    pub volts_per_code: f32,
-    /// Largest ADC code (a code at 0 or here is saturated).
-    pub adc_max: u16,
-}
-
-impl Scaling {
-    /// The volts of three ADC codes, and whether a code sits at either end of its range.
-    #[inline(always)]
-    pub fn volts(&self, adc: &[u16; 3]) -> ([f32; 3], bool) {
-        // Written out per channel: straight-line code at opt-level "s" (the firmware's).
-        // Each check is a value whose sign bit is set exactly when the code is at a range end, so
-        // the three fold into one OR and one sign test (two integer operations per channel, no
-        // compare-and-select): `v − 1 < 0` is code 0, `adc_max − 1 − v < 0` is a code ≥ adc_max.
-        let top = i32::from(self.adc_max) - 1;
-        let end = |v: u16| (i32::from(v) - 1) | (top - i32::from(v));
-        let volts = |v: u16| f32::from(v) * self.volts_per_code;
-        let ends = end(adc[0]) | end(adc[1]) | end(adc[2]);
-        ([volts(adc[0]), volts(adc[1]), volts(adc[2])], ends < 0)
-    }
 }
 
 /// A change to the pipeline, decided by the request handler in the main loop.
@@ -762,39 +738,6 @@ mod tests {
             panic!()
         };
         assert_eq!(x.rate_rad_s, S.rate_rad_s);
-    }
-
-    #[test]
-    fn scaling_converts_and_flags_range_ends() {
-        let k = Scaling {
-            volts_per_code: 3.3 / 4095.0,
-            adc_max: 4095,
-        };
-        let (v, end) = k.volts(&[2048, 1, 4094]);
-        assert!(!end);
-        assert_eq!(v[0], 2048.0 * (3.3 / 4095.0));
-        for c in [[0, 1, 1], [1, 4095, 1], [1, 1, u16::MAX]] {
-            assert!(k.volts(&c).1, "{c:?}");
-        }
-    }
-
-    /// The folded sign-bit checks against the plain definition, every code of each channel (the
-    /// others held mid-range), for a 12-bit and a 16-bit ADC.
-    #[test]
-    fn saturation_is_exactly_a_code_at_a_range_end() {
-        for adc_max in [4095u16, u16::MAX] {
-            let k = Scaling {
-                volts_per_code: 1e-3,
-                adc_max,
-            };
-            for slot in 0..3 {
-                for v in 0..=u16::MAX {
-                    let mut c = [100; 3];
-                    c[slot] = v;
-                    assert_eq!(k.volts(&c).1, v == 0 || v >= adc_max, "{c:?}");
-                }
-            }
-        }
     }
 
     #[test]

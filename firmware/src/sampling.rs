@@ -103,11 +103,12 @@ impl TemperatureMean {
 /// on-chip temperature sensor.
 pub const ADC_SCAN_LEN: usize = 4;
 
-/// Splits one ADC scan (DMA buffer order, [`ADC_SCAN_LEN`] codes) into the accelerometer codes and
-/// the temperature sensor's code.
+/// Splits one ADC scan (DMA buffer order, [`ADC_SCAN_LEN`] codes, each a word as the DMA reads
+/// ADC_DR: the code in the lower half, zeros above) into the accelerometer codes and the
+/// temperature sensor's code.
 #[inline(always)]
-pub fn split_scan(scan: &[u16; ADC_SCAN_LEN]) -> ([u16; 3], u16) {
-    ([scan[0], scan[1], scan[2]], scan[3])
+pub fn split_scan(scan: &[u32; ADC_SCAN_LEN]) -> ([u32; 3], u16) {
+    ([scan[0], scan[1], scan[2]], scan[3] as u16)
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@ use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
 
 use shared::wire::{DeviceToHost, SampleFlags, StreamKind, StreamRequest, VirtualTable};
 
+use crate::conversion::{gyro_word, Scaling};
 use crate::paper_unit;
 use crate::pipeline::{Pipeline, PipelineCommand};
 use crate::stats::WindowAccumulator;
@@ -268,6 +269,53 @@ pub fn check_window_block() -> Check {
     out
 }
 
+/// The ADC board's conversion through [`Scaling::convert`] against [`Scaling::reference`]: on the
+/// M4F the first is an assembly block, and both must agree bit for bit, the flag included (as 0.0
+/// or 1.0). Codes and gyro words at, next to and away from their range ends, words with low bits
+/// set (exact fixed-point conversion), with and without the watchdog's flag.
+pub fn check_conversion() -> Check {
+    const CODES: [u32; 9] = [0, 1, 2, 2047, 2048, 4094, 4095, 65_535, u32::MAX];
+    const WORDS: [i32; 12] = [
+        gyro_word(i16::MIN),
+        gyro_word(i16::MIN + 1),
+        gyro_word(-1),
+        gyro_word(0),
+        gyro_word(1),
+        gyro_word(i16::MAX - 1),
+        gyro_word(i16::MAX),
+        0x7FFE_FFFF,
+        0x7FFF_0001,
+        i32::MIN + 0xFFFF,
+        i32::MIN + 0x1_0000,
+        0x1234_5678,
+    ];
+    let k = Scaling {
+        volts_per_code: 3.3 / 4095.0,
+        rad_s_per_lsb: 0.070 * core::f32::consts::PI / 180.0,
+    };
+    let flag = |s: &crate::pipeline::Sample| f32::from(u8::from(s.saturated));
+    let mut out = Check::default();
+    // Each code in each ADC slot and each word in each gyro slot, the other slots mid-range.
+    for (ga, word) in (0..3).flat_map(|slot| WORDS.map(|w| (slot, w))) {
+        for (aa, code) in (0..3).flat_map(|slot| CODES.map(|c| (slot, c))) {
+            let mut adc = [1000, 2000, 3000];
+            adc[aa] = code;
+            let mut gyro = [-123, 456, -789].map(gyro_word);
+            gyro[ga] = word;
+            for at_end in [false, true] {
+                let (a, b) = (
+                    k.convert(&adc, &gyro, at_end),
+                    k.reference(&adc, &gyro, at_end),
+                );
+                out.add3(&a.raw, &b.raw.map(f32::to_bits));
+                out.add3(&a.rate_rad_s, &b.rate_rad_s.map(f32::to_bits));
+                out.add(flag(&a), flag(&b).to_bits());
+            }
+        }
+    }
+    out
+}
+
 /// Window statistics of the compensation inputs (repeated [`STATS_REPEAT`] times) against the table.
 pub fn check_window_stats() -> Check {
     let mut acc = WindowAccumulator::<3>::new();
@@ -421,6 +469,8 @@ mod tests {
             assert!(c.passed() && c.values == 72, "{c:?}");
         }
         assert!(check_window_stats().passed());
+        let c = check_conversion();
+        assert!(c.passed() && c.values == 3 * 12 * 3 * 9 * 2 * 7, "{c:?}");
     }
 
     #[test]

@@ -274,6 +274,10 @@ fn first_boot(t: &mut Tally) -> ! {
         "window_block_matches_reference",
         testvectors::check_window_block(),
     );
+    t.check(
+        "adc_board_conversion_matches_reference",
+        testvectors::check_conversion(),
+    );
     let [rate, full] = testvectors::check_gyro_temperature();
     t.check("gyro_correction_matches_pc", rate);
     t.check("compensation_after_temperature_refresh_matches_pc", full);

@@ -43,11 +43,12 @@ mod app {
     use stm32f4xx_hal::timer::CounterHz;
 
     use firmware::board::stm32_common::Store;
-    use firmware::board::stm32f4::{self as board, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
+    use firmware::board::stm32f4::{self as board, AdcWords, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::conversion::Scaling;
     use firmware::gyro::L3gd20;
     use firmware::link::{on_rx_byte, RxQueueLink, RX_QUEUE};
-    use firmware::pipeline::{PipelineCommand, Sample, Scaling};
+    use firmware::pipeline::PipelineCommand;
     use firmware::sampling::{split_scan, TemperatureMean, ADC_SCAN_LEN};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, Gyro, LinkService, Pipeline};
@@ -56,8 +57,8 @@ mod app {
     /// Scans were lost to an ADC overrun: the next sample says so (set by `adc_overrun`).
     static SCAN_GAP: AtomicBool = AtomicBool::new(false);
 
-    type ScanBuf = &'static mut [u16; ADC_SCAN_LEN];
-    type ScanDma = Transfer<Stream0<DMA2>, 0, Adc<ADC1>, PeripheralToMemory, ScanBuf>;
+    type ScanBuf = &'static mut [u32; ADC_SCAN_LEN];
+    type ScanDma = Transfer<Stream0<DMA2>, 0, AdcWords, PeripheralToMemory, ScanBuf>;
     type GyroDev = L3gd20<ExclusiveDevice<Spi<SPI1>, PB6<Output<PushPull>>, NoDelay>>;
     type Link = RxQueueLink<'static, Tx<USART2>>;
 
@@ -83,7 +84,7 @@ mod app {
 
     #[init(local = [
         rx_bytes: Queue<u8, RX_QUEUE> = Queue::new(),
-        scan_buf: [u16; ADC_SCAN_LEN] = [0; ADC_SCAN_LEN],
+        scan_buf: [u32; ADC_SCAN_LEN] = [0; ADC_SCAN_LEN],
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         paint_stack();
@@ -163,8 +164,8 @@ mod app {
             Local {
                 gyro,
                 scaling: Scaling {
-                    volts_per_code: board::VREF_V / 4095.0,
-                    adc_max: 4095,
+                    volts_per_code: board::VREF_V / f32::from(board::ADC_MAX),
+                    rad_s_per_lsb: firmware::gyro::RAD_S_PER_LSB_2000DPS,
                 },
                 temperature: TemperatureMean::new(SAMPLE_RATE_HZ),
                 vtemp_cal: (VtempCal30::get().read(), VtempCal110::get().read()),
@@ -208,12 +209,14 @@ mod app {
         // The temperature sensor needs ≥ 10 µs of sampling: 480 cycles at 22.5 MHz = 21 µs.
         adc.configure_channel(&Temperature, Sequence::Four, SampleTime::Cycles_480);
         adc.enable_temperature_and_vref();
-        // SAFETY: sets only the overrun interrupt enable of ADC1, which the HAL leaves alone.
+        // SAFETY: sets only the overrun interrupt enable and the analog watchdog of ADC1, which
+        // the HAL leaves alone.
         unsafe { (*ADC1::ptr()).cr1().modify(|_, w| w.ovrie().set_bit()) };
+        board::guard_range_ends(unsafe { &*ADC1::ptr() });
         let streams = StreamsTuple::new(dma2, rcc);
         Transfer::init_peripheral_to_memory(
             streams.0,
-            adc,
+            AdcWords(adc),
             buf,
             None,
             DmaConfig::default()
@@ -279,20 +282,14 @@ mod app {
         };
         let l = cx.local;
         let (codes, temp_code) = split_scan(&scan);
-        let (raw, adc_end) = l.scaling.volts(&codes);
-        let mut sample = Sample {
-            raw,
-            rate_rad_s: [0.0; 3],
-            saturated: adc_end,
-        };
-        if let Some(g) = l.gyro.as_mut() {
-            match g.read_rate() {
-                Ok((w, sat)) => {
-                    sample.rate_rad_s = w;
-                    sample.saturated |= sat;
-                }
-                Err(_) => sample.rate_rad_s = [f32::NAN; 3], // flagged, left out of the statistics
-            }
+        let adc_at_end = board::take_watchdog_flag();
+        // No gyro: rates read as 0. A failed read: NaN, flagged and left out of the statistics.
+        let words = l.gyro.as_mut().map_or(Ok([0; 3]), Gyro::read_words);
+        let mut sample = l
+            .scaling
+            .convert(&codes, words.as_ref().unwrap_or(&[0; 3]), adc_at_end);
+        if words.is_err() {
+            sample.rate_rad_s = [f32::NAN; 3];
         }
         let temp_c = firmware::die_temperature::from_code(
             temp_code,

@@ -16,9 +16,11 @@
 //!
 //! Sampling (RTIC 2, see `src/bin/stm32f4.rs` and the README): TIM2's update event (TRGO) triggers
 //! one ADC1 scan — the three accelerometers (56-cycle sample time) and the on-chip temperature sensor
-//! (480 cycles, ≥ 10 µs as the datasheet asks) — which DMA2 stream 0 (channel 0) moves to memory; the
-//! stream's transfer-complete interrupt reads the gyro (7 bytes on SPI1) and runs the pipeline. The
-//! gyro's output rate is 800 Hz: above that, samples repeat its last value.
+//! (480 cycles, ≥ 10 µs as the datasheet asks) — which DMA2 stream 0 (channel 0) moves to memory as
+//! 32-bit words ([`AdcWords`]); the stream's transfer-complete interrupt takes the analog watchdog's
+//! range-end flag ([`take_watchdog_flag`]), reads the gyro (7 bytes on SPI1), converts the sample
+//! (`firmware::conversion`) and runs the pipeline. The gyro's output rate is 800 Hz: above that,
+//! samples repeat its last value.
 //!
 //! ADC clock, from the clock tree: HSE 8 MHz → PLL → SYSCLK 180 MHz; APB2 is limited to 90 MHz, so
 //! PCLK2 = 180 / 2 = 90 MHz ([`PCLK2_HZ`], asked of the HAL and checked at boot); the ADC prescaler
@@ -28,7 +30,12 @@
 
 use shared::wire::Board;
 use shared::OutputUnit;
+use stm32f4xx_hal::adc::Adc;
+use stm32f4xx_hal::dma::traits::{DMASet, PeriAddress};
+use stm32f4xx_hal::dma::{PeripheralToMemory, Stream0};
 use stm32f4xx_hal::flash::LockedFlash;
+use stm32f4xx_hal::pac::adc1::RegisterBlock as AdcRegisters;
+use stm32f4xx_hal::pac::{ADC1, DMA2};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
 use crate::protocol::DeviceInfo;
@@ -62,6 +69,51 @@ pub const STORE_OFFSET: u32 = 0x4_0000;
 pub const SLOT_SIZE: u32 = 0x2_0000;
 /// ADC reference voltage (Nucleo: VDDA = 3.3 V).
 pub const VREF_V: f32 = 3.3;
+
+/// Largest code of the 12-bit ADC.
+pub const ADC_MAX: u16 = 4095;
+
+/// ADC1 as the scan's DMA source of 32-bit words: the stream reads ADC_DR as words (PSIZE = MSIZE
+/// = 32 bits), whose upper half is zero in independent mode, so the conversion loads the codes
+/// with one instruction (`firmware::conversion`). The HAL's own `Adc` transfers half-words.
+pub struct AdcWords(pub Adc<ADC1>);
+
+// SAFETY: the address is ADC1's data register, read by the stream as the 32-bit register it is.
+unsafe impl PeriAddress for AdcWords {
+    type MemSize = u32;
+    fn address(&self) -> u32 {
+        self.0.data_register_address()
+    }
+}
+
+// SAFETY: DMA2 stream 0, channel 0 is ADC1's request (RM0390 Table 29), as for the HAL's `Adc`.
+unsafe impl DMASet<Stream0<DMA2>, 0, PeripheralToMemory> for AdcWords {}
+
+/// Guards every regular channel of ADC1 with its analog watchdog at the thresholds that flag
+/// exactly a code at 0 or at [`ADC_MAX`] (`firmware::conversion::watchdog_thresholds`); the flag is
+/// read and cleared once per scan by [`take_watchdog_flag`]. No interrupt: the scan's task polls.
+pub fn guard_range_ends(adc: &AdcRegisters) {
+    let (low, high) = crate::conversion::watchdog_thresholds(ADC_MAX);
+    adc.ltr().write(|w| w.lt().set(low));
+    adc.htr().write(|w| w.ht().set(high));
+    adc.cr1()
+        .modify(|_, w| w.awdsgl().clear_bit().awden().set_bit().awdie().clear_bit());
+}
+
+/// Whether ADC1's watchdog saw a code at either end since the last call, clearing its flag. One
+/// load per scan; the store only when it was set.
+#[inline(always)]
+pub fn take_watchdog_flag() -> bool {
+    // SAFETY: reads ADC1's status register and clears only its watchdog bit (its bits are cleared
+    // by writing 0; a 1 leaves them as they are). The HAL never touches that bit.
+    let adc = unsafe { &*ADC1::ptr() };
+    let set = adc.sr().read().bits() & crate::conversion::ADC_SR_AWD != 0;
+    if set {
+        adc.sr()
+            .write(|w| unsafe { w.bits(!crate::conversion::ADC_SR_AWD) });
+    }
+    set
+}
 
 /// What `Identify` reports.
 pub fn info() -> DeviceInfo {
