@@ -64,9 +64,9 @@ pub struct Scaling {
 const Q16_LSB: f32 = 1.0 / 65536.0;
 
 impl Scaling {
-    /// `out` from the scan's codes `adc`, the gyro's words `gyro` ([`gyro_word`]) and whether the
-    /// ADC's watchdog saw a code at either end of its range in this scan: outputs in volts, rates
-    /// in rad/s, saturated when a code or a gyro word sat at a range end.
+    /// The sample of the scan's codes `adc`, the gyro's words `gyro` ([`gyro_word`]) and whether
+    /// the ADC's watchdog saw a code at either end of its range in this scan: outputs in volts,
+    /// rates in rad/s, saturated when a code or a gyro word sat at a range end.
     #[inline(always)]
     pub fn convert(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
         let mut out = MaybeUninit::<Sample>::uninit();

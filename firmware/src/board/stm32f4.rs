@@ -86,7 +86,8 @@ unsafe impl PeriAddress for AdcWords {
     }
 }
 
-// SAFETY: DMA2 stream 0, channel 0 is ADC1's request (RM0390 Table 29), as for the HAL's `Adc`.
+// SAFETY: DMA2 stream 0, channel 0 is ADC1's request (RM0390, DMA2 request mapping), as for the
+// HAL's `Adc`.
 unsafe impl DMASet<Stream0<DMA2>, 0, PeripheralToMemory> for AdcWords {}
 
 /// Guards every regular channel of ADC1 with its analog watchdog at the thresholds that flag
