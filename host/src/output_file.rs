@@ -135,6 +135,26 @@ pub(crate) fn write_atomic(
     f.commit()
 }
 
+/// Replaces `target` whole or not at all, for a writer that takes a path (a plotting backend):
+/// `write` writes a temporary file beside it whose name ends as the target's does (the backend
+/// tells the format by the extension), renamed over `target` when complete and removed
+/// otherwise. `io` maps a failed rename to the writer's error.
+pub(crate) fn replace_through_path<E>(
+    target: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+    io: impl FnOnce(std::io::Error) -> E,
+) -> Result<(), E> {
+    let name = target
+        .file_name()
+        .map_or_else(Default::default, |n| n.to_string_lossy());
+    let temp = target.with_file_name(format!(".{}.partial.{name}", std::process::id()));
+    let done = write(&temp).and_then(|()| std::fs::rename(&temp, target).map_err(io));
+    if done.is_err() {
+        let _ = std::fs::remove_file(&temp);
+    }
+    done
+}
+
 /// A result directory being built in a hidden directory beside its target; it appears at the
 /// target, whole, only on [`OutputDir::commit`] (see the module documentation). A drop before that
 /// removes what was built.
@@ -281,6 +301,38 @@ impl Drop for OutputDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A writer that fails halfway leaves the target as it was; one that finishes replaces it; and
+    /// neither leaves its temporary file. The temporary's name ends as the target's.
+    #[test]
+    fn a_path_writer_replaces_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("fig.png");
+        std::fs::write(&target, b"old").unwrap();
+        let r: Result<(), String> = replace_through_path(
+            &target,
+            |temp| {
+                assert!(
+                    temp.to_string_lossy().ends_with(".png"),
+                    "{}",
+                    temp.display()
+                );
+                std::fs::write(temp, b"half").unwrap();
+                Err("the drawing failed".into())
+            },
+            |e| e.to_string(),
+        );
+        assert_eq!(r.unwrap_err(), "the drawing failed");
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        let done: Result<(), String> = replace_through_path(
+            &target,
+            |temp| std::fs::write(temp, b"new").map_err(|e| e.to_string()),
+            |e| e.to_string(),
+        );
+        done.unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
 
     #[test]
     fn never_overwrites_without_force_and_leaves_no_temporary() {

@@ -167,12 +167,7 @@ pub(crate) fn render_with(
     let mut out = RenderOutcome::default();
     if formats.svg {
         let path = dir.join(format!("{}.svg", fig.stem));
-        draw_to_file(
-            fig,
-            SVGBackend::new(&path, fig.size).into_drawing_area(),
-            &path,
-            text,
-        )?;
+        draw_in_place(fig, &path, text, FileKind::Svg)?;
         out.files.push(path);
         if !text {
             out.warnings.push(format!(
@@ -184,12 +179,7 @@ pub(crate) fn render_with(
     if formats.png {
         let path = dir.join(format!("{}.png", fig.stem));
         if text {
-            draw_to_file(
-                fig,
-                BitMapBackend::new(&path, fig.size).into_drawing_area(),
-                &path,
-                text,
-            )?;
+            draw_in_place(fig, &path, text, FileKind::Png)?;
             out.files.push(path);
         } else {
             out.warnings.push(format!(
@@ -199,6 +189,39 @@ pub(crate) fn render_with(
         }
     }
     Ok(out)
+}
+
+/// A figure file's format.
+#[derive(Clone, Copy)]
+enum FileKind {
+    Svg,
+    Png,
+}
+
+/// Draws `fig` into `path` whole or not at all (`output_file::replace_through_path`): a figure is
+/// regenerated in place, like its report.
+fn draw_in_place(fig: &Figure, path: &Path, text: bool, kind: FileKind) -> Result<(), FigureError> {
+    crate::output_file::replace_through_path(
+        path,
+        |temp| match kind {
+            FileKind::Svg => draw_to_file(
+                fig,
+                SVGBackend::new(temp, fig.size).into_drawing_area(),
+                path,
+                text,
+            ),
+            FileKind::Png => draw_to_file(
+                fig,
+                BitMapBackend::new(temp, fig.size).into_drawing_area(),
+                path,
+                text,
+            ),
+        },
+        |e| FigureError {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        },
+    )
 }
 
 /// Draws `fig` on a backend's root area and writes it out (the backend is dropped, closing the file).
@@ -632,6 +655,32 @@ mod tests {
                 },
             ],
         }
+    }
+
+    /// A figure appears whole or not at all: drawn again over itself, then onto a name that cannot
+    /// be replaced (a directory), it leaves no temporary file and the directory as it was.
+    #[test]
+    fn figures_are_replaced_whole_and_a_failed_write_leaves_nothing_behind() {
+        let dir = tempfile::tempdir().unwrap();
+        let fig = figure();
+        let names = |d: &Path| {
+            let mut n: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            n.sort();
+            n
+        };
+        for _ in 0..2 {
+            render(&fig, dir.path(), Formats::default()).unwrap();
+            assert_eq!(names(dir.path()), ["t.png", "t.svg"]);
+        }
+        let blocked = tempfile::tempdir().unwrap();
+        std::fs::create_dir(blocked.path().join("t.svg")).unwrap();
+        let e = render(&fig, blocked.path(), Formats::default()).unwrap_err();
+        assert!(e.to_string().contains("t.svg"), "{e}");
+        assert_eq!(names(blocked.path()), ["t.svg"]);
+        assert!(blocked.path().join("t.svg").is_dir());
     }
 
     #[test]
