@@ -21,6 +21,7 @@
 //! QEMU test checks the block against bit for bit. Both make one rounding per value, in the
 //! multiply: every conversion before it is exact.
 
+#[cfg(target_arch = "arm")]
 use core::mem::MaybeUninit;
 
 use crate::pipeline::Sample;
@@ -69,13 +70,11 @@ impl Scaling {
     /// rates in rad/s, saturated when a code or a gyro word sat at a range end.
     #[inline(always)]
     pub fn convert(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
-        let mut out = MaybeUninit::<Sample>::uninit();
         #[cfg(target_arch = "arm")]
-        self.convert_m4f(adc, gyro, adc_at_end, out.as_mut_ptr());
+        let sample = self.convert_m4f(adc, gyro, adc_at_end);
         #[cfg(not(target_arch = "arm"))]
-        self.convert_reference(adc, gyro, adc_at_end, out.as_mut_ptr());
-        // SAFETY: both forms write every field of `out` (the padding after the flag is never read).
-        unsafe { out.assume_init() }
+        let sample = self.reference(adc, gyro, adc_at_end);
+        sample
     }
 
     /// The definition of [`Scaling::convert`], in plain Rust: the PC's form, and the reference the
@@ -92,19 +91,14 @@ impl Scaling {
         }
     }
 
-    #[cfg(not(target_arch = "arm"))]
-    #[inline(always)]
-    fn convert_reference(&self, adc: &[u32; 3], gyro: &[i32; 3], at_end: bool, out: *mut Sample) {
-        // SAFETY: `out` points to a sample-sized, aligned place (`convert`'s).
-        unsafe { out.write(self.reference(adc, gyro, at_end)) };
-    }
-
     /// [`Scaling::convert`] as one assembly block: the three loads, six conversions and six
     /// multiplies of the FPU, one store of the six results; the gyro's range ends as the sticky Q
     /// flag of three saturating adds and subtracts, folded with the ADC's flag into the sample's.
     #[cfg(target_arch = "arm")]
     #[inline(always)]
-    fn convert_m4f(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool, out: *mut Sample) {
+    fn convert_m4f(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
+        let mut sample = MaybeUninit::<Sample>::uninit();
+        let out = sample.as_mut_ptr();
         // SAFETY: reads the three words of `adc` and of `gyro` and the two `f32` of `self`
         // (`repr(C)`), writes `out`'s six `f32` and its flag at the offsets the assertions below
         // `Sample` fix; all 4-byte aligned. Touches no stack. `msr` clears N, Z, C, V and Q (the
@@ -153,6 +147,8 @@ impl Scaling {
                 options(nostack),
             );
         }
+        // SAFETY: the block wrote every field (the padding after the flag is never read).
+        unsafe { sample.assume_init() }
     }
 }
 

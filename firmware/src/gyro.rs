@@ -61,21 +61,6 @@ impl<SPI: SpiDevice> L3gd20<SPI> {
         self.spi.write(&[reg, v]).map_err(Error::Comm)
     }
 
-    /// The rate words of x, y, z as the conversion takes them
-    /// ([`gyro_word`](crate::conversion::gyro_word)).
-    pub fn read_words(&mut self) -> Result<[i32; 3], Error<SPI::Error>> {
-        let mut b = [0u8; 6];
-        self.spi
-            .transaction(&mut [
-                Operation::Write(&[OUT_X_L | READ | AUTO_INC]),
-                Operation::Read(&mut b),
-            ])
-            .map_err(Error::Comm)?;
-        Ok(core::array::from_fn(|i| {
-            gyro_word_from_le(b[2 * i], b[2 * i + 1])
-        }))
-    }
-
     /// Gives the SPI device back.
     pub fn release(self) -> SPI {
         self.spi
@@ -86,7 +71,16 @@ impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
     type Error = Error<SPI::Error>;
 
     fn read_words(&mut self) -> Result<[i32; 3], Self::Error> {
-        L3gd20::read_words(self)
+        let mut b = [0u8; 6];
+        self.spi
+            .transaction(&mut [
+                Operation::Write(&[OUT_X_L | READ | AUTO_INC]),
+                Operation::Read(&mut b),
+            ])
+            .map_err(Error::Comm)?;
+        Ok(core::array::from_fn(|i| {
+            gyro_word_from_le(b[2 * i], b[2 * i + 1])
+        }))
     }
 }
 

@@ -60,10 +60,7 @@ impl OutputFile {
         if !force && target.exists() {
             return Err(OutputFileError::Exists(target.to_path_buf()));
         }
-        let name = target
-            .file_name()
-            .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-        let temp = target.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+        let temp = partial_beside(target);
         let file = File::create(&temp).map_err(|e| OutputFileError::Io(temp.clone(), e))?;
         Ok(OutputFile {
             target: target.to_path_buf(),
@@ -135,6 +132,15 @@ pub(crate) fn write_atomic(
     f.commit()
 }
 
+/// The temporary name beside `target` that a result is built under: `.NAME.PID.partial`, hidden,
+/// in the same directory (so the final rename stays on one file system), and this process's own.
+fn partial_beside(target: &Path) -> PathBuf {
+    let name = target
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    target.with_file_name(format!(".{name}.{}.partial", std::process::id()))
+}
+
 /// Replaces `target` whole or not at all, for a writer that takes a path (a plotting backend):
 /// `write` writes a temporary file beside it whose name ends as the target's does (the backend
 /// tells the format by the extension), renamed over `target` when complete and removed
@@ -144,10 +150,12 @@ pub(crate) fn replace_through_path<E>(
     write: impl FnOnce(&Path) -> Result<(), E>,
     io: impl FnOnce(std::io::Error) -> E,
 ) -> Result<(), E> {
-    let name = target
-        .file_name()
-        .map_or_else(Default::default, |n| n.to_string_lossy());
-    let temp = target.with_file_name(format!(".{}.partial.{name}", std::process::id()));
+    let mut temp = partial_beside(target).into_os_string();
+    if let Some(ext) = target.extension() {
+        temp.push(".");
+        temp.push(ext);
+    }
+    let temp = PathBuf::from(temp);
     let done = write(&temp).and_then(|()| std::fs::rename(&temp, target).map_err(io));
     if done.is_err() {
         let _ = std::fs::remove_file(&temp);
@@ -234,10 +242,7 @@ impl OutputDir {
     ) -> Result<OutputDir, OutputFileError> {
         check_replaceable(target, force, marker)?;
         let io = |p: &Path, e| OutputFileError::Io(p.to_path_buf(), e);
-        let name = target
-            .file_name()
-            .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-        let temp = target.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+        let temp = partial_beside(target);
         if let Some(parent) = temp.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
         }

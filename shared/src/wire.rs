@@ -421,6 +421,9 @@ pub fn blob_chunks(blob: &[u8]) -> impl Iterator<Item = BlobChunk> + '_ {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
     /// An identity of version 2 (no output unit) and one of this version: the version is read from
     /// either; a window frame is not an identity.
     #[test]
@@ -455,9 +458,6 @@ mod tests {
         let frame = encode_frame(&ack, &mut buf).unwrap();
         assert_eq!(identity_version_of(frame), None);
     }
-
-    use super::*;
-    use proptest::prelude::*;
 
     fn sample_messages() -> std::vec::Vec<HostToDevice> {
         std::vec![

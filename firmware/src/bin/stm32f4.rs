@@ -209,10 +209,9 @@ mod app {
         // The temperature sensor needs ≥ 10 µs of sampling: 480 cycles at 22.5 MHz = 21 µs.
         adc.configure_channel(&Temperature, Sequence::Four, SampleTime::Cycles_480);
         adc.enable_temperature_and_vref();
-        // SAFETY: sets only the overrun interrupt enable and the analog watchdog of ADC1, which
-        // the HAL leaves alone.
+        // SAFETY: sets only the overrun interrupt enable of ADC1, which the HAL leaves alone.
         unsafe { (*ADC1::ptr()).cr1().modify(|_, w| w.ovrie().set_bit()) };
-        board::guard_range_ends(unsafe { &*ADC1::ptr() });
+        board::guard_range_ends();
         let streams = StreamsTuple::new(dma2, rcc);
         Transfer::init_peripheral_to_memory(
             streams.0,

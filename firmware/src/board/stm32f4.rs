@@ -34,7 +34,6 @@ use stm32f4xx_hal::adc::Adc;
 use stm32f4xx_hal::dma::traits::{DMASet, PeriAddress};
 use stm32f4xx_hal::dma::{PeripheralToMemory, Stream0};
 use stm32f4xx_hal::flash::LockedFlash;
-use stm32f4xx_hal::pac::adc1::RegisterBlock as AdcRegisters;
 use stm32f4xx_hal::pac::{ADC1, DMA2};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
@@ -93,7 +92,10 @@ unsafe impl DMASet<Stream0<DMA2>, 0, PeripheralToMemory> for AdcWords {}
 /// Guards every regular channel of ADC1 with its analog watchdog at the thresholds that flag
 /// exactly a code at 0 or at [`ADC_MAX`] (`firmware::conversion::watchdog_thresholds`); the flag is
 /// read and cleared once per scan by [`take_watchdog_flag`]. No interrupt: the scan's task polls.
-pub fn guard_range_ends(adc: &AdcRegisters) {
+/// Called once while the scan is set up.
+pub fn guard_range_ends() {
+    // SAFETY: only ADC1's watchdog thresholds and enables, which the HAL never touches.
+    let adc = unsafe { &*ADC1::ptr() };
     let (low, high) = crate::conversion::watchdog_thresholds(ADC_MAX);
     adc.ltr().write(|w| w.lt().set(low));
     adc.htr().write(|w| w.ht().set(high));

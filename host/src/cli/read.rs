@@ -38,8 +38,8 @@ pub fn run(a: &ReadArgs) -> Result<(), CliError> {
     let src = PathBuf::from(format!("<device {}>", identity.unit_id));
     let blob = blob::decode(&bytes).map_err(|e| CliError::Blob(src, e))?;
     let text = UnitFile::from_calibration(&blob.calibration, Some(blob.unit_id), None).to_toml();
-    match (file, &a.out) {
-        (Some(mut f), Some(p)) => {
+    match file.zip(a.out.as_ref()) {
+        Some((mut f, p)) => {
             f.write_all(text.as_bytes()).map_err(|e| f.io_error(e))?;
             f.commit()?;
             crate::outln!(
@@ -48,7 +48,7 @@ pub fn run(a: &ReadArgs) -> Result<(), CliError> {
                 p.display()
             )?;
         }
-        _ => crate::out!("{text}")?,
+        None => crate::out!("{text}")?,
     }
     Ok(())
 }

@@ -210,20 +210,21 @@ impl<T: Transport> DeviceClient<T> {
         let mut last = None;
         self.foreign_version = None;
         for _ in 0..3 {
-            match self.request(&HostToDevice::Identify, "an identity", |m| match m {
+            let answer = self.request(&HostToDevice::Identify, "an identity", |m| match m {
                 DeviceToHost::Identity(id) => Some(*id),
                 _ => None,
-            }) {
+            });
+            // An identity that did not decode, of another version: that version is the answer.
+            if let (Err(_), Some(device)) = (&answer, self.foreign_version) {
+                return Err(LinkError::ProtocolVersion { device });
+            }
+            match answer {
                 Ok(id) if id.protocol_version != PROTOCOL_VERSION => {
                     return Err(LinkError::ProtocolVersion {
                         device: id.protocol_version,
                     })
                 }
                 Ok(id) => return Ok(id),
-                Err(_) if self.foreign_version.is_some() => {
-                    let device = self.foreign_version.unwrap_or_default();
-                    return Err(LinkError::ProtocolVersion { device });
-                }
                 Err(e @ LinkError::Timeout { .. }) => last = Some(e),
                 Err(LinkError::Unexpected { .. }) => continue,
                 Err(e) => return Err(e),

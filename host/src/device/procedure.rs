@@ -193,25 +193,7 @@ pub fn run<T: Transport>(
     let window_rate = fs / f64::from(window);
     let drive = has_virtual_table(&identity);
 
-    let mut plan = opts.plan.clone();
-    if plan.output_unit != identity.output_unit {
-        // The device's raw outputs are what is recorded and calibrated: a plan written for another
-        // board (the built-in plans are in volts) must not label counts as volts.
-        op.say(&format!(
-            "the device's outputs are in {}: the plan's {} is replaced",
-            identity.output_unit.symbol(),
-            plan.output_unit.symbol()
-        ));
-        plan.output_unit = identity.output_unit;
-    }
-    plan.sample_rate_hz = window_rate;
-    plan.unit_id = Some(identity.unit_id.to_string());
-    if drive && plan.attitude_sigma_deg.is_none() {
-        // A virtual table puts the unit exactly where the plan says: its fixture is exact
-        // (docs/model.md §7), unless the plan says otherwise.
-        plan.attitude_sigma_deg = Some(0.0);
-        plan.format_version = plan.format_version.max(2);
-    }
+    let plan = device_plan(&opts.plan, &identity, window_rate, drive, op);
     let recording_dir = opts.out_dir.join("recording");
     let Recorded { warnings, dropped } = record_plan(
         client,
@@ -266,6 +248,35 @@ pub fn run<T: Transport>(
         dropped_frames: dropped,
         passed,
     })
+}
+
+/// The plan as this device records it: in the device's output unit (its raw outputs are what is
+/// recorded and calibrated, so a plan written for another board, as the built-in plans in volts
+/// are for counts, is corrected and the operator told), at its window rate, bound to its unit, and
+/// with an exact fixture on a virtual table (docs/model.md §7) unless the plan says otherwise.
+fn device_plan(
+    plan: &Plan,
+    identity: &Identity,
+    window_rate: f64,
+    drive: bool,
+    op: &mut dyn Operator,
+) -> Plan {
+    let mut plan = plan.clone();
+    if plan.output_unit != identity.output_unit {
+        op.say(&format!(
+            "the device's outputs are in {}: the plan's {} is replaced",
+            identity.output_unit.symbol(),
+            plan.output_unit.symbol()
+        ));
+        plan.output_unit = identity.output_unit;
+    }
+    plan.sample_rate_hz = window_rate;
+    plan.unit_id = Some(identity.unit_id.to_string());
+    if drive && plan.attitude_sigma_deg.is_none() {
+        plan.attitude_sigma_deg = Some(0.0);
+        plan.format_version = plan.format_version.max(2);
+    }
+    plan
 }
 
 /// What recording the plan leaves besides the files: the live checks' warnings and the most frames
