@@ -356,10 +356,10 @@ mod tests {
 
     #[test]
     fn endless_and_non_text_files_are_refused_quickly() {
-        let started = std::time::Instant::now();
+        // /dev/zero never ends: that this returns at all is the bound (a time limit here would
+        // only measure how loaded the machine is).
         let e = read_text_bounded(Path::new("/dev/zero")).unwrap_err();
         assert!(e.to_string().contains("longer than"), "{e}");
-        assert!(started.elapsed().as_secs_f64() < 1.0);
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("t");
         std::fs::write(&p, b"a = 1\nb = \"\xff\"\n").unwrap();

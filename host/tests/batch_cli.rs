@@ -122,6 +122,17 @@ fn out_is_refused_without_force_and_replaced_whole_with_it() {
 fn an_interrupted_run_leaves_nothing_a_later_run_refuses() {
     let dir = tempfile::tempdir().unwrap();
     let input = lot(dir.path(), 4);
+    // The second unit's samples are a named pipe that nobody writes: its read blocks, so the run is
+    // certainly still going when the first unit is written and the kill comes (a lot of plain files
+    // could finish between two looks under load, and the test raced it).
+    let blocked = input.join("unit1").join("samples.csv");
+    let kept = dir.path().join("unit1-samples.csv");
+    std::fs::rename(&blocked, &kept).unwrap();
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&blocked)
+        .status()
+        .unwrap()
+        .success());
     let res = dir.path().join("res");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_host"))
         .args(["-q", "batch", "--jobs", "1", "--input"])
@@ -158,6 +169,8 @@ fn an_interrupted_run_leaves_nothing_a_later_run_refuses() {
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!res.exists(), "a half-written result at --out");
+    std::fs::remove_file(&blocked).unwrap();
+    std::fs::rename(&kept, &blocked).unwrap();
     let (ok, stdout, stderr) = host(&[
         "batch",
         "--input",

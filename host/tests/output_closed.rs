@@ -192,18 +192,32 @@ impl Fixture {
     }
 }
 
-/// Runs `host ARGS` with stdout on /dev/full (`full`) or into a pipe closed before the child writes.
+/// Runs `host ARGS` with stdout on /dev/full (`full`) or on a connection whose reader is gone.
+///
+/// The reader is closed before the child starts, not after: closing it after the spawn raced the
+/// child, and a command whose few lines reached the pipe's buffer first exited 0 (correctly: nothing
+/// it wrote was lost yet). A stream socket pair stands for the pipe (std's `io::pipe` is newer than
+/// the workspace's `rust-version`): a write whose peer is closed fails with `EPIPE`, as on a pipe.
 fn run(args: &[String], full: bool) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_host"));
     cmd.args(args).stderr(Stdio::piped());
     if full {
         cmd.stdout(std::fs::File::create("/dev/full").unwrap());
-        cmd.output().unwrap()
     } else {
-        let mut child = cmd.stdout(Stdio::piped()).spawn().unwrap();
-        drop(child.stdout.take());
-        child.wait_with_output().unwrap()
+        let (writer, reader) = std::os::unix::net::UnixStream::pair().unwrap();
+        drop(reader);
+        cmd.stdout(std::os::fd::OwnedFd::from(writer));
     }
+    cmd.output().unwrap()
+}
+
+/// How many times the cases run (`OUTPUT_CLOSED_ROUNDS`, default 1): the fixture is made once, so a
+/// search for a race (hundreds of rounds) costs only the commands.
+fn rounds() -> usize {
+    std::env::var("OUTPUT_CLOSED_ROUNDS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(1)
 }
 
 #[test]
@@ -218,7 +232,8 @@ fn every_subcommand_fails_cleanly_on_a_closed_or_full_stdout() {
     };
     let mut problems = Vec::new();
     let mut runs = 0;
-    for (k, full) in [true, false].into_iter().enumerate() {
+    let runs_of_each = (0..rounds()).flat_map(|_| [true, false]);
+    for (k, full) in runs_of_each.enumerate() {
         let cases = fixture.cases(k);
         // Every subcommand has a case: a new one must be added here.
         for n in &names {

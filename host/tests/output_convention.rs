@@ -280,7 +280,12 @@ fn plan_export_compare_noise_apply_follow_the_convention() {
 }
 
 /// `monitor --port sim` runs the simulated device at its real rate: 5 lines of 100 samples at
-/// 1 kHz take about half a second, and the output is those lines and no more.
+/// 1 kHz take at least half a second, and the output is those lines and no more.
+///
+/// Only the bounds a loaded machine cannot cross are checked: a paced run cannot end before its
+/// virtual time has passed, and `--fast` over 200 s of virtual time must end well before real time
+/// would (it takes about a second; a test machine busy enough to make it take 200 s would fail every
+/// other test too). An upper bound near the paced run's half second raced the machine's load.
 #[test]
 fn monitor_sim_is_paced_and_bounded() {
     let started = Instant::now();
@@ -292,13 +297,26 @@ fn monitor_sim_is_paced_and_bounded() {
     // The last line's device time stamp: its window starts at 0.4 s of virtual time.
     let t_s: f64 = lines[5].split_whitespace().next().unwrap().parse().unwrap();
     assert!((0.39..0.41).contains(&t_s), "{t_s}");
-    // Wall time ≈ virtual time (0.5 s), plus the process's start.
-    assert!((0.45..1.5).contains(&wall_s), "{wall_s} s");
+    // Wall time ≥ virtual time (0.5 s, less the first window's set-up).
+    assert!(wall_s >= 0.45, "{wall_s} s");
     // --fast needs --count (bounded), and is then quicker than real time.
     assert_eq!(run(&["monitor", "--port", "sim", "--fast"]).0, 2);
     let started = Instant::now();
-    let (code, stdout, _) = run(&["monitor", "--port", "sim", "--fast", "--count", "50"]);
+    let (code, stdout, _) = run(&["monitor", "--port", "sim", "--fast", "--count", "2000"]);
+    let wall_s = started.elapsed().as_secs_f64();
     assert_eq!(code, 0);
-    assert_eq!(stdout.lines().count(), 51);
-    assert!(started.elapsed().as_secs_f64() < 5.0);
+    assert_eq!(stdout.lines().count(), 2001);
+    let last_t_s: f64 = stdout
+        .lines()
+        .last()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        wall_s < last_t_s,
+        "{wall_s} s of wall time for {last_t_s} s of device time"
+    );
 }

@@ -36,6 +36,45 @@ pub fn hand_segment_args<'a>(csv: &'a str, out: &'a str) -> Vec<&'a str> {
     ]
 }
 
+/// Runs `host ARGS` unless it is still running after `limit`, when it is killed and `None` returned.
+///
+/// For the inputs that are endless (`/dev/zero`) or huge: a reader without a bound never ends on
+/// them, and this tells that apart from one that refuses them however loaded the machine is; the
+/// limit is a guard against a hang, not a measure of speed.
+#[allow(dead_code)]
+pub fn host_within(args: &[&str], limit: std::time::Duration) -> Option<(bool, String, String)> {
+    use std::io::Read;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_host"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the host binary runs");
+    let drain = |mut r: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            let _ = r.read_to_string(&mut text);
+            text
+        })
+    };
+    let stdout = drain(Box::new(child.stdout.take().unwrap()));
+    let stderr = drain(Box::new(child.stderr.take().unwrap()));
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break Some(status);
+        }
+        if started.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    let (stdout, stderr) = (stdout.join().unwrap(), stderr.join().unwrap());
+    status.map(|s| (s.success(), stdout, stderr))
+}
+
 /// Runs `host ARGS` in the current directory.
 #[allow(dead_code)] // not every test file uses both
 pub fn host(args: &[&str]) -> (bool, String, String) {
