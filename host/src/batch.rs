@@ -12,9 +12,10 @@
 //! the degree the data chose) is not screened unless the parameter has no 1σ in any unit (χ²/dof),
 //! and parameters with no spread and no 1σ are skipped.
 
-use crate::calibration_files::{now_unix_s, write_calibration_files};
-use crate::estimate::{calibrate_session_stats, median, EstimateOptions};
-use crate::session::{read_session, ReadOptions, PLAN_FILE};
+use crate::app::{self, CalibrateOptions, CalibrationDocument};
+use crate::calibration_files::now_unix_s;
+use crate::estimate::{median, EstimateOptions};
+use crate::session::{ReadOptions, PLAN_FILE};
 use crate::summary::{all_parameter_keys, CalibrationSummary, Limits};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -49,8 +50,9 @@ pub struct UnitResult {
     pub session: String,
     /// Rows read.
     pub rows: u64,
-    /// The calibration's summary; `None` when it failed (see `error`).
-    pub summary: Option<CalibrationSummary>,
+    /// The calibration's result, as `host calibrate --input --json` gives it; `None` when it
+    /// failed (see `error`).
+    pub summary: Option<CalibrationDocument>,
     /// Why the unit could not be calibrated.
     pub error: Option<String>,
     /// Parameters on which the unit is an outlier of the lot, with their robust z-score.
@@ -63,13 +65,18 @@ pub struct UnitResult {
 }
 
 impl UnitResult {
+    /// The calibration's summary (parameters, 1σ, checks), when the unit calibrated.
+    pub fn calibration(&self) -> Option<&CalibrationSummary> {
+        self.summary.as_ref().map(|d| &d.summary)
+    }
+
     /// Why the unit did not pass, every reason in one line (empty when it passed).
     pub(crate) fn why_failed(&self) -> String {
         let mut why = Vec::new();
         if let Some(e) = &self.error {
             why.push(e.clone());
         }
-        if let Some(s) = self.summary.as_ref().filter(|s| !s.passed) {
+        if let Some(s) = self.calibration().filter(|s| !s.passed) {
             why.push(s.failures());
         }
         if !self.outliers.is_empty() {
@@ -84,8 +91,7 @@ impl UnitResult {
             why.push(format!(
                 "unit id {} is also the unit of {}: each unit is calibrated once per lot; check the \
                  sessions' plan.toml unit_id",
-                self.summary
-                    .as_ref()
+                self.calibration()
                     .and_then(|s| s.unit_id.as_deref())
                     .unwrap_or("?"),
                 self.same_unit_id_as.join(", ")
@@ -165,29 +171,21 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
         passed: false,
     };
     let out_dir = out.join(&session);
-    let result = (|| -> Result<CalibrationSummary, String> {
-        let s = read_session(dir, &ReadOptions { quiet: true }).map_err(|e| e.to_string())?;
-        r.rows = s.report.rows;
-        let outcome = calibrate_session_stats(&s.plan, &s.stats, &opts.estimate)
-            .map_err(|e| e.to_string())?;
-        let unit = s.plan.unit_id.as_deref().and_then(UnitId::parse_hex);
-        write_calibration_files(
-            &out_dir,
-            &outcome,
-            unit.unwrap_or_default(),
-            now_unix_s(),
-            false,
-        )
-        .map_err(|e| e.to_string())?;
-        Ok(CalibrationSummary::new(
-            &outcome,
-            s.plan.unit_id.clone(),
-            &opts.limits,
-        ))
-    })();
-    match result {
-        Ok(s) => r.summary = Some(s),
-        Err(e) => r.error = Some(e),
+    let options = CalibrateOptions {
+        estimate: opts.estimate.clone(),
+        limits: opts.limits,
+    };
+    // The one calibrate use case, as `host calibrate --input`; the unit's error is kept as its
+    // message in the lot's summary (a row of summary.csv and summary.json).
+    match app::calibrate_session_dir(dir, &options, &ReadOptions { quiet: true }) {
+        Err(e) => r.error = Some(e.to_string()),
+        Ok((s, mut calibrated)) => {
+            r.rows = s.report.rows;
+            match app::write_result(&out_dir, &mut calibrated, now_unix_s(), false) {
+                Ok(_) => r.summary = Some(calibrated.document),
+                Err(e) => r.error = Some(e.to_string()),
+            }
+        }
     }
     r
 }
@@ -196,7 +194,7 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
 /// session claims too, and sets `passed`.
 pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     let mut names = all_parameter_keys();
-    for p in units.iter().filter_map(|u| u.summary.as_ref()) {
+    for p in units.iter().filter_map(UnitResult::calibration) {
         for q in &p.parameters {
             if !names.contains(&q.name) {
                 names.push(q.name.clone());
@@ -206,7 +204,7 @@ pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     // `None`: χ²/dof (no 1σ of its own).
     for name in names.iter().map(Some).chain([None]) {
         let value = |u: &UnitResult| -> Option<(f64, Option<f64>)> {
-            let s = u.summary.as_ref()?;
+            let s = u.calibration()?;
             let (v, sigma) = match name {
                 None => (s.chi2_per_dof, None),
                 Some(n) => {
@@ -234,7 +232,7 @@ pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     }
     flag_same_unit_ids(units);
     for u in units.iter_mut() {
-        u.passed = u.summary.as_ref().is_some_and(|s| s.passed)
+        u.passed = u.calibration().is_some_and(|s| s.passed)
             && u.outliers.is_empty()
             && u.same_unit_id_as.is_empty();
     }
@@ -268,8 +266,7 @@ fn robust_centre_and_scale(pairs: &[(f64, Option<f64>)]) -> Option<(f64, f64)> {
 /// all-zero id, a session recorded without one, matches nothing).
 fn flag_same_unit_ids(units: &mut [UnitResult]) {
     let id = |u: &UnitResult| {
-        u.summary
-            .as_ref()
+        u.calibration()
             .and_then(|s| s.unit_id.as_deref())
             .and_then(UnitId::parse_hex)
             .filter(|id| *id != UnitId::default())
@@ -322,8 +319,14 @@ pub fn run_batch(
         .iter_mut()
         .filter(|u| !u.passed && u.summary.is_some())
     {
-        if let Err(e) = crate::calibration_files::mark_failed_in(&out.join(&u.session), false) {
-            u.error = Some(e.to_string());
+        let dir = out.join(&u.session);
+        match crate::calibration_files::mark_failed_in(&dir, false) {
+            Ok((toml, bin)) => {
+                if let Some(d) = u.summary.as_mut() {
+                    d.set_file_paths(&toml, &bin, &dir);
+                }
+            }
+            Err(e) => u.error = Some(e.to_string()),
         }
     }
     Ok(LotSummary {
@@ -383,7 +386,7 @@ pub(crate) fn to_csv(lot: &LotSummary) -> String {
             .iter()
             .map(|(n, z)| format!("{n}(z={z:.1})"))
             .collect();
-        let sm = u.summary.as_ref();
+        let sm = u.calibration();
         let mut row = vec![
             csv_cell(&u.session),
             sm.and_then(|m| m.unit_id.clone()).unwrap_or_default(),

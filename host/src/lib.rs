@@ -6,6 +6,8 @@
 //! Each subcommand is one file of [`cli`]; it calls the domain modules below, which never call back
 //! up (no cycles: `estimate` knows nothing of `report`, `session` nothing of the terminal).
 //!
+//! - [`app`]: the use cases, each once (calibrate from a recording), called by the command line,
+//!   `host batch`, the live procedure and the Python package alike.
 //! - [`cli`]: one file per subcommand (its argument struct and `run`), the one [`cli::CliError`].
 //! - [`session`]: a recorded session — the plan (and the built-in plans), the per-segment statistics,
 //!   the streaming `samples.csv` reader and the writer (`docs/recording-format.md`).
@@ -29,6 +31,7 @@
 //! - [`ui`]: progress bars on a terminal.
 #![deny(missing_docs)]
 
+pub mod app;
 pub mod apply;
 pub mod batch;
 pub mod calibration_files;

@@ -4,12 +4,13 @@
 use crate::errors::{usage, IntoPy};
 use crate::session::Session;
 use clap::ValueEnum;
+use host::app::{self, CalibrateOptions, CalibrationDocument, Recording};
 use host::calibration_files::{
     blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
 };
 use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
 use host::cli::CliError;
-use host::estimate::{calibrate_session_stats, paper_values, CalibrationOutcome, GyroEstimate};
+use host::estimate::{paper_values, CalibrationOutcome};
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
 use host::summary::{parameter_keys, CalibrationSummary, Limits};
 use host::unit_file::{UnitFile, UnitFileError};
@@ -37,7 +38,8 @@ pub struct Calibration {
 
 struct Fitted {
     outcome: CalibrationOutcome,
-    summary: CalibrationSummary,
+    /// The result as `host calibrate --input --json` gives it (no files: nothing is written).
+    document: CalibrationDocument,
 }
 
 impl Calibration {
@@ -47,7 +49,7 @@ impl Calibration {
     }
 
     fn fit_summary(&self) -> Option<&CalibrationSummary> {
-        self.fitted.as_ref().map(|f| &f.summary)
+        self.fitted.as_ref().map(|f| &f.document.summary)
     }
 }
 
@@ -84,7 +86,7 @@ pub fn calibrate(
 ) -> PyResult<Calibration> {
     // `single_package`: host calibrate's --single-package (one lever arm for the three
     // accelerometers of one package, docs/model.md §4.7).
-    let options = EstimatorArgs {
+    let estimate = EstimatorArgs {
         method: parse_enum::<MethodArg>("method", method)?,
         reference: parse_enum::<ReferenceArg>("reference", reference)?,
         single_package,
@@ -97,20 +99,24 @@ pub fn calibrate(
         }
         None => Limits::default(),
     };
+    let options = CalibrateOptions { estimate, limits };
     let parts = py.detach(|| session.parts());
     let parts = parts?;
-    let outcome = py.detach(|| -> Result<CalibrationOutcome, CliError> {
-        let mut outcome = calibrate_session_stats(&parts.plan, &parts.stats, &options)?;
-        // As `host calibrate --input`: the hand-turn gyro when the plan estimates none.
-        if outcome.gyro.is_none() {
-            outcome.gyro = parts.gyro.clone();
-            outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
-        }
-        Ok(outcome)
+    // The one calibrate use case, as `host calibrate --input` (the hand turns' gyro included).
+    let calibrated = py.detach(|| {
+        app::calibrate_recording(
+            Recording {
+                plan: &parts.plan,
+                stats: &parts.stats,
+                hand_gyro: parts.gyro.as_ref(),
+                reader_warnings: &parts.reader_warnings,
+            },
+            &options,
+        )
     });
-    let outcome = outcome.py_err()?;
-    let unit_id = match &parts.plan.unit_id {
-        Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
+    let calibrated = calibrated.py_err()?;
+    let unit_id = match calibrated.unit_id {
+        Some(id) => id,
         None => {
             pyo3::PyErr::warn(
                 py,
@@ -122,13 +128,14 @@ pub fn calibrate(
             UnitId::default()
         }
     };
-    let mut summary = CalibrationSummary::new(&outcome, parts.plan.unit_id.clone(), &limits);
-    summary.warnings.extend(parts.reader_warnings);
+    let app::Calibrated {
+        outcome, document, ..
+    } = calibrated;
     Ok(Calibration {
         unit: calibration_unit_file(&outcome, Some(unit_id)),
         cal: outcome.calibration,
         unit_id,
-        fitted: Some(Box::new(Fitted { outcome, summary })),
+        fitted: Some(Box::new(Fitted { outcome, document })),
         created_unix_s: None,
     })
 }
@@ -271,7 +278,10 @@ impl Calibration {
     /// warnings) as a dict; None for a loaded calibration.
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
-        self.fit_summary().map(|s| json_to_py(py, s)).transpose()
+        self.fitted
+            .as_ref()
+            .map(|f| json_to_py(py, &f.document))
+            .transpose()
     }
 
     /// The calibration file's tables (`calibration.toml` as a dict).

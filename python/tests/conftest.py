@@ -53,6 +53,12 @@ def hand(host_bin, tmp_path_factory):
     }
 
 
+def unwritten(doc: dict) -> dict:
+    """`host calibrate --json`'s document as `accelcal.calibrate` gives it: the same result, but no
+    files written (`files` is None)."""
+    return {**doc, "files": None}
+
+
 def read_csv_exact(path: Path):
     """A CSV's header and rows, every number parsed by Python's float (exact for the shortest
     round-trip text `host` writes; pandas' default parser is not)."""

@@ -67,7 +67,7 @@ fn the_hand_held_procedure_calibrates_stores_and_verifies_a_unit_without_a_table
     // (scale factors and the angles between the sensing axes). The device's noise is 0.5 mg per
     // sample; each position is 5 s at 1 kHz.
     let truth = paper_unit();
-    let est = result.outcome.calibration;
+    let est = result.calibrated.outcome.calibration;
     let (m_true, _) = truth.statics.to_fitted().unwrap();
     let (m_est, _) = est.statics.to_fitted().unwrap();
     let (g_true, g_est) = (gram(&m_true.m_out_per_g), gram(&m_est.m_out_per_g));

@@ -48,12 +48,18 @@ fn calibrate_the_emulated_board_over_its_pty_and_survive_a_reset() {
     // Against the virtual sensor's truth (the paper's unit).
     let truth = paper_unit();
     let (m_true, _) = truth.statics.to_fitted().unwrap();
-    let (m_est, _) = result.outcome.calibration.statics.to_fitted().unwrap();
+    let (m_est, _) = result
+        .calibrated
+        .outcome
+        .calibration
+        .statics
+        .to_fitted()
+        .unwrap();
     assert!(max_abs_diff(&m_true.m_out_per_g, &m_est.m_out_per_g) < 2e-4);
     assert!(
         max_abs_diff(
             &truth.lever_arms.r_m,
-            &result.outcome.calibration.lever_arms.r_m
+            &result.calibrated.outcome.calibration.lever_arms.r_m
         ) < 3e-4
     );
 

@@ -33,7 +33,7 @@ fn calibrate_flash_verify_against_the_simulated_device() {
 
     // Recovered parameters against the simulator's truth (the device's noise is 0.5 mg per sample).
     let truth = paper_unit();
-    let est = result.outcome.calibration;
+    let est = result.calibrated.outcome.calibration;
     let (m_true, _) = truth.statics.to_fitted().unwrap();
     let (m_est, _) = est.statics.to_fitted().unwrap();
     let rel = max_abs_diff(&m_true.m_out_per_g, &m_est.m_out_per_g) / 0.4;

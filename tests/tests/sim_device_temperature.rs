@@ -120,6 +120,7 @@ fn assert_slopes_within_5_sigma(
     scales: bool,
 ) {
     let fit = result
+        .calibrated
         .outcome
         .thermal
         .as_ref()

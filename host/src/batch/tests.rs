@@ -125,7 +125,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
     UnitResult {
         session: format!("{value}"),
         rows: 1,
-        summary: Some(CalibrationSummary {
+        summary: Some(CalibrationDocument::new(CalibrationSummary {
             unit_id: None,
             parameters: vec![crate::summary::Parameter {
                 name: name.into(),
@@ -143,7 +143,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
             passed: true,
             warnings: Vec::new(),
             in_package_size_effect: None,
-        }),
+        })),
         error: None,
         outliers: Vec::new(),
         same_unit_id_as: Vec::new(),
@@ -299,7 +299,9 @@ fn units_claiming_one_id_fail_naming_each_other() {
     for (u, name) in lot.iter_mut().zip(names) {
         u.session = name.into();
     }
-    let id = |u: &mut UnitResult, hex: &str| u.summary.as_mut().unwrap().unit_id = Some(hex.into());
+    let id = |u: &mut UnitResult, hex: &str| {
+        u.summary.as_mut().unwrap().summary.unit_id = Some(hex.into())
+    };
     id(&mut lot[0], "00000000000000000000a001");
     id(&mut lot[1], "00000000000000000000a002");
     id(&mut lot[2], "00000000000000000000A001");

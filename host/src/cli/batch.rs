@@ -77,7 +77,11 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
         jobs: a.jobs,
     };
     let bar = crate::ui::progress_bar(sessions.len() as u64, "calibrating", quiet);
-    let lot = run_batch(&sessions, staged.path(), &opts, &bar).map_err(CliError::Batch)?;
+    let mut lot = run_batch(&sessions, staged.path(), &opts, &bar).map_err(CliError::Batch)?;
+    // The units' documents name their files where they will be once the result is in place.
+    for d in lot.units.iter_mut().filter_map(|u| u.summary.as_mut()) {
+        d.files_moved(staged.path(), &a.out);
+    }
     let json = serde_json::to_string_pretty(&lot)
         .map_err(|e| CliError::Failed(format!("cannot write the lot summary: {e}")))?;
     write_atomic(

@@ -4,21 +4,18 @@
 use super::output::Output;
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::calibration_files::{now_unix_s, write_calibration_files};
+use crate::app::{self, CalibrateOptions, VerificationSummary};
+use crate::calibration_files::now_unix_s;
 use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
 use crate::device::sim_hand::HandOperator;
 use crate::device::AnyTransport;
-use crate::estimate::{
-    calibrate_session_stats, CalibrationOutcome, EstimateOptions, GyroEstimate, Method,
-    ReferenceChoice,
-};
+use crate::estimate::{CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use crate::limits;
-use crate::session::{self, read_session, ReadOptions, Session};
-use crate::summary::{CalibrationSummary, Limits};
+use crate::session::{self, ReadOptions};
+use crate::summary::Limits;
 use clap::Args;
-use shared::UnitId;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
@@ -157,19 +154,12 @@ pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     }
 }
 
-/// Reads a session with the progress bar, printing the reader's warnings to stderr.
-pub(crate) fn read_session_verbose(dir: &Path, quiet: bool) -> Result<Session, CliError> {
-    let session = read_session(dir, &ReadOptions { quiet })?;
-    let out = Output { json: false, quiet };
-    for w in &session.report.warnings {
-        out.warn(w);
+/// What `host calibrate`'s flags ask of the calibration: the estimator and the limits.
+pub(crate) fn calibrate_options(a: &CalibrateArgs) -> CalibrateOptions {
+    CalibrateOptions {
+        estimate: a.estimator.options(),
+        limits: a.limits,
     }
-    Ok(session)
-}
-
-/// The estimator options of `host calibrate`'s flags.
-pub(crate) fn estimate_options(a: &CalibrateArgs) -> EstimateOptions {
-    a.estimator.options()
 }
 
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write
@@ -197,35 +187,23 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     // Refused before the (possibly long) read, not after it.
     crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
     let started = Instant::now();
-    let session = read_session_verbose(input, quiet)?;
+    let (session, mut calibrated) =
+        app::calibrate_session_dir(input, &calibrate_options(a), &ReadOptions { quiet })?;
     let read_s = started.elapsed().as_secs_f64();
-    let mut outcome = calibrate_session_stats(&session.plan, &session.stats, &estimate_options(a))?;
-    let hand_gyro = outcome.gyro.is_none() && {
-        outcome.gyro = crate::session::hand_gyro::read(input)?;
-        outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
-        outcome.gyro.is_some()
-    };
-    let unit_id = match &session.plan.unit_id {
-        Some(hex) => UnitId::parse_hex(hex).unwrap_or_default(),
-        None => {
-            out.warn(
-                "plan.toml has no unit_id: calibration.bin is bound to the all-zero unit id; \
-                 add unit_id = \"<24 hex digits>\" to plan.toml to bind it to the unit",
-            );
-            UnitId::default()
-        }
-    };
-    let mut summary = CalibrationSummary::new(&outcome, session.plan.unit_id.clone(), &a.limits);
-    // What the reader flagged (rows left out, gaps) belongs to the result, not only to stderr.
-    summary
-        .warnings
-        .extend(session.report.warnings.iter().cloned());
+    for w in &session.report.warnings {
+        out.warn(w);
+    }
+    if calibrated.unit_id.is_none() {
+        out.warn(
+            "plan.toml has no unit_id: calibration.bin is bound to the all-zero unit id; \
+             add unit_id = \"<24 hex digits>\" to plan.toml to bind it to the unit",
+        );
+    }
+    let unit_id = calibrated.bound_unit_id();
     // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
     // A unit that fails its checks keeps its files, under names that say so.
-    let mut written = write_calibration_files(out_dir, &outcome, unit_id, now_unix_s(), a.force)?;
-    if !summary.passed {
-        written = crate::calibration_files::mark_failed(&written, a.force)?;
-    }
+    let written = app::write_result(out_dir, &mut calibrated, now_unix_s(), a.force)?;
+    let written = app::calibrate::settle_files(&mut calibrated, written, out_dir, a.force)?;
     out.line(format_args!(
         "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
         session.report.rows,
@@ -235,7 +213,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         read_s,
         session.report.rows as f64 / read_s.max(1e-9) / 1e6
     ))?;
-    if hand_gyro {
+    if calibrated.gyro_from_hand_turns {
         out.line(format_args!(
             "gyro: from the hand turns ({})",
             input.join(super::segment::GYRO_FILE).display()
@@ -243,7 +221,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     }
     out.line("")?;
     out.human(crate::report::render_session(
-        &outcome,
+        &calibrated.outcome,
         &session.plan,
         &session.stats,
     ))?;
@@ -253,11 +231,13 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         written.bin_path.display(),
         written.blob.len()
     ))?;
-    out.document(&summary)?;
-    if !summary.passed {
-        return Err(CliError::ChecksFailed(summary.failures()));
+    out.document(&calibrated.document)?;
+    if !calibrated.document.summary.passed {
+        return Err(CliError::ChecksFailed(
+            calibrated.document.summary.failures(),
+        ));
     }
-    Ok(outcome)
+    Ok(calibrated.outcome)
 }
 
 /// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
@@ -286,7 +266,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
     let mut opts = ProcedureOptions::new(plan, out_dir);
     opts.window_samples = a.window;
-    opts.estimate = estimate_options(a);
+    opts.calibrate = calibrate_options(a);
     opts.verify_tolerance_mg = a.verify_tolerance_mg;
     opts.verify_temp_c = a.verify_temp_c;
     opts.force = a.force;
@@ -309,7 +289,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     } else {
         &mut person
     };
-    let result = procedure::run(&mut client, &opts, op)?;
+    let mut result = procedure::run(&mut client, &opts, op)?;
     let out = Output {
         json: a.json,
         quiet,
@@ -322,35 +302,31 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         .iter()
         .map(|v| v.error_mg)
         .fold(0.0, f64::max);
-    let summary = CalibrationSummary::new(
-        &result.outcome,
-        Some(result.identity.unit_id.to_string()),
-        &a.limits,
-    );
+    // The checks alone, before the verification joins them in `passed`.
+    let failed_checks = result.calibrated.document.summary.failures();
+    result
+        .calibrated
+        .document
+        .set_verification(VerificationSummary {
+            worst_error_mg: worst,
+            tolerance_mg: opts.verify_tolerance_mg,
+            passed: result.passed,
+        });
     // The results, on stdout like `calibrate --input`'s; the operator's steps went to stderr.
     out.human(&result.report)?;
-    let passed = result.passed && summary.passed;
-    let written = if passed {
-        result.written.clone()
-    } else {
-        crate::calibration_files::mark_failed(&result.written, a.force)?
-    };
+    let written = app::calibrate::settle_files(
+        &mut result.calibrated,
+        result.written.clone(),
+        &opts.out_dir,
+        a.force,
+    )?;
     print_written_and_verified(&out, &written, &result.verification)?;
-    out.document(&serde_json::json!({
-        "calibration": summary,
-        "verification_worst_error_mg": worst,
-        "verification_tolerance_mg": opts.verify_tolerance_mg,
-        "verified": result.passed,
-        "passed": passed,
-        "calibration_toml": written.toml_path.display().to_string(),
-        "calibration_bin": written.bin_path.display().to_string(),
-        "results_dir": opts.out_dir.display().to_string(),
-    }))?;
+    out.document(&result.calibrated.document)?;
     if !result.passed {
         return Err(CliError::VerificationFailed);
     }
-    if !summary.passed {
-        return Err(CliError::ChecksFailed(summary.failures()));
+    if !failed_checks.is_empty() {
+        return Err(CliError::ChecksFailed(failed_checks));
     }
     out.line(format_args!(
         "PASS: unit {} calibrated, stored and verified at {} positions (worst error {worst:.3} mg ≤ {} mg); \

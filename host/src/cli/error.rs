@@ -157,6 +157,17 @@ impl From<crate::session::in_memory::WriteError> for CliError {
     }
 }
 
+impl From<crate::app::CalibrateError> for CliError {
+    fn from(e: crate::app::CalibrateError) -> Self {
+        use crate::app::CalibrateError;
+        match e {
+            CalibrateError::Recording(e) => e.into(),
+            CalibrateError::HandGyro(e) => e.into(),
+            CalibrateError::Estimate(e) => e.into(),
+        }
+    }
+}
+
 impl From<crate::limits::RangeError> for CliError {
     fn from(e: crate::limits::RangeError) -> Self {
         CliError::Usage(e.to_string())
@@ -219,7 +230,7 @@ mod tests {
     #[test]
     fn a_procedure_failure_walks_to_the_parameters_error() {
         let e = CliError::from(ProcedureError::Estimate {
-            source: EstimateError::Params(ParamsError::NonFinite),
+            source: EstimateError::Params(ParamsError::NonFinite).into(),
             recording: PathBuf::from("rec"),
         });
         let below = chain(&e);

@@ -1,7 +1,7 @@
 //! Tests of the command line: parsing, and each command run end to end on the simulator or the
 //! simulated device.
 
-use super::calibrate::{calibrate, estimate_options};
+use super::calibrate::{calibrate, calibrate_options};
 use super::port::{connect, PortArgs, SIM_PORT};
 use super::simulate::noise_from_args;
 use super::*;
@@ -63,13 +63,13 @@ fn the_command_line_is_well_formed() {
     else {
         panic!("not calibrate")
     };
-    assert_eq!(estimate_options(&c).method, Method::Paper);
+    assert_eq!(calibrate_options(&c).estimate.method, Method::Paper);
     // The estimator's flags are one set, shared by calibrate and batch.
     let Command::Calibrate(c) = parse(&["calibrate", "--input", "x", "--single-package"]).command
     else {
         panic!("not calibrate")
     };
-    assert!(estimate_options(&c).single_package);
+    assert!(calibrate_options(&c).estimate.single_package);
     let Command::Batch(b) = parse(&[
         "batch",
         "--input",

@@ -14,9 +14,9 @@
 use super::live_check::{instruction, table_for};
 pub(crate) use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
+use crate::app::{self, CalibrateError, CalibrateOptions, Calibrated};
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::device::{handheld, DeviceClient, LinkError, Transport};
-use crate::estimate::{self, CalibrationOutcome, EstimateError, EstimateOptions};
 use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
@@ -32,8 +32,8 @@ pub struct ProcedureOptions {
     pub window_samples: Option<u32>,
     /// Time discarded after each set-up (table settling, ω̇ filter), s.
     pub settle_s: f64,
-    /// Estimator settings.
-    pub estimate: EstimateOptions,
+    /// The estimator's settings and the limits the result is checked against.
+    pub calibrate: CalibrateOptions,
     /// Largest compensated error accepted at a verification position, mg.
     pub verify_tolerance_mg: f64,
     /// Seconds of data per verification position.
@@ -55,7 +55,7 @@ impl ProcedureOptions {
             out_dir,
             window_samples: None,
             settle_s: 0.5,
-            estimate: EstimateOptions::default(),
+            calibrate: CalibrateOptions::default(),
             verify_tolerance_mg: 1.0,
             verify_seconds: 2.0,
             verify_temp_c: None,
@@ -74,8 +74,9 @@ pub struct ProcedureOutcome {
     pub identity: Identity,
     /// The saved recording.
     pub recording_dir: PathBuf,
-    /// The estimate.
-    pub outcome: CalibrationOutcome,
+    /// The calibration, estimated from the saved recording as `host calibrate --input` would; its
+    /// document names the files written (the verification is the caller's to add).
+    pub calibrated: Calibrated,
     /// The estimate's result tables ([`crate::report::render_session`]), for the caller to print
     /// with its other results.
     pub report: String,
@@ -111,7 +112,7 @@ pub enum ProcedureError {
     #[error("{source}\n(the recording is saved in {})", .recording.display())]
     Estimate {
         /// Why.
-        source: EstimateError,
+        source: CalibrateError,
         /// The saved recording.
         recording: PathBuf,
     },
@@ -205,26 +206,22 @@ pub fn run<T: Transport>(
         &recording_dir,
     )?;
 
-    // Estimate from the saved recording, exactly as `host calibrate --input` would.
-    let session =
-        session::read_session(&recording_dir, &session::ReadOptions { quiet: opts.quiet })?;
-    let outcome = estimate::calibrate_session_stats(&session.plan, &session.stats, &opts.estimate)
-        .map_err(|source| ProcedureError::Estimate {
-            source,
-            recording: recording_dir.clone(),
-        })?;
+    // Estimate from the saved recording: the one calibrate use case, as `host calibrate --input`.
+    let (session, mut calibrated) = app::calibrate_session_dir(
+        &recording_dir,
+        &opts.calibrate,
+        &session::ReadOptions { quiet: opts.quiet },
+    )
+    .map_err(|source| ProcedureError::Estimate {
+        source,
+        recording: recording_dir.clone(),
+    })?;
     // The result table is the caller's to print (on stdout, with the other results).
-    let report = crate::report::render_session(&outcome, &session.plan, &session.stats);
+    let report = crate::report::render_session(&calibrated.outcome, &session.plan, &session.stats);
 
     let created = calibration_files::now_unix_s();
-    let written = calibration_files::write_calibration_files(
-        &opts.out_dir,
-        &outcome,
-        identity.unit_id,
-        created,
-        opts.force,
-    )
-    .map_err(ProcedureError::Output)?;
+    let written = app::write_result(&opts.out_dir, &mut calibrated, created, opts.force)
+        .map_err(ProcedureError::Output)?;
 
     let after = store_on_device(client, op, &written, created)?;
 
@@ -240,7 +237,7 @@ pub fn run<T: Transport>(
         report,
         identity,
         recording_dir,
-        outcome,
+        calibrated,
         written,
         state_after_reset: after.calibration,
         verification,

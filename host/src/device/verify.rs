@@ -97,7 +97,7 @@ pub(crate) fn verify<T: Transport>(
 ) -> Result<Vec<VerificationPoint>, LinkError> {
     // The expected specific force at the reference point O is g·up − W c, with c the reference point
     // relative to the table axis (`docs/model.md` §4.5); spinning checks need c, known for these references.
-    let c = match opts.estimate.reference {
+    let c = match opts.calibrate.estimate.reference {
         ReferenceChoice::TableAxis => Some([0.0; 3]),
         ReferenceChoice::BodyPoint(p) => Some(p),
         ReferenceChoice::Centroid => None,

@@ -1,0 +1,144 @@
+//! The calibrate use case: from a recording's statistics to a calibration, its summary and its
+//! files, the same for `host calibrate --input`, `host batch`, the live procedure (which estimates
+//! from the recording it has just saved) and Python's `calibrate`.
+
+use super::document::CalibrationDocument;
+use super::error::CalibrateError;
+use crate::calibration_files::{self, OutputError, WrittenCalibration};
+use crate::estimate::GyroEstimate;
+use crate::estimate::{
+    calibrate_session_stats, CalibrationOutcome, EstimateError, EstimateOptions,
+};
+use crate::session::{self, Plan, ReadOptions, SegmentStats, Session};
+use crate::summary::{CalibrationSummary, Limits};
+use shared::UnitId;
+use std::path::Path;
+
+/// What a calibration is asked for: the estimator's settings and the pass/fail limits.
+#[derive(Clone, Debug, Default)]
+pub struct CalibrateOptions {
+    /// The estimator's settings (`--method`, `--reference`, `--single-package`).
+    pub estimate: EstimateOptions,
+    /// The limits the result is checked against.
+    pub limits: Limits,
+}
+
+/// A recording as the estimator takes it: its plan, its per-segment statistics, the gyro its hand
+/// turns determined (a hand-held session's `gyro.toml`), and what its reader flagged.
+#[derive(Clone, Copy, Debug)]
+pub struct Recording<'a> {
+    /// The plan.
+    pub plan: &'a Plan,
+    /// The per-segment statistics, in plan order.
+    pub stats: &'a [SegmentStats],
+    /// The gyro from the hand turns, used when the plan itself determines none.
+    pub hand_gyro: Option<&'a GyroEstimate>,
+    /// What the reader flagged (rows left out, gaps): part of the result, not only of the terminal.
+    pub reader_warnings: &'a [String],
+}
+
+/// A calibration and everything said about it.
+#[derive(Debug)]
+pub struct Calibrated {
+    /// The estimate.
+    pub outcome: CalibrationOutcome,
+    /// The result with its checks, as every caller presents it (one JSON shape).
+    pub document: CalibrationDocument,
+    /// The unit the recording names (`plan.toml`'s `unit_id`); `None`: the blob is bound to the
+    /// all-zero id, which each caller tells its user in its own terms.
+    pub unit_id: Option<UnitId>,
+    /// The gyro came from the hand turns, not from the plan's own spins.
+    pub gyro_from_hand_turns: bool,
+}
+
+impl Calibrated {
+    /// The id the blob is bound to.
+    pub fn bound_unit_id(&self) -> UnitId {
+        self.unit_id.unwrap_or_default()
+    }
+}
+
+/// Estimates a calibration from a recording (docs/model.md §2–§4), takes the hand turns' gyro
+/// where the plan determines none, and checks the result against the limits.
+pub fn calibrate_recording(
+    recording: Recording<'_>,
+    options: &CalibrateOptions,
+) -> Result<Calibrated, EstimateError> {
+    let mut outcome = calibrate_session_stats(recording.plan, recording.stats, &options.estimate)?;
+    let gyro_from_hand_turns = outcome.gyro.is_none() && recording.hand_gyro.is_some();
+    if gyro_from_hand_turns {
+        outcome.gyro = recording.hand_gyro.cloned();
+        outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
+    }
+    let plan_id = recording.plan.unit_id.clone();
+    let unit_id = plan_id
+        .as_deref()
+        .map(|hex| UnitId::parse_hex(hex).unwrap_or_default());
+    let mut summary = CalibrationSummary::new(&outcome, plan_id, &options.limits);
+    summary
+        .warnings
+        .extend(recording.reader_warnings.iter().cloned());
+    Ok(Calibrated {
+        outcome,
+        document: CalibrationDocument::new(summary),
+        unit_id,
+        gyro_from_hand_turns,
+    })
+}
+
+/// Reads the session in `dir` (`plan.toml`, `samples.csv` and a hand-held session's `gyro.toml`)
+/// and calibrates it ([`calibrate_recording`]). The session is returned for its report.
+pub fn calibrate_session_dir(
+    dir: &Path,
+    options: &CalibrateOptions,
+    read: &ReadOptions,
+) -> Result<(Session, Calibrated), CalibrateError> {
+    let session = session::read_session(dir, read)?;
+    let hand_gyro = session::hand_gyro::read(dir)?;
+    let calibrated = calibrate_recording(
+        Recording {
+            plan: &session.plan,
+            stats: &session.stats,
+            hand_gyro: hand_gyro.as_ref(),
+            reader_warnings: &session.report.warnings,
+        },
+        options,
+    )?;
+    Ok((session, calibrated))
+}
+
+/// Writes `calibration.toml` and `calibration.bin` into `out_dir` (atomically, as a pair; an
+/// existing pair replaced only with `force`), and records where in the result's document.
+pub fn write_result(
+    out_dir: &Path,
+    calibrated: &mut Calibrated,
+    created_unix_s: u64,
+    force: bool,
+) -> Result<WrittenCalibration, OutputError> {
+    let written = calibration_files::write_calibration_files(
+        out_dir,
+        &calibrated.outcome,
+        calibrated.bound_unit_id(),
+        created_unix_s,
+        force,
+    )?;
+    calibrated.document.set_files(&written, out_dir);
+    Ok(written)
+}
+
+/// Renames the written pair to `calibration.FAILED.*` when the result did not pass (its checks, or
+/// the device's verification), so that nothing that looks for an accepted calibration picks it up;
+/// the document names the files as they now are.
+pub fn settle_files(
+    calibrated: &mut Calibrated,
+    written: WrittenCalibration,
+    out_dir: &Path,
+    force: bool,
+) -> Result<WrittenCalibration, OutputError> {
+    if calibrated.document.summary.passed {
+        return Ok(written);
+    }
+    let failed = calibration_files::mark_failed(&written, force)?;
+    calibrated.document.set_files(&failed, out_dir);
+    Ok(failed)
+}
