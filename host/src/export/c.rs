@@ -351,21 +351,47 @@ pub(crate) fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 
     })
 }
 
-/// A row-major `FusionMatrix` initialiser list with undetermined entries marked in a comment.
-fn marked_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
+/// A `FusionMatrix` initialiser by its named elements (`.element = {.xx = …, …}`), with undetermined
+/// entries marked in a comment.
+///
+/// Named elements, because the array's shape changed between Fusion's versions: 1.2 declares
+/// `float array[3][3]`, where a flat `.array = {9 values}` is `-Wmissing-braces` (an error under
+/// `-Werror`), and later versions `float array[9]`, where nested braces are too many; both declare the
+/// same `element` struct (`xx` … `zz`, row-major: `xioTechnologies/Fusion` `Fusion/FusionMath.h`).
+/// An entry below the `f32` resolution of its row's largest (the rounding of an exact inverse, such
+/// as −6e-17 where the matrix holds 0) is written as an exact 0: it changes no product in `float`.
+fn fusion_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
+    const NAMES: [&str; 9] = ["xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"];
     let items: Vec<String> = m
         .iter()
         .enumerate()
         .map(|(k, v)| {
+            let row = &m[3 * (k / 3)..3 * (k / 3) + 3];
+            let largest = row.iter().fold(0.0f32, |a, x| a.max(x.abs()));
+            let v = if v.abs() < largest * f32::EPSILON / 2.0 {
+                0.0
+            } else {
+                *v
+            };
             let mark = if undetermined[k / 3][k % 3] {
                 " /* UNDETERMINED */"
             } else {
                 ""
             };
-            format!("{}{mark}", c_f32(*v))
+            format!(".{} = {}{mark}", NAMES[k], c_f32(v))
         })
         .collect();
-    format!("{{{}}}", items.join(", "))
+    format!("{{ .element = {{{}}} }}", items.join(", "))
+}
+
+/// A `FusionVector` initialiser by its named axes (the same in every Fusion version).
+fn fusion_vector(v: &[f32; 3]) -> String {
+    format!(
+        "{{ .axis = {{.x = {}, .y = {}, .z = {}}} }}",
+        c_f32(v[0]),
+        c_f32(v[1]),
+        c_f32(v[2])
+    )
 }
 
 /// Selects Fusion's inertial model by the header it includes: `FusionCalibrationInertial` in
@@ -441,28 +467,28 @@ pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportErr
     }
     let _ = writeln!(
         w,
-        "static const FusionMatrix accelerometerMisalignment = {{ .array = {} }};",
-        list(&m, c_f32)
+        "static const FusionMatrix accelerometerMisalignment = {};",
+        fusion_matrix(&m, &[[false; 3]; 3])
     );
     let _ = writeln!(
         w,
-        "static const FusionVector accelerometerSensitivity = {{ .array = {} }};",
-        list(&f.sensitivity.map(|v| v as f32), c_f32)
+        "static const FusionVector accelerometerSensitivity = {};",
+        fusion_vector(&f.sensitivity.map(|v| v as f32))
     );
     let _ = writeln!(
         w,
-        "static const FusionVector accelerometerOffset = {{ .array = {} }};",
-        list(&f.offset.map(|v| v as f32), c_f32)
+        "static const FusionVector accelerometerOffset = {};",
+        fusion_vector(&f.offset.map(|v| v as f32))
     );
     if let Some((misalignment, offset)) = gyroscope {
         let _ = writeln!(
             w,
-            "static const FusionMatrix gyroscopeMisalignment = {{ .array = {} }};\n\
-             static const FusionVector gyroscopeSensitivity = {{ .array = {} }};\n\
-             static const FusionVector gyroscopeOffset = {{ .array = {} }};",
-            marked_matrix(&misalignment, &undetermined),
-            list(&[1.0f32; 3], c_f32),
-            list(&offset, c_f32)
+            "static const FusionMatrix gyroscopeMisalignment = {};\n\
+             static const FusionVector gyroscopeSensitivity = {};\n\
+             static const FusionVector gyroscopeOffset = {};",
+            fusion_matrix(&misalignment, &undetermined),
+            fusion_vector(&[1.0f32; 3]),
+            fusion_vector(&offset)
         );
     }
     let _ = writeln!(w, "\n#endif");

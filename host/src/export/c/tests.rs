@@ -772,13 +772,15 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
 }
 
 /// Fusion before 1.3 (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`): the same model named
-/// `FusionCalibrationInertial`, over `FusionMatrixMultiplyVector` and `FusionVectorHadamardProduct`.
+/// `FusionCalibrationInertial`, over `FusionMatrixMultiplyVector` and `FusionVectorHadamardProduct`,
+/// and its `FusionMatrix` as 1.2's `Fusion/FusionMath.h` declares it: `float array[3][3]` (a flat
+/// nine-value initialiser of it is `-Wmissing-braces`, which `-Werror` refuses).
 const FUSION_OLD_STUB: &str = r#"
 #ifndef FUSION_H
 #define FUSION_H
 #define FUSION_CALIBRATION_H
 typedef union { float array[3]; struct { float x; float y; float z; } axis; } FusionVector;
-typedef union { float array[9]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
+typedef union { float array[3][3]; struct { float xx, xy, xz, yx, yy, yz, zx, zy, zz; } element; } FusionMatrix;
 static inline FusionVector FusionVectorSubtract(const FusionVector a, const FusionVector b) {
     const FusionVector r = {.axis = {a.axis.x - b.axis.x, a.axis.y - b.axis.y, a.axis.z - b.axis.z}};
     return r;
@@ -1197,3 +1199,18 @@ fn c_package_written_by_the_command_is_self_contained_and_bit_exact() {
 
 #[path = "cross_tests.rs"]
 mod cross_tests;
+
+/// A `FusionMatrix` is written by its named elements, and an entry that is the rounding of an exact
+/// inverse (−6e-17 beside entries of order 1), or any entry below half an `f32` step of its row's
+/// largest (2e-8 beside 1: it adds nothing to a `float` product), is written as an exact zero; a
+/// small entry that is a value (1e-6 beside 1) is kept.
+#[test]
+fn fusion_matrix_names_its_elements_and_writes_rounding_as_zero() {
+    let m = [1.0f32, -6e-17, 1e-6, 0.0, 0.5, 0.0, 2e-8, 0.0, 1.0];
+    let text = super::fusion_matrix(&m, &[[false; 3]; 3]);
+    assert_eq!(
+        text,
+        "{ .element = {.xx = 1e0f, .xy = 0e0f, .xz = 1e-6f, .yx = 0e0f, .yy = 5e-1f, .yz = 0e0f, \
+         .zx = 0e0f, .zy = 0e0f, .zz = 1e0f} }"
+    );
+}
