@@ -29,14 +29,15 @@ mod app {
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config;
-    use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
+    use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::SysDelay;
     use usb_device::bus::UsbBusAllocator;
     use usb_device::prelude::*;
 
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
-    use firmware::board::stm32_common::Store;
+    use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::clock_tree::f405::IMU_SPI;
     use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE};
@@ -103,12 +104,10 @@ mod app {
         // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
         let mut cs = gpioa.pa4.into_push_pull_output();
         cs.set_high();
-        let spi = dp.SPI1.spi(
-            (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
-            Mode {
-                polarity: Polarity::IdleHigh,
-                phase: Phase::CaptureOnSecondTransition,
-            },
+        let spi = spi1(
+            dp.SPI1,
+            (gpioa.pa5, gpioa.pa6, gpioa.pa7),
+            &IMU_SPI,
             board::SPI_HZ.Hz(),
             &mut rcc,
         );

@@ -281,6 +281,12 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Error::Spi(e) => write!(f, "ICM-42688-P: SPI transfer failed ({e:?}); check wiring and chip select"),
+            // Only bit 0 wrong: the STM32F4's "wrong last bit in every received byte" of SPI pins
+            // left at low speed (stm32f4xx-hal 0.23 src/spi.rs:302-303), not another part.
+            Error::WrongDevice(id) if id ^ WHO_AM_I_VALUE == 1 => write!(
+                f,
+                "ICM-42688-P: WHO_AM_I reads {id:#04x}, expected 0x47: bit 0 wrong, as when the SPI pins are at low speed"
+            ),
             Error::WrongDevice(id) => write!(
                 f,
                 "ICM-42688-P: WHO_AM_I reads {id:#04x}, expected 0x47; check the part and the SPI mode (0 or 3)"

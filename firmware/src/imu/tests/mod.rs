@@ -8,6 +8,7 @@ mod icm_fifo_decode;
 mod icm_identify;
 mod icm_overflow;
 mod icm_self_test;
+mod icm_spi_errata;
 mod icm_watermark;
 mod lsm6dso;
 
