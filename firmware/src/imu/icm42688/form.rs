@@ -116,6 +116,11 @@ macro_rules! driver {
                 for s in steps {
                     match *s {
                         Step::Write(reg, v) => $wait!(self.write(reg, v))?,
+                        Step::Update { reg, mask, value } => {
+                            let mut v = [0u8; 1];
+                            $wait!(self.read(reg, &mut v))?;
+                            $wait!(self.write(reg, (v[0] & !mask) | (value & mask)))?
+                        }
                         Step::WaitUs(0) => {}
                         Step::WaitUs(us) => $wait!(self
                             .spi

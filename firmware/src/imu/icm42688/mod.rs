@@ -305,6 +305,16 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
 pub enum Step {
     /// Write `value` to register `reg` of the bank currently selected.
     Write(u8, u8),
+    /// Read register `reg` of the bank selected, clear the bits of `mask`, set those of `value`,
+    /// write it back (for a register whose other bits the driver leaves as they are).
+    Update {
+        /// The register.
+        reg: u8,
+        /// The bits replaced.
+        mask: u8,
+        /// Their new value (within `mask`).
+        value: u8,
+    },
     /// Wait this many microseconds.
     WaitUs(u32),
 }
@@ -320,7 +330,7 @@ pub const RESET_STEPS: [Step; 3] = [
 pub const CONFIGURE_STEPS: usize = 29;
 
 /// The register writes that configure the part for `cfg` (checked before), in order: sensors off,
-/// interface, anti-alias filters (banks 1 and 2), ranges and rates, time stamps, FIFO, INT1, FIFO
+/// interface, AFSR off, anti-alias filters (banks 1 and 2), ranges and rates, time stamps, FIFO, INT1, FIFO
 /// flushed, sensors on in low-noise mode (then 200 µs without writes, §14.29).
 pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
     let aaf = |a: AntiAlias| a.coefficients().unwrap_or((0, 0, 0));
@@ -341,6 +351,14 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
             INTF_CONFIG0,
             FIFO_COUNT_REC | FIFO_COUNT_ENDIAN | SENSOR_DATA_ENDIAN | UI_SIFS_DISABLE_I2C,
         ),
+        // The adaptive full-scale switch off: it holds the gyro output for 1–2 ms whenever the rate
+        // crosses about ±100 °/s, which a rate table does on every turn. Read-modify-write as
+        // Betaflight does it (`accgyro_spi_icm426xx.c` 416-420, see `regs::AFSR_DISABLE`).
+        Step::Update {
+            reg: INTF_CONFIG1,
+            mask: AFSR_MASK,
+            value: AFSR_DISABLE,
+        },
         Step::Write(REG_BANK_SEL, 1),
         // Reset value 0xA0 with GYRO_AAF_DIS (bit 1) as configured, the notch filter left on.
         Step::Write(GYRO_CONFIG_STATIC2, 0xA0 | ((gyro_off as u8) << 1)),
@@ -371,7 +389,6 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
         Step::Write(SIGNAL_PATH_RESET, FIFO_FLUSH),
         Step::Write(PWR_MGMT0, PWR_LOW_NOISE),
         Step::WaitUs(200),
-        Step::WaitUs(0),
     ]
 }
 

@@ -54,6 +54,17 @@ pub const FIFO_COUNT_ENDIAN: u8 = 1 << 5;
 pub const SENSOR_DATA_ENDIAN: u8 = 1 << 4;
 /// INTF_CONFIG0: UI_SIFS_CFG = 11, the I²C interface disabled (an SPI-only board).
 pub const UI_SIFS_DISABLE_I2C: u8 = 0b11;
+/// INTF_CONFIG1 (§14.28), reset value 0x91: bits 7:6 hold the adaptive full-scale range (AFSR)
+/// switch, on at reset (10), which holds the gyro output for 1–2 ms when the rate crosses about
+/// ±100 °/s; RTC_MODE (2), CLKSEL (1:0).
+pub const INTF_CONFIG1: u8 = 0x4D;
+/// INTF_CONFIG1: the AFSR field.
+pub const AFSR_MASK: u8 = 0xC0;
+/// INTF_CONFIG1: AFSR off (01), as Betaflight writes it: `accgyro_spi_icm426xx.c` lines 76-78
+/// (`ICM426XX_INTF_CONFIG1_AFSR_MASK 0xC0`, `..._AFSR_DISABLE 0x40`, "Fix for stalls in gyro
+/// output", after ArduPilot PR 25332) and 416-420 (read, `&= ~MASK`, `|= DISABLE`, write), at
+/// betaflight/betaflight commit 301d01abc4.
+pub const AFSR_DISABLE: u8 = 0x40;
 /// PWR_MGMT0 (§14.29): GYRO_MODE bits 3:2, ACCEL_MODE bits 1:0 (11 = low noise). After turning the
 /// gyro on, no register write for 200 µs.
 pub const PWR_MGMT0: u8 = 0x4E;

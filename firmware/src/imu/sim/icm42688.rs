@@ -11,6 +11,10 @@
 //!   not fit is dropped, counted in [`Icm42688Model::dropped`] by its sample number, and sets
 //!   FIFO_FULL_INT; FIFO_THS_INT while the count (records with FIFO_COUNT_REC) reaches the
 //!   watermark; INT_STATUS cleared on read; INT1 as INT_SOURCE0 routes it;
+//! - the adaptive full-scale range switch (AFSR, INTF_CONFIG1 bits 7:6, on at reset): while it is
+//!   on, a gyro rate crossing ±[`AFSR_SWITCH_DPS`] on any axis holds the gyro output at its last
+//!   value for [`Icm42688Model::afsr_hold_ns`] (1.5 ms: the 1–2 ms stalls that Betaflight's and
+//!   ArduPilot's drivers turn AFSR off for); off when the field reads 01 (`regs::AFSR_DISABLE`);
 //! - the first samples after the sensors start are marked invalid (−32768 / −524288), as the part
 //!   does while they settle ([`Icm42688Model::invalid_after_start`]);
 //! - the self-test response: with SELF_TEST_CONFIG's axis bits set, the factory response for the
@@ -28,6 +32,9 @@ use crate::imu::icm42688::regs::*;
 /// Dropped sample numbers remembered (the first ones).
 pub const DROP_LOG: usize = 64;
 
+/// The gyro rate, °/s, at which the AFSR switches range (and the output stalls).
+pub const AFSR_SWITCH_DPS: f64 = 100.0;
+
 /// The model.
 pub struct Icm42688Model<G> {
     gen: G,
@@ -41,6 +48,12 @@ pub struct Icm42688Model<G> {
     busy_until_ns: u64,
     no_write_until_ns: u64,
     since_start: u32,
+    /// Any gyro axis above [`AFSR_SWITCH_DPS`] at the last sample (the AFSR's range).
+    afsr_high: bool,
+    afsr_hold_until_ns: u64,
+    held_gyro_dps: [f64; 3],
+    /// How long a range switch of the AFSR holds the gyro output, ns.
+    pub afsr_hold_ns: u64,
     /// WHO_AM_I's value (0x47).
     pub who_am_i: u8,
     /// Samples marked invalid after the sensors start.
@@ -67,7 +80,7 @@ fn reset_banks() -> [[u8; 128]; 4] {
     for (reg, v) in [
         (0x13, 0x05), // DRIVE_CONFIG
         (INTF_CONFIG0, 0x30),
-        (0x4D, 0x91), // INTF_CONFIG1
+        (INTF_CONFIG1, 0x91),
         (GYRO_CONFIG0, 0x06),
         (ACCEL_CONFIG0, 0x06),
         (GYRO_CONFIG1, 0x16),
@@ -98,6 +111,10 @@ impl<G: Generator> Icm42688Model<G> {
             busy_until_ns: 0,
             no_write_until_ns: 0,
             since_start: 0,
+            afsr_high: false,
+            afsr_hold_until_ns: 0,
+            held_gyro_dps: [0.0; 3],
+            afsr_hold_ns: 1_500_000,
             who_am_i: WHO_AM_I_VALUE,
             invalid_after_start: 1,
             self_test_gain: 1.0,
@@ -212,6 +229,7 @@ impl<G: Generator> Icm42688Model<G> {
             t.gyro_dps[i] += st_g[i];
             t.accel_g[i] += st_a[i];
         }
+        self.adaptive_range(&mut t);
         let n = self.samples;
         self.samples = self.samples.wrapping_add(1);
         let invalid = self.since_start < self.invalid_after_start;
@@ -220,6 +238,22 @@ impl<G: Generator> Icm42688Model<G> {
         self.status |= INT_DATA_RDY;
         if self.banks[0][FIFO_CONFIG as usize] >> 6 != 0 {
             self.push_packet(&t, invalid, n);
+        }
+    }
+
+    /// The AFSR: a range switch (any axis crossing ±[`AFSR_SWITCH_DPS`]) while it is on holds the
+    /// gyro output at the last value before the switch for `afsr_hold_ns`.
+    fn adaptive_range(&mut self, t: &mut Truth) {
+        let on = self.banks[0][INTF_CONFIG1 as usize] & AFSR_MASK != AFSR_DISABLE;
+        let high = t.gyro_dps.iter().any(|w| w.abs() > AFSR_SWITCH_DPS);
+        if on && high != self.afsr_high {
+            self.afsr_hold_until_ns = self.time_ns + self.afsr_hold_ns;
+        }
+        self.afsr_high = high;
+        if on && self.time_ns < self.afsr_hold_until_ns {
+            t.gyro_dps = self.held_gyro_dps;
+        } else {
+            self.held_gyro_dps = t.gyro_dps;
         }
     }
 
