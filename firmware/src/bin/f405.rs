@@ -108,7 +108,6 @@ mod app {
             dp.SPI1,
             (gpioa.pa5, gpioa.pa6, gpioa.pa7),
             &IMU_SPI,
-            board::SPI_HZ.Hz(),
             &mut rcc,
         );
         let sample_rate_hz = board::IMU_CONFIG.odr.hz();

@@ -126,7 +126,6 @@ mod app {
                 dp.SPI1,
                 (gpioa.pa5, gpioa.pa6, gpioa.pa7),
                 &GYRO_SPI,
-                8.MHz(),
                 &mut rcc,
             ),
             gpiob.pb6.into_push_pull_output(),

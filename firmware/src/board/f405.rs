@@ -32,12 +32,11 @@ use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 use crate::ByteLink;
 
-/// Core clock, Hz (the F405's maximum).
-pub const SYSCLK_HZ: u32 = 168_000_000;
+/// Core clock, Hz (the F405's maximum; `clock_tree::f405`, where the SPI clock is computed from it
+/// and checked against the ICM-42688-P's 24 MHz at compile time: 84 MHz APB2 / 4 = 21 MHz).
+pub use crate::clock_tree::f405::SYSCLK_HZ;
 /// Crystal, Hz (`SYSTEM_HSE_MHZ 8`).
 pub const HSE_HZ: u32 = 8_000_000;
-/// SPI1 clock, Hz: PCLK2 84 MHz / 4; the ICM-42688-P accepts up to 24 MHz.
-pub const SPI_HZ: u32 = 21_000_000;
 /// The ICM-42688-P's configuration: 8 kHz (its highest rate), ±4 g (0.12 mg per count: hand-held
 /// and rate-table motion stay well inside it; a sample beyond it is flagged saturated) and ±2000 °/s
 /// (the protocol's table rates reach 30 rad/s ≈ 1720 °/s), 258 Hz anti-alias filters, 16-byte

@@ -31,10 +31,12 @@ const fn hal_speed(s: PinSpeed) -> Speed {
     }
 }
 
-/// SPI1 as a master in mode 3, its pins first set to the output speeds of the board's `bus` table
-/// (`clock_tree`, checked at compile time there). The boards set up SPI only through this, so no
-/// SPI pin is left at its reset speed (low), under which stm32f4xx-hal 0.23 (`src/spi.rs:302-303`)
-/// warns of "the 'wrong last bit in every received byte' problem".
+/// SPI1 as a master in mode 3 at the frequency of the board's `bus` table, its pins first set to
+/// the table's output speeds (`clock_tree`, where the HAL's resulting clock and the pin speeds are
+/// checked at compile time). The boards set up SPI only through this, so no SPI pin is left at its
+/// reset speed (low), under which stm32f4xx-hal 0.23 (`src/spi.rs:302-303`) warns of "the 'wrong
+/// last bit in every received byte' problem". Logs an error when the HAL's APB2 clock is not the
+/// table's (the SPI clock would then not be the one checked).
 pub fn spi1(
     spi: SPI1,
     pins: (
@@ -43,13 +45,23 @@ pub fn spi1(
         impl Into<spi1::Mosi>,
     ),
     bus: &SpiBus,
-    freq: Hertz,
     rcc: &mut Rcc,
 ) -> Spi<SPI1> {
+    let apb = rcc.clocks.pclk2().raw();
+    if apb != bus.apb_hz {
+        defmt::error!(
+            "APB2 is {=u32} Hz, not {=u32}: the {=str} SPI clock is not {=u32} Hz",
+            apb,
+            bus.apb_hz,
+            bus.device,
+            bus.actual_hz()
+        );
+    }
     let (mut sck, mut miso, mut mosi) = (pins.0.into(), pins.1.into(), pins.2.into());
     sck.set_speed(hal_speed(bus.pins.sck));
     miso.set_speed(hal_speed(bus.pins.miso));
     mosi.set_speed(hal_speed(bus.pins.mosi));
+    let freq = Hertz::from_raw(bus.asked_hz);
     spi.spi((Some(sck), Some(miso), Some(mosi)), SPI_MODE_3, freq, rcc)
 }
 
