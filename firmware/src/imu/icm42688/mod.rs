@@ -319,6 +319,19 @@ pub enum Step {
     WaitUs(u32),
 }
 
+/// After power-on, 1 ms before the first access: Betaflight's `icm426xxSpiDetect`
+/// (`accgyro_spi_icm426xx.c` line 262, `delay(1); // power-on time`, commit 301d01abc4).
+pub const POWER_UP_STEPS: [Step; 1] = [Step::WaitUs(1000)];
+
+/// WHO_AM_I reads at most before the part is refused: the first and 20 retries, 1 ms apart, as
+/// Betaflight's `icm426xxSpiDetect` (lines 268-301: `attemptsRemaining = 20`, `delay(1)` before
+/// each read, `while (attemptsRemaining--)`, i.e. 21 reads). A part still starting may answer
+/// wrongly at first.
+pub const IDENTIFY_READS: u32 = 21;
+
+/// Wait before each WHO_AM_I retry, µs.
+pub const IDENTIFY_RETRY_US: u32 = 1000;
+
 /// Soft reset: DEVICE_CONFIG.SOFT_RESET_CONFIG, then 1 ms before any access (§14.1).
 pub const RESET_STEPS: [Step; 3] = [
     Step::Write(REG_BANK_SEL, 0),

@@ -20,8 +20,11 @@
 //! - the self-test response: with SELF_TEST_CONFIG's axis bits set, the factory response for the
 //!   part's code (`2620/2^(3−FS)·1.01^(code−1)` LSB at the self-test ranges), times
 //!   [`Icm42688Model::self_test_gain`] (1 for a healthy part);
-//! - rule checks: a register write within 200 µs of starting the gyro, any access within 1 ms of a
-//!   soft reset, or a write to a read-only register counts in [`Icm42688Model::violations`].
+//! - a part still starting: WHO_AM_I reads 0x00 for its first
+//!   [`Icm42688Model::who_am_i_wrong_reads`] reads (each read counted in `who_am_i_reads`);
+//! - rule checks: a register write within 200 µs of starting the gyro, any access within 1 ms of
+//!   power-on (the model's time 0) or of a soft reset, or a write to a read-only register counts in
+//!   [`Icm42688Model::violations`].
 
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 use heapless::Deque;
@@ -56,6 +59,10 @@ pub struct Icm42688Model<G> {
     pub afsr_hold_ns: u64,
     /// WHO_AM_I's value (0x47).
     pub who_am_i: u8,
+    /// WHO_AM_I reads 0x00 for this many reads first (a part still starting).
+    pub who_am_i_wrong_reads: u32,
+    /// WHO_AM_I reads so far.
+    pub who_am_i_reads: u32,
     /// Samples marked invalid after the sensors start.
     pub invalid_after_start: u32,
     /// Scale of the self-test response (1: healthy; 0.3: a failing part).
@@ -108,7 +115,8 @@ impl<G: Generator> Icm42688Model<G> {
             latched_count: 0,
             time_ns: 0,
             next_sample_ns: 0,
-            busy_until_ns: 0,
+            // Power-on: no access for 1 ms.
+            busy_until_ns: 1_000_000,
             no_write_until_ns: 0,
             since_start: 0,
             afsr_high: false,
@@ -116,6 +124,8 @@ impl<G: Generator> Icm42688Model<G> {
             held_gyro_dps: [0.0; 3],
             afsr_hold_ns: 1_500_000,
             who_am_i: WHO_AM_I_VALUE,
+            who_am_i_wrong_reads: 0,
+            who_am_i_reads: 0,
             invalid_after_start: 1,
             self_test_gain: 1.0,
             self_test_codes: [70, 72, 68, 60, 62, 58],
@@ -135,6 +145,11 @@ impl<G: Generator> Icm42688Model<G> {
     /// A register's value (bank, address), as the tests read the configuration.
     pub fn register(&self, bank: usize, reg: u8) -> u8 {
         self.banks[bank & 3][reg as usize & 0x7F]
+    }
+
+    /// The part's time since power-on, ns.
+    pub fn time_ns(&self) -> u64 {
+        self.time_ns
     }
 
     /// FIFO bytes held.
@@ -377,7 +392,14 @@ impl<G: Generator> Icm42688Model<G> {
                 }
             }
             FIFO_DATA => self.fifo.pop_front().unwrap_or(0xFF),
-            WHO_AM_I => self.who_am_i,
+            WHO_AM_I => {
+                self.who_am_i_reads += 1;
+                if self.who_am_i_reads <= self.who_am_i_wrong_reads {
+                    0x00
+                } else {
+                    self.who_am_i
+                }
+            }
             REG_BANK_SEL => self.bank as u8,
             r => self.banks[0][r as usize & 0x7F],
         }
