@@ -340,10 +340,11 @@ pub const RESET_STEPS: [Step; 3] = [
 ];
 
 /// Steps in [`configure_steps`].
-pub const CONFIGURE_STEPS: usize = 29;
+pub const CONFIGURE_STEPS: usize = 30;
 
 /// The register writes that configure the part for `cfg` (checked before), in order: sensors off,
-/// interface, AFSR off, anti-alias filters (banks 1 and 2), ranges and rates, time stamps, FIFO, INT1, FIFO
+/// interface, AFSR off, anti-alias filters (banks 1 and 2), ranges and rates, time stamps and
+/// FSYNC off, FIFO, INT1, FIFO
 /// flushed, sensors on in low-noise mode (then 200 µs without writes, §14.29).
 pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
     let aaf = |a: AntiAlias| a.coefficients().unwrap_or((0, 0, 0));
@@ -388,7 +389,22 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
             ACCEL_CONFIG0,
             ((cfg.accel_range as u8) << 5) | cfg.odr as u8,
         ),
-        Step::Write(TMST_CONFIG, TMST_ODR_1US),
+        // Time stamps as the decoder reads them, every field set by name rather than left at its
+        // reset value: absolute (not deltas), 1 µs resolution (`Odr::period_us` is in 1 µs
+        // ticks), FSYNC time stamps off. FSYNC itself off (FSYNC_UI_SEL 000, not the reset value
+        // 001). TDK's reference driver does both at start-up (Icm426xxDriver_HL.c,
+        // inv_icm426xx_init, lines 1913-1923: "Deactivate FSYNC by default", then the time-stamp
+        // resolution set explicitly; it picks 16 µs, this driver 1 µs).
+        Step::Update {
+            reg: TMST_CONFIG,
+            mask: TMST_FIELDS,
+            value: TMST_EN,
+        },
+        Step::Update {
+            reg: FSYNC_CONFIG,
+            mask: FSYNC_UI_SEL_MASK,
+            value: 0,
+        },
         Step::Write(FIFO_CONFIG, 0), // bypass while the FIFO is set up
         Step::Write(FIFO_CONFIG1, FIFO_WM_GT_TH | hires | FIFO_PACKET3_EN),
         Step::Write(FIFO_CONFIG2, (wm & 0xFF) as u8),

@@ -83,8 +83,25 @@ pub const ACCEL_CONFIG1: u8 = 0x53;
 /// TMST_CONFIG (§14.35), reset 0x23: TMST_TO_REGS_EN (4), TMST_RES (3: 0 = 1 µs), TMST_DELTA_EN
 /// (2), TMST_FSYNC_EN (1), TMST_EN (0).
 pub const TMST_CONFIG: u8 = 0x54;
-/// TMST_CONFIG: reset value with FSYNC time stamps off: absolute 1 µs ODR time stamps.
-pub const TMST_ODR_1US: u8 = 0x21;
+/// TMST_CONFIG: TMST_TO_REGS_EN (the time stamp readable from TMST_VALUE registers).
+pub const TMST_TO_REGS_EN: u8 = 1 << 4;
+/// TMST_CONFIG: TMST_RES, the time stamp's resolution: 0 = 1 µs, 1 = 16 µs (or one RTC period).
+pub const TMST_RES_16US: u8 = 1 << 3;
+/// TMST_CONFIG: TMST_DELTA_EN (time stamps as deltas from the previous one).
+pub const TMST_DELTA_EN: u8 = 1 << 2;
+/// TMST_CONFIG: TMST_FSYNC_EN (the FSYNC time stamp feature), on at reset.
+pub const TMST_FSYNC_EN: u8 = 1 << 1;
+/// TMST_CONFIG: TMST_EN (time stamps on), on at reset.
+pub const TMST_EN: u8 = 1;
+/// TMST_CONFIG's fields the driver sets (bits 7:5 are left as they read).
+pub const TMST_FIELDS: u8 =
+    TMST_TO_REGS_EN | TMST_RES_16US | TMST_DELTA_EN | TMST_FSYNC_EN | TMST_EN;
+/// FSYNC_CONFIG (§14.41), reset value 0x10: FSYNC_UI_SEL in bits 6:4 (001 at reset: the FSYNC
+/// flag tagged into the temperature's LSB; 000: FSYNC not tagged), FSYNC_UI_FLAG_CLEAR_SEL (1),
+/// FSYNC_POLARITY (0).
+pub const FSYNC_CONFIG: u8 = 0x62;
+/// FSYNC_CONFIG: the FSYNC_UI_SEL field.
+pub const FSYNC_UI_SEL_MASK: u8 = 0b0111_0000;
 /// FIFO_CONFIG1 (§14.38): FIFO_RESUME_PARTIAL_RD (6), FIFO_WM_GT_TH (5), FIFO_HIRES_EN (4),
 /// FIFO_TMST_FSYNC_EN (3), FIFO_TEMP_EN (2), FIFO_GYRO_EN (1), FIFO_ACCEL_EN (0).
 pub const FIFO_CONFIG1: u8 = 0x5F;

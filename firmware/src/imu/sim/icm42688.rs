@@ -7,7 +7,7 @@
 //! - sampling while both sensors are in low-noise mode, at GYRO_CONFIG0's ODR: the data registers
 //!   (16 bits at the range registers' sensitivity, big-endian) and, unless in bypass mode, the FIFO
 //!   (packet 3, or packet 4 with FIFO_HIRES_EN: 18-bit accel and 19-bit gyro at ±16 g / ±2000 °/s,
-//!   16-bit temperature) with the absolute 1 µs time stamp; 2 KiB, stop-on-full: a packet that does
+//!   16-bit temperature) with the absolute time stamp in 1 µs or (TMST_RES) 16 µs ticks; 2 KiB, stop-on-full: a packet that does
 //!   not fit is dropped, counted in [`Icm42688Model::dropped`] by its sample number, and sets
 //!   FIFO_FULL_INT; FIFO_THS_INT while the count (records with FIFO_COUNT_REC) reaches the
 //!   watermark; INT_STATUS cleared on read; INT1 as INT_SOURCE0 routes it;
@@ -94,6 +94,7 @@ fn reset_banks() -> [[u8; 128]; 4] {
         (GYRO_ACCEL_CONFIG0, 0x11),
         (ACCEL_CONFIG1, 0x0D),
         (TMST_CONFIG, 0x23),
+        (FSYNC_CONFIG, 0x10),
         (INT_CONFIG1, 0x10),
         (INT_SOURCE0, 0x10),
     ] {
@@ -301,7 +302,13 @@ impl<G: Generator> Icm42688Model<G> {
         let hires = self.banks[0][FIFO_CONFIG1 as usize] & FIFO_HIRES_EN != 0;
         let mut p = [0u8; PACKET4_LEN];
         let len = if hires { PACKET4_LEN } else { PACKET3_LEN };
-        let ts = ((self.time_ns / 1000) as u16).to_be_bytes();
+        // TMST_RES: 1 µs or 16 µs ticks.
+        let tick_ns = if self.banks[0][TMST_CONFIG as usize] & TMST_RES_16US != 0 {
+            16_000
+        } else {
+            1000
+        };
+        let ts = ((self.time_ns / tick_ns) as u16).to_be_bytes();
         if hires {
             p[0] = HEADER_PACKET4;
             for i in 0..3 {
