@@ -317,7 +317,9 @@ mod app {
         let adc = unsafe { &*ADC1::ptr() };
         cx.shared.scan.lock(|t| {
             adc.cr2().modify(|_, w| w.dma().clear_bit());
-            adc.sr().modify(|_, w| w.ovr().clear_bit());
+            // One write, not `modify`: a read-modify-write would also clear the watchdog's or
+            // the next scan's flag raised between its read and its write.
+            board::clear_adc_flags(firmware::conversion::ADC_SR_OVR);
             // SAFETY: not double-buffered: restarts the stream on its own buffer.
             let _ = unsafe { t.next_transfer_with(|buf, _| (buf, ())) };
             adc.cr2().modify(|_, w| w.dma().set_bit());

@@ -211,6 +211,11 @@ pub fn enter_bootloader_if_requested() {
         cortex_m::interrupt::enable();
         let rcc = &*stm32f4xx_hal::pac::RCC::ptr();
         rcc.apb2enr().modify(|_, w| w.syscfgen().set_bit());
+        // The clock reaches SYSCFG a few cycles after the enable's write: a dsb before the first
+        // access, as the HAL's own enable does (stm32f4xx-hal 0.23 src/rcc/f4/enable.rs:12-13,
+        // "erratum 2.1.13 (DM00037591)", the F40x errata's delay after an RCC peripheral clock
+        // enable). Without it the MEMRMP write may be lost and the bootloader jump read flash.
+        cortex_m::asm::dsb();
         let syscfg = &*stm32f4xx_hal::pac::SYSCFG::ptr();
         syscfg.memrmp().modify(|_, w| w.mem_mode().system_flash());
         cortex_m::asm::bootload(SYSTEM_MEMORY as *const u32)

@@ -37,6 +37,7 @@ use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::pac::{ADC1, DMA2};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
+use crate::conversion::{adc_sr_clear, ADC_SR_AWD};
 use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 
@@ -103,12 +104,22 @@ pub fn take_watchdog_flag() -> bool {
     // SAFETY: reads ADC1's status register and clears only its watchdog bit (its bits are cleared
     // by writing 0; a 1 leaves them as they are). The HAL never touches that bit.
     let adc = unsafe { &*ADC1::ptr() };
-    let set = adc.sr().read().bits() & crate::conversion::ADC_SR_AWD != 0;
+    let set = adc.sr().read().bits() & ADC_SR_AWD != 0;
     if set {
-        adc.sr()
-            .write(|w| unsafe { w.bits(!crate::conversion::ADC_SR_AWD) });
+        clear_adc_flags(ADC_SR_AWD);
     }
     set
+}
+
+/// Clears ADC1's status `flags` (`firmware::conversion::ADC_SR_*`) with one write of
+/// [`adc_sr_clear`], never a read-modify-write, which would also clear a flag raised between
+/// its read and its write.
+#[inline(always)]
+pub fn clear_adc_flags(flags: u32) {
+    // SAFETY: one write to ADC1's status register: 0 at `flags`, 1 (no effect) at the other flags,
+    // 0 at the reserved bits.
+    let adc = unsafe { &*ADC1::ptr() };
+    adc.sr().write(|w| unsafe { w.bits(adc_sr_clear(flags)) });
 }
 
 /// What `Identify` reports.
