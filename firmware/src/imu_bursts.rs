@@ -184,7 +184,7 @@ impl BurstReader {
     /// Around a configured driver's state (the part already configured over the blocking bus).
     pub fn new(core: Core) -> Self {
         let cfg = core.config();
-        let watermark_ms = u32::from(cfg.watermark_packets) * 1000 / cfg.odr.hz();
+        let watermark_ms = u32::from(cfg.watermark_packets) * u32::from(cfg.odr.period_us()) / 1000;
         BurstReader {
             core,
             phase: Phase::Status,
