@@ -30,6 +30,21 @@ use crate::pipeline::Sample;
 /// bit 0, `status & ADC_SR_AWD` is already 0 or 1.
 pub const ADC_SR_AWD: u32 = 1;
 
+/// ADC_SR's overrun flag (bit 5, cleared by writing 0).
+pub const ADC_SR_OVR: u32 = 1 << 5;
+
+/// ADC_SR's flags, bits 5:0 (OVR, STRT, JSTRT, JEOC, EOC, AWD: each cleared by writing 0, left as
+/// it is by writing 1); bits 31:6 are reserved, kept at 0.
+pub const ADC_SR_FLAGS: u32 = 0x3F;
+
+/// The word to write to ADC_SR to clear `flags` and no other: 0 at their bits, 1 at the other
+/// flags. One write, never a read-modify-write: a read-modify-write (the HAL's `modify`) writes
+/// back as 0 every flag that was still 0 when it read, so a flag the ADC raises between its read
+/// and its write (the next scan's EOC, the watchdog's AWD) is lost.
+pub const fn adc_sr_clear(flags: u32) -> u32 {
+    ADC_SR_FLAGS & !flags
+}
+
 /// The analog watchdog's (low, high) thresholds that flag exactly a code at 0 or at `adc_max`:
 /// the watchdog flags a code below the low or above the high threshold.
 pub const fn watchdog_thresholds(adc_max: u16) -> (u16, u16) {
@@ -224,5 +239,24 @@ mod tests {
                 assert_eq!(flagged, code == 0 || code == adc_max, "{code} of {adc_max}");
             }
         }
+    }
+
+    /// ADC_SR as the hardware treats a write: a flag written 0 is cleared, written 1 unchanged.
+    fn write_rc_w0(sr: u32, word: u32) -> u32 {
+        sr & word
+    }
+
+    #[test]
+    fn clearing_the_overrun_keeps_a_flag_raised_after_the_read() {
+        const EOC: u32 = 1 << 1;
+        let read = ADC_SR_OVR; // what a read-modify-write reads
+        let sr = read | ADC_SR_AWD | EOC; // the next scan's flags arrive before its write
+        assert_eq!(write_rc_w0(sr, adc_sr_clear(ADC_SR_OVR)), ADC_SR_AWD | EOC);
+        // The read-modify-write it replaces (`modify(|_, w| w.ovr().clear_bit())` writes what it
+        // read with OVR at 0) clears them too.
+        assert_eq!(write_rc_w0(sr, read & !ADC_SR_OVR), 0);
+        // The watchdog flag's clear leaves the overrun, and no reserved bit is written 1.
+        assert_eq!(write_rc_w0(sr, adc_sr_clear(ADC_SR_AWD)), ADC_SR_OVR | EOC);
+        assert_eq!(adc_sr_clear(0) & !ADC_SR_FLAGS, 0);
     }
 }

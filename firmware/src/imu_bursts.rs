@@ -11,6 +11,17 @@
 //! 3. **flush** (only after a FIFO read out of step): SIGNAL_PATH_RESET ← FIFO_FLUSH; the next
 //!    sample is flagged as following lost data.
 //!
+//! **A chain that stalls.** If one interrupt of the chain is lost (a DMA completion that never
+//! comes, or a watermark edge missed while INT1 is latched high), nothing would ever read the part
+//! again: the chain stays "under way", INT1 stays high and gives no new edge. A board ticks the
+//! reader every [`STALL_TICK_MS`] from a timer ([`BurstReader::on_tick`]); after more than
+//! [`STALL_TIMEOUT_MS`] without a completed burst (a watermark comes every millisecond or so) it
+//! starts over as PX4's ICM42688P driver does from its "backup schedule as a watchdog timeout"
+//! (`ICM42688P.cpp`, `RunImpl`, `ScheduleDelayed(100_ms)`, commit 00d281a): the FIFO flushed, then
+//! INT_STATUS read, which releases INT1; the next sample is flagged as following lost data. Reading
+//! resumes within 100 ms of the lost interrupt (tested on the PC against the register model:
+//! `imu::tests::bursts_stall`).
+//!
 //! The same bytes the blocking driver's `drain` moves (`imu::icm42688::Icm42688`), so the register
 //! model tests of the driver cover the protocol; the tests here cover the chaining.
 
@@ -68,9 +79,21 @@ impl Burst {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Phase {
     Status,
-    Fifo { bytes: usize, more: bool },
+    Fifo {
+        bytes: usize,
+        more: bool,
+    },
     Flush,
+    /// The flush of a stalled chain's restart; a status read follows.
+    Restart,
 }
+
+/// A chain without a completed burst for longer than this is presumed stalled, ms (or four
+/// watermark intervals, if longer: a slow configuration's chains are that far apart).
+pub const STALL_TIMEOUT_MS: u32 = 80;
+/// How often a board calls [`BurstReader::on_tick`], ms: a stall is acted on between 80 and
+/// 90 ms after the last completed burst, and reading resumes at the next watermark.
+pub const STALL_TICK_MS: u32 = 10;
 
 /// Whether a burst chain runs: set by the watermark interrupt, ended by the completion task. An
 /// atomic, so the watermark interrupt never waits for the completion task.
@@ -106,6 +129,12 @@ impl InFlight {
                 None
             }
         }
+    }
+
+    /// A stalled chain's restart takes the bus, whatever the state was (the watermark interrupt
+    /// then only notes a pending status read).
+    fn take_over(&self) {
+        self.0.store(BUSY, Ordering::Release);
     }
 
     /// The chain has nothing more to read: it ends, or goes on with a status read if a watermark
@@ -145,14 +174,22 @@ pub struct Completed {
 pub struct BurstReader {
     core: Core,
     phase: Phase,
+    /// Time since the last completed burst, ms (in [`STALL_TICK_MS`] steps).
+    quiet_ms: u32,
+    /// [`STALL_TIMEOUT_MS`], or four watermark intervals if longer.
+    stall_after_ms: u32,
 }
 
 impl BurstReader {
     /// Around a configured driver's state (the part already configured over the blocking bus).
     pub fn new(core: Core) -> Self {
+        let cfg = core.config();
+        let watermark_ms = u32::from(cfg.watermark_packets) * u32::from(cfg.odr.period_us()) / 1000;
         BurstReader {
             core,
             phase: Phase::Status,
+            quiet_ms: 0,
+            stall_after_ms: STALL_TIMEOUT_MS.max(4 * watermark_ms),
         }
     }
 
@@ -166,8 +203,24 @@ impl BurstReader {
         match self.phase {
             Phase::Status => STATUS_CMD.len(),
             Phase::Fifo { bytes, .. } => 1 + bytes,
-            Phase::Flush => FLUSH_CMD.len(),
+            Phase::Flush | Phase::Restart => FLUSH_CMD.len(),
         }
+    }
+
+    /// Called every [`STALL_TICK_MS`] by a board's timer. After more than [`STALL_TIMEOUT_MS`]
+    /// (or four watermark intervals) without a completed burst, the restart burst to put on the wire at once, in place of
+    /// whatever the stalled chain left there (the FIFO flush; its completion goes on with a status
+    /// read). The next sample is flagged as following lost data.
+    pub fn on_tick(&mut self, in_flight: &InFlight) -> Option<Burst> {
+        self.quiet_ms = self.quiet_ms.saturating_add(STALL_TICK_MS);
+        if self.quiet_ms <= self.stall_after_ms {
+            return None;
+        }
+        self.quiet_ms = 0;
+        self.core.corrupted();
+        self.phase = Phase::Restart;
+        in_flight.take_over();
+        Some(Burst { tx: &FLUSH_CMD })
     }
 
     /// The burst failed on the bus: the chain ends, and since packets may have been lost with it,
@@ -195,6 +248,7 @@ impl BurstReader {
             next: None,
             corrupt_header: None,
         };
+        self.quiet_ms = 0;
         let next = match self.phase {
             Phase::Status => {
                 let status = [byte(rx, 1), byte(rx, 2), byte(rx, 3)];
@@ -224,6 +278,10 @@ impl BurstReader {
                 }
             }
             Phase::Flush => None,
+            Phase::Restart => {
+                self.phase = Phase::Status;
+                Some(Burst { tx: &STATUS_CMD })
+            }
         };
         done.next = match next {
             Some(b) => Some(b),

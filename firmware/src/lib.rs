@@ -8,6 +8,8 @@
 //! - [`protocol`]: frame reception, the request handler ([`protocol::Controller`]) and the link
 //!   service that moves queued frames to the link without blocking.
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
+//! - [`clock_tree`]: the STM32 boards' SPI buses as data (pin speeds; clocks from the HAL's own
+//!   divider rules), checked at compile time against the parts' limits.
 //! - [`conversion`]: an ADC board's per-sample conversion of the scan's codes and the gyro's words
 //!   (Nucleo board).
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
@@ -28,6 +30,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;
 pub mod gyro;

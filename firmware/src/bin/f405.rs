@@ -8,6 +8,7 @@
 //! |---|---|---|---|
 //! | `imu_int` | EXTI4 (INT1 on PC4) | 3 | FIFO watermark: CS low, starts the SPI1 TX DMA (the RX stream is armed) |
 //! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, runs the pipeline on each |
+//! | `stall_tick` | SysTick (every 10 ms) | 2 | restarts a burst chain that stalled (an interrupt lost): FIFO flushed, status read |
 //! | `usb` | OTG_FS | 1 | USB device, link service (requests, calibration store, frames out) |
 //! | `idle` | — | 0 | stack high-water mark, LED blink when the IMU is missing, `wfi` |
 //!
@@ -29,17 +30,18 @@ mod app {
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config;
-    use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
-    use stm32f4xx_hal::timer::SysDelay;
+    use stm32f4xx_hal::spi::Spi;
+    use stm32f4xx_hal::timer::{SysCounterHz, SysDelay, SysEvent};
     use usb_device::bus::UsbBusAllocator;
     use usb_device::prelude::*;
 
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
-    use firmware::board::stm32_common::Store;
+    use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::clock_tree::f405::IMU_SPI;
     use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
     use firmware::imu::{ImuSample, PipelineFeed};
-    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE};
+    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::PipelineAccess;
     use firmware::stack::HighWater;
@@ -59,14 +61,19 @@ mod app {
         pipeline: &'static mut Pipeline<OUTPUT_QUEUE>,
         /// The SPI bus during bursts: its DMA streams and the chip select.
         bus: (SpiDma, PA4<Output<PushPull>>),
+        /// The chain's decisions (`None`: no IMU answered at boot); the completion task and the
+        /// stall timer share it at the same priority.
+        reader: Option<BurstReader>,
     }
 
     #[local]
     struct Local {
         int1: PC4<Input>,
         rx_for_int: RxBuf,
+        rx_for_tick: RxBuf,
         rx: RxBuf,
-        reader: Option<BurstReader>,
+        /// SysTick, counting the stall timer's period (kept so that it keeps running).
+        tick: SysCounterHz,
         samples: &'static mut [ImuSample; BATCH_PACKETS],
         feed: PipelineFeed,
         /// Samples between two LED updates (half a second).
@@ -103,18 +110,21 @@ mod app {
         // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
         let mut cs = gpioa.pa4.into_push_pull_output();
         cs.set_high();
-        let spi = dp.SPI1.spi(
-            (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
-            Mode {
-                polarity: Polarity::IdleHigh,
-                phase: Phase::CaptureOnSecondTransition,
-            },
-            board::SPI_HZ.Hz(),
+        let spi = spi1(
+            dp.SPI1,
+            (gpioa.pa5, gpioa.pa6, gpioa.pa7),
+            &IMU_SPI,
             &mut rcc,
         );
         let sample_rate_hz = board::IMU_CONFIG.odr.hz();
         let mut delay = cx.core.SYST.delay(&rcc.clocks);
         let reader = init_imu(spi, &mut cs, &mut delay);
+        let imu_found = reader.is_some();
+        // SysTick, free after the IMU's set-up, ticks the stall check every STALL_TICK_MS.
+        let mut tick = delay.release().counter_hz();
+        tick.start((1000 / STALL_TICK_MS).Hz())
+            .unwrap_or_else(|_| defmt::panic!("SysTick at the stall check's rate"));
+        tick.listen(SysEvent::Update);
         let dma = SpiDma::new(StreamsTuple::new(dp.DMA2, &mut rcc));
         let rx = RxBuf::new(cx.local.rx_buf);
 
@@ -153,13 +163,15 @@ mod app {
             Shared {
                 pipeline,
                 bus: (dma, cs),
+                reader,
             },
             Local {
                 int1,
                 rx_for_int: rx,
+                rx_for_tick: rx,
                 rx,
-                imu_found: reader.is_some(),
-                reader,
+                tick,
+                imu_found,
                 samples: cx.local.sample_buf,
                 feed: PipelineFeed::new(sample_rate_hz),
                 led_period: sample_rate_hz / 2,
@@ -266,9 +278,10 @@ mod app {
 
     /// A burst ended: CS high, the driver's decision on the received bytes (next burst of the
     /// chain, decoded samples) outside any lock, then the pipeline on each sample — all preemptible
-    /// by the watermark interrupt. The locks cover register writes only.
-    #[task(binds = DMA2_STREAM2, priority = 2, shared = [pipeline, bus],
-           local = [rx, reader, samples, feed, led_period, packets: u32 = 0])]
+    /// by the watermark interrupt. The locks cover register writes only (the reader's is free: its
+    /// other user, `stall_tick`, has the same priority).
+    #[task(binds = DMA2_STREAM2, priority = 2, shared = [pipeline, bus, reader],
+           local = [rx, samples, feed, led_period, packets: u32 = 0])]
     fn burst_done(mut cx: burst_done::Context) {
         let l = cx.local;
         // The stream's flags first, whatever follows: a flag left set would re-enter at once.
@@ -279,19 +292,24 @@ mod app {
         }) else {
             return; // spurious: the burst is still running
         };
-        let Some(reader) = l.reader.as_mut() else {
-            return; // no IMU answered at boot (the boot-time kick still runs one burst)
-        };
-        let done = match end {
-            // SAFETY: the burst ended and the next starts below, after the last use of `bytes`.
-            BurstEnd::Complete => {
-                let bytes = unsafe { l.rx.received(reader.expected_len()) };
-                reader.on_complete(bytes, l.samples, &IN_FLIGHT)
-            }
-            BurstEnd::Error => reader.abandon(&IN_FLIGHT),
+        let rx = *l.rx;
+        let samples = &mut *l.samples;
+        let Some(done) = cx.shared.reader.lock(|reader| {
+            // None: no IMU answered at boot (the boot-time kick still runs one burst).
+            let reader = reader.as_mut()?;
+            Some(match end {
+                // SAFETY: the burst ended and the next starts below, after the last use of
+                // `bytes`.
+                BurstEnd::Complete => {
+                    let bytes = unsafe { rx.received(reader.expected_len()) };
+                    reader.on_complete(bytes, samples, &IN_FLIGHT)
+                }
+                BurstEnd::Error => reader.abandon(&IN_FLIGHT),
+            })
+        }) else {
+            return;
         };
         if let Some(next) = done.next {
-            let rx = *l.rx;
             cx.shared.bus.lock(|bus| start(bus, next, rx));
         }
         if let Some(h) = done.corrupt_header {
@@ -300,7 +318,7 @@ mod app {
         cx.shared.pipeline.lock(|p| {
             // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through the
             // sample's DATA_LOST flag.
-            l.feed.push_all(&l.samples[..done.samples], p);
+            l.feed.push_all(&samples[..done.samples], p);
             *l.packets += done.samples as u32;
             if *l.packets >= *l.led_period {
                 *l.packets = 0;
@@ -309,6 +327,34 @@ mod app {
             if p.queued() > 0 {
                 rtic::pend(pac::Interrupt::OTG_FS);
             }
+        });
+    }
+
+    /// Every 10 ms: when no burst completed for the reader's stall time (an interrupt of the chain
+    /// was lost), restart the chain — CS high then low around the restart's flush, the streams
+    /// stopped and restarted by `SpiDma::start`; the next sample is flagged as following lost
+    /// data (`imu_bursts`, "A chain that stalls").
+    #[task(binds = SysTick, priority = 2, shared = [bus, reader], local = [rx_for_tick, tick])]
+    fn stall_tick(mut cx: stall_tick::Context) {
+        let Some(burst) = cx
+            .shared
+            .reader
+            .lock(|reader| reader.as_mut().and_then(|r| r.on_tick(&IN_FLIGHT)))
+        else {
+            return;
+        };
+        defmt::warn!("IMU burst chain stalled: FIFO flushed, reading restarted");
+        let rx = *cx.local.rx_for_tick;
+        cx.shared.bus.lock(|bus| {
+            bus.1.set_high();
+            // Whatever the stalled burst left in SPI1's receiver (and its overrun flag).
+            // SAFETY: two reads of SPI1's data and status registers, as at boot.
+            unsafe {
+                let regs = &*SPI1::ptr();
+                let _ = regs.dr().read();
+                let _ = regs.sr().read();
+            }
+            start(bus, burst, rx);
         });
     }
 

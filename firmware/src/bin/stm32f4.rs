@@ -39,12 +39,13 @@ mod app {
     use stm32f4xx_hal::rcc::{Config, Rcc};
     use stm32f4xx_hal::serial::{Rx, Tx};
     use stm32f4xx_hal::signature::{VtempCal110, VtempCal30};
-    use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi};
+    use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::CounterHz;
 
-    use firmware::board::stm32_common::Store;
+    use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::stm32f4::{self as board, AdcWords, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::clock_tree::nucleo::GYRO_SPI;
     use firmware::conversion::Scaling;
     use firmware::gyro::L3gd20;
     use firmware::link::{on_rx_byte, RxQueueLink, RX_QUEUE};
@@ -121,13 +122,10 @@ mod app {
         let controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
 
         let gyro = init_gyro(
-            dp.SPI1.spi(
-                (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
-                Mode {
-                    polarity: Polarity::IdleHigh,
-                    phase: Phase::CaptureOnSecondTransition,
-                },
-                8.MHz(),
+            spi1(
+                dp.SPI1,
+                (gpioa.pa5, gpioa.pa6, gpioa.pa7),
+                &GYRO_SPI,
                 &mut rcc,
             ),
             gpiob.pb6.into_push_pull_output(),
@@ -319,7 +317,9 @@ mod app {
         let adc = unsafe { &*ADC1::ptr() };
         cx.shared.scan.lock(|t| {
             adc.cr2().modify(|_, w| w.dma().clear_bit());
-            adc.sr().modify(|_, w| w.ovr().clear_bit());
+            // One write, not `modify`: a read-modify-write would also clear the watchdog's or
+            // the next scan's flag raised between its read and its write.
+            board::clear_adc_flags(firmware::conversion::ADC_SR_OVR);
             // SAFETY: not double-buffered: restarts the stream on its own buffer.
             let _ = unsafe { t.next_transfer_with(|buf, _| (buf, ())) };
             adc.cr2().modify(|_, w| w.dma().set_bit());

@@ -32,12 +32,11 @@ use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 use crate::ByteLink;
 
-/// Core clock, Hz (the F405's maximum).
-pub const SYSCLK_HZ: u32 = 168_000_000;
+/// Core clock, Hz (the F405's maximum; `clock_tree::f405`, where the SPI clock is computed from it
+/// and checked against the ICM-42688-P's 24 MHz at compile time: 84 MHz APB2 / 4 = 21 MHz).
+pub use crate::clock_tree::f405::SYSCLK_HZ;
 /// Crystal, Hz (`SYSTEM_HSE_MHZ 8`).
 pub const HSE_HZ: u32 = 8_000_000;
-/// SPI1 clock, Hz: PCLK2 84 MHz / 4; the ICM-42688-P accepts up to 24 MHz.
-pub const SPI_HZ: u32 = 21_000_000;
 /// The ICM-42688-P's configuration: 8 kHz (its highest rate), ±4 g (0.12 mg per count: hand-held
 /// and rate-table motion stay well inside it; a sample beyond it is flagged saturated) and ±2000 °/s
 /// (the protocol's table rates reach 30 rad/s ≈ 1720 °/s), 258 Hz anti-alias filters, 16-byte
@@ -212,6 +211,11 @@ pub fn enter_bootloader_if_requested() {
         cortex_m::interrupt::enable();
         let rcc = &*stm32f4xx_hal::pac::RCC::ptr();
         rcc.apb2enr().modify(|_, w| w.syscfgen().set_bit());
+        // The clock reaches SYSCFG a few cycles after the enable's write: a dsb before the first
+        // access, as the HAL's own enable does (stm32f4xx-hal 0.23 src/rcc/f4/enable.rs:12-13,
+        // "erratum 2.1.13 (DM00037591)", the F40x errata's delay after an RCC peripheral clock
+        // enable). Without it the MEMRMP write may be lost and the bootloader jump read flash.
+        cortex_m::asm::dsb();
         let syscfg = &*stm32f4xx_hal::pac::SYSCFG::ptr();
         syscfg.memrmp().modify(|_, w| w.mem_mode().system_flash());
         cortex_m::asm::bootload(SYSTEM_MEMORY as *const u32)

@@ -8,7 +8,7 @@
 //! | accelerometer x out  | PA0  | A0     | ADC1_IN0          |
 //! | accelerometer y out  | PA1  | A1     | ADC1_IN1          |
 //! | accelerometer z out  | PA4  | A2     | ADC1_IN4          |
-//! | gyro SCK             | PA5  | D13    | SPI1_SCK (LD2 shares it) |
+//! | gyro SCK             | PA5  | D13    | SPI1_SCK, 5.625 MHz (LD2 shares it) |
 //! | gyro SDO (MISO)      | PA6  | D12    | SPI1_MISO         |
 //! | gyro SDA (MOSI)      | PA7  | D11    | SPI1_MOSI         |
 //! | gyro CS              | PB6  | D10    | GPIO, active low  |
@@ -37,29 +37,23 @@ use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::pac::{ADC1, DMA2};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
+use crate::conversion::{adc_sr_clear, ADC_SR_AWD};
 use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
+
+// The clock tree, the ADC clock and the UART's baud rate, computed and checked against their
+// limits at compile time in `clock_tree::nucleo` (with the gyro's SPI clock).
+pub use crate::clock_tree::nucleo::{
+    ADC_CLOCK_HZ, ADC_CLOCK_MAX_HZ, ADC_PRESCALER, BAUD, PCLK2_HZ, SYSCLK_HZ,
+};
 
 /// Sampling rate, Hz (1000..=10000; change and rebuild).
 pub const SAMPLE_RATE_HZ: u32 = 1000;
 const _: () = assert!(SAMPLE_RATE_HZ >= 1000 && SAMPLE_RATE_HZ <= 10_000);
-/// Core clock, Hz.
-pub const SYSCLK_HZ: u32 = 180_000_000;
-/// APB2 clock, Hz: SYSCLK / 2 (APB2's maximum is 90 MHz).
-pub const PCLK2_HZ: u32 = 90_000_000;
-/// ADC prescaler (ADC_CCR.ADCPRE: PCLK2 divided by 4).
-pub const ADC_PRESCALER: u32 = 4;
-/// ADC clock, Hz.
-pub const ADC_CLOCK_HZ: u32 = PCLK2_HZ / ADC_PRESCALER;
-/// The STM32F446's highest ADC clock at V_DDA 2.4–3.6 V (datasheet DS10693), Hz.
-pub const ADC_CLOCK_MAX_HZ: u32 = 36_000_000;
-const _: () = assert!(ADC_CLOCK_HZ <= ADC_CLOCK_MAX_HZ);
 /// ADC cycles of one scan: three accelerometers at 56 + 12, the temperature sensor at 480 + 12.
 pub const SCAN_ADC_CYCLES: u32 = 3 * (56 + 12) + (480 + 12);
 // The scan must finish well within a sample period (here: half of it).
 const _: () = assert!(SCAN_ADC_CYCLES as u64 * SAMPLE_RATE_HZ as u64 * 2 <= ADC_CLOCK_HZ as u64);
-/// UART baud rate.
-pub const BAUD: u32 = 921_600;
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
 /// Flash offset (from 0x0800_0000) of the calibration store: sectors 6 and 7 (see memory.x).
@@ -110,12 +104,22 @@ pub fn take_watchdog_flag() -> bool {
     // SAFETY: reads ADC1's status register and clears only its watchdog bit (its bits are cleared
     // by writing 0; a 1 leaves them as they are). The HAL never touches that bit.
     let adc = unsafe { &*ADC1::ptr() };
-    let set = adc.sr().read().bits() & crate::conversion::ADC_SR_AWD != 0;
+    let set = adc.sr().read().bits() & ADC_SR_AWD != 0;
     if set {
-        adc.sr()
-            .write(|w| unsafe { w.bits(!crate::conversion::ADC_SR_AWD) });
+        clear_adc_flags(ADC_SR_AWD);
     }
     set
+}
+
+/// Clears ADC1's status `flags` (`firmware::conversion::ADC_SR_*`) with one write of
+/// [`adc_sr_clear`], never a read-modify-write, which would also clear a flag raised between
+/// its read and its write.
+#[inline(always)]
+pub fn clear_adc_flags(flags: u32) {
+    // SAFETY: one write to ADC1's status register: 0 at `flags`, 1 (no effect) at the other flags,
+    // 0 at the reserved bits.
+    let adc = unsafe { &*ADC1::ptr() };
+    adc.sr().write(|w| unsafe { w.bits(adc_sr_clear(flags)) });
 }
 
 /// What `Identify` reports.

@@ -9,7 +9,7 @@ use super::regs::*;
 use super::self_test::{self, SelfTestReport, SensorUnderTest};
 use super::{
     check_identity, configure_steps, Config, Core, Error, FifoBuffer, Step, BATCH_PACKETS,
-    RESET_STEPS,
+    IDENTIFY_READS, IDENTIFY_RETRY_US, POWER_UP_STEPS, RESET_STEPS,
 };
 use crate::imu::{Drained, ImuSample, ImuSourceAsync};
 

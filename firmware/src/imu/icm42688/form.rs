@@ -33,7 +33,8 @@ macro_rules! driver {
         }
 
         impl<SPI: $spi> $name<SPI> {
-            /// Resets the part, checks WHO_AM_I, configures it for `cfg` and starts the FIFO.
+            /// Waits out the part's power-on time, resets it, identifies it ([`Self::identify`]),
+            /// configures it for `cfg` and starts the FIFO.
             pub $($async)? fn new(spi: SPI, cfg: Config) -> Result<Self, Error<SPI::Error>> {
                 let core = Core::new(cfg).map_err(Error::Config)?;
                 let mut imu = $name {
@@ -41,10 +42,25 @@ macro_rules! driver {
                     core,
                     buf: [0; BATCH_PACKETS * PACKET4_LEN],
                 };
+                $wait!(imu.run(&POWER_UP_STEPS))?;
                 $wait!(imu.reset())?;
-                check_identity($wait!(imu.who_am_i())?)?;
+                $wait!(imu.identify())?;
                 $wait!(imu.configure(cfg))?;
                 Ok(imu)
+            }
+
+            /// Reads WHO_AM_I until it is 0x47, at most [`IDENTIFY_READS`] times
+            /// [`IDENTIFY_RETRY_US`] apart; refuses the part with the last value read.
+            pub $($async)? fn identify(&mut self) -> Result<(), Error<SPI::Error>> {
+                let mut id = $wait!(self.who_am_i())?;
+                for _ in 1..IDENTIFY_READS {
+                    if id == WHO_AM_I_VALUE {
+                        break;
+                    }
+                    $wait!(self.run(&[Step::WaitUs(IDENTIFY_RETRY_US)]))?;
+                    id = $wait!(self.who_am_i())?;
+                }
+                check_identity(id)
             }
 
             /// Soft reset (every register to its reset value, the FIFO emptied), 1 ms.
@@ -116,6 +132,11 @@ macro_rules! driver {
                 for s in steps {
                     match *s {
                         Step::Write(reg, v) => $wait!(self.write(reg, v))?,
+                        Step::Update { reg, mask, value } => {
+                            let mut v = [0u8; 1];
+                            $wait!(self.read(reg, &mut v))?;
+                            $wait!(self.write(reg, (v[0] & !mask) | (value & mask)))?
+                        }
                         Step::WaitUs(0) => {}
                         Step::WaitUs(us) => $wait!(self
                             .spi

@@ -281,6 +281,12 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Error::Spi(e) => write!(f, "ICM-42688-P: SPI transfer failed ({e:?}); check wiring and chip select"),
+            // Only bit 0 wrong: the STM32F4's "wrong last bit in every received byte" of SPI pins
+            // left at low speed (stm32f4xx-hal 0.23 src/spi.rs:302-303), not another part.
+            Error::WrongDevice(id) if id ^ WHO_AM_I_VALUE == 1 => write!(
+                f,
+                "ICM-42688-P: WHO_AM_I reads {id:#04x}, expected 0x47: bit 0 wrong, as when the SPI pins are at low speed"
+            ),
             Error::WrongDevice(id) => write!(
                 f,
                 "ICM-42688-P: WHO_AM_I reads {id:#04x}, expected 0x47; check the part and the SPI mode (0 or 3)"
@@ -299,9 +305,32 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
 pub enum Step {
     /// Write `value` to register `reg` of the bank currently selected.
     Write(u8, u8),
+    /// Read register `reg` of the bank selected, clear the bits of `mask`, set those of `value`,
+    /// write it back (for a register whose other bits the driver leaves as they are).
+    Update {
+        /// The register.
+        reg: u8,
+        /// The bits replaced.
+        mask: u8,
+        /// Their new value (within `mask`).
+        value: u8,
+    },
     /// Wait this many microseconds.
     WaitUs(u32),
 }
+
+/// After power-on, 1 ms before the first access: Betaflight's `icm426xxSpiDetect`
+/// (`accgyro_spi_icm426xx.c` line 262, `delay(1); // power-on time`, commit 301d01abc4).
+pub const POWER_UP_STEPS: [Step; 1] = [Step::WaitUs(1000)];
+
+/// WHO_AM_I reads at most before the part is refused: the first and 20 retries, 1 ms apart, as
+/// Betaflight's `icm426xxSpiDetect` (lines 268-301: `attemptsRemaining = 20`, `delay(1)` before
+/// each read, `while (attemptsRemaining--)`, i.e. 21 reads). A part still starting may answer
+/// wrongly at first.
+pub const IDENTIFY_READS: u32 = 21;
+
+/// Wait before each WHO_AM_I retry, µs.
+pub const IDENTIFY_RETRY_US: u32 = 1000;
 
 /// Soft reset: DEVICE_CONFIG.SOFT_RESET_CONFIG, then 1 ms before any access (§14.1).
 pub const RESET_STEPS: [Step; 3] = [
@@ -311,10 +340,11 @@ pub const RESET_STEPS: [Step; 3] = [
 ];
 
 /// Steps in [`configure_steps`].
-pub const CONFIGURE_STEPS: usize = 29;
+pub const CONFIGURE_STEPS: usize = 30;
 
 /// The register writes that configure the part for `cfg` (checked before), in order: sensors off,
-/// interface, anti-alias filters (banks 1 and 2), ranges and rates, time stamps, FIFO, INT1, FIFO
+/// interface, AFSR off, anti-alias filters (banks 1 and 2), ranges and rates, time stamps and
+/// FSYNC off, FIFO, INT1, FIFO
 /// flushed, sensors on in low-noise mode (then 200 µs without writes, §14.29).
 pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
     let aaf = |a: AntiAlias| a.coefficients().unwrap_or((0, 0, 0));
@@ -335,6 +365,14 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
             INTF_CONFIG0,
             FIFO_COUNT_REC | FIFO_COUNT_ENDIAN | SENSOR_DATA_ENDIAN | UI_SIFS_DISABLE_I2C,
         ),
+        // The adaptive full-scale switch off: it holds the gyro output for 1–2 ms whenever the rate
+        // crosses about ±100 °/s, which a rate table does on every turn. Read-modify-write as
+        // Betaflight does it (`accgyro_spi_icm426xx.c` 416-420, see `regs::AFSR_DISABLE`).
+        Step::Update {
+            reg: INTF_CONFIG1,
+            mask: AFSR_MASK,
+            value: AFSR_DISABLE,
+        },
         Step::Write(REG_BANK_SEL, 1),
         // Reset value 0xA0 with GYRO_AAF_DIS (bit 1) as configured, the notch filter left on.
         Step::Write(GYRO_CONFIG_STATIC2, 0xA0 | ((gyro_off as u8) << 1)),
@@ -351,7 +389,22 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
             ACCEL_CONFIG0,
             ((cfg.accel_range as u8) << 5) | cfg.odr as u8,
         ),
-        Step::Write(TMST_CONFIG, TMST_ODR_1US),
+        // Time stamps as the decoder reads them, every field set by name rather than left at its
+        // reset value: absolute (not deltas), 1 µs resolution (`Odr::period_us` is in 1 µs
+        // ticks), FSYNC time stamps off. FSYNC itself off (FSYNC_UI_SEL 000, not the reset value
+        // 001). TDK's reference driver does both at start-up (Icm426xxDriver_HL.c,
+        // inv_icm426xx_init, lines 1913-1923: "Deactivate FSYNC by default", then the time-stamp
+        // resolution set explicitly; it picks 16 µs, this driver 1 µs).
+        Step::Update {
+            reg: TMST_CONFIG,
+            mask: TMST_FIELDS,
+            value: TMST_EN,
+        },
+        Step::Update {
+            reg: FSYNC_CONFIG,
+            mask: FSYNC_UI_SEL_MASK,
+            value: 0,
+        },
         Step::Write(FIFO_CONFIG, 0), // bypass while the FIFO is set up
         Step::Write(FIFO_CONFIG1, FIFO_WM_GT_TH | hires | FIFO_PACKET3_EN),
         Step::Write(FIFO_CONFIG2, (wm & 0xFF) as u8),
@@ -365,7 +418,6 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
         Step::Write(SIGNAL_PATH_RESET, FIFO_FLUSH),
         Step::Write(PWR_MGMT0, PWR_LOW_NOISE),
         Step::WaitUs(200),
-        Step::WaitUs(0),
     ]
 }
 

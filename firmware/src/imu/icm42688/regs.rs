@@ -54,6 +54,17 @@ pub const FIFO_COUNT_ENDIAN: u8 = 1 << 5;
 pub const SENSOR_DATA_ENDIAN: u8 = 1 << 4;
 /// INTF_CONFIG0: UI_SIFS_CFG = 11, the I²C interface disabled (an SPI-only board).
 pub const UI_SIFS_DISABLE_I2C: u8 = 0b11;
+/// INTF_CONFIG1 (§14.28), reset value 0x91: bits 7:6 hold the adaptive full-scale range (AFSR)
+/// switch, on at reset (10), which holds the gyro output for 1–2 ms when the rate crosses about
+/// ±100 °/s; RTC_MODE (2), CLKSEL (1:0).
+pub const INTF_CONFIG1: u8 = 0x4D;
+/// INTF_CONFIG1: the AFSR field.
+pub const AFSR_MASK: u8 = 0xC0;
+/// INTF_CONFIG1: AFSR off (01), as Betaflight writes it: `accgyro_spi_icm426xx.c` lines 76-78
+/// (`ICM426XX_INTF_CONFIG1_AFSR_MASK 0xC0`, `..._AFSR_DISABLE 0x40`, "Fix for stalls in gyro
+/// output", after ArduPilot PR 25332) and 416-420 (read, `&= ~MASK`, `|= DISABLE`, write), at
+/// betaflight/betaflight commit 301d01abc4.
+pub const AFSR_DISABLE: u8 = 0x40;
 /// PWR_MGMT0 (§14.29): GYRO_MODE bits 3:2, ACCEL_MODE bits 1:0 (11 = low noise). After turning the
 /// gyro on, no register write for 200 µs.
 pub const PWR_MGMT0: u8 = 0x4E;
@@ -72,8 +83,25 @@ pub const ACCEL_CONFIG1: u8 = 0x53;
 /// TMST_CONFIG (§14.35), reset 0x23: TMST_TO_REGS_EN (4), TMST_RES (3: 0 = 1 µs), TMST_DELTA_EN
 /// (2), TMST_FSYNC_EN (1), TMST_EN (0).
 pub const TMST_CONFIG: u8 = 0x54;
-/// TMST_CONFIG: reset value with FSYNC time stamps off: absolute 1 µs ODR time stamps.
-pub const TMST_ODR_1US: u8 = 0x21;
+/// TMST_CONFIG: TMST_TO_REGS_EN (the time stamp readable from TMST_VALUE registers).
+pub const TMST_TO_REGS_EN: u8 = 1 << 4;
+/// TMST_CONFIG: TMST_RES, the time stamp's resolution: 0 = 1 µs, 1 = 16 µs (or one RTC period).
+pub const TMST_RES_16US: u8 = 1 << 3;
+/// TMST_CONFIG: TMST_DELTA_EN (time stamps as deltas from the previous one).
+pub const TMST_DELTA_EN: u8 = 1 << 2;
+/// TMST_CONFIG: TMST_FSYNC_EN (the FSYNC time stamp feature), on at reset.
+pub const TMST_FSYNC_EN: u8 = 1 << 1;
+/// TMST_CONFIG: TMST_EN (time stamps on), on at reset.
+pub const TMST_EN: u8 = 1;
+/// TMST_CONFIG's fields the driver sets (bits 7:5 are left as they read).
+pub const TMST_FIELDS: u8 =
+    TMST_TO_REGS_EN | TMST_RES_16US | TMST_DELTA_EN | TMST_FSYNC_EN | TMST_EN;
+/// FSYNC_CONFIG (§14.41), reset value 0x10: FSYNC_UI_SEL in bits 6:4 (001 at reset: the FSYNC
+/// flag tagged into the temperature's LSB; 000: FSYNC not tagged), FSYNC_UI_FLAG_CLEAR_SEL (1),
+/// FSYNC_POLARITY (0).
+pub const FSYNC_CONFIG: u8 = 0x62;
+/// FSYNC_CONFIG: the FSYNC_UI_SEL field.
+pub const FSYNC_UI_SEL_MASK: u8 = 0b0111_0000;
 /// FIFO_CONFIG1 (§14.38): FIFO_RESUME_PARTIAL_RD (6), FIFO_WM_GT_TH (5), FIFO_HIRES_EN (4),
 /// FIFO_TMST_FSYNC_EN (3), FIFO_TEMP_EN (2), FIFO_GYRO_EN (1), FIFO_ACCEL_EN (0).
 pub const FIFO_CONFIG1: u8 = 0x5F;

@@ -7,17 +7,24 @@
 //! - sampling while both sensors are in low-noise mode, at GYRO_CONFIG0's ODR: the data registers
 //!   (16 bits at the range registers' sensitivity, big-endian) and, unless in bypass mode, the FIFO
 //!   (packet 3, or packet 4 with FIFO_HIRES_EN: 18-bit accel and 19-bit gyro at ±16 g / ±2000 °/s,
-//!   16-bit temperature) with the absolute 1 µs time stamp; 2 KiB, stop-on-full: a packet that does
+//!   16-bit temperature) with the absolute time stamp in 1 µs or (TMST_RES) 16 µs ticks; 2 KiB, stop-on-full: a packet that does
 //!   not fit is dropped, counted in [`Icm42688Model::dropped`] by its sample number, and sets
 //!   FIFO_FULL_INT; FIFO_THS_INT while the count (records with FIFO_COUNT_REC) reaches the
 //!   watermark; INT_STATUS cleared on read; INT1 as INT_SOURCE0 routes it;
+//! - the adaptive full-scale range switch (AFSR, INTF_CONFIG1 bits 7:6, on at reset): while it is
+//!   on, a gyro rate crossing ±[`AFSR_SWITCH_DPS`] on any axis holds the gyro output at its last
+//!   value for [`Icm42688Model::afsr_hold_ns`] (1.5 ms: the 1–2 ms stalls that Betaflight's and
+//!   ArduPilot's drivers turn AFSR off for); off when the field reads 01 (`regs::AFSR_DISABLE`);
 //! - the first samples after the sensors start are marked invalid (−32768 / −524288), as the part
 //!   does while they settle ([`Icm42688Model::invalid_after_start`]);
 //! - the self-test response: with SELF_TEST_CONFIG's axis bits set, the factory response for the
 //!   part's code (`2620/2^(3−FS)·1.01^(code−1)` LSB at the self-test ranges), times
 //!   [`Icm42688Model::self_test_gain`] (1 for a healthy part);
-//! - rule checks: a register write within 200 µs of starting the gyro, any access within 1 ms of a
-//!   soft reset, or a write to a read-only register counts in [`Icm42688Model::violations`].
+//! - a part still starting: WHO_AM_I reads 0x00 for its first
+//!   [`Icm42688Model::who_am_i_wrong_reads`] reads (each read counted in `who_am_i_reads`);
+//! - rule checks: a register write within 200 µs of starting the gyro, any access within 1 ms of
+//!   power-on (the model's time 0) or of a soft reset, or a write to a read-only register counts in
+//!   [`Icm42688Model::violations`].
 
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 use heapless::Deque;
@@ -27,6 +34,9 @@ use crate::imu::icm42688::regs::*;
 
 /// Dropped sample numbers remembered (the first ones).
 pub const DROP_LOG: usize = 64;
+
+/// The gyro rate, °/s, at which the AFSR switches range (and the output stalls).
+pub const AFSR_SWITCH_DPS: f64 = 100.0;
 
 /// The model.
 pub struct Icm42688Model<G> {
@@ -41,8 +51,18 @@ pub struct Icm42688Model<G> {
     busy_until_ns: u64,
     no_write_until_ns: u64,
     since_start: u32,
+    /// Any gyro axis above [`AFSR_SWITCH_DPS`] at the last sample (the AFSR's range).
+    afsr_high: bool,
+    afsr_hold_until_ns: u64,
+    held_gyro_dps: [f64; 3],
+    /// How long a range switch of the AFSR holds the gyro output, ns.
+    pub afsr_hold_ns: u64,
     /// WHO_AM_I's value (0x47).
     pub who_am_i: u8,
+    /// WHO_AM_I reads 0x00 for this many reads first (a part still starting).
+    pub who_am_i_wrong_reads: u32,
+    /// WHO_AM_I reads so far.
+    pub who_am_i_reads: u32,
     /// Samples marked invalid after the sensors start.
     pub invalid_after_start: u32,
     /// Scale of the self-test response (1: healthy; 0.3: a failing part).
@@ -67,13 +87,14 @@ fn reset_banks() -> [[u8; 128]; 4] {
     for (reg, v) in [
         (0x13, 0x05), // DRIVE_CONFIG
         (INTF_CONFIG0, 0x30),
-        (0x4D, 0x91), // INTF_CONFIG1
+        (INTF_CONFIG1, 0x91),
         (GYRO_CONFIG0, 0x06),
         (ACCEL_CONFIG0, 0x06),
         (GYRO_CONFIG1, 0x16),
         (GYRO_ACCEL_CONFIG0, 0x11),
         (ACCEL_CONFIG1, 0x0D),
         (TMST_CONFIG, 0x23),
+        (FSYNC_CONFIG, 0x10),
         (INT_CONFIG1, 0x10),
         (INT_SOURCE0, 0x10),
     ] {
@@ -95,10 +116,17 @@ impl<G: Generator> Icm42688Model<G> {
             latched_count: 0,
             time_ns: 0,
             next_sample_ns: 0,
-            busy_until_ns: 0,
+            // Power-on: no access for 1 ms.
+            busy_until_ns: 1_000_000,
             no_write_until_ns: 0,
             since_start: 0,
+            afsr_high: false,
+            afsr_hold_until_ns: 0,
+            held_gyro_dps: [0.0; 3],
+            afsr_hold_ns: 1_500_000,
             who_am_i: WHO_AM_I_VALUE,
+            who_am_i_wrong_reads: 0,
+            who_am_i_reads: 0,
             invalid_after_start: 1,
             self_test_gain: 1.0,
             self_test_codes: [70, 72, 68, 60, 62, 58],
@@ -118,6 +146,11 @@ impl<G: Generator> Icm42688Model<G> {
     /// A register's value (bank, address), as the tests read the configuration.
     pub fn register(&self, bank: usize, reg: u8) -> u8 {
         self.banks[bank & 3][reg as usize & 0x7F]
+    }
+
+    /// The part's time since power-on, ns.
+    pub fn time_ns(&self) -> u64 {
+        self.time_ns
     }
 
     /// FIFO bytes held.
@@ -212,6 +245,7 @@ impl<G: Generator> Icm42688Model<G> {
             t.gyro_dps[i] += st_g[i];
             t.accel_g[i] += st_a[i];
         }
+        self.adaptive_range(&mut t);
         let n = self.samples;
         self.samples = self.samples.wrapping_add(1);
         let invalid = self.since_start < self.invalid_after_start;
@@ -220,6 +254,22 @@ impl<G: Generator> Icm42688Model<G> {
         self.status |= INT_DATA_RDY;
         if self.banks[0][FIFO_CONFIG as usize] >> 6 != 0 {
             self.push_packet(&t, invalid, n);
+        }
+    }
+
+    /// The AFSR: a range switch (any axis crossing ±[`AFSR_SWITCH_DPS`]) while it is on holds the
+    /// gyro output at the last value before the switch for `afsr_hold_ns`.
+    fn adaptive_range(&mut self, t: &mut Truth) {
+        let on = self.banks[0][INTF_CONFIG1 as usize] & AFSR_MASK != AFSR_DISABLE;
+        let high = t.gyro_dps.iter().any(|w| w.abs() > AFSR_SWITCH_DPS);
+        if on && high != self.afsr_high {
+            self.afsr_hold_until_ns = self.time_ns + self.afsr_hold_ns;
+        }
+        self.afsr_high = high;
+        if on && self.time_ns < self.afsr_hold_until_ns {
+            t.gyro_dps = self.held_gyro_dps;
+        } else {
+            self.held_gyro_dps = t.gyro_dps;
         }
     }
 
@@ -252,7 +302,13 @@ impl<G: Generator> Icm42688Model<G> {
         let hires = self.banks[0][FIFO_CONFIG1 as usize] & FIFO_HIRES_EN != 0;
         let mut p = [0u8; PACKET4_LEN];
         let len = if hires { PACKET4_LEN } else { PACKET3_LEN };
-        let ts = ((self.time_ns / 1000) as u16).to_be_bytes();
+        // TMST_RES: 1 µs or 16 µs ticks.
+        let tick_ns = if self.banks[0][TMST_CONFIG as usize] & TMST_RES_16US != 0 {
+            16_000
+        } else {
+            1000
+        };
+        let ts = ((self.time_ns / tick_ns) as u16).to_be_bytes();
         if hires {
             p[0] = HEADER_PACKET4;
             for i in 0..3 {
@@ -343,7 +399,14 @@ impl<G: Generator> Icm42688Model<G> {
                 }
             }
             FIFO_DATA => self.fifo.pop_front().unwrap_or(0xFF),
-            WHO_AM_I => self.who_am_i,
+            WHO_AM_I => {
+                self.who_am_i_reads += 1;
+                if self.who_am_i_reads <= self.who_am_i_wrong_reads {
+                    0x00
+                } else {
+                    self.who_am_i
+                }
+            }
             REG_BANK_SEL => self.bank as u8,
             r => self.banks[0][r as usize & 0x7F],
         }

@@ -5,14 +5,18 @@
 //! the firmware through them (feature `imu-sim`), so that driver, FIFO decode and pipeline run on
 //! the Cortex-M4F as they would on a board.
 //!
+//! Faults of the bus rather than the part ([`spi_fault`]) wrap any of them.
+//!
 //! Time: a model produces one sample per output-data-rate period of *its* time, which advances
 //! by the `DelayNs` operations it is given and by [`Icm42688Model::advance_ns`] (a board's timer).
 
 pub mod icm42688;
 pub mod lsm6dso;
+pub mod spi_fault;
 
 pub use icm42688::Icm42688Model;
 pub use lsm6dso::Lsm6dsoModel;
+pub use spi_fault::LastBitFault;
 
 /// One sample of the physical quantities a part measures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -5,6 +5,8 @@
 use super::*;
 use crate::imu::icm42688::regs::*;
 use crate::imu::icm42688::{AccelRange, AntiAlias, ConfigError, Error, FifoFormat, GyroRange, Odr};
+use crate::imu::ImuFlags;
+use embedded_hal::spi::SpiDevice;
 
 #[test]
 fn default_configuration_registers() {
@@ -39,6 +41,13 @@ fn default_configuration_registers() {
         "INT_ASYNC_RESET cleared"
     );
     assert_eq!(m.register(0, INT_SOURCE0), 0b110);
+    // AFSR off: 01 in bits 7:6 over the reset value 0x91 (Betaflight's write).
+    assert_eq!(m.register(0, INTF_CONFIG1), 0x51);
+    // Time stamps: TMST_EN (0) on, TMST_FSYNC_EN (1), TMST_DELTA_EN (2), TMST_RES (3: 1 µs) and
+    // TMST_TO_REGS_EN (4) off; bit 5 as at reset (0x23).
+    assert_eq!(m.register(0, TMST_CONFIG), 0b0010_0001);
+    // FSYNC not tagged anywhere: FSYNC_UI_SEL (6:4) = 000 (reset value 0x10 has 001).
+    assert_eq!(m.register(0, FSYNC_CONFIG), 0x00);
     assert_eq!(m.register(0, PWR_MGMT0), 0b1111, "both sensors low-noise");
     assert_eq!(
         m.violations, 0,
@@ -124,4 +133,28 @@ fn refused_combinations() {
         let r = Icm42688::new(Icm42688Model::new(TestGen::default()), cfg);
         assert_eq!(r.err(), Some(Error::Config(why)));
     }
+}
+
+#[test]
+fn time_stamp_resolution_is_set_by_configure() {
+    // A part switched to 16 µs time stamps (TMST_RES) behind the driver's back: its time base
+    // breaks (the stamps step by 62.5 ticks per millisecond instead of 1000), which the gap check
+    // sees as a loss of many samples.
+    let mut imu = started(Config::DEFAULT);
+    run_samples(&mut imu, 3);
+    assert_eq!(drain_all(&mut imu).len(), 3);
+    let m = imu.device_mut();
+    m.transaction(&mut [embedded_hal::spi::Operation::Write(&[TMST_CONFIG, 0x29])])
+        .unwrap();
+    run_samples(&mut imu, 5);
+    let got = drain_all(&mut imu);
+    assert!(got.iter().any(|s| s.flags.has(ImuFlags::DATA_LOST)));
+    // `configure` sets the 1 µs resolution whatever the part held: no gap in what follows.
+    imu.configure(Config::DEFAULT).unwrap();
+    assert_eq!(imu.device_mut().register(0, TMST_CONFIG) & TMST_RES_16US, 0);
+    run_samples(&mut imu, 10);
+    let got = drain_all(&mut imu);
+    assert_eq!(got.len(), 10);
+    // The first follows the flush of the reconfiguration; none after it.
+    assert!(got[1..].iter().all(|s| !s.flags.has(ImuFlags::DATA_LOST)));
 }

@@ -1,8 +1,11 @@
-//! Reset and identify: WHO_AM_I 0x47 accepted, anything else refused with its value; a soft reset
-//! puts the registers back to their reset values; the driver keeps the 1 ms after reset.
+//! Power-on, reset and identify: no access within 1 ms of power-on or of a soft reset; WHO_AM_I
+//! 0x47 accepted, retried 1 ms apart up to 21 reads while the part answers wrongly (Betaflight's
+//! `icm426xxSpiDetect`), anything else refused with its value; a soft reset puts the registers back
+//! to their reset values.
 
 use super::*;
 use crate::imu::icm42688::{regs, Error};
+use crate::imu::ImuSource;
 
 #[test]
 fn identifies_and_resets() {
@@ -36,4 +39,39 @@ fn wrong_who_am_i_is_refused_with_its_value() {
             other => panic!("{id:#x}: {:?}", other.err()),
         }
     }
+}
+
+#[test]
+fn no_access_within_1_ms_of_power_on() {
+    let imu = started(Config::DEFAULT);
+    let m = imu.release();
+    assert_eq!(m.violations, 0);
+    assert_eq!(m.who_am_i_reads, 1, "right at the first read");
+}
+
+#[test]
+fn who_am_i_retried_while_the_part_starts() {
+    let mut m = Icm42688Model::new(TestGen::default());
+    m.who_am_i_wrong_reads = 5;
+    let mut imu = Icm42688::new(m, Config::DEFAULT).expect("identified at the 6th read");
+    assert_eq!(imu.device_mut().who_am_i_reads, 6);
+    assert_eq!(imu.device_mut().violations, 0);
+    // And it runs.
+    run_samples(&mut imu, 3);
+    let mut buf = [ImuSample::default(); 4];
+    assert!(imu.drain(&mut buf).expect("drain").samples > 0);
+}
+
+#[test]
+fn who_am_i_gives_up_after_21_reads_1_ms_apart() {
+    let mut bus = Icm42688Model::new(TestGen::default());
+    bus.who_am_i_wrong_reads = 1000;
+    assert_eq!(
+        Icm42688::new(&mut bus, Config::DEFAULT).err(),
+        Some(Error::WrongDevice(0x00))
+    );
+    assert_eq!(bus.who_am_i_reads, 21);
+    // Power-on 1 ms, reset 1 ms, 20 retries 1 ms apart (the model's time is the driver's waits).
+    assert_eq!(bus.time_ns(), 22_000_000);
+    assert_eq!(bus.register(0, regs::PWR_MGMT0), 0, "never configured");
 }

@@ -2,12 +2,15 @@
 //! `tests/`). The expected values are written out here from the datasheets' numbers (sensitivities,
 //! register fields, the AAF table), independently of the driver's and the model's code.
 
+mod bursts_stall;
+mod icm_afsr;
 mod icm_configure;
 mod icm_errors;
 mod icm_fifo_decode;
 mod icm_identify;
 mod icm_overflow;
 mod icm_self_test;
+mod icm_spi_errata;
 mod icm_watermark;
 mod lsm6dso;
 

@@ -1,0 +1,197 @@
+//! The F405's burst chain (`imu_bursts`) run against the register model as the board runs it —
+//! INT1's rising edge starts a chain, each burst's completion decides the next, a 10 ms timer
+//! ticks the reader — with one interrupt lost: a DMA completion that never comes, or a watermark
+//! edge missed. Without the timer the part is never read again; with it reading resumes within
+//! 100 ms of the loss, the gap flagged on the first sample after it.
+
+use super::*;
+use crate::imu::icm42688::regs::READ;
+use crate::imu::icm42688::{AccelRange, Core, Odr, BATCH_PACKETS};
+use crate::imu::ImuFlags;
+use crate::imu_bursts::{Burst, BurstReader, InFlight, NO_SAMPLE, STALL_TICK_MS};
+use embedded_hal::spi::{Operation, SpiDevice};
+
+/// The F405's configuration (`board::f405::IMU_CONFIG`): 8 kHz, watermark 8 packets.
+const CFG: Config = Config {
+    odr: Odr::Hz8000,
+    accel_range: AccelRange::G4,
+    watermark_packets: 8,
+    ..Config::DEFAULT
+};
+
+/// One ODR period at 8 kHz, ns.
+const STEP_NS: u64 = 125_000;
+
+/// Which interrupt is lost.
+#[derive(Clone, Copy, PartialEq)]
+enum Loss {
+    /// The next burst's DMA completion.
+    Completion,
+    /// The next rising edge of INT1.
+    Edge,
+}
+
+struct Board {
+    part: Model,
+    in_flight: InFlight,
+    reader: BurstReader,
+    /// The burst on the wire.
+    wire: Option<Burst>,
+    int1_was: bool,
+    now_ns: u64,
+    out: [ImuSample; BATCH_PACKETS],
+    /// Samples handed on, with the time they were.
+    got: Vec<(u64, ImuSample)>,
+    /// The timer ticks the reader.
+    ticking: bool,
+    lose: Option<Loss>,
+    lost_at_ns: Option<u64>,
+    restarts: u32,
+}
+
+impl Board {
+    fn new(ticking: bool) -> Board {
+        let gen = TestGen {
+            still: true,
+            ..Default::default()
+        };
+        let imu = Icm42688::new(Icm42688Model::new(gen), CFG).expect("configured");
+        Board {
+            part: imu.release(),
+            in_flight: InFlight::new(),
+            reader: BurstReader::new(Core::new(CFG).unwrap()),
+            wire: None,
+            int1_was: false,
+            now_ns: 0,
+            out: [NO_SAMPLE; BATCH_PACKETS],
+            got: Vec::new(),
+            ticking,
+            lose: None,
+            lost_at_ns: None,
+            restarts: 0,
+        }
+    }
+
+    /// The bytes a full-duplex burst brings back (the address byte's slot first).
+    fn transfer(&mut self, b: Burst) -> Vec<u8> {
+        let mut rx = vec![0xFF; b.len()];
+        let r = if b.tx[0] & READ != 0 {
+            self.part
+                .transaction(&mut [Operation::Write(&b.tx[..1]), Operation::Read(&mut rx[1..])])
+        } else {
+            self.part.transaction(&mut [Operation::Write(b.tx)])
+        };
+        r.expect("the model's bus");
+        rx
+    }
+
+    /// One ODR period of the board.
+    fn step(&mut self) {
+        self.now_ns += STEP_NS;
+        self.part.advance_ns(STEP_NS);
+        let tick_ns = u64::from(STALL_TICK_MS) * 1_000_000;
+        if self.ticking && self.now_ns % tick_ns == 0 {
+            if let Some(b) = self.reader.on_tick(&self.in_flight) {
+                self.restarts += 1;
+                self.wire = Some(b);
+            }
+        }
+        let int1 = self.part.int1();
+        if int1 && !self.int1_was {
+            if self.lose == Some(Loss::Edge) {
+                self.lose = None;
+                self.lost_at_ns = Some(self.now_ns);
+            } else if let Some(b) = self.in_flight.on_watermark() {
+                self.wire = Some(b);
+            }
+        }
+        while let Some(b) = self.wire.take() {
+            let rx = self.transfer(b);
+            if self.lose == Some(Loss::Completion) {
+                // The bytes moved, but the completion interrupt never comes.
+                self.lose = None;
+                self.lost_at_ns = Some(self.now_ns);
+                break;
+            }
+            let done = self.reader.on_complete(&rx, &mut self.out, &self.in_flight);
+            for s in &self.out[..done.samples] {
+                self.got.push((self.now_ns, *s));
+            }
+            self.wire = done.next;
+        }
+        self.int1_was = self.part.int1();
+    }
+
+    fn run_ms(&mut self, ms: u64) {
+        for _ in 0..ms * 1_000_000 / STEP_NS {
+            self.step();
+        }
+    }
+
+    /// Samples handed on after `t_ns`.
+    fn after(&self, t_ns: u64) -> Vec<(u64, ImuSample)> {
+        self.got
+            .iter()
+            .filter(|(t, _)| *t > t_ns)
+            .copied()
+            .collect()
+    }
+}
+
+#[test]
+fn steady_reading_never_restarts() {
+    let mut b = Board::new(true);
+    b.run_ms(500);
+    assert_eq!(b.restarts, 0);
+    // 8 samples per millisecond, within the one read in flight at the end.
+    assert!(b.got.len() >= 3990, "{}", b.got.len());
+    assert!(b.got.iter().all(|(_, s)| !s.flags.has(ImuFlags::DATA_LOST)));
+}
+
+/// Loses `loss` at 200 ms, runs to 600 ms; the time the interrupt was lost.
+fn lose_at_200_ms(b: &mut Board, loss: Loss) -> u64 {
+    b.run_ms(200);
+    b.lose = Some(loss);
+    b.run_ms(400);
+    b.lost_at_ns.expect("the interrupt was lost")
+}
+
+#[test]
+fn without_the_timer_a_lost_interrupt_stops_reading_for_good() {
+    for loss in [Loss::Completion, Loss::Edge] {
+        let mut b = Board::new(false);
+        let lost = lose_at_200_ms(&mut b, loss);
+        assert!(b.after(lost).is_empty(), "read again without a restart");
+    }
+}
+
+#[test]
+fn a_lost_interrupt_is_recovered_within_100_ms() {
+    for loss in [Loss::Completion, Loss::Edge] {
+        let mut b = Board::new(true);
+        let lost = lose_at_200_ms(&mut b, loss);
+        assert_eq!(b.restarts, 1);
+        let after = b.after(lost);
+        let (resumed, first) = after[0];
+        assert!(
+            resumed - lost <= 100_000_000,
+            "resumed {} ms after the loss",
+            (resumed - lost) / 1_000_000
+        );
+        // The gap is flagged on the first sample after it, and only there.
+        assert!(first.flags.has(ImuFlags::DATA_LOST));
+        assert!(after[1..]
+            .iter()
+            .all(|(_, s)| !s.flags.has(ImuFlags::DATA_LOST)));
+        // Then 8 samples per millisecond again, their time stamps one period (125 µs) apart.
+        let span_ms = (b.now_ns - resumed) / 1_000_000;
+        assert!(
+            after.len() as u64 >= 8 * span_ms,
+            "{} in {span_ms} ms",
+            after.len()
+        );
+        assert!(after
+            .windows(2)
+            .all(|w| w[1].1.timestamp.wrapping_sub(w[0].1.timestamp) == 125));
+    }
+}
