@@ -600,6 +600,17 @@ fn exports_refuse_what_their_consumer_cannot_take_and_say_what_to_give() {
     );
     refused(
         export(&["--format", "ardupilot", "--driver-scale", "1e-3"]),
+        &["--device-id", "INS_ACC_ID", "3D Accel calibration needed"],
+    );
+    refused(
+        export(&[
+            "--format",
+            "ardupilot",
+            "--driver-scale",
+            "1e-3",
+            "--device-id",
+            "3932170",
+        ]),
         &["INS_ACCSCAL_X", "0.8..1.2", "--allow-out-of-range"],
     );
     let (ok, _, stderr) = export(&[
@@ -607,6 +618,8 @@ fn exports_refuse_what_their_consumer_cannot_take_and_say_what_to_give() {
         "ardupilot",
         "--driver-scale",
         "1e-3",
+        "--device-id",
+        "3932170",
         "--allow-out-of-range",
     ]);
     assert!(ok && stderr.contains("warning: INS_ACCSCAL_X"), "{stderr}");

@@ -147,7 +147,7 @@ EXPORTS = [
     ("kalibr-intrinsics", []),
     ("fusion-c", []),
     ("px4", ["--device-id", "1310988", "--gyro-device-id", "2490378"]),
-    ("ardupilot", []),
+    ("ardupilot", ["--device-id", "3932170", "--gyro-device-id", "3932426"]),
 ]
 
 

@@ -34,10 +34,12 @@ pub struct ExportArgs {
     /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
     #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true, value_parser = crate::limits::real(1e-9, crate::limits::MAX_LIMIT))]
     pub driver_scale: Option<f64>,
-    /// For px4: PX4's device id of the accelerometer (CAL_ACC0_ID), as the vehicle reports it.
+    /// For px4 and ardupilot: the accelerometer's device id as the vehicle reports it (PX4's
+    /// CAL_ACC0_ID, ArduPilot's INS_ACC_ID); required by both.
     #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
     pub device_id: Option<u32>,
-    /// For px4: PX4's device id of the gyro (CAL_GYRO0_ID); without it no gyro offsets are written.
+    /// For px4 and ardupilot: the gyro's device id (CAL_GYRO0_ID, INS_GYR_ID); without it no gyro
+    /// offsets are written.
     #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
     pub gyro_device_id: Option<u32>,
     /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one).

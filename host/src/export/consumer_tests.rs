@@ -227,6 +227,10 @@ fn px4_file_as_qgroundcontrol_loads_it_corrects_like_host_apply_within_what_it_h
     input.options.gyro_device_id = Some(2_359_306);
     input.options.sysid = 7;
     let text = params::render_px4(&input).unwrap();
+    assert!(
+        text.contains("reboot") && !text.contains("next boot"),
+        "{text}"
+    );
     let v = qgc_load(&text, 7);
     assert_eq!(v["CAL_ACC0_ID"], 2_490_378.0);
     assert_eq!(v["CAL_GYRO0_ID"], 2_359_306.0);
@@ -254,15 +258,78 @@ fn px4_file_as_qgroundcontrol_loads_it_corrects_like_host_apply_within_what_it_h
     assert!(w.deg_s > 0.5, "{w:?}");
 }
 
+/// ArduPilot's accelerometer pre-arm check for the first accelerometer, from its sources
+/// (`ArduPilot/ardupilot` `libraries/AP_InertialSensor/AP_InertialSensor.cpp`):
+/// `register_accel` marks the accelerometer detected with id `detected` as id-ok only when a saved
+/// `INS_ACC_ID` equals it (`_accel_id(i).load()` and the comparison), and `accel_calibrated_ok_all`
+/// then needs id-ok, offsets not all exactly zero and scales not all exactly zero; a failure is
+/// `AP_Arming::ins_checks`' "3D Accel calibration needed". `saved` are the parameters loaded.
+fn ardupilot_accel_calibrated_ok(saved: &HashMap<String, f64>, detected: u32) -> bool {
+    let id_ok = saved
+        .get("INS_ACC_ID")
+        .is_some_and(|id| *id as f32 as i64 == i64::from(detected));
+    let vector =
+        |p: &str| ["X", "Y", "Z"].map(|a| saved.get(&format!("{p}{a}")).copied().unwrap_or(0.0));
+    let is_zero = |v: [f64; 3]| v.iter().all(|x| *x == 0.0);
+    id_ok && !is_zero(vector("INS_ACCOFFS_")) && !is_zero(vector("INS_ACCSCAL_"))
+}
+
+/// The ArduPilot file passes ArduPilot's own accelerometer pre-arm check when the id it was made
+/// for is the one the vehicle detects, and fails it for another accelerometer; without the id the
+/// export is refused (the file without INS_ACC_ID failed the check on every vehicle).
+#[test]
+fn ardupilot_file_passes_the_accelerometer_pre_arm_check_of_its_accelerometer() {
+    let cal = handheld_unit();
+    let unit = UnitFile::from_calibration(&cal, None, None);
+    let mut input = ExportInput::for_tests(&unit, cal);
+    let e = params::render_ardupilot(&input).unwrap_err();
+    assert!(
+        e.to_string().contains("--device-id") && e.to_string().contains("INS_ACC_ID"),
+        "{e}"
+    );
+    // An ICM-42688-P on SPI bus 1 as ArduPilot numbers it (bus type, bus, address, device type).
+    input.options.device_id = Some(3_932_170);
+    let text = params::render_ardupilot(&input).unwrap();
+    let v = ardupilot_load(&text);
+    assert!(ardupilot_accel_calibrated_ok(&v, 3_932_170), "{text}");
+    assert!(!ardupilot_accel_calibrated_ok(&v, 3_932_171));
+    // The file as it was written before (every line but INS_ACC_ID): refused by the check.
+    let mut without = v.clone();
+    without.remove("INS_ACC_ID");
+    assert!(!ardupilot_accel_calibrated_ok(&without, 3_932_170));
+    assert!(
+        text.contains("reboot") && text.contains("3D Accel"),
+        "{text}"
+    );
+    // The gyro's offsets need its id, and the file says they are replaced at boot unless
+    // INS_GYR_CAL = 0.
+    assert!(text.contains("Gyro offsets NOT WRITTEN") && !v.contains_key("INS_GYROFFS_X"));
+    input.options.gyro_device_id = Some(3_932_426);
+    let text = params::render_ardupilot(&input).unwrap();
+    let v = ardupilot_load(&text);
+    assert_eq!(v["INS_GYR_ID"], 3_932_426.0);
+    assert!(text.contains("INS_GYR_CAL = 0"), "{text}");
+    // An id the float parameter protocol would round is refused.
+    input.options.device_id = Some(1 << 24);
+    let e = params::render_ardupilot(&input).unwrap_err();
+    assert!(
+        matches!(e, crate::export::ExportError::IdNotExact { .. }),
+        "{e}"
+    );
+}
+
 #[test]
 fn ardupilot_file_as_ap_param_loads_it_corrects_like_host_apply_within_what_it_holds() {
     let cal = handheld_unit();
     let unit = UnitFile::from_calibration(&cal, None, None);
-    let input = ExportInput::for_tests(&unit, cal);
+    let mut input = ExportInput::for_tests(&unit, cal);
+    input.options.device_id = Some(3_932_170);
+    input.options.gyro_device_id = Some(3_932_426);
     let text = params::render_ardupilot(&input).unwrap();
     assert!(!text.contains("WARNING"), "{text}");
     let v = ardupilot_load(&text);
-    assert_eq!(v.len(), 9);
+    // The two ids, the accelerometer's 6 values and the gyro's 3 offsets.
+    assert_eq!(v.len(), 11);
     let p = params::per_axis(&input, "ArduPilot").unwrap();
     let n = names(["INS_ACCOFFS_#", "INS_ACCSCAL_#", "INS_GYROFFS_#"]);
     let w = compare(
@@ -486,7 +553,10 @@ fn thermal_check(cal: Calibration) {
     let mut input = ExportInput::for_tests(&unit, cal);
     input.options.device_id = Some(11);
     input.options.gyro_device_id = Some(12);
-    let px4 = qgc_load(&params::render_px4(&input).unwrap(), 1);
+    let px4_text = params::render_px4(&input).unwrap();
+    // PX4 starts its temperature compensation only at boot: the file says to reboot.
+    assert!(px4_text.contains("apply from the next boot"), "{px4_text}");
+    let px4 = qgc_load(&px4_text, 1);
     let ap = ardupilot_load(&params::render_ardupilot(&input).unwrap());
     let p = params::per_axis(&input, "PX4").unwrap();
     let th = params::thermal(&input, &p).unwrap();

@@ -221,6 +221,19 @@ pub enum ExportError {
     /// A value the target needs that only the user can give.
     #[error("{0}")]
     Missing(String),
+    /// A device id the target's parameter protocol cannot carry exactly.
+    #[error(
+        "{flag} {id}: ArduPilot sends {name} as a float, exact only below 16777216 (2^24); check the \
+         id against the vehicle's {name} in its parameter list"
+    )]
+    IdNotExact {
+        /// The parameter.
+        name: &'static str,
+        /// The option that gave it.
+        flag: &'static str,
+        /// The id given.
+        id: u32,
+    },
 }
 
 /// What an export is made from.
@@ -248,9 +261,11 @@ pub struct ExportOptions {
     pub allow_out_of_range: bool,
     /// Write entries the calibration did not determine (marked) instead of refusing.
     pub allow_undetermined: bool,
-    /// PX4's device id of the accelerometer (`CAL_ACC0_ID`).
+    /// The autopilot's device id of the accelerometer (PX4's `CAL_ACC0_ID`, ArduPilot's
+    /// `INS_ACC_ID`).
     pub device_id: Option<u32>,
-    /// PX4's device id of the gyro (`CAL_GYRO0_ID`); without it no PX4 gyro parameters are written.
+    /// The autopilot's device id of the gyro (`CAL_GYRO0_ID`, `INS_GYR_ID`); without it no gyro
+    /// offsets are written.
     pub gyro_device_id: Option<u32>,
     /// MAVLink system id of the vehicle, the first column of QGroundControl's parameter file.
     pub sysid: u8,

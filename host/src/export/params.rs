@@ -100,20 +100,31 @@ pub(crate) fn per_axis(
 
 fn caveats(w: &mut String, input: &ExportInput<'_>, p: &PerAxis, tool: &str) {
     let unit = input.cal.statics.output_unit.symbol();
+    let gyro = p.gyro_offset_rad_s.is_some();
     let _ = writeln!(
         w,
-        "# Accelerometer and gyro calibration for {tool} (host export). Assumes the driver reports\n\
-         # a_m = c*U m/s^2 with c = {:?} m/s^2 per {unit} (the calibration's output unit), the gyro w in\n\
-         # rad/s, and sensor axes = our body axes (board rotation: none).\n\
+        "# Accelerometer{} calibration for {tool} (host export). Assumes the driver reports\n\
+         # a_m = c*U m/s^2 with c = {:?} m/s^2 per {unit} (the calibration's output unit){}, and sensor\n\
+         # axes = our body axes (board rotation: none).\n\
          # NOT HELD by these parameters (apply them elsewhere, or accept the error):\n\
-         # - accelerometer cross-axis (misalignment) terms: up to {:.3} mg at 1 g on the worst axis;\n\
-         # - the gyro's scale and misalignment (G^-1 - I): up to {:.4} deg/s at 100 deg/s;\n\
-         # - the per-axis sensing points and the lever-arm (size-effect) compensation.",
+         # - accelerometer cross-axis (misalignment) terms: up to {:.3} mg at 1 g on the worst axis;",
+        if gyro { " and gyro" } else { "" },
         p.driver_scale,
+        if gyro { ", the gyro w in rad/s" } else { "" },
         p.dropped_cross_axis_g * 1e3,
-        p.dropped_gyro_deg_s_at_100
     );
-    if p.gyro_offset_rad_s.is_none() {
+    if gyro {
+        let _ = writeln!(
+            w,
+            "# - the gyro's scale and misalignment (G^-1 - I): up to {:.4} deg/s at 100 deg/s;",
+            p.dropped_gyro_deg_s_at_100
+        );
+    }
+    let _ = writeln!(
+        w,
+        "# - the per-axis sensing points and the lever-arm (size-effect) compensation."
+    );
+    if !gyro {
         let _ = writeln!(
             w,
             "# Gyro offsets: UNDETERMINED (the calibration has no gyro correction); none written."
@@ -175,7 +186,20 @@ pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError>
         }
         (None, _) => {}
     }
-    values.extend(px4_thermal(input, &p, device_id, &mut s)?);
+    let thermal = px4_thermal(input, &p, device_id, &mut s)?;
+    let _ = writeln!(
+        s,
+        "# After loading (QGroundControl: Vehicle Setup > Parameters > Tools > Load from file; or\n\
+         # `param load` on the PX4 console, then `param save`): reboot.{}",
+        if thermal.is_empty() {
+            ""
+        } else {
+            " CAL_* take effect at once, but\n\
+             # PX4 starts its temperature compensation at boot only when TC_A_ENABLE or TC_G_ENABLE\n\
+             # is set: the TC_* values apply from the next boot."
+        }
+    );
+    values.extend(thermal);
     let _ = writeln!(
         s,
         "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
@@ -353,21 +377,92 @@ fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
     }
 }
 
+/// Largest device id ArduPilot's parameter protocol carries exactly: its values travel as `float`
+/// (MAVLink's `PARAM_SET`), exact for whole numbers up to 2²⁴.
+const ARDUPILOT_EXACT_ID_LIMIT: u32 = 1 << 24;
+
+/// A device id as an ArduPilot `INS_*_ID` value, refused where the parameter protocol would round it.
+fn ardupilot_id(
+    name: &'static str,
+    flag: &'static str,
+    id: u32,
+) -> Result<(String, f64, bool), ExportError> {
+    if id >= ARDUPILOT_EXACT_ID_LIMIT {
+        return Err(ExportError::IdNotExact { name, flag, id });
+    }
+    Ok((name.into(), f64::from(id), true))
+}
+
+/// What a user must do after loading the ArduPilot file, and what persists.
+fn ardupilot_after_loading(w: &mut String, gyro_written: bool) {
+    let _ = writeln!(
+        w,
+        "# After loading (Mission Planner: Config > Full Parameter List > Load from file, Write Params;\n\
+         # MAVProxy: param load FILE): reboot. At start-up ArduPilot compares INS_ACC_ID with the\n\
+         # accelerometer it detects (AP_InertialSensor::register_accel) and counts the offsets and\n\
+         # scales below as a calibration only when they match: otherwise pre-arm says \"3D Accel\n\
+         # calibration needed\"."
+    );
+    if gyro_written {
+        let _ = writeln!(
+            w,
+            "# INS_GYROFFS_* persist only with INS_GYR_CAL = 0 (never): with its default 1 (start-up)\n\
+             # ArduPilot measures the gyro offsets again at every boot, the vehicle still, and replaces\n\
+             # these. Keep 1 unless the vehicle cannot be still at boot."
+        );
+    }
+}
+
 /// An ArduPilot parameter file (`NAME,VALUE`, as Mission Planner saves and loads).
+///
+/// `INS_ACC_ID` (and `INS_GYR_ID` with the gyro's offsets) are the device ids the calibration is for:
+/// `AP_InertialSensor::register_accel` (`ArduPilot/ardupilot`
+/// `libraries/AP_InertialSensor/AP_InertialSensor.cpp`) marks an accelerometer whose saved
+/// `INS_ACC_ID` is absent or differs from the detected one as not calibrated, and
+/// `accel_calibrated_ok_all` then fails the pre-arm check; so the id is required, as PX4's is.
 pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let p = per_axis(input, "ArduPilot")?;
+    let o = input.options;
+    let device_id = o.device_id.ok_or_else(|| {
+        ExportError::Missing(
+            "ArduPilot counts INS_ACCOFFS_*/INS_ACCSCAL_* as a calibration only for the accelerometer \
+             whose id is INS_ACC_ID (pre-arm: \"3D Accel calibration needed\" otherwise): give \
+             --device-id ID, the vehicle's INS_ACC_ID as its parameter list shows it (ArduPilot sets \
+             it at start-up to the accelerometer it detects)"
+                .into(),
+        )
+    })?;
     let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();
     caveats(&mut s, input, &p, "ArduPilot");
-    let mut values = accel_values(&p, "INS_ACCOFFS_#", "INS_ACCSCAL_#");
-    if let Some(b) = p.gyro_offset_rad_s {
-        for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-            values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
+    let mut values = vec![ardupilot_id("INS_ACC_ID", "--device-id", device_id)?];
+    values.extend(accel_values(&p, "INS_ACCOFFS_#", "INS_ACCSCAL_#"));
+    let gyro_written = match (p.gyro_offset_rad_s, o.gyro_device_id) {
+        (Some(b), Some(id)) => {
+            values.push(ardupilot_id("INS_GYR_ID", "--gyro-device-id", id)?);
+            for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
+                values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
+            }
+            true
         }
-    }
+        (Some(_), None) => {
+            let _ = writeln!(
+                s,
+                "# Gyro offsets NOT WRITTEN: ArduPilot keeps INS_GYROFFS_* for the gyro whose id is\n\
+                 # INS_GYR_ID; give --gyro-device-id ID to write them."
+            );
+            false
+        }
+        (None, _) => false,
+    };
+    ardupilot_after_loading(&mut s, gyro_written);
     values.extend(ardupilot_thermal(input, &p, &mut s));
     let mut lines = String::new();
-    for (name, v, _) in &values {
+    for (name, v, int) in &values {
+        if *int {
+            let _ = writeln!(lines, "{name},{}", *v as i64);
+            continue;
+        }
         let text = f32_text(name, *v)?;
         if let Some((lo, hi)) = ardupilot_range(name) {
             if !(lo..=hi).contains(v) {
@@ -464,6 +559,7 @@ mod tests {
         let unit = UnitFile::paper_unit();
         let cal = unit.to_calibration().unwrap();
         let mut input = ExportInput::for_tests(&unit, cal);
+        input.options.device_id = Some(1);
         input.driver_scale_m_s2_per_out = Some(cal.gravity_m_s2 / 0.4);
         let e = render_ardupilot(&input).unwrap_err();
         assert!(
