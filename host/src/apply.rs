@@ -51,6 +51,9 @@ pub enum ApplyError {
     /// The calibration does not give a compensator.
     #[error("the calibration cannot be applied: {0}")]
     Compensator(#[source] CompensatorError),
+    /// A scale factor is negative or zero ([`crate::calibration_guard`]).
+    #[error("the calibration cannot be applied: {0}")]
+    Scale(#[from] crate::calibration_guard::ScaleError),
     /// The recording's sample rate does not give an ω̇ estimator.
     #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate: {1}")]
     SampleRate(f64, #[source] OmegaDotError),
@@ -250,8 +253,8 @@ pub(crate) fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), Ap
     Ok(())
 }
 
-/// Checks that a calibration can meet a recording at all: the same unit (when both have an id), the
-/// same output unit, and a temperature for a temperature model (the recording's, or
+/// Checks that a calibration can meet a recording at all: positive scale factors, the same unit
+/// (when both have an id), the same output unit, and a temperature for a temperature model (the recording's, or
 /// `assume_temp_c`).
 pub(crate) fn check_meeting(
     cal: &Calibration,
@@ -259,6 +262,7 @@ pub(crate) fn check_meeting(
     plan: &Plan,
     assume_temp_c: Option<f64>,
 ) -> Result<(), ApplyError> {
+    crate::calibration_guard::check_scales(cal)?;
     check_unit(cal_unit, plan)?;
     check_output_unit(cal, plan)?;
     if cal.temperature.is_some() && !plan.has_temperature() && assume_temp_c.is_none() {

@@ -27,7 +27,9 @@
 //!   parallel (`host batch`); [`summary`]: the machine-readable result with pass/fail limits.
 //! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`unit_file`]: a unit's parameters as TOML (the simulator's truth, the calibrator's result);
-//!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`.
+//!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`;
+//!   [`calibration_guard`]: what a calibration must be before it meets a recording, a device or a
+//!   tool.
 //! - [`ui`]: progress bars on a terminal.
 #![deny(missing_docs)]
 
@@ -35,6 +37,7 @@ pub mod app;
 pub mod apply;
 pub mod batch;
 pub mod calibration_files;
+pub mod calibration_guard;
 pub mod cli;
 pub mod device;
 pub mod estimate;

@@ -351,3 +351,69 @@ fn segment_binds_the_unit_and_the_sites_gravity() {
         &["--unit-id 12zz", "24 hex digits"],
     );
 }
+
+/// The simulated device's unit id (`--port sim`).
+const SIM_UNIT_ID: &str = "53494d2d50415045522d3031";
+
+/// A calibration whose x scale factor is negated compensates x with the wrong sign while |f| stays
+/// 1 g at rest: `apply` refuses it as `export` does, and `flash` names the scale factor (it said
+/// "zero scale factor").
+#[test]
+fn a_negated_scale_factor_is_refused_where_the_calibration_meets_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    let (session, cal) = table_session(dir.path());
+    let text = std::fs::read_to_string(&cal).unwrap();
+    let at = text.find("scale_v_per_g = [\n").unwrap() + "scale_v_per_g = [\n".len();
+    let first = text[at..].trim_start();
+    let negated = format!("{}-{first}", &text[..text.len() - text[at..].len()]);
+    let bad = dir.path().join("negated.toml");
+    std::fs::write(&bad, &negated).unwrap();
+    refused(
+        host(&["apply", "--calibration", s(&bad), "--input", s(&session)]),
+        &["accelerometer x has a negative scale factor", "positive"],
+    );
+    // The unmodified file applies: the refusal is the sign's.
+    assert!(
+        host(&[
+            "-q",
+            "apply",
+            "--calibration",
+            s(&cal),
+            "--input",
+            s(&session)
+        ])
+        .0
+    );
+    refused(
+        host(&["flash", "--port", "sim", "--calibration", s(&bad)]),
+        &["accelerometer x has a negative scale factor"],
+    );
+}
+
+/// A calibration in m/s² (a logger's session bound to the simulated device's id) is not flashed onto
+/// the simulated device, whose outputs are volts: both units are named.
+#[test]
+fn flash_refuses_a_calibration_of_another_output_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("hand.csv");
+    assert!(host(&["-q", "simulate-hand", "--out", s(&csv)]).0);
+    let session = dir.path().join("hand");
+    let mut args = hand_segment_args(s(&csv), s(&session));
+    args.extend(["--unit-id", SIM_UNIT_ID]);
+    let (ok, _, e) = host(&args);
+    assert!(ok, "{e}");
+    let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&session)]);
+    assert!(ok, "{e}");
+    for file in ["calibration.toml", "calibration.bin"] {
+        refused(
+            host(&[
+                "flash",
+                "--port",
+                "sim",
+                "--calibration",
+                s(&session.join(file)),
+            ]),
+            &["outputs in m/s2", "the device's outputs are in V"],
+        );
+    }
+}

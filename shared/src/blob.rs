@@ -78,7 +78,7 @@ pub enum BlobError {
     Malformed,
     /// A value is NaN or infinite.
     NonFinite,
-    /// A scale factor or sensing direction is zero.
+    /// A scale factor is zero or negative, or a sensing direction is zero.
     DegenerateAxis,
     /// `K·A` is singular or badly conditioned.
     IllConditioned,
@@ -108,7 +108,10 @@ impl core::fmt::Display for BlobError {
             BlobError::CrcMismatch => "calibration blob is corrupt (CRC mismatch)",
             BlobError::Malformed => "calibration blob payload does not decode",
             BlobError::NonFinite => "calibration contains NaN or infinite values",
-            BlobError::DegenerateAxis => "calibration has a zero scale factor or sensing direction",
+            BlobError::DegenerateAxis => {
+                "calibration has a zero or negative scale factor (positive by convention: a \
+                 reversed axis is an installation angle near 180°) or a zero sensing direction"
+            }
             BlobError::IllConditioned => "calibration's K·A matrix is singular or ill-conditioned",
             BlobError::BadGravity => "calibration's local gravity is implausible",
             BlobError::LeverArmOutOfRange => "calibration's lever arms exceed 1 m",

@@ -64,6 +64,21 @@ pub enum CliError {
         /// The device's unit.
         device: String,
     },
+    /// A calibration in another output unit than the device's.
+    #[error(
+        "this calibration maps outputs in {calibration}, the device's outputs are in {device}: \
+         calibrate from this device's own outputs (host calibrate --port, or a recording of the \
+         device in {device})"
+    )]
+    WrongOutputUnit {
+        /// The calibration's output unit.
+        calibration: &'static str,
+        /// The device's.
+        device: &'static str,
+    },
+    /// A calibration no device or tool can use ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Scale(#[from] crate::calibration_guard::ScaleError),
     /// A file.
     #[error("{}: {}", .0.display(), .1)]
     Io(PathBuf, #[source] std::io::Error),

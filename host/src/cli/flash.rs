@@ -7,6 +7,7 @@ use crate::device::procedure::ProcedureError;
 use crate::unit_file::UnitFile;
 use clap::Args;
 use shared::blob::{self, ParameterBlob};
+use shared::wire::Identity;
 use std::path::{Path, PathBuf};
 
 /// `host flash`.
@@ -27,7 +28,10 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
     // touched.
     let is_toml = calibration.extension().is_some_and(|e| e == "toml");
     let unit = if is_toml {
-        Some(UnitFile::load(calibration).map_err(CliError::Unit)?)
+        let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
+        let cal = unit.to_calibration().map_err(CliError::Usage)?;
+        crate::calibration_guard::check_scales(&cal)?;
+        Some(unit)
     } else {
         None
     };
@@ -51,6 +55,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
             }
         }
         let cal = unit.to_calibration().map_err(CliError::Usage)?;
+        check_output_unit(&cal, &identity)?;
         let blob = ParameterBlob {
             unit_id: identity.unit_id,
             calibration: cal,
@@ -70,6 +75,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
                 device: identity.unit_id.to_string(),
             });
         }
+        check_output_unit(&decoded.calibration, &identity)?;
         bytes
     };
     client.write_calibration(&bytes)?;
@@ -84,5 +90,17 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
         identity.unit_id,
         after.calibration
     ))?;
+    Ok(())
+}
+
+/// The calibration maps the outputs the device gives: one made in another output unit (m/s² from a
+/// logger, volts from the analog board) would compensate numbers of another kind.
+fn check_output_unit(cal: &shared::Calibration, identity: &Identity) -> Result<(), CliError> {
+    if cal.statics.output_unit != identity.output_unit {
+        return Err(CliError::WrongOutputUnit {
+            calibration: cal.statics.output_unit.symbol(),
+            device: identity.output_unit.symbol(),
+        });
+    }
     Ok(())
 }

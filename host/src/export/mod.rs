@@ -136,20 +136,10 @@ pub enum ExportError {
     /// Serialising failed.
     #[error("cannot export the calibration: {0}")]
     Serialise(String),
-    /// A scale factor is negative: the convention (and every target's model) has positive ones.
-    #[error(
-        "cannot export the calibration: accelerometer {axis} has a negative scale factor ({value} {unit} per g); \
-         scale factors are positive by convention (a reversed axis is an installation angle near 180°): \
-         correct the calibration file or recalibrate"
-    )]
-    NegativeScale {
-        /// "x", "y" or "z".
-        axis: &'static str,
-        /// The scale factor, output unit per g.
-        value: f64,
-        /// The output unit's symbol.
-        unit: &'static str,
-    },
+    /// A scale factor is negative or zero: the convention (and every target's model) has positive
+    /// ones.
+    #[error("cannot export the calibration: {0}")]
+    NegativeScale(#[from] crate::calibration_guard::ScaleError),
     /// The target reads m/s² from its driver, and the output unit does not say how to get there.
     #[error(
         "{format} reads the accelerometer in m/s² from its driver, and this calibration's output unit is {unit}: \
@@ -327,19 +317,10 @@ impl ExportInput<'_> {
     }
 }
 
-/// Refuses what no format can express faithfully: a negative scale factor.
+/// Refuses what no format can express faithfully: a negative scale factor
+/// ([`crate::calibration_guard`]).
 pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
-    let s = &cal.statics;
-    for (i, k) in s.scale_out_per_g.iter().enumerate() {
-        if *k < 0.0 {
-            return Err(ExportError::NegativeScale {
-                axis: shared::params::axis_name(i),
-                value: *k,
-                unit: s.output_unit.symbol(),
-            });
-        }
-    }
-    Ok(())
+    Ok(crate::calibration_guard::check_scales(cal)?)
 }
 
 /// `value` as the target's `f32`, refused when it does not fit.

@@ -625,7 +625,13 @@ mod tests {
         ] {
             let e = render(&input, format).unwrap_err();
             assert!(
-                matches!(e, ExportError::NegativeScale { axis: "y", .. }),
+                matches!(
+                    e,
+                    ExportError::NegativeScale(crate::calibration_guard::ScaleError {
+                        axis: "y",
+                        ..
+                    })
+                ),
                 "{format:?}: {e}"
             );
             assert!(
