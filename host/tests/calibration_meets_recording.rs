@@ -350,6 +350,12 @@ fn segment_binds_the_unit_and_the_sites_gravity() {
         ]),
         &["--unit-id 12zz", "24 hex digits"],
     );
+    // The all-zero id binds nothing (flash refuses it): refused before anything is read.
+    let zero = dir.path().join("zero");
+    let mut args = hand_segment_args(s(&csv), s(&zero));
+    args.extend(["--unit-id", "000000000000000000000000"]);
+    refused(host(&args), &["all-zero id", "host read"]);
+    assert!(!zero.exists());
 }
 
 /// The simulated device's unit id (`--port sim`).

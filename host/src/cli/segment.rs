@@ -358,6 +358,14 @@ fn unit_and_site(a: &SegmentArgs) -> Result<Option<String>, CliError> {
         Some(hex) if shared::UnitId::parse_hex(hex).is_none() => Err(CliError::Usage(format!(
             "--unit-id {hex}: give the unit's id as 24 hex digits"
         ))),
+        // The all-zero id is what a calibration without a unit is bound to: it binds nothing, and
+        // a device never has it.
+        Some(hex) if shared::UnitId::parse_hex(hex) == Some(shared::UnitId::default()) => {
+            Err(CliError::Usage(format!(
+                "--unit-id {hex}: the all-zero id means \"no unit\" (a device never has it); give \
+                 the unit's own id (host read --port PORT shows it), or leave --unit-id out"
+            )))
+        }
         id => Ok(id.as_ref().map(|h| h.to_ascii_lowercase())),
     }
 }
