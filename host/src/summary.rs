@@ -199,7 +199,7 @@ pub struct TemperatureRange {
 }
 
 /// Units of the paper-form values, in order.
-pub(crate) fn parameter_unit(index: usize, output_unit: &str) -> String {
+pub fn parameter_unit(index: usize, output_unit: &str) -> String {
     match index {
         0..=2 => output_unit.to_string(),
         3..=5 => format!("{output_unit}/g"),

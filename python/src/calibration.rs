@@ -12,7 +12,9 @@ use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
 use host::cli::CliError;
 use host::estimate::{paper_values, CalibrationOutcome};
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
-use host::summary::{parameter_keys, CalibrationSummary, Limits};
+use host::summary::{
+    parameter_keys, parameter_unit, section_values, CalibrationSummary, Limits, Parameter,
+};
 use host::unit_file::{UnitFile, UnitFileError};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -50,6 +52,37 @@ impl Calibration {
 
     fn fit_summary(&self) -> Option<&CalibrationSummary> {
         self.fitted.as_ref().map(|f| &f.document.summary)
+    }
+
+    /// Every value with its unit and 1σ, as `host calibrate --json` lists them: the fit's, or for a
+    /// loaded calibration the same names from the file (the paper-form values, then its `[gyro]` and
+    /// `[temperature]` sections), so that a calibration and the same one loaded list alike.
+    fn parameters(&self) -> PyResult<Vec<Parameter>> {
+        if let Some(s) = self.fit_summary() {
+            return Ok(s.parameters.clone());
+        }
+        let values = paper_values(&self.cal)
+            .map_err(|e| CliError::Export(e.into()))
+            .py_err()?;
+        let unit = self.cal.statics.output_unit.symbol();
+        let mut v: Vec<Parameter> = parameter_keys()
+            .into_iter()
+            .zip(values)
+            .enumerate()
+            .map(|(i, (name, value))| Parameter {
+                name,
+                unit: parameter_unit(i, unit),
+                value,
+                sigma: None,
+            })
+            .collect();
+        v.extend(section_values(&self.unit).into_iter().map(|s| Parameter {
+            name: s.name,
+            unit: s.unit,
+            value: s.value,
+            sigma: s.sigma.filter(|_| !s.undetermined),
+        }));
+        Ok(v)
     }
 }
 
@@ -290,49 +323,36 @@ impl Calibration {
         json_to_py(py, &self.unit)
     }
 
-    /// Names of the paper-form parameters: bias_x…, scale_x…, theta_xx…, r1x… (then, estimated, the
-    /// gyro's and the temperature model's).
+    /// Names of the paper-form parameters: bias_x…, scale_x…, theta_xx…, r1x…, then the gyro's and
+    /// the temperature model's when the calibration has them (estimated or loaded alike).
     #[getter]
-    fn names(&self) -> Vec<String> {
-        match self.fit_summary() {
-            Some(s) => s.parameters.iter().map(|p| p.name.clone()).collect(),
-            None => parameter_keys(),
-        }
+    fn names(&self) -> PyResult<Vec<String>> {
+        Ok(self.parameters()?.into_iter().map(|p| p.name).collect())
     }
 
     /// The values, in `names` order.
     #[getter]
     fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let v = match self.fit_summary() {
-            Some(s) => s.parameters.iter().map(|p| p.value).collect(),
-            None => paper_values(&self.cal)
-                .map_err(|e| CliError::Export(e.into()))
-                .py_err()?
-                .to_vec(),
-        };
+        let v = self.parameters()?.into_iter().map(|p| p.value).collect();
         Ok(PyArray1::from_vec(py, v))
     }
 
-    /// 1σ of each value (NaN: not determined, or a loaded calibration).
+    /// 1σ of each value (NaN: not determined; for a loaded calibration, the paper-form values'
+    /// 1σ, which need the fit's covariance, are NaN, and the sections' are the file's).
     #[getter]
-    fn sigmas<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let v = match self.fit_summary() {
-            Some(s) => s
-                .parameters
-                .iter()
-                .map(|p| p.sigma.unwrap_or(f64::NAN))
-                .collect(),
-            None => vec![f64::NAN; parameter_keys().len()],
-        };
-        PyArray1::from_vec(py, v)
+    fn sigmas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let v = self
+            .parameters()?
+            .into_iter()
+            .map(|p| p.sigma.unwrap_or(f64::NAN))
+            .collect();
+        Ok(PyArray1::from_vec(py, v))
     }
 
     /// Units of the values.
     #[getter]
-    fn units(&self) -> Vec<String> {
-        self.fit_summary()
-            .map(|s| s.parameters.iter().map(|p| p.unit.clone()).collect())
-            .unwrap_or_default()
+    fn units(&self) -> PyResult<Vec<String>> {
+        Ok(self.parameters()?.into_iter().map(|p| p.unit).collect())
     }
 
     /// The gyro's G (w = G·ω + b), or None.

@@ -68,6 +68,19 @@ def test_calibration_arrays_are_the_documents_parameters(hand, py_cal):
     assert py_cal.warnings == hand["summary"]["warnings"]
 
 
+def test_a_loaded_calibration_lists_the_parameters_the_estimated_one_does(hand, py_cal):
+    # The hand-held session's calibration has a gyro: 24 paper-form values and the gyro's 12, named,
+    # valued and in units alike whether estimated here or loaded from host's calibration.toml.
+    loaded = accelcal.Calibration.load(hand["toml"])
+    assert len(py_cal.names) == 36
+    assert loaded.names == py_cal.names
+    assert loaded.units == py_cal.units
+    np.testing.assert_allclose(loaded.values, py_cal.values, rtol=1e-12, atol=0)
+    # The sections' 1σ are the file's; the paper-form values' need the fit's covariance.
+    np.testing.assert_array_equal(loaded.sigmas[24:], py_cal.sigmas[24:])
+    assert np.isnan(loaded.sigmas[:24]).all()
+
+
 def test_segment_file_and_arrays_give_the_same_calibration(hand, py_cal):
     from_file = accelcal.segment_file(
         hand["csv"], acc_unit="m/s2", gyro_unit="deg/s", time_column="t", unit_id=UNIT_ID
