@@ -51,3 +51,52 @@ fn verifies_at_the_recorded_and_at_a_second_temperature() {
         assert!((temp(l) - 45.0).abs() < 0.5 && l.ends_with("ok"), "{l}");
     }
 }
+
+/// `--verify-temp-c` where nothing verifies at a second temperature is a usage error (exit 2)
+/// saying why, not a run that silently skips it: a recorded session (no device), and the hand-held
+/// procedure (it verifies |f| = 1 g in the hand's positions, at the room's temperature).
+#[test]
+fn verify_temp_c_is_refused_where_it_cannot_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_host"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let session = dir.path().join("s");
+    let s = session.to_str().unwrap();
+    assert!(run(&["-q", "simulate", "--out", s, "--plan", "short"])
+        .status
+        .success());
+    let out = dir.path().join("hand").to_str().unwrap().to_string();
+    for (args, needle) in [
+        (
+            vec!["calibrate", "--input", s, "--verify-temp-c", "45"],
+            "a recorded session has no device to verify",
+        ),
+        (
+            vec![
+                "calibrate",
+                "--port",
+                "sim-hand",
+                "--out-dir",
+                &out,
+                "--verify-temp-c",
+                "45",
+            ],
+            "the hand-held procedure verifies",
+        ),
+    ] {
+        let o = run(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("--verify-temp-c") && stderr.contains(needle),
+            "{stderr}"
+        );
+    }
+    // Nothing was calibrated or recorded on the way to the refusal.
+    assert!(!session.join("calibration.toml").exists());
+    assert!(!dir.path().join("hand").exists());
+}

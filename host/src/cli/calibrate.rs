@@ -179,6 +179,13 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         ));
     }
+    if a.verify_temp_c.is_some() {
+        return Err(CliError::Usage(
+            "--verify-temp-c verifies the calibration stored on a device (--port); a recorded session \
+             has no device to verify: give --port, or leave --verify-temp-c out"
+                .into(),
+        ));
+    }
     let out = Output {
         json: a.json,
         quiet,
@@ -263,6 +270,17 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         Some(spec) => session::builtin::load_plan(spec),
         None => procedure::default_plan(&identity),
     }?;
+    if a.verify_temp_c.is_some()
+        && !procedure::has_virtual_table(&identity)
+        && crate::device::handheld::is_hand_held(&plan)
+    {
+        return Err(CliError::Usage(
+            "--verify-temp-c verifies at rest on a table position at a second temperature; the \
+             hand-held procedure verifies |f| = 1 g in the positions the hand holds, at the room's \
+             temperature: leave --verify-temp-c out, or calibrate on a table plan"
+                .into(),
+        ));
+    }
     let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
     let mut opts = ProcedureOptions::new(plan, out_dir);
     opts.window_samples = a.window;
