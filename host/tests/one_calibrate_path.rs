@@ -12,6 +12,26 @@ fn document(stdout: &str) -> Value {
     serde_json::from_str(stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"))
 }
 
+/// `host -q ARGS --json`, which must succeed: its one JSON document.
+fn json(args: &[&str]) -> Value {
+    let mut all = vec!["-q"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    let (ok, stdout, stderr) = host(&all);
+    assert!(ok, "{args:?}: {stderr}");
+    document(&stdout)
+}
+
+/// `calibrate --input SESSION --out-dir OUT --json`.
+fn calibrate_input(session: &str, out: &str) -> Value {
+    json(&["calibrate", "--input", session, "--out-dir", out])
+}
+
+/// The first unit's document of `batch --input LOT --out OUT --json`.
+fn batch_first_unit(lot: &str, out: &str) -> Value {
+    json(&["batch", "--input", lot, "--out", out])["units"][0]["summary"].clone()
+}
+
 /// The document without what depends on where and how it was made: the files' paths and the
 /// verification (and the `passed` that includes it, which is checked on its own).
 fn calibration_part(doc: &Value) -> Value {
@@ -28,8 +48,7 @@ fn calibration_part(doc: &Value) -> Value {
 fn live_input_and_batch_calibrations_are_one_document() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
-    let (ok, stdout, stderr) = host(&[
-        "-q",
+    let live = json(&[
         "calibrate",
         "--port",
         "sim",
@@ -37,10 +56,7 @@ fn live_input_and_batch_calibrations_are_one_document() {
         "quick-oblique",
         "--out-dir",
         &p("live"),
-        "--json",
     ]);
-    assert!(ok, "{stderr}");
-    let live = document(&stdout);
     assert_eq!(live["verification"]["passed"], true, "{live}");
     assert!(live["verification"]["worst_error_mg"].as_f64().unwrap() >= 0.0);
     assert_eq!(
@@ -49,17 +65,7 @@ fn live_input_and_batch_calibrations_are_one_document() {
     );
 
     let recording = format!("{}/recording", p("live"));
-    let (ok, stdout, stderr) = host(&[
-        "-q",
-        "calibrate",
-        "--input",
-        &recording,
-        "--out-dir",
-        &p("input"),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let input = document(&stdout);
+    let input = calibrate_input(&recording, &p("input"));
     assert_eq!(input["verification"], Value::Null);
     assert_eq!(
         input["files"]["calibration_bin"],
@@ -71,18 +77,7 @@ fn live_input_and_batch_calibrations_are_one_document() {
     for f in ["plan.toml", "samples.csv"] {
         std::fs::copy(dir.path().join("live/recording").join(f), unit.join(f)).unwrap();
     }
-    let (ok, stdout, stderr) = host(&[
-        "-q",
-        "batch",
-        "--input",
-        &p("lot"),
-        "--out",
-        &p("res"),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let lot = document(&stdout);
-    let batch = &lot["units"][0]["summary"];
+    let batch = &batch_first_unit(&p("lot"), &p("res"));
     assert_eq!(
         batch["files"]["results_dir"],
         format!("{}/u1", p("res")),
@@ -121,29 +116,8 @@ fn a_hand_held_sessions_gyro_is_in_the_batch_result_as_in_calibrate() {
     let (ok, _, stderr) = host(&common::hand_segment_args(&p("hand.csv"), &session_s));
     assert!(ok, "{stderr}");
     assert!(session.join("gyro.toml").exists());
-    let (ok, stdout, stderr) = host(&[
-        "-q",
-        "calibrate",
-        "--input",
-        &session_s,
-        "--out-dir",
-        &p("input"),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let input = document(&stdout);
-    let (ok, stdout, stderr) = host(&[
-        "-q",
-        "batch",
-        "--input",
-        &p("lot"),
-        "--out",
-        &p("res"),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let lot = document(&stdout);
-    let batch = &lot["units"][0]["summary"];
+    let input = calibrate_input(&session_s, &p("input"));
+    let batch = &batch_first_unit(&p("lot"), &p("res"));
     let gyro = |d: &Value| -> Vec<String> {
         d["parameters"]
             .as_array()
