@@ -270,17 +270,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         Some(spec) => session::builtin::load_plan(spec),
         None => procedure::default_plan(&identity),
     }?;
-    if a.verify_temp_c.is_some()
-        && !procedure::has_virtual_table(&identity)
-        && crate::device::handheld::is_hand_held(&plan)
-    {
-        return Err(CliError::Usage(
-            "--verify-temp-c verifies at rest on a table position at a second temperature; the \
-             hand-held procedure verifies |f| = 1 g in the positions the hand holds, at the room's \
-             temperature: leave --verify-temp-c out, or calibrate on a table plan"
-                .into(),
-        ));
-    }
+    refuse_verify_temp_in_hand(a, &identity, &plan)?;
     let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
     let mut opts = ProcedureOptions::new(plan, out_dir);
     opts.window_samples = a.window;
@@ -354,6 +344,28 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         opts.verify_tolerance_mg,
         opts.out_dir.display()
     ))?;
+    Ok(())
+}
+
+/// `--verify-temp-c` with the hand-held procedure (a device without a virtual table, a hand-held
+/// plan), which verifies |f| = 1 g in the hand's positions at the room's temperature: refused, not
+/// silently skipped.
+fn refuse_verify_temp_in_hand(
+    a: &CalibrateArgs,
+    identity: &shared::wire::Identity,
+    plan: &session::Plan,
+) -> Result<(), CliError> {
+    if a.verify_temp_c.is_some()
+        && !procedure::has_virtual_table(identity)
+        && crate::device::handheld::is_hand_held(plan)
+    {
+        return Err(CliError::Usage(
+            "--verify-temp-c verifies at rest on a table position at a second temperature; the \
+             hand-held procedure verifies |f| = 1 g in the positions the hand holds, at the room's \
+             temperature: leave --verify-temp-c out, or calibrate on a table plan"
+                .into(),
+        ));
+    }
     Ok(())
 }
 
