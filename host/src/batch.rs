@@ -320,13 +320,8 @@ pub fn run_batch(
         .filter(|u| !u.passed && u.summary.is_some())
     {
         let dir = out.join(&u.session);
-        match crate::calibration_files::mark_failed_in(&dir, false) {
-            Ok((toml, bin)) => {
-                if let Some(d) = u.summary.as_mut() {
-                    d.set_file_paths(&toml, &bin, &dir);
-                }
-            }
-            Err(e) => u.error = Some(e.to_string()),
+        if let Some(Err(e)) = u.summary.as_mut().map(|d| app::mark_failed(d, &dir, false)) {
+            u.error = Some(e.to_string());
         }
     }
     Ok(LotSummary {

@@ -169,23 +169,10 @@ pub fn write_calibration_files(
     })
 }
 
-/// Renames a written pair to [`FAILED_BIN`] and [`FAILED_TOML`] (the blob first: it is what could be
-/// flashed), because its unit failed a check: the files stay for inspection, under names that say
-/// so. An existing failed pair is replaced only with `force`.
-pub(crate) fn mark_failed(
-    written: &WrittenCalibration,
-    force: bool,
-) -> Result<WrittenCalibration, OutputError> {
-    let dir = written.bin_path.parent().unwrap_or(Path::new("."));
-    let (toml_path, bin_path) = mark_failed_in(dir, force)?;
-    Ok(WrittenCalibration {
-        toml_path,
-        bin_path,
-        blob: written.blob.clone(),
-    })
-}
-
-/// [`mark_failed`] for the pair in `dir`: the new paths of the `.toml` and the `.bin`.
+/// Renames the pair in `dir` to [`FAILED_BIN`] and [`FAILED_TOML`] (the blob first: it is what
+/// could be flashed), because its unit failed a check: the files stay for inspection, under names
+/// that say so. An existing failed pair is replaced only with `force`. Returns the new paths of the
+/// `.toml` and the `.bin`.
 pub(crate) fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
     let (toml_path, bin_path) = (dir.join(FAILED_TOML), dir.join(FAILED_BIN));
     for p in [&toml_path, &bin_path] {

@@ -9,8 +9,9 @@ use crate::estimate::gyro::UNDETERMINED_SIGMA;
 use crate::estimate::{paper_values, CalibrationOutcome, PAPER_LEN};
 use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
-use shared::params::axis_name;
+use shared::params::{axis_name, ParamsError};
 use shared::sensor_models::MAX_TEMPERATURE_DEGREE;
+use shared::Calibration;
 
 /// ASCII keys of the paper-form values (same order as `estimate::paper_labels`), for CSV columns and
 /// JSON keys: `bias_x`, `scale_x`, `theta_xy`, `r1x`, …
@@ -199,7 +200,7 @@ pub struct TemperatureRange {
 }
 
 /// Units of the paper-form values, in order.
-pub fn parameter_unit(index: usize, output_unit: &str) -> String {
+pub(crate) fn parameter_unit(index: usize, output_unit: &str) -> String {
     match index {
         0..=2 => output_unit.to_string(),
         3..=5 => format!("{output_unit}/g"),
@@ -291,25 +292,60 @@ pub struct CalibrationSummary {
     pub in_package_size_effect: Option<String>,
 }
 
+/// The paper-form parameters ([`parameter_keys`]) with their units, `values` and, from the
+/// diagonal of `covariance` (empty: none), their 1σ.
+fn paper_parameters(
+    cal: &Calibration,
+    values: &[f64; PAPER_LEN],
+    covariance: &[Vec<f64>],
+) -> Vec<Parameter> {
+    let unit = cal.statics.output_unit.symbol();
+    parameter_keys()
+        .into_iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let var = covariance.get(i).and_then(|r| r.get(i)).copied();
+            Parameter {
+                name,
+                unit: parameter_unit(i, unit),
+                value: values[i],
+                sigma: var.filter(|v| v.is_finite() && *v >= 0.0).map(f64::sqrt),
+            }
+        })
+        .collect()
+}
+
+/// Every parameter of a calibration file, named and ordered as [`CalibrationSummary::parameters`]:
+/// the paper-form values (their 1σ need the fit's covariance, which a file does not hold: `None`),
+/// then its `[gyro]` and `[temperature]` sections with the file's 1σ.
+pub fn file_parameters(file: &UnitFile, cal: &Calibration) -> Result<Vec<Parameter>, ParamsError> {
+    let mut v = paper_parameters(cal, &paper_values(cal)?, &[]);
+    v.extend(
+        section_values(file)
+            .into_iter()
+            .map(SectionValue::into_parameter),
+    );
+    Ok(v)
+}
+
+impl SectionValue {
+    /// As a [`Parameter`]: an undetermined entry has no 1σ.
+    fn into_parameter(self) -> Parameter {
+        Parameter {
+            sigma: self.sigma.filter(|_| !self.undetermined),
+            name: self.name,
+            unit: self.unit,
+            value: self.value,
+        }
+    }
+}
+
 impl CalibrationSummary {
     /// The summary of `outcome`, checked against `limits`.
     pub fn new(outcome: &CalibrationOutcome, unit_id: Option<String>, limits: &Limits) -> Self {
         let cal = &outcome.calibration;
         let values = paper_values(cal).unwrap_or([f64::NAN; PAPER_LEN]);
-        let unit = cal.statics.output_unit.symbol();
-        let mut parameters = parameter_keys()
-            .into_iter()
-            .enumerate()
-            .map(|(i, name)| {
-                let var = outcome.covariance.get(i).and_then(|r| r.get(i)).copied();
-                Parameter {
-                    name,
-                    unit: parameter_unit(i, unit),
-                    value: values[i],
-                    sigma: var.filter(|v| v.is_finite() && *v >= 0.0).map(f64::sqrt),
-                }
-            })
-            .collect::<Vec<_>>();
+        let mut parameters = paper_parameters(cal, &values, &outcome.covariance);
         let mut undetermined: Vec<String> = parameters
             .iter()
             .filter(|p| p.sigma.is_none())
@@ -318,17 +354,14 @@ impl CalibrationSummary {
         // The gyro and temperature values exactly as calibration.toml holds them.
         let id = unit_id.as_deref().and_then(shared::UnitId::parse_hex);
         let file = calibration_unit_file(outcome, id);
-        for s in section_values(&file) {
-            if s.undetermined {
-                undetermined.push(s.name.clone());
-            }
-            parameters.push(Parameter {
-                name: s.name,
-                unit: s.unit,
-                value: s.value,
-                sigma: s.sigma.filter(|_| !s.undetermined),
-            });
-        }
+        let sections = section_values(&file);
+        undetermined.extend(
+            sections
+                .iter()
+                .filter(|s| s.undetermined)
+                .map(|s| s.name.clone()),
+        );
+        parameters.extend(sections.into_iter().map(SectionValue::into_parameter));
         let temperature = file.temperature.as_ref().map(|t| TemperatureRange {
             reference_c: t.reference_c,
             valid_range_c: t.valid_range_c,

@@ -602,26 +602,19 @@ fn exports_refuse_what_their_consumer_cannot_take_and_say_what_to_give() {
         export(&["--format", "ardupilot", "--driver-scale", "1e-3"]),
         &["--device-id", "INS_ACC_ID", "3D Accel calibration needed"],
     );
-    refused(
-        export(&[
-            "--format",
-            "ardupilot",
-            "--driver-scale",
-            "1e-3",
-            "--device-id",
-            "3932170",
-        ]),
-        &["INS_ACCSCAL_X", "0.8..1.2", "--allow-out-of-range"],
-    );
-    let (ok, _, stderr) = export(&[
+    let out_of_range = [
         "--format",
         "ardupilot",
         "--driver-scale",
         "1e-3",
         "--device-id",
         "3932170",
-        "--allow-out-of-range",
-    ]);
+    ];
+    refused(
+        export(&out_of_range),
+        &["INS_ACCSCAL_X", "0.8..1.2", "--allow-out-of-range"],
+    );
+    let (ok, _, stderr) = export(&[&out_of_range[..], &["--allow-out-of-range"]].concat());
     assert!(ok && stderr.contains("warning: INS_ACCSCAL_X"), "{stderr}");
     refused(
         export(&["--format", "px4", "--driver-scale", "24.5"]),

@@ -10,11 +10,9 @@ use host::calibration_files::{
 };
 use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
 use host::cli::CliError;
-use host::estimate::{paper_values, CalibrationOutcome};
+use host::estimate::CalibrationOutcome;
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
-use host::summary::{
-    parameter_keys, parameter_unit, section_values, CalibrationSummary, Limits, Parameter,
-};
+use host::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
 use host::unit_file::{UnitFile, UnitFileError};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -61,28 +59,9 @@ impl Calibration {
         if let Some(s) = self.fit_summary() {
             return Ok(s.parameters.clone());
         }
-        let values = paper_values(&self.cal)
+        file_parameters(&self.unit, &self.cal)
             .map_err(|e| CliError::Export(e.into()))
-            .py_err()?;
-        let unit = self.cal.statics.output_unit.symbol();
-        let mut v: Vec<Parameter> = parameter_keys()
-            .into_iter()
-            .zip(values)
-            .enumerate()
-            .map(|(i, (name, value))| Parameter {
-                name,
-                unit: parameter_unit(i, unit),
-                value,
-                sigma: None,
-            })
-            .collect();
-        v.extend(section_values(&self.unit).into_iter().map(|s| Parameter {
-            name: s.name,
-            unit: s.unit,
-            value: s.value,
-            sigma: s.sigma.filter(|_| !s.undetermined),
-        }));
-        Ok(v)
+            .py_err()
     }
 }
 

@@ -12,7 +12,7 @@ use crate::estimate::{
 use crate::session::{self, Plan, ReadOptions, SegmentStats, Session};
 use crate::summary::{CalibrationSummary, Limits};
 use shared::UnitId;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What a calibration is asked for: the estimator's settings and the pass/fail limits.
 #[derive(Clone, Debug, Default)]
@@ -122,7 +122,9 @@ pub fn write_result(
         created_unix_s,
         force,
     )?;
-    calibrated.document.set_files(&written, out_dir);
+    calibrated
+        .document
+        .set_files(&written.toml_path, &written.bin_path);
     Ok(written)
 }
 
@@ -132,13 +134,29 @@ pub fn write_result(
 pub fn settle_files(
     calibrated: &mut Calibrated,
     written: WrittenCalibration,
-    out_dir: &Path,
     force: bool,
 ) -> Result<WrittenCalibration, OutputError> {
     if calibrated.document.summary.passed {
         return Ok(written);
     }
-    let failed = calibration_files::mark_failed(&written, force)?;
-    calibrated.document.set_files(&failed, out_dir);
-    Ok(failed)
+    let dir = written.bin_path.parent().unwrap_or(Path::new("."));
+    let (toml_path, bin_path) = mark_failed(&mut calibrated.document, dir, force)?;
+    Ok(WrittenCalibration {
+        toml_path,
+        bin_path,
+        blob: written.blob,
+    })
+}
+
+/// Renames the pair in `dir` to `calibration.FAILED.*` (an existing failed pair replaced only with
+/// `force`) and names the new files in `document`: for a result that failed its checks, or (in
+/// `host batch`) a unit that is an outlier of its lot.
+pub fn mark_failed(
+    document: &mut CalibrationDocument,
+    dir: &Path,
+    force: bool,
+) -> Result<(PathBuf, PathBuf), OutputError> {
+    let (toml, bin) = calibration_files::mark_failed_in(dir, force)?;
+    document.set_files(&toml, &bin);
+    Ok((toml, bin))
 }

@@ -2,7 +2,6 @@
 //! (`host calibrate --input`, `host batch`, Python) or live from a device (`host calibrate --port`),
 //! which adds its verification.
 
-use crate::calibration_files::WrittenCalibration;
 use crate::summary::CalibrationSummary;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -54,17 +53,13 @@ impl CalibrationDocument {
         }
     }
 
-    /// Records the files as written (or renamed).
-    pub(crate) fn set_files(&mut self, written: &WrittenCalibration, dir: &Path) {
-        self.set_file_paths(&written.toml_path, &written.bin_path, dir);
-    }
-
-    /// Records the files' paths (after a rename to `calibration.FAILED.*`).
-    pub(crate) fn set_file_paths(&mut self, toml: &Path, bin: &Path, dir: &Path) {
+    /// Records the files' paths as written (or renamed to `calibration.FAILED.*`); the results
+    /// directory is the one holding them.
+    pub(crate) fn set_files(&mut self, toml: &Path, bin: &Path) {
         self.files = Some(ResultFiles {
             calibration_toml: toml.display().to_string(),
             calibration_bin: bin.display().to_string(),
-            results_dir: dir.display().to_string(),
+            results_dir: bin.parent().unwrap_or(Path::new(".")).display().to_string(),
         });
     }
 

@@ -16,8 +16,8 @@ pub mod document;
 pub mod error;
 
 pub use calibrate::{
-    calibrate_recording, calibrate_session_dir, write_result, CalibrateOptions, Calibrated,
-    Recording,
+    calibrate_recording, calibrate_session_dir, mark_failed, settle_files, write_result,
+    CalibrateOptions, Calibrated, Recording,
 };
 pub use document::{CalibrationDocument, ResultFiles, VerificationSummary};
 pub use error::CalibrateError;

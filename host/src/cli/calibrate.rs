@@ -210,7 +210,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     // The files first: a closed or full stdout (`| head`, `> /dev/full`) must not lose the result.
     // A unit that fails its checks keeps its files, under names that say so.
     let written = app::write_result(out_dir, &mut calibrated, now_unix_s(), a.force)?;
-    let written = app::calibrate::settle_files(&mut calibrated, written, out_dir, a.force)?;
+    let written = app::settle_files(&mut calibrated, written, a.force)?;
     out.line(format_args!(
         "read {} rows ({:.1} MB) of {} segments from {} in {:.2} s ({:.2} M rows/s)",
         session.report.rows,
@@ -322,12 +322,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         });
     // The results, on stdout like `calibrate --input`'s; the operator's steps went to stderr.
     out.human(&result.report)?;
-    let written = app::calibrate::settle_files(
-        &mut result.calibrated,
-        result.written.clone(),
-        &opts.out_dir,
-        a.force,
-    )?;
+    let written = app::settle_files(&mut result.calibrated, result.written, a.force)?;
     print_written_and_verified(&out, &written, &result.verification)?;
     out.document(&result.calibrated.document)?;
     if !result.passed {

@@ -31,7 +31,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
         let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
         let cal = unit.to_calibration().map_err(CliError::Usage)?;
         crate::calibration_guard::check_scales(&cal)?;
-        Some(unit)
+        Some((unit, cal))
     } else {
         None
     };
@@ -45,7 +45,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
     };
     let mut client = connect(port)?;
     let identity = client.identify()?;
-    let bytes = if let Some(unit) = unit {
+    let bytes = if let Some((unit, cal)) = unit {
         if let Ok(Some(id)) = unit.unit_id() {
             if id != identity.unit_id {
                 return Err(CliError::WrongUnit {
@@ -54,7 +54,6 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
                 });
             }
         }
-        let cal = unit.to_calibration().map_err(CliError::Usage)?;
         check_output_unit(&cal, &identity)?;
         let blob = ParameterBlob {
             unit_id: identity.unit_id,
