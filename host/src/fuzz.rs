@@ -11,7 +11,7 @@
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
 //!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
-mod logs;
+pub(crate) mod logs;
 
 use crate::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use crate::session::{read_samples, Plan};

@@ -27,6 +27,8 @@ pub mod apply;
 pub mod batch;
 pub mod calibrate;
 pub mod compare;
+#[cfg(test)]
+mod damaged_log_tests;
 pub mod error;
 pub mod export;
 pub mod flash;

@@ -49,16 +49,45 @@ pub fn mcap(data: &[u8]) {
     }
 }
 
-/// One still sample `k` of the corpora: time s, acc m/s², gyro rad/s, temperature °C.
-fn sample(k: usize) -> (f64, [f32; 3], [f32; 3], f32) {
+/// One sample as a logger writes it: time s, acc m/s², gyro rad/s, temperature °C.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LogSample {
+    /// Time stamp, s.
+    pub t_s: f64,
+    /// Accelerometer, m/s².
+    pub acc: [f32; 3],
+    /// Gyro, rad/s.
+    pub gyro: [f32; 3],
+    /// Temperature, °C.
+    pub temp_c: f32,
+}
+
+/// One still sample `k` of the corpora.
+fn sample(k: usize) -> LogSample {
     let e = 1e-3 * ((k * 7 % 11) as f32 - 5.0);
-    (k as f64 * 0.01, [e, -e, 9.81 + e], [e, 0.01, -e], 25.0 + e)
+    LogSample {
+        t_s: k as f64 * 0.01,
+        acc: [e, -e, 9.81 + e],
+        gyro: [e, 0.01, -e],
+        temp_c: 25.0 + e,
+    }
 }
 
 const SAMPLES: usize = 150;
 
+fn corpus_samples() -> Vec<LogSample> {
+    (0..SAMPLES).map(sample).collect()
+}
+
 /// A ULog with `sensor_accel` and `sensor_gyro` (PX4's fields) and a dropout.
 pub fn ulog_corpus() -> Vec<u8> {
+    write_ulog(&corpus_samples(), Some(75))
+}
+
+/// A PX4 ULog of `samples` (1 s added to each stamp, as a vehicle's clock starts at boot): one
+/// `sensor_accel` and one `sensor_gyro` message per sample (PX4's fields, multi_id 0), and a 20 ms
+/// dropout message after sample `dropout`, if given.
+pub fn write_ulog(samples: &[LogSample], dropout: Option<usize>) -> Vec<u8> {
     const FORMAT: &str = "uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;\
         float x;float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;\
         uint8_t samples;uint8_t[4] _padding0;";
@@ -80,20 +109,19 @@ pub fn ulog_corpus() -> Vec<u8> {
         b.extend(name.as_bytes());
         msg(b'A', &b);
     }
-    for k in 0..SAMPLES {
-        let (t, a, g, temp) = sample(k);
-        for (id, v) in [a, g].iter().enumerate() {
+    for (k, s) in samples.iter().enumerate() {
+        for (id, v) in [s.acc, s.gyro].iter().enumerate() {
             let mut b = (id as u16).to_le_bytes().to_vec();
-            let us = (t * 1e6) as u64 + 1_000_000;
+            let us = (s.t_s * 1e6).round() as u64 + 1_000_000;
             b.extend((us + 100).to_le_bytes());
             b.extend(us.to_le_bytes());
             b.extend(7u32.to_le_bytes());
             v.iter().for_each(|x| b.extend(x.to_le_bytes()));
-            b.extend(temp.to_le_bytes());
+            b.extend(s.temp_c.to_le_bytes());
             b.extend([0u8; 8]);
             msg(b'D', &b);
         }
-        if k == 75 {
+        if Some(k) == dropout {
             msg(b'O', &20u16.to_le_bytes());
         }
     }
@@ -102,6 +130,11 @@ pub fn ulog_corpus() -> Vec<u8> {
 
 /// A DataFlash log: `FMT` of `FMT`, `FMT` of `IMU` (ArduPilot 4.x's fields) and the samples.
 pub fn dataflash_corpus() -> Vec<u8> {
+    write_dataflash(&corpus_samples())
+}
+
+/// A DataFlash log of `samples`, one `IMU` message (instance 0) each.
+pub fn write_dataflash(samples: &[LogSample]) -> Vec<u8> {
     let fmt = |ty: u8, len: u8, name: &str, format: &str, cols: &str| {
         let mut b = vec![0xA3, 0x95, 0x80, ty, len];
         for (s, n) in [(name, 4), (format, 16), (cols, 64)] {
@@ -114,14 +147,16 @@ pub fn dataflash_corpus() -> Vec<u8> {
     let mut out = fmt(0x80, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns");
     let cols = "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz";
     out.extend(fmt(0xA5, 54, "IMU", "QBffffffIIfBBHH", cols));
-    for k in 0..SAMPLES {
-        let (t, a, g, temp) = sample(k);
+    for s in samples {
         out.extend([0xA3, 0x95, 0xA5]);
-        out.extend(((t * 1e6) as u64).to_le_bytes());
+        out.extend(((s.t_s * 1e6).round() as u64).to_le_bytes());
         out.push(0);
-        g.iter().chain(&a).for_each(|x| out.extend(x.to_le_bytes()));
+        s.gyro
+            .iter()
+            .chain(&s.acc)
+            .for_each(|x| out.extend(x.to_le_bytes()));
         out.extend([0u8; 8]);
-        out.extend(temp.to_le_bytes());
+        out.extend(s.temp_c.to_le_bytes());
         out.extend([1, 1, 100, 0, 100, 0]);
     }
     out
@@ -131,7 +166,7 @@ pub fn dataflash_corpus() -> Vec<u8> {
 fn imu_cdr(t: f64, a: [f32; 3], g: [f32; 3]) -> Vec<u8> {
     let mut b = vec![0, 1, 0, 0];
     b.extend((t.floor() as i32).to_le_bytes());
-    b.extend((((t - t.floor()) * 1e9) as u32).to_le_bytes());
+    b.extend((((t - t.floor()) * 1e9).round() as u32).to_le_bytes());
     b.extend(4u32.to_le_bytes());
     b.extend(b"imu\0");
     let mut doubles = vec![0.0, 0.0, 0.0, 1.0];
@@ -146,21 +181,39 @@ fn imu_cdr(t: f64, a: [f32; 3], g: [f32; 3]) -> Vec<u8> {
 
 /// A ROS 2 bag with one Imu topic `/imu`, written by the mcap crate.
 pub fn mcap_corpus(compression: Option<::mcap::Compression>) -> Vec<u8> {
+    let samples: Vec<LogSample> = corpus_samples()
+        .into_iter()
+        .map(|s| LogSample {
+            t_s: s.t_s + 100.0,
+            ..s
+        })
+        .collect();
+    write_mcap(&samples, compression, 0.0)
+}
+
+/// A ROS 2 bag of `samples` on the Imu topic `/imu`, written by the mcap crate: `header.stamp`
+/// the sample's time, the log time the recorder's clock, `recorder_offset_s` later (a bag recorded
+/// in simulated time has stamps from 0 and a wall-clock log time).
+pub fn write_mcap(
+    samples: &[LogSample],
+    compression: Option<::mcap::Compression>,
+    recorder_offset_s: f64,
+) -> Vec<u8> {
     let write = || -> ::mcap::McapResult<Vec<u8>> {
         let mut cursor = std::io::Cursor::new(Vec::new());
         let options = ::mcap::WriteOptions::new().compression(compression);
         let mut w = options.create(&mut cursor)?;
         let schema = w.add_schema("sensor_msgs/msg/Imu", "ros2msg", b"")?;
         let channel = w.add_channel(schema, "/imu", "cdr", &Default::default())?;
-        for k in 0..SAMPLES {
-            let (t, a, g, _) = sample(k);
+        for (k, s) in samples.iter().enumerate() {
+            let log_time = ((s.t_s + recorder_offset_s).max(0.0) * 1e9) as u64;
             let header = ::mcap::records::MessageHeader {
                 channel_id: channel,
                 sequence: k as u32,
-                log_time: ((t + 100.0) * 1e9) as u64,
-                publish_time: ((t + 100.0) * 1e9) as u64,
+                log_time,
+                publish_time: log_time,
             };
-            w.write_to_known_channel(&header, &imu_cdr(t + 100.0, a, g))?;
+            w.write_to_known_channel(&header, &imu_cdr(s.t_s, s.acc, s.gyro))?;
         }
         w.finish()?;
         drop(w);
@@ -185,7 +238,7 @@ mod tests {
         assert_eq!(rec.temp_c.as_ref().map(Vec::len), Some(SAMPLES));
         let (rec, _) = dataflash::read(dataflash_corpus().as_slice(), 0).unwrap();
         assert_eq!(rec.len(), SAMPLES);
-        assert_eq!(rec.acc[3], sample(3).1.map(f64::from));
+        assert_eq!(rec.acc[3], sample(3).acc.map(f64::from));
         for c in [
             None,
             Some(::mcap::Compression::Lz4),
@@ -193,7 +246,7 @@ mod tests {
         ] {
             let (rec, _) = mcap::read(mcap_corpus(c).as_slice(), None).unwrap();
             assert_eq!(rec.len(), SAMPLES, "{c:?}");
-            assert_eq!(rec.gyro_rad_s[3], sample(3).2.map(f64::from));
+            assert_eq!(rec.gyro_rad_s[3], sample(3).gyro.map(f64::from));
             assert!((rec.t_s[3] - 100.03).abs() < 1e-6, "{}", rec.t_s[3]);
         }
     }

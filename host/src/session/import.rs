@@ -11,12 +11,13 @@ use crate::limits::short_number;
 use shared::OutputUnit;
 
 pub mod time;
+use super::repair::{repair_times, run_rate_hz, TimeRepairs};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 pub(crate) use time::six_digits;
 pub use time::{detect_time_unit, TimeJump, TimeUnit, GAP_PERIODS};
-use time::{median_rate, MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
+use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
 
 /// Longest accepted line, bytes: a logger's row is well under 1 KiB; a file with no line ends (or a
 /// binary file) must not be read into memory whole.
@@ -151,6 +152,12 @@ pub struct Recording {
     pub time_unit: Option<(TimeUnit, bool)>,
     /// The unit's temperature at each row, °C, where the log has it (binary logs, `super::logs`).
     pub temp_c: Option<Vec<f64>>,
+    /// The time stamps' repairs ([`super::repair`]), per stream: what a sample is called there
+    /// ("data row", "IMU sample", "accelerometer sample", "gyro sample") and what was done.
+    pub time_repairs: Vec<(&'static str, TimeRepairs)>,
+    /// The stream read is already corrected by a vehicle's own calibration (PX4's
+    /// `sensor_combined`): its name. A calibration made from it would be a residual.
+    pub corrected_by: Option<&'static str>,
 }
 
 /// Why a logger's file cannot be imported; each says what to do.
@@ -389,7 +396,16 @@ pub fn read_logger<R: BufRead>(
         rec.t_s.iter_mut().for_each(|t| *t *= k);
         rec.time_unit = Some((unit, options.time_unit.is_none()));
     }
-    rec.rate_hz = median_rate(&rec.t_s);
+    let (order, repairs) = repair_times(&rec.t_s, |i, j| {
+        rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j]
+    });
+    rec.t_s = order.iter().map(|s| s.1).collect();
+    rec.acc = order.iter().map(|s| rec.acc[s.0]).collect();
+    rec.gyro_rad_s = order.iter().map(|s| rec.gyro_rad_s[s.0]).collect();
+    if !repairs.is_empty() {
+        rec.time_repairs.push(("data row", repairs));
+    }
+    rec.rate_hz = run_rate_hz(&rec.t_s);
     if options.acc_unit == OutputUnit::Lsb && options.acc_offset == [0.0; 3] {
         if let Some((offset, bits)) = mid_scale(&rec.acc) {
             return Err(ImportError::MidScale { offset, bits });
@@ -587,7 +603,7 @@ fn read_rows<R: BufRead>(
 
 /// Appends a row of finite values `v` at `t_s` (line `line`) to `rec`, its gyro converted with
 /// `gyro_scale` (rad/s per unit); the rows stay within [`MAX_ROWS`]. A repeated or earlier time
-/// stamp is kept: [`Recording::jumps`] reports it, and nothing is integrated or averaged across it.
+/// stamp is kept here and mended by [`super::repair`] once the file is read.
 fn push_row(
     rec: &mut Recording,
     v: [f64; 6],
@@ -929,32 +945,44 @@ mod tests {
     }
 
     #[test]
-    fn gaps_repeats_and_steps_back_are_kept_and_reported_with_their_place() {
+    fn gaps_are_kept_and_repeats_and_steps_back_repaired_with_their_place() {
         let mut t: Vec<f64> = (0..300).map(|i| i as f64 * 0.01).collect();
-        t[100] = t[99]; // a repeat after data row 100
+        t[100] = t[99]; // a repeated stamp on a row of its own values, after data row 100
         for x in &mut t[200..] {
             *x += 3.0; // a gap of 3 s after data row 200
         }
-        t[250] -= 1.0; // a step back after row 250, and a jump forward after row 251
-        let text = format!(
-            "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
-            t.iter()
-                .map(|x| format!("{x},0,0,9.81,0,0,0\n"))
-                .collect::<String>()
-        );
+        t[250] -= 1.0; // an isolated step back at data row 251
+        let mut rows: Vec<String> = t
+            .iter()
+            .enumerate()
+            .map(|(i, x)| format!("{x},{},0,9.81,0,0,0\n", i as f64 * 1e-3))
+            .collect();
+        rows.insert(150, rows[149].clone()); // an exact repeat: data row 151
+        let text = format!("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}", rows.concat());
         let rec = read(&text, &timed(OutputUnit::MetresPerSecondSquared)).unwrap();
+        assert_eq!(rec.len(), 300);
+        assert!(rec.t_s.windows(2).all(|w| w[1] > w[0]));
         let rows: Vec<usize> = rec.jumps().iter().map(|j| j.row).collect();
-        assert_eq!(rows, [99, 199, 249, 250]);
+        assert_eq!(rows, [199]);
         let w = rec.time_jumps().unwrap();
+        assert!(w.contains("gap of +3.010 s after data row 200"), "{w}");
+        let (what, r) = &rec.time_repairs[0];
+        assert_eq!(*what, "data row");
+        assert_eq!(r.spread, [100]);
+        assert_eq!(r.repeats, [150]);
+        assert_eq!(r.retimed.len(), 1);
+        assert_eq!(r.retimed[0].0, 251);
+        assert!((r.retimed[0].2 - 5.5).abs() < 1e-9, "{:?}", r.retimed);
+        let said = r.describe(what).unwrap();
         assert!(
-            w.contains("repeat of +0.000 s after data row 100 (t = 0.990 s)")
-                && w.contains("gap of +3.010 s after data row 200")
-                && w.contains("step back of -0.990 s after data row 250"),
-            "{w}"
+            said.contains("data row 252 stamped 4.500000 s, re-timed to 5.500000 s")
+                && said
+                    .contains("exact repeat(s) (same stamp, same values) left out (data row 151)")
+                && said.contains("data row 101"),
+            "{said}"
         );
         assert!(Recording::continuous(&rec.jumps(), 100, 200));
         assert!(!Recording::continuous(&rec.jumps(), 150, 201));
-        assert!(Recording::continuous(&rec.jumps(), 150, 200));
     }
 
     #[test]

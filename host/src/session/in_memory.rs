@@ -84,7 +84,8 @@ pub enum InMemoryError {
     GyroRefused(Vec<String>),
 }
 
-/// The reader's warnings about a recording: rows left out, a cut-short last line, time jumps.
+/// The reader's warnings about a recording: rows left out, a cut-short last line, the time stamps
+/// repaired, time jumps.
 pub fn recording_warnings(rec: &Recording) -> Vec<String> {
     let mut warnings = Vec::new();
     if rec.skipped_rows > 0 {
@@ -97,6 +98,9 @@ pub fn recording_warnings(rec: &Recording) -> Vec<String> {
         warnings.push(format!(
             "line {line}, the last, has no line end: the file was cut short; that line is left out"
         ));
+    }
+    for (what, repairs) in &rec.time_repairs {
+        warnings.extend(repairs.describe(what));
     }
     warnings.extend(rec.time_jumps());
     warnings
@@ -117,6 +121,9 @@ pub fn segment_recording(
 
 /// The first step of [`segment_recording`]: the intervals and their coverage.
 pub fn find(recording: Recording, choices: &SegmentChoices) -> Result<Found, SegmentError> {
+    if let Some(stream) = recording.corrected_by {
+        return Err(SegmentError::AlreadyCorrected(stream));
+    }
     let warnings = recording_warnings(&recording);
     let segmentation = find_intervals(&recording, &choices.segment)?;
     let coverage = coverage(&segmentation.stills, choices.segment.same_position_deg);

@@ -15,7 +15,8 @@
 //!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
 //!   `gyro.toml`; [`table_turn`] finds the whole turns on a table the gyro fit takes as known angles; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
 //!   tells them from text by their first bytes; [`in_memory`] does all of that without writing
-//!   files (the Python package).
+//!   files (the Python package); [`repair`] mends the damaged time stamps of every reader's
+//!   samples by one set of rules.
 
 pub mod builtin;
 pub mod coverage;
@@ -27,6 +28,7 @@ pub mod in_memory;
 pub mod logs;
 pub mod plan;
 pub mod reader;
+pub mod repair;
 pub mod segment;
 pub mod stats;
 pub mod table_turn;

@@ -320,8 +320,9 @@ impl<'a, S: FnMut(&Row<'_>) -> Result<(), RecordingError>> Reducer<'a, S> {
         }
         let c = &mut self.steps[idx];
         c.steps += 1;
-        if (dt / self.period_s - 1.0).abs() <= STEP_TOLERANCE {
-            c.at_rate += 1;
+        if !off_rate {
+            c.near += 1;
+            c.near_sum_s += dt;
         }
         if dt > 0.0 && dt < 100.0 * self.period_s {
             c.short += 1;
@@ -498,11 +499,13 @@ pub fn read_samples_each<R: BufRead>(
 /// Fewest steps between a segment's consecutive rows for its time base to be checked.
 const TIME_BASE_MIN_STEPS: u64 = 100;
 
-/// A step between consecutive rows longer than this many periods is a gap (rows are missing).
-const GAP_PERIODS: f64 = 5.0;
+/// A step between consecutive rows longer than this many periods is a gap (rows are missing): the
+/// same rule as the logs' readers.
+use super::import::GAP_PERIODS;
 
-/// A step between consecutive rows of a segment is "at the plan's rate" within this relative
-/// difference (a real clock's jitter and rounding of the stamps are far smaller).
+/// A segment's mean step (over the steps that are no gap) is "at the plan's rate" within this
+/// relative difference. The mean, not each step: a logger's stamps jitter by a large part of a
+/// period (±1 ms at 200 Hz), and jitter averages out where a wrong time base does not.
 const STEP_TOLERANCE: f64 = 0.1;
 
 /// The time steps between consecutive rows of one segment (a segment recorded in several runs has a
@@ -511,15 +514,17 @@ const STEP_TOLERANCE: f64 = 0.1;
 pub struct StepCount {
     /// Steps seen.
     pub steps: u64,
-    /// Of which at the plan's period, within 10 %.
-    pub at_rate: u64,
+    /// Of which forward and no gap (at most [`GAP_PERIODS`] of the plan's periods).
+    pub near: u64,
+    /// Their sum, s (their mean is the segment's period).
+    pub near_sum_s: f64,
     /// Sum of the positive steps shorter than 100 periods, s (the rate they imply, for a message).
     pub short_sum_s: f64,
     /// How many those are.
     pub short: u64,
 }
 
-/// Each segment's time stamps step at the plan's rate, for most of their steps
+/// Each segment's time stamps step at the plan's rate, on the mean of most of their steps
 /// ([`RecordingError::TimeBase`]): the rate enters `ω̇` (docs/model.md §5) and the durations, and a
 /// mismatch means that the time column is not what it says.
 fn check_time_base(
@@ -529,7 +534,10 @@ fn check_time_base(
     path: &Path,
 ) -> Result<(), RecordingError> {
     for (seg, c) in plan.segments.iter().zip(&report.steps) {
-        if c.steps < TIME_BASE_MIN_STEPS || 2 * c.at_rate >= c.steps {
+        let period_s = 1.0 / plan.sample_rate_hz;
+        let at_rate = 2 * c.near >= c.steps
+            && (c.near_sum_s / c.near as f64 / period_s - 1.0).abs() <= STEP_TOLERANCE;
+        if c.steps < TIME_BASE_MIN_STEPS || at_rate {
             continue;
         }
         let span = stats

@@ -123,6 +123,15 @@ pub struct Segmentation {
 /// Why the recording cannot be made into a session; each says what to record instead.
 #[derive(Debug, thiserror::Error)]
 pub enum SegmentError {
+    /// The samples are already corrected by the vehicle's calibration.
+    #[error(
+        "the log's IMU samples are {0}, which the vehicle has already corrected with its own \
+         calibration: a calibration made from them would be a residual, and exported as \
+         CAL_ACC0_* it would replace the vehicle's offsets with it. Log the sensor's raw topics \
+         (sensor_accel and sensor_gyro, at the sensor's rate: PX4's SDLOG_PROFILE \
+         'high rate' or logger_topics.txt) and record the session again"
+    )]
+    AlreadyCorrected(&'static str),
     /// Nothing in the recording is still.
     #[error(
         "no still interval: the quietest stretch of the recording moves ({acc_mg:.1} mg, \

@@ -146,9 +146,9 @@ impl SegmentAccumulator {
         }
     }
 
-    /// Adds one row with the unit's temperature, °C. A row whose temperature is NaN or infinite is
-    /// rejected whole, like any other non-finite value, so the temperature moments and the rest
-    /// describe the same rows.
+    /// Adds one row with the unit's temperature, °C. A row whose temperature is NaN or infinite (a
+    /// driver without a reading) is kept for the means and left out of the temperature moments,
+    /// which keep their own sums of the outputs over the rows that have a reading.
     #[inline]
     pub(crate) fn push_with_temperature(
         &mut self,
@@ -157,13 +157,9 @@ impl SegmentAccumulator {
         w_rad_s: &[f64; 3],
         temp_c: f64,
     ) {
-        if !temp_c.is_finite() {
-            self.rejected += 1;
-            return;
-        }
         let before = self.n;
         self.push(t_s, u, w_rad_s);
-        if self.n > before {
+        if self.n > before && temp_c.is_finite() {
             self.thermal
                 .get_or_insert_with(Default::default)
                 .push(u, temp_c);

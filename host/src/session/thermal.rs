@@ -298,9 +298,11 @@ up_b = [-1, 0, 0]
         let th = s.stats[0].thermal.as_ref().unwrap();
         assert_eq!((th.count, th.min_c, th.max_c), (10, 10.0, 19.0));
         assert!((th.mean_c() - 14.5).abs() < 1e-12);
-        // The row with a NaN temperature is left out whole and counted.
-        assert_eq!((s.stats[1].count, s.stats[1].rejected_rows), (1, 1));
-        assert!(s.report.warnings.iter().any(|w| w.contains("'x-'")));
+        // The row with a NaN temperature (a driver without a reading) is kept for the means and
+        // left out of the temperature moments.
+        assert_eq!((s.stats[1].count, s.stats[1].rejected_rows), (2, 0));
+        let th = s.stats[1].thermal.as_ref().unwrap();
+        assert_eq!((th.count, th.min_c, th.max_c), (1, 20.0, 20.0));
 
         // The same samples under a version 1 plan: the header names the fix.
         let v1 = PLAN_V2

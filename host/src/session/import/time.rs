@@ -147,14 +147,12 @@ pub(super) const MIN_SPAN_S: f64 = 0.5;
 /// Longest, days.
 pub(super) const MAX_SPAN_DAYS: f64 = 7.0;
 
-/// The median positive step and the span of raw time stamps.
+/// The median step and the span of raw time stamps, both unmoved by a few damaged stamps (the
+/// span is the samples' count times the median step) and by the log's direction (a log written
+/// newest first steps back by the same steps).
 fn step_and_span(t: &[f64]) -> (f64, f64) {
-    let (lo, hi) = t
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-            (lo.min(x), hi.max(x))
-        });
-    (1.0 / median_rate(t), hi - lo)
+    let step = 1.0 / median_rate(t);
+    (step, step * t.len().saturating_sub(1) as f64)
 }
 
 /// Whether time stamps in `unit` give a logger's rate over a plausible span.
@@ -218,11 +216,11 @@ pub(crate) fn six_digits(x: f64) -> String {
     short_number(format!("{x:.5e}").parse().unwrap_or(x))
 }
 
-/// The median rate of the positive steps (repeats and steps back are jumps, not the rate).
+/// The median rate of the steps, forward or back (repeats are not the rate).
 pub(super) fn median_rate(t_s: &[f64]) -> f64 {
     let mut dt: Vec<f64> = t_s
         .windows(2)
-        .map(|w| w[1] - w[0])
+        .map(|w| (w[1] - w[0]).abs())
         .filter(|d| *d > 0.0)
         .collect();
     if dt.is_empty() {

@@ -250,6 +250,8 @@ struct State {
     gyro: Stream,
     messages: u64,
     unstamped: u64,
+    /// Each accelerometer and gyro sample's log time, s: its time when no message has a stamp.
+    log_times: [Vec<f64>; 2],
 }
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
@@ -260,8 +262,17 @@ pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<St
     let mut reader = LinearReader::new_with_options(options);
     let mut st = State::default();
     let mut offset = 0u64;
+    let mut cut_at = None;
     while let Some(event) = reader.next_event() {
-        let event = event.map_err(|source| McapError::Container { offset, source })?;
+        let event = match event {
+            // A recorder that stopped (a crash, a full disk) leaves its last record cut: what came
+            // before it is sound, and the cut record (a whole chunk, if chunked) is what is lost.
+            Err(::mcap::McapError::UnexpectedEof) if st.messages > 0 => {
+                cut_at = Some(offset);
+                break;
+            }
+            other => other.map_err(|source| McapError::Container { offset, source })?,
+        };
         match event {
             LinearReadEvent::ReadRequest(need) => {
                 let buf = reader.insert(need.min(RECORD_LIMIT));
@@ -280,7 +291,14 @@ pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<St
             }
         }
     }
-    st.finish(topic)
+    let (rec, mut warnings) = st.finish(topic)?;
+    if let Some(offset) = cut_at {
+        warnings.push(format!(
+            "the file is cut short: it ends at byte {offset} inside a record; the messages before \
+             that record are read, those in it (a whole chunk, if the bag is chunked) are lost"
+        ));
+    }
+    Ok((rec, warnings))
 }
 
 fn read_some<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
@@ -384,27 +402,36 @@ impl State {
                     index: self.messages,
                     problem,
                 })?;
-                let t_s = if m.stamp_s == 0.0 {
+                // A stamp of 0 is a driver that stamps nothing only when every message has it; a
+                // bag recorded in simulated time starts at 0 and goes on from there.
+                if m.stamp_s == 0.0 {
                     self.unstamped += 1;
-                    header.log_time as f64 * 1e-9
-                } else {
-                    m.stamp_s
-                };
+                }
+                let t_s = m.stamp_s;
                 let too_many = |_: TooMany| McapError::TooManySamples;
                 let s = |v| StreamSample {
                     t_s,
                     v,
                     temp_c: None,
                 };
-                self.acc.push(s(m.acc_m_s2)).map_err(too_many)?;
-                self.gyro.push(s(m.gyro_rad_s)).map_err(too_many)?;
+                let log_s = header.log_time as f64 * 1e-9;
+                for (k, (st, v)) in [(&mut self.acc, m.acc_m_s2), (&mut self.gyro, m.gyro_rad_s)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let before = st.samples.len();
+                    st.push(s(v)).map_err(too_many)?;
+                    if st.samples.len() > before {
+                        self.log_times[k].push(log_s);
+                    }
+                }
             }
             _ => {}
         }
         Ok(())
     }
 
-    fn finish(self, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+    fn finish(mut self, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
         let imu: Vec<&str> = self
             .channels
             .values()
@@ -439,14 +466,25 @@ impl State {
             }
             _ => {}
         }
+        let unstamped = self.unstamped > 0 && self.unstamped == self.messages;
+        if unstamped {
+            for (st, log) in [&mut self.acc, &mut self.gyro]
+                .into_iter()
+                .zip(&self.log_times)
+            {
+                for (s, &t) in st.samples.iter_mut().zip(log) {
+                    s.t_s = t;
+                }
+            }
+        }
         let (mut rec, mut warnings) = super::pair(&self.acc, &self.gyro, f64::INFINITY);
         rec.acc_unit = Some(OutputUnit::MetresPerSecondSquared);
-        if self.unstamped > 0 {
+        if unstamped {
             warnings.insert(
                 0,
                 format!(
-                    "{} Imu message(s) have no header stamp (0): timed by the bag's log time, when \
-                     the recorder received them",
+                    "the {} Imu messages have no header stamp (all 0): timed by the bag's log \
+                     time, when the recorder received them",
                     self.unstamped
                 ),
             );

@@ -11,7 +11,8 @@ pub mod dataflash;
 pub mod mcap;
 pub mod ulog;
 
-use super::import::{read_logger, ImportError, ImportOptions, Recording, MAX_ROWS};
+use super::import::{read_logger, ImportError, ImportOptions, Recording, GAP_PERIODS, MAX_ROWS};
+use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -331,26 +332,23 @@ impl Stream {
 /// the gyro's two neighbouring samples; an accelerometer sample outside the gyro's time span, or
 /// further than `max_gap_s` from a gyro sample on either side, is left out). Logs with one message
 /// for both (ULog's `sensor_combined`, DataFlash's `IMU`) give the two streams the same times, and
-/// the interpolation returns the gyro sample itself. Time must increase: samples that step back
-/// are left out and counted in the returned warnings.
+/// the interpolation returns the gyro sample itself. Each stream's time stamps are first mended by
+/// [`repair`](crate::session::repair)'s rules, so that a damaged stamp costs at most its sample.
 pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
+    let (acc_s, acc_rep) = repaired(&acc.samples);
+    let (g, gyro_rep) = repaired(&gyro.samples);
     let mut rec = Recording {
         acc_unit: Some(OutputUnit::MetresPerSecondSquared),
         ..Recording::default()
     };
-    let with_temp = acc.samples.iter().any(|s| s.temp_c.is_some());
+    let with_temp = acc_s.iter().any(|s| s.temp_c.is_some());
     let mut temps = Vec::new();
-    let g = &gyro.samples;
-    let (mut j, mut back, mut unpaired) = (0usize, 0usize, 0usize);
-    for a in &acc.samples {
-        if rec.t_s.last().is_some_and(|&last| a.t_s <= last) {
-            back += 1;
-            continue;
-        }
+    let (mut j, mut unpaired) = (0usize, 0usize);
+    for a in &acc_s {
         while j + 1 < g.len() && g[j + 1].t_s <= a.t_s {
             j += 1;
         }
-        let Some(w) = interpolate(g, j, a.t_s, max_gap_s) else {
+        let Some(w) = interpolate(&g, j, a.t_s, max_gap_s) else {
             unpaired += 1;
             continue;
         };
@@ -359,16 +357,37 @@ pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, V
         rec.gyro_rad_s.push(w);
         temps.push(a.temp_c.unwrap_or(f64::NAN));
     }
-    rec.skipped_rows = acc.non_finite + back + unpaired;
-    rec.rate_hz = median_rate(&rec.t_s);
-    if with_temp {
+    rec.skipped_rows = acc.non_finite;
+    rec.rate_hz = run_rate_hz(&rec.t_s);
+    let mut warnings = Vec::new();
+    let readings = temps.iter().filter(|t| t.is_finite()).count();
+    if with_temp && readings == 0 {
+        warnings.push(
+            "the temperature field is NaN in every sample (a driver without a temperature \
+             reading): read as a log without temperature"
+                .to_string(),
+        );
+    } else if with_temp {
+        if readings < temps.len() {
+            warnings.push(format!(
+                "{} of {} samples have no temperature reading (NaN): those rows are kept, and \
+                 only the readings enter the temperature statistics",
+                temps.len() - readings,
+                temps.len()
+            ));
+        }
         rec.temp_c = Some(temps);
     }
-    let mut warnings = Vec::new();
-    if back > 0 {
-        warnings.push(format!(
-            "{back} accelerometer sample(s) whose time does not increase left out"
-        ));
+    if acc_rep == gyro_rep {
+        if !acc_rep.is_empty() {
+            rec.time_repairs.push(("IMU sample", acc_rep));
+        }
+    } else {
+        for (name, r) in [("accelerometer sample", acc_rep), ("gyro sample", gyro_rep)] {
+            if !r.is_empty() {
+                rec.time_repairs.push((name, r));
+            }
+        }
     }
     if unpaired > 0 {
         warnings.push(format!(
@@ -376,19 +395,34 @@ pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, V
             max_gap_s * 1e3
         ));
     }
-    if acc.non_finite + gyro.non_finite > 0 {
+    if gyro.non_finite > 0 {
         warnings.push(format!(
-            "{} sample(s) with NaN or infinite values left out",
-            acc.non_finite + gyro.non_finite
+            "{} gyro sample(s) with NaN or infinite values left out (the rate interpolated \
+             between their neighbours)",
+            gyro.non_finite
         ));
     }
     (rec, warnings)
 }
 
+/// A stream's samples in time order, their stamps mended ([`repair_times`]).
+fn repaired(samples: &[StreamSample]) -> (Vec<StreamSample>, TimeRepairs) {
+    let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
+    let (order, rep) = repair_times(&t, |i, j| {
+        samples[i].v == samples[j].v && samples[i].temp_c == samples[j].temp_c
+    });
+    let out = order
+        .iter()
+        .map(|&(i, t_s)| StreamSample { t_s, ..samples[i] })
+        .collect();
+    (out, rep)
+}
+
 /// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.
 pub(crate) fn pair_streams(acc: &Stream, gyro: &Stream) -> (Recording, Vec<String>) {
     let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
-    pair(acc, gyro, 5.0 / median_rate(&gyro_ts).max(1.0))
+    let rate_hz = 1.0 / median_step(&gyro_ts).unwrap_or(1.0);
+    pair(acc, gyro, GAP_PERIODS / rate_hz.max(1.0))
 }
 
 /// "NAME instance I, …" of the IMU messages or topics a log has, or `none` when it has none.
@@ -415,16 +449,6 @@ fn interpolate(g: &[StreamSample], j: usize, t_s: f64, max_gap_s: f64) -> Option
     Some(std::array::from_fn(|k| a.v[k] + f * (b.v[k] - a.v[k])))
 }
 
-/// The median sample rate, Hz (0 for fewer than two samples).
-pub(crate) fn median_rate(t_s: &[f64]) -> f64 {
-    let mut dt: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
-    if dt.is_empty() {
-        return 0.0;
-    }
-    dt.sort_by(f64::total_cmp);
-    1.0 / dt[dt.len() / 2]
-}
-
 /// Reads exactly `buf.len()` bytes, `Ok(false)` at a clean end of input (no byte read).
 pub(crate) fn read_exact_or_end<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<bool> {
     let mut got = 0;
@@ -442,3 +466,5 @@ pub(crate) fn read_exact_or_end<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod torture_tests;

@@ -1,6 +1,7 @@
 //! PX4 ULog: the IMU's samples from `sensor_accel` + `sensor_gyro` (the sensors' own outputs before
 //! PX4's calibration is applied, with the sensor's temperature), else from `sensor_combined` (already
-//! corrected by PX4's calibration, no temperature).
+//! corrected by PX4's calibration, no temperature: marked [`Recording::corrected_by`], which `apply`
+//! and `noise` read and `segment` refuses).
 //!
 //! Written against PX4's "ULog File Format" (docs.px4.io, `dev_log/ulog_file_format`) and its C
 //! header `ulog_messages.h`, with pyulog's `core.py` (v1.3.0) as the reference reader: a 16-byte
@@ -621,8 +622,9 @@ impl State {
             warnings.push(format!(
                 "sensor_accel/sensor_gyro hold only {raw} samples against sensor_combined's \
                  {combined}: reading sensor_combined (already corrected by PX4's calibration, no \
-                 temperature); to calibrate the sensor itself, log sensor_accel and sensor_gyro at \
-                 the sensor's rate (PX4's logger_topics.txt or SDLOG_PROFILE)"
+                 temperature), which a calibration cannot be made from; to calibrate the sensor \
+                 itself, log sensor_accel and sensor_gyro at the sensor's rate (PX4's \
+                 logger_topics.txt or SDLOG_PROFILE)"
             ));
         }
         let (acc, gyro) = if raw > 0 && !raw_is_sparse {
@@ -642,7 +644,10 @@ impl State {
             }
             .into());
         };
-        let (rec, mut paired) = pair_streams(acc, gyro);
+        let (mut rec, mut paired) = pair_streams(acc, gyro);
+        if std::ptr::eq(acc, &self.combined_acc) {
+            rec.corrected_by = Some("PX4's sensor_combined");
+        }
         if let Some(&(offset, t_s, ms)) = self.dropouts.first() {
             let total: u64 = self.dropouts.iter().map(|d| u64::from(d.2)).sum();
             warnings.push(format!(

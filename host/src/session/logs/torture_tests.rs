@@ -1,0 +1,304 @@
+//! The readers under damage, property-based over all four formats: a simulated hand session written
+//! as text, ULog, DataFlash and MCAP, one mutation at a seeded random place (a flipped bit in a
+//! stamp, swapped or repeated messages, a repeated stamp, jitter, a gap, a cut file, a NaN value or
+//! temperature, simulated time, reversed order), read back. The property (docs/robustness.md,
+//! "Damaged time stamps"): every sample the mutation did not damage is kept, at its own time and
+//! with its own values; at most 2 rows are lost per damaged sample.
+//!
+//! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
+//! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
+
+use super::{read_log_from, LogSource};
+use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use crate::session::import::GyroUnit;
+use crate::session::import::{ImportOptions, TimeSource};
+use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use crate::sim::testkit::Rng;
+use shared::OutputUnit;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Format {
+    Text,
+    Ulog,
+    DataFlash,
+    Mcap,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Mutation {
+    StampBitFlip,
+    Swap,
+    RepeatMessage,
+    RepeatStamp,
+    Jitter,
+    Gap,
+    Truncate,
+    NanValue,
+    NanTemperature,
+    SimulatedTime,
+    Reversed,
+}
+
+const MUTATIONS: [Mutation; 11] = [
+    Mutation::StampBitFlip,
+    Mutation::Swap,
+    Mutation::RepeatMessage,
+    Mutation::RepeatStamp,
+    Mutation::Jitter,
+    Mutation::Gap,
+    Mutation::Truncate,
+    Mutation::NanValue,
+    Mutation::NanTemperature,
+    Mutation::SimulatedTime,
+    Mutation::Reversed,
+];
+
+/// The clean session: the first 12 000 rows (60 s) of the standard hand session at 200 Hz.
+fn clean() -> Vec<LogSample> {
+    let sim = simulate_hand(
+        &logger_unit(OutputUnit::MetresPerSecondSquared),
+        &HandSpec::standard(3),
+    );
+    sim.rows
+        .iter()
+        .take(12_000)
+        .enumerate()
+        .map(|(k, (t, a, g))| LogSample {
+            t_s: 1000.0 + t,
+            acc: a.map(|x| x as f32),
+            gyro: g.map(|x| x as f32),
+            temp_c: 30.0 + 1e-4 * k as f32,
+        })
+        .collect()
+}
+
+fn write_text(samples: &[LogSample]) -> Vec<u8> {
+    let mut out = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
+    for s in samples {
+        let [ax, ay, az] = s.acc;
+        let [gx, gy, gz] = s.gyro;
+        out.push_str(&format!("{:.6},{ax},{ay},{az},{gx},{gy},{gz}\n", s.t_s));
+    }
+    out.into_bytes()
+}
+
+fn write(format: Format, samples: &[LogSample], recorder_offset_s: f64) -> Vec<u8> {
+    match format {
+        Format::Text => write_text(samples),
+        Format::Ulog => write_ulog(samples, None),
+        Format::DataFlash => write_dataflash(samples),
+        Format::Mcap => write_mcap(samples, None, recorder_offset_s),
+    }
+}
+
+/// The samples with one mutation at a random place, the file, and how many samples were damaged
+/// (a gap's samples and a cut file's tail count as removed, not damaged: `removed`).
+struct Damaged {
+    bytes: Vec<u8>,
+    damaged: usize,
+    removed: usize,
+}
+
+fn mutate(format: Format, m: Mutation, clean: &[LogSample], rng: &mut Rng) -> Damaged {
+    let n = clean.len();
+    let mut s = clean.to_vec();
+    let at = rng.range(20.0, n as f64 - 20.0) as usize;
+    let (mut damaged, mut removed, mut offset) = (1, 0, 0.0);
+    match m {
+        Mutation::StampBitFlip => {
+            let bit = rng.range(14.0, 44.0) as u32;
+            let us = (s[at].t_s * 1e6).round() as u64 ^ (1u64 << bit);
+            s[at].t_s = us as f64 * 1e-6;
+        }
+        Mutation::Swap => {
+            s.swap(at, at + 1);
+            damaged = 2;
+        }
+        Mutation::RepeatMessage => s.insert(at, s[at]),
+        Mutation::RepeatStamp => s[at].t_s = s[at - 1].t_s,
+        Mutation::Jitter => {
+            s.iter_mut().for_each(|x| x.t_s += rng.range(-1e-3, 1e-3));
+            damaged = 0;
+        }
+        Mutation::Gap => {
+            s.drain(at..at + 50);
+            (damaged, removed) = (0, 50);
+        }
+        Mutation::NanValue => s[at].acc[rng.range(0.0, 3.0) as usize] = f32::NAN,
+        Mutation::NanTemperature => {
+            let upto = if rng.range(0.0, 1.0) < 0.5 { n } else { n / 5 };
+            s[..upto].iter_mut().for_each(|x| x.temp_c = f32::NAN);
+            damaged = 0;
+        }
+        Mutation::SimulatedTime => {
+            let t0 = s[0].t_s;
+            s.iter_mut().for_each(|x| x.t_s -= t0);
+            offset = 1.7e9;
+            damaged = 0;
+        }
+        Mutation::Reversed => {
+            s.reverse();
+            damaged = 0;
+        }
+        Mutation::Truncate => {}
+    }
+    let mut bytes = write(format, &s, offset);
+    if m == Mutation::Truncate {
+        let cut = rng.range(0.5, 0.95);
+        let keep = (bytes.len() as f64 * cut) as usize;
+        bytes.truncate(keep);
+        // About the samples after the cut are removed; the one the cut runs through is damaged.
+        removed = match format {
+            // A text file's rows are its complete lines after the header.
+            Format::Text => n + 1 - bytes.iter().filter(|&&b| b == b'\n').count(),
+            _ => n - (n as f64 * cut) as usize,
+        };
+        damaged = 1;
+    }
+    Damaged {
+        bytes,
+        damaged,
+        removed,
+    }
+}
+
+fn source(format: Format) -> LogSource {
+    LogSource {
+        text: (format == Format::Text).then(|| {
+            ImportOptions::new(
+                TimeSource::Column("t".into()),
+                OutputUnit::MetresPerSecondSquared,
+                GyroUnit::RadPerS,
+            )
+        }),
+        instance: None,
+        topic: None,
+    }
+}
+
+/// Rows of the clean session the damaged read kept at their own time (within the jitter) with their
+/// own values, and the last of them (index); panics on a kept row at another time.
+fn kept_clean_rows(
+    clean: &[LogSample],
+    rec: &crate::session::import::Recording,
+    jitter_s: f64,
+    case: &str,
+) -> (usize, usize) {
+    // As f32: the writers' values, which a text file holds to the digits that give them back.
+    let key = |a: [f64; 3]| a.map(|x| (x as f32).to_bits());
+    let by_acc: HashMap<[u32; 3], (f64, usize)> = clean
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (key(s.acc.map(f64::from)), (s.t_s, k)))
+        .collect();
+    let mut offsets: Vec<f64> = rec
+        .acc
+        .iter()
+        .zip(&rec.t_s)
+        .filter_map(|(a, t)| by_acc.get(&key(*a)).map(|t0| t - t0.0))
+        .collect();
+    offsets.sort_by(f64::total_cmp);
+    let offset = offsets[offsets.len() / 2];
+    let (mut kept, mut last) = (0, 0);
+    for (a, t) in rec.acc.iter().zip(&rec.t_s) {
+        let Some(&(t0, k)) = by_acc.get(&key(*a)) else {
+            continue;
+        };
+        last = last.max(k);
+        assert!(
+            (t - offset - t0).abs() <= jitter_s + 5e-5,
+            "{case}: a row at {t} s kept at {} s from its own time",
+            t - offset - t0
+        );
+        kept += 1;
+    }
+    (kept, last)
+}
+
+#[test]
+fn a_damaged_sample_costs_at_most_two_rows_in_every_format() {
+    let seeds: u64 = std::env::var("TORTURE_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(3);
+    let clean = clean();
+    let n = clean.len();
+    let mut worst: BTreeMap<(Format, Mutation), (usize, f64)> = BTreeMap::new();
+    let mut cut_losses: BTreeMap<Format, usize> = BTreeMap::new();
+    for format in [Format::Text, Format::Ulog, Format::DataFlash, Format::Mcap] {
+        for m in MUTATIONS {
+            for seed in 0..seeds {
+                let mut rng = Rng::new(seed, 40 + m as u64);
+                let d = mutate(format, m, &clean, &mut rng);
+                let case = format!("{format:?} {m:?} seed {seed}");
+                let log = read_log_from(&d.bytes[..], &d.bytes, Path::new("x"), &source(format))
+                    .unwrap_or_else(|e| panic!("{case}: refused: {e}"));
+                let jitter = if m == Mutation::Jitter { 1e-3 } else { 0.0 };
+                let (kept, last) = kept_clean_rows(&clean, &log.recording, jitter, &case);
+                let removed = if m == Mutation::Truncate {
+                    // The rows after the cut; the reader must have read up to it, or, in a chunked
+                    // MCAP, up to the chunk the cut runs through (the format's unit of integrity:
+                    // the crate's writer makes 1 MiB chunks, 3 000 messages).
+                    let slack = if format == Format::Mcap { 3_200 } else { 200 };
+                    assert!(
+                        n - last <= d.removed + slack,
+                        "{case}: read up to row {last} of a file cut after {}",
+                        n - d.removed
+                    );
+                    assert!(
+                        format == Format::Text
+                            || log.warnings.iter().any(|w| w.contains("cut short")),
+                        "{case}: {:?}",
+                        log.warnings
+                    );
+                    let cut = cut_losses.entry(format).or_default();
+                    *cut = (*cut).max((n - d.removed).saturating_sub(last + 1));
+                    n - 1 - last
+                } else {
+                    d.removed
+                };
+                let lost = n - removed - kept.min(n - removed);
+                assert!(
+                    lost <= 2 * d.damaged,
+                    "{case}: {lost} rows lost for {} damaged sample(s); warnings {:?} {:?}",
+                    d.damaged,
+                    log.warnings,
+                    log.recording.time_repairs
+                );
+                if m == Mutation::NanTemperature
+                    && matches!(format, Format::Ulog | Format::DataFlash)
+                {
+                    // Partly NaN: the column kept whole; NaN throughout: no temperature, said.
+                    match log.recording.temp_c.as_ref() {
+                        Some(t) => assert_eq!(t.len(), log.recording.len(), "{case}"),
+                        None => assert!(
+                            log.warnings
+                                .iter()
+                                .any(|w| w.contains("NaN in every sample")),
+                            "{case}: {:?}",
+                            log.warnings
+                        ),
+                    }
+                }
+                let per = lost as f64 / d.damaged.max(1) as f64;
+                let w = worst.entry((format, m)).or_insert((0, 0.0));
+                w.0 += 1;
+                w.1 = w.1.max(per);
+            }
+        }
+    }
+    println!("format     mutation         cases  rows lost per damaged sample (worst)");
+    for ((f, m), (cases, per)) in &worst {
+        println!(
+            "{:<10} {:<16} {cases:>5}  {per}",
+            format!("{f:?}"),
+            format!("{m:?}")
+        );
+    }
+    for (f, lost) in &cut_losses {
+        println!("{f:?}: a cut file lost at most {lost} rows before the cut");
+    }
+    println!("{} cases run", worst.values().map(|w| w.0).sum::<usize>());
+}
