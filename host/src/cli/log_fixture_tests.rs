@@ -359,9 +359,17 @@ fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_sessi
     // The estimator publishes at 250 Hz (the median step, 4 ms) and now and then skips a
     // cycle: the rate is the mean over the steps, each counted in whole periods (2 372 steps in
     // 9.618 s), below the median's 250 Hz and above the plain mean's 246.6 Hz.
-    let periods: f64 = rec.t_s.windows(2).map(|w| ((w[1] - w[0]) / 0.004).round()).sum();
+    let periods: f64 = rec
+        .t_s
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) / 0.004).round())
+        .sum();
     let span = rec.t_s[2372] - rec.t_s[0];
-    assert!((rec.rate_hz - periods / span).abs() < 1e-6, "{}", rec.rate_hz);
+    assert!(
+        (rec.rate_hz - periods / span).abs() < 1e-6,
+        "{}",
+        rec.rate_hz
+    );
     assert!((246.6..250.0).contains(&rec.rate_hz), "{}", rec.rate_hz);
     assert_eq!(rec.temp_c, None, "sensor_combined carries no temperature");
 

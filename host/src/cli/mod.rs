@@ -38,6 +38,8 @@ pub mod log_input;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;
+#[cfg(test)]
+mod nominal_scale_tests;
 pub mod output;
 pub mod plan;
 pub mod port;

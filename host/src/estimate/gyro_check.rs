@@ -7,8 +7,11 @@
 //! - a diagonal entry ≤ 0: that axis's sign is reversed (or the accelerometer's axes are mirrored,
 //!   which only the gyro can see: a reflection of every still position is still a set of positions);
 //! - an off-diagonal entry larger than the diagonal one: two axes are swapped;
-//! - the same scale error on all three axes: the time base is wrong (the turns were integrated over
-//!   the wrong durations: the sample rate, or the time column's unit), or the gyro's unit;
+//! - the same scale error on all three axes by 57.3× or its inverse: the gyro's unit. The same error
+//!   by any other factor within [`COMMON_SCALE_RANGE`] is no contradiction: the gyro's nominal
+//!   scale is off (which is what a gyro calibration is for), or the time base is (the turns were
+//!   integrated over the wrong durations); the two cannot be told apart from the turns, so the fit is
+//!   kept and [`common_scale`] lets the caller name both with the figure each implies;
 //! - turns that no `G` explains (a misfit far beyond the noise): a sign, a swap or a time gap.
 //!
 //! The table session's gyro is also refused when the screening left out spins because the gyro
@@ -32,6 +35,31 @@ pub(crate) const MAX_TURN_MISFIT_DEG: f64 = 1.0;
 /// Ratio of two scale errors regarded as "the same on all three axes" (a time base or unit, not a
 /// part's own scale errors, which differ from axis to axis).
 const COMMON_SCALE_SPREAD: f64 = 0.05;
+
+/// The common scale factors taken for a result, not a contradiction ([`common_scale`]): a nominal
+/// scale off by up to 4× (a wrong LSB per °/s, a full-scale range mixed up) or a time base as far.
+pub(crate) const COMMON_SCALE_RANGE: (f64, f64) = (0.25, 4.0);
+
+/// The factor `k` by which the gyro reads on all three axes (`G ≈ k·(I + small)`), when it is beyond
+/// [`MAX_SCALE_ERROR`], the same on every axis, within [`COMMON_SCALE_RANGE`] and not a unit's
+/// 57.3×: a nominal scale or a time base, which the caller names (docs/model.md §8).
+pub(crate) fn common_scale(matrix: &RowMajor3) -> Option<f64> {
+    let ratio: [f64; 3] = core::array::from_fn(|i| matrix[i][i]);
+    if ratio.iter().any(|r| !r.is_finite() || *r <= 0.0) {
+        return None;
+    }
+    let k = ratio.iter().sum::<f64>() / 3.0;
+    let deg = 180.0 / core::f64::consts::PI;
+    let common = ratio
+        .iter()
+        .all(|r| (r / k - 1.0).abs() < COMMON_SCALE_SPREAD);
+    let unit = (k / deg - 1.0).abs() < 0.1 || (k * deg - 1.0).abs() < 0.1;
+    (common
+        && !unit
+        && (k - 1.0).abs() > MAX_SCALE_ERROR
+        && (COMMON_SCALE_RANGE.0..=COMMON_SCALE_RANGE.1).contains(&k))
+    .then_some(k)
+}
 
 /// The likely causes of an implausible `G`, one line each (empty: `G` is plausible).
 pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
@@ -72,12 +100,13 @@ pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
         return problems;
     }
     let scale: [f64; 3] = core::array::from_fn(|i| matrix[i][i] - 1.0);
-    if scale.iter().any(|s| s.abs() > MAX_SCALE_ERROR) {
+    if common_scale(matrix).is_none() && scale.iter().any(|s| s.abs() > MAX_SCALE_ERROR) {
         problems.push(scale_cause(&scale));
     }
+    // Relative to the row's scale: a gyro that reads 2× has its cross-axis terms doubled too.
     for i in 0..3 {
         for j in (0..3).filter(|&j| j != i) {
-            if matrix[i][j].abs() > MAX_CROSS_AXIS {
+            if matrix[i][j].abs() > MAX_CROSS_AXIS * matrix[i][i].abs() {
                 problems.push(format!(
                     "G[{}][{}] = {:+.3}: a {:.1}° misalignment, beyond any mounted gyro's (at most \
                      {MAX_CROSS_AXIS} is plausible); check the columns and the gyro's mounting",
@@ -118,9 +147,11 @@ fn scale_cause(scale: &[f64; 3]) -> String {
         )
     } else if common {
         format!(
-            "gyro scale errors {shown}, the same on all three axes: the time base is wrong, not the \
-             gyro: the time stamps span {mean:.3}× the true durations (the sample rate given, or \
-             the time column's unit); check --rate-hz or --time-column"
+            "gyro scale errors {shown}, the same on all three axes: {mean:.3}×, beyond any nominal \
+             scale or time base error taken for a result ({}× to {}×); check the gyro's unit, its \
+             nominal scale and the time stamps",
+            COMMON_SCALE_RANGE.0,
+            COMMON_SCALE_RANGE.1
         )
     } else {
         format!(
@@ -229,19 +260,27 @@ mod tests {
     }
 
     #[test]
-    fn the_same_scale_on_every_axis_is_a_time_base() {
-        let g = [[2.0 / 3.0, 0.0, 0.0], [0.0, 0.668, 0.0], [0.0, 0.0, 0.665]];
-        let p = matrix_problems(&g);
-        assert!(
-            p[0].contains("time base is wrong") && p[0].contains("span 0.667×"),
-            "{p:?}"
-        );
+    fn the_same_scale_on_every_axis_is_a_result_a_unit_or_beyond_range() {
+        // 0.667× on every axis, a 2 % misalignment scaled with it: kept, the factor given.
+        let g = [
+            [2.0 / 3.0, 0.013, 0.0],
+            [0.0, 0.668, 0.0],
+            [0.0, 0.0, 0.665],
+        ];
+        assert!(matrix_problems(&g).is_empty(), "{:?}", matrix_problems(&g));
+        let k = common_scale(&g).unwrap();
+        assert!((k - 0.6667).abs() < 1e-3, "{k}");
+        assert_eq!(common_scale(&I), None);
         let g = I.map(|r| r.map(|v| v * 57.3));
         assert!(matrix_problems(&g)[0].contains("--gyro-unit deg/s"));
-        // Different errors per axis: not a time base.
+        assert_eq!(common_scale(&g), None);
+        let g = I.map(|r| r.map(|v| v * 6.0));
+        assert!(matrix_problems(&g)[0].contains("beyond any nominal scale"));
+        // Different errors per axis: no common factor, refused as a scale error.
         let g = [[1.3, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let p = matrix_problems(&g);
-        assert!(!p[0].contains("time base"), "{p:?}");
+        assert!(p[0].contains("at most 20 % is plausible"), "{p:?}");
+        assert_eq!(common_scale(&g), None);
     }
 
     #[test]

@@ -309,10 +309,11 @@ pub(crate) fn fit_handheld_gyro(
         why: "singular",
     })?;
     let norms = g.map(|r| linalg::norm(&r));
-    if norms.iter().any(|n| !(0.5..=2.0).contains(n)) {
+    let (lo, hi) = super::gyro_check::COMMON_SCALE_RANGE;
+    if norms.iter().any(|n| !(lo..=hi).contains(n)) {
         return Err(HandGyroError::Implausible {
             norms,
-            why: "a gyro in the stated unit reads within a factor of two of the true rate",
+            why: "a gyro in the stated unit reads within a factor of four of the true rate",
         });
     }
     let cov = (jac.transpose() * &jac)

@@ -55,6 +55,7 @@ pub(crate) fn check(
     }
     if problems.is_empty() {
         outcome.warnings.extend(labels);
+        outcome.warnings.extend(common_scale_note(&outcome));
         return Ok(outcome);
     }
     problems.extend(labels);
@@ -73,6 +74,19 @@ fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
         problems.extend(gyro_check::matrix_problems(&g.matrix));
     }
     problems
+}
+
+/// A gyro that reads `k`× the table's rates on every axis ([`gyro_check::common_scale`]): no
+/// contradiction, since a spin's rate does not depend on the time base: the gyro's nominal scale is
+/// off (which the calibration corrects), or the plan's rates are.
+fn common_scale_note(outcome: &CalibrationOutcome) -> Option<String> {
+    let g = outcome.gyro.as_ref()?;
+    let k = gyro_check::common_scale(&g.matrix)?;
+    Some(format!(
+        "the gyro reads {k:.4}× the table's rates on all three axes: its nominal scale is off by \
+         {:+.1} %, which this calibration corrects, or the plan's rate_deg_s are off by as much",
+        (k - 1.0) * 100.0
+    ))
 }
 
 /// A scale factor that contradicts the plan's `output_unit`: an output declared in g must measure

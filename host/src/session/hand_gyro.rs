@@ -3,7 +3,7 @@
 //! the session as `gyro.toml` ([`file_text`], [`read`]) for `host calibrate --input`.
 
 use super::from_recording::stats_for;
-use super::import::Recording;
+use super::import::{six_digits, Recording, TimeOrigin};
 use super::segment::{PositionSet, Segmentation};
 use super::table_turn::find_table_turns;
 use super::Plan;
@@ -194,6 +194,69 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
             .collect();
     problems.extend(gyro_check::matrix_problems(&fit.matrix));
     problems
+}
+
+/// A gyro that reads `k`× on every axis and fits its turns ([`gyro_check::common_scale`]): a
+/// result, not a contradiction. The turns cannot tell a nominal scale that is off (which the
+/// calibration corrects) from a time base that is (which it must not), so the note names both, each
+/// with the figure it implies, in the terms of the recording's own input (docs/model.md §8).
+pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording) -> Option<String> {
+    let k = gyro_check::common_scale(&fit.matrix)?;
+    let diag: Vec<String> = (0..3)
+        .map(|i| format!("{:+.1} %", (fit.matrix[i][i] - 1.0) * 100.0))
+        .collect();
+    let scale = match rec.gyro_lsb_per_dps {
+        Some(lsb) => format!(
+            "the gyro's nominal scale is off: the turns imply {} LSB per °/s where \
+             --gyro-lsb-per-dps gave {}",
+            six_digits(lsb * k),
+            six_digits(lsb)
+        ),
+        None => format!(
+            "the gyro's nominal scale is off: its values are {k:.4}× the true rates (the conversion \
+             its logger applied)"
+        ),
+    };
+    let rate = rec.rate_hz;
+    let (time, fix) = match rec.time_origin {
+        Some(TimeOrigin::RateGiven(hz)) => (
+            format!(
+                "the rate given is: the rows would have to come at {:.3} Hz, not the --rate-hz {hz}",
+                hz * k
+            ),
+            "give the true --rate-hz",
+        ),
+        Some(TimeOrigin::TimeColumn) => (
+            format!(
+                "the time column is: its stamps would have to step at {:.3} Hz, not {rate:.3} Hz",
+                rate * k
+            ),
+            "fix the time column (or --time-unit)",
+        ),
+        Some(TimeOrigin::LoggerStamps(format)) => (
+            format!(
+                "the {format} log's stamps are: they would have to step at {:.3} Hz, not \
+                 {rate:.3} Hz",
+                rate * k
+            ),
+            "re-time the log",
+        ),
+        None => (
+            format!(
+                "the time base is: the samples would have to come at {:.3} Hz, not {rate:.3} Hz",
+                rate * k
+            ),
+            "fix the time stamps",
+        ),
+    };
+    Some(format!(
+        "gyro scale {} on all three axes, and the {} turns fit it (rms misfit {:.3}°): either {scale}, \
+         which this calibration corrects, or {time}, which it must not correct; if the time stamps \
+         are what is wrong, {fix} and segment again",
+        diag.join(", "),
+        fit.turns,
+        fit.rms_residual_deg
+    ))
 }
 
 /// The largest plausible rms misfit of the hand turns, degrees: 1° (`gyro_check::MAX_TURN_MISFIT_DEG`),

@@ -158,6 +158,21 @@ pub struct Recording {
     /// The stream read is already corrected by a vehicle's own calibration (PX4's
     /// `sensor_combined`): its name. A calibration made from it would be a residual.
     pub corrected_by: Option<&'static str>,
+    /// Where the times come from (`None`: built in memory).
+    pub time_origin: Option<TimeOrigin>,
+    /// The gyro was logged in counts and converted at this nominal scale, LSB per °/s.
+    pub gyro_lsb_per_dps: Option<f64>,
+}
+
+/// Where a recording's times come from: what a wrong time base would have to be wrong in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeOrigin {
+    /// A text file's rows at the rate given (`--rate-hz`), Hz.
+    RateGiven(f64),
+    /// A text file's time column.
+    TimeColumn,
+    /// A binary log's own stamps: its format's name.
+    LoggerStamps(&'static str),
 }
 
 /// Why a logger's file cannot be imported; each says what to do.
@@ -385,6 +400,11 @@ pub fn read_logger<R: BufRead>(
     if rec.len() < 100 {
         return Err(ImportError::TooFewRows(rec.len()));
     }
+    rec.gyro_lsb_per_dps = options.gyro_lsb_per_dps;
+    rec.time_origin = Some(match options.time {
+        TimeSource::Column(_) => TimeOrigin::TimeColumn,
+        TimeSource::RateHz(hz) => TimeOrigin::RateGiven(hz),
+    });
     if let Time::Column(_) = layout.time {
         let unit = match options.time_unit {
             Some(u) => time::fits_time_unit(&rec.t_s, u)

@@ -183,6 +183,9 @@ impl Found {
         } else {
             (Err(HandGyroError::NotAsked), Vec::new())
         };
+        if let Ok(fit) = &gyro {
+            warnings.extend(hand_gyro::common_scale_note(fit, &recording));
+        }
         Ok(SegmentedSession {
             recording,
             segmentation,

@@ -11,7 +11,9 @@ pub mod dataflash;
 pub mod mcap;
 pub mod ulog;
 
-use super::import::{read_logger, ImportError, ImportOptions, Recording, GAP_PERIODS, MAX_ROWS};
+use super::import::{
+    read_logger, ImportError, ImportOptions, Recording, TimeOrigin, GAP_PERIODS, MAX_ROWS,
+};
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use shared::OutputUnit;
 use std::fs::File;
@@ -281,6 +283,10 @@ pub fn read_log_from<R: BufRead>(
             (imu.0, imu.1)
         }
     };
+    let mut recording = recording;
+    if format != LogFormat::Text {
+        recording.time_origin = Some(TimeOrigin::LoggerStamps(format.name()));
+    }
     if recording.len() < 100 {
         return Err(LogError::TooFewSamples {
             path: p(),
