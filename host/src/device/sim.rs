@@ -100,7 +100,7 @@ impl SimDevice {
         dev.info.board = Board::SimulatedHand;
         dev.info.virtual_table = false;
         dev.hand = Some(SimHand::new(SIM_SAMPLE_RATE_HZ));
-        let service = dev.service.take().map(|s| s.controller.into_store());
+        let service = dev.service.take().and_then(|s| s.controller.into_store());
         if let Some(store) = service {
             dev.boot(store);
         }
@@ -211,14 +211,18 @@ impl SimDevice {
             Some(BoardEvent::Reset) => {
                 self.line.budget = self.line.budget.max(256);
                 service.flush(&mut self.line, 1024);
-                if let Some(old) = self.service.take() {
-                    let store = old.controller.into_store();
+                // The link reads no request while a store job is out: the store is home.
+                if let Some(store) = self.service.take().and_then(|s| s.controller.into_store()) {
                     self.resets += 1;
                     self.line.to_device.clear();
                     self.boot(store);
                 }
             }
             None => {}
+        }
+        // The store of a calibration write, as a board's idle loop runs it.
+        if let Some(service) = self.service.as_mut() {
+            service.run_store_here(&mut self.pipeline);
         }
     }
 
