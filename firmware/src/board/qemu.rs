@@ -27,6 +27,19 @@ use crate::protocol::DeviceInfo;
 use crate::storage::{AbStore, RamNorFlash};
 use crate::virtual_sensor::{VirtualSensor, IMU_CONFIG};
 
+extern "C" {
+    /// cortex-m-rt's default interrupt handler (its link script provides it).
+    fn DefaultHandler();
+}
+
+/// The device part of the vector table: mps2-an386's 32 interrupt lines (QEMU's `num-irq` for the
+/// board), all to the default handler, since the board enables none (SysTick is a core
+/// exception). cortex-m-rt's generic table has 240 entries: 832 bytes of flash more.
+#[link_section = ".vector_table.interrupts"]
+#[no_mangle]
+#[used]
+pub static __INTERRUPTS: [unsafe extern "C" fn(); 32] = [DefaultHandler; 32];
+
 /// Sampling rate of the virtual sensor, Hz (SysTick at 25 MHz / 25 000).
 pub const SAMPLE_RATE_HZ: u32 = 1000;
 /// Core clock of mps2-an386 (SysTick's processor clock), Hz.
