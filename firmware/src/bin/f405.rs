@@ -7,7 +7,7 @@
 //! | task | binds | priority | does |
 //! |---|---|---|---|
 //! | `imu_int` | EXTI4 (INT1 on PC4) | 3 | FIFO watermark: CS low, starts the SPI1 TX DMA (the RX stream is armed) |
-//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, runs the pipeline on each |
+//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, rotates them into the board's axes, runs the pipeline on each |
 //! | `stall_tick` | SysTick (every 10 ms) | 2 | restarts a burst chain that stalled (an interrupt lost): FIFO flushed, status read |
 //! | `usb` | OTG_FS | 1 | USB device, link service (requests, frames out); a calibration write's store only queued |
 //! | `idle` | — | 0 | the calibration store (sector erase and programming), stack high-water mark, LED blink when the IMU is missing, `wfi` |
@@ -335,6 +335,8 @@ mod app {
         if let Some(h) = done.corrupt_header {
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
         }
+        // Into the board's axes (the calibration's body frame), outside any lock.
+        board::IMU_ALIGNMENT.apply(&mut samples[..done.samples]);
         cx.shared.pipeline.lock(|p| {
             // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through the
             // sample's DATA_LOST flag.
