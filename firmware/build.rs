@@ -1,6 +1,7 @@
 //! Puts the board's memory layout in OUT_DIR as `memory.x` (cortex-m-rt's `link.x` includes it):
 //! `memory-qemu.x` for `board-qemu`, the repository's `memory.x` (STM32F446RE) for `board-stm32f4`,
-//! `memory-f405.x` for `board-f405`. PC builds (tests) need none.
+//! `memory-f405.x` for `board-f405`; for the QEMU board also an empty `device.x` (its interrupt
+//! table is `board::qemu::__INTERRUPTS`). PC builds (tests) need none.
 
 use std::{env, fs, path::PathBuf};
 
@@ -31,5 +32,14 @@ fn main() {
     };
     let out = PathBuf::from(env::var_os("OUT_DIR").unwrap());
     fs::copy(source, out.join("memory.x")).expect("copy memory layout");
+    if env::var_os("CARGO_FEATURE_BOARD_QEMU").is_some() {
+        // cortex-m-rt's `device` feature makes link.x include a `device.x` (a PAC's, on the STM32
+        // boards): the QEMU board's interrupt table names only `DefaultHandler`, so it is empty.
+        fs::write(
+            out.join("device.x"),
+            "/* mps2-an386: no device interrupt handlers */\n",
+        )
+        .expect("write device.x");
+    }
     println!("cargo:rustc-link-search={}", out.display());
 }

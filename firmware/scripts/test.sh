@@ -6,7 +6,8 @@
 #  3. rustfmt --check, clippy -D warnings (library on the PC, every binary on the target) and the
 #     library's rustdoc -D warnings
 #  4. every board built with -D warnings (QEMU mps2-an386; the STM32F446 Nucleo and the STM32F405
-#     flight controller, which only build here), their flash and RAM printed
+#     flight controller, which only build here), their flash and RAM printed; the QEMU image's
+#     flash budget (scripts/qemu-board.sh) and the F405's checked
 #  5. on-target tests in QEMU (bit-exact compensation vs the PC, storage across a system reset)
 #  6. end-to-end smoke test: the QEMU firmware over its serial pty (protocol, calibration, reset)
 #  7. the benchmark (instruction counts, flash/RAM)
@@ -53,6 +54,7 @@ qemu_features=(--no-default-features --features board-qemu)
 step "build + clippy: QEMU board (mps2-an386)"
 cargo clippy --release "${qemu_features[@]}" --bins --target "$target" -- -D warnings
 cargo build --release "${qemu_features[@]}" --bins --target "$target"
+qemu_size_check "target/$target/release/qemu"
 
 if [ "${SKIP_STM32:-0}" != 1 ]; then
     # One board at a time (each compiles the HAL for its own chip). Budgets of the F405 image:

@@ -22,8 +22,11 @@ use shared::{Calibration, OutputUnit};
 
 use crate::pipeline::{Pipeline, PipelineCommand, MAX_WINDOW_SAMPLES};
 use crate::storage::CalStore;
+
+mod store_job;
 use crate::virtual_sensor::VirtualSensor;
 use crate::{ByteLink, FIRMWARE_VERSION};
+pub use store_job::{StoreJob, StoreMailbox};
 
 /// What the request handler needs to know about the board.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,8 +57,9 @@ pub enum BoardEvent {
 /// Result of one request.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outcome {
-    /// The answer to send.
-    pub reply: DeviceToHost,
+    /// The answer to send; `None` while a calibration write waits for its store
+    /// ([`Controller::take_store_job`]): the answer comes with [`Controller::finish_store`].
+    pub reply: Option<DeviceToHost>,
     /// A change for the sampling pipeline.
     pub pipeline: Option<PipelineCommand>,
     /// A board action.
@@ -65,7 +69,7 @@ pub struct Outcome {
 impl Outcome {
     fn reply(reply: DeviceToHost) -> Self {
         Outcome {
-            reply,
+            reply: Some(reply),
             pipeline: None,
             board: None,
         }
@@ -78,10 +82,21 @@ impl Outcome {
     }
 }
 
+/// A validated calibration whose store is under way ([`StoreJob`]).
+struct Pending {
+    calibration: Calibration,
+    created_unix_s: u64,
+}
+
 /// The request handler: identity, calibration state and storage, lever mode, chunk assembly.
 pub struct Controller<S> {
     info: DeviceInfo,
-    store: S,
+    /// `None` while a [`StoreJob`] holds it.
+    store: Option<S>,
+    /// A store handed out (or ready to be): its answer is owed.
+    pending: Option<Pending>,
+    /// The job ready to be taken by the board.
+    job: Option<StoreJob<S>>,
     state: CalibrationState,
     calibration: Option<Calibration>,
     lever_mode: LeverMode,
@@ -125,7 +140,9 @@ impl<S: CalStore> Controller<S> {
         };
         Controller {
             info,
-            store,
+            store: Some(store),
+            pending: None,
+            job: None,
             state,
             calibration,
             lever_mode,
@@ -154,14 +171,56 @@ impl<S: CalStore> Controller<S> {
         self.lever_mode
     }
 
-    /// The store (for tests and boards that inspect it).
-    pub fn store_mut(&mut self) -> &mut S {
-        &mut self.store
+    /// The store (for tests and boards that inspect it); `None` while a store job holds it.
+    pub fn store_mut(&mut self) -> Option<&mut S> {
+        self.store.as_mut()
     }
 
-    /// Gives the store back (to boot again from it).
-    pub fn into_store(self) -> S {
+    /// Gives the store back (to boot again from it); `None` while a store job holds it (the link
+    /// reads no request, so no reset either, until the job is back).
+    pub fn into_store(self) -> Option<S> {
         self.store
+    }
+
+    /// A calibration write waits for its store: its answer is owed.
+    pub fn store_pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// The store job of a validated calibration write, for the board's lowest priority
+    /// ([`StoreJob::run`]), then [`Self::finish_store`].
+    pub fn take_store_job(&mut self) -> Option<StoreJob<S>> {
+        self.job.take()
+    }
+
+    /// Takes a job back after [`StoreJob::run`]: the store returns, and on success the calibration
+    /// is applied. Returns the write's answer (`None` for a job this controller did not hand out).
+    #[inline(never)]
+    pub fn finish_store(&mut self, job: StoreJob<S>) -> Option<Outcome> {
+        let pending = self.pending.take()?;
+        let StoreJob {
+            store,
+            blob,
+            len,
+            result,
+        } = job;
+        self.store = Some(store);
+        if result != Some(Ok(())) {
+            #[cfg(target_os = "none")]
+            defmt::warn!("storing the calibration failed; the previous one stays in force");
+            return Some(Outcome::error(DeviceError::StorageFailed));
+        }
+        self.stored[..len].copy_from_slice(&blob[..len]);
+        self.stored_len = len;
+        let compensator = Compensator::new(&pending.calibration, self.lever_mode).ok();
+        self.calibration = Some(pending.calibration);
+        self.state = CalibrationState::Valid {
+            created_unix_s: pending.created_unix_s,
+        };
+        Some(Outcome {
+            pipeline: Some(PipelineCommand::Compensator(compensator)),
+            ..Outcome::ack(Ack::CalibrationStored)
+        })
     }
 
     /// Answers one request.
@@ -295,24 +354,30 @@ impl<S: CalStore> Controller<S> {
                 return Outcome::error(DeviceError::BlobRejected(e));
             }
         };
-        let compensator = match Compensator::new(&blob.calibration, self.lever_mode) {
-            Ok(c) => c,
-            Err(e) => return Outcome::error(DeviceError::BlobRejected(e.into())),
-        };
-        if self.store.store(&self.assembly[..total]).is_err() {
-            #[cfg(target_os = "none")]
-            defmt::warn!("storing the calibration failed; the previous one stays in force");
-            return Outcome::error(DeviceError::StorageFailed);
+        if let Err(e) = Compensator::new(&blob.calibration, self.lever_mode) {
+            return Outcome::error(DeviceError::BlobRejected(e.into()));
         }
-        self.stored[..total].copy_from_slice(&self.assembly[..total]);
-        self.stored_len = total;
-        self.calibration = Some(blob.calibration);
-        self.state = CalibrationState::Valid {
-            created_unix_s: blob.created_unix_s,
+        // The store is slow (a sector erase): it leaves this handler, which may run in the link's
+        // interrupt, as a job for the board's lowest priority; the answer waits for it.
+        let Some(store) = self.store.take() else {
+            return Outcome::error(DeviceError::StorageFailed);
         };
+        let mut job = StoreJob {
+            store,
+            blob: [0xFF; BLOB_MAX_LEN],
+            len: total,
+            result: None,
+        };
+        job.blob[..total].copy_from_slice(&self.assembly[..total]);
+        self.job = Some(job);
+        self.pending = Some(Pending {
+            calibration: blob.calibration,
+            created_unix_s: blob.created_unix_s,
+        });
         Outcome {
-            pipeline: Some(PipelineCommand::Compensator(Some(compensator))),
-            ..Outcome::ack(Ack::CalibrationStored)
+            reply: None,
+            pipeline: None,
+            board: None,
         }
     }
 }
@@ -483,7 +548,9 @@ impl<S: CalStore> LinkService<S> {
     ) -> Option<BoardEvent> {
         let mut event = None;
         for _ in 0..RX_BURST {
-            if self.replies.is_full() || event.is_some() {
+            // While a calibration write waits for its store, its answer is owed: no request is
+            // read until it is sent (back-pressure, as for a full reply queue).
+            if self.replies.is_full() || event.is_some() || self.controller.store_pending() {
                 break;
             }
             let Some(byte) = link.try_read() else {
@@ -498,7 +565,10 @@ impl<S: CalStore> LinkService<S> {
                         pipeline.apply(c);
                     }
                     event = o.board;
-                    o.reply
+                    match o.reply {
+                        Some(r) => r,
+                        None => continue, // owed: sent by `finish_store`
+                    }
                 }
             };
             // Cannot fail: checked `is_full` above and one reply per frame.
@@ -506,6 +576,36 @@ impl<S: CalStore> LinkService<S> {
         }
         self.transmit(link, pipeline);
         event
+    }
+
+    /// The store job of a calibration write that [`Self::poll`] validated, for the board's lowest
+    /// priority: run it there ([`StoreJob::run`]) and hand it back with [`Self::finish_store`].
+    pub fn take_store_job(&mut self) -> Option<StoreJob<S>> {
+        self.controller.take_store_job()
+    }
+
+    /// Takes a store job back: applies the calibration when it was stored and queues the write's
+    /// answer (sent by the next [`Self::poll`]).
+    pub fn finish_store<P: PipelineAccess>(&mut self, job: StoreJob<S>, pipeline: &mut P) {
+        if let Some(o) = self.controller.finish_store(job) {
+            if let Some(c) = o.pipeline {
+                pipeline.apply(c);
+            }
+            if let Some(r) = o.reply {
+                // Room is left: the write's request was read only with a free slot, and nothing
+                // was read after it.
+                let _ = self.replies.push_back(r);
+            }
+        }
+    }
+
+    /// For a board whose link service already runs at its lowest priority (the QEMU board's main
+    /// loop, the simulated device): runs a waiting store job here and now.
+    pub fn run_store_here<P: PipelineAccess>(&mut self, pipeline: &mut P) {
+        if let Some(mut job) = self.take_store_job() {
+            job.run();
+            self.finish_store(job, pipeline);
+        }
     }
 
     fn transmit<L: ByteLink, P: PipelineAccess>(&mut self, link: &mut L, pipeline: &mut P) {
@@ -542,5 +642,7 @@ impl<S: CalStore> LinkService<S> {
     }
 }
 
+#[cfg(test)]
+mod store_tests;
 #[cfg(test)]
 mod tests;

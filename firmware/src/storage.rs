@@ -10,8 +10,12 @@
 //! then       u32  COMMIT_MAGIC (its own program operation, written last)
 //! ```
 //!
-//! Writing a new blob erases the slot that does *not* hold the newest valid record, programs the
-//! record, programs the commit word, and reads it back. A record counts only with its commit word,
+//! Writing a new blob erases the slot that does *not* hold the newest valid record (unless the
+//! record's bytes there are already blank), programs the record, programs the commit word, and
+//! reads it back. A board erases that spare slot ahead, at power-on before sampling starts
+//! ([`AbStore::prepare`]): a sector erase stalls every flash read of a single-bank STM32F4 — the
+//! CPU's instruction fetches included — for about a second, so a write that finds its slot blank
+//! only programs (16 µs a word) and sampling runs on through it. A record counts only with its commit word,
 //! a matching CRC and a plausible length; at boot the valid record with the newer sequence number
 //! (wrapping comparison) wins. A power cut at any step therefore leaves the old record untouched in
 //! the other slot: the device boots with the old or the new calibration, never none and never a
@@ -162,6 +166,51 @@ impl<F: NorFlash> AbStore<F> {
         }))
     }
 
+    /// Bytes a record of a `len`-byte blob occupies, commit word included.
+    fn record_len(len: usize) -> usize {
+        align_up(HEADER_LEN + len, Self::ALIGN) + Self::ALIGN
+    }
+
+    /// The first `n` bytes of `slot` read as erased (0xFF).
+    fn blank(&mut self, slot: u32, n: usize) -> Result<bool, StoreError> {
+        let a = self.slot_addr(slot);
+        let mut buf = [0u8; 64];
+        let mut pos = 0;
+        while pos < n {
+            let k = (n - pos).min(buf.len());
+            self.read(a + pos as u32, &mut buf[..k])?;
+            if buf[..k].iter().any(|b| *b != 0xFF) {
+                return Ok(false);
+            }
+            pos += k;
+        }
+        Ok(true)
+    }
+
+    /// The slot the next write goes to and its sequence number.
+    fn next_slot(&mut self) -> Result<(u32, u32), StoreError> {
+        Ok(match self.newest()? {
+            Some(f) => (1 - f.slot, f.seq.wrapping_add(1)),
+            None => (0, 1),
+        })
+    }
+
+    /// Erases ahead: the slot the next write goes to, unless the room of the longest record there
+    /// is already blank. Returns whether it erased. A board calls it at power-on, before sampling
+    /// starts (the erase stalls a single-bank STM32F4's CPU for about a second), so that a
+    /// calibration written later only programs. Never call it from an interrupt.
+    pub fn prepare(&mut self) -> Result<bool, StoreError> {
+        let (slot, _) = self.next_slot()?;
+        if self.blank(slot, Self::record_len(BLOB_MAX_LEN))? {
+            return Ok(false);
+        }
+        let a = self.slot_addr(slot);
+        self.flash
+            .erase(a, a + self.slot_size)
+            .map_err(|_| StoreError::Flash)?;
+        Ok(true)
+    }
+
     fn newest(&mut self) -> Result<Option<Found>, StoreError> {
         let a = self.check_slot(0, None)?;
         let b = self.check_slot(1, None)?;
@@ -191,15 +240,16 @@ impl<F: NorFlash> CalStore for AbStore<F> {
         if blob.is_empty() || blob.len() > BLOB_MAX_LEN {
             return Err(StoreError::BadLength);
         }
-        let newest = self.newest()?;
-        let (slot, seq) = match newest {
-            Some(f) => (1 - f.slot, f.seq.wrapping_add(1)),
-            None => (0, 1),
-        };
+        let (slot, seq) = self.next_slot()?;
         let a = self.slot_addr(slot);
-        self.flash
-            .erase(a, a + self.slot_size)
-            .map_err(|_| StoreError::Flash)?;
+        // Erased ahead (`prepare`): program at once. A blank record area is all a record needs; a
+        // slot cut during a program is not blank there, one cut during its erase is either not
+        // blank or erased where the record goes.
+        if !self.blank(slot, Self::record_len(blob.len()))? {
+            self.flash
+                .erase(a, a + self.slot_size)
+                .map_err(|_| StoreError::Flash)?;
+        }
         // Header and blob, padded; programmed in pieces of a small stack buffer.
         let mut h = [0xFFu8; HEADER_LEN];
         h[0..4].copy_from_slice(&RECORD_MAGIC.to_le_bytes());
@@ -331,6 +381,7 @@ mod tests {
         mem: std::vec::Vec<u8>,
         budget: Option<usize>,
         steps: usize,
+        erases: usize,
     }
 
     #[derive(Debug)]
@@ -347,6 +398,7 @@ mod tests {
                 mem: std::vec![0u8; blocks * E], // never-erased flash: arbitrary (zero) content
                 budget: None,
                 steps: 0,
+                erases: 0,
             }
         }
         /// Counts a step; `Ok(true)` = do it fully, `Ok(false)` = this is the cut step.
@@ -380,6 +432,7 @@ mod tests {
         fn erase(&mut self, from: u32, to: u32) -> Result<(), Cut> {
             assert!(from as usize % E == 0 && to as usize % E == 0);
             for block in (from as usize..to as usize).step_by(E) {
+                self.erases += 1;
                 if self.step()? {
                     self.mem[block..block + E].fill(0xFF);
                 } else {
@@ -485,6 +538,7 @@ mod tests {
                 mem: with_a,
                 budget: None,
                 steps: 0,
+                erases: 0,
             },
             0,
             E as u32,
@@ -524,6 +578,7 @@ mod tests {
                 mem,
                 budget: None,
                 steps: 0,
+                erases: 0,
             },
             0,
             1024,
@@ -545,6 +600,39 @@ mod tests {
         assert_eq!(s.store(&[0; BLOB_MAX_LEN + 1]), Err(StoreError::BadLength));
         assert!(AbStore::new(CutFlash::<4, 128>::new(4), 0, 128).is_err()); // slot too small
         assert!(AbStore::new(CutFlash::<4, 1024>::new(1), 0, 1024).is_err()); // no room for B
+    }
+
+    /// Erased ahead at power-on, a store only programs; the store after it erases (its slot holds
+    /// the first record) unless the board prepared again; a power cut during `prepare` boots the
+    /// stored blob.
+    #[test]
+    fn prepared_slots_are_programmed_without_an_erase() {
+        let [a, b, _] = blobs();
+        let mut s = AbStore::new(CutFlash::<4, 1024>::new(2), 0, 1024).unwrap();
+        assert_eq!(s.prepare(), Ok(true));
+        assert_eq!(s.prepare(), Ok(false), "already blank: no second erase");
+        s.store(&a).unwrap();
+        assert_eq!(s.flash.erases, 1, "the store erased");
+        s.store(&b).unwrap();
+        assert_eq!(
+            s.flash.erases, 2,
+            "slot 1 was never erased: the store must erase it"
+        );
+        assert_eq!(s.prepare(), Ok(true));
+        assert_eq!(s.flash.erases, 3);
+        s.store(&a).unwrap();
+        assert_eq!(s.flash.erases, 3, "prepared: the store erased");
+        // A cut half-way through `prepare`'s erase leaves the newest record (a) in force.
+        let mem = s.into_inner().mem;
+        let mut f = CutFlash::<4, 1024>::new(0);
+        f.mem = mem;
+        f.budget = Some(0);
+        let mut s = AbStore::new(f, 0, 1024).unwrap();
+        assert!(s.prepare().is_err());
+        assert_eq!(
+            boot::<4, 1024>(&s.into_inner().mem).as_deref(),
+            Some(&a[..])
+        );
     }
 
     #[test]

@@ -245,6 +245,11 @@ pub fn wire(data: &[u8]) {
         match rx.push(b) {
             Some(Received::Message(m)) => {
                 let _ = device.handle(m);
+                // A write's store, as the board's idle loop runs it.
+                if let Some(mut job) = device.take_store_job() {
+                    job.run();
+                    let _ = device.finish_store(job);
+                }
             }
             Some(Received::Error(_)) | None => {}
         }

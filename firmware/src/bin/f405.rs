@@ -7,13 +7,15 @@
 //! | task | binds | priority | does |
 //! |---|---|---|---|
 //! | `imu_int` | EXTI4 (INT1 on PC4) | 3 | FIFO watermark: CS low, starts the SPI1 TX DMA (the RX stream is armed) |
-//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, runs the pipeline on each |
+//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, rotates them into the board's axes, runs the pipeline on each |
 //! | `stall_tick` | SysTick (every 10 ms) | 2 | restarts a burst chain that stalled (an interrupt lost): FIFO flushed, status read |
-//! | `usb` | OTG_FS | 1 | USB device, link service (requests, calibration store, frames out) |
-//! | `idle` | — | 0 | stack high-water mark, LED blink when the IMU is missing, `wfi` |
+//! | `usb` | OTG_FS | 1 | USB device, link service (requests, frames out); a calibration write's store only queued |
+//! | `idle` | — | 0 | the calibration store (sector erase and programming), stack high-water mark, LED blink when the IMU is missing, `wfi` |
 //!
 //! Locks: the pipeline is shared by `burst_done` and `usb`; `usb` locks it (BASEPRI to 2) for one
 //! `pop_output`/`apply`, never around I/O. The watermark interrupt (3) is never masked by a lock.
+//! A calibration write's store job goes from `usb` to `idle` and back through `store_job` (locked
+//! only to move the job, never while it runs).
 #![no_std]
 #![no_main]
 
@@ -43,7 +45,7 @@ mod app {
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
-    use firmware::protocol::PipelineAccess;
+    use firmware::protocol::{PipelineAccess, StoreMailbox};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, LinkService, Pipeline};
     use shared::LeverMode;
@@ -64,6 +66,8 @@ mod app {
         /// The chain's decisions (`None`: no IMU answered at boot); the completion task and the
         /// stall timer share it at the same priority.
         reader: Option<BurstReader>,
+        /// A calibration write's store job, between the USB task and the idle loop.
+        store_job: StoreMailbox<Store>,
     }
 
     #[local]
@@ -107,6 +111,14 @@ mod app {
             .pc13
             .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
 
+        // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
+        // single-bank F4), before the IMU's FIFO runs. A calibration written later only programs.
+        let mut store = board::store(LockedFlash::new(dp.FLASH))
+            .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
+        if store.prepare().is_err() {
+            defmt::warn!("calibration store: erasing ahead failed");
+        }
+
         // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
         let mut cs = gpioa.pa4.into_push_pull_output();
         cs.set_high();
@@ -134,8 +146,6 @@ mod app {
         int1.trigger_on_edge(&mut dp.EXTI, Edge::Rising);
         int1.enable_interrupt(&mut dp.EXTI);
 
-        let store = board::store(LockedFlash::new(dp.FLASH))
-            .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
         let controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
         let pipeline =
             cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(sample_rate_hz))
@@ -164,6 +174,7 @@ mod app {
                 pipeline,
                 bus: (dma, cs),
                 reader,
+                store_job: StoreMailbox::new(),
             },
             Local {
                 int1,
@@ -235,12 +246,21 @@ mod app {
         (usb_dev, link)
     }
 
-    /// Stack high-water mark; without an IMU, the LED blinks fast (4 Hz) from here.
-    #[idle(local = [imu_found])]
-    fn idle(cx: idle::Context) -> ! {
+    /// The calibration store, stack high-water mark; without an IMU, the LED blinks fast (4 Hz)
+    /// from here.
+    ///
+    /// The store runs here, below every interrupt: the USB task only validates a write and posts
+    /// its job (`firmware::protocol::StoreJob`). The lock moves the job, never runs it.
+    #[idle(local = [imu_found], shared = [store_job])]
+    fn idle(mut cx: idle::Context) -> ! {
         let mut high_water = HighWater::new();
         let mut wakes = 0u32;
         loop {
+            if let Some(mut job) = cx.shared.store_job.lock(|m| m.take_to_run()) {
+                job.run();
+                cx.shared.store_job.lock(|m| m.post(job));
+                rtic::pend(pac::Interrupt::OTG_FS);
+            }
             // The scan reads the whole unused stack (≈ 0.2 ms): once per 1024 wakes (about a
             // second at the watermark's 1 kHz), not after every interrupt.
             if wakes % 1024 == 0 {
@@ -315,6 +335,8 @@ mod app {
         if let Some(h) = done.corrupt_header {
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
         }
+        // Into the board's axes (the calibration's body frame), outside any lock.
+        board::IMU_ALIGNMENT.apply(&mut samples[..done.samples]);
         cx.shared.pipeline.lock(|p| {
             // A FIFO overflow, a flushed FIFO or a failed burst reaches the window through the
             // sample's DATA_LOST flag.
@@ -360,9 +382,9 @@ mod app {
 
     /// USB events and the link service: requests in, answers and frames out. Also pended by
     /// `burst_done` when frames are queued.
-    #[task(binds = OTG_FS, priority = 1, shared = [pipeline],
+    #[task(binds = OTG_FS, priority = 1, shared = [pipeline, store_job],
            local = [usb_dev, link, service, sample_rate_hz])]
-    fn usb(cx: usb::Context) {
+    fn usb(mut cx: usb::Context) {
         let l = cx.local;
         l.usb_dev.poll(&mut [&mut l.link.serial]);
         if board::bootloader_requested(&l.link.serial) {
@@ -372,7 +394,14 @@ mod app {
             return;
         };
         let mut pipeline = LockedPipeline(cx.shared.pipeline);
+        // A store the idle loop finished: its answer goes out with this poll.
+        if let Some(job) = cx.shared.store_job.lock(|m| m.take_done()) {
+            service.finish_store(job, &mut pipeline);
+        }
         let event = service.poll(l.link, &mut pipeline);
+        if let Some(job) = service.take_store_job() {
+            cx.shared.store_job.lock(|m| m.post(job));
+        }
         l.link.flush();
         if let Some(BoardEvent::Reset) = event {
             // A soft restart: a hardware reset would re-enumerate USB and close the host's port.
@@ -384,10 +413,10 @@ mod app {
                     break;
                 }
             }
-            let Some(old) = l.service.take() else {
+            // The reset request was read, so no store job is out: the store is home.
+            let Some(store) = l.service.take().and_then(|s| s.controller.into_store()) else {
                 return;
             };
-            let store = old.controller.into_store();
             let controller =
                 Controller::boot(board::info(*l.sample_rate_hz), store, BOOT_LEVER_MODE);
             pipeline.apply(PipelineCommand::StopStream);

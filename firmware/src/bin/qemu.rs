@@ -31,7 +31,11 @@ fn main() -> ! {
     // SAFETY: UART0 is used by nothing else.
     let uart = unsafe { CmsdkUart::new(UART0_BASE, 16) };
     // SAFETY: called once.
-    let store = unsafe { qemu::store() }.unwrap_or_else(|| halt());
+    let mut store = unsafe { qemu::store() }.unwrap_or_else(|| halt());
+    // Erase ahead, before sampling starts, as the STM32 boards do.
+    if store.prepare().is_err() {
+        defmt::warn!("calibration store: erasing ahead failed");
+    }
     let controller = Controller::boot(qemu::INFO, store, qemu::BOOT_LEVER_MODE);
     let pipeline = cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(SAMPLE_RATE_HZ))
         .unwrap_or_else(|| halt());
@@ -78,6 +82,8 @@ fn main() -> ! {
             }
             None => {}
         }
+        // A calibration write's store, here in thread mode: SysTick keeps sampling through it.
+        service.run_store_here(&mut shared);
     }
 }
 

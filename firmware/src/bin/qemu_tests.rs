@@ -12,9 +12,14 @@
 #![no_std]
 #![no_main]
 
+use core::cell::RefCell;
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
+use core::sync::atomic::{AtomicU32, Ordering};
 
-use cortex_m_rt::entry;
+use cortex_m::interrupt::{self, Mutex};
+use cortex_m::peripheral::scb::SystemHandler;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_semihosting as _;
 
@@ -22,6 +27,7 @@ use firmware::board::{self, qemu};
 use firmware::imu::PipelineFeed;
 use firmware::pipeline::PipelineCommand;
 use firmware::protocol::{DeviceInfo, PipelineAccess};
+use firmware::storage::{AbStore, RamNorFlash};
 use firmware::testvectors::{self, Check};
 use firmware::virtual_sensor::VirtualSensor;
 use firmware::{paper_unit, ByteLink, Controller, LinkService, Pipeline};
@@ -113,6 +119,23 @@ impl MemLink {
         }
     }
 
+    /// Queues one request frame for the next polls (and forgets the answers so far).
+    fn load(&mut self, m: &HostToDevice) {
+        let mut buf = [0u8; HOST_FRAME_MAX];
+        if let Ok(f) = encode_frame(m, &mut buf) {
+            self.rx[..f.len()].copy_from_slice(f);
+            (self.rx_len, self.rx_pos, self.tx_len) = (f.len(), 0, 0);
+        }
+    }
+
+    /// The first answer frame since the last [`Self::load`].
+    fn first_reply(&self) -> Option<DeviceToHost> {
+        let end = self.tx[..self.tx_len].iter().position(|b| *b == 0)?;
+        let mut frame = [0u8; DEVICE_FRAME_MAX];
+        frame[..end].copy_from_slice(&self.tx[..end]);
+        decode_frame(&mut frame[..end]).ok()
+    }
+
     /// Sends one request through the service and returns the first answer frame.
     fn request<S: firmware::CalStore, P: PipelineAccess>(
         &mut self,
@@ -126,6 +149,8 @@ impl MemLink {
         (self.rx_len, self.rx_pos, self.tx_len) = (f.len(), 0, 0);
         for _ in 0..8 {
             service.poll(self, pipeline);
+            // The board's main loop: a calibration write's store.
+            service.run_store_here(pipeline);
         }
         let end = self.tx[..self.tx_len].iter().position(|b| *b == 0)?;
         let mut frame = [0u8; DEVICE_FRAME_MAX];
@@ -261,7 +286,220 @@ fn heated_board(t: &mut Tally) {
     );
 }
 
-fn first_boot(t: &mut Tally) -> ! {
+/// The sampling interrupt of the store test: the virtual IMU, its feed and a pipeline.
+type Sampler = (
+    &'static mut qemu::Imu,
+    PipelineFeed,
+    &'static mut Pipeline<4>,
+);
+static SAMPLER: Mutex<RefCell<Option<Sampler>>> = Mutex::new(RefCell::new(None));
+/// Samples the driver handed to the pipeline (the pipeline's index also counts the lost ones).
+static DELIVERED: AtomicU32 = AtomicU32::new(0);
+
+/// Erase block of the store test's flash (its stall is a 128 KiB sector's: `StallingFlash`).
+const TEST_ERASE: usize = 4096;
+type TestStore = AbStore<qemu::StallingFlash<TEST_ERASE>>;
+static mut TEST_FLASH: [u8; 2 * TEST_ERASE] = [0; 2 * TEST_ERASE];
+/// The link of the store test, polled from PendSV as the F405 polls it from its USB interrupt.
+type UsbSide = (LinkService<TestStore>, MemLink, Pipeline<1>);
+static USB_SIDE: Mutex<RefCell<Option<UsbSide>>> = Mutex::new(RefCell::new(None));
+
+/// 1 kHz: one sample period of the virtual IMU, as the QEMU board's SysTick.
+#[exception]
+fn SysTick() {
+    interrupt::free(|cs| {
+        if let Some((imu, feed, p)) = SAMPLER.borrow(cs).borrow_mut().as_mut() {
+            // The part sampled on through a flash stall that held this interrupt back.
+            let stalled = qemu::STALLED_MS.swap(0, Ordering::Relaxed);
+            imu.device_mut().advance_ns(u64::from(stalled) * 1_000_000);
+            let n = qemu::sample_period(imu, feed, p);
+            DELIVERED.fetch_add(n as u32, Ordering::Relaxed);
+        }
+    });
+}
+
+/// The F405's USB interrupt, at the lowest exception priority: the link service's poll only.
+#[exception]
+fn PendSV() {
+    interrupt::free(|cs| {
+        if let Some((service, link, p)) = USB_SIDE.borrow(cs).borrow_mut().as_mut() {
+            for _ in 0..8 {
+                service.poll(link, p);
+            }
+        }
+    });
+}
+
+/// Samples the part produced, the pipeline's sample count (which counts the losses the driver
+/// saw) and the samples delivered, read together.
+fn counts() -> (u64, u64, u32) {
+    interrupt::free(|cs| {
+        let mut s = SAMPLER.borrow(cs).borrow_mut();
+        let (made, index) = s.as_mut().map_or((0, 0), |(imu, _, p)| {
+            (u64::from(imu.device_mut().samples), p.samples())
+        });
+        (made, index, DELIVERED.load(Ordering::Relaxed))
+    })
+}
+
+/// Busy-waits `ms` sample periods of SysTick's interrupt.
+fn wait_samples(ms: u64) {
+    let (start, _, _) = counts();
+    while counts().0 < start + ms {}
+}
+
+/// One calibration write as the F405 does it: each chunk's request polled from PendSV (the USB
+/// interrupt), the store job run here in thread mode (the idle loop) while SysTick samples.
+/// Returns the samples lost (as produced by the part less those delivered), those the driver
+/// counted as lost, the samples the part produced meanwhile, and the write's answer.
+fn store_while_sampling() -> (u64, u64, u64, Option<DeviceToHost>) {
+    let (buf, n) = ParameterBlob {
+        unit_id: paper_unit::QEMU_UNIT_ID,
+        calibration: paper_unit::calibration(),
+        created_unix_s: 7,
+    }
+    .to_bytes()
+    .unwrap_or(([0; shared::blob::BLOB_MAX_LEN], 0));
+    let (made0, index0, delivered0) = counts();
+    for c in blob_chunks(&buf[..n]) {
+        interrupt::free(|cs| {
+            if let Some((_, link, _)) = USB_SIDE.borrow(cs).borrow_mut().as_mut() {
+                link.load(&HostToDevice::WriteCalibration(c));
+            }
+        });
+        cortex_m::peripheral::SCB::set_pendsv();
+        cortex_m::asm::isb();
+    }
+    let take = || {
+        interrupt::free(|cs| {
+            USB_SIDE
+                .borrow(cs)
+                .borrow_mut()
+                .as_mut()
+                .and_then(|(s, _, _)| s.take_store_job())
+        })
+    };
+    if let Some(mut job) = take() {
+        job.run();
+        interrupt::free(|cs| {
+            if let Some((s, _, p)) = USB_SIDE.borrow(cs).borrow_mut().as_mut() {
+                s.finish_store(job, p);
+            }
+        });
+    }
+    cortex_m::peripheral::SCB::set_pendsv();
+    cortex_m::asm::isb();
+    // A few periods more: the first sample after a gap carries it.
+    wait_samples(5);
+    let (made1, index1, delivered1) = counts();
+    let reply = interrupt::free(|cs| {
+        USB_SIDE
+            .borrow(cs)
+            .borrow_mut()
+            .as_mut()
+            .and_then(|(_, link, _)| link.first_reply())
+    });
+    let delivered = u64::from(delivered1 - delivered0);
+    let made = made1 - made0;
+    (
+        made.saturating_sub(delivered),
+        (index1 - index0).saturating_sub(delivered),
+        made,
+        reply,
+    )
+}
+
+/// Sample loss while a calibration is stored, with the F405's flash stall modelled
+/// (`qemu::StallingFlash`: a sector erase masks interrupts for 1000 ms): none when the slot was
+/// erased ahead at boot (`AbStore::prepare`), the stall less the FIFO's depth when the write must
+/// erase; and no flash operation from an interrupt.
+#[inline(never)]
+fn store_keeps_sampling(t: &mut Tally, cp: &mut cortex_m::Peripherals) {
+    let sensor = VirtualSensor::new(&paper_unit::calibration(), 1000, true);
+    let Some(imu) = sensor.and_then(qemu::imu) else {
+        t.report("store_keeps_sampling", false, "(driver refused the model)");
+        return;
+    };
+    let (Some(imu), Some(p)) = (
+        cortex_m::singleton!(: qemu::Imu = imu),
+        cortex_m::singleton!(: Pipeline<4> = Pipeline::new(1000)),
+    ) else {
+        return;
+    };
+    // SAFETY: the test flash is used by this test only, once.
+    let mem: &'static mut [u8] = unsafe { &mut *addr_of_mut!(TEST_FLASH) };
+    let Ok(mut store) = AbStore::new(
+        qemu::StallingFlash(RamNorFlash::new(mem)),
+        0,
+        TEST_ERASE as u32,
+    ) else {
+        return;
+    };
+    // Power-on: erase ahead before sampling starts (SysTick not yet running: no stall).
+    let prepared = store.prepare() == Ok(true);
+    let service = LinkService::new(Controller::boot(
+        info(),
+        store,
+        LeverMode::RateAndAcceleration,
+    ));
+    interrupt::free(|cs| {
+        SAMPLER
+            .borrow(cs)
+            .replace(Some((imu, PipelineFeed::new(1000), p)));
+        USB_SIDE
+            .borrow(cs)
+            .replace(Some((service, MemLink::new(), Pipeline::new(1000))));
+    });
+    // SAFETY: PendSV below SysTick, as the F405's USB interrupt (1) is below its sampling (2, 3).
+    unsafe { cp.SCB.set_priority(SystemHandler::PendSV, 0xF0) };
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(qemu::CORE_CLOCK_HZ / 1000 - 1);
+    cp.SYST.clear_current();
+    cp.SYST.enable_interrupt();
+    cp.SYST.enable_counter();
+    wait_samples(20);
+    // The first write finds slot 0 erased ahead; the second finds slot 1 never erased.
+    let (lost_a, counted_a, made_a, reply_a) = store_while_sampling();
+    let (lost_b, counted_b, made_b, reply_b) = store_while_sampling();
+    cp.SYST.disable_interrupt();
+    cp.SYST.disable_counter();
+    let in_handler = qemu::FLASH_OPS_IN_HANDLER.load(Ordering::Relaxed);
+    let stored = Some(DeviceToHost::Ack(Ack::CalibrationStored));
+    let ok = prepared
+        && reply_a == stored
+        && reply_b == stored
+        && lost_a == 0
+        && counted_a == 0
+        && lost_b > 500
+        && counted_b > 0
+        && in_handler == 0;
+    hprintln!(
+        "test store_keeps_sampling ... {} (erased ahead: {} samples lost of {} during the store; erasing: {} lost of {}, {} counted lost by the driver; {} flash operations in an interrupt)",
+        if ok { "ok" } else { "FAILED" },
+        lost_a,
+        made_a,
+        lost_b,
+        made_b,
+        counted_b,
+        in_handler
+    );
+    if !ok {
+        hprintln!(
+            "  answers: {:?}, {:?}; {} erases",
+            reply_a,
+            reply_b,
+            qemu::FLASH_ERASES.load(Ordering::Relaxed)
+        );
+    }
+    t.passed += u32::from(ok);
+    t.failed += u32::from(!ok);
+    interrupt::free(|cs| {
+        SAMPLER.borrow(cs).replace(None);
+        USB_SIDE.borrow(cs).replace(None);
+    });
+}
+
+fn first_boot(t: &mut Tally, cp: &mut cortex_m::Peripherals) -> ! {
     board::paint_stack();
     hprintln!("qemu-target-tests: boot 1 (Cortex-M4F FPU, mps2-an386)");
     let [st, rate, full] = testvectors::check_compensation();
@@ -284,6 +522,7 @@ fn first_boot(t: &mut Tally) -> ! {
     pipeline_on_virtual_table(t);
     imu_overflow_on_target(t);
     heated_board(t);
+    store_keeps_sampling(t, cp);
 
     // The protocol handler on the board's real storage region: write the paper unit's calibration.
     // SAFETY: only place the store is created in this binary.
@@ -427,7 +666,11 @@ fn main() -> ! {
             passed: 0,
             failed: 0,
         };
-        first_boot(&mut t)
+        let Some(mut cp) = cortex_m::Peripherals::take() else {
+            t.report("core_peripherals", false, "");
+            finish(&t)
+        };
+        first_boot(&mut t, &mut cp)
     }
 }
 

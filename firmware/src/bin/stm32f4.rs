@@ -117,8 +117,12 @@ mod app {
         let (tx, rx) = serial.split();
         let (rx_queue, rx_consumer) = cx.local.rx_bytes.split();
 
-        let store = board::store(LockedFlash::new(dp.FLASH))
+        let mut store = board::store(LockedFlash::new(dp.FLASH))
             .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
+        // Erase ahead, before sampling starts: a calibration written later only programs.
+        if store.prepare().is_err() {
+            defmt::warn!("calibration store: erasing ahead failed");
+        }
         let controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
 
         let gyro = init_gyro(
@@ -251,6 +255,8 @@ mod app {
                 // Refused by the request handler on this board (no virtual unit).
                 Some(BoardEvent::SetTable(_)) | Some(BoardEvent::SetTemperature(_)) | None => {}
             }
+            // A calibration write's store, here at the lowest priority.
+            service.run_store_here(&mut pipeline);
             rounds = rounds.wrapping_add(1);
             if rounds % 65_536 == 0 {
                 log_stack_growth(&mut high_water);

@@ -10,6 +10,7 @@
 //! | status LED | PC13 | `LED0_PIN` | GPIO, lit when low (see the README for its states) |
 //! | USB D− / D+ | PA11 / PA12 | (the F405's OTG FS pins) | USB CDC-ACM, the host link |
 //! | crystal | 8 MHz | `SYSTEM_HSE_MHZ 8` | HSE → PLL: 168 MHz core, 48 MHz USB |
+//! | IMU mounting | CW90 | `GYRO_1_ALIGN CW90_DEG` | every sample rotated into the board's axes ([`IMU_ALIGNMENT`]) |
 //!
 //! DMA (RM0090 Table 43, DMA2 request mapping): SPI1_RX on DMA2 stream 2 channel 3, SPI1_TX on DMA2
 //! stream 3 channel 3. Stream 0 — SPI1_RX's other choice — is left to ADC1, as the board's Betaflight
@@ -24,6 +25,7 @@ use shared::wire::Board;
 use shared::OutputUnit;
 use stm32f4xx_hal::flash::LockedFlash;
 
+use crate::imu::alignment::{self, Alignment};
 use crate::imu::icm42688::{AccelRange, Config, Odr};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
@@ -48,6 +50,11 @@ pub const IMU_CONFIG: Config = Config {
     watermark_packets: 8,
     ..Config::DEFAULT
 };
+/// How the board mounts the ICM-42688-P: turned 90° clockwise seen from the top (Betaflight's
+/// `GYRO_1_ALIGN CW90_DEG` for this board). `burst_done` rotates every sample into the board's
+/// axes (x toward the board's arrow, y to its left, z up out of its top) before the pipeline, so
+/// the streams and the calibration are in the board's frame, the one the operator sees.
+pub const IMU_ALIGNMENT: Alignment = alignment::SPEEDYBEE_F405_V4;
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
 /// Flash offset (from 0x0800_0000) of the calibration store: sectors 5 and 6 (see memory-f405.x).

@@ -13,6 +13,7 @@
 //! `HostToDevice::Reset` (`SCB::sys_reset`) exactly as flash would. It starts as zeros when QEMU
 //! starts (no valid record: uncalibrated).
 
+use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 use shared::wire::Board;
 use shared::LeverMode;
 use shared::OutputUnit;
@@ -25,6 +26,19 @@ use crate::pipeline::Pipeline;
 use crate::protocol::DeviceInfo;
 use crate::storage::{AbStore, RamNorFlash};
 use crate::virtual_sensor::{VirtualSensor, IMU_CONFIG};
+
+extern "C" {
+    /// cortex-m-rt's default interrupt handler (its link script provides it).
+    fn DefaultHandler();
+}
+
+/// The device part of the vector table: mps2-an386's 32 interrupt lines (QEMU's `num-irq` for the
+/// board), all to the default handler, since the board enables none (SysTick is a core
+/// exception). cortex-m-rt's generic table has 240 entries: 832 bytes of flash more.
+#[link_section = ".vector_table.interrupts"]
+#[no_mangle]
+#[used]
+pub static __INTERRUPTS: [unsafe extern "C" fn(); 32] = [DefaultHandler; 32];
 
 /// Sampling rate of the virtual sensor, Hz (SysTick at 25 MHz / 25 000).
 pub const SAMPLE_RATE_HZ: u32 = 1000;
@@ -99,4 +113,77 @@ pub fn sample_period<const Q: usize>(
         }
     }
     n
+}
+
+/// How long the F405's flash stalls the CPU for a 128 KiB sector erase, ms (DS8626 "Flash memory
+/// programming": t_ERASE128KB typical at 32-bit parallelism).
+pub const SECTOR_ERASE_STALL_MS: u32 = 1000;
+
+/// Milliseconds a [`StallingFlash`] stalled the CPU and no sampling interrupt has caught up with
+/// yet: the part's own clock ran on, so the next sample period lets that much more of the model's
+/// time pass (and its FIFO overflow, as a real part's would).
+pub static STALLED_MS: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// Erases done by a [`StallingFlash`].
+pub static FLASH_ERASES: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// Flash operations done in handler mode (an interrupt or exception) by a [`StallingFlash`].
+pub static FLASH_OPS_IN_HANDLER: core::sync::atomic::AtomicU32 =
+    core::sync::atomic::AtomicU32::new(0);
+
+/// The QEMU model of a single-bank STM32F4's flash timing over a RAM flash, for the on-target
+/// tests: an erase stalls the CPU — modelled as interrupts masked — for
+/// [`SECTOR_ERASE_STALL_MS`] SysTick periods of 1 ms (QEMU's code memory is RAM and never stalls);
+/// a program is too short to matter at 1 kHz (16 µs a word) and is not delayed. Every operation
+/// made in handler mode is counted in [`FLASH_OPS_IN_HANDLER`].
+pub struct StallingFlash<const ERASE: usize>(pub RamNorFlash<'static, ERASE>);
+
+impl<const ERASE: usize> StallingFlash<ERASE> {
+    fn count_handler_mode() {
+        if cortex_m::peripheral::SCB::vect_active()
+            != cortex_m::peripheral::scb::VectActive::ThreadMode
+        {
+            FLASH_OPS_IN_HANDLER.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        }
+    }
+}
+
+impl<const ERASE: usize> ErrorType for StallingFlash<ERASE> {
+    type Error = crate::storage::RamFlashError;
+}
+
+impl<const ERASE: usize> ReadNorFlash for StallingFlash<ERASE> {
+    const READ_SIZE: usize = 1;
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        self.0.read(offset, bytes)
+    }
+    fn capacity(&self) -> usize {
+        self.0.capacity()
+    }
+}
+
+impl<const ERASE: usize> NorFlash for StallingFlash<ERASE> {
+    const WRITE_SIZE: usize = 4;
+    const ERASE_SIZE: usize = ERASE;
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        Self::count_handler_mode();
+        FLASH_ERASES.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        cortex_m::interrupt::free(|_| {
+            // SAFETY: reads of SysTick's control register (which clears its COUNTFLAG); SysTick's
+            // own set-up is not changed.
+            let csr = || unsafe { (*cortex_m::peripheral::SYST::PTR).csr.read() };
+            if csr() & 1 != 0 {
+                let mut wraps = 0;
+                while wraps < SECTOR_ERASE_STALL_MS {
+                    wraps += u32::from(csr() & (1 << 16) != 0);
+                }
+                STALLED_MS.fetch_add(wraps, core::sync::atomic::Ordering::Relaxed);
+            }
+            self.0.erase(from, to)
+        })
+    }
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        Self::count_handler_mode();
+        self.0.write(offset, bytes)
+    }
 }

@@ -1,6 +1,7 @@
 //! Digital IMUs read from their FIFO: what a board's sampling task needs from any of them
 //! ([`ImuSource`], [`ImuSourceAsync`]), and the drivers behind it.
 //!
+//! - [`alignment`]: how a board mounts its IMU, and each sample rotated into the board's axes.
 //! - [`icm42688`]: TDK InvenSense ICM-42688-P over SPI (blocking and async), FIFO packets 3 and 4,
 //!   watermark interrupt on INT1, overflow detection, self-test.
 //! - [`lsm6dso`]: ST LSM6DSO over SPI, its FIFO of tagged words, the same trait.
@@ -9,12 +10,13 @@
 //!
 //! A driver hands out [`ImuSample`]s: the accelerometer in the calibration's output unit (the part's
 //! LSB counts as `f32`, times the board's [`ImuSample`] unit factor — 1 for a real board, whose
-//! calibration is made in counts), the gyro in rad/s in the part's axes (the body axes of the
-//! calibration), the die temperature in °C and the part's own time stamp. Nothing is lost silently:
+//! calibration is made in counts), the gyro in rad/s in the part's axes (a board turns both into
+//! its own axes, the body axes of the calibration, with [`alignment`]), the die temperature in °C and the part's own time stamp. Nothing is lost silently:
 //! a sample that follows dropped ones carries [`ImuFlags::DATA_LOST`] and the count, a sample with an
 //! axis at its range limit [`ImuFlags::SATURATED`], and a sample the part marked invalid (it does so
 //! while a sensor starts) has NaN values and [`ImuFlags::INVALID`], which the pipeline leaves out.
 
+pub mod alignment;
 pub mod icm42688;
 pub mod lsm6dso;
 #[cfg(any(test, feature = "imu-sim"))]

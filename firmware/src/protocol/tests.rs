@@ -101,6 +101,8 @@ impl Sim {
             if let Some(b) = self.link.budget.as_mut() {
                 *b = 12;
             }
+            // The board's lowest priority (idle loop): a calibration write's store.
+            self.service.run_store_here(&mut self.pipeline);
             match self.service.poll(&mut self.link, &mut self.pipeline) {
                 Some(BoardEvent::SetTable(t)) => self.sensor.set_table(&t).unwrap(),
                 Some(BoardEvent::SetTemperature(t)) => self.sensor.set_temperature(t),
@@ -111,8 +113,8 @@ impl Sim {
                 None => {}
             }
         }
-        // Drain the receive side without sampling.
-        while !self.link.rx.is_empty() {
+        // Drain the receive side (and a store's answer) without sampling.
+        while !self.link.rx.is_empty() || self.service.controller.store_pending() {
             self.run(0);
         }
     }
@@ -124,7 +126,8 @@ impl Sim {
             LinkService::new(Controller::boot(INFO, fresh_store(), LeverMode::Off)),
         )
         .controller
-        .into_store();
+        .into_store()
+        .expect("no store job out at a reset");
         let link = core::mem::replace(
             &mut self.link,
             TestLink {
@@ -420,8 +423,15 @@ fn storage_failure_is_reported_and_nothing_changes() {
     for chunk in blob_chunks(&blob) {
         last = Some(c.handle(HostToDevice::WriteCalibration(chunk)));
     }
-    let o = last.unwrap();
-    assert_eq!(o.reply, DeviceToHost::Error(DeviceError::StorageFailed));
+    // The handler only parks the write: no answer until its store job has run.
+    assert_eq!(last.unwrap().reply, None);
+    let mut job = c.take_store_job().unwrap();
+    job.run();
+    let o = c.finish_store(job).unwrap();
+    assert_eq!(
+        o.reply,
+        Some(DeviceToHost::Error(DeviceError::StorageFailed))
+    );
     assert_eq!(o.pipeline, None);
     assert_eq!(c.calibration_state(), CalibrationState::Missing);
     assert!(c.compensator().is_none());
@@ -530,9 +540,9 @@ fn bad_requests_get_typed_errors() {
         rate_rad_s: 0.0,
         accel_rad_s2: 0.0,
     }));
-    assert_eq!(o.reply, DeviceToHost::Error(DeviceError::Unsupported));
+    assert_eq!(o.reply, Some(DeviceToHost::Error(DeviceError::Unsupported)));
     let o = real.handle(HostToDevice::SetVirtualTemperature { temp_c: 30.0 });
-    assert_eq!(o.reply, DeviceToHost::Error(DeviceError::Unsupported));
+    assert_eq!(o.reply, Some(DeviceToHost::Error(DeviceError::Unsupported)));
     for temp_c in [f32::NAN, 1e9] {
         assert_eq!(
             sim.request(&HostToDevice::SetVirtualTemperature { temp_c }),

@@ -101,6 +101,9 @@ pub enum CliError {
     /// `host batch` could not run.
     #[error(transparent)]
     Batch(crate::batch::BatchError),
+    /// `host bringup` could not run its checks.
+    #[error(transparent)]
+    Bringup(#[from] crate::device::bringup::BringupError),
     /// A result failed its pass/fail limits (the failed checks, one line).
     #[error("FAIL: {0}")]
     ChecksFailed(String),

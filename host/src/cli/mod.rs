@@ -16,6 +16,7 @@
 //! | `noise` | [`noise`] | [`crate::noise`] |
 //! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
 //! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
+//! | `bringup` | [`bringup`] | [`crate::device::bringup`] over [`port`] |
 //!
 //! `segment`, `apply` and `noise` read a logger's file with the one set of input options,
 //! [`log_input`].
@@ -25,6 +26,7 @@
 
 pub mod apply;
 pub mod batch;
+pub mod bringup;
 pub mod calibrate;
 pub mod compare;
 #[cfg(test)]
@@ -113,6 +115,9 @@ pub enum Command {
     Read(read::ReadArgs),
     /// Show a device's live compensated output.
     Monitor(monitor::MonitorArgs),
+    /// First checks of a freshly flashed board at rest: identity, samples, rate, losses,
+    /// temperature, axes, gravity, gyro; each with pass/fail and the likely cause.
+    Bringup(bringup::BringupArgs),
 }
 
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).
@@ -133,6 +138,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Flash(a) => flash::run(&a.port, &a.calibration, cli.quiet),
         Command::Read(a) => read::run(&a),
         Command::Monitor(a) => monitor::run(&a, cli.quiet),
+        Command::Bringup(a) => bringup::run(&a, cli.quiet),
     }
 }
 

@@ -2,9 +2,10 @@
 //! [`serial`], or the in-process simulated device, [`sim`], perhaps held by the simulated hand of
 //! [`sim_hand`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
-//! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), and hand-held
-//! mode ([`handheld`]).
+//! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), hand-held
+//! mode ([`handheld`]), and the first checks of a freshly flashed board ([`bringup`]).
 
+pub mod bringup;
 pub mod client;
 pub mod handheld;
 pub mod live_check;

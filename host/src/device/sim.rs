@@ -10,7 +10,9 @@
 //! per millisecond), so a window too short for the link shows up as dropped frames, as on a board.
 //!
 //! Fault injection for the end-to-end tests: [`SimDevice::stop_answering_after_samples`] (a device that
-//! dies mid-segment) and [`SimDevice::inject_line_garbage`] (noise on the device→host line).
+//! dies mid-segment) and [`SimDevice::inject_line_garbage`] (noise on the device→host line); for
+//! `host bringup`'s tests, [`SimDevice::sample_at_hz`] (a part sampling at another rate than the
+//! identity says) and [`SimDevice::stick_axis`] (an accelerometer axis whose output never changes).
 
 use super::client::{LinkError, Transport};
 use super::sim_hand::{HandCue, SimHand};
@@ -74,6 +76,10 @@ pub struct SimDevice {
     pace: Option<(Instant, u64)>,
     /// The hand that turns a device without a table (`SimDevice::hand_held`).
     hand: Option<(SimHand, HandCue)>,
+    /// Paced at this rate instead of the identity's (a planted fault).
+    actual_rate_hz: Option<u32>,
+    /// This accelerometer axis reads one fixed value (a planted fault).
+    stuck_axis: Option<usize>,
 }
 
 /// Why a simulated device cannot be built.
@@ -100,7 +106,7 @@ impl SimDevice {
         dev.info.board = Board::SimulatedHand;
         dev.info.virtual_table = false;
         dev.hand = Some(SimHand::new(SIM_SAMPLE_RATE_HZ));
-        let service = dev.service.take().map(|s| s.controller.into_store());
+        let service = dev.service.take().and_then(|s| s.controller.into_store());
         if let Some(store) = service {
             dev.boot(store);
         }
@@ -139,6 +145,8 @@ impl SimDevice {
             resets: 0,
             pace: None,
             hand: None,
+            actual_rate_hz: None,
+            stuck_axis: None,
         };
         dev.boot(store);
         Ok(dev)
@@ -186,11 +194,24 @@ impl SimDevice {
         self.pace = Some((Instant::now(), self.samples));
     }
 
+    /// A planted fault: paced, the unit samples at `hz` while its identity still says
+    /// [`SIM_SAMPLE_RATE_HZ`] (a wrong crystal or output data rate).
+    pub fn sample_at_hz(&mut self, hz: u32) {
+        self.actual_rate_hz = Some(hz.max(1));
+    }
+
+    /// A planted fault: accelerometer axis `axis` (0–2) reads a fixed 2.5 V from now on (a dead
+    /// sensing element or a stuck bit of the data path).
+    pub fn stick_axis(&mut self, axis: usize) {
+        self.stuck_axis = Some(axis.min(2));
+    }
+
     /// When paced, the wall-clock instant the next sample is due.
     fn next_sample_due(&self) -> Option<Instant> {
         let (start, first) = self.pace?;
         let n = self.samples + 1 - first;
-        Some(start + Duration::from_secs_f64(n as f64 / f64::from(SIM_SAMPLE_RATE_HZ)))
+        let hz = self.actual_rate_hz.unwrap_or(SIM_SAMPLE_RATE_HZ);
+        Some(start + Duration::from_secs_f64(n as f64 / f64::from(hz)))
     }
 
     fn dead(&self) -> bool {
@@ -211,14 +232,18 @@ impl SimDevice {
             Some(BoardEvent::Reset) => {
                 self.line.budget = self.line.budget.max(256);
                 service.flush(&mut self.line, 1024);
-                if let Some(old) = self.service.take() {
-                    let store = old.controller.into_store();
+                // The link reads no request while a store job is out: the store is home.
+                if let Some(store) = self.service.take().and_then(|s| s.controller.into_store()) {
                     self.resets += 1;
                     self.line.to_device.clear();
                     self.boot(store);
                 }
             }
             None => {}
+        }
+        // The store of a calibration write, as a board's idle loop runs it.
+        if let Some(service) = self.service.as_mut() {
+            service.run_store_here(&mut self.pipeline);
         }
     }
 
@@ -230,7 +255,20 @@ impl SimDevice {
                 let _ = self.sensor.set_table(&t);
             }
         }
-        self.sensor.step(&mut self.pipeline);
+        match self.stuck_axis {
+            None => self.sensor.step(&mut self.pipeline),
+            Some(axis) => {
+                // `VirtualSensor::step` with the axis held.
+                let every =
+                    u64::from(SIM_SAMPLE_RATE_HZ / firmware::pipeline::TEMPERATURE_REFRESH_HZ);
+                if self.samples % every.max(1) == 0 {
+                    self.pipeline.set_temperature(self.sensor.temperature_c());
+                }
+                let mut s = self.sensor.sample();
+                s.raw[axis] = 2.5;
+                self.pipeline.on_sample(&s);
+            }
+        }
         self.samples += 1;
         self.line.budget =
             (self.line.budget + LINE_BYTES_PER_SAMPLE).min(4 * LINE_BYTES_PER_SAMPLE);

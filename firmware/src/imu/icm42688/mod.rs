@@ -275,6 +275,9 @@ pub enum Error<E> {
         /// The header byte read.
         header: u8,
     },
+    /// During the self-test, INT_STATUS did not flag DATA_RDY for 200 samples within twice their
+    /// time: the sensor under test is not sampling.
+    NoDataReady,
 }
 
 impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
@@ -295,6 +298,10 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
             Error::FifoCorrupt { header } => write!(
                 f,
                 "ICM-42688-P: FIFO out of step (header {header:#04x}); flushed, samples were lost"
+            ),
+            Error::NoDataReady => write!(
+                f,
+                "ICM-42688-P: no new sample during the self-test; the sensor under test is not sampling"
             ),
         }
     }

@@ -80,6 +80,24 @@ pub const GYRO_CONFIG1: u8 = 0x51;
 pub const GYRO_ACCEL_CONFIG0: u8 = 0x52;
 /// ACCEL_CONFIG1 (§14.34): ACCEL_UI_FILT_ORD 4:3, ACCEL_DEC2_M2_ORD 2:1. Reset 0x0D.
 pub const ACCEL_CONFIG1: u8 = 0x53;
+/// GYRO_CONFIG1's GYRO_UI_FILT_ORD field.
+pub const GYRO_UI_FILT_ORD_MASK: u8 = 0b0000_1100;
+/// GYRO_UI_FILT_ORD = 10: a 3rd-order UI filter.
+pub const GYRO_UI_FILT_ORD_3RD: u8 = 0b0000_1000;
+/// ACCEL_CONFIG1's ACCEL_UI_FILT_ORD field.
+pub const ACCEL_UI_FILT_ORD_MASK: u8 = 0b0001_1000;
+/// ACCEL_UI_FILT_ORD = 10: a 3rd-order UI filter.
+pub const ACCEL_UI_FILT_ORD_3RD: u8 = 0b0001_0000;
+/// GYRO_ACCEL_CONFIG0's GYRO_UI_FILT_BW field.
+pub const GYRO_UI_FILT_BW_MASK: u8 = 0x0F;
+/// GYRO_ACCEL_CONFIG0's ACCEL_UI_FILT_BW field.
+pub const ACCEL_UI_FILT_BW_MASK: u8 = 0xF0;
+/// UI filter bandwidth field value 4: max(400 Hz, ODR)/10, in either field's position.
+pub const UI_FILT_BW_ODR_10: u8 = 0x44;
+/// PWR_MGMT0 with the gyro alone in low-noise mode.
+pub const PWR_GYRO_LOW_NOISE: u8 = 0b1100;
+/// PWR_MGMT0 with the accelerometer alone in low-noise mode.
+pub const PWR_ACCEL_LOW_NOISE: u8 = 0b0011;
 /// TMST_CONFIG (§14.35), reset 0x23: TMST_TO_REGS_EN (4), TMST_RES (3: 0 = 1 µs), TMST_DELTA_EN
 /// (2), TMST_FSYNC_EN (1), TMST_EN (0).
 pub const TMST_CONFIG: u8 = 0x54;

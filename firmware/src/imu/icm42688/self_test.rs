@@ -11,6 +11,18 @@
 //! (no factory value) falls back to absolute limits: gyro response ≥ 60 °/s, accelerometer 50 to
 //! 1200 mg. The gyro's offset with self-test off must also be within ±20 °/s.
 //!
+//! The measurement follows TDK's reference driver: `Ixm42xxx/Ixm42xxxSelfTest.c` in TDK's public
+//! repository `InvenSenseInc/public.mcu.iim42652` (commit 5033be4; the same procedure as the
+//! ICM-426xx eMD's `Icm426xxSelfTest.c`, which differs only in testing the accelerometer at ±4 g,
+//! as here, rather than the IIM-42652's ±2 g). Lines 36–44: the setting — range, 1 kHz, the UI
+//! filter of 3rd order at a bandwidth of ODR/10, for both sensors; lines 197–212 (gyro) and
+//! 292–307 (accelerometer): those fields written by read-modify-write before measuring; lines
+//! 389–423: only the sensor under test in low-noise mode, 60 ms (gyro) or 25 ms (accelerometer) to
+//! settle, and after the self-test is switched on 200 ms (gyro) or 25 ms; lines 426–457: a sample
+//! read only when INT_STATUS says DATA_RDY, samples at −32768 discarded, 200 of them; lines
+//! 482–520: the registers saved before and restored after. PX4's, ArduPilot's and Betaflight's
+//! ICM-42688-P drivers run no self-test, so TDK's is the procedure followed.
+//!
 //! The evaluation is a pure function of the averages and the codes, run after the measurement
 //! (never per sample; it uses `libm::pow`).
 
@@ -19,8 +31,12 @@ use super::Step;
 
 /// Samples averaged per phase.
 pub const SAMPLES: u32 = 200;
-/// Wait before each data-register read: one 1 kHz period.
-pub const SAMPLE_WAIT_NS: u32 = 1_000_000;
+/// Wait between two reads of INT_STATUS while waiting for DATA_RDY: a quarter of the 1 kHz
+/// period, so that consecutive samples are read and none twice.
+pub const POLL_WAIT_NS: u32 = 250_000;
+/// INT_STATUS reads before a phase gives up (`Error::NoDataReady`): twice the time 200 samples
+/// take at 1 kHz (TDK's driver gives 300 reads 1 ms apart).
+pub const MAX_POLLS: u32 = 2 * SAMPLES * 4;
 /// Gyro LSB per °/s at ±250 °/s.
 pub const GYRO_ST_LSB_PER_DPS: f32 = 131.0;
 /// Accelerometer LSB per g at ±4 g.
@@ -59,23 +75,74 @@ impl SensorUnderTest {
     }
 }
 
-/// Configure for the measurement: FIFO off, the sensor's self-test setting, low-noise mode, and
-/// the settling time (gyro 60 ms, accelerometer 25 ms).
-pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 7] {
-    let (reg, setting, settle) = match sensor {
-        // GYRO_FS_SEL 011 (±250 °/s), ODR 1 kHz.
-        SensorUnderTest::Gyro => (GYRO_CONFIG0, (3 << 5) | 6, 60_000),
-        // ACCEL_FS_SEL 010 (±4 g), ODR 1 kHz.
-        SensorUnderTest::Accel => (ACCEL_CONFIG0, (2 << 5) | 6, 25_000),
+/// Configure for the measurement (TDK's setting, see the module doc): FIFO off, self-test off,
+/// the sensor's range and 1 kHz, its UI filter 3rd order at ODR/10, the sensor under test alone
+/// in low-noise mode, and its settling time (gyro 60 ms, accelerometer 25 ms).
+pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 10] {
+    let (config0, fs_odr, config1, ord_mask, ord, bw_mask, power, settle) = match sensor {
+        // GYRO_FS_SEL 011 (±250 °/s), GYRO_ODR 0110 (1 kHz).
+        SensorUnderTest::Gyro => (
+            GYRO_CONFIG0,
+            (3 << 5) | 6,
+            GYRO_CONFIG1,
+            GYRO_UI_FILT_ORD_MASK,
+            GYRO_UI_FILT_ORD_3RD,
+            GYRO_UI_FILT_BW_MASK,
+            PWR_GYRO_LOW_NOISE,
+            60_000,
+        ),
+        // ACCEL_FS_SEL 010 (±4 g), ACCEL_ODR 0110 (1 kHz).
+        SensorUnderTest::Accel => (
+            ACCEL_CONFIG0,
+            (2 << 5) | 6,
+            ACCEL_CONFIG1,
+            ACCEL_UI_FILT_ORD_MASK,
+            ACCEL_UI_FILT_ORD_3RD,
+            ACCEL_UI_FILT_BW_MASK,
+            PWR_ACCEL_LOW_NOISE,
+            25_000,
+        ),
     };
     [
         Step::Write(REG_BANK_SEL, 0),
         Step::Write(FIFO_CONFIG, 0),
         Step::Write(SELF_TEST_CONFIG, 0),
-        Step::Write(reg, setting),
-        Step::Write(PWR_MGMT0, PWR_LOW_NOISE),
+        // FS_SEL 7:5 and ODR 3:0; bit 4 is reserved.
+        Step::Update {
+            reg: config0,
+            mask: 0xEF,
+            value: fs_odr,
+        },
+        Step::Update {
+            reg: config1,
+            mask: ord_mask,
+            value: ord,
+        },
+        Step::Update {
+            reg: GYRO_ACCEL_CONFIG0,
+            mask: bw_mask,
+            value: UI_FILT_BW_ODR_10 & bw_mask,
+        },
+        Step::Write(PWR_MGMT0, 0),
+        Step::Write(PWR_MGMT0, power),
         Step::WaitUs(200),
         Step::WaitUs(settle),
+    ]
+}
+
+/// The UI filter registers the self-test changes, in address order (one burst saves them).
+pub const SAVED_FILTERS: [u8; 3] = [GYRO_CONFIG1, GYRO_ACCEL_CONFIG0, ACCEL_CONFIG1];
+const _: () = assert!(GYRO_ACCEL_CONFIG0 == GYRO_CONFIG1 + 1 && ACCEL_CONFIG1 == GYRO_CONFIG1 + 2);
+
+/// Sensors off, then the saved UI filter registers written back (before the configuration is
+/// applied again).
+pub fn restore_steps(saved: [u8; 3]) -> [Step; 5] {
+    [
+        Step::Write(REG_BANK_SEL, 0),
+        Step::Write(PWR_MGMT0, 0),
+        Step::Write(SAVED_FILTERS[0], saved[0]),
+        Step::Write(SAVED_FILTERS[1], saved[1]),
+        Step::Write(SAVED_FILTERS[2], saved[2]),
     ]
 }
 
@@ -101,12 +168,22 @@ pub struct Averager {
 }
 
 impl Averager {
-    /// Adds one read of the six data registers.
+    /// Adds one read of the six data registers, unless an axis reads −32768 (invalid: the
+    /// sensor starting), which TDK's driver discards too.
     pub fn add(&mut self, b: &[u8; 6]) {
+        let v: [i16; 3] = core::array::from_fn(|i| i16::from_be_bytes([b[2 * i], b[2 * i + 1]]));
+        if v.contains(&i16::MIN) {
+            return;
+        }
         for i in 0..3 {
-            self.sum[i] += i64::from(i16::from_be_bytes([b[2 * i], b[2 * i + 1]]));
+            self.sum[i] += i64::from(v[i]);
         }
         self.n += 1;
+    }
+
+    /// Samples added.
+    pub fn count(&self) -> u32 {
+        self.n as u32
     }
     /// The mean, LSB (rounded toward zero).
     pub fn mean(&self) -> [i32; 3] {

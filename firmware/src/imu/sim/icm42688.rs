@@ -79,6 +79,22 @@ pub struct Icm42688Model<G> {
     pub violations: u32,
     /// The last truth sampled.
     pub last_truth: Truth,
+    /// The part's clock error, ppm (positive: slow, each ODR period that much longer): its
+    /// oscillator is not the board's timer. (This and the two read records below are the PC
+    /// tests' instruments, not in the QEMU image.)
+    #[cfg(test)]
+    pub clock_ppm: i32,
+    /// Reads of a sensor's data registers that found no new sample since the last read of them
+    /// (gyro, accelerometer): a host reading on a timer instead of DATA_RDY.
+    #[cfg(test)]
+    pub stale_data_reads: [u32; 2],
+    /// At the last read of each sensor's data registers (gyro, accelerometer): GYRO_CONFIG0,
+    /// ACCEL_CONFIG0, GYRO_CONFIG1, GYRO_ACCEL_CONFIG0, ACCEL_CONFIG1, PWR_MGMT0, SELF_TEST_CONFIG.
+    #[cfg(test)]
+    pub config_at_data_read: [[u8; 7]; 2],
+    /// A sample not yet read from each sensor's data registers (gyro, accelerometer).
+    #[cfg(test)]
+    fresh: [bool; 2],
 }
 
 fn reset_banks() -> [[u8; 128]; 4] {
@@ -135,6 +151,14 @@ impl<G: Generator> Icm42688Model<G> {
             dropped: heapless::Vec::new(),
             violations: 0,
             last_truth: Truth::default(),
+            #[cfg(test)]
+            clock_ppm: 0,
+            #[cfg(test)]
+            stale_data_reads: [0; 2],
+            #[cfg(test)]
+            config_at_data_read: [[0; 7]; 2],
+            #[cfg(test)]
+            fresh: [false; 2],
         }
     }
 
@@ -175,7 +199,18 @@ impl<G: Generator> Icm42688Model<G> {
         pending != 0
     }
 
+    #[cfg(test)]
     fn odr_period_ns(&self) -> u64 {
+        let nominal = self.nominal_period_ns();
+        nominal.saturating_add_signed(nominal as i64 * i64::from(self.clock_ppm) / 1_000_000)
+    }
+
+    #[cfg(not(test))]
+    fn odr_period_ns(&self) -> u64 {
+        self.nominal_period_ns()
+    }
+
+    fn nominal_period_ns(&self) -> u64 {
         match self.banks[0][GYRO_CONFIG0 as usize] & 0x0F {
             1 => 31_250,
             2 => 62_500,
@@ -192,8 +227,15 @@ impl<G: Generator> Icm42688Model<G> {
         }
     }
 
+    /// (gyro, accelerometer) in low-noise mode.
+    fn sensors_on(&self) -> [bool; 2] {
+        let p = self.banks[0][PWR_MGMT0 as usize];
+        [p & 0b1100 == 0b1100, p & 0b0011 == 0b0011]
+    }
+
+    /// Either sensor on (the self-test runs one alone; sampling runs both).
     fn sampling(&self) -> bool {
-        self.banks[0][PWR_MGMT0 as usize] & 0x0F == PWR_LOW_NOISE
+        self.sensors_on().contains(&true)
     }
 
     /// Lets `ns` of the part's time pass: one sample per ODR period while sampling.
@@ -216,12 +258,26 @@ impl<G: Generator> Icm42688Model<G> {
     }
 
     fn self_test_response(&self) -> ([f64; 3], [f64; 3]) {
+        /// 1.01ⁿ by squaring: the factory formula's power (`imu::icm42688::self_test`) without `libm::pow`,
+        /// whose 1.2 KiB the QEMU image, which carries this model, does not need; it agrees with
+        /// `pow` to a few ulp, far inside the self-test's 0.5–1.5 bounds.
+        fn pow_1_01(mut n: u32) -> f64 {
+            let (mut base, mut acc) = (1.01f64, 1.0f64);
+            while n > 0 {
+                if n & 1 == 1 {
+                    acc *= base;
+                }
+                base *= base;
+                n >>= 1;
+            }
+            acc
+        }
         let st = self.banks[0][SELF_TEST_CONFIG as usize];
         let otp = |fs: u32, code: u8| {
             if code == 0 {
                 0.0
             } else {
-                2620.0 / f64::from(1u32 << (3 - fs)) * libm::pow(1.01, f64::from(code) - 1.0)
+                2620.0 / f64::from(1u32 << (3 - fs)) * pow_1_01(u32::from(code) - 1)
             }
         };
         let mut g = [0.0; 3];
@@ -252,6 +308,10 @@ impl<G: Generator> Icm42688Model<G> {
         self.since_start = self.since_start.saturating_add(1);
         self.write_data_registers(&t, invalid);
         self.status |= INT_DATA_RDY;
+        #[cfg(test)]
+        {
+            self.fresh = [true; 2];
+        }
         if self.banks[0][FIFO_CONFIG as usize] >> 6 != 0 {
             self.push_packet(&t, invalid, n);
         }
@@ -273,7 +333,9 @@ impl<G: Generator> Icm42688Model<G> {
         }
     }
 
+    /// A sensor that is off reads −32768, as one still starting does.
     fn write_data_registers(&mut self, t: &Truth, invalid: bool) {
+        let on = self.sensors_on();
         let a_fs = (self.banks[0][ACCEL_CONFIG0 as usize] >> 5) & 3;
         let g_fs = (self.banks[0][GYRO_CONFIG0 as usize] >> 5) & 7;
         let a_lsb = 2048.0 * f64::from(1u32 << a_fs);
@@ -282,12 +344,12 @@ impl<G: Generator> Icm42688Model<G> {
         let r = &mut self.banks[0];
         r[TEMP_DATA1 as usize..TEMP_DATA1 as usize + 2].copy_from_slice(&temp.to_be_bytes());
         for i in 0..3 {
-            let a = if invalid {
+            let a = if invalid || !on[1] {
                 INVALID_16
             } else {
                 quantize(t.accel_g[i] * a_lsb, 32767) as i16
             };
-            let g = if invalid {
+            let g = if invalid || !on[0] {
                 INVALID_16
             } else {
                 quantize(t.gyro_dps[i] * g_lsb, 32767) as i16
@@ -369,6 +431,26 @@ impl<G: Generator> Icm42688Model<G> {
         }
     }
 
+    /// The first byte of a sensor's data registers read (0 gyro, 1 accelerometer).
+    #[cfg(test)]
+    fn note_data_read(&mut self, k: usize) {
+        if !self.fresh[k] {
+            self.stale_data_reads[k] += 1;
+        }
+        self.fresh[k] = false;
+        let r = &self.banks[0];
+        self.config_at_data_read[k] = [
+            GYRO_CONFIG0,
+            ACCEL_CONFIG0,
+            GYRO_CONFIG1,
+            GYRO_ACCEL_CONFIG0,
+            ACCEL_CONFIG1,
+            PWR_MGMT0,
+            SELF_TEST_CONFIG,
+        ]
+        .map(|a| r[a as usize]);
+    }
+
     fn read_register(&mut self, reg: u8) -> u8 {
         match (self.bank, reg) {
             (1, XG_ST_DATA..=0x61) => return self.self_test_codes[usize::from(reg - XG_ST_DATA)],
@@ -377,6 +459,12 @@ impl<G: Generator> Icm42688Model<G> {
             }
             (0, _) => {}
             (b, r) => return self.banks[b][r as usize & 0x7F],
+        }
+        #[cfg(test)]
+        if reg == ACCEL_DATA_X1 + 6 {
+            self.note_data_read(0);
+        } else if reg == ACCEL_DATA_X1 {
+            self.note_data_read(1);
         }
         let big = self.banks[0][INTF_CONFIG0 as usize] & FIFO_COUNT_ENDIAN != 0;
         match reg {

@@ -2,6 +2,7 @@
 //! `tests/`). The expected values are written out here from the datasheets' numbers (sensitivities,
 //! register fields, the AAF table), independently of the driver's and the model's code.
 
+mod alignment;
 mod bursts_stall;
 mod icm_afsr;
 mod icm_configure;
