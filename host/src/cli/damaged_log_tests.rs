@@ -300,3 +300,40 @@ fn nan_temperatures_cost_no_rows_and_no_positions() {
     let rows = std::fs::read_to_string(&out).unwrap().lines().count() - 1;
     assert_eq!(rows, 24_000);
 }
+
+/// Advice names only options that exist for the input: a DataFlash log whose gyro is logged in °/s
+/// where the format says rad/s has no `--gyro-unit` to give.
+#[test]
+fn advice_on_a_binary_log_names_no_text_option() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sim = simulate_hand(
+        &logger_unit(OutputUnit::MetresPerSecondSquared),
+        &HandSpec::standard(8),
+    );
+    let samples: Vec<LogSample> = sim
+        .rows
+        .iter()
+        .take(24_000)
+        .map(|&(t, a, g)| LogSample {
+            t_s: t,
+            acc: a.map(|x| x as f32),
+            gyro: g.map(|x| x.to_degrees() as f32),
+            temp_c: 25.0,
+        })
+        .collect();
+    let path = tmp.path().join("deg.bin");
+    std::fs::write(&path, crate::fuzz::logs::write_dataflash(&samples)).unwrap();
+    let line = format!(
+        "host segment -q --input {} --out {}/s",
+        path.display(),
+        tmp.path().display()
+    );
+    let Command::Segment(a) = command(&line) else {
+        panic!()
+    };
+    let e = segment(&a).err().expect("refused").to_string();
+    assert!(
+        e.contains("ArduPilot DataFlash log's gyro") && !e.contains("--gyro-unit"),
+        "{e}"
+    );
+}

@@ -162,7 +162,7 @@ fn twice_and_one_and_a_half_times_follow_one_rule() {
             p(&format!("c{lsb}")).display()
         ));
         let note = said.iter().find(|w| w.contains("all three axes")).unwrap();
-    println!("{note}");
+        println!("{note}");
         assert!(
             note.contains(&format!("the turns imply {implied}")),
             "{lsb}: {note}"
@@ -176,7 +176,7 @@ fn twice_and_one_and_a_half_times_follow_one_rule() {
             p(&format!("r{rate}")).display()
         ));
         let note = said.iter().find(|w| w.contains("all three axes")).unwrap();
-    println!("{note}");
+        println!("{note}");
         assert!(
             note.contains("rows would have to come at 200.")
                 && note.contains(&format!("--rate-hz {rate}")),

@@ -256,8 +256,30 @@ pub enum ImportError {
         step: f64,
         /// Last minus first time stamp, in the column's unit.
         span: f64,
-        /// ", or in the given --time-unit X", or empty.
+        /// " (--time-unit X gives … Hz)", or empty.
         given: String,
+    },
+    /// The `--time-unit` given makes no logger's rate of the time column, and another unit does.
+    #[error(
+        "the time column steps by a median {} and spans {} of its unit: --time-unit {given} reads \
+         that as {given_reading}, no logger's; in {fits} it reads as {fits_reading}: give \
+         --time-unit {fits}",
+        six_digits(*.step),
+        six_digits(*.span)
+    )]
+    TimeUnitGiven {
+        /// The median step, in the column's unit.
+        step: f64,
+        /// Last minus first time stamp, in the column's unit.
+        span: f64,
+        /// The unit given.
+        given: &'static str,
+        /// What it makes of the column ("1e6 Hz over 0.12 s").
+        given_reading: String,
+        /// The unit that fits.
+        fits: &'static str,
+        /// What that makes of it.
+        fits_reading: String,
     },
     /// More than one time unit fits the time column.
     #[error(
@@ -945,8 +967,16 @@ mod tests {
             read(&text(1e3), &given).unwrap().time_unit,
             Some((TimeUnit::Ms, false))
         );
+        // A unit given that fits no logger, where another does: that one named, not --rate-hz.
         let e = read(&text(1.0), &given).unwrap_err().to_string();
-        assert!(e.contains("--time-unit ms gives 100000 Hz"), "{e}");
+        assert!(
+            e.contains("--time-unit ms reads that as 100000 Hz")
+                && e.contains("in s it reads as 100 Hz over 19.99 s: give --time-unit s")
+                && !e.contains("--rate-hz"),
+            "{e}"
+        );
+        let e = read(&text(1e6), &given).unwrap_err().to_string();
+        assert!(e.contains("give --time-unit us"), "{e}");
         // Steps of 0.1 over 200 000 rows: 10 Hz for 5.6 h in s, or 10 kHz for 20 s in ms.
         let long = format!(
             "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",

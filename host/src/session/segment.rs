@@ -10,7 +10,7 @@
 //! minimum are dropped (counted). This is how imu_tk's static detector works, with thresholds from the
 //! data instead of a user's guess.
 
-use super::import::{Recording, TimeJump};
+use super::import::{Recording, TimeJump, TimeOrigin};
 use shared::linalg;
 use shared::OutputUnit;
 
@@ -241,11 +241,17 @@ pub(crate) fn find_intervals(
         .collect();
     let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
         // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
-        hint: if acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0 {
-            "; but the accelerometer is still there: if the gyro logs deg/s, give --gyro-unit deg/s"
-                .into()
-        } else {
-            String::new()
+        hint: match rec.time_origin {
+            _ if !(acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0) => String::new(),
+            // A binary log states its units: no option changes them.
+            Some(TimeOrigin::LoggerStamps(format)) => format!(
+                "; but the accelerometer is still there: the {format} log's gyro moves \
+                 {gyro_deg_s:.1} °/s at rest, 57× a still gyro's, as if its logger wrote °/s \
+                 where the format says rad/s"
+            ),
+            _ => "; but the accelerometer is still there: if the gyro logs deg/s, give \
+                  --gyro-unit deg/s"
+                .into(),
         },
         acc_mg,
         gyro_deg_s,

@@ -34,6 +34,14 @@ impl TimeUnit {
         }
     }
 
+    /// The unit as `--time-unit` takes it, in plain ASCII ("us" for µs).
+    pub fn option(self) -> &'static str {
+        match self {
+            TimeUnit::Us => "us",
+            other => other.symbol(),
+        }
+    }
+
     /// Seconds per unit.
     pub fn seconds(self) -> f64 {
         match self {
@@ -197,6 +205,27 @@ pub fn detect_time_unit(t: &[f64]) -> Result<TimeUnit, ImportError> {
 
 pub(super) fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError {
     let (step, span) = step_and_span(t);
+    let reading = |u: TimeUnit| {
+        format!(
+            "{} Hz over {} s",
+            six_digits(1.0 / (step * u.seconds())),
+            six_digits(span * u.seconds())
+        )
+    };
+    let fits: Vec<TimeUnit> = TimeUnit::ALL
+        .into_iter()
+        .filter(|&u| fits_time_unit(t, u))
+        .collect();
+    if let (Some(given), &[fits]) = (given, &fits[..]) {
+        return ImportError::TimeUnitGiven {
+            step,
+            span,
+            given: given.option(),
+            given_reading: reading(given),
+            fits: fits.option(),
+            fits_reading: reading(fits),
+        };
+    }
     ImportError::TimeUnit {
         step,
         span,
