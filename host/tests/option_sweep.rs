@@ -43,7 +43,7 @@ fn base(sub: &str) -> &'static [&'static str] {
         "apply" => &["--calibration", "c.toml", "--input", "i"],
         "batch" => &["--input", "i", "--out", "o"],
         "flash" => &["--port", "sim", "--calibration", "c.bin"],
-        "read" | "monitor" => &["--port", "sim"],
+        "read" | "monitor" | "bringup" => &["--port", "sim"],
         other => panic!("the sweep has no base command line for `{other}`: add one to base()"),
     }
 }
