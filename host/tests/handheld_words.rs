@@ -104,7 +104,7 @@ fn the_coverage_advice_is_one_plain_sentence() {
         distinct: 10,
         repeats: vec![None; 10],
         missing_faces: vec!["x down", "z up"],
-        six_faces: false,
+        faces: None,
     };
     let a = c.advice().unwrap();
     assert_eq!(
@@ -117,7 +117,7 @@ fn the_coverage_advice_is_one_plain_sentence() {
         distinct: 24,
         repeats: vec![None; 24],
         missing_faces: vec![],
-        six_faces: false,
+        faces: None,
     };
     assert_eq!(full.advice(), None);
 }

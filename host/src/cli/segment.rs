@@ -338,8 +338,9 @@ fn time_unit_note(out: &Output, rec: &Recording) {
 /// What a six-face session is taken as (stdout, with the table).
 fn six_face_text(face_sigma_deg: f64) -> String {
     format!(
-        "six-face session: fewer than {} distinct positions, each within {}° of a body axis and \
-         all six faces present: taken as the faces of a cube, each the nominal body axis up with a \
+        "six-face session: fewer than {} distinct positions, each within {}° of a body axis once \
+         the faces' own biases and scales are taken out, and all six faces present: taken as the \
+         faces of a cube, each the nominal body axis up with a \
          {face_sigma_deg}° attitude prior (--face-sigma-deg); the prior fixes the body frame and \
          the fit estimates each face's placement (docs/model.md §7.1)",
         crate::session::segment::MIN_POSITIONS,

@@ -611,3 +611,80 @@ fn nine_position_hand_sessions_many_seeds() {
         }
     }
 }
+
+/// A consumer MEMS unit's six faces: biases of 40–100 mg on every axis and each face set down 5°
+/// off its axis (one face's raw direction is then up to 13° from its axis, where a raw 5° test
+/// refused it). Found as six faces on every seed; held-out accuracy against the six-position fit
+/// with the true faces (the oracle) and with the nominal faces (the peers' method).
+/// `BIASED_FACE_SEEDS=N` runs N seeds (default 4).
+#[test]
+fn biased_mems_faces_five_degrees_off_are_found_and_calibrate() {
+    let seeds: u64 = std::env::var("BIASED_FACE_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(4);
+    let unit = OutputUnit::MetresPerSecondSquared;
+    let mut rows = Vec::new();
+    let mut worst_raw_deg: f64 = 0.0;
+    for seed in 0..seeds {
+        let mut truth = logger_unit(unit);
+        let mut rng = testkit::Rng::new(seed, 91);
+        truth.statics.zero_bias_out = core::array::from_fn(|_| {
+            let mg = rng.range(40.0, 100.0) * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
+            mg * 1e-3 * truth.gravity_m_s2
+        });
+        let spec = HandSpec::six_faces(100 + seed, 5.0, 1);
+        let sim = simulate_hand(&truth, &spec);
+        let tmp = tempfile::tempdir().unwrap();
+        write_logger_csv(
+            &tmp.path().join("raw.csv"),
+            &sim.rows,
+            &LoggerLayout::default(),
+        )
+        .unwrap();
+        // Faces placed to 5° are a wider prior than the bench's default 2°: the user says so. The
+        // hand turns' gyro of such a unit is refused (its five turns do not determine G against
+        // these faces), so the accelerometer is calibrated alone.
+        let (out, cal) = segment_and_calibrate(
+            tmp.path(),
+            "--acc-unit m/s2 --gyro-unit deg/s --face-sigma-deg 5 --no-gyro",
+        );
+        assert_eq!(out.segmentation.stills.len(), 6, "seed {seed}");
+        for s in &out.segmentation.stills {
+            let d = s.direction;
+            let big = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            worst_raw_deg = worst_raw_deg.max(big.acos().to_degrees());
+        }
+        let means = hold_means(&sim.rows, &sim.holds);
+        let true_ups: Vec<[f64; 3]> = sim.holds.iter().map(|h| h.2).collect();
+        let nominal: Vec<[f64; 3]> = true_ups.iter().map(|u| u.map(f64::round)).collect();
+        let ours = held_out(
+            &truth,
+            &cal.fitted.m_out_per_g,
+            &cal.fitted.zero_bias_out,
+            seed,
+        );
+        let (m, b) = six_position_fit(&means, &true_ups);
+        let oracle = held_out(&truth, &m, &b, seed);
+        let (m, b) = six_position_fit(&means, &nominal);
+        let peers = held_out(&truth, &m, &b, seed);
+        rows.push([ours, oracle, peers]);
+    }
+    println!("worst raw face direction off its axis: {worst_raw_deg:.1}°");
+    println!("held-out rms, mg, per seed: ours (nominal faces, 5° prior) | oracle (true faces) | peers (nominal faces)");
+    for (seed, [ours, oracle, peers]) in rows.iter().enumerate() {
+        println!(
+            "  seed {seed}: {:>8.3} | {:>8.3} | {:>8.3}",
+            ours.rms_mg, oracle.rms_mg, peers.rms_mg
+        );
+    }
+    // The biases tilt the raw faces beyond the old 5° test on some seed.
+    assert!(worst_raw_deg > 5.0, "{worst_raw_deg}");
+    for r in &rows {
+        let [ours, _, peers] = r;
+        assert!(
+            ours.rms_mg <= peers.rms_mg * 1.05,
+            "{ours:?} against {peers:?}"
+        );
+    }
+}

@@ -496,8 +496,17 @@ pub(crate) fn static_fit_with_attitude_check(
             }
         }
         let worst = best.map(|(k, _, own)| (k, own));
+        // A segment whose plan gives its attitude a prior (a six-face session's faces, placed by
+        // hand) contradicts it only beyond three of that prior's σ (docs/model.md §7.1).
+        let tol_of = |k: usize| {
+            let prior = plan.segments[segs[models[k].seg].plan_idx].attitude_sigma_deg;
+            let deg = options
+                .attitude_tolerance_deg
+                .max(3.0 * prior.unwrap_or(0.0));
+            tol_g.max(2.0 * (0.5 * deg.to_radians()).sin())
+        };
         match worst {
-            Some((k, err)) if err > tol_g => {
+            Some((k, err)) if err > tol_of(k) => {
                 let seg = models[k].seg;
                 segs[seg].used = false;
                 excluded.push(Exclusion {

@@ -3,8 +3,8 @@
 //! (`docs/model.md` §7.1) — the check `host segment` makes before cutting a session.
 
 use super::segment::{
-    angle_deg, Interval, PositionSet, SegmentError, FACE_COVERAGE_DEG, MIN_POSITIONS,
-    RECOMMENDED_POSITIONS, SIX_FACE_DEG,
+    angle_deg, Interval, PositionSet, SegmentError, FACE_COVERAGE_DEG, FACE_LABEL_DEG,
+    MIN_POSITIONS, RECOMMENDED_POSITIONS, SIX_FACE_DEG,
 };
 
 /// How well a set of still positions serves a calibration.
@@ -16,8 +16,9 @@ pub struct Coverage {
     pub repeats: Vec<Option<usize>>,
     /// Body directions (+x, −x, …) with no position within [`FACE_COVERAGE_DEG`].
     pub missing_faces: Vec<&'static str>,
-    /// Every position within [`SIX_FACE_DEG`] of a body axis, and all six axes' directions present.
-    pub six_faces: bool,
+    /// A six-face session's face for each still interval (its body axis up), when the positions
+    /// are the six faces of a cube ([`six_face_labels`]).
+    pub faces: Option<Vec<[f64; 3]>>,
 }
 
 const FACES: [(&str, [f64; 3]); 6] = [
@@ -55,20 +56,63 @@ pub(crate) fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage 
         })
         .map(|(name, _)| *name)
         .collect();
-    let near_face = |s: &Interval| {
-        FACES
-            .iter()
-            .position(|(_, a)| angle_deg(&s.direction, a) < SIX_FACE_DEG)
-    };
-    let faces: Vec<Option<usize>> = stills.iter().map(near_face).collect();
-    let six_faces =
-        faces.iter().all(Option::is_some) && (0..FACES.len()).all(|f| faces.contains(&Some(f)));
     Coverage {
         distinct: firsts.len(),
         repeats,
         missing_faces,
-        six_faces,
+        faces: six_face_labels(stills),
     }
+}
+
+/// The faces of a six-face session (docs/model.md §7.1), as a consumer MEMS unit shows them: each
+/// still interval labelled by its nearest body axis (within [`FACE_LABEL_DEG`]), all six present;
+/// each axis's bias and scale from the mean outputs of its two faces; and every interval, with
+/// those taken out, within [`SIX_FACE_DEG`] of its label. Raw directions against a tight bound would
+/// refuse a unit whose biases alone tilt a face by more than its placement.
+pub(crate) fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
+    let labels: Vec<(usize, f64)> = stills
+        .iter()
+        .map(|s| {
+            let d = s.direction;
+            let j = (0..3).max_by(|&a, &b| d[a].abs().total_cmp(&d[b].abs()))?;
+            let mut axis = [0.0; 3];
+            axis[j] = d[j].signum();
+            (angle_deg(&d, &axis) < FACE_LABEL_DEG).then_some((j, d[j].signum()))
+        })
+        .collect::<Option<_>>()?;
+    let mean = |j: usize, sign: f64| {
+        let v: Vec<f64> = stills
+            .iter()
+            .zip(&labels)
+            .filter(|(_, l)| **l == (j, sign))
+            .map(|(s, _)| s.mean_acc[j])
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let mut bias = [0.0; 3];
+    let mut scale = [0.0; 3];
+    for j in 0..3 {
+        let (up, down) = (mean(j, 1.0)?, mean(j, -1.0)?);
+        bias[j] = 0.5 * (up + down);
+        scale[j] = 0.5 * (up - down);
+        if scale[j] <= 0.0 {
+            return None;
+        }
+    }
+    let faces: Vec<[f64; 3]> = labels
+        .iter()
+        .map(|&(j, sign)| {
+            let mut a = [0.0; 3];
+            a[j] = sign;
+            a
+        })
+        .collect();
+    let fits = stills.iter().zip(&faces).all(|(s, face)| {
+        let c: [f64; 3] = core::array::from_fn(|k| (s.mean_acc[k] - bias[k]) / scale[k]);
+        let n = shared::linalg::norm(&c);
+        n > 0.0 && angle_deg(&c.map(|x| x / n), face) < SIX_FACE_DEG
+    });
+    fits.then_some(faces)
 }
 
 impl Coverage {
@@ -78,7 +122,7 @@ impl Coverage {
         if self.distinct >= MIN_POSITIONS {
             return Ok(PositionSet::Spread);
         }
-        if self.six_faces {
+        if self.faces.is_some() {
             return Ok(PositionSet::SixFaces);
         }
         Err(SegmentError::TooFewPositions {

@@ -63,10 +63,21 @@ pub fn plan_for(rec: &Recording, seg: &Segmentation) -> Plan {
 }
 
 /// The plan of a six-face session (`super::segment::PositionSet::SixFaces`): every still interval is
-/// its nearest face (all within [`super::segment::SIX_FACE_DEG`]) with the prior `face_sigma_deg`,
-/// which fixes the body frame and lets the nine intrinsic parameters follow (docs/model.md §7.1).
-pub fn plan_for_faces(rec: &Recording, seg: &Segmentation, face_sigma_deg: f64) -> Plan {
-    plan_with(rec, seg, super::segment::SIX_FACE_DEG, face_sigma_deg)
+/// its face, `faces` (`super::coverage::six_face_labels`), with the prior `face_sigma_deg`, which
+/// fixes the body frame and lets the nine intrinsic parameters follow (docs/model.md §7.1).
+pub fn plan_for_faces(
+    rec: &Recording,
+    seg: &Segmentation,
+    faces: &[[f64; 3]],
+    face_sigma_deg: f64,
+) -> Plan {
+    let mut plan = plan_with(rec, seg, AXIS_SNAP_DEG, face_sigma_deg);
+    for (sp, face) in plan.segments.iter_mut().zip(faces) {
+        sp.up_b = *face;
+        sp.attitude = Attitude::default();
+        sp.attitude_sigma_deg = Some(face_sigma_deg);
+    }
+    plan
 }
 
 fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64) -> Plan {

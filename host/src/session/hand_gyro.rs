@@ -365,7 +365,8 @@ mod tests {
             crate::session::segment::tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
         let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
         assert_eq!(seg.stills.len(), 12);
-        let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, 2.0);
+        let faces = crate::session::coverage::six_face_labels(&seg.stills).unwrap();
+        let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
         let fit = fit(&rec, &seg, &plan).unwrap().unwrap();
         assert_eq!((fit.turns, fit.table_turns), (5, 6));
         let truth = spec.gyro.matrix;

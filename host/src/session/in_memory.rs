@@ -151,7 +151,12 @@ impl Found {
             PositionSet::Spread => (coverage.advice(), plan_for(&recording, &segmentation)),
             PositionSet::SixFaces => (
                 None,
-                plan_for_faces(&recording, &segmentation, choices.face_sigma_deg),
+                plan_for_faces(
+                    &recording,
+                    &segmentation,
+                    coverage.faces.as_deref().unwrap_or_default(),
+                    choices.face_sigma_deg,
+                ),
             ),
         };
         plan.unit_id = choices.unit_id.clone();

@@ -55,17 +55,22 @@ pub(crate) const RECOMMENDED_POSITIONS: usize = 24;
 /// A body direction (±x, ±y, ±z) with no position within this angle is missing, degrees.
 pub const FACE_COVERAGE_DEG: f64 = 50.0;
 /// Fewer than [`MIN_POSITIONS`] positions are taken as the six faces of a cube when each lies within
-/// this angle of a body axis, degrees: a face set down on a bench, seen through an uncalibrated
-/// accelerometer (scale errors of a few %, axes a degree off) and placed to a degree or two.
-pub const SIX_FACE_DEG: f64 = 5.0;
+/// this angle of a body axis once the biases and scales the faces themselves give are taken out,
+/// degrees: a face placed by hand up to 5° off, seen through axes a degree or two off.
+pub const SIX_FACE_DEG: f64 = 7.5;
+/// A still position's raw direction labels it with its nearest body axis only within this angle,
+/// degrees: a consumer MEMS unit's biases of up to 100 mg on two axes move it 8°, a 5° placement as
+/// much again; 25° keeps every label unambiguous (the axes are 90° apart).
+pub const FACE_LABEL_DEG: f64 = 25.0;
 
 /// What the still positions are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PositionSet {
     /// At least [`MIN_POSITIONS`] distinct positions: each free or snapped to a near axis.
     Spread,
-    /// The six faces of a cube (each within [`SIX_FACE_DEG`] of a body axis, all six present):
-    /// nominal ups with an attitude prior, docs/model.md §7.1.
+    /// The six faces of a cube (all six present, each within [`SIX_FACE_DEG`] of its body axis once
+    /// the faces' own biases and scales are out): nominal ups with an attitude prior, docs/model.md
+    /// §7.1.
     SixFaces,
 }
 
@@ -152,7 +157,8 @@ pub enum SegmentError {
     #[error(
         "{found} still interval(s) in {distinct} distinct position(s): at least {MIN_POSITIONS} \
          distinct positions are needed ({RECOMMENDED_POSITIONS} recommended), or the six faces of a \
-         cube, each within {SIX_FACE_DEG}° of a body axis; record {more} more, each at least \
+         cube, each within {FACE_LABEL_DEG}° of a body axis as read and {SIX_FACE_DEG}° once the \
+         faces' own biases and scales are taken out; record {more} more, each at least \
          {same_deg:.0}° from the others{faces}"
     )]
     TooFewPositions {
