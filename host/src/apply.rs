@@ -124,6 +124,18 @@ pub enum ApplyError {
     /// A logger's file could not be read.
     #[error(transparent)]
     Log(LogError),
+    /// The accelerometer is still somewhere, the gyro nowhere.
+    #[error(
+        "no stretch of the recording is at rest: where the accelerometer is still ({acc_mg:.1} mg \
+         of noise) the gyro moves {gyro_deg_s:.1} °/s, 57× a still gyro's, as a gyro in °/s read as \
+         rad/s does: the gyro's unit does not fit this recording"
+    )]
+    GyroNeverAtRest {
+        /// The quietest accelerometer noise, mg.
+        acc_mg: f64,
+        /// The gyro's noise there, °/s.
+        gyro_deg_s: f64,
+    },
 }
 
 /// The device's per-sample state for one recording.

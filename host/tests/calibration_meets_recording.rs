@@ -428,3 +428,39 @@ fn flash_refuses_a_calibration_of_another_output_unit() {
         );
     }
 }
+
+/// `apply` of a logger's CSV whose gyro is in °/s, declared rad/s: no interval is still (the gyro
+/// moves 57× a still gyro's), and the rest check that would have caught it is not skipped for that:
+/// refused, nothing written. Declared right, the same file applies.
+#[test]
+fn a_gyro_in_the_wrong_unit_is_refused_even_where_nothing_is_still() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, cal) = hand_session(dir.path());
+    let csv = dir.path().join("hand.csv");
+    let apply = |unit: &str, out: &Path| {
+        host(&[
+            "apply",
+            "--calibration",
+            s(&cal),
+            "--input",
+            s(&csv),
+            "--time-column",
+            "t",
+            "--acc-unit",
+            "m/s2",
+            "--gyro-unit",
+            unit,
+            "--out",
+            s(out),
+        ])
+    };
+    let good = dir.path().join("good.csv");
+    let (ok, _, e) = apply("deg/s", &good);
+    assert!(ok, "{e}");
+    let wrong = dir.path().join("wrong.csv");
+    refused(
+        apply("rad/s", &wrong),
+        &["no stretch of the recording is at rest", "57×"],
+    );
+    assert!(!wrong.exists());
+}

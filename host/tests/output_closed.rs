@@ -188,7 +188,10 @@ impl Fixture {
             ),
             ("read", v(&["read", "--port", "sim"])),
             ("monitor", v(&["monitor", "--port", "sim", "--count", "3"])),
-            ("bringup", v(&["bringup", "--port", "sim", "--seconds", "0.5"])),
+            (
+                "bringup",
+                v(&["bringup", "--port", "sim", "--seconds", "0.5"]),
+            ),
         ]
     }
 }

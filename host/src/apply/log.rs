@@ -2,7 +2,7 @@
 
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::session::logs::{read_log, LogSource};
-use crate::session::segment::{find_intervals, SegmentOptions};
+use crate::session::segment::{find_intervals, gyro_unit_suspect, SegmentError, SegmentOptions};
 use crate::session::Row;
 use shared::compensator::LeverMode;
 use shared::{Calibration, OutputUnit};
@@ -37,9 +37,17 @@ pub(crate) fn apply_log(
     if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
         applier.compensator.refresh(t as f32);
     }
-    let stills = find_intervals(rec, &SegmentOptions::default())
-        .map(|s| s.stills)
-        .unwrap_or_default();
+    // No still interval at all is a flight log, unless the accelerometer is still and only the
+    // gyro moves: then the rest check cannot be skipped, it has failed.
+    let stills = match find_intervals(rec, &SegmentOptions::default()) {
+        Ok(s) => s.stills,
+        Err(SegmentError::NoStill {
+            acc_mg, gyro_deg_s, ..
+        }) if gyro_unit_suspect(acc_mg, gyro_deg_s) => {
+            return Err(ApplyError::GyroNeverAtRest { acc_mg, gyro_deg_s })
+        }
+        Err(_) => Vec::new(),
+    };
     let mut sums = vec![StillSums::default(); stills.len()];
     let write_err = |e: std::io::Error| {
         ApplyError::Recording(crate::session::RecordingError::Io {

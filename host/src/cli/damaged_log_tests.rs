@@ -3,26 +3,14 @@
 //! stamp, repeated or reversed rows, jitter or simulated time. Each must calibrate as its clean self
 //! does (within the clean calibration's 1σ) and say what was repaired.
 
+use super::log_fixture_tests::{command, fixture};
 use super::segment::segment;
-use super::{apply, calibrate, Cli, Command};
+use super::{apply, calibrate, Command};
 use crate::fuzz::logs::{write_mcap, LogSample};
 use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use crate::sim::testkit::Rng;
-use clap::Parser;
 use shared::OutputUnit;
-use std::path::{Path, PathBuf};
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/logs")
-        .join(name)
-}
-
-fn command(line: &str) -> Command {
-    Cli::try_parse_from(line.split_whitespace())
-        .unwrap()
-        .command
-}
+use std::path::Path;
 
 /// What a damaged log gave: the positions found, the calibration's (name, value, 1σ), and the
 /// repairs `segment` said.

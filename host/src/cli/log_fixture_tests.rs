@@ -16,13 +16,15 @@ use std::path::{Path, PathBuf};
 /// The rows of the simulated session the fixtures hold (`scripts/make-log-fixtures.py`'s ROWS).
 const ROWS: usize = 6000;
 
-fn fixture(name: &str) -> PathBuf {
+/// A file of `host/tests/fixtures/logs/`.
+pub(super) fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/logs")
         .join(name)
 }
 
-fn command(line: &str) -> Command {
+/// The subcommand a command line parses to.
+pub(super) fn command(line: &str) -> Command {
     Cli::try_parse_from(line.split_whitespace())
         .unwrap()
         .command

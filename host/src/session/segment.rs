@@ -228,6 +228,12 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (m, s)
 }
 
+/// A still accelerometer (`acc_mg` of window noise, under 20 mg) beside a gyro that moves 1–200 °/s:
+/// 57× a still gyro's 0.02–3 °/s, as a gyro in °/s read as rad/s moves.
+pub(crate) fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
+    acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0
+}
+
 /// Finds the still intervals and spins of `rec`.
 pub(crate) fn find_intervals(
     rec: &Recording,
@@ -248,7 +254,7 @@ pub(crate) fn find_intervals(
     let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
         // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
         hint: match rec.time_origin {
-            _ if !(acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0) => String::new(),
+            _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
             // A binary log states its units: no option changes them.
             Some(TimeOrigin::LoggerStamps(format)) => format!(
                 "; but the accelerometer is still there: the {format} log's gyro moves \
