@@ -427,10 +427,10 @@ const RAW_MAX: usize = if HostToDevice::POSTCARD_MAX_SIZE > DeviceToHost::POSTCA
     DeviceToHost::POSTCARD_MAX_SIZE
 };
 
-/// Serialises `msg` (a protocol message, at most [`RAW_MAX`] bytes of postcard) as one COBS frame
+/// Serialises `msg` (a protocol message, at most `RAW_MAX` bytes of postcard) as one COBS frame
 /// ending in a zero byte; returns the used part of `buf`.
 ///
-/// In two passes, postcard into a scratch buffer and then one COBS pass ([`cobs_encode`]), rather
+/// In two passes, postcard into a scratch buffer and then one COBS pass (`cobs_encode`), rather
 /// than postcard's `to_slice_cobs`, whose COBS flavour was inlined at every byte each message
 /// field pushes: 3.5 KiB of the QEMU image's frame encoder. The frame is the same, byte for byte
 /// (tested against `to_slice_cobs`).

@@ -195,7 +195,7 @@ impl SimDevice {
     }
 
     /// A planted fault: paced, the unit samples at `hz` while its identity still says
-    /// [`SIM_SAMPLE_RATE_HZ`] (a wrong crystal or output data rate).
+    /// `SIM_SAMPLE_RATE_HZ` (a wrong crystal or output data rate).
     pub fn sample_at_hz(&mut self, hz: u32) {
         self.actual_rate_hz = Some(hz.max(1));
     }

@@ -8,10 +8,10 @@
 //!   which only the gyro can see: a reflection of every still position is still a set of positions);
 //! - an off-diagonal entry larger than the diagonal one: two axes are swapped;
 //! - the same scale error on all three axes by 57.3× or its inverse: the gyro's unit. The same error
-//!   by any other factor within [`COMMON_SCALE_RANGE`] is no contradiction: the gyro's nominal
+//!   by any other factor within `COMMON_SCALE_RANGE` is no contradiction: the gyro's nominal
 //!   scale is off (which is what a gyro calibration is for), or the time base is (the turns were
 //!   integrated over the wrong durations); the two cannot be told apart from the turns, so the fit is
-//!   kept and [`common_scale`] lets the caller name both with the figure each implies;
+//!   kept and `common_scale` lets the caller name both with the figure each implies;
 //! - turns that no `G` explains (a misfit far beyond the noise): a sign, a swap or a time gap.
 //!
 //! The table session's gyro is also refused when the screening left out spins because the gyro

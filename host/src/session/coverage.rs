@@ -17,7 +17,7 @@ pub struct Coverage {
     /// Body directions (+x, −x, …) with no position within [`FACE_COVERAGE_DEG`].
     pub missing_faces: Vec<&'static str>,
     /// A six-face session's face for each still interval (its body axis up), when the positions
-    /// are the six faces of a cube ([`six_face_labels`]).
+    /// are the six faces of a cube (`six_face_labels`).
     pub faces: Option<Vec<[f64; 3]>>,
 }
 

@@ -196,7 +196,7 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
     problems
 }
 
-/// A gyro that reads `k`× on every axis and fits its turns ([`gyro_check::common_scale`]): a
+/// A gyro that reads `k`× on every axis and fits its turns (`gyro_check::common_scale`): a
 /// result, not a contradiction. The turns cannot tell a nominal scale that is off (which the
 /// calibration corrects) from a time base that is (which it must not), so the note names both, each
 /// with the figure it implies, in the terms of the recording's own input (docs/model.md §8).
