@@ -11,12 +11,12 @@ use crate::limits::short_number;
 use shared::OutputUnit;
 
 pub mod time;
-use super::repair::{repair_times, run_rate_hz, TimeRepairs};
+use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 pub(crate) use time::six_digits;
-pub use time::{detect_time_unit, TimeJump, TimeUnit, GAP_PERIODS};
+pub use time::{detect_time_unit, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
 use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
 
 /// Longest accepted line, bytes: a logger's row is well under 1 KiB; a file with no line ends (or a
@@ -162,17 +162,6 @@ pub struct Recording {
     pub time_origin: Option<TimeOrigin>,
     /// The gyro was logged in counts and converted at this nominal scale, LSB per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
-}
-
-/// Where a recording's times come from: what a wrong time base would have to be wrong in.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TimeOrigin {
-    /// A text file's rows at the rate given (`--rate-hz`), Hz.
-    RateGiven(f64),
-    /// A text file's time column.
-    TimeColumn,
-    /// A binary log's own stamps: its format's name.
-    LoggerStamps(&'static str),
 }
 
 /// Why a logger's file cannot be imported; each says what to do.
@@ -423,10 +412,7 @@ pub fn read_logger<R: BufRead>(
         return Err(ImportError::TooFewRows(rec.len()));
     }
     rec.gyro_lsb_per_dps = options.gyro_lsb_per_dps;
-    rec.time_origin = Some(match options.time {
-        TimeSource::Column(_) => TimeOrigin::TimeColumn,
-        TimeSource::RateHz(hz) => TimeOrigin::RateGiven(hz),
-    });
+    rec.time_origin = Some(TimeOrigin::of_text(&options.time));
     if let Time::Column(_) = layout.time {
         let unit = match options.time_unit {
             Some(u) => time::fits_time_unit(&rec.t_s, u)
@@ -438,15 +424,7 @@ pub fn read_logger<R: BufRead>(
         rec.t_s.iter_mut().for_each(|t| *t *= k);
         rec.time_unit = Some((unit, options.time_unit.is_none()));
     }
-    let (order, repairs) = repair_times(&rec.t_s, |i, j| {
-        rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j]
-    });
-    rec.t_s = order.iter().map(|s| s.1).collect();
-    rec.acc = order.iter().map(|s| rec.acc[s.0]).collect();
-    rec.gyro_rad_s = order.iter().map(|s| rec.gyro_rad_s[s.0]).collect();
-    if !repairs.is_empty() {
-        rec.time_repairs.push(("data row", repairs));
-    }
+    repair_rows(&mut rec);
     rec.rate_hz = run_rate_hz(&rec.t_s);
     if options.acc_unit == OutputUnit::Lsb && options.acc_offset == [0.0; 3] {
         if let Some((offset, bits)) = mid_scale(&rec.acc) {

@@ -153,6 +153,20 @@ pub fn repair_times(
     (order, rep)
 }
 
+/// A text file's rows in time order, their stamps mended ([`repair_times`]; rows whose values
+/// and stamps are equal are exact repeats), and the repairs kept with them as "data row"s.
+pub fn repair_rows(rec: &mut super::import::Recording) {
+    let (order, repairs) = repair_times(&rec.t_s, |i, j| {
+        rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j]
+    });
+    rec.t_s = order.iter().map(|s| s.1).collect();
+    rec.acc = order.iter().map(|s| rec.acc[s.0]).collect();
+    rec.gyro_rad_s = order.iter().map(|s| rec.gyro_rad_s[s.0]).collect();
+    if !repairs.is_empty() {
+        rec.time_repairs.push(("data row", repairs));
+    }
+}
+
 /// The median of the positive steps, s (`None` when no step is).
 pub fn median_step(t_s: &[f64]) -> Option<f64> {
     let mut dt: Vec<f64> = t_s

@@ -234,6 +234,23 @@ pub(crate) fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
     acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0
 }
 
+/// Why nothing is still, when the data suggest a cause: a still accelerometer with a gyro 57× too
+/// noisy is a gyro in the wrong unit, said with the option that fixes it where the input has one.
+fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64) -> String {
+    match rec.time_origin {
+        _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
+        // A binary log states its units: no option changes them.
+        Some(TimeOrigin::LoggerStamps(format)) => format!(
+            "; but the accelerometer is still there: the {format} log's gyro moves \
+             {gyro_deg_s:.1} °/s at rest, 57× a still gyro's, as if its logger wrote °/s where \
+             the format says rad/s"
+        ),
+        _ => "; but the accelerometer is still there: if the gyro logs deg/s, give --gyro-unit \
+              deg/s"
+            .into(),
+    }
+}
+
 /// Finds the still intervals and spins of `rec`.
 pub(crate) fn find_intervals(
     rec: &Recording,
@@ -253,18 +270,7 @@ pub(crate) fn find_intervals(
         .collect();
     let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
         // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
-        hint: match rec.time_origin {
-            _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
-            // A binary log states its units: no option changes them.
-            Some(TimeOrigin::LoggerStamps(format)) => format!(
-                "; but the accelerometer is still there: the {format} log's gyro moves \
-                 {gyro_deg_s:.1} °/s at rest, 57× a still gyro's, as if its logger wrote °/s \
-                 where the format says rad/s"
-            ),
-            _ => "; but the accelerometer is still there: if the gyro logs deg/s, give \
-                  --gyro-unit deg/s"
-                .into(),
-        },
+        hint: no_still_hint(rec, acc_mg, gyro_deg_s),
         acc_mg,
         gyro_deg_s,
         min_s: options.min_still_s,

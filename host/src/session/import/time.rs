@@ -63,6 +63,27 @@ impl TimeUnit {
     }
 }
 
+/// Where a recording's times come from: what a wrong time base would have to be wrong in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeOrigin {
+    /// A text file's rows at the rate given (`--rate-hz`), Hz.
+    RateGiven(f64),
+    /// A text file's time column.
+    TimeColumn,
+    /// A binary log's own stamps: its format's name.
+    LoggerStamps(&'static str),
+}
+
+impl TimeOrigin {
+    /// A text file's: its time column, or the rate given.
+    pub fn of_text(time: &super::TimeSource) -> TimeOrigin {
+        match time {
+            super::TimeSource::Column(_) => TimeOrigin::TimeColumn,
+            super::TimeSource::RateHz(hz) => TimeOrigin::RateGiven(*hz),
+        }
+    }
+}
+
 /// Where the time stamps break: a gap of more than [`GAP_PERIODS`] sample periods, a repeat or a
 /// step back, after row `row`.
 #[derive(Clone, Copy, Debug, PartialEq)]
