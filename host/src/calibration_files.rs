@@ -187,6 +187,21 @@ pub(crate) fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBu
     Ok((toml_path, bin_path))
 }
 
+/// Removes an earlier run's failed pair from `dir`, when there is one: a directory holds one
+/// result, and an accepted pair written beside a failed one (under `--force`) replaces it.
+pub(crate) fn remove_failed_in(dir: &Path) -> Result<(), OutputError> {
+    for name in [FAILED_BIN, FAILED_TOML] {
+        let p = dir.join(name);
+        match std::fs::remove_file(&p) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(OutputError::Io(p, e))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Writes and syncs one file, naming it in the error.
 fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Error)> {
     use std::io::Write;

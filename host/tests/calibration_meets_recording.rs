@@ -464,3 +464,46 @@ fn a_gyro_in_the_wrong_unit_is_refused_even_where_nothing_is_still() {
     );
     assert!(!wrong.exists());
 }
+
+/// A directory holds one result: a failing run (a bias limit no unit meets) leaves its failed
+/// pair; a passing `--force` run then replaces it with the accepted pair, and a failing `--force`
+/// run the accepted pair with a failed one.
+#[test]
+fn a_directory_holds_one_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("table");
+    assert!(host(&["-q", "simulate", "--out", s(&session), "--plan", "short"]).0);
+    let names = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("calibration"))
+            .collect();
+        v.sort();
+        v
+    };
+    let failing = [
+        "-q",
+        "calibrate",
+        "--input",
+        s(&session),
+        "--max-bias-mg",
+        "0.000001",
+    ];
+    let (ok, _, _) = host(&failing);
+    assert!(!ok);
+    assert_eq!(
+        names(&session),
+        ["calibration.FAILED.bin", "calibration.FAILED.toml"]
+    );
+    let (ok, _, e) = host(&["-q", "calibrate", "--input", s(&session), "--force"]);
+    assert!(ok, "{e}");
+    assert_eq!(names(&session), ["calibration.bin", "calibration.toml"]);
+    let mut forced = failing.to_vec();
+    forced.push("--force");
+    assert!(!host(&forced).0);
+    assert_eq!(
+        names(&session),
+        ["calibration.FAILED.bin", "calibration.FAILED.toml"]
+    );
+}

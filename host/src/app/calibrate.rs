@@ -130,13 +130,20 @@ pub fn write_result(
 
 /// Renames the written pair to `calibration.FAILED.*` when the result did not pass (its checks, or
 /// the device's verification), so that nothing that looks for an accepted calibration picks it up;
-/// the document names the files as they now are.
+/// the document names the files as they now are. A passing result removes an earlier failed pair
+/// (`force`): the directory holds one result.
 pub fn settle_files(
     calibrated: &mut Calibrated,
     written: WrittenCalibration,
     force: bool,
 ) -> Result<WrittenCalibration, OutputError> {
     if calibrated.document.summary.passed {
+        // Without `force` an earlier result was refused before any work: only a forced run can
+        // find a failed pair here.
+        if force {
+            let dir = written.bin_path.parent().unwrap_or(Path::new("."));
+            calibration_files::remove_failed_in(dir)?;
+        }
         return Ok(written);
     }
     let dir = written.bin_path.parent().unwrap_or(Path::new("."));
