@@ -7,7 +7,7 @@ use super::log_fixture_tests::{command, fixture};
 use super::segment::segment;
 use super::{apply, calibrate, Command};
 use crate::fuzz::logs::{write_mcap, LogSample};
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use crate::sim::testkit::Rng;
 use shared::OutputUnit;
 use std::path::Path;
@@ -119,16 +119,13 @@ fn one_flipped_stamp_bit_in_a_dataflash_log_costs_nothing() {
     assert_eq!(rows, 6000);
 }
 
-/// A simulated hand session at 200 Hz as a logger CSV (time s, m/s², rad/s), its rows `rows`.
+/// Rows as a logger CSV in m/s² and rad/s, as `host simulate-hand --gyro-unit rad/s` writes them.
 fn csv(path: &Path, rows: &[(f64, [f64; 3], [f64; 3])]) {
-    let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
-    for (t, a, g) in rows {
-        text.push_str(&format!(
-            "{t:.6},{},{},{},{},{},{}\n",
-            a[0], a[1], a[2], g[0], g[1], g[2]
-        ));
-    }
-    std::fs::write(path, text).unwrap();
+    let layout = LoggerLayout {
+        gyro_deg_s: false,
+        ..LoggerLayout::default()
+    };
+    write_logger_csv(path, rows, &layout).unwrap();
 }
 
 const CSV_FLAGS: &str = "--time-column t --acc-unit m/s2 --gyro-unit rad/s";

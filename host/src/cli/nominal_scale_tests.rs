@@ -9,7 +9,7 @@ use super::segment::segment;
 use super::{Cli, Command};
 use crate::estimate::handheld_gyro::HandGyroFit;
 use crate::fuzz::logs::{write_mcap, LogSample};
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use clap::Parser;
 use shared::OutputUnit;
 use std::path::Path;
@@ -31,16 +31,19 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
 
 type Rows = Vec<(f64, [f64; 3], [f64; 3])>;
 
-fn write_csv(path: &Path, rows: &Rows, gyro: impl Fn([f64; 3]) -> [f64; 3]) {
-    let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
-    for (t, a, g) in rows {
-        let g = gyro(*g);
-        text.push_str(&format!(
-            "{t:.6},{},{},{},{},{},{}\n",
-            a[0], a[1], a[2], g[0], g[1], g[2]
-        ));
-    }
-    std::fs::write(path, text).unwrap();
+/// The rows as a logger CSV (m/s², the gyro in rad/s or, with `lsb_per_dps`, in counts), each gyro
+/// value first multiplied by `k`.
+fn write_csv(path: &Path, rows: &Rows, k: f64, lsb_per_dps: Option<f64>) {
+    let scaled: Rows = rows
+        .iter()
+        .map(|&(t, a, g)| (t, a, g.map(|v| v * k)))
+        .collect();
+    let layout = LoggerLayout {
+        gyro_deg_s: false,
+        gyro_lsb_per_dps: lsb_per_dps,
+        ..LoggerLayout::default()
+    };
+    write_logger_csv(path, &scaled, &layout).unwrap();
 }
 
 /// `fit`'s `G` and `b` divided by `k` against the true-scale fit `reference`: the same gyro to
@@ -67,7 +70,7 @@ fn a_nominal_gyro_scale_24_percent_off_calibrates_with_a_warning_in_every_form()
     );
     let rows: Rows = sim.rows.clone();
     let flags = "--time-column t --acc-unit m/s2";
-    write_csv(&p("true.csv"), &rows, |g| g);
+    write_csv(&p("true.csv"), &rows, 1.0, None);
     let line = |input: &str, out: &str, more: &str| {
         format!(
             "host segment -q --input {} --out {} {more}",
@@ -86,7 +89,7 @@ fn a_nominal_gyro_scale_24_percent_off_calibrates_with_a_warning_in_every_form()
     );
 
     // A CSV in rad/s, converted at a nominal scale 24 % low.
-    write_csv(&p("low.csv"), &rows, |g| g.map(|v| v * K));
+    write_csv(&p("low.csv"), &rows, K, None);
     let (fit, said) = segment_line(&line(
         "low.csv",
         "low",
@@ -104,9 +107,7 @@ fn a_nominal_gyro_scale_24_percent_off_calibrates_with_a_warning_in_every_form()
 
     // Raw counts of a 65.5 LSB per °/s part, converted at 85.84 (65.5 / 0.763).
     let lsb = 65.5 / K;
-    write_csv(&p("counts.csv"), &rows, |g| {
-        g.map(|v| (v.to_degrees() * 65.5).round())
-    });
+    write_csv(&p("counts.csv"), &rows, 1.0, Some(65.5));
     let (fit, said) = segment_line(&line(
         "counts.csv",
         "counts",
@@ -151,9 +152,7 @@ fn twice_and_one_and_a_half_times_follow_one_rule() {
         &HandSpec::standard(7),
     );
     let rows: Rows = sim.rows.clone();
-    write_csv(&p("counts.csv"), &rows, |g| {
-        g.map(|v| (v.to_degrees() * 65.5).round())
-    });
+    write_csv(&p("counts.csv"), &rows, 1.0, Some(65.5));
     for (lsb, implied) in [(131.0, "65.5"), (98.25, "65.5")] {
         let (_, said) = segment_line(&format!(
             "host segment -q --input {} --out {} --time-column t --acc-unit m/s2 --gyro-unit LSB \

@@ -211,6 +211,22 @@ fn hold_means(
         .collect()
 }
 
+/// Held-out accuracy of the peers' six-position least squares on the holds' means, with the true
+/// faces (the oracle) and with the nominal ones.
+fn six_position_references(
+    truth: &Calibration,
+    sim: &crate::sim::handheld::HandSession,
+    seed: u64,
+) -> (HeldOut, HeldOut) {
+    let means = hold_means(&sim.rows, &sim.holds);
+    let true_ups: Vec<[f64; 3]> = sim.holds.iter().map(|h| h.2).collect();
+    let nominal: Vec<[f64; 3]> = true_ups.iter().map(|u| u.map(f64::round)).collect();
+    let (m, b) = six_position_fit(&means, &true_ups);
+    let oracle = held_out(truth, &m, &b, seed);
+    let (m, b) = six_position_fit(&means, &nominal);
+    (oracle, held_out(truth, &m, &b, seed))
+}
+
 /// One unit, four calibrations, held-out accuracy of each: (a) ours on the six-face session, (b) the
 /// six-position fit with the true faces, (c) with the nominal faces, (d) ours on a 24-position
 /// hand-held session of the same unit (free attitudes: its body frame is a convention, so only its
@@ -234,13 +250,7 @@ fn six_face_case(seed: u64) -> [HeldOut; 4] {
         &cal.fitted.zero_bias_out,
         seed,
     );
-    let means = hold_means(&sim.rows, &sim.holds);
-    let true_ups: Vec<[f64; 3]> = sim.holds.iter().map(|h| h.2).collect();
-    let nominal: Vec<[f64; 3]> = true_ups.iter().map(|u| u.map(f64::round)).collect();
-    let (m, b) = six_position_fit(&means, &true_ups);
-    let reference_true = held_out(&truth, &m, &b, seed);
-    let (m, b) = six_position_fit(&means, &nominal);
-    let reference_nominal = held_out(&truth, &m, &b, seed);
+    let (reference_true, reference_nominal) = six_position_references(&truth, &sim, seed);
     let hand = HandSpec {
         noise_g: spec.noise_g,
         gyro_noise_deg_s: spec.gyro_noise_deg_s,
@@ -655,19 +665,13 @@ fn biased_mems_faces_five_degrees_off_are_found_and_calibrate() {
             let big = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             worst_raw_deg = worst_raw_deg.max(big.acos().to_degrees());
         }
-        let means = hold_means(&sim.rows, &sim.holds);
-        let true_ups: Vec<[f64; 3]> = sim.holds.iter().map(|h| h.2).collect();
-        let nominal: Vec<[f64; 3]> = true_ups.iter().map(|u| u.map(f64::round)).collect();
         let ours = held_out(
             &truth,
             &cal.fitted.m_out_per_g,
             &cal.fitted.zero_bias_out,
             seed,
         );
-        let (m, b) = six_position_fit(&means, &true_ups);
-        let oracle = held_out(&truth, &m, &b, seed);
-        let (m, b) = six_position_fit(&means, &nominal);
-        let peers = held_out(&truth, &m, &b, seed);
+        let (oracle, peers) = six_position_references(&truth, &sim, seed);
         rows.push([ours, oracle, peers]);
     }
     println!("worst raw face direction off its axis: {worst_raw_deg:.1}°");
