@@ -12,6 +12,8 @@
 //!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
 pub(crate) mod logs;
+#[cfg(test)]
+mod torture_tests;
 
 use crate::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use crate::session::{read_samples, Plan};

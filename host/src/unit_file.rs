@@ -271,7 +271,7 @@ impl UnitFile {
     /// otherwise silently mean zero lever arms) is an error naming its line and column.
     pub fn parse(text: &str) -> Result<UnitFile, String> {
         let file: UnitFile = toml::from_str(text).map_err(|e| e.to_string())?;
-        if let Some(e) = surplus_values(text, &file) {
+        if let Some(e) = crate::session::toml_check::surplus_values(text, &file) {
             return Err(e);
         }
         if let Some(key) = file
@@ -505,43 +505,6 @@ impl StaticSection {
                 "scale_g_per_g",
             ),
         ]
-    }
-}
-
-/// Arrays in `text` longer than what `parsed` kept: serde fills a `[f64; 3]` from the first three
-/// values of a longer array and drops the rest silently (`zero_bias_v = [a, b, c, d]`, a 3×4 matrix,
-/// `up_b = [1, 0, 0, 7]`). `parsed` is serialised back and every array's length compared with the
-/// text's; the first that differs is named.
-pub(crate) fn surplus_values<T: Serialize>(text: &str, parsed: &T) -> Option<String> {
-    let original: toml::Value = toml::from_str(text).ok()?;
-    let kept = toml::Value::try_from(parsed).ok()?;
-    first_length_difference(&original, &kept, "")
-}
-
-fn first_length_difference(a: &toml::Value, b: &toml::Value, path: &str) -> Option<String> {
-    match (a, b) {
-        (toml::Value::Table(ta), toml::Value::Table(tb)) => ta.iter().find_map(|(k, va)| {
-            let p = if path.is_empty() {
-                k.clone()
-            } else {
-                format!("{path}.{k}")
-            };
-            tb.get(k).and_then(|vb| first_length_difference(va, vb, &p))
-        }),
-        (toml::Value::Array(xa), toml::Value::Array(xb)) => {
-            if xa.len() != xb.len() {
-                return Some(format!(
-                    "'{path}' has {} values, {} expected; remove the extra ones",
-                    xa.len(),
-                    xb.len()
-                ));
-            }
-            xa.iter()
-                .zip(xb)
-                .enumerate()
-                .find_map(|(i, (va, vb))| first_length_difference(va, vb, &format!("{path}[{i}]")))
-        }
-        _ => None,
     }
 }
 

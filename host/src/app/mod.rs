@@ -10,10 +10,19 @@
 //! - `document`: the result's one JSON shape ([`CalibrationDocument`]), a live run's verification
 //!   included.
 //! - `error`: why a use case failed ([`CalibrateError`]), each cause kept as its source.
+//! - [`in_memory`]: `host segment` (a logger's recording to a session) without writing files until
+//!   asked: the positions and spins found, their coverage, the plan and statistics, the gyro fit.
+//! - [`hand_gyro`]: the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`;
+//!   [`table_turn`]: the whole turns on a table that the gyro fit takes as known angles.
 
 pub mod calibrate;
 pub mod document;
 pub mod error;
+pub mod hand_gyro;
+pub mod in_memory;
+#[cfg(test)]
+mod segmentation_tests;
+pub mod table_turn;
 
 pub use calibrate::{
     calibrate_recording, calibrate_session_dir, mark_failed, settle_files, write_result,

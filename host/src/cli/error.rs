@@ -116,7 +116,7 @@ pub enum CliError {
     GyroRefused(Vec<String>),
     /// The hand-held session's gyro.
     #[error(transparent)]
-    HandGyro(#[from] crate::session::hand_gyro::HandGyroFileError),
+    HandGyro(#[from] crate::app::hand_gyro::HandGyroFileError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
@@ -154,9 +154,9 @@ impl CliError {
     }
 }
 
-impl From<crate::session::in_memory::InMemoryError> for CliError {
-    fn from(e: crate::session::in_memory::InMemoryError) -> Self {
-        use crate::session::in_memory::InMemoryError;
+impl From<crate::app::in_memory::InMemoryError> for CliError {
+    fn from(e: crate::app::in_memory::InMemoryError) -> Self {
+        use crate::app::in_memory::InMemoryError;
         match e {
             InMemoryError::GyroRefused(problems) => CliError::GyroRefused(problems),
             InMemoryError::HandGyro(e) => CliError::HandGyro(e),
@@ -165,9 +165,9 @@ impl From<crate::session::in_memory::InMemoryError> for CliError {
     }
 }
 
-impl From<crate::session::in_memory::WriteError> for CliError {
-    fn from(e: crate::session::in_memory::WriteError) -> Self {
-        use crate::session::in_memory::WriteError;
+impl From<crate::app::in_memory::WriteError> for CliError {
+    fn from(e: crate::app::in_memory::WriteError) -> Self {
+        use crate::app::in_memory::WriteError;
         match e {
             WriteError::Session(e) => e.into(),
             WriteError::Gyro(e) => e.into(),

@@ -4,16 +4,16 @@
 
 use super::output::Output;
 use super::CliError;
+use crate::app::in_memory::{find, SegmentChoices};
+use crate::app::table_turn::FoundTableTurn;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Formats};
 use crate::session::coverage::Coverage;
 use crate::session::from_recording::normal_gravity_m_s2;
 use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
-use crate::session::in_memory::{find, SegmentChoices};
 use crate::session::logs::read_log;
 use crate::session::segment::{PositionSet, SegmentOptions, Segmentation};
-use crate::session::table_turn::FoundTableTurn;
 use crate::session::Plan;
 use crate::sim::handheld::{
     logger_unit, simulate_hand, truth_toml, write_logger_csv, HandSpec, LoggerLayout,
@@ -24,7 +24,7 @@ use shared::OutputUnit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-pub use crate::session::hand_gyro::GYRO_FILE;
+pub use crate::app::hand_gyro::GYRO_FILE;
 
 mod present;
 use present::{document, figure, Written};

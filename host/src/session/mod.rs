@@ -12,27 +12,24 @@
 //!   [`segment`] finds the still positions and the spins in it (`host segment`), [`coverage`]
 //!   judges the positions found (distinct, directions missed, a cube's six faces), and
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
-//!   [`hand_gyro`] fits the gyro from the hand turns, accepts or refuses it, and keeps it as
-//!   `gyro.toml`; [`table_turn`] finds the whole turns on a table the gyro fit takes as known angles; [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and
-//!   tells them from text by their first bytes; [`in_memory`] does all of that without writing
-//!   files (the Python package); [`repair`] mends the damaged time stamps of every reader's
+//!   [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and tells them
+//!   from text by their first bytes; [`repair`] mends the damaged time stamps of every reader's
 //!   samples by one set of rules.
+//! - [`toml_check`]: the arrays of a TOML file that serde would silently cut short.
 
 pub mod builtin;
 pub mod coverage;
 pub mod error;
 pub mod from_recording;
-pub mod hand_gyro;
 pub mod import;
-pub mod in_memory;
 pub mod logs;
 pub mod plan;
 pub mod reader;
 pub mod repair;
 pub mod segment;
 pub mod stats;
-pub mod table_turn;
 pub mod thermal;
+pub mod toml_check;
 pub mod writer;
 
 pub use error::RecordingError;

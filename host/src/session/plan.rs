@@ -291,7 +291,7 @@ impl Plan {
     pub fn parse(text: &str) -> Result<Plan, PlanError> {
         let plan: Plan =
             toml::from_str(text).map_err(|e| PlanError::Syntax("<text>".into(), e.to_string()))?;
-        if let Some(e) = crate::unit_file::surplus_values(text, &plan) {
+        if let Some(e) = super::toml_check::surplus_values(text, &plan) {
             return Err(PlanError::Syntax("<text>".into(), e));
         }
         plan.validate()?;

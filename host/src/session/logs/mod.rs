@@ -472,5 +472,3 @@ pub(crate) fn read_exact_or_end<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::
 
 #[cfg(test)]
 mod tests;
-#[cfg(test)]
-mod torture_tests;

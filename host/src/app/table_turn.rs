@@ -5,9 +5,9 @@
 //! when the angle turned is within [`WHOLE_TURN_TOLERANCE_DEG`] of a whole number of turns, and says
 //! why it leaves one out otherwise.
 
-use super::import::Recording;
-use super::segment::{angle_deg, Segmentation};
 use crate::estimate::handheld_gyro::still_bias;
+use crate::session::import::Recording;
+use crate::session::segment::{angle_deg, Segmentation};
 use shared::linalg;
 
 /// Two still intervals whose gravity directions differ by less than this are at the same position,

@@ -4,18 +4,20 @@
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
 
-use super::coverage::{coverage, Coverage};
-use super::from_recording::{
-    join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
-};
 use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
-use super::import::Recording;
-use super::segment::{find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation};
 use super::table_turn::{find_table_turns, FoundTableTurn};
-use super::{Plan, RecordingError, SegmentStats};
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputFileError};
+use crate::session::coverage::{coverage, Coverage};
+use crate::session::from_recording::{
+    join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
+};
+use crate::session::import::Recording;
+use crate::session::segment::{
+    find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
+};
+use crate::session::{Plan, RecordingError, SegmentStats};
 use std::path::Path;
 
 /// What `host segment`'s options decide besides the recording.

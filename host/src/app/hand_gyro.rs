@@ -2,16 +2,16 @@
 //! positions ([`fit`]), accepted or refused ([`problems`], `estimate::gyro_check`), and kept beside
 //! the session as `gyro.toml` ([`file_text`], [`read`]) for `host calibrate --input`.
 
-use super::from_recording::stats_for;
-use super::import::{six_digits, Recording, TimeOrigin};
-use super::segment::{PositionSet, Segmentation};
 use super::table_turn::find_table_turns;
-use super::Plan;
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{
     fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, TableTurn, Turn, DETERMINED_1SIGMA,
 };
 use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
+use crate::session::from_recording::stats_for;
+use crate::session::import::{six_digits, Recording, TimeOrigin};
+use crate::session::segment::{PositionSet, Segmentation};
+use crate::session::Plan;
 use crate::unit_file::GyroSection;
 use shared::linalg;
 use std::path::{Path, PathBuf};
@@ -66,7 +66,7 @@ pub fn fit(
     let outcome = calibrate_session_stats(plan, &stats, &options)?;
     let m = outcome.fitted.m_out_per_g;
     let minv = linalg::inverse(&m).ok_or(HandGyroFileError::Singular)?;
-    let up = |iv: &super::segment::Interval| {
+    let up = |iv: &crate::session::segment::Interval| {
         let d: [f64; 3] =
             core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
         let f = linalg::mat_vec(&minv, &d);
@@ -362,7 +362,7 @@ mod tests {
             ..HandSpec::six_faces(4, 1.0, 1)
         };
         let rec =
-            crate::session::segment::tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
+            super::super::segmentation_tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
         let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
         assert_eq!(seg.stills.len(), 12);
         let faces = crate::session::coverage::six_face_labels(&seg.stills).unwrap();

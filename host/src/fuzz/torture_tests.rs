@@ -8,10 +8,10 @@
 //! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
 //! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
 
-use super::{read_log_from, LogSource};
-use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use super::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
 use crate::session::import::GyroUnit;
 use crate::session::import::{ImportOptions, TimeSource};
+use crate::session::logs::{read_log_from, LogSource};
 use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use crate::sim::testkit::Rng;
 use shared::OutputUnit;
