@@ -14,7 +14,8 @@
 # must be byte-identical. The blob carries its creation time in whole seconds: with `faketime` installed
 # (Debian package faketime) both calibrations run at the same frozen wall-clock time; without it they
 # are run within the same second (retried until they are). `plan --check`, `export` and `compare` are
-# compared too. Exits nonzero at the first difference, naming it.
+# compared too, and `segment` and `apply` on a simulated hand-held logger recording. Exits nonzero at
+# the first difference, naming it.
 #
 # samples.csv, calibration.toml and calibration.bin are compared raw. Text meant for a person (printed
 # output, truth.toml's comment, the export headers) is compared after applying the renames the
@@ -126,5 +127,39 @@ for plan in paper oblique short short-oblique quick-oblique; do
   "$new" plan --check "$plan" >"$work/plan-new" 2>&1
   same_text "$work/plan-old" "$work/plan-new" "plan --check $plan"
 done
+
+# `host segment` and `host apply` on a simulated hand-held logger recording (the readers, the
+# segmentation, the hand-turn gyro fit, the device's compensation over a log).
+hand=$work/hand
+units="--time-column t --acc-unit m/s2 --gyro-unit deg/s"
+mkdir -p "$hand"
+"$old" simulate-hand --seed 4 --out "$hand/log" >/dev/null 2>&1
+for bin in old new; do
+  b=$old
+  [ $bin = new ] && b=$new
+  # shellcheck disable=SC2086
+  "$b" segment --input "$hand/log" $units --out "$hand/seg-$bin" >"$hand/$bin.out" 2>&1
+  # shellcheck disable=SC2086
+  "$b" segment --input "$hand/log" $units --out "$hand/json-$bin" --json >"$hand/$bin.json" 2>/dev/null
+  sed -i "s#$hand/seg-$bin#OUT#g" "$hand/$bin.out"
+  sed -i "s#$hand/json-$bin#OUT#g" "$hand/$bin.json"
+done
+same_text "$hand/old.out" "$hand/new.out" "segment: printed output"
+same_text "$hand/old.json" "$hand/new.json" "segment --json"
+for f in plan.toml samples.csv gyro.toml; do
+  same "$hand/seg-old/$f" "$hand/seg-new/$f" "segment: $f"
+done
+calibrate_both "$hand/seg-old" "$hand/cal"
+same "$hand/cal/old/calibration.toml" "$hand/cal/new/calibration.toml" "segment, calibrate: calibration.toml"
+for bin in old new; do
+  b=$old
+  [ $bin = new ] && b=$new
+  # shellcheck disable=SC2086
+  "$b" apply --input "$hand/log" $units --calibration "$hand/cal/old/calibration.toml" \
+    --out "$hand/applied-$bin.csv" >"$hand/apply-$bin.out" 2>&1 || echo "exit status $?" >>"$hand/apply-$bin.out"
+  sed -i "s#$hand/applied-$bin.csv#OUT#g" "$hand/apply-$bin.out"
+done
+same_text "$hand/apply-old.out" "$hand/apply-new.out" "apply: printed output"
+same "$hand/applied-old.csv" "$hand/applied-new.csv" "apply: the compensated samples"
 
 echo "check-same-output: old and new binaries print and write the same bytes"

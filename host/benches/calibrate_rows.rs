@@ -8,10 +8,10 @@
 //! `calibrate` path (read + statistics + joint estimate with the paper-method comparison) is timed too.
 
 use host::estimate::{calibrate_session_stats, EstimateOptions};
-use host::session::builtin::paper_plan;
-use host::session::{read_session, ReadOptions, SAMPLES_FILE};
 use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
+use recording::session::builtin::paper_plan;
+use recording::session::{read_session, ReadOptions, SAMPLES_FILE};
 use std::time::Instant;
 
 const ROWS: f64 = 1e6;

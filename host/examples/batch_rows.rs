@@ -10,11 +10,11 @@
 //! from disk each time (the second run reads from the page cache, like the first after simulation).
 
 use host::batch::{find_sessions, run_batch, BatchOptions};
-use host::session::builtin::load_plan;
 use host::sim::{simulate_to_dir, NoiseModel};
 use host::summary::Limits;
 use host::unit_file::UnitFile;
 use indicatif::ProgressBar;
+use recording::session::builtin::load_plan;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

@@ -16,10 +16,10 @@ use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
 use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::{render_position_targets, report, ReportOptions};
-use host::session::builtin::paper_plan;
-use host::session::{read_session, ReadOptions};
 use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
+use recording::session::builtin::paper_plan;
+use recording::session::{read_session, ReadOptions};
 use shared::UnitId;
 use std::path::PathBuf;
 

@@ -4,13 +4,12 @@
 //! # Module map
 //!
 //! Each subcommand is one file of [`cli`]; it calls the domain modules below, which never call back
-//! up (no cycles: `estimate` knows nothing of `report`, `session` nothing of the terminal).
+//! up (no cycles: `estimate` knows nothing of `report`). The recording (its readers, segmentation
+//! and statistics, the input limits, the result files) is the crate `recording`, below this one.
 //!
 //! - [`app`]: the use cases, each once (calibrate from a recording), called by the command line,
 //!   `host batch`, the live procedure and the Python package alike.
 //! - [`cli`]: one file per subcommand (its argument struct and `run`), the one [`cli::CliError`].
-//! - [`session`]: a recorded session — the plan (and the built-in plans), the per-segment statistics,
-//!   the streaming `samples.csv` reader and the writer (`docs/recording-format.md`).
 //! - [`estimate`]: from a plan and segment statistics to a calibration, its [`estimate::Uncertainty`]
 //!   and what the plan could not determine; the Cramér–Rao prediction of a plan (`docs/model.md`
 //!   §2–§4).
@@ -25,13 +24,14 @@
 //! - [`apply`]: a calibration applied to a recording with the device's own code (`host apply`);
 //!   [`noise`]: Allan deviation and noise terms (`host noise`); [`batch`]: a lot calibrated in
 //!   parallel (`host batch`); [`summary`]: the machine-readable result with pass/fail limits.
-//! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`unit_file`]: a unit's parameters as TOML (the simulator's truth, the calibrator's result);
 //!   [`calibration_files`]: writing `calibration.toml` and `calibration.bin`;
 //!   [`calibration_guard`]: what a calibration must be before it meets a recording, a device or a
 //!   tool.
-//! - [`ui`]: progress bars on a terminal.
 #![deny(missing_docs)]
+
+// The recording layer is its own crate; its modules keep their paths inside this one.
+use recording::{output_file, session};
 
 pub mod app;
 pub mod apply;
@@ -48,9 +48,7 @@ pub mod export;
 pub mod fuzz;
 pub mod limits;
 pub mod noise;
-pub mod output_file;
 pub mod report;
-pub mod session;
 pub mod sim;
 pub mod summary;
 pub mod ui;

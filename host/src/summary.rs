@@ -7,6 +7,7 @@
 use crate::calibration_files::calibration_unit_file;
 use crate::estimate::gyro::UNDETERMINED_SIGMA;
 use crate::estimate::{paper_values, CalibrationOutcome, PAPER_LEN};
+use crate::limits;
 use crate::unit_file::UnitFile;
 use serde::{Deserialize, Serialize};
 use shared::params::{axis_name, ParamsError};
@@ -428,6 +429,20 @@ impl CalibrationSummary {
             .map(|c| format!("{} {:.4} > {}", c.name, c.value, c.limit))
             .collect();
         f.join(", ")
+    }
+}
+
+/// Gives the pass/fail limit options (declared in [`Limits`]) their ranges:
+/// `--max-misalignment-deg` in `[MIN_LIMIT, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
+/// `--max-bias-sigma-mg` in `[MIN_LIMIT, MAX_LIMIT]`. A command that flattens the limits applies it to its
+/// arguments with `#[command(mut_args(summary::pass_fail_limits))]`; other arguments pass unchanged.
+pub(crate) fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
+    match arg.get_id().as_str() {
+        "max_misalignment_deg" => arg.value_parser(limits::real(limits::MIN_LIMIT, 90.0)),
+        "max_chi2_per_dof" | "max_bias_mg" | "max_bias_sigma_mg" => {
+            arg.value_parser(limits::real(limits::MIN_LIMIT, limits::MAX_LIMIT))
+        }
+        _ => arg,
     }
 }
 

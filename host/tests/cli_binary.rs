@@ -140,7 +140,7 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
 fn a_live_recording_with_format_version_3_carries_the_device_temperature() {
     let dir = tempfile::tempdir().unwrap();
     let plan = dir.path().join("plan.toml");
-    let text = include_str!("../plans/quick-oblique.toml");
+    let text = include_str!("../../recording/plans/quick-oblique.toml");
     std::fs::write(
         &plan,
         text.replace("format_version = 1", "format_version = 3"),

@@ -99,7 +99,7 @@ fn a_hand_held_calibration_and_its_report_speak_of_no_table() {
 /// how many there are, what is missing, how many more to record.
 #[test]
 fn the_coverage_advice_is_one_plain_sentence() {
-    use host::session::coverage::Coverage;
+    use recording::session::coverage::Coverage;
     let c = Coverage {
         distinct: 10,
         repeats: vec![None; 10],

@@ -273,7 +273,7 @@ fn a_live_ramp_records_the_planned_rates() {
     let plan = dir.path().join("ramp.toml");
     let text = format!(
         "{}\n[[segment]]\nname = \"z+ ramp\"\nup_b = [0, 0, 1]\nrate_deg_s = 100\nrate_end_deg_s = 200\nduration_s = 1\n",
-        include_str!("../plans/quick-oblique.toml")
+        include_str!("../../recording/plans/quick-oblique.toml")
     );
     std::fs::write(&plan, text).unwrap();
     let out = dir.path().join("o");

@@ -1,5 +1,6 @@
-//! The README's layout table and each module's own map name every source file of `host/src`'s
-//! module folders, so that a reader who looks a piece up by its name finds it.
+//! The README's layout table and each module's own map name every source file of the PC crates'
+//! module folders (`host/src`, `recording/src`), so that a reader who looks a piece up by its name
+//! finds it.
 
 use std::path::Path;
 
@@ -23,7 +24,16 @@ fn readme_and_module_maps_name_every_file() {
     let readme = std::fs::read_to_string(root.join("../README.md")).unwrap();
     let layout = &readme[readme.find("## Layout").unwrap()..];
     let mut missing = Vec::new();
-    for entry in std::fs::read_dir(root.join("src")).unwrap() {
+    for krate in ["host", "recording"] {
+        missing.extend(unnamed(&root.join("..").join(krate), krate, layout));
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// What `krate`'s module maps and the README's rows for its folders do not name.
+fn unnamed(crate_dir: &Path, krate: &str, layout: &str) -> Vec<String> {
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(crate_dir.join("src")).unwrap() {
         let dir = entry.unwrap().path();
         let Ok(map) = std::fs::read_to_string(dir.join("mod.rs")) else {
             continue;
@@ -36,20 +46,22 @@ fn readme_and_module_maps_name_every_file() {
             .join("\n");
         let row = layout
             .lines()
-            .find(|l| l.starts_with(&format!("| `host/src/{folder}/`")));
+            .find(|l| l.starts_with(&format!("| `{krate}/src/{folder}/`")));
         for m in modules(&dir) {
             if !doc.contains(&format!("`{m}`")) && !doc.contains(&format!("`mod@{m}`")) {
-                missing.push(format!("{folder}/mod.rs's module map does not name {m}"));
+                missing.push(format!(
+                    "{krate}/src/{folder}/mod.rs's module map does not name {m}"
+                ));
             }
             // A folder the README describes in a shared row (`noise/`) is named as a whole there.
             if let Some(row) = row {
                 if !row.contains(&format!("`{m}.rs`")) {
                     missing.push(format!(
-                        "README's layout row for host/src/{folder}/ does not name {m}.rs"
+                        "README's layout row for {krate}/src/{folder}/ does not name {m}.rs"
                     ));
                 }
             }
         }
     }
-    assert!(missing.is_empty(), "{}", missing.join("\n"));
+    missing
 }

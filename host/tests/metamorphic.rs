@@ -319,7 +319,7 @@ fn a_temperature_glitch() {
     let plan = dir.path().join("plan.toml");
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/plans/thermal-soak.toml"
+        "/../recording/plans/thermal-soak.toml"
     ))
     .unwrap();
     std::fs::write(&plan, text.replace("duration_s = 20", "duration_s = 2")).unwrap();

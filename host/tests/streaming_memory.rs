@@ -2,7 +2,7 @@
 //! counting global allocator (this test binary only) while reading rows generated on the fly; the
 //! tests take [`LOCK`] so that one's allocations do not count in the other's peak.
 
-use host::session::{read_samples, Plan};
+use recording::session::{read_samples, Plan};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::{BufReader, Read};
 use std::path::Path;

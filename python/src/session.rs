@@ -1,21 +1,22 @@
 //! `segment`, `segment_file`, `load_session` and the `Session` they give: a hand-held recording cut
-//! into still positions by `host segment`'s own steps (`host::session::in_memory`), or a recorded
+//! into still positions by `host segment`'s own steps (`host::app::in_memory`), or a recorded
 //! session directory read by `host calibrate --input`'s reader.
 
 use crate::errors::{usage, IntoPy};
+use host::app::hand_gyro;
+use host::app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
 use host::cli::log_input::LogInputArgs;
 use host::cli::CliError;
 use host::estimate::gyro::GyroEstimate;
-use host::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
-use host::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
-use host::session::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
-use host::session::logs::read_log;
-use host::session::segment::{IntervalKind, SegmentOptions};
-use host::session::{hand_gyro, read_session, Plan, ReadOptions, SegmentStats};
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
+use recording::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
+use recording::session::logs::read_log;
+use recording::session::segment::{IntervalKind, SegmentOptions};
+use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 

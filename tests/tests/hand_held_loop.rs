@@ -9,7 +9,7 @@ use host::device::procedure::{self, ProcedureError, ProcedureOptions};
 use host::device::sim::SimDevice;
 use host::device::sim_hand::HandOperator;
 use host::device::{DeviceClient, LinkError};
-use host::session::builtin::load_plan;
+use recording::session::builtin::load_plan;
 use shared::wire::{Board, CalibrationState};
 use std::time::Duration;
 

@@ -8,7 +8,7 @@ use host::device::operator::AutomaticOperator;
 use host::device::procedure::{self, ProcedureOptions};
 use host::device::serial::{SerialTransport, DEFAULT_BAUD};
 use host::device::DeviceClient;
-use host::session::builtin::load_plan;
+use recording::session::builtin::load_plan;
 use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 use std::time::Duration;
 

@@ -7,10 +7,10 @@ use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::plot::png_dimensions;
 use host::report::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
-use host::session::builtin::load_plan;
-use host::session::{read_session, ReadOptions};
 use host::sim::{simulate_to_dir, NoiseModel};
 use host::unit_file::UnitFile;
+use recording::session::builtin::load_plan;
+use recording::session::{read_session, ReadOptions};
 use shared::UnitId;
 
 #[test]

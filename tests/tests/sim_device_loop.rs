@@ -4,7 +4,7 @@
 use e2e::{max_abs_diff, paper_unit, sim_client};
 use host::device::operator::AutomaticOperator;
 use host::device::procedure::{self, ProcedureOptions};
-use host::session::builtin::load_plan;
+use recording::session::builtin::load_plan;
 use shared::wire::CalibrationState;
 
 #[test]

@@ -6,8 +6,8 @@ use host::device::operator::AutomaticOperator;
 use host::device::procedure::{self, ProcedureOptions};
 use host::device::sim::SimDevice;
 use host::device::DeviceClient;
-use host::session::builtin::load_plan;
 use host::unit_file::UnitFile;
+use recording::session::builtin::load_plan;
 use std::path::Path;
 use std::time::Duration;
 

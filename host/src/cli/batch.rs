@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 /// `host batch`.
 #[derive(Debug, Args)]
-#[command(mut_args(crate::limits::pass_fail_limits))]
+#[command(mut_args(crate::summary::pass_fail_limits))]
 pub struct BatchArgs {
     /// Directory whose subdirectories are sessions (plan.toml + samples.csv), one per unit.
     #[arg(long, value_name = "DIR_OF_SESSIONS")]

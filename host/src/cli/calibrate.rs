@@ -20,7 +20,7 @@ use std::time::Instant;
 
 /// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
 #[derive(Debug, Args)]
-#[command(mut_args(crate::limits::pass_fail_limits))]
+#[command(mut_args(crate::summary::pass_fail_limits))]
 pub struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR", conflicts_with = "port")]

@@ -97,8 +97,9 @@ pub const THERMAL_GYRO_SECTION: &str = "[gyro]\nbias_rad_s = [0.01, -0.02, 0.015
 pub fn thermal_gyro_session(dir: &Path, name: &str, seed: u64) -> std::path::PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
-    let soak = read("plans/thermal-soak.toml").replace("duration_s = 20", "duration_s = 2");
-    let quick = read("plans/quick-oblique.toml");
+    let soak =
+        read("../recording/plans/thermal-soak.toml").replace("duration_s = 20", "duration_s = 2");
+    let quick = read("../recording/plans/quick-oblique.toml");
     let spins = &quick[quick.find("[[segment]]\nname = \"x+ 200\"").unwrap()..];
     let plan = format!(
         "{soak}\n{}",

@@ -71,7 +71,7 @@ impl OutputFile {
     }
 
     /// Maps a write error to this file's error.
-    pub(crate) fn io_error(&self, e: std::io::Error) -> OutputFileError {
+    pub fn io_error(&self, e: std::io::Error) -> OutputFileError {
         OutputFileError::Io(self.target.clone(), e)
     }
 
@@ -122,11 +122,7 @@ impl Drop for OutputFile {
 }
 
 /// Writes `bytes` to `target` atomically (see the module documentation).
-pub(crate) fn write_atomic(
-    target: &Path,
-    bytes: &[u8],
-    force: bool,
-) -> Result<(), OutputFileError> {
+pub fn write_atomic(target: &Path, bytes: &[u8], force: bool) -> Result<(), OutputFileError> {
     let mut f = OutputFile::create(target, force)?;
     f.write_all(bytes).map_err(|e| f.io_error(e))?;
     f.commit()
@@ -145,7 +141,7 @@ fn partial_beside(target: &Path) -> PathBuf {
 /// `write` writes a temporary file beside it whose name ends as the target's does (the backend
 /// tells the format by the extension), renamed over `target` when complete and removed
 /// otherwise. `io` maps a failed rename to the writer's error.
-pub(crate) fn replace_through_path<E>(
+pub fn replace_through_path<E>(
     target: &Path,
     write: impl FnOnce(&Path) -> Result<(), E>,
     io: impl FnOnce(std::io::Error) -> E,

@@ -41,12 +41,12 @@ pub use stats::{SegmentAccumulator, SegmentStats};
 pub use writer::SessionWriter;
 
 /// The plan file inside a session directory.
-pub(crate) const PLAN_FILE: &str = "plan.toml";
+pub const PLAN_FILE: &str = "plan.toml";
 /// The samples file inside a session directory.
 pub const SAMPLES_FILE: &str = "samples.csv";
 /// The header of `samples.csv` in versions 1 and 2 ([`RecordingVersion::samples_header`] says which
 /// a plan has).
-pub(crate) const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
+pub const SAMPLES_HEADER: &str = "segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z";
 /// Column names, in order.
 pub(crate) const COLUMNS: [&str; 8] = ["segment", "t_s", "u_x", "u_y", "u_z", "w_x", "w_y", "w_z"];
 /// The header of `samples.csv` version 3: version 2's and the unit's temperature, °C.

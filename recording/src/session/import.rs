@@ -15,7 +15,7 @@ use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-pub(crate) use time::six_digits;
+pub use time::six_digits;
 pub use time::{detect_time_unit, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
 use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
 
@@ -56,7 +56,7 @@ impl GyroUnit {
     }
 
     /// "deg/s" or "rad/s".
-    pub(crate) fn symbol(self) -> &'static str {
+    pub fn symbol(self) -> &'static str {
         match self {
             GyroUnit::DegPerS => "deg/s",
             GyroUnit::RadPerS => "rad/s",

@@ -4,7 +4,7 @@ use super::plan::{Plan, PlanError};
 use std::path::Path;
 
 /// (name, TOML text) of every built-in plan.
-pub(crate) const BUILTIN_PLANS: [(&str, &str); 9] = [
+pub const BUILTIN_PLANS: [(&str, &str); 9] = [
     ("paper", include_str!("../../plans/paper.toml")),
     ("oblique", include_str!("../../plans/oblique.toml")),
     ("short", include_str!("../../plans/short.toml")),
@@ -32,7 +32,7 @@ pub(crate) const BUILTIN_PLANS: [(&str, &str); 9] = [
 ];
 
 /// The built-in plan called `name`, if any.
-pub(crate) fn builtin_plan(name: &str) -> Option<Result<Plan, PlanError>> {
+pub fn builtin_plan(name: &str) -> Option<Result<Plan, PlanError>> {
     BUILTIN_PLANS
         .iter()
         .find(|(n, _)| *n == name)

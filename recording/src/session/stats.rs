@@ -43,12 +43,12 @@ pub struct SegmentStats {
 
 impl SegmentStats {
     /// Standard deviation of each output, output unit.
-    pub(crate) fn std_u(&self) -> [f64; 3] {
+    pub fn std_u(&self) -> [f64; 3] {
         std::array::from_fn(|i| self.cov_u[i][i].max(0.0).sqrt())
     }
 
     /// Standard deviation of each gyro axis, rad/s.
-    pub(crate) fn std_w(&self) -> [f64; 3] {
+    pub fn std_w(&self) -> [f64; 3] {
         std::array::from_fn(|i| self.cov_w[i][i].max(0.0).sqrt())
     }
 
@@ -150,7 +150,7 @@ impl SegmentAccumulator {
     /// driver without a reading) is kept for the means and left out of the temperature moments,
     /// which keep their own sums of the outputs over the rows that have a reading.
     #[inline]
-    pub(crate) fn push_with_temperature(
+    pub fn push_with_temperature(
         &mut self,
         t_s: f64,
         u: &[f64; 3],
@@ -167,7 +167,7 @@ impl SegmentAccumulator {
     }
 
     /// The statistics, or `None` when no row was accepted.
-    pub(crate) fn finish(&self) -> Option<SegmentStats> {
+    pub fn finish(&self) -> Option<SegmentStats> {
         if self.n == 0 {
             return None;
         }

@@ -230,7 +230,7 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 
 /// A still accelerometer (`acc_mg` of window noise, under 20 mg) beside a gyro that moves 1–200 °/s:
 /// 57× a still gyro's 0.02–3 °/s, as a gyro in °/s read as rad/s moves.
-pub(crate) fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
+pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
     acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0
 }
 
@@ -252,7 +252,7 @@ fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64) -> String {
 }
 
 /// Finds the still intervals and spins of `rec`.
-pub(crate) fn find_intervals(
+pub fn find_intervals(
     rec: &Recording,
     options: &SegmentOptions,
 ) -> Result<Segmentation, SegmentError> {
@@ -445,7 +445,7 @@ fn interval(
 }
 
 /// Angle between two unit vectors, degrees.
-pub(crate) fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+pub fn angle_deg(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     linalg::dot(a, b).clamp(-1.0, 1.0).acos().to_degrees()
 }
 

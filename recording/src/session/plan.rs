@@ -27,7 +27,7 @@ impl RecordingVersion {
     pub(crate) const NEWEST: RecordingVersion = RecordingVersion::V3Temperature;
     /// The version a plan without `format_version` has: version 2 reads every version 1 plan
     /// unchanged, and a plan that wants temperature has to say so.
-    pub(crate) const DEFAULT: RecordingVersion = RecordingVersion::V2Attitudes;
+    pub const DEFAULT: RecordingVersion = RecordingVersion::V2Attitudes;
 
     /// The version numbered `n`, if this build knows it.
     pub const fn from_number(n: u32) -> Option<RecordingVersion> {
@@ -81,10 +81,9 @@ impl std::fmt::Display for RecordingVersion {
 }
 
 /// [`RecordingVersion::DEFAULT`]'s number, for plans built in code.
-pub(crate) const PLAN_FORMAT_VERSION: u32 = RecordingVersion::DEFAULT.number();
+pub const PLAN_FORMAT_VERSION: u32 = RecordingVersion::DEFAULT.number();
 /// [`RecordingVersion::V3Temperature`]'s number, for plans built in code that record `temp_c`.
-#[cfg(test)]
-pub(crate) const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = RecordingVersion::V3Temperature.number();
+pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = RecordingVersion::V3Temperature.number();
 
 /// 1σ of each mount's tilt (per axis perpendicular to the nominal up) when the plan says nothing,
 /// degrees. A machined fixture on a levelled rate table is good to a few arc-minutes at best once the
@@ -224,23 +223,23 @@ pub struct SegmentPlan {
 
 impl SegmentPlan {
     /// At rest for the whole segment.
-    pub(crate) fn is_static(&self) -> bool {
+    pub fn is_static(&self) -> bool {
         self.rate_deg_s == 0.0 && self.rate_end_deg_s.is_none_or(|r| r == 0.0)
     }
 
     /// The attitude is unknown (estimated with no prior).
-    pub(crate) fn is_free(&self) -> bool {
+    pub fn is_free(&self) -> bool {
         self.attitude == Attitude::Free
     }
 
     /// `up_b` was given (always for a fixture segment).
-    pub(crate) fn has_up(&self) -> bool {
+    pub fn has_up(&self) -> bool {
         !is_zero3(&self.up_b)
     }
 
     /// The mount this segment belongs to: its `mount`, else its own name for a free attitude (each
     /// hand-held position is its own mount), else named after `up_b`.
-    pub(crate) fn mount_name(&self) -> String {
+    pub fn mount_name(&self) -> String {
         if self.mount.is_none() && self.is_free() {
             return format!("free '{}'", self.name);
         }
@@ -299,7 +298,7 @@ impl Plan {
     }
 
     /// Semantic checks: version, positive rate, unique names, unit `up_b`, finite numbers.
-    pub(crate) fn validate(&self) -> Result<(), PlanError> {
+    pub fn validate(&self) -> Result<(), PlanError> {
         let version = self.version()?;
         self.validate_attitudes(version)?;
         crate::limits::positive_at_most(
@@ -433,7 +432,7 @@ impl Plan {
     }
 
     /// The table's relative rate 1σ, ppm (the default when absent).
-    pub(crate) fn table_rate_sigma_ppm(&self) -> f64 {
+    pub fn table_rate_sigma_ppm(&self) -> f64 {
         self.table_rate_sigma_ppm
             .unwrap_or(DEFAULT_TABLE_RATE_SIGMA_PPM)
     }
@@ -445,7 +444,7 @@ impl Plan {
     }
 
     /// The tilt 1σ of the mount `seg` belongs to, degrees; `None` for a free attitude.
-    pub(crate) fn mount_sigma_deg(&self, seg: &SegmentPlan) -> Option<f64> {
+    pub fn mount_sigma_deg(&self, seg: &SegmentPlan) -> Option<f64> {
         if seg.is_free() {
             return None;
         }
@@ -543,7 +542,7 @@ impl Plan {
 
     /// True when `samples.csv` carries the unit's temperature (format version 3 and later; false for
     /// a version this build does not read, which [`Plan::validate`] refuses).
-    pub(crate) fn has_temperature(&self) -> bool {
+    pub fn has_temperature(&self) -> bool {
         self.version().is_ok_and(RecordingVersion::has_temperature)
     }
 

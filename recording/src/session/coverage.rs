@@ -31,7 +31,7 @@ const FACES: [(&str, [f64; 3]); 6] = [
 ];
 
 /// Distinct positions and the directions they miss.
-pub(crate) fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
+pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
     let mut firsts: Vec<usize> = Vec::new();
     let repeats = stills
         .iter()
@@ -69,7 +69,7 @@ pub(crate) fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage 
 /// each axis's bias and scale from the mean outputs of its two faces; and every interval, with
 /// those taken out, within [`SIX_FACE_DEG`] of its label. Raw directions against a tight bound would
 /// refuse a unit whose biases alone tilt a face by more than its placement.
-pub(crate) fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
+pub fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
     let labels: Vec<(usize, f64)> = stills
         .iter()
         .map(|s| {

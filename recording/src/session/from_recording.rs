@@ -107,7 +107,7 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
 /// between still `k` and `k + 1`) is the same mount as the one before: the unit was turned flat and
 /// set back against its stop, so both see the same up and share one attitude unknown (docs/model.md
 /// §7.2); only segments with a known up and a prior (not free) are joined.
-pub(crate) fn join_table_turn_mounts(plan: &mut Plan, after_still: impl Iterator<Item = usize>) {
+pub fn join_table_turn_mounts(plan: &mut Plan, after_still: impl Iterator<Item = usize>) {
     for k in after_still {
         let Some([before, after]) = plan.segments.get_mut(k..k + 2) else {
             continue;
@@ -139,7 +139,7 @@ pub fn normal_gravity_m_s2(lat_deg: f64, height_m: f64) -> f64 {
 }
 
 /// The per-segment statistics, as reading the written session would give them.
-pub(crate) fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
+pub fn stats_for(rec: &Recording, seg: &Segmentation, plan: &Plan) -> Vec<SegmentStats> {
     seg.stills
         .iter()
         .zip(&plan.segments)

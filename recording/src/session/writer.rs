@@ -70,7 +70,7 @@ impl SessionWriter {
     }
 
     /// True when rows carry the unit's temperature (the plan's version has `temp_c`).
-    pub(crate) fn has_temperature(&self) -> bool {
+    pub fn has_temperature(&self) -> bool {
         self.version.has_temperature()
     }
 
@@ -82,7 +82,7 @@ impl SessionWriter {
     /// Appends one sample of `segment` to a recording without temperature (format version 1 or 2).
     /// Changing segment ends the previous one (flush to disk). Floats are written in their shortest
     /// exact form, so they read back bit for bit.
-    pub(crate) fn write_row(
+    pub fn write_row(
         &mut self,
         segment: &str,
         t_s: f64,
@@ -98,7 +98,7 @@ impl SessionWriter {
     }
 
     /// Appends one sample of `segment` with the unit's temperature, °C (format version 3).
-    pub(crate) fn write_row_with_temperature(
+    pub fn write_row_with_temperature(
         &mut self,
         segment: &str,
         t_s: f64,
@@ -156,7 +156,7 @@ impl SessionWriter {
     }
 
     /// Ends the current segment: everything written so far goes to the disk.
-    pub(crate) fn end_segment(&mut self) -> Result<(), RecordingError> {
+    pub fn end_segment(&mut self) -> Result<(), RecordingError> {
         self.current = None;
         self.out
             .flush()
@@ -168,7 +168,7 @@ impl SessionWriter {
     }
 
     /// Ends the recording; returns the number of rows written.
-    pub(crate) fn finish(mut self) -> Result<u64, RecordingError> {
+    pub fn finish(mut self) -> Result<u64, RecordingError> {
         self.end_segment()?;
         Ok(self.rows)
     }

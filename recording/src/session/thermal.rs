@@ -8,11 +8,11 @@
 //! conditioned; outputs are shifted by the segment's first sample like [`super::stats`].
 
 /// The fixed origin of the accumulated powers, °C.
-pub(crate) const ORIGIN_C: f64 = 25.0;
+pub const ORIGIN_C: f64 = 25.0;
 /// The scale of the accumulated powers, °C: `x = (T − ORIGIN_C)/SCALE_C`.
-pub(crate) const SCALE_C: f64 = 50.0;
+pub const SCALE_C: f64 = 50.0;
 /// Number of polynomial coefficients (degree 3 and the constant).
-pub(crate) const TERMS: usize = 4;
+pub const TERMS: usize = 4;
 
 /// The temperature moments of one segment's accepted rows.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,18 +35,18 @@ pub struct ThermalStats {
 
 impl ThermalStats {
     /// The mean temperature, °C.
-    pub(crate) fn mean_c(&self) -> f64 {
+    pub fn mean_c(&self) -> f64 {
         ORIGIN_C + SCALE_C * self.sum_x_pow[1] / self.sum_x_pow[0]
     }
 
     /// The Gram matrix `G_jk = Σ x^(j+k)`.
-    pub(crate) fn gram(&self) -> [[f64; TERMS]; TERMS] {
+    pub fn gram(&self) -> [[f64; TERMS]; TERMS] {
         std::array::from_fn(|j| std::array::from_fn(|k| self.sum_x_pow[j + k]))
     }
 
     /// `Σ (u_i − shift − β(x))²` for a polynomial `β` in `x` (coefficients of `x^0..x^3`) of output
     /// `i`, the shift included in `β_0` by the caller.
-    pub(crate) fn residual_sum_squares(&self, i: usize, beta: &[f64; TERMS]) -> f64 {
+    pub fn residual_sum_squares(&self, i: usize, beta: &[f64; TERMS]) -> f64 {
         let g = self.gram();
         let b = &self.sum_u_x_pow[i];
         let mut quad = 0.0;
@@ -60,7 +60,7 @@ impl ThermalStats {
     }
 
     /// The mean of `x'^k`, `k = 0..=3`, with `x' = (T − reference_c)/SCALE_C`.
-    pub(crate) fn mean_powers_about(&self, reference_c: f64) -> [f64; TERMS] {
+    pub fn mean_powers_about(&self, reference_c: f64) -> [f64; TERMS] {
         let d = (reference_c - ORIGIN_C) / SCALE_C;
         let n = self.sum_x_pow[0];
         // E[(x − d)^k] = Σ_j C(k, j) E[x^j] (−d)^(k−j).
@@ -73,13 +73,13 @@ impl ThermalStats {
 }
 
 /// `C(n, k)` for the small `n` of a cubic.
-pub(crate) fn binomial(n: usize, k: usize) -> f64 {
+pub fn binomial(n: usize, k: usize) -> f64 {
     (0..k).fold(1.0, |acc, j| acc * (n - j) as f64 / (j + 1) as f64)
 }
 
 /// Streaming accumulator for [`ThermalStats`].
 #[derive(Clone, Debug)]
-pub(crate) struct ThermalAccumulator {
+pub struct ThermalAccumulator {
     n: u64,
     u_shift: [f64; 3],
     sx: [f64; 2 * TERMS - 1],
@@ -131,7 +131,7 @@ impl ThermalAccumulator {
     }
 
     /// The statistics, or `None` when no row had a temperature.
-    pub(crate) fn finish(&self) -> Option<ThermalStats> {
+    pub fn finish(&self) -> Option<ThermalStats> {
         (self.n > 0).then_some(ThermalStats {
             count: self.n,
             u_shift: self.u_shift,

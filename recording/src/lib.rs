@@ -1,0 +1,18 @@
+//! A calibration recording, the lowest layer of the PC calibrator: what a session or a logger's
+//! file holds, read with bounded memory and repaired where one sample is damaged, cut into segments
+//! and reduced to the per-segment statistics the estimator works on. It knows nothing of the
+//! estimator, the simulator, the device or the command line (`ARCHITECTURE.md`).
+//!
+//! - [`session`]: the plan (and the built-in plans), the per-segment statistics, the streaming
+//!   `samples.csv` reader and writer (`docs/recording-format.md`), the loggers' readers (CSV, ULog,
+//!   DataFlash, MCAP), the time-stamp repair, segmentation and coverage.
+//! - [`limits`]: the bounds every input is held to (line length, segment count, rates, file size)
+//!   and the range parsers of the command line's numbers.
+//! - [`output_file`]: result files written atomically, never over an existing one unless asked.
+//! - [`ui`]: progress bars on a terminal.
+#![deny(missing_docs)]
+
+pub mod limits;
+pub mod output_file;
+pub mod session;
+pub mod ui;
