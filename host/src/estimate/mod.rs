@@ -81,6 +81,6 @@ pub use uncertainty::Uncertainty;
 
 // The tests (`tests.rs` and its siblings) take this module's names with `use super::*`.
 #[cfg(test)]
-use crate::session::{Plan, SegmentStats};
+use crate::session::Plan;
 #[cfg(test)]
 use shared::{Calibration, FittedStatic};

@@ -179,7 +179,7 @@ fn predict_temperature(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::thermal_tests::{hot_unit, simulate_stats, soak_plan};
+    use crate::sim::testkit::{hot_unit, simulate_stats, soak_plan};
     use crate::sim::thermal::ThermalSim;
     use crate::sim::NoiseModel;
 

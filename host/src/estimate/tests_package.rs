@@ -8,55 +8,12 @@
 //! `cargo test -p host --lib single_package_many_seeds -- --ignored --nocapture`.
 
 use super::*;
-use crate::estimate::thermal_tests::simulate_stats;
-use crate::session::builtin::builtin_plan;
 use crate::session::Package;
+use crate::sim::testkit::{
+    mems_noise, simulate_stats, single_package_fits, single_package_plan, single_package_unit,
+};
 use crate::sim::thermal::ThermalSim;
 use crate::sim::NoiseModel;
-
-/// The MEMS IMU of `host/units/single-package.toml`.
-fn single_unit() -> Calibration {
-    let file = crate::unit_file::UnitFile::parse(include_str!("../../units/single-package.toml"))
-        .expect("the shipped unit parses");
-    assert_eq!(file.package(), Package::Single);
-    file.to_calibration().expect("a valid unit")
-}
-
-/// Consumer MEMS noise: 1.4 mg white (70 µg/√Hz over a 400 Hz band) in 1 LSB steps, 0.06 °/s gyro.
-fn mems_noise() -> NoiseModel {
-    NoiseModel {
-        accel_white_mg: 1.4,
-        accel_quantum_out: 1.0,
-        gyro_white_deg_s: 0.06,
-        ..NoiseModel::default()
-    }
-}
-
-fn plan(package: Package) -> Plan {
-    let mut p = builtin_plan("single-package").unwrap().unwrap();
-    p.package = package;
-    p
-}
-
-/// Both fits of one simulated session: (one lever arm, nine).
-fn both_fits(truth: &Calibration, seed: u64) -> (CalibrationOutcome, CalibrationOutcome) {
-    let stats = simulate_stats(
-        truth,
-        &plan(Package::Single),
-        &mems_noise(),
-        &ThermalSim::default(),
-        seed,
-    );
-    let one = calibrate_session_stats(&plan(Package::Single), &stats, &EstimateOptions::default())
-        .expect("the one-point fit");
-    let nine = calibrate_session_stats(
-        &plan(Package::Separate),
-        &stats,
-        &EstimateOptions::default(),
-    )
-    .expect("the nine-component fit");
-    (one, nine)
-}
 
 /// Largest |error| / 1σ of the biases and scale factors.
 fn static_z(o: &CalibrationOutcome, truth: &Calibration) -> f64 {
@@ -74,9 +31,9 @@ fn static_z(o: &CalibrationOutcome, truth: &Calibration) -> f64 {
 
 #[test]
 fn single_package_unit_gets_one_lever_arm_within_3_sigma() {
-    let truth = single_unit();
+    let truth = single_package_unit();
     let r_true = truth.lever_arms.r_m[0];
-    let (one, nine) = both_fits(&truth, 11);
+    let (one, nine) = single_package_fits(&truth, 11);
     assert!(one.single_package && !nine.single_package);
     let r = one.calibration.lever_arms.r_m;
     let s = one.uncertainty.lever_arms_m_1sigma;
@@ -126,7 +83,7 @@ fn single_package_unit_gets_one_lever_arm_within_3_sigma() {
 fn separate_lever_arms_fitted_as_one_point_are_refused() {
     // The paper's unit: three lever arms millimetres apart, on the single-package plan.
     let truth = shared::params::PAPER_UNIT;
-    let mut p = plan(Package::Single);
+    let mut p = single_package_plan(Package::Single);
     p.output_unit = truth.statics.output_unit;
     // The paper's unit reads volts: MEMS noise without the 1 LSB step.
     let noise = NoiseModel {
@@ -157,10 +114,10 @@ fn separate_lever_arms_fitted_as_one_point_are_refused() {
 
 #[test]
 fn the_option_is_refused_with_the_paper_method_or_the_centroid() {
-    let truth = single_unit();
+    let truth = single_package_unit();
     let stats = simulate_stats(
         &truth,
-        &plan(Package::Single),
+        &single_package_plan(Package::Single),
         &mems_noise(),
         &ThermalSim::default(),
         2,
@@ -181,7 +138,8 @@ fn the_option_is_refused_with_the_paper_method_or_the_centroid() {
             PackageRefusal::CentroidReference,
         ),
     ] {
-        let e = calibrate_session_stats(&plan(Package::Single), &stats, &options).unwrap_err();
+        let e = calibrate_session_stats(&single_package_plan(Package::Single), &stats, &options)
+            .unwrap_err();
         assert_eq!(e, EstimateError::SinglePackage(want));
     }
 }
@@ -191,7 +149,7 @@ fn the_option_is_refused_with_the_paper_method_or_the_centroid() {
 #[test]
 #[ignore = "20 simulated sessions (minutes in a debug build): run with --ignored --nocapture"]
 fn single_package_many_seeds() {
-    let truth = single_unit();
+    let truth = single_package_unit();
     let r_true = truth.lever_arms.r_m[0];
     let seeds = 20;
     let (mut err1, mut err9) = ([0.0f64; 3], [[0.0f64; 3]; 3]);
@@ -201,7 +159,7 @@ fn single_package_many_seeds() {
     let (mut sig1, mut sig9) = ([0.0f64; 3], [[0.0f64; 3]; 3]);
     let (mut warned, mut static_worst) = (0, 0.0f64);
     for seed in 0..seeds {
-        let (one, nine) = both_fits(&truth, 100 + seed);
+        let (one, nine) = single_package_fits(&truth, 100 + seed);
         for j in 0..3 {
             err1[j] += (one.calibration.lever_arms.r_m[0][j] - r_true[j]).powi(2);
             mean1[j] += (one.calibration.lever_arms.r_m[0][j] - r_true[j]) / seeds as f64;
@@ -245,80 +203,4 @@ fn single_package_many_seeds() {
     );
     // 60 terms: the mean of χ²(60)/60 is above 1.5 with probability below 0.5 %.
     assert!(z2_per < 1.5, "{z2_per}");
-}
-
-/// The terminal text, the JSON summary and the report's Table 3 of a single-package fit say the
-/// in-package size effect is not observable and give the package's one lever arm, not three rows;
-/// a nine-component fit of the same session shows three rows and no such line.
-#[test]
-fn outputs_say_the_in_package_size_effect_is_not_observable() {
-    use crate::report::{build_report, page::page, render, ReportOptions};
-    use crate::summary::{CalibrationSummary, Limits};
-    let truth = single_unit();
-    let (one, nine) = both_fits(&truth, 3);
-    let text = render(&one, &[]);
-    assert!(
-        text.contains("in-package size effect") && text.contains("not observable"),
-        "{text}"
-    );
-    assert!(text.contains("\nr    ") && !text.contains("\nr2 ") && !text.contains("\nr3 "));
-    let text9 = render(&nine, &[]);
-    assert!(!text9.contains("in-package") && text9.contains("\nr2 "));
-    let json = |o: &CalibrationOutcome| {
-        serde_json::to_value(CalibrationSummary::new(o, None, &Limits::default())).unwrap()
-    };
-    let j = json(&one);
-    assert!(j["in_package_size_effect"]
-        .as_str()
-        .is_some_and(|s| s.contains("not observable")));
-    assert_eq!(j["calibration"]["dynamic"]["package"], "single");
-    assert!(json(&nine).get("in_package_size_effect").is_none());
-    // The HTML/Markdown report's Table 3.
-    let p = plan(Package::Single);
-    let stats = simulate_stats(&truth, &p, &mems_noise(), &ThermalSim::default(), 3);
-    let data = build_report(
-        &p,
-        &stats,
-        &one.calibration,
-        Some(&one.uncertainty),
-        Some(one.clone()),
-        &ReportOptions::default(),
-    )
-    .unwrap();
-    let blocks = format!("{:?}", page(&data, "s", "c", &[]));
-    assert!(blocks.contains("Lever arm of the package") && blocks.contains("not observable"));
-    assert!(!blocks.contains("\"r2\""), "{blocks}");
-}
-
-/// `host plan --check single-package`'s text: the common lever arm is observable, the in-package
-/// size effect is not.
-#[test]
-fn plan_check_says_the_common_lever_arm_is_observable() {
-    let truth = single_unit();
-    let p = plan(Package::Single);
-    let k = truth.statics.scale_out_per_g;
-    let settings = PredictSettings {
-        noise_out_per_sample_1sigma: k.map(|k| 1e-3 * k.abs()),
-        gyro_noise_rad_s: 0.05f64.to_radians(),
-        ..PredictSettings::white(0.0)
-    };
-    let stats = crate::sim::synth::prediction_stats(&p, &truth, &settings).unwrap();
-    let prediction = predict(&p, &truth, &stats, &settings).unwrap();
-    assert!(prediction.single_package);
-    let text = crate::report::render_prediction(&prediction);
-    assert!(
-        text.contains("Common lever arm r") && text.contains(": observable"),
-        "{text}"
-    );
-    assert!(
-        text.contains("in-package size effect") && !text.contains("  r2x"),
-        "{text}"
-    );
-    for j in 0..3 {
-        assert!(
-            prediction.sigma[15 + j] < 12e-6,
-            "{}",
-            prediction.sigma[15 + j]
-        );
-    }
 }

@@ -18,6 +18,8 @@ pub mod compare;
 pub mod data;
 pub mod document;
 pub mod figures;
+#[cfg(test)]
+mod fit_text_tests;
 pub mod format;
 pub mod markup;
 pub mod navigation;

@@ -3,9 +3,15 @@
 //! optional table errors (attitude per mount, rate scale) — all seeded.
 
 use super::synth::{self, ActualSegment, SynthNoise};
-use crate::session::{Plan, SegmentPlan, SegmentStats};
-use shared::forward::ForwardModel;
-use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams};
+use super::thermal::{outputs_at, ThermalSim};
+use super::{simulate_rows_with_temperature, NoiseModel};
+use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
+use crate::session::builtin::builtin_plan;
+use crate::session::{Package, Plan, SegmentAccumulator, SegmentPlan, SegmentStats};
+use crate::unit_file::UnitFile;
+use shared::forward::{ForwardModel, TableState};
+use shared::{Calibration, Compensator, LeverArms, LeverMode, OutputUnit, ReferencePoint};
+use shared::{SensorOutputs, StaticParams};
 
 pub(crate) use super::rng::Rng;
 
@@ -283,4 +289,201 @@ pub(crate) fn many_mounts_plan() -> Plan {
         table_rate_sigma_ppm: None,
         segments,
     }
+}
+
+/// 1 mg per sample in the output unit of the x axis: the paper's noise.
+pub fn paper_noise(truth: &Calibration) -> f64 {
+    1e-3 * truth.statics.scale_out_per_g[0]
+}
+
+/// The paper's unit on `plan` with [`paper_noise`] and a perfect table, seeded.
+pub fn clean_session(plan: &Plan, seed: u64) -> (Calibration, Vec<SegmentStats>) {
+    let truth = paper_unit();
+    let mut rng = Rng::new(seed, 0);
+    let stats = noisy_stats(
+        plan,
+        &truth,
+        paper_noise(&truth),
+        TableErrors::default(),
+        &mut rng,
+    );
+    (truth, stats)
+}
+
+/// `host/units/thermal-mems.toml`: the paper's unit with tempcos of MEMS size (bias 0.25..0.35
+/// mg/°C plus a quadratic term, scale 100..150 ppm/°C).
+pub fn hot_unit_file() -> UnitFile {
+    toml::from_str(include_str!("../../units/thermal-mems.toml")).unwrap()
+}
+
+/// [`hot_unit_file`] as a calibration.
+pub fn hot_unit() -> Calibration {
+    hot_unit_file().to_calibration().unwrap()
+}
+
+/// Six positions (±1 g per axis) at each chamber set-point, `seconds` each.
+pub fn soak_plan(temps_c: &[f64], seconds: f64) -> Plan {
+    let mut segments = Vec::new();
+    for &t in temps_c {
+        for (a, n) in ["x", "y", "z"].iter().enumerate() {
+            for (sgn, s) in [(1.0, "+"), (-1.0, "-")] {
+                let mut up_b = [0.0; 3];
+                up_b[a] = sgn;
+                segments.push(SegmentPlan {
+                    name: format!("{n}{s} @{t}"),
+                    up_b,
+                    rate_deg_s: 0.0,
+                    rate_end_deg_s: None,
+                    duration_s: Some(seconds),
+                    table_centre_m: None,
+                    mount: Some(format!("{n}{s}")),
+                    temp_c: Some(t),
+                    temp_end_c: None,
+                    ..Default::default()
+                });
+            }
+        }
+    }
+    Plan {
+        attitude_sigma_deg: None,
+        table_rate_sigma_ppm: None,
+        format_version: crate::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE,
+        output_unit: OutputUnit::Volts,
+        sample_rate_hz: 1000.0,
+        gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
+        unit_id: None,
+        package: Default::default(),
+        segments,
+    }
+}
+
+/// Simulates straight into per-segment statistics (what the reader would make of the CSV).
+pub fn simulate_stats(
+    cal: &Calibration,
+    plan: &Plan,
+    noise: &NoiseModel,
+    thermal: &ThermalSim,
+    seed: u64,
+) -> Vec<SegmentStats> {
+    let mut accs: Vec<SegmentAccumulator> = plan
+        .segments
+        .iter()
+        .map(|s| SegmentAccumulator::new(s.name.clone()))
+        .collect();
+    let mut current = 0;
+    simulate_rows_with_temperature(cal, plan, noise, thermal, seed, |seg, t, u, w, temp| {
+        if plan.segments[current].name != seg {
+            current = plan.segments.iter().position(|s| s.name == seg).unwrap();
+        }
+        accs[current].push_with_temperature(t, u, w, temp);
+        Ok::<(), ()>(())
+    })
+    .unwrap()
+    .unwrap();
+    accs.iter().filter_map(SegmentAccumulator::finish).collect()
+}
+
+/// The realistic nuisances: 1 mg white noise, a 16-bit ADC's step on 5 V, a slow bias random walk,
+/// a quantised and noisy temperature sensor.
+pub fn nuisances() -> NoiseModel {
+    NoiseModel {
+        accel_quantum_out: 5.0 / 65536.0,
+        accel_bias_walk_mg_sqrt_s: 2e-4,
+        ..NoiseModel::default()
+    }
+}
+
+/// Worst error, µg, of `cal` compensating the truth's noise-free outputs at `temp_c` over `ups`.
+pub fn worst_error_ug(
+    truth: &Calibration,
+    cal: &Calibration,
+    temp_c: f64,
+    ups: &[[f64; 3]],
+) -> f64 {
+    let model = ForwardModel::new(truth).unwrap();
+    let mut comp = Compensator::new(cal, LeverMode::Off).unwrap();
+    comp.refresh(temp_c as f32);
+    let g = truth.gravity_m_s2;
+    ups.iter()
+        .map(|up| {
+            let n = shared::linalg::norm(up);
+            let up = up.map(|v| v / n);
+            let motion = TableState {
+                up_b: up,
+                rate_rad_s: 0.0,
+                accel_rad_s2: 0.0,
+                centre_m: [0.0; 3],
+            }
+            .motion(g);
+            let mut u = model.outputs(&motion).raw;
+            if let Some(th) = &truth.temperature {
+                u = outputs_at(th, &model.zero_bias_out, &u, temp_c);
+            }
+            let f = comp.compensate_static(&SensorOutputs {
+                raw: u.map(|v| v as f32),
+            });
+            let e: Vec<f64> = (0..3).map(|j| f.m_s2[j] as f64 / g - up[j]).collect();
+            (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e6
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Attitudes no plan holds, for held-out checks.
+pub const HELD_OUT_UPS: [[f64; 3]; 4] = [
+    [1.0, 1.0, 1.0],
+    [-1.0, 0.5, -0.3],
+    [0.2, -0.9, 0.4],
+    [0.6, 0.1, -0.8],
+];
+
+/// The MEMS IMU of `host/units/single-package.toml`.
+pub fn single_package_unit() -> Calibration {
+    let file = crate::unit_file::UnitFile::parse(include_str!("../../units/single-package.toml"))
+        .expect("the shipped unit parses");
+    assert_eq!(file.package(), Package::Single);
+    file.to_calibration().expect("a valid unit")
+}
+
+/// Consumer MEMS noise: 1.4 mg white (70 µg/√Hz over a 400 Hz band) in 1 LSB steps, 0.06 °/s gyro.
+pub fn mems_noise() -> NoiseModel {
+    NoiseModel {
+        accel_white_mg: 1.4,
+        accel_quantum_out: 1.0,
+        gyro_white_deg_s: 0.06,
+        ..NoiseModel::default()
+    }
+}
+
+/// The built-in `single-package` plan, fitted as `package`.
+pub fn single_package_plan(package: Package) -> Plan {
+    let mut p = builtin_plan("single-package").unwrap().unwrap();
+    p.package = package;
+    p
+}
+
+/// Both fits of one simulated session: (one lever arm, nine).
+pub fn single_package_fits(
+    truth: &Calibration,
+    seed: u64,
+) -> (CalibrationOutcome, CalibrationOutcome) {
+    let stats = simulate_stats(
+        truth,
+        &single_package_plan(Package::Single),
+        &mems_noise(),
+        &ThermalSim::default(),
+        seed,
+    );
+    let one = calibrate_session_stats(
+        &single_package_plan(Package::Single),
+        &stats,
+        &EstimateOptions::default(),
+    )
+    .expect("the one-point fit");
+    let nine = calibrate_session_stats(
+        &single_package_plan(Package::Separate),
+        &stats,
+        &EstimateOptions::default(),
+    )
+    .expect("the nine-component fit");
+    (one, nine)
 }
