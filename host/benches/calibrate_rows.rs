@@ -7,9 +7,9 @@
 //! is what limits `calibrate` (the estimator works on 15 segment summaries, not on rows); the whole
 //! `calibrate` path (read + statistics + joint estimate with the paper-method comparison) is timed too.
 
-use host::estimate::{calibrate_session_stats, EstimateOptions};
-use host::sim::{simulate_to_dir, NoiseModel};
-use host::unit_file::UnitFile;
+use estimator::estimate::{calibrate_session_stats, EstimateOptions};
+use estimator::sim::{simulate_to_dir, NoiseModel};
+use estimator::unit_file::UnitFile;
 use recording::session::builtin::paper_plan;
 use recording::session::{read_session, ReadOptions, SAMPLES_FILE};
 use std::time::Instant;

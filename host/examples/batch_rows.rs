@@ -9,10 +9,10 @@
 //! one thread and with one per core. Prints rows, seconds and rows/s of each run. The rows are read
 //! from disk each time (the second run reads from the page cache, like the first after simulation).
 
+use estimator::sim::{simulate_to_dir, NoiseModel};
+use estimator::unit_file::UnitFile;
 use host::batch::{find_sessions, run_batch, BatchOptions};
-use host::sim::{simulate_to_dir, NoiseModel};
 use host::summary::Limits;
-use host::unit_file::UnitFile;
 use indicatif::ProgressBar;
 use recording::session::builtin::load_plan;
 

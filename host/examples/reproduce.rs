@@ -11,13 +11,13 @@
 //! Usage: `cargo run --release -p host --example reproduce -- [OUT] [COPY_PNGS_TO]`
 //! (OUT defaults to `target/paper-reproduction`).
 
-use host::calibration_files::write_calibration_files;
-use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
+use estimator::calibration_files::write_calibration_files;
+use estimator::estimate::{calibrate_session_stats, EstimateOptions, Method};
+use estimator::sim::{simulate_to_dir, NoiseModel};
+use estimator::unit_file::UnitFile;
 use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::{render_position_targets, report, ReportOptions};
-use host::sim::{simulate_to_dir, NoiseModel};
-use host::unit_file::UnitFile;
 use recording::session::builtin::paper_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::UnitId;

@@ -125,7 +125,7 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
         "{stdout}"
     );
     let toml = std::fs::read_to_string(session.join("calibration.toml")).unwrap();
-    let cal: host::unit_file::UnitFile = toml::from_str(&toml).unwrap();
+    let cal: estimator::unit_file::UnitFile = toml::from_str(&toml).unwrap();
     let t = cal.temperature.expect("a [temperature] section");
     assert_eq!(t.zero_bias_degree, Some([2; 3]), "{toml}");
     assert_eq!(t.scale_degree, Some([1; 3]), "{toml}");

@@ -1,5 +1,5 @@
 //! The README's layout table and each module's own map name every source file of the PC crates'
-//! module folders (`host/src`, `recording/src`), so that a reader who looks a piece up by its name
+//! module folders (`host/src`, `estimator/src`, `recording/src`), so that a reader who looks a piece up by its name
 //! finds it.
 
 use std::path::Path;
@@ -24,7 +24,7 @@ fn readme_and_module_maps_name_every_file() {
     let readme = std::fs::read_to_string(root.join("../README.md")).unwrap();
     let layout = &readme[readme.find("## Layout").unwrap()..];
     let mut missing = Vec::new();
-    for krate in ["host", "recording"] {
+    for krate in ["host", "estimator", "recording"] {
         missing.extend(unnamed(&root.join("..").join(krate), krate, layout));
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));

@@ -3,8 +3,8 @@
 
 mod common;
 use common::{host, thermal_gyro_session};
+use estimator::unit_file::UnitFile;
 use host::summary::section_values;
-use host::unit_file::UnitFile;
 use serde_json::Value;
 use std::path::Path;
 

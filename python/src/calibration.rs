@@ -4,16 +4,16 @@
 use crate::errors::{usage, IntoPy};
 use crate::session::Session;
 use clap::ValueEnum;
-use host::app::{self, CalibrateOptions, CalibrationDocument, Recording};
-use host::calibration_files::{
+use estimator::calibration_files::{
     blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
 };
+use estimator::estimate::CalibrationOutcome;
+use estimator::unit_file::{UnitFile, UnitFileError};
+use host::app::{self, CalibrateOptions, CalibrationDocument, Recording};
 use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
 use host::cli::CliError;
-use host::estimate::CalibrationOutcome;
 use host::export::{render, ExportFormat, ExportInput, ExportOptions};
 use host::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
-use host::unit_file::{UnitFile, UnitFileError};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -212,7 +212,7 @@ impl Calibration {
             .map(|(b, n)| b[..n].to_vec()),
         };
         let bytes = bytes
-            .map_err(|e| CliError::Output(host::calibration_files::OutputError::Blob(e)))
+            .map_err(|e| CliError::Output(estimator::calibration_files::OutputError::Blob(e)))
             .py_err()?;
         Ok(PyBytes::new(py, &bytes))
     }

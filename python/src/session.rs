@@ -3,11 +3,11 @@
 //! session directory read by `host calibrate --input`'s reader.
 
 use crate::errors::{usage, IntoPy};
+use estimator::estimate::gyro::GyroEstimate;
 use host::app::hand_gyro;
 use host::app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
 use host::cli::log_input::LogInputArgs;
 use host::cli::CliError;
-use host::estimate::gyro::GyroEstimate;
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;

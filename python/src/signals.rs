@@ -5,13 +5,15 @@ use crate::calibration::Calibration;
 use crate::errors::{usage, IntoPy};
 use crate::session::{load_session, rows_of_pair, Session};
 use clap::{Parser, ValueEnum};
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec,
+};
 use host::apply::Applier;
 use host::cli::apply::LeverArg;
 use host::cli::simulate::SimulateArgs;
 use host::cli::CliError;
 use host::noise::allan::{fit, octave_sizes, overlapping_adev, TermFit};
 use host::noise::confidence::relative_sigma;
-use host::sim::handheld::{logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec};
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;

@@ -1,14 +1,14 @@
 //! `host report` and `host compare` end to end, through files: a simulated session on disk, its
 //! calibration written as `calibration.toml`, then the report and the comparison read those files.
 
-use host::calibration_files::write_calibration_files;
-use host::estimate::{calibrate_session_stats, EstimateOptions, Method};
+use estimator::calibration_files::write_calibration_files;
+use estimator::estimate::{calibrate_session_stats, EstimateOptions, Method};
+use estimator::sim::{simulate_to_dir, NoiseModel};
+use estimator::unit_file::UnitFile;
 use host::export::{toml_forms::render as export, ExportFormat};
 use host::report::compare::compare;
 use host::report::plot::png_dimensions;
 use host::report::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
-use host::sim::{simulate_to_dir, NoiseModel};
-use host::unit_file::UnitFile;
 use recording::session::builtin::load_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::UnitId;

@@ -14,6 +14,21 @@ use crate::summary::{CalibrationSummary, Limits};
 use shared::sensor_models::poly_no_constant;
 use shared::{Compensator, LeverMode, OutputUnit};
 
+/// The paper plan's prediction names its bound and the lever-arm components it cannot determine.
+#[test]
+fn the_paper_plans_prediction_says_what_it_cannot_determine() {
+    let truth = testkit::paper_unit();
+    let settings = PredictSettings::white(paper_noise(&truth));
+    let plan = testkit::paper_plan(OutputUnit::Volts);
+    let stats = synth::prediction_stats(&plan, &truth, &settings).unwrap();
+    let prediction = predict(&plan, &truth, &stats, &settings).unwrap();
+    let text = render_prediction(&prediction);
+    assert!(
+        text.contains("Cramér–Rao") && text.contains("not determined"),
+        "{text}"
+    );
+}
+
 /// The paper's method beside the joint fit on the paper's plan: the text prints both.
 #[test]
 fn paper_method_and_joint_fit_are_both_printed() {

@@ -485,14 +485,6 @@ pub fn render_prediction(p: &Prediction) -> String {
     s
 }
 
-/// A prediction prints as [`render_prediction`] (here, so that the estimator does not depend on the
-/// report).
-impl std::fmt::Display for Prediction {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&render_prediction(self))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use crate::estimate::{calibrate_session_stats, EstimateOptions};

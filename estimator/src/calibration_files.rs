@@ -8,14 +8,14 @@ use shared::UnitId;
 use std::path::{Path, PathBuf};
 
 /// File name of the TOML result.
-pub(crate) const CALIBRATION_TOML: &str = "calibration.toml";
+pub const CALIBRATION_TOML: &str = "calibration.toml";
 /// File name of the blob.
 pub(crate) const CALIBRATION_BIN: &str = "calibration.bin";
 /// File name `calibration.toml` takes when its unit failed its checks (pass/fail limits or the
 /// device's verification): nothing that looks for an accepted calibration picks it up.
-pub(crate) const FAILED_TOML: &str = "calibration.FAILED.toml";
+pub const FAILED_TOML: &str = "calibration.FAILED.toml";
 /// File name `calibration.bin` takes when its unit failed its checks.
-pub(crate) const FAILED_BIN: &str = "calibration.FAILED.bin";
+pub const FAILED_BIN: &str = "calibration.FAILED.bin";
 
 /// What was written.
 #[derive(Clone, Debug)]
@@ -54,7 +54,7 @@ pub fn now_unix_s() -> u64 {
 
 /// `YYYYMMDDTHHMMSSZ` of a Unix time (the proleptic Gregorian calendar, H. Hinnant's
 /// days-to-civil algorithm).
-pub(crate) fn utc_stamp(unix_s: u64) -> String {
+pub fn utc_stamp(unix_s: u64) -> String {
     let days = (unix_s / 86_400) as i64;
     let secs = unix_s % 86_400;
     let z = days + 719_468;
@@ -91,7 +91,7 @@ pub fn blob_bytes(
 
 /// Refuses to go on when `out_dir` already holds a calibration and `force` is false: called before
 /// any work (reading a session, recording, flashing), so a run is never wasted on a refusal at its end.
-pub(crate) fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
+pub fn refuse_overwrite(out_dir: &Path, force: bool) -> Result<(), OutputError> {
     if force {
         return Ok(());
     }
@@ -173,7 +173,7 @@ pub fn write_calibration_files(
 /// could be flashed), because its unit failed a check: the files stay for inspection, under names
 /// that say so. An existing failed pair is replaced only with `force`. Returns the new paths of the
 /// `.toml` and the `.bin`.
-pub(crate) fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
+pub fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBuf), OutputError> {
     let (toml_path, bin_path) = (dir.join(FAILED_TOML), dir.join(FAILED_BIN));
     for p in [&toml_path, &bin_path] {
         if !force && p.exists() {
@@ -189,7 +189,7 @@ pub(crate) fn mark_failed_in(dir: &Path, force: bool) -> Result<(PathBuf, PathBu
 
 /// Removes an earlier run's failed pair from `dir`, when there is one: a directory holds one
 /// result, and an accepted pair written beside a failed one (under `--force`) replaces it.
-pub(crate) fn remove_failed_in(dir: &Path) -> Result<(), OutputError> {
+pub fn remove_failed_in(dir: &Path) -> Result<(), OutputError> {
     for name in [FAILED_BIN, FAILED_TOML] {
         let p = dir.join(name);
         match std::fs::remove_file(&p) {

@@ -41,7 +41,7 @@ impl ActualSegment {
 
 /// Noise of the recorded signals, per sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct SynthNoise {
+pub struct SynthNoise {
     /// Accelerometer white noise, 1σ per sample, output unit.
     pub out_1sigma: [f64; 3],
     /// Gyro white noise, 1σ per sample, rad/s.
@@ -123,7 +123,7 @@ pub(crate) fn segment_stats(
 }
 
 /// Noise-free statistics of every segment of a plan run as planned on `unit`.
-pub(crate) fn plan_stats(
+pub fn plan_stats(
     plan: &Plan,
     unit: &ForwardModel,
     noise: &SynthNoise,
@@ -144,7 +144,7 @@ pub(crate) fn plan_stats(
 
 /// The noise-free statistics of `plan` run on `truth` with the noise and durations of `settings`: the
 /// input of [`crate::estimate::predict`].
-pub(crate) fn prediction_stats(
+pub fn prediction_stats(
     plan: &Plan,
     truth: &shared::Calibration,
     settings: &crate::estimate::PredictSettings,

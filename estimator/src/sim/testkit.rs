@@ -13,11 +13,11 @@ use shared::forward::{ForwardModel, TableState};
 use shared::{Calibration, Compensator, LeverArms, LeverMode, OutputUnit, ReferencePoint};
 use shared::{SensorOutputs, StaticParams};
 
-pub(crate) use super::rng::Rng;
+pub use super::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct TableErrors {
+pub struct TableErrors {
     /// 1σ tilt of each mount about each of the two axes perpendicular to its up, degrees (as
     /// `host simulate --tilt-deg`).
     pub attitude_deg: f64,
@@ -110,7 +110,7 @@ pub fn paper_plan(unit: OutputUnit) -> Plan {
 }
 
 /// The paper's plan plus three 45° oblique mounts spun at ±200 °/s and a spin-up per oblique mount.
-pub(crate) fn better_plan(unit: OutputUnit) -> Plan {
+pub fn better_plan(unit: OutputUnit) -> Plan {
     let mut p = paper_plan(unit);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for (n, up) in [
@@ -136,7 +136,7 @@ pub fn paper_unit() -> Calibration {
 }
 
 /// A random digital unit: 4096 LSB/g ± 5 %, biases ±100 LSB, axis tilts up to 2°, lever arms up to 2 cm.
-pub(crate) fn random_digital_unit(rng: &mut Rng) -> Calibration {
+pub fn random_digital_unit(rng: &mut Rng) -> Calibration {
     let mut angles = [[0.0; 3]; 3];
     for i in 0..3 {
         // Tilt axis i by up to 2° in a random direction.
@@ -167,7 +167,7 @@ pub(crate) fn random_digital_unit(rng: &mut Rng) -> Calibration {
 }
 
 /// Noisy statistics of `plan` run on `truth`: each mean gets N(0, σ²/n) per axis.
-pub(crate) fn noisy_stats(
+pub fn noisy_stats(
     plan: &Plan,
     truth: &Calibration,
     noise_out: f64,
@@ -233,7 +233,7 @@ pub fn declared(plan: &Plan, sigma_deg: f64, scale: f64) -> Plan {
 /// A fixture plan with more mounts: the six faces and six edge diagonals at rest (30 s), a 200 °/s
 /// spin on x+, y+ and z+ (30 s), and the four upper cube corners at rest and spun at ±200 °/s (30 s):
 /// 16 mounts.
-pub(crate) fn many_mounts_plan() -> Plan {
+pub fn many_mounts_plan() -> Plan {
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let c = 1.0 / 3f64.sqrt();
     let mut segments = Vec::new();
@@ -313,7 +313,7 @@ pub fn clean_session(plan: &Plan, seed: u64) -> (Calibration, Vec<SegmentStats>)
 /// `host/units/thermal-mems.toml`: the paper's unit with tempcos of MEMS size (bias 0.25..0.35
 /// mg/°C plus a quadratic term, scale 100..150 ppm/°C).
 pub fn hot_unit_file() -> UnitFile {
-    toml::from_str(include_str!("../../units/thermal-mems.toml")).unwrap()
+    toml::from_str(include_str!("../../../host/units/thermal-mems.toml")).unwrap()
 }
 
 /// [`hot_unit_file`] as a calibration.
@@ -438,8 +438,9 @@ pub const HELD_OUT_UPS: [[f64; 3]; 4] = [
 
 /// The MEMS IMU of `host/units/single-package.toml`.
 pub fn single_package_unit() -> Calibration {
-    let file = crate::unit_file::UnitFile::parse(include_str!("../../units/single-package.toml"))
-        .expect("the shipped unit parses");
+    let file =
+        crate::unit_file::UnitFile::parse(include_str!("../../../host/units/single-package.toml"))
+            .expect("the shipped unit parses");
     assert_eq!(file.package(), Package::Single);
     file.to_calibration().expect("a valid unit")
 }

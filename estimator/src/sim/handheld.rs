@@ -187,7 +187,7 @@ impl TableTurnSim {
 }
 
 /// One logged row: time, accelerometer (output unit), gyro (rad/s).
-pub(crate) type HandRow = (f64, [f64; 3], [f64; 3]);
+pub type HandRow = (f64, [f64; 3], [f64; 3]);
 
 /// The simulated recording and where the holds really were.
 pub struct HandSession {
@@ -471,7 +471,7 @@ impl TableTurnPath {
 
 /// How the CSV is laid out, as a logger would.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct LoggerLayout {
+pub struct LoggerLayout {
     /// Header names of acc x y z, gyro x y z.
     pub columns: [String; 6],
     /// Time column name (seconds), or `None` for a sample-index column named `sample`.
@@ -500,7 +500,7 @@ impl Default for LoggerLayout {
 }
 
 /// Writes `rows` as one unlabelled CSV.
-pub(crate) fn write_logger_csv(
+pub fn write_logger_csv(
     path: &Path,
     rows: &[HandRow],
     layout: &LoggerLayout,

@@ -22,7 +22,7 @@ use shared::linalg::RowMajor3;
 
 /// Largest plausible |G_ii − 1|: MEMS gyros are within ±3 % of their nominal scale; 20 % leaves room
 /// for any real part while catching a wrong unit (×57.3), a time base off by ≥ 1.25× and a sign.
-pub(crate) const MAX_SCALE_ERROR: f64 = 0.2;
+pub const MAX_SCALE_ERROR: f64 = 0.2;
 
 /// Largest plausible |G_ij| (i ≠ j): 0.1 is a 5.7° misalignment, far beyond any mounted part's
 /// (≤ 1–2°) but far below a swapped axis's 1.
@@ -30,7 +30,7 @@ pub(crate) const MAX_CROSS_AXIS: f64 = 0.1;
 
 /// Largest plausible rms misfit of hand turns, degrees. The still positions give each "up" to about
 /// 0.01–0.1° and a fitted `G` leaves only that; beyond 1° the turns contradict every linear gyro model.
-pub(crate) const MAX_TURN_MISFIT_DEG: f64 = 1.0;
+pub const MAX_TURN_MISFIT_DEG: f64 = 1.0;
 
 /// Ratio of two scale errors regarded as "the same on all three axes" (a time base or unit, not a
 /// part's own scale errors, which differ from axis to axis).
@@ -38,12 +38,12 @@ const COMMON_SCALE_SPREAD: f64 = 0.05;
 
 /// The common scale factors taken for a result, not a contradiction ([`common_scale`]): a nominal
 /// scale off by up to 4× (a wrong LSB per °/s, a full-scale range mixed up) or a time base as far.
-pub(crate) const COMMON_SCALE_RANGE: (f64, f64) = (0.25, 4.0);
+pub const COMMON_SCALE_RANGE: (f64, f64) = (0.25, 4.0);
 
 /// The factor `k` by which the gyro reads on all three axes (`G ≈ k·(I + small)`), when it is beyond
 /// [`MAX_SCALE_ERROR`], the same on every axis, within [`COMMON_SCALE_RANGE`] and not a unit's
 /// 57.3×: a nominal scale or a time base, which the caller names (docs/model.md §8).
-pub(crate) fn common_scale(matrix: &RowMajor3) -> Option<f64> {
+pub fn common_scale(matrix: &RowMajor3) -> Option<f64> {
     let ratio: [f64; 3] = core::array::from_fn(|i| matrix[i][i]);
     if ratio.iter().any(|r| !r.is_finite() || *r <= 0.0) {
         return None;
@@ -62,7 +62,7 @@ pub(crate) fn common_scale(matrix: &RowMajor3) -> Option<f64> {
 }
 
 /// The likely causes of an implausible `G`, one line each (empty: `G` is plausible).
-pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
+pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();
     if matrix.iter().flatten().any(|v| !v.is_finite()) {
@@ -164,7 +164,7 @@ fn scale_cause(scale: &[f64; 3]) -> String {
 
 /// The refusal of turns that no gyro model explains (`rms_misfit_deg` over `max_deg`: usually
 /// [`MAX_TURN_MISFIT_DEG`]; a six-face session's ups are only as good as its faces, docs/model.md §7.2).
-pub(crate) fn misfit_problem(rms_misfit_deg: f64, turns: usize, max_deg: f64) -> Option<String> {
+pub fn misfit_problem(rms_misfit_deg: f64, turns: usize, max_deg: f64) -> Option<String> {
     (rms_misfit_deg.is_nan() || rms_misfit_deg > max_deg).then(|| {
         format!(
             "the {turns} hand turns contradict every gyro model (rms misfit {rms_misfit_deg:.2}°, at \

@@ -17,7 +17,7 @@ const PER_DECADE: usize = 2;
 
 /// One axis's flicker process.
 #[derive(Clone, Debug)]
-pub(crate) struct Flicker {
+pub struct Flicker {
     /// Per process: (a = e^{−dt/τ}, innovation σ·√(1 − a²), state).
     poles: Vec<(f64, f64, f64)>,
 }

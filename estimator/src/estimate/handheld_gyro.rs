@@ -18,7 +18,7 @@ use std::f64::consts::PI;
 /// One turn: the rows from the end of one still position to the start of the next, with the two
 /// calibrated gravity ("up") directions in body axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Turn {
+pub struct Turn {
     /// Last row of the first still position.
     pub from_row: usize,
     /// First row of the next still position.
@@ -32,7 +32,7 @@ pub(crate) struct Turn {
 /// A whole turn on a table (docs/model.md §7.2): the unit turned `turns` times about the vertical and
 /// set back against the same stop, the same face down before and after.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct TableTurn {
+pub struct TableTurn {
     /// Last row of the still position before.
     pub from_row: usize,
     /// First row of the still position after.
@@ -82,12 +82,12 @@ pub const DETERMINED_1SIGMA: f64 = 1e-3;
 
 impl HandGyroFit {
     /// Scale factor error of each gyro axis (row norm − 1).
-    pub(crate) fn scale_rel(&self) -> [f64; 3] {
+    pub fn scale_rel(&self) -> [f64; 3] {
         self.matrix.map(|r| linalg::norm(&r) - 1.0)
     }
 
     /// Misalignment of gyro axis i towards body axis j (i ≠ j), degrees.
-    pub(crate) fn misalignment_deg(&self) -> RowMajor3 {
+    pub fn misalignment_deg(&self) -> RowMajor3 {
         core::array::from_fn(|i| {
             let n = linalg::norm(&self.matrix[i]);
             core::array::from_fn(|j| {
@@ -202,7 +202,7 @@ fn unpack(p: &[f64]) -> (RowMajor3, [f64; 3]) {
 
 /// The gyro's bias from still intervals: the mean of their mean rates weighted by their lengths, with
 /// 1σ from the spread between intervals (it includes the tremor's and the bias's own wander).
-pub(crate) fn still_bias(means_rad_s: &[([f64; 3], usize)]) -> ([f64; 3], [f64; 3]) {
+pub fn still_bias(means_rad_s: &[([f64; 3], usize)]) -> ([f64; 3], [f64; 3]) {
     let n: usize = means_rad_s.iter().map(|m| m.1).sum();
     let b: [f64; 3] = core::array::from_fn(|j| {
         means_rad_s
@@ -272,7 +272,7 @@ fn check_unit(
 /// Fits `G` and `b` from the hand `turns`, the whole `table` turns and the still intervals' bias
 /// `bias` (from [`still_bias`], with its 1σ), with the gyro's angle random walk `arw_rad_per_sqrt_s`
 /// (from the still intervals' noise) in the table turns' weights.
-pub(crate) fn fit_handheld_gyro(
+pub fn fit_handheld_gyro(
     turns: &[Turn],
     table: &[TableTurn],
     t_s: &[f64],

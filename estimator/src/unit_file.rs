@@ -44,7 +44,7 @@ use shared::{Calibration, LeverArms, OutputUnit, ReferencePoint, StaticParams, U
 use std::path::{Path, PathBuf};
 
 /// The paper's unit (Tables 1 and 3), built in.
-pub(crate) const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
+pub const PAPER_UNIT_TOML: &str = include_str!("../../reference/paper-unit.toml");
 
 /// Top-level tables a unit file may have besides the ones it interprets: kept as they are in
 /// [`UnitFile::other`] (the paper's `[procedure]` and `[expected]`, the simulator's `[noise]` and
@@ -219,7 +219,7 @@ impl TemperatureSection {
     }
 
     /// The section of a model, without an estimate's extras.
-    pub(crate) fn from_model(m: &TemperatureModel) -> TemperatureSection {
+    pub fn from_model(m: &TemperatureModel) -> TemperatureSection {
         TemperatureSection {
             reference_c: m.reference_c,
             valid_range_c: m.valid_range_c,
@@ -305,11 +305,7 @@ impl UnitFile {
 
     /// Checks that this calibration belongs to the unit `other` names (a plan's, a device's or another
     /// file's `unit_id`). An absent or all-zero id (a session recorded without one) binds nothing.
-    pub(crate) fn check_same_unit(
-        &self,
-        other: Option<&str>,
-        other_what: &str,
-    ) -> Result<(), String> {
+    pub fn check_same_unit(&self, other: Option<&str>, other_what: &str) -> Result<(), String> {
         let known = |s: Option<&str>| {
             s.and_then(UnitId::parse_hex)
                 .filter(|id| *id != UnitId::default())
@@ -606,7 +602,7 @@ mod tests {
     /// a single-package fit reads back as one.
     #[test]
     fn a_single_package_unit_has_one_lever_arm() {
-        let text = include_str!("../units/single-package.toml");
+        let text = include_str!("../../host/units/single-package.toml");
         let unit = UnitFile::parse(text).unwrap();
         assert_eq!(unit.package(), Package::Single);
         let cal = unit.to_calibration().unwrap();

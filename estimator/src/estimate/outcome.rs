@@ -99,7 +99,7 @@ pub struct Exclusion {
 
 /// The fit's view of one segment: its fitted up, the specific force the fitted model predicts and
 /// the χ² check. The outputs before and after compensation (the paper's Tables 2 and 4) are the one
-/// table of [`crate::report::segment_rows`], which the terminal text shows beside these.
+/// table of the report's `segment_rows` (crate `host`), which the terminal text shows beside these.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SegmentDiagnostic {
     /// Segment name.

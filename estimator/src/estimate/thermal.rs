@@ -424,7 +424,7 @@ fn fit_axis(
 
 impl ThermalFit {
     /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
-    pub(crate) fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
+    pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
         let dt = temp_c - self.model.reference_c;
         let g = [dt, dt * dt, dt * dt * dt];
         let value = (0..DEG).map(|k| c[k] * g[k]).sum();

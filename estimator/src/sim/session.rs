@@ -62,7 +62,7 @@ pub(crate) const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0
 /// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
 /// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
 /// non-orthogonality, so no change of body frame absorbs it).
-pub(crate) fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
+pub fn gyro_matrix(scale: [f64; 3], misalignment_rad: f64) -> [[f64; 3]; 3] {
     const SIGN: [[f64; 3]; 3] = [[0.0, 1.0, -1.0], [1.0, 0.0, 1.0], [-1.0, -1.0, 0.0]];
     std::array::from_fn(|i| {
         std::array::from_fn(|j| {
@@ -106,7 +106,7 @@ impl NoiseModel {
     }
 
     /// The `[noise]` table of a unit file, over the defaults; `None` when there is none.
-    pub(crate) fn from_unit_file(unit: &UnitFile) -> Result<Option<NoiseModel>, SimulateError> {
+    pub fn from_unit_file(unit: &UnitFile) -> Result<Option<NoiseModel>, SimulateError> {
         match unit.other.get("noise") {
             None => Ok(None),
             Some(v) => v
@@ -118,7 +118,7 @@ impl NoiseModel {
     }
 
     /// Checks that every value is finite and every σ non-negative.
-    pub(crate) fn validate(&self) -> Result<(), SimulateError> {
+    pub fn validate(&self) -> Result<(), SimulateError> {
         let sigmas = [
             ("accel_white_mg", self.accel_white_mg),
             ("accel_quantum_out", self.accel_quantum_out),

@@ -17,7 +17,7 @@ use shared::{Calibration, FittedStatic};
 
 /// How a session's statistics are made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Generator {
+pub enum Generator {
     /// `simulate_rows` (every sample, 1 mg accelerometer and 0.05 °/s gyro white noise).
     Rows,
     /// The exact distribution of the segment means (same noise).
@@ -26,7 +26,7 @@ pub(crate) enum Generator {
 
 /// One Monte Carlo case.
 #[derive(Clone, Debug)]
-pub(crate) struct Case {
+pub struct Case {
     /// Printed title.
     pub title: String,
     /// The plan, with the attitude prior it declares.
@@ -50,7 +50,7 @@ pub(crate) struct Case {
 
 /// One seed's errors.
 #[derive(Clone, Debug)]
-pub(crate) struct SeedResult {
+pub struct SeedResult {
     /// Worst error over 26 held-out attitudes × 3 axes, µg, as is.
     pub static_raw_ug: f64,
     /// The same after removing the best common rotation.
@@ -79,10 +79,10 @@ pub(crate) struct SeedResult {
 }
 
 /// A gyro estimate's errors and reported 1σ: (G − G_true, b − b_true, σ_G, σ_b).
-pub(crate) type GyroErrors = (RowMajor3, [f64; 3], RowMajor3, [f64; 3]);
+pub type GyroErrors = (RowMajor3, [f64; 3], RowMajor3, [f64; 3]);
 
 /// All seeds of a case.
-pub(crate) struct CaseResult {
+pub struct CaseResult {
     /// The case's title.
     pub title: String,
     /// Per seed.
@@ -133,7 +133,7 @@ fn compensate(
 }
 
 /// Static errors on 26 random held-out attitudes, µg.
-pub(crate) struct StaticErrors {
+pub struct StaticErrors {
     /// Worst as is.
     pub raw_worst_ug: f64,
     /// Worst after the best common rotation.
@@ -145,7 +145,7 @@ pub(crate) struct StaticErrors {
 }
 
 /// Static errors on 26 random held-out attitudes.
-pub(crate) fn static_errors(
+pub fn static_errors(
     truth: &Calibration,
     fitted: &FittedStatic,
     rng: &mut testkit::Rng,
@@ -246,7 +246,7 @@ fn dynamic_error(
 
 /// The norm-only method (as hand-calibration tools do): `u0` and a lower-triangular `T = M⁻¹` such
 /// that every static mean has |T (ū − u0)| = 1, unweighted Gauss–Newton with a numerical Jacobian.
-pub(crate) fn norm_only(means: &[[f64; 3]]) -> Option<FittedStatic> {
+pub fn norm_only(means: &[[f64; 3]]) -> Option<FittedStatic> {
     let mut p = [0.0; 9]; // u0 (3), T00, T10, T11, T20, T21, T22
     for i in 0..3 {
         let (lo, hi) = means
@@ -451,14 +451,14 @@ fn norm_only_errors(
 }
 
 /// The `q` quantile (nearest rank).
-pub(crate) fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
+pub fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
     v[k]
 }
 
 /// Root mean square.
-pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
+pub fn rms(v: impl Iterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0.0);
     for x in v {
         s += x * x;
@@ -469,50 +469,50 @@ pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
 
 impl CaseResult {
     /// 95th percentile of the static error after the common rotation, µg.
-    pub(crate) fn static_p95_ug(&self) -> f64 {
+    pub fn static_p95_ug(&self) -> f64 {
         percentile(self.seeds.iter().map(|s| s.static_ug).collect(), 0.95)
     }
     /// 95th percentile of the static error as is, µg.
-    pub(crate) fn static_raw_p95_ug(&self) -> f64 {
+    pub fn static_raw_p95_ug(&self) -> f64 {
         percentile(self.seeds.iter().map(|s| s.static_raw_ug).collect(), 0.95)
     }
     /// RMS over seeds of the dynamic error at 200 °/s, µg.
-    pub(crate) fn dyn200_ug(&self) -> f64 {
+    pub fn dyn200_ug(&self) -> f64 {
         rms(self.seeds.iter().map(|s| s.dyn200_ug))
     }
     /// RMS over seeds of the dynamic error to 300 °/s, µg.
-    pub(crate) fn dyn300_ug(&self) -> f64 {
+    pub fn dyn300_ug(&self) -> f64 {
         rms(self.seeds.iter().map(|s| s.dyn300_ug))
     }
     /// RMS error of each lever-arm component over seeds, m.
-    pub(crate) fn lever_rms_m(&self) -> RowMajor3 {
+    pub fn lever_rms_m(&self) -> RowMajor3 {
         core::array::from_fn(|i| {
             core::array::from_fn(|j| rms(self.seeds.iter().map(|s| s.lever_err_m[i][j])))
         })
     }
     /// The worst component's RMS lever-arm error, m.
-    pub(crate) fn lever_worst_rms_m(&self) -> f64 {
+    pub fn lever_worst_rms_m(&self) -> f64 {
         self.lever_rms_m()
             .iter()
             .flatten()
             .fold(0.0, |a: f64, b| a.max(*b))
     }
     /// Observed body-frame error spread / mean reported 1σ, pooled over the three axes.
-    pub(crate) fn body_ratio(&self) -> f64 {
+    pub fn body_ratio(&self) -> f64 {
         let spread = rms(self.seeds.iter().flat_map(|s| s.body_err_rad));
         let sigma = rms(self.seeds.iter().flat_map(|s| s.body_sigma_rad));
         spread / sigma
     }
     /// Seeds whose report warned of a tilt.
-    pub(crate) fn warned(&self) -> usize {
+    pub fn warned(&self) -> usize {
         self.seeds.iter().filter(|s| s.tilt_warning).count()
     }
     /// RMS over seeds and held-out attitudes of the static error after the common rotation, µg.
-    pub(crate) fn static_rms_ug(&self) -> f64 {
+    pub fn static_rms_ug(&self) -> f64 {
         rms(self.seeds.iter().map(|s| s.static_rms_ug))
     }
     /// The norm-only method's 95th percentile worst and overall rms static error, µg.
-    pub(crate) fn norm_only_ug(&self) -> Option<(f64, f64)> {
+    pub fn norm_only_ug(&self) -> Option<(f64, f64)> {
         let v: Vec<(f64, f64)> = self
             .seeds
             .iter()
@@ -527,7 +527,7 @@ impl CaseResult {
     }
     /// Gyro figures: rms error and spread/mean 1σ of the scale entries (diagonal, ppm), the
     /// misalignment entries (off-diagonal, µrad) and the biases (°/s).
-    pub(crate) fn gyro_figures(&self) -> Option<[(f64, f64); 3]> {
+    pub fn gyro_figures(&self) -> Option<[(f64, f64); 3]> {
         let e: Vec<&(RowMajor3, [f64; 3], RowMajor3, [f64; 3])> = self
             .seeds
             .iter()
@@ -557,7 +557,7 @@ impl CaseResult {
 
     /// RMS of the scale (diagonal, ppm) and misalignment (off-diagonal, µrad) errors of `G` after
     /// removing the common rotation.
-    pub(crate) fn gyro_intrinsic(&self) -> Option<(f64, f64)> {
+    pub fn gyro_intrinsic(&self) -> Option<(f64, f64)> {
         let e: Vec<&RowMajor3> = self
             .seeds
             .iter()

@@ -41,7 +41,7 @@ pub struct Noise {
 
 impl Noise {
     /// The mean covariances over `statics` (zero when there is none).
-    pub(crate) fn pooled<'a>(statics: impl Iterator<Item = &'a SegmentStats>) -> Noise {
+    pub fn pooled<'a>(statics: impl Iterator<Item = &'a SegmentStats>) -> Noise {
         let statics: Vec<&SegmentStats> = statics.collect();
         let n = statics.len().max(1) as f64;
         let mean = |f: &dyn Fn(&SegmentStats) -> RowMajor3| -> RowMajor3 {

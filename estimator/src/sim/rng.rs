@@ -8,7 +8,7 @@
 /// xoshiro256++ (Blackman and Vigna), seeded through SplitMix64: small, fast, and fixed forever, so
 /// that a seed names the same session on every machine.
 #[derive(Clone, Debug)]
-pub(crate) struct Rng {
+pub struct Rng {
     s: [u64; 4],
     spare: Option<f64>,
 }
@@ -35,7 +35,7 @@ impl Rng {
     }
 
     /// Next 64 random bits.
-    pub(crate) fn next_u64(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         let s = &mut self.s;
         let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
         let t = s[1] << 17;
@@ -54,20 +54,20 @@ impl Rng {
     }
 
     /// Uniform on (0, 1), never exactly 0 or 1.
-    #[cfg(test)]
-    pub(crate) fn uniform(&mut self) -> f64 {
+    #[cfg(any(test, feature = "testkit"))]
+    pub fn uniform(&mut self) -> f64 {
         ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
 
     /// Uniform on (`lo`, `hi`).
-    #[cfg(test)]
+    #[cfg(any(test, feature = "testkit"))]
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.uniform()
     }
 
     /// A direction uniform on the unit sphere.
-    #[cfg(test)]
-    pub(crate) fn unit_vector(&mut self) -> [f64; 3] {
+    #[cfg(any(test, feature = "testkit"))]
+    pub fn unit_vector(&mut self) -> [f64; 3] {
         let v = [self.normal(), self.normal(), self.normal()];
         let n = shared::linalg::norm(&v);
         v.map(|c| c / n)

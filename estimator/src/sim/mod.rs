@@ -8,23 +8,23 @@
 //!   [`stats`]: its statistics without writing rows.
 //! - [`handheld`]: a hand-held session (`host simulate-hand`); [`thermal`]: temperature profiles and
 //!   the unit's thermal model; [`flicker`]: 1/f noise.
-//! - Test-only: `testkit` (the tests' noisy statistics with table errors, and their plans) and `montecarlo` (the
+//! - For tests (here, and with the feature `testkit` for the crates above): `testkit` (the tests' noisy statistics with table errors, and their plans) and `montecarlo` (the
 //!   Monte Carlo runs behind the accuracy figures).
 
 pub mod flicker;
 pub mod handheld;
-#[cfg(test)]
-pub(crate) mod montecarlo;
+#[cfg(any(test, feature = "testkit"))]
+pub mod montecarlo;
 pub mod rng;
 mod sensor_noise;
 pub mod session;
 pub mod stats;
 pub mod synth;
-#[cfg(test)]
-pub(crate) mod testkit;
+#[cfg(any(test, feature = "testkit"))]
+pub mod testkit;
 pub mod thermal;
 
-pub(crate) use rng::Rng;
+pub use rng::Rng;
 pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
     simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
