@@ -5,9 +5,10 @@ QEMU_BOARD=(qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -mo
     -semihosting-config enable=on,target=native)
 
 # Flash budget of the QEMU firmware image, bytes: it fails above this. The goal is 48 KiB (49 152);
-# the image is 56 232 bytes (54.9 KiB) since the virtual IMU (the ICM-42688-P register model and
-# driver, +9.5 KiB) and the pipeline's run loops (+2.9 KiB) joined it; README "Measured figures".
-QEMU_FLASH_BUDGET=56320
+# the image is 57 320 bytes (56.0 KiB) since the virtual IMU (the ICM-42688-P register model and
+# driver, +9.5 KiB), the pipeline's run loops (+2.9 KiB) and the per-sample path in plain Rust
+# instead of inline assembly (+1.1 KiB) joined it; README "Measured figures".
+QEMU_FLASH_BUDGET=57344
 
 # Prints the QEMU firmware's flash and static RAM (arm-none-eabi-size: flash = text + data, static
 # RAM = data + bss) and fails when the flash is over QEMU_FLASH_BUDGET.

@@ -7,8 +7,8 @@
 //!   `M = K·A`, with the conversions of `docs/model.md` §4.2;
 //! - [`sensor_models`]: the gyro's correction and the temperature model (docs/model.md §8, §9);
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
-//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), with its
-//!   Cortex-M4F form in `compensator_arm.rs` (bit for bit the same arithmetic);
+//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), the same
+//!   bits on the PC and on the Cortex-M4F;
 //! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §4.6;
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
 //! - [`wire`]: the host↔device messages and their COBS framing.
