@@ -38,9 +38,7 @@ pub const MAX_WINDOW_SAMPLES: u32 = 1 << 24;
 /// over seconds, and a refresh (about 150 instructions with 3 divisions) need not run per sample.
 pub const TEMPERATURE_REFRESH_HZ: u32 = 4;
 
-/// One sample as read from the sensors. `repr(C)`: an ADC board's conversion
-/// ([`crate::conversion`]) writes it from an assembly block.
-#[repr(C)]
+/// One sample as read from the sensors.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Sample {
     /// Accelerometer outputs, sensor axes, output unit (V or LSB).

@@ -267,9 +267,10 @@ pub fn check_window_6() -> Check {
 }
 
 /// The ADC board's conversion through [`Scaling::convert`] against [`Scaling::reference`]: on the
-/// M4F the first is an assembly block, and both must agree bit for bit, the flag included (as 0.0
-/// or 1.0). Codes and gyro words at, next to and away from their range ends, words with low bits
-/// set (exact fixed-point conversion), with and without the watchdog's flag.
+/// M4F the first runs on the FPU, the second in soft-float `f64`, and both must agree bit for bit,
+/// the flag included (as 0.0 or 1.0). Codes and gyro words at, next to and away from their range
+/// ends, words with low bits set (rounded by the conversion), with and without the watchdog's
+/// flag.
 pub fn check_conversion() -> Check {
     const CODES: [u32; 9] = [0, 1, 2, 2047, 2048, 4094, 4095, 65_535, u32::MAX];
     const WORDS: [i32; 12] = [
