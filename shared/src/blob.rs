@@ -94,7 +94,8 @@ pub enum BlobError {
     BadGyro,
     /// The temperature model is implausible (range, scale over the range, non-finite values).
     BadTemperatureModel,
-    /// A value is beyond the range of the device's `f32` arithmetic (e.g. a bias of 1e300).
+    /// A value is beyond the range the device computes with: its `f32` arithmetic (e.g. a bias
+    /// of 1e300), or an installation angle beyond ±[`crate::trig::MAX_ANGLE_DEG`].
     OutOfDeviceRange,
 }
 
@@ -120,7 +121,7 @@ impl core::fmt::Display for BlobError {
             BlobError::BadGyro => "calibration's gyro correction is implausible",
             BlobError::BadTemperatureModel => "calibration's temperature model is implausible",
             BlobError::OutOfDeviceRange => {
-                "calibration holds a value beyond the device's f32 range"
+                "calibration holds a value beyond the device's range (f32, installation angles)"
             }
         };
         f.write_str(s)
@@ -136,6 +137,9 @@ impl From<CompensatorError> for BlobError {
             CompensatorError::Params(ParamsError::NonFinite) => BlobError::NonFinite,
             CompensatorError::Params(ParamsError::DegenerateAxis { .. }) => {
                 BlobError::DegenerateAxis
+            }
+            CompensatorError::Params(ParamsError::AngleOutOfRange { .. }) => {
+                BlobError::OutOfDeviceRange
             }
             CompensatorError::IllConditioned { .. } => BlobError::IllConditioned,
             CompensatorError::Gravity => BlobError::BadGravity,
