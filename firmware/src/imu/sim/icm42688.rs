@@ -370,7 +370,7 @@ impl<G: Generator> Icm42688Model<G> {
         } else {
             1000
         };
-        let ts = ((self.time_ns / tick_ns) as u16).to_be_bytes();
+        let ts = ticks_u16(self.time_ns, tick_ns).to_be_bytes();
         if hires {
             p[0] = HEADER_PACKET4;
             for i in 0..3 {
@@ -616,11 +616,54 @@ impl<G: Generator> Icm42688Model<G> {
     }
 }
 
+/// `(t / d) mod 2¹⁶` for a divisor `d` below 2¹⁶ (the time stamp's tick, 1 000 or 16 000 ns), by
+/// long division in 16-bit digits with 32-bit divisions: the model needs no 64-bit division
+/// routine (0.9 KiB of the QEMU image).
+fn ticks_u16(t: u64, d: u32) -> u16 {
+    debug_assert!(d > 0 && d < 1 << 16);
+    // Each step divides a remainder (below d < 2¹⁶) with the next 16-bit digit appended: below
+    // 2³², and its quotient digit below 2¹⁶. Only the last quotient digit is kept.
+    let mut r = ((t >> 32) as u32) % d;
+    r = ((r << 16) | ((t >> 16) as u32 & 0xFFFF)) % d;
+    (((r << 16) | (t as u32 & 0xFFFF)) / d) as u16
+}
+
 /// Burst accesses step through the registers, except FIFO_DATA, which a burst keeps popping.
 fn next_address(a: u8) -> u8 {
     if a == FIFO_DATA {
         a
     } else {
         (a + 1) & 0x7F
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ticks_u16;
+    use proptest::prelude::*;
+
+    #[test]
+    fn ticks_at_the_edges() {
+        for d in [1, 2, 1000, 16_000, 65_535] {
+            for t in [
+                0,
+                1,
+                u64::from(d) - 1,
+                u64::from(d),
+                u64::MAX,
+                u64::MAX - 1,
+                1 << 32,
+            ] {
+                assert_eq!(ticks_u16(t, d), (t / u64::from(d)) as u16, "{t} / {d}");
+            }
+        }
+    }
+
+    proptest! {
+        /// The time stamp's ticks as the 64-bit division gives them.
+        #[test]
+        fn ticks_are_the_64_bit_quotient_mod_2_16(t: u64, d in 1u32..65_536) {
+            prop_assert_eq!(ticks_u16(t, d), (t / u64::from(d)) as u16);
+        }
     }
 }
