@@ -285,8 +285,10 @@ impl<const Q: usize> Pipeline<Q> {
     }
 
     /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
-    /// when uncalibrated.
-    #[inline(always)]
+    /// when uncalibrated. Out of line: `on_sample` needs it twice, and the run loops (`run.rs`),
+    /// the digital IMU's per-sample path, have their own copies in line (0.4 KiB of the QEMU image;
+    /// the ADC path's call costs about 40 instructions per sample of its 0.5 % budget's 900).
+    #[inline(never)]
     fn compensate(&self, raw: &[f32; 3], rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
         match &self.compensator {
             Some(c) if c.mode() == LeverMode::Off => {
