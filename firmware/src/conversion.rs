@@ -5,24 +5,19 @@
 //! them:
 //!
 //! - **The ADC scan's codes as 32-bit words.** The DMA reads ADC_DR as words; its upper half is zero
-//!   in independent mode (RM0390 §13.13.14). One `vldmia` takes all three codes and
-//!   `vcvt.f32.u32` converts each exactly.
+//!   in independent mode (RM0390 §13.13.14), and each code converts to `f32` exactly.
 //! - **The gyro's words in the upper half of 32-bit words** ([`gyro_word`], the word as a Q16.16
-//!   value, assembled from the SPI bytes at no extra cost). The FPU's fixed-point conversion
-//!   (`vcvt.f32.s32 #16`) gives the word exactly. A saturating add and a saturating subtract of one
-//!   LSB (`qadd`, `qsub`) set the sticky Q flag exactly for 32767 and −32768, the range ends.
+//!   value, assembled from the SPI bytes at no extra cost). Converted and scaled by 2⁻¹⁶ (the
+//!   FPU's fixed-point conversion, `vcvt.f32.s32 #16`), that gives the word exactly.
 //! - **Whether a code sat at 0 or at full scale, from the ADC itself.** Its analog watchdog guards
 //!   every regular channel with the thresholds of [`watchdog_thresholds`]: it flags a conversion
 //!   below the low threshold or above the high one (RM0390 §13.3.7), which is exactly a code at
 //!   either end. The board reads and clears the flag ([`ADC_SR_AWD`]) once per scan.
 //!
-//! On the Cortex-M4F the conversion is one assembly block of 28 instructions (the benchmark's
-//! "sample conversion" line). Elsewhere it is [`Scaling::reference`], the definition the
-//! QEMU test checks the block against bit for bit. Both make one rounding per value, in the
-//! multiply: every conversion before it is exact.
-
-#[cfg(target_arch = "arm")]
-use core::mem::MaybeUninit;
+//! [`Scaling::convert`] makes one rounding per value, in the multiply: every conversion before it
+//! is exact. [`Scaling::reference`] defines the same values another way (each product in `f64`,
+//! where it is exact, then rounded once), which the QEMU test checks the device's conversion
+//! against bit for bit.
 
 use crate::pipeline::Sample;
 
@@ -64,9 +59,7 @@ pub const fn gyro_word_from_le(low: u8, high: u8) -> i32 {
     i32::from_le_bytes([0, 0, low, high])
 }
 
-/// The conversion's two scales, precomputed from the board's configuration. `repr(C)`: the
-/// assembly block loads both with one `vldmia`.
-#[repr(C)]
+/// The conversion's two scales, precomputed from the board's configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scaling {
     /// Volts per ADC code (V_ref / 4095 for a 12-bit ADC).
@@ -79,98 +72,57 @@ pub struct Scaling {
 /// fraction bits.
 const Q16_LSB: f32 = 1.0 / 65536.0;
 
+/// A [`gyro_word`]'s upper half `v` as `v + 32767` in `u32`: the two range ends are the only
+/// words at or above [`AT_RANGE_END`] (−32768 gives `u32::MAX`, 32767 gives 65 534, the others
+/// 0..=65 533), so one comparison of the largest of three tests them all.
+#[inline(always)]
+fn end_key(q: i32) -> u32 {
+    ((q >> 16) + 32767) as u32
+}
+
+/// An [`end_key`] at or above this: the word sat at a range end.
+const AT_RANGE_END: u32 = 65_534;
+
 impl Scaling {
     /// The sample of the scan's codes `adc`, the gyro's words `gyro` ([`gyro_word`]) and whether
     /// the ADC's watchdog saw a code at either end of its range in this scan: outputs in volts,
     /// rates in rad/s, saturated when a code or a gyro word sat at a range end.
+    ///
+    /// Scaling by 2⁻¹⁶ is exact, so converting then scaling rounds once, in the multiply (the
+    /// conversion of a gyro word, whose lower half is 0, is exact). Written out per value:
+    /// straight-line code at opt-level "s".
     #[inline(always)]
     pub fn convert(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
-        #[cfg(target_arch = "arm")]
-        let sample = self.convert_m4f(adc, gyro, adc_at_end);
-        #[cfg(not(target_arch = "arm"))]
-        let sample = self.reference(adc, gyro, adc_at_end);
-        sample
-    }
-
-    /// The definition of [`Scaling::convert`], in plain Rust: the PC's form, and the reference the
-    /// M4F's assembly block is checked against.
-    #[inline(always)]
-    pub fn reference(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
-        // Scaling by 2⁻¹⁶ is exact, so converting then scaling rounds once, as the FPU's
-        // fixed-point conversion does.
-        let end = |q: i32| matches!(q >> 16, -32768 | 32767);
+        let (kv, kg) = (self.volts_per_code, self.rad_s_per_lsb);
         Sample {
-            raw: adc.map(|c| c as f32 * self.volts_per_code),
-            rate_rad_s: gyro.map(|q| (q as f32 * Q16_LSB) * self.rad_s_per_lsb),
-            saturated: adc_at_end || gyro.iter().any(|&q| end(q)),
+            raw: [adc[0] as f32 * kv, adc[1] as f32 * kv, adc[2] as f32 * kv],
+            rate_rad_s: [
+                (gyro[0] as f32 * Q16_LSB) * kg,
+                (gyro[1] as f32 * Q16_LSB) * kg,
+                (gyro[2] as f32 * Q16_LSB) * kg,
+            ],
+            saturated: adc_at_end
+                | (end_key(gyro[0]).max(end_key(gyro[1])).max(end_key(gyro[2])) >= AT_RANGE_END),
         }
     }
 
-    /// [`Scaling::convert`] as one assembly block: the three loads, six conversions and six
-    /// multiplies of the FPU, one store of the six results; the gyro's range ends as the sticky Q
-    /// flag of three saturating adds and subtracts, folded with the ADC's flag into the sample's.
-    #[cfg(target_arch = "arm")]
-    #[inline(always)]
-    fn convert_m4f(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
-        let mut sample = MaybeUninit::<Sample>::uninit();
-        let out = sample.as_mut_ptr();
-        // SAFETY: reads the three words of `adc` and of `gyro` and the two `f32` of `self`
-        // (`repr(C)`), writes `out`'s six `f32` and its flag at the offsets the assertions below
-        // `Sample` fix; all 4-byte aligned. Touches no stack. `msr` clears N, Z, C, V and Q (the
-        // constant 0x10000 has bits 31–27 clear) and nothing after it sets N, Z, C or V (`qadd`
-        // and `qsub` set only Q), so `APSR >> 27` is Q alone and the stored flag is 0 or 1.
-        unsafe {
-            core::arch::asm!(
-                "mov {one}, #0x10000",
-                "msr APSR_nzcvq, {one}",
-                "vldmia {adc}, {{s0-s2}}",
-                "vldmia {gyr}, {{s3-s5}}",
-                "vldmia {k}, {{s6-s7}}",
-                "vcvt.f32.u32 s0, s0",
-                "vcvt.f32.u32 s1, s1",
-                "vcvt.f32.u32 s2, s2",
-                "vcvt.f32.s32 s3, s3, #16",
-                "vcvt.f32.s32 s4, s4, #16",
-                "vcvt.f32.s32 s5, s5, #16",
-                "vmul.f32 s0, s0, s6",
-                "vmul.f32 s1, s1, s6",
-                "vmul.f32 s2, s2, s6",
-                "vmul.f32 s3, s3, s7",
-                "vmul.f32 s4, s4, s7",
-                "vmul.f32 s5, s5, s7",
-                "vstmia {out}, {{s0-s5}}",
-                "ldm {gyr}, {{r1, r2, r3}}",
-                "qadd {t}, r1, {one}",
-                "qsub {t}, r1, {one}",
-                "qadd {t}, r2, {one}",
-                "qsub {t}, r2, {one}",
-                "qadd {t}, r3, {one}",
-                "qsub {t}, r3, {one}",
-                "mrs {t}, APSR",
-                "orr {t}, {end}, {t}, lsr #27",
-                "strb {t}, [{out}, #24]",
-                adc = in(reg) adc.as_ptr(),
-                gyr = in(reg) gyro.as_ptr(),
-                k = in(reg) self as *const Scaling,
-                out = in(reg) out,
-                end = in(reg) u32::from(adc_at_end),
-                one = out(reg) _,
-                t = out(reg) _,
-                out("r1") _, out("r2") _, out("r3") _,
-                out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
-                out("s5") _, out("s6") _, out("s7") _,
-                options(nostack),
-            );
+    /// What [`Scaling::convert`] must give, defined another way: each value converted through
+    /// `f64` and its product with the scale formed in `f64`, where the product of two `f32` is
+    /// exact (48 significant bits), then rounded once to `f32` (the correctly rounded `f32`
+    /// product); the range ends from the word's upper half as an `i16`. On the M4F this runs in
+    /// soft-float, so the QEMU test compares the FPU's conversion with an independent one.
+    pub fn reference(&self, adc: &[u32; 3], gyro: &[i32; 3], adc_at_end: bool) -> Sample {
+        let product = |x: f64, k: f32| (f64::from(x as f32) * f64::from(k)) as f32;
+        Sample {
+            raw: adc.map(|c| product(f64::from(c), self.volts_per_code)),
+            rate_rad_s: gyro.map(|q| product(f64::from(q) / 65536.0, self.rad_s_per_lsb)),
+            saturated: adc_at_end
+                || gyro
+                    .iter()
+                    .any(|&q| matches!((q >> 16) as i16, i16::MIN | i16::MAX)),
         }
-        // SAFETY: the block wrote every field (the padding after the flag is never read).
-        unsafe { sample.assume_init() }
     }
 }
-
-// The assembly block's view of `Sample`: six `f32` in a row, then the flag.
-const _: () = assert!(core::mem::offset_of!(Sample, raw) == 0);
-const _: () = assert!(core::mem::offset_of!(Sample, rate_rad_s) == 12);
-const _: () = assert!(core::mem::offset_of!(Sample, saturated) == 24);
 
 #[cfg(test)]
 mod tests {

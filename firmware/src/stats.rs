@@ -20,10 +20,8 @@ pub struct WindowStats<const N: usize> {
     pub var: [f32; N],
 }
 
-/// Running accumulator of one window. `repr(C)`: the reference and the block sums lie first, in
-/// one run of `f32` that the M4F form of [`WindowAccumulator::add`] reads in one block load.
+/// Running accumulator of one window.
 #[derive(Clone, Copy, Debug)]
-#[repr(C)]
 pub struct WindowAccumulator<const N: usize> {
     reference: [f32; N],
     block_sum: [f32; N],
@@ -62,18 +60,6 @@ impl<const N: usize> WindowAccumulator<N> {
     /// Adds one sample (the caller has checked that it is finite).
     #[inline(always)]
     pub fn add(&mut self, x: &[f32; N]) {
-        self.add_with(x, Self::add_sums);
-    }
-
-    /// [`Self::add`] with the block sums in Rust on every target: what the QEMU tests compare the
-    /// M4F form with.
-    #[inline(always)]
-    pub fn add_compiled(&mut self, x: &[f32; N]) {
-        self.add_with(x, Self::add_reference);
-    }
-
-    #[inline(always)]
-    fn add_with(&mut self, x: &[f32; N], sums: fn(&mut Self, &[f32; N])) {
         // One counter and one branch per sample: the window's first sample and each block's end
         // take the out-of-line path.
         // (`x` stays out of the call: passing its address would make the caller store the sample
@@ -81,26 +67,14 @@ impl<const N: usize> WindowAccumulator<N> {
         if self.block_left == 0 && self.next_block() {
             self.reference = *x;
         }
-        sums(self, x);
+        self.add_sums(x);
         self.block_left -= 1;
     }
 
-    /// The block sums of one sample: the M4F block for 6 channels, else the reference.
+    /// The block sums of one sample: `d = x − r`, `Σd += d`, `Σd² += d·d`, each product rounded
+    /// before its addition.
     #[inline(always)]
     fn add_sums(&mut self, x: &[f32; N]) {
-        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-        if N == 6 {
-            self.add6_block(x);
-            return;
-        }
-        self.add_reference(x);
-    }
-
-    /// The block sums of one sample in Rust: the reference (the PC, other targets, other channel
-    /// counts); the M4F form for 6 channels rounds identically, which the QEMU tests check bit for
-    /// bit (`window_block_matches_reference`).
-    #[inline(always)]
-    fn add_reference(&mut self, x: &[f32; N]) {
         // Written out for the pipeline's 6 channels (and 3): straight-line code even at opt-level
         // "s", which the firmware is built with (a loop costs 45 % more instructions there).
         match N {
@@ -122,62 +96,6 @@ impl<const N: usize> WindowAccumulator<N> {
                     self.channel(j, x);
                 }
             }
-        }
-    }
-
-    /// The block sums of one 6-channel sample on the M4F, in line: the reference and both block
-    /// sums (18 `f32`) in one block load, the sample in another, the reference's 18 operations
-    /// (`d = x − r`, `Σd += d`, `Σd² += d·d`, each product rounded before its addition) and one
-    /// block store: 22 instructions where compiled code moves each value on its own (about 50
-    /// in place, firmware/scripts/bench-qemu.sh). Operands through memory, the FPU registers used
-    /// declared clobbered, as in `shared::Compensator`'s blocks.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-    #[inline(always)]
-    fn add6_block(&mut self, x: &[f32; N]) {
-        const {
-            use core::mem::offset_of;
-            assert!(offset_of!(WindowAccumulator<6>, reference) == 0);
-            assert!(offset_of!(WindowAccumulator<6>, block_sum) == 6 * 4);
-            assert!(offset_of!(WindowAccumulator<6>, block_sq) == 12 * 4);
-        };
-        // SAFETY: called for N == 6 only: reads the 18 `f32` at the start of `self` (offsets
-        // checked above) and the six of `x`, writes the twelve block sums; all 4-byte aligned
-        // `f32`. Touches no stack; s0–s23 are declared clobbered and the pointer register is an
-        // in-out temporary. Not `preserves_flags`: the arithmetic sets the FPSCR's cumulative
-        // exception flags, and `adds` the APSR's.
-        unsafe {
-            core::arch::asm!(
-                "vldmia {a}, {{s0-s17}}",
-                "vldmia {x}, {{s18-s23}}",
-                "vsub.f32 s18, s18, s0",
-                "vsub.f32 s19, s19, s1",
-                "vsub.f32 s20, s20, s2",
-                "vsub.f32 s21, s21, s3",
-                "vsub.f32 s22, s22, s4",
-                "vsub.f32 s23, s23, s5",
-                "vadd.f32 s6, s6, s18",
-                "vadd.f32 s7, s7, s19",
-                "vadd.f32 s8, s8, s20",
-                "vadd.f32 s9, s9, s21",
-                "vadd.f32 s10, s10, s22",
-                "vadd.f32 s11, s11, s23",
-                "vmla.f32 s12, s18, s18",
-                "vmla.f32 s13, s19, s19",
-                "vmla.f32 s14, s20, s20",
-                "vmla.f32 s15, s21, s21",
-                "vmla.f32 s16, s22, s22",
-                "vmla.f32 s17, s23, s23",
-                "adds {a}, #24",
-                "vstmia {a}, {{s6-s17}}",
-                a = inout(reg) (self as *mut Self) => _,
-                x = in(reg) x.as_ptr(),
-                out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
-                out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
-                out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
-                out("s15") _, out("s16") _, out("s17") _, out("s18") _, out("s19") _,
-                out("s20") _, out("s21") _, out("s22") _, out("s23") _,
-                options(nostack),
-            );
         }
     }
 

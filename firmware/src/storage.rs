@@ -29,7 +29,7 @@
 use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
-use shared::blob::BLOB_MAX_LEN;
+use shared::blob::{Crc32, BLOB_MAX_LEN};
 
 /// First word of a record.
 pub const RECORD_MAGIC: u32 = 0x4143_5331; // "ACS1"
@@ -38,7 +38,6 @@ pub const COMMIT_MAGIC: u32 = 0x4F4B_4F4B; // "OKOK"
 const HEADER_LEN: usize = 16;
 /// Largest program granularity supported (bytes).
 const MAX_ALIGN: usize = 16;
-const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Why the store failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,10 +149,10 @@ impl<F: NorFlash> AbStore<F> {
             a + HEADER_LEN as u32,
             &mut blob[..align_up(len, Self::ALIGN)],
         )?;
-        let mut digest = CRC.digest();
+        let mut digest = Crc32::new();
         digest.update(&h[..12]);
         digest.update(&blob[..len]);
-        if digest.finalize() != word(12) {
+        if digest.finish() != word(12) {
             return Ok(None);
         }
         if let Some(out) = out {
@@ -255,10 +254,10 @@ impl<F: NorFlash> CalStore for AbStore<F> {
         h[0..4].copy_from_slice(&RECORD_MAGIC.to_le_bytes());
         h[4..8].copy_from_slice(&seq.to_le_bytes());
         h[8..10].copy_from_slice(&(blob.len() as u16).to_le_bytes());
-        let mut digest = CRC.digest();
+        let mut digest = Crc32::new();
         digest.update(&h[..12]);
         digest.update(blob);
-        h[12..16].copy_from_slice(&digest.finalize().to_le_bytes());
+        h[12..16].copy_from_slice(&digest.finish().to_le_bytes());
         let body_len = align_up(HEADER_LEN + blob.len(), Self::ALIGN);
         let mut buf = [0xFFu8; 64];
         let mut pos = 0;
@@ -568,7 +567,9 @@ mod tests {
         // Forge slot 0's sequence to u32::MAX (re-sign the CRC), then store b: it gets seq 0 and wins.
         let mut mem = s.into_inner().mem;
         mem[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
-        let mut d = CRC.digest();
+        // (Re-signed with the `crc` crate's table-driven CRC-32: the store's bitwise one must agree.)
+        let table = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+        let mut d = table.digest();
         d.update(&mem[..12]);
         d.update(&a);
         mem[12..16].copy_from_slice(&d.finalize().to_le_bytes());

@@ -246,33 +246,31 @@ pub fn check_omega_dot() -> Check {
     out
 }
 
-/// The 6-channel window (the pipeline's) through [`WindowAccumulator::add`] against the same
-/// samples through [`WindowAccumulator::add_compiled`]: on the M4F the first is an assembly
-/// block, and both must agree bit for bit (count, means, variances; across a block fold).
-pub fn check_window_block() -> Check {
-    let (mut block, mut compiled) = (WindowAccumulator::<6>::new(), WindowAccumulator::<6>::new());
+/// The 6-channel window (the pipeline's: outputs and rate of the compensation cases, repeated
+/// [`STATS_REPEAT`] times, across a block fold) against the table: count, means, variances.
+pub fn check_window_6() -> Check {
+    let mut acc = WindowAccumulator::<6>::new();
     for _ in 0..STATS_REPEAT {
         for c in COMP_CASES {
             let (u, w) = (f(&c.u), f(&c.w));
-            let x = [u[0], u[1], u[2], w[0], w[1], w[2]];
-            block.add(&x);
-            compiled.add_compiled(&x);
+            acc.add(&[u[0], u[1], u[2], w[0], w[1], w[2]]);
         }
     }
-    let (a, b) = (block.finish(), compiled.finish());
+    let s = acc.finish();
     let mut out = Check::default();
-    out.add(f32::from_bits(a.count), b.count);
+    out.add(f32::from_bits(s.count), STATS6_COUNT);
     for j in 0..6 {
-        out.add(a.mean[j], b.mean[j].to_bits());
-        out.add(a.var[j], b.var[j].to_bits());
+        out.add(s.mean[j], STATS6_MEAN[j]);
+        out.add(s.var[j], STATS6_VAR[j]);
     }
     out
 }
 
 /// The ADC board's conversion through [`Scaling::convert`] against [`Scaling::reference`]: on the
-/// M4F the first is an assembly block, and both must agree bit for bit, the flag included (as 0.0
-/// or 1.0). Codes and gyro words at, next to and away from their range ends, words with low bits
-/// set (exact fixed-point conversion), with and without the watchdog's flag.
+/// M4F the first runs on the FPU, the second in soft-float `f64`, and both must agree bit for bit,
+/// the flag included (as 0.0 or 1.0). Codes and gyro words at, next to and away from their range
+/// ends, words with low bits set (rounded by the conversion), with and without the watchdog's
+/// flag.
 pub fn check_conversion() -> Check {
     const CODES: [u32; 9] = [0, 1, 2, 2047, 2048, 4094, 4095, 65_535, u32::MAX];
     const WORDS: [i32; 12] = [
@@ -373,7 +371,7 @@ mod tests {
             let u = [0; 3].map(|_| rng.range(0.4, 4.4));
             let w = [0; 3].map(|_| rng.range(-10.0, 10.0));
             let wd = [0; 3].map(|_| rng.range(-50.0, 50.0));
-            inputs.push(u);
+            inputs.push((u, w));
             let (uu, ww, dd) = (
                 SensorOutputs { raw: u },
                 BodyRate { rad_s: w },
@@ -431,9 +429,11 @@ mod tests {
             .unwrap();
         }
         let mut acc = WindowAccumulator::<3>::new();
+        let mut acc6 = WindowAccumulator::<6>::new();
         for _ in 0..STATS_REPEAT {
-            for u in &inputs {
+            for (u, w) in &inputs {
                 acc.add(u);
+                acc6.add(&[u[0], u[1], u[2], w[0], w[1], w[2]]);
             }
         }
         let st = acc.finish();
@@ -443,6 +443,19 @@ mod tests {
             f32::from_bits(st.count).to_bits(),
             bits(st.mean),
             bits(st.var)
+        )
+        .unwrap();
+        let st6 = acc6.finish();
+        let bits6 = |v: [f32; 6]| {
+            let [a, b] = [[v[0], v[1], v[2]], [v[3], v[4], v[5]]].map(bits);
+            std::format!("[{}, {}]", &a[1..a.len() - 1], &b[1..b.len() - 1])
+        };
+        writeln!(
+            s,
+            "\n/// The 6-channel window (outputs and rate of the cases) over the same repeats.\npub const STATS6_COUNT: u32 = 0x{:08x};\n/// Means.\npub const STATS6_MEAN: [u32; 6] = {};\n/// Variances.\npub const STATS6_VAR: [u32; 6] = {};",
+            f32::from_bits(st6.count).to_bits(),
+            bits6(st6.mean),
+            bits6(st6.var)
         )
         .unwrap();
         s
@@ -469,6 +482,8 @@ mod tests {
             assert!(c.passed() && c.values == 72, "{c:?}");
         }
         assert!(check_window_stats().passed());
+        let c = check_window_6();
+        assert!(c.passed() && c.values == 13, "{c:?}");
         let c = check_conversion();
         assert!(c.passed() && c.values == 3 * 12 * 3 * 9 * 2 * 7, "{c:?}");
     }

@@ -114,3 +114,10 @@ pub const STATS_COUNT: u32 = 0x000001e0;
 pub const STATS_MEAN: [u32; 3] = [0x401f4ada, 0x401d4e14, 0x40238453];
 /// Variance.
 pub const STATS_VAR: [u32; 3] = [0x3f99988e, 0x3fea19b6, 0x3fb87abc];
+
+/// The 6-channel window (outputs and rate of the cases) over the same repeats.
+pub const STATS6_COUNT: u32 = 0x000001e0;
+/// Means.
+pub const STATS6_MEAN: [u32; 6] = [0x401f4ada, 0x401d4e14, 0x40238453, 0xbebd27ab, 0xc01e6337, 0xbb2fc889];
+/// Variances.
+pub const STATS6_VAR: [u32; 6] = [0x3f99988e, 0x3fea19b6, 0x3fb87abc, 0x41f722a3, 0x41f0c055, 0x421fa14b];

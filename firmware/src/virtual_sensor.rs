@@ -219,7 +219,7 @@ impl VirtualSensor {
         if !ok {
             return Err(BadTable);
         }
-        let n = libm::sqrt(n2);
+        let n = linalg::sqrt(n2);
         Ok(VirtualTable {
             up_b: u.map(|v| (v / n) as f32),
             ..*t

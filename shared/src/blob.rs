@@ -48,7 +48,49 @@ pub const BLOB_MAX_LEN: usize = HEADER_LEN + PayloadV2::POSTCARD_MAX_SIZE + CRC_
 /// Largest accepted |r_i| component, metres: no accelerometer unit is a metre across.
 pub const MAX_LEVER_ARM_M: f64 = 1.0;
 
-const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+/// CRC-32/ISO-HDLC (zlib's and Ethernet's: reflected polynomial 0xEDB88320, initial value and final
+/// XOR all ones), bit by bit: the blob's checksum, and the firmware store's. A table-driven form
+/// needs a 1 KiB table, which the device's image cannot spare for a checksum of a few hundred
+/// bytes computed at boot and on a calibration write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crc32(u32);
+
+impl Default for Crc32 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Crc32 {
+    /// Nothing checksummed yet.
+    pub const fn new() -> Self {
+        Crc32(!0)
+    }
+
+    /// Adds `bytes`.
+    pub fn update(&mut self, bytes: &[u8]) {
+        let mut c = self.0;
+        for &b in bytes {
+            c ^= u32::from(b);
+            for _ in 0..8 {
+                c = (c >> 1) ^ (0xEDB8_8320 & (c & 1).wrapping_neg());
+            }
+        }
+        self.0 = c;
+    }
+
+    /// The CRC of the bytes added.
+    pub const fn finish(self) -> u32 {
+        !self.0
+    }
+
+    /// The CRC of `bytes`.
+    pub fn checksum(bytes: &[u8]) -> u32 {
+        let mut c = Self::new();
+        c.update(bytes);
+        c.finish()
+    }
+}
 
 /// A calibration bound to one unit, as stored on the device.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,7 +136,8 @@ pub enum BlobError {
     BadGyro,
     /// The temperature model is implausible (range, scale over the range, non-finite values).
     BadTemperatureModel,
-    /// A value is beyond the range of the device's `f32` arithmetic (e.g. a bias of 1e300).
+    /// A value is beyond the range the device computes with: its `f32` arithmetic (e.g. a bias
+    /// of 1e300), or an installation angle beyond ±[`crate::trig::MAX_ANGLE_DEG`].
     OutOfDeviceRange,
 }
 
@@ -120,7 +163,7 @@ impl core::fmt::Display for BlobError {
             BlobError::BadGyro => "calibration's gyro correction is implausible",
             BlobError::BadTemperatureModel => "calibration's temperature model is implausible",
             BlobError::OutOfDeviceRange => {
-                "calibration holds a value beyond the device's f32 range"
+                "calibration holds a value beyond the device's range (f32, installation angles)"
             }
         };
         f.write_str(s)
@@ -136,6 +179,9 @@ impl From<CompensatorError> for BlobError {
             CompensatorError::Params(ParamsError::NonFinite) => BlobError::NonFinite,
             CompensatorError::Params(ParamsError::DegenerateAxis { .. }) => {
                 BlobError::DegenerateAxis
+            }
+            CompensatorError::Params(ParamsError::AngleOutOfRange { .. }) => {
+                BlobError::OutOfDeviceRange
             }
             CompensatorError::IllConditioned { .. } => BlobError::IllConditioned,
             CompensatorError::Gravity => BlobError::BadGravity,
@@ -224,7 +270,7 @@ impl ParameterBlob {
         out[0..4].copy_from_slice(&BLOB_MAGIC);
         out[4..6].copy_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
         out[6..8].copy_from_slice(&(n as u16).to_le_bytes());
-        let crc = CRC.checksum(&out[..HEADER_LEN + n]);
+        let crc = Crc32::checksum(&out[..HEADER_LEN + n]);
         out[HEADER_LEN + n..HEADER_LEN + n + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
         Ok(HEADER_LEN + n + CRC_LEN)
     }
@@ -255,7 +301,7 @@ pub fn decode(bytes: &[u8]) -> Result<ParameterBlob, BlobError> {
     }
     let (body, crc_bytes) = bytes.split_at(HEADER_LEN + n);
     let stored = u32::from_le_bytes([crc_bytes[0], crc_bytes[1], crc_bytes[2], crc_bytes[3]]);
-    if CRC.checksum(body) != stored {
+    if Crc32::checksum(body) != stored {
         return Err(BlobError::CrcMismatch);
     }
     let payload = &body[HEADER_LEN..];
@@ -411,6 +457,31 @@ pub(crate) mod tests {
         (gyro, temperature)
     }
 
+    /// The bitwise CRC against the `crc` crate's table-driven CRC-32/ISO-HDLC: its check value,
+    /// and random bytes split at random points (the incremental form).
+    #[test]
+    fn crc32_is_crc_32_iso_hdlc() {
+        let table = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+        assert_eq!(Crc32::checksum(b"123456789"), 0xCBF4_3926);
+        assert_eq!(Crc32::checksum(&[]), table.checksum(&[]));
+        let mut state = 0x9E37_79B9u32;
+        let mut bytes = [0u8; 700];
+        for round in 0..200 {
+            for b in bytes.iter_mut() {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                *b = state as u8;
+            }
+            let len = round * 3 + 1;
+            let split = (state as usize) % len;
+            let mut c = Crc32::new();
+            c.update(&bytes[..split]);
+            c.update(&bytes[split..len]);
+            assert_eq!(c.finish(), table.checksum(&bytes[..len]), "{len} {split}");
+        }
+    }
+
     /// Re-signs `p` in place of the payload of a valid version 2 blob (a buggy or foreign writer).
     fn resigned(p: &PayloadV2) -> std::vec::Vec<u8> {
         let mut buf = [0u8; BLOB_MAX_LEN];
@@ -418,7 +489,7 @@ pub(crate) mod tests {
         buf[0..4].copy_from_slice(&BLOB_MAGIC);
         buf[4..6].copy_from_slice(&BLOB_FORMAT_VERSION.to_le_bytes());
         buf[6..8].copy_from_slice(&(n as u16).to_le_bytes());
-        let crc = CRC.checksum(&buf[..HEADER_LEN + n]);
+        let crc = Crc32::checksum(&buf[..HEADER_LEN + n]);
         buf[HEADER_LEN + n..HEADER_LEN + n + 4].copy_from_slice(&crc.to_le_bytes());
         buf[..HEADER_LEN + n + CRC_LEN].to_vec()
     }

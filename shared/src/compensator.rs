@@ -210,9 +210,7 @@ fn poly32(c: &[f32; MAX_TEMPERATURE_DEGREE], x: f32) -> f32 {
 }
 
 /// The gyro's correction in the affine form the device evaluates, `ω = c + G⁻¹ w` with
-/// `c = −G⁻¹ b(T)` (docs/model.md §8). `repr(C)`: `c` and `G⁻¹` are twelve consecutive `f32`, the
-/// order in which one block load reads them on the device.
-#[repr(C)]
+/// `c = −G⁻¹ b(T)` (docs/model.md §8).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct GyroInverse {
     /// `c = −G⁻¹ b(T)`, rad/s, body axes.
@@ -223,48 +221,8 @@ struct GyroInverse {
     bias_rad_s: [f32; 3],
 }
 
-// The layout the device's block load in `GyroInverse::correct` relies on, checked at compile time on
-// every target (the PC build fails too, not only the board's): `vldmia` reads twelve 4-byte words from
-// the start of the struct into s0–s11 and the `vmla`s take s0–s2 as `c` and s3–s11 as `G⁻¹` row by
-// row, so `offset_rad_s` must be first, `inv` must follow it with no padding, and both must be `f32`.
-const _: () = {
-    use core::mem::{align_of, offset_of, size_of};
-    // Fails to compile if either field changes type: the block reads `f32`s, three then nine.
-    const fn block_fields(g: &GyroInverse) -> (&[f32; 3], &[[f32; 3]; 3]) {
-        (&g.offset_rad_s, &g.inv)
-    }
-    let _ = block_fields;
-    assert!(size_of::<f32>() == 4, "the block load reads 4-byte words");
-    assert!(
-        offset_of!(GyroInverse, offset_rad_s) == 0,
-        "c must be s0-s2"
-    );
-    assert!(size_of::<[f32; 3]>() == 3 * 4, "c and w are three words");
-    assert!(
-        offset_of!(GyroInverse, inv) == 3 * 4,
-        "G^-1 must be s3-s11, right after c"
-    );
-    assert!(
-        size_of::<[[f32; 3]; 3]>() == 9 * 4,
-        "G^-1 is nine words, row-major"
-    );
-    assert!(offset_of!(GyroInverse, inv) + 9 * 4 <= size_of::<GyroInverse>());
-    assert!(
-        align_of::<GyroInverse>() >= 4,
-        "vldmia needs word alignment"
-    );
-};
-
-#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-#[path = "compensator_arm.rs"]
-mod arm;
-
 /// Precomputed state of the inverse model. `f32` throughout, fixed size, `Copy`.
-///
-/// `repr(C)`, the per-sample constants first and in the order the ARM form of
-/// [`Compensator::compensate`] reads them (`compensator_arm.rs`: one block load per group).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
 pub struct Compensator {
     /// `p_i = k_i (r_i × a_i)/g`, output unit per rad/s².
     p: [[f32; 3]; 3],
@@ -501,29 +459,15 @@ impl Compensator {
     /// them without a copy, and gets the result where it wants it (a window's sample).
     #[inline(always)]
     pub fn compensate_into(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3], out: &mut [f32; 3]) {
-        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-        self.compensate_block_into(u, w, wd, out);
-        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
-        {
-            *out = self.compensate_reference(u, w, wd);
-        }
+        *out = self.compensate_in_place(u, w, wd);
     }
 
-    /// [`Compensator::compensate_into`] returning the specific force (m/s²).
+    /// [`Compensator::compensate_into`] returning the specific force (m/s²). Each sum runs left to
+    /// right, each product rounded before its addition (Rust never fuses `a * b + c`; the
+    /// Cortex-M4F's `vmla.f32`/`vmls.f32` are not fused either): the same bits on the PC and on the
+    /// device, which the QEMU test vectors check (`compensation_*_matches_pc`).
     #[inline(always)]
     pub fn compensate_in_place(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
-        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-        return self.compensate_block(u, w, wd);
-        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
-        return self.compensate_reference(u, w, wd);
-    }
-
-    /// [`Compensator::compensate`] in Rust: the reference on the PC and on other targets; the ARM
-    /// form (`compensator_arm.rs`) rounds identically, which the QEMU test vectors check bit for bit.
-    /// Each sum runs left to right, each product rounded before its addition (`vmla.f32`).
-    #[cfg_attr(all(target_arch = "arm", target_abi = "eabihf"), allow(dead_code))]
-    #[inline(always)]
-    fn compensate_reference(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
         let w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
         let v = [
             self.lever_corrected(0, u, w, wd, w2),
@@ -599,10 +543,9 @@ impl GyroInverse {
     }
 
     /// `c + G⁻¹ w`, each row `((c_r + m_r0 w_0) + m_r1 w_1) + m_r2 w_2`: nine multiply-adds, each
-    /// product rounded before its addition (the Cortex-M4F's `vmla.f32`, not a fused multiply-add).
-    /// This is the reference for other targets and for the PC; the device's form below rounds
-    /// identically, which the QEMU test vectors check bit for bit.
-    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    /// product rounded before its addition (Rust never fuses `a * b + c`; the Cortex-M4F's
+    /// `vmla.f32` is not fused either), the same bits on the PC and on the device, which the QEMU
+    /// test vectors check.
     #[inline(always)]
     fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
         let (c, m) = (&self.offset_rad_s, &self.inv);
@@ -614,69 +557,9 @@ impl GyroInverse {
     }
 
     /// [`GyroInverse::correct`] into `out`.
-    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
     #[inline(always)]
     fn correct_into(&self, w: &[f32; 3], out: &mut [f32; 3]) {
         *out = self.correct(w);
-    }
-
-    /// The same on an ARM hard-float target, in line: one block load of the twelve constants, one of
-    /// `w`, nine `vmla.f32` and one block store, 12 instructions. Compiled code needs 21 or more: one
-    /// `vldr` per constant (measured with scripts/bench-qemu.sh, as were an out-of-line routine, 23.6
-    /// in place, and correcting 16 samples at a time, 21.5 per sample). Operands pass through memory
-    /// because this toolchain's inline assembly takes no single-precision FPU register operands on
-    /// this target; the FPU registers it uses are declared clobbered, so the compiler keeps nothing
-    /// live in them across the block.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-    #[inline(always)]
-    fn correct(&self, w: &[f32; 3]) -> [f32; 3] {
-        let mut out = core::mem::MaybeUninit::<[f32; 3]>::uninit();
-        // SAFETY: `out` has room for three `f32`, all written by the block.
-        unsafe {
-            self.correct_to(w, out.as_mut_ptr().cast());
-            out.assume_init()
-        }
-    }
-
-    /// [`GyroInverse::correct`] into `out` (no copy of the result).
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-    #[inline(always)]
-    fn correct_into(&self, w: &[f32; 3], out: &mut [f32; 3]) {
-        // SAFETY: `out` is three writable, aligned `f32` that `w` cannot alias (`&mut`).
-        unsafe { self.correct_to(w, out.as_mut_ptr()) }
-    }
-
-    /// The block. Safety: `out` must point to three writable, 4-byte aligned `f32`.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-    #[inline(always)]
-    unsafe fn correct_to(&self, w: &[f32; 3], out: *mut f32) {
-        // SAFETY: reads the twelve `f32` at the start of `self` (`repr(C)`: `offset_rad_s` then
-        // `inv`) and the three of `w`, writes the three at `out` (the caller's promise); all are
-        // 4-byte aligned. It touches no stack; s0–s14 are declared clobbered. Not `preserves_flags`: `vmla`
-        // sets the FPSCR's cumulative exception flags (inexact, overflow), which that option covers.
-        unsafe {
-            core::arch::asm!(
-                "vldmia {g}, {{s0-s11}}",
-                "vldmia {w}, {{s12-s14}}",
-                "vmla.f32 s0, s3, s12",
-                "vmla.f32 s0, s4, s13",
-                "vmla.f32 s0, s5, s14",
-                "vmla.f32 s1, s6, s12",
-                "vmla.f32 s1, s7, s13",
-                "vmla.f32 s1, s8, s14",
-                "vmla.f32 s2, s9, s12",
-                "vmla.f32 s2, s10, s13",
-                "vmla.f32 s2, s11, s14",
-                "vstmia {out}, {{s0-s2}}",
-                g = in(reg) self as *const GyroInverse,
-                w = in(reg) w.as_ptr(),
-                out = in(reg) out,
-                out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
-                out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
-                out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
-                options(nostack),
-            );
-        }
     }
 }
 

@@ -7,9 +7,10 @@
 //!   `M = K·A`, with the conversions of `docs/model.md` §4.2;
 //! - [`sensor_models`]: the gyro's correction and the temperature model (docs/model.md §8, §9);
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
-//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), with its
-//!   Cortex-M4F form in `compensator_arm.rs` (bit for bit the same arithmetic);
+//! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), the same
+//!   bits on the PC and on the Cortex-M4F;
 //! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §4.6;
+//! - [`trig`]: `libm::cos` bit for bit without the large-argument reduction (installation angles);
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
 //! - [`wire`]: the host↔device messages and their COBS framing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -22,6 +23,7 @@ pub mod linalg;
 pub mod omega_dot;
 pub mod params;
 pub mod sensor_models;
+pub mod trig;
 pub mod units;
 pub mod wire;
 

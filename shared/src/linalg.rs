@@ -32,9 +32,69 @@ pub fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Euclidean norm (exact, libm).
+/// Euclidean norm (the square root correctly rounded: [`sqrt`]).
 pub fn norm(a: &[f64; 3]) -> f64 {
-    libm::sqrt(dot(a, a))
+    sqrt(dot(a, a))
+}
+
+/// `√x`, correctly rounded as IEEE 754 defines it, so the same bits on every target: `libm::sqrt`
+/// (the FPU's instruction on the PC) where the FPU has one for `f64`, [`sqrt_digit_by_digit`] on the
+/// Cortex-M4F, whose FPU is single precision and where `libm`'s table-driven software form would
+/// cost the image 0.8 KiB.
+#[inline]
+pub fn sqrt(x: f64) -> f64 {
+    #[cfg(target_os = "none")]
+    return sqrt_digit_by_digit(x);
+    #[cfg(not(target_os = "none"))]
+    return libm::sqrt(x);
+}
+
+/// `√x` digit by digit on the significand (fdlibm's "bit by bit" method in 64-bit words): 54 bits of
+/// the root, the last one deciding the rounding to nearest (an exact halfway case cannot occur for a
+/// square root). Correctly rounded, so bit for bit `libm::sqrt`; tested against it below. NaN and
+/// `x < 0` give NaN, ±0 and +∞ themselves. About 54 iterations of 64-bit integer steps: for the
+/// once-per-calibration work only.
+pub fn sqrt_digit_by_digit(x: f64) -> f64 {
+    if x.is_nan() || x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    if x < 0.0 {
+        return f64::NAN;
+    }
+    let bits = x.to_bits();
+    let biased = (bits >> 52) as i32; // the sign is 0
+    let mut m = bits & ((1 << 52) - 1);
+    // x = (m / 2⁵²)·2^exp with m in [2⁵², 2⁵³): subnormals normalised.
+    let mut exp = if biased == 0 {
+        let shift = m.leading_zeros() - 11;
+        m <<= shift;
+        -1022 - shift as i32
+    } else {
+        m |= 1 << 52;
+        biased - 1023
+    };
+    // An even exponent: m in [2⁵², 2⁵⁴).
+    if exp & 1 != 0 {
+        m <<= 1;
+        exp -= 1;
+    }
+    // q: the root's 54 bits, one per step from the top; r the remainder, doubled each step.
+    let mut r = m << 1;
+    let (mut q, mut s, mut bit) = (0u64, 0u64, 1u64 << 53);
+    while bit != 0 {
+        let t = s + bit;
+        if t <= r {
+            s = t + bit;
+            r -= t;
+            q += bit;
+        }
+        r <<= 1;
+        bit >>= 1;
+    }
+    // Round to nearest on the last bit; the significand (with its leading bit, which adds one to
+    // the exponent field) may carry into the exponent.
+    let significand = (q + (q & 1)) >> 1;
+    f64::from_bits((((exp / 2 + 1022) as u64) << 52) + significand)
 }
 
 /// `a / |a|`; a zero vector stays zero (divided by the smallest positive number, not by 0).
@@ -77,6 +137,75 @@ pub fn condition_number_1(m: &RowMajor3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    fn same_sqrt(x: f64) {
+        let (got, want) = (sqrt_digit_by_digit(x), libm::sqrt(x));
+        assert!(
+            got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+            "sqrt({x:e} = {:#x}): {got:e} vs {want:e}",
+            x.to_bits()
+        );
+    }
+
+    /// Special values, subnormals, powers of two, perfect squares and their neighbours (where the
+    /// rounding is closest to halfway), the extremes.
+    #[test]
+    fn sqrt_digit_by_digit_is_libm_at_the_edges() {
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            2.0,
+            0.25,
+            -1.0,
+            -f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            f64::from_bits(1),
+            f64::from_bits(2),
+            f64::from_bits(3),
+            f64::from_bits(0x000F_FFFF_FFFF_FFFF),
+            f64::EPSILON,
+        ] {
+            same_sqrt(x);
+        }
+        for e in -1074i64..1024 {
+            // 2^e, subnormal below −1022.
+            let p = if e < -1022 {
+                1u64 << (e + 1074)
+            } else {
+                ((e + 1023) as u64) << 52
+            };
+            same_sqrt(f64::from_bits(p));
+            same_sqrt(f64::from_bits(p + 1));
+            same_sqrt(f64::from_bits(p - 1));
+        }
+        let mut k = 1u64;
+        while k < 1 << 26 {
+            let sq = (k * k) as f64;
+            for d in [-2i64, -1, 0, 1, 2] {
+                same_sqrt(f64::from_bits(sq.to_bits().wrapping_add_signed(d)));
+            }
+            k = k * 3 / 2 + 1;
+        }
+        for b in 0..200_000u64 {
+            // Subnormals across their range.
+            same_sqrt(f64::from_bits(b.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 12));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(100_000))]
+        /// Any positive bit pattern.
+        #[test]
+        fn sqrt_digit_by_digit_is_libm(bits in 0u64..0x7FF0_0000_0000_0000) {
+            same_sqrt(f64::from_bits(bits));
+        }
+    }
 
     #[test]
     fn lever_matrix_matches_vector_identity() {

@@ -23,10 +23,8 @@
 //! division and no branch on data. To turn the ω̇ term off, build the compensator with
 //! [`crate::LeverMode::RateOnly`].
 
-/// Filtered backward-difference estimator of `ω̇`, fixed-size state. `repr(C)`: the ARM form of
-/// [`OmegaDotEstimator::update`] reads the twelve `f32` in one block load.
+/// Filtered backward-difference estimator of `ω̇`, fixed-size state.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
 pub struct OmegaDotEstimator {
     sample_rate_hz: f32,
     beta: f32,
@@ -85,91 +83,16 @@ impl OmegaDotEstimator {
     /// starts the difference (its difference is scaled by 0: no branch at all).
     #[inline(always)]
     pub fn update(&mut self, omega_rad_s: &[f32; 3]) -> &[f32; 3] {
-        #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-        self.step_block(omega_rad_s);
-        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
-        self.step_reference(omega_rad_s);
-        &self.stage2
-    }
-
-    /// One step in Rust: the reference on the PC and on other targets; the ARM form below
-    /// rounds identically, which the QEMU test vectors check bit for bit (`omega_dot_matches_pc`).
-    #[cfg_attr(all(target_arch = "arm", target_abi = "eabihf"), allow(dead_code))]
-    #[inline(always)]
-    fn step_reference(&mut self, omega_rad_s: &[f32; 3]) {
         // Per axis written out: straight-line code at any optimisation level (the firmware builds
-        // this crate for size).
+        // this crate for size). Each product rounded before its addition (Rust never fuses
+        // `a * b + c`): the same bits on the PC and on the device (`omega_dot_matches_pc`).
         let gain = self.difference_gain_hz;
         self.axis(0, omega_rad_s[0], gain);
         self.axis(1, omega_rad_s[1], gain);
         self.axis(2, omega_rad_s[2], gain);
         self.previous_rad_s = *omega_rad_s;
         self.difference_gain_hz = self.sample_rate_hz;
-    }
-
-    /// One step on an ARM hard-float target (the Cortex-M4F), in line: the state in one block load,
-    /// `ω` in another, the reference's 18 operations in its order (each product rounded before its
-    /// addition: `vmla.f32` is not fused), and two block stores and one store back — 24
-    /// instructions where compiled code moves the state one value at a time (42 in place, measured
-    /// with firmware/scripts/bench-qemu.sh). Operands pass through memory and the FPU registers used
-    /// are declared clobbered, as in the compensator's blocks (`compensator.rs`).
-    ///
-    /// Registers: f_s s0, β s1, gain s2, ω₋₁ s3–s5, stage 1 s6–s8, stage 2 s9–s11, ω s12–s14,
-    /// temporaries s15, s16.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-    #[inline(always)]
-    fn step_block(&mut self, omega_rad_s: &[f32; 3]) {
-        const _: () = {
-            use core::mem::offset_of;
-            assert!(offset_of!(OmegaDotEstimator, sample_rate_hz) == 0);
-            assert!(offset_of!(OmegaDotEstimator, beta) == 4);
-            assert!(offset_of!(OmegaDotEstimator, difference_gain_hz) == 8);
-            assert!(offset_of!(OmegaDotEstimator, previous_rad_s) == 12);
-            assert!(offset_of!(OmegaDotEstimator, stage1) == 24);
-            assert!(offset_of!(OmegaDotEstimator, stage2) == 36);
-        };
-        // SAFETY: reads the twelve `f32` at the start of `self` (offsets checked above) and the
-        // three of `omega_rad_s`, writes `self`'s gain, previous rate and stages; all 4-byte
-        // aligned `f32`. Touches no stack; s0–s16 are declared clobbered and the pointer register
-        // is an in-out temporary. Not `preserves_flags`: the arithmetic sets the FPSCR's
-        // cumulative exception flags.
-        unsafe {
-            core::arch::asm!(
-                "vldmia {e}, {{s0-s11}}",
-                "vldmia {w}, {{s12-s14}}",
-                // x = (ω − ω₋₁)·gain; stage1 += β (x − stage1); stage2 += β (stage1 − stage2)
-                "vsub.f32 s15, s12, s3",
-                "vmul.f32 s15, s15, s2",
-                "vsub.f32 s15, s15, s6",
-                "vmla.f32 s6, s1, s15",
-                "vsub.f32 s16, s6, s9",
-                "vmla.f32 s9, s1, s16",
-                "vsub.f32 s15, s13, s4",
-                "vmul.f32 s15, s15, s2",
-                "vsub.f32 s15, s15, s7",
-                "vmla.f32 s7, s1, s15",
-                "vsub.f32 s16, s7, s10",
-                "vmla.f32 s10, s1, s16",
-                "vsub.f32 s15, s14, s5",
-                "vmul.f32 s15, s15, s2",
-                "vsub.f32 s15, s15, s8",
-                "vmla.f32 s8, s1, s15",
-                "vsub.f32 s16, s8, s11",
-                "vmla.f32 s11, s1, s16",
-                // gain = f_s; ω₋₁ = ω; the stages
-                "vstr s0, [{e}, #8]",
-                "adds {e}, #12",
-                "vstmia {e}!, {{s12-s14}}",
-                "vstmia {e}, {{s6-s11}}",
-                e = inout(reg) (self as *mut OmegaDotEstimator) => _,
-                w = in(reg) omega_rad_s.as_ptr(),
-                out("s0") _, out("s1") _, out("s2") _, out("s3") _, out("s4") _,
-                out("s5") _, out("s6") _, out("s7") _, out("s8") _, out("s9") _,
-                out("s10") _, out("s11") _, out("s12") _, out("s13") _, out("s14") _,
-                out("s15") _, out("s16") _,
-                options(nostack),
-            );
-        }
+        &self.stage2
     }
 
     #[inline(always)]

@@ -101,6 +101,13 @@ pub enum ParamsError {
         /// 0 = x, 1 = y, 2 = z.
         axis: u8,
     },
+    /// Accelerometer `axis` has an installation angle beyond ±[`crate::trig::MAX_ANGLE_DEG`]
+    /// (about 2²⁰·90°), where the cosine is refused ([`crate::trig::cos_moderate`]); a real
+    /// unit's angles lie in 0..180°.
+    AngleOutOfRange {
+        /// 0 = x, 1 = y, 2 = z.
+        axis: u8,
+    },
 }
 
 impl core::fmt::Display for ParamsError {
@@ -111,6 +118,12 @@ impl core::fmt::Display for ParamsError {
                 f,
                 "accelerometer {} has a zero scale factor or sensing direction",
                 axis_name(*axis as usize)
+            ),
+            ParamsError::AngleOutOfRange { axis } => write!(
+                f,
+                "accelerometer {} has an installation angle beyond ±{}°",
+                axis_name(*axis as usize),
+                crate::trig::MAX_ANGLE_DEG
             ),
         }
     }
@@ -135,6 +148,8 @@ impl StaticParams {
     }
 
     /// The unit sensing directions `a_i` (rows of `A`) from the angles, normalised (`docs/model.md` §4.2).
+    /// The cosines are `libm::cos`'s bits ([`crate::trig::cos_moderate`]); an angle beyond
+    /// ±[`crate::trig::MAX_ANGLE_DEG`] is refused ([`ParamsError::AngleOutOfRange`]).
     pub fn sensing_directions(&self) -> Result<(RowMajor3, Normalisation), ParamsError> {
         let flat = self.installation_angles_deg.iter().flatten().copied();
         if !all_finite(flat) {
@@ -143,9 +158,13 @@ impl StaticParams {
         let mut a = [[0.0; 3]; 3];
         let mut row_norms = [0.0; 3];
         for i in 0..3 {
-            let raw: [f64; 3] = core::array::from_fn(|j| {
-                libm::cos(self.installation_angles_deg[i][j].to_radians())
-            });
+            let mut raw = [0.0; 3];
+            for j in 0..3 {
+                let deg = self.installation_angles_deg[i][j];
+                raw[j] = crate::trig::cos_moderate(deg.to_radians())
+                    .filter(|_| libm::fabs(deg) <= crate::trig::MAX_ANGLE_DEG)
+                    .ok_or(ParamsError::AngleOutOfRange { axis: i as u8 })?;
+            }
             let n = linalg::norm(&raw);
             if n < 1e-9 {
                 return Err(ParamsError::DegenerateAxis { axis: i as u8 });
@@ -431,6 +450,20 @@ pub(crate) mod tests {
         assert_eq!(
             s.to_fitted().unwrap_err(),
             ParamsError::DegenerateAxis { axis: 0 }
+        );
+        // The largest accepted angle, and just beyond it.
+        let mut s = paper_unit().statics;
+        s.installation_angles_deg[2][1] = -crate::trig::MAX_ANGLE_DEG;
+        assert!(s.to_fitted().is_ok());
+        s.installation_angles_deg[2][1] = crate::trig::MAX_ANGLE_DEG * 1.000_001;
+        assert_eq!(
+            s.to_fitted().unwrap_err(),
+            ParamsError::AngleOutOfRange { axis: 2 }
+        );
+        s.installation_angles_deg[2][1] = 1e300;
+        assert_eq!(
+            s.to_fitted().unwrap_err(),
+            ParamsError::AngleOutOfRange { axis: 2 }
         );
     }
 

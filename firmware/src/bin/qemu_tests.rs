@@ -508,10 +508,7 @@ fn first_boot(t: &mut Tally, cp: &mut cortex_m::Peripherals) -> ! {
     t.check("compensation_full_matches_pc", full);
     t.check("omega_dot_matches_pc", testvectors::check_omega_dot());
     t.check("window_stats_match_pc", testvectors::check_window_stats());
-    t.check(
-        "window_block_matches_reference",
-        testvectors::check_window_block(),
-    );
+    t.check("window_6_channels_match_pc", testvectors::check_window_6());
     t.check(
         "adc_board_conversion_matches_reference",
         testvectors::check_conversion(),

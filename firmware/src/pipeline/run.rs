@@ -12,7 +12,7 @@
 use shared::units::SensorOutputs;
 use shared::wire::StreamKind;
 
-use super::{Pipeline, SampleView};
+use super::{omega_dot_update, window_add, Pipeline, SampleView};
 
 /// The five loops: what a clean sample costs besides the gyro correction and the ω̇ update.
 const IDLE: u8 = 0;
@@ -76,8 +76,16 @@ impl<const Q: usize> Pipeline<Q> {
             n += 1;
             let (raw, gyro) = (s.raw(), s.rate_rad_s());
             let rate = if R == RAW_WINDOW { &mut body_rate } else { r };
-            self.body_rate_into(gyro, rate);
-            self.omega_dot.update(rate);
+            // The full compensation's loop, the digital IMU's budgeted path, keeps the gyro
+            // correction, the ω̇ update and the window accumulation in line; the others call the
+            // out-of-line copies.
+            if R == FULL_WINDOW {
+                self.body_rate_into(gyro, rate);
+                self.omega_dot.update(rate);
+            } else {
+                self.body_rate_into_outlined(gyro, rate);
+                omega_dot_update(&mut self.omega_dot, rate);
+            }
             match (R, &self.compensator) {
                 (IDLE, _) => continue,
                 (STATIC_WINDOW, Some(c)) => {
@@ -93,7 +101,11 @@ impl<const Q: usize> Pipeline<Q> {
                     *r = *gyro;
                 }
             }
-            self.acc.add(&x);
+            if R == FULL_WINDOW {
+                self.acc.add(&x);
+            } else {
+                window_add(&mut self.acc, &x);
+            }
             in_window += 1;
             if in_window >= window {
                 self.index = start + n as u64;
