@@ -192,6 +192,29 @@ impl GyroEstimate {
         }
     }
 
+    /// The bias alone, from rests (a session without spins): `G` is the identity, none of its
+    /// entries determined (1σ infinite), and `b` with its 1σ (docs/model.md §8).
+    pub(crate) fn bias_only(bias_rad_s: [f64; 3], bias_rad_s_1sigma: [f64; 3]) -> GyroEstimate {
+        let mut undetermined = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                undetermined.push(format!(
+                    "G[{}][{}]",
+                    shared::params::axis_name(i),
+                    shared::params::axis_name(j)
+                ));
+            }
+        }
+        GyroEstimate {
+            matrix: core::array::from_fn(|i| core::array::from_fn(|j| f64::from(u8::from(i == j)))),
+            matrix_1sigma: [[f64::INFINITY; 3]; 3],
+            bias_rad_s,
+            bias_rad_s_1sigma,
+            table_rate_scale: None,
+            undetermined,
+        }
+    }
+
     /// `(G⁻¹, b)`: what turns a gyro reading into the body rate.
     pub(crate) fn correction(&self) -> Option<(RowMajor3, [f64; 3])> {
         linalg::inverse(&self.matrix).map(|gi| (gi, self.bias_rad_s))

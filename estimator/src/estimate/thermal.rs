@@ -77,6 +77,10 @@ pub struct ThermalFit {
     pub gyro_bias_degree: Option<[usize; 3]>,
     /// 1σ of `model.gyro_bias_rad_s_per_c` (0 where the degree leaves a coefficient out).
     pub gyro_bias_sigma: [[f64; DEG]; 3],
+    /// The gyro bias at `T_ref` from the rests and its 1σ, rad/s; `None` when the recording has no
+    /// gyro readings. It is the calibration's gyro bias when the session has no spins to fit the
+    /// whole gyro from (docs/model.md §8, §9).
+    pub gyro_bias_ref_rad_s: Option<([f64; 3], [f64; 3])>,
     /// How each degree was chosen, for the report.
     pub notes: Vec<String>,
 }
@@ -172,6 +176,7 @@ fn fit_with(
             .collect(),
         gyro_bias_degree: None,
         gyro_bias_sigma: [[0.0; DEG]; 3],
+        gyro_bias_ref_rad_s: None,
         notes: Vec::new(),
     };
     for axis in 0..3 {
@@ -192,6 +197,7 @@ fn fit_with(
         fit.model.gyro_bias_rad_s_per_c = g.degree.iter().any(|&d| d > 0).then_some(g.per_c);
         fit.gyro_bias_degree = Some(g.degree);
         fit.gyro_bias_sigma = g.sigma;
+        fit.gyro_bias_ref_rad_s = Some((g.bias_ref_rad_s, g.bias_ref_sigma_rad_s));
         fit.notes.extend(g.notes);
     }
     let soaks: Vec<_> = statics

@@ -28,6 +28,8 @@ pub(crate) struct GyroBiasFit {
     pub degree: [usize; 3],
     /// The bias at `T_ref` this fit found, rad/s (the main estimate's agrees to noise).
     pub bias_ref_rad_s: [f64; 3],
+    /// Its 1σ, rad/s (scaled by the chosen degree's χ²/dof when above 1).
+    pub bias_ref_sigma_rad_s: [f64; 3],
     /// How each degree was chosen.
     pub notes: Vec<String>,
 }
@@ -48,6 +50,7 @@ pub fn fit(statics: &[(&SegmentStats, &ThermalStats)], reference_c: f64) -> Opti
         sigma: [[0.0; DEG]; 3],
         degree: [0; 3],
         bias_ref_rad_s: [0.0; 3],
+        bias_ref_sigma_rad_s: [0.0; 3],
         notes: Vec::new(),
     };
     for axis in 0..3 {
@@ -85,6 +88,7 @@ pub fn fit(statics: &[(&SegmentStats, &ThermalStats)], reference_c: f64) -> Opti
         let scale2 = (chi2 / dof(d)).max(1.0);
         out.degree[axis] = d;
         out.bias_ref_rad_s[axis] = beta[0];
+        out.bias_ref_sigma_rad_s[axis] = (cov[(0, 0)] * scale2).sqrt();
         for k in 0..d {
             let per_c = SCALE_C.powi(k as i32 + 1);
             out.per_c[axis][k] = beta[k + 1] / per_c;
