@@ -49,7 +49,7 @@ fn run(args: &[&str]) -> String {
     format!("{stdout}\n{stderr}")
 }
 
-/// The value of `key = …` (TOML or a parameter file's `NAME VALUE` line) as numbers.
+/// The numbers on the parameter file's line that starts with `key`.
 fn numbers_after(text: &str, key: &str) -> Vec<f64> {
     let line = text
         .lines()
@@ -94,9 +94,17 @@ fn a_thermal_session_without_spins_keeps_the_gyro_bias() {
         "{printed}"
     );
     let toml = std::fs::read_to_string(cal_dir.join("calibration.toml")).unwrap();
-    let gyro = &toml[toml.find("[gyro]").expect("a [gyro] section")..];
-    let bias = numbers_after(gyro, "bias_rad_s =");
-    let sigma = numbers_after(gyro, "bias_rad_s_1sigma =");
+    let file: toml::Value = toml::from_str(&toml).unwrap();
+    let gyro = file.get("gyro").expect("a [gyro] section");
+    let three = |key: &str| -> Vec<f64> {
+        gyro[key]
+            .as_array()
+            .unwrap_or_else(|| panic!("no {key} in\n{toml}"))
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    };
+    let (bias, sigma) = (three("bias_rad_s"), three("bias_rad_s_1sigma"));
     assert!(toml.contains("reference_c = 25.0"), "{toml}");
     for i in 0..3 {
         let truth = BIAS_DEG_S[i].to_radians();
