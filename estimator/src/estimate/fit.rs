@@ -9,7 +9,7 @@ use super::model::{self, SegModel};
 use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
-use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal};
+use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal, thermal_gyro};
 use super::{
     BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions, Exclusion,
     FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
@@ -53,39 +53,9 @@ pub fn calibrate_session_stats(
     };
     outcome.warnings.extend(notes);
     outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
-    gyro_bias_from_rests(&mut outcome, fit.as_ref(), options);
+    thermal_gyro::bias_from_rests(&mut outcome, fit.as_ref(), options);
     outcome.thermal = fit;
     Ok(outcome)
-}
-
-/// A thermal session without spins still determines the gyro's bias at `T_ref` from its rests (the
-/// temperature model holds only its drift about `T_ref`): that bias becomes the calibration's gyro
-/// correction, `G` taken as perfect and said to be undetermined (docs/model.md §8, §9). Without it
-/// the device and every export would keep the whole bias in the rate.
-fn gyro_bias_from_rests(
-    outcome: &mut CalibrationOutcome,
-    fit: Option<&thermal::ThermalFit>,
-    options: &EstimateOptions,
-) {
-    if outcome.gyro.is_some() || options.gyro_model != GyroModel::Estimate {
-        return;
-    }
-    let Some((bias, sigma)) = fit.and_then(|f| f.gyro_bias_ref_rad_s) else {
-        return;
-    };
-    let g = GyroEstimate::bias_only(bias, sigma);
-    outcome.warnings.push(format!(
-        "gyro: bias at the reference temperature from the rests, ({:+.4}, {:+.4}, {:+.4}) ± ({:.4}, {:.4}, {:.4}) °/s; \
-         its scale and misalignment are not determined (the session has no spins) and are taken as perfect",
-        bias[0].to_degrees(),
-        bias[1].to_degrees(),
-        bias[2].to_degrees(),
-        sigma[0].to_degrees(),
-        sigma[1].to_degrees(),
-        sigma[2].to_degrees()
-    ));
-    outcome.calibration.gyro = Some(g.device_correction());
-    outcome.gyro = Some(g);
 }
 
 /// [`calibrate_session_stats`] for statistics at one temperature, before the plausibility checks.

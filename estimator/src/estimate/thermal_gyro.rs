@@ -9,6 +9,7 @@
 //! information criterion as the accelerometers' ([`super::thermal`]).
 
 use super::solve::invert_spd;
+use super::{CalibrationOutcome, EstimateOptions, GyroEstimate, GyroModel};
 use crate::session::thermal::{ThermalStats, SCALE_C};
 use crate::session::SegmentStats;
 use nalgebra::{DMatrix, DVector};
@@ -102,6 +103,36 @@ pub fn fit(statics: &[(&SegmentStats, &ThermalStats)], reference_c: f64) -> Opti
         ));
     }
     Some(out)
+}
+
+/// A thermal session without spins still determines the gyro's bias at `T_ref` from its rests (the
+/// temperature model holds only its drift about `T_ref`): that bias becomes the calibration's gyro
+/// correction, `G` taken as perfect and said to be undetermined (docs/model.md §8, §9). Without it
+/// the device and every export would keep the whole bias in the rate.
+pub(crate) fn bias_from_rests(
+    outcome: &mut CalibrationOutcome,
+    fit: Option<&super::thermal::ThermalFit>,
+    options: &EstimateOptions,
+) {
+    if outcome.gyro.is_some() || options.gyro_model != GyroModel::Estimate {
+        return;
+    }
+    let Some((bias, sigma)) = fit.and_then(|f| f.gyro_bias_ref_rad_s) else {
+        return;
+    };
+    let g = GyroEstimate::bias_only(bias, sigma);
+    outcome.warnings.push(format!(
+        "gyro: bias at the reference temperature from the rests, ({:+.4}, {:+.4}, {:+.4}) ± ({:.4}, {:.4}, {:.4}) °/s; \
+         its scale factors and axis alignment (G) are not determined (the session has no spins) and are taken as perfect",
+        bias[0].to_degrees(),
+        bias[1].to_degrees(),
+        bias[2].to_degrees(),
+        sigma[0].to_degrees(),
+        sigma[1].to_degrees(),
+        sigma[2].to_degrees()
+    ));
+    outcome.calibration.gyro = Some(g.device_correction());
+    outcome.gyro = Some(g);
 }
 
 /// The scatter of segment means at one temperature beyond their own noise (the bias wandering
