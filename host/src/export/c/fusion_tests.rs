@@ -3,9 +3,14 @@
 
 use super::*;
 
-/// x-io Fusion's types and `FusionModelInertial` as its current FusionMath.h / FusionModel.h define
-/// them (row-major `float array[9]`), for compiling the generated header without the library.
-const FUSION_STUB: &str = r#"
+/// x-io Fusion 1.3's declarations that the header uses, restated from `xioTechnologies/Fusion` at tag
+/// v1.3.2 (the newest; the same from v1.3.0): `Fusion/FusionMath.h` lines 23–31 (`FusionVector`),
+/// 51–65 (`FusionMatrix`, row-major `float array[9]` beside `element`), 218 (`FusionVectorSubtract`),
+/// 261 (`FusionVectorHadamard`), 481–494 (`FusionMatrixMultiply`, its sums in this order), and
+/// `Fusion/FusionModel.h` lines 7 (guard `FUSION_MODEL_H`) and 26 (`FusionModelInertial`). The
+/// header checks the types' shapes under `-Werror` as the real ones do (a nested `.array`
+/// initialiser fails on both, see `array_initialisers_fail_where_named_elements_build`).
+const FUSION_1_3: &str = r#"
 #ifndef FUSION_H
 #define FUSION_H
 #define FUSION_MODEL_H
@@ -56,7 +61,7 @@ fn fusion_header_compiles_and_its_model_recovers_the_specific_force() {
     assert!(text.contains("Gyroscope: UNDETERMINED"));
     assert!(!text.contains("gyroscopeOffset"));
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("Fusion.h"), FUSION_STUB).unwrap();
+    std::fs::write(dir.path().join("Fusion.h"), FUSION_1_3).unwrap();
     std::fs::write(dir.path().join("fusion_calibration.h"), text).unwrap();
     std::fs::write(dir.path().join("main.c"), FUSION_MAIN).unwrap();
     compile(dir.path(), &["main.c"]);
@@ -120,7 +125,7 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
     assert!(!text.contains("UNDETERMINED"), "{text}");
     assert!(text.contains("NOT HELD by FusionModelInertial: the temperature model"));
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("Fusion.h"), FUSION_STUB).unwrap();
+    std::fs::write(dir.path().join("Fusion.h"), FUSION_1_3).unwrap();
     std::fs::write(dir.path().join("fusion_calibration.h"), text).unwrap();
     std::fs::write(dir.path().join("main.c"), FUSION_GYRO_MAIN).unwrap();
     compile(dir.path(), &["main.c"]);
@@ -175,11 +180,14 @@ fn fusion_header_with_a_gyro_recovers_the_body_rate() {
     assert!(uncorrected > 0.5, "the test gyro must need its correction");
 }
 
-/// Fusion before 1.3 (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`): the same model named
-/// `FusionCalibrationInertial`, over `FusionMatrixMultiplyVector` and `FusionVectorHadamardProduct`,
-/// and its `FusionMatrix` as 1.2's `Fusion/FusionMath.h` declares it: `float array[3][3]` (a flat
-/// nine-value initialiser of it is `-Wmissing-braces`, which `-Werror` refuses).
-const FUSION_OLD_STUB: &str = r#"
+/// x-io Fusion 1.2's declarations that the header uses, restated from `xioTechnologies/Fusion` at tag
+/// v1.2.9 (the same from v1.1.0 to v1.2.11): `Fusion/FusionMath.h` lines 23–31 (`FusionVector`),
+/// 51–65 (`FusionMatrix`, `float array[3][3]` beside `element`: a flat nine-value initialiser of it is
+/// `-Wmissing-braces`, which `-Werror` refuses), 216 (`FusionVectorSubtract`), 255
+/// (`FusionVectorHadamardProduct`), 418–427 (`FusionMatrixMultiplyVector`), and
+/// `Fusion/FusionCalibration.h` lines 7 (guard `FUSION_CALIBRATION_H`) and 26
+/// (`FusionCalibrationInertial`, the same formula as 1.3's `FusionModelInertial`).
+const FUSION_1_2: &str = r#"
 #ifndef FUSION_H
 #define FUSION_H
 #define FUSION_CALIBRATION_H
@@ -251,7 +259,7 @@ fn fusion_header_in_both_fusion_versions_corrects_like_host_apply_within_what_it
         })
         .collect();
     let g = cal.gravity_m_s2;
-    for stub in [FUSION_STUB, FUSION_OLD_STUB] {
+    for stub in [FUSION_1_3, FUSION_1_2] {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("Fusion.h"), stub).unwrap();
         std::fs::write(dir.path().join("fusion_calibration.h"), &text).unwrap();
@@ -329,17 +337,239 @@ fn fusion_header_refuses_or_marks_undetermined_gyro_entries() {
     assert!(!render_fusion(&input).unwrap().contains("UNDETERMINED"));
 }
 
-/// A `FusionMatrix` is written by its named elements, and an entry that is the rounding of an exact
-/// inverse (−6e-17 beside entries of order 1), or any entry below half an `f32` step of its row's
-/// largest (2e-8 beside 1: it adds nothing to a `float` product), is written as an exact zero; a
-/// small entry that is a value (1e-6 beside 1) is kept.
+/// The exported header's matrices rewritten as `.array` initialisers, flat (`{9 values}`) or nested
+/// (`{{3}, {3}, {3}}`): the forms a writer that ignored one of Fusion's versions would produce.
+fn as_array_initialisers(text: &str, nested: bool) -> String {
+    let mut out = String::new();
+    for line in text.lines() {
+        let Some((head, tail)) = line.split_once("{ .element = {") else {
+            out += line;
+            out += "\n";
+            continue;
+        };
+        let inner = tail
+            .strip_suffix("} };")
+            .expect("a FusionMatrix initialiser");
+        let values: Vec<&str> = inner
+            .split(", ")
+            .map(|item| item.split(" = ").nth(1).unwrap().split(' ').next().unwrap())
+            .collect();
+        assert_eq!(values.len(), 9, "{line}");
+        let array = if nested {
+            let rows: Vec<String> = values
+                .chunks(3)
+                .map(|r| format!("{{{}}}", r.join(", ")))
+                .collect();
+            format!("{{{}}}", rows.join(", "))
+        } else {
+            format!("{{{}}}", values.join(", "))
+        };
+        out += &format!("{head}{{ .array = {array} }};\n");
+    }
+    out
+}
+
+/// The header's `.element` initialisers build under `-Wall -Wextra -pedantic -Werror` against both
+/// Fusion versions' declarations, where each `.array` form fails one of them, with the diagnostics
+/// gcc gives against the real headers of v1.2.9 and v1.3.2: a flat `.array` (what the header wrote
+/// before) is "missing braces" against 1.2's `float array[3][3]`, a nested one "braces around scalar
+/// initializer" against 1.3's `float array[9]`. This also keeps the two restated declarations as
+/// strict as the real ones.
 #[test]
-fn fusion_matrix_names_its_elements_and_writes_rounding_as_zero() {
-    let m = [1.0f32, -6e-17, 1e-6, 0.0, 0.5, 0.0, 2e-8, 0.0, 1.0];
-    let text = fusion_matrix(&m, &[[false; 3]; 3]);
-    assert_eq!(
-        text,
-        "{ .element = {.xx = 1e0f, .xy = 0e0f, .xz = 1e-6f, .yx = 0e0f, .yy = 5e-1f, .yz = 0e0f, \
-         .zx = 0e0f, .zy = 0e0f, .zz = 1e0f} }"
+fn array_initialisers_fail_where_named_elements_build() {
+    let cal = crate::export::consumer_tests::handheld_unit();
+    let unit = UnitFile::from_calibration(&cal, None, None);
+    let named = render_fusion(&ExportInput::for_tests(&unit, cal)).unwrap();
+    assert!(
+        named.contains("gyroscopeMisalignment = { .element = {"),
+        "{named}"
     );
+    let flat = as_array_initialisers(&named, false);
+    let nested = as_array_initialisers(&named, true);
+    assert!(
+        flat.contains("accelerometerMisalignment = { .array = {9.9"),
+        "{flat}"
+    );
+    assert!(
+        nested.contains("gyroscopeMisalignment = { .array = {{"),
+        "{nested}"
+    );
+    let cases = [
+        ("1.2 named", FUSION_1_2, &named, None),
+        ("1.3 named", FUSION_1_3, &named, None),
+        (
+            "1.2 flat",
+            FUSION_1_2,
+            &flat,
+            Some("missing braces around initializer"),
+        ),
+        ("1.3 flat", FUSION_1_3, &flat, None),
+        ("1.2 nested", FUSION_1_2, &nested, None),
+        (
+            "1.3 nested",
+            FUSION_1_3,
+            &nested,
+            Some("braces around scalar initializer"),
+        ),
+    ];
+    for (what, fusion, header, error) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("Fusion.h"), fusion).unwrap();
+        std::fs::write(dir.path().join("fusion_calibration.h"), header).unwrap();
+        std::fs::write(dir.path().join("main.c"), FUSION_BOTH_MAIN).unwrap();
+        let result = compile_result(dir.path(), &["main.c"]);
+        match error {
+            None => assert!(result.is_ok(), "{what}: {result:?}"),
+            Some(e) => {
+                let message = result.expect_err(what);
+                assert!(
+                    message.contains(e) && message.contains("-Werror"),
+                    "{what}: {message}"
+                );
+            }
+        }
+    }
+}
+
+/// Only entries that are zero to the rounding of their computation are written `0.0f` (at most 8
+/// `f64` ulps of the matrix's largest): −6e-17 (`cos(fl(π/2))`, 0.28 ulp), −0 and 8 ulps; 8.5 ulps
+/// is kept, and so is every small value that is a value: 1e-6, 2e-8, 1e-12 beside 1 (all below half
+/// an `f32` step of 1, which a rule in `float` terms would have zeroed). The threshold scales with
+/// the matrix: beside 1e3, 1e-13 is rounding and 1e-11 is kept.
+#[test]
+fn fusion_matrix_writes_only_rounding_as_zero() {
+    let eps = f64::EPSILON;
+    let m = [
+        [1.0, -6.123233995736766e-17, 8.0 * eps],
+        [-0.0, 1.0, 1e-6],
+        [2e-8, -1e-12, 8.5 * eps],
+    ];
+    assert_eq!(
+        fusion_matrix(&m, &[[false; 3]; 3]),
+        format!(
+            "{{ .element = {{.xx = 1e0f, .xy = 0.0f, .xz = 0.0f, .yx = 0.0f, .yy = 1e0f, \
+             .yz = 1e-6f, .zx = 2e-8f, .zy = -1e-12f, .zz = {:e}f}} }}",
+            (8.5 * eps) as f32
+        )
+    );
+    let big = [[1e3, 1e-13, 1e-11], [0.0, 1e3, 0.0], [0.0, 0.0, -1e3]];
+    assert_eq!(
+        fusion_matrix(&big, &[[false; 3]; 3]),
+        "{ .element = {.xx = 1e3f, .xy = 0.0f, .xz = 1e-11f, .yx = 0.0f, .yy = 1e3f, .yz = 0.0f, \
+         .zx = 0.0f, .zy = 0.0f, .zz = -1e3f} }"
+    );
+}
+
+/// The initialiser values of the `FusionMatrix` named `name` in `text`, by element.
+fn matrix_items<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
+    let line = text
+        .lines()
+        .find(|l| l.contains(&format!("FusionMatrix {name} = ")))
+        .unwrap_or_else(|| panic!("no {name} in {text}"));
+    let inner = line.split_once("{ .element = {").unwrap().1;
+    inner
+        .trim_end_matches("} };")
+        .split(", ")
+        .map(|item| item.split(" = ").nth(1).unwrap())
+        .collect()
+}
+
+/// A unit exactly on the body axes but for a 1 µrad tilt of its y axis towards x, and a gyro whose only
+/// cross term is 1e-6: the right angles' ±6e-17 and the inverse's zeros are written `0.0f`, the
+/// microradian terms kept, and Fusion's model (both versions) gives `host apply`'s specific force and
+/// rate on samples where the microradian terms are most of a component (1e-6 g of a 1 g sample along
+/// x, 1e-4 °/s of 100 °/s about y), to a few `f32` roundings of the terms summed.
+#[test]
+fn fusion_header_keeps_a_microradian_misalignment_and_writes_right_angles_as_zero() {
+    let d = 1e-6f64.to_degrees();
+    let mut cal = shared::params::PAPER_UNIT;
+    cal.statics.output_unit = shared::OutputUnit::StandardGravity;
+    cal.statics.scale_out_per_g = [1.0; 3];
+    cal.statics.zero_bias_out = [0.0; 3];
+    cal.statics.installation_angles_deg =
+        [[0.0, 90.0, 90.0], [90.0 - d, d, 90.0], [90.0, 90.0, 0.0]];
+    cal.lever_arms.r_m = [[0.0; 3]; 3];
+    let gyro = GyroCorrection {
+        matrix: [[1.004, 1e-6, 0.0], [0.0, 0.997, 0.0], [0.0, 0.0, 1.001]],
+        bias_rad_s: [0.01, -0.02, 0.005],
+    };
+    cal.gyro = Some(gyro);
+    let unit = UnitFile::from_calibration(&cal, None, None);
+    let text = render_fusion(&ExportInput::for_tests(&unit, cal)).unwrap();
+    // The computation's −6e-17 where A holds 0 (what the header wrote before) is gone.
+    let a_inv = crate::export::convert(&cal).unwrap().fusion.misalignment;
+    assert!(a_inv[0][1] != 0.0 && a_inv[0][1].abs() < 1e-16, "{a_inv:?}");
+    assert!(!text.contains("e-17") && !text.contains("-0e0"), "{text}");
+    let accel = matrix_items(&text, "accelerometerMisalignment");
+    let gyro_items = matrix_items(&text, "gyroscopeMisalignment");
+    let zeros = |items: &[&str]| -> Vec<usize> { (0..9).filter(|&k| items[k] == "0.0f").collect() };
+    assert_eq!(zeros(&accel), [1, 2, 5, 6, 7], "{accel:?}");
+    assert_eq!(zeros(&gyro_items), [2, 3, 5, 6, 7], "{gyro_items:?}");
+    let yx: f32 = accel[3].trim_end_matches('f').parse().unwrap();
+    assert!((f64::from(yx) + 1e-6).abs() < 1e-12, "{yx}");
+    let xy: f32 = gyro_items[1].trim_end_matches('f').parse().unwrap();
+    assert!(
+        (f64::from(xy) + 1e-6 / (1.004 * 0.997)).abs() < 1e-12,
+        "{xy}"
+    );
+
+    let g = cal.gravity_m_s2;
+    let samples: [([f32; 3], [f64; 3]); 4] = [
+        ([1.0, 0.0, 0.0], [0.0, 100.0, 0.0]),
+        ([0.0, 1.0, 0.0], [100.0, 0.0, 0.0]),
+        ([0.6, -0.8, 0.0], [0.0, 0.0, -250.0]),
+        ([0.48, 0.6, 0.64], [30.0, -40.0, 50.0]),
+    ];
+    let mut applier =
+        crate::apply::Applier::new(&cal, shared::LeverMode::RateAndAcceleration, 1000.0).unwrap();
+    let mut stdin = String::new();
+    let mut want = Vec::new();
+    let g_inv = gyro.checked_inverse().unwrap();
+    for (u, omega_deg_s) in samples {
+        let omega = omega_deg_s.map(f64::to_radians);
+        let w: [f64; 3] = std::array::from_fn(|i| {
+            crate::export::linalg::dot(&gyro.matrix[i], &omega) + gyro.bias_rad_s[i]
+        });
+        let w32 = w.map(|v| v as f32);
+        let f = applier.sample(&u, &w32).unwrap();
+        let rate = applier.rate_rad_s();
+        let w_deg = w.map(|v| (v.to_degrees() as f32).to_bits());
+        stdin += &hex_line(u.map(f32::to_bits).iter().chain(&w_deg));
+        // Each component's bound: a few f32 roundings of the terms it sums, and what the entries
+        // written as 0 contribute on the device (at most 8 f64 ulps of the largest each).
+        let bound = |m: &[[f64; 3]; 3], v: &[f64; 3], j: usize| {
+            let largest = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+            let terms: f64 = (0..3).map(|k| (m[j][k] * v[k]).abs()).sum();
+            let sum: f64 = v.iter().map(|x| x.abs()).sum();
+            6.0 * f64::from(f32::EPSILON) * terms + 8.0 * f64::EPSILON * largest * sum
+        };
+        let b_deg = gyro.bias_rad_s.map(f64::to_degrees);
+        let w_abs: [f64; 3] = std::array::from_fn(|k| w[k].to_degrees().abs() + b_deg[k].abs());
+        for j in 0..3 {
+            want.push((f64::from(f[j]) / g, bound(&a_inv, &u.map(f64::from), j)));
+        }
+        for j in 0..3 {
+            want.push((f64::from(rate[j]).to_degrees(), bound(&g_inv, &w_abs, j)));
+        }
+    }
+    for fusion in [FUSION_1_2, FUSION_1_3] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("Fusion.h"), fusion).unwrap();
+        std::fs::write(dir.path().join("fusion_calibration.h"), &text).unwrap();
+        std::fs::write(dir.path().join("main.c"), FUSION_BOTH_MAIN).unwrap();
+        compile(dir.path(), &["main.c"]);
+        let out = run(dir.path(), &stdin);
+        let got: Vec<f64> = out.split_whitespace().map(|v| v.parse().unwrap()).collect();
+        assert_eq!(got.len(), want.len(), "{out}");
+        let mut worst: f64 = 0.0;
+        for (k, (fusion_v, (apply_v, bound))) in got.iter().zip(&want).enumerate() {
+            let d = (fusion_v - apply_v).abs();
+            assert!(
+                d <= *bound,
+                "value {k}: Fusion {fusion_v:e}, host apply {apply_v:e}, bound {bound:e}"
+            );
+            worst = worst.max(d / bound);
+        }
+        eprintln!("microradian terms: largest difference {worst:.3} of its bound");
+    }
 }

@@ -22,6 +22,14 @@ fn compiler() -> &'static str {
 
 /// Compiles `sources` in `dir` into `dir/prog` with strict flags; panics with gcc's message.
 fn compile(dir: &Path, sources: &[&str]) {
+    if let Err(message) = compile_result(dir, sources) {
+        panic!("{message}");
+    }
+}
+
+/// [`compile`]'s build: `-std=c99 -O2 -Wall -Wextra -pedantic -Werror -ffp-contract=off`, gcc's
+/// message when it fails.
+fn compile_result(dir: &Path, sources: &[&str]) -> Result<(), String> {
     let out = Command::new(compiler())
         .current_dir(dir)
         .args([
@@ -37,11 +45,11 @@ fn compile(dir: &Path, sources: &[&str]) {
         .args(["-lm", "-o", "prog"])
         .output()
         .expect("a C compiler runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(String::from_utf8_lossy(&out.stderr).into_owned())
+    }
 }
 
 /// Writes the C package of `input` into `dir`, as `host export --format c-header --out DIR` does.
