@@ -698,7 +698,7 @@ fn compile_package(dir: &Path, flags: &[&str]) {
 
 /// Writes `cal` as a unit file into `dir` and exports its C package through the command's own `run`
 /// into `dir/pkg` (refused over it without --force, then forced), with [`PACKAGE_MAIN_C`] beside it
-/// as `main.c`; checks that the package is the five files and includes nothing else. Returns `dir/pkg`.
+/// as `main.c`; checks that the package is the six files and includes nothing else. Returns `dir/pkg`.
 fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
     use crate::cli::export::{run as export, ExportArgs};
     let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
@@ -737,7 +737,8 @@ fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
             "acal_blob.h",
             "acal_calibration.h",
             "acal_device.c",
-            "acal_device.h"
+            "acal_device.h",
+            "example.c"
         ]
     );
     // The header includes nothing the package does not hold.
@@ -875,6 +876,107 @@ fn c_package_written_by_the_command_is_self_contained_and_bit_exact() {
             compile_package(&out, flags);
             let got = run(&out, &stdin);
             assert_package_output(&got, &want, &format!("{vectors} {flags:?}"));
+        }
+    }
+}
+
+/// Runs `dir/prog` with `args`; its standard output.
+fn run_with_args(dir: &Path, args: &[String]) -> String {
+    let out = Command::new(dir.join("prog")).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// The values of the line of `out` that starts with `tag`, as `f32` bits (`%.9g` round-trips a
+/// `float`).
+fn printed_bits(out: &str, tag: &str) -> Vec<u32> {
+    let line = out
+        .lines()
+        .find_map(|l| l.strip_prefix(&format!("{tag} ")))
+        .unwrap_or_else(|| panic!("no '{tag}' in {out}"));
+    line.split(' ')
+        .map(|v| v.parse::<f32>().unwrap().to_bits())
+        .collect()
+}
+
+/// `example.c` of the package the command writes, built as its comment says (with the strict flags
+/// too) and run without arguments (the unit at rest, z up, the gyro reading its bias) and with a
+/// sample and a temperature: what it prints is host apply's specific force and rate for the same
+/// sample, bit for bit, and the decoded blob's unit and sections.
+#[test]
+fn c_package_example_decodes_corrects_one_sample_and_prints_host_applys_result() {
+    use crate::apply::Applier;
+    // The sample given on the command line: u, w (rad/s), temperature (°C).
+    type Given = ([f32; 3], [f32; 3], f32);
+    let cases: [(Calibration, Option<Given>); 3] = [
+        (firmware::paper_unit::calibration(), None),
+        (imperfect_unit(), None),
+        (
+            imperfect_unit(),
+            Some(([0.31, -0.52, 2.71], [0.4, -1.25, 2.0], 41.5)),
+        ),
+    ];
+    for (cal, given) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let pkg = exported_package(dir.path(), &cal);
+        compile(&pkg, &["example.c", "acal_blob.c", "acal_device.c"]);
+        let s = &cal.statics;
+        let gyro = cal.gyro.unwrap_or(GyroCorrection::PERFECT);
+        let at_rest = (
+            std::array::from_fn(|i| {
+                (s.zero_bias_out[i] + if i == 2 { s.scale_out_per_g[2] } else { 0.0 }) as f32
+            }),
+            gyro.bias_rad_s.map(|b| b as f32),
+        );
+        let (u, w) = given.map_or(at_rest, |(u, w, _)| (u, w));
+        let temp_c = given.map(|(_, _, t)| t);
+        let mut args: Vec<String> = Vec::new();
+        if let Some(t) = temp_c {
+            args = u
+                .iter()
+                .chain(&w)
+                .chain([&t])
+                .map(|v| format!("{v:e}"))
+                .collect();
+        }
+        let out = run_with_args(&pkg, &args);
+        let mut applier =
+            Applier::new(&cal, shared::LeverMode::RateAndAcceleration, 1000.0).unwrap();
+        let f = applier
+            .row(&crate::session::reader::Row {
+                segment: "s",
+                segment_index: 0,
+                t_s: 0.0,
+                u: u.map(f64::from),
+                w_rad_s: w.map(f64::from),
+                temp_c: temp_c.map(f64::from),
+            })
+            .unwrap();
+        assert_eq!(printed_bits(&out, "u"), u.map(f32::to_bits), "{out}");
+        assert_eq!(printed_bits(&out, "f_m_s2"), f.map(f32::to_bits), "{out}");
+        let rate = applier.rate_rad_s().map(f32::to_bits);
+        assert_eq!(printed_bits(&out, "omega_rad_s"), rate, "{out}");
+        let sections = match cal.gyro {
+            Some(_) => "gyro present, temperature model present",
+            None => "gyro absent, temperature model absent",
+        };
+        let first = out.lines().next().unwrap();
+        assert!(
+            first.starts_with("unit a1b2c3d4e5f60718293a4b5c, gravity "),
+            "{first}"
+        );
+        assert!(first.ends_with(sections), "{first}");
+        // At rest with z up the unit reads about 1 g on z (its misalignments tilt it by ~1°).
+        if given.is_none() {
+            let f_g = f.map(|v| f64::from(v) / cal.gravity_m_s2);
+            assert!(
+                (f_g[2] - 1.0).abs() < 1e-3 && f_g[0].abs() < 0.05,
+                "{f_g:?}"
+            );
         }
     }
 }
