@@ -125,7 +125,8 @@ fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Resu
         write_atomic(&dir.join(name), text.as_bytes(), a.force).map_err(CliError::Written)?;
     }
     Output { json: false, quiet }.line(format_args!(
-        "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off)",
+        "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off); \
+         example.c shows their use",
         files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
         dir.display()
     ))?;

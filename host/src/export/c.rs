@@ -1,17 +1,19 @@
 //! C outputs: the calibration for a C firmware (`c-header`, a package of files, [`package`]) and for
 //! x-io Fusion (`fusion-c`).
 //!
-//! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the device's
-//! whole per-sample correction ([`DEVICE_H`], [`DEVICE_C`]: gyro correction, the ω̇ estimator of
-//! `shared::omega_dot`, the lever-arm compensation and the temperature refresh at the firmware's pace),
-//! so that it builds alone. `acal_calibration.h` holds the calibration as a plain `struct acal_calibration` initialiser, the device's
-//! precomputed per-sample constants (`struct acal_compensator`, the exact `f32` values of
-//! `shared::Compensator`, so `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give
-//! the device's results bit for bit), with a temperature model what `acal_refresh` recomputes them
-//! from (`struct acal_thermal`, the device's refresh, also bit for bit), and the blob as a byte array
-//! that `acal_decode` checks and decodes. The decoder and the
-//! compensation are the files [`DECODER_H`] and [`DECODER_C`] (`host/src/export/c/`); the decoder reads
-//! blob versions 1 and 2 and fills the optional gyro and temperature sections with presence flags.
+//! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the
+//! device's whole per-sample correction ([`DEVICE_H`], [`DEVICE_C`]: gyro correction, the ω̇
+//! estimator of `shared::omega_dot`, the lever-arm compensation and the temperature refresh at the
+//! firmware's pace), so that it builds alone, and `example.c` ([`EXAMPLE_C`]): the blob decoded,
+//! one sample corrected with the device's code, printed. `acal_calibration.h` holds the calibration
+//! as a plain `struct acal_calibration` initialiser, the device's precomputed per-sample constants
+//! (`struct acal_compensator`, the exact `f32` values of `shared::Compensator`, so
+//! `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give the device's results
+//! bit for bit), with a temperature model what `acal_refresh` recomputes them from (`struct
+//! acal_thermal`, the device's refresh, also bit for bit), and the blob as a byte array that
+//! `acal_decode` checks and decodes. The decoder and the compensation are the files [`DECODER_H`]
+//! and [`DECODER_C`] (`host/src/export/c/`); the decoder reads blob versions 1 and 2 and fills the
+//! optional gyro and temperature sections with presence flags.
 //!
 //! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for Fusion's inertial model
 //! (`misalignment·((U − offset) ∘ sensitivity)`, [`super::FusionStyle`]), named `FusionModelInertial`
@@ -36,11 +38,15 @@ pub const DECODER_C: &str = include_str!("c/acal_blob.c");
 pub const DEVICE_H: &str = include_str!("c/acal_device.h");
 /// Its implementation.
 pub const DEVICE_C: &str = include_str!("c/acal_device.c");
+/// A short program of the package: decodes the blob, corrects one sample with the device's code and
+/// prints it (what a firmware engineer copies from).
+pub const EXAMPLE_C: &str = include_str!("c/example.c");
 /// The name of the constants header in the package.
 pub(crate) const HEADER_NAME: &str = "acal_calibration.h";
 
 /// The files of the C package `export --format c-header --out DIR` writes: the constants header, the
-/// decoder and the device's per-sample correction, self-contained (the header includes only them).
+/// decoder, the device's per-sample correction and [`EXAMPLE_C`], self-contained (the header includes
+/// only them).
 pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
     Ok(vec![
         (HEADER_NAME, render_header(input)?),
@@ -48,6 +54,7 @@ pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, E
         ("acal_blob.c", DECODER_C.to_string()),
         ("acal_device.h", DEVICE_H.to_string()),
         ("acal_device.c", DEVICE_C.to_string()),
+        ("example.c", EXAMPLE_C.to_string()),
     ])
 }
 
@@ -317,13 +324,12 @@ pub(crate) fn render_header(input: &ExportInput<'_>) -> Result<String, ExportErr
 /// `offset = b` and `misalignment·diag(sensitivity) = G⁻¹`. The split is not unique; the scale
 /// factors are left inside `G⁻¹` (`sensitivity = 1`, `misalignment = G⁻¹`, the exact inverse), which
 /// keeps a general `G` (scale, cross-axis and alignment terms together) exact. `G` is dimensionless,
-/// so only `b` takes the unit: `b·180/π` °/s.
-fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<(Vec<f32>, [f32; 3]), ExportError> {
+/// so only `b` takes the unit: `b·180/π` °/s. `G⁻¹` stays in `f64` for [`zero_to_rounding`].
+fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<([[f64; 3]; 3], [f32; 3]), ExportError> {
     let inv = gyro
         .checked_inverse()
         .map_err(|e| ExportError::Compensator(CompensatorError::Gyro(e)))?;
-    let m = inv.iter().flatten().map(|v| *v as f32).collect();
-    Ok((m, gyro.bias_rad_s.map(|b| b.to_degrees() as f32)))
+    Ok((inv, gyro.bias_rad_s.map(|b| b.to_degrees() as f32)))
 }
 
 /// Which entries of `G⁻¹` the calibration did not determine: the first-order propagation of the
@@ -351,34 +357,65 @@ pub(crate) fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 
     })
 }
 
-/// A `FusionMatrix` initialiser by its named elements (`.element = {.xx = …, …}`), with undetermined
+/// How many `f64` ulps of a matrix's largest entry an entry may measure and still be the rounding of a
+/// zero ([`zero_to_rounding`]).
+const ROUNDING_ULPS: f64 = 8.0;
+
+/// `m` with every entry that is zero to the rounding of its computation written as an exact 0: the
+/// entries with `|x| ≤ 8·ε·max|m|` (`ε = f64::EPSILON`; 1.8e-15 beside entries of order 1).
+///
+/// Fusion's matrices are computed in `f64`: `A⁻¹` from the cosines of the installation angles
+/// (normalised, decomposed, inverted by cofactors) and `G⁻¹` from the gyro's `G`. An angle of exactly
+/// 90° has the cosine `cos(fl(π/2)) = 6.1e-17`, 0.28 ulp of 1, where the matrix holds 0, and the
+/// inverse carries it on: its zeros come out as ±6e-17. Measured on identity angles, on a triangular
+/// `A` (one axis exactly on a body axis, the others 0.5° to 3° off), on 180° angles, in V, m/s² and
+/// LSB units: every such entry is 0.27 to 0.28 ulp of the largest; a `G` without cross terms
+/// inverts to exact zeros (of either sign). Angles within ±180° (what a calibration writes) round
+/// to within 1 ulp of 1 in radians, the normalisation and the cofactor inverse of a near-orthogonal
+/// matrix add a few roundings more: 8 ulps is a margin of about 30 over what was measured. A real
+/// misalignment is far above it: 1e-6 rad is 4.5e9 ulps, even 1e-12 rad is 4 500 (kept).
+///
+/// The rule errs one way only: where the rounding is larger (an ill-conditioned matrix, or angles
+/// far beyond ±180°, whose radians round coarsely), a mathematically zero entry is written as the
+/// small value the computation gave, which changes Fusion's result by no more than that rounding;
+/// a value is never written as 0.
+fn zero_to_rounding(m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let largest = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+    let threshold = ROUNDING_ULPS * f64::EPSILON * largest;
+    m.map(|row| row.map(|v| if v.abs() <= threshold { 0.0 } else { v }))
+}
+
+/// A `FusionMatrix` initialiser by its named elements (`{ .element = {.xx = …, …} }`, single
+/// precision), an entry zero to rounding ([`zero_to_rounding`]) written `0.0f`, with undetermined
 /// entries marked in a comment.
 ///
-/// Named elements, because the array's shape changed between Fusion's versions: 1.2 declares
-/// `float array[3][3]`, where a flat `.array = {9 values}` is `-Wmissing-braces` (an error under
-/// `-Werror`), and later versions `float array[9]`, where nested braces are too many; both declare the
-/// same `element` struct (`xx` … `zz`, row-major: `xioTechnologies/Fusion` `Fusion/FusionMath.h`).
-/// An entry below the `f32` resolution of its row's largest (the rounding of an exact inverse, such
-/// as −6e-17 where the matrix holds 0) is written as an exact 0: it changes no product in `float`.
-fn fusion_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
+/// Named elements, because the array's shape changed between Fusion's versions (read in
+/// `xioTechnologies/Fusion`'s history, see [`FUSION_VERSION_SELECT`]):
+///
+/// - v1.2.9 (every tag from v1.1.0 to v1.2.11 alike), `Fusion/FusionMath.h` lines 51–65: `typedef union
+///   { float array[3][3]; struct { float xx; … float zz; } element; } FusionMatrix;` A flat
+///   `.array = {9 values}` is `-Wmissing-braces` there, an error under `-Werror`.
+/// - v1.3.2, the newest tag (from v1.3.0, commit e3b8522 "Refactor math library"), the same file and
+///   lines: `float array[9]` and the same `element`. Nested `.array = {{…}, {…}, {…}}` is "braces
+///   around scalar initializer" and "excess elements" there, errors under `-Werror`.
+///
+/// Both declare `element` the same (`xx`, `xy`, `xz`, `yx` … `zz`, row-major), and `FusionVector`
+/// (lines 23–31 in both) `{ float array[3]; struct { float x; float y; float z; } axis; }`, so
+/// `.element` and `.axis` initialisers are exact for both, checked with `-Wall -Wextra -pedantic
+/// -Werror` against each tag's headers.
+fn fusion_matrix(m: &[[f64; 3]; 3], undetermined: &[[bool; 3]; 3]) -> String {
     const NAMES: [&str; 9] = ["xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"];
-    let items: Vec<String> = m
-        .iter()
-        .enumerate()
-        .map(|(k, v)| {
-            let row = &m[3 * (k / 3)..3 * (k / 3) + 3];
-            let largest = row.iter().fold(0.0f32, |a, x| a.max(x.abs()));
-            let v = if v.abs() < largest * f32::EPSILON / 2.0 {
-                0.0
-            } else {
-                *v
-            };
+    let m = zero_to_rounding(m);
+    let items: Vec<String> = (0..9)
+        .map(|k| {
+            let v = m[k / 3][k % 3];
+            let value = fusion_f32(v as f32);
             let mark = if undetermined[k / 3][k % 3] {
                 " /* UNDETERMINED */"
             } else {
                 ""
             };
-            format!(".{} = {}{mark}", NAMES[k], c_f32(v))
+            format!(".{} = {value}{mark}", NAMES[k])
         })
         .collect();
     format!("{{ .element = {{{}}} }}", items.join(", "))
@@ -388,16 +425,27 @@ fn fusion_matrix(m: &[f32], undetermined: &[[bool; 3]; 3]) -> String {
 fn fusion_vector(v: &[f32; 3]) -> String {
     format!(
         "{{ .axis = {{.x = {}, .y = {}, .z = {}}} }}",
-        c_f32(v[0]),
-        c_f32(v[1]),
-        c_f32(v[2])
+        fusion_f32(v[0]),
+        fusion_f32(v[1]),
+        fusion_f32(v[2])
     )
 }
 
+/// A value of Fusion's header: [`c_f32`], and a zero of either sign as `0.0f`.
+fn fusion_f32(v: f32) -> String {
+    if v == 0.0 {
+        "0.0f".into()
+    } else {
+        c_f32(v)
+    }
+}
+
 /// Selects Fusion's inertial model by the header it includes: `FusionCalibrationInertial` in
-/// `FusionCalibration.h` before Fusion 1.3, `FusionModelInertial` in `FusionModel.h` from 1.3
-/// (`xioTechnologies/Fusion` `Fusion/FusionCalibration.h`, `Fusion/FusionModel.h`; same arguments,
-/// same formula).
+/// `FusionCalibration.h` before Fusion 1.3, `FusionModelInertial` in `FusionModel.h` from 1.3, same
+/// arguments, same formula (`misalignment·((uncalibrated − offset) ∘ sensitivity)`). Read in
+/// `xioTechnologies/Fusion` at tag v1.2.9, `Fusion/FusionCalibration.h` line 7 (include guard
+/// `FUSION_CALIBRATION_H`) and line 26 (`FusionCalibrationInertial`), and at tag v1.3.2,
+/// `Fusion/FusionModel.h` line 7 (`FUSION_MODEL_H`) and line 26 (`FusionModelInertial`).
 const FUSION_VERSION_SELECT: &str =
     "/* Fusion >= 1.3 names the model FusionModelInertial (FusionModel.h); before 1.3 it is
  * FusionCalibrationInertial (FusionCalibration.h), same arguments and formula. */
@@ -413,7 +461,6 @@ const FUSION_VERSION_SELECT: &str =
 /// The `fusion-c` text.
 pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let f = convert(&input.cal)?.fusion;
-    let m: Vec<f32> = f.misalignment.iter().flatten().map(|v| *v as f32).collect();
     let gyroscope = input.cal.gyro.as_ref().map(fusion_gyroscope).transpose()?;
     let undetermined = undetermined_gyro_inverse(input);
     let names: Vec<String> = (0..3)
@@ -428,18 +475,18 @@ pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportErr
         });
     }
     let gyro_note = if gyroscope.is_some() {
-        " *   gyroscope = ACAL_FUSION_INERTIAL(uncalibrated, gyroscopeMisalignment,\n\
-         *                                    gyroscopeSensitivity, gyroscopeOffset);\n\
-         * uncalibrated and result in deg/s (Fusion's unit; a gyro read in rad/s: multiply by 180/pi\n\
-         * first), result in body axes. From w = G omega + b (docs/model.md 8): offset = b,\n\
+        " *   gyroscope = ACAL_FUSION_INERTIAL(uncalibrated, gyroscopeMisalignment,\n \
+         *                                    gyroscopeSensitivity, gyroscopeOffset);\n \
+         * uncalibrated and result in deg/s (Fusion's unit; a gyro read in rad/s: multiply by 180/pi\n \
+         * first), result in body axes. From w = G omega + b (docs/model.md 8): offset = b,\n \
          * misalignment = G^-1 (the exact inverse, scale factors included), sensitivity = 1.\n"
     } else {
-        " * Gyroscope: UNDETERMINED, this calibration has no gyro model; no gyroscope initialisers\n\
+        " * Gyroscope: UNDETERMINED, this calibration has no gyro model; no gyroscope initialisers\n \
          * are written (an identity would look like a calibration).\n"
     };
     let temperature_note = match input.cal.temperature {
         Some(t) => format!(
-            " * NOT HELD by FusionModelInertial: the temperature model; these are the values at its\n\
+            " * NOT HELD by FusionModelInertial: the temperature model; these are the values at its\n \
              * reference temperature, {} degC.\n",
             t.reference_c
         ),
@@ -448,12 +495,14 @@ pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportErr
     let mut w = String::new();
     let _ = write!(
         w,
-        "/*\n * x-io Fusion calibration (host export --format fusion-c), for\n\
-         *   accelerometer = ACAL_FUSION_INERTIAL(uncalibrated, accelerometerMisalignment,\n\
-         *                                        accelerometerSensitivity, accelerometerOffset);\n\
-         * uncalibrated in the unit's output unit ({}), result in g, body axes:\n\
-         * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n\
-         * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n\
+        "/*\n * x-io Fusion calibration (host export --format fusion-c), for\n \
+         *   accelerometer = ACAL_FUSION_INERTIAL(uncalibrated, accelerometerMisalignment,\n \
+         *                                        accelerometerSensitivity, accelerometerOffset);\n \
+         * uncalibrated in the unit's output unit ({}), result in g, body axes:\n \
+         * misalignment = A^-1, sensitivity = 1/k (g per output unit), offset = u0 (docs/model.md 2-3).\n \
+         * NOT HELD by FusionModelInertial: the lever-arm (size-effect) terms; apply them elsewhere.\n \
+         * Matrices by named elements: valid for Fusion 1.2 (float array[3][3]) and 1.3+\n \
+         * (float array[9]) under -Wall -Wextra -Werror. An entry 0 but for rounding is 0.0f.\n\
          {gyro_note}{temperature_note} */\n\
          #ifndef ACAL_FUSION_CALIBRATION_H\n#define ACAL_FUSION_CALIBRATION_H\n\n#include \"Fusion.h\"\n\n{FUSION_VERSION_SELECT}\n",
         input.cal.statics.output_unit.symbol()
@@ -468,7 +517,7 @@ pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportErr
     let _ = writeln!(
         w,
         "static const FusionMatrix accelerometerMisalignment = {};",
-        fusion_matrix(&m, &[[false; 3]; 3])
+        fusion_matrix(&f.misalignment, &[[false; 3]; 3])
     );
     let _ = writeln!(
         w,

@@ -100,7 +100,8 @@ pub enum ExportFormat {
     FusionC,
     /// A C package (--out DIR): acal_calibration.h (the calibration as a struct initialiser, the
     /// device's precomputed constants, the blob as bytes), the blob decoder acal_blob.{h,c}, and the
-    /// device's whole per-sample correction acal_device.{h,c}.
+    /// device's whole per-sample correction acal_device.{h,c}, and example.c (the blob decoded, one
+    /// sample corrected, printed).
     #[value(alias = "c")]
     CHeader,
     /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
