@@ -252,9 +252,8 @@ fn column_mixup(ratios: &[(&str, f64)], spins: &[Spin]) -> Option<RowMajor3> {
             && spins.iter().all(|s| {
                 // A permutation keeps a rate's magnitude: a free spin reads its plan under any.
                 let reads = s.axis_b.map_or(1.0, |u| {
-                    let pu: [f64; 3] = core::array::from_fn(|i| {
-                        (0..3).map(|j| p[i][j] * u[j]).sum::<f64>()
-                    });
+                    let pu: [f64; 3] =
+                        core::array::from_fn(|i| (0..3).map(|j| p[i][j] * u[j]).sum::<f64>());
                     shared::linalg::dot(&u, &pu) / shared::linalg::dot(&u, &u)
                 });
                 match ratios.iter().find(|(name, _)| *name == s.name) {
@@ -472,7 +471,10 @@ mod tests {
             ex("xy", 50.0, 100.0),
         ];
         let p = contradiction_problem(&swapped, &plan).unwrap();
-        assert!(p.contains("gyro y reads body z, gyro z reads body y"), "{p}");
+        assert!(
+            p.contains("gyro y reads body z, gyro z reads body y"),
+            "{p}"
+        );
         // One oblique spin that read nothing is a slip, not a column: no signed permutation gives 0
         // on yz alone while every axis spin reads in full.
         assert!(contradiction_problem(&[ex("yz", 0.0, 200.0)], &plan).is_none());

@@ -229,7 +229,8 @@ pub fn run<T: Transport>(
     let verification = if hand {
         handheld::verify_magnitude(client, op, &plan, window, window_rate, opts, fs)
     } else {
-        super::verify::verify(client, op, &plan, drive, opts, fs)
+        let frame = calibrated.outcome.static_split.frame;
+        super::verify::verify(client, op, &plan, drive, frame, opts, fs)
     }
     .map_err(link)?;
     let passed = verification.iter().all(|v| v.pass);
