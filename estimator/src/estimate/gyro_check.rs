@@ -264,7 +264,7 @@ fn column_mixup(ratios: &[(&str, f64)], spins: &[Spin]) -> Option<RowMajor3> {
     };
     signed_permutations()
         .filter(|p| explains(p))
-        .min_by_key(|p| changed_entries(p))
+        .min_by_key(changed_entries)
 }
 
 /// The 47 signed permutation matrices other than the identity.
