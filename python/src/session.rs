@@ -378,7 +378,7 @@ pub fn segment_arrays(
         instance: None,
         topic: None,
     };
-    let Some(options) = input.source().py_err()?.text else {
+    let Some(options) = input.source(Path::new("(arrays)")).py_err()?.text else {
         return Err(usage("acc_unit and gyro_unit are needed"));
     };
     let lines = ArrayLines {
@@ -449,7 +449,7 @@ pub fn segment_file(
         instance,
         topic,
     };
-    let source = input.source().py_err()?;
+    let source = input.source(&path).py_err()?;
     let site = SiteArgs {
         min_still_s,
         unit_id,
