@@ -81,6 +81,13 @@ pub enum ReportError {
     /// A requested segment is not in the session, or the session has none to use.
     #[error("{0}")]
     Segment(String),
+    /// A segment named by `--static-run` or `--rate-run` is not in the session or not of that
+    /// kind (the message names it and the segments that are).
+    #[error("{0}")]
+    NamedRun(String),
+    /// The navigation check has no segment to replay (the reasons, one per replay).
+    #[error("nothing to replay: {}", .0.join("; "))]
+    NothingToReplay(Vec<String>),
     /// A figure could not be drawn.
     #[error(transparent)]
     Figure(#[from] plot::FigureError),
@@ -220,6 +227,8 @@ pub struct ReportData {
     pub chi2_terms: usize,
     /// The static and the rotating replay (either may be absent when the plan has none).
     pub navigation: Vec<NavigationRun>,
+    /// Why a replay is left out, one line each (also among the warnings).
+    pub navigation_left_out: Vec<String>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
     pub session_fit: Result<CalibrationOutcome, String>,
     /// The session's segments through the session fit's own calibration (empty when it failed or its
@@ -395,7 +404,14 @@ pub fn build_report(
             }
         }
     }
-    let navigation = navigation_runs(&segments, cal.gravity_m_s2, options, &mut warnings)?;
+    let mut navigation_left_out = Vec::new();
+    let navigation = navigation_runs(
+        &segments,
+        cal.gravity_m_s2,
+        options,
+        &mut navigation_left_out,
+    )?;
+    warnings.extend(navigation_left_out.iter().cloned());
     let session_fit_segments = match &session_fit {
         Ok(o) => segment_rows(plan, stats, &o.calibration).unwrap_or_default(),
         Err(_) => Vec::new(),
@@ -418,6 +434,7 @@ pub fn build_report(
         chi2,
         chi2_terms: terms,
         navigation,
+        navigation_left_out,
         session_fit,
         session_fit_segments,
         warnings,
@@ -465,18 +482,45 @@ fn navigation_runs(
         segments
             .iter()
             .find(|r| r.name == name)
-            .ok_or_else(|| ReportError::Segment(format!("segment '{name}' is not in the session")))
+            .ok_or_else(|| ReportError::NamedRun(format!("segment '{name}' is not in the session")))
     };
     let known = |r: &&SegmentRow| !r.free && r.theoretical != Theoretical::Unknown;
+    // A named run of the other kind would replay the wrong case under the right heading.
+    let of_kind = |name: &str, kind: SegmentKind, option: &str, wanted: &str| {
+        let row = find(name)?;
+        if row.kind != kind {
+            let examples: Vec<&str> = segments
+                .iter()
+                .filter(|r| r.kind == kind)
+                .take(3)
+                .map(|r| r.name.as_str())
+                .collect();
+            return Err(ReportError::NamedRun(format!(
+                "segment '{name}' is not {wanted}: {option} needs one ({})",
+                if examples.is_empty() {
+                    "this session has none".to_string()
+                } else {
+                    format!("e.g. '{}'", examples.join("', '"))
+                }
+            )));
+        }
+        Ok(row)
+    };
     let static_row = match &options.static_run {
-        Some(n) => Some(find(n)?).filter(known),
+        Some(n) => Some(of_kind(n, SegmentKind::Static, "--static-run", "static")?).filter(known),
         None => segments
             .iter()
             .filter(known)
             .find(|r| r.kind == SegmentKind::Static),
     };
     let rate_row = match &options.rate_run {
-        Some(n) => Some(find(n)?).filter(known),
+        Some(n) => Some(of_kind(
+            n,
+            SegmentKind::ConstantRate,
+            "--rate-run",
+            "at a constant rate",
+        )?)
+        .filter(known),
         None => segments
             .iter()
             .filter(known)
