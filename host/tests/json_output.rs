@@ -209,7 +209,10 @@ fn a_refusal_under_json_is_a_json_document() {
         assert_eq!(v["exit_code"], code, "{args:?}: {v}");
         assert_eq!(v["kind"], kind, "{args:?}: {v}");
         let message = v["error"].as_str().unwrap();
-        assert!(!message.is_empty() && stderr.contains(message), "{args:?}: {v} / {stderr}");
+        assert!(
+            !message.is_empty() && stderr.contains(message),
+            "{args:?}: {v} / {stderr}"
+        );
     }
     // Without --json, stdout stays empty.
     let (_, stdout, _) = host(&["calibrate", "--input", missing]);

@@ -72,7 +72,7 @@ pub struct CalibrateArgs {
     )]
     pub verify_temp_c: Option<f64>,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
-    #[arg(long, value_name = "OUT")]
+    #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
     /// Replace an existing calibration (and, with --port, an existing recording) in the output
     /// directory.

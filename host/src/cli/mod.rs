@@ -148,10 +148,7 @@ pub fn error_document(e: &CliError) -> Option<String> {
     } else {
         "error"
     };
-    Some(
-        serde_json::json!({ "error": e.to_string(), "kind": kind, "exit_code": code })
-            .to_string(),
-    )
+    Some(serde_json::json!({ "error": e.to_string(), "kind": kind, "exit_code": code }).to_string())
 }
 
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).
