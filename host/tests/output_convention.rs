@@ -229,7 +229,7 @@ fn plan_export_compare_noise_apply_follow_the_convention() {
     ]);
     assert_eq!(code, 0);
     assert!(stdout.starts_with("wrote "), "{stdout}");
-    let (code, stdout, _) = run(&["export", "--calibration", s(&cal_a), "--format", "c-header"]);
+    let (code, stdout, _) = run(&["export", "--calibration", s(&cal_a), "--format", "c"]);
     assert_eq!((code, stdout.as_str()), (2, ""));
     let missing = dir.path().join("missing.toml");
     assert_eq!(

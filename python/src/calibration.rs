@@ -232,7 +232,7 @@ impl Calibration {
     }
 
     /// The calibration in another tool's format, as `host export --format FORMAT` writes it (the
-    /// same keyword options as its flags). `c-header` gives a dict of file name → text.
+    /// same keyword options as its flags). `c` gives a dict of file name → text (the package), `c-header` its header alone.
     #[pyo3(signature = (format, *, noise = None, rostopic = "/imu0", driver_scale = None,
         device_id = None, gyro_device_id = None, sysid = 1, compid = 1,
         allow_out_of_range = false, allow_undetermined = false))]
@@ -271,7 +271,7 @@ impl Calibration {
                 compid,
             },
         };
-        if format == ExportFormat::CHeader {
+        if format == ExportFormat::C {
             host::export::check_exportable(&input.cal).py_err()?;
             let files = host::export::c::package(&input).py_err()?;
             let d = PyDict::new(py);

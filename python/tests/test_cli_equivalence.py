@@ -176,9 +176,9 @@ def test_export_writes_host_exports_text(hand, py_cal, host_bin, fmt, flags):
 
 
 def test_export_c_header_writes_host_exports_package(hand, py_cal, host_bin, tmp_path):
-    run(host_bin, "-q", "export", "--calibration", str(hand["toml"]), "--format", "c-header",
+    run(host_bin, "-q", "export", "--calibration", str(hand["toml"]), "--format", "c",
         "--out", str(tmp_path))
-    files = py_cal.export("c-header")
+    files = py_cal.export("c")
     assert sorted(files) == sorted(p.name for p in tmp_path.iterdir())
     for name, text in files.items():
         assert text.encode() == (tmp_path / name).read_bytes(), name

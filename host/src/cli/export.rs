@@ -18,7 +18,7 @@ pub struct ExportArgs {
     /// The format.
     #[arg(long, value_enum, default_value_t = ExportFormat::All)]
     pub format: ExportFormat,
-    /// Where to write it (default: stdout); for c-header a directory, where the package goes.
+    /// Where to write it (default: stdout); for c a directory, where the package goes.
     #[arg(long, value_name = "FILE|DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out file.
@@ -132,7 +132,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             compid: u8::try_from(a.compid.unwrap_or(1)).unwrap_or(u8::MAX),
         },
     };
-    if a.format == ExportFormat::CHeader {
+    if a.format == ExportFormat::C {
         return write_c_package(a, &input, quiet);
     }
     let text = render(&input, a.format)?;
@@ -152,13 +152,13 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `c-header`: the self-contained C package (constants header, decoder, the device's per-sample
+/// `c`: the self-contained C package (constants header, decoder, the device's per-sample
 /// correction) into the `--out` directory, every file atomically; nothing is written when one would
 /// replace an existing file without `--force`.
 fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Result<(), CliError> {
     let dir = a.out.as_ref().ok_or_else(|| {
         CliError::Usage(
-            "--format c-header writes a package of files (acal_calibration.h, the decoder and the \
+            "--format c writes a package of files (acal_calibration.h, the decoder and the \
              device's per-sample correction): give --out DIR"
                 .into(),
         )

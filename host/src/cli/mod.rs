@@ -95,7 +95,7 @@ pub enum Command {
     NavigationCheck(navigation_check::NavigationCheckCliArgs),
     /// Two calibrations of one unit side by side, each difference in units of its combined 1σ.
     Compare(compare::CompareArgs),
-    /// A calibration in another tool's format: kalibr, fusion-c, c-header, json, px4, ardupilot
+    /// A calibration in another tool's format: kalibr, fusion-c, c, c-header, json, px4, ardupilot
     /// (or the TOML conversions plain, fusion, all).
     Export(export::ExportArgs),
     /// Apply a calibration to a recording with the device's own compensation code: CSV of the

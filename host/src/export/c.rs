@@ -1,4 +1,4 @@
-//! C outputs: the calibration for a C firmware (`c-header`, a package of files, [`package`]) and for
+//! C outputs: the calibration for a C firmware (`c`, a package of files, [`package`]; `c-header`, its header alone) and for
 //! x-io Fusion (`fusion-c`).
 //!
 //! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the
@@ -44,7 +44,7 @@ pub const EXAMPLE_C: &str = include_str!("c/example.c");
 /// The name of the constants header in the package.
 pub(crate) const HEADER_NAME: &str = "acal_calibration.h";
 
-/// The files of the C package `export --format c-header --out DIR` writes: the constants header, the
+/// The files of the C package `export --format c --out DIR` writes: the constants header, the
 /// decoder, the device's per-sample correction and [`EXAMPLE_C`], self-contained (the header includes
 /// only them).
 pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
@@ -233,7 +233,7 @@ fn compensator_initialisers(compensator: &Compensator) -> String {
     w
 }
 
-/// The `c-header` text.
+/// The `c-header` text (the package's `acal_calibration.h`).
 pub(crate) fn render_header(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let cal = &input.cal;
     let unit_id = input

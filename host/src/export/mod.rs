@@ -102,7 +102,9 @@ pub enum ExportFormat {
     /// device's precomputed constants, the blob as bytes), the blob decoder acal_blob.{h,c}, and the
     /// device's whole per-sample correction acal_device.{h,c}, and example.c (the blob decoded, one
     /// sample corrected, printed).
-    #[value(alias = "c")]
+    C,
+    /// acal_calibration.h alone, one file (for a firmware that has the package's acal_blob and
+    /// acal_device already: a new unit's calibration is this one file).
     CHeader,
     /// Everything in the calibration file plus derived forms and fit statistics, as JSON.
     Json,
@@ -343,7 +345,7 @@ pub(crate) fn temperature_not_held(cal: &Calibration, format: &str) -> String {
     match &cal.temperature {
         Some(t) => format!(
             "# NOT HELD by {format}: the temperature model ([temperature] in the calibration file); these \
-             values hold at {} °C (valid {}..{} °C); use host apply or the c-header export for the model.\n",
+             values hold at {} °C (valid {}..{} °C); use host apply or the c export for the model.\n",
             t.reference_c, t.valid_range_c[0], t.valid_range_c[1]
         ),
         None => String::new(),
@@ -359,7 +361,7 @@ pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, E
     // the calibration file's `package = "single"`).
     let comment = match format {
         ExportFormat::Json => None,
-        ExportFormat::FusionC | ExportFormat::CHeader => Some("//"),
+        ExportFormat::FusionC | ExportFormat::C | ExportFormat::CHeader => Some("//"),
         _ => Some("#"),
     };
     Ok(match (input.unit.package(), comment) {
@@ -377,7 +379,7 @@ fn render_format(input: &ExportInput<'_>, format: ExportFormat) -> Result<String
         ExportFormat::Kalibr => kalibr::render(input),
         ExportFormat::KalibrIntrinsics => kalibr::render_intrinsics(input),
         ExportFormat::FusionC => c::render_fusion(input),
-        ExportFormat::CHeader => c::render_header(input),
+        ExportFormat::C | ExportFormat::CHeader => c::render_header(input),
         ExportFormat::Json => json::render(input),
         ExportFormat::Px4 => params::render_px4(input),
         ExportFormat::Ardupilot => params::render_ardupilot(input),

@@ -52,7 +52,7 @@ fn compile_result(dir: &Path, sources: &[&str]) -> Result<(), String> {
     }
 }
 
-/// Writes the C package of `input` into `dir`, as `host export --format c-header --out DIR` does.
+/// Writes the C package of `input` into `dir`, as `host export --format c --out DIR` does.
 fn write_package(dir: &Path, input: &ExportInput<'_>) {
     for (name, text) in package(input).unwrap() {
         std::fs::write(dir.join(name), text).unwrap();
@@ -708,7 +708,7 @@ fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
     let out = dir.join("pkg");
     let args = |force| ExportArgs {
         calibration: cal_path.clone(),
-        format: crate::export::ExportFormat::CHeader,
+        format: crate::export::ExportFormat::C,
         out: Some(out.clone()),
         force,
         noise: None,
@@ -746,6 +746,19 @@ fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
     for inc in header.lines().filter_map(|l| l.strip_prefix("#include \"")) {
         assert!(written.iter().any(|w| inc.starts_with(w.as_str())), "{inc}");
     }
+    // The one-file format writes one file, the package's own header, where --out says.
+    let one = dir.join("cal.h");
+    export(
+        &ExportArgs {
+            format: crate::export::ExportFormat::CHeader,
+            out: Some(one.clone()),
+            ..args(false)
+        },
+        true,
+    )
+    .unwrap();
+    assert!(one.is_file(), "{} is not a file", one.display());
+    assert_eq!(std::fs::read_to_string(&one).unwrap(), header);
     std::fs::write(out.join("main.c"), PACKAGE_MAIN_C).unwrap();
     out
 }
