@@ -455,8 +455,37 @@ impl UnitFile {
 
     /// TOML text.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).expect("a unit file always serialises")
+        let text = toml::to_string(self).expect("a unit file always serialises");
+        matrices_as_rows(&text)
     }
+}
+
+/// `key = [[a, b, c], [d, e, f]]` (how the serialiser writes a matrix on one line) written one row
+/// per line, as a reader writes a matrix; every other line as it is. The TOML value is the same.
+fn matrices_as_rows(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 64);
+    for line in text.lines() {
+        let rows = line
+            .split_once(" = [[")
+            .and_then(|(key, rest)| Some((key, rest.strip_suffix("]]")?)));
+        match rows {
+            Some((key, inner)) => {
+                out.push_str(key);
+                out.push_str(" = [\n");
+                for row in inner.split("], [") {
+                    out.push_str("    [");
+                    out.push_str(row);
+                    out.push_str("],\n");
+                }
+                out.push_str("]\n");
+            }
+            None => {
+                out.push_str(line);
+                out.push('\n');
+            }
+        }
+    }
+    out
 }
 
 /// One unit's pair of `[static]` keys: (unit, zero bias, scale, their key names).
@@ -573,6 +602,20 @@ mod tests {
         assert_eq!(back.to_calibration().unwrap(), cal);
         assert_eq!(back.unit_id().unwrap(), Some(id));
         assert_eq!(back.uncertainty, Some(unc));
+        // A matrix is written as a reader writes one: a row per line; a vector on one line.
+        let angles = cal.statics.installation_angles_deg;
+        let rows: String = angles
+            .iter()
+            .map(|r| format!("    [{:?}, {:?}, {:?}],\n", r[0], r[1], r[2]))
+            .collect();
+        assert!(
+            text.contains(&format!("installation_angles_deg = [\n{rows}]\n")),
+            "{text}"
+        );
+        assert!(
+            text.contains("zero_bias_lsb = [12.0, -40.0, 3.5]\n"),
+            "{text}"
+        );
     }
 
     #[test]

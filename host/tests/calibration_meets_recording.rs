@@ -374,7 +374,7 @@ fn a_negated_scale_factor_is_refused_where_the_calibration_meets_anything() {
     let dir = tempfile::tempdir().unwrap();
     let (session, cal) = table_session(dir.path());
     let text = std::fs::read_to_string(&cal).unwrap();
-    let at = text.find("scale_v_per_g = [\n").unwrap() + "scale_v_per_g = [\n".len();
+    let at = text.find("scale_v_per_g = [").unwrap() + "scale_v_per_g = [".len();
     let first = text[at..].trim_start();
     let negated = format!("{}-{first}", &text[..text.len() - text[at..].len()]);
     let bad = dir.path().join("negated.toml");

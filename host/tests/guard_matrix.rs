@@ -32,13 +32,22 @@ fn edited(from: &Path, to: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     to.to_path_buf()
 }
 
+/// The span of the first number of `key = [...]` (the x axis's), however the array is laid out.
+fn first_number(text: &str, key: &str) -> std::ops::Range<usize> {
+    let at = text.find(&format!("{key} = [")).unwrap();
+    let start = at
+        + text[at..]
+            .find(|c: char| c.is_ascii_digit() || c == '-')
+            .unwrap();
+    let end = start + text[start..].find([',', ']']).unwrap();
+    start..end
+}
+
 /// The first value of `key = [` negated (the x axis's).
 fn negate_first(text: String, key: &str) -> String {
-    let at = text.find(&format!("{key} = [")).unwrap();
-    let start = at + text[at..].find('\n').unwrap() + 1;
-    let digits = start + text[start..].find(|c: char| c.is_ascii_digit()).unwrap();
     let mut t = text;
-    t.insert(digits, '-');
+    let at = first_number(&t, key).start;
+    t.insert(at, '-');
     t
 }
 
@@ -72,10 +81,8 @@ fn fixtures() -> Fixtures {
         negate_first(t, "scale_v_per_g")
     });
     let zero = edited(&cal, &tmp.join("zero.toml"), |t| {
-        let at = t.find("scale_v_per_g = [").unwrap();
-        let start = at + t[at..].find('\n').unwrap() + 1;
-        let end = start + t[start..].find(',').unwrap();
-        format!("{}    0.0{}", &t[..start], &t[end..])
+        let r = first_number(&t, "scale_v_per_g");
+        format!("{}0.0{}", &t[..r.start], &t[r.end..])
     });
     let csv = tmp.join("hand.csv");
     ok(&["-q", "simulate-hand", "--out", &s(&csv)]);
