@@ -69,6 +69,7 @@ pub fn analyse_log(
         rate_hz: rec.rate_hz,
         data,
         cut: end < iv.end,
+        acc_unit: Some(unit),
     };
     let mut report = analyse_signals(s, path.display().to_string(), calibration.map(|c| c.0))?;
     let mut warnings = log.warnings;

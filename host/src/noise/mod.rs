@@ -28,6 +28,7 @@ use crate::session::{read_samples_each, read_session, Plan, ReadOptions, Recordi
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use allan::{fit, octave_sizes, overlapping_adev, AllanPoint, NoiseTerms};
 use serde::{Deserialize, Serialize};
+use shared::OutputUnit;
 use std::collections::HashSet;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -104,6 +105,8 @@ struct Signals {
     rate_hz: f64,
     data: [Vec<f64>; 6],
     cut: bool,
+    /// The accelerometer's unit as the input states it (`None`: a bare samples.csv states none).
+    acc_unit: Option<OutputUnit>,
 }
 
 fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
@@ -157,6 +160,7 @@ fn collect_session(dir: &Path, quiet: bool) -> Result<Signals, NoiseError> {
         rate_hz: plan.sample_rate_hz,
         data,
         cut,
+        acc_unit: Some(plan.output_unit),
     })
 }
 
@@ -228,6 +232,7 @@ fn collect_csv_from<R: std::io::BufRead>(
                 rate_hz: 0.0,
                 data: Default::default(),
                 cut: false,
+                acc_unit: None,
             };
             cur = Some((s, row.segment_index, row.t_s, row.t_s));
         }
@@ -302,6 +307,15 @@ fn segment_names<R: std::io::BufRead>(
     Ok(names)
 }
 
+/// m/s² per unit of an output that has a physical unit (m/s², g); `None` for volts and counts.
+fn metres_per_second_squared_per(unit: OutputUnit) -> Option<f64> {
+    match unit {
+        OutputUnit::MetresPerSecondSquared => Some(1.0),
+        OutputUnit::StandardGravity => Some(shared::STANDARD_GRAVITY_M_S2),
+        _ => None,
+    }
+}
+
 /// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
 /// outputs into m/s².
 pub fn analyse(
@@ -373,14 +387,24 @@ fn analyse_signals(
             }
             "m/s^2"
         }
-        None => {
-            warnings.push(
-                "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
-                 accelerometer figures are undetermined"
-                    .into(),
-            );
-            "output unit"
-        }
+        // An input already in m/s² (or g) needs no calibration for Kalibr's figures: they are
+        // its own noise, and a calibration's scale errors change them by parts per thousand.
+        None => match s.acc_unit.and_then(metres_per_second_squared_per) {
+            Some(k) => {
+                for axis in s.data.iter_mut().take(3) {
+                    axis.iter_mut().for_each(|v| *v *= k);
+                }
+                "m/s^2"
+            }
+            None => {
+                warnings.push(
+                    "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
+                     accelerometer figures are undetermined"
+                        .into(),
+                );
+                "output unit"
+            }
+        },
     };
     let sizes = octave_sizes(n);
     let axes: Vec<AxisNoise> = AXES
@@ -404,7 +428,7 @@ fn analyse_signals(
         let v: Option<Vec<f64>> = axes[r].iter().map(|a| f(&a.terms)).collect();
         v.map(|v| v.into_iter().fold(0.0, f64::max))
     };
-    let accel_known = calibration.is_some();
+    let accel_known = accel_unit == "m/s^2";
     let kalibr = KalibrNoise {
         update_rate_hz: Some(s.rate_hz),
         accelerometer_noise_density: worst(0..3, |t| t.white_density).filter(|_| accel_known),

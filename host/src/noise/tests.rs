@@ -333,3 +333,38 @@ fn the_table_names_what_white_noise_does_not_determine() {
     }
     assert!(!text.contains("gyro_x N: not determined"), "{text}");
 }
+
+/// A recording already in m/s² (or g) gives Kalibr's accelerometer figures without a calibration:
+/// 1 mg of white noise per sample at 200 Hz is N = 1e-3 g / √200 Hz, in m/s²/√Hz.
+#[test]
+fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {
+    let g = shared::STANDARD_GRAVITY_M_S2;
+    let want = 1e-3 * g / 200f64.sqrt();
+    for unit in [
+        OutputUnit::MetresPerSecondSquared,
+        OutputUnit::StandardGravity,
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let truth = crate::sim::handheld::logger_unit(unit);
+        let file = UnitFile::from_calibration(&truth, None, None);
+        let mut plan = still_plan(200.0, 60.0);
+        plan.output_unit = unit;
+        let white = NoiseModel {
+            accel_white_mg: 1.0,
+            ..NoiseModel::none()
+        };
+        simulate_to_dir(dir.path(), &file, &plan, &white, 5, false).unwrap();
+        let r = analyse(dir.path(), None, true).unwrap();
+        let n = r.kalibr.accelerometer_noise_density.unwrap();
+        assert!(
+            (n / want - 1.0).abs() < 0.05,
+            "{unit:?}: N {n:e}, want {want:e}"
+        );
+        assert_eq!(r.axes[0].unit, "m/s^2");
+        assert!(
+            r.warnings.iter().all(|w| !w.contains("--calibration")),
+            "{:?}",
+            r.warnings
+        );
+    }
+}
