@@ -232,4 +232,6 @@ pub struct CalibrationOutcome {
     pub single_package: bool,
     /// The χ² test of one lever arm against three, when the session turns.
     pub package_test: Option<super::package::PackageTest>,
+    /// The accelerometers' bias random walk the fit assumed (docs/model.md §11), when asked for.
+    pub bias_walk: Option<super::WalkEstimate>,
 }
