@@ -151,10 +151,8 @@ pub(crate) fn add_models(ne: &mut NormalSystem, models: &[SegModel], d: &Drift, 
         }
     }
     let l = chol.l();
-    let (Some(rw), Some(jw)) = (
-        l.solve_lower_triangular(&r),
-        l.solve_lower_triangular(&jac),
-    ) else {
+    let (Some(rw), Some(jw)) = (l.solve_lower_triangular(&r), l.solve_lower_triangular(&jac))
+    else {
         ne.add_models(models, t);
         return;
     };
@@ -170,13 +168,20 @@ fn log_det(models: &[SegModel], d: &Drift) -> Option<f64> {
     Some((0..l.nrows()).map(|i| 2.0 * l[(i, i)].ln()).sum())
 }
 
-/// The walk's strength estimated from the session, mg/√s, with its 1σ.
+/// The walk's strength, given or estimated from the session with its 1σ, and the strength the
+/// segments were weighted with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkEstimate {
-    /// The strength the fit used, mg/√s.
+    /// The strength given or estimated, mg/√s.
     pub mg_sqrt_s: f64,
     /// Its 1σ (half the width of the likelihood interval), mg/√s; `None` when given, not estimated.
     pub sigma_mg_sqrt_s: Option<f64>,
+    /// The likelihood interval (log-likelihood within ½ of its maximum), mg/√s: not symmetric about
+    /// the estimate when the session holds little of the walk.
+    pub interval_mg_sqrt_s: Option<[f64; 2]>,
+    /// The strength the fit weighted the segments with, mg/√s: the given one, or for an estimate
+    /// `√(K̂² + σ²)`, the walk's mean square over its likelihood (docs/model.md §11.3).
+    pub fit_mg_sqrt_s: f64,
 }
 
 /// The walk the options ask for, set on `problem`: a given strength, or one estimated from the
@@ -192,11 +197,13 @@ pub(crate) fn apply(
         BiasWalk::Given(mg) => WalkEstimate {
             mg_sqrt_s: mg,
             sigma_mg_sqrt_s: None,
+            interval_mg_sqrt_s: None,
+            fit_mg_sqrt_s: mg,
         },
         BiasWalk::Estimate => estimate(problem, segs, static_fit)?,
     };
     let k = scale_factors(&static_fit.theta);
-    problem.drift = Some(Drift::new(est.mg_sqrt_s, k, start_time(segs)));
+    problem.drift = Some(Drift::new(est.fit_mg_sqrt_s, k, start_time(segs)));
     Ok(Some(est))
 }
 
@@ -229,7 +236,13 @@ impl Likelihood<'_> {
         let d = Drift::new(mg, self.k, self.t0);
         let ld_sigma = log_det(&p.models, &d)?;
         p.drift = Some(d);
-        let fit = solve::fit(&p, self.start.to_vec(), self.free.to_vec(), "walk likelihood").ok()?;
+        let fit = solve::fit(
+            &p,
+            self.start.to_vec(),
+            self.free.to_vec(),
+            "walk likelihood",
+        )
+        .ok()?;
         let ld_n = solve::log_det_information(&p, &fit.theta, &fit.free)?;
         Some(-0.5 * (fit.chi2 + ld_sigma + ld_n))
     }
@@ -294,9 +307,12 @@ pub(crate) fn estimate(
         .find(|(x, v)| *x > q && *v < target)
         .map_or(10.0 * q.max(1.0), |p| p.0);
     let upper = crossing(&at, q, hi, target)?;
+    let sigma = 0.5 * (upper - lower);
     Ok(WalkEstimate {
         mg_sqrt_s: q,
-        sigma_mg_sqrt_s: Some(0.5 * (upper - lower)),
+        sigma_mg_sqrt_s: Some(sigma),
+        interval_mg_sqrt_s: Some([lower, upper]),
+        fit_mg_sqrt_s: q.hypot(sigma),
     })
 }
 
@@ -355,6 +371,75 @@ fn crossing(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::model::{idx_m, idx_u0, Mount, TiltGeometry};
+
+    /// The dense path with a walk too weak to matter is the per-segment path: the same χ² and the
+    /// same covariance of θ at the same θ, to rounding (no iteration in between to differ by).
+    #[test]
+    fn the_dense_path_without_a_walk_is_the_per_segment_path() {
+        let mut rng = crate::sim::Rng::new(3, 0);
+        let ups = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [0.6, 0.0, 0.8],
+        ];
+        let mut mounts = Vec::new();
+        let mut models = Vec::new();
+        for (k, up) in ups.iter().enumerate() {
+            let geometry = TiltGeometry::new(*up, k);
+            mounts.push(Mount {
+                name: format!("m{k}"),
+                geometry,
+                prior_rad: Some(1e-3),
+                up_given: true,
+                spins: false,
+            });
+            let mean_u = core::array::from_fn(|i| 2.4 + 0.4 * up[i] + 1e-4 * rng.normal());
+            let c = 1e-8 * (1.0 + rng.range(0.0, 1.0));
+            let se = [[c, 0.2 * c, 0.0], [0.2 * c, c, 0.1 * c], [0.0, 0.1 * c, c]];
+            let mut m = SegModel::new(k, geometry, [0.0; 3], [[0.0; 3]; 3], mean_u, se).unwrap();
+            m.span_s = [40.0 * k as f64, 40.0 * k as f64 + 30.0];
+            models.push(m);
+        }
+        let mut p = Problem::new(models, mounts);
+        let mut t = vec![0.0; p.n_params()];
+        let mut free = crate::estimate::screen::static_free(t.len());
+        attitude::tilt_free(&p, &mut free);
+        for i in 0..3 {
+            t[idx_m(i, i)] = 0.4;
+            t[idx_u0(i)] = 2.4;
+        }
+        let plain = (
+            p.chi2(&t, &free),
+            solve::covariance(&p, &t, &free, None).unwrap(),
+        );
+        p.drift = Some(Drift {
+            q2: [1e-300; 3],
+            t0_s: 0.0,
+        });
+        assert!(p.drift.as_ref().unwrap().active());
+        let dense = (
+            p.chi2(&t, &free),
+            solve::covariance(&p, &t, &free, None).unwrap(),
+        );
+        assert!(
+            (plain.0 - dense.0).abs() <= 1e-12 * plain.0,
+            "{plain:?} {dense:?}"
+        );
+        let worst = (0..t.len())
+            .flat_map(|a| (0..t.len()).map(move |b| (a, b)))
+            .filter(|&(a, b)| plain.1[(a, a)] > 0.0 && plain.1[(b, b)] > 0.0)
+            .map(|(a, b)| {
+                (plain.1[(a, b)] - dense.1[(a, b)]).abs()
+                    / (plain.1[(a, a)] * plain.1[(b, b)]).sqrt()
+            })
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-12, "{worst}");
+    }
 
     /// The closed forms against a direct double sum over a fine grid.
     #[test]

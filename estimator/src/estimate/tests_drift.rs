@@ -3,19 +3,40 @@
 //! walk.
 //!
 //! `DRIFT_SEEDS=N cargo test -p estimator --lib drift_against_the_oracle -- --nocapture` runs N seeds
-//! per walk strength (default 2) and prints every figure; `DRIFT_SEEDS=12` is the documented run.
+//! per walk strength and prints every figure. The default (2 seeds) runs the exact fixture only;
+//! ten seeds and more add the 0.05° fixture, whose fitted attitudes leave the walk's strength
+//! loosely known (30–100 % 1σ), so that two seeds do not measure its honesty. `DRIFT_SEEDS=12` is
+//! the documented run (both fixtures, about 2 minutes).
 
 use super::*;
-use crate::session::{SegmentAccumulator, SegmentStats};
+use crate::session::SegmentStats;
 use crate::sim::montecarlo::{rms, static_errors};
 use crate::sim::testkit::{self, Rng};
-use crate::sim::{simulate_rows, NoiseModel};
+use crate::sim::NoiseModel;
 use std::collections::BTreeMap;
 
-/// The paper's unit on the 16-mount plan (27 segments of 30 s, 810 s) with a 0.05° fixture declared
-/// as such.
-fn plan() -> Plan {
-    testkit::declared(&testkit::many_mounts_plan(), 0.05, 1.0)
+/// A fixture: how far each mount's true up is from the plan's, and what the plan declares.
+#[derive(Clone, Copy, Debug)]
+struct Fixture {
+    name: &'static str,
+    /// 1σ per tilt axis of each mount's true up, and the plan's declared attitude prior, degrees.
+    tilt_deg: f64,
+}
+
+const FIXTURES: [Fixture; 2] = [
+    Fixture {
+        name: "exact fixture",
+        tilt_deg: 0.0,
+    },
+    Fixture {
+        name: "0.05° fixture",
+        tilt_deg: 0.05,
+    },
+];
+
+/// The 16-mount plan (27 segments of 30 s, 810 s) with the fixture's attitude prior declared.
+fn plan(fixture: Fixture) -> Plan {
+    testkit::declared(&testkit::many_mounts_plan(), fixture.tilt_deg, 1.0)
 }
 
 /// A simulated session's statistics and the true up of every mount.
@@ -24,33 +45,20 @@ struct Session {
     ups: BTreeMap<String, [f64; 3]>,
 }
 
-/// `plan` simulated row by row with 1 mg white noise, a 0.05° fixture and a bias walk of
-/// `walk_mg` mg/√s.
-fn simulate(plan: &Plan, truth: &Calibration, walk_mg: f64, seed: u64) -> Session {
+/// `plan` simulated row by row with 1 mg white noise, mounts tilted by `tilt_deg` and a bias walk
+/// of `walk_mg` mg/√s.
+fn simulate(plan: &Plan, truth: &Calibration, tilt_deg: f64, walk_mg: f64, seed: u64) -> Session {
     let noise = NoiseModel {
         accel_white_mg: 1.0,
         gyro_white_deg_s: 0.05,
-        table_tilt_deg: 0.05,
+        table_tilt_deg: tilt_deg,
         accel_bias_walk_mg_sqrt_s: walk_mg,
         ..NoiseModel::none()
     };
-    let mut accs: Vec<SegmentAccumulator> = plan
-        .segments
-        .iter()
-        .map(|s| SegmentAccumulator::new(s.name.clone()))
-        .collect();
-    let mut current = 0;
-    let summary = simulate_rows(truth, plan, &noise, seed, |seg, t, u, w| {
-        if plan.segments[current].name != seg {
-            current += 1;
-        }
-        accs[current].push(t, u, w);
-        Ok::<(), ()>(())
-    })
-    .unwrap()
-    .unwrap();
+    let (stats, summary) =
+        crate::sim::stats::simulate_stats_with_summary(truth, plan, &noise, seed).unwrap();
     Session {
-        stats: accs.iter().filter_map(SegmentAccumulator::finish).collect(),
+        stats,
         ups: summary.mount_up_b,
     }
 }
@@ -92,8 +100,8 @@ fn figures(truth: &Calibration, out: &CalibrationOutcome, seed: u64) -> Figures 
     let mut z2 = [(0.0, 0); 3];
     let mut lever = Vec::new();
     for i in 0..3 {
-        let zb = (c.statics.zero_bias_out[i] - truth.statics.zero_bias_out[i])
-            / u.zero_bias_1sigma[i];
+        let zb =
+            (c.statics.zero_bias_out[i] - truth.statics.zero_bias_out[i]) / u.zero_bias_1sigma[i];
         let zk = (c.statics.scale_out_per_g[i] - truth.statics.scale_out_per_g[i])
             / u.scale_per_g_1sigma[i];
         z2[0] = (z2[0].0 + zb * zb, z2[0].1 + 1);
@@ -121,43 +129,201 @@ fn seeds() -> u64 {
         .unwrap_or(2)
 }
 
-#[test]
-fn drift_against_the_oracle() {
+/// √(mean z²) over the pooled (Σ z², count) pairs.
+fn rms_z(parts: impl Iterator<Item = (f64, usize)>) -> f64 {
+    let (s, n) = parts.fold((0.0, 0), |a, p| (a.0 + p.0, a.1 + p.1));
+    (s / n.max(1) as f64).sqrt()
+}
+
+/// The fits of each walk strength over the seeds: today's (constant bias), the walk given, the
+/// walk estimated, the oracle; and the estimated walks.
+struct WalkRun {
+    walk: f64,
+    rows: Vec<[Figures; 4]>,
+    estimated: Vec<WalkEstimate>,
+}
+
+const FITS: [&str; 4] = ["constant bias", "walk given", "walk estimated", "oracle"];
+
+fn run(fixture: Fixture, walk: f64, seeds: u64) -> WalkRun {
     let truth = testkit::paper_unit();
-    let plan = plan();
-    let n = seeds();
-    for walk in [0.0, 0.001, 0.002, 0.005] {
-        let mut rows: Vec<[Figures; 4]> = Vec::new();
-        let mut estimated = Vec::new();
-        for seed in 0..n {
-            let s = simulate(&plan, &truth, walk, 500 + seed);
-            let today = fit(&plan, &s.stats, BiasWalk::Off);
-            let given = fit(&plan, &s.stats, BiasWalk::Given(walk));
-            let est = fit(&plan, &s.stats, BiasWalk::Estimate);
-            let oracle = fit(&true_attitudes(&plan, &s.ups), &s.stats, BiasWalk::Given(walk));
-            estimated.push(est.bias_walk.unwrap());
-            rows.push([today, given, est, oracle].map(|o| figures(&truth, &o, seed)));
-        }
-        println!("walk {walk} mg/√s, {n} seeds: static µg (worst, rotation removed) | lever µm rms | rms z bias, scale, lever");
-        for (k, name) in ["today", "given", "estimated", "oracle"].iter().enumerate() {
-            let st = rms(rows.iter().map(|r| r[k].static_ug));
-            let lv = rms(rows.iter().map(|r| r[k].lever_um));
+    let plan = plan(fixture);
+    let mut rows = Vec::new();
+    let mut estimated = Vec::new();
+    for seed in 0..seeds {
+        // Each strength its own seeds: the walk's draws scale with its strength, so shared seeds
+        // would repeat one walk three times.
+        let seed = seed + (walk * 1e6) as u64;
+        let s = simulate(&plan, &truth, fixture.tilt_deg, walk, seed);
+        let today = fit(&plan, &s.stats, BiasWalk::Off);
+        let given = fit(&plan, &s.stats, BiasWalk::Given(walk));
+        let est = fit(&plan, &s.stats, BiasWalk::Estimate);
+        let oracle = fit(
+            &true_attitudes(&plan, &s.ups),
+            &s.stats,
+            BiasWalk::Given(walk),
+        );
+        estimated.push(est.bias_walk.expect("asked for"));
+        rows.push([today, given, est, oracle].map(|o| figures(&truth, &o, seed)));
+    }
+    WalkRun {
+        walk,
+        rows,
+        estimated,
+    }
+}
+
+impl WalkRun {
+    /// RMS over the seeds of fit `k`'s static error, µg.
+    fn static_ug(&self, k: usize) -> f64 {
+        rms(self.rows.iter().map(|r| r[k].static_ug))
+    }
+
+    /// RMS over the seeds of fit `k`'s lever-arm error, µm.
+    fn lever_um(&self, k: usize) -> f64 {
+        rms(self.rows.iter().map(|r| r[k].lever_um))
+    }
+
+    fn print(&self, fixture: Fixture) {
+        println!(
+            "{}, walk {} mg/√s, {} seeds: static µg (worst of 26 held-out attitudes, common \
+             rotation removed; rms over seeds) | lever arms µm rms | rms error/σ of biases, scales, \
+             lever arms",
+            fixture.name,
+            self.walk,
+            self.rows.len()
+        );
+        for (k, name) in FITS.iter().enumerate() {
             let z: Vec<f64> = (0..3)
-                .map(|c| {
-                    let (s, m) = rows.iter().fold((0.0, 0), |a, r| {
-                        (a.0 + r[k].z2[c].0, a.1 + r[k].z2[c].1)
-                    });
-                    (s / m.max(1) as f64).sqrt()
-                })
+                .map(|c| rms_z(self.rows.iter().map(|r| r[k].z2[c])))
                 .collect();
-            println!("  {name:10} {st:7.1} {lv:7.1}   {:.2} {:.2} {:.2}", z[0], z[1], z[2]);
-        }
-        for e in &estimated {
             println!(
-                "  estimated walk {:.5} ± {:.5} mg/√s (simulated {walk})",
-                e.mg_sqrt_s,
-                e.sigma_mg_sqrt_s.unwrap_or(f64::NAN)
+                "  {name:15} {:7.1} {:7.1}   {:.2} {:.2} {:.2}",
+                self.static_ug(k),
+                self.lever_um(k),
+                z[0],
+                z[1],
+                z[2]
             );
         }
+        let est: Vec<String> = self
+            .estimated
+            .iter()
+            .map(|e| {
+                format!(
+                    "{:.5}±{:.5}",
+                    e.mg_sqrt_s,
+                    e.sigma_mg_sqrt_s.unwrap_or(f64::NAN)
+                )
+            })
+            .collect();
+        println!("  estimated walk, mg/√s: {}", est.join(" "));
+    }
+}
+
+/// The estimated walk's error over the side of its likelihood interval the truth lies on.
+fn walk_z(e: &WalkEstimate, truth: f64) -> f64 {
+    let [lo, hi] = e.interval_mg_sqrt_s.expect("estimated");
+    let d = e.mg_sqrt_s - truth;
+    d / if d < 0.0 {
+        hi - e.mg_sqrt_s
+    } else {
+        e.mg_sqrt_s - lo
+    }
+}
+
+/// With the walk estimated from the session, the fit's static error is within 1.2× the oracle's
+/// (the fit given the true attitudes and the true walk) where the constant-bias fit reaches its
+/// oracle without a walk (the exact fixture); on a 0.05° fixture the fitted attitudes cost a gap to
+/// the oracle even without a walk, and the walk may widen that gap by at most 1.2×. The lever arms
+/// are no worse than the constant-bias fit's; under the walk the 1σ of biases, scale factors and
+/// lever arms stay honest (rms error/σ within 30 % of 1, pooled over the seeds and walks); every
+/// estimated walk is within 4σ of the simulated one and, over ten seeds or more, its likelihood
+/// interval is honest too (rms of (estimated − simulated) over the interval's half on the truth's
+/// side within 30 % of 1).
+#[test]
+fn drift_against_the_oracle() {
+    let n = seeds();
+    let fixtures = if n >= 10 {
+        &FIXTURES[..]
+    } else {
+        &FIXTURES[..1]
+    };
+    for &fixture in fixtures {
+        let still = run(fixture, 0.0, n);
+        still.print(fixture);
+        // The fit's own gap to the oracle without a walk: 1 on the exact fixture.
+        let gap = still.static_ug(0) / still.static_ug(3);
+        let runs: Vec<WalkRun> = [0.001, 0.002, 0.005]
+            .iter()
+            .map(|&w| run(fixture, w, n))
+            .collect();
+        for r in &runs {
+            r.print(fixture);
+            let (est, oracle) = (r.static_ug(2), r.static_ug(3));
+            assert!(
+                est <= 1.2 * gap * oracle,
+                "{}: {est} against the oracle's {oracle} (gap without a walk {gap})",
+                r.walk
+            );
+            assert!(
+                r.lever_um(2) <= r.lever_um(0),
+                "{}: lever arms {} against {}",
+                r.walk,
+                r.lever_um(2),
+                r.lever_um(0)
+            );
+            for e in &r.estimated {
+                assert!(walk_z(e, r.walk).abs() < 4.0, "{e:?} against {}", r.walk);
+            }
+        }
+        let z = rms(runs
+            .iter()
+            .flat_map(|r| r.estimated.iter().map(|e| walk_z(e, r.walk))));
+        let sym = rms(runs.iter().flat_map(|r| {
+            r.estimated
+                .iter()
+                .map(|e| (e.mg_sqrt_s - r.walk) / e.sigma_mg_sqrt_s.expect("estimated"))
+        }));
+        println!(
+            "{} (without a walk, the constant-bias fit at {gap:.2}× the oracle's static error): \
+             estimated walk − simulated, rms over the likelihood interval's side {z:.2}, over its \
+             half-width {sym:.2}",
+            fixture.name
+        );
+        // Ten seeds and more (the documented run) make the rms of the walk's own z a measure.
+        if n >= 10 {
+            assert!((z - 1.0).abs() < 0.3, "{}: walk: {z}", fixture.name);
+        }
+        for (c, what) in ["biases", "scale factors", "lever arms"].iter().enumerate() {
+            let z = rms_z(
+                runs.iter()
+                    .flat_map(|r| r.rows.iter().map(|row| row[2].z2[c])),
+            );
+            println!(
+                "{}: rms error/σ of {what}, walk estimated: {z:.2}",
+                fixture.name
+            );
+            assert!((z - 1.0).abs() < 0.3, "{}: {what}: {z}", fixture.name);
+        }
+    }
+}
+
+/// No walk is today's fit: a zero walk takes the constant-bias path, and the fit is the
+/// constant-bias fit bit for bit (the dense path's algebra at no walk is checked in `drift`'s own
+/// tests, at one θ, where no iteration can differ).
+#[test]
+fn a_zero_walk_is_the_constant_bias_fit() {
+    let truth = testkit::paper_unit();
+    for fixture in FIXTURES {
+        let plan = plan(fixture);
+        let s = simulate(&plan, &truth, fixture.tilt_deg, 0.0, 7);
+        let today = fit(&plan, &s.stats, BiasWalk::Off);
+        let zero = fit(&plan, &s.stats, BiasWalk::Given(0.0));
+        assert_eq!(today.calibration, zero.calibration);
+        assert_eq!(today.uncertainty, zero.uncertainty);
+        assert_eq!(today.covariance, zero.covariance);
+        assert_eq!(today.parameters, zero.parameters);
+        assert_eq!(today.fit, zero.fit);
     }
 }
