@@ -14,7 +14,7 @@
 
 use super::model::SegModel;
 use super::solve::{self, NormalSystem, Problem};
-use super::{attitude, BiasWalk, EstimateError, EstimateOptions, SegmentKind, SessionSeg};
+use super::{BiasWalk, EstimateError, EstimateOptions, SessionSeg};
 use nalgebra::{DMatrix, DVector};
 
 /// The random walk the fit assumes.
@@ -184,27 +184,26 @@ pub struct WalkEstimate {
     pub fit_mg_sqrt_s: f64,
 }
 
-/// The walk the options ask for, set on `problem`: a given strength, or one estimated from the
-/// session's static segments under the constant-bias `static_fit`; `None` when the bias is constant.
+/// A given walk set on `problem`, its scale factors from the constant-bias `static_fit`; `None`
+/// when the bias is constant, or when the walk is to be estimated (the constant-bias fit comes
+/// first, docs/model.md §11.3).
 pub(crate) fn apply(
     options: &EstimateOptions,
     segs: &[SessionSeg],
     problem: &mut Problem,
     static_fit: &solve::Fit,
-) -> Result<Option<WalkEstimate>, EstimateError> {
-    let est = match options.bias_walk {
-        BiasWalk::Off => return Ok(None),
-        BiasWalk::Given(mg) => WalkEstimate {
-            mg_sqrt_s: mg,
-            sigma_mg_sqrt_s: None,
-            interval_mg_sqrt_s: None,
-            fit_mg_sqrt_s: mg,
-        },
-        BiasWalk::Estimate => estimate(problem, segs, static_fit)?,
+) -> Option<WalkEstimate> {
+    let BiasWalk::Given(mg) = options.bias_walk else {
+        return None;
     };
     let k = scale_factors(&static_fit.theta);
-    problem.drift = Some(Drift::new(est.fit_mg_sqrt_s, k, start_time(segs)));
-    Ok(Some(est))
+    problem.drift = Some(Drift::new(mg, k, start_time(segs)));
+    Some(WalkEstimate {
+        mg_sqrt_s: mg,
+        sigma_mg_sqrt_s: None,
+        interval_mg_sqrt_s: None,
+        fit_mg_sqrt_s: mg,
+    })
 }
 
 /// Each axis's scale factor (output unit per g) from a fit's `M`: what turns mg/√s into output units.
@@ -220,10 +219,11 @@ pub(crate) fn start_time(segs: &[SessionSeg]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The restricted log-likelihood (docs/model.md §11.3) of the static problem `p` under a walk of
-/// `mg` mg/√s: `−½ (χ² + log det Σ + log det N)` at the generalised least-squares fit.
+/// The restricted log-likelihood (docs/model.md §11.3) of the fit's problem `p` under a walk of
+/// `mg` mg/√s: `−½ (χ² + log det Σ + log det N)` at the generalised least-squares fit (the terms
+/// that do not depend on the walk, the gyro's and the priors' own, left out).
 struct Likelihood<'a> {
-    p: Problem,
+    p: &'a Problem,
     start: &'a [f64],
     free: &'a [bool],
     k: [f64; 3],
@@ -236,6 +236,21 @@ impl Likelihood<'_> {
         let d = Drift::new(mg, self.k, self.t0);
         let ld_sigma = log_det(&p.models, &d)?;
         p.drift = Some(d);
+        if !p.groups.is_empty() {
+            // The differences' covariance holds the walk: group them again under it.
+            let rests = p.rest_segments.clone();
+            p.group_spins(&|s| rests.contains(&s));
+        }
+        // `whiten` is `L⁻¹`, lower triangular: its diagonal is `1 / L_ii`.
+        let ld_groups: f64 = p
+            .groups
+            .iter()
+            .map(|g| {
+                (0..g.whiten.nrows())
+                    .map(|i| -2.0 * g.whiten[(i, i)].ln())
+                    .sum::<f64>()
+            })
+            .sum();
         let fit = solve::fit(
             &p,
             self.start.to_vec(),
@@ -244,7 +259,7 @@ impl Likelihood<'_> {
         )
         .ok()?;
         let ld_n = solve::log_det_information(&p, &fit.theta, &fit.free)?;
-        Some(-0.5 * (fit.chi2 + ld_sigma + ld_n))
+        Some(-0.5 * (fit.chi2 + ld_sigma + ld_groups + ld_n))
     }
 }
 
@@ -253,29 +268,21 @@ fn grid() -> impl Iterator<Item = f64> {
     (0..=20).map(|i| 10f64.powf(-5.0 + 0.25 * i as f64))
 }
 
-/// The walk's strength that maximises the restricted likelihood of the static segments' mean
-/// outputs (docs/model.md §11.3), and half the width of the interval where the log-likelihood is
-/// within ½ of its maximum as its 1σ. `static_fit` is the constant-bias fit it starts from.
+/// The walk's strength that maximises the restricted likelihood of the fit's problem (every used
+/// segment, the gyro's observations and model, the attitude priors; docs/model.md §11.3), and half
+/// the width of the interval where the log-likelihood is within ½ of its maximum as its 1σ.
+/// `theta` and `free` are the constant-bias fit's, which it starts from.
 pub(crate) fn estimate(
     problem: &Problem,
+    theta: &[f64],
+    free: &[bool],
     segs: &[SessionSeg],
-    static_fit: &solve::Fit,
 ) -> Result<WalkEstimate, EstimateError> {
-    let models: Vec<SegModel> = problem
-        .models
-        .iter()
-        .filter(|m| segs[m.seg].kind == SegmentKind::Static)
-        .cloned()
-        .collect();
-    let mut p = Problem::new(models, problem.mounts.clone());
-    p.single_package = problem.single_package;
-    let mut free = static_fit.free.clone();
-    attitude::tilt_free(&p, &mut free);
     let lik = Likelihood {
-        p,
-        start: &static_fit.theta,
-        free: &free,
-        k: scale_factors(&static_fit.theta),
+        p: problem,
+        start: theta,
+        free,
+        k: scale_factors(theta),
         t0: start_time(segs),
     };
     let fail = || EstimateError::Singular {
@@ -327,7 +334,7 @@ fn golden(
     let mut x1 = hi - r * (hi - lo);
     let mut x2 = lo + r * (hi - lo);
     let (mut f1, mut f2) = (f(x1.exp())?, f(x2.exp())?);
-    for _ in 0..30 {
+    for _ in 0..24 {
         if f1 >= f2 {
             hi = x2;
             (x2, f2) = (x1, f1);
@@ -357,7 +364,7 @@ fn crossing(
 ) -> Result<f64, EstimateError> {
     let above_at_a = f(a)? >= target;
     let (mut lo, mut hi) = (a, b);
-    for _ in 0..40 {
+    for _ in 0..24 {
         let mid = 0.5 * (lo + hi);
         if (f(mid)? >= target) == above_at_a {
             lo = mid;
@@ -371,6 +378,7 @@ fn crossing(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::attitude;
     use crate::estimate::model::{idx_m, idx_u0, Mount, TiltGeometry};
 
     /// The dense path with a walk too weak to matter is the per-segment path: the same χ² and the

@@ -12,8 +12,8 @@ use super::solve::{self, Problem};
 use super::{attitude, build, drift, gyro, joint, paper, plausibility, screen, thermal};
 use super::{thermal_gyro, WalkEstimate};
 use super::{
-    BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions, Exclusion,
-    FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
+    BiasWalk, BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions,
+    Exclusion, FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
     SegmentDiagnostic, SegmentKind,
 };
 use crate::session::{Package, Plan, SegmentStats};
@@ -66,10 +66,22 @@ fn fit_session(
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
     package::preconditions(options).map_err(EstimateError::SinglePackage)?;
+    if options.method == Method::Paper && options.bias_walk != BiasWalk::Off {
+        return Err(EstimateError::BiasWalkWithPaperMethod);
+    }
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
+    if options.bias_walk == BiasWalk::Estimate {
+        // The walk from the constant-bias fit's problem, then the fit again with it (§11.3).
+        let (p, segs) = (&prepared.problem, &prepared.segs);
+        let est = drift::estimate(p, &main.theta, &main.free, segs)?;
+        let given = BiasWalk::Given(est.fit_mg_sqrt_s);
+        let mut out = fit_session(plan, stats, &options.with_bias_walk(given))?;
+        out.bias_walk = Some(est);
+        return Ok(out);
+    }
     let fitted = package::Fitted {
         theta: &main.theta,
         free: &main.free,
@@ -162,7 +174,7 @@ fn prepare(
     let mut static_fit = stage(&mut segs, &mut problem)?;
     // The walk's strength (given, or estimated from the constant-bias fit's segments), then the
     // static fit again with it (docs/model.md §11).
-    let walk = drift::apply(options, &segs, &mut problem, &static_fit)?;
+    let walk = drift::apply(options, &segs, &mut problem, &static_fit);
     if problem.drift.as_ref().is_some_and(drift::Drift::active) {
         static_fit = stage(&mut segs, &mut problem)?;
     }

@@ -96,6 +96,16 @@ pub struct EstimateOptions {
     pub bias_walk: BiasWalk,
 }
 
+impl EstimateOptions {
+    /// These options with the bias walk `walk`.
+    pub fn with_bias_walk(&self, walk: BiasWalk) -> EstimateOptions {
+        EstimateOptions {
+            bias_walk: walk,
+            ..self.clone()
+        }
+    }
+}
+
 /// How the estimator treats the accelerometers' bias over the session (docs/model.md §11).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BiasWalk {

@@ -3,10 +3,8 @@
 //! walk.
 //!
 //! `DRIFT_SEEDS=N cargo test -p estimator --lib drift_against_the_oracle -- --nocapture` runs N seeds
-//! per walk strength and prints every figure. The default (2 seeds) runs the exact fixture only;
-//! ten seeds and more add the 0.05° fixture, whose fitted attitudes leave the walk's strength
-//! loosely known (30–100 % 1σ), so that two seeds do not measure its honesty. `DRIFT_SEEDS=12` is
-//! the documented run (both fixtures, about 2 minutes).
+//! per walk strength (default 2) on both fixtures and prints every figure; `DRIFT_SEEDS=12` is the
+//! documented run (about 3 minutes).
 
 use super::*;
 use crate::session::SegmentStats;
@@ -244,12 +242,7 @@ fn walk_z(e: &WalkEstimate, truth: f64) -> f64 {
 #[test]
 fn drift_against_the_oracle() {
     let n = seeds();
-    let fixtures = if n >= 10 {
-        &FIXTURES[..]
-    } else {
-        &FIXTURES[..1]
-    };
-    for &fixture in fixtures {
+    for fixture in FIXTURES {
         let still = run(fixture, 0.0, n);
         still.print(fixture);
         // The fit's own gap to the oracle without a walk: 1 on the exact fixture.
@@ -326,4 +319,25 @@ fn a_zero_walk_is_the_constant_bias_fit() {
         assert_eq!(today.parameters, zero.parameters);
         assert_eq!(today.fit, zero.fit);
     }
+}
+
+/// The paper's eq. 24 has no weights for a walk: asked for one, it refuses (and without one it
+/// runs).
+#[test]
+fn the_paper_method_refuses_a_walk() {
+    let truth = testkit::paper_unit();
+    let plan = plan(FIXTURES[0]);
+    let s = simulate(&plan, &truth, 0.0, 0.002, 11);
+    let paper = EstimateOptions {
+        method: Method::Paper,
+        ..EstimateOptions::default()
+    };
+    for walk in [BiasWalk::Given(0.002), BiasWalk::Estimate] {
+        let r = calibrate_session_stats(&plan, &s.stats, &paper.with_bias_walk(walk));
+        assert!(
+            matches!(r, Err(EstimateError::BiasWalkWithPaperMethod)),
+            "{walk:?}: {r:?}"
+        );
+    }
+    assert!(calibrate_session_stats(&plan, &s.stats, &paper).is_ok());
 }

@@ -50,6 +50,21 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
         "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
         o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
     );
+    if let Some(w) = &o.bias_walk {
+        let how = match w.sigma_mg_sqrt_s {
+            Some(sd) => format!(
+                " ± {sd:.5} (1σ), estimated from the static segments; the segments weighted with \
+                 √(K² + σ²) = {:.5}",
+                w.fit_mg_sqrt_s
+            ),
+            None => " (given)".into(),
+        };
+        let _ = writeln!(
+            s,
+            "Bias random walk: {:.5} mg/√s{how} (docs/model.md §11)",
+            w.mg_sqrt_s
+        );
+    }
     super::thermal::render(&mut s, o);
     if !o.excluded.is_empty() {
         let _ = writeln!(s);
