@@ -258,9 +258,19 @@ impl Likelihood<'_> {
             "walk likelihood",
         )
         .ok()?;
-        let ld_n = solve::log_det_information(&p, &fit.theta, &fit.free)?;
+        let ld_n = log_det_information(&p, &fit.theta, &fit.free)?;
         Some(-0.5 * (fit.chi2 + ld_sigma + ld_groups + ld_n))
     }
+}
+
+/// `log det` of the information matrix over the free columns at `t` (the restricted likelihood's
+/// term), or `None` when it is not positive definite.
+fn log_det_information(p: &Problem, t: &[f64], free: &[bool]) -> Option<f64> {
+    let cols = solve::Columns::new(free, p.single_package);
+    let (n, _, _) = solve::normal_equations(p, t, &cols, None);
+    let chol = n.cholesky()?;
+    let l = chol.l();
+    Some((0..l.nrows()).map(|i| 2.0 * l[(i, i)].ln()).sum())
 }
 
 /// The grid the likelihood is first searched on, mg/√s: 10⁻⁵ to 1 in quarter decades.

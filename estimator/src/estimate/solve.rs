@@ -324,7 +324,7 @@ pub(crate) fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64
 ///
 /// The blocks are accumulated in a fixed order (outputs, grouped spins, gyro axes, gyro model, mount
 /// priors, lever-arm prior): the sums, and so the fit's numbers, depend on it.
-fn normal_equations(
+pub(crate) fn normal_equations(
     p: &Problem,
     t: &[f64],
     cols: &Columns,
@@ -589,15 +589,6 @@ pub(crate) fn covariance(
             _ => 0.0,
         }
     }))
-}
-
-/// `log det` of the information matrix over the free columns at `t` (the restricted likelihood's
-/// term, docs/model.md §11.3), or `None` when it is not positive definite.
-pub(crate) fn log_det_information(p: &Problem, t: &[f64], free: &[bool]) -> Option<f64> {
-    let (n, _, _) = normal_equations(p, t, &Columns::new(free, p.single_package), None);
-    let chol = n.cholesky()?;
-    let l = chol.l();
-    Some((0..l.nrows()).map(|i| 2.0 * l[(i, i)].ln()).sum())
 }
 
 /// One Gauss–Newton step over the free columns, or `None` when the normal equations are singular.
