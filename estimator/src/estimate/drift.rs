@@ -7,10 +7,11 @@
 //! closed-form covariance of [`interval_cov`]. The segments' mean outputs are then fitted with the
 //! full covariance `blockdiag(se_cov) + q² C` whitened by its Cholesky factor (§11.2), which is the
 //! least squares of `solve` with a dense weight in place of the per-segment one. No walk leaves
-//! `solve` on its per-segment path, so a zero walk is today's fit bit for bit.
+//! `solve` on its per-segment path, so a zero walk is the constant-bias fit bit for bit.
 //!
-//! The walk's strength is given (mg/√s) or estimated from the static segments by restricted maximum
-//! likelihood (§11.3), with the likelihood interval as its 1σ.
+//! The walk's strength is given (mg/√s) or estimated from the constant-bias fit's whole problem by
+//! restricted maximum likelihood (§11.3), with the likelihood interval as its 1σ; [`track`] is each
+//! segment's fitted bias over the session (§11.4).
 
 use super::model::SegModel;
 use super::solve::{self, NormalSystem, Problem};
@@ -204,6 +205,59 @@ pub(crate) fn apply(
         interval_mg_sqrt_s: None,
         fit_mg_sqrt_s: mg,
     })
+}
+
+/// One segment's fitted wander of the bias from `u0` (docs/model.md §11.4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WalkPoint {
+    /// The segment's name.
+    pub name: String,
+    /// The middle of its span, s from the session's first sample.
+    pub t_mid_s: f64,
+    /// The walk's mean over the segment per axis, mg.
+    pub bias_mg: [f64; 3],
+}
+
+/// Each plain segment's fitted walk, `Σ_walk Σ⁻¹ r` at `theta` (the walk's conditional mean given
+/// the residuals, docs/model.md §11.4), in time order; empty without a walk.
+pub(crate) fn track(problem: &Problem, theta: &[f64], segs: &[SessionSeg]) -> Vec<WalkPoint> {
+    let Some(d) = problem.drift.as_ref().filter(|d| d.active()) else {
+        return Vec::new();
+    };
+    let models = &problem.models;
+    let sigma = covariance(models, d);
+    let mut walk = sigma.clone();
+    for (s, m) in models.iter().enumerate() {
+        for a in 0..3 {
+            for b in 0..3 {
+                walk[(3 * s + a, 3 * s + b)] -= m.se_cov[a][b];
+            }
+        }
+    }
+    let r = DVector::from_iterator(
+        3 * models.len(),
+        models.iter().flat_map(|m| {
+            let p = m.predict(theta);
+            (0..3).map(move |a| m.mean_u[a] - p[a])
+        }),
+    );
+    let Some(chol) = sigma.cholesky() else {
+        return Vec::new();
+    };
+    let w = walk * chol.solve(&r);
+    let k = scale_factors(theta);
+    let t0 = start_time(segs);
+    let mut out: Vec<WalkPoint> = models
+        .iter()
+        .enumerate()
+        .map(|(s, m)| WalkPoint {
+            name: segs[m.seg].stats.name.clone(),
+            t_mid_s: 0.5 * (m.span_s[0] + m.span_s[1]) - t0,
+            bias_mg: core::array::from_fn(|a| w[3 * s + a] / k[a] * 1e3),
+        })
+        .collect();
+    out.sort_by(|a, b| a.t_mid_s.total_cmp(&b.t_mid_s));
+    out
 }
 
 /// Each axis's scale factor (output unit per g) from a fit's `M`: what turns mg/√s into output units.

@@ -68,7 +68,7 @@ mod thermal_tests;
 mod uncertainty;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
-pub use drift::WalkEstimate;
+pub use drift::{WalkEstimate, WalkPoint};
 pub use error::EstimateError;
 pub use fit::calibrate_session_stats;
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};

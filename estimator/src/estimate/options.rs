@@ -113,8 +113,8 @@ pub enum BiasWalk {
     Off,
     /// A random walk of this strength, mg/√s (0 is [`BiasWalk::Off`]).
     Given(f64),
-    /// A random walk whose strength is estimated from the static segments (restricted maximum
-    /// likelihood, §11.3).
+    /// A random walk whose strength is estimated from the session (restricted maximum likelihood on
+    /// the constant-bias fit's problem, §11.3).
     Estimate,
 }
 

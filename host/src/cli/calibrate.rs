@@ -117,8 +117,8 @@ pub struct EstimatorArgs {
         value_parser = limits::real(0.0, limits::MAX_BIAS_WALK_MG_SQRT_S)
     )]
     pub bias_walk: Option<f64>,
-    /// The accelerometers' bias is a random walk whose strength is estimated from the session's
-    /// static segments (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
+    /// The accelerometers' bias is a random walk whose strength is estimated from the session
+    /// (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
     #[arg(long)]
     pub bias_walk_estimate: bool,
 }
