@@ -377,3 +377,43 @@ fn the_fitted_bias_track_follows_the_simulated_walk() {
     );
     assert!(none.bias_track.is_empty());
 }
+
+/// The prediction of a plan under a walk (`host plan --check --bias-walk`) is the 1σ a session of
+/// it reports with the walk given: the biases' and scale factors' within 2 % over two simulated
+/// sessions, and well above the prediction without the walk.
+#[test]
+fn the_prediction_with_a_walk_is_what_a_session_reports() {
+    let truth = testkit::paper_unit();
+    let plan = plan(FIXTURES[0]);
+    let walk = 0.002;
+    let settings = |w: BiasWalk| PredictSettings {
+        noise_out_per_sample_1sigma: truth.statics.scale_out_per_g.map(|k| 1e-3 * k),
+        gyro_noise_rad_s: 0.05f64.to_radians(),
+        options: EstimateOptions::default().with_bias_walk(w),
+        ..PredictSettings::white(0.0)
+    };
+    let predicted = |w: BiasWalk| {
+        let s = settings(w);
+        let stats = crate::sim::synth::prediction_stats(&plan, &truth, &s).unwrap();
+        predict(&plan, &truth, &stats, &s).unwrap().sigma
+    };
+    let (with, without) = (predicted(BiasWalk::Given(walk)), predicted(BiasWalk::Off));
+    for seed in 0..2 {
+        let s = simulate(&plan, &truth, 0.0, walk, 700 + seed);
+        let u = fit(&plan, &s.stats, BiasWalk::Given(walk)).uncertainty;
+        for i in 0..3 {
+            // The paper's order: the zero biases first, then the scale factors.
+            let (b, k) = (with[i], with[3 + i]);
+            println!(
+                "axis {i}: bias 1σ predicted {b:.3e} reported {:.3e}; scale {k:.3e} {:.3e}",
+                u.zero_bias_1sigma[i], u.scale_per_g_1sigma[i]
+            );
+            assert!((u.zero_bias_1sigma[i] / b - 1.0).abs() < 0.02, "bias {i}");
+            assert!(
+                (u.scale_per_g_1sigma[i] / k - 1.0).abs() < 0.02,
+                "scale {i}"
+            );
+            assert!(b > 2.0 * without[i], "bias {i}: {b} against {}", without[i]);
+        }
+    }
+}
