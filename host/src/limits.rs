@@ -15,6 +15,10 @@ pub(crate) const MIN_TIMEOUT_S: f64 = 1e-3;
 /// Longest wait for one answer of a device, s.
 pub(crate) const MAX_TIMEOUT_S: f64 = 3600.0;
 
+/// Strongest accelerometer bias random walk `--bias-walk` takes, mg/√s: 1 mg/√s wanders a whole
+/// milli-g every second, far beyond any accelerometer worth calibrating.
+pub(crate) const MAX_BIAS_WALK_MG_SQRT_S: f64 = 1.0;
+
 /// Most samples in one streamed window.
 pub(crate) const MAX_WINDOW: u32 = 1_000_000;
 

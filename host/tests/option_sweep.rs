@@ -311,3 +311,54 @@ fn a_column_named_twice_is_named_before_the_file_is_read() {
     assert!(!ok);
     assert!(stderr.contains("'gyr_z' is named twice"), "{stderr}");
 }
+
+#[test]
+fn a_bias_walk_where_it_cannot_apply_is_refused() {
+    // The walk is either given or estimated: both is a usage error (exit 2) naming the two, before
+    // any work (the session directories do not exist), in both commands that take the estimator's
+    // flags; so is either with the paper's method. Each alone parses there (the numeric sweep
+    // above checks `--bias-walk`'s range).
+    for base in [
+        &["calibrate", "--input", "/nonexistent/session"][..],
+        &[
+            "batch",
+            "--input",
+            "/nonexistent/lot",
+            "--out",
+            "/nonexistent/out",
+        ][..],
+    ] {
+        let mut both = base.to_vec();
+        both.extend(["--bias-walk", "0.002", "--bias-walk-estimate"]);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_host"))
+            .args(&both)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{both:?}: {stderr}");
+        assert!(
+            stderr.starts_with("error:")
+                && stderr.contains("--bias-walk")
+                && stderr.contains("--bias-walk-estimate"),
+            "{both:?}: {stderr}"
+        );
+        for alone in [&["--bias-walk", "0.002"][..], &["--bias-walk-estimate"][..]] {
+            let mut v = vec!["host"];
+            v.extend(base);
+            v.extend(alone);
+            assert!(Cli::try_parse_from(&v).is_ok(), "{v:?}");
+            // The paper's eq. 24 has no weights for a walk: a usage error before any work.
+            v.extend(["--method", "paper"]);
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_host"))
+                .args(&v[1..])
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{v:?}: {stderr}");
+            assert!(
+                stderr.starts_with("error:") && stderr.contains("--method paper"),
+                "{v:?}: {stderr}"
+            );
+        }
+    }
+}

@@ -279,6 +279,7 @@ pub(crate) fn free_static_fit(
         statics.iter().map(|&k| problem.models[k].clone()).collect(),
         problem.mounts.clone(),
     );
+    sub.drift = problem.drift.clone();
     super::build::seed_free_mounts(plan, segs, noise, &mut sub, &t);
     let frame = body_frame(&sub);
     let mut free = super::screen::static_free(n);

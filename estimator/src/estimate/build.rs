@@ -104,7 +104,8 @@ pub(crate) fn build_models(
             se[i][i] = se[i][i].max(floor);
         }
         let tilt = mounts[seg_mount[k]].geometry;
-        if let Some(m) = SegModel::new(k, tilt, centre, e, st.mean_u, se) {
+        if let Some(mut m) = SegModel::new(k, tilt, centre, e, st.mean_u, se) {
+            m.span_s = [st.t_first_s, st.t_last_s];
             out.push(m);
         }
     }

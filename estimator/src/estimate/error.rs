@@ -66,6 +66,13 @@ pub enum EstimateError {
     /// The single-package lever-arm model was asked for where it cannot apply (docs/model.md §4.7).
     #[error("the single-package lever-arm model: {0}")]
     SinglePackage(super::package::PackageRefusal),
+    /// A bias random walk was asked of the paper's method, which has no weights to give it
+    /// (docs/model.md §11).
+    #[error(
+        "a bias random walk weighs the joint fit's segments (docs/model.md §11); the paper's \
+         eq. 24 is the published method: use the joint method, or leave the walk out"
+    )]
+    BiasWalkWithPaperMethod,
     /// The temperature model cannot be fitted or is implausible (the message says why).
     #[error("temperature model: {0}; check the recording's temp_c column and the soak steps")]
     Temperature(String),

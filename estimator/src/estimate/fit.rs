@@ -9,10 +9,11 @@ use super::model::{self, SegModel};
 use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
-use super::{attitude, build, gyro, joint, paper, plausibility, screen, thermal, thermal_gyro};
+use super::{attitude, build, drift, gyro, joint, paper, plausibility, screen, thermal};
+use super::{thermal_gyro, WalkEstimate};
 use super::{
-    BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions, Exclusion,
-    FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
+    BiasWalk, BodyFrame, CalibrationOutcome, ChiSquareScaling, EstimateError, EstimateOptions,
+    Exclusion, FitSummary, GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability,
     SegmentDiagnostic, SegmentKind,
 };
 use crate::session::{Package, Plan, SegmentStats};
@@ -65,10 +66,22 @@ fn fit_session(
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
     package::preconditions(options).map_err(EstimateError::SinglePackage)?;
+    if options.method == Method::Paper && options.bias_walk != BiasWalk::Off {
+        return Err(EstimateError::BiasWalkWithPaperMethod);
+    }
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
+    if options.bias_walk == BiasWalk::Estimate {
+        // The walk from the constant-bias fit's problem, then the fit again with it (§11.3).
+        let (p, segs) = (&prepared.problem, &prepared.segs);
+        let est = drift::estimate(p, &main.theta, &main.free, segs)?;
+        let given = BiasWalk::Given(est.fit_mg_sqrt_s);
+        let mut out = fit_session(plan, stats, &options.with_bias_walk(given))?;
+        out.bias_walk = Some(est);
+        return Ok(out);
+    }
     let fitted = package::Fitted {
         theta: &main.theta,
         free: &main.free,
@@ -134,6 +147,8 @@ struct Prepared {
     seg_mount: Vec<usize>,
     problem: Problem,
     static_fit: solve::Fit,
+    /// The bias random walk the fit assumes, when asked for (docs/model.md §11).
+    walk: Option<WalkEstimate>,
 }
 
 /// Plan ↔ data, screening, the segment models and the static fit.
@@ -152,24 +167,19 @@ fn prepare(
     let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem::new(models, mounts);
     problem.single_package = options.single_package;
-    let static_fit = match screen::static_fit_with_attitude_check(
-        plan,
-        &mut segs,
-        &mut problem,
-        options,
-        &mut excluded,
-        planned_static,
-    ) {
-        Ok(fit) => {
-            build::seed_free_mounts(plan, &segs, &noise, &mut problem, &fit.theta);
-            fit
-        }
-        Err(
-            e @ (EstimateError::NoStaticSegments { .. } | EstimateError::TooFewAttitudes { .. }),
-        ) => attitude::free_static_fit(plan, &segs, &noise, &mut problem, e)?.0,
-        Err(e) => return Err(e),
+    let mut stage = |segs: &mut [SessionSeg], problem: &mut Problem| {
+        let (ex, n) = (&mut excluded, planned_static);
+        screen::static_stage(plan, segs, &noise, problem, options, ex, n)
     };
+    let mut static_fit = stage(&mut segs, &mut problem)?;
+    // The walk's strength (given, or estimated from the constant-bias fit's segments), then the
+    // static fit again with it (docs/model.md §11).
+    let walk = drift::apply(options, &segs, &mut problem, &static_fit);
+    if problem.drift.as_ref().is_some_and(drift::Drift::active) {
+        static_fit = stage(&mut segs, &mut problem)?;
+    }
     Ok(Prepared {
+        walk,
         warnings,
         excluded,
         segs,
@@ -472,6 +482,7 @@ fn outcome(
         excluded,
         segs,
         problem,
+        walk,
         ..
     } = p;
     let segments = diagnostics(
@@ -514,6 +525,8 @@ fn outcome(
         thermal: None,
         single_package: options.single_package,
         package_test: s.package_test,
+        bias_track: drift::track(&problem, &main.theta, &segs),
+        bias_walk: walk,
     }
 }
 

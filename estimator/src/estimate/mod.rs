@@ -24,10 +24,13 @@
 //! [`plausibility`] (checks before any file is written); [`thermal`], `thermal_gyro` and
 //! `thermal_misalignment` (the temperature model, §9); [`handheld_gyro`] (the gyro from hand turns);
 //! [`package`] (a single-package unit's one lever arm: its preconditions and χ² test, §4.7);
+//! `drift` (the accelerometers' bias random walk: generalised least squares over the segments'
+//! time order, its strength by restricted maximum likelihood, §11);
 //! [`predict`] (Cramér–Rao).
 
 pub mod attitude;
 mod build;
+mod drift;
 pub mod error;
 mod fit;
 pub mod gyro;
@@ -48,6 +51,8 @@ mod solve;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_drift;
+#[cfg(test)]
 mod tests_fixture;
 #[cfg(test)]
 mod tests_gyro;
@@ -63,11 +68,14 @@ mod thermal_tests;
 mod uncertainty;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
+pub use drift::{WalkEstimate, WalkPoint};
 pub use error::EstimateError;
 pub use fit::calibrate_session_stats;
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
-pub use options::{ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice};
+pub use options::{
+    BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice,
+};
 pub use outcome::{
     CalibrationOutcome, Exclusion, ExclusionReason, FitSummary, MethodComparison, Observability,
     SegmentDiagnostic,

@@ -206,6 +206,9 @@ pub(crate) struct SegModel {
     pub se_cov: RowMajor3,
     /// `L⁻¹` with `se_cov = L Lᵀ`: multiplies residuals into unit-variance ones.
     pub whiten: RowMajor3,
+    /// First and last sample time, s: where the segment sits on the bias random walk
+    /// (docs/model.md §11); `[0, 0]` until `build::build_models` sets it.
+    pub span_s: [f64; 2],
 }
 
 impl SegModel {
@@ -244,6 +247,7 @@ impl SegModel {
             mean_u,
             se_cov,
             whiten,
+            span_s: [0.0; 2],
         })
     }
 

@@ -92,6 +92,30 @@ pub struct EstimateOptions {
     /// position, for all three, and the in-package differences `r_i − r` reported as not observable
     /// (docs/model.md §4.7).
     pub single_package: bool,
+    /// The accelerometers' bias random walk (docs/model.md §11).
+    pub bias_walk: BiasWalk,
+}
+
+impl EstimateOptions {
+    /// These options with the bias walk `walk`.
+    pub fn with_bias_walk(&self, walk: BiasWalk) -> EstimateOptions {
+        EstimateOptions {
+            bias_walk: walk,
+            ..self.clone()
+        }
+    }
+}
+
+/// How the estimator treats the accelerometers' bias over the session (docs/model.md §11).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BiasWalk {
+    /// A constant bias: every segment weighted by its own noise alone.
+    Off,
+    /// A random walk of this strength, mg/√s (0 is [`BiasWalk::Off`]).
+    Given(f64),
+    /// A random walk whose strength is estimated from the session (restricted maximum likelihood on
+    /// the constant-bias fit's problem, §11.3).
+    Estimate,
 }
 
 /// How the estimator treats the gyro.
@@ -126,6 +150,7 @@ impl Default for EstimateOptions {
             gyro_model: GyroModel::Estimate,
             static_from_rest: false,
             single_package: false,
+            bias_walk: BiasWalk::Off,
         }
     }
 }

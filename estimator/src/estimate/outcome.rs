@@ -232,4 +232,9 @@ pub struct CalibrationOutcome {
     pub single_package: bool,
     /// The χ² test of one lever arm against three, when the session turns.
     pub package_test: Option<super::package::PackageTest>,
+    /// The accelerometers' bias random walk the fit assumed (docs/model.md §11), when asked for.
+    pub bias_walk: Option<super::WalkEstimate>,
+    /// Under a bias walk, each segment's fitted bias over the session (its wander from `u0`), in
+    /// time order; empty without a walk (docs/model.md §11.4).
+    pub bias_track: Vec<super::WalkPoint>,
 }

@@ -388,11 +388,13 @@ fn static_start(models: &[&SegModel], n_params: usize) -> Vec<f64> {
 pub(crate) fn static_fit(
     models: &[&SegModel],
     mounts: &[Mount],
+    drift: Option<&super::drift::Drift>,
 ) -> Result<solve::Fit, EstimateError> {
-    let problem = Problem::new(
+    let mut problem = Problem::new(
         models.iter().map(|m| (*m).clone()).collect(),
         mounts.to_vec(),
     );
+    problem.drift = drift.cloned();
     let n = problem.n_params();
     solve::fit(
         &problem,
@@ -400,6 +402,29 @@ pub(crate) fn static_fit(
         static_free(n),
         "static least squares",
     )
+}
+
+/// The static fit: on the fixture's (known-attitude) static segments, or, without enough known
+/// attitudes, with every attitude free (docs/model.md §7); free mounts then start from it.
+pub(crate) fn static_stage(
+    plan: &Plan,
+    segs: &mut [SessionSeg],
+    noise: &Noise,
+    problem: &mut Problem,
+    options: &EstimateOptions,
+    excluded: &mut Vec<Exclusion>,
+    planned_static: usize,
+) -> Result<solve::Fit, EstimateError> {
+    match static_fit_with_attitude_check(plan, segs, problem, options, excluded, planned_static) {
+        Ok(fit) => {
+            super::build::seed_free_mounts(plan, segs, noise, problem, &fit.theta);
+            Ok(fit)
+        }
+        Err(
+            e @ (EstimateError::NoStaticSegments { .. } | EstimateError::TooFewAttitudes { .. }),
+        ) => Ok(super::attitude::free_static_fit(plan, segs, noise, problem, e)?.0),
+        Err(e) => Err(e),
+    }
 }
 
 /// |M⁻¹(ū − u0) − up| of each static segment under a fit, g.
@@ -463,7 +488,7 @@ pub(crate) fn static_fit_with_attitude_check(
         // Fast path: when the fit on all static segments leaves every one within a tenth of the
         // tolerance, no segment can hide a wrong attitude (its leverage is < 1 − 1/10).
         let refs: Vec<&SegModel> = statics.iter().map(|&k| &models[k]).collect();
-        let all = static_fit(&refs, &mounts)?;
+        let all = static_fit(&refs, &mounts, problem.drift.as_ref())?;
         let all_err = attitude_errors(&all, &refs, &ups);
         if all_err.iter().all(|e| *e < 0.1 * tol_g) {
             return Ok(all);
@@ -483,7 +508,7 @@ pub(crate) fn static_fit_with_attitude_check(
                     .filter(|&&q| q != k)
                     .map(|&q| &models[q])
                     .collect();
-                let Ok(fit) = static_fit(&rest, &mounts) else {
+                let Ok(fit) = static_fit(&rest, &mounts, problem.drift.as_ref()) else {
                     continue;
                 };
                 let rest_worst = attitude_errors(&fit, &rest, &rest_ups)

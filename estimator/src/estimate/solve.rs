@@ -6,6 +6,7 @@
 //! (free attitudes may start tens of degrees off). Normal equations are solved after scaling every
 //! column to unit diagonal: the parameters span ten orders of magnitude (V/g against metres).
 
+use super::drift::{self, Drift};
 use super::gyro::{self, GyroBlock, NG};
 use super::model::{is_lever, Mount, SegModel, TiltGeometry, NI};
 use super::EstimateError;
@@ -54,10 +55,11 @@ pub(crate) struct DiffGroup {
 }
 
 impl DiffGroup {
-    /// Groups `spins` with `rest`; `None` when the covariance is not positive definite.
-    pub fn new(rest: SegModel, spins: Vec<SegModel>) -> Option<DiffGroup> {
+    /// Groups `spins` with `rest`, with the bias random walk's share of the differences when there
+    /// is one (docs/model.md §11.2); `None` when the covariance is not positive definite.
+    pub fn new(rest: SegModel, spins: Vec<SegModel>, walk: Option<&Drift>) -> Option<DiffGroup> {
         let k = spins.len();
-        let c = DMatrix::from_fn(3 * k, 3 * k, |a, b| {
+        let mut c = DMatrix::from_fn(3 * k, 3 * k, |a, b| {
             let (i, j) = (a / 3, b / 3);
             let own = if i == j {
                 spins[i].se_cov[a % 3][b % 3]
@@ -66,6 +68,9 @@ impl DiffGroup {
             };
             own + rest.se_cov[a % 3][b % 3]
         });
+        if let Some(d) = walk.filter(|d| d.active()) {
+            c += drift::difference_cov(&rest, &spins, d);
+        }
         let whiten = c.cholesky()?.l().try_inverse()?;
         Some(DiffGroup {
             rest,
@@ -130,6 +135,9 @@ pub(crate) struct Problem {
     /// The three accelerometers share one package: one lever arm `r` for all three
     /// (docs/model.md §4.7), fitted as one column per component of the normal equations.
     pub single_package: bool,
+    /// The accelerometers' bias random walk the outputs are weighted with (docs/model.md §11);
+    /// `None` (or a zero walk): a constant bias, each segment weighted by its own noise.
+    pub drift: Option<Drift>,
 }
 
 impl Problem {
@@ -144,6 +152,7 @@ impl Problem {
             groups: Vec::new(),
             rest_segments: Vec::new(),
             single_package: false,
+            drift: None,
         }
     }
 
@@ -186,7 +195,7 @@ impl Problem {
             }
         }
         for (r, v) in by_rest {
-            match DiffGroup::new(keep[r].clone(), v.clone()) {
+            match DiffGroup::new(keep[r].clone(), v.clone(), self.drift.as_ref()) {
                 Some(g) => self.groups.push(g),
                 None => loose.extend(v),
             }
@@ -315,14 +324,17 @@ pub(crate) fn invert_spd(n: &DMatrix<f64>, min_eigen: f64) -> Option<DMatrix<f64
 ///
 /// The blocks are accumulated in a fixed order (outputs, grouped spins, gyro axes, gyro model, mount
 /// priors, lever-arm prior): the sums, and so the fit's numbers, depend on it.
-fn normal_equations(
+pub(crate) fn normal_equations(
     p: &Problem,
     t: &[f64],
     cols: &Columns,
     prior_r_m: Option<f64>,
 ) -> (DMatrix<f64>, DVector<f64>, f64) {
     let mut ne = NormalSystem::new(cols);
-    ne.add_models(&p.models, t);
+    match p.drift.as_ref().filter(|d| d.active()) {
+        Some(d) => drift::add_models(&mut ne, &p.models, d, t),
+        None => ne.add_models(&p.models, t),
+    }
     ne.add_groups(&p.groups, t);
     ne.add_gyro_directions(&p.gyro, t);
     if let Some(blk) = &p.gyro_block {
@@ -336,15 +348,15 @@ fn normal_equations(
 }
 
 /// The normal equations being accumulated, one block of observations at a time.
-struct NormalSystem {
+pub(crate) struct NormalSystem {
     /// Column of each θ entry in `n` and `b` (`usize::MAX` for a fixed entry).
-    col_of: Vec<usize>,
+    pub(crate) col_of: Vec<usize>,
     /// `Jᵀ Σ⁻¹ J` so far.
-    n: DMatrix<f64>,
+    pub(crate) n: DMatrix<f64>,
     /// `Jᵀ Σ⁻¹ res` so far.
-    b: DVector<f64>,
+    pub(crate) b: DVector<f64>,
     /// Σ of whitened residuals² so far.
-    chi2: f64,
+    pub(crate) chi2: f64,
 }
 
 impl NormalSystem {
@@ -369,8 +381,8 @@ impl NormalSystem {
         }
     }
 
-    /// The segments' mean outputs (docs/model.md §4).
-    fn add_models(&mut self, models: &[SegModel], t: &[f64]) {
+    /// The segments' mean outputs (docs/model.md §4), each weighted by its own noise.
+    pub(crate) fn add_models(&mut self, models: &[SegModel], t: &[f64]) {
         for s in models {
             let jac = s.jacobian(t);
             let res = s.whitened_residual(t);

@@ -155,5 +155,15 @@ pub fn prediction_stats(
         gyro_1sigma_rad_s: settings.gyro_noise_rad_s,
         sample_rate_hz: settings.sample_rate_hz.unwrap_or(plan.sample_rate_hz),
     };
-    Ok(plan_stats(plan, &unit, &noise, settings.default_duration_s))
+    let mut stats = plan_stats(plan, &unit, &noise, settings.default_duration_s);
+    // One segment after the other, as a session runs them: where each sits on the bias random
+    // walk (docs/model.md §11).
+    let mut t = 0.0;
+    for st in &mut stats {
+        let length = st.t_last_s - st.t_first_s + 1.0 / noise.sample_rate_hz;
+        st.t_last_s += t - st.t_first_s;
+        st.t_first_s = t;
+        t += length;
+    }
+    Ok(stats)
 }

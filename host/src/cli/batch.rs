@@ -49,6 +49,7 @@ pub(crate) const SUMMARY_JSON: &str = "summary.json";
 /// Runs `host batch`; exits nonzero when any unit failed, is outside the limits or is an outlier.
 pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     // Checked before anything is read, created or started.
+    a.estimator.refuse()?;
     if let Some(j) = a.jobs {
         if !(1..=MAX_JOBS).contains(&j) {
             return Err(CliError::Usage(format!(

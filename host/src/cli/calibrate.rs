@@ -10,7 +10,7 @@ use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
 use crate::device::sim_hand::HandOperator;
 use crate::device::AnyTransport;
-use crate::estimate::{CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
+use crate::estimate::{BiasWalk, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use crate::limits;
 use crate::session::{self, ReadOptions};
 use crate::summary::Limits;
@@ -104,9 +104,38 @@ pub struct EstimatorArgs {
     /// (docs/model.md §4.7). A plan with package = "single" implies it.
     #[arg(long)]
     pub single_package: bool,
+    /// The accelerometers' bias is a random walk of this strength, mg/√s (the Allan K of
+    /// `host noise`, in mg): the segments are weighted with the walk's covariance across the
+    /// session (docs/model.md §11). 0 is a constant bias, the default.
+    #[arg(
+        long,
+        value_name = "MG_SQRT_S",
+        conflicts_with = "bias_walk_estimate",
+        value_parser = limits::real(0.0, limits::MAX_BIAS_WALK_MG_SQRT_S)
+    )]
+    pub bias_walk: Option<f64>,
+    /// The accelerometers' bias is a random walk whose strength is estimated from the session
+    /// (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
+    #[arg(long)]
+    pub bias_walk_estimate: bool,
 }
 
 impl EstimatorArgs {
+    /// Refuses flags that cannot apply together, before any work: the bias walk weighs the joint
+    /// fit's segments (docs/model.md §11), and `--method paper` is the paper's eq. 24 as published.
+    pub(crate) fn refuse(&self) -> Result<(), CliError> {
+        let walk = self.bias_walk.is_some_and(|w| w > 0.0) || self.bias_walk_estimate;
+        if walk && self.method == MethodArg::Paper {
+            return Err(CliError::Usage(
+                "--bias-walk and --bias-walk-estimate weigh the joint fit's segments with the \
+                 walk (docs/model.md §11); --method paper is the paper's eq. 24 as published: \
+                 leave one out"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
     /// The estimator options these flags ask for.
     pub fn options(&self) -> EstimateOptions {
         EstimateOptions {
@@ -119,6 +148,11 @@ impl EstimatorArgs {
                 ReferenceArg::Centroid => ReferenceChoice::Centroid,
             },
             single_package: self.single_package,
+            bias_walk: match (self.bias_walk, self.bias_walk_estimate) {
+                (_, true) => BiasWalk::Estimate,
+                (Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
+                _ => BiasWalk::Off,
+            },
             ..EstimateOptions::default()
         }
     }
@@ -144,6 +178,7 @@ pub enum ReferenceArg {
 
 /// Runs `host calibrate`: live with `--port`, else from `--input`.
 pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+    a.estimator.refuse()?;
     if a.port.is_some() {
         calibrate_live(a, quiet)
     } else {

@@ -32,6 +32,10 @@ pub struct PlanArgs {
     /// or for a plan with package = "single" `host/units/single-package.toml`, a MEMS IMU).
     #[arg(long, value_name = "FILE")]
     pub unit: Option<PathBuf>,
+    /// Predict with the accelerometers' bias a random walk of this strength, mg/√s (the Allan K
+    /// of `host noise`, in mg; docs/model.md §11): the segments' order in the plan then matters.
+    #[arg(long, value_name = "MG_SQRT_S", value_parser = crate::limits::real(0.0, crate::limits::MAX_BIAS_WALK_MG_SQRT_S))]
+    pub bias_walk: Option<f64>,
     /// Print the prediction as one JSON document on stdout (the table goes to stderr).
     #[arg(long)]
     pub json: bool,
@@ -70,14 +74,24 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
         gyro_noise_rad_s: a.gyro_noise_deg_s.to_radians(),
+        options: crate::estimate::EstimateOptions {
+            bias_walk: match a.bias_walk {
+                Some(k) if k > 0.0 => crate::estimate::BiasWalk::Given(k),
+                _ => crate::estimate::BiasWalk::Off,
+            },
+            ..crate::estimate::EstimateOptions::default()
+        },
         ..PredictSettings::white(0.0)
     };
     let stats = crate::sim::synth::prediction_stats(&plan, &truth, &settings)
         .map_err(crate::estimate::EstimateError::from)?;
     let prediction = predict(&plan, &truth, &stats, &settings)?;
     out.line("")?;
+    let walk = a.bias_walk.filter(|k| *k > 0.0).map_or(String::new(), |k| {
+        format!("; a bias random walk of {k} mg/√s (docs/model.md §11)")
+    });
     out.line(format_args!(
-        "noise: {} mg per sample on each accelerometer, {} °/s on the gyro",
+        "noise: {} mg per sample on each accelerometer, {} °/s on the gyro{walk}",
         a.noise_mg, a.gyro_noise_deg_s
     ))?;
     out.human(crate::report::render_prediction(&prediction))?;

@@ -50,6 +50,32 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
         "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
         o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
     );
+    if let Some(w) = &o.bias_walk {
+        let how = match w.sigma_mg_sqrt_s {
+            Some(sd) => format!(
+                " ± {sd:.5} (1σ), estimated from the session; the segments weighted with \
+                 √(K² + σ²) = {:.5}",
+                w.fit_mg_sqrt_s
+            ),
+            None => " (given)".into(),
+        };
+        let _ = writeln!(
+            s,
+            "Bias random walk: {:.5} mg/√s{how} (docs/model.md §11)",
+            w.mg_sqrt_s
+        );
+    }
+    if !o.bias_track.is_empty() {
+        let _ = writeln!(s, "Fitted bias wander from u0 per segment, mg (x, y, z):");
+        for p in &o.bias_track {
+            let [x, y, z] = p.bias_mg;
+            let _ = writeln!(
+                s,
+                "  {:8.1} s  {x:+.4} {y:+.4} {z:+.4}  {}",
+                p.t_mid_s, p.name
+            );
+        }
+    }
     super::thermal::render(&mut s, o);
     if !o.excluded.is_empty() {
         let _ = writeln!(s);
