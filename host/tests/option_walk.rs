@@ -203,6 +203,31 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
         t.push(("calibrate", o, Everywhere(ALWAYS_FIT)));
         t.push(("batch", o, Everywhere(ALWAYS_FIT)));
     }
+    // The bias walk weights the joint fit; the paper's method has no such weighting.
+    for (o, args) in [
+        ("bias-walk", &["--bias-walk", "0.002"][..]),
+        ("bias-walk-estimate", &["--bias-walk-estimate"][..]),
+    ] {
+        for (sub, head) in [
+            (
+                "calibrate",
+                &["--input", "{session}", "--out", "{tmp}/c"][..],
+            ),
+            ("batch", &["--input", "{tmp}", "--out", "{tmp}/lot"][..]),
+        ] {
+            let line: &'static [&'static str] = Box::leak(
+                [head, &["--method", "paper"][..], args]
+                    .concat()
+                    .into_boxed_slice(),
+            );
+            t.push((sub, o, NotIn(Box::leak(Box::new([line])))));
+        }
+    }
+    t.push((
+        "plan",
+        "bias-walk",
+        Everywhere("every plan check predicts its 1σ under the walk it is given"),
+    ));
     for o in ["input", "jobs", "outlier-z"] {
         t.push((
             "batch",
