@@ -421,7 +421,7 @@ impl CalibrationSummary {
     }
 
     /// The failed checks as one line, e.g. "chi2_per_dof 3.1 > 2".
-    pub(crate) fn failures(&self) -> String {
+    pub fn failures(&self) -> String {
         let f: Vec<String> = self
             .checks
             .iter()

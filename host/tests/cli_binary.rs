@@ -21,9 +21,13 @@ fn simulate_and_calibrate_through_the_binary() {
     let (ok, stdout, stderr) = host(&["calibrate", "--input", s]);
     assert!(ok, "{stderr}");
     assert!(
-        stdout.contains("Table 1") && stdout.contains("calibration.bin"),
+        stdout.contains("Result (± 1σ)") && stdout.contains("calibration.bin"),
         "{stdout}"
     );
+    // The fit's full tables behind -v.
+    assert!(!stdout.contains("Table 1"), "{stdout}");
+    let (ok, stdout, stderr) = host(&["calibrate", "-v", "--force", "--input", s]);
+    assert!(ok && stdout.contains("Table 1"), "{stdout}\n{stderr}");
     assert!(stderr.contains("no unit_id"), "{stderr}");
     assert!(session.join("calibration.toml").exists());
 }
@@ -118,7 +122,7 @@ fn a_soak_session_calibrates_over_temperature_through_the_binary() {
     assert!(ok, "{stderr}");
     let csv = std::fs::read_to_string(session.join("samples.csv")).unwrap();
     assert!(csv.starts_with("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z,temp_c\nx+ @-20,"));
-    let (ok, stdout, stderr) = host(&["calibrate", "--input", s]);
+    let (ok, stdout, stderr) = host(&["calibrate", "-v", "--input", s]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("Temperature model") && stdout.contains("x+ @60"),

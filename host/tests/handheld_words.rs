@@ -56,7 +56,7 @@ fn a_hand_held_calibration_and_its_report_speak_of_no_table() {
     let rep = d.join("rep");
     host(&["-q", "simulate-hand", "--out", s(&raw)]);
     host(&common::hand_segment_args(s(&raw), s(&session)));
-    let (out, err) = host(&["calibrate", "--input", s(&session), "--out-dir", s(&cal)]);
+    let (out, err) = host(&["calibrate", "-v", "--input", s(&session), "--out", s(&cal)]);
     assert_no_table_words("calibrate", &format!("{out}{err}"));
     assert!(out.contains("Free positions"), "{out}");
     assert!(out.contains("Lever arms: not calibrated"), "{out}");

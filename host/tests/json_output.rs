@@ -27,7 +27,7 @@ fn calibrate_compare_plan_and_noise_print_one_json_document() {
     assert!(v["chi2_per_dof"].as_f64().unwrap() > 0.0);
     assert_eq!(v["passed"], true);
     // The human report went to stderr.
-    assert!(stderr.contains("Table 1"), "{stderr}");
+    assert!(stderr.contains("Result (± 1σ)"), "{stderr}");
 
     // A limit the unit cannot meet: nonzero exit, the JSON still complete, the reason on stderr
     // (its files, elsewhere, are marked FAILED; the accepted pair above stays).

@@ -191,6 +191,18 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     for o in ["input", "port"] {
         t.push(("calibrate", o, Everywhere("the source of the run")));
     }
+    t.push((
+        "calibrate",
+        "verbose",
+        NotIn(&[&[
+            "--input",
+            "{session}",
+            "--out",
+            "{tmp}/v",
+            "-q",
+            "--verbose",
+        ]]),
+    ));
     for o in [
         "method",
         "reference",

@@ -77,10 +77,10 @@ fn calibrate_input_success_failed_check_error_and_usage() {
     let (code, stdout, stderr) = run(&["calibrate", "--input", s(&session)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(
-        stdout.contains("Table 1") && stdout.contains("wrote"),
+        stdout.contains("Result (± 1σ)") && stdout.contains("wrote"),
         "{stdout}"
     );
-    assert!(!stderr.contains("Table 1"), "{stderr}");
+    assert!(!stderr.contains("Result (± 1σ)"), "{stderr}");
 
     // A failed limit: exit 3, the tables still on stdout, the files kept under FAILED names.
     let failed = dir.path().join("failed");
@@ -94,7 +94,7 @@ fn calibrate_input_success_failed_check_error_and_usage() {
         "0.000001",
     ]);
     assert_eq!(code, 3, "{stderr}");
-    assert!(stdout.contains("Table 1") && stdout.contains("calibration.FAILED.bin"));
+    assert!(stdout.contains("verdict          FAIL") && stdout.contains("calibration.FAILED.bin"));
     assert!(stderr.contains("error: FAIL:"), "{stderr}");
     assert!(failed.join("calibration.FAILED.toml").exists());
     assert!(failed.join("calibration.FAILED.bin").exists());
@@ -142,13 +142,13 @@ fn calibrate_port_sim_results_on_stdout_progress_on_stderr() {
         s(&ok),
     ]);
     assert_eq!(code, 0, "{stderr}");
-    // The same tables as `calibrate --input`, on stdout; the operator's steps on stderr.
+    // The same result block as `calibrate --input`, on stdout; the operator's steps on stderr.
     assert!(
-        stdout.contains("Table 1") && stdout.contains("PASS:"),
+        stdout.contains("Result (± 1σ)") && stdout.contains("PASS:"),
         "{stdout}"
     );
     assert!(stdout.contains("verify "), "{stdout}");
-    assert!(!stderr.contains("Table 1") && stderr.contains("mount the unit"));
+    assert!(!stderr.contains("Result (± 1σ)") && stderr.contains("mount the unit"));
     assert!(ok.join("calibration.toml").exists());
 
     // Quiet: nothing on stdout, not even the PASS line.

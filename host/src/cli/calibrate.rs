@@ -71,6 +71,10 @@ pub struct CalibrateArgs {
         value_parser = limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
     )]
     pub verify_temp_c: Option<f64>,
+    /// Verbose: the fit's full tables (segments, residuals, gyro, observability) before the short
+    /// result block; `host report` has them too.
+    #[arg(short, long)]
+    pub verbose: bool,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
     #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
@@ -179,6 +183,11 @@ pub enum ReferenceArg {
 /// Runs `host calibrate`: live with `--port`, else from `--input`.
 pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     a.estimator.refuse()?;
+    if a.verbose && quiet {
+        return Err(CliError::Usage(
+            "--verbose does not apply with --quiet, which prints no tables: leave one out".into(),
+        ));
+    }
     if a.port.is_some() {
         calibrate_live(a, quiet)
     } else {
@@ -204,40 +213,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         )
     })?;
-    if a.plan.is_some() || a.window.is_some() || a.sim_unit.is_some() {
-        return Err(CliError::Usage(
-            "--plan, --window and --sim-unit are for --port; a recorded session is read with its own \
-             plan.toml (edit that file to change the plan)"
-                .into(),
-        ));
-    }
-    let device_given: Vec<&str> = [
-        ("--baud", a.baud.is_some()),
-        ("--timeout-s", a.timeout_s.is_some()),
-        ("--verify-tolerance-mg", a.verify_tolerance_mg.is_some()),
-    ]
-    .into_iter()
-    .filter_map(|(flag, given)| given.then_some(flag))
-    .collect();
-    if !device_given.is_empty() {
-        return Err(CliError::Usage(format!(
-            "{} {} for --port: a recorded session has no device to talk to or verify; leave {} out",
-            device_given.join(", "),
-            if device_given.len() == 1 { "is" } else { "are" },
-            if device_given.len() == 1 {
-                "it"
-            } else {
-                "them"
-            },
-        )));
-    }
-    if a.verify_temp_c.is_some() {
-        return Err(CliError::Usage(
-            "--verify-temp-c verifies the calibration stored on a device (--port); a recorded session \
-             has no device to verify: give --port, or leave --verify-temp-c out"
-                .into(),
-        ));
-    }
+    refuse_device_options(a)?;
     let out = Output {
         json: a.json,
         quiet,
@@ -279,16 +255,21 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         ))?;
     }
     out.line("")?;
-    out.human(crate::report::render_session(
-        &calibrated.outcome,
-        &session.plan,
-        &session.stats,
-    ))?;
+    if a.verbose {
+        out.human(crate::report::render_session(
+            &calibrated.outcome,
+            &session.plan,
+            &session.stats,
+        ))?;
+    }
     out.line(format_args!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
         written.toml_path.display(),
         written.bin_path.display(),
         written.blob.len()
+    ))?;
+    out.human(crate::report::summary_block::render_summary_block(
+        &calibrated.document.summary,
     ))?;
     out.document(&calibrated.document)?;
     if !calibrated.document.summary.passed {
@@ -297,6 +278,46 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         ));
     }
     Ok(calibrated.outcome)
+}
+
+/// Refuses, for a recorded session, the options that act only on a device (`--port`): it has no
+/// device to talk to, record with or verify.
+fn refuse_device_options(a: &CalibrateArgs) -> Result<(), CliError> {
+    if a.plan.is_some() || a.window.is_some() || a.sim_unit.is_some() {
+        return Err(CliError::Usage(
+            "--plan, --window and --sim-unit are for --port; a recorded session is read with its own \
+             plan.toml (edit that file to change the plan)"
+                .into(),
+        ));
+    }
+    let device_given: Vec<&str> = [
+        ("--baud", a.baud.is_some()),
+        ("--timeout-s", a.timeout_s.is_some()),
+        ("--verify-tolerance-mg", a.verify_tolerance_mg.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, given)| given.then_some(flag))
+    .collect();
+    if !device_given.is_empty() {
+        return Err(CliError::Usage(format!(
+            "{} {} for --port: a recorded session has no device to talk to or verify; leave {} out",
+            device_given.join(", "),
+            if device_given.len() == 1 { "is" } else { "are" },
+            if device_given.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+        )));
+    }
+    if a.verify_temp_c.is_some() {
+        return Err(CliError::Usage(
+            "--verify-temp-c verifies the calibration stored on a device (--port); a recorded session \
+             has no device to verify: give --port, or leave --verify-temp-c out"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
@@ -376,9 +397,14 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
             passed: result.passed,
         });
     // The results, on stdout like `calibrate --input`'s; the operator's steps went to stderr.
-    out.human(&result.report)?;
+    if a.verbose {
+        out.human(&result.report)?;
+    }
     let written = app::settle_files(&mut result.calibrated, result.written, a.force)?;
     print_written_and_verified(&out, &written, &result.verification)?;
+    out.human(crate::report::summary_block::render_summary_block(
+        &result.calibrated.document.summary,
+    ))?;
     out.document(&result.calibrated.document)?;
     if !result.passed {
         return Err(CliError::VerificationFailed);

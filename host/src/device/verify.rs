@@ -181,7 +181,22 @@ pub(crate) fn verify<T: Transport>(
             measured.push(m);
         }
     }
-    let rotation = match frame {
+    let rotation = frame_rotation(op, frame, &measured[..at_reference]);
+    Ok(measured
+        .into_iter()
+        .map(|m| m.judge(rotation.as_ref(), opts.verify_tolerance_mg))
+        .collect())
+}
+
+/// The rotation the expected forces are turned by before they are judged: none in the fixture's
+/// frame; in a conventional frame, the best common rotation of the positions at rest (`reference`:
+/// those at the reference temperature), which the operator is told.
+fn frame_rotation(
+    op: &mut dyn Operator,
+    frame: BodyFrame,
+    reference: &[Measured],
+) -> Option<Matrix3<f64>> {
+    match frame {
         BodyFrame::Fixture { .. } => None,
         BodyFrame::Convention => {
             op.say(
@@ -189,19 +204,12 @@ pub(crate) fn verify<T: Transport>(
                  table's: each position is compared after the best common rotation of those at \
                  rest, so their magnitudes and the angles between them are verified",
             );
-            let rest: Vec<&Measured> = measured[..at_reference]
-                .iter()
-                .filter(|m| m.rate_deg_s == 0.0)
-                .collect();
+            let rest: Vec<&Measured> = reference.iter().filter(|m| m.rate_deg_s == 0.0).collect();
             let expected: Vec<[f64; 3]> = rest.iter().map(|m| m.expected_g).collect();
             let got: Vec<[f64; 3]> = rest.iter().map(|m| m.measured_g).collect();
             best_rotation(&expected, &got)
         }
-    };
-    Ok(measured
-        .into_iter()
-        .map(|m| m.judge(rotation.as_ref(), opts.verify_tolerance_mg))
-        .collect())
+    }
 }
 
 /// One position's measurement, before it is judged.

@@ -12,6 +12,7 @@
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
 //!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
 //! - [`compare`]: two calibrations side by side, and the `host export` text.
+//! - [`summary_block`]: the short block of results that ends `host calibrate`.
 
 pub mod axes;
 pub mod compare;
@@ -26,6 +27,7 @@ pub mod navigation;
 pub mod navigation_check;
 pub mod page;
 pub mod plot;
+pub mod summary_block;
 #[cfg(test)]
 mod tests;
 pub mod text;

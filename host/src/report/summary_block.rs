@@ -1,0 +1,168 @@
+//! The short block that ends `host calibrate`: what a person wants of the result, in the units an
+//! engineer reads (biases in mg, scale factors with their 1σ in ppm, each accelerometer's
+//! misalignment from its body axis in mrad, lever arms in mm, the gyro's bias in °/s and scale in
+//! ppm), each ± 1σ, and the verdict. The full tables stay behind `calibrate -v` and in the report.
+
+use crate::summary::CalibrationSummary;
+use std::fmt::Write as _;
+
+/// A lever-arm component whose 1σ exceeds this is not determined (the full table's rule), m.
+const LEVER_DETERMINED_M: f64 = 200e-6;
+
+/// The block, one line per quantity and the verdict last.
+pub fn render_summary_block(s: &CalibrationSummary) -> String {
+    let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
+    let axes = ["x", "y", "z"];
+    let mut out = String::from("Result (± 1σ):\n");
+    let pm = |v: f64, sigma: Option<f64>, digits: usize| match sigma {
+        Some(sd) => format!("{v:+.digits$} ± {sd:.digits$}"),
+        None => format!("{v:+.digits$} (n.d.)"),
+    };
+    // Biases: in mg where the output has a physical zero (m/s², g); else the zero-g output in its
+    // unit, with its 1σ in mg.
+    let mut bias = Vec::new();
+    let mut scale = Vec::new();
+    let mut misalignment = Vec::new();
+    for a in axes {
+        let (Some(b), Some(k)) = (p(&format!("bias_{a}")), p(&format!("scale_{a}"))) else {
+            continue;
+        };
+        let mg = |v: f64| v / k.value * 1e3;
+        bias.push(match b.unit.as_str() {
+            "m/s2" | "g" => format!("{a} {}", pm(mg(b.value), b.sigma.map(mg), 3)),
+            unit => format!(
+                "{a} {:.5} {unit} ± {} mg",
+                b.value,
+                b.sigma.map_or("n.d.".into(), |sd| format!("{:.3}", mg(sd)))
+            ),
+        });
+        scale.push(format!(
+            "{a} {:.6} {} ± {} ppm",
+            k.value,
+            k.unit,
+            k.sigma
+                .map_or("n.d.".into(), |sd| format!("{:.0}", sd / k.value * 1e6))
+        ));
+        let own = format!("theta_{a}{a}");
+        if let Some(t) = p(&own) {
+            let mrad = |deg: f64| deg.to_radians() * 1e3;
+            misalignment.push(format!("{a} {}", pm(mrad(t.value), t.sigma.map(mrad), 3)));
+        }
+    }
+    let _ = writeln!(out, "  bias             {}", bias.join("   "));
+    let _ = writeln!(out, "  scale            {}", scale.join("   "));
+    let _ = writeln!(
+        out,
+        "  misalignment     {}  mrad (each sensing axis from its body axis)",
+        misalignment.join("   ")
+    );
+    for (i, a) in axes.iter().enumerate() {
+        let comps: Vec<String> = axes
+            .iter()
+            .filter_map(|c| p(&format!("r{}{c}", i + 1)))
+            .map(|r| match r.sigma {
+                Some(sd) if sd <= LEVER_DETERMINED_M => pm(r.value * 1e3, Some(sd * 1e3), 3),
+                _ => "n.d.".into(),
+            })
+            .collect();
+        if !comps.is_empty() {
+            let _ = writeln!(out, "  lever arm {a}, mm  {}", comps.join(", "));
+        }
+    }
+    let gyro_bias: Vec<String> = axes
+        .iter()
+        .filter_map(|a| p(&format!("gyro_bias_{a}")).map(|b| (a, b)))
+        .map(|(a, b)| {
+            format!(
+                "{a} {}",
+                pm(b.value.to_degrees(), b.sigma.map(f64::to_degrees), 4)
+            )
+        })
+        .collect();
+    if !gyro_bias.is_empty() {
+        let _ = writeln!(out, "  gyro bias, °/s   {}", gyro_bias.join("   "));
+    }
+    let gyro_scale: Vec<String> = axes
+        .iter()
+        .filter_map(|a| p(&format!("gyro_g_{a}{a}")).map(|g| (a, g)))
+        .map(|(a, g)| {
+            let ppm = |v: f64| v * 1e6;
+            format!("{a} {}", pm(ppm(g.value - 1.0), g.sigma.map(ppm), 0))
+        })
+        .collect();
+    if !gyro_scale.is_empty() {
+        let _ = writeln!(out, "  gyro scale, ppm  {}", gyro_scale.join("   "));
+    }
+    let failures = s.failures();
+    let _ = writeln!(
+        out,
+        "  verdict          {}: χ²/dof {:.2}{}",
+        if s.passed { "PASS" } else { "FAIL" },
+        s.chi2_per_dof,
+        if failures.is_empty() {
+            String::new()
+        } else {
+            format!("; {failures}")
+        }
+    );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::Parameter;
+
+    fn param(name: &str, unit: &str, value: f64, sigma: Option<f64>) -> Parameter {
+        Parameter {
+            name: name.into(),
+            unit: unit.into(),
+            value,
+            sigma,
+        }
+    }
+
+    /// A hand-worked case: 49.03 mm/s² of bias at 9.80665 m/s² per g is 5.000 mg; 1σ 2e-5 of a
+    /// scale of 1.0002 is 20 ppm; θ_xx = 0.5° is 8.727 mrad; a lever arm of 12.3 ± 0.05 mm, one
+    /// of 1σ 0.5 mm is not determined.
+    #[test]
+    fn the_block_is_in_an_engineers_units() {
+        let g = shared::STANDARD_GRAVITY_M_S2;
+        let mut s = CalibrationSummary {
+            unit_id: None,
+            parameters: Vec::new(),
+            undetermined: Vec::new(),
+            temperature: None,
+            calibration: None,
+            chi2: 1.04,
+            dof: 1,
+            chi2_per_dof: 1.04,
+            checks: Vec::new(),
+            passed: true,
+            warnings: Vec::new(),
+            in_package_size_effect: None,
+        };
+        s.parameters = vec![
+            param("bias_x", "m/s2", 5e-3 * g, Some(1e-4 * g)),
+            param("scale_x", "m/s2/g", g * 1.0002, Some(g * 1.0002 * 2e-5)),
+            param("theta_xx", "deg", 0.5, Some(0.01)),
+            param("r1x", "m", 0.0123, Some(5e-5)),
+            param("r1y", "m", 0.001, Some(5e-4)),
+            param(
+                "gyro_bias_x",
+                "rad/s",
+                0.01f64.to_radians(),
+                Some(1e-4f64.to_radians()),
+            ),
+            param("gyro_g_xx", "1", 1.0 + 250e-6, Some(10e-6)),
+        ];
+        let b = render_summary_block(&s);
+        assert!(b.contains("bias             x +5.000 ± 0.100"), "{b}");
+        assert!(b.contains("± 20 ppm"), "{b}");
+        assert!(b.contains("x +8.727 ± 0.175  mrad"), "{b}");
+        assert!(b.contains("lever arm x, mm  +12.300 ± 0.050, n.d."), "{b}");
+        assert!(b.contains("gyro bias, °/s   x +0.0100 ± 0.0001"), "{b}");
+        assert!(b.contains("gyro scale, ppm  x +250 ± 10"), "{b}");
+        assert!(b.contains("verdict          PASS: χ²/dof 1.04"), "{b}");
+    }
+}
