@@ -188,7 +188,8 @@ pub enum ImuError {
     /// No IMU samples for the instance.
     #[error(
         "no IMU samples for instance {instance}: the log has {found}; {hint} and choose the IMU \
-         with --instance N"
+         with {}",
+        .spelling.given(UserOption::Instance, "N")
     )]
     NoImu {
         /// The instance asked for.
@@ -197,12 +198,35 @@ pub enum ImuError {
         found: String,
         /// What to log.
         hint: &'static str,
+        /// The caller's names of the options (the readers say flags; [`read_log_from`] gives the
+        /// caller's).
+        spelling: Spelling,
     },
     /// More samples than [`MAX_ROWS`].
     #[error(
         "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
     )]
     TooManySamples(String),
+}
+
+impl ImuError {
+    /// The error with the options named as `spelling` does.
+    pub fn spelled(self, spelling: Spelling) -> ImuError {
+        match self {
+            ImuError::NoImu {
+                instance,
+                found,
+                hint,
+                ..
+            } => ImuError::NoImu {
+                instance,
+                found,
+                hint,
+                spelling,
+            },
+            e => e,
+        }
+    }
 }
 
 /// Reads the log at `path` in whatever format its first bytes say (see the module docs).
@@ -270,7 +294,7 @@ pub fn read_log_from<R: BufRead>(
             }
             let imu = ulog::read(r, source.instance.unwrap_or(0)).map_err(|e| LogError::Ulog {
                 path: p(),
-                source: e,
+                source: e.spelled(sp),
             })?;
             (imu.0, imu.1)
         }
@@ -281,7 +305,7 @@ pub fn read_log_from<R: BufRead>(
             let imu = dataflash::read(r, source.instance.unwrap_or(0)).map_err(|e| {
                 LogError::DataFlash {
                     path: p(),
-                    source: e,
+                    source: e.spelled(sp),
                 }
             })?;
             (imu.0, imu.1)
@@ -292,7 +316,7 @@ pub fn read_log_from<R: BufRead>(
             }
             let imu = mcap::read(r, source.topic.as_deref()).map_err(|e| LogError::Mcap {
                 path: p(),
-                source: e,
+                source: e.spelled(sp),
             })?;
             (imu.0, imu.1)
         }
