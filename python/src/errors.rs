@@ -147,6 +147,9 @@ impl PyAccelErr {
         use PyAccelErr as E;
         match self {
             E::LogInput(_) | E::Apply(_) | E::Argument(_) => Kind::Input,
+            // A gyro whose turns are 57× (or 1/57 of) gravity's is read in the wrong unit.
+            E::Segment(InMemoryError::HandGyro(HandGyroFileError::Unit(_)))
+            | E::HandGyro(HandGyroFileError::Unit(_)) => Kind::Input,
             E::Log(LogError::Io { .. }) | E::Import(ImportError::Io { .. }) => Kind::File,
             E::Log(_) | E::Import(_) => Kind::Input,
             // A vehicle's corrected samples are the wrong input; every other refusal of the
@@ -181,6 +184,10 @@ impl PyAccelErr {
             ) => {
                 format!("{e}; give the gyro's unit with gyro_unit=\"deg/s\" or gyro_unit=\"rad/s\"")
             }
+            PyAccelErr::Output(OutputError::Exists(path)) => format!(
+                "{} already exists: choose another directory or replace it (force=True)",
+                path.display()
+            ),
             e => e.to_string(),
         }
     }

@@ -109,8 +109,34 @@ def test_errors_name_the_keyword_arguments(hand, py_cal_of_hand):
         py_cal_of_hand.export("ardupilot", device_id=1 << 25)
     messages.append(str(e.value))
     assert messages[-1].startswith("device_id=33554432: ArduPilot sends INS_ACC_ID as a float")
+    # The IMU of a binary log: a missing instance, a topic the bag does not have.
+    logs = ROOT / "host" / "tests" / "fixtures" / "logs"
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(logs / "hand.ulg", instance=1)
+    messages.append(str(e.value))
+    assert "choose the IMU with instance=N" in messages[-1]
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(logs / "hand.mcap", topic="/nope")
+    messages.append(str(e.value))
+    assert 'topic="/nope": not a' in messages[-1]
+    # A gyro in rad/s declared deg/s: its turns are 1/57 of gravity's, an input in the wrong unit.
+    d = accelcal.simulate_hand(seed=3)
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment(d["acc"], np.radians(d["gyro"]), d["t"], acc_unit="m/s2",
+                         gyro_unit="deg/s")
+    messages.append(str(e.value))
+    assert 'gyro_unit="rad/s"' in messages[-1]
     for m in messages:
         assert not re.search(r"(^|\W)--[a-z]", m), m
+
+
+def test_save_refuses_to_replace_and_names_force(hand, tmp_path):
+    cal = accelcal.calibrate(accelcal.load_session(hand["session"]))
+    cal.save(tmp_path)
+    with pytest.raises(accelcal.FileError, match=r"force=True") as e:
+        cal.save(tmp_path)
+    assert "--" not in str(e.value)
+    cal.save(tmp_path, force=True)
 
 
 @pytest.fixture(scope="module")
