@@ -130,6 +130,7 @@ pub fn calibrate(
             ],
         )?,
         single_package,
+        spelling: Spelling::Keywords,
         ..EstimateOptions::default()
     };
     let limits: Limits = match limits {

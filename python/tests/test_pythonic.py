@@ -109,6 +109,12 @@ def test_errors_name_the_keyword_arguments(hand, py_cal_of_hand):
         py_cal_of_hand.export("ardupilot", device_id=1 << 25)
     messages.append(str(e.value))
     assert messages[-1].startswith("device_id=33554432: ArduPilot sends INS_ACC_ID as a float")
+    # The single-package model refused for the paper's method.
+    session = accelcal.load_session(hand["session"])
+    with pytest.raises(accelcal.CalibrationError) as e:
+        accelcal.calibrate(session, method="paper", single_package=True)
+    messages.append(str(e.value))
+    assert 'use method="joint" with single_package=True' in messages[-1]
     # The IMU of a binary log: a missing instance, a topic the bag does not have.
     logs = ROOT / "host" / "tests" / "fixtures" / "logs"
     with pytest.raises(accelcal.InputError) as e:

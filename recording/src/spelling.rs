@@ -42,6 +42,12 @@ pub enum UserOption {
     AllowUndetermined,
     /// An export: the noise analysis (`noise.json`).
     Noise,
+    /// The estimator's method.
+    Method,
+    /// The lever arms' reference point.
+    Reference,
+    /// One lever arm for the three accelerometers of one package.
+    SinglePackage,
 }
 
 impl UserOption {
@@ -65,6 +71,9 @@ impl UserOption {
             UserOption::DriverScale => "driver_scale",
             UserOption::AllowUndetermined => "allow_undetermined",
             UserOption::Noise => "noise",
+            UserOption::Method => "method",
+            UserOption::Reference => "reference",
+            UserOption::SinglePackage => "single_package",
         }
     }
 
@@ -88,6 +97,9 @@ impl UserOption {
             UserOption::DriverScale => "--driver-scale",
             UserOption::AllowUndetermined => "--allow-undetermined",
             UserOption::Noise => "--noise",
+            UserOption::Method => "--method",
+            UserOption::Reference => "--reference",
+            UserOption::SinglePackage => "--single-package",
         }
     }
 
@@ -101,6 +113,8 @@ impl UserOption {
                 | UserOption::GyroUnit
                 | UserOption::Topic
                 | UserOption::Noise
+                | UserOption::Method
+                | UserOption::Reference
         )
     }
 }

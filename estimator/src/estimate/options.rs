@@ -1,6 +1,8 @@
 //! The estimator's settings: which method, which reference point, when to scale by χ², how the gyro
 //! is treated, and the screening thresholds.
 
+use recording::spelling::Spelling;
+
 /// Which estimator gives the result.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -92,6 +94,8 @@ pub struct EstimateOptions {
     /// position, for all three, and the in-package differences `r_i − r` reported as not observable
     /// (docs/model.md §4.7).
     pub single_package: bool,
+    /// How the caller names these options in refusals and warnings.
+    pub spelling: Spelling,
 }
 
 /// How the estimator treats the gyro.
@@ -126,6 +130,7 @@ impl Default for EstimateOptions {
             gyro_model: GyroModel::Estimate,
             static_from_rest: false,
             single_package: false,
+            spelling: Spelling::Flags,
         }
     }
 }
