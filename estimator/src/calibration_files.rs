@@ -39,7 +39,7 @@ pub enum OutputError {
     Io(PathBuf, #[source] std::io::Error),
     /// A calibration is already there and `--force` was not given.
     #[error(
-        "{} already exists: choose another output directory (--out-dir) or replace it (--force)",
+        "{} already exists: choose another output directory (--out) or replace it (--force)",
         .0.display()
     )]
     Exists(PathBuf),

@@ -91,6 +91,12 @@ pub enum ApplyError {
          with the distance from the recording's real temperature)"
     )]
     NoTemperature,
+    /// A temperature to assume where the recording has its own (it would be ignored).
+    #[error(
+        "--temperature-c does not apply: the recording has its own temperatures (temp_c), which \
+         the temperature model uses; leave it out"
+    )]
+    TemperatureNotUsed,
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
     #[error(
         "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
@@ -278,10 +284,21 @@ pub(crate) fn check_meeting(
     crate::calibration_guard::check_scales(cal)?;
     check_unit(cal_unit, plan)?;
     check_output_unit(cal, plan)?;
-    if cal.temperature.is_some() && !plan.has_temperature() && assume_temp_c.is_none() {
-        return Err(ApplyError::NoTemperature);
+    check_temperature(cal, plan.has_temperature(), assume_temp_c)
+}
+
+/// A temperature model needs a temperature: the recording's, or `assume_temp_c` where it has none;
+/// a temperature to assume beside the recording's own is refused ([`ApplyError::TemperatureNotUsed`]).
+pub(crate) fn check_temperature(
+    cal: &Calibration,
+    recorded: bool,
+    assume_temp_c: Option<f64>,
+) -> Result<(), ApplyError> {
+    match (recorded, assume_temp_c) {
+        (true, Some(_)) => Err(ApplyError::TemperatureNotUsed),
+        (false, None) if cal.temperature.is_some() => Err(ApplyError::NoTemperature),
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 /// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).

@@ -11,6 +11,10 @@
 //! (a lever-arm component or gyro entry the plan did not determine, a temperature coefficient above
 //! the degree the data chose) is not screened unless the parameter has no 1σ in any unit (χ²/dof),
 //! and parameters with no spread and no 1σ are skipped.
+//!
+//! Units: a bias in volts and one in m/s² are not one population. A lot that mixes output units is
+//! screened within each output unit (a group below [`MIN_LOT`] is not screened) and says so; each
+//! summary row names its unit.
 
 use crate::app::{self, CalibrateOptions, CalibrationDocument};
 use crate::calibration_files::now_unix_s;
@@ -20,7 +24,7 @@ use crate::summary::{all_parameter_keys, CalibrationSummary, Limits};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use shared::UnitId;
+use shared::{OutputUnit, UnitId};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -65,6 +69,12 @@ pub struct UnitResult {
 }
 
 impl UnitResult {
+    /// The output unit of the unit's calibration (its biases' unit), when it calibrated.
+    pub fn output_unit(&self) -> Option<OutputUnit> {
+        let file = self.calibration()?.calibration.as_ref()?;
+        Some(file.output_unit.unwrap_or(OutputUnit::Volts))
+    }
+
     /// The calibration's summary (parameters, 1σ, checks), when the unit calibrated.
     pub fn calibration(&self) -> Option<&CalibrationSummary> {
         self.summary.as_ref().map(|d| &d.summary)
@@ -114,6 +124,9 @@ pub struct LotSummary {
     pub threads: usize,
     /// The outlier limit used.
     pub outlier_z: f64,
+    /// What the reader must know about the lot as a whole (a mix of output units).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl LotSummary {
@@ -192,7 +205,45 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
 
 /// Flags the outliers of the lot (see the module documentation) and the units whose id another
 /// session claims too, and sets `passed`.
-pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
+pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) -> Vec<String> {
+    let mut groups: Vec<(Option<OutputUnit>, usize)> = Vec::new();
+    for unit in units
+        .iter()
+        .filter(|u| u.calibration().is_some())
+        .map(UnitResult::output_unit)
+    {
+        match groups.iter_mut().find(|(u, _)| *u == unit) {
+            Some((_, n)) => *n += 1,
+            None => groups.push((unit, 1)),
+        }
+    }
+    for (unit, _) in &groups {
+        flag_outliers_of(units, z_limit, *unit);
+    }
+    flag_same_unit_ids(units);
+    for u in units.iter_mut() {
+        u.passed = u.calibration().is_some_and(|s| s.passed)
+            && u.outliers.is_empty()
+            && u.same_unit_id_as.is_empty();
+    }
+    if groups.len() < 2 {
+        return Vec::new();
+    }
+    let counts: Vec<String> = groups
+        .iter()
+        .map(|(u, n)| format!("{n} in {}", u.map_or("an unknown unit", OutputUnit::symbol)))
+        .collect();
+    vec![format!(
+        "the lot mixes output units ({}): each unit is screened against the units of its own \
+         output unit only (fewer than {MIN_LOT} are not screened); check that every session is of \
+         this lot",
+        counts.join(", ")
+    )]
+}
+
+/// [`flag_outliers`] among the units whose output unit is `unit` (`None`: a summary without its
+/// calibration file).
+fn flag_outliers_of(units: &mut [UnitResult], z_limit: f64, unit: Option<OutputUnit>) {
     let mut names = all_parameter_keys();
     for p in units.iter().filter_map(UnitResult::calibration) {
         for q in &p.parameters {
@@ -204,6 +255,9 @@ pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
     // `None`: χ²/dof (no 1σ of its own).
     for name in names.iter().map(Some).chain([None]) {
         let value = |u: &UnitResult| -> Option<(f64, Option<f64>)> {
+            if u.output_unit() != unit {
+                return None;
+            }
             let s = u.calibration()?;
             let (v, sigma) = match name {
                 None => (s.chi2_per_dof, None),
@@ -229,12 +283,6 @@ pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) {
                 u.outliers.push((label, z));
             }
         }
-    }
-    flag_same_unit_ids(units);
-    for u in units.iter_mut() {
-        u.passed = u.calibration().is_some_and(|s| s.passed)
-            && u.outliers.is_empty()
-            && u.same_unit_id_as.is_empty();
     }
 }
 
@@ -312,7 +360,7 @@ pub fn run_batch(
     });
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    flag_outliers(&mut units, opts.outlier_z);
+    let warnings = flag_outliers(&mut units, opts.outlier_z);
     // A unit that did not pass keeps its files under names that say so (README, "Output and exit
     // status"); one that could not be renamed says why.
     for u in units
@@ -330,6 +378,7 @@ pub fn run_batch(
         seconds,
         threads: pool.current_num_threads(),
         outlier_z: opts.outlier_z,
+        warnings,
     })
 }
 
@@ -350,6 +399,7 @@ pub(crate) fn to_csv(lot: &LotSummary) -> String {
     let mut header: Vec<String> = [
         "session",
         "unit_id",
+        "output_unit",
         "passed",
         "within_limits",
         "outliers",
@@ -385,6 +435,7 @@ pub(crate) fn to_csv(lot: &LotSummary) -> String {
         let mut row = vec![
             csv_cell(&u.session),
             sm.and_then(|m| m.unit_id.clone()).unwrap_or_default(),
+            u.output_unit().map_or("", OutputUnit::symbol).to_string(),
             u.passed.to_string(),
             sm.is_some_and(|m| m.passed).to_string(),
             csv_cell(&outl.join(" ")),

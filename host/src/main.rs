@@ -5,8 +5,14 @@ use clap::Parser;
 
 fn main() {
     let cli = host::cli::Cli::parse();
+    let json = cli.command.json();
     if let Err(e) = host::cli::run(cli) {
         eprintln!("error: {e}");
+        if let Some(doc) = host::cli::error_document(&e).filter(|_| json) {
+            use std::io::Write;
+            // A closed stdout leaves the message above and the exit status.
+            let _ = writeln!(std::io::stdout(), "{doc}");
+        }
         std::process::exit(e.exit_code());
     }
 }

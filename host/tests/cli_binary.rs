@@ -167,3 +167,40 @@ fn a_live_recording_with_format_version_3_carries_the_device_temperature() {
     // The simulated device's chamber stays at 25 °C: every window's mean reading.
     assert!(lines.all(|l| l.ends_with(",25.0")), "{csv}");
 }
+
+/// Every command that writes names its output `--out`; the older `--out-dir` stays an alias.
+#[test]
+fn every_output_is_named_out() {
+    use clap::CommandFactory;
+    for sub in host::cli::Cli::command().get_subcommands() {
+        for arg in sub.get_arguments() {
+            assert_ne!(
+                arg.get_long(),
+                Some("out-dir"),
+                "{} names its output --out-dir",
+                sub.get_name()
+            );
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("s");
+    let s = s.to_str().unwrap();
+    assert!(host(&["-q", "simulate", "--out", s, "--plan", "short"]).0);
+    for (flag, name) in [("--out", "a"), ("--out-dir", "b")] {
+        let cal = dir.path().join(format!("cal-{name}"));
+        let (ok, _, e) = host(&["-q", "calibrate", "--input", s, flag, cal.to_str().unwrap()]);
+        assert!(ok && cal.join("calibration.toml").exists(), "{flag}: {e}");
+        let rep = dir.path().join(format!("report-{name}"));
+        let cal = cal.join("calibration.toml");
+        let line = [
+            "-q",
+            "report",
+            "--input",
+            s,
+            "--calibration",
+            cal.to_str().unwrap(),
+        ];
+        let (ok, _, e) = host(&[&line[..], &[flag, rep.to_str().unwrap()]].concat());
+        assert!(ok && rep.is_dir(), "{flag}: {e}");
+    }
+}

@@ -184,3 +184,37 @@ fn segment_prints_one_json_document_with_every_position_and_the_gyro() {
     assert!(stderr.contains("gyro from"), "{stderr}");
     assert!(std::path::Path::new(session).join("gyro.toml").exists());
 }
+
+/// A refusal under `--json` is a document too: the error, its kind and the exit status on stdout
+/// (the message also on stderr), so a script reading stdout never gets nothing.
+#[test]
+fn a_refusal_under_json_is_a_json_document() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let missing = missing.to_str().unwrap();
+    for (args, code, kind) in [
+        (vec!["calibrate", "--input", missing, "--json"], 1, "error"),
+        (
+            vec!["calibrate", "--input", missing, "--baud", "9600", "--json"],
+            2,
+            "usage",
+        ),
+        (vec!["plan", "--check", missing, "--json"], 1, "error"),
+        (vec!["compare", missing, missing, "--json"], 1, "error"),
+    ] {
+        let (ok, stdout, stderr) = host(&args);
+        assert!(!ok);
+        let v: serde_json::Value = serde_json::from_str(stdout.trim())
+            .unwrap_or_else(|e| panic!("{args:?}: stdout is no JSON document ({e}): {stdout}"));
+        assert_eq!(v["exit_code"], code, "{args:?}: {v}");
+        assert_eq!(v["kind"], kind, "{args:?}: {v}");
+        let message = v["error"].as_str().unwrap();
+        assert!(
+            !message.is_empty() && stderr.contains(message),
+            "{args:?}: {v} / {stderr}"
+        );
+    }
+    // Without --json, stdout stays empty.
+    let (_, stdout, _) = host(&["calibrate", "--input", missing]);
+    assert!(stdout.is_empty(), "{stdout}");
+}

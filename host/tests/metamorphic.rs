@@ -116,9 +116,18 @@ fn logger(name: &str, units: (&str, &str), edit: Option<Edit<'_>>) -> Outcome {
 /// The table path: a simulated session of the `short` plan (six ±1 g positions, nine spins),
 /// transformed, through calibrate --input.
 fn table(edit: Option<Edit<'_>>, plan_edit: Option<&dyn Fn(String) -> String>) -> Outcome {
+    table_plan("short", edit, plan_edit)
+}
+
+/// [`table`] on the built-in plan `plan`.
+fn table_plan(
+    plan: &str,
+    edit: Option<Edit<'_>>,
+    plan_edit: Option<&dyn Fn(String) -> String>,
+) -> Outcome {
     let dir = tempfile::tempdir().unwrap();
     let session = dir.path().join("s");
-    let (ok, _, e) = host(&["-q", "simulate", "--out", s(&session), "--plan", "short"]);
+    let (ok, _, e) = host(&["-q", "simulate", "--out", s(&session), "--plan", plan]);
     assert!(ok, "{e}");
     table_of(&session, edit, plan_edit)
 }
@@ -193,6 +202,21 @@ fn one_gyro_axis_negated() {
     );
     let neg: Edit<'_> = &|f, c, _| negate(f, c("w_z"));
     assert_refused(&table(Some(neg), None), &["sign reversed"]);
+}
+
+/// On the oblique plans a negated column reads −1 on its own axis's spins but 0 on the spins
+/// between it and another axis: every spin still names the one column, and nothing is half kept.
+#[test]
+fn one_gyro_axis_negated_on_the_oblique_plans() {
+    for plan in ["short-oblique", "quick-oblique"] {
+        for (column, axis) in [("w_x", "x"), ("w_y", "y"), ("w_z", "z")] {
+            let neg: Edit<'_> = &|f, c, _| negate(f, c(column));
+            let o = table_plan(plan, Some(neg), None);
+            let needle = format!("gyro's {axis} column has its sign reversed");
+            eprintln!("{plan}, {column} negated:");
+            assert_refused(&o, &[needle.as_str()]);
+        }
+    }
 }
 
 #[test]

@@ -49,6 +49,24 @@ impl std::fmt::Display for BodyFrame {
     }
 }
 
+/// The proper rotation `R` minimising Σ |R a_k − b_k|² (Kabsch): what a result in a conventional
+/// body frame (`BodyFrame::Convention`) is compared through, since any rotation of that frame fits
+/// the data equally well (docs/model.md §7). `None` only if the 3×3 SVD does not converge.
+pub fn best_rotation(a: &[[f64; 3]], b: &[[f64; 3]]) -> Option<Matrix3<f64>> {
+    let mut h = Matrix3::zeros();
+    for (x, y) in a.iter().zip(b) {
+        for i in 0..3 {
+            for j in 0..3 {
+                h[(i, j)] += y[i] * x[j];
+            }
+        }
+    }
+    let svd = h.svd(true, true);
+    let (u, vt): (Matrix3<f64>, Matrix3<f64>) = (svd.u?, svd.v_t?);
+    let d = (u * vt).determinant().signum();
+    Some(u * Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, d)) * vt)
+}
+
 /// Each mount's estimated attitude.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MountTilt {

@@ -187,7 +187,7 @@ pub fn misfit_problem(rms_misfit_deg: f64, turns: usize, max_deg: f64) -> Option
 /// for `RateContradiction` of a sign or unit (a ratio of −1 or 57.3^±1, which only the gyro's columns
 /// give), or of more than half of the session's `spins`. One spin that did not happen as planned is a
 /// table's slip: it stays an exclusion, and the others calibrate.
-pub(crate) fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Option<String> {
+pub(crate) fn contradiction_problem(excluded: &[Exclusion], spins: &[Spin]) -> Option<String> {
     let ratios: Vec<(&str, f64)> = excluded
         .iter()
         .filter_map(|e| match e.reason {
@@ -201,14 +201,18 @@ pub(crate) fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Opt
     let first = ratios.first()?;
     let deg = 180.0 / core::f64::consts::PI;
     let near = |r: f64, x: f64| (r / x - 1.0).abs() < 0.1;
-    let systematic = ratios
-        .iter()
-        .all(|(_, r)| near(*r, -1.0) || near(*r, deg) || near(*r, 1.0 / deg));
-    if !systematic && 2 * ratios.len() <= spins {
+    let mixup = column_mixup(&ratios, spins);
+    let systematic = mixup.is_some()
+        || ratios
+            .iter()
+            .all(|(_, r)| near(*r, -1.0) || near(*r, deg) || near(*r, 1.0 / deg));
+    if !systematic && 2 * ratios.len() <= spins.len() {
         return None;
     }
     let names: Vec<String> = ratios.iter().map(|(n, _)| format!("'{n}'")).collect();
-    let cause = if ratios.iter().all(|(_, r)| near(*r, -1.0)) {
+    let cause = if let Some(p) = mixup {
+        mixup_cause(&p)
+    } else if ratios.iter().all(|(_, r)| near(*r, -1.0)) {
         "the gyro axis along those spins has its sign reversed: negate that column".to_string()
     } else if ratios.iter().all(|(_, r)| near(*r, deg)) {
         "the gyro reads about 57.3× the table rate: it is in °/s, and the recording must be in rad/s \
@@ -233,6 +237,102 @@ pub(crate) fn contradiction_problem(excluded: &[Exclusion], spins: usize) -> Opt
         ratios.len(),
         names.join(", ")
     ))
+}
+
+/// A spin of the plan by its segment's name, about its `up_b` (`None`: a free attitude's spin,
+/// screened on its magnitude alone).
+pub(crate) struct Spin<'a> {
+    pub(crate) name: &'a str,
+    pub(crate) axis_b: Option<[f64; 3]>,
+}
+
+/// The signed permutation `P` of the gyro's columns (other than the identity) under which every
+/// spin reads as screened: a spin about `u` reads `u·P·u` times its planned rate about `u`, so the
+/// excluded spins must read that ratio and the others about 1 (the screen's 10 %). A column's sign
+/// reads −1 on a spin along that axis but 0 on a spin between two axes (an oblique plan's), and
+/// only such a `P` explains both. The closest to the identity wins; `None` when none explains all.
+fn column_mixup(ratios: &[(&str, f64)], spins: &[Spin]) -> Option<RowMajor3> {
+    let tolerance = 0.1;
+    let explains = |p: &RowMajor3| {
+        let excluded_known = ratios
+            .iter()
+            .all(|(name, _)| spins.iter().any(|s| s.name == *name));
+        excluded_known
+            && spins.iter().all(|s| {
+                // A permutation keeps a rate's magnitude: a free spin reads its plan under any.
+                let reads = s.axis_b.map_or(1.0, |u| {
+                    let pu: [f64; 3] =
+                        core::array::from_fn(|i| (0..3).map(|j| p[i][j] * u[j]).sum::<f64>());
+                    shared::linalg::dot(&u, &pu) / shared::linalg::dot(&u, &u)
+                });
+                match ratios.iter().find(|(name, _)| *name == s.name) {
+                    Some((_, measured)) => (measured - reads).abs() < tolerance,
+                    None => (reads - 1.0).abs() < tolerance,
+                }
+            })
+    };
+    signed_permutations()
+        .filter(|p| explains(p))
+        .min_by_key(changed_entries)
+}
+
+/// The 47 signed permutation matrices other than the identity.
+fn signed_permutations() -> impl Iterator<Item = RowMajor3> {
+    const ORDERS: [[usize; 3]; 6] = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    ORDERS.into_iter().flat_map(|order| {
+        (0..8u8).filter_map(move |signs| {
+            let mut p = [[0.0; 3]; 3];
+            for (i, &j) in order.iter().enumerate() {
+                p[i][j] = if signs & (1 << i) != 0 { -1.0 } else { 1.0 };
+            }
+            (changed_entries(&p) > 0).then_some(p)
+        })
+    })
+}
+
+fn changed_entries(p: &RowMajor3) -> usize {
+    (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| p[i][j] != if i == j { 1.0 } else { 0.0 })
+        .count()
+}
+
+/// What the gyro's columns would have to be to read as `p` says, in the recording's terms.
+fn mixup_cause(p: &RowMajor3) -> String {
+    let ax = shared::params::axis_name;
+    let diagonal = (0..3).all(|i| p[i][i] != 0.0);
+    if diagonal {
+        let negated: Vec<String> = (0..3)
+            .filter(|&i| p[i][i] < 0.0)
+            .map(|i| ax(i).to_string())
+            .collect();
+        return format!(
+            "the gyro's {} column has its sign reversed (every spin reads as that sign predicts, \
+             the oblique ones too): negate that column",
+            negated.join(" and ")
+        );
+    }
+    let reads: Vec<String> = (0..3)
+        .filter_map(|i| {
+            let j = (0..3).find(|&j| p[i][j] != 0.0)?;
+            (i != j || p[i][j] < 0.0).then(|| {
+                let sign = if p[i][j] < 0.0 { "−" } else { "" };
+                format!("gyro {} reads {sign}body {}", ax(i), ax(j))
+            })
+        })
+        .collect();
+    format!(
+        "the gyro's columns are swapped or reversed ({}; every spin reads as that predicts): \
+         reorder the columns",
+        reads.join(", ")
+    )
 }
 
 #[cfg(test)]
@@ -301,27 +401,91 @@ mod tests {
         assert!(misfit_problem(f64::NAN, 23, MAX_TURN_MISFIT_DEG).is_some());
     }
 
-    #[test]
-    fn rate_contradictions_name_their_cause() {
-        let ex = |name: &str, m: f64, p: f64| Exclusion {
+    fn ex(name: &str, measured: f64, planned: f64) -> Exclusion {
+        Exclusion {
             name: name.into(),
             reason: ExclusionReason::RateContradiction {
-                measured_deg_s: m,
-                planned_deg_s: p,
+                measured_deg_s: measured,
+                planned_deg_s: planned,
             },
-        };
-        assert!(contradiction_problem(&[], 9).is_none());
-        let z = [ex("z 100", -100.0, 100.0), ex("z 200", -200.0, 200.0)];
-        assert!(contradiction_problem(&z, 9)
-            .unwrap()
-            .contains("sign reversed"));
-        let p = contradiction_problem(&[ex("x 100", 5729.6, 100.0)], 9).unwrap();
+        }
+    }
+
+    /// Spins about each body axis, `per_axis` of them each, named "x 1", "x 2", …
+    fn axis_spins(per_axis: usize) -> Vec<(String, [f64; 3])> {
+        (0..3)
+            .flat_map(|i| {
+                (1..=per_axis).map(move |k| {
+                    let mut u = [0.0; 3];
+                    u[i] = 1.0;
+                    (format!("{} {k}", shared::params::axis_name(i)), u)
+                })
+            })
+            .collect()
+    }
+
+    fn spins(list: &[(String, [f64; 3])]) -> Vec<Spin<'_>> {
+        list.iter()
+            .map(|(name, u)| Spin {
+                name,
+                axis_b: Some(*u),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn rate_contradictions_name_their_cause() {
+        let plan = axis_spins(3);
+        let plan = spins(&plan);
+        assert!(contradiction_problem(&[], &plan).is_none());
+        let z = [
+            ex("z 1", -100.0, 100.0),
+            ex("z 2", -200.0, 200.0),
+            ex("z 3", -300.0, 300.0),
+        ];
+        let p = contradiction_problem(&z, &plan).unwrap();
+        assert!(p.contains("z column has its sign reversed"), "{p}");
+        let p = contradiction_problem(&[ex("x 1", 5729.6, 100.0)], &plan).unwrap();
         assert!(p.contains("57.3×"), "{p}");
         // One spin that did not happen is the table's slip; most of them, the gyro's columns.
         let still = |n: &str| ex(n, 0.0, 100.0);
-        assert!(contradiction_problem(&[still("x 100")], 9).is_none());
+        assert!(contradiction_problem(&[still("x 1")], &plan).is_none());
         let many: Vec<Exclusion> = ["x 1", "x 2", "x 3", "y 1", "y 2"].map(still).into();
-        let p = contradiction_problem(&many, 9).unwrap();
+        let p = contradiction_problem(&many, &plan).unwrap();
         assert!(p.contains("swapped"), "{p}");
+    }
+
+    /// A negated z column reads −1 on a z spin but 0 on a spin halfway between y and z: the
+    /// oblique plan's spins are explained by the same sign, so the gyro is refused, not half kept.
+    #[test]
+    fn a_negated_column_is_refused_on_oblique_spins_too() {
+        let h = core::f64::consts::FRAC_1_SQRT_2;
+        let mut plan = axis_spins(1);
+        plan.push(("yz".into(), [0.0, h, h]));
+        plan.push(("zx".into(), [h, 0.0, h]));
+        plan.push(("xy".into(), [h, h, 0.0]));
+        let plan = spins(&plan);
+        let excluded = [
+            ex("z 1", -200.0, 200.0),
+            ex("yz", -0.01, 200.0),
+            ex("zx", 0.02, -200.0),
+        ];
+        let p = contradiction_problem(&excluded, &plan).unwrap();
+        assert!(p.contains("z column has its sign reversed"), "{p}");
+        // Swapped y and z: the xy and zx spins read half their rate, the y, z and yz spins in full.
+        let swapped = [
+            ex("y 1", 0.0, 100.0),
+            ex("z 1", 0.0, 100.0),
+            ex("zx", 50.0, 100.0),
+            ex("xy", 50.0, 100.0),
+        ];
+        let p = contradiction_problem(&swapped, &plan).unwrap();
+        assert!(
+            p.contains("gyro y reads body z, gyro z reads body y"),
+            "{p}"
+        );
+        // One oblique spin that read nothing is a slip, not a column: no signed permutation gives 0
+        // on yz alone while every axis spin reads in full.
+        assert!(contradiction_problem(&[ex("yz", 0.0, 200.0)], &plan).is_none());
     }
 }

@@ -66,8 +66,16 @@ pub(crate) fn check(
 /// implausible `G`. A calibration with such a gyro is not written: its numbers would be loaded as if
 /// calibrated. (`G` entries that the plan does not determine are marked by their 1σ and listed.)
 fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
-    let spins = plan.segments.iter().filter(|s| !s.is_static()).count();
-    let mut problems: Vec<String> = gyro_check::contradiction_problem(&outcome.excluded, spins)
+    let spins: Vec<gyro_check::Spin> = plan
+        .segments
+        .iter()
+        .filter(|s| !s.is_static())
+        .map(|s| gyro_check::Spin {
+            name: &s.name,
+            axis_b: (!s.is_free()).then_some(s.up_b),
+        })
+        .collect();
+    let mut problems: Vec<String> = gyro_check::contradiction_problem(&outcome.excluded, &spins)
         .into_iter()
         .collect();
     if let Some(g) = &outcome.gyro {

@@ -96,18 +96,7 @@ fn unit(rng: &mut testkit::Rng) -> [f64; 3] {
 
 /// The rotation `R` minimising Σ |R a_k − b_k|² (Kabsch).
 fn best_rotation(a: &[[f64; 3]], b: &[[f64; 3]]) -> Matrix3<f64> {
-    let mut h = Matrix3::zeros();
-    for (x, y) in a.iter().zip(b) {
-        for i in 0..3 {
-            for j in 0..3 {
-                h[(i, j)] += y[i] * x[j];
-            }
-        }
-    }
-    let svd = h.svd(true, true);
-    let (u, vt): (Matrix3<f64>, Matrix3<f64>) = (svd.u.expect("u"), svd.v_t.expect("v"));
-    let d = (u * vt).determinant().signum();
-    u * Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, d)) * vt
+    crate::estimate::attitude::best_rotation(a, b).expect("an SVD of a 3×3 matrix")
 }
 
 fn apply(r: &Matrix3<f64>, v: &[f64; 3]) -> [f64; 3] {

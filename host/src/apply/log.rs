@@ -72,9 +72,7 @@ impl Prepared {
         mode: LeverMode,
         assume_temp_c: Option<f64>,
     ) -> Result<Prepared, ApplyError> {
-        if cal.temperature.is_some() && rec.temp_c.is_none() && assume_temp_c.is_none() {
-            return Err(ApplyError::NoTemperature);
-        }
+        super::check_temperature(cal, rec.temp_c.is_some(), assume_temp_c)?;
         let mut applier = Applier::new(cal, mode, rec.rate_hz)?;
         if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
             applier.compensator.refresh(t as f32);

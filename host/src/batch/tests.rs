@@ -323,3 +323,72 @@ fn units_claiming_one_id_fail_naming_each_other() {
     flag_outliers(&mut lot, 5.0);
     assert!(lot.iter().all(|u| u.passed));
 }
+
+/// Six units in volts and one in m/s²: a bias of 9.8 "per g" is not an outlier of volts. Each unit
+/// is screened among the units of its own output unit, the lot says it mixes them, and each row of
+/// the summary names its unit.
+#[test]
+fn a_lot_of_mixed_output_units_is_screened_unit_by_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lot");
+    let out = dir.path().join("out");
+    let plan = builtin_plan("quick-oblique").unwrap().unwrap();
+    let noise = NoiseModel::default();
+    let mut rng = Rng::new(7, 3);
+    for i in 0..6u64 {
+        let unit = lot_unit(i, &mut rng);
+        let session = input.join(format!("unit{i:02}"));
+        simulate_to_dir(&session, &unit, &plan, &noise, 40 + i, false).unwrap();
+    }
+    let unit = shared::OutputUnit::MetresPerSecondSquared;
+    let metric = UnitFile::from_calibration(
+        &crate::sim::handheld::logger_unit(unit),
+        Some(UnitId::parse_hex("00000000000000000000b0b0").unwrap()),
+        None,
+    );
+    let mut metric_plan = plan.clone();
+    metric_plan.output_unit = unit;
+    simulate_to_dir(
+        &input.join("unit99"),
+        &metric,
+        &metric_plan,
+        &noise,
+        99,
+        false,
+    )
+    .unwrap();
+    let sessions = find_sessions(&input).unwrap();
+    let opts = BatchOptions {
+        estimate: EstimateOptions::default(),
+        limits: Limits::default(),
+        outlier_z: 5.0,
+        jobs: Some(2),
+    };
+    let lot = run_batch(&sessions, &out, &opts, &ProgressBar::hidden()).unwrap();
+    assert!(
+        lot.units.iter().all(|u| u.error.is_none()),
+        "{:?}",
+        lot.failed()
+    );
+    let outliers: Vec<_> = lot
+        .units
+        .iter()
+        .filter(|u| !u.outliers.is_empty())
+        .collect();
+    assert!(outliers.is_empty(), "{outliers:?}");
+    assert_eq!(lot.warnings.len(), 1, "{:?}", lot.warnings);
+    assert!(
+        lot.warnings[0].contains("6 in V, 1 in m/s2"),
+        "{:?}",
+        lot.warnings
+    );
+    let csv = to_csv(&lot);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "output_unit").unwrap();
+    let units: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(col).unwrap().to_string())
+        .collect();
+    assert_eq!(units, ["V", "V", "V", "V", "V", "V", "m/s2"]);
+}

@@ -77,16 +77,30 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     } else {
         unit.unit_id().map_err(invalid)?
     };
+    if a.temperature_c.is_some() && cal.temperature.is_none() {
+        return Err(CliError::Usage(format!(
+            "--temperature-c does not apply: {} has no temperature model, so no temperature \
+             changes its result; leave it out",
+            a.calibration.display()
+        )));
+    }
     let mode = a.lever.into();
     let source = if a.input.is_dir() {
         a.log.refuse_for_session(&a.input)?;
         None
     } else {
-        Some(a.log.source()?)
+        Some(a.log.source(&a.input)?)
     };
-    let apply = |w: &mut dyn Write| match &source {
-        None => apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, w),
-        Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),
+    let apply = |w: &mut dyn Write| {
+        match &source {
+            None => apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, w),
+            Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),
+        }
+        .map_err(|e| match e {
+            // An option that would be ignored is a usage error, found only once the input is read.
+            e @ ApplyError::TemperatureNotUsed => CliError::Usage(e.to_string()),
+            e => e.into(),
+        })
     };
     let summary: ApplySummary = match &a.out {
         Some(path) => {

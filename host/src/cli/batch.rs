@@ -92,6 +92,9 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     write_atomic(&staged.path().join(SUMMARY_JSON), json.as_bytes(), false)?;
     staged.commit()?;
     out.document(&lot)?;
+    for w in &lot.warnings {
+        out.warn(w);
+    }
     let failed = lot.failed();
     out.line(format_args!(
         "{} units, {} rows in {:.2} s on {} threads ({:.0} rows/s); {} passed, {} not",

@@ -30,22 +30,20 @@ pub struct CalibrateArgs {
     /// procedure). Records the session, estimates, writes the files, flashes, resets and verifies.
     #[arg(long, value_name = "PORT|sim|sim-hand")]
     pub port: Option<String>,
-    /// With --port: baud rate of the serial port.
+    /// With a serial --port: its baud rate (default: 115200).
     #[arg(
         long,
-        default_value_t = crate::device::serial::DEFAULT_BAUD,
         requires = "port",
         value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD)
     )]
-    pub baud: u32,
-    /// With --port: seconds to wait for each answer of the device.
+    pub baud: Option<u32>,
+    /// With a serial --port: seconds to wait for each answer of the device (default: 5).
     #[arg(
         long,
-        default_value_t = 5.0,
         requires = "port",
         value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
     )]
-    pub timeout_s: f64,
+    pub timeout_s: Option<f64>,
     /// With --port sim or sim-hand: the simulated unit's parameters (default: the paper's unit).
     #[arg(long, value_name = "FILE", requires = "port")]
     pub sim_unit: Option<PathBuf>,
@@ -56,14 +54,13 @@ pub struct CalibrateArgs {
     /// With --port: samples per streamed window (default: a 50th of the device's rate).
     #[arg(long, requires = "port", value_parser = limits::whole_u32(1, limits::MAX_WINDOW))]
     pub window: Option<u32>,
-    /// With --port: largest compensated error accepted at a verification position, mg.
+    /// With --port: largest compensated error accepted at a verification position, mg (default: 1).
     #[arg(
         long,
-        default_value_t = 1.0,
         requires = "port",
         value_parser = limits::real(limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
     )]
-    pub verify_tolerance_mg: f64,
+    pub verify_tolerance_mg: Option<f64>,
     /// With --port: verify again, at rest, at this temperature, °C: `--port sim` sets its virtual
     /// chamber there; with a real board the operator brings it there (a hot plate or a chamber) and
     /// its temperature reading is checked to within 2 °C.
@@ -75,7 +72,7 @@ pub struct CalibrateArgs {
     )]
     pub verify_temp_c: Option<f64>,
     /// Where to write calibration.toml and calibration.bin (default: the session directory).
-    #[arg(long, value_name = "OUT")]
+    #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
     /// Replace an existing calibration (and, with --port, an existing recording) in the output
     /// directory.
@@ -179,6 +176,26 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
                 .into(),
         ));
     }
+    let device_given: Vec<&str> = [
+        ("--baud", a.baud.is_some()),
+        ("--timeout-s", a.timeout_s.is_some()),
+        ("--verify-tolerance-mg", a.verify_tolerance_mg.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, given)| given.then_some(flag))
+    .collect();
+    if !device_given.is_empty() {
+        return Err(CliError::Usage(format!(
+            "{} {} for --port: a recorded session has no device to talk to or verify; leave {} out",
+            device_given.join(", "),
+            if device_given.len() == 1 { "is" } else { "are" },
+            if device_given.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+        )));
+    }
     if a.verify_temp_c.is_some() {
         return Err(CliError::Usage(
             "--verify-temp-c verifies the calibration stored on a device (--port); a recorded session \
@@ -259,9 +276,12 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     if let Some(w) = a.window {
         crate::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
     }
+    let verify_tolerance_mg = a
+        .verify_tolerance_mg
+        .unwrap_or(ProcedureOptions::DEFAULT_VERIFY_TOLERANCE_MG);
     crate::limits::positive_at_most(
         "--verify-tolerance-mg",
-        a.verify_tolerance_mg,
+        verify_tolerance_mg,
         crate::limits::MAX_TOLERANCE_MG,
     )?;
     let mut client = connect(&port)?;
@@ -275,7 +295,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     let mut opts = ProcedureOptions::new(plan, out_dir);
     opts.window_samples = a.window;
     opts.calibrate = calibrate_options(a);
-    opts.verify_tolerance_mg = a.verify_tolerance_mg;
+    opts.verify_tolerance_mg = verify_tolerance_mg;
     opts.verify_temp_c = a.verify_temp_c;
     opts.force = a.force;
     opts.quiet = quiet;

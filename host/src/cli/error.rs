@@ -35,6 +35,9 @@ pub enum CliError {
     /// Writing the result.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// A logger's file could not be read.
+    #[error(transparent)]
+    Log(crate::session::logs::LogError),
     /// `host report` / `host navigation-check`.
     #[error(transparent)]
     Report(#[from] ReportError),
@@ -152,8 +155,22 @@ impl CliError {
         match self {
             CliError::Usage(_) | CliError::LogInput(_) => EXIT_USAGE,
             CliError::ChecksFailed(_) | CliError::VerificationFailed => EXIT_CHECK_FAILED,
+            _ if self.is_option_not_for_input() => EXIT_USAGE,
             _ => EXIT_ERROR,
         }
+    }
+
+    /// An option that does not apply to the input it was given with, found only once the input
+    /// was opened (a log's format, a session's segments): a usage error like any other.
+    fn is_option_not_for_input(&self) -> bool {
+        use crate::session::logs::LogError;
+        matches!(
+            self,
+            CliError::Report(ReportError::NamedRun(_))
+                | CliError::Log(
+                    LogError::OptionNotForFormat { .. } | LogError::TextOptionOnBinary { .. }
+                )
+        )
     }
 }
 

@@ -28,9 +28,9 @@ pub struct ExportArgs {
     /// The noise figures for Kalibr: noise.json written by `host noise`.
     #[arg(long, value_name = "NOISE.json")]
     pub noise: Option<PathBuf>,
-    /// Kalibr's rostopic of the IMU.
-    #[arg(long, default_value = "/imu0")]
-    pub rostopic: String,
+    /// Kalibr's rostopic of the IMU (default: /imu0).
+    #[arg(long, value_name = "TOPIC")]
+    pub rostopic: Option<String>,
     /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: 1 for a
     /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
     #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true, value_parser = crate::limits::real(1e-9, crate::limits::MAX_LIMIT))]
@@ -43,12 +43,13 @@ pub struct ExportArgs {
     /// offsets are written.
     #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
     pub gyro_device_id: Option<u32>,
-    /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one).
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 255))]
-    pub sysid: u32,
-    /// For px4: the autopilot's MAVLink component id.
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 255))]
-    pub compid: u32,
+    /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one;
+    /// default: 1).
+    #[arg(long, value_parser = crate::limits::whole_u32(1, 255))]
+    pub sysid: Option<u32>,
+    /// For px4: the autopilot's MAVLink component id (default: 1).
+    #[arg(long, value_parser = crate::limits::whole_u32(1, 255))]
+    pub compid: Option<u32>,
     /// Write values outside the target's documented range (with a warning) instead of refusing.
     #[arg(long)]
     pub allow_out_of_range: bool,
@@ -57,8 +58,58 @@ pub struct ExportArgs {
     pub allow_undetermined: bool,
 }
 
+impl ExportArgs {
+    /// Refuses a format-specific option given with a format it does not act on (it would be
+    /// ignored), naming the formats it is for.
+    fn refuse_options_not_for_format(&self) -> Result<(), CliError> {
+        use ExportFormat::{Ardupilot, FusionC, Kalibr, KalibrIntrinsics, Px4};
+        let options: [(&str, bool, &[ExportFormat]); 9] = [
+            ("--noise", self.noise.is_some(), &[Kalibr]),
+            ("--rostopic", self.rostopic.is_some(), &[Kalibr]),
+            (
+                "--driver-scale",
+                self.driver_scale.is_some(),
+                &[Kalibr, KalibrIntrinsics, Px4, Ardupilot],
+            ),
+            ("--device-id", self.device_id.is_some(), &[Px4, Ardupilot]),
+            (
+                "--gyro-device-id",
+                self.gyro_device_id.is_some(),
+                &[Px4, Ardupilot],
+            ),
+            ("--sysid", self.sysid.is_some(), &[Px4]),
+            ("--compid", self.compid.is_some(), &[Px4]),
+            (
+                "--allow-out-of-range",
+                self.allow_out_of_range,
+                &[Px4, Ardupilot],
+            ),
+            (
+                "--allow-undetermined",
+                self.allow_undetermined,
+                &[KalibrIntrinsics, FusionC],
+            ),
+        ];
+        let name = |f: &ExportFormat| {
+            clap::ValueEnum::to_possible_value(f).map_or_else(String::new, |v| v.get_name().into())
+        };
+        for (flag, given, formats) in options {
+            if given && !formats.contains(&self.format) {
+                let names: Vec<String> = formats.iter().map(name).collect();
+                return Err(CliError::Usage(format!(
+                    "{flag} does not apply to --format {}: it is for {}; leave it out",
+                    name(&self.format),
+                    names.join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Runs `host export`.
 pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
+    a.refuse_options_not_for_format()?;
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;
@@ -70,7 +121,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
         unit: &unit,
         cal,
         noise: noise.as_ref(),
-        rostopic: &a.rostopic,
+        rostopic: a.rostopic.as_deref().unwrap_or("/imu0"),
         driver_scale_m_s2_per_out: a.driver_scale,
         options: ExportOptions {
             allow_out_of_range: a.allow_out_of_range,
@@ -78,8 +129,8 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             device_id: a.device_id,
             gyro_device_id: a.gyro_device_id,
             // Within 1..=255 by their parsers.
-            sysid: u8::try_from(a.sysid).unwrap_or(u8::MAX),
-            compid: u8::try_from(a.compid).unwrap_or(u8::MAX),
+            sysid: u8::try_from(a.sysid.unwrap_or(1)).unwrap_or(u8::MAX),
+            compid: u8::try_from(a.compid.unwrap_or(1)).unwrap_or(u8::MAX),
             spelling: Spelling::Flags,
         },
     };

@@ -4,7 +4,7 @@
 use super::CliError;
 use crate::app::log_input::{LogInput, LogInputError};
 use crate::session::import::GyroUnit;
-use crate::session::logs::LogSource;
+use crate::session::logs::{LogFormat, LogSource};
 use clap::Args;
 use recording::spelling::Spelling;
 
@@ -82,35 +82,97 @@ impl LogInputArgs {
         }
     }
 
-    /// What to read: the text options when any is given (checked whole), the instance and topic.
-    pub fn source(&self) -> Result<LogSource, CliError> {
+    /// The text-file options given, by their flags (a text file's columns, time and units: what a
+    /// binary log or a session directory states itself).
+    fn text_options_given(&self) -> Vec<&'static str> {
+        let default_columns = self.columns == crate::session::import::DEFAULT_COLUMNS.join(",");
+        [
+            ("--columns", !default_columns),
+            ("--time-column", self.time_column.is_some()),
+            ("--time-unit", self.time_unit.is_some()),
+            ("--rate-hz", self.rate_hz.is_some()),
+            ("--acc-unit", self.acc_unit.is_some()),
+            ("--acc-offset", self.acc_offset.is_some()),
+            ("--gyro-unit", self.gyro_unit.is_some()),
+            ("--gyro-lsb-per-dps", self.gyro_lsb_per_dps.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect()
+    }
+
+    /// What to read from `input`: the text options when any is given (checked whole by the
+    /// application layer), the instance and topic. Text options on a binary log are refused by
+    /// name before they are checked as a text file's (a log that states its units needs none).
+    pub fn source(&self, input: &std::path::Path) -> Result<LogSource, CliError> {
+        let text = self.text_options_given();
+        let format = log_format(input);
+        if let Some(format) = format {
+            self.refuse_for_format(input, format)?;
+        }
+        if !text.is_empty() {
+            if let Some(format) = format.filter(|f| *f != LogFormat::Text) {
+                return Err(CliError::Usage(format!(
+                    "{} is in the {} format, which states its columns, time and units: {} {} not \
+                     apply to it; leave {} out",
+                    input.display(),
+                    format.name(),
+                    text.join(", "),
+                    if text.len() == 1 { "does" } else { "do" },
+                    if text.len() == 1 { "it" } else { "them" },
+                )));
+            }
+        }
         self.input()
             .source()
             .map_err(|e| match (e, &self.acc_offset) {
                 // The offset as the command line wrote it, not as it was read.
                 (LogInputError::AccOffsetValues { .. }, Some(text)) => CliError::Usage(format!(
-                "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) or \
-                 three (X,Y,Z)"
-            )),
+                    "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) \
+                     or three (X,Y,Z)"
+                )),
                 (e, _) => CliError::LogInput(e),
             })
     }
 
-    /// Refuses these options for an input that is a session directory (they would be ignored).
+    /// Refuses `--instance` and `--topic` where the format has no such thing (a usage error, found
+    /// before the file is read).
+    fn refuse_for_format(
+        &self,
+        input: &std::path::Path,
+        format: LogFormat,
+    ) -> Result<(), CliError> {
+        let instance = matches!(format, LogFormat::Ulog | LogFormat::DataFlash);
+        let topic = format == LogFormat::Mcap;
+        let wrong = [
+            ("--instance", self.instance.is_some() && !instance),
+            ("--topic", self.topic.is_some() && !topic),
+        ]
+        .into_iter()
+        .find_map(|(flag, wrong)| wrong.then_some(flag));
+        match wrong {
+            Some(flag) => Err(CliError::Usage(format!(
+                "{} is in the {} format: {flag} does not apply to it (--instance is for PX4 ULog \
+                 and ArduPilot DataFlash, --topic for ROS 2 MCAP); leave it out",
+                input.display(),
+                format.name()
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// Refuses these options for an input that is a session directory (they would be ignored),
+    /// naming the ones given.
     pub fn refuse_for_session(&self, input: &std::path::Path) -> Result<(), CliError> {
-        let default_columns = self.columns == crate::session::import::DEFAULT_COLUMNS.join(",");
-        let given = !default_columns
-            || self.time_column.is_some()
-            || self.rate_hz.is_some()
-            || self.acc_unit.is_some()
-            || self.gyro_unit.is_some()
-            || self.instance.is_some()
-            || self.topic.is_some();
-        if given {
+        let mut given = self.text_options_given();
+        given.extend(self.instance.map(|_| "--instance"));
+        given.extend(self.topic.as_ref().map(|_| "--topic"));
+        if !given.is_empty() {
             return Err(CliError::Usage(format!(
-                "{} is a session directory: the logger's file options (--columns, --time-column, \
-                 --rate-hz, --acc-unit, --gyro-unit, --instance, --topic) do not apply; leave them out",
-                input.display()
+                "{} is a session directory, whose plan.toml states its units and time: the \
+                 logger's file options do not apply ({}); leave them out",
+                input.display(),
+                given.join(", ")
             )));
         }
         Ok(())
@@ -131,4 +193,13 @@ impl LogInputArgs {
             None => self.gyro_unit().symbol(),
         }
     }
+}
+
+/// The log format `input` starts with (`None`: unreadable here; the reader then says why).
+fn log_format(input: &std::path::Path) -> Option<LogFormat> {
+    use std::io::Read;
+    let mut head = [0u8; 64];
+    let file = std::fs::File::open(input).ok()?;
+    let n = file.take(head.len() as u64).read(&mut head).ok()?;
+    Some(LogFormat::detect(&head[..n]))
 }

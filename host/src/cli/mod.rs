@@ -120,6 +120,37 @@ pub enum Command {
     Bringup(bringup::BringupArgs),
 }
 
+impl Command {
+    /// Whether the command line asked for one JSON document on stdout (`--json`).
+    pub fn json(&self) -> bool {
+        match self {
+            Command::Calibrate(a) => a.json,
+            Command::Batch(a) => a.json,
+            Command::Compare(a) => a.json,
+            Command::Noise(a) => a.json,
+            Command::Plan(a) => a.json,
+            Command::Segment(a) => a.json,
+            _ => false,
+        }
+    }
+}
+
+/// The document `--json` gets on stdout when a command fails before its own document: the error
+/// and the exit status. A command that ran to the end and failed a check has printed its own
+/// document (with `passed: false`), and gets no second one (`None`).
+pub fn error_document(e: &CliError) -> Option<String> {
+    let code = e.exit_code();
+    if code == error::EXIT_CHECK_FAILED {
+        return None;
+    }
+    let kind = if code == error::EXIT_USAGE {
+        "usage"
+    } else {
+        "error"
+    };
+    Some(serde_json::json!({ "error": e.to_string(), "kind": kind, "exit_code": code }).to_string())
+}
+
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {

@@ -50,7 +50,7 @@ pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
     // A window takes its own duration to arrive, on top of the answer timeout.
     let window_s = f64::from(window) / f64::from(identity.sample_rate_hz.max(1));
     client.set_timeout(std::time::Duration::from_secs_f64(
-        a.port.timeout_s + window_s,
+        a.port.timeout_s() + window_s,
     ));
     let g = shared::STANDARD_GRAVITY_M_S2;
     if !quiet {

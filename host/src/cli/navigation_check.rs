@@ -17,7 +17,7 @@ pub struct NavigationCheckCliArgs {
     #[arg(long, default_value_t = 60.0, value_parser = crate::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
     pub duration_s: f64,
     /// Where to write the figures and pages (default: nothing written).
-    #[arg(long, value_name = "OUT")]
+    #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
     /// Unit file of the simulated unit (default: the paper's unit).
     #[arg(long, value_name = "FILE")]

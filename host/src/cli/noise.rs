@@ -41,6 +41,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
             let cal = unit
                 .to_calibration()
                 .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
+            crate::calibration_guard::check_scales(&cal)?;
             let plan_path = a.input.join(crate::session::PLAN_FILE);
             if a.input.is_dir() && plan_path.exists() {
                 let plan = crate::session::Plan::load(&plan_path)?;
@@ -61,7 +62,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         analyse(&a.input, plain, quiet)
     } else {
         let with_unit = cal.as_ref().map(|(p, u)| (p, *u));
-        analyse_log(&a.input, &a.log.source()?, with_unit)
+        analyse_log(&a.input, &a.log.source(&a.input)?, with_unit)
     }
     .map_err(CliError::Noise)?;
     let out = super::output::Output {

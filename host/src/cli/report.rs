@@ -16,7 +16,7 @@ pub struct ReportArgs {
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<PathBuf>,
     /// Where to write the figures and pages (default: DIR/report).
-    #[arg(long, value_name = "OUT")]
+    #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]
     pub out_dir: Option<PathBuf>,
     /// The static segment to replay for the navigation check (default: the first static one).
     #[arg(long, value_name = "NAME")]

@@ -106,7 +106,7 @@ pub struct SimulateHandArgs {
     #[arg(long)]
     pub six_faces: bool,
     /// With --six-faces: how many times the cube is turned over through its six faces.
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u32(1, 10))]
+    #[arg(long, default_value_t = 1, requires = "six_faces", value_parser = crate::limits::whole_u32(1, 10))]
     pub rounds: u32,
     /// At each position, one whole turn about the vertical flat on the table (either way, 4–6 s,
     /// rocking by 0.1°, the unit 3 cm from the turn's axis), set back against its stop to 0.05° and
@@ -228,7 +228,7 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 }
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
-    let source = a.log.source()?;
+    let source = a.log.source(&a.input)?;
     let choices = SegmentChoices {
         segment: SegmentOptions {
             min_still_s: a.min_still_s,
@@ -241,7 +241,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let log = read_log(&a.input, &source).map_err(|e| CliError::Failed(e.to_string()))?;
+    let log = read_log(&a.input, &source).map_err(CliError::Log)?;
     time_unit_note(out, &log.recording);
     let found = find(log.recording, &choices).map_err(|e| CliError::Failed(e.to_string()))?;
     let reader_warnings = found.warnings.len();

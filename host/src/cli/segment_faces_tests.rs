@@ -324,7 +324,7 @@ fn count_time_and_face_options_are_checked_before_any_work() {
     let error = |extra: &str| {
         segment_args(&format!("{base} {extra}"))
             .log
-            .source()
+            .source(std::path::Path::new("r.csv"))
             .unwrap_err()
             .to_string()
     };
@@ -348,7 +348,7 @@ fn count_time_and_face_options_are_checked_before_any_work() {
         "{base} {t} --time-unit us --acc-offset 32768,32768,32000 --gyro-unit LSB --gyro-lsb-per-dps 131"
     ))
     .log
-    .source()
+    .source(std::path::Path::new("r.csv"))
     .unwrap()
     .text
     .unwrap();

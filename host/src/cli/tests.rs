@@ -5,7 +5,6 @@ use super::calibrate::{calibrate, calibrate_options};
 use super::port::{connect, PortArgs, SIM_PORT};
 use super::simulate::noise_from_args;
 use super::*;
-use crate::device::serial::DEFAULT_BAUD;
 use crate::device::sim::SIM_UNIT_ID;
 use crate::device::LinkError;
 use crate::estimate::Method;
@@ -267,8 +266,8 @@ fn calibrate_without_input_says_what_to_give() {
 fn sim() -> PortArgs {
     PortArgs {
         port: SIM_PORT.into(),
-        baud: DEFAULT_BAUD,
-        timeout_s: 1.0,
+        baud: None,
+        timeout_s: None,
         sim_unit: None,
     }
 }

@@ -48,6 +48,9 @@ pub struct ProcedureOptions {
 }
 
 impl ProcedureOptions {
+    /// Largest compensated error accepted at a verification position unless told otherwise, mg.
+    pub const DEFAULT_VERIFY_TOLERANCE_MG: f64 = 1.0;
+
     /// Defaults for `plan` into `out_dir`.
     pub fn new(plan: Plan, out_dir: PathBuf) -> Self {
         ProcedureOptions {
@@ -56,7 +59,7 @@ impl ProcedureOptions {
             window_samples: None,
             settle_s: 0.5,
             calibrate: CalibrateOptions::default(),
-            verify_tolerance_mg: 1.0,
+            verify_tolerance_mg: Self::DEFAULT_VERIFY_TOLERANCE_MG,
             verify_seconds: 2.0,
             verify_temp_c: None,
             force: false,
@@ -229,7 +232,8 @@ pub fn run<T: Transport>(
     let verification = if hand {
         handheld::verify_magnitude(client, op, &plan, window, window_rate, opts, fs)
     } else {
-        super::verify::verify(client, op, &plan, drive, opts, fs)
+        let frame = calibrated.outcome.static_split.frame;
+        super::verify::verify(client, op, &plan, drive, frame, opts, fs)
     }
     .map_err(link)?;
     let passed = verification.iter().all(|v| v.pass);

@@ -7,8 +7,10 @@ use super::live_check::{instruction, table_for};
 use super::operator::Operator;
 use super::procedure::ProcedureOptions;
 use crate::device::{DeviceClient, LinkError, Transport};
-use crate::estimate::ReferenceChoice;
+use crate::estimate::attitude::best_rotation;
+use crate::estimate::{BodyFrame, ReferenceChoice};
 use crate::session::{Plan, SegmentPlan};
+use nalgebra::{Matrix3, Vector3};
 use shared::wire::{SampleFlags, StreamKind};
 
 /// One verification position.
@@ -87,11 +89,16 @@ fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f6
 /// device reports, °C: a board not yet there is not verified "at" that temperature.
 pub const VERIFY_TEMP_TOLERANCE_C: f64 = 2.0;
 
+/// Verifies the stored calibration at the verification positions. A calibration whose body frame is
+/// a convention (`frame`: no attitude known, docs/model.md §7) is compared after the best common
+/// rotation of the positions at rest: its frame is not the table's, and what it fixes (magnitudes
+/// and the angles between positions) is what is judged.
 pub(crate) fn verify<T: Transport>(
     client: &mut DeviceClient<T>,
     op: &mut dyn Operator,
     plan: &Plan,
     drive: bool,
+    frame: BodyFrame,
     opts: &ProcedureOptions,
     sample_rate_hz: f64,
 ) -> Result<Vec<VerificationPoint>, LinkError> {
@@ -107,7 +114,7 @@ pub(crate) fn verify<T: Transport>(
             "verification at rest only: the plan has no rotations, so it calibrated no lever arm",
         );
     }
-    let mut points = Vec::new();
+    let mut measured = Vec::new();
     let positions = verification_positions(plan, drive);
     for (label, up, rate) in &positions {
         let Some(c) = (if *rate == 0.0 { Some([0.0; 3]) } else { c }) else {
@@ -122,7 +129,7 @@ pub(crate) fn verify<T: Transport>(
             rate_deg_s: *rate,
             centre_m: c,
         };
-        points.push(verify_position(
+        measured.push(verify_position(
             client,
             op,
             plan,
@@ -132,6 +139,7 @@ pub(crate) fn verify<T: Transport>(
             &p,
         )?);
     }
+    let at_reference = measured.len();
     if let Some(t) = opts.verify_temp_c {
         // A second temperature: the temperature model (or its absence) is what is judged, at rest.
         if drive {
@@ -156,25 +164,83 @@ pub(crate) fn verify<T: Transport>(
                 rate_deg_s: 0.0,
                 centre_m: [0.0; 3],
             };
-            let mut point = verify_position(client, op, plan, drive, opts, sample_rate_hz, &p)?;
-            let reached = point
+            let mut m = verify_position(client, op, plan, drive, opts, sample_rate_hz, &p)?;
+            let reached = m
                 .temp_c
                 .is_some_and(|r| (r - t).abs() <= VERIFY_TEMP_TOLERANCE_C);
             if !reached {
                 op.say(&format!(
                     "verify {}: the device reads {}, not within {VERIFY_TEMP_TOLERANCE_C} °C of \
                      {t:.1} °C: not verified at that temperature",
-                    point.label,
-                    point
-                        .temp_c
+                    m.label,
+                    m.temp_c
                         .map_or("no temperature".to_string(), |r| format!("{r:.1} °C"))
                 ));
-                point.pass = false;
+                m.temperature_missed = true;
             }
-            points.push(point);
+            measured.push(m);
         }
     }
-    Ok(points)
+    let rotation = match frame {
+        BodyFrame::Fixture { .. } => None,
+        BodyFrame::Convention => {
+            op.say(
+                "the calibration's body frame is a convention (no attitude was known), not the \
+                 table's: each position is compared after the best common rotation of those at \
+                 rest, so their magnitudes and the angles between them are verified",
+            );
+            let rest: Vec<&Measured> = measured[..at_reference]
+                .iter()
+                .filter(|m| m.rate_deg_s == 0.0)
+                .collect();
+            let expected: Vec<[f64; 3]> = rest.iter().map(|m| m.expected_g).collect();
+            let got: Vec<[f64; 3]> = rest.iter().map(|m| m.measured_g).collect();
+            best_rotation(&expected, &got)
+        }
+    };
+    Ok(measured
+        .into_iter()
+        .map(|m| m.judge(rotation.as_ref(), opts.verify_tolerance_mg))
+        .collect())
+}
+
+/// One position's measurement, before it is judged.
+struct Measured {
+    label: String,
+    up_b: [f64; 3],
+    rate_deg_s: f64,
+    measured_g: [f64; 3],
+    expected_g: [f64; 3],
+    temp_c: Option<f64>,
+    uncalibrated: bool,
+    temperature_missed: bool,
+}
+
+impl Measured {
+    /// The point's error against its expected specific force (turned by `rotation` when the
+    /// calibration's frame is a convention) and its verdict.
+    fn judge(self, rotation: Option<&Matrix3<f64>>, tolerance_mg: f64) -> VerificationPoint {
+        let expected_g = rotation.map_or(self.expected_g, |r| {
+            let v = r * Vector3::from(self.expected_g);
+            [v[0], v[1], v[2]]
+        });
+        let error_mg = (0..3)
+            .map(|j| (self.measured_g[j] - expected_g[j]).abs() * 1e3)
+            .fold(0.0, f64::max);
+        VerificationPoint {
+            label: match rotation {
+                Some(_) => format!("{} (frame-free)", self.label),
+                None => self.label,
+            },
+            up_b: self.up_b,
+            rate_deg_s: self.rate_deg_s,
+            measured_g: self.measured_g,
+            expected_g,
+            error_mg,
+            temp_c: self.temp_c,
+            pass: !self.uncalibrated && !self.temperature_missed && error_mg <= tolerance_mg,
+        }
+    }
 }
 
 /// One verification position: where the unit is, how it turns, and the reference point's offset
@@ -197,7 +263,7 @@ fn verify_position<T: Transport>(
     opts: &ProcedureOptions,
     sample_rate_hz: f64,
     p: &Position,
-) -> Result<VerificationPoint, LinkError> {
+) -> Result<Measured, LinkError> {
     let g = plan.gravity_m_s2;
     let (up, rate) = (p.up, p.rate_deg_s);
     let seg = SegmentPlan {
@@ -249,17 +315,71 @@ fn verify_position<T: Transport>(
     );
     let expected_g: [f64; 3] = std::array::from_fn(|j| (g * up[j] - wc[j]) / g);
     let measured_g: [f64; 3] = std::array::from_fn(|j| sum[j] / count.max(1.0) / g);
-    let error_mg = (0..3)
-        .map(|j| (measured_g[j] - expected_g[j]).abs() * 1e3)
-        .fold(0.0, f64::max);
-    Ok(VerificationPoint {
+    Ok(Measured {
         label: p.label.clone(),
         up_b: up,
         rate_deg_s: rate,
         measured_g,
         expected_g,
-        error_mg,
         temp_c: (temp_count > 0.0).then(|| temp_sum / temp_count),
-        pass: !uncalibrated && error_mg <= opts.verify_tolerance_mg,
+        uncalibrated,
+        temperature_missed: false,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at_rest(label: &str, expected_g: [f64; 3], measured_g: [f64; 3]) -> Measured {
+        Measured {
+            label: label.into(),
+            up_b: expected_g,
+            rate_deg_s: 0.0,
+            measured_g,
+            expected_g,
+            temp_c: None,
+            uncalibrated: false,
+            temperature_missed: false,
+        }
+    }
+
+    /// Turned by any rotation the positions pass after the best common rotation; a magnitude
+    /// 5 mg off, or an angle between two positions 0.5° off, fails in any frame.
+    #[test]
+    fn a_conventional_frame_is_judged_by_what_it_fixes() {
+        let k = 1.0 / 3f64.sqrt();
+        let ups = [[k, k, k], [0.0, 1.0, 0.0], [0.6, 0.0, -0.8]];
+        // A 20° rotation about (1, 2, 2)/3, the frame the calibration happened to choose.
+        let r = nalgebra::Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, 2.0)),
+            20f64.to_radians(),
+        );
+        let turn = |v: [f64; 3]| {
+            let x = r * Vector3::from(v);
+            [x[0], x[1], x[2]]
+        };
+        let judge = |measured: [[f64; 3]; 3]| {
+            let m: Vec<Measured> = (0..3).map(|i| at_rest("p", ups[i], measured[i])).collect();
+            let e: Vec<[f64; 3]> = m.iter().map(|m| m.expected_g).collect();
+            let g: Vec<[f64; 3]> = m.iter().map(|m| m.measured_g).collect();
+            let rot = best_rotation(&e, &g);
+            m.into_iter()
+                .map(|m| m.judge(rot.as_ref(), 1.0))
+                .collect::<Vec<_>>()
+        };
+        let turned = ups.map(turn);
+        assert!(judge(turned).iter().all(|p| p.pass && p.error_mg < 1e-9));
+        // Without the rotation the same right calibration fails: the frames differ.
+        let plain = at_rest("p", ups[0], turned[0]).judge(None, 1.0);
+        assert!(!plain.pass, "{plain:?}");
+        let mut long = turned;
+        long[1] = long[1].map(|x| x * 1.005);
+        assert!(judge(long).iter().any(|p| !p.pass));
+        let mut bent = turned;
+        let tilt = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), 0.5f64.to_radians());
+        let b = tilt * Vector3::from(bent[2]);
+        bent[2] = [b[0], b[1], b[2]];
+        assert!(judge(bent).iter().any(|p| !p.pass));
+    }
 }

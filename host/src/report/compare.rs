@@ -197,6 +197,10 @@ fn comparable_calibrations(
         .map_err(|m| CompareError::Incompatible(format!("A ({a_name}) and B ({b_name}): {m}")))?;
     let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
     let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
+    for (cal, side, name) in [(&ca, "A", a_name), (&cb, "B", b_name)] {
+        crate::calibration_guard::check_scales(cal)
+            .map_err(|e| CompareError::Incompatible(format!("{side} ({name}): {e}")))?;
+    }
     let (ua, ub) = (ca.statics.output_unit, cb.statics.output_unit);
     if ua != ub {
         return Err(CompareError::Incompatible(format!(

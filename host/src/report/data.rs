@@ -78,9 +78,19 @@ pub enum ReportError {
     /// The calibration cannot compensate (message says why).
     #[error("the calibration cannot compensate: {0}")]
     Calibration(String),
+    /// The calibration cannot meet this recording (`crate::apply::check_meeting`).
+    #[error("{}", meeting_message(.0))]
+    Meeting(#[source] crate::apply::ApplyError),
     /// A requested segment is not in the session, or the session has none to use.
     #[error("{0}")]
     Segment(String),
+    /// A segment named by `--static-run` or `--rate-run` is not in the session or not of that
+    /// kind (the message names it and the segments that are).
+    #[error("{0}")]
+    NamedRun(String),
+    /// The navigation check has no segment to replay (the reasons, one per replay).
+    #[error("nothing to replay: {}", .0.join("; "))]
+    NothingToReplay(Vec<String>),
     /// A figure could not be drawn.
     #[error(transparent)]
     Figure(#[from] plot::FigureError),
@@ -99,6 +109,17 @@ pub enum ReportError {
     /// The calibration is of another unit than the session.
     #[error("{0}")]
     WrongUnit(String),
+}
+
+/// The guard's refusal in the report's terms: the report has no temperature to assume.
+fn meeting_message(e: &crate::apply::ApplyError) -> String {
+    match e {
+        crate::apply::ApplyError::NoTemperature => "the calibration has a temperature model but \
+            the recording has no temp_c column: its segments cannot be compensated at their \
+            temperature; report on a recording with temperatures"
+            .into(),
+        e => e.to_string(),
+    }
 }
 
 /// A compensation level.
@@ -220,6 +241,8 @@ pub struct ReportData {
     pub chi2_terms: usize,
     /// The static and the rotating replay (either may be absent when the plan has none).
     pub navigation: Vec<NavigationRun>,
+    /// Why a replay is left out, one line each (also among the warnings).
+    pub navigation_left_out: Vec<String>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
     pub session_fit: Result<CalibrationOutcome, String>,
     /// The session's segments through the session fit's own calibration (empty when it failed or its
@@ -359,8 +382,9 @@ pub fn build_report(
     session_fit: Option<CalibrationOutcome>,
     options: &ReportOptions,
 ) -> Result<ReportData, ReportError> {
-    // A calibration in another output unit is refused before anything is computed from it.
-    crate::apply::check_output_unit(cal, plan).map_err(|e| ReportError::Segment(e.to_string()))?;
+    // A calibration that cannot meet this recording (scales, output unit, a temperature model
+    // without temperatures) is refused before anything is computed from it: the guard `apply` uses.
+    crate::apply::check_meeting(cal, None, plan, None).map_err(ReportError::Meeting)?;
     let mut segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
         return Err(ReportError::Segment(
@@ -395,7 +419,14 @@ pub fn build_report(
             }
         }
     }
-    let navigation = navigation_runs(&segments, cal.gravity_m_s2, options, &mut warnings)?;
+    let mut navigation_left_out = Vec::new();
+    let navigation = navigation_runs(
+        &segments,
+        cal.gravity_m_s2,
+        options,
+        &mut navigation_left_out,
+    )?;
+    warnings.extend(navigation_left_out.iter().cloned());
     let session_fit_segments = match &session_fit {
         Ok(o) => segment_rows(plan, stats, &o.calibration).unwrap_or_default(),
         Err(_) => Vec::new(),
@@ -418,6 +449,7 @@ pub fn build_report(
         chi2,
         chi2_terms: terms,
         navigation,
+        navigation_left_out,
         session_fit,
         session_fit_segments,
         warnings,
@@ -465,18 +497,45 @@ fn navigation_runs(
         segments
             .iter()
             .find(|r| r.name == name)
-            .ok_or_else(|| ReportError::Segment(format!("segment '{name}' is not in the session")))
+            .ok_or_else(|| ReportError::NamedRun(format!("segment '{name}' is not in the session")))
     };
     let known = |r: &&SegmentRow| !r.free && r.theoretical != Theoretical::Unknown;
+    // A named run of the other kind would replay the wrong case under the right heading.
+    let of_kind = |name: &str, kind: SegmentKind, option: &str, wanted: &str| {
+        let row = find(name)?;
+        if row.kind != kind {
+            let examples: Vec<&str> = segments
+                .iter()
+                .filter(|r| r.kind == kind)
+                .take(3)
+                .map(|r| r.name.as_str())
+                .collect();
+            return Err(ReportError::NamedRun(format!(
+                "segment '{name}' is not {wanted}: {option} needs one ({})",
+                if examples.is_empty() {
+                    "this session has none".to_string()
+                } else {
+                    format!("e.g. '{}'", examples.join("', '"))
+                }
+            )));
+        }
+        Ok(row)
+    };
     let static_row = match &options.static_run {
-        Some(n) => Some(find(n)?).filter(known),
+        Some(n) => Some(of_kind(n, SegmentKind::Static, "--static-run", "static")?).filter(known),
         None => segments
             .iter()
             .filter(known)
             .find(|r| r.kind == SegmentKind::Static),
     };
     let rate_row = match &options.rate_run {
-        Some(n) => Some(find(n)?).filter(known),
+        Some(n) => Some(of_kind(
+            n,
+            SegmentKind::ConstantRate,
+            "--rate-run",
+            "at a constant rate",
+        )?)
+        .filter(known),
         None => segments
             .iter()
             .filter(known)

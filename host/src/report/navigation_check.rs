@@ -58,6 +58,9 @@ impl NavigationCheck {
     /// What the CLI prints: the navigation table and the position errors against their targets.
     pub fn render(&self) -> String {
         let mut s = render_navigation(&self.data.navigation);
+        for why in &self.data.navigation_left_out {
+            let _ = writeln!(s, "  left out: {why}");
+        }
         s.push_str(&render_position_targets(&self.data.navigation));
         if let Some(w) = &self.written {
             let _ = writeln!(s, "Report: {}", w.page.display());
@@ -86,6 +89,9 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
         Some(outcome.clone()),
         &args.report,
     )?;
+    if data.navigation.is_empty() {
+        return Err(ReportError::NothingToReplay(data.navigation_left_out));
+    }
     let written = match &args.out_dir {
         Some(dir) => Some(write_report(
             &data,
