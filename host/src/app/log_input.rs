@@ -353,6 +353,95 @@ mod tests {
         );
     }
 
+    /// With the flags' spelling every refusal is word for word the command line's message from
+    /// before the options became typed (the texts below are those messages).
+    #[test]
+    fn the_flags_spelling_keeps_the_command_lines_words() {
+        let base = || text(Spelling::Flags);
+        let cases: Vec<(LogInput, &str)> = vec![
+            (
+                LogInput {
+                    columns: vec!["a".into(), "b".into()],
+                    ..base()
+                },
+                "--columns needs six names: acc x,y,z then gyro x,y,z",
+            ),
+            (
+                LogInput {
+                    columns: ["a", "b", "", "d", "e", "f"].map(String::from).to_vec(),
+                    ..base()
+                },
+                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z",
+            ),
+            (
+                LogInput {
+                    columns: ["a", "b", "c", "d", "e", "A"].map(String::from).to_vec(),
+                    ..base()
+                },
+                "column 'a' is named twice in --columns/--time-column: each of acc x,y,z, gyro \
+                 x,y,z and the time must be its own column",
+            ),
+            (
+                LogInput {
+                    rate_hz: None,
+                    ..base()
+                },
+                "a text file needs exactly one of --time-column NAME or --rate-hz HZ",
+            ),
+            (
+                LogInput {
+                    rate_hz: None,
+                    time_column: Some("t".into()),
+                    time_unit: Some("h".into()),
+                    ..base()
+                },
+                "--time-unit h: use s, ms, us or ns",
+            ),
+            (
+                LogInput {
+                    time_unit: Some("s".into()),
+                    ..base()
+                },
+                "--time-unit applies to --time-column, not to --rate-hz",
+            ),
+            (
+                LogInput {
+                    acc_offset: Some(vec![1.0]),
+                    ..base()
+                },
+                "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the \
+                 unit is g)",
+            ),
+            (
+                LogInput {
+                    gyro_unit: Some("LSB".into()),
+                    ..base()
+                },
+                "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts \
+                 per °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns \
+                 then fit the true scale",
+            ),
+            (
+                LogInput {
+                    gyro_lsb_per_dps: Some(16.4),
+                    ..base()
+                },
+                "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not 'deg/s')",
+            ),
+            (
+                LogInput {
+                    gyro_unit: Some("x".into()),
+                    ..base()
+                },
+                "--gyro-unit 'x': a text file needs its gyro unit, deg/s, rad/s or LSB (with \
+                 --gyro-lsb-per-dps)",
+            ),
+        ];
+        for (input, want) in cases {
+            assert_eq!(input.source().unwrap_err().to_string(), want);
+        }
+    }
+
     #[test]
     fn one_or_three_finite_offsets_are_taken() {
         let with = |v: Vec<f64>| {
