@@ -64,7 +64,8 @@ python3 -m venv "$pyenv/venv"
 # Pinned: the build tool and the test's libraries, from PyPI.
 "$pyenv/venv/bin/pip" install -q maturin==1.7.4 numpy==2.4.6 pandas==3.1.1 pytest==9.2.0
 "$pyenv/venv/bin/maturin" build -q --manifest-path python/Cargo.toml --out "$pyenv/wheel"
-"$pyenv/venv/bin/pip" install -q "$pyenv"/wheel/accelcal-*.whl
+# With the `[pandas]` extra, as the Python README installs it.
+"$pyenv/venv/bin/pip" install -q "$(ls "$pyenv"/wheel/accelcal-*.whl)[pandas]"
 # The tests run `host` (target/debug/host, built by the PC tests above) beside the package.
 tests "$pyenv/venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 

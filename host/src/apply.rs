@@ -21,6 +21,7 @@
 mod log;
 
 pub(crate) use log::apply_log;
+pub use log::Prepared;
 
 use crate::output_file::OutputFileError;
 use crate::session::logs::LogError;
@@ -246,9 +247,9 @@ impl Applier {
     }
 }
 
-/// What [`apply_session`] did.
+/// What `apply_session` (or [`Prepared::run`]) did.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct ApplySummary {
+pub struct ApplySummary {
     /// Rows written (one per input row).
     pub rows: u64,
     /// Rows written as `NaN` because an input value was not finite.

@@ -7,13 +7,14 @@ pandas DataFrame, with the same library (and so the same numbers and files) as t
     f_g = accelcal.apply(cal, acc, gyro, rate_hz=200.0)                    # host apply
     curve = accelcal.allan(gyro[:, 0], rate_hz=200.0)                      # host noise
 
-Errors are raised as ``accelcal.Error`` (``InputError``, ``CalibrationError``, ``FileError``) with
-the message the command line prints for the same failure.
+Errors are raised as ``accelcal.Error`` (``InputError``, ``CalibrationError``, ``FileError``); their
+messages name this package's keyword arguments, and ``__cause__`` holds what caused them (an
+``OSError`` for a file the system could not read).
 """
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -23,10 +24,11 @@ from ._accelcal import (
     Error,
     FileError,
     InputError,
+    LogOptions,
     Session,
+    SessionOptions,
     calibrate,
     load_session,
-    segment_file,
 )
 from . import _accelcal
 
@@ -36,7 +38,9 @@ __all__ = [
     "Error",
     "FileError",
     "InputError",
+    "LogOptions",
     "Session",
+    "SessionOptions",
     "allan",
     "apply",
     "calibrate",
@@ -47,8 +51,18 @@ __all__ = [
     "simulate_hand",
 ]
 
-#: The column names ``segment`` looks for in a DataFrame (``host segment``'s default ``--columns``).
+#: The column names ``segment`` and ``apply`` look for in a DataFrame (``host segment``'s default
+#: ``--columns``).
 DEFAULT_COLUMNS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+
+#: The keywords of ``LogOptions`` (how to read a log) and of ``SessionOptions`` (how to cut it).
+_LOG_KEYWORDS = (
+    "acc_unit", "gyro_unit", "columns", "time_column", "time_unit", "rate_hz", "acc_offset",
+    "gyro_lsb_per_dps", "instance", "topic",
+)
+_SESSION_KEYWORDS = (
+    "min_still_s", "unit_id", "gravity", "latitude", "height_m", "no_gyro", "face_sigma_deg",
+)
 
 
 def _rows3(a: Any, what: str) -> np.ndarray:
@@ -63,35 +77,21 @@ def _is_frame(x: Any) -> bool:
     return hasattr(x, "columns") and hasattr(x, "to_numpy")
 
 
-def segment(
-    acc: Any,
-    gyro: Any = None,
-    t: Any = None,
-    rate_hz: Optional[float] = None,
-    *,
-    acc_unit: str,
-    gyro_unit: str,
-    columns: Sequence[str] = DEFAULT_COLUMNS,
-    time_column: Optional[str] = "t",
-    **options: Any,
-) -> Session:
-    """Cut a continuous hand-held recording into a calibration session (``host segment``).
-
-    ``acc`` and ``gyro`` are (n, 3) arrays, or ``acc`` is a pandas DataFrame whose columns are named
-    (``columns``: acc x, y, z then gyro x, y, z; ``time_column`` in seconds when present, else give
-    ``rate_hz``). ``acc_unit`` is "m/s2", "g", "LSB" or "V" (it becomes the calibration's output
-    unit), ``gyro_unit`` "deg/s", "rad/s" or "LSB". Options as ``host segment``'s flags, checked by
-    its own option set: ``time_unit`` ("s", "ms", "us", "ns"; else detected), ``acc_offset`` (raw
-    counts' zero force, one value or one per axis), ``gyro_lsb_per_dps`` (with ``gyro_unit="LSB"``),
-    ``min_still_s``, ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``,
-    ``face_sigma_deg``.
-
-    C-contiguous float64 arrays are read in place (no copy); other layouts are converted once.
-    """
-    if _is_frame(acc):
+def _rows(
+    acc: Any, gyro: Any, t: Any, rate_hz: Optional[float], columns: Sequence[str],
+    time_column: Optional[str],
+) -> Tuple[np.ndarray, np.ndarray, Optional[np.ndarray]]:
+    """The one array-like rule of every function: ``acc`` and ``gyro`` as two (n, 3) array-likes
+    (numpy arrays, DataFrames, nested lists), or ``acc`` alone as a DataFrame with named columns
+    (``columns``; the time from ``time_column`` when present and neither ``t`` nor ``rate_hz`` is
+    given). Returns float64 arrays (acc, gyro, t or None)."""
+    if gyro is None:
+        if not _is_frame(acc):
+            raise InputError(
+                "give acc and gyro as (n, 3) arrays or DataFrames, or one DataFrame with named "
+                "columns"
+            )
         frame = acc
-        if gyro is not None:
-            raise InputError("give a DataFrame alone, or acc and gyro arrays")
         names = {str(c).lower(): c for c in frame.columns}
         missing = [c for c in columns if c.lower() not in names]
         if len(columns) != 6 or missing:
@@ -110,21 +110,100 @@ def segment(
                     "time_column=NAME, or give rate_hz=HZ"
                 )
             t = frame[names[time_column.lower()]].to_numpy(dtype=np.float64)
-    elif gyro is None:
-        raise InputError("give acc and gyro as (n, 3) arrays, or a DataFrame with named columns")
-    acc = np.ascontiguousarray(_rows3(acc, "acc"))
-    gyro = np.ascontiguousarray(_rows3(gyro, "gyro"))
+    acc = _rows3(acc, "acc")
+    gyro = _rows3(gyro, "gyro")
     if t is not None:
-        t = np.ascontiguousarray(np.asarray(t, dtype=np.float64))
-    return _accelcal.segment_arrays(
-        acc, gyro, t, rate_hz, acc_unit=acc_unit, gyro_unit=gyro_unit, **options
-    )
+        t = np.asarray(t, dtype=np.float64)
+        if t.ndim != 1:
+            raise InputError(f"t must be one time per row, shape (n,); got shape {t.shape}")
+    return acc, gyro, t
+
+
+def _options(
+    log: Optional[LogOptions], site: Optional[SessionOptions], keywords: Dict[str, Any],
+) -> Tuple[LogOptions, SessionOptions]:
+    """The two option groups: given whole (``log=LogOptions(...)``, ``site=SessionOptions(...)``),
+    or built from the same names as flat keywords; not both for one group."""
+    unknown = sorted(set(keywords) - set(_LOG_KEYWORDS) - set(_SESSION_KEYWORDS))
+    if unknown:
+        raise TypeError(f"unexpected keyword argument(s): {', '.join(unknown)}")
+    log_kw = {k: keywords[k] for k in _LOG_KEYWORDS if keywords.get(k) is not None}
+    site_kw = {k: keywords[k] for k in _SESSION_KEYWORDS if k in keywords}
+    offset = log_kw.get("acc_offset")
+    if offset is not None and np.ndim(offset) == 0:
+        log_kw["acc_offset"] = [offset]
+    elif offset is not None:
+        log_kw["acc_offset"] = [float(v) for v in offset]
+    if "columns" in log_kw:
+        log_kw["columns"] = list(log_kw["columns"])
+    if log is not None and log_kw:
+        raise InputError(
+            f"give log=LogOptions(...) or its keywords ({', '.join(log_kw)}), not both"
+        )
+    if site is not None and site_kw:
+        raise InputError(
+            f"give site=SessionOptions(...) or its keywords ({', '.join(site_kw)}), not both"
+        )
+    return log or LogOptions(**log_kw), site or SessionOptions(**site_kw)
+
+
+def segment(
+    acc: Any,
+    gyro: Any = None,
+    t: Any = None,
+    rate_hz: Optional[float] = None,
+    *,
+    columns: Sequence[str] = DEFAULT_COLUMNS,
+    time_column: Optional[str] = "t",
+    log: Optional[LogOptions] = None,
+    site: Optional[SessionOptions] = None,
+    **keywords: Any,
+) -> Session:
+    """Cut a continuous hand-held recording into a calibration session (``host segment``).
+
+    ``acc`` and ``gyro`` are (n, 3) array-likes (numpy arrays or DataFrames), or ``acc`` is one
+    pandas DataFrame whose columns are named (``columns``: acc x, y, z then gyro x, y, z;
+    ``time_column`` in seconds when present, else give ``t`` or ``rate_hz``).
+
+    How to read the values, as ``log=LogOptions(...)`` or its keywords: ``acc_unit`` ("m/s2",
+    "g", "LSB" or "V": the calibration's output unit) and ``gyro_unit`` ("deg/s", "rad/s" or
+    "LSB"), both needed; ``time_unit`` ("s", "ms", "us", "ns"; else detected), ``acc_offset`` (raw
+    counts' zero force, one value or one per axis), ``gyro_lsb_per_dps`` (with
+    ``gyro_unit="LSB"``). How to cut it, as ``site=SessionOptions(...)`` or its keywords:
+    ``min_still_s``, ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``,
+    ``face_sigma_deg``.
+
+    C-contiguous float64 arrays are read in place (no copy); other layouts are converted once.
+    """
+    log, site = _options(log, site, keywords)
+    acc, gyro, t = _rows(acc, gyro, t, rate_hz, columns, time_column)
+    acc = np.ascontiguousarray(acc)
+    gyro = np.ascontiguousarray(gyro)
+    if t is not None:
+        t = np.ascontiguousarray(t)
+    return _accelcal.segment_arrays(acc, gyro, t, rate_hz, log, site)
+
+
+def segment_file(
+    path: Any,
+    *,
+    log: Optional[LogOptions] = None,
+    site: Optional[SessionOptions] = None,
+    **keywords: Any,
+) -> Session:
+    """Cut a logger's file into a session (``host segment --input``): text (its units and time
+    needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes). How to read it
+    as ``log=LogOptions(...)`` or its keywords (``acc_unit``, ``gyro_unit``, ``columns``,
+    ``time_column``, ``time_unit``, ``rate_hz``, ``acc_offset``, ``gyro_lsb_per_dps``,
+    ``instance``, ``topic``); how to cut it as ``site=SessionOptions(...)`` or its keywords."""
+    log, site = _options(log, site, keywords)
+    return _accelcal.segment_file(str(path), log, site)
 
 
 def apply(
     calibration: Calibration,
     acc: Any,
-    gyro: Any,
+    gyro: Any = None,
     t: Any = None,
     rate_hz: Optional[float] = None,
     *,
@@ -132,21 +211,26 @@ def apply(
     lever: str = "full",
     gyro_unit: str = "rad/s",
     with_rate: bool = False,
+    columns: Sequence[str] = DEFAULT_COLUMNS,
+    time_column: Optional[str] = "t",
 ) -> Any:
     """The compensated specific force, g, body axes, of each row (``host apply``): the device's
     own f32 path (``shared::Compensator`` and the firmware's ω̇ estimator). With ``with_rate``,
     a pair: the force and the corrected body rate of each row, rad/s (``host apply``'s ``w_*``).
 
-    The sample rate is ``rate_hz``, or from ``t`` (seconds; the median step, as ``segment`` reads
-    a logger's time column). ``temp_c``: one temperature, or one per row (needed when the
-    calibration has a temperature model). ``lever``: "off", "rate" or "full" (the device's modes).
+    ``acc`` and ``gyro`` as ``segment`` takes them (two (n, 3) array-likes, or one DataFrame with
+    named columns). The sample rate is ``rate_hz``, or from ``t`` (seconds; the median step, as
+    ``segment`` reads a logger's time column). ``gyro_unit``: "rad/s" or "deg/s"; as ``host
+    apply`` checks a logger's file, the still intervals found in the rows must compensate to 1 g
+    and rest, so a gyro in °/s given as rad/s is refused (``InputError``). ``temp_c``: one
+    temperature, or one per row (needed when the calibration has a temperature model).
+    ``lever``: "off", "rate" or "full" (the device's modes).
     """
-    acc = _rows3(acc, "acc")
-    gyro = _rows3(gyro, "gyro")
+    acc, gyro, t = _rows(acc, gyro, t, rate_hz, columns, time_column)
     if rate_hz is None:
         if t is None:
             raise InputError("give the sample rate: rate_hz=HZ, or t (seconds)")
-        steps = np.sort(np.diff(np.asarray(t, dtype=np.float64)))
+        steps = np.sort(np.diff(t))
         if steps.size == 0 or not steps[steps.size // 2] > 0:
             raise InputError("t must increase: give the time of each row in seconds")
         rate_hz = float(1.0 / steps[steps.size // 2])
@@ -166,6 +250,7 @@ def allan(x: Any, rate_hz: float) -> dict:
     fitted noise terms ``white_density`` (N, unit/√Hz), ``bias_instability`` (B, unit) and
     ``random_walk`` (K, unit/√s), each a dict: ``value`` (None when not determined), ``sigma``,
     ``upper_bound_2sigma``, ``needs_recording_s``. For (n, k) input every entry is a list of k.
+    A NaN or infinite value is refused (``InputError``): it would make every τ's deviation NaN.
     """
     arr = np.asarray(x, dtype=np.float64)
     if arr.ndim == 1:
@@ -200,15 +285,13 @@ def simulate_hand(
     return frame
 
 
-def simulate(out: Any, **flags: Any) -> Session:
-    """A session on the virtual rate table (``host simulate --out OUT``), read back. Keyword flags
-    are ``host simulate``'s: ``plan="oblique"``, ``seed=3``, ``unit="unit.toml"``,
-    ``no_noise=True``, ``force=True``…"""
-    args: list = []
-    for key, value in flags.items():
-        flag = "--" + key.replace("_", "-")
-        if value is True:
-            args.append(flag)
-        elif value is not False and value is not None:
-            args += [flag, str(value)]
-    return _accelcal.simulate(str(out), args)
+def simulate(out: Any, **options: Any) -> Session:
+    """A session on the virtual rate table (``host simulate``), written to ``out`` and read back.
+    Typed keywords: ``plan`` (a built-in plan's name or a plan file), ``seed``, ``unit`` (a unit
+    file), ``force``, and the noise: ``no_noise``, ``noise_mg``, ``lsb``, ``drift_mg_sqrt_s``,
+    ``tilt_deg``, ``rate_scale``, ``rate_offset_deg_s``, ``gyro_noise_deg_s``,
+    ``gyro_bias_deg_s`` (x, y, z), ``gyro_scale_ppm`` (x, y, z), ``gyro_misalignment_deg``,
+    ``flicker_mg``, ``gyro_drift_deg_s_sqrt_s``, ``gyro_flicker_deg_s``."""
+    if "unit" in options and options["unit"] is not None:
+        options["unit"] = str(options["unit"])
+    return _accelcal.simulate(str(out), **options)

@@ -12,16 +12,68 @@ _Rows3 = npt.ArrayLike  # (n, 3) float
 DEFAULT_COLUMNS: Tuple[str, str, str, str, str, str]
 
 class Error(Exception):
-    """Every error of accelcal; the message is the one `host` prints."""
+    """Every error of accelcal: `host`'s message, its options named as this package's keywords;
+    `__cause__` holds what caused it (an `OSError` for a file the system could not read)."""
 
 class InputError(Error):
     """The input cannot be used as given."""
 
 class CalibrationError(Error):
-    """The data give no calibration (too few positions, a refused gyro fit, a failed check)."""
+    """The data give no calibration (too few positions, a refused gyro fit, a failed check, an
+    export the calibration cannot fill)."""
 
 class FileError(Error):
     """A file could not be read or written."""
+
+class LogOptions:
+    """How to read a logger's file or arrays (`host segment`'s input options)."""
+
+    def __init__(
+        self,
+        *,
+        acc_unit: Optional[str] = None,
+        gyro_unit: Optional[str] = None,
+        columns: Optional[Sequence[str]] = None,
+        time_column: Optional[str] = None,
+        time_unit: Optional[str] = None,
+        rate_hz: Optional[float] = None,
+        acc_offset: Optional[Sequence[float]] = None,
+        gyro_lsb_per_dps: Optional[float] = None,
+        instance: Optional[int] = None,
+        topic: Optional[str] = None,
+    ) -> None: ...
+    acc_unit: Optional[str]
+    gyro_unit: Optional[str]
+    columns: Optional[List[str]]
+    time_column: Optional[str]
+    time_unit: Optional[str]
+    rate_hz: Optional[float]
+    acc_offset: Optional[List[float]]
+    gyro_lsb_per_dps: Optional[float]
+    instance: Optional[int]
+    topic: Optional[str]
+
+class SessionOptions:
+    """How to cut a recording into a session: shortest still position, unit id, site, gyro fit."""
+
+    def __init__(
+        self,
+        *,
+        min_still_s: float = 1.0,
+        unit_id: Optional[str] = None,
+        gravity: Optional[float] = None,
+        latitude: Optional[float] = None,
+        height_m: Optional[float] = None,
+        no_gyro: bool = False,
+        face_sigma_deg: float = 2.0,
+    ) -> None: ...
+    min_still_s: float
+    unit_id: Optional[str]
+    gravity: Optional[float]
+    latitude: Optional[float]
+    height_m: Optional[float]
+    no_gyro: bool
+    face_sigma_deg: float
 
 class Session:
     """A calibration session: plan, per-segment statistics and the hand-turn gyro."""
@@ -108,12 +160,14 @@ def segment(
     t: Optional[npt.ArrayLike] = None,
     rate_hz: Optional[float] = None,
     *,
-    acc_unit: str,
-    gyro_unit: str,
     columns: Sequence[str] = ...,
     time_column: Optional[str] = "t",
+    log: Optional[LogOptions] = None,
+    site: Optional[SessionOptions] = None,
+    acc_unit: Optional[str] = None,
+    gyro_unit: Optional[str] = None,
     time_unit: Optional[str] = None,
-    acc_offset: Optional[Sequence[float]] = None,
+    acc_offset: Union[None, float, Sequence[float]] = None,
     gyro_lsb_per_dps: Optional[float] = None,
     min_still_s: float = 1.0,
     unit_id: Optional[str] = None,
@@ -122,17 +176,23 @@ def segment(
     height_m: Optional[float] = None,
     no_gyro: bool = False,
     face_sigma_deg: float = 2.0,
-) -> Session: ...
+) -> Session:
+    """Cuts a recording (two (n, 3) array-likes, or one DataFrame with named columns) into a
+    session; the reading options as `log=` or keywords, the cutting options as `site=` or
+    keywords, not both for one group."""
+    ...
 def segment_file(
     path: _Path,
     *,
+    log: Optional[LogOptions] = None,
+    site: Optional[SessionOptions] = None,
     acc_unit: Optional[str] = None,
     gyro_unit: Optional[str] = None,
     columns: Optional[Sequence[str]] = None,
     time_column: Optional[str] = None,
     time_unit: Optional[str] = None,
     rate_hz: Optional[float] = None,
-    acc_offset: Optional[Sequence[float]] = None,
+    acc_offset: Union[None, float, Sequence[float]] = None,
     gyro_lsb_per_dps: Optional[float] = None,
     instance: Optional[int] = None,
     topic: Optional[str] = None,
@@ -146,7 +206,9 @@ def segment_file(
 ) -> Session:
     """Cuts a logger's file into a session, as ``host segment`` does: text (the units and time
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes; ``instance`` and
-    ``topic`` choose the IMU); raw counts with ``acc_offset`` and ``gyro_lsb_per_dps``."""
+    ``topic`` choose the IMU); raw counts with ``acc_offset`` and ``gyro_lsb_per_dps``. The
+    reading options as ``log=LogOptions(...)`` or keywords, the cutting options as
+    ``site=SessionOptions(...)`` or keywords."""
     ...
 def load_session(dir: _Path) -> Session: ...
 def calibrate(
@@ -159,8 +221,8 @@ def calibrate(
 ) -> Calibration: ...
 def apply(
     calibration: Calibration,
-    acc: _Rows3,
-    gyro: _Rows3,
+    acc: Any,
+    gyro: Optional[_Rows3] = None,
     t: Optional[npt.ArrayLike] = None,
     rate_hz: Optional[float] = None,
     *,
@@ -168,8 +230,15 @@ def apply(
     lever: str = "full",
     gyro_unit: str = "rad/s",
     with_rate: bool = False,
-) -> Any: ...
-def allan(x: npt.ArrayLike, rate_hz: float) -> Dict[str, Any]: ...
+    columns: Sequence[str] = ...,
+    time_column: Optional[str] = "t",
+) -> Any:
+    """The compensated specific force per row, g; a gyro whose rest does not fit ``gyro_unit``
+    (°/s declared rad/s) raises InputError."""
+    ...
+def allan(x: npt.ArrayLike, rate_hz: float) -> Dict[str, Any]:
+    """The Allan deviation and noise terms; a NaN or infinite value raises InputError."""
+    ...
 def simulate_hand(
     seed: int = 1,
     rate_hz: float = 200.0,
@@ -178,4 +247,25 @@ def simulate_hand(
     *,
     as_frame: bool = False,
 ) -> Any: ...
-def simulate(out: _Path, **flags: Any) -> Session: ...
+def simulate(
+    out: _Path,
+    *,
+    plan: Optional[str] = None,
+    unit: Optional[_Path] = None,
+    seed: int = 1,
+    force: bool = False,
+    no_noise: bool = False,
+    noise_mg: Optional[float] = None,
+    lsb: Optional[float] = None,
+    drift_mg_sqrt_s: Optional[float] = None,
+    tilt_deg: Optional[float] = None,
+    rate_scale: Optional[float] = None,
+    rate_offset_deg_s: Optional[float] = None,
+    gyro_noise_deg_s: Optional[float] = None,
+    gyro_bias_deg_s: Optional[Tuple[float, float, float]] = None,
+    gyro_scale_ppm: Optional[Tuple[float, float, float]] = None,
+    gyro_misalignment_deg: Optional[float] = None,
+    flicker_mg: Optional[float] = None,
+    gyro_drift_deg_s_sqrt_s: Optional[float] = None,
+    gyro_flicker_deg_s: Optional[float] = None,
+) -> Session: ...

@@ -1,22 +1,21 @@
 //! `calibrate` and the `Calibration` it gives: the estimate of `host calibrate --input`, its
 //! `calibration.toml` and `calibration.bin`, the exports of `host export`, and `Calibration.load`.
 
-use crate::errors::{usage, IntoPy};
+use crate::errors::{usage, IntoPy, PyAccelErr};
 use crate::session::Session;
 use clap::ValueEnum;
 use estimator::calibration_files::{
     blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
 };
-use estimator::estimate::CalibrationOutcome;
+use estimator::estimate::{CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use estimator::unit_file::{UnitFile, UnitFileError};
 use host::app::{self, CalibrateOptions, CalibrationDocument, Recording};
-use host::cli::calibrate::{EstimatorArgs, MethodArg, ReferenceArg};
-use host::cli::CliError;
-use host::export::{render, ExportFormat, ExportInput, ExportOptions};
+use host::export::{render, ExportError, ExportFormat, ExportInput, ExportOptions};
 use host::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use recording::spelling::Spelling;
 use shared::blob::ParameterBlob;
 use shared::UnitId;
 use std::path::PathBuf;
@@ -60,25 +59,43 @@ impl Calibration {
             return Ok(s.parameters.clone());
         }
         file_parameters(&self.unit, &self.cal)
-            .map_err(|e| CliError::Export(e.into()))
+            .map_err(ExportError::from)
             .py_err()
     }
 }
 
-fn parse_enum<T: ValueEnum>(what: &str, text: &str) -> PyResult<T> {
-    T::from_str(text, false).map_err(|_| {
-        let names: Vec<String> = T::value_variants()
-            .iter()
-            .filter_map(|v| v.to_possible_value().map(|p| p.get_name().to_string()))
-            .collect();
-        usage(format!("{what} {text}: use one of {}", names.join(", ")))
-    })
+/// One of `names`' values by its name, or [`crate::errors::InputError`] naming the keyword and the
+/// names it takes.
+pub fn choose<T: Copy>(keyword: &str, given: &str, names: &[(&str, T)]) -> PyResult<T> {
+    names
+        .iter()
+        .find(|(n, _)| *n == given)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let all: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+            usage(format!(
+                "{keyword}=\"{given}\": use one of {}",
+                all.join(", ")
+            ))
+        })
+}
+
+/// An export format by the name `host export` gives it (the enum's own names).
+fn export_format(given: &str) -> PyResult<ExportFormat> {
+    let names: Vec<(String, ExportFormat)> = ExportFormat::value_variants()
+        .iter()
+        .filter_map(|v| {
+            v.to_possible_value()
+                .map(|p| (p.get_name().to_string(), *v))
+        })
+        .collect();
+    let names: Vec<(&str, ExportFormat)> = names.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    choose("format", given, &names)
 }
 
 fn json_to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value)
-        .map_err(|e| CliError::Failed(format!("cannot write the JSON result: {e}")))
-        .py_err()?;
+        .map_err(|e| usage(format!("cannot write the JSON result: {e}")))?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -98,12 +115,24 @@ pub fn calibrate(
 ) -> PyResult<Calibration> {
     // `single_package`: host calibrate's --single-package (one lever arm for the three
     // accelerometers of one package, docs/model.md §4.7).
-    let estimate = EstimatorArgs {
-        method: parse_enum::<MethodArg>("method", method)?,
-        reference: parse_enum::<ReferenceArg>("reference", reference)?,
+    let estimate = EstimateOptions {
+        method: choose(
+            "method",
+            method,
+            &[("joint", Method::Joint), ("paper", Method::Paper)],
+        )?,
+        reference: choose(
+            "reference",
+            reference,
+            &[
+                ("table-axis", ReferenceChoice::TableAxis),
+                ("centroid", ReferenceChoice::Centroid),
+            ],
+        )?,
         single_package,
-    }
-    .options();
+        spelling: Spelling::Keywords,
+        ..EstimateOptions::default()
+    };
     let limits: Limits = match limits {
         Some(d) => {
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
@@ -159,10 +188,16 @@ impl Calibration {
     fn load(path: PathBuf) -> PyResult<Calibration> {
         if path.extension().is_some_and(|e| e == "bin") {
             let bytes = std::fs::read(&path)
-                .map_err(|e| CliError::Io(path.clone(), e))
+                .map_err(|source| PyAccelErr::Io {
+                    path: path.clone(),
+                    source,
+                })
                 .py_err()?;
             let blob = shared::blob::decode(&bytes)
-                .map_err(|e| CliError::Blob(path.clone(), e))
+                .map_err(|source| PyAccelErr::Blob {
+                    path: path.clone(),
+                    source,
+                })
                 .py_err()?;
             return Ok(Calibration {
                 unit: UnitFile::from_calibration(&blob.calibration, Some(blob.unit_id), None),
@@ -173,7 +208,7 @@ impl Calibration {
             });
         }
         let unit = UnitFile::load(&path).py_err()?;
-        let invalid = |m| CliError::Unit(UnitFileError::Invalid(path.clone(), m));
+        let invalid = |m| UnitFileError::Invalid(path.clone(), m);
         let cal = unit.to_calibration().map_err(invalid).py_err()?;
         let unit_id = unit.unit_id().map_err(invalid).py_err()?;
         Ok(Calibration {
@@ -212,7 +247,7 @@ impl Calibration {
             .map(|(b, n)| b[..n].to_vec()),
         };
         let bytes = bytes
-            .map_err(|e| CliError::Output(estimator::calibration_files::OutputError::Blob(e)))
+            .map_err(estimator::calibration_files::OutputError::Blob)
             .py_err()?;
         Ok(PyBytes::new(py, &bytes))
     }
@@ -251,7 +286,7 @@ impl Calibration {
         allow_out_of_range: bool,
         allow_undetermined: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let format = parse_enum::<ExportFormat>("format", format)?;
+        let format = export_format(format)?;
         let noise = match &noise {
             Some(p) => Some(host::noise::load_kalibr_noise(p).py_err()?),
             None => None,
@@ -269,6 +304,7 @@ impl Calibration {
                 gyro_device_id,
                 sysid,
                 compid,
+                spelling: Spelling::Keywords,
             },
         };
         if format == ExportFormat::C {

@@ -1,5 +1,6 @@
-//! `accelcal._accelcal`: the Python package's compiled half. Every function calls the `host`
-//! library that the command line calls (no second implementation); the Python half
+//! `accelcal._accelcal`: the Python package's compiled half. Every function calls `host`'s
+//! application layer and domain modules, as the command line does (no second implementation, and
+//! nothing of the command line itself: typed options, not flags); the Python half
 //! (`accelcal/__init__.py`) adds pandas DataFrames and keyword conveniences.
 
 mod calibration;
@@ -14,6 +15,8 @@ fn _accelcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<session::Session>()?;
     m.add_class::<calibration::Calibration>()?;
+    m.add_class::<session::LogOptions>()?;
+    m.add_class::<session::SessionOptions>()?;
     m.add_function(wrap_pyfunction!(session::segment_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(session::segment_file, m)?)?;
     m.add_function(wrap_pyfunction!(session::load_session, m)?)?;

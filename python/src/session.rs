@@ -2,12 +2,11 @@
 //! into still positions by `host segment`'s own steps (`host::app::in_memory`), or a recorded
 //! session directory read by `host calibrate --input`'s reader.
 
-use crate::errors::{usage, IntoPy};
+use crate::errors::{usage, IntoPy, PyAccelErr};
 use estimator::estimate::gyro::GyroEstimate;
 use host::app::hand_gyro;
 use host::app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
-use host::cli::log_input::LogInputArgs;
-use host::cli::CliError;
+use host::app::log_input::LogInput;
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -17,6 +16,7 @@ use recording::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
 use recording::session::logs::read_log;
 use recording::session::segment::{IntervalKind, SegmentOptions};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
+use recording::spelling::Spelling;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
@@ -167,10 +167,7 @@ impl Session {
     #[pyo3(signature = (dir, force = false))]
     fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<u64> {
         match &self.inner {
-            Inner::Memory(s) => py
-                .detach(|| s.write(&dir, force))
-                .map_err(|e| CliError::Failed(e.to_string()))
-                .py_err(),
+            Inner::Memory(s) => py.detach(|| s.write(&dir, force)).py_err(),
             Inner::Read { dir: from, .. } => Err(usage(format!(
                 "this session was read from {}: it is already written",
                 from.display()
@@ -189,18 +186,149 @@ impl Session {
     }
 }
 
-/// `host segment`'s options that do not name the input.
-pub struct SiteArgs {
+/// How to read a logger's file or arrays (`host segment`'s input options, as keywords): the
+/// columns, the time, the units, raw counts' offset and scale, the IMU of a binary log.
+#[pyclass(module = "accelcal", frozen, get_all)]
+#[derive(Clone, Debug)]
+pub struct LogOptions {
+    /// Accelerometer unit: "m/s2", "g", "LSB" or "V" (text files and arrays).
+    pub acc_unit: Option<String>,
+    /// Gyro unit: "deg/s", "rad/s" or "LSB" (with gyro_lsb_per_dps).
+    pub gyro_unit: Option<String>,
+    /// The six column names, acc x, y, z then gyro x, y, z (text files).
+    pub columns: Option<Vec<String>>,
+    /// The time column (text files; else rate_hz).
+    pub time_column: Option<String>,
+    /// The time column's unit: "s", "ms", "us", "ns" (default: detected).
+    pub time_unit: Option<String>,
+    /// The sample rate, Hz, of a text file without a time column.
+    pub rate_hz: Option<f64>,
+    /// Raw counts' zero force, one value or one per axis.
+    pub acc_offset: Option<Vec<f64>>,
+    /// A gyro in counts: counts per °/s.
+    pub gyro_lsb_per_dps: Option<f64>,
+    /// ULog or DataFlash: which IMU.
+    pub instance: Option<u8>,
+    /// MCAP: which Imu topic.
+    pub topic: Option<String>,
+}
+
+#[pymethods]
+impl LogOptions {
+    #[new]
+    #[pyo3(signature = (*, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
+        time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None,
+        instance = None, topic = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        acc_unit: Option<String>,
+        gyro_unit: Option<String>,
+        columns: Option<Vec<String>>,
+        time_column: Option<String>,
+        time_unit: Option<String>,
+        rate_hz: Option<f64>,
+        acc_offset: Option<Vec<f64>>,
+        gyro_lsb_per_dps: Option<f64>,
+        instance: Option<u32>,
+        topic: Option<String>,
+    ) -> PyResult<Self> {
+        let instance = instance
+            .map(u8::try_from)
+            .transpose()
+            .map_err(|_| usage("instance is an IMU's number in the log, 0 to 255"))?;
+        Ok(LogOptions {
+            acc_unit,
+            gyro_unit,
+            columns,
+            time_column,
+            time_unit,
+            rate_hz,
+            acc_offset,
+            gyro_lsb_per_dps,
+            instance,
+            topic,
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        format!("{self:?}").replacen("LogOptions {", "LogOptions(", 1)
+    }
+}
+
+impl LogOptions {
+    /// The application layer's options, named as keywords in its messages.
+    fn input(&self) -> LogInput {
+        LogInput {
+            columns: self
+                .columns
+                .clone()
+                .unwrap_or_else(|| DEFAULT_COLUMNS.map(String::from).to_vec()),
+            time_column: self.time_column.clone(),
+            time_unit: self.time_unit.clone(),
+            rate_hz: self.rate_hz,
+            acc_unit: self.acc_unit.clone(),
+            acc_offset: self.acc_offset.clone(),
+            gyro_unit: self.gyro_unit.clone(),
+            gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            instance: self.instance,
+            topic: self.topic.clone(),
+            spelling: Spelling::Keywords,
+        }
+    }
+}
+
+/// How to cut a recording into a session (`host segment`'s options that do not name the input):
+/// the shortest still position, the unit's id, the site's gravity, the gyro fit, a six-face prior.
+#[pyclass(module = "accelcal", frozen, get_all)]
+#[derive(Clone, Debug)]
+pub struct SessionOptions {
+    /// Shortest still position kept, s.
     pub min_still_s: f64,
+    /// The unit's id, 24 hex digits.
     pub unit_id: Option<String>,
+    /// The site's gravity, m/s².
     pub gravity: Option<f64>,
+    /// The site's latitude, degrees (its normal gravity).
     pub latitude: Option<f64>,
+    /// The site's height, m (with latitude).
     pub height_m: Option<f64>,
+    /// Leave the gyro out.
     pub no_gyro: bool,
+    /// A six-face session's prior on its faces, degrees.
     pub face_sigma_deg: f64,
 }
 
-impl SiteArgs {
+#[pymethods]
+impl SessionOptions {
+    #[new]
+    #[pyo3(signature = (*, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
+        height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
+    fn new(
+        min_still_s: f64,
+        unit_id: Option<String>,
+        gravity: Option<f64>,
+        latitude: Option<f64>,
+        height_m: Option<f64>,
+        no_gyro: bool,
+        face_sigma_deg: f64,
+    ) -> Self {
+        SessionOptions {
+            min_still_s,
+            unit_id,
+            gravity,
+            latitude,
+            height_m,
+            no_gyro,
+            face_sigma_deg,
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        format!("{self:?}").replacen("SessionOptions {", "SessionOptions(", 1)
+    }
+}
+
+impl SessionOptions {
     /// The choices, checked as `host segment` checks its flags.
     fn choices(&self) -> PyResult<SegmentChoices> {
         if self.height_m.is_some() && self.latitude.is_none() {
@@ -227,6 +355,7 @@ impl SiteArgs {
         Ok(SegmentChoices {
             segment: SegmentOptions {
                 min_still_s: self.min_still_s,
+                spelling: Spelling::Keywords,
                 ..SegmentOptions::default()
             },
             unit_id,
@@ -239,18 +368,15 @@ impl SiteArgs {
 
 /// `host segment`'s steps after the options: the recording `read` gives (the import's checks and
 /// messages), then the intervals, plan and gyro; the GIL released meanwhile.
-fn segmented<F, E>(py: Python<'_>, site: &SiteArgs, read: F) -> PyResult<Session>
+fn segmented<F, E>(py: Python<'_>, site: &SessionOptions, read: F) -> PyResult<Session>
 where
     F: FnOnce() -> Result<(Recording, Vec<String>), E> + Send,
-    E: std::fmt::Display + Send,
+    E: Into<PyAccelErr> + Send,
 {
     let choices = site.choices()?;
-    let (rec, reader_warnings) = py
-        .detach(read)
-        .map_err(|e| CliError::Failed(e.to_string()))
-        .py_err()?;
+    let (rec, reader_warnings) = py.detach(read).py_err()?;
     let s = py.detach(|| segment_recording(rec, &choices));
-    let mut s = s.map_err(CliError::from).py_err()?;
+    let mut s = s.py_err()?;
     s.warnings.splice(0..0, reader_warnings);
     Ok(Session {
         inner: Inner::Memory(Box::new(s)),
@@ -328,31 +454,17 @@ pub fn rows_of_pair(acc: &ArrayView2<'_, f64>, gyro: &ArrayView2<'_, f64>) -> Py
 }
 
 /// Cuts a hand-held recording held in arrays into a session, with `host segment`'s input options
-/// (units, raw counts' offset and gyro scale, the time unit), parsed and checked by the command
-/// line's own option set as for a file.
+/// (units, raw counts' offset and gyro scale, the time unit) checked as for a file.
 #[pyfunction]
-#[pyo3(signature = (acc, gyro, t = None, rate_hz = None, *, acc_unit, gyro_unit, time_unit = None,
-    acc_offset = None, gyro_lsb_per_dps = None, min_still_s = 1.0, unit_id = None, gravity = None,
-    latitude = None, height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (acc, gyro, t, rate_hz, log, site))]
 pub fn segment_arrays(
     py: Python<'_>,
     acc: PyReadonlyArray2<'_, f64>,
     gyro: PyReadonlyArray2<'_, f64>,
     t: Option<PyReadonlyArray1<'_, f64>>,
     rate_hz: Option<f64>,
-    acc_unit: String,
-    gyro_unit: String,
-    time_unit: Option<String>,
-    acc_offset: Option<Vec<f64>>,
-    gyro_lsb_per_dps: Option<f64>,
-    min_still_s: f64,
-    unit_id: Option<String>,
-    gravity: Option<f64>,
-    latitude: Option<f64>,
-    height_m: Option<f64>,
-    no_gyro: bool,
-    face_sigma_deg: f64,
+    log: &LogOptions,
+    site: &SessionOptions,
 ) -> PyResult<Session> {
     let (acc, gyro) = (acc.as_array(), gyro.as_array());
     let t = t.as_ref().map(|t| t.as_array());
@@ -366,21 +478,18 @@ pub fn segment_arrays(
     if t.is_some() == rate_hz.is_some() {
         return Err(usage("give exactly one of t (seconds) or rate_hz (Hz)"));
     }
-    let input = LogInputArgs {
-        columns: DEFAULT_COLUMNS.join(","),
+    if log.columns.is_some() || log.instance.is_some() || log.topic.is_some() {
+        return Err(usage(
+            "arrays have no columns, instances or topics: give columns, instance and topic to \
+             segment_file",
+        ));
+    }
+    let input = LogInput {
         time_column: t.map(|_| "t".to_string()),
-        time_unit,
         rate_hz,
-        acc_unit: Some(acc_unit),
-        acc_offset: acc_offset.map(|v| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",")),
-        gyro_unit: Some(gyro_unit),
-        gyro_lsb_per_dps,
-        instance: None,
-        topic: None,
+        ..log.input()
     };
-    let Some(options) = input.source(Path::new("(arrays)")).py_err()?.text else {
-        return Err(usage("acc_unit and gyro_unit are needed"));
-    };
+    let options = input.import_options().py_err()?;
     let lines = ArrayLines {
         acc,
         gyro,
@@ -389,77 +498,24 @@ pub fn segment_arrays(
         line: Vec::new(),
         pos: 0,
     };
-    let site = SiteArgs {
-        min_still_s,
-        unit_id,
-        gravity,
-        latitude,
-        height_m,
-        no_gyro,
-        face_sigma_deg,
-    };
-    segmented(py, &site, || {
+    segmented(py, site, || {
         read_logger(BufReader::new(lines), Path::new("(arrays)"), &options).map(|r| (r, Vec::new()))
     })
 }
 
 /// Cuts a logger's file into a session: every format `host segment` reads (text, PX4 ULog,
-/// ArduPilot DataFlash, ROS 2 MCAP, told by its first bytes), with the same input options, parsed
-/// and checked by the command line's own option set (`host::cli::log_input`).
+/// ArduPilot DataFlash, ROS 2 MCAP, told by its first bytes), read as `log` says and cut as `site`
+/// says.
 #[pyfunction]
-#[pyo3(signature = (path, *, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
-    time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None, instance = None,
-    topic = None, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
-    height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (path, log, site))]
 pub fn segment_file(
     py: Python<'_>,
     path: PathBuf,
-    acc_unit: Option<String>,
-    gyro_unit: Option<String>,
-    columns: Option<Vec<String>>,
-    time_column: Option<String>,
-    time_unit: Option<String>,
-    rate_hz: Option<f64>,
-    acc_offset: Option<Vec<f64>>,
-    gyro_lsb_per_dps: Option<f64>,
-    instance: Option<u32>,
-    topic: Option<String>,
-    min_still_s: f64,
-    unit_id: Option<String>,
-    gravity: Option<f64>,
-    latitude: Option<f64>,
-    height_m: Option<f64>,
-    no_gyro: bool,
-    face_sigma_deg: f64,
+    log: &LogOptions,
+    site: &SessionOptions,
 ) -> PyResult<Session> {
-    if instance.is_some_and(|i| i > u32::from(u8::MAX)) {
-        return Err(usage("instance is an IMU's number in the log, 0 to 255"));
-    }
-    let join = |v: Vec<String>| v.join(",");
-    let input = LogInputArgs {
-        columns: columns.map_or_else(|| DEFAULT_COLUMNS.join(","), join),
-        time_column,
-        time_unit,
-        rate_hz,
-        acc_unit,
-        acc_offset: acc_offset.map(|v| join(v.iter().map(f64::to_string).collect())),
-        gyro_unit,
-        gyro_lsb_per_dps,
-        instance,
-        topic,
-    };
-    let source = input.source(&path).py_err()?;
-    let site = SiteArgs {
-        min_still_s,
-        unit_id,
-        gravity,
-        latitude,
-        height_m,
-        no_gyro,
-        face_sigma_deg,
-    };
-    segmented(py, &site, || {
+    let source = log.input().source().py_err()?;
+    segmented(py, site, || {
         read_log(&path, &source).map(|log| (log.recording, log.warnings))
     })
 }
@@ -468,7 +524,7 @@ pub fn segment_file(
 /// one), as `host calibrate --input DIR` does.
 #[pyfunction]
 pub fn load_session(py: Python<'_>, dir: PathBuf) -> PyResult<Session> {
-    let read = py.detach(|| -> Result<_, CliError> {
+    let read = py.detach(|| -> Result<_, PyAccelErr> {
         let s = read_session(&dir, &ReadOptions { quiet: true })?;
         let gyro = hand_gyro::read(&dir)?;
         Ok((s, gyro))

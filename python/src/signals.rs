@@ -1,25 +1,21 @@
 //! `apply` (the device's per-sample compensation, `host apply`), `allan` (`host noise`'s Allan
 //! deviation and noise terms), and the simulators of `host simulate-hand` and `host simulate`.
 
-use crate::calibration::Calibration;
+use crate::calibration::{choose, Calibration};
 use crate::errors::{usage, IntoPy};
 use crate::session::{load_session, rows_of_pair, Session};
-use clap::{Parser, ValueEnum};
 use estimator::sim::handheld::{
     logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec,
 };
-use host::apply::Applier;
-use host::cli::apply::LeverArg;
-use host::cli::simulate::SimulateArgs;
-use host::cli::CliError;
+use host::app::simulate::{NoiseChoices, Simulation};
+use host::apply::Prepared;
 use host::noise::allan::{fit, octave_sizes, overlapping_adev, TermFit};
 use host::noise::confidence::relative_sigma;
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use recording::session::import::{parse_acc_unit, GyroUnit};
-use recording::session::Row;
+use recording::session::import::{parse_acc_unit, GyroUnit, Recording};
 use shared::compensator::LeverMode;
 use shared::OutputUnit;
 use std::path::PathBuf;
@@ -27,8 +23,10 @@ use std::path::PathBuf;
 /// The compensated specific force of each row, g, body axes: every sample through the device's
 /// own f32 path (`shared::Compensator` with the firmware's ω̇ estimator, as `host apply` does), the
 /// temperature model refreshed at the device's pace. A row with a non-finite value gives NaN and
-/// restarts the ω̇ estimate, as on the device. The gyro is in rad/s unless `gyro_unit` says deg/s.
-/// With `with_rate`, also the corrected body rate of each row, rad/s (`host apply`'s `w_*` columns).
+/// restarts the ω̇ estimate, as on the device. The gyro is in `gyro_unit`; as `host apply` does for
+/// a logger's file, the still intervals found in the rows must compensate to 1 g and, with a gyro
+/// calibration, rest (a gyro in °/s declared rad/s is refused). With `with_rate`, also the corrected
+/// body rate of each row, rad/s (`host apply`'s `w_*` columns).
 #[pyfunction]
 #[pyo3(signature = (calibration, acc, gyro, rate_hz, *, temp_c = None, lever = "full",
     gyro_unit = "rad/s", with_rate = false))]
@@ -44,11 +42,27 @@ pub fn apply<'py>(
     gyro_unit: &str,
     with_rate: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let lever: LeverArg = LeverArg::from_str(lever, false)
-        .map_err(|_| usage(format!("lever {lever}: use off, rate or full")))?;
+    let mode = choose(
+        "lever",
+        lever,
+        &[
+            ("off", LeverMode::Off),
+            ("rate", LeverMode::RateOnly),
+            ("full", LeverMode::RateAndAcceleration),
+        ],
+    )?;
     let to_rad_s = GyroUnit::parse(gyro_unit)
-        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?
+        .ok_or_else(|| {
+            usage(format!(
+                "gyro_unit=\"{gyro_unit}\": use \"deg/s\" or \"rad/s\""
+            ))
+        })?
         .to_rad_s();
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(usage(format!(
+            "rate_hz={rate_hz}: give the sample rate in Hz"
+        )));
+    }
     let (acc, gyro) = (acc.as_array(), gyro.as_array());
     let n = rows_of_pair(&acc, &gyro)?;
     // One temperature for every row, or one per row.
@@ -67,33 +81,45 @@ pub fn apply<'py>(
         return Err(usage(format!("temp_c has the wrong length for {n} rows")));
     }
     let cal = calibration.device();
-    if cal.temperature.is_some() && temps.is_none() {
-        return Err(CliError::Apply(host::apply::ApplyError::NoTemperature)).py_err();
-    }
-    let mut applier = Applier::new(cal, LeverMode::from(lever), rate_hz).py_err()?;
+    // The rows as a recording in the calibration's unit, evenly spaced at the rate given.
+    let rec = Recording {
+        t_s: (0..n).map(|i| i as f64 / rate_hz).collect(),
+        acc: (0..n).map(|i| [0, 1, 2].map(|j| acc[(i, j)])).collect(),
+        gyro_rad_s: (0..n)
+            .map(|i| [0, 1, 2].map(|j| gyro[(i, j)] * to_rad_s))
+            .collect(),
+        acc_unit: Some(cal.statics.output_unit),
+        rate_hz,
+        temp_c: temps,
+        ..Recording::default()
+    };
     let g = cal.gravity_m_s2;
-    let (out, rate) = py.detach(|| {
+    let done = py.detach(|| {
         let mut out = Array2::<f64>::from_elem((n, 3), f64::NAN);
         let mut rate = Array2::<f64>::from_elem((n, 3), f64::NAN);
-        for i in 0..n {
-            let row = Row {
-                segment: "",
-                segment_index: 0,
-                t_s: 0.0,
-                u: [acc[(i, 0)], acc[(i, 1)], acc[(i, 2)]],
-                w_rad_s: [0, 1, 2].map(|j| gyro[(i, j)] * to_rad_s),
-                temp_c: temps.as_ref().map(|t| t[i]),
-            };
-            if let Some(f) = applier.row(&row) {
+        let prepared = Prepared::new(&rec, cal, mode, None)?;
+        let summary = prepared.run(&rec, cal, &mut |i, f, applier| {
+            if let Some(f) = f {
                 let w = applier.rate_rad_s();
                 for j in 0..3 {
                     out[(i, j)] = f64::from(f[j]) / g;
                     rate[(i, j)] = f64::from(w[j]);
                 }
             }
-        }
-        (out, rate)
+            Ok(())
+        })?;
+        Ok::<_, host::apply::ApplyError>((out, rate, summary.warnings))
     });
+    let (out, rate, warnings) = done.py_err()?;
+    for w in warnings {
+        let text = std::ffi::CString::new(w).unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &text,
+            1,
+        )?;
+    }
     let out = out.into_pyarray(py).into_any();
     if with_rate {
         Ok((out, rate.into_pyarray(py)).into_pyobject(py)?.into_any())
@@ -132,6 +158,15 @@ pub fn allan<'py>(
     }
     let view: ArrayView1<'_, f64> = x.as_array();
     let n = view.len();
+    // One NaN would make every τ's deviation NaN: refused, with where it is.
+    let bad = view.iter().filter(|v| !v.is_finite()).count();
+    if let Some(first) = view.iter().position(|v| !v.is_finite()) {
+        return Err(usage(format!(
+            "x has {bad} non-finite value(s) (the first at index {first}): the Allan deviation \
+             needs an unbroken record; analyse a stretch without them (e.g. the longest run of \
+             finite values)"
+        )));
+    }
     if n < host::noise::MIN_SAMPLES {
         return Err(usage(format!(
             "{n} samples: at least {} are needed (record a long still segment)",
@@ -235,26 +270,61 @@ pub fn simulate_hand<'py>(
     Ok(d)
 }
 
-/// `host simulate`'s command line, parsed by its own clap definition.
-#[derive(Parser)]
-#[command(name = "simulate")]
-struct SimulateCommand {
-    #[command(flatten)]
-    args: SimulateArgs,
-}
-
-/// Runs `host simulate --out OUT ARGS…` (a session on the virtual table: plan.toml, samples.csv,
-/// truth.toml) and reads the session back. `args` are the command's flags, e.g.
-/// `["--plan", "oblique", "--seed", "3"]`.
+/// A session on the virtual rate table (`host simulate`: plan.toml, samples.csv, truth.toml in
+/// `out`), read back. The keywords are the simulation's typed options.
 #[pyfunction]
-#[pyo3(signature = (out, args = Vec::new()))]
-pub fn simulate(py: Python<'_>, out: PathBuf, args: Vec<String>) -> PyResult<Session> {
-    let mut argv = vec!["simulate".to_string(), "--out".into()];
-    argv.push(out.display().to_string());
-    argv.extend(args);
-    let parsed =
-        SimulateCommand::try_parse_from(&argv).map_err(|e| usage(e.render().to_string()))?;
-    py.detach(|| host::cli::simulate::run(&parsed.args, true))
+#[pyo3(signature = (out, *, plan = None, unit = None, seed = 1, force = false, no_noise = false,
+    noise_mg = None, lsb = None, drift_mg_sqrt_s = None, tilt_deg = None, rate_scale = None,
+    rate_offset_deg_s = None, gyro_noise_deg_s = None, gyro_bias_deg_s = None,
+    gyro_scale_ppm = None, gyro_misalignment_deg = None, flicker_mg = None,
+    gyro_drift_deg_s_sqrt_s = None, gyro_flicker_deg_s = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(
+    py: Python<'_>,
+    out: PathBuf,
+    plan: Option<String>,
+    unit: Option<PathBuf>,
+    seed: u64,
+    force: bool,
+    no_noise: bool,
+    noise_mg: Option<f64>,
+    lsb: Option<f64>,
+    drift_mg_sqrt_s: Option<f64>,
+    tilt_deg: Option<f64>,
+    rate_scale: Option<f64>,
+    rate_offset_deg_s: Option<f64>,
+    gyro_noise_deg_s: Option<f64>,
+    gyro_bias_deg_s: Option<[f64; 3]>,
+    gyro_scale_ppm: Option<[f64; 3]>,
+    gyro_misalignment_deg: Option<f64>,
+    flicker_mg: Option<f64>,
+    gyro_drift_deg_s_sqrt_s: Option<f64>,
+    gyro_flicker_deg_s: Option<f64>,
+) -> PyResult<Session> {
+    let simulation = Simulation {
+        out: out.clone(),
+        unit,
+        plan,
+        seed,
+        force,
+        noise: NoiseChoices {
+            no_noise,
+            noise_mg,
+            lsb,
+            drift_mg_sqrt_s,
+            tilt_deg,
+            rate_scale,
+            rate_offset_deg_s,
+            gyro_noise_deg_s,
+            gyro_bias_deg_s,
+            gyro_scale_ppm,
+            gyro_misalignment_deg,
+            flicker_mg,
+            gyro_drift_deg_s_sqrt_s,
+            gyro_flicker_deg_s,
+        },
+    };
+    py.detach(|| host::app::simulate::simulate(&simulation, None))
         .py_err()?;
     load_session(py, out)
 }

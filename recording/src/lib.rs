@@ -10,9 +10,11 @@
 //!   and the range parsers of the command line's numbers.
 //! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`ui`]: progress bars on a terminal.
+//! - [`spelling`]: how a caller names the input options in messages (flags or keyword arguments).
 #![deny(missing_docs)]
 
 pub mod limits;
 pub mod output_file;
 pub mod session;
+pub mod spelling;
 pub mod ui;

@@ -18,6 +18,7 @@
 //! contradicts the table (`ExclusionReason::RateContradiction`): the same causes, seen before the fit.
 
 use super::{Exclusion, ExclusionReason};
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg::RowMajor3;
 
 /// Largest plausible |G_ii − 1|: MEMS gyros are within ±3 % of their nominal scale; 20 % leaves room
@@ -61,8 +62,14 @@ pub fn common_scale(matrix: &RowMajor3) -> Option<f64> {
     .then_some(k)
 }
 
-/// The likely causes of an implausible `G`, one line each (empty: `G` is plausible).
+/// The likely causes of an implausible `G`, one line each (empty: `G` is plausible), the options
+/// named as the command line's flags.
 pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
+    matrix_problems_spelled(matrix, Spelling::Flags)
+}
+
+/// [`matrix_problems`], the options named as `sp` spells them.
+pub fn matrix_problems_spelled(matrix: &RowMajor3, sp: Spelling) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();
     if matrix.iter().flatten().any(|v| !v.is_finite()) {
@@ -101,7 +108,7 @@ pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
     }
     let scale: [f64; 3] = core::array::from_fn(|i| matrix[i][i] - 1.0);
     if common_scale(matrix).is_none() && scale.iter().any(|s| s.abs() > MAX_SCALE_ERROR) {
-        problems.push(scale_cause(&scale));
+        problems.push(scale_cause(&scale, sp));
     }
     // Relative to the row's scale: a gyro that reads 2× has its cross-axis terms doubled too.
     for i in 0..3 {
@@ -122,7 +129,7 @@ pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
 }
 
 /// The cause of a scale error beyond [`MAX_SCALE_ERROR`]: a common one is the time base or unit.
-fn scale_cause(scale: &[f64; 3]) -> String {
+fn scale_cause(scale: &[f64; 3], sp: Spelling) -> String {
     let ratio: [f64; 3] = scale.map(|s| 1.0 + s);
     let mean = ratio.iter().sum::<f64>() / 3.0;
     let common = ratio
@@ -138,12 +145,14 @@ fn scale_cause(scale: &[f64; 3]) -> String {
     if common && ((mean / deg) - 1.0).abs() < 0.1 {
         format!(
             "gyro scale errors {shown}: the rates are {deg:.1}× too large on every axis, so the gyro \
-             is in °/s but was read as rad/s (--gyro-unit deg/s)"
+             is in °/s but was read as rad/s ({})",
+            sp.given(UserOption::GyroUnit, "deg/s")
         )
     } else if common && ((mean * deg) - 1.0).abs() < 0.1 {
         format!(
             "gyro scale errors {shown}: the rates are {deg:.1}× too small on every axis, so the gyro \
-             is in rad/s but was read as °/s (--gyro-unit rad/s)"
+             is in rad/s but was read as °/s ({})",
+            sp.given(UserOption::GyroUnit, "rad/s")
         )
     } else if common {
         format!(

@@ -12,6 +12,7 @@
 //! frame; an uncalibrated accelerometer's percent-level errors would otherwise enter `G` directly.
 
 use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg::{self, RowMajor3};
 use std::f64::consts::PI;
 
@@ -134,13 +135,16 @@ pub enum HandGyroError {
     /// The integrated gyro turns far more or far less than gravity did.
     #[error(
         "the gyro turns {ratio:.3}× as far as gravity does between positions: its unit is wrong{hint}; \
-         give the right --gyro-unit"
+         give the right {}",
+        .spelling.name(UserOption::GyroUnit)
     )]
     UnitMismatch {
         /// Median ratio of integrated to gravity angle.
         ratio: f64,
         /// A guess at the right unit.
-        hint: &'static str,
+        hint: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The user asked for no gyro fit (`host segment --no-gyro`).
     #[error("not fitted (--no-gyro); the accelerometer's axes are unchecked for a mirror image")]
@@ -230,6 +234,7 @@ fn check_unit(
     t_s: &[f64],
     w: &[[f64; 3]],
     b: &[f64; 3],
+    sp: Spelling,
 ) -> Result<(), HandGyroError> {
     let path = |turn: &Turn| {
         (turn.from_row..turn.to_row)
@@ -258,12 +263,19 @@ fn check_unit(
     match ratio {
         r if r < 0.3 => Err(HandGyroError::UnitMismatch {
             ratio: r,
-            hint: " (the values look like rad/s: --gyro-unit rad/s)",
+            hint: format!(
+                " (the values look like rad/s: {})",
+                sp.given(UserOption::GyroUnit, "rad/s")
+            ),
+            spelling: sp,
         }),
         r if r > 5.0 => Err(HandGyroError::UnitMismatch {
             ratio: r,
-            hint: " (deg/s read as rad/s gives 57×: --gyro-unit deg/s; time stamps in ms instead of s \
-                   give 1000×)",
+            hint: format!(
+                " (deg/s read as rad/s gives 57×: {}; time stamps in ms instead of s give 1000×)",
+                sp.given(UserOption::GyroUnit, "deg/s")
+            ),
+            spelling: sp,
         }),
         _ => Ok(()),
     }
@@ -271,7 +283,8 @@ fn check_unit(
 
 /// Fits `G` and `b` from the hand `turns`, the whole `table` turns and the still intervals' bias
 /// `bias` (from [`still_bias`], with its 1σ), with the gyro's angle random walk `arw_rad_per_sqrt_s`
-/// (from the still intervals' noise) in the table turns' weights.
+/// (from the still intervals' noise) in the table turns' weights. A refusal names the options as
+/// `spelling` does.
 pub fn fit_handheld_gyro(
     turns: &[Turn],
     table: &[TableTurn],
@@ -279,6 +292,7 @@ pub fn fit_handheld_gyro(
     w_rad_s: &[[f64; 3]],
     bias: ([f64; 3], [f64; 3]),
     arw_rad_per_sqrt_s: f64,
+    spelling: Spelling,
 ) -> Result<HandGyroFit, HandGyroError> {
     if 2 * turns.len() + 3 * table.len() < 10 {
         return Err(HandGyroError::TooFewTurns {
@@ -286,7 +300,7 @@ pub fn fit_handheld_gyro(
             table_turns: table.len(),
         });
     }
-    check_unit(turns, t_s, w_rad_s, &bias.0)?;
+    check_unit(turns, t_s, w_rad_s, &bias.0, spelling)?;
     let problem = Problem::new(turns, table, t_s, w_rad_s, bias, arw_rad_per_sqrt_s);
     let mut p = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
     p.extend_from_slice(&bias.0);

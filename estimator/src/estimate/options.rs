@@ -1,6 +1,8 @@
 //! The estimator's settings: which method, which reference point, when to scale by χ², how the gyro
 //! is treated, and the screening thresholds.
 
+use recording::spelling::Spelling;
+
 /// Which estimator gives the result.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -94,6 +96,8 @@ pub struct EstimateOptions {
     pub single_package: bool,
     /// The accelerometers' bias random walk (docs/model.md §11).
     pub bias_walk: BiasWalk,
+    /// How the caller names these options in refusals and warnings.
+    pub spelling: Spelling,
 }
 
 impl EstimateOptions {
@@ -151,6 +155,7 @@ impl Default for EstimateOptions {
             static_from_rest: false,
             single_package: false,
             bias_walk: BiasWalk::Off,
+            spelling: Spelling::Flags,
         }
     }
 }

@@ -11,6 +11,7 @@
 use super::model::{idx_r, r_of};
 use super::solve::{self, Problem};
 use super::{EstimateOptions, Method, ReferenceChoice};
+use recording::spelling::{Spelling, UserOption};
 
 /// The one line every output gives for a single-package unit's in-package size effect.
 pub const IN_PACKAGE_NOT_OBSERVABLE: &str =
@@ -24,23 +25,26 @@ pub const IN_PACKAGE_NOT_OBSERVABLE: &str =
 pub enum PackageRefusal {
     /// The paper's eq. 24 fits each component on its own: it has no single-point form.
     #[error(
-        "the paper's eq. 24 estimates each accelerometer's lever arm on its own; use --method joint \
-         with --single-package"
+        "the paper's eq. 24 estimates each accelerometer's lever arm on its own; use {} with {}",
+        .0.given(UserOption::Method, "joint"),
+        .0.switch(UserOption::SinglePackage)
     )]
-    PaperMethod,
+    PaperMethod(Spelling),
     /// Relative to the centroid every lever arm of a single-package unit is 0 by construction.
     #[error(
         "relative to the sensing points' centroid a single-package unit's lever arms are all 0 by \
-         construction; use --reference table-axis to get the package's position"
+         construction; use {} to get the package's position",
+        .0.given(UserOption::Reference, "table-axis")
     )]
-    CentroidReference,
+    CentroidReference(Spelling),
     /// The residuals show the three lever arms differ (χ² test).
     #[error(
         "this session resolves different lever arms for the three accelerometers (they differ by up \
          to {spread_mm:.2} mm; the one-point fit raises χ² by {delta_chi2:.1} for {dof} degrees of \
          freedom, above its 99.9 % point {limit:.1}), so they are not one point at this session's \
-         precision; calibrate without --single-package (and without package = \"single\" in \
-         plan.toml) to fit each accelerometer's lever arm"
+         precision; calibrate without {} (and without package = \"single\" in \
+         plan.toml) to fit each accelerometer's lever arm",
+        .spelling.switch(UserOption::SinglePackage)
     )]
     Contradicted {
         /// Largest distance of one accelerometer's lever-arm component from the three's mean in the
@@ -53,6 +57,8 @@ pub enum PackageRefusal {
         dof: i64,
         /// The 99.9 % point of χ² with `dof` degrees of freedom.
         limit: f64,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
 }
 
@@ -74,10 +80,10 @@ pub(crate) fn preconditions(options: &EstimateOptions) -> Result<(), PackageRefu
         return Ok(());
     }
     if options.method == Method::Paper {
-        return Err(PackageRefusal::PaperMethod);
+        return Err(PackageRefusal::PaperMethod(options.spelling));
     }
     if options.reference == ReferenceChoice::Centroid {
-        return Err(PackageRefusal::CentroidReference);
+        return Err(PackageRefusal::CentroidReference(options.spelling));
     }
     Ok(())
 }
@@ -103,7 +109,7 @@ pub(crate) fn check(
         }
         return Ok(None);
     };
-    warnings.extend(verdict(&t, options.single_package)?);
+    warnings.extend(verdict(&t, options.single_package, options.spelling)?);
     Ok(Some(t))
 }
 
@@ -181,6 +187,7 @@ pub(crate) fn test(
 pub(crate) fn verdict(
     test: &PackageTest,
     single_package: bool,
+    sp: Spelling,
 ) -> Result<Option<String>, PackageRefusal> {
     if single_package {
         let limit = chi2_quantile(test.dof, Z_999);
@@ -190,6 +197,7 @@ pub(crate) fn verdict(
                 delta_chi2: test.delta_chi2,
                 dof: test.dof,
                 limit,
+                spelling: sp,
             });
         }
         return Ok(None);
@@ -200,9 +208,11 @@ pub(crate) fn verdict(
             "the three accelerometers' lever arms do not differ significantly (one point for the \
              three raises χ² by only {:.1} for {} degrees of freedom, below its 95 % point {limit:.1}): \
              the per-accelerometer values fit noise; if the accelerometers share one package (a MEMS \
-             IMU), calibrate with --single-package (or package = \"single\" in plan.toml) to fit the \
+             IMU), calibrate with {} (or package = \"single\" in plan.toml) to fit the \
              package's one lever arm with a smaller 1σ",
-            test.delta_chi2, test.dof
+            test.delta_chi2,
+            test.dof,
+            sp.switch(UserOption::SinglePackage)
         )
     }))
 }

@@ -128,14 +128,14 @@ fn the_option_is_refused_with_the_paper_method_or_the_centroid() {
                 method: Method::Paper,
                 ..EstimateOptions::default()
             },
-            PackageRefusal::PaperMethod,
+            PackageRefusal::PaperMethod(Default::default()),
         ),
         (
             EstimateOptions {
                 reference: ReferenceChoice::Centroid,
                 ..EstimateOptions::default()
             },
-            PackageRefusal::CentroidReference,
+            PackageRefusal::CentroidReference(Default::default()),
         ),
     ] {
         let e = calibrate_session_stats(&single_package_plan(Package::Single), &stats, &options)

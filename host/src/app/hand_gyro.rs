@@ -13,6 +13,7 @@ use crate::session::import::{six_digits, Recording, TimeOrigin};
 use crate::session::segment::{PositionSet, Segmentation};
 use crate::session::Plan;
 use crate::unit_file::GyroSection;
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg;
 use std::path::{Path, PathBuf};
 
@@ -57,6 +58,7 @@ pub fn fit(
     rec: &Recording,
     seg: &Segmentation,
     plan: &Plan,
+    spelling: Spelling,
 ) -> Result<Result<HandGyroFit, HandGyroError>, HandGyroFileError> {
     let stats = stats_for(rec, seg, plan);
     let options = EstimateOptions {
@@ -118,6 +120,7 @@ pub fn fit(
         &rec.gyro_rad_s,
         still_bias(&means),
         angle_random_walk(rec, seg),
+        spelling,
     );
     match fitted {
         Err(e @ HandGyroError::UnitMismatch { .. }) => Err(HandGyroFileError::Unit(e)),
@@ -187,12 +190,12 @@ pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
 /// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
 /// turns no `G` explains (an rms misfit over `max_misfit_deg`, [`plausible_misfit_deg`]). Empty:
 /// accepted.
-pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
+pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<String> {
     let mut problems: Vec<String> =
         gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns, max_misfit_deg)
             .into_iter()
             .collect();
-    problems.extend(gyro_check::matrix_problems(&fit.matrix));
+    problems.extend(gyro_check::matrix_problems_spelled(&fit.matrix, sp));
     problems
 }
 
@@ -200,7 +203,7 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64) -> Vec<String> {
 /// result, not a contradiction. The turns cannot tell a nominal scale that is off (which the
 /// calibration corrects) from a time base that is (which it must not), so the note names both, each
 /// with the figure it implies, in the terms of the recording's own input (docs/model.md §8).
-pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording) -> Option<String> {
+pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording, sp: Spelling) -> Option<String> {
     let k = gyro_check::common_scale(&fit.matrix)?;
     let diag: Vec<String> = (0..3)
         .map(|i| format!("{:+.1} %", (fit.matrix[i][i] - 1.0) * 100.0))
@@ -208,8 +211,9 @@ pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording) -> Option<String> {
     let scale = match rec.gyro_lsb_per_dps {
         Some(lsb) => format!(
             "the gyro's nominal scale is off: the turns imply {} LSB per °/s where \
-             --gyro-lsb-per-dps gave {}",
+             {} gave {}",
             six_digits(lsb * k),
+            sp.name(UserOption::GyroLsbPerDps),
             six_digits(lsb)
         ),
         None => format!(
@@ -221,17 +225,18 @@ pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording) -> Option<String> {
     let (time, fix) = match rec.time_origin {
         Some(TimeOrigin::RateGiven(hz)) => (
             format!(
-                "the rate given is: the rows would have to come at {:.3} Hz, not the --rate-hz {hz}",
-                hz * k
+                "the rate given is: the rows would have to come at {:.3} Hz, not the {}",
+                hz * k,
+                sp.given(UserOption::RateHz, hz)
             ),
-            "give the true --rate-hz",
+            format!("give the true {}", sp.name(UserOption::RateHz)),
         ),
         Some(TimeOrigin::TimeColumn) => (
             format!(
                 "the time column is: its stamps would have to step at {:.3} Hz, not {rate:.3} Hz",
                 rate * k
             ),
-            "fix the time column (or --time-unit)",
+            format!("fix the time column (or {})", sp.name(UserOption::TimeUnit)),
         ),
         Some(TimeOrigin::LoggerStamps(format)) => (
             format!(
@@ -239,14 +244,14 @@ pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording) -> Option<String> {
                  {rate:.3} Hz",
                 rate * k
             ),
-            "re-time the log",
+            "re-time the log".to_string(),
         ),
         None => (
             format!(
                 "the time base is: the samples would have to come at {:.3} Hz, not {rate:.3} Hz",
                 rate * k
             ),
-            "fix the time stamps",
+            "fix the time stamps".to_string(),
         ),
     };
     Some(format!(
@@ -367,7 +372,7 @@ mod tests {
         assert_eq!(seg.stills.len(), 12);
         let faces = crate::session::coverage::six_face_labels(&seg.stills).unwrap();
         let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
-        let fit = fit(&rec, &seg, &plan).unwrap().unwrap();
+        let fit = fit(&rec, &seg, &plan, Spelling::Flags).unwrap().unwrap();
         assert_eq!((fit.turns, fit.table_turns), (5, 6));
         let truth = spec.gyro.matrix;
         for i in 0..3 {
@@ -396,7 +401,11 @@ mod tests {
         // A six-face session's hand turns are judged against its face prior (2°), others against 1°.
         assert_eq!(plausible_misfit_deg(PositionSet::SixFaces, &plan), 2.0);
         assert_eq!(plausible_misfit_deg(PositionSet::Spread, &plan), 1.0);
-        assert!(problems(&fit, 2.0).is_empty(), "{:?}", problems(&fit, 2.0));
+        assert!(
+            problems(&fit, 2.0, Spelling::Flags).is_empty(),
+            "{:?}",
+            problems(&fit, 2.0, Spelling::Flags)
+        );
     }
 
     #[test]
@@ -423,7 +432,9 @@ mod tests {
         let text = dropped[0].to_string();
         assert!(text.contains("after still interval #1"), "{text}");
         assert!((0.5..0.52).contains(&dropped[0].jump.step_s), "{text}");
-        let fit = fit(&rec, &seg, &plan_for(&rec, &seg)).unwrap().unwrap();
+        let fit = fit(&rec, &seg, &plan_for(&rec, &seg), Spelling::Flags)
+            .unwrap()
+            .unwrap();
         assert_eq!(fit.turns, 22);
         // The gyro's truth (GyroTruth::half_percent): the remaining turns still find its scale.
         let want = [0.005, -0.005, 0.004];

@@ -18,6 +18,7 @@ use crate::session::segment::{
     find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
 use crate::session::{Plan, RecordingError, SegmentStats};
+use recording::spelling::Spelling;
 use std::path::Path;
 
 /// What `host segment`'s options decide besides the recording.
@@ -70,6 +71,8 @@ pub struct SegmentedSession {
     pub warnings: Vec<String>,
     /// How to make a better session, when the positions are too few or too alike.
     pub advice: Option<String>,
+    /// How the caller names its options in the gyro's refusals.
+    pub spelling: Spelling,
 }
 
 /// Why a recording gives no session.
@@ -184,14 +187,18 @@ impl Found {
                     .map(ToString::to_string),
             );
             (
-                hand_gyro::fit(&recording, &segmentation, &plan)?,
+                hand_gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?,
                 table_turns,
             )
         } else {
             (Err(HandGyroError::NotAsked), Vec::new())
         };
         if let Ok(fit) = &gyro {
-            warnings.extend(hand_gyro::common_scale_note(fit, &recording));
+            warnings.extend(hand_gyro::common_scale_note(
+                fit,
+                &recording,
+                choices.segment.spelling,
+            ));
         }
         Ok(SegmentedSession {
             recording,
@@ -203,6 +210,7 @@ impl Found {
             table_turns,
             warnings,
             advice,
+            spelling: choices.segment.spelling,
         })
     }
 }
@@ -211,7 +219,7 @@ impl SegmentedSession {
     /// Why the gyro fit is not one a real gyro gives (`hand_gyro::problems`), if it is not.
     pub fn gyro_problems(&self) -> Option<Vec<String>> {
         let max_misfit_deg = hand_gyro::plausible_misfit_deg(self.position_set, &self.plan);
-        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg);
+        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg, self.spelling);
         (!problems.is_empty()).then_some(problems)
     }
 

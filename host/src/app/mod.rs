@@ -12,6 +12,10 @@
 //! - `error`: why a use case failed ([`CalibrateError`]), each cause kept as its source.
 //! - [`in_memory`]: `host segment` (a logger's recording to a session) without writing files until
 //!   asked: the positions and spins found, their coverage, the plan and statistics, the gyro fit.
+//! - [`log_input`]: how to read a logger's file ([`log_input::LogInput`]), the options named as the
+//!   caller spells them.
+//! - [`simulate`]: a virtual unit on a virtual rate table written as a session
+//!   ([`simulate::Simulation`]).
 //! - [`hand_gyro`]: the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`;
 //!   [`table_turn`]: the whole turns on a table that the gyro fit takes as known angles.
 
@@ -20,8 +24,10 @@ pub mod document;
 pub mod error;
 pub mod hand_gyro;
 pub mod in_memory;
+pub mod log_input;
 #[cfg(test)]
 mod segmentation_tests;
+pub mod simulate;
 pub mod table_turn;
 
 pub use calibrate::{

@@ -120,6 +120,9 @@ pub enum CliError {
     /// The hand-held session's gyro.
     #[error(transparent)]
     HandGyro(#[from] crate::app::hand_gyro::HandGyroFileError),
+    /// The options that say how to read a logger's file do not fit together.
+    #[error(transparent)]
+    LogInput(#[from] crate::app::log_input::LogInputError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
@@ -150,7 +153,7 @@ impl CliError {
     /// [`EXIT_ERROR`], so that scripts tell a typo, a failed unit and a broken run apart.
     pub fn exit_code(&self) -> i32 {
         match self {
-            CliError::Usage(_) => EXIT_USAGE,
+            CliError::Usage(_) | CliError::LogInput(_) => EXIT_USAGE,
             CliError::ChecksFailed(_) | CliError::VerificationFailed => EXIT_CHECK_FAILED,
             _ if self.is_option_not_for_input() => EXIT_USAGE,
             _ => EXIT_ERROR,
@@ -199,6 +202,17 @@ impl From<crate::app::CalibrateError> for CliError {
             CalibrateError::Recording(e) => e.into(),
             CalibrateError::HandGyro(e) => e.into(),
             CalibrateError::Estimate(e) => e.into(),
+        }
+    }
+}
+
+impl From<crate::app::simulate::SimulationError> for CliError {
+    fn from(e: crate::app::simulate::SimulationError) -> Self {
+        use crate::app::simulate::SimulationError;
+        match e {
+            SimulationError::Unit(e) => e.into(),
+            SimulationError::Plan(e) => e.into(),
+            SimulationError::Simulate(e) => e.into(),
         }
     }
 }

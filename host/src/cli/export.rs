@@ -7,6 +7,7 @@ use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
 use crate::output_file::{write_atomic, OutputFileError};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
+use recording::spelling::Spelling;
 use std::path::PathBuf;
 
 /// `host export`.
@@ -130,6 +131,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             // Within 1..=255 by their parsers.
             sysid: u8::try_from(a.sysid.unwrap_or(1)).unwrap_or(u8::MAX),
             compid: u8::try_from(a.compid.unwrap_or(1)).unwrap_or(u8::MAX),
+            spelling: Spelling::Flags,
         },
     };
     if a.format == ExportFormat::C {

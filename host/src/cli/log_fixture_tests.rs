@@ -108,6 +108,7 @@ fn each_reader_reads_what_the_formats_reference_tool_reads() {
         text: None,
         instance: None,
         topic: None,
+        spelling: Default::default(),
     };
     for (name, format) in [
         ("hand.ulg", LogFormat::Ulog),
@@ -259,6 +260,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
             text: None,
             instance,
             topic: topic.map(String::from),
+            spelling: Default::default(),
         };
         read_log(&fixture(name), &source).unwrap_err().to_string()
     };
@@ -283,6 +285,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
         text: None,
         instance: None,
         topic: Some("/imu/data".into()),
+        spelling: Default::default(),
     };
     assert_eq!(
         read_log(&fixture("hand.mcap"), &source)
@@ -340,6 +343,7 @@ fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_sessi
         text: None,
         instance: None,
         topic: None,
+        spelling: Default::default(),
     };
     let log = read_log(&path, &none).unwrap();
     assert_eq!(log.format, LogFormat::Ulog);
@@ -420,6 +424,7 @@ fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
         text: None,
         instance: None,
         topic: None,
+        spelling: Default::default(),
     };
     let log = crate::session::logs::read_log_from(&bytes[..], &bytes, Path::new("cut.ulg"), &none)
         .unwrap();
@@ -446,6 +451,7 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
             text: None,
             instance: Some(instance),
             topic: None,
+            spelling: Default::default(),
         };
         let log = read_log(&fixture("hand-accgyr.bin"), &source).unwrap();
         assert_eq!(log.format, LogFormat::DataFlash);
@@ -467,6 +473,7 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
         text: None,
         instance: Some(2),
         topic: None,
+        spelling: Default::default(),
     };
     let e = read_log(&fixture("hand-accgyr.bin"), &source)
         .unwrap_err()

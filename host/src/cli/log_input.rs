@@ -2,10 +2,11 @@
 //! `host noise` (flattened into each, so the three read a file the same way).
 
 use super::CliError;
-use crate::session::import::{parse_acc_unit, GyroUnit, ImportOptions, TimeSource, TimeUnit};
+use crate::app::log_input::{LogInput, LogInputError};
+use crate::session::import::GyroUnit;
 use crate::session::logs::{LogFormat, LogSource};
 use clap::Args;
-use shared::OutputUnit;
+use recording::spelling::Spelling;
 
 /// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
 /// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
@@ -57,6 +58,30 @@ pub struct LogInputArgs {
 }
 
 impl LogInputArgs {
+    /// The flags as the application layer's typed options (named as flags in its messages).
+    pub fn input(&self) -> LogInput {
+        LogInput {
+            columns: self.columns.split(',').map(str::to_string).collect(),
+            time_column: self.time_column.clone(),
+            time_unit: self.time_unit.clone(),
+            rate_hz: self.rate_hz,
+            acc_unit: self.acc_unit.clone(),
+            // A value that is not a number reads as NaN, which the offset's check refuses (the
+            // message then quotes the flag's text, below).
+            acc_offset: self.acc_offset.as_ref().map(|text| {
+                text.split(',')
+                    .map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN))
+                    .collect()
+            }),
+            gyro_unit: self.gyro_unit.clone(),
+            gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
+            instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
+            topic: self.topic.clone(),
+            spelling: Spelling::Flags,
+        }
+    }
+
     /// The text-file options given, by their flags (a text file's columns, time and units: what a
     /// binary log or a session directory states itself).
     fn text_options_given(&self) -> Vec<&'static str> {
@@ -76,9 +101,9 @@ impl LogInputArgs {
         .collect()
     }
 
-    /// What to read from `input`: the text options when any is given (checked whole), the
-    /// instance and topic. Text options on a binary log are refused by name before they are
-    /// checked as a text file's (a log that states its units needs none of them).
+    /// What to read from `input`: the text options when any is given (checked whole by the
+    /// application layer), the instance and topic. Text options on a binary log are refused by
+    /// name before they are checked as a text file's (a log that states its units needs none).
     pub fn source(&self, input: &std::path::Path) -> Result<LogSource, CliError> {
         let text = self.text_options_given();
         let format = log_format(input);
@@ -98,17 +123,16 @@ impl LogInputArgs {
                 )));
             }
         }
-        let text_given = !text.is_empty() && text != ["--columns"];
-        Ok(LogSource {
-            text: if text_given {
-                Some(self.import_options()?)
-            } else {
-                None
-            },
-            // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
-            instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
-            topic: self.topic.clone(),
-        })
+        self.input()
+            .source()
+            .map_err(|e| match (e, &self.acc_offset) {
+                // The offset as the command line wrote it, not as it was read.
+                (LogInputError::AccOffsetValues { .. }, Some(text)) => CliError::Usage(format!(
+                    "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) \
+                     or three (X,Y,Z)"
+                )),
+                (e, _) => CliError::LogInput(e),
+            })
     }
 
     /// Refuses `--instance` and `--topic` where the format has no such thing (a usage error, found
@@ -167,127 +191,6 @@ impl LogInputArgs {
         match self.gyro_lsb_per_dps {
             Some(_) => "LSB",
             None => self.gyro_unit().symbol(),
-        }
-    }
-
-    /// The text reader's options: six distinct column names, one time source, the units.
-    fn import_options(&self) -> Result<ImportOptions, CliError> {
-        let names: Vec<String> = self
-            .columns
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect();
-        let columns: [String; 6] = names.try_into().map_err(|_| {
-            CliError::Usage("--columns needs six names: acc x,y,z then gyro x,y,z".into())
-        })?;
-        // The reader matches names case-insensitively: a name given twice would read one column
-        // twice and make the fit singular, far from the cause.
-        let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
-        seen.extend(self.time_column.as_deref());
-        for (k, name) in seen.iter().enumerate() {
-            if name.is_empty() {
-                return Err(CliError::Usage(
-                    "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z".into(),
-                ));
-            }
-            if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
-                return Err(CliError::Usage(format!(
-                    "column '{first}' is named twice in --columns/--time-column: each of acc x,y,z, \
-                     gyro x,y,z and the time must be its own column"
-                )));
-            }
-        }
-        let time = match (&self.time_column, self.rate_hz) {
-            (Some(c), None) => TimeSource::Column(c.clone()),
-            (None, Some(hz)) => TimeSource::RateHz(hz),
-            _ => {
-                return Err(CliError::Usage(
-                    "a text file needs exactly one of --time-column NAME or --rate-hz HZ".into(),
-                ))
-            }
-        };
-        let time_unit =
-            match (&self.time_unit, &time) {
-                (None, _) => None,
-                (Some(u), TimeSource::Column(_)) => Some(TimeUnit::parse(u).ok_or_else(|| {
-                    CliError::Usage(format!("--time-unit {u}: use s, ms, us or ns"))
-                })?),
-                (Some(_), TimeSource::RateHz(_)) => {
-                    return Err(CliError::Usage(
-                        "--time-unit applies to --time-column, not to --rate-hz".into(),
-                    ))
-                }
-            };
-        let acc = self.acc_unit.as_deref().unwrap_or("");
-        let acc_unit = parse_acc_unit(acc).ok_or_else(|| {
-            CliError::Usage(format!(
-                "--acc-unit '{acc}': a text file needs its accelerometer unit, m/s2, g, LSB or V"
-            ))
-        })?;
-        let (gyro_unit, gyro_lsb_per_dps) = self.text_gyro_unit()?;
-        Ok(ImportOptions {
-            columns,
-            time,
-            acc_unit,
-            gyro_unit,
-            time_unit,
-            acc_offset: self.text_acc_offset(acc_unit)?,
-            gyro_lsb_per_dps,
-        })
-    }
-
-    /// `--acc-offset`: one value for every axis or three, with `--acc-unit LSB` only.
-    fn text_acc_offset(&self, unit: OutputUnit) -> Result<[f64; 3], CliError> {
-        let Some(text) = &self.acc_offset else {
-            return Ok([0.0; 3]);
-        };
-        if unit != OutputUnit::Lsb {
-            return Err(CliError::Usage(format!(
-                "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the \
-                 unit is {})",
-                self.acc_unit.as_deref().unwrap_or("")
-            )));
-        }
-        let bad = || {
-            CliError::Usage(format!(
-                "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) or \
-                 three (X,Y,Z)"
-            ))
-        };
-        let v: Vec<f64> = text
-            .split(',')
-            .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-            .collect::<Option<_>>()
-            .ok_or_else(bad)?;
-        match v[..] {
-            [n] => Ok([n; 3]),
-            [x, y, z] => Ok([x, y, z]),
-            _ => Err(bad()),
-        }
-    }
-
-    /// `--gyro-unit` and `--gyro-lsb-per-dps`: counts need their nominal scale, and only counts
-    /// take one.
-    fn text_gyro_unit(&self) -> Result<(GyroUnit, Option<f64>), CliError> {
-        let gyro = self.gyro_unit.as_deref().unwrap_or("");
-        let counts = matches!(gyro, "LSB" | "lsb" | "counts");
-        match (counts, self.gyro_lsb_per_dps) {
-            (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
-            (true, None) => Err(CliError::Usage(
-                "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts \
-                 per °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns \
-                 then fit the true scale"
-                    .into(),
-            )),
-            (false, Some(_)) => Err(CliError::Usage(format!(
-                "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not '{gyro}')"
-            ))),
-            (false, None) => GyroUnit::parse(gyro).map(|u| (u, None)).ok_or_else(|| {
-                CliError::Usage(format!(
-                    "--gyro-unit '{gyro}': a text file needs its gyro unit, deg/s, rad/s or LSB \
-                     (with --gyro-lsb-per-dps)"
-                ))
-            }),
         }
     }
 }

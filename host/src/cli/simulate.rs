@@ -1,10 +1,13 @@
 //! `host simulate`: a virtual unit on a virtual rate table, written as a recording.
 
-use super::{load_unit, CliError};
+use super::CliError;
+use crate::app::simulate::{simulate, NoiseChoices, Simulated, Simulation};
 use crate::limits;
-use crate::session::builtin::{load_plan, paper_plan};
-use crate::sim::{simulate_to_dir_with_progress, NoiseModel, SimulationSummary};
+#[cfg(test)]
+use crate::sim::NoiseModel;
+use crate::sim::SimulationSummary;
 use crate::ui::progress_bar;
+#[cfg(test)]
 use crate::unit_file::UnitFile;
 use clap::Args;
 use std::path::PathBuf;
@@ -90,62 +93,58 @@ pub struct SimulateArgs {
     pub gyro_flicker_deg_s: Option<f64>,
 }
 
+/// Three values of a flag that takes X,Y,Z.
+fn three(v: &Option<Vec<f64>>, flag: &str) -> Result<Option<[f64; 3]>, CliError> {
+    v.as_deref()
+        .map(|v| {
+            <[f64; 3]>::try_from(v)
+                .map_err(|_| CliError::Usage(format!("{flag} takes three values: X,Y,Z")))
+        })
+        .transpose()
+}
+
+/// The noise the flags ask for, as the application layer takes it.
+fn noise_choices(a: &SimulateArgs) -> Result<NoiseChoices, CliError> {
+    Ok(NoiseChoices {
+        no_noise: a.no_noise,
+        noise_mg: a.noise_mg,
+        lsb: a.lsb,
+        drift_mg_sqrt_s: a.drift_mg_sqrt_s,
+        tilt_deg: a.tilt_deg,
+        rate_scale: a.rate_scale,
+        rate_offset_deg_s: a.rate_offset_deg_s,
+        gyro_noise_deg_s: a.gyro_noise_deg_s,
+        gyro_bias_deg_s: three(&a.gyro_bias_deg_s, "--gyro-bias-deg-s")?,
+        gyro_scale_ppm: three(&a.gyro_scale_ppm, "--gyro-scale-ppm")?,
+        gyro_misalignment_deg: a.gyro_misalignment_deg,
+        flicker_mg: a.flicker_mg,
+        gyro_drift_deg_s_sqrt_s: a.gyro_drift_deg_s_sqrt_s,
+        gyro_flicker_deg_s: a.gyro_flicker_deg_s,
+    })
+}
+
 /// The noise model of `host simulate`: defaults, then the unit file's `[noise]`, then the flags.
+#[cfg(test)]
 pub(crate) fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<NoiseModel, CliError> {
-    let mut n = if a.no_noise {
-        NoiseModel::none()
-    } else {
-        NoiseModel::from_unit_file(unit)?.unwrap_or_default()
-    };
-    let set = |dst: &mut f64, v: Option<f64>| {
-        if let Some(v) = v {
-            *dst = v;
-        }
-    };
-    set(&mut n.accel_white_mg, a.noise_mg);
-    set(&mut n.accel_quantum_out, a.lsb);
-    set(&mut n.accel_bias_walk_mg_sqrt_s, a.drift_mg_sqrt_s);
-    set(&mut n.table_tilt_deg, a.tilt_deg);
-    set(&mut n.table_rate_scale, a.rate_scale);
-    set(&mut n.table_rate_offset_deg_s, a.rate_offset_deg_s);
-    set(&mut n.gyro_white_deg_s, a.gyro_noise_deg_s);
-    set(&mut n.accel_flicker_mg, a.flicker_mg);
-    set(
-        &mut n.gyro_bias_walk_deg_s_sqrt_s,
-        a.gyro_drift_deg_s_sqrt_s,
-    );
-    set(&mut n.gyro_flicker_deg_s, a.gyro_flicker_deg_s);
-    if let Some(b) = &a.gyro_bias_deg_s {
-        n.gyro_bias_deg_s = b
-            .as_slice()
-            .try_into()
-            .map_err(|_| CliError::Usage("--gyro-bias-deg-s takes three values: X,Y,Z".into()))?;
-    }
-    if a.gyro_scale_ppm.is_some() || a.gyro_misalignment_deg.is_some() {
-        let scale: [f64; 3] = match &a.gyro_scale_ppm {
-            Some(v) => <[f64; 3]>::try_from(v.as_slice())
-                .map_err(|_| CliError::Usage("--gyro-scale-ppm takes three values: X,Y,Z".into()))?
-                .map(|p| p * 1e-6),
-            None => [0.0; 3],
-        };
-        let mis = a.gyro_misalignment_deg.unwrap_or(0.0).to_radians();
-        n.gyro_matrix = crate::sim::session::gyro_matrix(scale, mis);
-    }
-    n.validate()?;
-    Ok(n)
+    Ok(noise_choices(a)?.model(unit)?)
 }
 
 /// `host simulate`.
 pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError> {
-    let unit = load_unit(a.unit.as_deref())?;
-    let plan = match &a.plan {
-        Some(spec) => load_plan(spec)?,
-        None => paper_plan(),
+    let simulation = Simulation {
+        out: a.out.clone(),
+        unit: a.unit.clone(),
+        plan: a.plan.clone(),
+        seed: a.seed,
+        force: a.force,
+        noise: noise_choices(a)?,
     };
-    let noise = noise_from_args(a, &unit)?;
     let bar = progress_bar(0, "simulating", quiet);
-    let summary =
-        simulate_to_dir_with_progress(&a.out, &unit, &plan, &noise, a.seed, a.force, &bar)?;
+    let Simulated {
+        summary,
+        plan,
+        noise,
+    } = simulate(&simulation, Some(&bar))?;
     let out = super::output::Output { json: false, quiet };
     for note in &summary.notes {
         out.note(format_args!("note: {note}"));

@@ -472,6 +472,7 @@ pub(crate) fn render_fusion(input: &ExportInput<'_>) -> Result<String, ExportErr
         return Err(ExportError::Undetermined {
             format: "fusion-c",
             names: names.join(", "),
+            spelling: input.options.spelling,
         });
     }
     let gyro_note = if gyroscope.is_some() {

@@ -33,6 +33,7 @@
 //!   `host_export_biases` for reference.
 
 use super::{ExportError, ExportInput};
+use recording::spelling::UserOption;
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use std::fmt::Write as _;
@@ -150,12 +151,12 @@ fn noise_figures(
     input: &ExportInput<'_>,
 ) -> Result<[(&'static str, f64, &'static str); 5], ExportError> {
     let n = input.noise.ok_or_else(|| {
-        ExportError::Missing(
+        ExportError::Missing(format!(
             "Kalibr needs the IMU's noise densities and random walks, which only a noise analysis gives: \
              run `host noise --input SESSION --out DIR` on a recording with a long still segment and give \
-             --noise DIR/noise.json"
-                .into(),
-        )
+             {}",
+            input.options.spelling.given(UserOption::Noise, "DIR/noise.json")
+        ))
     })?;
     let fields = [
         ("update_rate", n.update_rate_hz, "Hz"),
@@ -274,6 +275,7 @@ pub(crate) fn render_intrinsics(input: &ExportInput<'_>) -> Result<String, Expor
                     return Err(ExportError::Undetermined {
                         format: "kalibr-intrinsics",
                         names: "the gyroscope's M and C_gyro_i (from an undetermined G)".into(),
+                        spelling: input.options.spelling,
                     });
                 }
                 let _ = writeln!(

@@ -33,6 +33,7 @@ pub mod params;
 pub mod toml_forms;
 
 use crate::unit_file::UnitFile;
+use recording::spelling::{Spelling, UserOption};
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use shared::params::ParamsError;
@@ -146,18 +147,24 @@ pub enum ExportError {
     /// The target reads m/s² from its driver, and the output unit does not say how to get there.
     #[error(
         "{format} reads the accelerometer in m/s² from its driver, and this calibration's output unit is {unit}: \
-         give --driver-scale M_S2_PER_UNIT, the m/s² per {unit} the driver applies to the raw reading \
-         (only the driver's configuration knows it; outputs in m/s² or g need none)"
+         give {}, the m/s² per {unit} the driver applies to the raw reading \
+         (only the driver's configuration knows it; outputs in m/s² or g need none)",
+        .spelling.given(UserOption::DriverScale, "M_S2_PER_UNIT")
     )]
     DriverScaleRequired {
         /// The format.
         format: &'static str,
         /// The output unit's symbol.
         unit: &'static str,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The driver scale given is not a positive finite number.
-    #[error("--driver-scale {0} must be a positive, finite number of m/s² per output unit")]
-    DriverScale(f64),
+    #[error(
+        "{} must be a positive, finite number of m/s² per output unit",
+        .1.given(UserOption::DriverScale, .0)
+    )]
+    DriverScale(f64, Spelling),
     /// A value of the export does not fit the target's number type (e.g. an absurd driver scale).
     #[error(
         "cannot export {name} = {value:e}: beyond the target's single-precision range; \
@@ -191,13 +198,16 @@ pub enum ExportError {
     /// Values the calibration did not determine would be written as numbers.
     #[error(
         "{format} would hold values the calibration did not determine ({names}); calibrate with a plan \
-         that determines them, or give --allow-undetermined to write them marked UNDETERMINED"
+         that determines them, or give {} to write them marked UNDETERMINED",
+        .spelling.switch(UserOption::AllowUndetermined)
     )]
     Undetermined {
         /// The format.
         format: &'static str,
         /// The entries.
         names: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// Kalibr's form needs `c·K·A/g` (or `G·C_i_bᵀ`) as lower-triangular × rotation, which does not exist.
     #[error(
@@ -216,14 +226,17 @@ pub enum ExportError {
     Missing(String),
     /// A device id the target's parameter protocol cannot carry exactly.
     #[error(
-        "{flag} {id}: ArduPilot sends {name} as a float, exact only below 16777216 (2^24); check the \
-         id against the vehicle's {name} in its parameter list"
+        "{}: ArduPilot sends {name} as a float, exact only below 16777216 (2^24); check the \
+         id against the vehicle's {name} in its parameter list",
+        .spelling.given(*.option, .id)
     )]
     IdNotExact {
         /// The parameter.
         name: &'static str,
         /// The option that gave it.
-        flag: &'static str,
+        option: UserOption,
+        /// The caller's names of the options.
+        spelling: Spelling,
         /// The id given.
         id: u32,
     },
@@ -264,6 +277,8 @@ pub struct ExportOptions {
     pub sysid: u8,
     /// MAVLink component id of the autopilot, the second column.
     pub compid: u8,
+    /// How the caller names these options in messages.
+    pub spelling: Spelling,
 }
 
 impl Default for ExportOptions {
@@ -275,6 +290,7 @@ impl Default for ExportOptions {
             gyro_device_id: None,
             sysid: 1,
             compid: 1,
+            spelling: Spelling::Flags,
         }
     }
 }
@@ -306,7 +322,7 @@ impl ExportInput<'_> {
             return if c.is_finite() && c > 0.0 {
                 Ok(c)
             } else {
-                Err(ExportError::DriverScale(c))
+                Err(ExportError::DriverScale(c, self.options.spelling))
             };
         }
         match self.cal.statics.output_unit {
@@ -315,6 +331,7 @@ impl ExportInput<'_> {
             unit @ (OutputUnit::Volts | OutputUnit::Lsb) => Err(ExportError::DriverScaleRequired {
                 format,
                 unit: unit.symbol(),
+                spelling: self.options.spelling,
             }),
         }
     }

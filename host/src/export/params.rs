@@ -34,6 +34,7 @@
 //! documents no range for `CAL_ACC0_*`/`CAL_GYRO0_*`, so nothing is checked there beyond `f32`.
 
 use super::{as_f32, ExportError, ExportInput};
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg::{self, RowMajor3};
 use std::fmt::Write as _;
 
@@ -159,12 +160,12 @@ pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError>
     let p = per_axis(input, "PX4")?;
     let o = input.options;
     let device_id = o.device_id.ok_or_else(|| {
-        ExportError::Missing(
+        ExportError::Missing(format!(
             "PX4 applies CAL_ACC0_* only to the accelerometer whose device id is CAL_ACC0_ID: give \
-             --device-id ID (the vehicle's CAL_ACC0_ID, or the device_id that `listener sensor_accel` \
-             shows on the vehicle)"
-                .into(),
-        )
+             {} (the vehicle's CAL_ACC0_ID, or the device_id that `listener sensor_accel` \
+             shows on the vehicle)",
+            o.spelling.given(UserOption::DeviceId, "ID")
+        ))
     })?;
     let mut s = String::new();
     caveats(&mut s, input, &p, "PX4");
@@ -384,11 +385,17 @@ const ARDUPILOT_EXACT_ID_LIMIT: u32 = 1 << 24;
 /// A device id as an ArduPilot `INS_*_ID` value, refused where the parameter protocol would round it.
 fn ardupilot_id(
     name: &'static str,
-    flag: &'static str,
+    option: UserOption,
+    spelling: Spelling,
     id: u32,
 ) -> Result<(String, f64, bool), ExportError> {
     if id >= ARDUPILOT_EXACT_ID_LIMIT {
-        return Err(ExportError::IdNotExact { name, flag, id });
+        return Err(ExportError::IdNotExact {
+            name,
+            option,
+            spelling,
+            id,
+        });
     }
     Ok((name.into(), f64::from(id), true))
 }
@@ -424,22 +431,32 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
     let p = per_axis(input, "ArduPilot")?;
     let o = input.options;
     let device_id = o.device_id.ok_or_else(|| {
-        ExportError::Missing(
+        ExportError::Missing(format!(
             "ArduPilot counts INS_ACCOFFS_*/INS_ACCSCAL_* as a calibration only for the accelerometer \
              whose id is INS_ACC_ID (pre-arm: \"3D Accel calibration needed\" otherwise): give \
-             --device-id ID, the vehicle's INS_ACC_ID as its parameter list shows it (ArduPilot sets \
-             it at start-up to the accelerometer it detects)"
-                .into(),
-        )
+             {}, the vehicle's INS_ACC_ID as its parameter list shows it (ArduPilot sets \
+             it at start-up to the accelerometer it detects)",
+            o.spelling.given(UserOption::DeviceId, "ID")
+        ))
     })?;
     let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();
     caveats(&mut s, input, &p, "ArduPilot");
-    let mut values = vec![ardupilot_id("INS_ACC_ID", "--device-id", device_id)?];
+    let mut values = vec![ardupilot_id(
+        "INS_ACC_ID",
+        UserOption::DeviceId,
+        o.spelling,
+        device_id,
+    )?];
     values.extend(accel_values(&p, "INS_ACCOFFS_#", "INS_ACCSCAL_#"));
     let gyro_written = match (p.gyro_offset_rad_s, o.gyro_device_id) {
         (Some(b), Some(id)) => {
-            values.push(ardupilot_id("INS_GYR_ID", "--gyro-device-id", id)?);
+            values.push(ardupilot_id(
+                "INS_GYR_ID",
+                UserOption::GyroDeviceId,
+                o.spelling,
+                id,
+            )?);
             for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
                 values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
             }
@@ -606,7 +623,7 @@ mod tests {
         for bad in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
             input.driver_scale_m_s2_per_out = Some(bad);
             let e = render(&input, ExportFormat::Px4).unwrap_err();
-            assert!(matches!(e, ExportError::DriverScale(_)), "{e}");
+            assert!(matches!(e, ExportError::DriverScale(..)), "{e}");
             assert!(e.to_string().contains("positive, finite"), "{e}");
         }
         let mut negative = shared::params::PAPER_UNIT;

@@ -175,6 +175,7 @@ fn source(format: Format) -> LogSource {
         }),
         instance: None,
         topic: None,
+        spelling: Default::default(),
     }
 }
 

@@ -8,8 +8,10 @@
 //! so the number of rows is capped ([`MAX_ROWS`]) and every line is bounded ([`MAX_LINE_BYTES`]).
 
 use crate::limits::short_number;
+use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 
+mod gravity;
 pub mod time;
 use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
 use std::fs::File;
@@ -103,6 +105,8 @@ pub struct ImportOptions {
     /// The gyro logs counts at this nominal scale, LSB per °/s (the gyro fit finds the true one);
     /// `gyro_unit` is then ignored.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// How the caller names these options in messages.
+    pub spelling: Spelling,
 }
 
 impl ImportOptions {
@@ -116,6 +120,7 @@ impl ImportOptions {
             time_unit: None,
             acc_offset: [0.0; 3],
             gyro_lsb_per_dps: None,
+            spelling: Spelling::Flags,
         }
     }
 
@@ -181,13 +186,17 @@ pub enum ImportError {
     /// A needed column is not in the header.
     #[error(
         "column '{name}' is not in the header ({found}); name the file's columns with \
-         --columns ACC_X,ACC_Y,ACC_Z,GYR_X,GYR_Y,GYR_Z (and --time-column NAME)"
+         {} (and {})",
+        .spelling.given(UserOption::Columns, "ACC_X,ACC_Y,ACC_Z,GYR_X,GYR_Y,GYR_Z"),
+        .spelling.given(UserOption::TimeColumn, "NAME")
     )]
     MissingColumn {
         /// The column asked for.
         name: String,
         /// The header's columns.
         found: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// A line longer than [`MAX_LINE_BYTES`].
     #[error(
@@ -229,16 +238,20 @@ pub enum ImportError {
     TooFewRows(usize),
     /// The rate is not a positive finite number.
     #[error(
-        "--rate-hz {0} is not a sample rate: give the logger's rate in Hz, e.g. --rate-hz 102.4"
+        "{} is not a sample rate: give the logger's rate in Hz, e.g. {}",
+        .0.given(UserOption::RateHz, .1),
+        .0.given(UserOption::RateHz, 102.4)
     )]
-    BadRate(f64),
+    BadRate(Spelling, f64),
     /// No time unit (s, ms, µs, ns) makes the time column's steps and span a logger's.
     #[error(
         "the time column steps by a median {} and spans {} of its unit: in no unit (s, ms, µs, ns) \
          is that a logger's rate ({MIN_RATE_HZ}–{MAX_RATE_HZ} Hz) over a recording of {MIN_SPAN_S} s \
-         to {MAX_SPAN_DAYS} days{given}; give --rate-hz HZ instead of --time-column",
+         to {MAX_SPAN_DAYS} days{given}; give {} instead of {}",
         six_digits(*.step),
-        six_digits(*.span)
+        six_digits(*.span),
+        .spelling.given(UserOption::RateHz, "HZ"),
+        .spelling.name(UserOption::TimeColumn)
     )]
     TimeUnit {
         /// The median step, in the column's unit.
@@ -247,14 +260,18 @@ pub enum ImportError {
         span: f64,
         /// " (--time-unit X gives … Hz)", or empty.
         given: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The `--time-unit` given makes no logger's rate of the time column, and another unit does.
     #[error(
-        "the time column steps by a median {} and spans {} of its unit: --time-unit {given} reads \
+        "the time column steps by a median {} and spans {} of its unit: {} reads \
          that as {given_reading}, no logger's; in {fits} it reads as {fits_reading}: give \
-         --time-unit {fits}",
+         {}",
         six_digits(*.step),
-        six_digits(*.span)
+        six_digits(*.span),
+        .spelling.given(UserOption::TimeUnit, .given),
+        .spelling.given(UserOption::TimeUnit, .fits)
     )]
     TimeUnitGiven {
         /// The median step, in the column's unit.
@@ -269,14 +286,17 @@ pub enum ImportError {
         fits: &'static str,
         /// What that makes of it.
         fits_reading: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// More than one time unit fits the time column.
     #[error(
         "the time column steps by a median {} over a span of {}: that reads as {}; say which with \
-         --time-unit s|ms|us|ns",
+         {}",
         six_digits(*.step),
         six_digits(*.span),
-        .readings.join(" or ")
+        .readings.join(" or "),
+        .spelling.given(UserOption::TimeUnit, "s|ms|us|ns")
     )]
     TimeUnitAmbiguous {
         /// The median step, in the column's unit.
@@ -285,27 +305,32 @@ pub enum ImportError {
         span: f64,
         /// Each reading ("100 Hz for 10 min in s").
         readings: Vec<String>,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// Counts from an unsigned output whose zero force sits at mid-scale, given without the offset.
     #[error(
         "every accelerometer sample sits near {} counts on each axis, the mid-scale of an unsigned \
-         {bits}-bit output: its zero force reads there, not at 0 counts; give --acc-offset {} (counts \
+         {bits}-bit output: its zero force reads there, not at 0 counts; give {} (counts \
          subtracted from each axis before anything else)",
         short_number(*.offset),
-        short_number(*.offset)
+        .spelling.given(UserOption::AccOffset, short_number(*.offset))
     )]
     MidScale {
         /// The mid-scale value, counts.
         offset: f64,
         /// The output's bits.
         bits: u32,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// Gravity's magnitude does not fit the stated accelerometer unit.
     #[error(
         "the accelerometer's median magnitude is {} {unit}{}: the unit is wrong{hint}; give the \
-         right --acc-unit (m/s2, g, LSB or V)",
+         right {} (m/s2, g, LSB or V)",
         short_number(*.median),
-        expected.map_or(String::new(), |e| format!(", but gravity is {} {unit}", short_number(e)))
+        expected.map_or(String::new(), |e| format!(", but gravity is {} {unit}", short_number(e))),
+        .spelling.name(UserOption::AccUnit)
     )]
     UnitMismatch {
         /// Median |acc|.
@@ -316,6 +341,8 @@ pub enum ImportError {
         expected: Option<f64>,
         /// A guess at the right unit.
         hint: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
 }
 
@@ -417,8 +444,8 @@ pub fn read_logger<R: BufRead>(
         let unit = match options.time_unit {
             Some(u) => time::fits_time_unit(&rec.t_s, u)
                 .then_some(u)
-                .ok_or_else(|| time::time_unit_error(&rec.t_s, Some(u)))?,
-            None => detect_time_unit(&rec.t_s)?,
+                .ok_or_else(|| time::time_unit_error(&rec.t_s, Some(u), options.spelling))?,
+            None => detect_time_unit(&rec.t_s, options.spelling)?,
         };
         let k = unit.seconds();
         rec.t_s.iter_mut().for_each(|t| *t *= k);
@@ -428,7 +455,11 @@ pub fn read_logger<R: BufRead>(
     rec.rate_hz = run_rate_hz(&rec.t_s);
     if options.acc_unit == OutputUnit::Lsb && options.acc_offset == [0.0; 3] {
         if let Some((offset, bits)) = mid_scale(&rec.acc) {
-            return Err(ImportError::MidScale { offset, bits });
+            return Err(ImportError::MidScale {
+                offset,
+                bits,
+                spelling: options.spelling,
+            });
         }
     }
     for v in &mut rec.acc {
@@ -437,7 +468,7 @@ pub fn read_logger<R: BufRead>(
         }
     }
     rec.acc_offset = options.acc_offset;
-    check_gravity(&rec, options.acc_unit)?;
+    gravity::check_gravity(&rec, options.acc_unit, options.spelling)?;
     Ok(rec)
 }
 
@@ -518,6 +549,7 @@ impl Layout {
                 .ok_or_else(|| ImportError::MissingColumn {
                     name: name.to_string(),
                     found: header.join(", "),
+                    spelling: options.spelling,
                 })
         };
         let mut idx = [0usize; 6];
@@ -527,7 +559,7 @@ impl Layout {
         let time = match &options.time {
             TimeSource::Column(name) => Time::Column(find(name)?),
             TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
-            TimeSource::RateHz(hz) => return Err(ImportError::BadRate(*hz)),
+            TimeSource::RateHz(hz) => return Err(ImportError::BadRate(options.spelling, *hz)),
         };
         Ok(Layout {
             header,
@@ -638,63 +670,6 @@ fn push_row(
     rec.gyro_rad_s
         .push([v[3] * gyro_scale, v[4] * gyro_scale, v[5] * gyro_scale]);
     Ok(())
-}
-
-/// The median of |acc| over all rows: gravity's magnitude in the recording's unit (a hand-held
-/// recording is mostly still).
-fn median_magnitude(rec: &Recording) -> f64 {
-    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
-    mags.sort_by(f64::total_cmp);
-    mags[mags.len() / 2]
-}
-
-/// Counts and volts have no expected gravity, but data whose gravity reads as 1 g in m/s² or in g
-/// (within 2 %) are physical units given as counts or volts: no ADC or digital part reads gravity as
-/// 9.81 or 1.00 of its own unit by chance.
-fn check_not_physical(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
-    let median = median_magnitude(rec);
-    let near = |x: f64| (median / x - 1.0).abs() < 0.02;
-    let hint = if near(shared::STANDARD_GRAVITY_M_S2) {
-        " (the values are gravity in m/s²: --acc-unit m/s2)"
-    } else if near(1.0) {
-        " (the values are gravity in g: --acc-unit g)"
-    } else {
-        return Ok(());
-    };
-    Err(ImportError::UnitMismatch {
-        median,
-        unit: unit.symbol(),
-        expected: None,
-        hint: hint.into(),
-    })
-}
-
-/// Gravity's magnitude must be about 1 g in the stated unit (for m/s² and g; LSB and V have no
-/// expected value). The median over all rows is gravity's: a hand-held recording is mostly still.
-fn check_gravity(rec: &Recording, unit: OutputUnit) -> Result<(), ImportError> {
-    let expected = match unit {
-        OutputUnit::MetresPerSecondSquared => shared::STANDARD_GRAVITY_M_S2,
-        OutputUnit::StandardGravity => 1.0,
-        OutputUnit::Lsb | OutputUnit::Volts => return check_not_physical(rec, unit),
-    };
-    let median = median_magnitude(rec);
-    let ratio = median / expected;
-    if (0.8..=1.25).contains(&ratio) {
-        return Ok(());
-    }
-    let hint = if (ratio * shared::STANDARD_GRAVITY_M_S2 - 1.0).abs() < 0.2 {
-        " (the values look like g: --acc-unit g)".to_string()
-    } else if (ratio / shared::STANDARD_GRAVITY_M_S2 - 1.0).abs() < 0.2 {
-        " (the values look like m/s²: --acc-unit m/s2)".to_string()
-    } else {
-        " (raw counts or volts? --acc-unit LSB or V)".to_string()
-    };
-    Err(ImportError::UnitMismatch {
-        median,
-        unit: unit.symbol(),
-        expected: Some(expected),
-        hint,
-    })
 }
 
 #[cfg(test)]
@@ -899,7 +874,7 @@ mod tests {
         };
         assert!(matches!(
             read(&ms2_values, &no_rate),
-            Err(ImportError::BadRate(_))
+            Err(ImportError::BadRate(..))
         ));
     }
 

@@ -11,6 +11,7 @@
 //! data instead of a user's guess.
 
 use super::import::{Recording, TimeJump, TimeOrigin};
+use crate::spelling::{Spelling, UserOption};
 use shared::linalg;
 use shared::OutputUnit;
 
@@ -31,6 +32,8 @@ pub struct SegmentOptions {
     pub spin_min_rate_deg_s: f64,
     /// Two positions closer than this are the same position, degrees.
     pub same_position_deg: f64,
+    /// How the caller names its options in messages.
+    pub spelling: Spelling,
 }
 
 impl Default for SegmentOptions {
@@ -43,6 +46,7 @@ impl Default for SegmentOptions {
             quiet_percentile: 0.1,
             spin_min_rate_deg_s: 10.0,
             same_position_deg: 10.0,
+            spelling: Spelling::Flags,
         }
     }
 }
@@ -236,7 +240,7 @@ pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
 
 /// Why nothing is still, when the data suggest a cause: a still accelerometer with a gyro 57× too
 /// noisy is a gyro in the wrong unit, said with the option that fixes it where the input has one.
-fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64) -> String {
+fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64, sp: Spelling) -> String {
     match rec.time_origin {
         _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
         // A binary log states its units: no option changes them.
@@ -245,9 +249,10 @@ fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64) -> String {
              {gyro_deg_s:.1} °/s at rest, 57× a still gyro's, as if its logger wrote °/s where \
              the format says rad/s"
         ),
-        _ => "; but the accelerometer is still there: if the gyro logs deg/s, give --gyro-unit \
-              deg/s"
-            .into(),
+        _ => format!(
+            "; but the accelerometer is still there: if the gyro logs deg/s, give {}",
+            sp.given(UserOption::GyroUnit, "deg/s")
+        ),
     }
 }
 
@@ -270,7 +275,7 @@ pub fn find_intervals(
         .collect();
     let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
         // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
-        hint: no_still_hint(rec, acc_mg, gyro_deg_s),
+        hint: no_still_hint(rec, acc_mg, gyro_deg_s, options.spelling),
         acc_mg,
         gyro_deg_s,
         min_s: options.min_still_s,

@@ -4,6 +4,7 @@
 
 use super::{ImportError, Recording};
 use crate::limits::short_number;
+use crate::spelling::{Spelling, UserOption};
 
 /// The unit of a time column: detected from the median step and the span, or given
 /// (`--time-unit`).
@@ -195,14 +196,14 @@ pub(super) fn fits_time_unit(t: &[f64], unit: TimeUnit) -> bool {
 
 /// The one time unit (s, ms, µs, ns) in which the median step is a logger's rate and the span a
 /// recording's; refused when none or several fit.
-pub fn detect_time_unit(t: &[f64]) -> Result<TimeUnit, ImportError> {
+pub fn detect_time_unit(t: &[f64], spelling: Spelling) -> Result<TimeUnit, ImportError> {
     let fits: Vec<TimeUnit> = TimeUnit::ALL
         .into_iter()
         .filter(|&u| fits_time_unit(t, u))
         .collect();
     match fits[..] {
         [one] => Ok(one),
-        [] => Err(time_unit_error(t, None)),
+        [] => Err(time_unit_error(t, None, spelling)),
         _ => {
             let (step, span) = step_and_span(t);
             Err(ImportError::TimeUnitAmbiguous {
@@ -219,12 +220,17 @@ pub fn detect_time_unit(t: &[f64]) -> Result<TimeUnit, ImportError> {
                         )
                     })
                     .collect(),
+                spelling,
             })
         }
     }
 }
 
-pub(super) fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError {
+pub(super) fn time_unit_error(
+    t: &[f64],
+    given: Option<TimeUnit>,
+    spelling: Spelling,
+) -> ImportError {
     let (step, span) = step_and_span(t);
     let reading = |u: TimeUnit| {
         format!(
@@ -245,6 +251,7 @@ pub(super) fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError
             given_reading: reading(given),
             fits: fits.option(),
             fits_reading: reading(fits),
+            spelling,
         };
     }
     ImportError::TimeUnit {
@@ -252,11 +259,12 @@ pub(super) fn time_unit_error(t: &[f64], given: Option<TimeUnit>) -> ImportError
         span,
         given: given.map_or(String::new(), |u| {
             format!(
-                " (--time-unit {} gives {} Hz)",
-                u.symbol(),
+                " ({} gives {} Hz)",
+                spelling.given(UserOption::TimeUnit, u.symbol()),
                 six_digits(1.0 / (step * u.seconds()))
             )
         }),
+        spelling,
     }
 }
 

@@ -13,6 +13,7 @@
 
 use super::{list_instances, pair_streams, ImuError, Stream, StreamSample, TooMany};
 use crate::session::import::Recording;
+use crate::spelling::Spelling;
 use std::io::Read;
 
 /// A log's first bytes: the header and the type of the `FMT` message that defines `FMT`.
@@ -274,6 +275,16 @@ struct State {
     first_skip: Option<u64>,
 }
 
+impl DataFlashError {
+    /// The error with the options named as `spelling` does (the reader says flags).
+    pub fn spelled(self, spelling: Spelling) -> DataFlashError {
+        match self {
+            DataFlashError::Imu(e) => DataFlashError::Imu(e.spelled(spelling)),
+            e => e,
+        }
+    }
+}
+
 /// Reads the IMU samples of `instance` from a DataFlash log.
 pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), DataFlashError> {
     let mut w = Window {
@@ -430,6 +441,7 @@ impl State {
                 instance,
                 found,
                 hint: "log IMU (LOG_BITMASK's IMU bit)",
+                spelling: Spelling::Flags,
             }
             .into());
         };

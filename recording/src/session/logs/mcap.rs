@@ -12,6 +12,7 @@
 
 use super::{Stream, StreamSample, TooMany};
 use crate::session::import::{Recording, MAX_ROWS};
+use crate::spelling::{Spelling, UserOption};
 use ::mcap::records::Record;
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use shared::OutputUnit;
@@ -59,18 +60,28 @@ pub enum McapError {
         topics: String,
     },
     /// Several Imu topics and no `--topic`.
-    #[error("the bag has several {IMU_SCHEMA} topics ({topics}): choose one with --topic NAME")]
+    #[error(
+        "the bag has several {IMU_SCHEMA} topics ({topics}): choose one with {}",
+        .spelling.given(UserOption::Topic, "NAME")
+    )]
     SeveralImuTopics {
         /// The Imu topics.
         topics: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The topic asked for is not an Imu topic of the bag.
-    #[error("--topic {topic}: not a {IMU_SCHEMA} topic of the bag; its Imu topics: {imu_topics}")]
+    #[error(
+        "{}: not a {IMU_SCHEMA} topic of the bag; its Imu topics: {imu_topics}",
+        .spelling.given(UserOption::Topic, .topic)
+    )]
     NoSuchTopic {
         /// The topic asked for.
         topic: String,
         /// The Imu topics there are.
         imu_topics: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// Not CDR.
     #[error(
@@ -252,6 +263,25 @@ struct State {
     unstamped: u64,
     /// Each accelerometer and gyro sample's log time, s: its time when no message has a stamp.
     log_times: [Vec<f64>; 2],
+}
+
+impl McapError {
+    /// The error with the options named as `spelling` does (the reader says flags).
+    pub fn spelled(self, spelling: Spelling) -> McapError {
+        match self {
+            McapError::SeveralImuTopics { topics, .. } => {
+                McapError::SeveralImuTopics { topics, spelling }
+            }
+            McapError::NoSuchTopic {
+                topic, imu_topics, ..
+            } => McapError::NoSuchTopic {
+                topic,
+                imu_topics,
+                spelling,
+            },
+            e => e,
+        }
+    }
 }
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
@@ -450,6 +480,7 @@ impl State {
                 return Err(McapError::NoSuchTopic {
                     topic: t.to_string(),
                     imu_topics: list(&imu),
+                    spelling: Spelling::Flags,
                 })
             }
             (None, None) => {
@@ -462,7 +493,10 @@ impl State {
                 return Err(McapError::NoImuTopic { topics: list(&all) });
             }
             (None, Some(_)) if imu.len() > 1 => {
-                return Err(McapError::SeveralImuTopics { topics: list(&imu) })
+                return Err(McapError::SeveralImuTopics {
+                    topics: list(&imu),
+                    spelling: Spelling::Flags,
+                })
             }
             _ => {}
         }

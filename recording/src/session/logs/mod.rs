@@ -15,6 +15,7 @@ use super::import::{
     read_logger, ImportError, ImportOptions, Recording, TimeOrigin, GAP_PERIODS, MAX_ROWS,
 };
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
+use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
@@ -30,6 +31,8 @@ pub struct LogSource {
     pub instance: Option<u8>,
     /// The MCAP topic with the `sensor_msgs/msg/Imu` messages (default: the only one).
     pub topic: Option<String>,
+    /// How the caller names these options in messages.
+    pub spelling: Spelling,
 }
 
 /// The formats read.
@@ -111,10 +114,14 @@ pub enum LogError {
     },
     /// A text file without its units and columns.
     #[error(
-        "{0} is a text file: give its units (--acc-unit and --gyro-unit) and its time \
-         (--time-column NAME or --rate-hz HZ)"
+        "{} is a text file: give its units ({} and {}) and its time ({} or {})",
+        .0.display(),
+        .1.name(UserOption::AccUnit),
+        .1.name(UserOption::GyroUnit),
+        .1.given(UserOption::TimeColumn, "NAME"),
+        .1.given(UserOption::RateHz, "HZ")
     )]
-    TextNeedsOptions(PathBuf),
+    TextNeedsOptions(PathBuf, Spelling),
     /// Text options on a binary log, which states its own units.
     #[error(
         "{path} is a {} log, which states its own units (m/s², rad/s) and time: leave out {option}",
@@ -125,8 +132,8 @@ pub enum LogError {
         path: PathBuf,
         /// Its format.
         format: LogFormat,
-        /// The option given.
-        option: &'static str,
+        /// The options given.
+        option: String,
     },
     /// A ULog's problem.
     #[error("{path}: {source}")]
@@ -181,7 +188,8 @@ pub enum ImuError {
     /// No IMU samples for the instance.
     #[error(
         "no IMU samples for instance {instance}: the log has {found}; {hint} and choose the IMU \
-         with --instance N"
+         with {}",
+        .spelling.given(UserOption::Instance, "N")
     )]
     NoImu {
         /// The instance asked for.
@@ -190,12 +198,35 @@ pub enum ImuError {
         found: String,
         /// What to log.
         hint: &'static str,
+        /// The caller's names of the options (the readers say flags; [`read_log_from`] gives the
+        /// caller's).
+        spelling: Spelling,
     },
     /// More samples than [`MAX_ROWS`].
     #[error(
         "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
     )]
     TooManySamples(String),
+}
+
+impl ImuError {
+    /// The error with the options named as `spelling` does.
+    pub fn spelled(self, spelling: Spelling) -> ImuError {
+        match self {
+            ImuError::NoImu {
+                instance,
+                found,
+                hint,
+                ..
+            } => ImuError::NoImu {
+                instance,
+                found,
+                hint,
+                spelling,
+            },
+            e => e,
+        }
+    }
 }
 
 /// Reads the log at `path` in whatever format its first bytes say (see the module docs).
@@ -218,26 +249,33 @@ pub fn read_log_from<R: BufRead>(
     source: &LogSource,
 ) -> Result<LogFile, LogError> {
     let format = LogFormat::detect(head);
+    let sp = source.spelling;
     let not_for = |option| LogError::OptionNotForFormat {
         path: path.to_path_buf(),
         format,
-        option,
+        option: sp.name(option),
     };
     let p = || path.to_path_buf();
     if format != LogFormat::Text && source.text.is_some() {
         return Err(LogError::TextOptionOnBinary {
             path: p(),
             format,
-            option: "--acc-unit, --gyro-unit, --time-column and --rate-hz",
+            option: format!(
+                "{}, {}, {} and {}",
+                sp.name(UserOption::AccUnit),
+                sp.name(UserOption::GyroUnit),
+                sp.name(UserOption::TimeColumn),
+                sp.name(UserOption::RateHz)
+            ),
         });
     }
     let (recording, warnings) = match format {
         LogFormat::Text => {
             if source.instance.is_some() {
-                return Err(not_for("--instance"));
+                return Err(not_for(UserOption::Instance));
             }
             if source.topic.is_some() {
-                return Err(not_for("--topic"));
+                return Err(not_for(UserOption::Topic));
             }
             // A NUL byte early on: no text file, and none of the binary formats either.
             if head.iter().take(4096).any(|&b| b == 0) {
@@ -247,38 +285,38 @@ pub fn read_log_from<R: BufRead>(
             let options = source
                 .text
                 .as_ref()
-                .ok_or_else(|| LogError::TextNeedsOptions(p()))?;
+                .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
             (read_logger(r, path, options)?, Vec::new())
         }
         LogFormat::Ulog => {
             if source.topic.is_some() {
-                return Err(not_for("--topic"));
+                return Err(not_for(UserOption::Topic));
             }
             let imu = ulog::read(r, source.instance.unwrap_or(0)).map_err(|e| LogError::Ulog {
                 path: p(),
-                source: e,
+                source: e.spelled(sp),
             })?;
             (imu.0, imu.1)
         }
         LogFormat::DataFlash => {
             if source.topic.is_some() {
-                return Err(not_for("--topic"));
+                return Err(not_for(UserOption::Topic));
             }
             let imu = dataflash::read(r, source.instance.unwrap_or(0)).map_err(|e| {
                 LogError::DataFlash {
                     path: p(),
-                    source: e,
+                    source: e.spelled(sp),
                 }
             })?;
             (imu.0, imu.1)
         }
         LogFormat::Mcap => {
             if source.instance.is_some() {
-                return Err(not_for("--instance"));
+                return Err(not_for(UserOption::Instance));
             }
             let imu = mcap::read(r, source.topic.as_deref()).map_err(|e| LogError::Mcap {
                 path: p(),
-                source: e,
+                source: e.spelled(sp),
             })?;
             (imu.0, imu.1)
         }

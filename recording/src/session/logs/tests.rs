@@ -74,6 +74,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         text: None,
         instance: Some(1),
         topic: None,
+        spelling: Default::default(),
     };
     let text = b"t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
     let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
@@ -101,6 +102,7 @@ fn a_binary_file_of_another_format_is_named_as_such() {
         text: None,
         instance: None,
         topic: None,
+        spelling: Default::default(),
     };
     let sqlite = b"SQLite format 3\0rest";
     let e = read_log_from(&sqlite[..], sqlite, Path::new("bag.db3"), &source).unwrap_err();

@@ -14,6 +14,7 @@ use super::{
     list_instances, pair_streams, read_exact_or_end, ImuError, Stream, StreamSample, TooMany,
 };
 use crate::session::import::Recording;
+use crate::spelling::Spelling;
 use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
 
@@ -378,6 +379,16 @@ struct State {
     appended: Vec<u64>,
 }
 
+impl UlogError {
+    /// The error with the options named as `spelling` does (the reader says flags).
+    pub fn spelled(self, spelling: Spelling) -> UlogError {
+        match self {
+            UlogError::Imu(e) => UlogError::Imu(e.spelled(spelling)),
+            e => e,
+        }
+    }
+}
+
 /// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
 pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
     let mut header = [0u8; 16];
@@ -641,6 +652,7 @@ impl State {
                 instance,
                 found,
                 hint: "log sensor_accel and sensor_gyro (or sensor_combined)",
+                spelling: Spelling::Flags,
             }
             .into());
         };

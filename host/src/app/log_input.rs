@@ -1,0 +1,461 @@
+//! How to read a logger's file, as typed options ([`LogInput`]): the columns, the time, the units,
+//! raw counts' offset and scale, the IMU of a binary log. The command line's flags and Python's
+//! keyword arguments both become a `LogInput`; its checks name the options as the caller spells
+//! them ([`Spelling`]).
+
+use crate::session::import::{
+    parse_acc_unit, GyroUnit, ImportOptions, TimeSource, TimeUnit, DEFAULT_COLUMNS,
+};
+use crate::session::logs::LogSource;
+use recording::spelling::{Spelling, UserOption};
+use shared::OutputUnit;
+
+/// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
+/// DataFlash log or a ROS 2 bag (MCAP) states them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogInput {
+    /// Text files: the accelerometer x, y, z and gyro x, y, z column names, in that order.
+    pub columns: Vec<String>,
+    /// Text files: the column with the time stamps (else `rate_hz`).
+    pub time_column: Option<String>,
+    /// Text files: the time column's unit, s, ms, us or ns (default: detected).
+    pub time_unit: Option<String>,
+    /// Text files without a time column: the sample rate, Hz.
+    pub rate_hz: Option<f64>,
+    /// Text files: the accelerometer's unit, m/s2, g, LSB or V.
+    pub acc_unit: Option<String>,
+    /// Text files in counts: the counts of zero force, one value or one per axis.
+    pub acc_offset: Option<Vec<f64>>,
+    /// Text files: the gyro's unit, deg/s, rad/s or LSB (with `gyro_lsb_per_dps`).
+    pub gyro_unit: Option<String>,
+    /// A gyro in counts: its nominal scale, counts per °/s.
+    pub gyro_lsb_per_dps: Option<f64>,
+    /// ULog and DataFlash: which IMU (default 0).
+    pub instance: Option<u8>,
+    /// MCAP: the Imu topic (default: the bag's only one).
+    pub topic: Option<String>,
+    /// How the caller names these options in messages.
+    pub spelling: Spelling,
+}
+
+impl Default for LogInput {
+    fn default() -> Self {
+        LogInput {
+            columns: DEFAULT_COLUMNS.map(String::from).to_vec(),
+            time_column: None,
+            time_unit: None,
+            rate_hz: None,
+            acc_unit: None,
+            acc_offset: None,
+            gyro_unit: None,
+            gyro_lsb_per_dps: None,
+            instance: None,
+            topic: None,
+            spelling: Spelling::Flags,
+        }
+    }
+}
+
+/// Why the options cannot read a file; each names the options as the caller spells them.
+#[derive(Debug, thiserror::Error)]
+pub enum LogInputError {
+    /// Not six column names.
+    #[error("{} needs six names: acc x,y,z then gyro x,y,z", .0.name(UserOption::Columns))]
+    ColumnCount(Spelling),
+    /// An empty column name.
+    #[error(
+        "{} has an empty name: give six names, acc x,y,z then gyro x,y,z",
+        .0.name(UserOption::Columns)
+    )]
+    EmptyColumn(Spelling),
+    /// One column named for two quantities.
+    #[error(
+        "column '{name}' is named twice in {}/{}: each of acc x,y,z, gyro x,y,z and the time must \
+         be its own column",
+        .spelling.name(UserOption::Columns),
+        .spelling.name(UserOption::TimeColumn)
+    )]
+    ColumnTwice {
+        /// The name.
+        name: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// Neither or both of a time column and a rate.
+    #[error(
+        "a text file needs exactly one of {} or {}",
+        .0.given(UserOption::TimeColumn, "NAME"),
+        .0.given(UserOption::RateHz, "HZ")
+    )]
+    TimeSource(Spelling),
+    /// A time unit that is none of s, ms, us, ns.
+    #[error("{}: use s, ms, us or ns", .spelling.given(UserOption::TimeUnit, .given))]
+    TimeUnit {
+        /// The unit given.
+        given: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// A time unit with a rate.
+    #[error(
+        "{} applies to {}, not to {}",
+        .0.name(UserOption::TimeUnit),
+        .0.name(UserOption::TimeColumn),
+        .0.name(UserOption::RateHz)
+    )]
+    TimeUnitWithRate(Spelling),
+    /// No or an unknown accelerometer unit.
+    #[error(
+        "{}: a text file needs its accelerometer unit, m/s2, g, LSB or V",
+        .spelling.quoted(UserOption::AccUnit, .given)
+    )]
+    AccUnit {
+        /// The unit given ("" for none).
+        given: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// An offset for an accelerometer not in counts.
+    #[error(
+        "{} is for raw counts: give {}, or drop {} (the unit is {unit})",
+        .spelling.name(UserOption::AccOffset),
+        .spelling.given(UserOption::AccUnit, "LSB"),
+        .spelling.name(UserOption::AccOffset)
+    )]
+    AccOffsetNotCounts {
+        /// The accelerometer unit given.
+        unit: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// An offset of neither one nor three finite values.
+    #[error(
+        "{}: give the counts of zero force, one number (e.g. 32768) or three (X,Y,Z)",
+        .spelling.given(UserOption::AccOffset, format!("{:?}", .given))
+    )]
+    AccOffsetValues {
+        /// The values given.
+        given: Vec<f64>,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// A gyro in counts without its scale.
+    #[error(
+        "{} needs the gyro's nominal scale: add {} (counts per °/s from its data sheet, e.g. 16.4 \
+         at ±2000 °/s, 131 at ±250 °/s); the turns then fit the true scale",
+        .0.given(UserOption::GyroUnit, "LSB"),
+        .0.given(UserOption::GyroLsbPerDps, "X")
+    )]
+    GyroNeedsScale(Spelling),
+    /// A scale for a gyro not in counts.
+    #[error(
+        "{} is for a gyro in counts: give {} (not '{given}')",
+        .spelling.name(UserOption::GyroLsbPerDps),
+        .spelling.given(UserOption::GyroUnit, "LSB")
+    )]
+    GyroScaleNotCounts {
+        /// The gyro unit given.
+        given: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// No or an unknown gyro unit.
+    #[error(
+        "{}: a text file needs its gyro unit, deg/s, rad/s or LSB (with {})",
+        .spelling.quoted(UserOption::GyroUnit, .given),
+        .spelling.name(UserOption::GyroLsbPerDps)
+    )]
+    GyroUnit {
+        /// The unit given ("" for none).
+        given: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+}
+
+impl LogInput {
+    /// What to read: the text options when any is given (checked whole), the instance and topic.
+    pub fn source(&self) -> Result<LogSource, LogInputError> {
+        let text_given = self.acc_unit.is_some()
+            || self.gyro_unit.is_some()
+            || self.time_column.is_some()
+            || self.rate_hz.is_some()
+            || self.time_unit.is_some()
+            || self.acc_offset.is_some()
+            || self.gyro_lsb_per_dps.is_some();
+        Ok(LogSource {
+            text: if text_given {
+                Some(self.import_options()?)
+            } else {
+                None
+            },
+            instance: self.instance,
+            topic: self.topic.clone(),
+            spelling: self.spelling,
+        })
+    }
+
+    /// The text reader's options: six distinct column names, one time source, the units.
+    pub fn import_options(&self) -> Result<ImportOptions, LogInputError> {
+        let sp = self.spelling;
+        let columns: [String; 6] = self
+            .columns
+            .iter()
+            .map(|s| s.trim().to_string())
+            .collect::<Vec<_>>()
+            .try_into()
+            .map_err(|_| LogInputError::ColumnCount(sp))?;
+        // The reader matches names case-insensitively: a name given twice would read one column
+        // twice and make the fit singular, far from the cause.
+        let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
+        seen.extend(self.time_column.as_deref());
+        for (k, name) in seen.iter().enumerate() {
+            if name.is_empty() {
+                return Err(LogInputError::EmptyColumn(sp));
+            }
+            if let Some(first) = seen[..k].iter().find(|n| n.eq_ignore_ascii_case(name)) {
+                return Err(LogInputError::ColumnTwice {
+                    name: first.to_string(),
+                    spelling: sp,
+                });
+            }
+        }
+        let time = match (&self.time_column, self.rate_hz) {
+            (Some(c), None) => TimeSource::Column(c.clone()),
+            (None, Some(hz)) => TimeSource::RateHz(hz),
+            _ => return Err(LogInputError::TimeSource(sp)),
+        };
+        let time_unit = match (&self.time_unit, &time) {
+            (None, _) => None,
+            (Some(u), TimeSource::Column(_)) => {
+                Some(TimeUnit::parse(u).ok_or_else(|| LogInputError::TimeUnit {
+                    given: u.clone(),
+                    spelling: sp,
+                })?)
+            }
+            (Some(_), TimeSource::RateHz(_)) => return Err(LogInputError::TimeUnitWithRate(sp)),
+        };
+        let acc = self.acc_unit.as_deref().unwrap_or("");
+        let acc_unit = parse_acc_unit(acc).ok_or_else(|| LogInputError::AccUnit {
+            given: acc.to_string(),
+            spelling: sp,
+        })?;
+        let (gyro_unit, gyro_lsb_per_dps) = self.text_gyro_unit()?;
+        Ok(ImportOptions {
+            columns,
+            time,
+            acc_unit,
+            gyro_unit,
+            time_unit,
+            acc_offset: self.text_acc_offset(acc_unit)?,
+            gyro_lsb_per_dps,
+            spelling: sp,
+        })
+    }
+
+    /// The offset: one value for every axis or three, for an accelerometer in counts only.
+    fn text_acc_offset(&self, unit: OutputUnit) -> Result<[f64; 3], LogInputError> {
+        let Some(v) = &self.acc_offset else {
+            return Ok([0.0; 3]);
+        };
+        if unit != OutputUnit::Lsb {
+            return Err(LogInputError::AccOffsetNotCounts {
+                unit: self.acc_unit.clone().unwrap_or_default(),
+                spelling: self.spelling,
+            });
+        }
+        match v[..] {
+            _ if v.iter().any(|x| !x.is_finite()) => {}
+            [n] => return Ok([n; 3]),
+            [x, y, z] => return Ok([x, y, z]),
+            _ => {}
+        }
+        Err(LogInputError::AccOffsetValues {
+            given: v.clone(),
+            spelling: self.spelling,
+        })
+    }
+
+    /// The gyro's unit and scale: counts need their nominal scale, and only counts take one.
+    fn text_gyro_unit(&self) -> Result<(GyroUnit, Option<f64>), LogInputError> {
+        let sp = self.spelling;
+        let gyro = self.gyro_unit.as_deref().unwrap_or("");
+        let counts = matches!(gyro, "LSB" | "lsb" | "counts");
+        match (counts, self.gyro_lsb_per_dps) {
+            (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
+            (true, None) => Err(LogInputError::GyroNeedsScale(sp)),
+            (false, Some(_)) => Err(LogInputError::GyroScaleNotCounts {
+                given: gyro.to_string(),
+                spelling: sp,
+            }),
+            (false, None) => {
+                GyroUnit::parse(gyro)
+                    .map(|u| (u, None))
+                    .ok_or_else(|| LogInputError::GyroUnit {
+                        given: gyro.to_string(),
+                        spelling: sp,
+                    })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn text(spelling: Spelling) -> LogInput {
+        LogInput {
+            rate_hz: Some(100.0),
+            acc_unit: Some("g".into()),
+            gyro_unit: Some("deg/s".into()),
+            spelling,
+            ..LogInput::default()
+        }
+    }
+
+    /// One check, two callers: each reads its own option names, never the other's.
+    #[test]
+    fn a_refusal_names_the_callers_options() {
+        let e = |i: LogInput| i.source().unwrap_err().to_string();
+        let bad_unit = |sp| LogInput {
+            acc_unit: Some("furlong".into()),
+            ..text(sp)
+        };
+        assert_eq!(
+            e(bad_unit(Spelling::Flags)),
+            "--acc-unit 'furlong': a text file needs its accelerometer unit, m/s2, g, LSB or V"
+        );
+        assert_eq!(
+            e(bad_unit(Spelling::Keywords)),
+            "acc_unit=\"furlong\": a text file needs its accelerometer unit, m/s2, g, LSB or V"
+        );
+        let counts = |sp| LogInput {
+            gyro_unit: Some("LSB".into()),
+            ..text(sp)
+        };
+        let m = e(counts(Spelling::Keywords));
+        assert!(m.starts_with("gyro_unit=\"LSB\" needs") && m.contains("gyro_lsb_per_dps=X"));
+        assert!(!m.contains("--"), "{m}");
+        let offset = |sp| LogInput {
+            acc_unit: Some("LSB".into()),
+            acc_offset: Some(vec![1.0, 2.0]),
+            ..text(sp)
+        };
+        assert!(e(offset(Spelling::Keywords)).starts_with("acc_offset=[1.0, 2.0]: give"));
+        let both = LogInput {
+            time_column: Some("t".into()),
+            ..text(Spelling::Keywords)
+        };
+        assert_eq!(
+            e(both),
+            "a text file needs exactly one of time_column=\"NAME\" or rate_hz=HZ"
+        );
+    }
+
+    /// With the flags' spelling every refusal is word for word the command line's message from
+    /// before the options became typed (the texts below are those messages).
+    #[test]
+    fn the_flags_spelling_keeps_the_command_lines_words() {
+        let base = || text(Spelling::Flags);
+        let cases: Vec<(LogInput, &str)> = vec![
+            (
+                LogInput {
+                    columns: vec!["a".into(), "b".into()],
+                    ..base()
+                },
+                "--columns needs six names: acc x,y,z then gyro x,y,z",
+            ),
+            (
+                LogInput {
+                    columns: ["a", "b", "", "d", "e", "f"].map(String::from).to_vec(),
+                    ..base()
+                },
+                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z",
+            ),
+            (
+                LogInput {
+                    columns: ["a", "b", "c", "d", "e", "A"].map(String::from).to_vec(),
+                    ..base()
+                },
+                "column 'a' is named twice in --columns/--time-column: each of acc x,y,z, gyro \
+                 x,y,z and the time must be its own column",
+            ),
+            (
+                LogInput {
+                    rate_hz: None,
+                    ..base()
+                },
+                "a text file needs exactly one of --time-column NAME or --rate-hz HZ",
+            ),
+            (
+                LogInput {
+                    rate_hz: None,
+                    time_column: Some("t".into()),
+                    time_unit: Some("h".into()),
+                    ..base()
+                },
+                "--time-unit h: use s, ms, us or ns",
+            ),
+            (
+                LogInput {
+                    time_unit: Some("s".into()),
+                    ..base()
+                },
+                "--time-unit applies to --time-column, not to --rate-hz",
+            ),
+            (
+                LogInput {
+                    acc_offset: Some(vec![1.0]),
+                    ..base()
+                },
+                "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the \
+                 unit is g)",
+            ),
+            (
+                LogInput {
+                    gyro_unit: Some("LSB".into()),
+                    ..base()
+                },
+                "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts \
+                 per °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns \
+                 then fit the true scale",
+            ),
+            (
+                LogInput {
+                    gyro_lsb_per_dps: Some(16.4),
+                    ..base()
+                },
+                "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not 'deg/s')",
+            ),
+            (
+                LogInput {
+                    gyro_unit: Some("x".into()),
+                    ..base()
+                },
+                "--gyro-unit 'x': a text file needs its gyro unit, deg/s, rad/s or LSB (with \
+                 --gyro-lsb-per-dps)",
+            ),
+        ];
+        for (input, want) in cases {
+            assert_eq!(input.source().unwrap_err().to_string(), want);
+        }
+    }
+
+    #[test]
+    fn one_or_three_finite_offsets_are_taken() {
+        let with = |v: Vec<f64>| {
+            LogInput {
+                acc_unit: Some("LSB".into()),
+                acc_offset: Some(v),
+                ..text(Spelling::Flags)
+            }
+            .import_options()
+            .map(|o| o.acc_offset)
+        };
+        assert_eq!(with(vec![5.0]).unwrap(), [5.0; 3]);
+        assert_eq!(with(vec![1.0, 2.0, 3.0]).unwrap(), [1.0, 2.0, 3.0]);
+        assert!(with(vec![f64::NAN]).is_err());
+        assert!(with(vec![]).is_err());
+    }
+}

@@ -1,0 +1,206 @@
+"""The package as a Python user meets it: typed keywords and option objects (no command-line
+strings), exceptions of the promised types that keep their causes and name this package's keyword
+arguments, one array-like rule for every function, and refusals where the numbers would be silently
+wrong (a gyro in the wrong unit, a NaN in an Allan deviation)."""
+
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import accelcal
+from conftest import ROOT, UNIT_ID, run
+
+ACC = ["acc_x", "acc_y", "acc_z"]
+GYR = ["gyr_x", "gyr_y", "gyr_z"]
+
+
+def test_the_compiled_half_uses_the_application_layer_not_the_command_line():
+    sources = sorted((ROOT / "python" / "src").glob("*.rs"))
+    assert sources
+    for src in sources:
+        text = src.read_text()
+        assert "host::cli" not in text, src.name
+        assert "CliError" not in text, src.name
+
+
+def test_simulate_takes_typed_keywords(host_bin, tmp_path):
+    # The command line's flags and Python's typed keywords write the same session.
+    run(host_bin, "-q", "simulate", "--out", str(tmp_path / "cli"), "--plan", "short",
+        "--seed", "4", "--gyro-bias-deg-s", "0.5,-0.25,0", "--noise-mg", "0.5")
+    session = accelcal.simulate(tmp_path / "py", plan="short", seed=4,
+                                gyro_bias_deg_s=(0.5, -0.25, 0.0), noise_mg=0.5)
+    assert session.segments == accelcal.load_session(tmp_path / "cli").segments
+    for name in ["plan.toml", "samples.csv", "truth.toml"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    # Command-line strings are no keywords; a bias is three numbers.
+    with pytest.raises(TypeError):
+        accelcal.simulate(tmp_path / "x", args=["--plan", "short"])
+    with pytest.raises((TypeError, ValueError)):
+        accelcal.simulate(tmp_path / "x", gyro_bias_deg_s=(0.5, 0.0))
+
+
+def test_segment_file_takes_grouped_options_or_the_same_keywords(hand):
+    grouped = accelcal.segment_file(
+        hand["csv"],
+        log=accelcal.LogOptions(acc_unit="m/s2", gyro_unit="deg/s", time_column="t"),
+        site=accelcal.SessionOptions(unit_id=UNIT_ID, min_still_s=1.0),
+    )
+    flat = accelcal.segment_file(hand["csv"], acc_unit="m/s2", gyro_unit="deg/s",
+                                 time_column="t", unit_id=UNIT_ID)
+    assert grouped.plan_toml() == flat.plan_toml() == (hand["session"] / "plan.toml").read_text()
+    options = accelcal.LogOptions(acc_unit="g")
+    assert options.acc_unit == "g" and options.gyro_unit is None
+    with pytest.raises(accelcal.InputError, match="not both"):
+        accelcal.segment_file(hand["csv"], log=options, acc_unit="m/s2")
+    with pytest.raises(TypeError, match="acc_units"):
+        accelcal.segment_file(hand["csv"], acc_units="m/s2")
+
+
+def still_arrays(n=4000, seed=1):
+    rng = np.random.default_rng(seed)
+    acc = np.tile([0.0, 0.0, 9.80665], (n, 1)) + rng.normal(0, 0.01, (n, 3))
+    gyro = rng.normal(0, 0.05, (n, 3))
+    return acc, gyro, np.arange(n) / 200.0
+
+
+def test_too_few_positions_is_a_calibration_error():
+    acc, gyro, t = still_arrays()
+    with pytest.raises(accelcal.CalibrationError, match="position"):
+        accelcal.segment(acc, gyro, t, acc_unit="m/s2", gyro_unit="deg/s")
+
+
+def test_an_exception_keeps_its_cause(tmp_path):
+    with pytest.raises(accelcal.FileError) as e:
+        accelcal.Calibration.load(tmp_path / "no-such.toml")
+    assert isinstance(e.value.__cause__, FileNotFoundError), repr(e.value.__cause__)
+    with pytest.raises(accelcal.FileError) as e:
+        accelcal.load_session(tmp_path / "no-such-session")
+    causes = []
+    c = e.value.__cause__
+    while c is not None:
+        causes.append(c)
+        c = c.__cause__
+    assert any(isinstance(c, FileNotFoundError) for c in causes), causes
+
+
+def test_errors_name_the_keyword_arguments(hand, py_cal_of_hand):
+    messages = []
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(hand["csv"], acc_unit="g", gyro_unit="deg/s", time_column="t")
+    messages.append(str(e.value))
+    assert 'acc_unit="m/s2"' in messages[-1]
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(hand["csv"], acc_unit="m/s2", gyro_unit="LSB", time_column="t")
+    messages.append(str(e.value))
+    assert "gyro_lsb_per_dps=X" in messages[-1]
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(hand["csv"], acc_unit="m/s2", gyro_unit="deg/s")
+    messages.append(str(e.value))
+    assert 'time_column="NAME" or rate_hz=HZ' in messages[-1]
+    with pytest.raises(accelcal.CalibrationError) as e:
+        py_cal_of_hand.export("px4")
+    messages.append(str(e.value))
+    assert "give device_id=ID" in messages[-1]
+    with pytest.raises(accelcal.CalibrationError) as e:
+        py_cal_of_hand.export("ardupilot", device_id=1 << 25)
+    messages.append(str(e.value))
+    assert messages[-1].startswith("device_id=33554432: ArduPilot sends INS_ACC_ID as a float")
+    # The single-package model refused for the paper's method.
+    session = accelcal.load_session(hand["session"])
+    with pytest.raises(accelcal.CalibrationError) as e:
+        accelcal.calibrate(session, method="paper", single_package=True)
+    messages.append(str(e.value))
+    assert 'use method="joint" with single_package=True' in messages[-1]
+    # The IMU of a binary log: a missing instance, a topic the bag does not have.
+    logs = ROOT / "host" / "tests" / "fixtures" / "logs"
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(logs / "hand.ulg", instance=1)
+    messages.append(str(e.value))
+    assert "choose the IMU with instance=N" in messages[-1]
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment_file(logs / "hand.mcap", topic="/nope")
+    messages.append(str(e.value))
+    assert 'topic="/nope": not a' in messages[-1]
+    # A gyro in rad/s declared deg/s: its turns are 1/57 of gravity's, an input in the wrong unit.
+    d = accelcal.simulate_hand(seed=3)
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.segment(d["acc"], np.radians(d["gyro"]), d["t"], acc_unit="m/s2",
+                         gyro_unit="deg/s")
+    messages.append(str(e.value))
+    assert 'gyro_unit="rad/s"' in messages[-1]
+    for m in messages:
+        assert not re.search(r"(^|\W)--[a-z]", m), m
+
+
+def test_save_refuses_to_replace_and_names_force(hand, tmp_path):
+    cal = accelcal.calibrate(accelcal.load_session(hand["session"]))
+    cal.save(tmp_path)
+    with pytest.raises(accelcal.FileError, match=r"force=True") as e:
+        cal.save(tmp_path)
+    assert "--" not in str(e.value)
+    cal.save(tmp_path, force=True)
+
+
+@pytest.fixture(scope="module")
+def py_cal_of_hand(hand):
+    return accelcal.Calibration.load(hand["toml"])
+
+
+def test_apply_refuses_a_gyro_in_deg_s_declared_rad_s(hand):
+    cal = accelcal.Calibration.load(hand["toml"])
+    d = accelcal.simulate_hand(seed=3)  # the gyro in deg/s, as the hand session's logger wrote it
+    with pytest.raises(accelcal.InputError, match='gyro_unit="deg/s"'):
+        accelcal.apply(cal, d["acc"], d["gyro"], d["t"])  # gyro_unit defaults to rad/s
+    f = accelcal.apply(cal, d["acc"], d["gyro"], d["t"], gyro_unit="deg/s")
+    assert f.shape == d["acc"].shape
+    # Against the simulator: a still hand is at 1 g (the truth is the simulated gravity).
+    assert abs(np.median(np.linalg.norm(f, axis=1)) - 1.0) < 5e-3
+
+
+def test_allan_refuses_a_nan():
+    x = np.random.default_rng(2).normal(0, 1e-3, 20000)
+    clean = accelcal.allan(x, rate_hz=100.0)
+    assert np.all(np.isfinite(clean["adev"]))
+    x[1234] = np.nan
+    with pytest.raises(accelcal.InputError, match="index 1234"):
+        accelcal.allan(x, rate_hz=100.0)
+    with pytest.raises(accelcal.InputError, match="non-finite"):
+        accelcal.allan(np.column_stack([x, x]), rate_hz=100.0)
+
+
+def test_every_function_takes_the_same_array_likes(hand):
+    d = accelcal.simulate_hand(seed=3, as_frame=True)
+    arrays = accelcal.segment(d[ACC].to_numpy(), d[GYR].to_numpy(), d["t"].to_numpy(),
+                              acc_unit="m/s2", gyro_unit="deg/s", unit_id=UNIT_ID)
+    frame_pair = accelcal.segment(d[ACC], d[GYR], d["t"], acc_unit="m/s2", gyro_unit="deg/s",
+                                  unit_id=UNIT_ID)
+    one_frame = accelcal.segment(d, acc_unit="m/s2", gyro_unit="deg/s", unit_id=UNIT_ID)
+    assert arrays.plan_toml() == frame_pair.plan_toml() == one_frame.plan_toml()
+    cal = accelcal.calibrate(arrays)
+    f_arrays = accelcal.apply(cal, d[ACC].to_numpy(), np.radians(d[GYR].to_numpy()),
+                              d["t"].to_numpy())
+    f_pair = accelcal.apply(cal, d[ACC], np.radians(d[GYR]), d["t"])
+    f_frame = accelcal.apply(cal, d, gyro_unit="deg/s")
+    np.testing.assert_array_equal(f_arrays, f_pair)
+    # deg/s converted here or by numpy: the same rates to an ulp, the same f32 force to 1e-6 g.
+    np.testing.assert_allclose(f_frame, f_arrays, rtol=0, atol=1e-6)
+    a = accelcal.allan(d["gyr_x"], rate_hz=200.0)
+    b = accelcal.allan(d["gyr_x"].to_numpy(), rate_hz=200.0)
+    np.testing.assert_array_equal(a["adev"], b["adev"])
+
+
+def test_the_readme_installs_what_the_readme_uses():
+    readme = (ROOT / "python" / "README.md").read_text()
+    project = tomllib.loads((ROOT / "python" / "pyproject.toml").read_text())["project"]
+    extra = project["optional-dependencies"]["pandas"]
+    assert any(re.match(r"pandas\b", r) for r in extra), extra
+    installs = re.findall(r"pip install (.+)", readme)
+    assert installs, "no pip install line"
+    assert any("[pandas]" in line for line in installs), installs
+    # The example uses pandas (a DataFrame): the extra is what brings it.
+    code = "".join(re.findall(r"```python\n(.*?)```", readme, flags=re.S))
+    assert "as_frame=True" in code or "import pandas" in code
