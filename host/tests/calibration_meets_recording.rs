@@ -534,3 +534,33 @@ fn a_calibration_in_a_conventional_frame_is_verified_in_its_own_frame() {
     assert_eq!(lines.len(), 3, "{all}");
     assert!(lines.iter().all(|l| l.ends_with("ok")), "{lines:?}");
 }
+
+/// `navigation-check` on a plan whose positions are all held by hand has nothing to replay: it
+/// printed an empty table, exit 0. It fails naming why; a plan with static positions but no
+/// spin names the replay it leaves out under its table.
+#[test]
+fn an_empty_navigation_table_says_why() {
+    let (ok, stdout, stderr) = host(&["navigation-check", "--plan", "hand"]);
+    assert!(!ok, "{stdout}");
+    assert!(
+        stderr.contains("nothing to replay") && stderr.contains("held by hand"),
+        "{stderr}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("still.toml");
+    let short = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recording/plans/short.toml");
+    let short = std::fs::read_to_string(short).unwrap();
+    // The six positions without the spins.
+    let still: String = short
+        .split("[[segment]]")
+        .filter(|block| !block.contains("rate_deg_s"))
+        .collect::<Vec<_>>()
+        .join("[[segment]]");
+    std::fs::write(&plan, still).unwrap();
+    let (ok, stdout, stderr) = host(&["navigation-check", "--plan", s(&plan)]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("left out: no constant-rate segment"),
+        "{stdout}"
+    );
+}

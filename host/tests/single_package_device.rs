@@ -13,7 +13,7 @@ const UNIT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/units/single-package.to
 /// stdout and stderr.
 fn calibrate_live(port: &str, plan: &str, out_dir: &Path) -> (String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["calibrate", "--port", port, "--sim-unit", UNIT])
+        .args(["calibrate", "-v", "--port", port, "--sim-unit", UNIT])
         .args(["--plan", plan, "--out-dir"])
         .arg(out_dir)
         .output()

@@ -83,6 +83,7 @@ fn a_thermal_session_without_spins_keeps_the_gyro_bias() {
     ]);
     let printed = run(&[
         "calibrate",
+        "-v",
         "--input",
         &p(&session),
         "--out-dir",
