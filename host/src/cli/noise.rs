@@ -62,7 +62,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         analyse(&a.input, plain, quiet)
     } else {
         let with_unit = cal.as_ref().map(|(p, u)| (p, *u));
-        analyse_log(&a.input, &a.log.source(&a.input)?, with_unit)
+        analyse_log(&a.input, &a.log.source(&a.input)?, with_unit, quiet)
     }
     .map_err(CliError::Noise)?;
     let out = super::output::Output {

@@ -30,6 +30,7 @@ pub fn analyse_log(
     path: &Path,
     source: &LogSource,
     calibration: Option<(&PlainMatrices, OutputUnit)>,
+    quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let file = |m: String| NoiseError::File(path.to_path_buf(), m);
     let log = read_log(path, source).map_err(|e| file(e.to_string()))?;
@@ -71,7 +72,12 @@ pub fn analyse_log(
         cut: end < iv.end,
         acc_unit: Some(unit),
     };
-    let mut report = analyse_signals(s, path.display().to_string(), calibration.map(|c| c.0))?;
+    let mut report = analyse_signals(
+        s,
+        path.display().to_string(),
+        calibration.map(|c| c.0),
+        quiet,
+    )?;
     let mut warnings = log.warnings;
     warnings.append(&mut report.warnings);
     report.warnings = warnings;

@@ -334,7 +334,7 @@ pub fn analyse(
     } else {
         collect_csv(input)?
     };
-    analyse_signals(s, input.display().to_string(), calibration)
+    analyse_signals(s, input.display().to_string(), calibration, quiet)
 }
 
 /// [`analyse`] of a bare samples.csv held in memory (`host::fuzz`'s `noise_csv` target).
@@ -344,7 +344,7 @@ pub(crate) fn analyse_csv_bytes(
     calibration: Option<&PlainMatrices>,
 ) -> Result<NoiseReport, NoiseError> {
     let s = collect_csv_from(data, data, Path::new(SAMPLES_FILE))?;
-    analyse_signals(s, SAMPLES_FILE.into(), calibration)
+    analyse_signals(s, SAMPLES_FILE.into(), calibration, true)
 }
 
 /// The Allan curves, fitted terms and Kalibr figures of one segment's signals.
@@ -352,6 +352,7 @@ fn analyse_signals(
     mut s: Signals,
     source: String,
     calibration: Option<&PlainMatrices>,
+    quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let n = s.data[0].len();
     if n < MIN_SAMPLES || !(s.rate_hz.is_finite() && s.rate_hz > 0.0) {
@@ -407,11 +408,19 @@ fn analyse_signals(
         },
     };
     let sizes = octave_sizes(n);
+    // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
+    let bar = crate::ui::progress_bar(
+        AXES.len() as u64,
+        "Allan deviation and fit, per axis",
+        quiet,
+    );
     let axes: Vec<AxisNoise> = AXES
         .iter()
         .enumerate()
         .map(|(j, name)| {
             let points = overlapping_adev(&s.data[j], s.rate_hz, &sizes);
+            let terms = fit(&points);
+            bar.inc(1);
             AxisNoise {
                 axis: (*name).into(),
                 unit: if j < 3 {
@@ -419,11 +428,12 @@ fn analyse_signals(
                 } else {
                     "rad/s".into()
                 },
-                terms: fit(&points),
+                terms,
                 points,
             }
         })
         .collect();
+    bar.finish_and_clear();
     let worst = |r: std::ops::Range<usize>, f: fn(&NoiseTerms) -> Option<f64>| -> Option<f64> {
         let v: Option<Vec<f64>> = axes[r].iter().map(|a| f(&a.terms)).collect();
         v.map(|v| v.into_iter().fold(0.0, f64::max))
