@@ -533,55 +533,86 @@ impl NoiseReport {
         s
     }
 
-    /// The Allan curves (markers) and fitted lines, on log–log axes with a labelled tick per decade.
+    /// The Allan figure as engineers draw it: one log–log panel per axis with the measured curve
+    /// and its 1σ bars (IEEE 952's cluster count, [`confidence::relative_sigma`]), the fitted model,
+    /// and each determined term as its own line: N on the −½ slope (read at τ = 1 s), B flat at
+    /// 0.664 B, K on the +½ slope (read at τ = 3 s), labelled with its value.
     pub fn figure(&self) -> Figure {
-        let panel = |range: std::ops::Range<usize>, title: &str, unit: &str| Panel {
-            title: title.into(),
-            x_desc: "τ (s)".into(),
-            y_desc: format!("Allan deviation [{unit}]"),
-            x_categories: None,
-            log_x: true,
-            log_y: true,
-            series: self.axes[range]
-                .iter()
-                .enumerate()
-                .flat_map(|(c, a)| {
-                    let measured = Series {
-                        label: a.axis.clone(),
-                        points: a.points.iter().map(|p| (p.tau_s, p.adev)).collect(),
-                        error: None,
-                        style: SeriesStyle::Markers,
-                        colour: c,
-                    };
-                    let fitted = Series {
-                        label: format!("{} fit", a.axis),
-                        points: a
-                            .points
-                            .iter()
-                            .map(|p| (p.tau_s, a.terms.adev(p.tau_s)))
-                            .collect(),
-                        error: None,
-                        style: SeriesStyle::Line,
-                        colour: c,
-                    };
-                    [measured, fitted]
-                })
-                .collect(),
-        };
         let accel_unit = self
             .axes
             .first()
             .map_or("m/s^2".to_string(), |a| a.unit.clone());
+        let panels = self
+            .axes
+            .iter()
+            .enumerate()
+            .map(|(j, a)| {
+                let unit = if j < 3 { accel_unit.as_str() } else { "rad/s" };
+                self.axis_panel(a, unit)
+            })
+            .collect();
         Figure {
             stem: "allan".into(),
             title: "Allan deviation".into(),
-            grid: (1, 2),
-            size: (1400, 600),
-            panels: vec![
-                panel(0..3, "accelerometer", &accel_unit),
-                panel(3..6, "gyro", "rad/s"),
-            ],
+            grid: (2, 3),
+            size: (1800, 1100),
+            panels,
         }
+    }
+
+    /// One axis's panel of [`Self::figure`].
+    fn axis_panel(&self, a: &AxisNoise, unit: &str) -> Panel {
+        let n = usize::try_from(self.samples).unwrap_or(usize::MAX);
+        let sigma = |tau: f64| {
+            let m = (tau * self.sample_rate_hz).round() as usize;
+            confidence::relative_sigma(n, m.max(1)).unwrap_or(0.0)
+        };
+        let mut series = vec![
+            Series {
+                label: format!("{} (±1σ)", a.axis),
+                points: a.points.iter().map(|p| (p.tau_s, p.adev)).collect(),
+                error: Some(a.points.iter().map(|p| p.adev * sigma(p.tau_s)).collect()),
+                style: SeriesStyle::Markers,
+                colour: 0,
+            },
+            Series {
+                label: "fit".into(),
+                points: a
+                    .points
+                    .iter()
+                    .map(|p| (p.tau_s, a.terms.adev(p.tau_s)))
+                    .collect(),
+                error: None,
+                style: SeriesStyle::Line,
+                colour: 1,
+            },
+        ];
+        let (Some(first), Some(last)) = (a.points.first(), a.points.last()) else {
+            return axis_panel_of(a, unit, series);
+        };
+        let span = [first.tau_s, last.tau_s];
+        let t = &a.terms;
+        let lines: [(Option<f64>, &str, &str, fn(f64, f64) -> f64); 3] = [
+            (t.white_density, "N", "slope −½", |v, tau| v / tau.sqrt()),
+            (t.bias_instability, "B", "flat", |v, _| {
+                allan::FLICKER_FACTOR.sqrt() * v
+            }),
+            (t.random_walk, "K", "slope +½", |v, tau| {
+                v * (tau / 3.0).sqrt()
+            }),
+        ];
+        for (k, (value, name, slope, adev)) in lines.into_iter().enumerate() {
+            if let Some(v) = value {
+                series.push(Series {
+                    label: format!("{name} = {v:.3e} ({slope})"),
+                    points: span.iter().map(|&tau| (tau, adev(v, tau))).collect(),
+                    error: None,
+                    style: SeriesStyle::Dashed,
+                    colour: 2 + k,
+                });
+            }
+        }
+        axis_panel_of(a, unit, series)
     }
 
     /// `axis,tau_s,adev,fit_adev,terms` rows.
@@ -611,6 +642,19 @@ pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
         NoiseError::File(path.into(), format!("not a noise.json of host noise: {e}"))
     })?;
     Ok(report.kalibr)
+}
+
+/// A log–log panel of one axis's `series`.
+fn axis_panel_of(a: &AxisNoise, unit: &str, series: Vec<Series>) -> Panel {
+    Panel {
+        title: a.axis.clone(),
+        x_desc: "τ (s)".into(),
+        y_desc: format!("Allan deviation [{unit}]"),
+        x_categories: None,
+        log_x: true,
+        log_y: true,
+        series,
+    }
 }
 
 #[cfg(test)]

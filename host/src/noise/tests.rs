@@ -368,3 +368,57 @@ fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {
         );
     }
 }
+
+/// The figure as engineers draw it: a panel per axis, the measured curve with 1σ bars from the
+/// cluster count (25 % at nine clusters, IEEE 952), and each determined term as its own line,
+/// labelled with its value: N's line reads N at τ = 1 s on a −½ slope.
+#[test]
+fn the_allan_figure_has_error_bars_and_a_line_per_term() {
+    let dir = tempfile::tempdir().unwrap();
+    let unit = UnitFile::paper_unit();
+    simulate_to_dir(
+        dir.path(),
+        &unit,
+        &still_plan(200.0, 60.0),
+        &noise(),
+        9,
+        false,
+    )
+    .unwrap();
+    let r = analyse(dir.path(), None, true).unwrap();
+    let f = r.figure();
+    assert_eq!(f.panels.len(), 6);
+    for (panel, axis) in f.panels.iter().zip(&r.axes) {
+        let measured = &panel.series[0];
+        let bars = measured.error.as_ref().expect("1σ bars");
+        for (p, e) in axis.points.iter().zip(bars) {
+            let m = (p.tau_s * r.sample_rate_hz).round() as usize;
+            let want = p.adev / (2.0 * ((r.samples as usize / m) as f64 - 1.0)).sqrt();
+            assert!(
+                (e / want - 1.0).abs() < 1e-9,
+                "{}: τ {} bar {e} vs {want}",
+                axis.axis,
+                p.tau_s
+            );
+        }
+        let n = axis.terms.white_density.expect("N determined");
+        let line = panel
+            .series
+            .iter()
+            .find(|s| s.label.starts_with("N = "))
+            .expect("an N line");
+        assert!(line.label.contains(&format!("{n:.3e}")), "{}", line.label);
+        let (t0, y0) = line.points[0];
+        assert!(
+            (y0 * t0.sqrt() / n - 1.0).abs() < 1e-12,
+            "N line reads N at τ = 1 s"
+        );
+        let drawn_terms = panel
+            .series
+            .iter()
+            .filter(|s| s.label.contains(" = "))
+            .count();
+        let determined = axis.terms.values().iter().filter(|v| v.is_some()).count();
+        assert_eq!(drawn_terms, determined, "{}", axis.axis);
+    }
+}
