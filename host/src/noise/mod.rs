@@ -307,6 +307,54 @@ fn segment_names<R: std::io::BufRead>(
     Ok(names)
 }
 
+/// Turns the accelerometer signals of `s` into m/s² where they can be (a calibration, or an input
+/// already in m/s² or g); the unit they end in.
+fn accel_to_m_s2(
+    s: &mut Signals,
+    calibration: Option<&PlainMatrices>,
+    warnings: &mut Vec<String>,
+) -> Result<&'static str, NoiseError> {
+    let n = s.data[0].len();
+    Ok(match calibration {
+        Some(pm) => {
+            let g = pm.gravity_m_s2;
+            let mut sum = [0.0; 3];
+            for k in 0..n {
+                let u = [s.data[0][k], s.data[1][k], s.data[2][k]];
+                let f = shared::linalg::mat_vec(&pm.k_a_g_per_out, &u);
+                for j in 0..3 {
+                    s.data[j][k] = (f[j] - pm.nabla_b_g[j]) * g;
+                    sum[j] += s.data[j][k];
+                }
+            }
+            // The physical check: a still recording is at 1 g (docs/robustness.md).
+            let f_g = shared::linalg::norm(&sum.map(|v| v / n as f64)) / g;
+            if f_g.is_nan() || (f_g - 1.0).abs() > crate::apply::MAX_STILL_G_ERROR {
+                return Err(NoiseError::NotOneG { f_g });
+            }
+            "m/s^2"
+        }
+        // An input already in m/s² (or g) needs no calibration for Kalibr's figures: they are
+        // its own noise, and a calibration's scale errors change them by parts per thousand.
+        None => match s.acc_unit.and_then(metres_per_second_squared_per) {
+            Some(k) => {
+                for axis in s.data.iter_mut().take(3) {
+                    axis.iter_mut().for_each(|v| *v *= k);
+                }
+                "m/s^2"
+            }
+            None => {
+                warnings.push(
+                    "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
+                     accelerometer figures are undetermined"
+                        .into(),
+                );
+                "output unit"
+            }
+        },
+    })
+}
+
 /// m/s² per unit of an output that has a physical unit (m/s², g); `None` for volts and counts.
 fn metres_per_second_squared_per(unit: OutputUnit) -> Option<f64> {
     match unit {
@@ -369,44 +417,7 @@ fn analyse_signals(
             s.segment
         ));
     }
-    let accel_unit = match calibration {
-        Some(pm) => {
-            let g = pm.gravity_m_s2;
-            let mut sum = [0.0; 3];
-            for k in 0..n {
-                let u = [s.data[0][k], s.data[1][k], s.data[2][k]];
-                let f = shared::linalg::mat_vec(&pm.k_a_g_per_out, &u);
-                for j in 0..3 {
-                    s.data[j][k] = (f[j] - pm.nabla_b_g[j]) * g;
-                    sum[j] += s.data[j][k];
-                }
-            }
-            // The physical check: a still recording is at 1 g (docs/robustness.md).
-            let f_g = shared::linalg::norm(&sum.map(|v| v / n as f64)) / g;
-            if f_g.is_nan() || (f_g - 1.0).abs() > crate::apply::MAX_STILL_G_ERROR {
-                return Err(NoiseError::NotOneG { f_g });
-            }
-            "m/s^2"
-        }
-        // An input already in m/s² (or g) needs no calibration for Kalibr's figures: they are
-        // its own noise, and a calibration's scale errors change them by parts per thousand.
-        None => match s.acc_unit.and_then(metres_per_second_squared_per) {
-            Some(k) => {
-                for axis in s.data.iter_mut().take(3) {
-                    axis.iter_mut().for_each(|v| *v *= k);
-                }
-                "m/s^2"
-            }
-            None => {
-                warnings.push(
-                    "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
-                     accelerometer figures are undetermined"
-                        .into(),
-                );
-                "output unit"
-            }
-        },
-    };
+    let accel_unit = accel_to_m_s2(&mut s, calibration, &mut warnings)?;
     let sizes = octave_sizes(n);
     // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
     let bar = crate::ui::progress_bar(
@@ -592,7 +603,7 @@ impl NoiseReport {
         };
         let span = [first.tau_s, last.tau_s];
         let t = &a.terms;
-        let lines: [(Option<f64>, &str, &str, fn(f64, f64) -> f64); 3] = [
+        let lines: [TermLine; 3] = [
             (t.white_density, "N", "slope −½", |v, tau| v / tau.sqrt()),
             (t.bias_instability, "B", "flat", |v, _| {
                 allan::FLICKER_FACTOR.sqrt() * v
@@ -643,6 +654,9 @@ pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
     })?;
     Ok(report.kalibr)
 }
+
+/// A term's line in the Allan figure: its value, name, slope, and its Allan deviation at τ.
+type TermLine = (Option<f64>, &'static str, &'static str, fn(f64, f64) -> f64);
 
 /// A log–log panel of one axis's `series`.
 fn axis_panel_of(a: &AxisNoise, unit: &str, series: Vec<Series>) -> Panel {
