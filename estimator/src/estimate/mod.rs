@@ -15,7 +15,8 @@
 //!
 //! The estimator's types: [`options`] (its settings), [`outcome`] (what it returns), [`error`] (why
 //! it made no calibration). The modules, in the order a fit runs through them: `fit` (the fit's
-//! stages, from plan and statistics to the outcome), `screen` (plan ↔ data, screening, the static
+//! stages, from plan and statistics to the outcome), `fit_checks` (the χ² check, the lever arms'
+//! observability, the residual warning), `screen` (plan ↔ data, screening, the static
 //! least squares), `segment` (segment kind, pooled static noise), [`model`] (one segment's mean
 //! outputs, the parameter layout), `build` (segment models, mounts, the gyro's observations),
 //! [`attitude`] (each mount's tilt unknowns and prior, docs/model.md §7), [`gyro`] (the gyro model,
@@ -33,6 +34,7 @@ mod build;
 mod drift;
 pub mod error;
 mod fit;
+mod fit_checks;
 pub mod gyro;
 pub mod gyro_check;
 pub mod handheld_gyro;
