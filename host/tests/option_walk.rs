@@ -11,6 +11,8 @@ use host::cli::Cli;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+
 /// Where an option acts.
 enum Verdict {
     /// Wherever the subcommand accepts it; why.
@@ -63,16 +65,7 @@ fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
             sub,
             name,
             head,
-            &[
-                "--input",
-                "{csv}",
-                "--time-column",
-                "t",
-                "--acc-unit",
-                "m/s2",
-                "--gyro-unit",
-                "deg/s",
-            ],
+            &[&["--input", "{csv}"][..], &common::HAND_CSV_READING[..]].concat(),
             args,
         ));
     }

@@ -6,13 +6,12 @@
 use crate::summary::CalibrationSummary;
 use std::fmt::Write as _;
 
-/// A lever-arm component whose 1σ exceeds this is not determined (the full table's rule), m.
-const LEVER_DETERMINED_M: f64 = 200e-6;
-
 /// The block, one line per quantity and the verdict last.
 pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
     let axes = ["x", "y", "z"];
+    // A lever-arm component is determined to the estimator's own threshold (the full table's rule).
+    let lever_determined_m = crate::estimate::EstimateOptions::default().lever_arm_threshold_m;
     let mut out = String::from("Result (± 1σ):\n");
     let pm = |v: f64, sigma: Option<f64>, digits: usize| match sigma {
         Some(sd) => format!("{v:+.digits$} ± {sd:.digits$}"),
@@ -61,7 +60,7 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
             .iter()
             .filter_map(|c| p(&format!("r{}{c}", i + 1)))
             .map(|r| match r.sigma {
-                Some(sd) if sd <= LEVER_DETERMINED_M => pm(r.value * 1e3, Some(sd * 1e3), 3),
+                Some(sd) if sd <= lever_determined_m => pm(r.value * 1e3, Some(sd * 1e3), 3),
                 _ => "n.d.".into(),
             })
             .collect();

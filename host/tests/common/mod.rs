@@ -18,22 +18,23 @@ pub fn host_in(cwd: Option<&Path>, args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// `host segment` arguments for a `simulate-hand` CSV (m/s², °/s, its time column `t`) into `out`.
+/// How a `simulate-hand` CSV is read: its time column `t`, m/s² and °/s.
+#[allow(dead_code)] // not every test file uses it
+pub const HAND_CSV_READING: [&str; 6] = [
+    "--time-column",
+    "t",
+    "--acc-unit",
+    "m/s2",
+    "--gyro-unit",
+    "deg/s",
+];
+
+/// `host segment` arguments for a `simulate-hand` CSV ([`HAND_CSV_READING`]) into `out`.
 #[allow(dead_code)] // not every test file uses it
 pub fn hand_segment_args<'a>(csv: &'a str, out: &'a str) -> Vec<&'a str> {
-    vec![
-        "segment",
-        "--input",
-        csv,
-        "--out",
-        out,
-        "--time-column",
-        "t",
-        "--acc-unit",
-        "m/s2",
-        "--gyro-unit",
-        "deg/s",
-    ]
+    let mut v = vec!["segment", "--input", csv, "--out", out];
+    v.extend(HAND_CSV_READING);
+    v
 }
 
 /// Runs `host ARGS` unless it is still running after `limit`, when it is killed and `None` returned.
