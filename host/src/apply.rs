@@ -283,7 +283,7 @@ pub(crate) fn check_meeting(
 ) -> Result<(), ApplyError> {
     crate::calibration_guard::check_scales(cal)?;
     check_unit(cal_unit, plan)?;
-    check_output_unit(cal, plan)?;
+    check_output_unit(cal, plan.output_unit)?;
     check_temperature(cal, plan.has_temperature(), assume_temp_c)
 }
 
@@ -302,11 +302,14 @@ pub(crate) fn check_temperature(
 }
 
 /// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).
-pub(crate) fn check_output_unit(cal: &Calibration, plan: &Plan) -> Result<(), ApplyError> {
-    if cal.statics.output_unit != plan.output_unit {
+pub(crate) fn check_output_unit(
+    cal: &Calibration,
+    recording: OutputUnit,
+) -> Result<(), ApplyError> {
+    if cal.statics.output_unit != recording {
         return Err(ApplyError::OutputUnitMismatch {
             calibration: cal.statics.output_unit,
-            recording: plan.output_unit,
+            recording,
         });
     }
     Ok(())

@@ -26,13 +26,7 @@ pub(crate) fn apply_log(
 ) -> Result<ApplySummary, ApplyError> {
     let log = read_log(path, source).map_err(ApplyError::Log)?;
     let rec = &log.recording;
-    let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);
-    if cal.statics.output_unit != unit {
-        return Err(ApplyError::OutputUnitMismatch {
-            calibration: cal.statics.output_unit,
-            recording: unit,
-        });
-    }
+    super::check_output_unit(cal, rec.acc_unit.unwrap_or(OutputUnit::Lsb))?;
     let prepared = Prepared::new(rec, cal, mode, assume_temp_c)?;
     let write_err = |e: std::io::Error| {
         ApplyError::Recording(crate::session::RecordingError::Io {

@@ -49,7 +49,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
                     .unit_id()
                     .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
                 crate::apply::check_unit(id, &plan)?;
-                crate::apply::check_output_unit(&cal, &plan)?;
+                crate::apply::check_output_unit(&cal, plan.output_unit)?;
             }
             let plain = convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain;
             Some((plain, cal.statics.output_unit))
