@@ -9,7 +9,7 @@ use estimator::sim::handheld::{
 };
 use host::app::simulate::{NoiseChoices, Simulation};
 use host::apply::Prepared;
-use host::noise::allan::{fit, octave_sizes, overlapping_adev, TermFit};
+use host::noise::allan::{curve_and_fit, curve_sizes, TermFit};
 use host::noise::confidence::relative_sigma;
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
@@ -183,10 +183,8 @@ pub fn allan<'py>(
         }
     };
     let (points, sizes, terms) = py.detach(|| {
-        let sizes = octave_sizes(n);
-        let points = overlapping_adev(y, rate_hz, &sizes);
-        let terms = fit(&points);
-        (points, sizes, terms)
+        let (points, terms) = curve_and_fit(y, rate_hz);
+        (points, curve_sizes(n), terms)
     });
     let rel: Vec<f64> = sizes
         .iter()

@@ -7,7 +7,8 @@
 //! ```
 //!
 //! which is the estimator `allantools.oadev` uses (its `frequency2phase` and `calc_adev_phase`).
-//! Averaging times are octave-spaced, `m = 1, 2, 4, …` while at least 4 independent clusters remain.
+//! Averaging times are octave-spaced, `m = 1, 2, 4, …` while at least 4 independent clusters remain,
+//! and the curve ends at a ninth of the record ([`curve_sizes`]), as engineers read a random walk.
 //!
 //! The fit models `σ²(τ) = N²/τ + (2 ln 2/π) B² + K² τ/3` (white noise density N, bias instability
 //! B, random walk K): linear in (N², B², K²), solved by least squares with each point weighted by the
@@ -52,6 +53,29 @@ pub fn octave_sizes(n: usize) -> Vec<usize> {
         m *= 2;
     }
     out
+}
+
+/// Cluster sizes of the curve shown: the octaves, then `m = ⌊n/9⌋` (τ a ninth of the record) when
+/// the last octave falls short of it. The fit uses only the octaves ([`curve_and_fit`]).
+pub fn curve_sizes(n: usize) -> Vec<usize> {
+    let mut out = octave_sizes(n);
+    let ninth = n / 9;
+    if out.last().is_some_and(|&m| m < ninth) {
+        out.push(ninth);
+    }
+    out
+}
+
+/// The Allan curve of rate samples `y` at `rate_hz` at [`curve_sizes`], and the noise terms fitted
+/// to its octave points. The last point stays out of the fit: it shares most of its samples with
+/// the last octave, and the fit's weights (and its bootstrap) treat the octaves as the independent
+/// evidence they were validated on; with that point in, the random walk of
+/// `white_noise_and_random_walk_determine_k` was lost on some seeds.
+pub fn curve_and_fit(y: &[f64], rate_hz: f64) -> (Vec<AllanPoint>, NoiseTerms) {
+    let octaves = octave_sizes(y.len()).len();
+    let points = overlapping_adev(y, rate_hz, &curve_sizes(y.len()));
+    let terms = fit(&points[..octaves.min(points.len())]);
+    (points, terms)
 }
 
 /// Overlapping Allan deviation of rate samples `y` at `rate_hz` for the cluster sizes `sizes`.
@@ -483,7 +507,26 @@ mod tests {
     }
 
     fn fit_of(y: &[f64], rate_hz: f64) -> NoiseTerms {
-        fit(&overlapping_adev(y, rate_hz, &octave_sizes(y.len())))
+        curve_and_fit(y, rate_hz).1
+    }
+
+    /// The curve reaches a ninth of the record: 50 000 samples at 100 Hz (500 s) end at
+    /// m = 5 555, τ = 55.55 s, after the octaves' 4 096 (40.96 s); a record whose last octave is
+    /// already past a ninth (n = 36 864, 8·4 096 + 4 096: n/9 = 4 096) gets no extra point. The
+    /// terms are the fit of the octave points alone.
+    #[test]
+    fn the_curve_reaches_a_ninth_of_the_record() {
+        let y = white_and_walk(7, 50_000, 100.0, 1e-3, 4e-4);
+        let (points, terms) = curve_and_fit(&y, 100.0);
+        let last = points.last().expect("points");
+        assert!((last.tau_s - 55.55).abs() < 1e-9, "{last:?}");
+        assert_eq!(last.terms, 50_001 - 2 * 5_555);
+        assert!((points[points.len() - 2].tau_s - 40.96).abs() < 1e-9);
+        let octaves = overlapping_adev(&y, 100.0, &octave_sizes(y.len()));
+        assert_eq!(points.len(), octaves.len() + 1);
+        assert_eq!(terms, fit(&octaves));
+        assert_eq!(curve_sizes(36_864), octave_sizes(36_864));
+        assert_eq!(curve_sizes(36_864).last(), Some(&4_096));
     }
 
     /// White noise alone determines N and nothing else: B and K are reported as not determined,

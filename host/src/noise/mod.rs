@@ -26,7 +26,7 @@ use crate::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
 use crate::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
-use allan::{fit, octave_sizes, overlapping_adev, AllanPoint, NoiseTerms};
+use allan::{curve_and_fit, AllanPoint, NoiseTerms};
 use serde::{Deserialize, Serialize};
 use shared::OutputUnit;
 use std::collections::HashSet;
@@ -418,7 +418,6 @@ fn analyse_signals(
         ));
     }
     let accel_unit = accel_to_m_s2(&mut s, calibration, &mut warnings)?;
-    let sizes = octave_sizes(n);
     // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
     let bar = crate::ui::progress_bar(
         AXES.len() as u64,
@@ -429,8 +428,7 @@ fn analyse_signals(
         .iter()
         .enumerate()
         .map(|(j, name)| {
-            let points = overlapping_adev(&s.data[j], s.rate_hz, &sizes);
-            let terms = fit(&points);
+            let (points, terms) = curve_and_fit(&s.data[j], s.rate_hz);
             bar.inc(1);
             AxisNoise {
                 axis: (*name).into(),

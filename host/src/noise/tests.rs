@@ -1,6 +1,7 @@
 //! `host noise` on simulated data with known noise terms, and against `allantools`.
 
 use super::*;
+use allan::overlapping_adev;
 use crate::export::convert;
 use crate::session::SegmentPlan;
 use crate::sim::{simulate_to_dir, NoiseModel};
