@@ -1,7 +1,9 @@
 //! The README's "Load it" recipes, run as written in a fresh directory, each file checked by its
 //! consumer's own rules: PX4's QGroundControl parameter file (five tab-separated fields, ids as
 //! type 6 integers), ArduPilot's parameter file (`NAME,VALUE`, its device ids, the note on
-//! `INS_GYR_CAL`), and the C package, built and run.
+//! `INS_GYR_CAL`), Kalibr's `imu.yaml` (the keys its `ConfigReader.py` reads, from a still
+//! recording with known noise), and the C package, built and run. The Python recipe is run by
+//! `python/tests/test_readme.py`.
 
 use std::path::Path;
 use std::process::Command;
@@ -42,6 +44,68 @@ fn params(text: &str, split: char, name_at: usize) -> Vec<(String, String)> {
         .collect()
 }
 
+/// The still recording the Kalibr recipe reads, logged like `hand.csv` (`t`, m/s², °/s), at rest
+/// with +z up for 300 s at 200 Hz: on every axis white noise of density `N` and a random walk `K`
+/// (accelerometer m/s²/√Hz and m/s³/√Hz, gyro °/s/√Hz and °/s²/√Hz), strong enough for 300 s to
+/// determine both (K at about 5σ).
+const STILL_ACC_N_K: (f64, f64) = (1.0e-3, 1.2e-3);
+const STILL_GYRO_N_K_DEG: (f64, f64) = (0.01, 0.012);
+
+fn write_still_csv(path: &Path) {
+    use std::fmt::Write;
+    let (rate_hz, rows) = (200.0f64, 60_000usize);
+    let mut rng = estimator::sim::Rng::new(5, 0);
+    let mut walk = [0.0f64; 6];
+    let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
+    for k in 0..rows {
+        write!(text, "{}", k as f64 / rate_hz).unwrap();
+        for (j, w) in walk.iter_mut().enumerate() {
+            let (n, kw) = if j < 3 {
+                STILL_ACC_N_K
+            } else {
+                STILL_GYRO_N_K_DEG
+            };
+            *w += kw / rate_hz.sqrt() * rng.normal();
+            let g = if j == 2 { 9.80665 } else { 0.0 };
+            write!(text, ",{}", g + *w + n * rate_hz.sqrt() * rng.normal()).unwrap();
+        }
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// Kalibr's `imu.yaml` (`kalibr_common/ConfigReader.py`, `ImuParameters`): the noise figures in
+/// its units (the worst axis), within 10 % (N) and 35 % (K, whose 1σ is about 10 % on 300 s) of
+/// the recording's.
+fn check_kalibr(dir: &Path) {
+    let yaml = std::fs::read_to_string(dir.join("imu.yaml")).unwrap();
+    let field = |k: &str| -> f64 {
+        yaml.lines()
+            .find_map(|l| l.strip_prefix(&format!("{k}:")))
+            .unwrap_or_else(|| panic!("{k} missing: {yaml}"))
+            .split('#')
+            .next()
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap()
+    };
+    let rad = std::f64::consts::PI / 180.0;
+    let (an, ak) = STILL_ACC_N_K;
+    let (gn, gk) = STILL_GYRO_N_K_DEG;
+    for (k, truth, tol) in [
+        ("accelerometer_noise_density", an, 0.10),
+        ("accelerometer_random_walk", ak, 0.35),
+        ("gyroscope_noise_density", gn * rad, 0.10),
+        ("gyroscope_random_walk", gk * rad, 0.35),
+        ("update_rate", 200.0, 1e-9),
+    ] {
+        let v = field(k);
+        assert!((v / truth - 1.0).abs() < tol, "{k} = {v}, simulated {truth}");
+    }
+    assert!(yaml.contains("rostopic:"), "{yaml}");
+}
+
 #[test]
 fn readme_load_it_recipes_work_as_written() {
     let section = section();
@@ -49,8 +113,9 @@ fn readme_load_it_recipes_work_as_written() {
         .lines()
         .filter_map(|l| l.strip_prefix("host "))
         .collect();
-    assert_eq!(commands.len(), 6, "{commands:?}");
+    assert_eq!(commands.len(), 8, "{commands:?}");
     let dir = tempfile::tempdir().unwrap();
+    write_still_csv(&dir.path().join("still.csv"));
     for c in &commands {
         run(dir.path(), c);
     }
@@ -82,6 +147,7 @@ fn readme_load_it_recipes_work_as_written() {
         assert!(v.abs() <= 3.5, "{k} = {v} outside ArduPilot's range");
     }
     assert!(ap_text.contains("INS_GYR_CAL = 0"), "{ap_text}");
+    check_kalibr(dir.path());
     // The C package: built with the README's own line and run.
     let acal = dir.path().join("acal");
     let cc = section

@@ -186,10 +186,19 @@ fn noise_figures(
         match v {
             Some(v) if v.is_finite() && v > 0.0 => out[k] = (name, v, unit),
             _ => {
+                // The causes that fit: too short a recording always; for the accelerometer's
+                // figures also an output in volts or counts that `host noise` could not convert
+                // (noise.json comes from `host noise` for Python callers too).
+                let unconverted = if name.starts_with("accelerometer") {
+                    ", or its accelerometer was not in m/s\u{b2} or g and `host noise` had no \
+                     --calibration to convert it"
+                } else {
+                    ""
+                };
                 return Err(ExportError::Missing(format!(
                     "the noise analysis did not determine Kalibr's {name} (Kalibr refuses a missing or \
-                     non-positive value): run `host noise` with --calibration (the accelerometer figures \
-                     need it) on a still recording long enough to show the term"
+                     non-positive value): its still recording is too short to show that term \
+                     (noise.json's `fits` say how long it would need to be){unconverted}"
                 )))
             }
         }
@@ -414,8 +423,21 @@ mod tests {
             noise: Some(&noise),
             ..ExportInput::for_tests(&unit, cal)
         };
-        let e = render(&input).unwrap_err();
-        assert!(e.to_string().contains("accelerometer_random_walk"), "{e}");
+        let e = render(&input).unwrap_err().to_string();
+        assert!(e.contains("accelerometer_random_walk"), "{e}");
+        assert!(e.contains("too short") && e.contains("--calibration"), "{e}");
+        // A gyro figure has one cause: the calibration converts only the accelerometer.
+        let noise = KalibrNoise {
+            gyroscope_random_walk: None,
+            ..full_noise()
+        };
+        let input = ExportInput {
+            noise: Some(&noise),
+            ..ExportInput::for_tests(&unit, cal)
+        };
+        let e = render(&input).unwrap_err().to_string();
+        assert!(e.contains("gyroscope_random_walk") && e.contains("too short"), "{e}");
+        assert!(!e.contains("--calibration"), "{e}");
     }
 
     #[test]
