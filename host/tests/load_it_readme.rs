@@ -101,7 +101,10 @@ fn check_kalibr(dir: &Path) {
         ("update_rate", 200.0, 1e-9),
     ] {
         let v = field(k);
-        assert!((v / truth - 1.0).abs() < tol, "{k} = {v}, simulated {truth}");
+        assert!(
+            (v / truth - 1.0).abs() < tol,
+            "{k} = {v}, simulated {truth}"
+        );
     }
     assert!(yaml.contains("rostopic:"), "{yaml}");
 }

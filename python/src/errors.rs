@@ -24,6 +24,7 @@ use pyo3::prelude::*;
 use recording::session::import::ImportError;
 use recording::session::logs::LogError;
 use recording::session::segment::SegmentError;
+use recording::output_file::OutputFileError;
 use recording::session::RecordingError;
 use std::path::PathBuf;
 
@@ -184,7 +185,10 @@ impl PyAccelErr {
             ) => {
                 format!("{e}; give the gyro's unit with gyro_unit=\"deg/s\" or gyro_unit=\"rad/s\"")
             }
-            PyAccelErr::Output(OutputError::Exists(path)) => format!(
+            PyAccelErr::Output(OutputError::Exists(path))
+            | PyAccelErr::Recording(RecordingError::Exists(path))
+            | PyAccelErr::Write(WriteError::Session(RecordingError::Exists(path)))
+            | PyAccelErr::Write(WriteError::Gyro(OutputFileError::Exists(path))) => format!(
                 "{} already exists: choose another directory or replace it (force=True)",
                 path.display()
             ),

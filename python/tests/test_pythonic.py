@@ -143,6 +143,20 @@ def test_save_refuses_to_replace_and_names_force(hand, tmp_path):
         cal.save(tmp_path)
     assert "--" not in str(e.value)
     cal.save(tmp_path, force=True)
+    session = accelcal.load_session(hand["session"])
+    session.write(tmp_path / "s")
+    with pytest.raises(accelcal.FileError, match=r"force=True") as e:
+        session.write(tmp_path / "s")
+    assert "--" not in str(e.value)
+
+
+def test_an_export_out_of_range_names_the_keyword(py_cal_of_hand):
+    # A driver scale 100 times too small puts ArduPilot's scales far outside 0.8..1.2.
+    with pytest.raises(accelcal.CalibrationError) as e:
+        py_cal_of_hand.export("ardupilot", device_id=1, driver_scale=0.01)
+    m = str(e.value)
+    assert "allow_out_of_range=True" in m and "driver_scale" in m, m
+    assert not re.search(r"(^|\W)--[a-z]", m), m
 
 
 @pytest.fixture(scope="module")

@@ -40,6 +40,8 @@ pub enum UserOption {
     DriverScale,
     /// An export: write undetermined entries, marked.
     AllowUndetermined,
+    /// An export: write values outside the target's documented range, with a warning.
+    AllowOutOfRange,
     /// An export: the noise analysis (`noise.json`).
     Noise,
     /// The estimator's method.
@@ -70,6 +72,7 @@ impl UserOption {
             UserOption::GyroDeviceId => "gyro_device_id",
             UserOption::DriverScale => "driver_scale",
             UserOption::AllowUndetermined => "allow_undetermined",
+            UserOption::AllowOutOfRange => "allow_out_of_range",
             UserOption::Noise => "noise",
             UserOption::Method => "method",
             UserOption::Reference => "reference",
@@ -96,6 +99,7 @@ impl UserOption {
             UserOption::GyroDeviceId => "--gyro-device-id",
             UserOption::DriverScale => "--driver-scale",
             UserOption::AllowUndetermined => "--allow-undetermined",
+            UserOption::AllowOutOfRange => "--allow-out-of-range",
             UserOption::Noise => "--noise",
             UserOption::Method => "--method",
             UserOption::Reference => "--reference",

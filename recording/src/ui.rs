@@ -37,3 +37,20 @@ fn styled_bar(total: u64, message: &'static str, quiet: bool, template: &str) ->
     bar.set_message(message);
     bar
 }
+
+/// A step without a count (reading a log, a fit, drawing figures): a spinner with its message and
+/// the time spent so far on stderr, cleared when the step ends or is abandoned by an error; hidden
+/// unless stderr is a terminal and `quiet` is false.
+pub fn step(message: impl Into<std::borrow::Cow<'static, str>>, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr())
+        .with_finish(indicatif::ProgressFinish::AndClear);
+    let style = ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+        .unwrap_or_else(|_| ProgressStyle::default_spinner());
+    bar.set_style(style);
+    bar.set_message(message);
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}

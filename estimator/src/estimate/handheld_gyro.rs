@@ -147,7 +147,7 @@ pub enum HandGyroError {
         spelling: Spelling,
     },
     /// The user asked for no gyro fit (`host segment --no-gyro`).
-    #[error("not fitted (--no-gyro); the accelerometer's axes are unchecked for a mirror image")]
+    #[error("not fitted (the gyro was left out); the accelerometer's axes are unchecked for a mirror image")]
     NotAsked,
     /// The fit did not give a usable `G`.
     #[error("the gyro fit gives an implausible G (row norms {norms:?}, expected near 1): {why}")]

@@ -92,6 +92,11 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
         Some(a.log.source(&a.input)?)
     };
     let apply = |w: &mut dyn Write| {
+        // Reading, compensating and writing run row by row together: one step.
+        let _step = crate::ui::step(
+            format!("applying the calibration to {}", a.input.display()),
+            quiet,
+        );
         match &source {
             None => apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, w),
             Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),

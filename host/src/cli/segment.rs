@@ -241,9 +241,13 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     };
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
+    let step = crate::ui::step(format!("reading {}", a.input.display()), out.quiet);
     let log = read_log(&a.input, &source).map_err(CliError::Log)?;
+    step.finish_and_clear();
     time_unit_note(out, &log.recording);
+    let step = crate::ui::step("finding the still intervals and the turns", out.quiet);
     let found = find(log.recording, &choices).map_err(|e| CliError::Failed(e.to_string()))?;
+    step.finish_and_clear();
     let reader_warnings = found.warnings.len();
     let mut warnings = Vec::new();
     for w in log
@@ -258,7 +262,16 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         &found.segmentation,
         &found.coverage,
     ))?;
+    let step = crate::ui::step(
+        if choices.fit_gyro {
+            "choosing the positions and fitting the gyro to the turns"
+        } else {
+            "choosing the positions"
+        },
+        out.quiet,
+    );
     let s = found.session(&choices)?;
+    step.finish_and_clear();
     for w in &s.warnings[reader_warnings..] {
         warn(out, &mut warnings, w.clone());
     }
@@ -277,10 +290,13 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if let Some(problems) = s.gyro_problems() {
         return Err(CliError::GyroRefused(problems));
     }
+    let step = crate::ui::step("writing the session", out.quiet);
     let rows = s.write(dir.path(), false)?;
+    step.finish_and_clear();
     if let Err(e) = &s.gyro {
         out.line(format_args!("gyro: not calibrated: {e}"))?;
     }
+    let step = crate::ui::step("drawing the segments' figure", out.quiet);
     let fig = figure(&s.recording, &s.segmentation);
     match plot::render(&fig, dir.path(), Formats::default()) {
         Ok(o) => o
@@ -290,6 +306,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         Err(e) => warn(out, &mut warnings, e.to_string()),
     }
     dir.commit()?;
+    step.finish_and_clear();
     out.line(format_args!(
         "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
         a.out.display(),

@@ -33,7 +33,6 @@
 //!   `host_export_biases` for reference.
 
 use super::{ExportError, ExportInput};
-use recording::spelling::UserOption;
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
 use std::fmt::Write as _;
@@ -106,6 +105,7 @@ pub(crate) fn intrinsics(input: &ExportInput<'_>) -> Result<KalibrIntrinsics, Ex
         return Err(ExportError::NotRepresentable {
             name: "Kalibr's c*K*A/g".into(),
             value: *v,
+            spelling: input.options.spelling,
         });
     }
     let (m, c_i_b) = rq(&n).ok_or(ExportError::NoKalibrFactorisation("c*K*A/g"))?;
@@ -150,14 +150,9 @@ fn row(v: &[f64]) -> String {
 fn noise_figures(
     input: &ExportInput<'_>,
 ) -> Result<[(&'static str, f64, &'static str); 5], ExportError> {
-    let n = input.noise.ok_or_else(|| {
-        ExportError::Missing(format!(
-            "Kalibr needs the IMU's noise densities and random walks, which only a noise analysis gives: \
-             run `host noise --input SESSION --out DIR` on a recording with a long still segment and give \
-             {}",
-            input.options.spelling.given(UserOption::Noise, "DIR/noise.json")
-        ))
-    })?;
+    let n = input
+        .noise
+        .ok_or(ExportError::NoNoise(input.options.spelling))?;
     let fields = [
         ("update_rate", n.update_rate_hz, "Hz"),
         (
@@ -185,22 +180,7 @@ fn noise_figures(
     for (k, (name, v, unit)) in fields.into_iter().enumerate() {
         match v {
             Some(v) if v.is_finite() && v > 0.0 => out[k] = (name, v, unit),
-            _ => {
-                // The causes that fit: too short a recording always; for the accelerometer's
-                // figures also an output in volts or counts that `host noise` could not convert
-                // (noise.json comes from `host noise` for Python callers too).
-                let unconverted = if name.starts_with("accelerometer") {
-                    ", or its accelerometer was not in m/s\u{b2} or g and `host noise` had no \
-                     --calibration to convert it"
-                } else {
-                    ""
-                };
-                return Err(ExportError::Missing(format!(
-                    "the noise analysis did not determine Kalibr's {name} (Kalibr refuses a missing or \
-                     non-positive value): its still recording is too short to show that term \
-                     (noise.json's `fits` say how long it would need to be){unconverted}"
-                )))
-            }
+            _ => return Err(ExportError::NoiseFigure { name }),
         }
     }
     Ok(out)
@@ -425,7 +405,10 @@ mod tests {
         };
         let e = render(&input).unwrap_err().to_string();
         assert!(e.contains("accelerometer_random_walk"), "{e}");
-        assert!(e.contains("too short") && e.contains("--calibration"), "{e}");
+        assert!(
+            e.contains("too short") && e.contains("--calibration"),
+            "{e}"
+        );
         // A gyro figure has one cause: the calibration converts only the accelerometer.
         let noise = KalibrNoise {
             gyroscope_random_walk: None,
@@ -436,7 +419,10 @@ mod tests {
             ..ExportInput::for_tests(&unit, cal)
         };
         let e = render(&input).unwrap_err().to_string();
-        assert!(e.contains("gyroscope_random_walk") && e.contains("too short"), "{e}");
+        assert!(
+            e.contains("gyroscope_random_walk") && e.contains("too short"),
+            "{e}"
+        );
         assert!(!e.contains("--calibration"), "{e}");
     }
 

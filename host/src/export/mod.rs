@@ -168,18 +168,22 @@ pub enum ExportError {
     /// A value of the export does not fit the target's number type (e.g. an absurd driver scale).
     #[error(
         "cannot export {name} = {value:e}: beyond the target's single-precision range; \
-         check --driver-scale (m/s² per output unit, e.g. 1 for a driver already in m/s²)"
+         check {} (m/s² per output unit, e.g. 1 for a driver already in m/s²)",
+        .spelling.name(UserOption::DriverScale)
     )]
     NotRepresentable {
         /// The parameter.
         name: String,
         /// Its value.
         value: f64,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// A value lies outside the range the target documents for it.
     #[error(
         "{name} = {value} is outside {target}'s documented range {lo}..{hi}{hint}; \
-         the target would reject or misuse it (--allow-out-of-range writes it anyway, with a warning)"
+         the target would reject or misuse it ({} writes it anyway, with a warning)",
+        .spelling.switch(UserOption::AllowOutOfRange)
     )]
     OutOfRange {
         /// The parameter.
@@ -194,6 +198,8 @@ pub enum ExportError {
         hi: f64,
         /// What probably caused it.
         hint: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// Values the calibration did not determine would be written as numbers.
     #[error(
@@ -221,9 +227,47 @@ pub enum ExportError {
          singular), so no correction exists; check the installation angles"
     )]
     Singular,
-    /// A value the target needs that only the user can give.
-    #[error("{0}")]
-    Missing(String),
+    /// Kalibr's `imu.yaml` without a noise analysis.
+    #[error(
+        "Kalibr needs the IMU's noise densities and random walks, which only a noise analysis gives: \
+         run `host noise --input SESSION --out DIR` on a recording with a long still segment and give \
+         {}",
+        .0.given(UserOption::Noise, "DIR/noise.json")
+    )]
+    NoNoise(Spelling),
+    /// A noise figure Kalibr needs that the noise analysis did not determine. The causes that fit:
+    /// too short a recording always; for the accelerometer's figures also an output in volts or
+    /// counts that `host noise` had no calibration to convert (`noise.json` comes from
+    /// `host noise`, for Python callers too).
+    #[error(
+        "the noise analysis did not determine Kalibr's {name} (Kalibr refuses a missing or \
+         non-positive value): its still recording is too short to show that term (noise.json's \
+         `fits` say how long it would need to be){}",
+        if name.starts_with("accelerometer") {
+            ", or its accelerometer was not in m/s² or g and `host noise` had no --calibration \
+             to convert it"
+        } else {
+            ""
+        }
+    )]
+    NoiseFigure {
+        /// Kalibr's key.
+        name: &'static str,
+    },
+    /// An autopilot applies its calibration parameters only to the sensor whose id they carry.
+    #[error(
+        "{}: give {}, the vehicle's {id_parameter} as its parameter list shows it",
+        .autopilot.why_the_id(),
+        .spelling.given(UserOption::DeviceId, "ID")
+    )]
+    DeviceIdRequired {
+        /// The target.
+        autopilot: Autopilot,
+        /// The target's parameter that holds the accelerometer's id.
+        id_parameter: &'static str,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
     /// A device id the target's parameter protocol cannot carry exactly.
     #[error(
         "{}: ArduPilot sends {name} as a float, exact only below 16777216 (2^24); check the \
@@ -240,6 +284,32 @@ pub enum ExportError {
         /// The id given.
         id: u32,
     },
+}
+
+/// An autopilot whose parameters carry the device id they were calibrated for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Autopilot {
+    /// PX4: `CAL_ACC0_*` apply to the accelerometer whose device id is `CAL_ACC0_ID`.
+    Px4,
+    /// ArduPilot: `AP_InertialSensor::register_accel` counts `INS_ACC*` as a calibration only for
+    /// the accelerometer whose id is `INS_ACC_ID`.
+    ArduPilot,
+}
+
+impl Autopilot {
+    fn why_the_id(self) -> &'static str {
+        match self {
+            Autopilot::Px4 => {
+                "PX4 applies CAL_ACC0_* only to the accelerometer whose device id is CAL_ACC0_ID \
+                 (`listener sensor_accel` shows it as device_id on the vehicle)"
+            }
+            Autopilot::ArduPilot => {
+                "ArduPilot counts INS_ACCOFFS_*/INS_ACCSCAL_* as a calibration only for the \
+                 accelerometer whose id is INS_ACC_ID (pre-arm: \"3D Accel calibration needed\" \
+                 otherwise; ArduPilot sets it at start-up to the accelerometer it detects)"
+            }
+        }
+    }
 }
 
 /// What an export is made from.
@@ -344,7 +414,7 @@ pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
 }
 
 /// `value` as the target's `f32`, refused when it does not fit.
-pub(crate) fn as_f32(name: &str, value: f64) -> Result<f32, ExportError> {
+pub(crate) fn as_f32(name: &str, value: f64, spelling: Spelling) -> Result<f32, ExportError> {
     let v = value as f32;
     if v.is_finite() {
         Ok(v)
@@ -352,6 +422,7 @@ pub(crate) fn as_f32(name: &str, value: f64) -> Result<f32, ExportError> {
         Err(ExportError::NotRepresentable {
             name: name.to_string(),
             value,
+            spelling,
         })
     }
 }

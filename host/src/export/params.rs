@@ -33,7 +33,7 @@
 //! `--allow-out-of-range`, which writes it with a `# WARNING:` line. PX4's parameter metadata
 //! documents no range for `CAL_ACC0_*`/`CAL_GYRO0_*`, so nothing is checked there beyond `f32`.
 
-use super::{as_f32, ExportError, ExportInput};
+use super::{as_f32, Autopilot, ExportError, ExportInput};
 use recording::spelling::{Spelling, UserOption};
 use shared::linalg::{self, RowMajor3};
 use std::fmt::Write as _;
@@ -134,8 +134,8 @@ fn caveats(w: &mut String, input: &ExportInput<'_>, p: &PerAxis, tool: &str) {
 }
 
 /// Values as the autopilots store them (IEEE single precision), shortest form.
-fn f32_text(name: &str, v: f64) -> Result<String, ExportError> {
-    Ok(format!("{}", as_f32(name, v)?))
+fn f32_text(name: &str, v: f64, spelling: Spelling) -> Result<String, ExportError> {
+    Ok(format!("{}", as_f32(name, v, spelling)?))
 }
 
 /// The values of a parameter file, in order: `(name, value, is_integer)`.
@@ -159,13 +159,10 @@ fn accel_values(p: &PerAxis, off: &str, scl: &str) -> Values {
 pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let p = per_axis(input, "PX4")?;
     let o = input.options;
-    let device_id = o.device_id.ok_or_else(|| {
-        ExportError::Missing(format!(
-            "PX4 applies CAL_ACC0_* only to the accelerometer whose device id is CAL_ACC0_ID: give \
-             {} (the vehicle's CAL_ACC0_ID, or the device_id that `listener sensor_accel` \
-             shows on the vehicle)",
-            o.spelling.given(UserOption::DeviceId, "ID")
-        ))
+    let device_id = o.device_id.ok_or(ExportError::DeviceIdRequired {
+        autopilot: Autopilot::Px4,
+        id_parameter: "CAL_ACC0_ID",
+        spelling: o.spelling,
     })?;
     let mut s = String::new();
     caveats(&mut s, input, &p, "PX4");
@@ -210,7 +207,7 @@ pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError>
         let (text, ty) = if int {
             (format!("{}", v as i64), 6)
         } else {
-            (f32_text(&name, v)?, 9)
+            (f32_text(&name, v, o.spelling)?, 9)
         };
         let _ = writeln!(s, "{}\t{}\t{name}\t{text}\t{ty}", o.sysid, o.compid);
     }
@@ -299,7 +296,8 @@ fn px4_thermal(
         (Some(_), None) => {
             let _ = writeln!(
                 w,
-                "# TC_G0_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G0_ID; give --gyro-device-id."
+                "# TC_G0_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G0_ID; give {}.",
+                input.options.spelling.given(UserOption::GyroDeviceId, "ID")
             );
         }
         (None, _) => {}
@@ -430,14 +428,10 @@ fn ardupilot_after_loading(w: &mut String, gyro_written: bool) {
 pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let p = per_axis(input, "ArduPilot")?;
     let o = input.options;
-    let device_id = o.device_id.ok_or_else(|| {
-        ExportError::Missing(format!(
-            "ArduPilot counts INS_ACCOFFS_*/INS_ACCSCAL_* as a calibration only for the accelerometer \
-             whose id is INS_ACC_ID (pre-arm: \"3D Accel calibration needed\" otherwise): give \
-             {}, the vehicle's INS_ACC_ID as its parameter list shows it (ArduPilot sets \
-             it at start-up to the accelerometer it detects)",
-            o.spelling.given(UserOption::DeviceId, "ID")
-        ))
+    let device_id = o.device_id.ok_or(ExportError::DeviceIdRequired {
+        autopilot: Autopilot::ArduPilot,
+        id_parameter: "INS_ACC_ID",
+        spelling: o.spelling,
     })?;
     let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();
@@ -480,7 +474,7 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
             let _ = writeln!(lines, "{name},{}", *v as i64);
             continue;
         }
-        let text = f32_text(name, *v)?;
+        let text = f32_text(name, *v, input.options.spelling)?;
         if let Some((lo, hi)) = ardupilot_range(name) {
             if !(lo..=hi).contains(v) {
                 let hint = if name.starts_with("INS_ACCOFFS_") {
@@ -491,8 +485,9 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
                     )
                 } else {
                     format!(
-                        " (g*[(K*A)^-1]_ii / c with c = {} m/s² per {unit}: is --driver-scale the driver's true scale?)",
-                        p.driver_scale
+                        " (g*[(K*A)^-1]_ii / c with c = {} m/s² per {unit}: is {} the driver's true scale?)",
+                        p.driver_scale,
+                        input.options.spelling.name(UserOption::DriverScale)
                     )
                 };
                 let e = ExportError::OutOfRange {
@@ -502,6 +497,7 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
                     lo,
                     hi,
                     hint,
+                    spelling: input.options.spelling,
                 };
                 if !input.options.allow_out_of_range {
                     return Err(e);
@@ -509,7 +505,8 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
                 let _ = writeln!(
                     s,
                     "# WARNING: {name} = {v} is outside ArduPilot's documented range {lo}..{hi}; written \
-                     because of --allow-out-of-range"
+                     because of {}",
+                    input.options.spelling.switch(UserOption::AllowOutOfRange)
                 );
             }
         }
@@ -598,6 +595,53 @@ mod tests {
             .filter(|l| l.starts_with("# WARNING: INS_ACCSCAL_"))
             .count();
         assert_eq!(warnings, 3, "{text}");
+    }
+
+    /// Called from Python, every refusal an export makes names Python's keywords, never a flag,
+    /// outside a quoted `host` command (the command line's own words are checked above).
+    #[test]
+    fn refusals_name_the_callers_keywords() {
+        use recording::spelling::Spelling;
+        let unit = UnitFile::paper_unit();
+        let cal = unit.to_calibration().unwrap();
+        let mut input = ExportInput::for_tests(&unit, cal);
+        input.options.spelling = Spelling::Keywords;
+        input.driver_scale_m_s2_per_out = Some(cal.gravity_m_s2 / 0.4);
+        let mut seen = vec![(
+            render(
+                &ExportInput {
+                    driver_scale_m_s2_per_out: None,
+                    ..input
+                },
+                ExportFormat::Px4,
+            )
+            .unwrap_err(),
+            "driver_scale=M_S2_PER_UNIT",
+        )];
+        for format in [ExportFormat::Px4, ExportFormat::Ardupilot] {
+            seen.push((render(&input, format).unwrap_err(), "device_id=ID"));
+        }
+        seen.push((
+            render(&input, ExportFormat::Kalibr).unwrap_err(),
+            "noise=\"DIR/noise.json\"",
+        ));
+        input.options.device_id = Some(1);
+        seen.push((
+            render(&input, ExportFormat::Ardupilot).unwrap_err(),
+            "allow_out_of_range=True",
+        ));
+        input.driver_scale_m_s2_per_out = Some(1e300);
+        seen.push((
+            render(&input, ExportFormat::Px4).unwrap_err(),
+            "driver_scale",
+        ));
+        for (e, keyword) in seen {
+            let m = e.to_string();
+            assert!(m.contains(keyword), "{keyword}: {m}");
+            // A `host …` command line (the noise analysis is one) keeps its flags.
+            let outside_commands: String = m.split('`').step_by(2).collect();
+            assert!(!outside_commands.contains(" --"), "a flag in: {m}");
+        }
     }
 
     /// Each bad scale gets its own message, in every format: never "zero scale factor".

@@ -33,7 +33,9 @@ pub fn analyse_log(
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let file = |m: String| NoiseError::File(path.to_path_buf(), m);
+    let step = crate::ui::step(format!("reading {}", path.display()), quiet);
     let log = read_log(path, source).map_err(|e| file(e.to_string()))?;
+    step.finish_and_clear();
     let rec = &log.recording;
     let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);
     if let Some((_, cal_unit)) = calibration {

@@ -1,11 +1,11 @@
 //! `host noise` on simulated data with known noise terms, and against `allantools`.
 
 use super::*;
-use allan::overlapping_adev;
 use crate::export::convert;
 use crate::session::SegmentPlan;
 use crate::sim::{simulate_to_dir, NoiseModel};
 use crate::unit_file::UnitFile;
+use allan::overlapping_adev;
 use std::process::Command;
 
 fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
