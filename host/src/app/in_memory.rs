@@ -99,6 +99,18 @@ pub fn recording_warnings(rec: &Recording) -> Vec<String> {
             rec.skipped_rows
         ));
     }
+    if let Some(first) = rec.overlong_lines.first() {
+        warnings.push(format!(
+            "{} line(s) longer than {} bytes left out as damaged (line {first}{})",
+            rec.overlong_lines.len(),
+            crate::session::import::MAX_LINE_BYTES,
+            if rec.overlong_lines.len() > 1 {
+                ", …"
+            } else {
+                ""
+            }
+        ));
+    }
     if let Some(line) = rec.unterminated_line {
         warnings.push(format!(
             "line {line}, the last, has no line end: the file was cut short; that line is left out"

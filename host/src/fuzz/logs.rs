@@ -199,12 +199,32 @@ pub fn write_mcap(
     compression: Option<::mcap::Compression>,
     recorder_offset_s: f64,
 ) -> Vec<u8> {
+    write_mcap_with(samples, compression, recorder_offset_s, None)
+}
+
+/// [`write_mcap`], and with `junk_at` a second topic `/junk` whose schema is 1 MiB of bytes that
+/// are no message definition, with one message of garbage after sample `junk_at` (an oversized,
+/// malformed format record beside the IMU's).
+pub fn write_mcap_with(
+    samples: &[LogSample],
+    compression: Option<::mcap::Compression>,
+    recorder_offset_s: f64,
+    junk_at: Option<usize>,
+) -> Vec<u8> {
     let write = || -> ::mcap::McapResult<Vec<u8>> {
         let mut cursor = std::io::Cursor::new(Vec::new());
         let options = ::mcap::WriteOptions::new().compression(compression);
         let mut w = options.create(&mut cursor)?;
         let schema = w.add_schema("sensor_msgs/msg/Imu", "ros2msg", b"")?;
         let channel = w.add_channel(schema, "/imu", "cdr", &Default::default())?;
+        let junk_schema: Vec<u8> = (0..1u32 << 20).map(|i| (i * 131 % 251) as u8).collect();
+        let junk = match junk_at {
+            Some(_) => {
+                let s = w.add_schema("junk/msg/Junk", "ros2msg", &junk_schema)?;
+                Some(w.add_channel(s, "/junk", "cdr", &Default::default())?)
+            }
+            None => None,
+        };
         for (k, s) in samples.iter().enumerate() {
             let log_time = ((s.t_s + recorder_offset_s).max(0.0) * 1e9) as u64;
             let header = ::mcap::records::MessageHeader {
@@ -214,6 +234,15 @@ pub fn write_mcap(
                 publish_time: log_time,
             };
             w.write_to_known_channel(&header, &imu_cdr(s.t_s, s.acc, s.gyro))?;
+            if let (Some(channel_id), true) = (junk, junk_at == Some(k)) {
+                let header = ::mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: 0,
+                    log_time,
+                    publish_time: log_time,
+                };
+                w.write_to_known_channel(&header, &junk_schema[..333])?;
+            }
         }
         w.finish()?;
         drop(w);

@@ -1,14 +1,14 @@
 //! The readers under damage, property-based over all four formats: a simulated hand session written
 //! as text, ULog, DataFlash and MCAP, one mutation at a seeded random place (a flipped bit in a
 //! stamp, swapped or repeated messages, a repeated stamp, jitter, a gap, a cut file, a NaN value or
-//! temperature, simulated time, reversed order), read back. The property (docs/robustness.md,
+//! temperature, simulated time, reversed order, an oversized malformed format record), read back. The property (docs/robustness.md,
 //! "Damaged time stamps"): every sample the mutation did not damage is kept, at its own time and
 //! with its own values; at most 2 rows are lost per damaged sample.
 //!
 //! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
 //! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
 
-use super::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use super::logs::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
 use crate::session::import::GyroUnit;
 use crate::session::import::{ImportOptions, TimeSource};
 use crate::session::logs::{read_log_from, LogSource};
@@ -39,9 +39,10 @@ enum Mutation {
     NanTemperature,
     SimulatedTime,
     Reversed,
+    MalformedFormat,
 }
 
-const MUTATIONS: [Mutation; 11] = [
+const MUTATIONS: [Mutation; 12] = [
     Mutation::StampBitFlip,
     Mutation::Swap,
     Mutation::RepeatMessage,
@@ -53,6 +54,7 @@ const MUTATIONS: [Mutation; 11] = [
     Mutation::NanTemperature,
     Mutation::SimulatedTime,
     Mutation::Reversed,
+    Mutation::MalformedFormat,
 ];
 
 /// The clean session: the first 12 000 rows (60 s) of the standard hand session at 200 Hz.
@@ -143,6 +145,17 @@ fn mutate(format: Format, m: Mutation, clean: &[LogSample], rng: &mut Rng) -> Da
             damaged = 0;
         }
         Mutation::Truncate => {}
+        Mutation::MalformedFormat => {
+            let bytes = match format {
+                Format::Mcap => write_mcap_with(&s, None, 0.0, Some(at)),
+                _ => malformed_format_record(write(format, &s, 0.0), format, n - at),
+            };
+            return Damaged {
+                bytes,
+                damaged: 1,
+                removed: 0,
+            };
+        }
     }
     let mut bytes = write(format, &s, offset);
     if m == Mutation::Truncate {
@@ -162,6 +175,51 @@ fn mutate(format: Format, m: Mutation, clean: &[LogSample], rng: &mut Rng) -> Da
         damaged,
         removed,
     }
+}
+
+/// `file` with an oversized, malformed format record inserted before its last `tail` samples: a
+/// text line of 100 000 bytes that is no row; a ULog format definition (`F`) of 60 000 bytes that
+/// does not parse; a DataFlash `FMT` whose format has a type letter none defines and whose length
+/// is the largest a record can claim.
+fn malformed_format_record(mut file: Vec<u8>, format: Format, tail: usize) -> Vec<u8> {
+    // Bytes per sample as the writers write them.
+    let (at, record) = match format {
+        Format::Text => {
+            let lines: Vec<usize> = file
+                .iter()
+                .enumerate()
+                .filter(|(_, &b)| b == b'\n')
+                .map(|(i, _)| i + 1)
+                .collect();
+            let mut line = vec![b'x'; 100_000];
+            line.push(b'\n');
+            (lines[lines.len() - 1 - tail], line)
+        }
+        Format::Ulog => {
+            let body: Vec<u8> = b"junk:float[0] x;"
+                .iter()
+                .copied()
+                .cycle()
+                .take(60_000)
+                .collect();
+            let mut record = (body.len() as u16).to_le_bytes().to_vec();
+            record.push(b'F');
+            record.extend(body);
+            (file.len() - tail * 98, record)
+        }
+        Format::DataFlash => {
+            let mut record = vec![0xA3, 0x95, 0x80, 0xB0, 255];
+            for (s, n) in [("JUNK", 4), ("Qf?!", 16), ("TimeUS,A,B,C", 64)] {
+                let mut v = s.as_bytes().to_vec();
+                v.resize(n, 0);
+                record.extend(v);
+            }
+            (file.len() - tail * 54, record)
+        }
+        Format::Mcap => unreachable!("the mcap crate writes its records"),
+    };
+    file.splice(at..at, record);
+    file
 }
 
 fn source(format: Format) -> LogSource {

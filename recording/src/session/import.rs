@@ -24,6 +24,10 @@ use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
 /// Longest accepted line, bytes: a logger's row is well under 1 KiB; a file with no line ends (or a
 /// binary file) must not be read into memory whole.
 pub const MAX_LINE_BYTES: usize = 64 * 1024;
+
+/// A text file with more lines longer than [`MAX_LINE_BYTES`] than this is refused: not a damaged
+/// logger's CSV but something else.
+pub const MAX_OVERLONG_LINES: usize = 100;
 /// Most rows held: 4 million rows (about 190 MB) is 67 minutes at 1 kHz, far more than a hand-held
 /// session needs.
 pub const MAX_ROWS: usize = 4_000_000;
@@ -150,6 +154,9 @@ pub struct Recording {
     pub skipped_rows: usize,
     /// The last line, left out because it has no line end (the file was cut short).
     pub unterminated_line: Option<u64>,
+    /// Lines longer than [`MAX_LINE_BYTES`], left out (damaged lines; at most
+    /// [`MAX_OVERLONG_LINES`]).
+    pub overlong_lines: Vec<u64>,
     /// Counts subtracted from each accelerometer axis on reading (the session is written with them
     /// added back, so that the calibration applies to the logger's own outputs).
     pub acc_offset: [f64; 3],
@@ -203,6 +210,15 @@ pub enum ImportError {
         "line {line} is longer than {MAX_LINE_BYTES} bytes: not a logger's CSV (or no line ends)"
     )]
     LineTooLong {
+        /// 1-based line.
+        line: u64,
+    },
+    /// More lines longer than [`MAX_LINE_BYTES`] than a damaged file has.
+    #[error(
+        "line {line} is the {}th line longer than {MAX_LINE_BYTES} bytes: not a logger's CSV",
+        MAX_OVERLONG_LINES + 1
+    )]
+    OverlongLines {
         /// 1-based line.
         line: u64,
     },
@@ -358,16 +374,57 @@ pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording
 
 /// Reads the next line (without its line end) into `buf`; `Ok(false)` at the end of the input.
 fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool, ImportError> {
-    Ok(next_line_end(r, buf, line)?.is_some())
+    match next_line_end(r, buf, line)? {
+        Some(LineEnd::Overlong) => Err(ImportError::LineTooLong { line }),
+        read => Ok(read.is_some()),
+    }
 }
 
-/// [`next_line`], saying whether the line had its line end (`Some(false)`: the file's last line
-/// without one, which a cut-short recording has).
+/// How a line read by [`next_line_end`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LineEnd {
+    /// At its line end.
+    Ended,
+    /// At the end of the file (a cut-short recording's last line).
+    Unterminated,
+    /// Longer than [`MAX_LINE_BYTES`]: skipped up to its line end, `buf` empty (a damaged line).
+    Overlong,
+}
+
+/// How far past [`MAX_LINE_BYTES`] an overlong line is skipped to find its end; a file with no
+/// line end that far is not a logger's CSV (`/dev/zero`, a binary file).
+const MAX_SKIPPED_LINE_BYTES: u64 = 16 << 20;
+
+/// Skips to the next line end, reading at most [`MAX_SKIPPED_LINE_BYTES`]; `false` when the file
+/// or that limit ends first.
+fn skip_line<R: BufRead>(r: &mut R) -> std::io::Result<bool> {
+    let mut skipped = 0u64;
+    while skipped < MAX_SKIPPED_LINE_BYTES {
+        let buf = r.fill_buf()?;
+        if buf.is_empty() {
+            return Ok(false);
+        }
+        if let Some(i) = buf.iter().position(|&b| b == b'\n') {
+            r.consume(i + 1);
+            return Ok(true);
+        }
+        let n = buf.len();
+        r.consume(n);
+        skipped += n as u64;
+    }
+    Ok(false)
+}
+
+/// [`next_line`], saying how the line ended.
 fn next_line_end<R: BufRead>(
     r: &mut R,
     buf: &mut Vec<u8>,
     line: u64,
-) -> Result<Option<bool>, ImportError> {
+) -> Result<Option<LineEnd>, ImportError> {
+    let io = |source| ImportError::Io {
+        path: PathBuf::new(),
+        source,
+    };
     buf.clear();
     let n = r
         .by_ref()
@@ -384,12 +441,20 @@ fn next_line_end<R: BufRead>(
     if ended {
         buf.pop();
     } else if buf.len() > MAX_LINE_BYTES {
-        return Err(ImportError::LineTooLong { line });
+        buf.clear();
+        return match skip_line(r).map_err(io)? {
+            true => Ok(Some(LineEnd::Overlong)),
+            false => Err(ImportError::LineTooLong { line }),
+        };
     }
     if buf.last() == Some(&b'\r') {
         buf.pop();
     }
-    Ok(Some(ended))
+    Ok(Some(if ended {
+        LineEnd::Ended
+    } else {
+        LineEnd::Unterminated
+    }))
 }
 
 /// The field separator: a comma, else a semicolon or tab if the header uses one, else white space
@@ -629,14 +694,22 @@ fn read_rows<R: BufRead>(
     let mut row_index = 0u64;
     loop {
         line += 1;
-        let Some(ended) = next_line_end(r, buf, line)? else {
+        let Some(end) = next_line_end(r, buf, line)? else {
             break;
         };
+        if end == LineEnd::Overlong {
+            // A damaged line costs that line; a file of them is not a logger's CSV.
+            if rec.overlong_lines.len() >= MAX_OVERLONG_LINES {
+                return Err(ImportError::OverlongLines { line });
+            }
+            rec.overlong_lines.push(line);
+            continue;
+        }
         let text = String::from_utf8_lossy(buf);
         if text.trim().is_empty() || is_comment(&text) {
             continue;
         }
-        if !ended {
+        if end == LineEnd::Unterminated {
             // The last line without its line end: a cut-short file, whose last number may have
             // lost digits and still parse.
             rec.unterminated_line = Some(line);
@@ -866,6 +939,33 @@ mod tests {
         assert!(matches!(
             read(&long, &ms2),
             Err(ImportError::LineTooLong { line: 2 })
+        ));
+        // One overlong line among rows is a damaged line: left out, named; a hundred and one are
+        // not a logger's CSV.
+        let rows_around = |long_lines: usize| {
+            let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
+            for i in 0..300 {
+                text.push_str(&format!("{},0,0,9.8,0,0,0\n", i as f64 * 0.01));
+                if i >= 100 && i < 100 + long_lines {
+                    text.push_str(&"9".repeat(70_000));
+                    text.push('\n');
+                }
+            }
+            text
+        };
+        let timed = ImportOptions::new(
+            TimeSource::Column("t".into()),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::RadPerS,
+        );
+        let rec = read(&rows_around(1), &timed).unwrap();
+        assert_eq!(
+            (rec.len(), rec.overlong_lines.as_slice()),
+            (300, &[103u64][..])
+        );
+        assert!(matches!(
+            read(&rows_around(MAX_OVERLONG_LINES + 1), &timed),
+            Err(ImportError::OverlongLines { .. })
         ));
 
         let no_rate = ImportOptions {

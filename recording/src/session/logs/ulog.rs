@@ -377,6 +377,8 @@ struct State {
     dropouts: Vec<(u64, f64, u16)>,
     /// Where data was appended after the log was first closed (the flag bits message), ascending.
     appended: Vec<u64>,
+    /// Format definitions that do not parse and define no IMU topic: how many, the first's byte.
+    bad_formats: (u64, u64),
 }
 
 impl UlogError {
@@ -464,6 +466,12 @@ pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>),
         st.message(h[2], &payload[..size], offset, instance)?;
         offset += 3 + size as u64;
     }
+    if let (count @ 1.., first) = st.bad_formats {
+        warnings.push(format!(
+            "{count} format definition(s) that do not parse left out (the first at byte {first}); \
+             they define no IMU topic, and the topics they define are not read"
+        ));
+    }
     st.finish(instance, warnings)
 }
 
@@ -514,10 +522,22 @@ impl State {
             }
             b'F' => {
                 let text = String::from_utf8_lossy(p);
-                let (name, fields) = parse_format(&text).ok_or_else(|| UlogError::BadFormat {
-                    offset,
-                    text: text.chars().take(80).collect(),
-                })?;
+                let Some((name, fields)) = parse_format(&text) else {
+                    // A damaged definition of another topic costs that topic; of an IMU topic,
+                    // the log (a type it nests is refused where the topic is laid out).
+                    let name = text.split_once(':').map_or("", |(n, _)| n);
+                    if Topic::from_name(name).is_some() {
+                        return Err(UlogError::BadFormat {
+                            offset,
+                            text: text.chars().take(80).collect(),
+                        });
+                    }
+                    if self.bad_formats.0 == 0 {
+                        self.bad_formats.1 = offset;
+                    }
+                    self.bad_formats.0 += 1;
+                    return Ok(());
+                };
                 if self.formats.len() >= MAX_FORMATS && !self.formats.contains_key(&name) {
                     return Err(UlogError::TooManyFormats);
                 }
