@@ -1,9 +1,10 @@
 //! The readers under damage, property-based over all four formats: a simulated hand session written
 //! as text, ULog, DataFlash and MCAP, one mutation at a seeded random place (a flipped bit in a
 //! stamp, swapped or repeated messages, a repeated stamp, jitter, a gap, a cut file, a NaN value or
-//! temperature, simulated time, reversed order, an oversized malformed format record), read back. The property (docs/robustness.md,
-//! "Damaged time stamps"): every sample the mutation did not damage is kept, at its own time and
-//! with its own values; at most 2 rows are lost per damaged sample.
+//! temperature, simulated time, reversed order, an oversized malformed format record), read back.
+//! The property (docs/robustness.md, "Damaged time stamps"): every sample the mutation did not
+//! damage is kept, at its own time and with its own values; at most 2 rows are lost per damaged
+//! sample.
 //!
 //! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
 //! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
