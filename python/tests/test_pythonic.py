@@ -143,7 +143,8 @@ def test_save_refuses_to_replace_and_names_force(hand, tmp_path):
         cal.save(tmp_path)
     assert "--" not in str(e.value)
     cal.save(tmp_path, force=True)
-    session = accelcal.load_session(hand["session"])
+    session = accelcal.segment_file(hand["csv"], acc_unit="m/s2", gyro_unit="deg/s",
+                                    time_column="t")
     session.write(tmp_path / "s")
     with pytest.raises(accelcal.FileError, match=r"force=True") as e:
         session.write(tmp_path / "s")
