@@ -314,15 +314,16 @@ pub(crate) fn logger_csv(data: &[u8]) {
 }
 
 /// A bare `samples.csv` for `host noise`: a report it gives is of `MIN_SAMPLES..=MAX_SAMPLES` rows
-/// at a finite positive rate, six axes, one Allan point per octave cluster size.
+/// at a finite positive rate, six axes, one Allan point per cluster size of the curve (the octaves
+/// and a ninth of the record).
 pub(crate) fn noise_csv(data: &[u8]) {
-    use crate::noise::{allan::octave_sizes, MAX_SAMPLES, MIN_SAMPLES};
+    use crate::noise::{allan::curve_sizes, MAX_SAMPLES, MIN_SAMPLES};
     if let Ok(r) = crate::noise::analyse_csv_bytes(data, None) {
         let n = usize::try_from(r.samples).unwrap_or(usize::MAX);
         assert!((MIN_SAMPLES..=MAX_SAMPLES).contains(&n), "{n} rows");
         assert!(r.sample_rate_hz.is_finite() && r.sample_rate_hz > 0.0);
         assert_eq!(r.axes.len(), 6);
-        let sizes = octave_sizes(n).len();
+        let sizes = curve_sizes(n).len();
         assert!(r.axes.iter().all(|a| a.points.len() == sizes));
     }
 }
