@@ -8,6 +8,9 @@ use nalgebra::{Matrix3, Vector3};
 /// Row-major 3×3 matrix: `m[i][j]` is row `i`, column `j`.
 pub type RowMajor3 = [[f64; 3]; 3];
 
+/// The 3×3 identity.
+pub const IDENTITY: RowMajor3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
 /// nalgebra matrix from row-major rows.
 pub fn to_na(m: &RowMajor3) -> Matrix3<f64> {
     Matrix3::from_fn(|i, j| m[i][j])

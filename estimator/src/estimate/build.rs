@@ -7,7 +7,7 @@ use super::screen::median;
 use super::solve::{GyroDirection, Problem};
 use super::{EstimateOptions, Noise, SegmentKind, SessionSeg};
 use crate::session::Plan;
-use shared::linalg::{self, RowMajor3};
+use shared::linalg::{self, RowMajor3, IDENTITY};
 
 /// The mounts of the used segments (one attitude each, docs/model.md §7) and each session
 /// segment's mount index. A mount is keyed by its name and nominal up; a free mount without an up
@@ -62,6 +62,7 @@ pub(crate) fn build_models(
     correction: Option<&(RowMajor3, [f64; 3])>,
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
+    let static_bias = static_gyro(segs);
     let mut out = Vec::new();
     for (k, s) in segs.iter().enumerate() {
         if !s.used {
@@ -69,25 +70,18 @@ pub(crate) fn build_models(
         }
         let sp = &plan.segments[s.plan_idx];
         let st = &s.stats;
-        let ew = match correction {
-            // The body's rate through the estimated gyro model (docs/model.md §8).
-            Some(c) => {
-                let (wwt, wdot) = super::gyro::corrected_moments(
-                    &st.mean_wwt,
-                    &st.mean_w_rad_s,
-                    &st.wdot_rad_s2,
-                    &noise.gyro_cov,
-                    c,
-                );
-                model::mean_lever_matrix(&wwt, &wdot, &[[0.0; 3]; 3], options.use_omega_dot)
-            }
-            None => model::mean_lever_matrix(
-                &st.mean_wwt,
-                &st.wdot_rad_s2,
-                &noise.gyro_cov,
-                options.use_omega_dot,
-            ),
-        };
+        // The body's rate through the gyro model when one is estimated (docs/model.md §8), else
+        // through its static reading alone: a gyro's bias is no rotation, and one of hundreds of
+        // °/s (raw counts of an unsigned output) would otherwise read as a centripetal term.
+        let c = correction.copied().unwrap_or((IDENTITY, static_bias));
+        let (wwt, wdot) = super::gyro::corrected_moments(
+            &st.mean_wwt,
+            &st.mean_w_rad_s,
+            &st.wdot_rad_s2,
+            &noise.gyro_cov,
+            &c,
+        );
+        let ew = model::mean_lever_matrix(&wwt, &wdot, &[[0.0; 3]; 3], options.use_omega_dot);
         let p = sp.table_centre_m.unwrap_or([0.0; 3]);
         let wp = linalg::mat_vec(&ew, &p);
         let centre = core::array::from_fn(|j| -wp[j] / g);

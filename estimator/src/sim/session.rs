@@ -57,7 +57,7 @@ pub struct NoiseModel {
 }
 
 /// The identity, the perfect gyro's matrix.
-pub(crate) const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+pub(crate) use shared::linalg::IDENTITY;
 
 /// A gyro matrix with relative scale errors `scale` and every off-diagonal entry of magnitude
 /// `misalignment_rad` with the signs `[[·, +, −], [+, ·, +], [−, −, ·]]` (a mix of axis rotation and
