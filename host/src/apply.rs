@@ -97,6 +97,12 @@ pub enum ApplyError {
          the temperature model uses; leave it out"
     )]
     TemperatureNotUsed,
+    /// `--ignore-unit-id` where the unit ids do not differ (it would change nothing).
+    #[error("--ignore-unit-id does not apply: {why}, so no id is refused; leave it out")]
+    IgnoreUnitIdUnused {
+        /// Why the ids do not differ.
+        why: String,
+    },
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
     #[error(
         "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
@@ -259,6 +265,35 @@ pub struct ApplySummary {
     pub warnings: Vec<String>,
 }
 
+/// How the calibration's unit id binds it to a recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UnitBinding {
+    /// The calibration's id (`None`: it has none), checked against the recording's.
+    Bound(Option<UnitId>),
+    /// The calibration's id, not checked (`--ignore-unit-id`): refused where the ids do not differ.
+    Ignored(Option<UnitId>),
+}
+
+impl UnitBinding {
+    /// The id to check against the recording's, after refusing an ignored check that would change
+    /// nothing ([`ApplyError::IgnoreUnitIdUnused`]).
+    fn checked_id(self, plan: &Plan) -> Result<Option<UnitId>, ApplyError> {
+        let ignored = match self {
+            UnitBinding::Bound(id) => return Ok(id),
+            UnitBinding::Ignored(id) => id,
+        };
+        let why = match (ignored, plan.unit_id.as_deref()) {
+            (None, _) => "the calibration has no unit id".to_string(),
+            (_, None) => "the recording's plan has no unit_id".to_string(),
+            (Some(c), Some(_)) if check_unit(Some(c), plan).is_ok() => {
+                format!("the calibration and the recording are both of unit {c}")
+            }
+            _ => return Ok(None),
+        };
+        Err(ApplyError::IgnoreUnitIdUnused { why })
+    }
+}
+
 /// Checks the unit ids when both sides have one.
 pub(crate) fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
     if let (Some(c), Some(r)) = (cal_unit, plan.unit_id.as_deref()) {
@@ -397,19 +432,20 @@ fn output_line(
 }
 
 /// Applies `cal` to the session in `dir`, writing the CSV to `out` (streaming, constant memory).
-/// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`;
+/// `unit` is the calibration's unit id and whether it is checked against the plan's;
 /// `assume_temp_c` is the temperature of a recording without one ([`check_meeting`]). The still
 /// segments are then checked to compensate to 1 g ([`MAX_STILL_G_ERROR`]).
 pub(crate) fn apply_session(
     dir: &Path,
     cal: &Calibration,
-    cal_unit: Option<UnitId>,
+    unit: UnitBinding,
     mode: LeverMode,
     assume_temp_c: Option<f64>,
     out: &mut dyn Write,
 ) -> Result<ApplySummary, ApplyError> {
     let plan = Plan::load(&dir.join(PLAN_FILE))
         .map_err(|e: PlanError| ApplyError::from(RecordingError::from(e)))?;
+    let cal_unit = unit.checked_id(&plan)?;
     check_meeting(cal, cal_unit, &plan, assume_temp_c)?;
     let mut applier = Applier::new(cal, mode, plan.sample_rate_hz)?;
     if let (Some(t), false) = (assume_temp_c, plan.has_temperature()) {
@@ -547,7 +583,15 @@ mod tests {
         vector_session(dir.path(), &rows);
         for (mode, pick) in [(LeverMode::Off, 0), (LeverMode::RateOnly, 1)] {
             let mut out = Vec::new();
-            let s = apply_session(dir.path(), &cal, None, mode, None, &mut out).unwrap();
+            let s = apply_session(
+                dir.path(),
+                &cal,
+                UnitBinding::Bound(None),
+                mode,
+                None,
+                &mut out,
+            )
+            .unwrap();
             assert_eq!(s.rows, COMP_CASES.len() as u64);
             let parsed = parse(std::str::from_utf8(&out).unwrap());
             for (c, (_, _, f_g)) in COMP_CASES.iter().zip(&parsed) {
@@ -582,7 +626,7 @@ mod tests {
         let s = apply_session(
             dir.path(),
             &cal,
-            None,
+            UnitBinding::Bound(None),
             LeverMode::RateAndAcceleration,
             None,
             &mut out,
