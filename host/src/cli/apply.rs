@@ -2,6 +2,7 @@
 
 use super::CliError;
 use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary, UnitBinding};
+use crate::calibration_guard::GuardError;
 use crate::output_file::OutputFile;
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -115,9 +116,8 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
         }
         .map_err(|e| match e {
             // An option that would be ignored is a usage error, found only once the input is read.
-            e @ (ApplyError::TemperatureNotUsed | ApplyError::IgnoreUnitIdUnused { .. }) => {
-                CliError::Usage(e.to_string())
-            }
+            e @ (ApplyError::Guard(GuardError::TemperatureNotUsed { .. })
+            | ApplyError::IgnoreUnitIdUnused { .. }) => CliError::Usage(e.to_string()),
             e => e.into(),
         })
     };
