@@ -173,7 +173,7 @@ pub fn verdict(meeting: Meeting, check: Check) -> Verdict {
              analysed as recorded",
         ),
         (M::Report, C::GyroUnit) => {
-            No("the report shows the gyro's rates as recorded; apply and noise judge them at rest")
+            No("the report shows the gyro's rates as recorded; apply judges them at rest")
         }
         (M::Flash | M::Read, C::Frame) => No(DEVICE_NO_FRAME),
         (M::Flash | M::Read, C::Temperature) => No("the device measures its own temperature"),
