@@ -215,7 +215,7 @@ pub struct ApplySummary {
 
 /// How the calibration's unit id binds it to a recording.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum UnitBinding {
+pub(crate) enum UnitBinding {
     /// The calibration's id (`None`: it has none), checked against the recording's.
     Bound(Option<UnitId>),
     /// The calibration's id, not checked (`--ignore-unit-id`): refused where the ids do not differ.

@@ -1,8 +1,8 @@
 //! One guard wherever a calibration meets something: a recording (`host apply`, `noise`, `report`,
 //! `navigation-check`), a device (`flash`, the live procedure's `verify`, `read`) or another
 //! calibration (`compare`, `batch`). [`verdict`] is the one table of which check applies at which
-//! meeting (and, where one does not, why); [`meet`] runs the checks that apply, in the table's order,
-//! before anything is computed or written; [`check_rest_rate`] is the one check that needs the data
+//! meeting (and, where one does not, why); `meet` runs the checks that apply, in the table's order,
+//! before anything is computed or written; `check_rest_rate` is the one check that needs the data
 //! (the gyro's rate at rest). Every refusal ([`GuardError`]) names both sides and the fix.
 //!
 //! The scale check itself (sign and size of every scale factor) is the estimator's
@@ -95,7 +95,7 @@ pub enum Check {
 }
 
 impl Check {
-    /// Every check, in the order [`meet`] runs them.
+    /// Every check, in the order `meet` runs them.
     pub const ALL: [Check; 6] = [
         Check::Scales,
         Check::UnitId,
@@ -222,7 +222,7 @@ impl Frame {
     /// A calibration's frame: a conventional one holds accelerometer x's angles at exactly 0°, 90°,
     /// 90° and accelerometer y's angle to body z at exactly 90° (the fit keeps them fixed, docs
     /// /model.md §7); a fitted table frame never gives those exact values.
-    pub fn of_calibration(cal: &Calibration) -> Frame {
+    pub(crate) fn of_calibration(cal: &Calibration) -> Frame {
         let a = &cal.statics.installation_angles_deg;
         if a[0] == [0.0, 90.0, 90.0] && a[1][2] == 90.0 {
             Frame::Convention
@@ -233,7 +233,7 @@ impl Frame {
 
     /// A recording's frame: the table's when any segment's attitude is the fixture's, else a
     /// convention (every position free, as a hand-held session's).
-    pub fn of_plan(plan: &crate::session::Plan) -> Frame {
+    pub(crate) fn of_plan(plan: &crate::session::Plan) -> Frame {
         use crate::session::plan::Attitude;
         if plan
             .segments
@@ -249,7 +249,7 @@ impl Frame {
 
 /// The temperatures a recording gives a temperature model.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Temperatures {
+pub(crate) enum Temperatures {
     /// None recorded, none to assume.
     None,
     /// Recorded (a `temp_c` column); `assumed`: a temperature also given to assume.
@@ -263,28 +263,28 @@ pub enum Temperatures {
 
 /// The calibration's side of a meeting.
 #[derive(Clone, Copy, Debug)]
-pub struct Mine<'a> {
+pub(crate) struct Mine<'a> {
     /// As the messages name it ("the calibration", "A (a.toml)").
-    pub name: &'a str,
+    pub(crate) name: &'a str,
     /// The calibration.
-    pub cal: &'a Calibration,
+    pub(crate) cal: &'a Calibration,
     /// Its unit id (`None`: it has none).
-    pub unit_id: Option<UnitId>,
+    pub(crate) unit_id: Option<UnitId>,
 }
 
 /// What the calibration meets, as far as the checks need it (`None`: the side has no such thing).
 #[derive(Clone, Debug)]
-pub struct Other<'a> {
+pub(crate) struct Other<'a> {
     /// As the messages name it ("the recording", "the device", "B (b.toml)").
-    pub name: &'a str,
+    pub(crate) name: &'a str,
     /// Its unit id, as it gives it.
-    pub unit_id: Option<String>,
+    pub(crate) unit_id: Option<String>,
     /// Its output unit.
-    pub output_unit: Option<OutputUnit>,
+    pub(crate) output_unit: Option<OutputUnit>,
     /// Its body frame.
-    pub frame: Option<Frame>,
+    pub(crate) frame: Option<Frame>,
     /// Its temperatures.
-    pub temperatures: Temperatures,
+    pub(crate) temperatures: Temperatures,
 }
 
 /// Why a calibration cannot meet what it meets. Each names both sides and the fix.
@@ -383,8 +383,8 @@ pub enum GuardError {
 }
 
 /// Runs every check the table ([`verdict`]) applies at `meeting` but the gyro's rest (which needs
-/// the data: [`check_rest_rate`]), in the order of [`Check::ALL`].
-pub fn meet(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(), GuardError> {
+/// the data: `check_rest_rate`), in the order of [`Check::ALL`].
+pub(crate) fn meet(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(), GuardError> {
     for check in Check::ALL {
         if verdict(meeting, check) != Verdict::Checked {
             continue;
@@ -448,7 +448,7 @@ fn check_output_unit(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(),
 
 /// [`Check::OutputUnit`] where only the two output units are at hand (a logger's file read after
 /// the calibration was turned into matrices).
-pub fn check_output_units(
+pub(crate) fn check_output_units(
     meeting: Meeting,
     mine: &str,
     mine_unit: OutputUnit,
@@ -532,7 +532,7 @@ fn check_temperature(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(),
 
 /// The gyro's rest ([`Check::GyroUnit`]; `mine`, `other`: the two sides' names): a still segment's
 /// mean rate after the calibration's bias, `deg_s`, must be below [`MAX_REST_RATE_DEG_S`] (NaN is refused).
-pub fn check_rest_rate(
+pub(crate) fn check_rest_rate(
     mine: &str,
     other: &str,
     segment: &str,
