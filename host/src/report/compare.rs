@@ -190,7 +190,8 @@ pub(crate) fn compare_units(
     })
 }
 
-/// The calibrations of A and B, when they are of the same unit and in the same output unit.
+/// The calibrations of A and B, when the guard lets them meet: usable scales, the same unit,
+/// output unit and body frame.
 fn comparable_calibrations(
     a: &UnitFile,
     a_name: &str,
