@@ -231,15 +231,22 @@ impl Frame {
         }
     }
 
-    /// A recording's frame: the table's when any segment's attitude is the fixture's, else a
-    /// convention (every position free, as a hand-held session's).
+    /// A recording's frame: the table's when the segments on the fixture have known ups in at
+    /// least two directions (as the fit's own choice of frame: parallel ups leave a rotation about
+    /// them free), else a convention (every position free, as a hand-held session's).
     pub(crate) fn of_plan(plan: &crate::session::Plan) -> Frame {
         use crate::session::plan::Attitude;
-        if plan
+        let ups: Vec<[f64; 3]> = plan
             .segments
             .iter()
-            .any(|s| s.attitude == Attitude::Fixture)
-        {
+            .filter(|s| s.attitude == Attitude::Fixture)
+            .map(|s| s.up_b)
+            .collect();
+        let spread = ups.iter().any(|a| {
+            ups.iter()
+                .any(|b| shared::linalg::norm(&shared::linalg::cross(a, b)) > 0.2)
+        });
+        if spread {
             Frame::Table
         } else {
             Frame::Convention
@@ -561,6 +568,20 @@ mod tests {
             frame: Some(Frame::Table),
             temperatures: Temperatures::None,
         }
+    }
+
+    /// A table plan's frame is the table's; a hand-held plan's (all free) and one whose fixture
+    /// ups are all parallel (z up and down: a rotation about z is left free) are conventions.
+    #[test]
+    fn a_plans_frame_needs_two_known_directions() {
+        use crate::session::builtin::builtin_plan;
+        let plan = |name| builtin_plan(name).unwrap().unwrap();
+        assert_eq!(Frame::of_plan(&plan("short")), Frame::Table);
+        assert_eq!(Frame::of_plan(&plan("hand")), Frame::Convention);
+        let mut z_only = plan("short");
+        z_only.segments.retain(|s| s.up_b[2].abs() > 0.99);
+        assert!(!z_only.segments.is_empty());
+        assert_eq!(Frame::of_plan(&z_only), Frame::Convention);
     }
 
     /// Every cell of the table is decided, and every "does not apply" says why.
