@@ -303,22 +303,6 @@ impl UnitFile {
         }
     }
 
-    /// Checks that this calibration belongs to the unit `other` names (a plan's, a device's or another
-    /// file's `unit_id`). An absent or all-zero id (a session recorded without one) binds nothing.
-    pub fn check_same_unit(&self, other: Option<&str>, other_what: &str) -> Result<(), String> {
-        let known = |s: Option<&str>| {
-            s.and_then(UnitId::parse_hex)
-                .filter(|id| *id != UnitId::default())
-        };
-        match (known(self.unit_id.as_deref()), known(other)) {
-            (Some(a), Some(b)) if a != b => Err(format!(
-                "the calibration is of unit {a} but {other_what} is of unit {b}: use the calibration \
-                 of this unit"
-            )),
-            _ => Ok(()),
-        }
-    }
-
     /// The calibration this file describes.
     pub fn to_calibration(&self) -> Result<Calibration, String> {
         let unit = self.output_unit.unwrap_or(OutputUnit::Volts);

@@ -23,6 +23,9 @@ mod log;
 pub(crate) use log::apply_log;
 pub use log::Prepared;
 
+use crate::calibration_guard::{
+    check_rest_rate, meet, Frame, GuardError, Meeting, Mine, Other, Temperatures,
+};
 use crate::output_file::OutputFileError;
 use crate::session::logs::LogError;
 use crate::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
@@ -30,7 +33,7 @@ use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
 use shared::compensator::{Compensator, CompensatorError, LeverMode};
 use shared::omega_dot::{OmegaDotError, OmegaDotEstimator};
-use shared::{BodyAngularAccel, BodyRate, Calibration, OutputUnit, SensorOutputs, UnitId};
+use shared::{BodyAngularAccel, BodyRate, Calibration, SensorOutputs, UnitId};
 use std::io::{BufReader, Write};
 use std::path::Path;
 
@@ -38,10 +41,6 @@ use std::path::Path;
 /// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
 /// by tens of percent or by a factor.
 pub(crate) const MAX_STILL_G_ERROR: f64 = 0.05;
-
-/// Largest mean gyro rate of a still segment after the calibration's bias, °/s: a MEMS gyro's
-/// turn-on bias repeatability is below 1 °/s; a wrong unit (°/s read as rad/s) is 57× its bias.
-pub(crate) const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// The header of the output, exactly.
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";
@@ -52,51 +51,18 @@ pub enum ApplyError {
     /// The calibration does not give a compensator.
     #[error("the calibration cannot be applied: {0}")]
     Compensator(#[source] CompensatorError),
-    /// A scale factor is negative or zero ([`crate::calibration_guard`]).
-    #[error("the calibration cannot be applied: {0}")]
-    Scale(#[from] crate::calibration_guard::ScaleError),
+    /// The calibration cannot meet the recording ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Guard(#[from] GuardError),
     /// The recording's sample rate does not give an ω̇ estimator.
     #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate: {1}")]
     SampleRate(f64, #[source] OmegaDotError),
-    /// The recording and the calibration are of different units.
-    #[error(
-        "the calibration is of unit {calibration} but the recording is of unit {recording}; \
-         use that unit's calibration (or --ignore-unit-id if the recording's id is wrong)"
-    )]
-    UnitMismatch {
-        /// Unit id in the calibration.
-        calibration: UnitId,
-        /// Unit id in the recording's plan.
-        recording: String,
+    /// `--ignore-unit-id` where the unit ids do not differ (it would change nothing).
+    #[error("--ignore-unit-id does not apply: {why}, so no id is refused; leave it out")]
+    IgnoreUnitIdUnused {
+        /// Why the ids do not differ.
+        why: String,
     },
-    /// The calibration's output unit is not the recording's.
-    #[error(
-        "the calibration maps outputs in {} but the recording is in {}: use a calibration \
-         of this recording's unit and output (or record in {})",
-        .calibration.symbol(),
-        .recording.symbol(),
-        .calibration.symbol()
-    )]
-    OutputUnitMismatch {
-        /// The calibration's.
-        calibration: OutputUnit,
-        /// The recording's plan's.
-        recording: OutputUnit,
-    },
-    /// A calibration with a temperature model, a recording without temperatures, and no
-    /// temperature to assume.
-    #[error(
-        "the calibration has a temperature model but the recording has no temp_c column: \
-         say which temperature to assume with --temperature-c C (the model's error grows \
-         with the distance from the recording's real temperature)"
-    )]
-    NoTemperature,
-    /// A temperature to assume where the recording has its own (it would be ignored).
-    #[error(
-        "--temperature-c does not apply: the recording has its own temperatures (temp_c), which \
-         the temperature model uses; leave it out"
-    )]
-    TemperatureNotUsed,
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
     #[error(
         "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
@@ -109,18 +75,6 @@ pub enum ApplyError {
         segment: String,
         /// Its mean |f|, g.
         f_g: f64,
-    },
-    /// A still segment's gyro rate after the calibration's bias is far from zero.
-    #[error(
-        "still segment '{segment}' has a gyro rate of {deg_s:.2} °/s after the calibration's \
-         bias (at most {MAX_REST_RATE_DEG_S} °/s is plausible): the gyro's unit or the \
-         calibration's gyro does not fit this recording"
-    )]
-    RestRate {
-        /// The segment.
-        segment: String,
-        /// Its mean |ω|, °/s.
-        deg_s: f64,
     },
     /// The recording could not be read.
     #[error(transparent)]
@@ -259,60 +213,64 @@ pub struct ApplySummary {
     pub warnings: Vec<String>,
 }
 
-/// Checks the unit ids when both sides have one.
-pub(crate) fn check_unit(cal_unit: Option<UnitId>, plan: &Plan) -> Result<(), ApplyError> {
-    if let (Some(c), Some(r)) = (cal_unit, plan.unit_id.as_deref()) {
-        if UnitId::parse_hex(r) != Some(c) {
-            return Err(ApplyError::UnitMismatch {
-                calibration: c,
-                recording: r.to_string(),
-            });
-        }
+/// How the calibration's unit id binds it to a recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum UnitBinding {
+    /// The calibration's id (`None`: it has none), checked against the recording's.
+    Bound(Option<UnitId>),
+    /// The calibration's id, not checked (`--ignore-unit-id`): refused where the ids do not differ.
+    Ignored(Option<UnitId>),
+}
+
+impl UnitBinding {
+    /// The id to check against the recording's, after refusing an ignored check that would change
+    /// nothing ([`ApplyError::IgnoreUnitIdUnused`]).
+    fn checked_id(self, plan: &Plan) -> Result<Option<UnitId>, ApplyError> {
+        let ignored = match self {
+            UnitBinding::Bound(id) => return Ok(id),
+            UnitBinding::Ignored(id) => id,
+        };
+        let why = match (ignored, plan.unit_id.as_deref()) {
+            (None, _) => "the calibration has no unit id".to_string(),
+            (_, None) => "the recording's plan has no unit_id".to_string(),
+            (Some(c), Some(r)) if UnitId::parse_hex(r) == Some(c) => {
+                format!("the calibration and the recording are both of unit {c}")
+            }
+            _ => return Ok(None),
+        };
+        Err(ApplyError::IgnoreUnitIdUnused { why })
     }
-    Ok(())
 }
 
-/// Checks that a calibration can meet a recording at all: positive scale factors, the same unit
-/// (when both have an id), the same output unit, and a temperature for a temperature model (the recording's, or
-/// `assume_temp_c`).
-pub(crate) fn check_meeting(
-    cal: &Calibration,
-    cal_unit: Option<UnitId>,
-    plan: &Plan,
-    assume_temp_c: Option<f64>,
-) -> Result<(), ApplyError> {
-    crate::calibration_guard::check_scales(cal)?;
-    check_unit(cal_unit, plan)?;
-    check_output_unit(cal, plan.output_unit)?;
-    check_temperature(cal, plan.has_temperature(), assume_temp_c)
+/// The calibration's side of a meeting with a recording.
+pub(crate) fn mine(cal: &Calibration, unit_id: Option<UnitId>) -> Mine<'_> {
+    Mine {
+        name: "the calibration",
+        cal,
+        unit_id,
+    }
 }
 
-/// A temperature model needs a temperature: the recording's, or `assume_temp_c` where it has none;
-/// a temperature to assume beside the recording's own is refused ([`ApplyError::TemperatureNotUsed`]).
-pub(crate) fn check_temperature(
-    cal: &Calibration,
-    recorded: bool,
-    assume_temp_c: Option<f64>,
-) -> Result<(), ApplyError> {
+/// A session's side of a meeting: its plan's unit id, output unit, frame and temperatures
+/// (`assume_temp_c`: a temperature given to assume).
+pub(crate) fn recording(plan: &Plan, assume_temp_c: Option<f64>) -> Other<'static> {
+    Other {
+        name: "the recording",
+        unit_id: plan.unit_id.clone(),
+        output_unit: Some(plan.output_unit),
+        frame: Some(Frame::of_plan(plan)),
+        temperatures: temperatures(plan.has_temperature(), assume_temp_c),
+    }
+}
+
+/// What a recording gives a temperature model: its own temperatures (`recorded`), or the one to
+/// assume.
+pub(crate) fn temperatures(recorded: bool, assume_temp_c: Option<f64>) -> Temperatures {
     match (recorded, assume_temp_c) {
-        (true, Some(_)) => Err(ApplyError::TemperatureNotUsed),
-        (false, None) if cal.temperature.is_some() => Err(ApplyError::NoTemperature),
-        _ => Ok(()),
+        (true, assumed) => Temperatures::Recorded { assumed },
+        (false, Some(t)) => Temperatures::Assumed(t),
+        (false, None) => Temperatures::None,
     }
-}
-
-/// The calibration maps the outputs the recording has ([`ApplyError::OutputUnitMismatch`]).
-pub(crate) fn check_output_unit(
-    cal: &Calibration,
-    recording: OutputUnit,
-) -> Result<(), ApplyError> {
-    if cal.statics.output_unit != recording {
-        return Err(ApplyError::OutputUnitMismatch {
-            calibration: cal.statics.output_unit,
-            recording,
-        });
-    }
-    Ok(())
 }
 
 /// Per still segment, the compensated specific force and the corrected rate summed, for the
@@ -349,11 +307,8 @@ fn check_still(name: &str, s: &StillSums, gyro: bool) -> Result<(), ApplyError> 
         });
     }
     let w = shared::linalg::norm(&s.w_rad_s.map(|v| v / n)).to_degrees();
-    if gyro && (w.is_nan() || w > MAX_REST_RATE_DEG_S) {
-        return Err(ApplyError::RestRate {
-            segment: name.to_string(),
-            deg_s: w,
-        });
+    if gyro {
+        check_rest_rate("the calibration", "the recording", name, w)?;
     }
     Ok(())
 }
@@ -397,20 +352,26 @@ fn output_line(
 }
 
 /// Applies `cal` to the session in `dir`, writing the CSV to `out` (streaming, constant memory).
-/// `cal_unit` is the calibration's unit id, checked against the plan's unless `None`;
-/// `assume_temp_c` is the temperature of a recording without one ([`check_meeting`]). The still
-/// segments are then checked to compensate to 1 g ([`MAX_STILL_G_ERROR`]).
+/// `unit` is the calibration's unit id and whether it is checked against the plan's;
+/// `assume_temp_c` is the temperature of a recording without one. The meeting is checked first
+/// ([`crate::calibration_guard::meet`]); the still segments are then checked to compensate to 1 g
+/// ([`MAX_STILL_G_ERROR`]).
 pub(crate) fn apply_session(
     dir: &Path,
     cal: &Calibration,
-    cal_unit: Option<UnitId>,
+    unit: UnitBinding,
     mode: LeverMode,
     assume_temp_c: Option<f64>,
     out: &mut dyn Write,
 ) -> Result<ApplySummary, ApplyError> {
     let plan = Plan::load(&dir.join(PLAN_FILE))
         .map_err(|e: PlanError| ApplyError::from(RecordingError::from(e)))?;
-    check_meeting(cal, cal_unit, &plan, assume_temp_c)?;
+    let cal_unit = unit.checked_id(&plan)?;
+    meet(
+        Meeting::Apply,
+        &mine(cal, cal_unit),
+        &recording(&plan, assume_temp_c),
+    )?;
     let mut applier = Applier::new(cal, mode, plan.sample_rate_hz)?;
     if let (Some(t), false) = (assume_temp_c, plan.has_temperature()) {
         applier.compensator.refresh(t as f32);
@@ -547,7 +508,15 @@ mod tests {
         vector_session(dir.path(), &rows);
         for (mode, pick) in [(LeverMode::Off, 0), (LeverMode::RateOnly, 1)] {
             let mut out = Vec::new();
-            let s = apply_session(dir.path(), &cal, None, mode, None, &mut out).unwrap();
+            let s = apply_session(
+                dir.path(),
+                &cal,
+                UnitBinding::Bound(None),
+                mode,
+                None,
+                &mut out,
+            )
+            .unwrap();
             assert_eq!(s.rows, COMP_CASES.len() as u64);
             let parsed = parse(std::str::from_utf8(&out).unwrap());
             for (c, (_, _, f_g)) in COMP_CASES.iter().zip(&parsed) {
@@ -582,7 +551,7 @@ mod tests {
         let s = apply_session(
             dir.path(),
             &cal,
-            None,
+            UnitBinding::Bound(None),
             LeverMode::RateAndAcceleration,
             None,
             &mut out,
@@ -631,12 +600,15 @@ mod tests {
         let mut plan = builtin_plan("quick-oblique").unwrap().unwrap();
         plan.unit_id = Some("00112233445566778899aabb".into());
         let other = UnitId::parse_hex("ffeeddccbbaa998877665544").unwrap();
-        let err = check_unit(Some(other), &plan).unwrap_err();
+        let check = |id| meet(Meeting::Apply, &mine(&cal, id), &recording(&plan, None));
+        let err = check(Some(other)).unwrap_err();
         assert!(err.to_string().contains("--ignore-unit-id"), "{err}");
-        let same = UnitId::parse_hex("00112233445566778899AABB");
-        assert!(check_unit(same, &plan).is_ok());
-        assert!(check_unit(None, &plan).is_ok());
-        let _ = cal;
+        assert!(
+            err.to_string().contains("ffeeddccbbaa998877665544"),
+            "{err}"
+        );
+        assert!(check(UnitId::parse_hex("00112233445566778899AABB")).is_ok());
+        assert!(check(None).is_ok());
     }
 
     /// A calibration that carries the gyro's errors: the applier turns the gyro's reading into the

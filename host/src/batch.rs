@@ -227,7 +227,18 @@ pub(crate) fn flag_outliers(units: &mut [UnitResult], z_limit: f64) -> Vec<Strin
             && u.same_unit_id_as.is_empty();
     }
     if groups.len() < 2 {
-        return Vec::new();
+        // A lot too small to screen leaves every outlier cell empty: say why.
+        return groups
+            .first()
+            .filter(|(_, n)| *n < MIN_LOT)
+            .map(|(_, n)| {
+                format!(
+                    "no unit is screened for outliers: the lot has {n} calibrated unit(s), fewer \
+                     than the {MIN_LOT} a robust spread needs, so the outliers column is empty"
+                )
+            })
+            .into_iter()
+            .collect();
     }
     let counts: Vec<String> = groups
         .iter()

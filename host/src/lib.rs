@@ -17,6 +17,8 @@
 //!   tables, the navigation replay, the comparison of two calibrations.
 //! - [`export`]: a calibration in other tools' formats (Kalibr YAML, Fusion and plain C headers with a
 //!   C blob decoder, JSON, PX4, ArduPilot, the TOML conversions).
+//! - [`calibration_guard`]: the one guard wherever a calibration meets a recording, a device or
+//!   another calibration, with its table of checks.
 //! - [`apply`]: a calibration applied to a recording with the device's own code (`host apply`);
 //!   [`noise`]: Allan deviation and noise terms (`host noise`); [`batch`]: a lot calibrated in
 //!   parallel (`host batch`); [`summary`]: the machine-readable result with pass/fail limits.
@@ -24,12 +26,13 @@
 
 // The recording and the estimator are crates of their own, below this one; their modules keep
 // their paths inside this one.
-use estimator::{calibration_files, calibration_guard, estimate, sim, unit_file};
+use estimator::{calibration_files, estimate, sim, unit_file};
 use recording::{output_file, session};
 
 pub mod app;
 pub mod apply;
 pub mod batch;
+pub mod calibration_guard;
 pub mod cli;
 pub mod device;
 pub mod export;

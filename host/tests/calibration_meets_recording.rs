@@ -78,7 +78,7 @@ fn apply_noise_and_report_refuse_a_calibration_of_another_output_unit() {
             "--out-dir",
             s(&dir.path().join("r")),
         ]),
-        &["in m/s2 but the recording is in V"],
+        &["in m/s2 but the session is in V"],
     );
 }
 
@@ -137,7 +137,6 @@ fn a_temperature_model_needs_a_temperature() {
             s(&table),
             "--out",
             s(&out),
-            "--ignore-unit-id",
         ]),
         &["no temp_c column", "--temperature-c"],
     );
@@ -151,7 +150,6 @@ fn a_temperature_model_needs_a_temperature() {
         s(&table),
         "--out",
         s(&out),
-        "--ignore-unit-id",
         "--temperature-c",
         "25",
     ]);
@@ -424,7 +422,7 @@ fn flash_refuses_a_calibration_of_another_output_unit() {
                 "--calibration",
                 s(&session.join(file)),
             ]),
-            &["outputs in m/s2", "the device's outputs are in V"],
+            &["outputs in m/s2", "the device is in V"],
         );
     }
 }

@@ -17,6 +17,7 @@ use host::app::log_input::LogInputError;
 use host::app::simulate::SimulationError;
 use host::app::CalibrateError;
 use host::apply::ApplyError;
+use host::calibration_guard::GuardError;
 use host::export::ExportError;
 use host::noise::NoiseError;
 use pyo3::exceptions::PyException;
@@ -176,12 +177,13 @@ impl PyAccelErr {
                  or time base named above; to use the accelerometer alone, give no_gyro=True",
                 problems.join("\n  - ")
             ),
-            PyAccelErr::Apply(ApplyError::NoTemperature) => "the calibration has a temperature \
+            PyAccelErr::Apply(ApplyError::Guard(GuardError::NoTemperature { .. })) => "the calibration has a temperature \
                  model but no temperature was given: give temp_c=C (one temperature, or one per \
                  row; the model's error grows with the distance from the real temperature)"
                 .to_string(),
             PyAccelErr::Apply(
-                e @ (ApplyError::RestRate { .. } | ApplyError::GyroNeverAtRest { .. }),
+                e @ (ApplyError::Guard(GuardError::RestRate { .. })
+                | ApplyError::GyroNeverAtRest { .. }),
             ) => {
                 format!("{e}; give the gyro's unit with gyro_unit=\"deg/s\" or gyro_unit=\"rad/s\"")
             }

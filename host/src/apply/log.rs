@@ -1,6 +1,7 @@
 //! [`apply_log`]: a calibration applied to a logger's file (any format `host segment` reads).
 
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
+use crate::calibration_guard::{meet, Meeting, Other};
 use crate::session::import::Recording;
 use crate::session::logs::{read_log, LogSource};
 use crate::session::segment::{
@@ -26,7 +27,14 @@ pub(crate) fn apply_log(
 ) -> Result<ApplySummary, ApplyError> {
     let log = read_log(path, source).map_err(ApplyError::Log)?;
     let rec = &log.recording;
-    super::check_output_unit(cal, rec.acc_unit.unwrap_or(OutputUnit::Lsb))?;
+    let other = Other {
+        name: "the log",
+        unit_id: None,
+        output_unit: Some(rec.acc_unit.unwrap_or(OutputUnit::Lsb)),
+        frame: None,
+        temperatures: super::temperatures(rec.temp_c.is_some(), assume_temp_c),
+    };
+    meet(Meeting::Apply, &super::mine(cal, None), &other)?;
     let prepared = Prepared::new(rec, cal, mode, assume_temp_c)?;
     let write_err = |e: std::io::Error| {
         ApplyError::Recording(crate::session::RecordingError::Io {
@@ -66,7 +74,14 @@ impl Prepared {
         mode: LeverMode,
         assume_temp_c: Option<f64>,
     ) -> Result<Prepared, ApplyError> {
-        super::check_temperature(cal, rec.temp_c.is_some(), assume_temp_c)?;
+        let other = Other {
+            name: "the recording",
+            unit_id: None,
+            output_unit: None,
+            frame: None,
+            temperatures: super::temperatures(rec.temp_c.is_some(), assume_temp_c),
+        };
+        meet(Meeting::Apply, &super::mine(cal, None), &other)?;
         let mut applier = Applier::new(cal, mode, rec.rate_hz)?;
         if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
             applier.compensator.refresh(t as f32);

@@ -182,8 +182,14 @@ fn a_small_lot_of_equal_units_is_not_screened_below_its_own_noise() {
         .iter()
         .map(|&v| unit_with(v, 1.0))
         .collect();
-    flag_outliers(&mut small, 5.0);
+    let warnings = flag_outliers(&mut small, 5.0);
     assert!(small.iter().all(|u| u.passed));
+    // Its empty outlier columns say why, once.
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("3 calibrated unit(s), fewer than the 5"),
+        "{warnings:?}"
+    );
 }
 
 /// Five good units and one with a 5 % gyro scale error on x and a 5 °/s gyro bias: its

@@ -1,7 +1,8 @@
 //! `host apply`: a calibration applied to a recording with the device's own compensation code.
 
 use super::CliError;
-use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary};
+use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary, UnitBinding};
+use crate::calibration_guard::GuardError;
 use crate::output_file::OutputFile;
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -29,10 +30,12 @@ pub struct ApplyArgs {
     /// Replace an existing --out file.
     #[arg(long)]
     pub force: bool,
-    /// Which lever-arm terms to apply, as the device's lever mode.
-    #[arg(long, value_enum, default_value_t = LeverArg::Full)]
-    pub lever: LeverArg,
-    /// Apply even when the calibration's and the recording's unit ids differ.
+    /// Which lever-arm terms to apply, as the device's lever mode (default: full). Refused with a
+    /// calibration whose lever arms are all zero.
+    #[arg(long, value_enum)]
+    pub lever: Option<LeverArg>,
+    /// Apply even when the calibration's and the recording's unit ids differ (refused where they
+    /// do not).
     #[arg(long)]
     pub ignore_unit_id: bool,
     /// The unit's temperature, °C, for a calibration with a temperature model applied to a recording
@@ -72,11 +75,19 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;
-    let cal_unit = if a.ignore_unit_id {
-        None
+    let cal_unit = unit.unit_id().map_err(invalid)?;
+    let unit_ids = if a.ignore_unit_id {
+        UnitBinding::Ignored(cal_unit)
     } else {
-        unit.unit_id().map_err(invalid)?
+        UnitBinding::Bound(cal_unit)
     };
+    if a.lever.is_some() && cal.lever_arms.r_m.iter().flatten().all(|r| *r == 0.0) {
+        return Err(CliError::Usage(format!(
+            "--lever does not apply: the lever arms of {} are all zero, so every lever mode gives \
+             the same result; leave it out",
+            a.calibration.display()
+        )));
+    }
     if a.temperature_c.is_some() && cal.temperature.is_none() {
         return Err(CliError::Usage(format!(
             "--temperature-c does not apply: {} has no temperature model, so no temperature \
@@ -84,11 +95,18 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             a.calibration.display()
         )));
     }
-    let mode = a.lever.into();
+    let mode = a.lever.unwrap_or(LeverArg::Full).into();
     let source = if a.input.is_dir() {
         a.log.refuse_for_session(&a.input)?;
         None
     } else {
+        if a.ignore_unit_id {
+            return Err(CliError::Usage(format!(
+                "--ignore-unit-id does not apply: {} is a logger's file, which carries no unit id, \
+                 so no ids are compared; leave it out",
+                a.input.display()
+            )));
+        }
         Some(a.log.source(&a.input)?)
     };
     let apply = |w: &mut dyn Write| {
@@ -98,12 +116,13 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             quiet,
         );
         match &source {
-            None => apply_session(&a.input, &cal, cal_unit, mode, a.temperature_c, w),
+            None => apply_session(&a.input, &cal, unit_ids, mode, a.temperature_c, w),
             Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),
         }
         .map_err(|e| match e {
             // An option that would be ignored is a usage error, found only once the input is read.
-            e @ ApplyError::TemperatureNotUsed => CliError::Usage(e.to_string()),
+            e @ (ApplyError::Guard(GuardError::TemperatureNotUsed { .. })
+            | ApplyError::IgnoreUnitIdUnused { .. }) => CliError::Usage(e.to_string()),
             e => e.into(),
         })
     };

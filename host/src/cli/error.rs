@@ -56,29 +56,9 @@ pub enum CliError {
     /// A blob file.
     #[error("{}: {}", .0.display(), .1)]
     Blob(PathBuf, #[source] BlobError),
-    /// A blob made for another unit.
-    #[error(
-        "this calibration was made for unit {blob}, the device is unit {device}: calibrate this \
-         unit, or flash its own calibration"
-    )]
-    WrongUnit {
-        /// The blob's unit.
-        blob: String,
-        /// The device's unit.
-        device: String,
-    },
-    /// A calibration in another output unit than the device's.
-    #[error(
-        "this calibration maps outputs in {calibration}, the device's outputs are in {device}: \
-         calibrate from this device's own outputs (host calibrate --port, or a recording of the \
-         device in {device})"
-    )]
-    WrongOutputUnit {
-        /// The calibration's output unit.
-        calibration: &'static str,
-        /// The device's.
-        device: &'static str,
-    },
+    /// A calibration that cannot meet what it meets ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Guard(#[from] crate::calibration_guard::GuardError),
     /// A calibration no device or tool can use ([`crate::calibration_guard`]).
     #[error(transparent)]
     Scale(#[from] crate::calibration_guard::ScaleError),

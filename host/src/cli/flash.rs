@@ -3,6 +3,7 @@
 use super::port::{connect, PortArgs};
 use super::CliError;
 use crate::calibration_files;
+use crate::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
 use crate::device::procedure::ProcedureError;
 use crate::unit_file::UnitFile;
 use clap::Args;
@@ -27,34 +28,29 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
     // The file is read (bounded: `/dev/zero` is refused at once) and checked before the device is
     // touched.
     let is_toml = calibration.extension().is_some_and(|e| e == "toml");
-    let unit = if is_toml {
+    let (cal, unit_id, file_bytes) = if is_toml {
         let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
         let cal = unit.to_calibration().map_err(CliError::Usage)?;
-        crate::calibration_guard::check_scales(&cal)?;
-        Some((unit, cal))
-    } else {
-        None
-    };
-    let file_bytes = if is_toml {
-        Vec::new()
+        (cal, unit.unit_id().ok().flatten(), Vec::new())
     } else {
         let bytes = crate::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)
             .map_err(|e| CliError::Io(calibration.to_path_buf(), e))?;
-        blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
-        bytes
+        let decoded =
+            blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
+        (decoded.calibration, Some(decoded.unit_id), bytes)
     };
+    let name = calibration.display().to_string();
+    let mine = Mine {
+        name: &name,
+        cal: &cal,
+        unit_id,
+    };
+    // Before the device is known, only what the file alone can fail (its scales).
+    meet(Meeting::Flash, &mine, &device_side(None))?;
     let mut client = connect(port)?;
     let identity = client.identify()?;
-    let bytes = if let Some((unit, cal)) = unit {
-        if let Ok(Some(id)) = unit.unit_id() {
-            if id != identity.unit_id {
-                return Err(CliError::WrongUnit {
-                    blob: id.to_string(),
-                    device: identity.unit_id.to_string(),
-                });
-            }
-        }
-        check_output_unit(&cal, &identity)?;
+    meet(Meeting::Flash, &mine, &device_side(Some(&identity)))?;
+    let bytes = if is_toml {
         let blob = ParameterBlob {
             unit_id: identity.unit_id,
             calibration: cal,
@@ -65,17 +61,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
             .map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
         buf[..n].to_vec()
     } else {
-        let bytes = file_bytes;
-        let decoded =
-            blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;
-        if decoded.unit_id != identity.unit_id {
-            return Err(CliError::WrongUnit {
-                blob: decoded.unit_id.to_string(),
-                device: identity.unit_id.to_string(),
-            });
-        }
-        check_output_unit(&decoded.calibration, &identity)?;
-        bytes
+        file_bytes
     };
     client.write_calibration(&bytes)?;
     let after = client.reset()?;
@@ -92,14 +78,13 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
     Ok(())
 }
 
-/// The calibration maps the outputs the device gives: one made in another output unit (m/s² from a
-/// logger, volts from the analog board) would compensate numbers of another kind.
-fn check_output_unit(cal: &shared::Calibration, identity: &Identity) -> Result<(), CliError> {
-    if cal.statics.output_unit != identity.output_unit {
-        return Err(CliError::WrongOutputUnit {
-            calibration: cal.statics.output_unit.symbol(),
-            device: identity.output_unit.symbol(),
-        });
+/// The device's side of a meeting (`None`: not connected yet, nothing of it known).
+pub(crate) fn device_side(identity: Option<&Identity>) -> Other<'static> {
+    Other {
+        name: "the device",
+        unit_id: identity.map(|i| i.unit_id.to_string()),
+        output_unit: identity.map(|i| i.output_unit),
+        frame: None,
+        temperatures: Temperatures::None,
     }
-    Ok(())
 }

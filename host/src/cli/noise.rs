@@ -1,6 +1,7 @@
 //! `host noise`: Allan deviation and noise terms of a still recording.
 
 use super::CliError;
+use crate::calibration_guard::Meeting;
 use crate::export::convert;
 use crate::noise::{analyse, analyse_log, is_samples_csv, NoiseError};
 use crate::output_file::write_atomic;
@@ -41,16 +42,29 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
             let cal = unit
                 .to_calibration()
                 .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
-            crate::calibration_guard::check_scales(&cal)?;
+            let id = unit
+                .unit_id()
+                .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
             let plan_path = a.input.join(crate::session::PLAN_FILE);
-            if a.input.is_dir() && plan_path.exists() {
-                let plan = crate::session::Plan::load(&plan_path)?;
-                let id = unit
-                    .unit_id()
-                    .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
-                crate::apply::check_unit(id, &plan)?;
-                crate::apply::check_output_unit(&cal, plan.output_unit)?;
-            }
+            let plan = if a.input.is_dir() && plan_path.exists() {
+                Some(crate::session::Plan::load(&plan_path)?)
+            } else {
+                None
+            };
+            // A logger's file (or a bare samples.csv) is met once read: its output unit then.
+            let other = match &plan {
+                Some(plan) => crate::apply::recording(plan, None),
+                None => crate::calibration_guard::Other {
+                    name: "the recording",
+                    unit_id: None,
+                    output_unit: None,
+                    frame: None,
+                    temperatures: crate::calibration_guard::Temperatures::None,
+                },
+            };
+            let mine = crate::apply::mine(&cal, id);
+            crate::calibration_guard::meet(Meeting::Noise, &mine, &other)
+                .map_err(|e| CliError::Noise(e.into()))?;
             let plain = convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain;
             Some((plain, cal.statics.output_unit))
         }

@@ -37,6 +37,16 @@ pub fn run(a: &ReadArgs) -> Result<(), CliError> {
     let bytes = client.read_calibration()?;
     let src = PathBuf::from(format!("<device {}>", identity.unit_id));
     let blob = blob::decode(&bytes).map_err(|e| CliError::Blob(src, e))?;
+    let mine = crate::calibration_guard::Mine {
+        name: "the calibration the device holds",
+        cal: &blob.calibration,
+        unit_id: Some(blob.unit_id),
+    };
+    crate::calibration_guard::meet(
+        crate::calibration_guard::Meeting::Read,
+        &mine,
+        &super::flash::device_side(Some(&identity)),
+    )?;
     let text = UnitFile::from_calibration(&blob.calibration, Some(blob.unit_id), None).to_toml();
     match file.zip(a.out.as_ref()) {
         Some((mut f, p)) => {

@@ -4,7 +4,7 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::app::in_memory::{find, SegmentChoices};
+use crate::app::in_memory::{find, SegmentChoices, SegmentedSession};
 use crate::app::table_turn::FoundTableTurn;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
@@ -42,10 +42,10 @@ pub struct SegmentArgs {
     /// How to read it (text: columns, time, units; binary logs: instance, topic).
     #[command(flatten)]
     pub log: super::log_input::LogInputArgs,
-    /// Prior 1σ of a six-face session's faces, degrees (how well the cube sits on its faces; used
-    /// only when the still positions are the six faces of a cube).
-    #[arg(long, default_value_t = crate::session::from_recording::SIX_FACE_PRIOR_DEG, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
-    pub face_sigma_deg: f64,
+    /// Prior 1σ of a six-face session's faces, degrees (how well the cube sits on its faces;
+    /// default 2). Refused unless the still positions are found to be the six faces of a cube.
+    #[arg(long, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
+    pub face_sigma_deg: Option<f64>,
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
@@ -237,7 +237,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         unit_id: unit_and_site(a)?,
         gravity_m_s2: site_gravity_m_s2(a),
         fit_gyro: !a.no_gyro,
-        face_sigma_deg: a.face_sigma_deg,
+        face_sigma_deg: face_sigma_deg(a),
     };
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
@@ -272,6 +272,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     );
     let s = found.session(&choices)?;
     step.finish_and_clear();
+    refuse_unused_face_sigma(a, &s)?;
     for w in &s.warnings[reader_warnings..] {
         warn(out, &mut warnings, w.clone());
     }
@@ -279,7 +280,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         out.line(format_args!("advice: {advice}"))?;
     }
     if s.position_set == PositionSet::SixFaces {
-        out.line(format_args!("{}", six_face_text(a.face_sigma_deg)))?;
+        out.line(format_args!("{}", six_face_text(face_sigma_deg(a))))?;
     }
     if !s.table_turns.is_empty() {
         out.line(format_args!("{}", table_turns_text(&s.table_turns)))?;
@@ -350,6 +351,27 @@ fn time_unit_note(out: &Output, rec: &Recording) {
             six_digits(rec.t_s.last().unwrap_or(&0.0) - rec.t_s.first().unwrap_or(&0.0))
         ));
     }
+}
+
+/// The six-face prior, degrees: `--face-sigma-deg` or its default.
+fn face_sigma_deg(a: &SegmentArgs) -> f64 {
+    a.face_sigma_deg
+        .unwrap_or(crate::session::from_recording::SIX_FACE_PRIOR_DEG)
+}
+
+/// `--face-sigma-deg` acts only on a six-face session: elsewhere it would change nothing, so it is a
+/// usage error (found once the still positions are known).
+fn refuse_unused_face_sigma(a: &SegmentArgs, s: &SegmentedSession) -> Result<(), CliError> {
+    if a.face_sigma_deg.is_none() || s.position_set == PositionSet::SixFaces {
+        return Ok(());
+    }
+    Err(CliError::Usage(format!(
+        "--face-sigma-deg does not apply: the {} still positions found are not the six faces of a \
+         cube (each within {}° of a body axis, all six present), so no face prior is used; leave \
+         it out",
+        s.plan.segments.iter().filter(|p| p.is_static()).count(),
+        crate::session::segment::SIX_FACE_DEG
+    )))
 }
 
 /// What a six-face session is taken as (stdout, with the table).

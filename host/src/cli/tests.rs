@@ -296,8 +296,18 @@ fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
         false,
     )
     .unwrap_err();
-    assert!(matches!(e, CliError::WrongUnit { .. }), "{e}");
-    assert!(e.to_string().contains("made for unit"), "{e}");
+    assert!(
+        matches!(
+            e,
+            CliError::Guard(crate::calibration_guard::GuardError::UnitId { .. })
+        ),
+        "{e}"
+    );
+    let m = e.to_string();
+    assert!(
+        m.contains(&UnitId(*b"ANOTHER-UNIT").to_string()) && m.contains(&SIM_UNIT_ID.to_string()),
+        "{m}"
+    );
     // A corrupt file is refused before anything reaches the device.
     std::fs::write(dir.path().join("bad.bin"), b"ACAL garbage").unwrap();
     let e = flash::run(&sim(), &dir.path().join("bad.bin"), false).unwrap_err();

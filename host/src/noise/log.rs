@@ -2,6 +2,7 @@
 //! `session::segment` finds in it is analysed like a session's longest static segment.
 
 use super::{analyse_signals, NoiseError, NoiseReport, Signals, MAX_SAMPLES};
+use crate::calibration_guard::Meeting;
 use crate::export::PlainMatrices;
 use crate::session::logs::{read_log, LogSource};
 use crate::session::segment::{find_intervals, SegmentOptions};
@@ -39,14 +40,13 @@ pub fn analyse_log(
     let rec = &log.recording;
     let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);
     if let Some((_, cal_unit)) = calibration {
-        if cal_unit != unit {
-            return Err(file(format!(
-                "the calibration maps outputs in {} but the log is in {}: give this log's unit's \
-                 calibration",
-                cal_unit.symbol(),
-                unit.symbol()
-            )));
-        }
+        crate::calibration_guard::check_output_units(
+            Meeting::Noise,
+            "the calibration",
+            cal_unit,
+            "the log",
+            unit,
+        )?;
     }
     let seg = find_intervals(rec, &SegmentOptions::default())
         .map_err(|e| NoiseError::NoStillData(e.to_string()))?;

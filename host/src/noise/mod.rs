@@ -65,6 +65,9 @@ pub enum NoiseError {
         /// Mean |f| of the still data after the calibration, g.
         f_g: f64,
     },
+    /// The calibration cannot meet the recording ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Guard(#[from] crate::calibration_guard::GuardError),
 }
 
 /// One axis's analysis.

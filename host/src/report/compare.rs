@@ -3,6 +3,7 @@
 //! model's coefficients ([`crate::summary::section_values`]). [`compare`] reads the files,
 //! [`ComparisonTable::render`] prints the table.
 
+use crate::calibration_guard::{meet, Frame, Meeting, Mine, Other, Temperatures};
 use crate::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
 use crate::summary::section_values;
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -119,6 +120,9 @@ pub enum CompareError {
     /// They cannot be compared (message says why).
     #[error("{0}")]
     Incompatible(String),
+    /// One cannot meet the other ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Guard(#[from] crate::calibration_guard::GuardError),
 }
 
 /// `host compare`: reads two calibration (unit) files and compares them.
@@ -186,28 +190,32 @@ pub(crate) fn compare_units(
     })
 }
 
-/// The calibrations of A and B, when they are of the same unit and in the same output unit.
+/// The calibrations of A and B, when the guard lets them meet: usable scales, the same unit,
+/// output unit and body frame.
 fn comparable_calibrations(
     a: &UnitFile,
     a_name: &str,
     b: &UnitFile,
     b_name: &str,
 ) -> Result<(Calibration, Calibration), CompareError> {
-    a.check_same_unit(b.unit_id.as_deref(), "B")
-        .map_err(|m| CompareError::Incompatible(format!("A ({a_name}) and B ({b_name}): {m}")))?;
     let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
     let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
-    for (cal, side, name) in [(&ca, "A", a_name), (&cb, "B", b_name)] {
-        crate::calibration_guard::check_scales(cal)
-            .map_err(|e| CompareError::Incompatible(format!("{side} ({name}): {e}")))?;
-    }
-    let (ua, ub) = (ca.statics.output_unit, cb.statics.output_unit);
-    if ua != ub {
-        return Err(CompareError::Incompatible(format!(
-            "A is in {} and B in {}: the biases and scale factors are not comparable",
-            ua.symbol(),
-            ub.symbol()
-        )));
+    let (na, nb) = (format!("A ({a_name})"), format!("B ({b_name})"));
+    // The guard both ways: each file's own scales, and what the two must share.
+    for (x, nx, cx, y, ny, cy) in [(a, &na, &ca, b, &nb, &cb), (b, &nb, &cb, a, &na, &ca)] {
+        let mine = Mine {
+            name: nx,
+            cal: cx,
+            unit_id: x.unit_id().ok().flatten(),
+        };
+        let other = Other {
+            name: ny,
+            unit_id: y.unit_id().ok().flatten().map(|id| id.to_string()),
+            output_unit: Some(cy.statics.output_unit),
+            frame: Some(Frame::of_calibration(cy)),
+            temperatures: Temperatures::None,
+        };
+        meet(Meeting::Compare, &mine, &other)?;
     }
     Ok((ca, cb))
 }

@@ -78,9 +78,9 @@ pub enum ReportError {
     /// The calibration cannot compensate (message says why).
     #[error("the calibration cannot compensate: {0}")]
     Calibration(String),
-    /// The calibration cannot meet this recording (`crate::apply::check_meeting`).
-    #[error("{}", meeting_message(.0))]
-    Meeting(#[source] crate::apply::ApplyError),
+    /// The calibration cannot meet this recording ([`crate::calibration_guard`]).
+    #[error(transparent)]
+    Meeting(#[from] crate::calibration_guard::GuardError),
     /// A requested segment is not in the session, or the session has none to use.
     #[error("{0}")]
     Segment(String),
@@ -106,20 +106,6 @@ pub enum ReportError {
     /// The calibration of the navigation check failed.
     #[error(transparent)]
     Estimate(crate::estimate::EstimateError),
-    /// The calibration is of another unit than the session.
-    #[error("{0}")]
-    WrongUnit(String),
-}
-
-/// The guard's refusal in the report's terms: the report has no temperature to assume.
-fn meeting_message(e: &crate::apply::ApplyError) -> String {
-    match e {
-        crate::apply::ApplyError::NoTemperature => "the calibration has a temperature model but \
-            the recording has no temp_c column: its segments cannot be compensated at their \
-            temperature; report on a recording with temperatures"
-            .into(),
-        e => e.to_string(),
-    }
 }
 
 /// A compensation level.
@@ -382,9 +368,6 @@ pub fn build_report(
     session_fit: Option<CalibrationOutcome>,
     options: &ReportOptions,
 ) -> Result<ReportData, ReportError> {
-    // A calibration that cannot meet this recording (scales, output unit, a temperature model
-    // without temperatures) is refused before anything is computed from it: the guard `apply` uses.
-    crate::apply::check_meeting(cal, None, plan, None).map_err(ReportError::Meeting)?;
     let mut segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
         return Err(ReportError::Segment(

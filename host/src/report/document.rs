@@ -149,9 +149,17 @@ pub fn report(
     let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
     let session =
         read_session(input_dir, &ReadOptions { quiet: true }).map_err(ReportError::Recording)?;
-    unit.check_same_unit(session.plan.unit_id.as_deref(), "the session")
-        .map_err(ReportError::WrongUnit)?;
     let cal = unit.to_calibration().map_err(ReportError::Calibration)?;
+    // A calibration that cannot meet this session (unit, output unit, scales, frame, a
+    // temperature model without temperatures) is refused before anything is computed from it.
+    let id = unit.unit_id().map_err(ReportError::Calibration)?;
+    let mut session_side = crate::apply::recording(&session.plan, None);
+    session_side.name = "the session";
+    crate::calibration_guard::meet(
+        crate::calibration_guard::Meeting::Report,
+        &crate::apply::mine(&cal, id),
+        &session_side,
+    )?;
     let mut data = build_report(
         &session.plan,
         &session.stats,

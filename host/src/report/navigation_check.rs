@@ -77,6 +77,22 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
         .unit
         .to_calibration()
         .map_err(ReportError::Calibration)?;
+    // Only the scales can fail here: the session is simulated from this unit (the guard's table).
+    crate::calibration_guard::meet(
+        crate::calibration_guard::Meeting::NavigationCheck,
+        &crate::calibration_guard::Mine {
+            name: "the --unit file",
+            cal: &truth,
+            unit_id: None,
+        },
+        &crate::calibration_guard::Other {
+            name: "its simulated session",
+            unit_id: None,
+            output_unit: None,
+            frame: None,
+            temperatures: crate::calibration_guard::Temperatures::None,
+        },
+    )?;
     let stats = simulate_stats(&truth, &args.plan, &args.noise, args.seed)
         .map_err(ReportError::Simulate)?;
     let outcome = calibrate_session_stats(&args.plan, &stats, &args.report.estimate)

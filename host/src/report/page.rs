@@ -223,6 +223,10 @@ pub(crate) fn navigation_table(runs: &[NavigationRun]) -> Block {
     }
 }
 
+/// What Table 2 says in place of its rows when the session has no static segment.
+pub(crate) const NO_STATIC_ROW: &str = "No row: every segment of this session with data rotates \
+     (its plan has no static segment), so there is no static output to compare.";
+
 /// The whole page.
 pub fn page(
     data: &ReportData,
@@ -277,7 +281,11 @@ pub fn page(
     ));
     b.push(Block::Para(theoretical_note(data)));
     b.push(Block::Heading(3, "Static segments (Table 2)".into()));
-    b.push(before_after_table(data, false));
+    if data.segments.iter().any(|r| r.kind == SegmentKind::Static) {
+        b.push(before_after_table(data, false));
+    } else {
+        b.push(Block::Para(NO_STATIC_ROW.into()));
+    }
     if data.segments.iter().any(|r| r.kind != SegmentKind::Static) {
         b.push(Block::Heading(3, "Rotating segments (Table 4)".into()));
         b.push(before_after_table(data, true));

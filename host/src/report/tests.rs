@@ -409,3 +409,28 @@ fn the_report_compares_against_the_same_fitted_attitudes_as_the_terminal() {
     let per_value = data.chi2 / data.chi2_terms as f64;
     assert!(per_value < 2.0, "χ²/value {per_value}");
 }
+
+/// A session of spins only has no static row: the page says so in place of an empty Table 2,
+/// and still shows Table 4.
+#[test]
+fn an_empty_static_table_says_why() {
+    let mut plan = short();
+    plan.segments.retain(|s| !s.is_static());
+    assert!(!plan.segments.is_empty());
+    let truth = shared::params::PAPER_UNIT;
+    let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
+    let data = build_report(&plan, &stats, &truth, None, None, &ReportOptions::default()).unwrap();
+    let blocks = page(&data, "spins", "cal.toml", &[]);
+    let at = blocks
+        .iter()
+        .position(|b| matches!(b, Block::Heading(3, h) if h.starts_with("Static segments")))
+        .unwrap();
+    assert!(
+        matches!(&blocks[at + 1], Block::Para(p) if p == NO_STATIC_ROW),
+        "{:?}",
+        blocks[at + 1]
+    );
+    assert!(blocks
+        .iter()
+        .any(|b| matches!(b, Block::Heading(3, h) if h.starts_with("Rotating segments"))));
+}
