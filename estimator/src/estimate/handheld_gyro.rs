@@ -120,11 +120,12 @@ impl HandGyroFit {
 /// Why the gyro could not be fitted.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum HandGyroError {
-    /// Fewer turns than the nine unknowns need.
+    /// Too few turns for the nine unknowns and a check of them ([`MIN_EQUATIONS`]).
     #[error(
-        "{turns} turn(s) between still positions and {table_turns} whole turn(s) on the table: the \
-         gyro's scale and misalignment need at least 5 turns (24 recommended), turning about \
-         different axes, or with one whole table turn on each face"
+        "{turns} turn(s) between still positions and {table_turns} whole turn(s) on the table: too \
+         few to determine the gyro's scale and misalignment or to check its columns, which need at \
+         least 6 turns (24 recommended), turning about different axes, or one whole table turn on \
+         each face"
     )]
     TooFewTurns {
         /// Hand turns available.
@@ -145,6 +146,19 @@ pub enum HandGyroError {
         hint: String,
         /// The caller's names of the options.
         spelling: Spelling,
+    },
+    /// The turns leave `G` so loose that an implausible fitted `G` is within 3σ of a plausible one:
+    /// no evidence of a wrong column or unit, and no calibration either.
+    #[error(
+        "not determined by these {turns} turn(s): G's entries have 1σ up to {worst_1sigma_pct:.0} %, \
+         and within 3σ the fit is a plausible gyro's; turn the unit about each of its axes, both \
+         ways, between the still positions (24 turns recommended)"
+    )]
+    NotDetermined {
+        /// Hand turns used.
+        turns: usize,
+        /// The largest 1σ of an entry of `G`, %.
+        worst_1sigma_pct: f64,
     },
     /// The user asked for no gyro fit (`host segment --no-gyro`).
     #[error("not fitted (the gyro was left out); the accelerometer's axes are unchecked for a mirror image")]
@@ -281,6 +295,11 @@ fn check_unit(
     }
 }
 
+/// Equations a hand-turn fit needs (two per hand turn, three per table turn): `G`'s nine entries and
+/// three to spare. With fewer the fit neither determines `G` nor can it tell a wrong column from a
+/// right one (its misfit and 1σ would rest on one or two degrees of freedom).
+pub const MIN_EQUATIONS: usize = 12;
+
 /// Fits `G` and `b` from the hand `turns`, the whole `table` turns and the still intervals' bias
 /// `bias` (from [`still_bias`], with its 1σ), with the gyro's angle random walk `arw_rad_per_sqrt_s`
 /// (from the still intervals' noise) in the table turns' weights. A refusal names the options as
@@ -294,7 +313,7 @@ pub fn fit_handheld_gyro(
     arw_rad_per_sqrt_s: f64,
     spelling: Spelling,
 ) -> Result<HandGyroFit, HandGyroError> {
-    if 2 * turns.len() + 3 * table.len() < 10 {
+    if 2 * turns.len() + 3 * table.len() < MIN_EQUATIONS {
         return Err(HandGyroError::TooFewTurns {
             turns: turns.len(),
             table_turns: table.len(),

@@ -14,7 +14,7 @@ use crate::session::segment::{PositionSet, Segmentation};
 use crate::session::Plan;
 use crate::unit_file::GyroSection;
 use recording::spelling::{Spelling, UserOption};
-use shared::linalg;
+use shared::linalg::{self, RowMajor3};
 use std::path::{Path, PathBuf};
 
 /// The gyro result's file in the session directory.
@@ -197,6 +197,41 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<Str
             .collect();
     problems.extend(gyro_check::matrix_problems_spelled(&fit.matrix, sp));
     problems
+}
+
+/// An accepted fit whose only problems are entries of `G` that its turns do not determine (a
+/// plausible `G` lies within 3σ of every entry) is no calibration, and no contradiction either:
+/// the gyro is then absent, saying why ([`HandGyroError::NotDetermined`]). `max_misfit_deg` is
+/// [`plausible_misfit_deg`]. A misfit of the turns
+/// is evidence whatever `G`'s 1σ, and a `G` implausible beyond its 3σ too: both stay refusals.
+pub fn undetermined(fit: HandGyroFit, max_misfit_deg: f64) -> Result<HandGyroFit, HandGyroError> {
+    let sp = Spelling::default();
+    let worst = fit
+        .matrix_1sigma
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, s| m.max(*s));
+    let not_determined = || HandGyroError::NotDetermined {
+        turns: fit.turns,
+        worst_1sigma_pct: 100.0 * worst,
+    };
+    if gyro_check::matrix_problems_spelled(&fit.matrix, sp).is_empty()
+        || gyro_check::misfit_problem(fit.rms_residual_deg, fit.turns, max_misfit_deg).is_some()
+    {
+        return Ok(fit);
+    }
+    // The matrix within 3σ of the fit that is nearest the identity.
+    let nearest: RowMajor3 = core::array::from_fn(|i| {
+        core::array::from_fn(|j| {
+            let d = fit.matrix[i][j] - f64::from(u8::from(i == j));
+            let reach = 3.0 * fit.matrix_1sigma[i][j];
+            fit.matrix[i][j] - d.clamp(-reach, reach)
+        })
+    });
+    if !gyro_check::matrix_problems_spelled(&nearest, sp).is_empty() {
+        return Ok(fit);
+    }
+    Err(not_determined())
 }
 
 /// A gyro that reads `k`× on every axis and fits its turns (`gyro_check::common_scale`): a

@@ -198,8 +198,10 @@ impl Found {
                     .filter(|t| t.used().is_none())
                     .map(ToString::to_string),
             );
+            let fit = hand_gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?;
+            let max_misfit_deg = hand_gyro::plausible_misfit_deg(position_set, &plan);
             (
-                hand_gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?,
+                fit.and_then(|f| hand_gyro::undetermined(f, max_misfit_deg)),
                 table_turns,
             )
         } else {
