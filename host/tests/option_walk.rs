@@ -212,6 +212,7 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     for (o, args) in [
         ("bias-walk", &["--bias-walk", "0.002"][..]),
         ("bias-walk-estimate", &["--bias-walk-estimate"][..]),
+        ("bias-walk-from", &["--bias-walk-from", "{cal}"][..]),
     ] {
         for (sub, head) in [
             (

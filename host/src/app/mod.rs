@@ -29,6 +29,7 @@ pub mod log_input;
 mod segmentation_tests;
 pub mod simulate;
 pub mod table_turn;
+pub mod walk_source;
 
 pub use calibrate::{
     calibrate_recording, calibrate_session_dir, mark_failed, settle_files, write_result,
