@@ -218,3 +218,64 @@ fn a_refusal_under_json_is_a_json_document() {
     let (_, stdout, _) = host(&["calibrate", "--input", missing]);
     assert!(stdout.is_empty(), "{stdout}");
 }
+
+/// The walk in the document (docs/model.md §11): `calibrate --bias-walk-from truth.toml` takes the
+/// simulator's own walk (its `[noise]`, 0.003 mg/√s) as the unit's, and the document says so, with
+/// one bias-track point per segment of the plan; the same session without a walk option has no
+/// `bias_walk` key at all, and `--bias-walk 0.003` is the same fit labelled `given`.
+#[test]
+fn the_document_carries_the_walk_and_its_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("s");
+    let s = s.to_str().unwrap();
+    let (ok, _, e) = host(&[
+        "-q",
+        "simulate",
+        "--out",
+        s,
+        "--plan",
+        "quick-oblique",
+        "--drift-mg-sqrt-s",
+        "0.003",
+    ]);
+    assert!(ok, "{e}");
+    let truth = format!("{s}/truth.toml");
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec!["-q", "calibrate", "--input", s, "--json", "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend(extra);
+        let (ok, stdout, stderr) = host(&args);
+        assert!(ok, "{stderr}");
+        serde_json::from_str::<serde_json::Value>(&stdout).unwrap()
+    };
+    let unit = run(&["--bias-walk-from", &truth], "unit");
+    let w = &unit["bias_walk"];
+    assert_eq!(w["source"], "unit", "{w}");
+    assert_eq!(w["mg_sqrt_s"].as_f64(), Some(0.003));
+    assert_eq!(
+        w["axes_mg_sqrt_s"],
+        serde_json::json!([0.003, 0.003, 0.003])
+    );
+    assert!(w["sigma_mg_sqrt_s"].is_null());
+    let plan = std::fs::read_to_string(format!("{s}/plan.toml")).unwrap();
+    let segments = plan.matches("[[segment]]").count();
+    let track = w["track"].as_array().unwrap();
+    assert!(
+        segments > 0 && track.len() <= segments,
+        "{} of {segments}",
+        track.len()
+    );
+    assert!(!track.is_empty());
+    for p in track {
+        for a in 0..3 {
+            assert!(p["sigma_mg"][a].as_f64().unwrap() > 0.0, "{p}");
+        }
+    }
+    let given = run(&["--bias-walk", "0.003"], "given");
+    assert_eq!(given["bias_walk"]["source"], "given");
+    assert_eq!(given["bias_walk"]["track"], w["track"]);
+    assert_eq!(given["parameters"], unit["parameters"]);
+    let none = run(&[], "none");
+    assert!(none.get("bias_walk").is_none(), "{none}");
+}

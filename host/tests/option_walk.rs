@@ -229,6 +229,13 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
             t.push((sub, o, NotIn(Box::leak(Box::new([line])))));
         }
     }
+    for o in ["bias-walk", "bias-walk-estimate", "bias-walk-from"] {
+        t.push((
+            "report",
+            o,
+            Everywhere("every report runs the session's own fit, which the walk weighs"),
+        ));
+    }
     t.push((
         "plan",
         "bias-walk",
