@@ -279,3 +279,55 @@ fn the_document_carries_the_walk_and_its_source() {
     let none = run(&[], "none");
     assert!(none.get("bias_walk").is_none(), "{none}");
 }
+
+/// `plan --check --bias-walk` advises on the order only where one helps: the paper's plan with each
+/// mount's spins moved right after its rest gets the advice to run the static segments first (the
+/// paper's own order) in its document; the paper's plan itself gets none, and no `order_advice` key.
+#[test]
+fn plan_check_advises_on_a_bad_order_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = include_str!("../../recording/plans/paper.toml");
+    let mut parts = text.split("[[segment]]");
+    let head = parts.next().unwrap();
+    let segs: Vec<&str> = parts.collect();
+    let name = |s: &str| s.split('"').nth(1).unwrap().to_string();
+    let order = [
+        "x+", "x+ 100", "x+ 150", "x+ 200", "x-", "y+", "y+ 100", "y+ 150", "y+ 200", "y-", "z+",
+        "z+ 100", "z+ 150", "z+ 200", "z-",
+    ];
+    let mut bad = head.to_string();
+    for n in order {
+        let s = segs.iter().find(|s| name(s) == n).unwrap();
+        bad.push_str("[[segment]]");
+        bad.push_str(s);
+    }
+    let path = dir.path().join("bad.toml");
+    std::fs::write(&path, bad).unwrap();
+    let check = |plan: &str| {
+        let (ok, stdout, stderr) =
+            host(&["plan", "--check", plan, "--bias-walk", "0.002", "--json"]);
+        assert!(ok, "{stderr}");
+        (
+            serde_json::from_str::<serde_json::Value>(&stdout).unwrap(),
+            stderr,
+        )
+    };
+    let (v, stderr) = check(path.to_str().unwrap());
+    let advice = v["order_advice"].as_array().expect("advice");
+    assert!(advice[0]["change"]
+        .as_str()
+        .unwrap()
+        .contains("static segments first"));
+    let advised: Vec<&str> = advice[0]["order"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let paper: Vec<String> = segs.iter().map(|s| name(s)).collect();
+    assert_eq!(advised, paper);
+    assert!(stderr.contains("order under the walk"), "{stderr}");
+    let (v, stderr) = check("paper");
+    assert!(v.get("order_advice").is_none(), "{v}");
+    assert!(!stderr.contains("order under the walk"), "{stderr}");
+}

@@ -25,6 +25,7 @@ pub mod error;
 pub mod hand_gyro;
 pub mod in_memory;
 pub mod log_input;
+pub mod segment_order;
 #[cfg(test)]
 mod segmentation_tests;
 pub mod simulate;
