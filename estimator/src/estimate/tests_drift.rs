@@ -234,7 +234,8 @@ fn walk_z(e: &WalkEstimate, truth: f64) -> f64 {
 /// (the fit given the true attitudes and the true walk) where the constant-bias fit reaches its
 /// oracle without a walk (the exact fixture); on a 0.05° fixture the fitted attitudes cost a gap to
 /// the oracle even without a walk, and the walk may widen that gap by at most 1.2×. The lever arms
-/// are no worse than the constant-bias fit's; under the walk the 1σ of biases, scale factors and
+/// are no worse than the constant-bias fit's, and the static error with the walk estimated is within
+/// 1.1× the fit's given the true walk (which estimates the attitudes as it does); under the walk the 1σ of biases, scale factors and
 /// lever arms stay honest (rms error/σ within 30 % of 1, pooled over the seeds and walks); every
 /// estimated walk is within 4σ of the simulated one and, over ten seeds or more, its likelihood
 /// interval is honest too (rms of (estimated − simulated) over the interval's half on the truth's
@@ -254,6 +255,15 @@ fn drift_against_the_oracle() {
         for r in &runs {
             r.print(fixture);
             let (est, oracle) = (r.static_ug(2), r.static_ug(3));
+            // The fair reference on a tilted fixture: the fit given the true walk, which also
+            // estimates the attitudes. Estimating the walk costs at most 10 % over it.
+            assert!(
+                r.static_ug(2) <= 1.1 * r.static_ug(1),
+                "{}: walk estimated {} against given {}",
+                r.walk,
+                r.static_ug(2),
+                r.static_ug(1)
+            );
             assert!(
                 est <= 1.2 * gap * oracle,
                 "{}: {est} against the oracle's {oracle} (gap without a walk {gap})",
@@ -476,4 +486,65 @@ fn a_walk_from_the_unit_is_the_given_walk() {
         "{u:?} against {g:?}"
     );
     assert!(u[0] > 2.0 * u[1], "{u:?}");
+}
+
+/// Where the 0.05° fixture's gap to the oracle comes from (docs/model.md §11.5), without a walk:
+/// the fit with the plan's prior at the truth's 0.05°, at half and twice it, with the nominal ups
+/// taken as exact, and with the true ups as the prior's centres (the attitudes still estimated);
+/// the oracle takes the true ups as exact. `DRIFT_SEEDS=48 cargo test -p estimator --lib
+/// tilted_fixture_gap -- --ignored --nocapture` prints the figures (`DRIFT_SEED0` the first seed).
+#[test]
+#[ignore]
+fn tilted_fixture_gap() {
+    let truth = testkit::paper_unit();
+    let base = testkit::many_mounts_plan();
+    let n = seeds().max(4);
+    let first: u64 = std::env::var("DRIFT_SEED0")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let names = [
+        "prior 0.05° (the fit)",
+        "prior 0.025°",
+        "prior 0.1°",
+        "nominal ups as exact",
+        "true ups, prior 0.05°",
+        "oracle: true ups exact",
+    ];
+    let mut rows: Vec<Vec<Figures>> = Vec::new();
+    for seed in first..first + n {
+        let plan = testkit::declared(&base, 0.05, 1.0);
+        let s = simulate(&plan, &truth, 0.05, 0.0, seed);
+        let mut centred = true_attitudes(&plan, &s.ups);
+        centred.attitude_sigma_deg = Some(0.05);
+        let plans = [
+            plan.clone(),
+            testkit::declared(&base, 0.025, 1.0),
+            testkit::declared(&base, 0.1, 1.0),
+            testkit::declared(&base, 0.0, 1.0),
+            centred,
+            true_attitudes(&plan, &s.ups),
+        ];
+        rows.push(
+            plans
+                .iter()
+                .map(|p| figures(&truth, &fit(p, &s.stats, BiasWalk::Off), seed))
+                .collect(),
+        );
+    }
+    let oracle = rms(rows.iter().map(|r| r[5].static_ug));
+    for (k, name) in names.iter().enumerate() {
+        let st = rms(rows.iter().map(|r| r[k].static_ug));
+        let z: Vec<f64> = (0..3)
+            .map(|c| rms_z(rows.iter().map(|r| r[k].z2[c])))
+            .collect();
+        println!(
+            "{name:24} static {st:6.2} µg ({:.2}× the oracle)  lever {:6.1} µm  error/σ {:.2} {:.2} {:.2}",
+            st / oracle,
+            rms(rows.iter().map(|r| r[k].lever_um)),
+            z[0],
+            z[1],
+            z[2]
+        );
+    }
 }
