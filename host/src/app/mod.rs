@@ -18,6 +18,10 @@
 //!   ([`simulate::Simulation`]).
 //! - [`hand_gyro`]: the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`;
 //!   [`table_turn`]: the whole turns on a table that the gyro fit takes as known angles.
+//! - [`walk_source`]: the accelerometers' bias random walk taken from the unit's noise figures
+//!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
+//! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
+//!   (`host plan --check --bias-walk`).
 
 pub mod calibrate;
 pub mod document;

@@ -1,8 +1,8 @@
 //! Segment-order advice under a bias random walk (`host plan --check --bias-walk K`,
 //! docs/model.md §11.2): the same closed-form prediction run on a few reorderings of the plan's
 //! mounts, and on the plan with a return to its first mount, each kept only when it lowers the worst
-//! bias or scale-factor 1σ by [`MIN_GAIN`] or more and leaves no static parameter's 1σ more than
-//! [`MAX_LOSS`] worse.
+//! bias or scale-factor 1σ by 10 % or more and leaves no static parameter's 1σ more than 2 % worse
+//! (`MIN_GAIN`, `MAX_LOSS`).
 //!
 //! Segments move with their mount (the segments of one mount run together, as a fixture is mounted
 //! once), so every candidate is a plan the operator can run; the prediction lays the segments one
@@ -136,7 +136,7 @@ fn with_return(plan: &Plan) -> Option<(Plan, f64)> {
 }
 
 /// The advice for `plan` under the walk of `settings` (docs/model.md §11.2), best first; empty
-/// when no candidate helps by [`MIN_GAIN`] or when the walk is off.
+/// when no candidate helps by 10 % or when the walk is off.
 pub fn order_advice(
     plan: &Plan,
     truth: &Calibration,

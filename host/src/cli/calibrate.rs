@@ -131,6 +131,8 @@ pub struct BiasWalkArgs {
     /// (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
     #[arg(long, conflicts_with = "bias_walk_from")]
     pub bias_walk_estimate: bool,
+    // The `[noise]` below is the TOML table's name in the --help text, not a link.
+    #[allow(rustdoc::broken_intra_doc_links)]
     /// The accelerometers' bias is a random walk of the unit's own strength, per axis: the Allan K
     /// of `host noise` (its noise.json) or a unit file's [noise] accel_bias_walk_mg_sqrt_s
     /// (docs/model.md §11.3). Refused when the file holds none.
