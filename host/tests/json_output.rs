@@ -331,3 +331,72 @@ fn plan_check_advises_on_a_bad_order_only() {
     assert!(v.get("order_advice").is_none(), "{v}");
     assert!(!stderr.contains("order under the walk"), "{stderr}");
 }
+
+/// The walk from `host noise` end to end: a still recording simulated with a 0.01 mg/√s walk, its
+/// Allan K (in V/√s: no calibration given) taken by `calibrate --bias-walk-from noise.json`, which
+/// reports each axis's K over the fitted scale factor, ×10³ mg/√s: the noise file's figures turned
+/// by hand here with the truth's scale factors (the fitted ones differ by parts in 10⁴), and within
+/// 35 % of the simulated walk (half an hour of still data; an Allan K is a statistic of it).
+#[test]
+fn the_walk_from_host_noise_is_the_simulated_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    std::fs::write(
+        p("still.toml"),
+        "format_version = 1\noutput_unit = \"V\"\nsample_rate_hz = 100.0\n\n[[segment]]\n\
+         name = \"still\"\nup_b = [0, 0, 1]\nduration_s = 1800\n",
+    )
+    .unwrap();
+    let walk = ["--drift-mg-sqrt-s", "0.01"];
+    let mut args = vec!["-q", "simulate", "--out"];
+    let (still, plan) = (p("still"), p("still.toml"));
+    args.extend([still.as_str(), "--plan", plan.as_str(), "--seed", "3"]);
+    args.extend(walk);
+    let (ok, _, e) = host(&args);
+    assert!(ok, "{e}");
+    let noise_dir = p("noise");
+    let (ok, _, e) = host(&["-q", "noise", "--input", &still, "--out", &noise_dir]);
+    assert!(ok, "{e}");
+    let noise: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{noise_dir}/noise.json")).unwrap())
+            .unwrap();
+    let cal = p("cal");
+    let mut args = vec![
+        "-q",
+        "simulate",
+        "--out",
+        cal.as_str(),
+        "--plan",
+        "quick-oblique",
+    ];
+    args.extend(walk);
+    let (ok, _, e) = host(&args);
+    assert!(ok, "{e}");
+    let json = format!("{noise_dir}/noise.json");
+    let (ok, stdout, e) = host(&[
+        "-q",
+        "calibrate",
+        "--input",
+        &cal,
+        "--bias-walk-from",
+        &json,
+        "--json",
+    ]);
+    assert!(ok, "{e}");
+    let w = &serde_json::from_str::<serde_json::Value>(&stdout).unwrap()["bias_walk"];
+    assert_eq!(w["source"], "unit");
+    // The paper unit's scale factors, V/g (reference/paper-unit.toml).
+    let k = [0.39496, 0.39808, 0.40024];
+    for a in 0..3 {
+        let axis = &noise["axes"][a];
+        assert_eq!(axis["unit"], "output unit");
+        let k_v = axis["terms"]["random_walk"].as_f64().unwrap();
+        let by_hand = k_v / k[a] * 1e3;
+        let got = w["axes_mg_sqrt_s"][a].as_f64().unwrap();
+        assert!(
+            (got / by_hand - 1.0).abs() < 1e-3,
+            "{a}: {got} against {by_hand}"
+        );
+        assert!((got / 0.01 - 1.0).abs() < 0.35, "{a}: {got} against 0.01");
+    }
+}
