@@ -291,6 +291,67 @@ pub struct CalibrationSummary {
     /// (docs/model.md §4.7). Absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub in_package_size_effect: Option<String>,
+    /// The accelerometers' bias random walk the fit assumed and each segment's fitted bias over
+    /// the session (docs/model.md §11). Absent with a constant bias.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bias_walk: Option<BiasWalkSummary>,
+}
+
+/// The bias random walk of a fit (docs/model.md §11.3, §11.4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BiasWalkSummary {
+    /// Where its strength came from: `given`, `unit` (the unit's noise figures) or `estimated`.
+    pub source: String,
+    /// The strength, mg/√s (from the unit: the strongest axis's).
+    pub mg_sqrt_s: f64,
+    /// Each axis's strength, mg/√s.
+    pub axes_mg_sqrt_s: [f64; 3],
+    /// Estimated: its 1σ, mg/√s.
+    pub sigma_mg_sqrt_s: Option<f64>,
+    /// Estimated: the likelihood interval, mg/√s.
+    pub interval_mg_sqrt_s: Option<[f64; 2]>,
+    /// The strength the segments were weighted with, mg/√s.
+    pub fit_mg_sqrt_s: f64,
+    /// Each segment's fitted wander of the bias from the session's start, in time order.
+    pub track: Vec<BiasTrackPoint>,
+}
+
+/// One segment's fitted bias wander (docs/model.md §11.4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BiasTrackPoint {
+    /// The segment.
+    pub segment: String,
+    /// The middle of its span, s from the session's first sample.
+    pub t_mid_s: f64,
+    /// The wander per axis, mg.
+    pub bias_mg: [f64; 3],
+    /// Its 1σ per axis, mg.
+    pub sigma_mg: [f64; 3],
+}
+
+impl BiasWalkSummary {
+    /// The walk of `outcome`, when its fit assumed one.
+    pub(crate) fn of(outcome: &CalibrationOutcome) -> Option<BiasWalkSummary> {
+        let w = outcome.bias_walk.as_ref()?;
+        Some(BiasWalkSummary {
+            source: w.origin.word().into(),
+            mg_sqrt_s: w.mg_sqrt_s,
+            axes_mg_sqrt_s: w.axes_mg_sqrt_s,
+            sigma_mg_sqrt_s: w.sigma_mg_sqrt_s,
+            interval_mg_sqrt_s: w.interval_mg_sqrt_s,
+            fit_mg_sqrt_s: w.fit_mg_sqrt_s,
+            track: outcome
+                .bias_track
+                .iter()
+                .map(|p| BiasTrackPoint {
+                    segment: p.name.clone(),
+                    t_mid_s: p.t_mid_s,
+                    bias_mg: p.bias_mg,
+                    sigma_mg: p.sigma_mg,
+                })
+                .collect(),
+        })
+    }
 }
 
 /// The paper-form parameters ([`parameter_keys`]) with their units, `values` and, from the
@@ -417,6 +478,7 @@ impl CalibrationSummary {
             in_package_size_effect: outcome
                 .single_package
                 .then(|| crate::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
+            bias_walk: BiasWalkSummary::of(outcome),
         }
     }
 

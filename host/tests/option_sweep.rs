@@ -342,7 +342,25 @@ fn a_bias_walk_where_it_cannot_apply_is_refused() {
                 && stderr.contains("--bias-walk-estimate"),
             "{both:?}: {stderr}"
         );
-        for alone in [&["--bias-walk", "0.002"][..], &["--bias-walk-estimate"][..]] {
+        // `--bias-walk-from` takes the walk from a file: with either of the others it is a usage
+        // error too.
+        for other in [&["--bias-walk", "0.002"][..], &["--bias-walk-estimate"][..]] {
+            let mut v = base.to_vec();
+            v.extend(["--bias-walk-from", "/nonexistent/noise.json"]);
+            v.extend(other);
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_host"))
+                .args(&v)
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{v:?}: {stderr}");
+            assert!(stderr.contains("--bias-walk-from"), "{v:?}: {stderr}");
+        }
+        for alone in [
+            &["--bias-walk", "0.002"][..],
+            &["--bias-walk-estimate"][..],
+            &["--bias-walk-from", "/nonexistent/noise.json"][..],
+        ] {
             let mut v = vec!["host"];
             v.extend(base);
             v.extend(alone);
@@ -361,4 +379,56 @@ fn a_bias_walk_where_it_cannot_apply_is_refused() {
             );
         }
     }
+}
+
+#[test]
+fn a_walk_from_a_file_without_one_is_refused_naming_the_fix() {
+    // A unit file without a `[noise]` walk (the paper's unit) and a noise.json whose K the recording
+    // did not determine: a usage error (exit 2) before any work, naming `host noise` and the file.
+    let dir = std::env::temp_dir().join(format!("walk-from-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let unit = dir.join("unit.toml");
+    std::fs::write(&unit, include_str!("../../reference/paper-unit.toml")).unwrap();
+    let walkless = dir.join("walkless.toml");
+    std::fs::write(
+        &walkless,
+        format!(
+            "{}\n[noise]\naccel_white_mg = 1.0\n",
+            include_str!("../../reference/paper-unit.toml")
+        ),
+    )
+    .unwrap();
+    for file in [&unit, &walkless] {
+        let f = file.to_str().unwrap();
+        for args in [
+            &[
+                "calibrate",
+                "--input",
+                "/nonexistent/session",
+                "--bias-walk-from",
+                f,
+            ][..],
+            &[
+                "batch",
+                "--input",
+                "/nonexistent/lot",
+                "--out",
+                "/nonexistent/out",
+                "--bias-walk-from",
+                f,
+            ][..],
+        ] {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_host"))
+                .args(args)
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+            assert!(
+                stderr.contains("host noise") && stderr.contains(f) && stderr.contains("[noise]"),
+                "{args:?}: {stderr}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -214,6 +214,7 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     for (o, args) in [
         ("bias-walk", &["--bias-walk", "0.002"][..]),
         ("bias-walk-estimate", &["--bias-walk-estimate"][..]),
+        ("bias-walk-from", &["--bias-walk-from", "{cal}"][..]),
     ] {
         for (sub, head) in [
             (
@@ -229,6 +230,13 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
             );
             t.push((sub, o, NotIn(Box::leak(Box::new([line])))));
         }
+    }
+    for o in ["bias-walk", "bias-walk-estimate", "bias-walk-from"] {
+        t.push((
+            "report",
+            o,
+            Everywhere("every report runs the session's own fit, which the walk weighs"),
+        ));
     }
     t.push((
         "plan",

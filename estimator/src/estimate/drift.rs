@@ -15,7 +15,7 @@
 
 use super::model::SegModel;
 use super::solve::{self, NormalSystem, Problem};
-use super::{BiasWalk, EstimateError, EstimateOptions, SessionSeg};
+use super::{BiasWalk, EstimateError, EstimateOptions, SessionSeg, UnitWalk};
 use nalgebra::{DMatrix, DVector};
 
 /// The random walk the fit assumes.
@@ -33,6 +33,14 @@ impl Drift {
     pub(crate) fn new(mg_sqrt_s: f64, k: [f64; 3], t0_s: f64) -> Drift {
         Drift {
             q2: k.map(|k| (mg_sqrt_s * 1e-3 * k).powi(2)),
+            t0_s,
+        }
+    }
+
+    /// A walk per axis in output unit/√s: `q_i = K_i`.
+    fn per_axis_out(out_sqrt_s: [f64; 3], t0_s: f64) -> Drift {
+        Drift {
+            q2: out_sqrt_s.map(|q| q * q),
             t0_s,
         }
     }
@@ -169,12 +177,38 @@ fn log_det(models: &[SegModel], d: &Drift) -> Option<f64> {
     Some((0..l.nrows()).map(|i| 2.0 * l[(i, i)].ln()).sum())
 }
 
+/// Where the walk's strength came from (docs/model.md §11.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WalkOrigin {
+    /// Given on the command line.
+    Given,
+    /// Taken from the unit's noise figures (a unit file's `[noise]`, or `host noise`'s Allan K).
+    Unit,
+    /// Estimated from the session by restricted maximum likelihood.
+    Estimated,
+}
+
+impl WalkOrigin {
+    /// The word reports use: `given`, `unit` or `estimated`.
+    pub fn word(self) -> &'static str {
+        match self {
+            WalkOrigin::Given => "given",
+            WalkOrigin::Unit => "unit",
+            WalkOrigin::Estimated => "estimated",
+        }
+    }
+}
+
 /// The walk's strength, given or estimated from the session with its 1σ, and the strength the
 /// segments were weighted with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkEstimate {
-    /// The strength given or estimated, mg/√s.
+    /// Where it came from.
+    pub origin: WalkOrigin,
+    /// The strength given or estimated, mg/√s; taken from the unit, the strongest axis's.
     pub mg_sqrt_s: f64,
+    /// Each axis's strength, mg/√s (the three equal unless taken from the unit per axis).
+    pub axes_mg_sqrt_s: [f64; 3],
     /// Its 1σ (half the width of the likelihood interval), mg/√s; `None` when given, not estimated.
     pub sigma_mg_sqrt_s: Option<f64>,
     /// The likelihood interval (log-likelihood within ½ of its maximum), mg/√s: not symmetric about
@@ -185,25 +219,42 @@ pub struct WalkEstimate {
     pub fit_mg_sqrt_s: f64,
 }
 
-/// A given walk set on `problem`, its scale factors from the constant-bias `static_fit`; `None`
-/// when the bias is constant, or when the walk is to be estimated (the constant-bias fit comes
-/// first, docs/model.md §11.3).
+/// A given walk (or one taken from the unit) set on `problem`, its scale factors from the
+/// constant-bias `static_fit`; `None` when the bias is constant, or when the walk is to be estimated
+/// (the constant-bias fit comes first, docs/model.md §11.3).
 pub(crate) fn apply(
     options: &EstimateOptions,
     segs: &[SessionSeg],
     problem: &mut Problem,
     static_fit: &solve::Fit,
 ) -> Option<WalkEstimate> {
-    let BiasWalk::Given(mg) = options.bias_walk else {
-        return None;
-    };
     let k = scale_factors(&static_fit.theta);
-    problem.drift = Some(Drift::new(mg, k, start_time(segs)));
+    let t0 = start_time(segs);
+    let (drift, origin, axes) = match options.bias_walk {
+        BiasWalk::Given(mg) => (Drift::new(mg, k, t0), WalkOrigin::Given, [mg; 3]),
+        BiasWalk::FromUnit(UnitWalk::MgSqrtS(mg)) => {
+            let d = Drift {
+                q2: core::array::from_fn(|a| (mg[a] * 1e-3 * k[a]).powi(2)),
+                t0_s: t0,
+            };
+            (d, WalkOrigin::Unit, mg)
+        }
+        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(out)) => {
+            // K_i output unit/√s over k_i output unit/g is g/√s; ×10³ mg.
+            let mg = core::array::from_fn(|a| out[a] / k[a] * 1e3);
+            (Drift::per_axis_out(out, t0), WalkOrigin::Unit, mg)
+        }
+        BiasWalk::Off | BiasWalk::Estimate => return None,
+    };
+    problem.drift = Some(drift);
+    let strongest = axes.iter().copied().fold(0.0, f64::max);
     Some(WalkEstimate {
-        mg_sqrt_s: mg,
+        origin,
+        mg_sqrt_s: strongest,
+        axes_mg_sqrt_s: axes,
         sigma_mg_sqrt_s: None,
         interval_mg_sqrt_s: None,
-        fit_mg_sqrt_s: mg,
+        fit_mg_sqrt_s: strongest,
     })
 }
 
@@ -216,11 +267,19 @@ pub struct WalkPoint {
     pub t_mid_s: f64,
     /// The walk's mean over the segment per axis, mg.
     pub bias_mg: [f64; 3],
+    /// Its 1σ per axis, mg: the spread of the true wander about the fitted one (docs/model.md §11.4).
+    pub sigma_mg: [f64; 3],
 }
 
 /// Each plain segment's fitted walk, `Σ_walk Σ⁻¹ r` at `theta` (the walk's conditional mean given
-/// the residuals, docs/model.md §11.4), in time order; empty without a walk.
-pub(crate) fn track(problem: &Problem, theta: &[f64], segs: &[SessionSeg]) -> Vec<WalkPoint> {
+/// the residuals, docs/model.md §11.4), with its 1σ from `cov` (θ's covariance), in time order;
+/// empty without a walk.
+pub(crate) fn track(
+    problem: &Problem,
+    theta: &[f64],
+    cov: &DMatrix<f64>,
+    segs: &[SessionSeg],
+) -> Vec<WalkPoint> {
     let Some(d) = problem.drift.as_ref().filter(|d| d.active()) else {
         return Vec::new();
     };
@@ -234,19 +293,37 @@ pub(crate) fn track(problem: &Problem, theta: &[f64], segs: &[SessionSeg]) -> Ve
             }
         }
     }
+    let rows = 3 * models.len();
     let r = DVector::from_iterator(
-        3 * models.len(),
+        rows,
         models.iter().flat_map(|m| {
             let p = m.predict(theta);
             (0..3).map(move |a| m.mean_u[a] - p[a])
         }),
     );
+    let mut jac = DMatrix::zeros(rows, theta.len());
+    for (s, m) in models.iter().enumerate() {
+        for (q, dv) in m.jacobian(theta) {
+            for a in 0..3 {
+                jac[(3 * s + a, q)] += dv[a];
+            }
+        }
+    }
     let Some(chol) = sigma.cholesky() else {
         return Vec::new();
     };
-    let w = walk * chol.solve(&r);
+    // A = Σ_walk Σ⁻¹ (both symmetric): the prediction, and its error's covariance
+    // Σ_walk − A Σ_walk + (A J) cov (A J)ᵀ (the second term the residuals' share of θ's error).
+    let a_mat = chol.solve(&walk).transpose();
+    let w = &a_mat * r;
+    let aj = &a_mat * jac;
+    let from_theta = (&aj * cov).component_mul(&aj).column_sum();
+    let shrunk = (&a_mat * &walk).diagonal();
     let k = scale_factors(theta);
     let t0 = start_time(segs);
+    let sd = |i: usize, a: usize| {
+        (walk[(i, i)] - shrunk[i] + from_theta[i]).max(0.0).sqrt() / k[a] * 1e3
+    };
     let mut out: Vec<WalkPoint> = models
         .iter()
         .enumerate()
@@ -254,6 +331,7 @@ pub(crate) fn track(problem: &Problem, theta: &[f64], segs: &[SessionSeg]) -> Ve
             name: segs[m.seg].stats.name.clone(),
             t_mid_s: 0.5 * (m.span_s[0] + m.span_s[1]) - t0,
             bias_mg: core::array::from_fn(|a| w[3 * s + a] / k[a] * 1e3),
+            sigma_mg: core::array::from_fn(|a| sd(3 * s + a, a)),
         })
         .collect();
     out.sort_by(|a, b| a.t_mid_s.total_cmp(&b.t_mid_s));
@@ -380,7 +458,9 @@ pub(crate) fn estimate(
     let upper = crossing(&at, q, hi, target)?;
     let sigma = 0.5 * (upper - lower);
     Ok(WalkEstimate {
+        origin: WalkOrigin::Estimated,
         mg_sqrt_s: q,
+        axes_mg_sqrt_s: [q; 3],
         sigma_mg_sqrt_s: Some(sigma),
         interval_mg_sqrt_s: Some([lower, upper]),
         fit_mg_sqrt_s: q.hypot(sigma),

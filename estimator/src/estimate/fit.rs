@@ -420,7 +420,7 @@ fn outcome(
         thermal: None,
         single_package: options.single_package,
         package_test: s.package_test,
-        bias_track: drift::track(&problem, &main.theta, &segs),
+        bias_track: drift::track(&problem, &main.theta, &main.cov, &segs),
         bias_walk: walk,
     }
 }

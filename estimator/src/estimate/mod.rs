@@ -70,13 +70,13 @@ mod thermal_tests;
 mod uncertainty;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
-pub use drift::{WalkEstimate, WalkPoint};
+pub use drift::{WalkEstimate, WalkOrigin, WalkPoint};
 pub use error::EstimateError;
 pub use fit::calibrate_session_stats;
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
 pub use options::{
-    BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice,
+    BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice, UnitWalk,
 };
 pub use outcome::{
     CalibrationOutcome, Exclusion, ExclusionReason, FitSummary, MethodComparison, Observability,

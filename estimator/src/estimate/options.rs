@@ -117,9 +117,23 @@ pub enum BiasWalk {
     Off,
     /// A random walk of this strength, mg/√s (0 is [`BiasWalk::Off`]).
     Given(f64),
+    /// A random walk per axis taken from the unit's noise figures (a unit file's `[noise]`, or the
+    /// Allan K of `host noise`), reported as taken from the unit (docs/model.md §11.3).
+    FromUnit(UnitWalk),
     /// A random walk whose strength is estimated from the session (restricted maximum likelihood on
     /// the constant-bias fit's problem, §11.3).
     Estimate,
+}
+
+/// A per-axis walk strength from the unit's noise figures, in the unit it was measured in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UnitWalk {
+    /// mg/√s per axis (a unit file's `accel_bias_walk_mg_sqrt_s`, or an Allan K in m/s²/√s or
+    /// g/√s turned into mg): turned into output units with each axis's fitted scale factor.
+    MgSqrtS([f64; 3]),
+    /// Output unit/√s per axis (an Allan K of the raw outputs, V/√s or LSB/√s): the walk's
+    /// intensity as it is, `q_i = K_i` (docs/model.md §11).
+    OutputPerSqrtS([f64; 3]),
 }
 
 /// How the estimator treats the gyro.

@@ -234,7 +234,8 @@ fn walk_z(e: &WalkEstimate, truth: f64) -> f64 {
 /// (the fit given the true attitudes and the true walk) where the constant-bias fit reaches its
 /// oracle without a walk (the exact fixture); on a 0.05° fixture the fitted attitudes cost a gap to
 /// the oracle even without a walk, and the walk may widen that gap by at most 1.2×. The lever arms
-/// are no worse than the constant-bias fit's; under the walk the 1σ of biases, scale factors and
+/// are no worse than the constant-bias fit's, and the static error with the walk estimated is within
+/// 1.1× the fit's given the true walk (which estimates the attitudes as it does); under the walk the 1σ of biases, scale factors and
 /// lever arms stay honest (rms error/σ within 30 % of 1, pooled over the seeds and walks); every
 /// estimated walk is within 4σ of the simulated one and, over ten seeds or more, its likelihood
 /// interval is honest too (rms of (estimated − simulated) over the interval's half on the truth's
@@ -254,6 +255,15 @@ fn drift_against_the_oracle() {
         for r in &runs {
             r.print(fixture);
             let (est, oracle) = (r.static_ug(2), r.static_ug(3));
+            // The fair reference on a tilted fixture: the fit given the true walk, which also
+            // estimates the attitudes. Estimating the walk costs at most 10 % over it.
+            assert!(
+                r.static_ug(2) <= 1.1 * r.static_ug(1),
+                "{}: walk estimated {} against given {}",
+                r.walk,
+                r.static_ug(2),
+                r.static_ug(1)
+            );
             assert!(
                 est <= 1.2 * gap * oracle,
                 "{}: {est} against the oracle's {oracle} (gap without a walk {gap})",
@@ -344,15 +354,15 @@ fn the_paper_method_refuses_a_walk() {
 
 /// The report's fitted bias per segment follows the simulated walk: its truth is the difference of
 /// each segment's mean outputs simulated with and without the walk (the walk has its own random
-/// stream, so every other draw is the same). Over two seeds of a 0.005 mg/√s walk the fitted track
-/// leaves less than half of the walk's rms.
+/// stream, so every other draw is the same). Over eight seeds of a 0.005 mg/√s walk the fitted track
+/// leaves less than half of the walk's rms, and its error is the size its 1σ says.
 #[test]
 fn the_fitted_bias_track_follows_the_simulated_walk() {
     let truth = testkit::paper_unit();
     let plan = plan(FIXTURES[0]);
     let k = truth.statics.scale_out_per_g;
-    let (mut err, mut size) = (Vec::new(), Vec::new());
-    for seed in 0..2 {
+    let (mut err, mut size, mut z) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..8 {
         let with = simulate(&plan, &truth, 0.0, 0.005, 900 + seed);
         let without = simulate(&plan, &truth, 0.0, 0.0, 900 + seed);
         let out = fit(&plan, &with.stats, BiasWalk::Given(0.005));
@@ -363,6 +373,7 @@ fn the_fitted_bias_track_follows_the_simulated_walk() {
             for a in 0..3 {
                 let walk_mg = (w.mean_u[a] - c.mean_u[a]) / k[a] * 1e3;
                 err.push(p.bias_mg[a] - walk_mg);
+                z.push((p.bias_mg[a] - walk_mg) / p.sigma_mg[a]);
                 size.push(walk_mg);
             }
         }
@@ -370,6 +381,11 @@ fn the_fitted_bias_track_follows_the_simulated_walk() {
     let (e, s) = (rms(err.into_iter()), rms(size.into_iter()));
     println!("fitted bias track: rms error {e:.4} mg against the walk's rms {s:.4} mg");
     assert!(e < 0.5 * s, "{e} against {s}");
+    // The 1σ bars are the error's size: error over 1σ has an rms near 1 (648 points, correlated
+    // within a seed, so a wide band; 1σ bars of half or twice the error's spread fail it).
+    let zr = rms(z.into_iter());
+    println!("fitted bias track: rms of error over its 1σ {zr:.3}");
+    assert!((0.7..1.4).contains(&zr), "{zr}");
     let none = fit(
         &plan,
         &simulate(&plan, &truth, 0.0, 0.0, 900).stats,
@@ -415,5 +431,120 @@ fn the_prediction_with_a_walk_is_what_a_session_reports() {
             );
             assert!(b > 2.0 * without[i], "bias {i}: {b} against {}", without[i]);
         }
+    }
+}
+
+/// A walk taken from the unit is the given walk: in mg/√s per axis it is the same fit bit for bit
+/// (only its origin differs); in output unit/√s, `K_i = K_mg · 10⁻³ · k_i` with the true scale
+/// factors, it differs only by the fitted against the true `k_i` (parts in 10⁴ of the walk), and
+/// its reported strength is that K back in mg/√s.
+#[test]
+fn a_walk_from_the_unit_is_the_given_walk() {
+    let truth = testkit::paper_unit();
+    let plan = plan(FIXTURES[0]);
+    let s = simulate(&plan, &truth, 0.0, 0.002, 31);
+    let given = fit(&plan, &s.stats, BiasWalk::Given(0.002));
+    let mg = fit(
+        &plan,
+        &s.stats,
+        BiasWalk::FromUnit(UnitWalk::MgSqrtS([0.002; 3])),
+    );
+    assert_eq!(given.calibration, mg.calibration);
+    assert_eq!(given.uncertainty, mg.uncertainty);
+    let (gw, mw) = (given.bias_walk.unwrap(), mg.bias_walk.unwrap());
+    assert_eq!(
+        (gw.origin, mw.origin),
+        (WalkOrigin::Given, WalkOrigin::Unit)
+    );
+    assert_eq!(mw.axes_mg_sqrt_s, [0.002; 3]);
+    let k = truth.statics.scale_out_per_g;
+    let out = fit(
+        &plan,
+        &s.stats,
+        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(k.map(|k| 0.002e-3 * k))),
+    );
+    let ow = out.bias_walk.unwrap();
+    for a in 0..3 {
+        assert!((ow.axes_mg_sqrt_s[a] / 0.002 - 1.0).abs() < 1e-3, "{ow:?}");
+        let (b, c) = (
+            given.uncertainty.zero_bias_1sigma[a],
+            out.uncertainty.zero_bias_1sigma[a],
+        );
+        assert!((b / c - 1.0).abs() < 1e-3, "{b} {c}");
+    }
+    // Per axis: a walk assumed on x alone leaves y's and z's biases as precise as a constant bias
+    // would (the session's walk on them then shows in χ², which scales every 1σ up, x's too).
+    let x_only = fit(
+        &plan,
+        &s.stats,
+        BiasWalk::FromUnit(UnitWalk::MgSqrtS([0.002, 0.0, 0.0])),
+    );
+    let u = &x_only.uncertainty.zero_bias_1sigma;
+    let g = &given.uncertainty.zero_bias_1sigma;
+    assert!(
+        u[1] < 0.5 * g[1] && u[2] < 0.5 * g[2],
+        "{u:?} against {g:?}"
+    );
+    assert!(u[0] > 2.0 * u[1], "{u:?}");
+}
+
+/// Where the 0.05° fixture's gap to the oracle comes from (docs/model.md §11.5), without a walk:
+/// the fit with the plan's prior at the truth's 0.05°, at half and twice it, with the nominal ups
+/// taken as exact, and with the true ups as the prior's centres (the attitudes still estimated);
+/// the oracle takes the true ups as exact. `DRIFT_SEEDS=48 cargo test -p estimator --lib
+/// tilted_fixture_gap -- --ignored --nocapture` prints the figures (`DRIFT_SEED0` the first seed).
+#[test]
+#[ignore]
+fn tilted_fixture_gap() {
+    let truth = testkit::paper_unit();
+    let base = testkit::many_mounts_plan();
+    let n = seeds().max(4);
+    let first: u64 = std::env::var("DRIFT_SEED0")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let names = [
+        "prior 0.05° (the fit)",
+        "prior 0.025°",
+        "prior 0.1°",
+        "nominal ups as exact",
+        "true ups, prior 0.05°",
+        "oracle: true ups exact",
+    ];
+    let mut rows: Vec<Vec<Figures>> = Vec::new();
+    for seed in first..first + n {
+        let plan = testkit::declared(&base, 0.05, 1.0);
+        let s = simulate(&plan, &truth, 0.05, 0.0, seed);
+        let mut centred = true_attitudes(&plan, &s.ups);
+        centred.attitude_sigma_deg = Some(0.05);
+        let plans = [
+            plan.clone(),
+            testkit::declared(&base, 0.025, 1.0),
+            testkit::declared(&base, 0.1, 1.0),
+            testkit::declared(&base, 0.0, 1.0),
+            centred,
+            true_attitudes(&plan, &s.ups),
+        ];
+        rows.push(
+            plans
+                .iter()
+                .map(|p| figures(&truth, &fit(p, &s.stats, BiasWalk::Off), seed))
+                .collect(),
+        );
+    }
+    let oracle = rms(rows.iter().map(|r| r[5].static_ug));
+    for (k, name) in names.iter().enumerate() {
+        let st = rms(rows.iter().map(|r| r[k].static_ug));
+        let z: Vec<f64> = (0..3)
+            .map(|c| rms_z(rows.iter().map(|r| r[k].z2[c])))
+            .collect();
+        println!(
+            "{name:24} static {st:6.2} µg ({:.2}× the oracle)  lever {:6.1} µm  error/σ {:.2} {:.2} {:.2}",
+            st / oracle,
+            rms(rows.iter().map(|r| r[k].lever_um)),
+            z[0],
+            z[1],
+            z[2]
+        );
     }
 }

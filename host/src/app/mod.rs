@@ -18,6 +18,10 @@
 //!   ([`simulate::Simulation`]).
 //! - [`hand_gyro`]: the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`;
 //!   [`table_turn`]: the whole turns on a table that the gyro fit takes as known angles.
+//! - [`walk_source`]: the accelerometers' bias random walk taken from the unit's noise figures
+//!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
+//! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
+//!   (`host plan --check --bias-walk`).
 
 pub mod calibrate;
 pub mod document;
@@ -25,10 +29,12 @@ pub mod error;
 pub mod hand_gyro;
 pub mod in_memory;
 pub mod log_input;
+pub mod segment_order;
 #[cfg(test)]
 mod segmentation_tests;
 pub mod simulate;
 pub mod table_turn;
+pub mod walk_source;
 
 pub use calibrate::{
     calibrate_recording, calibrate_session_dir, mark_failed, settle_files, write_result,

@@ -50,6 +50,7 @@ pub(crate) const SUMMARY_JSON: &str = "summary.json";
 pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     // Checked before anything is read, created or started.
     a.estimator.refuse()?;
+    let estimate = a.estimator.options()?;
     if let Some(j) = a.jobs {
         if !(1..=MAX_JOBS).contains(&j) {
             return Err(CliError::Usage(format!(
@@ -72,7 +73,7 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     let staged = OutputDir::create(&a.out, a.force, SUMMARY_JSON)?;
     let sessions = find_sessions(&a.input).map_err(CliError::Batch)?;
     let opts = BatchOptions {
-        estimate: a.estimator.options(),
+        estimate,
         limits: a.limits,
         outlier_z: a.outlier_z,
         jobs: a.jobs,

@@ -95,7 +95,7 @@ pub struct CalibrateArgs {
 }
 
 /// The estimator's flags, shared by `host calibrate` and `host batch`.
-#[derive(Clone, Copy, Debug, Args)]
+#[derive(Clone, Debug, Args)]
 pub struct EstimatorArgs {
     /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
@@ -108,41 +108,84 @@ pub struct EstimatorArgs {
     /// (docs/model.md §4.7). A plan with package = "single" implies it.
     #[arg(long)]
     pub single_package: bool,
+    /// The bias random walk: --bias-walk, --bias-walk-estimate, --bias-walk-from.
+    #[command(flatten)]
+    pub walk: BiasWalkArgs,
+}
+
+/// The accelerometers' bias random walk (docs/model.md §11): given, estimated or the unit's own;
+/// shared by `host calibrate`, `host batch` and `host report` (whose session fit it weighs).
+#[derive(Clone, Debug, Default, Args)]
+pub struct BiasWalkArgs {
     /// The accelerometers' bias is a random walk of this strength, mg/√s (the Allan K of
     /// `host noise`, in mg): the segments are weighted with the walk's covariance across the
     /// session (docs/model.md §11). 0 is a constant bias, the default.
     #[arg(
         long,
         value_name = "MG_SQRT_S",
-        conflicts_with = "bias_walk_estimate",
+        conflicts_with_all = ["bias_walk_estimate", "bias_walk_from"],
         value_parser = limits::real(0.0, limits::MAX_BIAS_WALK_MG_SQRT_S)
     )]
     pub bias_walk: Option<f64>,
     /// The accelerometers' bias is a random walk whose strength is estimated from the session
     /// (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "bias_walk_from")]
     pub bias_walk_estimate: bool,
+    // The `[noise]` below is the TOML table's name in the --help text, not a link.
+    #[allow(rustdoc::broken_intra_doc_links)]
+    /// The accelerometers' bias is a random walk of the unit's own strength, per axis: the Allan K
+    /// of `host noise` (its noise.json) or a unit file's [noise] accel_bias_walk_mg_sqrt_s
+    /// (docs/model.md §11.3). Refused when the file holds none.
+    #[arg(long, value_name = "noise.json|UNIT_FILE")]
+    pub bias_walk_from: Option<PathBuf>,
+}
+
+impl BiasWalkArgs {
+    /// Whether any walk is asked for.
+    pub(crate) fn any(&self) -> bool {
+        self.bias_walk.is_some_and(|w| w > 0.0)
+            || self.bias_walk_estimate
+            || self.bias_walk_from.is_some()
+    }
+
+    /// The walk these flags ask for; `--bias-walk-from`'s file is read here.
+    pub(crate) fn walk(&self) -> Result<BiasWalk, CliError> {
+        Ok(
+            match (
+                &self.bias_walk_from,
+                self.bias_walk,
+                self.bias_walk_estimate,
+            ) {
+                (Some(path), _, _) => {
+                    BiasWalk::FromUnit(crate::app::walk_source::walk_from_file(path)?)
+                }
+                (None, _, true) => BiasWalk::Estimate,
+                (None, Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
+                _ => BiasWalk::Off,
+            },
+        )
+    }
 }
 
 impl EstimatorArgs {
     /// Refuses flags that cannot apply together, before any work: the bias walk weighs the joint
     /// fit's segments (docs/model.md §11), and `--method paper` is the paper's eq. 24 as published.
     pub(crate) fn refuse(&self) -> Result<(), CliError> {
-        let walk = self.bias_walk.is_some_and(|w| w > 0.0) || self.bias_walk_estimate;
-        if walk && self.method == MethodArg::Paper {
+        if self.walk.any() && self.method == MethodArg::Paper {
             return Err(CliError::Usage(
-                "--bias-walk and --bias-walk-estimate weigh the joint fit's segments with the \
-                 walk (docs/model.md §11); --method paper is the paper's eq. 24 as published: \
-                 leave one out"
+                "--bias-walk, --bias-walk-estimate and --bias-walk-from weigh the joint fit's \
+                 segments with the walk (docs/model.md §11); --method paper is the paper's eq. 24 \
+                 as published: leave one out"
                     .into(),
             ));
         }
         Ok(())
     }
 
-    /// The estimator options these flags ask for.
-    pub fn options(&self) -> EstimateOptions {
-        EstimateOptions {
+    /// The estimator options these flags ask for; `--bias-walk-from`'s file is read here.
+    pub fn options(&self) -> Result<EstimateOptions, CliError> {
+        let bias_walk = self.walk.walk()?;
+        Ok(EstimateOptions {
             method: match self.method {
                 MethodArg::Joint => Method::Joint,
                 MethodArg::Paper => Method::Paper,
@@ -152,13 +195,9 @@ impl EstimatorArgs {
                 ReferenceArg::Centroid => ReferenceChoice::Centroid,
             },
             single_package: self.single_package,
-            bias_walk: match (self.bias_walk, self.bias_walk_estimate) {
-                (_, true) => BiasWalk::Estimate,
-                (Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
-                _ => BiasWalk::Off,
-            },
+            bias_walk,
             ..EstimateOptions::default()
-        }
+        })
     }
 }
 
@@ -183,6 +222,8 @@ pub enum ReferenceArg {
 /// Runs `host calibrate`: live with `--port`, else from `--input`.
 pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     a.estimator.refuse()?;
+    // `--bias-walk-from`'s file, read before a device is opened or a session read.
+    a.estimator.options()?;
     if a.verbose && quiet {
         return Err(CliError::Usage(
             "--verbose does not apply with --quiet, which prints no tables: leave one out".into(),
@@ -196,11 +237,11 @@ pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
 }
 
 /// What `host calibrate`'s flags ask of the calibration: the estimator and the limits.
-pub(crate) fn calibrate_options(a: &CalibrateArgs) -> CalibrateOptions {
-    CalibrateOptions {
-        estimate: a.estimator.options(),
+pub(crate) fn calibrate_options(a: &CalibrateArgs) -> Result<CalibrateOptions, CliError> {
+    Ok(CalibrateOptions {
+        estimate: a.estimator.options()?,
         limits: a.limits,
-    }
+    })
 }
 
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write
@@ -223,7 +264,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
     let started = Instant::now();
     let (session, mut calibrated) =
-        app::calibrate_session_dir(input, &calibrate_options(a), &ReadOptions { quiet })?;
+        app::calibrate_session_dir(input, &calibrate_options(a)?, &ReadOptions { quiet })?;
     let read_s = started.elapsed().as_secs_f64();
     for w in &session.report.warnings {
         out.warn(w);
@@ -350,7 +391,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
     let mut opts = ProcedureOptions::new(plan, out_dir);
     opts.window_samples = a.window;
-    opts.calibrate = calibrate_options(a);
+    opts.calibrate = calibrate_options(a)?;
     opts.verify_tolerance_mg = verify_tolerance_mg;
     opts.verify_temp_c = a.verify_temp_c;
     opts.force = a.force;

@@ -103,6 +103,9 @@ pub enum CliError {
     /// The options that say how to read a logger's file do not fit together.
     #[error(transparent)]
     LogInput(#[from] crate::app::log_input::LogInputError),
+    /// `--bias-walk-from`: the walk could not be taken from the file.
+    #[error(transparent)]
+    WalkSource(#[from] crate::app::walk_source::WalkSourceError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
@@ -135,6 +138,7 @@ impl CliError {
         match self {
             CliError::Usage(_) | CliError::LogInput(_) => EXIT_USAGE,
             CliError::ChecksFailed(_) | CliError::VerificationFailed => EXIT_CHECK_FAILED,
+            CliError::WalkSource(e) if e.is_usage() => EXIT_USAGE,
             _ if self.is_option_not_for_input() => EXIT_USAGE,
             _ => EXIT_ERROR,
         }

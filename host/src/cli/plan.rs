@@ -95,6 +95,11 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         a.noise_mg, a.gyro_noise_deg_s
     ))?;
     out.human(crate::report::render_prediction(&prediction))?;
+    let advice = match a.bias_walk {
+        Some(k) if k > 0.0 => crate::app::segment_order::order_advice(&plan, &truth, &settings)?,
+        _ => Vec::new(),
+    };
+    print_advice(&advice, &out)?;
     let unit = prediction.output_unit.symbol();
     let parameters: Vec<_> = parameter_keys()
         .into_iter()
@@ -109,7 +114,7 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
             })
         })
         .collect();
-    out.document(&json!({
+    let mut doc = json!({
         "plan": a.check,
         "segments": plan.segments.len(),
         "sample_rate_hz": plan.sample_rate_hz,
@@ -123,8 +128,42 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "in_package_size_effect": prediction
             .single_package
             .then_some(crate::estimate::IN_PACKAGE_NOT_OBSERVABLE),
-    }))?;
+    });
+    if !advice.is_empty() {
+        doc["order_advice"] = json!(advice);
+    }
+    out.document(&doc)?;
     Ok(prediction)
+}
+
+/// The segment-order advice under the walk (docs/model.md §11.2), one paragraph each; nothing when
+/// no order helps.
+fn print_advice(
+    advice: &[crate::app::segment_order::OrderAdvice],
+    out: &Output,
+) -> Result<(), CliError> {
+    for v in advice {
+        let (b, f) = (&v.before, &v.after);
+        let pct = |x: f64, y: f64| 100.0 * (y / x - 1.0);
+        let cost = if v.added_s > 0.0 {
+            format!(" ({} s more)", v.added_s)
+        } else {
+            String::new()
+        };
+        out.line(format_args!(
+            "order under the walk: {}{cost}: worst bias 1σ {:.4} → {:.4} mg ({:+.0} %), worst \
+             scale 1σ {:.1} → {:.1} ppm ({:+.0} %)",
+            v.change,
+            b.worst_bias_sigma_mg,
+            f.worst_bias_sigma_mg,
+            pct(b.worst_bias_sigma_mg, f.worst_bias_sigma_mg),
+            b.worst_scale_sigma_ppm,
+            f.worst_scale_sigma_ppm,
+            pct(b.worst_scale_sigma_ppm, f.worst_scale_sigma_ppm),
+        ))?;
+        out.line(format_args!("  order: {}", v.order.join(", ")))?;
+    }
+    Ok(())
 }
 
 fn print_plan(plan: &Plan, out: &Output) -> Result<(), CliError> {

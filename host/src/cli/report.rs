@@ -30,11 +30,16 @@ pub struct ReportArgs {
     /// No PNG figures (SVG only).
     #[arg(long)]
     pub no_png: bool,
+    /// The session's own fit under a bias random walk (its strength and each segment's fitted bias
+    /// over the session in the report, docs/model.md §11).
+    #[command(flatten)]
+    pub walk: super::calibrate::BiasWalkArgs,
 }
 
 /// `host report`.
 pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     navigation_duration(a.duration_s)?;
+    let bias_walk = a.walk.walk()?;
     let calibration = match &a.calibration {
         Some(c) => c.clone(),
         None => default_calibration(&a.input),
@@ -46,6 +51,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
         rate_run: a.rate_run.clone(),
         ..ReportOptions::default()
     };
+    options.estimate.bias_walk = bias_walk;
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
     let out = super::output::Output { json: false, quiet };

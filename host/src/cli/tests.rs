@@ -62,13 +62,16 @@ fn the_command_line_is_well_formed() {
     else {
         panic!("not calibrate")
     };
-    assert_eq!(calibrate_options(&c).estimate.method, Method::Paper);
+    assert_eq!(
+        calibrate_options(&c).unwrap().estimate.method,
+        Method::Paper
+    );
     // The estimator's flags are one set, shared by calibrate and batch.
     let Command::Calibrate(c) = parse(&["calibrate", "--input", "x", "--single-package"]).command
     else {
         panic!("not calibrate")
     };
-    assert!(calibrate_options(&c).estimate.single_package);
+    assert!(calibrate_options(&c).unwrap().estimate.single_package);
     let Command::Batch(b) = parse(&[
         "batch",
         "--input",
@@ -83,7 +86,7 @@ fn the_command_line_is_well_formed() {
     else {
         panic!("not batch")
     };
-    let o = b.estimator.options();
+    let o = b.estimator.options().unwrap();
     assert!(o.single_package);
     assert_eq!(o.reference, crate::estimate::ReferenceChoice::Centroid);
     assert!(Cli::try_parse_from(["host", "calibrate", "--method", "best"]).is_err());

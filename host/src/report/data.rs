@@ -236,6 +236,9 @@ pub struct ReportData {
     pub session_fit_segments: Vec<SegmentRow>,
     /// The temperature figure, for a session whose own fit has a temperature model.
     pub temperature_figure: Option<super::plot::Figure>,
+    /// Each segment's fitted bias over the session's time, for a session fit under a bias random
+    /// walk (docs/model.md §11.4).
+    pub bias_walk_figure: Option<super::plot::Figure>,
     /// Warnings for the reader.
     pub warnings: Vec<String>,
     /// The calibration's three lever arms are one package's (docs/model.md §4.7): Table 3 shows the
@@ -417,6 +420,10 @@ pub fn build_report(
     let temperature_figure = session_fit.as_ref().ok().and_then(|o| {
         super::thermal::figure(o, Some(&super::thermal::soak_points(o, plan, stats)))
     });
+    let bias_walk_figure = session_fit
+        .as_ref()
+        .ok()
+        .and_then(super::figures::bias_walk_figure);
     let r = &cal.lever_arms.r_m;
     let single_package = (plan.package == Package::Single
         || session_fit.as_ref().is_ok_and(|o| o.single_package))
@@ -425,6 +432,7 @@ pub fn build_report(
     Ok(ReportData {
         single_package,
         temperature_figure,
+        bias_walk_figure,
         calibration: *cal,
         uncertainty: uncertainty.cloned(),
         unit_symbol: cal.statics.output_unit.symbol().to_string(),

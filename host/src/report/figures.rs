@@ -4,6 +4,7 @@
 use super::data::{Compensation, ReportData};
 use super::navigation::{Drift, NavigationRun};
 use super::plot::{Figure, Panel, Series, SeriesStyle};
+use crate::estimate::CalibrationOutcome;
 use shared::linalg;
 use shared::params::axis_name;
 
@@ -134,10 +135,53 @@ pub(crate) fn navigation_figure(run: &NavigationRun, stem: &str) -> Figure {
     }
 }
 
+/// The session fit's bias over the session (docs/model.md §11.4): each segment's fitted wander of
+/// the bias from the session's start against the middle of its span, mg, with its 1σ, one panel per
+/// axis; `None` when the fit assumed no walk.
+pub(crate) fn bias_walk_figure(o: &CalibrationOutcome) -> Option<Figure> {
+    let w = o.bias_walk.as_ref()?;
+    if o.bias_track.is_empty() {
+        return None;
+    }
+    let panels = (0..3)
+        .map(|j| Panel {
+            title: format!("{} bias wander from the start", axis_name(j)),
+            x_desc: "t (s)".into(),
+            y_desc: "mg".into(),
+            x_categories: None,
+            log_x: false,
+            log_y: false,
+            series: vec![Series {
+                label: "bias ± 1σ".into(),
+                points: o
+                    .bias_track
+                    .iter()
+                    .map(|p| (p.t_mid_s, p.bias_mg[j]))
+                    .collect(),
+                error: Some(o.bias_track.iter().map(|p| p.sigma_mg[j]).collect()),
+                style: SeriesStyle::Markers,
+                colour: 0,
+            }],
+        })
+        .collect();
+    let how = match w.sigma_mg_sqrt_s {
+        Some(sd) => format!("{:.5} ± {sd:.5} mg/√s, estimated", w.mg_sqrt_s),
+        None => format!("{:.5} mg/√s, {}", w.mg_sqrt_s, w.origin.word()),
+    };
+    Some(Figure {
+        stem: "bias_walk".into(),
+        title: format!("Bias over the session under a random walk of {how}"),
+        grid: (3, 1),
+        size: (1200, 1000),
+        panels,
+    })
+}
+
 /// All figures of a report: outputs, residuals, then one per navigation run.
 pub(crate) fn report_figures(data: &ReportData) -> Vec<Figure> {
     let mut v = vec![outputs_figure(data), residuals_figure(data)];
     v.extend(data.temperature_figure.clone());
+    v.extend(data.bias_walk_figure.clone());
     for (k, run) in data.navigation.iter().enumerate() {
         let stem = if k == 0 && run.rate_deg_s.abs() < 0.5 {
             "navigation_static".to_string()

@@ -364,6 +364,9 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
                     }
                 }
             )));
+            if let Some(w) = &o.bias_walk {
+                b.push(Block::Para(bias_walk_note(w)));
+            }
             b.push(Block::Pre(crate::report::render(
                 o,
                 &data.session_fit_segments,
@@ -373,4 +376,25 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
             "The session alone does not calibrate: {e}"
         ))),
     }
+}
+
+/// The walk the session fit assumed (docs/model.md §11.3): its strength, where it came from, and
+/// the strength the segments were weighted with.
+fn bias_walk_note(w: &crate::estimate::WalkEstimate) -> String {
+    let [x, y, z] = w.axes_mg_sqrt_s;
+    let source = match (w.origin, w.sigma_mg_sqrt_s) {
+        (_, Some(sd)) => format!(
+            "estimated from the session, {:.5} ± {sd:.5} mg/√s (1σ)",
+            w.mg_sqrt_s
+        ),
+        (crate::estimate::WalkOrigin::Unit, None) => {
+            format!("from the unit's noise figures, x {x:.5}, y {y:.5}, z {z:.5} mg/√s")
+        }
+        _ => format!("given, {:.5} mg/√s", w.mg_sqrt_s),
+    };
+    format!(
+        "Bias random walk (docs/model.md §11): {source}; the segments weighted with {:.5} mg/√s. \
+         The figure bias_walk shows each segment's fitted bias over the session with its 1σ.",
+        w.fit_mg_sqrt_s
+    )
 }

@@ -140,6 +140,7 @@ mod tests {
             passed: true,
             warnings: Vec::new(),
             in_package_size_effect: None,
+            bias_walk: None,
         };
         s.parameters = vec![
             param("bias_x", "m/s2", 5e-3 * g, Some(1e-4 * g)),

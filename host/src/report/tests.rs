@@ -434,3 +434,75 @@ fn an_empty_static_table_says_why() {
         .iter()
         .any(|b| matches!(b, Block::Heading(3, h) if h.starts_with("Rotating segments"))));
 }
+
+/// The session fit under a walk (docs/model.md §11.4): the report's `bias_walk` figure is the fit's
+/// own bias track, point for point with its 1σ as the bars, and the page names the walk's strength
+/// and source; the same session without a walk has no such figure, note or file, and its other
+/// figures are the same.
+#[test]
+fn the_bias_walk_figure_is_the_fits_track() {
+    let plan = short();
+    let truth = shared::params::PAPER_UNIT;
+    let noise = NoiseModel {
+        accel_bias_walk_mg_sqrt_s: 0.005,
+        ..NoiseModel::default()
+    };
+    let stats = simulate_stats(&truth, &plan, &noise, 5).unwrap();
+    let build = |walk: crate::estimate::BiasWalk| {
+        let options = ReportOptions {
+            estimate: EstimateOptions::default().with_bias_walk(walk),
+            ..ReportOptions::default()
+        };
+        build_report(&plan, &stats, &truth, None, None, &options).unwrap()
+    };
+    let with = build(crate::estimate::BiasWalk::Given(0.005));
+    let o = with.session_fit.as_ref().unwrap();
+    assert!(!o.bias_track.is_empty());
+    let fig = with
+        .bias_walk_figure
+        .as_ref()
+        .expect("a walk gives the figure");
+    assert_eq!(fig.panels.len(), 3);
+    for (j, panel) in fig.panels.iter().enumerate() {
+        let s = &panel.series[0];
+        assert_eq!(s.style, SeriesStyle::Markers);
+        assert_eq!(s.points.len(), o.bias_track.len());
+        for (k, p) in o.bias_track.iter().enumerate() {
+            assert_eq!(s.points[k], (p.t_mid_s, p.bias_mg[j]));
+            assert_eq!(s.error.as_ref().unwrap()[k], p.sigma_mg[j]);
+        }
+    }
+    // The segments are in time order over the session (the short plan runs 15 segments).
+    let t: Vec<f64> = o.bias_track.iter().map(|p| p.t_mid_s).collect();
+    assert!(t.windows(2).all(|w| w[0] < w[1]), "{t:?}");
+    let stems: Vec<String> = report_figures(&with)
+        .iter()
+        .map(|f| f.stem.clone())
+        .collect();
+    assert!(stems.contains(&"bias_walk".to_string()), "{stems:?}");
+    let md = super::markup::to_markdown(&page(&with, "s", "c", &stems));
+    assert!(
+        md.contains("Bias random walk (docs/model.md §11): given, 0.00500 mg/√s")
+            && md.contains("bias_walk.png"),
+        "{md}"
+    );
+    let without = build(crate::estimate::BiasWalk::Off);
+    assert!(without.bias_walk_figure.is_none());
+    let plain: Vec<String> = report_figures(&without)
+        .iter()
+        .map(|f| f.stem.clone())
+        .collect();
+    assert_eq!(
+        plain,
+        stems
+            .iter()
+            .filter(|s| *s != "bias_walk")
+            .cloned()
+            .collect::<Vec<_>>()
+    );
+    let md = super::markup::to_markdown(&page(&without, "s", "c", &plain));
+    assert!(
+        !md.contains("Bias random walk") && !md.contains("bias_walk"),
+        "{md}"
+    );
+}

@@ -51,13 +51,17 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
         o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
     );
     if let Some(w) = &o.bias_walk {
-        let how = match w.sigma_mg_sqrt_s {
-            Some(sd) => format!(
+        let how = match (w.sigma_mg_sqrt_s, w.origin) {
+            (Some(sd), _) => format!(
                 " ± {sd:.5} (1σ), estimated from the session; the segments weighted with \
                  √(K² + σ²) = {:.5}",
                 w.fit_mg_sqrt_s
             ),
-            None => " (given)".into(),
+            (None, crate::estimate::WalkOrigin::Unit) => {
+                let [x, y, z] = w.axes_mg_sqrt_s;
+                format!(" (the strongest axis; from the unit's noise figures: x {x:.5}, y {y:.5}, z {z:.5})")
+            }
+            (None, _) => " (given)".into(),
         };
         let _ = writeln!(
             s,

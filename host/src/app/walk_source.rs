@@ -1,0 +1,253 @@
+//! The accelerometers' bias random walk taken from the unit's own noise figures
+//! (`--bias-walk-from FILE`, docs/model.md §11.3): the Allan K of `host noise`'s `noise.json`, or a
+//! unit file's `[noise]` `accel_bias_walk_mg_sqrt_s`.
+//!
+//! Units: the fit wants the walk per axis either in mg/√s (turned into output units with the fitted
+//! scale factors) or in output unit/√s as it is. A unit file's `[noise]` is mg/√s already. A
+//! `noise.json` holds K in its axes' `unit` per √s: `m/s^2` (a recording in m/s² or g, or one analysed
+//! with `--calibration`) becomes mg/√s as `K / g₀ · 10³` with g₀ the standard gravity (a local g
+//! differs by at most 0.3 %, far inside K's own uncertainty); `output unit` (V or LSB, no
+//! calibration) is taken as it is.
+
+use crate::estimate::UnitWalk;
+use crate::noise::{NoiseReport, AXES};
+use crate::sim::{NoiseModel, SimulateError};
+use crate::unit_file::{UnitFile, UnitFileError};
+use std::path::{Path, PathBuf};
+
+/// Why the walk could not be taken from the file.
+#[derive(Debug, thiserror::Error)]
+pub enum WalkSourceError {
+    /// The file could not be read.
+    #[error("--bias-walk-from {}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A `.json` file that is not `host noise`'s `noise.json`.
+    #[error(
+        "--bias-walk-from {}: not a noise.json of `host noise` ({source})",
+        .path.display()
+    )]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A unit file that cannot be read.
+    #[error(transparent)]
+    Unit(#[from] UnitFileError),
+    /// A unit file whose `[noise]` table is not the simulator's noise model.
+    #[error("--bias-walk-from {}: {source}", .path.display())]
+    Noise {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: SimulateError,
+    },
+    /// The file holds no accelerometer bias random walk.
+    #[error(
+        "--bias-walk-from {}: the file holds no accelerometer bias random walk ({what}); measure \
+         it with `host noise --input STILL --out DIR` on a still recording (hours long for a walk \
+         to show) and give DIR/noise.json, or give the walk in mg/√s with --bias-walk",
+        .path.display()
+    )]
+    NoWalk {
+        /// The file.
+        path: PathBuf,
+        /// What is missing.
+        what: String,
+    },
+}
+
+impl WalkSourceError {
+    /// Whether the file was read but says nothing usable about the walk: a usage error (exit 2).
+    pub fn is_usage(&self) -> bool {
+        matches!(self, WalkSourceError::NoWalk { .. })
+    }
+}
+
+/// The walk per axis from `path`: a `noise.json` (by its `.json` name) or a unit file.
+pub(crate) fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
+        let text = std::fs::read_to_string(path).map_err(|source| WalkSourceError::Io {
+            path: path.into(),
+            source,
+        })?;
+        let report: NoiseReport =
+            serde_json::from_str(&text).map_err(|source| WalkSourceError::Json {
+                path: path.into(),
+                source,
+            })?;
+        return walk_from_noise(&report, path);
+    }
+    let unit = UnitFile::load(path)?;
+    let noise = NoiseModel::from_unit_file(&unit).map_err(|source| WalkSourceError::Noise {
+        path: path.into(),
+        source,
+    })?;
+    match noise {
+        Some(n) if n.accel_bias_walk_mg_sqrt_s > 0.0 => {
+            Ok(UnitWalk::MgSqrtS([n.accel_bias_walk_mg_sqrt_s; 3]))
+        }
+        Some(_) => Err(WalkSourceError::NoWalk {
+            path: path.into(),
+            what: "its [noise] table has no accel_bias_walk_mg_sqrt_s above 0".into(),
+        }),
+        None => Err(WalkSourceError::NoWalk {
+            path: path.into(),
+            what: "it has no [noise] table".into(),
+        }),
+    }
+}
+
+/// The accelerometer axes' Allan K of `host noise`, in the unit the fit takes (module docs).
+pub(crate) fn walk_from_noise(r: &NoiseReport, path: &Path) -> Result<UnitWalk, WalkSourceError> {
+    let no_walk = |what: String| WalkSourceError::NoWalk {
+        path: path.into(),
+        what,
+    };
+    let mut k = [0.0; 3];
+    let mut unit = None;
+    for (a, name) in AXES.iter().take(3).enumerate() {
+        let axis = r
+            .axes
+            .iter()
+            .find(|x| x.axis == *name)
+            .ok_or_else(|| no_walk(format!("no {name} axis")))?;
+        k[a] = match axis.terms.random_walk {
+            Some(v) if v.is_finite() && v > 0.0 => v,
+            _ => {
+                let needs = axis.terms.fits[2]
+                    .needs_recording_s
+                    .map_or(String::new(), |s| {
+                        format!(", at least {s:.0} s of still recording would")
+                    });
+                return Err(no_walk(format!(
+                    "{name}'s random walk K is not determined by that recording{needs}"
+                )));
+            }
+        };
+        if unit.is_some_and(|u: &str| u != axis.unit) {
+            return Err(no_walk(
+                "the accelerometer axes are in different units".into(),
+            ));
+        }
+        unit = Some(axis.unit.as_str());
+    }
+    match unit {
+        Some("m/s^2") => Ok(UnitWalk::MgSqrtS(
+            k.map(|k| k / shared::STANDARD_GRAVITY_M_S2 * 1e3),
+        )),
+        Some("output unit") => Ok(UnitWalk::OutputPerSqrtS(k)),
+        other => Err(no_walk(format!(
+            "its accelerometer unit {other:?} is neither m/s^2 nor the output unit"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::noise::allan::{NoiseTerms, TermFit};
+    use crate::noise::AxisNoise;
+
+    fn report(unit: &str, k: [Option<f64>; 3]) -> NoiseReport {
+        let axes = AXES
+            .iter()
+            .enumerate()
+            .map(|(j, name)| AxisNoise {
+                axis: (*name).into(),
+                unit: if j < 3 { unit.into() } else { "rad/s".into() },
+                points: Vec::new(),
+                terms: NoiseTerms {
+                    white_density: Some(1e-3),
+                    bias_instability: None,
+                    random_walk: if j < 3 { k[j] } else { None },
+                    fits: [
+                        TermFit::default(),
+                        TermFit::default(),
+                        TermFit {
+                            needs_recording_s: Some(7200.0),
+                            ..TermFit::default()
+                        },
+                    ],
+                },
+            })
+            .collect();
+        NoiseReport {
+            source: "still".into(),
+            segment: "still".into(),
+            sample_rate_hz: 200.0,
+            samples: 1000,
+            axes,
+            kalibr: Default::default(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// By hand: K = 9.80665·10⁻⁵ m/s²/√s is 10⁻⁵ g/√s, 0.01 mg/√s; 1.961 33·10⁻⁵ m/s²/√s is
+    /// 2·10⁻⁶ g/√s, 0.002 mg/√s. An Allan K of the raw outputs (V/√s) is taken as it is.
+    #[test]
+    fn an_allan_k_is_turned_into_mg_by_hand() {
+        let p = Path::new("noise.json");
+        let r = report(
+            "m/s^2",
+            [Some(9.80665e-5), Some(1.96133e-5), Some(9.80665e-6)],
+        );
+        let UnitWalk::MgSqrtS(mg) = walk_from_noise(&r, p).unwrap() else {
+            panic!("not in mg")
+        };
+        for (got, want) in mg.iter().zip([0.01, 0.002, 0.001]) {
+            assert!((got - want).abs() < 1e-15, "{mg:?}");
+        }
+        let raw = report("output unit", [Some(4e-6), Some(5e-6), Some(6e-6)]);
+        assert_eq!(
+            walk_from_noise(&raw, p).unwrap(),
+            UnitWalk::OutputPerSqrtS([4e-6, 5e-6, 6e-6])
+        );
+    }
+
+    /// An axis whose K the recording did not determine refuses, naming the axis, how long a
+    /// recording would determine it, and `host noise`.
+    #[test]
+    fn an_undetermined_k_is_refused() {
+        let r = report("m/s^2", [Some(1e-5), None, Some(1e-5)]);
+        let e = walk_from_noise(&r, Path::new("noise.json")).unwrap_err();
+        assert!(e.is_usage());
+        let m = e.to_string();
+        assert!(
+            m.contains("accel_y") && m.contains("7200 s") && m.contains("host noise"),
+            "{m}"
+        );
+    }
+
+    /// The file itself: a noise.json written as `host noise` writes it, and a unit file's `[noise]`.
+    #[test]
+    fn the_walk_is_read_from_either_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("noise.json");
+        let r = report("m/s^2", [Some(9.80665e-5); 3]);
+        std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
+        assert_eq!(walk_from_file(&json).unwrap(), UnitWalk::MgSqrtS([0.01; 3]));
+        let unit = dir.path().join("unit.toml");
+        let text = format!(
+            "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\n",
+            crate::unit_file::PAPER_UNIT_TOML
+        );
+        std::fs::write(&unit, text).unwrap();
+        assert_eq!(
+            walk_from_file(&unit).unwrap(),
+            UnitWalk::MgSqrtS([0.003; 3])
+        );
+    }
+}
