@@ -77,7 +77,7 @@ fn number_after(text: &str, key: &str) -> f64 {
         + key.len();
     text[at..]
         .trim_start()
-        .split(|c: char| c == ' ' || c == ',' || c == '°')
+        .split([' ', ',', '°'])
         .next()
         .unwrap()
         .parse()

@@ -297,23 +297,12 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if let Err(e) = &s.gyro {
         out.line(format_args!("gyro: not calibrated: {e}"))?;
     }
-    let step = crate::ui::step("drawing the segments' figure", out.quiet);
-    let fig = figure(&s.recording, &s.segmentation);
-    match plot::render(&fig, dir.path(), Formats::default()) {
-        Ok(o) => o
-            .warnings
-            .into_iter()
-            .for_each(|w| warn(out, &mut warnings, w)),
-        Err(e) => warn(out, &mut warnings, e.to_string()),
-    }
-    dir.commit()?;
-    step.finish_and_clear();
+    let stem = draw_and_commit(&s, dir, out, &mut warnings)?;
     out.line(format_args!(
-        "wrote {} ({} rows in {} static segments) and {}.svg; next: host calibrate --input {}",
+        "wrote {} ({} rows in {} static segments) and {stem}.svg; next: host calibrate --input {}",
         a.out.display(),
         rows,
         s.plan.segments.len(),
-        fig.stem,
         a.out.display()
     ))?;
     let written = Written {
@@ -337,6 +326,25 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         &written,
     ))?;
     Ok(outcome)
+}
+
+/// Draws the segments' figure into the session directory being built and moves the directory into
+/// place; the figure's name. A figure that cannot be drawn is a warning, not a lost session.
+fn draw_and_commit(
+    s: &SegmentedSession,
+    dir: OutputDir,
+    out: &Output,
+    warnings: &mut Vec<String>,
+) -> Result<String, CliError> {
+    let step = crate::ui::step("drawing the segments' figure", out.quiet);
+    let fig = figure(&s.recording, &s.segmentation);
+    match plot::render(&fig, dir.path(), Formats::default()) {
+        Ok(o) => o.warnings.into_iter().for_each(|w| warn(out, warnings, w)),
+        Err(e) => warn(out, warnings, e.to_string()),
+    }
+    dir.commit()?;
+    step.finish_and_clear();
+    Ok(fig.stem.to_string())
 }
 
 /// What reading the file left out or detected, on stderr (and into the JSON document's warnings).

@@ -12,10 +12,12 @@ use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 
 mod gravity;
+mod lines;
 pub mod time;
 use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
+use lines::{next_line, next_line_end, LineEnd};
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 pub use time::six_digits;
 pub use time::{detect_time_unit, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
@@ -370,91 +372,6 @@ pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording
     };
     let file = File::open(path).map_err(io)?;
     read_logger(BufReader::with_capacity(1 << 20, file), path, options)
-}
-
-/// Reads the next line (without its line end) into `buf`; `Ok(false)` at the end of the input.
-fn next_line<R: BufRead>(r: &mut R, buf: &mut Vec<u8>, line: u64) -> Result<bool, ImportError> {
-    match next_line_end(r, buf, line)? {
-        Some(LineEnd::Overlong) => Err(ImportError::LineTooLong { line }),
-        read => Ok(read.is_some()),
-    }
-}
-
-/// How a line read by [`next_line_end`] ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum LineEnd {
-    /// At its line end.
-    Ended,
-    /// At the end of the file (a cut-short recording's last line).
-    Unterminated,
-    /// Longer than [`MAX_LINE_BYTES`]: skipped up to its line end, `buf` empty (a damaged line).
-    Overlong,
-}
-
-/// How far past [`MAX_LINE_BYTES`] an overlong line is skipped to find its end; a file with no
-/// line end that far is not a logger's CSV (`/dev/zero`, a binary file).
-const MAX_SKIPPED_LINE_BYTES: u64 = 16 << 20;
-
-/// Skips to the next line end, reading at most [`MAX_SKIPPED_LINE_BYTES`]; `false` when the file
-/// or that limit ends first.
-fn skip_line<R: BufRead>(r: &mut R) -> std::io::Result<bool> {
-    let mut skipped = 0u64;
-    while skipped < MAX_SKIPPED_LINE_BYTES {
-        let buf = r.fill_buf()?;
-        if buf.is_empty() {
-            return Ok(false);
-        }
-        if let Some(i) = buf.iter().position(|&b| b == b'\n') {
-            r.consume(i + 1);
-            return Ok(true);
-        }
-        let n = buf.len();
-        r.consume(n);
-        skipped += n as u64;
-    }
-    Ok(false)
-}
-
-/// [`next_line`], saying how the line ended.
-fn next_line_end<R: BufRead>(
-    r: &mut R,
-    buf: &mut Vec<u8>,
-    line: u64,
-) -> Result<Option<LineEnd>, ImportError> {
-    let io = |source| ImportError::Io {
-        path: PathBuf::new(),
-        source,
-    };
-    buf.clear();
-    let n = r
-        .by_ref()
-        .take(MAX_LINE_BYTES as u64 + 1)
-        .read_until(b'\n', buf)
-        .map_err(|source| ImportError::Io {
-            path: PathBuf::new(),
-            source,
-        })?;
-    if n == 0 {
-        return Ok(None);
-    }
-    let ended = buf.last() == Some(&b'\n');
-    if ended {
-        buf.pop();
-    } else if buf.len() > MAX_LINE_BYTES {
-        buf.clear();
-        return match skip_line(r).map_err(io)? {
-            true => Ok(Some(LineEnd::Overlong)),
-            false => Err(ImportError::LineTooLong { line }),
-        };
-    }
-    if buf.last() == Some(&b'\r') {
-        buf.pop();
-    }
-    Ok(Some(if ended {
-        LineEnd::Ended
-    } else {
-        LineEnd::Unterminated
-    }))
 }
 
 /// The field separator: a comma, else a semicolon or tab if the header uses one, else white space
