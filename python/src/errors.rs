@@ -22,10 +22,10 @@ use host::export::ExportError;
 use host::noise::NoiseError;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
+use recording::output_file::OutputFileError;
 use recording::session::import::ImportError;
 use recording::session::logs::LogError;
 use recording::session::segment::SegmentError;
-use recording::output_file::OutputFileError;
 use recording::session::RecordingError;
 use std::path::PathBuf;
 
@@ -177,10 +177,12 @@ impl PyAccelErr {
                  or time base named above; to use the accelerometer alone, give no_gyro=True",
                 problems.join("\n  - ")
             ),
-            PyAccelErr::Apply(ApplyError::Guard(GuardError::NoTemperature { .. })) => "the calibration has a temperature \
+            PyAccelErr::Apply(ApplyError::Guard(GuardError::NoTemperature { .. })) => {
+                "the calibration has a temperature \
                  model but no temperature was given: give temp_c=C (one temperature, or one per \
                  row; the model's error grows with the distance from the real temperature)"
-                .to_string(),
+                    .to_string()
+            }
             PyAccelErr::Apply(
                 e @ (ApplyError::Guard(GuardError::RestRate { .. })
                 | ApplyError::GyroNeverAtRest { .. }),
