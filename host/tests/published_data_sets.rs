@@ -118,3 +118,44 @@ fn imu_tks_xsens_recording_segments_and_calibrates() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("verdict          PASS"), "{stdout}");
 }
+
+/// rosbag2's own test bags (`fixtures/logs/rosbag2.LICENSE`, Apache-2.0): ROS 2 bags that hold no
+/// IMU. Each is read and refused for that reason, naming the topics rosbag2's tests say it holds
+/// (`rosbag2_py/test/test_sequential_reader.py`: the talker bag's `rcl_interfaces/msg/Log`,
+/// `rcl_interfaces/msg/ParameterEvent` and `std_msgs/msg/String`; `rosbag2_tests`' cdr bag of
+/// `test_msgs/msg/BasicTypes` and `Arrays`), and the command that records an IMU.
+#[test]
+fn rosbag2s_test_bags_are_read_and_refused_for_holding_no_imu() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fixtures = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/logs");
+    for (bag, types) in [
+        (
+            "rosbag2-talker.mcap",
+            &[
+                "rcl_interfaces/msg/Log",
+                "rcl_interfaces/msg/ParameterEvent",
+                "std_msgs/msg/String",
+            ][..],
+        ),
+        (
+            "rosbag2-cdr_test_0.mcap",
+            &["test_msgs/msg/BasicTypes", "test_msgs/msg/Arrays"][..],
+        ),
+    ] {
+        let input = format!("{fixtures}/{bag}");
+        let (ok, _, stderr) = common::host_in(
+            Some(tmp.path()),
+            &["segment", "--input", &input, "--out", bag],
+        );
+        assert!(!ok, "{bag}");
+        assert!(stderr.contains("no sensor_msgs/msg/Imu topic"), "{stderr}");
+        for t in types {
+            assert!(stderr.contains(t), "{bag}: {t} not named: {stderr}");
+        }
+        assert!(stderr.contains("ros2 bag record"), "{stderr}");
+        assert!(
+            !tmp.path().join(bag).exists(),
+            "{bag}: a session was written"
+        );
+    }
+}
