@@ -164,6 +164,7 @@ pub(crate) fn joint(
                     name: plan.segments[segs[seg].plan_idx].name.clone(),
                     reason: ExclusionReason::AttitudeContradiction {
                         angle_deg: chord_to_angle_deg(err),
+                        prior_sigma_deg: plan.segments[segs[seg].plan_idx].attitude_sigma_deg,
                     },
                 });
                 problem.remove_segment(seg);

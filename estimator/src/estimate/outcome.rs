@@ -47,6 +47,9 @@ pub enum ExclusionReason {
     AttitudeContradiction {
         /// Angle between measured and planned "up", degrees.
         angle_deg: f64,
+        /// The segment's attitude prior (1σ, degrees), where the plan gives one (a hand-held
+        /// session's faces).
+        prior_sigma_deg: Option<f64>,
     },
 }
 
@@ -80,7 +83,19 @@ impl std::fmt::Display for ExclusionReason {
                 f,
                 "gyro reads {measured_deg_s:.2} °/s about up_b, the plan says {planned_deg_s:.2} °/s"
             ),
-            ExclusionReason::AttitudeContradiction { angle_deg } => write!(
+            ExclusionReason::AttitudeContradiction {
+                angle_deg,
+                prior_sigma_deg: Some(s),
+            } => write!(
+                f,
+                "measured attitude is {angle_deg:.2}° from the plan's up_b, beyond three times its \
+                 {s}° placement prior: the unit sat farther off that face than the prior allows \
+                 (`host segment --face-sigma-deg` sets it), or on another face"
+            ),
+            ExclusionReason::AttitudeContradiction {
+                angle_deg,
+                prior_sigma_deg: None,
+            } => write!(
                 f,
                 "measured attitude is {angle_deg:.2}° from the plan's up_b (wrong mount, or the plan's up_b is wrong)"
             ),

@@ -538,6 +538,7 @@ pub(crate) fn static_fit_with_attitude_check(
                     name: plan.segments[segs[seg].plan_idx].name.clone(),
                     reason: ExclusionReason::AttitudeContradiction {
                         angle_deg: super::chord_to_angle_deg(err),
+                        prior_sigma_deg: plan.segments[segs[seg].plan_idx].attitude_sigma_deg,
                     },
                 });
                 problem.remove_segment(seg);

@@ -6,6 +6,7 @@ use super::table_turn::find_table_turns;
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{
     fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, TableTurn, Turn, DETERMINED_1SIGMA,
+    MIN_EQUATIONS,
 };
 use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
 use crate::session::from_recording::stats_for;
@@ -60,6 +61,19 @@ pub fn fit(
     plan: &Plan,
     spelling: Spelling,
 ) -> Result<Result<HandGyroFit, HandGyroError>, HandGyroFileError> {
+    // Too few turns for any gyro: said before the accelerometer fit, which a gyro it cannot have
+    // must not wait on (or fail for).
+    let whole = find_table_turns(rec, seg)
+        .iter()
+        .filter(|f| f.used().is_some())
+        .count();
+    let hand = seg.stills.len().saturating_sub(1).saturating_sub(whole);
+    if 2 * hand + 3 * whole < MIN_EQUATIONS {
+        return Ok(Err(HandGyroError::TooFewTurns {
+            turns: hand,
+            table_turns: whole,
+        }));
+    }
     let stats = stats_for(rec, seg, plan);
     let options = EstimateOptions {
         compare_methods: false,
