@@ -32,36 +32,36 @@
 pub mod attitude;
 mod build;
 mod drift;
+#[cfg(test)]
+mod drift_tests;
 pub mod error;
 mod fit;
 mod fit_checks;
+#[cfg(test)]
+mod fixture_tests;
 pub mod gyro;
 pub mod gyro_check;
+#[cfg(test)]
+mod gyro_tests;
 pub mod handheld_gyro;
 mod joint;
 pub mod model;
 pub mod options;
 pub mod outcome;
 pub mod package;
+#[cfg(test)]
+mod package_tests;
 mod paper;
 mod paper_angles;
 pub mod plausibility;
 mod predict;
+#[cfg(test)]
+mod ramp_tests;
 mod screen;
 mod segment;
 mod solve;
 #[cfg(test)]
 mod tests;
-#[cfg(test)]
-mod tests_drift;
-#[cfg(test)]
-mod tests_fixture;
-#[cfg(test)]
-mod tests_gyro;
-#[cfg(test)]
-mod tests_package;
-#[cfg(test)]
-mod tests_ramp;
 pub mod thermal;
 mod thermal_gyro;
 mod thermal_misalignment;
