@@ -390,6 +390,13 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
             Everywhere("every segmented log is cut and bound with it"),
         ));
     }
+    t.push((
+        "segment",
+        "faces",
+        Everywhere(
+            "labels make the still positions a six-face session, or are refused by the data",
+        ),
+    ));
     for o in ["check", "noise-mg", "gyro-noise-deg-s", "unit"] {
         t.push(("plan", o, Everywhere("the plan check's inputs")));
     }

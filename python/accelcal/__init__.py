@@ -62,6 +62,7 @@ _LOG_KEYWORDS = (
 )
 _SESSION_KEYWORDS = (
     "min_still_s", "unit_id", "gravity", "latitude", "height_m", "no_gyro", "face_sigma_deg",
+    "faces",
 )
 
 
@@ -171,7 +172,8 @@ def segment(
     counts' zero force, one value or one per axis), ``gyro_lsb_per_dps`` (with
     ``gyro_unit="LSB"``). How to cut it, as ``site=SessionOptions(...)`` or its keywords:
     ``min_still_s``, ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``,
-    ``face_sigma_deg``.
+    ``face_sigma_deg``, ``faces`` (one label per still position in order, "x+" … "z-": a six-face
+    session checked against the data).
 
     C-contiguous float64 arrays are read in place (no copy); other layouts are converted once.
     """

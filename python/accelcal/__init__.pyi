@@ -66,6 +66,7 @@ class SessionOptions:
         height_m: Optional[float] = None,
         no_gyro: bool = False,
         face_sigma_deg: float = 2.0,
+        faces: Optional[Sequence[str]] = None,
     ) -> None: ...
     min_still_s: float
     unit_id: Optional[str]
@@ -74,6 +75,7 @@ class SessionOptions:
     height_m: Optional[float]
     no_gyro: bool
     face_sigma_deg: float
+    faces: Optional[List[str]]
 
 class Session:
     """A calibration session: plan, per-segment statistics and the hand-turn gyro."""
@@ -176,6 +178,7 @@ def segment(
     height_m: Optional[float] = None,
     no_gyro: bool = False,
     face_sigma_deg: float = 2.0,
+    faces: Optional[Sequence[str]] = None,
 ) -> Session:
     """Cuts a recording (two (n, 3) array-likes, or one DataFrame with named columns) into a
     session; the reading options as `log=` or keywords, the cutting options as `site=` or
@@ -203,6 +206,7 @@ def segment_file(
     height_m: Optional[float] = None,
     no_gyro: bool = False,
     face_sigma_deg: float = 2.0,
+    faces: Optional[Sequence[str]] = None,
 ) -> Session:
     """Cuts a logger's file into a session, as ``host segment`` does: text (the units and time
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes; ``instance`` and

@@ -154,9 +154,15 @@ impl PyAccelErr {
             | E::HandGyro(HandGyroFileError::Unit(_)) => Kind::Input,
             E::Log(LogError::Io { .. }) | E::Import(ImportError::Io { .. }) => Kind::File,
             E::Log(_) | E::Import(_) => Kind::Input,
-            // A vehicle's corrected samples are the wrong input; every other refusal of the
-            // segmentation (no still position, too few positions) is data that give no calibration.
-            E::Segment(InMemoryError::Segment(SegmentError::AlreadyCorrected(_))) => Kind::Input,
+            // A vehicle's corrected samples, or face labels the data contradict, are the wrong
+            // input; every other refusal of the segmentation (no still position, too few
+            // positions) is data that give no calibration.
+            E::Segment(InMemoryError::Segment(
+                SegmentError::AlreadyCorrected(_)
+                | SegmentError::FaceLabelCount { .. }
+                | SegmentError::FaceMissing(_)
+                | SegmentError::FaceLabelContradicted { .. },
+            )) => Kind::Input,
             E::Segment(_) | E::HandGyro(_) | E::Estimate(_) | E::Export(_) | E::Noise(_) => {
                 Kind::Calibration
             }

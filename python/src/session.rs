@@ -11,6 +11,7 @@ use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use recording::session::coverage::face_label;
 use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
 use recording::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
 use recording::session::logs::read_log;
@@ -296,13 +297,17 @@ pub struct SessionOptions {
     pub no_gyro: bool,
     /// A six-face session's prior on its faces, degrees.
     pub face_sigma_deg: f64,
+    /// The faces as the user labels them, one per still position in order (`x+` … `z-`).
+    pub faces: Option<Vec<String>>,
 }
 
 #[pymethods]
 impl SessionOptions {
     #[new]
     #[pyo3(signature = (*, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
-        height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG))]
+        height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG, faces = None))]
+    // One argument per Python keyword, as LogOptions' constructor.
+    #[allow(clippy::too_many_arguments)]
     fn new(
         min_still_s: f64,
         unit_id: Option<String>,
@@ -311,6 +316,7 @@ impl SessionOptions {
         height_m: Option<f64>,
         no_gyro: bool,
         face_sigma_deg: f64,
+        faces: Option<Vec<String>>,
     ) -> Self {
         SessionOptions {
             min_still_s,
@@ -320,6 +326,7 @@ impl SessionOptions {
             height_m,
             no_gyro,
             face_sigma_deg,
+            faces,
         }
     }
 
@@ -352,6 +359,21 @@ impl SessionOptions {
             (None, Some(lat)) => normal_gravity_m_s2(lat, self.height_m.unwrap_or(0.0)),
             (None, None) => shared::STANDARD_GRAVITY_M_S2,
         };
+        let faces = match &self.faces {
+            Some(labels) => Some(
+                labels
+                    .iter()
+                    .map(|l| {
+                        face_label(l).ok_or_else(|| {
+                            usage(format!(
+                                "faces: '{l}' is not a face; use \"x+\", \"x-\", \"y+\", \"y-\", \"z+\" or \"z-\""
+                            ))
+                        })
+                    })
+                    .collect::<PyResult<Vec<_>>>()?,
+            ),
+            None => None,
+        };
         Ok(SegmentChoices {
             segment: SegmentOptions {
                 min_still_s: self.min_still_s,
@@ -362,6 +384,7 @@ impl SessionOptions {
             gravity_m_s2,
             fit_gyro: !self.no_gyro,
             face_sigma_deg: self.face_sigma_deg,
+            faces,
         })
     }
 }

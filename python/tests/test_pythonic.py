@@ -219,3 +219,24 @@ def test_the_readme_installs_what_the_readme_uses():
     # The example uses pandas (a DataFrame): the extra is what brings it.
     code = "".join(re.findall(r"```python\n(.*?)```", readme, flags=re.S))
     assert "as_frame=True" in code or "import pandas" in code
+
+
+def test_faces_labelled_by_the_user_are_checked_against_the_data(host_bin, tmp_path):
+    # A cube on its six faces; the labels as the automatic labelling reads each still position.
+    run(host_bin, "-q", "simulate-hand", "--six-faces", "--out", str(tmp_path / "cube.csv"))
+    reading = dict(acc_unit="m/s2", gyro_unit="deg/s", time_column="t")
+    auto = accelcal.segment_file(tmp_path / "cube.csv", **reading)
+    ups = re.findall(r"up_b = \[([^\]]*)\]", auto.plan_toml())
+    labels = []
+    for up in ups:
+        v = [float(x) for x in up.split(",") if x.strip()]
+        j = max(range(3), key=lambda i: abs(v[i]))
+        labels.append("xyz"[j] + ("+" if v[j] > 0 else "-"))
+    assert len(labels) == 6, auto.plan_toml()
+    given = accelcal.segment_file(tmp_path / "cube.csv", faces=labels, **reading)
+    assert given.plan_toml() == auto.plan_toml()
+    swapped = [labels[1], labels[0]] + labels[2:]
+    with pytest.raises(accelcal.InputError, match="still interval 1 is labelled"):
+        accelcal.segment_file(tmp_path / "cube.csv", faces=swapped, **reading)
+    with pytest.raises(accelcal.InputError, match="'up' is not a face"):
+        accelcal.segment_file(tmp_path / "cube.csv", faces=["up"] * 6, **reading)

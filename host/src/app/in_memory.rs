@@ -9,7 +9,7 @@ use super::table_turn::{find_table_turns, FoundTableTurn};
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputFileError};
-use crate::session::coverage::{coverage, Coverage};
+use crate::session::coverage::{coverage, given_faces, Coverage};
 use crate::session::from_recording::{
     join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
 };
@@ -34,6 +34,9 @@ pub struct SegmentChoices {
     pub fit_gyro: bool,
     /// A six-face session's prior on its faces, degrees (`--face-sigma-deg`, docs/model.md §7.1).
     pub face_sigma_deg: f64,
+    /// The faces as the user labels them, one per still interval in order (`--faces`): a six-face
+    /// session whatever the automatic labelling finds, checked against the data.
+    pub faces: Option<Vec<(usize, f64)>>,
 }
 
 /// The first step: the recording, the reader's warnings, the intervals and their coverage, before
@@ -159,11 +162,16 @@ impl Found {
         let Found {
             recording,
             segmentation,
-            coverage,
+            mut coverage,
             mut warnings,
         } = self;
-        let position_set =
-            coverage.check(segmentation.stills.len(), choices.segment.same_position_deg)?;
+        let position_set = match &choices.faces {
+            Some(labels) => {
+                coverage.faces = Some(given_faces(&segmentation.stills, labels)?);
+                PositionSet::SixFaces
+            }
+            None => coverage.check(segmentation.stills.len(), choices.segment.same_position_deg)?,
+        };
         let (advice, mut plan) = match position_set {
             PositionSet::Spread => (coverage.advice(), plan_for(&recording, &segmentation)),
             PositionSet::SixFaces => (

@@ -46,6 +46,11 @@ pub struct SegmentArgs {
     /// default 2). Refused unless the still positions are found to be the six faces of a cube.
     #[arg(long, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
     pub face_sigma_deg: Option<f64>,
+    /// The six faces as you set the unit down, one label per still interval in the order found
+    /// (x+, x-, y+, y-, z+, z-; e.g. `z+,x+,y+,z-,x-,y-`): a six-face session, checked against the
+    /// data, whatever the automatic labelling finds.
+    #[arg(long, value_name = "LABELS", value_delimiter = ',', value_parser = face_label)]
+    pub faces: Option<Vec<(usize, f64)>>,
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
@@ -229,16 +234,7 @@ pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
 
 fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError> {
     let source = a.log.source(&a.input)?;
-    let choices = SegmentChoices {
-        segment: SegmentOptions {
-            min_still_s: a.min_still_s,
-            ..SegmentOptions::default()
-        },
-        unit_id: unit_and_site(a)?,
-        gravity_m_s2: site_gravity_m_s2(a),
-        fit_gyro: !a.no_gyro,
-        face_sigma_deg: face_sigma_deg(a),
-    };
+    let choices = choices(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let step = crate::ui::step(format!("reading {}", a.input.display()), out.quiet);
@@ -362,6 +358,27 @@ fn time_unit_note(out: &Output, rec: &Recording) {
 }
 
 /// The six-face prior, degrees: `--face-sigma-deg` or its default.
+/// How the log is cut, from the command line (the unit id and site checked).
+fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
+    Ok(SegmentChoices {
+        segment: SegmentOptions {
+            min_still_s: a.min_still_s,
+            ..SegmentOptions::default()
+        },
+        unit_id: unit_and_site(a)?,
+        gravity_m_s2: site_gravity_m_s2(a),
+        fit_gyro: !a.no_gyro,
+        face_sigma_deg: face_sigma_deg(a),
+        faces: a.faces.clone(),
+    })
+}
+
+/// One `--faces` label.
+fn face_label(text: &str) -> Result<(usize, f64), String> {
+    crate::session::coverage::face_label(text)
+        .ok_or_else(|| format!("'{text}' is not a face: use x+, x-, y+, y-, z+ or z-"))
+}
+
 fn face_sigma_deg(a: &SegmentArgs) -> f64 {
     a.face_sigma_deg
         .unwrap_or(crate::session::from_recording::SIX_FACE_PRIOR_DEG)

@@ -787,3 +787,68 @@ fn a_biased_mems_units_gyro_is_calibrated_from_two_rounds_of_faces() {
         }
     }
 }
+
+/// The faces as the user labels them (`--faces`, one per still in order, as imucal's users name
+/// their sections): the labels that match the data give the session the automatic labelling gives;
+/// two labels swapped are refused naming the still and its reading; a label too few is refused
+/// naming both counts.
+#[test]
+fn faces_labelled_by_the_user_are_checked_against_the_data() {
+    let mut truth = logger_unit(OutputUnit::MetresPerSecondSquared);
+    truth.statics.zero_bias_out = [0.6, -0.8, 0.9];
+    let spec = HandSpec::six_faces(7, 2.0, 1);
+    let sim = simulate_hand(&truth, &spec);
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().display();
+    write_logger_csv(
+        &tmp.path().join("raw.csv"),
+        &sim.rows,
+        &LoggerLayout::default(),
+    )
+    .unwrap();
+    // The true faces, from the simulator's holds.
+    let names = ["x", "y", "z"];
+    let labels: Vec<String> = sim
+        .holds
+        .iter()
+        .map(|(_, _, up)| {
+            let j = (0..3)
+                .max_by(|&a, &b| up[a].abs().total_cmp(&up[b].abs()))
+                .unwrap();
+            format!("{}{}", names[j], if up[j] > 0.0 { "+" } else { "-" })
+        })
+        .collect();
+    assert_eq!(labels.len(), 6);
+    let run = |out: &str, faces: &str| {
+        let faces = if faces.is_empty() {
+            String::new()
+        } else {
+            format!(" --faces {faces}")
+        };
+        segment(&segment_args(&format!(
+            "host segment -q --input {d}/raw.csv --out {d}/{out} --time-column t \
+             --acc-unit m/s2 --gyro-unit deg/s{faces}"
+        )))
+    };
+    let auto = run("auto", "").unwrap();
+    let given = run("given", &labels.join(",")).unwrap();
+    assert_eq!(given.plan, auto.plan);
+    let mut swapped = labels.clone();
+    swapped.swap(0, 1);
+    let e = run("swapped", &swapped.join(","))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("still interval 1 is labelled") && e.contains("check the labels' order"),
+        "{e}"
+    );
+    let e = run("short", &labels[..5].join(","))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("5 face label(s) given for 6 still interval(s)"),
+        "{e}"
+    );
+}

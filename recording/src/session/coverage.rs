@@ -80,14 +80,76 @@ pub fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
             (angle_deg(&d, &axis) < FACE_LABEL_DEG).then_some((j, d[j].signum()))
         })
         .collect::<Option<_>>()?;
+    checked_faces(stills, &labels).ok()
+}
+
+/// The six faces' names, in [`face_label`]'s order.
+const FACE_NAMES: [&str; 6] = ["x+", "x-", "y+", "y-", "z+", "z-"];
+
+/// A face's label (`x+` … `z-`, also `+x` or `x up`) as its axis and sign.
+pub fn face_label(text: &str) -> Option<(usize, f64)> {
+    let t = text.trim().to_ascii_lowercase().replace(' ', "");
+    let (axis, sign) = match t.as_str() {
+        "x+" | "+x" | "xup" => (0, 1.0),
+        "x-" | "-x" | "xdown" => (0, -1.0),
+        "y+" | "+y" | "yup" => (1, 1.0),
+        "y-" | "-y" | "ydown" => (1, -1.0),
+        "z+" | "+z" | "zup" => (2, 1.0),
+        "z-" | "-z" | "zdown" => (2, -1.0),
+        _ => return None,
+    };
+    Some((axis, sign))
+}
+
+/// The faces the user labelled (one label per still interval, in order; [`face_label`]),
+/// checked against the data as the found ones are: all six present, and every interval, with the
+/// faces' own biases and scales taken out, within [`SIX_FACE_DEG`] of its label.
+pub fn given_faces(
+    stills: &[Interval],
+    labels: &[(usize, f64)],
+) -> Result<Vec<[f64; 3]>, SegmentError> {
+    if labels.len() != stills.len() {
+        return Err(SegmentError::FaceLabelCount {
+            given: labels.len(),
+            found: stills.len(),
+        });
+    }
+    checked_faces(stills, labels).map_err(|e| match e {
+        FaceCheck::Missing(name) => SegmentError::FaceMissing(name),
+        FaceCheck::Off(k, angle_deg) => SegmentError::FaceLabelContradicted {
+            still: k + 1,
+            label: name_of(labels[k]),
+            direction: stills[k].direction,
+            angle_deg,
+        },
+    })
+}
+
+fn name_of((j, sign): (usize, f64)) -> &'static str {
+    FACE_NAMES[2 * j + usize::from(sign < 0.0)]
+}
+
+/// Why labelled faces do not hold.
+enum FaceCheck {
+    /// No interval is labelled this face.
+    Missing(&'static str),
+    /// Interval `k` is this far from its label (degrees), biases and scales taken out.
+    Off(usize, f64),
+}
+
+/// Each axis's bias and scale from the mean outputs of its two labelled faces, then every interval
+/// within [`SIX_FACE_DEG`] of its label with those taken out.
+fn checked_faces(stills: &[Interval], labels: &[(usize, f64)]) -> Result<Vec<[f64; 3]>, FaceCheck> {
     let mean = |j: usize, sign: f64| {
         let v: Vec<f64> = stills
             .iter()
-            .zip(&labels)
+            .zip(labels)
             .filter(|(_, l)| **l == (j, sign))
             .map(|(s, _)| s.mean_acc[j])
             .collect();
-        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+        (!v.is_empty())
+            .then(|| v.iter().sum::<f64>() / v.len() as f64)
+            .ok_or(FaceCheck::Missing(name_of((j, sign))))
     };
     let mut bias = [0.0; 3];
     let mut scale = [0.0; 3];
@@ -95,9 +157,6 @@ pub fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
         let (up, down) = (mean(j, 1.0)?, mean(j, -1.0)?);
         bias[j] = 0.5 * (up + down);
         scale[j] = 0.5 * (up - down);
-        if scale[j] <= 0.0 {
-            return None;
-        }
     }
     let faces: Vec<[f64; 3]> = labels
         .iter()
@@ -107,12 +166,19 @@ pub fn six_face_labels(stills: &[Interval]) -> Option<Vec<[f64; 3]>> {
             a
         })
         .collect();
-    let fits = stills.iter().zip(&faces).all(|(s, face)| {
-        let c: [f64; 3] = core::array::from_fn(|k| (s.mean_acc[k] - bias[k]) / scale[k]);
+    for (k, (s, face)) in stills.iter().zip(&faces).enumerate() {
+        let c: [f64; 3] = core::array::from_fn(|i| (s.mean_acc[i] - bias[i]) / scale[i]);
         let n = shared::linalg::norm(&c);
-        n > 0.0 && angle_deg(&c.map(|x| x / n), face) < SIX_FACE_DEG
-    });
-    fits.then_some(faces)
+        let off = if n > 0.0 && scale.iter().all(|&x| x > 0.0) {
+            angle_deg(&c.map(|x| x / n), face)
+        } else {
+            180.0
+        };
+        if off.is_nan() || off >= SIX_FACE_DEG {
+            return Err(FaceCheck::Off(k, off));
+        }
+    }
+    Ok(faces)
 }
 
 impl Coverage {

@@ -177,6 +177,42 @@ pub enum SegmentError {
         /// Which directions are missing, as text.
         faces: String,
     },
+    /// Face labels given for a number of still intervals other than the number found.
+    #[error(
+        "{given} face label(s) given for {found} still interval(s): give one label per still \
+         interval, in the order found (x+, x-, y+, y-, z+ or z-)"
+    )]
+    FaceLabelCount {
+        /// Labels given.
+        given: usize,
+        /// Still intervals found.
+        found: usize,
+    },
+    /// The labels given miss a face: an axis's bias and scale need both of its faces.
+    #[error(
+        "the face labels given have no {0}: each axis's bias and scale need both of its faces"
+    )]
+    FaceMissing(&'static str),
+    /// A still interval does not read as the face it is labelled, even with the faces' own biases
+    /// and scales taken out.
+    #[error(
+        "still interval {still} is labelled {label} but reads {angle_deg:.1}° from it once the \
+         faces' own biases and scales are taken out (at most {SIX_FACE_DEG}°): its direction is \
+         ({:+.3}, {:+.3}, {:+.3}); check the labels' order",
+        .direction[0],
+        .direction[1],
+        .direction[2]
+    )]
+    FaceLabelContradicted {
+        /// 1-based still interval.
+        still: usize,
+        /// Its label.
+        label: &'static str,
+        /// Its raw direction.
+        direction: [f64; 3],
+        /// The angle from its label, bias and scale removed, degrees.
+        angle_deg: f64,
+    },
 }
 
 /// Running sums for window statistics in O(1) per window.
