@@ -106,6 +106,10 @@ pub enum CliError {
     /// `--bias-walk-from`: the walk could not be taken from the file.
     #[error(transparent)]
     WalkSource(#[from] crate::app::walk_source::WalkSourceError),
+    /// The recording gives no session: no still interval, too few positions, face labels the
+    /// data contradict.
+    #[error(transparent)]
+    Segment(#[from] crate::session::segment::SegmentError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
@@ -164,7 +168,7 @@ impl From<crate::app::in_memory::InMemoryError> for CliError {
         match e {
             InMemoryError::GyroRefused(problems) => CliError::GyroRefused(problems),
             InMemoryError::HandGyro(e) => CliError::HandGyro(e),
-            e @ InMemoryError::Segment(_) => CliError::Failed(e.to_string()),
+            InMemoryError::Segment(e) => CliError::Segment(e),
         }
     }
 }

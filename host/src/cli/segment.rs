@@ -242,7 +242,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     step.finish_and_clear();
     time_unit_note(out, &log.recording);
     let step = crate::ui::step("finding the still intervals and the turns", out.quiet);
-    let found = find(log.recording, &choices).map_err(|e| CliError::Failed(e.to_string()))?;
+    let found = find(log.recording, &choices)?;
     step.finish_and_clear();
     let reader_warnings = found.warnings.len();
     let mut warnings = Vec::new();

@@ -33,9 +33,8 @@ pub fn analyse_log(
     calibration: Option<(&PlainMatrices, OutputUnit)>,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
-    let file = |m: String| NoiseError::File(path.to_path_buf(), m);
     let step = crate::ui::step(format!("reading {}", path.display()), quiet);
-    let log = read_log(path, source).map_err(|e| file(e.to_string()))?;
+    let log = read_log(path, source)?;
     step.finish_and_clear();
     let rec = &log.recording;
     let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);
@@ -48,8 +47,7 @@ pub fn analyse_log(
             unit,
         )?;
     }
-    let seg = find_intervals(rec, &SegmentOptions::default())
-        .map_err(|e| NoiseError::NoStillData(e.to_string()))?;
+    let seg = find_intervals(rec, &SegmentOptions::default()).map_err(NoiseError::NoStill)?;
     let best = seg
         .stills
         .iter()

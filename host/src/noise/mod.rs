@@ -52,6 +52,12 @@ pub enum NoiseError {
     /// No still segment with enough rows.
     #[error("no noise analysis possible: {0}")]
     NoStillData(String),
+    /// The logger's file could not be read.
+    #[error(transparent)]
+    Log(#[from] crate::session::logs::LogError),
+    /// The logger's file has no still interval to analyse.
+    #[error("no noise analysis possible: {0}")]
+    NoStill(#[source] crate::session::segment::SegmentError),
     /// A noise file could not be read or parsed.
     #[error("cannot use noise file {}: {}", .0.display(), .1)]
     File(PathBuf, String),
