@@ -15,12 +15,14 @@ step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
 rustup target add thumbv7em-none-eabihf >/dev/null
 rustup component add rustfmt clippy >/dev/null
 
-step "system packages the tests need: arm-none-eabi-gcc, newlib and QEMU for the C package's Cortex-M4F run"
+step "system packages the tests need: arm-none-eabi-gcc, newlib and QEMU for the C package's Cortex-M4F run, script(1)"
 packages=()
 command -v arm-none-eabi-gcc >/dev/null || packages+=(gcc-arm-none-eabi)
 # rdimon.specs (semihosting start-up and stdio) comes with newlib, not with the compiler.
 dpkg -s libnewlib-arm-none-eabi >/dev/null 2>&1 || packages+=(libnewlib-arm-none-eabi)
 command -v qemu-system-arm >/dev/null || packages+=(qemu-system-arm)
+# The progress test gives `host` a terminal with script(1) (util-linux's, in bsdutils).
+command -v script >/dev/null || packages+=(bsdutils)
 # The Python package's tests run in a fresh virtual environment (Debian splits venv/ensurepip out).
 python3 -c 'import ensurepip, venv' 2>/dev/null || packages+=(python3-venv)
 if [ ${#packages[@]} -gt 0 ]; then
