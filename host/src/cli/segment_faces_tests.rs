@@ -633,6 +633,26 @@ fn nine_position_hand_sessions_many_seeds() {
     }
 }
 
+/// A consumer MEMS unit (biases of 40–100 mg on every axis, seeded) turned over `rounds` times
+/// through its six faces, each set down 5° off its axis, written as the logger's CSV `dir/raw.csv`:
+/// the unit, the session's spec and the simulated session.
+fn biased_mems_faces(
+    dir: &Path,
+    seed: u64,
+    rounds: usize,
+) -> (Calibration, HandSpec, crate::sim::handheld::HandSession) {
+    let mut truth = logger_unit(OutputUnit::MetresPerSecondSquared);
+    let mut rng = testkit::Rng::new(seed, 91);
+    truth.statics.zero_bias_out = core::array::from_fn(|_| {
+        let mg = rng.range(40.0, 100.0) * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
+        mg * 1e-3 * truth.gravity_m_s2
+    });
+    let spec = HandSpec::six_faces(100 + seed, 5.0, rounds);
+    let sim = simulate_hand(&truth, &spec);
+    write_logger_csv(&dir.join("raw.csv"), &sim.rows, &LoggerLayout::default()).unwrap();
+    (truth, spec, sim)
+}
+
 /// A consumer MEMS unit's six faces: biases of 40–100 mg on every axis and each face set down 5°
 /// off its axis (one face's raw direction is then up to 13° from its axis, where a raw 5° test
 /// refused it). Found as six faces on every seed; held-out accuracy against the six-position fit
@@ -644,25 +664,11 @@ fn biased_mems_faces_five_degrees_off_are_found_and_calibrate() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(4);
-    let unit = OutputUnit::MetresPerSecondSquared;
     let mut rows = Vec::new();
     let mut worst_raw_deg: f64 = 0.0;
     for seed in 0..seeds {
-        let mut truth = logger_unit(unit);
-        let mut rng = testkit::Rng::new(seed, 91);
-        truth.statics.zero_bias_out = core::array::from_fn(|_| {
-            let mg = rng.range(40.0, 100.0) * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
-            mg * 1e-3 * truth.gravity_m_s2
-        });
-        let spec = HandSpec::six_faces(100 + seed, 5.0, 1);
-        let sim = simulate_hand(&truth, &spec);
         let tmp = tempfile::tempdir().unwrap();
-        write_logger_csv(
-            &tmp.path().join("raw.csv"),
-            &sim.rows,
-            &LoggerLayout::default(),
-        )
-        .unwrap();
+        let (truth, _, sim) = biased_mems_faces(tmp.path(), seed, 1);
         if seed == 0 {
             // With the default 2° prior the session is still written (one round's turns are too
             // few for a gyro, said before any fit), and calibrate names the faces the prior could
@@ -743,21 +749,8 @@ fn biased_mems_faces_five_degrees_off_are_found_and_calibrate() {
 #[test]
 fn a_biased_mems_units_gyro_is_calibrated_from_two_rounds_of_faces() {
     for seed in 0..3 {
-        let mut truth = logger_unit(OutputUnit::MetresPerSecondSquared);
-        let mut rng = testkit::Rng::new(seed, 91);
-        truth.statics.zero_bias_out = core::array::from_fn(|_| {
-            let mg = rng.range(40.0, 100.0) * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
-            mg * 1e-3 * truth.gravity_m_s2
-        });
-        let spec = HandSpec::six_faces(100 + seed, 5.0, 2);
-        let sim = simulate_hand(&truth, &spec);
         let tmp = tempfile::tempdir().unwrap();
-        write_logger_csv(
-            &tmp.path().join("raw.csv"),
-            &sim.rows,
-            &LoggerLayout::default(),
-        )
-        .unwrap();
+        let (_, spec, _) = biased_mems_faces(tmp.path(), seed, 2);
         let (out, _) = segment_and_calibrate(
             tmp.path(),
             "--acc-unit m/s2 --gyro-unit deg/s --face-sigma-deg 5",
