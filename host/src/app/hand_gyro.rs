@@ -63,15 +63,21 @@ pub fn fit(
 ) -> Result<Result<HandGyroFit, HandGyroError>, HandGyroFileError> {
     // Too few turns for any gyro: said before the accelerometer fit, which a gyro it cannot have
     // must not wait on (or fail for).
-    let whole = find_table_turns(rec, seg)
+    // (An upper bound on the turns the fit will use: `fit_handheld_gyro` applies the same rule to
+    // those that no time jump cuts.)
+    let whole: Vec<(usize, i32)> = find_table_turns(rec, seg)
         .iter()
-        .filter(|f| f.used().is_some())
-        .count();
-    let hand = seg.stills.len().saturating_sub(1).saturating_sub(whole);
-    if 2 * hand + 3 * whole < MIN_EQUATIONS {
+        .filter_map(|f| Some((f.after_still, f.used()?)))
+        .collect();
+    let hand = seg
+        .stills
+        .len()
+        .saturating_sub(1)
+        .saturating_sub(whole.len());
+    if 2 * hand + 3 * whole.len() < MIN_EQUATIONS {
         return Ok(Err(HandGyroError::TooFewTurns {
             turns: hand,
-            table_turns: whole,
+            table_turns: whole.len(),
         }));
     }
     let stats = stats_for(rec, seg, plan);
@@ -90,10 +96,6 @@ pub fn fit(
         f.map(|c| c / n)
     };
     let jumps = rec.jumps();
-    let whole: Vec<(usize, i32)> = find_table_turns(rec, seg)
-        .iter()
-        .filter_map(|f| Some((f.after_still, f.used()?)))
-        .collect();
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
