@@ -29,19 +29,15 @@
 use estimator::{calibration_files, estimate, sim, unit_file};
 use recording::{output_file, session};
 
+pub use outputs::{apply, calibration_guard, export, noise, report, summary};
+
 pub mod app;
-pub mod apply;
 pub mod batch;
-pub mod calibration_guard;
 pub mod cli;
 pub mod device;
-pub mod export;
 /// The parsers' fuzz targets: not in the shipped library or binary (feature `fuzz`, which the `fuzz/`
 /// crate and `--example fuzz` enable); the unit tests run their short seeded runs.
 #[cfg(any(test, feature = "fuzz"))]
 pub mod fuzz;
 pub mod limits;
-pub mod noise;
-pub mod report;
-pub mod summary;
 pub mod ui;

@@ -31,14 +31,6 @@ pub(crate) const MAX_BAUD: u32 = 12_000_000;
 /// Slowest serial link, baud.
 pub(crate) const MIN_BAUD: u32 = 300;
 
-/// Smallest pass/fail limit, tolerance, σ multiple or noise σ an option may give: a smaller one is
-/// zero in every printout and passes no real unit (and a σ of zero makes a prediction singular).
-pub(crate) const MIN_LIMIT: f64 = 1e-6;
-
-/// Largest pass/fail limit or σ multiple an option may give (a limit of a million mg, degrees-squared
-/// or σ checks nothing; a larger number is a typo).
-pub(crate) const MAX_LIMIT: f64 = 1e6;
-
 /// Largest simulated noise, drift or flicker level in mg or °/s: 10 g or 10 000 °/s of noise is no
 /// sensor any more.
 pub(crate) const MAX_SIM_NOISE: f64 = 1e4;

@@ -245,6 +245,14 @@ pub fn read_text_bounded(path: &Path) -> std::io::Result<String> {
     })
 }
 
+/// Smallest pass/fail limit, tolerance, σ multiple or noise σ an option may give: a smaller one is
+/// zero in every printout and passes no real unit (and a σ of zero makes a prediction singular).
+pub const MIN_LIMIT: f64 = 1e-6;
+
+/// Largest pass/fail limit or σ multiple an option may give (a limit of a million mg, degrees-squared
+/// or σ checks nothing; a larger number is a typo).
+pub const MAX_LIMIT: f64 = 1e6;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,7 +4,7 @@ use super::output::Output;
 use super::CliError;
 use crate::export::kalibr::KalibrNoise;
 use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
-use crate::output_file::{write_atomic, OutputFileError};
+use crate::output_file::write_atomic;
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use recording::spelling::Spelling;
@@ -165,22 +165,11 @@ fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Resu
                 .into(),
         )
     })?;
-    crate::export::check_exportable(&input.cal)?;
-    let files = crate::export::c::package(input)?;
-    if !a.force {
-        if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
-            return Err(CliError::Written(OutputFileError::Exists(dir.join(name))));
-        }
-    }
-    std::fs::create_dir_all(dir)
-        .map_err(|e| CliError::Written(OutputFileError::Io(dir.clone(), e)))?;
-    for (name, text) in &files {
-        write_atomic(&dir.join(name), text.as_bytes(), a.force).map_err(CliError::Written)?;
-    }
+    let files = crate::export::c::write_package(dir, input, a.force)?;
     Output { json: false, quiet }.line(format_args!(
         "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off); \
          example.c shows their use",
-        files.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+        files.join(", "),
         dir.display()
     ))?;
     Ok(())

@@ -696,35 +696,27 @@ fn compile_package(dir: &Path, flags: &[&str]) {
     );
 }
 
-/// Writes `cal` as a unit file into `dir` and exports its C package through the command's own `run`
-/// into `dir/pkg` (refused over it without --force, then forced), with [`PACKAGE_MAIN_C`] beside it
-/// as `main.c`; checks that the package is the six files and includes nothing else. Returns `dir/pkg`.
+/// Exports `cal`'s C package with [`write_package`] into `dir/pkg` (refused over it without
+/// `force`, then forced), with [`PACKAGE_MAIN_C`] beside it as `main.c`; checks that the package is
+/// the six files and includes nothing else, and that the one-file format is the package's own
+/// header. Returns `dir/pkg`.
 fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
-    use crate::cli::export::{run as export, ExportArgs};
+    use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
     let unit_id = UnitId::parse_hex("a1b2c3d4e5f60718293a4b5c").unwrap();
-    let toml = UnitFile::from_calibration(cal, Some(unit_id), None).to_toml();
-    let cal_path = dir.join("calibration.toml");
-    std::fs::write(&cal_path, toml).unwrap();
-    let out = dir.join("pkg");
-    let args = |force| ExportArgs {
-        calibration: cal_path.clone(),
-        format: crate::export::ExportFormat::C,
-        out: Some(out.clone()),
-        force,
+    let unit = UnitFile::from_calibration(cal, Some(unit_id), None);
+    let input = ExportInput {
+        unit: &unit,
+        cal: cal.clone(),
         noise: None,
-        rostopic: None,
-        driver_scale: None,
-        device_id: None,
-        gyro_device_id: None,
-        sysid: None,
-        compid: None,
-        allow_out_of_range: false,
-        allow_undetermined: false,
+        rostopic: "/imu0",
+        driver_scale_m_s2_per_out: None,
+        options: ExportOptions::default(),
     };
-    export(&args(false), true).unwrap();
-    // Never over an existing package without --force.
-    assert!(export(&args(false), true).is_err());
-    export(&args(true), true).unwrap();
+    let out = dir.join("pkg");
+    super::write_package(&out, &input, false).unwrap();
+    // Never over an existing package without force.
+    assert!(super::write_package(&out, &input, false).is_err());
+    super::write_package(&out, &input, true).unwrap();
     let mut written: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
@@ -746,19 +738,8 @@ fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
     for inc in header.lines().filter_map(|l| l.strip_prefix("#include \"")) {
         assert!(written.iter().any(|w| inc.starts_with(w.as_str())), "{inc}");
     }
-    // The one-file format writes one file, the package's own header, where --out says.
-    let one = dir.join("cal.h");
-    export(
-        &ExportArgs {
-            format: crate::export::ExportFormat::CHeader,
-            out: Some(one.clone()),
-            ..args(false)
-        },
-        true,
-    )
-    .unwrap();
-    assert!(one.is_file(), "{} is not a file", one.display());
-    assert_eq!(std::fs::read_to_string(&one).unwrap(), header);
+    // The one-file format is the package's own header.
+    assert_eq!(render(&input, ExportFormat::CHeader).unwrap(), header);
     std::fs::write(out.join("main.c"), PACKAGE_MAIN_C).unwrap();
     out
 }

@@ -17,7 +17,7 @@ use std::path::Path;
 /// and no segments: the output unit and the temperature are checked as for a session, the ω̇
 /// estimate restarts at every gap in the time stamps (more than five periods), and the still
 /// intervals found in the log must compensate to 1 g (and rest, with a gyro calibration).
-pub(crate) fn apply_log(
+pub fn apply_log(
     path: &Path,
     source: &LogSource,
     cal: &Calibration,

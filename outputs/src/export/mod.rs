@@ -137,6 +137,9 @@ pub enum ExportError {
     /// The calibration file has no valid unit id, which the blob needs.
     #[error("cannot export the calibration's blob: {0}")]
     UnitId(String),
+    /// A file of the export could not be written (or exists, without `--force`).
+    #[error(transparent)]
+    Written(#[from] crate::output_file::OutputFileError),
     /// Serialising failed.
     #[error("cannot export the calibration: {0}")]
     Serialise(String),

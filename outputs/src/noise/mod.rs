@@ -396,7 +396,7 @@ pub fn analyse(
 
 /// [`analyse`] of a bare samples.csv held in memory (`host::fuzz`'s `noise_csv` target).
 #[cfg(any(test, feature = "fuzz"))]
-pub(crate) fn analyse_csv_bytes(
+pub fn analyse_csv_bytes(
     data: &[u8],
     calibration: Option<&PlainMatrices>,
 ) -> Result<NoiseReport, NoiseError> {

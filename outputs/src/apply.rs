@@ -20,7 +20,7 @@
 
 mod log;
 
-pub(crate) use log::apply_log;
+pub use log::apply_log;
 pub use log::Prepared;
 
 use crate::calibration_guard::{
@@ -215,7 +215,7 @@ pub struct ApplySummary {
 
 /// How the calibration's unit id binds it to a recording.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum UnitBinding {
+pub enum UnitBinding {
     /// The calibration's id (`None`: it has none), checked against the recording's.
     Bound(Option<UnitId>),
     /// The calibration's id, not checked (`--ignore-unit-id`): refused where the ids do not differ.
@@ -243,7 +243,7 @@ impl UnitBinding {
 }
 
 /// The calibration's side of a meeting with a recording.
-pub(crate) fn mine(cal: &Calibration, unit_id: Option<UnitId>) -> Mine<'_> {
+pub fn mine(cal: &Calibration, unit_id: Option<UnitId>) -> Mine<'_> {
     Mine {
         name: "the calibration",
         cal,
@@ -253,7 +253,7 @@ pub(crate) fn mine(cal: &Calibration, unit_id: Option<UnitId>) -> Mine<'_> {
 
 /// A session's side of a meeting: its plan's unit id, output unit, frame and temperatures
 /// (`assume_temp_c`: a temperature given to assume).
-pub(crate) fn recording(plan: &Plan, assume_temp_c: Option<f64>) -> Other<'static> {
+pub fn recording(plan: &Plan, assume_temp_c: Option<f64>) -> Other<'static> {
     Other {
         name: "the recording",
         unit_id: plan.unit_id.clone(),
@@ -356,7 +356,7 @@ fn output_line(
 /// `assume_temp_c` is the temperature of a recording without one. The meeting is checked first
 /// ([`crate::calibration_guard::meet`]); the still segments are then checked to compensate to 1 g
 /// ([`MAX_STILL_G_ERROR`]).
-pub(crate) fn apply_session(
+pub fn apply_session(
     dir: &Path,
     cal: &Calibration,
     unit: UnitBinding,

@@ -44,6 +44,28 @@ pub const EXAMPLE_C: &str = include_str!("c/example.c");
 /// The name of the constants header in the package.
 pub(crate) const HEADER_NAME: &str = "acal_calibration.h";
 
+/// Writes [`package`] into `dir`, every file atomically; nothing is written when one would replace
+/// an existing file without `force`. Returns the names written.
+pub fn write_package(
+    dir: &std::path::Path,
+    input: &ExportInput<'_>,
+    force: bool,
+) -> Result<Vec<&'static str>, ExportError> {
+    use crate::output_file::{write_atomic, OutputFileError};
+    super::check_exportable(&input.cal)?;
+    let files = package(input)?;
+    if !force {
+        if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
+            return Err(OutputFileError::Exists(dir.join(name)).into());
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| OutputFileError::Io(dir.to_path_buf(), e))?;
+    for (name, text) in &files {
+        write_atomic(&dir.join(name), text.as_bytes(), force)?;
+    }
+    Ok(files.iter().map(|(n, _)| *n).collect())
+}
+
 /// The files of the C package `export --format c --out DIR` writes: the constants header, the
 /// decoder, the device's per-sample correction and [`EXAMPLE_C`], self-contained (the header includes
 /// only them).

@@ -78,7 +78,7 @@ pub fn temperature_keys() -> Vec<String> {
 
 /// Every key a summary can have, in order: [`parameter_keys`], [`gyro_keys`], [`temperature_keys`]
 /// (the lot summary's columns).
-pub(crate) fn all_parameter_keys() -> Vec<String> {
+pub fn all_parameter_keys() -> Vec<String> {
     let mut v = parameter_keys();
     v.extend(gyro_keys());
     v.extend(temperature_keys());
@@ -201,7 +201,7 @@ pub struct TemperatureRange {
 }
 
 /// Units of the paper-form values, in order.
-pub(crate) fn parameter_unit(index: usize, output_unit: &str) -> String {
+pub fn parameter_unit(index: usize, output_unit: &str) -> String {
     match index {
         0..=2 => output_unit.to_string(),
         3..=5 => format!("{output_unit}/g"),
@@ -498,7 +498,7 @@ impl CalibrationSummary {
 /// `--max-misalignment-deg` in `[MIN_LIMIT, 90]`, `--max-chi2-per-dof`, `--max-bias-mg` and
 /// `--max-bias-sigma-mg` in `[MIN_LIMIT, MAX_LIMIT]`. A command that flattens the limits applies it to its
 /// arguments with `#[command(mut_args(summary::pass_fail_limits))]`; other arguments pass unchanged.
-pub(crate) fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
+pub fn pass_fail_limits(arg: clap::Arg) -> clap::Arg {
     match arg.get_id().as_str() {
         "max_misalignment_deg" => arg.value_parser(limits::real(limits::MIN_LIMIT, 90.0)),
         "max_chi2_per_dof" | "max_bias_mg" | "max_bias_sigma_mg" => {

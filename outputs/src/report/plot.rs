@@ -6,7 +6,7 @@
 //!
 //! Text needs a font. plotters is built without `font-kit` (no system font libraries), with `ab_glyph`
 //! and one TrueType font compiled into the binary ([`EMBEDDED_FONT`], DejaVu Sans, licence beside it
-//! in `host/assets/fonts/`): every machine draws the same PNG and SVG, and nothing is looked up on the
+//! in `outputs/assets/fonts/`): every machine draws the same PNG and SVG, and nothing is looked up on the
 //! file system or in the environment.
 
 use plotters::coord::Shift;
@@ -18,7 +18,7 @@ use super::axes::{decades, draw_legend, draw_markers, marker_shape, LABEL_PX};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-/// DejaVu Sans (Bitstream Vera licence, `host/assets/fonts/LICENSE-DejaVu.txt`), the figures' only
+/// DejaVu Sans (Bitstream Vera licence, `outputs/assets/fonts/LICENSE-DejaVu.txt`), the figures' only
 /// font: embedded so that a machine without fonts draws the same figures as any other.
 pub static EMBEDDED_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 

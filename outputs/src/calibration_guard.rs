@@ -256,7 +256,7 @@ impl Frame {
 
 /// The temperatures a recording gives a temperature model.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Temperatures {
+pub enum Temperatures {
     /// None recorded, none to assume.
     None,
     /// Recorded (a `temp_c` column); `assumed`: a temperature also given to assume.
@@ -270,28 +270,28 @@ pub(crate) enum Temperatures {
 
 /// The calibration's side of a meeting.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Mine<'a> {
+pub struct Mine<'a> {
     /// As the messages name it ("the calibration", "A (a.toml)").
-    pub(crate) name: &'a str,
+    pub name: &'a str,
     /// The calibration.
-    pub(crate) cal: &'a Calibration,
+    pub cal: &'a Calibration,
     /// Its unit id (`None`: it has none).
-    pub(crate) unit_id: Option<UnitId>,
+    pub unit_id: Option<UnitId>,
 }
 
 /// What the calibration meets, as far as the checks need it (`None`: the side has no such thing).
 #[derive(Clone, Debug)]
-pub(crate) struct Other<'a> {
+pub struct Other<'a> {
     /// As the messages name it ("the recording", "the device", "B (b.toml)").
-    pub(crate) name: &'a str,
+    pub name: &'a str,
     /// Its unit id, as it gives it.
-    pub(crate) unit_id: Option<String>,
+    pub unit_id: Option<String>,
     /// Its output unit.
-    pub(crate) output_unit: Option<OutputUnit>,
+    pub output_unit: Option<OutputUnit>,
     /// Its body frame.
-    pub(crate) frame: Option<Frame>,
+    pub frame: Option<Frame>,
     /// Its temperatures.
-    pub(crate) temperatures: Temperatures,
+    pub temperatures: Temperatures,
 }
 
 /// Why a calibration cannot meet what it meets. Each names both sides and the fix.
@@ -391,7 +391,7 @@ pub enum GuardError {
 
 /// Runs every check the table ([`verdict`]) applies at `meeting` but the gyro's rest (which needs
 /// the data: `check_rest_rate`), in the order of [`Check::ALL`].
-pub(crate) fn meet(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(), GuardError> {
+pub fn meet(meeting: Meeting, mine: &Mine, other: &Other) -> Result<(), GuardError> {
     for check in Check::ALL {
         if verdict(meeting, check) != Verdict::Checked {
             continue;
