@@ -22,7 +22,7 @@ for p in m["packages"]:
 
 echo
 echo "public items per crate (non-test sources; pub, not pub(crate)):"
-for krate in shared recording estimator host; do
+for krate in shared recording estimator outputs app device host; do
   n=$(find "$krate/src" -name '*.rs' ! -name '*tests*.rs' -print0 |
     xargs -0 awk 'FNR == 1 { skip = 0 } /^#\[cfg\(test\)\]/ { t = 1; next } t && /^(pub(\(crate\))? )?mod [a-z_]+ \{/ { skip = 1 } { t = 0 } !skip && /^[[:space:]]*pub (fn|struct|enum|const|static|mod|use|trait|type|unsafe fn|async fn)[[:space:]]|^[[:space:]]*pub [a-z_0-9]+:/ { n++ } END { print n + 0 }' |
     awk '{ s += $1 } END { print s }')

@@ -1,5 +1,5 @@
 //! The README's layout table and each module's own map name every source file of the PC crates'
-//! module folders (`host/src`, `estimator/src`, `recording/src`), so that a reader who looks a piece up by its name
+//! module folders (the src of each PC crate but `shared`), so that a reader who looks a piece up by its name
 //! finds it.
 
 use std::path::Path;
@@ -24,15 +24,34 @@ fn readme_and_module_maps_name_every_file() {
     let readme = std::fs::read_to_string(root.join("../README.md")).unwrap();
     let layout = &readme[readme.find("## Layout").unwrap()..];
     let mut missing = Vec::new();
-    for krate in ["host", "estimator", "recording"] {
+    for krate in ["host", "device", "app", "outputs", "estimator", "recording"] {
         missing.extend(unnamed(&root.join("..").join(krate), krate, layout));
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
 
-/// What `krate`'s module maps and the README's rows for its folders do not name.
+/// What `krate`'s module maps and the README's rows for its folders do not name: the crate root's
+/// map (`lib.rs`) names each top-level module, and each folder's `mod.rs` the files in it.
 fn unnamed(crate_dir: &Path, krate: &str, layout: &str) -> Vec<String> {
     let mut missing = Vec::new();
+    let lib = std::fs::read_to_string(crate_dir.join("src/lib.rs")).unwrap();
+    let lib_doc: String = lib.lines().take_while(|l| l.starts_with("//!")).collect();
+    let root_row = layout
+        .lines()
+        .find(|l| l.starts_with(&format!("| `{krate}/src/` |")));
+    for m in modules(&crate_dir.join("src")) {
+        if ["lib", "main"].contains(&m.as_str()) {
+            continue;
+        }
+        if !lib_doc.contains(&format!("`{m}`")) {
+            missing.push(format!("{krate}/src/lib.rs's module map does not name {m}"));
+        }
+        if root_row.is_some_and(|row| !row.contains(&format!("`{m}.rs`"))) {
+            missing.push(format!(
+                "README's layout row for {krate}/src/ does not name {m}.rs"
+            ));
+        }
+    }
     for entry in std::fs::read_dir(crate_dir.join("src")).unwrap() {
         let dir = entry.unwrap().path();
         let Ok(map) = std::fs::read_to_string(dir.join("mod.rs")) else {

@@ -40,7 +40,7 @@ use std::path::Path;
 /// Largest relative difference of a still segment's compensated |f| from 1 g for a calibration to
 /// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
 /// by tens of percent or by a factor.
-pub(crate) const MAX_STILL_G_ERROR: f64 = 0.05;
+pub const MAX_STILL_G_ERROR: f64 = 0.05;
 
 /// The header of the output, exactly.
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";

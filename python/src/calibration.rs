@@ -3,16 +3,16 @@
 
 use crate::errors::{usage, IntoPy, PyAccelErr};
 use crate::session::Session;
+use app::{self, CalibrateOptions, CalibrationDocument, Recording};
 use clap::ValueEnum;
 use estimator::calibration_files::{
     blob_bytes, calibration_unit_file, now_unix_s, write_calibration_files,
 };
 use estimator::estimate::{CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use estimator::unit_file::{UnitFile, UnitFileError};
-use host::app::{self, CalibrateOptions, CalibrationDocument, Recording};
-use host::export::{render, ExportError, ExportFormat, ExportInput, ExportOptions};
-use host::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
 use numpy::{PyArray1, PyArray2};
+use outputs::export::{render, ExportError, ExportFormat, ExportInput, ExportOptions};
+use outputs::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use recording::spelling::Spelling;
@@ -288,7 +288,7 @@ impl Calibration {
     ) -> PyResult<Bound<'py, PyAny>> {
         let format = export_format(format)?;
         let noise = match &noise {
-            Some(p) => Some(host::noise::load_kalibr_noise(p).py_err()?),
+            Some(p) => Some(outputs::noise::load_kalibr_noise(p).py_err()?),
             None => None,
         };
         let input = ExportInput {
@@ -308,8 +308,7 @@ impl Calibration {
             },
         };
         if format == ExportFormat::C {
-            host::export::check_exportable(&input.cal).py_err()?;
-            let files = host::export::c::package(&input).py_err()?;
+            let files = outputs::export::c::package(&input).py_err()?;
             let d = PyDict::new(py);
             for (name, text) in files {
                 d.set_item(name, text)?;

@@ -8,18 +8,18 @@
 //! keyword spelling ([`recording::spelling::Spelling::Keywords`]); the few refusals whose text is
 //! the command line's own are said here in Python's words ([`PyAccelErr::python_message`]).
 
+use app::hand_gyro::HandGyroFileError;
+use app::in_memory::{InMemoryError, WriteError};
+use app::log_input::LogInputError;
+use app::simulate::SimulationError;
+use app::CalibrateError;
 use estimator::calibration_files::OutputError;
 use estimator::estimate::EstimateError;
 use estimator::unit_file::UnitFileError;
-use host::app::hand_gyro::HandGyroFileError;
-use host::app::in_memory::{InMemoryError, WriteError};
-use host::app::log_input::LogInputError;
-use host::app::simulate::SimulationError;
-use host::app::CalibrateError;
-use host::apply::ApplyError;
-use host::calibration_guard::GuardError;
-use host::export::ExportError;
-use host::noise::NoiseError;
+use outputs::apply::ApplyError;
+use outputs::calibration_guard::GuardError;
+use outputs::export::ExportError;
+use outputs::noise::NoiseError;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use recording::output_file::OutputFileError;

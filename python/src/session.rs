@@ -1,12 +1,12 @@
 //! `segment`, `segment_file`, `load_session` and the `Session` they give: a hand-held recording cut
-//! into still positions by `host segment`'s own steps (`host::app::in_memory`), or a recorded
+//! into still positions by `host segment`'s own steps (`app::in_memory`), or a recorded
 //! session directory read by `host calibrate --input`'s reader.
 
 use crate::errors::{usage, IntoPy, PyAccelErr};
+use app::hand_gyro;
+use app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
+use app::log_input::LogInput;
 use estimator::estimate::gyro::GyroEstimate;
-use host::app::hand_gyro;
-use host::app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
-use host::app::log_input::LogInput;
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;

@@ -4,15 +4,15 @@
 use crate::calibration::{choose, Calibration};
 use crate::errors::{usage, IntoPy};
 use crate::session::{load_session, rows_of_pair, Session};
+use app::simulate::{NoiseChoices, Simulation};
 use estimator::sim::handheld::{
     logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec,
 };
-use host::app::simulate::{NoiseChoices, Simulation};
-use host::apply::Prepared;
-use host::noise::allan::{curve_and_fit, curve_sizes, TermFit};
-use host::noise::confidence::relative_sigma;
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use outputs::apply::Prepared;
+use outputs::noise::allan::{curve_and_fit, curve_sizes, TermFit};
+use outputs::noise::confidence::relative_sigma;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use recording::session::import::{parse_acc_unit, GyroUnit, Recording};
@@ -108,7 +108,7 @@ pub fn apply<'py>(
             }
             Ok(())
         })?;
-        Ok::<_, host::apply::ApplyError>((out, rate, summary.warnings))
+        Ok::<_, outputs::apply::ApplyError>((out, rate, summary.warnings))
     });
     let (out, rate, warnings) = done.py_err()?;
     for w in warnings {
@@ -167,10 +167,10 @@ pub fn allan<'py>(
              finite values)"
         )));
     }
-    if n < host::noise::MIN_SAMPLES {
+    if n < outputs::noise::MIN_SAMPLES {
         return Err(usage(format!(
             "{n} samples: at least {} are needed (record a long still segment)",
-            host::noise::MIN_SAMPLES
+            outputs::noise::MIN_SAMPLES
         )));
     }
     // The array itself when it is contiguous; a strided view is copied once.
@@ -322,7 +322,7 @@ pub fn simulate(
             gyro_flicker_deg_s,
         },
     };
-    py.detach(|| host::app::simulate::simulate(&simulation, None))
+    py.detach(|| app::simulate::simulate(&simulation, None))
         .py_err()?;
     load_session(py, out)
 }

@@ -12,7 +12,7 @@
 //! bit for bit), with a temperature model what `acal_refresh` recomputes them from (`struct
 //! acal_thermal`, the device's refresh, also bit for bit), and the blob as a byte array that
 //! `acal_decode` checks and decodes. The decoder and the compensation are the files [`DECODER_H`]
-//! and [`DECODER_C`] (`host/src/export/c/`); the decoder reads blob versions 1 and 2 and fills the
+//! and [`DECODER_C`] (`outputs/src/export/c/`); the decoder reads blob versions 1 and 2 and fills the
 //! optional gyro and temperature sections with presence flags.
 //!
 //! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for Fusion's inertial model
@@ -52,7 +52,6 @@ pub fn write_package(
     force: bool,
 ) -> Result<Vec<&'static str>, ExportError> {
     use crate::output_file::{write_atomic, OutputFileError};
-    super::check_exportable(&input.cal)?;
     let files = package(input)?;
     if !force {
         if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
@@ -68,8 +67,9 @@ pub fn write_package(
 
 /// The files of the C package `export --format c --out DIR` writes: the constants header, the
 /// decoder, the device's per-sample correction and [`EXAMPLE_C`], self-contained (the header includes
-/// only them).
+/// only them); refused for a calibration no target can take ([`super::check_exportable`]).
 pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
+    super::check_exportable(&input.cal)?;
     Ok(vec![
         (HEADER_NAME, render_header(input)?),
         ("acal_blob.h", DECODER_H.to_string()),

@@ -706,7 +706,7 @@ fn exported_package(dir: &Path, cal: &Calibration) -> std::path::PathBuf {
     let unit = UnitFile::from_calibration(cal, Some(unit_id), None);
     let input = ExportInput {
         unit: &unit,
-        cal: cal.clone(),
+        cal: *cal,
         noise: None,
         rostopic: "/imu0",
         driver_scale_m_s2_per_out: None,

@@ -310,7 +310,7 @@ impl Transport for SimDevice {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::client::DeviceClient;
+    use crate::client::DeviceClient;
     use shared::blob::ParameterBlob;
     use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 

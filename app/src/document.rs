@@ -65,7 +65,7 @@ impl CalibrationDocument {
 
     /// Names the files where they are after their directory `from` was moved to `to` (a result
     /// built beside its destination and renamed into place whole, as `host batch` does).
-    pub(crate) fn files_moved(&mut self, from: &Path, to: &Path) {
+    pub fn files_moved(&mut self, from: &Path, to: &Path) {
         let moved = |p: &mut String| {
             if let Ok(rest) = Path::new(p.as_str()).strip_prefix(from) {
                 *p = to.join(rest).display().to_string();

@@ -264,7 +264,7 @@ pub fn wait_for_new_position<T: Transport>(
 
 /// Whether a plan is run hand-held on a device without a table: every static segment's attitude is
 /// free and nothing spins.
-pub(crate) fn is_hand_held(plan: &Plan) -> bool {
+pub fn is_hand_held(plan: &Plan) -> bool {
     plan.segments.iter().all(|s| s.is_static() && s.is_free())
 }
 
@@ -322,7 +322,7 @@ pub(crate) fn verify_magnitude<T: Transport>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+    use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 
     /// Windows of 4 samples (50 Hz) of a simulated hand session.
     fn windows(spec: &HandSpec) -> Vec<([f64; 3], [f64; 3], f64)> {

@@ -5,6 +5,11 @@
 //! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), hand-held
 //! mode ([`handheld`]), and the first checks of a freshly flashed board ([`bringup`]).
 
+#![deny(missing_docs)]
+
+use estimator::{calibration_files, estimate};
+use recording::{session, ui};
+
 pub mod bringup;
 pub mod client;
 pub mod handheld;

@@ -16,11 +16,11 @@
 //! screened within each output unit (a group below [`MIN_LOT`] is not screened) and says so; each
 //! summary row names its unit.
 
-use crate::app::{self, CalibrateOptions, CalibrationDocument};
 use crate::calibration_files::now_unix_s;
 use crate::estimate::{median, EstimateOptions};
 use crate::session::{ReadOptions, PLAN_FILE};
 use crate::summary::{all_parameter_keys, CalibrationSummary, Limits};
+use crate::{CalibrateOptions, CalibrationDocument};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Most worker threads `host batch --jobs` starts (a lot never uses more than it has sessions).
-pub(crate) const MAX_JOBS: usize = 256;
+pub const MAX_JOBS: usize = 256;
 
 /// Fewest calibrated units for the outlier screening.
 pub const MIN_LOT: usize = 5;
@@ -81,7 +81,7 @@ impl UnitResult {
     }
 
     /// Why the unit did not pass, every reason in one line (empty when it passed).
-    pub(crate) fn why_failed(&self) -> String {
+    pub fn why_failed(&self) -> String {
         let mut why = Vec::new();
         if let Some(e) = &self.error {
             why.push(e.clone());
@@ -190,11 +190,11 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
     };
     // The one calibrate use case, as `host calibrate --input`; the unit's error is kept as its
     // message in the lot's summary (a row of summary.csv and summary.json).
-    match app::calibrate_session_dir(dir, &options, &ReadOptions { quiet: true }) {
+    match crate::calibrate_session_dir(dir, &options, &ReadOptions { quiet: true }) {
         Err(e) => r.error = Some(e.to_string()),
         Ok((s, mut calibrated)) => {
             r.rows = s.report.rows;
-            match app::write_result(&out_dir, &mut calibrated, now_unix_s(), false) {
+            match crate::write_result(&out_dir, &mut calibrated, now_unix_s(), false) {
                 Ok(_) => r.summary = Some(calibrated.document),
                 Err(e) => r.error = Some(e.to_string()),
             }
@@ -379,7 +379,11 @@ pub fn run_batch(
         .filter(|u| !u.passed && u.summary.is_some())
     {
         let dir = out.join(&u.session);
-        if let Some(Err(e)) = u.summary.as_mut().map(|d| app::mark_failed(d, &dir, false)) {
+        if let Some(Err(e)) = u
+            .summary
+            .as_mut()
+            .map(|d| crate::mark_failed(d, &dir, false))
+        {
             u.error = Some(e.to_string());
         }
     }
@@ -405,7 +409,7 @@ fn csv_cell(text: &str) -> String {
 /// The lot as CSV: one row per unit, every parameter ([`all_parameter_keys`]: the accelerometer's,
 /// the gyro's, the temperature model's) and its 1σ, the temperature model's reference and range; a
 /// unit without a gyro or a temperature model leaves those cells empty.
-pub(crate) fn to_csv(lot: &LotSummary) -> String {
+pub fn to_csv(lot: &LotSummary) -> String {
     let keys = all_parameter_keys();
     let mut header: Vec<String> = [
         "session",

@@ -6,10 +6,10 @@
 use super::live_check::{instruction, table_for};
 use super::operator::Operator;
 use super::procedure::ProcedureOptions;
-use crate::device::{DeviceClient, LinkError, Transport};
 use crate::estimate::attitude::best_rotation;
 use crate::estimate::{BodyFrame, ReferenceChoice};
 use crate::session::{Plan, SegmentPlan};
+use crate::{DeviceClient, LinkError, Transport};
 use nalgebra::{Matrix3, Vector3};
 use shared::wire::{SampleFlags, StreamKind};
 

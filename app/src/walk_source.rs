@@ -74,7 +74,7 @@ impl WalkSourceError {
 }
 
 /// The walk per axis from `path`: a `noise.json` (by its `.json` name) or a unit file.
-pub(crate) fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
+pub fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))

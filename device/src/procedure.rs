@@ -14,10 +14,10 @@
 use super::live_check::{instruction, table_for};
 pub(crate) use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
-use crate::app::{self, CalibrateError, CalibrateOptions, Calibrated};
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
-use crate::device::{handheld, DeviceClient, LinkError, Transport};
 use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use crate::{handheld, DeviceClient, LinkError, Transport};
+use app::{CalibrateError, CalibrateOptions, Calibrated};
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
 
@@ -80,7 +80,7 @@ pub struct ProcedureOutcome {
     /// The calibration, estimated from the saved recording as `host calibrate --input` would; its
     /// document names the files written (the verification is the caller's to add).
     pub calibrated: Calibrated,
-    /// The estimate's result tables ([`crate::report::render_session`]), for the caller to print
+    /// The estimate's result tables ([`outputs::report::render_session`]), for the caller to print
     /// with its other results.
     pub report: String,
     /// The files written.
@@ -160,7 +160,7 @@ fn link_message(
 }
 
 /// The device can set its own table.
-pub(crate) fn has_virtual_table(identity: &Identity) -> bool {
+pub fn has_virtual_table(identity: &Identity) -> bool {
     matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
 }
 
@@ -220,7 +220,8 @@ pub fn run<T: Transport>(
         recording: recording_dir.clone(),
     })?;
     // The result table is the caller's to print (on stdout, with the other results).
-    let report = crate::report::render_session(&calibrated.outcome, &session.plan, &session.stats);
+    let report =
+        outputs::report::render_session(&calibrated.outcome, &session.plan, &session.stats);
 
     let created = calibration_files::now_unix_s();
     let written = app::write_result(&opts.out_dir, &mut calibrated, created, opts.force)
@@ -532,7 +533,7 @@ fn settle_windows<T: Transport>(
 /// The plan a device gets by default: the oblique plan when its table is virtual (it observes all nine
 /// lever-arm components), the hand plan for the simulated hand (it has no table), the paper's plan
 /// otherwise (no fixture beyond the paper's is needed).
-pub(crate) fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
+pub fn default_plan(identity: &Identity) -> Result<Plan, session::PlanError> {
     session::builtin::load_plan(if has_virtual_table(identity) {
         "oblique"
     } else if identity.board == Board::SimulatedHand {
@@ -545,7 +546,7 @@ pub(crate) fn default_plan(identity: &Identity) -> Result<Plan, session::PlanErr
 /// `OUT` for a run: the given directory, or a new one per run in the current directory,
 /// `calibration-<unit id>-<UTC time>` (a suffix `-2`, `-3`, … if that exists), so that a second run
 /// never records over the first.
-pub(crate) fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
+pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
     if let Some(dir) = out {
         return dir.to_path_buf();
     }

@@ -96,7 +96,7 @@ impl<T: Transport> DeviceClient<T> {
     }
 
     /// Changes the answer timeout.
-    pub(crate) fn set_timeout(&mut self, timeout: Duration) {
+    pub fn set_timeout(&mut self, timeout: Duration) {
         self.timeout = timeout;
     }
 
@@ -426,7 +426,7 @@ mod tests {
 
     /// The simulated device's identity (the firmware's own answer), as of protocol `version`.
     fn identity(version: u16) -> Identity {
-        let truth = crate::unit_file::UnitFile::paper_unit()
+        let truth = estimator::unit_file::UnitFile::paper_unit()
             .to_calibration()
             .unwrap();
         let device = super::super::sim::SimDevice::new(truth).unwrap();

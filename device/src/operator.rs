@@ -22,7 +22,7 @@ pub trait Operator {
 
 /// An operator at the terminal: instructions on stderr (stdout stays for results, e.g. `--json`),
 /// Enter on stdin.
-pub(crate) struct TerminalOperator;
+pub struct TerminalOperator;
 
 impl Operator for TerminalOperator {
     fn say(&mut self, text: &str) {

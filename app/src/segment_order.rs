@@ -20,7 +20,7 @@ pub(crate) const MAX_LOSS: f64 = 0.02;
 
 /// The figures an order is judged by.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub(crate) struct OrderFigures {
+pub struct OrderFigures {
     /// The worst of the three biases' 1σ, mg.
     pub worst_bias_sigma_mg: f64,
     /// The worst of the three scale factors' 1σ, ppm of the scale factor.
@@ -29,7 +29,7 @@ pub(crate) struct OrderFigures {
 
 /// One piece of advice: what to change, the segments' new order, and the figures before and after.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub(crate) struct OrderAdvice {
+pub struct OrderAdvice {
     /// What the change is, in words.
     pub change: String,
     /// The segments in the advised order (a return to the first mount adds one, named so).
@@ -137,7 +137,7 @@ fn with_return(plan: &Plan) -> Option<(Plan, f64)> {
 
 /// The advice for `plan` under the walk of `settings` (docs/model.md §11.2), best first; empty
 /// when no candidate helps by 10 % or when the walk is off.
-pub(crate) fn order_advice(
+pub fn order_advice(
     plan: &Plan,
     truth: &Calibration,
     settings: &PredictSettings,

@@ -1,5 +1,5 @@
 //! The operator's instruction for a segment, the table setting that performs it, and the live checks
-//! that a recorded segment matches its plan (the live procedure's `crate::device::procedure`).
+//! that a recorded segment matches its plan (the live procedure's `crate::procedure`).
 
 use crate::session::{self, SegmentPlan};
 use shared::wire::VirtualTable;

@@ -1,6 +1,6 @@
-//! The application layer: each use case written once, called alike by the command line
-//! ([`crate::cli`]), `host batch` ([`crate::batch`]), the live procedure
-//! ([`crate::device::procedure`]) and the Python package.
+//! The application layer: each use case written once, called alike by the command line (`host`'s
+//! `cli`), `host batch` ([`batch`]), the live procedure (the `device` crate's `procedure`) and the
+//! Python package.
 //!
 //! A use case takes typed inputs and returns a typed result; it prints nothing and parses no command
 //! line. Presenting the result (the terminal text, `--json`, a Python object) is the caller's.
@@ -22,7 +22,15 @@
 //!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
 //! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
 //!   (`host plan --check --bias-walk`).
+//! - [`batch`]: a lot of recordings calibrated in parallel (`host batch`), each through
+//!   [`calibrate_recording`], with the lot's screen and summary.
+#![deny(missing_docs)]
 
+use estimator::{calibration_files, estimate, sim, unit_file};
+use outputs::{noise, summary};
+use recording::{limits, output_file, session};
+
+pub mod batch;
 pub mod calibrate;
 pub mod document;
 pub mod error;
