@@ -2,7 +2,8 @@
 //! it"), on a unit without any temperature dependence: the simulator's 24-position session, its
 //! logger recording given a temperature column (a warm-up 30 → 37 °C, a swing 15 → 35 → 15 °C),
 //! segmented and calibrated as `host segment` and `host calibrate --input` do, and compared with the
-//! simulator's truth and with the same recording at a constant temperature.
+//! simulator's truth and with the same recording at a constant temperature. And the verdict: a fit
+//! whose χ²/dof is far beyond 1 fails (docs/model.md §4.4).
 
 use estimator::estimate::handheld_gyro::HandGyroFit;
 use estimator::sim::handheld::{logger_unit, simulate_hand, GyroTruth, HandSpec};
@@ -198,4 +199,37 @@ fn a_temperature_swing_gives_no_passing_misfit() {
         "χ²/dof {}, {off} mg",
         s.chi2_per_dof
     );
+}
+
+/// The verdict: one still position's mean moved by 20 mg (the unit nudged while "still") lifts χ²/dof
+/// into the hundreds, and the calibration fails naming the figure; `--max-chi2-per-dof` still sets
+/// another limit.
+#[test]
+fn a_chi2_per_dof_far_beyond_one_fails_the_verdict() {
+    let (_, _, rec) = hand_recording(|_| 25.0);
+    let (session, mut stats, clean) = segment_and_calibrate(rec);
+    assert!(clean.document.summary.passed);
+    let per_g = shared::STANDARD_GRAVITY_M_S2;
+    stats[5].mean_u[0] += 0.020 * per_g;
+    let recording = Session {
+        plan: &session.plan,
+        stats: &stats,
+        hand_gyro: None,
+        reader_warnings: &[],
+    };
+    let nudged = calibrate_recording(recording, &CalibrateOptions::default()).unwrap();
+    let s = &nudged.document.summary;
+    println!("nudged: χ²/dof {:.1}, {}", s.chi2_per_dof, s.failures());
+    assert!(s.chi2_per_dof > 100.0, "χ²/dof {}", s.chi2_per_dof);
+    assert!(!s.passed);
+    assert!(
+        s.failures()
+            .starts_with(&format!("chi2_per_dof {:.4} > 100", s.chi2_per_dof)),
+        "{}",
+        s.failures()
+    );
+    let mut options = CalibrateOptions::default();
+    options.limits.max_chi2_per_dof = Some(1e6);
+    let lenient = calibrate_recording(recording, &options).unwrap();
+    assert!(lenient.document.summary.passed);
 }
