@@ -224,10 +224,16 @@ pub struct Parameter {
     pub sigma: Option<f64>,
 }
 
-/// Production limits; each `None` is not checked.
+/// χ²/dof above which a calibration fails without `--max-chi2-per-dof`: residuals ten times the
+/// segments' own noise are a model that does not describe the data (docs/model.md §4.4), whatever
+/// the scaled 1σ say. Clean simulated sessions give about 1.
+pub const DEFAULT_MAX_CHI2_PER_DOF: f64 = 100.0;
+
+/// Production limits; each `None` is not checked, but χ²/dof always is
+/// ([`DEFAULT_MAX_CHI2_PER_DOF`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct Limits {
-    /// Fail when χ²/dof exceeds this (a misfit: table errors, a moved unit, a bad sensor).
+    /// Fail when χ²/dof exceeds this (a misfit: table errors, a moved unit, a bad sensor); default 100.
     #[arg(long, value_name = "X")]
     pub max_chi2_per_dof: Option<f64>,
     /// Fail when any zero bias B = u0/k (paper eq. 1) exceeds this, mg. Meaningful for outputs that
@@ -448,7 +454,7 @@ impl CalibrationSummary {
         check(
             "chi2_per_dof",
             outcome.fit.reduced_chi2,
-            limits.max_chi2_per_dof,
+            Some(limits.max_chi2_per_dof.unwrap_or(DEFAULT_MAX_CHI2_PER_DOF)),
         );
         let worst_bias = (0..3).map(bias_mg).fold(0.0, f64::max);
         check("bias_mg", worst_bias, limits.max_bias_mg);

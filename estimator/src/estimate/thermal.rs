@@ -16,13 +16,16 @@
 //! The result then refers every segment's statistics to `T_ref`, and the usual estimator runs on
 //! them unchanged: its biases, scale factors and angles are the values at `T_ref`.
 //!
-//! The gyro bias gets its polynomial from the same static segments (`thermal_gyro`), and
+//! Only attitudes seen over a temperature span determine the terms (`determining`): a session that
+//! spans temperature only between attitudes, such as a hand-held one warming up, gets no model.
+//!
+//! The gyro bias gets its polynomial from the static segments (`thermal_gyro`), and
 //! the misalignment held constant is tested across the soak temperatures
 //! (`thermal_misalignment`): a significant change is a warning, not a model term.
 
 use super::solve::invert_spd;
 use crate::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
-use crate::session::{Plan, SegmentStats};
+use crate::session::{Plan, SegmentPlan, SegmentStats};
 use nalgebra::{DMatrix, DVector};
 use shared::sensor_models::{TemperatureModel, MAX_TEMPERATURE_DEGREE as DEG};
 
@@ -94,8 +97,9 @@ struct Obs<'a> {
     var: [f64; 3],
 }
 
-/// Fits the temperature model when the static segments span at least [`MIN_SPAN_C`]; `Ok(None)`
-/// otherwise (with a note when temperatures were recorded at all).
+/// Fits the temperature model when the session determines it: static segments of a known attitude
+/// seen over at least [`MIN_SPAN_C`] (`determining`, docs/model.md §9); `Ok(None)` otherwise, with a
+/// note naming the numbers when temperatures were recorded at all.
 pub(crate) fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
@@ -118,27 +122,26 @@ fn fit_with(
     stats: &[SegmentStats],
     degrees: Option<[(usize, usize); 3]>,
 ) -> Result<(Option<ThermalFit>, Vec<String>), String> {
-    let obs: Vec<Obs> = stats
+    let statics: Vec<(Obs, &SegmentPlan)> = stats
         .iter()
         .filter_map(|st| {
             let seg = plan.segment(&st.name)?;
             let ts = st.thermal.as_ref()?;
-            seg.is_static().then(|| Obs {
-                name: &st.name,
-                up_b: seg.up_b,
-                ts,
-                var: noise_variance(st, ts),
+            seg.is_static().then(|| {
+                let o = Obs {
+                    name: &st.name,
+                    up_b: seg.up_b,
+                    ts,
+                    var: noise_variance(st, ts),
+                };
+                (o, seg)
             })
         })
         .collect();
-    if obs.is_empty() {
+    if statics.is_empty() {
         return Ok((None, Vec::new()));
     }
-    let lo = obs.iter().map(|o| o.ts.min_c).fold(f64::INFINITY, f64::min);
-    let hi = obs
-        .iter()
-        .map(|o| o.ts.max_c)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = span(statics.iter().map(|(o, _)| o));
     if hi - lo < MIN_SPAN_C {
         return Ok((
             None,
@@ -148,37 +151,13 @@ fn fit_with(
             )],
         ));
     }
-    let reference_c = PREFERRED_REFERENCE_C.clamp(lo, hi);
-    let mut fit = ThermalFit {
-        model: TemperatureModel {
-            reference_c,
-            valid_range_c: [lo, hi],
-            zero_bias_out_per_c: [[0.0; DEG]; 3],
-            scale_rel_per_c: [[0.0; DEG]; 3],
-            gyro_bias_rad_s_per_c: None,
-        },
-        zero_bias_ref_out: [0.0; 3],
-        zero_bias_degree: [0; 3],
-        scale_degree: [0; 3],
-        zero_bias_sigma: [[0.0; DEG]; 3],
-        scale_sigma: [[0.0; DEG]; 3],
-        zero_bias_cov: [[[0.0; DEG]; DEG]; 3],
-        scale_cov: [[[0.0; DEG]; DEG]; 3],
-        chi2: [(0.0, 0); 3],
-        steps: obs
-            .iter()
-            .map(|o| ThermalStep {
-                segment: o.name.to_string(),
-                mean_c: o.ts.mean_c(),
-                residual_out: [0.0; 3],
-                sigma_out: [0.0; 3],
-            })
-            .collect(),
-        gyro_bias_degree: None,
-        gyro_bias_sigma: [[0.0; DEG]; 3],
-        gyro_bias_ref_rad_s: None,
-        notes: Vec::new(),
+    let obs = match determining(statics, (lo, hi)) {
+        Ok(obs) => obs,
+        Err(refusal) => return Ok((None, vec![refusal])),
     };
+    let (lo, hi) = span(obs.iter());
+    let reference_c = PREFERRED_REFERENCE_C.clamp(lo, hi);
+    let mut fit = ThermalFit::empty(reference_c, [lo, hi], &obs);
     for axis in 0..3 {
         fit_axis(&obs, axis, degrees.map(|d| d[axis]), &mut fit)?;
     }
@@ -200,13 +179,97 @@ fn fit_with(
         fit.gyro_bias_ref_rad_s = Some((g.bias_ref_rad_s, g.bias_ref_sigma_rad_s));
         fit.notes.extend(g.notes);
     }
+    // The misalignment is compared across the soaks whose attitude determines the model.
     let soaks: Vec<_> = statics
         .into_iter()
-        .filter(|(_, ts, _)| ts.max_c - ts.min_c < SOAK_SPAN_C)
+        .filter(|(st, ts, _)| {
+            ts.max_c - ts.min_c < SOAK_SPAN_C && obs.iter().any(|o| o.name == st.name)
+        })
         .collect();
     let warnings = super::thermal_misalignment::check(&soaks);
     fit.model.check().map_err(|e| e.to_string())?;
     Ok((Some(fit), warnings))
+}
+
+/// The lowest and highest temperature the segments read, °C.
+fn span<'a>(obs: impl IntoIterator<Item = &'a Obs<'a>>) -> (f64, f64) {
+    obs.into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), o| {
+            (lo.min(o.ts.min_c), hi.max(o.ts.max_c))
+        })
+}
+
+/// The static segments that determine a temperature model (docs/model.md §9, "When the session
+/// determines it"): those of a known attitude (not free) whose mount is seen over at least
+/// [`MIN_SPAN_C`], when they hold four attitudes not in one plane (each axis's bias and scale).
+/// Otherwise the warning that says why there is no model, with the session's numbers.
+fn determining<'a>(
+    statics: Vec<(Obs<'a>, &SegmentPlan)>,
+    (lo, hi): (f64, f64),
+) -> Result<Vec<Obs<'a>>, String> {
+    // Each known attitude's temperatures: (mount, lowest, highest).
+    let mut mounts: Vec<(String, f64, f64)> = Vec::new();
+    for (o, seg) in statics.iter().filter(|(_, seg)| !seg.is_free()) {
+        let name = seg.mount_name();
+        match mounts.iter_mut().find(|m| m.0 == name) {
+            Some(m) => *m = (name, m.1.min(o.ts.min_c), m.2.max(o.ts.max_c)),
+            None => mounts.push((name, o.ts.min_c, o.ts.max_c)),
+        }
+    }
+    let held = |name: &str| {
+        mounts
+            .iter()
+            .any(|m| m.0 == name && m.2 - m.1 >= MIN_SPAN_C)
+    };
+    let (total, free) = (
+        statics.len(),
+        statics.iter().filter(|(_, seg)| seg.is_free()).count(),
+    );
+    let kept: Vec<Obs> = statics
+        .into_iter()
+        .filter(|(_, seg)| !seg.is_free() && held(&seg.mount_name()))
+        .map(|(o, _)| o)
+        .collect();
+    if !kept.is_empty() && spans_space(&kept) {
+        return Ok(kept);
+    }
+    let attitudes = mounts.iter().filter(|m| m.2 - m.1 >= MIN_SPAN_C).count();
+    let widest = mounts
+        .iter()
+        .max_by(|a, b| (a.2 - a.1).total_cmp(&(b.2 - b.1)))
+        .map_or(String::new(), |(name, a, b)| {
+            format!(
+                "; the widest span at one known attitude is {:.2} °C ({name})",
+                b - a
+            )
+        });
+    let why = if attitudes == 0 {
+        format!("no known attitude is seen over {MIN_SPAN_C} °C or more")
+    } else {
+        format!(
+            "the {attitudes} known attitude(s) seen over {MIN_SPAN_C} °C or more are not four \
+             attitudes out of one plane, which each axis's bias and scale need"
+        )
+    };
+    Err(format!(
+        "no temperature model: the static segments span {lo:.1}..{hi:.1} °C, but {why} \
+         ({free} of {total} static segments have a free attitude{widest}); a temperature change \
+         seen only between different attitudes cannot be told from the attitudes' own difference \
+         (docs/model.md §9), so the calibration is made without a temperature model, its values \
+         the session's average over {lo:.1}..{hi:.1} °C; to calibrate over temperature, repeat \
+         the positions at several temperatures (soak steps) or hold them through a ramp"
+    ))
+}
+
+/// Whether the segments' ups hold four attitudes out of one plane: `Σ [f 1][f 1]ᵀ` of full rank.
+fn spans_space(obs: &[Obs]) -> bool {
+    let mut gram = nalgebra::Matrix4::<f64>::zeros();
+    for o in obs {
+        let x = nalgebra::Vector4::new(o.up_b[0], o.up_b[1], o.up_b[2], 1.0);
+        gram += x * x.transpose();
+    }
+    let eig = gram.symmetric_eigenvalues();
+    eig.min() > 1e-9 * eig.max().max(f64::MIN_POSITIVE)
 }
 
 /// Per-sample noise variance: a soak's own scatter, or a ramp's scatter about its own cubic.
@@ -429,6 +492,40 @@ fn fit_axis(
 }
 
 impl ThermalFit {
+    /// No temperature terms yet: the fit over `valid_range_c` about `reference_c`, one step a segment.
+    fn empty(reference_c: f64, valid_range_c: [f64; 2], obs: &[Obs]) -> ThermalFit {
+        ThermalFit {
+            model: TemperatureModel {
+                reference_c,
+                valid_range_c,
+                zero_bias_out_per_c: [[0.0; DEG]; 3],
+                scale_rel_per_c: [[0.0; DEG]; 3],
+                gyro_bias_rad_s_per_c: None,
+            },
+            zero_bias_ref_out: [0.0; 3],
+            zero_bias_degree: [0; 3],
+            scale_degree: [0; 3],
+            zero_bias_sigma: [[0.0; DEG]; 3],
+            scale_sigma: [[0.0; DEG]; 3],
+            zero_bias_cov: [[[0.0; DEG]; DEG]; 3],
+            scale_cov: [[[0.0; DEG]; DEG]; 3],
+            chi2: [(0.0, 0); 3],
+            steps: obs
+                .iter()
+                .map(|o| ThermalStep {
+                    segment: o.name.to_string(),
+                    mean_c: o.ts.mean_c(),
+                    residual_out: [0.0; 3],
+                    sigma_out: [0.0; 3],
+                })
+                .collect(),
+            gyro_bias_degree: None,
+            gyro_bias_sigma: [[0.0; DEG]; 3],
+            gyro_bias_ref_rad_s: None,
+            notes: Vec::new(),
+        }
+    }
+
     /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
     pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
         let dt = temp_c - self.model.reference_c;

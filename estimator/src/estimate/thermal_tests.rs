@@ -220,3 +220,118 @@ fn a_misalignment_drifting_with_temperature_is_flagged() {
         "{flagged:?}"
     );
 }
+
+/// The `hand` plan's 24 free positions, position k held at `temp(k / 23)` °C, each up given as a
+/// hand-held session gives it (`host segment`): the direction of its mean output, here less the
+/// true bias (the scale errors and misalignment still in it, half a degree off).
+fn hand_held(
+    truth: &shared::Calibration,
+    temp: impl Fn(f64) -> f64,
+    seed: u64,
+) -> (crate::session::Plan, Vec<crate::session::SegmentStats>) {
+    let mut plan = crate::session::builtin::builtin_plan("hand")
+        .unwrap()
+        .unwrap();
+    plan.format_version = crate::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE;
+    let last = (plan.segments.len() - 1) as f64;
+    for (k, s) in plan.segments.iter_mut().enumerate() {
+        s.temp_c = Some(temp(k as f64 / last));
+    }
+    let stats = simulate_stats(truth, &plan, &nuisances(), &ThermalSim::default(), seed);
+    let bias = truth.statics.to_fitted().unwrap().0.zero_bias_out;
+    for (s, st) in plan.segments.iter_mut().zip(&stats) {
+        let d: [f64; 3] = std::array::from_fn(|i| st.mean_u[i] - bias[i]);
+        s.up_b = d.map(|c| c / shared::linalg::norm(&d));
+    }
+    (plan, stats)
+}
+
+/// docs/model.md §9, "When the session determines it": a unit without any temperature dependence
+/// held by hand through 15 → 35 → 15 °C. Each position sees one temperature, so no attitude is seen
+/// over a span and no model is fitted; the fit is the one at a constant temperature, against the
+/// simulator's truth.
+#[test]
+fn temperatures_seen_only_between_free_attitudes_give_no_model() {
+    let mut truth = hot_unit();
+    truth.temperature = None;
+    let swing = |x: f64| 25.0 - 10.0 * (2.0 * std::f64::consts::PI * x).cos();
+    let calibrate = |temp: &dyn Fn(f64) -> f64| {
+        let (plan, stats) = hand_held(&truth, temp, 7);
+        calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap()
+    };
+    let (out, constant) = (calibrate(&swing), calibrate(&|_| 25.0));
+    let errors = |o: &super::CalibrationOutcome| {
+        let mut rng = crate::sim::testkit::Rng::new(5, 0);
+        crate::sim::montecarlo::static_errors(&truth, &o.fitted, &mut rng)
+    };
+    let (e, e0) = (errors(&out), errors(&constant));
+    println!(
+        "15 → 35 → 15 °C: χ²/dof {:.2}, held-out worst {:.1} µg, rms {:.1} µg; at 25 °C: χ²/dof \
+         {:.2}, worst {:.1} µg, rms {:.1} µg",
+        out.fit.reduced_chi2,
+        e.worst_ug,
+        e.rms_ug,
+        constant.fit.reduced_chi2,
+        e0.worst_ug,
+        e0.rms_ug
+    );
+    assert!(out.thermal.is_none() && out.calibration.temperature.is_none());
+    let note = out
+        .warnings
+        .iter()
+        .find(|w| w.contains("no temperature model"))
+        .unwrap_or_else(|| panic!("{:?}", out.warnings));
+    assert!(
+        note.contains("no known attitude is seen over 5 °C") && note.contains("24 of 24 static"),
+        "{note}"
+    );
+    assert!(
+        out.fit.reduced_chi2 < 2.0,
+        "χ²/dof {}",
+        out.fit.reduced_chi2
+    );
+    assert!(
+        e.worst_ug <= 1.5 * e0.worst_ug + 20.0,
+        "{} µg vs {} µg",
+        e.worst_ug,
+        e0.worst_ug
+    );
+}
+
+/// A soak (the six positions at five temperatures) beside hand-held positions at temperatures along
+/// the same range: the soak's attitudes determine the model, the free ones do not enter it, and the
+/// model and held-out accuracy are the soak's own.
+#[test]
+fn soak_positions_determine_the_model_beside_free_ones() {
+    let truth = hot_unit();
+    let soak = soak_plan(&SOAK_TEMPS_C, 10.0);
+    let soak_stats = simulate_stats(&truth, &soak, &nuisances(), &ThermalSim::default(), 5);
+    let (lo, hi) = (SOAK_TEMPS_C[0], SOAK_TEMPS_C[4]);
+    let (hand, hand_stats) = hand_held(&truth, |x| lo + (hi - lo) * x, 9);
+    let mut plan = soak.clone();
+    plan.segments.extend(hand.segments);
+    let stats = [soak_stats.clone(), hand_stats].concat();
+    let options = EstimateOptions::default();
+    let both = calibrate_session_stats(&plan, &stats, &options).unwrap();
+    let alone = calibrate_session_stats(&soak, &soak_stats, &options).unwrap();
+    let (fit, own) = (
+        both.thermal.as_ref().unwrap(),
+        alone.thermal.as_ref().unwrap(),
+    );
+    assert_eq!(fit.steps.len(), soak.segments.len(), "{:?}", fit.notes);
+    assert_eq!(
+        (fit.zero_bias_degree, fit.scale_degree),
+        (own.zero_bias_degree, own.scale_degree),
+        "{:?}",
+        fit.notes
+    );
+    for temp in [0.0, 45.0] {
+        let with = worst_error_ug(&truth, &both.calibration, temp, &HELD_OUT_UPS);
+        let soak_only = worst_error_ug(&truth, &alone.calibration, temp, &HELD_OUT_UPS);
+        println!("held-out at {temp} °C: worst {with:.1} µg, the soak alone {soak_only:.1} µg");
+        assert!(
+            with <= 30.0_f64.max(1.5 * soak_only),
+            "{temp} °C: {with} µg"
+        );
+    }
+}
