@@ -15,7 +15,6 @@
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
 //! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
-//! - [`gyro`]: an SPI gyro driver generic over `embedded_hal::spi::SpiDevice` (STM32 board).
 //! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
 //!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
 //! - [`imu_bursts`]: the ICM-42688-P's FIFO read as a chain of DMA bursts (F405 board).
@@ -33,7 +32,6 @@
 pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;
-pub mod gyro;
 pub mod imu;
 pub mod imu_bursts;
 pub mod link;

@@ -47,7 +47,7 @@ mod app {
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
     use firmware::clock_tree::nucleo::GYRO_SPI;
     use firmware::conversion::Scaling;
-    use firmware::gyro::L3gd20;
+    use firmware::imu::l3gd20h::L3gd20;
     use firmware::link::{on_rx_byte, RxQueueLink, RX_QUEUE};
     use firmware::pipeline::PipelineCommand;
     use firmware::sampling::{split_scan, TemperatureMean, ADC_SCAN_LEN};
@@ -167,7 +167,7 @@ mod app {
                 gyro,
                 scaling: Scaling {
                     volts_per_code: board::VREF_V / f32::from(board::ADC_MAX),
-                    rad_s_per_lsb: firmware::gyro::RAD_S_PER_LSB_2000DPS,
+                    rad_s_per_lsb: firmware::imu::l3gd20h::RAD_S_PER_LSB_2000DPS,
                 },
                 temperature: TemperatureMean::new(SAMPLE_RATE_HZ),
                 vtemp_cal: (VtempCal30::get().read(), VtempCal110::get().read()),

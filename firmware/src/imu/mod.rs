@@ -1,10 +1,13 @@
-//! Digital IMUs read from their FIFO: what a board's sampling task needs from any of them
-//! ([`ImuSource`], [`ImuSourceAsync`]), and the drivers behind it.
+//! The inertial sensors' drivers. Digital IMUs read from their FIFO: what a board's sampling task
+//! needs from any of them ([`ImuSource`], [`ImuSourceAsync`]), and the drivers behind it; and the
+//! analog-accelerometer board's separate SPI gyro ([`l3gd20h`]), read one sample at a time.
 //!
 //! - [`alignment`]: how a board mounts its IMU, and each sample rotated into the board's axes.
 //! - [`icm42688`]: TDK InvenSense ICM-42688-P over SPI (blocking and async), FIFO packets 3 and 4,
 //!   watermark interrupt on INT1, overflow detection, self-test.
 //! - [`lsm6dso`]: ST LSM6DSO over SPI, its FIFO of tagged words, the same trait.
+//! - [`l3gd20h`]: ST L3GD20H / I3G4250D gyro over SPI (the STM32F446 Nucleo board), generic over
+//!   `embedded_hal::spi::SpiDevice`, with typed errors.
 //! - `sim` (PC tests, and the QEMU board with the `imu-sim` feature): register-level models of
 //!   both parts as `SpiDevice`s, fed by a sample generator.
 //!
@@ -18,6 +21,7 @@
 
 pub mod alignment;
 pub mod icm42688;
+pub mod l3gd20h;
 pub mod lsm6dso;
 #[cfg(any(test, feature = "imu-sim"))]
 pub mod sim;
