@@ -150,7 +150,7 @@ pub enum BatchError {
     NoSessions(PathBuf),
     /// The thread pool could not start.
     #[error("cannot start the worker threads: {0}")]
-    Threads(String),
+    Threads(#[source] rayon::ThreadPoolBuildError),
 }
 
 /// The session directories directly under `dir`, sorted by name.
@@ -354,9 +354,7 @@ pub fn run_batch(
     let cores = std::thread::available_parallelism().map_or(1, usize::from);
     let threads = opts.jobs.unwrap_or(cores).clamp(1, sessions.len().max(1));
     let builder = rayon::ThreadPoolBuilder::new().num_threads(threads);
-    let pool = builder
-        .build()
-        .map_err(|e| BatchError::Threads(e.to_string()))?;
+    let pool = builder.build().map_err(BatchError::Threads)?;
     bar.set_length(sessions.len() as u64);
     let started = Instant::now();
     let mut units: Vec<UnitResult> = pool.install(|| {

@@ -113,7 +113,7 @@ impl NoiseModel {
                 .clone()
                 .try_into::<NoiseModel>()
                 .map(Some)
-                .map_err(|e| SimulateError::Noise(format!("[noise] in the unit file: {e}"))),
+                .map_err(SimulateError::NoiseTable),
         }
     }
 
@@ -159,6 +159,12 @@ pub enum SimulateError {
     /// The unit's parameters are unusable.
     #[error("the unit to simulate is not usable: {0}")]
     Unit(String),
+    /// The unit's parameters do not make a forward model.
+    #[error("the unit to simulate is not usable: {0}")]
+    Params(#[source] shared::params::ParamsError),
+    /// The unit file's `[noise]` table is not a noise model.
+    #[error("noise model: [noise] in the unit file: {0}")]
+    NoiseTable(#[source] toml::de::Error),
     /// The plan is unusable for simulation.
     #[error(transparent)]
     Plan(PlanError),
@@ -254,7 +260,7 @@ fn simulable_model(
     plan.validate().map_err(SimulateError::Plan)?;
     noise.validate()?;
     thermal.validate()?;
-    let model = ForwardModel::new(cal).map_err(|e| SimulateError::Unit(e.to_string()))?;
+    let model = ForwardModel::new(cal).map_err(SimulateError::Params)?;
     if let Some(s) = plan.segments.iter().find(|s| !s.has_up()) {
         return Err(SimulateError::Plan(PlanError::Invalid(format!(
             "segment '{}' has no up_b; simulate needs the true attitude of every segment (a free \
@@ -457,10 +463,7 @@ pub fn simulate_to_dir_with_progress(
     let cal = unit.to_calibration().map_err(SimulateError::Unit)?;
     let mut notes = Vec::new();
     let noise = &simulated_noise(unit, noise);
-    let (fitted, normalisation) = cal
-        .statics
-        .to_fitted()
-        .map_err(|e| SimulateError::Unit(e.to_string()))?;
+    let (fitted, normalisation) = cal.statics.to_fitted().map_err(SimulateError::Params)?;
     if normalisation.needs_warning() {
         notes.push(format!(
             "the unit's installation angles are inconsistent (row norms {:.7?}); simulated with each \

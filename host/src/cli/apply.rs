@@ -2,7 +2,6 @@
 
 use super::CliError;
 use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary, UnitBinding};
-use crate::calibration_guard::GuardError;
 use crate::output_file::OutputFile;
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
@@ -119,12 +118,9 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             None => apply_session(&a.input, &cal, unit_ids, mode, a.temperature_c, w),
             Some(s) => apply_log(&a.input, s, &cal, mode, a.temperature_c, w),
         }
-        .map_err(|e| match e {
-            // An option that would be ignored is a usage error, found only once the input is read.
-            e @ (ApplyError::Guard(GuardError::TemperatureNotUsed { .. })
-            | ApplyError::IgnoreUnitIdUnused { .. }) => CliError::Usage(e.to_string()),
-            e => e.into(),
-        })
+        // An option that would be ignored is a usage error, found only once the input is read
+        // (`CliError::exit_code`).
+        .map_err(CliError::from)
     };
     let summary: ApplySummary = match &a.out {
         Some(path) => {

@@ -84,8 +84,10 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     for d in lot.units.iter_mut().filter_map(|u| u.summary.as_mut()) {
         d.files_moved(staged.path(), &a.out);
     }
-    let json = serde_json::to_string_pretty(&lot)
-        .map_err(|e| CliError::Failed(format!("cannot write the lot summary: {e}")))?;
+    let json = serde_json::to_string_pretty(&lot).map_err(|source| CliError::Json {
+        what: "the lot summary",
+        source,
+    })?;
     write_atomic(
         &staged.path().join(SUMMARY_CSV),
         to_csv(&lot).as_bytes(),

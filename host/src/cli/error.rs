@@ -113,10 +113,24 @@ pub enum CliError {
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
-    /// An input the command cannot use, or a result it cannot produce, said in words (where no
-    /// domain error type fits).
-    #[error("{0}")]
-    Failed(String),
+    /// An option's value is out of its range.
+    #[error(transparent)]
+    Range(#[from] crate::limits::RangeError),
+    /// The simulated device cannot hold the unit given (`--sim-unit`).
+    #[error(transparent)]
+    SimDevice(#[from] crate::device::sim::SimError),
+    /// A result could not be written as JSON (`what` names it).
+    #[error("cannot write {what} as JSON: {source}")]
+    Json {
+        /// The result.
+        what: &'static str,
+        /// Why.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A file could not be written.
+    #[error("cannot write {}: {}", .0.display(), .1)]
+    Write(PathBuf, #[source] std::io::Error),
     /// Standard output is closed or full (`| head`, `> /dev/full`); files and devices were written
     /// before it.
     #[error(
@@ -151,10 +165,18 @@ impl CliError {
     /// An option that does not apply to the input it was given with, found only once the input
     /// was opened (a log's format, a session's segments): a usage error like any other.
     fn is_option_not_for_input(&self) -> bool {
+        use crate::apply::ApplyError;
+        use crate::calibration_guard::GuardError;
         use crate::session::logs::LogError;
         matches!(
             self,
             CliError::Report(ReportError::NamedRun(_))
+                | CliError::Range(_)
+                | CliError::SimDevice(_)
+                | CliError::Apply(
+                    ApplyError::Guard(GuardError::TemperatureNotUsed { .. })
+                        | ApplyError::IgnoreUnitIdUnused { .. }
+                )
                 | CliError::Log(
                     LogError::OptionNotForFormat { .. } | LogError::TextOptionOnBinary { .. }
                 )
@@ -202,12 +224,6 @@ impl From<crate::app::simulate::SimulationError> for CliError {
             SimulationError::Plan(e) => e.into(),
             SimulationError::Simulate(e) => e.into(),
         }
-    }
-}
-
-impl From<crate::limits::RangeError> for CliError {
-    fn from(e: crate::limits::RangeError) -> Self {
-        CliError::Usage(e.to_string())
     }
 }
 

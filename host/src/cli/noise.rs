@@ -86,8 +86,10 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
     for w in &report.warnings {
         out.warn(w);
     }
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::Noise(NoiseError::File(a.input.clone(), e.to_string())))?;
+    let json = serde_json::to_string_pretty(&report).map_err(|source| CliError::Json {
+        what: "the noise report",
+        source,
+    })?;
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir).map_err(|e| {
             CliError::Written(crate::output_file::OutputFileError::Io(dir.clone(), e))
@@ -97,7 +99,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
         write_atomic(&dir.join("allan.csv"), report.csv().as_bytes(), a.force)
             .map_err(CliError::Written)?;
         let fig = render(&report.figure(), dir, Formats::default())
-            .map_err(|e| CliError::Noise(NoiseError::File(dir.clone(), e.to_string())))?;
+            .map_err(|e| CliError::Noise(NoiseError::Figure(e)))?;
         for w in &fig.warnings {
             out.warn(w);
         }

@@ -55,8 +55,10 @@ impl Output {
     /// The JSON document, when `--json` was given.
     pub fn document<T: Serialize>(&self, value: &T) -> Result<(), CliError> {
         if self.json {
-            let text = serde_json::to_string_pretty(value)
-                .map_err(|e| CliError::Failed(format!("cannot write the JSON result: {e}")))?;
+            let text = serde_json::to_string_pretty(value).map_err(|source| CliError::Json {
+                what: "the result",
+                source,
+            })?;
             crate::outln!("{text}").map_err(CliError::Stdout)?;
         }
         Ok(())

@@ -115,7 +115,7 @@ pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> 
         } else {
             SimDevice::new(truth)
         }
-        .map_err(|e| CliError::Usage(e.to_string()))?;
+        .map_err(CliError::SimDevice)?;
         AnyTransport::Sim(Box::new(dev))
     } else {
         AnyTransport::Serial(SerialTransport::open(

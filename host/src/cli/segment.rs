@@ -179,8 +179,8 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
     // The file's zero force is at the offset: so is the truth's bias.
     truth.statics.zero_bias_out = truth.statics.zero_bias_out.map(|b| b + acc_offset);
     let io = |p: &Path| {
-        let p = p.display().to_string();
-        move |e: std::io::Error| CliError::Failed(format!("cannot write {p}: {e}"))
+        let p = p.to_path_buf();
+        move |e: std::io::Error| CliError::Write(p, e)
     };
     write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
     let text = truth_toml(&truth, &spec.gyro);

@@ -16,7 +16,7 @@ pub(crate) const JSON_FORMAT_VERSION: u32 = 1;
 /// The document.
 pub fn document(input: &ExportInput<'_>) -> Result<Value, ExportError> {
     let conv = convert(&input.cal)?;
-    let ser = |e: serde_json::Error| ExportError::Serialise(e.to_string());
+    let ser = ExportError::Json;
     let mut undetermined: Vec<String> = Vec::new();
     let unc = input.unit.uncertainty.as_ref();
     match unc {
@@ -98,7 +98,7 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
     let v = document(input)?;
     serde_json::to_string_pretty(&v)
         .map(|s| s + "\n")
-        .map_err(|e| ExportError::Serialise(e.to_string()))
+        .map_err(ExportError::Json)
 }
 
 #[cfg(test)]

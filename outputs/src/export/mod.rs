@@ -140,9 +140,12 @@ pub enum ExportError {
     /// A file of the export could not be written (or exists, without `--force`).
     #[error(transparent)]
     Written(#[from] crate::output_file::OutputFileError),
-    /// Serialising failed.
+    /// Writing TOML failed.
     #[error("cannot export the calibration: {0}")]
-    Serialise(String),
+    Toml(#[source] toml::ser::Error),
+    /// Writing JSON failed.
+    #[error("cannot export the calibration: {0}")]
+    Json(#[source] serde_json::Error),
     /// A scale factor is negative or zero: the convention (and every target's model) has positive
     /// ones.
     #[error("cannot export the calibration: {0}")]

@@ -24,8 +24,7 @@ const HEADER_KALIBR: &str = "\
 /// format gives all three).
 pub fn render(calibration: &Calibration, format: ExportFormat) -> Result<String, ExportError> {
     let c: Conversions = convert(calibration)?;
-    let ser =
-        |r: Result<String, toml::ser::Error>| r.map_err(|e| ExportError::Serialise(e.to_string()));
+    let ser = |r: Result<String, toml::ser::Error>| r.map_err(ExportError::Toml);
     Ok(match format {
         ExportFormat::Plain => format!("{HEADER_PLAIN}{}", ser(toml::to_string(&c.plain))?),
         ExportFormat::Fusion => format!("{HEADER_FUSION}{}", ser(toml::to_string(&c.fusion))?),

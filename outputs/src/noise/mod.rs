@@ -58,9 +58,15 @@ pub enum NoiseError {
     /// The logger's file has no still interval to analyse.
     #[error("no noise analysis possible: {0}")]
     NoStill(#[source] crate::session::segment::SegmentError),
-    /// A noise file could not be read or parsed.
+    /// A noise file could not be read.
     #[error("cannot use noise file {}: {}", .0.display(), .1)]
-    File(PathBuf, String),
+    File(PathBuf, #[source] std::io::Error),
+    /// A noise file is not `host noise`'s `noise.json`.
+    #[error("cannot use noise file {}: not a noise.json of host noise: {}", .0.display(), .1)]
+    NotNoiseJson(PathBuf, #[source] serde_json::Error),
+    /// The Allan figure could not be drawn.
+    #[error(transparent)]
+    Figure(#[from] crate::report::plot::FigureError),
     /// The calibration does not turn this still recording into 1 g: it is not this recording's.
     #[error(
         "the calibration turns this still recording into |f| = {f_g:.4} g, not 1 g: it is \
@@ -654,11 +660,10 @@ impl NoiseReport {
 
 /// Kalibr's figures from a `noise.json` written by `host noise`.
 pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
-    let text = crate::limits::read_text_bounded(path)
-        .map_err(|e| NoiseError::File(path.into(), e.to_string()))?;
-    let report: NoiseReport = serde_json::from_str(&text).map_err(|e| {
-        NoiseError::File(path.into(), format!("not a noise.json of host noise: {e}"))
-    })?;
+    let text =
+        crate::limits::read_text_bounded(path).map_err(|e| NoiseError::File(path.into(), e))?;
+    let report: NoiseReport =
+        serde_json::from_str(&text).map_err(|e| NoiseError::NotNoiseJson(path.into(), e))?;
     Ok(report.kalibr)
 }
 

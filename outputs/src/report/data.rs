@@ -75,9 +75,15 @@ pub enum ReportError {
     /// The calibration file could not be read.
     #[error(transparent)]
     Unit(UnitFileError),
-    /// The calibration cannot compensate (message says why).
+    /// The calibration file's values are not a calibration (the unit file says why).
     #[error("the calibration cannot compensate: {0}")]
     Calibration(String),
+    /// The calibration cannot compensate.
+    #[error("the calibration cannot compensate: {0}")]
+    Compensator(#[source] shared::compensator::CompensatorError),
+    /// The calibration's gyro correction cannot be inverted.
+    #[error("the calibration cannot compensate: {0}")]
+    Gyro(#[source] shared::sensor_models::GyroError),
     /// The calibration cannot meet this recording ([`crate::calibration_guard`]).
     #[error(transparent)]
     Meeting(#[from] crate::calibration_guard::GuardError),
@@ -230,7 +236,7 @@ pub struct ReportData {
     /// Why a replay is left out, one line each (also among the warnings).
     pub navigation_left_out: Vec<String>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
-    pub session_fit: Result<CalibrationOutcome, String>,
+    pub session_fit: Result<CalibrationOutcome, crate::estimate::EstimateError>,
     /// The session's segments through the session fit's own calibration (empty when it failed or its
     /// compensator cannot be built: the text then shows the fit's values only).
     pub session_fit_segments: Vec<SegmentRow>,
@@ -253,15 +259,14 @@ pub fn segment_rows(
     cal: &Calibration,
 ) -> Result<Vec<SegmentRow>, ReportError> {
     let g = cal.gravity_m_s2;
-    let stat = Compensator::new(cal, LeverMode::Off)
-        .map_err(|e| ReportError::Calibration(e.to_string()))?;
-    let full = Compensator::new(cal, LeverMode::RateAndAcceleration)
-        .map_err(|e| ReportError::Calibration(e.to_string()))?;
+    let stat = Compensator::new(cal, LeverMode::Off).map_err(ReportError::Compensator)?;
+    let full =
+        Compensator::new(cal, LeverMode::RateAndAcceleration).map_err(ReportError::Compensator)?;
     let gyro_inv = cal
         .gyro
         .unwrap_or(shared::GyroCorrection::PERFECT)
         .checked_inverse()
-        .map_err(|e| ReportError::Calibration(e.to_string()))?;
+        .map_err(ReportError::Gyro)?;
     let u0 = cal.statics.zero_bias_out;
     let k = cal.statics.scale_out_per_g;
     let trace = |m: &[[f64; 3]; 3]| m[0][0] + m[1][1] + m[2][2];
@@ -384,7 +389,7 @@ pub fn build_report(
                 reference: reference_choice(&cal.reference),
                 ..options.estimate.clone()
             };
-            calibrate_session_stats(plan, stats, &estimate).map_err(|e| e.to_string())
+            calibrate_session_stats(plan, stats, &estimate)
         }
     };
     let mut warnings = Vec::new();
