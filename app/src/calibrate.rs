@@ -94,7 +94,7 @@ pub fn calibrate_session_dir(
     read: &ReadOptions,
 ) -> Result<(Session, Calibrated), CalibrateError> {
     let session = session::read_session(dir, read)?;
-    let hand_gyro = super::hand_gyro::read(dir)?;
+    let hand_gyro = crate::handheld::gyro::read(dir)?;
     let calibrated = calibrate_recording(
         Recording {
             plan: &session.plan,

@@ -1,7 +1,7 @@
 //! Why a calibration use case failed.
 
 use crate::estimate::EstimateError;
-use crate::hand_gyro::HandGyroFileError;
+use crate::handheld::gyro::HandGyroFileError;
 use crate::session::RecordingError;
 
 /// Why [`super::calibrate_session_dir`] produced no calibration; each keeps its cause.

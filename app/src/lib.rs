@@ -10,14 +10,13 @@
 //! - `document`: the result's one JSON shape ([`CalibrationDocument`]), a live run's verification
 //!   included.
 //! - `error`: why a use case failed ([`CalibrateError`]), each cause kept as its source.
-//! - [`in_memory`]: `host segment` (a logger's recording to a session) without writing files until
-//!   asked: the positions and spins found, their coverage, the plan and statistics, the gyro fit.
+//! - [`handheld`]: `host segment` (a logger's recording to a session) without writing files until
+//!   asked: the positions and spins found, their coverage, the plan and statistics, and the gyro
+//!   fit from the hand turns or the table turns ([`handheld::gyro`], [`handheld::table_turn`]).
 //! - [`log_input`]: how to read a logger's file ([`log_input::LogInput`]), the options named as the
 //!   caller spells them.
 //! - [`simulate`]: a virtual unit on a virtual rate table written as a session
 //!   ([`simulate::Simulation`]).
-//! - [`hand_gyro`]: the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`;
-//!   [`table_turn`]: the whole turns on a table that the gyro fit takes as known angles.
 //! - [`walk_source`]: the accelerometers' bias random walk taken from the unit's noise figures
 //!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
 //! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
@@ -34,14 +33,10 @@ pub mod batch;
 pub mod calibrate;
 pub mod document;
 pub mod error;
-pub mod hand_gyro;
-pub mod in_memory;
+pub mod handheld;
 pub mod log_input;
 pub mod segment_order;
-#[cfg(test)]
-mod segmentation_tests;
 pub mod simulate;
-pub mod table_turn;
 pub mod walk_source;
 
 pub use calibrate::{

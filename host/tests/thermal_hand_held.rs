@@ -9,7 +9,7 @@ use estimator::estimate::handheld_gyro::HandGyroFit;
 use estimator::sim::handheld::{logger_unit, simulate_hand, GyroTruth, HandSpec};
 use estimator::sim::montecarlo::{static_errors, StaticErrors};
 use estimator::sim::testkit::Rng;
-use host::app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
+use host::app::handheld::{segment_recording, SegmentChoices, SegmentedSession};
 use host::app::{calibrate_recording, CalibrateOptions, Calibrated, Recording as Session};
 use recording::session::import::Recording;
 use recording::session::segment::SegmentOptions;

@@ -8,8 +8,8 @@
 //! keyword spelling ([`recording::spelling::Spelling::Keywords`]); the few refusals whose text is
 //! the command line's own are said here in Python's words ([`PyAccelErr::python_message`]).
 
-use app::hand_gyro::HandGyroFileError;
-use app::in_memory::{InMemoryError, WriteError};
+use app::handheld::gyro::HandGyroFileError;
+use app::handheld::{InMemoryError, WriteError};
 use app::log_input::LogInputError;
 use app::simulate::SimulationError;
 use app::CalibrateError;

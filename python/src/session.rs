@@ -1,10 +1,10 @@
 //! `segment`, `segment_file`, `load_session` and the `Session` they give: a hand-held recording cut
-//! into still positions by `host segment`'s own steps (`app::in_memory`), or a recorded
+//! into still positions by `host segment`'s own steps (`app::handheld`), or a recorded
 //! session directory read by `host calibrate --input`'s reader.
 
 use crate::errors::{usage, IntoPy, PyAccelErr};
-use app::hand_gyro;
-use app::in_memory::{segment_recording, SegmentChoices, SegmentedSession};
+use app::handheld::gyro as hand_gyro;
+use app::handheld::{segment_recording, SegmentChoices, SegmentedSession};
 use app::log_input::LogInput;
 use estimator::estimate::gyro::GyroEstimate;
 use numpy::ndarray::{ArrayView1, ArrayView2};

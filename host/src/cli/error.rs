@@ -99,7 +99,7 @@ pub enum CliError {
     GyroRefused(Vec<String>),
     /// The hand-held session's gyro.
     #[error(transparent)]
-    HandGyro(#[from] crate::app::hand_gyro::HandGyroFileError),
+    HandGyro(#[from] crate::app::handheld::gyro::HandGyroFileError),
     /// The options that say how to read a logger's file do not fit together.
     #[error(transparent)]
     LogInput(#[from] crate::app::log_input::LogInputError),
@@ -184,9 +184,9 @@ impl CliError {
     }
 }
 
-impl From<crate::app::in_memory::InMemoryError> for CliError {
-    fn from(e: crate::app::in_memory::InMemoryError) -> Self {
-        use crate::app::in_memory::InMemoryError;
+impl From<crate::app::handheld::InMemoryError> for CliError {
+    fn from(e: crate::app::handheld::InMemoryError) -> Self {
+        use crate::app::handheld::InMemoryError;
         match e {
             InMemoryError::GyroRefused(problems) => CliError::GyroRefused(problems),
             InMemoryError::HandGyro(e) => CliError::HandGyro(e),
@@ -195,9 +195,9 @@ impl From<crate::app::in_memory::InMemoryError> for CliError {
     }
 }
 
-impl From<crate::app::in_memory::WriteError> for CliError {
-    fn from(e: crate::app::in_memory::WriteError) -> Self {
-        use crate::app::in_memory::WriteError;
+impl From<crate::app::handheld::WriteError> for CliError {
+    fn from(e: crate::app::handheld::WriteError) -> Self {
+        use crate::app::handheld::WriteError;
         match e {
             WriteError::Session(e) => e.into(),
             WriteError::Gyro(e) => e.into(),

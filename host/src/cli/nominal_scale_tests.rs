@@ -22,10 +22,11 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
         panic!("{line}")
     };
     let out = segment(&a).unwrap_or_else(|e| panic!("{line}: {e}"));
-    let warnings = crate::app::in_memory::recording_warnings(&out.recording);
+    let warnings = crate::app::handheld::recording_warnings(&out.recording);
     let fit = out.gyro.unwrap_or_else(|e| panic!("{line}: gyro {e}"));
     // The session's warnings are not kept in the outcome: rebuild the note from the fit.
-    let note = crate::app::hand_gyro::common_scale_note(&fit, &out.recording, Default::default());
+    let note =
+        crate::app::handheld::gyro::common_scale_note(&fit, &out.recording, Default::default());
     (fit, warnings.into_iter().chain(note).collect())
 }
 

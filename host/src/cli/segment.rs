@@ -4,8 +4,8 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::app::in_memory::{find, SegmentChoices, SegmentedSession};
-use crate::app::table_turn::FoundTableTurn;
+use crate::app::handheld::table_turn::FoundTableTurn;
+use crate::app::handheld::{find, SegmentChoices, SegmentedSession};
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Formats};
@@ -24,7 +24,7 @@ use shared::OutputUnit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-pub use crate::app::hand_gyro::GYRO_FILE;
+pub use crate::app::handheld::gyro::GYRO_FILE;
 
 mod present;
 use present::{document, figure, Written};

@@ -3,9 +3,19 @@
 //! accepted or refused — without writing the session directory, and what `host calibrate --input`
 //! would read back from that directory ([`SegmentedSession::stats`], [`SegmentedSession::gyro_estimate`]).
 //! The Python package (`python/`) calibrates from it without files.
+//!
+//! The hand-held method's use case is here whole: this module (a logger's recording to a session),
+//! [`gyro`] (the gyro fit from the hand turns, accepted or refused, kept as `gyro.toml`) and
+//! [`table_turn`] (the whole turns on a table that the gyro fit takes as known angles). The
+//! layers below hold their own parts: the recording's segmentation and coverage, the estimator's
+//! hand-turn gyro fit (`estimate::handheld_gyro`) and simulated hand (`sim::handheld`); above,
+//! the device's live hand-held mode (`device::handheld`, `device::sim_hand`).
 
-use super::hand_gyro::{self, HandGyroFileError, GYRO_FILE};
-use super::table_turn::{find_table_turns, FoundTableTurn};
+pub mod gyro;
+#[cfg(test)]
+mod segmentation_tests;
+pub mod table_turn;
+
 use crate::estimate::gyro::GyroEstimate;
 use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
 use crate::output_file::{write_atomic, OutputFileError};
@@ -18,8 +28,10 @@ use crate::session::segment::{
     find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
 use crate::session::{Plan, RecordingError, SegmentStats};
+use gyro::{HandGyroFileError, GYRO_FILE};
 use recording::spelling::Spelling;
 use std::path::Path;
+use table_turn::{find_table_turns, FoundTableTurn};
 
 /// What `host segment`'s options decide besides the recording.
 #[derive(Clone, Debug, PartialEq)]
@@ -87,7 +99,7 @@ pub enum InMemoryError {
     /// The gyro fit failed in a way that says the input is wrong (its unit).
     #[error(transparent)]
     HandGyro(#[from] HandGyroFileError),
-    /// A gyro fit that no real gyro gives: its problems (`hand_gyro::problems`).
+    /// A gyro fit that no real gyro gives: its problems (`gyro::problems`).
     #[error("the gyro fit is refused:\n  - {}", .0.join("\n  - "))]
     GyroRefused(Vec<String>),
 }
@@ -196,7 +208,7 @@ impl Found {
                     .map(|t| t.after_still),
             );
             warnings.extend(
-                hand_gyro::dropped_turns(&recording, &segmentation)
+                gyro::dropped_turns(&recording, &segmentation)
                     .iter()
                     .map(ToString::to_string),
             );
@@ -206,17 +218,17 @@ impl Found {
                     .filter(|t| t.used().is_none())
                     .map(ToString::to_string),
             );
-            let fit = hand_gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?;
-            let max_misfit_deg = hand_gyro::plausible_misfit_deg(position_set, &plan);
+            let fit = gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?;
+            let max_misfit_deg = gyro::plausible_misfit_deg(position_set, &plan);
             (
-                fit.and_then(|f| hand_gyro::undetermined(f, max_misfit_deg)),
+                fit.and_then(|f| gyro::undetermined(f, max_misfit_deg)),
                 table_turns,
             )
         } else {
             (Err(HandGyroError::NotAsked), Vec::new())
         };
         if let Ok(fit) = &gyro {
-            warnings.extend(hand_gyro::common_scale_note(
+            warnings.extend(gyro::common_scale_note(
                 fit,
                 &recording,
                 choices.segment.spelling,
@@ -238,10 +250,10 @@ impl Found {
 }
 
 impl SegmentedSession {
-    /// Why the gyro fit is not one a real gyro gives (`hand_gyro::problems`), if it is not.
+    /// Why the gyro fit is not one a real gyro gives (`gyro::problems`), if it is not.
     pub fn gyro_problems(&self) -> Option<Vec<String>> {
-        let max_misfit_deg = hand_gyro::plausible_misfit_deg(self.position_set, &self.plan);
-        let problems = hand_gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg, self.spelling);
+        let max_misfit_deg = gyro::plausible_misfit_deg(self.position_set, &self.plan);
+        let problems = gyro::problems(self.gyro.as_ref().ok()?, max_misfit_deg, self.spelling);
         (!problems.is_empty()).then_some(problems)
     }
 
@@ -254,7 +266,7 @@ impl SegmentedSession {
     /// the same text, so that the calibration is the same to the last bit.
     pub fn gyro_estimate(&self) -> Result<Option<GyroEstimate>, HandGyroFileError> {
         match &self.gyro {
-            Ok(fit) => hand_gyro::parse(&hand_gyro::file_text(fit), Path::new(GYRO_FILE)).map(Some),
+            Ok(fit) => gyro::parse(&gyro::file_text(fit), Path::new(GYRO_FILE)).map(Some),
             Err(_) => Ok(None),
         }
     }
@@ -270,7 +282,7 @@ impl SegmentedSession {
             overwrite,
         )?;
         if let Ok(fit) = &self.gyro {
-            let text = hand_gyro::file_text(fit);
+            let text = gyro::file_text(fit);
             write_atomic(&dir.join(GYRO_FILE), text.as_bytes(), overwrite)?;
         }
         Ok(rows)
