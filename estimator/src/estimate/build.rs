@@ -51,7 +51,9 @@ pub(crate) fn build_mounts(plan: &Plan, segs: &[SessionSeg]) -> (Vec<Mount>, Vec
 }
 
 /// Segment models of the used segments. Ramps are weighted with the static noise (their own output
-/// variance includes the ramp's signal).
+/// variance includes the ramp's signal). `seg_bias` gives segments their own gyro bias in place of
+/// `correction`'s (the fitted bias over the segment under a gyro bias walk, docs/model.md §11.6).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn build_models(
     plan: &Plan,
     segs: &[SessionSeg],
@@ -60,6 +62,7 @@ pub(crate) fn build_models(
     mounts: &[Mount],
     seg_mount: &[usize],
     correction: Option<&(RowMajor3, [f64; 3])>,
+    seg_bias: &[(usize, [f64; 3])],
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
     let static_bias = static_gyro(segs);
@@ -73,7 +76,10 @@ pub(crate) fn build_models(
         // The body's rate through the gyro model when one is estimated (docs/model.md §8), else
         // through its static reading alone: a gyro's bias is no rotation, and one of hundreds of
         // °/s (raw counts of an unsigned output) would otherwise read as a centripetal term.
-        let c = correction.copied().unwrap_or((IDENTITY, static_bias));
+        let mut c = correction.copied().unwrap_or((IDENTITY, static_bias));
+        if let Some((_, b)) = seg_bias.iter().find(|(q, _)| *q == k) {
+            c.1 = *b;
+        }
         let (wwt, wdot) = super::gyro::corrected_moments(
             &st.mean_wwt,
             &st.mean_w_rad_s,
@@ -216,7 +222,9 @@ pub(crate) fn build_gyro_block(
             core::array::from_fn(|j| per_sample[i][j] / n + if i == j { 1e-14 } else { 0.0 })
         });
         let tilt = mounts[seg_mount[k]].geometry;
-        if let Some(m) = super::gyro::GyroMean::new(k, tilt, rate, s.stats.mean_w_rad_s, se) {
+        let span = [s.stats.t_first_s, s.stats.t_last_s];
+        let mean = s.stats.mean_w_rad_s;
+        if let Some(m) = super::gyro::GyroMean::new(k, tilt, rate, mean, se, span) {
             means.push(m);
         }
     }
@@ -224,6 +232,7 @@ pub(crate) fn build_gyro_block(
         base,
         means,
         rate_sigma_rel: plan.table_rate_sigma_ppm() * 1e-6,
+        walk: None,
     }
 }
 

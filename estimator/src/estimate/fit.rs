@@ -11,7 +11,7 @@ use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, drift, gyro, joint, paper, plausibility, screen, thermal};
-use super::{thermal_gyro, WalkEstimate};
+use super::{gyro_drift, thermal_gyro, WalkEstimate};
 use super::{
     BiasWalk, BodyFrame, CalibrationOutcome, EstimateError, EstimateOptions, Exclusion, FitSummary,
     GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability, SegmentDiagnostic,
@@ -165,7 +165,7 @@ fn prepare(
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let noise = screen::pooled_noise(&segs);
     let (mounts, seg_mount) = build::build_mounts(plan, &segs);
-    let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
+    let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None, &[]);
     let mut problem = Problem::new(models, mounts);
     problem.single_package = options.single_package;
     let mut stage = |segs: &mut [SessionSeg], problem: &mut Problem| {
@@ -212,14 +212,17 @@ fn setup_gyro(plan: &Plan, options: &EstimateOptions, p: &mut Prepared) -> Setup
         options.gyro_model == GyroModel::Estimate && spins && options.method == Method::Joint;
     let gyro_base = p.problem.n_params();
     if gyro_on {
-        p.problem.gyro_block = Some(build::build_gyro_block(
+        let mut blk = build::build_gyro_block(
             plan,
             segs,
             &p.noise,
             &p.problem.mounts,
             &p.seg_mount,
             gyro_base,
-        ));
+        );
+        // The gyro bias's random walk, when given (docs/model.md §11.6).
+        blk.walk = gyro_drift::walk(options, segs);
+        p.problem.gyro_block = Some(blk);
     } else {
         p.problem.gyro = build::build_gyro(
             plan,
