@@ -44,6 +44,8 @@ pub mod gyro;
 pub mod gyro_check;
 mod gyro_drift;
 #[cfg(test)]
+mod gyro_drift_tests;
+#[cfg(test)]
 mod gyro_tests;
 pub mod handheld_gyro;
 mod joint;
