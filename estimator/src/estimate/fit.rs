@@ -72,6 +72,13 @@ fn fit_session(
     }
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
+    if options.gyro_bias_walk_deg_s_sqrt_s > 0.0 && setup.gyro_base.is_none() {
+        prepared.warnings.push(
+            "gyro: the gyro bias random walk given has no effect: the session estimates no gyro \
+             model (no spins, the gyro taken as perfect, or the paper's method; docs/model.md §11.6)"
+                .into(),
+        );
+    }
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
     if options.bias_walk == BiasWalk::Estimate {

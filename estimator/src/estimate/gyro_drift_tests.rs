@@ -364,3 +364,20 @@ fn the_dense_gyro_path_without_a_walk_is_the_per_mean_path() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-12, "{worst}");
 }
+
+/// A session without spins estimates no gyro model: a gyro walk given there is said to have no
+/// effect, and the fit is the one without it.
+#[test]
+fn a_gyro_walk_without_spins_is_said_to_have_no_effect() {
+    let truth = testkit::paper_unit();
+    let mut plan = plan();
+    plan.segments.retain(|s| s.is_static());
+    let stats = simulate(&plan, &truth, 3e-4, 23);
+    let without = fit(&plan, &stats, 0.0);
+    let with = fit(&plan, &stats, 3e-4);
+    let said = |o: &CalibrationOutcome| o.warnings.iter().any(|w| w.contains("§11.6"));
+    assert!(said(&with) && !said(&without), "{:?}", with.warnings);
+    assert!(with.gyro.is_none());
+    assert_eq!(with.calibration, without.calibration);
+    assert_eq!(with.uncertainty, without.uncertainty);
+}
