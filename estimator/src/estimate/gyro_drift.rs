@@ -73,10 +73,13 @@ fn residuals(blk: &GyroBlock, t: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
 }
 
 /// Adds the gyro means of `blk` to the normal equations with the full covariance of
-/// [`covariance`] under `d`, whitened by its Cholesky factor `L` (`L⁻¹ r`, `L⁻¹ J`); `false` (and
-/// nothing added) when that covariance is not positive definite, so that the caller weights each
-/// mean by its own noise.
-pub(crate) fn add_means(ne: &mut NormalSystem, blk: &GyroBlock, d: &Drift, t: &[f64]) -> bool {
+/// [`covariance`] under its walk, whitened by its Cholesky factor `L` (`L⁻¹ r`, `L⁻¹ J`); `false`
+/// (and nothing added) without a walk or when that covariance is not positive definite, so that
+/// the caller weights each mean by its own noise.
+pub(crate) fn add_means(ne: &mut NormalSystem, blk: &GyroBlock, t: &[f64]) -> bool {
+    let Some(d) = blk.walk.as_ref().filter(|d| d.active()) else {
+        return false;
+    };
     let Some(chol) = covariance(blk, d).cholesky() else {
         return false;
     };

@@ -144,13 +144,16 @@ fn run(walk: f64, seeds: u64) -> Run {
     Run { walk, rows }
 }
 
+/// Which group of a fit's figures: its (error, error/σ) pairs.
+type Pick = fn(&Figures) -> &Vec<(f64, f64)>;
+
 /// RMS of the errors and of error/σ of one group over the seeds of fit `k`.
-fn group(rows: &[[Figures; 2]], k: usize, pick: fn(&Figures) -> &Vec<(f64, f64)>) -> (f64, f64) {
+fn group(rows: &[[Figures; 2]], k: usize, pick: Pick) -> (f64, f64) {
     let all = || rows.iter().flat_map(move |r| pick(&r[k]).iter().copied());
     (rms(all().map(|p| p.0)), rms(all().map(|p| p.1)))
 }
 
-const GROUPS: [(&str, fn(&Figures) -> &Vec<(f64, f64)>); 3] = [
+const GROUPS: [(&str, Pick); 3] = [
     ("scale ppm", |f| &f.scale),
     ("misalignment µrad", |f| &f.misalignment),
     ("bias °/s", |f| &f.bias),

@@ -447,13 +447,8 @@ impl NormalSystem {
     /// The gyro model's mean rates and its priors (docs/model.md §8); with a gyro bias walk the
     /// means are weighted with its covariance across the session (§11.6).
     fn add_gyro_block(&mut self, blk: &GyroBlock, t: &[f64]) {
-        let dense = blk
-            .walk
-            .as_ref()
-            .filter(|d| d.active())
-            .is_some_and(|d| gyro_drift::add_means(self, blk, d, t));
-        let per_mean = if dense { &[][..] } else { &blk.means[..] };
-        for g in per_mean {
+        let dense = gyro_drift::add_means(self, blk, t);
+        for g in if dense { &[][..] } else { &blk.means[..] } {
             let jac = g.jacobian(t, blk.base);
             let res = g.whitened_residual(t, blk.base);
             self.chi2 += res.iter().map(|v| v * v).sum::<f64>();
