@@ -384,3 +384,37 @@ fn a_gyro_walk_without_spins_is_said_to_have_no_effect() {
     assert_eq!(with.calibration, without.calibration);
     assert_eq!(with.uncertainty, without.uncertainty);
 }
+
+/// A walk given three times too weak or too strong (an Allan K read off by that much): the errors
+/// of G and b against the truth and the rms of error/σ, beside the constant-bias fit and the true
+/// walk, at 3·10⁻⁴ °/s/√s (docs/model.md §11.6). `GYRO_WALK_SEEDS=12 cargo test -p estimator --lib
+/// gyro_walk_misstated -- --ignored --nocapture` prints them.
+#[test]
+#[ignore]
+fn gyro_walk_misstated() {
+    let truth = testkit::paper_unit();
+    let plan = plan();
+    let walk = 3e-4;
+    let given = [0.0, walk / 3.0, walk, 3.0 * walk];
+    let rows: Vec<Vec<Figures>> = (0..seeds())
+        .map(|s| {
+            let seed = 5000 + s + (walk * 1e7) as u64;
+            let stats = simulate(&plan, &truth, walk, seed);
+            given
+                .iter()
+                .map(|&w| figures(&truth, &fit(&plan, &stats, w), seed))
+                .collect()
+        })
+        .collect();
+    for (k, w) in given.iter().enumerate() {
+        let g: Vec<String> = GROUPS
+            .iter()
+            .map(|(name, pick)| {
+                let all = || rows.iter().flat_map(|r| pick(&r[k]).iter().copied());
+                let (e, z) = (rms(all().map(|p| p.0)), rms(all().map(|p| p.1)));
+                format!("{name} {e:.4} ({z:.2})")
+            })
+            .collect();
+        println!("walk {walk} °/s/√s, fitted with {w:.0e}: {}", g.join(", "));
+    }
+}
