@@ -431,6 +431,12 @@ fn outcome(
         single_package: options.single_package,
         package_test: s.package_test,
         bias_track: drift::track(&problem, &main.theta, &main.cov, &segs),
+        gyro_bias_walk_deg_s_sqrt_s: problem
+            .gyro_block
+            .as_ref()
+            .and_then(|b| b.walk.as_ref())
+            .filter(|d| d.active())
+            .map(|_| options.gyro_bias_walk_deg_s_sqrt_s),
         bias_walk: walk,
     }
 }

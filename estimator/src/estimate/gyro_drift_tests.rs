@@ -249,7 +249,9 @@ fn a_zero_gyro_walk_is_the_constant_bias_fit() {
     assert_eq!(today.parameters, zero.parameters);
     assert_eq!(today.fit, zero.fit);
     assert_eq!(today.gyro, zero.gyro);
+    assert_eq!(zero.gyro_bias_walk_deg_s_sqrt_s, None);
     let tiny = fit(&plan, &stats, 1e-12);
+    assert_eq!(tiny.gyro_bias_walk_deg_s_sqrt_s, Some(1e-12));
     for ((name, v0, s0), (_, v1, s1)) in today.parameters.iter().zip(&tiny.parameters) {
         if *s0 > 0.0 {
             assert!((v0 - v1).abs() <= 1e-9 * s0, "{name}: {v0} {v1} ± {s0}");
@@ -380,7 +382,7 @@ fn a_gyro_walk_without_spins_is_said_to_have_no_effect() {
     let with = fit(&plan, &stats, 3e-4);
     let said = |o: &CalibrationOutcome| o.warnings.iter().any(|w| w.contains("§11.6"));
     assert!(said(&with) && !said(&without), "{:?}", with.warnings);
-    assert!(with.gyro.is_none());
+    assert!(with.gyro.is_none() && with.gyro_bias_walk_deg_s_sqrt_s.is_none());
     assert_eq!(with.calibration, without.calibration);
     assert_eq!(with.uncertainty, without.uncertainty);
 }
