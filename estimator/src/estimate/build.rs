@@ -50,10 +50,17 @@ pub(crate) fn build_mounts(plan: &Plan, segs: &[SessionSeg]) -> (Vec<Mount>, Vec
     (mounts, of_seg)
 }
 
+/// The body's rate through the gyro model (docs/model.md §8): `(G⁻¹, b)`, and under a gyro bias
+/// walk each segment's own fitted bias in place of `b` (§11.6).
+pub(crate) struct RateCorrection<'a> {
+    /// `G⁻¹` and `b`.
+    pub gyro: (RowMajor3, [f64; 3]),
+    /// `(segment, bias)`: the segments whose rate is corrected with a bias of their own.
+    pub seg_bias: &'a [(usize, [f64; 3])],
+}
+
 /// Segment models of the used segments. Ramps are weighted with the static noise (their own output
-/// variance includes the ramp's signal). `seg_bias` gives segments their own gyro bias in place of
-/// `correction`'s (the fitted bias over the segment under a gyro bias walk, docs/model.md §11.6).
-#[allow(clippy::too_many_arguments)]
+/// variance includes the ramp's signal).
 pub(crate) fn build_models(
     plan: &Plan,
     segs: &[SessionSeg],
@@ -61,8 +68,7 @@ pub(crate) fn build_models(
     options: &EstimateOptions,
     mounts: &[Mount],
     seg_mount: &[usize],
-    correction: Option<&(RowMajor3, [f64; 3])>,
-    seg_bias: &[(usize, [f64; 3])],
+    correction: Option<&RateCorrection<'_>>,
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
     let static_bias = static_gyro(segs);
@@ -76,8 +82,8 @@ pub(crate) fn build_models(
         // The body's rate through the gyro model when one is estimated (docs/model.md §8), else
         // through its static reading alone: a gyro's bias is no rotation, and one of hundreds of
         // °/s (raw counts of an unsigned output) would otherwise read as a centripetal term.
-        let mut c = correction.copied().unwrap_or((IDENTITY, static_bias));
-        if let Some((_, b)) = seg_bias.iter().find(|(q, _)| *q == k) {
+        let mut c = correction.map_or((IDENTITY, static_bias), |r| r.gyro);
+        if let Some((_, b)) = correction.and_then(|r| r.seg_bias.iter().find(|(q, _)| *q == k)) {
             c.1 = *b;
         }
         let (wwt, wdot) = super::gyro::corrected_moments(

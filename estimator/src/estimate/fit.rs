@@ -172,7 +172,7 @@ fn prepare(
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let noise = screen::pooled_noise(&segs);
     let (mounts, seg_mount) = build::build_mounts(plan, &segs);
-    let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None, &[]);
+    let models = build::build_models(plan, &segs, &noise, options, &mounts, &seg_mount, None);
     let mut problem = Problem::new(models, mounts);
     problem.single_package = options.single_package;
     let mut stage = |segs: &mut [SessionSeg], problem: &mut Problem| {

@@ -44,8 +44,10 @@ impl Context<'_> {
             self.options,
             &problem.mounts,
             self.seg_mount,
-            Some(correction),
-            &seg_bias,
+            Some(&build::RateCorrection {
+                gyro: *correction,
+                seg_bias: &seg_bias,
+            }),
         );
         problem.groups.clear();
         if let Some(r) = self.rests {

@@ -143,16 +143,7 @@ fn a_fixed_lever_arm_component_does_not_keep_its_start_value() {
     screen::screen(&plan, &mut segs, &options, &mut excluded);
     let noise = screen::pooled_noise(&segs);
     let (mounts, seg_mount) = build::build_mounts(&plan, &segs);
-    let models = build::build_models(
-        &plan,
-        &segs,
-        &noise,
-        &options,
-        &mounts,
-        &seg_mount,
-        None,
-        &[],
-    );
+    let models = build::build_models(&plan, &segs, &noise, &options, &mounts, &seg_mount, None);
     let mut problem = solve::Problem::new(models, mounts);
     let planned_static = plan.segments.iter().filter(|s| s.is_static()).count();
     let static_fit = screen::static_fit_with_attitude_check(
