@@ -19,6 +19,10 @@ pub(crate) const MAX_TIMEOUT_S: f64 = 3600.0;
 /// milli-g every second, far beyond any accelerometer worth calibrating.
 pub(crate) const MAX_BIAS_WALK_MG_SQRT_S: f64 = 1.0;
 
+/// Strongest gyro bias random walk `--gyro-bias-walk` takes, °/s/√s: a bias that wanders a whole
+/// °/s every second is no gyro worth calibrating (a plain MEMS gyro's is 10⁻⁴–10⁻³).
+pub(crate) const MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S: f64 = 1.0;
+
 /// Most samples in one streamed window.
 pub(crate) const MAX_WINDOW: u32 = 1_000_000;
 

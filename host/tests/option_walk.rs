@@ -210,11 +210,13 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
         t.push(("calibrate", o, Everywhere(ALWAYS_FIT)));
         t.push(("batch", o, Everywhere(ALWAYS_FIT)));
     }
-    // The bias walk weights the joint fit; the paper's method has no such weighting.
+    // The bias walks weight the joint fit; the paper's method has no such weighting (and no gyro
+    // model for the gyro's walk to weigh).
     for (o, args) in [
         ("bias-walk", &["--bias-walk", "0.002"][..]),
         ("bias-walk-estimate", &["--bias-walk-estimate"][..]),
         ("bias-walk-from", &["--bias-walk-from", "{cal}"][..]),
+        ("gyro-bias-walk", &["--gyro-bias-walk", "0.001"][..]),
     ] {
         for (sub, head) in [
             (
@@ -231,7 +233,12 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
             t.push((sub, o, NotIn(Box::leak(Box::new([line])))));
         }
     }
-    for o in ["bias-walk", "bias-walk-estimate", "bias-walk-from"] {
+    for o in [
+        "bias-walk",
+        "bias-walk-estimate",
+        "bias-walk-from",
+        "gyro-bias-walk",
+    ] {
         t.push((
             "report",
             o,

@@ -301,6 +301,10 @@ pub struct CalibrationSummary {
     /// the session (docs/model.md §11). Absent with a constant bias.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bias_walk: Option<BiasWalkSummary>,
+    /// The gyro's bias random walk the gyro model's mean rates were weighted with, °/s/√s
+    /// (docs/model.md §11.6). Absent with a constant gyro bias or without a gyro model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
 }
 
 /// The bias random walk of a fit (docs/model.md §11.3, §11.4).
@@ -485,6 +489,7 @@ impl CalibrationSummary {
                 .single_package
                 .then(|| crate::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
             bias_walk: BiasWalkSummary::of(outcome),
+            gyro_bias_walk_deg_s_sqrt_s: outcome.gyro_bias_walk_deg_s_sqrt_s,
         }
     }
 

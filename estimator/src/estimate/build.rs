@@ -50,6 +50,15 @@ pub(crate) fn build_mounts(plan: &Plan, segs: &[SessionSeg]) -> (Vec<Mount>, Vec
     (mounts, of_seg)
 }
 
+/// The body's rate through the gyro model (docs/model.md §8): `(G⁻¹, b)`, and under a gyro bias
+/// walk each segment's own fitted bias in place of `b` (§11.6).
+pub(crate) struct RateCorrection<'a> {
+    /// `G⁻¹` and `b`.
+    pub gyro: (RowMajor3, [f64; 3]),
+    /// `(segment, bias)`: the segments whose rate is corrected with a bias of their own.
+    pub seg_bias: &'a [(usize, [f64; 3])],
+}
+
 /// Segment models of the used segments. Ramps are weighted with the static noise (their own output
 /// variance includes the ramp's signal).
 pub(crate) fn build_models(
@@ -59,7 +68,7 @@ pub(crate) fn build_models(
     options: &EstimateOptions,
     mounts: &[Mount],
     seg_mount: &[usize],
-    correction: Option<&(RowMajor3, [f64; 3])>,
+    correction: Option<&RateCorrection<'_>>,
 ) -> Vec<SegModel> {
     let g = plan.gravity_m_s2;
     let static_bias = static_gyro(segs);
@@ -73,7 +82,10 @@ pub(crate) fn build_models(
         // The body's rate through the gyro model when one is estimated (docs/model.md §8), else
         // through its static reading alone: a gyro's bias is no rotation, and one of hundreds of
         // °/s (raw counts of an unsigned output) would otherwise read as a centripetal term.
-        let c = correction.copied().unwrap_or((IDENTITY, static_bias));
+        let mut c = correction.map_or((IDENTITY, static_bias), |r| r.gyro);
+        if let Some((_, b)) = correction.and_then(|r| r.seg_bias.iter().find(|(q, _)| *q == k)) {
+            c.1 = *b;
+        }
         let (wwt, wdot) = super::gyro::corrected_moments(
             &st.mean_wwt,
             &st.mean_w_rad_s,
@@ -216,7 +228,9 @@ pub(crate) fn build_gyro_block(
             core::array::from_fn(|j| per_sample[i][j] / n + if i == j { 1e-14 } else { 0.0 })
         });
         let tilt = mounts[seg_mount[k]].geometry;
-        if let Some(m) = super::gyro::GyroMean::new(k, tilt, rate, s.stats.mean_w_rad_s, se) {
+        let span = [s.stats.t_first_s, s.stats.t_last_s];
+        let mean = s.stats.mean_w_rad_s;
+        if let Some(m) = super::gyro::GyroMean::new(k, tilt, rate, mean, se, span) {
             means.push(m);
         }
     }
@@ -224,6 +238,7 @@ pub(crate) fn build_gyro_block(
         base,
         means,
         rate_sigma_rel: plan.table_rate_sigma_ppm() * 1e-6,
+        walk: None,
     }
 }
 

@@ -11,7 +11,7 @@ use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, drift, gyro, joint, paper, plausibility, screen, thermal};
-use super::{thermal_gyro, WalkEstimate};
+use super::{gyro_drift, thermal_gyro, WalkEstimate};
 use super::{
     BiasWalk, BodyFrame, CalibrationOutcome, EstimateError, EstimateOptions, Exclusion, FitSummary,
     GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability, SegmentDiagnostic,
@@ -72,6 +72,13 @@ fn fit_session(
     }
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
+    if options.gyro_bias_walk_deg_s_sqrt_s > 0.0 && setup.gyro_base.is_none() {
+        prepared.warnings.push(
+            "gyro: the gyro bias random walk given has no effect: the session estimates no gyro \
+             model (no spins, the gyro taken as perfect, or the paper's method; docs/model.md §11.6)"
+                .into(),
+        );
+    }
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
     if options.bias_walk == BiasWalk::Estimate {
@@ -212,14 +219,17 @@ fn setup_gyro(plan: &Plan, options: &EstimateOptions, p: &mut Prepared) -> Setup
         options.gyro_model == GyroModel::Estimate && spins && options.method == Method::Joint;
     let gyro_base = p.problem.n_params();
     if gyro_on {
-        p.problem.gyro_block = Some(build::build_gyro_block(
+        let mut blk = build::build_gyro_block(
             plan,
             segs,
             &p.noise,
             &p.problem.mounts,
             &p.seg_mount,
             gyro_base,
-        ));
+        );
+        // The gyro bias's random walk, when given (docs/model.md §11.6).
+        blk.walk = gyro_drift::walk(options, segs);
+        p.problem.gyro_block = Some(blk);
     } else {
         p.problem.gyro = build::build_gyro(
             plan,
@@ -421,6 +431,12 @@ fn outcome(
         single_package: options.single_package,
         package_test: s.package_test,
         bias_track: drift::track(&problem, &main.theta, &main.cov, &segs),
+        gyro_bias_walk_deg_s_sqrt_s: problem
+            .gyro_block
+            .as_ref()
+            .and_then(|b| b.walk.as_ref())
+            .filter(|d| d.active())
+            .map(|_| options.gyro_bias_walk_deg_s_sqrt_s),
         bias_walk: walk,
     }
 }

@@ -55,16 +55,22 @@ pub(crate) struct GyroMean {
     pub mean_w_rad_s: [f64; 3],
     /// `L⁻¹` of the mean's covariance.
     pub whiten: RowMajor3,
+    /// The mean's own covariance (its noise), (rad/s)²: the gyro walk's dense weighting adds the
+    /// walk's share to it (docs/model.md §11.6).
+    pub se_cov: RowMajor3,
+    /// The segment's first and last sample, s (where the gyro walk's share is taken over).
+    pub span_s: [f64; 2],
 }
 
 impl GyroMean {
-    /// Builds one; `None` when the covariance is not positive definite.
+    /// Builds one over the span `span_s`; `None` when the covariance is not positive definite.
     pub fn new(
         seg: usize,
         tilt: TiltGeometry,
         rate_rad_s: f64,
         mean_w_rad_s: [f64; 3],
         se_cov: RowMajor3,
+        span_s: [f64; 2],
     ) -> Option<GyroMean> {
         let l = linalg::to_na(&se_cov).cholesky()?.l();
         let whiten = linalg::from_na(&l.try_inverse()?);
@@ -74,6 +80,8 @@ impl GyroMean {
             rate_rad_s,
             mean_w_rad_s,
             whiten,
+            se_cov,
+            span_s,
         })
     }
 
@@ -137,6 +145,10 @@ pub(crate) struct GyroBlock {
     pub means: Vec<GyroMean>,
     /// 1σ of the table's relative rate error.
     pub rate_sigma_rel: f64,
+    /// The gyro bias's random walk the means are weighted with (docs/model.md §11.6), intensity
+    /// in (rad/s)²/s per gyro axis; `None` (or a zero walk): a constant bias, each mean weighted by
+    /// its own noise.
+    pub walk: Option<super::drift::Drift>,
 }
 
 /// The estimated gyro correction, with 1σ, for the calibration file and the report.

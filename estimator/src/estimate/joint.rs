@@ -3,6 +3,7 @@
 //! the lever terms rerun on the body's rate through the estimated `G`, `b`.
 
 use super::gyro::GyroEstimate;
+use super::gyro_drift;
 use super::solve::{self, Problem};
 use super::{
     attitude, build, chord_to_angle_deg, model, BodyFrame, EstimateError, EstimateOptions,
@@ -22,13 +23,20 @@ pub(crate) struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// The segment models again, the lever terms on the body's rate through `correction`.
+    /// The segment models again, the lever terms on the body's rate through `correction`; under a
+    /// gyro bias walk each segment's rate through its own fitted bias at `theta` (docs/model.md
+    /// §11.6).
     fn rebuild(
         &self,
         segs: &[SessionSeg],
         problem: &mut Problem,
         correction: &(shared::linalg::RowMajor3, [f64; 3]),
+        theta: &[f64],
     ) {
+        let seg_bias = problem
+            .gyro_block
+            .as_ref()
+            .map_or_else(Vec::new, |b| gyro_drift::segment_biases(b, theta));
         problem.models = build::build_models(
             self.plan,
             segs,
@@ -36,7 +44,10 @@ impl Context<'_> {
             self.options,
             &problem.mounts,
             self.seg_mount,
-            Some(correction),
+            Some(&build::RateCorrection {
+                gyro: *correction,
+                seg_bias: &seg_bias,
+            }),
         );
         problem.groups.clear();
         if let Some(r) = self.rests {
@@ -71,7 +82,7 @@ pub(crate) fn with_gyro(
     attitude::tilt_free(&gyro_only, &mut free);
     let f = solve::fit(&gyro_only, start.clone(), free, "gyro model")?;
     if let Some(c) = GyroEstimate::from_fit(&f.theta, &f.cov, base).correction() {
-        ctx.rebuild(segs, problem, &c);
+        ctx.rebuild(segs, problem, &c, &f.theta);
         start[base..].copy_from_slice(&f.theta[base..]);
     }
     let mut j = joint(ctx.plan, segs, problem, start, ctx.options, excluded, frame)?;
@@ -79,7 +90,7 @@ pub(crate) fn with_gyro(
         let Some(c) = GyroEstimate::from_fit(&j.theta, &j.cov, base).correction() else {
             break;
         };
-        ctx.rebuild(segs, problem, &c);
+        ctx.rebuild(segs, problem, &c, &j.theta);
         j = joint(
             ctx.plan,
             segs,

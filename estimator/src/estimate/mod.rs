@@ -26,7 +26,8 @@
 //! `thermal_misalignment` (the temperature model, §9); [`handheld_gyro`] (the gyro from hand turns);
 //! [`package`] (a single-package unit's one lever arm: its preconditions and χ² test, §4.7);
 //! `drift` (the accelerometers' bias random walk: generalised least squares over the segments'
-//! time order, its strength by restricted maximum likelihood, §11);
+//! time order, its strength by restricted maximum likelihood, §11); `gyro_drift` (the gyro's bias
+//! random walk: the gyro model's mean rates by generalised least squares, §11.6);
 //! [`predict`] (Cramér–Rao).
 
 pub mod attitude;
@@ -41,6 +42,9 @@ mod fit_checks;
 mod fixture_tests;
 pub mod gyro;
 pub mod gyro_check;
+mod gyro_drift;
+#[cfg(test)]
+mod gyro_drift_tests;
 #[cfg(test)]
 mod gyro_tests;
 pub mod handheld_gyro;

@@ -96,6 +96,9 @@ pub struct EstimateOptions {
     pub single_package: bool,
     /// The accelerometers' bias random walk (docs/model.md §11).
     pub bias_walk: BiasWalk,
+    /// The gyro's bias random walk, °/s/√s (docs/model.md §11.6): the gyro model's mean rates are
+    /// weighted with its covariance across the session. 0 is a constant gyro bias, the default.
+    pub gyro_bias_walk_deg_s_sqrt_s: f64,
     /// How the caller names these options in refusals and warnings.
     pub spelling: Spelling,
 }
@@ -169,6 +172,7 @@ impl Default for EstimateOptions {
             static_from_rest: false,
             single_package: false,
             bias_walk: BiasWalk::Off,
+            gyro_bias_walk_deg_s_sqrt_s: 0.0,
             spelling: Spelling::Flags,
         }
     }

@@ -252,4 +252,7 @@ pub struct CalibrationOutcome {
     /// Under a bias walk, each segment's fitted bias over the session (its wander from `u0`), in
     /// time order; empty without a walk (docs/model.md §11.4).
     pub bias_track: Vec<super::WalkPoint>,
+    /// The gyro's bias random walk the gyro model's mean rates were weighted with, °/s/√s
+    /// (docs/model.md §11.6); `None` with a constant gyro bias or without a gyro model.
+    pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
 }

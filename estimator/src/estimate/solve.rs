@@ -8,6 +8,7 @@
 
 use super::drift::{self, Drift};
 use super::gyro::{self, GyroBlock, NG};
+use super::gyro_drift;
 use super::model::{is_lever, Mount, SegModel, TiltGeometry, NI};
 use super::EstimateError;
 use nalgebra::{DMatrix, DVector};
@@ -443,9 +444,11 @@ impl NormalSystem {
         }
     }
 
-    /// The gyro model's mean rates and its priors (docs/model.md §8).
+    /// The gyro model's mean rates and its priors (docs/model.md §8); with a gyro bias walk the
+    /// means are weighted with its covariance across the session (§11.6).
     fn add_gyro_block(&mut self, blk: &GyroBlock, t: &[f64]) {
-        for g in &blk.means {
+        let dense = gyro_drift::add_means(self, blk, t);
+        for g in if dense { &[][..] } else { &blk.means[..] } {
             let jac = g.jacobian(t, blk.base);
             let res = g.whitened_residual(t, blk.base);
             self.chi2 += res.iter().map(|v| v * v).sum::<f64>();

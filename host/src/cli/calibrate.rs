@@ -108,13 +108,15 @@ pub struct EstimatorArgs {
     /// (docs/model.md §4.7). A plan with package = "single" implies it.
     #[arg(long)]
     pub single_package: bool,
-    /// The bias random walk: --bias-walk, --bias-walk-estimate, --bias-walk-from.
+    /// The bias random walks: --bias-walk, --bias-walk-estimate, --bias-walk-from, and the gyro's
+    /// --gyro-bias-walk.
     #[command(flatten)]
     pub walk: BiasWalkArgs,
 }
 
 /// The accelerometers' bias random walk (docs/model.md §11): given, estimated or the unit's own;
-/// shared by `host calibrate`, `host batch` and `host report` (whose session fit it weighs).
+/// and the gyro's, given (§11.6); shared by `host calibrate`, `host batch` and `host report` (whose
+/// session fit they weigh).
 #[derive(Clone, Debug, Default, Args)]
 pub struct BiasWalkArgs {
     /// The accelerometers' bias is a random walk of this strength, mg/√s (the Allan K of
@@ -138,6 +140,15 @@ pub struct BiasWalkArgs {
     /// (docs/model.md §11.3). Refused when the file holds none.
     #[arg(long, value_name = "noise.json|UNIT_FILE")]
     pub bias_walk_from: Option<PathBuf>,
+    /// The gyro's bias is a random walk of this strength, °/s/√s (the Allan K of `host noise`'s
+    /// gyro axes, in °/s): the gyro model's mean rates are weighted with the walk's covariance
+    /// across the session (docs/model.md §11.6). 0 is a constant gyro bias, the default.
+    #[arg(
+        long,
+        value_name = "DEG_S_SQRT_S",
+        value_parser = limits::real(0.0, limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S)
+    )]
+    pub gyro_bias_walk: Option<f64>,
 }
 
 impl BiasWalkArgs {
@@ -146,6 +157,11 @@ impl BiasWalkArgs {
         self.bias_walk.is_some_and(|w| w > 0.0)
             || self.bias_walk_estimate
             || self.bias_walk_from.is_some()
+    }
+
+    /// The gyro's bias walk these flags ask for, °/s/√s (0: a constant gyro bias).
+    pub(crate) fn gyro_walk(&self) -> f64 {
+        self.gyro_bias_walk.unwrap_or(0.0)
     }
 
     /// The walk these flags ask for; `--bias-walk-from`'s file is read here.
@@ -179,6 +195,13 @@ impl EstimatorArgs {
                     .into(),
             ));
         }
+        if self.walk.gyro_walk() > 0.0 && self.method == MethodArg::Paper {
+            return Err(CliError::Usage(
+                "--gyro-bias-walk weighs the gyro model's mean rates with the walk (docs/model.md \
+                 §11.6); --method paper estimates no gyro model: leave one out"
+                    .into(),
+            ));
+        }
         Ok(())
     }
 
@@ -196,6 +219,7 @@ impl EstimatorArgs {
             },
             single_package: self.single_package,
             bias_walk,
+            gyro_bias_walk_deg_s_sqrt_s: self.walk.gyro_walk(),
             ..EstimateOptions::default()
         })
     }

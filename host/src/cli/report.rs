@@ -52,6 +52,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
         ..ReportOptions::default()
     };
     options.estimate.bias_walk = bias_walk;
+    options.estimate.gyro_bias_walk_deg_s_sqrt_s = a.walk.gyro_walk();
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
     let out = super::output::Output { json: false, quiet };

@@ -458,3 +458,34 @@ fn plan_check_says_the_common_lever_arm_is_observable() {
         );
     }
 }
+
+/// A gyro bias walk the fit assumed is said: in the text (its strength, docs/model.md §11.6) and
+/// in the JSON summary; without one, neither.
+#[test]
+fn a_gyro_bias_walk_is_said_in_the_text_and_the_summary() {
+    let plan = testkit::paper_plan(OutputUnit::Volts);
+    let (_, stats) = clean_session(&plan, 5);
+    for k in [0.0, 3e-4] {
+        let options = EstimateOptions {
+            gyro_bias_walk_deg_s_sqrt_s: k,
+            ..EstimateOptions::default()
+        };
+        let out = calibrate_session_stats(&plan, &stats, &options).unwrap();
+        let text = render(&out, &[]);
+        let json =
+            serde_json::to_value(CalibrationSummary::new(&out, None, &Limits::default())).unwrap();
+        let field = json
+            .get("gyro_bias_walk_deg_s_sqrt_s")
+            .and_then(|v| v.as_f64());
+        if k > 0.0 {
+            assert!(
+                text.contains("Gyro bias random walk: 0.00030 °/s/√s"),
+                "{text}"
+            );
+            assert_eq!(field, Some(k));
+        } else {
+            assert!(!text.contains("Gyro bias random walk"), "{text}");
+            assert_eq!(field, None);
+        }
+    }
+}

@@ -140,6 +140,7 @@ mod tests {
             passed: true,
             warnings: Vec::new(),
             in_package_size_effect: None,
+            gyro_bias_walk_deg_s_sqrt_s: None,
             bias_walk: None,
         };
         s.parameters = vec![

@@ -69,6 +69,13 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
             w.mg_sqrt_s
         );
     }
+    if let Some(k) = o.gyro_bias_walk_deg_s_sqrt_s {
+        let _ = writeln!(
+            s,
+            "Gyro bias random walk: {k:.5} °/s/√s (given; the gyro's mean rates weighted with it, \
+             its bias b at the session's start; docs/model.md §11.6)"
+        );
+    }
     if !o.bias_track.is_empty() {
         let _ = writeln!(s, "Fitted bias wander from u0 per segment, mg (x, y, z):");
         for p in &o.bias_track {
