@@ -1,6 +1,8 @@
-//! The accelerometers' bias random walk taken from the unit's own noise figures
-//! (`--bias-walk-from FILE`, docs/model.md §11.3): the Allan K of `host noise`'s `noise.json`, or a
-//! unit file's `[noise]` `accel_bias_walk_mg_sqrt_s`.
+//! The bias random walks taken from the unit's own noise figures (`--bias-walk-from FILE`,
+//! docs/model.md §11.3): the Allan K of `host noise`'s `noise.json`, or a unit file's `[noise]`
+//! `accel_bias_walk_mg_sqrt_s`. The accelerometers' walk must be there; the gyro's is taken too
+//! where the file holds it (the gyro axes' K, or `gyro_bias_walk_deg_s_sqrt_s`; §11.6), as one
+//! strength for the three axes: the rms of theirs.
 //!
 //! Units: the fit wants the walk per axis either in mg/√s (turned into output units with the fitted
 //! scale factors) or in output unit/√s as it is. A unit file's `[noise]` is mg/√s already. A
@@ -73,8 +75,17 @@ impl WalkSourceError {
     }
 }
 
-/// The walk per axis from `path`: a `noise.json` (by its `.json` name) or a unit file.
-pub fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
+/// The walks a file gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FileWalks {
+    /// The accelerometers' walk, per axis.
+    pub accel: UnitWalk,
+    /// The gyro's walk, °/s/√s, where the file holds one for all three axes.
+    pub gyro_deg_s_sqrt_s: Option<f64>,
+}
+
+/// The walks from `path`: a `noise.json` (by its `.json` name) or a unit file.
+pub fn walk_from_file(path: &Path) -> Result<FileWalks, WalkSourceError> {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
@@ -88,7 +99,10 @@ pub fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
                 path: path.into(),
                 source,
             })?;
-        return walk_from_noise(&report, path);
+        return Ok(FileWalks {
+            accel: walk_from_noise(&report, path)?,
+            gyro_deg_s_sqrt_s: gyro_walk_from_noise(&report),
+        });
     }
     let unit = UnitFile::load(path)?;
     let noise = NoiseModel::from_unit_file(&unit).map_err(|source| WalkSourceError::Noise {
@@ -96,9 +110,10 @@ pub fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
         source,
     })?;
     match noise {
-        Some(n) if n.accel_bias_walk_mg_sqrt_s > 0.0 => {
-            Ok(UnitWalk::MgSqrtS([n.accel_bias_walk_mg_sqrt_s; 3]))
-        }
+        Some(n) if n.accel_bias_walk_mg_sqrt_s > 0.0 => Ok(FileWalks {
+            accel: UnitWalk::MgSqrtS([n.accel_bias_walk_mg_sqrt_s; 3]),
+            gyro_deg_s_sqrt_s: Some(n.gyro_bias_walk_deg_s_sqrt_s).filter(|&k| k > 0.0),
+        }),
         Some(_) => Err(WalkSourceError::NoWalk {
             path: path.into(),
             what: "its [noise] table has no accel_bias_walk_mg_sqrt_s above 0".into(),
@@ -108,6 +123,24 @@ pub fn walk_from_file(path: &Path) -> Result<UnitWalk, WalkSourceError> {
             what: "it has no [noise] table".into(),
         }),
     }
+}
+
+/// The gyro axes' Allan K of `host noise` (rad/s/√s) as one strength in °/s/√s, the rms of the
+/// three; none unless all three are determined.
+fn gyro_walk_from_noise(r: &NoiseReport) -> Option<f64> {
+    let mut sum_sq = 0.0;
+    for name in &AXES[3..] {
+        let axis = r
+            .axes
+            .iter()
+            .find(|x| x.axis == *name && x.unit == "rad/s")?;
+        let k = axis
+            .terms
+            .random_walk
+            .filter(|k| k.is_finite() && *k > 0.0)?;
+        sum_sq += k * k;
+    }
+    Some((sum_sq / 3.0).sqrt().to_degrees())
 }
 
 /// The accelerometer axes' Allan K of `host noise`, in the unit the fit takes (module docs).
@@ -162,6 +195,11 @@ mod tests {
     use crate::noise::AxisNoise;
 
     fn report(unit: &str, k: [Option<f64>; 3]) -> NoiseReport {
+        with_gyro(unit, k, [None; 3])
+    }
+
+    /// A report whose accelerometer axes have K `k` (in `unit`) and gyro axes `gyro` (rad/s/√s).
+    fn with_gyro(unit: &str, k: [Option<f64>; 3], gyro: [Option<f64>; 3]) -> NoiseReport {
         let axes = AXES
             .iter()
             .enumerate()
@@ -172,7 +210,7 @@ mod tests {
                 terms: NoiseTerms {
                     white_density: Some(1e-3),
                     bias_instability: None,
-                    random_walk: if j < 3 { k[j] } else { None },
+                    random_walk: if j < 3 { k[j] } else { gyro[j - 3] },
                     fits: [
                         TermFit::default(),
                         TermFit::default(),
@@ -238,16 +276,55 @@ mod tests {
         let json = dir.path().join("noise.json");
         let r = report("m/s^2", [Some(9.80665e-5); 3]);
         std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
-        assert_eq!(walk_from_file(&json).unwrap(), UnitWalk::MgSqrtS([0.01; 3]));
+        let walks = walk_from_file(&json).unwrap();
+        assert_eq!(walks.accel, UnitWalk::MgSqrtS([0.01; 3]));
+        assert_eq!(walks.gyro_deg_s_sqrt_s, None);
         let unit = dir.path().join("unit.toml");
         let text = format!(
             "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\n",
             crate::unit_file::PAPER_UNIT_TOML
         );
         std::fs::write(&unit, text).unwrap();
+        let walks = walk_from_file(&unit).unwrap();
+        assert_eq!(walks.accel, UnitWalk::MgSqrtS([0.003; 3]));
+        assert_eq!(walks.gyro_deg_s_sqrt_s, None);
+        // A unit file's gyro walk comes with it.
+        let text = format!(
+            "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\ngyro_bias_walk_deg_s_sqrt_s = 0.0004\n",
+            crate::unit_file::PAPER_UNIT_TOML
+        );
+        std::fs::write(&unit, text).unwrap();
         assert_eq!(
-            walk_from_file(&unit).unwrap(),
-            UnitWalk::MgSqrtS([0.003; 3])
+            walk_from_file(&unit).unwrap().gyro_deg_s_sqrt_s,
+            Some(0.0004)
+        );
+    }
+
+    /// By hand: gyro K of 1, 2 and 2 ·10⁻⁵ rad/s/√s have the rms √(9/3)·10⁻⁵ = 1.732 05·10⁻⁵
+    /// rad/s/√s, 9.9240·10⁻⁴ °/s/√s; one axis undetermined gives no gyro walk (the accelerometers'
+    /// is still taken).
+    #[test]
+    fn the_gyro_axes_k_is_one_strength_in_degrees() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("noise.json");
+        let r = with_gyro(
+            "m/s^2",
+            [Some(9.80665e-5); 3],
+            [Some(1e-5), Some(2e-5), Some(2e-5)],
+        );
+        std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
+        let got = walk_from_file(&json).unwrap().gyro_deg_s_sqrt_s.unwrap();
+        assert!((got - 9.9240e-4).abs() < 1e-7, "{got}");
+        let r = with_gyro(
+            "m/s^2",
+            [Some(9.80665e-5); 3],
+            [Some(1e-5), None, Some(2e-5)],
+        );
+        std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
+        let walks = walk_from_file(&json).unwrap();
+        assert_eq!(
+            (walks.accel, walks.gyro_deg_s_sqrt_s),
+            (UnitWalk::MgSqrtS([0.01; 3]), None)
         );
     }
 }

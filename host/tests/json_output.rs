@@ -400,3 +400,54 @@ fn the_walk_from_host_noise_is_the_simulated_one() {
         assert!((got / 0.01 - 1.0).abs() < 0.35, "{a}: {got} against 0.01");
     }
 }
+
+/// `--bias-walk-from` a unit file whose `[noise]` holds both walks: the gyro's is assumed too (the
+/// document says the file's figure), and `--gyro-bias-walk` given beside it takes its place.
+#[test]
+fn the_gyro_walk_comes_from_the_same_file_unless_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let paper = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../reference/paper-unit.toml"
+    ))
+    .unwrap();
+    let unit = p("unit.toml");
+    std::fs::write(
+        &unit,
+        format!(
+            "{paper}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.002\n\
+             gyro_bias_walk_deg_s_sqrt_s = 0.0003\n"
+        ),
+    )
+    .unwrap();
+    let session = p("s");
+    let (ok, _, e) = host(&[
+        "-q",
+        "simulate",
+        "--out",
+        &session,
+        "--plan",
+        "quick-oblique",
+    ]);
+    assert!(ok, "{e}");
+    let gyro_walk = |extra: &[&str]| {
+        let mut args = vec![
+            "-q",
+            "calibrate",
+            "--input",
+            &session,
+            "--bias-walk-from",
+            &unit,
+        ];
+        args.extend_from_slice(extra);
+        args.extend(["--json", "--force"]);
+        let (ok, stdout, e) = host(&args);
+        assert!(ok, "{e}");
+        let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        assert_eq!(doc["bias_walk"]["axes_mg_sqrt_s"][0], 0.002, "{doc}");
+        doc["gyro_bias_walk_deg_s_sqrt_s"].as_f64()
+    };
+    assert_eq!(gyro_walk(&[]), Some(0.0003));
+    assert_eq!(gyro_walk(&["--gyro-bias-walk", "0.0001"]), Some(0.0001));
+}

@@ -137,7 +137,9 @@ pub struct BiasWalkArgs {
     #[allow(rustdoc::broken_intra_doc_links)]
     /// The accelerometers' bias is a random walk of the unit's own strength, per axis: the Allan K
     /// of `host noise` (its noise.json) or a unit file's [noise] accel_bias_walk_mg_sqrt_s
-    /// (docs/model.md §11.3). Refused when the file holds none.
+    /// (docs/model.md §11.3). Refused when the file holds none. The gyro's walk is taken from the
+    /// same file where it holds one (its gyro axes' K, or gyro_bias_walk_deg_s_sqrt_s), unless
+    /// --gyro-bias-walk is given.
     #[arg(long, value_name = "noise.json|UNIT_FILE")]
     pub bias_walk_from: Option<PathBuf>,
     /// The gyro's bias is a random walk of this strength, °/s/√s (the Allan K of `host noise`'s
@@ -159,27 +161,26 @@ impl BiasWalkArgs {
             || self.bias_walk_from.is_some()
     }
 
-    /// The gyro's bias walk these flags ask for, °/s/√s (0: a constant gyro bias).
+    /// The gyro's bias walk given on the command line, °/s/√s (0: a constant gyro bias).
     pub(crate) fn gyro_walk(&self) -> f64 {
         self.gyro_bias_walk.unwrap_or(0.0)
     }
 
-    /// The walk these flags ask for; `--bias-walk-from`'s file is read here.
-    pub(crate) fn walk(&self) -> Result<BiasWalk, CliError> {
-        Ok(
-            match (
-                &self.bias_walk_from,
-                self.bias_walk,
-                self.bias_walk_estimate,
-            ) {
-                (Some(path), _, _) => {
-                    BiasWalk::FromUnit(crate::app::walk_source::walk_from_file(path)?)
-                }
-                (None, _, true) => BiasWalk::Estimate,
-                (None, Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
-                _ => BiasWalk::Off,
-            },
-        )
+    /// The walks these flags ask for: the accelerometers' and the gyro's (°/s/√s, 0 for a
+    /// constant gyro bias). `--bias-walk-from`'s file is read here; `--gyro-bias-walk` takes the
+    /// place of its gyro figure.
+    pub(crate) fn walks(&self) -> Result<(BiasWalk, f64), CliError> {
+        if let Some(path) = &self.bias_walk_from {
+            let from_file = crate::app::walk_source::walk_from_file(path)?;
+            let gyro = self.gyro_bias_walk.or(from_file.gyro_deg_s_sqrt_s);
+            return Ok((BiasWalk::FromUnit(from_file.accel), gyro.unwrap_or(0.0)));
+        }
+        let accel = match (self.bias_walk, self.bias_walk_estimate) {
+            (_, true) => BiasWalk::Estimate,
+            (Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
+            _ => BiasWalk::Off,
+        };
+        Ok((accel, self.gyro_walk()))
     }
 }
 
@@ -207,7 +208,7 @@ impl EstimatorArgs {
 
     /// The estimator options these flags ask for; `--bias-walk-from`'s file is read here.
     pub fn options(&self) -> Result<EstimateOptions, CliError> {
-        let bias_walk = self.walk.walk()?;
+        let (bias_walk, gyro_walk) = self.walk.walks()?;
         Ok(EstimateOptions {
             method: match self.method {
                 MethodArg::Joint => Method::Joint,
@@ -219,7 +220,7 @@ impl EstimatorArgs {
             },
             single_package: self.single_package,
             bias_walk,
-            gyro_bias_walk_deg_s_sqrt_s: self.walk.gyro_walk(),
+            gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
             ..EstimateOptions::default()
         })
     }
