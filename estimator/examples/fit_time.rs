@@ -1,6 +1,7 @@
 //! The estimator's time on the paper's session (the built-in `paper` plan: 15 segments of 60 s at
-//! 1 kHz, 900 000 rows) with a bias random walk of 0.002 mg/√s: the constant-bias fit, the walk
-//! given and the walk estimated (docs/model.md §11).
+//! 1 kHz, 900 000 rows) with an accelerometer bias random walk of 0.002 mg/√s and a gyro bias walk
+//! of 3·10⁻⁴ °/s/√s: the constant-bias fit, the accelerometers' walk given, estimated, and given
+//! with the gyro's (docs/model.md §11, §11.6).
 //!
 //! `cargo run --release -p estimator --example fit_time`
 //!
@@ -15,27 +16,37 @@ use recording::session::builtin::paper_plan;
 use std::time::Instant;
 
 const RUNS: usize = 7;
+/// The simulated (and, in the last case, given) gyro bias walk, °/s/√s.
+const GYRO_WALK_DEG_S_SQRT_S: f64 = 3e-4;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let plan = paper_plan();
     let truth = shared::params::PAPER_UNIT;
     let noise = NoiseModel {
         accel_bias_walk_mg_sqrt_s: 0.002,
+        gyro_bias_walk_deg_s_sqrt_s: GYRO_WALK_DEG_S_SQRT_S,
         ..NoiseModel::default()
     };
     let stats = simulate_stats(&truth, &plan, &noise, 1)?;
     let rows: u64 = stats.iter().map(|s| s.count).sum();
     println!(
-        "paper session: {rows} rows in {} segments, walk 0.002 mg/√s",
+        "paper session: {rows} rows in {} segments, walks 0.002 mg/√s and \
+         {GYRO_WALK_DEG_S_SQRT_S} °/s/√s",
         stats.len()
     );
-    for (name, walk) in [
-        ("constant bias", BiasWalk::Off),
-        ("walk given 0.002 mg/√s", BiasWalk::Given(0.002)),
-        ("walk estimated", BiasWalk::Estimate),
+    for (name, walk, gyro_walk) in [
+        ("constant bias", BiasWalk::Off, 0.0),
+        ("walk given 0.002 mg/√s", BiasWalk::Given(0.002), 0.0),
+        ("walk estimated", BiasWalk::Estimate, 0.0),
+        (
+            "both walks given",
+            BiasWalk::Given(0.002),
+            GYRO_WALK_DEG_S_SQRT_S,
+        ),
     ] {
         let options = EstimateOptions {
             bias_walk: walk,
+            gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
             ..EstimateOptions::default()
         };
         let mut times = Vec::with_capacity(RUNS);
