@@ -53,6 +53,17 @@ same() { # same FILE_A FILE_B WHAT
 untimed() { grep -v '^read [0-9]* rows' "$1" >"$1.untimed" || true; }
 
 # Calibrates the session in $1 with both binaries into $2/old and $2/new, within one wall-clock second.
+# as_passed OUT: a calibration that failed its checks is written as calibration.FAILED.toml/.bin
+# and exits 3; both are in the printed output (compared), and its files are compared under the
+# plain names.
+as_passed() {
+  local f
+  for f in "$1"/old/calibration.FAILED.* "$1"/new/calibration.FAILED.*; do
+    [ -e "$f" ] && mv "$f" "${f/.FAILED/}"
+  done
+  return 0
+}
+
 calibrate_both() {
   local session=$1 out=$2
   shift 2
@@ -60,8 +71,11 @@ calibrate_both() {
     rm -rf "$out"
     mkdir -p "$out"
     export FAKETIME_DONT_FAKE_MONOTONIC=1
-    faketime -f '2026-01-01 00:00:00' "$old" calibrate --input "$session" --out-dir "$out/old" "$@" >"$out/old.out" 2>&1
-    faketime -f '2026-01-01 00:00:00' "$new" calibrate --input "$session" --out-dir "$out/new" "$@" >"$out/new.out" 2>&1
+    faketime -f '2026-01-01 00:00:00' "$old" calibrate --input "$session" --out-dir "$out/old" "$@" >"$out/old.out" 2>&1 ||
+      echo "exit status $?" >>"$out/old.out"
+    faketime -f '2026-01-01 00:00:00' "$new" calibrate --input "$session" --out-dir "$out/new" "$@" >"$out/new.out" 2>&1 ||
+      echo "exit status $?" >>"$out/new.out"
+    as_passed "$out"
     return 0
   fi
   for attempt in 1 2 3 4 5; do
@@ -69,10 +83,15 @@ calibrate_both() {
     mkdir -p "$out"
     local t0 t1
     t0=$(date +%s)
-    "$old" calibrate --input "$session" --out-dir "$out/old" "$@" >"$out/old.out" 2>&1
-    "$new" calibrate --input "$session" --out-dir "$out/new" "$@" >"$out/new.out" 2>&1
+    "$old" calibrate --input "$session" --out-dir "$out/old" "$@" >"$out/old.out" 2>&1 ||
+      echo "exit status $?" >>"$out/old.out"
+    "$new" calibrate --input "$session" --out-dir "$out/new" "$@" >"$out/new.out" 2>&1 ||
+      echo "exit status $?" >>"$out/new.out"
     t1=$(date +%s)
-    [ "$t0" = "$t1" ] && return 0
+    if [ "$t0" = "$t1" ]; then
+      as_passed "$out"
+      return 0
+    fi
     echo "(the two calibrations straddled a second; again, attempt $attempt)"
   done
   echo "could not run both calibrations within one second" >&2
