@@ -11,7 +11,7 @@
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
 //!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
-pub(crate) mod logs;
+pub mod logs;
 #[cfg(test)]
 mod torture_tests;
 

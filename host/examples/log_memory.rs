@@ -1,0 +1,51 @@
+//! Writes one PX4 ULog, one ArduPilot DataFlash log and one ROS 2 MCAP bag of about `MB` megabytes
+//! each (default 500) into `DIR`: a unit at rest sampled at 1 kHz, written by the fuzz corpora's
+//! writers. They are the inputs of the peak-memory figure of `host segment` on a large log of each
+//! binary format:
+//!
+//! ```text
+//! cargo run -p host --features fuzz --example log_memory -- DIR [MB]
+//! /usr/bin/time -v target/debug/host -q segment --input DIR/big.ulg --out DIR/s-ulg
+//! ```
+//!
+//! ("Maximum resident set size"). The files are not kept in the repository.
+
+use host::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use std::path::PathBuf;
+
+/// Sample `k` of a unit at rest, z up, at 1 kHz: small deterministic noise on every axis.
+fn still(k: usize) -> LogSample {
+    let e = 1e-3 * ((k * 7 % 11) as f32 - 5.0);
+    LogSample {
+        t_s: k as f64 * 1e-3,
+        acc: [e, -e, 9.81 + e],
+        gyro: [e, 1e-3, -e],
+        temp_c: 25.0 + e,
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let dir = PathBuf::from(args.next().ok_or("usage: log_memory DIR [MB]")?);
+    let mb: f64 = args.next().map_or(Ok(500.0), |s| s.parse())?;
+    std::fs::create_dir_all(&dir)?;
+    let probe: Vec<LogSample> = (0..10_000).map(still).collect();
+    type Writer = fn(&[LogSample]) -> Vec<u8>;
+    let writers: [(&str, Writer); 3] = [
+        ("big.ulg", |s| write_ulog(s, None)),
+        ("big.bin", write_dataflash),
+        ("big.mcap", |s| write_mcap(s, None, 0.0)),
+    ];
+    for (name, write) in writers {
+        let per_sample = write(&probe).len() as f64 / probe.len() as f64;
+        let n = (mb * 1e6 / per_sample) as usize;
+        let samples: Vec<LogSample> = (0..n).map(still).collect();
+        let bytes = write(&samples);
+        std::fs::write(dir.join(name), &bytes)?;
+        println!(
+            "{name}: {n} samples, {:.0} MB ({per_sample:.1} bytes per sample)",
+            bytes.len() as f64 / 1e6
+        );
+    }
+    Ok(())
+}
