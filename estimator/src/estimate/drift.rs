@@ -17,6 +17,7 @@ use super::model::SegModel;
 use super::solve::{self, NormalSystem, Problem};
 use super::{BiasWalk, EstimateError, EstimateOptions, SessionSeg, UnitWalk};
 use nalgebra::{DMatrix, DVector};
+use shared::linalg::RowMajor3;
 
 /// The random walk the fit assumes.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,11 +92,24 @@ fn mean_min(x0: f64, x1: f64, p: f64) -> f64 {
 /// The covariance of the stacked mean outputs of `models` (3 rows each, segment by segment):
 /// each segment's own `se_cov` plus the walk's `q_a² C(s, s')` between equal axes.
 fn covariance(models: &[SegModel], d: &Drift) -> DMatrix<f64> {
-    let n = models.len();
+    with_own_noise(walk_part(models, d), models.iter().map(|m| &m.se_cov))
+}
+
+/// The walk's part of [`covariance`]: `q_a² C(s, s')` between equal axes.
+fn walk_part(models: &[SegModel], d: &Drift) -> DMatrix<f64> {
+    let spans: Vec<[f64; 2]> = models.iter().map(|m| m.span_s).collect();
+    walk_covariance(&spans, d)
+}
+
+/// The walk's share of the covariance of stacked 3-row means taken over `spans` (in the same
+/// order): `q_a² C(s, s')` between equal axes, 0 between different ones (docs/model.md §11.1).
+/// The accelerometers' segment means and the gyro's mean rates (§11.6) both use it.
+pub(crate) fn walk_covariance(spans: &[[f64; 2]], d: &Drift) -> DMatrix<f64> {
+    let n = spans.len();
     let mut c = DMatrix::zeros(3 * n, 3 * n);
-    for (s, ms) in models.iter().enumerate() {
-        for (r, mr) in models.iter().enumerate().skip(s) {
-            let w = interval_cov(ms.span_s, mr.span_s, d.t0_s);
+    for (s, &ss) in spans.iter().enumerate() {
+        for (r, &sr) in spans.iter().enumerate().skip(s) {
+            let w = interval_cov(ss, sr, d.t0_s);
             for a in 0..3 {
                 let v = d.q2[a] * w;
                 c[(3 * s + a, 3 * r + a)] += v;
@@ -104,13 +118,24 @@ fn covariance(models: &[SegModel], d: &Drift) -> DMatrix<f64> {
                 }
             }
         }
+    }
+    c
+}
+
+/// `walk` with each mean's own covariance added on its diagonal block: the means' whole
+/// covariance `blockdiag(se_cov) + q² C` (docs/model.md §11.1).
+pub(crate) fn with_own_noise<'a>(
+    mut walk: DMatrix<f64>,
+    own: impl Iterator<Item = &'a RowMajor3>,
+) -> DMatrix<f64> {
+    for (s, m) in own.enumerate() {
         for a in 0..3 {
             for b in 0..3 {
-                c[(3 * s + a, 3 * s + b)] += ms.se_cov[a][b];
+                walk[(3 * s + a, 3 * s + b)] += m[a][b];
             }
         }
     }
-    c
+    walk
 }
 
 /// The walk's part of the covariance of a rest's spins taken as differences from it
@@ -284,15 +309,8 @@ pub(crate) fn track(
         return Vec::new();
     };
     let models = &problem.models;
-    let sigma = covariance(models, d);
-    let mut walk = sigma.clone();
-    for (s, m) in models.iter().enumerate() {
-        for a in 0..3 {
-            for b in 0..3 {
-                walk[(3 * s + a, 3 * s + b)] -= m.se_cov[a][b];
-            }
-        }
-    }
+    let walk = walk_part(models, d);
+    let sigma = with_own_noise(walk.clone(), models.iter().map(|m| &m.se_cov));
     let rows = 3 * models.len();
     let r = DVector::from_iterator(
         rows,

@@ -9,7 +9,7 @@
 //! `blockdiag(se_cov) + q² C`, whitened by its Cholesky factor, in place of each mean's own
 //! whitening. No walk leaves the per-mean path, so a zero walk is the constant-bias fit bit for bit.
 
-use super::drift::{interval_cov, start_time, Drift};
+use super::drift::{start_time, walk_covariance, with_own_noise, Drift};
 use super::gyro::GyroBlock;
 use super::solve::NormalSystem;
 use super::{EstimateOptions, SessionSeg};
@@ -31,26 +31,13 @@ pub(crate) fn walk(options: &EstimateOptions, segs: &[SessionSeg]) -> Option<Dri
 /// The covariance of the stacked gyro means of `blk` (3 rows each, mean by mean): each mean's own
 /// `se_cov` plus the walk's `q_a² C(s, s')` between equal axes (docs/model.md §11.1, §11.6).
 fn covariance(blk: &GyroBlock, d: &Drift) -> DMatrix<f64> {
-    let n = blk.means.len();
-    let mut c = DMatrix::zeros(3 * n, 3 * n);
-    for (s, ms) in blk.means.iter().enumerate() {
-        for (r, mr) in blk.means.iter().enumerate().skip(s) {
-            let w = interval_cov(ms.span_s, mr.span_s, d.t0_s);
-            for a in 0..3 {
-                let v = d.q2[a] * w;
-                c[(3 * s + a, 3 * r + a)] += v;
-                if r != s {
-                    c[(3 * r + a, 3 * s + a)] += v;
-                }
-            }
-        }
-        for a in 0..3 {
-            for b in 0..3 {
-                c[(3 * s + a, 3 * s + b)] += ms.se_cov[a][b];
-            }
-        }
-    }
-    c
+    with_own_noise(walk_part(blk, d), blk.means.iter().map(|m| &m.se_cov))
+}
+
+/// The walk's part of [`covariance`].
+fn walk_part(blk: &GyroBlock, d: &Drift) -> DMatrix<f64> {
+    let spans: Vec<[f64; 2]> = blk.means.iter().map(|m| m.span_s).collect();
+    walk_covariance(&spans, d)
 }
 
 /// The residuals (measured − predicted mean rates) and the Jacobian over every θ entry, stacked.
@@ -114,15 +101,8 @@ pub(crate) fn segment_biases(blk: &GyroBlock, t: &[f64]) -> Vec<(usize, [f64; 3]
     let Some(d) = blk.walk.as_ref().filter(|d| d.active()) else {
         return Vec::new();
     };
-    let sigma = covariance(blk, d);
-    let mut walk = sigma.clone();
-    for (s, m) in blk.means.iter().enumerate() {
-        for a in 0..3 {
-            for b in 0..3 {
-                walk[(3 * s + a, 3 * s + b)] -= m.se_cov[a][b];
-            }
-        }
-    }
+    let walk = walk_part(blk, d);
+    let sigma = with_own_noise(walk.clone(), blk.means.iter().map(|m| &m.se_cov));
     let Some(chol) = sigma.cholesky() else {
         return Vec::new();
     };

@@ -62,11 +62,12 @@ pub struct LogSample {
     pub temp_c: f32,
 }
 
-/// One still sample `k` of the corpora.
-fn sample(k: usize) -> LogSample {
+/// Sample `k` of a unit at rest, z up, at `rate_hz` (the corpora's at 100 Hz): small deterministic
+/// noise on every axis.
+pub fn still_sample(k: usize, rate_hz: f64) -> LogSample {
     let e = 1e-3 * ((k * 7 % 11) as f32 - 5.0);
     LogSample {
-        t_s: k as f64 * 0.01,
+        t_s: k as f64 / rate_hz,
         acc: [e, -e, 9.81 + e],
         gyro: [e, 0.01, -e],
         temp_c: 25.0 + e,
@@ -76,7 +77,7 @@ fn sample(k: usize) -> LogSample {
 const SAMPLES: usize = 150;
 
 fn corpus_samples() -> Vec<LogSample> {
-    (0..SAMPLES).map(sample).collect()
+    (0..SAMPLES).map(|k| still_sample(k, 100.0)).collect()
 }
 
 /// A ULog with `sensor_accel` and `sensor_gyro` (PX4's fields) and a dropout.
@@ -267,7 +268,7 @@ mod tests {
         assert_eq!(rec.temp_c.as_ref().map(Vec::len), Some(SAMPLES));
         let (rec, _) = dataflash::read(dataflash_corpus().as_slice(), 0).unwrap();
         assert_eq!(rec.len(), SAMPLES);
-        assert_eq!(rec.acc[3], sample(3).acc.map(f64::from));
+        assert_eq!(rec.acc[3], still_sample(3, 100.0).acc.map(f64::from));
         for c in [
             None,
             Some(::mcap::Compression::Lz4),
@@ -275,7 +276,10 @@ mod tests {
         ] {
             let (rec, _) = mcap::read(mcap_corpus(c).as_slice(), None).unwrap();
             assert_eq!(rec.len(), SAMPLES, "{c:?}");
-            assert_eq!(rec.gyro_rad_s[3], sample(3).gyro.map(f64::from));
+            assert_eq!(
+                rec.gyro_rad_s[3],
+                still_sample(3, 100.0).gyro.map(f64::from)
+            );
             assert!((rec.t_s[3] - 100.03).abs() < 1e-6, "{}", rec.t_s[3]);
         }
     }
