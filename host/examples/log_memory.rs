@@ -1,7 +1,8 @@
-//! Writes one PX4 ULog, one ArduPilot DataFlash log and one ROS 2 MCAP bag of about `MB` megabytes
-//! each (default 500) into `DIR`: a unit at rest sampled at 1 kHz, written by the fuzz corpora's
-//! writers. They are the inputs of the peak-memory figure of `host segment` on a large log of each
-//! binary format:
+//! Writes one PX4 ULog, one ArduPilot DataFlash log, one ROS 2 MCAP bag and one logger's CSV of
+//! about `MB` megabytes each (default 500) into `DIR`: a unit at rest sampled at 1 kHz, the binary
+//! logs written by the fuzz corpora's writers. They are the inputs of the peak-memory figure of
+//! `host segment` on a large log of each format (the CSV with `--time-column t --acc-unit m/s2
+//! --gyro-unit rad/s`):
 //!
 //! ```text
 //! cargo run -p host --features fuzz --example log_memory -- DIR [MB]
@@ -41,5 +42,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bytes.len() as f64 / 1e6
         );
     }
+    write_csv(&dir.join("big.csv"), mb)
+}
+
+/// The same unit at rest as a logger's CSV (time in s), written as it goes.
+fn write_csv(path: &std::path::Path, mb: f64) -> Result<(), Box<dyn std::error::Error>> {
+    use std::io::Write;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let header = "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
+    w.write_all(header.as_bytes())?;
+    let (mut bytes, mut k) = (header.len(), 0);
+    while (bytes as f64) < mb * 1e6 {
+        let s = still(k);
+        let [ax, ay, az] = s.acc;
+        let [gx, gy, gz] = s.gyro;
+        let line = format!("{:.3},{ax},{ay},{az},{gx},{gy},{gz}\n", s.t_s);
+        w.write_all(line.as_bytes())?;
+        bytes += line.len();
+        k += 1;
+    }
+    w.flush()?;
+    println!("big.csv: {k} rows, {:.0} MB", bytes as f64 / 1e6);
     Ok(())
 }

@@ -384,6 +384,7 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     ));
     for o in [
         "input",
+        "max-samples",
         "min-still-s",
         "no-gyro",
         "unit-id",

@@ -62,7 +62,7 @@ _LOG_KEYWORDS = (
 )
 _SESSION_KEYWORDS = (
     "min_still_s", "unit_id", "gravity", "latitude", "height_m", "no_gyro", "face_sigma_deg",
-    "faces",
+    "faces", "max_samples",
 )
 
 
@@ -197,7 +197,9 @@ def segment_file(
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes). How to read it
     as ``log=LogOptions(...)`` or its keywords (``acc_unit``, ``gyro_unit``, ``columns``,
     ``time_column``, ``time_unit``, ``rate_hz``, ``acc_offset``, ``gyro_lsb_per_dps``,
-    ``instance``, ``topic``); how to cut it as ``site=SessionOptions(...)`` or its keywords."""
+    ``instance``, ``topic``); how to cut it as ``site=SessionOptions(...)`` or its keywords, with
+    ``max_samples``: the samples of each stream held in memory at once (default 250 000, about
+    200 bytes each); a longer log is read again and only its still positions and turns are kept."""
     log, site = _options(log, site, keywords)
     return _accelcal.segment_file(str(path), log, site)
 

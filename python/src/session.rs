@@ -13,8 +13,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use recording::session::coverage::face_label;
 use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
+use recording::session::import::MAX_ROWS;
 use recording::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
-use recording::session::logs::read_log;
+use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
 use recording::session::segment::{IntervalKind, SegmentOptions};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
 use recording::spelling::Spelling;
@@ -299,13 +300,16 @@ pub struct SessionOptions {
     pub face_sigma_deg: f64,
     /// The faces as the user labels them, one per still position in order (`x+` … `z-`).
     pub faces: Option<Vec<String>>,
+    /// Samples of each stream held in memory at once from a file (`host segment --max-samples`).
+    pub max_samples: Option<usize>,
 }
 
 #[pymethods]
 impl SessionOptions {
     #[new]
     #[pyo3(signature = (*, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
-        height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG, faces = None))]
+        height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG, faces = None,
+        max_samples = None))]
     // One argument per Python keyword, as LogOptions' constructor.
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -317,8 +321,10 @@ impl SessionOptions {
         no_gyro: bool,
         face_sigma_deg: f64,
         faces: Option<Vec<String>>,
+        max_samples: Option<usize>,
     ) -> Self {
         SessionOptions {
+            max_samples,
             min_still_s,
             unit_id,
             gravity,
@@ -507,6 +513,12 @@ pub fn segment_arrays(
              segment_file",
         ));
     }
+    if site.max_samples.is_some() {
+        return Err(usage(
+            "max_samples bounds what is read from a file; arrays are in memory already: leave it \
+             out, or give it to segment_file",
+        ));
+    }
     let input = LogInput {
         time_column: t.map(|_| "t".to_string()),
         rate_hz,
@@ -538,8 +550,15 @@ pub fn segment_file(
     site: &SessionOptions,
 ) -> PyResult<Session> {
     let source = log.input().source().py_err()?;
+    let max = match site.max_samples {
+        Some(n) if !(1000..=MAX_ROWS).contains(&n) => {
+            return Err(usage(format!("max_samples {n}: give 1000 to {MAX_ROWS}")))
+        }
+        Some(n) => n,
+        None => DEFAULT_MAX_SAMPLES,
+    };
     segmented(py, site, || {
-        read_log(&path, &source).map(|log| (log.recording, log.warnings))
+        read_log_keeping(&path, &source, max).map(|log| (log.recording, log.warnings))
     })
 }
 

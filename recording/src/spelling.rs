@@ -50,6 +50,8 @@ pub enum UserOption {
     Reference,
     /// One lever arm for the three accelerometers of one package.
     SinglePackage,
+    /// Samples kept in memory at once from a long log.
+    MaxSamples,
 }
 
 impl UserOption {
@@ -77,6 +79,7 @@ impl UserOption {
             UserOption::Method => "method",
             UserOption::Reference => "reference",
             UserOption::SinglePackage => "single_package",
+            UserOption::MaxSamples => "max_samples",
         }
     }
 
@@ -104,6 +107,7 @@ impl UserOption {
             UserOption::Method => "--method",
             UserOption::Reference => "--reference",
             UserOption::SinglePackage => "--single-package",
+            UserOption::MaxSamples => "--max-samples",
         }
     }
 

@@ -39,7 +39,7 @@ fn truth() -> Calibration {
 
 /// Segments `input` (with `flags`) into `dir/s`, calibrates it into `dir/cal`; returns the intrinsic
 /// rms error against the truth on held-out attitudes (µg) and the gyro bias error (°/s, worst axis).
-fn segment_and_calibrate(dir: &Path, input: &Path, flags: &str) -> (f64, f64) {
+pub(super) fn segment_and_calibrate(dir: &Path, input: &Path, flags: &str) -> (f64, f64) {
     let d = dir.display();
     let line = format!(
         "host segment -q --input {} --out {d}/s {flags}",

@@ -37,6 +37,8 @@ pub mod flash;
 #[cfg(test)]
 mod log_fixture_tests;
 pub mod log_input;
+#[cfg(test)]
+mod long_log_tests;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;

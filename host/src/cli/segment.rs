@@ -11,8 +11,9 @@ use crate::output_file::{write_atomic, OutputDir};
 use crate::report::plot::{self, Formats};
 use crate::session::coverage::Coverage;
 use crate::session::from_recording::normal_gravity_m_s2;
+use crate::session::import::MAX_ROWS;
 use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
-use crate::session::logs::read_log;
+use crate::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
 use crate::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use crate::session::Plan;
 use crate::sim::handheld::{
@@ -51,6 +52,11 @@ pub struct SegmentArgs {
     /// data, whatever the automatic labelling finds.
     #[arg(long, value_name = "LABELS", value_delimiter = ',', value_parser = face_label)]
     pub faces: Option<Vec<(usize, f64)>>,
+    /// Most samples of each sensor stream held in memory at once (about 200 bytes each). A binary
+    /// log with more is read again, and only its still positions and the turns between them are
+    /// kept, the first this many; what is left out is said.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES as u64, value_parser = crate::limits::whole_u64(1000, MAX_ROWS as u64))]
+    pub max_samples: u64,
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
@@ -238,7 +244,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
     let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
     let step = crate::ui::step(format!("reading {}", a.input.display()), out.quiet);
-    let log = read_log(&a.input, &source).map_err(CliError::Log)?;
+    let log = read_log_keeping(&a.input, &source, a.max_samples as usize).map_err(CliError::Log)?;
     step.finish_and_clear();
     time_unit_note(out, &log.recording);
     let step = crate::ui::step("finding the still intervals and the turns", out.quiet);

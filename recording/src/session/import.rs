@@ -14,6 +14,7 @@ use shared::OutputUnit;
 mod gravity;
 mod lines;
 pub mod time;
+use super::logs::keep::{Admit, Keep, Keeper, STILL_VAR_M2_S4};
 use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
 use lines::{next_line, next_line_end, LineEnd};
 use std::fs::File;
@@ -244,11 +245,15 @@ pub enum ImportError {
         /// Header fields.
         header: usize,
     },
-    /// Too many rows.
-    #[error(
-        "more than {MAX_ROWS} rows: cut the recording (a hand-held session needs a few minutes)"
-    )]
-    TooManyRows,
+    /// More rows than are read into memory at once.
+    #[error("more than {max} rows, the most this reads into memory at once: cut the recording")]
+    TooManyRows {
+        /// The budget.
+        max: usize,
+        /// The time column's unit as the rows read so far tell it (detected or given); `None`:
+        /// from a rate, or not told.
+        time_unit: Option<TimeUnit>,
+    },
     /// Too few rows.
     #[error(
         "only {0} usable rows: a hand-held session needs minutes of data (24 positions of 3–5 s)"
@@ -409,14 +414,41 @@ fn clean(field: &str) -> &str {
 
 /// [`read_logger_csv`] on any reader (`path` only names it in messages).
 pub fn read_logger<R: BufRead>(
+    r: R,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<Recording, ImportError> {
+    read_logger_keeping(r, path, options, &Keep::default(), 1.0)
+}
+
+/// [`read_logger`] keeping the rows `keep` says (`super::logs::keep`); `seconds_per_unit`: the
+/// time column's unit, in which the rows are surveyed and chosen. A survey returns no rows.
+pub(crate) fn read_logger_keeping<R: BufRead>(
     mut r: R,
     path: &Path,
     options: &ImportOptions,
+    keep: &Keep,
+    seconds_per_unit: f64,
 ) -> Result<Recording, ImportError> {
     let mut buf = Vec::new();
     let (header, sep, header_line) = read_header(&mut r, &mut buf, path)?;
     let layout = Layout::new(header, sep, options)?;
-    let mut rec = read_rows(&mut r, &mut buf, &layout, options, header_line)?;
+    let still_var = match options.acc_unit {
+        OutputUnit::MetresPerSecondSquared => STILL_VAR_M2_S4,
+        OutputUnit::StandardGravity => STILL_VAR_M2_S4 / (9.80665 * 9.80665),
+        _ => 0.0,
+    };
+    let mut keeper = Keeper::with_still_var(keep, still_var);
+    let rows = Rows {
+        layout: &layout,
+        options,
+        header_line,
+        seconds_per_unit,
+    };
+    let mut rec = read_rows(&mut r, &mut buf, &rows, &mut keeper)?;
+    if keeper.report() {
+        return Ok(Recording::default());
+    }
     if rec.len() < 100 {
         return Err(ImportError::TooFewRows(rec.len()));
     }
@@ -593,15 +625,29 @@ impl Layout {
     }
 }
 
-/// Reads every data row after the header into a recording (blank lines ignored, rows with a value
-/// that is not finite counted and left out).
+/// How the data rows are read.
+struct Rows<'a> {
+    layout: &'a Layout,
+    options: &'a ImportOptions,
+    header_line: u64,
+    /// The time column's unit, s (1 with a rate).
+    seconds_per_unit: f64,
+}
+
+/// Reads the data rows after the header that `keeper` keeps into a recording (blank lines
+/// ignored, rows with a value that is not finite counted and left out).
 fn read_rows<R: BufRead>(
     r: &mut R,
     buf: &mut Vec<u8>,
-    layout: &Layout,
-    options: &ImportOptions,
-    header_line: u64,
+    rows: &Rows,
+    keeper: &mut Keeper,
 ) -> Result<Recording, ImportError> {
+    let Rows {
+        layout,
+        options,
+        header_line,
+        seconds_per_unit,
+    } = *rows;
     let gyro_scale = options.gyro_rad_s_per_unit();
     let mut rec = Recording {
         acc_unit: Some(options.acc_unit),
@@ -638,28 +684,32 @@ fn read_rows<R: BufRead>(
             rec.skipped_rows += 1;
             continue;
         }
-        push_row(&mut rec, v, t_s, gyro_scale)?;
+        let acc = [v[0], v[1], v[2]];
+        match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
+            Admit::Keep => push_row(&mut rec, v, t_s, gyro_scale),
+            Admit::Pass => {}
+            Admit::TooMany(max) => {
+                let time_unit = match layout.time {
+                    Time::Column(_) => options
+                        .time_unit
+                        .or_else(|| detect_time_unit(&rec.t_s, options.spelling).ok()),
+                    Time::RateHz(_) => None,
+                };
+                return Err(ImportError::TooManyRows { max, time_unit });
+            }
+        }
     }
     Ok(rec)
 }
 
-/// Appends a row of finite values `v` at `t_s` (line `line`) to `rec`, its gyro converted with
-/// `gyro_scale` (rad/s per unit); the rows stay within [`MAX_ROWS`]. A repeated or earlier time
-/// stamp is kept here and mended by [`super::repair`] once the file is read.
-fn push_row(
-    rec: &mut Recording,
-    v: [f64; 6],
-    t_s: f64,
-    gyro_scale: f64,
-) -> Result<(), ImportError> {
-    if rec.t_s.len() >= MAX_ROWS {
-        return Err(ImportError::TooManyRows);
-    }
+/// Appends a row of finite values `v` at `t_s` to `rec`, its gyro converted with `gyro_scale`
+/// (rad/s per unit). A repeated or earlier time stamp is kept here and mended by
+/// [`super::repair`] once the file is read.
+fn push_row(rec: &mut Recording, v: [f64; 6], t_s: f64, gyro_scale: f64) {
     rec.t_s.push(t_s);
     rec.acc.push([v[0], v[1], v[2]]);
     rec.gyro_rad_s
         .push([v[3] * gyro_scale, v[4] * gyro_scale, v[5] * gyro_scale]);
-    Ok(())
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the
 //! reader streams with a window of a few hundred bytes.
 
-use super::{list_instances, pair_streams, ImuError, Stream, StreamSample, TooMany};
+use super::{list_instances, pair_streams, ImuError, Keep, Stream, StreamSample, TooMany};
 use crate::session::import::Recording;
 use crate::spelling::Spelling;
 use std::io::Read;
@@ -287,6 +287,15 @@ impl DataFlashError {
 
 /// Reads the IMU samples of `instance` from a DataFlash log.
 pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), DataFlashError> {
+    read_keeping(r, instance, &Keep::default())
+}
+
+/// [`read`], each stream keeping what `keep` says.
+pub(crate) fn read_keeping<R: Read>(
+    r: R,
+    instance: u8,
+    keep: &Keep,
+) -> Result<(Recording, Vec<String>), DataFlashError> {
     let mut w = Window {
         r,
         buf: Vec::new(),
@@ -297,6 +306,10 @@ pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), Dat
     let mut st = State {
         formats: vec![None; 256],
         layouts: vec![None; 256],
+        imu_acc: Stream::new(keep),
+        imu_gyro: Stream::new(keep),
+        acc: Stream::new(keep),
+        gyro: Stream::new(keep),
         ..State::default()
     };
     let mut warnings = Vec::new();
@@ -398,7 +411,8 @@ impl State {
         }
         let t_s = get((l.time.0, l.time.1)) * l.time.2;
         let temp_c = l.temperature.map(get);
-        let too_many = |_: TooMany| DataFlashError::from(ImuError::TooManySamples(name.into()));
+        let too_many =
+            |e: TooMany| DataFlashError::from(ImuError::TooManySamples(name.into(), e.0));
         let sample = |v: [(usize, u8); 3]| StreamSample {
             t_s,
             v: v.map(get),
@@ -430,10 +444,10 @@ impl State {
         instance: u8,
         mut warnings: Vec<String>,
     ) -> Result<(Recording, Vec<String>), DataFlashError> {
-        let (acc, gyro) = if !self.imu_acc.samples.is_empty() {
-            (&self.imu_acc, &self.imu_gyro)
-        } else if !self.acc.samples.is_empty() && !self.gyro.samples.is_empty() {
-            (&self.acc, &self.gyro)
+        let (acc, gyro) = if self.imu_acc.count() > 0 {
+            (self.imu_acc, self.imu_gyro)
+        } else if self.acc.count() > 0 && self.gyro.count() > 0 {
+            (self.acc, self.gyro)
         } else {
             let seen = self.seen.iter().map(|(n, i)| (n.as_str(), *i));
             let found = list_instances(seen, "no IMU, ACC or GYR message");

@@ -10,8 +10,8 @@
 //! layout is short and fixed by the message definition (`sensor_msgs/msg/Imu.msg`,
 //! `std_msgs/msg/Header.msg`, `builtin_interfaces/msg/Time.msg`).
 
-use super::{Stream, StreamSample, TooMany};
-use crate::session::import::{Recording, MAX_ROWS};
+use super::{Keep, Stream, StreamSample, TooMany};
+use crate::session::import::Recording;
 use crate::spelling::{Spelling, UserOption};
 use ::mcap::records::Record;
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
@@ -104,9 +104,12 @@ pub enum McapError {
         /// What is wrong.
         problem: CdrError,
     },
-    /// More samples than [`MAX_ROWS`].
-    #[error("more than {MAX_ROWS} Imu messages: cut the bag (a hand-held session needs minutes)")]
-    TooManySamples,
+    /// More samples than are kept at once, from a reader that cannot be read again.
+    #[error(
+        "more than {0} Imu messages, the most kept in memory at once from a stream that cannot \
+         be read a second time: read it from a file"
+    )]
+    TooManySamples(usize),
     /// A chunk that does not decompress to its stated size, or whose records overrun it.
     #[error(
         "the chunk ending before byte {offset} is damaged ({problem}); check the bag with \
@@ -285,12 +288,25 @@ impl McapError {
 }
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
-pub fn read<R: Read>(mut r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+pub fn read<R: Read>(r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+    read_keeping(r, topic, &Keep::default())
+}
+
+/// [`read`], each stream keeping what `keep` says.
+pub(crate) fn read_keeping<R: Read>(
+    mut r: R,
+    topic: Option<&str>,
+    keep: &Keep,
+) -> Result<(Recording, Vec<String>), McapError> {
     let options = LinearReaderOptions::default()
         .with_record_length_limit(RECORD_LIMIT)
         .with_emit_chunks(true);
     let mut reader = LinearReader::new_with_options(options);
-    let mut st = State::default();
+    let mut st = State {
+        acc: Stream::new(keep),
+        gyro: Stream::new(keep),
+        ..State::default()
+    };
     let mut offset = 0u64;
     let mut cut_at = None;
     while let Some(event) = reader.next_event() {
@@ -438,20 +454,25 @@ impl State {
                     self.unstamped += 1;
                 }
                 let t_s = m.stamp_s;
-                let too_many = |_: TooMany| McapError::TooManySamples;
+                let too_many = |e: TooMany| McapError::TooManySamples(e.0);
                 let s = |v| StreamSample {
                     t_s,
                     v,
                     temp_c: None,
                 };
                 let log_s = header.log_time as f64 * 1e-9;
+                // The log times are needed only while no message has had a stamp.
+                let all_unstamped = self.unstamped == self.messages;
+                if !all_unstamped && !self.log_times[0].is_empty() {
+                    self.log_times = Default::default();
+                }
                 for (k, (st, v)) in [(&mut self.acc, m.acc_m_s2), (&mut self.gyro, m.gyro_rad_s)]
                     .into_iter()
                     .enumerate()
                 {
                     let before = st.samples.len();
                     st.push(s(v)).map_err(too_many)?;
-                    if st.samples.len() > before {
+                    if st.samples.len() > before && all_unstamped {
                         self.log_times[k].push(log_s);
                     }
                 }
@@ -511,7 +532,7 @@ impl State {
                 }
             }
         }
-        let (mut rec, mut warnings) = super::pair(&self.acc, &self.gyro, f64::INFINITY);
+        let (mut rec, mut warnings) = super::pair(self.acc, self.gyro, f64::INFINITY);
         rec.acc_unit = Some(OutputUnit::MetresPerSecondSquared);
         if unstamped {
             warnings.insert(

@@ -4,15 +4,22 @@
 //! ([`dataflash`]) and a ROS 2 bag in MCAP ([`mcap`]). The format is told by the file's first bytes,
 //! not its name: a renamed `.bin` or a `.log` that is really a ULog reads the same.
 //!
-//! Every reader streams the file once; what it keeps is capped by [`MAX_ROWS`] samples per stream,
-//! and every length field is bounded before anything is allocated for it.
+//! Every reader streams the file, and every length field is bounded before anything is allocated
+//! for it. What a reader keeps is bounded too: a log of more samples than the budget is read
+//! again, and only its quiet stretches and the turns between them are kept ([`keep`]), so that
+//! the memory needed does not grow with the file.
 
 pub mod dataflash;
+pub(crate) mod keep;
 pub mod mcap;
 pub mod ulog;
 
+use keep::{Admit, Keep, Keeper, PassReport};
+pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
+
 use super::import::{
-    read_logger, ImportError, ImportOptions, Recording, TimeOrigin, GAP_PERIODS, MAX_ROWS,
+    read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin, TimeSource, TimeUnit,
+    GAP_PERIODS,
 };
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use crate::spelling::{Spelling, UserOption};
@@ -20,6 +27,7 @@ use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// What to take from a log: the text reader's columns, time and units (text files only), the IMU
 /// instance (ULog's `multi_id`, DataFlash's `I`) and the MCAP topic.
@@ -202,11 +210,40 @@ pub enum ImuError {
         /// caller's).
         spelling: Spelling,
     },
-    /// More samples than [`MAX_ROWS`].
+    /// More samples than are kept at once, from a reader that cannot be read again (a file is read
+    /// again: [`read_log_keeping`]).
     #[error(
-        "more than {MAX_ROWS} samples in '{0}': cut the log (a hand-held session needs minutes)"
+        "more than {1} samples in '{0}', the most this reads into memory at once: cut the log"
     )]
-    TooManySamples(String),
+    TooManySamples(String, usize),
+}
+
+impl LogError {
+    /// A stream held more samples than its budget ([`Keep::All`]): the seconds per unit of its
+    /// time stamps (`None`: another error, or a text file whose time unit the rows read did not
+    /// tell).
+    fn over_budget(&self, source: &LogSource) -> Option<f64> {
+        if let LogError::Text(ImportError::TooManyRows { time_unit, .. }) = self {
+            return match source.text.as_ref().map(|o| &o.time) {
+                Some(TimeSource::RateHz(_)) => Some(1.0),
+                _ => time_unit.map(TimeUnit::seconds),
+            };
+        }
+        matches!(
+            self,
+            LogError::Ulog {
+                source: ulog::UlogError::Imu(ImuError::TooManySamples(..)),
+                ..
+            } | LogError::DataFlash {
+                source: dataflash::DataFlashError::Imu(ImuError::TooManySamples(..)),
+                ..
+            } | LogError::Mcap {
+                source: mcap::McapError::TooManySamples(_),
+                ..
+            }
+        )
+        .then_some(1.0)
+    }
 }
 
 impl ImuError {
@@ -229,8 +266,59 @@ impl ImuError {
     }
 }
 
-/// Reads the log at `path` in whatever format its first bytes say (see the module docs).
+/// Reads the whole log at `path` in whatever format its first bytes say (see the module docs), up
+/// to [`MAX_ROWS`](super::import::MAX_ROWS) samples per stream: for the uses that need every sample (`apply`) or the
+/// longest stretches (`noise`).
 pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
+    read_pass(path, source, &Keep::default(), 1.0)
+}
+
+/// [`read_log`] keeping at most `max_samples` samples per stream: a longer log is surveyed and only
+/// its quiet stretches and the turns between them are kept ([`keep`]), the first `max_samples` of
+/// them; a warning says what was left out.
+pub fn read_log_keeping(
+    path: &Path,
+    source: &LogSource,
+    max_samples: usize,
+) -> Result<LogFile, LogError> {
+    let max = max_samples.max(1);
+    let first = read_pass(path, source, &Keep::All { max }, 1.0);
+    let seconds_per_unit = match &first {
+        Err(e) => match e.over_budget(source) {
+            Some(k) => k,
+            None => return first,
+        },
+        Ok(_) => return first,
+    };
+    let report = Arc::new(Mutex::new(PassReport::default()));
+    let survey = Keep::Survey(Arc::clone(&report));
+    read_pass(path, source, &survey, seconds_per_unit)?;
+    let regions = report.lock().ok().and_then(|mut r| r.regions.take());
+    let Some(regions) = regions else {
+        return first;
+    };
+    let n_regions = regions.len();
+    let keep = Keep::Within {
+        regions: regions.into(),
+        max,
+        report: Arc::clone(&report),
+    };
+    let mut log = read_pass(path, source, &keep, seconds_per_unit)?;
+    let left_out = report.lock().ok().and_then(|r| r.left_out);
+    if let Some(l) = left_out {
+        log.warnings
+            .extend(keep::left_out_note(&l, max, n_regions, source.spelling));
+    }
+    Ok(log)
+}
+
+/// One pass over the file at `path` (a text file's time column in `seconds_per_unit`).
+fn read_pass(
+    path: &Path,
+    source: &LogSource,
+    keep: &Keep,
+    seconds_per_unit: f64,
+) -> Result<LogFile, LogError> {
     let io = |e| LogError::Io {
         path: path.to_path_buf(),
         source: e,
@@ -238,7 +326,7 @@ pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
     let file = File::open(path).map_err(io)?;
     let mut r = BufReader::with_capacity(1 << 20, file);
     let head = r.fill_buf().map_err(io)?.to_vec();
-    read_log_from(r, &head, path, source)
+    read_keeping(r, &head, path, source, keep, seconds_per_unit)
 }
 
 /// [`read_log`] on any reader whose first bytes are `head` (`path` only names it in messages).
@@ -247,6 +335,18 @@ pub fn read_log_from<R: BufRead>(
     head: &[u8],
     path: &Path,
     source: &LogSource,
+) -> Result<LogFile, LogError> {
+    read_keeping(r, head, path, source, &Keep::default(), 1.0)
+}
+
+/// [`read_log_from`], each stream keeping what `keep` says.
+fn read_keeping<R: BufRead>(
+    r: R,
+    head: &[u8],
+    path: &Path,
+    source: &LogSource,
+    keep: &Keep,
+    seconds_per_unit: f64,
 ) -> Result<LogFile, LogError> {
     let format = LogFormat::detect(head);
     let sp = source.spelling;
@@ -286,15 +386,18 @@ pub fn read_log_from<R: BufRead>(
                 .text
                 .as_ref()
                 .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
-            (read_logger(r, path, options)?, Vec::new())
+            let rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
+            (rec, Vec::new())
         }
         LogFormat::Ulog => {
             if source.topic.is_some() {
                 return Err(not_for(UserOption::Topic));
             }
-            let imu = ulog::read(r, source.instance.unwrap_or(0)).map_err(|e| LogError::Ulog {
-                path: p(),
-                source: e.spelled(sp),
+            let imu = ulog::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
+                LogError::Ulog {
+                    path: p(),
+                    source: e.spelled(sp),
+                }
             })?;
             (imu.0, imu.1)
         }
@@ -302,21 +405,24 @@ pub fn read_log_from<R: BufRead>(
             if source.topic.is_some() {
                 return Err(not_for(UserOption::Topic));
             }
-            let imu = dataflash::read(r, source.instance.unwrap_or(0)).map_err(|e| {
-                LogError::DataFlash {
-                    path: p(),
-                    source: e.spelled(sp),
-                }
-            })?;
+            let imu =
+                dataflash::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
+                    LogError::DataFlash {
+                        path: p(),
+                        source: e.spelled(sp),
+                    }
+                })?;
             (imu.0, imu.1)
         }
         LogFormat::Mcap => {
             if source.instance.is_some() {
                 return Err(not_for(UserOption::Instance));
             }
-            let imu = mcap::read(r, source.topic.as_deref()).map_err(|e| LogError::Mcap {
-                path: p(),
-                source: e.spelled(sp),
+            let imu = mcap::read_keeping(r, source.topic.as_deref(), keep).map_err(|e| {
+                LogError::Mcap {
+                    path: p(),
+                    source: e.spelled(sp),
+                }
             })?;
             (imu.0, imu.1)
         }
@@ -325,7 +431,7 @@ pub fn read_log_from<R: BufRead>(
     if format != LogFormat::Text {
         recording.time_origin = Some(TimeOrigin::LoggerStamps(format.name()));
     }
-    if recording.len() < 100 {
+    if recording.len() < 100 && !matches!(keep, Keep::Survey(_)) {
         return Err(LogError::TooFewSamples {
             path: p(),
             rows: recording.len(),
@@ -346,29 +452,44 @@ pub(crate) struct StreamSample {
     pub temp_c: Option<f64>,
 }
 
-/// Collects one stream's samples, refusing more than [`MAX_ROWS`].
+/// Collects one stream's samples as its [`Keep`] says.
 #[derive(Debug, Default)]
 pub(crate) struct Stream {
     pub samples: Vec<StreamSample>,
     /// Samples left out for a value that is not finite.
     pub non_finite: usize,
+    keeper: Keeper,
 }
 
-/// More than [`MAX_ROWS`] samples in one stream.
+/// More samples than the stream's budget ([`Keep::All`]), which is given.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct TooMany;
+pub(crate) struct TooMany(pub usize);
 
 impl Stream {
+    /// An empty stream that keeps what `keep` says.
+    pub fn new(keep: &Keep) -> Stream {
+        Stream {
+            keeper: Keeper::new(keep),
+            ..Stream::default()
+        }
+    }
+
     pub fn push(&mut self, s: StreamSample) -> Result<(), TooMany> {
         if !(s.t_s.is_finite() && s.v.iter().all(|x| x.is_finite())) {
             self.non_finite += 1;
             return Ok(());
         }
-        if self.samples.len() >= MAX_ROWS {
-            return Err(TooMany);
+        match self.keeper.admit(s.t_s, &s.v, self.samples.len()) {
+            Admit::Keep => self.samples.push(s),
+            Admit::Pass => {}
+            Admit::TooMany(max) => return Err(TooMany(max)),
         }
-        self.samples.push(s);
         Ok(())
+    }
+
+    /// The finite samples read, whether kept or not.
+    pub fn count(&self) -> usize {
+        self.keeper.count()
     }
 }
 
@@ -378,15 +499,24 @@ impl Stream {
 /// for both (ULog's `sensor_combined`, DataFlash's `IMU`) give the two streams the same times, and
 /// the interpolation returns the gyro sample itself. Each stream's time stamps are first mended by
 /// [`repair`](crate::session::repair)'s rules, so that a damaged stamp costs at most its sample.
-pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
-    let (acc_s, acc_rep) = repaired(&acc.samples);
-    let (g, gyro_rep) = repaired(&gyro.samples);
+/// The streams are consumed, each dropped once mended, so that no more than one copy of a
+/// stream is held at a time ([`keep`]).
+pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
+    if acc.keeper.report() {
+        return (Recording::default(), Vec::new());
+    }
+    let (acc_s, acc_rep) = repaired(std::mem::take(&mut acc.samples));
+    let (g, gyro_rep) = repaired(std::mem::take(&mut gyro.samples));
+    let n = acc_s.len();
     let mut rec = Recording {
         acc_unit: Some(OutputUnit::MetresPerSecondSquared),
+        t_s: Vec::with_capacity(n),
+        acc: Vec::with_capacity(n),
+        gyro_rad_s: Vec::with_capacity(n),
         ..Recording::default()
     };
     let with_temp = acc_s.iter().any(|s| s.temp_c.is_some());
-    let mut temps = Vec::new();
+    let mut temps = Vec::with_capacity(if with_temp { n } else { 0 });
     let (mut j, mut unpaired) = (0usize, 0usize);
     for a in &acc_s {
         while j + 1 < g.len() && g[j + 1].t_s <= a.t_s {
@@ -399,7 +529,9 @@ pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, V
         rec.t_s.push(a.t_s);
         rec.acc.push(a.v);
         rec.gyro_rad_s.push(w);
-        temps.push(a.temp_c.unwrap_or(f64::NAN));
+        if with_temp {
+            temps.push(a.temp_c.unwrap_or(f64::NAN));
+        }
     }
     rec.skipped_rows = acc.non_finite;
     rec.rate_hz = run_rate_hz(&rec.t_s);
@@ -450,11 +582,12 @@ pub(crate) fn pair(acc: &Stream, gyro: &Stream, max_gap_s: f64) -> (Recording, V
 }
 
 /// A stream's samples in time order, their stamps mended ([`repair_times`]).
-fn repaired(samples: &[StreamSample]) -> (Vec<StreamSample>, TimeRepairs) {
+fn repaired(samples: Vec<StreamSample>) -> (Vec<StreamSample>, TimeRepairs) {
     let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
     let (order, rep) = repair_times(&t, |i, j| {
         samples[i].v == samples[j].v && samples[i].temp_c == samples[j].temp_c
     });
+    drop(t);
     let out = order
         .iter()
         .map(|&(i, t_s)| StreamSample { t_s, ..samples[i] })
@@ -463,7 +596,7 @@ fn repaired(samples: &[StreamSample]) -> (Vec<StreamSample>, TimeRepairs) {
 }
 
 /// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.
-pub(crate) fn pair_streams(acc: &Stream, gyro: &Stream) -> (Recording, Vec<String>) {
+pub(crate) fn pair_streams(acc: Stream, gyro: Stream) -> (Recording, Vec<String>) {
     let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
     let rate_hz = 1.0 / median_step(&gyro_ts).unwrap_or(1.0);
     pair(acc, gyro, GAP_PERIODS / rate_hz.max(1.0))

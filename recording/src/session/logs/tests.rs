@@ -42,11 +42,11 @@ fn the_gyro_is_interpolated_to_the_accelerometers_times_and_gaps_are_not_bridged
             .into_iter()
             .filter(|s| !(1.0..1.5).contains(&s.t_s))
             .collect(),
-        non_finite: 0,
+        ..Stream::default()
     };
     at.insert(10, at[10]); // a repeated time stamp
     let acc = stream(&at, |_| [0.0, 0.0, 9.81], Some(25.0));
-    let (rec, warnings) = pair(&acc, &gyro, 0.05);
+    let (rec, warnings) = pair(acc, gyro, 0.05);
     let i = rec
         .t_s
         .iter()

@@ -11,7 +11,7 @@
 //! topics, and bounds everything (a message is at most 65 535 bytes by its size field).
 
 use super::{
-    list_instances, pair_streams, read_exact_or_end, ImuError, Stream, StreamSample, TooMany,
+    list_instances, pair_streams, read_exact_or_end, ImuError, Keep, Stream, StreamSample, TooMany,
 };
 use crate::session::import::Recording;
 use crate::spelling::Spelling;
@@ -392,7 +392,16 @@ impl UlogError {
 }
 
 /// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
-pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
+pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
+    read_keeping(r, instance, &Keep::default())
+}
+
+/// [`read`], each stream keeping what `keep` says.
+pub(crate) fn read_keeping<R: Read>(
+    mut r: R,
+    instance: u8,
+    keep: &Keep,
+) -> Result<(Recording, Vec<String>), UlogError> {
     let mut header = [0u8; 16];
     match read_exact_or_end(&mut r, &mut header) {
         Ok(true) => {}
@@ -402,7 +411,13 @@ pub fn read<R: Read>(mut r: R, instance: u8) -> Result<(Recording, Vec<String>),
         }
         Err(source) => return Err(UlogError::Io { offset: 0, source }),
     }
-    let mut st = State::default();
+    let mut st = State {
+        combined_acc: Stream::new(keep),
+        combined_gyro: Stream::new(keep),
+        accel: Stream::new(keep),
+        gyro: Stream::new(keep),
+        ..State::default()
+    };
     let mut offset = 16u64;
     let mut payload = vec![0u8; u16::MAX as usize];
     let mut warnings = Vec::new();
@@ -600,7 +615,7 @@ impl State {
         let xyz = l.xyz.map(|p| p.read(d));
         let temp_c = l.temperature.map(|p| p.read(d));
         let too_many =
-            |_: TooMany| UlogError::from(ImuError::TooManySamples(l.topic.name().into()));
+            |e: TooMany| UlogError::from(ImuError::TooManySamples(l.topic.name().into(), e.0));
         match l.topic {
             Topic::Combined => {
                 let rel = l.relative.map_or(0.0, |p| p.read(d));
@@ -639,12 +654,12 @@ impl State {
 
     /// The chosen streams paired into a recording, and the dropouts said.
     fn finish(
-        self,
+        mut self,
         instance: u8,
         mut warnings: Vec<String>,
     ) -> Result<(Recording, Vec<String>), UlogError> {
-        let raw = self.accel.samples.len().min(self.gyro.samples.len());
-        let combined = self.combined_gyro.samples.len();
+        let raw = self.accel.count().min(self.gyro.count());
+        let combined = self.combined_gyro.count();
         // The sensors' own topics are preferred (raw, with temperature), but a log often keeps them
         // only at a few samples per second for comparison while sensor_combined runs at the
         // estimator's rate: then the richer topic is the one a calibration can use.
@@ -658,10 +673,15 @@ impl State {
                  logger_topics.txt or SDLOG_PROFILE)"
             ));
         }
-        let (acc, gyro) = if raw > 0 && !raw_is_sparse {
-            (&self.accel, &self.gyro)
+        let take = std::mem::take;
+        let (acc, gyro, from_combined) = if raw > 0 && !raw_is_sparse {
+            (take(&mut self.accel), take(&mut self.gyro), false)
         } else if combined > 0 {
-            (&self.combined_acc, &self.combined_gyro)
+            (
+                take(&mut self.combined_acc),
+                take(&mut self.combined_gyro),
+                true,
+            )
         } else {
             let seen = self.seen.iter().map(|(t, i)| (t.name(), *i));
             let found = list_instances(
@@ -677,7 +697,7 @@ impl State {
             .into());
         };
         let (mut rec, mut paired) = pair_streams(acc, gyro);
-        if std::ptr::eq(acc, &self.combined_acc) {
+        if from_combined {
             rec.corrected_by = Some("PX4's sensor_combined");
         }
         if let Some(&(offset, t_s, ms)) = self.dropouts.first() {

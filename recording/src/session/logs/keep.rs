@@ -1,0 +1,436 @@
+//! How much of a log the readers keep in memory, so that the memory `segment` needs does not grow
+//! with the file (docs/robustness.md, "Memory").
+//!
+//! A log of up to [`DEFAULT_MAX_SAMPLES`] samples per stream is kept whole, as it always was. A
+//! longer one is read three times, each pass streaming the file:
+//!
+//! 1. the first pass stops at the budget ([`Keep::All`]);
+//! 2. the survey ([`Keep::Survey`]) keeps each stream's block statistics only, at most
+//!    [`MAX_BLOCKS`] blocks, merged pairwise as the log goes on;
+//! 3. the extract ([`Keep::Within`]) keeps the samples whose time lies in the regions the survey
+//!    found ([`regions`]): the accelerometer's quiet stretches (a still position, or a spin on a
+//!    table) with a margin, and the moves between two of them shorter than [`MAX_MOVE_S`] (the
+//!    turns). Long flights, walks and drives between them are what is left out; a calibration
+//!    uses none of it. The extract keeps at most the budget too: what lies beyond it is named.
+//!
+//! The survey locates; it decides nothing. The still intervals are found on the samples kept, by
+//! the same rules as on a short log (`super::super::segment`).
+
+use crate::session::import::MAX_ROWS;
+use crate::spelling::{Spelling, UserOption};
+use std::sync::{Arc, Mutex};
+
+/// Samples kept per stream by default: about 50 MB for the whole of `segment` (measured at about
+/// 200 bytes per sample: the samples, their repair, the window statistics), so that it stays within
+/// 64 MiB. That is 4 min 10 s at 1 kHz of still positions and turns.
+pub const DEFAULT_MAX_SAMPLES: usize = 250_000;
+
+/// Most blocks a survey holds; two neighbours are merged when it is full (about 2.5 MB).
+pub const MAX_BLOCKS: usize = 1 << 15;
+
+/// A move longer than this between two quiet stretches is no turn of a calibration (a flight, a
+/// walk): it is left out of a long log.
+pub const MAX_MOVE_S: f64 = 60.0;
+
+/// The variance, summed over three axes, that no still unit exceeds, (m/s²)²: 20 mg per axis, the
+/// segmentation's own limit (`super::super::segment`).
+pub(crate) const STILL_VAR_M2_S4: f64 = 3.0 * (0.02 * 9.80665) * (0.02 * 9.80665);
+
+/// Seconds kept around each quiet stretch: the segmentation's windows and trims reach beyond the
+/// stretch a block found.
+const MARGIN_S: f64 = 2.0;
+
+/// Samples in a survey's first blocks.
+const FIRST_BLOCK: usize = 16;
+
+/// What a stream keeps of its samples.
+#[derive(Clone, Debug)]
+pub(crate) enum Keep {
+    /// Every sample, refusing more than `max` ([`super::TooMany`]).
+    All {
+        /// The budget.
+        max: usize,
+    },
+    /// Block statistics only; the accelerometer's regions are put in the report when the reader
+    /// pairs its streams.
+    Survey(Arc<Mutex<PassReport>>),
+    /// The samples whose time lies in one of `regions` (sorted, disjoint, s), the first `max`;
+    /// what the accelerometer's stream left out is put in the report.
+    Within {
+        /// Start and end of each region kept.
+        regions: Arc<[(f64, f64)]>,
+        /// The budget.
+        max: usize,
+        /// Where the accelerometer's [`LeftOut`] goes.
+        report: Arc<Mutex<PassReport>>,
+    },
+}
+
+/// What a survey or an extract found, handed back from inside a reader.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PassReport {
+    /// The survey's regions.
+    pub regions: Option<Vec<(f64, f64)>>,
+    /// What the extract left out of the accelerometer's stream.
+    pub left_out: Option<LeftOut>,
+}
+
+impl Default for Keep {
+    /// Everything, up to [`MAX_ROWS`].
+    fn default() -> Keep {
+        Keep::All { max: MAX_ROWS }
+    }
+}
+
+/// Decides, sample by sample, what a stream (or a text file's rows) keeps: the one place the
+/// [`Keep`] rules are applied.
+#[derive(Debug, Default)]
+pub(crate) struct Keeper {
+    keep: Keep,
+    survey: Survey,
+    left_out: LeftOut,
+    /// The variance, summed over the axes, that a still unit never exceeds, in the stream's unit
+    /// (0: unknown, the quietest blocks alone decide).
+    still_var: f64,
+}
+
+/// What [`Keeper::admit`] says of a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Admit {
+    /// Keep it.
+    Keep,
+    /// Leave it out (surveyed, outside the regions, or beyond the budget).
+    Pass,
+    /// More than the budget of [`Keep::All`], which is given: the pass fails.
+    TooMany(usize),
+}
+
+impl Keeper {
+    /// A keeper of a stream in m/s².
+    pub fn new(keep: &Keep) -> Keeper {
+        Keeper {
+            keep: keep.clone(),
+            still_var: STILL_VAR_M2_S4,
+            ..Keeper::default()
+        }
+    }
+
+    /// A keeper of a stream whose still limit is `still_var` in its own unit.
+    pub fn with_still_var(keep: &Keep, still_var: f64) -> Keeper {
+        Keeper {
+            still_var,
+            ..Keeper::new(keep)
+        }
+    }
+
+    /// A finite sample at `t_s` (s) with accelerometer `acc`, when `kept` are already kept.
+    pub fn admit(&mut self, t_s: f64, acc: &[f64; 3], kept: usize) -> Admit {
+        self.left_out.read += 1;
+        match &self.keep {
+            Keep::All { max } if kept >= *max => Admit::TooMany(*max),
+            Keep::All { .. } => Admit::Keep,
+            Keep::Survey(_) => {
+                self.survey.push(t_s, acc);
+                Admit::Pass
+            }
+            Keep::Within { regions, max, .. } => {
+                if !within(regions, t_s) {
+                    self.left_out.outside += 1;
+                    Admit::Pass
+                } else if kept >= *max {
+                    self.left_out.over_budget += 1;
+                    self.left_out.first_over_s.get_or_insert(t_s);
+                    Admit::Pass
+                } else {
+                    Admit::Keep
+                }
+            }
+        }
+    }
+
+    /// The finite samples seen, whether kept or not.
+    pub fn count(&self) -> usize {
+        self.left_out.read
+    }
+
+    /// Hands what this stream (the accelerometer's) found to the pass's report: the survey's
+    /// regions, or what the extract left out. `true`: a survey, which keeps no samples.
+    pub fn report(&self) -> bool {
+        match &self.keep {
+            Keep::All { .. } => false,
+            Keep::Survey(report) => {
+                if let Ok(mut r) = report.lock() {
+                    r.regions = Some(self.survey.regions(self.still_var));
+                }
+                true
+            }
+            Keep::Within { report, .. } => {
+                if let Ok(mut r) = report.lock() {
+                    r.left_out = Some(self.left_out);
+                }
+                false
+            }
+        }
+    }
+}
+
+/// What a stream left out under [`Keep::Within`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct LeftOut {
+    /// Finite samples read.
+    pub read: usize,
+    /// Outside every region.
+    pub outside: usize,
+    /// Inside a region but beyond the budget.
+    pub over_budget: usize,
+    /// The time of the first sample beyond the budget.
+    pub first_over_s: Option<f64>,
+}
+
+/// What a long log's extract left out, for the user: always that only the quiet stretches and the
+/// turns were kept, and, when they held more than the budget, from when on they were cut.
+pub(crate) fn left_out_note(
+    l: &LeftOut,
+    max: usize,
+    regions: usize,
+    spelling: Spelling,
+) -> Vec<String> {
+    let kept = l.read - l.outside - l.over_budget;
+    let mut notes = vec![format!(
+        "the log holds {} accelerometer samples, more than the {max} kept in memory at once: \
+         {kept} are kept, those of its {regions} stretch(es) of still positions and turns, and \
+         the {} of moves longer than {MAX_MOVE_S:.0} s between them (flights, walks) are left out",
+        l.read, l.outside
+    )];
+    if let Some(t) = l.first_over_s {
+        let needed = l.read - l.outside;
+        let advice = if needed <= MAX_ROWS {
+            format!(
+                "give {} to keep them",
+                spelling.given(UserOption::MaxSamples, needed)
+            )
+        } else {
+            format!(
+                "at most {} can be kept ({}), about 200 bytes of memory each",
+                MAX_ROWS,
+                spelling.given(UserOption::MaxSamples, MAX_ROWS)
+            )
+        };
+        notes.push(format!(
+            "the still positions and turns hold more than {max} samples: the {} from t = {t:.3} s \
+             on are left out; {advice}",
+            l.over_budget,
+        ));
+    }
+    notes
+}
+
+/// Whether `t_s` lies in one of the sorted, disjoint `regions`.
+pub(crate) fn within(regions: &[(f64, f64)], t_s: f64) -> bool {
+    let k = regions.partition_point(|r| r.1 < t_s);
+    regions.get(k).is_some_and(|r| r.0 <= t_s)
+}
+
+/// Count, mean and sum of squared deviations of x y z over some samples, and their time span.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Block {
+    t_lo: f64,
+    t_hi: f64,
+    n: f64,
+    mean: [f64; 3],
+    m2: [f64; 3],
+}
+
+impl Block {
+    /// The statistics of `samples` (at least one). The span leaves out the earliest and latest
+    /// stamp when there are three or more, so that one damaged stamp cannot stretch it.
+    fn of(samples: &[(f64, [f64; 3])]) -> Block {
+        let n = samples.len() as f64;
+        let mean: [f64; 3] =
+            core::array::from_fn(|j| samples.iter().map(|s| s.1[j]).sum::<f64>() / n);
+        let m2 = core::array::from_fn(|j| samples.iter().map(|s| (s.1[j] - mean[j]).powi(2)).sum());
+        let mut t: Vec<f64> = samples.iter().map(|s| s.0).collect();
+        t.sort_by(f64::total_cmp);
+        let cut = usize::from(t.len() >= 3);
+        Block {
+            t_lo: t[cut],
+            t_hi: t[t.len() - 1 - cut],
+            n,
+            mean,
+            m2,
+        }
+    }
+
+    /// The two blocks as one (the parallel variance formula of Chan, Golub and LeVeque).
+    fn merge(a: &Block, b: &Block) -> Block {
+        let n = a.n + b.n;
+        let d: [f64; 3] = core::array::from_fn(|j| b.mean[j] - a.mean[j]);
+        Block {
+            t_lo: a.t_lo.min(b.t_lo),
+            t_hi: a.t_hi.max(b.t_hi),
+            n,
+            mean: core::array::from_fn(|j| a.mean[j] + d[j] * b.n / n),
+            m2: core::array::from_fn(|j| a.m2[j] + b.m2[j] + d[j] * d[j] * a.n * b.n / n),
+        }
+    }
+
+    /// The variance summed over the three axes.
+    fn var(&self) -> f64 {
+        self.m2.iter().sum::<f64>() / self.n
+    }
+}
+
+/// A stream's block statistics, in the order the samples came, in bounded memory.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Survey {
+    blocks: Vec<Block>,
+    pending: Vec<(f64, [f64; 3])>,
+    per_block: usize,
+}
+
+impl Survey {
+    pub fn push(&mut self, t_s: f64, v: &[f64; 3]) {
+        if self.per_block == 0 {
+            self.per_block = FIRST_BLOCK;
+        }
+        self.pending.push((t_s, *v));
+        if self.pending.len() >= self.per_block {
+            self.close_block();
+        }
+    }
+
+    fn close_block(&mut self) {
+        if self.pending.is_empty() {
+            return;
+        }
+        self.blocks.push(Block::of(&self.pending));
+        self.pending.clear();
+        if self.blocks.len() >= MAX_BLOCKS {
+            self.blocks = self
+                .blocks
+                .chunks(2)
+                .map(|c| c[1..].iter().fold(c[0], |a, b| Block::merge(&a, b)))
+                .collect();
+            self.per_block *= 2;
+        }
+    }
+
+    /// The regions to keep (see the module docs): sorted, disjoint, s. `still_var`: the variance,
+    /// summed over the axes, that a still unit never exceeds in the stream's unit.
+    pub fn regions(&self, still_var: f64) -> Vec<(f64, f64)> {
+        let mut blocks = self.blocks.clone();
+        if !self.pending.is_empty() {
+            blocks.push(Block::of(&self.pending));
+        }
+        if blocks.is_empty() {
+            return Vec::new();
+        }
+        // The noise at rest is the quietest blocks' (no percentile: in a long log the still
+        // positions may be a thousandth of it); the fourth quietest that moves at all, so that a
+        // few blocks of a stuck or quantised output do not set it. A block is quiet within 10× that
+        // noise's σ, or within the still limit the segmentation itself allows.
+        let mut vars: Vec<f64> = blocks.iter().map(Block::var).filter(|&v| v > 0.0).collect();
+        vars.sort_by(f64::total_cmp);
+        let noise = vars.get(3).or(vars.last()).copied().unwrap_or(0.0);
+        let quiet = |b: &Block| b.var() <= (100.0 * noise).max(still_var);
+        let mut spans: Vec<(f64, f64)> = Vec::new();
+        let mut run: Option<(f64, f64)> = None;
+        for b in &blocks {
+            run = match (quiet(b), run) {
+                (true, None) => Some((b.t_lo, b.t_hi)),
+                (true, Some((lo, hi))) => Some((lo.min(b.t_lo), hi.max(b.t_hi))),
+                (false, Some(r)) => {
+                    spans.push(r);
+                    None
+                }
+                (false, None) => None,
+            };
+        }
+        spans.extend(run);
+        spans.retain(|s| s.0.is_finite() && s.1.is_finite());
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut regions: Vec<(f64, f64)> = Vec::with_capacity(spans.len());
+        for (lo, hi) in spans {
+            let (lo, hi) = (lo - MARGIN_S, hi + MARGIN_S);
+            match regions.last_mut() {
+                Some(last) if lo - last.1 <= MAX_MOVE_S => last.1 = last.1.max(hi),
+                _ => regions.push((lo, hi)),
+            }
+        }
+        regions
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merged_blocks_have_the_statistics_of_their_samples() {
+        let s: Vec<(f64, [f64; 3])> = (0..10)
+            .map(|k| {
+                let x = f64::from(k);
+                (x * 0.1, [x, x * x, 9.8 - x])
+            })
+            .collect();
+        let whole = Block::of(&s);
+        let merged = Block::merge(&Block::of(&s[..3]), &Block::of(&s[3..]));
+        for j in 0..3 {
+            assert!((whole.mean[j] - merged.mean[j]).abs() < 1e-12);
+            assert!((whole.m2[j] - merged.m2[j]).abs() < 1e-9 * whole.m2[j].max(1.0));
+        }
+        // By hand: x = 0..9 has mean 4.5 and Σ(x − 4.5)² = 82.5.
+        assert!((merged.mean[0] - 4.5).abs() < 1e-12 && (merged.m2[0] - 82.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn one_damaged_stamp_does_not_stretch_a_block() {
+        let mut s: Vec<(f64, [f64; 3])> = (0..16).map(|k| (f64::from(k), [0.0; 3])).collect();
+        s[7].0 = 1e9;
+        let b = Block::of(&s);
+        assert_eq!((b.t_lo, b.t_hi), (1.0, 15.0));
+    }
+
+    /// Rest, a 2 s turn, rest, a 100 s flight, rest: three quiet stretches, the first two joined by
+    /// their turn, the flight left out. Memory stays within the block bound on a long log.
+    #[test]
+    fn the_regions_are_the_quiet_stretches_and_the_short_moves_between_them() {
+        let rate = 100.0;
+        let mut survey = Survey::default();
+        let mut k = 0u64;
+        let mut push = |seconds: f64, moving: bool, survey: &mut Survey| {
+            for _ in 0..(seconds * rate) as u64 {
+                let t = k as f64 / rate;
+                // A deterministic wobble: noise of 1e-3 at rest, 1.0 when moving.
+                let w = ((k * 2_654_435_761) % 1000) as f64 / 1000.0 - 0.5;
+                let a = if moving { 1.0 } else { 1e-3 };
+                survey.push(t, &[a * w, -a * w, 9.8 + a * w]);
+                k += 1;
+            }
+        };
+        push(10.0, false, &mut survey);
+        push(2.0, true, &mut survey);
+        push(10.0, false, &mut survey);
+        push(100.0, true, &mut survey);
+        push(10.0, false, &mut survey);
+        let regions = survey.regions(STILL_VAR_M2_S4);
+        assert_eq!(regions.len(), 2, "{regions:?}");
+        assert!(regions[0].0 <= 0.2 && regions[0].1 >= 21.8, "{regions:?}");
+        assert!(regions[0].1 < 30.0, "the flight is left out: {regions:?}");
+        assert!(regions[1].0 <= 122.2 && regions[1].0 > 110.0, "{regions:?}");
+        assert!(within(&regions, 11.0) && !within(&regions, 60.0) && within(&regions, 125.0));
+    }
+
+    #[test]
+    fn a_survey_holds_at_most_its_block_bound() {
+        let mut survey = Survey::default();
+        for k in 0..(MAX_BLOCKS * FIRST_BLOCK * 3) {
+            survey.push(k as f64 * 1e-3, &[0.0, 0.0, 9.8]);
+        }
+        assert!(survey.blocks.len() < MAX_BLOCKS);
+        assert!(survey.pending.capacity() <= survey.per_block.max(FIRST_BLOCK) * 2);
+        assert_eq!(survey.per_block, FIRST_BLOCK * 4);
+        let n: f64 = survey.blocks.iter().map(|b| b.n).sum::<f64>() + survey.pending.len() as f64;
+        assert_eq!(n as usize, MAX_BLOCKS * FIRST_BLOCK * 3);
+    }
+}
