@@ -6,6 +6,7 @@
 
 mod common;
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// IMU-TK's example gyro scale, 1/6258 rad/s per count, in counts per °/s.
@@ -158,4 +159,199 @@ fn rosbag2s_test_bags_are_read_and_refused_for_holding_no_imu() {
             "{bag}: a session was written"
         );
     }
+}
+
+/// Each message name's `TimeUS` stamps, counted by walking a DataFlash log the way ArduPilot writes
+/// it (`libraries/AP_Logger/LogStructure.h`): every message is `0xA3 0x95 type`, its length given by
+/// an earlier `FMT` (type 128, 89 bytes: Type, Length, Name `char[4]`, Format `char[16]`, Columns
+/// `char[64]`). Independent of the reader under test: no resynchronisation, so it stops the test if
+/// a message does not start where the previous one ended. Also the bytes of a last message cut off
+/// by the end of the file.
+fn walk_dataflash(bytes: &[u8], names: &[&str]) -> (BTreeMap<String, Vec<u64>>, usize) {
+    let mut length = BTreeMap::from([(128u8, 89usize)]);
+    let mut name = BTreeMap::from([(128u8, "FMT".to_string())]);
+    let mut stamps: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    let mut at = 0;
+    while at + 3 <= bytes.len() {
+        assert_eq!(
+            bytes[at..at + 2],
+            [0xA3, 0x95],
+            "no message starts at byte {at}"
+        );
+        let kind = bytes[at + 2];
+        let len = length[&kind];
+        if at + len > bytes.len() {
+            return (stamps, bytes.len() - at);
+        }
+        let m = &bytes[at..at + len];
+        if kind == 128 {
+            let text = |r: std::ops::Range<usize>| {
+                String::from_utf8_lossy(&m[r])
+                    .trim_end_matches('\0')
+                    .to_string()
+            };
+            let (n, format, columns) = (text(5..9), text(9..25), text(25..89));
+            if names.contains(&n.as_str()) {
+                assert!(
+                    format.starts_with('Q') && columns.starts_with("TimeUS,"),
+                    "{n}"
+                );
+            }
+            length.insert(m[3], usize::from(m[4]));
+            name.insert(m[3], n);
+        } else if names.contains(&name[&kind].as_str()) {
+            let t = u64::from_le_bytes(m[3..11].try_into().unwrap());
+            stamps.entry(name[&kind].clone()).or_default().push(t);
+        }
+        at += len;
+    }
+    (stamps, bytes.len() - at)
+}
+
+/// pymavlink's own test log (`fixtures/logs/pymavlink-test.bin`, its `tests/test.BIN`, LGPL-3.0;
+/// licence beside it): the first 64 KiB of a real ArduPlane 3.8.2-dev log (a PX4v4 board, armed on
+/// the ground, 2017), its two IMUs in the older naming, messages `IMU` and `IMU2` with no `I` field,
+/// each with the sensor's temperature `T`. Both read as pymavlink 2.4.50's `DFReader_binary` reads
+/// them: 45 samples each (the same count as the walk above), the first and last values equal, at
+/// 50.3 Hz; the message the file's end cuts short is left out and said so. A second of data is no
+/// calibration session: `segment` refuses it for that, naming the count, and
+/// the reason is true of the log (it is 0.97 s long, shorter than one still position of the default
+/// 1 s, let alone minutes). An instance the log does not have is refused with the two it has.
+#[test]
+fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_session() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/logs/pymavlink-test.bin"
+    );
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(bytes[..3], [0xA3, 0x95, 0x80]);
+    let (stamps, cut) = walk_dataflash(&bytes, &["IMU", "IMU2"]);
+    assert_eq!(cut, 24, "the file ends 24 bytes into an AHR2 message");
+    // pymavlink's values (`DFReader_binary(f).recv_msg()`): TimeUS, AccX..Z, GyrX..Z, T of the
+    // first and last samples.
+    let pymavlink = [
+        (
+            "IMU",
+            [
+                (
+                    81_794_643u64,
+                    [0.41619187593460083, 0.4691760838031769, -9.780994415283203],
+                    [
+                        -0.1165708526968956,
+                        0.009646732360124588,
+                        -0.0036614425480365753,
+                    ],
+                    44.423282623291016,
+                ),
+                (
+                    82_769_489,
+                    [0.3519606590270996, 0.735745906829834, -9.931867599487305],
+                    [
+                        -0.05384852737188339,
+                        -0.009476035833358765,
+                        -0.004102954640984535,
+                    ],
+                    44.46217346191406,
+                ),
+            ],
+        ),
+        (
+            "IMU2",
+            [
+                (
+                    81_794_643,
+                    [0.3878509998321533, 0.5220719575881958, -9.676275253295898],
+                    [
+                        -0.11092303693294525,
+                        0.009959599003195763,
+                        -0.001431140466593206,
+                    ],
+                    39.922950744628906,
+                ),
+                (
+                    82_769_489,
+                    [0.31356990337371826, 0.78541499376297, -9.849275588989258],
+                    [
+                        -0.052002906799316406,
+                        -0.009817482903599739,
+                        -0.0028600424993783236,
+                    ],
+                    39.95038604736328,
+                ),
+            ],
+        ),
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    for (instance, (name, want)) in pymavlink.iter().enumerate() {
+        let walked = &stamps[*name];
+        assert_eq!(walked.len(), 45, "{name}: pymavlink reads 45");
+        let (rec, warnings) = recording::session::logs::dataflash::read(
+            std::fs::File::open(path).unwrap(),
+            instance as u8,
+        )
+        .unwrap();
+        assert_eq!(rec.len(), walked.len(), "{name}");
+        let cut_at = format!("(at byte {}) is cut short", bytes.len() - cut);
+        assert!(warnings.iter().any(|w| w.contains(&cut_at)), "{warnings:?}");
+        // 20 ms steps with a few missed (the median step, 20 ms; 44 steps of 49 periods in 0.975 s):
+        // the rate is the mean over the steps, each counted in whole periods.
+        let periods: f64 = walked
+            .windows(2)
+            .map(|w| ((w[1] - w[0]) as f64 / 20_000.0).round())
+            .sum();
+        let span_s = (walked[walked.len() - 1] - walked[0]) as f64 * 1e-6;
+        assert_eq!(periods, 49.0);
+        assert!(
+            (rec.rate_hz - periods / span_s).abs() < 1e-6,
+            "{}",
+            rec.rate_hz
+        );
+        let temp = rec.temp_c.as_ref().expect("IMU messages carry T");
+        for (i, (t_us, acc, gyro, t_c)) in [0, rec.len() - 1].into_iter().zip(want) {
+            assert_eq!(walked[i], *t_us, "{name}");
+            assert!(
+                (rec.t_s[i] - *t_us as f64 * 1e-6).abs() < 1e-9,
+                "{name} {i}"
+            );
+            assert_eq!(rec.acc[i], *acc, "{name} {i}");
+            assert_eq!(rec.gyro_rad_s[i], *gyro, "{name} {i}");
+            assert_eq!(temp[i], *t_c, "{name} {i}");
+        }
+        assert!(span_s < 1.0, "{span_s}");
+
+        let out = format!("s{instance}");
+        let inst = instance.to_string();
+        let (ok, _, stderr) = common::host_in(
+            Some(tmp.path()),
+            &[
+                "segment",
+                "--input",
+                path,
+                "--out",
+                &out,
+                "--instance",
+                &inst,
+            ],
+        );
+        assert!(!ok, "{name}: a second of data segmented");
+        let count = format!("only {} IMU samples", walked.len());
+        assert!(
+            stderr.contains(&count) && stderr.contains("needs minutes of data"),
+            "{stderr}"
+        );
+        assert!(
+            !tmp.path().join(&out).exists(),
+            "{name}: a session was written"
+        );
+    }
+    let (ok, _, stderr) = common::host_in(
+        Some(tmp.path()),
+        &["segment", "--input", path, "--out", "s2", "--instance", "2"],
+    );
+    assert!(!ok);
+    assert!(
+        stderr.contains("no IMU samples for instance 2")
+            && stderr.contains("IMU instance 0, IMU instance 1"),
+        "{stderr}"
+    );
 }
