@@ -7,7 +7,8 @@ use super::error::CalibrateError;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::estimate::GyroEstimate;
 use crate::estimate::{
-    calibrate_session_stats, CalibrationOutcome, EstimateError, EstimateOptions,
+    calibrate_session_stats, take_hand_turns_gyro, CalibrationOutcome, EstimateError,
+    EstimateOptions,
 };
 use crate::session::{self, Plan, ReadOptions, SegmentStats, Session};
 use crate::summary::{CalibrationSummary, Limits};
@@ -47,7 +48,8 @@ pub struct Calibrated {
     /// The unit the recording names (`plan.toml`'s `unit_id`); `None`: the blob is bound to the
     /// all-zero id, which each caller tells its user in its own terms.
     pub unit_id: Option<UnitId>,
-    /// The gyro came from the hand turns, not from the plan's own spins.
+    /// The gyro came from the hand turns, not from the plan's own spins: its `G`, and its bias too
+    /// unless a temperature model's rests give the bias at `T_ref` (docs/model.md §9).
     pub gyro_from_hand_turns: bool,
 }
 
@@ -59,17 +61,16 @@ impl Calibrated {
 }
 
 /// Estimates a calibration from a recording (docs/model.md §2–§4), takes the hand turns' gyro
-/// where the plan determines none, and checks the result against the limits.
+/// where the plan determines no `G` ([`take_hand_turns_gyro`]: beside a temperature model, with
+/// the rests' bias, §9), and checks the result against the limits.
 pub fn calibrate_recording(
     recording: Recording<'_>,
     options: &CalibrateOptions,
 ) -> Result<Calibrated, EstimateError> {
     let mut outcome = calibrate_session_stats(recording.plan, recording.stats, &options.estimate)?;
-    let gyro_from_hand_turns = outcome.gyro.is_none() && recording.hand_gyro.is_some();
-    if gyro_from_hand_turns {
-        outcome.gyro = recording.hand_gyro.cloned();
-        outcome.calibration.gyro = outcome.gyro.as_ref().map(GyroEstimate::device_correction);
-    }
+    let gyro_from_hand_turns = recording
+        .hand_gyro
+        .is_some_and(|hand| take_hand_turns_gyro(&mut outcome, hand));
     let plan_id = recording.plan.unit_id.clone();
     let unit_id = plan_id
         .as_deref()

@@ -139,6 +139,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
             chi2: 1.0,
             dof: 1,
             chi2_per_dof: 1.0,
+            thermal_fit: None,
             checks: Vec::new(),
             passed: true,
             warnings: Vec::new(),

@@ -227,6 +227,15 @@ impl GyroEstimate {
         }
     }
 
+    /// Whether any entry of `G` is determined ([`UNDETERMINED_SIGMA`]): not for the rests' bias
+    /// alone ([`GyroEstimate::bias_only`]), whose `G` is the identity taken as perfect.
+    pub fn determines_matrix(&self) -> bool {
+        self.matrix_1sigma
+            .iter()
+            .flatten()
+            .any(|&s| s <= UNDETERMINED_SIGMA)
+    }
+
     /// `(G⁻¹, b)`: what turns a gyro reading into the body rate.
     pub(crate) fn correction(&self) -> Option<(RowMajor3, [f64; 3])> {
         linalg::inverse(&self.matrix).map(|gi| (gi, self.bias_rad_s))

@@ -91,6 +91,7 @@ pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 pub use screen::median;
 pub use segment::{Noise, SegmentKind};
+pub use thermal_gyro::take_hand_turns_gyro;
 pub use uncertainty::Uncertainty;
 
 // The tests (`tests.rs` and its siblings) take this module's names with `use super::*`.

@@ -526,6 +526,28 @@ impl ThermalFit {
         }
     }
 
+    /// Each accelerometer's χ²/dof of its chosen model over every sample (NaN without degrees of
+    /// freedom). A segment enters the main fit only by its mean referred to `T_ref`, so a misfit
+    /// within a ramp (its shape against temperature, the mean unchanged) shows here and not in the
+    /// main fit's χ²/dof: the verdict checks both (docs/model.md §9).
+    pub fn reduced_chi2(&self) -> [f64; 3] {
+        self.chi2
+            .map(|(c, dof)| if dof > 0 { c / dof as f64 } else { f64::NAN })
+    }
+
+    /// The largest of [`ThermalFit::reduced_chi2`] (NaN when any is): the figure the verdict checks.
+    pub fn worst_reduced_chi2(&self) -> f64 {
+        self.reduced_chi2()
+            .into_iter()
+            .fold(f64::NEG_INFINITY, |a, b| {
+                if a.is_nan() || b.is_nan() {
+                    f64::NAN
+                } else {
+                    a.max(b)
+                }
+            })
+    }
+
     /// `c1·ΔT + c2·ΔT² + c3·ΔT³` of axis `axis` at `temp_c` and its 1σ from `cov`.
     pub fn curve(&self, c: &[f64; DEG], cov: &[[f64; DEG]; DEG], temp_c: f64) -> (f64, f64) {
         let dt = temp_c - self.model.reference_c;

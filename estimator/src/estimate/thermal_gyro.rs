@@ -121,18 +121,61 @@ pub(crate) fn bias_from_rests(
         return;
     };
     let g = GyroEstimate::bias_only(bias, sigma);
-    outcome.warnings.push(format!(
-        "gyro: bias at the reference temperature from the rests, ({:+.4}, {:+.4}, {:+.4}) ± ({:.4}, {:.4}, {:.4}) °/s; \
-         its scale factors and axis alignment (G) are not determined (the session has no spins) and are taken as perfect",
-        bias[0].to_degrees(),
-        bias[1].to_degrees(),
-        bias[2].to_degrees(),
-        sigma[0].to_degrees(),
-        sigma[1].to_degrees(),
-        sigma[2].to_degrees()
-    ));
+    outcome.warnings.push(rests_warning(&g));
     outcome.calibration.gyro = Some(g.device_correction());
     outcome.gyro = Some(g);
+}
+
+/// The warning [`bias_from_rests`] gives: the bias from the rests, `G` taken as perfect.
+fn rests_warning(g: &GyroEstimate) -> String {
+    let (b, s) = (g.bias_rad_s, g.bias_rad_s_1sigma);
+    format!(
+        "gyro: bias at the reference temperature from the rests, ({:+.4}, {:+.4}, {:+.4}) ± ({:.4}, {:.4}, {:.4}) °/s; \
+         its scale factors and axis alignment (G) are not determined (the session has no spins) and are taken as perfect",
+        b[0].to_degrees(),
+        b[1].to_degrees(),
+        b[2].to_degrees(),
+        s[0].to_degrees(),
+        s[1].to_degrees(),
+        s[2].to_degrees()
+    )
+}
+
+/// The gyro a hand-held session's turns determined (`gyro.toml`, docs/model.md §8) becomes the
+/// calibration's where the session's own fit determines no entry of `G`: taken whole when the
+/// outcome has no gyro; beside a temperature model, its `G` (scale factors and axis alignment) with
+/// the rests' bias at `T_ref` ([`bias_from_rests`]), since the model's gyro polynomial holds the
+/// bias's change about that value and the turns' bias is the stills' average over their
+/// temperatures (§9). A warning says which part came from where. Whether the hand turns' gyro was
+/// taken.
+pub fn take_hand_turns_gyro(outcome: &mut CalibrationOutcome, hand: &GyroEstimate) -> bool {
+    let gyro = match outcome.gyro.take() {
+        None => hand.clone(),
+        Some(own) if own.determines_matrix() => {
+            outcome.gyro = Some(own);
+            return false;
+        }
+        Some(rests) => {
+            let replaced = rests_warning(&rests);
+            outcome.warnings.retain(|w| *w != replaced);
+            let b = rests.bias_rad_s.map(f64::to_degrees);
+            outcome.warnings.push(format!(
+                "gyro: scale factors and axis alignment (G) from the hand turns (gyro.toml); the bias \
+                 at the reference temperature, ({:+.4}, {:+.4}, {:+.4}) °/s, and its change with \
+                 temperature from the rests (docs/model.md §8, §9), not the hand turns' bias, which is \
+                 the still positions' average over their temperatures",
+                b[0], b[1], b[2]
+            ));
+            GyroEstimate {
+                bias_rad_s: rests.bias_rad_s,
+                bias_rad_s_1sigma: rests.bias_rad_s_1sigma,
+                ..hand.clone()
+            }
+        }
+    };
+    outcome.calibration.gyro = Some(gyro.device_correction());
+    outcome.gyro = Some(gyro);
+    true
 }
 
 /// The scatter of segment means at one temperature beyond their own noise (the bias wandering

@@ -335,3 +335,40 @@ fn soak_positions_determine_the_model_beside_free_ones() {
         );
     }
 }
+
+/// `d` added to output `axis` of every sample of `st`: its mean, extremes and temperature moments.
+fn shift_output(st: &mut crate::session::SegmentStats, axis: usize, d: f64) {
+    let ts = st.thermal.as_mut().expect("temperature moments");
+    ts.sum_u2[axis] += 2.0 * d * ts.sum_u_x_pow[axis][0] + ts.count as f64 * d * d;
+    for k in 0..ts.sum_u_x_pow[axis].len() {
+        ts.sum_u_x_pow[axis][k] += d * ts.sum_x_pow[k];
+    }
+    st.mean_u[axis] += d;
+    st.min_u[axis] += d;
+    st.max_u[axis] += d;
+}
+
+/// docs/model.md §9, "The verdict": a misfit between soak steps reaches the main fit, which sees
+/// each step's mean referred to `T_ref`, far more strongly than the temperature fit's own χ²/dof,
+/// which spreads it over every sample. Planted: output x one sample-σ higher in every position at
+/// 40 °C, a step no cubic through five temperatures follows.
+#[test]
+fn a_soak_step_off_the_model_shows_in_the_main_chi2() {
+    let truth = hot_unit();
+    let plan = soak_plan(&SOAK_TEMPS_C, 10.0);
+    let mut stats = simulate_stats(&truth, &plan, &nuisances(), &ThermalSim::default(), 5);
+    let sigma = stats[0].cov_u[0][0].sqrt();
+    for st in stats.iter_mut().filter(|st| st.name.ends_with("@40")) {
+        shift_output(st, 0, sigma);
+    }
+    let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
+    let fit = out.thermal.as_ref().expect("a temperature model");
+    println!(
+        "a {:.3} mV step at 40 °C: main χ²/dof {:.1}, temperature fit χ²/dof {:.4?}",
+        sigma * 1e3,
+        out.fit.reduced_chi2,
+        fit.reduced_chi2()
+    );
+    assert!(out.fit.reduced_chi2 > 100.0, "{}", out.fit.reduced_chi2);
+    assert!(fit.worst_reduced_chi2() < 1.1, "{:?}", fit.reduced_chi2());
+}

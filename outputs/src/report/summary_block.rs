@@ -95,9 +95,13 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let failures = s.failures();
     let _ = writeln!(
         out,
-        "  verdict          {}: χ²/dof {:.2}{}",
+        "  verdict          {}: χ²/dof {:.2}{}{}",
         if s.passed { "PASS" } else { "FAIL" },
         s.chi2_per_dof,
+        s.thermal_fit.as_ref().map_or(String::new(), |t| format!(
+            ", temperature fit χ²/dof {:.2}",
+            t.worst_chi2_per_dof
+        )),
         if failures.is_empty() {
             String::new()
         } else {
@@ -136,6 +140,7 @@ mod tests {
             chi2: 1.04,
             dof: 1,
             chi2_per_dof: 1.04,
+            thermal_fit: None,
             checks: Vec::new(),
             passed: true,
             warnings: Vec::new(),

@@ -50,6 +50,14 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
         "Fit: χ² = {:.1}, dof = {}, χ²/dof = {:.2}, 1σ scaled by {:.2}",
         o.fit.chi2, o.fit.dof, o.fit.reduced_chi2, o.fit.sigma_scale
     );
+    if let Some(t) = &o.thermal {
+        let [x, y, z] = t.reduced_chi2();
+        let _ = writeln!(
+            s,
+            "Temperature fit: χ²/dof x {x:.2}, y {y:.2}, z {z:.2} over every sample (the largest is \
+             checked against the same limit as the fit's; docs/model.md §9)"
+        );
+    }
     if let Some(w) = &o.bias_walk {
         let how = match (w.sigma_mg_sqrt_s, w.origin) {
             (Some(sd), _) => format!(
