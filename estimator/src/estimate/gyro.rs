@@ -228,7 +228,7 @@ impl GyroEstimate {
     }
 
     /// Whether any entry of `G` is determined ([`UNDETERMINED_SIGMA`]): not for the rests' bias
-    /// alone ([`GyroEstimate::bias_only`]), whose `G` is the identity taken as perfect.
+    /// alone (`GyroEstimate::bias_only`), whose `G` is the identity taken as perfect.
     pub fn determines_matrix(&self) -> bool {
         self.matrix_1sigma
             .iter()

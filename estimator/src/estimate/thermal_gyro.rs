@@ -144,7 +144,7 @@ fn rests_warning(g: &GyroEstimate) -> String {
 /// The gyro a hand-held session's turns determined (`gyro.toml`, docs/model.md §8) becomes the
 /// calibration's where the session's own fit determines no entry of `G`: taken whole when the
 /// outcome has no gyro; beside a temperature model, its `G` (scale factors and axis alignment) with
-/// the rests' bias at `T_ref` ([`bias_from_rests`]), since the model's gyro polynomial holds the
+/// the rests' bias at `T_ref` (`bias_from_rests`), since the model's gyro polynomial holds the
 /// bias's change about that value and the turns' bias is the stills' average over their
 /// temperatures (§9). A warning says which part came from where. Whether the hand turns' gyro was
 /// taken.

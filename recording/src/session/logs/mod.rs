@@ -6,7 +6,7 @@
 //!
 //! Every reader streams the file, and every length field is bounded before anything is allocated
 //! for it. What a reader keeps is bounded too: a log of more samples than the budget is read
-//! again, and only its quiet stretches and the turns between them are kept ([`keep`]), so that
+//! again, and only its quiet stretches and the turns between them are kept (`keep`), so that
 //! the memory needed does not grow with the file.
 
 pub mod dataflash;
@@ -274,7 +274,7 @@ pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
 }
 
 /// [`read_log`] keeping at most `max_samples` samples per stream: a longer log is surveyed and only
-/// its quiet stretches and the turns between them are kept ([`keep`]), the first `max_samples` of
+/// its quiet stretches and the turns between them are kept (`keep`), the first `max_samples` of
 /// them; a warning says what was left out.
 pub fn read_log_keeping(
     path: &Path,
@@ -500,7 +500,7 @@ impl Stream {
 /// the interpolation returns the gyro sample itself. Each stream's time stamps are first mended by
 /// [`repair`](crate::session::repair)'s rules, so that a damaged stamp costs at most its sample.
 /// The streams are consumed, each dropped once mended, so that no more than one copy of a
-/// stream is held at a time ([`keep`]).
+/// stream is held at a time (`keep`).
 pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
     if acc.keeper.report() {
         return (Recording::default(), Vec::new());
