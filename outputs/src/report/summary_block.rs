@@ -9,14 +9,10 @@ use std::fmt::Write as _;
 /// The block, one line per quantity and the verdict last.
 pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
-    let axes = ["x", "y", "z"];
+    let axes = AXES;
     // A lever-arm component is determined to the estimator's own threshold (the full table's rule).
     let lever_determined_m = crate::estimate::EstimateOptions::default().lever_arm_threshold_m;
     let mut out = String::from("Result (± 1σ):\n");
-    let pm = |v: f64, sigma: Option<f64>, digits: usize| match sigma {
-        Some(sd) => format!("{v:+.digits$} ± {sd:.digits$}"),
-        None => format!("{v:+.digits$} (n.d.)"),
-    };
     // Biases: in mg where the output has a physical zero (m/s², g); else the zero-g output in its
     // unit, with its 1σ in mg.
     let mut bias = Vec::new();
@@ -68,30 +64,7 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
             let _ = writeln!(out, "  lever arm {a}, mm  {}", comps.join(", "));
         }
     }
-    let gyro_bias: Vec<String> = axes
-        .iter()
-        .filter_map(|a| p(&format!("gyro_bias_{a}")).map(|b| (a, b)))
-        .map(|(a, b)| {
-            format!(
-                "{a} {}",
-                pm(b.value.to_degrees(), b.sigma.map(f64::to_degrees), 4)
-            )
-        })
-        .collect();
-    if !gyro_bias.is_empty() {
-        let _ = writeln!(out, "  gyro bias, °/s   {}", gyro_bias.join("   "));
-    }
-    let gyro_scale: Vec<String> = axes
-        .iter()
-        .filter_map(|a| p(&format!("gyro_g_{a}{a}")).map(|g| (a, g)))
-        .map(|(a, g)| {
-            let ppm = |v: f64| v * 1e6;
-            format!("{a} {}", pm(ppm(g.value - 1.0), g.sigma.map(ppm), 0))
-        })
-        .collect();
-    if !gyro_scale.is_empty() {
-        let _ = writeln!(out, "  gyro scale, ppm  {}", gyro_scale.join("   "));
-    }
+    write_gyro(&mut out, s);
     let failures = s.failures();
     let _ = writeln!(
         out,
@@ -109,6 +82,45 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
         }
     );
     out
+}
+
+/// `v ± σ` with `digits` decimals, or `v (n.d.)` when it is not determined.
+fn pm(v: f64, sigma: Option<f64>, digits: usize) -> String {
+    match sigma {
+        Some(sd) => format!("{v:+.digits$} ± {sd:.digits$}"),
+        None => format!("{v:+.digits$} (n.d.)"),
+    }
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The gyro's bias (°/s) and scale (ppm) lines, where the calibration has a gyro.
+fn write_gyro(out: &mut String, s: &CalibrationSummary) {
+    let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
+    let gyro_bias: Vec<String> = AXES
+        .iter()
+        .filter_map(|a| p(&format!("gyro_bias_{a}")).map(|b| (a, b)))
+        .map(|(a, b)| {
+            format!(
+                "{a} {}",
+                pm(b.value.to_degrees(), b.sigma.map(f64::to_degrees), 4)
+            )
+        })
+        .collect();
+    if !gyro_bias.is_empty() {
+        let _ = writeln!(out, "  gyro bias, °/s   {}", gyro_bias.join("   "));
+    }
+    let gyro_scale: Vec<String> = AXES
+        .iter()
+        .filter_map(|a| p(&format!("gyro_g_{a}{a}")).map(|g| (a, g)))
+        .map(|(a, g)| {
+            let ppm = |v: f64| v * 1e6;
+            format!("{a} {}", pm(ppm(g.value - 1.0), g.sigma.map(ppm), 0))
+        })
+        .collect();
+    if !gyro_scale.is_empty() {
+        let _ = writeln!(out, "  gyro scale, ppm  {}", gyro_scale.join("   "));
+    }
 }
 
 #[cfg(test)]

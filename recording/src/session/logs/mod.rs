@@ -339,23 +339,21 @@ pub fn read_log_from<R: BufRead>(
     read_keeping(r, head, path, source, &Keep::default(), 1.0)
 }
 
-/// [`read_log_from`], each stream keeping what `keep` says.
-fn read_keeping<R: BufRead>(
-    r: R,
+/// The options that do not apply to a file of `format` (text options on a binary log, an instance
+/// or a topic where the format has none), and a text file that is binary after all.
+fn refuse_options(
+    format: LogFormat,
     head: &[u8],
     path: &Path,
     source: &LogSource,
-    keep: &Keep,
-    seconds_per_unit: f64,
-) -> Result<LogFile, LogError> {
-    let format = LogFormat::detect(head);
+) -> Result<(), LogError> {
     let sp = source.spelling;
+    let p = || path.to_path_buf();
     let not_for = |option| LogError::OptionNotForFormat {
-        path: path.to_path_buf(),
+        path: p(),
         format,
         option: sp.name(option),
     };
-    let p = || path.to_path_buf();
     if format != LogFormat::Text && source.text.is_some() {
         return Err(LogError::TextOptionOnBinary {
             path: p(),
@@ -369,19 +367,40 @@ fn read_keeping<R: BufRead>(
             ),
         });
     }
+    let (instance, topic) = match format {
+        LogFormat::Text => (false, false),
+        LogFormat::Ulog | LogFormat::DataFlash => (true, false),
+        LogFormat::Mcap => (false, true),
+    };
+    if source.instance.is_some() && !instance {
+        return Err(not_for(UserOption::Instance));
+    }
+    if source.topic.is_some() && !topic {
+        return Err(not_for(UserOption::Topic));
+    }
+    // A NUL byte early on: no text file, and none of the binary formats either.
+    if format == LogFormat::Text && head.iter().take(4096).any(|&b| b == 0) {
+        let head = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
+        return Err(LogError::UnknownFormat { path: p(), head });
+    }
+    Ok(())
+}
+
+/// [`read_log_from`], each stream keeping what `keep` says.
+fn read_keeping<R: BufRead>(
+    r: R,
+    head: &[u8],
+    path: &Path,
+    source: &LogSource,
+    keep: &Keep,
+    seconds_per_unit: f64,
+) -> Result<LogFile, LogError> {
+    let format = LogFormat::detect(head);
+    let sp = source.spelling;
+    let p = || path.to_path_buf();
+    refuse_options(format, head, path, source)?;
     let (recording, warnings) = match format {
         LogFormat::Text => {
-            if source.instance.is_some() {
-                return Err(not_for(UserOption::Instance));
-            }
-            if source.topic.is_some() {
-                return Err(not_for(UserOption::Topic));
-            }
-            // A NUL byte early on: no text file, and none of the binary formats either.
-            if head.iter().take(4096).any(|&b| b == 0) {
-                let head = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
-                return Err(LogError::UnknownFormat { path: p(), head });
-            }
             let options = source
                 .text
                 .as_ref()
@@ -390,9 +409,6 @@ fn read_keeping<R: BufRead>(
             (rec, Vec::new())
         }
         LogFormat::Ulog => {
-            if source.topic.is_some() {
-                return Err(not_for(UserOption::Topic));
-            }
             let imu = ulog::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
                 LogError::Ulog {
                     path: p(),
@@ -402,9 +418,6 @@ fn read_keeping<R: BufRead>(
             (imu.0, imu.1)
         }
         LogFormat::DataFlash => {
-            if source.topic.is_some() {
-                return Err(not_for(UserOption::Topic));
-            }
             let imu =
                 dataflash::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
                     LogError::DataFlash {
@@ -415,9 +428,6 @@ fn read_keeping<R: BufRead>(
             (imu.0, imu.1)
         }
         LogFormat::Mcap => {
-            if source.instance.is_some() {
-                return Err(not_for(UserOption::Instance));
-            }
             let imu = mcap::read_keeping(r, source.topic.as_deref(), keep).map_err(|e| {
                 LogError::Mcap {
                     path: p(),
