@@ -30,6 +30,8 @@ pub struct LogInput {
     pub gyro_unit: Option<String>,
     /// A gyro in counts: its nominal scale, counts per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// Text files: the column with the unit's temperature, °C.
+    pub temp_column: Option<String>,
     /// ULog and DataFlash: which IMU (default 0).
     pub instance: Option<u8>,
     /// MCAP: the Imu topic (default: the bag's only one).
@@ -49,6 +51,7 @@ impl Default for LogInput {
             acc_offset: None,
             gyro_unit: None,
             gyro_lsb_per_dps: None,
+            temp_column: None,
             instance: None,
             topic: None,
             spelling: Spelling::Flags,
@@ -182,7 +185,8 @@ impl LogInput {
             || self.rate_hz.is_some()
             || self.time_unit.is_some()
             || self.acc_offset.is_some()
-            || self.gyro_lsb_per_dps.is_some();
+            || self.gyro_lsb_per_dps.is_some()
+            || self.temp_column.is_some();
         Ok(LogSource {
             text: if text_given {
                 Some(self.import_options()?)
@@ -209,6 +213,7 @@ impl LogInput {
         // twice and make the fit singular, far from the cause.
         let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
         seen.extend(self.time_column.as_deref());
+        seen.extend(self.temp_column.as_deref().map(str::trim));
         for (k, name) in seen.iter().enumerate() {
             if name.is_empty() {
                 return Err(LogInputError::EmptyColumn(sp));
@@ -249,6 +254,7 @@ impl LogInput {
             time_unit,
             acc_offset: self.text_acc_offset(acc_unit)?,
             gyro_lsb_per_dps,
+            temp_column: self.temp_column.as_ref().map(|c| c.trim().to_string()),
             spelling: sp,
         })
     }

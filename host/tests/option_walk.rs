@@ -38,7 +38,7 @@ const ALWAYS_DEVICE: &str = "every run of this command talks to the device";
 /// session directory and on a binary log; `--instance` and `--topic` on a text file.
 fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
     let mut v = Vec::new();
-    let text: [(&str, &[&str]); 8] = [
+    let text: [(&str, &[&str]); 9] = [
         ("columns", &["--columns", "a,b,c,d,e,f"]),
         ("time-column", &["--time-column", "t"]),
         ("time-unit", &["--time-unit", "ms"]),
@@ -47,6 +47,7 @@ fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
         ("acc-offset", &["--acc-offset", "1"]),
         ("gyro-unit", &["--gyro-unit", "deg/s"]),
         ("gyro-lsb-per-dps", &["--gyro-lsb-per-dps", "65.5"]),
+        ("temp-column", &["--temp-column", "temp"]),
     ];
     // `segment` reads logs only: a session directory is no input of it at all.
     let session = sub != "segment";
@@ -354,6 +355,23 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
                 "--ignore-unit-id",
             ],
         ]),
+    ));
+    // The noise analysis does not use the temperature, whatever the input.
+    t.push((
+        "noise",
+        "temp-column",
+        NotIn(&[&[
+            "--input",
+            "{csv}",
+            "--time-column",
+            "t",
+            "--acc-unit",
+            "m/s2",
+            "--gyro-unit",
+            "deg/s",
+            "--temp-column",
+            "temp",
+        ]]),
     ));
     for o in ["input", "calibration"] {
         t.push((

@@ -209,6 +209,8 @@ pub struct LogOptions {
     pub acc_offset: Option<Vec<f64>>,
     /// A gyro in counts: counts per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// A text file's temperature column, °C.
+    pub temp_column: Option<String>,
     /// ULog or DataFlash: which IMU.
     pub instance: Option<u8>,
     /// MCAP: which Imu topic.
@@ -220,7 +222,7 @@ impl LogOptions {
     #[new]
     #[pyo3(signature = (*, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
         time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None,
-        instance = None, topic = None))]
+        temp_column = None, instance = None, topic = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         acc_unit: Option<String>,
@@ -231,6 +233,7 @@ impl LogOptions {
         rate_hz: Option<f64>,
         acc_offset: Option<Vec<f64>>,
         gyro_lsb_per_dps: Option<f64>,
+        temp_column: Option<String>,
         instance: Option<u32>,
         topic: Option<String>,
     ) -> PyResult<Self> {
@@ -247,6 +250,7 @@ impl LogOptions {
             rate_hz,
             acc_offset,
             gyro_lsb_per_dps,
+            temp_column,
             instance,
             topic,
         })
@@ -272,6 +276,7 @@ impl LogOptions {
             acc_offset: self.acc_offset.clone(),
             gyro_unit: self.gyro_unit.clone(),
             gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            temp_column: self.temp_column.clone(),
             instance: self.instance,
             topic: self.topic.clone(),
             spelling: Spelling::Keywords,
@@ -507,10 +512,14 @@ pub fn segment_arrays(
     if t.is_some() == rate_hz.is_some() {
         return Err(usage("give exactly one of t (seconds) or rate_hz (Hz)"));
     }
-    if log.columns.is_some() || log.instance.is_some() || log.topic.is_some() {
+    if log.columns.is_some()
+        || log.instance.is_some()
+        || log.topic.is_some()
+        || log.temp_column.is_some()
+    {
         return Err(usage(
-            "arrays have no columns, instances or topics: give columns, instance and topic to \
-             segment_file",
+            "arrays have no columns, instances or topics: give columns, temp_column, instance \
+             and topic to segment_file",
         ));
     }
     if site.max_samples.is_some() {

@@ -90,3 +90,34 @@ def test_the_hand_calibration_is_near_the_simulators_truth(hand):
         value, sigma = cal.values[k], cal.sigmas[k]
         true = np.array(truth["static"][true_key])
         assert np.all(np.abs(value - true) < 5 * sigma), (key, value, true, sigma)
+
+
+def test_a_temperature_column_and_a_memory_budget_read_as_host_segment_reads_them(
+        hand, host_bin, tmp_path):
+    # The hand-held CSV with the unit's temperature, a reading missing every 97th row.
+    lines = hand["csv"].read_text().splitlines()
+    out = [lines[0] + ",temp"]
+    for i, line in enumerate(lines[1:]):
+        out.append(line + ("," + ("nan" if i % 97 == 50 else f"{25.0 + i * 1e-4:.4f}")))
+    csv = tmp_path / "hand-temp.csv"
+    csv.write_text("\n".join(out) + "\n")
+    reading = dict(acc_unit="m/s2", gyro_unit="deg/s", time_column="t", temp_column="temp")
+    session = accelcal.segment_file(csv, max_samples=1_000_000, **reading)
+    session.write(tmp_path / "py")
+    run = subprocess.run(
+        [str(host_bin), "-q", "segment", "--input", str(csv), "--out", str(tmp_path / "cli"),
+         "--acc-unit", "m/s2", "--gyro-unit", "deg/s", "--time-column", "t",
+         "--temp-column", "temp", "--max-samples", "1000000"],
+        capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    py = (tmp_path / "py" / "samples.csv").read_text()
+    assert py.splitlines()[0].endswith(",temp_c")
+    assert py == (tmp_path / "cli" / "samples.csv").read_text()
+    # Arrays are in memory already: a budget for reading a file is refused, and so is a column.
+    d = np.loadtxt(hand["csv"], delimiter=",", skiprows=1)
+    with pytest.raises(accelcal.Error, match="max_samples"):
+        accelcal.segment(d[:, 1:4], d[:, 4:7], d[:, 0], acc_unit="m/s2", gyro_unit="deg/s",
+                         max_samples=1000)
+    with pytest.raises(accelcal.Error, match="temp_column"):
+        accelcal.segment(d[:, 1:4], d[:, 4:7], d[:, 0], acc_unit="m/s2", gyro_unit="deg/s",
+                         temp_column="temp")

@@ -52,6 +52,8 @@ pub enum UserOption {
     SinglePackage,
     /// Samples kept in memory at once from a long log.
     MaxSamples,
+    /// A text file's temperature column.
+    TempColumn,
 }
 
 impl UserOption {
@@ -80,6 +82,7 @@ impl UserOption {
             UserOption::Reference => "reference",
             UserOption::SinglePackage => "single_package",
             UserOption::MaxSamples => "max_samples",
+            UserOption::TempColumn => "temp_column",
         }
     }
 
@@ -108,6 +111,7 @@ impl UserOption {
             UserOption::Reference => "--reference",
             UserOption::SinglePackage => "--single-package",
             UserOption::MaxSamples => "--max-samples",
+            UserOption::TempColumn => "--temp-column",
         }
     }
 

@@ -69,7 +69,7 @@ pub(super) fn segment_and_calibrate(dir: &Path, input: &Path, flags: &str) -> (f
 
 /// The same session as a logger CSV, as `host simulate-hand --rate-hz 100 --gyro-unit rad/s` writes
 /// it, cut to the fixtures' rows; its calibration is the yardstick for the binary formats.
-fn csv_reference(dir: &Path) -> (f64, f64) {
+pub(super) fn csv_reference(dir: &Path) -> (f64, f64) {
     let spec = HandSpec {
         rate_hz: 100.0,
         ..HandSpec::standard(1)

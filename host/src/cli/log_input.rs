@@ -48,6 +48,10 @@ pub struct LogInputArgs {
     /// sheet, e.g. 16.4 or 131); the turns fit the true scale.
     #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
     pub gyro_lsb_per_dps: Option<f64>,
+    /// Text files: the column with the unit's temperature, °C (a row whose temperature is not a
+    /// number keeps its values; only its temperature is missing). Binary logs carry their own.
+    #[arg(long, value_name = "NAME")]
+    pub temp_column: Option<String>,
     /// PX4 ULog and ArduPilot DataFlash: which IMU of a vehicle with several (ULog's multi_id,
     /// DataFlash's I; default 0).
     #[arg(long, value_name = "N", value_parser = crate::limits::whole_u32(0, u8::MAX as u32))]
@@ -75,6 +79,7 @@ impl LogInputArgs {
             }),
             gyro_unit: self.gyro_unit.clone(),
             gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            temp_column: self.temp_column.clone(),
             // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
             instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
             topic: self.topic.clone(),
@@ -95,6 +100,7 @@ impl LogInputArgs {
             ("--acc-offset", self.acc_offset.is_some()),
             ("--gyro-unit", self.gyro_unit.is_some()),
             ("--gyro-lsb-per-dps", self.gyro_lsb_per_dps.is_some()),
+            ("--temp-column", self.temp_column.is_some()),
         ]
         .into_iter()
         .filter_map(|(flag, given)| given.then_some(flag))

@@ -55,6 +55,8 @@ mod segment_tests;
 pub mod simulate;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod text_temperature_tests;
 
 pub use error::CliError;
 

@@ -36,6 +36,13 @@ pub struct NoiseArgs {
 
 /// Runs `host noise`.
 pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
+    if a.log.temp_column.is_some() {
+        return Err(CliError::Usage(
+            "--temp-column: the noise analysis does not use the temperature (it measures the \
+             still stretches' noise); leave it out"
+                .into(),
+        ));
+    }
     let cal = match &a.calibration {
         Some(p) => {
             let unit = UnitFile::load(p)?;

@@ -114,6 +114,9 @@ pub struct ImportOptions {
     /// The gyro logs counts at this nominal scale, LSB per °/s (the gyro fit finds the true one);
     /// `gyro_unit` is then ignored.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// The column with the unit's temperature, °C. A row whose temperature is not a number (a
+    /// driver without a reading, an empty field) keeps its values: only its temperature is missing.
+    pub temp_column: Option<String>,
     /// How the caller names these options in messages.
     pub spelling: Spelling,
 }
@@ -129,6 +132,7 @@ impl ImportOptions {
             time_unit: None,
             acc_offset: [0.0; 3],
             gyro_lsb_per_dps: None,
+            temp_column: None,
             spelling: Spelling::Flags,
         }
     }

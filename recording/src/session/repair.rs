@@ -156,12 +156,16 @@ pub fn repair_times(
 /// A text file's rows in time order, their stamps mended ([`repair_times`]; rows whose values
 /// and stamps are equal are exact repeats), and the repairs kept with them as "data row"s.
 pub fn repair_rows(rec: &mut super::import::Recording) {
+    let temp = |i: usize| rec.temp_c.as_ref().map(|t| t[i].to_bits());
     let (order, repairs) = repair_times(&rec.t_s, |i, j| {
-        rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j]
+        rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j] && temp(i) == temp(j)
     });
     rec.t_s = order.iter().map(|s| s.1).collect();
     rec.acc = order.iter().map(|s| rec.acc[s.0]).collect();
     rec.gyro_rad_s = order.iter().map(|s| rec.gyro_rad_s[s.0]).collect();
+    if let Some(t) = &rec.temp_c {
+        rec.temp_c = Some(order.iter().map(|s| t[s.0]).collect());
+    }
     if !repairs.is_empty() {
         rec.time_repairs.push(("data row", repairs));
     }

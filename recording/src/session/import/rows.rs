@@ -87,6 +87,8 @@ pub(super) struct Layout {
     pub(super) idx: [usize; 6],
     /// Where the time comes from.
     pub(super) time: Time,
+    /// The temperature column, if the options name one.
+    pub(super) temp: Option<usize>,
 }
 
 impl Layout {
@@ -110,6 +112,7 @@ impl Layout {
         for (k, name) in options.columns.iter().enumerate() {
             idx[k] = find(name)?;
         }
+        let temp = options.temp_column.as_deref().map(find).transpose()?;
         let time = match &options.time {
             TimeSource::Column(name) => Time::Column(find(name)?),
             TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
@@ -120,6 +123,7 @@ impl Layout {
             sep,
             idx,
             time,
+            temp,
         })
     }
 
@@ -130,7 +134,7 @@ impl Layout {
         text: &str,
         line: u64,
         row_index: u64,
-    ) -> Result<([f64; 6], f64), ImportError> {
+    ) -> Result<([f64; 6], f64, f64), ImportError> {
         let fields = split_fields(text, self.sep);
         if fields.len() < self.header.len() {
             return Err(ImportError::ShortRow {
@@ -161,7 +165,11 @@ impl Layout {
             Time::Column(i) => number(i)?,
             Time::RateHz(hz) => row_index as f64 / hz,
         };
-        Ok((v, t_s))
+        // A temperature that is not a number is a missing reading, not a damaged row.
+        let temp_c = self
+            .temp
+            .map_or(f64::NAN, |i| fields[i].parse::<f64>().unwrap_or(f64::NAN));
+        Ok((v, t_s, temp_c))
     }
 }
 
@@ -191,6 +199,7 @@ pub(super) fn read_rows<R: BufRead>(
     let gyro_scale = options.gyro_rad_s_per_unit();
     let mut rec = Recording {
         acc_unit: Some(options.acc_unit),
+        temp_c: layout.temp.map(|_| Vec::new()),
         ..Recording::default()
     };
     let mut line = header_line;
@@ -218,7 +227,7 @@ pub(super) fn read_rows<R: BufRead>(
             rec.unterminated_line = Some(line);
             break;
         }
-        let (v, t_s) = layout.parse_row(&text, line, row_index)?;
+        let (v, t_s, temp_c) = layout.parse_row(&text, line, row_index)?;
         row_index += 1;
         if !v.iter().all(|x| x.is_finite()) || !t_s.is_finite() {
             rec.skipped_rows += 1;
@@ -226,7 +235,7 @@ pub(super) fn read_rows<R: BufRead>(
         }
         let acc = [v[0], v[1], v[2]];
         match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
-            Admit::Keep => push_row(&mut rec, v, t_s, gyro_scale),
+            Admit::Keep => push_row(&mut rec, v, t_s, temp_c, gyro_scale),
             Admit::Pass => {}
             Admit::TooMany(max) => {
                 let time_unit = match layout.time {
@@ -242,10 +251,13 @@ pub(super) fn read_rows<R: BufRead>(
     Ok(rec)
 }
 
-/// Appends a row of finite values `v` at `t_s` to `rec`, its gyro converted with `gyro_scale`
-/// (rad/s per unit). A repeated or earlier time stamp is kept here and mended by
-/// [`super::repair`] once the file is read.
-pub(super) fn push_row(rec: &mut Recording, v: [f64; 6], t_s: f64, gyro_scale: f64) {
+/// Appends a row of finite values `v` at `t_s` (temperature `temp_c`, where the recording has
+/// one) to `rec`, its gyro converted with `gyro_scale` (rad/s per unit). A repeated or earlier
+/// time stamp is kept here and mended by `repair` once the file is read.
+pub(super) fn push_row(rec: &mut Recording, v: [f64; 6], t_s: f64, temp_c: f64, gyro_scale: f64) {
+    if let Some(t) = &mut rec.temp_c {
+        t.push(temp_c);
+    }
     rec.t_s.push(t_s);
     rec.acc.push([v[0], v[1], v[2]]);
     rec.gyro_rad_s

@@ -405,8 +405,9 @@ fn read_keeping<R: BufRead>(
                 .text
                 .as_ref()
                 .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
-            let rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
-            (rec, Vec::new())
+            let mut rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
+            let notes = temperature_notes(&mut rec);
+            (rec, notes)
         }
         LogFormat::Ulog => {
             let imu = ulog::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
@@ -545,25 +546,10 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
     }
     rec.skipped_rows = acc.non_finite;
     rec.rate_hz = run_rate_hz(&rec.t_s);
-    let mut warnings = Vec::new();
-    let readings = temps.iter().filter(|t| t.is_finite()).count();
-    if with_temp && readings == 0 {
-        warnings.push(
-            "the temperature field is NaN in every sample (a driver without a temperature \
-             reading): read as a log without temperature"
-                .to_string(),
-        );
-    } else if with_temp {
-        if readings < temps.len() {
-            warnings.push(format!(
-                "{} of {} samples have no temperature reading (NaN): those rows are kept, and \
-                 only the readings enter the temperature statistics",
-                temps.len() - readings,
-                temps.len()
-            ));
-        }
+    if with_temp {
         rec.temp_c = Some(temps);
     }
+    let mut warnings = temperature_notes(&mut rec);
     if acc_rep == gyro_rep {
         if !acc_rep.is_empty() {
             rec.time_repairs.push(("IMU sample", acc_rep));
@@ -589,6 +575,34 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
         ));
     }
     (rec, warnings)
+}
+
+/// What the user is told of a recording's temperature readings, the same for every format: none at
+/// all (a driver without a temperature sensor: the recording is then read as one without
+/// temperature), or some missing (those rows are kept; only the readings enter the temperature
+/// statistics, docs/model.md §9).
+pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
+    let Some(temps) = &rec.temp_c else {
+        return Vec::new();
+    };
+    let readings = temps.iter().filter(|t| t.is_finite()).count();
+    if readings == 0 {
+        rec.temp_c = None;
+        return vec![
+            "the temperature is NaN in every sample (a driver without a temperature \
+                     reading): read as a log without temperature"
+                .to_string(),
+        ];
+    }
+    if readings == temps.len() {
+        return Vec::new();
+    }
+    vec![format!(
+        "{} of {} samples have no temperature reading (NaN): those rows are kept, and only the \
+         readings enter the temperature statistics",
+        temps.len() - readings,
+        temps.len()
+    )]
 }
 
 /// A stream's samples in time order, their stamps mended ([`repair_times`]).

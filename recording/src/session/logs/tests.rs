@@ -110,3 +110,95 @@ fn a_binary_file_of_another_format_is_named_as_such() {
     assert!(matches!(e, LogError::UnknownFormat { .. }), "{m}");
     assert!(m.contains("53514c69") && m.contains("mcap convert"), "{m}");
 }
+
+/// A text file's temperature column: read beside the values, a missing reading ("nan", an empty
+/// field, text) costs only that row's temperature, and a column with no reading at all is a log
+/// without temperature, said so, as in the binary formats.
+#[test]
+fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row() {
+    let text = |temp: &dyn Fn(usize) -> String| {
+        let mut s = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp\n");
+        for i in 0..300 {
+            let e = 1e-3 * ((i * 7 % 11) as f64 - 5.0);
+            s.push_str(&format!(
+                "{},{e},{},{},0.01,{e},0,{}\n",
+                i as f64 * 0.01,
+                -e,
+                9.81 + e,
+                temp(i)
+            ));
+        }
+        s
+    };
+    let mut options = ImportOptions::new(
+        TimeSource::Column("t".into()),
+        OutputUnit::MetresPerSecondSquared,
+        crate::session::import::GyroUnit::RadPerS,
+    );
+    options.temp_column = Some("temp".into());
+    let source = LogSource {
+        text: Some(options),
+        instance: None,
+        topic: None,
+        spelling: Spelling::Flags,
+    };
+    let some = text(&|i| match i {
+        10 => "nan".into(),
+        20 => String::new(),
+        30 => "n/a".into(),
+        _ => format!("{}", 20.0 + i as f64 / 100.0),
+    });
+    let log = read_log_from(
+        some.as_bytes(),
+        some.as_bytes(),
+        Path::new("x.csv"),
+        &source,
+    )
+    .unwrap();
+    let rec = &log.recording;
+    assert_eq!(rec.len(), 300);
+    let temp = rec.temp_c.as_ref().unwrap();
+    assert_eq!(temp[5], 20.0 + 5.0 / 100.0);
+    assert_eq!(temp[299], 20.0 + 299.0 / 100.0);
+    assert!(temp[10].is_nan() && temp[20].is_nan() && temp[30].is_nan());
+    assert_eq!(temp.iter().filter(|t| t.is_finite()).count(), 297);
+    assert!(
+        log.warnings
+            .iter()
+            .any(|w| w.contains("3 of 300 samples have no temperature reading")),
+        "{:?}",
+        log.warnings
+    );
+
+    let none = text(&|_| "NaN".into());
+    let log = read_log_from(
+        none.as_bytes(),
+        none.as_bytes(),
+        Path::new("x.csv"),
+        &source,
+    )
+    .unwrap();
+    assert_eq!(log.recording.len(), 300);
+    assert_eq!(log.recording.temp_c, None);
+    assert!(
+        log.warnings
+            .iter()
+            .any(|w| w.contains("NaN in every sample")),
+        "{:?}",
+        log.warnings
+    );
+
+    // A column the file does not have is named with the columns it has.
+    let mut missing = source.clone();
+    if let Some(o) = missing.text.as_mut() {
+        o.temp_column = Some("temperature".into());
+    }
+    let e = read_log_from(
+        some.as_bytes(),
+        some.as_bytes(),
+        Path::new("x.csv"),
+        &missing,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("temperature"), "{e}");
+}
