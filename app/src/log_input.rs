@@ -30,6 +30,8 @@ pub struct LogInput {
     pub gyro_unit: Option<String>,
     /// A gyro in counts: its nominal scale, counts per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// A gyro in counts: the counts of zero rate, one value or one per axis.
+    pub gyro_offset: Option<Vec<f64>>,
     /// Text files: the column with the unit's temperature, °C.
     pub temp_column: Option<String>,
     /// ULog and DataFlash: which IMU (default 0).
@@ -51,6 +53,7 @@ impl Default for LogInput {
             acc_offset: None,
             gyro_unit: None,
             gyro_lsb_per_dps: None,
+            gyro_offset: None,
             temp_column: None,
             instance: None,
             topic: None,
@@ -142,6 +145,31 @@ pub enum LogInputError {
         /// The caller's names of the options.
         spelling: Spelling,
     },
+    /// A gyro offset for a gyro not in counts.
+    #[error(
+        "{} is for raw counts: give {} with {}, or drop {} (the unit is {unit})",
+        .spelling.name(UserOption::GyroOffset),
+        .spelling.given(UserOption::GyroUnit, "LSB"),
+        .spelling.name(UserOption::GyroLsbPerDps),
+        .spelling.name(UserOption::GyroOffset)
+    )]
+    GyroOffsetNotCounts {
+        /// The gyro unit given.
+        unit: String,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
+    /// A gyro offset of neither one nor three finite values.
+    #[error(
+        "{}: give the counts of zero rate, one number (e.g. 32768) or three (X,Y,Z)",
+        .spelling.given(UserOption::GyroOffset, format!("{:?}", .given))
+    )]
+    GyroOffsetValues {
+        /// The values given.
+        given: Vec<f64>,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
     /// A gyro in counts without its scale.
     #[error(
         "{} needs the gyro's nominal scale: add {} (counts per °/s from its data sheet, e.g. 16.4 \
@@ -186,6 +214,7 @@ impl LogInput {
             || self.time_unit.is_some()
             || self.acc_offset.is_some()
             || self.gyro_lsb_per_dps.is_some()
+            || self.gyro_offset.is_some()
             || self.temp_column.is_some();
         Ok(LogSource {
             text: if text_given {
@@ -254,6 +283,7 @@ impl LogInput {
             time_unit,
             acc_offset: self.text_acc_offset(acc_unit)?,
             gyro_lsb_per_dps,
+            gyro_offset: self.text_gyro_offset(gyro_lsb_per_dps.is_some())?,
             temp_column: self.temp_column.as_ref().map(|c| c.trim().to_string()),
             spelling: sp,
         })
@@ -283,6 +313,29 @@ impl LogInput {
     }
 
     /// The gyro's unit and scale: counts need their nominal scale, and only counts take one.
+    /// The gyro's offset: one value for every axis or three, for a gyro in counts only.
+    fn text_gyro_offset(&self, counts: bool) -> Result<[f64; 3], LogInputError> {
+        let Some(v) = &self.gyro_offset else {
+            return Ok([0.0; 3]);
+        };
+        if !counts {
+            return Err(LogInputError::GyroOffsetNotCounts {
+                unit: self.gyro_unit.clone().unwrap_or_default(),
+                spelling: self.spelling,
+            });
+        }
+        match v[..] {
+            _ if v.iter().any(|x| !x.is_finite()) => {}
+            [n] => return Ok([n; 3]),
+            [x, y, z] => return Ok([x, y, z]),
+            _ => {}
+        }
+        Err(LogInputError::GyroOffsetValues {
+            given: v.clone(),
+            spelling: self.spelling,
+        })
+    }
+
     fn text_gyro_unit(&self) -> Result<(GyroUnit, Option<f64>), LogInputError> {
         let sp = self.spelling;
         let gyro = self.gyro_unit.as_deref().unwrap_or("");
@@ -463,5 +516,40 @@ mod tests {
         assert_eq!(with(vec![1.0, 2.0, 3.0]).unwrap(), [1.0, 2.0, 3.0]);
         assert!(with(vec![f64::NAN]).is_err());
         assert!(with(vec![]).is_err());
+    }
+
+    /// A gyro's offset is for counts only, one or three finite values, named as the caller
+    /// spells it.
+    #[test]
+    fn a_gyro_offset_is_for_counts_one_or_three_values() {
+        let with = |unit: &str, v: Vec<f64>, spelling| {
+            LogInput {
+                gyro_unit: Some(unit.into()),
+                gyro_lsb_per_dps: (unit == "LSB").then_some(16.4),
+                gyro_offset: Some(v),
+                ..text(spelling)
+            }
+            .import_options()
+            .map(|o| o.gyro_offset)
+        };
+        assert_eq!(
+            with("LSB", vec![32768.0], Spelling::Flags).unwrap(),
+            [32768.0; 3]
+        );
+        assert_eq!(
+            with("LSB", vec![1.0, 2.0, 3.0], Spelling::Flags).unwrap(),
+            [1.0, 2.0, 3.0]
+        );
+        let e = with("LSB", vec![1.0, 2.0], Spelling::Keywords).unwrap_err();
+        assert!(
+            e.to_string().starts_with("gyro_offset=[1.0, 2.0]: give"),
+            "{e}"
+        );
+        let e = with("deg/s", vec![32768.0], Spelling::Flags).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("--gyro-offset is for raw counts: give --gyro-unit LSB"),
+            "{e}"
+        );
     }
 }

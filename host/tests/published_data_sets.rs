@@ -24,8 +24,8 @@ fn unpack(dir: &Path) -> String {
 }
 
 /// The gyro's rows less the output's zero (32 768 counts), as IMU-TK's pipeline removes it before
-/// its fit; this tool takes the zero of an unsigned accelerometer (`--acc-offset`) but not yet of
-/// a gyro, whose calibration would otherwise hold a 300 °/s bias no device accepts.
+/// its fit (a calibration would otherwise hold a 300 °/s bias no device accepts): the yardstick of
+/// `--gyro-offset 32768` on the raw file, which must give the same session.
 fn gyro_zero_removed(dir: &Path) -> String {
     let text = std::fs::read_to_string(dir.join("xsens.csv")).unwrap();
     let mut out = String::new();
@@ -47,27 +47,31 @@ fn gyro_zero_removed(dir: &Path) -> String {
 }
 
 fn segment(dir: &Path, input: &str, out: &str) -> (bool, String, String) {
+    segment_with(dir, input, out, &[])
+}
+
+/// [`segment`] with `more` options.
+fn segment_with(dir: &Path, input: &str, out: &str, more: &[&str]) -> (bool, String, String) {
     let lsb = format!("{IMU_TK_LSB_PER_DPS}");
-    common::host_in(
-        Some(dir),
-        &[
-            "segment",
-            "--input",
-            input,
-            "--out",
-            out,
-            "--time-column",
-            "t",
-            "--acc-unit",
-            "LSB",
-            "--acc-offset",
-            "32768",
-            "--gyro-unit",
-            "LSB",
-            "--gyro-lsb-per-dps",
-            &lsb,
-        ],
-    )
+    let mut args = vec![
+        "segment",
+        "--input",
+        input,
+        "--out",
+        out,
+        "--time-column",
+        "t",
+        "--acc-unit",
+        "LSB",
+        "--acc-offset",
+        "32768",
+        "--gyro-unit",
+        "LSB",
+        "--gyro-lsb-per-dps",
+        &lsb,
+    ];
+    args.extend_from_slice(more);
+    common::host_in(Some(dir), &args)
 }
 
 /// The number after `key` in `text` (up to a space, comma or °).
@@ -104,6 +108,12 @@ fn imu_tks_xsens_recording_segments_and_calibrates() {
         stderr.contains("its stamps would have to step at"),
         "{stderr}"
     );
+    // The unsigned zero is named, with the option that takes it out.
+    assert!(
+        stderr.contains("mid-scale of a 16-bit unsigned output")
+            && stderr.contains("give --gyro-offset 32768"),
+        "{stderr}"
+    );
     // With the gyro's zero removed, as IMU-TK's pipeline does: the same turns, and a calibration
     // that passes its checks.
     let centred = gyro_zero_removed(d);
@@ -118,6 +128,17 @@ fn imu_tks_xsens_recording_segments_and_calibrates() {
         common::host_in(Some(d), &["calibrate", "--input", "s", "--out", "c"]);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("verdict          PASS"), "{stdout}");
+    // The raw file with --gyro-offset: the session the centred file gives, to the byte.
+    let (ok, _, stderr) = segment_with(d, &raw, "off", &["--gyro-offset", "32768"]);
+    assert!(ok, "{stderr}");
+    assert!(!stderr.contains("--gyro-offset"), "{stderr}");
+    for f in ["samples.csv", "gyro.toml", "plan.toml"] {
+        let (a, b) = (d.join("s").join(f), d.join("off").join(f));
+        assert!(
+            std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
+            "{f} differs"
+        );
+    }
 }
 
 /// rosbag2's own test bags (`fixtures/logs/rosbag2.LICENSE`, Apache-2.0): ROS 2 bags that hold no

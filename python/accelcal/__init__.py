@@ -58,7 +58,7 @@ DEFAULT_COLUMNS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 #: The keywords of ``LogOptions`` (how to read a log) and of ``SessionOptions`` (how to cut it).
 _LOG_KEYWORDS = (
     "acc_unit", "gyro_unit", "columns", "time_column", "time_unit", "rate_hz", "acc_offset",
-    "gyro_lsb_per_dps", "temp_column", "instance", "topic",
+    "gyro_lsb_per_dps", "gyro_offset", "temp_column", "instance", "topic",
 )
 _SESSION_KEYWORDS = (
     "min_still_s", "unit_id", "gravity", "latitude", "height_m", "no_gyro", "face_sigma_deg",
@@ -197,7 +197,7 @@ def segment_file(
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes). How to read it
     as ``log=LogOptions(...)`` or its keywords (``acc_unit``, ``gyro_unit``, ``columns``,
     ``time_column``, ``time_unit``, ``rate_hz``, ``acc_offset``, ``gyro_lsb_per_dps``,
-    ``temp_column``, ``instance``, ``topic``); how to cut it as ``site=SessionOptions(...)`` or its keywords, with
+    ``gyro_offset``, ``temp_column``, ``instance``, ``topic``); how to cut it as ``site=SessionOptions(...)`` or its keywords, with
     ``max_samples``: the samples of each stream held in memory at once (default 250 000, about
     200 bytes each); a longer log is read again and only its still positions and turns are kept."""
     log, site = _options(log, site, keywords)

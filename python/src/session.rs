@@ -209,6 +209,8 @@ pub struct LogOptions {
     pub acc_offset: Option<Vec<f64>>,
     /// A gyro in counts: counts per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// A gyro in counts: the counts of zero rate, one value or one per axis.
+    pub gyro_offset: Option<Vec<f64>>,
     /// A text file's temperature column, °C.
     pub temp_column: Option<String>,
     /// ULog or DataFlash: which IMU.
@@ -222,7 +224,7 @@ impl LogOptions {
     #[new]
     #[pyo3(signature = (*, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
         time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None,
-        temp_column = None, instance = None, topic = None))]
+        gyro_offset = None, temp_column = None, instance = None, topic = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         acc_unit: Option<String>,
@@ -233,6 +235,7 @@ impl LogOptions {
         rate_hz: Option<f64>,
         acc_offset: Option<Vec<f64>>,
         gyro_lsb_per_dps: Option<f64>,
+        gyro_offset: Option<Vec<f64>>,
         temp_column: Option<String>,
         instance: Option<u32>,
         topic: Option<String>,
@@ -250,6 +253,7 @@ impl LogOptions {
             rate_hz,
             acc_offset,
             gyro_lsb_per_dps,
+            gyro_offset,
             temp_column,
             instance,
             topic,
@@ -276,6 +280,7 @@ impl LogOptions {
             acc_offset: self.acc_offset.clone(),
             gyro_unit: self.gyro_unit.clone(),
             gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            gyro_offset: self.gyro_offset.clone(),
             temp_column: self.temp_column.clone(),
             instance: self.instance,
             topic: self.topic.clone(),

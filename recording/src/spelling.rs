@@ -54,6 +54,8 @@ pub enum UserOption {
     MaxSamples,
     /// A text file's temperature column.
     TempColumn,
+    /// Raw gyro counts' zero rate.
+    GyroOffset,
 }
 
 impl UserOption {
@@ -83,6 +85,7 @@ impl UserOption {
             UserOption::SinglePackage => "single_package",
             UserOption::MaxSamples => "max_samples",
             UserOption::TempColumn => "temp_column",
+            UserOption::GyroOffset => "gyro_offset",
         }
     }
 
@@ -112,6 +115,7 @@ impl UserOption {
             UserOption::SinglePackage => "--single-package",
             UserOption::MaxSamples => "--max-samples",
             UserOption::TempColumn => "--temp-column",
+            UserOption::GyroOffset => "--gyro-offset",
         }
     }
 

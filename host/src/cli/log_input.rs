@@ -48,6 +48,11 @@ pub struct LogInputArgs {
     /// sheet, e.g. 16.4 or 131); the turns fit the true scale.
     #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
     pub gyro_lsb_per_dps: Option<f64>,
+    /// Text files, with --gyro-unit LSB: the counts of zero rate (an unsigned output's mid-scale,
+    /// e.g. 32768), one value or one per axis (X,Y,Z), subtracted before the scale; give the same
+    /// to `apply` on the raw log.
+    #[arg(long, value_name = "N[,NY,NZ]", allow_negative_numbers = true)]
+    pub gyro_offset: Option<String>,
     /// Text files: the column with the unit's temperature, °C (a row whose temperature is not a
     /// number keeps its values; only its temperature is missing). Binary logs carry their own.
     #[arg(long, value_name = "NAME")]
@@ -79,6 +84,11 @@ impl LogInputArgs {
             }),
             gyro_unit: self.gyro_unit.clone(),
             gyro_lsb_per_dps: self.gyro_lsb_per_dps,
+            gyro_offset: self.gyro_offset.as_ref().map(|text| {
+                text.split(',')
+                    .map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN))
+                    .collect()
+            }),
             temp_column: self.temp_column.clone(),
             // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
             instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
@@ -100,6 +110,7 @@ impl LogInputArgs {
             ("--acc-offset", self.acc_offset.is_some()),
             ("--gyro-unit", self.gyro_unit.is_some()),
             ("--gyro-lsb-per-dps", self.gyro_lsb_per_dps.is_some()),
+            ("--gyro-offset", self.gyro_offset.is_some()),
             ("--temp-column", self.temp_column.is_some()),
         ]
         .into_iter()
@@ -136,6 +147,11 @@ impl LogInputArgs {
                 (LogInputError::AccOffsetValues { .. }, Some(text)) => CliError::Usage(format!(
                     "--acc-offset {text}: give the counts of zero force, one number (e.g. 32768) \
                      or three (X,Y,Z)"
+                )),
+                (LogInputError::GyroOffsetValues { .. }, _) => CliError::Usage(format!(
+                    "--gyro-offset {}: give the counts of zero rate, one number (e.g. 32768) or \
+                     three (X,Y,Z)",
+                    self.gyro_offset.as_deref().unwrap_or_default()
                 )),
                 (e, _) => CliError::LogInput(e),
             })

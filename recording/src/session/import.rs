@@ -114,6 +114,10 @@ pub struct ImportOptions {
     /// The gyro logs counts at this nominal scale, LSB per °/s (the gyro fit finds the true one);
     /// `gyro_unit` is then ignored.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// Counts subtracted from each gyro axis before it is scaled (an unsigned output's mid-scale
+    /// zero rate), with a gyro in counts. The gyro's calibration is then of the counts less it, and
+    /// a reading of the log for `apply` gives the same offset.
+    pub gyro_offset: [f64; 3],
     /// The column with the unit's temperature, °C. A row whose temperature is not a number (a
     /// driver without a reading, an empty field) keeps its values: only its temperature is missing.
     pub temp_column: Option<String>,
@@ -132,6 +136,7 @@ impl ImportOptions {
             time_unit: None,
             acc_offset: [0.0; 3],
             gyro_lsb_per_dps: None,
+            gyro_offset: [0.0; 3],
             temp_column: None,
             spelling: Spelling::Flags,
         }
@@ -457,6 +462,32 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
     rec.acc_offset = options.acc_offset;
     gravity::check_gravity(&rec, options.acc_unit, options.spelling)?;
     Ok(rec)
+}
+
+/// A note when a gyro in counts sits at an unsigned output's mid-scale on every axis and no offset
+/// was given: its zero rate, read as a bias of hundreds of °/s, which no device accepts in a
+/// calibration. The fit still takes it as a bias (the turns are right); the note names the offset.
+pub(crate) fn gyro_mid_scale_note(rec: &Recording, options: &ImportOptions) -> Option<String> {
+    let lsb = options.gyro_lsb_per_dps?;
+    if options.gyro_offset != [0.0; 3] || rec.is_empty() {
+        return None;
+    }
+    let per_count = options.gyro_rad_s_per_unit();
+    let counts: Vec<[f64; 3]> = rec
+        .gyro_rad_s
+        .iter()
+        .map(|w| w.map(|x| x / per_count))
+        .collect();
+    let (m, bits) = mid_scale(&counts)?;
+    Some(format!(
+        "every gyro count sits near {m} on all three axes, the mid-scale of a {bits}-bit \
+         unsigned output: read as a bias of {:.0} °/s, more than a calibration can hold; if that \
+         is the gyro's zero rate, give {}",
+        m / lsb,
+        options
+            .spelling
+            .given(UserOption::GyroOffset, short_number(m))
+    ))
 }
 
 /// The mid-scale value (and bits) of an unsigned output that every sample's axes sit near: all

@@ -227,7 +227,10 @@ pub(super) fn read_rows<R: BufRead>(
             rec.unterminated_line = Some(line);
             break;
         }
-        let (v, t_s, temp_c) = layout.parse_row(&text, line, row_index)?;
+        let (mut v, t_s, temp_c) = layout.parse_row(&text, line, row_index)?;
+        for j in 0..3 {
+            v[3 + j] -= options.gyro_offset[j];
+        }
         row_index += 1;
         if !v.iter().all(|x| x.is_finite()) || !t_s.is_finite() {
             rec.skipped_rows += 1;

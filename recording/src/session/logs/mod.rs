@@ -18,8 +18,8 @@ use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
 
 use super::import::{
-    read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin, TimeSource, TimeUnit,
-    GAP_PERIODS,
+    gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
+    TimeSource, TimeUnit, GAP_PERIODS,
 };
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use crate::spelling::{Spelling, UserOption};
@@ -406,7 +406,8 @@ fn read_keeping<R: BufRead>(
                 .as_ref()
                 .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
             let mut rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
-            let notes = temperature_notes(&mut rec);
+            let mut notes = temperature_notes(&mut rec);
+            notes.extend(gyro_mid_scale_note(&rec, options));
             (rec, notes)
         }
         LogFormat::Ulog => {
