@@ -300,19 +300,12 @@ impl LogInput {
                 spelling: self.spelling,
             });
         }
-        match v[..] {
-            _ if v.iter().any(|x| !x.is_finite()) => {}
-            [n] => return Ok([n; 3]),
-            [x, y, z] => return Ok([x, y, z]),
-            _ => {}
-        }
-        Err(LogInputError::AccOffsetValues {
+        per_axis(v).ok_or_else(|| LogInputError::AccOffsetValues {
             given: v.clone(),
             spelling: self.spelling,
         })
     }
 
-    /// The gyro's unit and scale: counts need their nominal scale, and only counts take one.
     /// The gyro's offset: one value for every axis or three, for a gyro in counts only.
     fn text_gyro_offset(&self, counts: bool) -> Result<[f64; 3], LogInputError> {
         let Some(v) = &self.gyro_offset else {
@@ -324,18 +317,13 @@ impl LogInput {
                 spelling: self.spelling,
             });
         }
-        match v[..] {
-            _ if v.iter().any(|x| !x.is_finite()) => {}
-            [n] => return Ok([n; 3]),
-            [x, y, z] => return Ok([x, y, z]),
-            _ => {}
-        }
-        Err(LogInputError::GyroOffsetValues {
+        per_axis(v).ok_or_else(|| LogInputError::GyroOffsetValues {
             given: v.clone(),
             spelling: self.spelling,
         })
     }
 
+    /// The gyro's unit and scale: counts need their nominal scale, and only counts take one.
     fn text_gyro_unit(&self) -> Result<(GyroUnit, Option<f64>), LogInputError> {
         let sp = self.spelling;
         let gyro = self.gyro_unit.as_deref().unwrap_or("");
@@ -356,6 +344,16 @@ impl LogInput {
                     })
             }
         }
+    }
+}
+
+/// One finite value for every axis, or three: an offset as given.
+fn per_axis(v: &[f64]) -> Option<[f64; 3]> {
+    match *v {
+        _ if v.iter().any(|x| !x.is_finite()) => None,
+        [n] => Some([n; 3]),
+        [x, y, z] => Some([x, y, z]),
+        _ => None,
     }
 }
 

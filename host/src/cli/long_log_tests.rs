@@ -80,6 +80,25 @@ fn long_samples() -> (Vec<LogSample>, usize) {
     (samples, hand.len())
 }
 
+/// `segment` + `calibrate` of the long log at `path` (with `flags`) against the fixture session
+/// alone: the held-out error and the gyro bias within 10 % of the session's own.
+fn calibrates_as_the_session_alone(tmp: &std::path::Path, path: &std::path::Path, flags: &str) {
+    let (alone_ug, alone_bias) = segment_and_calibrate(&tmp.join("a"), &fixture("hand.ulg"), "");
+    let (ug, bias) = segment_and_calibrate(&tmp.join("b"), path, flags);
+    println!(
+        "the session alone: {alone_ug:.1} µg, {alone_bias:.4} °/s; in the long log: {ug:.1} µg, \
+         {bias:.4} °/s"
+    );
+    assert!(
+        ug <= (alone_ug * 1.1).max(alone_ug + 2.0),
+        "{ug} {alone_ug}"
+    );
+    assert!(
+        bias <= (alone_bias * 1.1).max(alone_bias + 0.002),
+        "{bias} {alone_bias}"
+    );
+}
+
 #[test]
 fn a_long_log_keeps_its_session_within_the_budget_and_calibrates_as_the_session() {
     let tmp = tempfile::tempdir().unwrap();
@@ -110,22 +129,7 @@ fn a_long_log_keeps_its_session_within_the_budget_and_calibrates_as_the_session(
         log.warnings
     );
 
-    let (alone_ug, alone_bias) =
-        segment_and_calibrate(&tmp.path().join("a"), &fixture("hand.ulg"), "");
-    let (ug, bias) = segment_and_calibrate(
-        &tmp.path().join("b"),
-        &path,
-        &format!("--max-samples {budget}"),
-    );
-    println!("the session alone: {alone_ug:.1} µg, {alone_bias:.4} °/s; in the long log: {ug:.1} µg, {bias:.4} °/s");
-    assert!(
-        ug <= (alone_ug * 1.1).max(alone_ug + 2.0),
-        "{ug} {alone_ug}"
-    );
-    assert!(
-        bias <= (alone_bias * 1.1).max(alone_bias + 0.002),
-        "{bias} {alone_bias}"
-    );
+    calibrates_as_the_session_alone(tmp.path(), &path, &format!("--max-samples {budget}"));
 }
 
 /// A budget smaller than the session: the first samples are kept, and the note says from when on
@@ -186,20 +190,5 @@ fn a_long_text_log_keeps_its_session_too() {
         "{:?}",
         log.warnings
     );
-    let (alone_ug, alone_bias) =
-        segment_and_calibrate(&tmp.path().join("a"), &fixture("hand.ulg"), "");
-    let (ug, bias) = segment_and_calibrate(
-        &tmp.path().join("b"),
-        &path,
-        &format!("{options} --max-samples 10000"),
-    );
-    println!("{session} session rows: alone {alone_ug:.1} µg, {alone_bias:.4} °/s; in the long CSV: {ug:.1} µg, {bias:.4} °/s");
-    assert!(
-        ug <= (alone_ug * 1.1).max(alone_ug + 2.0),
-        "{ug} {alone_ug}"
-    );
-    assert!(
-        bias <= (alone_bias * 1.1).max(alone_bias + 0.002),
-        "{bias} {alone_bias}"
-    );
+    calibrates_as_the_session_alone(tmp.path(), &path, &format!("{options} --max-samples 10000"));
 }

@@ -4,7 +4,7 @@
 use super::{analyse_signals, NoiseError, NoiseReport, Signals, MAX_SAMPLES};
 use crate::calibration_guard::Meeting;
 use crate::export::PlainMatrices;
-use crate::session::logs::{read_log, LogSource};
+use crate::session::logs::{read_log_within, LogSource};
 use crate::session::segment::{find_intervals, SegmentOptions};
 use crate::session::SAMPLES_HEADER;
 use shared::OutputUnit;
@@ -34,7 +34,9 @@ pub fn analyse_log(
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let step = crate::ui::step(format!("reading {}", path.display()), quiet);
-    let log = read_log(path, source)?;
+    // A log longer than one analysis is read again and only its still stretches are kept, the
+    // first MAX_SAMPLES: no more than one analysis takes (recording's `logs::keep`).
+    let log = read_log_within(path, source, MAX_SAMPLES, None)?;
     step.finish_and_clear();
     let rec = &log.recording;
     let unit = rec.acc_unit.unwrap_or(OutputUnit::Lsb);

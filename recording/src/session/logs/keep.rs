@@ -193,6 +193,7 @@ pub(crate) fn left_out_note(
     l: &LeftOut,
     max: usize,
     regions: usize,
+    option: Option<UserOption>,
     spelling: Spelling,
 ) -> Vec<String> {
     let kept = l.read - l.outside - l.over_budget;
@@ -204,17 +205,16 @@ pub(crate) fn left_out_note(
     )];
     if let Some(t) = l.first_over_s {
         let needed = l.read - l.outside;
-        let advice = if needed <= MAX_ROWS {
-            format!(
-                "give {} to keep them",
-                spelling.given(UserOption::MaxSamples, needed)
-            )
-        } else {
-            format!(
+        let advice = match option {
+            None => "the most one analysis takes".to_string(),
+            Some(o) if needed <= MAX_ROWS => {
+                format!("give {} to keep them", spelling.given(o, needed))
+            }
+            Some(o) => format!(
                 "at most {} can be kept ({}), about 200 bytes of memory each",
                 MAX_ROWS,
-                spelling.given(UserOption::MaxSamples, MAX_ROWS)
-            )
+                spelling.given(o, MAX_ROWS)
+            ),
         };
         notes.push(format!(
             "the still positions and turns hold more than {max} samples: the {} from t = {t:.3} s \

@@ -281,6 +281,17 @@ pub fn read_log_keeping(
     source: &LogSource,
     max_samples: usize,
 ) -> Result<LogFile, LogError> {
+    read_log_within(path, source, max_samples, Some(UserOption::MaxSamples))
+}
+
+/// [`read_log_keeping`] for a caller whose budget the user sets with `option`, or cannot set
+/// (`None`: the warning then names no option).
+pub fn read_log_within(
+    path: &Path,
+    source: &LogSource,
+    max_samples: usize,
+    option: Option<UserOption>,
+) -> Result<LogFile, LogError> {
     let max = max_samples.max(1);
     let first = read_pass(path, source, &Keep::All { max }, 1.0);
     let seconds_per_unit = match &first {
@@ -306,8 +317,13 @@ pub fn read_log_keeping(
     let mut log = read_pass(path, source, &keep, seconds_per_unit)?;
     let left_out = report.lock().ok().and_then(|r| r.left_out);
     if let Some(l) = left_out {
-        log.warnings
-            .extend(keep::left_out_note(&l, max, n_regions, source.spelling));
+        log.warnings.extend(keep::left_out_note(
+            &l,
+            max,
+            n_regions,
+            option,
+            source.spelling,
+        ));
     }
     Ok(log)
 }
