@@ -1,17 +1,18 @@
 //! How much of a log the readers keep in memory, so that the memory `segment` needs does not grow
-//! with the file (docs/robustness.md, "Memory").
+//! with the file (docs/robustness.md, "Peak memory of `segment` on a large log").
 //!
-//! A log of up to [`DEFAULT_MAX_SAMPLES`] samples per stream is kept whole, as it always was. A
+//! A log of up to the budget ([`DEFAULT_MAX_SAMPLES`] for `segment`) per stream is kept whole. A
 //! longer one is read three times, each pass streaming the file:
 //!
 //! 1. the first pass stops at the budget ([`Keep::All`]);
 //! 2. the survey ([`Keep::Survey`]) keeps each stream's block statistics only, at most
 //!    [`MAX_BLOCKS`] blocks, merged pairwise as the log goes on;
 //! 3. the extract ([`Keep::Within`]) keeps the samples whose time lies in the regions the survey
-//!    found ([`regions`]): the accelerometer's quiet stretches (a still position, or a spin on a
-//!    table) with a margin, and the moves between two of them shorter than [`MAX_MOVE_S`] (the
-//!    turns). Long flights, walks and drives between them are what is left out; a calibration
-//!    uses none of it. The extract keeps at most the budget too: what lies beyond it is named.
+//!    found ([`Survey::regions`]): the accelerometer's quiet stretches (a still position, or a
+//!    spin on a table) with a margin, and the moves between two of them shorter than
+//!    [`MAX_MOVE_S`] (the turns). Long flights, walks and drives between them are what is left
+//!    out; a calibration uses none of it. The extract keeps at most the budget too: what lies
+//!    beyond it is named.
 //!
 //! The survey locates; it decides nothing. The still intervals are found on the samples kept, by
 //! the same rules as on a short log (`super::super::segment`).
