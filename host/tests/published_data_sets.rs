@@ -364,6 +364,16 @@ fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_sessio
             !tmp.path().join(&out).exists(),
             "{name}: a session was written"
         );
+        // A second of data is no session, but it is a log: `apply` and `noise` read it whole (the
+        // reason above is `segment`'s alone).
+        let source = recording::session::logs::LogSource {
+            text: None,
+            instance: Some(instance as u8),
+            topic: None,
+            spelling: Default::default(),
+        };
+        let log = recording::session::logs::read_log(Path::new(path), &source).unwrap();
+        assert_eq!(log.recording.len(), walked.len(), "{name}");
     }
     let (ok, _, stderr) = common::host_in(
         Some(tmp.path()),

@@ -36,6 +36,9 @@ pub const MAX_OVERLONG_LINES: usize = 100;
 /// Most rows held: 4 million rows (about 190 MB) is 67 minutes at 1 kHz, far more than a hand-held
 /// session needs.
 pub const MAX_ROWS: usize = 4_000_000;
+/// Fewest rows (or samples) of a recording that `segment` cuts into a session: a second at 100 Hz,
+/// shorter than one still position.
+pub const MIN_SESSION_ROWS: usize = 100;
 /// The default accelerometer and gyro column names, x y z each.
 pub const DEFAULT_COLUMNS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
 
@@ -265,11 +268,14 @@ pub enum ImportError {
         /// from a rate, or not told.
         time_unit: Option<TimeUnit>,
     },
-    /// Too few rows.
+    /// Too few rows for a session.
     #[error(
         "only {0} usable rows: a hand-held session needs minutes of data (24 positions of 3–5 s)"
     )]
     TooFewRows(usize),
+    /// Too few rows to tell a step of time from them.
+    #[error("only {0} usable rows: too few to read as a recording (at least 2)")]
+    NoRecording(usize),
     /// The rate is not a positive finite number.
     #[error(
         "{} is not a sample rate: give the logger's rate in Hz, e.g. {}",
@@ -391,12 +397,17 @@ pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording
 }
 
 /// [`read_logger_csv`] on any reader (`path` only names it in messages).
+/// A hand-held session's file: fewer than [`MIN_SESSION_ROWS`] rows are refused for it.
 pub fn read_logger<R: BufRead>(
     r: R,
     path: &Path,
     options: &ImportOptions,
 ) -> Result<Recording, ImportError> {
-    read_logger_keeping(r, path, options, &Keep::default(), 1.0)
+    let rec = read_logger_keeping(r, path, options, &Keep::default(), 1.0)?;
+    if rec.len() < MIN_SESSION_ROWS {
+        return Err(ImportError::TooFewRows(rec.len()));
+    }
+    Ok(rec)
 }
 
 /// [`read_logger`] keeping the rows `keep` says (`super::logs::keep`); `seconds_per_unit`: the
@@ -427,8 +438,8 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
     if keeper.report() {
         return Ok(Recording::default());
     }
-    if rec.len() < 100 {
-        return Err(ImportError::TooFewRows(rec.len()));
+    if rec.len() < 2 {
+        return Err(ImportError::NoRecording(rec.len()));
     }
     rec.gyro_lsb_per_dps = options.gyro_lsb_per_dps;
     rec.time_origin = Some(TimeOrigin::of_text(&options.time));

@@ -19,7 +19,7 @@ pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
 
 use super::import::{
     gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
-    TimeSource, TimeUnit, GAP_PERIODS,
+    TimeSource, TimeUnit, GAP_PERIODS, MIN_SESSION_ROWS,
 };
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use crate::spelling::{Spelling, UserOption};
@@ -177,6 +177,14 @@ pub enum LogError {
         /// The option given.
         option: &'static str,
     },
+    /// Too few samples to read as a recording.
+    #[error("{path}: only {rows} IMU samples: too few to read as a recording (at least 2)")]
+    NoRecording {
+        /// The file.
+        path: PathBuf,
+        /// Samples found.
+        rows: usize,
+    },
     /// Too few samples for a session.
     #[error(
         "{path}: only {rows} IMU samples: a hand-held session needs minutes of data (positions \
@@ -276,12 +284,23 @@ pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
 /// [`read_log`] keeping at most `max_samples` samples per stream: a longer log is surveyed and only
 /// its quiet stretches and the turns between them are kept (`keep`), the first `max_samples` of
 /// them; a warning says what was left out.
+///
+/// It reads a hand-held session: fewer than [`MIN_SESSION_ROWS`] samples are refused for it.
 pub fn read_log_keeping(
     path: &Path,
     source: &LogSource,
     max_samples: usize,
 ) -> Result<LogFile, LogError> {
-    read_log_within(path, source, max_samples, Some(UserOption::MaxSamples))
+    let log = read_log_within(path, source, max_samples, Some(UserOption::MaxSamples))?;
+    let rows = log.recording.len();
+    match log.format {
+        _ if rows >= MIN_SESSION_ROWS => Ok(log),
+        LogFormat::Text => Err(LogError::Text(ImportError::TooFewRows(rows))),
+        _ => Err(LogError::TooFewSamples {
+            path: path.to_path_buf(),
+            rows,
+        }),
+    }
 }
 
 /// [`read_log_keeping`] for a caller whose budget the user sets with `option`, or cannot set
@@ -459,8 +478,8 @@ fn read_keeping<R: BufRead>(
     if format != LogFormat::Text {
         recording.time_origin = Some(TimeOrigin::LoggerStamps(format.name()));
     }
-    if recording.len() < 100 && !matches!(keep, Keep::Survey(_)) {
-        return Err(LogError::TooFewSamples {
+    if recording.len() < 2 && !matches!(keep, Keep::Survey(_)) {
+        return Err(LogError::NoRecording {
             path: p(),
             rows: recording.len(),
         });
