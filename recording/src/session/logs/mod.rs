@@ -10,23 +10,25 @@
 //! the memory needed does not grow with the file.
 
 pub mod dataflash;
+mod error;
 pub(crate) mod keep;
 pub mod mcap;
 pub mod ulog;
 
+pub use error::{ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
 
 use super::import::{
     gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
-    TimeSource, TimeUnit, GAP_PERIODS, MIN_SESSION_ROWS,
+    GAP_PERIODS, MIN_SESSION_ROWS,
 };
 use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 /// What to take from a log: the text reader's columns, time and units (text files only), the IMU
@@ -92,186 +94,6 @@ pub struct LogFile {
     pub format: LogFormat,
     /// What to tell the user.
     pub warnings: Vec<String>,
-}
-
-/// Why a log cannot be read; each says what to do.
-#[derive(Debug, thiserror::Error)]
-pub enum LogError {
-    /// Not readable.
-    #[error("cannot read {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// A text file's problem.
-    #[error(transparent)]
-    Text(#[from] ImportError),
-    /// Binary, but none of the formats read.
-    #[error(
-        "{path} is not a format this tool reads (it starts with bytes {head}): give a text file \
-         (CSV), a PX4 ULog, an ArduPilot DataFlash .bin or a ROS 2 bag in MCAP (ROS 1 bags and \
-         sqlite3 ROS 2 bags: convert with `mcap convert`)"
-    )]
-    UnknownFormat {
-        /// The file.
-        path: PathBuf,
-        /// Its first bytes, hex.
-        head: String,
-    },
-    /// A text file without its units and columns.
-    #[error(
-        "{} is a text file: give its units ({} and {}) and its time ({} or {})",
-        .0.display(),
-        .1.name(UserOption::AccUnit),
-        .1.name(UserOption::GyroUnit),
-        .1.given(UserOption::TimeColumn, "NAME"),
-        .1.given(UserOption::RateHz, "HZ")
-    )]
-    TextNeedsOptions(PathBuf, Spelling),
-    /// Text options on a binary log, which states its own units.
-    #[error(
-        "{path} is a {} log, which states its own units (m/s², rad/s) and time: leave out {option}",
-        format.name()
-    )]
-    TextOptionOnBinary {
-        /// The file.
-        path: PathBuf,
-        /// Its format.
-        format: LogFormat,
-        /// The options given.
-        option: String,
-    },
-    /// A ULog's problem.
-    #[error("{path}: {source}")]
-    Ulog {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: ulog::UlogError,
-    },
-    /// A DataFlash log's problem.
-    #[error("{path}: {source}")]
-    DataFlash {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: dataflash::DataFlashError,
-    },
-    /// An MCAP file's problem.
-    #[error("{path}: {source}")]
-    Mcap {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: mcap::McapError,
-    },
-    /// `--instance` or `--topic` on a format that has no such thing.
-    #[error("{path} is a {} log: {option} does not apply to it; leave it out", format.name())]
-    OptionNotForFormat {
-        /// The file.
-        path: PathBuf,
-        /// Its format.
-        format: LogFormat,
-        /// The option given.
-        option: &'static str,
-    },
-    /// Too few samples to read as a recording.
-    #[error("{path}: only {rows} IMU samples: too few to read as a recording (at least 2)")]
-    NoRecording {
-        /// The file.
-        path: PathBuf,
-        /// Samples found.
-        rows: usize,
-    },
-    /// Too few samples for a session.
-    #[error(
-        "{path}: only {rows} IMU samples: a hand-held session needs minutes of data (positions \
-         of 3–5 s and the turns between them)"
-    )]
-    TooFewSamples {
-        /// The file.
-        path: PathBuf,
-        /// Samples found.
-        rows: usize,
-    },
-}
-
-/// The IMU a ULog or DataFlash log was asked for is not there, or has too many samples.
-#[derive(Debug, thiserror::Error)]
-pub enum ImuError {
-    /// No IMU samples for the instance.
-    #[error(
-        "no IMU samples for instance {instance}: the log has {found}; {hint} and choose the IMU \
-         with {}",
-        .spelling.given(UserOption::Instance, "N")
-    )]
-    NoImu {
-        /// The instance asked for.
-        instance: u8,
-        /// The IMU messages or topics and their instances found.
-        found: String,
-        /// What to log.
-        hint: &'static str,
-        /// The caller's names of the options (the readers say flags; [`read_log_from`] gives the
-        /// caller's).
-        spelling: Spelling,
-    },
-    /// More samples than are kept at once, from a reader that cannot be read again (a file is read
-    /// again: [`read_log_keeping`]).
-    #[error(
-        "more than {1} samples in '{0}', the most this reads into memory at once: cut the log"
-    )]
-    TooManySamples(String, usize),
-}
-
-impl LogError {
-    /// A stream held more samples than its budget ([`Keep::All`]): the seconds per unit of its
-    /// time stamps (`None`: another error, or a text file whose time unit the rows read did not
-    /// tell).
-    fn over_budget(&self, source: &LogSource) -> Option<f64> {
-        if let LogError::Text(ImportError::TooManyRows { time_unit, .. }) = self {
-            return match source.text.as_ref().map(|o| &o.time) {
-                Some(TimeSource::RateHz(_)) => Some(1.0),
-                _ => time_unit.map(TimeUnit::seconds),
-            };
-        }
-        matches!(
-            self,
-            LogError::Ulog {
-                source: ulog::UlogError::Imu(ImuError::TooManySamples(..)),
-                ..
-            } | LogError::DataFlash {
-                source: dataflash::DataFlashError::Imu(ImuError::TooManySamples(..)),
-                ..
-            } | LogError::Mcap {
-                source: mcap::McapError::TooManySamples(_),
-                ..
-            }
-        )
-        .then_some(1.0)
-    }
-}
-
-impl ImuError {
-    /// The error with the options named as `spelling` does.
-    pub fn spelled(self, spelling: Spelling) -> ImuError {
-        match self {
-            ImuError::NoImu {
-                instance,
-                found,
-                hint,
-                ..
-            } => ImuError::NoImu {
-                instance,
-                found,
-                hint,
-                spelling,
-            },
-            e => e,
-        }
-    }
 }
 
 /// Reads the whole log at `path` in whatever format its first bytes say (see the module docs), up

@@ -1,4 +1,5 @@
 use super::*;
+use crate::session::import::TimeSource;
 
 fn stream(ts: &[f64], v: impl Fn(f64) -> [f64; 3], temp: Option<f64>) -> Stream {
     let mut s = Stream::default();
