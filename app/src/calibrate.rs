@@ -7,8 +7,7 @@ use super::error::CalibrateError;
 use crate::calibration_files::{self, OutputError, WrittenCalibration};
 use crate::estimate::GyroEstimate;
 use crate::estimate::{
-    calibrate_session_stats, take_hand_turns_gyro, CalibrationOutcome, EstimateError,
-    EstimateOptions,
+    calibrate_with_hand_gyro, CalibrationOutcome, EstimateError, EstimateOptions,
 };
 use crate::session::{self, Plan, ReadOptions, SegmentStats, Session};
 use crate::summary::{CalibrationSummary, Limits};
@@ -61,16 +60,18 @@ impl Calibrated {
 }
 
 /// Estimates a calibration from a recording (docs/model.md §2–§4), takes the hand turns' gyro
-/// where the plan determines no `G` ([`take_hand_turns_gyro`]: beside a temperature model, with
+/// where the plan determines no `G` ([`calibrate_with_hand_gyro`]: beside a temperature model, with
 /// the rests' bias, §9), and checks the result against the limits.
 pub fn calibrate_recording(
     recording: Recording<'_>,
     options: &CalibrateOptions,
 ) -> Result<Calibrated, EstimateError> {
-    let mut outcome = calibrate_session_stats(recording.plan, recording.stats, &options.estimate)?;
-    let gyro_from_hand_turns = recording
-        .hand_gyro
-        .is_some_and(|hand| take_hand_turns_gyro(&mut outcome, hand));
+    let (outcome, gyro_from_hand_turns) = calibrate_with_hand_gyro(
+        recording.plan,
+        recording.stats,
+        &options.estimate,
+        recording.hand_gyro,
+    )?;
     let plan_id = recording.plan.unit_id.clone();
     let unit_id = plan_id
         .as_deref()

@@ -40,6 +40,18 @@ pub fn calibrate_session_stats(
     stats: &[SegmentStats],
     options: &EstimateOptions,
 ) -> Result<CalibrationOutcome, EstimateError> {
+    calibrate_with_hand_gyro(plan, stats, options, None).map(|(outcome, _)| outcome)
+}
+
+/// [`calibrate_session_stats`] with the gyro a hand-held session's turns determined (`gyro.toml`),
+/// which the calibration takes where the session's own fit determines no `G`
+/// (`thermal_gyro::settle_gyro`, docs/model.md §8, §9); and whether it took it.
+pub fn calibrate_with_hand_gyro(
+    plan: &Plan,
+    stats: &[SegmentStats],
+    options: &EstimateOptions,
+    hand: Option<&GyroEstimate>,
+) -> Result<(CalibrationOutcome, bool), EstimateError> {
     // A plan for a single-package unit asks for its model whatever the flags (docs/model.md §4.7).
     let options = &EstimateOptions {
         single_package: options.single_package || plan.package == Package::Single,
@@ -55,9 +67,10 @@ pub fn calibrate_session_stats(
     };
     outcome.warnings.extend(notes);
     outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
-    thermal_gyro::bias_from_rests(&mut outcome, fit.as_ref(), options);
+    let rests = thermal_gyro::bias_from_rests(&outcome, fit.as_ref(), options);
+    let from_hand = thermal_gyro::settle_gyro(&mut outcome, rests, hand);
     outcome.thermal = fit;
-    Ok(outcome)
+    Ok((outcome, from_hand))
 }
 
 /// [`calibrate_session_stats`] for statistics at one temperature, before the plausibility checks.

@@ -76,7 +76,7 @@ mod uncertainty;
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
 pub use drift::{WalkEstimate, WalkOrigin, WalkPoint};
 pub use error::EstimateError;
-pub use fit::calibrate_session_stats;
+pub use fit::{calibrate_session_stats, calibrate_with_hand_gyro};
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
 pub use options::{
@@ -91,7 +91,6 @@ pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};
 pub use predict::{predict, PredictSettings, Prediction};
 pub use screen::median;
 pub use segment::{Noise, SegmentKind};
-pub use thermal_gyro::take_hand_turns_gyro;
 pub use uncertainty::Uncertainty;
 
 // The tests (`tests.rs` and its siblings) take this module's names with `use super::*`.

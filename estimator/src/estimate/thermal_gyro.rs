@@ -106,27 +106,23 @@ pub fn fit(statics: &[(&SegmentStats, &ThermalStats)], reference_c: f64) -> Opti
 }
 
 /// A thermal session without spins still determines the gyro's bias at `T_ref` from its rests (the
-/// temperature model holds only its drift about `T_ref`): that bias becomes the calibration's gyro
-/// correction, `G` taken as perfect and said to be undetermined (docs/model.md §8, §9). Without it
-/// the device and every export would keep the whole bias in the rate.
+/// temperature model holds only its drift about `T_ref`): that bias, for the calibration's gyro
+/// correction where the session's own fit gives no gyro ([`settle_gyro`]). Without it the device and
+/// every export would keep the whole bias in the rate.
 pub(crate) fn bias_from_rests(
-    outcome: &mut CalibrationOutcome,
+    outcome: &CalibrationOutcome,
     fit: Option<&super::thermal::ThermalFit>,
     options: &EstimateOptions,
-) {
+) -> Option<GyroEstimate> {
     if outcome.gyro.is_some() || options.gyro_model != GyroModel::Estimate {
-        return;
+        return None;
     }
-    let Some((bias, sigma)) = fit.and_then(|f| f.gyro_bias_ref_rad_s) else {
-        return;
-    };
-    let g = GyroEstimate::bias_only(bias, sigma);
-    outcome.warnings.push(rests_warning(&g));
-    outcome.calibration.gyro = Some(g.device_correction());
-    outcome.gyro = Some(g);
+    let (bias, sigma) = fit.and_then(|f| f.gyro_bias_ref_rad_s)?;
+    Some(GyroEstimate::bias_only(bias, sigma))
 }
 
-/// The warning [`bias_from_rests`] gives: the bias from the rests, `G` taken as perfect.
+/// The warning for the rests' bias alone: `G` taken as perfect and said to be undetermined
+/// (docs/model.md §8, §9).
 fn rests_warning(g: &GyroEstimate) -> String {
     let (b, s) = (g.bias_rad_s, g.bias_rad_s_1sigma);
     format!(
@@ -141,41 +137,60 @@ fn rests_warning(g: &GyroEstimate) -> String {
     )
 }
 
-/// The gyro a hand-held session's turns determined (`gyro.toml`, docs/model.md §8) becomes the
-/// calibration's where the session's own fit determines no entry of `G`: taken whole when the
-/// outcome has no gyro; beside a temperature model, its `G` (scale factors and axis alignment) with
-/// the rests' bias at `T_ref` (`bias_from_rests`), since the model's gyro polynomial holds the
-/// bias's change about that value and the turns' bias is the stills' average over their
-/// temperatures (§9). A warning says which part came from where. Whether the hand turns' gyro was
-/// taken.
-pub fn take_hand_turns_gyro(outcome: &mut CalibrationOutcome, hand: &GyroEstimate) -> bool {
-    let gyro = match outcome.gyro.take() {
-        None => hand.clone(),
-        Some(own) if own.determines_matrix() => {
+/// The warning for the hand turns' `G` beside a bias of `bias`'s.
+fn combined_warning(bias: &GyroEstimate) -> String {
+    let b = bias.bias_rad_s.map(f64::to_degrees);
+    format!(
+        "gyro: scale factors and axis alignment (G) from the hand turns (gyro.toml); the bias \
+         at the reference temperature, ({:+.4}, {:+.4}, {:+.4}) °/s, and its change with \
+         temperature from the rests (docs/model.md §8, §9), not the hand turns' bias, which is \
+         the still positions' average over their temperatures",
+        b[0], b[1], b[2]
+    )
+}
+
+/// The calibration's gyro, decided once from what the session gives: its own fit's where that
+/// determines `G`; else the gyro a hand-held session's turns determined (`gyro.toml`, §8), whole
+/// when the session gives no gyro, and beside a temperature model its `G` (scale factors and axis
+/// alignment) with the rests' bias at `T_ref`, since the model's gyro polynomial holds the bias's
+/// change about that value and the turns' bias is the stills' average over their temperatures
+/// (§9); else the rests' bias alone. A warning says which part came from where. Whether the hand
+/// turns' gyro was taken.
+pub(crate) fn settle_gyro(
+    outcome: &mut CalibrationOutcome,
+    rests: Option<GyroEstimate>,
+    hand: Option<&GyroEstimate>,
+) -> bool {
+    let own = outcome.gyro.take();
+    let (gyro, from_hand, warning) = match (own, rests, hand) {
+        (Some(own), _, _) if own.determines_matrix() => {
             outcome.gyro = Some(own);
             return false;
         }
-        Some(rests) => {
-            let replaced = rests_warning(&rests);
-            outcome.warnings.retain(|w| *w != replaced);
-            let b = rests.bias_rad_s.map(f64::to_degrees);
-            outcome.warnings.push(format!(
-                "gyro: scale factors and axis alignment (G) from the hand turns (gyro.toml); the bias \
-                 at the reference temperature, ({:+.4}, {:+.4}, {:+.4}) °/s, and its change with \
-                 temperature from the rests (docs/model.md §8, §9), not the hand turns' bias, which is \
-                 the still positions' average over their temperatures",
-                b[0], b[1], b[2]
-            ));
-            GyroEstimate {
-                bias_rad_s: rests.bias_rad_s,
-                bias_rad_s_1sigma: rests.bias_rad_s_1sigma,
-                ..hand.clone()
-            }
+        (Some(own), _, None) => {
+            outcome.gyro = Some(own);
+            return false;
         }
+        (Some(bias), _, Some(hand)) | (None, Some(bias), Some(hand)) => {
+            let warning = combined_warning(&bias);
+            let gyro = GyroEstimate {
+                bias_rad_s: bias.bias_rad_s,
+                bias_rad_s_1sigma: bias.bias_rad_s_1sigma,
+                ..hand.clone()
+            };
+            (gyro, true, Some(warning))
+        }
+        (None, Some(rests), None) => {
+            let warning = rests_warning(&rests);
+            (rests, false, Some(warning))
+        }
+        (None, None, Some(hand)) => (hand.clone(), true, None),
+        (None, None, None) => return false,
     };
+    outcome.warnings.extend(warning);
     outcome.calibration.gyro = Some(gyro.device_correction());
     outcome.gyro = Some(gyro);
-    true
+    from_hand
 }
 
 /// The scatter of segment means at one temperature beyond their own noise (the bias wandering

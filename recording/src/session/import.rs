@@ -424,7 +424,9 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
     let layout = Layout::new(header, sep, options)?;
     let still_var = match options.acc_unit {
         OutputUnit::MetresPerSecondSquared => STILL_VAR_M2_S4,
-        OutputUnit::StandardGravity => STILL_VAR_M2_S4 / (9.80665 * 9.80665),
+        OutputUnit::StandardGravity => {
+            STILL_VAR_M2_S4 / (shared::STANDARD_GRAVITY_M_S2 * shared::STANDARD_GRAVITY_M_S2)
+        }
         _ => 0.0,
     };
     let mut keeper = Keeper::with_still_var(keep, still_var);

@@ -35,7 +35,8 @@ pub const MAX_MOVE_S: f64 = 60.0;
 
 /// The variance, summed over three axes, that no still unit exceeds, (m/s²)²: 20 mg per axis, the
 /// segmentation's own limit (`super::super::segment`).
-pub(crate) const STILL_VAR_M2_S4: f64 = 3.0 * (0.02 * 9.80665) * (0.02 * 9.80665);
+pub(crate) const STILL_VAR_M2_S4: f64 =
+    3.0 * (0.02 * shared::STANDARD_GRAVITY_M_S2) * (0.02 * shared::STANDARD_GRAVITY_M_S2);
 
 /// Seconds kept around each quiet stretch: the segmentation's windows and trims reach beyond the
 /// stretch a block found.
