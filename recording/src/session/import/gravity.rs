@@ -7,10 +7,23 @@ use super::{ImportError, Recording};
 use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 
-/// The median of |acc| over all rows: gravity's magnitude in the recording's unit (a hand-held
-/// recording is mostly still).
+/// Rows averaged before their magnitude is taken.
+const BLOCK_ROWS: usize = 16;
+
+/// The median over blocks of [`BLOCK_ROWS`] rows of |mean acc|: gravity's magnitude in the
+/// recording's unit. The mean of a block is what the unit feels once vibration averages out: a
+/// vehicle's log whose rows shake by a g or more about gravity (a flight) still reads 1 g, where the
+/// median of the rows' own magnitudes would read up to 1.7 g.
 fn median_magnitude(rec: &Recording) -> f64 {
-    let mut mags: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+    let mut mags: Vec<f64> = rec
+        .acc
+        .chunks(BLOCK_ROWS)
+        .map(|b| {
+            let n = b.len() as f64;
+            let mean: [f64; 3] = core::array::from_fn(|j| b.iter().map(|v| v[j]).sum::<f64>() / n);
+            shared::linalg::norm(&mean)
+        })
+        .collect();
     mags.sort_by(f64::total_cmp);
     mags[mags.len() / 2]
 }
@@ -70,4 +83,41 @@ pub(super) fn check_gravity(
         hint,
         spelling: sp,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vehicle's log: gravity on z and a vibration of ±1 g on each axis, its sign alternating from
+    /// row to row, so that each block of 16 rows averages it out exactly. Each row's magnitude is
+    /// √(1² + 1² + 0²) g or √(1² + 1² + 2²) g, never 1 g; the blocks' means are gravity itself.
+    fn vibrating(rows: usize) -> Recording {
+        let g = shared::STANDARD_GRAVITY_M_S2;
+        let acc = (0..rows)
+            .map(|k| {
+                let s = if k % 2 == 0 { g } else { -g };
+                [s, -s, -g + s]
+            })
+            .collect();
+        Recording {
+            acc,
+            ..Recording::default()
+        }
+    }
+
+    #[test]
+    fn a_vibrating_log_in_m_s2_reads_as_gravity() {
+        let rec = vibrating(1600);
+        let rows: Vec<f64> = rec.acc.iter().map(shared::linalg::norm).collect();
+        assert!(rows
+            .iter()
+            .all(|m| *m > 1.4 * shared::STANDARD_GRAVITY_M_S2));
+        assert!((median_magnitude(&rec) - shared::STANDARD_GRAVITY_M_S2).abs() < 1e-9);
+        let sp = Spelling::default();
+        assert!(check_gravity(&rec, OutputUnit::MetresPerSecondSquared, sp).is_ok());
+        // The same numbers said to be in g are still refused, and the hint names m/s².
+        let e = check_gravity(&rec, OutputUnit::StandardGravity, sp).unwrap_err();
+        assert!(e.to_string().contains("m/s2"), "{e}");
+    }
 }
