@@ -266,7 +266,7 @@ impl<R: Read> Window<R> {
 struct State {
     formats: Vec<Option<Format>>,
     layouts: Vec<Option<Layout>>,
-    seen: std::collections::BTreeSet<(String, u8)>,
+    seen: std::collections::BTreeSet<(&'static str, u8)>,
     imu_acc: Stream,
     imu_gyro: Stream,
     acc: Stream,
@@ -404,7 +404,7 @@ impl State {
             Kind::Gyr => "GYR",
         };
         if self.seen.len() < 64 {
-            self.seen.insert((name.to_string(), i));
+            self.seen.insert((name, i));
         }
         if i != instance {
             return Ok(());
@@ -449,7 +449,7 @@ impl State {
         } else if self.acc.count() > 0 && self.gyro.count() > 0 {
             (self.acc, self.gyro)
         } else {
-            let seen = self.seen.iter().map(|(n, i)| (n.as_str(), *i));
+            let seen = self.seen.iter().copied();
             let found = list_instances(seen, "no IMU, ACC or GYR message");
             return Err(ImuError::NoImu {
                 instance,
