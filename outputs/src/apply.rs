@@ -14,14 +14,15 @@
 //! f64), and the corrected body rate the device used for it (the calibration's gyro `G⁻¹(w − b)`,
 //! docs/model.md §8; the gyro's reading where the calibration has no gyro), rad/s.
 //!
-//! A logger's file (`apply_log`) is read whole by `session::logs` (bounded by its row cap): it has
-//! no segments, so its rows are written with the segment `log`, and the still intervals
-//! `session::segment` finds in it are the ones checked to compensate to 1 g.
+//! A logger's file (`apply_log`) is read by `session::logs`, whole when it holds at most
+//! [`APPLY_MAX_SAMPLES`] per stream and window by window when longer (the device's state carried
+//! from one window to the next), so that the memory needed does not grow with the file. It has no
+//! segments: its rows are written with the segment `log`, and the still intervals
+//! `session::segment` finds in it (in each window) are the ones checked to compensate to 1 g.
 
 mod log;
 
-pub use log::apply_log;
-pub use log::Prepared;
+pub use log::{apply_log, apply_log_within, Prepared, Setting, APPLY_MAX_SAMPLES};
 
 use crate::calibration_guard::{
     check_rest_rate, meet, Frame, GuardError, Meeting, Mine, Other, Temperatures,

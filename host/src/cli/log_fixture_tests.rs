@@ -30,7 +30,7 @@ pub(super) fn command(line: &str) -> Command {
         .command
 }
 
-fn truth() -> Calibration {
+pub(super) fn truth() -> Calibration {
     UnitFile::load(&fixture("hand.truth.toml"))
         .unwrap()
         .to_calibration()

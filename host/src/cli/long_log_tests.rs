@@ -2,11 +2,14 @@
 //! five-minute stretches of motion (a flight before and after it). Only the session is kept, and
 //! it calibrates as the session alone does.
 
-use super::log_fixture_tests::{fixture, segment_and_calibrate};
-use crate::fuzz::logs::{write_ulog, LogSample};
+use super::log_fixture_tests::{fixture, segment_and_calibrate, truth};
+use crate::apply::{apply_log_within, ApplySummary, Setting};
+use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use crate::session::import::MAX_ROWS;
 use crate::session::import::{GyroUnit, ImportOptions, TimeSource, TimeUnit};
 use crate::session::logs::{read_log, read_log_keeping, LogSource};
 use crate::sim::testkit::Rng;
+use shared::compensator::LeverMode;
 use shared::OutputUnit;
 
 /// Seconds of motion before and after the session.
@@ -39,6 +42,121 @@ fn long_log(path: &std::path::Path) -> usize {
     let (samples, session) = long_samples();
     std::fs::write(path, write_ulog(&samples, None)).unwrap();
     session
+}
+
+/// `apply` of the truth's calibration to the log at `path` (read as `source` says), reading at
+/// most `max_samples` at once: the CSV's lines and the summary.
+fn apply_within(
+    path: &std::path::Path,
+    source: &LogSource,
+    max_samples: usize,
+) -> (Vec<String>, ApplySummary) {
+    let mut out = Vec::new();
+    let setting = Setting {
+        mode: LeverMode::RateAndAcceleration,
+        assume_temp_c: None,
+    };
+    let summary = apply_log_within(path, source, &truth(), &setting, max_samples, &mut out)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let text = String::from_utf8(out).unwrap();
+    (text.lines().map(str::to_string).collect(), summary)
+}
+
+/// The text reader's options for [`long_csv`].
+fn csv_source() -> LogSource {
+    LogSource {
+        text: Some(ImportOptions::new(
+            TimeSource::Column("t_ms".into()),
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::RadPerS,
+        )),
+        ..none()
+    }
+}
+
+/// `apply` on the long log read window by window writes what it writes reading the log whole, byte
+/// for byte, in each of the four formats: each window's repair and pairing see the neighbours a
+/// whole read does, and the device's state (ω̇, temperature refresh, gaps) is carried from one
+/// window to the next.
+#[test]
+fn a_long_log_applied_window_by_window_is_the_log_applied_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (samples, _) = long_samples();
+    let logs = [
+        ("long.ulg", write_ulog(&samples, None)),
+        ("long.bin", write_dataflash(&samples)),
+        ("long.mcap", write_mcap(&samples, None, 0.0)),
+    ];
+    let mut inputs: Vec<(std::path::PathBuf, LogSource)> = Vec::new();
+    for (name, bytes) in logs {
+        std::fs::write(tmp.path().join(name), bytes).unwrap();
+        inputs.push((tmp.path().join(name), none()));
+    }
+    long_csv(&tmp.path().join("long.csv"));
+    inputs.push((tmp.path().join("long.csv"), csv_source()));
+    for (path, source) in &inputs {
+        let (whole, whole_summary) = apply_within(path, source, MAX_ROWS);
+        let (windowed, summary) = apply_within(path, source, 10_000);
+        let note = &summary.warnings[0];
+        println!(
+            "{}: {} rows whole and window by window; {note}",
+            path.display(),
+            whole_summary.rows
+        );
+        let windows: usize = note
+            .split(" in ")
+            .nth(1)
+            .and_then(|w| w.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{:?}", summary.warnings));
+        // About 66 000 samples in windows of about 5 000.
+        assert!((10..=16).contains(&windows), "{note}");
+        assert!(
+            !whole_summary.warnings.iter().any(|w| w.contains("windows")),
+            "{:?}",
+            whole_summary.warnings
+        );
+        assert_eq!(summary.rows, whole_summary.rows);
+        assert_eq!(windowed.len(), whole.len());
+        for (k, (a, b)) in windowed.iter().zip(&whole).enumerate() {
+            assert_eq!(a, b, "{}: line {}", path.display(), k + 1);
+        }
+    }
+}
+
+/// A stamp damaged so far that it lands in another window is left out there (the repair's end
+/// rule) where a whole read re-times it: one row fewer, every other row at its own time. An exact
+/// repeat and a swapped pair cost nothing.
+#[test]
+fn a_far_damaged_stamp_costs_its_row_in_a_windowed_apply() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("long.ulg");
+    let (mut samples, _) = long_samples();
+    let damaged = 20_000;
+    samples[damaged].t_s += 1000.0;
+    samples.swap(40_000, 40_001);
+    let repeat = samples[50_000];
+    samples.insert(50_001, repeat);
+    std::fs::write(&path, write_ulog(&samples, None)).unwrap();
+    let (whole, _) = apply_within(&path, &none(), MAX_ROWS);
+    let (windowed, _) = apply_within(&path, &none(), 10_000);
+    let times = |lines: &[String]| -> Vec<f64> {
+        let t = lines.iter().skip(1).map(|l| l.split(',').nth(1).unwrap());
+        t.map(|t| t.parse().unwrap()).collect()
+    };
+    let (whole_t, windowed_t) = (times(&whole), times(&windowed));
+    assert_eq!(whole_t.len(), samples.len() - 1, "the repeat left out");
+    assert_eq!(windowed_t.len(), whole_t.len() - 1);
+    let missing: Vec<f64> = whole_t
+        .iter()
+        .copied()
+        .filter(|t| windowed_t.binary_search_by(|w| w.total_cmp(t)).is_err())
+        .collect();
+    // The log's times start where the writer's do: the rows are the samples moved by that.
+    let start = whole_t[0] - samples[0].t_s;
+    let retimed = start + (samples[damaged - 1].t_s + samples[damaged + 1].t_s) / 2.0;
+    assert_eq!(missing.len(), 1, "{missing:?}");
+    assert!((missing[0] - retimed).abs() < 1e-4, "{missing:?} {retimed}");
 }
 
 /// The same as a logger's CSV with its time in milliseconds, a unit told from the rows.
@@ -170,15 +288,7 @@ fn a_long_text_log_keeps_its_session_too() {
     let path = tmp.path().join("long.csv");
     let session = long_csv(&path);
     let options = "--time-column t_ms --acc-unit m/s2 --gyro-unit rad/s";
-    let source = LogSource {
-        text: Some(ImportOptions::new(
-            TimeSource::Column("t_ms".into()),
-            OutputUnit::MetresPerSecondSquared,
-            GyroUnit::RadPerS,
-        )),
-        ..none()
-    };
-    let log = read_log_keeping(&path, &source, 10_000).unwrap();
+    let log = read_log_keeping(&path, &csv_source(), 10_000).unwrap();
     let rec = &log.recording;
     assert!((session..=10_000).contains(&rec.len()), "{}", rec.len());
     assert_eq!(rec.time_unit, Some((TimeUnit::Ms, true)));

@@ -3,7 +3,7 @@
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::calibration_guard::{meet, Meeting, Other};
 use crate::session::import::Recording;
-use crate::session::logs::{read_log, LogSource};
+use crate::session::logs::{read_log_windows, LogError, LogRead, LogSource};
 use crate::session::segment::{
     find_intervals, gyro_unit_suspect, Interval, SegmentError, SegmentOptions,
 };
@@ -13,10 +13,17 @@ use shared::{Calibration, OutputUnit};
 use std::io::Write;
 use std::path::Path;
 
+/// Samples per stream read into memory at once: a log within it is read whole, a longer one window
+/// by window (`session::logs::read_log_windows`), so that the memory `apply` needs does not grow
+/// with the file.
+pub const APPLY_MAX_SAMPLES: usize = crate::session::logs::DEFAULT_MAX_SAMPLES;
+
 /// Applies `cal` to the logger's file at `path`, writing the CSV to `out`. The log has no unit id
 /// and no segments: the output unit and the temperature are checked as for a session, the ω̇
 /// estimate restarts at every gap in the time stamps (more than five periods), and the still
-/// intervals found in the log must compensate to 1 g (and rest, with a gyro calibration).
+/// intervals found in the log must compensate to 1 g (and rest, with a gyro calibration). A log
+/// of more than [`APPLY_MAX_SAMPLES`] per stream is read and compensated window by window, the
+/// device's state carried from one window to the next.
 pub fn apply_log(
     path: &Path,
     source: &LogSource,
@@ -25,32 +32,118 @@ pub fn apply_log(
     assume_temp_c: Option<f64>,
     out: &mut dyn Write,
 ) -> Result<ApplySummary, ApplyError> {
-    let log = read_log(path, source).map_err(ApplyError::Log)?;
-    let rec = &log.recording;
-    let other = Other {
-        name: "the log",
-        unit_id: None,
-        output_unit: Some(rec.acc_unit.unwrap_or(OutputUnit::Lsb)),
-        frame: None,
-        temperatures: super::temperatures(rec.temp_c.is_some(), assume_temp_c),
+    apply_log_within(
+        path,
+        source,
+        cal,
+        &Setting {
+            mode,
+            assume_temp_c,
+        },
+        APPLY_MAX_SAMPLES,
+        out,
+    )
+}
+
+/// How the calibration is applied: the lever-arm mode and a temperature to assume.
+#[derive(Clone, Copy, Debug)]
+pub struct Setting {
+    /// The lever-arm terms applied.
+    pub mode: LeverMode,
+    /// The temperature to assume for a log without one, °C.
+    pub assume_temp_c: Option<f64>,
+}
+
+/// [`apply_log`] reading at most `max_samples` per stream at once.
+pub fn apply_log_within(
+    path: &Path,
+    source: &LogSource,
+    cal: &Calibration,
+    setting: &Setting,
+    max_samples: usize,
+    out: &mut dyn Write,
+) -> Result<ApplySummary, ApplyError> {
+    let mut csv = CsvOut {
+        out,
+        fmt: ryu::Buffer::new(),
+        g: cal.gravity_m_s2,
     };
-    meet(Meeting::Apply, &super::mine(cal, None), &other)?;
-    let prepared = Prepared::new(rec, cal, mode, assume_temp_c)?;
-    let write_err = |e: std::io::Error| {
-        ApplyError::Recording(crate::session::RecordingError::Io {
-            path: Path::new("(output)").to_path_buf(),
-            source: e,
-        })
+    let windows = match read_log_windows(path, source, max_samples).map_err(ApplyError::Log)? {
+        LogRead::Whole(log) => {
+            let rec = &log.recording;
+            meet_log(rec, cal, setting.assume_temp_c)?;
+            let prepared = Prepared::new(rec, cal, setting.mode, setting.assume_temp_c)?;
+            csv.header()?;
+            let mut summary = prepared.run(rec, cal, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
+            summary.warnings.splice(0..0, log.warnings);
+            return Ok(summary);
+        }
+        LogRead::Windows(w) => w,
     };
-    writeln!(out, "{}", super::APPLY_HEADER).map_err(write_err)?;
-    let g = cal.gravity_m_s2;
-    let mut fmt = ryu::Buffer::new();
-    let mut summary = prepared.run(rec, cal, &mut |i, f, applier| {
-        let line = output_line("log", rec.t_s[i], f, applier, g, &mut fmt);
-        out.write_all(line.as_bytes()).map_err(write_err)
-    })?;
-    summary.warnings.splice(0..0, log.warnings);
+    csv.header()?;
+    let mut run: Option<Run> = None;
+    let mut notes = WindowNotes::default();
+    for k in 0..windows.len() {
+        let log = windows.read(k).map_err(ApplyError::Log)?;
+        let rec = &log.recording;
+        notes.add(windows.span(k), log.warnings);
+        if rec.is_empty() {
+            continue;
+        }
+        meet_log(rec, cal, setting.assume_temp_c)?;
+        let run = match &mut run {
+            Some(r) => r,
+            None => run.insert(Run::new(
+                Applier::new(cal, setting.mode, rec.rate_hz)?,
+                cal,
+                rec.rate_hz,
+            )),
+        };
+        run.assume_temperature(rec, setting.assume_temp_c);
+        let stills = stills_of(rec)?;
+        run.rows(rec, &stills, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
+    }
+    let Some(run) = run else {
+        return Err(ApplyError::Log(LogError::NoRecording {
+            path: path.to_path_buf(),
+            rows: 0,
+        }));
+    };
+    let mut summary = run.finish();
+    let mut warnings = vec![format!(
+        "the log holds more than {max_samples} samples per stream, the most read into memory at \
+         once: it was read and compensated in {} time windows, the device's state carried from \
+         each to the next",
+        windows.len()
+    )];
+    warnings.extend(notes.into_warnings(windows.len()));
+    summary.warnings.splice(0..0, warnings);
     Ok(summary)
+}
+
+/// Where `apply` writes a log's rows: the CSV, its number formatter and the gravity its g are of.
+struct CsvOut<'o> {
+    out: &'o mut dyn Write,
+    fmt: ryu::Buffer,
+    g: f64,
+}
+
+impl CsvOut<'_> {
+    fn header(&mut self) -> Result<(), ApplyError> {
+        writeln!(self.out, "{}", super::APPLY_HEADER).map_err(write_error)
+    }
+
+    fn row(&mut self, t_s: f64, f: Option<[f32; 3]>, applier: &Applier) -> Result<(), ApplyError> {
+        let line = output_line("log", t_s, f, applier, self.g, &mut self.fmt);
+        self.out.write_all(line.as_bytes()).map_err(write_error)
+    }
+}
+
+fn write_error(e: std::io::Error) -> ApplyError {
+    ApplyError::Recording(crate::session::RecordingError::Io {
+        path: Path::new("(output)").to_path_buf(),
+        source: e,
+    })
 }
 
 /// What [`Prepared::run`] hands each row to: its index, its specific force (m/s², `None` for a row
@@ -86,17 +179,7 @@ impl Prepared {
         if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
             applier.compensator.refresh(t as f32);
         }
-        // No still interval at all is a flight log, unless the accelerometer is still and only the
-        // gyro moves: then the rest check cannot be skipped, it has failed.
-        let stills = match find_intervals(rec, &SegmentOptions::default()) {
-            Ok(s) => s.stills,
-            Err(SegmentError::NoStill {
-                acc_mg, gyro_deg_s, ..
-            }) if gyro_unit_suspect(acc_mg, gyro_deg_s) => {
-                return Err(ApplyError::GyroNeverAtRest { acc_mg, gyro_deg_s })
-            }
-            Err(_) => Vec::new(),
-        };
+        let stills = stills_of(rec)?;
         Ok(Prepared { applier, stills })
     }
 
@@ -104,31 +187,111 @@ impl Prepared {
     /// rows `None`) to `row`, then checks the still intervals. The ω̇ estimate restarts at every gap
     /// in the time stamps (more than five periods).
     pub fn run(
-        mut self,
+        self,
         rec: &Recording,
         cal: &Calibration,
         row: &mut RowSink<'_>,
     ) -> Result<ApplySummary, ApplyError> {
-        let (applier, stills) = (&mut self.applier, &self.stills);
+        let mut run = Run::new(self.applier, cal, rec.rate_hz);
+        run.rows(rec, &self.stills, row)?;
+        Ok(run.finish())
+    }
+}
+
+/// The log's side of a meeting with the calibration: its output unit and its temperatures.
+fn meet_log(
+    rec: &Recording,
+    cal: &Calibration,
+    assume_temp_c: Option<f64>,
+) -> Result<(), ApplyError> {
+    let other = Other {
+        name: "the log",
+        unit_id: None,
+        output_unit: Some(rec.acc_unit.unwrap_or(OutputUnit::Lsb)),
+        frame: None,
+        temperatures: super::temperatures(rec.temp_c.is_some(), assume_temp_c),
+    };
+    meet(Meeting::Apply, &super::mine(cal, None), &other)?;
+    Ok(())
+}
+
+/// The still intervals of `rec`, each of which must compensate to 1 g. No still interval at all is
+/// a flight log, unless the accelerometer is still and only the gyro moves: then the rest check
+/// cannot be skipped, it has failed.
+fn stills_of(rec: &Recording) -> Result<Vec<Interval>, ApplyError> {
+    match find_intervals(rec, &SegmentOptions::default()) {
+        Ok(s) => Ok(s.stills),
+        Err(SegmentError::NoStill {
+            acc_mg, gyro_deg_s, ..
+        }) if gyro_unit_suspect(acc_mg, gyro_deg_s) => {
+            Err(ApplyError::GyroNeverAtRest { acc_mg, gyro_deg_s })
+        }
+        Err(_) => Ok(Vec::new()),
+    }
+}
+
+/// The device's state carried from row to row, and from one window of a long log to the next:
+/// the applier (its ω̇ estimate and temperature refresh), the piece of the log between two gaps,
+/// the stills checked so far and what was done.
+struct Run<'c> {
+    applier: Applier,
+    cal: &'c Calibration,
+    gap_s: f64,
+    piece: usize,
+    last_t_s: Option<f64>,
+    stills: usize,
+    summary: ApplySummary,
+}
+
+impl<'c> Run<'c> {
+    fn new(applier: Applier, cal: &'c Calibration, rate_hz: f64) -> Run<'c> {
+        Run {
+            applier,
+            cal,
+            gap_s: 5.0 / rate_hz,
+            piece: 0,
+            last_t_s: None,
+            stills: 0,
+            summary: ApplySummary::default(),
+        }
+    }
+
+    /// A window without temperatures, where one is assumed, compensates at that one.
+    fn assume_temperature(&mut self, rec: &Recording, assume_temp_c: Option<f64>) {
+        if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
+            self.applier.compensator.refresh(t as f32);
+        }
+    }
+
+    /// Compensates every row of `rec` as the device does, handing each row's index and result (NaN
+    /// rows `None`) to `row`, then checks `stills` (intervals of `rec`). The ω̇ estimate restarts
+    /// at every gap in the time stamps (more than five periods).
+    fn rows(
+        &mut self,
+        rec: &Recording,
+        stills: &[Interval],
+        row: &mut RowSink<'_>,
+    ) -> Result<(), ApplyError> {
+        let applier = &mut self.applier;
         let mut sums = vec![StillSums::default(); stills.len()];
-        let g = cal.gravity_m_s2;
-        let mut summary = ApplySummary::default();
-        let (mut piece, mut still) = (0usize, 0usize);
-        let gap_s = 5.0 / rec.rate_hz;
+        let g = self.cal.gravity_m_s2;
+        let mut still = 0usize;
         for i in 0..rec.len() {
-            if i > 0 && rec.t_s[i] - rec.t_s[i - 1] > gap_s {
-                piece += 1;
+            let t_s = rec.t_s[i];
+            if self.last_t_s.is_some_and(|last| t_s - last > self.gap_s) {
+                self.piece += 1;
             }
+            self.last_t_s = Some(t_s);
             let r = Row {
                 segment: "log",
-                segment_index: piece,
-                t_s: rec.t_s[i],
+                segment_index: self.piece,
+                t_s,
                 u: rec.acc[i],
                 w_rad_s: rec.gyro_rad_s[i],
                 temp_c: rec.temp_c.as_ref().map(|t| t[i]),
             };
             let f = applier.row(&r);
-            summary.rows += 1;
+            self.summary.rows += 1;
             while still < stills.len() && stills[still].end <= i {
                 still += 1;
             }
@@ -142,19 +305,65 @@ impl Prepared {
                     s.rows += 1;
                 }
                 Some(_) => {}
-                None => summary.non_finite_rows += 1,
+                None => self.summary.non_finite_rows += 1,
             }
             row(i, f, applier)?;
         }
-        for (k, (iv, s)) in stills.iter().zip(&sums).enumerate() {
-            let name = format!("still {:02} (t = {:.1} s)", k + 1, iv.start_s);
-            check_still(&name, s, cal.gyro.is_some())?;
+        for (iv, s) in stills.iter().zip(&sums) {
+            self.stills += 1;
+            let name = format!("still {:02} (t = {:.1} s)", self.stills, iv.start_s);
+            check_still(&name, s, self.cal.gyro.is_some())?;
         }
-        if applier.flagged_rows > 0 {
+        Ok(())
+    }
+
+    /// What was done, with the rows flagged for their temperature.
+    fn finish(self) -> ApplySummary {
+        let mut summary = self.summary;
+        if self.applier.flagged_rows > 0 {
             summary
                 .warnings
-                .push(super::flagged_warning(applier.flagged_rows));
+                .push(super::flagged_warning(self.applier.flagged_rows));
         }
-        Ok(summary)
+        summary
+    }
+}
+
+/// What the reader said of each window of a long log, each thing said once: with the window's
+/// times where it was said of one window, with the number of windows where of several.
+#[derive(Debug, Default)]
+struct WindowNotes {
+    notes: Vec<(String, Vec<(f64, f64)>)>,
+}
+
+impl WindowNotes {
+    fn add(&mut self, span: (f64, f64), warnings: Vec<String>) {
+        for w in warnings {
+            match self.notes.iter_mut().find(|(n, _)| *n == w) {
+                Some((_, spans)) => spans.push(span),
+                None => self.notes.push((w, vec![span])),
+            }
+        }
+    }
+
+    fn into_warnings(self, windows: usize) -> Vec<String> {
+        self.notes
+            .into_iter()
+            .map(|(w, spans)| match spans.as_slice() {
+                _ if spans.len() == windows => w,
+                [(lo, hi)] => format!("in the window {}: {w}", span_text(*lo, *hi)),
+                _ => format!("in {} of the {windows} windows: {w}", spans.len()),
+            })
+            .collect()
+    }
+}
+
+/// A window's times for the user: "t = 120.000 s to 245.500 s", its open ends said as such.
+fn span_text(lo: f64, hi: f64) -> String {
+    match (lo.is_finite(), hi.is_finite()) {
+        (true, true) => format!("t = {lo:.3} s to {hi:.3} s"),
+        (false, true) => format!("up to t = {hi:.3} s"),
+        (true, false) => format!("from t = {lo:.3} s on"),
+        (false, false) => "of the whole log".to_string(),
     }
 }

@@ -129,6 +129,17 @@ impl Layout {
 
     /// The six values (in the logger's units) and the time of data row `row_index` (0-based),
     /// the text of line `line`.
+    /// The row's time alone, no value parsed (`None` where it is no finite number: the whole
+    /// row's reading then says what is wrong).
+    pub(super) fn time_only(&self, text: &str, row_index: u64) -> Option<f64> {
+        let t = match self.time {
+            Time::RateHz(hz) => return Some(row_index as f64 / hz),
+            Time::Column(i) if self.sep == ' ' => text.split_whitespace().nth(i)?,
+            Time::Column(i) => text.split(self.sep).nth(i)?,
+        };
+        clean(t).parse::<f64>().ok().filter(|t| t.is_finite())
+    }
+
     pub(super) fn parse_row(
         &self,
         text: &str,
@@ -226,6 +237,13 @@ pub(super) fn read_rows<R: BufRead>(
             // lost digits and still parse.
             rec.unterminated_line = Some(line);
             break;
+        }
+        // A window's pass reads only the time of a row outside its span (`Keeper::passes`): the
+        // passes before it read the whole row.
+        let t = layout.time_only(&text, row_index);
+        if t.is_some_and(|t| keeper.passes(t * seconds_per_unit)) {
+            row_index += 1;
+            continue;
         }
         let (mut v, t_s, temp_c) = layout.parse_row(&text, line, row_index)?;
         for j in 0..3 {

@@ -66,6 +66,16 @@ pub(crate) enum Keep {
         /// Where the accelerometer's [`LeftOut`] goes.
         report: Arc<Mutex<PassReport>>,
     },
+    /// The samples whose time lies in `lo..hi` (s), refusing more than `max` ([`super::TooMany`]):
+    /// one window of a log read window by window (`super::windows`).
+    Span {
+        /// The first time kept.
+        lo: f64,
+        /// The first time no longer kept.
+        hi: f64,
+        /// The budget.
+        max: usize,
+    },
 }
 
 /// What a survey or an extract found, handed back from inside a reader.
@@ -73,6 +83,8 @@ pub(crate) enum Keep {
 pub(crate) struct PassReport {
     /// The survey's regions.
     pub regions: Option<Vec<(f64, f64)>>,
+    /// The survey itself, for a caller that cuts the log into windows (`super::windows`).
+    pub survey: Option<Survey>,
     /// What the extract left out of the accelerometer's stream.
     pub left_out: Option<LeftOut>,
 }
@@ -147,7 +159,20 @@ impl Keeper {
                     Admit::Keep
                 }
             }
+            Keep::Span { lo, hi, max } => match *lo <= t_s && t_s < *hi {
+                false => Admit::Pass,
+                true if kept >= *max => Admit::TooMany(*max),
+                true => Admit::Keep,
+            },
         }
+    }
+
+    /// Whether a sample at `t_s` (s) is left out on its time alone: outside a window's span
+    /// ([`Keep::Span`]; it is then counted as seen). A text reader need not read the rest of it.
+    pub fn passes(&mut self, t_s: f64) -> bool {
+        let outside = matches!(self.keep, Keep::Span { lo, hi, .. } if !(lo <= t_s && t_s < hi));
+        self.left_out.read += usize::from(outside);
+        outside
     }
 
     /// The finite samples seen, whether kept or not.
@@ -159,10 +184,11 @@ impl Keeper {
     /// regions, or what the extract left out. `true`: a survey, which keeps no samples.
     pub fn report(&self) -> bool {
         match &self.keep {
-            Keep::All { .. } => false,
+            Keep::All { .. } | Keep::Span { .. } => false,
             Keep::Survey(report) => {
                 if let Ok(mut r) = report.lock() {
                     r.regions = Some(self.survey.regions(self.still_var));
+                    r.survey = Some(self.survey.clone());
                 }
                 true
             }
@@ -317,13 +343,51 @@ impl Survey {
         }
     }
 
-    /// The regions to keep (see the module docs): sorted, disjoint, s. `still_var`: the variance,
-    /// summed over the axes, that a still unit never exceeds in the stream's unit.
-    pub fn regions(&self, still_var: f64) -> Vec<(f64, f64)> {
+    /// The blocks closed and the one still open.
+    fn all_blocks(&self) -> Vec<Block> {
         let mut blocks = self.blocks.clone();
         if !self.pending.is_empty() {
             blocks.push(Block::of(&self.pending));
         }
+        blocks
+    }
+
+    /// Where to cut the log into windows of about `per_window` samples each, along the blocks in
+    /// time order: the start of each window after the first (increasing, s; a window's last block
+    /// holding less than half `per_window` joins the one before), and the period the blocks show
+    /// (the median of their spans per step, s; `None` when no block of four samples or more has a
+    /// span).
+    pub fn window_starts(&self, per_window: usize) -> (Vec<f64>, Option<f64>) {
+        let mut blocks = self.all_blocks();
+        blocks.retain(|b| b.t_lo.is_finite() && b.t_hi.is_finite());
+        blocks.sort_by(|a, b| a.t_lo.total_cmp(&b.t_lo));
+        let per_window = per_window as f64;
+        let mut starts: Vec<f64> = Vec::new();
+        let mut n = 0.0;
+        for b in &blocks {
+            if n >= per_window && starts.last().is_none_or(|&s| b.t_lo > s) {
+                starts.push(b.t_lo);
+                n = 0.0;
+            }
+            n += b.n;
+        }
+        if n < 0.5 * per_window {
+            starts.pop();
+        }
+        // A block's span leaves out its first and last stamp (`Block::of`): n − 3 steps.
+        let mut steps: Vec<f64> = blocks
+            .iter()
+            .filter(|b| b.n >= 4.0 && b.t_hi > b.t_lo)
+            .map(|b| (b.t_hi - b.t_lo) / (b.n - 3.0))
+            .collect();
+        steps.sort_by(f64::total_cmp);
+        (starts, steps.get(steps.len() / 2).copied())
+    }
+
+    /// The regions to keep (see the module docs): sorted, disjoint, s. `still_var`: the variance,
+    /// summed over the axes, that a still unit never exceeds in the stream's unit.
+    pub fn regions(&self, still_var: f64) -> Vec<(f64, f64)> {
+        let blocks = self.all_blocks();
         if blocks.is_empty() {
             return Vec::new();
         }

@@ -14,10 +14,12 @@ mod error;
 pub(crate) mod keep;
 pub mod mcap;
 pub mod ulog;
+mod windows;
 
 pub use error::{ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
+pub use windows::{read_log_windows, LogRead, LogWindows};
 
 use super::import::{
     gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
@@ -97,8 +99,9 @@ pub struct LogFile {
 }
 
 /// Reads the whole log at `path` in whatever format its first bytes say (see the module docs), up
-/// to [`MAX_ROWS`](super::import::MAX_ROWS) samples per stream: for the uses that need every sample (`apply`) or the
-/// longest stretches (`noise`).
+/// to [`MAX_ROWS`](super::import::MAX_ROWS) samples per stream, refusing a longer one. A use that
+/// needs every sample of a log of any length reads it with [`read_log_windows`] (`apply`); one
+/// that needs its still stretches, with [`read_log_within`] (`segment`, `noise`).
 pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
     read_pass(path, source, &Keep::default(), 1.0)
 }
