@@ -405,8 +405,9 @@ fn csv_cell(text: &str) -> String {
 }
 
 /// The lot as CSV: one row per unit, every parameter ([`all_parameter_keys`]: the accelerometer's,
-/// the gyro's, the temperature model's) and its 1σ, the temperature model's reference and range; a
-/// unit without a gyro or a temperature model leaves those cells empty.
+/// the gyro's, the temperature model's) and its 1σ, the temperature model's reference and range and
+/// its fit's worst χ²/dof (the figure the verdict checks, docs/model.md §9); a unit without a gyro
+/// or a temperature model leaves those cells empty.
 pub fn to_csv(lot: &LotSummary) -> String {
     let keys = all_parameter_keys();
     let mut header: Vec<String> = [
@@ -420,6 +421,7 @@ pub fn to_csv(lot: &LotSummary) -> String {
         "chi2",
         "dof",
         "chi2_per_dof",
+        "thermal_chi2_per_dof",
     ]
     .map(String::from)
     .into();
@@ -456,6 +458,9 @@ pub fn to_csv(lot: &LotSummary) -> String {
             num(sm.map(|m| m.chi2)),
             sm.map_or(String::new(), |m| m.dof.to_string()),
             num(sm.map(|m| m.chi2_per_dof)),
+            num(sm
+                .and_then(|m| m.thermal_fit.as_ref())
+                .map(|t| t.worst_chi2_per_dof)),
         ];
         for k in &keys {
             let p = sm.and_then(|m| m.parameters.iter().find(|p| &p.name == k));

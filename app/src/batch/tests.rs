@@ -401,3 +401,40 @@ fn a_lot_of_mixed_output_units_is_screened_unit_by_unit() {
         .collect();
     assert_eq!(units, ["V", "V", "V", "V", "V", "V", "m/s2"]);
 }
+
+/// The temperature fit's worst χ²/dof (the figure the verdict checks) has its column; a unit
+/// without a temperature model leaves it empty, not zero.
+#[test]
+fn the_temperature_fit_chi2_has_its_column() {
+    let mut warm = unit_with(1.0, 0.1);
+    let mut cold = unit_with(2.0, 0.1);
+    warm.session = "warm".into();
+    cold.session = "cold".into();
+    if let Some(doc) = warm.summary.as_mut() {
+        doc.summary.thermal_fit = Some(crate::summary::ThermalFitSummary {
+            chi2: [1722.0, 10.0, 10.0],
+            dof: [10, 10, 10],
+            chi2_per_dof: [172.2, 1.0, 1.0],
+            worst_chi2_per_dof: 172.2,
+        });
+    }
+    let csv = to_csv(&LotSummary {
+        units: vec![warm, cold],
+        rows: 2,
+        seconds: 0.0,
+        threads: 1,
+        outlier_z: 5.0,
+        warnings: Vec::new(),
+    });
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|h| *h == "thermal_chi2_per_dof")
+        .unwrap_or_else(|| panic!("{header:?}"));
+    let cell = |session: &str| -> String {
+        let row = csv.lines().find(|l| l.starts_with(session)).unwrap();
+        row.split(',').nth(col).unwrap().to_string()
+    };
+    assert_eq!(cell("warm,").parse::<f64>().unwrap(), 172.2);
+    assert_eq!(cell("cold,"), "");
+}
