@@ -364,6 +364,15 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
                     }
                 }
             )));
+            if let Some(t) = &o.thermal {
+                let [x, y, z] = t.reduced_chi2();
+                b.push(Block::Para(format!(
+                    "Temperature fit: χ²/dof x {x:.2}, y {y:.2}, z {z:.2} over every sample of the \
+                     segments that determine it; the largest is checked against the same limit as \
+                     the fit's χ²/dof, since a misfit within a ramp leaves the segment means the \
+                     main fit sees (docs/model.md §9)."
+                )));
+            }
             if let Some(w) = &o.bias_walk {
                 b.push(Block::Para(bias_walk_note(w)));
             }

@@ -506,3 +506,38 @@ fn the_bias_walk_figure_is_the_fits_track() {
         "{md}"
     );
 }
+
+/// A session with a temperature model: the page's own-fit section gives the temperature fit's
+/// χ²/dof per axis, the figure the verdict checks; a session without one says nothing of it.
+#[test]
+fn the_session_fit_section_gives_the_temperature_fits_chi2() {
+    let truth = crate::sim::testkit::hot_unit();
+    let para = |plan_name: &str| -> (Option<String>, Option<[f64; 3]>) {
+        let plan = builtin_plan(plan_name).unwrap().unwrap();
+        let thermal = crate::sim::thermal::ThermalSim::default();
+        let stats =
+            crate::sim::testkit::simulate_stats(&truth, &plan, &NoiseModel::default(), &thermal, 5);
+        let data =
+            build_report(&plan, &stats, &truth, None, None, &ReportOptions::default()).unwrap();
+        let fit = data.session_fit.as_ref().unwrap();
+        let chi2 = fit.thermal.as_ref().map(|t| t.reduced_chi2());
+        let text = page(&data, plan_name, "cal.toml", &[])
+            .into_iter()
+            .find_map(|b| match b {
+                Block::Para(p) if p.starts_with("Temperature fit") => Some(p),
+                _ => None,
+            });
+        (text, chi2)
+    };
+    let (text, chi2) = para("thermal-ramp");
+    let [x, y, z] = chi2.expect("the ramp fits a temperature model");
+    let text = text.expect("the paragraph");
+    assert!(
+        text.contains(&format!("x {x:.2}, y {y:.2}, z {z:.2}")),
+        "{text}"
+    );
+    // White noise about a model that fits: χ²/dof is 1 to within a few √(2/dof).
+    assert!([x, y, z].iter().all(|c| (c - 1.0).abs() < 0.05), "{text}");
+    let (text, chi2) = para("short");
+    assert_eq!((text, chi2), (None, None));
+}
