@@ -456,6 +456,16 @@ impl Calibration {
         self.fit_summary().map(|s| s.chi2_per_dof)
     }
 
+    /// The temperature fit's χ²/dof per axis (x, y, z), over every sample of the segments that
+    /// determine the model (docs/model.md §9); the largest is checked against the same limit as
+    /// `chi2_per_dof`. None without a temperature model, and for a loaded calibration.
+    #[getter]
+    fn thermal_chi2_per_dof(&self) -> Option<(f64, f64, f64)> {
+        let t = self.fit_summary()?.thermal_fit.as_ref()?;
+        let [x, y, z] = t.chi2_per_dof;
+        Some((x, y, z))
+    }
+
     /// The pass/fail checks passed (all, when no limits were given).
     #[getter]
     fn passed(&self) -> Option<bool> {

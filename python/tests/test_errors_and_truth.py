@@ -121,3 +121,18 @@ def test_a_temperature_column_and_a_memory_budget_read_as_host_segment_reads_the
     with pytest.raises(accelcal.Error, match="temp_column"):
         accelcal.segment(d[:, 1:4], d[:, 4:7], d[:, 0], acc_unit="m/s2", gyro_unit="deg/s",
                          temp_column="temp")
+
+
+def test_the_temperature_fit_chi2_per_axis_is_one_for_a_unit_that_fits(tmp_path):
+    # A thermal ramp of the simulator's unit with white noise only: a right temperature model
+    # leaves residuals of the noise's own size, χ²/dof = 1 within a few sqrt(2/dof) (dof ≈ 360 000).
+    session = accelcal.simulate(tmp_path / "ramp", plan="thermal-ramp")
+    per_axis = accelcal.calibrate(session).thermal_chi2_per_dof
+    assert per_axis is not None and len(per_axis) == 3
+    assert all(abs(c - 1.0) < 0.02 for c in per_axis), per_axis
+    # No temperature model, no figure; nor for a calibration loaded from its file.
+    plain = accelcal.calibrate(accelcal.simulate(tmp_path / "plain"))
+    assert plain.thermal_chi2_per_dof is None
+    plain.save(tmp_path / "cal")
+    loaded = accelcal.Calibration.load(tmp_path / "cal" / "calibration.toml")
+    assert loaded.thermal_chi2_per_dof is None
