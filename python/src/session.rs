@@ -14,8 +14,8 @@ use pyo3::types::PyDict;
 use recording::session::coverage::face_label;
 use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG};
 use recording::session::import::MAX_ROWS;
-use recording::session::import::{read_logger, Recording, DEFAULT_COLUMNS};
-use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
+use recording::session::import::{read_logger, ImportError, Recording, DEFAULT_COLUMNS};
+use recording::session::logs::{read_log_keeping, text_notes, DEFAULT_MAX_SAMPLES};
 use recording::session::segment::{IntervalKind, SegmentOptions};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
 use recording::spelling::Spelling;
@@ -548,7 +548,9 @@ pub fn segment_arrays(
         pos: 0,
     };
     segmented(py, site, || {
-        read_logger(BufReader::new(lines), Path::new("(arrays)"), &options).map(|r| (r, Vec::new()))
+        let mut rec = read_logger(BufReader::new(lines), Path::new("(arrays)"), &options)?;
+        let notes = text_notes(&mut rec, &options);
+        Ok::<_, ImportError>((rec, notes))
     })
 }
 

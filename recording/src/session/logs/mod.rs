@@ -266,8 +266,7 @@ fn read_keeping<R: BufRead>(
                 .as_ref()
                 .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
             let mut rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
-            let mut notes = temperature_notes(&mut rec);
-            notes.extend(gyro_mid_scale_note(&rec, options));
+            let notes = text_notes(&mut rec, options);
             (rec, notes)
         }
         LogFormat::Ulog => {
@@ -436,6 +435,15 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
         ));
     }
     (rec, warnings)
+}
+
+/// What the user is told of a text recording read with `options` (a file's or arrays'): its
+/// temperature readings ([`temperature_notes`]) and a gyro in counts at an unsigned output's
+/// mid-scale with no offset given.
+pub fn text_notes(rec: &mut Recording, options: &ImportOptions) -> Vec<String> {
+    let mut notes = temperature_notes(rec);
+    notes.extend(gyro_mid_scale_note(rec, options));
+    notes
 }
 
 /// What the user is told of a recording's temperature readings, the same for every format: none at
