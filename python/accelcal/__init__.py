@@ -130,11 +130,13 @@ def _options(
         raise TypeError(f"unexpected keyword argument(s): {', '.join(unknown)}")
     log_kw = {k: keywords[k] for k in _LOG_KEYWORDS if keywords.get(k) is not None}
     site_kw = {k: keywords[k] for k in _SESSION_KEYWORDS if k in keywords}
-    offset = log_kw.get("acc_offset")
-    if offset is not None and np.ndim(offset) == 0:
-        log_kw["acc_offset"] = [offset]
-    elif offset is not None:
-        log_kw["acc_offset"] = [float(v) for v in offset]
+    # The raw counts' offsets: one value for every axis, or one per axis.
+    for name in ("acc_offset", "gyro_offset"):
+        offset = log_kw.get(name)
+        if offset is not None and np.ndim(offset) == 0:
+            log_kw[name] = [offset]
+        elif offset is not None:
+            log_kw[name] = [float(v) for v in offset]
     if "columns" in log_kw:
         log_kw["columns"] = list(log_kw["columns"])
     if log is not None and log_kw:

@@ -240,3 +240,17 @@ def test_faces_labelled_by_the_user_are_checked_against_the_data(host_bin, tmp_p
         accelcal.segment_file(tmp_path / "cube.csv", faces=swapped, **reading)
     with pytest.raises(accelcal.InputError, match="'up' is not a face"):
         accelcal.segment_file(tmp_path / "cube.csv", faces=["up"] * 6, **reading)
+
+
+def test_a_gyro_at_an_unsigned_mid_scale_is_named_for_arrays_as_for_a_file():
+    # An unsigned 16-bit gyro reads its zero rate at 32768 counts: the fit would take it for a bias
+    # of 500 °/s. The note names the keyword that removes it, as host segment names its option.
+    d = accelcal.simulate_hand(seed=3)
+    lsb = 65.5
+    counts = np.round(np.asarray(d["gyro"]) * lsb) + 32768.0
+    keywords = dict(acc_unit="m/s2", gyro_unit="LSB", gyro_lsb_per_dps=lsb, unit_id=UNIT_ID)
+    raw = accelcal.segment(d["acc"], counts, d["t"], **keywords)
+    notes = [w for w in raw.warnings if "mid-scale" in w]
+    assert len(notes) == 1 and "gyro_offset=32768" in notes[0], raw.warnings
+    centred = accelcal.segment(d["acc"], counts, d["t"], gyro_offset=32768, **keywords)
+    assert not any("mid-scale" in w for w in centred.warnings), centred.warnings
