@@ -39,6 +39,8 @@ class LogOptions:
         rate_hz: Optional[float] = None,
         acc_offset: Optional[Sequence[float]] = None,
         gyro_lsb_per_dps: Optional[float] = None,
+        gyro_offset: Optional[Sequence[float]] = None,
+        temp_column: Optional[str] = None,
         instance: Optional[int] = None,
         topic: Optional[str] = None,
     ) -> None: ...
@@ -50,6 +52,8 @@ class LogOptions:
     rate_hz: Optional[float]
     acc_offset: Optional[List[float]]
     gyro_lsb_per_dps: Optional[float]
+    gyro_offset: Optional[List[float]]
+    temp_column: Optional[str]
     instance: Optional[int]
     topic: Optional[str]
 
@@ -67,6 +71,7 @@ class SessionOptions:
         no_gyro: bool = False,
         face_sigma_deg: float = 2.0,
         faces: Optional[Sequence[str]] = None,
+        max_samples: Optional[int] = None,
     ) -> None: ...
     min_still_s: float
     unit_id: Optional[str]
@@ -76,6 +81,7 @@ class SessionOptions:
     no_gyro: bool
     face_sigma_deg: float
     faces: Optional[List[str]]
+    max_samples: Optional[int]
 
 class Session:
     """A calibration session: plan, per-segment statistics and the hand-turn gyro."""
@@ -173,6 +179,7 @@ def segment(
     time_unit: Optional[str] = None,
     acc_offset: Union[None, float, Sequence[float]] = None,
     gyro_lsb_per_dps: Optional[float] = None,
+    gyro_offset: Union[None, float, Sequence[float]] = None,
     min_still_s: float = 1.0,
     unit_id: Optional[str] = None,
     gravity: Optional[float] = None,
@@ -199,6 +206,8 @@ def segment_file(
     rate_hz: Optional[float] = None,
     acc_offset: Union[None, float, Sequence[float]] = None,
     gyro_lsb_per_dps: Optional[float] = None,
+    gyro_offset: Union[None, float, Sequence[float]] = None,
+    temp_column: Optional[str] = None,
     instance: Optional[int] = None,
     topic: Optional[str] = None,
     min_still_s: float = 1.0,
@@ -209,6 +218,7 @@ def segment_file(
     no_gyro: bool = False,
     face_sigma_deg: float = 2.0,
     faces: Optional[Sequence[str]] = None,
+    max_samples: Optional[int] = None,
 ) -> Session:
     """Cuts a logger's file into a session, as ``host segment`` does: text (the units and time
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes; ``instance`` and

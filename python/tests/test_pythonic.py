@@ -242,6 +242,43 @@ def test_faces_labelled_by_the_user_are_checked_against_the_data(host_bin, tmp_p
         accelcal.segment_file(tmp_path / "cube.csv", faces=["up"] * 6, **reading)
 
 
+def _stub():
+    """The package's type stub, parsed: its classes' members and its functions' keywords."""
+    import ast
+
+    tree = ast.parse((ROOT / "python" / "accelcal" / "__init__.pyi").read_text())
+    classes, functions = {}, {}
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef):
+            members = {}
+            for item in node.body:
+                if isinstance(item, ast.FunctionDef):
+                    members[item.name] = {a.arg for a in item.args.kwonlyargs + item.args.args}
+                elif isinstance(item, ast.AnnAssign):
+                    members[item.target.id] = set()
+            classes[node.name] = members
+        elif isinstance(node, ast.FunctionDef):
+            functions[node.name] = {a.arg for a in node.args.kwonlyargs + node.args.args}
+    return classes, functions
+
+
+def test_the_type_stub_has_every_option_and_property_the_package_has():
+    # An editor's completion and a type checker read the stub, not the package: an option or a
+    # property missing from it is one they refuse.
+    classes, functions = _stub()
+    log_keywords, site_keywords = set(accelcal._LOG_KEYWORDS), set(accelcal._SESSION_KEYWORDS)
+    assert classes["LogOptions"]["__init__"] - {"self"} == log_keywords
+    assert classes["SessionOptions"]["__init__"] - {"self"} == site_keywords
+    for name in ["LogOptions", "SessionOptions"]:
+        keywords = log_keywords if name == "LogOptions" else site_keywords
+        assert keywords <= set(classes[name]), (name, keywords - set(classes[name]))
+    missing = (log_keywords | site_keywords) - functions["segment_file"]
+    assert not missing, missing
+    for cls in ["Calibration", "Session"]:
+        runtime = {n for n in dir(getattr(accelcal, cls)) if not n.startswith("_")}
+        assert runtime <= set(classes[cls]), (cls, sorted(runtime - set(classes[cls])))
+
+
 def test_a_gyro_at_an_unsigned_mid_scale_is_named_for_arrays_as_for_a_file():
     # An unsigned 16-bit gyro reads its zero rate at 32768 counts: the fit would take it for a bias
     # of 500 °/s. The note names the keyword that removes it, as host segment names its option.
