@@ -137,20 +137,19 @@ pub fn read_log_within(
     option: Option<UserOption>,
 ) -> Result<LogFile, LogError> {
     let max = max_samples.max(1);
-    let first = read_pass(path, source, &Keep::All { max }, 1.0);
-    let seconds_per_unit = match &first {
-        Err(e) => match e.over_budget(source) {
-            Some(k) => k,
-            None => return first,
-        },
-        Ok(_) => return first,
+    let (seconds_per_unit, over) = match first_pass(path, source, max)? {
+        FirstPass::Whole(log) => return Ok(log),
+        FirstPass::Over {
+            seconds_per_unit,
+            error,
+        } => (seconds_per_unit, error),
     };
     let report = Arc::new(Mutex::new(PassReport::default()));
     let survey = Keep::Survey(Arc::clone(&report));
     read_pass(path, source, &survey, seconds_per_unit)?;
     let regions = report.lock().ok().and_then(|mut r| r.regions.take());
     let Some(regions) = regions else {
-        return first;
+        return Err(over);
     };
     let n_regions = regions.len();
     let keep = Keep::Within {
@@ -170,6 +169,37 @@ pub fn read_log_within(
         ));
     }
     Ok(log)
+}
+
+/// What the first pass of a log read within a budget found.
+pub(super) enum FirstPass {
+    /// The log, within the budget.
+    Whole(LogFile),
+    /// More than the budget: its time stamps' unit, s (a text file's, told from the rows read).
+    Over {
+        /// Seconds per unit of the time stamps.
+        seconds_per_unit: f64,
+        /// The budget's refusal, for a caller that cannot read the log otherwise.
+        error: LogError,
+    },
+}
+
+/// The first pass of a read within `max` samples per stream: the whole log, or that it holds more.
+pub(super) fn first_pass(
+    path: &Path,
+    source: &LogSource,
+    max: usize,
+) -> Result<FirstPass, LogError> {
+    match read_pass(path, source, &Keep::All { max }, 1.0) {
+        Ok(log) => Ok(FirstPass::Whole(log)),
+        Err(e) => match e.over_budget(source) {
+            Some(seconds_per_unit) => Ok(FirstPass::Over {
+                seconds_per_unit,
+                error: e,
+            }),
+            None => Err(e),
+        },
+    }
 }
 
 /// One pass over the file at `path` (a text file's time column in `seconds_per_unit`).

@@ -15,7 +15,7 @@
 //! left out by the repair's end rule (`crate::session::repair`, rule 2) instead of being re-timed.
 
 use super::keep::{Keep, PassReport};
-use super::{read_pass, LogError, LogFile, LogSource};
+use super::{first_pass, read_pass, FirstPass, LogError, LogFile, LogSource};
 use crate::session::import::Recording;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -97,15 +97,12 @@ pub fn read_log_windows(
     max_samples: usize,
 ) -> Result<LogRead, LogError> {
     let max = max_samples.max(2);
-    let first = read_pass(path, source, &Keep::All { max }, 1.0);
-    let seconds_per_unit = match &first {
-        Err(e) => match e.over_budget(source) {
-            Some(k) => k,
-            None => return first.map(LogRead::Whole),
-        },
-        Ok(_) => return first.map(LogRead::Whole),
+    let seconds_per_unit = match first_pass(path, source, max)? {
+        FirstPass::Whole(log) => return Ok(LogRead::Whole(log)),
+        FirstPass::Over {
+            seconds_per_unit, ..
+        } => seconds_per_unit,
     };
-    drop(first);
     let report = Arc::new(Mutex::new(PassReport::default()));
     read_pass(
         path,
