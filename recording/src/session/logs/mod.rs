@@ -468,7 +468,7 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
 }
 
 /// What the user is told of a text recording read with `options` (a file's or arrays'): its
-/// temperature readings ([`temperature_notes`]) and a gyro in counts at an unsigned output's
+/// temperature readings (`temperature_notes`) and a gyro in counts at an unsigned output's
 /// mid-scale with no offset given.
 pub fn text_notes(rec: &mut Recording, options: &ImportOptions) -> Vec<String> {
     let mut notes = temperature_notes(rec);
