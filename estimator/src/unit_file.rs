@@ -245,9 +245,50 @@ pub enum UnitFileError {
     /// Not valid TOML or wrong fields (message names line and column).
     #[error("unit file {} is not valid: {}", .0.display(), .1)]
     Syntax(PathBuf, String),
-    /// Semantically wrong (message names the field and the fix).
+    /// Semantically wrong (names the field and the fix).
     #[error("unit file {}: {}", .0.display(), .1)]
-    Invalid(PathBuf, String),
+    Invalid(PathBuf, #[source] UnitFileInvalid),
+}
+
+/// Why a unit file's values are not a calibration; each names the field and the fix.
+#[derive(Debug, thiserror::Error)]
+pub enum UnitFileInvalid {
+    /// `[static]` has keys of another unit too.
+    #[error("[static] mixes units: with output_unit = \"{unit}\" use {bias} and {scale}")]
+    MixedUnits {
+        /// The output unit's symbol.
+        unit: &'static str,
+        /// Its zero-bias key.
+        bias: &'static str,
+        /// Its scale key.
+        scale: &'static str,
+    },
+    /// A `[static]` key of the output unit is missing.
+    #[error("[static] needs {0}")]
+    Missing(&'static str),
+    /// A single package with three different lever arms.
+    #[error(
+        "[dynamic] package = \"single\" needs the three rows of lever_arms_m equal (one package, \
+         one lever arm): write the package's position three times, or remove package = \"single\""
+    )]
+    SinglePackageArms,
+    /// A reference point that is none of the three, or an offset without `body-point`.
+    #[error(
+        "[dynamic] reference = {reference:?} with reference_offset_m = {offset_m:?}: use \
+         \"table-axis\", \"centroid\", or \"body-point\" together with reference_offset_m"
+    )]
+    Reference {
+        /// The reference given.
+        reference: Option<String>,
+        /// The offset given, m.
+        offset_m: Option<[f64; 3]>,
+    },
+    /// A unit id that is not 24 hexadecimal digits.
+    #[error("unit_id '{0}' must be 24 hexadecimal digits")]
+    UnitId(String),
+    /// The values do not make a compensator (a singular matrix, a non-finite value).
+    #[error(transparent)]
+    Compensator(#[from] shared::compensator::CompensatorError),
 }
 
 impl UnitFile {
@@ -294,36 +335,39 @@ impl UnitFile {
     }
 
     /// The unit id, if the file has a valid one.
-    pub fn unit_id(&self) -> Result<Option<UnitId>, String> {
+    pub fn unit_id(&self) -> Result<Option<UnitId>, UnitFileInvalid> {
         match &self.unit_id {
             None => Ok(None),
             Some(s) => UnitId::parse_hex(s)
                 .map(Some)
-                .ok_or_else(|| format!("unit_id '{s}' must be 24 hexadecimal digits")),
+                .ok_or_else(|| UnitFileInvalid::UnitId(s.clone())),
         }
     }
 
     /// The calibration this file describes.
-    pub fn to_calibration(&self) -> Result<Calibration, String> {
+    pub fn to_calibration(&self) -> Result<Calibration, UnitFileInvalid> {
         let unit = self.output_unit.unwrap_or(OutputUnit::Volts);
         let s = &self.statics;
-        let (_, bias, scale, b_name, k_name) = s
-            .by_unit()
-            .into_iter()
-            .find(|k| k.0 == unit)
-            .ok_or_else(|| format!("output_unit \"{}\" has no [static] keys", unit.symbol()))?;
+        let [v, lsb, m_s2, g] = s.by_unit();
+        let (_, bias, scale, b_name, k_name) = match unit {
+            OutputUnit::Volts => v,
+            OutputUnit::Lsb => lsb,
+            OutputUnit::MetresPerSecondSquared => m_s2,
+            OutputUnit::StandardGravity => g,
+        };
         let wrong_unit = s
             .by_unit()
             .iter()
             .any(|(u, b, k, ..)| *u != unit && (b.is_some() || k.is_some()));
         if wrong_unit {
-            return Err(format!(
-                "[static] mixes units: with output_unit = \"{}\" use {b_name} and {k_name}",
-                unit.symbol()
-            ));
+            return Err(UnitFileInvalid::MixedUnits {
+                unit: unit.symbol(),
+                bias: b_name,
+                scale: k_name,
+            });
         }
-        let bias = bias.ok_or_else(|| format!("[static] needs {b_name}"))?;
-        let scale = scale.ok_or_else(|| format!("[static] needs {k_name}"))?;
+        let bias = bias.ok_or(UnitFileInvalid::Missing(b_name))?;
+        let scale = scale.ok_or(UnitFileInvalid::Missing(k_name))?;
         let statics = StaticParams {
             output_unit: unit,
             zero_bias_out: bias,
@@ -335,22 +379,17 @@ impl UnitFile {
             Some(d) => {
                 let r = &d.lever_arms_m;
                 if d.package == Package::Single && (r[1] != r[0] || r[2] != r[0]) {
-                    return Err(
-                        "[dynamic] package = \"single\" needs the three rows of lever_arms_m \
-                         equal (one package, one lever arm): write the package's position three \
-                         times, or remove package = \"single\""
-                            .into(),
-                    );
+                    return Err(UnitFileInvalid::SinglePackageArms);
                 }
                 let reference = match (d.reference.as_deref(), d.reference_offset_m) {
                     (None | Some("table-axis"), None) => ReferencePoint::TableAxis,
                     (Some("centroid"), None) => ReferencePoint::Centroid,
                     (Some("body-point"), Some(offset_m)) => ReferencePoint::BodyPoint { offset_m },
                     (r, o) => {
-                        return Err(format!(
-                            "[dynamic] reference = {r:?} with reference_offset_m = {o:?}: use \"table-axis\", \
-                             \"centroid\", or \"body-point\" together with reference_offset_m"
-                        ))
+                        return Err(UnitFileInvalid::Reference {
+                            reference: r.map(str::to_string),
+                            offset_m: o,
+                        })
                     }
                 };
                 (
@@ -373,8 +412,7 @@ impl UnitFile {
             temperature: self.temperature.as_ref().map(TemperatureSection::model),
         };
         self.unit_id()?;
-        shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)
-            .map_err(|e| e.to_string())?;
+        shared::Compensator::new(&cal, shared::LeverMode::RateAndAcceleration)?;
         Ok(cal)
     }
 
@@ -640,7 +678,8 @@ mod tests {
             .to_calibration()
             .unwrap_err();
         assert!(
-            e.contains("package = \"single\" needs the three rows"),
+            e.to_string()
+                .contains("package = \"single\" needs the three rows"),
             "{e}"
         );
         let mut back = UnitFile::from_calibration(&cal, None, None);
@@ -649,5 +688,53 @@ mod tests {
         let again = UnitFile::parse(&back.to_toml()).unwrap();
         assert_eq!(again.package(), Package::Single);
         assert_eq!(again.to_calibration().unwrap(), cal);
+    }
+
+    /// Each way a unit file's values fail is its own variant, and says what it said when it was a
+    /// message (the texts written out here by hand).
+    #[test]
+    fn an_invalid_unit_file_says_which_field_and_the_fix() {
+        let paper = UnitFile::paper_unit;
+        let mut u = paper();
+        u.statics.scale_v_per_g = None;
+        let e = u.to_calibration().unwrap_err();
+        assert!(
+            matches!(e, UnitFileInvalid::Missing("scale_v_per_g")),
+            "{e:?}"
+        );
+        assert_eq!(e.to_string(), "[static] needs scale_v_per_g");
+        let mut u = paper();
+        u.statics.zero_bias_lsb = Some([0.0; 3]);
+        assert_eq!(
+            u.to_calibration().unwrap_err().to_string(),
+            "[static] mixes units: with output_unit = \"V\" use zero_bias_v and scale_v_per_g"
+        );
+        let mut u = paper();
+        u.output_unit = Some(OutputUnit::Lsb);
+        assert_eq!(
+            u.to_calibration().unwrap_err().to_string(),
+            "[static] mixes units: with output_unit = \"LSB\" use zero_bias_lsb and scale_lsb_per_g"
+        );
+        let mut u = paper();
+        u.unit_id = Some("12".into());
+        assert_eq!(
+            u.to_calibration().unwrap_err().to_string(),
+            "unit_id '12' must be 24 hexadecimal digits"
+        );
+        let mut u = paper();
+        if let Some(d) = u.dynamic.as_mut() {
+            d.reference = Some("centroid".into());
+            d.reference_offset_m = Some([0.0, 0.0, 0.1]);
+        }
+        assert_eq!(
+            u.to_calibration().unwrap_err().to_string(),
+            "[dynamic] reference = Some(\"centroid\") with reference_offset_m = Some([0.0, 0.0, \
+             0.1]): use \"table-axis\", \"centroid\", or \"body-point\" together with \
+             reference_offset_m"
+        );
+        let mut u = paper();
+        u.statics.scale_v_per_g = Some([0.0; 3]);
+        let e = u.to_calibration().unwrap_err();
+        assert!(matches!(e, UnitFileInvalid::Compensator(_)), "{e:?}");
     }
 }

@@ -113,7 +113,7 @@ impl NoiseModel {
                 .clone()
                 .try_into::<NoiseModel>()
                 .map(Some)
-                .map_err(SimulateError::NoiseTable),
+                .map_err(|e| SimulateError::NoiseTable(Box::new(e))),
         }
     }
 
@@ -158,13 +158,22 @@ impl NoiseModel {
 pub enum SimulateError {
     /// The unit's parameters are unusable.
     #[error("the unit to simulate is not usable: {0}")]
-    Unit(String),
+    Unit(#[source] crate::unit_file::UnitFileInvalid),
+    /// The unit file's `[thermal]` table is not a thermal model.
+    #[error("the unit to simulate is not usable: [thermal]: {0}")]
+    ThermalTable(#[source] Box<toml::de::Error>),
+    /// The thermal model's values are not finite and non-negative.
+    #[error(
+        "the unit to simulate is not usable: [thermal]: time constants, noise and quantum must \
+         be finite and ≥ 0"
+    )]
+    ThermalValues,
     /// The unit's parameters do not make a forward model.
     #[error("the unit to simulate is not usable: {0}")]
     Params(#[source] shared::params::ParamsError),
     /// The unit file's `[noise]` table is not a noise model.
     #[error("noise model: [noise] in the unit file: {0}")]
-    NoiseTable(#[source] toml::de::Error),
+    NoiseTable(#[source] Box<toml::de::Error>),
     /// The plan is unusable for simulation.
     #[error(transparent)]
     Plan(PlanError),
@@ -563,9 +572,7 @@ fn write_truth(
     summary: &SimulationSummary,
 ) -> Result<(), SimulateError> {
     let truth_cal = Calibration {
-        statics: fitted
-            .to_paper()
-            .map_err(|e| SimulateError::Unit(e.to_string()))?,
+        statics: fitted.to_paper().map_err(SimulateError::Params)?,
         ..cal
     };
     let unit_id = unit.unit_id().map_err(SimulateError::Unit)?;

@@ -51,7 +51,7 @@ impl ThermalSim {
             Some(v) => v
                 .clone()
                 .try_into()
-                .map_err(|e| SimulateError::Unit(format!("[thermal]: {e}")))?,
+                .map_err(|e| SimulateError::ThermalTable(Box::new(e)))?,
             None => ThermalSim::default(),
         };
         sim.validate()?;
@@ -69,9 +69,7 @@ impl ThermalSim {
         if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
             Ok(())
         } else {
-            Err(SimulateError::Unit(
-                "[thermal]: time constants, noise and quantum must be finite and ≥ 0".into(),
-            ))
+            Err(SimulateError::ThermalValues)
         }
     }
 }

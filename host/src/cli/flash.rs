@@ -5,7 +5,7 @@ use super::CliError;
 use crate::calibration_files;
 use crate::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
 use crate::device::procedure::ProcedureError;
-use crate::unit_file::UnitFile;
+use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
 use shared::blob::{self, ParameterBlob};
 use shared::wire::Identity;
@@ -30,7 +30,9 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
     let is_toml = calibration.extension().is_some_and(|e| e == "toml");
     let (cal, unit_id, file_bytes) = if is_toml {
         let unit = UnitFile::load(calibration).map_err(CliError::Unit)?;
-        let cal = unit.to_calibration().map_err(CliError::Usage)?;
+        let cal = unit
+            .to_calibration()
+            .map_err(|e| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), e)))?;
         (cal, unit.unit_id().ok().flatten(), Vec::new())
     } else {
         let bytes = crate::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)

@@ -50,7 +50,7 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
     let plan = load_plan(&a.check)?;
     let unit = match (&a.unit, plan.package) {
         (None, Package::Single) => UnitFile::parse(SINGLE_PACKAGE_UNIT_TOML).map_err(|m| {
-            CliError::Unit(UnitFileError::Invalid("<single-package unit>".into(), m))
+            CliError::Unit(UnitFileError::Syntax("<single-package unit>".into(), m))
         })?,
         _ => load_unit(a.unit.as_deref())?,
     };

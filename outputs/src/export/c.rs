@@ -262,13 +262,7 @@ pub(crate) fn render_header(input: &ExportInput<'_>) -> Result<String, ExportErr
         .unit
         .unit_id()
         .map_err(ExportError::UnitId)?
-        .ok_or_else(|| {
-            ExportError::UnitId(
-                "the calibration file has no unit_id, and a blob is bound to one unit; calibrate \
-                 with the unit's id (or add unit_id = \"…24 hex digits…\")"
-                    .into(),
-            )
-        })?;
+        .ok_or(ExportError::NoUnitId)?;
     let blob = ParameterBlob {
         unit_id,
         calibration: *cal,

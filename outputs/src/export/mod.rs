@@ -134,9 +134,15 @@ pub enum ExportError {
     /// The blob cannot be encoded.
     #[error("cannot export the calibration's blob: {0}")]
     Blob(#[source] shared::blob::BlobError),
-    /// The calibration file has no valid unit id, which the blob needs.
+    /// The calibration file's unit id is not one.
     #[error("cannot export the calibration's blob: {0}")]
-    UnitId(String),
+    UnitId(#[source] crate::unit_file::UnitFileInvalid),
+    /// The calibration file has no unit id, which the blob needs.
+    #[error(
+        "cannot export the calibration's blob: the calibration file has no unit_id, and a blob is \
+         bound to one unit; calibrate with the unit's id (or add unit_id = \"…24 hex digits…\")"
+    )]
+    NoUnitId,
     /// A file of the export could not be written (or exists, without `--force`).
     #[error(transparent)]
     Written(#[from] crate::output_file::OutputFileError),

@@ -117,9 +117,12 @@ pub enum CompareError {
     /// A file could not be read.
     #[error(transparent)]
     Unit(UnitFileError),
-    /// They cannot be compared (message says why).
+    /// A file's values are not a calibration.
     #[error("{0}")]
-    Incompatible(String),
+    Invalid(#[source] crate::unit_file::UnitFileInvalid),
+    /// A calibration's values have no paper form.
+    #[error("{0}")]
+    Params(#[source] shared::params::ParamsError),
     /// One cannot meet the other ([`crate::calibration_guard`]).
     #[error(transparent)]
     Guard(#[from] crate::calibration_guard::GuardError),
@@ -156,9 +159,8 @@ pub(crate) fn compare_units(
     b_name: &str,
 ) -> Result<ComparisonTable, CompareError> {
     let (ca, cb) = comparable_calibrations(a, a_name, b, b_name)?;
-    let bad = |e: shared::params::ParamsError| CompareError::Incompatible(e.to_string());
-    let va = paper_values(&ca).map_err(bad)?;
-    let vb = paper_values(&cb).map_err(bad)?;
+    let va = paper_values(&ca).map_err(CompareError::Params)?;
+    let vb = paper_values(&cb).map_err(CompareError::Params)?;
     let (sa, sb) = (sigmas(a), sigmas(b));
     let labels = paper_labels();
     let sym = ca.statics.output_unit.symbol();
@@ -198,8 +200,8 @@ fn comparable_calibrations(
     b: &UnitFile,
     b_name: &str,
 ) -> Result<(Calibration, Calibration), CompareError> {
-    let ca = a.to_calibration().map_err(CompareError::Incompatible)?;
-    let cb = b.to_calibration().map_err(CompareError::Incompatible)?;
+    let ca = a.to_calibration().map_err(CompareError::Invalid)?;
+    let cb = b.to_calibration().map_err(CompareError::Invalid)?;
     let (na, nb) = (format!("A ({a_name})"), format!("B ({b_name})"));
     // The guard both ways: each file's own scales, and what the two must share.
     for (x, nx, cx, y, ny, cy) in [(a, &na, &ca, b, &nb, &cb), (b, &nb, &cb, a, &na, &ca)] {

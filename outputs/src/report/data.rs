@@ -77,7 +77,7 @@ pub enum ReportError {
     Unit(UnitFileError),
     /// The calibration file's values are not a calibration (the unit file says why).
     #[error("the calibration cannot compensate: {0}")]
-    Calibration(String),
+    Calibration(#[source] crate::unit_file::UnitFileInvalid),
     /// The calibration cannot compensate.
     #[error("the calibration cannot compensate: {0}")]
     Compensator(#[source] shared::compensator::CompensatorError),
