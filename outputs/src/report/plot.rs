@@ -109,13 +109,29 @@ pub struct RenderOutcome {
 
 /// Why a figure could not be drawn.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot draw {}: {}", .path.display(), .message)]
-pub struct FigureError {
-    /// The file.
-    pub path: PathBuf,
-    /// What went wrong.
-    pub message: String,
+pub enum FigureError {
+    /// plotters could not draw it (its backend's error, boxed: each backend has its own type).
+    #[error("cannot draw {}: {source}", .path.display())]
+    Draw {
+        /// The file.
+        path: PathBuf,
+        /// plotters' error.
+        #[source]
+        source: DrawError,
+    },
+    /// The drawn file could not be put in place.
+    #[error("cannot draw {}: {source}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
 }
+
+/// A plotters error of any backend.
+pub type DrawError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Which files to write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -217,9 +233,9 @@ fn draw_in_place(fig: &Figure, path: &Path, text: bool, kind: FileKind) -> Resul
                 text,
             ),
         },
-        |e| FigureError {
+        |source| FigureError::Write {
             path: path.to_path_buf(),
-            message: e.to_string(),
+            source,
         },
     )
 }
@@ -230,24 +246,30 @@ fn draw_to_file<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     path: &Path,
     text: bool,
-) -> Result<(), FigureError> {
-    let fail = |message: String| FigureError {
+) -> Result<(), FigureError>
+where
+    DB::ErrorType: 'static,
+{
+    let fail = |source: DrawError| FigureError::Draw {
         path: path.to_path_buf(),
-        message,
+        source,
     };
     draw(fig, &root, text).map_err(fail)?;
-    root.present().map_err(|e| fail(e.to_string()))
+    root.present().map_err(|e| fail(err(e)))
 }
 
-fn err<E: std::fmt::Debug>(e: E) -> String {
-    format!("{e:?}")
+fn err<E: std::error::Error + Send + Sync + 'static>(e: E) -> DrawError {
+    Box::new(e)
 }
 
 fn draw<DB: DrawingBackend>(
     fig: &Figure,
     root: &DrawingArea<DB, Shift>,
     text: bool,
-) -> Result<(), String> {
+) -> Result<(), DrawError>
+where
+    DB::ErrorType: 'static,
+{
     root.fill(&WHITE).map_err(err)?;
     let area = if text {
         root.titled(&fig.title, (FAMILY, 22)).map_err(err)?
@@ -335,7 +357,10 @@ fn draw_panel<DB: DrawingBackend>(
     panel: &Panel,
     area: &DrawingArea<DB, Shift>,
     text: bool,
-) -> Result<(), String> {
+) -> Result<(), DrawError>
+where
+    DB::ErrorType: 'static,
+{
     let (x0, x1) = x_range(panel);
     let (y0, y1) = y_range(panel);
     let legend = text && !panel.series.is_empty();
@@ -411,8 +436,9 @@ impl Axes<'_> {
         &self,
         chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
         area: &DrawingArea<DB, Shift>,
-    ) -> Result<(), String>
+    ) -> Result<(), DrawError>
     where
+        DB::ErrorType: 'static,
         X: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
         Y: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
     {
@@ -486,8 +512,9 @@ impl Axes<'_> {
 fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     panel: &Panel,
-) -> Result<(), String>
+) -> Result<(), DrawError>
 where
+    DB::ErrorType: 'static,
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {

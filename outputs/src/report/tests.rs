@@ -541,3 +541,29 @@ fn the_session_fit_section_gives_the_temperature_fits_chi2() {
     let (text, chi2) = para("short");
     assert_eq!((text, chi2), (None, None));
 }
+
+/// A figure that cannot be written is a typed error naming its file, with plotters' or the file
+/// system's error as its source, not a message.
+#[test]
+fn a_figure_that_cannot_be_written_keeps_its_cause() {
+    let data = noisy_report();
+    let fig = outputs_figure(&data);
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("no-such-dir");
+    let svg_only = Formats {
+        png: false,
+        svg: true,
+    };
+    let e = super::plot::render(&fig, &missing, svg_only).unwrap_err();
+    let text = e.to_string();
+    assert!(text.starts_with("cannot draw "), "{text}");
+    assert!(text.contains("no-such-dir"), "{text}");
+    let source = std::error::Error::source(&e).map(ToString::to_string);
+    assert!(source.is_some(), "{e:?}");
+    match e {
+        super::plot::FigureError::Draw { path, .. }
+        | super::plot::FigureError::Write { path, .. } => {
+            assert!(path.starts_with(&missing), "{}", path.display());
+        }
+    }
+}
