@@ -23,7 +23,7 @@ use crate::session::coverage::{coverage, given_faces, Coverage};
 use crate::session::from_recording::{
     join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
 };
-use crate::session::import::Recording;
+use crate::session::import::{Places, Recording};
 use crate::session::segment::{
     find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
@@ -104,40 +104,6 @@ pub enum InMemoryError {
     GyroRefused(Vec<String>),
 }
 
-/// The reader's warnings about a recording: rows left out, a cut-short last line, the time stamps
-/// repaired, time jumps.
-pub fn recording_warnings(rec: &Recording) -> Vec<String> {
-    let mut warnings = Vec::new();
-    if rec.skipped_rows > 0 {
-        warnings.push(format!(
-            "{} row(s) with NaN or infinite values left out",
-            rec.skipped_rows
-        ));
-    }
-    if let Some(first) = rec.overlong_lines.first() {
-        warnings.push(format!(
-            "{} line(s) longer than {} bytes left out as damaged (line {first}{})",
-            rec.overlong_lines.len(),
-            crate::session::import::MAX_LINE_BYTES,
-            if rec.overlong_lines.len() > 1 {
-                ", …"
-            } else {
-                ""
-            }
-        ));
-    }
-    if let Some(line) = rec.unterminated_line {
-        warnings.push(format!(
-            "line {line}, the last, has no line end: the file was cut short; that line is left out"
-        ));
-    }
-    for (what, repairs) in &rec.time_repairs {
-        warnings.extend(repairs.describe(what));
-    }
-    warnings.extend(rec.time_jumps());
-    warnings
-}
-
 /// `host segment` on a recording in memory, up to (not including) writing the session; a gyro fit
 /// that no real gyro gives is refused ([`SegmentedSession::gyro_problems`]).
 pub fn segment_recording(
@@ -156,7 +122,7 @@ pub fn find(recording: Recording, choices: &SegmentChoices) -> Result<Found, Seg
     if let Some(stream) = recording.corrected_by {
         return Err(SegmentError::AlreadyCorrected(stream));
     }
-    let warnings = recording_warnings(&recording);
+    let warnings = recording.reader_warnings(Places::InFile);
     let segmentation = find_intervals(&recording, &choices.segment)?;
     let coverage = coverage(&segmentation.stills, choices.segment.same_position_deg);
     Ok(Found {

@@ -35,7 +35,9 @@ fn run(dir: &Path, input: &Path, flags: &str) -> Run {
         panic!()
     };
     let cal = calibrate::calibrate(&c, true).unwrap_or_else(|e| panic!("{}: {e}", input.display()));
-    let notes: Vec<String> = crate::app::handheld::recording_warnings(&out.recording)
+    let notes: Vec<String> = out
+        .recording
+        .reader_warnings(crate::session::import::Places::InFile)
         .into_iter()
         .filter(|w| w.contains("repaired"))
         .collect();

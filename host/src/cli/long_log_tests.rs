@@ -138,8 +138,37 @@ fn a_far_damaged_stamp_costs_its_row_in_a_windowed_apply() {
     let repeat = samples[50_000];
     samples.insert(50_001, repeat);
     std::fs::write(&path, write_ulog(&samples, None)).unwrap();
-    let (whole, _) = apply_within(&path, &none(), MAX_ROWS);
-    let (windowed, _) = apply_within(&path, &none(), 10_000);
+    let (whole, whole_summary) = apply_within(&path, &none(), MAX_ROWS);
+    let (windowed, summary) = apply_within(&path, &none(), 10_000);
+    // Each repair is said: read whole, with the samples' places in the file; window by window,
+    // by count (a window's places count from its own start).
+    let repairs = |s: &ApplySummary| -> Vec<String> {
+        let w = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("time stamps repaired"));
+        w.cloned().collect()
+    };
+    let said = repairs(&whole_summary).join(" | ");
+    println!("read whole: {said}");
+    for part in [
+        "1 isolated stamp(s) that jumped and came back re-timed from their neighbours (",
+        &format!("sample {} stamped", damaged + 1),
+        "1 exact repeat(s) (same stamp, same values) left out (",
+        "sample(s) out of order sorted into time order",
+    ] {
+        assert!(said.contains(part), "{part}: {said}");
+    }
+    let said = repairs(&summary).join(" | ");
+    println!("window by window: {said}");
+    for part in [
+        "1 stamp(s) at an end of the window far from their neighbours left out",
+        "1 exact repeat(s) (same stamp, same values) left out",
+        "sample(s) out of order sorted into time order",
+    ] {
+        assert!(said.contains(part), "{part}: {said}");
+    }
+    assert!(!said.contains("sample 2"), "no places in a window: {said}");
     let times = |lines: &[String]| -> Vec<f64> {
         let t = lines.iter().skip(1).map(|l| l.split(',').nth(1).unwrap());
         t.map(|t| t.parse().unwrap()).collect()

@@ -22,7 +22,9 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
         panic!("{line}")
     };
     let out = segment(&a).unwrap_or_else(|e| panic!("{line}: {e}"));
-    let warnings = crate::app::handheld::recording_warnings(&out.recording);
+    let warnings = out
+        .recording
+        .reader_warnings(crate::session::import::Places::InFile);
     let fit = out.gyro.unwrap_or_else(|e| panic!("{line}: gyro {e}"));
     // The session's warnings are not kept in the outcome: rebuild the note from the fit.
     let note =

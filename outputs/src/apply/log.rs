@@ -2,7 +2,7 @@
 
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::calibration_guard::{meet, Meeting, Other};
-use crate::session::import::Recording;
+use crate::session::import::{Places, Recording};
 use crate::session::logs::{read_log_windows, LogError, LogRead, LogSource};
 use crate::session::segment::{
     find_intervals, gyro_unit_suspect, Interval, SegmentError, SegmentOptions,
@@ -75,7 +75,9 @@ pub fn apply_log_within(
             let prepared = Prepared::new(rec, cal, setting.mode, setting.assume_temp_c)?;
             csv.header()?;
             let mut summary = prepared.run(rec, cal, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
-            summary.warnings.splice(0..0, log.warnings);
+            let mut notes = log.warnings;
+            notes.extend(rec.reader_warnings(Places::InFile));
+            summary.warnings.splice(0..0, notes);
             return Ok(summary);
         }
         LogRead::Windows(w) => w,
@@ -86,7 +88,9 @@ pub fn apply_log_within(
     for k in 0..windows.len() {
         let log = windows.read(k).map_err(ApplyError::Log)?;
         let rec = &log.recording;
-        notes.add(windows.span(k), log.warnings);
+        let mut said = log.warnings;
+        said.extend(rec.reader_warnings(Places::InWindow));
+        notes.add(windows.span(k), said);
         if rec.is_empty() {
             continue;
         }

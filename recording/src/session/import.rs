@@ -14,10 +14,13 @@ use shared::OutputUnit;
 
 mod gravity;
 mod lines;
+mod notes;
 mod rows;
 pub mod time;
+
 use super::logs::keep::{Keep, Keeper, STILL_VAR_M2_S4};
 use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
+pub use notes::Places;
 use rows::{read_header, read_rows, Layout, Rows, Time};
 use std::fs::File;
 use std::io::{BufRead, BufReader};

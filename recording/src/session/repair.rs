@@ -56,9 +56,28 @@ impl TimeRepairs {
     /// The repairs said for the user, `what` naming a sample ("message", "data row"), with the
     /// first places of each kind (1-based, as a person counts them).
     pub fn describe(&self, what: &str) -> Option<String> {
+        self.said(Some(what))
+    }
+
+    /// The repairs said by kind and count alone, for the samples of one window of a long log,
+    /// whose places in the file are not known.
+    pub fn count(&self) -> Option<String> {
+        self.said(None)
+    }
+
+    /// [`TimeRepairs::describe`], the places of each kind only where `what` names the samples.
+    fn said(&self, what: Option<&str>) -> Option<String> {
         if self.is_empty() {
             return None;
         }
+        // " (message 12 stamped …, …)" where the places are known.
+        let at = |list: String| match what {
+            Some(_) => format!(" ({list})"),
+            None => String::new(),
+        };
+        // Without places, the samples are a window's, whose ends are not the log's.
+        let end = if what.is_some() { "log" } else { "window" };
+        let what = what.unwrap_or_default();
         let mut parts = Vec::new();
         if self.reversed {
             parts.push("the log was written newest first: read in reverse".to_string());
@@ -71,9 +90,9 @@ impl TimeRepairs {
                 )
             });
             parts.push(format!(
-                "{} isolated stamp(s) that jumped and came back re-timed from their neighbours \
-                 ({places})",
-                self.retimed.len()
+                "{} isolated stamp(s) that jumped and came back re-timed from their neighbours{}",
+                self.retimed.len(),
+                at(places)
             ));
         }
         if !self.dropped.is_empty() {
@@ -81,8 +100,9 @@ impl TimeRepairs {
                 format!("{what} {} stamped {read:.6} s", i + 1)
             });
             parts.push(format!(
-                "{} stamp(s) at an end of the log far from their neighbours left out ({places})",
-                self.dropped.len()
+                "{} stamp(s) at an end of the {end} far from their neighbours left out{}",
+                self.dropped.len(),
+                at(places)
             ));
         }
         if self.reordered > 0 {
@@ -94,16 +114,18 @@ impl TimeRepairs {
         if !self.repeats.is_empty() {
             let places = places(self.repeats.iter(), |&i| format!("{what} {}", i + 1));
             parts.push(format!(
-                "{} exact repeat(s) (same stamp, same values) left out ({places})",
-                self.repeats.len()
+                "{} exact repeat(s) (same stamp, same values) left out{}",
+                self.repeats.len(),
+                at(places)
             ));
         }
         if !self.spread.is_empty() {
             let places = places(self.spread.iter(), |&i| format!("{what} {}", i + 1));
             parts.push(format!(
                 "{} sample(s) with a repeated stamp but values of their own spread evenly up to \
-                 the next stamp ({places})",
-                self.spread.len()
+                 the next stamp{}",
+                self.spread.len(),
+                at(places)
             ));
         }
         Some(format!("time stamps repaired: {}", parts.join("; ")))
