@@ -9,7 +9,7 @@ use crate::device::serial::{SerialTransport, DEFAULT_BAUD};
 use crate::device::sim::SimDevice;
 use crate::device::{AnyTransport, DeviceClient};
 use crate::limits;
-use crate::unit_file::UnitFile;
+use crate::unit_file::{UnitFile, UnitFileError};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -103,13 +103,13 @@ pub(crate) fn refuse_for_port(
 pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> {
     args.validate()?;
     let transport = if args.port == SIM_PORT || args.port == SIM_HAND_PORT {
-        let unit = match &args.sim_unit {
-            Some(p) => UnitFile::load(p).map_err(CliError::Unit)?,
-            None => UnitFile::paper_unit(),
+        let (unit, name) = match &args.sim_unit {
+            Some(p) => (UnitFile::load(p).map_err(CliError::Unit)?, p.clone()),
+            None => (UnitFile::paper_unit(), PathBuf::from("<paper unit>")),
         };
         let truth = unit
             .to_calibration()
-            .map_err(|m| CliError::Usage(format!("--sim-unit: {m}")))?;
+            .map_err(|e| CliError::Unit(UnitFileError::Invalid(name, e)))?;
         let dev = if args.port == SIM_HAND_PORT {
             SimDevice::hand_held(truth)
         } else {
