@@ -240,8 +240,7 @@ pub(super) fn read_rows<R: BufRead>(
         }
         // A window's pass reads only the time of a row outside its span (`Keeper::passes`): the
         // passes before it read the whole row.
-        let t = layout.time_only(&text, row_index);
-        if t.is_some_and(|t| keeper.passes(t * seconds_per_unit)) {
+        if keeper.passes(|| Some(layout.time_only(&text, row_index)? * seconds_per_unit)) {
             row_index += 1;
             continue;
         }

@@ -89,6 +89,13 @@ pub(crate) struct PassReport {
     pub left_out: Option<LeftOut>,
 }
 
+impl Keep {
+    /// Whether `t_s` lies outside a window's span (never, for the other kinds).
+    fn outside_span(&self, t_s: f64) -> bool {
+        matches!(self, Keep::Span { lo, hi, .. } if !(*lo <= t_s && t_s < *hi))
+    }
+}
+
 impl Default for Keep {
     /// Everything, up to [`MAX_ROWS`].
     fn default() -> Keep {
@@ -159,18 +166,23 @@ impl Keeper {
                     Admit::Keep
                 }
             }
-            Keep::Span { lo, hi, max } => match *lo <= t_s && t_s < *hi {
-                false => Admit::Pass,
-                true if kept >= *max => Admit::TooMany(*max),
-                true => Admit::Keep,
+            Keep::Span { max, .. } => match self.keep.outside_span(t_s) {
+                true => Admit::Pass,
+                false if kept >= *max => Admit::TooMany(*max),
+                false => Admit::Keep,
             },
         }
     }
 
-    /// Whether a sample at `t_s` (s) is left out on its time alone: outside a window's span
-    /// ([`Keep::Span`]; it is then counted as seen). A text reader need not read the rest of it.
-    pub fn passes(&mut self, t_s: f64) -> bool {
-        let outside = matches!(self.keep, Keep::Span { lo, hi, .. } if !(lo <= t_s && t_s < hi));
+    /// Whether a sample is left out on its time alone, `time_s` telling it (s; `None`: no
+    /// finite time, which the whole sample's reading then says): outside a window's span
+    /// ([`Keep::Span`]; it is then counted as seen). Only a window's pass asks for the time, so
+    /// a text reader reads the rest of a row it leaves out in no pass.
+    pub fn passes(&mut self, time_s: impl FnOnce() -> Option<f64>) -> bool {
+        if !matches!(self.keep, Keep::Span { .. }) {
+            return false;
+        }
+        let outside = time_s().is_some_and(|t| self.keep.outside_span(t));
         self.left_out.read += usize::from(outside);
         outside
     }
