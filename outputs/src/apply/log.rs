@@ -86,7 +86,9 @@ pub fn apply_log_within(
     let mut run: Option<Run> = None;
     let mut notes = WindowNotes::default();
     for k in 0..windows.len() {
-        let log = windows.read(k).map_err(ApplyError::Log)?;
+        let Some(log) = windows.read(k).map_err(ApplyError::Log)? else {
+            continue;
+        };
         let rec = &log.recording;
         let mut said = log.warnings;
         said.extend(rec.reader_warnings(Places::InWindow));

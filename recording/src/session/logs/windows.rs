@@ -67,9 +67,9 @@ impl LogWindows {
     }
 
     /// Window `k` read: its samples in time order, their stamps repaired with the margin's
-    /// neighbours, and what the reader noticed in the pass. A window whose pass keeps fewer than
-    /// two samples (a few stamps far off on their own) is an empty recording.
-    pub fn read(&self, k: usize) -> Result<LogFile, LogError> {
+    /// neighbours, and what the reader noticed in the pass; `None` where the pass keeps fewer
+    /// than two samples (a few stamps far off on their own).
+    pub fn read(&self, k: usize) -> Result<Option<LogFile>, LogError> {
         let (lo, hi) = self.span(k);
         let keep = Keep::Span {
             lo: lo - self.margin_s,
@@ -77,15 +77,11 @@ impl LogWindows {
             max: self.max,
         };
         let mut log = match read_pass(&self.path, &self.source, &keep, self.seconds_per_unit) {
-            Err(LogError::NoRecording { .. }) => LogFile {
-                recording: Recording::default(),
-                format: super::LogFormat::Text,
-                warnings: Vec::new(),
-            },
+            Err(LogError::NoRecording { .. }) => return Ok(None),
             r => r?,
         };
         within_span(&mut log.recording, lo, hi);
-        Ok(log)
+        Ok(Some(log))
     }
 }
 
