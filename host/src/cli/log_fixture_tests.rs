@@ -30,6 +30,20 @@ pub(super) fn command(line: &str) -> Command {
         .command
 }
 
+/// `what`'s calibration is as good as the reference one: its held-out error (µg) and gyro bias
+/// error (°/s), as [`segment_and_calibrate`] gives them, within 10 % of the reference's, or 2 µg
+/// and 0.002 °/s of it (a float32 log's rounding, a sample or two lost).
+pub(super) fn assert_as_good(what: &str, (ug, bias): (f64, f64), (ref_ug, ref_bias): (f64, f64)) {
+    assert!(
+        ug <= (ref_ug * 1.1).max(ref_ug + 2.0),
+        "{what}: {ug} µg, the reference {ref_ug}"
+    );
+    assert!(
+        bias <= (ref_bias * 1.1).max(ref_bias + 0.002),
+        "{what}: {bias} °/s, the reference {ref_bias}"
+    );
+}
+
 pub(super) fn truth() -> Calibration {
     UnitFile::load(&fixture("hand.truth.toml"))
         .unwrap()
@@ -191,14 +205,7 @@ fn every_format_calibrates_like_the_csv_and_applies() {
         println!("{name}: intrinsic rms {ug:.1} µg, gyro bias error {bias:.4} °/s");
         // The logs hold the values as float32 (0.5 µg steps at 1 g) and ULog lost two samples:
         // within 10 % (or 2 µg) of the CSV's error.
-        assert!(
-            ug <= (csv_ug * 1.1).max(csv_ug + 2.0),
-            "{name}: {ug} µg, CSV {csv_ug}"
-        );
-        assert!(
-            bias <= (csv_bias * 1.1).max(csv_bias + 0.002),
-            "{name}: {bias}, CSV {csv_bias}"
-        );
+        assert_as_good(name, (ug, bias), (csv_ug, csv_bias));
         let out = dir.join("applied.csv");
         let line = format!(
             "host apply --calibration {}/cal/calibration.toml --input {} --out {}",
