@@ -14,7 +14,8 @@ temperature ramp (24.0 to 24.6 °C) where the format has one:
 - hand.ulg: PX4 ULog written by pyulog's own writer (ULog.write_ulog) from a ULog whose
   sensor_accel and sensor_gyro data were replaced by the session's (PX4's message definitions of
   those topics, multi_id 0), with one 20 ms dropout (two samples lost) at row DROP.
-- hand.bin: ArduPilot DataFlash (FMT, then IMU with instance I = 0, LogStructure.h's formats), each
+- hand.bin: ArduPilot DataFlash (FMT, PARM with the IMU correction's parameters at their defaults,
+  then IMU with instance I = 0, LogStructure.h's formats), each
   message packed by pymavlink's DFMessage.get_msgbuf (the packer mavlogdump writes .bin files with;
   pymavlink has no log-writer class), and the file read back with pymavlink's DFReader_binary,
   which must give the same values.
@@ -145,13 +146,36 @@ def dataflash_msg(fmt, values):
     return out
 
 
+PARM_TYPE = 0x81
+# The device ids of the vehicle's IMUs (instances 0 and 1).
+ACC_IDS, GYR_IDS = (2753028, 2753036), (2752772, 2752780)
+
+
+def dataflash_parms(instances):
+    """FMT of PARM ("QNf", as ArduPilot's Write_Parameter writes it) and the parameters ArduPilot
+    corrects the IMU samples with (AP_InertialSensor_Backend.cpp, _rotate_and_correct_accel), each
+    at its default: the samples are the sensor's own output, as the simulation gives them."""
+    fmt, parm = dataflash_fmt(PARM_TYPE, "PARM", "QNf", "TimeUS,Name,Value")
+    values = [("AHRS_ORIENTATION", 0.0)]
+    for i in range(instances):
+        sfx = "" if i == 0 else str(i + 1)
+        values += [(f"INS_ACC{sfx}_ID", float(ACC_IDS[i])), (f"INS_GYR{sfx}_ID", float(GYR_IDS[i]))]
+        for axis in "XYZ":
+            values += [(f"INS_ACC{sfx}OFFS_{axis}", 0.0), (f"INS_ACC{sfx}SCAL_{axis}", 1.0)]
+            values += [(f"INS_GYR{sfx}OFFS_{axis}", 0.0)]
+    out = bytearray(fmt)
+    for name, value in values:
+        out += dataflash_msg(parm, [1_000_000, name.encode(), value])
+    return out
+
+
 def write_dataflash(path, t, acc, gyro, temp):
     from pymavlink import DFReader
 
     out = bytearray()
     fmt, _ = dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
     imu_fmt, imu = dataflash_fmt(IMU_TYPE, "IMU", IMU_FORMAT, IMU_COLUMNS)
-    out += fmt + imu_fmt
+    out += fmt + imu_fmt + dataflash_parms(1)
     us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
     for k in range(len(t)):
         values = [int(us[k]), 0, *map(float, gyro[k]), *map(float, acc[k]), 0, 0, float(temp[k])]
@@ -217,7 +241,7 @@ def write_dataflash_accgyr(path, t, acc, gyro):
     fmt, _ = dataflash_fmt(0x80, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
     acc_fmt, acc_type = dataflash_fmt(ACC_TYPE, "ACC", "QBQfff", "TimeUS,I,SampleUS,AccX,AccY,AccZ")
     gyr_fmt, gyr_type = dataflash_fmt(GYR_TYPE, "GYR", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
-    out += fmt + acc_fmt + gyr_fmt
+    out += fmt + acc_fmt + gyr_fmt + dataflash_parms(2)
     sample_us = np.round(t * 1e6).astype(np.uint64) + np.uint64(2_000_000)
     for k in range(len(t)):
         # Written 800 µs after the sample was taken, as the batch sampler does.

@@ -11,6 +11,7 @@
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the
 //! reader streams with a window of a few hundred bytes.
 
+use super::vehicle::VehicleParams;
 use super::{list_instances, pair_streams, ImuError, Keep, Stream, StreamSample, TooMany};
 use crate::session::import::Recording;
 use crate::spelling::Spelling;
@@ -23,6 +24,8 @@ const HEAD2: u8 = 0x95;
 const FMT_TYPE: u8 = 0x80;
 /// The `FMT` message's length: 3 header bytes, Type, Length, Name[4], Format[16], Columns[64].
 const FMT_LEN: usize = 89;
+
+mod parm;
 
 /// Why a DataFlash log cannot be read; each names the byte offset where it went wrong.
 #[derive(Debug, thiserror::Error)]
@@ -273,6 +276,7 @@ struct State {
     gyro: Stream,
     skipped: u64,
     first_skip: Option<u64>,
+    params: VehicleParams,
 }
 
 impl DataFlashError {
@@ -296,6 +300,15 @@ pub(crate) fn read_keeping<R: Read>(
     instance: u8,
     keep: &Keep,
 ) -> Result<(Recording, Vec<String>), DataFlashError> {
+    read_with_params(r, instance, keep).map(|(rec, w, _)| (rec, w))
+}
+
+/// [`read_keeping`], with the vehicle's parameters the log holds (its `PARM` messages).
+pub(crate) fn read_with_params<R: Read>(
+    r: R,
+    instance: u8,
+    keep: &Keep,
+) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
     let mut w = Window {
         r,
         buf: Vec::new(),
@@ -349,7 +362,8 @@ pub(crate) fn read_keeping<R: Read>(
             st.skipped
         ));
     }
-    st.finish(instance, warnings)
+    let params = std::mem::take(&mut st.params);
+    st.finish(instance, warnings).map(|(rec, w)| (rec, w, params))
 }
 
 impl State {
@@ -384,6 +398,10 @@ impl State {
                 self.layouts[t as usize] = layout(&f);
                 self.formats[t as usize] = Some(f);
             }
+            return Ok(());
+        }
+        if let Some(f) = self.formats[ty as usize].as_ref().filter(|f| f.name == "PARM") {
+            parm::record(f, m, &mut self.params);
             return Ok(());
         }
         let Some(l) = self.layouts[ty as usize].clone() else {

@@ -79,6 +79,14 @@ pub enum LogError {
         /// The cause.
         source: mcap::McapError,
     },
+    /// A stream the vehicle corrected before logging it, whose correction cannot be undone.
+    #[error("{path}: {source}")]
+    NotUndone {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: super::ardupilot::UndoError,
+    },
     /// `--instance` or `--topic` on a format that has no such thing.
     #[error("{path} is a {} log: {option} does not apply to it; leave it out", format.name())]
     OptionNotForFormat {

@@ -9,13 +9,16 @@
 //! again, and only its quiet stretches and the turns between them are kept (`keep`), so that
 //! the memory needed does not grow with the file.
 
+mod ardupilot;
 pub mod dataflash;
 mod error;
 pub(crate) mod keep;
 pub mod mcap;
 pub mod ulog;
+pub mod vehicle;
 mod windows;
 
+pub use ardupilot::UndoError;
 pub use error::{ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
@@ -309,14 +312,16 @@ fn read_keeping<R: BufRead>(
             (imu.0, imu.1)
         }
         LogFormat::DataFlash => {
-            let imu =
-                dataflash::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
-                    LogError::DataFlash {
-                        path: p(),
-                        source: e.spelled(sp),
-                    }
+            let instance = source.instance.unwrap_or(0);
+            let (mut rec, mut notes, params) = dataflash::read_with_params(r, instance, keep)
+                .map_err(|e| LogError::DataFlash {
+                    path: p(),
+                    source: e.spelled(sp),
                 })?;
-            (imu.0, imu.1)
+            let undone = ardupilot::undo(&mut rec, &params, instance)
+                .map_err(|source| LogError::NotUndone { path: p(), source })?;
+            notes.extend(undone);
+            (rec, notes)
         }
         LogFormat::Mcap => {
             let imu = mcap::read_keeping(r, source.topic.as_deref(), keep).map_err(|e| {

@@ -20,6 +20,8 @@ use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
 
 mod layout;
+mod params;
+pub use params::read_params;
 use layout::{layout, parse_format, Field, Layout, Topic, MAX_NESTING};
 
 /// The file's first seven bytes ("ULog" 01 12 35).
