@@ -21,6 +21,7 @@
 //!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
 //! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
 //!   (`host plan --check --bias-walk`).
+//! - [`autopilot`]: a vehicle's log to its IMUs' ids, slots and calibrations (`host export --log`).
 //! - [`batch`]: a lot of recordings calibrated in parallel (`host batch`), each through
 //!   [`calibrate_recording`], with the lot's screen and summary.
 #![deny(missing_docs)]
@@ -29,6 +30,7 @@ use estimator::{calibration_files, estimate, sim, unit_file};
 use outputs::{noise, summary};
 use recording::{limits, output_file, session};
 
+pub mod autopilot;
 pub mod batch;
 pub mod calibrate;
 pub mod document;

@@ -302,6 +302,8 @@ impl Calibration {
                 allow_undetermined,
                 device_id,
                 gyro_device_id,
+                slot: None,
+                gyro_slot: None,
                 sysid,
                 compid,
                 spelling: Spelling::Keywords,

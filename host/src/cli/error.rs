@@ -103,6 +103,9 @@ pub enum CliError {
     /// The options that say how to read a logger's file do not fit together.
     #[error(transparent)]
     LogInput(#[from] crate::app::log_input::LogInputError),
+    /// A vehicle's log gives no ids, slots or calibrations.
+    #[error(transparent)]
+    Autopilot(#[from] crate::app::autopilot::AutopilotError),
     /// `--bias-walk-from`: the walk could not be taken from the file.
     #[error(transparent)]
     WalkSource(#[from] crate::app::walk_source::WalkSourceError),

@@ -89,6 +89,44 @@ pub fn ulog_corpus() -> Vec<u8> {
 /// `sensor_accel` and one `sensor_gyro` message per sample (PX4's fields, multi_id 0), and a 20 ms
 /// dropout message after sample `dropout`, if given.
 pub fn write_ulog(samples: &[LogSample], dropout: Option<usize>) -> Vec<u8> {
+    write_ulog_imus(
+        &[UlogImu {
+            samples,
+            accel_id: 7,
+            gyro_id: 7,
+        }],
+        &[],
+        dropout,
+    )
+}
+
+/// One IMU of a ULog: its samples and its sensors' device ids.
+pub struct UlogImu<'a> {
+    /// The samples.
+    pub samples: &'a [LogSample],
+    /// `sensor_accel.device_id`.
+    pub accel_id: u32,
+    /// `sensor_gyro.device_id`.
+    pub gyro_id: u32,
+}
+
+/// A PX4 ULog parameter: `int32_t` (`Int`) or `float`.
+#[derive(Clone, Copy, Debug)]
+pub enum UlogParam {
+    /// An `int32_t` parameter (ids are stored as their int32 bits).
+    Int(i32),
+    /// A `float` parameter.
+    Float(f32),
+}
+
+/// [`write_ulog`] for several IMUs (IMU `i` is `multi_id` `i`, its messages interleaved sample by
+/// sample) with the parameter messages `params` in the definitions section, as PX4's logger writes
+/// its start-up parameters (`P`: key length, `"type name"`, value).
+pub fn write_ulog_imus(
+    imus: &[UlogImu<'_>],
+    params: &[(&str, UlogParam)],
+    dropout: Option<usize>,
+) -> Vec<u8> {
     const FORMAT: &str = "uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;\
         float x;float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;\
         uint8_t samples;uint8_t[4] _padding0;";
@@ -104,23 +142,43 @@ pub fn write_ulog(samples: &[LogSample], dropout: Option<usize>) -> Vec<u8> {
     for name in ["sensor_accel", "sensor_gyro"] {
         msg(b'F', format!("{name}:{FORMAT}").as_bytes());
     }
-    for (id, name) in ["sensor_accel", "sensor_gyro"].iter().enumerate() {
-        let mut b = vec![0u8];
-        b.extend((id as u16).to_le_bytes());
-        b.extend(name.as_bytes());
-        msg(b'A', &b);
+    for (name, value) in params {
+        let (ty, bytes) = match value {
+            UlogParam::Int(v) => ("int32_t", v.to_le_bytes()),
+            UlogParam::Float(v) => ("float", v.to_le_bytes()),
+        };
+        let key = format!("{ty} {name}");
+        let mut b = vec![key.len() as u8];
+        b.extend(key.as_bytes());
+        b.extend(bytes);
+        msg(b'P', &b);
     }
-    for (k, s) in samples.iter().enumerate() {
-        for (id, v) in [s.acc, s.gyro].iter().enumerate() {
-            let mut b = (id as u16).to_le_bytes().to_vec();
-            let us = (s.t_s * 1e6).round() as u64 + 1_000_000;
-            b.extend((us + 100).to_le_bytes());
-            b.extend(us.to_le_bytes());
-            b.extend(7u32.to_le_bytes());
-            v.iter().for_each(|x| b.extend(x.to_le_bytes()));
-            b.extend(s.temp_c.to_le_bytes());
-            b.extend([0u8; 8]);
-            msg(b'D', &b);
+    for (i, _) in imus.iter().enumerate() {
+        for (k, name) in ["sensor_accel", "sensor_gyro"].iter().enumerate() {
+            let mut b = vec![i as u8];
+            b.extend(((2 * i + k) as u16).to_le_bytes());
+            b.extend(name.as_bytes());
+            msg(b'A', &b);
+        }
+    }
+    let n = imus.iter().map(|m| m.samples.len()).max().unwrap_or(0);
+    for k in 0..n {
+        for (i, imu) in imus.iter().enumerate() {
+            let Some(s) = imu.samples.get(k) else {
+                continue;
+            };
+            let ids = [imu.accel_id, imu.gyro_id];
+            for (j, v) in [s.acc, s.gyro].iter().enumerate() {
+                let mut b = ((2 * i + j) as u16).to_le_bytes().to_vec();
+                let us = (s.t_s * 1e6).round() as u64 + 1_000_000;
+                b.extend((us + 100).to_le_bytes());
+                b.extend(us.to_le_bytes());
+                b.extend(ids[j].to_le_bytes());
+                v.iter().for_each(|x| b.extend(x.to_le_bytes()));
+                b.extend(s.temp_c.to_le_bytes());
+                b.extend([0u8; 8]);
+                msg(b'D', &b);
+            }
         }
         if Some(k) == dropout {
             msg(b'O', &20u16.to_le_bytes());
@@ -134,8 +192,38 @@ pub fn dataflash_corpus() -> Vec<u8> {
     write_dataflash(&corpus_samples())
 }
 
-/// A DataFlash log of `samples`, one `IMU` message (instance 0) each.
+/// A DataFlash log of `samples`, one `IMU` message (instance 0) each, after the parameters of
+/// ArduPilot's IMU correction at their defaults ([`ardupilot_default_params`]): the samples are
+/// the sensor's own.
 pub fn write_dataflash(samples: &[LogSample]) -> Vec<u8> {
+    write_dataflash_imus(&[samples], &ardupilot_default_params(1))
+}
+
+/// The parameters ArduPilot corrects `instances` IMUs with (`_rotate_and_correct_accel`), each at
+/// its default (offsets 0, scales 1, no board rotation), and the IMUs' ids.
+pub fn ardupilot_default_params(instances: u8) -> Vec<(String, f32)> {
+    let mut v = vec![("AHRS_ORIENTATION".to_string(), 0.0)];
+    for i in 0..instances {
+        let sfx = if i == 0 {
+            String::new()
+        } else {
+            (i + 1).to_string()
+        };
+        v.push((format!("INS_ACC{sfx}_ID"), 2_753_028.0 + 8.0 * f32::from(i)));
+        v.push((format!("INS_GYR{sfx}_ID"), 2_752_772.0 + 8.0 * f32::from(i)));
+        for axis in ["X", "Y", "Z"] {
+            v.push((format!("INS_ACC{sfx}OFFS_{axis}"), 0.0));
+            v.push((format!("INS_ACC{sfx}SCAL_{axis}"), 1.0));
+            v.push((format!("INS_GYR{sfx}OFFS_{axis}"), 0.0));
+        }
+    }
+    v
+}
+
+/// A DataFlash log: `FMT`s, the `PARM` messages `params` (format `QNf`, as ArduPilot's
+/// `Write_Parameter`), then IMU `i`'s samples as `IMU` messages with `I = i`, interleaved sample by
+/// sample.
+pub fn write_dataflash_imus(imus: &[&[LogSample]], params: &[(String, f32)]) -> Vec<u8> {
     let fmt = |ty: u8, len: u8, name: &str, format: &str, cols: &str| {
         let mut b = vec![0xA3, 0x95, 0x80, ty, len];
         for (s, n) in [(name, 4), (format, 16), (cols, 64)] {
@@ -148,17 +236,32 @@ pub fn write_dataflash(samples: &[LogSample]) -> Vec<u8> {
     let mut out = fmt(0x80, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns");
     let cols = "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz";
     out.extend(fmt(0xA5, 54, "IMU", "QBffffffIIfBBHH", cols));
-    for s in samples {
-        out.extend([0xA3, 0x95, 0xA5]);
-        out.extend(((s.t_s * 1e6).round() as u64).to_le_bytes());
-        out.push(0);
-        s.gyro
-            .iter()
-            .chain(&s.acc)
-            .for_each(|x| out.extend(x.to_le_bytes()));
-        out.extend([0u8; 8]);
-        out.extend(s.temp_c.to_le_bytes());
-        out.extend([1, 1, 100, 0, 100, 0]);
+    out.extend(fmt(0x81, 31, "PARM", "QNf", "TimeUS,Name,Value"));
+    for (name, value) in params {
+        out.extend([0xA3, 0x95, 0x81]);
+        out.extend(0u64.to_le_bytes());
+        let mut n = name.as_bytes().to_vec();
+        n.resize(16, 0);
+        out.extend(n);
+        out.extend(value.to_le_bytes());
+    }
+    let n = imus.iter().map(|m| m.len()).max().unwrap_or(0);
+    for k in 0..n {
+        for (i, imu) in imus.iter().enumerate() {
+            let Some(s) = imu.get(k) else {
+                continue;
+            };
+            out.extend([0xA3, 0x95, 0xA5]);
+            out.extend(((s.t_s * 1e6).round() as u64).to_le_bytes());
+            out.push(i as u8);
+            s.gyro
+                .iter()
+                .chain(&s.acc)
+                .for_each(|x| out.extend(x.to_le_bytes()));
+            out.extend([0u8; 8]);
+            out.extend(s.temp_c.to_le_bytes());
+            out.extend([1, 1, 100, 0, 100, 0]);
+        }
     }
     out
 }

@@ -280,6 +280,19 @@ pub enum ExportError {
         /// The caller's names of the options.
         spelling: Spelling,
     },
+    /// A slot beyond the autopilot's.
+    #[error(
+        "slot {slot}: {} keeps {} calibration slots (0..{})",
+        .autopilot.name(),
+        .autopilot.slots(),
+        .autopilot.slots() - 1
+    )]
+    NoSuchSlot {
+        /// The target.
+        autopilot: Autopilot,
+        /// The slot asked for.
+        slot: u8,
+    },
     /// A device id the target's parameter protocol cannot carry exactly.
     #[error(
         "{}: ArduPilot sends {name} as a float, exact only below 16777216 (2^24); check the \
@@ -309,6 +322,23 @@ pub enum Autopilot {
 }
 
 impl Autopilot {
+    /// The autopilot's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Autopilot::Px4 => "PX4",
+            Autopilot::ArduPilot => "ArduPilot",
+        }
+    }
+
+    /// Its calibration slots per sensor (`recording::session::logs::vehicle`).
+    pub fn slots(self) -> u8 {
+        use recording::session::logs::vehicle::{ARDUPILOT_SLOTS, PX4_SLOTS};
+        match self {
+            Autopilot::Px4 => PX4_SLOTS,
+            Autopilot::ArduPilot => ARDUPILOT_SLOTS,
+        }
+    }
+
     fn why_the_id(self) -> &'static str {
         match self {
             Autopilot::Px4 => {
@@ -355,6 +385,11 @@ pub struct ExportOptions {
     /// The autopilot's device id of the gyro (`CAL_GYRO0_ID`, `INS_GYR_ID`); without it no gyro
     /// offsets are written.
     pub gyro_device_id: Option<u32>,
+    /// The accelerometer's calibration slot (PX4's `n` of `CAL_ACCn_*`, ArduPilot's instance of
+    /// `INS_ACC*`/`INS_ACC2*`/`INS_ACC3*`); `None`: the first.
+    pub slot: Option<u8>,
+    /// The gyro's slot; `None`: the accelerometer's.
+    pub gyro_slot: Option<u8>,
     /// MAVLink system id of the vehicle, the first column of QGroundControl's parameter file.
     pub sysid: u8,
     /// MAVLink component id of the autopilot, the second column.
@@ -370,6 +405,8 @@ impl Default for ExportOptions {
             allow_undetermined: false,
             device_id: None,
             gyro_device_id: None,
+            slot: None,
+            gyro_slot: None,
             sysid: 1,
             compid: 1,
             spelling: Spelling::Flags,

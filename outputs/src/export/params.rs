@@ -157,47 +157,115 @@ fn accel_values(p: &PerAxis, off: &str, scl: &str) -> Values {
 /// on tabs into exactly five fields `sysid compid name value type`, refuses a file whose sysid is not
 /// the vehicle's, and converts the value by its MAVLink type (9 = REAL32, 6 = INT32).
 pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    let (comments, values) = px4_slot(input)?;
+    let o = input.options;
+    let mut s = comments;
+    px4_after_loading(&mut s, &values);
+    px4_table(&mut s, o, values)?;
+    Ok(s)
+}
+
+/// Several IMUs' calibrations in one QGroundControl file, each in its own slot (`inputs` hold each
+/// one's ids and slot): the slots must differ.
+pub fn render_px4_slots(inputs: &[ExportInput<'_>]) -> Result<String, ExportError> {
+    let mut s = String::new();
+    let mut values = Values::new();
+    for input in inputs {
+        let (comments, v) = px4_slot(input)?;
+        s.push_str(&comments);
+        values.extend(v);
+    }
+    px4_after_loading(&mut s, &values);
+    let o = inputs.first().map(|i| i.options).unwrap_or_default();
+    px4_table(&mut s, o, values)?;
+    Ok(s)
+}
+
+/// PX4's per-slot names (`Utilities.cpp` builds them as `CAL_%s%u_ID`; four slots).
+const PX4_ACC_ID: [&str; 4] = ["CAL_ACC0_ID", "CAL_ACC1_ID", "CAL_ACC2_ID", "CAL_ACC3_ID"];
+
+/// One calibration's comments and values in its slot (`ExportOptions::slot`, default 0).
+fn px4_slot(input: &ExportInput<'_>) -> Result<(String, Values), ExportError> {
     let p = per_axis(input, "PX4")?;
     let o = input.options;
+    let n = o.slot.unwrap_or(0);
+    let id_name = PX4_ACC_ID
+        .get(usize::from(n))
+        .copied()
+        .ok_or(ExportError::NoSuchSlot {
+            autopilot: Autopilot::Px4,
+            slot: n,
+        })?;
     let device_id = o.device_id.ok_or(ExportError::DeviceIdRequired {
         autopilot: Autopilot::Px4,
-        id_parameter: "CAL_ACC0_ID",
+        id_parameter: id_name,
         spelling: o.spelling,
     })?;
     let mut s = String::new();
     caveats(&mut s, input, &p, "PX4");
-    let mut values: Values = vec![("CAL_ACC0_ID".into(), f64::from(device_id as i32), true)];
-    values.extend(accel_values(&p, "CAL_ACC0_#OFF", "CAL_ACC0_#SCALE"));
+    let _ = writeln!(
+        s,
+        "# Slot {n}: CAL_ACC{n}_* for the accelerometer with device id {device_id} (PX4 applies a slot to\n\
+         # the sensor whose id it holds: FindCurrentCalibrationIndex, src/lib/sensor_calibration/Utilities.cpp)."
+    );
+    let mut values: Values = vec![(id_name.into(), f64::from(device_id as i32), true)];
+    values.extend(accel_values(
+        &p,
+        &format!("CAL_ACC{n}_#OFF"),
+        &format!("CAL_ACC{n}_#SCALE"),
+    ));
+    let gn = o.gyro_slot.unwrap_or(n);
     match (p.gyro_offset_rad_s, o.gyro_device_id) {
         (Some(b), Some(id)) => {
-            values.push(("CAL_GYRO0_ID".into(), f64::from(id as i32), true));
+            values.push((format!("CAL_GYRO{gn}_ID"), f64::from(id as i32), true));
             for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-                values.push((format!("CAL_GYRO0_{axis}OFF"), b[i], false));
+                values.push((format!("CAL_GYRO{gn}_{axis}OFF"), b[i], false));
             }
+            let _ = writeln!(
+                s,
+                "# CAL_GYRO{gn}_*OFF: with IMU_GYRO_CAL_EN = 1 (PX4's default) the gyro_calibration module\n\
+                 # (started by ROMFS/px4fmu_common/init.d/rcS; src/modules/gyro_calibration) measures the\n\
+                 # gyro offsets again whenever the vehicle rests disarmed and saves them over these."
+            );
         }
         (Some(_), None) => {
             let _ = writeln!(
                 s,
-                "# Gyro offsets NOT WRITTEN: PX4 applies CAL_GYRO0_* only to the gyro whose device id is\n\
-                 # CAL_GYRO0_ID; give --gyro-device-id ID to write them."
+                "# Gyro offsets NOT WRITTEN: PX4 applies CAL_GYRO{gn}_* only to the gyro whose device id is\n\
+                 # CAL_GYRO{gn}_ID; give {} to write them.",
+                o.spelling.given(UserOption::GyroDeviceId, "ID")
             );
         }
         (None, _) => {}
     }
-    let thermal = px4_thermal(input, &p, device_id, &mut s)?;
+    values.extend(px4_thermal(input, &p, device_id, &mut s)?);
+    Ok((s, values))
+}
+
+/// How to load a PX4 file of `values` safely and check it took, from the sources each step follows.
+fn px4_after_loading(s: &mut String, values: &Values) {
     let _ = writeln!(
         s,
-        "# After loading (QGroundControl: Vehicle Setup > Parameters > Tools > Load from file; or\n\
-         # `param load` on the PX4 console, then `param save`): reboot.{}",
-        if thermal.is_empty() {
-            ""
-        } else {
-            " CAL_* take effect at once, but\n\
-             # PX4 starts its temperature compensation at boot only when TC_A_ENABLE or TC_G_ENABLE\n\
-             # is set: the TC_* values apply from the next boot."
-        }
+        "# Load: QGroundControl, Vehicle Setup > Parameters > Tools > Load from file (ParameterManager.cc,\n\
+         # readParametersFromStream: sets each line's parameter, leaves the others alone); or on the\n\
+         # console (nsh, MAVLink shell) `param set NAME VALUE` for each line below, then `param save`.\n\
+         # NEVER `param load` this file: PX4's param_load (src/lib/parameters/parameters.cpp) first\n\
+         # resets EVERY parameter to its default, then reads a binary (BSON) file, which this is not;\n\
+         # the import fails after the reset, and `param save` would store the reset vehicle.\n\
+         # Then reboot. Check: `listener sensor_accel` shows each device_id the slots name, and\n\
+         # QGroundControl's pre-flight checks no longer ask for an accelerometer calibration."
     );
-    values.extend(thermal);
+    if values.iter().any(|(name, _, _)| name.starts_with("TC_")) {
+        let _ = writeln!(
+            s,
+            "# CAL_* take effect at once, but PX4 starts its temperature compensation at boot only\n\
+             # when TC_A_ENABLE or TC_G_ENABLE is set: the TC_* values apply from the next boot."
+        );
+    }
+}
+
+/// QGroundControl's table of `values`.
+fn px4_table(s: &mut String, o: super::ExportOptions, values: Values) -> Result<(), ExportError> {
     let _ = writeln!(
         s,
         "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
@@ -211,7 +279,7 @@ pub(crate) fn render_px4(input: &ExportInput<'_>) -> Result<String, ExportError>
         };
         let _ = writeln!(s, "{}\t{}\t{name}\t{text}\t{ty}", o.sysid, o.compid);
     }
-    Ok(s)
+    Ok(())
 }
 
 /// What a temperature model becomes in the autopilots' thermal offsets, in the driver's units.
@@ -290,13 +358,20 @@ fn px4_thermal(
             }
         }
     };
-    block("TC_A0", "TC_A_ENABLE", device_id, &th.accel_m_s2);
-    match (th.gyro_rad_s, input.options.gyro_device_id) {
-        (Some(g), Some(id)) => block("TC_G0", "TC_G_ENABLE", id, &g),
+    let o = input.options;
+    let (n, gn) = (o.slot.unwrap_or(0), o.gyro_slot.or(o.slot).unwrap_or(0));
+    block(
+        &format!("TC_A{n}"),
+        "TC_A_ENABLE",
+        device_id,
+        &th.accel_m_s2,
+    );
+    match (th.gyro_rad_s, o.gyro_device_id) {
+        (Some(g), Some(id)) => block(&format!("TC_G{gn}"), "TC_G_ENABLE", id, &g),
         (Some(_), None) => {
             let _ = writeln!(
                 w,
-                "# TC_G0_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G0_ID; give {}.",
+                "# TC_G{gn}_* NOT WRITTEN: PX4 applies them only to the gyro whose id is TC_G{gn}_ID; give {}.",
                 input.options.spelling.given(UserOption::GyroDeviceId, "ID")
             );
         }
@@ -328,16 +403,17 @@ fn ardupilot_thermal(input: &ExportInput<'_>, p: &PerAxis, w: &mut String) -> Va
         return Values::new();
     };
     thermal_caveat(w, &th);
+    let k = input.options.slot.unwrap_or(0) + 1;
     let mut v: Values = vec![
-        ("INS_TCAL1_ENABLE".into(), 1.0, true),
-        ("INS_TCAL1_TMIN".into(), th.range_c[0], false),
-        ("INS_TCAL1_TMAX".into(), th.range_c[1], false),
-        ("INS_ACC1_CALTEMP".into(), th.reference_c, false),
+        (format!("INS_TCAL{k}_ENABLE"), 1.0, true),
+        (format!("INS_TCAL{k}_TMIN"), th.range_c[0], false),
+        (format!("INS_TCAL{k}_TMAX"), th.range_c[1], false),
+        (format!("INS_ACC{k}_CALTEMP"), th.reference_c, false),
     ];
     let mut polys = vec![("ACC", th.accel_m_s2)];
     match th.gyro_rad_s {
         Some(g) => {
-            v.push(("INS_GYR1_CALTEMP".into(), th.reference_c, false));
+            v.push((format!("INS_GYR{k}_CALTEMP"), th.reference_c, false));
             polys.push(("GYR", g));
         }
         None => {
@@ -347,12 +423,13 @@ fn ardupilot_thermal(input: &ExportInput<'_>, p: &PerAxis, w: &mut String) -> Va
             );
         }
     }
+    let tk = k;
     for (name, poly) in &polys {
         let q: Vec<[f64; 3]> = poly.iter().map(|k| recentred(k, th.reference_c)).collect();
         for k in 0..3 {
             for (axis, row) in ["X", "Y", "Z"].iter().zip(&q) {
                 v.push((
-                    format!("INS_TCAL1_{name}{}_{axis}", k + 1),
+                    format!("INS_TCAL{tk}_{name}{}_{axis}", k + 1),
                     row[k] * ARDUPILOT_TCAL_SCALE,
                     false,
                 ));
@@ -365,11 +442,12 @@ fn ardupilot_thermal(input: &ExportInput<'_>, p: &PerAxis, w: &mut String) -> Va
 /// ArduPilot's documented range of a parameter (its `@Range` metadata in
 /// `libraries/AP_InertialSensor/AP_InertialSensor.cpp`), if any.
 fn ardupilot_range(name: &str) -> Option<(f64, f64)> {
-    if name.starts_with("INS_ACCSCAL_") {
+    let acc = name.starts_with("INS_ACC");
+    if acc && name.contains("SCAL_") {
         Some((0.8, 1.2))
-    } else if name.starts_with("INS_ACCOFFS_") {
+    } else if acc && name.contains("OFFS_") {
         Some((-3.5, 3.5))
-    } else if name == "INS_TCAL1_TMIN" || name == "INS_TCAL1_TMAX" {
+    } else if name.starts_with("INS_TCAL") && (name.ends_with("_TMIN") || name.ends_with("_TMAX")) {
         Some((-70.0, 80.0))
     } else {
         None
@@ -398,20 +476,22 @@ fn ardupilot_id(
     Ok((name.into(), f64::from(id), true))
 }
 
-/// What a user must do after loading the ArduPilot file, and what persists.
+/// What a user must do after loading the ArduPilot file, what persists, and how to check it took.
 fn ardupilot_after_loading(w: &mut String, gyro_written: bool) {
     let _ = writeln!(
         w,
-        "# After loading (Mission Planner: Config > Full Parameter List > Load from file, Write Params;\n\
-         # MAVProxy: param load FILE): reboot. At start-up ArduPilot compares INS_ACC_ID with the\n\
-         # accelerometer it detects (AP_InertialSensor::register_accel) and counts the offsets and\n\
-         # scales below as a calibration only when they match: otherwise pre-arm says \"3D Accel\n\
-         # calibration needed\"."
+        "# Load: Mission Planner, Config > Full Parameter List > Load from file, then Write Params; or\n\
+         # MAVProxy `param load FILE` (mavproxy_param.py: sets each parameter the file names, the others\n\
+         # untouched). Then reboot. At start-up ArduPilot compares each INS_ACC*_ID with the\n\
+         # accelerometer it detects in that slot (AP_InertialSensor::register_accel) and counts the\n\
+         # offsets and scales below as a calibration only when they match. Check: no pre-arm message\n\
+         # \"3D Accel calibration needed\" (accel_calibrated_ok_all wants every accelerometer\n\
+         # calibrated), and the INS_ACC*_ID the parameter list shows after the reboot equal these."
     );
     if gyro_written {
         let _ = writeln!(
             w,
-            "# INS_GYROFFS_* persist only with INS_GYR_CAL = 0 (never): with its default 1 (start-up)\n\
+            "# INS_GYR*OFFS_* persist only with INS_GYR_CAL = 0 (never): with its default 1 (start-up)\n\
              # ArduPilot measures the gyro offsets again at every boot, the vehicle still, and replaces\n\
              # these. Keep 1 unless the vehicle cannot be still at boot."
         );
@@ -426,47 +506,95 @@ fn ardupilot_after_loading(w: &mut String, gyro_written: bool) {
 /// `INS_ACC_ID` is absent or differs from the detected one as not calibrated, and
 /// `accel_calibrated_ok_all` then fails the pre-arm check; so the id is required, as PX4's is.
 pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, ExportError> {
+    render_ardupilot_slots(std::slice::from_ref(input))
+}
+
+/// ArduPilot's per-slot id names (`AP_InertialSensor.cpp`: `INS_ACC_ID`, `INS_ACC2_ID`, `INS_ACC3_ID`).
+const ARDUPILOT_ACC_ID: [&str; 3] = ["INS_ACC_ID", "INS_ACC2_ID", "INS_ACC3_ID"];
+const ARDUPILOT_GYR_ID: [&str; 3] = ["INS_GYR_ID", "INS_GYR2_ID", "INS_GYR3_ID"];
+
+/// Several IMUs' calibrations in one ArduPilot file, each in its slot (`ExportOptions::slot`).
+pub fn render_ardupilot_slots(inputs: &[ExportInput<'_>]) -> Result<String, ExportError> {
+    let (mut s, mut lines, mut gyro_written) = (String::new(), String::new(), false);
+    for input in inputs {
+        let (comments, slot_lines, gyro) = ardupilot_slot(input)?;
+        s.push_str(&comments);
+        lines.push_str(&slot_lines);
+        gyro_written |= gyro;
+    }
+    ardupilot_after_loading(&mut s, gyro_written);
+    s.push_str(&lines);
+    Ok(s)
+}
+
+/// One calibration's comments and `NAME,VALUE` lines in its slot, and whether gyro offsets are
+/// among them.
+fn ardupilot_slot(input: &ExportInput<'_>) -> Result<(String, String, bool), ExportError> {
     let p = per_axis(input, "ArduPilot")?;
     let o = input.options;
+    let n = o.slot.unwrap_or(0);
+    let no_slot = |slot| ExportError::NoSuchSlot {
+        autopilot: Autopilot::ArduPilot,
+        slot,
+    };
+    let id_name = *ARDUPILOT_ACC_ID.get(usize::from(n)).ok_or(no_slot(n))?;
+    let gn = o.gyro_slot.unwrap_or(n);
+    let gyr_id_name = *ARDUPILOT_GYR_ID.get(usize::from(gn)).ok_or(no_slot(gn))?;
     let device_id = o.device_id.ok_or(ExportError::DeviceIdRequired {
         autopilot: Autopilot::ArduPilot,
-        id_parameter: "INS_ACC_ID",
+        id_parameter: id_name,
         spelling: o.spelling,
     })?;
     let unit = input.cal.statics.output_unit.symbol();
     let mut s = String::new();
     caveats(&mut s, input, &p, "ArduPilot");
+    let _ = writeln!(
+        s,
+        "# Slot {n} (IMU instance {n}): {id_name} = {device_id} and its offsets and scales."
+    );
     let mut values = vec![ardupilot_id(
-        "INS_ACC_ID",
+        id_name,
         UserOption::DeviceId,
         o.spelling,
         device_id,
     )?];
-    values.extend(accel_values(&p, "INS_ACCOFFS_#", "INS_ACCSCAL_#"));
+    let sfx = |k: u8| {
+        if k == 0 {
+            String::new()
+        } else {
+            (k + 1).to_string()
+        }
+    };
+    values.extend(accel_values(
+        &p,
+        &format!("INS_ACC{}OFFS_#", sfx(n)),
+        &format!("INS_ACC{}SCAL_#", sfx(n)),
+    ));
     let gyro_written = match (p.gyro_offset_rad_s, o.gyro_device_id) {
         (Some(b), Some(id)) => {
             values.push(ardupilot_id(
-                "INS_GYR_ID",
+                gyr_id_name,
                 UserOption::GyroDeviceId,
                 o.spelling,
                 id,
             )?);
             for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
-                values.push((format!("INS_GYROFFS_{axis}"), b[i], false));
+                values.push((format!("INS_GYR{}OFFS_{axis}", sfx(gn)), b[i], false));
             }
             true
         }
         (Some(_), None) => {
             let _ = writeln!(
                 s,
-                "# Gyro offsets NOT WRITTEN: ArduPilot keeps INS_GYROFFS_* for the gyro whose id is\n\
-                 # INS_GYR_ID; give --gyro-device-id ID to write them."
+                "# Gyro offsets NOT WRITTEN: ArduPilot keeps INS_GYR{}OFFS_* for the gyro whose id is\n\
+                 # {gyr_id_name}; give {} to write them.",
+                sfx(gn),
+                o.spelling.given(UserOption::GyroDeviceId, "ID")
             );
             false
         }
         (None, _) => false,
     };
-    ardupilot_after_loading(&mut s, gyro_written);
     values.extend(ardupilot_thermal(input, &p, &mut s));
     let mut lines = String::new();
     for (name, v, int) in &values {
@@ -477,43 +605,57 @@ pub(crate) fn render_ardupilot(input: &ExportInput<'_>) -> Result<String, Export
         let text = f32_text(name, *v, input.options.spelling)?;
         if let Some((lo, hi)) = ardupilot_range(name) {
             if !(lo..=hi).contains(v) {
-                let hint = if name.starts_with("INS_ACCOFFS_") {
-                    format!(
-                        " m/s² (the driver's reading at zero specific force, c*u0 with c = {} m/s² per {unit}: \
-                         the driver must remove the output's offset, or the scale c is wrong)",
-                        p.driver_scale
-                    )
-                } else {
-                    format!(
-                        " (g*[(K*A)^-1]_ii / c with c = {} m/s² per {unit}: is {} the driver's true scale?)",
-                        p.driver_scale,
-                        input.options.spelling.name(UserOption::DriverScale)
-                    )
-                };
-                let e = ExportError::OutOfRange {
-                    name: name.clone(),
-                    value: *v,
-                    target: "ArduPilot",
-                    lo,
-                    hi,
-                    hint,
-                    spelling: input.options.spelling,
-                };
-                if !input.options.allow_out_of_range {
-                    return Err(e);
-                }
-                let _ = writeln!(
-                    s,
-                    "# WARNING: {name} = {v} is outside ArduPilot's documented range {lo}..{hi}; written \
-                     because of {}",
-                    input.options.spelling.switch(UserOption::AllowOutOfRange)
-                );
+                check_range(input, &p, unit, name, *v, (lo, hi), &mut s)?;
             }
         }
         let _ = writeln!(lines, "{name},{text}");
     }
-    s.push_str(&lines);
-    Ok(s)
+    Ok((s, lines, gyro_written))
+}
+
+/// A value outside ArduPilot's documented range: refused, or with `--allow-out-of-range` written
+/// with a `# WARNING:` line.
+fn check_range(
+    input: &ExportInput<'_>,
+    p: &PerAxis,
+    unit: &str,
+    name: &str,
+    v: f64,
+    (lo, hi): (f64, f64),
+    s: &mut String,
+) -> Result<(), ExportError> {
+    let hint = if name.contains("OFFS_") {
+        format!(
+            " m/s² (the driver's reading at zero specific force, c*u0 with c = {} m/s² per {unit}: \
+             the driver must remove the output's offset, or the scale c is wrong)",
+            p.driver_scale
+        )
+    } else {
+        format!(
+            " (g*[(K*A)^-1]_ii / c with c = {} m/s² per {unit}: is {} the driver's true scale?)",
+            p.driver_scale,
+            input.options.spelling.name(UserOption::DriverScale)
+        )
+    };
+    let e = ExportError::OutOfRange {
+        name: name.to_string(),
+        value: v,
+        target: "ArduPilot",
+        lo,
+        hi,
+        hint,
+        spelling: input.options.spelling,
+    };
+    if !input.options.allow_out_of_range {
+        return Err(e);
+    }
+    let _ = writeln!(
+        s,
+        "# WARNING: {name} = {v} is outside ArduPilot's documented range {lo}..{hi}; written \
+         because of {}",
+        input.options.spelling.switch(UserOption::AllowOutOfRange)
+    );
+    Ok(())
 }
 
 #[cfg(test)]
