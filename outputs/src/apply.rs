@@ -49,6 +49,14 @@ pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_
 /// Why a calibration could not be applied.
 #[derive(Debug, thiserror::Error)]
 pub enum ApplyError {
+    /// The log's stream is already corrected by the vehicle's own calibration.
+    #[error(
+        "the log's IMU samples are {0}, which the vehicle has already corrected with its own \
+         calibration: applying this calibration would correct them a second time (as `segment` \
+         refuses to calibrate from them). Apply it to a log of the sensor's raw topics \
+         (sensor_accel and sensor_gyro: PX4's SDLOG_PROFILE 'high rate' or logger_topics.txt)"
+    )]
+    AlreadyCorrected(&'static str),
     /// The calibration does not give a compensator.
     #[error("the calibration cannot be applied: {0}")]
     Compensator(#[source] CompensatorError),

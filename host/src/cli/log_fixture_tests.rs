@@ -342,7 +342,8 @@ fn log_options_on_a_session_directory_are_refused() {
 /// the log was first closed. The values are pyulog 1.3's (`ULog(f).get_dataset("sensor_combined")`,
 /// the accelerometer at `timestamp + accelerometer_timestamp_relative`). A flight log is not a
 /// calibration session, and its IMU data are `sensor_combined`, which PX4 has already corrected: `segment`
-/// must say so, and `apply` must still read it.
+/// must say so, and `apply` must refuse it by the same rule (it would correct the samples a second
+/// time), writing nothing.
 #[test]
 fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_session() {
     let path = fixture("px4-sample-appended-multiple.ulg");
@@ -414,9 +415,12 @@ fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_sessi
     let Command::Apply(a) = command(&line) else {
         panic!()
     };
-    apply::run(&a, true).unwrap();
-    let text = std::fs::read_to_string(&out).unwrap();
-    assert_eq!(text.lines().count(), 1 + 2373);
+    let e = apply::run(&a, true).unwrap_err().to_string();
+    assert!(
+        e.contains("sensor_combined") && e.contains("a second time"),
+        "{e}"
+    );
+    assert!(!out.exists(), "apply wrote a corrected-twice file");
 }
 
 /// A logger that stopped inside a message before data was appended: the same public log with its

@@ -210,6 +210,10 @@ fn meet_log(
     cal: &Calibration,
     assume_temp_c: Option<f64>,
 ) -> Result<(), ApplyError> {
+    // As `segment` refuses it: a stream the vehicle has corrected would be corrected twice.
+    if let Some(stream) = rec.corrected_by {
+        return Err(ApplyError::AlreadyCorrected(stream));
+    }
     let other = Other {
         name: "the log",
         unit_id: None,
