@@ -135,6 +135,31 @@ fn readme_load_it_recipes_work_as_written() {
             .unwrap_or_else(|| panic!("{k} missing"))
     };
     assert_eq!(get(&px4, "CAL_ACC0_ID"), "1310988");
+    // PX4's `param load` resets every parameter before it reads a binary file: the PX4 file and the
+    // README's PX4 recipe name it only to forbid it, and give `param set` and `param save` instead.
+    let px4_text = std::fs::read_to_string(dir.path().join("px4.params")).unwrap();
+    let px4_recipe = section
+        .split("- **PX4**")
+        .nth(1)
+        .and_then(|s| s.split("- **ArduPilot**").next())
+        .unwrap();
+    for (what, text) in [
+        ("the PX4 file", px4_text.as_str()),
+        ("the README", px4_recipe),
+    ] {
+        let flat = text.replace("\n# ", " ").replace('\n', " ").to_lowercase();
+        assert_eq!(
+            flat.matches("param load").count(),
+            flat.matches("never `param load`").count()
+                + flat.matches("never with px4's `param load`").count(),
+            "{what} names `param load` as a step: {text}"
+        );
+        assert!(
+            flat.contains("param set") && flat.contains("param save"),
+            "{what}: {text}"
+        );
+    }
+    assert!(px4_text.contains("IMU_GYRO_CAL_EN"), "{px4_text}");
     assert_eq!(get(&px4, "CAL_GYRO0_ID"), "1310996");
     for k in ["CAL_ACC0_XSCALE", "CAL_ACC0_YSCALE", "CAL_ACC0_ZSCALE"] {
         let v: f64 = get(&px4, k).parse().unwrap();
