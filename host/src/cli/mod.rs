@@ -25,6 +25,8 @@
 //! (`--json`, `--quiet`).
 
 pub mod apply;
+#[cfg(test)]
+mod autopilot_tests;
 pub mod batch;
 pub mod bringup;
 pub mod calibrate;
@@ -33,6 +35,7 @@ pub mod compare;
 mod damaged_log_tests;
 pub mod error;
 pub mod export;
+mod export_log;
 pub mod flash;
 #[cfg(test)]
 mod log_fixture_tests;
@@ -48,6 +51,8 @@ pub mod output;
 pub mod plan;
 pub mod port;
 pub mod read;
+#[cfg(test)]
+mod reference_fits_tests;
 pub mod report;
 pub mod segment;
 #[cfg(test)]
