@@ -363,7 +363,8 @@ pub(crate) fn read_with_params<R: Read>(
         ));
     }
     let params = std::mem::take(&mut st.params);
-    st.finish(instance, warnings).map(|(rec, w)| (rec, w, params))
+    st.finish(instance, warnings)
+        .map(|(rec, w)| (rec, w, params))
 }
 
 impl State {
@@ -400,7 +401,10 @@ impl State {
             }
             return Ok(());
         }
-        if let Some(f) = self.formats[ty as usize].as_ref().filter(|f| f.name == "PARM") {
+        if let Some(f) = self.formats[ty as usize]
+            .as_ref()
+            .filter(|f| f.name == "PARM")
+        {
             parm::record(f, m, &mut self.params);
             return Ok(());
         }

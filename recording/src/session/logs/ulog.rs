@@ -21,8 +21,8 @@ use std::io::Read;
 
 mod layout;
 mod params;
-pub use params::read_params;
 use layout::{layout, parse_format, Field, Layout, Topic, MAX_NESTING};
+pub use params::read_params;
 
 /// The file's first seven bytes ("ULog" 01 12 35).
 pub const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];

@@ -6,7 +6,7 @@ use super::*;
 fn ardupilot_forward(
     p: &VehicleParams,
     n: u8,
-    rot: &dyn Fn([f32; 3]) -> [f32; 3],
+    rot: Rotate,
     acc: [f64; 3],
     gyro: [f64; 3],
     temp_c: f64,
@@ -49,6 +49,9 @@ fn ardupilot_forward(
     }
     (rot(a).map(f64::from), rot(w).map(f64::from))
 }
+
+/// A board rotation as `Vector3::rotate` applies it.
+type Rotate = fn([f32; 3]) -> [f32; 3];
 
 /// `Vector3::rotate(ROTATION_ROLL_180)` and `ROTATION_YAW_90` as `AP_Math/vector3.cpp` writes them.
 fn roll_180(v: [f32; 3]) -> [f32; 3] {
@@ -137,7 +140,7 @@ fn raw_recording(n: usize) -> Recording {
 /// within the vehicle's `float` rounding, on each of the three instances' parameter names.
 #[test]
 fn ardupilots_correction_is_undone_sample_by_sample() {
-    let rots: [(f64, &dyn Fn([f32; 3]) -> [f32; 3]); 2] = [(8.0, &roll_180), (2.0, &yaw_90)];
+    let rots: [(f64, Rotate); 2] = [(8.0, roll_180), (2.0, yaw_90)];
     for instance in 0..3u8 {
         for (orientation, rot) in rots {
             for tcal in [false, true] {
