@@ -280,6 +280,8 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
         ("compid", &["--compid", "2"][..]),
         ("allow-out-of-range", &["--allow-out-of-range"][..]),
         ("allow-undetermined", &["--allow-undetermined"][..]),
+        ("log", &["--log", "{ulog}"][..]),
+        ("slot", &["--slot", "1"][..]),
     ] {
         let line: &'static [&'static str] = Box::leak(
             [&["--calibration", "{cal}", "--format", "json"][..], args]
@@ -291,6 +293,29 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     for o in ["calibration", "format"] {
         t.push(("export", o, Everywhere("what is exported, and how")));
     }
+    // export: an IMU of a log with another format, or with no log to choose it from.
+    t.push((
+        "export",
+        "instance",
+        NotIn(&[
+            &[
+                "--calibration",
+                "{cal}",
+                "--format",
+                "json",
+                "--instance",
+                "1",
+            ],
+            &[
+                "--calibration",
+                "{cal}",
+                "--format",
+                "px4",
+                "--instance",
+                "1",
+            ],
+        ]),
+    ));
     // apply: the temperature to assume, where nothing would use it.
     t.push((
         "apply",
