@@ -1,7 +1,7 @@
 //! PX4 ULog: the IMU's samples from `sensor_accel` + `sensor_gyro` (the sensors' own outputs before
 //! PX4's calibration is applied, with the sensor's temperature), else from `sensor_combined` (already
-//! corrected by PX4's calibration, no temperature: marked [`Recording::corrected_by`], which `apply`
-//! and `noise` read and `segment` refuses).
+//! corrected by PX4's calibration, no temperature: marked [`Recording::corrected_by`], which `noise`
+//! reads and `segment` and `apply` refuse).
 //!
 //! Written against PX4's "ULog File Format" (docs.px4.io, `dev_log/ulog_file_format`) and its C
 //! header `ulog_messages.h`, with pyulog's `core.py` (v1.3.0) as the reference reader: a 16-byte
