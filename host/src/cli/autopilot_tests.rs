@@ -338,3 +338,70 @@ fn a_three_imu_log_gives_one_file_with_three_slots() {
         assert_same_accel(&got, &in_slot0, sfx);
     }
 }
+
+/// A PX4 vehicle with three IMUs, the log's parameters holding their ids in slots 2, 0 and 1:
+/// `--instance all` writes one QGroundControl file with each IMU's calibration in the slot its id
+/// holds, each as its own raw samples give it.
+#[test]
+fn a_three_imu_ulog_gives_one_file_with_each_imu_in_its_slot() {
+    let tmp = tempfile::tempdir().unwrap();
+    let raw = raw_session(24);
+    let ids = [1_310_988u32, 1_311_004, 1_311_020];
+    let imus: Vec<UlogImu<'_>> = ids
+        .iter()
+        .map(|&id| UlogImu {
+            samples: &raw,
+            accel_id: id,
+            gyro_id: id + 4,
+        })
+        .collect();
+    let slots = [2usize, 0, 1];
+    let mut params = Vec::new();
+    for (imu, &slot) in slots.iter().enumerate() {
+        let name: &'static str = Box::leak(format!("CAL_ACC{slot}_ID").into_boxed_str());
+        params.push((name, UlogParam::Int(ids[imu] as i32)));
+    }
+    let log = tmp.path().join("three.ulg");
+    std::fs::write(&log, write_ulog_imus(&imus, &params, None)).unwrap();
+    let one = tmp.path().join("one.ulg");
+    std::fs::write(&one, write_ulog_imus(&imus[..1], &params, None)).unwrap();
+    let want_cal = calibrate_log(&tmp.path().join("one"), &one, "");
+    let want = px4_values(&export_text(
+        tmp.path(),
+        &format!(
+            "--calibration {} --format px4 --log {}",
+            want_cal.display(),
+            one.display()
+        ),
+    ));
+    let text = export_text(
+        tmp.path(),
+        &format!(
+            "--format px4 --log {} --instance all --force",
+            log.display()
+        ),
+    );
+    let got = px4_values(&text);
+    for (imu, &slot) in slots.iter().enumerate() {
+        assert_eq!(
+            got[&format!("CAL_ACC{slot}_ID")],
+            f64::from(ids[imu]),
+            "{text}"
+        );
+        for axis in ["X", "Y", "Z"] {
+            let (o, s) = (format!("{axis}OFF"), format!("{axis}SCALE"));
+            let (go, wo) = (
+                got[&format!("CAL_ACC{slot}_{o}")],
+                want[&format!("CAL_ACC2_{o}")],
+            );
+            let (gs, ws) = (
+                got[&format!("CAL_ACC{slot}_{s}")],
+                want[&format!("CAL_ACC2_{s}")],
+            );
+            assert!(
+                (go - wo).abs() < 3e-3 && (gs - ws).abs() < 3e-4,
+                "slot {slot}: {text}"
+            );
+        }
+    }
+}
