@@ -10,7 +10,8 @@
 //! `a ← (a − INS_ACCOFFS) ∘ INS_ACCSCAL`, then the board rotation `AHRS_ORIENTATION`;
 //! `_rotate_and_correct_gyro` likewise `ω ← R·(ω − [p_g(T − 35) − p_g(T_cal − 35)] − INS_GYROFFS)`.
 //! Firmware before the sensor-frame calibration (`INS_CALSENSFRAME = 0`, a parameter since
-//! retired: `AP_InertialSensor.cpp` keeps its index reserved) rotated first and corrected after.
+//! retired: `AP_InertialSensor.cpp` keeps its index reserved) rotated first and corrected after, in
+//! an order that changed between its versions: such a log is refused, not guessed at.
 //! All of it is affine in the sample, so it commutes with the logged low-pass filter and is undone
 //! exactly (to the `float` rounding of the vehicle): `a = Rᵀ·l ∘ (1/INS_ACCSCAL) + INS_ACCOFFS +
 //! p(T − 35) − p(T_cal − 35)`. The result is the frame `INS_ACC*` are written in, which is what
@@ -84,6 +85,13 @@ pub enum UndoError {
          custom, are read); log the IMU with AHRS_ORIENTATION = 0 for the calibration session"
     )]
     UnknownRotation(f64),
+    /// A calibration of the body-frame era.
+    #[error(
+        "INS_CALSENSFRAME = 0: the log's firmware corrected its IMU samples with a calibration made \
+         in the board's frame, in an order that changed between its versions, so they cannot be \
+         undone with certainty; record the session with current firmware"
+    )]
+    BodyFrameCalibration,
     /// ArduPilot keeps calibrations for three IMUs here.
     #[error(
         "IMU instance {0}: the calibrations read are INS_ACC*, INS_ACC2*, INS_ACC3* (instances \
@@ -109,8 +117,6 @@ pub enum UndoError {
 struct Correction {
     /// Board rotation, body ← sensor (row-major).
     rotation: [[f64; 3]; 3],
-    /// Whether the rotation came before the offsets and scales (`INS_CALSENSFRAME = 0`).
-    rotate_first: bool,
     acc_offset: [f64; 3],
     acc_inv_scale: [f64; 3],
     gyro_offset: [f64; 3],
@@ -185,11 +191,12 @@ fn correction(p: &VehicleParams, instance: u8) -> Result<Correction, UndoError> 
     } else {
         board_rotation(orientation).ok_or(UndoError::UnknownRotation(orientation))?
     };
-    let rotate_first = p.get("INS_CALSENSFRAME") == Some(0.0);
+    if p.get("INS_CALSENSFRAME") == Some(0.0) {
+        return Err(UndoError::BodyFrameCalibration);
+    }
     let tcal = tcal(p, instance, &get)?;
     Ok(Correction {
         rotation,
-        rotate_first,
         acc_offset,
         acc_inv_scale,
         gyro_offset,
@@ -322,14 +329,8 @@ pub(crate) fn undo(
     let mut last_temp = temps.iter().copied().find(|t| t.is_finite());
     let mut no_temp = 0usize;
     for (k, (a, w)) in rec.acc.iter_mut().zip(&mut rec.gyro_rad_s).enumerate() {
-        let (mut acc, mut gyro) = (*a, rotate_back(&c.rotation, *w));
-        if !c.rotate_first {
-            acc = rotate_back(&c.rotation, acc);
-        }
+        let (mut acc, mut gyro) = (rotate_back(&c.rotation, *a), rotate_back(&c.rotation, *w));
         acc = std::array::from_fn(|i| acc[i] * c.acc_inv_scale[i] + c.acc_offset[i]);
-        if c.rotate_first {
-            acc = rotate_back(&c.rotation, acc);
-        }
         gyro = std::array::from_fn(|i| gyro[i] + c.gyro_offset[i]);
         if let Some(t) = &c.tcal {
             let temp = match temps.get(k).copied().filter(|t| t.is_finite()) {

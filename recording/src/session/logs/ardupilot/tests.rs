@@ -226,4 +226,10 @@ fn what_cannot_be_undone_is_refused() {
     assert!(matches!(e, UndoError::NoTemperature { .. }), "{e}");
     let e = undo(&mut rec, &params(0, 41.0, false), 0).unwrap_err();
     assert!(matches!(e, UndoError::UnknownRotation(_)), "{e}");
+    let e = undo(
+        &mut rec,
+        &params_with(0, 0.0, false, &[("INS_CALSENSFRAME", 0.0)]),
+        0,
+    );
+    assert_eq!(e.unwrap_err(), UndoError::BodyFrameCalibration);
 }
