@@ -507,13 +507,16 @@ pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
 /// A stream's samples in time order, their stamps mended ([`repair_times`]).
 fn repaired(samples: Vec<StreamSample>) -> (Vec<StreamSample>, TimeRepairs) {
     let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
-    let (order, rep) = repair_times(&t, |i, j| {
+    let (order, mut rep) = repair_times(&t, |i, j| {
         samples[i].v == samples[j].v && samples[i].temp_c == samples[j].temp_c
     });
     drop(t);
+    let mut times: Vec<f64> = order.iter().map(|s| s.1).collect();
+    rep.bursts = super::bursts::retime_bursts(&mut times);
     let out = order
         .iter()
-        .map(|&(i, t_s)| StreamSample { t_s, ..samples[i] })
+        .zip(times)
+        .map(|(&(i, _), t_s)| StreamSample { t_s, ..samples[i] })
         .collect();
     (out, rep)
 }
