@@ -236,12 +236,19 @@ fn fixed_limits_are_honoured_where_the_floor_would_refuse() {
     let fixed = SegmentOptions {
         still_threshold: Some(StillThreshold {
             acc_mg: 15.0,
-            gyro_deg_s: 9.0,
+            gyro_deg_s: 12.0,
         }),
         ..SegmentOptions::default()
     };
     let seg = find_intervals(&rec, &fixed).unwrap();
-    assert_eq!(seg.stills.len(), spec.ups.len());
+    let sim = simulate_hand(&logger_unit(OutputUnit::MetresPerSecondSquared), &spec);
+    assert_eq!(
+        seg.stills.len(),
+        spec.ups.len(),
+        "{:?}\n{:?}",
+        seg.stills.iter().map(|s| (s.start_s, s.duration_s)).collect::<Vec<_>>(),
+        sim.holds.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>()
+    );
     // A limit tighter than the tremor finds nothing and says which limits it used.
     let tight = SegmentOptions {
         still_threshold: Some(StillThreshold {

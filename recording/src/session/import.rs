@@ -575,6 +575,10 @@ fn mid_scale(acc: &[[f64; 3]]) -> Option<(f64, u32)> {
 }
 
 #[cfg(test)]
+#[path = "import/logger_files_tests.rs"]
+mod logger_files_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -234,20 +234,75 @@ impl Judge {
         }
     }
 
-    /// Whether rows `lo..hi` are at rest.
-    pub(crate) fn still(&self, a: &Stream, g: &Stream, lo: usize, hi: usize) -> bool {
+    /// How rows `lo..hi` are at rest, if they are.
+    pub(crate) fn rest(&self, a: &Stream, g: &Stream, lo: usize, hi: usize) -> Rest {
         match *self {
             Judge::Fixed { acc, gyro_rad_s } => {
-                a.var(lo, hi).iter().sum::<f64>() <= acc * acc
-                    && g.var(lo, hi).iter().sum::<f64>() <= gyro_rad_s * gyro_rad_s
+                let still = a.var(lo, hi).iter().sum::<f64>() <= acc * acc
+                    && g.var(lo, hi).iter().sum::<f64>() <= gyro_rad_s * gyro_rad_s;
+                if still {
+                    Rest::Table
+                } else {
+                    Rest::Moving
+                }
             }
             Judge::Noise { acc, gyro, g_out } => {
                 let w = hi - lo;
-                let (ok_a, ok_g) = (table_rest(a, &acc, lo, hi), table_rest(g, &gyro, lo, hi));
-                (ok_a && ok_g) || hand_rest(a, g, (&acc, &gyro), g_out, (lo, hi), w)
+                if table_rest(a, &acc, lo, hi) && table_rest(g, &gyro, lo, hi) {
+                    Rest::Table
+                } else if hand_rest(a, g, (&acc, &gyro), g_out, (lo, hi), w) {
+                    Rest::Hand
+                } else {
+                    Rest::Moving
+                }
             }
         }
     }
+}
+
+/// What a window is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Rest {
+    /// Moving.
+    Moving,
+    /// Held in a hand: a tremor and nothing more.
+    Hand,
+    /// At rest as the floor says (or within the user's limits).
+    Table,
+}
+
+/// A hand-held rest is told from the slow start of a turn only over a longer stretch than a
+/// window: a run of hand-held windows loses this much more at each end, s.
+pub const HAND_EDGE_S: f64 = 0.2;
+
+/// Which window centres are quiet: a run of quiet windows that holds a table rest loses the
+/// hand-held windows at its ends (the start and end of the turns around it, which a tremor's
+/// allowance would let in), and a run of hand-held windows alone loses `hand_edge` at each end.
+pub(crate) fn quiet(kinds: &[Rest], hand_edge: usize) -> Vec<bool> {
+    let mut quiet: Vec<bool> = kinds.iter().map(|k| *k != Rest::Moving).collect();
+    let mut a = 0;
+    while a < kinds.len() {
+        if !quiet[a] {
+            a += 1;
+            continue;
+        }
+        let mut b = a;
+        while b < kinds.len() && quiet[b] {
+            b += 1;
+        }
+        let (lo, hi) = if kinds[a..b].contains(&Rest::Table) {
+            let lo = a + kinds[a..b].iter().position(|k| *k == Rest::Table).unwrap_or(0);
+            let hi = a + kinds[a..b].iter().rposition(|k| *k == Rest::Table).unwrap_or(0) + 1;
+            (lo, hi)
+        } else {
+            (a + hand_edge, b.saturating_sub(hand_edge))
+        };
+        for (k, q) in quiet[a..b].iter_mut().enumerate() {
+            *q = a + k >= lo && a + k < hi;
+        }
+        a = b;
+    }
+    quiet
 }
 
 /// The χ² bound on a window's spread over the floor's, for windows of `w` rows.

@@ -11,7 +11,7 @@
 //! the thresholds from the sensor's noise instead of a user's guess.
 
 use super::import::{Recording, TimeJump, TimeOrigin};
-use super::rest::{self, Floor, Judge, Stream};
+use super::rest::{self, Floor, Judge, Rest, Stream};
 use crate::spelling::{Spelling, UserOption};
 use shared::linalg;
 use shared::OutputUnit;
@@ -381,9 +381,10 @@ pub fn find_intervals(
              and {MAX_GYRO_FLOOR_DEG_S} °/s)"
         )));
     }
-    let quiet: Vec<bool> = (half..n.saturating_sub(half))
-        .map(|i| judge.still(&sa, &sg, i - half, i + half + 1))
+    let kinds: Vec<Rest> = (half..n.saturating_sub(half))
+        .map(|i| judge.rest(&sa, &sg, i - half, i + half + 1))
         .collect();
+    let quiet = rest::quiet(&kinds, (rest::HAND_EDGE_S * rec.rate_hz).round() as usize);
     let jumps = rec.jumps();
     let runs = split_at_jumps(quiet_runs(&quiet, half), &jumps);
     let still_bias = still_bias(rec, &runs);
@@ -464,19 +465,25 @@ fn split_at_jumps(runs: Vec<(usize, usize)>, jumps: &[TimeJump]) -> Vec<(usize, 
     out
 }
 
-/// The gyro's mean over all quiet runs, weighted by length (its bias when most runs are still).
+/// The gyro's mean over all quiet runs, the median weighted by their lengths (its bias when most of
+/// the quiet time is still, however a spin's run is cut).
 fn still_bias(rec: &Recording, runs: &[(usize, usize)]) -> [f64; 3] {
-    let mut means: Vec<[f64; 3]> = runs
+    let means: Vec<([f64; 3], usize)> = runs
         .iter()
-        .map(|&(lo, hi)| mean_std(&rec.gyro_rad_s[lo..hi]).0)
+        .map(|&(lo, hi)| (mean_std(&rec.gyro_rad_s[lo..hi]).0, hi - lo))
         .collect();
-    if means.is_empty() {
-        return [0.0; 3];
-    }
+    let total: usize = means.iter().map(|m| m.1).sum();
     core::array::from_fn(|j| {
-        let mut v: Vec<f64> = means.iter_mut().map(|m| m[j]).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
+        let mut v: Vec<(f64, usize)> = means.iter().map(|m| (m.0[j], m.1)).collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut seen = 0;
+        for (x, n) in &v {
+            seen += n;
+            if 2 * seen >= total {
+                return *x;
+            }
+        }
+        0.0
     })
 }
 
