@@ -77,7 +77,7 @@ fn a_preamble_before_the_header_is_found_or_skipped_as_told() {
     assert!(told.read_notes.is_empty(), "{:?}", told.read_notes);
     // Told wrong: the line after the lines skipped is the header, and it names no such column.
     let e = read(&text, &ImportOptions { skip_lines: 2, ..o }).unwrap_err().to_string();
-    assert!(e.contains("'t' is not in the header"), "{e}");
+    assert!(e.contains("'acc_x' is not in the header (rate, 100, Hz)"), "{e}");
 }
 
 #[test]

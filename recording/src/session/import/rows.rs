@@ -448,7 +448,6 @@ pub(super) fn fill_streams(rec: &mut Recording) -> Option<String> {
         k = 0;
         t.retain(|_| (keep[k], k += 1).0);
     }
-    rec.skipped_rows += unfilled;
     Some(format!(
         "{no_gyro} row(s) without gyro values and {no_acc} with the gyro's alone (a logger writing \
          each sensor's packets in rows of their own, or cells left empty): the accelerometer's rows \
