@@ -69,8 +69,9 @@ fn flight(seed: u64, dur_s: f64, rests: &[(f64, f64)]) -> Recording {
             (play(&vib_a, t), play(&vib_w, t).map(f64::to_radians))
         };
         rec.t_s.push(t);
-        rec.acc
-            .push(core::array::from_fn(|j| g_b[j] + va[j] + 2e-3 * rng.normal()));
+        rec.acc.push(core::array::from_fn(|j| {
+            g_b[j] + va[j] + 2e-3 * rng.normal()
+        }));
         rec.gyro_rad_s.push(core::array::from_fn(|j| {
             bias[j] + vw[j] + 0.1f64.to_radians() * rng.normal()
         }));
@@ -80,14 +81,22 @@ fn flight(seed: u64, dur_s: f64, rests: &[(f64, f64)]) -> Recording {
 
 /// Every still found lies inside one of `rests` and covers most of it, and each rest has one.
 fn assert_rests_found(rec: &Recording, rests: &[(f64, f64)], what: &str) {
-    let seg = find_intervals(rec, &SegmentOptions::default())
-        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let seg =
+        find_intervals(rec, &SegmentOptions::default()).unwrap_or_else(|e| panic!("{what}: {e}"));
     assert_eq!(seg.stills.len(), rests.len(), "{what}: {:?}", seg.stills);
     for (s, &(a, l)) in seg.stills.iter().zip(rests) {
         let (t0, t1) = (s.start_s, s.start_s + s.duration_s);
-        assert!(t0 >= a && t1 <= a + l, "{what}: {t0}..{t1} not inside {a}..{}", a + l);
+        assert!(
+            t0 >= a && t1 <= a + l,
+            "{what}: {t0}..{t1} not inside {a}..{}",
+            a + l
+        );
         // The window's half and the trim come off each end: 0.35 s.
-        assert!(s.duration_s > l - 0.8, "{what}: {t0}..{t1} of {a}..{}", a + l);
+        assert!(
+            s.duration_s > l - 0.8,
+            "{what}: {t0}..{t1} of {a}..{}",
+            a + l
+        );
         assert!(s.direction[2] > 0.9999, "{what}: {:?}", s.direction);
     }
 }
@@ -98,7 +107,11 @@ fn a_two_second_rest_anywhere_in_a_ten_minute_vibrating_flight_is_found_every_ti
         let mut rng = Rng::new(seed, 71);
         let start = rng.range(5.0, 590.0);
         let rests = [(start, 2.0)];
-        assert_rests_found(&flight(seed, 600.0, &rests), &rests, &format!("seed {seed}"));
+        assert_rests_found(
+            &flight(seed, 600.0, &rests),
+            &rests,
+            &format!("seed {seed}"),
+        );
     }
 }
 
@@ -109,7 +122,11 @@ fn short_rests_at_the_ends_of_a_flight_log_are_found() {
         let first = [(0.0, 3.0)];
         assert_rests_found(&flight(seed, 150.0, &first), &first, "3 s of 150 s");
         let both = [(0.0, 2.0), (71.0, 2.0)];
-        assert_rests_found(&flight(seed, 73.0, &both), &both, "2 s at both ends of 73 s");
+        assert_rests_found(
+            &flight(seed, 73.0, &both),
+            &both,
+            "2 s at both ends of 73 s",
+        );
     }
 }
 
@@ -119,7 +136,9 @@ fn a_flight_with_no_rest_has_no_still_interval_and_the_message_says_what_was_mea
     let text = e.to_string();
     assert!(matches!(e, SegmentError::NoStill { .. }), "{text}");
     assert!(
-        text.contains("--still-threshold MG,DEG_S") && text.contains(" mg") && !text.contains("NaN"),
+        text.contains("--still-threshold MG,DEG_S")
+            && text.contains(" mg")
+            && !text.contains("NaN"),
         "{text}"
     );
 }
@@ -170,8 +189,14 @@ fn hand_held_rests_beside_table_rests_are_all_found_over_many_seeds() {
         assert_eq!(seg.stills.len(), holds.len(), "seed {seed}");
         for (s, (t0, t1)) in seg.stills.iter().zip(&holds) {
             let (a, b) = (s.start_s, s.start_s + s.duration_s);
-            assert!(a >= *t0 && b <= *t1, "seed {seed}: {a}..{b} not inside {t0}..{t1}");
-            assert!(s.duration_s > 0.6 * (t1 - t0), "seed {seed}: {a}..{b} of {t0}..{t1}");
+            assert!(
+                a >= *t0 && b <= *t1,
+                "seed {seed}: {a}..{b} not inside {t0}..{t1}"
+            );
+            assert!(
+                s.duration_s > 0.6 * (t1 - t0),
+                "seed {seed}: {a}..{b} of {t0}..{t1}"
+            );
         }
     }
 }
@@ -182,7 +207,11 @@ fn continuous_hand_motion_has_no_false_rest() {
         let spec = HandSpec {
             hold_s: (0.0, 0.0),
             // Slow turns too: 1–3 s and 3–6 s between positions.
-            turn_s: if seed % 2 == 0 { (1.0, 3.0) } else { (3.0, 6.0) },
+            turn_s: if seed % 2 == 0 {
+                (1.0, 3.0)
+            } else {
+                (3.0, 6.0)
+            },
             tremor_deg_s: 1.0,
             tremor_g: 2e-3,
             ..HandSpec::standard(seed)
@@ -220,7 +249,10 @@ fn a_rad_s_gyro_held_in_a_hand_is_not_told_to_change_its_unit() {
         })
         .unwrap_err()
         .to_string();
-        assert!(!e.contains("gyro-unit") && !e.contains("NaN"), "seed {seed}: {e}");
+        assert!(
+            !e.contains("gyro-unit") && !e.contains("NaN"),
+            "seed {seed}: {e}"
+        );
         assert!(e.contains("--still-threshold"), "{e}");
     }
 }
@@ -246,7 +278,10 @@ fn fixed_limits_are_honoured_where_the_floor_would_refuse() {
         seg.stills.len(),
         spec.ups.len(),
         "{:?}\n{:?}",
-        seg.stills.iter().map(|s| (s.start_s, s.duration_s)).collect::<Vec<_>>(),
+        seg.stills
+            .iter()
+            .map(|s| (s.start_s, s.duration_s))
+            .collect::<Vec<_>>(),
         sim.holds.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>()
     );
     // A limit tighter than the tremor finds nothing and says which limits it used.

@@ -94,7 +94,11 @@ pub fn retime_bursts(t_s: &mut [f64]) -> Option<Bursts> {
     let p = fitted_period_s(t_s)?;
     let steps: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
     let m = median(steps.clone())?;
-    let gaps: Vec<f64> = steps.iter().copied().filter(|d| *d > BURST_GAP * p).collect();
+    let gaps: Vec<f64> = steps
+        .iter()
+        .copied()
+        .filter(|d| *d > BURST_GAP * p)
+        .collect();
     // Most steps within a burst, and gaps between them at least every 64 samples.
     if m >= IN_BURST * p || gaps.len() * 64 < n {
         return None;
@@ -140,7 +144,11 @@ pub fn retime_rows(rec: &mut super::import::Recording) {
     let Some(b) = retime_bursts(&mut rec.t_s) else {
         return;
     };
-    match rec.time_repairs.iter_mut().find(|(what, _)| *what == "data row") {
+    match rec
+        .time_repairs
+        .iter_mut()
+        .find(|(what, _)| *what == "data row")
+    {
         Some((_, r)) => r.bursts = Some(b),
         None => rec.time_repairs.push((
             "data row",
@@ -172,7 +180,12 @@ mod tests {
     fn bursts_of_host_stamps_are_re_timed_at_the_rate_the_fit_gives() {
         // 10 minutes at 99.3 Hz, read in bursts of 10: the median step is 2 ms (500 Hz).
         let mut t = host_stamped(59_580, 99.3, 10);
-        let fastest = 1.0 / t[1..].iter().zip(&t).map(|(a, b)| a - b).fold(f64::NAN, f64::min);
+        let fastest = 1.0
+            / t[1..]
+                .iter()
+                .zip(&t)
+                .map(|(a, b)| a - b)
+                .fold(f64::NAN, f64::min);
         assert!(fastest > 400.0, "{fastest}");
         let b = retime_bursts(&mut t).expect("bursts found");
         assert!((b.fitted_rate_hz - 99.3).abs() < 0.01, "{b:?}");
@@ -180,9 +193,14 @@ mod tests {
         assert_eq!(b.pieces, 1);
         let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
         // Evenly stepped at the fitted period, which is the sensor's within 0.01 Hz (above).
-        assert!(steps.iter().all(|d| (d * b.fitted_rate_hz - 1.0).abs() < 1e-6));
+        assert!(steps
+            .iter()
+            .all(|d| (d * b.fitted_rate_hz - 1.0).abs() < 1e-6));
         let text = b.describe("data row");
-        assert!(text.contains("99.300 Hz") && text.contains("500.0 Hz"), "{text}");
+        assert!(
+            text.contains("99.300 Hz") && text.contains("500.0 Hz"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -193,7 +211,11 @@ mod tests {
         }
         let b = retime_bursts(&mut t).expect("bursts found");
         assert_eq!(b.pieces, 2, "{b:?}");
-        assert!((t[10_000] - t[9_999] - 3.01).abs() < 0.02, "{}", t[10_000] - t[9_999]);
+        assert!(
+            (t[10_000] - t[9_999] - 3.01).abs() < 0.02,
+            "{}",
+            t[10_000] - t[9_999]
+        );
         // A clean log, and one with jitter, have no bursts.
         let mut even: Vec<f64> = (0..5000).map(|i| i as f64 * 0.01).collect();
         assert_eq!(retime_bursts(&mut even), None);

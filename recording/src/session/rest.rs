@@ -172,7 +172,12 @@ pub(crate) fn floor(stream: &Stream, n: usize, w: usize, centre: &[f64; 3]) -> O
         f = next;
     }
     let per_axis = |g: &dyn Fn(usize, usize) -> [f64; 3], j: usize| {
-        median(chosen.iter().map(|&k| g(blocks[k].0, blocks[k].1)[j]).collect())
+        median(
+            chosen
+                .iter()
+                .map(|&k| g(blocks[k].0, blocks[k].1)[j])
+                .collect(),
+        )
     };
     let var: [f64; 3] = core::array::from_fn(|j| per_axis(&|lo, hi| stream.var(lo, hi), j));
     let white: [f64; 3] = core::array::from_fn(|j| per_axis(&|lo, hi| stream.white(lo, hi), j));
@@ -182,14 +187,21 @@ pub(crate) fn floor(stream: &Stream, n: usize, w: usize, centre: &[f64; 3]) -> O
             .iter()
             .map(|&k| {
                 let m = stream.mean(blocks[k].0, blocks[k].1);
-                (0..3).map(|j| (m[j] - centre[j]).powi(2)).sum::<f64>().sqrt()
+                (0..3)
+                    .map(|j| (m[j] - centre[j]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
             })
             .collect(),
     );
     // AR(1) noise with lag-one correlation ρ: white/var = 1 − ρ, and n(1 − ρ)/(1 + ρ) of n samples
     // are independent.
     let (sv, sw) = (var.iter().sum::<f64>(), white.iter().sum::<f64>());
-    let r = if sv > 0.0 { (sw / sv).clamp(0.0, 1.0) } else { 1.0 };
+    let r = if sv > 0.0 {
+        (sw / sv).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     Some(Floor {
         var,
         white,
@@ -291,8 +303,16 @@ pub(crate) fn quiet(kinds: &[Rest], hand_edge: usize) -> Vec<bool> {
             b += 1;
         }
         let (lo, hi) = if kinds[a..b].contains(&Rest::Table) {
-            let lo = a + kinds[a..b].iter().position(|k| *k == Rest::Table).unwrap_or(0);
-            let hi = a + kinds[a..b].iter().rposition(|k| *k == Rest::Table).unwrap_or(0) + 1;
+            let lo = a + kinds[a..b]
+                .iter()
+                .position(|k| *k == Rest::Table)
+                .unwrap_or(0);
+            let hi = a
+                + kinds[a..b]
+                    .iter()
+                    .rposition(|k| *k == Rest::Table)
+                    .unwrap_or(0)
+                + 1;
             (lo, hi)
         } else {
             (a + hand_edge, b.saturating_sub(hand_edge))

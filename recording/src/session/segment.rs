@@ -385,8 +385,34 @@ pub fn find_intervals(
         .map(|i| judge.rest(&sa, &sg, i - half, i + half + 1))
         .collect();
     let quiet = rest::quiet(&kinds, (rest::HAND_EDGE_S * rec.rate_hz).round() as usize);
+    let runs = split_at_jumps(quiet_runs(&quiet, half), &rec.jumps());
+    let (stills, spins, short_dropped) = intervals(rec, runs, options, half);
+    if stills.is_empty() {
+        return Err(no_still(format!(
+            "no window at rest lasts {} s",
+            options.min_still_s
+        )));
+    }
+    Ok(Segmentation {
+        stills,
+        spins,
+        short_dropped,
+        acc_threshold: thr_a,
+        gyro_threshold_rad_s: thr_g,
+        gravity_out,
+    })
+}
+
+/// The still intervals and spins of the quiet `runs` (rows), and how many were too short: each
+/// run trimmed, its kind told by its mean rate, and a run joined to the last of its kind when a
+/// short disturbance split one position.
+fn intervals(
+    rec: &Recording,
+    runs: Vec<(usize, usize)>,
+    options: &SegmentOptions,
+    half: usize,
+) -> (Vec<Interval>, Vec<Interval>, usize) {
     let jumps = rec.jumps();
-    let runs = split_at_jumps(quiet_runs(&quiet, half), &jumps);
     let still_bias = still_bias(rec, &runs);
     let trim = (options.trim_s * rec.rate_hz).round() as usize;
     let min_len = (options.min_still_s * rec.rate_hz).round() as usize;
@@ -417,20 +443,7 @@ pub fn find_intervals(
             _ => list.push(iv),
         }
     }
-    if stills.is_empty() {
-        return Err(no_still(format!(
-            "no window at rest lasts {} s",
-            options.min_still_s
-        )));
-    }
-    Ok(Segmentation {
-        stills,
-        spins,
-        short_dropped,
-        acc_threshold: thr_a,
-        gyro_threshold_rad_s: thr_g,
-        gravity_out,
-    })
+    (stills, spins, short_dropped)
 }
 
 /// Rows `lo..hi` of runs of quiet window centres (indices into the recording).

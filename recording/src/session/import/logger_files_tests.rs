@@ -36,7 +36,11 @@ fn a_header_less_file_is_read_by_column_index_and_named_as_such_when_read_by_nam
     assert_eq!(rec.len(), 300, "the first line is data too");
     assert_eq!(rec.acc[0], [0.01, -0.02, 9.81]);
     assert!((rec.rate_hz - 100.0).abs() < 1e-6, "{}", rec.rate_hz);
-    assert!(rec.read_notes.iter().any(|n| n.contains("no header")), "{:?}", rec.read_notes);
+    assert!(
+        rec.read_notes.iter().any(|n| n.contains("no header")),
+        "{:?}",
+        rec.read_notes
+    );
     // No time column: the rate.
     let rec = read(&text, &by_index(TimeSource::RateHz(50.0))).unwrap();
     assert_eq!(rec.len(), 300);
@@ -68,16 +72,31 @@ fn a_preamble_before_the_header_is_found_or_skipped_as_told() {
     let found = read(&text, &o).unwrap();
     assert_eq!(found.len(), 300);
     assert!(
-        found.read_notes.iter().any(|n| n.contains("3 line(s) before the header on line 4")),
+        found
+            .read_notes
+            .iter()
+            .any(|n| n.contains("3 line(s) before the header on line 4")),
         "{:?}",
         found.read_notes
     );
-    let told = read(&text, &ImportOptions { skip_lines: 3, ..o.clone() }).unwrap();
+    let told = read(
+        &text,
+        &ImportOptions {
+            skip_lines: 3,
+            ..o.clone()
+        },
+    )
+    .unwrap();
     assert_eq!((told.len(), told.acc.clone()), (300, found.acc.clone()));
     assert!(told.read_notes.is_empty(), "{:?}", told.read_notes);
     // Told wrong: the line after the lines skipped is the header, and it names no such column.
-    let e = read(&text, &ImportOptions { skip_lines: 2, ..o }).unwrap_err().to_string();
-    assert!(e.contains("'acc_x' is not in the header (rate, 100, Hz)"), "{e}");
+    let e = read(&text, &ImportOptions { skip_lines: 2, ..o })
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("'acc_x' is not in the header (rate, 100, Hz)"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -113,7 +132,11 @@ fn empty_cells_cost_that_rows_stream_never_the_file() {
     // A single empty cell: that row's gyro comes from its neighbours, the file is read.
     let mut one = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
     for i in 0..300 {
-        let gx = if i == 150 { String::new() } else { "0.5".into() };
+        let gx = if i == 150 {
+            String::new()
+        } else {
+            "0.5".into()
+        };
         one.push_str(&format!("{:.2},0,0,9.81,{gx},0,0\n", i as f64 * 0.01));
     }
     let rec = read(&one, &o).unwrap();
@@ -137,5 +160,8 @@ fn host_stamped_bursts_are_re_timed_at_the_rate_the_stamps_fit() {
     let rec = read(&text, &o).unwrap();
     assert!((rec.rate_hz - 99.3).abs() < 0.01, "{}", rec.rate_hz);
     let said = rec.reader_warnings(Places::InFile).join("\n");
-    assert!(said.contains("bursts") && said.contains("99.300 Hz"), "{said}");
+    assert!(
+        said.contains("bursts") && said.contains("99.300 Hz"),
+        "{said}"
+    );
 }

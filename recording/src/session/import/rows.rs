@@ -425,10 +425,17 @@ pub(super) fn fill_streams(rec: &mut Recording) -> Option<String> {
         }
         let k = with_gyro.partition_point(|&j| j < i);
         let near = |j: usize| j.abs_diff(i) <= FILL_ROWS;
-        match (k.checked_sub(1).map(|k| with_gyro[k]), with_gyro.get(k).copied()) {
+        match (
+            k.checked_sub(1).map(|k| with_gyro[k]),
+            with_gyro.get(k).copied(),
+        ) {
             (Some(a), Some(b)) if near(a) && near(b) => {
                 let (ta, tb, t) = (rec.t_s[a], rec.t_s[b], rec.t_s[i]);
-                let f = if tb > ta { ((t - ta) / (tb - ta)).clamp(0.0, 1.0) } else { 0.5 };
+                let f = if tb > ta {
+                    ((t - ta) / (tb - ta)).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
                 let (ga, gb) = (rec.gyro_rad_s[a], rec.gyro_rad_s[b]);
                 rec.gyro_rad_s[i] = core::array::from_fn(|j| ga[j] + f * (gb[j] - ga[j]));
             }
