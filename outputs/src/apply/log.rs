@@ -228,11 +228,8 @@ fn stills_of(rec: &Recording) -> Result<Vec<Interval>, ApplyError> {
     match find_intervals(rec, &SegmentOptions::default()) {
         Ok(s) => Ok(s.stills),
         Err(SegmentError::NoStill {
-            acc_mg,
-            gyro_deg_s,
-            gyro_white_deg_s,
-            ..
-        }) if gyro_unit_suspect(acc_mg, gyro_deg_s, gyro_white_deg_s) => {
+            acc_mg, gyro_deg_s, ..
+        }) if gyro_unit_suspect(acc_mg, gyro_deg_s) => {
             Err(ApplyError::GyroNeverAtRest { acc_mg, gyro_deg_s })
         }
         Err(_) => Ok(Vec::new()),

@@ -266,23 +266,19 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 }
 
 /// A still accelerometer (a floor under [`MAX_ACC_FLOOR_MG`]) beside a gyro whose floor is above
-/// [`MAX_GYRO_FLOOR_DEG_S`] and white noise (`gyro_white_deg_s` at least 0.9 of `gyro_deg_s`, up to
-/// 200 °/s): 57× a still gyro's 0.02–3 °/s, as a gyro in °/s read as rad/s moves. A hand's tremor
-/// is not white (it moves slowly from sample to sample), so a rad/s gyro held in a hand is never
-/// taken for one.
-pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64, gyro_white_deg_s: f64) -> bool {
-    acc_mg < MAX_ACC_FLOOR_MG
-        && gyro_deg_s > MAX_GYRO_FLOOR_DEG_S
-        && gyro_white_deg_s >= 0.9 * gyro_deg_s
-        && gyro_white_deg_s < 200.0
+/// [`MAX_GYRO_FLOOR_DEG_S`] (more than any hand shakes) and under 200 °/s: 57× a still gyro's
+/// 0.02–3 °/s, as a gyro in °/s read as rad/s moves. A rad/s gyro held in a hand (0.5–2 °/s of
+/// tremor) is under the floor's limit, so it is never taken for one.
+pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
+    acc_mg < MAX_ACC_FLOOR_MG && gyro_deg_s > MAX_GYRO_FLOOR_DEG_S && gyro_deg_s < 200.0
 }
 
 /// Why nothing is still, when the data suggest a cause: a still accelerometer with a gyro 57× too
 /// noisy is a gyro in the wrong unit, said with the option that fixes it where the input has one.
 fn no_still_hint(rec: &Recording, figures: (f64, f64, f64), sp: Spelling) -> String {
-    let (acc_mg, gyro_deg_s, gyro_white_deg_s) = figures;
+    let (acc_mg, gyro_deg_s, _) = figures;
     match rec.time_origin {
-        _ if !gyro_unit_suspect(acc_mg, gyro_deg_s, gyro_white_deg_s) => String::new(),
+        _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
         // A binary log states its units: no option changes them.
         Some(TimeOrigin::LoggerStamps(format)) => format!(
             "; but the accelerometer is still there: the {format} log's gyro moves \
