@@ -418,6 +418,7 @@ impl SessionOptions {
             segment: SegmentOptions {
                 min_still_s: self.min_still_s,
                 still_threshold,
+                offer_still_threshold: true,
                 spelling: Spelling::Keywords,
                 ..SegmentOptions::default()
             },

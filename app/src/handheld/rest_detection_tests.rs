@@ -132,7 +132,12 @@ fn short_rests_at_the_ends_of_a_flight_log_are_found() {
 
 #[test]
 fn a_flight_with_no_rest_has_no_still_interval_and_the_message_says_what_was_measured() {
-    let e = find_intervals(&flight(3, 120.0, &[]), &SegmentOptions::default()).unwrap_err();
+    // As `segment` asks, which has the fixed limits' option.
+    let offered = SegmentOptions {
+        offer_still_threshold: true,
+        ..SegmentOptions::default()
+    };
+    let e = find_intervals(&flight(3, 120.0, &[]), &offered).unwrap_err();
     let text = e.to_string();
     assert!(matches!(e, SegmentError::NoStill { .. }), "{text}");
     assert!(
@@ -141,6 +146,9 @@ fn a_flight_with_no_rest_has_no_still_interval_and_the_message_says_what_was_mea
             && !text.contains("NaN"),
         "{text}"
     );
+    // As `apply` and `noise` ask, which have no such option: not named.
+    let e = find_intervals(&flight(3, 120.0, &[]), &SegmentOptions::default()).unwrap_err();
+    assert!(!e.to_string().contains("--still-threshold"), "{e}");
 }
 
 /// A session of `hand` positions held in a hand (tremor `tremor_deg_s` per axis), then the other
@@ -244,9 +252,14 @@ fn a_rad_s_gyro_held_in_a_hand_is_not_told_to_change_its_unit() {
             hold_s: (0.7, 0.9),
             ..spec
         };
-        let e = find_intervals(&recording(&short, OutputUnit::MetresPerSecondSquared), &{
-            SegmentOptions::default()
-        })
+        let offered = SegmentOptions {
+            offer_still_threshold: true,
+            ..SegmentOptions::default()
+        };
+        let e = find_intervals(
+            &recording(&short, OutputUnit::MetresPerSecondSquared),
+            &offered,
+        )
         .unwrap_err()
         .to_string();
         assert!(

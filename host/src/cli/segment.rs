@@ -375,6 +375,7 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
         segment: SegmentOptions {
             min_still_s: a.min_still_s,
             still_threshold: a.still_threshold,
+            offer_still_threshold: true,
             ..SegmentOptions::default()
         },
         unit_id: unit_and_site(a)?,

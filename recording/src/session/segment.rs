@@ -28,6 +28,9 @@ pub struct SegmentOptions {
     /// Fixed limits on a still window's rms over the axes instead of the noise floor's: the
     /// accelerometer's in mg (of the measured gravity) and the gyro's in °/s.
     pub still_threshold: Option<StillThreshold>,
+    /// The caller has the fixed limits' option (`segment`; `apply` and `noise` do not): a "no
+    /// still interval" message names it.
+    pub offer_still_threshold: bool,
     /// A quiet run whose mean rate exceeds the still bias by this much is a spin, °/s.
     pub spin_min_rate_deg_s: f64,
     /// Two positions closer than this are the same position, degrees.
@@ -43,6 +46,7 @@ impl Default for SegmentOptions {
             min_still_s: 1.0,
             trim_s: 0.15,
             still_threshold: None,
+            offer_still_threshold: false,
             spin_min_rate_deg_s: 10.0,
             same_position_deg: 10.0,
             spelling: Spelling::Flags,
@@ -160,8 +164,7 @@ pub enum SegmentError {
          {acc_mg:.2} mg and a gyro spread of {gyro_deg_s:.3} °/s rms ({gyro_white_deg_s:.3} °/s of \
          it white noise), and a window is still within {acc_limit_mg:.2} mg and \
          {gyro_limit_deg_s:.3} °/s{hand}; hold the unit still for 3–5 s in each of about \
-         {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them, or give {option} \
-         (mg, °/s) if a rest moves more than that{hint}"
+         {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{option}{hint}"
     )]
     NoStill {
         /// What was missing.
@@ -180,7 +183,7 @@ pub enum SegmentError {
         gyro_limit_deg_s: f64,
         /// The hand-held rest's limits, as text (none with fixed limits).
         hand: String,
-        /// The fixed limits' option, spelt for the caller.
+        /// The fixed limits' option, spelt for the caller, where the caller has it.
         option: String,
     },
     /// The recording is shorter than one window.
@@ -364,9 +367,16 @@ pub fn find_intervals(
                 rest::HAND_GYRO_DEG_S
             ),
         },
-        option: options
-            .spelling
-            .given(UserOption::StillThreshold, "MG,DEG_S"),
+        option: if options.offer_still_threshold {
+            format!(
+                ", or give {} (mg, °/s) if a rest moves more than that",
+                options
+                    .spelling
+                    .given(UserOption::StillThreshold, "MG,DEG_S")
+            )
+        } else {
+            String::new()
+        },
     };
     // A still hand-held MEMS unit is far quieter than this: above it nothing is still.
     if options.still_threshold.is_none()
