@@ -370,9 +370,13 @@ pub fn find_intervals(
         option: if options.offer_still_threshold {
             format!(
                 ", or give {} (mg, °/s) if a rest moves more than that",
-                options
-                    .spelling
-                    .given(UserOption::StillThreshold, "MG,DEG_S")
+                options.spelling.given(
+                    UserOption::StillThreshold,
+                    match options.spelling {
+                        Spelling::Flags => "MG,DEG_S",
+                        Spelling::Keywords => "(MG, DEG_S)",
+                    }
+                )
             )
         } else {
             String::new()
