@@ -198,7 +198,7 @@ mod tests {
             .all(|d| (d * b.fitted_rate_hz - 1.0).abs() < 1e-6));
         let text = b.describe("data row");
         assert!(
-            text.contains("99.300 Hz") && text.contains("500.0 Hz"),
+            text.contains(&format!("{:.3} Hz", b.fitted_rate_hz)) && text.contains("500.0 Hz"),
             "{text}"
         );
     }
