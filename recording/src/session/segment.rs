@@ -164,13 +164,14 @@ pub enum SegmentError {
          {acc_mg:.2} mg and a gyro spread of {gyro_deg_s:.3} °/s rms ({gyro_white_deg_s:.3} °/s of \
          it white noise), and a window is still within {acc_limit_mg:.2} mg and \
          {gyro_limit_deg_s:.3} °/s{hand}; hold the unit still for 3–5 s in each of about \
-         {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{option}{hint}"
+         {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{advice}"
     )]
     NoStill {
         /// What was missing.
         why: String,
-        /// A likelier cause, if the data suggest one.
-        hint: String,
+        /// The fixed limits' option where the caller has it, then a likelier cause where the
+        /// data suggest one.
+        advice: String,
         /// The accelerometer's floor, mg of the measured gravity (rms over the axes).
         acc_mg: f64,
         /// The gyro's floor, °/s (rms over the axes).
@@ -183,8 +184,6 @@ pub enum SegmentError {
         gyro_limit_deg_s: f64,
         /// The hand-held rest's limits, as text (none with fixed limits).
         hand: String,
-        /// The fixed limits' option, spelt for the caller, where the caller has it.
-        option: String,
     },
     /// The recording is shorter than one window.
     #[error(
@@ -295,6 +294,21 @@ fn no_still_hint(rec: &Recording, figures: (f64, f64, f64), sp: Spelling) -> Str
     }
 }
 
+/// ", or give --still-threshold MG,DEG_S …" where the caller has that option, else nothing.
+fn still_threshold_advice(options: &SegmentOptions) -> String {
+    if !options.offer_still_threshold {
+        return String::new();
+    }
+    let value = match options.spelling {
+        Spelling::Flags => "MG,DEG_S",
+        Spelling::Keywords => "(MG, DEG_S)",
+    };
+    format!(
+        ", or give {} (mg, °/s) if a rest moves more than that",
+        options.spelling.given(UserOption::StillThreshold, value)
+    )
+}
+
 /// The streams' noise floors (the accelerometer's mean magnitude at rest is gravity's).
 fn floors(rec: &Recording, a: &Stream, g: &Stream, w: usize) -> Option<(Floor, Floor)> {
     let n = rec.len();
@@ -353,7 +367,7 @@ pub fn find_intervals(
     let no_still = |why: String| SegmentError::NoStill {
         why,
         // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
-        hint: no_still_hint(rec, figures, options.spelling),
+        advice: still_threshold_advice(options) + &no_still_hint(rec, figures, options.spelling),
         acc_mg: figures.0,
         gyro_deg_s: figures.1,
         gyro_white_deg_s: figures.2,
@@ -366,20 +380,6 @@ pub fn find_intervals(
                 rest::HAND_ACC_MG,
                 rest::HAND_GYRO_DEG_S
             ),
-        },
-        option: if options.offer_still_threshold {
-            format!(
-                ", or give {} (mg, °/s) if a rest moves more than that",
-                options.spelling.given(
-                    UserOption::StillThreshold,
-                    match options.spelling {
-                        Spelling::Flags => "MG,DEG_S",
-                        Spelling::Keywords => "(MG, DEG_S)",
-                    }
-                )
-            )
-        } else {
-            String::new()
         },
     };
     // A still hand-held MEMS unit is far quieter than this: above it nothing is still.

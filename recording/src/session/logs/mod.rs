@@ -138,7 +138,7 @@ pub fn read_log_within(
 ) -> Result<LogFile, LogError> {
     let max = max_samples.max(1);
     let (seconds_per_unit, over) = match first_pass(path, source, max)? {
-        FirstPass::Whole(log) => return Ok(log),
+        FirstPass::Whole(log) => return Ok(*log),
         FirstPass::Over {
             seconds_per_unit,
             error,
@@ -173,8 +173,8 @@ pub fn read_log_within(
 
 /// What the first pass of a log read within a budget found.
 pub(super) enum FirstPass {
-    /// The log, within the budget.
-    Whole(LogFile),
+    /// The log, within the budget (boxed: the other variant is a fraction of its size).
+    Whole(Box<LogFile>),
     /// More than the budget: its time stamps' unit, s (a text file's, told from the rows read).
     Over {
         /// Seconds per unit of the time stamps.
@@ -191,7 +191,7 @@ pub(super) fn first_pass(
     max: usize,
 ) -> Result<FirstPass, LogError> {
     match read_pass(path, source, &Keep::All { max }, 1.0) {
-        Ok(log) => Ok(FirstPass::Whole(log)),
+        Ok(log) => Ok(FirstPass::Whole(Box::new(log))),
         Err(e) => match e.over_budget(source) {
             Some(seconds_per_unit) => Ok(FirstPass::Over {
                 seconds_per_unit,
