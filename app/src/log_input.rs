@@ -34,6 +34,8 @@ pub struct LogInput {
     pub gyro_offset: Option<Vec<f64>>,
     /// Text files: the column with the unit's temperature, °C.
     pub temp_column: Option<String>,
+    /// Text files: lines before the header to skip (default: a preamble is found).
+    pub skip_lines: Option<u64>,
     /// ULog and DataFlash: which IMU (default 0).
     pub instance: Option<u8>,
     /// MCAP: the Imu topic (default: the bag's only one).
@@ -55,6 +57,7 @@ impl Default for LogInput {
             gyro_lsb_per_dps: None,
             gyro_offset: None,
             temp_column: None,
+            skip_lines: None,
             instance: None,
             topic: None,
             spelling: Spelling::Flags,
@@ -215,7 +218,8 @@ impl LogInput {
             || self.acc_offset.is_some()
             || self.gyro_lsb_per_dps.is_some()
             || self.gyro_offset.is_some()
-            || self.temp_column.is_some();
+            || self.temp_column.is_some()
+            || self.skip_lines.is_some();
         Ok(LogSource {
             text: if text_given {
                 Some(self.import_options()?)
@@ -241,7 +245,12 @@ impl LogInput {
         // The reader matches names case-insensitively: a name given twice would read one column
         // twice and make the fit singular, far from the cause.
         let mut seen: Vec<&str> = columns.iter().map(String::as_str).collect();
-        seen.extend(self.time_column.as_deref());
+        // "none": the file has no time column (its rate is given).
+        let time_column = self
+            .time_column
+            .as_deref()
+            .filter(|c| !c.trim().eq_ignore_ascii_case("none"));
+        seen.extend(time_column);
         seen.extend(self.temp_column.as_deref().map(str::trim));
         for (k, name) in seen.iter().enumerate() {
             if name.is_empty() {
@@ -254,8 +263,8 @@ impl LogInput {
                 });
             }
         }
-        let time = match (&self.time_column, self.rate_hz) {
-            (Some(c), None) => TimeSource::Column(c.clone()),
+        let time = match (time_column, self.rate_hz) {
+            (Some(c), None) => TimeSource::Column(c.to_string()),
             (None, Some(hz)) => TimeSource::RateHz(hz),
             _ => return Err(LogInputError::TimeSource(sp)),
         };
@@ -285,6 +294,7 @@ impl LogInput {
             gyro_lsb_per_dps,
             gyro_offset: self.text_gyro_offset(gyro_lsb_per_dps.is_some())?,
             temp_column: self.temp_column.as_ref().map(|c| c.trim().to_string()),
+            skip_lines: self.skip_lines.unwrap_or(0),
             spelling: sp,
         })
     }

@@ -38,7 +38,7 @@ const ALWAYS_DEVICE: &str = "every run of this command talks to the device";
 /// session directory and on a binary log; `--instance` and `--topic` on a text file.
 fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
     let mut v = Vec::new();
-    let text: [(&str, &[&str]); 10] = [
+    let text: [(&str, &[&str]); 11] = [
         ("columns", &["--columns", "a,b,c,d,e,f"]),
         ("time-column", &["--time-column", "t"]),
         ("time-unit", &["--time-unit", "ms"]),
@@ -49,6 +49,7 @@ fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
         ("gyro-lsb-per-dps", &["--gyro-lsb-per-dps", "65.5"]),
         ("temp-column", &["--temp-column", "temp"]),
         ("gyro-offset", &["--gyro-offset", "32768"]),
+        ("skip-lines", &["--skip-lines", "3"]),
     ];
     // `segment` reads logs only: a session directory is no input of it at all.
     let session = sub != "segment";
@@ -423,6 +424,7 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
         "input",
         "max-samples",
         "min-still-s",
+        "still-threshold",
         "no-gyro",
         "unit-id",
         "gravity",

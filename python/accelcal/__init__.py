@@ -58,11 +58,11 @@ DEFAULT_COLUMNS = ("acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
 #: The keywords of ``LogOptions`` (how to read a log) and of ``SessionOptions`` (how to cut it).
 _LOG_KEYWORDS = (
     "acc_unit", "gyro_unit", "columns", "time_column", "time_unit", "rate_hz", "acc_offset",
-    "gyro_lsb_per_dps", "gyro_offset", "temp_column", "instance", "topic",
+    "gyro_lsb_per_dps", "gyro_offset", "temp_column", "instance", "topic", "skip_lines",
 )
 _SESSION_KEYWORDS = (
     "min_still_s", "unit_id", "gravity", "latitude", "height_m", "no_gyro", "face_sigma_deg",
-    "faces", "max_samples",
+    "faces", "max_samples", "still_threshold",
 )
 
 
@@ -175,7 +175,8 @@ def segment(
     ``gyro_unit="LSB"``). How to cut it, as ``site=SessionOptions(...)`` or its keywords:
     ``min_still_s``, ``unit_id``, ``gravity``, ``latitude``, ``height_m``, ``no_gyro``,
     ``face_sigma_deg``, ``faces`` (one label per still position in order, "x+" … "z-": a six-face
-    session checked against the data).
+    session checked against the data), ``still_threshold`` ((mg, °/s): fixed limits on a still
+    window's spread instead of the sensor's own noise floor).
 
     C-contiguous float64 arrays are read in place (no copy); other layouts are converted once.
     """

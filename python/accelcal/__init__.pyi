@@ -43,6 +43,7 @@ class LogOptions:
         temp_column: Optional[str] = None,
         instance: Optional[int] = None,
         topic: Optional[str] = None,
+        skip_lines: Optional[int] = None,
     ) -> None: ...
     acc_unit: Optional[str]
     gyro_unit: Optional[str]
@@ -56,6 +57,7 @@ class LogOptions:
     temp_column: Optional[str]
     instance: Optional[int]
     topic: Optional[str]
+    skip_lines: Optional[int]
 
 class SessionOptions:
     """How to cut a recording into a session: shortest still position, unit id, site, gyro fit."""
@@ -72,6 +74,7 @@ class SessionOptions:
         face_sigma_deg: float = 2.0,
         faces: Optional[Sequence[str]] = None,
         max_samples: Optional[int] = None,
+        still_threshold: Optional[Tuple[float, float]] = None,
     ) -> None: ...
     min_still_s: float
     unit_id: Optional[str]
@@ -82,6 +85,7 @@ class SessionOptions:
     face_sigma_deg: float
     faces: Optional[List[str]]
     max_samples: Optional[int]
+    still_threshold: Optional[Tuple[float, float]]
 
 class Session:
     """A calibration session: plan, per-segment statistics and the hand-turn gyro."""
@@ -188,6 +192,7 @@ def segment(
     no_gyro: bool = False,
     face_sigma_deg: float = 2.0,
     faces: Optional[Sequence[str]] = None,
+    still_threshold: Optional[Tuple[float, float]] = None,
 ) -> Session:
     """Cuts a recording (two (n, 3) array-likes, or one DataFrame with named columns) into a
     session; the reading options as `log=` or keywords, the cutting options as `site=` or
@@ -210,6 +215,7 @@ def segment_file(
     temp_column: Optional[str] = None,
     instance: Optional[int] = None,
     topic: Optional[str] = None,
+    skip_lines: Optional[int] = None,
     min_still_s: float = 1.0,
     unit_id: Optional[str] = None,
     gravity: Optional[float] = None,
@@ -219,6 +225,7 @@ def segment_file(
     face_sigma_deg: float = 2.0,
     faces: Optional[Sequence[str]] = None,
     max_samples: Optional[int] = None,
+    still_threshold: Optional[Tuple[float, float]] = None,
 ) -> Session:
     """Cuts a logger's file into a session, as ``host segment`` does: text (the units and time
     needed), PX4 ULog, ArduPilot DataFlash or ROS 2 MCAP (told by the first bytes; ``instance`` and

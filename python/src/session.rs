@@ -16,7 +16,7 @@ use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG
 use recording::session::import::MAX_ROWS;
 use recording::session::import::{read_logger, ImportError, Recording, DEFAULT_COLUMNS};
 use recording::session::logs::{read_log_keeping, text_notes, DEFAULT_MAX_SAMPLES};
-use recording::session::segment::{IntervalKind, SegmentOptions};
+use recording::session::segment::{IntervalKind, SegmentOptions, StillThreshold};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
 use recording::spelling::Spelling;
 use std::io::{BufReader, Read};
@@ -217,6 +217,8 @@ pub struct LogOptions {
     pub instance: Option<u8>,
     /// MCAP: which Imu topic.
     pub topic: Option<String>,
+    /// Text files: lines before the header to skip (`host segment --skip-lines`).
+    pub skip_lines: Option<u64>,
 }
 
 #[pymethods]
@@ -224,7 +226,7 @@ impl LogOptions {
     #[new]
     #[pyo3(signature = (*, acc_unit = None, gyro_unit = None, columns = None, time_column = None,
         time_unit = None, rate_hz = None, acc_offset = None, gyro_lsb_per_dps = None,
-        gyro_offset = None, temp_column = None, instance = None, topic = None))]
+        gyro_offset = None, temp_column = None, instance = None, topic = None, skip_lines = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         acc_unit: Option<String>,
@@ -239,6 +241,7 @@ impl LogOptions {
         temp_column: Option<String>,
         instance: Option<u32>,
         topic: Option<String>,
+        skip_lines: Option<u64>,
     ) -> PyResult<Self> {
         let instance = instance
             .map(u8::try_from)
@@ -257,6 +260,7 @@ impl LogOptions {
             temp_column,
             instance,
             topic,
+            skip_lines,
         })
     }
 
@@ -282,6 +286,7 @@ impl LogOptions {
             gyro_lsb_per_dps: self.gyro_lsb_per_dps,
             gyro_offset: self.gyro_offset.clone(),
             temp_column: self.temp_column.clone(),
+            skip_lines: self.skip_lines,
             instance: self.instance,
             topic: self.topic.clone(),
             spelling: Spelling::Keywords,
@@ -312,6 +317,8 @@ pub struct SessionOptions {
     pub faces: Option<Vec<String>>,
     /// Samples of each stream held in memory at once from a file (`host segment --max-samples`).
     pub max_samples: Option<usize>,
+    /// Fixed limits on a still window's spread, (mg, °/s) (`host segment --still-threshold`).
+    pub still_threshold: Option<(f64, f64)>,
 }
 
 #[pymethods]
@@ -319,7 +326,7 @@ impl SessionOptions {
     #[new]
     #[pyo3(signature = (*, min_still_s = 1.0, unit_id = None, gravity = None, latitude = None,
         height_m = None, no_gyro = false, face_sigma_deg = SIX_FACE_PRIOR_DEG, faces = None,
-        max_samples = None))]
+        max_samples = None, still_threshold = None))]
     // One argument per Python keyword, as LogOptions' constructor.
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -332,9 +339,11 @@ impl SessionOptions {
         face_sigma_deg: f64,
         faces: Option<Vec<String>>,
         max_samples: Option<usize>,
+        still_threshold: Option<(f64, f64)>,
     ) -> Self {
         SessionOptions {
             max_samples,
+            still_threshold,
             min_still_s,
             unit_id,
             gravity,
@@ -390,9 +399,26 @@ impl SessionOptions {
             ),
             None => None,
         };
+        let still_threshold = match self.still_threshold {
+            Some((mg, dps)) if mg > 0.0 && mg <= 1000.0 && dps > 0.0 && dps <= 100.0 => {
+                Some(StillThreshold {
+                    acc_mg: mg,
+                    gyro_deg_s: dps,
+                })
+            }
+            Some((mg, dps)) => {
+                return Err(usage(format!(
+                    "still_threshold=({mg}, {dps}): give the accelerometer's limit in mg (0–1000) \
+                     and the gyro's in °/s (0–100), e.g. (15, 6)"
+                )))
+            }
+            None => None,
+        };
         Ok(SegmentChoices {
             segment: SegmentOptions {
                 min_still_s: self.min_still_s,
+                still_threshold,
+                offer_still_threshold: true,
                 spelling: Spelling::Keywords,
                 ..SegmentOptions::default()
             },

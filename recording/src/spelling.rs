@@ -56,6 +56,10 @@ pub enum UserOption {
     TempColumn,
     /// Raw gyro counts' zero rate.
     GyroOffset,
+    /// Fixed limits on a still window's spread instead of the noise floor's.
+    StillThreshold,
+    /// Lines before a text file's header.
+    SkipLines,
 }
 
 impl UserOption {
@@ -86,6 +90,8 @@ impl UserOption {
             UserOption::MaxSamples => "max_samples",
             UserOption::TempColumn => "temp_column",
             UserOption::GyroOffset => "gyro_offset",
+            UserOption::StillThreshold => "still_threshold",
+            UserOption::SkipLines => "skip_lines",
         }
     }
 
@@ -116,6 +122,8 @@ impl UserOption {
             UserOption::MaxSamples => "--max-samples",
             UserOption::TempColumn => "--temp-column",
             UserOption::GyroOffset => "--gyro-offset",
+            UserOption::StillThreshold => "--still-threshold",
+            UserOption::SkipLines => "--skip-lines",
         }
     }
 

@@ -13,6 +13,8 @@
 
 pub mod gyro;
 #[cfg(test)]
+mod rest_detection_tests;
+#[cfg(test)]
 mod segmentation_tests;
 pub mod table_turn;
 

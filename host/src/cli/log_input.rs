@@ -12,15 +12,16 @@ use recording::spelling::Spelling;
 /// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
 #[derive(Clone, Debug, Args)]
 pub struct LogInputArgs {
-    /// Text files: the accelerometer x,y,z and gyro x,y,z column names, in that order.
+    /// Text files: the accelerometer x,y,z and gyro x,y,z column names, in that order, or their
+    /// indices (0-based) in a file with or without a header.
     #[arg(
         long,
         value_name = "AX,AY,AZ,GX,GY,GZ",
         default_value = "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z"
     )]
     pub columns: String,
-    /// Text files: the column with the time stamps (else --rate-hz); their unit is detected, or
-    /// --time-unit.
+    /// Text files: the column with the time stamps, by name or index (0-based), or `none` (then
+    /// --rate-hz); their unit is detected, or --time-unit.
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
     /// Text files: the time column's unit, s, ms, us or ns (default: detected from its median step
@@ -57,6 +58,11 @@ pub struct LogInputArgs {
     /// number keeps its values; only its temperature is missing). Binary logs carry their own.
     #[arg(long, value_name = "NAME")]
     pub temp_column: Option<String>,
+    /// Text files: lines before the header to skip (a logger's preamble; default: a header naming
+    /// the columns asked for is looked for in the first lines, and a header-less file of numbers
+    /// is read with --columns given by index, e.g. 0,1,2,3,4,5).
+    #[arg(long, value_name = "N", value_parser = crate::limits::whole_u64(1, 1_000_000))]
+    pub skip_lines: Option<u64>,
     /// PX4 ULog and ArduPilot DataFlash: which IMU of a vehicle with several (ULog's multi_id,
     /// DataFlash's I; default 0).
     #[arg(long, value_name = "N", value_parser = crate::limits::whole_u32(0, u8::MAX as u32))]
@@ -90,6 +96,7 @@ impl LogInputArgs {
                     .collect()
             }),
             temp_column: self.temp_column.clone(),
+            skip_lines: self.skip_lines,
             // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
             instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
             topic: self.topic.clone(),
@@ -112,6 +119,7 @@ impl LogInputArgs {
             ("--gyro-lsb-per-dps", self.gyro_lsb_per_dps.is_some()),
             ("--gyro-offset", self.gyro_offset.is_some()),
             ("--temp-column", self.temp_column.is_some()),
+            ("--skip-lines", self.skip_lines.is_some()),
         ]
         .into_iter()
         .filter_map(|(flag, given)| given.then_some(flag))

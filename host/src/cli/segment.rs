@@ -60,6 +60,11 @@ pub struct SegmentArgs {
     /// Shortest still interval kept, s.
     #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
+    /// Fixed limits on a still window's spread (rms over the axes: accelerometer in mg of the
+    /// measured gravity, gyro in °/s) instead of the sensor's own noise floor and a hand's tremor,
+    /// for when the automatic choice is wrong (e.g. `--still-threshold 15,6`).
+    #[arg(long, value_name = "MG,DEG_S", value_parser = still_threshold)]
+    pub still_threshold: Option<crate::session::segment::StillThreshold>,
     /// Replace an existing session in DIR.
     #[arg(long)]
     pub force: bool,
@@ -369,6 +374,8 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
     Ok(SegmentChoices {
         segment: SegmentOptions {
             min_still_s: a.min_still_s,
+            still_threshold: a.still_threshold,
+            offer_still_threshold: true,
             ..SegmentOptions::default()
         },
         unit_id: unit_and_site(a)?,
@@ -377,6 +384,26 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
         face_sigma_deg: face_sigma_deg(a),
         faces: a.faces.clone(),
     })
+}
+
+/// `--still-threshold MG,DEG_S`: two positive limits.
+fn still_threshold(text: &str) -> Result<crate::session::segment::StillThreshold, String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN))
+        .collect();
+    match v[..] {
+        [mg, dps] if mg > 0.0 && mg <= 1000.0 && dps > 0.0 && dps <= 100.0 => {
+            Ok(crate::session::segment::StillThreshold {
+                acc_mg: mg,
+                gyro_deg_s: dps,
+            })
+        }
+        _ => Err(format!(
+            "'{text}' is not MG,DEG_S: give the accelerometer's limit in mg (0–1000) and the \
+             gyro's in °/s (0–100), e.g. 15,6"
+        )),
+    }
 }
 
 /// One `--faces` label.
@@ -461,7 +488,8 @@ pub fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
     let unit = rec.acc_unit.map_or("", |u| u.symbol());
     let mut s = format!(
         "{} still interval(s), {} spin(s), {} short quiet run(s) dropped; thresholds: accelerometer \
-         {:.3} mg, gyro {:.3} °/s (window std, from the quietest stretch)\n",
+         {:.3} mg, gyro {:.3} °/s (a rest's window std, from the sensor's noise floor or \
+         --still-threshold)\n",
         seg.stills.len(),
         seg.spins.len(),
         seg.short_dropped,

@@ -127,6 +127,8 @@ pub struct ImportOptions {
     /// The column with the unit's temperature, °C. A row whose temperature is not a number (a
     /// driver without a reading, an empty field) keeps its values: only its temperature is missing.
     pub temp_column: Option<String>,
+    /// Lines before the header to skip (a logger's preamble); 0: the header is found.
+    pub skip_lines: u64,
     /// How the caller names these options in messages.
     pub spelling: Spelling,
 }
@@ -144,6 +146,7 @@ impl ImportOptions {
             gyro_lsb_per_dps: None,
             gyro_offset: [0.0; 3],
             temp_column: None,
+            skip_lines: 0,
             spelling: Spelling::Flags,
         }
     }
@@ -194,6 +197,9 @@ pub struct Recording {
     pub time_origin: Option<TimeOrigin>,
     /// The gyro was logged in counts and converted at this nominal scale, LSB per °/s.
     pub gyro_lsb_per_dps: Option<f64>,
+    /// What reading a text file found and did beyond the rows themselves: a preamble skipped, a
+    /// header-less file, rows with one stream missing.
+    pub read_notes: Vec<String>,
 }
 
 /// Why a logger's file cannot be imported; each says what to do.
@@ -210,6 +216,22 @@ pub enum ImportError {
     /// No header line.
     #[error("{0} is empty: a logger's CSV needs a header line naming its columns")]
     Empty(PathBuf),
+    /// The first line is numbers and the columns are asked for by name.
+    #[error(
+        "line {line}, the first, is {fields} numbers: the file has no header; give its columns by \
+         index (0-based), e.g. {} and {} (or {})",
+        .spelling.given(UserOption::Columns, "0,1,2,3,4,5"),
+        .spelling.given(UserOption::TimeColumn, "6"),
+        .spelling.given(UserOption::RateHz, "HZ")
+    )]
+    NoHeader {
+        /// 1-based line.
+        line: u64,
+        /// Its fields.
+        fields: usize,
+        /// The caller's names of the options.
+        spelling: Spelling,
+    },
     /// A needed column is not in the header.
     #[error(
         "column '{name}' is not in the header ({found}); name the file's columns with \
@@ -423,8 +445,31 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
     seconds_per_unit: f64,
 ) -> Result<Recording, ImportError> {
     let mut buf = Vec::new();
-    let (header, sep, header_line) = read_header(&mut r, &mut buf, path)?;
-    let layout = Layout::new(header, sep, options)?;
+    let header = read_header(&mut r, &mut buf, path, options)?;
+    let header_line = header.line;
+    let mut read_notes = Vec::new();
+    if header.preamble > 0 {
+        read_notes.push(format!(
+            "{} line(s) before the header on line {header_line} skipped (a logger's preamble; \
+             {} to say how many)",
+            header.preamble,
+            options.spelling.given(UserOption::SkipLines, "N")
+        ));
+    }
+    if header.first_row.is_some() {
+        read_notes.push(format!(
+            "no header: line {header_line} is data, its columns taken by index"
+        ));
+    }
+    if header.first_row.is_none() && rows::all_numbers(&header.names) {
+        return Err(ImportError::NoHeader {
+            line: header_line,
+            fields: header.names.len(),
+            spelling: options.spelling,
+        });
+    }
+    let first_row = header.first_row.clone();
+    let layout = Layout::new(header.names, header.sep, options)?;
     let still_var = match options.acc_unit {
         OutputUnit::MetresPerSecondSquared => STILL_VAR_M2_S4,
         OutputUnit::StandardGravity => {
@@ -437,9 +482,12 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
         layout: &layout,
         options,
         header_line,
+        first_row,
         seconds_per_unit,
     };
     let mut rec = read_rows(&mut r, &mut buf, &rows, &mut keeper)?;
+    read_notes.extend(rows::fill_streams(&mut rec));
+    rec.read_notes = read_notes;
     if keeper.report() {
         return Ok(Recording::default());
     }
@@ -460,6 +508,7 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
         rec.time_unit = Some((unit, options.time_unit.is_none()));
     }
     repair_rows(&mut rec);
+    super::bursts::retime_rows(&mut rec);
     rec.rate_hz = run_rate_hz(&rec.t_s);
     if options.acc_unit == OutputUnit::Lsb && options.acc_offset == [0.0; 3] {
         if let Some((offset, bits)) = mid_scale(&rec.acc) {
@@ -524,6 +573,10 @@ fn mid_scale(acc: &[[f64; 3]]) -> Option<(f64, u32)> {
         (inside && centred).then_some((m, bits))
     })
 }
+
+#[cfg(test)]
+#[path = "import/logger_files_tests.rs"]
+mod logger_files_tests;
 
 #[cfg(test)]
 mod tests {

@@ -18,6 +18,7 @@
 //! - [`toml_check`]: the arrays of a TOML file that serde would silently cut short.
 
 pub mod builtin;
+pub mod bursts;
 pub mod coverage;
 pub mod error;
 pub mod from_recording;
@@ -26,6 +27,7 @@ pub mod logs;
 pub mod plan;
 pub mod reader;
 pub mod repair;
+pub mod rest;
 pub mod segment;
 pub mod stats;
 pub mod thermal;

@@ -40,6 +40,8 @@ pub struct TimeRepairs {
     pub repeats: Vec<usize>,
     /// Samples with a repeated stamp and values of their own, spread up to the next stamp (index).
     pub spread: Vec<usize>,
+    /// Stamps that came in bursts, re-timed from the fit of stamp against index.
+    pub bursts: Option<super::bursts::Bursts>,
 }
 
 impl TimeRepairs {
@@ -127,6 +129,9 @@ impl TimeRepairs {
                 self.spread.len(),
                 at(places)
             ));
+        }
+        if let Some(b) = &self.bursts {
+            parts.push(b.describe(if what.is_empty() { "sample" } else { what }));
         }
         Some(format!("time stamps repaired: {}", parts.join("; ")))
     }

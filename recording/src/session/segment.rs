@@ -1,16 +1,17 @@
 //! Still intervals (and constant-rate spins) in one continuous recording, and what they are worth:
 //! the detection behind `host segment`.
 //!
-//! A sample is quiet when the variance of the accelerometer and of the gyro over a centred sliding
-//! window are both below thresholds learnt from the recording itself: a multiple of the window
-//! variance of its quietest stretch (a low percentile over all windows, so one lucky window does not
-//! set it). Quiet runs with a steady gyro near the still bias are still positions; quiet runs turning
-//! steadily faster than [`SegmentOptions::spin_min_rate_deg_s`] are spins. Runs split by a short
-//! disturbance in the same direction are joined, edges are trimmed, and runs shorter than the
-//! minimum are dropped (counted). This is how imu_tk's static detector works, with thresholds from the
-//! data instead of a user's guess.
+//! A sample is quiet when the window centred on it is at rest as the sensor's own noise says
+//! ([`super::rest`]: a table rest's spread consistent with the noise floor measured from the
+//! recording, or a hand-held rest's tremor and nothing more), or within the user's fixed limits
+//! (`--still-threshold`). Quiet runs with a steady gyro near the still bias are still positions;
+//! quiet runs turning steadily faster than [`SegmentOptions::spin_min_rate_deg_s`] are spins. Runs
+//! split by a short disturbance in the same direction are joined, edges are trimmed, and runs
+//! shorter than the minimum are dropped (counted). This is how imu_tk's static detector works, with
+//! the thresholds from the sensor's noise instead of a user's guess.
 
 use super::import::{Recording, TimeJump, TimeOrigin};
+use super::rest::{self, Floor, Judge, Rest, Stream};
 use crate::spelling::{Spelling, UserOption};
 use shared::linalg;
 use shared::OutputUnit;
@@ -24,10 +25,12 @@ pub struct SegmentOptions {
     pub min_still_s: f64,
     /// Trimmed from each end of an interval, s.
     pub trim_s: f64,
-    /// Threshold = this² × the quietest stretch's window variance.
-    pub threshold_factor: f64,
-    /// Percentile of the window variances taken as the quietest stretch's.
-    pub quiet_percentile: f64,
+    /// Fixed limits on a still window's rms over the axes instead of the noise floor's: the
+    /// accelerometer's in mg (of the measured gravity) and the gyro's in °/s.
+    pub still_threshold: Option<StillThreshold>,
+    /// The caller has the fixed limits' option (`segment`; `apply` and `noise` do not): a "no
+    /// still interval" message names it.
+    pub offer_still_threshold: bool,
     /// A quiet run whose mean rate exceeds the still bias by this much is a spin, °/s.
     pub spin_min_rate_deg_s: f64,
     /// Two positions closer than this are the same position, degrees.
@@ -42,14 +45,28 @@ impl Default for SegmentOptions {
             window_s: 0.4,
             min_still_s: 1.0,
             trim_s: 0.15,
-            threshold_factor: 3.0,
-            quiet_percentile: 0.1,
+            still_threshold: None,
+            offer_still_threshold: false,
             spin_min_rate_deg_s: 10.0,
             same_position_deg: 10.0,
             spelling: Spelling::Flags,
         }
     }
 }
+
+/// A user's fixed limits on a still window's spread (`--still-threshold MG,DEG_S`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StillThreshold {
+    /// The accelerometer's rms over the axes, mg of the measured gravity.
+    pub acc_mg: f64,
+    /// The gyro's rms over the axes, °/s.
+    pub gyro_deg_s: f64,
+}
+
+/// A still accelerometer's floor is under this, mg: above it nothing in the recording is still.
+pub const MAX_ACC_FLOOR_MG: f64 = 20.0;
+/// A still gyro's floor (a hand's tremor included) is under this, °/s: above it nothing is still.
+pub const MAX_GYRO_FLOOR_DEG_S: f64 = 5.0;
 
 /// Fewest distinct still positions for the intrinsic parameters from gravity's magnitude alone (nine
 /// unknowns: 3 biases, 3 scales, 3 non-orthogonalities; docs/model.md §7).
@@ -143,17 +160,43 @@ pub enum SegmentError {
     AlreadyCorrected(&'static str),
     /// Nothing in the recording is still.
     #[error(
-        "no still interval: the quietest stretch of the recording moves ({acc_mg:.1} mg, \
-         {gyro_deg_s:.2} °/s rms) or no quiet run lasts {min_s} s; hold the unit still for 3–5 s in \
-         each of about {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{hint}"
+        "no still interval: {why}; the recording's quietest stretch has an accelerometer spread of \
+         {acc_mg:.2} mg and a gyro spread of {gyro_deg_s:.3} °/s rms ({gyro_white_deg_s:.3} °/s of \
+         it white noise), and a window is still within {acc_limit_mg:.2} mg and \
+         {gyro_limit_deg_s:.3} °/s{hand}; hold the unit still for 3–5 s in each of about \
+         {RECOMMENDED_POSITIONS} positions, turning it in 1–3 s between them{advice}"
     )]
     NoStill {
-        /// A likelier cause, if the data suggest one.
-        hint: String,
-        /// Quietest accelerometer noise, mg (of the measured gravity).
+        /// What was missing.
+        why: String,
+        /// The fixed limits' option where the caller has it, then a likelier cause where the
+        /// data suggest one.
+        advice: String,
+        /// The accelerometer's floor, mg of the measured gravity (rms over the axes).
         acc_mg: f64,
-        /// Quietest gyro noise, °/s.
+        /// The gyro's floor, °/s (rms over the axes).
         gyro_deg_s: f64,
+        /// Its white part, °/s.
+        gyro_white_deg_s: f64,
+        /// The accelerometer limit of a still window, mg.
+        acc_limit_mg: f64,
+        /// The gyro limit of a still window, °/s.
+        gyro_limit_deg_s: f64,
+        /// The hand-held rest's limits, as text (none with fixed limits).
+        hand: String,
+    },
+    /// The recording is shorter than one window.
+    #[error(
+        "no still interval: the recording has {rows} sample(s), fewer than one {window_s} s window \
+         ({window_rows} samples); record at least {min_s} s of rest in each position"
+    )]
+    TooShort {
+        /// Samples in the recording.
+        rows: usize,
+        /// Samples in one window.
+        window_rows: usize,
+        /// The window, s.
+        window_s: f64,
         /// Minimum still duration, s.
         min_s: f64,
     },
@@ -215,50 +258,6 @@ pub enum SegmentError {
     },
 }
 
-/// Running sums for window statistics in O(1) per window.
-struct Prefix {
-    s: Vec<[f64; 3]>,
-    s2: Vec<[f64; 3]>,
-}
-
-impl Prefix {
-    fn new(x: &[[f64; 3]]) -> Prefix {
-        let x0 = x.first().copied().unwrap_or([0.0; 3]);
-        let mut s = Vec::with_capacity(x.len() + 1);
-        let mut s2 = Vec::with_capacity(x.len() + 1);
-        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
-        s.push(a);
-        s2.push(b);
-        for v in x {
-            for j in 0..3 {
-                let d = v[j] - x0[j];
-                a[j] += d;
-                b[j] += d * d;
-            }
-            s.push(a);
-            s2.push(b);
-        }
-        Prefix { s, s2 }
-    }
-
-    /// Sum over axes of the variance of rows `lo..hi`.
-    fn var(&self, lo: usize, hi: usize) -> f64 {
-        let n = (hi - lo) as f64;
-        (0..3)
-            .map(|j| {
-                let m = (self.s[hi][j] - self.s[lo][j]) / n;
-                ((self.s2[hi][j] - self.s2[lo][j]) / n - m * m).max(0.0)
-            })
-            .sum()
-    }
-}
-
-fn percentile(v: &[f64], q: f64) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * q).round() as usize]
-}
-
 fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     let n = x.len() as f64;
     let m: [f64; 3] = core::array::from_fn(|j| x.iter().map(|v| v[j]).sum::<f64>() / n);
@@ -268,15 +267,18 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (m, s)
 }
 
-/// A still accelerometer (`acc_mg` of window noise, under 20 mg) beside a gyro that moves 1–200 °/s:
-/// 57× a still gyro's 0.02–3 °/s, as a gyro in °/s read as rad/s moves.
+/// A still accelerometer (a floor under [`MAX_ACC_FLOOR_MG`]) beside a gyro whose floor is above
+/// [`MAX_GYRO_FLOOR_DEG_S`] (more than any hand shakes) and under 200 °/s: 57× a still gyro's
+/// 0.02–3 °/s, as a gyro in °/s read as rad/s moves. A rad/s gyro held in a hand (0.5–2 °/s of
+/// tremor) is under the floor's limit, so it is never taken for one.
 pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {
-    acc_mg < 20.0 && gyro_deg_s > 1.0 && gyro_deg_s < 200.0
+    acc_mg < MAX_ACC_FLOOR_MG && gyro_deg_s > MAX_GYRO_FLOOR_DEG_S && gyro_deg_s < 200.0
 }
 
 /// Why nothing is still, when the data suggest a cause: a still accelerometer with a gyro 57× too
 /// noisy is a gyro in the wrong unit, said with the option that fixes it where the input has one.
-fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64, sp: Spelling) -> String {
+fn no_still_hint(rec: &Recording, figures: (f64, f64, f64), sp: Spelling) -> String {
+    let (acc_mg, gyro_deg_s, _) = figures;
     match rec.time_origin {
         _ if !gyro_unit_suspect(acc_mg, gyro_deg_s) => String::new(),
         // A binary log states its units: no option changes them.
@@ -292,6 +294,51 @@ fn no_still_hint(rec: &Recording, acc_mg: f64, gyro_deg_s: f64, sp: Spelling) ->
     }
 }
 
+/// ", or give --still-threshold MG,DEG_S …" where the caller has that option, else nothing.
+fn still_threshold_advice(options: &SegmentOptions) -> String {
+    if !options.offer_still_threshold {
+        return String::new();
+    }
+    let value = match options.spelling {
+        Spelling::Flags => "MG,DEG_S",
+        Spelling::Keywords => "(MG, DEG_S)",
+    };
+    format!(
+        ", or give {} (mg, °/s) if a rest moves more than that",
+        options.spelling.given(UserOption::StillThreshold, value)
+    )
+}
+
+/// The streams' noise floors (the accelerometer's mean magnitude at rest is gravity's).
+fn floors(rec: &Recording, a: &Stream, g: &Stream, w: usize) -> Option<(Floor, Floor)> {
+    let n = rec.len();
+    let fa = rest::floor(a, n, w, &acc_centre(rec))?;
+    let fg = rest::floor(g, n, w, &[0.0; 3])?;
+    let g_out = fa.rest_norm.max(f64::MIN_POSITIVE);
+    // A quantised output at rest may not move at all: the floors are at least 0.1 mg and
+    // 0.01 °/s (rms over the axes), as a tool cannot tell a rest from a finer one.
+    Some((
+        fa.at_least((1e-4 * g_out).powi(2) / 3.0),
+        fg.at_least(0.01f64.to_radians().powi(2) / 3.0),
+    ))
+}
+
+/// How windows are judged: the user's fixed limits, or the floors'.
+fn judge(options: &SegmentOptions, fa: &Floor, fg: &Floor) -> Judge {
+    let g_out = fa.rest_norm.max(f64::MIN_POSITIVE);
+    match options.still_threshold {
+        Some(t) => Judge::Fixed {
+            acc: t.acc_mg * 1e-3 * g_out,
+            gyro_rad_s: t.gyro_deg_s.to_radians(),
+        },
+        None => Judge::Noise {
+            acc: *fa,
+            gyro: *fg,
+            g_out,
+        },
+    }
+}
+
 /// Finds the still intervals and spins of `rec`.
 pub fn find_intervals(
     rec: &Recording,
@@ -299,57 +346,88 @@ pub fn find_intervals(
 ) -> Result<Segmentation, SegmentError> {
     let n = rec.len();
     let half = ((options.window_s * rec.rate_hz / 2.0).round() as usize).max(2);
-    let (pa, pg) = (Prefix::new(&rec.acc), Prefix::new(&rec.gyro_rad_s));
-    let centres: Vec<usize> = (half..n.saturating_sub(half)).collect();
-    let var_a: Vec<f64> = centres
-        .iter()
-        .map(|&i| pa.var(i - half, i + half + 1))
-        .collect();
-    let var_g: Vec<f64> = centres
-        .iter()
-        .map(|&i| pg.var(i - half, i + half + 1))
-        .collect();
-    let no_still = |acc_mg: f64, gyro_deg_s: f64| SegmentError::NoStill {
-        // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
-        hint: no_still_hint(rec, acc_mg, gyro_deg_s, options.spelling),
-        acc_mg,
-        gyro_deg_s,
-        min_s: options.min_still_s,
+    let w = 2 * half + 1;
+    let (sa, sg) = (Stream::new(&rec.acc), Stream::new(&rec.gyro_rad_s));
+    let Some((fa, fg)) = floors(rec, &sa, &sg, w) else {
+        return Err(SegmentError::TooShort {
+            rows: n,
+            window_rows: w,
+            window_s: options.window_s,
+            min_s: options.min_still_s,
+        });
     };
-    if centres.is_empty() {
-        return Err(no_still(f64::NAN, f64::NAN));
+    let judge = judge(options, &fa, &fg);
+    let gravity_out = fa.rest_norm.max(f64::MIN_POSITIVE);
+    let (thr_a, thr_g) = judge.limits(w);
+    let figures = (
+        fa.rms() / gravity_out * 1e3,
+        fg.rms().to_degrees(),
+        fg.white_rms().to_degrees(),
+    );
+    let no_still = |why: String| SegmentError::NoStill {
+        why,
+        // A still accelerometer with a gyro 57× too noisy: the gyro's unit is wrong.
+        advice: still_threshold_advice(options) + &no_still_hint(rec, figures, options.spelling),
+        acc_mg: figures.0,
+        gyro_deg_s: figures.1,
+        gyro_white_deg_s: figures.2,
+        acc_limit_mg: thr_a / gravity_out * 1e3,
+        gyro_limit_deg_s: thr_g.to_degrees(),
+        hand: match judge {
+            Judge::Fixed { .. } => String::new(),
+            Judge::Noise { .. } => format!(
+                " on a table, or within {} mg and {} °/s more than that in a hand",
+                rest::HAND_ACC_MG,
+                rest::HAND_GYRO_DEG_S
+            ),
+        },
+    };
+    // A still hand-held MEMS unit is far quieter than this: above it nothing is still.
+    if options.still_threshold.is_none()
+        && (figures.0 > MAX_ACC_FLOOR_MG || figures.1 > MAX_GYRO_FLOOR_DEG_S)
+    {
+        return Err(no_still(format!(
+            "even the quietest stretch moves more than a still unit (at most {MAX_ACC_FLOOR_MG} mg \
+             and {MAX_GYRO_FLOOR_DEG_S} °/s)"
+        )));
     }
-    let quiet_a = percentile(&var_a, options.quiet_percentile);
-    let quiet_g = percentile(&var_g, options.quiet_percentile);
-    let centre = acc_centre(rec);
-    let mut mags: Vec<f64> = centres
-        .iter()
-        .zip(&var_a)
-        .filter(|(_, &v)| v <= quiet_a * 4.0)
-        .map(|(&i, _)| linalg::norm(&core::array::from_fn(|j| rec.acc[i][j] - centre[j])))
+    let kinds: Vec<Rest> = (half..n.saturating_sub(half))
+        .map(|i| judge.rest(&sa, &sg, i - half, i + half + 1))
         .collect();
-    mags.sort_by(f64::total_cmp);
-    let gravity_out = mags[mags.len() / 2];
-    let g_scale = gravity_out.max(f64::MIN_POSITIVE);
-    let (acc_mg, gyro_deg_s) = (quiet_a.sqrt() / g_scale * 1e3, quiet_g.sqrt().to_degrees());
-    // A still hand-held MEMS unit is far quieter than 20 mg and 1 °/s: above that nothing is still.
-    if acc_mg > 20.0 || gyro_deg_s > 1.0 {
-        return Err(no_still(acc_mg, gyro_deg_s));
+    let quiet = rest::quiet(&kinds, (rest::HAND_EDGE_S * rec.rate_hz).round() as usize);
+    let runs = split_at_jumps(quiet_runs(&quiet, half), &rec.jumps());
+    let (stills, spins, short_dropped) = intervals(rec, runs, options, half);
+    if stills.is_empty() {
+        return Err(no_still(format!(
+            "no window at rest lasts {} s",
+            options.min_still_s
+        )));
     }
-    let f2 = options.threshold_factor.powi(2);
-    let thr_a = (quiet_a * f2).max((1e-4 * g_scale).powi(2));
-    let thr_g = (quiet_g * f2).max(0.01f64.to_radians().powi(2));
-    let quiet: Vec<bool> = var_a
-        .iter()
-        .zip(&var_g)
-        .map(|(a, g)| *a < thr_a && *g < thr_g)
-        .collect();
+    Ok(Segmentation {
+        stills,
+        spins,
+        short_dropped,
+        acc_threshold: thr_a,
+        gyro_threshold_rad_s: thr_g,
+        gravity_out,
+    })
+}
+
+/// The still intervals and spins of the quiet `runs` (rows), and how many were too short: each
+/// run trimmed, its kind told by its mean rate, and a run joined to the last of its kind when a
+/// short disturbance split one position.
+fn intervals(
+    rec: &Recording,
+    runs: Vec<(usize, usize)>,
+    options: &SegmentOptions,
+    half: usize,
+) -> (Vec<Interval>, Vec<Interval>, usize) {
     let jumps = rec.jumps();
-    let runs = split_at_jumps(quiet_runs(&quiet, half), &jumps);
     let still_bias = still_bias(rec, &runs);
     let trim = (options.trim_s * rec.rate_hz).round() as usize;
     let min_len = (options.min_still_s * rec.rate_hz).round() as usize;
     let spin_min = options.spin_min_rate_deg_s.to_radians();
+    let centre = acc_centre(rec);
     let mut stills: Vec<Interval> = Vec::new();
     let mut spins = Vec::new();
     let mut short_dropped = 0;
@@ -375,17 +453,7 @@ pub fn find_intervals(
             _ => list.push(iv),
         }
     }
-    if stills.is_empty() {
-        return Err(no_still(acc_mg, gyro_deg_s));
-    }
-    Ok(Segmentation {
-        stills,
-        spins,
-        short_dropped,
-        acc_threshold: thr_a.sqrt(),
-        gyro_threshold_rad_s: thr_g.sqrt(),
-        gravity_out,
-    })
+    (stills, spins, short_dropped)
 }
 
 /// Rows `lo..hi` of runs of quiet window centres (indices into the recording).
@@ -420,19 +488,25 @@ fn split_at_jumps(runs: Vec<(usize, usize)>, jumps: &[TimeJump]) -> Vec<(usize, 
     out
 }
 
-/// The gyro's mean over all quiet runs, weighted by length (its bias when most runs are still).
+/// The gyro's mean over all quiet runs, the median weighted by their lengths (its bias when most of
+/// the quiet time is still, however a spin's run is cut).
 fn still_bias(rec: &Recording, runs: &[(usize, usize)]) -> [f64; 3] {
-    let mut means: Vec<[f64; 3]> = runs
+    let means: Vec<([f64; 3], usize)> = runs
         .iter()
-        .map(|&(lo, hi)| mean_std(&rec.gyro_rad_s[lo..hi]).0)
+        .map(|&(lo, hi)| (mean_std(&rec.gyro_rad_s[lo..hi]).0, hi - lo))
         .collect();
-    if means.is_empty() {
-        return [0.0; 3];
-    }
+    let total: usize = means.iter().map(|m| m.1).sum();
     core::array::from_fn(|j| {
-        let mut v: Vec<f64> = means.iter_mut().map(|m| m[j]).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
+        let mut v: Vec<(f64, usize)> = means.iter().map(|m| (m.0[j], m.1)).collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut seen = 0;
+        for (x, n) in &v {
+            seen += n;
+            if 2 * seen >= total {
+                return *x;
+            }
+        }
+        0.0
     })
 }
 

@@ -18,7 +18,7 @@ impl Recording {
     /// The reader's warnings about this recording: rows left out, damaged or cut-short lines, the
     /// time stamps repaired, time jumps.
     pub fn reader_warnings(&self, places: Places) -> Vec<String> {
-        let mut warnings = Vec::new();
+        let mut warnings = self.read_notes.clone();
         if self.skipped_rows > 0 {
             warnings.push(format!(
                 "{} row(s) with NaN or infinite values left out",

@@ -41,32 +41,120 @@ pub(super) fn clean(field: &str) -> &str {
     field.trim().trim_matches('"').trim()
 }
 
-/// Reads the header line (after any blank or `#` comment lines): its column names (a byte-order mark
-/// and quotes removed), the field separator it uses, and its line number.
+/// A text file's header as found: its column names (indices "0", "1", … for a header-less file),
+/// the separator, its line number, and where the file is header-less, its first data row's text.
+pub(super) struct Header {
+    pub(super) names: Vec<String>,
+    pub(super) sep: char,
+    pub(super) line: u64,
+    /// A header-less file's first line, which is data.
+    pub(super) first_row: Option<String>,
+    /// Lines before the header that are neither blank nor comments (a logger's preamble).
+    pub(super) preamble: u64,
+}
+
+/// Lines looked at for the header when the first one does not name the columns asked for.
+const PREAMBLE_LINES: usize = 64;
+
+/// A line of numbers only: a header-less file's data.
+fn numeric(text: &str, sep: char) -> bool {
+    let f = split_fields(text, sep);
+    !f.is_empty() && f.iter().all(|x| x.is_empty() || x.parse::<f64>().is_ok())
+}
+
+/// Whether the header's names are all numbers: the file has no header.
+pub(super) fn all_numbers(names: &[String]) -> bool {
+    !names.is_empty() && names.iter().all(|x| x.parse::<f64>().is_ok())
+}
+
+/// Whether `names` are all column indices (`--columns 0,1,2,3,4,5`).
+fn by_index(options: &ImportOptions) -> bool {
+    options.columns.iter().all(|c| c.parse::<usize>().is_ok())
+}
+
+/// Whether the line `fields` names every column the options ask for.
+fn names_all(fields: &[&str], options: &ImportOptions) -> bool {
+    let has = |name: &str| fields.iter().any(|h| h.eq_ignore_ascii_case(name));
+    options.columns.iter().all(|c| has(c))
+        && match &options.time {
+            TimeSource::Column(t) => has(t),
+            TimeSource::RateHz(_) => true,
+        }
+}
+
+/// Reads the header line: after `options.skip_lines` lines, the first line that is neither blank
+/// nor a `#` comment; where that one does not name the columns asked for, the first of the next
+/// lines that does (a logger's preamble before it is skipped and counted), or with columns given by
+/// index, the first line of numbers (a header-less file). Its column names (a byte-order mark and
+/// quotes removed), the field separator it uses, and its line number.
 pub(super) fn read_header<R: BufRead>(
     r: &mut R,
     buf: &mut Vec<u8>,
     path: &Path,
-) -> Result<(Vec<String>, char, u64), ImportError> {
+    options: &ImportOptions,
+) -> Result<Header, ImportError> {
     let mut line = 0u64;
-    let header_text = loop {
+    while line < options.skip_lines {
         line += 1;
         if !next_line(r, buf, line)? {
             return Err(ImportError::Empty(path.to_path_buf()));
         }
+    }
+    let mut first: Option<(String, u64)> = None;
+    let mut seen = 0;
+    loop {
+        line += 1;
+        if !next_line(r, buf, line)? {
+            break;
+        }
         let text = String::from_utf8_lossy(buf)
             .trim_start_matches('\u{feff}')
             .to_string();
-        if !text.trim().is_empty() && !is_comment(&text) {
-            break text;
+        if text.trim().is_empty() || is_comment(&text) {
+            continue;
         }
-    };
-    let sep = separator(&header_text);
-    let header: Vec<String> = split_fields(&header_text, sep)
+        let sep = separator(&text);
+        if by_index(options) && numeric(&text, sep) {
+            let names = (0..split_fields(&text, sep).len())
+                .map(|i| i.to_string())
+                .collect();
+            return Ok(Header {
+                names,
+                sep,
+                line,
+                first_row: Some(text),
+                preamble: seen,
+            });
+        }
+        if names_all(&split_fields(&text, sep), options) {
+            return Ok(header(&text, line, seen));
+        }
+        seen += 1;
+        first.get_or_insert((text, line));
+        // Told where the header is, or not found in a preamble's length: the first line is it.
+        if options.skip_lines > 0 || seen as usize >= PREAMBLE_LINES {
+            break;
+        }
+    }
+    match first {
+        Some((text, line)) => Ok(header(&text, line, 0)),
+        None => Err(ImportError::Empty(path.to_path_buf())),
+    }
+}
+
+fn header(text: &str, line: u64, preamble: u64) -> Header {
+    let sep = separator(text);
+    let names: Vec<String> = split_fields(text, sep)
         .into_iter()
         .map(str::to_string)
         .collect();
-    Ok((header, sep, line))
+    Header {
+        names,
+        sep,
+        line,
+        first_row: None,
+        preamble,
+    }
 }
 
 /// The resolved time source.
@@ -98,10 +186,12 @@ impl Layout {
         sep: char,
         options: &ImportOptions,
     ) -> Result<Layout, ImportError> {
+        // A column by name, or by its index (0-based) where no column has that name.
         let find = |name: &str| {
             header
                 .iter()
                 .position(|h| h.eq_ignore_ascii_case(name))
+                .or_else(|| name.parse::<usize>().ok().filter(|i| *i < header.len()))
                 .ok_or_else(|| ImportError::MissingColumn {
                     name: name.to_string(),
                     found: header.join(", "),
@@ -154,7 +244,12 @@ impl Layout {
                 header: self.header.len(),
             });
         }
+        // An empty cell is a missing value (a logger that writes two kinds of packet in one file
+        // leaves the other kind's cells empty): read as NaN, as a "nan" is.
         let number = |i: usize| -> Result<f64, ImportError> {
+            if fields[i].is_empty() {
+                return Ok(f64::NAN);
+            }
             fields[i]
                 .parse::<f64>()
                 .map_err(|_| ImportError::NotANumber {
@@ -189,32 +284,31 @@ pub(super) struct Rows<'a> {
     pub(super) layout: &'a Layout,
     pub(super) options: &'a ImportOptions,
     pub(super) header_line: u64,
+    /// A header-less file's first line, which is data.
+    pub(super) first_row: Option<String>,
     /// The time column's unit, s (1 with a rate).
     pub(super) seconds_per_unit: f64,
 }
 
 /// Reads the data rows after the header that `keeper` keeps into a recording (blank lines
-/// ignored, rows with a value that is not finite counted and left out).
+/// ignored, rows with no finite time or with both streams' values missing counted and left out; a
+/// row with one stream missing is kept for [`fill_streams`]).
 pub(super) fn read_rows<R: BufRead>(
     r: &mut R,
     buf: &mut Vec<u8>,
     rows: &Rows,
     keeper: &mut Keeper,
 ) -> Result<Recording, ImportError> {
-    let Rows {
-        layout,
-        options,
-        header_line,
-        seconds_per_unit,
-    } = *rows;
-    let gyro_scale = options.gyro_rad_s_per_unit();
     let mut rec = Recording {
-        acc_unit: Some(options.acc_unit),
-        temp_c: layout.temp.map(|_| Vec::new()),
+        acc_unit: Some(rows.options.acc_unit),
+        temp_c: rows.layout.temp.map(|_| Vec::new()),
         ..Recording::default()
     };
-    let mut line = header_line;
+    let mut line = rows.header_line;
     let mut row_index = 0u64;
+    if let Some(text) = &rows.first_row {
+        take_row(text, line, &mut row_index, rows, keeper, &mut rec)?;
+    }
     loop {
         line += 1;
         let Some(end) = next_line_end(r, buf, line)? else {
@@ -238,38 +332,143 @@ pub(super) fn read_rows<R: BufRead>(
             rec.unterminated_line = Some(line);
             break;
         }
-        // A window's pass reads only the time of a row outside its span (`Keeper::passes`): the
-        // passes before it read the whole row.
-        if keeper.passes(|| Some(layout.time_only(&text, row_index)? * seconds_per_unit)) {
-            row_index += 1;
-            continue;
-        }
-        let (mut v, t_s, temp_c) = layout.parse_row(&text, line, row_index)?;
-        for j in 0..3 {
-            v[3 + j] -= options.gyro_offset[j];
-        }
-        row_index += 1;
-        if !v.iter().all(|x| x.is_finite()) || !t_s.is_finite() {
-            rec.skipped_rows += 1;
-            continue;
-        }
-        let acc = [v[0], v[1], v[2]];
-        match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
-            Admit::Keep => push_row(&mut rec, v, t_s, temp_c, gyro_scale),
-            Admit::Pass => {}
-            Admit::TooMany(max) => {
-                let time_unit = match layout.time {
-                    Time::Column(_) => options
-                        .time_unit
-                        .or_else(|| detect_time_unit(&rec.t_s, options.spelling).ok()),
-                    Time::RateHz(_) => None,
-                };
-                return Err(ImportError::TooManyRows { max, time_unit });
-            }
-        }
+        take_row(&text, line, &mut row_index, rows, keeper, &mut rec)?;
     }
     Ok(rec)
 }
+
+/// One data row's text, read into `rec` as `keeper` says.
+fn take_row(
+    text: &str,
+    line: u64,
+    row_index: &mut u64,
+    rows: &Rows,
+    keeper: &mut Keeper,
+    rec: &mut Recording,
+) -> Result<(), ImportError> {
+    let Rows {
+        layout,
+        options,
+        seconds_per_unit,
+        ..
+    } = *rows;
+    // A window's pass reads only the time of a row outside its span (`Keeper::passes`): the
+    // passes before it read the whole row.
+    if keeper.passes(|| Some(layout.time_only(text, *row_index)? * seconds_per_unit)) {
+        *row_index += 1;
+        return Ok(());
+    }
+    let (mut v, t_s, temp_c) = layout.parse_row(text, line, *row_index)?;
+    for j in 0..3 {
+        v[3 + j] -= options.gyro_offset[j];
+    }
+    *row_index += 1;
+    let acc_ok = v[..3].iter().all(|x| x.is_finite());
+    let gyro_ok = v[3..].iter().all(|x| x.is_finite());
+    if !(acc_ok || gyro_ok) || !t_s.is_finite() {
+        rec.skipped_rows += 1;
+        return Ok(());
+    }
+    // A row with one stream missing is admitted as its neighbour's accelerometer sample.
+    let acc = if acc_ok {
+        [v[0], v[1], v[2]]
+    } else {
+        rec.acc.last().copied().unwrap_or([0.0; 3])
+    };
+    match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
+        Admit::Keep => {
+            if !(acc_ok && gyro_ok) {
+                // One stream missing in part: that row's stream is missing, nothing else.
+                let missing = if acc_ok { 3 } else { 0 };
+                v[missing..missing + 3].fill(f64::NAN);
+            }
+            push_row(rec, v, t_s, temp_c, options.gyro_rad_s_per_unit());
+        }
+        Admit::Pass => {}
+        Admit::TooMany(max) => {
+            let time_unit = match layout.time {
+                Time::Column(_) => options
+                    .time_unit
+                    .or_else(|| detect_time_unit(&rec.t_s, options.spelling).ok()),
+                Time::RateHz(_) => None,
+            };
+            return Err(ImportError::TooManyRows { max, time_unit });
+        }
+    }
+    Ok(())
+}
+
+/// Rows with one stream missing (a logger that writes accelerometer and gyro packets in rows of
+/// their own, or a cell left empty): a row without its gyro takes the rate interpolated in time
+/// between the nearest rows before and after it that have one (within [`FILL_ROWS`] rows; else the
+/// row is left out), and rows with the gyro alone are left out once they have served for that.
+/// Returns what was done, for the user.
+pub(super) fn fill_streams(rec: &mut Recording) -> Option<String> {
+    let gyro_ok = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+    let acc_ok = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+    let no_gyro = rec.gyro_rad_s.iter().filter(|g| !gyro_ok(g)).count();
+    let no_acc = rec.acc.iter().filter(|a| !acc_ok(a)).count();
+    if no_gyro + no_acc == 0 {
+        return None;
+    }
+    let n = rec.len();
+    let with_gyro: Vec<usize> = (0..n).filter(|&i| gyro_ok(&rec.gyro_rad_s[i])).collect();
+    let mut keep = vec![true; n];
+    let mut unfilled = 0;
+    for i in 0..n {
+        if !acc_ok(&rec.acc[i]) {
+            keep[i] = false;
+            continue;
+        }
+        if gyro_ok(&rec.gyro_rad_s[i]) {
+            continue;
+        }
+        let k = with_gyro.partition_point(|&j| j < i);
+        let near = |j: usize| j.abs_diff(i) <= FILL_ROWS;
+        match (
+            k.checked_sub(1).map(|k| with_gyro[k]),
+            with_gyro.get(k).copied(),
+        ) {
+            (Some(a), Some(b)) if near(a) && near(b) => {
+                let (ta, tb, t) = (rec.t_s[a], rec.t_s[b], rec.t_s[i]);
+                let f = if tb > ta {
+                    ((t - ta) / (tb - ta)).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
+                let (ga, gb) = (rec.gyro_rad_s[a], rec.gyro_rad_s[b]);
+                rec.gyro_rad_s[i] = core::array::from_fn(|j| ga[j] + f * (gb[j] - ga[j]));
+            }
+            _ => {
+                keep[i] = false;
+                unfilled += 1;
+            }
+        }
+    }
+    let mut k = 0;
+    rec.t_s.retain(|_| (keep[k], k += 1).0);
+    k = 0;
+    rec.acc.retain(|_| (keep[k], k += 1).0);
+    k = 0;
+    rec.gyro_rad_s.retain(|_| (keep[k], k += 1).0);
+    if let Some(t) = &mut rec.temp_c {
+        k = 0;
+        t.retain(|_| (keep[k], k += 1).0);
+    }
+    Some(format!(
+        "{no_gyro} row(s) without gyro values and {no_acc} with the gyro's alone (a logger writing \
+         each sensor's packets in rows of their own, or cells left empty): the accelerometer's rows \
+         take the gyro's rate interpolated from the nearest rows that have one{}",
+        if unfilled > 0 {
+            format!(" ({unfilled} with none within {FILL_ROWS} rows left out)")
+        } else {
+            String::new()
+        }
+    ))
+}
+
+/// A row without its gyro takes it from rows at most this many rows away.
+const FILL_ROWS: usize = 16;
 
 /// Appends a row of finite values `v` at `t_s` (temperature `temp_c`, where the recording has
 /// one) to `rec`, its gyro converted with `gyro_scale` (rad/s per unit). A repeated or earlier

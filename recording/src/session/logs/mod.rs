@@ -141,7 +141,7 @@ pub fn read_log_within(
 ) -> Result<LogFile, LogError> {
     let max = max_samples.max(1);
     let (seconds_per_unit, over) = match first_pass(path, source, max)? {
-        FirstPass::Whole(log) => return Ok(log),
+        FirstPass::Whole(log) => return Ok(*log),
         FirstPass::Over {
             seconds_per_unit,
             error,
@@ -176,8 +176,8 @@ pub fn read_log_within(
 
 /// What the first pass of a log read within a budget found.
 pub(super) enum FirstPass {
-    /// The log, within the budget.
-    Whole(LogFile),
+    /// The log, within the budget (boxed: the other variant is a fraction of its size).
+    Whole(Box<LogFile>),
     /// More than the budget: its time stamps' unit, s (a text file's, told from the rows read).
     Over {
         /// Seconds per unit of the time stamps.
@@ -194,7 +194,7 @@ pub(super) fn first_pass(
     max: usize,
 ) -> Result<FirstPass, LogError> {
     match read_pass(path, source, &Keep::All { max }, 1.0) {
-        Ok(log) => Ok(FirstPass::Whole(log)),
+        Ok(log) => Ok(FirstPass::Whole(Box::new(log))),
         Err(e) => match e.over_budget(source) {
             Some(seconds_per_unit) => Ok(FirstPass::Over {
                 seconds_per_unit,
@@ -512,13 +512,16 @@ pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
 /// A stream's samples in time order, their stamps mended ([`repair_times`]).
 fn repaired(samples: Vec<StreamSample>) -> (Vec<StreamSample>, TimeRepairs) {
     let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
-    let (order, rep) = repair_times(&t, |i, j| {
+    let (order, mut rep) = repair_times(&t, |i, j| {
         samples[i].v == samples[j].v && samples[i].temp_c == samples[j].temp_c
     });
     drop(t);
+    let mut times: Vec<f64> = order.iter().map(|s| s.1).collect();
+    rep.bursts = super::bursts::retime_bursts(&mut times);
     let out = order
         .iter()
-        .map(|&(i, t_s)| StreamSample { t_s, ..samples[i] })
+        .zip(times)
+        .map(|(&(i, _), t_s)| StreamSample { t_s, ..samples[i] })
         .collect();
     (out, rep)
 }

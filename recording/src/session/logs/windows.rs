@@ -94,7 +94,7 @@ pub fn read_log_windows(
 ) -> Result<LogRead, LogError> {
     let max = max_samples.max(2);
     let seconds_per_unit = match first_pass(path, source, max)? {
-        FirstPass::Whole(log) => return Ok(LogRead::Whole(log)),
+        FirstPass::Whole(log) => return Ok(LogRead::Whole(*log)),
         FirstPass::Over {
             seconds_per_unit, ..
         } => seconds_per_unit,
