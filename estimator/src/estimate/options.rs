@@ -134,9 +134,10 @@ pub enum UnitWalk {
     /// mg/√s per axis (a unit file's `accel_bias_walk_mg_sqrt_s`, or an Allan K in m/s²/√s or
     /// g/√s turned into mg): turned into output units with each axis's fitted scale factor.
     MgSqrtS([f64; 3]),
-    /// Output unit/√s per axis (an Allan K of the raw outputs, V/√s or LSB/√s): the walk's
-    /// intensity as it is, `q_i = K_i` (docs/model.md §11).
-    OutputPerSqrtS([f64; 3]),
+    /// Output unit/√s per axis (an Allan K of the raw outputs, V/√s or LSB/√s) and that output
+    /// unit: the walk's intensity as it is, `q_i = K_i` (docs/model.md §11), for a session in
+    /// the same unit only (another is refused, [`super::EstimateError::BiasWalkUnit`]).
+    OutputPerSqrtS([f64; 3], shared::OutputUnit),
 }
 
 /// How the estimator treats the gyro.
