@@ -120,6 +120,45 @@ fn a_gyro_walk_without_a_gyro_model_is_refused() {
     }
 }
 
+/// A gyro walk that comes with the unit's noise figures (`--bias-walk-from`, whose accelerometer
+/// walk is used) is not asked for by itself: on a session without a gyro model it is left out with a
+/// warning, and the calibration is made.
+#[test]
+fn a_units_gyro_walk_is_left_out_where_there_is_no_gyro_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let thermal = dir.path().join("thermal");
+    let thermal = thermal.to_str().unwrap();
+    ok(&[
+        "-q",
+        "simulate",
+        "--plan",
+        "thermal-soak",
+        "--out",
+        thermal,
+        "--drift-mg-sqrt-s",
+        "0.003",
+        "--gyro-drift-deg-s-sqrt-s",
+        "0.0004",
+    ]);
+    let truth = format!("{thermal}/truth.toml");
+    let (code, stdout, stderr) = host(&[
+        "calibrate",
+        "--input",
+        thermal,
+        "--bias-walk-from",
+        &truth,
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let warnings = doc["warnings"].to_string();
+    assert!(
+        warnings.contains("gyro bias random walk is left out") && warnings.contains("no spins"),
+        "{warnings}"
+    );
+    assert!(doc["gyro_bias_walk_deg_s_sqrt_s"].is_null(), "{doc}");
+}
+
 /// The thermal unit on the thermal-soak plan: the simulation carries the unit's temperatures, so
 /// the check's calibration has its temperature model and fits within the noise, and the static
 /// calibration's navigation error is the calibration's, not a misfit's hundreds of metres.

@@ -110,7 +110,12 @@ fn fit_session(
         } else {
             "the session estimates no gyro model"
         };
-        return Err(EstimateError::GyroBiasWalkUnused { why });
+        if !options.gyro_bias_walk_from_unit {
+            return Err(EstimateError::GyroBiasWalkUnused { why });
+        }
+        prepared.warnings.push(format!(
+            "gyro: the unit's gyro bias random walk is left out: {why} (docs/model.md §11.6)"
+        ));
     }
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;

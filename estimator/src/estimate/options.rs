@@ -99,6 +99,10 @@ pub struct EstimateOptions {
     /// The gyro's bias random walk, °/s/√s (docs/model.md §11.6): the gyro model's mean rates are
     /// weighted with its covariance across the session. 0 is a constant gyro bias, the default.
     pub gyro_bias_walk_deg_s_sqrt_s: f64,
+    /// The gyro's walk comes with the unit's noise figures (a file giving the accelerometers'
+    /// walk too), not asked for: on a session without a gyro model it is left out with a warning
+    /// instead of refused ([`super::EstimateError::GyroBiasWalkUnused`]).
+    pub gyro_bias_walk_from_unit: bool,
     /// How the caller names these options in refusals and warnings.
     pub spelling: Spelling,
 }
@@ -174,6 +178,7 @@ impl Default for EstimateOptions {
             single_package: false,
             bias_walk: BiasWalk::Off,
             gyro_bias_walk_deg_s_sqrt_s: 0.0,
+            gyro_bias_walk_from_unit: false,
             spelling: Spelling::Flags,
         }
     }
