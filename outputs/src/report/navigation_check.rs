@@ -80,7 +80,7 @@ fn refuse_misfit(outcome: &CalibrationOutcome) -> Result<(), ReportError> {
     ];
     for (what, value) in figures {
         // NaN is a misfit too.
-        if let Some(value) = value.filter(|v| !(*v <= limit)) {
+        if let Some(value) = value.filter(|v| v.is_nan() || *v > limit) {
             return Err(ReportError::Misfit { what, value, limit });
         }
     }
