@@ -83,34 +83,7 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
         UnitBinding::Bound(cal_unit)
     };
     let out = super::output::Output { json: false, quiet };
-    // An explicit lever mode the calibration already satisfies (no lever arms: every mode is the
-    // static compensation) is honoured, with a note.
-    if let Some(lever) = a.lever {
-        if cal.lever_arms.r_m.iter().flatten().all(|r| *r == 0.0) {
-            out.note(format!(
-                "note: the lever arms of {} are all zero, so --lever {} gives the static \
-                 compensation, as every lever mode does",
-                a.calibration.display(),
-                lever
-                    .to_possible_value()
-                    .map_or_else(String::new, |v| v.get_name().to_owned())
-            ));
-        }
-    }
-    if a.temperature_c.is_some() && cal.temperature.is_none() {
-        return Err(CliError::Usage(format!(
-            "--temperature-c does not apply: {} has no temperature model, so no temperature \
-             changes its result; leave it out",
-            a.calibration.display()
-        )));
-    }
-    if a.log.temp_column.is_some() && cal.temperature.is_none() {
-        return Err(CliError::Usage(format!(
-            "--temp-column does not apply: {} has no temperature model, so the log's \
-             temperatures change nothing in its result; leave it out",
-            a.calibration.display()
-        )));
-    }
+    options_for_calibration(a, &cal, &out)?;
     let mode = a.lever.unwrap_or(LeverArg::Full).into();
     let source = if a.input.is_dir() {
         a.log.refuse_for_session(&a.input)?;
@@ -184,6 +157,43 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     match &a.out {
         Some(_) => out.line(line)?,
         None => out.note(line),
+    }
+    Ok(())
+}
+
+/// The options that meet the calibration: a lever mode it already satisfies (no lever arms: every
+/// mode is the static compensation) is honoured with a note; a temperature for a calibration
+/// without a temperature model would change nothing and is refused.
+fn options_for_calibration(
+    a: &ApplyArgs,
+    cal: &shared::Calibration,
+    out: &super::output::Output,
+) -> Result<(), CliError> {
+    if let Some(lever) = a.lever {
+        if cal.lever_arms.r_m.iter().flatten().all(|r| *r == 0.0) {
+            out.note(format!(
+                "note: the lever arms of {} are all zero, so --lever {} gives the static \
+                 compensation, as every lever mode does",
+                a.calibration.display(),
+                lever
+                    .to_possible_value()
+                    .map_or_else(String::new, |v| v.get_name().to_owned())
+            ));
+        }
+    }
+    if a.temperature_c.is_some() && cal.temperature.is_none() {
+        return Err(CliError::Usage(format!(
+            "--temperature-c does not apply: {} has no temperature model, so no temperature \
+             changes its result; leave it out",
+            a.calibration.display()
+        )));
+    }
+    if a.log.temp_column.is_some() && cal.temperature.is_none() {
+        return Err(CliError::Usage(format!(
+            "--temp-column does not apply: {} has no temperature model, so the log's \
+             temperatures change nothing in its result; leave it out",
+            a.calibration.display()
+        )));
     }
     Ok(())
 }
