@@ -9,7 +9,8 @@
 //! `noise.json` holds K in its axes' `unit` per √s: `m/s^2` (a recording in m/s² or g, or one analysed
 //! with `--calibration`) becomes mg/√s as `K / g₀ · 10³` with g₀ the standard gravity (a local g
 //! differs by at most 0.3 %, far inside K's own uncertainty); `output unit` (V or LSB, no
-//! calibration) is taken as it is.
+//! calibration) is taken as it is, with the output unit the file records (`output_unit`), which
+//! the fit checks against the session's; a file that records none is refused.
 
 use crate::estimate::UnitWalk;
 use crate::noise::{NoiseReport, AXES};
@@ -66,12 +67,27 @@ pub enum WalkSourceError {
         /// What is missing.
         what: String,
     },
+    /// A walk in raw outputs whose output unit the file does not record.
+    #[error(
+        "--bias-walk-from {}: its accelerometer figures are in the output unit of the recording \
+         analysed, and the file does not say which (V, LSB, …; a bare samples.csv states none, and \
+         an older `host noise` did not record it): run `host noise` again on the session \
+         directory or the logger's file (or with --calibration, for figures in m/s²)",
+        .path.display()
+    )]
+    UnknownUnit {
+        /// The file.
+        path: PathBuf,
+    },
 }
 
 impl WalkSourceError {
     /// Whether the file was read but says nothing usable about the walk: a usage error (exit 2).
     pub fn is_usage(&self) -> bool {
-        matches!(self, WalkSourceError::NoWalk { .. })
+        matches!(
+            self,
+            WalkSourceError::NoWalk { .. } | WalkSourceError::UnknownUnit { .. }
+        )
     }
 }
 
@@ -181,7 +197,10 @@ pub(crate) fn walk_from_noise(r: &NoiseReport, path: &Path) -> Result<UnitWalk, 
         Some("m/s^2") => Ok(UnitWalk::MgSqrtS(
             k.map(|k| k / shared::STANDARD_GRAVITY_M_S2 * 1e3),
         )),
-        Some("output unit") => Ok(UnitWalk::OutputPerSqrtS(k)),
+        Some("output unit") => match r.output_unit {
+            Some(u) => Ok(UnitWalk::OutputPerSqrtS(k, u)),
+            None => Err(WalkSourceError::UnknownUnit { path: path.into() }),
+        },
         other => Err(no_walk(format!(
             "its accelerometer unit {other:?} is neither m/s^2 nor the output unit"
         ))),
@@ -230,6 +249,7 @@ mod tests {
             axes,
             kalibr: Default::default(),
             warnings: Vec::new(),
+            output_unit: Some(shared::OutputUnit::Volts),
         }
     }
 
@@ -251,8 +271,29 @@ mod tests {
         let raw = report("output unit", [Some(4e-6), Some(5e-6), Some(6e-6)]);
         assert_eq!(
             walk_from_noise(&raw, p).unwrap(),
-            UnitWalk::OutputPerSqrtS([4e-6, 5e-6, 6e-6])
+            UnitWalk::OutputPerSqrtS([4e-6, 5e-6, 6e-6], shared::OutputUnit::Volts)
         );
+    }
+
+    /// A walk in raw outputs carries the output unit the file records; a file that records none
+    /// (an older noise.json) is refused as a usage error naming the file.
+    #[test]
+    fn a_raw_output_walk_carries_its_unit_or_is_refused() {
+        let p = Path::new("noise.json");
+        let mut raw = report("output unit", [Some(8.2); 3]);
+        raw.output_unit = Some(shared::OutputUnit::Lsb);
+        assert_eq!(
+            walk_from_noise(&raw, p).unwrap(),
+            UnitWalk::OutputPerSqrtS([8.2; 3], shared::OutputUnit::Lsb)
+        );
+        raw.output_unit = None;
+        let e = walk_from_noise(&raw, p).unwrap_err();
+        assert!(e.is_usage() && e.to_string().contains("noise.json"), "{e}");
+        // A noise.json without the field reads as one that records none.
+        let mut v = serde_json::to_value(report("output unit", [Some(8.2); 3])).unwrap();
+        v.as_object_mut().unwrap().remove("output_unit");
+        let old: NoiseReport = serde_json::from_value(v).unwrap();
+        assert_eq!(old.output_unit, None);
     }
 
     /// An axis whose K the recording did not determine refuses, naming the axis, how long a

@@ -113,6 +113,8 @@ pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitI
         unit_id,
         Some(outcome.uncertainty.clone()),
     );
+    // The raw log's counts of zero force, which the biases hold (apply checks them).
+    file.statics.raw_offset_lsb = outcome.acc_offset;
     // A single-package fit's three lever arms are one point, and the file says so (docs/model.md §4.7).
     if let (Some(d), true) = (file.dynamic.as_mut(), outcome.single_package) {
         d.package = crate::session::Package::Single;

@@ -134,6 +134,12 @@ pub struct StaticSection {
     pub scale_g_per_g: Option<[f64; 3]>,
     /// θ_ij, degrees.
     pub installation_angles_deg: RowMajor3,
+    /// The counts of zero force subtracted from a raw log when it was read (`--acc-offset`), per
+    /// axis: `zero_bias_lsb` is of the logger's own counts and holds them, so `apply` on a raw log
+    /// applies the calibration to those counts (and refuses another offset). Absent: none was
+    /// subtracted, or a file written before the offset was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw_offset_lsb: Option<[f64; 3]>,
 }
 
 /// `[dynamic]`.
@@ -449,6 +455,7 @@ impl UnitFile {
                 zero_bias_g: g.then_some(s.zero_bias_out),
                 scale_g_per_g: g.then_some(s.scale_out_per_g),
                 installation_angles_deg: s.installation_angles_deg,
+                raw_offset_lsb: None,
             },
             dynamic: Some(DynamicSection {
                 lever_arms_m: cal.lever_arms.r_m,

@@ -9,9 +9,10 @@ cd "$(dirname "$0")/.."
 # shellcheck source=qemu-board.sh
 source scripts/qemu-board.sh
 target=thumbv7em-none-eabihf
+tdir=$(firmware_target_dir)
 cargo build --quiet --release --no-default-features --features board-qemu \
     --bin qemu-bench --bin qemu --target "$target"
 timeout 120 "${QEMU_BOARD[@]}" -icount shift=0,align=off,sleep=off \
-    -serial null -kernel "target/$target/release/qemu-bench"
+    -serial null -kernel "$tdir/$target/release/qemu-bench"
 
-qemu_size_check "target/$target/release/qemu"
+qemu_size_check "$tdir/$target/release/qemu"

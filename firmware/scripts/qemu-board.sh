@@ -4,6 +4,19 @@
 QEMU_BOARD=(qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none
     -semihosting-config enable=on,target=native)
 
+# The firmware workspace's build directory, as cargo places it: CARGO_TARGET_DIR (or a config's
+# build.target-dir) when set, else firmware/target. Run from firmware/.
+firmware_target_dir() {
+    local dir
+    dir=$(cargo metadata --format-version 1 --no-deps |
+        sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')
+    if [ -z "$dir" ]; then
+        echo "cargo metadata names no target_directory" >&2
+        return 1
+    fi
+    echo "$dir"
+}
+
 # Flash budget of the QEMU firmware image, bytes: it fails above this. 48 KiB, the goal: the image
 # is 48 932 bytes; README "Measured figures" says what each cut saved and what grew it.
 QEMU_FLASH_BUDGET=49152

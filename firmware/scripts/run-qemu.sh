@@ -7,7 +7,8 @@
 #
 # Logs: QEMU's stdout in $QEMU_RUN_DIR/qemu.out: its first line is QEMU's "char device redirected to
 # /dev/pts/N", the rest the firmware's defmt frames (semihosting stdout); decode them with
-# `tail -n +2 target/qemu-run/qemu.out | defmt-print -e target/thumbv7em-none-eabihf/release/qemu`.
+# `tail -n +2 target/qemu-run/qemu.out | defmt-print -e target/thumbv7em-none-eabihf/release/qemu`
+# (the build directory is $CARGO_TARGET_DIR instead of target/ when that is set).
 # QEMU's errors go to $QEMU_RUN_DIR/qemu.log. QEMU discards UART output until the pty is opened and polls it about once
 # a second: open the pty, send first, and allow >= 2 s for the first answer.
 set -euo pipefail
@@ -27,8 +28,9 @@ done
 
 cargo build --quiet --release --no-default-features --features board-qemu --bin qemu \
     --target thumbv7em-none-eabihf
-elf=target/thumbv7em-none-eabihf/release/qemu
-run_dir=${QEMU_RUN_DIR:-target/qemu-run}
+tdir=$(firmware_target_dir)
+elf=$tdir/thumbv7em-none-eabihf/release/qemu
+run_dir=${QEMU_RUN_DIR:-$tdir/qemu-run}
 mkdir -p "$run_dir"
 : >"$run_dir/qemu.out"
 

@@ -19,6 +19,8 @@ cd "$(dirname "$0")/.."
 source scripts/qemu-board.sh
 target=thumbv7em-none-eabihf
 host=$(rustc -vV | sed -n 's/^host: //p')
+# Where cargo builds (CARGO_TARGET_DIR when set).
+tdir=$(firmware_target_dir)
 step() { printf '\n=== firmware: %s\n' "$*"; }
 
 step "tools"
@@ -54,7 +56,7 @@ qemu_features=(--no-default-features --features board-qemu)
 step "build + clippy: QEMU board (mps2-an386)"
 cargo clippy --release "${qemu_features[@]}" --bins --target "$target" -- -D warnings
 cargo build --release "${qemu_features[@]}" --bins --target "$target"
-qemu_size_check "target/$target/release/qemu"
+qemu_size_check "$tdir/$target/release/qemu"
 
 if [ "${SKIP_STM32:-0}" != 1 ]; then
     # One board at a time (each compiles the HAL for its own chip). Budgets of the F405 image:
@@ -62,28 +64,28 @@ if [ "${SKIP_STM32:-0}" != 1 ]; then
     step "build + clippy: STM32F446 Nucleo-64 board"
     cargo clippy --release --features board-stm32f4 --bin stm32f4 --target "$target" -- -D warnings
     cargo build --release --features board-stm32f4 --bin stm32f4 --target "$target"
-    arm-none-eabi-size "target/$target/release/stm32f4"
+    arm-none-eabi-size "$tdir/$target/release/stm32f4"
 
     step "build + clippy: STM32F405 flight controller (ICM-42688-P, USB CDC-ACM)"
     f405_features=(--no-default-features --features board-f405)
     cargo clippy --release "${f405_features[@]}" --bin f405 --target "$target" -- -D warnings
     cargo build --release "${f405_features[@]}" --bin f405 --target "$target"
-    arm-none-eabi-size "target/$target/release/f405"
-    read -r text data bss _ < <(arm-none-eabi-size "target/$target/release/f405" | tail -n1)
+    arm-none-eabi-size "$tdir/$target/release/f405"
+    read -r text data bss _ < <(arm-none-eabi-size "$tdir/$target/release/f405" | tail -n1)
     flash=$((text + data)) ram=$((data + bss))
     echo "F405: flash $flash bytes (budget 131072), static RAM $ram bytes (budget 32768)"
     [ "$flash" -le 131072 ] && [ "$ram" -le 32768 ] || { echo "F405 over its budget" >&2; exit 1; }
 fi
 
 step "on-target tests in QEMU"
-timeout 120 "${QEMU_BOARD[@]}" -serial null -kernel "target/$target/release/qemu-tests"
+timeout 120 "${QEMU_BOARD[@]}" -serial null -kernel "$tdir/$target/release/qemu-tests"
 
 step "end-to-end over the serial pty"
 cargo build --quiet --example pty_smoke --target "$host"
 out=$(scripts/run-qemu.sh)
 eval "$out"
 trap 'kill "$QEMU_PID" 2>/dev/null || true' EXIT
-timeout 120 "target/$host/debug/examples/pty_smoke" "$QEMU_PTY"
+timeout 120 "$tdir/$host/debug/examples/pty_smoke" "$QEMU_PTY"
 kill "$QEMU_PID" 2>/dev/null || true
 trap - EXIT
 

@@ -4,7 +4,17 @@
 use clap::Parser;
 
 fn main() {
-    let cli = host::cli::Cli::parse();
+    let cli = host::cli::Cli::try_parse().unwrap_or_else(|e| {
+        // Under --json the parser's own refusals give the same document as every other usage
+        // error; help and version print as usual.
+        if let Some(doc) = host::cli::output::parse_error_document(&e, std::env::args_os()) {
+            use std::io::Write;
+            let _ = e.print();
+            let _ = writeln!(std::io::stdout(), "{doc}");
+            std::process::exit(e.exit_code());
+        }
+        e.exit()
+    });
     let json = cli.command.json();
     if let Err(e) = host::cli::run(cli) {
         eprintln!("error: {e}");

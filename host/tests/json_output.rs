@@ -219,6 +219,64 @@ fn a_refusal_under_json_is_a_json_document() {
     assert!(stdout.is_empty(), "{stdout}");
 }
 
+/// The argument parser's own refusals (a value below its bound) under `--json` give the same
+/// document as every other usage error: the message (also on stderr), kind "usage", exit 2. Help is
+/// no error and stays text.
+#[test]
+fn a_parser_refusal_under_json_is_the_same_json_document() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let missing = missing.to_str().unwrap();
+    for (args, flag) in [
+        (
+            vec![
+                "segment",
+                "--input",
+                missing,
+                "--max-samples",
+                "0",
+                "--json",
+            ],
+            "--max-samples",
+        ),
+        (
+            vec![
+                "calibrate",
+                "--input",
+                missing,
+                "--max-chi2-per-dof",
+                "0",
+                "--json",
+            ],
+            "--max-chi2-per-dof",
+        ),
+        (
+            vec!["noise", "--input", missing, "--rate-hz", "0", "--json"],
+            "--rate-hz",
+        ),
+    ] {
+        let (ok, stdout, stderr) = host(&args);
+        assert!(!ok);
+        let v: serde_json::Value = serde_json::from_str(stdout.trim())
+            .unwrap_or_else(|e| panic!("{args:?}: stdout is no JSON document ({e}): {stdout}"));
+        assert_eq!(v["exit_code"], 2, "{args:?}: {v}");
+        assert_eq!(v["kind"], "usage", "{args:?}: {v}");
+        let message = v["error"].as_str().unwrap();
+        assert!(message.contains(flag), "{args:?}: {v}");
+        assert!(!message.starts_with("error:"), "{args:?}: {v}");
+        assert!(
+            stderr.contains(message.lines().next().unwrap()),
+            "{args:?}: {v} / {stderr}"
+        );
+        // Without --json the refusal is text on stderr only.
+        let plain: Vec<&str> = args.iter().copied().filter(|a| *a != "--json").collect();
+        let (ok, stdout, _) = host(&plain);
+        assert!(!ok && stdout.is_empty(), "{plain:?}: {stdout}");
+    }
+    let (ok, stdout, _) = host(&["calibrate", "--json", "--help"]);
+    assert!(ok && stdout.contains("Usage"), "{stdout}");
+}
+
 /// The walk in the document (docs/model.md §11): `calibrate --bias-walk-from truth.toml` takes the
 /// simulator's own walk (its `[noise]`, 0.003 mg/√s) as the unit's, and the document says so, with
 /// one bias-track point per segment of the plan; the same session without a walk option has no

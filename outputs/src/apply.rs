@@ -21,8 +21,10 @@
 //! `session::segment` finds in it (in each window) are the ones checked to compensate to 1 g.
 
 mod log;
+mod offset;
 
 pub use log::{apply_log, apply_log_within, Prepared, Setting, APPLY_MAX_SAMPLES};
+pub use offset::{log_offset, LogOffset};
 
 use crate::calibration_guard::{
     check_rest_rate, meet, Frame, GuardError, Meeting, Mine, Other, Temperatures,
@@ -66,12 +68,6 @@ pub enum ApplyError {
     /// The recording's sample rate does not give an ω̇ estimator.
     #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate: {1}")]
     SampleRate(f64, #[source] OmegaDotError),
-    /// `--ignore-unit-id` where the unit ids do not differ (it would change nothing).
-    #[error("--ignore-unit-id does not apply: {why}, so no id is refused; leave it out")]
-    IgnoreUnitIdUnused {
-        /// Why the ids do not differ.
-        why: String,
-    },
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
     #[error(
         "still segment '{segment}' compensates to |f| = {f_g:.4} g, not 1 g (at most \
@@ -105,6 +101,31 @@ pub enum ApplyError {
         acc_mg: f64,
         /// The gyro's noise there, °/s.
         gyro_deg_s: f64,
+    },
+    /// A raw log's offset that contradicts the one the calibration was made with (or a recorded
+    /// one that is no number).
+    #[error(
+        "{}{calibration} was made from counts read with {} counts of zero force \
+         (raw_offset_lsb), which its biases hold: {}",
+        .given.map_or(String::new(), |g| format!("--acc-offset {}: ", offset::counts(g))),
+        offset::counts(*.recorded),
+        if .recorded.iter().all(|x| x.is_finite()) {
+            format!(
+                "the log's own counts are compensated, so another offset contradicts it; give \
+                 --acc-offset {} or leave it out (the calibration's is then used)",
+                offset::counts(*.recorded)
+            )
+        } else {
+            "fix or remove raw_offset_lsb in the calibration".to_string()
+        }
+    )]
+    RawOffset {
+        /// The calibration file.
+        calibration: String,
+        /// The offset given (`None`: the calibration's own is not a number).
+        given: Option<[f64; 3]>,
+        /// The calibration's.
+        recorded: [f64; 3],
     },
 }
 
@@ -220,6 +241,9 @@ pub struct ApplySummary {
     /// Warnings of the reader (cut-short last line, empty segments, …), and rows outside the
     /// calibration's temperature range.
     pub warnings: Vec<String>,
+    /// Notes: an explicit choice the data already satisfied (`--ignore-unit-id` where no ids
+    /// differ).
+    pub notes: Vec<String>,
 }
 
 /// How the calibration's unit id binds it to a recording.
@@ -227,16 +251,16 @@ pub struct ApplySummary {
 pub enum UnitBinding {
     /// The calibration's id (`None`: it has none), checked against the recording's.
     Bound(Option<UnitId>),
-    /// The calibration's id, not checked (`--ignore-unit-id`): refused where the ids do not differ.
+    /// The calibration's id, not checked (`--ignore-unit-id`): a note where the ids do not differ.
     Ignored(Option<UnitId>),
 }
 
 impl UnitBinding {
-    /// The id to check against the recording's, after refusing an ignored check that would change
-    /// nothing ([`ApplyError::IgnoreUnitIdUnused`]).
-    fn checked_id(self, plan: &Plan) -> Result<Option<UnitId>, ApplyError> {
+    /// The id to check against the recording's, and a note where the check was to be ignored but
+    /// no ids differ: the choice is satisfied already, and honoured.
+    fn checked_id(self, plan: &Plan) -> (Option<UnitId>, Option<String>) {
         let ignored = match self {
-            UnitBinding::Bound(id) => return Ok(id),
+            UnitBinding::Bound(id) => return (id, None),
             UnitBinding::Ignored(id) => id,
         };
         let why = match (ignored, plan.unit_id.as_deref()) {
@@ -245,9 +269,10 @@ impl UnitBinding {
             (Some(c), Some(r)) if UnitId::parse_hex(r) == Some(c) => {
                 format!("the calibration and the recording are both of unit {c}")
             }
-            _ => return Ok(None),
+            _ => return (None, None),
         };
-        Err(ApplyError::IgnoreUnitIdUnused { why })
+        let note = format!("note: --ignore-unit-id: {why}, so no id would have been refused");
+        (None, Some(note))
     }
 }
 
@@ -375,7 +400,7 @@ pub fn apply_session(
 ) -> Result<ApplySummary, ApplyError> {
     let plan = Plan::load(&dir.join(PLAN_FILE))
         .map_err(|e: PlanError| ApplyError::from(RecordingError::from(e)))?;
-    let cal_unit = unit.checked_id(&plan)?;
+    let (cal_unit, id_note) = unit.checked_id(&plan);
     meet(
         Meeting::Apply,
         &mine(cal, cal_unit),
@@ -423,6 +448,7 @@ pub fn apply_session(
         },
     )?;
     summary.warnings = report.warnings;
+    summary.notes.extend(id_note);
     check_stills(&plan, &stills, cal.gyro.is_some())?;
     if applier.flagged_rows > 0 {
         summary.warnings.push(flagged_warning(applier.flagged_rows));

@@ -19,7 +19,20 @@ def host_bin() -> Path:
     if given:
         return Path(given)
     subprocess.run(["cargo", "build", "-q", "-p", "host"], cwd=ROOT, check=True)
-    return ROOT / "target" / "debug" / "host"
+    return target_dir() / "debug" / "host"
+
+
+def target_dir() -> Path:
+    """Where cargo builds this workspace: CARGO_TARGET_DIR (or a config's target-dir) when set,
+    else target/, as `cargo metadata` says."""
+    meta = subprocess.run(
+        ["cargo", "metadata", "--format-version", "1", "--no-deps"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    return Path(json.loads(meta.stdout)["target_directory"])
 
 
 def run(host_bin: Path, *args: str, cwd=None) -> subprocess.CompletedProcess:

@@ -132,6 +132,7 @@ impl UserOption {
         matches!(
             self,
             UserOption::TimeColumn
+                | UserOption::TempColumn
                 | UserOption::TimeUnit
                 | UserOption::AccUnit
                 | UserOption::GyroUnit

@@ -38,7 +38,30 @@ pub fn build_firmware() -> Result<PathBuf, String> {
                 .into(),
         );
     }
-    Ok(root.join("firmware/target/thumbv7em-none-eabihf/release/qemu"))
+    Ok(firmware_target_dir(&root)?.join("thumbv7em-none-eabihf/release/qemu"))
+}
+
+/// The firmware workspace's build directory as cargo places it (`CARGO_TARGET_DIR` or a config's
+/// `build.target-dir` when set, else `firmware/target`), from `cargo metadata`.
+fn firmware_target_dir(root: &Path) -> Result<PathBuf, String> {
+    let out = Command::new(env!("CARGO"))
+        .current_dir(root)
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--manifest-path",
+            "firmware/Cargo.toml",
+        ])
+        .output()
+        .map_err(|e| format!("cannot run cargo metadata: {e}"))?;
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .map_err(|e| format!("cargo metadata gave no JSON document ({e})"))?;
+    doc["target_directory"]
+        .as_str()
+        .map(PathBuf::from)
+        .ok_or_else(|| "cargo metadata names no target_directory".into())
 }
 
 /// A running emulated board.

@@ -264,7 +264,7 @@ pub(crate) fn apply(
             };
             (d, WalkOrigin::Unit, mg)
         }
-        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(out)) => {
+        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(out, _)) => {
             // K_i output unit/√s over k_i output unit/g is g/√s; ×10³ mg.
             let mg = core::array::from_fn(|a| out[a] / k[a] * 1e3);
             (Drift::per_axis_out(out, t0), WalkOrigin::Unit, mg)

@@ -461,7 +461,10 @@ fn a_walk_from_the_unit_is_the_given_walk() {
     let out = fit(
         &plan,
         &s.stats,
-        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(k.map(|k| 0.002e-3 * k))),
+        BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(
+            k.map(|k| 0.002e-3 * k),
+            plan.output_unit,
+        )),
     );
     let ow = out.bias_walk.unwrap();
     for a in 0..3 {
@@ -486,6 +489,33 @@ fn a_walk_from_the_unit_is_the_given_walk() {
         "{u:?} against {g:?}"
     );
     assert!(u[0] > 2.0 * u[1], "{u:?}");
+}
+
+/// A walk of raw outputs is a strength in its own output unit: one in LSB/√s on a session in volts
+/// (8.2 LSB/√s would read as 8.2 V/√s) is refused naming both units, not fitted.
+#[test]
+fn a_walk_in_another_output_unit_is_refused() {
+    let truth = testkit::paper_unit();
+    let plan = plan(FIXTURES[0]);
+    assert_eq!(plan.output_unit, shared::OutputUnit::Volts);
+    let s = simulate(&plan, &truth, 0.0, 0.0, 32);
+    let options = EstimateOptions {
+        bias_walk: BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS([8.2; 3], shared::OutputUnit::Lsb)),
+        ..EstimateOptions::default()
+    };
+    let e = calibrate_session_stats(&plan, &s.stats, &options).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            EstimateError::BiasWalkUnit {
+                walk: "LSB",
+                session: "V"
+            }
+        ),
+        "{e}"
+    );
+    let m = e.to_string();
+    assert!(m.contains("LSB/√s") && m.contains("in V"), "{m}");
 }
 
 /// Where the 0.05° fixture's gap to the oracle comes from (docs/model.md §11.5), without a walk:

@@ -73,6 +73,28 @@ pub enum EstimateError {
          eq. 24 is the published method: use the joint method, or leave the walk out"
     )]
     BiasWalkWithPaperMethod,
+    /// A gyro bias random walk for a session without a gyro model: it would weigh nothing.
+    #[error(
+        "the gyro bias random walk does not apply: {why}, and the walk weighs only a gyro model's \
+         mean rates (docs/model.md §11.6); leave it out"
+    )]
+    GyroBiasWalkUnused {
+        /// Why the session has no gyro model.
+        why: &'static str,
+    },
+    /// A walk from the unit's noise figures in the raw outputs of another unit than the
+    /// session's: its strength would be read in the wrong unit.
+    #[error(
+        "the bias random walk from the unit's noise figures is in {walk}/√s (the noise analysis \
+         was of outputs in {walk}), but this session's outputs are in {session}: give the noise \
+         analysis of a recording in {session}, or one made with a calibration (in m/s²)"
+    )]
+    BiasWalkUnit {
+        /// The walk's output unit.
+        walk: &'static str,
+        /// The session's output unit.
+        session: &'static str,
+    },
     /// The temperature model cannot be fitted or is implausible (the message says why).
     #[error("temperature model: {0}; check the recording's temp_c column and the soak steps")]
     Temperature(String),

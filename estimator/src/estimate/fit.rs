@@ -15,7 +15,7 @@ use super::{gyro_drift, thermal_gyro, WalkEstimate};
 use super::{
     BiasWalk, BodyFrame, CalibrationOutcome, EstimateError, EstimateOptions, Exclusion, FitSummary,
     GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability, SegmentDiagnostic,
-    SegmentKind,
+    SegmentKind, UnitWalk,
 };
 use crate::session::{Package, Plan, SegmentStats};
 use nalgebra::DMatrix;
@@ -83,15 +83,10 @@ fn fit_session(
     if options.method == Method::Paper && options.bias_walk != BiasWalk::Off {
         return Err(EstimateError::BiasWalkWithPaperMethod);
     }
+    refuse_walk_unit(plan, options)?;
     let mut prepared = prepare(plan, stats, options)?;
     let setup = setup_gyro(plan, options, &mut prepared);
-    if options.gyro_bias_walk_deg_s_sqrt_s > 0.0 && setup.gyro_base.is_none() {
-        prepared.warnings.push(
-            "gyro: the gyro bias random walk given has no effect: the session estimates no gyro \
-             model (no spins, the gyro taken as perfect, or the paper's method; docs/model.md §11.6)"
-                .into(),
-        );
-    }
+    settle_gyro_walk(options, &mut prepared, setup.gyro_base.is_some())?;
     let frame = setup.frame;
     let main = main_fit(plan, options, &mut prepared, setup)?;
     if options.bias_walk == BiasWalk::Estimate {
@@ -209,6 +204,54 @@ fn prepare(
         problem,
         static_fit,
     })
+}
+
+/// A walk of raw outputs is a strength in its own output unit: one of another unit than the
+/// session's is refused (docs/model.md §11.3).
+fn refuse_walk_unit(plan: &Plan, options: &EstimateOptions) -> Result<(), EstimateError> {
+    if let BiasWalk::FromUnit(UnitWalk::OutputPerSqrtS(_, unit)) = options.bias_walk {
+        if unit != plan.output_unit {
+            return Err(EstimateError::BiasWalkUnit {
+                walk: unit.symbol(),
+                session: plan.output_unit.symbol(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The gyro's walk weighs the gyro model's mean rates (§11.6): without the model it would change
+/// nothing, so one asked for is refused, naming why there is none, and a unit's is left out with a
+/// warning.
+fn settle_gyro_walk(
+    options: &EstimateOptions,
+    prepared: &mut Prepared,
+    has_gyro_model: bool,
+) -> Result<(), EstimateError> {
+    if options.gyro_bias_walk_deg_s_sqrt_s <= 0.0 || has_gyro_model {
+        return Ok(());
+    }
+    let spins = prepared
+        .segs
+        .iter()
+        .any(|s| s.used && s.kind != SegmentKind::Static);
+    let why = if options.method == Method::Paper {
+        "the paper's method estimates no gyro model"
+    } else if options.gyro_model != GyroModel::Estimate {
+        "the gyro is taken as given, not estimated from this session"
+    } else if !spins {
+        "the session has no spins (every segment used is a rest), so no gyro model is estimated \
+         from it"
+    } else {
+        "the session estimates no gyro model"
+    };
+    if !options.gyro_bias_walk_from_unit {
+        return Err(EstimateError::GyroBiasWalkUnused { why });
+    }
+    prepared.warnings.push(format!(
+        "gyro: the unit's gyro bias random walk is left out: {why} (docs/model.md §11.6)"
+    ));
+    Ok(())
 }
 
 /// What the main fit starts from.
@@ -450,6 +493,7 @@ fn outcome(
             .and_then(|b| b.walk.as_ref())
             .filter(|d| d.active())
             .map(|_| options.gyro_bias_walk_deg_s_sqrt_s),
+        acc_offset: plan.acc_offset,
         bias_walk: walk,
     }
 }

@@ -370,16 +370,34 @@ fn the_dense_gyro_path_without_a_walk_is_the_per_mean_path() {
     assert!(worst < 1e-12, "{worst}");
 }
 
-/// A session without spins estimates no gyro model: a gyro walk given there is said to have no
-/// effect, and the fit is the one without it.
+/// A session without spins estimates no gyro model: a gyro walk that came with the unit's noise
+/// figures is said to have been left out, and the fit is the one without it; one asked for by
+/// itself would change nothing and is refused, naming why.
 #[test]
 fn a_gyro_walk_without_spins_is_said_to_have_no_effect() {
     let truth = testkit::paper_unit();
     let mut plan = plan();
     plan.segments.retain(|s| s.is_static());
     let stats = simulate(&plan, &truth, 3e-4, 23);
+    let asked = EstimateOptions {
+        gyro_bias_walk_deg_s_sqrt_s: 3e-4,
+        ..EstimateOptions::default()
+    };
+    let e = calibrate_session_stats(&plan, &stats, &asked).unwrap_err();
+    assert!(
+        matches!(e, EstimateError::GyroBiasWalkUnused { why } if why.contains("no spins")),
+        "{e}"
+    );
     let without = fit(&plan, &stats, 0.0);
-    let with = fit(&plan, &stats, 3e-4);
+    let with = calibrate_session_stats(
+        &plan,
+        &stats,
+        &EstimateOptions {
+            gyro_bias_walk_from_unit: true,
+            ..asked
+        },
+    )
+    .unwrap();
     let said = |o: &CalibrationOutcome| o.warnings.iter().any(|w| w.contains("§11.6"));
     assert!(said(&with) && !said(&without), "{:?}", with.warnings);
     assert!(with.gyro.is_none() && with.gyro_bias_walk_deg_s_sqrt_s.is_none());

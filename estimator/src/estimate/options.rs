@@ -99,6 +99,10 @@ pub struct EstimateOptions {
     /// The gyro's bias random walk, °/s/√s (docs/model.md §11.6): the gyro model's mean rates are
     /// weighted with its covariance across the session. 0 is a constant gyro bias, the default.
     pub gyro_bias_walk_deg_s_sqrt_s: f64,
+    /// The gyro's walk comes with the unit's noise figures (a file giving the accelerometers'
+    /// walk too), not asked for: on a session without a gyro model it is left out with a warning
+    /// instead of refused ([`super::EstimateError::GyroBiasWalkUnused`]).
+    pub gyro_bias_walk_from_unit: bool,
     /// How the caller names these options in refusals and warnings.
     pub spelling: Spelling,
 }
@@ -134,9 +138,10 @@ pub enum UnitWalk {
     /// mg/√s per axis (a unit file's `accel_bias_walk_mg_sqrt_s`, or an Allan K in m/s²/√s or
     /// g/√s turned into mg): turned into output units with each axis's fitted scale factor.
     MgSqrtS([f64; 3]),
-    /// Output unit/√s per axis (an Allan K of the raw outputs, V/√s or LSB/√s): the walk's
-    /// intensity as it is, `q_i = K_i` (docs/model.md §11).
-    OutputPerSqrtS([f64; 3]),
+    /// Output unit/√s per axis (an Allan K of the raw outputs, V/√s or LSB/√s) and that output
+    /// unit: the walk's intensity as it is, `q_i = K_i` (docs/model.md §11), for a session in
+    /// the same unit only (another is refused, [`super::EstimateError::BiasWalkUnit`]).
+    OutputPerSqrtS([f64; 3], shared::OutputUnit),
 }
 
 /// How the estimator treats the gyro.
@@ -173,6 +178,7 @@ impl Default for EstimateOptions {
             single_package: false,
             bias_walk: BiasWalk::Off,
             gyro_bias_walk_deg_s_sqrt_s: 0.0,
+            gyro_bias_walk_from_unit: false,
             spelling: Spelling::Flags,
         }
     }

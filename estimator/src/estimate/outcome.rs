@@ -255,4 +255,8 @@ pub struct CalibrationOutcome {
     /// The gyro's bias random walk the gyro model's mean rates were weighted with, °/s/√s
     /// (docs/model.md §11.6); `None` with a constant gyro bias or without a gyro model.
     pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
+    /// The counts of zero force subtracted when the session's logger's file was read (its plan's
+    /// `acc_offset`): the biases are of the logger's own counts and hold them; written to the
+    /// calibration file for `apply`. `None`: none was subtracted.
+    pub acc_offset: Option<[f64; 3]>,
 }

@@ -29,4 +29,4 @@ pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
     simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,
 };
-pub use stats::simulate_stats;
+pub use stats::{simulate_stats, simulate_unit_stats};

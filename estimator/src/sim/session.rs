@@ -490,7 +490,7 @@ pub fn simulate_to_dir_with_progress(
 
 /// `noise` with the unit's `[gyro]` table as the simulated gyro: its matrix replaces the noise
 /// model's, its bias adds to the noise model's.
-fn simulated_noise(unit: &UnitFile, noise: &NoiseModel) -> NoiseModel {
+pub(crate) fn simulated_noise(unit: &UnitFile, noise: &NoiseModel) -> NoiseModel {
     let mut noise = noise.clone();
     if let Some(g) = &unit.gyro {
         noise.gyro_matrix = g.matrix;

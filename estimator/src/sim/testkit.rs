@@ -105,6 +105,7 @@ pub fn paper_plan(unit: OutputUnit) -> Plan {
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         package: Default::default(),
+        acc_offset: None,
         segments,
     }
 }
@@ -285,6 +286,7 @@ pub fn many_mounts_plan() -> Plan {
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         package: Default::default(),
+        acc_offset: None,
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
         segments,
@@ -353,6 +355,7 @@ pub fn soak_plan(temps_c: &[f64], seconds: f64) -> Plan {
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         package: Default::default(),
+        acc_offset: None,
         segments,
     }
 }

@@ -1,12 +1,13 @@
 //! `host apply`: a calibration applied to a recording with the device's own compensation code.
 
 use super::CliError;
-use crate::apply::{apply_log, apply_session, ApplyError, ApplySummary, UnitBinding};
+use crate::apply::{apply_log, apply_session, log_offset, ApplyError, ApplySummary, UnitBinding};
 use crate::output_file::OutputFile;
+use crate::session::logs::LogSource;
 use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, ValueEnum};
-use shared::LeverMode;
+use shared::{LeverMode, OutputUnit};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -29,12 +30,13 @@ pub struct ApplyArgs {
     /// Replace an existing --out file.
     #[arg(long)]
     pub force: bool,
-    /// Which lever-arm terms to apply, as the device's lever mode (default: full). Refused with a
-    /// calibration whose lever arms are all zero.
+    /// Which lever-arm terms to apply, as the device's lever mode (default: full). With a
+    /// calibration whose lever arms are all zero every mode is the static compensation (a note
+    /// says so).
     #[arg(long, value_enum)]
     pub lever: Option<LeverArg>,
-    /// Apply even when the calibration's and the recording's unit ids differ (refused where they
-    /// do not).
+    /// Apply even when the calibration's and the recording's unit ids differ (where they do not,
+    /// or there are none, a note says so).
     #[arg(long)]
     pub ignore_unit_id: bool,
     /// The unit's temperature, °C, for a calibration with a temperature model applied to a recording
@@ -80,33 +82,23 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     } else {
         UnitBinding::Bound(cal_unit)
     };
-    if a.lever.is_some() && cal.lever_arms.r_m.iter().flatten().all(|r| *r == 0.0) {
-        return Err(CliError::Usage(format!(
-            "--lever does not apply: the lever arms of {} are all zero, so every lever mode gives \
-             the same result; leave it out",
-            a.calibration.display()
-        )));
-    }
-    if a.temperature_c.is_some() && cal.temperature.is_none() {
-        return Err(CliError::Usage(format!(
-            "--temperature-c does not apply: {} has no temperature model, so no temperature \
-             changes its result; leave it out",
-            a.calibration.display()
-        )));
-    }
+    let out = super::output::Output { json: false, quiet };
+    options_for_calibration(a, &cal, &out)?;
     let mode = a.lever.unwrap_or(LeverArg::Full).into();
     let source = if a.input.is_dir() {
         a.log.refuse_for_session(&a.input)?;
         None
     } else {
         if a.ignore_unit_id {
-            return Err(CliError::Usage(format!(
-                "--ignore-unit-id does not apply: {} is a logger's file, which carries no unit id, \
-                 so no ids are compared; leave it out",
+            out.note(format!(
+                "note: --ignore-unit-id: {} is a logger's file, which carries no unit id, so no id \
+                 would have been refused",
                 a.input.display()
-            )));
+            ));
         }
-        Some(a.log.source(&a.input)?)
+        let mut source = a.log.source(&a.input)?;
+        read_with_calibrations_offset(&mut source, &unit, a, &out)?;
+        Some(source)
     };
     let apply = |w: &mut dyn Write| {
         // Reading, compensating and writing run row by row together: one step.
@@ -145,9 +137,11 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
             s
         }
     };
-    let out = super::output::Output { json: false, quiet };
     for w in &summary.warnings {
         out.warn(w);
+    }
+    for n in &summary.notes {
+        out.note(n);
     }
     let dest = a
         .out
@@ -163,6 +157,68 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     match &a.out {
         Some(_) => out.line(line)?,
         None => out.note(line),
+    }
+    Ok(())
+}
+
+/// The options that meet the calibration: a lever mode it already satisfies (no lever arms: every
+/// mode is the static compensation) is honoured with a note; a temperature for a calibration
+/// without a temperature model would change nothing and is refused.
+fn options_for_calibration(
+    a: &ApplyArgs,
+    cal: &shared::Calibration,
+    out: &super::output::Output,
+) -> Result<(), CliError> {
+    if let Some(lever) = a.lever {
+        if cal.lever_arms.r_m.iter().flatten().all(|r| *r == 0.0) {
+            out.note(format!(
+                "note: the lever arms of {} are all zero, so --lever {} gives the static \
+                 compensation, as every lever mode does",
+                a.calibration.display(),
+                lever
+                    .to_possible_value()
+                    .map_or_else(String::new, |v| v.get_name().to_owned())
+            ));
+        }
+    }
+    if a.temperature_c.is_some() && cal.temperature.is_none() {
+        return Err(CliError::Usage(format!(
+            "--temperature-c does not apply: {} has no temperature model, so no temperature \
+             changes its result; leave it out",
+            a.calibration.display()
+        )));
+    }
+    if a.log.temp_column.is_some() && cal.temperature.is_none() {
+        return Err(CliError::Usage(format!(
+            "--temp-column does not apply: {} has no temperature model, so the log's \
+             temperatures change nothing in its result; leave it out",
+            a.calibration.display()
+        )));
+    }
+    Ok(())
+}
+
+/// A raw log in counts is read with the counts of zero force the calibration was made with
+/// (`crate::apply::log_offset`): `--acc-offset` must be that one, and may be left out.
+fn read_with_calibrations_offset(
+    source: &mut LogSource,
+    unit: &UnitFile,
+    a: &ApplyArgs,
+    out: &super::output::Output,
+) -> Result<(), CliError> {
+    let Some(text) = source
+        .text
+        .as_mut()
+        .filter(|t| t.acc_unit == OutputUnit::Lsb)
+    else {
+        return Ok(());
+    };
+    let given = a.log.acc_offset.is_some().then_some(text.acc_offset);
+    let name = a.calibration.display().to_string();
+    let offset = log_offset(&name, unit.statics.raw_offset_lsb, given)?;
+    text.acc_offset = offset.read_with;
+    if let Some(note) = offset.note {
+        out.note(note);
     }
     Ok(())
 }

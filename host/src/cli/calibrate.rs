@@ -221,6 +221,9 @@ impl EstimatorArgs {
             single_package: self.single_package,
             bias_walk,
             gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
+            // The file's gyro walk was not asked for by itself: where the session has no gyro
+            // model it is left out, not refused.
+            gyro_bias_walk_from_unit: self.walk.gyro_bias_walk.is_none(),
             ..EstimateOptions::default()
         })
     }

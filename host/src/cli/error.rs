@@ -29,8 +29,8 @@ pub enum CliError {
     /// The simulator.
     #[error(transparent)]
     Simulate(#[from] SimulateError),
-    /// The estimator.
-    #[error(transparent)]
+    /// The estimator (an option it refuses named by its flag).
+    #[error("{}", estimate_text(.0))]
     Estimate(#[from] EstimateError),
     /// Writing the result.
     #[error(transparent)]
@@ -142,6 +142,16 @@ pub enum CliError {
     Stdout(#[from] std::io::Error),
 }
 
+/// The estimator's message, led by the flag it refuses where one is refused (the estimator names
+/// no caller's options).
+fn estimate_text(e: &EstimateError) -> String {
+    match e {
+        EstimateError::GyroBiasWalkUnused { .. } => format!("--gyro-bias-walk: {e}"),
+        EstimateError::BiasWalkUnit { .. } => format!("--bias-walk-from: {e}"),
+        _ => e.to_string(),
+    }
+}
+
 /// Exit status of a successful command.
 pub const EXIT_OK: i32 = 0;
 /// Exit status of a command that failed (bad input, I/O, a device, an estimate refused).
@@ -178,10 +188,13 @@ impl CliError {
                 | CliError::SimDevice(_)
                 | CliError::Apply(
                     ApplyError::Guard(GuardError::TemperatureNotUsed { .. })
-                        | ApplyError::IgnoreUnitIdUnused { .. }
+                        | ApplyError::RawOffset { given: Some(_), .. }
                 )
                 | CliError::Log(
                     LogError::OptionNotForFormat { .. } | LogError::TextOptionOnBinary { .. }
+                )
+                | CliError::Estimate(
+                    EstimateError::BiasWalkUnit { .. } | EstimateError::GyroBiasWalkUnused { .. }
                 )
         )
     }

@@ -26,6 +26,8 @@
 
 pub mod apply;
 #[cfg(test)]
+mod apply_offset_tests;
+#[cfg(test)]
 mod autopilot_tests;
 pub mod batch;
 pub mod bringup;
@@ -157,7 +159,7 @@ pub fn error_document(e: &CliError) -> Option<String> {
     } else {
         "error"
     };
-    Some(serde_json::json!({ "error": e.to_string(), "kind": kind, "exit_code": code }).to_string())
+    Some(output::error_json(&e.to_string(), kind, code))
 }
 
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).

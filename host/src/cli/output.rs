@@ -64,3 +64,27 @@ impl Output {
         Ok(())
     }
 }
+
+/// The one JSON error document: the message, its kind ("usage" or "error") and the exit status.
+pub(crate) fn error_json(message: &str, kind: &str, exit_code: i32) -> String {
+    serde_json::json!({ "error": message, "kind": kind, "exit_code": exit_code }).to_string()
+}
+
+/// The argument parser's own refusal (a value below its bound, an unknown flag) as the document
+/// every other usage error gives under `--json`; `None` for help and version, which are no errors,
+/// or when `args` do not ask for JSON. The message is the parser's, without its "error: " prefix.
+pub fn parse_error_document(
+    e: &clap::Error,
+    args: impl IntoIterator<Item = std::ffi::OsString>,
+) -> Option<String> {
+    let json = args
+        .into_iter()
+        .take_while(|a| a != "--")
+        .any(|a| a == "--json");
+    if !json || !e.use_stderr() {
+        return None;
+    }
+    let text = e.render().to_string();
+    let message = text.trim().strip_prefix("error: ").unwrap_or(text.trim());
+    Some(error_json(message, "usage", e.exit_code()))
+}

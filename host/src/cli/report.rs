@@ -53,6 +53,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     };
     options.estimate.bias_walk = bias_walk;
     options.estimate.gyro_bias_walk_deg_s_sqrt_s = gyro_walk;
+    options.estimate.gyro_bias_walk_from_unit = a.walk.gyro_bias_walk.is_none();
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
     let out = super::output::Output { json: false, quiet };

@@ -296,7 +296,9 @@ impl<'c> Run<'c> {
                 segment: "log",
                 segment_index: self.piece,
                 t_s,
-                u: rec.acc[i],
+                // The logger's own counts, as the calibration's session held them (its biases
+                // hold the offset the log was read with; `super::offset`).
+                u: core::array::from_fn(|j| rec.acc[i][j] + rec.acc_offset[j]),
                 w_rad_s: rec.gyro_rad_s[i],
                 temp_c: rec.temp_c.as_ref().map(|t| t[i]),
             };

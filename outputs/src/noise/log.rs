@@ -61,9 +61,11 @@ pub fn analyse_log(
     let (k, iv) = best;
     let end = iv.end.min(iv.start + MAX_SAMPLES);
     let mut data: [Vec<f64>; 6] = Default::default();
+    // The logger's own counts (the offset it was read with added back), which a calibration made
+    // from them applies to (`crate::apply`); a constant changes no Allan deviation.
     for i in iv.start..end {
         for j in 0..3 {
-            data[j].push(rec.acc[i][j]);
+            data[j].push(rec.acc[i][j] + rec.acc_offset[j]);
             data[3 + j].push(rec.gyro_rad_s[i][j]);
         }
     }

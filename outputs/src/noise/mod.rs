@@ -112,6 +112,12 @@ pub struct NoiseReport {
     pub kalibr: KalibrNoise,
     /// Warnings (segment cut, accelerometer not in m/s², …).
     pub warnings: Vec<String>,
+    /// The recording's accelerometer output unit (`V`, `LSB`, `m/s2`, `g`): what the accelerometer
+    /// axes' figures are in where their unit is `output unit`, so that a consumer can check it
+    /// against its own recording's. Absent where the input states none (a bare samples.csv) and in
+    /// a noise.json written before it was recorded.
+    #[serde(default)]
+    pub output_unit: Option<OutputUnit>,
 }
 
 /// The rows of one segment as six signals.
@@ -210,6 +216,7 @@ fn collect_csv_from<R: std::io::BufRead>(
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         package: Default::default(),
+        acc_offset: None,
         segments: names
             .iter()
             .map(|n| crate::session::SegmentPlan {
@@ -478,6 +485,7 @@ fn analyse_signals(
         axes,
         kalibr,
         warnings,
+        output_unit: s.acc_unit,
     })
 }
 

@@ -18,6 +18,7 @@ fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         unit_id: None,
         package: Default::default(),
+        acc_offset: None,
         segments: vec![
             SegmentPlan {
                 attitude: Default::default(),
@@ -318,6 +319,7 @@ fn the_table_names_what_white_noise_does_not_determine() {
         axes: vec![axis],
         kalibr: KalibrNoise::default(),
         warnings: Vec::new(),
+        output_unit: None,
     };
     let text = report.render();
     let row = text.lines().find(|l| l.starts_with("gyro_x")).unwrap();
@@ -336,6 +338,32 @@ fn the_table_names_what_white_noise_does_not_determine() {
 }
 
 /// A recording already in m/s² (or g) gives Kalibr's accelerometer figures without a calibration:
+/// noise.json says which output unit its raw figures are in: the session's plan's (volts for the
+/// paper's unit, whose plan says V), read back from the JSON; a bare samples.csv states none.
+#[test]
+fn the_report_records_the_recordings_output_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let unit = UnitFile::paper_unit();
+    simulate_to_dir(
+        dir.path(),
+        &unit,
+        &still_plan(200.0, 10.0),
+        &noise(),
+        4,
+        false,
+    )
+    .unwrap();
+    let r = analyse(dir.path(), None, true).unwrap();
+    assert_eq!(r.axes[0].unit, "output unit");
+    assert_eq!(r.output_unit, Some(OutputUnit::Volts));
+    let json = serde_json::to_value(&r).unwrap();
+    assert_eq!(json["output_unit"], "V");
+    let back: NoiseReport = serde_json::from_value(json).unwrap();
+    assert_eq!(back.output_unit, Some(OutputUnit::Volts));
+    let bare = analyse(&dir.path().join(SAMPLES_FILE), None, true).unwrap();
+    assert_eq!(bare.output_unit, None);
+}
+
 /// 1 mg of white noise per sample at 200 Hz is N = 1e-3 g / √200 Hz, in m/s²/√Hz.
 #[test]
 fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {

@@ -112,6 +112,21 @@ pub enum ReportError {
     /// The calibration of the navigation check failed.
     #[error(transparent)]
     Estimate(crate::estimate::EstimateError),
+    /// The navigation check's calibration misfits its own simulated session far beyond the
+    /// simulated noise: its navigation figures would describe a fit, not the unit.
+    #[error(
+        "the calibration of the simulated session misfits it: {what} = {value:.4e}, above \
+         {limit} (a fit to the simulated noise gives about 1), so the navigation figures would \
+         describe the misfit, not the unit"
+    )]
+    Misfit {
+        /// The figure ("χ²/dof", "the temperature fit's χ²/dof").
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// The limit it exceeds.
+        limit: f64,
+    },
 }
 
 /// A compensation level.

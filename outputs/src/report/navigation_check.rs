@@ -8,7 +8,7 @@ use super::navigation::{render_navigation, render_position_targets};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome};
 use crate::session::builtin::paper_plan;
 use crate::session::Plan;
-use crate::sim::{simulate_stats, NoiseModel};
+use crate::sim::{simulate_unit_stats, NoiseModel};
 use crate::unit_file::UnitFile;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -69,6 +69,24 @@ impl NavigationCheck {
     }
 }
 
+/// A fit of a simulated session is held to the calibration's own χ²/dof limit, the main fit's and
+/// the temperature fit's ([`crate::summary::DEFAULT_MAX_CHI2_PER_DOF`]).
+fn refuse_misfit(outcome: &CalibrationOutcome) -> Result<(), ReportError> {
+    let limit = crate::summary::DEFAULT_MAX_CHI2_PER_DOF;
+    let thermal = outcome.thermal.as_ref().map(|t| t.worst_reduced_chi2());
+    let figures = [
+        ("χ²/dof", Some(outcome.fit.reduced_chi2)),
+        ("the temperature fit's χ²/dof", thermal),
+    ];
+    for (what, value) in figures {
+        // NaN is a misfit too.
+        if let Some(value) = value.filter(|v| v.is_nan() || *v > limit) {
+            return Err(ReportError::Misfit { what, value, limit });
+        }
+    }
+    Ok(())
+}
+
 /// `host navigation-check`: the paper's unit simulated with its plan (1 mg white noise, fixed seed),
 /// calibrated with the joint method, and the navigation replay of a static and the fastest rotating
 /// segment. Prints (via [`NavigationCheck::render`]) the final position errors against their targets.
@@ -93,10 +111,12 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
             temperatures: crate::calibration_guard::Temperatures::None,
         },
     )?;
-    let stats = simulate_stats(&truth, &args.plan, &args.noise, args.seed)
+    // The unit as `host simulate` records it: with its temperatures where the plan has them.
+    let stats = simulate_unit_stats(&args.unit, &args.plan, &args.noise, args.seed)
         .map_err(ReportError::Simulate)?;
     let outcome = calibrate_session_stats(&args.plan, &stats, &args.report.estimate)
         .map_err(ReportError::Estimate)?;
+    refuse_misfit(&outcome)?;
     let data = build_report(
         &args.plan,
         &stats,
@@ -132,4 +152,30 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
         data,
         written,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::builtin::builtin_plan;
+
+    /// A fit far beyond its noise (χ²/dof 1.6·10⁶, what a thermal unit simulated without its
+    /// temperatures gave) is refused, naming the figure and the limit; the fit of the simulated
+    /// session itself passes.
+    #[test]
+    fn a_misfit_far_beyond_the_noise_is_refused() {
+        let unit = UnitFile::paper_unit();
+        let plan = builtin_plan("quick-oblique").unwrap().unwrap();
+        let stats = simulate_unit_stats(&unit, &plan, &NoiseModel::default(), 3).unwrap();
+        let mut outcome = calibrate_session_stats(&plan, &stats, &Default::default()).unwrap();
+        refuse_misfit(&outcome).unwrap();
+        outcome.fit.reduced_chi2 = 1.6e6;
+        let e = refuse_misfit(&outcome).unwrap_err().to_string();
+        assert!(
+            e.contains("χ²/dof = 1.6000e6") && e.contains("above 100"),
+            "{e}"
+        );
+        outcome.fit.reduced_chi2 = f64::NAN;
+        assert!(refuse_misfit(&outcome).is_err());
+    }
 }

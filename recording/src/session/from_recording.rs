@@ -94,6 +94,7 @@ fn plan_with(rec: &Recording, seg: &Segmentation, snap_deg: f64, prior_deg: f64)
         package: Default::default(),
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
+        acc_offset: (rec.acc_offset != [0.0; 3]).then_some(rec.acc_offset),
         segments: seg
             .stills
             .iter()

@@ -232,18 +232,18 @@ pub enum ImportError {
         /// The caller's names of the options.
         spelling: Spelling,
     },
-    /// A needed column is not in the header.
+    /// A needed column is not in the header; the advice names the option that asked for it.
     #[error(
-        "column '{name}' is not in the header ({found}); name the file's columns with \
-         {} (and {})",
-        .spelling.given(UserOption::Columns, "ACC_X,ACC_Y,ACC_Z,GYR_X,GYR_Y,GYR_Z"),
-        .spelling.given(UserOption::TimeColumn, "NAME")
+        "column '{name}' is not in the header ({found}); {}",
+        missing_column_advice(*.option, *.spelling)
     )]
     MissingColumn {
         /// The column asked for.
         name: String,
         /// The header's columns.
         found: String,
+        /// The option that named the column (`Columns`, `TimeColumn` or `TempColumn`).
+        option: UserOption,
         /// The caller's names of the options.
         spelling: Spelling,
     },
@@ -409,6 +409,22 @@ pub enum ImportError {
         /// The caller's names of the options.
         spelling: Spelling,
     },
+}
+
+/// What to give for a column the header lacks: the option that named it, and only that one.
+fn missing_column_advice(option: UserOption, spelling: Spelling) -> String {
+    match option {
+        UserOption::TempColumn => format!(
+            "give the temperature column as it is spelt in the header with {}, or leave {} out",
+            spelling.given(UserOption::TempColumn, "NAME"),
+            spelling.name(UserOption::TempColumn)
+        ),
+        _ => format!(
+            "name the file's columns with {} (and {})",
+            spelling.given(UserOption::Columns, "ACC_X,ACC_Y,ACC_Z,GYR_X,GYR_Y,GYR_Z"),
+            spelling.given(UserOption::TimeColumn, "NAME")
+        ),
+    }
 }
 
 /// Reads a logger's CSV (see the module docs).
@@ -715,6 +731,39 @@ mod tests {
         );
         let e = read(&text, &o).unwrap_err().to_string();
         assert!(e.contains("median magnitude is 1e100 m/s2"), "{e}");
+    }
+
+    /// A misspelt temperature column is named with the option that asked for it, and the advice
+    /// is that option's, not the accelerometer's columns or the time's.
+    #[test]
+    fn a_missing_temperature_column_names_its_own_option() {
+        let text = format!(
+            "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp_c\n{}",
+            rows(200, |_| "0,0,9.8,0,0,0,25".into())
+        );
+        let o = |spelling| ImportOptions {
+            temp_column: Some("tmep_c".into()),
+            spelling,
+            ..ImportOptions::new(
+                TimeSource::RateHz(100.0),
+                OutputUnit::MetresPerSecondSquared,
+                GyroUnit::DegPerS,
+            )
+        };
+        let m = read(&text, &o(Spelling::Flags)).unwrap_err().to_string();
+        assert!(
+            m.contains("'tmep_c'") && m.contains("--temp-column NAME"),
+            "{m}"
+        );
+        assert!(
+            !m.contains("--columns") && !m.contains("--time-column"),
+            "{m}"
+        );
+        let m = read(&text, &o(Spelling::Keywords)).unwrap_err().to_string();
+        assert!(
+            m.contains("temp_column=\"NAME\"") && !m.contains("--"),
+            "{m}"
+        );
     }
 
     #[test]

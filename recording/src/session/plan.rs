@@ -155,6 +155,12 @@ pub struct Plan {
     /// the three, docs/model.md §4.7) or sit apart (`"separate"`, the default).
     #[serde(default, skip_serializing_if = "Package::is_separate")]
     pub package: Package,
+    /// Outputs in counts read from a logger's file with its counts of zero force (`--acc-offset`,
+    /// an unsigned output's mid-scale), per axis: `samples.csv` holds the logger's own counts (the
+    /// offset added back), so a calibration made from it has biases in those counts, the offset
+    /// in them, and records it for `apply`. Absent: none was subtracted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub acc_offset: Option<[f64; 3]>,
     /// The segments, in the order they are run.
     #[serde(rename = "segment")]
     pub segments: Vec<SegmentPlan>,

@@ -5,6 +5,7 @@ use super::lines::{next_line, next_line_end, LineEnd};
 use super::time::detect_time_unit;
 use super::{ImportError, ImportOptions, Recording, TimeSource, MAX_OVERLONG_LINES};
 use crate::session::logs::keep::{Admit, Keeper};
+use crate::spelling::UserOption;
 use std::io::BufRead;
 use std::path::Path;
 
@@ -187,7 +188,7 @@ impl Layout {
         options: &ImportOptions,
     ) -> Result<Layout, ImportError> {
         // A column by name, or by its index (0-based) where no column has that name.
-        let find = |name: &str| {
+        let find = |name: &str, option: UserOption| {
             header
                 .iter()
                 .position(|h| h.eq_ignore_ascii_case(name))
@@ -195,16 +196,19 @@ impl Layout {
                 .ok_or_else(|| ImportError::MissingColumn {
                     name: name.to_string(),
                     found: header.join(", "),
+                    option,
                     spelling: options.spelling,
                 })
         };
         let mut idx = [0usize; 6];
         for (k, name) in options.columns.iter().enumerate() {
-            idx[k] = find(name)?;
+            idx[k] = find(name, UserOption::Columns)?;
         }
-        let temp = options.temp_column.as_deref().map(find).transpose()?;
+        let temp = (options.temp_column.as_deref())
+            .map(|name| find(name, UserOption::TempColumn))
+            .transpose()?;
         let time = match &options.time {
-            TimeSource::Column(name) => Time::Column(find(name)?),
+            TimeSource::Column(name) => Time::Column(find(name, UserOption::TimeColumn)?),
             TimeSource::RateHz(hz) if hz.is_finite() && *hz > 0.0 => Time::RateHz(*hz),
             TimeSource::RateHz(hz) => return Err(ImportError::BadRate(options.spelling, *hz)),
         };
