@@ -9,6 +9,7 @@ use crate::calibration_files::now_unix_s;
 use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
 use crate::device::sim_hand::HandOperator;
+use crate::device::view;
 use crate::device::AnyTransport;
 use crate::estimate::{BiasWalk, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use crate::limits;
@@ -71,6 +72,12 @@ pub struct CalibrateArgs {
         value_parser = limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
     )]
     pub verify_temp_c: Option<f64>,
+    /// With --port: show the session on a live page (attitude, stillness, coverage, what to do next,
+    /// the result), served read-only on 127.0.0.1 at a free port (printed; opened in the browser
+    /// where $BROWSER or a display is set) until Enter after the result. A simulated device (`sim`,
+    /// `sim-hand`) then runs at a real one's pace, so that the page can be followed.
+    #[arg(long, requires = "port")]
+    pub view: bool,
     /// Verbose: the fit's full tables (segments, residuals, gyro, observability) before the short
     /// result block; `host report` has them too.
     #[arg(short, long)]
@@ -407,6 +414,19 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         crate::limits::MAX_TOLERANCE_MG,
     )?;
     let mut client = connect(&port)?;
+    let viewed = match a.view {
+        true => Some(view::Viewed::start().map_err(|e| {
+            CliError::Io(PathBuf::from("http://127.0.0.1"), std::io::Error::other(e))
+        })?),
+        false => None,
+    };
+    if let Some(v) = &viewed {
+        client.set_view(v.live.clone());
+        // Watched, a simulated device runs at a real one's pace, so that the page can be followed.
+        if let AnyTransport::Sim(dev) = client.transport_mut() {
+            dev.pace_real_time();
+        }
+    }
     let identity = client.identify()?;
     let plan = match &a.plan {
         Some(spec) => session::builtin::load_plan(spec),
@@ -439,7 +459,27 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     } else {
         &mut person
     };
-    let mut result = procedure::run(&mut client, &opts, op)?;
+    let mut shown;
+    let op: &mut dyn Operator = match &viewed {
+        Some(v) => {
+            shown = view::ViewOperator {
+                inner: op,
+                live: v.live.clone(),
+            };
+            &mut shown
+        }
+        None => op,
+    };
+    let mut result = match procedure::run(&mut client, &opts, op) {
+        Ok(r) => r,
+        Err(e) => {
+            if let Some(v) = &viewed {
+                v.live.failed(&e.to_string());
+                v.linger();
+            }
+            return Err(e.into());
+        }
+    };
     let out = Output {
         json: a.json,
         quiet,
@@ -471,7 +511,14 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     out.human(crate::report::summary_block::render_summary_block(
         &result.calibrated.document.summary,
     ))?;
+    if let Some(v) = &viewed {
+        v.live
+            .finish(&result.calibrated.document, next_commands(&written, &result.recording_dir));
+    }
     out.document(&result.calibrated.document)?;
+    if let Some(v) = &viewed {
+        v.linger();
+    }
     if !result.passed {
         return Err(CliError::VerificationFailed);
     }
@@ -487,6 +534,25 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         opts.out_dir.display()
     ))?;
     Ok(())
+}
+
+/// What to run next on a live result, as the page lists it: the report of the recording and an
+/// export of the calibration.
+fn next_commands(
+    written: &crate::calibration_files::WrittenCalibration,
+    recording_dir: &std::path::Path,
+) -> Vec<String> {
+    vec![
+        format!(
+            "host report --input {} --calibration {}",
+            recording_dir.display(),
+            written.toml_path.display()
+        ),
+        format!(
+            "host export --calibration {} --format px4",
+            written.toml_path.display()
+        ),
+    ]
 }
 
 /// `--verify-temp-c` with the hand-held procedure (a device without a virtual table, a hand-held
