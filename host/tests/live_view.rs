@@ -122,8 +122,7 @@ impl Session {
                 "--disable-gpu",
                 "--hide-scrollbars",
                 "--no-first-run",
-                "--window-size=1280,1000",
-                "--virtual-time-budget=1500",
+                "--virtual-time-budget=3000",
             ])
             .arg(format!("--user-data-dir={}", self.profile.path().display()))
             .args(extra)
@@ -142,16 +141,20 @@ impl Session {
     /// A screenshot of the page now, and its DOM, checked against the live state: the page shows an
     /// update at least as new as the state before the browser opened it, and the target of that
     /// moment.
-    fn look(&self, stage: &str) -> String {
+    fn look(&self, stage: &str, moving: bool) -> String {
         let before = state(self.port);
         let png = screenshot_dir().join(format!("{}-{stage}.png", self.name));
-        self.browser(&[format!("--screenshot={}", png.display())]);
+        let height = if moving { 1000 } else { 1700 };
+        self.browser(&[
+            format!("--screenshot={}", png.display()),
+            format!("--window-size=1280,{height}"),
+        ]);
         assert!(
             std::fs::metadata(&png).map(|m| m.len() > 10_000).unwrap_or(false),
             "{} was not written",
             png.display()
         );
-        let dom = self.browser(&["--dump-dom".to_string()]);
+        let dom = self.browser(&["--dump-dom".to_string(), "--window-size=1280,1000".into()]);
         let after = state(self.port);
         let seq: u64 = attribute(&dom, "data-seq")
             .parse()
@@ -162,20 +165,51 @@ impl Session {
             seq >= s0 && seq <= s1,
             "{stage}: the page shows update {seq}, the session was at {s0}..{s1}: it does not keep up"
         );
-        let label = |s: &Value| {
-            s["step"]["target"]["label"]
-                .as_str()
-                .unwrap_or("—")
-                .to_string()
-        };
-        if label(&before) == label(&after) {
+        // The page kept polling while open and, while the session moves, showed it moving.
+        let polls: u64 = attribute(&dom, "data-polls").parse().unwrap();
+        assert!(polls >= 3, "{stage}: the page polled {polls} times: it stopped updating");
+        let first: u64 = attribute(&dom, "data-first-seq").parse().unwrap();
+        assert!(
+            !moving || seq > first,
+            "{stage}: the page stayed at update {first} while the session moved on"
+        );
+        // Shown at or after the current step began: the page shows its target.
+        let step_seq = after["step_seq"].as_u64().unwrap();
+        if seq >= step_seq {
             assert_eq!(
                 text_of(&dom, "target-label"),
-                label(&before),
-                "{stage}: the page's target is stale"
+                target_label(&after),
+                "{stage}: the page's target is stale (update {seq}, step since {step_seq})"
             );
         }
         dom
+    }
+
+    /// Opens the page until it stays open across a change of step (the page's first update before
+    /// the step began, its last after): it must then show the new target, not the one it loaded
+    /// with.
+    fn look_across_a_change(&self) {
+        for _ in 0..40 {
+            assert_eq!(
+                state(self.port)["phase"],
+                "recording",
+                "the session ended before the page was seen across a change of step"
+            );
+            let dom = self.browser(&["--dump-dom".to_string()]);
+            let after = state(self.port);
+            let seq: u64 = attribute(&dom, "data-seq").parse().unwrap();
+            let first: u64 = attribute(&dom, "data-first-seq").parse().unwrap();
+            let step_seq = after["step_seq"].as_u64().unwrap();
+            if first < step_seq && step_seq <= seq {
+                assert_eq!(
+                    text_of(&dom, "target-label"),
+                    target_label(&after),
+                    "the page kept the target it loaded with across a change of step"
+                );
+                return;
+            }
+        }
+        panic!("in 40 looks the page never stayed open across a change of step");
     }
 
     fn wait_for(&self, what: &str, done: impl Fn(&Value) -> bool) -> Value {
@@ -207,6 +241,14 @@ impl Session {
         assert!(status.success(), "host calibrate failed: {status}");
         serde_json::from_str(&out).expect("--json prints one document")
     }
+}
+
+/// The label of the state's current target, as the page writes it ("—" without one).
+fn target_label(s: &Value) -> String {
+    s["step"]["target"]["label"]
+        .as_str()
+        .unwrap_or("—")
+        .to_string()
 }
 
 /// The value of the first `name="…"` attribute in `html`.
@@ -311,7 +353,7 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
         ],
     );
     s.wait_for("recording", |v| v["phase"] == "recording" && !v["step"].is_null());
-    let start = s.look("1-start");
+    let start = s.look("1-start", true);
     assert_eq!(text_of(&start, "positions-planned"), "10");
     assert_eq!(text_of(&start, "positions-needed"), "9");
     let first: u64 = attribute(&start, "data-seq").parse().unwrap();
@@ -319,7 +361,8 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
     s.wait_for("half the positions", |v| {
         v["progress"]["positions_done"].as_u64() >= Some(5)
     });
-    let half = s.look("2-half");
+    let half = s.look("2-half", true);
+    s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
     assert!(later > first, "the page stopped updating ({first} → {later})");
     let done: u64 = text_of(&half, "positions-done").parse().unwrap();
@@ -329,7 +372,7 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
     assert!(st["live"]["up_b"].is_array() || done < 6, "{st}");
 
     s.wait_for("the result", |v| v["phase"] == "done");
-    let end = s.look("3-end");
+    let end = s.look("3-end", false);
     let doc = s.finish();
     check_result(&end, &doc);
 }
@@ -352,19 +395,20 @@ fn the_table_page_follows_the_session_in_a_browser() {
         ],
     );
     s.wait_for("recording", |v| v["phase"] == "recording" && !v["step"].is_null());
-    let start = s.look("1-start");
+    let start = s.look("1-start", true);
     assert_eq!(text_of(&start, "segments-planned"), "12");
     let first: u64 = attribute(&start, "data-seq").parse().unwrap();
 
     s.wait_for("half the segments", |v| {
         v["progress"]["segments_done"].as_u64() >= Some(6)
     });
-    let half = s.look("2-half");
+    let half = s.look("2-half", true);
+    s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
     assert!(later > first, "the page stopped updating ({first} → {later})");
 
     s.wait_for("the result", |v| v["phase"] == "done");
-    let end = s.look("3-end");
+    let end = s.look("3-end", false);
     let doc = s.finish();
     check_result(&end, &doc);
 }

@@ -143,6 +143,8 @@ struct State {
     table_ups: Vec<[f64; 3]>,
     recorded: Vec<Recorded>,
     step: Option<Step>,
+    /// The update at which `step` was set.
+    step_seq: u64,
     reading: LiveReading,
     recent: VecDeque<([f64; 3], [f64; 3])>,
     hold: usize,
@@ -265,6 +267,7 @@ impl Live {
         self.edit(|s| {
             let now = s.reading.up_b;
             let target = s.coverage.targets.get(index).cloned();
+            s.step_seq = s.seq + 1;
             s.step = Some(Step {
                 label: seg.name.clone(),
                 words: format!(
@@ -301,6 +304,7 @@ impl Live {
                 Some((t, w)) => (Some(t), w),
                 None => (None, "every target is covered: turn to any new position".into()),
             };
+            s.step_seq = s.seq + 1;
             s.step = Some(Step {
                 label: label.into(),
                 target,
@@ -315,6 +319,18 @@ impl Live {
         self.edit(|s| {
             s.set_hand_coverage(coverage);
             s.progress.segments_done += 1;
+            // The best next target changes with each position: never show the one just reached.
+            let (target, words) = match coverage.next_step() {
+                Some((t, w)) => (Some(t), w),
+                None => (None, "every target is covered: turn to any new position".into()),
+            };
+            s.step_seq = s.seq + 1;
+            s.step = Some(Step {
+                label: format!("after position {}", coverage.outputs.len()),
+                target,
+                words,
+                rate_deg_s: 0.0,
+            });
         });
     }
 
@@ -363,6 +379,7 @@ impl Live {
             s.result = Some(doc);
             s.next = next;
             s.step = None;
+            s.step_seq = s.seq + 1;
             s.phase = "done".into();
         });
     }
@@ -372,6 +389,7 @@ impl Live {
         self.edit(|s| {
             s.phase = "failed".into();
             s.step = None;
+            s.step_seq = s.seq + 1;
             s.messages.push_back(why.to_string());
         });
     }
@@ -394,6 +412,7 @@ impl Live {
             "recorded": s.recorded,
             "targets": s.coverage.targets,
             "step": s.step,
+            "step_seq": s.step_seq,
             "progress": s.progress,
             "messages": s.messages,
             "result": s.result,
