@@ -344,6 +344,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     out.human(crate::report::summary_block::render_summary_block(
         &calibrated.document.summary,
     ))?;
+    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
     out.document(&calibrated.document)?;
     if !calibrated.document.summary.passed {
         return Err(CliError::ChecksFailed(
@@ -511,6 +512,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     out.human(crate::report::summary_block::render_summary_block(
         &result.calibrated.document.summary,
     ))?;
+    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
     if let Some(v) = &viewed {
         v.live
             .finish(&result.calibrated.document, next_commands(&written, &result.recording_dir));
@@ -549,7 +551,7 @@ fn next_commands(
             written.toml_path.display()
         ),
         format!(
-            "host export --calibration {} --format px4",
+            "host export --calibration {} --format json",
             written.toml_path.display()
         ),
     ]
