@@ -310,7 +310,9 @@ pub fn page(
 fn navigation_section(b: &mut Vec<Block>, data: &ReportData, figure_stems: &[String]) {
     b.push(Block::Heading(
         2,
-        "Navigation check (paper Figs. 6/7, 9/10)".into(),
+        "Navigation check: velocity and position error of an integrated run, before and after \
+         compensation"
+            .into(),
     ));
     if data.navigation.is_empty() {
         b.push(Block::Para(

@@ -567,3 +567,26 @@ fn a_figure_that_cannot_be_written_keeps_its_cause() {
         }
     }
 }
+
+/// Figure titles and headings say what they show in the user's terms: nothing that needs the paper
+/// at hand ("paper Figs. 5, 8").
+#[test]
+fn figure_titles_and_headings_need_no_paper() {
+    let data = noisy_report();
+    let mut titles: Vec<String> = report_figures(&data)
+        .iter()
+        .flat_map(|f| std::iter::once(f.title.clone()).chain(f.panels.iter().map(|p| p.title.clone())))
+        .collect();
+    titles.extend(
+        page(&data, "s", "c", &[])
+            .into_iter()
+            .filter_map(|b| match b {
+                Block::Heading(_, h) => Some(h),
+                _ => None,
+            }),
+    );
+    assert!(titles.len() > 3, "{titles:?}");
+    for t in &titles {
+        assert!(!t.contains("paper") && !t.contains("Fig"), "'{t}' needs the paper");
+    }
+}
