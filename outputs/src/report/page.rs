@@ -302,6 +302,7 @@ pub fn page(
         });
     }
     navigation_section(&mut b, data, figure_stems);
+    b.extend(super::gyro_section::gyro_section(data));
     session_fit_section(&mut b, data);
     b
 }
