@@ -323,15 +323,7 @@ fn record_plan<T: Transport>(
 
     let hand = !drive && handheld::is_hand_held(plan);
     let planned_free = plan.segments.iter().filter(|s| s.is_free()).count();
-    let mut watcher = handheld::PositionWatcher::new(
-        plan.output_unit,
-        window_rate,
-        crate::session::segment::SegmentOptions::default().same_position_deg,
-    );
-    if hand {
-        let aims: Vec<[f64; 3]> = plan.segments.iter().map(|s| s.up_b).collect();
-        watcher.set_aims(&aims);
-    }
+    let mut watcher = watcher_for(plan, window_rate);
     let mut static_done: Vec<(SegmentPlan, session::SegmentStats)> = Vec::new();
     for (index, seg) in plan.segments.iter().enumerate() {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
@@ -367,12 +359,7 @@ fn record_plan<T: Transport>(
                 dropped = dropped.max(drops);
                 let mut problems = live_check(seg, &stats, rejected);
                 if hand && seg.is_free() {
-                    let n = stats.count.max(1) as f64;
-                    let sigma = core::array::from_fn(|j| (stats.cov_u[j][j] / n).sqrt());
-                    watcher.accept_with_spread(stats.mean_u, stats.mean_w_rad_s, sigma);
-                    if let Some(live) = client.view() {
-                        live.hand_recorded(watcher.coverage());
-                    }
+                    take_position(client.view(), &mut watcher, &stats);
                     op.say(&watcher.guidance(planned_free));
                 } else {
                     if let Some(live) = client.view() {
@@ -416,6 +403,32 @@ fn record_plan<T: Transport>(
         ));
     }
     Ok(Recorded { warnings, dropped })
+}
+
+/// The watcher of a hand-held plan's positions, with the plan's aims as its targets.
+fn watcher_for(plan: &Plan, window_rate: f64) -> handheld::PositionWatcher {
+    let mut watcher = handheld::PositionWatcher::new(
+        plan.output_unit,
+        window_rate,
+        crate::session::segment::SegmentOptions::default().same_position_deg,
+    );
+    watcher.set_aims(&plan.segments.iter().map(|s| s.up_b).collect::<Vec<_>>());
+    watcher
+}
+
+/// A hand-held position just recorded: the watcher takes it with its mean's 1σ (which weighs it in
+/// the predicted 1σ), and the live page shows the coverage it gives.
+fn take_position(
+    live: Option<&crate::view::Live>,
+    watcher: &mut handheld::PositionWatcher,
+    stats: &session::SegmentStats,
+) {
+    let n = stats.count.max(1) as f64;
+    let sigma = core::array::from_fn(|j| (stats.cov_u[j][j] / n).sqrt());
+    watcher.accept_with_spread(stats.mean_u, stats.mean_w_rad_s, sigma);
+    if let Some(live) = live {
+        live.hand_recorded(watcher.coverage());
+    }
 }
 
 /// Writes the blob, resets the device and checks that it applied it and reads it back unchanged.

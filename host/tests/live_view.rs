@@ -150,7 +150,9 @@ impl Session {
             format!("--window-size=1280,{height}"),
         ]);
         assert!(
-            std::fs::metadata(&png).map(|m| m.len() > 10_000).unwrap_or(false),
+            std::fs::metadata(&png)
+                .map(|m| m.len() > 10_000)
+                .unwrap_or(false),
             "{} was not written",
             png.display()
         );
@@ -167,7 +169,10 @@ impl Session {
         );
         // The page kept polling while open and, while the session moves, showed it moving.
         let polls: u64 = attribute(&dom, "data-polls").parse().unwrap();
-        assert!(polls >= 3, "{stage}: the page polled {polls} times: it stopped updating");
+        assert!(
+            polls >= 3,
+            "{stage}: the page polled {polls} times: it stopped updating"
+        );
         let first: u64 = attribute(&dom, "data-first-seq").parse().unwrap();
         assert!(
             !moving || seq > first,
@@ -274,10 +279,16 @@ fn text_of(html: &str, id: &str) -> String {
 /// The texts of the cells of the parameter row named `name`, by class.
 fn parameter_cell(html: &str, name: &str, class: &str) -> String {
     let row = html
-        .find(&format!("data-name=\"{}\"", name.replace('&', "&amp;").replace('"', "&quot;")))
+        .find(&format!(
+            "data-name=\"{}\"",
+            name.replace('&', "&amp;").replace('"', "&quot;")
+        ))
         .unwrap_or_else(|| panic!("the page has no row for {name}"));
     let end = row + html[row..].find("</tr>").unwrap();
-    let cell = row + html[row..end].find(&format!("class=\"{class}\"")).expect(class);
+    let cell = row
+        + html[row..end]
+            .find(&format!("class=\"{class}\""))
+            .expect(class);
     let open = cell + html[cell..].find('>').unwrap() + 1;
     unescape(html[open..].split('<').next().unwrap_or_default())
 }
@@ -319,7 +330,10 @@ fn check_result(dom: &str, doc: &Value) {
     assert_eq!(text_of(dom, "verdict"), verdict);
     let toml = doc["files"]["calibration_toml"].as_str().unwrap();
     assert!(dom.contains(toml), "the page names {toml}");
-    assert!(dom.contains("host export --calibration"), "the next command");
+    assert!(
+        dom.contains("host export --calibration"),
+        "the next command"
+    );
 }
 
 /// A plan file of the first `n` hand-held aims, `seconds` each.
@@ -352,7 +366,9 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
             out.to_str().unwrap(),
         ],
     );
-    s.wait_for("recording", |v| v["phase"] == "recording" && !v["step"].is_null());
+    s.wait_for("recording", |v| {
+        v["phase"] == "recording" && !v["step"].is_null()
+    });
     let start = s.look("1-start", true);
     assert_eq!(text_of(&start, "positions-planned"), "10");
     assert_eq!(text_of(&start, "positions-needed"), "9");
@@ -364,7 +380,10 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
     let half = s.look("2-half", true);
     s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
-    assert!(later > first, "the page stopped updating ({first} → {later})");
+    assert!(
+        later > first,
+        "the page stopped updating ({first} → {later})"
+    );
     let done: u64 = text_of(&half, "positions-done").parse().unwrap();
     assert!(done >= 5, "{done} positions shown half way");
     // An offset output's directions are known from six positions on: the sphere has them.
@@ -394,7 +413,9 @@ fn the_table_page_follows_the_session_in_a_browser() {
             out.to_str().unwrap(),
         ],
     );
-    s.wait_for("recording", |v| v["phase"] == "recording" && !v["step"].is_null());
+    s.wait_for("recording", |v| {
+        v["phase"] == "recording" && !v["step"].is_null()
+    });
     let start = s.look("1-start", true);
     assert_eq!(text_of(&start, "segments-planned"), "12");
     let first: u64 = attribute(&start, "data-seq").parse().unwrap();
@@ -405,7 +426,10 @@ fn the_table_page_follows_the_session_in_a_browser() {
     let half = s.look("2-half", true);
     s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
-    assert!(later > first, "the page stopped updating ({first} → {later})");
+    assert!(
+        later > first,
+        "the page stopped updating ({first} → {later})"
+    );
 
     s.wait_for("the result", |v| v["phase"] == "done");
     let end = s.look("3-end", false);

@@ -45,7 +45,10 @@ fn the_result_block_gives_each_figure_one_unit_and_the_next_command() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("  zero-g output, V  x 2.4"), "{stdout}");
     assert!(stdout.contains("  bias 1σ, mg      x 0.0"), "{stdout}");
-    for line in stdout.lines().filter(|l| l.contains(" V ") || l.contains(", V")) {
+    for line in stdout
+        .lines()
+        .filter(|l| l.contains(" V ") || l.contains(", V"))
+    {
         assert!(!line.contains("mg"), "two units in one figure: {line}");
     }
     let toml = Path::new(&s).join("calibration.toml");

@@ -61,7 +61,7 @@ pub fn rough_scale(zero_centred: bool, positions: &[[f64; 3]]) -> Option<RoughSc
         .iter()
         .map(|u| linalg::norm(&core::array::from_fn(|j| u[j] - mean[j])))
         .fold(0.0, f64::max);
-    if !(spread > 0.0) {
+    if spread.is_nan() || spread <= 0.0 {
         return None;
     }
     let a = DMatrix::from_fn(positions.len(), 7, |r, c| {
@@ -78,12 +78,12 @@ pub fn rough_scale(zero_centred: bool, positions: &[[f64; 3]]) -> Option<RoughSc
     if x[0] < 0.0 {
         x = -x;
     }
-    if (0..3).any(|j| !(x[j] > 0.0)) {
+    if (0..3).any(|j| x[j].is_nan() || x[j] <= 0.0) {
         return None;
     }
     let centre: [f64; 3] = core::array::from_fn(|j| -x[j + 3] / (2.0 * x[j]));
     let k = -x[6] + (0..3).map(|j| x[j] * centre[j].powi(2)).sum::<f64>();
-    if !(k > 0.0) {
+    if k.is_nan() || k <= 0.0 {
         return None;
     }
     let zero_out = core::array::from_fn(|j| mean[j] + centre[j] * spread);
@@ -114,7 +114,11 @@ pub fn six_faces() -> Vec<Target> {
             let sign = if f % 2 == 0 { 1.0 } else { -1.0 };
             up[f / 2] = sign;
             Target {
-                label: format!("{} {}", names[f / 2], if sign > 0.0 { "up" } else { "down" }),
+                label: format!(
+                    "{} {}",
+                    names[f / 2],
+                    if sign > 0.0 { "up" } else { "down" }
+                ),
                 up_b: up,
                 done: false,
             }
@@ -133,7 +137,11 @@ fn nearest_axis(d: &[f64; 3]) -> (usize, f64, f64) {
 }
 
 fn axis_name(k: usize, sign: f64) -> String {
-    format!("{}{}", if sign > 0.0 { "+" } else { "−" }, ["x", "y", "z"][k])
+    format!(
+        "{}{}",
+        if sign > 0.0 { "+" } else { "−" },
+        ["x", "y", "z"][k]
+    )
 }
 
 /// How to reach up `target` (body axes) in the operator's words: which side of the housing goes
@@ -201,7 +209,10 @@ fn free_covariance(positions: &[([f64; 3], f64)], ridge: f64) -> Option<DMatrix<
 
 fn worst_sigma(cov: &DMatrix<f64>, n: usize) -> (f64, f64) {
     let bias = (0..3).map(|i| cov[(i, i)]).fold(0.0, f64::max).sqrt();
-    let scale = (3..n.min(6)).map(|i| cov[(i, i)]).fold(0.0, f64::max).sqrt();
+    let scale = (3..n.min(6))
+        .map(|i| cov[(i, i)])
+        .fold(0.0, f64::max)
+        .sqrt();
     (bias * 1e3, scale * 1e6)
 }
 
@@ -215,7 +226,7 @@ pub fn table_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
         info += &r * r.transpose() / sigma_g.max(1e-12).powi(2);
     }
     let cov = info.try_inverse()?;
-    if !(1..4).all(|i| cov[(i, i)] > 0.0) || !(cov[(0, 0)] > 0.0) {
+    if !(0..4).all(|i| cov[(i, i)] > 0.0) {
         return None;
     }
     let scale = (1..4).map(|i| cov[(i, i)]).fold(0.0, f64::max).sqrt();
@@ -225,10 +236,7 @@ pub fn table_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
 /// The targets not yet done, best first: the one whose position most lowers the summed variance of
 /// the biases and scale factors (A-optimal) given the positions so far; ties in plan order.
 pub fn rank_targets(positions: &[([f64; 3], f64)], targets: &[Target]) -> Vec<usize> {
-    let sigma = positions
-        .iter()
-        .map(|p| p.1)
-        .fold(f64::INFINITY, f64::min);
+    let sigma = positions.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
     let sigma = if sigma.is_finite() { sigma } else { 1e-3 };
     let score = |t: &Target| {
         let mut with = positions.to_vec();
@@ -310,7 +318,12 @@ impl Coverage {
     /// Gravity's up at each position, body axes, once the rough scale is known.
     pub fn ups(&self) -> Option<Vec<[f64; 3]>> {
         let r = self.rough()?;
-        Some(self.outputs.iter().map(|u| linalg::unit(&r.force_g(u))).collect())
+        Some(
+            self.outputs
+                .iter()
+                .map(|u| linalg::unit(&r.force_g(u)))
+                .collect(),
+        )
     }
 
     /// Each position's up and 1σ of its mean specific force (worst axis), g.
@@ -321,7 +334,9 @@ impl Coverage {
             ups.into_iter()
                 .zip(&self.sigma_out)
                 .map(|(d, s)| {
-                    let g = (0..3).map(|j| s[j] / r.out_per_g[j].abs()).fold(0.0, f64::max);
+                    let g = (0..3)
+                        .map(|j| s[j] / r.out_per_g[j].abs())
+                        .fold(0.0, f64::max);
                     (d, g)
                 })
                 .collect(),
@@ -396,26 +411,35 @@ mod tests {
             "tilt so that −y points down"
         );
         let w = turn_words(Some(&[0.0, 0.0, 1.0]), &[0.285652, 0.0, 0.958333]);
-        assert_eq!(w, "tilt so that −z points down, leaning 17° so that −x dips (17° from now)");
+        assert_eq!(
+            w,
+            "tilt so that −z points down, leaning 17° so that −x dips (17° from now)"
+        );
     }
 
     #[test]
     fn nine_spread_positions_determine_the_free_model_and_a_missing_face_ranks_first() {
         let faces = six_faces();
-        let mut pos: Vec<([f64; 3], f64)> =
-            faces.iter().take(5).map(|t| (t.up_b, 1e-4)).collect();
+        let mut pos: Vec<([f64; 3], f64)> = faces.iter().take(5).map(|t| (t.up_b, 1e-4)).collect();
         assert_eq!(free_sigma(&pos), None);
         // The six faces alone leave the cross terms undetermined; three diagonals fix them.
         let s = 1.0 / 3f64.sqrt();
         pos.extend([[s, s, s], [s, -s, s], [-s, s, s]].map(|d| (d, 1e-4)));
         assert_eq!(pos.len(), 8);
         let mut targets = six_faces();
-        mark_done(&mut targets, &pos.iter().map(|p| p.0).collect::<Vec<_>>(), 10.0);
+        mark_done(
+            &mut targets,
+            &pos.iter().map(|p| p.0).collect::<Vec<_>>(),
+            10.0,
+        );
         assert_eq!(targets.iter().filter(|t| !t.done).count(), 1);
         let best = rank_targets(&pos, &targets);
         assert_eq!(targets[best[0]].label, "z down");
         pos.push((targets[best[0]].up_b, 1e-4));
         let (bias_mg, scale_ppm) = free_sigma(&pos).unwrap();
-        assert!(bias_mg > 0.0 && bias_mg < 1.0 && scale_ppm > 0.0, "{bias_mg} {scale_ppm}");
+        assert!(
+            bias_mg > 0.0 && bias_mg < 1.0 && scale_ppm > 0.0,
+            "{bias_mg} {scale_ppm}"
+        );
     }
 }

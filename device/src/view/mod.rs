@@ -36,7 +36,11 @@ impl Viewed {
         let opened = server::open_in_browser(&url);
         eprintln!(
             "live page: {url}{}",
-            if opened { " (opened in the browser)" } else { "" }
+            if opened {
+                " (opened in the browser)"
+            } else {
+                ""
+            }
         );
         Ok(Viewed { live, server })
     }
@@ -302,7 +306,10 @@ impl Live {
                         .into(),
                 ),
                 Some((t, w)) => (Some(t), w),
-                None => (None, "every target is covered: turn to any new position".into()),
+                None => (
+                    None,
+                    "every target is covered: turn to any new position".into(),
+                ),
             };
             s.step_seq = s.seq + 1;
             s.step = Some(Step {
@@ -322,7 +329,10 @@ impl Live {
             // The best next target changes with each position: never show the one just reached.
             let (target, words) = match coverage.next_step() {
                 Some((t, w)) => (Some(t), w),
-                None => (None, "every target is covered: turn to any new position".into()),
+                None => (
+                    None,
+                    "every target is covered: turn to any new position".into(),
+                ),
             };
             s.step_seq = s.seq + 1;
             s.step = Some(Step {
@@ -493,11 +503,14 @@ impl State {
     }
 }
 
+/// A window's mean output and mean rate.
+type Window = ([f64; 3], [f64; 3]);
+
 /// The spread of the window means over the last hold, against the hand-held procedure's limits
 /// (`handheld::PositionWatcher` takes a position below both).
 fn stillness(recent: &VecDeque<([f64; 3], [f64; 3])>, hold: usize) -> Stillness {
     let n = recent.len().max(1) as f64;
-    let spread = |f: &dyn Fn(&([f64; 3], [f64; 3])) -> [f64; 3]| {
+    let spread = |f: &dyn Fn(&Window) -> [f64; 3]| {
         let m: [f64; 3] = core::array::from_fn(|j| recent.iter().map(|w| f(w)[j]).sum::<f64>() / n);
         let var = recent
             .iter()

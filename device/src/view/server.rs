@@ -34,8 +34,7 @@ pub struct ViewServer {
 impl ViewServer {
     /// Serves `live` on a free port of 127.0.0.1.
     pub fn start(live: Live) -> Result<ViewServer, ViewError> {
-        let server =
-            tiny_http::Server::http("127.0.0.1:0").map_err(ViewError::Bind)?;
+        let server = tiny_http::Server::http("127.0.0.1:0").map_err(ViewError::Bind)?;
         let port = server
             .server_addr()
             .to_ip()

@@ -616,29 +616,26 @@ impl NoiseReport {
         };
         let span = [first.tau_s, last.tau_s];
         let t = &a.terms;
-        // Each term's unit: N in unit/√Hz, B in the unit, K in unit/√s.
+        // Each term in its unit (N in unit/√Hz, B in the unit, K in unit/√s) and its slope.
         let lines: [TermLine; 3] = [
-            (t.white_density, "N", "/√Hz", "slope −½", |v, tau| {
+            (t.white_density, "N", "/√Hz (slope −½)", |v, tau| {
                 v / tau.sqrt()
             }),
-            (t.bias_instability, "B", "", "flat", |v, _| {
+            (t.bias_instability, "B", " (flat)", |v, _| {
                 allan::FLICKER_FACTOR.sqrt() * v
             }),
-            (t.random_walk, "K", "/√s", "slope +½", |v, tau| {
+            (t.random_walk, "K", "/√s (slope +½)", |v, tau| {
                 v * (tau / 3.0).sqrt()
             }),
         ];
-        for (k, (value, name, per, slope, adev)) in lines.into_iter().enumerate() {
+        for (k, (value, name, rest, adev)) in lines.into_iter().enumerate() {
             // A term the record does not determine is said in the legend, not left out silently.
             let (label, points) = match value {
                 Some(v) => (
-                    format!("{name} = {v:.3e} {unit}{per} ({slope})"),
+                    format!("{name} = {v:.3e} {unit}{rest}"),
                     span.iter().map(|&tau| (tau, adev(v, tau))).collect(),
                 ),
-                None => (
-                    format!("{name}: not determined by this record (n.d.)"),
-                    Vec::new(),
-                ),
+                None => (format!("{name}: not determined by this record"), Vec::new()),
             };
             series.push(Series {
                 label,
@@ -679,15 +676,9 @@ pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
     Ok(report.kalibr)
 }
 
-/// A term's line in the Allan figure: its value, name, unit suffix, slope, and its Allan deviation
-/// at τ.
-type TermLine = (
-    Option<f64>,
-    &'static str,
-    &'static str,
-    &'static str,
-    fn(f64, f64) -> f64,
-);
+/// A term's line in the Allan figure: its value, name, unit suffix and slope, and its Allan
+/// deviation at τ.
+type TermLine = (Option<f64>, &'static str, &'static str, fn(f64, f64) -> f64);
 
 /// A log–log panel of one axis's `series`.
 fn axis_panel_of(a: &AxisNoise, unit: &str, series: Vec<Series>) -> Panel {

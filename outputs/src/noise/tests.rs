@@ -426,14 +426,17 @@ fn the_allan_figure_has_error_bars_and_a_line_per_term() {
             .y_desc
             .trim_start_matches("Allan deviation [")
             .trim_end_matches(']');
-        for (name, per) in [("N", "/√Hz"), ("B", ""), ("K", "/√s")] {
+        for (name, per) in [("N", "/√Hz ("), ("B", " ("), ("K", "/√s (")] {
             let entry = panel
                 .series
                 .iter()
-                .find(|s| s.label.starts_with(&format!("{name} ")) || s.label.starts_with(&format!("{name}:")))
+                .find(|s| {
+                    s.label.starts_with(&format!("{name} "))
+                        || s.label.starts_with(&format!("{name}:"))
+                })
                 .unwrap_or_else(|| panic!("{}: no legend entry for {name}", axis.axis));
             assert!(
-                entry.label.contains(&format!(" {unit}{per} ("))
+                entry.label.contains(&format!(" {unit}{per}"))
                     || entry.label.contains("not determined"),
                 "{}: {}",
                 axis.axis,

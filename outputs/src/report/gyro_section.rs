@@ -28,10 +28,8 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
         fit.map_or("—".to_string(), |g| format!("{:.6}", f(g)))
     };
     let zero = [[0.0; 3]; 3];
-    let scale = crate::estimate::gyro::scale_error(
-        &gyro.matrix,
-        fit.map_or(&zero, |g| &g.matrix_1sigma),
-    );
+    let scale =
+        crate::estimate::gyro::scale_error(&gyro.matrix, fit.map_or(&zero, |g| &g.matrix_1sigma));
     let rows = (0..3)
         .map(|i| {
             let mut row = vec![axis_name(i).to_string()];
@@ -48,8 +46,17 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
         .collect();
     b.push(Block::Table {
         header: [
-            "gyro axis", "G·x", "1σ", "G·y", "1σ", "G·z", "1σ", "scale error ppm", "1σ ppm",
-            "b °/s", "1σ °/s",
+            "gyro axis",
+            "G·x",
+            "1σ",
+            "G·y",
+            "1σ",
+            "G·z",
+            "1σ",
+            "scale error ppm",
+            "1σ ppm",
+            "b °/s",
+            "1σ °/s",
         ]
         .map(String::from)
         .to_vec(),
@@ -62,9 +69,10 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
         .map(|r| {
             let omega = r.planned_rate_deg_s;
             let mut row = vec![r.name.clone(), format!("{omega:+.1}")];
-            row.extend((0..3).map(|j| {
-                format!("{:+.5}", r.omega_rad_s[j].to_degrees() - omega * r.up_b[j])
-            }));
+            row.extend(
+                (0..3)
+                    .map(|j| format!("{:+.5}", r.omega_rad_s[j].to_degrees() - omega * r.up_b[j])),
+            );
             row
         })
         .collect();

@@ -836,7 +836,10 @@ mod tests {
         for line in &lines {
             let x = text_x(&svg, line).unwrap_or_else(|| panic!("no legend line {line}"));
             let right = x + (line.chars().count() as u32 * CHAR_PX) as f64;
-            assert!(right <= 1200.0, "'{line}' ends at x {right}, past the figure's 1200");
+            assert!(
+                right <= 1200.0,
+                "'{line}' ends at x {right}, past the figure's 1200"
+            );
         }
     }
 

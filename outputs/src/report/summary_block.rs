@@ -52,11 +52,7 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     if zero.is_empty() {
         let _ = writeln!(out, "  bias, mg         {}", bias.join("   "));
     } else {
-        let _ = writeln!(
-            out,
-            "  zero-g output, {output_unit:<3}{}",
-            zero.join("   ")
-        );
+        let _ = writeln!(out, "  zero-g output, {output_unit:<3}{}", zero.join("   "));
         let _ = writeln!(out, "  bias 1σ, mg      {}", bias.join("   "));
     }
     let _ = writeln!(out, "  scale            {}", scale.join("   "));
@@ -151,7 +147,9 @@ fn write_gyro(out: &mut String, s: &CalibrationSummary) {
         None => Vec::new(),
         Some(_) => {
             let g = core::array::from_fn(|i| {
-                core::array::from_fn(|j| entry(i, j).map_or(if i == j { 1.0 } else { 0.0 }, |e| e.value))
+                core::array::from_fn(|j| {
+                    entry(i, j).map_or(if i == j { 1.0 } else { 0.0 }, |e| e.value)
+                })
             });
             let sd = core::array::from_fn(|i| {
                 core::array::from_fn(|j| entry(i, j).and_then(|e| e.sigma).unwrap_or(0.0))
@@ -308,6 +306,9 @@ mod tests {
         let b = render_summary_block(&s);
         let want = (1.004772f64.powi(2) + 0.021f64.powi(2)).sqrt() - 1.0;
         assert_eq!(format!("{:+.0}", want * 1e6), "+4991");
-        assert!(b.contains("gyro scale, ppm  x +4991 ± 10   y +0 ± 10"), "{b}");
+        assert!(
+            b.contains("gyro scale, ppm  x +4991 ± 10   y +0 ± 10"),
+            "{b}"
+        );
     }
 }

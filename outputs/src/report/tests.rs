@@ -575,7 +575,9 @@ fn figure_titles_and_headings_need_no_paper() {
     let data = noisy_report();
     let mut titles: Vec<String> = report_figures(&data)
         .iter()
-        .flat_map(|f| std::iter::once(f.title.clone()).chain(f.panels.iter().map(|p| p.title.clone())))
+        .flat_map(|f| {
+            std::iter::once(f.title.clone()).chain(f.panels.iter().map(|p| p.title.clone()))
+        })
         .collect();
     titles.extend(
         page(&data, "s", "c", &[])
@@ -587,7 +589,10 @@ fn figure_titles_and_headings_need_no_paper() {
     );
     assert!(titles.len() > 3, "{titles:?}");
     for t in &titles {
-        assert!(!t.contains("paper") && !t.contains("Fig"), "'{t}' needs the paper");
+        assert!(
+            !t.contains("paper") && !t.contains("Fig"),
+            "'{t}' needs the paper"
+        );
     }
 }
 
@@ -596,7 +601,10 @@ fn figure_titles_and_headings_need_no_paper() {
 #[test]
 fn the_report_has_a_gyro_section() {
     let data = noisy_report();
-    let g = data.calibration.gyro.expect("the short plan's spins fit the gyro");
+    let g = data
+        .calibration
+        .gyro
+        .expect("the short plan's spins fit the gyro");
     let blocks = page(&data, "s", "c", &[]);
     let at = blocks
         .iter()
@@ -610,7 +618,10 @@ fn the_report_has_a_gyro_section() {
     for i in 0..3 {
         for j in 0..3 {
             let shown: f64 = rows[i][1 + 2 * j].parse().unwrap();
-            assert!((shown - g.matrix[i][j]).abs() <= 5e-7, "G[{i}][{j}] {shown}");
+            assert!(
+                (shown - g.matrix[i][j]).abs() <= 5e-7,
+                "G[{i}][{j}] {shown}"
+            );
         }
         let norm = g.matrix[i].iter().map(|v| v * v).sum::<f64>().sqrt();
         assert_eq!(rows[i][7], format!("{:+.0}", (norm - 1.0) * 1e6));
@@ -633,7 +644,10 @@ fn the_report_has_a_gyro_section() {
     for row in cells(spins) {
         for v in &row[2..5] {
             let r: f64 = v.parse().unwrap();
-            assert!(r.abs() < 0.05, "{row:?}: the corrected gyro reads the table's rate");
+            assert!(
+                r.abs() < 0.05,
+                "{row:?}: the corrected gyro reads the table's rate"
+            );
         }
     }
 }
