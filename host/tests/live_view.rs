@@ -419,12 +419,13 @@ fn the_table_page_follows_the_session_in_a_browser() {
     let start = s.look("1-start", true);
     assert_eq!(text_of(&start, "segments-planned"), "12");
     let first: u64 = attribute(&start, "data-seq").parse().unwrap();
+    // A table step lasts about 1.5 s: looked for from the start, while most are still to come.
+    s.look_across_a_change();
 
     s.wait_for("half the segments", |v| {
         v["progress"]["segments_done"].as_u64() >= Some(6)
     });
     let half = s.look("2-half", true);
-    s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
     assert!(
         later > first,
