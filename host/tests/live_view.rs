@@ -14,6 +14,10 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+/// One session and one browser at a time: two paced sessions and two browsers side by side on a
+/// loaded machine starve the pages' polls.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Where the screenshots go: `target/view-screenshots/`.
 fn screenshot_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -122,10 +126,13 @@ impl Session {
                 "--disable-gpu",
                 "--hide-scrollbars",
                 "--no-first-run",
-                "--virtual-time-budget=3000",
             ])
             .arg(format!("--user-data-dir={}", self.profile.path().display()))
             .args(extra)
+            .args(
+                (!extra.iter().any(|e| e.starts_with("--virtual-time-budget")))
+                    .then_some("--virtual-time-budget=3000"),
+            )
             .arg(self.url())
             .stdin(Stdio::null())
             .output()
@@ -142,6 +149,8 @@ impl Session {
     /// update at least as new as the state before the browser opened it, and the target of that
     /// moment.
     fn look(&self, stage: &str, moving: bool) -> String {
+        // A page that polls but no longer draws is caught by `look_across_a_change`: its update
+        // number would never pass the step's.
         let before = state(self.port);
         let png = screenshot_dir().join(format!("{}-{stage}.png", self.name));
         let height = if moving { 1000 } else { 1700 };
@@ -173,11 +182,6 @@ impl Session {
             polls >= 3,
             "{stage}: the page polled {polls} times: it stopped updating"
         );
-        let first: u64 = attribute(&dom, "data-first-seq").parse().unwrap();
-        assert!(
-            !moving || seq > first,
-            "{stage}: the page stayed at update {first} while the session moved on"
-        );
         // Shown at or after the current step began: the page shows its target.
         let step_seq = after["step_seq"].as_u64().unwrap();
         if seq >= step_seq {
@@ -194,17 +198,22 @@ impl Session {
     /// the step began, its last after): it must then show the new target, not the one it loaded
     /// with.
     fn look_across_a_change(&self) {
-        for _ in 0..40 {
+        for _ in 0..60 {
             assert_eq!(
                 state(self.port)["phase"],
                 "recording",
                 "the session ended before the page was seen across a change of step"
             );
-            let dom = self.browser(&["--dump-dom".to_string()]);
+            // A longer budget keeps the page open (and polling) longer.
+            let dom = self.browser(&[
+                "--dump-dom".to_string(),
+                "--virtual-time-budget=6000".into(),
+            ]);
             let after = state(self.port);
             let seq: u64 = attribute(&dom, "data-seq").parse().unwrap();
             let first: u64 = attribute(&dom, "data-first-seq").parse().unwrap();
             let step_seq = after["step_seq"].as_u64().unwrap();
+            eprintln!("look: page {first}..{seq}, step since {step_seq}");
             if first < step_seq && step_seq <= seq {
                 assert_eq!(
                     text_of(&dom, "target-label"),
@@ -214,7 +223,7 @@ impl Session {
                 return;
             }
         }
-        panic!("in 40 looks the page never stayed open across a change of step");
+        panic!("in 60 looks the page never stayed open across a change of step");
     }
 
     fn wait_for(&self, what: &str, done: impl Fn(&Value) -> bool) -> Value {
@@ -351,6 +360,7 @@ fn short_hand_plan(dir: &Path, n: usize, seconds: f64) -> PathBuf {
 #[test]
 fn the_hand_held_page_follows_the_session_in_a_browser() {
     let Some(chromium) = chromium() else { return };
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let plan = short_hand_plan(dir.path(), 10, 1.0);
     let out = dir.path().join("out");
@@ -373,12 +383,12 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
     assert_eq!(text_of(&start, "positions-planned"), "10");
     assert_eq!(text_of(&start, "positions-needed"), "9");
     let first: u64 = attribute(&start, "data-seq").parse().unwrap();
+    s.look_across_a_change();
 
     s.wait_for("half the positions", |v| {
         v["progress"]["positions_done"].as_u64() >= Some(5)
     });
     let half = s.look("2-half", true);
-    s.look_across_a_change();
     let later: u64 = attribute(&half, "data-seq").parse().unwrap();
     assert!(
         later > first,
@@ -399,6 +409,7 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
 #[test]
 fn the_table_page_follows_the_session_in_a_browser() {
     let Some(chromium) = chromium() else { return };
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let s = Session::start(

@@ -409,6 +409,11 @@ impl Live {
         self.edit(|s| s.window(w));
     }
 
+    /// The number of the latest update.
+    pub fn seq(&self) -> u64 {
+        self.lock().seq
+    }
+
     /// The state as the page reads it.
     pub fn snapshot(&self) -> Value {
         let s = self.lock();

@@ -13,6 +13,9 @@ use super::Live;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
+/// Longest wait of a `?after=` request for a newer state.
+const LONG_POLL: std::time::Duration = std::time::Duration::from_millis(250);
+
 /// The page, built into the binary.
 const PAGE: &str = include_str!("page.html");
 
@@ -125,6 +128,18 @@ fn answer(request: tiny_http::Request, live: &Live, port: u16) -> std::io::Resul
     match path.as_str() {
         "/" | "/index.html" => respond(request, 200, "text/html; charset=utf-8", PAGE.into()),
         "/state.json" => {
+            // `?after=N` waits (briefly) for an update past N: the page sees each change as it
+            // comes without polling faster.
+            let after = request
+                .url()
+                .split_once("?after=")
+                .and_then(|(_, n)| n.parse::<u64>().ok());
+            if let Some(n) = after {
+                let until = std::time::Instant::now() + LONG_POLL;
+                while live.seq() <= n && std::time::Instant::now() < until {
+                    std::thread::sleep(std::time::Duration::from_millis(10));
+                }
+            }
             let body = live.snapshot().to_string();
             respond(request, 200, "application/json", body)
         }
