@@ -25,6 +25,8 @@ command -v qemu-system-arm >/dev/null || packages+=(qemu-system-arm)
 command -v script >/dev/null || packages+=(bsdutils)
 # The Python package's tests run in a fresh virtual environment (Debian splits venv/ensurepip out).
 python3 -c 'import ensurepip, venv' 2>/dev/null || packages+=(python3-venv)
+# The live page's test (host/tests/live_view.rs) drives Debian's headless Chromium.
+command -v chromium >/dev/null || packages+=(chromium)
 if [ ${#packages[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)

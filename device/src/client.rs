@@ -74,6 +74,8 @@ pub struct DeviceClient<T: Transport> {
     pub garbage_frames: u64,
     /// The version of an identity that did not decode: a device of another protocol version.
     foreign_version: Option<u16>,
+    /// Who else sees each raw window (the live page).
+    tap: Option<crate::view::Live>,
 }
 
 impl<T: Transport> DeviceClient<T> {
@@ -87,12 +89,23 @@ impl<T: Transport> DeviceClient<T> {
             timeout,
             garbage_frames: 0,
             foreign_version: None,
+            tap: None,
         }
     }
 
     /// The transport (e.g. to inject faults in tests).
     pub fn transport_mut(&mut self) -> &mut T {
         &mut self.transport
+    }
+
+    /// Shows every raw window on the live page as well.
+    pub fn set_view(&mut self, live: crate::view::Live) {
+        self.tap = Some(live);
+    }
+
+    /// The live page this client feeds, if any.
+    pub fn view(&self) -> Option<&crate::view::Live> {
+        self.tap.as_ref()
     }
 
     /// Changes the answer timeout.
@@ -275,7 +288,12 @@ impl<T: Transport> DeviceClient<T> {
     pub fn next_raw_window(&mut self) -> Result<RawWindow, LinkError> {
         loop {
             match self.next_message("a raw window", self.timeout)? {
-                DeviceToHost::RawWindow(w) => return Ok(w),
+                DeviceToHost::RawWindow(w) => {
+                    if let Some(live) = &self.tap {
+                        live.window(&w);
+                    }
+                    return Ok(w);
+                }
                 DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
                 _ => continue,
             }

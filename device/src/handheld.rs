@@ -10,22 +10,23 @@
 use super::client::{DeviceClient, LinkError, Transport};
 use super::operator::Operator;
 use super::procedure::{ProcedureOptions, VerificationPoint};
-use crate::session::segment::{angle_deg, FACE_COVERAGE_DEG, MIN_POSITIONS};
+use crate::session::segment::{angle_deg, MIN_POSITIONS};
 use crate::session::Plan;
+use crate::view::guide::Coverage;
 use shared::linalg;
 use shared::wire::{SampleFlags, StreamKind};
 use shared::OutputUnit;
 use std::collections::VecDeque;
 
 /// Hold needed before a position is taken as still, s.
-pub(crate) const STILL_HOLD_S: f64 = 1.0;
+pub const STILL_HOLD_S: f64 = 1.0;
 /// Longest wait for a new still position, s.
 pub(crate) const MAX_WAIT_S: f64 = 300.0;
 /// Gyro window means steadier than this over the hold: still, rad/s (0.5 °/s).
-const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
+pub const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Accelerometer window means steadier than this fraction of the output's magnitude: still (2 mg
 /// of a zero-centred output).
-const STILL_ACC_STD_REL: f64 = 2e-3;
+pub const STILL_ACC_STD_REL: f64 = 2e-3;
 /// Still means a mean rate within this of the gyro's offset (read at the first position), rad/s
 /// (1 °/s: 5° over a 5 s position).
 const STILL_RATE_RAD_S: f64 = 1.0 * std::f64::consts::PI / 180.0;
@@ -62,6 +63,7 @@ pub struct PositionWatcher {
     moved: bool,
     warned_same: Option<usize>,
     bias_rad_s: Option<[f64; 3]>,
+    coverage: Coverage,
 }
 
 impl PositionWatcher {
@@ -77,7 +79,19 @@ impl PositionWatcher {
             moved: false,
             warned_same: None,
             bias_rad_s: None,
+            coverage: Coverage::new(unit != OutputUnit::Volts, same_position_deg, &[]),
         }
+    }
+
+    /// Takes the plan's aims (its free segments' ups) as targets besides the six faces.
+    pub fn set_aims(&mut self, aims: &[[f64; 3]]) {
+        let c = &self.coverage;
+        self.coverage = Coverage::new(c.zero_centred, c.within_deg, aims);
+    }
+
+    /// The positions, their rough directions and the targets (what the live page shows).
+    pub fn coverage(&self) -> &Coverage {
+        &self.coverage
     }
 
     /// Positions recorded so far.
@@ -94,8 +108,20 @@ impl PositionWatcher {
 
     /// Records the position just taken.
     pub(crate) fn accept(&mut self, mean_u: [f64; 3], mean_rate_rad_s: [f64; 3]) {
+        self.accept_with_spread(mean_u, mean_rate_rad_s, [0.0; 3]);
+    }
+
+    /// Records the position just taken with the 1σ of its mean output per axis (output unit),
+    /// which weighs it in the predicted 1σ.
+    pub(crate) fn accept_with_spread(
+        &mut self,
+        mean_u: [f64; 3],
+        mean_rate_rad_s: [f64; 3],
+        sigma_out: [f64; 3],
+    ) {
         self.earlier.push(mean_u);
         self.bias_rad_s.get_or_insert(mean_rate_rad_s);
+        self.coverage.add(mean_u, sigma_out);
     }
 
     fn mean_std(&self, f: impl Fn(&([f64; 3], [f64; 3])) -> [f64; 3]) -> ([f64; 3], f64) {
@@ -181,22 +207,10 @@ impl PositionWatcher {
         }
     }
 
-    /// Body directions (±x, ±y, ±z) with no position within 50° yet (zero-centred outputs only).
-    pub(crate) fn missing_faces(&self) -> Vec<&'static str> {
-        if !self.zero_centred {
-            return Vec::new();
-        }
-        let names = ["x up", "x down", "y up", "y down", "z up", "z down"];
-        (0..6)
-            .filter(|&f| {
-                let mut axis = [0.0; 3];
-                axis[f / 2] = if f % 2 == 0 { 1.0 } else { -1.0 };
-                self.earlier
-                    .iter()
-                    .all(|u| angle_deg(&linalg::unit(u), &axis) > FACE_COVERAGE_DEG)
-            })
-            .map(|f| names[f])
-            .collect()
+    /// Body directions (x up, x down, …) with no position within 50° yet, once the positions give
+    /// gravity's direction (at once for a zero-centred output, after six for one with an offset).
+    pub(crate) fn missing_faces(&self) -> Vec<&str> {
+        self.coverage.missing_faces()
     }
 
     /// What to tell the operator after a position: how many remain, which directions are missing.
@@ -234,8 +248,16 @@ pub fn wait_for_new_position<T: Transport>(
     window_rate_hz: f64,
     label: &str,
 ) -> Result<[f64; 3], LinkError> {
+    let next = watcher.coverage.next_step();
+    if let Some(live) = client.view() {
+        live.hand_step(label, watcher.coverage(), next.clone());
+    }
+    let towards = next.map_or(String::new(), |(t, words)| {
+        format!("; best next: {} — {words}", t.label)
+    });
     op.turn_unit(&format!(
-        "[{label}] turn the unit to a new position (at least 10° from the earlier ones) and hold it still"
+        "[{label}] turn the unit to a new position (at least 10° from the earlier ones) and hold it \
+         still{towards}"
     ));
     watcher.start();
     client.start_stream(StreamKind::RawWindows, window)?;

@@ -3,7 +3,8 @@
 //! [`sim_hand`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
 //! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), hand-held
-//! mode ([`handheld`]), and the first checks of a freshly flashed board ([`bringup`]).
+//! mode ([`handheld`]), the first checks of a freshly flashed board ([`bringup`]), and the operator's live page
+//! ([`view`]).
 
 #![deny(missing_docs)]
 
@@ -20,6 +21,7 @@ pub mod serial;
 pub mod sim;
 pub mod sim_hand;
 pub mod verify;
+pub mod view;
 
 pub use client::{DeviceClient, LinkError, Transport};
 

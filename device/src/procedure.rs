@@ -198,6 +198,15 @@ pub fn run<T: Transport>(
     let drive = has_virtual_table(&identity);
 
     let plan = device_plan(&opts.plan, &identity, window_rate, drive, op);
+    if let Some(live) = client.view() {
+        live.identity(&identity);
+        live.plan(
+            &plan,
+            !drive && handheld::is_hand_held(&plan),
+            window_rate,
+            crate::session::segment::SegmentOptions::default().same_position_deg,
+        );
+    }
     let recording_dir = opts.out_dir.join("recording");
     let Recorded { warnings, dropped } = record_plan(
         client,
@@ -209,6 +218,12 @@ pub fn run<T: Transport>(
         &recording_dir,
     )?;
 
+    let phase = |client: &DeviceClient<T>, p: &str| {
+        if let Some(live) = client.view() {
+            live.phase(p);
+        }
+    };
+    phase(client, "estimating");
     // Estimate from the saved recording: the one calibrate use case, as `host calibrate --input`.
     let (session, mut calibrated) = app::calibrate_session_dir(
         &recording_dir,
@@ -227,7 +242,9 @@ pub fn run<T: Transport>(
     let written = app::write_result(&opts.out_dir, &mut calibrated, created, opts.force)
         .map_err(ProcedureError::Output)?;
 
+    phase(client, "storing");
     let after = store_on_device(client, op, &written, created)?;
+    phase(client, "verifying");
 
     let hand = !drive && handheld::is_hand_held(&plan);
     let verification = if hand {
@@ -306,14 +323,13 @@ fn record_plan<T: Transport>(
 
     let hand = !drive && handheld::is_hand_held(plan);
     let planned_free = plan.segments.iter().filter(|s| s.is_free()).count();
-    let mut watcher = handheld::PositionWatcher::new(
-        plan.output_unit,
-        window_rate,
-        crate::session::segment::SegmentOptions::default().same_position_deg,
-    );
+    let mut watcher = watcher_for(plan, window_rate);
     let mut static_done: Vec<(SegmentPlan, session::SegmentStats)> = Vec::new();
-    for seg in &plan.segments {
+    for (index, seg) in plan.segments.iter().enumerate() {
         let saved = |w: &SessionWriter| Some((w.dir().to_path_buf(), w.rows()));
+        if let (false, Some(live)) = (hand && seg.is_free(), client.view()) {
+            live.table_step(index, seg);
+        }
         if hand && seg.is_free() {
             handheld::wait_for_new_position(
                 client,
@@ -343,11 +359,16 @@ fn record_plan<T: Transport>(
                 dropped = dropped.max(drops);
                 let mut problems = live_check(seg, &stats, rejected);
                 if hand && seg.is_free() {
-                    watcher.accept(stats.mean_u, stats.mean_w_rad_s);
+                    take_position(client.view(), &mut watcher, &stats);
                     op.say(&watcher.guidance(planned_free));
-                } else if seg.is_static() {
-                    problems.extend(remount_check(seg, &stats, &static_done));
-                    static_done.push((seg.clone(), stats.clone()));
+                } else {
+                    if let Some(live) = client.view() {
+                        live.table_recorded(index, seg, &stats);
+                    }
+                    if seg.is_static() {
+                        problems.extend(remount_check(seg, &stats, &static_done));
+                        static_done.push((seg.clone(), stats.clone()));
+                    }
                 }
                 if !problems.is_empty() && !op.keep_despite(&seg.name, &problems)? {
                     writer.end_segment()?;
@@ -382,6 +403,32 @@ fn record_plan<T: Transport>(
         ));
     }
     Ok(Recorded { warnings, dropped })
+}
+
+/// The watcher of a hand-held plan's positions, with the plan's aims as its targets.
+fn watcher_for(plan: &Plan, window_rate: f64) -> handheld::PositionWatcher {
+    let mut watcher = handheld::PositionWatcher::new(
+        plan.output_unit,
+        window_rate,
+        crate::session::segment::SegmentOptions::default().same_position_deg,
+    );
+    watcher.set_aims(&plan.segments.iter().map(|s| s.up_b).collect::<Vec<_>>());
+    watcher
+}
+
+/// A hand-held position just recorded: the watcher takes it with its mean's 1σ (which weighs it in
+/// the predicted 1σ), and the live page shows the coverage it gives.
+fn take_position(
+    live: Option<&crate::view::Live>,
+    watcher: &mut handheld::PositionWatcher,
+    stats: &session::SegmentStats,
+) {
+    let n = stats.count.max(1) as f64;
+    let sigma = core::array::from_fn(|j| (stats.cov_u[j][j] / n).sqrt());
+    watcher.accept_with_spread(stats.mean_u, stats.mean_w_rad_s, sigma);
+    if let Some(live) = live {
+        live.hand_recorded(watcher.coverage());
+    }
 }
 
 /// Writes the blob, resets the device and checks that it applied it and reads it back unchanged.

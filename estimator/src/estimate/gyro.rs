@@ -151,6 +151,18 @@ pub(crate) struct GyroBlock {
     pub walk: Option<super::drift::Drift>,
 }
 
+/// Each gyro axis's scale error, `|G_i·| − 1` (docs/model.md §8): its gain along its own sensing
+/// direction, whatever that direction's misalignment; the 1σ from the row's entries' 1σ.
+pub fn scale_error(matrix: &RowMajor3, matrix_1sigma: &RowMajor3) -> [(f64, f64); 3] {
+    core::array::from_fn(|i| {
+        let n = linalg::norm(&matrix[i]);
+        let var: f64 = (0..3)
+            .map(|j| (matrix[i][j] / n * matrix_1sigma[i][j]).powi(2))
+            .sum();
+        (n - 1.0, var.sqrt())
+    })
+}
+
 /// The estimated gyro correction, with 1σ, for the calibration file and the report.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GyroEstimate {

@@ -82,9 +82,10 @@ pub struct HandGyroFit {
 pub const DETERMINED_1SIGMA: f64 = 1e-3;
 
 impl HandGyroFit {
-    /// Scale factor error of each gyro axis (row norm − 1).
+    /// Scale factor error of each gyro axis, the one definition of docs/model.md §8
+    /// ([`super::gyro::scale_error`]).
     pub fn scale_rel(&self) -> [f64; 3] {
-        self.matrix.map(|r| linalg::norm(&r) - 1.0)
+        super::gyro::scale_error(&self.matrix, &self.matrix_1sigma).map(|e| e.0)
     }
 
     /// Misalignment of gyro axis i towards body axis j (i ≠ j), degrees.

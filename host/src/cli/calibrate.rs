@@ -9,6 +9,7 @@ use crate::calibration_files::now_unix_s;
 use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
 use crate::device::procedure::{self, ProcedureOptions};
 use crate::device::sim_hand::HandOperator;
+use crate::device::view;
 use crate::device::AnyTransport;
 use crate::estimate::{BiasWalk, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use crate::limits;
@@ -71,6 +72,12 @@ pub struct CalibrateArgs {
         value_parser = limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
     )]
     pub verify_temp_c: Option<f64>,
+    /// With --port: show the session on a live page (attitude, stillness, coverage, what to do next,
+    /// the result), served read-only on 127.0.0.1 at a free port (printed; opened in the browser
+    /// where $BROWSER or a display is set) until Enter after the result. A simulated device (`sim`,
+    /// `sim-hand`) then runs at a real one's pace, so that the page can be followed.
+    #[arg(long, requires = "port")]
+    pub view: bool,
     /// Verbose: the fit's full tables (segments, residuals, gyro, observability) before the short
     /// result block; `host report` has them too.
     #[arg(short, long)]
@@ -340,6 +347,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     out.human(crate::report::summary_block::render_summary_block(
         &calibrated.document.summary,
     ))?;
+    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
     out.document(&calibrated.document)?;
     if !calibrated.document.summary.passed {
         return Err(CliError::ChecksFailed(
@@ -392,12 +400,7 @@ fn refuse_device_options(a: &CalibrateArgs) -> Result<(), CliError> {
 /// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
 /// runs the whole procedure and ends with a pass/fail line.
 pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
-    let port = PortArgs {
-        port: a.port.clone().unwrap_or_default(),
-        baud: a.baud,
-        timeout_s: a.timeout_s,
-        sim_unit: a.sim_unit.clone(),
-    };
+    let port = port_args(a);
     if let Some(w) = a.window {
         crate::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
     }
@@ -410,6 +413,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         crate::limits::MAX_TOLERANCE_MG,
     )?;
     let mut client = connect(&port)?;
+    let viewed = start_view(a.view, &mut client)?;
     let identity = client.identify()?;
     let plan = match &a.plan {
         Some(spec) => session::builtin::load_plan(spec),
@@ -442,7 +446,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     } else {
         &mut person
     };
-    let mut result = procedure::run(&mut client, &opts, op)?;
+    let mut result = run_watched(&mut client, &opts, op, viewed.as_ref())?;
     let out = Output {
         json: a.json,
         quiet,
@@ -470,11 +474,12 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         out.human(&result.report)?;
     }
     let written = app::settle_files(&mut result.calibrated, result.written, a.force)?;
-    print_written_and_verified(&out, &written, &result.verification)?;
-    out.human(crate::report::summary_block::render_summary_block(
-        &result.calibrated.document.summary,
-    ))?;
-    out.document(&result.calibrated.document)?;
+    let shown = (
+        &written,
+        &result.verification[..],
+        result.recording_dir.as_path(),
+    );
+    present_live_result(&out, shown, &result.calibrated.document, viewed.as_ref())?;
     if !result.passed {
         return Err(CliError::VerificationFailed);
     }
@@ -490,6 +495,103 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         opts.out_dir.display()
     ))?;
     Ok(())
+}
+
+/// A live run's results: the files and the verification, the result block, the next command, the
+/// JSON document; on the live page too, which then stays up until Enter.
+fn present_live_result(
+    out: &Output,
+    (written, verification, recording_dir): (
+        &crate::calibration_files::WrittenCalibration,
+        &[procedure::VerificationPoint],
+        &std::path::Path,
+    ),
+    document: &app::CalibrationDocument,
+    viewed: Option<&view::Viewed>,
+) -> Result<(), CliError> {
+    print_written_and_verified(out, written, verification)?;
+    out.human(crate::report::summary_block::render_summary_block(
+        &document.summary,
+    ))?;
+    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
+    if let Some(v) = viewed {
+        v.live
+            .finish(document, next_commands(written, recording_dir));
+    }
+    out.document(document)?;
+    if let Some(v) = viewed {
+        v.linger();
+    }
+    Ok(())
+}
+
+/// The device `--port` and its link options name.
+fn port_args(a: &CalibrateArgs) -> PortArgs {
+    PortArgs {
+        port: a.port.clone().unwrap_or_default(),
+        baud: a.baud,
+        timeout_s: a.timeout_s,
+        sim_unit: a.sim_unit.clone(),
+    }
+}
+
+/// `--view`: the live page, served before the device is identified, fed by the client's windows;
+/// a watched simulated device runs at a real one's pace, so that the page can be followed.
+fn start_view(
+    wanted: bool,
+    client: &mut crate::device::DeviceClient<AnyTransport>,
+) -> Result<Option<view::Viewed>, CliError> {
+    if !wanted {
+        return Ok(None);
+    }
+    let v = view::Viewed::start()
+        .map_err(|e| CliError::Io(PathBuf::from("http://127.0.0.1"), std::io::Error::other(e)))?;
+    client.set_view(v.live.clone());
+    if let AnyTransport::Sim(dev) = client.transport_mut() {
+        dev.pace_real_time();
+    }
+    Ok(Some(v))
+}
+
+/// The procedure, its every line also on the live page when there is one; a failure is shown
+/// there (until Enter) before it is reported.
+fn run_watched(
+    client: &mut crate::device::DeviceClient<AnyTransport>,
+    opts: &ProcedureOptions,
+    op: &mut dyn Operator,
+    viewed: Option<&view::Viewed>,
+) -> Result<procedure::ProcedureOutcome, CliError> {
+    let Some(v) = viewed else {
+        return Ok(procedure::run(client, opts, op)?);
+    };
+    let mut shown = view::ViewOperator {
+        inner: op,
+        live: v.live.clone(),
+    };
+    procedure::run(client, opts, &mut shown).map_err(|e| {
+        v.live.failed(&e.to_string());
+        v.linger();
+        e.into()
+    })
+}
+
+/// What to run next on a live result, as the page lists it: the report of the recording and an
+/// export of the calibration.
+fn next_commands(
+    written: &crate::calibration_files::WrittenCalibration,
+    recording_dir: &std::path::Path,
+) -> Vec<String> {
+    vec![
+        format!(
+            "host report --input {} --calibration {}",
+            recording_dir.display(),
+            written.toml_path.display()
+        ),
+        format!(
+            "host export --calibration {} --format json",
+            written.toml_path.display()
+        ),
+    ]
 }
 
 /// `--verify-temp-c` with the hand-held procedure (a device without a virtual table, a hand-held

@@ -1,7 +1,7 @@
 //! Where a command's output goes, the one convention of every subcommand (README, "Output and exit
 //! status"): results on stdout — the human text, or with `--json` only the JSON document (the human
 //! text then goes to stderr, so `host calibrate --json | jq .` works); progress, prompts and warnings
-//! on stderr. `--quiet` silences everything but errors and the JSON document.
+//! on stderr. `--quiet` silences everything but warnings, errors and the JSON document.
 
 use super::CliError;
 use serde::Serialize;
@@ -37,11 +37,10 @@ impl Output {
         self.human(format_args!("{text}\n"))
     }
 
-    /// A warning: on stderr, unless `--quiet`.
+    /// A warning: on stderr, with `--quiet` too (its help says so: quiet drops progress and
+    /// results, never what may be wrong).
     pub(crate) fn warn(&self, text: impl Display) {
-        if !self.quiet {
-            let _ = writeln!(std::io::stderr(), "warning: {text}");
-        }
+        let _ = writeln!(std::io::stderr(), "warning: {text}");
     }
 
     /// Progress or a note for the person at the terminal (not a result): on stderr, unless

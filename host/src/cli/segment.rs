@@ -545,7 +545,8 @@ fn table_turns_text(found: &[FoundTableTurn]) -> String {
 }
 
 fn gyro_text(fit: &HandGyroFit) -> String {
-    let sc = fit.scale_rel();
+    // The scale error as every command says it (docs/model.md §8).
+    let sc = crate::estimate::gyro::scale_error(&fit.matrix, &fit.matrix_1sigma);
     let mis = fit.misalignment_deg();
     let table = if fit.table_turns > 0 {
         format!(
@@ -563,10 +564,10 @@ fn gyro_text(fit: &HandGyroFit) -> String {
     for i in 0..3 {
         let _ = writeln!(
             s,
-            "  {}: scale {:+.4} % ± {:.4} %, misalignment {:+.4}°, {:+.4}°, bias {:+.4} ± {:.4} °/s",
+            "  {}: scale {:+.0} ± {:.0} ppm, misalignment {:+.4}°, {:+.4}°, bias {:+.4} ± {:.4} °/s",
             ["x", "y", "z"][i],
-            sc[i] * 100.0,
-            fit.matrix_1sigma[i][i] * 100.0,
+            sc[i].0 * 1e6,
+            sc[i].1 * 1e6,
             mis[i][(i + 1) % 3],
             mis[i][(i + 2) % 3],
             fit.bias_rad_s[i].to_degrees(),

@@ -601,7 +601,7 @@ impl NoiseReport {
         };
         let mut series = vec![
             Series {
-                label: format!("{} (±1σ)", a.axis),
+                label: format!("{} (±1σ), {unit}", a.axis),
                 points: a.points.iter().map(|p| (p.tau_s, p.adev)).collect(),
                 error: Some(a.points.iter().map(|p| p.adev * sigma(p.tau_s)).collect()),
                 style: SeriesStyle::Markers,
@@ -624,25 +624,34 @@ impl NoiseReport {
         };
         let span = [first.tau_s, last.tau_s];
         let t = &a.terms;
+        // Each term in its unit (N in unit/√Hz, B in the unit, K in unit/√s) and its slope.
         let lines: [TermLine; 3] = [
-            (t.white_density, "N", "slope −½", |v, tau| v / tau.sqrt()),
-            (t.bias_instability, "B", "flat", |v, _| {
+            (t.white_density, "N", "/√Hz (slope −½)", |v, tau| {
+                v / tau.sqrt()
+            }),
+            (t.bias_instability, "B", " (flat)", |v, _| {
                 allan::FLICKER_FACTOR.sqrt() * v
             }),
-            (t.random_walk, "K", "slope +½", |v, tau| {
+            (t.random_walk, "K", "/√s (slope +½)", |v, tau| {
                 v * (tau / 3.0).sqrt()
             }),
         ];
-        for (k, (value, name, slope, adev)) in lines.into_iter().enumerate() {
-            if let Some(v) = value {
-                series.push(Series {
-                    label: format!("{name} = {v:.3e} ({slope})"),
-                    points: span.iter().map(|&tau| (tau, adev(v, tau))).collect(),
-                    error: None,
-                    style: SeriesStyle::Dashed,
-                    colour: 2 + k,
-                });
-            }
+        for (k, (value, name, rest, adev)) in lines.into_iter().enumerate() {
+            // A term the record does not determine is said in the legend, not left out silently.
+            let (label, points) = match value {
+                Some(v) => (
+                    format!("{name} = {v:.3e} {unit}{rest}"),
+                    span.iter().map(|&tau| (tau, adev(v, tau))).collect(),
+                ),
+                None => (format!("{name}: not determined by this record"), Vec::new()),
+            };
+            series.push(Series {
+                label,
+                points,
+                error: None,
+                style: SeriesStyle::Dashed,
+                colour: 2 + k,
+            });
         }
         axis_panel_of(a, unit, series)
     }
@@ -675,7 +684,8 @@ pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
     Ok(report.kalibr)
 }
 
-/// A term's line in the Allan figure: its value, name, slope, and its Allan deviation at τ.
+/// A term's line in the Allan figure: its value, name, unit suffix and slope, and its Allan
+/// deviation at τ.
 type TermLine = (Option<f64>, &'static str, &'static str, fn(f64, f64) -> f64);
 
 /// A log–log panel of one axis's `series`.

@@ -449,5 +449,27 @@ fn the_allan_figure_has_error_bars_and_a_line_per_term() {
             .count();
         let determined = axis.terms.values().iter().filter(|v| v.is_some()).count();
         assert_eq!(drawn_terms, determined, "{}", axis.axis);
+        // Every term is in the legend: drawn with its value in units, or said undetermined.
+        let unit = panel
+            .y_desc
+            .trim_start_matches("Allan deviation [")
+            .trim_end_matches(']');
+        for (name, per) in [("N", "/√Hz ("), ("B", " ("), ("K", "/√s (")] {
+            let entry = panel
+                .series
+                .iter()
+                .find(|s| {
+                    s.label.starts_with(&format!("{name} "))
+                        || s.label.starts_with(&format!("{name}:"))
+                })
+                .unwrap_or_else(|| panic!("{}: no legend entry for {name}", axis.axis));
+            assert!(
+                entry.label.contains(&format!(" {unit}{per}"))
+                    || entry.label.contains("not determined"),
+                "{}: {}",
+                axis.axis,
+                entry.label
+            );
+        }
     }
 }

@@ -176,9 +176,33 @@ pub fn draw_legend<DB: DrawingBackend>(
                 .map_err(err)?;
             }
         }
-        area.draw(&Text::new(s.label.clone(), (x1 + 8, y), style.clone()))
-            .map_err(err)?;
-        y += 18;
+        // A label longer than the column is wrapped at its spaces, never cut at the figure's edge.
+        for line in legend_lines(&s.label, legend_chars()) {
+            area.draw(&Text::new(line, (x1 + 8, y), style.clone()))
+                .map_err(err)?;
+            y += 16;
+        }
+        y += 2;
     }
     Ok(())
+}
+
+/// How many characters of a legend label fit in the legend column right of its marker.
+pub(crate) fn legend_chars() -> usize {
+    ((LEGEND_WIDTH_PX - 38 - 6) / CHAR_PX) as usize
+}
+
+/// `label` in lines of at most `width` characters, broken at spaces (a longer word stands alone).
+pub(crate) fn legend_lines(label: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in label.split(' ') {
+        match lines.last_mut() {
+            Some(l) if l.chars().count() + 1 + word.chars().count() <= width => {
+                l.push(' ');
+                l.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
 }

@@ -43,9 +43,9 @@ pub(crate) fn outputs_figure(data: &ReportData) -> Figure {
         .collect();
     Figure {
         stem: "outputs".into(),
-        title:
-            "Outputs before and after compensation, minus the theoretical value (paper Figs. 5, 8)"
-                .into(),
+        title: "Each segment's error (measured less expected specific force): raw, after the \
+                static calibration, after static + lever arms"
+            .into(),
         grid: (3, 1),
         size: (1200, 1000),
         panels,

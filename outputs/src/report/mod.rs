@@ -22,6 +22,7 @@ pub mod figures;
 #[cfg(test)]
 mod fit_text_tests;
 pub mod format;
+mod gyro_section;
 pub mod markup;
 pub mod navigation;
 pub mod navigation_check;

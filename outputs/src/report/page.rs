@@ -302,6 +302,7 @@ pub fn page(
         });
     }
     navigation_section(&mut b, data, figure_stems);
+    b.extend(super::gyro_section::gyro_section(data));
     session_fit_section(&mut b, data);
     b
 }
@@ -310,7 +311,9 @@ pub fn page(
 fn navigation_section(b: &mut Vec<Block>, data: &ReportData, figure_stems: &[String]) {
     b.push(Block::Heading(
         2,
-        "Navigation check (paper Figs. 6/7, 9/10)".into(),
+        "Navigation check: velocity and position error of an integrated run, before and after \
+         compensation"
+            .into(),
     ));
     if data.navigation.is_empty() {
         b.push(Block::Para(

@@ -812,6 +812,37 @@ mod tests {
         }
     }
 
+    /// A legend label longer than the legend's column is wrapped inside the figure, not cut at
+    /// its right edge (the residuals figure's "residual ± 1σ of the segment mean").
+    #[test]
+    fn long_legend_labels_stay_inside_the_figure() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut fig = figure();
+        fig.size = (1200, 400);
+        let label = "residual ± 1σ of the segment mean";
+        fig.panels[1].series[0].label = label.into();
+        render(
+            &fig,
+            dir.path(),
+            Formats {
+                png: false,
+                svg: true,
+            },
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(dir.path().join("t.svg")).unwrap();
+        let lines = super::super::axes::legend_lines(label, super::super::axes::legend_chars());
+        assert!(lines.len() > 1, "{lines:?}");
+        for line in &lines {
+            let x = text_x(&svg, line).unwrap_or_else(|| panic!("no legend line {line}"));
+            let right = x + (line.chars().count() as u32 * CHAR_PX) as f64;
+            assert!(
+                right <= 1200.0,
+                "'{line}' ends at x {right}, past the figure's 1200"
+            );
+        }
+    }
+
     /// Category labels never run into each other: level when each fits its pitch, else upright and
     /// thinned to one per two line heights.
     #[test]

@@ -14,23 +14,28 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let lever_determined_m = crate::estimate::EstimateOptions::default().lever_arm_threshold_m;
     let mut out = String::from("Result (± 1σ):\n");
     // Biases: in mg where the output has a physical zero (m/s², g); else the zero-g output in its
-    // unit, with its 1σ in mg.
+    // own unit with its 1σ in that unit, and the 1σ in mg on a row of its own (one unit a figure).
     let mut bias = Vec::new();
+    let mut zero = Vec::new();
     let mut scale = Vec::new();
     let mut misalignment = Vec::new();
+    let mut output_unit = String::new();
     for a in axes {
         let (Some(b), Some(k)) = (p(&format!("bias_{a}")), p(&format!("scale_{a}"))) else {
             continue;
         };
         let mg = |v: f64| v / k.value * 1e3;
-        bias.push(match b.unit.as_str() {
-            "m/s2" | "g" => format!("{a} {}", pm(mg(b.value), b.sigma.map(mg), 3)),
-            unit => format!(
-                "{a} {:.5} {unit} ± {} mg",
-                b.value,
-                b.sigma.map_or("n.d.".into(), |sd| format!("{:.3}", mg(sd)))
-            ),
-        });
+        match b.unit.as_str() {
+            "m/s2" | "g" => bias.push(format!("{a} {}", pm(mg(b.value), b.sigma.map(mg), 3))),
+            unit => {
+                output_unit = unit.to_string();
+                zero.push(format!("{a} {}", pm_same_unit(b.value, b.sigma)));
+                bias.push(format!(
+                    "{a} {}",
+                    b.sigma.map_or("n.d.".into(), |sd| format!("{:.3}", mg(sd)))
+                ));
+            }
+        }
         scale.push(format!(
             "{a} {:.6} {} ± {} ppm",
             k.value,
@@ -44,7 +49,12 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
             misalignment.push(format!("{a} {}", pm(mrad(t.value), t.sigma.map(mrad), 3)));
         }
     }
-    let _ = writeln!(out, "  bias             {}", bias.join("   "));
+    if zero.is_empty() {
+        let _ = writeln!(out, "  bias, mg         {}", bias.join("   "));
+    } else {
+        let _ = writeln!(out, "  zero-g output, {output_unit:<3}{}", zero.join("   "));
+        let _ = writeln!(out, "  bias 1σ, mg      {}", bias.join("   "));
+    }
     let _ = writeln!(out, "  scale            {}", scale.join("   "));
     let _ = writeln!(
         out,
@@ -84,6 +94,27 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     out
 }
 
+/// The line after the result: the command that takes the calibration to a flight stack or a
+/// driver.
+pub fn next_line(calibration_toml: &std::path::Path) -> String {
+    format!(
+        "next: host export --calibration {} --format json   (or px4, ardupilot, kalibr, c, \
+         fusion: `host export --help`)\n",
+        calibration_toml.display()
+    )
+}
+
+/// `v ± σ` in one unit, with as many decimals as give σ two significant digits (at least five).
+fn pm_same_unit(v: f64, sigma: Option<f64>) -> String {
+    let digits = sigma
+        .filter(|sd| *sd > 0.0)
+        .map_or(5, |sd| (1.0 - sd.log10().floor()).clamp(5.0, 12.0) as usize);
+    match sigma {
+        Some(sd) => format!("{v:.digits$} ± {sd:.digits$}"),
+        None => format!("{v:.digits$} (n.d.)"),
+    }
+}
+
 /// `v ± σ` with `digits` decimals, or `v (n.d.)` when it is not determined.
 fn pm(v: f64, sigma: Option<f64>, digits: usize) -> String {
     match sigma {
@@ -110,14 +141,33 @@ fn write_gyro(out: &mut String, s: &CalibrationSummary) {
     if !gyro_bias.is_empty() {
         let _ = writeln!(out, "  gyro bias, °/s   {}", gyro_bias.join("   "));
     }
-    let gyro_scale: Vec<String> = AXES
-        .iter()
-        .filter_map(|a| p(&format!("gyro_g_{a}{a}")).map(|g| (a, g)))
-        .map(|(a, g)| {
-            let ppm = |v: f64| v * 1e6;
-            format!("{a} {}", pm(ppm(g.value - 1.0), g.sigma.map(ppm), 0))
-        })
-        .collect();
+    // The scale error of docs/model.md §8 (the row's length less one), from G's entries.
+    let entry = |i: usize, j: usize| p(&format!("gyro_g_{}{}", AXES[i], AXES[j]));
+    let gyro_scale: Vec<String> = match entry(0, 0) {
+        None => Vec::new(),
+        Some(_) => {
+            let g = core::array::from_fn(|i| {
+                core::array::from_fn(|j| {
+                    entry(i, j).map_or(if i == j { 1.0 } else { 0.0 }, |e| e.value)
+                })
+            });
+            let sd = core::array::from_fn(|i| {
+                core::array::from_fn(|j| entry(i, j).and_then(|e| e.sigma).unwrap_or(0.0))
+            });
+            let determined = |i: usize| entry(i, i).is_some_and(|e| e.sigma.is_some());
+            crate::estimate::gyro::scale_error(&g, &sd)
+                .iter()
+                .enumerate()
+                .map(|(i, (e, s))| {
+                    format!(
+                        "{} {}",
+                        AXES[i],
+                        pm(e * 1e6, determined(i).then_some(s * 1e6), 0)
+                    )
+                })
+                .collect()
+        }
+    };
     if !gyro_scale.is_empty() {
         let _ = writeln!(out, "  gyro scale, ppm  {}", gyro_scale.join("   "));
     }
@@ -175,12 +225,90 @@ mod tests {
             param("gyro_g_xx", "1", 1.0 + 250e-6, Some(10e-6)),
         ];
         let b = render_summary_block(&s);
-        assert!(b.contains("bias             x +5.000 ± 0.100"), "{b}");
+        assert!(b.contains("bias, mg         x +5.000 ± 0.100"), "{b}");
         assert!(b.contains("± 20 ppm"), "{b}");
         assert!(b.contains("x +8.727 ± 0.175  mrad"), "{b}");
         assert!(b.contains("lever arm x, mm  +12.300 ± 0.050, n.d."), "{b}");
         assert!(b.contains("gyro bias, °/s   x +0.0100 ± 0.0001"), "{b}");
         assert!(b.contains("gyro scale, ppm  x +250 ± 10"), "{b}");
         assert!(b.contains("verdict          PASS: χ²/dof 1.04"), "{b}");
+    }
+
+    /// An output in volts: the zero-g output in V with its 1σ in V, the 1σ in mg on a row of its
+    /// own (4 µV of 0.4 V/g is 0.010 mg), never a figure in volts with a 1σ in mg.
+    #[test]
+    fn an_offset_outputs_zero_and_its_sigma_share_one_unit() {
+        let s = CalibrationSummary {
+            unit_id: None,
+            parameters: vec![
+                param("bias_x", "V", 2.4051, Some(4e-6)),
+                param("scale_x", "V/g", 0.4, Some(8e-6)),
+            ],
+            undetermined: Vec::new(),
+            temperature: None,
+            calibration: None,
+            chi2: 1.0,
+            dof: 1,
+            chi2_per_dof: 1.0,
+            thermal_fit: None,
+            checks: Vec::new(),
+            passed: true,
+            warnings: Vec::new(),
+            in_package_size_effect: None,
+            gyro_bias_walk_deg_s_sqrt_s: None,
+            bias_walk: None,
+        };
+        let b = render_summary_block(&s);
+        assert!(
+            b.contains("zero-g output, V  x 2.4051000 ± 0.0000040"),
+            "{b}"
+        );
+        assert!(b.contains("bias 1σ, mg      x 0.010"), "{b}");
+        for line in b.lines().filter(|l| l.contains(" V ") || l.contains(", V")) {
+            assert!(!line.contains("mg"), "two units in one figure: {line}");
+        }
+    }
+
+    /// A gyro scale error is the row's length less one (docs/model.md §8), as `host segment` says
+    /// it: a row (1.004772, 0.021, 0) is +4991 ppm (1.004772 · √(1 + (0.021/1.004772)²) − 1), not
+    /// the diagonal's +4772.
+    #[test]
+    fn the_gyro_scale_is_the_rows_length() {
+        let mut parameters = Vec::new();
+        for (i, a) in AXES.iter().enumerate() {
+            for (j, b) in AXES.iter().enumerate() {
+                let v = match (i, j) {
+                    (0, 0) => 1.004772,
+                    (0, 1) => 0.021,
+                    _ if i == j => 1.0,
+                    _ => 0.0,
+                };
+                parameters.push(param(&format!("gyro_g_{a}{b}"), "1", v, Some(1e-5)));
+            }
+        }
+        let s = CalibrationSummary {
+            unit_id: None,
+            parameters,
+            undetermined: Vec::new(),
+            temperature: None,
+            calibration: None,
+            chi2: 1.0,
+            dof: 1,
+            chi2_per_dof: 1.0,
+            thermal_fit: None,
+            checks: Vec::new(),
+            passed: true,
+            warnings: Vec::new(),
+            in_package_size_effect: None,
+            gyro_bias_walk_deg_s_sqrt_s: None,
+            bias_walk: None,
+        };
+        let b = render_summary_block(&s);
+        let want = (1.004772f64.powi(2) + 0.021f64.powi(2)).sqrt() - 1.0;
+        assert_eq!(format!("{:+.0}", want * 1e6), "+4991");
+        assert!(
+            b.contains("gyro scale, ppm  x +4991 ± 10   y +0 ± 10"),
+            "{b}"
+        );
     }
 }

@@ -567,3 +567,87 @@ fn a_figure_that_cannot_be_written_keeps_its_cause() {
         }
     }
 }
+
+/// Figure titles and headings say what they show in the user's terms: nothing that needs the paper
+/// at hand ("paper Figs. 5, 8").
+#[test]
+fn figure_titles_and_headings_need_no_paper() {
+    let data = noisy_report();
+    let mut titles: Vec<String> = report_figures(&data)
+        .iter()
+        .flat_map(|f| {
+            std::iter::once(f.title.clone()).chain(f.panels.iter().map(|p| p.title.clone()))
+        })
+        .collect();
+    titles.extend(
+        page(&data, "s", "c", &[])
+            .into_iter()
+            .filter_map(|b| match b {
+                Block::Heading(_, h) => Some(h),
+                _ => None,
+            }),
+    );
+    assert!(titles.len() > 3, "{titles:?}");
+    for t in &titles {
+        assert!(
+            !t.contains("paper") && !t.contains("Fig"),
+            "'{t}' needs the paper"
+        );
+    }
+}
+
+/// The report has the gyro: G and b as the calibration holds them, the scale error as the row's
+/// length less one, and each spin's corrected rate against the table's.
+#[test]
+fn the_report_has_a_gyro_section() {
+    let data = noisy_report();
+    let g = data
+        .calibration
+        .gyro
+        .expect("the short plan's spins fit the gyro");
+    let blocks = page(&data, "s", "c", &[]);
+    let at = blocks
+        .iter()
+        .position(|b| *b == Block::Heading(2, "Gyro".into()))
+        .expect("a gyro section");
+    let table = blocks[at + 1..]
+        .iter()
+        .find(|b| matches!(b, Block::Table { .. }))
+        .unwrap();
+    let rows = cells(table);
+    for i in 0..3 {
+        for j in 0..3 {
+            let shown: f64 = rows[i][1 + 2 * j].parse().unwrap();
+            assert!(
+                (shown - g.matrix[i][j]).abs() <= 5e-7,
+                "G[{i}][{j}] {shown}"
+            );
+        }
+        let norm = g.matrix[i].iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert_eq!(rows[i][7], format!("{:+.0}", (norm - 1.0) * 1e6));
+        let b: f64 = rows[i][9].parse().unwrap();
+        assert!((b - g.bias_rad_s[i].to_degrees()).abs() <= 5e-6);
+        assert_ne!(rows[i][2], "—", "the session's fit gives G's 1σ");
+    }
+    let spins = blocks[at + 1..]
+        .iter()
+        .filter(|b| matches!(b, Block::Table { .. }))
+        .nth(1)
+        .expect("the spins' residuals");
+    let n_spins = data
+        .segments
+        .iter()
+        .filter(|r| r.kind != SegmentKind::Static && r.planned_rate_deg_s != 0.0)
+        .count();
+    assert!(n_spins > 0);
+    assert_eq!(cells(spins).len(), n_spins);
+    for row in cells(spins) {
+        for v in &row[2..5] {
+            let r: f64 = v.parse().unwrap();
+            assert!(
+                r.abs() < 0.05,
+                "{row:?}: the corrected gyro reads the table's rate"
+            );
+        }
+    }
+}
