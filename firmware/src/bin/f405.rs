@@ -40,11 +40,13 @@ mod app {
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
-    use firmware::clock_tree::f405::IMU_SPI;
-    use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
+    use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
+    use firmware::health::{Counter, HealthCounters};
+    use firmware::imu::ImuFlags;
     use firmware::pipeline::PipelineCommand;
+    use shared::wire::ImuStatus;
     use firmware::protocol::{PipelineAccess, StoreMailbox};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, LinkService, Pipeline};
@@ -57,6 +59,8 @@ mod app {
 
     /// A burst chain is running (set by the watermark interrupt, cleared by the completion task).
     static IN_FLIGHT: InFlight = InFlight::new();
+    /// The error counters the device reports to `Health`.
+    static HEALTH: HealthCounters = HealthCounters::new();
 
     #[shared]
     struct Shared {
@@ -87,6 +91,7 @@ mod app {
         link: Link,
         service: Option<LinkService<Store>>,
         imu_found: bool,
+        imu_status: ImuStatus,
     }
 
     #[init(local = [
@@ -106,10 +111,9 @@ mod app {
         );
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        // The status LED (PC13, lit when low), then driven through `board::set_led`.
-        let _led = gpioc
-            .pc13
-            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+        // The status LED (`board::BOARD.led`, dark), then driven through `board::set_led`; its
+        // port's clock is on (GPIOA and GPIOC split above).
+        board::init_led();
 
         // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
         // single-bank F4), before the IMU's FIFO runs. A calibration written later only programs.
@@ -125,12 +129,12 @@ mod app {
         let spi = spi1(
             dp.SPI1,
             (gpioa.pa5, gpioa.pa6, gpioa.pa7),
-            &IMU_SPI,
+            &board::BOARD.imu_spi,
             &mut rcc,
         );
         let sample_rate_hz = board::IMU_CONFIG.odr.hz();
         let mut delay = cx.core.SYST.delay(&rcc.clocks);
-        let reader = init_imu(spi, &mut cs, &mut delay);
+        let (reader, imu_status) = init_imu(spi, &mut cs, &mut delay);
         let imu_found = reader.is_some();
         // SysTick, free after the IMU's set-up, ticks the stall check every STALL_TICK_MS.
         let mut tick = delay.release().counter_hz();
@@ -146,7 +150,7 @@ mod app {
         int1.trigger_on_edge(&mut dp.EXTI, Edge::Rising);
         int1.enable_interrupt(&mut dp.EXTI);
 
-        let controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
+        let controller = boot_controller(store, sample_rate_hz, imu_status);
         let pipeline =
             cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(sample_rate_hz))
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
@@ -190,8 +194,17 @@ mod app {
                 usb_dev,
                 link,
                 service: Some(LinkService::new(controller)),
+                imu_status,
             },
         )
+    }
+
+    /// The request handler from the store, with the part's start and the counters for `Health`.
+    fn boot_controller(store: Store, sample_rate_hz: u32, imu: ImuStatus) -> Controller<Store> {
+        let mut controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
+        controller.set_imu(imu, board::IMU_CONFIG.accel_range.lsb_per_g() as u32);
+        controller.set_counters(&HEALTH);
+        controller
     }
 
     /// Configures the ICM-42688-P over the blocking bus, then hands SPI1 to its DMA streams. `None`
@@ -200,17 +213,26 @@ mod app {
         mut spi: Spi<SPI1>,
         cs: &mut PA4<Output<PushPull>>,
         delay: &mut SysDelay,
-    ) -> Option<BurstReader> {
-        let reader = match ExclusiveDevice::new(&mut spi, cs, delay)
-            .map_err(|_| ())
-            .and_then(|dev| Icm42688::new(dev, board::IMU_CONFIG).map_err(|_| ()))
-            .and_then(|_| Core::new(board::IMU_CONFIG).map_err(|_| ()))
-        {
+    ) -> (Option<BurstReader>, ImuStatus) {
+        let (configured, status) = match ExclusiveDevice::new(&mut spi, cs, delay) {
+            Ok(dev) => {
+                let result = Icm42688::new(dev, board::IMU_CONFIG).map(|_| ());
+                (result.is_ok(), board::imu_status(&result))
+            }
+            Err(_) => (false, board::imu_status::<()>(&Err(IcmError::Spi(())))),
+        };
+        let core = configured
+            .then(|| Core::new(board::IMU_CONFIG).ok())
+            .flatten();
+        let reader = match core {
             // The part is configured and its FIFO running; the driver's state continues in the
             // burst reader, the bus goes to the DMA streams.
-            Ok(core) => Some(BurstReader::new(core)),
-            Err(()) => {
-                defmt::error!("ICM-42688-P not answering on SPI1: no samples");
+            Some(core) => Some(BurstReader::new(core)),
+            None => {
+                defmt::error!(
+                    "ICM-42688-P not answering on SPI1 (WHO_AM_I {=u8:#x}): no samples",
+                    status.who_am_i
+                );
                 None
             }
         };
@@ -223,7 +245,7 @@ mod app {
             let _ = regs.sr().read();
         }
         let _ = spi.use_dma().txrx();
-        reader
+        (reader, status)
     }
 
     /// The USB device with its CDC-ACM class (the link).
@@ -333,7 +355,13 @@ mod app {
             cx.shared.bus.lock(|bus| start(bus, next, rx));
         }
         if let Some(h) = done.corrupt_header {
+            HEALTH.add(Counter::FifoResync, 1);
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
+        }
+        for s in &samples[..done.samples] {
+            if s.flags.has(ImuFlags::DATA_LOST) {
+                HEALTH.add(Counter::LostSamples, u32::from(s.lost_before.max(1)));
+            }
         }
         // Into the board's axes (the calibration's body frame), outside any lock.
         board::IMU_ALIGNMENT.apply(&mut samples[..done.samples]);
@@ -365,6 +393,7 @@ mod app {
         else {
             return;
         };
+        HEALTH.add(Counter::Stall, 1);
         defmt::warn!("IMU burst chain stalled: FIFO flushed, reading restarted");
         let rx = *cx.local.rx_for_tick;
         cx.shared.bus.lock(|bus| {
@@ -383,7 +412,7 @@ mod app {
     /// USB events and the link service: requests in, answers and frames out. Also pended by
     /// `burst_done` when frames are queued.
     #[task(binds = OTG_FS, priority = 1, shared = [pipeline, store_job],
-           local = [usb_dev, link, service, sample_rate_hz])]
+           local = [usb_dev, link, service, sample_rate_hz, imu_status])]
     fn usb(mut cx: usb::Context) {
         let l = cx.local;
         l.usb_dev.poll(&mut [&mut l.link.serial]);
@@ -417,8 +446,7 @@ mod app {
             let Some(store) = l.service.take().and_then(|s| s.controller.into_store()) else {
                 return;
             };
-            let controller =
-                Controller::boot(board::info(*l.sample_rate_hz), store, BOOT_LEVER_MODE);
+            let controller = boot_controller(store, *l.sample_rate_hz, *l.imu_status);
             pipeline.apply(PipelineCommand::StopStream);
             pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
             *l.service = Some(LinkService::new(controller));
