@@ -29,7 +29,15 @@ pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 ///   [`HostToDevice::SetVirtualTemperature`]; blob errors for the gyro, temperature and `f32` range.
 /// - 3: [`Identity::output_unit`] (a board's raw outputs may be volts or counts), appended: a host
 ///   reads the version of an older device before the identity's new field.
-pub const PROTOCOL_VERSION: u16 = 3;
+/// - 4: [`HostToDevice::Health`] → [`DeviceToHost::Health`] (the part, its WHO_AM_I and start,
+///   its nominal sensitivity, the error counters), both appended; everything of version 3 is
+///   unchanged, so a host speaks to a version 3 device without the health report.
+pub const PROTOCOL_VERSION: u16 = 4;
+/// The oldest device version a host speaks to (it asks [`HostToDevice::Health`] only from 4 on).
+pub const MIN_PROTOCOL_VERSION: u16 = 3;
+
+mod health;
+pub use health::{ErrorCounters, Health, ImuInit, ImuPart, ImuStatus};
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
 
@@ -162,6 +170,8 @@ pub enum HostToDevice {
         /// Die temperature, °C.
         temp_c: f32,
     },
+    /// Ask for the [`Health`] report (version 4).
+    Health,
 }
 
 /// Which board the device is.
@@ -379,6 +389,8 @@ pub enum DeviceToHost {
     Ack(Ack),
     /// A typed error.
     Error(DeviceError),
+    /// Answer to `Health` (version 4).
+    Health(Health),
 }
 
 impl core::fmt::Display for DeviceError {

@@ -123,7 +123,17 @@ mod app {
         if store.prepare().is_err() {
             defmt::warn!("calibration store: erasing ahead failed");
         }
-        let controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
+        let mut controller =
+            Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
+        // Analog accelerometers on the ADC: no identity register, outputs in volts.
+        controller.set_imu(
+            shared::wire::ImuStatus {
+                part: shared::wire::ImuPart::Analog,
+                who_am_i: 0,
+                init: shared::wire::ImuInit::NotApplicable,
+            },
+            0,
+        );
 
         let gyro = init_gyro(
             spi1(
