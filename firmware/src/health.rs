@@ -81,6 +81,19 @@ impl HealthCounters {
     }
 }
 
+/// `bytes` as lower-case hex digits in `out` (two per byte; the rest of `out` untouched), as a
+/// `str` (a USB serial number from the chip's unique ID).
+pub fn hex_into<'a>(bytes: &[u8], out: &'a mut [u8]) -> &'a str {
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    let n = bytes.len().min(out.len() / 2);
+    for (i, b) in bytes[..n].iter().enumerate() {
+        out[2 * i] = DIGITS[usize::from(b >> 4)];
+        out[2 * i + 1] = DIGITS[usize::from(b & 0xF)];
+    }
+    // Only ASCII digits were written.
+    core::str::from_utf8(&out[..2 * n]).unwrap_or("")
+}
+
 /// What the request handler reports to `Health`.
 #[derive(Clone, Copy)]
 pub struct HealthState {
@@ -212,6 +225,15 @@ mod tests {
             [DeviceToHost::Health(h)] => *h,
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn a_unique_id_in_hex() {
+        let mut out = [0u8; 24];
+        let id = [0x00, 0x1f, 0xa0, 0xff, 1, 2, 3, 4, 5, 6, 7, 0x8e];
+        assert_eq!(hex_into(&id, &mut out), "001fa0ff010203040506078e");
+        let mut short = [0u8; 5];
+        assert_eq!(hex_into(&id, &mut short), "001f");
     }
 
     /// The board's part and start, its counts per g, its counters and the link's own frame

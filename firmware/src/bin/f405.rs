@@ -34,6 +34,7 @@ mod app {
     use stm32f4xx_hal::rcc::Config;
     use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::{SysCounterHz, SysDelay, SysEvent};
+    use stm32f4xx_hal::watchdog::IndependentWatchdog;
     use usb_device::bus::UsbBusAllocator;
     use usb_device::prelude::*;
 
@@ -92,6 +93,7 @@ mod app {
         service: Option<LinkService<Store>>,
         imu_found: bool,
         imu_status: ImuStatus,
+        watchdog: IndependentWatchdog,
     }
 
     #[init(local = [
@@ -104,6 +106,13 @@ mod app {
         board::enter_bootloader_if_requested();
         paint_stack();
         let mut dp = cx.device;
+        // Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090
+        // §7.3.21, RCC_CSR: IWDGRSTF, cleared by RMVF).
+        if dp.RCC.csr().read().wdgrstf().bit_is_set() {
+            HEALTH.add(Counter::WatchdogReset, 1);
+            defmt::warn!("restarted by the independent watchdog");
+        }
+        dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
         let mut rcc = dp.RCC.freeze(
             Config::hse(board::HSE_HZ.Hz())
                 .sysclk(board::SYSCLK_HZ.Hz())
@@ -156,6 +165,13 @@ mod app {
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
         pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
 
+        // The independent watchdog (its own 32 kHz LSI): fed by the idle loop, so a task that
+        // never returns (or a stuck interrupt storm) resets the chip. Its period outlasts the
+        // longest thing the idle loop does: a calibration store's sector erase (board::
+        // WATCHDOG_MS, from the erase's datasheet maximum).
+        let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+        watchdog.start(board::WATCHDOG_MS.millis());
+
         let (usb_dev, link) = init_usb(
             USB::new(
                 (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
@@ -187,6 +203,7 @@ mod app {
                 rx,
                 tick,
                 imu_found,
+                watchdog,
                 samples: cx.local.sample_buf,
                 feed: PipelineFeed::new(sample_rate_hz),
                 led_period: sample_rate_hz / 2,
@@ -248,6 +265,16 @@ mod app {
         (reader, status)
     }
 
+    /// The USB serial number: the chip's 96-bit unique ID in hex (24 characters), so that two
+    /// boards on one computer are told apart (udev's `/dev/serial/by-id/`).
+    fn serial_number() -> &'static str {
+        let text = cortex_m::singleton!(: [u8; 24] = [0; 24]);
+        match text {
+            Some(text) => board::unique_id_hex(text),
+            None => "F405",
+        }
+    }
+
     /// The USB device with its CDC-ACM class (the link).
     fn init_usb(
         usb: USB,
@@ -262,7 +289,7 @@ mod app {
                 .strings(&[StringDescriptors::default()
                     .manufacturer("accel-cal")
                     .product("accel-cal F405 IMU")
-                    .serial_number("F405")])
+                    .serial_number(serial_number())])
                 .unwrap_or_else(|_| defmt::panic!("USB strings"))
                 .build();
         (usb_dev, link)
@@ -273,11 +300,12 @@ mod app {
     ///
     /// The store runs here, below every interrupt: the USB task only validates a write and posts
     /// its job (`firmware::protocol::StoreJob`). The lock moves the job, never runs it.
-    #[idle(local = [imu_found], shared = [store_job])]
+    #[idle(local = [imu_found, watchdog], shared = [store_job])]
     fn idle(mut cx: idle::Context) -> ! {
         let mut high_water = HighWater::new();
         let mut wakes = 0u32;
         loop {
+            cx.local.watchdog.feed();
             if let Some(mut job) = cx.shared.store_job.lock(|m| m.take_to_run()) {
                 job.run();
                 cx.shared.store_job.lock(|m| m.post(job));

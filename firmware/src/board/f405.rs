@@ -117,6 +117,15 @@ pub fn imu_status<E>(result: &Result<(), crate::imu::icm42688::Error<E>>) -> Imu
     }
 }
 
+/// The independent watchdog's period, ms: above the longest the idle loop may block, a 128 KiB
+/// sector erase (DS8626, flash erase time at x8 parallelism, the HAL's: 4 s at most), with margin.
+pub const WATCHDOG_MS: u32 = 6000;
+
+/// The unique ID (`unit_id`) as 24 hex digits in `out`.
+pub fn unique_id_hex(out: &'static mut [u8; 24]) -> &'static str {
+    crate::health::hex_into(&unit_id().0, out)
+}
+
 /// The A/B store on sectors 5 and 6.
 pub fn store(flash: LockedFlash) -> Option<Store> {
     AbStore::new(F4Flash(flash), STORE_OFFSET, SLOT_SIZE).ok()
