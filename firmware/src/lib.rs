@@ -36,6 +36,7 @@ pub mod boards;
 pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;
+#[cfg(feature = "health")]
 pub mod health;
 pub mod imu;
 pub mod imu_bursts;

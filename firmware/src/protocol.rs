@@ -106,11 +106,13 @@ pub struct Controller<S> {
     assembly_len: usize,
     assembly_total: usize,
     /// What `Health` answers.
+    #[cfg(feature = "health")]
     health: crate::health::HealthState,
 }
 
 impl<S: CalStore> Controller<S> {
     /// The health report's state (`crate::health`).
+    #[cfg(feature = "health")]
     pub(crate) fn health_mut(&mut self) -> &mut crate::health::HealthState {
         &mut self.health
     }
@@ -158,6 +160,7 @@ impl<S: CalStore> Controller<S> {
             assembly: [0; BLOB_MAX_LEN],
             assembly_len: 0,
             assembly_total: 0,
+            #[cfg(feature = "health")]
             health: crate::health::HealthState::new(),
         }
     }
@@ -254,6 +257,7 @@ impl<S: CalStore> Controller<S> {
                     ..Outcome::ack(Ack::StreamStarted)
                 }
             }
+            #[cfg(feature = "health")]
             HostToDevice::Health => Outcome::reply(DeviceToHost::Health(self.health.report())),
             HostToDevice::StopStream => Outcome {
                 pipeline: Some(PipelineCommand::StopStream),
@@ -568,6 +572,7 @@ impl<S: CalStore> LinkService<S> {
             let reply = match self.rx.push(byte) {
                 None => continue,
                 Some(Received::Error(e)) => {
+                    #[cfg(feature = "health")]
                     self.controller.count_frame_error();
                     DeviceToHost::Error(e)
                 }

@@ -32,11 +32,17 @@ pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 /// - 4: [`HostToDevice::Health`] → [`DeviceToHost::Health`] (the part, its WHO_AM_I and start,
 ///   its nominal sensitivity, the error counters), both appended; everything of version 3 is
 ///   unchanged, so a host speaks to a version 3 device without the health report.
+#[cfg(feature = "health")]
 pub const PROTOCOL_VERSION: u16 = 4;
+/// Version of this protocol: 3 without the `health` feature (the QEMU image).
+#[cfg(not(feature = "health"))]
+pub const PROTOCOL_VERSION: u16 = 3;
 /// The oldest device version a host speaks to (it asks [`HostToDevice::Health`] only from 4 on).
 pub const MIN_PROTOCOL_VERSION: u16 = 3;
 
+#[cfg(feature = "health")]
 mod health;
+#[cfg(feature = "health")]
 pub use health::{ErrorCounters, Health, ImuInit, ImuPart, ImuStatus};
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
@@ -171,6 +177,7 @@ pub enum HostToDevice {
         temp_c: f32,
     },
     /// Ask for the [`Health`] report (version 4).
+    #[cfg(feature = "health")]
     Health,
 }
 
@@ -390,6 +397,7 @@ pub enum DeviceToHost {
     /// A typed error.
     Error(DeviceError),
     /// Answer to `Health` (version 4).
+    #[cfg(feature = "health")]
     Health(Health),
 }
 
@@ -557,6 +565,7 @@ mod tests {
         assert_eq!(identity_version_of(frame), None);
     }
 
+    #[cfg(feature = "health")]
     /// The hand-encoded `Health` decodes with the derived deserializer to itself, for every part
     /// and start, small and largest counters; and the message frame round-trips.
     #[test]
