@@ -63,7 +63,12 @@ pub struct Check {
 }
 
 impl Check {
-    pub(crate) fn new(name: &'static str, ok: bool, detail: String, cause: impl Into<String>) -> Check {
+    pub(crate) fn new(
+        name: &'static str,
+        ok: bool,
+        detail: String,
+        cause: impl Into<String>,
+    ) -> Check {
         Check {
             name,
             verdict: if ok { Verdict::Pass } else { Verdict::Fail },
@@ -166,7 +171,8 @@ pub mod names {
 }
 
 /// Why a pose check was skipped without an operator.
-const NO_OPERATOR: &str = "nobody to move the board (run at a terminal, or on the simulated device)";
+const NO_OPERATOR: &str =
+    "nobody to move the board (run at a terminal, or on the simulated device)";
 
 /// Runs the checks on a device at rest, measuring for `measure` of the host's time; the checks
 /// that need the board moved are skipped.
@@ -256,7 +262,10 @@ pub fn bringup_with<T: Transport, O: Operator<T>>(
     }
     if identity.protocol_version >= 4 {
         let after = client.health().map_err(BringupError::Identify)?;
-        checks.push(crate::bringup_health::counters_check(health.as_ref(), &after));
+        checks.push(crate::bringup_health::counters_check(
+            health.as_ref(),
+            &after,
+        ));
     }
     Ok(Bringup { identity, checks })
 }

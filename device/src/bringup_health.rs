@@ -48,18 +48,42 @@ pub(crate) fn counters_check(before: Option<&Health>, after: &Health) -> Check {
     let a = after.counters;
     let grew = |f: fn(&ErrorCounters) -> u32| f(&a).saturating_sub(f(&b));
     let rows: [(&str, u32, u32, &str); 6] = [
-        ("FIFO resyncs", grew(|c| c.fifo_resyncs), a.fifo_resyncs,
-         "the FIFO read went out of step: SPI errors (a loose connector, interference)"),
-        ("stall restarts", grew(|c| c.stalls), a.stalls,
-         "the interrupt or DMA completion was lost: check the INT pin"),
-        ("re-inits", grew(|c| c.reinits), a.reinits,
-         "the part lost its configuration (brown-out): check the board's 3.3 V supply"),
-        ("frame errors", grew(|c| c.crc_errors), a.crc_errors,
-         "frames from this computer arrived damaged: the USB cable or hub"),
-        ("lost samples", grew(|c| c.lost_samples), a.lost_samples,
-         "the FIFO overflowed: sampling was held up (a flash write, a stalled chain)"),
-        ("watchdog resets", 0, a.watchdog_resets,
-         "the firmware hung and the watchdog restarted it: report it with the board's log"),
+        (
+            "FIFO resyncs",
+            grew(|c| c.fifo_resyncs),
+            a.fifo_resyncs,
+            "the FIFO read went out of step: SPI errors (a loose connector, interference)",
+        ),
+        (
+            "stall restarts",
+            grew(|c| c.stalls),
+            a.stalls,
+            "the interrupt or DMA completion was lost: check the INT pin",
+        ),
+        (
+            "re-inits",
+            grew(|c| c.reinits),
+            a.reinits,
+            "the part lost its configuration (brown-out): check the board's 3.3 V supply",
+        ),
+        (
+            "frame errors",
+            grew(|c| c.crc_errors),
+            a.crc_errors,
+            "frames from this computer arrived damaged: the USB cable or hub",
+        ),
+        (
+            "lost samples",
+            grew(|c| c.lost_samples),
+            a.lost_samples,
+            "the FIFO overflowed: sampling was held up (a flash write, a stalled chain)",
+        ),
+        (
+            "watchdog resets",
+            0,
+            a.watchdog_resets,
+            "the firmware hung and the watchdog restarted it: report it with the board's log",
+        ),
     ];
     let detail = rows
         .iter()
@@ -71,10 +95,5 @@ pub(crate) fn counters_check(before: Option<&Health>, after: &Health) -> Check {
         .filter(|(n, d, t, _)| *d > 0 || (*n == "watchdog resets" && *t > 0))
         .map(|r| r.3)
         .collect();
-    Check::new(
-        names::COUNTERS,
-        bad.is_empty(),
-        detail,
-        bad.join("; "),
-    )
+    Check::new(names::COUNTERS, bad.is_empty(), detail, bad.join("; "))
 }

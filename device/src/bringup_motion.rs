@@ -25,8 +25,12 @@ impl Pose {
     /// What a person is asked to do.
     pub fn instruction(self) -> &'static str {
         match self {
-            Pose::NoseUp => "hold the board still with its nose (the arrow, +x) pointing straight up",
-            Pose::Waved => "wave the board about all its axes (a few turns per second) until told to stop",
+            Pose::NoseUp => {
+                "hold the board still with its nose (the arrow, +x) pointing straight up"
+            }
+            Pose::Waved => {
+                "wave the board about all its axes (a few turns per second) until told to stop"
+            }
         }
     }
 }
@@ -150,7 +154,12 @@ pub(crate) fn noise_check(
 ) -> Check {
     let n = windows.len() as f64;
     let sigma: [f64; 3] = core::array::from_fn(|i| {
-        (windows.iter().map(|(_, w)| f64::from(w.var_raw[i])).sum::<f64>() / n).sqrt()
+        (windows
+            .iter()
+            .map(|(_, w)| f64::from(w.var_raw[i]))
+            .sum::<f64>()
+            / n)
+            .sqrt()
     });
     // A stuck axis (σ exactly 0) is the axes check's; the others are compared among themselves.
     let quietest = sigma
@@ -184,10 +193,19 @@ pub(crate) fn noise_check(
             "; datasheet {density} µg/√Hz over {} Hz: at most {bound:.4} {unit}",
             sample_rate_hz / 2
         )),
-        None => detail.push_str("; no datasheet density for this part: axes compared with each other"),
+        None => {
+            detail.push_str("; no datasheet density for this part: axes compared with each other")
+        }
     }
-    let worst: Vec<usize> = if noisy.is_empty() { over.clone() } else { noisy.clone() };
-    let names: Vec<String> = worst.iter().map(|&i| format!("accelerometer {}", AXES[i])).collect();
+    let worst: Vec<usize> = if noisy.is_empty() {
+        over.clone()
+    } else {
+        noisy.clone()
+    };
+    let names: Vec<String> = worst
+        .iter()
+        .map(|&i| format!("accelerometer {}", AXES[i]))
+        .collect();
     let cause = format!(
         "{} noisier than {}: a loose or vibrating mount, a damaged sensing element, or \
          interference on the part's supply",
@@ -198,7 +216,12 @@ pub(crate) fn noise_check(
             format!("{NOISE_AXIS_RATIO}× the quietest axis")
         }
     );
-    Check::new(names::NOISE, noisy.is_empty() && over.is_empty(), detail, cause)
+    Check::new(
+        names::NOISE,
+        noisy.is_empty() && over.is_empty(),
+        detail,
+        cause,
+    )
 }
 
 /// Every sample for `measure` while the board is waved: consecutive samples (by index) whose

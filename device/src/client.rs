@@ -220,7 +220,10 @@ impl<T: Transport> DeviceClient<T> {
                 return Err(LinkError::ProtocolVersion { device });
             }
             match answer {
-                Ok(id) if !(MIN_PROTOCOL_VERSION..=PROTOCOL_VERSION).contains(&id.protocol_version) => {
+                Ok(id)
+                    if !(MIN_PROTOCOL_VERSION..=PROTOCOL_VERSION)
+                        .contains(&id.protocol_version) =>
+                {
                     return Err(LinkError::ProtocolVersion {
                         device: id.protocol_version,
                     })

@@ -47,7 +47,13 @@ fn nominal_lsb_per_g(truth: &Calibration) -> u32 {
     if truth.statics.output_unit != shared::OutputUnit::Lsb {
         return 0;
     }
-    let mean = truth.statics.scale_out_per_g.iter().map(|s| s.abs()).sum::<f64>() / 3.0;
+    let mean = truth
+        .statics
+        .scale_out_per_g
+        .iter()
+        .map(|s| s.abs())
+        .sum::<f64>()
+        / 3.0;
     if !(mean >= 1.0 && mean < 2.0e9) {
         return 0;
     }

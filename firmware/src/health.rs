@@ -220,7 +220,9 @@ mod tests {
 
     fn health(service: &mut LinkService<AbStore<RamNorFlash<'static, 1024>>>) -> Health {
         let mut buf = [0u8; HOST_FRAME_MAX];
-        let frame = encode_frame(&HostToDevice::Health, &mut buf).unwrap().to_vec();
+        let frame = encode_frame(&HostToDevice::Health, &mut buf)
+            .unwrap()
+            .to_vec();
         match exchange(service, &frame).as_slice() {
             [DeviceToHost::Health(h)] => *h,
             other => panic!("{other:?}"),

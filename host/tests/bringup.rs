@@ -3,9 +3,9 @@
 //! states 1000, an accelerometer axis stuck — fails the one check that names it, with its cause;
 //! and the command itself (`host bringup --port sim`) passes, exit status 0.
 
+use firmware::imu::alignment::Alignment;
 use host::device::bringup::{bringup, bringup_with, names, Bringup, Verdict};
 use host::device::bringup_motion::TableOperator;
-use firmware::imu::alignment::Alignment;
 use host::device::sim::{SimDevice, SIM_UNIT_ID};
 use host::device::DeviceClient;
 use shared::blob::ParameterBlob;
@@ -104,7 +104,15 @@ fn a_unit_in_counts_is_checked_against_its_own_counts_per_g() {
     assert!(g.detail.contains("2048 per g"), "{g:?}");
     assert!(r.passed(), "{:#?}", r.checks);
     let out = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["bringup", "--port", "sim", "--sim-unit", SINGLE_PACKAGE, "--seconds", "1"])
+        .args([
+            "bringup",
+            "--port",
+            "sim",
+            "--sim-unit",
+            SINGLE_PACKAGE,
+            "--seconds",
+            "1",
+        ])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -174,7 +182,10 @@ fn a_noisy_axis_is_named() {
     let r = run_unit(SINGLE_PACKAGE, |d| d.noisy_axis(1, 10.0), true);
     assert_eq!(failed(&r), [names::NOISE], "{:#?}", r.checks);
     let c = r.check(names::NOISE).unwrap();
-    assert!(c.cause.as_deref().unwrap().contains("accelerometer y"), "{c:?}");
+    assert!(
+        c.cause.as_deref().unwrap().contains("accelerometer y"),
+        "{c:?}"
+    );
 }
 
 /// A part that holds its gyro output for 12 samples (the ICM-42688-P's AFSR at 8 kHz) is caught
@@ -206,7 +217,10 @@ fn the_report_of_a_planted_rotation_and_noisy_axis() {
     assert!(text.contains("FAIL  nose up"), "{text}");
     assert!(text.contains("FAIL  noise at rest"), "{text}");
     assert!(text.contains("likely cause: gravity reads on −x"), "{text}");
-    assert!(text.contains("likely cause: accelerometer x noisier"), "{text}");
+    assert!(
+        text.contains("likely cause: accelerometer x noisier"),
+        "{text}"
+    );
     assert!(text.contains("PASS  flat, top up"), "{text}");
 }
 
@@ -214,11 +228,22 @@ fn the_report_of_a_planted_rotation_and_noisy_axis() {
 #[test]
 fn the_command_poses_the_simulated_board() {
     let out = Command::new(env!("CARGO_BIN_EXE_host"))
-        .args(["bringup", "--port", "sim", "--sim-unit", SINGLE_PACKAGE, "--seconds", "1"])
+        .args([
+            "bringup",
+            "--port",
+            "sim",
+            "--sim-unit",
+            SINGLE_PACKAGE,
+            "--seconds",
+            "1",
+        ])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
     assert!(stdout.contains("PASS  nose up"), "{stdout}");
-    assert!(stdout.contains("PASS  repeated samples while waved"), "{stdout}");
+    assert!(
+        stdout.contains("PASS  repeated samples while waved"),
+        "{stdout}"
+    );
 }

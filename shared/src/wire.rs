@@ -585,7 +585,17 @@ mod tests {
             ImuInit::RegisterMismatch,
             ImuInit::NotApplicable,
         ];
-        let values = [0u32, 1, 127, 128, 16_383, 16_384, 8192, u32::MAX - 1, u32::MAX];
+        let values = [
+            0u32,
+            1,
+            127,
+            128,
+            16_383,
+            16_384,
+            8192,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
         let mut k = 0usize;
         for part in parts {
             for init in inits {

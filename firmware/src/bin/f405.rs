@@ -41,16 +41,16 @@ mod app {
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::health::{Counter, HealthCounters};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
+    use firmware::imu::ImuFlags;
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
-    use firmware::health::{Counter, HealthCounters};
-    use firmware::imu::ImuFlags;
     use firmware::pipeline::PipelineCommand;
-    use shared::wire::ImuStatus;
     use firmware::protocol::{PipelineAccess, StoreMailbox};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, LinkService, Pipeline};
+    use shared::wire::ImuStatus;
     use shared::LeverMode;
 
     type Link = UsbLink<'static, UsbBusType>;

@@ -123,8 +123,7 @@ mod app {
         if store.prepare().is_err() {
             defmt::warn!("calibration store: erasing ahead failed");
         }
-        let mut controller =
-            Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
+        let mut controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
         // Analog accelerometers on the ADC: no identity register, outputs in volts.
         controller.set_imu(
             shared::wire::ImuStatus {

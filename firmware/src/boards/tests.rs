@@ -46,16 +46,16 @@ struct ArduPilot {
 }
 
 const BF_V3: Betaflight = Betaflight {
-    board_name: "SPEEDYBEEF405V3",     // #define BOARD_NAME        SPEEDYBEEF405V3
-    imu_define: "USE_ACCGYRO_BMI270",  // #define USE_ACCGYRO_BMI270
-    gyro_1_spi_instance: "SPI1",       // #define GYRO_1_SPI_INSTANCE SPI1
-    gyro_1_cs_pin: "PA4",              // #define GYRO_1_CS_PIN        PA4
-    gyro_1_exti_pin: "PC4",            // #define GYRO_1_EXTI_PIN      PC4
-    spi1_pins: ["PA5", "PA6", "PA7"],  // SPI1_SCK_PIN PA5, SPI1_SDI_PIN PA6, SPI1_SDO_PIN PA7
-    gyro_1_align: None,                // (no GYRO_1_ALIGN line)
-    led0_pin: "PC8",                   // #define LED0_PIN             PC8
-    pinio_pins: &["PC3"],              // #define PINIO1_PIN           PC3
-    system_hse_mhz: 8,                 // #define SYSTEM_HSE_MHZ 8
+    board_name: "SPEEDYBEEF405V3", // #define BOARD_NAME        SPEEDYBEEF405V3
+    imu_define: "USE_ACCGYRO_BMI270", // #define USE_ACCGYRO_BMI270
+    gyro_1_spi_instance: "SPI1",   // #define GYRO_1_SPI_INSTANCE SPI1
+    gyro_1_cs_pin: "PA4",          // #define GYRO_1_CS_PIN        PA4
+    gyro_1_exti_pin: "PC4",        // #define GYRO_1_EXTI_PIN      PC4
+    spi1_pins: ["PA5", "PA6", "PA7"], // SPI1_SCK_PIN PA5, SPI1_SDI_PIN PA6, SPI1_SDO_PIN PA7
+    gyro_1_align: None,            // (no GYRO_1_ALIGN line)
+    led0_pin: "PC8",               // #define LED0_PIN             PC8
+    pinio_pins: &["PC3"],          // #define PINIO1_PIN           PC3
+    system_hse_mhz: 8,             // #define SYSTEM_HSE_MHZ 8
 };
 const BF_V4: Betaflight = Betaflight {
     board_name: "SPEEDYBEEF405V4",
@@ -85,7 +85,7 @@ const BF_V5: Betaflight = Betaflight {
 };
 
 const AP_V3: ArduPilot = ArduPilot {
-    imu_driver: "BMI270",             // IMU BMI270 SPI:bmi270 ROTATION_ROLL_180
+    imu_driver: "BMI270", // IMU BMI270 SPI:bmi270 ROTATION_ROLL_180
     imu_rotation: "ROTATION_ROLL_180",
     imu_cs: "PA4",                    // PA4 BMI270_CS CS
     spi1_pins: ["PA5", "PA6", "PA7"], // PA5 SPI1_SCK, PA6 SPI1_MISO, PA7 SPI1_MOSI
@@ -98,7 +98,7 @@ const AP_V4: ArduPilot = ArduPilot {
     imu_rotation: "ROTATION_PITCH_180_YAW_270",
     imu_cs: "PA4", // PA4 GYRO1_CS CS
     spi1_pins: ["PA5", "PA6", "PA7"],
-    led: "PC13", // PC13 LED0 OUTPUT LOW GPIO(90); AP_NOTIFY_GPIO_LED_1_PIN 90
+    led: "PC13",           // PC13 LED0 OUTPUT LOW GPIO(90); AP_NOTIFY_GPIO_LED_1_PIN 90
     relay_pins: &["PB14"], // PB14 CAMERA1 OUTPUT GPIO(70) LOW; RELAY2_PIN_DEFAULT 70
     oscillator_hz: 8_000_000,
 };
@@ -179,7 +179,12 @@ fn each_board_matches_its_betaflight_config() {
                 d.name
             );
         }
-        for v in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -0.5, 0.8]] {
+        for v in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.3, -0.5, 0.8],
+        ] {
             assert_eq!(
                 d.alignment.to_board(v),
                 betaflight_rotate(bf.gyro_1_align, v),
@@ -211,7 +216,12 @@ fn each_board_matches_its_ardupilot_hwdef() {
             );
         }
         // ArduPilot's body frame (forward, right, down) rolled by 180° is the board frame.
-        for v in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -0.5, 0.8]] {
+        for v in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.3, -0.5, 0.8],
+        ] {
             let [x, y, z] = ardupilot_rotate(ap.imu_rotation, v);
             assert_eq!(d.alignment.to_board(v), [x, -y, -z], "{}", d.name);
         }

@@ -6,10 +6,10 @@ use super::CliError;
 use crate::device::bringup::{bringup, bringup_with, Verdict};
 use crate::device::bringup_motion::{Operator, Pose, TableOperator};
 use crate::device::client::{DeviceClient, LinkError, Transport};
-use std::io::IsTerminal;
 use crate::device::AnyTransport;
 use crate::limits;
 use clap::Args;
+use std::io::IsTerminal;
 use std::time::Duration;
 
 /// `host bringup`.

@@ -163,7 +163,8 @@ impl<G: Generator> Bmi270Model<G> {
         self.samples += 1;
         let lsb_per_g = 32768.0 / f64::from(2u32 << (self.regs[ACC_RANGE as usize] & 3));
         // ±2000 °/s >> gyr_range (ois_range does not change the UI scale).
-        let lsb_per_dps = 32768.0 / (2000.0 / f64::from(1u32 << (self.regs[GYR_RANGE as usize] & 7)));
+        let lsb_per_dps =
+            32768.0 / (2000.0 / f64::from(1u32 << (self.regs[GYR_RANGE as usize] & 7)));
         let a = t.accel_g.map(|g| quantize(g * lsb_per_g, 32767) as i16);
         let w = t.gyro_dps.map(|d| quantize(d * lsb_per_dps, 32767) as i16);
         if self.regs[STATUS as usize] & STATUS_DRDY_ACC != 0 {
@@ -213,7 +214,11 @@ impl<G: Generator> Bmi270Model<G> {
                         Some(self.aps_off_at_ns.map_or(0, |t| self.time_ns - t));
                 }
                 if self.regs[INIT_CTRL as usize] == 0 && i < self.program.len() {
-                    let flip = if self.corrupt_upload_byte == Some(i) { 0x01 } else { 0 };
+                    let flip = if self.corrupt_upload_byte == Some(i) {
+                        0x01
+                    } else {
+                        0
+                    };
                     self.program[i] = v ^ flip;
                 }
             }

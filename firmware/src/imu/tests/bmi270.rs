@@ -7,7 +7,7 @@
 use super::{code, TestGen};
 use crate::imu::bmi270::regs::*;
 use crate::imu::bmi270::{Bmi270, Config, Error};
-use crate::imu::sim::{BusFault, Bmi270Model, Generator};
+use crate::imu::sim::{Bmi270Model, BusFault, Generator};
 use crate::imu::{ImuFlags, ImuSample, ImuSource};
 use core::f32::consts::PI;
 
