@@ -54,7 +54,7 @@ fn nominal_lsb_per_g(truth: &Calibration) -> u32 {
         .map(|s| s.abs())
         .sum::<f64>()
         / 3.0;
-    if !(mean >= 1.0 && mean < 2.0e9) {
+    if !(1.0..2.0e9).contains(&mean) {
         return 0;
     }
     1u32 << (mean.log2().round() as u32)
