@@ -106,13 +106,7 @@ mod app {
         board::enter_bootloader_if_requested();
         paint_stack();
         let mut dp = cx.device;
-        // Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090
-        // §7.3.21, RCC_CSR: IWDGRSTF, cleared by RMVF).
-        if dp.RCC.csr().read().wdgrstf().bit_is_set() {
-            HEALTH.add(Counter::WatchdogReset, 1);
-            defmt::warn!("restarted by the independent watchdog");
-        }
-        dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+        count_watchdog_reset(&dp.RCC);
         let mut rcc = dp.RCC.freeze(
             Config::hse(board::HSE_HZ.Hz())
                 .sysclk(board::SYSCLK_HZ.Hz())
@@ -120,9 +114,7 @@ mod app {
         );
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        // The status LED (`board::BOARD.led`, dark), then driven through `board::set_led`; its
-        // port's clock is on (GPIOA and GPIOC split above).
-        board::init_led();
+        board::init_led(); // `BOARD.led`, dark; its port's clock is on (split above)
 
         // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
         // single-bank F4), before the IMU's FIFO runs. A calibration written later only programs.
@@ -165,13 +157,7 @@ mod app {
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
         pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
 
-        // The independent watchdog (its own 32 kHz LSI): fed by the idle loop, so a task that
-        // never returns (or a stuck interrupt storm) resets the chip. Its period outlasts the
-        // longest thing the idle loop does: a calibration store's sector erase (board::
-        // WATCHDOG_MS, from the erase's datasheet maximum).
-        let mut watchdog = IndependentWatchdog::new(dp.IWDG);
-        watchdog.start(board::WATCHDOG_MS.millis());
-
+        let watchdog = start_watchdog(dp.IWDG);
         let (usb_dev, link) = init_usb(
             USB::new(
                 (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
@@ -214,6 +200,26 @@ mod app {
                 imu_status,
             },
         )
+    }
+
+    /// Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090
+    /// §7.3.21, RCC_CSR: IWDGRSTF, cleared by RMVF).
+    fn count_watchdog_reset(rcc: &pac::RCC) {
+        if rcc.csr().read().wdgrstf().bit_is_set() {
+            HEALTH.add(Counter::WatchdogReset, 1);
+            defmt::warn!("restarted by the independent watchdog");
+        }
+        rcc.csr().modify(|_, w| w.rmvf().set_bit());
+    }
+
+    /// The independent watchdog (its own 32 kHz LSI), started: fed by the idle loop, so a task
+    /// that never returns (or a stuck interrupt storm) resets the chip. Its period outlasts the
+    /// longest thing the idle loop does, a calibration store's sector erase
+    /// (`board::WATCHDOG_MS`, from the erase's datasheet maximum).
+    fn start_watchdog(iwdg: pac::IWDG) -> IndependentWatchdog {
+        let mut watchdog = IndependentWatchdog::new(iwdg);
+        watchdog.start(board::WATCHDOG_MS.millis());
+        watchdog
     }
 
     /// The request handler from the store, with the part's start and the counters for `Health`.

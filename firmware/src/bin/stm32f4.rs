@@ -124,15 +124,7 @@ mod app {
             defmt::warn!("calibration store: erasing ahead failed");
         }
         let mut controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
-        // Analog accelerometers on the ADC: no identity register, outputs in volts.
-        controller.set_imu(
-            shared::wire::ImuStatus {
-                part: shared::wire::ImuPart::Analog,
-                who_am_i: 0,
-                init: shared::wire::ImuInit::NotApplicable,
-            },
-            0,
-        );
+        controller.set_imu(board::ANALOG_ACCELEROMETERS, 0);
 
         let gyro = init_gyro(
             spi1(

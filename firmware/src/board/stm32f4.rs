@@ -55,6 +55,13 @@ const _: () = assert!(SAMPLE_RATE_HZ >= 100 && SAMPLE_RATE_HZ <= 10_000);
 pub const SCAN_ADC_CYCLES: u32 = 3 * (56 + 12) + (480 + 12);
 // The scan must finish well within a sample period (here: half of it).
 const _: () = assert!(SCAN_ADC_CYCLES as u64 * SAMPLE_RATE_HZ as u64 * 2 <= ADC_CLOCK_HZ as u64);
+/// What `Health` reports of the part: analog accelerometers on the ADC, no identity register
+/// (their outputs are volts: no counts per g).
+pub const ANALOG_ACCELEROMETERS: shared::wire::ImuStatus = shared::wire::ImuStatus {
+    part: shared::wire::ImuPart::Analog,
+    who_am_i: 0,
+    init: shared::wire::ImuInit::NotApplicable,
+};
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
 /// Flash offset (from 0x0800_0000) of the calibration store: sectors 6 and 7 (see memory.x).
