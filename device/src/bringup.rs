@@ -11,9 +11,11 @@
 //! is applied, in counts at the F405's ±4 g, not checked for an uncalibrated analog unit); the
 //! gyro's rate at rest.
 
+use super::bringup_motion::{self as motion, NoOperator, Operator, Pose};
 use super::client::{DeviceClient, LinkError, Transport};
 use shared::wire::{
-    CalibrationState, Identity, RawWindow, SampleFlags, StreamKind, PROTOCOL_VERSION,
+    CalibrationState, Health, Identity, RawWindow, SampleFlags, StreamKind, MIN_PROTOCOL_VERSION,
+    PROTOCOL_VERSION,
 };
 use shared::OutputUnit;
 use std::time::{Duration, Instant};
@@ -27,7 +29,8 @@ const G: f64 = 9.80665;
 /// Gravity's length at rest may differ from 1 g by this fraction (an uncalibrated part's scale
 /// and bias: the ICM-42688-P's ±0.5 % sensitivity and ±20 mg offset, DS-000347 Table 2).
 pub const GRAVITY_TOLERANCE: f64 = 0.05;
-/// The F405 configures the accelerometer at ±4 g: 8192 counts per g (DS-000347 Table 2).
+/// Counts per g of a version 3 device in counts (the F405's ICM-42688-P at ±4 g: 8192, DS-000347
+/// Table 2); a version 4 device states its own in its health report.
 pub const F405_LSB_PER_G: f64 = 8192.0;
 /// The gyro's rate at rest may be this large, rad/s (3 °/s; the ICM-42688-P's zero-rate offset is
 /// ±0.5 °/s, DS-000347 Table 1, so more means the board moved or the part is off).
@@ -60,7 +63,12 @@ pub struct Check {
 }
 
 impl Check {
-    fn new(name: &'static str, ok: bool, detail: String, cause: impl Into<String>) -> Check {
+    pub(crate) fn new(
+        name: &'static str,
+        ok: bool,
+        detail: String,
+        cause: impl Into<String>,
+    ) -> Check {
         Check {
             name,
             verdict: if ok { Verdict::Pass } else { Verdict::Fail },
@@ -69,7 +77,7 @@ impl Check {
         }
     }
 
-    fn skipped(name: &'static str, detail: impl Into<String>) -> Check {
+    pub(crate) fn skipped(name: &'static str, detail: impl Into<String>) -> Check {
         Check {
             name,
             verdict: Verdict::Skipped,
@@ -97,6 +105,25 @@ impl Bringup {
     /// The check named `name`.
     pub fn check(&self, name: &str) -> Option<&Check> {
         self.checks.iter().find(|c| c.name == name)
+    }
+}
+
+/// The report as `host bringup` prints it: one line per check (`PASS`, `FAIL` or `SKIP`, its
+/// name, what was measured against what), a failure's likely cause under it.
+impl std::fmt::Display for Bringup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for c in &self.checks {
+            let verdict = match c.verdict {
+                Verdict::Pass => "PASS",
+                Verdict::Fail => "FAIL",
+                Verdict::Skipped => "SKIP",
+            };
+            writeln!(f, "{verdict}  {:<28} {}", c.name, c.detail)?;
+            if let Some(cause) = &c.cause {
+                writeln!(f, "      likely cause: {cause}")?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -129,15 +156,48 @@ pub mod names {
     pub const GRAVITY: &str = "gravity at rest";
     /// The gyro at rest.
     pub const GYRO_REST: &str = "gyro at rest";
+    /// The part, its WHO_AM_I and its start (the device's health report).
+    pub const PART: &str = "part and WHO_AM_I";
+    /// The device's error counters.
+    pub const COUNTERS: &str = "device error counters";
+    /// Gravity along +z alone, the board flat and top up.
+    pub const FLAT: &str = "flat, top up";
+    /// Gravity along +x alone, the board nose up.
+    pub const NOSE_UP: &str = "nose up";
+    /// Noise at rest against the datasheet and across the axes.
+    pub const NOISE: &str = "noise at rest";
+    /// No repeated samples while waved.
+    pub const REPEATS: &str = "repeated samples while waved";
 }
 
-/// Runs the checks on a device at rest, measuring for `measure` of the host's time.
+/// Why a pose check was skipped without an operator.
+const NO_OPERATOR: &str =
+    "nobody to move the board (run at a terminal, or on the simulated device)";
+
+/// Runs the checks on a device at rest, measuring for `measure` of the host's time; the checks
+/// that need the board moved are skipped.
 pub fn bringup<T: Transport>(
     client: &mut DeviceClient<T>,
     measure: Duration,
 ) -> Result<Bringup, BringupError> {
+    bringup_with(client, measure, &mut NoOperator)
+}
+
+/// Runs the checks, the board at rest, flat and top up; then `operator` turns it nose up and
+/// waves it.
+pub fn bringup_with<T: Transport, O: Operator<T>>(
+    client: &mut DeviceClient<T>,
+    measure: Duration,
+    operator: &mut O,
+) -> Result<Bringup, BringupError> {
     let identity = client.identify().map_err(BringupError::Identify)?;
     let mut checks = vec![identity_check(&identity)];
+    let health = if identity.protocol_version >= 4 {
+        Some(client.health().map_err(BringupError::Identify)?)
+    } else {
+        None
+    };
+    checks.push(crate::bringup_health::part_check(health.as_ref()));
     let window = (identity.sample_rate_hz / 10).max(1);
     client
         .start_stream(StreamKind::RawWindows, window)
@@ -171,8 +231,42 @@ pub fn bringup<T: Transport>(
     checks.push(lost_check(&windows));
     checks.push(temperature_check(&windows));
     checks.push(axes_check(&windows));
-    checks.push(gravity_check(client, &identity, &windows)?);
+    let lsb = lsb_per_g(health.as_ref());
+    let rest_g = measure_g(client, &identity, lsb, Some(&windows))?;
+    checks.push(gravity_check(&identity, rest_g, lsb));
+    checks.push(motion::pose_check(names::FLAT, rest_g, 2));
+    let unit = match identity.output_unit {
+        OutputUnit::Lsb => "counts".to_string(),
+        OutputUnit::Volts => "V".to_string(),
+        other => format!("{other:?}"),
+    };
+    checks.push(motion::noise_check(
+        &windows,
+        health.as_ref(),
+        identity.sample_rate_hz,
+        &unit,
+    ));
     checks.push(gyro_rest_check(&windows));
+    let stream = BringupError::Stream;
+    if operator.pose(Pose::NoseUp, client).map_err(stream)? {
+        let g = measure_g(client, &identity, lsb, None)?;
+        checks.push(motion::pose_check(names::NOSE_UP, g, 0));
+    } else {
+        checks.push(Check::skipped(names::NOSE_UP, NO_OPERATOR));
+    }
+    if operator.pose(Pose::Waved, client).map_err(stream)? {
+        checks.push(motion::repeats_check(client, measure).map_err(stream)?);
+        operator.rest(client).map_err(stream)?;
+    } else {
+        checks.push(Check::skipped(names::REPEATS, NO_OPERATOR));
+    }
+    if identity.protocol_version >= 4 {
+        let after = client.health().map_err(BringupError::Identify)?;
+        checks.push(crate::bringup_health::counters_check(
+            health.as_ref(),
+            &after,
+        ));
+    }
     Ok(Bringup { identity, checks })
 }
 
@@ -197,7 +291,8 @@ fn identity_check(id: &Identity) -> Check {
         "{:?} board, firmware {a}.{b}.{c}, protocol {}, unit {}, {} Hz stated, outputs in {:?}, calibration {:?}",
         id.board, id.protocol_version, id.unit_id, id.sample_rate_hz, id.output_unit, id.calibration
     );
-    let ok = id.protocol_version == PROTOCOL_VERSION && id.sample_rate_hz > 0;
+    let ok = (MIN_PROTOCOL_VERSION..=PROTOCOL_VERSION).contains(&id.protocol_version)
+        && id.sample_rate_hz > 0;
     Check::new(
         names::IDENTITY,
         ok,
@@ -310,14 +405,24 @@ fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
-/// Gravity's length at rest: in m/s² from compensated windows when a calibration is applied; in
-/// counts on a digital part (the F405's ±4 g); not checked on an uncalibrated analog unit.
-fn gravity_check<T: Transport>(
+/// Counts per g: the health report's (0 when it states none), or a version 3 device's F405 ±4 g.
+fn lsb_per_g(health: Option<&Health>) -> f64 {
+    match health {
+        Some(h) => f64::from(h.accel_lsb_per_g),
+        None => F405_LSB_PER_G,
+    }
+}
+
+/// Gravity along the board's axes, g: from a compensated window of one second when a calibration
+/// is applied; else from the raw means in counts (`windows`, or half a second measured now) at
+/// the device's counts per g; `None` for an uncalibrated analog unit.
+fn measure_g<T: Transport>(
     client: &mut DeviceClient<T>,
     id: &Identity,
-    windows: &[(Instant, RawWindow)],
-) -> Result<Check, BringupError> {
-    let (length, expected, unit) = if matches!(id.calibration, CalibrationState::Valid { .. }) {
+    lsb_per_g: f64,
+    windows: Option<&[(Instant, RawWindow)]>,
+) -> Result<Option<[f64; 3]>, BringupError> {
+    if matches!(id.calibration, CalibrationState::Valid { .. }) {
         let window = id.sample_rate_hz.max(1);
         client
             .start_stream(StreamKind::CompensatedWindows, window)
@@ -325,31 +430,57 @@ fn gravity_check<T: Transport>(
         let w = client.next_compensated_window();
         client.stop_stream().map_err(BringupError::Stream)?;
         let w = w.map_err(BringupError::Stream)?;
-        (norm(w.mean_m_s2.map(f64::from)), G, "m/s²")
-    } else if id.output_unit == OutputUnit::Lsb {
-        (
-            norm(mean3(windows, |w| w.mean_raw)),
-            F405_LSB_PER_G,
-            "counts",
-        )
-    } else {
-        return Ok(Check::skipped(
-            names::GRAVITY,
-            "uncalibrated analog unit: no scale to compare the outputs with (calibrate first)",
-        ));
+        return Ok(Some(w.mean_m_s2.map(|v| f64::from(v) / G)));
+    }
+    if id.output_unit != OutputUnit::Lsb || lsb_per_g <= 0.0 {
+        return Ok(None);
+    }
+    let mean = match windows {
+        Some(w) => mean3(w, |w| w.mean_raw),
+        None => {
+            client
+                .start_stream(StreamKind::RawWindows, (id.sample_rate_hz / 10).max(1))
+                .map_err(BringupError::Stream)?;
+            let w = collect(client, Duration::from_millis(500));
+            client.stop_stream().map_err(BringupError::Stream)?;
+            mean3(&w.map_err(BringupError::Stream)?, |w| w.mean_raw)
+        }
     };
-    let off = length / expected - 1.0;
-    Ok(Check::new(
+    Ok(Some(crate::bringup_motion::in_g(mean, lsb_per_g)))
+}
+
+/// Gravity's length at rest, in g (see [`measure_g`]).
+fn gravity_check(id: &Identity, g: Option<[f64; 3]>, lsb_per_g: f64) -> Check {
+    let Some(g) = g else {
+        let why = if id.output_unit == OutputUnit::Lsb {
+            "outputs in counts but the device states no counts per g (calibrate first)"
+        } else {
+            "uncalibrated analog unit: no scale to compare the outputs with (calibrate first)"
+        };
+        return Check::skipped(names::GRAVITY, why);
+    };
+    let calibrated = matches!(id.calibration, CalibrationState::Valid { .. });
+    let length = norm(g);
+    let off = length - 1.0;
+    let source = if calibrated {
+        "compensated".to_string()
+    } else {
+        format!("counts at {lsb_per_g:.0} per g")
+    };
+    Check::new(
         names::GRAVITY,
         off.abs() <= GRAVITY_TOLERANCE,
         format!(
-            "|a| = {length:.4} {unit}, expected {expected:.4} ({:+.1} %; limit ±{:.0} %)",
+            "|a| = {length:.4} g ({source}), expected 1 g ({:+.1} %; limit ±{:.0} %)",
             100.0 * off,
             100.0 * GRAVITY_TOLERANCE
         ),
-        "gravity's length is off: the board moved, the accelerometer's range is not the one \
-         assumed (±4 g on the F405), or a calibration for another unit is applied",
-    ))
+        format!(
+            "gravity's length is off: the board moved, the accelerometer's range is not the one \
+             the device states ({lsb_per_g:.0} counts per g), or a calibration for another unit \
+             is applied"
+        ),
+    )
 }
 
 fn gyro_rest_check(windows: &[(Instant, RawWindow)]) -> Check {

@@ -5,7 +5,7 @@
 use shared::wire::{
     self, Ack, CobsAccumulator, DeviceError, DeviceToHost, FeedResult, HostToDevice, Identity,
     RawWindow, StreamKind, StreamRequest, VirtualTable, DEVICE_FRAME_MAX, HOST_FRAME_MAX,
-    PROTOCOL_VERSION,
+    MIN_PROTOCOL_VERSION, PROTOCOL_VERSION,
 };
 use shared::LeverMode;
 use std::collections::VecDeque;
@@ -212,7 +212,8 @@ impl<T: Transport> DeviceClient<T> {
                 | DeviceToHost::CompensatedSample(_)
                 | DeviceToHost::Ack(_)
                 | DeviceToHost::Identity(_)
-                | DeviceToHost::CalibrationChunk(_) => continue,
+                | DeviceToHost::CalibrationChunk(_)
+                | DeviceToHost::Health(_) => continue,
             }
         }
     }
@@ -232,7 +233,10 @@ impl<T: Transport> DeviceClient<T> {
                 return Err(LinkError::ProtocolVersion { device });
             }
             match answer {
-                Ok(id) if id.protocol_version != PROTOCOL_VERSION => {
+                Ok(id)
+                    if !(MIN_PROTOCOL_VERSION..=PROTOCOL_VERSION)
+                        .contains(&id.protocol_version) =>
+                {
                     return Err(LinkError::ProtocolVersion {
                         device: id.protocol_version,
                     })
@@ -257,6 +261,15 @@ impl<T: Transport> DeviceClient<T> {
     ) -> Result<(), LinkError> {
         self.request(msg, waiting_for, |m| match m {
             DeviceToHost::Ack(a) if *a == want => Some(()),
+            _ => None,
+        })
+    }
+
+    /// The device's health report: its part, WHO_AM_I and start, its nominal sensitivity and its
+    /// error counters (protocol version 4; ask only a device whose identity says 4 or later).
+    pub fn health(&mut self) -> Result<wire::Health, LinkError> {
+        self.request(&HostToDevice::Health, "a health report", |m| match m {
+            DeviceToHost::Health(h) => Some(*h),
             _ => None,
         })
     }
@@ -294,6 +307,17 @@ impl<T: Transport> DeviceClient<T> {
                     }
                     return Ok(w);
                 }
+                DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
+                _ => continue,
+            }
+        }
+    }
+
+    /// The next raw sample of a running `RawDecimated` stream.
+    pub fn next_raw_sample(&mut self) -> Result<wire::RawSample, LinkError> {
+        loop {
+            match self.next_message("a raw sample", self.timeout)? {
+                DeviceToHost::RawSample(s) => return Ok(s),
                 DeviceToHost::Error(e) => return Err(LinkError::Device(e)),
                 _ => continue,
             }
@@ -485,5 +509,9 @@ mod tests {
         // This version's identity is taken.
         let mut c = client_answering(&DeviceToHost::Identity(identity(PROTOCOL_VERSION)));
         assert_eq!(c.identify().unwrap(), identity(PROTOCOL_VERSION));
+        // Version 3 (no health report, otherwise the same messages) is taken too.
+        assert_eq!(MIN_PROTOCOL_VERSION, 3);
+        let mut c = client_answering(&DeviceToHost::Identity(identity(3)));
+        assert_eq!(c.identify().unwrap(), identity(3));
     }
 }

@@ -12,6 +12,8 @@ use estimator::{calibration_files, estimate};
 use recording::{session, ui};
 
 pub mod bringup;
+mod bringup_health;
+pub mod bringup_motion;
 pub mod client;
 pub mod handheld;
 pub mod live_check;

@@ -16,12 +16,13 @@
 
 use super::client::{LinkError, Transport};
 use super::sim_hand::{HandCue, SimHand};
+use firmware::imu::alignment::Alignment;
 use firmware::pipeline::Pipeline;
 use firmware::protocol::{BoardEvent, Controller, DeviceInfo, LinkService};
 use firmware::storage::{AbStore, RamNorFlash};
 use firmware::virtual_sensor::VirtualSensor;
 use firmware::ByteLink;
-use shared::wire::Board;
+use shared::wire::{Board, ImuInit, ImuPart, ImuStatus};
 use shared::{Calibration, LeverMode, UnitId};
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -38,6 +39,26 @@ const FLASH_ERASE: usize = 4096;
 const OUTPUT_QUEUE: usize = 16;
 
 type Store = AbStore<RamNorFlash<'static, FLASH_ERASE>>;
+
+/// The nominal sensitivity a digital part at its configured range reports for a unit in counts:
+/// the power of two nearest its scales' mean (a part's ranges give 2048, 4096, 8192 or 16384
+/// counts per g; a unit's own scales are a few tenths of a percent off it). 0 for a unit in volts.
+fn nominal_lsb_per_g(truth: &Calibration) -> u32 {
+    if truth.statics.output_unit != shared::OutputUnit::Lsb {
+        return 0;
+    }
+    let mean = truth
+        .statics
+        .scale_out_per_g
+        .iter()
+        .map(|s| s.abs())
+        .sum::<f64>()
+        / 3.0;
+    if !(1.0..2.0e9).contains(&mean) {
+        return 0;
+    }
+    1u32 << (mean.log2().round() as u32)
+}
 
 /// Byte queues standing in for the UART.
 #[derive(Default)]
@@ -80,6 +101,12 @@ pub struct SimDevice {
     actual_rate_hz: Option<u32>,
     /// This accelerometer axis reads one fixed value (a planted fault).
     stuck_axis: Option<usize>,
+    /// The unit's outputs turned by this rotation (a planted fault: a board description whose
+    /// IMU rotation is wrong).
+    turned: Option<Alignment>,
+    /// Each gyro reading held for this many samples (a planted fault: a part that holds its
+    /// output, as the ICM-42688-P's AFSR does), with the reading held and its age.
+    hold_gyro: Option<(u32, [f32; 3], u32)>,
 }
 
 /// Why a simulated device cannot be built.
@@ -147,13 +174,23 @@ impl SimDevice {
             hand: None,
             actual_rate_hz: None,
             stuck_axis: None,
+            turned: None,
+            hold_gyro: None,
         };
         dev.boot(store);
         Ok(dev)
     }
 
     fn boot(&mut self, store: Store) {
-        let controller = Controller::boot(self.info, store, LeverMode::RateAndAcceleration);
+        let mut controller = Controller::boot(self.info, store, LeverMode::RateAndAcceleration);
+        controller.set_imu(
+            ImuStatus {
+                part: ImuPart::Virtual,
+                who_am_i: 0,
+                init: ImuInit::NotApplicable,
+            },
+            nominal_lsb_per_g(&self.truth),
+        );
         self.pipeline = Pipeline::new(SIM_SAMPLE_RATE_HZ);
         if let Some(c) = controller.compensator() {
             self.pipeline
@@ -206,6 +243,22 @@ impl SimDevice {
         self.stuck_axis = Some(axis.min(2));
     }
 
+    /// A planted fault: the unit's accelerometer and gyro outputs turned by `a` (a board whose
+    /// description gives the wrong IMU rotation).
+    pub fn turn_outputs(&mut self, a: Alignment) {
+        self.turned = Some(a);
+    }
+
+    /// A planted fault: accelerometer axis `axis`'s noise `k` times the others'.
+    pub fn noisy_axis(&mut self, axis: usize, k: f32) {
+        self.sensor.scale_output_noise(axis, k);
+    }
+
+    /// A planted fault: each gyro reading is repeated for `n` samples.
+    pub fn hold_gyro_samples(&mut self, n: u32) {
+        self.hold_gyro = Some((n.max(1), [0.0; 3], 0));
+    }
+
     /// When paced, the wall-clock instant the next sample is due.
     fn next_sample_due(&self) -> Option<Instant> {
         let (start, first) = self.pace?;
@@ -255,19 +308,30 @@ impl SimDevice {
                 let _ = self.sensor.set_table(&t);
             }
         }
-        match self.stuck_axis {
-            None => self.sensor.step(&mut self.pipeline),
-            Some(axis) => {
-                // `VirtualSensor::step` with the axis held.
-                let every =
-                    u64::from(SIM_SAMPLE_RATE_HZ / firmware::pipeline::TEMPERATURE_REFRESH_HZ);
-                if self.samples % every.max(1) == 0 {
-                    self.pipeline.set_temperature(self.sensor.temperature_c());
-                }
-                let mut s = self.sensor.sample();
-                s.raw[axis] = 2.5;
-                self.pipeline.on_sample(&s);
+        if self.stuck_axis.is_none() && self.turned.is_none() && self.hold_gyro.is_none() {
+            self.sensor.step(&mut self.pipeline);
+        } else {
+            // `VirtualSensor::step` with the planted faults applied to the sample.
+            let every = u64::from(SIM_SAMPLE_RATE_HZ / firmware::pipeline::TEMPERATURE_REFRESH_HZ);
+            if self.samples % every.max(1) == 0 {
+                self.pipeline.set_temperature(self.sensor.temperature_c());
             }
+            let mut s = self.sensor.sample();
+            if let Some(axis) = self.stuck_axis {
+                s.raw[axis] = 2.5;
+            }
+            if let Some(a) = self.turned {
+                s.raw = a.to_board(s.raw);
+                s.rate_rad_s = a.to_board(s.rate_rad_s);
+            }
+            if let Some((n, held, age)) = self.hold_gyro.as_mut() {
+                if *age == 0 {
+                    *held = s.rate_rad_s;
+                }
+                s.rate_rad_s = *held;
+                *age = (*age + 1) % *n;
+            }
+            self.pipeline.on_sample(&s);
         }
         self.samples += 1;
         self.line.budget =

@@ -216,6 +216,11 @@ pub const L3GD20H_SPI_MAX_HZ: u32 = 10_000_000;
 /// The ICM-42688-P's highest SPI clock, Hz (DS-000347: 24 MHz; Betaflight's
 /// `accgyro_spi_icm426xx.c` line 56, `ICM426XX_MAX_SPI_CLK_HZ 24000000`).
 pub const ICM42688_SPI_MAX_HZ: u32 = 24_000_000;
+/// The BMI270's highest SPI clock, Hz (BST-BMI270-DS000 §"Electrical specification", SPI clock
+/// 10 MHz; Betaflight's `accgyro_spi_bmi270.c`, `BMI270_MAX_SPI_CLK_HZ 10000000`).
+pub const BMI270_SPI_MAX_HZ: u32 = 10_000_000;
+/// The LSM6DSO's highest SPI clock, Hz (DS12140 Table "SPI slave timing values": f_c(SPC) 10 MHz).
+pub const LSM6DSO_SPI_MAX_HZ: u32 = 10_000_000;
 /// A USART's baud rate error allowed on this side, ppm: half of the 3.41 % a receiver with 16×
 /// oversampling and a fractional divider tolerates (RM0390, USART receiver's tolerance to clock
 /// deviation), the other half left to the other end.
@@ -271,14 +276,33 @@ pub mod f405 {
         device_max_hz: ICM42688_SPI_MAX_HZ,
         pins: SpiPins::VERY_HIGH,
     };
+
+    /// SPI1 to an LSM6DSO (10 MHz): 84 / 5.25 = 16 → ÷16 = 5.25 MHz. 10 MHz asked would give
+    /// 84 / 10 = 8 → ÷8 = 10.5 MHz, over the part's limit; 21 MHz (the ICM's bus) twice it.
+    pub const LSM6DSO_SPI: SpiBus = SpiBus {
+        device: "LSM6DSO",
+        apb_hz: PCLK2_HZ,
+        asked_hz: 5_250_000,
+        device_max_hz: LSM6DSO_SPI_MAX_HZ,
+        pins: SpiPins::VERY_HIGH,
+    };
 }
 
-/// Every board's SPI buses (the PC test goes through all of them).
-pub const BOARD_SPI_BUSES: [SpiBus; 2] = [nucleo::GYRO_SPI, f405::IMU_SPI];
+/// Every board's SPI buses (the PC test goes through all of them), the described flight
+/// controllers' IMU buses (`boards`) included.
+pub const BOARD_SPI_BUSES: [SpiBus; 6] = [
+    nucleo::GYRO_SPI,
+    f405::IMU_SPI,
+    f405::LSM6DSO_SPI,
+    crate::boards::SPEEDYBEE_F405_V3.imu_spi,
+    crate::boards::SPEEDYBEE_F405_V4.imu_spi,
+    crate::boards::SPEEDYBEE_F405_V5.imu_spi,
+];
 
 // A board whose table is refused does not build.
 const _: () = assert!(nucleo::GYRO_SPI.check().is_ok());
 const _: () = assert!(f405::IMU_SPI.check().is_ok());
+const _: () = assert!(f405::LSM6DSO_SPI.check().is_ok());
 const _: () = assert!(nucleo::ADC_CLOCK_HZ <= nucleo::ADC_CLOCK_MAX_HZ);
 const _: () = assert!(nucleo::BAUD_ACTUAL != 0);
 const _: () = assert!(error_ppm(nucleo::BAUD_ACTUAL, nucleo::BAUD) <= USART_ERROR_MAX_PPM);
@@ -366,6 +390,39 @@ mod tests {
             ..nucleo::GYRO_SPI
         };
         assert_eq!(unreachable.check(), Err(BusError::Unreachable));
+    }
+
+    /// The 10 MHz parts on the F405's APB2 (84 MHz): the ICM's 21 MHz bus, and 10 MHz asked
+    /// (÷8 = 10.5 MHz), are both refused; 5.25 MHz (÷16) is what the table gives them.
+    #[test]
+    fn the_10_mhz_parts_get_their_own_f405_clock() {
+        for part in [f405::LSM6DSO_SPI, crate::boards::BMI270_BUS] {
+            assert_eq!(part.device_max_hz, 10_000_000, "{}", part.device);
+            let on_icm_bus = SpiBus {
+                asked_hz: f405::IMU_SPI.asked_hz,
+                ..part
+            };
+            assert_eq!(
+                on_icm_bus.check(),
+                Err(BusError::AboveDevice {
+                    actual_hz: 21_000_000,
+                    max_hz: 10_000_000
+                })
+            );
+            let asked_at_limit = SpiBus {
+                asked_hz: 10_000_000,
+                ..part
+            };
+            assert_eq!(
+                asked_at_limit.check(),
+                Err(BusError::AboveDevice {
+                    actual_hz: 10_500_000,
+                    max_hz: 10_000_000
+                })
+            );
+            assert_eq!(part.check(), Ok(()));
+            assert_eq!(part.actual_hz(), 5_250_000);
+        }
     }
 
     #[test]

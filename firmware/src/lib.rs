@@ -8,6 +8,8 @@
 //! - [`protocol`]: frame reception, the request handler ([`protocol::Controller`]) and the link
 //!   service that moves queued frames to the link without blocking.
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
+//! - [`boards`]: the flight controllers as data (IMU, bus, pins, IMU rotation, LED, pins never to
+//!   touch, crystal), each checked against its Betaflight and ArduPilot board files.
 //! - [`clock_tree`]: the STM32 boards' SPI buses as data (pin speeds; clocks from the HAL's own
 //!   divider rules), checked at compile time against the parts' limits.
 //! - [`conversion`]: an ADC board's per-sample conversion of the scan's codes and the gyro's words
@@ -15,6 +17,7 @@
 //! - [`stats`]: window statistics (count, mean, variance) with f32 per sample and f64 per block.
 //! - [`virtual_sensor`]: the shared forward model of a unit on a virtual rate table (QEMU board).
 //! - [`die_temperature`]: the STM32F4's on-chip temperature sensor, code to °C (Nucleo board).
+//! - [`health`]: the error counters and the part's identity the device reports to `Health`.
 //! - [`imu`]: digital IMUs read from their FIFO (`ImuSource`): ICM-42688-P and LSM6DSO drivers,
 //!   and their register-level models (`imu::sim`, PC tests and the QEMU board).
 //! - [`imu_bursts`]: the ICM-42688-P's FIFO read as a chain of DMA bursts (F405 board).
@@ -29,9 +32,12 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod boards;
 pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;
+#[cfg(feature = "health")]
+pub mod health;
 pub mod imu;
 pub mod imu_bursts;
 pub mod link;

@@ -105,9 +105,18 @@ pub struct Controller<S> {
     assembly: [u8; BLOB_MAX_LEN],
     assembly_len: usize,
     assembly_total: usize,
+    /// What `Health` answers.
+    #[cfg(feature = "health")]
+    health: crate::health::HealthState,
 }
 
 impl<S: CalStore> Controller<S> {
+    /// The health report's state (`crate::health`).
+    #[cfg(feature = "health")]
+    pub(crate) fn health_mut(&mut self) -> &mut crate::health::HealthState {
+        &mut self.health
+    }
+
     /// Loads and validates the stored calibration. An invalid, corrupt or foreign blob (or a storage
     /// error) leaves the device uncalibrated with the reason in [`Self::calibration_state`].
     #[inline(never)]
@@ -151,6 +160,8 @@ impl<S: CalStore> Controller<S> {
             assembly: [0; BLOB_MAX_LEN],
             assembly_len: 0,
             assembly_total: 0,
+            #[cfg(feature = "health")]
+            health: crate::health::HealthState::new(),
         }
     }
 
@@ -246,6 +257,8 @@ impl<S: CalStore> Controller<S> {
                     ..Outcome::ack(Ack::StreamStarted)
                 }
             }
+            #[cfg(feature = "health")]
+            HostToDevice::Health => Outcome::reply(DeviceToHost::Health(self.health.report())),
             HostToDevice::StopStream => Outcome {
                 pipeline: Some(PipelineCommand::StopStream),
                 ..Outcome::ack(Ack::StreamStopped)
@@ -558,7 +571,11 @@ impl<S: CalStore> LinkService<S> {
             };
             let reply = match self.rx.push(byte) {
                 None => continue,
-                Some(Received::Error(e)) => DeviceToHost::Error(e),
+                Some(Received::Error(e)) => {
+                    #[cfg(feature = "health")]
+                    self.controller.count_frame_error();
+                    DeviceToHost::Error(e)
+                }
                 Some(Received::Message(m)) => {
                     let o = self.controller.handle(m);
                     if let Some(c) = o.pipeline {

@@ -233,6 +233,14 @@ impl VirtualSensor {
         Ok(())
     }
 
+    /// Multiplies accelerometer `axis`'s output noise by `k` (the host's simulated device: a
+    /// planted noisy axis).
+    pub fn scale_output_noise(&mut self, axis: usize, k: f32) {
+        if let Some(n) = self.output_noise.get_mut(axis) {
+            *n *= k;
+        }
+    }
+
     /// The current table setting.
     pub fn table(&self) -> VirtualTable {
         self.table

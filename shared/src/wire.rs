@@ -29,7 +29,21 @@ pub use postcard::accumulator::{CobsAccumulator, FeedResult};
 ///   [`HostToDevice::SetVirtualTemperature`]; blob errors for the gyro, temperature and `f32` range.
 /// - 3: [`Identity::output_unit`] (a board's raw outputs may be volts or counts), appended: a host
 ///   reads the version of an older device before the identity's new field.
+/// - 4: [`HostToDevice::Health`] → [`DeviceToHost::Health`] (the part, its WHO_AM_I and start,
+///   its nominal sensitivity, the error counters), both appended; everything of version 3 is
+///   unchanged, so a host speaks to a version 3 device without the health report.
+#[cfg(feature = "health")]
+pub const PROTOCOL_VERSION: u16 = 4;
+/// Version of this protocol: 3 without the `health` feature (the QEMU image).
+#[cfg(not(feature = "health"))]
 pub const PROTOCOL_VERSION: u16 = 3;
+/// The oldest device version a host speaks to (it asks [`HostToDevice::Health`] only from 4 on).
+pub const MIN_PROTOCOL_VERSION: u16 = 3;
+
+#[cfg(feature = "health")]
+mod health;
+#[cfg(feature = "health")]
+pub use health::{ErrorCounters, Health, ImuInit, ImuPart, ImuStatus};
 /// Bytes of blob per [`BlobChunk`] (serde's array limit is 32).
 pub const BLOB_CHUNK_LEN: usize = 32;
 
@@ -162,6 +176,9 @@ pub enum HostToDevice {
         /// Die temperature, °C.
         temp_c: f32,
     },
+    /// Ask for the [`Health`] report (version 4).
+    #[cfg(feature = "health")]
+    Health,
 }
 
 /// Which board the device is.
@@ -379,6 +396,9 @@ pub enum DeviceToHost {
     Ack(Ack),
     /// A typed error.
     Error(DeviceError),
+    /// Answer to `Health` (version 4).
+    #[cfg(feature = "health")]
+    Health(Health),
 }
 
 impl core::fmt::Display for DeviceError {
@@ -543,6 +563,73 @@ mod tests {
         let ack = DeviceToHost::Ack(Ack::StreamStopped);
         let frame = encode_frame(&ack, &mut buf).unwrap();
         assert_eq!(identity_version_of(frame), None);
+    }
+
+    #[cfg(feature = "health")]
+    /// The hand-encoded `Health` decodes with the derived deserializer to itself, for every part
+    /// and start, small and largest counters; and the message frame round-trips.
+    #[test]
+    fn health_bytes_are_the_derived_form() {
+        let parts = [
+            ImuPart::Analog,
+            ImuPart::Virtual,
+            ImuPart::Icm42688P,
+            ImuPart::Lsm6dso,
+            ImuPart::Bmi270,
+        ];
+        let inits = [
+            ImuInit::Ok,
+            ImuInit::WrongDevice,
+            ImuInit::BusError,
+            ImuInit::ConfigRejected,
+            ImuInit::RegisterMismatch,
+            ImuInit::NotApplicable,
+        ];
+        let values = [
+            0u32,
+            1,
+            127,
+            128,
+            16_383,
+            16_384,
+            8192,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
+        let mut k = 0usize;
+        for part in parts {
+            for init in inits {
+                for (j, &v) in values.iter().enumerate() {
+                    k += 1;
+                    let w = |o: usize| values[(j + o) % values.len()];
+                    let h = Health {
+                        imu: ImuStatus {
+                            part,
+                            who_am_i: (k * 37) as u8,
+                            init,
+                        },
+                        accel_lsb_per_g: v,
+                        counters: ErrorCounters {
+                            fifo_resyncs: w(1),
+                            stalls: w(2),
+                            reinits: w(3),
+                            crc_errors: w(4),
+                            lost_samples: w(5),
+                            watchdog_resets: w(6),
+                        },
+                    };
+                    let mut buf = [0u8; 64];
+                    let bytes = postcard::to_slice(&h, &mut buf).unwrap();
+                    assert!(bytes.len() <= Health::POSTCARD_MAX_SIZE);
+                    let back: Health = postcard::from_bytes(bytes).unwrap();
+                    assert_eq!(back, h);
+                    let mut frame = [0u8; DEVICE_FRAME_MAX];
+                    let f = encode_frame(&DeviceToHost::Health(h), &mut frame).unwrap();
+                    let m: DeviceToHost = decode_frame(&mut f.to_vec()).unwrap();
+                    assert_eq!(m, DeviceToHost::Health(h));
+                }
+            }
+        }
     }
 
     fn sample_messages() -> std::vec::Vec<HostToDevice> {

@@ -34,20 +34,23 @@ mod app {
     use stm32f4xx_hal::rcc::Config;
     use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::{SysCounterHz, SysDelay, SysEvent};
+    use stm32f4xx_hal::watchdog::IndependentWatchdog;
     use usb_device::bus::UsbBusAllocator;
     use usb_device::prelude::*;
 
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
-    use firmware::clock_tree::f405::IMU_SPI;
-    use firmware::imu::icm42688::{Core, Icm42688, BATCH_PACKETS};
+    use firmware::health::{Counter, HealthCounters};
+    use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
+    use firmware::imu::ImuFlags;
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::{PipelineAccess, StoreMailbox};
     use firmware::stack::HighWater;
     use firmware::{BoardEvent, Controller, LinkService, Pipeline};
+    use shared::wire::ImuStatus;
     use shared::LeverMode;
 
     type Link = UsbLink<'static, UsbBusType>;
@@ -57,6 +60,8 @@ mod app {
 
     /// A burst chain is running (set by the watermark interrupt, cleared by the completion task).
     static IN_FLIGHT: InFlight = InFlight::new();
+    /// The error counters the device reports to `Health`.
+    static HEALTH: HealthCounters = HealthCounters::new();
 
     #[shared]
     struct Shared {
@@ -87,6 +92,8 @@ mod app {
         link: Link,
         service: Option<LinkService<Store>>,
         imu_found: bool,
+        imu_status: ImuStatus,
+        watchdog: IndependentWatchdog,
     }
 
     #[init(local = [
@@ -99,6 +106,7 @@ mod app {
         board::enter_bootloader_if_requested();
         paint_stack();
         let mut dp = cx.device;
+        count_watchdog_reset(&dp.RCC);
         let mut rcc = dp.RCC.freeze(
             Config::hse(board::HSE_HZ.Hz())
                 .sysclk(board::SYSCLK_HZ.Hz())
@@ -106,10 +114,7 @@ mod app {
         );
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        // The status LED (PC13, lit when low), then driven through `board::set_led`.
-        let _led = gpioc
-            .pc13
-            .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+        board::init_led(); // `BOARD.led`, dark; its port's clock is on (split above)
 
         // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
         // single-bank F4), before the IMU's FIFO runs. A calibration written later only programs.
@@ -125,12 +130,12 @@ mod app {
         let spi = spi1(
             dp.SPI1,
             (gpioa.pa5, gpioa.pa6, gpioa.pa7),
-            &IMU_SPI,
+            &board::BOARD.imu_spi,
             &mut rcc,
         );
         let sample_rate_hz = board::IMU_CONFIG.odr.hz();
         let mut delay = cx.core.SYST.delay(&rcc.clocks);
-        let reader = init_imu(spi, &mut cs, &mut delay);
+        let (reader, imu_status) = init_imu(spi, &mut cs, &mut delay);
         let imu_found = reader.is_some();
         // SysTick, free after the IMU's set-up, ticks the stall check every STALL_TICK_MS.
         let mut tick = delay.release().counter_hz();
@@ -146,12 +151,13 @@ mod app {
         int1.trigger_on_edge(&mut dp.EXTI, Edge::Rising);
         int1.enable_interrupt(&mut dp.EXTI);
 
-        let controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
+        let controller = boot_controller(store, sample_rate_hz, imu_status);
         let pipeline =
             cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(sample_rate_hz))
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
         pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
 
+        let watchdog = start_watchdog(dp.IWDG);
         let (usb_dev, link) = init_usb(
             USB::new(
                 (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
@@ -183,6 +189,7 @@ mod app {
                 rx,
                 tick,
                 imu_found,
+                watchdog,
                 samples: cx.local.sample_buf,
                 feed: PipelineFeed::new(sample_rate_hz),
                 led_period: sample_rate_hz / 2,
@@ -190,8 +197,37 @@ mod app {
                 usb_dev,
                 link,
                 service: Some(LinkService::new(controller)),
+                imu_status,
             },
         )
+    }
+
+    /// Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090
+    /// §7.3.21, RCC_CSR: IWDGRSTF, cleared by RMVF).
+    fn count_watchdog_reset(rcc: &pac::RCC) {
+        if rcc.csr().read().wdgrstf().bit_is_set() {
+            HEALTH.add(Counter::WatchdogReset, 1);
+            defmt::warn!("restarted by the independent watchdog");
+        }
+        rcc.csr().modify(|_, w| w.rmvf().set_bit());
+    }
+
+    /// The independent watchdog (its own 32 kHz LSI), started: fed by the idle loop, so a task
+    /// that never returns (or a stuck interrupt storm) resets the chip. Its period outlasts the
+    /// longest thing the idle loop does, a calibration store's sector erase
+    /// (`board::WATCHDOG_MS`, from the erase's datasheet maximum).
+    fn start_watchdog(iwdg: pac::IWDG) -> IndependentWatchdog {
+        let mut watchdog = IndependentWatchdog::new(iwdg);
+        watchdog.start(board::WATCHDOG_MS.millis());
+        watchdog
+    }
+
+    /// The request handler from the store, with the part's start and the counters for `Health`.
+    fn boot_controller(store: Store, sample_rate_hz: u32, imu: ImuStatus) -> Controller<Store> {
+        let mut controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
+        controller.set_imu(imu, board::IMU_CONFIG.accel_range.lsb_per_g() as u32);
+        controller.set_counters(&HEALTH);
+        controller
     }
 
     /// Configures the ICM-42688-P over the blocking bus, then hands SPI1 to its DMA streams. `None`
@@ -200,17 +236,26 @@ mod app {
         mut spi: Spi<SPI1>,
         cs: &mut PA4<Output<PushPull>>,
         delay: &mut SysDelay,
-    ) -> Option<BurstReader> {
-        let reader = match ExclusiveDevice::new(&mut spi, cs, delay)
-            .map_err(|_| ())
-            .and_then(|dev| Icm42688::new(dev, board::IMU_CONFIG).map_err(|_| ()))
-            .and_then(|_| Core::new(board::IMU_CONFIG).map_err(|_| ()))
-        {
+    ) -> (Option<BurstReader>, ImuStatus) {
+        let (configured, status) = match ExclusiveDevice::new(&mut spi, cs, delay) {
+            Ok(dev) => {
+                let result = Icm42688::new(dev, board::IMU_CONFIG).map(|_| ());
+                (result.is_ok(), board::imu_status(&result))
+            }
+            Err(_) => (false, board::imu_status::<()>(&Err(IcmError::Spi(())))),
+        };
+        let core = configured
+            .then(|| Core::new(board::IMU_CONFIG).ok())
+            .flatten();
+        let reader = match core {
             // The part is configured and its FIFO running; the driver's state continues in the
             // burst reader, the bus goes to the DMA streams.
-            Ok(core) => Some(BurstReader::new(core)),
-            Err(()) => {
-                defmt::error!("ICM-42688-P not answering on SPI1: no samples");
+            Some(core) => Some(BurstReader::new(core)),
+            None => {
+                defmt::error!(
+                    "ICM-42688-P not answering on SPI1 (WHO_AM_I {=u8:#x}): no samples",
+                    status.who_am_i
+                );
                 None
             }
         };
@@ -223,7 +268,17 @@ mod app {
             let _ = regs.sr().read();
         }
         let _ = spi.use_dma().txrx();
-        reader
+        (reader, status)
+    }
+
+    /// The USB serial number: the chip's 96-bit unique ID in hex (24 characters), so that two
+    /// boards on one computer are told apart (udev's `/dev/serial/by-id/`).
+    fn serial_number() -> &'static str {
+        let text = cortex_m::singleton!(: [u8; 24] = [0; 24]);
+        match text {
+            Some(text) => board::unique_id_hex(text),
+            None => "F405",
+        }
     }
 
     /// The USB device with its CDC-ACM class (the link).
@@ -240,7 +295,7 @@ mod app {
                 .strings(&[StringDescriptors::default()
                     .manufacturer("accel-cal")
                     .product("accel-cal F405 IMU")
-                    .serial_number("F405")])
+                    .serial_number(serial_number())])
                 .unwrap_or_else(|_| defmt::panic!("USB strings"))
                 .build();
         (usb_dev, link)
@@ -251,11 +306,12 @@ mod app {
     ///
     /// The store runs here, below every interrupt: the USB task only validates a write and posts
     /// its job (`firmware::protocol::StoreJob`). The lock moves the job, never runs it.
-    #[idle(local = [imu_found], shared = [store_job])]
+    #[idle(local = [imu_found, watchdog], shared = [store_job])]
     fn idle(mut cx: idle::Context) -> ! {
         let mut high_water = HighWater::new();
         let mut wakes = 0u32;
         loop {
+            cx.local.watchdog.feed();
             if let Some(mut job) = cx.shared.store_job.lock(|m| m.take_to_run()) {
                 job.run();
                 cx.shared.store_job.lock(|m| m.post(job));
@@ -333,7 +389,13 @@ mod app {
             cx.shared.bus.lock(|bus| start(bus, next, rx));
         }
         if let Some(h) = done.corrupt_header {
+            HEALTH.add(Counter::FifoResync, 1);
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
+        }
+        for s in &samples[..done.samples] {
+            if s.flags.has(ImuFlags::DATA_LOST) {
+                HEALTH.add(Counter::LostSamples, u32::from(s.lost_before.max(1)));
+            }
         }
         // Into the board's axes (the calibration's body frame), outside any lock.
         board::IMU_ALIGNMENT.apply(&mut samples[..done.samples]);
@@ -365,6 +427,7 @@ mod app {
         else {
             return;
         };
+        HEALTH.add(Counter::Stall, 1);
         defmt::warn!("IMU burst chain stalled: FIFO flushed, reading restarted");
         let rx = *cx.local.rx_for_tick;
         cx.shared.bus.lock(|bus| {
@@ -383,7 +446,7 @@ mod app {
     /// USB events and the link service: requests in, answers and frames out. Also pended by
     /// `burst_done` when frames are queued.
     #[task(binds = OTG_FS, priority = 1, shared = [pipeline, store_job],
-           local = [usb_dev, link, service, sample_rate_hz])]
+           local = [usb_dev, link, service, sample_rate_hz, imu_status])]
     fn usb(mut cx: usb::Context) {
         let l = cx.local;
         l.usb_dev.poll(&mut [&mut l.link.serial]);
@@ -417,8 +480,7 @@ mod app {
             let Some(store) = l.service.take().and_then(|s| s.controller.into_store()) else {
                 return;
             };
-            let controller =
-                Controller::boot(board::info(*l.sample_rate_hz), store, BOOT_LEVER_MODE);
+            let controller = boot_controller(store, *l.sample_rate_hz, *l.imu_status);
             pipeline.apply(PipelineCommand::StopStream);
             pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
             *l.service = Some(LinkService::new(controller));

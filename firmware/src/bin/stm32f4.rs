@@ -123,7 +123,8 @@ mod app {
         if store.prepare().is_err() {
             defmt::warn!("calibration store: erasing ahead failed");
         }
-        let controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
+        let mut controller = Controller::boot(board::info(), store, LeverMode::RateAndAcceleration);
+        controller.set_imu(board::ANALOG_ACCELEROMETERS, 0);
 
         let gyro = init_gyro(
             spi1(

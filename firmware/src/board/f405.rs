@@ -1,31 +1,33 @@
-//! An STM32F405 flight controller with an ICM-42688-P on SPI: the SpeedyBee F405 V4 (one of the most
-//! common F405 boards), pins from its Betaflight hardware definition
-//! (`betaflight/config`, `configs/SPEEDYBEEF405V4/config.h`):
+//! An STM32F405 flight controller built from its description in [`crate::boards`] (IMU and bus,
+//! CS and interrupt pins, IMU rotation, LED, pins never to touch, crystal): the SpeedyBee F405 V4
+//! (ICM-42688-P, LED PC13, IMU turned CW90) by default, the V5 (the V4's IMU pins, IMU turned
+//! CW270, LED PA15, PC13 the 9 V BEC switch: never driven) with feature `speedybee-v5`, the V3
+//! (BMI270, LED PC8) with `speedybee-v3`. The facts are checked against Betaflight's and
+//! ArduPilot's board files in `boards::tests`.
 //!
-//! | signal | pin | Betaflight name | use here |
+//! | signal | V4 pin | Betaflight name | use here |
 //! |---|---|---|---|
-//! | IMU SCK / SDI (MISO) / SDO (MOSI) | PA5 / PA6 / PA7 | `SPI1_SCK_PIN`, `SPI1_SDI_PIN`, `SPI1_SDO_PIN` | SPI1, mode 3, 21 MHz |
+//! | IMU SCK / SDI (MISO) / SDO (MOSI) | PA5 / PA6 / PA7 | `SPI1_SCK_PIN`, `SPI1_SDI_PIN`, `SPI1_SDO_PIN` | SPI1, mode 3, `BOARD.imu_spi` (21 MHz for the ICM-42688-P) |
 //! | IMU CS | PA4 | `GYRO_1_CS_PIN` | GPIO, active low |
 //! | IMU INT1 | PC4 | `GYRO_1_EXTI_PIN` | EXTI4, rising edge: FIFO watermark |
-//! | status LED | PC13 | `LED0_PIN` | GPIO, lit when low (see the README for its states) |
+//! | status LED | `BOARD.led` (V4 PC13, V5 PA15, V3 PC8) | `LED0_PIN` | GPIO, lit when low (see the README for its states) |
 //! | USB D− / D+ | PA11 / PA12 | (the F405's OTG FS pins) | USB CDC-ACM, the host link |
 //! | crystal | 8 MHz | `SYSTEM_HSE_MHZ 8` | HSE → PLL: 168 MHz core, 48 MHz USB |
-//! | IMU mounting | CW90 | `GYRO_1_ALIGN CW90_DEG` | every sample rotated into the board's axes ([`IMU_ALIGNMENT`]) |
+//! | IMU mounting | `BOARD.alignment` | `GYRO_1_ALIGN` | every sample rotated into the board's axes ([`IMU_ALIGNMENT`]) |
 //!
 //! DMA (RM0090 Table 43, DMA2 request mapping): SPI1_RX on DMA2 stream 2 channel 3, SPI1_TX on DMA2
 //! stream 3 channel 3. Stream 0 — SPI1_RX's other choice — is left to ADC1, as the board's Betaflight
-//! definition assigns it (`ADC1_DMA_OPT 0`). Another F405 board with an ICM-42688-P works after changing
-//! the SPI bus, CS, EXTI and LED pins (and the DMA streams if the bus is not SPI1) to those of its
-//! Betaflight `config.h`: they are the only board-specific facts.
+//! definition assigns it (`ADC1_DMA_OPT 0`).
 //!
 //! Flash: sectors 0–4 (128 KiB) hold the image (`memory-f405.x`), sectors 5 and 6 (128 KiB each) the
 //! calibration A/B store.
 
-use shared::wire::Board;
+use shared::wire::{Board, ImuInit, ImuPart as WirePart, ImuStatus};
 use shared::OutputUnit;
 use stm32f4xx_hal::flash::LockedFlash;
 
-use crate::imu::alignment::{self, Alignment};
+use crate::boards::{self, BoardDesc, ImuPart};
+use crate::imu::alignment::Alignment;
 use crate::imu::icm42688::{AccelRange, Config, Odr};
 
 use super::stm32_common::{unit_id, F4Flash, Store};
@@ -34,11 +36,33 @@ use crate::protocol::DeviceInfo;
 use crate::storage::AbStore;
 use crate::ByteLink;
 
+#[cfg(all(feature = "speedybee-v3", feature = "speedybee-v5"))]
+compile_error!("choose one board: `speedybee-v3` or `speedybee-v5` (neither: the V4)");
+
+/// The board this firmware is built for.
+#[cfg(feature = "speedybee-v3")]
+pub const BOARD: BoardDesc = boards::SPEEDYBEE_F405_V3;
+/// The board this firmware is built for.
+#[cfg(feature = "speedybee-v5")]
+pub const BOARD: BoardDesc = boards::SPEEDYBEE_F405_V5;
+/// The board this firmware is built for.
+#[cfg(not(any(feature = "speedybee-v3", feature = "speedybee-v5")))]
+pub const BOARD: BoardDesc = boards::SPEEDYBEE_F405_V4;
+
+// A description whose LED is a reserved pin, whose pins collide or whose bus is too fast for its
+// part does not build.
+const _: () = assert!(BOARD.check().is_ok());
+// The sampling path below (FIFO watermark → DMA bursts) is the ICM-42688-P's.
+const _: () = assert!(
+    matches!(BOARD.imu, ImuPart::Icm42688P),
+    "the F405 firmware's DMA burst chain reads an ICM-42688-P; this board's IMU has no sampling task yet"
+);
+
 /// Core clock, Hz (the F405's maximum; `clock_tree::f405`, where the SPI clock is computed from it
 /// and checked against the ICM-42688-P's 24 MHz at compile time: 84 MHz APB2 / 4 = 21 MHz).
 pub use crate::clock_tree::f405::SYSCLK_HZ;
-/// Crystal, Hz (`SYSTEM_HSE_MHZ 8`).
-pub const HSE_HZ: u32 = 8_000_000;
+/// Crystal, Hz (`SYSTEM_HSE_MHZ 8` on the three boards).
+pub const HSE_HZ: u32 = BOARD.hse_hz;
 /// The ICM-42688-P's configuration: 8 kHz (its highest rate), ±4 g (0.12 mg per count: hand-held
 /// and rate-table motion stay well inside it; a sample beyond it is flagged saturated) and ±2000 °/s
 /// (the protocol's table rates reach 30 rad/s ≈ 1720 °/s), 258 Hz anti-alias filters, 16-byte
@@ -50,11 +74,11 @@ pub const IMU_CONFIG: Config = Config {
     watermark_packets: 8,
     ..Config::DEFAULT
 };
-/// How the board mounts the ICM-42688-P: turned 90° clockwise seen from the top (Betaflight's
-/// `GYRO_1_ALIGN CW90_DEG` for this board). `burst_done` rotates every sample into the board's
+/// How the board mounts its IMU (Betaflight's `GYRO_1_ALIGN`: V4 CW90, V5 CW270, V3 none).
+/// `burst_done` rotates every sample into the board's
 /// axes (x toward the board's arrow, y to its left, z up out of its top) before the pipeline, so
 /// the streams and the calibration are in the board's frame, the one the operator sees.
-pub const IMU_ALIGNMENT: Alignment = alignment::SPEEDYBEE_F405_V4;
+pub const IMU_ALIGNMENT: Alignment = BOARD.alignment;
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
 /// Flash offset (from 0x0800_0000) of the calibration store: sectors 5 and 6 (see memory-f405.x).
@@ -75,6 +99,31 @@ pub fn info(sample_rate_hz: u32) -> DeviceInfo {
         // IMU_CONFIG keeps the accelerometer in counts.
         output_unit: OutputUnit::Lsb,
     }
+}
+
+/// The part's start for `Health`, from the driver's result.
+pub fn imu_status<E>(result: &Result<(), crate::imu::icm42688::Error<E>>) -> ImuStatus {
+    use crate::imu::icm42688::Error;
+    let (who_am_i, init) = match result {
+        Ok(()) => (0x47, ImuInit::Ok),
+        Err(Error::WrongDevice(v)) => (*v, ImuInit::WrongDevice),
+        Err(Error::Spi(_)) => (0, ImuInit::BusError),
+        Err(_) => (0x47, ImuInit::ConfigRejected),
+    };
+    ImuStatus {
+        part: WirePart::Icm42688P,
+        who_am_i,
+        init,
+    }
+}
+
+/// The independent watchdog's period, ms: above the longest the idle loop may block, a 128 KiB
+/// sector erase (DS8626, flash erase time at x8 parallelism, the HAL's: 4 s at most), with margin.
+pub const WATCHDOG_MS: u32 = 6000;
+
+/// The unique ID (`unit_id`) as 24 hex digits in `out`.
+pub fn unique_id_hex(out: &'static mut [u8; 24]) -> &'static str {
+    crate::health::hex_into(&unit_id().0, out)
 }
 
 /// The A/B store on sectors 5 and 6.
@@ -128,26 +177,48 @@ impl<B: usb_device::bus::UsbBus> ByteLink for UsbLink<'_, B> {
     }
 }
 
-/// PC13's bit in the GPIOC registers.
-const LED_BIT: u32 = 1 << 13;
+/// The LED pin's GPIO port registers (RM0090 §8.4: GPIOA at 0x4002_0000, one port every 0x400).
+const LED_PORT: usize = 0x4002_0000 + 0x400 * BOARD.led.port_index() as usize;
+/// GPIOx_MODER, GPIOx_ODR and GPIOx_BSRR offsets (RM0090 §8.4.1, §8.4.6, §8.4.7).
+const MODER: usize = 0x00;
+const ODR: usize = 0x14;
+const BSRR: usize = 0x18;
+/// The LED's bit in its port.
+const LED_BIT: u32 = 1 << BOARD.led.n;
 
-/// Lights or darkens the status LED (PC13, lit when low) with one atomic BSRR write, so the idle
-/// loop and the sampling task may both drive it.
+/// Makes the LED pin (`BOARD.led`, never a reserved pin: `BOARD.check`) a dark push-pull output.
+/// Its port's clock must be on (the HAL's `split` of GPIOA and GPIOC, the LED ports of the three
+/// boards). Only the LED's own bits are written: the rest of the port belongs to the HAL.
+pub fn init_led() {
+    set_led(false);
+    // SAFETY: read-modify-write of the LED pin's two MODER bits (01: general-purpose output) in
+    // init, before any task runs; OTYPER and OSPEEDR keep their reset values (push-pull, low).
+    unsafe {
+        let moder = (LED_PORT + MODER) as *mut u32;
+        let shift = 2 * u32::from(BOARD.led.n);
+        let v = core::ptr::read_volatile(moder);
+        core::ptr::write_volatile(moder, (v & !(0b11 << shift)) | (0b01 << shift));
+    }
+}
+
+/// Lights or darkens the status LED with one atomic BSRR write, so the idle loop and the sampling
+/// task may both drive it.
 pub fn set_led(lit: bool) {
-    // SAFETY: BSRR writes are atomic and touch only the bit named; PC13 is configured as an output
-    // at boot and nothing else uses it.
-    let gpioc = unsafe { &*stm32f4xx_hal::pac::GPIOC::ptr() };
-    gpioc
-        .bsrr()
-        .write(|w| unsafe { w.bits(if lit { LED_BIT << 16 } else { LED_BIT }) });
+    let low = lit == BOARD.led_lit_low;
+    // SAFETY: a BSRR write is atomic and touches only the LED's bit.
+    unsafe {
+        core::ptr::write_volatile(
+            (LED_PORT + BSRR) as *mut u32,
+            if low { LED_BIT << 16 } else { LED_BIT },
+        )
+    };
 }
 
 /// Toggles the status LED.
 pub fn toggle_led() {
-    // SAFETY: a read of GPIOC's output register.
-    let gpioc = unsafe { &*stm32f4xx_hal::pac::GPIOC::ptr() };
-    let lit = gpioc.odr().read().bits() & LED_BIT == 0;
-    set_led(!lit);
+    // SAFETY: a read of the LED port's output register.
+    let high = unsafe { core::ptr::read_volatile((LED_PORT + ODR) as *const u32) } & LED_BIT != 0;
+    set_led(high == BOARD.led_lit_low);
 }
 
 /// The LED's meaning while samples flow (called twice a second by the sampling task): steadily lit

@@ -47,13 +47,21 @@ pub use crate::clock_tree::nucleo::{
     ADC_CLOCK_HZ, ADC_CLOCK_MAX_HZ, ADC_PRESCALER, BAUD, PCLK2_HZ, SYSCLK_HZ,
 };
 
-/// Sampling rate, Hz (1000..=10000; change and rebuild).
-pub const SAMPLE_RATE_HZ: u32 = 1000;
-const _: () = assert!(SAMPLE_RATE_HZ >= 1000 && SAMPLE_RATE_HZ <= 10_000);
+/// Sampling rate, Hz: the gyro's output data rate, so that each ADC scan reads one new gyro sample
+/// (at 1 kHz against its 800 Hz, one read in five repeated the previous sample).
+pub const SAMPLE_RATE_HZ: u32 = crate::imu::l3gd20h::ODR_HZ;
+const _: () = assert!(SAMPLE_RATE_HZ >= 100 && SAMPLE_RATE_HZ <= 10_000);
 /// ADC cycles of one scan: three accelerometers at 56 + 12, the temperature sensor at 480 + 12.
 pub const SCAN_ADC_CYCLES: u32 = 3 * (56 + 12) + (480 + 12);
 // The scan must finish well within a sample period (here: half of it).
 const _: () = assert!(SCAN_ADC_CYCLES as u64 * SAMPLE_RATE_HZ as u64 * 2 <= ADC_CLOCK_HZ as u64);
+/// What `Health` reports of the part: analog accelerometers on the ADC, no identity register
+/// (their outputs are volts: no counts per g).
+pub const ANALOG_ACCELEROMETERS: shared::wire::ImuStatus = shared::wire::ImuStatus {
+    part: shared::wire::ImuPart::Analog,
+    who_am_i: 0,
+    init: shared::wire::ImuInit::NotApplicable,
+};
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
 /// Flash offset (from 0x0800_0000) of the calibration store: sectors 6 and 7 (see memory.x).

@@ -17,6 +17,18 @@ const CTRL4: u8 = 0x23;
 const OUT_X_L: u8 = 0x28;
 const READ: u8 = 0x80;
 const AUTO_INC: u8 = 0x40;
+/// CTRL4: BDU (bit 7), block data update: the output registers are not updated between the reads
+/// of a sample's low and high bytes, so one read never mixes two samples (datasheet CTRL4 table).
+const CTRL4_BDU: u8 = 0x80;
+/// CTRL4: FS (bits 5:4) = 10, ±2000 °/s.
+const CTRL4_FS_2000DPS: u8 = 0x20;
+/// CTRL1: DR (7:6) = 11 and BW (5:4) = 11 with LOW_ODR = 0: 800 Hz, the widest bandwidth; PD (3)
+/// normal mode; Zen, Yen, Xen (2:0) on.
+const CTRL1_800HZ_ALL_AXES: u8 = 0xFF;
+/// The output data rate the driver sets, Hz: the board samples its ADC at this rate, so that each
+/// scan reads one new gyro sample (read at 1 kHz, one in five was read twice).
+pub const ODR_HZ: u32 = 800;
+
 /// Identities accepted.
 pub const WHO_AM_I_VALUES: [u8; 2] = [0xD7, 0xD3];
 /// rad/s per LSB at ±2000 °/s (70 m°/s).
@@ -37,15 +49,16 @@ pub struct L3gd20<SPI> {
 }
 
 impl<SPI: SpiDevice> L3gd20<SPI> {
-    /// Checks the identity and starts the gyro: 800 Hz output rate, all axes, ±2000 °/s.
+    /// Checks the identity and starts the gyro: [`ODR_HZ`], all axes, ±2000 °/s, block data
+    /// update.
     pub fn new(spi: SPI) -> Result<Self, Error<SPI::Error>> {
         let mut g = L3gd20 { spi };
         let id = g.read_reg(WHO_AM_I)?;
         if !WHO_AM_I_VALUES.contains(&id) {
             return Err(Error::WrongDevice(id));
         }
-        g.write_reg(CTRL4, 0x20)?; // FS = 2000 dps
-        g.write_reg(CTRL1, 0xFF)?; // ODR 800 Hz, bandwidth max, power on, X/Y/Z on
+        g.write_reg(CTRL4, CTRL4_BDU | CTRL4_FS_2000DPS)?;
+        g.write_reg(CTRL1, CTRL1_800HZ_ALL_AXES)?;
         Ok(g)
     }
 
@@ -158,8 +171,11 @@ mod tests {
         assert!((s.rate_rad_s[0] - 70f32.to_radians()).abs() < 1e-4, "{s:?}");
         assert!((s.rate_rad_s[1] + 140f32.to_radians()).abs() < 1e-4);
         let m = g.release();
-        assert_eq!(m.regs[CTRL1 as usize], 0xFF);
-        assert_eq!(m.regs[CTRL4 as usize], 0x20);
+        // CTRL1: DR 11, BW 11 (800 Hz with LOW_ODR 0, the datasheet's ODR table), PD 1, Z/Y/X on.
+        assert_eq!(m.regs[CTRL1 as usize], 0b1111_1111);
+        assert_eq!(ODR_HZ, 800);
+        // CTRL4: BDU (bit 7) set, FS 10 (±2000 °/s).
+        assert_eq!(m.regs[CTRL4 as usize], 0b1010_0000);
     }
 
     #[test]

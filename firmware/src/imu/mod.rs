@@ -3,6 +3,8 @@
 //! analog-accelerometer board's separate SPI gyro ([`l3gd20h`]), read one sample at a time.
 //!
 //! - [`alignment`]: how a board mounts its IMU, and each sample rotated into the board's axes.
+//! - [`bmi270`]: Bosch BMI270 over SPI: its configuration upload checked by INTERNAL_STATUS,
+//!   data-ready reads with time-stamp gap detection, the register check with re-init.
 //! - [`icm42688`]: TDK InvenSense ICM-42688-P over SPI (blocking and async), FIFO packets 3 and 4,
 //!   watermark interrupt on INT1, overflow detection, self-test.
 //! - [`lsm6dso`]: ST LSM6DSO over SPI, its FIFO of tagged words, the same trait.
@@ -20,6 +22,7 @@
 //! while a sensor starts) has NaN values and [`ImuFlags::INVALID`], which the pipeline leaves out.
 
 pub mod alignment;
+pub mod bmi270;
 pub mod icm42688;
 pub mod l3gd20h;
 pub mod lsm6dso;

@@ -3,10 +3,13 @@
 
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::device::bringup::{bringup, Verdict};
+use crate::device::bringup::{bringup, bringup_with, Verdict};
+use crate::device::bringup_motion::{Operator, Pose, TableOperator};
+use crate::device::client::{DeviceClient, LinkError, Transport};
 use crate::device::AnyTransport;
 use crate::limits;
 use clap::Args;
+use std::io::IsTerminal;
 use std::time::Duration;
 
 /// `host bringup`.
@@ -21,26 +24,50 @@ pub struct BringupArgs {
     pub seconds: f64,
 }
 
+/// A person at this terminal: asked for each pose, answering with Enter.
+struct TerminalOperator;
+
+impl<T: Transport> Operator<T> for TerminalOperator {
+    fn pose(&mut self, pose: Pose, _: &mut DeviceClient<T>) -> Result<bool, LinkError> {
+        let wait = pose == Pose::NoseUp;
+        eprintln!(
+            "bringup: {}{}",
+            pose.instruction(),
+            if wait { ", then press Enter" } else { "" }
+        );
+        if wait {
+            let mut line = String::new();
+            std::io::stdin()
+                .read_line(&mut line)
+                .map_err(|e| LinkError::Io("reading the operator's Enter".into(), e))?;
+        }
+        Ok(true)
+    }
+
+    fn rest(&mut self, _: &mut DeviceClient<T>) -> Result<(), LinkError> {
+        eprintln!("bringup: stop waving; put the board down");
+        Ok(())
+    }
+}
+
 /// `host bringup --port P`: prints each check and fails (exit status 3) when one fails. The
-/// simulated device runs in real time here, so that its rate is measured as a board's.
+/// simulated device runs in real time here, so that its rate is measured as a board's; its
+/// virtual table takes the poses. On a board, a person at the terminal does (without a terminal
+/// the pose checks are skipped, each saying so).
 pub fn run(a: &BringupArgs, quiet: bool) -> Result<(), CliError> {
     let mut client = connect(&a.port)?;
-    if let AnyTransport::Sim(dev) = client.transport_mut() {
+    let measure = Duration::from_secs_f64(a.seconds);
+    let report = if let AnyTransport::Sim(dev) = client.transport_mut() {
         dev.pace_real_time();
-    }
-    let report = bringup(&mut client, Duration::from_secs_f64(a.seconds))?;
+        bringup_with(&mut client, measure, &mut TableOperator)?
+    } else if std::io::stdin().is_terminal() {
+        eprintln!("bringup: place the board flat, top up, and keep it still");
+        bringup_with(&mut client, measure, &mut TerminalOperator)?
+    } else {
+        bringup(&mut client, measure)?
+    };
     if !quiet {
-        for c in &report.checks {
-            let verdict = match c.verdict {
-                Verdict::Pass => "PASS",
-                Verdict::Fail => "FAIL",
-                Verdict::Skipped => "SKIP",
-            };
-            crate::outln!("{verdict}  {:<28} {}", c.name, c.detail)?;
-            if let Some(cause) = &c.cause {
-                crate::outln!("      likely cause: {cause}")?;
-            }
-        }
+        crate::out!("{report}")?;
     }
     if report.passed() {
         return Ok(());

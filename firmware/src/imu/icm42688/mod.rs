@@ -349,6 +349,19 @@ pub const RESET_STEPS: [Step; 3] = [
 /// Steps in [`configure_steps`].
 pub const CONFIGURE_STEPS: usize = 30;
 
+/// INT_CONFIG1 for `odr` (DS-000347 §14.43): INT_ASYNC_RESET (bit 4) cleared "for proper INT1
+/// and INT2 pin operation"; at 4 kHz and above INT_TPULSE_DURATION (bit 6) = 1, the 8 µs pulse,
+/// and INT_TDEASSERT_DISABLE (bit 5) = 1, no minimum de-assert time — both "required for
+/// ODR ≥ 4 kHz" (the 100 µs defaults are for ODR < 4 kHz only), as Betaflight's
+/// `accgyro_spi_icm426xx.c` writes them (`ICM426XX_INT_TPULSE_DURATION_8 |
+/// ICM426XX_INT_TDEASSERT_DISABLED`, INT_ASYNC_RESET cleared).
+pub const fn int_config1(odr: Odr) -> u8 {
+    match odr {
+        Odr::Hz8000 | Odr::Hz4000 => INT_TPULSE_DURATION_8US | INT_TDEASSERT_DISABLE,
+        _ => 0,
+    }
+}
+
 /// The register writes that configure the part for `cfg` (checked before), in order: sensors off,
 /// interface, AFSR off, anti-alias filters (banks 1 and 2), ranges and rates, time stamps and
 /// FSYNC off, FIFO, INT1, FIFO
@@ -418,7 +431,7 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
         Step::Write(FIFO_CONFIG3, (wm >> 8) as u8),
         // INT1 latched until INT_STATUS is read, push-pull, active high.
         Step::Write(INT_CONFIG, 0b111),
-        Step::Write(INT_CONFIG1, 0), // INT_ASYNC_RESET cleared (§14.43)
+        Step::Write(INT_CONFIG1, int_config1(cfg.odr)),
         Step::Write(INT_SOURCE0, INT1_FIFO_THS_FULL),
         Step::Write(SELF_TEST_CONFIG, 0),
         Step::Write(FIFO_CONFIG, FIFO_MODE_STOP_ON_FULL),

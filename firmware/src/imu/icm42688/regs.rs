@@ -137,6 +137,10 @@ pub const FIFO_CONFIG3: u8 = 0x61;
 /// INT_CONFIG1 (§14.43), reset 0x10: INT_ASYNC_RESET (bit 4) must be cleared for proper INT1/2
 /// operation.
 pub const INT_CONFIG1: u8 = 0x64;
+/// INT_CONFIG1: INT_TPULSE_DURATION (bit 6) = 1, an 8 µs interrupt pulse.
+pub const INT_TPULSE_DURATION_8US: u8 = 1 << 6;
+/// INT_CONFIG1: INT_TDEASSERT_DISABLE (bit 5) = 1, no minimum de-assert time.
+pub const INT_TDEASSERT_DISABLE: u8 = 1 << 5;
 /// INT_SOURCE0 (§14.44), reset 0x10: FIFO_THS_INT1_EN (2), FIFO_FULL_INT1_EN (1), UI_DRDY_INT1_EN (3).
 pub const INT_SOURCE0: u8 = 0x65;
 /// INT_SOURCE0: the FIFO watermark and FIFO full on INT1.

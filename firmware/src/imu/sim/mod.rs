@@ -10,10 +10,12 @@
 //! Time: a model produces one sample per output-data-rate period of *its* time, which advances
 //! by the `DelayNs` operations it is given and by [`Icm42688Model::advance_ns`] (a board's timer).
 
+pub mod bmi270;
 pub mod icm42688;
 pub mod lsm6dso;
 pub mod spi_fault;
 
+pub use bmi270::Bmi270Model;
 pub use icm42688::Icm42688Model;
 pub use lsm6dso::Lsm6dsoModel;
 pub use spi_fault::LastBitFault;

@@ -56,9 +56,16 @@ fn the_f405_board_rotates_by_its_betaflight_alignment() {
     );
     let board = include_str!("../../board/f405.rs");
     assert!(
-        board.contains("pub const IMU_ALIGNMENT: Alignment = alignment::SPEEDYBEE_F405_V4;"),
+        board.contains("pub const IMU_ALIGNMENT: Alignment = BOARD.alignment;"),
         "board/f405.rs no longer states its alignment"
     );
+    assert_eq!(
+        crate::boards::SPEEDYBEE_F405_V4.alignment,
+        SPEEDYBEE_F405_V4
+    );
+    assert!(board.contains(
+        "#[cfg(not(any(feature = \"speedybee-v3\", feature = \"speedybee-v5\")))]\npub const BOARD: BoardDesc = boards::SPEEDYBEE_F405_V4;"
+    ));
     let bin = include_str!("../../bin/f405.rs");
     let rotate = bin
         .find("board::IMU_ALIGNMENT.apply(&mut samples[..done.samples]);")

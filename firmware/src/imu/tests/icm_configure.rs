@@ -41,6 +41,8 @@ fn default_configuration_registers() {
         "INT_ASYNC_RESET cleared"
     );
     assert_eq!(m.register(0, INT_SOURCE0), 0b110);
+    // At 1 kHz the reset pulse and de-assert settings stand (bits 6:5 = 00).
+    assert_eq!(m.register(0, INT_CONFIG1), 0b0000_0000);
     // AFSR off: 01 in bits 7:6 over the reset value 0x91 (Betaflight's write).
     assert_eq!(m.register(0, INTF_CONFIG1), 0x51);
     // Time stamps: TMST_EN (0) on, TMST_FSYNC_EN (1), TMST_DELTA_EN (2), TMST_RES (3: 1 µs) and
@@ -75,6 +77,9 @@ fn other_settings_and_high_resolution() {
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC4), 0xB8);
     assert_eq!(m.register(1, GYRO_CONFIG_STATIC5), (6 << 4) | 0x1);
     assert_eq!(m.register(2, ACCEL_CONFIG_STATIC2) & 1, 1, "accel AAF off");
+    // At 8 kHz (§14.43): INT_TPULSE_DURATION 1 (8 µs) and INT_TDEASSERT_DISABLE 1, "required for
+    // ODR ≥ 4 kHz"; INT_ASYNC_RESET 0.
+    assert_eq!(m.register(0, INT_CONFIG1), 0b0110_0000);
     assert_eq!(
         (m.register(0, FIFO_CONFIG2), m.register(0, FIFO_CONFIG3)),
         (100, 0)

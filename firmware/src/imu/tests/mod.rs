@@ -3,6 +3,7 @@
 //! register fields, the AAF table), independently of the driver's and the model's code.
 
 mod alignment;
+mod bmi270;
 mod bursts_stall;
 mod icm_afsr;
 mod icm_configure;
