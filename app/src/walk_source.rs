@@ -219,6 +219,7 @@ mod tests {
                             ..TermFit::default()
                         },
                     ],
+                    curve: None,
                 },
             })
             .collect();

@@ -11,7 +11,7 @@ use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
 use super::{attitude, build, drift, gyro, joint, paper, plausibility, screen, thermal};
-use super::{gyro_drift, thermal_gyro, WalkEstimate};
+use super::{gyro_drift, thermal_gyro, GyroWalkEstimate, WalkEstimate};
 use super::{
     BiasWalk, BodyFrame, CalibrationOutcome, EstimateError, EstimateOptions, Exclusion, FitSummary,
     GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability, SegmentDiagnostic,
@@ -93,14 +93,16 @@ fn fit_session(
         );
     }
     let frame = setup.frame;
+    let estimate_gyro = options.gyro_bias_walk_estimate
+        && options.gyro_bias_walk_deg_s_sqrt_s == 0.0
+        && setup.gyro_base.is_some();
     let main = main_fit(plan, options, &mut prepared, setup)?;
-    if options.bias_walk == BiasWalk::Estimate {
-        // The walk from the constant-bias fit's problem, then the fit again with it (§11.3).
-        let (p, segs) = (&prepared.problem, &prepared.segs);
-        let est = drift::estimate(p, &main.theta, &main.free, segs)?;
-        let given = BiasWalk::Given(est.fit_mg_sqrt_s);
-        let mut out = fit_session(plan, stats, &options.with_bias_walk(given))?;
-        out.bias_walk = Some(est);
+    let walks = estimate_walks(options, estimate_gyro, &prepared, &main)?;
+    if let Some(refit) = walks.refit(options) {
+        // A walk the session determines: the fit again with it (§11.3, §11.6).
+        let mut out = fit_session(plan, stats, &refit)?;
+        out.bias_walk = walks.accel.or(out.bias_walk);
+        out.gyro_walk = walks.gyro;
         return Ok(out);
     }
     let fitted = package::Fitted {
@@ -151,7 +153,72 @@ fn fit_session(
         frame,
         package_test,
     };
-    Ok(outcome(plan, options, prepared, main, solution))
+    let mut out = outcome(plan, options, prepared, main, solution);
+    // Estimated and not determined: reported, and the fit is the constant-bias one.
+    out.bias_walk = walks.accel.or(out.bias_walk);
+    out.gyro_walk = walks.gyro;
+    Ok(out)
+}
+
+/// The walks estimated from the constant-bias fit's problem (docs/model.md §11.3, §11.6).
+struct Walks {
+    accel: Option<WalkEstimate>,
+    gyro: Option<GyroWalkEstimate>,
+}
+
+impl Walks {
+    /// The options of the fit again with every walk the session determines, the others as
+    /// `options` had them; `None` when it determines none (the constant-bias fit stands).
+    fn refit(&self, options: &EstimateOptions) -> Option<EstimateOptions> {
+        let accel = self.accel.filter(|w| w.used);
+        let gyro = self.gyro.filter(|w| w.used);
+        if accel.is_none() && gyro.is_none() {
+            return None;
+        }
+        Some(EstimateOptions {
+            bias_walk: accel.map_or(options.bias_walk, |w| BiasWalk::Given(w.fit_mg_sqrt_s)),
+            gyro_bias_walk_deg_s_sqrt_s: gyro.map_or(options.gyro_bias_walk_deg_s_sqrt_s, |w| {
+                w.fit_deg_s_sqrt_s
+            }),
+            gyro_bias_walk_estimate: false,
+            ..options.clone()
+        })
+        .map(|o| EstimateOptions {
+            bias_walk: match o.bias_walk {
+                BiasWalk::Estimate => BiasWalk::Off,
+                w => w,
+            },
+            ..o
+        })
+    }
+}
+
+/// The gyro's walk first (on a spinning session its misfit is most of χ²), then the
+/// accelerometers' under the gyro's where that is determined; each only when asked for.
+fn estimate_walks(
+    options: &EstimateOptions,
+    estimate_gyro: bool,
+    prepared: &Prepared,
+    main: &MainFit,
+) -> Result<Walks, EstimateError> {
+    let (p, segs) = (&prepared.problem, &prepared.segs);
+    let gyro = if estimate_gyro {
+        gyro_drift::estimate(p, &main.theta, &main.free, segs)?
+    } else {
+        None
+    };
+    let accel = if options.bias_walk == BiasWalk::Estimate {
+        let mut p = p.clone();
+        if let (Some(g), Some(blk)) = (gyro.filter(|g| g.used), p.gyro_block.as_mut()) {
+            let mut o = options.clone();
+            o.gyro_bias_walk_deg_s_sqrt_s = g.fit_deg_s_sqrt_s;
+            blk.walk = gyro_drift::walk(&o, segs);
+        }
+        Some(drift::estimate(&p, &main.theta, &main.free, segs)?)
+    } else {
+        None
+    };
+    Ok(Walks { accel, gyro })
 }
 
 /// The session matched to its plan and screened, the mounts and segment models built, and the
@@ -451,6 +518,7 @@ fn outcome(
             .filter(|d| d.active())
             .map(|_| options.gyro_bias_walk_deg_s_sqrt_s),
         bias_walk: walk,
+        gyro_walk: None,
     }
 }
 

@@ -255,4 +255,7 @@ pub struct CalibrationOutcome {
     /// The gyro's bias random walk the gyro model's mean rates were weighted with, °/s/√s
     /// (docs/model.md §11.6); `None` with a constant gyro bias or without a gyro model.
     pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
+    /// The gyro's bias random walk estimated from the session, when asked for and the session
+    /// estimates a gyro model (used only where it determines it; docs/model.md §11.6).
+    pub gyro_walk: Option<super::GyroWalkEstimate>,
 }

@@ -550,9 +550,13 @@ impl NoiseReport {
         let lines = undetermined_lines(&self.axes, self.samples as f64 / self.sample_rate_hz);
         if !lines.is_empty() {
             s += &format!(
-                "n.d.: a term counts only where it is at least {}× its 1σ (from a bootstrap of the fit)\n{lines}",
+                "n.d.: a term counts only where it is at least {}× its 1σ (from the Allan points' \
+                 equivalent degrees of freedom) and the curve reaches the τ where it dominates\n{lines}",
                 allan::Z_DETERMINED
             );
+        }
+        for line in self.axes.iter().flat_map(|a| a.terms.notes(&a.axis)) {
+            s += &format!("note: {line}\n");
         }
         s
     }

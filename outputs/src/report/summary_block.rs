@@ -158,6 +158,7 @@ mod tests {
             warnings: Vec::new(),
             in_package_size_effect: None,
             gyro_bias_walk_deg_s_sqrt_s: None,
+            gyro_walk: None,
             bias_walk: None,
         };
         s.parameters = vec![
