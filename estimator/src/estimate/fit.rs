@@ -175,20 +175,19 @@ impl Walks {
         if accel.is_none() && gyro.is_none() {
             return None;
         }
+        // An estimate the session does not determine leaves that bias constant.
+        let bias_walk = match (accel, options.bias_walk) {
+            (Some(w), _) => BiasWalk::Given(w.fit_mg_sqrt_s),
+            (None, BiasWalk::Estimate) => BiasWalk::Off,
+            (None, w) => w,
+        };
         Some(EstimateOptions {
-            bias_walk: accel.map_or(options.bias_walk, |w| BiasWalk::Given(w.fit_mg_sqrt_s)),
+            bias_walk,
             gyro_bias_walk_deg_s_sqrt_s: gyro.map_or(options.gyro_bias_walk_deg_s_sqrt_s, |w| {
                 w.fit_deg_s_sqrt_s
             }),
             gyro_bias_walk_estimate: false,
             ..options.clone()
-        })
-        .map(|o| EstimateOptions {
-            bias_walk: match o.bias_walk {
-                BiasWalk::Estimate => BiasWalk::Off,
-                w => w,
-            },
-            ..o
         })
     }
 }

@@ -30,12 +30,22 @@ fn paper_plan() -> Plan {
     testkit::paper_plan(OutputUnit::Lsb)
 }
 
-/// `plan` simulated row by row with consumer MEMS noise and the walks given.
+/// `plan` simulated row by row with the walks given: consumer MEMS noise for a unit in LSB, else
+/// 1 mg and 0.05 °/s of white noise.
 fn simulate(plan: &Plan, truth: &Calibration, walks: [f64; 2], seed: u64) -> Vec<SegmentStats> {
+    let base = if plan.output_unit == OutputUnit::Lsb {
+        testkit::mems_noise()
+    } else {
+        NoiseModel {
+            accel_white_mg: 1.0,
+            gyro_white_deg_s: 0.05,
+            ..NoiseModel::none()
+        }
+    };
     let noise = NoiseModel {
         accel_bias_walk_mg_sqrt_s: walks[0],
         gyro_bias_walk_deg_s_sqrt_s: walks[1],
-        ..testkit::mems_noise()
+        ..base
     };
     crate::sim::stats::simulate_stats(truth, plan, &noise, seed).unwrap()
 }
