@@ -183,9 +183,8 @@ impl Walks {
         };
         Some(EstimateOptions {
             bias_walk,
-            gyro_bias_walk_deg_s_sqrt_s: gyro.map_or(options.gyro_bias_walk_deg_s_sqrt_s, |w| {
-                w.fit_deg_s_sqrt_s
-            }),
+            gyro_bias_walk_deg_s_sqrt_s: gyro
+                .map_or(options.gyro_bias_walk_deg_s_sqrt_s, |w| w.fit_deg_s_sqrt_s),
             gyro_bias_walk_estimate: false,
             ..options.clone()
         })

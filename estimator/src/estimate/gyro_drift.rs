@@ -142,7 +142,9 @@ pub struct GyroWalkEstimate {
 /// The grid the gyro walk's likelihood is first searched on, °/s/√s: 10⁻⁶ to 0.1 in quarter
 /// decades.
 fn grid() -> Vec<f64> {
-    (0..=20).map(|i| 10f64.powf(-6.0 + 0.25 * i as f64)).collect()
+    (0..=20)
+        .map(|i| 10f64.powf(-6.0 + 0.25 * i as f64))
+        .collect()
 }
 
 /// The restricted log-likelihood (docs/model.md §11.3) of `p` under a gyro walk of `k` °/s/√s:

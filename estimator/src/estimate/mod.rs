@@ -46,8 +46,6 @@ mod gyro_drift;
 #[cfg(test)]
 mod gyro_drift_tests;
 #[cfg(test)]
-mod walk_default_tests;
-#[cfg(test)]
 mod gyro_tests;
 pub mod handheld_gyro;
 mod joint;
@@ -74,14 +72,16 @@ mod thermal_misalignment;
 #[cfg(test)]
 mod thermal_tests;
 mod uncertainty;
+#[cfg(test)]
+mod walk_default_tests;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
 pub use drift::{WalkEstimate, WalkOrigin, WalkPoint, Z_WALK};
-pub use gyro_drift::GyroWalkEstimate;
 pub use error::EstimateError;
 pub use fit::{calibrate_session_stats, calibrate_with_hand_gyro};
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
+pub use gyro_drift::GyroWalkEstimate;
 pub use options::{
     BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice, UnitWalk,
 };

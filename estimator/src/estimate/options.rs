@@ -115,7 +115,11 @@ impl EstimateOptions {
     pub fn drift_aware(self) -> EstimateOptions {
         let joint = self.method == Method::Joint;
         EstimateOptions {
-            bias_walk: if joint { BiasWalk::Estimate } else { self.bias_walk },
+            bias_walk: if joint {
+                BiasWalk::Estimate
+            } else {
+                self.bias_walk
+            },
             gyro_bias_walk_estimate: joint,
             ..self
         }

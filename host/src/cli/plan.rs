@@ -204,7 +204,11 @@ fn expected_walks(a: &PlanArgs, plan: &Plan, unit: &UnitFile) -> Result<Walks, C
         let spins = plan.segments.iter().any(|s| !s.is_static());
         Walks {
             accel_mg_sqrt_s: MEMS_ACCEL_WALK_MG_SQRT_S,
-            gyro_deg_s_sqrt_s: if spins { MEMS_GYRO_WALK_DEG_S_SQRT_S } else { 0.0 },
+            gyro_deg_s_sqrt_s: if spins {
+                MEMS_GYRO_WALK_DEG_S_SQRT_S
+            } else {
+                0.0
+            },
             from: "mems",
         }
     } else {

@@ -33,10 +33,10 @@
 mod holds;
 
 use super::confidence::{edf_overlapping_adev, PowerLaw};
-pub use holds::{CurveCheck, Z_CURVE, Z_MISFIT};
-use holds::{curve_check, unshown};
 use crate::sim::flicker::Flicker;
 use crate::sim::Rng;
+use holds::{curve_check, unshown};
+pub use holds::{CurveCheck, Z_CURVE, Z_MISFIT};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -208,10 +208,13 @@ impl NoiseTerms {
             .filter_map(|(i, v)| v.map(|v| (i, v * v)))
             .unzip();
         let sd = point_sd(&p, &idx, &coef);
-        let sd = if sd > 0.0 { sd } else { p.var * basis_free_sd(&p) };
+        let sd = if sd > 0.0 {
+            sd
+        } else {
+            p.var * basis_free_sd(&p)
+        };
         sd / (2.0 * point.adev)
     }
-
 }
 
 /// `2 ln 2 / π`: Allan variance of flicker noise per B².
@@ -510,7 +513,9 @@ fn simulate_terms(n: usize, tau0: f64, idx: &[usize], coef: &[f64], r: u64) -> V
 
 /// The coefficients' 1σ from their covariance.
 fn fit_sigma(cov: &nalgebra::DMatrix<f64>) -> Vec<f64> {
-    (0..cov.nrows()).map(|r| cov[(r, r)].max(0.0).sqrt()).collect()
+    (0..cov.nrows())
+        .map(|r| cov[(r, r)].max(0.0).sqrt())
+        .collect()
 }
 
 /// Fits [`NoiseTerms`] to a curve: only the terms the curve determines (see the module docs).
@@ -555,7 +560,9 @@ pub fn fit(points: &[AllanPoint]) -> NoiseTerms {
         out.fits[i].upper_bound_2sigma = fit.upper_bound_2sigma;
         // A term beyond the record needs at least the record whose curve reaches its τ (the
         // curve ends at a ninth of the record).
-        let reach = out.fits[i].shows_at_tau_s.filter(|_| out.fits[i].beyond_record);
+        let reach = out.fits[i]
+            .shows_at_tau_s
+            .filter(|_| out.fits[i].beyond_record);
         out.fits[i].needs_recording_s = match (fit.needs_recording_s, reach) {
             (Some(t), Some(tau)) => Some(t.max(9.0 * tau)),
             (t, _) => t,
@@ -867,10 +874,16 @@ mod tests {
         let at = short.fits[1].shows_at_tau_s.unwrap();
         assert!((at - 10.24).abs() < 1e-9, "{at}");
         assert!(short.fits[1].needs_recording_s.unwrap() >= 9.0 * 10.24);
-        assert!(short.notes("gx").iter().any(|l| l.contains("does not reach the τ")));
+        assert!(short
+            .notes("gx")
+            .iter()
+            .any(|l| l.contains("does not reach the τ")));
         let long = fit(&model_points(&|t| truth.adev(t), 13, n));
         let b = long.bias_instability.expect("determined");
-        assert!((b / truth.bias_instability.unwrap() - 1.0).abs() < 1e-6, "{long:?}");
+        assert!(
+            (b / truth.bias_instability.unwrap() - 1.0).abs() < 1e-6,
+            "{long:?}"
+        );
         assert!(!long.fits[1].beyond_record);
         assert!(long.notes("gx").is_empty(), "{:?}", long.notes("gx"));
     }
@@ -902,9 +915,15 @@ mod tests {
         let c = missed.curve.unwrap();
         println!("{missed:?}");
         assert!(!c.holds, "{c:?}");
-        assert!(c.worst_z.abs() > Z_CURVE && c.within_1sigma < c.points, "{c:?}");
         assert!(
-            missed.notes("gz").iter().any(|l| l.contains("misses the measured points")),
+            c.worst_z.abs() > Z_CURVE && c.within_1sigma < c.points,
+            "{c:?}"
+        );
+        assert!(
+            missed
+                .notes("gz")
+                .iter()
+                .any(|l| l.contains("misses the measured points")),
             "{:?}",
             missed.notes("gz")
         );

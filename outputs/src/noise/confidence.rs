@@ -160,13 +160,26 @@ mod tests {
             (PowerLaw::FlickerRate, 300, 1000, 2.245_954_085_845_091_3),
             (PowerLaw::RandomWalkRate, 1, 1000, 762.290_490_473_850_8),
             (PowerLaw::RandomWalkRate, 64, 1000, 12.966_105_328_201_303),
-            (PowerLaw::RandomWalkRate, 1024, 720_000, 650.108_618_240_042_2),
-            (PowerLaw::RandomWalkRate, 65_536, 720_000, 8.656_955_140_498_487),
+            (
+                PowerLaw::RandomWalkRate,
+                1024,
+                720_000,
+                650.108_618_240_042_2,
+            ),
+            (
+                PowerLaw::RandomWalkRate,
+                65_536,
+                720_000,
+                8.656_955_140_498_487,
+            ),
             (PowerLaw::RandomWalkRate, 300, 1000, 1.663_656_026_479_360_3),
         ];
         for (law, m, n, want) in cases {
             let got = edf_overlapping_adev(law, m, n).unwrap();
-            assert!((got / want - 1.0).abs() < 1e-9, "{law:?} m {m} n {n}: {got} against {want}");
+            assert!(
+                (got / want - 1.0).abs() < 1e-9,
+                "{law:?} m {m} n {n}: {got} against {want}"
+            );
         }
         assert_eq!(edf_overlapping_adev(PowerLaw::WhiteRate, 600, 1000), None);
         assert_eq!(edf_overlapping_adev(PowerLaw::WhiteRate, 0, 1000), None);

@@ -91,7 +91,10 @@ fn share(tau: f64, idx: &[usize], coef: &[f64], r: usize) -> f64 {
 /// The τ the search for a term's largest share covers: every half octave from 2⁻⁴⁰ of the
 /// curve's first τ to 2⁴⁰ times its last.
 fn wide_taus(lo: f64, hi: f64) -> impl Iterator<Item = f64> {
-    let (a, b) = (lo.ln() - 40.0 * std::f64::consts::LN_2, hi.ln() + 40.0 * std::f64::consts::LN_2);
+    let (a, b) = (
+        lo.ln() - 40.0 * std::f64::consts::LN_2,
+        hi.ln() + 40.0 * std::f64::consts::LN_2,
+    );
     let steps = ((b - a) / (0.5 * std::f64::consts::LN_2)).ceil() as usize;
     (0..=steps).map(move |k| (a + (b - a) * k as f64 / steps as f64).exp())
 }
@@ -102,9 +105,17 @@ fn wide_taus(lo: f64, hi: f64) -> impl Iterator<Item = f64> {
 /// the curve's floor (`τ = √3 N/K` with both), however small its share there. A fit can find a term
 /// significant from a curve that never reaches that τ (a short still's "bias instability"); it is
 /// then a guess at the curve's end, not a figure of the recording.
-pub(super) fn unshown(pts: &[VarPoint], idx: &[usize], coef: &[f64]) -> Option<(usize, Option<f64>)> {
+pub(super) fn unshown(
+    pts: &[VarPoint],
+    idx: &[usize],
+    coef: &[f64],
+) -> Option<(usize, Option<f64>)> {
     let (lo, hi) = (pts.first()?.tau, pts.last()?.tau);
-    let largest = |r: usize| wide_taus(lo, hi).map(|t| share(t, idx, coef, r)).fold(0.0, f64::max);
+    let largest = |r: usize| {
+        wide_taus(lo, hi)
+            .map(|t| share(t, idx, coef, r))
+            .fold(0.0, f64::max)
+    };
     let r = (0..idx.len()).find(|&r| {
         let half = 0.5 * largest(r);
         !pts.iter().any(|p| share(p.tau, idx, coef, r) >= half)
