@@ -8,7 +8,7 @@
 Writes a 2-hour still at 100 Hz (white noise and a random walk on every axis) to a temporary
 directory, times each `host noise` given (wall and CPU of the child) and allantools' `oadev` of the
 six axes at octave τ, and prints both tools' Allan deviation and 1σ at each τ of one gyro axis:
-`host noise`'s from its allan.csv, allantools' from Greenhall's EDF (`allantools.ci.edf_greenhall`
+the last `host noise`'s from its allan.csv (its `sigma` column), allantools' from Greenhall's EDF (`allantools.ci.edf_greenhall`
 for white rate noise, relative 1σ 1/√(2ν)).
 """
 import os
@@ -64,7 +64,8 @@ def main():
         print(f"allantools oadev, 6 axes: wall {time.perf_counter() - t0:.2f} s, "
               f"cpu {time.process_time() - c0:.2f} s (data in memory)")
         if hosts:
-            rows = np.genfromtxt(os.path.join(d, "out0", "allan.csv"), delimiter=",", names=True,
+            last = os.path.join(d, f"out{len(hosts) - 1}", "allan.csv")
+            rows = np.genfromtxt(last, delimiter=",", names=True,
                                  dtype=None, encoding=None)
             print("gyro_x: tau s | host adev, 1σ | allantools adev, 1σ (Greenhall EDF, white)")
             taus, adev = curves[3][0], curves[3][1]

@@ -151,7 +151,7 @@ mod tests {
             (PowerLaw::WhiteRate, 1, 1000, 782.030_299_072_743_8),
             (PowerLaw::WhiteRate, 16, 1000, 86.370_102_004_972_62),
             (PowerLaw::WhiteRate, 256, 1000, 3.879_630_664_270_347),
-            (PowerLaw::WhiteRate, 1024, 720_000, 1052.439_500_079_400_2),
+            (PowerLaw::WhiteRate, 1024, 720_000, 1_052.439_500_079_400_2),
             (PowerLaw::WhiteRate, 65_536, 720_000, 14.273_703_718_900_217),
             (PowerLaw::FlickerRate, 1, 720_000, 645_086.542_363_918_3),
             (PowerLaw::FlickerRate, 4, 1000, 282.357_703_970_543_87),

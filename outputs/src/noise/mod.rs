@@ -551,7 +551,7 @@ impl NoiseReport {
         if !lines.is_empty() {
             s += &format!(
                 "n.d.: a term counts only where it is at least {}× its 1σ (from the Allan points' \
-                 equivalent degrees of freedom) and the curve reaches the τ where it dominates\n{lines}",
+                 equivalent degrees of freedom) and the curve reaches the τ that shows it\n{lines}",
                 allan::Z_DETERMINED
             );
         }
