@@ -3,8 +3,9 @@
 //! walk.
 //!
 //! `DRIFT_SEEDS=N cargo test -p estimator --lib drift_against_the_oracle -- --nocapture` runs N seeds
-//! per walk strength (default 2) on both fixtures and prints every figure; `DRIFT_SEEDS=12` is the
-//! documented run (about 3 minutes).
+//! per walk strength (default 2) on both fixtures and prints every figure; `DRIFT_SEEDS=10` is the
+//! documented run (about 10 minutes on two busy cores: the default fit estimates the gyro's walk
+//! too).
 
 use super::*;
 use crate::session::SegmentStats;
