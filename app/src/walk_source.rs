@@ -238,6 +238,7 @@ mod tests {
                             ..TermFit::default()
                         },
                     ],
+                    curve: None,
                 },
             })
             .collect();

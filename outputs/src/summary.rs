@@ -311,6 +311,25 @@ pub struct CalibrationSummary {
     /// (docs/model.md §11.6). Absent with a constant gyro bias or without a gyro model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
+    /// The gyro's bias random walk estimated from the session, with its 1σ, and whether the fit
+    /// used it (docs/model.md §11.6). Absent when not estimated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gyro_walk: Option<GyroWalkSummary>,
+}
+
+/// The gyro's bias random walk estimated from the session (docs/model.md §11.6).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GyroWalkSummary {
+    /// The estimate, °/s/√s.
+    pub deg_s_sqrt_s: f64,
+    /// Its 1σ, °/s/√s.
+    pub sigma_deg_s_sqrt_s: f64,
+    /// The likelihood interval, °/s/√s.
+    pub interval_deg_s_sqrt_s: [f64; 2],
+    /// How far the session rules out a constant gyro bias, σ.
+    pub significance: f64,
+    /// Whether the fit weighted the gyro's means with it (determined by the session).
+    pub used: bool,
 }
 
 /// The temperature fit's χ² per accelerometer axis, over every sample of the segments that
@@ -356,6 +375,13 @@ pub struct BiasWalkSummary {
     pub interval_mg_sqrt_s: Option<[f64; 2]>,
     /// The strength the segments were weighted with, mg/√s.
     pub fit_mg_sqrt_s: f64,
+    /// Estimated: how far the session rules out no walk, σ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub significance: Option<f64>,
+    /// Whether the fit weighted the segments with it (an estimate only where the session
+    /// determines it; otherwise the bias is fitted as constant).
+    #[serde(default = "used_by_default")]
+    pub used: bool,
     /// Each segment's fitted wander of the bias from the session's start, in time order.
     pub track: Vec<BiasTrackPoint>,
 }
@@ -373,6 +399,25 @@ pub struct BiasTrackPoint {
     pub sigma_mg: [f64; 3],
 }
 
+/// A summary written before estimates could go unused: its walk was used.
+fn used_by_default() -> bool {
+    true
+}
+
+impl GyroWalkSummary {
+    /// The gyro walk estimated for `outcome`, when it was.
+    pub(crate) fn of(outcome: &CalibrationOutcome) -> Option<GyroWalkSummary> {
+        let g = outcome.gyro_walk.as_ref()?;
+        Some(GyroWalkSummary {
+            deg_s_sqrt_s: g.deg_s_sqrt_s,
+            sigma_deg_s_sqrt_s: g.sigma_deg_s_sqrt_s,
+            interval_deg_s_sqrt_s: g.interval_deg_s_sqrt_s,
+            significance: g.significance,
+            used: g.used,
+        })
+    }
+}
+
 impl BiasWalkSummary {
     /// The walk of `outcome`, when its fit assumed one.
     pub(crate) fn of(outcome: &CalibrationOutcome) -> Option<BiasWalkSummary> {
@@ -384,6 +429,8 @@ impl BiasWalkSummary {
             sigma_mg_sqrt_s: w.sigma_mg_sqrt_s,
             interval_mg_sqrt_s: w.interval_mg_sqrt_s,
             fit_mg_sqrt_s: w.fit_mg_sqrt_s,
+            significance: w.significance,
+            used: w.used,
             track: outcome
                 .bias_track
                 .iter()
@@ -528,6 +575,7 @@ impl CalibrationSummary {
                 .then(|| crate::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
             bias_walk: BiasWalkSummary::of(outcome),
             gyro_bias_walk_deg_s_sqrt_s: outcome.gyro_bias_walk_deg_s_sqrt_s,
+            gyro_walk: GyroWalkSummary::of(outcome),
         }
     }
 

@@ -132,7 +132,8 @@ pub fn calibrate(
         single_package,
         spelling: Spelling::Keywords,
         ..EstimateOptions::default()
-    };
+    }
+    .drift_aware();
     let limits: Limits = match limits {
         Some(d) => {
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;

@@ -145,6 +145,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
             warnings: Vec::new(),
             in_package_size_effect: None,
             gyro_bias_walk_deg_s_sqrt_s: None,
+            gyro_walk: None,
             bias_walk: None,
         })),
         error: None,

@@ -242,6 +242,80 @@ pub struct WalkEstimate {
     /// The strength the fit weighted the segments with, mg/√s: the given one, or for an estimate
     /// `√(K̂² + σ²)`, the walk's mean square over its likelihood (docs/model.md §11.3).
     pub fit_mg_sqrt_s: f64,
+    /// For an estimate, how far the session's likelihood rules out no walk at all:
+    /// `√(2 (log L(K̂) − log L(0)))`, in σ (docs/model.md §11.3).
+    pub significance: Option<f64>,
+    /// Whether the fit weighted the segments with it: always when given or taken from the unit;
+    /// an estimate only where the session determines it (a significance of at least
+    /// [`Z_WALK`]); otherwise the bias is fitted as constant.
+    pub used: bool,
+}
+
+/// An estimated walk is used when the session's likelihood rules out no walk by at least this
+/// many σ (a likelihood ratio `2 Δlog L ≥ 4`; on a session without a walk, about one in 44 crosses
+/// it, and then at a strength too weak to move the fit much).
+pub const Z_WALK: f64 = 2.0;
+
+/// The maximum of a walk strength's restricted log-likelihood (docs/model.md §11.3): the strength,
+/// the interval where the log-likelihood is within ½ of its maximum, and the maximum's height above
+/// no walk.
+pub(crate) struct Search {
+    pub q: f64,
+    pub interval: [f64; 2],
+    pub gain: f64,
+}
+
+impl Search {
+    /// Half the likelihood interval's width: the 1σ.
+    pub(crate) fn sigma(&self) -> f64 {
+        0.5 * (self.interval[1] - self.interval[0])
+    }
+
+    /// `√(2 Δlog L)` against no walk, σ.
+    pub(crate) fn significance(&self) -> f64 {
+        (2.0 * self.gain.max(0.0)).sqrt()
+    }
+}
+
+/// The walk strength on `grid` (then refined by golden section) that maximises the log-likelihood
+/// `at`, with its likelihood interval (docs/model.md §11.3).
+pub(crate) fn search(
+    at: &dyn Fn(f64) -> Result<f64, EstimateError>,
+    grid: &[f64],
+    fail: &dyn Fn() -> EstimateError,
+) -> Result<Search, EstimateError> {
+    let l0 = at(0.0)?;
+    let mut pts: Vec<(f64, f64)> = vec![(0.0, l0)];
+    for &q in grid {
+        pts.push((q, at(q)?));
+    }
+    let best = (0..pts.len())
+        .max_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1))
+        .ok_or_else(fail)?;
+    let (mut q, mut l) = pts[best];
+    if best > 0 && best + 1 < pts.len() {
+        let floor = grid[0] / 10.0;
+        (q, l) = golden(at, pts[best - 1].0.max(floor), pts[best + 1].0)?;
+        if l < pts[best].1 {
+            (q, l) = pts[best];
+        }
+    }
+    let target = l - 0.5;
+    let lower = if q == 0.0 || l0 >= target {
+        0.0
+    } else {
+        crossing(at, 0.0, q, target)?
+    };
+    let hi = pts
+        .iter()
+        .find(|(x, v)| *x > q && *v < target)
+        .map_or(10.0 * q.max(grid[grid.len() - 1]), |p| p.0);
+    let upper = crossing(at, q, hi, target)?;
+    Ok(Search {
+        q,
+        interval: [lower, upper],
+        gain: l - l0,
+    })
 }
 
 /// A given walk (or one taken from the unit) set on `problem`, its scale factors from the
@@ -280,6 +354,8 @@ pub(crate) fn apply(
         sigma_mg_sqrt_s: None,
         interval_mg_sqrt_s: None,
         fit_mg_sqrt_s: strongest,
+        significance: None,
+        used: true,
     })
 }
 
@@ -415,7 +491,7 @@ impl Likelihood<'_> {
 
 /// `log det` of the information matrix over the free columns at `t` (the restricted likelihood's
 /// term), or `None` when it is not positive definite.
-fn log_det_information(p: &Problem, t: &[f64], free: &[bool]) -> Option<f64> {
+pub(crate) fn log_det_information(p: &Problem, t: &[f64], free: &[bool]) -> Option<f64> {
     let cols = solve::Columns::new(free, p.single_package);
     let (n, _, _) = solve::normal_equations(p, t, &cols, None);
     let chol = n.cholesky()?;
@@ -449,39 +525,18 @@ pub(crate) fn estimate(
         what: "bias random walk likelihood",
     };
     let at = |mg: f64| lik.at(mg).ok_or_else(fail);
-    let mut pts: Vec<(f64, f64)> = vec![(0.0, at(0.0)?)];
-    for q in grid() {
-        pts.push((q, at(q)?));
-    }
-    let best = (0..pts.len())
-        .max_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1))
-        .ok_or_else(fail)?;
-    let (mut q, mut l) = pts[best];
-    if best > 0 && best + 1 < pts.len() {
-        (q, l) = golden(&at, pts[best - 1].0.max(1e-6), pts[best + 1].0)?;
-        if l < pts[best].1 {
-            (q, l) = pts[best];
-        }
-    }
-    let target = l - 0.5;
-    let lower = if q == 0.0 || at(0.0)? >= target {
-        0.0
-    } else {
-        crossing(&at, 0.0, q, target)?
-    };
-    let hi = pts
-        .iter()
-        .find(|(x, v)| *x > q && *v < target)
-        .map_or(10.0 * q.max(1.0), |p| p.0);
-    let upper = crossing(&at, q, hi, target)?;
-    let sigma = 0.5 * (upper - lower);
+    let grid: Vec<f64> = grid().collect();
+    let found = search(&at, &grid, &fail)?;
+    let (q, sigma) = (found.q, found.sigma());
     Ok(WalkEstimate {
         origin: WalkOrigin::Estimated,
         mg_sqrt_s: q,
         axes_mg_sqrt_s: [q; 3],
         sigma_mg_sqrt_s: Some(sigma),
-        interval_mg_sqrt_s: Some([lower, upper]),
+        interval_mg_sqrt_s: Some(found.interval),
         fit_mg_sqrt_s: q.hypot(sigma),
+        significance: Some(found.significance()),
+        used: found.significance() >= Z_WALK,
     })
 }
 

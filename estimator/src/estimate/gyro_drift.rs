@@ -9,10 +9,12 @@
 //! `blockdiag(se_cov) + q² C`, whitened by its Cholesky factor, in place of each mean's own
 //! whitening. No walk leaves the per-mean path, so a zero walk is the constant-bias fit bit for bit.
 
-use super::drift::{start_time, walk_covariance, with_own_noise, Drift};
+use super::drift::{
+    log_det_information, search, start_time, walk_covariance, with_own_noise, Drift, Z_WALK,
+};
 use super::gyro::GyroBlock;
-use super::solve::NormalSystem;
-use super::{EstimateOptions, SessionSeg};
+use super::solve::{self, NormalSystem, Problem};
+use super::{EstimateError, EstimateOptions, SessionSeg};
 use nalgebra::{DMatrix, DVector};
 
 /// The gyro walk of `options` (°/s/√s, the same on every axis), starting at the first sample of
@@ -115,4 +117,82 @@ pub(crate) fn segment_biases(blk: &GyroBlock, t: &[f64]) -> Vec<(usize, [f64; 3]
         .enumerate()
         .map(|(s, m)| (m.seg, core::array::from_fn(|a| b[a] + w[3 * s + a])))
         .collect()
+}
+
+/// The gyro walk's strength, estimated from the session, with its 1σ (docs/model.md §11.6).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GyroWalkEstimate {
+    /// The strength that maximises the session's restricted likelihood, °/s/√s (one for the three
+    /// axes).
+    pub deg_s_sqrt_s: f64,
+    /// Its 1σ (half the likelihood interval's width), °/s/√s.
+    pub sigma_deg_s_sqrt_s: f64,
+    /// The likelihood interval (log-likelihood within ½ of its maximum), °/s/√s.
+    pub interval_deg_s_sqrt_s: [f64; 2],
+    /// The strength the fit weighted the gyro's means with when used, °/s/√s: `√(K̂² + σ²)`, the
+    /// walk's mean square over its likelihood, as for the accelerometers (§11.3).
+    pub fit_deg_s_sqrt_s: f64,
+    /// `√(2 (log L(K̂) − log L(0)))`: how far the session rules out a constant gyro bias, σ.
+    pub significance: f64,
+    /// Whether the fit used it (a significance of at least [`super::drift::Z_WALK`]); otherwise
+    /// the gyro bias is fitted as constant.
+    pub used: bool,
+}
+
+/// The grid the gyro walk's likelihood is first searched on, °/s/√s: 10⁻⁶ to 0.1 in quarter
+/// decades.
+fn grid() -> Vec<f64> {
+    (0..=20)
+        .map(|i| 10f64.powf(-6.0 + 0.25 * i as f64))
+        .collect()
+}
+
+/// The restricted log-likelihood (docs/model.md §11.3) of `p` under a gyro walk of `k` °/s/√s:
+/// `−½ (χ² + log det Σ_g + log det N)` at the generalised least-squares fit, `Σ_g` the gyro means'
+/// covariance under the walk (the accelerometers' and the priors' terms, which do not depend on
+/// it, left out).
+fn log_likelihood(p: &Problem, start: &[f64], free: &[bool], t0: f64, k: f64) -> Option<f64> {
+    let mut p = p.clone();
+    let q = k.to_radians();
+    let d = Drift {
+        q2: [q * q; 3],
+        t0_s: t0,
+    };
+    let blk = p.gyro_block.as_mut()?;
+    let chol = covariance(blk, &d).cholesky()?;
+    let l = chol.l();
+    let ld_sigma: f64 = (0..l.nrows()).map(|i| 2.0 * l[(i, i)].ln()).sum();
+    blk.walk = Some(d);
+    let fit = solve::fit(&p, start.to_vec(), free.to_vec(), "gyro walk likelihood").ok()?;
+    let ld_n = log_det_information(&p, &fit.theta, &fit.free)?;
+    Some(-0.5 * (fit.chi2 + ld_sigma + ld_n))
+}
+
+/// The gyro walk's strength that maximises the restricted likelihood of the fit's problem `p`
+/// (its gyro model estimated with the rest), from the constant-bias fit's `theta` and `free`
+/// (docs/model.md §11.3, §11.6); `None` when the session estimates no gyro model.
+pub(crate) fn estimate(
+    p: &Problem,
+    theta: &[f64],
+    free: &[bool],
+    segs: &[SessionSeg],
+) -> Result<Option<GyroWalkEstimate>, EstimateError> {
+    if p.gyro_block.is_none() {
+        return Ok(None);
+    }
+    let t0 = start_time(segs);
+    let fail = || EstimateError::Singular {
+        what: "gyro bias random walk likelihood",
+    };
+    let at = |k: f64| log_likelihood(p, theta, free, t0, k).ok_or_else(fail);
+    let found = search(&at, &grid(), &fail)?;
+    let sigma = found.sigma();
+    Ok(Some(GyroWalkEstimate {
+        deg_s_sqrt_s: found.q,
+        sigma_deg_s_sqrt_s: sigma,
+        interval_deg_s_sqrt_s: found.interval,
+        fit_deg_s_sqrt_s: found.q.hypot(sigma),
+        significance: found.significance(),
+        used: found.significance() >= Z_WALK,
+    }))
 }

@@ -72,13 +72,16 @@ mod thermal_misalignment;
 #[cfg(test)]
 mod thermal_tests;
 mod uncertainty;
+#[cfg(test)]
+mod walk_default_tests;
 
 pub use attitude::{BodyFrame, MountTilt, StaticSplit};
-pub use drift::{WalkEstimate, WalkOrigin, WalkPoint};
+pub use drift::{WalkEstimate, WalkOrigin, WalkPoint, Z_WALK};
 pub use error::EstimateError;
 pub use fit::{calibrate_session_stats, calibrate_with_hand_gyro};
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
+pub use gyro_drift::GyroWalkEstimate;
 pub use options::{
     BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice, UnitWalk,
 };

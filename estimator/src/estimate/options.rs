@@ -103,11 +103,32 @@ pub struct EstimateOptions {
     /// walk too), not asked for: on a session without a gyro model it is left out with a warning
     /// instead of refused ([`super::EstimateError::GyroBiasWalkUnused`]).
     pub gyro_bias_walk_from_unit: bool,
+    /// Estimate the gyro's bias random walk from the session when none is given (a
+    /// `gyro_bias_walk_deg_s_sqrt_s` of 0), and weigh the gyro's means with it where the session
+    /// determines it (docs/model.md §11.6); off, a constant gyro bias. The tools ask for it by
+    /// default, with [`BiasWalk::Estimate`]; the library's default is the constant-bias fit.
+    pub gyro_bias_walk_estimate: bool,
     /// How the caller names these options in refusals and warnings.
     pub spelling: Spelling,
 }
 
 impl EstimateOptions {
+    /// These options as the tools fit by default: drift-aware, both bias walks estimated from the
+    /// session and used where it determines them (docs/model.md §11.3, §11.6); the paper's
+    /// method, which weighs no walk, keeps constant biases.
+    pub fn drift_aware(self) -> EstimateOptions {
+        let joint = self.method == Method::Joint;
+        EstimateOptions {
+            bias_walk: if joint {
+                BiasWalk::Estimate
+            } else {
+                self.bias_walk
+            },
+            gyro_bias_walk_estimate: joint,
+            ..self
+        }
+    }
+
     /// These options with the bias walk `walk`.
     pub fn with_bias_walk(&self, walk: BiasWalk) -> EstimateOptions {
         EstimateOptions {
@@ -128,7 +149,9 @@ pub enum BiasWalk {
     /// Allan K of `host noise`), reported as taken from the unit (docs/model.md §11.3).
     FromUnit(UnitWalk),
     /// A random walk whose strength is estimated from the session (restricted maximum likelihood on
-    /// the constant-bias fit's problem, §11.3).
+    /// the constant-bias fit's problem, §11.3), reported with its 1σ, and used where the session
+    /// determines it ([`super::drift::Z_WALK`]); a session that determines none is the
+    /// constant-bias fit, to the last digit.
     Estimate,
 }
 
@@ -179,6 +202,7 @@ impl Default for EstimateOptions {
             bias_walk: BiasWalk::Off,
             gyro_bias_walk_deg_s_sqrt_s: 0.0,
             gyro_bias_walk_from_unit: false,
+            gyro_bias_walk_estimate: false,
             spelling: Spelling::Flags,
         }
     }

@@ -259,4 +259,7 @@ pub struct CalibrationOutcome {
     /// `acc_offset`): the biases are of the logger's own counts and hold them; written to the
     /// calibration file for `apply`. `None`: none was subtracted.
     pub acc_offset: Option<[f64; 3]>,
+    /// The gyro's bias random walk estimated from the session, when asked for and the session
+    /// estimates a gyro model (used only where it determines it; docs/model.md §11.6).
+    pub gyro_walk: Option<super::GyroWalkEstimate>,
 }

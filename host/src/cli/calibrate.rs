@@ -128,7 +128,9 @@ pub struct EstimatorArgs {
 pub struct BiasWalkArgs {
     /// The accelerometers' bias is a random walk of this strength, mg/√s (the Allan K of
     /// `host noise`, in mg): the segments are weighted with the walk's covariance across the
-    /// session (docs/model.md §11). 0 is a constant bias, the default.
+    /// session (docs/model.md §11). 0 keeps a constant bias. Without it (and without
+    /// --bias-walk-from) the walk is estimated from the session, reported with its 1σ, and used
+    /// where the session determines it.
     #[arg(
         long,
         value_name = "MG_SQRT_S",
@@ -137,7 +139,8 @@ pub struct BiasWalkArgs {
     )]
     pub bias_walk: Option<f64>,
     /// The accelerometers' bias is a random walk whose strength is estimated from the session
-    /// (restricted maximum likelihood, reported with its 1σ; docs/model.md §11).
+    /// (restricted maximum likelihood, reported with its 1σ, used where the session determines
+    /// it; docs/model.md §11). The default; the flag states it.
     #[arg(long, conflicts_with = "bias_walk_from")]
     pub bias_walk_estimate: bool,
     // The `[noise]` below is the TOML table's name in the --help text, not a link.
@@ -151,7 +154,9 @@ pub struct BiasWalkArgs {
     pub bias_walk_from: Option<PathBuf>,
     /// The gyro's bias is a random walk of this strength, °/s/√s (the Allan K of `host noise`'s
     /// gyro axes, in °/s): the gyro model's mean rates are weighted with the walk's covariance
-    /// across the session (docs/model.md §11.6). 0 is a constant gyro bias, the default.
+    /// across the session (docs/model.md §11.6). 0 keeps a constant gyro bias. Without it (and
+    /// without a gyro figure in --bias-walk-from's file) the gyro's walk is estimated from a
+    /// session that spins, reported with its 1σ, and used where the session determines it.
     #[arg(
         long,
         value_name = "DEG_S_SQRT_S",
@@ -173,21 +178,42 @@ impl BiasWalkArgs {
         self.gyro_bias_walk.unwrap_or(0.0)
     }
 
-    /// The walks these flags ask for: the accelerometers' and the gyro's (°/s/√s, 0 for a
-    /// constant gyro bias). `--bias-walk-from`'s file is read here; `--gyro-bias-walk` takes the
-    /// place of its gyro figure.
-    pub(crate) fn walks(&self) -> Result<(BiasWalk, f64), CliError> {
+    /// The walks these flags ask for: the accelerometers', the gyro's (°/s/√s, 0 for a constant
+    /// gyro bias), and whether the gyro's is to be estimated (none given). Without a flag both are
+    /// estimated from the session (docs/model.md §11.3, §11.6). `--bias-walk-from`'s file is read
+    /// here; `--gyro-bias-walk` takes the place of its gyro figure.
+    pub(crate) fn walks(&self) -> Result<(BiasWalk, f64, bool), CliError> {
         if let Some(path) = &self.bias_walk_from {
             let from_file = crate::app::walk_source::walk_from_file(path)?;
             let gyro = self.gyro_bias_walk.or(from_file.gyro_deg_s_sqrt_s);
-            return Ok((BiasWalk::FromUnit(from_file.accel), gyro.unwrap_or(0.0)));
+            let accel = BiasWalk::FromUnit(from_file.accel);
+            return Ok((accel, gyro.unwrap_or(0.0), gyro.is_none()));
         }
         let accel = match (self.bias_walk, self.bias_walk_estimate) {
-            (_, true) => BiasWalk::Estimate,
+            (_, true) | (None, false) => BiasWalk::Estimate,
             (Some(mg), false) if mg > 0.0 => BiasWalk::Given(mg),
             _ => BiasWalk::Off,
         };
-        Ok((accel, self.gyro_walk()))
+        Ok((accel, self.gyro_walk(), self.gyro_bias_walk.is_none()))
+    }
+
+    /// Sets the walks these flags ask for on `options` ([`Self::walks`]); the paper's method,
+    /// which weighs no walk, keeps a constant bias unless a walk was asked for (then
+    /// [`EstimatorArgs::refuse`] has refused it).
+    pub(crate) fn set(&self, options: &mut EstimateOptions) -> Result<(), CliError> {
+        let (accel, gyro, estimate_gyro) = self.walks()?;
+        let joint = options.method == Method::Joint;
+        options.bias_walk = if joint || self.any() {
+            accel
+        } else {
+            BiasWalk::Off
+        };
+        options.gyro_bias_walk_deg_s_sqrt_s = gyro;
+        options.gyro_bias_walk_estimate = estimate_gyro && joint;
+        // A gyro walk not asked for by itself (from the unit's noise figures, or none): where the
+        // session has no gyro model it is left out, not refused.
+        options.gyro_bias_walk_from_unit = self.gyro_bias_walk.is_none();
+        Ok(())
     }
 }
 
@@ -215,8 +241,7 @@ impl EstimatorArgs {
 
     /// The estimator options these flags ask for; `--bias-walk-from`'s file is read here.
     pub fn options(&self) -> Result<EstimateOptions, CliError> {
-        let (bias_walk, gyro_walk) = self.walk.walks()?;
-        Ok(EstimateOptions {
+        let mut options = EstimateOptions {
             method: match self.method {
                 MethodArg::Joint => Method::Joint,
                 MethodArg::Paper => Method::Paper,
@@ -226,13 +251,10 @@ impl EstimatorArgs {
                 ReferenceArg::Centroid => ReferenceChoice::Centroid,
             },
             single_package: self.single_package,
-            bias_walk,
-            gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
-            // The file's gyro walk was not asked for by itself: where the session has no gyro
-            // model it is left out, not refused.
-            gyro_bias_walk_from_unit: self.walk.gyro_bias_walk.is_none(),
             ..EstimateOptions::default()
-        })
+        };
+        self.walk.set(&mut options)?;
+        Ok(options)
     }
 }
 

@@ -34,8 +34,17 @@ pub struct PlanArgs {
     pub unit: Option<PathBuf>,
     /// Predict with the accelerometers' bias a random walk of this strength, mg/√s (the Allan K
     /// of `host noise`, in mg; docs/model.md §11): the segments' order in the plan then matters.
+    /// Without it, the walk the unit's class is expected to have (see --gyro-bias-walk); 0 for a
+    /// constant bias.
     #[arg(long, value_name = "MG_SQRT_S", value_parser = crate::limits::real(0.0, crate::limits::MAX_BIAS_WALK_MG_SQRT_S))]
     pub bias_walk: Option<f64>,
+    /// Predict with the gyro's bias a random walk of this strength, °/s/√s (docs/model.md §11.6);
+    /// 0 for a constant gyro bias. Without it (and without --bias-walk) the walks the unit's
+    /// class is expected to have: the unit file's [noise] figures where it has them, else for a
+    /// digital MEMS unit (an LSB plan, or a single package) 0.002 mg/√s and 0.0005 °/s/√s,
+    /// ordinary figures for a consumer part, and none for an analog unit.
+    #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = crate::limits::real(0.0, crate::limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S))]
+    pub gyro_bias_walk: Option<f64>,
     /// Print the prediction as one JSON document on stdout (the table goes to stderr).
     #[arg(long)]
     pub json: bool,
@@ -70,15 +79,18 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         )));
     }
     print_plan(&plan, &out)?;
+    let walks = expected_walks(a, &plan, &unit)?;
     let k = truth.statics.scale_out_per_g;
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
         gyro_noise_rad_s: a.gyro_noise_deg_s.to_radians(),
         options: crate::estimate::EstimateOptions {
-            bias_walk: match a.bias_walk {
-                Some(k) if k > 0.0 => crate::estimate::BiasWalk::Given(k),
-                _ => crate::estimate::BiasWalk::Off,
+            bias_walk: if walks.accel_mg_sqrt_s > 0.0 {
+                crate::estimate::BiasWalk::Given(walks.accel_mg_sqrt_s)
+            } else {
+                crate::estimate::BiasWalk::Off
             },
+            gyro_bias_walk_deg_s_sqrt_s: walks.gyro_deg_s_sqrt_s,
             ..crate::estimate::EstimateOptions::default()
         },
         ..PredictSettings::white(0.0)
@@ -87,17 +99,16 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         .map_err(crate::estimate::EstimateError::from)?;
     let prediction = predict(&plan, &truth, &stats, &settings)?;
     out.line("")?;
-    let walk = a.bias_walk.filter(|k| *k > 0.0).map_or(String::new(), |k| {
-        format!("; a bias random walk of {k} mg/√s (docs/model.md §11)")
-    });
+    let walk = walks.describe();
     out.line(format_args!(
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro{walk}",
         a.noise_mg, a.gyro_noise_deg_s
     ))?;
     out.human(crate::report::render_prediction(&prediction))?;
-    let advice = match a.bias_walk {
-        Some(k) if k > 0.0 => crate::app::segment_order::order_advice(&plan, &truth, &settings)?,
-        _ => Vec::new(),
+    let advice = if walks.accel_mg_sqrt_s > 0.0 {
+        crate::app::segment_order::order_advice(&plan, &truth, &settings)?
+    } else {
+        Vec::new()
     };
     print_advice(&advice, &out)?;
     let unit = prediction.output_unit.symbol();
@@ -120,6 +131,9 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "sample_rate_hz": plan.sample_rate_hz,
         "noise_mg": a.noise_mg,
         "gyro_noise_deg_s": a.gyro_noise_deg_s,
+        "bias_walk_mg_sqrt_s": walks.accel_mg_sqrt_s,
+        "gyro_bias_walk_deg_s_sqrt_s": walks.gyro_deg_s_sqrt_s,
+        "walks_from": walks.from,
         "parameters": parameters,
         "lever_arms_observable": prediction.lever_arms_observable,
         "lever_arms_fixed": prediction.lever_arms_fixed,
@@ -134,6 +148,76 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
     }
     out.document(&doc)?;
     Ok(prediction)
+}
+
+/// A digital MEMS unit's accelerometer bias walk when nothing says otherwise, mg/√s: an ordinary
+/// figure for a consumer part (docs/model.md §11).
+const MEMS_ACCEL_WALK_MG_SQRT_S: f64 = 0.002;
+/// And its gyro's, °/s/√s (docs/model.md §11.6).
+const MEMS_GYRO_WALK_DEG_S_SQRT_S: f64 = 0.0005;
+
+/// The walks the prediction assumes and where they came from.
+struct Walks {
+    accel_mg_sqrt_s: f64,
+    gyro_deg_s_sqrt_s: f64,
+    /// `given`, `unit` (its file's `[noise]`), `mems` (the class's ordinary figures) or `none`.
+    from: &'static str,
+}
+
+impl Walks {
+    /// The clause of the noise line that states them.
+    fn describe(&self) -> String {
+        let why = match self.from {
+            "given" => "given",
+            "unit" => "the unit file's [noise]",
+            "mems" => "expected of a digital MEMS unit; --bias-walk 0 --gyro-bias-walk 0 for none",
+            _ => return String::new(),
+        };
+        format!(
+            "; bias random walks {} mg/√s and {} °/s/√s ({why}; docs/model.md §11)",
+            self.accel_mg_sqrt_s, self.gyro_deg_s_sqrt_s
+        )
+    }
+}
+
+/// The walks to predict with: those given, else the unit file's `[noise]` figures, else those of
+/// the unit's class (a digital MEMS unit: an LSB plan or a single package; an analog unit: none).
+fn expected_walks(a: &PlanArgs, plan: &Plan, unit: &UnitFile) -> Result<Walks, CliError> {
+    if a.bias_walk.is_some() || a.gyro_bias_walk.is_some() {
+        return Ok(Walks {
+            accel_mg_sqrt_s: a.bias_walk.unwrap_or(0.0),
+            gyro_deg_s_sqrt_s: a.gyro_bias_walk.unwrap_or(0.0),
+            from: "given",
+        });
+    }
+    let noise = crate::sim::NoiseModel::from_unit_file(unit)?;
+    if let Some(n) = noise.filter(|n| n.accel_bias_walk_mg_sqrt_s > 0.0) {
+        return Ok(Walks {
+            accel_mg_sqrt_s: n.accel_bias_walk_mg_sqrt_s,
+            gyro_deg_s_sqrt_s: n.gyro_bias_walk_deg_s_sqrt_s,
+            from: "unit",
+        });
+    }
+    let mems = plan.output_unit == shared::OutputUnit::Lsb || plan.package == Package::Single;
+    Ok(if mems {
+        // A plan without spins estimates no gyro model for a gyro walk to weigh.
+        let spins = plan.segments.iter().any(|s| !s.is_static());
+        Walks {
+            accel_mg_sqrt_s: MEMS_ACCEL_WALK_MG_SQRT_S,
+            gyro_deg_s_sqrt_s: if spins {
+                MEMS_GYRO_WALK_DEG_S_SQRT_S
+            } else {
+                0.0
+            },
+            from: "mems",
+        }
+    } else {
+        Walks {
+            accel_mg_sqrt_s: 0.0,
+            gyro_deg_s_sqrt_s: 0.0,
+            from: "none",
+        }
+    })
 }
 
 /// The segment-order advice under the walk (docs/model.md §11.2), one paragraph each; nothing when

@@ -39,7 +39,6 @@ pub struct ReportArgs {
 /// `host report`.
 pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     navigation_duration(a.duration_s)?;
-    let (bias_walk, gyro_walk) = a.walk.walks()?;
     let calibration = match &a.calibration {
         Some(c) => c.clone(),
         None => default_calibration(&a.input),
@@ -51,9 +50,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
         rate_run: a.rate_run.clone(),
         ..ReportOptions::default()
     };
-    options.estimate.bias_walk = bias_walk;
-    options.estimate.gyro_bias_walk_deg_s_sqrt_s = gyro_walk;
-    options.estimate.gyro_bias_walk_from_unit = a.walk.gyro_bias_walk.is_none();
+    a.walk.set(&mut options.estimate)?;
     options.formats.png = !a.no_png;
     let summary = report(&a.input, &calibration, &out_dir, &options)?;
     let out = super::output::Output { json: false, quiet };

@@ -386,3 +386,76 @@ fn a_missing_serial_port_names_the_port_and_the_fix() {
         "{e}"
     );
 }
+
+/// Drift-aware by default: without a walk flag `calibrate` estimates both walks from the session;
+/// `--bias-walk 0` and `--gyro-bias-walk 0` keep constant biases on request, a given strength takes
+/// the estimate's place, and the paper's method (no walk weights) keeps constant biases.
+#[test]
+fn the_walks_are_estimated_unless_a_flag_says_otherwise() {
+    use crate::estimate::BiasWalk;
+    let options = |extra: &[&str]| {
+        let mut args = vec!["calibrate", "--input", "x"];
+        args.extend_from_slice(extra);
+        let Command::Calibrate(c) = parse(&args).command else {
+            panic!("not calibrate")
+        };
+        calibrate_options(&c).unwrap().estimate
+    };
+    let by_default = options(&[]);
+    assert_eq!(by_default.bias_walk, BiasWalk::Estimate);
+    assert!(by_default.gyro_bias_walk_estimate);
+    let off = options(&["--bias-walk", "0", "--gyro-bias-walk", "0"]);
+    assert_eq!(off.bias_walk, BiasWalk::Off);
+    assert!(!off.gyro_bias_walk_estimate);
+    assert_eq!(off.gyro_bias_walk_deg_s_sqrt_s, 0.0);
+    let given = options(&["--bias-walk", "0.002", "--gyro-bias-walk", "0.0005"]);
+    assert_eq!(given.bias_walk, BiasWalk::Given(0.002));
+    assert!(!given.gyro_bias_walk_estimate);
+    assert_eq!(given.gyro_bias_walk_deg_s_sqrt_s, 0.0005);
+    let paper = options(&["--method", "paper"]);
+    assert_eq!(paper.bias_walk, BiasWalk::Off);
+    assert!(!paper.gyro_bias_walk_estimate);
+}
+
+/// `plan --check` predicts with the walks the unit's class is expected to have: the
+/// single-package plan (a digital MEMS unit) by default under 0.002 mg/√s and 0.0005 °/s/√s,
+/// exactly as with those walks given, and its bias 1σ above the prediction without walks; the
+/// paper's analog unit without any.
+#[test]
+fn plan_check_predicts_with_the_walks_of_the_units_class() {
+    let check = |args: &[&str]| {
+        let mut v = vec!["plan", "--check"];
+        v.extend_from_slice(args);
+        let Command::Plan(a) = parse(&v).command else {
+            panic!()
+        };
+        plan::run(&a, true).unwrap()
+    };
+    let by_default = check(&["single-package"]);
+    let given = check(&[
+        "single-package",
+        "--bias-walk",
+        "0.002",
+        "--gyro-bias-walk",
+        "0.0005",
+    ]);
+    let none = check(&[
+        "single-package",
+        "--bias-walk",
+        "0",
+        "--gyro-bias-walk",
+        "0",
+    ]);
+    assert_eq!(by_default.sigma, given.sigma);
+    // The paper's order: the bias of x first.
+    let k = 0;
+    assert!(
+        by_default.sigma[k] > none.sigma[k],
+        "{} against {}",
+        by_default.sigma[k],
+        none.sigma[k]
+    );
+    let paper = check(&["paper"]);
+    let paper_none = check(&["paper", "--bias-walk", "0"]);
+    assert_eq!(paper.sigma, paper_none.sigma);
+}

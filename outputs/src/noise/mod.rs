@@ -558,9 +558,13 @@ impl NoiseReport {
         let lines = undetermined_lines(&self.axes, self.samples as f64 / self.sample_rate_hz);
         if !lines.is_empty() {
             s += &format!(
-                "n.d.: a term counts only where it is at least {}× its 1σ (from a bootstrap of the fit)\n{lines}",
+                "n.d.: a term counts only where it is at least {}× its 1σ (from the Allan points' \
+                 equivalent degrees of freedom) and the curve reaches the τ that shows it\n{lines}",
                 allan::Z_DETERMINED
             );
+        }
+        for line in self.axes.iter().flat_map(|a| a.terms.notes(&a.axis)) {
+            s += &format!("note: {line}\n");
         }
         s
     }
@@ -656,18 +660,20 @@ impl NoiseReport {
         axis_panel_of(a, unit, series)
     }
 
-    /// `axis,tau_s,adev,fit_adev,terms` rows.
+    /// `axis,tau_s,adev,fit_adev,terms,sigma` rows (`sigma`: the 1σ of `adev` from the equivalent
+    /// degrees of freedom under the fitted terms, [`allan::NoiseTerms::adev_sigma`]).
     pub fn csv(&self) -> String {
-        let mut s = String::from("axis,tau_s,adev,fit_adev,terms\n");
+        let mut s = String::from("axis,tau_s,adev,fit_adev,terms,sigma\n");
         for a in &self.axes {
             for p in &a.points {
                 s += &format!(
-                    "{},{:e},{:e},{:e},{}\n",
+                    "{},{:e},{:e},{:e},{},{:e}\n",
                     a.axis,
                     p.tau_s,
                     p.adev,
                     a.terms.adev(p.tau_s),
-                    p.terms
+                    p.terms,
+                    a.terms.adev_sigma(p, 1.0 / self.sample_rate_hz)
                 );
             }
         }

@@ -404,6 +404,14 @@ fn bias_walk_note(w: &crate::estimate::WalkEstimate) -> String {
         }
         _ => format!("given, {:.5} mg/√s", w.mg_sqrt_s),
     };
+    if !w.used {
+        return format!(
+            "Bias random walk (docs/model.md §11): {source}, {:.1}σ from none: not determined by \
+             the session (under {}σ), so the bias is fitted as constant.",
+            w.significance.unwrap_or(0.0),
+            crate::estimate::Z_WALK
+        );
+    }
     format!(
         "Bias random walk (docs/model.md §11): {source}; the segments weighted with {:.5} mg/√s. \
          The figure bias_walk shows each segment's fitted bias over the session with its 1σ.",

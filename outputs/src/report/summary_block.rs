@@ -208,6 +208,7 @@ mod tests {
             warnings: Vec::new(),
             in_package_size_effect: None,
             gyro_bias_walk_deg_s_sqrt_s: None,
+            gyro_walk: None,
             bias_walk: None,
         };
         s.parameters = vec![
@@ -257,6 +258,7 @@ mod tests {
             in_package_size_effect: None,
             gyro_bias_walk_deg_s_sqrt_s: None,
             bias_walk: None,
+            gyro_walk: None,
         };
         let b = render_summary_block(&s);
         assert!(
@@ -302,6 +304,7 @@ mod tests {
             in_package_size_effect: None,
             gyro_bias_walk_deg_s_sqrt_s: None,
             bias_walk: None,
+            gyro_walk: None,
         };
         let b = render_summary_block(&s);
         let want = (1.004772f64.powi(2) + 0.021f64.powi(2)).sqrt() - 1.0;

@@ -60,9 +60,16 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
     }
     if let Some(w) = &o.bias_walk {
         let how = match (w.sigma_mg_sqrt_s, w.origin) {
+            (Some(sd), _) if !w.used => format!(
+                " ± {sd:.5} (1σ), estimated from the session, {:.1}σ from none: not determined \
+                 (under {}σ), the bias fitted as constant",
+                w.significance.unwrap_or(0.0),
+                crate::estimate::Z_WALK
+            ),
             (Some(sd), _) => format!(
-                " ± {sd:.5} (1σ), estimated from the session; the segments weighted with \
-                 √(K² + σ²) = {:.5}",
+                " ± {sd:.5} (1σ), estimated from the session ({:.1}σ from none); the segments \
+                 weighted with √(K² + σ²) = {:.5}",
+                w.significance.unwrap_or(0.0),
                 w.fit_mg_sqrt_s
             ),
             (None, crate::estimate::WalkOrigin::Unit) => {
@@ -77,12 +84,35 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
             w.mg_sqrt_s
         );
     }
-    if let Some(k) = o.gyro_bias_walk_deg_s_sqrt_s {
-        let _ = writeln!(
-            s,
-            "Gyro bias random walk: {k:.5} °/s/√s (given; the gyro's mean rates weighted with it, \
-             its bias b at the session's start; docs/model.md §11.6)"
-        );
+    match (&o.gyro_walk, o.gyro_bias_walk_deg_s_sqrt_s) {
+        (Some(g), _) => {
+            let how = if g.used {
+                format!(
+                    "the gyro's mean rates weighted with √(K² + σ²) = {:.6}, its bias b at the \
+                     session's start",
+                    g.fit_deg_s_sqrt_s
+                )
+            } else {
+                format!(
+                    "not determined (under {}σ), the gyro bias fitted as constant",
+                    crate::estimate::Z_WALK
+                )
+            };
+            let _ = writeln!(
+                s,
+                "Gyro bias random walk: {:.6} ± {:.6} °/s/√s (1σ), estimated from the session, \
+                 {:.1}σ from none; {how} (docs/model.md §11.6)",
+                g.deg_s_sqrt_s, g.sigma_deg_s_sqrt_s, g.significance
+            );
+        }
+        (None, Some(k)) => {
+            let _ = writeln!(
+                s,
+                "Gyro bias random walk: {k:.5} °/s/√s (given; the gyro's mean rates weighted with \
+                 it, its bias b at the session's start; docs/model.md §11.6)"
+            );
+        }
+        (None, None) => {}
     }
     if !o.bias_track.is_empty() {
         let _ = writeln!(s, "Fitted bias wander from u0 per segment, mg (x, y, z):");
