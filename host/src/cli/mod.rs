@@ -39,6 +39,8 @@ mod log_fixture_tests;
 pub mod log_input;
 #[cfg(test)]
 mod long_log_tests;
+#[cfg(test)]
+mod window_property_tests;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;

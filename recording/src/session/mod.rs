@@ -26,6 +26,7 @@ pub mod logs;
 pub mod plan;
 pub mod reader;
 pub mod repair;
+mod restart;
 pub mod segment;
 pub mod stats;
 pub mod thermal;

@@ -254,7 +254,11 @@ pub(super) fn read_rows<R: BufRead>(
             continue;
         }
         let acc = [v[0], v[1], v[2]];
-        match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
+        let admit = keeper.admit(t_s * seconds_per_unit, &acc, rec.len());
+        if layout.temp.is_some() {
+            keeper.temperature(temp_c);
+        }
+        match admit {
             Admit::Keep => push_row(&mut rec, v, t_s, temp_c, gyro_scale),
             Admit::Pass => {}
             Admit::TooMany(max) => {
