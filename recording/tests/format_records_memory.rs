@@ -100,7 +100,9 @@ fn many_oversized_ulog_format_definitions_cost_bounded_memory() {
         );
         assert_eq!(rec.t_s.len(), 1000);
         assert!(
-            warnings.iter().any(|w| w.contains("format definition(s) beyond")),
+            warnings
+                .iter()
+                .any(|w| w.contains("format definition(s) beyond")),
             "{warnings:?}"
         );
         assert!(peak < 10 << 20, "peak heap {peak} bytes");

@@ -162,7 +162,10 @@ fn a_far_damaged_stamp_costs_its_row_in_a_windowed_apply() {
     let said = repairs(&summary).join(" | ");
     println!("window by window: {said}");
     for part in [
-        &format!("1 exact repeat(s) (same stamp, same values) left out (IMU sample {})", 50_002),
+        &format!(
+            "1 exact repeat(s) (same stamp, same values) left out (IMU sample {})",
+            50_002
+        ),
         "2 sample(s) out of order sorted into time order",
     ] {
         assert!(said.contains(part), "{part}: {said}");

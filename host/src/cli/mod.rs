@@ -35,12 +35,12 @@ pub mod error;
 pub mod export;
 pub mod flash;
 #[cfg(test)]
+mod joined_log_tests;
+#[cfg(test)]
 mod log_fixture_tests;
 pub mod log_input;
 #[cfg(test)]
 mod long_log_tests;
-#[cfg(test)]
-mod window_property_tests;
 pub mod monitor;
 pub mod navigation_check;
 pub mod noise;
@@ -59,6 +59,8 @@ pub mod simulate;
 mod tests;
 #[cfg(test)]
 mod text_temperature_tests;
+#[cfg(test)]
+mod window_property_tests;
 
 pub use error::CliError;
 

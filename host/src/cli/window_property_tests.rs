@@ -10,12 +10,12 @@
 
 use super::log_fixture_tests::{fixture, truth};
 use crate::apply::{apply_log_within, Setting};
-use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
+use crate::fuzz::logs::{write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample};
 use crate::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
-use crate::session::logs::{read_log, LogSource};
+use crate::session::logs::{read_log, read_log_windows, LogRead, LogSource};
 use crate::sim::testkit::Rng;
 use shared::compensator::LeverMode;
-use shared::OutputUnit;
+use shared::{Calibration, OutputUnit};
 use std::path::Path;
 
 fn binary() -> LogSource {
@@ -105,13 +105,18 @@ fn write_csv(path: &Path, samples: &[LogSample]) {
 
 /// `apply` of the truth to `path`, at most `max_samples` read at once: the CSV's lines and what
 /// was said.
-fn apply(path: &Path, source: &LogSource, max_samples: usize) -> (Vec<String>, Vec<String>) {
+fn apply(
+    path: &Path,
+    source: &LogSource,
+    cal: &Calibration,
+    max_samples: usize,
+) -> (Vec<String>, Vec<String>) {
     let mut out = Vec::new();
     let setting = Setting {
         mode: LeverMode::RateAndAcceleration,
         assume_temp_c: None,
     };
-    let summary = apply_log_within(path, source, &truth(), &setting, max_samples, &mut out)
+    let summary = apply_log_within(path, source, cal, &setting, max_samples, &mut out)
         .unwrap_or_else(|e| panic!("{} within {max_samples}: {e}", path.display()));
     let text = String::from_utf8(out).unwrap();
     (text.lines().map(str::to_string).collect(), summary.warnings)
@@ -124,16 +129,29 @@ fn time_of(line: &str) -> &str {
 
 /// Samples the windowed read says the window rule left out.
 fn said_lost(warnings: &[String]) -> usize {
-    let w = warnings.iter().find(|w| w.contains("left out by the window rule"));
+    let w = warnings
+        .iter()
+        .find(|w| w.contains("left out by the window rule"));
     w.and_then(|w| w.split(' ').next()?.parse().ok())
         .unwrap_or(0)
 }
 
 /// One case: the windowed read against the whole read, as the module docs say. The number of
-/// windows read.
+/// windows read and of rows said left out by the window rule.
 fn check(path: &Path, source: &LogSource, max_samples: usize, case: &str) -> (usize, usize) {
-    let (whole, whole_said) = apply(path, source, MAX_ROWS);
-    let (windowed, mut said) = apply(path, source, max_samples);
+    check_with(path, source, &truth(), max_samples, case).0
+}
+
+/// [`check`] applying `cal`; and what the whole read said.
+fn check_with(
+    path: &Path,
+    source: &LogSource,
+    cal: &Calibration,
+    max_samples: usize,
+    case: &str,
+) -> ((usize, usize), Vec<String>) {
+    let (whole, whole_said) = apply(path, source, cal, MAX_ROWS);
+    let (windowed, mut said) = apply(path, source, cal, max_samples);
     let note = said.remove(0);
     assert!(note.contains("time windows"), "{case}: {note}");
     let windows: usize = note
@@ -156,7 +174,11 @@ fn check(path: &Path, source: &LogSource, max_samples: usize, case: &str) -> (us
         while k < whole.len() && time_of(&whole[k]) != time_of(line) {
             k += 1;
         }
-        assert!(k < whole.len(), "{case}: row at t = {} not written whole", time_of(line));
+        assert!(
+            k < whole.len(),
+            "{case}: row at t = {} not written whole",
+            time_of(line)
+        );
         if lost == 0 {
             assert_eq!(line, &whole[k], "{case}");
         }
@@ -181,7 +203,7 @@ fn check(path: &Path, source: &LogSource, max_samples: usize, case: &str) -> (us
         sorted(&whole_said, &comparable),
         "{case}: what is said"
     );
-    (windows, lost)
+    ((windows, lost), whole_said)
 }
 
 #[test]
@@ -223,4 +245,127 @@ fn a_window_by_window_apply_writes_and_says_what_a_whole_read_does() {
     println!("{cases} cases of {n} samples, {lost_rows} row(s) left out by the window rule in all");
 }
 
+/// The budget of the targeted cases below: windows of about 666 samples of the 5998.
+const BUDGET: usize = 1332;
 
+/// A DataFlash log of `samples` (its times those written) at `path`, and its windows' starts.
+fn dataflash_windows(path: &Path, samples: &[LogSample]) -> Vec<f64> {
+    std::fs::write(path, write_dataflash(samples)).unwrap();
+    let LogRead::Windows(w) = read_log_windows(path, &binary(), BUDGET).unwrap() else {
+        panic!("read whole");
+    };
+    (1..w.len()).map(|k| w.span(k).0).collect()
+}
+
+/// The sample at time `t_s`.
+fn at(samples: &[LogSample], t_s: f64) -> usize {
+    samples.iter().position(|s| s.t_s == t_s).unwrap()
+}
+
+/// A gap exactly at a window's edge is said, and a gap inside a later window is said after its
+/// row in the log, not in the window: as a whole read says both.
+#[test]
+fn gaps_are_said_with_their_rows_in_the_log_at_a_window_edge_too() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("gaps.bin");
+    let mut samples = session();
+    let starts = dataflash_windows(&path, &samples);
+    let edge = at(&samples, starts[3]);
+    let inside = at(&samples, starts[5]) + 100;
+    for from in [edge, inside] {
+        samples[from..].iter_mut().for_each(|s| s.t_s += 3.0);
+    }
+    let starts = dataflash_windows(&path, &samples);
+    assert!(starts.contains(&samples[edge].t_s), "the gap is at an edge");
+    let ((windows, lost), whole) = check_with(&path, &binary(), &truth(), BUDGET, "two gaps");
+    let jumps = whole
+        .iter()
+        .find(|w| w.contains("time stamps jump 2 time(s)"));
+    let jumps = jumps.unwrap_or_else(|| panic!("{whole:?}"));
+    for row in [edge, inside] {
+        assert!(
+            jumps.contains(&format!("after data row {row} (")),
+            "{jumps}"
+        );
+    }
+    println!("{windows} windows, {lost} left out: {jumps}");
+}
+
+/// A stamp damaged 4 rows before a window's edge, so far (2.5 s) that it lies beyond its own
+/// window's reach: that row is left out (the window rule) and said so, not said re-timed.
+#[test]
+fn a_stamp_damaged_before_a_window_edge_is_said_left_out_not_re_timed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("stamp.bin");
+    let mut samples = session();
+    let starts = dataflash_windows(&path, &samples);
+    let damaged = at(&samples, starts[2]) - 4;
+    samples[damaged].t_s += 2.5;
+    dataflash_windows(&path, &samples);
+    let (whole, _) = apply(&path, &binary(), &truth(), MAX_ROWS);
+    let (windowed, said) = apply(&path, &binary(), &truth(), BUDGET);
+    println!("{said:#?}");
+    assert_eq!(windowed.len(), whole.len() - 1);
+    assert_eq!(said_lost(&said), 1, "{said:?}");
+    assert!(
+        !said.iter().any(|w| w.contains("isolated stamp")),
+        "{said:?}"
+    );
+    check(&path, &binary(), BUDGET, "a stamp damaged before an edge");
+}
+
+/// A calibration with a temperature model (one that changes nothing: the truth's values at
+/// every temperature).
+fn thermal_truth() -> Calibration {
+    let zero = [[0.0; shared::sensor_models::MAX_TEMPERATURE_DEGREE]; 3];
+    Calibration {
+        temperature: Some(shared::TemperatureModel {
+            reference_c: 24.0,
+            valid_range_c: [-40.0, 85.0],
+            zero_bias_out_per_c: zero,
+            scale_rel_per_c: zero,
+            gyro_bias_rad_s_per_c: None,
+        }),
+        ..truth()
+    }
+}
+
+/// A temperature dropout covering whole windows: the log has temperatures, and those windows are
+/// applied as the whole read applies them (rows without a reading kept), not refused for want of a
+/// temperature column.
+#[test]
+fn a_temperature_dropout_covering_whole_windows_is_applied_as_a_whole_read_applies_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("temps.bin");
+    let mut samples = session();
+    let starts = dataflash_windows(&path, &samples);
+    let (from, to) = (at(&samples, starts[1]) - 50, at(&samples, starts[4]) + 50);
+    samples[from..to]
+        .iter_mut()
+        .for_each(|s| s.temp_c = f32::NAN);
+    dataflash_windows(&path, &samples);
+    let ((windows, _), whole) = check_with(&path, &binary(), &thermal_truth(), BUDGET, "a dropout");
+    let note = format!(
+        "{} of {} samples have no temperature",
+        to - from,
+        samples.len()
+    );
+    assert!(whole.iter().any(|w| w.contains(&note)), "{whole:?}");
+    println!("{windows} windows: {note}");
+}
+
+/// A bag whose every header stamp is 0, longer than the budget: cut into windows by its log
+/// time as a whole read times it, not refused as a stream that cannot be read again.
+#[test]
+fn a_bag_without_stamps_longer_than_the_budget_is_read_window_by_window() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("unstamped.mcap");
+    std::fs::write(&path, write_mcap_unstamped(&session())).unwrap();
+    let ((windows, lost), whole) = check_with(&path, &binary(), &truth(), BUDGET, "unstamped");
+    assert!(
+        whole.iter().any(|w| w.contains("no header stamp (all 0)")),
+        "{whole:?}"
+    );
+    assert_eq!(lost, 0);
+    println!("{windows} windows");
+}

@@ -544,7 +544,9 @@ fn repaired(samples: Vec<StreamSample>, keeper: &Keeper) -> (Vec<StreamSample>, 
     // The temperatures compared bit for bit: a repeat of a sample without a reading (NaN) is a
     // repeat too.
     let temp = |i: usize| samples[i].temp_c.map(f64::to_bits);
-    let (order, rep) = repair_times(&t, |i, j| samples[i].v == samples[j].v && temp(i) == temp(j));
+    let (order, rep) = repair_times(&t, |i, j| {
+        samples[i].v == samples[j].v && temp(i) == temp(j)
+    });
     let rep = match keeper.keep().own() {
         Some(own) => windows::own_repairs(rep, &order, &t, keeper.places(), own),
         None => rep,

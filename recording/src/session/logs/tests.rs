@@ -217,7 +217,9 @@ fn an_exact_repeat_without_a_temperature_reading_is_left_out() {
     assert_eq!(rec.len(), 400);
     let repairs = &rec.time_repairs;
     assert!(
-        repairs.iter().any(|(_, r)| r.repeats == [201] && r.spread.is_empty()),
+        repairs
+            .iter()
+            .any(|(_, r)| r.repeats == [201] && r.spread.is_empty()),
         "{repairs:?}"
     );
     assert_eq!(rec.rate_hz, 100.0);

@@ -26,8 +26,7 @@
 
 use super::keep::{Keep, PassReport};
 use super::{
-    first_pass, read_pass, temperature_note, unpaired_note, FirstPass, LogError, LogFile,
-    LogSource,
+    first_pass, read_pass, temperature_note, unpaired_note, FirstPass, LogError, LogFile, LogSource,
 };
 use crate::session::import::{say_time_jumps, Recording, TimeJump, GAP_PERIODS};
 use crate::session::repair::{Restart, TimeRepairs};
@@ -231,11 +230,7 @@ impl LogScale {
                  left out"
             ));
         }
-        notes.extend(say_time_jumps(
-            &self.jumps,
-            self.jump_count,
-            self.rate_hz,
-        ));
+        notes.extend(say_time_jumps(&self.jumps, self.jump_count, self.rate_hz));
         notes
     }
 }
