@@ -40,6 +40,8 @@ pub mod export;
 mod export_log;
 pub mod flash;
 #[cfg(test)]
+mod joined_log_tests;
+#[cfg(test)]
 mod log_fixture_tests;
 pub mod log_input;
 #[cfg(test)]
@@ -64,6 +66,8 @@ pub mod simulate;
 mod tests;
 #[cfg(test)]
 mod text_temperature_tests;
+#[cfg(test)]
+mod window_property_tests;
 
 pub use error::CliError;
 

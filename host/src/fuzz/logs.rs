@@ -315,6 +315,23 @@ pub fn write_mcap_with(
     recorder_offset_s: f64,
     junk_at: Option<usize>,
 ) -> Vec<u8> {
+    write_mcap_stamped(samples, compression, recorder_offset_s, junk_at, |t| t)
+}
+
+/// [`write_mcap`] of a driver that stamps nothing: every `header.stamp` 0, the log time the
+/// sample's time (the recorder's clock).
+pub fn write_mcap_unstamped(samples: &[LogSample]) -> Vec<u8> {
+    write_mcap_stamped(samples, None, 0.0, None, |_| 0.0)
+}
+
+/// [`write_mcap_with`], each message's `header.stamp` `stamp` of its sample's time.
+fn write_mcap_stamped(
+    samples: &[LogSample],
+    compression: Option<::mcap::Compression>,
+    recorder_offset_s: f64,
+    junk_at: Option<usize>,
+    stamp: fn(f64) -> f64,
+) -> Vec<u8> {
     let write = || -> ::mcap::McapResult<Vec<u8>> {
         let mut cursor = std::io::Cursor::new(Vec::new());
         let options = ::mcap::WriteOptions::new().compression(compression);
@@ -337,7 +354,7 @@ pub fn write_mcap_with(
                 log_time,
                 publish_time: log_time,
             };
-            w.write_to_known_channel(&header, &imu_cdr(s.t_s, s.acc, s.gyro))?;
+            w.write_to_known_channel(&header, &imu_cdr(stamp(s.t_s), s.acc, s.gyro))?;
             if let (Some(channel_id), true) = (junk, junk_at == Some(k)) {
                 let header = ::mcap::records::MessageHeader {
                     channel_id,

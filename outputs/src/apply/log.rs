@@ -85,10 +85,13 @@ pub fn apply_log_within(
     csv.header()?;
     let mut run: Option<Run> = None;
     let mut notes = WindowNotes::default();
+    let mut scale = windows.scale();
     for k in 0..windows.len() {
-        let Some(log) = windows.read(k).map_err(ApplyError::Log)? else {
+        let Some(window) = windows.read(k).map_err(ApplyError::Log)? else {
             continue;
         };
+        scale.add(&window);
+        let log = window.log;
         let rec = &log.recording;
         let mut said = log.warnings;
         said.extend(rec.reader_warnings(Places::InWindow));
@@ -123,6 +126,7 @@ pub fn apply_log_within(
         windows.len()
     )];
     warnings.extend(notes.into_warnings(windows.len()));
+    warnings.extend(scale.notes());
     summary.warnings.splice(0..0, warnings);
     Ok(summary)
 }

@@ -19,14 +19,14 @@ mod rows;
 pub mod time;
 
 use super::logs::keep::{Keep, Keeper, STILL_VAR_M2_S4};
-use super::repair::{repair_rows, run_rate_hz, TimeRepairs};
+use super::repair::{run_rate_hz, TimeRepairs};
 pub use notes::Places;
 use rows::{read_header, read_rows, Layout, Rows, Time};
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 pub use time::six_digits;
-pub use time::{detect_time_unit, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
+pub use time::{detect_time_unit, say_time_jumps, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
 use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
 
 /// Longest accepted line, bytes: a logger's row is well under 1 KiB; a file with no line ends (or a
@@ -523,7 +523,7 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
         rec.t_s.iter_mut().for_each(|t| *t *= k);
         rec.time_unit = Some((unit, options.time_unit.is_none()));
     }
-    repair_rows(&mut rec);
+    super::logs::repair_kept_rows(&mut rec, &keeper);
     super::bursts::retime_rows(&mut rec);
     rec.rate_hz = run_rate_hz(&rec.t_s);
     if options.acc_unit == OutputUnit::Lsb && options.acc_offset == [0.0; 3] {

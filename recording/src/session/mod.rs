@@ -28,6 +28,7 @@ pub mod plan;
 pub mod reader;
 pub mod repair;
 pub mod rest;
+mod restart;
 pub mod segment;
 pub mod stats;
 pub mod thermal;

@@ -1,6 +1,8 @@
 //! The time repair every reader's samples pass through before they are paired and segmented (text,
 //! ULog, DataFlash and MCAP alike), by stated rules (docs/robustness.md, "Damaged time stamps"):
 //!
+//! 0. Logs joined one after the other, the stamps restarting, are read as such: each later log is
+//!    moved to follow the one before it (`super::restart`).
 //! 1. A log written newest first (most steps negative) is read in reverse.
 //! 2. An isolated stamp that jumps away and comes back (a flipped bit, a logger's glitch) is that
 //!    sample's error: where the neighbours on both sides agree where it should be and it is more
@@ -17,6 +19,8 @@
 //! Every repair is counted and its first places named.
 
 use super::import::GAP_PERIODS;
+use super::restart::join_restarts;
+pub use super::restart::Restart;
 
 /// Neighbours on each side that say where a sample should be.
 const NEIGHBOURS: usize = 4;
@@ -42,6 +46,8 @@ pub struct TimeRepairs {
     pub spread: Vec<usize>,
     /// Stamps that came in bursts, re-timed from the fit of stamp against index.
     pub bursts: Option<super::bursts::Bursts>,
+    /// Where a log joined after another starts, its stamps restarting (rule 0).
+    pub restarts: Vec<Restart>,
 }
 
 impl TimeRepairs {
@@ -83,6 +89,23 @@ impl TimeRepairs {
         let mut parts = Vec::new();
         if self.reversed {
             parts.push("the log was written newest first: read in reverse".to_string());
+        }
+        if !self.restarts.is_empty() {
+            let places = places(self.restarts.iter(), |r| {
+                format!(
+                    "{what} {} stamped {:.6} s, moved {:+.6} s",
+                    r.index + 1,
+                    r.read_s,
+                    r.moved_s
+                )
+            });
+            parts.push(format!(
+                "the stamps restart {} time(s), as in logs joined one after the other: each later \
+                 log is read after the one before it, {} periods after its last sample{}",
+                self.restarts.len(),
+                super::restart::JOIN_PERIODS,
+                at(places)
+            ));
         }
         if !self.retimed.is_empty() {
             let places = places(self.retimed.iter(), |&(i, read, given)| {
@@ -168,6 +191,11 @@ pub fn repair_times(
     let Some(dt) = median_step(&times) else {
         return (order, rep);
     };
+    // The period to 9 digits: the median step of a clean log is its period give or take the last
+    // bits of the stamps' subtraction, which differ between a whole log and a window of it; a
+    // sample re-timed from it is then re-timed alike in both.
+    let dt = format!("{dt:.8e}").parse().unwrap_or(dt);
+    rep.restarts = join_restarts(&mut order, dt);
     isolated_stamps(&mut order, dt, &mut rep);
     let before: Vec<usize> = order.iter().map(|s| s.0).collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1));
@@ -183,10 +211,20 @@ pub fn repair_times(
 /// A text file's rows in time order, their stamps mended ([`repair_times`]; rows whose values
 /// and stamps are equal are exact repeats), and the repairs kept with them as "data row"s.
 pub fn repair_rows(rec: &mut super::import::Recording) {
+    repair_rows_saying(rec, |_, _, repairs| repairs);
+}
+
+/// [`repair_rows`], the repairs kept as `say` has them from the repaired order, the stamps read
+/// and the repairs (a window of a long log says them on the log's scale, `super::logs`).
+pub(crate) fn repair_rows_saying(
+    rec: &mut super::import::Recording,
+    say: impl FnOnce(&[(usize, f64)], &[f64], TimeRepairs) -> TimeRepairs,
+) {
     let temp = |i: usize| rec.temp_c.as_ref().map(|t| t[i].to_bits());
     let (order, repairs) = repair_times(&rec.t_s, |i, j| {
         rec.acc[i] == rec.acc[j] && rec.gyro_rad_s[i] == rec.gyro_rad_s[j] && temp(i) == temp(j)
     });
+    let repairs = say(&order, &rec.t_s, repairs);
     rec.t_s = order.iter().map(|s| s.1).collect();
     rec.acc = order.iter().map(|s| rec.acc[s.0]).collect();
     rec.gyro_rad_s = order.iter().map(|s| rec.gyro_rad_s[s.0]).collect();

@@ -9,8 +9,8 @@ use super::{Recording, MAX_LINE_BYTES};
 pub enum Places {
     /// The recording is the whole file: a repair names its samples' places in it.
     InFile,
-    /// The recording is one window of a longer file (`super::super::logs::read_log_windows`): its
-    /// samples' places count from the window's first, so a repair is counted, not placed.
+    /// The recording is one window of a longer file (`super::super::logs::read_log_windows`):
+    /// its repairs and time jumps are said on the log's scale (`LogScale`), not here.
     InWindow,
 }
 
@@ -43,14 +43,12 @@ impl Recording {
                  out"
             ));
         }
-        for (what, repairs) in &self.time_repairs {
-            let said = match places {
-                Places::InFile => repairs.describe(what),
-                Places::InWindow => repairs.count(),
-            };
-            warnings.extend(said);
+        if places == Places::InFile {
+            for (what, repairs) in &self.time_repairs {
+                warnings.extend(repairs.describe(what));
+            }
+            warnings.extend(self.time_jumps());
         }
-        warnings.extend(self.time_jumps());
         warnings
     }
 }

@@ -379,7 +379,11 @@ fn take_row(
     } else {
         rec.acc.last().copied().unwrap_or([0.0; 3])
     };
-    match keeper.admit(t_s * seconds_per_unit, &acc, rec.len()) {
+    let admit = keeper.admit(t_s * seconds_per_unit, &acc, rec.len());
+    if layout.temp.is_some() {
+        keeper.temperature(temp_c);
+    }
+    match admit {
         Admit::Keep => {
             if !(acc_ok && gyro_ok) {
                 // One stream missing in part: that row's stream is missing, nothing else.

@@ -127,36 +127,7 @@ impl Recording {
     /// one and no turn is integrated across one.
     pub fn time_jumps(&self) -> Option<String> {
         let jumps = self.jumps();
-        if jumps.is_empty() {
-            return None;
-        }
-        let kind = |j: &TimeJump| match j.step_s {
-            0.0 => "repeat",
-            s if s < 0.0 => "step back",
-            _ => "gap",
-        };
-        let places: Vec<String> = jumps
-            .iter()
-            .take(5)
-            .map(|j| {
-                format!(
-                    "{} of {:+.3} s after data row {} (t = {:.3} s)",
-                    kind(j),
-                    j.step_s,
-                    j.row + 1,
-                    j.t_s
-                )
-            })
-            .collect();
-        Some(format!(
-            "the time stamps jump {} time(s) (a gap of more than {GAP_PERIODS} periods of {:.4} s, \
-             a repeat or a step back): {}{}; no still interval spans one and no turn is \
-             integrated across one",
-            jumps.len(),
-            1.0 / self.rate_hz,
-            places.join("; "),
-            if jumps.len() > 5 { "; …" } else { "" }
-        ))
+        say_time_jumps(&jumps[..jumps.len().min(5)], jumps.len(), self.rate_hz)
     }
 
     /// Number of samples.
@@ -168,6 +139,41 @@ impl Recording {
     pub fn is_empty(&self) -> bool {
         self.t_s.is_empty()
     }
+}
+
+/// `count` time jumps of a recording at `rate_hz` said, `named` the first of them (five are named),
+/// or `None` when there are none ([`Recording::time_jumps`]; a long log read window by window
+/// counts them across its windows, `crate::session::logs`).
+pub fn say_time_jumps(named: &[TimeJump], count: usize, rate_hz: f64) -> Option<String> {
+    if count == 0 {
+        return None;
+    }
+    let kind = |j: &TimeJump| match j.step_s {
+        0.0 => "repeat",
+        s if s < 0.0 => "step back",
+        _ => "gap",
+    };
+    let places: Vec<String> = named
+        .iter()
+        .take(5)
+        .map(|j| {
+            format!(
+                "{} of {:+.3} s after data row {} (t = {:.3} s)",
+                kind(j),
+                j.step_s,
+                j.row + 1,
+                j.t_s
+            )
+        })
+        .collect();
+    Some(format!(
+        "the time stamps jump {count} time(s) (a gap of more than {GAP_PERIODS} periods of {:.4} \
+         s, a repeat or a step back): {}{}; no still interval spans one and no turn is integrated \
+         across one",
+        1.0 / rate_hz,
+        places.join("; "),
+        if count > 5 { "; …" } else { "" }
+    ))
 }
 
 /// Shortest recording a time unit may make of the time column, s: a hand-held session is minutes

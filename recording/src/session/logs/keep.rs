@@ -75,6 +75,12 @@ pub(crate) enum Keep {
         hi: f64,
         /// The budget.
         max: usize,
+        /// The window's own times (`lo..hi` without the margins), s: what the pass says of its
+        /// samples (their repairs, those left unpaired) is said of these only, so that every
+        /// sample is said of in one window.
+        own: (f64, f64),
+        /// Where the accelerometer's counts go (`Keeper::report`, [`super::pair`]).
+        report: Arc<Mutex<PassReport>>,
     },
 }
 
@@ -87,12 +93,26 @@ pub(crate) struct PassReport {
     pub survey: Option<Survey>,
     /// What the extract left out of the accelerometer's stream.
     pub left_out: Option<LeftOut>,
+    /// The survey's count of the accelerometer's samples with a temperature field, and of those
+    /// with a reading (finite).
+    pub temperatures: (usize, usize),
+    /// A window's accelerometer samples of its own times left out for want of a gyro sample,
+    /// and the gap allowed, s.
+    pub unpaired: (usize, f64),
 }
 
 impl Keep {
     /// Whether `t_s` lies outside a window's span (never, for the other kinds).
     fn outside_span(&self, t_s: f64) -> bool {
         matches!(self, Keep::Span { lo, hi, .. } if !(*lo <= t_s && t_s < *hi))
+    }
+
+    /// A window's own times (`None`: not a window's pass).
+    pub fn own(&self) -> Option<(f64, f64)> {
+        match self {
+            Keep::Span { own, .. } => Some(*own),
+            _ => None,
+        }
     }
 }
 
@@ -113,6 +133,11 @@ pub(crate) struct Keeper {
     /// The variance, summed over the axes, that a still unit never exceeds, in the stream's unit
     /// (0: unknown, the quietest blocks alone decide).
     still_var: f64,
+    /// A window's pass: each sample kept, its place among the stream's finite samples in the file
+    /// (0-based), so that what is said of it names its place in the log.
+    places: Vec<usize>,
+    /// A survey: the samples with a temperature field, and those with a reading.
+    temperatures: (usize, usize),
 }
 
 /// What [`Keeper::admit`] says of a sample.
@@ -169,9 +194,31 @@ impl Keeper {
             Keep::Span { max, .. } => match self.keep.outside_span(t_s) {
                 true => Admit::Pass,
                 false if kept >= *max => Admit::TooMany(*max),
-                false => Admit::Keep,
+                false => {
+                    self.places.push(self.left_out.read - 1);
+                    Admit::Keep
+                }
             },
         }
+    }
+
+    /// The temperature of the sample last admitted, counted by a survey (whether the log has
+    /// readings decides each window's, `super::windows`).
+    pub fn temperature(&mut self, temp_c: f64) {
+        if matches!(self.keep, Keep::Survey(_)) {
+            self.temperatures.0 += 1;
+            self.temperatures.1 += usize::from(temp_c.is_finite());
+        }
+    }
+
+    /// What this stream keeps.
+    pub fn keep(&self) -> &Keep {
+        &self.keep
+    }
+
+    /// A window's pass: the place in the file of each sample kept (see `places`).
+    pub fn places(&self) -> &[usize] {
+        &self.places
     }
 
     /// Whether a sample is left out on its time alone, `time_s` telling it (s; `None`: no
@@ -201,6 +248,7 @@ impl Keeper {
                 if let Ok(mut r) = report.lock() {
                     r.regions = Some(self.survey.regions(self.still_var));
                     r.survey = Some(self.survey.clone());
+                    r.temperatures = self.temperatures;
                 }
                 true
             }
@@ -353,6 +401,12 @@ impl Survey {
                 .collect();
             self.per_block *= 2;
         }
+    }
+
+    /// The samples surveyed.
+    pub fn count(&self) -> usize {
+        let closed: f64 = self.blocks.iter().map(|b| b.n).sum();
+        closed as usize + self.pending.len()
     }
 
     /// The blocks closed and the one still open.

@@ -28,6 +28,10 @@ pub const RECORD_LIMIT: usize = 64 << 20;
 const IMU_SCHEMA: &str = "sensor_msgs/msg/Imu";
 /// Most channels remembered (for the listing in an error).
 const MAX_CHANNELS: usize = 4096;
+/// Longest schema name, topic or encoding remembered, bytes: a ROS 2 name is tens of bytes, and a
+/// record up to [`RECORD_LIMIT`] would otherwise be kept [`MAX_CHANNELS`] times over. A schema or
+/// channel with a longer one is left out (it is no Imu topic's).
+const MAX_NAME: usize = 4096;
 
 /// Why an MCAP file cannot be read.
 #[derive(Debug, thiserror::Error)]
@@ -266,6 +270,11 @@ struct State {
     unstamped: u64,
     /// Each accelerometer and gyro sample's log time, s: its time when no message has a stamp.
     log_times: [Vec<f64>; 2],
+    /// A pass that keeps samples by their time (a survey, a window, an extract): a message without
+    /// a stamp, while none before it had one, is kept and timed by its log time at once, as the
+    /// bag is timed when no message has a stamp (else all would be at 0, and a bag longer than
+    /// the budget could not be cut by time).
+    by_log_time: bool,
 }
 
 impl McapError {
@@ -305,6 +314,7 @@ pub(crate) fn read_keeping<R: Read>(
     let mut st = State {
         acc: Stream::new(keep),
         gyro: Stream::new(keep),
+        by_log_time: !matches!(keep, Keep::All { .. }),
         ..State::default()
     };
     let mut offset = 0u64;
@@ -417,6 +427,8 @@ impl State {
 
     fn record(&mut self, record: Record<'_>, topic: Option<&str>) -> Result<(), McapError> {
         match record {
+            Record::Schema { header, .. } if header.name.len() > MAX_NAME => {}
+            Record::Channel(c) if c.topic.len().max(c.message_encoding.len()) > MAX_NAME => {}
             Record::Schema { header, .. } if self.schemas.len() < MAX_CHANNELS => {
                 self.schemas.insert(header.id, header.name);
             }
@@ -453,16 +465,19 @@ impl State {
                 if m.stamp_s == 0.0 {
                     self.unstamped += 1;
                 }
-                let t_s = m.stamp_s;
+                let log_s = header.log_time as f64 * 1e-9;
+                // The log times are needed only while no message has had a stamp.
+                let all_unstamped = self.unstamped == self.messages;
+                let t_s = match self.by_log_time && all_unstamped {
+                    true => log_s,
+                    false => m.stamp_s,
+                };
                 let too_many = |e: TooMany| McapError::TooManySamples(e.0);
                 let s = |v| StreamSample {
                     t_s,
                     v,
                     temp_c: None,
                 };
-                let log_s = header.log_time as f64 * 1e-9;
-                // The log times are needed only while no message has had a stamp.
-                let all_unstamped = self.unstamped == self.messages;
                 if !all_unstamped && !self.log_times[0].is_empty() {
                     self.log_times = Default::default();
                 }

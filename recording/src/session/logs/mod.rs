@@ -22,13 +22,13 @@ pub use ardupilot::UndoError;
 pub use error::{ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
-pub use windows::{read_log_windows, LogRead, LogWindows};
+pub use windows::{read_log_windows, LogRead, LogScale, LogWindows, Window};
 
 use super::import::{
     gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
     GAP_PERIODS, MIN_SESSION_ROWS,
 };
-use super::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
+use super::repair::{median_step, repair_rows_saying, repair_times, run_rate_hz, TimeRepairs};
 use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 use std::fs::File;
@@ -299,7 +299,12 @@ fn read_keeping<R: BufRead>(
                 .as_ref()
                 .ok_or_else(|| LogError::TextNeedsOptions(p(), sp))?;
             let mut rec = read_logger_keeping(r, path, options, keep, seconds_per_unit)?;
-            let notes = text_notes(&mut rec, options);
+            let mut notes = match keep.own() {
+                // A window says its temperatures on the log's scale (`windows`).
+                None => temperature_notes(&mut rec),
+                Some(_) => Vec::new(),
+            };
+            notes.extend(gyro_mid_scale_note(&rec, options));
             (rec, notes)
         }
         LogFormat::Ulog => {
@@ -385,7 +390,11 @@ impl Stream {
             self.non_finite += 1;
             return Ok(());
         }
-        match self.keeper.admit(s.t_s, &s.v, self.samples.len()) {
+        let admit = self.keeper.admit(s.t_s, &s.v, self.samples.len());
+        if let Some(t) = s.temp_c {
+            self.keeper.temperature(t);
+        }
+        match admit {
             Admit::Keep => self.samples.push(s),
             Admit::Pass => {}
             Admit::TooMany(max) => return Err(TooMany(max)),
@@ -411,8 +420,9 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
     if acc.keeper.report() {
         return (Recording::default(), Vec::new());
     }
-    let (acc_s, acc_rep) = repaired(std::mem::take(&mut acc.samples));
-    let (g, gyro_rep) = repaired(std::mem::take(&mut gyro.samples));
+    let (acc_s, acc_rep) = repaired(std::mem::take(&mut acc.samples), &acc.keeper);
+    let (g, gyro_rep) = repaired(std::mem::take(&mut gyro.samples), &gyro.keeper);
+    let own = acc.keeper.keep().own();
     let n = acc_s.len();
     let mut rec = Recording {
         acc_unit: Some(OutputUnit::MetresPerSecondSquared),
@@ -429,7 +439,7 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
             j += 1;
         }
         let Some(w) = interpolate(&g, j, a.t_s, max_gap_s) else {
-            unpaired += 1;
+            unpaired += usize::from(own.is_none_or(|(lo, hi)| lo <= a.t_s && a.t_s < hi));
             continue;
         };
         rec.t_s.push(a.t_s);
@@ -444,7 +454,20 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
     if with_temp {
         rec.temp_c = Some(temps);
     }
-    let mut warnings = temperature_notes(&mut rec);
+    let mut warnings = match own {
+        None => temperature_notes(&mut rec),
+        // A window says its temperatures and the samples it leaves unpaired on the log's scale
+        // (`windows`).
+        Some(_) => {
+            if let Keep::Span { report, .. } = acc.keeper.keep() {
+                if let Ok(mut r) = report.lock() {
+                    r.unpaired = (unpaired, max_gap_s);
+                }
+            }
+            unpaired = 0;
+            Vec::new()
+        }
+    };
     if acc_rep == gyro_rep {
         if !acc_rep.is_empty() {
             rec.time_repairs.push(("IMU sample", acc_rep));
@@ -456,12 +479,7 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
             }
         }
     }
-    if unpaired > 0 {
-        warnings.push(format!(
-            "{unpaired} accelerometer sample(s) with no gyro sample within {:.0} ms left out",
-            max_gap_s * 1e3
-        ));
-    }
+    warnings.extend(unpaired_note(unpaired, max_gap_s));
     if gyro.non_finite > 0 {
         warnings.push(format!(
             "{} gyro sample(s) with NaN or infinite values left out (the rate interpolated \
@@ -470,6 +488,16 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
         ));
     }
     (rec, warnings)
+}
+
+/// The accelerometer samples left out for want of a gyro sample within `max_gap_s`, said.
+pub(crate) fn unpaired_note(unpaired: usize, max_gap_s: f64) -> Option<String> {
+    (unpaired > 0).then(|| {
+        format!(
+            "{unpaired} accelerometer sample(s) with no gyro sample within {:.0} ms left out",
+            max_gap_s * 1e3
+        )
+    })
 }
 
 /// What the user is told of a text recording read with `options` (a file's or arrays'): its
@@ -489,32 +517,45 @@ pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
     let Some(temps) = &rec.temp_c else {
         return Vec::new();
     };
-    let readings = temps.iter().filter(|t| t.is_finite()).count();
+    let (readings, rows) = (temps.iter().filter(|t| t.is_finite()).count(), temps.len());
     if readings == 0 {
         rec.temp_c = None;
-        return vec![
+    }
+    temperature_note(readings, rows).into_iter().collect()
+}
+
+/// [`temperature_notes`] of `readings` temperature readings in `rows` rows.
+pub(crate) fn temperature_note(readings: usize, rows: usize) -> Option<String> {
+    if readings == 0 {
+        return Some(
             "the temperature is NaN in every sample (a driver without a temperature \
                      reading): read as a log without temperature"
                 .to_string(),
-        ];
+        );
     }
-    if readings == temps.len() {
-        return Vec::new();
-    }
-    vec![format!(
-        "{} of {} samples have no temperature reading (NaN): those rows are kept, and only the \
-         readings enter the temperature statistics",
-        temps.len() - readings,
-        temps.len()
-    )]
+    (readings < rows).then(|| {
+        format!(
+            "{} of {rows} samples have no temperature reading (NaN): those rows are kept, and only \
+             the readings enter the temperature statistics",
+            rows - readings,
+        )
+    })
 }
 
-/// A stream's samples in time order, their stamps mended ([`repair_times`]).
-fn repaired(samples: Vec<StreamSample>) -> (Vec<StreamSample>, TimeRepairs) {
+/// A stream's samples in time order, their stamps mended ([`repair_times`]); a window's repairs
+/// said on the log's scale (`windows::own_repairs`).
+fn repaired(samples: Vec<StreamSample>, keeper: &Keeper) -> (Vec<StreamSample>, TimeRepairs) {
     let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
-    let (order, mut rep) = repair_times(&t, |i, j| {
-        samples[i].v == samples[j].v && samples[i].temp_c == samples[j].temp_c
+    // The temperatures compared bit for bit: a repeat of a sample without a reading (NaN) is a
+    // repeat too.
+    let temp = |i: usize| samples[i].temp_c.map(f64::to_bits);
+    let (order, rep) = repair_times(&t, |i, j| {
+        samples[i].v == samples[j].v && temp(i) == temp(j)
     });
+    let mut rep = match keeper.keep().own() {
+        Some(own) => windows::own_repairs(rep, &order, &t, keeper.places(), own),
+        None => rep,
+    };
     drop(t);
     let mut times: Vec<f64> = order.iter().map(|s| s.1).collect();
     rep.bursts = super::bursts::retime_bursts(&mut times);
@@ -524,6 +565,15 @@ fn repaired(samples: Vec<StreamSample>) -> (Vec<StreamSample>, TimeRepairs) {
         .map(|(&(i, _), t_s)| StreamSample { t_s, ..samples[i] })
         .collect();
     (out, rep)
+}
+
+/// [`repair_rows`](crate::session::repair::repair_rows) of a text file's rows kept by `keeper`;
+/// a window's repairs said on the log's scale (`windows::own_repairs`).
+pub(crate) fn repair_kept_rows(rec: &mut Recording, keeper: &Keeper) {
+    repair_rows_saying(rec, |order, t_s, rep| match keeper.keep().own() {
+        Some(own) => windows::own_repairs(rep, order, t_s, keeper.places(), own),
+        None => rep,
+    });
 }
 
 /// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.

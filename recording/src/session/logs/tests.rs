@@ -203,3 +203,24 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
     .unwrap_err();
     assert!(e.to_string().contains("temperature"), "{e}");
 }
+
+/// An exact repeat of a sample without a temperature reading (NaN) is a repeat like any other:
+/// left out, not spread as a sample of its own (which bent the rate).
+#[test]
+fn an_exact_repeat_without_a_temperature_reading_is_left_out() {
+    let mut t: Vec<f64> = (0..400).map(|i| i as f64 * 0.01).collect();
+    t.insert(201, t[200]);
+    let values = |t: f64| [t.sin(), 0.0, 9.81];
+    let acc = stream(&t, values, Some(f64::NAN));
+    let gyro = stream(&t, values, None);
+    let (rec, _) = pair(acc, gyro, 0.05);
+    assert_eq!(rec.len(), 400);
+    let repairs = &rec.time_repairs;
+    assert!(
+        repairs
+            .iter()
+            .any(|(_, r)| r.repeats == [201] && r.spread.is_empty()),
+        "{repairs:?}"
+    );
+    assert_eq!(rec.rate_hz, 100.0);
+}

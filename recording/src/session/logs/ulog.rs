@@ -28,6 +28,14 @@ pub use params::read_params;
 pub const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
 /// Most format definitions kept: PX4 logs a few hundred topics.
 const MAX_FORMATS: usize = 4096;
+/// Most fields kept over all format definitions: PX4's few hundred topics have a few thousand.
+/// A field costs about 100 bytes parsed (its type and name), so that a log of oversized
+/// definitions (each up to 65 535 bytes, some 16 000 fields) costs no more than about 6 MB
+/// however many it has; the definitions beyond it are left out (an IMU topic's own is kept).
+const MAX_FIELDS: usize = 1 << 16;
+/// Most bytes of field types and names kept over all format definitions (PX4's: some 60 KB), so
+/// that a few fields of very long names cost no more.
+const MAX_FIELD_BYTES: usize = 4 << 20;
 /// `accelerometer_timestamp_relative` when the accelerometer sample is missing (PX4's
 /// `sensor_combined_s::RELATIVE_TIMESTAMP_INVALID`).
 const RELATIVE_TIMESTAMP_INVALID: i32 = 0x7fff_ffff;
@@ -134,6 +142,12 @@ struct State {
     appended: Vec<u64>,
     /// Format definitions that do not parse and define no IMU topic: how many, the first's byte.
     bad_formats: (u64, u64),
+    /// The fields of `formats` and the bytes of their types and names, all told (at most
+    /// [`MAX_FIELDS`] and [`MAX_FIELD_BYTES`]).
+    fields: (usize, usize),
+    /// Format definitions beyond [`MAX_FIELDS`] or [`MAX_FIELD_BYTES`] that define no IMU topic:
+    /// how many, the first's byte.
+    over_formats: (u64, u64),
 }
 
 impl UlogError {
@@ -242,6 +256,13 @@ pub(crate) fn read_keeping<R: Read>(
              they define no IMU topic, and the topics they define are not read"
         ));
     }
+    if let (count @ 1.., first) = st.over_formats {
+        warnings.push(format!(
+            "{count} format definition(s) beyond the {MAX_FIELDS} fields or {MAX_FIELD_BYTES} bytes \
+             of fields kept left out (the first at byte {first}); they define no IMU topic, and \
+             the topics they define are not read"
+        ));
+    }
     st.finish(instance, warnings)
 }
 
@@ -265,6 +286,12 @@ fn skip_to<R: Read>(
         ));
     }
     Ok(got == want)
+}
+
+/// The fields of a format definition and the bytes of their types and names.
+fn size(fields: &[Field]) -> (usize, usize) {
+    let bytes = fields.iter().map(|f| f.ty.len() + f.name.len()).sum();
+    (fields.len(), bytes)
 }
 
 fn cut_short(offset: u64) -> String {
@@ -311,6 +338,24 @@ impl State {
                 if self.formats.len() >= MAX_FORMATS && !self.formats.contains_key(&name) {
                     return Err(UlogError::TooManyFormats);
                 }
+                let replaced = self.formats.get(&name).map_or((0, 0), |f| size(f));
+                let (n, bytes) = size(&fields);
+                let kept = (
+                    self.fields.0 - replaced.0 + n,
+                    self.fields.1 - replaced.1 + bytes,
+                );
+                // An IMU topic's own definition is always kept (three topics, each bounded by its
+                // message's length).
+                if (kept.0 > MAX_FIELDS || kept.1 > MAX_FIELD_BYTES)
+                    && Topic::from_name(&name).is_none()
+                {
+                    if self.over_formats.0 == 0 {
+                        self.over_formats.1 = offset;
+                    }
+                    self.over_formats.0 += 1;
+                    return Ok(());
+                }
+                self.fields = kept;
                 self.formats.insert(name, fields);
             }
             b'A' if p.len() >= 3 => {

@@ -10,13 +10,27 @@
 //! of the window itself are handed on: every sample lies in exactly one window, the first window
 //! reaching back and the last forward without bound.
 //!
-//! What a window cannot see is the rest of the log: a stamp damaged so far that it lands in
-//! another window's span is, there, an isolated stamp at an end of what that pass keeps, and is
-//! left out by the repair's end rule (`crate::session::repair`, rule 2) instead of being re-timed.
+//! What is said of the log is said on the log's scale, decided once for the whole log and applied
+//! by each window ([`LogScale`]): whether it has temperatures (the survey counts the readings), the
+//! places of the samples a repair names (counted in the file, not in the window), the gaps and
+//! their rows (counted in the rows written, across the windows' edges), the samples left unpaired
+//! and the temperatures missing. Each window says only what it found of its own times, so that
+//! every sample is said of once.
+//!
+//! What a window cannot see is the rest of the log: a stamp damaged so far that it lands outside
+//! its own window's reach (the window's times and the margin) is not among that window's samples;
+//! where it lands, it is an isolated stamp at an end of what that pass keeps, left out by the
+//! repair's end rule (`crate::session::repair`, rule 2), or not read at all. That is the window
+//! rule: such a sample is left out, where a whole read re-times it, and the samples it costs are
+//! counted against the survey's and said ([`LogScale::notes`]).
 
 use super::keep::{Keep, PassReport};
-use super::{first_pass, read_pass, FirstPass, LogError, LogFile, LogSource};
-use crate::session::import::Recording;
+use super::{
+    first_pass, read_pass, temperature_note, unpaired_note, FirstPass, LogError, LogFile, LogSource,
+};
+use crate::session::import::{say_time_jumps, Recording, TimeJump, GAP_PERIODS};
+use crate::session::repair::{Restart, TimeRepairs};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -46,6 +60,23 @@ pub struct LogWindows {
     starts: Vec<f64>,
     margin_s: f64,
     max: usize,
+    /// The survey's accelerometer samples (finite).
+    surveyed: usize,
+    /// Whether the log has a temperature reading anywhere: each window then has temperatures
+    /// (NaN where it has none), else none.
+    temperatures: bool,
+    /// The survey found a temperature field without a reading anywhere.
+    no_readings: bool,
+}
+
+/// One window of a long log read: its samples (their time repairs said on the log's scale, with
+/// their places in the file) and what it says on the log's scale ([`LogScale`]).
+#[derive(Debug)]
+pub struct Window {
+    /// The window's samples and what the reader noticed (less what [`LogScale`] says).
+    pub log: LogFile,
+    /// Its accelerometer samples left out for want of a gyro sample, and the gap allowed, s.
+    unpaired: (usize, f64),
 }
 
 impl LogWindows {
@@ -69,19 +100,217 @@ impl LogWindows {
     /// Window `k` read: its samples in time order, their stamps repaired with the margin's
     /// neighbours, and what the reader noticed in the pass; `None` where the pass keeps fewer
     /// than two samples (a few stamps far off on their own).
-    pub fn read(&self, k: usize) -> Result<Option<LogFile>, LogError> {
+    pub fn read(&self, k: usize) -> Result<Option<Window>, LogError> {
         let (lo, hi) = self.span(k);
+        let report = Arc::new(Mutex::new(PassReport::default()));
         let keep = Keep::Span {
             lo: lo - self.margin_s,
             hi: hi + self.margin_s,
             max: self.max,
+            own: (lo, hi),
+            report: Arc::clone(&report),
         };
         let mut log = match read_pass(&self.path, &self.source, &keep, self.seconds_per_unit) {
             Err(LogError::NoRecording { .. }) => return Ok(None),
             r => r?,
         };
-        within_span(&mut log.recording, lo, hi);
-        Ok(Some(log))
+        let rec = &mut log.recording;
+        within_span(rec, lo, hi);
+        match (&rec.temp_c, self.temperatures) {
+            (_, false) => rec.temp_c = None,
+            (None, true) => rec.temp_c = Some(vec![f64::NAN; rec.len()]),
+            (Some(_), true) => {}
+        }
+        let unpaired = report.lock().map(|r| r.unpaired).unwrap_or_default();
+        Ok(Some(Window { log, unpaired }))
+    }
+
+    /// What is said on the log's scale, to be told each window read in turn.
+    pub fn scale(&self) -> LogScale {
+        LogScale {
+            surveyed: self.surveyed,
+            no_readings: self.no_readings,
+            ..LogScale::default()
+        }
+    }
+}
+
+/// What a log read window by window says on the log's scale, gathered window by window (see the
+/// module docs): the same words a whole read says of the same samples.
+#[derive(Debug, Default)]
+pub struct LogScale {
+    surveyed: usize,
+    no_readings: bool,
+    rows: usize,
+    /// The rate of the first window, Hz: its gaps are five of its periods.
+    rate_hz: f64,
+    last_t_s: Option<f64>,
+    jumps: Vec<TimeJump>,
+    jump_count: usize,
+    temperatures: (usize, usize),
+    unpaired: (usize, f64),
+    repairs: Vec<(&'static str, TimeRepairs)>,
+}
+
+/// Time jumps named, as a whole read names them.
+const JUMPS_NAMED: usize = 5;
+
+impl LogScale {
+    /// Window `w`, the next in time order.
+    pub fn add(&mut self, w: &Window) {
+        let rec = &w.log.recording;
+        if self.rate_hz <= 0.0 {
+            self.rate_hz = rec.rate_hz;
+        }
+        let limit = GAP_PERIODS / self.rate_hz;
+        for (i, &t_s) in rec.t_s.iter().enumerate() {
+            if let Some(last) = self.last_t_s {
+                let step_s = t_s - last;
+                if !(step_s > 0.0 && step_s <= limit) {
+                    self.jump_count += 1;
+                    if self.jumps.len() < JUMPS_NAMED {
+                        let row = self.rows + i - 1;
+                        self.jumps.push(TimeJump {
+                            row,
+                            t_s: last,
+                            step_s,
+                        });
+                    }
+                }
+            }
+            self.last_t_s = Some(t_s);
+        }
+        self.rows += rec.len();
+        if let Some(t) = &rec.temp_c {
+            self.temperatures.0 += t.iter().filter(|t| t.is_finite()).count();
+            self.temperatures.1 += t.len();
+        }
+        self.unpaired.0 += w.unpaired.0;
+        if w.unpaired.0 > 0 || self.unpaired.1 == 0.0 {
+            self.unpaired.1 = w.unpaired.1;
+        }
+        for (what, rep) in &rec.time_repairs {
+            match self.repairs.iter_mut().find(|(w, _)| w == what) {
+                Some((_, all)) => merge(all, rep),
+                None => self.repairs.push((what, rep.clone())),
+            }
+        }
+    }
+
+    /// What the whole log says: its temperatures, the samples left unpaired, the time repairs
+    /// with their places in the file, the samples the window rule left out, and the gaps.
+    pub fn notes(mut self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.no_readings {
+            notes.extend(temperature_note(0, self.rows));
+        } else if self.temperatures.1 > 0 {
+            notes.extend(temperature_note(self.temperatures.0, self.temperatures.1));
+        }
+        notes.extend(unpaired_note(self.unpaired.0, self.unpaired.1));
+        let mut lost_by_repair = 0;
+        let last = self.surveyed.saturating_sub(1);
+        for (what, rep) in &mut self.repairs {
+            // A stamp left out at one window's edge may be re-timed, and written, by another;
+            // one left out at a window's edge that is not the log's is the window rule's.
+            let written: Vec<usize> = rep.retimed.iter().map(|r| r.0).collect();
+            rep.dropped
+                .retain(|d| !written.contains(&d.0) && (d.0 == 0 || d.0 == last));
+            if *what != "gyro sample" {
+                lost_by_repair += rep.lost();
+            }
+            notes.extend(rep.describe(what));
+        }
+        let accounted = self.rows + lost_by_repair + self.unpaired.0;
+        let lost = self.surveyed.saturating_sub(accounted);
+        if lost > 0 {
+            notes.push(format!(
+                "{lost} sample(s) left out by the window rule: a stamp damaged so far that it \
+                 lies outside its own window's reach (its times and {MARGIN_PERIODS:.0} periods \
+                 either side) is not re-timed from its neighbours, as a whole read does, but \
+                 left out"
+            ));
+        }
+        notes.extend(say_time_jumps(&self.jumps, self.jump_count, self.rate_hz));
+        notes
+    }
+}
+
+/// `rep`'s repairs added to `all`'s, in the file's order.
+fn merge(all: &mut TimeRepairs, rep: &TimeRepairs) {
+    all.reversed |= rep.reversed;
+    all.retimed.extend(&rep.retimed);
+    all.retimed.sort_by_key(|r| r.0);
+    all.dropped.extend(&rep.dropped);
+    all.dropped.sort_by_key(|r| r.0);
+    all.reordered += rep.reordered;
+    all.repeats.extend(&rep.repeats);
+    all.repeats.sort_unstable();
+    all.spread.extend(&rep.spread);
+    all.spread.sort_unstable();
+    all.restarts.extend(&rep.restarts);
+}
+
+/// A window pass's repairs `rep` said on the log's scale: the samples named by their places in
+/// the file (`places`, the keeper's) instead of in the pass, and only those of the window's own
+/// times `own` (a sample re-timed or spread into them, an exact repeat or a stamp left out that
+/// was read in them, the samples sorted into their order among those kept in them), so that
+/// each repair is said by one window. `order`: the repaired order (index in the pass, time);
+/// `t_s`: the stamps read.
+pub(super) fn own_repairs(
+    rep: TimeRepairs,
+    order: &[(usize, f64)],
+    t_s: &[f64],
+    places: &[usize],
+    own: (f64, f64),
+) -> TimeRepairs {
+    let inside = |t: f64| own.0 <= t && t < own.1;
+    let place = |i: usize| places.get(i).copied().unwrap_or(i);
+    let spread_at: HashMap<usize, f64> = match rep.spread.is_empty() {
+        true => HashMap::new(),
+        false => order.iter().copied().collect(),
+    };
+    // A sample sorted into its place: its place in the pass's (reading) order is not its place
+    // in time.
+    let mut read_order: Vec<usize> = order.iter().map(|s| s.0).collect();
+    read_order.sort_unstable();
+    if rep.reversed {
+        read_order.reverse();
+    }
+    let reordered = match rep.reordered {
+        0 => 0,
+        _ => order
+            .iter()
+            .zip(&read_order)
+            .filter(|(s, &r)| inside(s.1) && s.0 != r)
+            .count(),
+    };
+    TimeRepairs {
+        bursts: rep.bursts.clone(),
+        reversed: rep.reversed,
+        retimed: (rep.retimed.iter())
+            .filter(|r| inside(r.2))
+            .map(|&(i, read, given)| (place(i), read, given))
+            .collect(),
+        dropped: (rep.dropped.iter())
+            .filter(|d| inside(d.1))
+            .map(|&(i, read)| (place(i), read))
+            .collect(),
+        reordered,
+        repeats: (rep.repeats.iter())
+            .filter(|&&i| t_s.get(i).is_some_and(|&t| inside(t)))
+            .map(|&i| place(i))
+            .collect(),
+        spread: (rep.spread.iter())
+            .filter(|i| spread_at.get(i).is_some_and(|&t| inside(t)))
+            .map(|&i| place(i))
+            .collect(),
+        restarts: (rep.restarts.iter())
+            .filter(|r| inside(r.read_s + r.moved_s))
+            .map(|r| Restart {
+                index: place(r.index),
+                ..*r
+            })
+            .collect(),
     }
 }
 
@@ -106,7 +335,11 @@ pub fn read_log_windows(
         &Keep::Survey(Arc::clone(&report)),
         seconds_per_unit,
     )?;
-    let survey = report.lock().ok().and_then(|mut r| r.survey.take());
+    let (survey, temperatures) = match report.lock() {
+        Ok(mut r) => (r.survey.take(), r.temperatures),
+        Err(_) => (None, (0, 0)),
+    };
+    let surveyed = survey.as_ref().map_or(0, |s| s.count());
     let (mut starts, period) = survey.map(|s| s.window_starts(max / 2)).unwrap_or_default();
     starts.insert(0, f64::NEG_INFINITY);
     Ok(LogRead::Windows(LogWindows {
@@ -116,6 +349,9 @@ pub fn read_log_windows(
         starts,
         margin_s: period.map_or(MARGIN_FALLBACK_S, |p| MARGIN_PERIODS * p),
         max,
+        surveyed,
+        temperatures: temperatures.1 > 0,
+        no_readings: temperatures.0 > 0 && temperatures.1 == 0,
     }))
 }
 
