@@ -28,3 +28,6 @@ for krate in shared recording estimator outputs app device host; do
     awk '{ s += $1 } END { print s }')
   printf '  %-10s %5d\n' "$krate" "$n"
 done
+
+echo
+python3 scripts/house-counts.py

@@ -5,15 +5,15 @@
 //! one log, each through the one segment and calibrate path (`handheld`, `calibrate`).
 
 use crate::calibrate::{calibrate_recording, CalibrateOptions, Recording};
-use crate::calibration_files::calibration_unit_file;
-use crate::estimate::EstimateError;
 use crate::handheld::gyro::HandGyroFileError;
 use crate::handheld::{segment_recording, InMemoryError, SegmentChoices};
-use crate::session::logs::vehicle::{
+use estimator::calibration_files::calibration_unit_file;
+use estimator::estimate::EstimateError;
+use estimator::unit_file::UnitFile;
+use recording::session::logs::vehicle::{
     read_vehicle_params, SensorKind, SensorSlot, SlotError, VehicleParams,
 };
-use crate::session::logs::{read_log_keeping, LogError, LogFormat, LogSource};
-use crate::unit_file::UnitFile;
+use recording::session::logs::{read_log_keeping, LogError, LogFormat, LogSource};
 use std::path::{Path, PathBuf};
 
 /// Why a log gives no ids, slots or calibrations; each says what to do.

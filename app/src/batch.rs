@@ -16,13 +16,13 @@
 //! screened within each output unit (a group below [`MIN_LOT`] is not screened) and says so; each
 //! summary row names its unit.
 
-use crate::calibration_files::now_unix_s;
-use crate::estimate::{median, EstimateOptions};
-use crate::session::{ReadOptions, PLAN_FILE};
-use crate::summary::{all_parameter_keys, CalibrationSummary, Limits};
 use crate::{CalibrateOptions, CalibrationDocument};
+use estimator::calibration_files::now_unix_s;
+use estimator::estimate::{median, EstimateOptions};
 use indicatif::ProgressBar;
+use outputs::summary::{all_parameter_keys, CalibrationSummary, Limits};
 use rayon::prelude::*;
+use recording::session::{ReadOptions, PLAN_FILE};
 use serde::{Deserialize, Serialize};
 use shared::{OutputUnit, UnitId};
 use std::path::{Path, PathBuf};

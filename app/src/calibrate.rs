@@ -4,13 +4,13 @@
 
 use super::document::CalibrationDocument;
 use super::error::CalibrateError;
-use crate::calibration_files::{self, OutputError, WrittenCalibration};
-use crate::estimate::GyroEstimate;
-use crate::estimate::{
+use estimator::calibration_files::{self, OutputError, WrittenCalibration};
+use estimator::estimate::GyroEstimate;
+use estimator::estimate::{
     calibrate_with_hand_gyro, CalibrationOutcome, EstimateError, EstimateOptions,
 };
-use crate::session::{self, Plan, ReadOptions, SegmentStats, Session};
-use crate::summary::{CalibrationSummary, Limits};
+use outputs::summary::{CalibrationSummary, Limits};
+use recording::session::{self, Plan, ReadOptions, SegmentStats, Session};
 use shared::UnitId;
 use std::path::{Path, PathBuf};
 

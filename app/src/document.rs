@@ -2,7 +2,7 @@
 //! (`host calibrate --input`, `host batch`, Python) or live from a device (`host calibrate --port`),
 //! which adds its verification.
 
-use crate::summary::CalibrationSummary;
+use outputs::summary::CalibrationSummary;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

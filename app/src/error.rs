@@ -1,8 +1,8 @@
 //! Why a calibration use case failed.
 
-use crate::estimate::EstimateError;
 use crate::handheld::gyro::HandGyroFileError;
-use crate::session::RecordingError;
+use estimator::estimate::EstimateError;
+use recording::session::RecordingError;
 
 /// Why [`super::calibrate_session_dir`] produced no calibration; each keeps its cause.
 #[derive(Debug, thiserror::Error)]

@@ -26,10 +26,6 @@
 //!   [`calibrate_recording`], with the lot's screen and summary.
 #![deny(missing_docs)]
 
-use estimator::{calibration_files, estimate, sim, unit_file};
-use outputs::{noise, summary};
-use recording::{limits, output_file, session};
-
 pub mod autopilot;
 pub mod batch;
 pub mod calibrate;

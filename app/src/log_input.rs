@@ -3,10 +3,10 @@
 //! keyword arguments both become a `LogInput`; its checks name the options as the caller spells
 //! them ([`Spelling`]).
 
-use crate::session::import::{
+use recording::session::import::{
     parse_acc_unit, GyroUnit, ImportOptions, TimeSource, TimeUnit, DEFAULT_COLUMNS,
 };
-use crate::session::logs::LogSource;
+use recording::session::logs::LogSource;
 use recording::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
 

@@ -8,8 +8,8 @@
 //! once), so every candidate is a plan the operator can run; the prediction lays the segments one
 //! after the other in time, as a session runs them.
 
-use crate::estimate::{predict, EstimateError, PredictSettings};
-use crate::session::{Plan, SegmentPlan};
+use estimator::estimate::{predict, EstimateError, PredictSettings};
+use recording::session::{Plan, SegmentPlan};
 use serde::Serialize;
 use shared::Calibration;
 
@@ -49,7 +49,7 @@ fn sigmas(
     truth: &Calibration,
     settings: &PredictSettings,
 ) -> Result<(Vec<f64>, OrderFigures), EstimateError> {
-    let stats = crate::sim::synth::prediction_stats(plan, truth, settings)?;
+    let stats = estimator::sim::synth::prediction_stats(plan, truth, settings)?;
     let p = predict(plan, truth, &stats, settings)?;
     let k = truth.statics.scale_out_per_g;
     let worst = |f: &dyn Fn(usize) -> f64| (0..3).map(f).fold(0.0, f64::max);
@@ -222,8 +222,8 @@ fn helps(base: &[f64], sig: &[f64], before: &OrderFigures, after: &OrderFigures)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::{BiasWalk, EstimateOptions};
-    use crate::session::builtin::builtin_plan;
+    use estimator::estimate::{BiasWalk, EstimateOptions};
+    use recording::session::builtin::builtin_plan;
 
     fn settings(truth: &Calibration, walk: f64) -> PredictSettings {
         PredictSettings {

@@ -2,10 +2,10 @@
 //! (`plan.toml`, `samples.csv`, `truth.toml`). The command line's flags and Python's keyword
 //! arguments both become a [`Simulation`].
 
-use crate::session::builtin::{load_plan, paper_plan};
-use crate::session::{Plan, PlanError};
-use crate::sim::{simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary};
-use crate::unit_file::{UnitFile, UnitFileError};
+use estimator::sim::{simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary};
+use estimator::unit_file::{UnitFile, UnitFileError};
+use recording::session::builtin::{load_plan, paper_plan};
+use recording::session::{Plan, PlanError};
 use std::path::PathBuf;
 
 /// A simulated session to write.
@@ -115,7 +115,7 @@ impl NoiseChoices {
         if self.gyro_scale_ppm.is_some() || self.gyro_misalignment_deg.is_some() {
             let scale = self.gyro_scale_ppm.unwrap_or([0.0; 3]).map(|p| p * 1e-6);
             let mis = self.gyro_misalignment_deg.unwrap_or(0.0).to_radians();
-            n.gyro_matrix = crate::sim::session::gyro_matrix(scale, mis);
+            n.gyro_matrix = estimator::sim::session::gyro_matrix(scale, mis);
         }
         n.validate()?;
         Ok(n)

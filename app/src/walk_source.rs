@@ -12,10 +12,10 @@
 //! calibration) is taken as it is, with the output unit the file records (`output_unit`), which
 //! the fit checks against the session's; a file that records none is refused.
 
-use crate::estimate::UnitWalk;
-use crate::noise::{NoiseReport, AXES};
-use crate::sim::{NoiseModel, SimulateError};
-use crate::unit_file::{UnitFile, UnitFileError};
+use estimator::estimate::UnitWalk;
+use estimator::sim::{NoiseModel, SimulateError};
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::noise::{NoiseReport, AXES};
 use std::path::{Path, PathBuf};
 
 /// Why the walk could not be taken from the file.
@@ -210,8 +210,8 @@ pub(crate) fn walk_from_noise(r: &NoiseReport, path: &Path) -> Result<UnitWalk, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::noise::allan::{NoiseTerms, TermFit};
-    use crate::noise::AxisNoise;
+    use outputs::noise::allan::{NoiseTerms, TermFit};
+    use outputs::noise::AxisNoise;
 
     fn report(unit: &str, k: [Option<f64>; 3]) -> NoiseReport {
         with_gyro(unit, k, [None; 3])
@@ -324,7 +324,7 @@ mod tests {
         let unit = dir.path().join("unit.toml");
         let text = format!(
             "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\n",
-            crate::unit_file::PAPER_UNIT_TOML
+            estimator::unit_file::PAPER_UNIT_TOML
         );
         std::fs::write(&unit, text).unwrap();
         let walks = walk_from_file(&unit).unwrap();
@@ -333,7 +333,7 @@ mod tests {
         // A unit file's gyro walk comes with it.
         let text = format!(
             "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\ngyro_bias_walk_deg_s_sqrt_s = 0.0004\n",
-            crate::unit_file::PAPER_UNIT_TOML
+            estimator::unit_file::PAPER_UNIT_TOML
         );
         std::fs::write(&unit, text).unwrap();
         assert_eq!(

@@ -10,9 +10,9 @@
 use super::client::{DeviceClient, LinkError, Transport};
 use super::operator::Operator;
 use super::procedure::{ProcedureOptions, VerificationPoint};
-use crate::session::segment::{angle_deg, MIN_POSITIONS};
-use crate::session::Plan;
 use crate::view::guide::Coverage;
+use recording::session::segment::{angle_deg, MIN_POSITIONS};
+use recording::session::Plan;
 use shared::linalg;
 use shared::wire::{SampleFlags, StreamKind};
 use shared::OutputUnit;

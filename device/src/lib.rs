@@ -8,9 +8,6 @@
 
 #![deny(missing_docs)]
 
-use estimator::{calibration_files, estimate};
-use recording::{session, ui};
-
 pub mod bringup;
 mod bringup_health;
 pub mod bringup_motion;

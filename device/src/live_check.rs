@@ -1,7 +1,7 @@
 //! The operator's instruction for a segment, the table setting that performs it, and the live checks
 //! that a recorded segment matches its plan (the live procedure's `crate::procedure`).
 
-use crate::session::{self, SegmentPlan};
+use recording::session::{self, SegmentPlan};
 use shared::wire::VirtualTable;
 
 pub(crate) fn describe_up(up: &[f64; 3]) -> String {

@@ -14,10 +14,10 @@
 use super::live_check::{instruction, table_for};
 pub(crate) use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
-use crate::calibration_files::{self, OutputError, WrittenCalibration};
-use crate::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use crate::{handheld, DeviceClient, LinkError, Transport};
 use app::{CalibrateError, CalibrateOptions, Calibrated};
+use estimator::calibration_files::{self, OutputError, WrittenCalibration};
+use recording::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
 
@@ -204,7 +204,7 @@ pub fn run<T: Transport>(
             &plan,
             !drive && handheld::is_hand_held(&plan),
             window_rate,
-            crate::session::segment::SegmentOptions::default().same_position_deg,
+            recording::session::segment::SegmentOptions::default().same_position_deg,
         );
     }
     let recording_dir = opts.out_dir.join("recording");
@@ -410,7 +410,7 @@ fn watcher_for(plan: &Plan, window_rate: f64) -> handheld::PositionWatcher {
     let mut watcher = handheld::PositionWatcher::new(
         plan.output_unit,
         window_rate,
-        crate::session::segment::SegmentOptions::default().same_position_deg,
+        recording::session::segment::SegmentOptions::default().same_position_deg,
     );
     watcher.set_aims(&plan.segments.iter().map(|s| s.up_b).collect::<Vec<_>>());
     watcher
@@ -509,7 +509,7 @@ fn record_segment<T: Transport>(
     for _ in 0..settle {
         client.next_raw_window()?;
     }
-    let bar = crate::ui::progress_bar(n_windows, "recording", opts.quiet);
+    let bar = recording::ui::progress_bar(n_windows, "recording", opts.quiet);
     bar.set_message(seg.name.clone());
     let mut acc = session::SegmentAccumulator::new(seg.name.clone());
     let mut rejected = 0u64;
@@ -614,7 +614,7 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::SegmentAccumulator;
+    use recording::session::SegmentAccumulator;
 
     fn seg(up: [f64; 3], rate: f64) -> SegmentPlan {
         SegmentPlan {

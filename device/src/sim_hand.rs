@@ -13,7 +13,7 @@
 
 use super::operator::{AutomaticOperator, Operator};
 use super::procedure::ProcedureError;
-use crate::session::builtin::builtin_plan;
+use recording::session::builtin::builtin_plan;
 use shared::wire::VirtualTable;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;

@@ -6,11 +6,11 @@
 use super::live_check::{instruction, table_for};
 use super::operator::Operator;
 use super::procedure::ProcedureOptions;
-use crate::estimate::attitude::best_rotation;
-use crate::estimate::{BodyFrame, ReferenceChoice};
-use crate::session::{Plan, SegmentPlan};
 use crate::{DeviceClient, LinkError, Transport};
+use estimator::estimate::attitude::best_rotation;
+use estimator::estimate::{BodyFrame, ReferenceChoice};
 use nalgebra::{Matrix3, Vector3};
+use recording::session::{Plan, SegmentPlan};
 use shared::wire::{SampleFlags, StreamKind};
 
 /// One verification position.

@@ -117,7 +117,7 @@ pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitI
     file.statics.raw_offset_lsb = outcome.acc_offset;
     // A single-package fit's three lever arms are one point, and the file says so (docs/model.md §4.7).
     if let (Some(d), true) = (file.dynamic.as_mut(), outcome.single_package) {
-        d.package = crate::session::Package::Single;
+        d.package = recording::session::Package::Single;
     }
     // The estimate's 1σ beside the values that `from_calibration` wrote.
     if let (Some(section), Some(g)) = (file.gyro.as_mut(), outcome.gyro.as_ref()) {
@@ -258,7 +258,7 @@ mod tests {
 
     #[test]
     fn the_calibration_file_carries_the_estimated_gyro() {
-        let plan = crate::session::builtin::builtin_plan("short-oblique")
+        let plan = recording::session::builtin::builtin_plan("short-oblique")
             .unwrap()
             .unwrap();
         let truth = testkit::paper_unit();

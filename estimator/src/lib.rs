@@ -13,7 +13,6 @@
 #![deny(missing_docs)]
 
 // The recording's modules keep their paths inside this crate too.
-use recording::{limits, session};
 
 pub mod calibration_files;
 pub mod calibration_guard;

@@ -36,7 +36,7 @@
 //! Other top-level tables (`[procedure]`, `[expected]`, a simulator's `[noise]`) are kept in `other`.
 
 use crate::estimate::Uncertainty;
-use crate::session::Package;
+use recording::session::Package;
 use serde::{Deserialize, Serialize};
 use shared::linalg::RowMajor3;
 use shared::sensor_models::TemperatureModel;
@@ -305,7 +305,7 @@ impl UnitFile {
 
     /// Reads a unit file.
     pub fn load(path: &Path) -> Result<UnitFile, UnitFileError> {
-        let text = crate::limits::read_text_bounded(path)
+        let text = recording::limits::read_text_bounded(path)
             .map_err(|e| UnitFileError::Io(path.to_path_buf(), e))?;
         let file =
             UnitFile::parse(&text).map_err(|e| UnitFileError::Syntax(path.to_path_buf(), e))?;
@@ -318,7 +318,7 @@ impl UnitFile {
     /// otherwise silently mean zero lever arms) is an error naming its line and column.
     pub fn parse(text: &str) -> Result<UnitFile, String> {
         let file: UnitFile = toml::from_str(text).map_err(|e| e.to_string())?;
-        if let Some(e) = crate::session::toml_check::surplus_values(text, &file) {
+        if let Some(e) = recording::session::toml_check::surplus_values(text, &file) {
             return Err(e);
         }
         if let Some(key) = file
@@ -586,12 +586,14 @@ mod tests {
         );
         let plan = "output_unit = \"V\"\nsample_rate_hz = 100\n[[segment]]\nname = \"x+\"\n\
                     up_b = [1, 0, 0, 7]\n";
-        let e = crate::session::Plan::parse(plan).unwrap_err().to_string();
+        let e = recording::session::Plan::parse(plan)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("'segment[0].up_b' has 4 values, 3 expected"),
             "{e}"
         );
-        crate::session::Plan::parse(&plan.replace(", 7]", "]")).unwrap();
+        recording::session::Plan::parse(&plan.replace(", 7]", "]")).unwrap();
     }
 
     #[test]

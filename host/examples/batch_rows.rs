@@ -5,15 +5,15 @@
 //! ```
 //!
 //! Simulates UNITS (default 50) sessions of the paper's unit (PLAN, default `short`: 30 000 rows each)
-//! into a temporary directory, then calibrates the lot twice through `host::batch::run_batch`: with
+//! into a temporary directory, then calibrates the lot twice through `app::batch::run_batch`: with
 //! one thread and with one per core. Prints rows, seconds and rows/s of each run. The rows are read
 //! from disk each time (the second run reads from the page cache, like the first after simulation).
 
+use app::batch::{find_sessions, run_batch, BatchOptions};
 use estimator::sim::{simulate_to_dir, NoiseModel};
 use estimator::unit_file::UnitFile;
-use host::batch::{find_sessions, run_batch, BatchOptions};
-use host::summary::Limits;
 use indicatif::ProgressBar;
+use outputs::summary::Limits;
 use recording::session::builtin::load_plan;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -15,9 +15,9 @@ use estimator::calibration_files::write_calibration_files;
 use estimator::estimate::{calibrate_session_stats, EstimateOptions, Method};
 use estimator::sim::{simulate_to_dir, NoiseModel};
 use estimator::unit_file::UnitFile;
-use host::export::{toml_forms::render as export, ExportFormat};
-use host::report::compare::compare;
-use host::report::{render_position_targets, report, ReportOptions};
+use outputs::export::{toml_forms::render as export, ExportFormat};
+use outputs::report::compare::compare;
+use outputs::report::{render_position_targets, report, ReportOptions};
 use recording::session::builtin::paper_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::UnitId;
@@ -62,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         write_calibration_files(&out.join("calibration-eq24"), &eq24, unit_id, 0, true)?;
     println!(
         "\n{}",
-        host::report::render_session(&joint, &s.plan, &s.stats)
+        outputs::report::render_session(&joint, &s.plan, &s.stats)
     );
 
     println!("Joint least squares (A) against the paper's eq. 24 (B):");

@@ -15,10 +15,10 @@ pub mod logs;
 #[cfg(test)]
 mod torture_tests;
 
-use crate::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
-use crate::session::{read_samples, Plan};
-use crate::sim::Rng;
-use crate::unit_file::UnitFile;
+use estimator::sim::Rng;
+use estimator::unit_file::UnitFile;
+use recording::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
+use recording::session::{read_samples, Plan};
 use std::path::Path;
 
 /// The parsers under test.
@@ -107,11 +107,11 @@ impl Target {
             ],
             Target::PlanToml => vec![
                 FUZZ_PLAN.as_bytes().to_vec(),
-                crate::session::builtin::load_plan("short-oblique")
+                recording::session::builtin::load_plan("short-oblique")
                     .map(|p| p.to_toml().into_bytes())
                     .unwrap_or_default(),
             ],
-            Target::UnitFile => vec![crate::unit_file::PAPER_UNIT_TOML.as_bytes().to_vec()],
+            Target::UnitFile => vec![estimator::unit_file::PAPER_UNIT_TOML.as_bytes().to_vec()],
             Target::Blob => {
                 let b = paper_blob();
                 let payload = b
@@ -317,8 +317,8 @@ pub(crate) fn logger_csv(data: &[u8]) {
 /// at a finite positive rate, six axes, one Allan point per cluster size of the curve (the octaves
 /// and a ninth of the record).
 pub(crate) fn noise_csv(data: &[u8]) {
-    use crate::noise::{allan::curve_sizes, MAX_SAMPLES, MIN_SAMPLES};
-    if let Ok(r) = crate::noise::analyse_csv_bytes(data, None) {
+    use outputs::noise::{allan::curve_sizes, MAX_SAMPLES, MIN_SAMPLES};
+    if let Ok(r) = outputs::noise::analyse_csv_bytes(data, None) {
         let n = usize::try_from(r.samples).unwrap_or(usize::MAX);
         assert!((MIN_SAMPLES..=MAX_SAMPLES).contains(&n), "{n} rows");
         assert!(r.sample_rate_hz.is_finite() && r.sample_rate_hz > 0.0);
@@ -551,7 +551,7 @@ mod tests {
         assert!(read_samples(SAMPLES.as_bytes(), fuzz_plan(), Path::new("s")).is_ok());
         assert!(Plan::parse(FUZZ_PLAN).is_ok());
         assert!(shared::blob::decode(&paper_blob()).is_ok());
-        assert!(UnitFile::parse(crate::unit_file::PAPER_UNIT_TOML).is_ok());
+        assert!(UnitFile::parse(estimator::unit_file::PAPER_UNIT_TOML).is_ok());
         // Each logger entry is read with one of the two options; the noise entry gives its still
         // segment's 100 rows at 100 Hz.
         for (entry, options) in logger_corpus().iter().zip(logger_options()) {
@@ -559,7 +559,7 @@ mod tests {
             assert_eq!(rec.len(), 150);
             assert!((rec.rate_hz - 100.0).abs() < 1e-6, "{}", rec.rate_hz);
         }
-        let r = crate::noise::analyse_csv_bytes(&noise_corpus(), None).unwrap();
+        let r = outputs::noise::analyse_csv_bytes(&noise_corpus(), None).unwrap();
         assert_eq!((r.segment.as_str(), r.samples), ("z+", 100));
         assert!(
             (r.sample_rate_hz - 100.0).abs() < 1e-9,

@@ -1,7 +1,5 @@
-//! The bounds of the command line's numbers and of the device link, beside the recording's own
-//! ([`recording::limits`], re-exported here so that every bound is read from one module).
-
-pub use recording::limits::*;
+//! The bounds of the command line's numbers and of the device link; the recording's own are
+//! [`recording::limits`]'s.
 
 /// Shortest replayed navigation run (`--duration-s`), s: one step of the replay.
 pub(crate) const MIN_NAVIGATION_DURATION_S: f64 = 0.01;

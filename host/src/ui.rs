@@ -1,7 +1,5 @@
-//! The terminal: the recording's progress bars ([`recording::ui`], re-exported) and stdout writes
-//! that return an error where `println!` would panic.
-
-pub use recording::ui::*;
+//! The terminal: stdout writes that return an error where `println!` would panic (the progress bars
+//! are [`recording::ui`]'s).
 
 /// Writes to stdout, returning the error that `println!` would panic on: a closed pipe
 /// (`host … | head -2`) or a full disk (`> /dev/full`) becomes a clear error of the command.

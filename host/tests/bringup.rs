@@ -3,11 +3,11 @@
 //! states 1000, an accelerometer axis stuck — fails the one check that names it, with its cause;
 //! and the command itself (`host bringup --port sim`) passes, exit status 0.
 
+use device::bringup::{bringup, bringup_with, names, Bringup, Verdict};
+use device::bringup_motion::TableOperator;
+use device::sim::{SimDevice, SIM_UNIT_ID};
+use device::DeviceClient;
 use firmware::imu::alignment::Alignment;
-use host::device::bringup::{bringup, bringup_with, names, Bringup, Verdict};
-use host::device::bringup_motion::TableOperator;
-use host::device::sim::{SimDevice, SIM_UNIT_ID};
-use host::device::DeviceClient;
 use shared::blob::ParameterBlob;
 use shared::params::PAPER_UNIT;
 use std::process::Command;

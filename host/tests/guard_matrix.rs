@@ -1,5 +1,5 @@
 //! Where a calibration meets something, every mismatch is refused: each meeting of the guard's
-//! table (`host::calibration_guard`: a recording through `apply`, `noise`, `report` and
+//! table (`outputs::calibration_guard`: a recording through `apply`, `noise`, `report` and
 //! `navigation-check`; a device through `flash`, `verify` and `read`; another calibration through
 //! `compare` and `batch`) against each mismatch (another unit's id, another output unit, a negated
 //! or a zero scale factor, another body frame, a temperature model and no temperature, a gyro in
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 use common::{hand_segment_args, host};
-use host::calibration_guard::{verdict, Check, Meeting, Verdict};
+use outputs::calibration_guard::{verdict, Check, Meeting, Verdict};
 
 const UNIT: &str = "a1b2c3d4e5f6a1b2c3d4e5f6";
 const OTHER_UNIT: &str = "0f0f0f0f0f0f0f0f0f0f0f0f";

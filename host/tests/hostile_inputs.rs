@@ -541,7 +541,7 @@ fn messages_name_the_real_problem() {
 
 #[test]
 fn a_silent_device_is_reported_in_plain_words() {
-    let e = host::device::LinkError::Timeout {
+    let e = device::LinkError::Timeout {
         waiting_for: "an identity",
         after: Duration::from_secs(5),
     }

@@ -195,7 +195,7 @@ fn every_numeric_option_refuses_nan_infinity_and_out_of_range_values() {
         let declared = match Cli::try_parse_from(argv(o, "NaN")) {
             Ok(_) => {
                 problems.push(format!(
-                    "{} --{}: NaN accepted (a plain number parser: use host::limits::real, whole_u32 \
+                    "{} --{}: NaN accepted (a plain number parser: use recording::limits::real, whole_u32 \
                      or whole_u64)",
                     o.sub, o.long
                 ));

@@ -6,14 +6,14 @@
 //! whose χ²/dof is far beyond 1 fails (docs/model.md §4.4), and so does a temperature model whose
 //! own fit is (§9).
 
+use app::handheld::{segment_recording, SegmentChoices, SegmentedSession};
+use app::{calibrate_recording, CalibrateOptions, Calibrated, Recording as Session};
 use estimator::estimate::handheld_gyro::HandGyroFit;
 use estimator::sim::handheld::{logger_unit, simulate_hand, GyroTruth, HandSpec};
 use estimator::sim::montecarlo::{static_errors, StaticErrors};
 use estimator::sim::session::NoiseModel;
 use estimator::sim::testkit::{hot_unit, nuisances, simulate_stats, soak_plan, Rng};
 use estimator::sim::thermal::ThermalSim;
-use host::app::handheld::{segment_recording, SegmentChoices, SegmentedSession};
-use host::app::{calibrate_recording, CalibrateOptions, Calibrated, Recording as Session};
 use outputs::summary::Limits;
 use recording::session::import::Recording;
 use recording::session::segment::SegmentOptions;

@@ -4,7 +4,7 @@
 mod common;
 use common::{host, thermal_gyro_session};
 use estimator::unit_file::UnitFile;
-use host::summary::section_values;
+use outputs::summary::section_values;
 use serde_json::Value;
 use std::path::Path;
 

@@ -29,11 +29,11 @@ pub use offset::{log_offset, LogOffset};
 use crate::calibration_guard::{
     check_rest_rate, meet, Frame, GuardError, Meeting, Mine, Other, Temperatures,
 };
-use crate::output_file::OutputFileError;
-use crate::session::logs::LogError;
-use crate::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
-use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
+use recording::output_file::OutputFileError;
+use recording::session::logs::LogError;
+use recording::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
+use recording::session::{PLAN_FILE, SAMPLES_FILE};
 use shared::compensator::{Compensator, CompensatorError, LeverMode};
 use shared::omega_dot::{OmegaDotError, OmegaDotEstimator};
 use shared::{BodyAngularAccel, BodyRate, Calibration, SensorOutputs, UnitId};
@@ -459,10 +459,10 @@ pub fn apply_session(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::builtin::builtin_plan;
-    use crate::sim::{simulate_to_dir, NoiseModel};
-    use crate::unit_file::UnitFile;
+    use estimator::sim::{simulate_to_dir, NoiseModel};
+    use estimator::unit_file::UnitFile;
     use firmware::testvectors::{COMP_CASES, OMEGA_DOT_RATE_CORNER_HZ, OMEGA_DOT_SEQ};
+    use recording::session::builtin::builtin_plan;
     use shared::forward::TableState;
 
     fn f(bits: &[u32; 3]) -> [f32; 3] {
@@ -488,7 +488,7 @@ mod tests {
         let plan = "output_unit = \"V\"\nsample_rate_hz = 1000\n[[segment]]\nname = \"v\"\n\
                     up_b = [0, 0, 1]\nrate_deg_s = 100\n";
         std::fs::write(dir.join(PLAN_FILE), plan).unwrap();
-        let mut s = String::from(crate::session::SAMPLES_HEADER);
+        let mut s = String::from(recording::session::SAMPLES_HEADER);
         s.push('\n');
         for (k, (u, w)) in rows.iter().enumerate() {
             // f64 of an f32 prints exactly and parses back to the same f32.
@@ -568,7 +568,7 @@ mod tests {
         let cal = unit.to_calibration().unwrap();
         let mut plan = builtin_plan("quick-oblique").unwrap().unwrap();
         // A spin-up, so that the ω̇ estimate and the tangential term are exercised too.
-        plan.segments.push(crate::session::SegmentPlan {
+        plan.segments.push(recording::session::SegmentPlan {
             attitude: Default::default(),
             attitude_sigma_deg: None,
             name: "ramp".into(),

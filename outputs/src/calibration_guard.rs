@@ -234,8 +234,8 @@ impl Frame {
     /// A recording's frame: the table's when the segments on the fixture have known ups in at
     /// least two directions (as the fit's own choice of frame: parallel ups leave a rotation about
     /// them free), else a convention (every position free, as a hand-held session's).
-    pub(crate) fn of_plan(plan: &crate::session::Plan) -> Frame {
-        use crate::session::plan::Attitude;
+    pub(crate) fn of_plan(plan: &recording::session::Plan) -> Frame {
+        use recording::session::plan::Attitude;
         let ups: Vec<[f64; 3]> = plan
             .segments
             .iter()
@@ -574,7 +574,7 @@ mod tests {
     /// ups are all parallel (z up and down: a rotation about z is left free) are conventions.
     #[test]
     fn a_plans_frame_needs_two_known_directions() {
-        use crate::session::builtin::builtin_plan;
+        use recording::session::builtin::builtin_plan;
         let plan = |name| builtin_plan(name).unwrap().unwrap();
         assert_eq!(Frame::of_plan(&plan("short")), Frame::Table);
         assert_eq!(Frame::of_plan(&plan("hand")), Frame::Convention);

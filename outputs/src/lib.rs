@@ -15,9 +15,6 @@
 //! - [`noise`]: Allan deviation and noise terms (`host noise`).
 #![deny(missing_docs)]
 
-use estimator::{calibration_files, estimate, sim, unit_file};
-use recording::{limits, output_file, session, ui};
-
 pub mod apply;
 pub mod calibration_guard;
 pub mod export;

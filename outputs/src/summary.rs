@@ -4,11 +4,11 @@
 //! prints it; `host batch` writes one per unit into its lot summary; `host compare` compares the
 //! same gyro and temperature values ([`section_values`]).
 
-use crate::calibration_files::calibration_unit_file;
-use crate::estimate::gyro::UNDETERMINED_SIGMA;
-use crate::estimate::{paper_values, CalibrationOutcome, PAPER_LEN};
-use crate::limits;
-use crate::unit_file::UnitFile;
+use estimator::calibration_files::calibration_unit_file;
+use estimator::estimate::gyro::UNDETERMINED_SIGMA;
+use estimator::estimate::{paper_values, CalibrationOutcome, PAPER_LEN};
+use estimator::unit_file::UnitFile;
+use recording::limits;
 use serde::{Deserialize, Serialize};
 use shared::params::{axis_name, ParamsError};
 use shared::sensor_models::MAX_TEMPERATURE_DEGREE;
@@ -572,7 +572,7 @@ impl CalibrationSummary {
             warnings: outcome.warnings.clone(),
             in_package_size_effect: outcome
                 .single_package
-                .then(|| crate::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
+                .then(|| estimator::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),
             bias_walk: BiasWalkSummary::of(outcome),
             gyro_bias_walk_deg_s_sqrt_s: outcome.gyro_bias_walk_deg_s_sqrt_s,
             gyro_walk: GyroWalkSummary::of(outcome),
@@ -612,7 +612,7 @@ mod tests {
     #[test]
     fn keys_match_the_estimators_labels_one_to_one() {
         let keys = parameter_keys();
-        let labels = crate::estimate::paper_labels();
+        let labels = estimator::estimate::paper_labels();
         assert_eq!(keys.len(), labels.len());
         assert_eq!((keys[0].as_str(), labels[0].as_str()), ("bias_x", "bias x"));
         assert_eq!(keys[7], "theta_xy");

@@ -1,7 +1,7 @@
 //! Support for the end-to-end tests of host and firmware together (the tests are in `tests/tests/`).
 
-use host::device::sim::SimDevice;
-use host::device::DeviceClient;
+use device::sim::SimDevice;
+use device::DeviceClient;
 use shared::Calibration;
 use std::time::Duration;
 

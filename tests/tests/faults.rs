@@ -1,10 +1,10 @@
 //! Faults on the way: a device that dies mid-segment, garbage and truncated frames in both directions,
 //! a reset in the middle of a calibration write, and a blob made for another unit.
 
+use device::operator::AutomaticOperator;
+use device::procedure::{self, ProcedureError, ProcedureOptions};
+use device::LinkError;
 use e2e::{paper_unit, sim_client};
-use host::device::operator::AutomaticOperator;
-use host::device::procedure::{self, ProcedureError, ProcedureOptions};
-use host::device::LinkError;
 use recording::session::builtin::load_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::blob::{BlobError, ParameterBlob};
@@ -68,7 +68,7 @@ fn garbage_and_truncated_frames_are_survived_in_both_directions() {
         .unwrap()
         .to_vec();
     let dev = client.transport_mut();
-    use host::device::Transport;
+    use device::Transport;
     dev.send(&[0x13, 0x37, 0x00, 0xFF, 0xFE, 0x00]).unwrap();
     dev.send(&[0x42; 3 * HOST_FRAME_MAX]).unwrap();
     dev.send(&[0x00]).unwrap();

@@ -3,12 +3,12 @@
 //! running the firmware's own protocol, pipeline and storage code, without a table; a simulated
 //! hand turns it whenever the procedure asks the operator to.
 
+use device::operator::AutomaticOperator;
+use device::procedure::{self, ProcedureError, ProcedureOptions};
+use device::sim::SimDevice;
+use device::sim_hand::HandOperator;
+use device::{DeviceClient, LinkError};
 use e2e::paper_unit;
-use host::device::operator::AutomaticOperator;
-use host::device::procedure::{self, ProcedureError, ProcedureOptions};
-use host::device::sim::SimDevice;
-use host::device::sim_hand::HandOperator;
-use host::device::{DeviceClient, LinkError};
 use recording::session::builtin::load_plan;
 use shared::wire::{Board, CalibrationState};
 use std::time::Duration;

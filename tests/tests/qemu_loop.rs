@@ -2,12 +2,12 @@
 //! Needs `qemu-system-arm` and the thumb target, which `scripts/test-all.sh` installs; it runs them with
 //! `cargo test -p e2e --test qemu_loop -- --ignored`.
 
+use device::operator::AutomaticOperator;
+use device::procedure::{self, ProcedureOptions};
+use device::serial::{SerialTransport, DEFAULT_BAUD};
+use device::DeviceClient;
 use e2e::qemu::{build_firmware, Qemu};
 use e2e::{max_abs_diff, paper_unit};
-use host::device::operator::AutomaticOperator;
-use host::device::procedure::{self, ProcedureOptions};
-use host::device::serial::{SerialTransport, DEFAULT_BAUD};
-use host::device::DeviceClient;
 use recording::session::builtin::load_plan;
 use shared::wire::{CalibrationState, StreamKind, VirtualTable};
 use std::time::Duration;

@@ -1,9 +1,9 @@
 //! `host calibrate --port sim`: the whole loop against the in-process simulated device, which runs the
 //! firmware's own protocol, pipeline and storage code.
 
+use device::operator::AutomaticOperator;
+use device::procedure::{self, ProcedureOptions};
 use e2e::{max_abs_diff, paper_unit, sim_client};
-use host::device::operator::AutomaticOperator;
-use host::device::procedure::{self, ProcedureOptions};
 use recording::session::builtin::load_plan;
 use shared::wire::CalibrationState;
 

@@ -2,11 +2,11 @@
 //! drives the simulated device's chamber as it drives its table, so a temperature plan calibrates the
 //! temperature model against the in-process device, and a plan without rotations is verified at rest.
 
+use device::operator::AutomaticOperator;
+use device::procedure::{self, ProcedureOptions};
+use device::sim::SimDevice;
+use device::DeviceClient;
 use estimator::unit_file::UnitFile;
-use host::device::operator::AutomaticOperator;
-use host::device::procedure::{self, ProcedureOptions};
-use host::device::sim::SimDevice;
-use host::device::DeviceClient;
 use recording::session::builtin::load_plan;
 use std::path::Path;
 use std::time::Duration;

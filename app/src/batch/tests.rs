@@ -2,10 +2,10 @@
 //! gyro; the screening of temperature coefficients and of repeated unit ids.
 
 use super::*;
-use crate::calibration_files::CALIBRATION_TOML;
-use crate::session::builtin::builtin_plan;
-use crate::sim::{simulate_to_dir, NoiseModel, Rng};
-use crate::unit_file::UnitFile;
+use estimator::calibration_files::CALIBRATION_TOML;
+use estimator::sim::{simulate_to_dir, NoiseModel, Rng};
+use estimator::unit_file::UnitFile;
+use recording::session::builtin::builtin_plan;
 
 /// The paper's unit with a production spread: biases 2 mg, scale factors 0.2 %, angles 0.05°, 1σ.
 pub(crate) fn lot_unit(i: u64, rng: &mut Rng) -> UnitFile {
@@ -127,7 +127,7 @@ fn unit_with_parameter(name: &str, value: f64, sigma: Option<f64>) -> UnitResult
         rows: 1,
         summary: Some(CalibrationDocument::new(CalibrationSummary {
             unit_id: None,
-            parameters: vec![crate::summary::Parameter {
+            parameters: vec![outputs::summary::Parameter {
                 name: name.into(),
                 unit: "V".into(),
                 value,
@@ -212,7 +212,7 @@ fn six_units_one_with_a_bad_gyro_is_flagged() {
         if i == bad {
             let mut matrix = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
             matrix[0][0] = 1.05;
-            unit.gyro = Some(crate::unit_file::GyroSection {
+            unit.gyro = Some(estimator::unit_file::GyroSection {
                 bias_rad_s: [5f64.to_radians(), 0.0, 0.0],
                 matrix,
                 bias_rad_s_1sigma: None,
@@ -352,7 +352,7 @@ fn a_lot_of_mixed_output_units_is_screened_unit_by_unit() {
     }
     let unit = shared::OutputUnit::MetresPerSecondSquared;
     let metric = UnitFile::from_calibration(
-        &crate::sim::handheld::logger_unit(unit),
+        &estimator::sim::handheld::logger_unit(unit),
         Some(UnitId::parse_hex("00000000000000000000b0b0").unwrap()),
         None,
     );
@@ -412,7 +412,7 @@ fn the_temperature_fit_chi2_has_its_column() {
     warm.session = "warm".into();
     cold.session = "cold".into();
     if let Some(doc) = warm.summary.as_mut() {
-        doc.summary.thermal_fit = Some(crate::summary::ThermalFitSummary {
+        doc.summary.thermal_fit = Some(outputs::summary::ThermalFitSummary {
             chi2: [1722.0, 10.0, 10.0],
             dof: [10, 10, 10],
             chi2_per_dof: [172.2, 1.0, 1.0],

@@ -3,17 +3,17 @@
 //! the session as `gyro.toml` ([`file_text`], [`read`]) for `host calibrate --input`.
 
 use super::table_turn::find_table_turns;
-use crate::estimate::gyro::GyroEstimate;
-use crate::estimate::handheld_gyro::{
+use estimator::estimate::gyro::GyroEstimate;
+use estimator::estimate::handheld_gyro::{
     fit_handheld_gyro, still_bias, HandGyroError, HandGyroFit, TableTurn, Turn, DETERMINED_1SIGMA,
     MIN_EQUATIONS,
 };
-use crate::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
-use crate::session::from_recording::stats_for;
-use crate::session::import::{six_digits, Recording, TimeOrigin};
-use crate::session::segment::{PositionSet, Segmentation};
-use crate::session::Plan;
-use crate::unit_file::GyroSection;
+use estimator::estimate::{calibrate_session_stats, gyro_check, EstimateError, EstimateOptions};
+use estimator::unit_file::GyroSection;
+use recording::session::from_recording::stats_for;
+use recording::session::import::{six_digits, Recording, TimeOrigin};
+use recording::session::segment::{PositionSet, Segmentation};
+use recording::session::Plan;
 use recording::spelling::{Spelling, UserOption};
 use shared::linalg::{self, RowMajor3};
 use std::path::{Path, PathBuf};
@@ -88,7 +88,7 @@ pub fn fit(
     let outcome = calibrate_session_stats(plan, &stats, &options)?;
     let m = outcome.fitted.m_out_per_g;
     let minv = linalg::inverse(&m).ok_or(HandGyroFileError::Singular)?;
-    let up = |iv: &crate::session::segment::Interval| {
+    let up = |iv: &recording::session::segment::Interval| {
         let d: [f64; 3] =
             core::array::from_fn(|j| iv.mean_acc[j] - outcome.fitted.zero_bias_out[j]);
         let f = linalg::mat_vec(&minv, &d);
@@ -167,7 +167,7 @@ pub struct DroppedTurn {
     /// The turn's start, s.
     pub start_s: f64,
     /// The first jump in it.
-    pub jump: crate::session::import::TimeJump,
+    pub jump: recording::session::import::TimeJump,
 }
 
 impl std::fmt::Display for DroppedTurn {
@@ -203,7 +203,7 @@ pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
         .collect()
 }
 
-/// Why a hand-turn gyro fit is refused ([`crate::estimate::gyro_check`]): an implausible `G`, or
+/// Why a hand-turn gyro fit is refused ([`estimator::estimate::gyro_check`]): an implausible `G`, or
 /// turns no `G` explains (an rms misfit over `max_misfit_deg`, [`plausible_misfit_deg`]). Empty:
 /// accepted.
 pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<String> {
@@ -361,7 +361,7 @@ pub fn file_text(fit: &HandGyroFit) -> String {
 /// estimate, for a session whose own plan does not estimate the gyro. `None` without the file.
 pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
     let path = dir.join(GYRO_FILE);
-    let text = match crate::limits::read_text_bounded(&path) {
+    let text = match recording::limits::read_text_bounded(&path) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(source) => return Err(HandGyroFileError::Io { path, source }),
@@ -403,9 +403,9 @@ pub fn parse(text: &str, path: &Path) -> Result<GyroEstimate, HandGyroFileError>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::from_recording::plan_for;
-    use crate::session::segment::{find_intervals, SegmentOptions};
-    use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+    use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+    use recording::session::from_recording::plan_for;
+    use recording::session::segment::{find_intervals, SegmentOptions};
     use shared::OutputUnit;
 
     /// One face round of a six-face session (1° placement) with a whole table turn on each face: the
@@ -421,8 +421,8 @@ mod tests {
             super::super::segmentation_tests::recording(&spec, OutputUnit::MetresPerSecondSquared);
         let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
         assert_eq!(seg.stills.len(), 12);
-        let faces = crate::session::coverage::six_face_labels(&seg.stills).unwrap();
-        let plan = crate::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
+        let faces = recording::session::coverage::six_face_labels(&seg.stills).unwrap();
+        let plan = recording::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
         let fit = fit(&rec, &seg, &plan, Spelling::Flags).unwrap().unwrap();
         assert_eq!((fit.turns, fit.table_turns), (5, 6));
         let truth = spec.gyro.matrix;

@@ -18,19 +18,19 @@ mod rest_detection_tests;
 mod segmentation_tests;
 pub mod table_turn;
 
-use crate::estimate::gyro::GyroEstimate;
-use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
-use crate::output_file::{write_atomic, OutputFileError};
-use crate::session::coverage::{coverage, given_faces, Coverage};
-use crate::session::from_recording::{
+use estimator::estimate::gyro::GyroEstimate;
+use estimator::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
+use gyro::{HandGyroFileError, GYRO_FILE};
+use recording::output_file::{write_atomic, OutputFileError};
+use recording::session::coverage::{coverage, given_faces, Coverage};
+use recording::session::from_recording::{
     join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
 };
-use crate::session::import::{Places, Recording};
-use crate::session::segment::{
+use recording::session::import::{Places, Recording};
+use recording::session::segment::{
     find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
-use crate::session::{Plan, RecordingError, SegmentStats};
-use gyro::{HandGyroFileError, GYRO_FILE};
+use recording::session::{Plan, RecordingError, SegmentStats};
 use recording::spelling::Spelling;
 use std::path::Path;
 use table_turn::{find_table_turns, FoundTableTurn};

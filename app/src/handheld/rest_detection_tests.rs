@@ -1,12 +1,12 @@
-//! Rest detection ([`crate::session::rest`]) on simulated logs whose truth is known: short rests in
+//! Rest detection ([`recording::session::rest`]) on simulated logs whose truth is known: short rests in
 //! long vibrating flights, hand-held rests beside table rests, continuous hand motion with no rest,
 //! and a rad/s gyro held in a hand.
 
 use super::segmentation_tests::recording;
-use crate::session::import::Recording;
-use crate::session::segment::{find_intervals, SegmentError, SegmentOptions, StillThreshold};
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
-use crate::sim::Rng;
+use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use estimator::sim::Rng;
+use recording::session::import::Recording;
+use recording::session::segment::{find_intervals, SegmentError, SegmentOptions, StillThreshold};
 use shared::OutputUnit;
 use std::f64::consts::PI;
 

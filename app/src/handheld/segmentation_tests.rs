@@ -1,10 +1,10 @@
-//! Segmentation ([`crate::session::segment`]) on simulated hand-held recordings: the simulator
+//! Segmentation ([`recording::session::segment`]) on simulated hand-held recordings: the simulator
 //! lives above the recording layer, so these tests live here.
 
-use crate::session::coverage::coverage;
-use crate::session::import::Recording;
-use crate::session::segment::{angle_deg, find_intervals, PositionSet, SegmentOptions};
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use recording::session::coverage::coverage;
+use recording::session::import::Recording;
+use recording::session::segment::{angle_deg, find_intervals, PositionSet, SegmentOptions};
 use shared::linalg;
 
 /// The simulated session as the importer would deliver it.
@@ -53,7 +53,7 @@ fn finds_every_hand_position_and_no_false_one() {
 
 #[test]
 fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
-    let mut rng = crate::sim::Rng::new(5, 0);
+    let mut rng = estimator::sim::Rng::new(5, 0);
     let mut rec = Recording {
         acc_unit: Some(shared::OutputUnit::StandardGravity),
         rate_hz: 200.0,
@@ -87,7 +87,7 @@ fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
 
 #[test]
 fn no_still_interval_spans_a_time_gap() {
-    let mut rng = crate::sim::Rng::new(9, 0);
+    let mut rng = estimator::sim::Rng::new(9, 0);
     let mut rec = Recording {
         acc_unit: Some(shared::OutputUnit::StandardGravity),
         rate_hz: 100.0,

@@ -5,9 +5,9 @@
 //! when the angle turned is within [`WHOLE_TURN_TOLERANCE_DEG`] of a whole number of turns, and says
 //! why it leaves one out otherwise.
 
-use crate::estimate::handheld_gyro::still_bias;
-use crate::session::import::Recording;
-use crate::session::segment::{angle_deg, Segmentation};
+use estimator::estimate::handheld_gyro::still_bias;
+use recording::session::import::Recording;
+use recording::session::segment::{angle_deg, Segmentation};
 use shared::linalg;
 
 /// Two still intervals whose gravity directions differ by less than this are at the same position,
@@ -152,13 +152,13 @@ pub fn find_table_turns(rec: &Recording, seg: &Segmentation) -> Vec<FoundTableTu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::segment::{find_intervals, SegmentOptions};
+    use recording::session::segment::{find_intervals, SegmentOptions};
     use std::f64::consts::PI;
 
     /// Still z up for 3 s, then for each angle a turn about z (raised-cosine rate over 3 s) and 3 s
     /// still again, at 200 Hz with 1 mg and 0.05 °/s noise; the gyro reads 1 % high.
     fn turns_on_a_table(angles_deg: &[f64]) -> Recording {
-        let mut rng = crate::sim::Rng::new(3, 0);
+        let mut rng = estimator::sim::Rng::new(3, 0);
         let mut rec = Recording {
             acc_unit: Some(shared::OutputUnit::StandardGravity),
             rate_hz: 200.0,

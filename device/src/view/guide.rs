@@ -8,8 +8,8 @@
 //! with an offset (volts) needs its zero, which a diagonal ellipsoid through [`ELLIPSOID_MIN`]
 //! spread positions gives (|f| = 1 g at rest, docs/model.md §7).
 
-use crate::session::segment::FACE_COVERAGE_DEG;
 use nalgebra::{DMatrix, DVector};
+use recording::session::segment::FACE_COVERAGE_DEG;
 use shared::linalg;
 
 /// Positions an output with an offset needs before its rough zero and scale are known: a diagonal

@@ -10,8 +10,8 @@ pub mod guide;
 pub mod server;
 
 use crate::handheld::{STILL_ACC_STD_REL, STILL_GYRO_STD_RAD_S, STILL_HOLD_S};
-use crate::session::{Plan, SegmentPlan, SegmentStats};
 use guide::{table_sigma, turn_words, Coverage, Target};
+use recording::session::{Plan, SegmentPlan, SegmentStats};
 use serde::Serialize;
 use serde_json::Value;
 use shared::linalg;
@@ -224,7 +224,7 @@ impl Live {
             let free = plan.segments.iter().filter(|g| g.is_free()).count();
             s.progress = Progress {
                 positions_needed: if hand_held {
-                    crate::session::segment::MIN_POSITIONS
+                    recording::session::segment::MIN_POSITIONS
                 } else {
                     plan.segments.iter().filter(|g| g.is_static()).count()
                 },

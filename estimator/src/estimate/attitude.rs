@@ -5,8 +5,8 @@
 use super::model::{self, idx_m, idx_tilt, idx_u0};
 use super::solve::{self, Problem};
 use super::{EstimateError, SegmentKind, SessionSeg};
-use crate::session::Plan;
 use nalgebra::{DMatrix, Matrix3};
+use recording::session::Plan;
 use shared::linalg::{self, RowMajor3};
 
 /// The entries of `M` fixed at 0 by the frame convention used when nothing else fixes the body

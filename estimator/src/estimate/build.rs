@@ -6,7 +6,7 @@ use super::model::{self, Mount, SegModel, TiltGeometry};
 use super::screen::median;
 use super::solve::{GyroDirection, Problem};
 use super::{EstimateOptions, Noise, SegmentKind, SessionSeg};
-use crate::session::Plan;
+use recording::session::Plan;
 use shared::linalg::{self, RowMajor3, IDENTITY};
 
 /// The mounts of the used segments (one attitude each, docs/model.md §7) and each session
@@ -132,7 +132,7 @@ pub(crate) fn static_gyro(segs: &[SessionSeg]) -> [f64; 3] {
 /// its per-axis 1σ of the mean (rad/s): `None` below 1 °/s.
 fn spin_axis(
     s: &SessionSeg,
-    sp: &crate::session::SegmentPlan,
+    sp: &recording::session::SegmentPlan,
     noise: &Noise,
     bias: &[f64; 3],
 ) -> Option<([f64; 3], f64, RowMajor3)> {

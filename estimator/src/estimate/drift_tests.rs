@@ -8,10 +8,10 @@
 //! too).
 
 use super::*;
-use crate::session::SegmentStats;
 use crate::sim::montecarlo::{rms, static_errors};
 use crate::sim::testkit::{self, Rng};
 use crate::sim::NoiseModel;
+use recording::session::SegmentStats;
 use std::collections::BTreeMap;
 
 /// A fixture: how far each mount's true up is from the plan's, and what the plan declares.

@@ -17,8 +17,8 @@ use super::{
     GyroEstimate, GyroModel, Method, MethodComparison, Noise, Observability, SegmentDiagnostic,
     SegmentKind, UnitWalk,
 };
-use crate::session::{Package, Plan, SegmentStats};
 use nalgebra::DMatrix;
+use recording::session::{Package, Plan, SegmentStats};
 use shared::linalg;
 use shared::{Calibration, FittedStatic, LeverArms, OutputUnit};
 

@@ -9,7 +9,7 @@ use super::{
     ChiSquareScaling, EstimateError, EstimateOptions, Method, Observability, SegmentDiagnostic,
     SegmentKind,
 };
-use crate::session::Plan;
+use recording::session::Plan;
 
 /// The fit's χ²/dof and the factor the covariance is multiplied by.
 pub(super) struct ChiSquare {

@@ -10,10 +10,10 @@
 //! ```
 
 use crate::estimate::EstimateOptions;
-use crate::session::builtin::builtin_plan;
-use crate::session::Plan;
 use crate::sim::montecarlo::{run, Case, CaseResult, Generator};
 use crate::sim::testkit::{declared, many_mounts_plan};
+use recording::session::builtin::builtin_plan;
+use recording::session::Plan;
 
 fn oblique() -> Plan {
     builtin_plan("oblique").unwrap().unwrap()

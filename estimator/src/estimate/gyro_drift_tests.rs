@@ -7,11 +7,11 @@
 //! figure.
 
 use super::*;
-use crate::session::SegmentStats;
 use crate::sim::montecarlo::{rms, static_errors};
 use crate::sim::session::gyro_matrix;
 use crate::sim::testkit::{self, Rng};
 use crate::sim::NoiseModel;
+use recording::session::SegmentStats;
 use shared::linalg::RowMajor3;
 
 /// The walk strengths, °/s/√s: a plain MEMS gyro's rate random walk (docs/model.md §11.6).

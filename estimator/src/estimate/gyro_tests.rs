@@ -9,10 +9,10 @@
 //! ```
 
 use crate::estimate::{EstimateOptions, GyroModel};
-use crate::session::builtin::builtin_plan;
 use crate::sim::montecarlo::{run, Case, CaseResult, Generator};
 use crate::sim::session::gyro_matrix;
 use crate::sim::testkit::declared;
+use recording::session::builtin::builtin_plan;
 
 /// 0.5 % scale (signs differ per axis), 0.5° misalignment, 0.5 °/s bias.
 fn mems_gyro() -> ([[f64; 3]; 3], [f64; 3]) {
@@ -138,7 +138,7 @@ fn a_dynamic_misfit_does_not_move_the_static_parameters() {
     // The oblique plan plus a spin-up of 20 → 200 °/s in 3 s on each oblique mount (ω̇ ≈ 1 rad/s²,
     // a tangential term of about 1 mg), which has a rest segment.
     let mut plan = declared(&builtin_plan("oblique").unwrap().unwrap(), 0.05, 1.0);
-    let obliques: Vec<crate::session::SegmentPlan> = plan
+    let obliques: Vec<recording::session::SegmentPlan> = plan
         .segments
         .iter()
         .filter(|s| s.is_static() && s.up_b.iter().filter(|c| c.abs() > 0.5).count() == 2)
@@ -146,7 +146,7 @@ fn a_dynamic_misfit_does_not_move_the_static_parameters() {
         .collect();
     assert_eq!(obliques.len(), 3);
     for o in obliques {
-        plan.segments.push(crate::session::SegmentPlan {
+        plan.segments.push(recording::session::SegmentPlan {
             name: format!("{} ramp", o.name),
             rate_deg_s: 20.0,
             rate_end_deg_s: Some(200.0),

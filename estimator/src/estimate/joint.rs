@@ -9,7 +9,7 @@ use super::{
     attitude, build, chord_to_angle_deg, model, BodyFrame, EstimateError, EstimateOptions,
     Exclusion, ExclusionReason, Noise, SegmentKind, SessionSeg,
 };
-use crate::session::Plan;
+use recording::session::Plan;
 use shared::linalg;
 
 /// What rebuilding the segment models needs.

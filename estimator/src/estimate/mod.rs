@@ -1,7 +1,7 @@
 //! The estimator: from a plan and the per-segment statistics of a recording to a calibration, its
 //! uncertainty, and what the plan could not determine (`docs/model.md` §4.2–§4.4).
 //!
-//! Everything works on [`crate::session::SegmentStats`], the sufficient statistics of each segment,
+//! Everything works on [`recording::session::SegmentStats`], the sufficient statistics of each segment,
 //! so the estimator never sees sample rows and costs microseconds whatever the session's length.
 //!
 //! - [`calibrate_session_stats`]: screening (empty, saturated, moving or mis-attituded segments, plan
@@ -98,6 +98,6 @@ pub use uncertainty::Uncertainty;
 
 // The tests (`tests.rs` and its siblings) take this module's names with `use super::*`.
 #[cfg(test)]
-use crate::session::Plan;
+use recording::session::Plan;
 #[cfg(test)]
 use shared::{Calibration, FittedStatic};

@@ -8,12 +8,12 @@
 //! `cargo test -p host --lib single_package_many_seeds -- --ignored --nocapture`.
 
 use super::*;
-use crate::session::Package;
 use crate::sim::testkit::{
     mems_noise, simulate_stats, single_package_fits, single_package_plan, single_package_unit,
 };
 use crate::sim::thermal::ThermalSim;
 use crate::sim::NoiseModel;
+use recording::session::Package;
 
 /// Largest |error| / 1σ of the biases and scale factors.
 fn static_z(o: &CalibrationOutcome, truth: &Calibration) -> f64 {

@@ -24,8 +24,8 @@
 
 use super::model::{self, idx_r, SegModel, NI as NP};
 use super::{solve, EstimateError, SegmentKind, SessionSeg};
-use crate::session::Plan;
 use nalgebra::DMatrix;
+use recording::session::Plan;
 use shared::linalg;
 use std::collections::BTreeMap;
 

@@ -15,7 +15,7 @@
 //!   ([`super::gyro_check`]).
 
 use super::{gyro_check, CalibrationOutcome, EstimateError};
-use crate::session::{Plan, SegmentStats};
+use recording::session::{Plan, SegmentStats};
 use shared::linalg;
 
 /// Largest angle between a fitted sensing axis and its nominal body axis, degrees. Real units are

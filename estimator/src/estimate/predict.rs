@@ -9,7 +9,7 @@ use super::{
     calibrate_session_stats, paper_labels, paper_values, ChiSquareScaling, EstimateError,
     EstimateOptions, ReferenceChoice, PAPER_LEN,
 };
-use crate::session::{Plan, SegmentStats};
+use recording::session::{Plan, SegmentStats};
 use shared::{Calibration, OutputUnit};
 
 /// Noise level and durations for [`predict`].
@@ -154,7 +154,7 @@ fn predict_temperature(
                 if let Some(t0) = sp.temp_c {
                     let t1 = sp.temp_end_c.unwrap_or(t0);
                     let n = st.count.max(2);
-                    let mut acc = crate::session::thermal::ThermalAccumulator::default();
+                    let mut acc = recording::session::thermal::ThermalAccumulator::default();
                     // The noise as an alternating ±1σ: the per-sample variance the fit reads from
                     // a soak's scatter, or a ramp's scatter about its own cubic, is exactly the
                     // plan's, and the mean and the temperature moments are the noise-free ones.

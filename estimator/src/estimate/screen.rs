@@ -7,7 +7,7 @@ use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, Noise, ReferenceChoice,
     SegmentKind, SessionSeg,
 };
-use crate::session::{Plan, SegmentStats};
+use recording::session::{Plan, SegmentStats};
 use shared::linalg;
 use shared::params::axis_name;
 use shared::ReferencePoint;

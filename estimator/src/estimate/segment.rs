@@ -1,7 +1,7 @@
 //! What each segment of a plan is (static, constant rate, ramp) and the per-sample noise pooled over
 //! the static ones: the one place both are decided, for the estimator and for the report.
 
-use crate::session::{SegmentPlan, SegmentStats};
+use recording::session::{SegmentPlan, SegmentStats};
 use shared::linalg::RowMajor3;
 
 /// What a segment does.

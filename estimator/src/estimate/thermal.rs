@@ -10,7 +10,7 @@
 //! ```
 //!
 //! It is fitted by Gauss–Newton over every sample at once through the segments' temperature moments
-//! ([`crate::session::thermal`]), with the degrees of `P_i` and `S_i` (0..=3 each) chosen by the
+//! ([`recording::session::thermal`]), with the degrees of `P_i` and `S_i` (0..=3 each) chosen by the
 //! Bayesian information criterion, the χ² first divided by the largest model's χ²/dof when that
 //! exceeds 1 (noise the segments' own scatter does not show would otherwise buy higher degrees).
 //! The result then refers every segment's statistics to `T_ref`, and the usual estimator runs on
@@ -24,9 +24,9 @@
 //! (`thermal_misalignment`): a significant change is a warning, not a model term.
 
 use super::solve::invert_spd;
-use crate::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
-use crate::session::{Plan, SegmentPlan, SegmentStats};
 use nalgebra::{DMatrix, DVector};
+use recording::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
+use recording::session::{Plan, SegmentPlan, SegmentStats};
 use shared::sensor_models::{TemperatureModel, MAX_TEMPERATURE_DEGREE as DEG};
 
 /// Smallest temperature span of the static segments for a temperature model, °C.

@@ -10,9 +10,9 @@
 
 use super::solve::invert_spd;
 use super::{CalibrationOutcome, EstimateOptions, GyroEstimate, GyroModel};
-use crate::session::thermal::{ThermalStats, SCALE_C};
-use crate::session::SegmentStats;
 use nalgebra::{DMatrix, DVector};
+use recording::session::thermal::{ThermalStats, SCALE_C};
+use recording::session::SegmentStats;
 use shared::sensor_models::MAX_TEMPERATURE_DEGREE as DEG;
 
 /// Segments whose mean temperatures are within this are at one temperature, °C.

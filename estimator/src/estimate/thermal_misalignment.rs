@@ -5,9 +5,9 @@
 //! across the temperatures by a χ² test at 99.9 %.
 
 use super::solve::invert_spd;
-use crate::session::thermal::ThermalStats;
-use crate::session::SegmentStats;
 use nalgebra::{DMatrix, DVector};
+use recording::session::thermal::ThermalStats;
+use recording::session::SegmentStats;
 
 /// Soak segments within this of a group's first mean temperature belong to its group, °C.
 const GROUP_WIDTH_C: f64 = 1.5;

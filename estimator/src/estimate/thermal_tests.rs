@@ -28,7 +28,7 @@ fn a_session_at_one_temperature_gets_no_model() {
 #[test]
 fn slow_ramps_at_rest_calibrate_as_well_as_soak_steps() {
     let truth = hot_unit();
-    let plan = crate::session::builtin::builtin_plan("thermal-ramp")
+    let plan = recording::session::builtin::builtin_plan("thermal-ramp")
         .unwrap()
         .unwrap();
     let stats = simulate_stats(&truth, &plan, &nuisances(), &ThermalSim::default(), 11);
@@ -47,7 +47,7 @@ fn a_sensor_lagging_the_die_shows_in_the_ramp_residuals() {
     // Up and down sweeps with a sensor 5 s behind the die: the same reading means different die
     // temperatures on the way up and down, which the χ² sees (the soak steps do not suffer this).
     let truth = hot_unit();
-    let plan = crate::session::builtin::builtin_plan("thermal-ramp")
+    let plan = recording::session::builtin::builtin_plan("thermal-ramp")
         .unwrap()
         .unwrap();
     let lagging = ThermalSim {
@@ -228,11 +228,14 @@ fn hand_held(
     truth: &shared::Calibration,
     temp: impl Fn(f64) -> f64,
     seed: u64,
-) -> (crate::session::Plan, Vec<crate::session::SegmentStats>) {
-    let mut plan = crate::session::builtin::builtin_plan("hand")
+) -> (
+    recording::session::Plan,
+    Vec<recording::session::SegmentStats>,
+) {
+    let mut plan = recording::session::builtin::builtin_plan("hand")
         .unwrap()
         .unwrap();
-    plan.format_version = crate::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE;
+    plan.format_version = recording::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE;
     let last = (plan.segments.len() - 1) as f64;
     for (k, s) in plan.segments.iter_mut().enumerate() {
         s.temp_c = Some(temp(k as f64 / last));
@@ -337,7 +340,7 @@ fn soak_positions_determine_the_model_beside_free_ones() {
 }
 
 /// `d` added to output `axis` of every sample of `st`: its mean, extremes and temperature moments.
-fn shift_output(st: &mut crate::session::SegmentStats, axis: usize, d: f64) {
+fn shift_output(st: &mut recording::session::SegmentStats, axis: usize, d: f64) {
     let ts = st.thermal.as_mut().expect("temperature moments");
     ts.sum_u2[axis] += 2.0 * d * ts.sum_u_x_pow[axis][0] + ts.count as f64 * d * d;
     for k in 0..ts.sum_u_x_pow[axis].len() {

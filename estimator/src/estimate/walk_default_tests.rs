@@ -8,10 +8,10 @@
 //! ones with their 1σ, χ²/dof, and the rms of error/σ of biases, scale factors and lever arms.
 
 use super::*;
-use crate::session::SegmentStats;
 use crate::sim::montecarlo::rms;
 use crate::sim::testkit;
 use crate::sim::NoiseModel;
+use recording::session::SegmentStats;
 use shared::OutputUnit;
 
 /// The accelerometers' walk, mg/√s, and the gyro's, °/s/√s: ordinary figures for a consumer MEMS

@@ -9,9 +9,9 @@
 //! tremor. Outputs come from the shared forward model (lever arms included); the gyro reads
 //! `w = G·ω + b` plus white noise (docs/model.md §8).
 
-use crate::session::builtin::builtin_plan;
 use crate::sim::Rng;
 use nalgebra::{UnitQuaternion, Vector3};
+use recording::session::builtin::builtin_plan;
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::linalg::{self, RowMajor3};
 use shared::units::{BodyAngularAccel, BodyRate, BodySpecificForce};
@@ -489,7 +489,7 @@ pub struct LoggerLayout {
 impl Default for LoggerLayout {
     fn default() -> Self {
         LoggerLayout {
-            columns: crate::session::import::DEFAULT_COLUMNS.map(String::from),
+            columns: recording::session::import::DEFAULT_COLUMNS.map(String::from),
             time_column: Some("t".into()),
             gyro_deg_s: true,
             extra_column: false,

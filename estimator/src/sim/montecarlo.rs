@@ -6,10 +6,10 @@
 
 use crate::estimate::attitude::{lq, rotation_vector};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
-use crate::session::{Plan, SegmentStats};
 use crate::sim::testkit::{self, TableErrors};
 use crate::sim::NoiseModel;
 use nalgebra::Matrix3;
+use recording::session::{Plan, SegmentStats};
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::linalg::{self, RowMajor3};
 use shared::units::{BodyAngularAccel, BodyRate, BodySpecificForce};

@@ -12,9 +12,9 @@
 use super::rng::Rng;
 use super::sensor_noise::SensorNoise;
 use super::thermal::{ThermalSim, ThermalState};
-use crate::session::{Plan, PlanError, SegmentPlan};
-use crate::session::{RecordingError, SessionWriter};
 use crate::unit_file::UnitFile;
+use recording::session::{Plan, PlanError, SegmentPlan};
+use recording::session::{RecordingError, SessionWriter};
 use serde::{Deserialize, Serialize};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg;
@@ -617,8 +617,8 @@ fn to_value<T: Serialize>(v: &T) -> toml::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::builtin::builtin_plan;
-    use crate::session::{read_session, ReadOptions, SAMPLES_FILE};
+    use recording::session::builtin::builtin_plan;
+    use recording::session::{read_session, ReadOptions, SAMPLES_FILE};
 
     fn paper() -> UnitFile {
         UnitFile::paper_unit()

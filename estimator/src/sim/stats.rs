@@ -6,8 +6,8 @@ use super::session::{
     SimulationSummary,
 };
 use super::thermal::ThermalSim;
-use crate::session::{Plan, SegmentAccumulator, SegmentStats};
 use crate::unit_file::UnitFile;
+use recording::session::{Plan, SegmentAccumulator, SegmentStats};
 use shared::Calibration;
 
 /// Simulates `plan` on `cal` straight into segment statistics (no files).

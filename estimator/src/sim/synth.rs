@@ -6,7 +6,7 @@
 //! output at `E[ω²] = (ω_a² + ω_a ω_b + ω_b²)/3` and `ω̇ = (ω_b − ω_a)/T`. The outputs' covariance is
 //! the white noise plus, for a ramp, the spread of the signal itself.
 
-use crate::session::{Plan, SegmentPlan, SegmentStats};
+use recording::session::{Plan, SegmentPlan, SegmentStats};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg::RowMajor3;
 

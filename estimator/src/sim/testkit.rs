@@ -6,9 +6,9 @@ use super::synth::{self, ActualSegment, SynthNoise};
 use super::thermal::{outputs_at, ThermalSim};
 use super::{simulate_rows_with_temperature, NoiseModel};
 use crate::estimate::{calibrate_session_stats, CalibrationOutcome, EstimateOptions};
-use crate::session::builtin::builtin_plan;
-use crate::session::{Package, Plan, SegmentAccumulator, SegmentPlan, SegmentStats};
 use crate::unit_file::UnitFile;
+use recording::session::builtin::builtin_plan;
+use recording::session::{Package, Plan, SegmentAccumulator, SegmentPlan, SegmentStats};
 use shared::forward::{ForwardModel, TableState};
 use shared::{Calibration, Compensator, LeverArms, LeverMode, OutputUnit, ReferencePoint};
 use shared::{SensorOutputs, StaticParams};
@@ -349,7 +349,7 @@ pub fn soak_plan(temps_c: &[f64], seconds: f64) -> Plan {
     Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
-        format_version: crate::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE,
+        format_version: recording::session::plan::PLAN_FORMAT_VERSION_TEMPERATURE,
         output_unit: OutputUnit::Volts,
         sample_rate_hz: 1000.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,

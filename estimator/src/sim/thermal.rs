@@ -9,8 +9,8 @@
 
 use super::rng::Rng;
 use super::session::SimulateError;
-use crate::session::SegmentPlan;
 use crate::unit_file::UnitFile;
+use recording::session::SegmentPlan;
 use serde::{Deserialize, Serialize};
 use shared::sensor_models::{poly_no_constant, TemperatureModel};
 

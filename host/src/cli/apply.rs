@@ -1,12 +1,12 @@
 //! `host apply`: a calibration applied to a recording with the device's own compensation code.
 
 use super::CliError;
-use crate::apply::{apply_log, apply_session, log_offset, ApplyError, ApplySummary, UnitBinding};
-use crate::output_file::OutputFile;
-use crate::session::logs::LogSource;
-use crate::session::{PLAN_FILE, SAMPLES_FILE};
-use crate::unit_file::{UnitFile, UnitFileError};
 use clap::{Args, ValueEnum};
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::apply::{apply_log, apply_session, log_offset, ApplyError, ApplySummary, UnitBinding};
+use recording::output_file::OutputFile;
+use recording::session::logs::LogSource;
+use recording::session::{PLAN_FILE, SAMPLES_FILE};
 use shared::{LeverMode, OutputUnit};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -45,7 +45,7 @@ pub struct ApplyArgs {
         long,
         value_name = "C",
         allow_negative_numbers = true,
-        value_parser = crate::limits::real(-100.0, 200.0)
+        value_parser = recording::limits::real(-100.0, 200.0)
     )]
     pub temperature_c: Option<f64>,
 }
@@ -102,7 +102,7 @@ pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     };
     let apply = |w: &mut dyn Write| {
         // Reading, compensating and writing run row by row together: one step.
-        let _step = crate::ui::step(
+        let _step = recording::ui::step(
             format!("applying the calibration to {}", a.input.display()),
             quiet,
         );
@@ -199,7 +199,7 @@ fn options_for_calibration(
 }
 
 /// A raw log in counts is read with the counts of zero force the calibration was made with
-/// (`crate::apply::log_offset`): `--acc-offset` must be that one, and may be left out.
+/// (`outputs::apply::log_offset`): `--acc-offset` must be that one, and may be left out.
 fn read_with_calibrations_offset(
     source: &mut LogSource,
     unit: &UnitFile,

@@ -4,8 +4,10 @@
 //! with both figures. Truth: the simulator's up of each hold, where the specific force is 1 g.
 
 use crate::cli::{apply, calibrate, segment, Cli, CliError, Command};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use clap::Parser;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
 use shared::OutputUnit;
 use std::path::Path;
 
@@ -93,7 +95,7 @@ fn a_raw_log_is_compensated_once_with_the_calibrations_offset() {
         };
         write_logger_csv(&dir.join("raw.csv"), &sim.rows, &layout).unwrap();
         calibrate_raw(dir, &format!("--acc-offset {offset}"));
-        let file = crate::unit_file::UnitFile::load(&dir.join("cal/calibration.toml")).unwrap();
+        let file = estimator::unit_file::UnitFile::load(&dir.join("cal/calibration.toml")).unwrap();
         assert_eq!(file.statics.raw_offset_lsb, Some([offset; 3]));
 
         // The same offset: compensated once, as the signed log is.

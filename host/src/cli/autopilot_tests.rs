@@ -8,7 +8,7 @@ use super::{calibrate, export, Command};
 use crate::fuzz::logs::{
     ardupilot_default_params, write_dataflash_imus, write_ulog_imus, LogSample, UlogImu, UlogParam,
 };
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use shared::OutputUnit;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -3,15 +3,15 @@
 use super::calibrate::EstimatorArgs;
 use super::output::Output;
 use super::CliError;
-use crate::batch::{find_sessions, run_batch, to_csv, BatchOptions, MAX_JOBS};
-use crate::output_file::{write_atomic, OutputDir};
-use crate::summary::Limits;
+use app::batch::{find_sessions, run_batch, to_csv, BatchOptions, MAX_JOBS};
 use clap::Args;
+use outputs::summary::Limits;
+use recording::output_file::{write_atomic, OutputDir};
 use std::path::PathBuf;
 
 /// `host batch`.
 #[derive(Debug, Args)]
-#[command(mut_args(crate::summary::pass_fail_limits))]
+#[command(mut_args(outputs::summary::pass_fail_limits))]
 pub struct BatchArgs {
     /// Directory whose subdirectories are sessions (plan.toml + samples.csv), one per unit.
     #[arg(long, value_name = "DIR_OF_SESSIONS")]
@@ -27,7 +27,7 @@ pub struct BatchArgs {
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
     /// Robust z-score above which a parameter makes a unit an outlier of the lot.
-    #[arg(long, value_name = "Z", default_value_t = 5.0, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_LIMIT))]
+    #[arg(long, value_name = "Z", default_value_t = 5.0, value_parser = recording::limits::real(recording::limits::MIN_LIMIT, recording::limits::MAX_LIMIT))]
     pub outlier_z: f64,
     /// The estimator of each unit: --method, --reference, --single-package.
     #[command(flatten)]
@@ -78,7 +78,7 @@ pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
         outlier_z: a.outlier_z,
         jobs: a.jobs,
     };
-    let bar = crate::ui::progress_bar(sessions.len() as u64, "calibrating", quiet);
+    let bar = recording::ui::progress_bar(sessions.len() as u64, "calibrating", quiet);
     let mut lot = run_batch(&sessions, staged.path(), &opts, &bar).map_err(CliError::Batch)?;
     // The units' documents name their files where they will be once the result is in place.
     for d in lot.units.iter_mut().filter_map(|u| u.summary.as_mut()) {

@@ -1,14 +1,13 @@
 //! `host bringup`: the first checks of a freshly flashed board at rest, each with pass/fail and
-//! the likely cause of a failure ([`crate::device::bringup`]).
+//! the likely cause of a failure ([`device::bringup`]).
 
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::device::bringup::{bringup, bringup_with, Verdict};
-use crate::device::bringup_motion::{Operator, Pose, TableOperator};
-use crate::device::client::{DeviceClient, LinkError, Transport};
-use crate::device::AnyTransport;
-use crate::limits;
 use clap::Args;
+use device::bringup::{bringup, bringup_with, Verdict};
+use device::bringup_motion::{Operator, Pose, TableOperator};
+use device::client::{DeviceClient, LinkError, Transport};
+use device::AnyTransport;
 use std::io::IsTerminal;
 use std::time::Duration;
 
@@ -20,7 +19,7 @@ pub struct BringupArgs {
     pub port: PortArgs,
     /// Seconds of samples to measure, the board at rest (the sample rate is timed on this
     /// computer's clock over them).
-    #[arg(long, default_value_t = 3.0, value_parser = limits::real(0.5, 60.0))]
+    #[arg(long, default_value_t = 3.0, value_parser = recording::limits::real(0.5, 60.0))]
     pub seconds: f64,
 }
 

@@ -1,27 +1,27 @@
 //! `host calibrate`: from a recorded session (`--input DIR`), or live from a device (`--port`, the
-//! procedure of [`crate::device::procedure`]).
+//! procedure of [`device::procedure`]).
 
 use super::output::Output;
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::app::{self, CalibrateOptions, VerificationSummary};
-use crate::calibration_files::now_unix_s;
-use crate::device::operator::{AutomaticOperator, Operator, TerminalOperator};
-use crate::device::procedure::{self, ProcedureOptions};
-use crate::device::sim_hand::HandOperator;
-use crate::device::view;
-use crate::device::AnyTransport;
-use crate::estimate::{BiasWalk, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
 use crate::limits;
-use crate::session::{self, ReadOptions};
-use crate::summary::Limits;
+use app::{self, CalibrateOptions, VerificationSummary};
 use clap::Args;
+use device::operator::{AutomaticOperator, Operator, TerminalOperator};
+use device::procedure::{self, ProcedureOptions};
+use device::sim_hand::HandOperator;
+use device::view;
+use device::AnyTransport;
+use estimator::calibration_files::now_unix_s;
+use estimator::estimate::{BiasWalk, CalibrationOutcome, EstimateOptions, Method, ReferenceChoice};
+use outputs::summary::Limits;
+use recording::session::{self, ReadOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
 #[derive(Debug, Args)]
-#[command(mut_args(crate::summary::pass_fail_limits))]
+#[command(mut_args(outputs::summary::pass_fail_limits))]
 pub struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR", conflicts_with = "port")]
@@ -35,14 +35,14 @@ pub struct CalibrateArgs {
     #[arg(
         long,
         requires = "port",
-        value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD)
+        value_parser = recording::limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD)
     )]
     pub baud: Option<u32>,
     /// With a serial --port: seconds to wait for each answer of the device (default: 5).
     #[arg(
         long,
         requires = "port",
-        value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
+        value_parser = recording::limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S)
     )]
     pub timeout_s: Option<f64>,
     /// With --port sim or sim-hand: the simulated unit's parameters (default: the paper's unit).
@@ -53,13 +53,13 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "FILE|NAME", requires = "port")]
     pub plan: Option<String>,
     /// With --port: samples per streamed window (default: a 50th of the device's rate).
-    #[arg(long, requires = "port", value_parser = limits::whole_u32(1, limits::MAX_WINDOW))]
+    #[arg(long, requires = "port", value_parser = recording::limits::whole_u32(1, limits::MAX_WINDOW))]
     pub window: Option<u32>,
     /// With --port: largest compensated error accepted at a verification position, mg (default: 1).
     #[arg(
         long,
         requires = "port",
-        value_parser = limits::real(limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
+        value_parser = recording::limits::real(recording::limits::MIN_LIMIT, limits::MAX_TOLERANCE_MG)
     )]
     pub verify_tolerance_mg: Option<f64>,
     /// With --port: verify again, at rest, at this temperature, °C: `--port sim` sets its virtual
@@ -69,7 +69,7 @@ pub struct CalibrateArgs {
         long,
         value_name = "C",
         requires = "port",
-        value_parser = limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
+        value_parser = recording::limits::real(VERIFY_TEMP_MIN_C, VERIFY_TEMP_MAX_C)
     )]
     pub verify_temp_c: Option<f64>,
     /// With --port: show the session on a live page (attitude, stillness, coverage, what to do next,
@@ -135,7 +135,7 @@ pub struct BiasWalkArgs {
         long,
         value_name = "MG_SQRT_S",
         conflicts_with_all = ["bias_walk_estimate", "bias_walk_from"],
-        value_parser = limits::real(0.0, limits::MAX_BIAS_WALK_MG_SQRT_S)
+        value_parser = recording::limits::real(0.0, limits::MAX_BIAS_WALK_MG_SQRT_S)
     )]
     pub bias_walk: Option<f64>,
     /// The accelerometers' bias is a random walk whose strength is estimated from the session
@@ -160,7 +160,7 @@ pub struct BiasWalkArgs {
     #[arg(
         long,
         value_name = "DEG_S_SQRT_S",
-        value_parser = limits::real(0.0, limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S)
+        value_parser = recording::limits::real(0.0, limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S)
     )]
     pub gyro_bias_walk: Option<f64>,
 }
@@ -184,7 +184,7 @@ impl BiasWalkArgs {
     /// here; `--gyro-bias-walk` takes the place of its gyro figure.
     pub(crate) fn walks(&self) -> Result<(BiasWalk, f64, bool), CliError> {
         if let Some(path) = &self.bias_walk_from {
-            let from_file = crate::app::walk_source::walk_from_file(path)?;
+            let from_file = app::walk_source::walk_from_file(path)?;
             let gyro = self.gyro_bias_walk.or(from_file.gyro_deg_s_sqrt_s);
             let accel = BiasWalk::FromUnit(from_file.accel);
             return Ok((accel, gyro.unwrap_or(0.0), gyro.is_none()));
@@ -318,7 +318,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     };
     let out_dir = a.out_dir.as_deref().unwrap_or(input);
     // Refused before the (possibly long) read, not after it.
-    crate::calibration_files::refuse_overwrite(out_dir, a.force)?;
+    estimator::calibration_files::refuse_overwrite(out_dir, a.force)?;
     let started = Instant::now();
     let (session, mut calibrated) =
         app::calibrate_session_dir(input, &calibrate_options(a)?, &ReadOptions { quiet })?;
@@ -354,7 +354,7 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
     }
     out.line("")?;
     if a.verbose {
-        out.human(crate::report::render_session(
+        out.human(outputs::report::render_session(
             &calibrated.outcome,
             &session.plan,
             &session.stats,
@@ -366,10 +366,12 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
         written.bin_path.display(),
         written.blob.len()
     ))?;
-    out.human(crate::report::summary_block::render_summary_block(
+    out.human(outputs::report::summary_block::render_summary_block(
         &calibrated.document.summary,
     ))?;
-    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
+    out.human(outputs::report::summary_block::next_line(
+        &written.toml_path,
+    ))?;
     out.document(&calibrated.document)?;
     if !calibrated.document.summary.passed {
         return Err(CliError::ChecksFailed(
@@ -419,17 +421,17 @@ fn refuse_device_options(a: &CalibrateArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `host calibrate --port PORT`: the live procedure (`crate::device::procedure`) against a device;
+/// `host calibrate --port PORT`: the live procedure (`device::procedure`) against a device;
 /// runs the whole procedure and ends with a pass/fail line.
 pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     let port = port_args(a);
     if let Some(w) = a.window {
-        crate::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
+        recording::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
     }
     let verify_tolerance_mg = a
         .verify_tolerance_mg
         .unwrap_or(ProcedureOptions::DEFAULT_VERIFY_TOLERANCE_MG);
-    crate::limits::positive_at_most(
+    recording::limits::positive_at_most(
         "--verify-tolerance-mg",
         verify_tolerance_mg,
         crate::limits::MAX_TOLERANCE_MG,
@@ -524,7 +526,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
 fn present_live_result(
     out: &Output,
     (written, verification, recording_dir): (
-        &crate::calibration_files::WrittenCalibration,
+        &estimator::calibration_files::WrittenCalibration,
         &[procedure::VerificationPoint],
         &std::path::Path,
     ),
@@ -532,10 +534,12 @@ fn present_live_result(
     viewed: Option<&view::Viewed>,
 ) -> Result<(), CliError> {
     print_written_and_verified(out, written, verification)?;
-    out.human(crate::report::summary_block::render_summary_block(
+    out.human(outputs::report::summary_block::render_summary_block(
         &document.summary,
     ))?;
-    out.human(crate::report::summary_block::next_line(&written.toml_path))?;
+    out.human(outputs::report::summary_block::next_line(
+        &written.toml_path,
+    ))?;
     if let Some(v) = viewed {
         v.live
             .finish(document, next_commands(written, recording_dir));
@@ -561,7 +565,7 @@ fn port_args(a: &CalibrateArgs) -> PortArgs {
 /// a watched simulated device runs at a real one's pace, so that the page can be followed.
 fn start_view(
     wanted: bool,
-    client: &mut crate::device::DeviceClient<AnyTransport>,
+    client: &mut device::DeviceClient<AnyTransport>,
 ) -> Result<Option<view::Viewed>, CliError> {
     if !wanted {
         return Ok(None);
@@ -578,7 +582,7 @@ fn start_view(
 /// The procedure, its every line also on the live page when there is one; a failure is shown
 /// there (until Enter) before it is reported.
 fn run_watched(
-    client: &mut crate::device::DeviceClient<AnyTransport>,
+    client: &mut device::DeviceClient<AnyTransport>,
     opts: &ProcedureOptions,
     op: &mut dyn Operator,
     viewed: Option<&view::Viewed>,
@@ -600,7 +604,7 @@ fn run_watched(
 /// What to run next on a live result, as the page lists it: the report of the recording and an
 /// export of the calibration.
 fn next_commands(
-    written: &crate::calibration_files::WrittenCalibration,
+    written: &estimator::calibration_files::WrittenCalibration,
     recording_dir: &std::path::Path,
 ) -> Vec<String> {
     vec![
@@ -626,7 +630,7 @@ fn refuse_verify_temp_in_hand(
 ) -> Result<(), CliError> {
     if a.verify_temp_c.is_some()
         && !procedure::has_virtual_table(identity)
-        && crate::device::handheld::is_hand_held(plan)
+        && device::handheld::is_hand_held(plan)
     {
         return Err(CliError::Usage(
             "--verify-temp-c verifies at rest on a table position at a second temperature; the \
@@ -646,7 +650,7 @@ const VERIFY_TEMP_MAX_C: f64 = 125.0;
 /// The files a live calibration wrote (under their final names) and each verification position.
 fn print_written_and_verified(
     out: &Output,
-    written: &crate::calibration_files::WrittenCalibration,
+    written: &estimator::calibration_files::WrittenCalibration,
     verification: &[procedure::VerificationPoint],
 ) -> Result<(), CliError> {
     out.line(format_args!(

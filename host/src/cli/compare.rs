@@ -3,8 +3,8 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::report::compare::compare;
 use clap::Args;
+use outputs::report::compare::compare;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ pub struct CompareArgs {
     /// Second calibration.toml.
     pub b: PathBuf,
     /// Fail (exit nonzero) when any determined parameter differs by more than this many combined σ.
-    #[arg(long, value_name = "N", value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_LIMIT))]
+    #[arg(long, value_name = "N", value_parser = recording::limits::real(recording::limits::MIN_LIMIT, recording::limits::MAX_LIMIT))]
     pub max_sigma: Option<f64>,
     /// Print the comparison as one JSON document on stdout (the table goes to stderr).
     #[arg(long)]

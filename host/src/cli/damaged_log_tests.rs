@@ -7,8 +7,10 @@ use super::log_fixture_tests::{command, fixture};
 use super::segment::segment;
 use super::{apply, calibrate, Command};
 use crate::fuzz::logs::{write_mcap, LogSample};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::sim::testkit::Rng;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
+use estimator::sim::testkit::Rng;
 use shared::OutputUnit;
 use std::path::Path;
 
@@ -37,7 +39,7 @@ fn run(dir: &Path, input: &Path, flags: &str) -> Run {
     let cal = calibrate::calibrate(&c, true).unwrap_or_else(|e| panic!("{}: {e}", input.display()));
     let notes: Vec<String> = out
         .recording
-        .reader_warnings(crate::session::import::Places::InFile)
+        .reader_warnings(recording::session::import::Places::InFile)
         .into_iter()
         .filter(|w| w.contains("repaired"))
         .collect();

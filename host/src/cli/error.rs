@@ -1,16 +1,16 @@
 //! The one error type of the command line: every command's failure, each message naming the problem
 //! and, where there is one, the fix (the wrapped errors' own messages, unchanged).
 
-use crate::calibration_files::OutputError;
-use crate::device::procedure::ProcedureError;
-use crate::device::LinkError;
-use crate::estimate::EstimateError;
-use crate::export::ExportError;
-use crate::report::compare::CompareError;
-use crate::report::ReportError;
-use crate::session::{PlanError, RecordingError};
-use crate::sim::SimulateError;
-use crate::unit_file::UnitFileError;
+use device::procedure::ProcedureError;
+use device::LinkError;
+use estimator::calibration_files::OutputError;
+use estimator::estimate::EstimateError;
+use estimator::sim::SimulateError;
+use estimator::unit_file::UnitFileError;
+use outputs::export::ExportError;
+use outputs::report::compare::CompareError;
+use outputs::report::ReportError;
+use recording::session::{PlanError, RecordingError};
 use shared::blob::BlobError;
 use std::path::PathBuf;
 
@@ -37,7 +37,7 @@ pub enum CliError {
     Output(#[from] OutputError),
     /// A logger's file could not be read.
     #[error(transparent)]
-    Log(crate::session::logs::LogError),
+    Log(recording::session::logs::LogError),
     /// `host report` / `host navigation-check`.
     #[error(transparent)]
     Report(#[from] ReportError),
@@ -56,12 +56,12 @@ pub enum CliError {
     /// A blob file.
     #[error("{}: {}", .0.display(), .1)]
     Blob(PathBuf, #[source] BlobError),
-    /// A calibration that cannot meet what it meets ([`crate::calibration_guard`]).
+    /// A calibration that cannot meet what it meets ([`outputs::calibration_guard`]).
     #[error(transparent)]
-    Guard(#[from] crate::calibration_guard::GuardError),
-    /// A calibration no device or tool can use ([`crate::calibration_guard`]).
+    Guard(#[from] outputs::calibration_guard::GuardError),
+    /// A calibration no device or tool can use ([`outputs::calibration_guard`]).
     #[error(transparent)]
-    Scale(#[from] crate::calibration_guard::ScaleError),
+    Scale(#[from] outputs::calibration_guard::ScaleError),
     /// A file.
     #[error("{}: {}", .0.display(), .1)]
     Io(PathBuf, #[source] std::io::Error),
@@ -74,23 +74,23 @@ pub enum CliError {
     VerificationFailed,
     /// `host apply`.
     #[error(transparent)]
-    Apply(#[from] crate::apply::ApplyError),
+    Apply(#[from] outputs::apply::ApplyError),
     /// `host noise`.
     #[error(transparent)]
-    Noise(#[from] crate::noise::NoiseError),
+    Noise(#[from] outputs::noise::NoiseError),
     /// A result file could not be written.
     #[error(transparent)]
-    Written(#[from] crate::output_file::OutputFileError),
+    Written(#[from] recording::output_file::OutputFileError),
     /// `host batch` could not run.
     #[error(transparent)]
-    Batch(crate::batch::BatchError),
+    Batch(app::batch::BatchError),
     /// `host bringup` could not run its checks.
     #[error(transparent)]
-    Bringup(#[from] crate::device::bringup::BringupError),
+    Bringup(#[from] device::bringup::BringupError),
     /// A result failed its pass/fail limits (the failed checks, one line).
     #[error("FAIL: {0}")]
     ChecksFailed(String),
-    /// A gyro fit that no real gyro gives ([`crate::estimate::gyro_check`]): nothing was written.
+    /// A gyro fit that no real gyro gives ([`estimator::estimate::gyro_check`]): nothing was written.
     #[error(
         "the gyro fit is refused, nothing written:\n  - {}\nfix the columns, signs, unit or time \
          base named above; to use the accelerometer alone, add --no-gyro",
@@ -99,29 +99,29 @@ pub enum CliError {
     GyroRefused(Vec<String>),
     /// The hand-held session's gyro.
     #[error(transparent)]
-    HandGyro(#[from] crate::app::handheld::gyro::HandGyroFileError),
+    HandGyro(#[from] app::handheld::gyro::HandGyroFileError),
     /// The options that say how to read a logger's file do not fit together.
     #[error(transparent)]
-    LogInput(#[from] crate::app::log_input::LogInputError),
+    LogInput(#[from] app::log_input::LogInputError),
     /// A vehicle's log gives no ids, slots or calibrations.
     #[error(transparent)]
-    Autopilot(#[from] crate::app::autopilot::AutopilotError),
+    Autopilot(#[from] app::autopilot::AutopilotError),
     /// `--bias-walk-from`: the walk could not be taken from the file.
     #[error(transparent)]
-    WalkSource(#[from] crate::app::walk_source::WalkSourceError),
+    WalkSource(#[from] app::walk_source::WalkSourceError),
     /// The recording gives no session: no still interval, too few positions, face labels the
     /// data contradict.
     #[error(transparent)]
-    Segment(#[from] crate::session::segment::SegmentError),
+    Segment(#[from] recording::session::segment::SegmentError),
     /// The command line is incomplete or an option is unusable.
     #[error("{0}")]
     Usage(String),
     /// An option's value is out of its range.
     #[error(transparent)]
-    Range(#[from] crate::limits::RangeError),
+    Range(#[from] recording::limits::RangeError),
     /// The simulated device cannot hold the unit given (`--sim-unit`).
     #[error(transparent)]
-    SimDevice(#[from] crate::device::sim::SimError),
+    SimDevice(#[from] device::sim::SimError),
     /// A result could not be written as JSON (`what` names it).
     #[error("cannot write {what} as JSON: {source}")]
     Json {
@@ -178,9 +178,9 @@ impl CliError {
     /// An option that does not apply to the input it was given with, found only once the input
     /// was opened (a log's format, a session's segments): a usage error like any other.
     fn is_option_not_for_input(&self) -> bool {
-        use crate::apply::ApplyError;
-        use crate::calibration_guard::GuardError;
-        use crate::session::logs::LogError;
+        use outputs::apply::ApplyError;
+        use outputs::calibration_guard::GuardError;
+        use recording::session::logs::LogError;
         matches!(
             self,
             CliError::Report(ReportError::NamedRun(_))
@@ -200,9 +200,9 @@ impl CliError {
     }
 }
 
-impl From<crate::app::handheld::InMemoryError> for CliError {
-    fn from(e: crate::app::handheld::InMemoryError) -> Self {
-        use crate::app::handheld::InMemoryError;
+impl From<app::handheld::InMemoryError> for CliError {
+    fn from(e: app::handheld::InMemoryError) -> Self {
+        use app::handheld::InMemoryError;
         match e {
             InMemoryError::GyroRefused(problems) => CliError::GyroRefused(problems),
             InMemoryError::HandGyro(e) => CliError::HandGyro(e),
@@ -211,9 +211,9 @@ impl From<crate::app::handheld::InMemoryError> for CliError {
     }
 }
 
-impl From<crate::app::handheld::WriteError> for CliError {
-    fn from(e: crate::app::handheld::WriteError) -> Self {
-        use crate::app::handheld::WriteError;
+impl From<app::handheld::WriteError> for CliError {
+    fn from(e: app::handheld::WriteError) -> Self {
+        use app::handheld::WriteError;
         match e {
             WriteError::Session(e) => e.into(),
             WriteError::Gyro(e) => e.into(),
@@ -221,9 +221,9 @@ impl From<crate::app::handheld::WriteError> for CliError {
     }
 }
 
-impl From<crate::app::CalibrateError> for CliError {
-    fn from(e: crate::app::CalibrateError) -> Self {
-        use crate::app::CalibrateError;
+impl From<app::CalibrateError> for CliError {
+    fn from(e: app::CalibrateError) -> Self {
+        use app::CalibrateError;
         match e {
             CalibrateError::Recording(e) => e.into(),
             CalibrateError::HandGyro(e) => e.into(),
@@ -232,9 +232,9 @@ impl From<crate::app::CalibrateError> for CliError {
     }
 }
 
-impl From<crate::app::simulate::SimulationError> for CliError {
-    fn from(e: crate::app::simulate::SimulationError) -> Self {
-        use crate::app::simulate::SimulationError;
+impl From<app::simulate::SimulationError> for CliError {
+    fn from(e: app::simulate::SimulationError) -> Self {
+        use app::simulate::SimulationError;
         match e {
             SimulationError::Unit(e) => e.into(),
             SimulationError::Plan(e) => e.into(),
@@ -246,8 +246,8 @@ impl From<crate::app::simulate::SimulationError> for CliError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::procedure::ProcedureError;
-    use crate::session::{builtin::paper_plan, read_session, ReadOptions, PLAN_FILE};
+    use device::procedure::ProcedureError;
+    use recording::session::{builtin::paper_plan, read_session, ReadOptions, PLAN_FILE};
     use shared::params::ParamsError;
     use std::error::Error;
 

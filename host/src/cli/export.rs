@@ -2,11 +2,11 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::export::kalibr::KalibrNoise;
-use crate::export::{render, ExportFormat, ExportInput, ExportOptions};
-use crate::output_file::write_atomic;
-use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::export::kalibr::KalibrNoise;
+use outputs::export::{render, ExportFormat, ExportInput, ExportOptions};
+use recording::output_file::write_atomic;
 use recording::spelling::Spelling;
 use std::path::PathBuf;
 
@@ -34,7 +34,7 @@ pub struct ExportArgs {
     pub rostopic: Option<String>,
     /// For kalibr, px4, ardupilot: m/s² per output unit of the driver's reading (default: 1 for a
     /// calibration in m/s², 9.80665 for one in g; required for V and LSB).
-    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true, value_parser = crate::limits::real(1e-9, crate::limits::MAX_LIMIT))]
+    #[arg(long, value_name = "M_S2_PER_UNIT", allow_negative_numbers = true, value_parser = recording::limits::real(1e-9, recording::limits::MAX_LIMIT))]
     pub driver_scale: Option<f64>,
     /// For px4 and ardupilot: the vehicle's log (PX4 ULog, ArduPilot DataFlash) the calibration was
     /// made from: the device ids of its IMU and the slot each holds are read from the log's
@@ -48,22 +48,22 @@ pub struct ExportArgs {
     pub instance: Option<InstanceChoice>,
     /// For px4 and ardupilot: the accelerometer's calibration slot (PX4's n of CAL_ACCn_*, 0..3;
     /// ArduPilot's INS_ACC*, INS_ACC2*, INS_ACC3*: 0..2); default: the one the --log gives, else 0.
-    #[arg(long, value_name = "N", value_parser = crate::limits::whole_u32(0, 3))]
+    #[arg(long, value_name = "N", value_parser = recording::limits::whole_u32(0, 3))]
     pub slot: Option<u32>,
     /// For px4 and ardupilot: the accelerometer's device id as the vehicle reports it (PX4's
     /// CAL_ACCn_ID, ArduPilot's INS_ACC_ID); default: the --log's; required by both.
-    #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
+    #[arg(long, value_name = "ID", value_parser = recording::limits::whole_u32(1, u32::MAX))]
     pub device_id: Option<u32>,
     /// For px4 and ardupilot: the gyro's device id (CAL_GYRO0_ID, INS_GYR_ID); without it no gyro
     /// offsets are written.
-    #[arg(long, value_name = "ID", value_parser = crate::limits::whole_u32(1, u32::MAX))]
+    #[arg(long, value_name = "ID", value_parser = recording::limits::whole_u32(1, u32::MAX))]
     pub gyro_device_id: Option<u32>,
     /// For px4: the vehicle's MAVLink system id (QGroundControl refuses a file from another one;
     /// default: 1).
-    #[arg(long, value_parser = crate::limits::whole_u32(1, 255))]
+    #[arg(long, value_parser = recording::limits::whole_u32(1, 255))]
     pub sysid: Option<u32>,
     /// For px4: the autopilot's MAVLink component id (default: 1).
-    #[arg(long, value_parser = crate::limits::whole_u32(1, 255))]
+    #[arg(long, value_parser = recording::limits::whole_u32(1, 255))]
     pub compid: Option<u32>,
     /// Write values outside the target's documented range (with a warning) instead of refusing.
     #[arg(long)]
@@ -164,7 +164,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;
     let noise: Option<KalibrNoise> = match &a.noise {
-        Some(p) => Some(crate::noise::load_kalibr_noise(p).map_err(CliError::Noise)?),
+        Some(p) => Some(outputs::noise::load_kalibr_noise(p).map_err(CliError::Noise)?),
         None => None,
     };
     let input = ExportInput {
@@ -244,7 +244,7 @@ fn write_c_package(a: &ExportArgs, input: &ExportInput<'_>, quiet: bool) -> Resu
                 .into(),
         )
     })?;
-    let files = crate::export::c::write_package(dir, input, a.force)?;
+    let files = outputs::export::c::write_package(dir, input, a.force)?;
     Output { json: false, quiet }.line(format_args!(
         "wrote {} in {}: build acal_blob.c and acal_device.c with your firmware (-ffp-contract=off); \
          example.c shows their use",

@@ -4,14 +4,14 @@
 use super::export::{write_text, ExportArgs, InstanceChoice};
 use super::output::Output;
 use super::CliError;
-use crate::app::autopilot::{calibrate_each_imu, VehicleLog};
-use crate::app::handheld::SegmentChoices;
-use crate::app::CalibrateOptions;
-use crate::export::params::{render_ardupilot_slots, render_px4_slots};
-use crate::export::{ExportFormat, ExportInput};
-use crate::session::from_recording::SIX_FACE_PRIOR_DEG;
-use crate::session::logs::{LogFormat, DEFAULT_MAX_SAMPLES};
-use crate::session::segment::SegmentOptions;
+use app::autopilot::{calibrate_each_imu, VehicleLog};
+use app::handheld::SegmentChoices;
+use app::CalibrateOptions;
+use outputs::export::params::{render_ardupilot_slots, render_px4_slots};
+use outputs::export::{ExportFormat, ExportInput};
+use recording::session::from_recording::SIX_FACE_PRIOR_DEG;
+use recording::session::logs::{LogFormat, DEFAULT_MAX_SAMPLES};
+use recording::session::segment::SegmentOptions;
 use std::path::Path;
 
 /// Reads the `--log`'s parameters, refusing a log of the other autopilot than `--format`.
@@ -93,8 +93,12 @@ pub(super) fn run_all(a: &ExportArgs, v: &VehicleLog, quiet: bool) -> Result<(),
         for w in &imu.warnings {
             out.warn(format_args!("IMU instance {}: {w}", imu.ids.instance));
         }
-        let invalid =
-            |m| CliError::Unit(crate::unit_file::UnitFileError::Invalid(v.path.clone(), m));
+        let invalid = |m| {
+            CliError::Unit(estimator::unit_file::UnitFileError::Invalid(
+                v.path.clone(),
+                m,
+            ))
+        };
         let cal = imu.unit.to_calibration().map_err(invalid)?;
         let mut input = ExportInput {
             unit: &imu.unit,
@@ -102,7 +106,7 @@ pub(super) fn run_all(a: &ExportArgs, v: &VehicleLog, quiet: bool) -> Result<(),
             noise: None,
             rostopic: "/imu0",
             driver_scale_m_s2_per_out: a.driver_scale,
-            options: crate::export::ExportOptions {
+            options: outputs::export::ExportOptions {
                 allow_out_of_range: a.allow_out_of_range,
                 allow_undetermined: a.allow_undetermined,
                 sysid: u8::try_from(a.sysid.unwrap_or(1)).unwrap_or(u8::MAX),

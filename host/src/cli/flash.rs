@@ -2,11 +2,11 @@
 
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::calibration_files;
-use crate::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
-use crate::device::procedure::ProcedureError;
-use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
+use device::procedure::ProcedureError;
+use estimator::calibration_files;
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
 use shared::blob::{self, ParameterBlob};
 use shared::wire::Identity;
 use std::path::{Path, PathBuf};
@@ -35,7 +35,7 @@ pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliEr
             .map_err(|e| CliError::Unit(UnitFileError::Invalid(calibration.to_path_buf(), e)))?;
         (cal, unit.unit_id().ok().flatten(), Vec::new())
     } else {
-        let bytes = crate::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)
+        let bytes = recording::limits::read_bounded(calibration, blob::BLOB_MAX_LEN as u64)
             .map_err(|e| CliError::Io(calibration.to_path_buf(), e))?;
         let decoded =
             blob::decode(&bytes).map_err(|e| CliError::Blob(calibration.to_path_buf(), e))?;

@@ -2,9 +2,9 @@
 //! after the first, said so; not sorted into one that jumps between two attitudes every sample.
 
 use super::log_fixture_tests::fixture;
-use crate::session::import::{GyroUnit, ImportOptions, Places, TimeSource};
-use crate::session::logs::{read_log, LogSource};
-use crate::session::segment::{find_intervals, SegmentOptions};
+use recording::session::import::{GyroUnit, ImportOptions, Places, TimeSource};
+use recording::session::logs::{read_log, LogSource};
+use recording::session::segment::{find_intervals, SegmentOptions};
 use shared::OutputUnit;
 
 #[test]

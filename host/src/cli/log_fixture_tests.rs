@@ -4,12 +4,14 @@
 
 use super::segment::segment;
 use super::{apply, calibrate, Cli, Command};
-use crate::session::logs::{read_log, LogFormat, LogSource};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::sim::montecarlo::static_errors;
-use crate::sim::testkit;
-use crate::unit_file::UnitFile;
 use clap::Parser;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
+use estimator::sim::montecarlo::static_errors;
+use estimator::sim::testkit;
+use estimator::unit_file::UnitFile;
+use recording::session::logs::{read_log, LogFormat, LogSource};
 use shared::{Calibration, OutputUnit};
 use std::path::{Path, PathBuf};
 
@@ -219,7 +221,7 @@ fn every_format_calibrates_like_the_csv_and_applies() {
         apply::run(&a, true).unwrap();
         let text = std::fs::read_to_string(&out).unwrap();
         let mut lines = text.lines();
-        assert_eq!(lines.next(), Some(crate::apply::APPLY_HEADER));
+        assert_eq!(lines.next(), Some(outputs::apply::APPLY_HEADER));
         let rows: Vec<Vec<f64>> = lines
             .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
             .collect();
@@ -301,10 +303,10 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
             .len(),
         ROWS
     );
-    source.text = Some(crate::session::import::ImportOptions::new(
-        crate::session::import::TimeSource::RateHz(100.0),
+    source.text = Some(recording::session::import::ImportOptions::new(
+        recording::session::import::TimeSource::RateHz(100.0),
         OutputUnit::StandardGravity,
-        crate::session::import::GyroUnit::DegPerS,
+        recording::session::import::GyroUnit::DegPerS,
     ));
     let e = read_log(&fixture("hand.mcap"), &source)
         .unwrap_err()
@@ -437,8 +439,9 @@ fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
         topic: None,
         spelling: Default::default(),
     };
-    let log = crate::session::logs::read_log_from(&bytes[..], &bytes, Path::new("cut.ulg"), &none)
-        .unwrap();
+    let log =
+        recording::session::logs::read_log_from(&bytes[..], &bytes, Path::new("cut.ulg"), &none)
+            .unwrap();
     assert_eq!(log.recording.len(), 2372);
     assert!((log.recording.t_s[2371] - 21.876472).abs() < 1e-9);
     assert!(

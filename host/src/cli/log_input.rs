@@ -2,10 +2,10 @@
 //! `host noise` (flattened into each, so the three read a file the same way).
 
 use super::CliError;
-use crate::app::log_input::{LogInput, LogInputError};
-use crate::session::import::GyroUnit;
-use crate::session::logs::{LogFormat, LogSource};
+use app::log_input::{LogInput, LogInputError};
 use clap::Args;
+use recording::session::import::GyroUnit;
+use recording::session::logs::{LogFormat, LogSource};
 use recording::spelling::Spelling;
 
 /// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
@@ -30,7 +30,7 @@ pub struct LogInputArgs {
     pub time_unit: Option<String>,
     /// Text files: the sample rate, Hz, when the file has no time column (a sample index is
     /// ignored).
-    #[arg(long, value_name = "HZ", value_parser = crate::limits::real(crate::limits::MIN_LOGGER_RATE_HZ, crate::limits::MAX_SAMPLE_RATE_HZ))]
+    #[arg(long, value_name = "HZ", value_parser = recording::limits::real(recording::limits::MIN_LOGGER_RATE_HZ, recording::limits::MAX_SAMPLE_RATE_HZ))]
     pub rate_hz: Option<f64>,
     /// Text files: the accelerometer's unit, m/s2, g, LSB or V (kept as the calibration's output
     /// unit). Binary logs are in m/s².
@@ -47,7 +47,7 @@ pub struct LogInputArgs {
     pub gyro_unit: Option<String>,
     /// Text files, with --gyro-unit LSB: the gyro's nominal scale, counts per °/s (from its data
     /// sheet, e.g. 16.4 or 131); the turns fit the true scale.
-    #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
+    #[arg(long, value_name = "X", value_parser = recording::limits::real(1e-3, 1e6))]
     pub gyro_lsb_per_dps: Option<f64>,
     /// Text files, with --gyro-unit LSB: the counts of zero rate (an unsigned output's mid-scale,
     /// e.g. 32768), one value or one per axis (X,Y,Z), subtracted before the scale; give the same
@@ -61,11 +61,11 @@ pub struct LogInputArgs {
     /// Text files: lines before the header to skip (a logger's preamble; default: a header naming
     /// the columns asked for is looked for in the first lines, and a header-less file of numbers
     /// is read with --columns given by index, e.g. 0,1,2,3,4,5).
-    #[arg(long, value_name = "N", value_parser = crate::limits::whole_u64(1, 1_000_000))]
+    #[arg(long, value_name = "N", value_parser = recording::limits::whole_u64(1, 1_000_000))]
     pub skip_lines: Option<u64>,
     /// PX4 ULog and ArduPilot DataFlash: which IMU of a vehicle with several (ULog's multi_id,
     /// DataFlash's I; default 0).
-    #[arg(long, value_name = "N", value_parser = crate::limits::whole_u32(0, u8::MAX as u32))]
+    #[arg(long, value_name = "N", value_parser = recording::limits::whole_u32(0, u8::MAX as u32))]
     pub instance: Option<u32>,
     /// ROS 2 MCAP: the sensor_msgs/msg/Imu topic (default: the bag's only one).
     #[arg(long, value_name = "NAME")]
@@ -107,7 +107,7 @@ impl LogInputArgs {
     /// The text-file options given, by their flags (a text file's columns, time and units: what a
     /// binary log or a session directory states itself).
     fn text_options_given(&self) -> Vec<&'static str> {
-        let default_columns = self.columns == crate::session::import::DEFAULT_COLUMNS.join(",");
+        let default_columns = self.columns == recording::session::import::DEFAULT_COLUMNS.join(",");
         [
             ("--columns", !default_columns),
             ("--time-column", self.time_column.is_some()),

@@ -3,20 +3,20 @@
 //!
 //! | subcommand | file | domain code |
 //! |---|---|---|
-//! | `simulate` | [`simulate`] | [`crate::sim`] → [`crate::session::writer`] |
-//! | `calibrate --input` | [`calibrate`] | [`crate::session::reader`] → [`crate::estimate`] → [`crate::report::text`], [`crate::calibration_files`] |
-//! | `calibrate --port` | [`calibrate`] | [`crate::device::procedure`] over [`port`] |
-//! | `plan --check` | [`plan`] | [`crate::estimate::predict`] |
-//! | `segment`, `simulate-hand` | [`segment`] | [`crate::session::import`] → [`crate::session::segment`] → [`crate::session::from_recording`], [`crate::estimate::handheld_gyro`]; [`crate::sim::handheld`] |
-//! | `report` | [`report`] | [`crate::report::document`] over [`crate::report::data`] |
-//! | `navigation-check` | [`navigation_check`] | [`mod@crate::report::navigation_check`] on [`crate::sim`] |
-//! | `compare` | [`compare`] | [`crate::report::compare`] |
-//! | `export` | [`export`] | [`crate::export`] |
-//! | `apply` | [`apply`] | [`crate::apply`] over [`crate::session::reader`] |
-//! | `noise` | [`noise`] | [`crate::noise`] |
-//! | `batch` | [`batch`] | [`crate::batch`] (rayon) over [`crate::estimate`] |
-//! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`crate::device`] over [`port`] |
-//! | `bringup` | [`bringup`] | [`crate::device::bringup`] over [`port`] |
+//! | `simulate` | [`simulate`] | [`estimator::sim`] → [`recording::session::writer`] |
+//! | `calibrate --input` | [`calibrate`] | [`recording::session::reader`] → [`estimator::estimate`] → [`outputs::report::text`], [`estimator::calibration_files`] |
+//! | `calibrate --port` | [`calibrate`] | [`device::procedure`] over [`port`] |
+//! | `plan --check` | [`plan`] | [`estimator::estimate::predict`] |
+//! | `segment`, `simulate-hand` | [`segment`] | [`recording::session::import`] → [`recording::session::segment`] → [`recording::session::from_recording`], [`estimator::estimate::handheld_gyro`]; [`estimator::sim::handheld`] |
+//! | `report` | [`report`] | [`outputs::report::document`] over [`outputs::report::data`] |
+//! | `navigation-check` | [`navigation_check`] | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
+//! | `compare` | [`compare`] | [`outputs::report::compare`] |
+//! | `export` | [`export`] | [`outputs::export`] |
+//! | `apply` | [`apply`] | [`outputs::apply`] over [`recording::session::reader`] |
+//! | `noise` | [`noise`] | [`outputs::noise`] |
+//! | `batch` | [`batch`] | [`app::batch`] (rayon) over [`estimator::estimate`] |
+//! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`device`] over [`port`] |
+//! | `bringup` | [`bringup`] | [`device::bringup`] over [`port`] |
 //!
 //! `segment`, `apply` and `noise` read a logger's file with the one set of input options,
 //! [`log_input`].
@@ -71,8 +71,8 @@ mod window_property_tests;
 
 pub use error::CliError;
 
-use crate::unit_file::UnitFile;
 use clap::{Parser, Subcommand};
+use estimator::unit_file::UnitFile;
 use std::path::Path;
 
 /// Calibrate a strap-down tri-axis accelerometer unit (static + dynamic, with lever arms).

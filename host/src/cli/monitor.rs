@@ -12,10 +12,10 @@ pub struct MonitorArgs {
     #[command(flatten)]
     pub port: PortArgs,
     /// Samples averaged per line.
-    #[arg(long, default_value_t = 100, value_parser = crate::limits::whole_u32(1, crate::limits::MAX_WINDOW))]
+    #[arg(long, default_value_t = 100, value_parser = recording::limits::whole_u32(1, crate::limits::MAX_WINDOW))]
     pub window: u32,
     /// Stop after this many lines (default: run until interrupted).
-    #[arg(long, value_parser = crate::limits::whole_u64(1, u64::MAX))]
+    #[arg(long, value_parser = recording::limits::whole_u64(1, u64::MAX))]
     pub count: Option<u64>,
     /// With `--port sim`: run the simulated device as fast as it goes instead of at its real
     /// sampling rate (needs --count, so that the output stays bounded).
@@ -28,7 +28,7 @@ pub struct MonitorArgs {
 /// `--fast`; a board is paced by its own ADC.
 pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
     let (window, count) = (a.window, a.count);
-    crate::limits::count_in("--window", window, crate::limits::MAX_WINDOW)?;
+    recording::limits::count_in("--window", window, crate::limits::MAX_WINDOW)?;
     let sim = a.port.port == super::port::SIM_PORT;
     if a.fast && !sim {
         return Err(CliError::Usage(
@@ -44,7 +44,7 @@ pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
     }
     let mut client = connect(&a.port)?;
     let identity = client.identify()?;
-    if let (crate::device::AnyTransport::Sim(dev), false) = (client.transport_mut(), a.fast) {
+    if let (device::AnyTransport::Sim(dev), false) = (client.transport_mut(), a.fast) {
         dev.pace_real_time();
     }
     // A window takes its own duration to arrive, on top of the answer timeout.

@@ -1,20 +1,20 @@
 //! `host navigation-check`: the paper's navigation check on a simulated session of its unit.
 
 use super::CliError;
-use crate::report::{navigation_check, NavigationCheckArgs};
-use crate::session::builtin::load_plan;
-use crate::unit_file::UnitFile;
 use clap::Args;
+use estimator::unit_file::UnitFile;
+use outputs::report::{navigation_check, NavigationCheckArgs};
+use recording::session::builtin::load_plan;
 use std::path::PathBuf;
 
 /// `host navigation-check`.
 #[derive(Debug, Args)]
 pub struct NavigationCheckCliArgs {
     /// Seed of the simulated session's noise.
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u64(0, u64::MAX))]
+    #[arg(long, default_value_t = 1, value_parser = recording::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Length of the replayed navigation runs, s.
-    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
+    #[arg(long, default_value_t = 60.0, value_parser = recording::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
     pub duration_s: f64,
     /// Where to write the figures and pages (default: nothing written).
     #[arg(long = "out", visible_alias = "out-dir", value_name = "OUT")]

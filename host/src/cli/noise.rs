@@ -1,13 +1,13 @@
 //! `host noise`: Allan deviation and noise terms of a still recording.
 
 use super::CliError;
-use crate::calibration_guard::Meeting;
-use crate::export::convert;
-use crate::noise::{analyse, analyse_log, is_samples_csv, NoiseError};
-use crate::output_file::write_atomic;
-use crate::report::plot::{render, Formats};
-use crate::unit_file::{UnitFile, UnitFileError};
 use clap::Args;
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::calibration_guard::Meeting;
+use outputs::export::convert;
+use outputs::noise::{analyse, analyse_log, is_samples_csv, NoiseError};
+use outputs::report::plot::{render, Formats};
+use recording::output_file::write_atomic;
 use std::path::PathBuf;
 
 /// `host noise`.
@@ -52,25 +52,25 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
             let id = unit
                 .unit_id()
                 .map_err(|m| CliError::Unit(UnitFileError::Invalid(p.clone(), m)))?;
-            let plan_path = a.input.join(crate::session::PLAN_FILE);
+            let plan_path = a.input.join(recording::session::PLAN_FILE);
             let plan = if a.input.is_dir() && plan_path.exists() {
-                Some(crate::session::Plan::load(&plan_path)?)
+                Some(recording::session::Plan::load(&plan_path)?)
             } else {
                 None
             };
             // A logger's file (or a bare samples.csv) is met once read: its output unit then.
             let other = match &plan {
-                Some(plan) => crate::apply::recording(plan, None),
-                None => crate::calibration_guard::Other {
+                Some(plan) => outputs::apply::recording(plan, None),
+                None => outputs::calibration_guard::Other {
                     name: "the recording",
                     unit_id: None,
                     output_unit: None,
                     frame: None,
-                    temperatures: crate::calibration_guard::Temperatures::None,
+                    temperatures: outputs::calibration_guard::Temperatures::None,
                 },
             };
-            let mine = crate::apply::mine(&cal, id);
-            crate::calibration_guard::meet(Meeting::Noise, &mine, &other)
+            let mine = outputs::apply::mine(&cal, id);
+            outputs::calibration_guard::meet(Meeting::Noise, &mine, &other)
                 .map_err(|e| CliError::Noise(e.into()))?;
             let plain = convert(&cal).map_err(|e| CliError::Export(e.into()))?.plain;
             Some((plain, cal.statics.output_unit))
@@ -99,7 +99,7 @@ pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
     })?;
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir).map_err(|e| {
-            CliError::Written(crate::output_file::OutputFileError::Io(dir.clone(), e))
+            CliError::Written(recording::output_file::OutputFileError::Io(dir.clone(), e))
         })?;
         write_atomic(&dir.join("noise.json"), json.as_bytes(), a.force)
             .map_err(CliError::Written)?;

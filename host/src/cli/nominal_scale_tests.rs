@@ -7,10 +7,12 @@
 
 use super::segment::segment;
 use super::{Cli, Command};
-use crate::estimate::handheld_gyro::HandGyroFit;
 use crate::fuzz::logs::{write_mcap, LogSample};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
 use clap::Parser;
+use estimator::estimate::handheld_gyro::HandGyroFit;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
 use shared::OutputUnit;
 use std::path::Path;
 
@@ -24,11 +26,10 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
     let out = segment(&a).unwrap_or_else(|e| panic!("{line}: {e}"));
     let warnings = out
         .recording
-        .reader_warnings(crate::session::import::Places::InFile);
+        .reader_warnings(recording::session::import::Places::InFile);
     let fit = out.gyro.unwrap_or_else(|e| panic!("{line}: gyro {e}"));
     // The session's warnings are not kept in the outcome: rebuild the note from the fit.
-    let note =
-        crate::app::handheld::gyro::common_scale_note(&fit, &out.recording, Default::default());
+    let note = app::handheld::gyro::common_scale_note(&fit, &out.recording, Default::default());
     (fit, warnings.into_iter().chain(note).collect())
 }
 

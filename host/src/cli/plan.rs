@@ -3,12 +3,12 @@
 
 use super::output::Output;
 use super::{load_unit, CliError};
-use crate::estimate::{predict, PredictSettings, Prediction};
-use crate::session::builtin::load_plan;
-use crate::session::Package;
-use crate::session::Plan;
-use crate::summary::{parameter_keys, parameter_unit};
-use crate::unit_file::{UnitFile, UnitFileError};
+use estimator::estimate::{predict, PredictSettings, Prediction};
+use estimator::unit_file::{UnitFile, UnitFileError};
+use outputs::summary::{parameter_keys, parameter_unit};
+use recording::session::builtin::load_plan;
+use recording::session::Package;
+use recording::session::Plan;
 
 /// The MEMS IMU a single-package plan is predicted for when no unit is given.
 const SINGLE_PACKAGE_UNIT_TOML: &str = include_str!("../../units/single-package.toml");
@@ -23,10 +23,10 @@ pub struct PlanArgs {
     #[arg(long, value_name = "FILE|NAME")]
     pub check: String,
     /// Accelerometer white noise per sample, 1σ, mg.
-    #[arg(long, value_name = "MG", default_value_t = 1.0, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "MG", default_value_t = 1.0, value_parser = recording::limits::real(recording::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
     pub noise_mg: f64,
     /// Gyro white noise per sample, 1σ, °/s.
-    #[arg(long, value_name = "DEG_S", default_value_t = 0.05, value_parser = crate::limits::real(crate::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "DEG_S", default_value_t = 0.05, value_parser = recording::limits::real(recording::limits::MIN_LIMIT, crate::limits::MAX_SIM_NOISE))]
     pub gyro_noise_deg_s: f64,
     /// Unit file giving the scale factors and lever arms to predict for (default: the paper's unit,
     /// or for a plan with package = "single" `host/units/single-package.toml`, a MEMS IMU).
@@ -36,14 +36,14 @@ pub struct PlanArgs {
     /// of `host noise`, in mg; docs/model.md §11): the segments' order in the plan then matters.
     /// Without it, the walk the unit's class is expected to have (see --gyro-bias-walk); 0 for a
     /// constant bias.
-    #[arg(long, value_name = "MG_SQRT_S", value_parser = crate::limits::real(0.0, crate::limits::MAX_BIAS_WALK_MG_SQRT_S))]
+    #[arg(long, value_name = "MG_SQRT_S", value_parser = recording::limits::real(0.0, crate::limits::MAX_BIAS_WALK_MG_SQRT_S))]
     pub bias_walk: Option<f64>,
     /// Predict with the gyro's bias a random walk of this strength, °/s/√s (docs/model.md §11.6);
     /// 0 for a constant gyro bias. Without it (and without --bias-walk) the walks the unit's
     /// class is expected to have: the unit file's [noise] figures where it has them, else for a
     /// digital MEMS unit (an LSB plan, or a single package) 0.002 mg/√s and 0.0005 °/s/√s,
     /// ordinary figures for a consumer part, and none for an analog unit.
-    #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = crate::limits::real(0.0, crate::limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S))]
+    #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = recording::limits::real(0.0, crate::limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S))]
     pub gyro_bias_walk: Option<f64>,
     /// Print the prediction as one JSON document on stdout (the table goes to stderr).
     #[arg(long)]
@@ -84,19 +84,19 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| a.noise_mg * 1e-3 * k.abs()),
         gyro_noise_rad_s: a.gyro_noise_deg_s.to_radians(),
-        options: crate::estimate::EstimateOptions {
+        options: estimator::estimate::EstimateOptions {
             bias_walk: if walks.accel_mg_sqrt_s > 0.0 {
-                crate::estimate::BiasWalk::Given(walks.accel_mg_sqrt_s)
+                estimator::estimate::BiasWalk::Given(walks.accel_mg_sqrt_s)
             } else {
-                crate::estimate::BiasWalk::Off
+                estimator::estimate::BiasWalk::Off
             },
             gyro_bias_walk_deg_s_sqrt_s: walks.gyro_deg_s_sqrt_s,
-            ..crate::estimate::EstimateOptions::default()
+            ..estimator::estimate::EstimateOptions::default()
         },
         ..PredictSettings::white(0.0)
     };
-    let stats = crate::sim::synth::prediction_stats(&plan, &truth, &settings)
-        .map_err(crate::estimate::EstimateError::from)?;
+    let stats = estimator::sim::synth::prediction_stats(&plan, &truth, &settings)
+        .map_err(estimator::estimate::EstimateError::from)?;
     let prediction = predict(&plan, &truth, &stats, &settings)?;
     out.line("")?;
     let walk = walks.describe();
@@ -104,9 +104,9 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "noise: {} mg per sample on each accelerometer, {} °/s on the gyro{walk}",
         a.noise_mg, a.gyro_noise_deg_s
     ))?;
-    out.human(crate::report::render_prediction(&prediction))?;
+    out.human(outputs::report::render_prediction(&prediction))?;
     let advice = if walks.accel_mg_sqrt_s > 0.0 {
-        crate::app::segment_order::order_advice(&plan, &truth, &settings)?
+        app::segment_order::order_advice(&plan, &truth, &settings)?
     } else {
         Vec::new()
     };
@@ -141,7 +141,7 @@ pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "single_package": prediction.single_package,
         "in_package_size_effect": prediction
             .single_package
-            .then_some(crate::estimate::IN_PACKAGE_NOT_OBSERVABLE),
+            .then_some(estimator::estimate::IN_PACKAGE_NOT_OBSERVABLE),
     });
     if !advice.is_empty() {
         doc["order_advice"] = json!(advice);
@@ -190,7 +190,7 @@ fn expected_walks(a: &PlanArgs, plan: &Plan, unit: &UnitFile) -> Result<Walks, C
             from: "given",
         });
     }
-    let noise = crate::sim::NoiseModel::from_unit_file(unit)?;
+    let noise = estimator::sim::NoiseModel::from_unit_file(unit)?;
     if let Some(n) = noise.filter(|n| n.accel_bias_walk_mg_sqrt_s > 0.0) {
         return Ok(Walks {
             accel_mg_sqrt_s: n.accel_bias_walk_mg_sqrt_s,
@@ -222,10 +222,7 @@ fn expected_walks(a: &PlanArgs, plan: &Plan, unit: &UnitFile) -> Result<Walks, C
 
 /// The segment-order advice under the walk (docs/model.md §11.2), one paragraph each; nothing when
 /// no order helps.
-fn print_advice(
-    advice: &[crate::app::segment_order::OrderAdvice],
-    out: &Output,
-) -> Result<(), CliError> {
+fn print_advice(advice: &[app::segment_order::OrderAdvice], out: &Output) -> Result<(), CliError> {
     for v in advice {
         let (b, f) = (&v.before, &v.after);
         let pct = |x: f64, y: f64| 100.0 * (y / x - 1.0);

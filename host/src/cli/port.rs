@@ -5,11 +5,11 @@
 //! running in QEMU).
 
 use super::CliError;
-use crate::device::serial::{SerialTransport, DEFAULT_BAUD};
-use crate::device::sim::SimDevice;
-use crate::device::{AnyTransport, DeviceClient};
 use crate::limits;
-use crate::unit_file::{UnitFile, UnitFileError};
+use device::serial::{SerialTransport, DEFAULT_BAUD};
+use device::sim::SimDevice;
+use device::{AnyTransport, DeviceClient};
+use estimator::unit_file::{UnitFile, UnitFileError};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -27,11 +27,11 @@ pub struct PortArgs {
     #[arg(long)]
     pub port: String,
     /// A serial port's baud rate (default: 115200; no effect on a pty, refused for `sim`).
-    #[arg(long, value_parser = limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD))]
+    #[arg(long, value_parser = recording::limits::whole_u32(limits::MIN_BAUD, limits::MAX_BAUD))]
     pub baud: Option<u32>,
     /// A serial port's seconds to wait for each answer before declaring the device silent
     /// (default: 5; refused for `sim`, which always answers at once).
-    #[arg(long, value_parser = limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S))]
+    #[arg(long, value_parser = recording::limits::real(limits::MIN_TIMEOUT_S, limits::MAX_TIMEOUT_S))]
     pub timeout_s: Option<f64>,
     /// With `--port sim` or `sim-hand`: the simulated unit's parameters (unit file; default: the
     /// paper's unit).
@@ -46,7 +46,7 @@ impl PortArgs {
     /// Checks the numbers and that each option applies to the port before anything is opened or
     /// written.
     pub(crate) fn validate(&self) -> Result<(), CliError> {
-        crate::limits::positive_at_most(
+        recording::limits::positive_at_most(
             "--timeout-s",
             self.timeout_s(),
             crate::limits::MAX_TIMEOUT_S,

@@ -2,9 +2,9 @@
 
 use super::port::{connect, PortArgs};
 use super::CliError;
-use crate::output_file::OutputFile;
-use crate::unit_file::UnitFile;
 use clap::Args;
+use estimator::unit_file::UnitFile;
+use recording::output_file::OutputFile;
 use shared::blob;
 use std::io::Write;
 use std::path::PathBuf;
@@ -37,13 +37,13 @@ pub fn run(a: &ReadArgs) -> Result<(), CliError> {
     let bytes = client.read_calibration()?;
     let src = PathBuf::from(format!("<device {}>", identity.unit_id));
     let blob = blob::decode(&bytes).map_err(|e| CliError::Blob(src, e))?;
-    let mine = crate::calibration_guard::Mine {
+    let mine = outputs::calibration_guard::Mine {
         name: "the calibration the device holds",
         cal: &blob.calibration,
         unit_id: Some(blob.unit_id),
     };
-    crate::calibration_guard::meet(
-        crate::calibration_guard::Meeting::Read,
+    outputs::calibration_guard::meet(
+        outputs::calibration_guard::Meeting::Read,
         &mine,
         &super::flash::device_side(Some(&identity)),
     )?;

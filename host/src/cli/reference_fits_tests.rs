@@ -20,9 +20,11 @@
 use super::log_fixture_tests::command;
 use super::segment::segment;
 use super::{calibrate, Command};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::sim::montecarlo::static_errors;
-use crate::sim::testkit::Rng;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
+use estimator::sim::montecarlo::static_errors;
+use estimator::sim::testkit::Rng;
 use shared::linalg::{self, RowMajor3};
 use shared::{FittedStatic, OutputUnit};
 

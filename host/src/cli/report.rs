@@ -1,8 +1,8 @@
 //! `host report`: the report of a session judged by a calibration (figures, `report.html`, `report.md`).
 
 use super::CliError;
-use crate::report::{report, ReportOptions};
 use clap::Args;
+use outputs::report::{report, ReportOptions};
 use std::path::PathBuf;
 
 /// `host report`.
@@ -25,7 +25,7 @@ pub struct ReportArgs {
     #[arg(long, value_name = "NAME")]
     pub rate_run: Option<String>,
     /// Length of the replayed navigation runs, s.
-    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
+    #[arg(long, default_value_t = 60.0, value_parser = recording::limits::real(crate::limits::MIN_NAVIGATION_DURATION_S, crate::limits::MAX_NAVIGATION_DURATION_S))]
     pub duration_s: f64,
     /// No PNG figures (SVG only).
     #[arg(long)]
@@ -63,7 +63,7 @@ pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
 
 /// `--duration-s` sizes the navigation replay (samples = duration ÷ step): checked before any work.
 pub(crate) fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
-    Ok(crate::limits::positive_at_most(
+    Ok(recording::limits::positive_at_most(
         "--duration-s",
         duration_s,
         crate::limits::MAX_NAVIGATION_DURATION_S,
@@ -73,17 +73,17 @@ pub(crate) fn navigation_duration(duration_s: f64) -> Result<f64, CliError> {
 /// `DIR/calibration.toml` when it exists, else the one beside the recording (`DIR/..`), else
 /// `DIR/calibration.toml` (so that the error names the expected place).
 pub(crate) fn default_calibration(input: &std::path::Path) -> PathBuf {
-    let own = input.join(crate::calibration_files::CALIBRATION_TOML);
+    let own = input.join(estimator::calibration_files::CALIBRATION_TOML);
     if own.exists() {
         return own;
     }
     match input.parent() {
         Some(parent)
             if parent
-                .join(crate::calibration_files::CALIBRATION_TOML)
+                .join(estimator::calibration_files::CALIBRATION_TOML)
                 .exists() =>
         {
-            parent.join(crate::calibration_files::CALIBRATION_TOML)
+            parent.join(estimator::calibration_files::CALIBRATION_TOML)
         }
         _ => own,
     }

@@ -4,28 +4,28 @@
 
 use super::output::Output;
 use super::CliError;
-use crate::app::handheld::table_turn::FoundTableTurn;
-use crate::app::handheld::{find, SegmentChoices, SegmentedSession};
-use crate::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
-use crate::output_file::{write_atomic, OutputDir};
-use crate::report::plot::{self, Formats};
-use crate::session::coverage::Coverage;
-use crate::session::from_recording::normal_gravity_m_s2;
-use crate::session::import::MAX_ROWS;
-use crate::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
-use crate::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
-use crate::session::segment::{PositionSet, SegmentOptions, Segmentation};
-use crate::session::Plan;
-use crate::sim::handheld::{
+use app::handheld::table_turn::FoundTableTurn;
+use app::handheld::{find, SegmentChoices, SegmentedSession};
+use clap::Args;
+use estimator::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
+use estimator::sim::handheld::{
     logger_unit, simulate_hand, truth_toml, write_logger_csv, HandSpec, LoggerLayout,
 };
-use clap::Args;
+use outputs::report::plot::{self, Formats};
+use recording::output_file::{write_atomic, OutputDir};
+use recording::session::coverage::Coverage;
+use recording::session::from_recording::normal_gravity_m_s2;
+use recording::session::import::MAX_ROWS;
+use recording::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
+use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
+use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
+use recording::session::Plan;
 use shared::linalg;
 use shared::OutputUnit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-pub use crate::app::handheld::gyro::GYRO_FILE;
+pub use app::handheld::gyro::GYRO_FILE;
 
 mod present;
 use present::{document, figure, Written};
@@ -45,7 +45,7 @@ pub struct SegmentArgs {
     pub log: super::log_input::LogInputArgs,
     /// Prior 1σ of a six-face session's faces, degrees (how well the cube sits on its faces;
     /// default 2). Refused unless the still positions are found to be the six faces of a cube.
-    #[arg(long, value_name = "DEG", value_parser = crate::limits::real(0.01, 10.0))]
+    #[arg(long, value_name = "DEG", value_parser = recording::limits::real(0.01, 10.0))]
     pub face_sigma_deg: Option<f64>,
     /// The six faces as you set the unit down, one label per still interval in the order found
     /// (x+, x-, y+, y-, z+, z-; e.g. `z+,x+,y+,z-,x-,y-`): a six-face session, checked against the
@@ -55,16 +55,16 @@ pub struct SegmentArgs {
     /// Most samples of each sensor stream held in memory at once (about 200 bytes each). A binary
     /// log with more is read again, and only its still positions and the turns between them are
     /// kept, the first this many; what is left out is said.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES as u64, value_parser = crate::limits::whole_u64(1000, MAX_ROWS as u64))]
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES as u64, value_parser = recording::limits::whole_u64(1000, MAX_ROWS as u64))]
     pub max_samples: u64,
     /// Shortest still interval kept, s.
-    #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = crate::limits::real(0.1, crate::limits::MAX_SEGMENT_DURATION_S))]
+    #[arg(long, default_value_t = 1.0, value_name = "S", value_parser = recording::limits::real(0.1, recording::limits::MAX_SEGMENT_DURATION_S))]
     pub min_still_s: f64,
     /// Fixed limits on a still window's spread (rms over the axes: accelerometer in mg of the
     /// measured gravity, gyro in °/s) instead of the sensor's own noise floor and a hand's tremor,
     /// for when the automatic choice is wrong (e.g. `--still-threshold 15,6`).
     #[arg(long, value_name = "MG,DEG_S", value_parser = still_threshold)]
-    pub still_threshold: Option<crate::session::segment::StillThreshold>,
+    pub still_threshold: Option<recording::session::segment::StillThreshold>,
     /// Replace an existing session in DIR.
     #[arg(long)]
     pub force: bool,
@@ -82,13 +82,13 @@ pub struct SegmentArgs {
     pub unit_id: Option<String>,
     /// Local gravity at the site, m/s² (the calibration's m/s² output is scaled by it; default
     /// 9.80665, or from --latitude).
-    #[arg(long, value_name = "M_S2", value_parser = crate::limits::real(9.7, 9.9), conflicts_with = "latitude")]
+    #[arg(long, value_name = "M_S2", value_parser = recording::limits::real(9.7, 9.9), conflicts_with = "latitude")]
     pub gravity: Option<f64>,
     /// The site's latitude, degrees: local gravity from the WGS 84 normal gravity formula.
-    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = crate::limits::real(-90.0, 90.0))]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = recording::limits::real(-90.0, 90.0))]
     pub latitude: Option<f64>,
     /// The site's height above the ellipsoid, m (with --latitude).
-    #[arg(long, value_name = "M", allow_negative_numbers = true, value_parser = crate::limits::real(-500.0, 9000.0))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, value_parser = recording::limits::real(-500.0, 9000.0))]
     pub height_m: Option<f64>,
 }
 
@@ -99,30 +99,30 @@ pub struct SimulateHandArgs {
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Seed.
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::whole_u64(0, u64::MAX))]
+    #[arg(long, default_value_t = 1, value_parser = recording::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Sample rate, Hz.
-    #[arg(long, default_value_t = 200.0, value_name = "HZ", value_parser = crate::limits::real(20.0, 10_000.0))]
+    #[arg(long, default_value_t = 200.0, value_name = "HZ", value_parser = recording::limits::real(20.0, 10_000.0))]
     pub rate_hz: f64,
     /// Accelerometer unit written: m/s2, g or LSB (4096 per g, quantised).
     #[arg(long, default_value = "m/s2", value_name = "UNIT")]
     pub acc_unit: String,
     /// With --acc-unit LSB: counts added to every accelerometer value (an unsigned output's
     /// mid-scale zero, e.g. 32768); the truth file's biases include it.
-    #[arg(long, value_name = "N", value_parser = crate::limits::real(0.0, 1e7))]
+    #[arg(long, value_name = "N", value_parser = recording::limits::real(0.0, 1e7))]
     pub acc_offset: Option<f64>,
     /// Gyro unit written: deg/s, rad/s or LSB (whole counts at --gyro-lsb-per-dps).
     #[arg(long, default_value = "deg/s", value_name = "UNIT")]
     pub gyro_unit: String,
     /// With --gyro-unit LSB: counts per °/s written.
-    #[arg(long, value_name = "X", value_parser = crate::limits::real(1e-3, 1e6))]
+    #[arg(long, value_name = "X", value_parser = recording::limits::real(1e-3, 1e6))]
     pub gyro_lsb_per_dps: Option<f64>,
     /// A six-face session instead: a cube set down on its six faces (each placed 1° off its body
     /// axis), turned over by hand between them, consumer-MEMS noise (150 µg/√Hz).
     #[arg(long)]
     pub six_faces: bool,
     /// With --six-faces: how many times the cube is turned over through its six faces.
-    #[arg(long, default_value_t = 1, requires = "six_faces", value_parser = crate::limits::whole_u32(1, 10))]
+    #[arg(long, default_value_t = 1, requires = "six_faces", value_parser = recording::limits::whole_u32(1, 10))]
     pub rounds: u32,
     /// At each position, one whole turn about the vertical flat on the table (either way, 4–6 s,
     /// rocking by 0.1°, the unit 3 cm from the turn's axis), set back against its stop to 0.05° and
@@ -247,12 +247,12 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let source = a.log.source(&a.input)?;
     let choices = choices(a)?;
     // Refused before any work; built aside and moved into place whole (docs/robustness.md).
-    let dir = OutputDir::create(&a.out, a.force, crate::session::PLAN_FILE)?;
-    let step = crate::ui::step(format!("reading {}", a.input.display()), out.quiet);
+    let dir = OutputDir::create(&a.out, a.force, recording::session::PLAN_FILE)?;
+    let step = recording::ui::step(format!("reading {}", a.input.display()), out.quiet);
     let log = read_log_keeping(&a.input, &source, a.max_samples as usize).map_err(CliError::Log)?;
     step.finish_and_clear();
     time_unit_note(out, &log.recording);
-    let step = crate::ui::step("finding the still intervals and the turns", out.quiet);
+    let step = recording::ui::step("finding the still intervals and the turns", out.quiet);
     let found = find(log.recording, &choices)?;
     step.finish_and_clear();
     let reader_warnings = found.warnings.len();
@@ -269,7 +269,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
         &found.segmentation,
         &found.coverage,
     ))?;
-    let step = crate::ui::step(
+    let step = recording::ui::step(
         if choices.fit_gyro {
             "choosing the positions and fitting the gyro to the turns"
         } else {
@@ -298,7 +298,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     if let Some(problems) = s.gyro_problems() {
         return Err(CliError::GyroRefused(problems));
     }
-    let step = crate::ui::step("writing the session", out.quiet);
+    let step = recording::ui::step("writing the session", out.quiet);
     let rows = s.write(dir.path(), false)?;
     step.finish_and_clear();
     if let Err(e) = &s.gyro {
@@ -343,7 +343,7 @@ fn draw_and_commit(
     out: &Output,
     warnings: &mut Vec<String>,
 ) -> Result<String, CliError> {
-    let step = crate::ui::step("drawing the segments' figure", out.quiet);
+    let step = recording::ui::step("drawing the segments' figure", out.quiet);
     let fig = figure(&s.recording, &s.segmentation);
     match plot::render(&fig, dir.path(), Formats::default()) {
         Ok(o) => o.warnings.into_iter().for_each(|w| warn(out, warnings, w)),
@@ -387,14 +387,14 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
 }
 
 /// `--still-threshold MG,DEG_S`: two positive limits.
-fn still_threshold(text: &str) -> Result<crate::session::segment::StillThreshold, String> {
+fn still_threshold(text: &str) -> Result<recording::session::segment::StillThreshold, String> {
     let v: Vec<f64> = text
         .split(',')
         .map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN))
         .collect();
     match v[..] {
         [mg, dps] if mg > 0.0 && mg <= 1000.0 && dps > 0.0 && dps <= 100.0 => {
-            Ok(crate::session::segment::StillThreshold {
+            Ok(recording::session::segment::StillThreshold {
                 acc_mg: mg,
                 gyro_deg_s: dps,
             })
@@ -408,13 +408,13 @@ fn still_threshold(text: &str) -> Result<crate::session::segment::StillThreshold
 
 /// One `--faces` label.
 fn face_label(text: &str) -> Result<(usize, f64), String> {
-    crate::session::coverage::face_label(text)
+    recording::session::coverage::face_label(text)
         .ok_or_else(|| format!("'{text}' is not a face: use x+, x-, y+, y-, z+ or z-"))
 }
 
 fn face_sigma_deg(a: &SegmentArgs) -> f64 {
     a.face_sigma_deg
-        .unwrap_or(crate::session::from_recording::SIX_FACE_PRIOR_DEG)
+        .unwrap_or(recording::session::from_recording::SIX_FACE_PRIOR_DEG)
 }
 
 /// `--face-sigma-deg` acts only on a six-face session: elsewhere it would change nothing, so it is a
@@ -428,7 +428,7 @@ fn refuse_unused_face_sigma(a: &SegmentArgs, s: &SegmentedSession) -> Result<(),
          cube (each within {}° of a body axis, all six present), so no face prior is used; leave \
          it out",
         s.plan.segments.iter().filter(|p| p.is_static()).count(),
-        crate::session::segment::SIX_FACE_DEG
+        recording::session::segment::SIX_FACE_DEG
     )))
 }
 
@@ -440,8 +440,8 @@ fn six_face_text(face_sigma_deg: f64) -> String {
          faces of a cube, each the nominal body axis up with a \
          {face_sigma_deg}° attitude prior (--face-sigma-deg); the prior fixes the body frame and \
          the fit estimates each face's placement (docs/model.md §7.1)",
-        crate::session::segment::MIN_POSITIONS,
-        crate::session::segment::SIX_FACE_DEG
+        recording::session::segment::MIN_POSITIONS,
+        recording::session::segment::SIX_FACE_DEG
     )
 }
 
@@ -546,7 +546,7 @@ fn table_turns_text(found: &[FoundTableTurn]) -> String {
 
 fn gyro_text(fit: &HandGyroFit) -> String {
     // The scale error as every command says it (docs/model.md §8).
-    let sc = crate::estimate::gyro::scale_error(&fit.matrix, &fit.matrix_1sigma);
+    let sc = estimator::estimate::gyro::scale_error(&fit.matrix, &fit.matrix_1sigma);
     let mis = fit.misalignment_deg();
     let table = if fit.table_turns > 0 {
         format!(

@@ -6,11 +6,13 @@
 
 use crate::cli::segment::{segment, SegmentArgs, SegmentOutcome};
 use crate::cli::{calibrate, Cli, Command};
-use crate::estimate::handheld_gyro::HandGyroError;
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::sim::montecarlo::static_errors;
-use crate::sim::testkit;
 use clap::Parser;
+use estimator::estimate::handheld_gyro::HandGyroError;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
+use estimator::sim::montecarlo::static_errors;
+use estimator::sim::testkit;
 use nalgebra::{Matrix3, Matrix4, Vector4};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg::{self, RowMajor3};
@@ -31,7 +33,7 @@ fn segment_args(line: &str) -> SegmentArgs {
 fn segment_and_calibrate(
     dir: &Path,
     flags: &str,
-) -> (SegmentOutcome, crate::estimate::CalibrationOutcome) {
+) -> (SegmentOutcome, estimator::estimate::CalibrationOutcome) {
     let d = dir.display();
     let out = segment(&segment_args(&format!(
         "host segment --input {d}/raw.csv --out {d}/s --time-column t {flags}"
@@ -51,8 +53,8 @@ fn segment_and_calibrate(
 /// A simulated session written as the logger's CSV (m/s², °/s) in `dir`, segmented and calibrated.
 fn segment_and_calibrate_sim(
     dir: &Path,
-    sim: &crate::sim::handheld::HandSession,
-) -> (SegmentOutcome, crate::estimate::CalibrationOutcome) {
+    sim: &estimator::sim::handheld::HandSession,
+) -> (SegmentOutcome, estimator::estimate::CalibrationOutcome) {
     write_logger_csv(&dir.join("raw.csv"), &sim.rows, &LoggerLayout::default()).unwrap();
     segment_and_calibrate(dir, "--acc-unit m/s2 --gyro-unit deg/s")
 }
@@ -196,7 +198,7 @@ fn six_position_fit(means: &[[f64; 3]], ups: &[[f64; 3]]) -> (RowMajor3, [f64; 3
 
 /// The mean output of each hold (its middle, 1 s trimmed from each end) and its true up.
 fn hold_means(
-    rows: &[crate::sim::handheld::HandRow],
+    rows: &[estimator::sim::handheld::HandRow],
     holds: &[(f64, f64, [f64; 3])],
 ) -> Vec<[f64; 3]> {
     holds
@@ -216,7 +218,7 @@ fn hold_means(
 /// faces (the oracle) and with the nominal ones.
 fn six_position_references(
     truth: &Calibration,
-    sim: &crate::sim::handheld::HandSession,
+    sim: &estimator::sim::handheld::HandSession,
     seed: u64,
 ) -> (HeldOut, HeldOut) {
     let means = hold_means(&sim.rows, &sim.holds);
@@ -355,7 +357,7 @@ fn count_time_and_face_options_are_checked_before_any_work() {
     .unwrap();
     assert_eq!(o.acc_offset, [32768.0, 32768.0, 32000.0]);
     assert_eq!(o.gyro_lsb_per_dps, Some(131.0));
-    assert_eq!(o.time_unit, Some(crate::session::import::TimeUnit::Us));
+    assert_eq!(o.time_unit, Some(recording::session::import::TimeUnit::Us));
 }
 
 /// The gyro's errors against the simulator's truth, in the true body frame: the largest scale
@@ -390,7 +392,7 @@ fn gyro_errors(fitted: &RowMajor3, truth: &RowMajor3, undetermined: usize) -> Gy
 /// that integral over `2πk·n_j` (`k` the whole turns, rounded), averaged over the two faces of each
 /// axis. The faces are taken as exact, as the method does.
 fn classic_six_position_gyro(
-    rows: &[crate::sim::handheld::HandRow],
+    rows: &[estimator::sim::handheld::HandRow],
     holds: &[(f64, f64, [f64; 3])],
 ) -> RowMajor3 {
     let in_holds = |t: f64| holds.iter().any(|h| t >= h.0 && t <= h.1);
@@ -405,7 +407,7 @@ fn classic_six_position_gyro(
     // Holds come in pairs per face: before and after its table turn.
     for pair in holds.chunks(2) {
         let (t0, t1) = (pair[0].1, pair[1].0);
-        let turn: Vec<&crate::sim::handheld::HandRow> =
+        let turn: Vec<&estimator::sim::handheld::HandRow> =
             rows.iter().filter(|r| r.0 >= t0 && r.0 <= t1).collect();
         let mut s = [0.0; 3];
         for w in turn.windows(2) {
@@ -640,7 +642,7 @@ fn biased_mems_faces(
     dir: &Path,
     seed: u64,
     rounds: usize,
-) -> (Calibration, HandSpec, crate::sim::handheld::HandSession) {
+) -> (Calibration, HandSpec, estimator::sim::handheld::HandSession) {
     let mut truth = logger_unit(OutputUnit::MetresPerSecondSquared);
     let mut rng = testkit::Rng::new(seed, 91);
     truth.statics.zero_bias_out = core::array::from_fn(|_| {

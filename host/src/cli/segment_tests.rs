@@ -3,10 +3,12 @@
 
 use super::segment::{segment, SegmentArgs};
 use super::{calibrate, Cli, Command};
-use crate::sim::handheld::{logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout};
-use crate::sim::montecarlo::static_errors;
-use crate::sim::testkit;
 use clap::Parser;
+use estimator::sim::handheld::{
+    logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
+};
+use estimator::sim::montecarlo::static_errors;
+use estimator::sim::testkit;
 use shared::linalg::{self, RowMajor3};
 use shared::{Calibration, OutputUnit};
 use std::path::Path;
@@ -51,7 +53,7 @@ fn run_session(
 ) -> (
     Calibration,
     super::segment::SegmentOutcome,
-    crate::estimate::CalibrationOutcome,
+    estimator::estimate::CalibrationOutcome,
 ) {
     let truth = write_raw(dir, unit, spec, &LoggerLayout::default());
     let d = dir.display();
@@ -110,7 +112,7 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
     assert!(tmp.path().join("s/segments.svg").exists());
     // `host calibrate --input` carries the hand gyro into calibration.toml with the same keys.
     let cal_file =
-        crate::unit_file::UnitFile::load(&tmp.path().join("cal/calibration.toml")).unwrap();
+        estimator::unit_file::UnitFile::load(&tmp.path().join("cal/calibration.toml")).unwrap();
     let g = cal_file.gyro.expect("[gyro] in calibration.toml");
     assert_eq!(g.matrix, fit.matrix);
 }
@@ -334,10 +336,10 @@ fn bad_columns_and_units_get_a_message_naming_the_fix() {
 /// (stills found == holds, intrinsic rms µg, intrinsic worst µg, worst gyro scale error, worst gyro
 /// axis error °).
 fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
-    use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::session::from_recording::{plan_for, stats_for};
-    use crate::session::import::Recording;
-    use crate::session::segment::{find_intervals, SegmentOptions};
+    use estimator::estimate::{calibrate_session_stats, EstimateOptions};
+    use recording::session::from_recording::{plan_for, stats_for};
+    use recording::session::import::Recording;
+    use recording::session::segment::{find_intervals, SegmentOptions};
     let unit = OutputUnit::MetresPerSecondSquared;
     let truth = logger_unit(unit);
     let sim = simulate_hand(&truth, spec);
@@ -363,7 +365,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
     };
     let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
     let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed, 0));
-    let fit = crate::app::handheld::gyro::fit(&rec, &seg, &plan, Default::default())
+    let fit = app::handheld::gyro::fit(&rec, &seg, &plan, Default::default())
         .unwrap()
         .unwrap();
     let want = gyro_in_convention(&truth, &spec.gyro.matrix);

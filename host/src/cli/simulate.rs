@@ -1,15 +1,15 @@
 //! `host simulate`: a virtual unit on a virtual rate table, written as a recording.
 
 use super::CliError;
-use crate::app::simulate::{simulate, NoiseChoices, Simulated, Simulation};
 use crate::limits;
-#[cfg(test)]
-use crate::sim::NoiseModel;
-use crate::sim::SimulationSummary;
-use crate::ui::progress_bar;
-#[cfg(test)]
-use crate::unit_file::UnitFile;
+use app::simulate::{simulate, NoiseChoices, Simulated, Simulation};
 use clap::Args;
+#[cfg(test)]
+use estimator::sim::NoiseModel;
+use estimator::sim::SimulationSummary;
+#[cfg(test)]
+use estimator::unit_file::UnitFile;
+use recording::ui::progress_bar;
 use std::path::PathBuf;
 
 /// `host simulate`.
@@ -30,7 +30,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE|NAME")]
     pub plan: Option<String>,
     /// Seed of the noise.
-    #[arg(long, default_value_t = 1, value_parser = limits::whole_u64(0, u64::MAX))]
+    #[arg(long, default_value_t = 1, value_parser = recording::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Replace an existing samples.csv in DIR.
     #[arg(long)]
@@ -39,25 +39,25 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub no_noise: bool,
     /// Accelerometer white noise per sample, 1σ, mg [default: 1].
-    #[arg(long, value_name = "MG", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "MG", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub noise_mg: Option<f64>,
     /// ADC quantisation step in the output unit (V or LSB); 0 = none [default: 0].
-    #[arg(long, value_name = "STEP", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "STEP", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub lsb: Option<f64>,
     /// Accelerometer bias random walk, mg/√s [default: 0].
-    #[arg(long, value_name = "MG_SQRT_S", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "MG_SQRT_S", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub drift_mg_sqrt_s: Option<f64>,
     /// Table attitude error: random tilt of each mount, 1σ per axis, degrees [default: 0].
-    #[arg(long, value_name = "DEG", value_parser = limits::real(0.0, 45.0))]
+    #[arg(long, value_name = "DEG", value_parser = recording::limits::real(0.0, 45.0))]
     pub tilt_deg: Option<f64>,
     /// Table rate scale error, fraction (1e-4 = 100 ppm) [default: 0].
-    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = limits::real(-0.5, 0.5))]
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = recording::limits::real(-0.5, 0.5))]
     pub rate_scale: Option<f64>,
     /// Table rate offset, °/s [default: 0].
-    #[arg(long, value_name = "DEG_S", allow_hyphen_values = true, value_parser = limits::real(-limits::MAX_RATE_DEG_S, limits::MAX_RATE_DEG_S))]
+    #[arg(long, value_name = "DEG_S", allow_hyphen_values = true, value_parser = recording::limits::real(-recording::limits::MAX_RATE_DEG_S, recording::limits::MAX_RATE_DEG_S))]
     pub rate_offset_deg_s: Option<f64>,
     /// Gyro white noise per sample, 1σ, °/s [default: 0.05].
-    #[arg(long, value_name = "DEG_S", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "DEG_S", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub gyro_noise_deg_s: Option<f64>,
     /// Gyro bias, body axes, °/s, as X,Y,Z [default: 0,0,0].
     #[arg(
@@ -66,7 +66,7 @@ pub struct SimulateArgs {
         value_delimiter = ',',
         num_args = 1,
         allow_hyphen_values = true,
-        value_parser = limits::real(-limits::MAX_RATE_DEG_S, limits::MAX_RATE_DEG_S)
+        value_parser = recording::limits::real(-recording::limits::MAX_RATE_DEG_S, recording::limits::MAX_RATE_DEG_S)
     )]
     pub gyro_bias_deg_s: Option<Vec<f64>>,
     /// Gyro scale errors, ppm, as X,Y,Z (with --gyro-misalignment-deg: the gyro matrix) [default: 0].
@@ -76,20 +76,20 @@ pub struct SimulateArgs {
         value_delimiter = ',',
         num_args = 1,
         allow_hyphen_values = true,
-        value_parser = limits::real(-1e5, 1e5)
+        value_parser = recording::limits::real(-1e5, 1e5)
     )]
     pub gyro_scale_ppm: Option<Vec<f64>>,
     /// Gyro misalignment: every off-diagonal entry of the gyro matrix, degrees [default: 0].
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = limits::real(-10.0, 10.0))]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = recording::limits::real(-10.0, 10.0))]
     pub gyro_misalignment_deg: Option<f64>,
     /// Accelerometer flicker (1/f) bias noise as its bias instability B, mg [default: 0].
-    #[arg(long, value_name = "MG", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "MG", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub flicker_mg: Option<f64>,
     /// Gyro bias random walk, °/s/√s [default: 0].
-    #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub gyro_drift_deg_s_sqrt_s: Option<f64>,
     /// Gyro flicker (1/f) bias noise as its bias instability B, °/s [default: 0].
-    #[arg(long, value_name = "DEG_S", value_parser = limits::real(0.0, limits::MAX_SIM_NOISE))]
+    #[arg(long, value_name = "DEG_S", value_parser = recording::limits::real(0.0, limits::MAX_SIM_NOISE))]
     pub gyro_flicker_deg_s: Option<f64>,
 }
 

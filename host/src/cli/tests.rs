@@ -5,12 +5,12 @@ use super::calibrate::{calibrate, calibrate_options};
 use super::port::{connect, PortArgs, SIM_PORT};
 use super::simulate::noise_from_args;
 use super::*;
-use crate::device::sim::SIM_UNIT_ID;
-use crate::device::LinkError;
-use crate::estimate::Method;
-use crate::export::ExportFormat;
-use crate::sim::NoiseModel;
 use clap::CommandFactory;
+use device::sim::SIM_UNIT_ID;
+use device::LinkError;
+use estimator::estimate::Method;
+use estimator::sim::NoiseModel;
+use outputs::export::ExportFormat;
 use shared::blob::ParameterBlob;
 use shared::wire::DeviceError;
 use shared::UnitId;
@@ -29,7 +29,7 @@ fn simulate_help_names_every_built_in_plan() {
         .expect("simulate is a subcommand")
         .render_long_help()
         .to_string();
-    for (name, _) in crate::session::builtin::BUILTIN_PLANS {
+    for (name, _) in recording::session::builtin::BUILTIN_PLANS {
         assert!(
             help.contains(name),
             "`host simulate --help` omits the plan {name}"
@@ -88,7 +88,7 @@ fn the_command_line_is_well_formed() {
     };
     let o = b.estimator.options().unwrap();
     assert!(o.single_package);
-    assert_eq!(o.reference, crate::estimate::ReferenceChoice::Centroid);
+    assert_eq!(o.reference, estimator::estimate::ReferenceChoice::Centroid);
     assert!(Cli::try_parse_from(["host", "calibrate", "--method", "best"]).is_err());
     let Command::Calibrate(c) = parse(&["calibrate", "--input", "d", "--plan", "paper"]).command
     else {
@@ -302,7 +302,7 @@ fn flash_writes_resets_and_reads_back_and_refuses_another_units_blob() {
     assert!(
         matches!(
             e,
-            CliError::Guard(crate::calibration_guard::GuardError::UnitId { .. })
+            CliError::Guard(outputs::calibration_guard::GuardError::UnitId { .. })
         ),
         "{e}"
     );
@@ -392,7 +392,7 @@ fn a_missing_serial_port_names_the_port_and_the_fix() {
 /// the estimate's place, and the paper's method (no walk weights) keeps constant biases.
 #[test]
 fn the_walks_are_estimated_unless_a_flag_says_otherwise() {
-    use crate::estimate::BiasWalk;
+    use estimator::estimate::BiasWalk;
     let options = |extra: &[&str]| {
         let mut args = vec!["calibrate", "--input", "x"];
         args.extend_from_slice(extra);

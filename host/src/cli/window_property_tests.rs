@@ -9,11 +9,11 @@
 //! suite runs 6) and prints every case.
 
 use super::log_fixture_tests::{fixture, truth};
-use crate::apply::{apply_log_within, Setting};
 use crate::fuzz::logs::{write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample};
-use crate::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
-use crate::session::logs::{read_log, read_log_windows, LogRead, LogSource};
-use crate::sim::testkit::Rng;
+use estimator::sim::testkit::Rng;
+use outputs::apply::{apply_log_within, Setting};
+use recording::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
+use recording::session::logs::{read_log, read_log_windows, LogRead, LogSource};
 use shared::compensator::LeverMode;
 use shared::{Calibration, OutputUnit};
 use std::path::Path;

@@ -2,8 +2,8 @@
 //! here (150 samples at 100 Hz; the MCAP ones by the `mcap` crate's writer, once uncompressed so
 //! that mutations reach the records, once in lz4 and once in zstd chunks).
 
-use crate::session::import::{Recording, MAX_ROWS};
-use crate::session::logs::{dataflash, mcap, ulog};
+use recording::session::import::{Recording, MAX_ROWS};
+use recording::session::logs::{dataflash, mcap, ulog};
 
 /// A recording a reader accepts: as many times, accelerometer, gyro (and temperature) values as
 /// rows, at most `MAX_ROWS` of them, strictly increasing finite times, finite values, a positive

@@ -10,11 +10,11 @@
 //! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
 
 use super::logs::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
-use crate::session::import::GyroUnit;
-use crate::session::import::{ImportOptions, TimeSource};
-use crate::session::logs::{read_log_from, LogSource};
-use crate::sim::handheld::{logger_unit, simulate_hand, HandSpec};
-use crate::sim::testkit::Rng;
+use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use estimator::sim::testkit::Rng;
+use recording::session::import::GyroUnit;
+use recording::session::import::{ImportOptions, TimeSource};
+use recording::session::logs::{read_log_from, LogSource};
 use shared::OutputUnit;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -242,7 +242,7 @@ fn source(format: Format) -> LogSource {
 /// own values, and the last of them (index); panics on a kept row at another time.
 fn kept_clean_rows(
     clean: &[LogSample],
-    rec: &crate::session::import::Recording,
+    rec: &recording::session::import::Recording,
     jitter_s: f64,
     case: &str,
 ) -> (usize, usize) {

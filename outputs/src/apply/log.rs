@@ -2,12 +2,12 @@
 
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::calibration_guard::{meet, Meeting, Other};
-use crate::session::import::{Places, Recording};
-use crate::session::logs::{read_log_windows, LogError, LogRead, LogSource};
-use crate::session::segment::{
+use recording::session::import::{Places, Recording};
+use recording::session::logs::{read_log_windows, LogError, LogRead, LogSource};
+use recording::session::segment::{
     find_intervals, gyro_unit_suspect, Interval, SegmentError, SegmentOptions,
 };
-use crate::session::Row;
+use recording::session::Row;
 use shared::compensator::LeverMode;
 use shared::{Calibration, OutputUnit};
 use std::io::Write;
@@ -16,7 +16,7 @@ use std::path::Path;
 /// Samples per stream read into memory at once: a log within it is read whole, a longer one window
 /// by window (`session::logs::read_log_windows`), so that the memory `apply` needs does not grow
 /// with the file.
-pub const APPLY_MAX_SAMPLES: usize = crate::session::logs::DEFAULT_MAX_SAMPLES;
+pub const APPLY_MAX_SAMPLES: usize = recording::session::logs::DEFAULT_MAX_SAMPLES;
 
 /// Applies `cal` to the logger's file at `path`, writing the CSV to `out`. The log has no unit id
 /// and no segments: the output unit and the temperature are checked as for a session, the ω̇
@@ -150,7 +150,7 @@ impl CsvOut<'_> {
 }
 
 fn write_error(e: std::io::Error) -> ApplyError {
-    ApplyError::Recording(crate::session::RecordingError::Io {
+    ApplyError::Recording(recording::session::RecordingError::Io {
         path: Path::new("(output)").to_path_buf(),
         source: e,
     })

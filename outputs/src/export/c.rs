@@ -51,7 +51,7 @@ pub fn write_package(
     input: &ExportInput<'_>,
     force: bool,
 ) -> Result<Vec<&'static str>, ExportError> {
-    use crate::output_file::{write_atomic, OutputFileError};
+    use recording::output_file::{write_atomic, OutputFileError};
     let files = package(input)?;
     if !force {
         if let Some((name, _)) = files.iter().find(|(name, _)| dir.join(name).exists()) {
@@ -350,7 +350,7 @@ fn fusion_gyroscope(gyro: &GyroCorrection) -> Result<([[f64; 3]; 3], [f32; 3]), 
 
 /// Which entries of `G⁻¹` the calibration did not determine: the first-order propagation of the
 /// calibration file's 1σ of `G` (`δ(G⁻¹) = −G⁻¹·δG·G⁻¹`, absolute values summed, so no cancellation
-/// hides one) above [`crate::estimate::gyro::UNDETERMINED_SIGMA`]. With `G ≈ I` an undetermined column
+/// hides one) above [`estimator::estimate::gyro::UNDETERMINED_SIGMA`]. With `G ≈ I` an undetermined column
 /// of `G` (a spin axis the plan left out) is the same column of `G⁻¹`.
 pub(crate) fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 3] {
     let (Some(gyro), Some(sigma)) = (
@@ -368,7 +368,7 @@ pub(crate) fn undetermined_gyro_inverse(input: &ExportInput<'_>) -> [[bool; 3]; 
                 .flat_map(|i| (0..3).map(move |j| (i, j)))
                 .map(|(i, j)| (inv[k][i] * sigma[i][j] * inv[j][l]).abs())
                 .sum();
-            s.is_nan() || s > crate::estimate::gyro::UNDETERMINED_SIGMA
+            s.is_nan() || s > estimator::estimate::gyro::UNDETERMINED_SIGMA
         })
     })
 }

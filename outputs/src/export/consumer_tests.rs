@@ -532,7 +532,7 @@ fn heated_row(cal: &Calibration, up: [f64; 3], temp: f64) -> RawRow {
 /// corrected rate at `temp`.
 fn apply_at(cal: &Calibration, r: &RawRow, temp: f64) -> ([f64; 3], [f64; 3]) {
     let mut a = Applier::new(cal, LeverMode::RateAndAcceleration, 1000.0).unwrap();
-    let row = crate::session::reader::Row {
+    let row = recording::session::reader::Row {
         segment: "t",
         segment_index: 0,
         t_s: 0.0,

@@ -7,7 +7,7 @@
 
 use super::{convert, ExportError, ExportInput};
 use crate::summary::gyro_entry_undetermined;
-use crate::unit_file::UnitFile;
+use estimator::unit_file::UnitFile;
 use serde_json::{json, Value};
 
 /// Format version of the document.
@@ -104,8 +104,8 @@ pub fn render(input: &ExportInput<'_>) -> Result<String, ExportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::Uncertainty;
     use crate::export::Conversions;
+    use estimator::estimate::Uncertainty;
 
     #[test]
     fn json_parses_back_to_the_same_calibration_and_marks_the_undetermined() {
@@ -146,7 +146,7 @@ mod tests {
         let mut unit = UnitFile::paper_unit();
         let mut sigma = [[1e-5; 3]; 3];
         sigma[0][2] = 2e-3;
-        unit.gyro = Some(crate::unit_file::GyroSection {
+        unit.gyro = Some(estimator::unit_file::GyroSection {
             bias_rad_s: [0.01, 0.0, 0.0],
             matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             bias_rad_s_1sigma: Some([1e-5; 3]),

@@ -338,7 +338,7 @@ mod tests {
             .contains("UNDETERMINED: the gyroscope"));
     }
     use crate::export::consumer_tests::handheld_unit;
-    use crate::unit_file::UnitFile;
+    use estimator::unit_file::UnitFile;
 
     /// What Kalibr's ConfigReader.py reads: these keys, each positive (`checkUpdateRate`,
     /// `checkAccelerometerStatistics`, `checkGyroStatistics`).

@@ -32,7 +32,7 @@ pub mod kalibr;
 pub mod params;
 pub mod toml_forms;
 
-use crate::unit_file::UnitFile;
+use estimator::unit_file::UnitFile;
 use recording::spelling::{Spelling, UserOption};
 use serde::{Deserialize, Serialize};
 use shared::linalg::{self, RowMajor3};
@@ -136,7 +136,7 @@ pub enum ExportError {
     Blob(#[source] shared::blob::BlobError),
     /// The calibration file's unit id is not one.
     #[error("cannot export the calibration's blob: {0}")]
-    UnitId(#[source] crate::unit_file::UnitFileInvalid),
+    UnitId(#[source] estimator::unit_file::UnitFileInvalid),
     /// The calibration file has no unit id, which the blob needs.
     #[error(
         "cannot export the calibration's blob: the calibration file has no unit_id, and a blob is \
@@ -145,7 +145,7 @@ pub enum ExportError {
     NoUnitId,
     /// A file of the export could not be written (or exists, without `--force`).
     #[error(transparent)]
-    Written(#[from] crate::output_file::OutputFileError),
+    Written(#[from] recording::output_file::OutputFileError),
     /// Writing TOML failed.
     #[error("cannot export the calibration: {0}")]
     Toml(#[source] toml::ser::Error),
@@ -502,7 +502,7 @@ pub fn render(input: &ExportInput<'_>, format: ExportFormat) -> Result<String, E
         _ => Some("#"),
     };
     Ok(match (input.unit.package(), comment) {
-        (crate::session::Package::Single, Some(c)) => format!(
+        (recording::session::Package::Single, Some(c)) => format!(
             "{c} single package: the three accelerometers' lever arms are one point, the package's r; \
              their in-package differences r_i - r were not observable and are written as 0\n{text}"
         ),

@@ -663,7 +663,7 @@ mod tests {
     use super::*;
     use crate::export::consumer_tests::handheld_unit;
     use crate::export::{render, ExportFormat, STANDARD_GRAVITY_M_S2};
-    use crate::unit_file::UnitFile;
+    use estimator::unit_file::UnitFile;
     use shared::OutputUnit;
 
     /// The driver scale comes from the output unit, the same in every format: 1 for m/s², standard

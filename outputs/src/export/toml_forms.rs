@@ -69,7 +69,7 @@ pub(crate) fn render_marked(
 mod tests {
     use super::*;
     use crate::export::{FusionStyle, PlainMatrices};
-    use crate::unit_file::UnitFile;
+    use estimator::unit_file::UnitFile;
     use shared::forward::{BodyMotion, ForwardModel};
     use shared::{BodyAngularAccel, BodyRate, BodySpecificForce};
 

@@ -4,9 +4,9 @@
 use super::{analyse_signals, NoiseError, NoiseReport, Signals, MAX_SAMPLES};
 use crate::calibration_guard::Meeting;
 use crate::export::PlainMatrices;
-use crate::session::logs::{read_log_within, LogSource};
-use crate::session::segment::{find_intervals, SegmentOptions};
-use crate::session::SAMPLES_HEADER;
+use recording::session::logs::{read_log_within, LogSource};
+use recording::session::segment::{find_intervals, SegmentOptions};
+use recording::session::SAMPLES_HEADER;
 use shared::OutputUnit;
 use std::io::{BufRead, Read};
 use std::path::Path;
@@ -18,7 +18,7 @@ pub fn is_samples_csv(path: &Path) -> bool {
         return false;
     };
     let mut first = Vec::new();
-    let limit = crate::limits::MAX_LINE_BYTES as u64;
+    let limit = recording::limits::MAX_LINE_BYTES as u64;
     let read = std::io::BufReader::new(file)
         .take(limit)
         .read_until(b'\n', &mut first);
@@ -33,7 +33,7 @@ pub fn analyse_log(
     calibration: Option<(&PlainMatrices, OutputUnit)>,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
-    let step = crate::ui::step(format!("reading {}", path.display()), quiet);
+    let step = recording::ui::step(format!("reading {}", path.display()), quiet);
     // A log longer than one analysis is read again and only its still stretches are kept, the
     // first MAX_SAMPLES: no more than one analysis takes (recording's `logs::keep`).
     let log = read_log_within(path, source, MAX_SAMPLES, None)?;

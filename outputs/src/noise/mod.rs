@@ -22,11 +22,11 @@ pub use log::{analyse_log, is_samples_csv};
 
 use crate::export::kalibr::KalibrNoise;
 use crate::export::PlainMatrices;
-use crate::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
-use crate::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
-use crate::session::{PLAN_FILE, SAMPLES_FILE};
 use allan::{curve_and_fit, AllanPoint, NoiseTerms};
+use recording::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
+use recording::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
+use recording::session::{PLAN_FILE, SAMPLES_FILE};
 use serde::{Deserialize, Serialize};
 use shared::OutputUnit;
 use std::collections::HashSet;
@@ -54,10 +54,10 @@ pub enum NoiseError {
     NoStillData(String),
     /// The logger's file could not be read.
     #[error(transparent)]
-    Log(#[from] crate::session::logs::LogError),
+    Log(#[from] recording::session::logs::LogError),
     /// The logger's file has no still interval to analyse.
     #[error("no noise analysis possible: {0}")]
-    NoStill(#[source] crate::session::segment::SegmentError),
+    NoStill(#[source] recording::session::segment::SegmentError),
     /// A noise file could not be read.
     #[error("cannot use noise file {}: {}", .0.display(), .1)]
     File(PathBuf, #[source] std::io::Error),
@@ -210,7 +210,7 @@ fn collect_csv_from<R: std::io::BufRead>(
     let plan = Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
-        format_version: crate::session::plan::PLAN_FORMAT_VERSION,
+        format_version: recording::session::plan::PLAN_FORMAT_VERSION,
         output_unit: shared::OutputUnit::Volts,
         sample_rate_hz: 1.0,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -219,7 +219,7 @@ fn collect_csv_from<R: std::io::BufRead>(
         acc_offset: None,
         segments: names
             .iter()
-            .map(|n| crate::session::SegmentPlan {
+            .map(|n| recording::session::SegmentPlan {
                 attitude: Default::default(),
                 attitude_sigma_deg: None,
                 name: n.clone(),
@@ -441,7 +441,7 @@ fn analyse_signals(
     }
     let accel_unit = accel_to_m_s2(&mut s, calibration, &mut warnings)?;
     // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
-    let bar = crate::ui::progress_bar(
+    let bar = recording::ui::progress_bar(
         AXES.len() as u64,
         "Allan deviation and fit, per axis",
         quiet,
@@ -684,7 +684,7 @@ impl NoiseReport {
 /// Kalibr's figures from a `noise.json` written by `host noise`.
 pub fn load_kalibr_noise(path: &Path) -> Result<KalibrNoise, NoiseError> {
     let text =
-        crate::limits::read_text_bounded(path).map_err(|e| NoiseError::File(path.into(), e))?;
+        recording::limits::read_text_bounded(path).map_err(|e| NoiseError::File(path.into(), e))?;
     let report: NoiseReport =
         serde_json::from_str(&text).map_err(|e| NoiseError::NotNoiseJson(path.into(), e))?;
     Ok(report.kalibr)

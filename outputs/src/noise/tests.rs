@@ -2,17 +2,17 @@
 
 use super::*;
 use crate::export::convert;
-use crate::session::SegmentPlan;
-use crate::sim::{simulate_to_dir, NoiseModel};
-use crate::unit_file::UnitFile;
 use allan::overlapping_adev;
+use estimator::sim::{simulate_to_dir, NoiseModel};
+use estimator::unit_file::UnitFile;
+use recording::session::SegmentPlan;
 use std::process::Command;
 
 fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
     Plan {
         attitude_sigma_deg: None,
         table_rate_sigma_ppm: None,
-        format_version: crate::session::plan::PLAN_FORMAT_VERSION,
+        format_version: recording::session::plan::PLAN_FORMAT_VERSION,
         output_unit: shared::OutputUnit::Volts,
         sample_rate_hz: rate_hz,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
@@ -276,7 +276,7 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("samples.csv");
     let mut text = String::from("segment,t_s,u_x,u_y,u_z,w_x,w_y,w_z\n");
-    for k in 0..=crate::limits::MAX_SEGMENTS {
+    for k in 0..=recording::limits::MAX_SEGMENTS {
         text += &format!("s{k},{k},0,0,0,0,0,0\n");
     }
     std::fs::write(&path, &text).unwrap();
@@ -301,7 +301,7 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
 #[test]
 fn the_table_names_what_white_noise_does_not_determine() {
     let rate = 100.0;
-    let mut rng = crate::sim::Rng::new(3, 0);
+    let mut rng = estimator::sim::Rng::new(3, 0);
     let y: Vec<f64> = (0..20_000).map(|_| 1e-2 * rng.normal()).collect();
     let points = allan::overlapping_adev(&y, rate, &allan::octave_sizes(y.len()));
     let terms = allan::fit(&points);
@@ -374,7 +374,7 @@ fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {
         OutputUnit::StandardGravity,
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let truth = crate::sim::handheld::logger_unit(unit);
+        let truth = estimator::sim::handheld::logger_unit(unit);
         let file = UnitFile::from_calibration(&truth, None, None);
         let mut plan = still_plan(200.0, 60.0);
         plan.output_unit = unit;

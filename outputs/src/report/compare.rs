@@ -4,9 +4,9 @@
 //! [`ComparisonTable::render`] prints the table.
 
 use crate::calibration_guard::{meet, Frame, Meeting, Mine, Other, Temperatures};
-use crate::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
 use crate::summary::section_values;
-use crate::unit_file::{UnitFile, UnitFileError};
+use estimator::estimate::{paper_labels, paper_order, paper_values, PAPER_LEN};
+use estimator::unit_file::{UnitFile, UnitFileError};
 use shared::Calibration;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -119,7 +119,7 @@ pub enum CompareError {
     Unit(UnitFileError),
     /// A file's values are not a calibration.
     #[error("{0}")]
-    Invalid(#[source] crate::unit_file::UnitFileInvalid),
+    Invalid(#[source] estimator::unit_file::UnitFileInvalid),
     /// A calibration's values have no paper form.
     #[error("{0}")]
     Params(#[source] shared::params::ParamsError),
@@ -400,7 +400,7 @@ fn comparison_notes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::Uncertainty;
+    use estimator::estimate::Uncertainty;
 
     fn with_sigma() -> UnitFile {
         let mut u = UnitFile::paper_unit();
@@ -456,13 +456,13 @@ mod tests {
     /// known number of combined σ is known exactly).
     fn with_sections() -> UnitFile {
         let mut u = with_sigma();
-        u.gyro = Some(crate::unit_file::GyroSection {
+        u.gyro = Some(estimator::unit_file::GyroSection {
             bias_rad_s: [0.01, -0.02, 0.015],
             matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             bias_rad_s_1sigma: Some([1e-5; 3]),
             matrix_1sigma: Some([[1e-5, 2e-3, 1e-4], [1e-4, 1e-5, 1e-4], [1e-4, 1e-4, 1e-5]]),
         });
-        let mut t = crate::unit_file::TemperatureSection::from_model(
+        let mut t = estimator::unit_file::TemperatureSection::from_model(
             &shared::sensor_models::TemperatureModel {
                 reference_c: 25.0,
                 valid_range_c: [-20.0, 60.0],

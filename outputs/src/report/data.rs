@@ -25,12 +25,12 @@
 
 use super::navigation::{replay, NavigationRun};
 use super::plot::{self, Formats};
-use crate::estimate::{
+use estimator::estimate::{
     calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind, Uncertainty,
 };
-use crate::session::{Package, Plan, RecordingError, SegmentStats};
-use crate::sim::SimulateError;
-use crate::unit_file::UnitFileError;
+use estimator::sim::SimulateError;
+use estimator::unit_file::UnitFileError;
+use recording::session::{Package, Plan, RecordingError, SegmentStats};
 use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
@@ -77,7 +77,7 @@ pub enum ReportError {
     Unit(UnitFileError),
     /// The calibration file's values are not a calibration (the unit file says why).
     #[error("the calibration cannot compensate: {0}")]
-    Calibration(#[source] crate::unit_file::UnitFileInvalid),
+    Calibration(#[source] estimator::unit_file::UnitFileInvalid),
     /// The calibration cannot compensate.
     #[error("the calibration cannot compensate: {0}")]
     Compensator(#[source] shared::compensator::CompensatorError),
@@ -105,13 +105,13 @@ pub enum ReportError {
     Io(PathBuf, #[source] std::io::Error),
     /// A page of the report could not be written.
     #[error(transparent)]
-    Written(#[from] crate::output_file::OutputFileError),
+    Written(#[from] recording::output_file::OutputFileError),
     /// The simulation of the navigation check failed.
     #[error(transparent)]
     Simulate(SimulateError),
     /// The calibration of the navigation check failed.
     #[error(transparent)]
-    Estimate(crate::estimate::EstimateError),
+    Estimate(estimator::estimate::EstimateError),
     /// The navigation check's calibration misfits its own simulated session far beyond the
     /// simulated noise: its navigation figures would describe a fit, not the unit.
     #[error(
@@ -251,7 +251,7 @@ pub struct ReportData {
     /// Why a replay is left out, one line each (also among the warnings).
     pub navigation_left_out: Vec<String>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
-    pub session_fit: Result<CalibrationOutcome, crate::estimate::EstimateError>,
+    pub session_fit: Result<CalibrationOutcome, estimator::estimate::EstimateError>,
     /// The session's segments through the session fit's own calibration (empty when it failed or its
     /// compensator cannot be built: the text then shows the fit's values only).
     pub session_fit_segments: Vec<SegmentRow>,
@@ -365,7 +365,7 @@ pub fn segment_rows(
 /// The plan's specific force at the reference point, `g·up_b − W p` in g, for a fixture's known
 /// attitude; nothing (NaN) for a free one, whose `up_b` is only a rough guess.
 fn planned_theoretical(
-    sp: &crate::session::SegmentPlan,
+    sp: &recording::session::SegmentPlan,
     omega: &[f64; 3],
     omega_dot: &[f64; 3],
     g: f64,
@@ -469,8 +469,8 @@ pub fn build_report(
 
 /// The estimator's choice of the reference point a calibration's lever arms are referred to, so
 /// that the session's own fit gives its specific force where this calibration's output is.
-fn reference_choice(r: &shared::ReferencePoint) -> crate::estimate::ReferenceChoice {
-    use crate::estimate::ReferenceChoice;
+fn reference_choice(r: &shared::ReferencePoint) -> estimator::estimate::ReferenceChoice {
+    use estimator::estimate::ReferenceChoice;
     match *r {
         shared::ReferencePoint::TableAxis => ReferenceChoice::TableAxis,
         shared::ReferencePoint::Centroid => ReferenceChoice::Centroid,

@@ -7,9 +7,9 @@ use super::markup::{to_html, to_markdown};
 use super::navigation::render_navigation;
 use super::page::{page, Block};
 use super::plot::{self, Figure, Formats};
-use crate::output_file::write_atomic;
-use crate::session::{read_session, ReadOptions};
-use crate::unit_file::UnitFile;
+use estimator::unit_file::UnitFile;
+use recording::output_file::write_atomic;
+use recording::session::{read_session, ReadOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -171,7 +171,7 @@ pub fn report(
     data.warnings
         .extend(session.report.warnings.iter().cloned());
     // The calibration file says so itself (its rows are then equal, checked when it was read).
-    data.single_package |= unit.package() == crate::session::Package::Single;
+    data.single_package |= unit.package() == recording::session::Package::Single;
     write_report(
         &data,
         out_dir,

@@ -4,7 +4,7 @@
 use super::data::{Compensation, ReportData};
 use super::navigation::{Drift, NavigationRun};
 use super::plot::{Figure, Panel, Series, SeriesStyle};
-use crate::estimate::CalibrationOutcome;
+use estimator::estimate::CalibrationOutcome;
 use shared::linalg;
 use shared::params::axis_name;
 

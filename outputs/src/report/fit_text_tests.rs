@@ -2,15 +2,15 @@
 //! and checks what the terminal text, the report's tables and figures and the JSON summary say of
 //! it (the fits themselves are checked in `estimate`'s own tests).
 
-use crate::estimate::*;
 use crate::report::{
     build_report, page::page, render, render_prediction, render_session, ReportOptions,
 };
-use crate::session::Package;
-use crate::sim::synth;
-use crate::sim::testkit::{self, *};
-use crate::sim::thermal::ThermalSim;
 use crate::summary::{CalibrationSummary, Limits};
+use estimator::estimate::*;
+use estimator::sim::synth;
+use estimator::sim::testkit::{self, *};
+use estimator::sim::thermal::ThermalSim;
+use recording::session::Package;
 use shared::sensor_models::poly_no_constant;
 use shared::{Compensator, LeverMode, OutputUnit};
 

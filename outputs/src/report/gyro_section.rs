@@ -4,7 +4,7 @@
 
 use super::data::ReportData;
 use super::page::Block;
-use crate::estimate::SegmentKind;
+use estimator::estimate::SegmentKind;
 use shared::params::axis_name;
 
 /// The section's blocks: a heading, `G`/`b` with 1σ, and the spins' residuals (or why none).
@@ -24,12 +24,14 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
          determines none)."
             .into(),
     ));
-    let sd = |f: &dyn Fn(&crate::estimate::GyroEstimate) -> f64| {
+    let sd = |f: &dyn Fn(&estimator::estimate::GyroEstimate) -> f64| {
         fit.map_or("—".to_string(), |g| format!("{:.6}", f(g)))
     };
     let zero = [[0.0; 3]; 3];
-    let scale =
-        crate::estimate::gyro::scale_error(&gyro.matrix, fit.map_or(&zero, |g| &g.matrix_1sigma));
+    let scale = estimator::estimate::gyro::scale_error(
+        &gyro.matrix,
+        fit.map_or(&zero, |g| &g.matrix_1sigma),
+    );
     let rows = (0..3)
         .map(|i| {
             let mut row = vec![axis_name(i).to_string()];
@@ -99,6 +101,6 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
 }
 
 /// The scale error's 1σ of gyro axis `i`, ppm.
-fn scale_sigma_ppm(g: &crate::estimate::GyroEstimate, i: usize) -> f64 {
-    crate::estimate::gyro::scale_error(&g.matrix, &g.matrix_1sigma)[i].1 * 1e6
+fn scale_sigma_ppm(g: &estimator::estimate::GyroEstimate, i: usize) -> f64 {
+    estimator::estimate::gyro::scale_error(&g.matrix, &g.matrix_1sigma)[i].1 * 1e6
 }

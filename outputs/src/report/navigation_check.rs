@@ -5,11 +5,11 @@
 use super::data::{build_report, ReportData, ReportError, ReportOptions};
 use super::document::{write_report, ReportSummary};
 use super::navigation::{render_navigation, render_position_targets};
-use crate::estimate::{calibrate_session_stats, CalibrationOutcome};
-use crate::session::builtin::paper_plan;
-use crate::session::Plan;
-use crate::sim::{simulate_unit_stats, NoiseModel};
-use crate::unit_file::UnitFile;
+use estimator::estimate::{calibrate_session_stats, CalibrationOutcome};
+use estimator::sim::{simulate_unit_stats, NoiseModel};
+use estimator::unit_file::UnitFile;
+use recording::session::builtin::paper_plan;
+use recording::session::Plan;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -157,7 +157,7 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::builtin::builtin_plan;
+    use recording::session::builtin::builtin_plan;
 
     /// A fit far beyond its noise (χ²/dof 1.6·10⁶, what a thermal unit simulated without its
     /// temperatures gave) is refused, naming the figure and the limit; the fit of the simulated

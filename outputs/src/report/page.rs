@@ -7,7 +7,7 @@ use super::data::{Compensation, ReportData};
 use super::figures::fmt_rate;
 use super::format::{g_or_dash, out_digits, pm, pm_opt, reference_point};
 use super::navigation::NavigationRun;
-use crate::estimate::SegmentKind;
+use estimator::estimate::SegmentKind;
 use shared::linalg;
 use shared::params::axis_name;
 
@@ -258,7 +258,7 @@ pub fn page(
         b.push(table3(data));
         b.push(Block::Para(format!(
             "{}.",
-            crate::estimate::IN_PACKAGE_NOT_OBSERVABLE
+            estimator::estimate::IN_PACKAGE_NOT_OBSERVABLE
         )));
     } else if lever_arms_calibrated(data) {
         b.push(Block::Heading(2, "Table 3. Lever arms".into()));
@@ -392,14 +392,14 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
 
 /// The walk the session fit assumed (docs/model.md §11.3): its strength, where it came from, and
 /// the strength the segments were weighted with.
-fn bias_walk_note(w: &crate::estimate::WalkEstimate) -> String {
+fn bias_walk_note(w: &estimator::estimate::WalkEstimate) -> String {
     let [x, y, z] = w.axes_mg_sqrt_s;
     let source = match (w.origin, w.sigma_mg_sqrt_s) {
         (_, Some(sd)) => format!(
             "estimated from the session, {:.5} ± {sd:.5} mg/√s (1σ)",
             w.mg_sqrt_s
         ),
-        (crate::estimate::WalkOrigin::Unit, None) => {
+        (estimator::estimate::WalkOrigin::Unit, None) => {
             format!("from the unit's noise figures, x {x:.5}, y {y:.5}, z {z:.5} mg/√s")
         }
         _ => format!("given, {:.5} mg/√s", w.mg_sqrt_s),
@@ -409,7 +409,7 @@ fn bias_walk_note(w: &crate::estimate::WalkEstimate) -> String {
             "Bias random walk (docs/model.md §11): {source}, {:.1}σ from none: not determined by \
              the session (under {}σ), so the bias is fitted as constant.",
             w.significance.unwrap_or(0.0),
-            crate::estimate::Z_WALK
+            estimator::estimate::Z_WALK
         );
     }
     format!(

@@ -217,7 +217,7 @@ enum FileKind {
 /// Draws `fig` into `path` whole or not at all (`output_file::replace_through_path`): a figure is
 /// regenerated in place, like its report.
 fn draw_in_place(fig: &Figure, path: &Path, text: bool, kind: FileKind) -> Result<(), FigureError> {
-    crate::output_file::replace_through_path(
+    recording::output_file::replace_through_path(
         path,
         |temp| match kind {
             FileKind::Svg => draw_to_file(

@@ -11,7 +11,7 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
     let axes = AXES;
     // A lever-arm component is determined to the estimator's own threshold (the full table's rule).
-    let lever_determined_m = crate::estimate::EstimateOptions::default().lever_arm_threshold_m;
+    let lever_determined_m = estimator::estimate::EstimateOptions::default().lever_arm_threshold_m;
     let mut out = String::from("Result (± 1σ):\n");
     // Biases: in mg where the output has a physical zero (m/s², g); else the zero-g output in its
     // own unit with its 1σ in that unit, and the 1σ in mg on a row of its own (one unit a figure).
@@ -155,7 +155,7 @@ fn write_gyro(out: &mut String, s: &CalibrationSummary) {
                 core::array::from_fn(|j| entry(i, j).and_then(|e| e.sigma).unwrap_or(0.0))
             });
             let determined = |i: usize| entry(i, i).is_some_and(|e| e.sigma.is_some());
-            crate::estimate::gyro::scale_error(&g, &sd)
+            estimator::estimate::gyro::scale_error(&g, &sd)
                 .iter()
                 .enumerate()
                 .map(|(i, (e, s))| {

@@ -7,11 +7,11 @@ use super::figures::*;
 use super::navigation_check::*;
 use super::page::*;
 use super::plot::{Formats, SeriesStyle};
-use crate::estimate::{calibrate_session_stats, EstimateOptions, SegmentKind};
 use crate::report::plot::{line_width, palette_hex, png_dimensions, svg_polylines};
-use crate::session::builtin::builtin_plan;
-use crate::session::Plan;
-use crate::sim::{simulate_stats, NoiseModel};
+use estimator::estimate::{calibrate_session_stats, EstimateOptions, SegmentKind};
+use estimator::sim::{simulate_stats, NoiseModel};
+use recording::session::builtin::builtin_plan;
+use recording::session::Plan;
 
 fn short() -> Plan {
     builtin_plan("short").unwrap().unwrap()
@@ -307,8 +307,8 @@ fn a_named_run_must_exist() {
 /// same unit with its gyro taken as perfect misses on the spinning segments.
 #[test]
 fn segment_rows_correct_the_rate_with_the_calibrations_gyro() {
-    use crate::sim::session::gyro_matrix;
-    use crate::sim::testkit::{self, TableErrors};
+    use estimator::sim::session::gyro_matrix;
+    use estimator::sim::testkit::{self, TableErrors};
     let plan = builtin_plan("short-oblique").unwrap().unwrap();
     let unit = testkit::paper_unit();
     let gyro = shared::GyroCorrection {
@@ -348,7 +348,7 @@ fn segment_rows_correct_the_rate_with_the_calibrations_gyro() {
 /// fit's own origin by millig at 200 °/s; on a noise-free session the two still agree to f32 rounding.
 #[test]
 fn the_fits_specific_force_is_at_the_calibrations_reference_point() {
-    use crate::estimate::ReferenceChoice;
+    use estimator::estimate::ReferenceChoice;
     let plan = builtin_plan("short-oblique").unwrap().unwrap();
     let truth = shared::params::PAPER_UNIT;
     let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 3).unwrap();
@@ -448,14 +448,14 @@ fn the_bias_walk_figure_is_the_fits_track() {
         ..NoiseModel::default()
     };
     let stats = simulate_stats(&truth, &plan, &noise, 5).unwrap();
-    let build = |walk: crate::estimate::BiasWalk| {
+    let build = |walk: estimator::estimate::BiasWalk| {
         let options = ReportOptions {
             estimate: EstimateOptions::default().with_bias_walk(walk),
             ..ReportOptions::default()
         };
         build_report(&plan, &stats, &truth, None, None, &options).unwrap()
     };
-    let with = build(crate::estimate::BiasWalk::Given(0.005));
+    let with = build(estimator::estimate::BiasWalk::Given(0.005));
     let o = with.session_fit.as_ref().unwrap();
     assert!(!o.bias_track.is_empty());
     let fig = with
@@ -486,7 +486,7 @@ fn the_bias_walk_figure_is_the_fits_track() {
             && md.contains("bias_walk.png"),
         "{md}"
     );
-    let without = build(crate::estimate::BiasWalk::Off);
+    let without = build(estimator::estimate::BiasWalk::Off);
     assert!(without.bias_walk_figure.is_none());
     let plain: Vec<String> = report_figures(&without)
         .iter()
@@ -511,12 +511,17 @@ fn the_bias_walk_figure_is_the_fits_track() {
 /// χ²/dof per axis, the figure the verdict checks; a session without one says nothing of it.
 #[test]
 fn the_session_fit_section_gives_the_temperature_fits_chi2() {
-    let truth = crate::sim::testkit::hot_unit();
+    let truth = estimator::sim::testkit::hot_unit();
     let para = |plan_name: &str| -> (Option<String>, Option<[f64; 3]>) {
         let plan = builtin_plan(plan_name).unwrap().unwrap();
-        let thermal = crate::sim::thermal::ThermalSim::default();
-        let stats =
-            crate::sim::testkit::simulate_stats(&truth, &plan, &NoiseModel::default(), &thermal, 5);
+        let thermal = estimator::sim::thermal::ThermalSim::default();
+        let stats = estimator::sim::testkit::simulate_stats(
+            &truth,
+            &plan,
+            &NoiseModel::default(),
+            &thermal,
+            5,
+        );
         let data =
             build_report(&plan, &stats, &truth, None, None, &ReportOptions::default()).unwrap();
         let fit = data.session_fit.as_ref().unwrap();

@@ -5,11 +5,11 @@
 
 use super::format::{out_digits, pm, reference_point};
 use super::SegmentRow;
-use crate::estimate::{
+use estimator::estimate::{
     CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
     SegmentKind, StaticSplit, IN_PACKAGE_NOT_OBSERVABLE, PAPER_LEN,
 };
-use crate::session::{Plan, SegmentStats};
+use recording::session::{Plan, SegmentStats};
 use shared::params::axis_name;
 use std::fmt::Write;
 
@@ -64,7 +64,7 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
                 " ± {sd:.5} (1σ), estimated from the session, {:.1}σ from none: not determined \
                  (under {}σ), the bias fitted as constant",
                 w.significance.unwrap_or(0.0),
-                crate::estimate::Z_WALK
+                estimator::estimate::Z_WALK
             ),
             (Some(sd), _) => format!(
                 " ± {sd:.5} (1σ), estimated from the session ({:.1}σ from none); the segments \
@@ -72,7 +72,7 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
                 w.significance.unwrap_or(0.0),
                 w.fit_mg_sqrt_s
             ),
-            (None, crate::estimate::WalkOrigin::Unit) => {
+            (None, estimator::estimate::WalkOrigin::Unit) => {
                 let [x, y, z] = w.axes_mg_sqrt_s;
                 format!(" (the strongest axis; from the unit's noise figures: x {x:.5}, y {y:.5}, z {z:.5})")
             }
@@ -95,7 +95,7 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
             } else {
                 format!(
                     "not determined (under {}σ), the gyro bias fitted as constant",
-                    crate::estimate::Z_WALK
+                    estimator::estimate::Z_WALK
                 )
             };
             let _ = writeln!(
@@ -428,7 +428,7 @@ fn render_gyro(s: &mut String, g: Option<&GyroEstimate>) {
     for i in 0..3 {
         let row: Vec<String> = (0..3)
             .map(|j| {
-                if g.matrix_1sigma[i][j] > crate::estimate::gyro::UNDETERMINED_SIGMA {
+                if g.matrix_1sigma[i][j] > estimator::estimate::gyro::UNDETERMINED_SIGMA {
                     format!("{:>24}", "n.d.")
                 } else {
                     format!(
@@ -562,9 +562,9 @@ pub fn render_prediction(p: &Prediction) -> String {
 
 #[cfg(test)]
 mod tests {
-    use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::session::Plan;
-    use crate::sim::synth::{self, SynthNoise};
+    use estimator::estimate::{calibrate_session_stats, EstimateOptions};
+    use estimator::sim::synth::{self, SynthNoise};
+    use recording::session::Plan;
 
     const PLAN: &str = r#"
 output_unit = "V"

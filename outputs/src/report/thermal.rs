@@ -3,9 +3,9 @@
 //! chose, and the residual of every static segment against its temperature.
 
 use super::plot::{Figure, Panel, Series, SeriesStyle};
-use crate::estimate::thermal::ThermalFit;
-use crate::estimate::CalibrationOutcome;
-use crate::session::{Plan, SegmentStats};
+use estimator::estimate::thermal::ThermalFit;
+use estimator::estimate::CalibrationOutcome;
+use recording::session::{Plan, SegmentStats};
 use std::fmt::Write as _;
 
 /// `c ± s` of the three coefficients, each multiplied by its unit factor.

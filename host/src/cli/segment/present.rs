@@ -3,11 +3,11 @@
 
 use super::SegmentArgs;
 use super::SegmentOutcome;
-use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
-use crate::session::coverage::Coverage;
-use crate::session::import::Recording;
-use crate::session::plan::Attitude;
-use crate::session::segment::{IntervalKind, Segmentation};
+use outputs::report::plot::{Figure, Panel, Series, SeriesStyle};
+use recording::session::coverage::Coverage;
+use recording::session::import::Recording;
+use recording::session::plan::Attitude;
+use recording::session::segment::{IntervalKind, Segmentation};
 use serde::Serialize;
 use shared::linalg;
 

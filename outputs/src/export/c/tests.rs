@@ -2,7 +2,7 @@
 //! compensation against the firmware's test vectors bit for bit, Fusion's model against the truth.
 
 use super::*;
-use crate::unit_file::UnitFile;
+use estimator::unit_file::UnitFile;
 use firmware::testvectors::{imperfect_unit, COMP_CASES, GYRO_TEMP_CASES};
 use shared::blob::ParameterBlob;
 use shared::forward::{BodyMotion, ForwardModel};
@@ -812,7 +812,7 @@ fn package_vectors(cal: &Calibration, vectors: &str) -> (String, Vec<String>) {
             crate::export::linalg::dot(&gyro.matrix[i], &omega) + gyro.bias_rad_s[i]
         });
         let temp_c = (k % 3 != 2).then_some(-30.0 + 0.11 * k as f64);
-        let row = crate::session::reader::Row {
+        let row = recording::session::reader::Row {
             segment: "s",
             segment_index: segment,
             t_s: t,
@@ -941,7 +941,7 @@ fn c_package_example_decodes_corrects_one_sample_and_prints_host_applys_result()
         let mut applier =
             Applier::new(&cal, shared::LeverMode::RateAndAcceleration, 1000.0).unwrap();
         let f = applier
-            .row(&crate::session::reader::Row {
+            .row(&recording::session::reader::Row {
                 segment: "s",
                 segment_index: 0,
                 t_s: 0.0,

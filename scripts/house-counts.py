@@ -1,0 +1,129 @@
+#!/usr/bin/env python3
+"""Counts that show whether the crates' paths and public surfaces tell the truth (ARCHITECTURE.md,
+"Code map"): root aliases of other crates' modules, `crate::` paths that lead into another crate,
+`pub` items no other crate names, notes and errors kept as plain text, command-line flag names below
+the command line, and test lines against code lines per crate. It reads the sources as text, so a
+count is a place to look, not a verdict.
+
+    python3 scripts/house-counts.py
+"""
+import os
+import re
+import sys
+
+CRATES = ["shared", "recording", "estimator", "outputs", "app", "device", "host"]
+# Other code that names the crates: the end-to-end tests, the fuzz targets, the Python package, the
+# firmware (which names `shared`).
+OUTSIDE = ["tests", "fuzz", "python", "firmware"]
+BELOW_EDGE = ["shared", "recording", "estimator", "outputs", "app", "device"]
+
+
+def rust_files(root):
+    for dp, dn, fn in os.walk(root):
+        dn[:] = [d for d in dn if d not in ("target", ".git", ".venv")]
+        for f in fn:
+            if f.endswith(".rs"):
+                yield os.path.join(dp, f)
+
+
+def is_test_file(path):
+    name = os.path.basename(path)
+    return (re.search(r"(^|_)tests?\.rs$", name) is not None or "/tests/" in path
+            or "/benches/" in path or "/examples/" in path)
+
+
+def split_code(path):
+    """(code lines, test lines) of a file: a file's test module starts at `#[cfg(test)]` followed
+    by an inline `mod NAME {`."""
+    lines = open(path, errors="replace").read().split("\n")
+    if is_test_file(path):
+        return [], lines
+    for i, line in enumerate(lines):
+        if line.startswith("#[cfg(test)]") and i + 1 < len(lines) and re.match(
+                r"\s*(pub\s+)?mod\s+\w+\s*\{", lines[i + 1]):
+            return lines[:i], lines[i:]
+    return lines, []
+
+
+def root_aliases(crate):
+    """Names a crate's lib.rs brings in from other workspace crates with a root `use`/`pub use`."""
+    text = open(os.path.join(crate, "src", "lib.rs")).read()
+    aliases = {}
+    for m in re.finditer(r"^(?:pub )?use (?:::)?(\w+)::\{([^}]*)\};|^(?:pub )?use (?:::)?(\w+)::(\w+);|^pub use ::(\w+);",
+                         text, re.M):
+        if m.group(1):
+            other, names = m.group(1), [n.strip() for n in m.group(2).split(",") if n.strip()]
+        elif m.group(3):
+            other, names = m.group(3), [m.group(4)]
+        else:
+            other, names = m.group(5), [m.group(5)]
+        if other in CRATES and other != crate:
+            for n in names:
+                if re.fullmatch(r"[a-z_]+", n):
+                    aliases[n] = other
+    return aliases
+
+
+def main():
+    os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    code = {c: [] for c in CRATES}
+    tests = {c: 0 for c in CRATES}
+    for c in CRATES:
+        for p in rust_files(c):
+            k, t = split_code(p)
+            code[c].append((p, "\n".join(k)))
+            tests[c] += len(t)
+    print("root aliases of other crates' modules, and `crate::` paths that lead into another crate:")
+    for c in CRATES:
+        aliases = root_aliases(c)
+        total = into = 0
+        for p in rust_files(c):
+            text = open(p, errors="replace").read()
+            for m in re.finditer(r"\bcrate::(\w+)", text):
+                total += 1
+                if m.group(1) in aliases:
+                    into += 1
+        print(f"  {c:10} {len(aliases):3} aliases, {into:4} of {total:4} crate:: paths into another crate")
+
+    print("\ntop-level `pub` items no other crate names (by name, in another crate or in its own tests/, examples/, benches/):")
+    # A crate's own integration tests, examples and benches are other crates too.
+    all_files = [p for c in CRATES + OUTSIDE for p in rust_files(c)]
+    for c in CRATES:
+        src = os.path.join(c, "src") + os.sep
+        rest = "\n".join(open(p, errors="replace").read() for p in all_files if not p.startswith(src))
+        words = set(re.findall(r"\w+", rest))
+        pub = unused = 0
+        for p, text in code[c]:
+            for m in re.finditer(r"^pub (?:fn|struct|enum|const|static|mod|trait|type) (\w+)", text, re.M):
+                pub += 1
+                if m.group(1) not in words:
+                    unused += 1
+        print(f"  {c:10} {unused:4} of {pub:4}")
+
+    print("\nnotes and errors as text (non-test code):")
+    for c in CRATES:
+        pushes = variants = result_string = 0
+        for p, text in code[c]:
+            pushes += len(re.findall(r"\b\w*(?:warnings|notes|warning|note)\w*\s*\.push\(\s*(?:format!|\"|String::)", text))
+            result_string += len(re.findall(r"Result<[^;{]*,\s*String>", text))
+            if "thiserror" in text or "#[error(" in text:
+                variants += len(re.findall(r"^\s*\w+\((?:pub )?String\),?$|^\s*\w+\s*\{\s*\w+:\s*String\s*\},?$", text, re.M))
+        print(f"  {c:10} {pushes:4} String notes pushed, {variants:3} String-only error variants, "
+              f"{result_string:3} Result<_, String>")
+
+    print("\ncommand-line flag names in strings below the command line (non-test code):")
+    for c in BELOW_EDGE:
+        flags = set()
+        for p, text in code[c]:
+            for s in re.findall(r"\"(?:[^\"\\]|\\.)*\"", text):
+                flags.update(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]+", s))
+        print(f"  {c:10} {len(flags):4} distinct flags")
+
+    print("\nlines of code and of tests per crate:")
+    for c in CRATES:
+        n = sum(t.count("\n") + 1 for _, t in code[c] if t)
+        print(f"  {c:10} {n:6} code, {tests[c]:6} test ({tests[c] / max(n, 1):.1f}x)")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
