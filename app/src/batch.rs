@@ -7,13 +7,13 @@
 //! calibrated, with `s = max(1.4826·MAD, median of the units' own 1σ)` (the MAD scale of Iglewicz and
 //! Hoaglin, 1993, never below the measurement's own uncertainty: a small lot of nearly identical units
 //! has a MAD that can fall far below the noise by chance). A unit with `|z|` above the limit on any
-//! parameter is flagged. Lots of fewer than [`MIN_LOT`] units are not screened; a value with no 1σ
+//! parameter is flagged. Lots of fewer than `MIN_LOT` units are not screened; a value with no 1σ
 //! (a lever-arm component or gyro entry the plan did not determine, a temperature coefficient above
 //! the degree the data chose) is not screened unless the parameter has no 1σ in any unit (χ²/dof),
 //! and parameters with no spread and no 1σ are skipped.
 //!
 //! Units: a bias in volts and one in m/s² are not one population. A lot that mixes output units is
-//! screened within each output unit (a group below [`MIN_LOT`] is not screened) and says so; each
+//! screened within each output unit (a group below `MIN_LOT` is not screened) and says so; each
 //! summary row names its unit.
 
 use crate::{CalibrateOptions, CalibrationDocument};
@@ -32,7 +32,7 @@ use std::time::Instant;
 pub const MAX_JOBS: usize = 256;
 
 /// Fewest calibrated units for the outlier screening.
-pub const MIN_LOT: usize = 5;
+pub(crate) const MIN_LOT: usize = 5;
 
 /// How to run a lot.
 #[derive(Clone, Debug)]

@@ -23,20 +23,20 @@ use std::time::{Duration, Instant};
 /// How far the measured sample rate may be from the stated one: a crystal is within 0.01 %, the
 /// ICM-42688-P's own clock within ±1 % (DS-000347, ODR accuracy); what is left is the host's
 /// timing of frames over a few seconds.
-pub const RATE_TOLERANCE: f64 = 0.03;
+pub(crate) const RATE_TOLERANCE: f64 = 0.03;
 /// Standard gravity, m/s².
 const G: f64 = 9.80665;
 /// Gravity's length at rest may differ from 1 g by this fraction (an uncalibrated part's scale
 /// and bias: the ICM-42688-P's ±0.5 % sensitivity and ±20 mg offset, DS-000347 Table 2).
-pub const GRAVITY_TOLERANCE: f64 = 0.05;
+pub(crate) const GRAVITY_TOLERANCE: f64 = 0.05;
 /// Counts per g of a version 3 device in counts (the F405's ICM-42688-P at ±4 g: 8192, DS-000347
 /// Table 2); a version 4 device states its own in its health report.
-pub const F405_LSB_PER_G: f64 = 8192.0;
+pub(crate) const F405_LSB_PER_G: f64 = 8192.0;
 /// The gyro's rate at rest may be this large, rad/s (3 °/s; the ICM-42688-P's zero-rate offset is
 /// ±0.5 °/s, DS-000347 Table 1, so more means the board moved or the part is off).
-pub const REST_RATE_LIMIT_RAD_S: f64 = 3.0 * std::f64::consts::PI / 180.0;
+pub(crate) const REST_RATE_LIMIT_RAD_S: f64 = 3.0 * std::f64::consts::PI / 180.0;
 /// A die temperature outside this range, °C, is not a board on a bench.
-pub const TEMPERATURE_RANGE_C: (f32, f32) = (-40.0, 85.0);
+pub(crate) const TEMPERATURE_RANGE_C: (f32, f32) = (-40.0, 85.0);
 
 /// A check's outcome.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

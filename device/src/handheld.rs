@@ -4,8 +4,8 @@
 //! and is still again, refuses a position too close to an earlier one, and says how many remain and
 //! which directions are still missing.
 //!
-//! The decision logic is [`PositionWatcher`] (windows in, events out), so it is tested without a
-//! device; [`wait_for_new_position`] only feeds it the device's raw windows.
+//! The decision logic is `PositionWatcher` (windows in, events out), so it is tested without a
+//! device; `wait_for_new_position` only feeds it the device's raw windows.
 
 use super::client::{DeviceClient, LinkError, Transport};
 use super::operator::Operator;
@@ -38,7 +38,7 @@ const MOVED_RATE_RAD_S: f64 = 10.0 * std::f64::consts::PI / 180.0;
 
 /// What the watcher saw in a window.
 #[derive(Clone, Debug, PartialEq)]
-pub enum PositionEvent {
+pub(crate) enum PositionEvent {
     /// Still at a new position: record it now.
     NewPosition {
         /// Mean output over the hold.
@@ -54,7 +54,7 @@ pub enum PositionEvent {
 }
 
 /// Watches raw windows for a new still position.
-pub struct PositionWatcher {
+pub(crate) struct PositionWatcher {
     hold: usize,
     zero_centred: bool,
     same_position_deg: f64,
@@ -240,7 +240,7 @@ impl PositionWatcher {
 
 /// Tells the operator to turn the unit to a new position, then reads windows until the watcher
 /// reports a new still position (repeating the request when it is an earlier one).
-pub fn wait_for_new_position<T: Transport>(
+pub(crate) fn wait_for_new_position<T: Transport>(
     client: &mut DeviceClient<T>,
     op: &mut dyn Operator,
     watcher: &mut PositionWatcher,

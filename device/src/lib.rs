@@ -2,7 +2,7 @@
 //! [`serial`], or the in-process simulated device, [`sim`], perhaps held by the simulated hand of
 //! [`sim_hand`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
-//! segment ([`live_check`]), the verification of the stored calibration ([`verify`]), hand-held
+//! segment (`live_check`), the verification of the stored calibration ([`verify`]), hand-held
 //! mode ([`handheld`]), the first checks of a freshly flashed board ([`bringup`]), and the operator's live page
 //! ([`view`]).
 
@@ -13,7 +13,7 @@ mod bringup_health;
 pub mod bringup_motion;
 pub mod client;
 pub mod handheld;
-pub mod live_check;
+pub(crate) mod live_check;
 pub mod operator;
 pub mod procedure;
 pub mod serial;

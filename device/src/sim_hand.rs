@@ -3,12 +3,12 @@
 //! end to end without a board, on the firmware's own logic, as it runs with a board held in the hand
 //! (an F405 flight controller on its USB cable, say).
 //!
-//! Asked to turn, the hand spins the unit about the vertical for [`TURN_S`] at [`TURN_RATE_DEG_S`]
+//! Asked to turn, the hand spins the unit about the vertical for `TURN_S` at `TURN_RATE_DEG_S`
 //! (the motion the procedure waits for before it takes a new position), then sets it down at its
 //! next attitude and lets go: the unit is still there, as on a desk (no tremor). Its attitudes are
-//! the built-in `hand` plan's well-spread ups, each [`AIM_ERROR_DEG`] off where the plan aims, in a
+//! the built-in `hand` plan's well-spread ups, each `AIM_ERROR_DEG` off where the plan aims, in a
 //! direction that changes from position to position, as a person's aim would be. Like a person who
-//! loses count, every [`REPEAT_EVERY`]th turn brings the unit back to where it just was, which the
+//! loses count, every `REPEAT_EVERY`th turn brings the unit back to where it just was, which the
 //! procedure must refuse and ask again.
 
 use super::operator::{AutomaticOperator, Operator};
@@ -19,13 +19,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// How long one turn lasts, s.
-pub const TURN_S: f64 = 1.0;
+pub(crate) const TURN_S: f64 = 1.0;
 /// How fast the hand turns the unit, °/s (the procedure takes 10 °/s as moved).
-pub const TURN_RATE_DEG_S: f64 = 90.0;
+pub(crate) const TURN_RATE_DEG_S: f64 = 90.0;
 /// How far each attitude is off the plan's aim, degrees.
-pub const AIM_ERROR_DEG: f64 = 3.0;
+pub(crate) const AIM_ERROR_DEG: f64 = 3.0;
 /// Every this many turns, the hand sets the unit down where it was before the turn.
-pub const REPEAT_EVERY: u32 = 7;
+pub(crate) const REPEAT_EVERY: u32 = 7;
 
 /// The operator's side of the hand: each call asks it for one more turn.
 #[derive(Clone, Debug, Default)]

@@ -87,7 +87,7 @@ fn verification_positions(plan: &Plan, drive: bool) -> Vec<(String, [f64; 3], f6
 
 /// Largest difference between the temperature asked for a second verification and the one the
 /// device reports, °C: a board not yet there is not verified "at" that temperature.
-pub const VERIFY_TEMP_TOLERANCE_C: f64 = 2.0;
+pub(crate) const VERIFY_TEMP_TOLERANCE_C: f64 = 2.0;
 
 /// Verifies the stored calibration at the verification positions. A calibration whose body frame is
 /// a convention (`frame`: no attitude known, docs/model.md §7) is compared after the best common

@@ -13,9 +13,9 @@ pub const CALIBRATION_TOML: &str = "calibration.toml";
 pub(crate) const CALIBRATION_BIN: &str = "calibration.bin";
 /// File name `calibration.toml` takes when its unit failed its checks (pass/fail limits or the
 /// device's verification): nothing that looks for an accepted calibration picks it up.
-pub const FAILED_TOML: &str = "calibration.FAILED.toml";
+pub(crate) const FAILED_TOML: &str = "calibration.FAILED.toml";
 /// File name `calibration.bin` takes when its unit failed its checks.
-pub const FAILED_BIN: &str = "calibration.FAILED.bin";
+pub(crate) const FAILED_BIN: &str = "calibration.FAILED.bin";
 
 /// What was written.
 #[derive(Clone, Debug)]
@@ -171,7 +171,7 @@ pub fn write_calibration_files(
     })
 }
 
-/// Renames the pair in `dir` to [`FAILED_BIN`] and [`FAILED_TOML`] (the blob first: it is what
+/// Renames the pair in `dir` to `FAILED_BIN` and `FAILED_TOML` (the blob first: it is what
 /// could be flashed), because its unit failed a check: the files stay for inspection, under names
 /// that say so. An existing failed pair is replaced only with `force`. Returns the new paths of the
 /// `.toml` and the `.bin`.

@@ -43,7 +43,7 @@ use std::path::Path;
 /// Largest relative difference of a still segment's compensated |f| from 1 g for a calibration to
 /// fit a recording: a calibrated unit is within a few mg; a wrong unit, output unit or scale is off
 /// by tens of percent or by a factor.
-pub const MAX_STILL_G_ERROR: f64 = 0.05;
+pub(crate) const MAX_STILL_G_ERROR: f64 = 0.05;
 
 /// The header of the output, exactly.
 pub const APPLY_HEADER: &str = "segment,t_s,f_x_g,f_y_g,f_z_g,w_x_rad_s,w_y_rad_s,w_z_rad_s";
@@ -389,7 +389,7 @@ fn output_line(
 /// `unit` is the calibration's unit id and whether it is checked against the plan's;
 /// `assume_temp_c` is the temperature of a recording without one. The meeting is checked first
 /// ([`crate::calibration_guard::meet`]); the still segments are then checked to compensate to 1 g
-/// ([`MAX_STILL_G_ERROR`]).
+/// (`MAX_STILL_G_ERROR`).
 pub fn apply_session(
     dir: &Path,
     cal: &Calibration,

@@ -13,7 +13,7 @@ use shared::{Calibration, OutputUnit, UnitId};
 
 /// Largest mean gyro rate of a still segment after the calibration's bias, °/s: a MEMS gyro's
 /// turn-on bias repeatability is below 1 °/s; a wrong unit (°/s read as rad/s) is 57× its bias.
-pub const MAX_REST_RATE_DEG_S: f64 = 5.0;
+pub(crate) const MAX_REST_RATE_DEG_S: f64 = 5.0;
 
 /// Where a calibration meets something.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,7 +89,7 @@ pub enum Check {
     Frame,
     /// A temperature model has temperatures to use, and a temperature to assume is used.
     Temperature,
-    /// The gyro rests where the accelerometer does ([`MAX_REST_RATE_DEG_S`]): else it is in another
+    /// The gyro rests where the accelerometer does (`MAX_REST_RATE_DEG_S`): else it is in another
     /// unit than declared.
     GyroUnit,
 }

@@ -39,7 +39,7 @@ pub fn parameter_keys() -> Vec<String> {
 
 /// ASCII keys of the gyro's values: `gyro_g_xx` … `gyro_g_zz` (`G`, rows gyro axes, columns body
 /// axes), then `gyro_bias_x` … (`b`, rad/s).
-pub fn gyro_keys() -> Vec<String> {
+pub(crate) fn gyro_keys() -> Vec<String> {
     let mut v = Vec::with_capacity(12);
     for i in 0..3 {
         for j in 0..3 {
@@ -64,7 +64,7 @@ fn temperature_polynomials(out: &str) -> [(&'static str, String); 3] {
 
 /// ASCII keys of the temperature model's coefficients: `temp_bias_x_c1` (the zero bias's `ΔT¹`
 /// coefficient of axis x), … `temp_scale_*`, `temp_gyro_bias_*`, `c1` to `c3` per axis.
-pub fn temperature_keys() -> Vec<String> {
+pub(crate) fn temperature_keys() -> Vec<String> {
     let mut v = Vec::new();
     for (stem, _) in temperature_polynomials("") {
         for i in 0..3 {
@@ -76,7 +76,7 @@ pub fn temperature_keys() -> Vec<String> {
     v
 }
 
-/// Every key a summary can have, in order: [`parameter_keys`], [`gyro_keys`], [`temperature_keys`]
+/// Every key a summary can have, in order: [`parameter_keys`], `gyro_keys`, `temperature_keys`
 /// (the lot summary's columns).
 pub fn all_parameter_keys() -> Vec<String> {
     let mut v = parameter_keys();
@@ -93,7 +93,7 @@ pub(crate) fn gyro_entry_undetermined(sigma: f64) -> bool {
 /// One value of a calibration file's `[gyro]` or `[temperature]` section.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SectionValue {
-    /// Its key ([`gyro_keys`], [`temperature_keys`]).
+    /// Its key (`gyro_keys`, `temperature_keys`).
     pub name: String,
     /// Its unit as stored in the file.
     pub unit: String,
@@ -227,10 +227,10 @@ pub struct Parameter {
 /// χ²/dof above which a calibration fails without `--max-chi2-per-dof`: residuals ten times the
 /// segments' own noise are a model that does not describe the data (docs/model.md §4.4), whatever
 /// the scaled 1σ say. Clean simulated sessions give about 1.
-pub const DEFAULT_MAX_CHI2_PER_DOF: f64 = 100.0;
+pub(crate) const DEFAULT_MAX_CHI2_PER_DOF: f64 = 100.0;
 
 /// Production limits; each `None` is not checked, but χ²/dof always is
-/// ([`DEFAULT_MAX_CHI2_PER_DOF`]).
+/// (`DEFAULT_MAX_CHI2_PER_DOF`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct Limits {
     /// Fail when χ²/dof exceeds this (a misfit: table errors, a moved unit, a bad sensor); default 100.
@@ -268,7 +268,7 @@ pub struct CalibrationSummary {
     /// Unit id (24 hex digits), if the recording had one.
     pub unit_id: Option<String>,
     /// The parameters: the accelerometer's in paper form ([`parameter_keys`]), then the gyro's
-    /// ([`gyro_keys`]) and the temperature model's ([`temperature_keys`]) when the calibration has them.
+    /// (`gyro_keys`) and the temperature model's (`temperature_keys`) when the calibration has them.
     pub parameters: Vec<Parameter>,
     /// The parameters the session did not determine (their `sigma` is null): lever-arm components,
     /// gyro entries.

@@ -16,7 +16,7 @@ pub const MAX_SEGMENTS: usize = 10_000;
 
 /// Largest plan, unit or calibration file, bytes. The biggest real plan (hundreds of segments) is a
 /// few tens of kB.
-pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
+pub(crate) const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
 
 /// Highest sample rate a plan may declare, Hz.
 pub const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
@@ -25,7 +25,7 @@ pub const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
 pub const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
 
 /// Most rows one simulated segment may have (duration × rate): 10⁹ rows ≈ 150 GB of text.
-pub const MAX_SEGMENT_ROWS: f64 = 1e9;
+pub(crate) const MAX_SEGMENT_ROWS: f64 = 1e9;
 
 /// Largest table rate a plan may name, °/s (a rate table turning 20 rev/s is already extreme; the
 /// lever-arm terms grow as ω², so a typo like 1e9 °/s would make every model term overflow).
@@ -37,7 +37,7 @@ pub const MIN_LOGGER_RATE_HZ: f64 = 1e-3;
 
 /// A number as people read it: plain between 10⁻³ and 10⁶, else in exponent form (`1e300`, never
 /// three hundred digits).
-pub fn short_number(v: f64) -> String {
+pub(crate) fn short_number(v: f64) -> String {
     if v.is_finite() && v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
         format!("{v:e}")
     } else {
@@ -60,7 +60,7 @@ pub enum OptionRangeError {
     /// A number outside the option's range (NaN and ±inf are outside every range).
     #[error("{value} is out of range: give a number in {range}")]
     OutOfRange {
-        /// The value read, as [`short_number`] prints it.
+        /// The value read, as `short_number` prints it.
         value: String,
         /// The accepted range, as text.
         range: String,
@@ -71,7 +71,7 @@ pub enum OptionRangeError {
 /// duration) gets the smallest value that still means something as `min`, never an open 0: a
 /// `1e-300` accepted would print as three hundred digits later.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RealRange {
+pub(crate) struct RealRange {
     /// Lower bound (included).
     pub min: f64,
     /// Upper bound (included).
@@ -231,7 +231,7 @@ pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// [`read_bounded`] with [`MAX_TEXT_FILE_BYTES`], as UTF-8 text; bytes that are not UTF-8 are an
+/// [`read_bounded`] with `MAX_TEXT_FILE_BYTES`, as UTF-8 text; bytes that are not UTF-8 are an
 /// `InvalidData` error naming the line.
 pub fn read_text_bounded(path: &Path) -> std::io::Result<String> {
     let bytes = read_bounded(path, MAX_TEXT_FILE_BYTES)?;

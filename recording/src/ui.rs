@@ -16,7 +16,7 @@ pub fn progress_bar(total: u64, message: &'static str, quiet: bool) -> ProgressB
 }
 
 /// A progress bar counting bytes on stderr, hidden unless stderr is a terminal and `quiet` is false.
-pub fn progress_bar_bytes(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
+pub(crate) fn progress_bar_bytes(total: u64, message: &'static str, quiet: bool) -> ProgressBar {
     styled_bar(
         total,
         message,

@@ -40,13 +40,13 @@ pub const BLOB_MAGIC: [u8; 4] = *b"ACAL";
 /// the module documentation and refuses any other.
 pub const BLOB_FORMAT_VERSION: u16 = 2;
 /// The first format version (no gyro, no temperature section), still read.
-pub const BLOB_FORMAT_VERSION_V1: u16 = 1;
+pub(crate) const BLOB_FORMAT_VERSION_V1: u16 = 1;
 const HEADER_LEN: usize = 8;
 const CRC_LEN: usize = 4;
 /// Largest encoded blob, from the payload type's postcard bound.
 pub const BLOB_MAX_LEN: usize = HEADER_LEN + PayloadV2::POSTCARD_MAX_SIZE + CRC_LEN;
 /// Largest accepted |r_i| component, metres: no accelerometer unit is a metre across.
-pub const MAX_LEVER_ARM_M: f64 = 1.0;
+pub(crate) const MAX_LEVER_ARM_M: f64 = 1.0;
 
 /// CRC-32/ISO-HDLC (zlib's and Ethernet's: reflected polynomial 0xEDB88320, initial value and final
 /// XOR all ones), bit by bit: the blob's checksum, and the firmware store's. A table-driven form
@@ -126,7 +126,7 @@ pub enum BlobError {
     IllConditioned,
     /// Local gravity is implausible.
     BadGravity,
-    /// A lever arm component exceeds [`MAX_LEVER_ARM_M`].
+    /// A lever arm component exceeds `MAX_LEVER_ARM_M`.
     LeverArmOutOfRange,
     /// The blob was made for another unit.
     ForeignUnit,
@@ -137,7 +137,7 @@ pub enum BlobError {
     /// The temperature model is implausible (range, scale over the range, non-finite values).
     BadTemperatureModel,
     /// A value is beyond the range the device computes with: its `f32` arithmetic (e.g. a bias
-    /// of 1e300), or an installation angle beyond ±[`crate::trig::MAX_ANGLE_DEG`].
+    /// of 1e300), or an installation angle beyond ±`crate::trig::MAX_ANGLE_DEG`.
     OutOfDeviceRange,
 }
 

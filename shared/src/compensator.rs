@@ -70,7 +70,7 @@ pub enum CompensatorError {
     Gyro(GyroError),
     /// The temperature model is unusable.
     Temperature(TemperatureModelError),
-    /// A value the device computes with does not fit its `f32` arithmetic (see [`MAX_DEVICE_MAGNITUDE`]).
+    /// A value the device computes with does not fit its `f32` arithmetic (see `MAX_DEVICE_MAGNITUDE`).
     OutOfDeviceRange,
 }
 
@@ -101,19 +101,19 @@ impl core::error::Error for CompensatorError {}
 
 /// Largest accepted 1-norm condition number of `K·A`. A near-orthogonal unit has about 1.1; 100 means
 /// sensing axes within a few degrees of each other, which no usable unit has.
-pub const MAX_CONDITION: f64 = 100.0;
+pub(crate) const MAX_CONDITION: f64 = 100.0;
 /// Plausible local gravity range, m/s² (Earth's surface spans 9.76..9.84).
-pub const MIN_GRAVITY_M_S2: f64 = 9.7;
+pub(crate) const MIN_GRAVITY_M_S2: f64 = 9.7;
 /// See [`MIN_GRAVITY_M_S2`].
-pub const MAX_GRAVITY_M_S2: f64 = 9.9;
+pub(crate) const MAX_GRAVITY_M_S2: f64 = 9.9;
 /// Largest magnitude of any precomputed `f32` constant (and of the zero biases). The per-sample path
 /// multiplies a constant by at most two inputs (`s_i·|ω|²`, with |ω| ≤ 10³ rad/s; outputs ≤ 2²⁴ LSB),
 /// so 10²⁰ keeps every intermediate below 10³² — far from `f32::MAX` ≈ 3.4·10³⁸ — while no real unit
 /// comes near it. A CRC-valid blob with a bias of 10³⁰⁰ is refused instead of turning into ∞.
-pub const MAX_DEVICE_MAGNITUDE: f64 = 1e20;
+pub(crate) const MAX_DEVICE_MAGNITUDE: f64 = 1e20;
 /// Smallest magnitude of a non-zero entry of `g·K_A` and `G⁻¹`: below it `f32` loses precision
 /// (subnormals start at 1.2·10⁻³⁸) or flushes to zero, which would silently drop an axis.
-pub const MIN_DEVICE_MAGNITUDE: f64 = 1e-30;
+pub(crate) const MIN_DEVICE_MAGNITUDE: f64 = 1e-30;
 
 /// `v` as `f32`, or an error when it is non-finite or beyond [`MAX_DEVICE_MAGNITUDE`].
 fn device_f32(v: f64) -> Result<f32, CompensatorError> {
@@ -173,7 +173,7 @@ impl TemperatureState {
 }
 
 /// Three `f32` polynomials without constant term, row `i` = `c1, c2, c3` (see [`poly_no_constant`]).
-pub type Poly32 = [[f32; MAX_TEMPERATURE_DEGREE]; 3];
+pub(crate) type Poly32 = [[f32; MAX_TEMPERATURE_DEGREE]; 3];
 
 /// The reference values and polynomials [`Compensator::refresh`] starts from (all `f32`), public for
 /// code generators that reproduce the refresh in another language (the host's C export).

@@ -10,7 +10,7 @@
 //! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), the same
 //!   bits on the PC and on the Cortex-M4F;
 //! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §4.6;
-//! - [`trig`]: `libm::cos` bit for bit without the large-argument reduction (installation angles);
+//! - `trig`: `libm::cos` bit for bit without the large-argument reduction (installation angles);
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
 //! - [`wire`]: the host↔device messages and their COBS framing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -23,7 +23,7 @@ pub mod linalg;
 pub mod omega_dot;
 pub mod params;
 pub mod sensor_models;
-pub mod trig;
+pub(crate) mod trig;
 pub mod units;
 pub mod wire;
 

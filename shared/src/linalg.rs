@@ -125,7 +125,7 @@ pub fn inverse(m: &RowMajor3) -> Option<RowMajor3> {
 }
 
 /// 1-norm condition number `‖M‖₁ ‖M⁻¹‖₁` (∞ when singular). Cheap and deterministic: no iteration.
-pub fn condition_number_1(m: &RowMajor3) -> f64 {
+pub(crate) fn condition_number_1(m: &RowMajor3) -> f64 {
     let norm1 = |a: &RowMajor3| {
         (0..3)
             .map(|j| libm::fabs(a[0][j]) + libm::fabs(a[1][j]) + libm::fabs(a[2][j]))

@@ -101,8 +101,8 @@ pub enum ParamsError {
         /// 0 = x, 1 = y, 2 = z.
         axis: u8,
     },
-    /// Accelerometer `axis` has an installation angle beyond ±[`crate::trig::MAX_ANGLE_DEG`]
-    /// (about 2²⁰·90°), where the cosine is refused ([`crate::trig::cos_moderate`]); a real
+    /// Accelerometer `axis` has an installation angle beyond ±`crate::trig::MAX_ANGLE_DEG`
+    /// (about 2²⁰·90°), where the cosine is refused (`crate::trig::cos_moderate`); a real
     /// unit's angles lie in 0..180°.
     AngleOutOfRange {
         /// 0 = x, 1 = y, 2 = z.
@@ -148,8 +148,8 @@ impl StaticParams {
     }
 
     /// The unit sensing directions `a_i` (rows of `A`) from the angles, normalised (`docs/model.md` §4.2).
-    /// The cosines are `libm::cos`'s bits ([`crate::trig::cos_moderate`]); an angle beyond
-    /// ±[`crate::trig::MAX_ANGLE_DEG`] is refused ([`ParamsError::AngleOutOfRange`]).
+    /// The cosines are `libm::cos`'s bits (`crate::trig::cos_moderate`); an angle beyond
+    /// ±`crate::trig::MAX_ANGLE_DEG` is refused ([`ParamsError::AngleOutOfRange`]).
     pub fn sensing_directions(&self) -> Result<(RowMajor3, Normalisation), ParamsError> {
         let flat = self.installation_angles_deg.iter().flatten().copied();
         if !all_finite(flat) {

@@ -11,16 +11,16 @@ use serde::{Deserialize, Serialize};
 /// Highest degree of a temperature polynomial.
 pub const MAX_TEMPERATURE_DEGREE: usize = 3;
 /// Largest accepted gyro bias, rad/s (57 °/s; an L3GD20H's zero-rate level is ±25 °/s at ±2000 °/s).
-pub const MAX_GYRO_BIAS_RAD_S: f64 = 1.0;
+pub(crate) const MAX_GYRO_BIAS_RAD_S: f64 = 1.0;
 /// Accepted range of each row norm of `G`: the gyro reports rad/s already, so its sensitivity is
 /// within a factor of two of one unless the part or its setting is wrong.
-pub const GYRO_ROW_NORM_RANGE: (f64, f64) = (0.5, 2.0);
+pub(crate) const GYRO_ROW_NORM_RANGE: (f64, f64) = (0.5, 2.0);
 /// Largest accepted 1-norm condition number of `G` (a pure rotation has at most 3).
-pub const MAX_GYRO_CONDITION: f64 = 10.0;
+pub(crate) const MAX_GYRO_CONDITION: f64 = 10.0;
 /// Temperatures a model may cover, °C (beyond any electronics' rating).
 pub const TEMPERATURE_LIMITS_C: (f64, f64) = (-100.0, 200.0);
 /// Accepted range of the relative scale `1 + s(T)` over the valid range.
-pub const SCALE_FACTOR_RANGE: (f64, f64) = (0.5, 2.0);
+pub(crate) const SCALE_FACTOR_RANGE: (f64, f64) = (0.5, 2.0);
 
 /// The gyro's measurement model `w = G·ω_body + b` (docs/model.md §8).
 ///
@@ -74,14 +74,14 @@ impl GyroCorrection {
 pub enum GyroError {
     /// A value is NaN or infinite.
     NonFinite,
-    /// Row `axis` of `G` has a norm outside [`GYRO_ROW_NORM_RANGE`].
+    /// Row `axis` of `G` has a norm outside `GYRO_ROW_NORM_RANGE`.
     ScaleOutOfRange {
         /// 0 = x, 1 = y, 2 = z.
         axis: u8,
     },
-    /// A bias exceeds [`MAX_GYRO_BIAS_RAD_S`] (at some temperature of the valid range).
+    /// A bias exceeds `MAX_GYRO_BIAS_RAD_S` (at some temperature of the valid range).
     BiasOutOfRange,
-    /// `G` is singular or its condition number exceeds [`MAX_GYRO_CONDITION`].
+    /// `G` is singular or its condition number exceeds `MAX_GYRO_CONDITION`.
     IllConditioned,
 }
 
@@ -114,7 +114,7 @@ impl core::error::Error for GyroError {}
 /// Coefficients of a polynomial without constant term, per axis: row `i` holds `c_i1, c_i2, c_i3`, so
 /// that the value of axis `i` is `c_i1·ΔT + c_i2·ΔT² + c_i3·ΔT³` with `ΔT = T − T_ref` in °C. A lower
 /// degree has zeros at the end. The constant term is the calibration's own value at `T_ref`.
-pub type AxisPolynomials = [[f64; MAX_TEMPERATURE_DEGREE]; 3];
+pub(crate) type AxisPolynomials = [[f64; MAX_TEMPERATURE_DEGREE]; 3];
 
 /// How the parameters move with temperature (docs/model.md §9). Every polynomial is zero at
 /// `reference_c`, where the calibration's static values and gyro bias hold:
@@ -149,7 +149,7 @@ pub enum TemperatureModelError {
     /// The valid range is empty, reversed, beyond [`TEMPERATURE_LIMITS_C`], or does not contain the
     /// reference temperature.
     BadRange,
-    /// `1 + s_i(T)` leaves [`SCALE_FACTOR_RANGE`] somewhere in the valid range, for accelerometer `axis`.
+    /// `1 + s_i(T)` leaves `SCALE_FACTOR_RANGE` somewhere in the valid range, for accelerometer `axis`.
     ScaleOutOfRange {
         /// 0 = x, 1 = y, 2 = z.
         axis: u8,

@@ -24,11 +24,11 @@ const MODERATE_LIMIT_HI: u32 = 0x4139_21fb;
 
 /// Largest installation angle (degrees, either sign) whose cosine [`cos_moderate`] gives: 2²⁰·90°
 /// less a margin for the rounding of the conversion to radians.
-pub const MAX_ANGLE_DEG: f64 = 94_000_000.0;
+pub(crate) const MAX_ANGLE_DEG: f64 = 94_000_000.0;
 
 /// `libm::cos(x)` bit for bit for `|x| < 2²⁰·π/2` (about 1.6·10⁶ rad, 9.4·10⁷°); `None` above it
 /// and for NaN or infinite `x`.
-pub fn cos_moderate(x: f64) -> Option<f64> {
+pub(crate) fn cos_moderate(x: f64) -> Option<f64> {
     let ix = (x.to_bits() >> 32) as u32 & 0x7fff_ffff;
     if ix <= 0x3fe9_21fb {
         // |x| ≲ π/4: no reduction.

@@ -1,6 +1,6 @@
 //! The gyro of a hand-held session (docs/model.md §8): fitted from the hand turns between still
 //! positions ([`fit`]), accepted or refused ([`problems`], `estimate::gyro_check`), and kept beside
-//! the session as `gyro.toml` ([`file_text`], [`read`]) for `host calibrate --input`.
+//! the session as `gyro.toml` (`file_text`, [`read`]) for `host calibrate --input`.
 
 use super::table_turn::find_table_turns;
 use estimator::estimate::gyro::GyroEstimate;
@@ -161,7 +161,7 @@ fn angle_random_walk(rec: &Recording, seg: &Segmentation) -> f64 {
 /// A turn left out of the gyro fit because the time stamps jump during it (a gap, a repeat or a step
 /// back): its rotation cannot be integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DroppedTurn {
+pub(crate) struct DroppedTurn {
     /// The still interval before it (1-based, as in the table).
     pub after_still: usize,
     /// The turn's start, s.
@@ -186,7 +186,7 @@ impl std::fmt::Display for DroppedTurn {
 }
 
 /// The turns between consecutive still intervals that [`fit`] leaves out, with their place.
-pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
+pub(crate) fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
     let jumps = rec.jumps();
     seg.stills
         .windows(2)
@@ -204,7 +204,7 @@ pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
 }
 
 /// Why a hand-turn gyro fit is refused ([`estimator::estimate::gyro_check`]): an implausible `G`, or
-/// turns no `G` explains (an rms misfit over `max_misfit_deg`, [`plausible_misfit_deg`]). Empty:
+/// turns no `G` explains (an rms misfit over `max_misfit_deg`, `plausible_misfit_deg`). Empty:
 /// accepted.
 pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<String> {
     let mut problems: Vec<String> =
@@ -218,7 +218,7 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<Str
 /// An accepted fit whose only problems are entries of `G` that its turns do not determine (a
 /// plausible `G` lies within 3σ of every entry) is no calibration, and no contradiction either:
 /// the gyro is then absent, saying why ([`HandGyroError::NotDetermined`]). `max_misfit_deg` is
-/// [`plausible_misfit_deg`]. A misfit of the turns
+/// `plausible_misfit_deg`. A misfit of the turns
 /// is evidence whatever `G`'s 1σ, and a `G` implausible beyond its 3σ too: both stay refusals.
 pub fn undetermined(fit: HandGyroFit, max_misfit_deg: f64) -> Result<HandGyroFit, HandGyroError> {
     let sp = Spelling::default();
@@ -320,7 +320,7 @@ pub fn common_scale_note(fit: &HandGyroFit, rec: &Recording, sp: Spelling) -> Op
 /// whose non-orthogonality is only as good as the faces' placement (docs/model.md §7.1): when whole
 /// table turns fix the gyro's scales, the angle between two faces can no longer be absorbed by the
 /// gyro's `G`, and the hand turns are off by that much (docs/model.md §7.2).
-pub fn plausible_misfit_deg(position_set: PositionSet, plan: &Plan) -> f64 {
+pub(crate) fn plausible_misfit_deg(position_set: PositionSet, plan: &Plan) -> f64 {
     let faces = match position_set {
         PositionSet::SixFaces => plan
             .segments
@@ -334,7 +334,7 @@ pub fn plausible_misfit_deg(position_set: PositionSet, plan: &Plan) -> f64 {
 
 /// `gyro.toml`: the `[gyro]` table of a calibration file (the keys of the table gyro calibration) with a
 /// comment saying where it comes from.
-pub fn file_text(fit: &HandGyroFit) -> String {
+pub(crate) fn file_text(fit: &HandGyroFit) -> String {
     #[derive(serde::Serialize)]
     struct File {
         gyro: GyroSection,
@@ -369,7 +369,7 @@ pub fn read(dir: &Path) -> Result<Option<GyroEstimate>, HandGyroFileError> {
     parse(&text, &path).map(Some)
 }
 
-/// The gyro estimate of a `gyro.toml` text ([`file_text`]) named `path` in messages: what [`read`]
+/// The gyro estimate of a `gyro.toml` text (`file_text`) named `path` in messages: what [`read`]
 /// gives for that file, for a session held in memory (`super::in_memory`).
 pub fn parse(text: &str, path: &Path) -> Result<GyroEstimate, HandGyroFileError> {
     #[derive(serde::Deserialize)]

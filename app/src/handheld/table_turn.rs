@@ -2,7 +2,7 @@
 //! (the same face down, gravity where it was) with a large rotation about the vertical between them.
 //! The classic six-face bench method turns the unit once about the vertical on each face; the gyro
 //! fit (`estimate::handheld_gyro`) takes such a turn as a known angle, `2πk` about the up direction,
-//! when the angle turned is within [`WHOLE_TURN_TOLERANCE_DEG`] of a whole number of turns, and says
+//! when the angle turned is within `WHOLE_TURN_TOLERANCE_DEG` of a whole number of turns, and says
 //! why it leaves one out otherwise.
 
 use estimator::estimate::handheld_gyro::still_bias;
@@ -13,16 +13,16 @@ use shared::linalg;
 /// Two still intervals whose gravity directions differ by less than this are at the same position,
 /// degrees: a face turned flat on a table keeps its up to the table's flatness (a few hundredths of
 /// a degree); more means the unit was tipped or set down on another spot of an uneven bench.
-pub const SAME_UP_DEG: f64 = 1.0;
+pub(crate) const SAME_UP_DEG: f64 = 1.0;
 /// A rotation about the vertical this large between two stills at the same position is a table turn
 /// (used or refused), degrees; smaller ones are a nudge, used as an ordinary turn.
-pub const MIN_ANGLE_DEG: f64 = 90.0;
+pub(crate) const MIN_ANGLE_DEG: f64 = 90.0;
 /// The angle turned (from the gyro at its nominal scale, within a few percent) must be this close to
 /// a whole number of turns for the number to be sure, degrees.
-pub const WHOLE_TURN_TOLERANCE_DEG: f64 = 20.0;
+pub(crate) const WHOLE_TURN_TOLERANCE_DEG: f64 = 20.0;
 /// The rotation about horizontal axes over a table turn must be below this, degrees: a unit turned
 /// flat on a table barely rocks; more means it was lifted and turned in the hand.
-pub const MAX_OFF_VERTICAL_DEG: f64 = 20.0;
+pub(crate) const MAX_OFF_VERTICAL_DEG: f64 = 20.0;
 
 /// Why a table turn is not used as a known angle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,7 +94,7 @@ impl std::fmt::Display for FoundTableTurn {
 /// [`SAME_UP_DEG`]), not cut by a time jump, with at least [`MIN_ANGLE_DEG`] about the vertical
 /// between them; used when within [`WHOLE_TURN_TOLERANCE_DEG`] of a whole number of turns and
 /// nearly flat, refused otherwise.
-pub fn find_table_turns(rec: &Recording, seg: &Segmentation) -> Vec<FoundTableTurn> {
+pub(crate) fn find_table_turns(rec: &Recording, seg: &Segmentation) -> Vec<FoundTableTurn> {
     let means: Vec<([f64; 3], usize)> = seg
         .stills
         .iter()

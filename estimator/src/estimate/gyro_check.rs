@@ -23,7 +23,7 @@ use shared::linalg::RowMajor3;
 
 /// Largest plausible |G_ii − 1|: MEMS gyros are within ±3 % of their nominal scale; 20 % leaves room
 /// for any real part while catching a wrong unit (×57.3), a time base off by ≥ 1.25× and a sign.
-pub const MAX_SCALE_ERROR: f64 = 0.2;
+pub(crate) const MAX_SCALE_ERROR: f64 = 0.2;
 
 /// Largest plausible |G_ij| (i ≠ j): 0.1 is a 5.7° misalignment, far beyond any mounted part's
 /// (≤ 1–2°) but far below a swapped axis's 1.
@@ -39,10 +39,10 @@ const COMMON_SCALE_SPREAD: f64 = 0.05;
 
 /// The common scale factors taken for a result, not a contradiction ([`common_scale`]): a nominal
 /// scale off by up to 4× (a wrong LSB per °/s, a full-scale range mixed up) or a time base as far.
-pub const COMMON_SCALE_RANGE: (f64, f64) = (0.25, 4.0);
+pub(crate) const COMMON_SCALE_RANGE: (f64, f64) = (0.25, 4.0);
 
 /// The factor `k` by which the gyro reads on all three axes (`G ≈ k·(I + small)`), when it is beyond
-/// [`MAX_SCALE_ERROR`], the same on every axis, within [`COMMON_SCALE_RANGE`] and not a unit's
+/// `MAX_SCALE_ERROR`, the same on every axis, within `COMMON_SCALE_RANGE` and not a unit's
 /// 57.3×: a nominal scale or a time base, which the caller names (docs/model.md §8).
 pub fn common_scale(matrix: &RowMajor3) -> Option<f64> {
     let ratio: [f64; 3] = core::array::from_fn(|i| matrix[i][i]);
@@ -64,11 +64,11 @@ pub fn common_scale(matrix: &RowMajor3) -> Option<f64> {
 
 /// The likely causes of an implausible `G`, one line each (empty: `G` is plausible), the options
 /// named as the command line's flags.
-pub fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
+pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
     matrix_problems_spelled(matrix, Spelling::Flags)
 }
 
-/// [`matrix_problems`], the options named as `sp` spells them.
+/// `matrix_problems`, the options named as `sp` spells them.
 pub fn matrix_problems_spelled(matrix: &RowMajor3, sp: Spelling) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();

@@ -48,11 +48,11 @@ pub struct TableTurn {
 /// the same fence or corner after its whole turn repeats its heading to a few hundredths of a degree
 /// (a face's edge and a straight fence, both flat to about 0.02 mm over 20–30 mm); taken with margin
 /// for dust and a pushed-back rather than slid-back unit.
-pub const TABLE_STOP_DEG: f64 = 0.1;
+pub(crate) const TABLE_STOP_DEG: f64 = 0.1;
 /// 1σ of a table turn's axis from the calibrated up, degrees (docs/model.md §7.2): the table's normal
 /// is off the vertical by its levelling (a bench level to 0.1–0.2°), the face rocks on dust while
 /// turned, and the calibrated up is itself a fraction of a milliradian off.
-pub const TABLE_AXIS_DEG: f64 = 0.3;
+pub(crate) const TABLE_AXIS_DEG: f64 = 0.3;
 /// A hand turn's residual 1σ per component before the turns' own misfit estimates it, degrees.
 const HAND_PRIOR_DEG: f64 = 0.05;
 

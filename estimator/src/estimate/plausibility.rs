@@ -4,7 +4,7 @@
 //! come from a plan whose labels do not match the recording (two mounts swapped, `x+` recorded as
 //! `x−`), not from the unit:
 //! - the sensing directions (rows of `M = K·A`, `docs/model.md` §4.2) form a right-handed triad, each
-//!   within [`MAX_AXIS_ANGLE_DEG`] of its nominal body axis;
+//!   within `MAX_AXIS_ANGLE_DEG` of its nominal body axis;
 //! - at least one residual degree of freedom remains, so that χ²/dof is defined and the fit is checked
 //!   by the data at all;
 //! - the static segments read like their labels: with the nominal layout (accelerometer `i` along body
@@ -21,7 +21,7 @@ use shared::linalg;
 /// Largest angle between a fitted sensing axis and its nominal body axis, degrees. Real units are
 /// within a few degrees (the paper's: < 1°); 30° leaves room for any deliberate mounting while
 /// catching a swapped or reversed axis (90° or 180°).
-pub const MAX_AXIS_ANGLE_DEG: f64 = 30.0;
+pub(crate) const MAX_AXIS_ANGLE_DEG: f64 = 30.0;
 
 /// Angle between a static segment's measured "up" and a label's `up_b` below which the data are said
 /// to look like that label, and above which they contradict their own, degrees.

@@ -93,7 +93,7 @@ pub struct HandSpec {
     /// while turning.
     pub hold_tremor: bool,
     /// At each position, one whole turn about the vertical on the table before moving on, the unit
-    /// set back against the same stop and held again (docs/model.md §7.2, [`TableTurnSim`]).
+    /// set back against the same stop and held again (docs/model.md §7.2, `TableTurnSim`).
     pub table_turns: bool,
     /// Seed.
     pub seed: u64,
@@ -175,7 +175,7 @@ impl HandSpec {
 /// either way, in 4–6 s (raised-cosine rate, peaks of 120–180 °/s) about the vertical, rocking on
 /// the table by up to [`Self::ROCK_DEG`] about a horizontal axis in the middle of the turn (none at
 /// its ends), and set back against its stop with an error of [`Self::STOP_SIGMA_DEG`] (1σ).
-pub struct TableTurnSim;
+pub(crate) struct TableTurnSim;
 
 impl TableTurnSim {
     /// Distance of the unit's reference point from the turn's axis, m.

@@ -235,7 +235,7 @@ fn dynamic_error(
 
 /// The norm-only method (as hand-calibration tools do): `u0` and a lower-triangular `T = M⁻¹` such
 /// that every static mean has |T (ū − u0)| = 1, unweighted Gauss–Newton with a numerical Jacobian.
-pub fn norm_only(means: &[[f64; 3]]) -> Option<FittedStatic> {
+pub(crate) fn norm_only(means: &[[f64; 3]]) -> Option<FittedStatic> {
     let mut p = [0.0; 9]; // u0 (3), T00, T10, T11, T20, T21, T22
     for i in 0..3 {
         let (lo, hi) = means

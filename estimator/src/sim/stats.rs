@@ -22,7 +22,7 @@ pub fn simulate_stats(
 
 /// [`simulate_stats`] with the simulation's summary (each mount's true up, the truth an oracle fit
 /// is given).
-pub fn simulate_stats_with_summary(
+pub(crate) fn simulate_stats_with_summary(
     cal: &Calibration,
     plan: &Plan,
     noise: &NoiseModel,

@@ -314,7 +314,7 @@ pub fn clean_session(plan: &Plan, seed: u64) -> (Calibration, Vec<SegmentStats>)
 
 /// `host/units/thermal-mems.toml`: the paper's unit with tempcos of MEMS size (bias 0.25..0.35
 /// mg/°C plus a quadratic term, scale 100..150 ppm/°C).
-pub fn hot_unit_file() -> UnitFile {
+pub(crate) fn hot_unit_file() -> UnitFile {
     toml::from_str(include_str!("../../../host/units/thermal-mems.toml")).unwrap()
 }
 

@@ -155,16 +155,16 @@ fn estimate_text(e: &EstimateError) -> String {
 /// Exit status of a successful command.
 pub const EXIT_OK: i32 = 0;
 /// Exit status of a command that failed (bad input, I/O, a device, an estimate refused).
-pub const EXIT_ERROR: i32 = 1;
+pub(crate) const EXIT_ERROR: i32 = 1;
 /// Exit status of a command line that cannot be run as given (clap's own usage errors exit 2 too).
-pub const EXIT_USAGE: i32 = 2;
+pub(crate) const EXIT_USAGE: i32 = 2;
 /// Exit status of a command that ran to the end but whose result failed a check (pass/fail limits,
 /// the device's verification): its files are written, marked as failed.
-pub const EXIT_CHECK_FAILED: i32 = 3;
+pub(crate) const EXIT_CHECK_FAILED: i32 = 3;
 
 impl CliError {
-    /// The process exit status for this error: [`EXIT_USAGE`], [`EXIT_CHECK_FAILED`] or
-    /// [`EXIT_ERROR`], so that scripts tell a typo, a failed unit and a broken run apart.
+    /// The process exit status for this error: `EXIT_USAGE`, `EXIT_CHECK_FAILED` or
+    /// `EXIT_ERROR`, so that scripts tell a typo, a failed unit and a broken run apart.
     pub fn exit_code(&self) -> i32 {
         match self {
             CliError::Usage(_) | CliError::LogInput(_) => EXIT_USAGE,

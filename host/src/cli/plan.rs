@@ -40,7 +40,7 @@ pub struct PlanArgs {
     pub bias_walk: Option<f64>,
     /// Predict with the gyro's bias a random walk of this strength, °/s/√s (docs/model.md §11.6);
     /// 0 for a constant gyro bias. Without it (and without --bias-walk) the walks the unit's
-    /// class is expected to have: the unit file's [noise] figures where it has them, else for a
+    /// class is expected to have: the unit file's `[noise]` figures where it has them, else for a
     /// digital MEMS unit (an LSB plan, or a single package) 0.002 mg/√s and 0.0005 °/s/√s,
     /// ordinary figures for a consumer part, and none for an analog unit.
     #[arg(long, value_name = "DEG_S_SQRT_S", value_parser = recording::limits::real(0.0, crate::limits::MAX_GYRO_BIAS_WALK_DEG_S_SQRT_S))]

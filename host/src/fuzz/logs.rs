@@ -81,7 +81,7 @@ fn corpus_samples() -> Vec<LogSample> {
 }
 
 /// A ULog with `sensor_accel` and `sensor_gyro` (PX4's fields) and a dropout.
-pub fn ulog_corpus() -> Vec<u8> {
+pub(crate) fn ulog_corpus() -> Vec<u8> {
     write_ulog(&corpus_samples(), Some(75))
 }
 
@@ -188,7 +188,7 @@ pub fn write_ulog_imus(
 }
 
 /// A DataFlash log: `FMT` of `FMT`, `FMT` of `IMU` (ArduPilot 4.x's fields) and the samples.
-pub fn dataflash_corpus() -> Vec<u8> {
+pub(crate) fn dataflash_corpus() -> Vec<u8> {
     write_dataflash(&corpus_samples())
 }
 
@@ -284,7 +284,7 @@ fn imu_cdr(t: f64, a: [f32; 3], g: [f32; 3]) -> Vec<u8> {
 }
 
 /// A ROS 2 bag with one Imu topic `/imu`, written by the mcap crate.
-pub fn mcap_corpus(compression: Option<::mcap::Compression>) -> Vec<u8> {
+pub(crate) fn mcap_corpus(compression: Option<::mcap::Compression>) -> Vec<u8> {
     let samples: Vec<LogSample> = corpus_samples()
         .into_iter()
         .map(|s| LogSample {
@@ -309,7 +309,7 @@ pub fn write_mcap(
 /// [`write_mcap`], and with `junk_at` a second topic `/junk` whose schema is 1 MiB of bytes that
 /// are no message definition, with one message of garbage after sample `junk_at` (an oversized,
 /// malformed format record beside the IMU's).
-pub fn write_mcap_with(
+pub(crate) fn write_mcap_with(
     samples: &[LogSample],
     compression: Option<::mcap::Compression>,
     recorder_offset_s: f64,

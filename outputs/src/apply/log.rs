@@ -158,7 +158,8 @@ fn write_error(e: std::io::Error) -> ApplyError {
 
 /// What [`Prepared::run`] hands each row to: its index, its specific force (m/s², `None` for a row
 /// with a non-finite value) and the applier (its corrected rate).
-pub type RowSink<'a> = dyn FnMut(usize, Option<[f32; 3]>, &Applier) -> Result<(), ApplyError> + 'a;
+pub(crate) type RowSink<'a> =
+    dyn FnMut(usize, Option<[f32; 3]>, &Applier) -> Result<(), ApplyError> + 'a;
 
 /// A calibration ready to be applied to a recording held in memory (a logger's file read whole, or
 /// arrays): the compensator and ω̇ estimator, and the still intervals found in the recording, each

@@ -1,18 +1,18 @@
 //! C outputs: the calibration for a C firmware (`c`, a package of files, [`package`]; `c-header`, its header alone) and for
 //! x-io Fusion (`fusion-c`).
 //!
-//! The package holds `acal_calibration.h`, the decoder ([`DECODER_H`], [`DECODER_C`]) and the
-//! device's whole per-sample correction ([`DEVICE_H`], [`DEVICE_C`]: gyro correction, the ω̇
+//! The package holds `acal_calibration.h`, the decoder (`DECODER_H`, `DECODER_C`) and the
+//! device's whole per-sample correction (`DEVICE_H`, `DEVICE_C`: gyro correction, the ω̇
 //! estimator of `shared::omega_dot`, the lever-arm compensation and the temperature refresh at the
-//! firmware's pace), so that it builds alone, and `example.c` ([`EXAMPLE_C`]): the blob decoded,
+//! firmware's pace), so that it builds alone, and `example.c` (`EXAMPLE_C`): the blob decoded,
 //! one sample corrected with the device's code, printed. `acal_calibration.h` holds the calibration
 //! as a plain `struct acal_calibration` initialiser, the device's precomputed per-sample constants
 //! (`struct acal_compensator`, the exact `f32` values of `shared::Compensator`, so
 //! `acal_correct_rate` and `acal_compensate` in `export/c/acal_blob.c` give the device's results
 //! bit for bit), with a temperature model what `acal_refresh` recomputes them from (`struct
 //! acal_thermal`, the device's refresh, also bit for bit), and the blob as a byte array that
-//! `acal_decode` checks and decodes. The decoder and the compensation are the files [`DECODER_H`]
-//! and [`DECODER_C`] (`outputs/src/export/c/`); the decoder reads blob versions 1 and 2 and fills the
+//! `acal_decode` checks and decodes. The decoder and the compensation are the files `DECODER_H`
+//! and `DECODER_C` (`outputs/src/export/c/`); the decoder reads blob versions 1 and 2 and fills the
 //! optional gyro and temperature sections with presence flags.
 //!
 //! `fusion-c` holds `FusionMatrix`/`FusionVector` initialisers for Fusion's inertial model
@@ -31,16 +31,16 @@ use shared::{Calibration, GyroCorrection, TemperatureModel};
 use std::fmt::Write as _;
 
 /// The decoder's header.
-pub const DECODER_H: &str = include_str!("c/acal_blob.h");
+pub(crate) const DECODER_H: &str = include_str!("c/acal_blob.h");
 /// The decoder and the compensation.
-pub const DECODER_C: &str = include_str!("c/acal_blob.c");
+pub(crate) const DECODER_C: &str = include_str!("c/acal_blob.c");
 /// The device's whole per-sample correction (gyro, ω̇ estimate, lever arms, temperature refresh).
-pub const DEVICE_H: &str = include_str!("c/acal_device.h");
+pub(crate) const DEVICE_H: &str = include_str!("c/acal_device.h");
 /// Its implementation.
-pub const DEVICE_C: &str = include_str!("c/acal_device.c");
+pub(crate) const DEVICE_C: &str = include_str!("c/acal_device.c");
 /// A short program of the package: decodes the blob, corrects one sample with the device's code and
 /// prints it (what a firmware engineer copies from).
-pub const EXAMPLE_C: &str = include_str!("c/example.c");
+pub(crate) const EXAMPLE_C: &str = include_str!("c/example.c");
 /// The name of the constants header in the package.
 pub(crate) const HEADER_NAME: &str = "acal_calibration.h";
 
@@ -66,8 +66,8 @@ pub fn write_package(
 }
 
 /// The files of the C package `export --format c --out DIR` writes: the constants header, the
-/// decoder, the device's per-sample correction and [`EXAMPLE_C`], self-contained (the header includes
-/// only them); refused for a calibration no target can take ([`super::check_exportable`]).
+/// decoder, the device's per-sample correction and `EXAMPLE_C`, self-contained (the header includes
+/// only them); refused for a calibration no target can take (`super::check_exportable`).
 pub fn package(input: &ExportInput<'_>) -> Result<Vec<(&'static str, String)>, ExportError> {
     super::check_exportable(&input.cal)?;
     Ok(vec![

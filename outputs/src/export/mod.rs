@@ -458,7 +458,7 @@ impl ExportInput<'_> {
 
 /// Refuses what no format can express faithfully: a negative scale factor
 /// ([`crate::calibration_guard`]).
-pub fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
+pub(crate) fn check_exportable(cal: &Calibration) -> Result<(), ExportError> {
     Ok(crate::calibration_guard::check_scales(cal)?)
 }
 

@@ -18,13 +18,13 @@
 //! the fit down). The points are not independent (every τ uses the same samples, and a random walk
 //! moves all the long-τ points together), so the coefficients' 1σ takes the points' correlation
 //! from short simulated recordings of the fitted terms whose octaves are the record's longest
-//! ([`point_correlation`]), through the fit's weights. That costs less than one Allan curve of the
+//! (`point_correlation`), through the fit's weights. That costs less than one Allan curve of the
 //! record; a parametric bootstrap of the whole fit ([`bootstrap_sigma`]: recordings of the same
 //! length simulated with the fitted terms, each fitted the same way) costs one curve per replicate,
 //! and agrees with it within 30 % (tested). Fixed seeds: the same input gives the same output.
 //!
 //! A term counts as determined by the recording only when its coefficient is at least
-//! [`Z_DETERMINED`] times its 1σ: on white noise alone the fitted B² and K² are noise around zero, and
+//! `Z_DETERMINED` times its 1σ: on white noise alone the fitted B² and K² are noise around zero, and
 //! reporting them as values would invent a bias instability and a random walk. The least significant
 //! undetermined term is dropped and the rest refitted until every remaining one is determined. For a
 //! dropped term the fit gives its 2σ upper bound and the recording length that would determine a
@@ -52,7 +52,7 @@ pub struct AllanPoint {
 }
 
 /// Octave-spaced cluster sizes for `n` samples.
-pub fn octave_sizes(n: usize) -> Vec<usize> {
+pub(crate) fn octave_sizes(n: usize) -> Vec<usize> {
     let mut out = Vec::new();
     let mut m = 1usize;
     while 4 * m <= n / 2 {
@@ -88,7 +88,7 @@ pub fn curve_and_fit(y: &[f64], rate_hz: f64) -> (Vec<AllanPoint>, NoiseTerms) {
 /// Overlapping Allan deviation of rate samples `y` at `rate_hz` for the cluster sizes `sizes`.
 /// `X` is accumulated in f64 after removing the mean, which keeps the second differences exact to
 /// rounding even for long records of a large constant (the mean cancels in the differences).
-pub fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPoint> {
+pub(crate) fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPoint> {
     let n = y.len();
     if n == 0 {
         return Vec::new();
@@ -124,7 +124,7 @@ pub fn overlapping_adev(y: &[f64], rate_hz: f64, sizes: &[usize]) -> Vec<AllanPo
 
 /// A coefficient must be this many times its 1σ to count as determined (one-sided, 3σ: about one
 /// false term in 700 per axis and term on pure white noise).
-pub const Z_DETERMINED: f64 = 3.0;
+pub(crate) const Z_DETERMINED: f64 = 3.0;
 
 /// The longest recording [`TermFit::needs_recording_s`] looks for, as a multiple of the one given.
 const MAX_LENGTH_FACTOR: u32 = 1 << 16;
@@ -135,7 +135,7 @@ pub struct TermFit {
     /// 1σ of the term (same unit as the term), when it is determined.
     pub sigma: Option<f64>,
     /// The fitted coefficient (the term squared) over its 1σ, in the last fit that included it;
-    /// determined at ≥ [`Z_DETERMINED`].
+    /// determined at ≥ `Z_DETERMINED`.
     pub significance: f64,
     /// Not determined: the term's 2σ upper bound from this recording (same unit as the term).
     pub upper_bound_2sigma: Option<f64>,
@@ -191,7 +191,7 @@ impl NoiseTerms {
 
     /// The 1σ of a measured Allan deviation `point` (sample interval `tau0_s`) if these terms are
     /// the noise: its σ²'s 1σ from each term's equivalent degrees of freedom (Greenhall's, as
-    /// allantools computes them; [`point_sd`]) over `2σ`; under white noise alone when no term was
+    /// allantools computes them; `point_sd`) over `2σ`; under white noise alone when no term was
     /// fitted.
     pub fn adev_sigma(&self, point: &AllanPoint, tau0_s: f64) -> f64 {
         let m = ((point.tau_s / tau0_s).round() as usize).max(1);
@@ -340,7 +340,7 @@ fn recording(pts: &[VarPoint]) -> Option<(usize, f64)> {
 /// recordings of `n` samples at `tau0` simulated with those terms, their octave curves fitted on
 /// the same terms; the spread of the fitted coefficients. It costs `replicates` Allan curves of the
 /// whole record, so the fit takes its 1σ from the equivalent degrees of freedom instead
-/// ([`fit_sigma`]); this is the independent check they are tested against.
+/// (`fit_sigma`); this is the independent check they are tested against.
 pub fn bootstrap_sigma(
     n: usize,
     tau0: f64,

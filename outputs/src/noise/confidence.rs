@@ -3,7 +3,7 @@
 //! estimated deviation is `1/√(2(K − 1))` (IEEE Std 952-1997, Annex C, eq. C.13; El-Sheimy, Hou and
 //! Niu, *Analysis and Modeling of Inertial Sensors Using Allan Variance*, IEEE TIM 57(1), 2008,
 //! eq. 13). It is the non-overlapping estimate's; the overlapping one `host noise` computes
-//! ([`super::allan::overlapping_adev`]) is somewhat better, so the bounds are conservative.
+//! (`super::allan::overlapping_adev`) is somewhat better, so the bounds are conservative.
 
 /// The relative 1σ of the Allan deviation at cluster size `m` from `n` samples; `None` when fewer
 /// than two clusters fit (no deviation there).

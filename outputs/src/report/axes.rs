@@ -14,10 +14,10 @@ fn err<E: std::fmt::Debug>(e: E) -> String {
 /// Width of the legend column right of every panel, pixels: the legend never covers data.
 pub const LEGEND_WIDTH_PX: u32 = 200;
 /// Font size of tick labels and legend entries, pixels.
-pub const LABEL_PX: u32 = 12;
+pub(crate) const LABEL_PX: u32 = 12;
 /// A generous width of one character of the label font, pixels (DejaVu Sans at 12 px: 7 at most
 /// for the characters of the labels drawn here).
-pub const CHAR_PX: u32 = 7;
+pub(crate) const CHAR_PX: u32 = 7;
 
 /// How the category labels of an x axis are laid out so that none collides with the next: level
 /// when they fit, else turned upright (all of them, up to one per 16 pixels), else every `step`-th.
@@ -85,12 +85,12 @@ pub fn decades(lo: f64, hi: f64) -> usize {
 
 /// The marker of the `k`-th marker series of a panel: circle, triangle, square, cross, so that
 /// series differ in shape as well as colour.
-pub fn marker_shape(k: usize) -> usize {
+pub(crate) fn marker_shape(k: usize) -> usize {
     k % 4
 }
 
 /// Draws marker `shape` at each of `pts`.
-pub fn draw_markers<'a, DB: DrawingBackend + 'a, X, Y>(
+pub(crate) fn draw_markers<'a, DB: DrawingBackend + 'a, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     pts: &[(f64, f64)],
     shape: usize,
@@ -124,7 +124,7 @@ where
 
 /// The legend in its own column right of the panel: one entry per distinct label, its sample
 /// drawn as the series is (a line, a dashed line, or the series' marker).
-pub fn draw_legend<DB: DrawingBackend>(
+pub(crate) fn draw_legend<DB: DrawingBackend>(
     panel: &Panel,
     area: &DrawingArea<DB, Shift>,
 ) -> Result<(), String> {

@@ -48,7 +48,7 @@ impl ReportSummary {
 
 /// One line per compensation level: the rms over segments of |output − theoretical| and the rms of
 /// the segments' own noise, so the reader sees at once whether "after" is down at the noise.
-pub fn render_before_after(data: &ReportData) -> String {
+pub(crate) fn render_before_after(data: &ReportData) -> String {
     let compared: Vec<_> = data
         .segments
         .iter()

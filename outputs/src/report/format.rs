@@ -39,7 +39,7 @@ pub(crate) fn pm_opt(v: f64, s: Option<f64>, digits: usize) -> String {
 }
 
 /// The reference point of the lever arms, in words (never a type's name).
-pub fn reference_point(r: &shared::ReferencePoint) -> String {
+pub(crate) fn reference_point(r: &shared::ReferencePoint) -> String {
     match r {
         shared::ReferencePoint::TableAxis => "the point on the table's spin axis".into(),
         shared::ReferencePoint::Centroid => "the centroid of the three sensing points".into(),
@@ -53,7 +53,7 @@ pub fn reference_point(r: &shared::ReferencePoint) -> String {
 }
 
 /// A value in g to 0.1 µg, or "—" when there is none (NaN).
-pub fn g_or_dash(v: f64) -> String {
+pub(crate) fn g_or_dash(v: f64) -> String {
     if v.is_finite() {
         format!("{v:+.6}")
     } else {

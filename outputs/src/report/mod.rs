@@ -7,7 +7,7 @@
 //! - The HTML/Markdown report of `host report`: [`data`] (the numbers: segments before and after
 //!   compensation, χ², navigation replays) → [`figures`] (what each figure shows) and [`page`] (the
 //!   document model: Tables 1–4) → [`plot`] (plotters, PNG/SVG, with [`axes`]: legends beside the
-//!   data, labels that never collide, decade ticks) and [`markup`] (Markdown, HTML) →
+//!   data, labels that never collide, decade ticks) and `markup` (Markdown, HTML) →
 //!   [`document`] (the files).
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
 //!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
@@ -23,7 +23,7 @@ pub mod figures;
 mod fit_text_tests;
 pub mod format;
 mod gyro_section;
-pub mod markup;
+pub(crate) mod markup;
 pub mod navigation;
 pub mod navigation_check;
 pub mod page;

@@ -13,7 +13,7 @@
 //! A **noise-free replay**: the recorded mean outputs of a segment (what the unit measures in that
 //! attitude at that rate) are taken as a constant specific force over the whole run (60 s by default),
 //! compensated three ways, gravity (the true specific force above) removed, and integrated twice in body
-//! axes by [`integrate_drift`]. White noise would add a random walk that hides the error the calibration
+//! axes by `integrate_drift`. White noise would add a random walk that hides the error the calibration
 //! leaves; replaying the means shows exactly that error, `½·e·t²`. One static run and one rotating run
 
 use super::data::{Compensation, SegmentRow};
@@ -50,7 +50,7 @@ fn norm(v: &[f64; 3]) -> f64 {
 
 /// Integrates `(t, f)` samples (f: specific force at the reference point, body axes, m/s²) minus the
 /// true specific force `g·up_b`, with the trapezoidal rule, starting at rest.
-pub fn integrate_drift(
+pub(crate) fn integrate_drift(
     samples: impl IntoIterator<Item = (f64, [f64; 3])>,
     true_f_m_s2: [f64; 3],
 ) -> Drift {

@@ -1,5 +1,5 @@
 //! The report page as one document model ([`Block`]s): Tables 1 and 3, the before/after tables
-//! (the paper's Tables 2 and 4), the navigation table, the figures; [`super::markup`] writes it as
+//! (the paper's Tables 2 and 4), the navigation table, the figures; `super::markup` writes it as
 //! Markdown and HTML.
 
 use super::data::Theoretical;

@@ -5,7 +5,7 @@
 //! then rendered by [`render`].
 //!
 //! Text needs a font. plotters is built without `font-kit` (no system font libraries), with `ab_glyph`
-//! and one TrueType font compiled into the binary ([`EMBEDDED_FONT`], DejaVu Sans, licence beside it
+//! and one TrueType font compiled into the binary (`EMBEDDED_FONT`, DejaVu Sans, licence beside it
 //! in `outputs/assets/fonts/`): every machine draws the same PNG and SVG, and nothing is looked up on the
 //! file system or in the environment.
 
@@ -20,10 +20,10 @@ use std::sync::OnceLock;
 
 /// DejaVu Sans (Bitstream Vera licence, `outputs/assets/fonts/LICENSE-DejaVu.txt`), the figures' only
 /// font: embedded so that a machine without fonts draws the same figures as any other.
-pub static EMBEDDED_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+pub(crate) static EMBEDDED_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// The font family the embedded font is registered under.
-pub const FAMILY: &str = "sans-serif";
+pub(crate) const FAMILY: &str = "sans-serif";
 
 /// Registers [`EMBEDDED_FONT`] for the figures once per process; the bytes registered, or `None` if
 /// plotters refused them (a corrupt build; the figures are then drawn without text, SVG only).
@@ -131,7 +131,7 @@ pub enum FigureError {
 }
 
 /// A plotters error of any backend.
-pub type DrawError = Box<dyn std::error::Error + Send + Sync>;
+pub(crate) type DrawError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Which files to write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

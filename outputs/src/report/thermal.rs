@@ -145,7 +145,11 @@ pub struct SoakPoints {
 }
 
 /// [`SoakPoints`] of a session (empty where it has no axis-up/axis-down pair at one temperature).
-pub fn soak_points(o: &CalibrationOutcome, plan: &Plan, stats: &[SegmentStats]) -> SoakPoints {
+pub(crate) fn soak_points(
+    o: &CalibrationOutcome,
+    plan: &Plan,
+    stats: &[SegmentStats],
+) -> SoakPoints {
     let mut p = SoakPoints {
         bias_mg: Default::default(),
         scale_ppm: Default::default(),

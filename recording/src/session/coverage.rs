@@ -65,7 +65,7 @@ pub fn coverage(stills: &[Interval], same_position_deg: f64) -> Coverage {
 }
 
 /// The faces of a six-face session (docs/model.md §7.1), as a consumer MEMS unit shows them: each
-/// still interval labelled by its nearest body axis (within [`FACE_LABEL_DEG`]), all six present;
+/// still interval labelled by its nearest body axis (within `FACE_LABEL_DEG`), all six present;
 /// each axis's bias and scale from the mean outputs of its two faces; and every interval, with
 /// those taken out, within [`SIX_FACE_DEG`] of its label. Raw directions against a tight bound would
 /// refuse a unit whose biases alone tilt a face by more than its placement.

@@ -1,6 +1,6 @@
 //! A session (plan + samples) from one continuous recording cut by [`super::segment`]: every still
 //! interval becomes a static segment whose attitude is free, or the nearest body axis with a prior
-//! when it is within [`AXIS_SNAP_DEG`] of one (a unit set down on its faces, docs/model.md §7); in a
+//! when it is within `AXIS_SNAP_DEG` of one (a unit set down on its faces, docs/model.md §7); in a
 //! six-face session ([`plan_for_faces`]) every still interval is its nearest face with a prior.
 
 use super::import::Recording;
@@ -13,7 +13,7 @@ use crate::session::plan::Attitude;
 use std::path::Path;
 
 /// A still position this close to a body axis is taken as set down on that face, degrees.
-pub const AXIS_SNAP_DEG: f64 = 2.0;
+pub(crate) const AXIS_SNAP_DEG: f64 = 2.0;
 /// Prior 1σ of such a face position about each axis, degrees: a cube's face on a bench that is level
 /// to a fraction of a degree, with the direction measured before calibration (scale and axis errors
 /// of about 1 % and 0.5° move it by as much).

@@ -35,13 +35,13 @@ pub const MAX_LINE_BYTES: usize = 64 * 1024;
 
 /// A text file with more lines longer than [`MAX_LINE_BYTES`] than this is refused: not a damaged
 /// logger's CSV but something else.
-pub const MAX_OVERLONG_LINES: usize = 100;
+pub(crate) const MAX_OVERLONG_LINES: usize = 100;
 /// Most rows held: 4 million rows (about 190 MB) is 67 minutes at 1 kHz, far more than a hand-held
 /// session needs.
 pub const MAX_ROWS: usize = 4_000_000;
 /// Fewest rows (or samples) of a recording that `segment` cuts into a session: a second at 100 Hz,
 /// shorter than one still position.
-pub const MIN_SESSION_ROWS: usize = 100;
+pub(crate) const MIN_SESSION_ROWS: usize = 100;
 /// The default accelerometer and gyro column names, x y z each.
 pub const DEFAULT_COLUMNS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
 
@@ -178,7 +178,7 @@ pub struct Recording {
     /// The last line, left out because it has no line end (the file was cut short).
     pub unterminated_line: Option<u64>,
     /// Lines longer than [`MAX_LINE_BYTES`], left out (damaged lines; at most
-    /// [`MAX_OVERLONG_LINES`]).
+    /// `MAX_OVERLONG_LINES`).
     pub overlong_lines: Vec<u64>,
     /// Counts subtracted from each accelerometer axis on reading (the session is written with them
     /// added back, so that the calibration applies to the logger's own outputs).
@@ -438,7 +438,7 @@ pub fn read_logger_csv(path: &Path, options: &ImportOptions) -> Result<Recording
 }
 
 /// [`read_logger_csv`] on any reader (`path` only names it in messages).
-/// A hand-held session's file: fewer than [`MIN_SESSION_ROWS`] rows are refused for it.
+/// A hand-held session's file: fewer than `MIN_SESSION_ROWS` rows are refused for it.
 pub fn read_logger<R: BufRead>(
     r: R,
     path: &Path,

@@ -90,13 +90,13 @@ pub const PLAN_FORMAT_VERSION_TEMPERATURE: u32 = RecordingVersion::V3Temperature
 /// unit's own seating on the fixture is counted; 0.05° (3 arc-minutes) is the order of a good
 /// commercial fixture and its seating repeatability. Taking it as exact instead costs ~1 mg at this
 /// level (docs/model.md §7), while a prior that is somewhat too wide costs almost nothing.
-pub const DEFAULT_ATTITUDE_SIGMA_DEG: f64 = 0.05;
+pub(crate) const DEFAULT_ATTITUDE_SIGMA_DEG: f64 = 0.05;
 
 /// 1σ of a rate table's relative rate error when the plan says nothing, ppm: 0.001 %, a good
 /// precision rate table's rate accuracy averaged over whole turns (such tables quote 1–10 ppm; a
 /// plain turntable without an encoder-locked servo is worse, and its plan should say so). The gyro's
 /// scale factors cannot be better than this.
-pub const DEFAULT_TABLE_RATE_SIGMA_PPM: f64 = 10.0;
+pub(crate) const DEFAULT_TABLE_RATE_SIGMA_PPM: f64 = 10.0;
 
 /// How a segment's attitude is known.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -144,11 +144,11 @@ pub struct Plan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit_id: Option<String>,
     /// 1σ of each mount's tilt away from its nominal up, per axis, degrees (format 2). Absent:
-    /// [`DEFAULT_ATTITUDE_SIGMA_DEG`]; 0: the fixture is taken as exact.
+    /// `DEFAULT_ATTITUDE_SIGMA_DEG`; 0: the fixture is taken as exact.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attitude_sigma_deg: Option<f64>,
     /// 1σ of the rate table's relative rate error, ppm (format 2): the gyro's scale factors cannot
-    /// be better. Absent: [`DEFAULT_TABLE_RATE_SIGMA_PPM`].
+    /// be better. Absent: `DEFAULT_TABLE_RATE_SIGMA_PPM`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table_rate_sigma_ppm: Option<f64>,
     /// Whether the three accelerometers share one package (`"single"`: a MEMS IMU, one lever arm for

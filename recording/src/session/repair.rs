@@ -11,7 +11,7 @@
 //! 3. A local reordering (messages swapped in a recorder's queue) is sorted.
 //! 4. An exact repeat (the same stamp and the same values) is dropped; samples with a repeated stamp
 //!    but their own values are spread evenly up to the next stamp.
-//! 5. Jitter is kept; the rate is the mean over the steps that are no gap ([`run_rate_hz`]), which
+//! 5. Jitter is kept; the rate is the mean over the steps that are no gap (`run_rate_hz`), which
 //!    neither jitter nor a dropout biases; a real gap (more than [`GAP_PERIODS`] periods) stays a
 //!    gap, and segmentation neither spans nor integrates across it.
 //!
@@ -172,7 +172,7 @@ fn places<'a, T: 'a>(items: impl Iterator<Item = &'a T>, f: impl Fn(&T) -> Strin
 /// The repaired order: `(index in the file, time s)` of each sample kept, in time order, and what
 /// was done. `same(i, j)`: samples `i` and `j` hold the same values (an exact repeat when their
 /// stamps are equal too). Non-finite stamps are the reader's to leave out before this.
-pub fn repair_times(
+pub(crate) fn repair_times(
     t_s: &[f64],
     same: impl Fn(usize, usize) -> bool,
 ) -> (Vec<(usize, f64)>, TimeRepairs) {
@@ -208,7 +208,7 @@ pub fn repair_times(
     (order, rep)
 }
 
-/// A text file's rows in time order, their stamps mended ([`repair_times`]; rows whose values
+/// A text file's rows in time order, their stamps mended (`repair_times`; rows whose values
 /// and stamps are equal are exact repeats), and the repairs kept with them as "data row"s.
 pub fn repair_rows(rec: &mut super::import::Recording) {
     repair_rows_saying(rec, |_, _, repairs| repairs);
@@ -237,7 +237,7 @@ pub(crate) fn repair_rows_saying(
 }
 
 /// The median of the positive steps, s (`None` when no step is).
-pub fn median_step(t_s: &[f64]) -> Option<f64> {
+pub(crate) fn median_step(t_s: &[f64]) -> Option<f64> {
     let mut dt: Vec<f64> = t_s
         .windows(2)
         .map(|w| w[1] - w[0])
@@ -372,7 +372,7 @@ fn repeated_stamps(
 /// as the whole number of periods it spans, Hz (0 for fewer than two samples): a dropout of one
 /// sample is two periods, not a slower clock, and jitter averages out, where the median step of
 /// jittered stamps is off by a part of the jitter.
-pub fn run_rate_hz(t_s: &[f64]) -> f64 {
+pub(crate) fn run_rate_hz(t_s: &[f64]) -> f64 {
     let Some(dt) = median_step(t_s) else {
         return 0.0;
     };

@@ -82,7 +82,7 @@ pub const SIX_FACE_DEG: f64 = 7.5;
 /// A still position's raw direction labels it with its nearest body axis only within this angle,
 /// degrees: a consumer MEMS unit's biases of up to 100 mg on two axes move it 8°, a 5° placement as
 /// much again; 25° keeps every label unambiguous (the axes are 90° apart).
-pub const FACE_LABEL_DEG: f64 = 25.0;
+pub(crate) const FACE_LABEL_DEG: f64 = 25.0;
 
 /// What the still positions are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -6,7 +6,7 @@ use super::{basis, point_sd, NoiseTerms, VarPoint};
 use serde::{Deserialize, Serialize};
 
 /// A term fitted this many times its 1σ below zero is named a model misfit (the mirror of
-/// [`super::Z_DETERMINED`]: as rare on a curve the model describes as a false term).
+/// `super::Z_DETERMINED`: as rare on a curve the model describes as a false term).
 pub const Z_MISFIT: f64 = 3.0;
 
 /// A point this many times its 1σ from the fitted curve means the curve does not describe the

@@ -274,7 +274,7 @@ pub(super) fn time_unit_error(
     }
 }
 
-/// `x` to six significant digits, as [`short_number`] prints it (a median step of 0.01 read from
+/// `x` to six significant digits, as `short_number` prints it (a median step of 0.01 read from
 /// text is 0.009999999999999787).
 pub fn six_digits(x: f64) -> String {
     short_number(format!("{x:.5e}").parse().unwrap_or(x))

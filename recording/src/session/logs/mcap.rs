@@ -2,7 +2,7 @@
 //! `header.stamp` (the driver's sample time; the bag's log time is when the recorder got it).
 //!
 //! The container is read by Foxglove's `mcap` crate (the format's reference implementation) with its
-//! streaming `LinearReader`, every record capped in length ([`RECORD_LIMIT`]). Chunks come out whole
+//! streaming `LinearReader`, every record capped in length (`RECORD_LIMIT`). Chunks come out whole
 //! and are decompressed and walked here (`State::chunk`): the crate's own walk of a chunk's records
 //! subtracts a record's length from what is left of the chunk unchecked, which overflows on a
 //! damaged chunk (our fuzz target found it), so the lengths are checked here instead. The message is decoded by hand ([`decode_imu`]): a CDR
@@ -23,7 +23,7 @@ use std::io::Read;
 pub const MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
 /// The longest record accepted, bytes: a whole chunk, compressed or not (writers make chunks of
 /// about 1 MiB; an Imu message is about 330 bytes).
-pub const RECORD_LIMIT: usize = 64 << 20;
+pub(crate) const RECORD_LIMIT: usize = 64 << 20;
 /// The ROS 2 message type read.
 const IMU_SCHEMA: &str = "sensor_msgs/msg/Imu";
 /// Most channels remembered (for the listing in an error).

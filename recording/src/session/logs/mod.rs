@@ -113,7 +113,7 @@ pub fn read_log(path: &Path, source: &LogSource) -> Result<LogFile, LogError> {
 /// its quiet stretches and the turns between them are kept (`keep`), the first `max_samples` of
 /// them; a warning says what was left out.
 ///
-/// It reads a hand-held session: fewer than [`MIN_SESSION_ROWS`] samples are refused for it.
+/// It reads a hand-held session: fewer than `MIN_SESSION_ROWS` samples are refused for it.
 pub fn read_log_keeping(
     path: &Path,
     source: &LogSource,

@@ -1,6 +1,6 @@
 //! The vehicle's own parameters as its log carries them (ArduPilot's `PARM` messages, PX4's ULog
 //! parameter messages) and the device ids of PX4's sensor topics: what a log's IMU stream already
-//! went through ([`super::ardupilot`]), and which calibration slot a sensor holds.
+//! went through (`super::ardupilot`), and which calibration slot a sensor holds.
 //!
 //! The slots follow the autopilots' own lookup. PX4 (`PX4/PX4-Autopilot`
 //! `src/lib/sensor_calibration/Utilities.cpp`): `FindCurrentCalibrationIndex` takes the first of
@@ -43,7 +43,7 @@ pub struct VehicleParams {
     pub accel_ids: BTreeMap<u8, u32>,
     /// PX4: `sensor_gyro.device_id` per instance.
     pub gyro_ids: BTreeMap<u8, u32>,
-    /// Parameters left out beyond [`MAX_PARAMS`].
+    /// Parameters left out beyond `MAX_PARAMS`.
     pub left_out: usize,
 }
 
