@@ -46,7 +46,7 @@ pub trait Operator<T: Transport> {
 }
 
 /// Nobody: the pose checks are skipped.
-pub struct NoOperator;
+pub(crate) struct NoOperator;
 
 impl<T: Transport> Operator<T> for NoOperator {
     fn pose(&mut self, _: Pose, _: &mut DeviceClient<T>) -> Result<bool, LinkError> {
@@ -87,15 +87,15 @@ impl<T: Transport> Operator<T> for TableOperator {
 
 /// Largest off-axis component of gravity in a pose, g: ≈ 11.5° of tilt, or a bias far beyond an
 /// uncalibrated part's tens of mg.
-pub const POSE_OFF_AXIS_G: f64 = 0.2;
+pub(crate) const POSE_OFF_AXIS_G: f64 = 0.2;
 /// An axis noisier than this many times the quietest one is a noisy axis.
-pub const NOISE_AXIS_RATIO: f64 = 3.0;
+pub(crate) const NOISE_AXIS_RATIO: f64 = 3.0;
 /// The measured noise may exceed the datasheet's density over the whole Nyquist band by this
 /// factor (the parts' own filters keep it below that band's).
-pub const NOISE_DATASHEET_FACTOR: f64 = 2.0;
+pub(crate) const NOISE_DATASHEET_FACTOR: f64 = 2.0;
 /// Repeated gyro samples allowed while waved (a sample's three rates equal to the previous
 /// one's; with noise and motion a real repeat is practically impossible).
-pub const REPEATS_ALLOWED_FRACTION: f64 = 0.005;
+pub(crate) const REPEATS_ALLOWED_FRACTION: f64 = 0.005;
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 

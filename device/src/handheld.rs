@@ -19,14 +19,14 @@ use shared::OutputUnit;
 use std::collections::VecDeque;
 
 /// Hold needed before a position is taken as still, s.
-pub const STILL_HOLD_S: f64 = 1.0;
+pub(crate) const STILL_HOLD_S: f64 = 1.0;
 /// Longest wait for a new still position, s.
 pub(crate) const MAX_WAIT_S: f64 = 300.0;
 /// Gyro window means steadier than this over the hold: still, rad/s (0.5 °/s).
-pub const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
+pub(crate) const STILL_GYRO_STD_RAD_S: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Accelerometer window means steadier than this fraction of the output's magnitude: still (2 mg
 /// of a zero-centred output).
-pub const STILL_ACC_STD_REL: f64 = 2e-3;
+pub(crate) const STILL_ACC_STD_REL: f64 = 2e-3;
 /// Still means a mean rate within this of the gyro's offset (read at the first position), rad/s
 /// (1 °/s: 5° over a 5 s position).
 const STILL_RATE_RAD_S: f64 = 1.0 * std::f64::consts::PI / 180.0;

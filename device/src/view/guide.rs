@@ -14,7 +14,7 @@ use shared::linalg;
 
 /// Positions an output with an offset needs before its rough zero and scale are known: a diagonal
 /// ellipsoid has six unknowns.
-pub const ELLIPSOID_MIN: usize = 6;
+pub(crate) const ELLIPSOID_MIN: usize = 6;
 
 /// Parameters of the magnitude-only static model a free attitude determines (docs/model.md §7):
 /// three biases and the six entries of the symmetric scale matrix.
@@ -38,7 +38,7 @@ impl RoughScale {
 
 /// The rough scale of an output from its still positions' mean outputs: zero at zero for a
 /// zero-centred output (its scale the mean magnitude), else the diagonal ellipsoid through them.
-pub fn rough_scale(zero_centred: bool, positions: &[[f64; 3]]) -> Option<RoughScale> {
+pub(crate) fn rough_scale(zero_centred: bool, positions: &[[f64; 3]]) -> Option<RoughScale> {
     if positions.is_empty() {
         return None;
     }
@@ -147,7 +147,7 @@ fn axis_name(k: usize, sign: f64) -> String {
 /// How to reach up `target` (body axes) in the operator's words: which side of the housing goes
 /// down ("tilt so that −y points down"), how far the unit leans off it and towards which side, and
 /// how far it is from `now` when the current attitude is known.
-pub fn turn_words(now: Option<&[f64; 3]>, target: &[f64; 3]) -> String {
+pub(crate) fn turn_words(now: Option<&[f64; 3]>, target: &[f64; 3]) -> String {
     let t = linalg::unit(target);
     let (k, sign, lean) = nearest_axis(&t);
     let mut words = format!("tilt so that {} points down", axis_name(k, -sign));
@@ -189,7 +189,7 @@ fn free_row(d: &[f64; 3]) -> [f64; FREE_PARAMS] {
 /// The predicted 1σ of a hand-held session's biases (mg) and scale factors (ppm), worst axis, from
 /// the positions' ups and each one's 1σ of the mean specific force, g: the Cramér–Rao bound of the
 /// magnitude-only model (docs/model.md §7). `None` until the positions determine all nine.
-pub fn free_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
+pub(crate) fn free_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
     let cov = free_covariance(positions, 0.0)?;
     Some(worst_sigma(&cov, FREE_PARAMS))
 }
@@ -219,7 +219,7 @@ fn worst_sigma(cov: &DMatrix<f64>, n: usize) -> (f64, f64) {
 /// The predicted 1σ of a table session's biases (mg) and scale factors (ppm), worst axis: each
 /// axis's output is linear in the known up (bias and a row of the scale matrix, docs/model.md §2).
 /// `None` until four positions not in one plane.
-pub fn table_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
+pub(crate) fn table_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
     let mut info = DMatrix::<f64>::zeros(4, 4);
     for (d, sigma_g) in positions {
         let r = DVector::from_row_slice(&[1.0, d[0], d[1], d[2]]);
@@ -235,7 +235,7 @@ pub fn table_sigma(positions: &[([f64; 3], f64)]) -> Option<(f64, f64)> {
 
 /// The targets not yet done, best first: the one whose position most lowers the summed variance of
 /// the biases and scale factors (A-optimal) given the positions so far; ties in plan order.
-pub fn rank_targets(positions: &[([f64; 3], f64)], targets: &[Target]) -> Vec<usize> {
+pub(crate) fn rank_targets(positions: &[([f64; 3], f64)], targets: &[Target]) -> Vec<usize> {
     let sigma = positions.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
     let sigma = if sigma.is_finite() { sigma } else { 1e-3 };
     let score = |t: &Target| {
@@ -256,7 +256,7 @@ pub fn rank_targets(positions: &[([f64; 3], f64)], targets: &[Target]) -> Vec<us
 }
 
 /// Marks the targets that a position at one of `ups` covers (within `within_deg`).
-pub fn mark_done(targets: &mut [Target], ups: &[[f64; 3]], within_deg: f64) {
+pub(crate) fn mark_done(targets: &mut [Target], ups: &[[f64; 3]], within_deg: f64) {
     let cos = within_deg.to_radians().cos();
     for t in targets.iter_mut() {
         t.done = ups

@@ -3,10 +3,10 @@
 //! feeds a [`Live`] (its windows through the client's tap, its steps through [`Live`]'s methods);
 //! [`server`] serves its snapshot as JSON beside one HTML page built into the binary, read-only.
 //!
-//! [`guide`] holds what the page and the terminal prompts both say: gravity's direction, the
+//! `guide` holds what the page and the terminal prompts both say: gravity's direction, the
 //! targets still missing and the turn that reaches the best of them.
 
-pub mod guide;
+pub(crate) mod guide;
 pub mod server;
 
 use crate::handheld::{STILL_ACC_STD_REL, STILL_GYRO_STD_RAD_S, STILL_HOLD_S};

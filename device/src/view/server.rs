@@ -149,7 +149,7 @@ fn answer(request: tiny_http::Request, live: &Live, port: u16) -> std::io::Resul
 
 /// Opens `url` in the user's browser where there is one to open: `$BROWSER`, else `xdg-open` when
 /// a display is set. Returns whether one was started.
-pub fn open_in_browser(url: &str) -> bool {
+pub(crate) fn open_in_browser(url: &str) -> bool {
     let browser = std::env::var_os("BROWSER").filter(|b| !b.is_empty());
     let display = std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
         || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|d| !d.is_empty());

@@ -65,7 +65,7 @@ impl Output {
 }
 
 /// The one JSON error document: the message, its kind ("usage" or "error") and the exit status.
-pub(crate) fn error_json(message: &str, kind: &str, exit_code: i32) -> String {
+pub fn error_json(message: &str, kind: &str, exit_code: i32) -> String {
     serde_json::json!({ "error": message, "kind": kind, "exit_code": exit_code }).to_string()
 }
 

@@ -101,7 +101,7 @@ pub fn write_ulog(samples: &[LogSample], dropout: Option<usize>) -> Vec<u8> {
 }
 
 /// One IMU of a ULog: its samples and its sensors' device ids.
-pub struct UlogImu<'a> {
+pub(crate) struct UlogImu<'a> {
     /// The samples.
     pub samples: &'a [LogSample],
     /// `sensor_accel.device_id`.
@@ -112,7 +112,7 @@ pub struct UlogImu<'a> {
 
 /// A PX4 ULog parameter: `int32_t` (`Int`) or `float`.
 #[derive(Clone, Copy, Debug)]
-pub enum UlogParam {
+pub(crate) enum UlogParam {
     /// An `int32_t` parameter (ids are stored as their int32 bits).
     Int(i32),
     /// A `float` parameter.
@@ -122,7 +122,7 @@ pub enum UlogParam {
 /// [`write_ulog`] for several IMUs (IMU `i` is `multi_id` `i`, its messages interleaved sample by
 /// sample) with the parameter messages `params` in the definitions section, as PX4's logger writes
 /// its start-up parameters (`P`: key length, `"type name"`, value).
-pub fn write_ulog_imus(
+pub(crate) fn write_ulog_imus(
     imus: &[UlogImu<'_>],
     params: &[(&str, UlogParam)],
     dropout: Option<usize>,
@@ -201,7 +201,7 @@ pub fn write_dataflash(samples: &[LogSample]) -> Vec<u8> {
 
 /// The parameters ArduPilot corrects `instances` IMUs with (`_rotate_and_correct_accel`), each at
 /// its default (offsets 0, scales 1, no board rotation), and the IMUs' ids.
-pub fn ardupilot_default_params(instances: u8) -> Vec<(String, f32)> {
+pub(crate) fn ardupilot_default_params(instances: u8) -> Vec<(String, f32)> {
     let mut v = vec![("AHRS_ORIENTATION".to_string(), 0.0)];
     for i in 0..instances {
         let sfx = if i == 0 {
@@ -223,7 +223,7 @@ pub fn ardupilot_default_params(instances: u8) -> Vec<(String, f32)> {
 /// A DataFlash log: `FMT`s, the `PARM` messages `params` (format `QNf`, as ArduPilot's
 /// `Write_Parameter`), then IMU `i`'s samples as `IMU` messages with `I = i`, interleaved sample by
 /// sample.
-pub fn write_dataflash_imus(imus: &[&[LogSample]], params: &[(String, f32)]) -> Vec<u8> {
+pub(crate) fn write_dataflash_imus(imus: &[&[LogSample]], params: &[(String, f32)]) -> Vec<u8> {
     let fmt = |ty: u8, len: u8, name: &str, format: &str, cols: &str| {
         let mut b = vec![0xA3, 0x95, 0x80, ty, len];
         for (s, n) in [(name, 4), (format, 16), (cols, 64)] {
@@ -320,7 +320,7 @@ pub(crate) fn write_mcap_with(
 
 /// [`write_mcap`] of a driver that stamps nothing: every `header.stamp` 0, the log time the
 /// sample's time (the recorder's clock).
-pub fn write_mcap_unstamped(samples: &[LogSample]) -> Vec<u8> {
+pub(crate) fn write_mcap_unstamped(samples: &[LogSample]) -> Vec<u8> {
     write_mcap_stamped(samples, None, 0.0, None, |_| 0.0)
 }
 

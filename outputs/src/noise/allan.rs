@@ -14,7 +14,7 @@
 //! B, random walk K): linear in (N², B², K²), solved by least squares with each point weighted by the
 //! 1σ of its σ², `Σ_r v_r(τ) √(2/ν_r)` over the terms' shares `v_r` with `ν_r` their equivalent
 //! degrees of freedom at that τ and record length (Greenhall's, as allantools computes them:
-//! [`edf_overlapping_adev`]; the model's σ², not the measured one, so that a low point does not pull
+//! `edf_overlapping_adev`; the model's σ², not the measured one, so that a low point does not pull
 //! the fit down). The points are not independent (every τ uses the same samples, and a random walk
 //! moves all the long-τ points together), so the coefficients' 1σ takes the points' correlation
 //! from short simulated recordings of the fitted terms whose octaves are the record's longest

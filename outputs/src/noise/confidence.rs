@@ -104,7 +104,7 @@ fn table2(alpha: i32) -> (f64, f64) {
 /// distributions", 2004), case 2 (unmodified variance, α ≤ 0) with d = 2, F = S = m, as allantools
 /// computes it (`allantools/ci.py`, `edf_greenhall`, version 2024.6; allantools' `oadev`
 /// confidence intervals use it). `None` where no second difference fits.
-pub fn edf_overlapping_adev(law: PowerLaw, m: usize, n: usize) -> Option<f64> {
+pub(crate) fn edf_overlapping_adev(law: PowerLaw, m: usize, n: usize) -> Option<f64> {
     let alpha = law.alpha();
     let (m, phase) = (m as f64, n as f64 + 1.0);
     // Filter length L = m/F + m d = 1 + 2m; M = 1 + ⌊S (N − L)/m⌋ second differences.

@@ -57,7 +57,7 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 
 /// The period a robust fit of stamp against sample index gives, s: the median of
 /// `(t[i + k] − t[i]) / k` over the log, `k` a sixteenth of it (at most 512 samples).
-pub fn fitted_period_s(t_s: &[f64]) -> Option<f64> {
+pub(crate) fn fitted_period_s(t_s: &[f64]) -> Option<f64> {
     let n = t_s.len();
     if n < 4 {
         return None;
@@ -86,7 +86,7 @@ fn burst_period_s(t_s: &[f64], starts: &[usize]) -> Option<f64> {
 }
 
 /// Re-times `t_s` (sorted) where it comes in bursts (module docs); `None` where it does not.
-pub fn retime_bursts(t_s: &mut [f64]) -> Option<Bursts> {
+pub(crate) fn retime_bursts(t_s: &mut [f64]) -> Option<Bursts> {
     let n = t_s.len();
     if n < MIN_SAMPLES {
         return None;
@@ -140,7 +140,7 @@ pub fn retime_bursts(t_s: &mut [f64]) -> Option<Bursts> {
 
 /// A text file's rows re-timed where their stamps come in bursts, said beside the file's other
 /// time repairs ("data row").
-pub fn retime_rows(rec: &mut super::import::Recording) {
+pub(crate) fn retime_rows(rec: &mut super::import::Recording) {
     let Some(b) = retime_bursts(&mut rec.t_s) else {
         return;
     };

@@ -11,30 +11,30 @@
 //! samples a window holds.
 //!
 //! A window is a **table rest** when, on both streams, its spread is consistent with the floor (a
-//! χ² test at [`LEVEL_Z`], one-sided) and the means of its two halves agree within the floor's
+//! χ² test at `LEVEL_Z`, one-sided) and the means of its two halves agree within the floor's
 //! noise (χ² with 3 degrees of freedom at the same level). A window that fails only because a hand
 //! holds it is a **hand-held rest** when it has a person's tremor and nothing more: its spread
-//! exceeds the floor by at most [`HAND_ACC_MG`] and [`HAND_GYRO_DEG_S`], its accelerometer mean
-//! moves by at most [`HAND_DRIFT_MG`] between its halves and its mean rate is within
-//! [`HAND_RATE_DEG_S`] of the gyro's rest output (a turn, however slow, moves gravity across the
+//! exceeds the floor by at most `HAND_ACC_MG` and `HAND_GYRO_DEG_S`, its accelerometer mean
+//! moves by at most `HAND_DRIFT_MG` between its halves and its mean rate is within
+//! `HAND_RATE_DEG_S` of the gyro's rest output (a turn, however slow, moves gravity across the
 //! accelerometers and turns the gyro). A session may hold both kinds.
 
 /// One-sided normal quantile of the tests' level, 10⁻⁴ per window (each window is tested, so a long
 /// rest is not cut by chance).
-pub const LEVEL_Z: f64 = 3.719;
+pub(crate) const LEVEL_Z: f64 = 3.719;
 /// The same level as a χ² quantile with three degrees of freedom (the halves' means).
 const CHI2_3_LEVEL: f64 = 21.11;
 /// Hand-held rest: the accelerometer spread beyond the floor a person's tremor adds, mg (rms over
 /// the three axes; a tremor of 1–3 mg of linear acceleration and a wobble of a tenth of a degree).
-pub const HAND_ACC_MG: f64 = 10.0;
+pub(crate) const HAND_ACC_MG: f64 = 10.0;
 /// Hand-held rest: the gyro spread beyond the floor a person's tremor adds, °/s (rms over the
 /// three axes; tremor is 0.5–2 °/s).
-pub const HAND_GYRO_DEG_S: f64 = 3.0;
+pub(crate) const HAND_GYRO_DEG_S: f64 = 3.0;
 /// Hand-held rest: how far the accelerometer mean may move between a window's halves, mg (the
 /// gravity vector turned by 0.3°).
-pub const HAND_DRIFT_MG: f64 = 5.0;
+pub(crate) const HAND_DRIFT_MG: f64 = 5.0;
 /// Hand-held rest: how far the window's mean rate may be from the gyro's rest output, °/s.
-pub const HAND_RATE_DEG_S: f64 = 2.0;
+pub(crate) const HAND_RATE_DEG_S: f64 = 2.0;
 
 /// Running sums of one stream (values and squared successive differences, per axis) for any
 /// window's mean, spread and white noise in O(1).
@@ -96,7 +96,7 @@ impl Stream {
 
 /// One stream's noise at rest, measured from the recording.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Floor {
+pub(crate) struct Floor {
     /// Spread of a window at rest, per axis (variance about the window's mean), squared unit.
     pub var: [f64; 3],
     /// Its white part, per axis (from successive differences), squared unit.
@@ -285,7 +285,7 @@ pub(crate) enum Rest {
 
 /// A hand-held rest is told from the slow start of a turn only over a longer stretch than a
 /// window: a run of hand-held windows loses this much more at each end, s.
-pub const HAND_EDGE_S: f64 = 0.2;
+pub(crate) const HAND_EDGE_S: f64 = 0.2;
 
 /// Which window centres are quiet: a run of quiet windows that holds a table rest loses the
 /// hand-held windows at its ends (the start and end of the turns around it, which a tremor's

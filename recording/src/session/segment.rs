@@ -64,9 +64,9 @@ pub struct StillThreshold {
 }
 
 /// A still accelerometer's floor is under this, mg: above it nothing in the recording is still.
-pub const MAX_ACC_FLOOR_MG: f64 = 20.0;
+pub(crate) const MAX_ACC_FLOOR_MG: f64 = 20.0;
 /// A still gyro's floor (a hand's tremor included) is under this, °/s: above it nothing is still.
-pub const MAX_GYRO_FLOOR_DEG_S: f64 = 5.0;
+pub(crate) const MAX_GYRO_FLOOR_DEG_S: f64 = 5.0;
 
 /// Fewest distinct still positions for the intrinsic parameters from gravity's magnitude alone (nine
 /// unknowns: 3 biases, 3 scales, 3 non-orthogonalities; docs/model.md §7).
@@ -267,8 +267,8 @@ fn mean_std(x: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (m, s)
 }
 
-/// A still accelerometer (a floor under [`MAX_ACC_FLOOR_MG`]) beside a gyro whose floor is above
-/// [`MAX_GYRO_FLOOR_DEG_S`] (more than any hand shakes) and under 200 °/s: 57× a still gyro's
+/// A still accelerometer (a floor under `MAX_ACC_FLOOR_MG`) beside a gyro whose floor is above
+/// `MAX_GYRO_FLOOR_DEG_S` (more than any hand shakes) and under 200 °/s: 57× a still gyro's
 /// 0.02–3 °/s, as a gyro in °/s read as rad/s moves. A rad/s gyro held in a hand (0.5–2 °/s of
 /// tremor) is under the floor's limit, so it is never taken for one.
 pub fn gyro_unit_suspect(acc_mg: f64, gyro_deg_s: f64) -> bool {

@@ -250,7 +250,7 @@ impl VehicleParams {
 }
 
 /// ArduPilot's per-instance parameter name: `INS_ACC` + (``, `2`, `3`) + `rest`.
-pub fn ardupilot_name(stem: &str, instance: u8, rest: &str) -> String {
+pub(crate) fn ardupilot_name(stem: &str, instance: u8, rest: &str) -> String {
     match instance {
         0 => format!("{stem}{rest}"),
         n => format!("{stem}{}{rest}", n + 1),
@@ -258,7 +258,7 @@ pub fn ardupilot_name(stem: &str, instance: u8, rest: &str) -> String {
 }
 
 /// `INS_ACC_ID`, `INS_ACC2_ID`, `INS_GYR3_ID`, ….
-pub fn ardupilot_id_name(kind: SensorKind, instance: u8) -> String {
+pub(crate) fn ardupilot_id_name(kind: SensorKind, instance: u8) -> String {
     let stem = match kind {
         SensorKind::Accel => "INS_ACC",
         SensorKind::Gyro => "INS_GYR",
