@@ -21,6 +21,24 @@ pub enum EstimateError {
         /// Directions along which an attitude is missing (unit vectors, body axes).
         needed_directions: Vec<[f64; 3]>,
     },
+    /// Too few static positions are left for a fit with free attitudes (a hand-held or six-face
+    /// session, docs/model.md §7).
+    #[error(
+        "{left} static position(s) left of the {planned} planned; a fit without known attitudes \
+         needs {needed}: re-record the positions left out, or record more. Left out ({}):\n  - {}",
+        .dropped.len(),
+        .dropped.join("\n  - ")
+    )]
+    TooFewPositions {
+        /// Distinct static positions left after screening.
+        left: usize,
+        /// Positions the fit needs.
+        needed: usize,
+        /// Static segments in the plan.
+        planned: usize,
+        /// Every segment left out, with its reason, figure and limit.
+        dropped: Vec<String>,
+    },
     /// The plan cannot determine these parameters.
     #[error("the plan cannot determine {}: {hint}", .parameters.join(", "))]
     PlanCannotObserve {
