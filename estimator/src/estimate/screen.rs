@@ -547,6 +547,7 @@ pub(crate) fn static_fit_with_attitude_check(
             return Err(EstimateError::TooFewAttitudes {
                 attitudes: ups.len(),
                 needed_directions: missing,
+                dropped: excluded.iter().map(|e| e.to_string()).collect(),
             });
         }
         // Fast path: when the fit on all static segments leaves every one within a tenth of the

@@ -131,3 +131,37 @@ fn screen_refusal_counts_positions_left_and_names_every_segment_left_out() {
         );
     }
 }
+
+#[test]
+fn screen_refusal_on_a_fixture_names_the_segments_left_out() {
+    // The paper's plan: six faces. Both z faces turned (planted 2 and 3 °/s): the four left lie in
+    // the xy plane.
+    let plan = testkit::paper_plan(OutputUnit::Volts);
+    let (_, mut stats) = clean_session(&plan, 7);
+    let z: Vec<usize> = (0..stats.len())
+        .filter(|&k| plan.segments[k].is_static() && plan.segments[k].up_b[2] != 0.0)
+        .collect();
+    assert_eq!(z.len(), 2);
+    for (n, &k) in z.iter().enumerate() {
+        stats[k].mean_w_rad_s = [(2.0 + n as f64).to_radians(), 0.0, 0.0];
+    }
+    let e = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, EstimateError::TooFewAttitudes { attitudes: 4, ref dropped, .. } if dropped.len() == 2),
+        "{e:?}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("the 4 usable static attitude(s)") && text.contains("at least four"),
+        "{text}"
+    );
+    for (n, &k) in z.iter().enumerate() {
+        let planted = format!("{:.3} °/s > limit 0.500 °/s", 2.0 + n as f64);
+        let name = format!("'{}'", plan.segments[k].name);
+        assert!(
+            text.lines()
+                .any(|l| l.contains(&name) && l.contains(&planted)),
+            "{name} with {planted} in:\n{text}"
+        );
+    }
+}
