@@ -80,9 +80,11 @@ pub fn calibrate_recording(
     summary
         .warnings
         .extend(recording.reader_warnings.iter().cloned());
+    let mut document = CalibrationDocument::new(summary);
+    document.set_excluded(&outcome.excluded);
     Ok(Calibrated {
         outcome,
-        document: CalibrationDocument::new(summary),
+        document,
         unit_id,
         gyro_from_hand_turns,
     })

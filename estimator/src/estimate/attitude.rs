@@ -241,6 +241,11 @@ pub(crate) fn recentre_free(problem: &mut Problem, theta: &mut [f64]) {
     }
 }
 
+/// Static positions (distinct mounts) a fit with every attitude free needs: three equations per
+/// position against two tilts per position and the nine intrinsic parameters the frame leaves free
+/// (3n ≥ 2n + 9, docs/model.md §7).
+pub(crate) const FREE_POSITIONS_NEEDED: usize = 9;
+
 /// The static fit when the fixture's static attitudes do not determine `M` and `u0` but at least
 /// nine static mounts (free or not) do: |gravity| fixes the intrinsic parameters; the known mounts
 /// (or the convention) fix the frame. Starts from the per-axis output range (`u0` at its middle,
@@ -260,7 +265,9 @@ pub(crate) fn free_static_fit(
         .iter()
         .map(|&k| problem.models[k].tilt.index)
         .collect();
-    if static_mounts.len() < 9 || problem.mounts.iter().all(|m| m.prior_rad.is_some()) {
+    if static_mounts.len() < FREE_POSITIONS_NEEDED
+        || problem.mounts.iter().all(|m| m.prior_rad.is_some())
+    {
         return Err(fallback);
     }
     let n = problem.n_params();

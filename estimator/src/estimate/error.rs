@@ -20,6 +20,26 @@ pub enum EstimateError {
         attitudes: usize,
         /// Directions along which an attitude is missing (unit vectors, body axes).
         needed_directions: Vec<[f64; 3]>,
+        /// Every segment left out, with its reason, figure and limit.
+        dropped: Vec<String>,
+    },
+    /// Too few static positions are left for a fit with free attitudes (a hand-held or six-face
+    /// session, docs/model.md §7).
+    #[error(
+        "{left} static position(s) left of the {planned} planned; a fit without known attitudes \
+         needs {needed}: re-record the positions left out, or record more. Left out ({}):\n  - {}",
+        .dropped.len(),
+        .dropped.join("\n  - ")
+    )]
+    TooFewPositions {
+        /// Distinct static positions left after screening.
+        left: usize,
+        /// Positions the fit needs.
+        needed: usize,
+        /// Static segments in the plan.
+        planned: usize,
+        /// Every segment left out, with its reason, figure and limit.
+        dropped: Vec<String>,
     },
     /// The plan cannot determine these parameters.
     #[error("the plan cannot determine {}: {hint}", .parameters.join(", "))]
@@ -114,7 +134,9 @@ fn no_static_segments(
     } else {
         write!(
             f,
-            "all {planned} static segments were excluded; re-record them. Reasons:\n  - {}",
+            "0 static segments left of the {planned} planned, and at least four attitudes that span \
+             3-D are needed: re-record them. Left out ({}):\n  - {}",
+            reasons.len(),
             reasons.join("\n  - ")
         )
     }
@@ -124,15 +146,25 @@ fn no_static_segments(
 fn too_few_attitudes(
     attitudes: &usize,
     needed_directions: &[[f64; 3]],
+    dropped: &[String],
     f: &mut std::fmt::Formatter<'_>,
 ) -> std::fmt::Result {
     write!(
         f,
-        "the {attitudes} usable static attitude(s) do not span 3-D, so the biases and the \
-         scale/misalignment matrix are not determined; add static segments with up_b along"
+        "the {attitudes} usable static attitude(s) do not span 3-D (at least four that do are \
+         needed), so the biases and the scale/misalignment matrix are not determined; add static \
+         segments with up_b along"
     )?;
     for d in needed_directions {
         write!(f, " ±[{:.3}, {:.3}, {:.3}]", d[0], d[1], d[2])?;
+    }
+    if !dropped.is_empty() {
+        write!(
+            f,
+            ", or re-record those left out ({}):\n  - {}",
+            dropped.len(),
+            dropped.join("\n  - ")
+        )?;
     }
     Ok(())
 }

@@ -176,6 +176,7 @@ pub(crate) fn joint(
                     reason: ExclusionReason::AttitudeContradiction {
                         angle_deg: chord_to_angle_deg(err),
                         prior_sigma_deg: plan.segments[segs[seg].plan_idx].attitude_sigma_deg,
+                        limit_deg: chord_to_angle_deg(tol_g),
                     },
                 });
                 problem.remove_segment(seg);

@@ -62,6 +62,8 @@ mod predict;
 #[cfg(test)]
 mod ramp_tests;
 mod screen;
+#[cfg(test)]
+mod screen_tests;
 mod segment;
 mod solve;
 #[cfg(test)]
@@ -87,7 +89,7 @@ pub use options::{
 };
 pub use outcome::{
     CalibrationOutcome, Exclusion, ExclusionReason, FitSummary, MethodComparison, Observability,
-    SegmentDiagnostic,
+    ScreenFigure, SegmentDiagnostic,
 };
 pub use package::{PackageRefusal, PackageTest, IN_PACKAGE_NOT_OBSERVABLE};
 pub use paper_angles::{paper_labels, paper_order, paper_values, PAPER_LEN};

@@ -35,6 +35,8 @@ pub enum ExclusionReason {
     Motion {
         /// What was seen.
         detail: String,
+        /// The figure that failed, against its limit.
+        figure: ScreenFigure,
     },
     /// The measured rate contradicts the plan's.
     RateContradiction {
@@ -50,8 +52,101 @@ pub enum ExclusionReason {
         /// The segment's attitude prior (1σ, degrees), where the plan gives one (a hand-held
         /// session's faces).
         prior_sigma_deg: Option<f64>,
+        /// The angle allowed, degrees.
+        limit_deg: f64,
     },
 }
+
+/// The figure a screen measured on a segment and the limit it failed, so that a user sees how far
+/// off the segment was, not only that it was left out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScreenFigure {
+    /// What was measured ("mean gyro rate", "gyro x noise ratio").
+    pub what: String,
+    /// The measured value, in `unit`.
+    pub value: f64,
+    /// The limit, in `unit`.
+    pub limit: f64,
+    /// The unit of both ("°/s", "×", "°", "rows").
+    pub unit: &'static str,
+    /// The limit is a most (else a least).
+    pub at_most: bool,
+}
+
+impl std::fmt::Display for ScreenFigure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (op, word) = if self.at_most {
+            (">", "at most")
+        } else {
+            ("<", "at least")
+        };
+        let sep = if self.unit == "×" { "" } else { " " };
+        write!(
+            f,
+            "{} {}{sep}{} {op} limit {}{sep}{} ({word})",
+            self.what,
+            fmt_figure(self.value, self.unit),
+            self.unit,
+            fmt_figure(self.limit, self.unit),
+            self.unit
+        )
+    }
+}
+
+/// A figure with the digits a screen's comparison needs (rows are counted).
+fn fmt_figure(v: f64, unit: &str) -> String {
+    if unit == "rows" {
+        format!("{v:.0}")
+    } else if v.abs() >= 100.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+impl ExclusionReason {
+    /// The figure that failed and its limit, for the reasons a number decides; `None` for a
+    /// segment missing, unplanned, doubled, non-finite or stuck (the reason's text says what).
+    pub fn figure(&self) -> Option<ScreenFigure> {
+        match self {
+            ExclusionReason::Empty { rows, .. } => Some(ScreenFigure {
+                what: "valid rows".into(),
+                value: *rows as f64,
+                limit: 2.0,
+                unit: "rows",
+                at_most: false,
+            }),
+            ExclusionReason::Motion { figure, .. } => Some(figure.clone()),
+            ExclusionReason::RateContradiction {
+                measured_deg_s,
+                planned_deg_s,
+            } => Some(ScreenFigure {
+                what: "gyro rate off the plan's".into(),
+                value: (measured_deg_s - planned_deg_s).abs(),
+                limit: RATE_TOLERANCE_FRACTION * planned_deg_s.abs() + RATE_TOLERANCE_DEG_S,
+                unit: "°/s",
+                at_most: true,
+            }),
+            ExclusionReason::AttitudeContradiction {
+                angle_deg,
+                limit_deg,
+                ..
+            } => Some(ScreenFigure {
+                what: "attitude off the plan's up_b".into(),
+                value: *angle_deg,
+                limit: *limit_deg,
+                unit: "°",
+                at_most: true,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// A rotating segment's measured rate may differ from the plan's by this fraction of it …
+pub(crate) const RATE_TOLERANCE_FRACTION: f64 = 0.1;
+/// … plus this much, °/s.
+pub(crate) const RATE_TOLERANCE_DEG_S: f64 = 1.0;
 
 impl std::fmt::Display for ExclusionReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -73,7 +168,7 @@ impl std::fmt::Display for ExclusionReason {
             ExclusionReason::Saturated { axis, detail } => {
                 write!(f, "accelerometer {} saturated or stuck: {detail}", axis_name(*axis))
             }
-            ExclusionReason::Motion { detail } => {
+            ExclusionReason::Motion { detail, .. } => {
                 write!(f, "planned static but moved: {detail}")
             }
             ExclusionReason::RateContradiction {
@@ -86,6 +181,7 @@ impl std::fmt::Display for ExclusionReason {
             ExclusionReason::AttitudeContradiction {
                 angle_deg,
                 prior_sigma_deg: Some(s),
+                ..
             } => write!(
                 f,
                 "measured attitude is {angle_deg:.2}° from the plan's up_b, beyond three times its \
@@ -95,6 +191,7 @@ impl std::fmt::Display for ExclusionReason {
             ExclusionReason::AttitudeContradiction {
                 angle_deg,
                 prior_sigma_deg: None,
+                ..
             } => write!(
                 f,
                 "measured attitude is {angle_deg:.2}° from the plan's up_b (wrong mount, or the plan's up_b is wrong)"
@@ -110,6 +207,17 @@ pub struct Exclusion {
     pub name: String,
     /// Why.
     pub reason: ExclusionReason,
+}
+
+impl std::fmt::Display for Exclusion {
+    /// "'name': reason; figure > limit (at most)": the line every listing of left-out segments uses.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "'{}': {}", self.name, self.reason)?;
+        if let Some(fig) = self.reason.figure() {
+            write!(f, "; {fig}")?;
+        }
+        Ok(())
+    }
 }
 
 /// The fit's view of one segment: its fitted up, the specific force the fitted model predicts and

@@ -47,11 +47,7 @@ pub(crate) fn check(
     problems.extend(gyro_problems(plan, &outcome));
     problems.extend(scale_unit_problem(plan, &outcome));
     if outcome.fit.dof < 1 {
-        let excluded: Vec<String> = outcome
-            .excluded
-            .iter()
-            .map(|e| format!("{}: {}", e.name, e.reason))
-            .collect();
+        let excluded: Vec<String> = outcome.excluded.iter().map(|e| e.to_string()).collect();
         problems.push(format!(
             "{} residual degrees of freedom: χ²/dof is not defined, so nothing checks the fit; add \
              segments (repeat attitudes or rates) or re-record the excluded ones{}",

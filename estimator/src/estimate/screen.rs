@@ -2,10 +2,11 @@
 //! building the segment models and the static least squares.
 
 use super::model::{self, idx_m, idx_u0, Mount, SegModel};
+use super::outcome::{RATE_TOLERANCE_DEG_S, RATE_TOLERANCE_FRACTION};
 use super::solve::Problem;
 use super::{
     solve, EstimateError, EstimateOptions, Exclusion, ExclusionReason, Noise, ReferenceChoice,
-    SegmentKind, SessionSeg,
+    ScreenFigure, SegmentKind, SessionSeg,
 };
 use recording::session::{Plan, SegmentStats};
 use shared::linalg;
@@ -263,21 +264,32 @@ fn screen_motion(
     }
     let med = StaticMedians::of(segs, &statics);
     for &k in &statics {
-        if let Some(detail) = motion(&segs[k].stats, &med, options) {
-            exclude(segs, k, plan, ExclusionReason::Motion { detail }, excluded);
+        if let Some((detail, figure)) = motion(&segs[k].stats, &med, options) {
+            let reason = ExclusionReason::Motion { detail, figure };
+            exclude(segs, k, plan, reason, excluded);
         }
     }
 }
 
-/// Why a static segment's statistics `st` show motion against the static medians, if they do.
-fn motion(st: &SegmentStats, med: &StaticMedians, options: &EstimateOptions) -> Option<String> {
+/// Why a static segment's statistics `st` show motion against the static medians, if they do: the
+/// cause and the figure that failed with its limit.
+fn motion(
+    st: &SegmentStats,
+    med: &StaticMedians,
+    options: &EstimateOptions,
+) -> Option<(String, ScreenFigure)> {
     let dw: [f64; 3] = core::array::from_fn(|j| st.mean_w_rad_s[j] - med.w[j]);
     let rate = linalg::norm(&dw);
     if rate > options.motion_rate_threshold_rad_s {
-        return Some(format!(
-            "mean gyro rate {:.3} °/s above the static segments' ({:.3} °/s allowed)",
-            rate.to_degrees(),
-            options.motion_rate_threshold_rad_s.to_degrees()
+        return Some((
+            "the gyro turned (its mean rate departs from the static segments')".into(),
+            ScreenFigure {
+                what: "mean gyro rate off the static segments' median".into(),
+                value: rate.to_degrees(),
+                limit: options.motion_rate_threshold_rad_s.to_degrees(),
+                unit: "°/s",
+                at_most: true,
+            },
         ));
     }
     if !med.enough {
@@ -285,21 +297,41 @@ fn motion(st: &SegmentStats, med: &StaticMedians, options: &EstimateOptions) -> 
     }
     let sw = st.std_w();
     let su = st.std_u();
+    let ratio = |what: String, value: f64| ScreenFigure {
+        what,
+        value,
+        limit: options.motion_noise_ratio,
+        unit: "×",
+        at_most: true,
+    };
     for j in 0..3 {
         let floor = 0.01f64.to_radians();
         if sw[j] > options.motion_noise_ratio * med.sw[j] && sw[j] > floor {
-            return Some(format!(
-                "gyro {} noise {:.3} °/s is {:.1}× the other static segments'",
-                axis_name(j),
-                sw[j].to_degrees(),
-                sw[j] / med.sw[j]
+            return Some((
+                format!(
+                    "gyro {} noise {:.3} °/s, above the other static segments'",
+                    axis_name(j),
+                    sw[j].to_degrees()
+                ),
+                ratio(
+                    format!("gyro {} noise over the static median", axis_name(j)),
+                    sw[j] / med.sw[j],
+                ),
             ));
         }
         if med.su[j] > 0.0 && su[j] > options.motion_noise_ratio * med.su[j] {
-            return Some(format!(
-                "accelerometer {} noise is {:.1}× the other static segments' (vibration or motion)",
-                axis_name(j),
-                su[j] / med.su[j]
+            return Some((
+                format!(
+                    "accelerometer {} noisier than the other static segments (vibration or motion)",
+                    axis_name(j)
+                ),
+                ratio(
+                    format!(
+                        "accelerometer {} noise over the static median",
+                        axis_name(j)
+                    ),
+                    su[j] / med.su[j],
+                ),
             ));
         }
     }
@@ -321,7 +353,9 @@ fn screen_rates(plan: &Plan, segs: &mut [SessionSeg], excluded: &mut Vec<Exclusi
         } else {
             linalg::dot(w, &sp.up_b).to_degrees()
         };
-        if (measured - planned).abs() > 0.1 * planned.abs() + 1.0 {
+        if (measured - planned).abs()
+            > RATE_TOLERANCE_FRACTION * planned.abs() + RATE_TOLERANCE_DEG_S
+        {
             let reason = ExclusionReason::RateContradiction {
                 measured_deg_s: measured,
                 planned_deg_s: planned,
@@ -422,9 +456,42 @@ pub(crate) fn static_stage(
         }
         Err(
             e @ (EstimateError::NoStaticSegments { .. } | EstimateError::TooFewAttitudes { .. }),
-        ) => Ok(super::attitude::free_static_fit(plan, segs, noise, problem, e)?.0),
+        ) => {
+            if let Some(refusal) = too_few_positions(plan, segs, problem, excluded) {
+                return Err(refusal);
+            }
+            Ok(super::attitude::free_static_fit(plan, segs, noise, problem, e)?.0)
+        }
         Err(e) => Err(e),
     }
+}
+
+/// The refusal of a session whose static positions have free attitudes (a hand-held or six-face
+/// session) when fewer are left than the free-attitude fit needs (docs/model.md §7): the positions
+/// left against those needed, and every segment left out with its figure and limit.
+fn too_few_positions(
+    plan: &Plan,
+    segs: &[SessionSeg],
+    problem: &Problem,
+    excluded: &[Exclusion],
+) -> Option<EstimateError> {
+    let free_static = |sp: &recording::session::SegmentPlan| sp.is_static() && sp.is_free();
+    if !plan.segments.iter().any(free_static) {
+        return None;
+    }
+    let left: std::collections::HashSet<usize> = problem
+        .models
+        .iter()
+        .filter(|m| segs[m.seg].kind == SegmentKind::Static)
+        .map(|m| m.tilt.index)
+        .collect();
+    let needed = super::attitude::FREE_POSITIONS_NEEDED;
+    (left.len() < needed).then(|| EstimateError::TooFewPositions {
+        left: left.len(),
+        needed,
+        planned: plan.segments.iter().filter(|s| s.is_static()).count(),
+        dropped: excluded.iter().map(|e| e.to_string()).collect(),
+    })
 }
 
 /// |M⁻¹(ū − u0) − up| of each static segment under a fit, g.
@@ -468,10 +535,7 @@ pub(crate) fn static_fit_with_attitude_check(
         if statics.is_empty() {
             return Err(EstimateError::NoStaticSegments {
                 planned: planned_static,
-                reasons: excluded
-                    .iter()
-                    .map(|e| format!("'{}': {}", e.name, e.reason))
-                    .collect(),
+                reasons: excluded.iter().map(|e| e.to_string()).collect(),
             });
         }
         let ups: Vec<[f64; 3]> = statics
@@ -483,6 +547,7 @@ pub(crate) fn static_fit_with_attitude_check(
             return Err(EstimateError::TooFewAttitudes {
                 attitudes: ups.len(),
                 needed_directions: missing,
+                dropped: excluded.iter().map(|e| e.to_string()).collect(),
             });
         }
         // Fast path: when the fit on all static segments leaves every one within a tenth of the
@@ -533,12 +598,14 @@ pub(crate) fn static_fit_with_attitude_check(
         match worst {
             Some((k, err)) if err > tol_of(k) => {
                 let seg = models[k].seg;
+                let limit_deg = super::chord_to_angle_deg(tol_of(k));
                 segs[seg].used = false;
                 excluded.push(Exclusion {
                     name: plan.segments[segs[seg].plan_idx].name.clone(),
                     reason: ExclusionReason::AttitudeContradiction {
                         angle_deg: super::chord_to_angle_deg(err),
                         prior_sigma_deg: plan.segments[segs[seg].plan_idx].attitude_sigma_deg,
+                        limit_deg,
                     },
                 });
                 problem.remove_segment(seg);

@@ -374,6 +374,7 @@ fn attitudes_that_do_not_span_3d_say_which_directions_are_missing() {
         EstimateError::TooFewAttitudes {
             attitudes: 4,
             needed_directions,
+            ..
         } => {
             assert_eq!(needed_directions.len(), 1);
             assert!(

@@ -359,6 +359,11 @@ pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, C
             &session.plan,
             &session.stats,
         ))?;
+    } else {
+        // The full report lists them too; without it they are still named, never left silent.
+        out.human(outputs::report::render_excluded(
+            &calibrated.outcome.excluded,
+        ))?;
     }
     out.line(format_args!(
         "wrote {} and {} ({} bytes, unit {unit_id})",
@@ -496,6 +501,10 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     // The results, on stdout like `calibrate --input`'s; the operator's steps went to stderr.
     if a.verbose {
         out.human(&result.report)?;
+    } else {
+        out.human(outputs::report::render_excluded(
+            &result.calibrated.outcome.excluded,
+        ))?;
     }
     let written = app::settle_files(&mut result.calibrated, result.written, a.force)?;
     let shown = (

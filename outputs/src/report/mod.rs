@@ -40,4 +40,4 @@ pub use data::{
 pub use document::{report, ReportSummary, REPORT_HTML, REPORT_MD};
 pub use navigation::render_position_targets;
 pub use navigation_check::{navigation_check, NavigationCheck, NavigationCheckArgs};
-pub use text::{render, render_prediction, render_session};
+pub use text::{render, render_excluded, render_prediction, render_session};

@@ -353,7 +353,7 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
                 } else {
                     o.excluded
                         .iter()
-                        .map(|e| format!("'{}' ({})", e.name, e.reason))
+                        .map(|e| e.to_string())
                         .collect::<Vec<_>>()
                         .join("; ")
                 },

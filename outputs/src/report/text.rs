@@ -128,16 +128,26 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
     super::thermal::render(&mut s, o);
     if !o.excluded.is_empty() {
         let _ = writeln!(s);
-        let _ = writeln!(s, "Excluded segments:");
-        for e in &o.excluded {
-            let _ = writeln!(s, "  '{}': {}", e.name, e.reason);
-        }
+        s.push_str(&render_excluded(&o.excluded));
     }
     if !o.warnings.is_empty() {
         let _ = writeln!(s);
         let _ = writeln!(s, "Warnings:");
         for w in &o.warnings {
             let _ = writeln!(s, "  - {w}");
+        }
+    }
+    s
+}
+
+/// The segments a calibration left out, one line each with why and the figure that failed
+/// against its limit; empty when none was.
+pub fn render_excluded(excluded: &[estimator::estimate::Exclusion]) -> String {
+    let mut s = String::new();
+    if !excluded.is_empty() {
+        let _ = writeln!(s, "Excluded segments ({}):", excluded.len());
+        for e in excluded {
+            let _ = writeln!(s, "  {e}");
         }
     }
     s
