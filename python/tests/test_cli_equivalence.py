@@ -275,3 +275,64 @@ def test_segment_of_raw_count_arrays_writes_host_segments_session(host_bin, tmp_
     with pytest.raises(accelcal.InputError, match="32768"):
         accelcal.segment(data[:, 1:4], data[:, 4:7], data[:, 0], acc_unit="LSB",
                          gyro_unit="LSB", gyro_lsb_per_dps=16.4)
+
+
+@pytest.fixture(scope="module")
+def hand_noise(hand, host_bin, tmp_path_factory):
+    """`host noise --out` of the hand-held session: its noise.json and document."""
+    out = tmp_path_factory.mktemp("noise")
+    run(host_bin, "-q", "noise", "--input", str(hand["session"]), "--out", str(out))
+    return {"json": out / "noise.json", "doc": json.loads((out / "noise.json").read_text())}
+
+
+def test_export_takes_allans_result_as_host_noises_file(hand, py_cal, host_bin, hand_noise):
+    """Kalibr's imu.yaml from allan() of the six still signals host noise analyses equals the one
+    from its noise.json, in Python and from `host export --noise`."""
+    doc = hand_noise["doc"]
+    rows = session_rows(hand["session"])[doc["segment"]]
+    assert rows.shape[0] == doc["samples"]
+    # The session is in m/s² and rad/s: host noise's six axes, as columns in its order.
+    assert [a["axis"] for a in doc["axes"]] == ["accel_x", "accel_y", "accel_z",
+                                                "gyro_x", "gyro_y", "gyro_z"]
+    assert doc["kalibr"]["accelerometer_noise_density"] is not None
+    curves = accelcal.allan(rows[:, 1:7], doc["sample_rate_hz"])
+    from_file = py_cal.export("kalibr", noise=hand_noise["json"])
+    from_curves = py_cal.export("kalibr", noise=curves)
+    assert from_curves == from_file
+    assert py_cal.export("kalibr", noise=str(hand_noise["json"])) == from_file
+    cli = run(host_bin, "-q", "export", "--calibration", str(hand["toml"]), "--format", "kalibr",
+              "--noise", str(hand_noise["json"]))
+    assert from_curves == cli.stdout
+    # The figures printed are each sensor's worst axis of the curves' own terms (Kalibr's rule).
+    printed = {}
+    for line in from_curves.splitlines():
+        if not line.startswith("#") and ": " in line:
+            key, value = line.split(": ", 1)
+            printed[key] = value.split("#")[0].strip()
+    worst = {
+        "accelerometer_noise_density": max(t["value"] for t in curves["white_density"][:3]),
+        "accelerometer_random_walk": max(t["value"] for t in curves["random_walk"][:3]),
+        "gyroscope_noise_density": max(t["value"] for t in curves["white_density"][3:]),
+        "gyroscope_random_walk": max(t["value"] for t in curves["random_walk"][3:]),
+        "update_rate": doc["sample_rate_hz"],
+    }
+    for key, value in worst.items():
+        assert float(printed[key]) == value, key
+
+
+def test_export_refuses_a_noise_of_another_type(py_cal, hand, hand_noise):
+    doc = hand_noise["doc"]
+    rows = session_rows(hand["session"])[doc["segment"]]
+    for wrong in [42, 1.5, [1.0, 2.0], b"\x00"]:
+        with pytest.raises(TypeError, match=r"noise must be a path to host noise's noise\.json, "
+                                            r"or accelcal\.allan\(\)'s result .* got "):
+            py_cal.export("kalibr", noise=wrong)
+    with pytest.raises(TypeError, match=r"noise is a dict without 'rate_hz'"):
+        py_cal.export("kalibr", noise={"white_density": 1.0})
+    # One signal's curve, or the accelerometer's alone, cannot give both sensors' figures.
+    one = accelcal.allan(rows[:, 1], doc["sample_rate_hz"])
+    with pytest.raises(ValueError, match="result of one signal: Kalibr's figures need the six"):
+        py_cal.export("kalibr", noise=one)
+    three = accelcal.allan(rows[:, 1:4], doc["sample_rate_hz"])
+    with pytest.raises(ValueError, match="result of 3 signals: Kalibr's figures need the six"):
+        py_cal.export("kalibr", noise=three)
