@@ -482,16 +482,19 @@ fn analyse_signals(
     })
 }
 
+/// One axis's white noise density N and random walk K (`None`: not determined).
+pub type WhiteAndWalk = (Option<f64>, Option<f64>);
+
 /// Kalibr's figures from the six axes' white noise density N and random walk K, in [`AXES`] order
 /// (accelerometer in m/s², gyro in rad/s): each sensor's worst axis, undetermined where any of its
 /// axes is; the accelerometer's are undetermined unless `accel_in_m_s2`. `host noise` and the
 /// Python package's `export(noise=allan(…))` both take their figures from here.
 pub fn kalibr_figures(
     rate_hz: f64,
-    white_and_walk: &[(Option<f64>, Option<f64>); 6],
+    white_and_walk: &[WhiteAndWalk; 6],
     accel_in_m_s2: bool,
 ) -> KalibrNoise {
-    let worst = |r: std::ops::Range<usize>, f: fn(&(Option<f64>, Option<f64>)) -> Option<f64>| {
+    let worst = |r: std::ops::Range<usize>, f: fn(&WhiteAndWalk) -> Option<f64>| {
         let v: Option<Vec<f64>> = white_and_walk[r].iter().map(f).collect();
         v.map(|v| v.into_iter().fold(0.0, f64::max))
     };
