@@ -256,8 +256,13 @@ def allan(x: Any, rate_hz: float) -> dict:
     ``adev_low``/``adev_high`` (1σ bounds), ``terms`` (the sum's length), ``fit_adev`` and the
     fitted noise terms ``white_density`` (N, unit/√Hz), ``bias_instability`` (B, unit) and
     ``random_walk`` (K, unit/√s), each a dict: ``value`` (None when not determined), ``sigma``,
-    ``upper_bound_2sigma``, ``needs_recording_s``. For (n, k) input every entry is a list of k.
-    A NaN or infinite value is refused (``InputError``): it would make every τ's deviation NaN.
+    ``upper_bound_2sigma``, ``needs_recording_s``, and ``rate_hz``. For (n, k) input every entry
+    but ``rate_hz`` is a list of k. A NaN or infinite value is refused (``InputError``): it would
+    make every τ's deviation NaN.
+
+    The result of the six still signals ``host noise`` analyses, as columns (accel x, y, z in m/s²,
+    gyro x, y, z in rad/s), is what ``Calibration.export("kalibr", noise=…)`` takes in place of
+    ``noise.json``: the same figures.
     """
     arr = np.asarray(x, dtype=np.float64)
     if arr.ndim == 1:
@@ -265,7 +270,9 @@ def allan(x: Any, rate_hz: float) -> dict:
     if arr.ndim != 2:
         raise InputError(f"x must be (n,) or (n, k); got shape {arr.shape}")
     columns = [_accelcal.allan(np.ascontiguousarray(arr[:, j]), float(rate_hz)) for j in range(arr.shape[1])]
-    return {key: [c[key] for c in columns] for key in columns[0]}
+    result = {key: [c[key] for c in columns] for key in columns[0]}
+    result["rate_hz"] = float(rate_hz)
+    return result
 
 
 def simulate_hand(

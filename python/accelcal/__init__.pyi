@@ -117,7 +117,7 @@ class Calibration:
         self,
         format: str,
         *,
-        noise: Optional[_Path] = None,
+        noise: Union[_Path, Dict[str, Any], None] = None,
         rostopic: str = "/imu0",
         driver_scale: Optional[float] = None,
         device_id: Optional[int] = None,

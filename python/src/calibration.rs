@@ -269,6 +269,7 @@ impl Calibration {
 
     /// The calibration in another tool's format, as `host export --format FORMAT` writes it (the
     /// same keyword options as its flags). `c` gives a dict of file name → text (the package), `c-header` its header alone.
+    /// `noise` is `--noise`'s noise.json, or `allan()`'s result of the same six still signals.
     #[pyo3(signature = (format, *, noise = None, rostopic = "/imu0", driver_scale = None,
         device_id = None, gyro_device_id = None, sysid = 1, compid = 1,
         allow_out_of_range = false, allow_undetermined = false))]
@@ -277,7 +278,7 @@ impl Calibration {
         &self,
         py: Python<'py>,
         format: &str,
-        noise: Option<PathBuf>,
+        noise: Option<Bound<'py, PyAny>>,
         rostopic: &str,
         driver_scale: Option<f64>,
         device_id: Option<u32>,
@@ -288,10 +289,10 @@ impl Calibration {
         allow_undetermined: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let format = export_format(format)?;
-        let noise = match &noise {
-            Some(p) => Some(outputs::noise::load_kalibr_noise(p).py_err()?),
-            None => None,
-        };
+        let noise = noise
+            .as_ref()
+            .map(crate::noise_arg::kalibr_noise)
+            .transpose()?;
         let input = ExportInput {
             unit: &self.unit,
             cal: self.cal,

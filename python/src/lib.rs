@@ -5,6 +5,7 @@
 
 mod calibration;
 mod errors;
+mod noise_arg;
 mod session;
 mod signals;
 

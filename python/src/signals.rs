@@ -192,6 +192,7 @@ pub fn allan<'py>(
         .collect();
     let adev: Vec<f64> = points.iter().map(|p| p.adev).collect();
     let d = PyDict::new(py);
+    d.set_item("rate_hz", rate_hz)?;
     d.set_item(
         "tau_s",
         PyArray1::from_iter(py, points.iter().map(|p| p.tau_s)),

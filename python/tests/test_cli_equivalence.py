@@ -2,6 +2,7 @@
 last digit `host` prints, the same files byte for byte."""
 
 import json
+import subprocess
 
 import numpy as np
 import pandas as pd
@@ -275,3 +276,64 @@ def test_segment_of_raw_count_arrays_writes_host_segments_session(host_bin, tmp_
     with pytest.raises(accelcal.InputError, match="32768"):
         accelcal.segment(data[:, 1:4], data[:, 4:7], data[:, 0], acc_unit="LSB",
                          gyro_unit="LSB", gyro_lsb_per_dps=16.4)
+
+
+@pytest.fixture(scope="module")
+def faces_noise(host_bin, tmp_path_factory):
+    """A six-face session (still on a table: no tremor, so both sensors' N is determined), its
+    samples and `host noise --out`'s noise.json and document."""
+    d = tmp_path_factory.mktemp("faces")
+    run(host_bin, "-q", "simulate-hand", "--six-faces", "--out", str(d / "six.csv"), "--seed", "3")
+    run(host_bin, "-q", "segment", "--input", str(d / "six.csv"), "--out", str(d / "session"),
+        "--acc-unit", "m/s2", "--gyro-unit", "deg/s", "--time-column", "t", "--unit-id", UNIT_ID)
+    run(host_bin, "-q", "noise", "--input", str(d / "session"), "--out", str(d / "noise"))
+    doc = json.loads((d / "noise" / "noise.json").read_text())
+    rows = session_rows(d / "session")[doc["segment"]]
+    assert rows.shape[0] == doc["samples"]
+    return {"json": d / "noise" / "noise.json", "doc": doc, "rows": rows}
+
+
+def test_export_takes_allans_result_as_host_noises_file(hand, py_cal, host_bin, faces_noise):
+    """Kalibr's export from allan() of the six still signals host noise analyses is the one from
+    its noise.json, in Python and from `host export --noise`: here a refusal naming the same
+    undetermined figure (seconds of stillness do not determine a random walk)."""
+    doc, rows = faces_noise["doc"], faces_noise["rows"]
+    # The session is in m/s² and rad/s: host noise's six axes, as columns in its order.
+    assert [a["axis"] for a in doc["axes"]] == ["accel_x", "accel_y", "accel_z",
+                                                "gyro_x", "gyro_y", "gyro_z"]
+    curves = accelcal.allan(rows[:, 1:7], doc["sample_rate_hz"])
+    # The figures Kalibr gets are each sensor's worst axis of the curves' own terms.
+    assert doc["kalibr"]["accelerometer_noise_density"] is not None
+    assert doc["kalibr"]["gyroscope_noise_density"] is not None
+    assert max(t["value"] for t in curves["white_density"][:3]) == \
+        doc["kalibr"]["accelerometer_noise_density"]
+    assert max(t["value"] for t in curves["white_density"][3:]) == \
+        doc["kalibr"]["gyroscope_noise_density"]
+    messages = []
+    for noise in [curves, faces_noise["json"], str(faces_noise["json"])]:
+        with pytest.raises(accelcal.CalibrationError) as e:
+            py_cal.export("kalibr", noise=noise)
+        messages.append(str(e.value))
+    assert messages[0] == messages[1] == messages[2]
+    assert "random_walk" in messages[0]
+    cli = subprocess.run([str(host_bin), "-q", "export", "--calibration", str(hand["toml"]),
+                          "--format", "kalibr", "--noise", str(faces_noise["json"])],
+                         capture_output=True, text=True)
+    assert cli.returncode != 0 and "random_walk" in cli.stderr
+
+
+def test_export_refuses_a_noise_of_another_type(py_cal, faces_noise):
+    doc, rows = faces_noise["doc"], faces_noise["rows"]
+    for wrong in [42, 1.5, [1.0, 2.0], b"\x00"]:
+        with pytest.raises(TypeError, match=r"noise must be a path to host noise's noise\.json, "
+                                            r"or accelcal\.allan\(\)'s result .* got "):
+            py_cal.export("kalibr", noise=wrong)
+    with pytest.raises(TypeError, match=r"noise is a dict without 'rate_hz'"):
+        py_cal.export("kalibr", noise={"white_density": 1.0})
+    # One signal's curve, or the accelerometer's alone, cannot give both sensors' figures.
+    one = accelcal.allan(rows[:, 1], doc["sample_rate_hz"])
+    with pytest.raises(ValueError, match="result of one signal: Kalibr's figures need the six"):
+        py_cal.export("kalibr", noise=one)
+    three = accelcal.allan(rows[:, 1:4], doc["sample_rate_hz"])
+    with pytest.raises(ValueError, match="result of 3 signals: Kalibr's figures need the six"):
+        py_cal.export("kalibr", noise=three)

@@ -465,18 +465,11 @@ fn analyse_signals(
         })
         .collect();
     bar.finish_and_clear();
-    let worst = |r: std::ops::Range<usize>, f: fn(&NoiseTerms) -> Option<f64>| -> Option<f64> {
-        let v: Option<Vec<f64>> = axes[r].iter().map(|a| f(&a.terms)).collect();
-        v.map(|v| v.into_iter().fold(0.0, f64::max))
-    };
-    let accel_known = accel_unit == "m/s^2";
-    let kalibr = KalibrNoise {
-        update_rate_hz: Some(s.rate_hz),
-        accelerometer_noise_density: worst(0..3, |t| t.white_density).filter(|_| accel_known),
-        accelerometer_random_walk: worst(0..3, |t| t.random_walk).filter(|_| accel_known),
-        gyroscope_noise_density: worst(3..6, |t| t.white_density),
-        gyroscope_random_walk: worst(3..6, |t| t.random_walk),
-    };
+    let kalibr = kalibr_figures(
+        s.rate_hz,
+        &std::array::from_fn(|j| (axes[j].terms.white_density, axes[j].terms.random_walk)),
+        accel_unit == "m/s^2",
+    );
     Ok(NoiseReport {
         source,
         segment: s.segment,
@@ -487,6 +480,31 @@ fn analyse_signals(
         warnings,
         output_unit: s.acc_unit,
     })
+}
+
+/// One axis's white noise density N and random walk K (`None`: not determined).
+pub type WhiteAndWalk = (Option<f64>, Option<f64>);
+
+/// Kalibr's figures from the six axes' white noise density N and random walk K, in [`AXES`] order
+/// (accelerometer in m/s², gyro in rad/s): each sensor's worst axis, undetermined where any of its
+/// axes is; the accelerometer's are undetermined unless `accel_in_m_s2`. `host noise` and the
+/// Python package's `export(noise=allan(…))` both take their figures from here.
+pub fn kalibr_figures(
+    rate_hz: f64,
+    white_and_walk: &[WhiteAndWalk; 6],
+    accel_in_m_s2: bool,
+) -> KalibrNoise {
+    let worst = |r: std::ops::Range<usize>, f: fn(&WhiteAndWalk) -> Option<f64>| {
+        let v: Option<Vec<f64>> = white_and_walk[r].iter().map(f).collect();
+        v.map(|v| v.into_iter().fold(0.0, f64::max))
+    };
+    KalibrNoise {
+        update_rate_hz: Some(rate_hz),
+        accelerometer_noise_density: worst(0..3, |t| t.0).filter(|_| accel_in_m_s2),
+        accelerometer_random_walk: worst(0..3, |t| t.1).filter(|_| accel_in_m_s2),
+        gyroscope_noise_density: worst(3..6, |t| t.0),
+        gyroscope_random_walk: worst(3..6, |t| t.1),
+    }
 }
 
 fn opt(v: Option<f64>) -> String {
