@@ -3,9 +3,10 @@
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::calibration_guard::{meet, Meeting, Other};
 use recording::session::import::{Places, Recording};
-use recording::session::logs::{read_log_windows, LogError, LogRead, LogSource};
+use recording::session::logs::{read_log_windows, LogError, LogRead, LogSource, LogWindows};
 use recording::session::segment::{
-    find_intervals, gyro_unit_suspect, Interval, SegmentError, SegmentOptions,
+    find_intervals_by, gyro_unit_suspect, rest_floors, Interval, RestFloors, SegmentError,
+    SegmentOptions,
 };
 use recording::session::Row;
 use shared::compensator::LeverMode;
@@ -82,6 +83,7 @@ pub fn apply_log_within(
         }
         LogRead::Windows(w) => w,
     };
+    let floors = log_floors(&windows)?;
     csv.header()?;
     let mut run: Option<Run> = None;
     let mut notes = WindowNotes::default();
@@ -109,7 +111,7 @@ pub fn apply_log_within(
             )),
         };
         run.assume_temperature(rec, setting.assume_temp_c);
-        let stills = stills_of(rec)?;
+        let stills = stills_of(rec, floors.as_ref())?;
         run.rows(rec, &stills, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
     }
     let Some(run) = run else {
@@ -190,7 +192,7 @@ impl Prepared {
         if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
             applier.compensator.refresh(t as f32);
         }
-        let stills = stills_of(rec)?;
+        let stills = stills_of(rec, None)?;
         Ok(Prepared { applier, stills })
     }
 
@@ -233,8 +235,8 @@ fn meet_log(
 /// The still intervals of `rec`, each of which must compensate to 1 g. No still interval at all is
 /// a flight log, unless the accelerometer is still and only the gyro moves: then the rest check
 /// cannot be skipped, it has failed.
-fn stills_of(rec: &Recording) -> Result<Vec<Interval>, ApplyError> {
-    match find_intervals(rec, &SegmentOptions::default()) {
+fn stills_of(rec: &Recording, floors: Option<&RestFloors>) -> Result<Vec<Interval>, ApplyError> {
+    match find_intervals_by(rec, &SegmentOptions::default(), floors) {
         Ok(s) => Ok(s.stills),
         Err(SegmentError::NoStill {
             acc_mg, gyro_deg_s, ..
@@ -243,6 +245,22 @@ fn stills_of(rec: &Recording) -> Result<Vec<Interval>, ApplyError> {
         }
         Err(_) => Ok(Vec::new()),
     }
+}
+
+/// The noise floors every window of a long log is judged by: each stream's quietest window's, as a
+/// whole read takes the quietest stretch of the whole log (a first pass over the windows, holding
+/// one window at a time).
+fn log_floors(windows: &LogWindows) -> Result<Option<RestFloors>, ApplyError> {
+    let mut floors: Option<RestFloors> = None;
+    for k in 0..windows.len() {
+        let Some(window) = windows.read(k).map_err(ApplyError::Log)? else {
+            continue;
+        };
+        if let Some(f) = rest_floors(&window.log.recording, &SegmentOptions::default()) {
+            floors = Some(floors.map_or(f, |g| g.quieter(f)));
+        }
+    }
+    Ok(floors)
 }
 
 /// The device's state carried from row to row, and from one window of a long log to the next:

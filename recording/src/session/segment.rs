@@ -339,16 +339,61 @@ fn judge(options: &SegmentOptions, fa: &Floor, fg: &Floor) -> Judge {
     }
 }
 
+/// The noise floors a recording's rest is judged by: a long log read window by window judges every
+/// window by the quietest window's floors, as a whole read judges it by the quietest stretch of
+/// the whole log, so that a window without a rest does not take its own quietest motion for one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestFloors {
+    acc: Floor,
+    gyro: Floor,
+}
+
+impl RestFloors {
+    /// Each stream's quieter floor of the two (its rms over the axes).
+    pub fn quieter(self, other: RestFloors) -> RestFloors {
+        let pick = |a: Floor, b: Floor| if b.rms() < a.rms() { b } else { a };
+        RestFloors {
+            acc: pick(self.acc, other.acc),
+            gyro: pick(self.gyro, other.gyro),
+        }
+    }
+}
+
+/// The noise floors of `rec` with the windows `options` sets; `None` when it holds no whole window.
+pub fn rest_floors(rec: &Recording, options: &SegmentOptions) -> Option<RestFloors> {
+    let w = 2 * half_window(rec, options) + 1;
+    let (sa, sg) = (Stream::new(&rec.acc), Stream::new(&rec.gyro_rad_s));
+    floors(rec, &sa, &sg, w).map(|(acc, gyro)| RestFloors { acc, gyro })
+}
+
+fn half_window(rec: &Recording, options: &SegmentOptions) -> usize {
+    ((options.window_s * rec.rate_hz / 2.0).round() as usize).max(2)
+}
+
 /// Finds the still intervals and spins of `rec`.
 pub fn find_intervals(
     rec: &Recording,
     options: &SegmentOptions,
 ) -> Result<Segmentation, SegmentError> {
+    find_intervals_by(rec, options, None)
+}
+
+/// [`find_intervals`] judging rest by `floors` (those of the whole log a window of `rec` is of)
+/// instead of the floors of `rec` itself, when given.
+pub fn find_intervals_by(
+    rec: &Recording,
+    options: &SegmentOptions,
+    floors_given: Option<&RestFloors>,
+) -> Result<Segmentation, SegmentError> {
     let n = rec.len();
-    let half = ((options.window_s * rec.rate_hz / 2.0).round() as usize).max(2);
+    let half = half_window(rec, options);
     let w = 2 * half + 1;
     let (sa, sg) = (Stream::new(&rec.acc), Stream::new(&rec.gyro_rad_s));
-    let Some((fa, fg)) = floors(rec, &sa, &sg, w) else {
+    let own = match floors_given {
+        Some(f) if n >= w => Some((f.acc, f.gyro)),
+        _ => floors(rec, &sa, &sg, w),
+    };
+    let Some((fa, fg)) = own else {
         return Err(SegmentError::TooShort {
             rows: n,
             window_rows: w,
