@@ -426,10 +426,9 @@ fn refuse_device_options(a: &CalibrateArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `host calibrate --port PORT`: the live procedure (`device::procedure`) against a device;
-/// runs the whole procedure and ends with a pass/fail line.
-pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
-    let port = port_args(a);
+/// Checks the live run's `--window` and returns its verification tolerance, mg, before any device
+/// is touched.
+fn live_bounds(a: &CalibrateArgs) -> Result<f64, CliError> {
     if let Some(w) = a.window {
         recording::limits::count_in("--window", w, crate::limits::MAX_WINDOW)?;
     }
@@ -441,6 +440,14 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
         verify_tolerance_mg,
         crate::limits::MAX_TOLERANCE_MG,
     )?;
+    Ok(verify_tolerance_mg)
+}
+
+/// `host calibrate --port PORT`: the live procedure (`device::procedure`) against a device;
+/// runs the whole procedure and ends with a pass/fail line.
+pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+    let port = port_args(a);
+    let verify_tolerance_mg = live_bounds(a)?;
     let mut client = connect(&port)?;
     let viewed = start_view(a.view, &mut client)?;
     let identity = client.identify()?;

@@ -58,6 +58,36 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
              checked against the same limit as the fit's; docs/model.md §9)"
         );
     }
+    render_walks(&mut s, o);
+    if !o.bias_track.is_empty() {
+        let _ = writeln!(s, "Fitted bias wander from u0 per segment, mg (x, y, z):");
+        for p in &o.bias_track {
+            let [x, y, z] = p.bias_mg;
+            let _ = writeln!(
+                s,
+                "  {:8.1} s  {x:+.4} {y:+.4} {z:+.4}  {}",
+                p.t_mid_s, p.name
+            );
+        }
+    }
+    super::thermal::render(&mut s, o);
+    if !o.excluded.is_empty() {
+        let _ = writeln!(s);
+        s.push_str(&render_excluded(&o.excluded));
+    }
+    if !o.warnings.is_empty() {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "Warnings:");
+        for w in &o.warnings {
+            let _ = writeln!(s, "  - {w}");
+        }
+    }
+    s
+}
+
+/// The accelerometers' and the gyro's bias random walks the fit used or estimated, with how each
+/// came (docs/model.md §11, §11.6).
+fn render_walks(s: &mut String, o: &CalibrationOutcome) {
     if let Some(w) = &o.bias_walk {
         let how = match (w.sigma_mg_sqrt_s, w.origin) {
             (Some(sd), _) if !w.used => format!(
@@ -114,30 +144,6 @@ pub fn render(o: &CalibrationOutcome, segments: &[SegmentRow]) -> String {
         }
         (None, None) => {}
     }
-    if !o.bias_track.is_empty() {
-        let _ = writeln!(s, "Fitted bias wander from u0 per segment, mg (x, y, z):");
-        for p in &o.bias_track {
-            let [x, y, z] = p.bias_mg;
-            let _ = writeln!(
-                s,
-                "  {:8.1} s  {x:+.4} {y:+.4} {z:+.4}  {}",
-                p.t_mid_s, p.name
-            );
-        }
-    }
-    super::thermal::render(&mut s, o);
-    if !o.excluded.is_empty() {
-        let _ = writeln!(s);
-        s.push_str(&render_excluded(&o.excluded));
-    }
-    if !o.warnings.is_empty() {
-        let _ = writeln!(s);
-        let _ = writeln!(s, "Warnings:");
-        for w in &o.warnings {
-            let _ = writeln!(s, "  - {w}");
-        }
-    }
-    s
 }
 
 /// The segments a calibration left out, one line each with why and the figure that failed
