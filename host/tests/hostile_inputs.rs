@@ -367,7 +367,7 @@ fn noise_free_sessions_calibrate_and_exclusions_come_with_reasons() {
     std::fs::write(&csv, frozen).unwrap();
     let e = refused(
         host(&["-q", "calibrate", "--input", s(&noisy)]),
-        &["Reasons:"],
+        &["0 static segments left of the 6 planned", "Left out (15):"],
     );
     assert!(
         e.contains("'x+': accelerometer x saturated or stuck"),

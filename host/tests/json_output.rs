@@ -334,8 +334,16 @@ fn the_document_carries_the_walk_and_its_source() {
     assert_eq!(given["bias_walk"]["source"], "given");
     assert_eq!(given["bias_walk"]["track"], w["track"]);
     assert_eq!(given["parameters"], unit["parameters"]);
-    let none = run(&[], "none");
+    // Asked for none: the constant-bias fit, and no walk in the document.
+    let none = run(&["--bias-walk", "0", "--gyro-bias-walk", "0"], "none");
     assert!(none.get("bias_walk").is_none(), "{none}");
+    // By default both walks are estimated from the session; this short one determines neither,
+    // so the fit is the constant-bias fit to the last digit.
+    let default = run(&[], "default");
+    assert_eq!(default["bias_walk"]["source"], "estimated", "{default}");
+    assert_eq!(default["bias_walk"]["used"], false, "{default}");
+    assert_eq!(default["gyro_walk"]["used"], false, "{default}");
+    assert_eq!(default["parameters"], none["parameters"]);
 }
 
 /// `plan --check --bias-walk` advises on the order only where one helps: the paper's plan with each

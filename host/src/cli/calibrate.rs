@@ -286,6 +286,14 @@ pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
             "--verbose does not apply with --quiet, which prints no tables: leave one out".into(),
         ));
     }
+    // A recording read from a directory has no live session: --view would be silently ignored.
+    if a.view && a.port.is_none() {
+        return Err(CliError::Usage(
+            "--view shows a device session as it runs (--port); a recording read with --input \
+             has none to show: leave --view out"
+                .into(),
+        ));
+    }
     if a.port.is_some() {
         calibrate_live(a, quiet)
     } else {

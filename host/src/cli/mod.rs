@@ -11,7 +11,7 @@
 //! | `report` | [`report`] | [`outputs::report::document`] over [`outputs::report::data`] |
 //! | `navigation-check` | [`navigation_check`] | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
 //! | `compare` | [`compare`] | [`outputs::report::compare`] |
-//! | `export` | [`export`] | [`outputs::export`] |
+//! | `export` | [`export`] (`export_log`: the ids and slots of `--log`) | [`outputs::export`], [`app::autopilot`] |
 //! | `apply` | [`apply`] | [`outputs::apply`] over [`recording::session::reader`] |
 //! | `noise` | [`noise`] | [`outputs::noise`] |
 //! | `batch` | [`batch`] | [`app::batch`] (rayon) over [`estimator::estimate`] |

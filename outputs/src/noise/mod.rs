@@ -1,7 +1,8 @@
 //! Noise characterisation (`host noise`): the overlapping Allan deviation of each accelerometer and
 //! gyro axis over the longest still segment of a recording, the fitted white noise density, bias
 //! instability and random walk ([`allan`]), a table, a log-log figure, and the figures Kalibr needs.
-//! Each point's 1σ, for error bars, is [`confidence`]'s (the Python package's `allan`).
+//! Each point's 1σ, for error bars, is [`confidence`]'s (the Python package's `allan`); `kalibr`
+//! turns the fitted terms into Kalibr's figures.
 //!
 //! Input: a session directory (the longest static segment of its plan is used), a bare
 //! `samples.csv` (its longest run of rows of one segment is used, assumed still), or a logger's file

@@ -80,8 +80,8 @@ pub(crate) fn gyro_section(data: &ReportData) -> Vec<Block> {
         .collect();
     if spins.is_empty() {
         b.push(Block::Para(
-            "No spins at a known table rate in this session: a hand-held session's gyro is fitted \
-             from its turns by `host segment` (gyro.toml gives its rms misfit)."
+            "No spins at a known rate in this session: a hand-held session's gyro is fitted from \
+             its turns by `host segment` (gyro.toml gives its rms misfit)."
                 .into(),
         ));
     } else {

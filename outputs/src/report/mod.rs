@@ -12,7 +12,8 @@
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
 //!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
 //! - [`compare`]: two calibrations side by side, and the `host export` text.
-//! - [`summary_block`]: the short block of results that ends `host calibrate`.
+//! - [`summary_block`]: the short block of results that ends `host calibrate`; `gyro_section`: the
+//!   report's gyro section (G, b, 1σ, the spins' residuals).
 
 pub mod axes;
 pub mod compare;

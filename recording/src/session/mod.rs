@@ -14,7 +14,9 @@
 //!   [`from_recording`] turns what was found into a plan and statistics for the estimator;
 //!   [`logs`] reads the binary logs (PX4 ULog, ArduPilot DataFlash, ROS 2 MCAP) and tells them
 //!   from text by their first bytes; [`repair`] mends the damaged time stamps of every reader's
-//!   samples by one set of rules.
+//!   samples by one set of rules, with `bursts` (a host's bursts of stamps, re-timed from the fitted
+//!   rate) and `restart` (logs joined with their time restarting); `rest` judges stillness against
+//!   each stream's own noise floor for [`segment`].
 //! - [`toml_check`]: the arrays of a TOML file that serde would silently cut short.
 
 pub mod builtin;
