@@ -159,6 +159,20 @@ fn link_message(
     }
 }
 
+/// What the operator is told of the device before the procedure starts.
+fn identity_line(identity: &Identity) -> String {
+    format!(
+        "device: {:?}, firmware {}.{}.{}, unit {}, {} Hz, calibration {:?}",
+        identity.board,
+        identity.firmware_version[0],
+        identity.firmware_version[1],
+        identity.firmware_version[2],
+        identity.unit_id,
+        identity.sample_rate_hz,
+        identity.calibration
+    )
+}
+
 /// The device can set its own table.
 pub fn has_virtual_table(identity: &Identity) -> bool {
     matches!(identity.board, Board::Simulated | Board::QemuMps2An386)
@@ -180,16 +194,7 @@ pub fn run<T: Transport>(
     calibration_files::refuse_overwrite(&opts.out_dir, opts.force)
         .map_err(ProcedureError::Output)?;
     let identity = client.identify().map_err(link)?;
-    op.say(&format!(
-        "device: {:?}, firmware {}.{}.{}, unit {}, {} Hz, calibration {:?}",
-        identity.board,
-        identity.firmware_version[0],
-        identity.firmware_version[1],
-        identity.firmware_version[2],
-        identity.unit_id,
-        identity.sample_rate_hz,
-        identity.calibration
-    ));
+    op.say(&identity_line(&identity));
     let fs = f64::from(identity.sample_rate_hz.max(1));
     let window = opts
         .window_samples
