@@ -187,21 +187,18 @@ mod tests {
         }
     }
 
-    /// A hand-worked case: 49.03 mm/s² of bias at 9.80665 m/s² per g is 5.000 mg; 1σ 2e-5 of the
-    /// scale is 20 ppm; θ_xx = 0.5° is 8.727 mrad; a lever arm of 12.3 ± 0.05 mm, one
-    /// of 1σ 0.5 mm is not determined.
-    #[test]
-    fn the_block_is_in_an_engineers_units() {
-        let g = shared::STANDARD_GRAVITY_M_S2;
-        let mut s = CalibrationSummary {
+    /// A passing summary of `parameters` at χ²/dof `chi2_per_dof` (one degree of freedom), with
+    /// nothing else to say.
+    fn passing(parameters: Vec<Parameter>, chi2_per_dof: f64) -> CalibrationSummary {
+        CalibrationSummary {
             unit_id: None,
-            parameters: Vec::new(),
+            parameters,
             undetermined: Vec::new(),
             temperature: None,
             calibration: None,
-            chi2: 1.04,
+            chi2: chi2_per_dof,
             dof: 1,
-            chi2_per_dof: 1.04,
+            chi2_per_dof,
             thermal_fit: None,
             checks: Vec::new(),
             passed: true,
@@ -210,7 +207,16 @@ mod tests {
             gyro_bias_walk_deg_s_sqrt_s: None,
             gyro_walk: None,
             bias_walk: None,
-        };
+        }
+    }
+
+    /// A hand-worked case: 49.03 mm/s² of bias at 9.80665 m/s² per g is 5.000 mg; 1σ 2e-5 of the
+    /// scale is 20 ppm; θ_xx = 0.5° is 8.727 mrad; a lever arm of 12.3 ± 0.05 mm, one
+    /// of 1σ 0.5 mm is not determined.
+    #[test]
+    fn the_block_is_in_an_engineers_units() {
+        let g = shared::STANDARD_GRAVITY_M_S2;
+        let mut s = passing(Vec::new(), 1.04);
         s.parameters = vec![
             param("bias_x", "m/s2", 5e-3 * g, Some(1e-4 * g)),
             param("scale_x", "m/s2/g", g, Some(g * 2e-5)),
@@ -239,27 +245,13 @@ mod tests {
     /// own (4 µV of 0.4 V/g is 0.010 mg), never a figure in volts with a 1σ in mg.
     #[test]
     fn an_offset_outputs_zero_and_its_sigma_share_one_unit() {
-        let s = CalibrationSummary {
-            unit_id: None,
-            parameters: vec![
+        let s = passing(
+            vec![
                 param("bias_x", "V", 2.4051, Some(4e-6)),
                 param("scale_x", "V/g", 0.4, Some(8e-6)),
             ],
-            undetermined: Vec::new(),
-            temperature: None,
-            calibration: None,
-            chi2: 1.0,
-            dof: 1,
-            chi2_per_dof: 1.0,
-            thermal_fit: None,
-            checks: Vec::new(),
-            passed: true,
-            warnings: Vec::new(),
-            in_package_size_effect: None,
-            gyro_bias_walk_deg_s_sqrt_s: None,
-            bias_walk: None,
-            gyro_walk: None,
-        };
+            1.0,
+        );
         let b = render_summary_block(&s);
         assert!(
             b.contains("zero-g output, V  x 2.4051000 ± 0.0000040"),
@@ -288,24 +280,7 @@ mod tests {
                 parameters.push(param(&format!("gyro_g_{a}{b}"), "1", v, Some(1e-5)));
             }
         }
-        let s = CalibrationSummary {
-            unit_id: None,
-            parameters,
-            undetermined: Vec::new(),
-            temperature: None,
-            calibration: None,
-            chi2: 1.0,
-            dof: 1,
-            chi2_per_dof: 1.0,
-            thermal_fit: None,
-            checks: Vec::new(),
-            passed: true,
-            warnings: Vec::new(),
-            in_package_size_effect: None,
-            gyro_bias_walk_deg_s_sqrt_s: None,
-            bias_walk: None,
-            gyro_walk: None,
-        };
+        let s = passing(parameters, 1.0);
         let b = render_summary_block(&s);
         let want = (1.004772f64.powi(2) + 0.021f64.powi(2)).sqrt() - 1.0;
         assert_eq!(format!("{:+.0}", want * 1e6), "+4991");
