@@ -18,6 +18,21 @@ use std::time::{Duration, Instant};
 /// loaded machine starve the pages' polls.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// The longest one browser run may take: a page's run is its virtual-time budget (3 to 6 s)
+/// plus start-up, a few seconds on a loaded machine.
+const BROWSER_DEADLINE: Duration = Duration::from_secs(90);
+
+/// The longest a read of the page's server may wait.
+const SERVER_DEADLINE: Duration = Duration::from_secs(30);
+
+/// Kills a process group (the browser and its helpers), whatever state it is in.
+fn kill_group(child: &Child) {
+    let _ = Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .stderr(Stdio::null())
+        .status();
+}
+
 /// Where the screenshots go: `target/view-screenshots/`.
 fn screenshot_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -46,7 +61,11 @@ fn chromium() -> Option<PathBuf> {
 
 /// One GET on the page's server, the body.
 fn get(port: u16, path: &str) -> String {
-    let mut s = std::net::TcpStream::connect(("127.0.0.1", port)).expect("the page's server");
+    let address = std::net::SocketAddr::from(([127, 0, 0, 1], port));
+    let mut s =
+        std::net::TcpStream::connect_timeout(&address, SERVER_DEADLINE).expect("the page's server");
+    s.set_read_timeout(Some(SERVER_DEADLINE)).unwrap();
+    s.set_write_timeout(Some(SERVER_DEADLINE)).unwrap();
     write!(
         s,
         "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
@@ -118,12 +137,26 @@ impl Session {
         format!("http://127.0.0.1:{}/", self.port)
     }
 
+    /// One headless run of the browser on the page, its standard output. The flags are those a
+    /// closed network needs (no background connections, no component updates: on a machine
+    /// without a route out they hang rather than fail), and the run has a deadline: a browser
+    /// that does not finish is killed with its children and the test fails, instead of holding
+    /// the whole test run.
     fn browser(&self, extra: &[String]) -> String {
-        let out = Command::new(&self.chromium)
+        use std::os::unix::process::CommandExt;
+        let out_path = self.profile.path().join("browser.out");
+        let err_path = self.profile.path().join("browser.err");
+        let mut child = Command::new(&self.chromium)
             .args([
                 "--headless",
                 "--no-sandbox",
                 "--disable-gpu",
+                "--disable-dev-shm-usage",
+                "--disable-quic",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--disable-extensions",
                 "--hide-scrollbars",
                 "--no-first-run",
             ])
@@ -135,14 +168,35 @@ impl Session {
             )
             .arg(self.url())
             .stdin(Stdio::null())
-            .output()
+            .stdout(std::fs::File::create(&out_path).unwrap())
+            .stderr(std::fs::File::create(&err_path).unwrap())
+            .process_group(0)
+            .spawn()
             .expect("chromium runs");
+        let start = Instant::now();
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break status;
+            }
+            if start.elapsed() > BROWSER_DEADLINE {
+                kill_group(&child);
+                let _ = child.wait();
+                panic!(
+                    "chromium did not finish within {} s ({extra:?}); its stderr:\n{}",
+                    BROWSER_DEADLINE.as_secs(),
+                    std::fs::read_to_string(&err_path).unwrap_or_default()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        // The browser's helpers may outlive it in its group.
+        kill_group(&child);
         assert!(
-            out.status.success(),
+            status.success(),
             "chromium: {}",
-            String::from_utf8_lossy(&out.stderr)
+            std::fs::read_to_string(&err_path).unwrap_or_default()
         );
-        String::from_utf8_lossy(&out.stdout).into_owned()
+        std::fs::read_to_string(&out_path).unwrap()
     }
 
     /// A screenshot of the page now, and its DOM, checked against the live state: the page shows an
@@ -198,7 +252,12 @@ impl Session {
     /// the step began, its last after): it must then show the new target, not the one it loaded
     /// with.
     fn look_across_a_change(&self) {
+        let start = Instant::now();
         for _ in 0..60 {
+            assert!(
+                start.elapsed() < Duration::from_secs(300),
+                "in 300 s the page never stayed open across a change of step"
+            );
             assert_eq!(
                 state(self.port)["phase"],
                 "recording",
@@ -254,6 +313,16 @@ impl Session {
         let status = self.child.wait().unwrap();
         assert!(status.success(), "host calibrate failed: {status}");
         serde_json::from_str(&out).expect("--json prints one document")
+    }
+}
+
+/// A session the test gave up on does not outlive it.
+impl Drop for Session {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
     }
 }
 
