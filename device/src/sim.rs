@@ -15,7 +15,7 @@
 //! identity says) and [`SimDevice::stick_axis`] (an accelerometer axis whose output never changes).
 
 use super::client::{LinkError, Transport};
-use super::sim_hand::{HandCue, SimHand};
+use super::sim_hand::{HandCue, HandMove, SimHand};
 use firmware::imu::alignment::Alignment;
 use firmware::pipeline::Pipeline;
 use firmware::protocol::{BoardEvent, Controller, DeviceInfo, LinkService};
@@ -303,9 +303,16 @@ impl SimDevice {
     /// Runs one sample period; four times a second the unit's temperature too, as the boards do.
     fn step(&mut self) {
         if let Some((hand, _)) = self.hand.as_mut() {
-            if let Some(t) = hand.step(&self.sensor.table()) {
-                // The hand's settings are unit vectors and bounded rates: never refused.
-                let _ = self.sensor.set_table(&t);
+            // The hand's settings are unit vectors and bounded rates: never refused.
+            match hand.step(&self.sensor.table()) {
+                Some(HandMove::Table(t)) => {
+                    let _ = self.sensor.set_table(&t);
+                }
+                Some(HandMove::Tilt(from, omega_b_rad_s)) => {
+                    let _ = self.sensor.set_table(&from);
+                    let _ = self.sensor.set_tilt(omega_b_rad_s);
+                }
+                None => {}
             }
         }
         if self.stuck_axis.is_none() && self.turned.is_none() && self.hold_gyro.is_none() {

@@ -4,8 +4,10 @@
 //! (an F405 flight controller on its USB cable, say).
 //!
 //! Asked to turn, the hand spins the unit about the vertical for `TURN_S` at `TURN_RATE_DEG_S`
-//! (the motion the procedure waits for before it takes a new position), then sets it down at its
-//! next attitude and lets go: the unit is still there, as on a desk (no tremor). Its attitudes are
+//! (the motion the procedure waits for before it takes a new position), then tilts it at the same
+//! rate along the great circle to its next attitude, and lets go: the unit is still there, as on a
+//! desk (no tremor). Every turn is a real rotation that the gyro sees whole, so the session's
+//! recording holds the turns the hand-held gyro fit needs (docs/model.md §8). Its attitudes are
 //! the built-in `hand` plan's well-spread ups, each `AIM_ERROR_DEG` off where the plan aims, in a
 //! direction that changes from position to position, as a person's aim would be. Like a person who
 //! loses count, every `REPEAT_EVERY`th turn brings the unit back to where it just was, which the
@@ -14,6 +16,7 @@
 use super::operator::{AutomaticOperator, Operator};
 use super::procedure::ProcedureError;
 use recording::session::builtin::builtin_plan;
+use shared::linalg;
 use shared::wire::VirtualTable;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
@@ -26,6 +29,16 @@ pub(crate) const TURN_RATE_DEG_S: f64 = 90.0;
 pub(crate) const AIM_ERROR_DEG: f64 = 3.0;
 /// Every this many turns, the hand sets the unit down where it was before the turn.
 pub(crate) const REPEAT_EVERY: u32 = 7;
+
+/// What the hand does to the unit before a sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum HandMove {
+    /// Sets the table: a spin about the vertical, or the unit set down still.
+    Table(VirtualTable),
+    /// From this table attitude, tilts the unit at this body rate, rad/s
+    /// (`VirtualSensor::set_tilt`).
+    Tilt(VirtualTable, [f32; 3]),
+}
 
 /// The operator's side of the hand: each call asks it for one more turn.
 #[derive(Clone, Debug, Default)]
@@ -50,7 +63,10 @@ pub(crate) struct SimHand {
     next: usize,
     turns: u32,
     turn_samples: u32,
+    sample_rate_hz: u32,
     turning_left: u32,
+    /// The attitude being tilted to, and the samples the tilt has left.
+    tilting: Option<([f32; 3], u32)>,
 }
 
 impl SimHand {
@@ -73,55 +89,100 @@ impl SimHand {
             next: 0,
             turns: 0,
             turn_samples: (TURN_S * f64::from(sample_rate_hz)).round().max(1.0) as u32,
+            sample_rate_hz: sample_rate_hz.max(1),
             turning_left: 0,
+            tilting: None,
         };
         (hand, cue)
     }
 
-    /// Before a sample: the table setting to apply now, if the hand changes it.
-    pub(crate) fn step(&mut self, current: &VirtualTable) -> Option<VirtualTable> {
+    /// Before a sample: what the hand does to the unit now, if it changes anything.
+    pub(crate) fn step(&mut self, current: &VirtualTable) -> Option<HandMove> {
+        if let Some((up_b, left)) = self.tilting.as_mut() {
+            *left -= 1;
+            if *left > 0 {
+                return None;
+            }
+            let up_b = *up_b;
+            self.tilting = None;
+            return Some(HandMove::Table(still(up_b)));
+        }
         if self.turning_left > 0 {
             self.turning_left -= 1;
             if self.turning_left > 0 {
                 return None;
             }
-            self.turns += 1;
-            let up_b = if self.turns % REPEAT_EVERY == 0 && self.next > 0 {
-                *self.ups.get((self.next - 1) % self.ups.len().max(1))?
-            } else {
-                self.next += 1;
-                *self.ups.get((self.next - 1) % self.ups.len().max(1))?
-            };
-            return Some(VirtualTable {
-                up_b,
-                rate_rad_s: 0.0,
-                accel_rad_s2: 0.0,
-            });
+            return Some(self.tilt_to_next(current.up_b));
         }
         if self.cue.requested() == self.served {
             return None;
         }
         self.served = self.served.wrapping_add(1);
         self.turning_left = self.turn_samples;
-        Some(VirtualTable {
+        Some(HandMove::Table(VirtualTable {
             up_b: current.up_b,
             rate_rad_s: TURN_RATE_DEG_S.to_radians() as f32,
             accel_rad_s2: 0.0,
-        })
+        }))
     }
+
+    /// The end of a spin: the tilt along the great circle from `from` to the next attitude, at
+    /// [`TURN_RATE_DEG_S`] rounded to whole samples (or the unit set down, when the next attitude
+    /// is this one).
+    fn tilt_to_next(&mut self, from: [f32; 3]) -> HandMove {
+        self.turns += 1;
+        if !(self.turns % REPEAT_EVERY == 0 && self.next > 0) {
+            self.next += 1;
+        }
+        let n = self.ups.len().max(1);
+        let to = self
+            .ups
+            .get((self.next.max(1) - 1) % n)
+            .copied()
+            .unwrap_or(from);
+        let (u0, u1) = (from.map(f64::from), to.map(f64::from));
+        let angle = linalg::dot(&u0, &u1).clamp(-1.0, 1.0).acos();
+        let fs = f64::from(self.sample_rate_hz);
+        let samples = (angle / TURN_RATE_DEG_S.to_radians() * fs).round();
+        if samples < 1.0 {
+            return HandMove::Table(still(to));
+        }
+        // `du/dt = u × ω` carries u0 to u1 about a = u0 × u1 when ω = −(angle/T)·a.
+        let axis = match linalg::unit(&linalg::cross(&u0, &u1)) {
+            a if a.iter().all(|x| x.is_finite()) && linalg::norm(&a) > 0.5 => a,
+            _ => perpendicular(&u0),
+        };
+        let rate = angle / (samples / fs);
+        self.tilting = Some((to, samples as u32));
+        HandMove::Tilt(still(from), axis.map(|a| (-rate * a) as f32))
+    }
+}
+
+/// The unit at rest with `up_b` up.
+fn still(up_b: [f32; 3]) -> VirtualTable {
+    VirtualTable {
+        up_b,
+        rate_rad_s: 0.0,
+        accel_rad_s2: 0.0,
+    }
+}
+
+/// A unit vector perpendicular to `up`.
+fn perpendicular(up: &[f64; 3]) -> [f64; 3] {
+    let helper = if up[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    linalg::unit(&linalg::cross(up, &helper))
 }
 
 /// `up` turned by [`AIM_ERROR_DEG`] towards a direction perpendicular to it that rotates with `k`.
 fn off_aim(up: &[f64; 3], k: usize) -> [f32; 3] {
     // Any vector not along `up`, crossed with it, gives a perpendicular; rotate it about `up` by k
     // times the golden angle so that successive errors point different ways.
-    let helper = if up[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let e1 = shared::linalg::unit(&shared::linalg::cross(up, &helper));
-    let e2 = shared::linalg::cross(up, &e1);
+    let e1 = perpendicular(up);
+    let e2 = linalg::cross(up, &e1);
     let phi = k as f64 * 2.399_963_229_728_653;
     let t = AIM_ERROR_DEG.to_radians();
     core::array::from_fn(|j| {
@@ -176,15 +237,50 @@ mod tests {
         let start = table([0.0, 0.0, 1.0]);
         assert_eq!(hand.step(&start), None, "not asked: the unit stays");
         cue.turn();
-        let spin = hand.step(&start).expect("asked: it turns");
+        let Some(HandMove::Table(spin)) = hand.step(&start) else {
+            panic!("asked: it turns")
+        };
         assert_eq!(spin.up_b, start.up_b);
         assert!((f64::from(spin.rate_rad_s).to_degrees() - TURN_RATE_DEG_S).abs() < 1e-3);
-        // The turn lasts TURN_S (100 samples at 100 Hz), then the unit is set down, still.
+        // The spin lasts TURN_S (100 samples at 100 Hz), then the tilt to the first attitude.
         for _ in 0..99 {
             assert_eq!(hand.step(&spin), None);
         }
-        let down = hand.step(&spin).expect("set down");
+        let Some(HandMove::Tilt(from, omega)) = hand.step(&spin) else {
+            panic!("a tilt after the spin")
+        };
+        assert_eq!(
+            from,
+            table(start.up_b),
+            "the tilt starts still, where the spin left it"
+        );
+        let mut samples = 1;
+        let down = loop {
+            match hand.step(&from) {
+                None => samples += 1,
+                Some(HandMove::Table(t)) => break t,
+                Some(m) => panic!("{m:?} during a tilt"),
+            }
+        };
         assert_eq!(down.rate_rad_s, 0.0);
+        assert_eq!(down.up_b, hand.ups[0]);
+        // The tilt's rate over its samples carries "up" from the start to the attitude set down
+        // (du/dt = u × ω: up turned by −|ω|·t about ω).
+        let w = omega.map(f64::from);
+        let t = f64::from(samples) / 100.0;
+        let rate = linalg::norm(&w);
+        assert!((rate.to_degrees() - TURN_RATE_DEG_S).abs() < 2.0, "{rate}");
+        let k = linalg::unit(&w);
+        let u0 = start.up_b.map(f64::from);
+        let (sn, c) = ((-rate * t).sin(), (-rate * t).cos());
+        let kxu = linalg::cross(&k, &u0);
+        let kdu = linalg::dot(&k, &u0);
+        let u: [f64; 3] =
+            core::array::from_fn(|j| u0[j] * c + kxu[j] * sn + k[j] * kdu * (1.0 - c));
+        let u1 = down.up_b.map(f64::from);
+        let miss = linalg::norm(&[u[0] - u1[0], u[1] - u1[1], u[2] - u1[2]]);
+        // Within the single precision of the wire's rates and attitudes (10⁻⁵ rad is 2″).
+        assert!(miss < 1e-5, "{u:?} vs {u1:?}");
         assert_eq!(hand.step(&down), None, "one turn per request");
     }
 
@@ -194,14 +290,18 @@ mod tests {
         let mut downs = Vec::new();
         for _ in 0..n {
             cue.turn();
-            // A turn is 10 samples at 10 Hz; give it a few more.
-            for _ in 0..20 {
-                if let Some(next) = hand.step(&t) {
-                    t = next;
-                    if t.rate_rad_s == 0.0 {
-                        downs.push(t.up_b);
-                        break;
+            // A spin is 10 samples at 10 Hz, a tilt at most 20; give it a few more.
+            for _ in 0..40 {
+                match hand.step(&t) {
+                    Some(HandMove::Table(next)) => {
+                        t = next;
+                        if t.rate_rad_s == 0.0 {
+                            downs.push(t.up_b);
+                            break;
+                        }
                     }
+                    Some(HandMove::Tilt(from, _)) => t = from,
+                    None => {}
                 }
             }
         }

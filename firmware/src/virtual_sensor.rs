@@ -48,6 +48,9 @@ pub const POWER_ON_TEMPERATURE_C: f32 = 25.0;
 pub struct VirtualSensor {
     model: ForwardModel,
     table: VirtualTable,
+    /// A tilt under way: the body-axis rate vector `ω` (rad/s) that turns "up" away from the
+    /// table's `up_b`, through O. Cleared by [`Self::set_table`].
+    tilt: Option<[f64; 3]>,
     samples_since_set: u32,
     sample_period_s: f64,
     noise_state: u32,
@@ -109,6 +112,7 @@ impl VirtualSensor {
                     rate_rad_s: 0.0,
                     accel_rad_s2: 0.0,
                 },
+                tilt: None,
                 samples_since_set: 0,
                 sample_period_s: 1.0 / f64::from(sample_rate_hz.max(1)),
                 noise_state: 0x1234_5678,
@@ -229,8 +233,52 @@ impl VirtualSensor {
     /// Sets the table (time restarts at zero). Refuses a setting [`Self::check_table`] refuses.
     pub fn set_table(&mut self, t: &VirtualTable) -> Result<(), BadTable> {
         self.table = Self::check_table(t)?;
+        self.tilt = None;
         self.samples_since_set = 0;
         Ok(())
+    }
+
+    /// Tilts the unit from its table attitude as a hand does: from the next sample it turns at the
+    /// constant body rate `omega_b_rad_s` about an axis through O (the table's own rate and
+    /// acceleration are then not applied). Gravity turns in body axes as `du/dt = u × ω`, so
+    /// after `t` seconds "up" is `up_b` turned by `−|ω|·t` about `ω`; the gyro reads `ω` through
+    /// the unit's `G`, and the outputs carry the `[ω×]²` of each lever arm (docs/model.md §4.5).
+    /// A rate that is not finite, or faster than the table's limit, is refused.
+    pub fn set_tilt(&mut self, omega_b_rad_s: [f32; 3]) -> Result<(), BadTable> {
+        let w = omega_b_rad_s.map(f64::from);
+        let n = linalg::norm(&w);
+        if !n.is_finite() || n > f64::from(MAX_TABLE_RATE_RAD_S) {
+            return Err(BadTable);
+        }
+        self.tilt = Some(w);
+        self.samples_since_set = 0;
+        Ok(())
+    }
+
+    /// The body's motion `t` seconds into a tilt at `omega` from the table's attitude.
+    fn tilting(&self, omega: &[f64; 3], t: f64) -> shared::forward::BodyMotion {
+        let rate = linalg::norm(omega);
+        let up0 = self.table.up_b.map(f64::from);
+        let up = if rate > 0.0 {
+            // Rodrigues: up0 turned by −rate·t about ω/|ω|.
+            let k = omega.map(|x| x / rate);
+            let (s, c) = (libm::sin(-rate * t), libm::cos(-rate * t));
+            let kxu = linalg::cross(&k, &up0);
+            let kdu = linalg::dot(&k, &up0);
+            core::array::from_fn(|j| up0[j] * c + kxu[j] * s + k[j] * kdu * (1.0 - c))
+        } else {
+            up0
+        };
+        let g = self.model.gravity_m_s2;
+        let zero = [0.0; 3];
+        // O stays put: the body's specific force at O is gravity's alone.
+        shared::forward::BodyMotion {
+            f_o: shared::units::BodySpecificForce {
+                m_s2: up.map(|u| g * u),
+            },
+            omega: shared::units::BodyRate { rad_s: *omega },
+            omega_dot: shared::units::BodyAngularAccel { rad_s2: zero },
+        }
     }
 
     /// Multiplies accelerometer `axis`'s output noise by `k` (the host's simulated device: a
@@ -282,7 +330,10 @@ impl VirtualSensor {
             accel_rad_s2: accel,
             centre_m: [0.0; 3],
         };
-        let motion = state.motion(self.model.gravity_m_s2);
+        let motion = match &self.tilt {
+            Some(omega) => self.tilting(omega, t),
+            None => state.motion(self.model.gravity_m_s2),
+        };
         let u = self.model.outputs(&motion);
         self.samples = self.samples.wrapping_add(1);
         self.sensor_temp_c += (self.die_temp_c - self.sensor_temp_c) * self.lag_step;
@@ -381,6 +432,66 @@ mod tests {
             (st.m_s2[1].abs() / 9.80665 * 1e3 - 11.19).abs() < 0.05,
             "{st:?}"
         );
+    }
+
+    /// A hand's tilt about body x from z up: gravity turns towards +y (`du/dt = u × ω`), the
+    /// gyro reads `G ω + b`, and after a quarter turn y is up; a new table setting ends the tilt.
+    #[test]
+    fn a_tilt_turns_gravity_as_the_gyro_says() {
+        let truth = crate::testvectors::imperfect_unit();
+        let mut s = VirtualSensor::new(&truth, 1000, false).unwrap();
+        let rate = 90f32.to_radians();
+        s.set_tilt([rate, 0.0, 0.0]).unwrap();
+        let gyro = truth.gyro.unwrap();
+        let first = s.sample();
+        for j in 0..3 {
+            let want = gyro.matrix[j][0] * f64::from(rate) + gyro.bias_rad_s[j];
+            assert!(
+                (f64::from(first.rate_rad_s[j]) - want).abs() < 1e-5,
+                "{first:?}"
+            );
+        }
+        // 1000 samples at 1 kHz: 90° of tilt; the outputs are then those of y up, at rest but for
+        // the lever arms' centripetal term.
+        let mut last = first;
+        for _ in 0..999 {
+            last = s.sample();
+        }
+        let model = shared::forward::ForwardModel::new(&truth).unwrap();
+        let g = model.gravity_m_s2;
+        let turned = 90f64.to_radians() * 999.0 / 1000.0;
+        let up = [0.0, turned.sin(), turned.cos()];
+        let w = [f64::from(rate), 0.0, 0.0];
+        let want = model.outputs(&shared::forward::BodyMotion {
+            f_o: shared::units::BodySpecificForce {
+                m_s2: up.map(|u| g * u),
+            },
+            omega: BodyRate { rad_s: w },
+            omega_dot: BodyAngularAccel::default(),
+        });
+        for j in 0..3 {
+            assert!(
+                (f64::from(last.raw[j]) - want.raw[j]).abs() < 1e-5,
+                "{last:?} vs {want:?}"
+            );
+        }
+        // The lever arms' centripetal term shows: at rest at the same attitude the outputs differ.
+        let still = model.outputs(&shared::forward::BodyMotion {
+            f_o: shared::units::BodySpecificForce {
+                m_s2: up.map(|u| g * u),
+            },
+            ..Default::default()
+        });
+        assert!(
+            (0..3).any(|j| (f64::from(last.raw[j]) - still.raw[j]).abs() > 1e-5),
+            "{last:?} vs {still:?}"
+        );
+        // A table setting ends the tilt: at rest again.
+        s.set_table(&s.table()).unwrap();
+        let rest = s.sample();
+        assert!((f64::from(rest.rate_rad_s[0]) - gyro.bias_rad_s[0]).abs() < 1e-6);
+        assert!(s.set_tilt([f32::NAN, 0.0, 0.0]).is_err());
+        assert!(s.set_tilt([100.0, 0.0, 0.0]).is_err());
     }
 
     #[test]
