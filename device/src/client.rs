@@ -76,6 +76,8 @@ pub struct DeviceClient<T: Transport> {
     foreign_version: Option<u16>,
     /// Who else sees each raw window (the live page).
     tap: Option<crate::view::Live>,
+    /// Where every raw window is logged as well (a live hand-held session's `stream.csv`).
+    window_log: Option<crate::window_log::WindowLog>,
 }
 
 impl<T: Transport> DeviceClient<T> {
@@ -90,6 +92,7 @@ impl<T: Transport> DeviceClient<T> {
             garbage_frames: 0,
             foreign_version: None,
             tap: None,
+            window_log: None,
         }
     }
 
@@ -101,6 +104,27 @@ impl<T: Transport> DeviceClient<T> {
     /// Shows every raw window on the live page as well.
     pub fn set_view(&mut self, live: crate::view::Live) {
         self.tap = Some(live);
+    }
+
+    /// Logs every raw window from now on.
+    pub(crate) fn log_windows(&mut self, log: crate::window_log::WindowLog) {
+        self.window_log = Some(log);
+    }
+
+    /// Flushes the window log, if one is open.
+    pub(crate) fn flush_window_log(&mut self) {
+        if let Some(log) = self.window_log.as_mut() {
+            log.flush();
+        }
+    }
+
+    /// Closes the window log: where it is and its rows (`None` when none was open).
+    pub(crate) fn finish_window_log(
+        &mut self,
+    ) -> Option<Result<(std::path::PathBuf, u64), crate::window_log::WindowLogError>> {
+        self.window_log
+            .take()
+            .map(crate::window_log::WindowLog::finish)
     }
 
     /// The live page this client feeds, if any.
@@ -304,6 +328,9 @@ impl<T: Transport> DeviceClient<T> {
                 DeviceToHost::RawWindow(w) => {
                     if let Some(live) = &self.tap {
                         live.window(&w);
+                    }
+                    if let Some(log) = self.window_log.as_mut() {
+                        log.push(&w);
                     }
                     return Ok(w);
                 }

@@ -13,6 +13,7 @@ pub mod bringup;
 mod bringup_health;
 pub mod bringup_motion;
 pub mod client;
+pub mod hand_session;
 pub mod handheld;
 pub(crate) mod live_check;
 pub mod operator;
@@ -22,6 +23,7 @@ pub mod sim;
 pub mod sim_hand;
 pub mod verify;
 pub mod view;
+pub mod window_log;
 
 pub use client::{DeviceClient, LinkError, Transport};
 

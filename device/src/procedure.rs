@@ -14,7 +14,7 @@
 use super::live_check::{instruction, table_for};
 pub(crate) use super::live_check::{live_check, remount_check};
 use super::operator::Operator;
-use crate::{handheld, DeviceClient, LinkError, Transport};
+use crate::{hand_session, handheld, window_log, DeviceClient, LinkError, Transport};
 use app::{CalibrateError, CalibrateOptions, Calibrated};
 use estimator::calibration_files::{self, OutputError, WrittenCalibration};
 use recording::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
@@ -139,6 +139,20 @@ pub enum ProcedureError {
     /// The terminal failed.
     #[error("terminal error: {0}")]
     Terminal(#[source] std::io::Error),
+    /// A hand-held session's window log could not be opened.
+    #[error(transparent)]
+    WindowLog(window_log::WindowLogError),
+    /// A hand-held session's window log could not be kept or gave no session.
+    #[error("{source}\n(every window of the session is in {}: `{}` tells more)", .stream.display(), .command)]
+    HandSession {
+        /// Why.
+        #[source]
+        source: Box<crate::hand_session::HandSessionError>,
+        /// The window log.
+        stream: PathBuf,
+        /// The `host segment` command that reads it as the procedure did.
+        command: String,
+    },
 }
 
 /// [`ProcedureError::Link`]'s message: the link's, and where the recording so far is kept.
@@ -213,6 +227,13 @@ pub fn run<T: Transport>(
         );
     }
     let recording_dir = opts.out_dir.join("recording");
+    let hand = !drive && handheld::is_hand_held(&plan);
+    if hand {
+        // Every window, turns included: the gyro is fitted from the hand's turns.
+        let log = hand_session::open_log(&opts.out_dir, fs, window, opts.force)
+            .map_err(ProcedureError::WindowLog)?;
+        client.log_windows(log);
+    }
     let Recorded { warnings, dropped } = record_plan(
         client,
         op,
@@ -229,15 +250,19 @@ pub fn run<T: Transport>(
         }
     };
     phase(client, "estimating");
+    let session_dir = match client.finish_window_log() {
+        Some(log) => segment_window_log(log, &plan, op, opts)?,
+        None => recording_dir,
+    };
     // Estimate from the saved recording: the one calibrate use case, as `host calibrate --input`.
     let (session, mut calibrated) = app::calibrate_session_dir(
-        &recording_dir,
+        &session_dir,
         &opts.calibrate,
         &session::ReadOptions { quiet: opts.quiet },
     )
     .map_err(|source| ProcedureError::Estimate {
         source,
-        recording: recording_dir.clone(),
+        recording: session_dir.clone(),
     })?;
     // The result table is the caller's to print (on stdout, with the other results).
     let report =
@@ -251,7 +276,6 @@ pub fn run<T: Transport>(
     let after = store_on_device(client, op, &written, created)?;
     phase(client, "verifying");
 
-    let hand = !drive && handheld::is_hand_held(&plan);
     let verification = if hand {
         handheld::verify_magnitude(client, op, &plan, window, window_rate, opts, fs)
     } else {
@@ -263,7 +287,7 @@ pub fn run<T: Transport>(
     Ok(ProcedureOutcome {
         report,
         identity,
-        recording_dir,
+        recording_dir: session_dir,
         calibrated,
         written,
         state_after_reset: after.calibration,
@@ -272,6 +296,42 @@ pub fn run<T: Transport>(
         dropped_frames: dropped,
         passed,
     })
+}
+
+/// The end of a hand-held session: its window log closed and segmented as `host segment` would
+/// (the command said), into the session directory that is calibrated.
+fn segment_window_log(
+    log: Result<(PathBuf, u64), window_log::WindowLogError>,
+    plan: &Plan,
+    op: &mut dyn Operator,
+    opts: &ProcedureOptions,
+) -> Result<PathBuf, ProcedureError> {
+    let stream = opts.out_dir.join(window_log::STREAM_FILE);
+    let (stream, rows) = log.map_err(|e| hand_error(e.into(), &stream, plan, opts))?;
+    let segmented = opts.out_dir.join(hand_session::SEGMENTED_DIR);
+    op.say(&format!(
+        "{} windows in {}: segmented as `{}` does, turns and all",
+        rows,
+        stream.display(),
+        hand_session::segment_command(&stream, plan, &segmented)
+    ));
+    hand_session::segment_log(&stream, plan, &opts.out_dir, opts.force)
+        .map_err(|e| hand_error(e, &stream, plan, opts))
+}
+
+/// [`ProcedureError::HandSession`] for the window log at `stream`.
+fn hand_error(
+    source: hand_session::HandSessionError,
+    stream: &Path,
+    plan: &Plan,
+    opts: &ProcedureOptions,
+) -> ProcedureError {
+    let segmented = opts.out_dir.join(hand_session::SEGMENTED_DIR);
+    ProcedureError::HandSession {
+        source: Box::new(source),
+        stream: stream.to_path_buf(),
+        command: hand_session::segment_command(stream, plan, &segmented),
+    }
 }
 
 /// The plan as this device records it: in the device's output unit (its raw outputs are what is
@@ -399,6 +459,7 @@ fn record_plan<T: Transport>(
             }
         }
         writer.end_segment()?;
+        client.flush_window_log();
     }
     writer.finish()?;
     if dropped > 0 {

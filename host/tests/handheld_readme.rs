@@ -40,11 +40,14 @@ fn readme_hand_held_commands_work_as_written() {
         .lines()
         .filter_map(|l| l.strip_prefix(prefix))
         .collect();
-    assert_eq!(commands.len(), 4, "{commands:?}");
+    assert_eq!(commands.len(), 6, "{commands:?}");
     assert!(commands[0].starts_with("simulate-hand "));
     assert!(commands[1].starts_with("segment ") && commands[2].starts_with("calibrate "));
     // The live rehearsal: the simulated device in a simulated hand, no file in.
     assert!(commands[3].starts_with("calibrate --port sim-hand "));
+    // Its window log, segmented and calibrated by hand.
+    assert!(commands[4].starts_with("segment --input hand-live/stream.csv "));
+    assert!(commands[5].starts_with("calibrate --input hand-live-again "));
 
     let dir = tempfile::tempdir().unwrap();
     for c in &commands {
@@ -61,9 +64,25 @@ fn readme_hand_held_commands_work_as_written() {
         "hand-calibration/calibration.toml",
         "hand-live/calibration.toml",
         "hand-live/recording/plan.toml",
+        "hand-live/stream.csv",
+        "hand-live/segmented/gyro.toml",
     ] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
+    // The live session's calibration is the offline path's on its window log: the gyro fitted
+    // from the hand's turns, and everything else, to the last digit.
+    let read = |f: &str| std::fs::read_to_string(dir.path().join(f)).unwrap();
+    let live = read("hand-live/calibration.toml");
+    let offline = read("hand-live-again-cal/calibration.toml");
+    let gyro = |t: &str| {
+        t.split("\n[gyro]\n")
+            .nth(1)
+            .map(|g| g.split("\n[").next().unwrap_or_default().to_string())
+    };
+    let live_gyro = gyro(&live).expect("the live session's calibration has [gyro]");
+    assert!(live_gyro.contains("matrix = ["), "{live_gyro}");
+    assert_eq!(Some(live_gyro), gyro(&offline));
+    assert_eq!(live, offline);
 }
 
 /// The raw-count (mid-scale offset, gyro in counts) and six-face commands (`host …` lines).

@@ -471,8 +471,21 @@ fn the_hand_held_page_follows_the_session_in_a_browser() {
 
     s.wait_for("the result", |v| v["phase"] == "done");
     let end = s.look("3-end", false);
+    // Nothing is open once the session is over: what is left was not visited.
+    assert_eq!(text_of(&half, "open-label"), "open targets, best first:");
+    assert_eq!(text_of(&end, "open-label"), "targets not visited:");
     let doc = s.finish();
     check_result(&end, &doc);
+    // The live hand-held session's gyro, fitted from the hand's turns, is on the page.
+    assert!(
+        doc["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["name"].as_str().is_some_and(|n| n.starts_with("gyro_g_"))),
+        "the document has the gyro: {}",
+        doc["parameters"]
+    );
 }
 
 #[test]

@@ -91,6 +91,78 @@ fn the_hand_held_procedure_calibrates_stores_and_verifies_a_unit_without_a_table
     assert!(out.path().join("calibration.toml").exists());
 }
 
+/// A MEMS gyro's typical errors (0.5 % scale, 0.5° misalignment, 0.5 °/s bias; docs/model.md §8).
+fn typical_gyro() -> shared::sensor_models::GyroCorrection {
+    let m = 0.5f64.to_radians();
+    let b = 0.5f64.to_radians();
+    shared::sensor_models::GyroCorrection {
+        matrix: [[1.005, m, -m], [-m, 0.995, m], [m, -m, 1.005]],
+        bias_rad_s: [b, -b, 0.6 * b],
+    }
+}
+
+fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// The live session fits the gyro from the hand's turns, from every window it logged: `G` and `b`
+/// are the simulator's, seen in the calibration's body frame (which the accelerometers fix: the
+/// frame turned by `R = M_true⁻¹·M_est` from the simulator's), each within 5σ of its own 1σ.
+#[test]
+fn the_live_hand_held_session_fits_the_gyro_from_its_turns() {
+    let out = tempfile::tempdir().unwrap();
+    let mut truth = paper_unit();
+    truth.gyro = Some(typical_gyro());
+    let dev = SimDevice::hand_held(truth).expect("simulated device boots");
+    let mut client = DeviceClient::new(dev, Duration::from_millis(500));
+    let cue = client.transport_mut().hand_cue().expect("held in a hand");
+    let mut op = HandOperator {
+        inner: quiet(),
+        cue,
+    };
+    let result = procedure::run(&mut client, &options(out.path()), &mut op).unwrap();
+    assert!(result.passed, "verification: {:#?}", result.verification);
+    assert!(
+        out.path().join("stream.csv").exists(),
+        "every window is kept"
+    );
+    assert_eq!(result.recording_dir, out.path().join("segmented"));
+
+    let outcome = &result.calibrated.outcome;
+    let fitted = outcome
+        .gyro
+        .as_ref()
+        .expect("the gyro is fitted from the turns");
+    let g_est = outcome.calibration.gyro.expect("[gyro] in the calibration");
+    let (m_true, _) = truth.statics.to_fitted().unwrap();
+    let (m_est, _) = outcome.calibration.statics.to_fitted().unwrap();
+    let m_true_inv = shared::linalg::inverse(&m_true.m_out_per_g).unwrap();
+    let r = mat_mul(&m_true_inv, &m_est.m_out_per_g);
+    let want = mat_mul(&typical_gyro().matrix, &r);
+    for i in 0..3 {
+        for j in 0..3 {
+            let (got, sigma) = (g_est.matrix[i][j], fitted.matrix_1sigma[i][j]);
+            assert!(
+                (got - want[i][j]).abs() < 5.0 * sigma,
+                "G[{i}][{j}] = {got}, the simulator's {} (1σ {sigma})",
+                want[i][j]
+            );
+        }
+        let (got, sigma) = (g_est.bias_rad_s[i], fitted.bias_rad_s_1sigma[i]);
+        let b = typical_gyro().bias_rad_s[i];
+        assert!(
+            (got - b).abs() < 5.0 * sigma,
+            "b[{i}] = {got}, the simulator's {b} (1σ {sigma})"
+        );
+    }
+    // A fit, not a copy: G is determined to about 10⁻⁴.
+    assert!(fitted
+        .matrix_1sigma
+        .iter()
+        .flatten()
+        .all(|s| *s > 0.0 && *s < 5e-4));
+}
+
 /// Nobody turns the unit: the procedure says what it waited for, and the recording so far is kept.
 #[test]
 fn a_unit_nobody_turns_stops_the_procedure_with_what_it_waited_for() {
