@@ -161,6 +161,7 @@ pub fn calibrate_each_imu(
             instance: Some(instance),
             topic: None,
             spelling: choices.segment.spelling,
+            rate_hz: None,
         };
         let read = read_log_keeping(&log.path, &source, max_samples)?;
         let session = segment_recording(read.recording, choices)

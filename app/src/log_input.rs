@@ -213,13 +213,13 @@ impl LogInput {
         let text_given = self.acc_unit.is_some()
             || self.gyro_unit.is_some()
             || self.time_column.is_some()
-            || self.rate_hz.is_some()
             || self.time_unit.is_some()
             || self.acc_offset.is_some()
             || self.gyro_lsb_per_dps.is_some()
             || self.gyro_offset.is_some()
             || self.temp_column.is_some()
             || self.skip_lines.is_some();
+        // The rate alone is a binary log's re-timing; with the text options, a text file's time.
         Ok(LogSource {
             text: if text_given {
                 Some(self.import_options()?)
@@ -229,6 +229,7 @@ impl LogInput {
             instance: self.instance,
             topic: self.topic.clone(),
             spelling: self.spelling,
+            rate_hz: if text_given { None } else { self.rate_hz },
         })
     }
 

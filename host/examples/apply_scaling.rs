@@ -36,6 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let csv = LogSource {
         text: Some(ImportOptions::new(

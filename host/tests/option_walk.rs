@@ -35,7 +35,8 @@ const ALWAYS_FIT: &str = "a fit's option or limit: every run fits";
 const ALWAYS_DEVICE: &str = "every run of this command talks to the device";
 
 /// The log-reading options of `apply` and `noise` (the same set): text-file options refused on a
-/// session directory and on a binary log; `--instance` and `--topic` on a text file.
+/// session directory and on a binary log (but `--rate-hz`, which re-times a binary log's samples:
+/// `recording::session::logs`' tests); `--instance` and `--topic` on a text file.
 fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
     let mut v = Vec::new();
     let text: [(&str, &[&str]); 11] = [
@@ -57,7 +58,9 @@ fn log_options(sub: &'static str, head: &'static [&'static str]) -> Vec<Case> {
         if session {
             v.push(Case::new(sub, name, head, &["--input", "{session}"], args));
         }
-        v.push(Case::new(sub, name, head, &["--input", "{ulog}"], args));
+        if name != "rate-hz" {
+            v.push(Case::new(sub, name, head, &["--input", "{ulog}"], args));
+        }
     }
     // A calibration without a temperature model uses no temperature.
     if sub == "apply" {
@@ -176,6 +179,11 @@ fn table() -> Vec<(&'static str, &'static str, Verdict)> {
     ] {
         t.push(("simulate-hand", o, Everywhere(ALWAYS_SIM)));
     }
+    t.push((
+        "segment",
+        "rate-hz",
+        Everywhere("a text file's rate, or a binary log's samples re-timed: every input is a log"),
+    ));
     t.push((
         "simulate-hand",
         "rounds",

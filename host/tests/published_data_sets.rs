@@ -371,6 +371,7 @@ fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_sessio
             instance: Some(instance as u8),
             topic: None,
             spelling: Default::default(),
+            rate_hz: None,
         };
         let log = recording::session::logs::read_log(Path::new(path), &source).unwrap();
         assert_eq!(log.recording.len(), walked.len(), "{name}");
@@ -432,6 +433,7 @@ fn pymavlinks_test_log_is_undone_with_its_own_parameters() {
         instance: Some(0),
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let undone = read_log(path, &source).unwrap();
     assert!(

@@ -14,6 +14,7 @@ fn two_logs_joined_with_their_time_restarting_are_read_one_after_the_other() {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let hand = read_log(&fixture("hand.ulg"), &none).unwrap().recording;
     let n = hand.len();

@@ -125,6 +125,7 @@ fn each_reader_reads_what_the_formats_reference_tool_reads() {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     for (name, format) in [
         ("hand.ulg", LogFormat::Ulog),
@@ -270,6 +271,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
             instance,
             topic: topic.map(String::from),
             spelling: Default::default(),
+            rate_hz: None,
         };
         read_log(&fixture(name), &source).unwrap_err().to_string()
     };
@@ -295,6 +297,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
         instance: None,
         topic: Some("/imu/data".into()),
         spelling: Default::default(),
+        rate_hz: None,
     };
     assert_eq!(
         read_log(&fixture("hand.mcap"), &source)
@@ -354,6 +357,7 @@ fn a_public_px4_log_reads_as_pyulog_reads_it_and_segment_says_why_it_is_no_sessi
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let log = read_log(&path, &none).unwrap();
     assert_eq!(log.format, LogFormat::Ulog);
@@ -438,6 +442,7 @@ fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let log =
         recording::session::logs::read_log_from(&bytes[..], &bytes, Path::new("cut.ulg"), &none)
@@ -466,6 +471,7 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
             instance: Some(instance),
             topic: None,
             spelling: Default::default(),
+            rate_hz: None,
         };
         let log = read_log(&fixture("hand-accgyr.bin"), &source).unwrap();
         assert_eq!(log.format, LogFormat::DataFlash);
@@ -488,9 +494,89 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
         instance: Some(2),
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let e = read_log(&fixture("hand-accgyr.bin"), &source)
         .unwrap_err()
         .to_string();
     assert!(e.contains("ACC") && e.contains('1'), "{e}");
+}
+
+/// A still unit whose driver stamped it on the host in bursts: eight samples share the stamp of the
+/// first, the true rate 100 Hz (the stamps' median step is 0, their count per second 100).
+fn bursty_still(n: usize) -> Vec<crate::fuzz::logs::LogSample> {
+    (0..n)
+        .map(|k| crate::fuzz::logs::LogSample {
+            t_s: (k / 8 * 8) as f64 / 100.0,
+            ..crate::fuzz::logs::still_sample(k, 100.0)
+        })
+        .collect()
+}
+
+/// `--rate-hz` on a binary log re-times every sample at the rate given, from the first stamp, and
+/// says the rate the stamps imply beside it (here the user's 99.3 Hz against the stamps' 100 Hz),
+/// in every binary format; with another text option it is still refused.
+#[test]
+fn a_rate_given_for_a_binary_log_re_times_it_and_says_what_the_stamps_imply() {
+    use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog};
+    let tmp = tempfile::tempdir().unwrap();
+    let samples = bursty_still(3000);
+    for (name, bytes) in [
+        ("still.mcap", write_mcap(&samples, None, 0.0)),
+        ("still.bin", write_dataflash(&samples)),
+        ("still.ulg", write_ulog(&samples, None)),
+    ] {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let Command::Noise(a) = command(&format!(
+            "host noise --input {} --rate-hz 99.3",
+            path.display()
+        )) else {
+            panic!("noise parses")
+        };
+        let source = a.log.source(&path).unwrap();
+        assert_eq!(source.rate_hz, Some(99.3));
+        let log = read_log(&path, &source).unwrap();
+        let rec = &log.recording;
+        assert_eq!(rec.len(), 3000, "{name}: every sample kept");
+        for (k, t) in rec.t_s.iter().enumerate() {
+            let want = rec.t_s[0] + k as f64 / 99.3;
+            assert!(
+                (t - want).abs() < 1e-9,
+                "{name}: sample {k} at {t}, not {want}"
+            );
+        }
+        let note = log
+            .warnings
+            .iter()
+            .find(|w| w.contains("re-timed at 99.3 Hz"))
+            .unwrap_or_else(|| panic!("{name}: {:?}", log.warnings));
+        let implied: f64 = note
+            .split("the stamps imply ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("{note}"));
+        assert!((implied - 100.0).abs() < 0.3, "{name}: {note}");
+        assert!(note.contains("+0.7"), "{note}");
+        // Without the rate, the stamps are the log's own.
+        let own = read_log(
+            &path,
+            &LogSource {
+                rate_hz: None,
+                ..source
+            },
+        )
+        .unwrap();
+        assert!(own.warnings.iter().all(|w| !w.contains("re-timed at")));
+        // The rate with a text file's option on a binary log: refused, naming what was given.
+        let Command::Noise(b) = command(&format!(
+            "host noise --input {} --rate-hz 99.3 --acc-unit g",
+            path.display()
+        )) else {
+            panic!("noise parses")
+        };
+        let e = b.log.source(&path).unwrap_err().to_string();
+        assert!(e.contains("--acc-unit") && e.contains("--rate-hz"), "{e}");
+    }
 }

@@ -28,8 +28,9 @@ pub struct LogInputArgs {
     /// and span).
     #[arg(long, value_name = "UNIT")]
     pub time_unit: Option<String>,
-    /// Text files: the sample rate, Hz, when the file has no time column (a sample index is
-    /// ignored).
+    /// The sample rate, Hz. Text files: when the file has no time column (a sample index is
+    /// ignored). Binary logs: every sample re-timed at this rate from the first stamp (for a host's
+    /// or driver's stamps, which come in bursts), with the rate the stamps imply said beside it.
     #[arg(long, value_name = "HZ", value_parser = recording::limits::real(recording::limits::MIN_LOGGER_RATE_HZ, recording::limits::MAX_SAMPLE_RATE_HZ))]
     pub rate_hz: Option<f64>,
     /// Text files: the accelerometer's unit, m/s2, g, LSB or V (kept as the calibration's output
@@ -130,7 +131,12 @@ impl LogInputArgs {
     /// application layer), the instance and topic. Text options on a binary log are refused by
     /// name before they are checked as a text file's (a log that states its units needs none).
     pub fn source(&self, input: &std::path::Path) -> Result<LogSource, CliError> {
-        let text = self.text_options_given();
+        // A binary log takes --rate-hz alone: it re-times the samples (the stamps a host's
+        // driver wrote in bursts, say), and what the stamps imply is said beside it.
+        let mut text = self.text_options_given();
+        if text == ["--rate-hz"] {
+            text.clear();
+        }
         let format = log_format(input);
         if let Some(format) = format {
             self.refuse_for_format(input, format)?;

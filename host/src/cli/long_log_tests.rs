@@ -22,6 +22,7 @@ fn none() -> LogSource {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     }
 }
 

@@ -24,6 +24,7 @@ fn binary() -> LogSource {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     }
 }
 

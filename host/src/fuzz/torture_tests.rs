@@ -235,6 +235,7 @@ fn source(format: Format) -> LogSource {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     }
 }
 

@@ -300,7 +300,7 @@ pub(crate) fn read_keeping<R: Read>(
     instance: u8,
     keep: &Keep,
 ) -> Result<(Recording, Vec<String>), DataFlashError> {
-    read_with_params(r, instance, keep).map(|(rec, w, _)| (rec, w))
+    read_with_params(r, instance, keep, None).map(|(rec, w, _)| (rec, w))
 }
 
 /// [`read_keeping`], with the vehicle's parameters the log holds (its `PARM` messages).
@@ -308,6 +308,7 @@ pub(crate) fn read_with_params<R: Read>(
     r: R,
     instance: u8,
     keep: &Keep,
+    rate_hz: Option<f64>,
 ) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
     let mut w = Window {
         r,
@@ -325,6 +326,9 @@ pub(crate) fn read_with_params<R: Read>(
         gyro: Stream::new(keep),
         ..State::default()
     };
+    for s in [&mut st.imu_acc, &mut st.imu_gyro, &mut st.acc, &mut st.gyro] {
+        s.retime(rate_hz);
+    }
     let mut warnings = Vec::new();
     loop {
         if w.fill(3)? < 3 {

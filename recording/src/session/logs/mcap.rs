@@ -298,7 +298,7 @@ impl McapError {
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
 pub fn read<R: Read>(r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
-    read_keeping(r, topic, &Keep::default())
+    read_keeping(r, topic, &Keep::default(), None)
 }
 
 /// [`read`], each stream keeping what `keep` says.
@@ -306,6 +306,7 @@ pub(crate) fn read_keeping<R: Read>(
     mut r: R,
     topic: Option<&str>,
     keep: &Keep,
+    rate_hz: Option<f64>,
 ) -> Result<(Recording, Vec<String>), McapError> {
     let options = LinearReaderOptions::default()
         .with_record_length_limit(RECORD_LIMIT)
@@ -317,6 +318,8 @@ pub(crate) fn read_keeping<R: Read>(
         by_log_time: !matches!(keep, Keep::All { .. }),
         ..State::default()
     };
+    st.acc.retime(rate_hz);
+    st.gyro.retime(rate_hz);
     let mut offset = 0u64;
     let mut cut_at = None;
     while let Some(event) = reader.next_event() {

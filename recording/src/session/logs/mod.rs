@@ -7,13 +7,15 @@
 //! Every reader streams the file, and every length field is bounded before anything is allocated
 //! for it. What a reader keeps is bounded too: a log of more samples than the budget is read
 //! again, and only its quiet stretches and the turns between them are kept (`keep`), so that
-//! the memory needed does not grow with the file.
+//! the memory needed does not grow with the file. A binary log's samples can be re-timed at a
+//! given rate ([`retime`]).
 
 mod ardupilot;
 pub mod dataflash;
 mod error;
 pub(crate) mod keep;
 pub mod mcap;
+mod retime;
 pub mod ulog;
 pub mod vehicle;
 mod windows;
@@ -22,6 +24,7 @@ pub use ardupilot::UndoError;
 pub use error::{ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
+use retime::{retime_note, Retime};
 pub use windows::{read_log_windows, LogRead, LogScale, LogWindows, Window};
 
 use super::import::{
@@ -48,6 +51,10 @@ pub struct LogSource {
     pub topic: Option<String>,
     /// How the caller names these options in messages.
     pub spelling: Spelling,
+    /// A binary log's samples re-timed at this rate, Hz (`--rate-hz`): each stream's n-th sample
+    /// at its first stamp plus n periods, for a logger whose stamps are the host's (a ROS driver's
+    /// bursts) rather than the sensor's. A text file's rate is its [`ImportOptions`]'s.
+    pub rate_hz: Option<f64>,
 }
 
 /// The formats read.
@@ -252,11 +259,10 @@ fn refuse_options(
             path: p(),
             format,
             option: format!(
-                "{}, {}, {} and {}",
+                "{}, {} and {}",
                 sp.name(UserOption::AccUnit),
                 sp.name(UserOption::GyroUnit),
                 sp.name(UserOption::TimeColumn),
-                sp.name(UserOption::RateHz)
             ),
         });
     }
@@ -308,7 +314,8 @@ fn read_keeping<R: BufRead>(
             (rec, notes)
         }
         LogFormat::Ulog => {
-            let imu = ulog::read_keeping(r, source.instance.unwrap_or(0), keep).map_err(|e| {
+            let instance = source.instance.unwrap_or(0);
+            let imu = ulog::read_keeping(r, instance, keep, source.rate_hz).map_err(|e| {
                 LogError::Ulog {
                     path: p(),
                     source: e.spelled(sp),
@@ -318,10 +325,12 @@ fn read_keeping<R: BufRead>(
         }
         LogFormat::DataFlash => {
             let instance = source.instance.unwrap_or(0);
-            let (mut rec, mut notes, params) = dataflash::read_with_params(r, instance, keep)
-                .map_err(|e| LogError::DataFlash {
-                    path: p(),
-                    source: e.spelled(sp),
+            let (mut rec, mut notes, params) =
+                dataflash::read_with_params(r, instance, keep, source.rate_hz).map_err(|e| {
+                    LogError::DataFlash {
+                        path: p(),
+                        source: e.spelled(sp),
+                    }
                 })?;
             let undone = ardupilot::undo(&mut rec, &params, instance)
                 .map_err(|source| LogError::NotUndone { path: p(), source })?;
@@ -329,12 +338,12 @@ fn read_keeping<R: BufRead>(
             (rec, notes)
         }
         LogFormat::Mcap => {
-            let imu = mcap::read_keeping(r, source.topic.as_deref(), keep).map_err(|e| {
-                LogError::Mcap {
+            let topic = source.topic.as_deref();
+            let imu =
+                mcap::read_keeping(r, topic, keep, source.rate_hz).map_err(|e| LogError::Mcap {
                     path: p(),
                     source: e.spelled(sp),
-                }
-            })?;
+                })?;
             (imu.0, imu.1)
         }
     };
@@ -370,6 +379,8 @@ pub(crate) struct Stream {
     /// Samples left out for a value that is not finite.
     pub non_finite: usize,
     keeper: Keeper,
+    /// Each sample re-timed at a given rate ([`LogSource::rate_hz`]).
+    retime: Option<Retime>,
 }
 
 /// More samples than the stream's budget ([`Keep::All`]), which is given.
@@ -385,7 +396,22 @@ impl Stream {
         }
     }
 
-    pub fn push(&mut self, s: StreamSample) -> Result<(), TooMany> {
+    /// Re-times every sample from now on at `rate_hz` (none: the stamps as they are).
+    pub fn retime(&mut self, rate_hz: Option<f64>) {
+        self.retime = rate_hz.map(Retime::new);
+    }
+
+    /// The given rate and the rate the stamps imply, when re-timed.
+    pub fn rates_hz(&self) -> Option<(f64, Option<f64>)> {
+        self.retime
+            .as_ref()
+            .map(|r| (r.rate_hz, r.implied_rate_hz()))
+    }
+
+    pub fn push(&mut self, mut s: StreamSample) -> Result<(), TooMany> {
+        if let Some(r) = self.retime.as_mut() {
+            s.t_s = r.next(s.t_s);
+        }
         if !(s.t_s.is_finite() && s.v.iter().all(|x| x.is_finite())) {
             self.non_finite += 1;
             return Ok(());
@@ -480,6 +506,9 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
         }
     }
     warnings.extend(unpaired_note(unpaired, max_gap_s));
+    if own.is_none() {
+        warnings.extend(acc.rates_hz().map(retime_note));
+    }
     if gyro.non_finite > 0 {
         warnings.push(format!(
             "{} gyro sample(s) with NaN or infinite values left out (the rate interpolated \

@@ -76,6 +76,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         instance: Some(1),
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let text = b"t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n";
     let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
@@ -104,6 +105,7 @@ fn a_binary_file_of_another_format_is_named_as_such() {
         instance: None,
         topic: None,
         spelling: Default::default(),
+        rate_hz: None,
     };
     let sqlite = b"SQLite format 3\0rest";
     let e = read_log_from(&sqlite[..], sqlite, Path::new("bag.db3"), &source).unwrap_err();
@@ -142,6 +144,7 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
         instance: None,
         topic: None,
         spelling: Spelling::Flags,
+        rate_hz: None,
     };
     let some = text(&|i| match i {
         10 => "nan".into(),

@@ -122,6 +122,19 @@ pub enum UlogError {
     /// No IMU for the instance, or too many samples.
     #[error(transparent)]
     Imu(#[from] ImuError),
+    /// A rate given for a log whose accelerometer and gyro are separate topics at different
+    /// rates: one rate cannot re-time both.
+    #[error(
+        "the rate option re-times every sample at one rate, but this log's sensor_accel and \
+         sensor_gyro are separate topics of {accel} and {gyro} samples (different rates); its \
+         stamps are the autopilot's sample times: leave the rate out"
+    )]
+    RateForSeparateTopics {
+        /// Accelerometer samples.
+        accel: usize,
+        /// Gyro samples.
+        gyro: usize,
+    },
 }
 
 /// The reader's state while it streams the file.
@@ -162,7 +175,7 @@ impl UlogError {
 
 /// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
 pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
-    read_keeping(r, instance, &Keep::default())
+    read_keeping(r, instance, &Keep::default(), None)
 }
 
 /// [`read`], each stream keeping what `keep` says.
@@ -170,6 +183,7 @@ pub(crate) fn read_keeping<R: Read>(
     mut r: R,
     instance: u8,
     keep: &Keep,
+    rate_hz: Option<f64>,
 ) -> Result<(Recording, Vec<String>), UlogError> {
     let mut header = [0u8; 16];
     match read_exact_or_end(&mut r, &mut header) {
@@ -180,13 +194,7 @@ pub(crate) fn read_keeping<R: Read>(
         }
         Err(source) => return Err(UlogError::Io { offset: 0, source }),
     }
-    let mut st = State {
-        combined_acc: Stream::new(keep),
-        combined_gyro: Stream::new(keep),
-        accel: Stream::new(keep),
-        gyro: Stream::new(keep),
-        ..State::default()
-    };
+    let mut st = State::new(keep, rate_hz);
     let mut offset = 16u64;
     let mut payload = vec![0u8; u16::MAX as usize];
     let mut warnings = Vec::new();
@@ -299,6 +307,26 @@ fn cut_short(offset: u64) -> String {
 }
 
 impl State {
+    /// Empty streams that keep what `keep` says, re-timed at `rate_hz` (none: as stamped).
+    fn new(keep: &Keep, rate_hz: Option<f64>) -> State {
+        let mut st = State {
+            combined_acc: Stream::new(keep),
+            combined_gyro: Stream::new(keep),
+            accel: Stream::new(keep),
+            gyro: Stream::new(keep),
+            ..State::default()
+        };
+        for s in [
+            &mut st.combined_acc,
+            &mut st.combined_gyro,
+            &mut st.accel,
+            &mut st.gyro,
+        ] {
+            s.retime(rate_hz);
+        }
+        st
+    }
+
     /// Handles one message of type `ty` at byte `offset`.
     fn message(&mut self, ty: u8, p: &[u8], offset: u64, instance: u8) -> Result<(), UlogError> {
         match ty {
@@ -496,6 +524,13 @@ impl State {
             }
             .into());
         };
+        let (accel, gyro_n) = (acc.count(), gyro.count());
+        if acc.rates_hz().is_some() && !from_combined && accel.abs_diff(gyro_n) > accel / 1000 {
+            return Err(UlogError::RateForSeparateTopics {
+                accel,
+                gyro: gyro_n,
+            });
+        }
         let (mut rec, mut paired) = pair_streams(acc, gyro);
         if from_combined {
             rec.corrected_by = Some("PX4's sensor_combined");
@@ -516,6 +551,53 @@ impl State {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One rate re-times one stream per message: accelerometer and gyro topics of different counts
+    /// (two rates) are refused with it; equal ones, and sensor_combined, are re-timed.
+    #[test]
+    fn a_rate_for_topics_of_two_rates_is_refused() {
+        let fill = |n: usize, hz: f64, rate: Option<f64>| {
+            let mut s = Stream::default();
+            s.retime(rate);
+            for i in 0..n {
+                s.push(StreamSample {
+                    t_s: i as f64 / hz,
+                    v: [0.0, 0.0, -9.8],
+                    temp_c: None,
+                })
+                .unwrap();
+            }
+            s
+        };
+        let two_rates = |rate| State {
+            accel: fill(800, 400.0, rate),
+            gyro: fill(1600, 800.0, rate),
+            ..State::default()
+        };
+        let e = two_rates(Some(400.0)).finish(0, Vec::new()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                UlogError::RateForSeparateTopics {
+                    accel: 800,
+                    gyro: 1600
+                }
+            ),
+            "{e}"
+        );
+        assert!(two_rates(None).finish(0, Vec::new()).is_ok());
+        let one_rate = State {
+            accel: fill(800, 400.0, Some(500.0)),
+            gyro: fill(800, 400.0, Some(500.0)),
+            ..State::default()
+        };
+        let (rec, w) = one_rate.finish(0, Vec::new()).unwrap();
+        assert!((rec.t_s[799] - rec.t_s[0] - 799.0 / 500.0).abs() < 1e-12);
+        assert!(
+            w.iter().any(|w| w.contains("the stamps imply 400.0000 Hz")),
+            "{w:?}"
+        );
+    }
 
     #[test]
     fn sparse_sensor_topics_give_way_to_sensor_combined() {

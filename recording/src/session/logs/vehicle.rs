@@ -224,7 +224,7 @@ pub fn read_vehicle_params(path: &Path) -> Result<Option<(LogFormat, VehiclePara
         })?,
         LogFormat::DataFlash => {
             let survey = Keep::Survey(Arc::new(Mutex::new(PassReport::default())));
-            let read = dataflash::read_with_params(r, 0, &survey);
+            let read = dataflash::read_with_params(r, 0, &survey, None);
             read.map_err(|source| LogError::DataFlash {
                 path: path.to_path_buf(),
                 source,

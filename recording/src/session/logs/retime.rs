@@ -1,0 +1,91 @@
+//! A binary log's samples re-timed at a given rate (`--rate-hz`), for a logger whose stamps are a
+//! host's (a ROS driver's bursts) rather than the sensor's: each stream's n-th sample at its first
+//! stamp plus n periods, and the rate the stamps themselves imply said beside it.
+
+/// A stream re-timed at a given rate: the n-th sample (every sample read, kept or not, in file
+/// order) at `t0 + n/rate`, `t0` from the first finite stamp; the stamps themselves are sampled
+/// (at most [`Retime::KEPT`] of them, evenly) for the rate they imply.
+#[derive(Debug)]
+pub(super) struct Retime {
+    pub(super) rate_hz: f64,
+    t0: Option<f64>,
+    n: u64,
+    /// `(n, stamp)` of every `stride`-th sample.
+    stamps: Vec<(u64, f64)>,
+    stride: u64,
+}
+
+impl Retime {
+    const KEPT: usize = 4096;
+
+    pub(super) fn new(rate_hz: f64) -> Retime {
+        Retime {
+            rate_hz,
+            t0: None,
+            n: 0,
+            stamps: Vec::new(),
+            stride: 1,
+        }
+    }
+
+    /// The time of the next sample, whose stamp is `t_s`.
+    pub(super) fn next(&mut self, t_s: f64) -> f64 {
+        let n = self.n;
+        self.n += 1;
+        let period = 1.0 / self.rate_hz;
+        if t_s.is_finite() {
+            if self.t0.is_none() {
+                self.t0 = Some(t_s - n as f64 * period);
+            }
+            if n % self.stride == 0 {
+                if self.stamps.len() == Self::KEPT {
+                    // Full: keep every other, and sample half as often from now on.
+                    let mut k = 0;
+                    self.stamps.retain(|_| {
+                        k += 1;
+                        k % 2 == 1
+                    });
+                    self.stride *= 2;
+                }
+                if n % self.stride == 0 {
+                    self.stamps.push((n, t_s));
+                }
+            }
+        }
+        self.t0.unwrap_or(0.0) + n as f64 * period
+    }
+
+    /// The rate the stamps imply, Hz: the mean of the middle half of the slopes between each
+    /// sampled stamp and the one half the samples later (robust to a few damaged stamps; the
+    /// mean, not the median, so that bursts' steps average out instead of rounding the slope to
+    /// one of two burst-quantised values).
+    pub(super) fn implied_rate_hz(&self) -> Option<f64> {
+        let half = self.stamps.len() / 2;
+        let mut slopes: Vec<f64> = (0..half)
+            .map(|i| {
+                let ((n0, t0), (n1, t1)) = (self.stamps[i], self.stamps[i + half]);
+                (t1 - t0) / (n1 - n0) as f64
+            })
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .collect();
+        slopes.sort_by(f64::total_cmp);
+        let (lo, hi) = (slopes.len() / 4, slopes.len() - slopes.len() / 4);
+        let middle = slopes.get(lo..hi).filter(|m| !m.is_empty())?;
+        Some(middle.len() as f64 / middle.iter().sum::<f64>())
+    }
+}
+
+/// What a log re-timed at a given rate says: that rate beside the one its stamps imply.
+pub(super) fn retime_note((given, implied): (f64, Option<f64>)) -> String {
+    match implied {
+        Some(hz) => format!(
+            "every sample re-timed at {given} Hz as given, not at its stamp; the stamps imply \
+             {hz:.4} Hz ({:+.2} % from the rate given)",
+            (hz / given - 1.0) * 100.0
+        ),
+        None => format!(
+            "every sample re-timed at {given} Hz as given; too few stamps to say what rate they \
+             imply"
+        ),
+    }
+}
