@@ -5,7 +5,7 @@
 use super::*;
 use crate::sim::testkit::{self, clean_session};
 use recording::session::plan::Attitude;
-use recording::session::Plan;
+use recording::session::{Plan, SegmentStats};
 use shared::OutputUnit;
 
 /// The paper's plan plus six oblique static attitudes, so that the fit survives bad statics.
@@ -95,13 +95,14 @@ fn screen_refusal_counts_positions_left_and_names_every_segment_left_out() {
     // All sixteen positions: the free-attitude fit calibrates.
     let options = EstimateOptions::default();
     calibrate_session_stats(&plan, &clean, &options).unwrap();
-    // Eight of them turned (planted rates ±1..8 °/s of alternating sign, the other eight still,
-    // so the static median stays at the truth's zero): eight positions are left, nine are needed.
+    // Eight of them turned (planted rates ±3..10 °/s of alternating sign, beyond a hand's 2 °/s
+    // drift, the other eight still, so the static median stays at the truth's zero): eight
+    // positions are left, nine are needed.
     let mut stats = clean;
     let moved: Vec<String> = (0..8).map(|k| stats[2 * k].name.clone()).collect();
     for k in 0..8 {
         let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-        stats[2 * k].mean_w_rad_s = [0.0, sign * (k as f64 + 1.0).to_radians(), 0.0];
+        stats[2 * k].mean_w_rad_s = [0.0, sign * (k as f64 + 3.0).to_radians(), 0.0];
     }
     let e = calibrate_session_stats(&plan, &stats, &options).unwrap_err();
     match &e {
@@ -123,7 +124,7 @@ fn screen_refusal_counts_positions_left_and_names_every_segment_left_out() {
     );
     assert!(!text.contains("were excluded"), "{text}");
     for (k, name) in moved.iter().enumerate() {
-        let planted = format!("{:.3} °/s > limit 0.500 °/s", k as f64 + 1.0);
+        let planted = format!("{:.3} °/s > limit 2.000 °/s", k as f64 + 3.0);
         assert!(
             text.lines()
                 .any(|l| l.contains(&format!("'{name}'")) && l.contains(&planted)),
@@ -164,4 +165,44 @@ fn screen_refusal_on_a_fixture_names_the_segments_left_out() {
             "{name} with {planted} in:\n{text}"
         );
     }
+}
+
+/// `st`'s gyro noise: `deg_s` per axis, white.
+fn gyro_noise(st: &mut SegmentStats, deg_s: f64) {
+    let v = deg_s.to_radians().powi(2);
+    st.cov_w = [[v, 0.0, 0.0], [0.0, v, 0.0], [0.0, 0.0, v]];
+}
+
+/// A session with ten rests on a table and six held by hand: the hand's tremor triples the
+/// gyro's noise at its positions (as a real MPU-6050 session shows: about 1 °/s against a table's
+/// 0.3 °/s) without moving their mean specific force. Those positions are kept; held on a fixture,
+/// the same noise is a sign of motion and the segment is left out.
+#[test]
+fn a_hand_held_position_is_not_moving_for_its_tremor() {
+    let plan = free_statics(&testkit::many_mounts_plan());
+    let (_, mut stats) = clean_session(&plan, 7);
+    for (k, st) in stats.iter_mut().enumerate() {
+        gyro_noise(st, if k < 10 { 0.3 } else { 1.0 });
+    }
+    let options = EstimateOptions::default();
+    let out = calibrate_session_stats(&plan, &stats, &options).unwrap();
+    assert!(out.excluded.is_empty(), "{:?}", out.excluded);
+    // The same noise at a position on a rate table's fixture (a session with spins): left out as
+    // moved (the criterion is alive).
+    let fixture = testkit::many_mounts_plan();
+    let (_, mut stats) = clean_session(&fixture, 7);
+    let mut first = true;
+    for (k, st) in stats.iter_mut().enumerate() {
+        if fixture.segments[k].is_static() {
+            gyro_noise(st, if first { 1.0 } else { 0.3 });
+            first = false;
+        }
+    }
+    let out = calibrate_session_stats(&fixture, &stats, &options).unwrap();
+    let left_out = out.excluded.iter().find(|e| e.name == stats[0].name);
+    assert!(
+        left_out.is_some_and(|e| e.to_string().contains("gyro x noise")),
+        "{:?}",
+        out.excluded
+    );
 }
