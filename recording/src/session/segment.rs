@@ -439,9 +439,10 @@ pub fn find_intervals_by(
     let kinds: Vec<Rest> = (half..n.saturating_sub(half))
         .map(|i| judge.rest(&sa, &sg, i - half, i + half + 1))
         .collect();
-    let quiet = rest::quiet(&kinds, (rest::HAND_EDGE_S * rec.rate_hz).round() as usize);
+    let hand_edge = (rest::HAND_EDGE_S * rec.rate_hz).round() as usize;
+    let quiet = rest::quiet(&kinds, hand_edge);
     let runs = split_at_jumps(quiet_runs(&quiet, half), &rec.jumps());
-    let (stills, spins, short_dropped) = intervals(rec, runs, options, half);
+    let (stills, spins, short_dropped) = intervals(rec, runs, options, half + hand_edge);
     if stills.is_empty() {
         return Err(no_still(format!(
             "no window at rest lasts {} s",
@@ -460,12 +461,16 @@ pub fn find_intervals_by(
 
 /// The still intervals and spins of the quiet `runs` (rows), and how many were too short: each
 /// run trimmed, its kind told by its mean rate, and a run joined to the last of its kind when a
-/// short disturbance split one position.
+/// short disturbance split one position (within two `edge`s, the window's half and a hand-held
+/// run's edge, and two trims of each other). The length a position needs is judged once its pieces
+/// are joined: a hand's rest broken by a jolt or two into pieces each shorter than
+/// `min_still_s` is one rest, not several too short to keep; a short piece that nothing joins is
+/// dropped.
 fn intervals(
     rec: &Recording,
     runs: Vec<(usize, usize)>,
     options: &SegmentOptions,
-    half: usize,
+    edge: usize,
 ) -> (Vec<Interval>, Vec<Interval>, usize) {
     let jumps = rec.jumps();
     let still_bias = still_bias(rec, &runs);
@@ -476,9 +481,10 @@ fn intervals(
     let mut stills: Vec<Interval> = Vec::new();
     let mut spins = Vec::new();
     let mut short_dropped = 0;
+    let short = |iv: &Interval| iv.end - iv.start < min_len;
     for (lo, hi) in runs {
         let (lo, hi) = (lo + trim, hi.saturating_sub(trim));
-        if hi <= lo || hi - lo < min_len {
+        if hi <= lo {
             short_dropped += 1;
             continue;
         }
@@ -487,16 +493,27 @@ fn intervals(
             IntervalKind::Still => &mut stills,
             IntervalKind::Spin => &mut spins,
         };
+        let joins = |prev: &Interval| {
+            prev.end + 2 * (edge + trim) >= lo
+                && same(prev, &iv, 2.0)
+                && Recording::continuous(&jumps, prev.start, hi)
+        };
+        // A short piece stays only for a piece of the same position to join it.
+        if list.last().is_some_and(|prev| !joins(prev) && short(prev)) {
+            list.pop();
+            short_dropped += 1;
+        }
         match list.last_mut() {
-            Some(prev)
-                if prev.end + 2 * (half + trim) >= lo
-                    && same(prev, &iv, 2.0)
-                    && Recording::continuous(&jumps, prev.start, hi) =>
-            {
+            Some(prev) if joins(prev) => {
                 *prev = interval(rec, prev.start, hi, &centre, &still_bias, spin_min);
             }
             _ => list.push(iv),
         }
+    }
+    for list in [&mut stills, &mut spins] {
+        let before = list.len();
+        list.retain(|iv| !short(iv));
+        short_dropped += before - list.len();
     }
     (stills, spins, short_dropped)
 }
