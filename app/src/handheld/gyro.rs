@@ -95,13 +95,13 @@ pub fn fit(
         let n = linalg::norm(&f);
         f.map(|c| c / n)
     };
-    let jumps = rec.jumps();
+    let dropped = dropped_turns(rec, seg);
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
         .enumerate()
-        .filter(|(k, w)| {
-            Recording::continuous(&jumps, w[0].end - 1, w[1].start + 1)
+        .filter(|(k, _)| {
+            !dropped.iter().any(|d| d.after_still == k + 1)
                 && !whole.iter().any(|(after, _)| after == k)
         })
         .map(|(_, w)| Turn {
@@ -158,46 +158,115 @@ fn angle_random_walk(rec: &Recording, seg: &Segmentation) -> f64 {
         .map_or(0.0, |s| s / rec.rate_hz.max(f64::MIN_POSITIVE).sqrt())
 }
 
-/// A turn left out of the gyro fit because the time stamps jump during it (a gap, a repeat or a step
-/// back): its rotation cannot be integrated.
+/// A turn left out of the gyro fit: its rotation cannot be integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct DroppedTurn {
     /// The still interval before it (1-based, as in the table).
     pub after_still: usize,
     /// The turn's start, s.
     pub start_s: f64,
-    /// The first jump in it.
-    pub jump: recording::session::import::TimeJump,
+    /// Why.
+    pub cause: DropCause,
+}
+
+/// Why a turn cannot be integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum DropCause {
+    /// The time stamps jump during it (a gap, a repeat or a step back): the first jump.
+    Jump(recording::session::import::TimeJump),
+    /// The gyro reads its extreme on `axis` during it: a rate beyond its range was cut there.
+    Saturated {
+        /// The axis, 0..3.
+        axis: usize,
+        /// Its extreme, rad/s.
+        level_rad_s: f64,
+    },
 }
 
 impl std::fmt::Display for DroppedTurn {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "the turn after still interval #{} (from t = {:.3} s) is left out of the gyro fit: the \
-             time stamps jump by {:+.3} s after data row {} (t = {:.3} s) during it",
-            self.after_still,
-            self.start_s,
-            self.jump.step_s,
-            self.jump.row + 1,
-            self.jump.t_s
-        )
+            "the turn after still interval #{} (from t = {:.3} s) is left out of the gyro fit: ",
+            self.after_still, self.start_s,
+        )?;
+        match self.cause {
+            DropCause::Jump(jump) => write!(
+                f,
+                "the time stamps jump by {:+.3} s after data row {} (t = {:.3} s) during it",
+                jump.step_s,
+                jump.row + 1,
+                jump.t_s
+            ),
+            DropCause::Saturated { axis, level_rad_s } => write!(
+                f,
+                "the gyro's {} axis reads its extreme, ±{:.1} °/s, during it (the turn was faster \
+                 than the gyro's range: turn more slowly, or set a wider range)",
+                ["x", "y", "z"][axis.min(2)],
+                level_rad_s.to_degrees()
+            ),
+        }
     }
 }
+
+/// Each gyro axis's extreme where the recording holds it at least [`CLIPPED_SAMPLES`] times: a
+/// rate cut at the gyro's range (a measured rate peaks once; a range clips it flat).
+fn gyro_clip_levels(rec: &Recording) -> [Option<f64>; 3] {
+    core::array::from_fn(|j| {
+        let m = rec
+            .gyro_rad_s
+            .iter()
+            .map(|w| w[j].abs())
+            .fold(0.0, f64::max);
+        let at = rec
+            .gyro_rad_s
+            .iter()
+            .filter(|w| w[j].abs() >= m * (1.0 - CLIP_TOLERANCE))
+            .count();
+        (m > 0.0 && at >= CLIPPED_SAMPLES).then_some(m)
+    })
+}
+
+/// Samples at a gyro axis's extreme that say it was clipped there.
+const CLIPPED_SAMPLES: usize = 3;
+
+/// How close to the extreme a clipped sample is: a two's-complement range's two ends differ by
+/// one count in 32 768 (3·10⁻⁵).
+const CLIP_TOLERANCE: f64 = 1e-4;
 
 /// The turns between consecutive still intervals that [`fit`] leaves out, with their place.
 pub(crate) fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
     let jumps = rec.jumps();
+    let clip = gyro_clip_levels(rec);
     seg.stills
         .windows(2)
         .enumerate()
         .filter_map(|(k, w)| {
             let (lo, hi) = (w[0].end - 1, w[1].start + 1);
-            let jump = jumps.iter().find(|j| j.row >= lo && j.row + 1 < hi)?;
+            let jump = jumps
+                .iter()
+                .find(|j| j.row >= lo && j.row + 1 < hi)
+                .map(|j| DropCause::Jump(*j));
+            let saturated = || {
+                rec.gyro_rad_s
+                    .get(lo..hi.min(rec.len()))?
+                    .iter()
+                    .find_map(|g| {
+                        (0..3).find_map(|axis| {
+                            let level = clip[axis]?;
+                            (g[axis].abs() >= level * (1.0 - CLIP_TOLERANCE)).then_some(
+                                DropCause::Saturated {
+                                    axis,
+                                    level_rad_s: level,
+                                },
+                            )
+                        })
+                    })
+            };
             Some(DroppedTurn {
                 after_still: k + 1,
                 start_s: rec.t_s[lo],
-                jump: *jump,
+                cause: jump.or_else(saturated)?,
             })
         })
         .collect()
@@ -482,7 +551,10 @@ mod tests {
         assert_eq!(dropped[0].after_still, 1);
         let text = dropped[0].to_string();
         assert!(text.contains("after still interval #1"), "{text}");
-        assert!((0.5..0.52).contains(&dropped[0].jump.step_s), "{text}");
+        let DropCause::Jump(jump) = dropped[0].cause else {
+            panic!("{text}")
+        };
+        assert!((0.5..0.52).contains(&jump.step_s), "{text}");
         let fit = fit(&rec, &seg, &plan_for(&rec, &seg), Spelling::Flags)
             .unwrap()
             .unwrap();
