@@ -19,7 +19,7 @@
 //! `HAND_RATE_DEG_S` of the gyro's rest output (a turn, however slow, moves gravity across the
 //! accelerometers and turns the gyro). A session may hold both kinds: a run of quiet windows is a
 //! table rest when most of its windows are, and a hand's rest keeps its length however many
-//! steady moments it holds ([`quiet`]); a hand's tremor that pushes a window or two just past the
+//! steady moments it holds (`quiet`); a hand's tremor that pushes a window or two just past the
 //! limits does not cut its rest in two.
 
 /// One-sided normal quantile of the tests' level, 10⁻⁴ per window (each window is tested, so a long

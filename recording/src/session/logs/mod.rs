@@ -8,7 +8,7 @@
 //! for it. What a reader keeps is bounded too: a log of more samples than the budget is read
 //! again, and only its quiet stretches and the turns between them are kept (`keep`), so that
 //! the memory needed does not grow with the file. A binary log's samples can be re-timed at a
-//! given rate ([`retime`]).
+//! given rate (`retime`).
 
 mod ardupilot;
 pub mod dataflash;
