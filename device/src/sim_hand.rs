@@ -30,13 +30,43 @@ pub(crate) const AIM_ERROR_DEG: f64 = 3.0;
 /// Every this many turns, the hand sets the unit down where it was before the turn.
 pub(crate) const REPEAT_EVERY: u32 = 7;
 
+/// A tilt along a great circle: from `from` about `axis` (unit, body axes) at `rate` rad/s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Tilt {
+    from: [f64; 3],
+    to: [f32; 3],
+    axis: [f64; 3],
+    rate: f64,
+    /// Samples done, and in all.
+    done: u32,
+    samples: u32,
+}
+
+impl Tilt {
+    /// "Up" after `k` samples: `from` turned by −rate·t about `axis` (`du/dt = u × ω` with
+    /// `ω = −rate·axis`), and the body rate.
+    fn at(&self, k: u32, fs: f64) -> HandMove {
+        let th = -self.rate * f64::from(k) / fs;
+        let (a, u) = (self.axis, self.from);
+        let (sn, c) = (th.sin(), th.cos());
+        let axu = linalg::cross(&a, &u);
+        let adu = linalg::dot(&a, &u);
+        let up: [f64; 3] =
+            core::array::from_fn(|j| u[j] * c + axu[j] * sn + a[j] * adu * (1.0 - c));
+        HandMove::Tilt(
+            still(up.map(|x| x as f32)),
+            a.map(|x| (-self.rate * x) as f32),
+        )
+    }
+}
+
 /// What the hand does to the unit before a sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum HandMove {
     /// Sets the table: a spin about the vertical, or the unit set down still.
     Table(VirtualTable),
-    /// From this table attitude, tilts the unit at this body rate, rad/s
-    /// (`VirtualSensor::set_tilt`).
+    /// Turning: "up" where this table setting puts it, the body turning at this rate, rad/s
+    /// (`VirtualSensor::set_tilt`); one per sample of the tilt.
     Tilt(VirtualTable, [f32; 3]),
 }
 
@@ -65,8 +95,8 @@ pub(crate) struct SimHand {
     turn_samples: u32,
     sample_rate_hz: u32,
     turning_left: u32,
-    /// The attitude being tilted to, and the samples the tilt has left.
-    tilting: Option<([f32; 3], u32)>,
+    /// A tilt under way.
+    tilting: Option<Tilt>,
 }
 
 impl SimHand {
@@ -98,14 +128,15 @@ impl SimHand {
 
     /// Before a sample: what the hand does to the unit now, if it changes anything.
     pub(crate) fn step(&mut self, current: &VirtualTable) -> Option<HandMove> {
-        if let Some((up_b, left)) = self.tilting.as_mut() {
-            *left -= 1;
-            if *left > 0 {
-                return None;
+        let fs = f64::from(self.sample_rate_hz);
+        if let Some(tilt) = self.tilting.as_mut() {
+            tilt.done += 1;
+            if tilt.done < tilt.samples {
+                return Some(tilt.at(tilt.done, fs));
             }
-            let up_b = *up_b;
+            let to = tilt.to;
             self.tilting = None;
-            return Some(HandMove::Table(still(up_b)));
+            return Some(HandMove::Table(still(to)));
         }
         if self.turning_left > 0 {
             self.turning_left -= 1;
@@ -152,9 +183,16 @@ impl SimHand {
             a if a.iter().all(|x| x.is_finite()) && linalg::norm(&a) > 0.5 => a,
             _ => perpendicular(&u0),
         };
-        let rate = angle / (samples / fs);
-        self.tilting = Some((to, samples as u32));
-        HandMove::Tilt(still(from), axis.map(|a| (-rate * a) as f32))
+        let tilt = Tilt {
+            from: u0,
+            to,
+            axis,
+            rate: angle / (samples / fs),
+            done: 0,
+            samples: samples as u32,
+        };
+        self.tilting = Some(tilt);
+        tilt.at(0, fs)
     }
 }
 
@@ -257,9 +295,12 @@ mod tests {
         let mut samples = 1;
         let down = loop {
             match hand.step(&from) {
-                None => samples += 1,
+                Some(HandMove::Tilt(_, w)) => {
+                    assert_eq!(w, omega, "one rate through the tilt");
+                    samples += 1;
+                }
                 Some(HandMove::Table(t)) => break t,
-                Some(m) => panic!("{m:?} during a tilt"),
+                None => panic!("a tilt moves the unit at every sample"),
             }
         };
         assert_eq!(down.rate_rad_s, 0.0);

@@ -48,8 +48,9 @@ pub const POWER_ON_TEMPERATURE_C: f32 = 25.0;
 pub struct VirtualSensor {
     model: ForwardModel,
     table: VirtualTable,
-    /// A tilt under way: the body-axis rate vector `ω` (rad/s) that turns "up" away from the
-    /// table's `up_b`, through O. Cleared by [`Self::set_table`].
+    /// A tilt under way: the body-axis rate `ω` (rad/s) of a turn through O, "up" the table's
+    /// `up_b` (set by the caller sample by sample). Cleared by [`Self::set_table`].
+    #[cfg(any(test, feature = "hand-tilt"))]
     tilt: Option<[f64; 3]>,
     samples_since_set: u32,
     sample_period_s: f64,
@@ -112,6 +113,7 @@ impl VirtualSensor {
                     rate_rad_s: 0.0,
                     accel_rad_s2: 0.0,
                 },
+                #[cfg(any(test, feature = "hand-tilt"))]
                 tilt: None,
                 samples_since_set: 0,
                 sample_period_s: 1.0 / f64::from(sample_rate_hz.max(1)),
@@ -233,51 +235,58 @@ impl VirtualSensor {
     /// Sets the table (time restarts at zero). Refuses a setting [`Self::check_table`] refuses.
     pub fn set_table(&mut self, t: &VirtualTable) -> Result<(), BadTable> {
         self.table = Self::check_table(t)?;
-        self.tilt = None;
+        #[cfg(any(test, feature = "hand-tilt"))]
+        {
+            self.tilt = None;
+        }
         self.samples_since_set = 0;
         Ok(())
     }
 
-    /// Tilts the unit from its table attitude as a hand does: from the next sample it turns at the
-    /// constant body rate `omega_b_rad_s` about an axis through O (the table's own rate and
-    /// acceleration are then not applied). Gravity turns in body axes as `du/dt = u × ω`, so
-    /// after `t` seconds "up" is `up_b` turned by `−|ω|·t` about `ω`; the gyro reads `ω` through
-    /// the unit's `G`, and the outputs carry the `[ω×]²` of each lever arm (docs/model.md §4.5).
-    /// A rate that is not finite, or faster than the table's limit, is refused.
+    /// Turns the unit as a hand does, through O at the body rate `omega_b_rad_s` with "up" where
+    /// the table setting puts it: the caller sets both before each sample of a tilt (the
+    /// attitude's integration is the host's, so that the firmware carries no trigonometry). The
+    /// gyro reads `ω` through the unit's `G`, and the outputs carry the `[ω×]²` of each lever arm
+    /// (docs/model.md §4.5). Cleared by [`Self::set_table`]; a rate that is not finite, or faster
+    /// than the table's limit, is refused.
+    #[cfg(any(test, feature = "hand-tilt"))]
     pub fn set_tilt(&mut self, omega_b_rad_s: [f32; 3]) -> Result<(), BadTable> {
         let w = omega_b_rad_s.map(f64::from);
-        let n = linalg::norm(&w);
-        if !n.is_finite() || n > f64::from(MAX_TABLE_RATE_RAD_S) {
+        let n2 = linalg::dot(&w, &w);
+        let max = f64::from(MAX_TABLE_RATE_RAD_S);
+        if !n2.is_finite() || n2 > max * max {
             return Err(BadTable);
         }
         self.tilt = Some(w);
-        self.samples_since_set = 0;
         Ok(())
     }
 
-    /// The body's motion `t` seconds into a tilt at `omega` from the table's attitude.
-    fn tilting(&self, omega: &[f64; 3], t: f64) -> shared::forward::BodyMotion {
-        let rate = linalg::norm(omega);
-        let up0 = self.table.up_b.map(f64::from);
-        let up = if rate > 0.0 {
-            // Rodrigues: up0 turned by −rate·t about ω/|ω|.
-            let k = omega.map(|x| x / rate);
-            let (s, c) = (libm::sin(-rate * t), libm::cos(-rate * t));
-            let kxu = linalg::cross(&k, &up0);
-            let kdu = linalg::dot(&k, &up0);
-            core::array::from_fn(|j| up0[j] * c + kxu[j] * s + k[j] * kdu * (1.0 - c))
-        } else {
-            up0
-        };
+    /// The body's motion now: a tilt's, or the table's.
+    #[cfg(any(test, feature = "hand-tilt"))]
+    fn motion_now(&self, state: &TableState) -> shared::forward::BodyMotion {
+        match &self.tilt {
+            Some(omega) => self.tilting(omega),
+            None => state.motion(self.model.gravity_m_s2),
+        }
+    }
+
+    /// The body's motion now: the table's (QEMU's image has no room for the hand's tilt).
+    #[cfg(not(any(test, feature = "hand-tilt")))]
+    fn motion_now(&self, state: &TableState) -> shared::forward::BodyMotion {
+        state.motion(self.model.gravity_m_s2)
+    }
+
+    /// The body's motion while it turns at `omega` with the table's "up".
+    #[cfg(any(test, feature = "hand-tilt"))]
+    fn tilting(&self, omega: &[f64; 3]) -> shared::forward::BodyMotion {
         let g = self.model.gravity_m_s2;
-        let zero = [0.0; 3];
         // O stays put: the body's specific force at O is gravity's alone.
         shared::forward::BodyMotion {
             f_o: shared::units::BodySpecificForce {
-                m_s2: up.map(|u| g * u),
+                m_s2: self.table.up_b.map(|u| g * f64::from(u)),
             },
             omega: shared::units::BodyRate { rad_s: *omega },
-            omega_dot: shared::units::BodyAngularAccel { rad_s2: zero },
+            omega_dot: shared::units::BodyAngularAccel { rad_s2: [0.0; 3] },
         }
     }
 
@@ -330,10 +339,7 @@ impl VirtualSensor {
             accel_rad_s2: accel,
             centre_m: [0.0; 3],
         };
-        let motion = match &self.tilt {
-            Some(omega) => self.tilting(omega, t),
-            None => state.motion(self.model.gravity_m_s2),
-        };
+        let motion = self.motion_now(&state);
         let u = self.model.outputs(&motion);
         self.samples = self.samples.wrapping_add(1);
         self.sensor_temp_c += (self.die_temp_c - self.sensor_temp_c) * self.lag_step;
@@ -434,59 +440,46 @@ mod tests {
         );
     }
 
-    /// A hand's tilt about body x from z up: gravity turns towards +y (`du/dt = u × ω`), the
-    /// gyro reads `G ω + b`, and after a quarter turn y is up; a new table setting ends the tilt.
+    /// A hand's turn about body x with z up: the gyro reads `G ω + b`, the outputs are the forward
+    /// model's with the lever arms' centripetal term; a table setting ends the turn.
     #[test]
-    fn a_tilt_turns_gravity_as_the_gyro_says() {
+    fn a_tilt_turns_the_gyro_and_swings_the_lever_arms() {
         let truth = crate::testvectors::imperfect_unit();
         let mut s = VirtualSensor::new(&truth, 1000, false).unwrap();
         let rate = 90f32.to_radians();
         s.set_tilt([rate, 0.0, 0.0]).unwrap();
         let gyro = truth.gyro.unwrap();
-        let first = s.sample();
+        let x = s.sample();
         for j in 0..3 {
             let want = gyro.matrix[j][0] * f64::from(rate) + gyro.bias_rad_s[j];
-            assert!(
-                (f64::from(first.rate_rad_s[j]) - want).abs() < 1e-5,
-                "{first:?}"
-            );
-        }
-        // 1000 samples at 1 kHz: 90° of tilt; the outputs are then those of y up, at rest but for
-        // the lever arms' centripetal term.
-        let mut last = first;
-        for _ in 0..999 {
-            last = s.sample();
+            assert!((f64::from(x.rate_rad_s[j]) - want).abs() < 1e-5, "{x:?}");
         }
         let model = shared::forward::ForwardModel::new(&truth).unwrap();
         let g = model.gravity_m_s2;
-        let turned = 90f64.to_radians() * 999.0 / 1000.0;
-        let up = [0.0, turned.sin(), turned.cos()];
+        let f_o = shared::units::BodySpecificForce {
+            m_s2: [0.0, 0.0, g],
+        };
         let w = [f64::from(rate), 0.0, 0.0];
         let want = model.outputs(&shared::forward::BodyMotion {
-            f_o: shared::units::BodySpecificForce {
-                m_s2: up.map(|u| g * u),
-            },
+            f_o,
             omega: BodyRate { rad_s: w },
             omega_dot: BodyAngularAccel::default(),
         });
-        for j in 0..3 {
-            assert!(
-                (f64::from(last.raw[j]) - want.raw[j]).abs() < 1e-5,
-                "{last:?} vs {want:?}"
-            );
-        }
-        // The lever arms' centripetal term shows: at rest at the same attitude the outputs differ.
         let still = model.outputs(&shared::forward::BodyMotion {
-            f_o: shared::units::BodySpecificForce {
-                m_s2: up.map(|u| g * u),
-            },
+            f_o,
             ..Default::default()
         });
+        for j in 0..3 {
+            assert!(
+                (f64::from(x.raw[j]) - want.raw[j]).abs() < 1e-5,
+                "{x:?} vs {want:?}"
+            );
+        }
+        // The lever arms' centripetal term shows: at rest the outputs differ.
         assert!(
-            (0..3).any(|j| (f64::from(last.raw[j]) - still.raw[j]).abs() > 1e-5),
-            "{last:?} vs {still:?}"
+            (0..3).any(|j| (f64::from(x.raw[j]) - still.raw[j]).abs() > 1e-5),
+            "{x:?} vs {still:?}"
         );
-        // A table setting ends the tilt: at rest again.
         s.set_table(&s.table()).unwrap();
         let rest = s.sample();
         assert!((f64::from(rest.rate_rad_s[0]) - gyro.bias_rad_s[0]).abs() < 1e-6);
