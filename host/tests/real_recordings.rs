@@ -149,6 +149,17 @@ struct Figures {
     reference_mg: f64,
 }
 
+impl Figures {
+    /// `rests` rests, more than `before_above_mg` off at the nominal scale, and calibrated to
+    /// within 0.2 mg of the reference ellipsoid.
+    fn bounded(&self, rests: usize, before_above_mg: f64) {
+        assert_eq!(self.rests, rests);
+        assert!(self.before_mg > before_above_mg, "{}", self.before_mg);
+        let (ours, reference) = (self.ours_mg, self.reference_mg);
+        assert!(ours < reference + 0.2, "{ours} vs {reference}");
+    }
+}
+
 fn figures(session: &Path, calibration: &Path, per_g: f64, symmetric: bool) -> Figures {
     let s =
         recording::session::read_session(session, &recording::session::ReadOptions { quiet: true })
@@ -205,6 +216,14 @@ fn calibrated(dir: &Path, name: &str, more: &[&str], per_g: f64, symmetric: bool
     f
 }
 
+/// `host segment` on `name` (with `more`), which must accept it: its stdout and stderr.
+fn probe(dir: &Path, name: &str, more: &[&str]) -> (String, String) {
+    let input = unpack(dir, name);
+    let (ok, stdout, stderr) = segment(dir, &input, "probe", more);
+    assert!(ok, "{name}: {stderr}");
+    (stdout, stderr)
+}
+
 /// imucal's Ferraris session: the six faces on a table and three turns, found as a six-face
 /// session (13 rests in the six directions of the authors' list), calibrated to within 0.2 mg of
 /// the reference ellipsoid fit.
@@ -212,9 +231,7 @@ fn calibrated(dir: &Path, name: &str, more: &[&str], per_g: f64, symmetric: bool
 fn imucals_ferraris_session_calibrates_as_six_faces() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let input = unpack(d, "imucal_ferraris_session.csv.zst");
-    let (ok, stdout, stderr) = segment(d, &input, "probe", IMUCAL);
-    assert!(ok, "{stderr}");
+    let (stdout, _) = probe(d, "imucal_ferraris_session.csv.zst", IMUCAL);
     assert_eq!(count_before(&stdout, "distinct position"), 6, "{stdout}");
     assert!(stdout.contains("six-face session"), "{stdout}");
     let f = calibrated(
@@ -224,14 +241,7 @@ fn imucals_ferraris_session_calibrates_as_six_faces() {
         shared::STANDARD_GRAVITY_M_S2,
         false,
     );
-    assert_eq!(f.rests, 13);
-    assert!(f.before_mg > 20.0, "{}", f.before_mg);
-    assert!(
-        f.ours_mg < f.reference_mg + 0.2,
-        "{} vs {}",
-        f.ours_mg,
-        f.reference_mg
-    );
+    f.bounded(13, 20.0);
 }
 
 /// imucal's annotated session (the same kind of unit in counts, its nine annotated pieces joined):
@@ -274,9 +284,7 @@ fn imucals_annotated_session_calibrates_from_its_six_faces() {
 fn a_hand_held_session_with_a_table_rest_calibrates() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let input = unpack(d, "tomisuarez_calibration.csv.zst");
-    let (ok, stdout, stderr) = segment(d, &input, "probe", TOMI);
-    assert!(ok, "{stderr}");
+    let (stdout, stderr) = probe(d, "tomisuarez_calibration.csv.zst", TOMI);
     // The authors' own list (`optmization result data/static_intervals.csv`) has ten.
     assert_eq!(count_before(&stdout, "still interval(s)"), 10, "{stdout}");
     assert_eq!(count_before(&stdout, "distinct position"), 10, "{stdout}");
@@ -286,14 +294,7 @@ fn a_hand_held_session_with_a_table_rest_calibrates() {
         .count();
     assert_eq!(saturated, 3, "{stderr}");
     let f = calibrated(d, "tomisuarez_calibration.csv.zst", TOMI, 16384.0, true);
-    assert_eq!(f.rests, 10);
-    assert!(f.before_mg > 50.0, "{}", f.before_mg);
-    assert!(
-        f.ours_mg < f.reference_mg + 0.2,
-        "{} vs {}",
-        f.ours_mg,
-        f.reference_mg
-    );
+    f.bounded(10, 50.0);
 }
 
 /// The other recordings: each refused by `segment` for a reason true of it (the reason checked
