@@ -217,22 +217,19 @@ pub fn run<T: Transport>(
     let drive = has_virtual_table(&identity);
 
     let plan = device_plan(&opts.plan, &identity, window_rate, drive, op);
+    let hand = !drive && handheld::is_hand_held(&plan);
     if let Some(live) = client.view() {
         live.identity(&identity);
         live.plan(
             &plan,
-            !drive && handheld::is_hand_held(&plan),
+            hand,
             window_rate,
             recording::session::segment::SegmentOptions::default().same_position_deg,
         );
     }
     let recording_dir = opts.out_dir.join("recording");
-    let hand = !drive && handheld::is_hand_held(&plan);
     if hand {
-        // Every window, turns included: the gyro is fitted from the hand's turns.
-        let log = hand_session::open_log(&opts.out_dir, fs, window, opts.force)
-            .map_err(ProcedureError::WindowLog)?;
-        client.log_windows(log);
+        log_every_window(client, opts, fs, window)?;
     }
     let Recorded { warnings, dropped } = record_plan(
         client,
@@ -296,6 +293,20 @@ pub fn run<T: Transport>(
         dropped_frames: dropped,
         passed,
     })
+}
+
+/// A hand-held session logs every window, turns included: the gyro is fitted from the hand's
+/// turns.
+fn log_every_window<T: Transport>(
+    client: &mut DeviceClient<T>,
+    opts: &ProcedureOptions,
+    fs: f64,
+    window: u32,
+) -> Result<(), ProcedureError> {
+    let log = hand_session::open_log(&opts.out_dir, fs, window, opts.force)
+        .map_err(ProcedureError::WindowLog)?;
+    client.log_windows(log);
+    Ok(())
 }
 
 /// The end of a hand-held session: its window log closed and segmented as `host segment` would

@@ -53,12 +53,14 @@ pub enum HandGyroFileError {
 }
 
 /// The gyro fit on the hand turns and the whole table turns ([`super::table_turn`]), with gravity
-/// directions from the session's own accelerometer calibration. A wrong gyro unit is an error; too
-/// few turns only leave the gyro uncalibrated.
+/// directions from the session's own accelerometer calibration, leaving out the turns `dropped`
+/// ([`dropped_turns`]: cut by a time jump, or clipped by the gyro's range). A wrong gyro unit is an
+/// error; too few turns only leave the gyro uncalibrated.
 pub fn fit(
     rec: &Recording,
     seg: &Segmentation,
     plan: &Plan,
+    dropped: &[DroppedTurn],
     spelling: Spelling,
 ) -> Result<Result<HandGyroFit, HandGyroError>, HandGyroFileError> {
     // Too few turns for any gyro: said before the accelerometer fit, which a gyro it cannot have
@@ -95,7 +97,6 @@ pub fn fit(
         let n = linalg::norm(&f);
         f.map(|c| c / n)
     };
-    let dropped = dropped_turns(rec, seg);
     let turns: Vec<Turn> = seg
         .stills
         .windows(2)
@@ -160,7 +161,7 @@ fn angle_random_walk(rec: &Recording, seg: &Segmentation) -> f64 {
 
 /// A turn left out of the gyro fit: its rotation cannot be integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct DroppedTurn {
+pub struct DroppedTurn {
     /// The still interval before it (1-based, as in the table).
     pub after_still: usize,
     /// The turn's start, s.
@@ -171,7 +172,7 @@ pub(crate) struct DroppedTurn {
 
 /// Why a turn cannot be integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum DropCause {
+pub enum DropCause {
     /// The time stamps jump during it (a gap, a repeat or a step back): the first jump.
     Jump(recording::session::import::TimeJump),
     /// The gyro reads its extreme on `axis` during it: a rate beyond its range was cut there.
@@ -235,7 +236,7 @@ const CLIPPED_SAMPLES: usize = 3;
 const CLIP_TOLERANCE: f64 = 1e-4;
 
 /// The turns between consecutive still intervals that [`fit`] leaves out, with their place.
-pub(crate) fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
+pub fn dropped_turns(rec: &Recording, seg: &Segmentation) -> Vec<DroppedTurn> {
     let jumps = rec.jumps();
     let clip = gyro_clip_levels(rec);
     seg.stills
@@ -492,7 +493,15 @@ mod tests {
         assert_eq!(seg.stills.len(), 12);
         let faces = recording::session::coverage::six_face_labels(&seg.stills).unwrap();
         let plan = recording::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
-        let fit = fit(&rec, &seg, &plan, Spelling::Flags).unwrap().unwrap();
+        let fit = fit(
+            &rec,
+            &seg,
+            &plan,
+            &dropped_turns(&rec, &seg),
+            Spelling::Flags,
+        )
+        .unwrap()
+        .unwrap();
         assert_eq!((fit.turns, fit.table_turns), (5, 6));
         let truth = spec.gyro.matrix;
         for i in 0..3 {
@@ -555,7 +564,7 @@ mod tests {
             panic!("{text}")
         };
         assert!((0.5..0.52).contains(&jump.step_s), "{text}");
-        let fit = fit(&rec, &seg, &plan_for(&rec, &seg), Spelling::Flags)
+        let fit = fit(&rec, &seg, &plan_for(&rec, &seg), &dropped, Spelling::Flags)
             .unwrap()
             .unwrap();
         assert_eq!(fit.turns, 22);

@@ -175,18 +175,16 @@ impl Found {
                     .filter(|t| t.used().is_some())
                     .map(|t| t.after_still),
             );
-            warnings.extend(
-                gyro::dropped_turns(&recording, &segmentation)
-                    .iter()
-                    .map(ToString::to_string),
-            );
+            let dropped = gyro::dropped_turns(&recording, &segmentation);
+            warnings.extend(dropped.iter().map(ToString::to_string));
             warnings.extend(
                 table_turns
                     .iter()
                     .filter(|t| t.used().is_none())
                     .map(ToString::to_string),
             );
-            let fit = gyro::fit(&recording, &segmentation, &plan, choices.segment.spelling)?;
+            let spelling = choices.segment.spelling;
+            let fit = gyro::fit(&recording, &segmentation, &plan, &dropped, spelling)?;
             let max_misfit_deg = gyro::plausible_misfit_deg(position_set, &plan);
             (
                 fit.and_then(|f| gyro::undetermined(f, max_misfit_deg)),

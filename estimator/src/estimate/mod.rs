@@ -16,9 +16,9 @@
 //! The estimator's types: [`options`] (its settings), [`outcome`] (what it returns), [`error`] (why
 //! it made no calibration). The modules, in the order a fit runs through them: `fit` (the fit's
 //! stages, from plan and statistics to the outcome), `fit_checks` (the χ² check, the lever arms'
-//! observability, the residual warning), `screen` (plan ↔ data, screening, the static
-//! least squares), `segment` (segment kind, pooled static noise), [`model`] (one segment's mean
-//! outputs, the parameter layout), `build` (segment models, mounts, the gyro's observations),
+//! observability, the residual warning), `screen` (plan ↔ data, screening, the static least
+//! squares; `screen_motion` for the static segments that moved), `segment` (segment kind, pooled
+//! static noise), [`model`] (one segment's mean outputs, the parameter layout), `build` (segment models, mounts, the gyro's observations),
 //! [`attitude`] (each mount's tilt unknowns and prior, docs/model.md §7), [`gyro`] (the gyro model,
 //! §8), [`gyro_check`] (whether a fitted gyro is plausible), `solve` and `joint` (the weighted least squares), `paper` (the paper's eq. 24, for
 //! comparison), `paper_angles` (θ to the paper's angles with their covariance), `uncertainty`,
@@ -62,6 +62,7 @@ mod predict;
 #[cfg(test)]
 mod ramp_tests;
 mod screen;
+mod screen_motion;
 #[cfg(test)]
 mod screen_tests;
 mod segment;

@@ -365,7 +365,8 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
     };
     let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
     let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed, 0));
-    let fit = app::handheld::gyro::fit(&rec, &seg, &plan, Default::default())
+    let dropped = app::handheld::gyro::dropped_turns(&rec, &seg);
+    let fit = app::handheld::gyro::fit(&rec, &seg, &plan, &dropped, Default::default())
         .unwrap()
         .unwrap();
     let want = gyro_in_convention(&truth, &spec.gyro.matrix);

@@ -8,6 +8,7 @@
 #[derive(Debug)]
 pub(super) struct Retime {
     pub(super) rate_hz: f64,
+    period_s: f64,
     t0: Option<f64>,
     n: u64,
     /// `(n, stamp)` of every `stride`-th sample.
@@ -21,6 +22,7 @@ impl Retime {
     pub(super) fn new(rate_hz: f64) -> Retime {
         Retime {
             rate_hz,
+            period_s: 1.0 / rate_hz,
             t0: None,
             n: 0,
             stamps: Vec::new(),
@@ -32,27 +34,27 @@ impl Retime {
     pub(super) fn next(&mut self, t_s: f64) -> f64 {
         let n = self.n;
         self.n += 1;
-        let period = 1.0 / self.rate_hz;
         if t_s.is_finite() {
-            if self.t0.is_none() {
-                self.t0 = Some(t_s - n as f64 * period);
-            }
-            if n % self.stride == 0 {
-                if self.stamps.len() == Self::KEPT {
-                    // Full: keep every other, and sample half as often from now on.
-                    let mut k = 0;
-                    self.stamps.retain(|_| {
-                        k += 1;
-                        k % 2 == 1
-                    });
-                    self.stride *= 2;
-                }
-                if n % self.stride == 0 {
-                    self.stamps.push((n, t_s));
-                }
-            }
+            self.t0.get_or_insert(t_s - n as f64 * self.period_s);
+            self.keep_stamp(n, t_s);
         }
-        self.t0.unwrap_or(0.0) + n as f64 * period
+        self.t0.unwrap_or(0.0) + n as f64 * self.period_s
+    }
+
+    /// Keeps `(n, t_s)` when `n` is on the stride; a full store keeps every other stamp and samples
+    /// half as often from then on.
+    fn keep_stamp(&mut self, n: u64, t_s: f64) {
+        if self.stamps.len() == Self::KEPT {
+            let mut k = 0;
+            self.stamps.retain(|_| {
+                k += 1;
+                k % 2 == 1
+            });
+            self.stride *= 2;
+        }
+        if n % self.stride == 0 {
+            self.stamps.push((n, t_s));
+        }
     }
 
     /// The rate the stamps imply, Hz: the mean of the middle half of the slopes between each
