@@ -23,14 +23,15 @@ pub enum LogError {
     /// Binary, but none of the formats read.
     #[error(
         "{path} is not a format this tool reads (it starts with bytes {head}): give a text file \
-         (CSV), a PX4 ULog, an ArduPilot DataFlash .bin or a ROS 2 bag in MCAP (ROS 1 bags and \
-         sqlite3 ROS 2 bags: convert with `mcap convert`)"
+         (CSV), a PX4 ULog, an ArduPilot DataFlash .bin or a ROS 2 bag in MCAP{advice}"
     )]
     UnknownFormat {
         /// The file.
         path: PathBuf,
         /// Its first bytes, hex.
         head: String,
+        /// What it looks like, and the conversion that makes it one of them.
+        advice: ForeignFormat,
     },
     /// A text file without its units and columns.
     #[error(
@@ -191,5 +192,49 @@ impl ImuError {
             },
             e => e,
         }
+    }
+}
+
+/// A binary file of a format the readers do not take, as far as its first bytes tell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ForeignFormat {
+    /// A ROS 1 bag (`#ROSBAG`).
+    Ros1Bag,
+    /// A sqlite3 file (a ROS 2 bag's `.db3`).
+    Sqlite,
+    /// Anything else.
+    Other,
+}
+
+impl ForeignFormat {
+    /// What a file starting with `head` looks like.
+    pub fn of(head: &[u8]) -> ForeignFormat {
+        if head.starts_with(b"#ROSBAG") {
+            ForeignFormat::Ros1Bag
+        } else if head.starts_with(b"SQLite format 3\0") {
+            ForeignFormat::Sqlite
+        } else {
+            ForeignFormat::Other
+        }
+    }
+}
+
+/// The conversion to a ROS 2 bag in MCAP: for a ROS 1 bag rosbags' converter, which re-encodes
+/// its messages as ROS 2's CDR (`mcap convert` keeps ROS 1's encoding, which the reader does not
+/// take); for a sqlite3 bag `mcap convert`.
+impl std::fmt::Display for ForeignFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ForeignFormat::Ros1Bag => {
+                "; this is a ROS 1 bag: convert it with `rosbags-convert --src FILE.bag --dst DIR \
+                 --dst-storage mcap` (pip install rosbags) and give the .mcap file in DIR"
+            }
+            ForeignFormat::Sqlite => {
+                "; this is a sqlite3 file (a ROS 2 bag's .db3?): convert it with `mcap convert`"
+            }
+            ForeignFormat::Other => {
+                " (a ROS 1 bag or a sqlite3 ROS 2 bag is converted to one first)"
+            }
+        })
     }
 }

@@ -21,7 +21,7 @@ pub mod vehicle;
 mod windows;
 
 pub use ardupilot::UndoError;
-pub use error::{ImuError, LogError};
+pub use error::{ForeignFormat, ImuError, LogError};
 use keep::{Admit, Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
 use retime::{retime_note, Retime};
@@ -279,8 +279,13 @@ fn refuse_options(
     }
     // A NUL byte early on: no text file, and none of the binary formats either.
     if format == LogFormat::Text && head.iter().take(4096).any(|&b| b == 0) {
+        let advice = error::ForeignFormat::of(head);
         let head = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
-        return Err(LogError::UnknownFormat { path: p(), head });
+        return Err(LogError::UnknownFormat {
+            path: p(),
+            head,
+            advice,
+        });
     }
     Ok(())
 }

@@ -112,6 +112,16 @@ fn a_binary_file_of_another_format_is_named_as_such() {
     let m = e.to_string();
     assert!(matches!(e, LogError::UnknownFormat { .. }), "{m}");
     assert!(m.contains("53514c69") && m.contains("mcap convert"), "{m}");
+    // A ROS 1 bag: the conversion that re-encodes it for ROS 2, not `mcap convert`, whose output
+    // keeps ROS 1's encoding.
+    let ros1 = b"#ROSBAG V2.0\n\0\0\0rest";
+    let e = read_log_from(&ros1[..], ros1, Path::new("a.bag"), &source).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("ROS 1 bag: convert it with `rosbags-convert"),
+        "{m}"
+    );
+    assert!(!m.contains("mcap convert"), "{m}");
 }
 
 /// A text file's temperature column: read beside the values, a missing reading ("nan", an empty
