@@ -197,7 +197,7 @@ fn frame_rotation(
     reference: &[Measured],
 ) -> Option<Matrix3<f64>> {
     match frame {
-        BodyFrame::Fixture { .. } => None,
+        BodyFrame::Fixture { .. } | BodyFrame::Faces { .. } => None,
         BodyFrame::Convention => {
             op.say(
                 "the calibration's body frame is a convention (no attitude was known), not the \

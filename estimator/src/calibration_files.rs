@@ -113,6 +113,9 @@ pub fn calibration_unit_file(outcome: &CalibrationOutcome, unit_id: Option<UnitI
         unit_id,
         Some(outcome.uncertainty.clone()),
     );
+    file.frame = Some(crate::unit_file::FrameSection::of(
+        &outcome.static_split.frame,
+    ));
     // The raw log's counts of zero force, which the biases hold (apply checks them).
     file.statics.raw_offset_lsb = outcome.acc_offset;
     // A single-package fit's three lever arms are one point, and the file says so (docs/model.md §4.7).
@@ -254,6 +257,65 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names, vec![CALIBRATION_BIN.to_string()], "{names:?}");
+    }
+
+    /// `[frame]` says what the body axes are, from what fixed them: the fixture's nominal ups, the
+    /// faces a unit was set down on (`attitude = "face"`), or, with every position free, the
+    /// accelerometer triad's own axes, where accelerometer x's angles are exactly 0°, 90°, 90°
+    /// (docs/model.md §7).
+    #[test]
+    fn the_calibration_file_states_its_body_frame() {
+        use crate::unit_file::FrameKind;
+        use recording::session::plan::Attitude;
+        let mut fixture = testkit::many_mounts_plan();
+        fixture.segments.retain(|s| s.is_static());
+        let on_faces = |face: Attitude, other: Attitude| {
+            let mut p = fixture.clone();
+            for s in &mut p.segments {
+                let axis = s.up_b.iter().filter(|c| c.abs() == 1.0).count() == 1;
+                s.attitude = if axis { face } else { other };
+                s.attitude_sigma_deg = axis.then_some(1.0);
+            }
+            p
+        };
+        let faces = on_faces(Attitude::Face, Attitude::Free);
+        let free = on_faces(Attitude::Free, Attitude::Free);
+        let truth = testkit::paper_unit();
+        for (plan, kind) in [
+            (&fixture, FrameKind::Fixture),
+            (&faces, FrameKind::Faces),
+            (&free, FrameKind::Accelerometer),
+        ] {
+            let stats = testkit::noisy_stats(
+                plan,
+                &truth,
+                testkit::paper_noise(&truth),
+                TableErrors::default(),
+                &mut Rng::new(5, 0),
+            );
+            let out = calibrate_session_stats(plan, &stats, &EstimateOptions::default()).unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            let w = write_calibration_files(dir.path(), &out, UnitId([4; 12]), 0, false).unwrap();
+            let file = UnitFile::load(&w.toml_path).unwrap();
+            let frame = file.frame.clone().unwrap();
+            assert_eq!(frame.kind, kind, "{kind:?}: {frame:?}");
+            assert_eq!(frame.axes, out.static_split.frame.axes());
+            let x_angles = file.statics.installation_angles_deg[0];
+            let conventional = x_angles == [0.0, 90.0, 90.0];
+            assert_eq!(
+                conventional,
+                kind == FrameKind::Accelerometer,
+                "{x_angles:?}"
+            );
+            if kind == FrameKind::Faces {
+                let f = out.static_split.frame;
+                let six = crate::estimate::BodyFrame::Faces {
+                    faces: 6,
+                    prior_deg: 1.0,
+                };
+                assert_eq!(f, six, "{f}");
+            }
+        }
     }
 
     #[test]

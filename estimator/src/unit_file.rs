@@ -84,6 +84,10 @@ pub struct UnitFile {
     /// Output unit (default V).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_unit: Option<OutputUnit>,
+    /// The body frame the calibration's angles, lever arms and gyro matrix are in (an estimate's;
+    /// absent in a file written by hand or before the frame was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<FrameSection>,
     /// Table 1.
     #[serde(rename = "static")]
     pub statics: StaticSection,
@@ -140,6 +144,39 @@ pub struct StaticSection {
     /// subtracted, or a file written before the offset was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raw_offset_lsb: Option<[f64; 3]>,
+}
+
+/// `[frame]`: what the body axes are (docs/model.md §7): a fixture's, the housing's faces', or the
+/// accelerometer triad's own when no attitude was known.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameSection {
+    /// Which frame.
+    pub kind: FrameKind,
+    /// The axes in words, for a reader of the file.
+    pub axes: String,
+}
+
+/// Which body frame a calibration is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameKind {
+    /// A fixture's: the plan's nominal ups.
+    Fixture,
+    /// The housing's: the faces the unit was set down on.
+    Faces,
+    /// The accelerometer triad's own (no attitude known).
+    Accelerometer,
+}
+
+impl FrameSection {
+    /// The section of a fit's body frame.
+    pub fn of(frame: &crate::estimate::BodyFrame) -> FrameSection {
+        FrameSection {
+            kind: frame.kind(),
+            axes: frame.axes().into(),
+        }
+    }
 }
 
 /// `[dynamic]`.
@@ -445,6 +482,7 @@ impl UnitFile {
             g_m_s2: cal.gravity_m_s2,
             unit_id: unit_id.map(|u| u.to_string()),
             output_unit: Some(unit),
+            frame: None,
             statics: StaticSection {
                 zero_bias_v: v.then_some(s.zero_bias_out),
                 zero_bias_lsb: lsb.then_some(s.zero_bias_out),

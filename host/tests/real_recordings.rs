@@ -355,6 +355,29 @@ fn the_other_recordings_are_refused_for_what_they_are() {
         // PX4's logs hold only sensor_combined, which PX4 has already corrected.
         ("pyulog_sample.ulg.zst", &[], "sensor_combined", true),
         ("pyulog_sample_log_small.ulg", &[], "sensor_combined", true),
+        // A quadrotor's flight (PX4 on an FMU-V6C, 92 s): about 6 s still on the ground before
+        // take-off and 2.7 s after landing, its IMU at rate only in sensor_combined; `noise`
+        // finds the rest before take-off (`a_flight_logs_short_rest_is_found`).
+        (
+            "px4ulogrs_quadrotor_local.ulg.zst",
+            &[],
+            "sensor_combined",
+            true,
+        ),
+        // A ROS 1 bag (an AR.Drone's IMU over WiFi): the conversion that makes it a ROS 2 bag.
+        (
+            "imutools_ardrone_imu.bag",
+            &[],
+            "ROS 1 bag: convert it with `rosbags-convert",
+            false,
+        ),
+        // The same bag so converted: host-stamped, two rests on the bench between handling.
+        (
+            "imutools_ardrone_imu_ros2.mcap.zst",
+            &[],
+            "2 distinct position",
+            true,
+        ),
         // A truncated ArduPilot log of 45 IMU samples; a flight log without IMU messages.
         ("pymavlink_test.BIN", &[], "45 IMU samples", false),
         ("flightdata_center_0003.bin", &[], "no IMU samples", false),
@@ -377,4 +400,212 @@ fn the_other_recordings_are_refused_for_what_they_are() {
             assert!(ok, "{name}: noise: {stderr}");
         }
     }
+}
+
+/// The moves on a face in a six-face session: the time between two consecutive still intervals on
+/// the same face (their mean directions within 1°), more than a second apart: (start s, end s, the
+/// face's body axis 0–2), from `segment --json`'s intervals.
+fn turns_on_a_face(doc: &serde_json::Value) -> Vec<(f64, f64, usize)> {
+    let stills: Vec<(f64, f64, [f64; 3])> = doc["intervals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|iv| iv["kind"] == "static")
+        .map(|iv| {
+            let d = &iv["mean_direction"];
+            let start = iv["start_s"].as_f64().unwrap();
+            let dir = core::array::from_fn(|j| d[j].as_f64().unwrap());
+            (start, start + iv["duration_s"].as_f64().unwrap(), dir)
+        })
+        .collect();
+    stills
+        .windows(2)
+        .filter(|w| {
+            let cos: f64 = (0..3).map(|j| w[0].2[j] * w[1].2[j]).sum();
+            cos > 1f64.to_radians().cos() && w[1].0 - w[0].1 > 1.0
+        })
+        .map(|w| {
+            let axis = (0..3)
+                .max_by(|&a, &b| w[0].2[a].abs().total_cmp(&w[0].2[b].abs()))
+                .unwrap();
+            (w[0].1, w[1].0, axis)
+        })
+        .collect()
+}
+
+/// The peers' six-position least squares with the faces taken as exact (imucal's
+/// `FerrarisCalibration` model, `u = K·n + b` for each rest's mean output `u` and its face `n`,
+/// per output axis by the normal equations): `(K⁻¹, b)`, so that `f = K⁻¹(u − b)` in g.
+fn faces_exact_fit(rests: &[([f64; 3], [f64; 3])]) -> (nalgebra::Matrix3<f64>, [f64; 3]) {
+    use nalgebra::{Matrix3, Matrix4, Vector4};
+    let (mut k, mut b) = (Matrix3::zeros(), [0.0; 3]);
+    for i in 0..3 {
+        let (mut a, mut y) = (Matrix4::zeros(), Vector4::zeros());
+        for (u, n) in rests {
+            let x = Vector4::new(n[0], n[1], n[2], 1.0);
+            a += x * x.transpose();
+            y += x * u[i];
+        }
+        let s = a.try_inverse().unwrap() * y;
+        for j in 0..3 {
+            k[(i, j)] = s[j];
+        }
+        b[i] = s[3];
+    }
+    (k.try_inverse().unwrap(), b)
+}
+
+/// The mean of `rows` (t, x, y, z) over `[t0, t1]`.
+fn mean_over(rows: &[(f64, [f64; 3])], t0: f64, t1: f64) -> [f64; 3] {
+    let within: Vec<&[f64; 3]> = rows
+        .iter()
+        .filter(|(t, _)| (t0..=t1).contains(t))
+        .map(|(_, v)| v)
+        .collect();
+    core::array::from_fn(|j| within.iter().map(|v| v[j]).sum::<f64>() / within.len() as f64)
+}
+
+/// The specific force across axis `axis`, mg.
+fn off_axis_mg(f_g: &[f64; 3], axis: usize) -> f64 {
+    let across: f64 = (0..3).filter(|&j| j != axis).map(|j| f_g[j] * f_g[j]).sum();
+    across.sqrt() * 1e3
+}
+
+/// The frame of a six-face calibration, held out: imucal's Ferraris session turns the unit about
+/// the vertical on three faces, and no fit sees those turns (they are not still). Turned flat on a
+/// face, the unit's specific force stays along that face's normal, so in the housing's frame
+/// (`calibration.toml`'s `[frame]`, `faces`) its mean over each turn lies on that body axis. Ours
+/// (`host apply` on the log) keeps it there at least as well as the peers' six-position least
+/// squares with the faces taken as exact, which puts every face exactly on its axis by design.
+#[test]
+fn imucals_turns_on_a_face_keep_their_force_on_that_axis() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let name = "imucal_ferraris_session.csv.zst";
+    let input = unpack(d, name);
+    let (ok, doc, err) = segment(d, &input, "s", &[IMUCAL, &["--json"]].concat());
+    assert!(ok, "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&doc).unwrap();
+    // n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z at 102.4 Hz, °/s and m/s².
+    let rows = numeric_rows(&input);
+    let t_of = |n: usize| n as f64 / 102.4;
+    // A turn about the vertical: the gyro's integral about the face's axis at least 90°.
+    let turns: Vec<(f64, f64, usize)> = turns_on_a_face(&doc)
+        .into_iter()
+        .filter(|&(t0, t1, axis)| {
+            let inside = rows
+                .iter()
+                .enumerate()
+                .filter(|(n, _)| (t0..=t1).contains(&t_of(*n)));
+            let turned: f64 = inside.map(|(_, r)| r[1 + axis] / 102.4).sum();
+            turned.abs() > 90.0
+        })
+        .collect();
+    assert_eq!(turns.len(), 3, "{turns:?}");
+    let (ok, out, err) = common::host_in(Some(d), &["calibrate", "--input", "s", "--out", "c"]);
+    assert!(ok && out.contains("PASS"), "{out}{err}");
+    let toml = std::fs::read_to_string(d.join("c/calibration.toml")).unwrap();
+    assert!(toml.contains("[frame]\nkind = \"faces\""), "{toml}");
+    let applied = d.join("applied.csv");
+    let args = [
+        &["apply", "--calibration", "c/calibration.toml"][..],
+        &["--input", input.to_str().unwrap(), "--out", "applied.csv"],
+        IMUCAL,
+    ]
+    .concat();
+    let (ok, _, err) = common::host_in(Some(d), &args);
+    assert!(ok, "{err}");
+    // segment,t_s,f_x_g,f_y_g,f_z_g,…
+    let ours_rows: Vec<(f64, [f64; 3])> = numeric_rows(&applied)
+        .iter()
+        .map(|r| (r[1], core::array::from_fn(|j| r[2 + j])))
+        .collect();
+    // The reference: the rests' mean outputs and their faces, from the segmented session.
+    let session =
+        recording::session::read_session(&d.join("s"), &recording::session::ReadOptions::default())
+            .unwrap();
+    let rests: Vec<([f64; 3], [f64; 3])> = session
+        .stats
+        .iter()
+        .zip(&session.plan.segments)
+        .map(|(st, sp)| (st.mean_u, sp.up_b))
+        .collect();
+    let (k_inv, b) = faces_exact_fit(&rests);
+    let raw: Vec<(f64, [f64; 3])> = rows
+        .iter()
+        .enumerate()
+        .map(|(n, r)| {
+            let u = nalgebra::Vector3::from_fn(|j, _| r[4 + j] - b[j]);
+            let f = k_inv * u;
+            (t_of(n), [f[0], f[1], f[2]])
+        })
+        .collect();
+    let (mut ours, mut exact) = (Vec::new(), Vec::new());
+    for &(t0, t1, axis) in &turns {
+        ours.push(off_axis_mg(&mean_over(&ours_rows, t0, t1), axis));
+        exact.push(off_axis_mg(&mean_over(&raw, t0, t1), axis));
+        println!(
+            "turn on face {} ({t0:.1}–{t1:.1} s): mean specific force {:.2} mg off the axis \
+             (faces taken as exact: {:.2} mg)",
+            ["x", "y", "z"][axis],
+            ours.last().unwrap(),
+            exact.last().unwrap()
+        );
+    }
+    println!(
+        "rms over the turns: ours {:.2} mg, faces taken as exact {:.2} mg",
+        rms(&ours),
+        rms(&exact)
+    );
+    assert!(rms(&ours) <= rms(&exact), "{ours:?} against {exact:?}");
+    assert!(ours.iter().all(|&mg| mg < 5.0), "{ours:?}");
+}
+
+/// The rows of a CSV file after its header, each cell as a number (NaN where it is not one).
+fn numeric_rows(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
+}
+
+/// A short rest in a long flight log: PX4's 92 s quadrotor flight is still only for about 6 s
+/// before take-off and 2.7 s after landing. `noise` finds a rest of more than 4 s, which only the
+/// one before take-off is, and says that sensor_combined is what it read.
+#[test]
+fn a_flight_logs_short_rest_is_found() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let input = unpack(d, "px4ulogrs_quadrotor_local.ulg.zst");
+    let input = input.to_str().unwrap();
+    let args = ["noise", "--input", input, "--out", "n", "--json"];
+    let (ok, out, err) = common::host_in(Some(d), &args);
+    assert!(ok, "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let seconds = doc["samples"].as_f64().unwrap() / doc["sample_rate_hz"].as_f64().unwrap();
+    println!("PX4 flight log: the rest `noise` reads lasts {seconds:.2} s");
+    assert!((4.0..6.5).contains(&seconds), "{seconds} s: {out}");
+    assert!(err.contains("reading sensor_combined"), "{err}");
+}
+
+/// A host-stamped ROS bag (an AR.Drone's IMU stamped by its driver on WiFi receipt, 50 Hz, packets
+/// lost in runs of up to a second), converted to a ROS 2 bag as the reader's refusal of the ROS 1
+/// bag says: read at its 50 Hz, each gap named, the two rests on the bench found (9.7 s and 11.5 s),
+/// and refused for having only those two positions.
+#[test]
+fn a_host_stamped_bag_is_read_with_its_gaps_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let input = unpack(d, "imutools_ardrone_imu_ros2.mcap.zst");
+    let (ok, stdout, stderr) = segment(d, &input, "s", &[]);
+    assert!(!ok, "{stdout}");
+    assert!(stderr.contains("time stamps jump 24 time(s)"), "{stderr}");
+    assert_eq!(count_before(&stdout, "still interval(s)"), 2, "{stdout}");
+    assert!(stderr.contains("2 distinct position(s)"), "{stderr}");
 }

@@ -235,11 +235,10 @@ impl Frame {
     /// least two directions (as the fit's own choice of frame: parallel ups leave a rotation about
     /// them free), else a convention (every position free, as a hand-held session's).
     pub(crate) fn of_plan(plan: &recording::session::Plan) -> Frame {
-        use recording::session::plan::Attitude;
         let ups: Vec<[f64; 3]> = plan
             .segments
             .iter()
-            .filter(|s| s.attitude == Attitude::Fixture)
+            .filter(|s| !s.is_free())
             .map(|s| s.up_b)
             .collect();
         let spread = ups.iter().any(|a| {

@@ -6,6 +6,7 @@ use super::model::{self, idx_m, idx_tilt, idx_u0};
 use super::solve::{self, Problem};
 use super::{EstimateError, SegmentKind, SessionSeg};
 use nalgebra::{DMatrix, Matrix3};
+use recording::session::plan::Attitude;
 use recording::session::Plan;
 use shared::linalg::{self, RowMajor3};
 
@@ -14,8 +15,8 @@ use shared::linalg::{self, RowMajor3};
 /// axes (`M` lower-triangular; any rotation of the body frame fits |gravity| equally well).
 pub(crate) const CONVENTION_FIXED: [usize; 3] = [idx_m(0, 1), idx_m(0, 2), idx_m(1, 2)];
 
-/// What fixes the body frame's orientation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What fixes the body frame's orientation (docs/model.md §7, §7.1).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BodyFrame {
     /// The fixture: the mounts' nominal ups (within their prior) and, for spinning mounts, the gyro's
     /// rotation axis.
@@ -25,8 +26,47 @@ pub enum BodyFrame {
         /// Mounts whose spin axis the gyro measured.
         gyro_mounts: usize,
     },
+    /// The faces of the unit's housing, set down on a bench (`attitude = "face"`): each body axis
+    /// along a face's normal, the faces' placement errors averaging to zero within their prior.
+    Faces {
+        /// Positions taken as set down on a face.
+        faces: usize,
+        /// The widest of their priors, degrees (1σ per axis).
+        prior_deg: f64,
+    },
     /// No mount is known: body x along accelerometer x, body y in the x–y sensing plane.
     Convention,
+}
+
+impl BodyFrame {
+    /// Its short name, as `calibration.toml`'s `[frame]` writes it: `fixture`, `faces` or
+    /// `accelerometer`.
+    pub fn kind(&self) -> crate::unit_file::FrameKind {
+        use crate::unit_file::FrameKind;
+        match self {
+            BodyFrame::Fixture { .. } => FrameKind::Fixture,
+            BodyFrame::Faces { .. } => FrameKind::Faces,
+            BodyFrame::Convention => FrameKind::Accelerometer,
+        }
+    }
+
+    /// What the body axes are, for a reader of the calibration (no counts of this session).
+    pub fn axes(&self) -> &'static str {
+        match self {
+            BodyFrame::Fixture { .. } => {
+                "the fixture's axes: the plan's nominal ups, the mounts' tilts averaging to zero \
+                 within their attitude prior"
+            }
+            BodyFrame::Faces { .. } => {
+                "the housing's axes: each body axis along the normal of a face the unit was set \
+                 down on, the faces' placement errors averaging to zero within their prior"
+            }
+            BodyFrame::Convention => {
+                "the accelerometer triad's own: x along accelerometer x's sensing axis, y in the \
+                 plane of the x and y sensing axes, z completing a right-handed frame"
+            }
+        }
+    }
 }
 
 impl std::fmt::Display for BodyFrame {
@@ -39,6 +79,12 @@ impl std::fmt::Display for BodyFrame {
                 f,
                 "the body frame is fixed by the fixture: {known_mounts} mount(s) with a known up \
                  (within their attitude prior) and the gyro's spin axis on {gyro_mounts} mount(s)"
+            ),
+            BodyFrame::Faces { faces, prior_deg } => write!(
+                f,
+                "the body frame is the housing's: each body axis along the normal of a face the \
+                 unit was set down on ({faces} position(s) on a face, each within its {prior_deg}° \
+                 prior; their placement errors average to zero)"
             ),
             BodyFrame::Convention => write!(
                 f,
@@ -195,16 +241,19 @@ pub(crate) fn tilt_free(problem: &Problem, free: &mut [bool]) {
 }
 
 /// What fixes the body frame: the known mounts and gyro axes when they give two directions that are
-/// not parallel, else the convention.
-pub(crate) fn body_frame(problem: &Problem) -> BodyFrame {
+/// not parallel, else the convention. Known mounts that are all faces of the housing (`plan`'s
+/// `attitude = "face"`, no fixture mount, no spin) make it the housing's frame.
+pub(crate) fn body_frame(problem: &Problem, plan: &Plan) -> BodyFrame {
     let mut dirs: Vec<[f64; 3]> = Vec::new();
     let (mut known, mut gyro) = (0, 0);
+    let mut widest_rad: f64 = 0.0;
     for m in &problem.mounts {
         let idx = m.geometry.index;
         let seen = problem.models.iter().any(|s| s.tilt.index == idx);
         let spun = problem.gyro.iter().any(|g| g.tilt.index == idx);
-        if seen && m.prior_rad.is_some() {
+        if let (true, Some(prior)) = (seen, m.prior_rad) {
             known += 1;
+            widest_rad = widest_rad.max(prior);
         }
         if spun {
             gyro += 1;
@@ -217,13 +266,21 @@ pub(crate) fn body_frame(problem: &Problem) -> BodyFrame {
         dirs.iter()
             .any(|b| linalg::norm(&linalg::cross(a, b)) > 0.2)
     });
-    if spread {
-        BodyFrame::Fixture {
+    let faces = plan
+        .segments
+        .iter()
+        .filter(|s| s.attitude != Attitude::Free)
+        .all(|s| s.attitude == Attitude::Face);
+    match (spread, faces && gyro == 0) {
+        (false, _) => BodyFrame::Convention,
+        (true, true) => BodyFrame::Faces {
+            faces: known,
+            prior_deg: (widest_rad.to_degrees() * 1e3).round() / 1e3,
+        },
+        (true, false) => BodyFrame::Fixture {
             known_mounts: known,
             gyro_mounts: gyro,
-        }
-    } else {
-        BodyFrame::Convention
+        },
     }
 }
 
@@ -288,7 +345,7 @@ pub(crate) fn free_static_fit(
     );
     sub.drift = problem.drift.clone();
     super::build::seed_free_mounts(plan, segs, noise, &mut sub, &t);
-    let frame = body_frame(&sub);
+    let frame = body_frame(&sub, plan);
     let mut free = super::screen::static_free(n);
     tilt_free(&sub, &mut free);
     if frame == BodyFrame::Convention {

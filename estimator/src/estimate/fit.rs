@@ -305,7 +305,7 @@ fn setup_gyro(plan: &Plan, options: &EstimateOptions, p: &mut Prepared) -> Setup
             &p.seg_mount,
         );
     }
-    let frame = attitude::body_frame(&p.problem);
+    let frame = attitude::body_frame(&p.problem, plan);
     let group = options.static_from_rest && options.method == Method::Joint;
     let rests: Vec<bool> = segs.iter().map(|s| s.kind == SegmentKind::Static).collect();
     if group {

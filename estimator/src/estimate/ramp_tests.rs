@@ -156,7 +156,7 @@ fn a_fixed_lever_arm_component_does_not_keep_its_start_value() {
     )
     .unwrap();
     problem.gyro = build::build_gyro(&plan, &segs, &noise, &options, &problem.mounts, &seg_mount);
-    let frame = attitude::body_frame(&problem);
+    let frame = attitude::body_frame(&problem, &plan);
     let run = |start: Vec<f64>| {
         let (mut s, mut p, mut ex) = (segs.clone(), problem.clone(), Vec::new());
         joint::joint(&plan, &mut s, &mut p, start, &options, &mut ex, frame).unwrap()

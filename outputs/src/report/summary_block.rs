@@ -61,6 +61,9 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
         "  misalignment     {}  mrad (each sensing axis from its body axis)",
         misalignment.join("   ")
     );
+    if let Some(frame) = s.calibration.as_ref().and_then(|c| c.frame.as_ref()) {
+        let _ = writeln!(out, "  body frame       {}", frame.axes);
+    }
     for (i, a) in axes.iter().enumerate() {
         let comps: Vec<String> = axes
             .iter()
@@ -239,6 +242,24 @@ mod tests {
         assert!(b.contains("gyro bias, °/s   x +0.0100 ± 0.0001"), "{b}");
         assert!(b.contains("gyro scale, ppm  x +250 ± 10"), "{b}");
         assert!(b.contains("verdict          PASS: χ²/dof 1.04"), "{b}");
+    }
+
+    /// The body frame the numbers are in, as the calibration file states it; none where the file
+    /// states none.
+    #[test]
+    fn the_block_names_the_body_frame_the_file_states() {
+        use estimator::estimate::BodyFrame;
+        use estimator::unit_file::{FrameSection, UnitFile};
+        let mut s = passing(Vec::new(), 1.0);
+        assert!(!render_summary_block(&s).contains("body frame"));
+        let mut file = UnitFile::paper_unit();
+        file.frame = Some(FrameSection::of(&BodyFrame::Convention));
+        s.calibration = Some(file);
+        let b = render_summary_block(&s);
+        assert!(
+            b.contains("  body frame       the accelerometer triad's own: x along accelerometer x"),
+            "{b}"
+        );
     }
 
     /// An output in volts: the zero-g output in V with its 1σ in V, the 1σ in mg on a row of its

@@ -44,7 +44,7 @@ fn segment_for(k: usize, iv: &Interval, snap_deg: f64, prior_deg: f64) -> Segmen
     SegmentPlan {
         up_b: axis.unwrap_or(iv.direction.map(|c| (c * 1e6).round() / 1e6)),
         attitude: if axis.is_some() {
-            Attitude::default()
+            Attitude::Face
         } else {
             Attitude::Free
         },
@@ -74,7 +74,7 @@ pub fn plan_for_faces(
     let mut plan = plan_with(rec, seg, AXIS_SNAP_DEG, face_sigma_deg);
     for (sp, face) in plan.segments.iter_mut().zip(faces) {
         sp.up_b = *face;
-        sp.attitude = Attitude::default();
+        sp.attitude = Attitude::Face;
         sp.attitude_sigma_deg = Some(face_sigma_deg);
     }
     plan

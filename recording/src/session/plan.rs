@@ -108,6 +108,10 @@ pub enum Attitude {
     /// Unknown (e.g. held by hand): `up_b`, when given, is only a rough guess; the direction is
     /// estimated from the data with no prior.
     Free,
+    /// Set down on a face of the unit's housing (or held on it by hand), as `host segment` finds
+    /// it: `up_b` is that face's normal, a body axis, with the segment's prior. The faces, not a
+    /// fixture, then fix the body frame (docs/model.md §7.1).
+    Face,
 }
 
 fn is_fixture(a: &Attitude) -> bool {
@@ -468,10 +472,9 @@ impl Plan {
         }
         let uses_v2 = self.attitude_sigma_deg.is_some()
             || self.table_rate_sigma_ppm.is_some()
-            || self
-                .segments
-                .iter()
-                .any(|s| s.is_free() || s.attitude_sigma_deg.is_some() || !s.has_up());
+            || self.segments.iter().any(|s| {
+                s.attitude != Attitude::Fixture || s.attitude_sigma_deg.is_some() || !s.has_up()
+            });
         if uses_v2 && !version.has_attitudes() {
             return Err(PlanError::Invalid(format!(
                 "attitude, attitude_sigma_deg, table_rate_sigma_ppm and a missing up_b need \

@@ -131,7 +131,7 @@ pub(super) fn document(
                     segment: sp.name.clone(),
                     kind: match sp.attitude {
                         Attitude::Free => "free",
-                        Attitude::Fixture => "axis",
+                        Attitude::Fixture | Attitude::Face => "axis",
                     },
                     up_b: sp.up_b,
                     prior_1sigma_deg: sp.attitude_sigma_deg,
