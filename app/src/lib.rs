@@ -17,6 +17,8 @@
 //!   caller spells them.
 //! - [`simulate`]: a virtual unit on a virtual rate table written as a session
 //!   ([`simulate::Simulation`]).
+//! - [`simulate_hand`]: a simulated hand-held or six-face session as a logger writes it, with the
+//!   unit's truth ([`simulate_hand::HandSimulation`]).
 //! - [`walk_source`]: the accelerometers' bias random walk taken from the unit's noise figures
 //!   (`--bias-walk-from`: `host noise`'s `noise.json` or a unit file's `[noise]`).
 //! - [`segment_order`]: which order of a plan's segments lowers the predicted 1σ under a walk
@@ -35,6 +37,7 @@ pub mod handheld;
 pub mod log_input;
 pub mod segment_order;
 pub mod simulate;
+pub mod simulate_hand;
 pub mod walk_source;
 
 pub use calibrate::{

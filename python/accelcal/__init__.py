@@ -281,12 +281,23 @@ def simulate_hand(
     acc_unit: str = "m/s2",
     gyro_unit: str = "deg/s",
     *,
+    acc_offset: Optional[float] = None,
+    gyro_lsb_per_dps: Optional[float] = None,
     as_frame: bool = False,
 ) -> Any:
     """A simulated hand-held session (``host simulate-hand``): a dict with ``t``, ``acc``, ``gyro``
     and ``truth_toml``, or with ``as_frame=True`` a pandas DataFrame with the logger's columns
-    (t, acc_x … gyr_z) and the truth in ``df.attrs["truth_toml"]``."""
-    d = _accelcal.simulate_hand(seed, float(rate_hz), acc_unit, gyro_unit)
+    (t, acc_x … gyr_z) and the truth in ``df.attrs["truth_toml"]``. ``acc_offset`` (with
+    ``acc_unit="LSB"``) adds an unsigned output's mid-scale to every accelerometer value;
+    ``gyro_unit="LSB"`` writes whole gyro counts at ``gyro_lsb_per_dps``."""
+    d = _accelcal.simulate_hand(
+        seed,
+        float(rate_hz),
+        acc_unit,
+        gyro_unit,
+        acc_offset=None if acc_offset is None else float(acc_offset),
+        gyro_lsb_per_dps=None if gyro_lsb_per_dps is None else float(gyro_lsb_per_dps),
+    )
     if not as_frame:
         return d
     import pandas as pd

@@ -268,6 +268,8 @@ def simulate_hand(
     acc_unit: str = "m/s2",
     gyro_unit: str = "deg/s",
     *,
+    acc_offset: Optional[float] = None,
+    gyro_lsb_per_dps: Optional[float] = None,
     as_frame: bool = False,
 ) -> Any: ...
 def simulate(

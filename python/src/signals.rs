@@ -5,9 +5,7 @@ use crate::calibration::{choose, Calibration};
 use crate::errors::{usage, IntoPy};
 use crate::session::{load_session, rows_of_pair, Session};
 use app::simulate::{NoiseChoices, Simulation};
-use estimator::sim::handheld::{
-    logger_unit, simulate_hand as simulate_hand_rows, truth_toml, HandSpec,
-};
+use app::simulate_hand::HandSimulation;
 use numpy::ndarray::{Array2, ArrayView1};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use outputs::apply::Prepared;
@@ -15,9 +13,9 @@ use outputs::noise::allan::{curve_and_fit, curve_sizes, TermFit};
 use outputs::noise::confidence::relative_sigma;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use recording::session::import::{parse_acc_unit, GyroUnit, Recording};
+use recording::session::import::{GyroUnit, Recording};
+use recording::spelling::Spelling;
 use shared::compensator::LeverMode;
-use shared::OutputUnit;
 use std::path::PathBuf;
 
 /// The compensated specific force of each row, g, body axes: every sample through the device's
@@ -225,47 +223,46 @@ pub fn allan<'py>(
     Ok(d)
 }
 
-/// `host simulate-hand`'s session as arrays: t (s), acc (the unit asked), gyro (deg/s or rad/s),
-/// and the simulated unit's truth as unit-file TOML with its `[gyro]`.
+/// `host simulate-hand`'s session as arrays (`app::simulate_hand`): t (s), acc (the unit asked,
+/// its offset added), gyro (deg/s, rad/s or counts), and the simulated unit's truth as unit-file
+/// TOML with its `[gyro]`.
 #[pyfunction]
-#[pyo3(signature = (seed = 1, rate_hz = 200.0, acc_unit = "m/s2", gyro_unit = "deg/s"))]
+#[pyo3(signature = (seed = 1, rate_hz = 200.0, acc_unit = "m/s2", gyro_unit = "deg/s", *,
+    acc_offset = None, gyro_lsb_per_dps = None))]
 pub fn simulate_hand<'py>(
     py: Python<'py>,
     seed: u64,
     rate_hz: f64,
     acc_unit: &str,
     gyro_unit: &str,
+    acc_offset: Option<f64>,
+    gyro_lsb_per_dps: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let unit = parse_acc_unit(acc_unit)
-        .filter(|u| *u != OutputUnit::Volts)
-        .ok_or_else(|| usage(format!("acc_unit {acc_unit}: use m/s2, g or LSB")))?;
-    let gyro_unit_parsed = GyroUnit::parse(gyro_unit)
-        .ok_or_else(|| usage(format!("gyro_unit {gyro_unit}: use deg/s or rad/s")))?;
-    if !(20.0..=10_000.0).contains(&rate_hz) {
-        return Err(usage(format!("rate_hz {rate_hz}: use 20 to 10000")));
-    }
-    let truth = logger_unit(unit);
-    let spec = HandSpec {
+    let request = HandSimulation {
+        seed,
         rate_hz,
-        acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
-        ..HandSpec::standard(seed)
+        acc_unit: acc_unit.into(),
+        acc_offset,
+        gyro_unit: gyro_unit.into(),
+        gyro_lsb_per_dps,
+        six_face_rounds: None,
+        table_turns: false,
+        spelling: Spelling::Keywords,
     };
-    let sim = py.detach(|| simulate_hand_rows(&truth, &spec));
-    // As the logger's file holds it (`write_logger_csv`): the gyro times the unit's factor.
-    let k = match gyro_unit_parsed {
-        GyroUnit::DegPerS => 180.0 / std::f64::consts::PI,
-        GyroUnit::RadPerS => 1.0,
-    };
-    let n = sim.rows.len();
-    let t = PyArray1::from_iter(py, sim.rows.iter().map(|r| r.0));
-    let acc = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].1[j]);
-    let gyro = Array2::from_shape_fn((n, 3), |(i, j)| sim.rows[i].2[j] * k);
-    let truth_toml = truth_toml(&truth, &spec.gyro);
+    let sim = py
+        .detach(|| request.run())
+        .map_err(|e| usage(e.to_string()))?;
+    let rows = &sim.session.rows;
+    let written: Vec<([f64; 3], [f64; 3])> = rows.iter().map(|r| sim.layout.written(r)).collect();
+    let n = rows.len();
+    let t = PyArray1::from_iter(py, rows.iter().map(|r| r.0));
+    let acc = Array2::from_shape_fn((n, 3), |(i, j)| written[i].0[j]);
+    let gyro = Array2::from_shape_fn((n, 3), |(i, j)| written[i].1[j]);
     let d = PyDict::new(py);
     d.set_item("t", t)?;
     d.set_item("acc", acc.into_pyarray(py))?;
     d.set_item("gyro", gyro.into_pyarray(py))?;
-    d.set_item("truth_toml", truth_toml)?;
+    d.set_item("truth_toml", sim.truth_toml())?;
     Ok(d)
 }
 

@@ -291,3 +291,24 @@ def test_a_gyro_at_an_unsigned_mid_scale_is_named_for_arrays_as_for_a_file():
     assert len(notes) == 1 and "gyro_offset=32768" in notes[0], raw.warnings
     centred = accelcal.segment(d["acc"], counts, d["t"], gyro_offset=32768, **keywords)
     assert not any("mid-scale" in w for w in centred.warnings), centred.warnings
+
+
+def test_simulate_hand_refuses_as_python_spells_it_and_writes_counts():
+    """The simulated hand session is the command line's use case: its refusals name Python's
+    keywords, and counts come out as a logger writes them (whole gyro counts, the offset added)."""
+    for kwargs, words in [
+        (dict(gyro_unit="LSB"), 'gyro_unit="LSB" and gyro_lsb_per_dps=X go together'),
+        (dict(acc_offset=32768.0), 'acc_offset needs acc_unit="LSB"'),
+        (dict(rate_hz=5.0), "rate_hz=5: use 20 to 10000"),
+    ]:
+        with pytest.raises(accelcal.InputError) as e:
+            accelcal.simulate_hand(seed=3, **kwargs)
+        assert str(e.value) == words
+    plain = accelcal.simulate_hand(seed=3, acc_unit="LSB")
+    d = accelcal.simulate_hand(seed=3, acc_unit="LSB", acc_offset=32768.0, gyro_unit="LSB",
+                               gyro_lsb_per_dps=16.4)
+    assert np.array_equal(d["acc"], plain["acc"] + 32768.0)
+    assert np.array_equal(d["gyro"], np.round(d["gyro"]))
+    # The same rates: counts at 16.4 per °/s against the °/s of the default gyro unit.
+    deg = accelcal.simulate_hand(seed=3, acc_unit="LSB")["gyro"]
+    assert np.max(np.abs(d["gyro"] / 16.4 - deg)) <= 0.5 / 16.4 + 1e-9

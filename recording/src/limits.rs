@@ -21,6 +21,10 @@ pub(crate) const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
 /// Highest sample rate a plan may declare, Hz.
 pub const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
 
+/// Sample rates `simulate-hand` writes, Hz (the command line's `--rate-hz` and Python's `rate_hz`):
+/// from a slow logger's to a fast IMU's FIFO.
+pub const SIMULATED_HAND_RATE_HZ: (f64, f64) = (20.0, 10_000.0);
+
 /// Longest planned segment, s (one day).
 pub const MAX_SEGMENT_DURATION_S: f64 = 86_400.0;
 

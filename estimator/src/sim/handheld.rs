@@ -190,6 +190,7 @@ impl TableTurnSim {
 pub type HandRow = (f64, [f64; 3], [f64; 3]);
 
 /// The simulated recording and where the holds really were.
+#[derive(Clone, Debug)]
 pub struct HandSession {
     /// The rows.
     pub rows: Vec<HandRow>,
@@ -486,6 +487,23 @@ pub struct LoggerLayout {
     pub gyro_lsb_per_dps: Option<f64>,
 }
 
+impl LoggerLayout {
+    /// A row's accelerometer and gyro values as this layout writes them: the offset added to the
+    /// accelerometer, the gyro in °/s, rad/s or whole counts.
+    pub fn written(&self, row: &HandRow) -> ([f64; 3], [f64; 3]) {
+        let k = match self.gyro_lsb_per_dps {
+            Some(lsb) => 180.0 / PI * lsb,
+            None if self.gyro_deg_s => 180.0 / PI,
+            None => 1.0,
+        };
+        let gyro = |x: f64| match self.gyro_lsb_per_dps {
+            Some(_) => (x * k).round(),
+            None => x * k,
+        };
+        (row.1.map(|a| a + self.acc_offset), row.2.map(gyro))
+    }
+}
+
 impl Default for LoggerLayout {
     fn default() -> Self {
         LoggerLayout {
@@ -518,33 +536,19 @@ pub fn write_logger_csv(
     );
     header.extend(layout.columns.iter().cloned());
     writeln!(out, "{}", header.join(","))?;
-    let k = match layout.gyro_lsb_per_dps {
-        Some(lsb) => 180.0 / PI * lsb,
-        None if layout.gyro_deg_s => 180.0 / PI,
-        None => 1.0,
-    };
-    let gyro = |x: f64| match layout.gyro_lsb_per_dps {
-        Some(_) => (x * k).round(),
-        None => x * k,
-    };
-    let off = layout.acc_offset;
-    for (i, (t, a, w)) in rows.iter().enumerate() {
+    for (i, row) in rows.iter().enumerate() {
         if layout.extra_column {
             write!(out, "25.0,")?;
         }
         match layout.time_column {
-            Some(_) => write!(out, "{t}")?,
+            Some(_) => write!(out, "{}", row.0)?,
             None => write!(out, "{i}")?,
         }
+        let (a, w) = layout.written(row);
         writeln!(
             out,
             ",{},{},{},{},{},{}",
-            a[0] + off,
-            a[1] + off,
-            a[2] + off,
-            gyro(w[0]),
-            gyro(w[1]),
-            gyro(w[2])
+            a[0], a[1], a[2], w[0], w[1], w[2]
         )?;
     }
     out.into_inner().map_err(|e| e.into_error())?.sync_all()

@@ -6,24 +6,23 @@ use super::output::Output;
 use super::CliError;
 use app::handheld::table_turn::FoundTableTurn;
 use app::handheld::{find, SegmentChoices, SegmentedSession};
+use app::simulate_hand::{HandSimulation, HandWriteError};
 use clap::Args;
 use estimator::estimate::handheld_gyro::{HandGyroError, HandGyroFit};
-use estimator::sim::handheld::{
-    logger_unit, simulate_hand, truth_toml, write_logger_csv, HandSpec, LoggerLayout,
-};
 use outputs::report::plot::{self, Formats};
-use recording::output_file::{write_atomic, OutputDir};
+use recording::limits::SIMULATED_HAND_RATE_HZ;
+use recording::output_file::OutputDir;
 use recording::session::coverage::Coverage;
 use recording::session::from_recording::normal_gravity_m_s2;
 use recording::session::import::MAX_ROWS;
-use recording::session::import::{parse_acc_unit, six_digits, GyroUnit, Recording};
+use recording::session::import::{six_digits, Recording};
 use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
 use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use recording::session::Plan;
+use recording::spelling::Spelling;
 use shared::linalg;
-use shared::OutputUnit;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 pub use app::handheld::gyro::GYRO_FILE;
 
@@ -102,7 +101,7 @@ pub struct SimulateHandArgs {
     #[arg(long, default_value_t = 1, value_parser = recording::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
     /// Sample rate, Hz.
-    #[arg(long, default_value_t = 200.0, value_name = "HZ", value_parser = recording::limits::real(20.0, 10_000.0))]
+    #[arg(long, default_value_t = 200.0, value_name = "HZ", value_parser = recording::limits::real(SIMULATED_HAND_RATE_HZ.0, SIMULATED_HAND_RATE_HZ.1))]
     pub rate_hz: f64,
     /// Accelerometer unit written: m/s2, g or LSB (4096 per g, quantised).
     #[arg(long, default_value = "m/s2", value_name = "UNIT")]
@@ -136,77 +135,39 @@ pub struct SimulateHandArgs {
 
 /// Writes a simulated hand-held session as a logger CSV (`t,acc_x,…,gyr_z`): 24 positions held 3–5 s
 /// with hand tremor, turns of 1–3 s up to 180 °/s, 1 mg noise, a gyro with 0.5 % scale, 0.5°
-/// misalignment and 0.5 °/s bias. Returns the number of rows.
+/// misalignment and 0.5 °/s bias (`app::simulate_hand`). Returns the number of rows.
 pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliError> {
-    let unit = parse_acc_unit(&a.acc_unit)
-        .filter(|u| *u != OutputUnit::Volts)
-        .ok_or_else(|| CliError::Usage(format!("--acc-unit {}: use m/s2, g or LSB", a.acc_unit)))?;
-    let counts = matches!(a.gyro_unit.as_str(), "LSB" | "lsb" | "counts");
-    let gyro_unit = match (counts, a.gyro_lsb_per_dps) {
-        (true, Some(_)) => GyroUnit::DegPerS,
-        (false, None) => GyroUnit::parse(&a.gyro_unit).ok_or_else(|| {
-            CliError::Usage(format!(
-                "--gyro-unit {}: use deg/s, rad/s or LSB",
-                a.gyro_unit
-            ))
-        })?,
-        _ => {
-            return Err(CliError::Usage(
-                "--gyro-unit LSB and --gyro-lsb-per-dps X go together".into(),
-            ))
-        }
-    };
-    if a.acc_offset.is_some() && unit != OutputUnit::Lsb {
-        return Err(CliError::Usage("--acc-offset needs --acc-unit LSB".into()));
-    }
-    let truth_path = a.out.with_extension("truth.toml");
-    for p in [&a.out, &truth_path] {
-        if p.exists() && !a.force {
-            return Err(CliError::Usage(format!(
-                "{} exists: choose another --out or add --force to replace it",
-                p.display()
-            )));
-        }
-    }
-    let mut truth = logger_unit(unit);
-    let acc_offset = a.acc_offset.unwrap_or(0.0);
-    let spec = HandSpec {
+    let request = HandSimulation {
+        seed: a.seed,
         rate_hz: a.rate_hz,
-        acc_step: if unit == OutputUnit::Lsb { 1.0 } else { 0.0 },
-        table_turns: a.table_turns,
-        ..if a.six_faces {
-            HandSpec::six_faces(a.seed, 1.0, a.rounds as usize)
-        } else {
-            HandSpec::standard(a.seed)
-        }
-    };
-    let sim = simulate_hand(&truth, &spec);
-    let layout = LoggerLayout {
-        gyro_deg_s: gyro_unit == GyroUnit::DegPerS,
-        acc_offset,
+        acc_unit: a.acc_unit.clone(),
+        acc_offset: a.acc_offset,
+        gyro_unit: a.gyro_unit.clone(),
         gyro_lsb_per_dps: a.gyro_lsb_per_dps,
-        ..LoggerLayout::default()
+        six_face_rounds: a.six_faces.then_some(a.rounds),
+        table_turns: a.table_turns,
+        spelling: Spelling::Flags,
     };
-    // The file's zero force is at the offset: so is the truth's bias.
-    truth.statics.zero_bias_out = truth.statics.zero_bias_out.map(|b| b + acc_offset);
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |e: std::io::Error| CliError::Write(p, e)
-    };
-    write_logger_csv(&a.out, &sim.rows, &layout).map_err(io(&a.out))?;
-    let text = truth_toml(&truth, &spec.gyro);
-    write_atomic(&truth_path, text.as_bytes(), a.force)?;
+    let sim = request.run().map_err(|e| CliError::Usage(e.to_string()))?;
+    let truth_path = sim.write(&a.out, a.force).map_err(|e| match e {
+        HandWriteError::Exists(p) => CliError::Usage(format!(
+            "{} exists: choose another --out or add --force to replace it",
+            p.display()
+        )),
+        HandWriteError::Csv(p, e) => CliError::Write(p, e),
+        HandWriteError::Truth(e) => e.into(),
+    })?;
     crate::outln!(
         "wrote {} ({} rows, {} positions, {} Hz, {} and {}) and {}",
         a.out.display(),
-        sim.rows.len(),
-        sim.holds.len(),
+        sim.session.rows.len(),
+        sim.session.holds.len(),
         a.rate_hz,
-        unit.symbol(),
-        if counts { "LSB" } else { gyro_unit.symbol() },
+        sim.acc_unit.symbol(),
+        sim.gyro_symbol,
         truth_path.display()
     )?;
-    Ok(sim.rows.len())
+    Ok(sim.session.rows.len())
 }
 
 /// What `host segment` found and wrote.
