@@ -426,15 +426,47 @@ fn gyro_walk_misstated() {
                 .collect()
         })
         .collect();
-    for (k, w) in given.iter().enumerate() {
-        let g: Vec<String> = GROUPS
-            .iter()
-            .map(|(name, pick)| {
-                let all = || rows.iter().flat_map(|r| pick(&r[k]).iter().copied());
-                let (e, z) = (rms(all().map(|p| p.0)), rms(all().map(|p| p.1)));
-                format!("{name} {e:.4} ({z:.2})")
-            })
+    // (rms error, rms error/σ) of each group, for each strength given.
+    let figures: Vec<Vec<(f64, f64)>> = (0..given.len())
+        .map(|k| {
+            GROUPS
+                .iter()
+                .map(|(_, pick)| {
+                    let all = || rows.iter().flat_map(|r| pick(&r[k]).iter().copied());
+                    (rms(all().map(|p| p.0)), rms(all().map(|p| p.1)))
+                })
+                .collect()
+        })
+        .collect();
+    for (w, f) in given.iter().zip(&figures) {
+        let g: Vec<String> = (GROUPS.iter().zip(f))
+            .map(|((name, _), (e, z))| format!("{name} {e:.4} ({z:.2})"))
             .collect();
         println!("walk {walk} °/s/√s, fitted with {w:.0e}: {}", g.join(", "));
+    }
+    // docs/model.md §11.6: a strength three times too strong costs each error under 1 %, one three
+    // times too weak at most a quarter (the bias's 20 %), and each scales error/σ the way it is off
+    // (too weak a walk understates the 1σ, too strong overstates it); ignoring the walk costs more
+    // than either.
+    let truth_walk = &figures[2];
+    for (g, (name, _)) in GROUPS.iter().enumerate() {
+        let cost = |k: usize| figures[k][g].0 / truth_walk[g].0 - 1.0;
+        println!(
+            "{name}: the error given a third of the walk {:+.1} %, three times it {:+.1} %",
+            100.0 * cost(1),
+            100.0 * cost(3)
+        );
+        assert!(
+            cost(3) < 0.01 && cost(1) < 0.25,
+            "{name}: {} {}",
+            cost(1),
+            cost(3)
+        );
+        assert!(figures[1][g].1 > truth_walk[g].1 && truth_walk[g].1 > figures[3][g].1);
+        assert!(
+            figures[0][g].0 > figures[1][g].0,
+            "{name}: {:?}",
+            figures[0][g]
+        );
     }
 }
