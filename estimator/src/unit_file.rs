@@ -285,12 +285,39 @@ pub enum UnitFileError {
     /// Not readable.
     #[error("cannot read unit file {}: {}", .0.display(), .1)]
     Io(PathBuf, #[source] std::io::Error),
-    /// Not valid TOML or wrong fields (message names line and column).
+    /// Not valid TOML or wrong fields (the message names line and column).
     #[error("unit file {} is not valid: {}", .0.display(), .1)]
-    Syntax(PathBuf, String),
+    Syntax(PathBuf, UnitFileSyntax),
     /// Semantically wrong (names the field and the fix).
     #[error("unit file {}: {}", .0.display(), .1)]
     Invalid(PathBuf, #[source] UnitFileInvalid),
+}
+
+/// Why unit-file text is not a unit file: the TOML's own error (it names line and column), an array
+/// longer than its field, or a key no unit file has.
+#[derive(Debug, thiserror::Error)]
+pub enum UnitFileSyntax {
+    /// Not TOML, or a field of the wrong type.
+    #[error("{0}")]
+    Toml(toml::de::Error),
+    /// An array longer than its field.
+    #[error("{0}")]
+    Surplus(recording::session::toml_check::SurplusValues),
+    /// A key or table that no unit file has.
+    #[error(
+        "line {line}, column {column}: unknown key or table '{key}'; a unit file has g_m_s2, \
+         unit_id, output_unit, [static], [dynamic], [uncertainty], [gyro], [temperature] and the \
+         tables {}",
+        KNOWN_EXTRA_TABLES.iter().map(|t| format!("[{t}]")).collect::<Vec<_>>().join(", ")
+    )]
+    UnknownKey {
+        /// The key.
+        key: String,
+        /// Its line, from 1.
+        line: usize,
+        /// Its column, from 1.
+        column: usize,
+    },
 }
 
 /// Why a unit file's values are not a calibration; each names the field and the fix.
@@ -353,10 +380,10 @@ impl UnitFile {
 
     /// Parses unit-file text strictly: an unknown key or table (a typo such as `[dynamc]`, which would
     /// otherwise silently mean zero lever arms) is an error naming its line and column.
-    pub fn parse(text: &str) -> Result<UnitFile, String> {
-        let file: UnitFile = toml::from_str(text).map_err(|e| e.to_string())?;
+    pub fn parse(text: &str) -> Result<UnitFile, UnitFileSyntax> {
+        let file: UnitFile = toml::from_str(text).map_err(UnitFileSyntax::Toml)?;
         if let Some(e) = recording::session::toml_check::surplus_values(text, &file) {
-            return Err(e);
+            return Err(UnitFileSyntax::Surplus(e));
         }
         if let Some(key) = file
             .other
@@ -364,15 +391,11 @@ impl UnitFile {
             .find(|k| !KNOWN_EXTRA_TABLES.contains(&k.as_str()))
         {
             let (line, column) = key_position(text, key);
-            return Err(format!(
-                "line {line}, column {column}: unknown key or table '{key}'; a unit file has g_m_s2, \
-                 unit_id, output_unit, [static], [dynamic], [uncertainty], [gyro], [temperature] and the tables {}",
-                KNOWN_EXTRA_TABLES
-                    .iter()
-                    .map(|t| format!("[{t}]"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
+            return Err(UnitFileSyntax::UnknownKey {
+                key: key.clone(),
+                line,
+                column,
+            });
         }
         Ok(file)
     }
@@ -611,13 +634,15 @@ mod tests {
             "zero_bias_v = [2.405098, 2.380978, 2.435503]",
             "zero_bias_v = [2.405098, 2.380978, 2.435503, 9.0]",
         );
-        let e = UnitFile::parse(&text).unwrap_err();
+        let e = UnitFile::parse(&text).unwrap_err().to_string();
         assert!(
             e.contains("'static.zero_bias_v' has 4 values, 3 expected"),
             "{e}"
         );
         let gyro = "\n[gyro]\nbias_rad_s = [0, 0, 0]\nmatrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]\n";
-        let e = UnitFile::parse(&format!("{PAPER_UNIT_TOML}{gyro}")).unwrap_err();
+        let e = UnitFile::parse(&format!("{PAPER_UNIT_TOML}{gyro}"))
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("'gyro.matrix[0]' has 4 values, 3 expected"),
             "{e}"

@@ -115,9 +115,9 @@ pub enum EstimateError {
         /// The session's output unit.
         session: &'static str,
     },
-    /// The temperature model cannot be fitted or is implausible (the message says why).
+    /// The temperature model cannot be fitted or is implausible.
     #[error("temperature model: {0}; check the recording's temp_c column and the soak steps")]
-    Temperature(String),
+    Temperature(super::thermal::ThermalError),
 }
 
 /// [`EstimateError::NoStaticSegments`]'s message: none planned, or all excluded and why.

@@ -97,13 +97,33 @@ struct Obs<'a> {
     var: [f64; 3],
 }
 
+/// Why a temperature model could not be fitted where the session has the temperatures for one.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ThermalError {
+    /// An axis's bias and scale are not determined by the segments kept.
+    #[error(
+        "accelerometer {axis}: the static segments do not determine its bias and scale (too few \
+         attitudes)"
+    )]
+    Undetermined {
+        /// The axis, `x`, `y` or `z`.
+        axis: &'static str,
+    },
+    /// No pair of degrees could be fitted.
+    #[error("no temperature model can be fitted")]
+    NoModel,
+    /// The fitted model is not one the device can use (`shared`'s error has no `std` source).
+    #[error("{0}")]
+    Implausible(shared::sensor_models::TemperatureModelError),
+}
+
 /// Fits the temperature model when the session determines it: static segments of a known attitude
 /// seen over at least [`MIN_SPAN_C`] (`determining`, docs/model.md §9); `Ok(None)` otherwise, with a
 /// note naming the numbers when temperatures were recorded at all.
 pub(crate) fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
-) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
     fit_with(plan, stats, None)
 }
 
@@ -113,7 +133,7 @@ pub(crate) fn fit_session_at_degrees(
     plan: &Plan,
     stats: &[SegmentStats],
     degrees: [(usize, usize); 3],
-) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
     fit_with(plan, stats, Some(degrees))
 }
 
@@ -121,7 +141,7 @@ fn fit_with(
     plan: &Plan,
     stats: &[SegmentStats],
     degrees: Option<[(usize, usize); 3]>,
-) -> Result<(Option<ThermalFit>, Vec<String>), String> {
+) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
     let statics: Vec<(Obs, &SegmentPlan)> = stats
         .iter()
         .filter_map(|st| {
@@ -187,7 +207,7 @@ fn fit_with(
         })
         .collect();
     let warnings = super::thermal_misalignment::check(&soaks);
-    fit.model.check().map_err(|e| e.to_string())?;
+    fit.model.check().map_err(ThermalError::Implausible)?;
     Ok((Some(fit), warnings))
 }
 
@@ -413,10 +433,13 @@ fn fit_axis(
     axis: usize,
     forced: Option<(usize, usize)>,
     fit: &mut ThermalFit,
-) -> Result<(), String> {
+) -> Result<(), ThermalError> {
     let d = shift_matrix(fit.model.reference_c);
-    let base = solve_axis(obs, axis, &active(0, 0), &d, [0.0; NPAR])
-        .ok_or_else(|| format!("accelerometer {}: the static segments do not determine its bias and scale (too few attitudes)", shared::params::axis_name(axis)))?;
+    let base = solve_axis(obs, axis, &active(0, 0), &d, [0.0; NPAR]).ok_or(
+        ThermalError::Undetermined {
+            axis: shared::params::axis_name(axis),
+        },
+    )?;
     let rows: u64 = obs.iter().map(|o| o.ts.count).sum();
     let mut results = Vec::new();
     for db in 0..=DEG {
@@ -438,7 +461,7 @@ fn fit_axis(
     let ((db, ds), best) = results
         .into_iter()
         .min_by(|a, b| bic(&a.1).total_cmp(&bic(&b.1)))
-        .ok_or_else(|| "no temperature model can be fitted".to_string())?;
+        .ok_or(ThermalError::NoModel)?;
     let scale2 = (best.chi2 / best.dof.max(1) as f64).max(1.0);
     let name = shared::params::axis_name(axis);
     fit.notes.push(format!(

@@ -301,7 +301,7 @@ impl Plan {
         let plan: Plan =
             toml::from_str(text).map_err(|e| PlanError::Syntax("<text>".into(), e.to_string()))?;
         if let Some(e) = super::toml_check::surplus_values(text, &plan) {
-            return Err(PlanError::Syntax("<text>".into(), e));
+            return Err(PlanError::Syntax("<text>".into(), e.to_string()));
         }
         plan.validate()?;
         Ok(plan)
