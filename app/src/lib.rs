@@ -15,6 +15,10 @@
 //!   fit from the hand turns or the table turns ([`handheld::gyro`], [`handheld::table_turn`]).
 //! - [`log_input`]: how to read a logger's file ([`log_input::LogInput`]), the options named as the
 //!   caller spells them.
+//! - [`navigation_check`]: `host navigation-check`, the paper's unit simulated, fitted and
+//!   replayed by a navigator.
+//! - [`report`]: `host report`, a session judged by a calibration: the session's own fit run once
+//!   here and handed to the report.
 //! - [`simulate`]: a virtual unit on a virtual rate table written as a session
 //!   ([`simulate::Simulation`]).
 //! - [`simulate_hand`]: a simulated hand-held or six-face session as a logger writes it, with the
@@ -35,6 +39,8 @@ pub mod document;
 pub mod error;
 pub mod handheld;
 pub mod log_input;
+pub mod navigation_check;
+pub mod report;
 pub mod segment_order;
 pub mod simulate;
 pub mod simulate_hand;

@@ -11,13 +11,14 @@
 //! Usage: `cargo run --release -p host --example reproduce -- [OUT] [COPY_PNGS_TO]`
 //! (OUT defaults to `target/paper-reproduction`).
 
+use app::report::report;
 use estimator::calibration_files::write_calibration_files;
 use estimator::estimate::{calibrate_session_stats, EstimateOptions, Method};
 use estimator::sim::{simulate_to_dir, NoiseModel};
 use estimator::unit_file::UnitFile;
 use outputs::export::{toml_forms::render as export, ExportFormat};
 use outputs::report::compare::compare;
-use outputs::report::{render_position_targets, report, ReportOptions};
+use outputs::report::{render_position_targets, ReportOptions};
 use recording::session::builtin::paper_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::UnitId;

@@ -227,7 +227,7 @@ pub struct Parameter {
 /// χ²/dof above which a calibration fails without `--max-chi2-per-dof`: residuals ten times the
 /// segments' own noise are a model that does not describe the data (docs/model.md §4.4), whatever
 /// the scaled 1σ say. Clean simulated sessions give about 1.
-pub(crate) const DEFAULT_MAX_CHI2_PER_DOF: f64 = 100.0;
+pub const DEFAULT_MAX_CHI2_PER_DOF: f64 = 100.0;
 
 /// Production limits; each `None` is not checked, but χ²/dof always is
 /// (`DEFAULT_MAX_CHI2_PER_DOF`).

@@ -1,6 +1,7 @@
 //! `host report` and `host compare` end to end, through files: a simulated session on disk, its
 //! calibration written as `calibration.toml`, then the report and the comparison read those files.
 
+use app::report::report;
 use estimator::calibration_files::write_calibration_files;
 use estimator::estimate::{calibrate_session_stats, EstimateOptions, Method};
 use estimator::sim::{simulate_to_dir, NoiseModel};
@@ -8,7 +9,7 @@ use estimator::unit_file::UnitFile;
 use outputs::export::{toml_forms::render as export, ExportFormat};
 use outputs::report::compare::compare;
 use outputs::report::plot::png_dimensions;
-use outputs::report::{report, Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
+use outputs::report::{Compensation, ReportOptions, REPORT_HTML, REPORT_MD};
 use recording::session::builtin::load_plan;
 use recording::session::{read_session, ReadOptions};
 use shared::UnitId;

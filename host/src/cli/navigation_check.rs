@@ -1,9 +1,9 @@
 //! `host navigation-check`: the paper's navigation check on a simulated session of its unit.
 
 use super::CliError;
+use app::navigation_check::{navigation_check, NavigationCheckArgs};
 use clap::Args;
 use estimator::unit_file::UnitFile;
-use outputs::report::{navigation_check, NavigationCheckArgs};
 use recording::session::builtin::load_plan;
 use std::path::PathBuf;
 

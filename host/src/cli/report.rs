@@ -1,8 +1,9 @@
 //! `host report`: the report of a session judged by a calibration (figures, `report.html`, `report.md`).
 
 use super::CliError;
+use app::report::report;
 use clap::Args;
-use outputs::report::{report, ReportOptions};
+use outputs::report::ReportOptions;
 use std::path::PathBuf;
 
 /// `host report`.

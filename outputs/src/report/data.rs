@@ -26,7 +26,7 @@
 use super::navigation::{replay, NavigationRun};
 use super::plot::{self, Formats};
 use estimator::estimate::{
-    calibrate_session_stats, CalibrationOutcome, EstimateOptions, Noise, SegmentKind, Uncertainty,
+    CalibrationOutcome, EstimateError, EstimateOptions, Noise, SegmentKind, Uncertainty,
 };
 use estimator::sim::SimulateError;
 use estimator::unit_file::UnitFileError;
@@ -35,7 +35,7 @@ use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
 
-/// Settings of [`super::report`] and [`build_report`].
+/// Settings of a report (`app::report`) and [`build_report`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReportOptions {
     /// Estimator settings for the session's own fit (χ², excluded segments, observability).
@@ -381,14 +381,15 @@ fn planned_theoretical(
     )
 }
 
-/// Computes everything the report shows. `session_fit`: the session's own fit when the caller has it
-/// (else it is run here with `options.estimate`, at the calibration's reference point).
+/// Computes everything the report shows, beside `session_fit`: the session's own fit, received
+/// from the caller (`app::report` runs it with [`session_fit_options`]), or why the session alone
+/// does not calibrate.
 pub fn build_report(
     plan: &Plan,
     stats: &[SegmentStats],
     cal: &Calibration,
     uncertainty: Option<&Uncertainty>,
-    session_fit: Option<CalibrationOutcome>,
+    session_fit: Result<CalibrationOutcome, EstimateError>,
     options: &ReportOptions,
 ) -> Result<ReportData, ReportError> {
     let mut segments = segment_rows(plan, stats, cal)?;
@@ -397,16 +398,6 @@ pub fn build_report(
             "the session has no segment of its plan with data: nothing to report".into(),
         ));
     }
-    let session_fit = match session_fit {
-        Some(o) => Ok(o),
-        None => {
-            let estimate = EstimateOptions {
-                reference: reference_choice(&cal.reference),
-                ..options.estimate.clone()
-            };
-            calibrate_session_stats(plan, stats, &estimate)
-        }
-    };
     let mut warnings = Vec::new();
     match &session_fit {
         Ok(o) => refer_to_fit(&mut segments, o),
@@ -467,14 +458,19 @@ pub fn build_report(
     })
 }
 
-/// The estimator's choice of the reference point a calibration's lever arms are referred to, so
-/// that the session's own fit gives its specific force where this calibration's output is.
-fn reference_choice(r: &shared::ReferencePoint) -> estimator::estimate::ReferenceChoice {
+/// The options of the session's own fit that a report of `cal` sets beside it: the report's
+/// estimator options with the reference point `cal`'s lever arms are referred to, so that the fit
+/// gives its specific force where this calibration's output is.
+pub fn session_fit_options(cal: &Calibration, options: &ReportOptions) -> EstimateOptions {
     use estimator::estimate::ReferenceChoice;
-    match *r {
+    let reference = match cal.reference {
         shared::ReferencePoint::TableAxis => ReferenceChoice::TableAxis,
         shared::ReferencePoint::Centroid => ReferenceChoice::Centroid,
         shared::ReferencePoint::BodyPoint { offset_m } => ReferenceChoice::BodyPoint(offset_m),
+    };
+    EstimateOptions {
+        reference,
+        ..options.estimate.clone()
     }
 }
 

@@ -1,15 +1,13 @@
 //! `host report`: a recorded session judged by a calibration, written as figures (PNG, SVG) and
 //! `report.html` / `report.md` with Tables 1–4 and the navigation replay.
 
-use super::data::{build_report, Compensation, ReportData, ReportError, ReportOptions};
+use super::data::{Compensation, ReportData, ReportError};
 use super::figures::report_figures;
 use super::markup::{to_html, to_markdown};
 use super::navigation::render_navigation;
 use super::page::{page, Block};
 use super::plot::{self, Figure, Formats};
-use estimator::unit_file::UnitFile;
 use recording::output_file::write_atomic;
-use recording::session::{read_session, ReadOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -18,7 +16,7 @@ pub const REPORT_MD: &str = "report.md";
 /// File name of the HTML page (same content).
 pub const REPORT_HTML: &str = "report.html";
 
-/// What [`report`] wrote.
+/// What a report wrote ([`write_report`]).
 #[derive(Clone, Debug)]
 pub struct ReportSummary {
     /// The computed report.
@@ -84,7 +82,7 @@ pub(crate) fn render_before_after(data: &ReportData) -> String {
 }
 
 /// Writes the figures and the page of `data` into `out_dir`.
-pub(crate) fn write_report(
+pub fn write_report(
     data: &ReportData,
     out_dir: &Path,
     session: &str,
@@ -135,48 +133,4 @@ pub(crate) fn write_report(
         page: html,
         warnings,
     })
-}
-
-/// `host report`: reads the session in `input_dir` and the calibration file, computes the outputs
-/// before and after compensation, the residuals and the navigation replay, and writes the figures
-/// (PNG and SVG) and `report.html` / `report.md` into `out_dir`.
-pub fn report(
-    input_dir: &Path,
-    calibration_file: &Path,
-    out_dir: &Path,
-    options: &ReportOptions,
-) -> Result<ReportSummary, ReportError> {
-    let unit = UnitFile::load(calibration_file).map_err(ReportError::Unit)?;
-    let session =
-        read_session(input_dir, &ReadOptions { quiet: true }).map_err(ReportError::Recording)?;
-    let cal = unit.to_calibration().map_err(ReportError::Calibration)?;
-    // A calibration that cannot meet this session (unit, output unit, scales, frame, a
-    // temperature model without temperatures) is refused before anything is computed from it.
-    let id = unit.unit_id().map_err(ReportError::Calibration)?;
-    let mut session_side = crate::apply::recording(&session.plan, None);
-    session_side.name = "the session";
-    crate::calibration_guard::meet(
-        crate::calibration_guard::Meeting::Report,
-        &crate::apply::mine(&cal, id),
-        &session_side,
-    )?;
-    let mut data = build_report(
-        &session.plan,
-        &session.stats,
-        &cal,
-        unit.uncertainty.as_ref(),
-        None,
-        options,
-    )?;
-    data.warnings
-        .extend(session.report.warnings.iter().cloned());
-    // The calibration file says so itself (its rows are then equal, checked when it was read).
-    data.single_package |= unit.package() == recording::session::Package::Single;
-    write_report(
-        &data,
-        out_dir,
-        &input_dir.display().to_string(),
-        &calibration_file.display().to_string(),
-        options.formats,
-    )
 }

@@ -417,7 +417,7 @@ fn outputs_say_the_in_package_size_effect_is_not_observable() {
         &stats,
         &one.calibration,
         Some(&one.uncertainty),
-        Some(one.clone()),
+        Ok(one.clone()),
         &ReportOptions::default(),
     )
     .unwrap();

@@ -10,7 +10,7 @@
 //!   data, labels that never collide, decade ticks) and `markup` (Markdown, HTML) →
 //!   [`document`] (the files).
 //! - [`navigation`]: the paper's navigation check — the drift integration and the replay of a segment;
-//!   [`mod@navigation_check`]: `host navigation-check` on a simulated session.
+//!   [`mod@navigation_check`]: what `host navigation-check` shows (`app::navigation_check` runs it).
 //! - [`compare`]: two calibrations side by side, and the `host export` text.
 //! - [`summary_block`]: the short block of results that ends `host calibrate`; `gyro_section`: the
 //!   report's gyro section (G, b, 1σ, the spins' residuals).
@@ -36,9 +36,10 @@ pub mod text;
 pub mod thermal;
 
 pub use data::{
-    build_report, segment_rows, Compensation, ReportData, ReportError, ReportOptions, SegmentRow,
+    build_report, segment_rows, session_fit_options, Compensation, ReportData, ReportError,
+    ReportOptions, SegmentRow,
 };
-pub use document::{report, ReportSummary, REPORT_HTML, REPORT_MD};
+pub use document::{write_report, ReportSummary, REPORT_HTML, REPORT_MD};
 pub use navigation::render_position_targets;
-pub use navigation_check::{navigation_check, NavigationCheck, NavigationCheckArgs};
+pub use navigation_check::NavigationCheck;
 pub use text::{render, render_excluded, render_prediction, render_session};

@@ -4,7 +4,6 @@
 use super::data::*;
 use super::document::*;
 use super::figures::*;
-use super::navigation_check::*;
 use super::page::*;
 use super::plot::{Formats, SeriesStyle};
 use crate::report::plot::{line_width, palette_hex, png_dimensions, svg_polylines};
@@ -28,10 +27,22 @@ fn noisy_report() -> ReportData {
         &stats,
         &outcome.calibration,
         Some(&outcome.uncertainty),
-        Some(outcome.clone()),
+        Ok(outcome.clone()),
         &ReportOptions::default(),
     )
     .unwrap()
+}
+
+/// The report of `cal` on a session, the session's own fit run as `app::report` runs it.
+fn report_of(
+    plan: &Plan,
+    stats: &[recording::session::SegmentStats],
+    cal: &shared::Calibration,
+    uncertainty: Option<&estimator::estimate::Uncertainty>,
+    options: &ReportOptions,
+) -> Result<ReportData, ReportError> {
+    let fit = calibrate_session_stats(plan, stats, &session_fit_options(cal, options));
+    build_report(plan, stats, cal, uncertainty, fit, options)
 }
 
 /// Cells of a table block, parsed as numbers where they are.
@@ -259,28 +270,6 @@ fn a_ramp_is_compensated_at_its_rms_rate() {
 }
 
 #[test]
-fn navigation_check_prints_the_position_errors_against_targets() {
-    // The short plan keeps this fast; the paper's plan is what the command runs by default.
-    let dir = tempfile::tempdir().unwrap();
-    let check = navigation_check(&NavigationCheckArgs {
-        plan: short(),
-        out_dir: Some(dir.path().to_path_buf()),
-        ..NavigationCheckArgs::default()
-    })
-    .unwrap();
-    let text = check.render();
-    assert!(
-        text.contains("static run 'x+', 60 s: without compensation"),
-        "{text}"
-    );
-    assert!(
-        text.contains("200 °/s run 'x+ 200', 60 s: static-only"),
-        "{text}"
-    );
-    assert!(dir.path().join(REPORT_HTML).exists());
-}
-
-#[test]
 fn a_named_run_must_exist() {
     let plan = short();
     let truth = shared::params::PAPER_UNIT;
@@ -289,13 +278,13 @@ fn a_named_run_must_exist() {
         rate_run: Some("x+ 999".into()),
         ..ReportOptions::default()
     };
-    let e = build_report(&plan, &stats, &truth, None, None, &options).unwrap_err();
+    let e = report_of(&plan, &stats, &truth, None, &options).unwrap_err();
     assert!(e.to_string().contains("'x+ 999'"));
     let options = ReportOptions {
         rate_run: Some("y+ 100".into()),
         ..ReportOptions::default()
     };
-    let d = build_report(&plan, &stats, &truth, None, None, &options).unwrap();
+    let d = report_of(&plan, &stats, &truth, None, &options).unwrap();
     assert_eq!(d.navigation[1].segment, "y+ 100");
     // Without [uncertainty], Table 1 says so.
     assert!(cells(&table1(&d))[0][1].contains("no σ"));
@@ -384,12 +373,11 @@ fn the_report_compares_against_the_same_fitted_attitudes_as_the_terminal() {
     let truth = shared::params::PAPER_UNIT;
     let stats = simulate_stats(&truth, &plan, &NoiseModel::default(), 11).unwrap();
     let outcome = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
-    let data = build_report(
+    let data = report_of(
         &plan,
         &stats,
         &outcome.calibration,
         Some(&outcome.uncertainty),
-        None,
         &ReportOptions::default(),
     )
     .unwrap();
@@ -419,7 +407,7 @@ fn an_empty_static_table_says_why() {
     assert!(!plan.segments.is_empty());
     let truth = shared::params::PAPER_UNIT;
     let stats = simulate_stats(&truth, &plan, &NoiseModel::none(), 1).unwrap();
-    let data = build_report(&plan, &stats, &truth, None, None, &ReportOptions::default()).unwrap();
+    let data = report_of(&plan, &stats, &truth, None, &ReportOptions::default()).unwrap();
     let blocks = page(&data, "spins", "cal.toml", &[]);
     let at = blocks
         .iter()
@@ -453,7 +441,7 @@ fn the_bias_walk_figure_is_the_fits_track() {
             estimate: EstimateOptions::default().with_bias_walk(walk),
             ..ReportOptions::default()
         };
-        build_report(&plan, &stats, &truth, None, None, &options).unwrap()
+        report_of(&plan, &stats, &truth, None, &options).unwrap()
     };
     let with = build(estimator::estimate::BiasWalk::Given(0.005));
     let o = with.session_fit.as_ref().unwrap();
@@ -522,8 +510,7 @@ fn the_session_fit_section_gives_the_temperature_fits_chi2() {
             &thermal,
             5,
         );
-        let data =
-            build_report(&plan, &stats, &truth, None, None, &ReportOptions::default()).unwrap();
+        let data = report_of(&plan, &stats, &truth, None, &ReportOptions::default()).unwrap();
         let fit = data.session_fit.as_ref().unwrap();
         let chi2 = fit.thermal.as_ref().map(|t| t.reduced_chi2());
         let text = page(&data, plan_name, "cal.toml", &[])
