@@ -183,8 +183,9 @@ impl CliError {
         use recording::session::logs::LogError;
         matches!(
             self,
-            CliError::Report(ReportError::NamedRun(_))
-                | CliError::Range(_)
+            CliError::Report(
+                ReportError::RunNotInSession { .. } | ReportError::RunOfOtherKind { .. }
+            ) | CliError::Range(_)
                 | CliError::SimDevice(_)
                 | CliError::Apply(
                     ApplyError::Guard(GuardError::TemperatureNotUsed { .. })

@@ -87,13 +87,33 @@ pub enum ReportError {
     /// The calibration cannot meet this recording ([`crate::calibration_guard`]).
     #[error(transparent)]
     Meeting(#[from] crate::calibration_guard::GuardError),
-    /// A requested segment is not in the session, or the session has none to use.
-    #[error("{0}")]
-    Segment(String),
-    /// A segment named by `--static-run` or `--rate-run` is not in the session or not of that
-    /// kind (the message names it and the segments that are).
-    #[error("{0}")]
-    NamedRun(String),
+    /// The session has no segment of its plan with data.
+    #[error("the session has no segment of its plan with data: nothing to report")]
+    NothingToReport,
+    /// A segment named for a replay (`--static-run`, `--rate-run`) is not in the session.
+    #[error("segment '{name}' is not in the session")]
+    RunNotInSession {
+        /// The name given.
+        name: String,
+    },
+    /// A segment named for a replay is not of the replay's kind: it names the segments that are.
+    #[error(
+        "segment '{name}' is not {}: {} needs one ({})",
+        .run.wanted(),
+        .run.flag(),
+        match .examples.is_empty() {
+            true => "this session has none".to_string(),
+            false => format!("e.g. '{}'", .examples.join("', '")),
+        }
+    )]
+    RunOfOtherKind {
+        /// The name given.
+        name: String,
+        /// Which replay it was named for.
+        run: NamedRun,
+        /// Up to three segments of the replay's kind.
+        examples: Vec<String>,
+    },
     /// The navigation check has no segment to replay (the reasons, one per replay).
     #[error("nothing to replay: {}", .0.join("; "))]
     NothingToReplay(Vec<String>),
@@ -381,6 +401,41 @@ fn planned_theoretical(
     )
 }
 
+/// The replay a segment is named for (`--static-run`, `--rate-run`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NamedRun {
+    /// The static replay.
+    Static,
+    /// The rotating replay, at a constant rate.
+    Rate,
+}
+
+impl NamedRun {
+    /// The kind of segment it replays.
+    fn kind(self) -> SegmentKind {
+        match self {
+            NamedRun::Static => SegmentKind::Static,
+            NamedRun::Rate => SegmentKind::ConstantRate,
+        }
+    }
+
+    /// That kind in words.
+    fn wanted(self) -> &'static str {
+        match self {
+            NamedRun::Static => "static",
+            NamedRun::Rate => "at a constant rate",
+        }
+    }
+
+    /// The option that names it.
+    fn flag(self) -> &'static str {
+        match self {
+            NamedRun::Static => "--static-run",
+            NamedRun::Rate => "--rate-run",
+        }
+    }
+}
+
 /// Computes everything the report shows, beside `session_fit`: the session's own fit, received
 /// from the caller (`app::report` runs it with [`session_fit_options`]), or why the session alone
 /// does not calibrate.
@@ -394,9 +449,7 @@ pub fn build_report(
 ) -> Result<ReportData, ReportError> {
     let mut segments = segment_rows(plan, stats, cal)?;
     if segments.is_empty() {
-        return Err(ReportError::Segment(
-            "the session has no segment of its plan with data: nothing to report".into(),
-        ));
+        return Err(ReportError::NothingToReport);
     }
     let mut warnings = Vec::new();
     match &session_fit {
@@ -504,45 +557,36 @@ fn navigation_runs(
         segments
             .iter()
             .find(|r| r.name == name)
-            .ok_or_else(|| ReportError::NamedRun(format!("segment '{name}' is not in the session")))
+            .ok_or_else(|| ReportError::RunNotInSession { name: name.into() })
     };
     let known = |r: &&SegmentRow| !r.free && r.theoretical != Theoretical::Unknown;
     // A named run of the other kind would replay the wrong case under the right heading.
-    let of_kind = |name: &str, kind: SegmentKind, option: &str, wanted: &str| {
+    let of_kind = |name: &str, run: NamedRun| {
         let row = find(name)?;
+        let kind = run.kind();
         if row.kind != kind {
-            let examples: Vec<&str> = segments
-                .iter()
+            let examples = (segments.iter())
                 .filter(|r| r.kind == kind)
                 .take(3)
-                .map(|r| r.name.as_str())
+                .map(|r| r.name.clone())
                 .collect();
-            return Err(ReportError::NamedRun(format!(
-                "segment '{name}' is not {wanted}: {option} needs one ({})",
-                if examples.is_empty() {
-                    "this session has none".to_string()
-                } else {
-                    format!("e.g. '{}'", examples.join("', '"))
-                }
-            )));
+            return Err(ReportError::RunOfOtherKind {
+                name: name.into(),
+                run,
+                examples,
+            });
         }
         Ok(row)
     };
     let static_row = match &options.static_run {
-        Some(n) => Some(of_kind(n, SegmentKind::Static, "--static-run", "static")?).filter(known),
+        Some(n) => Some(of_kind(n, NamedRun::Static)?).filter(known),
         None => segments
             .iter()
             .filter(known)
             .find(|r| r.kind == SegmentKind::Static),
     };
     let rate_row = match &options.rate_run {
-        Some(n) => Some(of_kind(
-            n,
-            SegmentKind::ConstantRate,
-            "--rate-run",
-            "at a constant rate",
-        )?)
-        .filter(known),
+        Some(n) => Some(of_kind(n, NamedRun::Rate)?).filter(known),
         None => segments
             .iter()
             .filter(known)

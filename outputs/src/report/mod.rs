@@ -36,8 +36,8 @@ pub mod text;
 pub mod thermal;
 
 pub use data::{
-    build_report, segment_rows, session_fit_options, Compensation, ReportData, ReportError,
-    ReportOptions, SegmentRow,
+    build_report, segment_rows, session_fit_options, Compensation, NamedRun, ReportData,
+    ReportError, ReportOptions, SegmentRow,
 };
 pub use document::{write_report, ReportSummary, REPORT_HTML, REPORT_MD};
 pub use navigation::render_position_targets;
