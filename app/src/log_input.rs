@@ -4,7 +4,8 @@
 //! them ([`Spelling`]).
 
 use recording::session::import::{
-    parse_acc_unit, GyroUnit, ImportOptions, TimeSource, TimeUnit, DEFAULT_COLUMNS,
+    gyro_unit_and_scale, parse_acc_unit, GyroUnit, GyroUnitFault, ImportOptions, TimeSource,
+    TimeUnit, DEFAULT_COLUMNS,
 };
 use recording::session::logs::LogSource;
 use recording::spelling::{Spelling, UserOption};
@@ -338,23 +339,17 @@ impl LogInput {
     fn text_gyro_unit(&self) -> Result<(GyroUnit, Option<f64>), LogInputError> {
         let sp = self.spelling;
         let gyro = self.gyro_unit.as_deref().unwrap_or("");
-        let counts = matches!(gyro, "LSB" | "lsb" | "counts");
-        match (counts, self.gyro_lsb_per_dps) {
-            (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
-            (true, None) => Err(LogInputError::GyroNeedsScale(sp)),
-            (false, Some(_)) => Err(LogInputError::GyroScaleNotCounts {
+        gyro_unit_and_scale(gyro, self.gyro_lsb_per_dps).map_err(|fault| match fault {
+            GyroUnitFault::NeedsScale => LogInputError::GyroNeedsScale(sp),
+            GyroUnitFault::ScaleNotCounts => LogInputError::GyroScaleNotCounts {
                 given: gyro.to_string(),
                 spelling: sp,
-            }),
-            (false, None) => {
-                GyroUnit::parse(gyro)
-                    .map(|u| (u, None))
-                    .ok_or_else(|| LogInputError::GyroUnit {
-                        given: gyro.to_string(),
-                        spelling: sp,
-                    })
-            }
-        }
+            },
+            GyroUnitFault::Unknown => LogInputError::GyroUnit {
+                given: gyro.to_string(),
+                spelling: sp,
+            },
+        })
     }
 }
 

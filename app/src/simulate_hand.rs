@@ -8,7 +8,7 @@ use estimator::sim::handheld::{
 };
 use recording::limits::SIMULATED_HAND_RATE_HZ;
 use recording::output_file::{write_atomic, OutputFileError};
-use recording::session::import::{parse_acc_unit, GyroUnit};
+use recording::session::import::{gyro_unit_and_scale, parse_acc_unit, GyroUnit, GyroUnitFault};
 use recording::spelling::{Spelling, UserOption};
 use shared::{Calibration, OutputUnit};
 use std::path::{Path, PathBuf};
@@ -121,17 +121,18 @@ impl HandSimulation {
                 given: self.acc_unit.clone(),
                 spelling: sp,
             })?;
-        let counts = matches!(self.gyro_unit.as_str(), "LSB" | "lsb" | "counts");
-        let gyro_unit = match (counts, self.gyro_lsb_per_dps) {
-            (true, Some(_)) => GyroUnit::DegPerS,
-            (false, None) => {
-                GyroUnit::parse(&self.gyro_unit).ok_or_else(|| HandSimulationError::GyroUnit {
+        let (gyro_unit, _) = gyro_unit_and_scale(&self.gyro_unit, self.gyro_lsb_per_dps).map_err(
+            |fault| match fault {
+                GyroUnitFault::Unknown => HandSimulationError::GyroUnit {
                     given: self.gyro_unit.clone(),
                     spelling: sp,
-                })?
-            }
-            _ => return Err(HandSimulationError::GyroCounts(sp)),
-        };
+                },
+                GyroUnitFault::NeedsScale | GyroUnitFault::ScaleNotCounts => {
+                    HandSimulationError::GyroCounts(sp)
+                }
+            },
+        )?;
+        let counts = self.gyro_lsb_per_dps.is_some();
         if self.acc_offset.is_some() && acc_unit != OutputUnit::Lsb {
             return Err(HandSimulationError::OffsetWithoutCounts(sp));
         }

@@ -299,7 +299,7 @@ mod tests {
             let file = UnitFile::load(&w.toml_path).unwrap();
             let frame = file.frame.clone().unwrap();
             assert_eq!(frame.kind, kind, "{kind:?}: {frame:?}");
-            assert_eq!(frame.axes, out.static_split.frame.axes());
+            assert_eq!(frame.axes, out.static_split.frame.kind().axes());
             let x_angles = file.statics.installation_angles_deg[0];
             let conventional = x_angles == [0.0, 90.0, 90.0];
             assert_eq!(

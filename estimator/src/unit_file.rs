@@ -169,12 +169,33 @@ pub enum FrameKind {
     Accelerometer,
 }
 
+impl FrameKind {
+    /// What the body axes are, in words, as `[frame]`'s `axes` says them (no figure of a session).
+    pub fn axes(self) -> &'static str {
+        match self {
+            FrameKind::Fixture => {
+                "the fixture's axes: the plan's nominal ups, the mounts' tilts averaging to zero \
+                 within their attitude prior"
+            }
+            FrameKind::Faces => {
+                "the housing's axes: each body axis along the normal of a face the unit was set \
+                 down on, the faces' placement errors averaging to zero within their prior"
+            }
+            FrameKind::Accelerometer => {
+                "the accelerometer triad's own: x along accelerometer x's sensing axis, y in the \
+                 plane of the x and y sensing axes, z completing a right-handed frame"
+            }
+        }
+    }
+}
+
 impl FrameSection {
     /// The section of a fit's body frame.
     pub fn of(frame: &crate::estimate::BodyFrame) -> FrameSection {
+        let kind = frame.kind();
         FrameSection {
-            kind: frame.kind(),
-            axes: frame.axes().into(),
+            kind,
+            axes: kind.axes().into(),
         }
     }
 }

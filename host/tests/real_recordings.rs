@@ -524,11 +524,8 @@ fn imucals_turns_on_a_face_keep_their_force_on_that_axis() {
     let session =
         recording::session::read_session(&d.join("s"), &recording::session::ReadOptions::default())
             .unwrap();
-    let rests: Vec<([f64; 3], [f64; 3])> = session
-        .stats
-        .iter()
-        .zip(&session.plan.segments)
-        .map(|(st, sp)| (st.mean_u, sp.up_b))
+    let rests: Vec<([f64; 3], [f64; 3])> = (session.stats.iter())
+        .map(|st| (st.mean_u, session.plan.segment(&st.name).unwrap().up_b))
         .collect();
     let (k_inv, b) = faces_exact_fit(&rests);
     let raw: Vec<(f64, [f64; 3])> = rows

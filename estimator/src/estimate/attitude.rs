@@ -49,24 +49,6 @@ impl BodyFrame {
             BodyFrame::Convention => FrameKind::Accelerometer,
         }
     }
-
-    /// What the body axes are, for a reader of the calibration (no counts of this session).
-    pub fn axes(&self) -> &'static str {
-        match self {
-            BodyFrame::Fixture { .. } => {
-                "the fixture's axes: the plan's nominal ups, the mounts' tilts averaging to zero \
-                 within their attitude prior"
-            }
-            BodyFrame::Faces { .. } => {
-                "the housing's axes: each body axis along the normal of a face the unit was set \
-                 down on, the faces' placement errors averaging to zero within their prior"
-            }
-            BodyFrame::Convention => {
-                "the accelerometer triad's own: x along accelerometer x's sensing axis, y in the \
-                 plane of the x and y sensing axes, z completing a right-handed frame"
-            }
-        }
-    }
 }
 
 impl std::fmt::Display for BodyFrame {

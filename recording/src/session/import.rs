@@ -81,12 +81,44 @@ impl GyroUnit {
     }
 }
 
+/// Whether a unit, as given for either sensor, is raw counts: "LSB", "lsb" or "counts".
+pub fn names_counts(s: &str) -> bool {
+    matches!(s, "LSB" | "lsb" | "counts")
+}
+
+/// Why a gyro's unit and nominal scale, as given, do not go together.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GyroUnitFault {
+    /// Counts without their nominal scale.
+    NeedsScale,
+    /// A nominal scale for a gyro not in counts.
+    ScaleNotCounts,
+    /// None of the units read.
+    Unknown,
+}
+
+/// A gyro's unit as given and its nominal scale (counts per °/s): counts need the scale and are
+/// then read in °/s through it; no other unit takes one.
+pub fn gyro_unit_and_scale(
+    unit: &str,
+    lsb_per_dps: Option<f64>,
+) -> Result<(GyroUnit, Option<f64>), GyroUnitFault> {
+    match (names_counts(unit), lsb_per_dps) {
+        (true, Some(lsb)) => Ok((GyroUnit::DegPerS, Some(lsb))),
+        (true, None) => Err(GyroUnitFault::NeedsScale),
+        (false, Some(_)) => Err(GyroUnitFault::ScaleNotCounts),
+        (false, None) => GyroUnit::parse(unit)
+            .map(|u| (u, None))
+            .ok_or(GyroUnitFault::Unknown),
+    }
+}
+
 /// Parses an accelerometer unit as the command line spells it: "m/s2", "g", "LSB" or "V".
 pub fn parse_acc_unit(s: &str) -> Option<OutputUnit> {
     match s {
         "m/s2" | "m/s^2" | "m/s²" => Some(OutputUnit::MetresPerSecondSquared),
         "g" => Some(OutputUnit::StandardGravity),
-        "LSB" | "lsb" | "counts" => Some(OutputUnit::Lsb),
+        _ if names_counts(s) => Some(OutputUnit::Lsb),
         "V" | "v" => Some(OutputUnit::Volts),
         _ => None,
     }
