@@ -67,6 +67,8 @@ mod tests;
 #[cfg(test)]
 mod text_temperature_tests;
 #[cfg(test)]
+mod window_marks_tests;
+#[cfg(test)]
 mod window_property_tests;
 
 pub use error::CliError;

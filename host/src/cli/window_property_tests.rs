@@ -18,7 +18,7 @@ use shared::compensator::LeverMode;
 use shared::{Calibration, OutputUnit};
 use std::path::Path;
 
-fn binary() -> LogSource {
+pub(super) fn binary() -> LogSource {
     LogSource {
         text: None,
         instance: None,
@@ -28,7 +28,7 @@ fn binary() -> LogSource {
     }
 }
 
-fn csv_source() -> LogSource {
+pub(super) fn csv_source() -> LogSource {
     let mut options = ImportOptions::new(
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
@@ -42,7 +42,7 @@ fn csv_source() -> LogSource {
 }
 
 /// The hand-held fixture session's samples.
-fn session() -> Vec<LogSample> {
+pub(super) fn session() -> Vec<LogSample> {
     let hand = read_log(&fixture("hand.ulg"), &binary()).unwrap().recording;
     let temps = hand.temp_c.clone().unwrap();
     (0..hand.len())
@@ -91,7 +91,7 @@ fn damage(samples: &mut Vec<LogSample>, rng: &mut Rng) -> String {
     said.join(", ")
 }
 
-fn write_csv(path: &Path, samples: &[LogSample]) {
+pub(super) fn write_csv(path: &Path, samples: &[LogSample]) {
     let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp\n");
     for s in samples {
         let [ax, ay, az] = s.acc;
@@ -137,6 +137,23 @@ fn said_lost(warnings: &[String]) -> usize {
         .unwrap_or(0)
 }
 
+/// Every window read from the survey's marks is the window read by a pass over the whole file:
+/// the same samples, places and words.
+pub(super) fn same_from_marks(path: &Path, source: &LogSource, max_samples: usize, case: &str) {
+    let LogRead::Windows(marked) = read_log_windows(path, source, max_samples).unwrap() else {
+        panic!("{case}: read whole");
+    };
+    assert!(marked.marked(), "{case}: no marks");
+    let LogRead::Windows(whole) = read_log_windows(path, source, max_samples).unwrap() else {
+        panic!("{case}: read whole");
+    };
+    let whole = whole.without_marks();
+    for k in 0..marked.len() {
+        let (a, b) = (marked.read(k), whole.read(k));
+        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{case}: window {k}");
+    }
+}
+
 /// One case: the windowed read against the whole read, as the module docs say. The number of
 /// windows read and of rows said left out by the window rule.
 fn check(path: &Path, source: &LogSource, max_samples: usize, case: &str) -> (usize, usize) {
@@ -151,6 +168,7 @@ fn check_with(
     max_samples: usize,
     case: &str,
 ) -> ((usize, usize), Vec<String>) {
+    same_from_marks(path, source, max_samples, case);
     let (whole, whole_said) = apply(path, source, cal, MAX_ROWS);
     let (windowed, mut said) = apply(path, source, cal, max_samples);
     let note = said.remove(0);

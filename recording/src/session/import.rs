@@ -16,15 +16,18 @@ mod gravity;
 mod lines;
 mod notes;
 mod rows;
+mod stretches;
 pub mod time;
 
 use super::logs::keep::{Keep, Keeper, STILL_VAR_M2_S4};
 use super::repair::{run_rate_hz, TimeRepairs};
+use lines::Counted;
 pub use notes::Places;
-use rows::{read_header, read_rows, Layout, Rows, Time};
+use rows::{read_header, Layout, Rows, Time};
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
+pub(crate) use stretches::Resume;
 pub use time::six_digits;
 pub use time::{detect_time_unit, say_time_jumps, TimeJump, TimeOrigin, TimeUnit, GAP_PERIODS};
 use time::{MAX_RATE_HZ, MAX_SPAN_DAYS, MIN_RATE_HZ, MIN_SPAN_S};
@@ -486,12 +489,71 @@ pub fn read_logger<R: BufRead>(
 /// [`read_logger`] keeping the rows `keep` says (`super::logs::keep`); `seconds_per_unit`: the
 /// time column's unit, in which the rows are surveyed and chosen. A survey returns no rows.
 pub(crate) fn read_logger_keeping<R: BufRead>(
-    mut r: R,
+    r: R,
     path: &Path,
     options: &ImportOptions,
     keep: &Keep,
     seconds_per_unit: f64,
 ) -> Result<Recording, ImportError> {
+    let pass = Pass {
+        path,
+        options,
+        keep,
+        seconds_per_unit,
+    };
+    read_logger_by(Counted::new(r, 0), &pass, stretches::read_surveying)
+}
+
+/// One window of a long text log (`keep`, a `Keep::Span`) read from the stretches of `file` the
+/// survey's `resume` marks for its times (`super::logs::resume`): the same rows and words as
+/// [`read_logger_keeping`] reading the whole file with `keep`.
+pub(crate) fn read_logger_window(
+    file: &mut File,
+    path: &Path,
+    options: &ImportOptions,
+    keep: &Keep,
+    seconds_per_unit: f64,
+    resume: &Resume,
+) -> Result<Recording, ImportError> {
+    let pass = Pass {
+        path,
+        options,
+        keep,
+        seconds_per_unit,
+    };
+    let r = Counted::new(BufReader::with_capacity(1 << 20, file), 0);
+    read_logger_by(r, &pass, |r, buf, rows, keeper| {
+        stretches::read_stretches(r, buf, rows, keeper, resume, path)
+    })
+}
+
+/// What a pass over a text file is asked: the file, how to read it, what to keep, and the time
+/// column's unit (s).
+struct Pass<'a> {
+    path: &'a Path,
+    options: &'a ImportOptions,
+    keep: &'a Keep,
+    seconds_per_unit: f64,
+}
+
+/// A text file read by `pass`: its header, its rows as `read` reads them, and what follows
+/// from them.
+fn read_logger_by<R: BufRead>(
+    mut r: Counted<R>,
+    pass: &Pass,
+    read: impl FnOnce(
+        &mut Counted<R>,
+        &mut Vec<u8>,
+        &Rows,
+        &mut Keeper,
+    ) -> Result<Recording, ImportError>,
+) -> Result<Recording, ImportError> {
+    let Pass {
+        path,
+        options,
+        keep,
+        seconds_per_unit,
+    } = *pass;
     let mut buf = Vec::new();
     let header = read_header(&mut r, &mut buf, path, options)?;
     let header_line = header.line;
@@ -533,7 +595,7 @@ pub(crate) fn read_logger_keeping<R: BufRead>(
         first_row,
         seconds_per_unit,
     };
-    let mut rec = read_rows(&mut r, &mut buf, &rows, &mut keeper)?;
+    let mut rec = read(&mut r, &mut buf, &rows, &mut keeper)?;
     read_notes.extend(rows::fill_streams(&mut rec));
     rec.read_notes = read_notes;
     if keeper.report() {

@@ -3,8 +3,55 @@
 //! [`MAX_SKIPPED_LINE_BYTES`] refuses the file (docs/robustness.md, "Damaged time stamps").
 
 use super::{ImportError, MAX_LINE_BYTES};
-use std::io::{BufRead, Read};
+use std::io::{BufRead, Read, Seek, SeekFrom};
 use std::path::PathBuf;
+
+/// A reader that counts the bytes taken from it: where a line begins in the file, for the marks a
+/// survey sets (`crate::session::logs::resume`).
+#[derive(Debug)]
+pub(crate) struct Counted<R> {
+    inner: R,
+    position: u64,
+}
+
+impl<R> Counted<R> {
+    /// `inner`, whose next byte is the file's byte `position`.
+    pub(crate) fn new(inner: R, position: u64) -> Counted<R> {
+        Counted { inner, position }
+    }
+
+    /// The file's byte the next read takes.
+    pub(crate) fn position(&self) -> u64 {
+        self.position
+    }
+}
+
+impl<R: Read> Read for Counted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.position += n as u64;
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for Counted<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.inner.fill_buf()
+    }
+
+    fn consume(&mut self, amt: usize) {
+        self.position += amt as u64;
+        self.inner.consume(amt);
+    }
+}
+
+impl<R: Seek> Counted<R> {
+    /// Goes to the file's byte `position`.
+    pub(crate) fn seek_to(&mut self, position: u64) -> std::io::Result<()> {
+        self.position = self.inner.seek(SeekFrom::Start(position))?;
+        Ok(())
+    }
+}
 
 /// Reads the next line (without its line end) into `buf`; `Ok(false)` at the end of the input.
 pub(super) fn next_line<R: BufRead>(

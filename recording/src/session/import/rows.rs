@@ -1,10 +1,11 @@
 //! A text file's rows: its header and separator, where the options' columns are, and each data row
 //! parsed and kept as the [`Keeper`] says.
 
-use super::lines::{next_line, next_line_end, LineEnd};
+use super::lines::{next_line, next_line_end, Counted, LineEnd};
 use super::time::detect_time_unit;
 use super::{ImportError, ImportOptions, Recording, TimeSource, MAX_OVERLONG_LINES};
 use crate::session::logs::keep::{Admit, Keeper};
+use crate::session::logs::resume::Marker;
 use crate::spelling::UserOption;
 use std::io::BufRead;
 use std::path::Path;
@@ -296,25 +297,74 @@ pub(super) struct Rows<'a> {
 
 /// Reads the data rows after the header that `keeper` keeps into a recording (blank lines
 /// ignored, rows with no finite time or with both streams' values missing counted and left out; a
-/// row with one stream missing is kept for [`fill_streams`]).
+/// row with one stream missing is kept for [`fill_streams`]); a survey sets `marker`'s marks.
 pub(super) fn read_rows<R: BufRead>(
-    r: &mut R,
+    r: &mut Counted<R>,
     buf: &mut Vec<u8>,
     rows: &Rows,
     keeper: &mut Keeper,
+    marker: Option<&mut Marker<RowsAt>>,
 ) -> Result<Recording, ImportError> {
+    let (mut rec, mut at) = first_rows(rows, keeper)?;
+    rows_until(r, buf, rows, keeper, (&mut rec, &mut at), None, marker)?;
+    Ok(rec)
+}
+
+/// Where a text file's rows are read: the last line and the rows read before, in the file's
+/// count, and (at a survey's mark) the rows with a finite time before (`Keeper::row_time`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RowsAt {
+    pub(super) line: u64,
+    pub(super) row_index: u64,
+    pub(super) timed: usize,
+}
+
+/// An empty recording of `rows`, with a header-less file's first row read into it, and where the
+/// rows after it begin.
+pub(super) fn first_rows(
+    rows: &Rows,
+    keeper: &mut Keeper,
+) -> Result<(Recording, RowsAt), ImportError> {
     let mut rec = Recording {
         acc_unit: Some(rows.options.acc_unit),
         temp_c: rows.layout.temp.map(|_| Vec::new()),
         ..Recording::default()
     };
-    let mut line = rows.header_line;
-    let mut row_index = 0u64;
+    let mut at = RowsAt {
+        line: rows.header_line,
+        row_index: 0,
+        timed: 0,
+    };
     if let Some(text) = &rows.first_row {
-        take_row(text, line, &mut row_index, rows, keeper, &mut rec)?;
+        take_row(text, at.line, &mut at.row_index, rows, keeper, &mut rec)?;
     }
+    Ok((rec, at))
+}
+
+/// Reads rows into `rec` from where `at` and `r` stand up to the byte `end` (`None`: the end of
+/// the file), setting `marker`'s marks on the way.
+pub(super) fn rows_until<R: BufRead>(
+    r: &mut Counted<R>,
+    buf: &mut Vec<u8>,
+    rows: &Rows,
+    keeper: &mut Keeper,
+    (rec, at): (&mut Recording, &mut RowsAt),
+    end: Option<u64>,
+    mut marker: Option<&mut Marker<RowsAt>>,
+) -> Result<(), ImportError> {
     loop {
-        line += 1;
+        if end.is_some_and(|e| r.position() >= e) {
+            break;
+        }
+        if let Some(m) = marker.as_deref_mut().filter(|m| m.due(keeper.timed())) {
+            let state = RowsAt {
+                timed: keeper.timed(),
+                ..*at
+            };
+            m.set(r.position(), state, keeper.take_times(), keeper.timed());
+        }
+        at.line += 1;
+        let line = at.line;
         let Some(end) = next_line_end(r, buf, line)? else {
             break;
         };
@@ -336,9 +386,9 @@ pub(super) fn read_rows<R: BufRead>(
             rec.unterminated_line = Some(line);
             break;
         }
-        take_row(&text, line, &mut row_index, rows, keeper, &mut rec)?;
+        take_row(&text, line, &mut at.row_index, rows, keeper, rec)?;
     }
-    Ok(rec)
+    Ok(())
 }
 
 /// One data row's text, read into `rec` as `keeper` says.
@@ -362,6 +412,7 @@ fn take_row(
         *row_index += 1;
         return Ok(());
     }
+    keeper.row_time(|| Some(layout.time_only(text, *row_index)? * seconds_per_unit));
     let (mut v, t_s, temp_c) = layout.parse_row(text, line, *row_index)?;
     for j in 0..3 {
         v[3 + j] -= options.gyro_offset[j];
@@ -371,6 +422,9 @@ fn take_row(
     let gyro_ok = v[3..].iter().all(|x| x.is_finite());
     if !(acc_ok || gyro_ok) || !t_s.is_finite() {
         rec.skipped_rows += 1;
+        if !t_s.is_finite() {
+            keeper.untimed_row();
+        }
         return Ok(());
     }
     // A row with one stream missing is admitted as its neighbour's accelerometer sample.

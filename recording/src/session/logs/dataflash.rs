@@ -11,11 +11,16 @@
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the
 //! reader streams with a window of a few hundred bytes.
 
+use super::resume::{join, stretches, Mark, Marker, NO_TIMES};
 use super::vehicle::VehicleParams;
-use super::{list_instances, pair_streams, ImuError, Keep, Stream, StreamSample, TooMany};
+use super::{
+    list_instances, pair_streams, ImuError, Keep, Stream, StreamAt, StreamSample, TooMany,
+};
 use crate::session::import::Recording;
 use crate::spelling::Spelling;
-use std::io::Read;
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::sync::Arc;
 
 /// A log's first bytes: the header and the type of the `FMT` message that defines `FMT`.
 pub const MAGIC: [u8; 3] = [HEAD1, HEAD2, FMT_TYPE];
@@ -267,8 +272,9 @@ impl<R: Read> Window<R> {
 /// The streams gathered and the damage skipped.
 #[derive(Default)]
 struct State {
-    formats: Vec<Option<Format>>,
-    layouts: Vec<Option<Layout>>,
+    /// The formats by type, shared with the survey's marks until a `FMT` changes them.
+    formats: Arc<Vec<Option<Format>>>,
+    layouts: Arc<Vec<Option<Layout>>>,
     seen: std::collections::BTreeSet<(&'static str, u8)>,
     imu_acc: Stream,
     imu_gyro: Stream,
@@ -277,6 +283,27 @@ struct State {
     skipped: u64,
     first_skip: Option<u64>,
     params: VehicleParams,
+}
+
+/// The reader's state at a mark (`super::resume`): the formats and each stream's counts.
+#[derive(Clone, Debug)]
+pub(crate) struct At {
+    formats: Arc<Vec<Option<Format>>>,
+    layouts: Arc<Vec<Option<Layout>>>,
+    streams: [StreamAt; 4],
+}
+
+/// What a survey of a DataFlash log leaves for the windows' passes (`super::resume`): its marks,
+/// and what it found in the whole file.
+#[derive(Debug)]
+pub(crate) struct Resume {
+    marks: Vec<Mark<At>>,
+    streams: [StreamAt; 4],
+    seen: std::collections::BTreeSet<(&'static str, u8)>,
+    skipped: u64,
+    first_skip: Option<u64>,
+    params: VehicleParams,
+    warnings: Vec<String>,
 }
 
 impl DataFlashError {
@@ -310,55 +337,11 @@ pub(crate) fn read_with_params<R: Read>(
     keep: &Keep,
     rate_hz: Option<f64>,
 ) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
-    let mut w = Window {
-        r,
-        buf: Vec::new(),
-        start: 0,
-        offset: 0,
-        eof: false,
-    };
-    let mut st = State {
-        formats: vec![None; 256],
-        layouts: vec![None; 256],
-        imu_acc: Stream::new(keep),
-        imu_gyro: Stream::new(keep),
-        acc: Stream::new(keep),
-        gyro: Stream::new(keep),
-        ..State::default()
-    };
-    for s in [&mut st.imu_acc, &mut st.imu_gyro, &mut st.acc, &mut st.gyro] {
-        s.retime(rate_hz);
-    }
+    let mut w = Window::at(r, 0);
+    let mut st = State::new(keep, rate_hz);
     let mut warnings = Vec::new();
-    loop {
-        if w.fill(3)? < 3 {
-            break;
-        }
-        let h = w.peek();
-        let ty = h[2];
-        let length = if ty == FMT_TYPE {
-            Some(FMT_LEN)
-        } else {
-            st.formats[ty as usize].as_ref().map(|f| f.length)
-        };
-        let Some(length) = length.filter(|_| h[0] == HEAD1 && h[1] == HEAD2) else {
-            st.skipped += 1;
-            st.first_skip.get_or_insert(w.offset);
-            w.consume(1);
-            continue;
-        };
-        if w.fill(length)? < length {
-            warnings.push(format!(
-                "the log's last message (at byte {}) is cut short: it is left out",
-                w.offset
-            ));
-            break;
-        }
-        let offset = w.offset;
-        let m = w.peek()[..length].to_vec();
-        st.message(ty, &m, offset, instance)?;
-        w.consume(length);
-    }
+    let mut marker = Marker::for_keep(keep);
+    st.messages(&mut w, instance, None, marker.as_mut(), &mut warnings)?;
     if let Some(first) = st.first_skip {
         warnings.push(format!(
             "{} byte(s) that start no known message were skipped, the first at byte {first} (damage \
@@ -366,12 +349,172 @@ pub(crate) fn read_with_params<R: Read>(
             st.skipped
         ));
     }
+    if let (Some(marker), Keep::Survey(report)) = (marker, keep) {
+        let resume = Resume {
+            marks: marker.finish(st.take_times()),
+            streams: st.streams().map(|s| s.at()),
+            seen: st.seen.clone(),
+            skipped: st.skipped,
+            first_skip: st.first_skip,
+            params: st.params.clone(),
+            warnings: warnings.clone(),
+        };
+        if let Ok(mut r) = report.lock() {
+            r.resume = Some(Arc::new(super::resume::Resume::DataFlash(resume)));
+        }
+    }
     let params = std::mem::take(&mut st.params);
     st.finish(instance, warnings)
         .map(|(rec, w)| (rec, w, params))
 }
 
+/// One window of a long log (`keep`, a [`Keep::Span`]) read from the stretches of `file` its
+/// samples lie in, as the survey's `resume` marks them (`super::resume`): the same samples and
+/// words as [`read_with_params`] reading the whole file with `keep`.
+pub(crate) fn read_window(
+    file: &mut File,
+    resume: &Resume,
+    instance: u8,
+    keep: &Keep,
+    rate_hz: Option<f64>,
+) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
+    let mut st = State::new(keep, rate_hz);
+    let (lo, hi) = keep.reach();
+    for (i, end) in stretches(&resume.marks, lo, hi) {
+        let mark = &resume.marks[i];
+        file.seek(SeekFrom::Start(mark.offset))
+            .map_err(|source| DataFlashError::Io {
+                offset: mark.offset,
+                source,
+            })?;
+        let mut w = Window::at(&mut *file, mark.offset);
+        st.formats = Arc::clone(&mark.state.formats);
+        st.layouts = Arc::clone(&mark.state.layouts);
+        for (s, at) in st.streams_mut().into_iter().zip(&mark.state.streams) {
+            s.resume(at);
+        }
+        st.messages(&mut w, instance, end, None, &mut Vec::new())?;
+    }
+    for (s, at) in st.streams_mut().into_iter().zip(&resume.streams) {
+        s.resume(at);
+    }
+    st.seen = resume.seen.clone();
+    (st.skipped, st.first_skip) = (resume.skipped, resume.first_skip);
+    let params = resume.params.clone();
+    st.finish(instance, resume.warnings.clone())
+        .map(|(rec, w)| (rec, w, params))
+}
+
+impl<R: Read> Window<R> {
+    /// A window over `r`, whose first byte is the file's byte `offset`.
+    fn at(r: R, offset: u64) -> Window<R> {
+        Window {
+            r,
+            buf: Vec::new(),
+            start: 0,
+            offset,
+            eof: false,
+        }
+    }
+}
+
 impl State {
+    /// Empty streams that keep what `keep` says, re-timed at `rate_hz` (none: as stamped).
+    fn new(keep: &Keep, rate_hz: Option<f64>) -> State {
+        let mut st = State {
+            formats: Arc::new(vec![None; 256]),
+            layouts: Arc::new(vec![None; 256]),
+            imu_acc: Stream::new(keep),
+            imu_gyro: Stream::new(keep),
+            acc: Stream::new(keep),
+            gyro: Stream::new(keep),
+            ..State::default()
+        };
+        for s in st.streams_mut() {
+            s.retime(rate_hz);
+        }
+        st
+    }
+
+    fn streams(&self) -> [&Stream; 4] {
+        [&self.imu_acc, &self.imu_gyro, &self.acc, &self.gyro]
+    }
+
+    fn streams_mut(&mut self) -> [&mut Stream; 4] {
+        [
+            &mut self.imu_acc,
+            &mut self.imu_gyro,
+            &mut self.acc,
+            &mut self.gyro,
+        ]
+    }
+
+    /// The samples read, all streams told.
+    fn read(&self) -> usize {
+        self.streams().iter().map(|s| s.count()).sum()
+    }
+
+    /// A survey: the least and greatest time of the samples read since the last call.
+    fn take_times(&mut self) -> (f64, f64) {
+        self.streams_mut()
+            .into_iter()
+            .fold(NO_TIMES, |t, s| join(t, s.take_times()))
+    }
+
+    /// Reads the messages from where `w` stands up to the byte `end` (`None`: the end of the
+    /// file), setting `marker`'s marks on the way.
+    fn messages<R: Read>(
+        &mut self,
+        w: &mut Window<R>,
+        instance: u8,
+        end: Option<u64>,
+        mut marker: Option<&mut Marker<At>>,
+        warnings: &mut Vec<String>,
+    ) -> Result<(), DataFlashError> {
+        loop {
+            if end.is_some_and(|e| w.offset >= e) {
+                break;
+            }
+            if let Some(m) = marker.as_deref_mut().filter(|m| m.due(self.read())) {
+                let at = At {
+                    formats: Arc::clone(&self.formats),
+                    layouts: Arc::clone(&self.layouts),
+                    streams: self.streams().map(|s| s.at()),
+                };
+                let times = self.take_times();
+                m.set(w.offset, at, times, self.read());
+            }
+            if w.fill(3)? < 3 {
+                break;
+            }
+            let h = w.peek();
+            let ty = h[2];
+            let length = if ty == FMT_TYPE {
+                Some(FMT_LEN)
+            } else {
+                self.formats[ty as usize].as_ref().map(|f| f.length)
+            };
+            let Some(length) = length.filter(|_| h[0] == HEAD1 && h[1] == HEAD2) else {
+                self.skipped += 1;
+                self.first_skip.get_or_insert(w.offset);
+                w.consume(1);
+                continue;
+            };
+            if w.fill(length)? < length {
+                warnings.push(format!(
+                    "the log's last message (at byte {}) is cut short: it is left out",
+                    w.offset
+                ));
+                break;
+            }
+            let offset = w.offset;
+            let m = w.peek()[..length].to_vec();
+            self.message(ty, &m, offset, instance)?;
+            w.consume(length);
+        }
+        Ok(())
+    }
+
     fn message(
         &mut self,
         ty: u8,
@@ -400,8 +543,8 @@ impl State {
                 return Ok(());
             };
             if t != FMT_TYPE {
-                self.layouts[t as usize] = layout(&f);
-                self.formats[t as usize] = Some(f);
+                Arc::make_mut(&mut self.layouts)[t as usize] = layout(&f);
+                Arc::make_mut(&mut self.formats)[t as usize] = Some(f);
             }
             return Ok(());
         }

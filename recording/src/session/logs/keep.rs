@@ -91,6 +91,11 @@ pub(crate) struct PassReport {
     pub regions: Option<Vec<(f64, f64)>>,
     /// The survey itself, for a caller that cuts the log into windows (`super::windows`).
     pub survey: Option<Survey>,
+    /// Samples between the marks a survey sets for the windows' passes (0: none;
+    /// `super::resume`).
+    pub marks_every: usize,
+    /// The survey's marks and end state (`super::resume`).
+    pub resume: Option<super::resume::SharedResume>,
     /// What the extract left out of the accelerometer's stream.
     pub left_out: Option<LeftOut>,
     /// The survey's count of the accelerometer's samples with a temperature field, and of those
@@ -105,6 +110,15 @@ impl Keep {
     /// Whether `t_s` lies outside a window's span (never, for the other kinds).
     fn outside_span(&self, t_s: f64) -> bool {
         matches!(self, Keep::Span { lo, hi, .. } if !(*lo <= t_s && t_s < *hi))
+    }
+
+    /// The times a window's pass keeps, its margins included (`lo..hi`, s); every time for the
+    /// other kinds.
+    pub fn reach(&self) -> (f64, f64) {
+        match self {
+            Keep::Span { lo, hi, .. } => (*lo, *hi),
+            _ => (f64::NEG_INFINITY, f64::INFINITY),
+        }
     }
 
     /// A window's own times (`None`: not a window's pass).
@@ -138,6 +152,14 @@ pub(crate) struct Keeper {
     places: Vec<usize>,
     /// A survey: the samples with a temperature field, and those with a reading.
     temperatures: (usize, usize),
+    /// A survey: the least and greatest time of the samples admitted since the last mark
+    /// (`super::resume`).
+    times: Option<(f64, f64)>,
+    /// A text file's survey: the rows with a finite time, whatever their values (a window's pass
+    /// counts each it passes over as seen, [`Keeper::passes`]).
+    timed: usize,
+    /// A text file's rows left out for a time that is not finite.
+    untimed: usize,
 }
 
 /// What [`Keeper::admit`] says of a sample.
@@ -177,6 +199,8 @@ impl Keeper {
             Keep::All { .. } => Admit::Keep,
             Keep::Survey(_) => {
                 self.survey.push(t_s, acc);
+                let times = self.times.get_or_insert((t_s, t_s));
+                *times = (times.0.min(t_s), times.1.max(t_s));
                 Admit::Pass
             }
             Keep::Within { regions, max, .. } => {
@@ -237,6 +261,45 @@ impl Keeper {
     /// The finite samples seen, whether kept or not.
     pub fn count(&self) -> usize {
         self.left_out.read
+    }
+
+    /// Goes on as if `read` finite samples had been seen: a window's pass resumed at a mark
+    /// (`super::resume`), or finished with the count of the whole file.
+    pub fn resume_count(&mut self, read: usize) {
+        self.left_out.read = read;
+    }
+
+    /// A text file's survey: a row whose time (s) is `time_s` (`None`: not finite), whatever its
+    /// values, so that a mark's times reach every row a window's pass would pass over or keep.
+    pub fn row_time(&mut self, time_s: impl FnOnce() -> Option<f64>) {
+        if !matches!(self.keep, Keep::Survey(_)) {
+            return;
+        }
+        if let Some(t_s) = time_s() {
+            self.timed += 1;
+            let times = self.times.get_or_insert((t_s, t_s));
+            *times = (times.0.min(t_s), times.1.max(t_s));
+        }
+    }
+
+    /// A text file's survey: the rows with a finite time so far ([`Keeper::row_time`]).
+    pub fn timed(&self) -> usize {
+        self.timed
+    }
+
+    /// A text file's row left out for a time that is not finite.
+    pub fn untimed_row(&mut self) {
+        self.untimed += 1;
+    }
+
+    /// The rows left out for a time that is not finite, so far.
+    pub fn untimed(&self) -> usize {
+        self.untimed
+    }
+
+    /// A survey: the least and greatest time of the samples admitted since the last call.
+    pub fn take_times(&mut self) -> (f64, f64) {
+        self.times.take().unwrap_or(super::resume::NO_TIMES)
     }
 
     /// Hands what this stream (the accelerometer's) found to the pass's report: the survey's

@@ -10,6 +10,10 @@
 //! layout is short and fixed by the message definition (`sensor_msgs/msg/Imu.msg`,
 //! `std_msgs/msg/Header.msg`, `builtin_interfaces/msg/Time.msg`).
 
+mod cdr;
+
+use super::resume::{join, stretches, Mark, Marker, NO_TIMES};
+use super::StreamAt;
 use super::{Keep, Stream, StreamSample, TooMany};
 use crate::session::import::Recording;
 use crate::spelling::{Spelling, UserOption};
@@ -17,7 +21,11 @@ use ::mcap::records::Record;
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use shared::OutputUnit;
 use std::collections::BTreeMap;
-use std::io::Read;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::sync::Arc;
+
+pub use cdr::{decode_imu, CdrError, ImuMessage};
 
 /// The file's first eight bytes.
 pub const MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
@@ -127,128 +135,6 @@ pub enum McapError {
     },
 }
 
-/// What is wrong with a CDR message.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum CdrError {
-    /// Shorter than its fields.
-    #[error("{len} bytes end inside the field '{field}'")]
-    Short {
-        /// The message's length.
-        len: usize,
-        /// The field.
-        field: &'static str,
-    },
-    /// An encapsulation other than plain CDR.
-    #[error("encapsulation {0:#06x} is not plain CDR (0x0000 big-, 0x0001 little-endian)")]
-    Encapsulation(u16),
-}
-
-/// An Imu message's time (s), angular velocity (rad/s) and linear acceleration (m/s²).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ImuMessage {
-    /// `header.stamp` in seconds.
-    pub stamp_s: f64,
-    /// `angular_velocity`, rad/s.
-    pub gyro_rad_s: [f64; 3],
-    /// `linear_acceleration`, m/s².
-    pub acc_m_s2: [f64; 3],
-}
-
-/// Decodes a CDR-serialised `sensor_msgs/msg/Imu`.
-///
-/// The encoding is OMG plain CDR (XCDR version 1; DDS-XTypes 1.3 §7.4.1.1, the CORBA 3.4 Part 2
-/// §9.3 rules), as ROS 2's rmw layers write it: a 4-byte encapsulation header (`00 00` big-endian,
-/// `00 01` little-endian, then two option bytes), then the fields in order, each primitive aligned
-/// to its own size counted from the end of the encapsulation header; a string is a `u32` length that
-/// counts its terminating NUL, then its bytes. The message: `header` (`stamp.sec` i32,
-/// `stamp.nanosec` u32, `frame_id` string), `orientation` (4 × f64), its covariance (9 × f64),
-/// `angular_velocity` (3 × f64), its covariance, `linear_acceleration` (3 × f64), its covariance.
-pub fn decode_imu(m: &[u8]) -> Result<ImuMessage, CdrError> {
-    let head = m.get(..4).ok_or(CdrError::Short {
-        len: m.len(),
-        field: "encapsulation",
-    })?;
-    let kind = u16::from_be_bytes([head[0], head[1]]);
-    let little = match kind {
-        0x0000 => false,
-        0x0001 => true,
-        other => return Err(CdrError::Encapsulation(other)),
-    };
-    let mut c = Cdr {
-        body: &m[4..],
-        pos: 0,
-        little,
-        len: m.len(),
-    };
-    let sec = c.u32("header.stamp.sec")? as i32;
-    let nanosec = c.u32("header.stamp.nanosec")?;
-    let len = c.u32("header.frame_id")? as usize;
-    c.take(len, 1, "header.frame_id")?;
-    c.f64s::<4>("orientation")?;
-    c.f64s::<9>("orientation_covariance")?;
-    let w = c.f64s::<3>("angular_velocity")?;
-    c.f64s::<9>("angular_velocity_covariance")?;
-    let a = c.f64s::<3>("linear_acceleration")?;
-    Ok(ImuMessage {
-        stamp_s: f64::from(sec) + f64::from(nanosec) * 1e-9,
-        gyro_rad_s: w,
-        acc_m_s2: a,
-    })
-}
-
-/// A CDR body being read: the bytes after the encapsulation header, the read position (alignment
-/// counts from 0 here), the byte order, the whole message's length (for messages).
-struct Cdr<'a> {
-    body: &'a [u8],
-    pos: usize,
-    little: bool,
-    len: usize,
-}
-
-impl<'a> Cdr<'a> {
-    /// `size` bytes at the next multiple of `align`.
-    fn take(
-        &mut self,
-        size: usize,
-        align: usize,
-        field: &'static str,
-    ) -> Result<&'a [u8], CdrError> {
-        let short = CdrError::Short {
-            len: self.len,
-            field,
-        };
-        let start = self.pos.next_multiple_of(align);
-        let end = start.checked_add(size).ok_or(short.clone())?;
-        let b = self.body.get(start..end).ok_or(short)?;
-        self.pos = end;
-        Ok(b)
-    }
-
-    fn u32(&mut self, field: &'static str) -> Result<u32, CdrError> {
-        let b = self.take(4, 4, field)?;
-        let a = [b[0], b[1], b[2], b[3]];
-        Ok(if self.little {
-            u32::from_le_bytes(a)
-        } else {
-            u32::from_be_bytes(a)
-        })
-    }
-
-    fn f64s<const N: usize>(&mut self, field: &'static str) -> Result<[f64; N], CdrError> {
-        let mut out = [0.0; N];
-        for v in &mut out {
-            let b = self.take(8, 8, field)?;
-            let a: [u8; 8] = std::array::from_fn(|k| b[k]);
-            *v = if self.little {
-                f64::from_le_bytes(a)
-            } else {
-                f64::from_be_bytes(a)
-            };
-        }
-        Ok(out)
-    }
-}
-
 /// A channel: its topic, schema name and message encoding.
 #[derive(Clone, Debug)]
 struct Channel {
@@ -260,8 +146,9 @@ struct Channel {
 /// The reader's state.
 #[derive(Default)]
 struct State {
-    schemas: BTreeMap<u16, String>,
-    channels: BTreeMap<u16, Channel>,
+    /// The schemas and channels by id, shared with the survey's marks until a record changes them.
+    schemas: Arc<BTreeMap<u16, String>>,
+    channels: Arc<BTreeMap<u16, Channel>>,
     /// The channel read (the topic asked for, or the first Imu channel).
     chosen: Option<u16>,
     acc: Stream,
@@ -308,55 +195,99 @@ pub(crate) fn read_keeping<R: Read>(
     keep: &Keep,
     rate_hz: Option<f64>,
 ) -> Result<(Recording, Vec<String>), McapError> {
-    let options = LinearReaderOptions::default()
-        .with_record_length_limit(RECORD_LIMIT)
-        .with_emit_chunks(true);
-    let mut reader = LinearReader::new_with_options(options);
-    let mut st = State {
-        acc: Stream::new(keep),
-        gyro: Stream::new(keep),
-        by_log_time: !matches!(keep, Keep::All { .. }),
-        ..State::default()
-    };
-    st.acc.retime(rate_hz);
-    st.gyro.retime(rate_hz);
+    let mut reader = linear_reader(false);
+    let mut st = State::new(keep, rate_hz);
+    let mut marker = Marker::for_keep(keep);
+    if let Some(m) = marker.as_mut() {
+        // After the magic: the first record, read as the survey reads it.
+        m.set(MAGIC.len() as u64, st.at(), NO_TIMES, 0);
+    }
     let mut offset = 0u64;
-    let mut cut_at = None;
-    while let Some(event) = reader.next_event() {
-        let event = match event {
-            // A recorder that stopped (a crash, a full disk) leaves its last record cut: what came
-            // before it is sound, and the cut record (a whole chunk, if chunked) is what is lost.
-            Err(::mcap::McapError::UnexpectedEof) if st.messages > 0 => {
-                cut_at = Some(offset);
-                break;
-            }
-            other => other.map_err(|source| McapError::Container { offset, source })?,
+    let cut_at = st.records(
+        &mut r,
+        &mut reader,
+        &mut offset,
+        topic,
+        None,
+        marker.as_mut(),
+    )?;
+    if let (Some(marker), Keep::Survey(report)) = (marker, keep) {
+        let resume = Resume {
+            marks: marker.finish(st.take_times()),
+            last: st.at(),
+            cut_at,
         };
-        match event {
-            LinearReadEvent::ReadRequest(need) => {
-                let buf = reader.insert(need.min(RECORD_LIMIT));
-                let n =
-                    read_some(&mut r, buf).map_err(|source| McapError::Io { offset, source })?;
-                offset += n as u64;
-                reader.notify_read(n);
-            }
-            LinearReadEvent::Record { data, opcode } => {
-                let record = ::mcap::parse_record(opcode, data)
-                    .map_err(|source| McapError::Container { offset, source })?;
-                match record {
-                    Record::Chunk { header, data } => st.chunk(&header, &data, topic, offset)?,
-                    other => st.record(other, topic)?,
-                }
-            }
+        if let Ok(mut r) = report.lock() {
+            r.resume = Some(Arc::new(super::resume::Resume::Mcap(resume)));
         }
     }
     let (rec, mut warnings) = st.finish(topic)?;
-    if let Some(offset) = cut_at {
-        warnings.push(format!(
-            "the file is cut short: it ends at byte {offset} inside a record; the messages before \
-             that record are read, those in it (a whole chunk, if the bag is chunked) are lost"
-        ));
+    warnings.extend(cut_at.map(cut_note));
+    Ok((rec, warnings))
+}
+
+/// The reader of the file's records, from its start (`resumed`: from a record after it).
+fn linear_reader(resumed: bool) -> LinearReader {
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(RECORD_LIMIT)
+        .with_emit_chunks(true)
+        .with_skip_start_magic(resumed);
+    LinearReader::new_with_options(options)
+}
+
+/// A file cut short at byte `offset`, said.
+fn cut_note(offset: u64) -> String {
+    format!(
+        "the file is cut short: it ends at byte {offset} inside a record; the messages before \
+         that record are read, those in it (a whole chunk, if the bag is chunked) are lost"
+    )
+}
+
+/// The reader's state at a mark, or at the end of the survey (`super::resume`).
+#[derive(Clone, Debug)]
+pub(crate) struct At {
+    schemas: Arc<BTreeMap<u16, String>>,
+    channels: Arc<BTreeMap<u16, Channel>>,
+    chosen: Option<u16>,
+    messages: u64,
+    unstamped: u64,
+    streams: [StreamAt; 2],
+}
+
+/// What a survey of a bag leaves for the windows' passes (`super::resume`): its marks, its state
+/// at the end of the file, and where the file was cut short.
+#[derive(Debug)]
+pub(crate) struct Resume {
+    marks: Vec<Mark<At>>,
+    last: At,
+    cut_at: Option<u64>,
+}
+
+/// One window of a long bag (`keep`, a [`Keep::Span`]) read from the stretches of `file` its
+/// samples lie in, as the survey's `resume` marks them (`super::resume`): the same samples and
+/// words as [`read_keeping`] reading the whole file with `keep`.
+pub(crate) fn read_window(
+    file: &mut File,
+    resume: &Resume,
+    topic: Option<&str>,
+    keep: &Keep,
+    rate_hz: Option<f64>,
+) -> Result<(Recording, Vec<String>), McapError> {
+    let mut st = State::new(keep, rate_hz);
+    let (lo, hi) = keep.reach();
+    for (i, end) in stretches(&resume.marks, lo, hi) {
+        let mark = &resume.marks[i];
+        let mut offset = mark.offset;
+        file.seek(SeekFrom::Start(offset))
+            .map_err(|source| McapError::Io { offset, source })?;
+        let mut r = BufReader::with_capacity(1 << 20, &mut *file);
+        st.resume(&mark.state);
+        let mut reader = linear_reader(true);
+        st.records(&mut r, &mut reader, &mut offset, topic, end, None)?;
     }
+    st.resume(&resume.last);
+    let (rec, mut warnings) = st.finish(topic)?;
+    warnings.extend(resume.cut_at.map(cut_note));
     Ok((rec, warnings))
 }
 
@@ -370,6 +301,115 @@ fn read_some<R: Read>(r: &mut R, buf: &mut [u8]) -> std::io::Result<usize> {
 }
 
 impl State {
+    /// Empty streams that keep what `keep` says, re-timed at `rate_hz` (none: as stamped).
+    fn new(keep: &Keep, rate_hz: Option<f64>) -> State {
+        let mut st = State {
+            acc: Stream::new(keep),
+            gyro: Stream::new(keep),
+            by_log_time: !matches!(keep, Keep::All { .. }),
+            ..State::default()
+        };
+        st.acc.retime(rate_hz);
+        st.gyro.retime(rate_hz);
+        st
+    }
+
+    /// Where the reader stands ([`At`]).
+    fn at(&self) -> At {
+        At {
+            schemas: Arc::clone(&self.schemas),
+            channels: Arc::clone(&self.channels),
+            chosen: self.chosen,
+            messages: self.messages,
+            unstamped: self.unstamped,
+            streams: [self.acc.at(), self.gyro.at()],
+        }
+    }
+
+    /// Goes on from `at`.
+    fn resume(&mut self, at: &At) {
+        self.schemas = Arc::clone(&at.schemas);
+        self.channels = Arc::clone(&at.channels);
+        self.chosen = at.chosen;
+        self.messages = at.messages;
+        self.unstamped = at.unstamped;
+        self.acc.resume(&at.streams[0]);
+        self.gyro.resume(&at.streams[1]);
+    }
+
+    /// The samples read, both streams told.
+    fn read(&self) -> usize {
+        self.acc.count() + self.gyro.count()
+    }
+
+    /// A survey: the least and greatest time of the samples read since the last call.
+    fn take_times(&mut self) -> (f64, f64) {
+        join(self.acc.take_times(), self.gyro.take_times())
+    }
+
+    /// Reads the records of `r` (at the file's byte `offset`) with `reader` up to the byte `end`
+    /// (`None`: the end of the file), setting `marker`'s marks on the way; where the file is cut
+    /// short inside a record, the byte it ends at.
+    fn records<R: Read>(
+        &mut self,
+        r: &mut R,
+        reader: &mut LinearReader,
+        offset: &mut u64,
+        topic: Option<&str>,
+        end: Option<u64>,
+        mut marker: Option<&mut Marker<At>>,
+    ) -> Result<Option<u64>, McapError> {
+        while let Some(event) = reader.next_event() {
+            let event = match event {
+                // A recorder that stopped (a crash, a full disk) leaves its last record cut: what
+                // came before it is sound, and the cut record (a whole chunk, if chunked) is what
+                // is lost.
+                Err(::mcap::McapError::UnexpectedEof) if self.messages > 0 => {
+                    return Ok(Some(*offset))
+                }
+                other => other.map_err(|source| McapError::Container {
+                    offset: *offset,
+                    source,
+                })?,
+            };
+            match event {
+                LinearReadEvent::ReadRequest(need) => {
+                    let buf = reader.insert(need.min(RECORD_LIMIT));
+                    let n = read_some(r, buf).map_err(|source| McapError::Io {
+                        offset: *offset,
+                        source,
+                    })?;
+                    *offset += n as u64;
+                    reader.notify_read(n);
+                }
+                LinearReadEvent::Record { data, opcode } => {
+                    let record = ::mcap::parse_record(opcode, data).map_err(|source| {
+                        McapError::Container {
+                            offset: *offset,
+                            source,
+                        }
+                    })?;
+                    match record {
+                        Record::Chunk { header, data } => {
+                            self.chunk(&header, &data, topic, *offset)?
+                        }
+                        other => self.record(other, topic)?,
+                    }
+                    // The reader asks for no byte beyond the record it reads: the next begins
+                    // at `offset`.
+                    if end.is_some_and(|e| *offset >= e) {
+                        return Ok(None);
+                    }
+                    if let Some(m) = marker.as_deref_mut().filter(|m| m.due(self.read())) {
+                        let times = self.take_times();
+                        m.set(*offset, self.at(), times, self.read());
+                    }
+                }
+            }
+        }
+        Ok(None)
+    }
+
     /// A chunk: decompressed (no more than its stated size, itself within [`RECORD_LIMIT`]) and its
     /// records (opcode, `u64` length, body) read in turn.
     fn chunk(
@@ -433,7 +473,7 @@ impl State {
             Record::Schema { header, .. } if header.name.len() > MAX_NAME => {}
             Record::Channel(c) if c.topic.len().max(c.message_encoding.len()) > MAX_NAME => {}
             Record::Schema { header, .. } if self.schemas.len() < MAX_CHANNELS => {
-                self.schemas.insert(header.id, header.name);
+                Arc::make_mut(&mut self.schemas).insert(header.id, header.name);
             }
             Record::Channel(c) if self.channels.len() < MAX_CHANNELS => {
                 let schema = self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
@@ -454,7 +494,7 @@ impl State {
                     }
                     self.chosen = Some(c.id);
                 }
-                self.channels.insert(c.id, ch);
+                Arc::make_mut(&mut self.channels).insert(c.id, ch);
             }
             Record::Message { header, data } if Some(header.channel_id) == self.chosen => {
                 self.messages += 1;

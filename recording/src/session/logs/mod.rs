@@ -15,25 +15,26 @@ pub mod dataflash;
 mod error;
 pub(crate) mod keep;
 pub mod mcap;
+pub(crate) mod resume;
 mod retime;
+mod stream;
 pub mod ulog;
 pub mod vehicle;
 mod windows;
 
 pub use ardupilot::UndoError;
 pub use error::{ForeignFormat, ImuError, LogError};
-use keep::{Admit, Keep, Keeper, PassReport};
+use keep::{Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
-use retime::{retime_note, Retime};
+pub(crate) use stream::{pair, pair_streams, Stream, StreamAt, StreamSample, TooMany};
 pub use windows::{read_log_windows, LogRead, LogScale, LogWindows, Window};
 
 use super::import::{
-    gyro_mid_scale_note, read_logger_keeping, ImportError, ImportOptions, Recording, TimeOrigin,
-    GAP_PERIODS, MIN_SESSION_ROWS,
+    gyro_mid_scale_note, read_logger_keeping, read_logger_window, ImportError, ImportOptions,
+    Recording, TimeOrigin, MIN_SESSION_ROWS,
 };
-use super::repair::{median_step, repair_rows_saying, repair_times, run_rate_hz, TimeRepairs};
+use super::repair::repair_rows_saying;
 use crate::spelling::{Spelling, UserOption};
-use shared::OutputUnit;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -330,17 +331,8 @@ fn read_keeping<R: BufRead>(
         }
         LogFormat::DataFlash => {
             let instance = source.instance.unwrap_or(0);
-            let (mut rec, mut notes, params) =
-                dataflash::read_with_params(r, instance, keep, source.rate_hz).map_err(|e| {
-                    LogError::DataFlash {
-                        path: p(),
-                        source: e.spelled(sp),
-                    }
-                })?;
-            let undone = ardupilot::undo(&mut rec, &params, instance)
-                .map_err(|source| LogError::NotUndone { path: p(), source })?;
-            notes.extend(undone);
-            (rec, notes)
+            let read = dataflash::read_with_params(r, instance, keep, source.rate_hz);
+            dataflash_undone(read, instance, path, sp)?
         }
         LogFormat::Mcap => {
             let topic = source.topic.as_deref();
@@ -352,13 +344,42 @@ fn read_keeping<R: BufRead>(
             (imu.0, imu.1)
         }
     };
-    let mut recording = recording;
+    log_file(recording, warnings, format, keep, path)
+}
+
+/// A DataFlash log's samples and notes read, the vehicle's own corrections undone.
+fn dataflash_undone(
+    read: Result<(Recording, Vec<String>, vehicle::VehicleParams), dataflash::DataFlashError>,
+    instance: u8,
+    path: &Path,
+    sp: Spelling,
+) -> Result<(Recording, Vec<String>), LogError> {
+    let p = || path.to_path_buf();
+    let (mut rec, mut notes, params) = read.map_err(|e| LogError::DataFlash {
+        path: p(),
+        source: e.spelled(sp),
+    })?;
+    let undone = ardupilot::undo(&mut rec, &params, instance)
+        .map_err(|source| LogError::NotUndone { path: p(), source })?;
+    notes.extend(undone);
+    Ok((rec, notes))
+}
+
+/// A pass's recording of a binary log stamped by its logger, or its refusal when it kept fewer
+/// than two samples.
+fn log_file(
+    mut recording: Recording,
+    warnings: Vec<String>,
+    format: LogFormat,
+    keep: &Keep,
+    path: &Path,
+) -> Result<LogFile, LogError> {
     if format != LogFormat::Text {
         recording.time_origin = Some(TimeOrigin::LoggerStamps(format.name()));
     }
     if recording.len() < 2 && !matches!(keep, Keep::Survey(_)) {
         return Err(LogError::NoRecording {
-            path: p(),
+            path: path.to_path_buf(),
             rows: recording.len(),
         });
     }
@@ -369,159 +390,60 @@ fn read_keeping<R: BufRead>(
     })
 }
 
-/// One IMU stream sample as a binary log holds it: time s, x y z, and the temperature if logged.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct StreamSample {
-    pub t_s: f64,
-    pub v: [f64; 3],
-    pub temp_c: Option<f64>,
-}
-
-/// Collects one stream's samples as its [`Keep`] says.
-#[derive(Debug, Default)]
-pub(crate) struct Stream {
-    pub samples: Vec<StreamSample>,
-    /// Samples left out for a value that is not finite.
-    pub non_finite: usize,
-    keeper: Keeper,
-    /// Each sample re-timed at a given rate ([`LogSource::rate_hz`]).
-    retime: Option<Retime>,
-}
-
-/// More samples than the stream's budget ([`Keep::All`]), which is given.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct TooMany(pub usize);
-
-impl Stream {
-    /// An empty stream that keeps what `keep` says.
-    pub fn new(keep: &Keep) -> Stream {
-        Stream {
-            keeper: Keeper::new(keep),
-            ..Stream::default()
-        }
-    }
-
-    /// Re-times every sample from now on at `rate_hz` (none: the stamps as they are).
-    pub fn retime(&mut self, rate_hz: Option<f64>) {
-        self.retime = rate_hz.map(Retime::new);
-    }
-
-    /// The given rate and the rate the stamps imply, when re-timed.
-    pub fn rates_hz(&self) -> Option<(f64, Option<f64>)> {
-        self.retime
-            .as_ref()
-            .map(|r| (r.rate_hz, r.implied_rate_hz()))
-    }
-
-    pub fn push(&mut self, mut s: StreamSample) -> Result<(), TooMany> {
-        if let Some(r) = self.retime.as_mut() {
-            s.t_s = r.next(s.t_s);
-        }
-        if !(s.t_s.is_finite() && s.v.iter().all(|x| x.is_finite())) {
-            self.non_finite += 1;
-            return Ok(());
-        }
-        let admit = self.keeper.admit(s.t_s, &s.v, self.samples.len());
-        if let Some(t) = s.temp_c {
-            self.keeper.temperature(t);
-        }
-        match admit {
-            Admit::Keep => self.samples.push(s),
-            Admit::Pass => {}
-            Admit::TooMany(max) => return Err(TooMany(max)),
-        }
-        Ok(())
-    }
-
-    /// The finite samples read, whether kept or not.
-    pub fn count(&self) -> usize {
-        self.keeper.count()
-    }
-}
-
-/// The accelerometer's samples with the gyro's rate at their times (linear interpolation between
-/// the gyro's two neighbouring samples; an accelerometer sample outside the gyro's time span, or
-/// further than `max_gap_s` from a gyro sample on either side, is left out). Logs with one message
-/// for both (ULog's `sensor_combined`, DataFlash's `IMU`) give the two streams the same times, and
-/// the interpolation returns the gyro sample itself. Each stream's time stamps are first mended by
-/// [`repair`](crate::session::repair)'s rules, so that a damaged stamp costs at most its sample.
-/// The streams are consumed, each dropped once mended, so that no more than one copy of a
-/// stream is held at a time (`keep`).
-pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
-    if acc.keeper.report() {
-        return (Recording::default(), Vec::new());
-    }
-    let (acc_s, acc_rep) = repaired(std::mem::take(&mut acc.samples), &acc.keeper);
-    let (g, gyro_rep) = repaired(std::mem::take(&mut gyro.samples), &gyro.keeper);
-    let own = acc.keeper.keep().own();
-    let n = acc_s.len();
-    let mut rec = Recording {
-        acc_unit: Some(OutputUnit::MetresPerSecondSquared),
-        t_s: Vec::with_capacity(n),
-        acc: Vec::with_capacity(n),
-        gyro_rad_s: Vec::with_capacity(n),
-        ..Recording::default()
+/// One window's pass (`keep`, a [`Keep::Span`]) over the file at `path`, reading only the
+/// stretches the survey's `resume` marks for its times (`resume`): the same as [`read_pass`].
+fn resume_pass(
+    path: &Path,
+    source: &LogSource,
+    resume: &resume::Resume,
+    keep: &Keep,
+    seconds_per_unit: f64,
+) -> Result<LogFile, LogError> {
+    let io = |e| LogError::Io {
+        path: path.to_path_buf(),
+        source: e,
     };
-    let with_temp = acc_s.iter().any(|s| s.temp_c.is_some());
-    let mut temps = Vec::with_capacity(if with_temp { n } else { 0 });
-    let (mut j, mut unpaired) = (0usize, 0usize);
-    for a in &acc_s {
-        while j + 1 < g.len() && g[j + 1].t_s <= a.t_s {
-            j += 1;
+    let mut file = File::open(path).map_err(io)?;
+    let sp = source.spelling;
+    let (format, (recording, warnings)) = match resume {
+        resume::Resume::Ulog(r) => {
+            let instance = source.instance.unwrap_or(0);
+            let read = ulog::read_window(&mut file, r, instance, keep, source.rate_hz);
+            let read = read.map_err(|e| LogError::Ulog {
+                path: path.to_path_buf(),
+                source: e.spelled(sp),
+            })?;
+            (LogFormat::Ulog, read)
         }
-        let Some(w) = interpolate(&g, j, a.t_s, max_gap_s) else {
-            unpaired += usize::from(own.is_none_or(|(lo, hi)| lo <= a.t_s && a.t_s < hi));
-            continue;
-        };
-        rec.t_s.push(a.t_s);
-        rec.acc.push(a.v);
-        rec.gyro_rad_s.push(w);
-        if with_temp {
-            temps.push(a.temp_c.unwrap_or(f64::NAN));
+        resume::Resume::Text(r) => {
+            let options = source
+                .text
+                .as_ref()
+                .ok_or_else(|| LogError::TextNeedsOptions(path.to_path_buf(), sp))?;
+            let rec = read_logger_window(&mut file, path, options, keep, seconds_per_unit, r)?;
+            // A window says its temperatures on the log's scale (`windows`).
+            let notes = gyro_mid_scale_note(&rec, options).into_iter().collect();
+            (LogFormat::Text, (rec, notes))
         }
-    }
-    rec.skipped_rows = acc.non_finite;
-    rec.rate_hz = run_rate_hz(&rec.t_s);
-    if with_temp {
-        rec.temp_c = Some(temps);
-    }
-    let mut warnings = match own {
-        None => temperature_notes(&mut rec),
-        // A window says its temperatures and the samples it leaves unpaired on the log's scale
-        // (`windows`).
-        Some(_) => {
-            if let Keep::Span { report, .. } = acc.keeper.keep() {
-                if let Ok(mut r) = report.lock() {
-                    r.unpaired = (unpaired, max_gap_s);
-                }
-            }
-            unpaired = 0;
-            Vec::new()
+        resume::Resume::Mcap(r) => {
+            let topic = source.topic.as_deref();
+            let read = mcap::read_window(&mut file, r, topic, keep, source.rate_hz);
+            let read = read.map_err(|e| LogError::Mcap {
+                path: path.to_path_buf(),
+                source: e.spelled(sp),
+            })?;
+            (LogFormat::Mcap, read)
+        }
+        resume::Resume::DataFlash(r) => {
+            let instance = source.instance.unwrap_or(0);
+            let read = dataflash::read_window(&mut file, r, instance, keep, source.rate_hz);
+            (
+                LogFormat::DataFlash,
+                dataflash_undone(read, instance, path, sp)?,
+            )
         }
     };
-    if acc_rep == gyro_rep {
-        if !acc_rep.is_empty() {
-            rec.time_repairs.push(("IMU sample", acc_rep));
-        }
-    } else {
-        for (name, r) in [("accelerometer sample", acc_rep), ("gyro sample", gyro_rep)] {
-            if !r.is_empty() {
-                rec.time_repairs.push((name, r));
-            }
-        }
-    }
-    warnings.extend(unpaired_note(unpaired, max_gap_s));
-    if own.is_none() {
-        warnings.extend(acc.rates_hz().map(retime_note));
-    }
-    if gyro.non_finite > 0 {
-        warnings.push(format!(
-            "{} gyro sample(s) with NaN or infinite values left out (the rate interpolated \
-             between their neighbours)",
-            gyro.non_finite
-        ));
-    }
-    (rec, warnings)
+    log_file(recording, warnings, format, keep, path)
 }
 
 /// The accelerometer samples left out for want of a gyro sample within `max_gap_s`, said.
@@ -576,31 +498,6 @@ pub(crate) fn temperature_note(readings: usize, rows: usize) -> Option<String> {
     })
 }
 
-/// A stream's samples in time order, their stamps mended ([`repair_times`]); a window's repairs
-/// said on the log's scale (`windows::own_repairs`).
-fn repaired(samples: Vec<StreamSample>, keeper: &Keeper) -> (Vec<StreamSample>, TimeRepairs) {
-    let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
-    // The temperatures compared bit for bit: a repeat of a sample without a reading (NaN) is a
-    // repeat too.
-    let temp = |i: usize| samples[i].temp_c.map(f64::to_bits);
-    let (order, rep) = repair_times(&t, |i, j| {
-        samples[i].v == samples[j].v && temp(i) == temp(j)
-    });
-    let mut rep = match keeper.keep().own() {
-        Some(own) => windows::own_repairs(rep, &order, &t, keeper.places(), own),
-        None => rep,
-    };
-    drop(t);
-    let mut times: Vec<f64> = order.iter().map(|s| s.1).collect();
-    rep.bursts = super::bursts::retime_bursts(&mut times);
-    let out = order
-        .iter()
-        .zip(times)
-        .map(|(&(i, _), t_s)| StreamSample { t_s, ..samples[i] })
-        .collect();
-    (out, rep)
-}
-
 /// [`repair_rows`](crate::session::repair::repair_rows) of a text file's rows kept by `keeper`;
 /// a window's repairs said on the log's scale (`windows::own_repairs`).
 pub(crate) fn repair_kept_rows(rec: &mut Recording, keeper: &Keeper) {
@@ -608,13 +505,6 @@ pub(crate) fn repair_kept_rows(rec: &mut Recording, keeper: &Keeper) {
         Some(own) => windows::own_repairs(rep, order, t_s, keeper.places(), own),
         None => rep,
     });
-}
-
-/// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.
-pub(crate) fn pair_streams(acc: Stream, gyro: Stream) -> (Recording, Vec<String>) {
-    let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
-    let rate_hz = 1.0 / median_step(&gyro_ts).unwrap_or(1.0);
-    pair(acc, gyro, GAP_PERIODS / rate_hz.max(1.0))
 }
 
 /// "NAME instance I, …" of the IMU messages or topics a log has, or `none` when it has none.
@@ -625,20 +515,6 @@ pub(crate) fn list_instances<'a>(seen: impl Iterator<Item = (&'a str, u8)>, none
     } else {
         found.join(", ")
     }
-}
-
-/// The gyro's rate at `t_s`, between `g[j]` (at or before it) and `g[j + 1]`.
-fn interpolate(g: &[StreamSample], j: usize, t_s: f64, max_gap_s: f64) -> Option<[f64; 3]> {
-    let a = g.get(j)?;
-    if a.t_s == t_s {
-        return Some(a.v);
-    }
-    let b = g.get(j + 1)?;
-    if !(a.t_s < t_s && t_s < b.t_s) || b.t_s - a.t_s > max_gap_s {
-        return None;
-    }
-    let f = (t_s - a.t_s) / (b.t_s - a.t_s);
-    Some(std::array::from_fn(|k| a.v[k] + f * (b.v[k] - a.v[k])))
 }
 
 /// Reads exactly `buf.len()` bytes, `Ok(false)` at a clean end of input (no byte read).

@@ -30,6 +30,18 @@ impl Retime {
         }
     }
 
+    /// Where the re-timing stands: the first sample's time and the samples re-timed (`resume`).
+    pub(super) fn at(&self) -> (Option<f64>, u64) {
+        (self.t0, self.n)
+    }
+
+    /// Goes on from where [`Retime::at`] stood (the stamps sampled for the implied rate are a
+    /// whole pass's only).
+    pub(super) fn resume(&mut self, (t0, n): (Option<f64>, u64)) {
+        self.t0 = t0;
+        self.n = n;
+    }
+
     /// The time of the next sample, whose stamp is `t_s`.
     pub(super) fn next(&mut self, t_s: f64) -> f64 {
         let n = self.n;

@@ -1,5 +1,6 @@
 use super::*;
 use crate::session::import::TimeSource;
+use shared::OutputUnit;
 
 fn stream(ts: &[f64], v: impl Fn(f64) -> [f64; 3], temp: Option<f64>) -> Stream {
     let mut s = Stream::default();
@@ -35,16 +36,13 @@ fn the_gyro_is_interpolated_to_the_accelerometers_times_and_gaps_are_not_bridged
     // Gyro at 100 Hz with a rate linear in time; accelerometer at 100 Hz, 3 ms later.
     let gt: Vec<f64> = (0..300).map(|i| i as f64 * 0.01).collect();
     let mut at: Vec<f64> = gt.iter().map(|t| t + 0.003).collect();
-    let gyro = stream(&gt, |t| [t, -2.0 * t, 0.5], None);
     // A gyro gap: the accelerometer samples inside it have no partner.
-    let gyro = Stream {
-        samples: gyro
-            .samples
-            .into_iter()
-            .filter(|s| !(1.0..1.5).contains(&s.t_s))
-            .collect(),
-        ..Stream::default()
-    };
+    let kept: Vec<f64> = gt
+        .iter()
+        .copied()
+        .filter(|t| !(1.0..1.5).contains(t))
+        .collect();
+    let gyro = stream(&kept, |t| [t, -2.0 * t, 0.5], None);
     at.insert(10, at[10]); // a repeated time stamp
     let acc = stream(&at, |_| [0.0, 0.0, 9.81], Some(25.0));
     let (rec, warnings) = pair(acc, gyro, 0.05);

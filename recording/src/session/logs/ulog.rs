@@ -11,6 +11,7 @@
 //! topics, and bounds everything (a message is at most 65 535 bytes by its size field). What the
 //! format definitions say, each field's place in a message, is `layout`.
 
+use super::resume::{join, Marker, NO_TIMES};
 use super::{
     list_instances, pair_streams, read_exact_or_end, ImuError, Keep, Stream, StreamSample, TooMany,
 };
@@ -18,11 +19,14 @@ use crate::session::import::Recording;
 use crate::spelling::Spelling;
 use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
+use std::sync::Arc;
 
 mod layout;
 mod params;
+mod window;
 use layout::{layout, parse_format, Field, Layout, Topic, MAX_NESTING};
 pub use params::read_params;
+pub(crate) use window::{read_window, At, Resume};
 
 /// The file's first seven bytes ("ULog" 01 12 35).
 pub const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
@@ -140,9 +144,10 @@ pub enum UlogError {
 /// The reader's state while it streams the file.
 #[derive(Default)]
 struct State {
-    formats: HashMap<String, Vec<Field>>,
+    /// The formats by name, shared with the survey's marks until a definition changes them.
+    formats: Arc<HashMap<String, Vec<Field>>>,
     /// msg_id → the layout of an IMU topic of the chosen instance.
-    subscribed: HashMap<u16, Layout>,
+    subscribed: Arc<HashMap<u16, Layout>>,
     /// Every IMU topic and instance seen, for the error when the chosen one is absent.
     seen: BTreeSet<(Topic, u8)>,
     combined_acc: Stream,
@@ -196,68 +201,16 @@ pub(crate) fn read_keeping<R: Read>(
     }
     let mut st = State::new(keep, rate_hz);
     let mut offset = 16u64;
-    let mut payload = vec![0u8; u16::MAX as usize];
     let mut warnings = Vec::new();
-    loop {
-        if let Some(o) = st.appended.first().copied() {
-            if o <= offset || o - offset < 3 {
-                // The appended data starts here, or inside the next header.
-                st.appended.remove(0);
-                if o > offset {
-                    if !skip_to(&mut r, &mut offset, o, &mut warnings)? {
-                        break;
-                    }
-                } else if o < offset {
-                    warnings.push(format!(
-                        "the log's appended data at byte {o} lies before byte {offset}, where \
-                         reading is: ignored"
-                    ));
-                }
-                continue;
-            }
-        }
-        let mut h = [0u8; 3];
-        let size = match read_exact_or_end(&mut r, &mut h) {
-            Ok(false) => break,
-            Ok(true) => u16::from_le_bytes([h[0], h[1]]) as usize,
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                warnings.push(cut_short(offset));
-                break;
-            }
-            Err(source) => return Err(UlogError::Io { offset, source }),
-        };
-        let end = offset + 3 + size as u64;
-        if let Some(o) = st.appended.first().copied().filter(|&o| end > o) {
-            // As pyulog reads appended data (`core.py`, `_read_file_data(read_until=offset)`): a
-            // message running into it was cut when the logger stopped; it is dropped, and reading
-            // goes on where the appended data starts.
-            st.appended.remove(0);
-            warnings.push(format!(
-                "the message at byte {offset} runs into the data appended at byte {o} (the \
-                 logger stopped while writing it): left out"
-            ));
-            offset += 3;
-            if !skip_to(&mut r, &mut offset, o, &mut warnings)? {
-                break;
-            }
-            continue;
-        }
-        match read_exact_or_end(&mut r, &mut payload[..size]) {
-            Ok(true) => {}
-            Ok(false) if size == 0 => {}
-            Ok(false) => {
-                warnings.push(cut_short(offset));
-                break;
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                warnings.push(cut_short(offset));
-                break;
-            }
-            Err(source) => return Err(UlogError::Io { offset, source }),
-        }
-        st.message(h[2], &payload[..size], offset, instance)?;
-        offset += 3 + size as u64;
-    }
+    let mut marker = Marker::for_keep(keep);
+    st.messages(
+        &mut r,
+        &mut offset,
+        instance,
+        None,
+        marker.as_mut(),
+        &mut warnings,
+    )?;
     if let (count @ 1.., first) = st.bad_formats {
         warnings.push(format!(
             "{count} format definition(s) that do not parse left out (the first at byte {first}); \
@@ -270,6 +223,18 @@ pub(crate) fn read_keeping<R: Read>(
              of fields kept left out (the first at byte {first}); they define no IMU topic, and \
              the topics they define are not read"
         ));
+    }
+    if let (Some(marker), Keep::Survey(report)) = (marker, keep) {
+        let resume = Resume {
+            marks: marker.finish(st.take_times()),
+            streams: st.streams().map(|s| s.at()),
+            seen: st.seen.clone(),
+            dropouts: st.dropouts.clone(),
+            warnings: warnings.clone(),
+        };
+        if let Ok(mut r) = report.lock() {
+            r.resume = Some(Arc::new(super::resume::Resume::Ulog(resume)));
+        }
     }
     st.finish(instance, warnings)
 }
@@ -325,6 +290,146 @@ impl State {
             s.retime(rate_hz);
         }
         st
+    }
+
+    fn streams(&self) -> [&Stream; 4] {
+        [
+            &self.combined_acc,
+            &self.combined_gyro,
+            &self.accel,
+            &self.gyro,
+        ]
+    }
+
+    fn streams_mut(&mut self) -> [&mut Stream; 4] {
+        [
+            &mut self.combined_acc,
+            &mut self.combined_gyro,
+            &mut self.accel,
+            &mut self.gyro,
+        ]
+    }
+
+    /// The samples read, all streams told.
+    fn read(&self) -> usize {
+        self.streams().iter().map(|s| s.count()).sum()
+    }
+
+    /// A survey: the least and greatest time of the samples read since the last call.
+    fn take_times(&mut self) -> (f64, f64) {
+        self.streams_mut()
+            .into_iter()
+            .fold(NO_TIMES, |t, s| join(t, s.take_times()))
+    }
+
+    /// Reads the messages of `r` (at the file's byte `offset`) up to the byte `end` (`None`: the
+    /// end of the file), setting `marker`'s marks on the way.
+    fn messages<R: Read>(
+        &mut self,
+        r: &mut R,
+        offset: &mut u64,
+        instance: u8,
+        end: Option<u64>,
+        mut marker: Option<&mut Marker<At>>,
+        warnings: &mut Vec<String>,
+    ) -> Result<(), UlogError> {
+        let mut payload = vec![0u8; u16::MAX as usize];
+        loop {
+            if end.is_some_and(|e| *offset >= e) {
+                break;
+            }
+            if let Some(m) = marker.as_deref_mut().filter(|m| m.due(self.read())) {
+                let at = At {
+                    formats: Arc::clone(&self.formats),
+                    subscribed: Arc::clone(&self.subscribed),
+                    appended: self.appended.clone(),
+                    fields: self.fields,
+                    streams: self.streams().map(|s| s.at()),
+                };
+                let times = self.take_times();
+                m.set(*offset, at, times, self.read());
+            }
+            if !self.message_at(r, offset, &mut payload, instance, warnings)? {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads and handles the message at `offset` (or skips to the data appended there); `false`
+    /// at the end of the file.
+    fn message_at<R: Read>(
+        &mut self,
+        r: &mut R,
+        offset: &mut u64,
+        payload: &mut [u8],
+        instance: u8,
+        warnings: &mut Vec<String>,
+    ) -> Result<bool, UlogError> {
+        if let Some(o) = self.appended.first().copied() {
+            if o <= *offset || o - *offset < 3 {
+                // The appended data starts here, or inside the next header.
+                self.appended.remove(0);
+                if o > *offset {
+                    return skip_to(r, offset, o, warnings);
+                } else if o < *offset {
+                    warnings.push(format!(
+                        "the log's appended data at byte {o} lies before byte {offset}, where \
+                         reading is: ignored"
+                    ));
+                }
+                return Ok(true);
+            }
+        }
+        let mut h = [0u8; 3];
+        let size = match read_exact_or_end(r, &mut h) {
+            Ok(false) => return Ok(false),
+            Ok(true) => u16::from_le_bytes([h[0], h[1]]) as usize,
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                warnings.push(cut_short(*offset));
+                return Ok(false);
+            }
+            Err(source) => {
+                return Err(UlogError::Io {
+                    offset: *offset,
+                    source,
+                })
+            }
+        };
+        let end = *offset + 3 + size as u64;
+        if let Some(o) = self.appended.first().copied().filter(|&o| end > o) {
+            // As pyulog reads appended data (`core.py`, `_read_file_data(read_until=offset)`): a
+            // message running into it was cut when the logger stopped; it is dropped, and reading
+            // goes on where the appended data starts.
+            self.appended.remove(0);
+            warnings.push(format!(
+                "the message at byte {offset} runs into the data appended at byte {o} (the \
+                 logger stopped while writing it): left out"
+            ));
+            *offset += 3;
+            return skip_to(r, offset, o, warnings);
+        }
+        match read_exact_or_end(r, &mut payload[..size]) {
+            Ok(true) => {}
+            Ok(false) if size == 0 => {}
+            Ok(false) => {
+                warnings.push(cut_short(*offset));
+                return Ok(false);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                warnings.push(cut_short(*offset));
+                return Ok(false);
+            }
+            Err(source) => {
+                return Err(UlogError::Io {
+                    offset: *offset,
+                    source,
+                })
+            }
+        }
+        self.message(h[2], &payload[..size], *offset, instance)?;
+        *offset += 3 + size as u64;
+        Ok(true)
     }
 
     /// Handles one message of type `ty` at byte `offset`.
@@ -384,7 +489,7 @@ impl State {
                     return Ok(());
                 }
                 self.fields = kept;
-                self.formats.insert(name, fields);
+                Arc::make_mut(&mut self.formats).insert(name, fields);
             }
             b'A' if p.len() >= 3 => {
                 let multi_id = p[0];
@@ -401,12 +506,12 @@ impl State {
                             }
                         })?;
                         let l = layout(topic, &fields, &self.formats, offset)?;
-                        self.subscribed.insert(msg_id, l);
-                    } else {
-                        self.subscribed.remove(&msg_id);
+                        Arc::make_mut(&mut self.subscribed).insert(msg_id, l);
+                    } else if self.subscribed.contains_key(&msg_id) {
+                        Arc::make_mut(&mut self.subscribed).remove(&msg_id);
                     }
-                } else {
-                    self.subscribed.remove(&msg_id);
+                } else if self.subscribed.contains_key(&msg_id) {
+                    Arc::make_mut(&mut self.subscribed).remove(&msg_id);
                 }
             }
             b'D' if p.len() >= 2 => {

@@ -10,6 +10,12 @@
 //! of the window itself are handed on: every sample lies in exactly one window, the first window
 //! reaching back and the last forward without bound.
 //!
+//! A window's pass does not read the file from its start: the survey marks where the reader can
+//! resume (`super::resume`), and each window reads only the stretches between marks whose
+//! samples' times reach it, so that the time grows with the file's size, not its square. It keeps
+//! the same samples, and says the same, as a pass over the whole file
+//! ([`LogWindows::without_marks`] is that pass, for the tests).
+//!
 //! What is said of the log is said on the log's scale, decided once for the whole log and applied
 //! by each window ([`LogScale`]): whether it has temperatures (the survey counts the readings), the
 //! places of the samples a repair names (counted in the file, not in the window), the gaps and
@@ -25,8 +31,10 @@
 //! counted against the survey's and said ([`LogScale::notes`]).
 
 use super::keep::{Keep, PassReport};
+use super::resume::{mark_every, SharedResume};
 use super::{
-    first_pass, read_pass, temperature_note, unpaired_note, FirstPass, LogError, LogFile, LogSource,
+    first_pass, read_pass, resume_pass, temperature_note, unpaired_note, FirstPass, LogError,
+    LogFile, LogSource,
 };
 use crate::session::import::{say_time_jumps, Recording, TimeJump, GAP_PERIODS};
 use crate::session::repair::{Restart, TimeRepairs};
@@ -67,6 +75,9 @@ pub struct LogWindows {
     temperatures: bool,
     /// The survey found a temperature field without a reading anywhere.
     no_readings: bool,
+    /// Where each window's stretch of the file begins, from the survey (`None`: a format without
+    /// marks, whose windows each read the whole file; `super::resume`).
+    resume: Option<SharedResume>,
 }
 
 /// One window of a long log read: its samples (their time repairs said on the log's scale, with
@@ -110,7 +121,17 @@ impl LogWindows {
             own: (lo, hi),
             report: Arc::clone(&report),
         };
-        let mut log = match read_pass(&self.path, &self.source, &keep, self.seconds_per_unit) {
+        let pass = match &self.resume {
+            Some(resume) => resume_pass(
+                &self.path,
+                &self.source,
+                resume,
+                &keep,
+                self.seconds_per_unit,
+            ),
+            None => read_pass(&self.path, &self.source, &keep, self.seconds_per_unit),
+        };
+        let mut log = match pass {
             Err(LogError::NoRecording { .. }) => return Ok(None),
             r => r?,
         };
@@ -123,6 +144,20 @@ impl LogWindows {
         }
         let unpaired = report.lock().map(|r| r.unpaired).unwrap_or_default();
         Ok(Some(Window { log, unpaired }))
+    }
+
+    /// These windows, each read by a pass over the whole file rather than from the survey's
+    /// marks: what a read from the marks must equal, sample for sample and word for word.
+    pub fn without_marks(self) -> LogWindows {
+        LogWindows {
+            resume: None,
+            ..self
+        }
+    }
+
+    /// Whether the windows are read from the survey's marks (each its own stretch of the file).
+    pub fn marked(&self) -> bool {
+        self.resume.is_some()
     }
 
     /// What is said on the log's scale, to be told each window read in turn.
@@ -328,16 +363,19 @@ pub fn read_log_windows(
             seconds_per_unit, ..
         } => seconds_per_unit,
     };
-    let report = Arc::new(Mutex::new(PassReport::default()));
+    let report = Arc::new(Mutex::new(PassReport {
+        marks_every: mark_every(max),
+        ..PassReport::default()
+    }));
     read_pass(
         path,
         source,
         &Keep::Survey(Arc::clone(&report)),
         seconds_per_unit,
     )?;
-    let (survey, temperatures) = match report.lock() {
-        Ok(mut r) => (r.survey.take(), r.temperatures),
-        Err(_) => (None, (0, 0)),
+    let (survey, temperatures, resume) = match report.lock() {
+        Ok(mut r) => (r.survey.take(), r.temperatures, r.resume.take()),
+        Err(_) => (None, (0, 0), None),
     };
     let surveyed = survey.as_ref().map_or(0, |s| s.count());
     let (mut starts, period) = survey.map(|s| s.window_starts(max / 2)).unwrap_or_default();
@@ -352,6 +390,7 @@ pub fn read_log_windows(
         surveyed,
         temperatures: temperatures.1 > 0,
         no_readings: temperatures.0 > 0 && temperatures.1 == 0,
+        resume,
     }))
 }
 
