@@ -10,6 +10,8 @@
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
 //! - [`boards`]: the flight controllers as data (IMU, bus, pins, IMU rotation, LED, pins never to
 //!   touch, crystal), each checked against its Betaflight and ArduPilot board files.
+//! - [`clock_start`]: the STM32 boards' clock started without hanging on a missing external
+//!   clock (a bounded wait for the HSE, then the HSI).
 //! - [`clock_tree`]: the STM32 boards' SPI buses as data (pin speeds; clocks from the HAL's own
 //!   divider rules), checked at compile time against the parts' limits.
 //! - [`conversion`]: an ADC board's per-sample conversion of the scan's codes and the gyro's words
@@ -33,6 +35,7 @@
 #![deny(missing_docs)]
 
 pub mod boards;
+pub mod clock_start;
 pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;

@@ -45,6 +45,7 @@ mod app {
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::board::stm32f4::{self as board, AdcWords, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
     use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::clock_start::{self, ClockSource};
     use firmware::clock_tree::nucleo::GYRO_SPI;
     use firmware::conversion::Scaling;
     use firmware::imu::l3gd20h::L3gd20;
@@ -90,14 +91,44 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         paint_stack();
         let dp = cx.device;
-        // Nucleo: 8 MHz HSE from the ST-LINK's MCO. PCLK2 is asked for explicitly: the ADC clock
-        // derives from it (board::ADC_CLOCK_HZ).
+        // Nucleo: 8 MHz HSE from the ST-LINK's MCO, where the solder bridges route it; else the
+        // HSI after a bounded wait (`clock_start`), not the HAL's endless one. PCLK2 is asked for
+        // explicitly: the ADC clock derives from it (board::ADC_CLOCK_HZ).
+        dp.RCC.cr().modify(|_, w| {
+            w.hsebyp().bypassed();
+            w.hseon().set_bit()
+        });
+        let source = clock_start::settle(
+            || {
+                let ready = dp.RCC.cr().read().hserdy().bit_is_set();
+                if !ready {
+                    cortex_m::asm::delay(clock_start::CYCLES_PER_POLL);
+                }
+                ready
+            },
+            clock_start::HSE_POLLS,
+        );
+        let config = match source {
+            ClockSource::Hse => Config::hse(8.MHz()).bypass_hse_oscillator(),
+            ClockSource::Hsi => {
+                // HSEBYP can be written only with the HSE off (RM0390, RCC_CR).
+                dp.RCC.cr().modify(|_, w| w.hseon().clear_bit());
+                dp.RCC.cr().modify(|_, w| w.hsebyp().not_bypassed());
+                Config::hsi()
+            }
+        };
         let mut rcc = dp.RCC.freeze(
-            Config::hse(8.MHz())
-                .bypass_hse_oscillator()
+            config
                 .sysclk(board::SYSCLK_HZ.Hz())
                 .pclk2(board::PCLK2_HZ.Hz()),
         );
+        if source == ClockSource::Hsi {
+            defmt::warn!(
+                "no 8 MHz clock on OSC_IN within {=u32} ms (the ST-LINK's MCO not routed by the \
+                 board's solder bridges): running on the 16 MHz HSI, ±1 % at 25 °C",
+                clock_start::HSE_STARTUP_TIMEOUT_MS
+            );
+        }
         if rcc.clocks.pclk2().raw() != board::PCLK2_HZ {
             defmt::error!(
                 "PCLK2 is {=u32} Hz, not {=u32}: the ADC clock is not {=u32} Hz",
