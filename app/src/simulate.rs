@@ -104,10 +104,11 @@ impl NoiseChoices {
         set(&mut n.table_rate_offset_deg_s, self.rate_offset_deg_s);
         set(&mut n.gyro_white_deg_s, self.gyro_noise_deg_s);
         set(&mut n.accel_flicker_mg, self.flicker_mg);
-        set(
-            &mut n.gyro_bias_walk_deg_s_sqrt_s,
-            self.gyro_drift_deg_s_sqrt_s,
-        );
+        if let Some(k) = self.gyro_drift_deg_s_sqrt_s {
+            // One strength given replaces the unit file's, per axis too.
+            n.gyro_bias_walk_deg_s_sqrt_s = k;
+            n.gyro_bias_walk_per_axis_deg_s_sqrt_s = None;
+        }
         set(&mut n.gyro_flicker_deg_s, self.gyro_flicker_deg_s);
         if let Some(b) = self.gyro_bias_deg_s {
             n.gyro_bias_deg_s = b;

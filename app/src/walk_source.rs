@@ -1,8 +1,9 @@
 //! The bias random walks taken from the unit's own noise figures (`--bias-walk-from FILE`,
 //! docs/model.md §11.3): the Allan K of `host noise`'s `noise.json`, or a unit file's `[noise]`
 //! `accel_bias_walk_mg_sqrt_s`. The accelerometers' walk must be there; the gyro's is taken too
-//! where the file holds it (the gyro axes' K, or `gyro_bias_walk_deg_s_sqrt_s`; §11.6), as one
-//! strength for the three axes: the rms of theirs.
+//! where the file holds it (the gyro axes' K, or `gyro_bias_walk_deg_s_sqrt_s` or
+//! `gyro_bias_walk_per_axis_deg_s_sqrt_s`; §11.6), as one strength for the three axes: the rms of
+//! theirs.
 //!
 //! Units: the fit wants the walk per axis either in mg/√s (turned into output units with the fitted
 //! scale factors) or in output unit/√s as it is. A unit file's `[noise]` is mg/√s already. A
@@ -128,7 +129,7 @@ pub fn walk_from_file(path: &Path) -> Result<FileWalks, WalkSourceError> {
     match noise {
         Some(n) if n.accel_bias_walk_mg_sqrt_s > 0.0 => Ok(FileWalks {
             accel: UnitWalk::MgSqrtS([n.accel_bias_walk_mg_sqrt_s; 3]),
-            gyro_deg_s_sqrt_s: Some(n.gyro_bias_walk_deg_s_sqrt_s).filter(|&k| k > 0.0),
+            gyro_deg_s_sqrt_s: Some(n.gyro_bias_walk_one()).filter(|&k| k > 0.0),
         }),
         Some(_) => Err(WalkSourceError::NoWalk {
             path: path.into(),
@@ -340,6 +341,15 @@ mod tests {
             walk_from_file(&unit).unwrap().gyro_deg_s_sqrt_s,
             Some(0.0004)
         );
+        // Per axis, their rms: 1, 2 and 2 ·10⁻⁴ give √3·10⁻⁴ (by hand).
+        let text = format!(
+            "{}\n[noise]\naccel_bias_walk_mg_sqrt_s = 0.003\n\
+             gyro_bias_walk_per_axis_deg_s_sqrt_s = [0.0001, 0.0002, 0.0002]\n",
+            estimator::unit_file::PAPER_UNIT_TOML
+        );
+        std::fs::write(&unit, text).unwrap();
+        let got = walk_from_file(&unit).unwrap().gyro_deg_s_sqrt_s.unwrap();
+        assert!((got - 1.7320508e-4).abs() < 1e-11, "{got}");
     }
 
     /// By hand: gyro K of 1, 2 and 2 ·10⁻⁵ rad/s/√s have the rms √(9/3)·10⁻⁵ = 1.732 05·10⁻⁵

@@ -1,7 +1,8 @@
 //! The estimator's time on the paper's session (the built-in `paper` plan: 15 segments of 60 s at
 //! 1 kHz, 900 000 rows) with an accelerometer bias random walk of 0.002 mg/√s and a gyro bias walk
-//! of 3·10⁻⁴ °/s/√s: the constant-bias fit, the accelerometers' walk given, estimated, and given
-//! with the gyro's (docs/model.md §11, §11.6).
+//! of 3·10⁻⁴ °/s/√s: the constant-bias fit, the accelerometers' walk given, estimated, given with
+//! the gyro's, and both estimated as the tools do by default (the gyro's one strength, then per
+//! axis; docs/model.md §11, §11.6).
 //!
 //! `cargo run --release -p estimator --example fit_time`
 //!
@@ -34,21 +35,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
          {GYRO_WALK_DEG_S_SQRT_S} °/s/√s",
         stats.len()
     );
-    for (name, walk, gyro_walk) in [
-        ("constant bias", BiasWalk::Off, 0.0),
-        ("walk given 0.002 mg/√s", BiasWalk::Given(0.002), 0.0),
-        ("walk estimated", BiasWalk::Estimate, 0.0),
+    let given = |walk, gyro_walk| EstimateOptions {
+        bias_walk: walk,
+        gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
+        ..EstimateOptions::default()
+    };
+    for (name, options) in [
+        ("constant bias", given(BiasWalk::Off, 0.0)),
+        ("walk given 0.002 mg/√s", given(BiasWalk::Given(0.002), 0.0)),
+        ("walk estimated", given(BiasWalk::Estimate, 0.0)),
         (
             "both walks given",
-            BiasWalk::Given(0.002),
-            GYRO_WALK_DEG_S_SQRT_S,
+            given(BiasWalk::Given(0.002), GYRO_WALK_DEG_S_SQRT_S),
+        ),
+        (
+            "both walks estimated",
+            EstimateOptions::default().drift_aware(),
         ),
     ] {
-        let options = EstimateOptions {
-            bias_walk: walk,
-            gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
-            ..EstimateOptions::default()
-        };
         let mut times = Vec::with_capacity(RUNS);
         let mut last = None;
         for _ in 0..RUNS {
@@ -58,6 +62,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             last = Some(out);
         }
         times.sort_by(f64::total_cmp);
+        let gyro = last
+            .as_ref()
+            .and_then(|o| o.gyro_walk)
+            .map_or(String::new(), |g| {
+                let axes = g.axes.map_or(String::new(), |a| {
+                    format!(", per axis {:.6?} used {}", a.deg_s_sqrt_s, a.used)
+                });
+                format!(
+                    " (gyro {:.6} ± {:.6} °/s/√s{axes})",
+                    g.deg_s_sqrt_s, g.sigma_deg_s_sqrt_s
+                )
+            });
         let walk =
             last.and_then(|o| o.bias_walk)
                 .map_or(String::new(), |w| match w.sigma_mg_sqrt_s {
@@ -65,7 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     None => String::new(),
                 });
         println!(
-            "{name:24} {:8.2} ms median of {RUNS} ({:.2} best){walk}",
+            "{name:24} {:8.2} ms median of {RUNS} ({:.2} best){walk}{gyro}",
             times[RUNS / 2] * 1e3,
             times[0] * 1e3
         );

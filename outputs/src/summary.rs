@@ -330,6 +330,30 @@ pub struct GyroWalkSummary {
     pub significance: f64,
     /// Whether the fit weighted the gyro's means with it (determined by the session).
     pub used: bool,
+    /// Each axis's strength, estimated where the one strength is used (docs/model.md §11.6).
+    /// Absent where it is not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<GyroWalkAxesSummary>,
+}
+
+/// The gyro's bias random walk per axis (x, y, z), estimated from the session (docs/model.md
+/// §11.6).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GyroWalkAxesSummary {
+    /// The estimates, °/s/√s.
+    pub deg_s_sqrt_s: [f64; 3],
+    /// Their 1σ, °/s/√s.
+    pub sigma_deg_s_sqrt_s: [f64; 3],
+    /// Their likelihood intervals, °/s/√s.
+    pub interval_deg_s_sqrt_s: [[f64; 2]; 3],
+    /// The strengths each axis's means were weighted with when used, °/s/√s.
+    pub fit_deg_s_sqrt_s: [f64; 3],
+    /// How far the session rules out a constant bias on each axis, σ.
+    pub significance: [f64; 3],
+    /// 2 Δlog L of the per-axis strengths over the one strength.
+    pub likelihood_ratio: f64,
+    /// Whether the fit weighted the gyro's means with them (in place of the one strength).
+    pub used: bool,
 }
 
 /// The temperature fit's χ² per accelerometer axis, over every sample of the segments that
@@ -414,6 +438,15 @@ impl GyroWalkSummary {
             interval_deg_s_sqrt_s: g.interval_deg_s_sqrt_s,
             significance: g.significance,
             used: g.used,
+            axes: g.axes.map(|a| GyroWalkAxesSummary {
+                deg_s_sqrt_s: a.deg_s_sqrt_s,
+                sigma_deg_s_sqrt_s: a.sigma_deg_s_sqrt_s,
+                interval_deg_s_sqrt_s: a.interval_deg_s_sqrt_s,
+                fit_deg_s_sqrt_s: a.fit_deg_s_sqrt_s,
+                significance: a.significance,
+                likelihood_ratio: a.likelihood_ratio,
+                used: a.used,
+            }),
         })
     }
 }

@@ -263,6 +263,8 @@ pub(crate) struct Search {
     pub q: f64,
     pub interval: [f64; 2],
     pub gain: f64,
+    /// The log-likelihood at `q`.
+    pub peak: f64,
 }
 
 impl Search {
@@ -277,6 +279,10 @@ impl Search {
     }
 }
 
+/// Golden-section steps and bisections that place a strength and its interval's ends (the first
+/// leave 10⁻⁵ of their bracket, the second 6·10⁻⁸).
+const REFINE: usize = 24;
+
 /// The walk strength on `grid` (then refined by golden section) that maximises the log-likelihood
 /// `at`, with its likelihood interval (docs/model.md §11.3).
 pub(crate) fn search(
@@ -284,6 +290,27 @@ pub(crate) fn search(
     grid: &[f64],
     fail: &dyn Fn() -> EstimateError,
 ) -> Result<Search, EstimateError> {
+    let top = peak(at, grid, fail, REFINE)?;
+    interval(at, &top, grid[grid.len() - 1], REFINE)
+}
+
+/// The maximum of a log-likelihood over a grid of strengths and 0: every point evaluated, the
+/// best, and the log-likelihood at 0.
+pub(crate) struct Peak {
+    pts: Vec<(f64, f64)>,
+    pub q: f64,
+    pub l: f64,
+    l0: f64,
+}
+
+/// The strength on `grid` or 0 that maximises `at`, refined by `steps` of golden section between
+/// the best grid point's neighbours.
+pub(crate) fn peak(
+    at: &dyn Fn(f64) -> Result<f64, EstimateError>,
+    grid: &[f64],
+    fail: &dyn Fn() -> EstimateError,
+    steps: usize,
+) -> Result<Peak, EstimateError> {
     let l0 = at(0.0)?;
     let mut pts: Vec<(f64, f64)> = vec![(0.0, l0)];
     for &q in grid {
@@ -295,26 +322,41 @@ pub(crate) fn search(
     let (mut q, mut l) = pts[best];
     if best > 0 && best + 1 < pts.len() {
         let floor = grid[0] / 10.0;
-        (q, l) = golden(at, pts[best - 1].0.max(floor), pts[best + 1].0)?;
+        (q, l) = golden(at, pts[best - 1].0.max(floor), pts[best + 1].0, steps)?;
         if l < pts[best].1 {
             (q, l) = pts[best];
         }
     }
+    Ok(Peak { pts, q, l, l0 })
+}
+
+/// The likelihood interval about `top` (where `at` is within ½ of its maximum), its ends placed by
+/// `steps` bisections; `grid_top` the grid's strongest, above which an upper end is looked for
+/// up to ten times it.
+pub(crate) fn interval(
+    at: &dyn Fn(f64) -> Result<f64, EstimateError>,
+    top: &Peak,
+    grid_top: f64,
+    steps: usize,
+) -> Result<Search, EstimateError> {
+    let (q, l) = (top.q, top.l);
     let target = l - 0.5;
-    let lower = if q == 0.0 || l0 >= target {
+    let lower = if q == 0.0 || top.l0 >= target {
         0.0
     } else {
-        crossing(at, 0.0, q, target)?
+        crossing(at, 0.0, q, target, steps)?
     };
-    let hi = pts
+    let hi = top
+        .pts
         .iter()
         .find(|(x, v)| *x > q && *v < target)
-        .map_or(10.0 * q.max(grid[grid.len() - 1]), |p| p.0);
-    let upper = crossing(at, q, hi, target)?;
+        .map_or(10.0 * q.max(grid_top), |p| p.0);
+    let upper = crossing(at, q, hi, target, steps)?;
     Ok(Search {
         q,
         interval: [lower, upper],
-        gain: l - l0,
+        gain: l - top.l0,
+        peak: l,
     })
 }
 
@@ -540,18 +582,19 @@ pub(crate) fn estimate(
     })
 }
 
-/// The maximum of `f` on `[a, b]` by golden section in `ln q`.
+/// The maximum of `f` on `[a, b]` by `steps` of golden section in `ln q`.
 fn golden(
     f: &dyn Fn(f64) -> Result<f64, EstimateError>,
     a: f64,
     b: f64,
+    steps: usize,
 ) -> Result<(f64, f64), EstimateError> {
     let r = (5f64.sqrt() - 1.0) / 2.0;
     let (mut lo, mut hi) = (a.ln(), b.ln());
     let mut x1 = hi - r * (hi - lo);
     let mut x2 = lo + r * (hi - lo);
     let (mut f1, mut f2) = (f(x1.exp())?, f(x2.exp())?);
-    for _ in 0..24 {
+    for _ in 0..steps {
         if f1 >= f2 {
             hi = x2;
             (x2, f2) = (x1, f1);
@@ -572,16 +615,17 @@ fn golden(
 }
 
 /// Where `f` crosses `target` between `a` and `b` (one side above it, the other below), by
-/// bisection.
+/// `steps` bisections.
 fn crossing(
     f: &dyn Fn(f64) -> Result<f64, EstimateError>,
     a: f64,
     b: f64,
     target: f64,
+    steps: usize,
 ) -> Result<f64, EstimateError> {
     let above_at_a = f(a)? >= target;
     let (mut lo, mut hi) = (a, b);
-    for _ in 0..24 {
+    for _ in 0..steps {
         let mid = 0.5 * (lo + hi);
         if (f(mid)? >= target) == above_at_a {
             lo = mid;

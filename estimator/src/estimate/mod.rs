@@ -47,6 +47,8 @@ mod gyro_drift;
 mod gyro_drift_tests;
 #[cfg(test)]
 mod gyro_tests;
+#[cfg(test)]
+mod gyro_walk_axes_tests;
 pub mod handheld_gyro;
 mod joint;
 pub mod model;
@@ -84,7 +86,7 @@ pub use error::EstimateError;
 pub use fit::{calibrate_session_stats, calibrate_with_hand_gyro};
 pub(crate) use fit::{chord_to_angle_deg, SessionSeg};
 pub use gyro::GyroEstimate;
-pub use gyro_drift::GyroWalkEstimate;
+pub use gyro_drift::{GyroWalkAxes, GyroWalkEstimate, LR_AXES};
 pub use options::{
     BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice, UnitWalk,
 };

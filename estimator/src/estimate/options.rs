@@ -99,6 +99,11 @@ pub struct EstimateOptions {
     /// The gyro's bias random walk, °/s/√s (docs/model.md §11.6): the gyro model's mean rates are
     /// weighted with its covariance across the session. 0 is a constant gyro bias, the default.
     pub gyro_bias_walk_deg_s_sqrt_s: f64,
+    /// The gyro's bias random walk per axis (x, y, z), °/s/√s, in place of the one strength on
+    /// every axis: the fit weighing the per-axis estimate where the session determines it
+    /// (docs/model.md §11.6). Taken only with a `gyro_bias_walk_deg_s_sqrt_s` above 0 (the
+    /// strongest of these); `None`, the default, is that one strength on the three axes.
+    pub gyro_bias_walk_axes_deg_s_sqrt_s: Option<[f64; 3]>,
     /// The gyro's walk comes with the unit's noise figures (a file giving the accelerometers'
     /// walk too), not asked for: on a session without a gyro model it is left out with a warning
     /// instead of refused ([`super::EstimateError::GyroBiasWalkUnused`]).
@@ -201,6 +206,7 @@ impl Default for EstimateOptions {
             single_package: false,
             bias_walk: BiasWalk::Off,
             gyro_bias_walk_deg_s_sqrt_s: 0.0,
+            gyro_bias_walk_axes_deg_s_sqrt_s: None,
             gyro_bias_walk_from_unit: false,
             gyro_bias_walk_estimate: false,
             spelling: Spelling::Flags,

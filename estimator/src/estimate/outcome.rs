@@ -361,7 +361,8 @@ pub struct CalibrationOutcome {
     /// time order; empty without a walk (docs/model.md §11.4).
     pub bias_track: Vec<super::WalkPoint>,
     /// The gyro's bias random walk the gyro model's mean rates were weighted with, °/s/√s
-    /// (docs/model.md §11.6); `None` with a constant gyro bias or without a gyro model.
+    /// (docs/model.md §11.6), the strongest axis's where they were weighted per axis
+    /// ([`super::GyroWalkAxes::used`]); `None` with a constant gyro bias or without a gyro model.
     pub gyro_bias_walk_deg_s_sqrt_s: Option<f64>,
     /// The counts of zero force subtracted when the session's logger's file was read (its plan's
     /// `acc_offset`): the biases are of the logger's own counts and hold them; written to the

@@ -22,8 +22,9 @@ pub(super) struct SensorNoise {
     gyro_sigma: f64,
     /// Fixed gyro bias, rad/s.
     gyro_bias: [f64; 3],
-    /// Gyro bias random walk step per sample, rad/s.
-    gyro_walk: f64,
+    /// Gyro bias random walk step per sample, rad/s, per axis: an axis draws from the walk's
+    /// stream only when its step is above 0.
+    gyro_walk: [f64; 3],
     /// Stream of the accelerometer white noise.
     rng_accel: Rng,
     /// Stream of the gyro white noise.
@@ -67,7 +68,9 @@ impl SensorNoise {
             q: noise.accel_quantum_out,
             gyro_sigma: noise.gyro_white_deg_s.to_radians(),
             gyro_bias: noise.gyro_bias_deg_s.map(f64::to_radians),
-            gyro_walk: noise.gyro_bias_walk_deg_s_sqrt_s.to_radians() * dt.sqrt(),
+            gyro_walk: noise
+                .gyro_bias_walk_axes()
+                .map(|k| k.to_radians() * dt.sqrt()),
             rng_accel: Rng::new(seed, STREAM_ACCEL),
             rng_gyro: Rng::new(seed, STREAM_GYRO),
             rng_walk: Rng::new(seed, STREAM_WALK),
@@ -105,8 +108,8 @@ impl SensorNoise {
     pub(super) fn add_to_gyro(&mut self, w: &mut [f64; 3], thermal_bias: &[f64; 3]) {
         for i in 0..3 {
             w[i] += self.gyro_bias[i] + thermal_bias[i];
-            if self.gyro_walk > 0.0 {
-                self.gyro_drift[i] += self.gyro_walk * self.rng_gyro_walk.normal();
+            if self.gyro_walk[i] > 0.0 {
+                self.gyro_drift[i] += self.gyro_walk[i] * self.rng_gyro_walk.normal();
                 w[i] += self.gyro_drift[i];
             }
             if let Some(fl) = self.gyro_flicker.get_mut(i) {

@@ -50,8 +50,14 @@ pub struct NoiseModel {
     pub gyro_matrix: [[f64; 3]; 3],
     /// Accelerometer flicker (1/f) bias noise, as its bias instability B, mg (Allan floor 0.664 B).
     pub accel_flicker_mg: f64,
-    /// Gyro bias random walk, °/s/√s (each axis starts at 0 at the session's start).
+    /// Gyro bias random walk, °/s/√s, the same on the three axes (each axis starts at 0 at the
+    /// session's start).
     pub gyro_bias_walk_deg_s_sqrt_s: f64,
+    /// Gyro bias random walk per axis (x, y, z), °/s/√s, in place of
+    /// `gyro_bias_walk_deg_s_sqrt_s` when given: a unit whose axes wander differently
+    /// (docs/model.md §11.6). Absent from a file that does not give it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_walk_per_axis_deg_s_sqrt_s: Option<[f64; 3]>,
     /// Gyro flicker (1/f) bias noise, as its bias instability B, °/s.
     pub gyro_flicker_deg_s: f64,
 }
@@ -90,6 +96,7 @@ impl Default for NoiseModel {
             gyro_matrix: IDENTITY,
             accel_flicker_mg: 0.0,
             gyro_bias_walk_deg_s_sqrt_s: 0.0,
+            gyro_bias_walk_per_axis_deg_s_sqrt_s: None,
             gyro_flicker_deg_s: 0.0,
         }
     }
@@ -102,6 +109,22 @@ impl NoiseModel {
             accel_white_mg: 0.0,
             gyro_white_deg_s: 0.0,
             ..NoiseModel::default()
+        }
+    }
+
+    /// The gyro's bias random walk on each axis, °/s/√s: the per-axis strengths where given, else
+    /// the one strength on all three.
+    pub fn gyro_bias_walk_axes(&self) -> [f64; 3] {
+        self.gyro_bias_walk_per_axis_deg_s_sqrt_s
+            .unwrap_or([self.gyro_bias_walk_deg_s_sqrt_s; 3])
+    }
+
+    /// The gyro's bias random walk as one strength, °/s/√s: the one given, or the rms of the
+    /// per-axis strengths (as `--bias-walk-from` takes a `noise.json`'s three gyro axes).
+    pub fn gyro_bias_walk_one(&self) -> f64 {
+        match self.gyro_bias_walk_per_axis_deg_s_sqrt_s {
+            None => self.gyro_bias_walk_deg_s_sqrt_s,
+            Some(k) => (k.iter().map(|k| k * k).sum::<f64>() / 3.0).sqrt(),
         }
     }
 
@@ -131,7 +154,14 @@ impl NoiseModel {
                 self.gyro_bias_walk_deg_s_sqrt_s,
             ),
             ("gyro_flicker_deg_s", self.gyro_flicker_deg_s),
-        ];
+        ]
+        .into_iter()
+        .chain(
+            self.gyro_bias_walk_per_axis_deg_s_sqrt_s
+                .into_iter()
+                .flatten()
+                .map(|v| ("gyro_bias_walk_per_axis_deg_s_sqrt_s", v)),
+        );
         for (name, v) in sigmas {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(SimulateError::Noise(format!(
@@ -771,6 +801,65 @@ mod tests {
         }
         // 1 mg ≈ 0.4 mV of noise on a 1 mV step: a handful of levels per axis, not one.
         assert!(levels.len() > 6, "{levels:?}");
+    }
+
+    /// Each gyro axis walks with its own strength where given per axis (its steps' 1σ `K_i √dt`,
+    /// none at 0); the same strength on every axis is the one strength's session byte for byte;
+    /// the per-axis strengths go to truth.toml and back, and a model without them writes none.
+    #[test]
+    fn the_gyro_walk_per_axis_has_the_requested_size() {
+        let p = plan("[[segment]]\nname = \"x+\"\nup_b = [1, 0, 0]\nduration_s = 20\n");
+        let axes = [0.01, 0.03, 0.0];
+        let noise = NoiseModel {
+            gyro_bias_walk_per_axis_deg_s_sqrt_s: Some(axes),
+            ..NoiseModel::none()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        simulate_to_dir(dir.path(), &paper(), &p, &noise, 3, false).unwrap();
+        let r = rows(dir.path());
+        for (i, k) in axes.iter().enumerate() {
+            let d: Vec<f64> = r
+                .windows(2)
+                .map(|w| w[1].1[4 + i] - w[0].1[4 + i])
+                .collect();
+            let sd = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+            let want = k.to_radians() * (1e-3f64).sqrt();
+            if *k == 0.0 {
+                assert_eq!(sd, 0.0, "axis {i}");
+            } else {
+                assert!((sd / want - 1.0).abs() < 0.03, "axis {i}: {sd} vs {want}");
+            }
+        }
+        let truth = std::fs::read_to_string(dir.path().join(TRUTH_FILE)).unwrap();
+        let truth: UnitFile = toml::from_str(&truth).unwrap();
+        assert_eq!(NoiseModel::from_unit_file(&truth).unwrap(), Some(noise));
+        let session = |noise: &NoiseModel| {
+            let dir = tempfile::tempdir().unwrap();
+            simulate_to_dir(dir.path(), &paper(), &p, noise, 4, false).unwrap();
+            let read = |f: &str| std::fs::read_to_string(dir.path().join(f)).unwrap();
+            (read(SAMPLES_FILE), read(TRUTH_FILE))
+        };
+        let one = NoiseModel {
+            gyro_bias_walk_deg_s_sqrt_s: 0.02,
+            ..NoiseModel::default()
+        };
+        let per_axis = NoiseModel {
+            gyro_bias_walk_per_axis_deg_s_sqrt_s: Some([0.02; 3]),
+            ..NoiseModel::default()
+        };
+        let (a, b) = (session(&one), session(&per_axis));
+        assert_eq!(a.0, b.0);
+        assert!(
+            !a.1.contains("per_axis") && b.1.contains("per_axis"),
+            "{}",
+            a.1
+        );
+        let bad = NoiseModel {
+            gyro_bias_walk_per_axis_deg_s_sqrt_s: Some([0.01, -1.0, 0.0]),
+            ..NoiseModel::none()
+        };
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains("gyro_bias_walk_per_axis_deg_s_sqrt_s"), "{e}");
     }
 
     #[test]

@@ -194,7 +194,7 @@ fn expected_walks(a: &PlanArgs, plan: &Plan, unit: &UnitFile) -> Result<Walks, C
     if let Some(n) = noise.filter(|n| n.accel_bias_walk_mg_sqrt_s > 0.0) {
         return Ok(Walks {
             accel_mg_sqrt_s: n.accel_bias_walk_mg_sqrt_s,
-            gyro_deg_s_sqrt_s: n.gyro_bias_walk_deg_s_sqrt_s,
+            gyro_deg_s_sqrt_s: n.gyro_bias_walk_one(),
             from: "unit",
         });
     }

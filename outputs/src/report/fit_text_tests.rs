@@ -489,3 +489,69 @@ fn a_gyro_bias_walk_is_said_in_the_text_and_the_summary() {
         }
     }
 }
+
+/// The gyro walk estimated per axis is said where the fit used it: the text's line gives each
+/// axis's strength with its 1σ and the strengths the means were weighted with, and the JSON's
+/// `gyro_walk.axes` them all, `gyro_bias_walk_deg_s_sqrt_s` the strongest; where the axes walk
+/// alike the line is the one strength's, as it always was, and `gyro_walk.axes` says why
+/// (not used). Against the simulated walks (docs/model.md §11.6).
+#[test]
+fn a_gyro_walk_per_axis_is_said_where_it_is_used() {
+    let truth = testkit::single_package_unit();
+    let plan = testkit::paper_plan(OutputUnit::Lsb);
+    for (walks, per_axis) in [([0.0002, 0.0005, 0.0015], true), ([0.0005; 3], false)] {
+        let noise = estimator::sim::NoiseModel {
+            accel_bias_walk_mg_sqrt_s: 0.002,
+            gyro_bias_walk_per_axis_deg_s_sqrt_s: Some(walks),
+            ..testkit::mems_noise()
+        };
+        let stats = estimator::sim::simulate_stats(&truth, &plan, &noise, 40).unwrap();
+        let options = EstimateOptions::default().drift_aware();
+        let out = calibrate_session_stats(&plan, &stats, &options).unwrap();
+        let text = render(&out, &[]);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("Gyro bias random walk"))
+            .unwrap();
+        println!("{line}");
+        let json =
+            serde_json::to_value(CalibrationSummary::new(&out, None, &Limits::default())).unwrap();
+        let axes = &json["gyro_walk"]["axes"];
+        let a = out.gyro_walk.unwrap().axes.unwrap();
+        assert_eq!(axes["used"], per_axis, "{json}");
+        assert_eq!(axes["deg_s_sqrt_s"][2].as_f64(), Some(a.deg_s_sqrt_s[2]));
+        assert_eq!(json["gyro_walk"]["used"], true);
+        // A summary written before per-axis walks, without the key, still reads.
+        let mut before = json["gyro_walk"].clone();
+        before.as_object_mut().unwrap().remove("axes");
+        let read: crate::summary::GyroWalkSummary = serde_json::from_value(before).unwrap();
+        assert!(read.axes.is_none());
+        let weighted = json["gyro_bias_walk_deg_s_sqrt_s"].as_f64().unwrap();
+        if per_axis {
+            let z = format!(
+                "z {:.6} ± {:.6}",
+                a.deg_s_sqrt_s[2], a.sigma_deg_s_sqrt_s[2]
+            );
+            assert!(
+                line.contains(&z) && line.contains("weighted per axis"),
+                "{line}"
+            );
+            assert_eq!(weighted, a.fit_deg_s_sqrt_s[2]);
+            // The strongest axis is the one simulated strongest, within 3σ of it.
+            assert!((a.deg_s_sqrt_s[2] - walks[2]).abs() < 3.0 * a.sigma_deg_s_sqrt_s[2]);
+        } else {
+            assert!(!line.contains("per axis"), "{line}");
+            assert!(
+                line.contains("; the gyro's mean rates weighted with √(K² + σ²) = "),
+                "{line}"
+            );
+            assert_eq!(
+                weighted,
+                json["gyro_walk"]["deg_s_sqrt_s"]
+                    .as_f64()
+                    .unwrap()
+                    .hypot(json["gyro_walk"]["sigma_deg_s_sqrt_s"].as_f64().unwrap())
+            );
+        }
+    }
+}

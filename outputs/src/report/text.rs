@@ -6,8 +6,8 @@
 use super::format::{out_digits, pm, reference_point};
 use super::SegmentRow;
 use estimator::estimate::{
-    CalibrationOutcome, GyroEstimate, Method, MountTilt, Prediction, SegmentDiagnostic,
-    SegmentKind, StaticSplit, IN_PACKAGE_NOT_OBSERVABLE, PAPER_LEN,
+    CalibrationOutcome, GyroEstimate, GyroWalkAxes, GyroWalkEstimate, Method, MountTilt,
+    Prediction, SegmentDiagnostic, SegmentKind, StaticSplit, IN_PACKAGE_NOT_OBSERVABLE, PAPER_LEN,
 };
 use recording::session::{Plan, SegmentStats};
 use shared::params::axis_name;
@@ -114,6 +114,13 @@ fn render_walks(s: &mut String, o: &CalibrationOutcome) {
             w.mg_sqrt_s
         );
     }
+    let per_axis = o
+        .gyro_walk
+        .and_then(|g| Some((g, g.axes.filter(|a| a.used)?)));
+    if let Some((g, a)) = per_axis {
+        render_gyro_axes(s, &g, &a);
+        return;
+    }
     match (&o.gyro_walk, o.gyro_bias_walk_deg_s_sqrt_s) {
         (Some(g), _) => {
             let how = if g.used {
@@ -144,6 +151,34 @@ fn render_walks(s: &mut String, o: &CalibrationOutcome) {
         }
         (None, None) => {}
     }
+}
+
+/// The gyro walk's line where the fit weighted each axis with its own strength (docs/model.md
+/// §11.6).
+fn render_gyro_axes(s: &mut String, g: &GyroWalkEstimate, a: &GyroWalkAxes) {
+    let axes = |v: [f64; 3], sd: Option<[f64; 3]>| -> String {
+        let each: Vec<String> = (0..3)
+            .map(|i| match sd {
+                Some(sd) => format!("{} {:.6} ± {:.6}", axis_name(i), v[i], sd[i]),
+                None => format!("{} {:.6}", axis_name(i), v[i]),
+            })
+            .collect();
+        each.join(", ")
+    };
+    let _ = writeln!(
+        s,
+        "Gyro bias random walk: {:.6} ± {:.6} °/s/√s (1σ), estimated from the session, {:.1}σ \
+         from none; per axis {} °/s/√s (1σ), determined apart (2Δlog L = {:.1} over the one \
+         strength, at least {}): the gyro's mean rates weighted per axis with √(K² + σ²) = {}, \
+         its bias b at the session's start (docs/model.md §11.6)",
+        g.deg_s_sqrt_s,
+        g.sigma_deg_s_sqrt_s,
+        g.significance,
+        axes(a.deg_s_sqrt_s, Some(a.sigma_deg_s_sqrt_s)),
+        a.likelihood_ratio,
+        estimator::estimate::LR_AXES,
+        axes(a.fit_deg_s_sqrt_s, None),
+    );
 }
 
 /// The segments a calibration left out, one line each with why and the figure that failed

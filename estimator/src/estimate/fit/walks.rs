@@ -27,10 +27,17 @@ impl Walks {
             (None, BiasWalk::Estimate) => BiasWalk::Off,
             (None, w) => w,
         };
+        let (gyro_walk, gyro_axes) = gyro.map_or(
+            (
+                options.gyro_bias_walk_deg_s_sqrt_s,
+                options.gyro_bias_walk_axes_deg_s_sqrt_s,
+            ),
+            |w| w.fit_strengths(),
+        );
         Some(EstimateOptions {
             bias_walk,
-            gyro_bias_walk_deg_s_sqrt_s: gyro
-                .map_or(options.gyro_bias_walk_deg_s_sqrt_s, |w| w.fit_deg_s_sqrt_s),
+            gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
+            gyro_bias_walk_axes_deg_s_sqrt_s: gyro_axes,
             gyro_bias_walk_estimate: false,
             ..options.clone()
         })
@@ -38,10 +45,11 @@ impl Walks {
 }
 
 /// The walks asked for, by coordinate ascent of the restricted likelihood: the accelerometers'
-/// with a constant gyro bias, the gyro's under the accelerometers' where that is determined, then
-/// the accelerometers' again under the gyro's where that is (§11.3, §11.6). The gyro's first, with
-/// the accelerometers' walk not yet modelled, cost the 0.05° fixture of `drift_tests` under
-/// 0.005 mg/√s a fifth of its static error (61 µg against the given walk's 51).
+/// with a constant gyro bias, the gyro's (one strength, then per axis) under the accelerometers'
+/// where that is determined, then the accelerometers' again under the gyro's where that is (§11.3,
+/// §11.6). The gyro's first, with the accelerometers' walk not yet modelled, cost the 0.05° fixture
+/// of `drift_tests` under 0.005 mg/√s a fifth of its static error (61 µg against the given walk's
+/// 51).
 pub(super) fn estimate_walks(
     options: &EstimateOptions,
     estimate_gyro: bool,
@@ -72,7 +80,10 @@ pub(super) fn estimate_walks(
         (Some(g), true) if estimate_accel => {
             let mut q = p.clone();
             let mut o = options.clone();
-            o.gyro_bias_walk_deg_s_sqrt_s = g.fit_deg_s_sqrt_s;
+            (
+                o.gyro_bias_walk_deg_s_sqrt_s,
+                o.gyro_bias_walk_axes_deg_s_sqrt_s,
+            ) = g.fit_strengths();
             if let Some(blk) = q.gyro_block.as_mut() {
                 blk.walk = gyro_drift::walk(&o, segs);
             }
