@@ -66,16 +66,19 @@ if [ "${SKIP_STM32:-0}" != 1 ]; then
     cargo build --release --features board-stm32f4 --bin stm32f4 --target "$target"
     arm-none-eabi-size "$tdir/$target/release/stm32f4"
 
-    # The F405 boards, each from its description (`boards`): the SpeedyBee F405 V4 (no extra
-    # feature) and V5 (`speedybee-v5`); the V4 last, so that its image is the one left.
-    for board in v5 v4; do
-        step "build + clippy: SpeedyBee F405 $board (ICM-42688-P, USB CDC-ACM)"
+    # The F405 boards, each from its description (`boards`): the SpeedyBee F405 V3 (`speedybee-v3`,
+    # BMI270: the binary f405-bmi270), V5 (`speedybee-v5`) and V4 (no extra feature), both
+    # ICM-42688-P (the binary f405); the V4 last, so that its image is the one left.
+    for board in v3 v5 v4; do
+        bin=f405 part=ICM-42688-P
+        [ "$board" = v3 ] && bin=f405-bmi270 part=BMI270
+        step "build + clippy: SpeedyBee F405 $board ($part, USB CDC-ACM)"
         f405_features=(--no-default-features --features board-f405)
         [ "$board" = v4 ] || f405_features=(--no-default-features --features "speedybee-$board")
-        cargo clippy --release "${f405_features[@]}" --bin f405 --target "$target" -- -D warnings
-        cargo build --release "${f405_features[@]}" --bin f405 --target "$target"
-        arm-none-eabi-size "$tdir/$target/release/f405"
-        read -r text data bss _ < <(arm-none-eabi-size "$tdir/$target/release/f405" | tail -n1)
+        cargo clippy --release "${f405_features[@]}" --bin "$bin" --target "$target" -- -D warnings
+        cargo build --release "${f405_features[@]}" --bin "$bin" --target "$target"
+        arm-none-eabi-size "$tdir/$target/release/$bin"
+        read -r text data bss _ < <(arm-none-eabi-size "$tdir/$target/release/$bin" | tail -n1)
         flash=$((text + data)) ram=$((data + bss))
         echo "F405 $board: flash $flash bytes (budget 131072), static RAM $ram bytes (budget 32768)"
         [ "$flash" -le 131072 ] && [ "$ram" -le 32768 ] || { echo "F405 over its budget" >&2; exit 1; }

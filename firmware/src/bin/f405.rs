@@ -28,7 +28,7 @@ mod app {
     use stm32f4xx_hal::dma::StreamsTuple;
     use stm32f4xx_hal::flash::LockedFlash;
     use stm32f4xx_hal::gpio::{Edge, Input, Output, PushPull, PA4, PC4};
-    use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
+    use stm32f4xx_hal::otg_fs::{UsbBusType, USB};
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config;
@@ -36,27 +36,30 @@ mod app {
     use stm32f4xx_hal::timer::{SysCounterHz, SysDelay, SysEvent};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
     use usb_device::bus::UsbBusAllocator;
-    use usb_device::prelude::*;
 
-    use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, UsbLink, OUTPUT_QUEUE};
+    use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, OUTPUT_QUEUE};
+    use firmware::board::f405_service::{
+        boot_controller, count_watchdog_reset, init_usb, start_watchdog, ImuReport, UsbTask,
+    };
     use firmware::board::stm32_common::{spi1, Store};
-    use firmware::board::{log_stack_growth, paint_stack, LockedPipeline};
+    use firmware::board::{log_stack_growth, paint_stack};
+    use firmware::boards::ImuPart;
     use firmware::health::{Counter, HealthCounters};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
     use firmware::imu::ImuFlags;
     use firmware::imu::{ImuSample, PipelineFeed};
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
-    use firmware::protocol::{PipelineAccess, StoreMailbox};
+    use firmware::protocol::StoreMailbox;
     use firmware::stack::HighWater;
-    use firmware::{BoardEvent, Controller, LinkService, Pipeline};
+    use firmware::{LinkService, Pipeline};
     use shared::wire::ImuStatus;
-    use shared::LeverMode;
 
-    type Link = UsbLink<'static, UsbBusType>;
-
-    /// Lever mode at boot and after a reset request.
-    const BOOT_LEVER_MODE: LeverMode = LeverMode::RateAndAcceleration;
+    // The DMA burst chain below reads an ICM-42688-P; the V3's BMI270 is `f405-bmi270`'s.
+    const _: () = assert!(
+        matches!(board::BOARD.imu, ImuPart::Icm42688P),
+        "this board's IMU is read by another binary: `--bin f405-bmi270` for a BMI270"
+    );
 
     /// A burst chain is running (set by the watermark interrupt, cleared by the completion task).
     static IN_FLIGHT: InFlight = InFlight::new();
@@ -87,12 +90,8 @@ mod app {
         feed: PipelineFeed,
         /// Samples between two LED updates (half a second).
         led_period: u32,
-        sample_rate_hz: u32,
-        usb_dev: UsbDevice<'static, UsbBusType>,
-        link: Link,
-        service: Option<LinkService<Store>>,
+        usb: UsbTask,
         imu_found: bool,
-        imu_status: ImuStatus,
         watchdog: IndependentWatchdog,
     }
 
@@ -106,7 +105,7 @@ mod app {
         board::enter_bootloader_if_requested();
         paint_stack();
         let mut dp = cx.device;
-        count_watchdog_reset(&dp.RCC);
+        count_watchdog_reset(&dp.RCC, &HEALTH);
         let mut rcc = dp.RCC.freeze(
             Config::hse(board::HSE_HZ.Hz())
                 .sysclk(board::SYSCLK_HZ.Hz())
@@ -151,7 +150,12 @@ mod app {
         int1.trigger_on_edge(&mut dp.EXTI, Edge::Rising);
         int1.enable_interrupt(&mut dp.EXTI);
 
-        let controller = boot_controller(store, sample_rate_hz, imu_status);
+        let imu = ImuReport {
+            status: imu_status,
+            accel_lsb_per_g: board::IMU_CONFIG.accel_range.lsb_per_g() as u32,
+            health: &HEALTH,
+        };
+        let controller = boot_controller(store, sample_rate_hz, imu);
         let pipeline =
             cortex_m::singleton!(: Pipeline<OUTPUT_QUEUE> = Pipeline::new(sample_rate_hz))
                 .unwrap_or_else(|| defmt::panic!("pipeline singleton"));
@@ -193,41 +197,15 @@ mod app {
                 samples: cx.local.sample_buf,
                 feed: PipelineFeed::new(sample_rate_hz),
                 led_period: sample_rate_hz / 2,
-                sample_rate_hz,
-                usb_dev,
-                link,
-                service: Some(LinkService::new(controller)),
-                imu_status,
+                usb: UsbTask {
+                    usb_dev,
+                    link,
+                    service: Some(LinkService::new(controller)),
+                    sample_rate_hz,
+                    imu,
+                },
             },
         )
-    }
-
-    /// Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090
-    /// §7.3.21, RCC_CSR: IWDGRSTF, cleared by RMVF).
-    fn count_watchdog_reset(rcc: &pac::RCC) {
-        if rcc.csr().read().wdgrstf().bit_is_set() {
-            HEALTH.add(Counter::WatchdogReset, 1);
-            defmt::warn!("restarted by the independent watchdog");
-        }
-        rcc.csr().modify(|_, w| w.rmvf().set_bit());
-    }
-
-    /// The independent watchdog (its own 32 kHz LSI), started: fed by the idle loop, so a task
-    /// that never returns (or a stuck interrupt storm) resets the chip. Its period outlasts the
-    /// longest thing the idle loop does, a calibration store's sector erase
-    /// (`board::WATCHDOG_MS`, from the erase's datasheet maximum).
-    fn start_watchdog(iwdg: pac::IWDG) -> IndependentWatchdog {
-        let mut watchdog = IndependentWatchdog::new(iwdg);
-        watchdog.start(board::WATCHDOG_MS.millis());
-        watchdog
-    }
-
-    /// The request handler from the store, with the part's start and the counters for `Health`.
-    fn boot_controller(store: Store, sample_rate_hz: u32, imu: ImuStatus) -> Controller<Store> {
-        let mut controller = Controller::boot(board::info(sample_rate_hz), store, BOOT_LEVER_MODE);
-        controller.set_imu(imu, board::IMU_CONFIG.accel_range.lsb_per_g() as u32);
-        controller.set_counters(&HEALTH);
-        controller
     }
 
     /// Configures the ICM-42688-P over the blocking bus, then hands SPI1 to its DMA streams. `None`
@@ -269,36 +247,6 @@ mod app {
         }
         let _ = spi.use_dma().txrx();
         (reader, status)
-    }
-
-    /// The USB serial number: the chip's 96-bit unique ID in hex (24 characters), so that two
-    /// boards on one computer are told apart (udev's `/dev/serial/by-id/`).
-    fn serial_number() -> &'static str {
-        let text = cortex_m::singleton!(: [u8; 24] = [0; 24]);
-        match text {
-            Some(text) => board::unique_id_hex(text),
-            None => "F405",
-        }
-    }
-
-    /// The USB device with its CDC-ACM class (the link).
-    fn init_usb(
-        usb: USB,
-        bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
-        ep_memory: &'static mut [u32; 1024],
-    ) -> (UsbDevice<'static, UsbBusType>, Link) {
-        let bus: &'static UsbBusAllocator<UsbBusType> = bus.insert(UsbBus::new(usb, ep_memory));
-        let link = UsbLink::new(usbd_serial::SerialPort::new(bus));
-        let usb_dev =
-            UsbDeviceBuilder::new(bus, UsbVidPid(board::USB_VID_PID.0, board::USB_VID_PID.1))
-                .device_class(usbd_serial::USB_CLASS_CDC)
-                .strings(&[StringDescriptors::default()
-                    .manufacturer("accel-cal")
-                    .product("accel-cal F405 IMU")
-                    .serial_number(serial_number())])
-                .unwrap_or_else(|_| defmt::panic!("USB strings"))
-                .build();
-        (usb_dev, link)
     }
 
     /// The calibration store, stack high-water mark; without an IMU, the LED blinks fast (4 Hz)
@@ -443,48 +391,11 @@ mod app {
         });
     }
 
-    /// USB events and the link service: requests in, answers and frames out. Also pended by
-    /// `burst_done` when frames are queued.
-    #[task(binds = OTG_FS, priority = 1, shared = [pipeline, store_job],
-           local = [usb_dev, link, service, sample_rate_hz, imu_status])]
-    fn usb(mut cx: usb::Context) {
-        let l = cx.local;
-        l.usb_dev.poll(&mut [&mut l.link.serial]);
-        if board::bootloader_requested(&l.link.serial) {
-            board::reboot_into_bootloader();
-        }
-        let Some(service) = l.service.as_mut() else {
-            return;
-        };
-        let mut pipeline = LockedPipeline(cx.shared.pipeline);
-        // A store the idle loop finished: its answer goes out with this poll.
-        if let Some(job) = cx.shared.store_job.lock(|m| m.take_done()) {
-            service.finish_store(job, &mut pipeline);
-        }
-        let event = service.poll(l.link, &mut pipeline);
-        if let Some(job) = service.take_store_job() {
-            cx.shared.store_job.lock(|m| m.post(job));
-        }
-        l.link.flush();
-        if let Some(BoardEvent::Reset) = event {
-            // A soft restart: a hardware reset would re-enumerate USB and close the host's port.
-            for _ in 0..100_000 {
-                l.usb_dev.poll(&mut [&mut l.link.serial]);
-                service.flush(l.link, 1);
-                l.link.flush();
-                if l.link.is_drained() {
-                    break;
-                }
-            }
-            // The reset request was read, so no store job is out: the store is home.
-            let Some(store) = l.service.take().and_then(|s| s.controller.into_store()) else {
-                return;
-            };
-            let controller = boot_controller(store, *l.sample_rate_hz, *l.imu_status);
-            pipeline.apply(PipelineCommand::StopStream);
-            pipeline.apply(PipelineCommand::Compensator(controller.compensator()));
-            *l.service = Some(LinkService::new(controller));
-            defmt::info!("restarted on the host's request");
-        }
+    /// USB events and the link service: requests in, answers and frames out (`UsbTask::round`).
+    /// Also pended by `burst_done` when frames are queued.
+    #[task(binds = OTG_FS, priority = 1, shared = [pipeline, store_job], local = [usb])]
+    fn usb(cx: usb::Context) {
+        let mut store_job = cx.shared.store_job;
+        cx.local.usb.round(cx.shared.pipeline, &mut store_job);
     }
 }

@@ -26,7 +26,7 @@ use shared::wire::{Board, ImuInit, ImuPart as WirePart, ImuStatus};
 use shared::OutputUnit;
 use stm32f4xx_hal::flash::LockedFlash;
 
-use crate::boards::{self, BoardDesc, ImuPart};
+use crate::boards::{self, BoardDesc};
 use crate::imu::alignment::Alignment;
 use crate::imu::icm42688::{AccelRange, Config, Odr};
 
@@ -52,11 +52,6 @@ pub const BOARD: BoardDesc = boards::SPEEDYBEE_F405_V4;
 // A description whose LED is a reserved pin, whose pins collide or whose bus is too fast for its
 // part does not build.
 const _: () = assert!(BOARD.check().is_ok());
-// The sampling path below (FIFO watermark → DMA bursts) is the ICM-42688-P's.
-const _: () = assert!(
-    matches!(BOARD.imu, ImuPart::Icm42688P),
-    "the F405 firmware's DMA burst chain reads an ICM-42688-P; this board's IMU has no sampling task yet"
-);
 
 /// Core clock, Hz (the F405's maximum; `clock_tree::f405`, where the SPI clock is computed from it
 /// and checked against the ICM-42688-P's 24 MHz at compile time: 84 MHz APB2 / 4 = 21 MHz).
@@ -113,6 +108,25 @@ pub fn imu_status<E>(result: &Result<(), crate::imu::icm42688::Error<E>>) -> Imu
     ImuStatus {
         part: WirePart::Icm42688P,
         who_am_i,
+        init,
+    }
+}
+
+/// The BMI270's configuration on the F405 V3: 1.6 kHz, ±4 g (the driver's default).
+pub const BMI270_CONFIG: crate::imu::bmi270::Config = crate::imu::bmi270::Config::DEFAULT;
+
+/// The BMI270's start for `Health`, from the driver's result.
+pub fn bmi270_status<E>(result: &Result<(), crate::imu::bmi270::Error<E>>) -> ImuStatus {
+    use crate::imu::bmi270::Error;
+    let (chip_id, init) = match result {
+        Ok(()) => (0x24, ImuInit::Ok),
+        Err(Error::WrongDevice(v)) => (*v, ImuInit::WrongDevice),
+        Err(Error::Spi(_)) => (0, ImuInit::BusError),
+        Err(_) => (0x24, ImuInit::ConfigRejected),
+    };
+    ImuStatus {
+        part: WirePart::Bmi270,
+        who_am_i: chip_id,
         init,
     }
 }

@@ -11,6 +11,8 @@ use crate::protocol::PipelineAccess;
 pub mod cmsdk_uart;
 #[cfg(feature = "board-f405")]
 pub mod f405;
+#[cfg(feature = "board-f405")]
+pub mod f405_service;
 #[cfg(feature = "board-qemu")]
 pub mod qemu;
 #[cfg(any(feature = "board-stm32f4", feature = "board-f405"))]

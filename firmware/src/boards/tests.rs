@@ -286,7 +286,19 @@ fn the_f405_firmware_is_built_from_its_description() {
         !board.contains("GPIOC::ptr()"),
         "board/f405.rs drives a GPIO port of its own"
     );
-    let bin = include_str!("../bin/f405.rs");
-    assert!(!bin.contains(".pc13"), "bin/f405.rs configures PC13 itself");
-    assert!(bin.contains("board::init_led()"));
+    // Both binaries: the ICM-42688-P's (V4, V5) and the BMI270's (V3).
+    for (name, bin) in [
+        ("bin/f405.rs", include_str!("../bin/f405.rs")),
+        ("bin/f405_bmi270.rs", include_str!("../bin/f405_bmi270.rs")),
+    ] {
+        assert!(!bin.contains(".pc13"), "{name} configures PC13 itself");
+        for line in [
+            "board::init_led()",
+            "&board::BOARD.imu_spi",
+            "board::IMU_ALIGNMENT.apply(",
+            "matches!(board::BOARD.imu, ImuPart::",
+        ] {
+            assert!(bin.contains(line), "{name} lacks `{line}`");
+        }
+    }
 }
