@@ -26,12 +26,10 @@ use panic_probe as _;
 mod app {
     use embedded_hal_bus::spi::ExclusiveDevice;
     use stm32f4xx_hal::dma::StreamsTuple;
-    use stm32f4xx_hal::flash::LockedFlash;
     use stm32f4xx_hal::gpio::{Edge, Input, Output, PushPull, PA4, PC4};
     use stm32f4xx_hal::otg_fs::{UsbBusType, USB};
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
-    use stm32f4xx_hal::rcc::Config;
     use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::{SysCounterHz, SysDelay, SysEvent};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -39,10 +37,11 @@ mod app {
 
     use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, OUTPUT_QUEUE};
     use firmware::board::f405_service::{
-        boot_controller, count_watchdog_reset, init_usb, start_watchdog, ImuReport, UsbTask,
+        boot_controller, count_watchdog_reset, freeze_clocks, idle_loop, init_usb, prepared_store,
+        start_watchdog, ImuReport, UsbTask,
     };
+    use firmware::board::paint_stack;
     use firmware::board::stm32_common::{spi1, Store};
-    use firmware::board::{log_stack_growth, paint_stack};
     use firmware::boards::ImuPart;
     use firmware::health::{Counter, HealthCounters};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
@@ -51,7 +50,6 @@ mod app {
     use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::StoreMailbox;
-    use firmware::stack::HighWater;
     use firmware::{LinkService, Pipeline};
     use shared::wire::ImuStatus;
 
@@ -106,22 +104,13 @@ mod app {
         paint_stack();
         let mut dp = cx.device;
         count_watchdog_reset(&dp.RCC, &HEALTH);
-        let mut rcc = dp.RCC.freeze(
-            Config::hse(board::HSE_HZ.Hz())
-                .sysclk(board::SYSCLK_HZ.Hz())
-                .require_pll48clk(),
-        );
+        let mut rcc = freeze_clocks(dp.RCC);
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
         board::init_led(); // `BOARD.led`, dark; its port's clock is on (split above)
 
-        // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
-        // single-bank F4), before the IMU's FIFO runs. A calibration written later only programs.
-        let mut store = board::store(LockedFlash::new(dp.FLASH))
-            .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
-        if store.prepare().is_err() {
-            defmt::warn!("calibration store: erasing ahead failed");
-        }
+        // The store first (`prepared_store`): its erase ahead stalls the CPU before samples flow.
+        let store = prepared_store(dp.FLASH);
 
         // The IMU: configured over the blocking bus, then the bus is handed to the DMA streams.
         let mut cs = gpioa.pa4.into_push_pull_output();
@@ -249,35 +238,12 @@ mod app {
         (reader, status)
     }
 
-    /// The calibration store, stack high-water mark; without an IMU, the LED blinks fast (4 Hz)
-    /// from here.
-    ///
-    /// The store runs here, below every interrupt: the USB task only validates a write and posts
-    /// its job (`firmware::protocol::StoreJob`). The lock moves the job, never runs it.
+    /// The calibration store, stack high-water mark (once per 1024 wakes: about a second at the
+    /// watermark's 1 kHz); without an IMU, the LED blinks fast (`idle_loop`).
     #[idle(local = [imu_found, watchdog], shared = [store_job])]
-    fn idle(mut cx: idle::Context) -> ! {
-        let mut high_water = HighWater::new();
-        let mut wakes = 0u32;
-        loop {
-            cx.local.watchdog.feed();
-            if let Some(mut job) = cx.shared.store_job.lock(|m| m.take_to_run()) {
-                job.run();
-                cx.shared.store_job.lock(|m| m.post(job));
-                rtic::pend(pac::Interrupt::OTG_FS);
-            }
-            // The scan reads the whole unused stack (≈ 0.2 ms): once per 1024 wakes (about a
-            // second at the watermark's 1 kHz), not after every interrupt.
-            if wakes % 1024 == 0 {
-                log_stack_growth(&mut high_water);
-            }
-            wakes = wakes.wrapping_add(1);
-            if *cx.local.imu_found {
-                cortex_m::asm::wfi();
-            } else {
-                cortex_m::asm::delay(board::SYSCLK_HZ / 8);
-                board::toggle_led();
-            }
-        }
+    fn idle(cx: idle::Context) -> ! {
+        let mut store_job = cx.shared.store_job;
+        idle_loop(cx.local.watchdog, &mut store_job, *cx.local.imu_found, 1024)
     }
 
     /// FIFO watermark: start the chain's status burst, unless a chain runs (its status read will

@@ -26,12 +26,10 @@ use panic_probe as _;
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use embedded_hal_bus::spi::ExclusiveDevice;
-    use stm32f4xx_hal::flash::LockedFlash;
     use stm32f4xx_hal::gpio::{Edge, Input, Output, PushPull, PA4, PC4};
     use stm32f4xx_hal::otg_fs::{UsbBusType, USB};
     use stm32f4xx_hal::pac::{self, SPI1};
     use stm32f4xx_hal::prelude::*;
-    use stm32f4xx_hal::rcc::Config;
     use stm32f4xx_hal::spi::Spi;
     use stm32f4xx_hal::timer::{SysCounterHz, SysEvent};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -39,11 +37,11 @@ mod app {
 
     use firmware::board::f405::{self as board, OUTPUT_QUEUE};
     use firmware::board::f405_service::{
-        boot_controller, count_watchdog_reset, init_usb, start_watchdog, CycleDelay, ImuReport,
-        UsbTask,
+        boot_controller, count_watchdog_reset, freeze_clocks, idle_loop, init_usb, prepared_store,
+        start_watchdog, CycleDelay, ImuReport, UsbTask,
     };
+    use firmware::board::paint_stack;
     use firmware::board::stm32_common::{spi1, Store};
-    use firmware::board::{log_stack_growth, paint_stack};
     use firmware::boards::ImuPart;
     use firmware::health::{Counter, HealthCounters};
     use firmware::imu::bmi270::Bmi270;
@@ -51,7 +49,6 @@ mod app {
     use firmware::imu_bursts::NO_SAMPLE;
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::StoreMailbox;
-    use firmware::stack::HighWater;
     use firmware::{LinkService, Pipeline};
 
     // This binary reads a BMI270 on data ready; an ICM-42688-P board is `f405`'s.
@@ -100,22 +97,13 @@ mod app {
         paint_stack();
         let mut dp = cx.device;
         count_watchdog_reset(&dp.RCC, &HEALTH);
-        let mut rcc = dp.RCC.freeze(
-            Config::hse(board::HSE_HZ.Hz())
-                .sysclk(board::SYSCLK_HZ.Hz())
-                .require_pll48clk(),
-        );
+        let mut rcc = freeze_clocks(dp.RCC);
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
         board::init_led(); // `BOARD.led`, dark; its port's clock is on (split above)
 
-        // The store first: erasing ahead stalls the CPU for about a second (a sector erase on a
-        // single-bank F4), before the IMU runs. A calibration written later only programs.
-        let mut store = board::store(LockedFlash::new(dp.FLASH))
-            .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
-        if store.prepare().is_err() {
-            defmt::warn!("calibration store: erasing ahead failed");
-        }
+        // The store first (`prepared_store`): its erase ahead stalls the CPU before samples flow.
+        let store = prepared_store(dp.FLASH);
 
         let mut cs = gpioa.pa4.into_push_pull_output();
         cs.set_high();
@@ -210,31 +198,12 @@ mod app {
         }
     }
 
-    /// The calibration store, stack high-water mark; without an IMU, the LED blinks fast (4 Hz)
-    /// from here.
+    /// The calibration store, stack high-water mark (once per 2048 wakes: about a second at
+    /// 1.6 kHz and the check's 10 Hz); without an IMU, the LED blinks fast (`idle_loop`).
     #[idle(local = [imu_found, watchdog], shared = [store_job])]
-    fn idle(mut cx: idle::Context) -> ! {
-        let mut high_water = HighWater::new();
-        let mut wakes = 0u32;
-        loop {
-            cx.local.watchdog.feed();
-            if let Some(mut job) = cx.shared.store_job.lock(|m| m.take_to_run()) {
-                job.run();
-                cx.shared.store_job.lock(|m| m.post(job));
-                rtic::pend(pac::Interrupt::OTG_FS);
-            }
-            // The scan reads the whole unused stack (≈ 0.2 ms): about once a second.
-            if wakes % 2048 == 0 {
-                log_stack_growth(&mut high_water);
-            }
-            wakes = wakes.wrapping_add(1);
-            if *cx.local.imu_found {
-                cortex_m::asm::wfi();
-            } else {
-                cortex_m::asm::delay(board::SYSCLK_HZ / 8);
-                board::toggle_led();
-            }
-        }
+    fn idle(cx: idle::Context) -> ! {
+        let mut store_job = cx.shared.store_job;
+        idle_loop(cx.local.watchdog, &mut store_job, *cx.local.imu_found, 2048)
     }
 
     /// Data ready: the sample read, counted where it follows lost ones, rotated into the board's

@@ -4,19 +4,22 @@
 
 use shared::wire::ImuStatus;
 use shared::LeverMode;
+use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::{Config, Rcc};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 use usb_device::bus::UsbBusAllocator;
 use usb_device::prelude::*;
 
 use super::f405::{self as board, UsbLink};
 use super::stm32_common::Store;
-use super::LockedPipeline;
+use super::{log_stack_growth, LockedPipeline};
 use crate::health::{Counter, HealthCounters};
 use crate::pipeline::{Pipeline, PipelineCommand};
 use crate::protocol::{PipelineAccess, StoreMailbox};
+use crate::stack::HighWater;
 use crate::{BoardEvent, Controller, LinkService};
 
 /// The link over USB.
@@ -24,6 +27,64 @@ pub type Link = UsbLink<'static, UsbBusType>;
 
 /// Lever mode at boot and after a reset request.
 pub const BOOT_LEVER_MODE: LeverMode = LeverMode::RateAndAcceleration;
+
+/// The clocks from the board's crystal through the PLL: the F405's 168 MHz core and the 48 MHz
+/// USB clock.
+pub fn freeze_clocks(rcc: pac::RCC) -> Rcc {
+    rcc.freeze(
+        Config::hse(board::HSE_HZ.Hz())
+            .sysclk(board::SYSCLK_HZ.Hz())
+            .require_pll48clk(),
+    )
+}
+
+/// The calibration store, its spare slot erased ahead: the erase stalls the CPU for about a
+/// second (a sector erase on a single-bank F4), so it runs at boot, before the IMU's samples
+/// flow; a calibration written later only programs.
+pub fn prepared_store(flash: pac::FLASH) -> Store {
+    let mut store = board::store(LockedFlash::new(flash))
+        .unwrap_or_else(|| defmt::panic!("calibration store geometry"));
+    if store.prepare().is_err() {
+        defmt::warn!("calibration store: erasing ahead failed");
+    }
+    store
+}
+
+/// The idle loop: the watchdog fed, a calibration write's store job run (below every interrupt:
+/// the USB task only validates a write and posts its job, `crate::protocol::StoreJob`; the lock
+/// moves the job, never runs it), the stack's high-water mark once per `scan_every` wakes (the
+/// scan reads the whole unused stack, about 0.2 ms), then `wfi`; without an IMU, the LED blinks
+/// fast (4 Hz) instead.
+pub fn idle_loop<J>(
+    watchdog: &mut IndependentWatchdog,
+    store_job: &mut J,
+    imu_found: bool,
+    scan_every: u32,
+) -> !
+where
+    J: rtic::Mutex<T = StoreMailbox<Store>>,
+{
+    let mut high_water = HighWater::new();
+    let mut wakes = 0u32;
+    loop {
+        watchdog.feed();
+        if let Some(mut job) = store_job.lock(|m| m.take_to_run()) {
+            job.run();
+            store_job.lock(|m| m.post(job));
+            rtic::pend(pac::Interrupt::OTG_FS);
+        }
+        if wakes % scan_every == 0 {
+            log_stack_growth(&mut high_water);
+        }
+        wakes = wakes.wrapping_add(1);
+        if imu_found {
+            cortex_m::asm::wfi();
+        } else {
+            cortex_m::asm::delay(board::SYSCLK_HZ / 8);
+            board::toggle_led();
+        }
+    }
+}
 
 /// Why the chip reset: an independent-watchdog reset is counted for `Health` (RM0090 §7.3.21,
 /// RCC_CSR: IWDGRSTF, cleared by RMVF).

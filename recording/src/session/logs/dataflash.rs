@@ -11,7 +11,8 @@
 //! DataFlash logs in a maintained form; a message is at most 255 bytes (its length is a `u8`), so the
 //! reader streams with a window of a few hundred bytes.
 
-use super::resume::{join, stretches, Mark, Marker, NO_TIMES};
+use super::resume::{stretches, Mark, Marker};
+use super::stream::{read_by, take_times_of};
 use super::vehicle::VehicleParams;
 use super::{
     list_instances, pair_streams, ImuError, Keep, Stream, StreamAt, StreamSample, TooMany,
@@ -451,14 +452,12 @@ impl State {
 
     /// The samples read, all streams told.
     fn read(&self) -> usize {
-        self.streams().iter().map(|s| s.count()).sum()
+        read_by(&self.streams())
     }
 
     /// A survey: the least and greatest time of the samples read since the last call.
     fn take_times(&mut self) -> (f64, f64) {
-        self.streams_mut()
-            .into_iter()
-            .fold(NO_TIMES, |t, s| join(t, s.take_times()))
+        take_times_of(self.streams_mut())
     }
 
     /// Reads the messages from where `w` stands up to the byte `end` (`None`: the end of the

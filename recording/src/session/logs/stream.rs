@@ -241,3 +241,16 @@ fn interpolate(g: &[StreamSample], j: usize, t_s: f64, max_gap_s: f64) -> Option
     let f = (t_s - a.t_s) / (b.t_s - a.t_s);
     Some(std::array::from_fn(|k| a.v[k] + f * (b.v[k] - a.v[k])))
 }
+
+/// The finite samples `streams` have read, all told: where a survey's next mark is due
+/// (`super::resume`).
+pub(crate) fn read_by(streams: &[&Stream]) -> usize {
+    streams.iter().map(|s| s.count()).sum()
+}
+
+/// A survey: the least and greatest time of the samples `streams` read since the last call.
+pub(crate) fn take_times_of<const N: usize>(streams: [&mut Stream; N]) -> (f64, f64) {
+    streams.into_iter().fold(super::resume::NO_TIMES, |t, s| {
+        super::resume::join(t, s.take_times())
+    })
+}

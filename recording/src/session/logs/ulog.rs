@@ -11,7 +11,8 @@
 //! topics, and bounds everything (a message is at most 65 535 bytes by its size field). What the
 //! format definitions say, each field's place in a message, is `layout`.
 
-use super::resume::{join, Marker, NO_TIMES};
+use super::resume::Marker;
+use super::stream::{read_by, take_times_of};
 use super::{
     list_instances, pair_streams, read_exact_or_end, ImuError, Keep, Stream, StreamSample, TooMany,
 };
@@ -312,14 +313,12 @@ impl State {
 
     /// The samples read, all streams told.
     fn read(&self) -> usize {
-        self.streams().iter().map(|s| s.count()).sum()
+        read_by(&self.streams())
     }
 
     /// A survey: the least and greatest time of the samples read since the last call.
     fn take_times(&mut self) -> (f64, f64) {
-        self.streams_mut()
-            .into_iter()
-            .fold(NO_TIMES, |t, s| join(t, s.take_times()))
+        take_times_of(self.streams_mut())
     }
 
     /// Reads the messages of `r` (at the file's byte `offset`) up to the byte `end` (`None`: the
@@ -381,20 +380,17 @@ impl State {
                 return Ok(true);
             }
         }
+        let at = *offset;
+        let io = |source| UlogError::Io { offset: at, source };
         let mut h = [0u8; 3];
         let size = match read_exact_or_end(r, &mut h) {
             Ok(false) => return Ok(false),
             Ok(true) => u16::from_le_bytes([h[0], h[1]]) as usize,
             Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                warnings.push(cut_short(*offset));
+                warnings.push(cut_short(at));
                 return Ok(false);
             }
-            Err(source) => {
-                return Err(UlogError::Io {
-                    offset: *offset,
-                    source,
-                })
-            }
+            Err(source) => return Err(io(source)),
         };
         let end = *offset + 3 + size as u64;
         if let Some(o) = self.appended.first().copied().filter(|&o| end > o) {
@@ -420,12 +416,7 @@ impl State {
                 warnings.push(cut_short(*offset));
                 return Ok(false);
             }
-            Err(source) => {
-                return Err(UlogError::Io {
-                    offset: *offset,
-                    source,
-                })
-            }
+            Err(source) => return Err(io(source)),
         }
         self.message(h[2], &payload[..size], *offset, instance)?;
         *offset += 3 + size as u64;
