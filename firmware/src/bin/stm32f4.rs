@@ -34,7 +34,7 @@ mod app {
     use stm32f4xx_hal::dma::{PeripheralToMemory, Stream0, StreamsTuple, Transfer};
     use stm32f4xx_hal::flash::LockedFlash;
     use stm32f4xx_hal::gpio::{Output, PushPull, PA0, PA1, PA4, PB6};
-    use stm32f4xx_hal::pac::{ADC1, DMA2, SPI1, TIM2, USART2};
+    use stm32f4xx_hal::pac::{self, ADC1, DMA2, SPI1, TIM2, USART2};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::{Config, Rcc};
     use stm32f4xx_hal::serial::{Rx, Tx};
@@ -84,23 +84,17 @@ mod app {
         _timer: CounterHz<TIM2>,
     }
 
-    #[init(local = [
-        rx_bytes: Queue<u8, RX_QUEUE> = Queue::new(),
-        scan_buf: [u32; ADC_SCAN_LEN] = [0; ADC_SCAN_LEN],
-    ])]
-    fn init(cx: init::Context) -> (Shared, Local) {
-        paint_stack();
-        let dp = cx.device;
-        // Nucleo: 8 MHz HSE from the ST-LINK's MCO, where the solder bridges route it; else the
-        // HSI after a bounded wait (`clock_start`), not the HAL's endless one. PCLK2 is asked for
-        // explicitly: the ADC clock derives from it (board::ADC_CLOCK_HZ).
-        dp.RCC.cr().modify(|_, w| {
+    /// Nucleo: 8 MHz HSE from the ST-LINK's MCO, where the solder bridges route it; else the HSI
+    /// after a bounded wait (`clock_start`), not the HAL's endless one. PCLK2 is asked for
+    /// explicitly: the ADC clock derives from it (board::ADC_CLOCK_HZ).
+    fn freeze_clocks(rcc: pac::RCC) -> Rcc {
+        rcc.cr().modify(|_, w| {
             w.hsebyp().bypassed();
             w.hseon().set_bit()
         });
         let source = clock_start::settle(
             || {
-                let ready = dp.RCC.cr().read().hserdy().bit_is_set();
+                let ready = rcc.cr().read().hserdy().bit_is_set();
                 if !ready {
                     cortex_m::asm::delay(clock_start::CYCLES_PER_POLL);
                 }
@@ -112,12 +106,12 @@ mod app {
             ClockSource::Hse => Config::hse(8.MHz()).bypass_hse_oscillator(),
             ClockSource::Hsi => {
                 // HSEBYP can be written only with the HSE off (RM0390, RCC_CR).
-                dp.RCC.cr().modify(|_, w| w.hseon().clear_bit());
-                dp.RCC.cr().modify(|_, w| w.hsebyp().not_bypassed());
+                rcc.cr().modify(|_, w| w.hseon().clear_bit());
+                rcc.cr().modify(|_, w| w.hsebyp().not_bypassed());
                 Config::hsi()
             }
         };
-        let mut rcc = dp.RCC.freeze(
+        let rcc = rcc.freeze(
             config
                 .sysclk(board::SYSCLK_HZ.Hz())
                 .pclk2(board::PCLK2_HZ.Hz()),
@@ -129,6 +123,17 @@ mod app {
                 clock_start::HSE_STARTUP_TIMEOUT_MS
             );
         }
+        rcc
+    }
+
+    #[init(local = [
+        rx_bytes: Queue<u8, RX_QUEUE> = Queue::new(),
+        scan_buf: [u32; ADC_SCAN_LEN] = [0; ADC_SCAN_LEN],
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        paint_stack();
+        let dp = cx.device;
+        let mut rcc = freeze_clocks(dp.RCC);
         if rcc.clocks.pclk2().raw() != board::PCLK2_HZ {
             defmt::error!(
                 "PCLK2 is {=u32} Hz, not {=u32}: the ADC clock is not {=u32} Hz",
