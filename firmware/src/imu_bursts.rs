@@ -223,6 +223,14 @@ impl BurstReader {
         Some(Burst { tx: &FLUSH_CMD })
     }
 
+    /// Goes on with `core`, the state of a part started again after a register check found its
+    /// configuration lost (`imu::icm42688::check`); the next sample is flagged as following lost
+    /// data. The chain's restart burst from [`Self::on_tick`] still goes on the wire.
+    pub fn replace_core(&mut self, core: Core) {
+        self.core = core;
+        self.core.corrupted();
+    }
+
     /// The burst failed on the bus: the chain ends, and since packets may have been lost with it,
     /// the next sample is flagged as following lost data.
     pub fn abandon(&mut self, in_flight: &InFlight) -> Completed {

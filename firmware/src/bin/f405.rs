@@ -35,15 +35,16 @@ mod app {
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
     use usb_device::bus::UsbBusAllocator;
 
-    use firmware::board::f405::{self as board, BurstEnd, RxBuf, SpiDma, OUTPUT_QUEUE};
+    use firmware::board::f405::{self as board, BurstEnd, PolledSpi1, RxBuf, SpiDma, OUTPUT_QUEUE};
     use firmware::board::f405_service::{
         boot_controller, count_watchdog_reset, freeze_clocks, idle_loop, init_usb, prepared_store,
-        start_watchdog, ImuReport, UsbTask,
+        start_watchdog, CycleDelay, ImuReport, UsbTask,
     };
     use firmware::board::paint_stack;
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::boards::ImuPart;
     use firmware::health::{Counter, HealthCounters};
+    use firmware::imu::icm42688::check::{check_and_heal, Checked};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
     use firmware::imu::ImuFlags;
     use firmware::imu::{ImuSample, PipelineFeed};
@@ -328,10 +329,45 @@ mod app {
         });
     }
 
+    /// The register check after a stall over the polled bus: the part's fresh state where it had
+    /// lost its configuration and was started again.
+    fn check_after_stall(cs: &mut PA4<Output<PushPull>>) -> Option<Core> {
+        let dev = ExclusiveDevice::new(PolledSpi1, cs, CycleDelay).ok()?;
+        match check_and_heal(dev, board::IMU_CONFIG) {
+            Ok(Checked::Intact) => None,
+            Ok(Checked::Restarted {
+                reg,
+                expected,
+                read,
+                core,
+            }) => {
+                HEALTH.add(Counter::Reinit, 1);
+                defmt::warn!(
+                    "ICM-42688-P register {=u8:#x} read {=u8:#x}, not {=u8:#x}: started again",
+                    reg,
+                    read,
+                    expected
+                );
+                Some(core)
+            }
+            Err(e) => {
+                defmt::error!(
+                    "ICM-42688-P register check failed: {}",
+                    defmt::Debug2Format(&e)
+                );
+                None
+            }
+        }
+    }
+
     /// Every 10 ms: when no burst completed for the reader's stall time (an interrupt of the chain
     /// was lost), restart the chain — CS high then low around the restart's flush, the streams
     /// stopped and restarted by `SpiDma::start`; the next sample is flagged as following lost
     /// data (`imu_bursts`, "A chain that stalls").
+    ///
+    /// Before the restart, the configured registers are read back over the polled bus (PX4's
+    /// `RegisterCheck`, `imu::icm42688::check`): a part that reset under the board (a brown-out)
+    /// raises no watermark again, so it is started again here, counted as a re-init for `Health`.
     #[task(binds = SysTick, priority = 2, shared = [bus, reader], local = [rx_for_tick, tick])]
     fn stall_tick(mut cx: stall_tick::Context) {
         let Some(burst) = cx
@@ -344,6 +380,17 @@ mod app {
         HEALTH.add(Counter::Stall, 1);
         defmt::warn!("IMU burst chain stalled: FIFO flushed, reading restarted");
         let rx = *cx.local.rx_for_tick;
+        let restarted = cx.shared.bus.lock(|bus| {
+            bus.1.set_high();
+            check_after_stall(&mut bus.1)
+        });
+        if let Some(core) = restarted {
+            cx.shared.reader.lock(|reader| {
+                if let Some(r) = reader.as_mut() {
+                    r.replace_core(core);
+                }
+            });
+        }
         cx.shared.bus.lock(|bus| {
             bus.1.set_high();
             // Whatever the stalled burst left in SPI1's receiver (and its overrun flag).

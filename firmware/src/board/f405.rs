@@ -314,6 +314,92 @@ pub fn enter_bootloader_if_requested() {
     }
 }
 
+/// SPI1 driven by the CPU between the DMA's bursts: the register check after a stall and the
+/// part's start again (`imu::icm42688::check`). Each byte is written to the data register once
+/// the transmit buffer is empty and read back once received, with 8-bit access, as the HAL's own
+/// blocking transfer does (stm32f4xx-hal 0.23 `src/spi.rs`, `check_send`, `check_read`,
+/// `FrameSize for u8`: `dr8`); the DMA requests SPI1 raises meanwhile go to streams that are
+/// off. Every wait is bounded: a bus that never answers is an error, not a hang.
+pub struct PolledSpi1;
+
+/// A wait of [`PolledSpi1`] ran out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SpiTimeout;
+
+impl embedded_hal::spi::Error for SpiTimeout {
+    fn kind(&self) -> embedded_hal::spi::ErrorKind {
+        embedded_hal::spi::ErrorKind::Other
+    }
+}
+
+/// Polls of a status flag before [`SpiTimeout`]: a byte takes 0.4 µs at 21 MHz, a poll a few
+/// cycles at 168 MHz.
+const SPI_POLLS: u32 = 10_000;
+
+fn poll_until(mut ready: impl FnMut() -> bool) -> Result<(), SpiTimeout> {
+    for _ in 0..SPI_POLLS {
+        if ready() {
+            return Ok(());
+        }
+    }
+    Err(SpiTimeout)
+}
+
+impl PolledSpi1 {
+    fn exchange(&mut self, out: u8) -> Result<u8, SpiTimeout> {
+        // SAFETY: SPI1's registers, used only by the task that holds the bus while no DMA burst
+        // runs (the stall task, after the chain was taken over).
+        let spi = unsafe { &*stm32f4xx_hal::pac::SPI1::ptr() };
+        poll_until(|| spi.sr().read().txe().bit_is_set())?;
+        spi.dr8().write(|w| w.dr().set(out));
+        poll_until(|| spi.sr().read().rxne().bit_is_set())?;
+        Ok(spi.dr8().read().dr().bits())
+    }
+}
+
+impl embedded_hal::spi::ErrorType for PolledSpi1 {
+    type Error = SpiTimeout;
+}
+
+impl embedded_hal::spi::SpiBus for PolledSpi1 {
+    fn read(&mut self, words: &mut [u8]) -> Result<(), SpiTimeout> {
+        for w in words.iter_mut() {
+            *w = self.exchange(0)?;
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, words: &[u8]) -> Result<(), SpiTimeout> {
+        for &w in words {
+            self.exchange(w)?;
+        }
+        Ok(())
+    }
+
+    fn transfer(&mut self, read: &mut [u8], write: &[u8]) -> Result<(), SpiTimeout> {
+        for i in 0..read.len().max(write.len()) {
+            let b = self.exchange(write.get(i).copied().unwrap_or(0))?;
+            if let Some(r) = read.get_mut(i) {
+                *r = b;
+            }
+        }
+        Ok(())
+    }
+
+    fn transfer_in_place(&mut self, words: &mut [u8]) -> Result<(), SpiTimeout> {
+        for w in words.iter_mut() {
+            *w = self.exchange(*w)?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), SpiTimeout> {
+        // SAFETY: as in `exchange`.
+        let spi = unsafe { &*stm32f4xx_hal::pac::SPI1::ptr() };
+        poll_until(|| spi.sr().read().bsy().bit_is_clear())
+    }
+}
+
 /// SPI1's two DMA2 streams, programmed per burst (RM0090 §10.5): stream 2 channel 3 receives
 /// (peripheral → memory, transfer-complete and transfer-error interrupts), stream 3 channel 3 sends
 /// (memory → peripheral, no interrupt: the receive side finishes last). Register-level because a

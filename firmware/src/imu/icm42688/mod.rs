@@ -19,6 +19,7 @@
 //! The register sequences are data ([`Step`] lists built by [`configure_steps`]) and the
 //! decisions are methods of [`Core`]: the blocking and async drivers only move bytes.
 
+pub mod check;
 pub mod fifo;
 pub mod regs;
 pub mod self_test;

@@ -2,9 +2,12 @@
 //! INT1's rising edge starts a chain, each burst's completion decides the next, a 10 ms timer
 //! ticks the reader — with one interrupt lost: a DMA completion that never comes, or a watermark
 //! edge missed. Without the timer the part is never read again; with it reading resumes within
-//! 100 ms of the loss, the gap flagged on the first sample after it.
+//! 100 ms of the loss, the gap flagged on the first sample after it. And a part that resets under
+//! the board (a brown-out): the stall restart alone never reads it again; with the register check
+//! the board runs after each stall (`imu::icm42688::check`), it is started again and read.
 
 use super::*;
+use crate::imu::icm42688::check::{check_and_heal, Checked};
 use crate::imu::icm42688::regs::READ;
 use crate::imu::icm42688::{AccelRange, Core, Odr, BATCH_PACKETS};
 use crate::imu::ImuFlags;
@@ -47,6 +50,10 @@ struct Board {
     lose: Option<Loss>,
     lost_at_ns: Option<u64>,
     restarts: u32,
+    /// After each stall, the register check and, on a mismatch, the part started again.
+    checking: bool,
+    /// Parts started again.
+    heals: u32,
 }
 
 impl Board {
@@ -69,7 +76,18 @@ impl Board {
             lose: None,
             lost_at_ns: None,
             restarts: 0,
+            checking: true,
+            heals: 0,
         }
+    }
+
+    /// The part loses power and comes back: every register at its reset value.
+    fn brown_out(&mut self) {
+        let gen = TestGen {
+            still: true,
+            ..Default::default()
+        };
+        self.part = Icm42688Model::new(gen);
     }
 
     /// The bytes a full-duplex burst brings back (the address byte's slot first).
@@ -93,6 +111,16 @@ impl Board {
         if self.ticking && self.now_ns % tick_ns == 0 {
             if let Some(b) = self.reader.on_tick(&self.in_flight) {
                 self.restarts += 1;
+                if self.checking {
+                    // As the board does after a stall: the check over the blocking bus first.
+                    match check_and_heal(&mut self.part, CFG).expect("the model's bus") {
+                        Checked::Intact => {}
+                        Checked::Restarted { core, .. } => {
+                            self.heals += 1;
+                            self.reader.replace_core(core);
+                        }
+                    }
+                }
                 self.wire = Some(b);
             }
         }
@@ -193,5 +221,54 @@ fn a_lost_interrupt_is_recovered_within_100_ms() {
         assert!(after
             .windows(2)
             .all(|w| w[1].1.timestamp.wrapping_sub(w[0].1.timestamp) == 125));
+    }
+}
+
+/// A brown-out at 200 ms, then 600 ms more; samples after it.
+fn brown_out_at_200_ms(b: &mut Board) -> Vec<(u64, ImuSample)> {
+    b.run_ms(200);
+    let at = b.now_ns;
+    b.brown_out();
+    b.run_ms(600);
+    b.after(at)
+}
+
+#[test]
+fn a_part_that_reset_is_never_read_again_without_the_register_check() {
+    let mut b = Board::new(true);
+    b.checking = false;
+    let after = brown_out_at_200_ms(&mut b);
+    assert!(after.is_empty(), "{} samples", after.len());
+    assert!(b.restarts >= 5, "{} restarts", b.restarts);
+}
+
+#[test]
+fn a_part_that_reset_is_started_again_and_read_within_200_ms() {
+    let mut b = Board::new(true);
+    let at = 200_000_000;
+    let after = brown_out_at_200_ms(&mut b);
+    assert_eq!(b.heals, 1);
+    let (resumed, first) = after[0];
+    assert!(
+        resumed - at <= 200_000_000,
+        "resumed {} ms after the brown-out",
+        (resumed - at) / 1_000_000
+    );
+    assert!(first.flags.has(ImuFlags::DATA_LOST));
+    // Then 8 samples per millisecond again.
+    let span_ms = (b.now_ns - resumed) / 1_000_000;
+    assert!(
+        after.len() as u64 >= 8 * span_ms,
+        "{} in {span_ms} ms",
+        after.len()
+    );
+}
+
+#[test]
+fn an_intact_part_is_not_started_again_after_a_lost_interrupt() {
+    for loss in [Loss::Completion, Loss::Edge] {
+        let mut b = Board::new(true);
+        lose_at_200_ms(&mut b, loss);
+        assert_eq!((b.restarts, b.heals), (1, 0));
     }
 }

@@ -1,0 +1,108 @@
+//! The register check of a part read by a DMA burst chain (`crate::imu_bursts`), PX4's
+//! `RegisterCheck` pattern (`src/drivers/imu/invensense/icm42688p/ICM42688P.cpp`, `RegisterCheck`,
+//! "reset" on a mismatch): a part that resets under the board (a brown-out on its supply) comes
+//! back with every register at its reset value — PWR_MGMT0 0 (both sensors off), the FIFO in
+//! bypass, INT1 not routed — so it raises no watermark, and the chain's stall restart alone would
+//! flush its empty FIFO every 100 ms forever. After a stall, the board reads back the bank-0
+//! registers the configuration wrote ([`checked_registers`]); where one differs, the part is
+//! started again as at boot ([`check_and_heal`]).
+
+use embedded_hal::spi::{Operation, SpiDevice};
+
+use super::regs::{READ, REG_BANK_SEL, SIGNAL_PATH_RESET};
+use super::{configure_steps, Config, Core, Error, Icm42688, Step};
+
+/// Registers the check reads back at most.
+pub const MAX_CHECKED: usize = 24;
+
+/// The bank-0 registers [`configure_steps`] writes, each with the last value written (bank 0 is
+/// the one selected after the configuration and after a reset), less SIGNAL_PATH_RESET, whose
+/// bits clear themselves, and the read-modify-write steps, whose other bits are the part's.
+pub fn checked_registers(cfg: &Config) -> heapless::Vec<(u8, u8), MAX_CHECKED> {
+    let mut out: heapless::Vec<(u8, u8), MAX_CHECKED> = heapless::Vec::new();
+    let mut bank = 0u8;
+    for step in configure_steps(cfg) {
+        let Step::Write(reg, value) = step else {
+            continue;
+        };
+        if reg == REG_BANK_SEL {
+            bank = value;
+            continue;
+        }
+        if bank != 0 || reg == SIGNAL_PATH_RESET {
+            continue;
+        }
+        match out.iter_mut().find(|(r, _)| *r == reg) {
+            Some(entry) => entry.1 = value,
+            // At most one entry per register of the list: the list holds fewer than MAX_CHECKED.
+            None => {
+                let _ = out.push((reg, value));
+            }
+        }
+    }
+    out
+}
+
+/// What the check found.
+pub enum Checked {
+    /// Every checked register holds its configured value.
+    Intact,
+    /// `reg` read `read`, not `expected`: the part was started again, and reading goes on with
+    /// this fresh state.
+    Restarted {
+        /// The first register found changed.
+        reg: u8,
+        /// Its configured value.
+        expected: u8,
+        /// What it read.
+        read: u8,
+        /// The burst reader's new driver state.
+        core: Core,
+    },
+}
+
+/// Reads back `cfg`'s [`checked_registers`] over `spi`; at the first that differs, starts the part
+/// again (`Icm42688::new`: power-up wait, reset, identity, configuration).
+pub fn check_and_heal<SPI: SpiDevice>(
+    mut spi: SPI,
+    cfg: Config,
+) -> Result<Checked, Error<SPI::Error>> {
+    for (reg, expected) in checked_registers(&cfg) {
+        let mut b = [0u8; 1];
+        spi.transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(&mut b)])
+            .map_err(Error::Spi)?;
+        if b[0] != expected {
+            Icm42688::new(&mut spi, cfg)?;
+            let core = Core::new(cfg).map_err(Error::Config)?;
+            return Ok(Checked::Restarted {
+                reg,
+                expected,
+                read: b[0],
+                core,
+            });
+        }
+    }
+    Ok(Checked::Intact)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::imu::icm42688::regs::{
+        FIFO_CONFIG, FIFO_MODE_STOP_ON_FULL, GYRO_CONFIG_STATIC2, PWR_LOW_NOISE, PWR_MGMT0,
+    };
+
+    #[test]
+    fn the_checked_registers_are_bank_0_at_their_last_value() {
+        let regs = checked_registers(&Config::DEFAULT);
+        let value = |reg: u8| regs.iter().find(|(r, _)| *r == reg).map(|e| e.1);
+        // Written twice (off, then low-noise; bypass, then stop-on-full): the last value counts.
+        assert_eq!(value(PWR_MGMT0), Some(PWR_LOW_NOISE));
+        assert_eq!(value(FIFO_CONFIG), Some(FIFO_MODE_STOP_ON_FULL));
+        // A bank-1 register, the bank select and the self-clearing reset are not read back.
+        assert_eq!(value(GYRO_CONFIG_STATIC2), None);
+        assert_eq!(value(REG_BANK_SEL), None);
+        assert_eq!(value(SIGNAL_PATH_RESET), None);
+        assert!(regs.len() >= 10, "{}", regs.len());
+    }
+}
