@@ -155,6 +155,8 @@ pub(crate) struct Keeper {
     /// A survey: the least and greatest time of the samples admitted since the last mark
     /// (`super::resume`).
     times: Option<(f64, f64)>,
+    /// A survey asked for marks (`super::resume`): only it keeps the times and counts below.
+    marking: bool,
     /// A text file's survey: the rows with a finite time, whatever their values (a window's pass
     /// counts each it passes over as seen, [`Keeper::passes`]).
     timed: usize,
@@ -176,9 +178,14 @@ pub(crate) enum Admit {
 impl Keeper {
     /// A keeper of a stream in m/s².
     pub fn new(keep: &Keep) -> Keeper {
+        let marking = match keep {
+            Keep::Survey(report) => report.lock().is_ok_and(|r| r.marks_every > 0),
+            _ => false,
+        };
         Keeper {
             keep: keep.clone(),
             still_var: STILL_VAR_M2_S4,
+            marking,
             ..Keeper::default()
         }
     }
@@ -199,8 +206,7 @@ impl Keeper {
             Keep::All { .. } => Admit::Keep,
             Keep::Survey(_) => {
                 self.survey.push(t_s, acc);
-                let times = self.times.get_or_insert((t_s, t_s));
-                *times = (times.0.min(t_s), times.1.max(t_s));
+                self.note_time(t_s);
                 Admit::Pass
             }
             Keep::Within { regions, max, .. } => {
@@ -272,11 +278,18 @@ impl Keeper {
     /// A text file's survey: a row whose time (s) is `time_s` (`None`: not finite), whatever its
     /// values, so that a mark's times reach every row a window's pass would pass over or keep.
     pub fn row_time(&mut self, time_s: impl FnOnce() -> Option<f64>) {
-        if !matches!(self.keep, Keep::Survey(_)) {
+        if !self.marking {
             return;
         }
         if let Some(t_s) = time_s() {
             self.timed += 1;
+            self.note_time(t_s);
+        }
+    }
+
+    /// A survey that sets marks: `t_s` among the times since the last mark.
+    fn note_time(&mut self, t_s: f64) {
+        if self.marking {
             let times = self.times.get_or_insert((t_s, t_s));
             *times = (times.0.min(t_s), times.1.max(t_s));
         }
