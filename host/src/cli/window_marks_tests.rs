@@ -7,8 +7,9 @@
 use super::window_property_tests::{binary, csv_source, same_from_marks, session, write_csv};
 use crate::fuzz::logs::{write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample};
 use estimator::sim::testkit::Rng;
-use recording::session::import::MAX_LINE_BYTES;
+use recording::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_LINE_BYTES};
 use recording::session::logs::LogSource;
+use shared::OutputUnit;
 use std::path::Path;
 
 /// Values that are not finite in three samples, and three stamps moved far: one beyond the log's
@@ -100,6 +101,73 @@ fn windows_read_from_the_surveys_marks_are_the_windows_a_whole_pass_reads() {
                 let case = format!("seed {seed}, {name}, budget {max_samples}");
                 same_from_marks(&path, &source, max_samples, &case);
             }
+        }
+    }
+}
+
+/// A file of the corpus of real recordings, unpacked into `dir` when it is zstd-compressed.
+fn corpus_file(dir: &Path, name: &str) -> std::path::PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/corpus")
+        .join(name);
+    match name.strip_suffix(".zst") {
+        Some(plain) => {
+            let bytes = zstd::decode_all(&std::fs::read(&src).unwrap()[..]).unwrap();
+            let out = dir.join(plain);
+            std::fs::write(&out, bytes).unwrap();
+            out
+        }
+        None => src,
+    }
+}
+
+/// The real recordings other people's loggers made, read window by window with a budget that
+/// cuts each into many windows: every window read from the marks is the window a pass over the
+/// whole file reads (their stamps as those loggers wrote them: a flight's, host-stamped bag's
+/// lost packets, a device's own clock).
+#[test]
+fn real_recordings_read_from_the_marks_are_the_windows_a_whole_pass_reads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut xio = ImportOptions::new(
+        TimeSource::Column("Time (s)".into()),
+        OutputUnit::StandardGravity,
+        GyroUnit::DegPerS,
+    );
+    xio.columns = [
+        "Accelerometer X (g)",
+        "Accelerometer Y (g)",
+        "Accelerometer Z (g)",
+        "Gyroscope X (deg/s)",
+        "Gyroscope Y (deg/s)",
+        "Gyroscope Z (deg/s)",
+    ]
+    .map(String::from);
+    let mut imucal = ImportOptions::new(
+        TimeSource::RateHz(102.4),
+        OutputUnit::MetresPerSecondSquared,
+        GyroUnit::DegPerS,
+    );
+    imucal.columns = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"].map(String::from);
+    let text = |options: ImportOptions| LogSource {
+        text: Some(options),
+        ..binary()
+    };
+    let cases = [
+        ("px4ulogrs_quadrotor_local.ulg.zst", binary()),
+        ("pyulog_sample.ulg.zst", binary()),
+        ("imutools_ardrone_imu_ros2.mcap.zst", binary()),
+        ("xio_fusion_sensor_data.csv.zst", text(xio)),
+        ("imucal_ferraris_session.csv.zst", text(imucal)),
+    ];
+    for (name, source) in cases {
+        let path = corpus_file(tmp.path(), name);
+        for max_samples in [800, 3000] {
+            same_from_marks(
+                &path,
+                &source,
+                max_samples,
+                &format!("{name}, budget {max_samples}"),
+            );
         }
     }
 }
