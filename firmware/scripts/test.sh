@@ -23,6 +23,37 @@ host=$(rustc -vV | sed -n 's/^host: //p')
 tdir=$(firmware_target_dir)
 step() { printf '\n=== firmware: %s\n' "$*"; }
 
+# An STM32 image must leave the calibration store's sectors 1 and 2 (0x0800_4000..0x0800_C000,
+# src/flash_layout.rs) alone: no loaded segment (by its load address) may touch them, or flashing
+# the firmware would erase the calibration.
+store_untouched() {
+    local bad=0 type pa size
+    while read -r type _ _ pa size _; do
+        [ "$type" = LOAD ] && [ $((size)) -gt 0 ] || continue
+        if [ $((pa)) -lt $((0x0800C000)) ] && [ $((pa + size)) -gt $((0x08004000)) ]; then
+            echo "$1: a segment at $pa ($((size)) bytes) overlaps the calibration store" >&2
+            bad=1
+        fi
+    done < <(arm-none-eabi-readelf -lW "$1")
+    [ "$bad" = 0 ] && echo "$(basename "$1"): no segment in the calibration store's sectors 1-2"
+}
+
+# The DFU parts (scripts/dfu-images.sh) of an image are its flat binary without the store's gap:
+# the vector table at its start, the code from 0xC000 on.
+dfu_parts_match() {
+    local dir
+    dir=$(mktemp -d)
+    scripts/dfu-images.sh "$1" "$dir" >/dev/null
+    arm-none-eabi-objcopy -O binary "$1" "$dir/flat.bin"
+    local name vectors
+    name=$(basename "$1")
+    vectors=$(stat -c%s "$dir/$name-sector0.bin")
+    cmp -n "$vectors" "$dir/$name-sector0.bin" "$dir/flat.bin"
+    tail -c +$((0xC000 + 1)) "$dir/flat.bin" | cmp - "$dir/$name-code.bin"
+    echo "$name: the DFU parts are the image's bytes at 0x0800_0000 ($vectors) and 0x0800_C000"
+    rm -r "$dir"
+}
+
 step "tools"
 if ! rustup target list --installed | grep -qx "$target"; then
     rustup target add "$target"
@@ -60,11 +91,12 @@ qemu_size_check "$tdir/$target/release/qemu"
 
 if [ "${SKIP_STM32:-0}" != 1 ]; then
     # One board at a time (each compiles the HAL for its own chip). Budgets of the F405 image:
-    # flash <= 128 KiB (also enforced by memory-f405.x), static RAM <= 32 KiB.
+    # flash <= 128 KiB (memory-f405.x leaves the code 208 KiB), static RAM <= 32 KiB.
     step "build + clippy: STM32F446 Nucleo-64 board"
     cargo clippy --release --features board-stm32f4 --bin stm32f4 --target "$target" -- -D warnings
     cargo build --release --features board-stm32f4 --bin stm32f4 --target "$target"
     arm-none-eabi-size "$tdir/$target/release/stm32f4"
+    store_untouched "$tdir/$target/release/stm32f4"
 
     # The F405 boards, each from its description (`boards`): the SpeedyBee F405 V3 (`speedybee-v3`,
     # BMI270: the binary f405-bmi270), V5 (`speedybee-v5`) and V4 (no extra feature), both
@@ -82,7 +114,9 @@ if [ "${SKIP_STM32:-0}" != 1 ]; then
         flash=$((text + data)) ram=$((data + bss))
         echo "F405 $board: flash $flash bytes (budget 131072), static RAM $ram bytes (budget 32768)"
         [ "$flash" -le 131072 ] && [ "$ram" -le 32768 ] || { echo "F405 over its budget" >&2; exit 1; }
+        store_untouched "$tdir/$target/release/$bin"
     done
+    dfu_parts_match "$tdir/$target/release/f405"
 fi
 
 step "on-target tests in QEMU"

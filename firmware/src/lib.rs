@@ -8,6 +8,8 @@
 //! - [`protocol`]: frame reception, the request handler ([`protocol::Controller`]) and the link
 //!   service that moves queued frames to the link without blocking.
 //! - [`storage`]: the A/B parameter store on any `embedded-storage` NOR flash (power-cut safe).
+//! - [`flash_layout`]: where the STM32 boards keep the image and the store (the store in small
+//!   sectors, so its erase stops sampling for at most half a second).
 //! - [`boards`]: the flight controllers as data (IMU, bus, pins, IMU rotation, LED, pins never to
 //!   touch, crystal), each checked against its Betaflight and ArduPilot board files.
 //! - [`clock_start`]: the STM32 boards' clock started without hanging on a missing external
@@ -39,6 +41,7 @@ pub mod clock_start;
 pub mod clock_tree;
 pub mod conversion;
 pub mod die_temperature;
+pub mod flash_layout;
 #[cfg(feature = "health")]
 pub mod health;
 pub mod imu;

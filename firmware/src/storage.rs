@@ -1,7 +1,7 @@
 //! Power-cut-safe parameter storage: an A/B scheme on any `embedded-storage` NOR flash.
 //!
-//! The store owns two equal slots (each a whole number of erase blocks: on the STM32F446 the 128 KiB
-//! sectors 6 and 7; on QEMU a RAM region outside the ELF). A slot holds one record:
+//! The store owns two equal slots (each a whole number of erase blocks: on the STM32 boards the
+//! 16 KiB sectors 1 and 2, `crate::flash_layout`; on QEMU a RAM region outside the ELF). A slot holds one record:
 //!
 //! ```text
 //! offset 0   u32  RECORD_MAGIC          offset 8   u16  blob length n, u16 0xFFFF
@@ -14,7 +14,7 @@
 //! record's bytes there are already blank), programs the record, programs the commit word, and
 //! reads it back. A board erases that spare slot ahead, at power-on before sampling starts
 //! ([`AbStore::prepare`]): a sector erase stalls every flash read of a single-bank STM32F4 — the
-//! CPU's instruction fetches included — for about a second, so a write that finds its slot blank
+//! CPU's instruction fetches included — for up to half a second, so a write that finds its slot blank
 //! only programs (16 µs a word) and sampling runs on through it. A record counts only with its commit word,
 //! a matching CRC and a plausible length; at boot the valid record with the newer sequence number
 //! (wrapping comparison) wins. A power cut at any step therefore leaves the old record untouched in

@@ -296,7 +296,7 @@ static SAMPLER: Mutex<RefCell<Option<Sampler>>> = Mutex::new(RefCell::new(None))
 /// Samples the driver handed to the pipeline (the pipeline's index also counts the lost ones).
 static DELIVERED: AtomicU32 = AtomicU32::new(0);
 
-/// Erase block of the store test's flash (its stall is a 128 KiB sector's: `StallingFlash`).
+/// Erase block of the store test's flash (its stall is a store slot's: `StallingFlash`).
 const TEST_ERASE: usize = 4096;
 type TestStore = AbStore<qemu::StallingFlash<TEST_ERASE>>;
 static mut TEST_FLASH: [u8; 2 * TEST_ERASE] = [0; 2 * TEST_ERASE];
@@ -409,10 +409,11 @@ fn store_while_sampling() -> (u64, u64, u64, Option<DeviceToHost>) {
     )
 }
 
-/// Sample loss while a calibration is stored, with the F405's flash stall modelled
-/// (`qemu::StallingFlash`: a sector erase masks interrupts for 1000 ms): none when the slot was
-/// erased ahead at boot (`AbStore::prepare`), the stall less the FIFO's depth when the write must
-/// erase; and no flash operation from an interrupt.
+/// Sample loss while a calibration is stored, with the STM32 boards' flash stall modelled
+/// (`qemu::StallingFlash`: a slot's erase masks interrupts for its longest erase, 500 ms): none
+/// when the slot was erased ahead at boot (`AbStore::prepare`); when the write must erase, the
+/// stall less the FIFO's depth, at most half a second of samples (1 kHz here); and no flash
+/// operation from an interrupt.
 #[inline(never)]
 fn store_keeps_sampling(t: &mut Tally, cp: &mut cortex_m::Peripherals) {
     let sensor = VirtualSensor::new(&paper_unit::calibration(), 1000, true);
@@ -470,7 +471,8 @@ fn store_keeps_sampling(t: &mut Tally, cp: &mut cortex_m::Peripherals) {
         && reply_b == stored
         && lost_a == 0
         && counted_a == 0
-        && lost_b > 500
+        && lost_b > 100
+        && lost_b <= 500
         && counted_b > 0
         && in_handler == 0;
     hprintln!(

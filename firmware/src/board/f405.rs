@@ -19,21 +19,20 @@
 //! stream 3 channel 3. Stream 0 — SPI1_RX's other choice — is left to ADC1, as the board's Betaflight
 //! definition assigns it (`ADC1_DMA_OPT 0`).
 //!
-//! Flash: sectors 0–4 (128 KiB) hold the image (`memory-f405.x`), sectors 5 and 6 (128 KiB each) the
-//! calibration A/B store.
+//! Flash: sector 0 holds the vector table, the 16 KiB sectors 1 and 2 the calibration A/B store,
+//! sectors 3 on the code (`memory-f405.x`, [`crate::flash_layout`]).
 
 use shared::wire::{Board, ImuInit, ImuPart as WirePart, ImuStatus};
 use shared::OutputUnit;
-use stm32f4xx_hal::flash::LockedFlash;
 
 use crate::boards::{self, BoardDesc};
 use crate::imu::alignment::Alignment;
 use crate::imu::icm42688::{AccelRange, Config, Odr};
 
-use super::stm32_common::{unit_id, F4Flash, Store};
+pub use super::stm32_common::store;
+use super::stm32_common::unit_id;
 use crate::link::PacketStager;
 use crate::protocol::DeviceInfo;
-use crate::storage::AbStore;
 use crate::ByteLink;
 
 #[cfg(all(feature = "speedybee-v3", feature = "speedybee-v5"))]
@@ -76,10 +75,6 @@ pub const IMU_CONFIG: Config = Config {
 pub const IMU_ALIGNMENT: Alignment = BOARD.alignment;
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
-/// Flash offset (from 0x0800_0000) of the calibration store: sectors 5 and 6 (see memory-f405.x).
-pub const STORE_OFFSET: u32 = 0x2_0000;
-/// Size of one store slot: one 128 KiB sector.
-pub const SLOT_SIZE: u32 = 0x2_0000;
 /// USB vendor and product id: pid.codes' test VID/PID for open-source projects
 /// (<https://pid.codes/1209/0001/>); a product would register its own PID there.
 pub const USB_VID_PID: (u16, u16) = (0x1209, 0x0001);
@@ -131,18 +126,14 @@ pub fn bmi270_status<E>(result: &Result<(), crate::imu::bmi270::Error<E>>) -> Im
     }
 }
 
-/// The independent watchdog's period, ms: above the longest the idle loop may block, a 128 KiB
-/// sector erase (DS8626, flash erase time at x8 parallelism, the HAL's: 4 s at most), with margin.
-pub const WATCHDOG_MS: u32 = 6000;
+/// The independent watchdog's period, ms: four times the longest the idle loop may block, a store
+/// slot's erase (`flash_layout::SLOT_ERASE_MAX_MS`, 500 ms), which leaves margin for the LSI's
+/// spread (17–47 kHz against its nominal 32 kHz, DS8626 Table 35: a period up to 1.5× short).
+pub const WATCHDOG_MS: u32 = 4 * crate::flash_layout::SLOT_ERASE_MAX_MS;
 
 /// The unique ID (`unit_id`) as 24 hex digits in `out`.
 pub fn unique_id_hex(out: &'static mut [u8; 24]) -> &'static str {
     crate::health::hex_into(&unit_id().0, out)
-}
-
-/// The A/B store on sectors 5 and 6.
-pub fn store(flash: LockedFlash) -> Option<Store> {
-    AbStore::new(F4Flash(flash), STORE_OFFSET, SLOT_SIZE).ok()
 }
 
 /// USB full-speed bulk packet, bytes.

@@ -38,9 +38,9 @@ pub fn freeze_clocks(rcc: pac::RCC) -> Rcc {
     )
 }
 
-/// The calibration store, its spare slot erased ahead: the erase stalls the CPU for about a
-/// second (a sector erase on a single-bank F4), so it runs at boot, before the IMU's samples
-/// flow; a calibration written later only programs.
+/// The calibration store, its spare slot erased ahead: the erase stalls the CPU for up to half a
+/// second (a 16 KiB sector on a single-bank F4, `crate::flash_layout`), so it runs at boot,
+/// before the IMU's samples flow; a calibration written later only programs.
 pub fn prepared_store(flash: pac::FLASH) -> Store {
     let mut store = board::store(LockedFlash::new(flash))
         .unwrap_or_else(|| defmt::panic!("calibration store geometry"));

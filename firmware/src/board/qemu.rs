@@ -46,8 +46,9 @@ pub const SAMPLE_RATE_HZ: u32 = 1000;
 pub const CORE_CLOCK_HZ: u32 = 25_000_000;
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
-/// Erase block of the RAM "flash": the STM32F446's 128 KiB sector, so both boards use the same layout.
-pub const ERASE_SIZE: usize = 128 * 1024;
+/// Erase block of the RAM "flash": the STM32 boards' store slot (`flash_layout::SLOT_SIZE`, one
+/// 16 KiB sector), so all boards use the same layout.
+pub const ERASE_SIZE: usize = crate::flash_layout::SLOT_SIZE as usize;
 /// Lever-arm mode at boot.
 pub const BOOT_LEVER_MODE: LeverMode = LeverMode::RateAndAcceleration;
 
@@ -115,9 +116,9 @@ pub fn sample_period<const Q: usize>(
     n
 }
 
-/// How long the F405's flash stalls the CPU for a 128 KiB sector erase, ms (DS8626 "Flash memory
-/// programming": t_ERASE128KB typical at 32-bit parallelism).
-pub const SECTOR_ERASE_STALL_MS: u32 = 1000;
+/// How long the STM32 boards' flash stalls the CPU for a store slot's erase, ms: its longest
+/// (`flash_layout::SLOT_ERASE_MAX_MS`, DS8626's t_ERASE16KB at 32-bit parallelism).
+pub const SECTOR_ERASE_STALL_MS: u32 = crate::flash_layout::SLOT_ERASE_MAX_MS;
 
 /// Milliseconds a [`StallingFlash`] stalled the CPU and no sampling interrupt has caught up with
 /// yet: the part's own clock ran on, so the next sample period lets that much more of the model's

@@ -1,18 +1,22 @@
 //! What the two STM32F4 boards share: the unit identifier, the internal flash as the calibration
 //! store's NOR flash, and the set-up of SPI1 (both boards put their sensor on PA5–PA7). Both chips
-//! (F405, F446) have 128 KiB sectors from sector 5 on and the unique ID at the same address.
+//! (F405, F446) have the same first sectors (16 KiB sectors 0–3, where the store lives:
+//! [`crate::flash_layout`]) and the unique ID at the same address.
 
 use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 use shared::units::UnitId;
 use stm32f4xx_hal::flash::{Error as FlashError, FlashExt, LockedFlash};
 use stm32f4xx_hal::gpio::alt::spi1;
 use stm32f4xx_hal::gpio::{PinSpeed as _, Speed};
+use stm32f4xx_hal::pac::flash::cr::PSIZE;
+use stm32f4xx_hal::pac::FLASH;
 use stm32f4xx_hal::pac::SPI1;
 use stm32f4xx_hal::rcc::Rcc;
 use stm32f4xx_hal::spi::{Mode, Phase, Polarity, Spi, SpiExt};
 use stm32f4xx_hal::time::Hertz;
 
 use crate::clock_tree::{PinSpeed, SpiBus};
+use crate::flash_layout::{Parallelism, Sector, ERASE_PARALLELISM, SLOT_SIZE, STORE_OFFSET};
 use crate::storage::AbStore;
 
 /// SPI mode 3 (clock idle high, data captured on the second edge), which both sensors accept.
@@ -95,10 +99,26 @@ impl ReadNorFlash for F4Flash {
 
 impl NorFlash for F4Flash {
     const WRITE_SIZE: usize = 1;
-    const ERASE_SIZE: usize = 128 * 1024;
+    const ERASE_SIZE: usize = SLOT_SIZE as usize;
 
+    /// Erases the sectors from `from` to `to` at [`ERASE_PARALLELISM`]. stm32f4xx-hal 0.23 erases at
+    /// 8-bit parallelism only (`src/flash.rs:201`), which takes a 16 KiB sector 400 ms typical and
+    /// 800 ms at most against 250 and 500 ms at 32-bit (DS8626 Table 40): the slot's erase is the
+    /// one time sampling stops, so it is done here, in the reference manual's order (RM0090 §3.6.3,
+    /// "Sector Erase": BSY clear, SER and SNB set, then STRT, wait for BSY).
     fn erase(&mut self, from: u32, to: u32) -> Result<(), FlashError> {
-        NorFlash::erase(&mut self.0.unlocked(), from, to)
+        // Unlocked until dropped (the HAL's key sequence, RM0090 §3.5.1).
+        let _unlocked = self.0.unlocked();
+        // SAFETY: the flash interface's registers, unlocked above and touched by nothing else while
+        // this runs (the store is the only writer; the HAL's own operations are not interleaved).
+        let regs = unsafe { &*FLASH::ptr() };
+        let mut at = from;
+        while at < to {
+            let sector = Sector::at(at).ok_or(FlashError::ProgrammingSequence)?;
+            erase_sector(regs, sector.number)?;
+            at = sector.end();
+        }
+        Ok(())
     }
 
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), FlashError> {
@@ -106,5 +126,59 @@ impl NorFlash for F4Flash {
     }
 }
 
+/// FLASH_CR.PSIZE for a parallelism.
+const fn psize(p: Parallelism) -> PSIZE {
+    match p {
+        Parallelism::X8 => PSIZE::Psize8,
+        Parallelism::X16 => PSIZE::Psize16,
+        Parallelism::X32 => PSIZE::Psize32,
+    }
+}
+
+/// One sector erase on the unlocked flash interface; the error flags it raised, as the HAL's error.
+fn erase_sector(
+    regs: &stm32f4xx_hal::pac::flash::RegisterBlock,
+    number: u8,
+) -> Result<(), FlashError> {
+    while regs.sr().read().bsy().bit_is_set() {}
+    // Flags left by an earlier operation would be read as this one's (they clear by writing 1).
+    regs.sr().write(|w| {
+        w.pgserr().clear_bit_by_one();
+        w.pgperr().clear_bit_by_one();
+        w.pgaerr().clear_bit_by_one();
+        w.wrperr().clear_bit_by_one();
+        w.operr().clear_bit_by_one()
+    });
+    regs.cr().modify(|_, w| {
+        w.pg().clear_bit();
+        w.psize().variant(psize(ERASE_PARALLELISM));
+        // SAFETY: a sector number of this single-bank part (0–11, from the sector table).
+        unsafe { w.snb().bits(number) };
+        w.ser().set_bit()
+    });
+    regs.cr().modify(|_, w| w.strt().set_bit());
+    while regs.sr().read().bsy().bit_is_set() {}
+    regs.cr().modify(|_, w| w.ser().clear_bit());
+    let sr = regs.sr().read();
+    if sr.pgserr().bit_is_set() {
+        Err(FlashError::ProgrammingSequence)
+    } else if sr.pgperr().bit_is_set() {
+        Err(FlashError::ProgrammingParallelism)
+    } else if sr.pgaerr().bit_is_set() {
+        Err(FlashError::ProgrammingAlignment)
+    } else if sr.wrperr().bit_is_set() {
+        Err(FlashError::WriteProtection)
+    } else if sr.operr().bit_is_set() {
+        Err(FlashError::Operation)
+    } else {
+        Ok(())
+    }
+}
+
 /// A board's calibration store.
 pub type Store = AbStore<F4Flash>;
+
+/// The A/B store on the 16 KiB sectors 1 and 2 ([`crate::flash_layout`]).
+pub fn store(flash: LockedFlash) -> Option<Store> {
+    AbStore::new(F4Flash(flash), STORE_OFFSET, SLOT_SIZE).ok()
+}

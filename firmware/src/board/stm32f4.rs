@@ -1,5 +1,5 @@
 //! The STM32F446RE Nucleo-64 board: three analog accelerometers on ADC1, an L3GD20H/I3G4250D gyro
-//! on SPI1, USART2 to the PC (the ST-LINK virtual COM port), the calibration in flash sectors 6/7.
+//! on SPI1, USART2 to the PC (the ST-LINK virtual COM port), the calibration in the 16 KiB flash sectors 1 and 2 (`crate::flash_layout`).
 //!
 //! Pin map (Arduino header names in brackets):
 //!
@@ -33,13 +33,12 @@ use shared::OutputUnit;
 use stm32f4xx_hal::adc::Adc;
 use stm32f4xx_hal::dma::traits::{DMASet, PeriAddress};
 use stm32f4xx_hal::dma::{PeripheralToMemory, Stream0};
-use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::pac::{ADC1, DMA2};
 
-use super::stm32_common::{unit_id, F4Flash, Store};
+pub use super::stm32_common::store;
+use super::stm32_common::unit_id;
 use crate::conversion::{adc_sr_clear, ADC_SR_AWD};
 use crate::protocol::DeviceInfo;
-use crate::storage::AbStore;
 
 // The clock tree, the ADC clock and the UART's baud rate, computed and checked against their
 // limits at compile time in `clock_tree::nucleo` (with the gyro's SPI clock).
@@ -64,10 +63,6 @@ pub const ANALOG_ACCELEROMETERS: shared::wire::ImuStatus = shared::wire::ImuStat
 };
 /// Output queue length, frames.
 pub const OUTPUT_QUEUE: usize = 16;
-/// Flash offset (from 0x0800_0000) of the calibration store: sectors 6 and 7 (see memory.x).
-pub const STORE_OFFSET: u32 = 0x4_0000;
-/// Size of one store slot: one 128 KiB sector.
-pub const SLOT_SIZE: u32 = 0x2_0000;
 /// ADC reference voltage (Nucleo: VDDA = 3.3 V).
 pub const VREF_V: f32 = 3.3;
 
@@ -139,9 +134,4 @@ pub fn info() -> DeviceInfo {
         virtual_table: false,
         output_unit: OutputUnit::Volts,
     }
-}
-
-/// The A/B store on sectors 6 and 7.
-pub fn store(flash: LockedFlash) -> Option<Store> {
-    AbStore::new(F4Flash(flash), STORE_OFFSET, SLOT_SIZE).ok()
 }

@@ -1,9 +1,9 @@
 //! A calibration write on its way to the flash, handed from the request handler to the board's
 //! lowest priority.
 //!
-//! Why: erasing a 128 KiB STM32F4 sector takes about a second (the STM32F405's datasheet DS8626,
-//! "Flash memory programming": t_ERASE128KB 1 s typical, 2 s at most at 32-bit parallelism) and
-//! programming the record a few milliseconds (16 µs a word). On the F405 the request
+//! Why: erasing a store slot (a 16 KiB STM32F4 sector) takes 250 ms typical, 500 ms at most
+//! (`crate::flash_layout`, from DS8626's "Flash memory programming") and programming the record a
+//! few milliseconds (16 µs a word). On the F405 the request
 //! handler runs in the USB interrupt; a store there would hold that interrupt for the whole erase.
 //! So the handler only validates the blob and parks it here with the store itself
 //! ([`super::LinkService::take_store_job`]), owes the host its answer, and reads no further
