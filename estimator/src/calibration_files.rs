@@ -220,7 +220,8 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), (PathBuf, std::io::Erro
 mod tests {
     use super::*;
     use crate::estimate::{calibrate_session_stats, EstimateOptions};
-    use crate::sim::testkit::{self, Rng, TableErrors};
+    use crate::sim::testkit::{self, TableErrors};
+    use shared::rng::Rng;
 
     fn outcome() -> CalibrationOutcome {
         let plan = testkit::better_plan(shared::OutputUnit::Volts);

@@ -15,10 +15,10 @@ pub mod logs;
 #[cfg(test)]
 mod torture_tests;
 
-use estimator::sim::Rng;
 use estimator::unit_file::UnitFile;
 use recording::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use recording::session::{read_samples, Plan};
+use shared::rng::Rng;
 use std::path::Path;
 
 /// The parsers under test.

@@ -54,7 +54,7 @@ const STILL_GYRO_N_K_DEG: (f64, f64) = (0.01, 0.012);
 fn write_still_csv(path: &Path) {
     use std::fmt::Write;
     let (rate_hz, rows) = (200.0f64, 60_000usize);
-    let mut rng = estimator::sim::Rng::new(5, 0);
+    let mut rng = shared::rng::Rng::new(5, 0);
     let mut walk = [0.0f64; 6];
     let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
     for k in 0..rows {

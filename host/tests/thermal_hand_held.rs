@@ -12,12 +12,13 @@ use estimator::estimate::handheld_gyro::HandGyroFit;
 use estimator::sim::handheld::{logger_unit, simulate_hand, GyroTruth, HandSpec};
 use estimator::sim::montecarlo::{static_errors, StaticErrors};
 use estimator::sim::session::NoiseModel;
-use estimator::sim::testkit::{hot_unit, nuisances, simulate_stats, soak_plan, Rng};
+use estimator::sim::testkit::{hot_unit, nuisances, simulate_stats, soak_plan};
 use estimator::sim::thermal::ThermalSim;
 use outputs::summary::Limits;
 use recording::session::import::Recording;
 use recording::session::segment::SegmentOptions;
 use recording::session::{SegmentAccumulator, SegmentStats};
+use shared::rng::Rng;
 use shared::{linalg, Calibration, OutputUnit};
 
 const SEED: u64 = 1;

@@ -6,6 +6,8 @@
 //! - [`params`]: the calibration in the paper's form (Table 1 and Table 3) and in the fitted form
 //!   `M = K·A`, with the conversions of `docs/model.md` §4.2;
 //! - [`sensor_models`]: the gyro's correction and the temperature model (docs/model.md §8, §9);
+//! - [`rng`]: the one random number generator (simulators, Monte Carlo runs, tests), seeded and
+//!   the same on every platform;
 //! - [`forward`]: the forward model `U = K A f_O + K d + u0` (paper eq. 13–15), used by every simulator;
 //! - [`compensator`]: the per-sample inverse model (paper eq. 16, `docs/model.md` §3), the same
 //!   bits on the PC and on the Cortex-M4F;
@@ -22,6 +24,7 @@ pub mod forward;
 pub mod linalg;
 pub mod omega_dot;
 pub mod params;
+pub mod rng;
 pub mod sensor_models;
 pub(crate) mod trig;
 pub mod units;

@@ -3,9 +3,10 @@
 
 use super::*;
 use estimator::calibration_files::CALIBRATION_TOML;
-use estimator::sim::{simulate_to_dir, NoiseModel, Rng};
+use estimator::sim::{simulate_to_dir, NoiseModel};
 use estimator::unit_file::UnitFile;
 use recording::session::builtin::builtin_plan;
+use shared::rng::Rng;
 
 /// The paper's unit with a production spread: biases 2 mg, scale factors 0.2 %, angles 0.05°, 1σ.
 pub(crate) fn lot_unit(i: u64, rng: &mut Rng) -> UnitFile {

@@ -4,9 +4,9 @@
 
 use super::segmentation_tests::recording;
 use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
-use estimator::sim::Rng;
 use recording::session::import::Recording;
 use recording::session::segment::{find_intervals, SegmentError, SegmentOptions, StillThreshold};
+use shared::rng::Rng;
 use shared::OutputUnit;
 use std::f64::consts::PI;
 

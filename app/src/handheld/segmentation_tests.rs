@@ -53,7 +53,7 @@ fn finds_every_hand_position_and_no_false_one() {
 
 #[test]
 fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
-    let mut rng = estimator::sim::Rng::new(5, 0);
+    let mut rng = shared::rng::Rng::new(5, 0);
     let mut rec = Recording {
         acc_unit: Some(shared::OutputUnit::StandardGravity),
         rate_hz: 200.0,
@@ -87,7 +87,7 @@ fn a_steady_spin_is_listed_as_a_spin_not_as_a_still_position() {
 
 #[test]
 fn no_still_interval_spans_a_time_gap() {
-    let mut rng = estimator::sim::Rng::new(9, 0);
+    let mut rng = shared::rng::Rng::new(9, 0);
     let mut rec = Recording {
         acc_unit: Some(shared::OutputUnit::StandardGravity),
         rate_hz: 100.0,

@@ -158,7 +158,7 @@ mod tests {
     /// Still z up for 3 s, then for each angle a turn about z (raised-cosine rate over 3 s) and 3 s
     /// still again, at 200 Hz with 1 mg and 0.05 °/s noise; the gyro reads 1 % high.
     fn turns_on_a_table(angles_deg: &[f64]) -> Recording {
-        let mut rng = estimator::sim::Rng::new(3, 0);
+        let mut rng = shared::rng::Rng::new(3, 0);
         let mut rec = Recording {
             acc_unit: Some(shared::OutputUnit::StandardGravity),
             rate_hz: 200.0,

@@ -646,7 +646,7 @@ mod tests {
     /// same covariance of θ at the same θ, to rounding (no iteration in between to differ by).
     #[test]
     fn the_dense_path_without_a_walk_is_the_per_segment_path() {
-        let mut rng = crate::sim::Rng::new(3, 0);
+        let mut rng = shared::rng::Rng::new(3, 0);
         let ups = [
             [1.0, 0.0, 0.0],
             [-1.0, 0.0, 0.0],

@@ -9,9 +9,10 @@
 
 use super::*;
 use crate::sim::montecarlo::{rms, static_errors};
-use crate::sim::testkit::{self, Rng};
+use crate::sim::testkit;
 use crate::sim::NoiseModel;
 use recording::session::SegmentStats;
+use shared::rng::Rng;
 use std::collections::BTreeMap;
 
 /// A fixture: how far each mount's true up is from the plan's, and what the plan declares.

@@ -9,10 +9,11 @@
 use super::*;
 use crate::sim::montecarlo::{rms, static_errors};
 use crate::sim::session::gyro_matrix;
-use crate::sim::testkit::{self, Rng};
+use crate::sim::testkit;
 use crate::sim::NoiseModel;
 use recording::session::SegmentStats;
 use shared::linalg::RowMajor3;
+use shared::rng::Rng;
 
 /// The walk strengths, °/s/√s: a plain MEMS gyro's rate random walk (docs/model.md §11.6).
 const WALKS: [f64; 3] = [1e-4, 3e-4, 1e-3];

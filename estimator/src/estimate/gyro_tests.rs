@@ -164,7 +164,7 @@ fn a_dynamic_misfit_does_not_move_the_static_parameters() {
                 gyro: Some(mems_gyro()),
                 ..TableErrors::default()
             };
-            let mut rng = testkit::Rng::new(500 + seed, 0);
+            let mut rng = shared::rng::Rng::new(500 + seed, 0);
             let noise = 1e-3 * truth.statics.scale_out_per_g[0];
             let stats = testkit::noisy_stats(&plan, &truth, noise, errors, &mut rng);
             let good = calibrate_session_stats(&plan, &stats, options).unwrap();

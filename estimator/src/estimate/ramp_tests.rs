@@ -3,8 +3,9 @@
 //! the ω̇ (tangential) term included (docs/model.md §4.4, §4.6).
 
 use super::*;
-use crate::sim::testkit::{self, Rng, TableErrors};
+use crate::sim::testkit::{self, TableErrors};
 use recording::session::{Plan, SegmentPlan};
+use shared::rng::Rng;
 use shared::OutputUnit;
 
 /// ±1 g static per axis, and about z (z up) a spin-up and a spin-down: no constant-rate segment,

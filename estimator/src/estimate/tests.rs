@@ -2,7 +2,8 @@
 
 use super::*;
 use crate::sim::montecarlo::{percentile, rms};
-use crate::sim::testkit::{self, clean_session, paper_noise, Rng, TableErrors};
+use crate::sim::testkit::{self, clean_session, paper_noise, TableErrors};
+use shared::rng::Rng;
 use shared::OutputUnit;
 use shared::ReferencePoint;
 

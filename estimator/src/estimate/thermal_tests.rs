@@ -264,7 +264,7 @@ fn temperatures_seen_only_between_free_attitudes_give_no_model() {
     };
     let (out, constant) = (calibrate(&swing), calibrate(&|_| 25.0));
     let errors = |o: &super::CalibrationOutcome| {
-        let mut rng = crate::sim::testkit::Rng::new(5, 0);
+        let mut rng = shared::rng::Rng::new(5, 0);
         crate::sim::montecarlo::static_errors(&truth, &o.fitted, &mut rng)
     };
     let (e, e0) = (errors(&out), errors(&constant));

@@ -7,7 +7,7 @@
 //! `2 ln 2 · h₋₁`. Bias instability `B` is conventionally defined by that floor,
 //! `σ_A = √(2 ln 2/π) · B ≈ 0.664 B` (IEEE Std 952), so `σ = B·√(ln 10/(π m))`.
 
-use super::Rng;
+use shared::rng::Rng;
 
 /// Time constants span 10^MIN_DECADE .. 10^MAX_DECADE s.
 const MIN_DECADE: i32 = -2;

@@ -9,11 +9,11 @@
 //! tremor. Outputs come from the shared forward model (lever arms included); the gyro reads
 //! `w = G·ω + b` plus white noise (docs/model.md §8).
 
-use crate::sim::Rng;
 use nalgebra::{UnitQuaternion, Vector3};
 use recording::session::builtin::builtin_plan;
 use shared::forward::{BodyMotion, ForwardModel};
 use shared::linalg::{self, RowMajor3};
+use shared::rng::Rng;
 use shared::units::{BodyAngularAccel, BodyRate, BodySpecificForce};
 use shared::Calibration;
 use std::f64::consts::PI;

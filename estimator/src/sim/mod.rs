@@ -15,7 +15,6 @@ pub mod flicker;
 pub mod handheld;
 #[cfg(any(test, feature = "testkit"))]
 pub mod montecarlo;
-pub mod rng;
 mod sensor_noise;
 pub mod session;
 pub mod stats;
@@ -24,7 +23,6 @@ pub mod synth;
 pub mod testkit;
 pub mod thermal;
 
-pub use rng::Rng;
 pub use session::{
     simulate_calibration_to_dir, simulate_rows, simulate_rows_with_temperature, simulate_to_dir,
     simulate_to_dir_with_progress, NoiseModel, SimulateError, SimulationSummary, TRUTH_FILE,

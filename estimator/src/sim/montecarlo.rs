@@ -90,7 +90,7 @@ pub struct CaseResult {
 }
 
 /// A uniformly random unit vector.
-fn unit(rng: &mut testkit::Rng) -> [f64; 3] {
+fn unit(rng: &mut shared::rng::Rng) -> [f64; 3] {
     rng.unit_vector()
 }
 
@@ -137,7 +137,7 @@ pub struct StaticErrors {
 pub fn static_errors(
     truth: &Calibration,
     fitted: &FittedStatic,
-    rng: &mut testkit::Rng,
+    rng: &mut shared::rng::Rng,
 ) -> StaticErrors {
     let unit_model = ForwardModel::new(truth).expect("valid truth");
     let g = truth.gravity_m_s2;
@@ -178,8 +178,8 @@ fn dynamic_error(
     out: &CalibrationOutcome,
     gyro: Option<&(RowMajor3, [f64; 3])>,
     rot: &Matrix3<f64>,
-    rng: &mut testkit::Rng,
-    rate_deg_s: &dyn Fn(&mut testkit::Rng) -> f64,
+    rng: &mut shared::rng::Rng,
+    rate_deg_s: &dyn Fn(&mut shared::rng::Rng) -> f64,
 ) -> f64 {
     let unit_model = ForwardModel::new(truth).expect("valid truth");
     let g = truth.gravity_m_s2;
@@ -320,7 +320,7 @@ fn seed_result(case: &Case, truth: &Calibration, seed: u64) -> SeedResult {
     let stats = seed_stats(case, truth, seed);
     let out = calibrate_session_stats(&case.plan, &stats, &case.options)
         .unwrap_or_else(|e| panic!("{}: seed {seed}: {e}", case.title));
-    let mut rng = testkit::Rng::new(77 + seed, 0);
+    let mut rng = shared::rng::Rng::new(77 + seed, 0);
     let st = static_errors(truth, &out.fitted, &mut rng);
     let rot = st.rotation;
     let gy = case.gyro.as_ref();
@@ -360,7 +360,7 @@ fn seed_result(case: &Case, truth: &Calibration, seed: u64) -> SeedResult {
 /// error drawn when the case asks for one.
 fn seed_stats(case: &Case, truth: &Calibration, seed: u64) -> Vec<SegmentStats> {
     let rate_scale = if case.table_rate_error {
-        case.plan.table_rate_sigma_ppm() * 1e-6 * testkit::Rng::new(9000 + seed, 0).normal()
+        case.plan.table_rate_sigma_ppm() * 1e-6 * shared::rng::Rng::new(9000 + seed, 0).normal()
     } else {
         0.0
     };
@@ -389,7 +389,7 @@ fn seed_stats(case: &Case, truth: &Calibration, seed: u64) -> Vec<SegmentStats> 
                 rate_scale,
                 ..TableErrors::default()
             };
-            let mut rng = testkit::Rng::new(1000 + seed, 0);
+            let mut rng = shared::rng::Rng::new(1000 + seed, 0);
             testkit::noisy_stats(&case.plan, truth, noise_out, errors, &mut rng)
         }
     }
@@ -435,7 +435,7 @@ fn norm_only_errors(
         .map(|(_, st)| st.mean_u)
         .collect();
     let f = norm_only(&means).expect("norm-only converges");
-    let e = static_errors(truth, &f, &mut testkit::Rng::new(77 + seed, 0));
+    let e = static_errors(truth, &f, &mut shared::rng::Rng::new(77 + seed, 0));
     (e.worst_ug, e.rms_ug)
 }
 

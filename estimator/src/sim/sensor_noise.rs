@@ -3,10 +3,10 @@
 //! Each source draws from its own stream, and only when enabled.
 
 use super::flicker::Flicker;
-use super::rng::Rng;
 use super::session::{
     NoiseModel, STREAM_ACCEL, STREAM_FLICKER, STREAM_GYRO, STREAM_GYRO_WALK, STREAM_WALK,
 };
+use shared::rng::Rng;
 
 /// The sensors' noise sources: each one's size per sample, its own random stream and its running
 /// state. A source is drawn from only when enabled, so switching one on or off leaves the others'

@@ -9,7 +9,6 @@
 //! not on the platform or on a dependency's version, and switching one noise source on or off does not
 //! change the draws of the others.
 
-use super::rng::Rng;
 use super::sensor_noise::SensorNoise;
 use super::thermal::{ThermalSim, ThermalState};
 use crate::unit_file::UnitFile;
@@ -18,6 +17,7 @@ use recording::session::{RecordingError, SessionWriter};
 use serde::{Deserialize, Serialize};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg;
+use shared::rng::Rng;
 use shared::Calibration;
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -13,7 +13,7 @@ use shared::forward::{ForwardModel, TableState};
 use shared::{Calibration, Compensator, LeverArms, LeverMode, OutputUnit, ReferencePoint};
 use shared::{SensorOutputs, StaticParams};
 
-pub use super::rng::Rng;
+use shared::rng::Rng;
 
 /// Table errors of a simulated session.
 #[derive(Clone, Copy, Debug, Default)]

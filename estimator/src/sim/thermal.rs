@@ -7,11 +7,11 @@
 //! The lags matter because the estimator only sees the sensor: a sensor that lags the die makes a
 //! ramp's bias look shifted in temperature, which a soak step (waiting until both settle) avoids.
 
-use super::rng::Rng;
 use super::session::SimulateError;
 use crate::unit_file::UnitFile;
 use recording::session::SegmentPlan;
 use serde::{Deserialize, Serialize};
+use shared::rng::Rng;
 use shared::sensor_models::{poly_no_constant, TemperatureModel};
 
 /// The chamber temperature before the first set-point, °C.

@@ -10,7 +10,7 @@ use crate::fuzz::logs::{write_mcap, LogSample};
 use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
-use estimator::sim::testkit::Rng;
+use shared::rng::Rng;
 use shared::OutputUnit;
 use std::path::Path;
 

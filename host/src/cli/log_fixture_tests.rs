@@ -9,7 +9,6 @@ use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
 use estimator::sim::montecarlo::static_errors;
-use estimator::sim::testkit;
 use estimator::unit_file::UnitFile;
 use recording::session::logs::{read_log, LogFormat, LogSource};
 use shared::{Calibration, OutputUnit};
@@ -70,7 +69,7 @@ pub(super) fn segment_and_calibrate(dir: &Path, input: &Path, flags: &str) -> (f
         panic!()
     };
     let cal = calibrate::calibrate(&c, true).unwrap();
-    let e = static_errors(&truth(), &cal.fitted, &mut testkit::Rng::new(5, 0));
+    let e = static_errors(&truth(), &cal.fitted, &mut shared::rng::Rng::new(5, 0));
     let spec = HandSpec::standard(1);
     let fit = out.gyro.unwrap();
     let bias_err = (0..3)

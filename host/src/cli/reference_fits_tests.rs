@@ -24,8 +24,8 @@ use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
 use estimator::sim::montecarlo::static_errors;
-use estimator::sim::testkit::Rng;
 use shared::linalg::{self, RowMajor3};
+use shared::rng::Rng;
 use shared::{FittedStatic, OutputUnit};
 
 /// PX4's and ArduPilot's `CONSTANTS_ONE_G` / `GRAVITY_MSS`.

@@ -12,7 +12,6 @@ use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
 use estimator::sim::montecarlo::static_errors;
-use estimator::sim::testkit;
 use nalgebra::{Matrix3, Matrix4, Vector4};
 use shared::forward::{ForwardModel, TableState};
 use shared::linalg::{self, RowMajor3};
@@ -92,7 +91,7 @@ fn raw_counts_at_mid_scale_with_a_gyro_in_counts_calibrate_with_the_offset_and_s
         // 0.25 counts is 61 µg at 4096 per g, the 24-position session's noise level.
         assert!(e.abs() < 0.25, "axis {i}: {e} counts");
     }
-    let e = static_errors(&truth, fitted, &mut testkit::Rng::new(5, 0));
+    let e = static_errors(&truth, fitted, &mut shared::rng::Rng::new(5, 0));
     println!(
         "intrinsic rms {:.1} µg, worst {:.1} µg",
         e.rms_ug, e.worst_ug
@@ -128,7 +127,7 @@ fn held_out(truth: &Calibration, m: &RowMajor3, b: &[f64; 3], seed: u64) -> Held
     let model = ForwardModel::new(truth).unwrap();
     let g = truth.gravity_m_s2;
     let minv = linalg::inverse(m).unwrap();
-    let mut rng = testkit::Rng::new(seed, 77);
+    let mut rng = shared::rng::Rng::new(seed, 77);
     let ups: Vec<[f64; 3]> = (0..100)
         .map(|_| {
             let v: [f64; 3] = core::array::from_fn(|_| rng.normal());
@@ -672,7 +671,7 @@ fn biased_mems_faces(
     rounds: usize,
 ) -> (Calibration, HandSpec, estimator::sim::handheld::HandSession) {
     let mut truth = logger_unit(OutputUnit::MetresPerSecondSquared);
-    let mut rng = testkit::Rng::new(seed, 91);
+    let mut rng = shared::rng::Rng::new(seed, 91);
     truth.statics.zero_bias_out = core::array::from_fn(|_| {
         let mg = rng.range(40.0, 100.0) * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
         mg * 1e-3 * truth.gravity_m_s2

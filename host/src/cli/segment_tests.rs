@@ -8,7 +8,6 @@ use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
 use estimator::sim::montecarlo::static_errors;
-use estimator::sim::testkit;
 use shared::linalg::{self, RowMajor3};
 use shared::{Calibration, OutputUnit};
 use std::path::Path;
@@ -75,7 +74,7 @@ fn hand_session_in_m_s2_and_deg_s_calibrates_accelerometer_and_gyro() {
     let spec = HandSpec::standard(7);
     let (truth, out, cal) = run_session(tmp.path(), OutputUnit::MetresPerSecondSquared, &spec);
     assert_eq!(out.segmentation.stills.len(), spec.ups.len());
-    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(3, 0));
+    let e = static_errors(&truth, &cal.fitted, &mut shared::rng::Rng::new(3, 0));
     println!(
         "hand session: intrinsic (worst after the best common rotation) {:.1} µg, rms {:.1} µg",
         e.worst_ug, e.rms_ug
@@ -134,7 +133,7 @@ fn segment_and_calibrate(dir: &Path, truth: &Calibration, flags: &str) -> (usize
         Command::Calibrate(a) => calibrate::calibrate(&a, true).unwrap(),
         c => panic!("{c:?}"),
     };
-    let e = static_errors(truth, &cal.fitted, &mut testkit::Rng::new(5, 0));
+    let e = static_errors(truth, &cal.fitted, &mut shared::rng::Rng::new(5, 0));
     (out.segmentation.stills.len(), e.rms_ug)
 }
 
@@ -364,7 +363,11 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         ..EstimateOptions::default()
     };
     let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
-    let e = static_errors(&truth, &cal.fitted, &mut testkit::Rng::new(spec.seed, 0));
+    let e = static_errors(
+        &truth,
+        &cal.fitted,
+        &mut shared::rng::Rng::new(spec.seed, 0),
+    );
     let dropped = app::handheld::gyro::dropped_turns(&rec, &seg);
     let fit = app::handheld::gyro::fit(&rec, &seg, &plan, &dropped, Default::default())
         .unwrap()

@@ -11,10 +11,10 @@
 
 use super::logs::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
 use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
-use estimator::sim::testkit::Rng;
 use recording::session::import::GyroUnit;
 use recording::session::import::{ImportOptions, TimeSource};
 use recording::session::logs::{read_log_from, LogSource};
+use shared::rng::Rng;
 use shared::OutputUnit;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;

@@ -34,11 +34,11 @@ mod holds;
 
 use super::confidence::{edf_overlapping_adev, PowerLaw};
 use estimator::sim::flicker::Flicker;
-use estimator::sim::Rng;
 use holds::{curve_check, unshown};
 pub use holds::{CurveCheck, Z_CURVE, Z_MISFIT};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use shared::rng::Rng;
 
 /// One point of an Allan deviation curve.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -705,7 +705,7 @@ mod tests {
     /// `n` samples at `rate_hz` of white noise of density `n_density` plus a random walk of `k`
     /// (unit/√s), from the project's one generator.
     fn white_and_walk(seed: u64, n: usize, rate_hz: f64, n_density: f64, k: f64) -> Vec<f64> {
-        let mut rng = estimator::sim::rng::Rng::new(seed, 0);
+        let mut rng = shared::rng::Rng::new(seed, 0);
         let sd_white = n_density * rate_hz.sqrt();
         let sd_step = k / rate_hz.sqrt();
         let mut walk = 0.0;
@@ -799,7 +799,7 @@ mod tests {
         ];
         for (k, (name, white, flicker, walk)) in cases.into_iter().enumerate() {
             let n = 100_000;
-            let mut rng = estimator::sim::rng::Rng::new(4242 + k as u64, 0);
+            let mut rng = shared::rng::Rng::new(4242 + k as u64, 0);
             let mut fl = (flicker > 0.0).then(|| Flicker::new(flicker, 1.0 / rate, &mut rng));
             let mut level = 0.0;
             let y: Vec<f64> = (0..n)

@@ -301,7 +301,7 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
 #[test]
 fn the_table_names_what_white_noise_does_not_determine() {
     let rate = 100.0;
-    let mut rng = estimator::sim::Rng::new(3, 0);
+    let mut rng = shared::rng::Rng::new(3, 0);
     let y: Vec<f64> = (0..20_000).map(|_| 1e-2 * rng.normal()).collect();
     let points = allan::overlapping_adev(&y, rate, &allan::octave_sizes(y.len()));
     let terms = allan::fit(&points);

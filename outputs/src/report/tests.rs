@@ -312,7 +312,7 @@ fn segment_rows_correct_the_rate_with_the_calibrations_gyro() {
         gyro: Some((gyro.matrix, gyro.bias_rad_s)),
         ..TableErrors::default()
     };
-    let stats = testkit::noisy_stats(&plan, &unit, 0.0, errors, &mut testkit::Rng::new(1, 0));
+    let stats = testkit::noisy_stats(&plan, &unit, 0.0, errors, &mut shared::rng::Rng::new(1, 0));
     let worst = |cal: &shared::Calibration| {
         let rows = segment_rows(&plan, &stats, cal).unwrap();
         assert_eq!(rows.len(), plan.segments.len());

@@ -54,22 +54,19 @@ impl Rng {
     }
 
     /// Uniform on (0, 1), never exactly 0 or 1.
-    #[cfg(any(test, feature = "testkit"))]
     pub fn uniform(&mut self) -> f64 {
         ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
 
     /// Uniform on (`lo`, `hi`).
-    #[cfg(any(test, feature = "testkit"))]
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.uniform()
     }
 
     /// A direction uniform on the unit sphere.
-    #[cfg(any(test, feature = "testkit"))]
     pub fn unit_vector(&mut self) -> [f64; 3] {
         let v = [self.normal(), self.normal(), self.normal()];
-        let n = shared::linalg::norm(&v);
+        let n = crate::linalg::norm(&v);
         v.map(|c| c / n)
     }
 
