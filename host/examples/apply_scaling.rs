@@ -11,10 +11,10 @@
 //! ```
 
 use estimator::unit_file::UnitFile;
-use host::fuzz::logs::{still_sample, write_dataflash, write_mcap, write_ulog, LogSample};
 use outputs::apply::{apply_log_within, Setting, APPLY_MAX_SAMPLES};
 use recording::session::import::{GyroUnit, ImportOptions, TimeSource};
 use recording::session::logs::LogSource;
+use recording::testkit::{still_sample, write_dataflash, write_mcap, write_ulog, LogSample};
 use shared::compensator::LeverMode;
 use shared::OutputUnit;
 use std::path::{Path, PathBuf};

@@ -11,7 +11,7 @@
 //!
 //! ("Maximum resident set size"). The files are not kept in the repository.
 
-use host::fuzz::logs::{still_sample, write_dataflash, write_mcap, write_ulog, LogSample};
+use recording::testkit::{still_sample, write_dataflash, write_mcap, write_ulog, LogSample};
 use std::path::PathBuf;
 
 /// Sample `k` at 1 kHz.

@@ -11,10 +11,14 @@
 //! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`ui`]: progress bars on a terminal.
 //! - [`spelling`]: how a caller names the input options in messages (flags or keyword arguments).
+//! - `testkit` (feature `testkit`): the loggers' formats written from samples and the checks the
+//!   readers' tests share, for the tests, fuzz corpora and long-log benchmarks of every crate.
 #![deny(missing_docs)]
 
 pub mod limits;
 pub mod output_file;
 pub mod session;
 pub mod spelling;
+#[cfg(any(test, feature = "testkit"))]
+pub mod testkit;
 pub mod ui;

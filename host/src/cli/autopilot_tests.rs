@@ -5,10 +5,10 @@
 use super::log_fixture_tests::{command, fixture};
 use super::segment::segment;
 use super::{calibrate, export, Command};
-use crate::fuzz::logs::{
+use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
+use recording::testkit::{
     ardupilot_default_params, write_dataflash_imus, write_ulog_imus, LogSample, UlogImu, UlogParam,
 };
-use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use shared::OutputUnit;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -6,10 +6,10 @@
 use super::log_fixture_tests::{command, fixture};
 use super::segment::segment;
 use super::{apply, calibrate, Command};
-use crate::fuzz::logs::{write_mcap, LogSample};
 use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
+use recording::testkit::{write_mcap, LogSample};
 use shared::rng::Rng;
 use shared::OutputUnit;
 use std::path::Path;
@@ -243,7 +243,7 @@ fn nan_temperatures_cost_no_rows_and_no_positions() {
         let mut s = samples.clone();
         s[..nan_upto].iter_mut().for_each(|x| x.temp_c = f32::NAN);
         let path = tmp.path().join(name);
-        std::fs::write(&path, crate::fuzz::logs::write_ulog(&s, None)).unwrap();
+        std::fs::write(&path, recording::testkit::write_ulog(&s, None)).unwrap();
         path
     };
     let clean = run(&tmp.path().join("clean"), &write("clean.ulg", 0), "");
@@ -311,7 +311,7 @@ fn advice_on_a_binary_log_names_no_text_option() {
         })
         .collect();
     let path = tmp.path().join("deg.bin");
-    std::fs::write(&path, crate::fuzz::logs::write_dataflash(&samples)).unwrap();
+    std::fs::write(&path, recording::testkit::write_dataflash(&samples)).unwrap();
     let line = format!(
         "host segment -q --input {} --out {}/s",
         path.display(),

@@ -503,11 +503,11 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
 
 /// A still unit whose driver stamped it on the host in bursts: eight samples share the stamp of the
 /// first, the true rate 100 Hz (the stamps' median step is 0, their count per second 100).
-fn bursty_still(n: usize) -> Vec<crate::fuzz::logs::LogSample> {
+fn bursty_still(n: usize) -> Vec<recording::testkit::LogSample> {
     (0..n)
-        .map(|k| crate::fuzz::logs::LogSample {
+        .map(|k| recording::testkit::LogSample {
             t_s: (k / 8 * 8) as f64 / 100.0,
-            ..crate::fuzz::logs::still_sample(k, 100.0)
+            ..recording::testkit::still_sample(k, 100.0)
         })
         .collect()
 }
@@ -517,7 +517,7 @@ fn bursty_still(n: usize) -> Vec<crate::fuzz::logs::LogSample> {
 /// in every binary format; with another text option it is still refused.
 #[test]
 fn a_rate_given_for_a_binary_log_re_times_it_and_says_what_the_stamps_imply() {
-    use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog};
+    use recording::testkit::{write_dataflash, write_mcap, write_ulog};
     let tmp = tempfile::tempdir().unwrap();
     let samples = bursty_still(3000);
     for (name, bytes) in [

@@ -3,11 +3,11 @@
 //! it calibrates as the session alone does.
 
 use super::log_fixture_tests::{assert_as_good, fixture, segment_and_calibrate, truth};
-use crate::fuzz::logs::{write_dataflash, write_mcap, write_ulog, LogSample};
 use outputs::apply::{apply_log_within, ApplySummary, Setting};
 use recording::session::import::MAX_ROWS;
 use recording::session::import::{GyroUnit, ImportOptions, TimeSource, TimeUnit};
 use recording::session::logs::{read_log, read_log_keeping, LogSource};
+use recording::testkit::{write_dataflash, write_mcap, write_ulog, LogSample};
 use shared::compensator::LeverMode;
 use shared::rng::Rng;
 use shared::OutputUnit;

@@ -7,12 +7,12 @@
 
 use super::segment::segment;
 use super::{Cli, Command};
-use crate::fuzz::logs::{write_mcap, LogSample};
 use clap::Parser;
 use estimator::estimate::handheld_gyro::HandGyroFit;
 use estimator::sim::handheld::{
     logger_unit, simulate_hand, write_logger_csv, HandSpec, LoggerLayout,
 };
+use recording::testkit::{write_mcap, LogSample};
 use shared::OutputUnit;
 use std::path::Path;
 

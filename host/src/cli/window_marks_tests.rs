@@ -5,9 +5,11 @@
 //! a file cut short, a bag without stamps, samples re-timed at a given rate.
 
 use super::window_property_tests::{binary, csv_source, same_from_marks, session, write_csv};
-use crate::fuzz::logs::{write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample};
 use recording::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_LINE_BYTES};
 use recording::session::logs::LogSource;
+use recording::testkit::{
+    write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample,
+};
 use shared::rng::Rng;
 use shared::OutputUnit;
 use std::path::Path;

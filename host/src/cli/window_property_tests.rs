@@ -9,10 +9,12 @@
 //! suite runs 6) and prints every case.
 
 use super::log_fixture_tests::{fixture, truth};
-use crate::fuzz::logs::{write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample};
 use outputs::apply::{apply_log_within, Setting};
 use recording::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
 use recording::session::logs::{read_log, read_log_windows, LogRead, LogSource};
+use recording::testkit::{
+    write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample,
+};
 use shared::compensator::LeverMode;
 use shared::rng::Rng;
 use shared::{Calibration, OutputUnit};

@@ -9,11 +9,11 @@
 //! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
 //! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
 
-use super::logs::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
 use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use recording::session::import::GyroUnit;
 use recording::session::import::{ImportOptions, TimeSource};
 use recording::session::logs::{read_log_from, LogSource};
+use recording::testkit::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
 use shared::rng::Rng;
 use shared::OutputUnit;
 use std::collections::{BTreeMap, HashMap};
