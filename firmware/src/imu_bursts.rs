@@ -138,16 +138,31 @@ pub const STALL_TICK_MS: u32 = 10;
 /// A watermark that arrives while a chain runs is remembered: INT1 is latched until INT_STATUS is
 /// read, so if the chain ended without reading it again, INT1 would stay high with no new edge and
 /// reading would stop for good. The chain then reads the status once more instead of ending.
-pub struct InFlight(AtomicU8);
+///
+/// The BMI270's data-ready reading (`imu::bmi270::dma`) uses it too, with its sample burst as the
+/// command an interrupt starts ([`Self::with_command`]).
+pub struct InFlight {
+    state: AtomicU8,
+    /// The burst an interrupt starts (and a chain's end, when one came meanwhile).
+    cmd: &'static [u8],
+}
 
 const IDLE: u8 = 0;
 const BUSY: u8 = 1;
 const BUSY_AND_PENDING: u8 = 2;
 
 impl InFlight {
-    /// Idle.
+    /// Idle; an interrupt starts the status burst.
     pub const fn new() -> Self {
-        InFlight(AtomicU8::new(IDLE))
+        Self::with_command(&STATUS_CMD)
+    }
+
+    /// Idle; an interrupt starts `cmd`.
+    pub const fn with_command(cmd: &'static [u8]) -> Self {
+        InFlight {
+            state: AtomicU8::new(IDLE),
+            cmd,
+        }
     }
 
     /// The watermark interrupt: the status burst to start, or `None` while a chain runs (it will
@@ -156,13 +171,13 @@ impl InFlight {
     pub fn on_watermark(&self) -> Option<Burst> {
         // Single core: the completion task cannot run between the load and the store (it has a
         // lower priority than the watermark interrupt, the only caller).
-        match self.0.load(Ordering::Acquire) {
+        match self.state.load(Ordering::Acquire) {
             IDLE => {
-                self.0.store(BUSY, Ordering::Release);
-                Some(Burst { tx: &STATUS_CMD })
+                self.state.store(BUSY, Ordering::Release);
+                Some(Burst { tx: self.cmd })
             }
             _ => {
-                self.0.store(BUSY_AND_PENDING, Ordering::Release);
+                self.state.store(BUSY_AND_PENDING, Ordering::Release);
                 None
             }
         }
@@ -170,21 +185,21 @@ impl InFlight {
 
     /// A stalled chain's restart takes the bus, whatever the state was (the watermark interrupt
     /// then only notes a pending status read).
-    fn take_over(&self) {
-        self.0.store(BUSY, Ordering::Release);
+    pub(crate) fn take_over(&self) {
+        self.state.store(BUSY, Ordering::Release);
     }
 
     /// The chain has nothing more to read: it ends, or goes on with a status read if a watermark
     /// came meanwhile.
-    fn end(&self) -> Option<Burst> {
+    pub(crate) fn end(&self) -> Option<Burst> {
         match self
-            .0
+            .state
             .compare_exchange(BUSY, IDLE, Ordering::AcqRel, Ordering::Acquire)
         {
             Ok(_) => None,
             Err(_) => {
-                self.0.store(BUSY, Ordering::Release);
-                Some(Burst { tx: &STATUS_CMD })
+                self.state.store(BUSY, Ordering::Release);
+                Some(Burst { tx: self.cmd })
             }
         }
     }
