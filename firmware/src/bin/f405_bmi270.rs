@@ -230,8 +230,9 @@ mod app {
         (reader, status)
     }
 
-    /// The calibration store, stack high-water mark (once per 2048 wakes: about a second at
-    /// 1.6 kHz and the check's 10 Hz); without an IMU, the LED blinks fast (`idle_loop`).
+    /// The calibration store, stack high-water mark (once per 2048 wakes: about 0.6 s with a
+    /// data-ready and a DMA interrupt per sample at 1.6 kHz and the 100 Hz tick); without an IMU,
+    /// the LED blinks fast (`idle_loop`).
     #[idle(local = [imu_found, watchdog], shared = [store_job])]
     fn idle(cx: idle::Context) -> ! {
         let mut store_job = cx.shared.store_job;
