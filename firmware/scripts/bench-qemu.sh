@@ -2,7 +2,8 @@
 # Instruction counts of the per-sample path in QEMU (-icount: SysTick counts instructions) and the
 # flash/RAM use of the QEMU firmware image. Fails when a per-sample path is over its CPU share at the
 # board's real rate (instructions as the proxy for cycles; checked in src/bin/qemu_bench.rs):
-#   F405 IMU path, 8 kHz on 168 MHz:   <= 2 %   (420 instructions per sample)
+#   F405 IMU path, 8 kHz on 168 MHz:   <= 2 %   (420 instructions per sample), for each IMU:
+#     the ICM-42688-P, the BMI270 and the LSM6DSO
 #   Nucleo ADC path, 1 kHz on 180 MHz: <= 0.5 % (900 instructions per sample)
 set -euo pipefail
 cd "$(dirname "$0")/.."

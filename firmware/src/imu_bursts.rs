@@ -9,7 +9,22 @@
 //!    `Core::decode` (time-stamp gaps and overflow flagged on the samples); if the FIFO held more,
 //!    back to 1 at once;
 //! 3. **flush** (only after a FIFO read out of step): SIGNAL_PATH_RESET ← FIFO_FLUSH; the next
-//!    sample is flagged as following lost data.
+//!    sample is flagged as following lost data;
+//! 4. **register check** (every [`CHECK_PERIOD_MS`], at the end of a chain, and at the end of the
+//!    chain after a failure): one configured register read back, 2 bytes
+//!    ([`crate::imu::icm42688::check::RegisterCheck`], round robin).
+//!
+//! **The register check** is PX4's (`ICM42688P.cpp`, `RunImpl`: one register per bank read back
+//! between FIFO reads when more than 100 ms passed since the last check, or right after a failure;
+//! `Reset()` on a mismatch). Here it is one more burst of the chain, so it costs no CPU wait and
+//! never meets a FIFO read on the bus: the chain still holds the bus, a watermark meanwhile only
+//! notes a status read to follow. A register that differs ends the chain's bursts with
+//! [`Completed::mismatch`] while the chain keeps the bus; the board starts the part again over the
+//! CPU-driven bus (`imu::icm42688::check::restart`), counts a re-init, and hands the fresh state to
+//! [`BurstReader::resume_after_heal`], which frees the bus. A changed register is found within one
+//! round of the list (at most [`crate::imu::icm42688::check::MAX_CHECKED`] × 100 ms, plus a
+//! watermark interval for the chain to end), whether or not the FIFO keeps flowing (tested on the
+//! PC: `imu::tests::bursts_stall`). Cost: a 2-byte burst and two interrupts ten times a second.
 //!
 //! **A chain that stalls.** If one interrupt of the chain is lost (a DMA completion that never
 //! comes, or a watermark edge missed while INT1 is latched high), nothing would ever read the part
@@ -27,6 +42,7 @@
 
 use core::sync::atomic::{AtomicU8, Ordering};
 
+use crate::imu::icm42688::check::RegisterCheck;
 use crate::imu::icm42688::regs::{
     FIFO_DATA, FIFO_FLUSH, INT_STATUS, PACKET4_LEN, READ, SIGNAL_PATH_RESET,
 };
@@ -46,6 +62,19 @@ pub static FIFO_CMD: [u8; BURST_MAX] = {
 };
 /// FIFO flush: a register write.
 pub static FLUSH_CMD: [u8; 2] = [SIGNAL_PATH_RESET, FIFO_FLUSH];
+/// The register check's one-register reads, by address: the address with the read bit, then a
+/// dummy byte while the value comes back (the ICM-42688-P sends no dummy byte before it).
+pub static REG_READ_CMD: [[u8; 2]; 128] = {
+    let mut c = [[0u8; 2]; 128];
+    let mut r = 0;
+    while r < 128 {
+        c[r][0] = r as u8 | READ;
+        r += 1;
+    }
+    c
+};
+/// The register check's period, ms (PX4's 100 ms).
+pub const CHECK_PERIOD_MS: u32 = 100;
 
 /// An all-zero sample, to initialise the decoded-sample buffer (`ImuSample::default` is not const).
 pub const NO_SAMPLE: ImuSample = ImuSample {
@@ -86,6 +115,14 @@ enum Phase {
     Flush,
     /// The flush of a stalled chain's restart; a status read follows.
     Restart,
+    /// The register check's read of `reg`, which must hold `expected`.
+    Check {
+        reg: u8,
+        expected: u8,
+    },
+    /// The check found a register changed: the board starts the part again, the chain keeps the
+    /// bus until [`BurstReader::resume_after_heal`].
+    Heal,
 }
 
 /// A chain without a completed burst for longer than this is presumed stalled, ms (or four
@@ -101,16 +138,31 @@ pub const STALL_TICK_MS: u32 = 10;
 /// A watermark that arrives while a chain runs is remembered: INT1 is latched until INT_STATUS is
 /// read, so if the chain ended without reading it again, INT1 would stay high with no new edge and
 /// reading would stop for good. The chain then reads the status once more instead of ending.
-pub struct InFlight(AtomicU8);
+///
+/// The BMI270's data-ready reading (`imu::bmi270::dma`) uses it too, with its sample burst as the
+/// command an interrupt starts ([`Self::with_command`]).
+pub struct InFlight {
+    state: AtomicU8,
+    /// The burst an interrupt starts (and a chain's end, when one came meanwhile).
+    cmd: &'static [u8],
+}
 
 const IDLE: u8 = 0;
 const BUSY: u8 = 1;
 const BUSY_AND_PENDING: u8 = 2;
 
 impl InFlight {
-    /// Idle.
+    /// Idle; an interrupt starts the status burst.
     pub const fn new() -> Self {
-        InFlight(AtomicU8::new(IDLE))
+        Self::with_command(&STATUS_CMD)
+    }
+
+    /// Idle; an interrupt starts `cmd`.
+    pub const fn with_command(cmd: &'static [u8]) -> Self {
+        InFlight {
+            state: AtomicU8::new(IDLE),
+            cmd,
+        }
     }
 
     /// The watermark interrupt: the status burst to start, or `None` while a chain runs (it will
@@ -119,13 +171,13 @@ impl InFlight {
     pub fn on_watermark(&self) -> Option<Burst> {
         // Single core: the completion task cannot run between the load and the store (it has a
         // lower priority than the watermark interrupt, the only caller).
-        match self.0.load(Ordering::Acquire) {
+        match self.state.load(Ordering::Acquire) {
             IDLE => {
-                self.0.store(BUSY, Ordering::Release);
-                Some(Burst { tx: &STATUS_CMD })
+                self.state.store(BUSY, Ordering::Release);
+                Some(Burst { tx: self.cmd })
             }
             _ => {
-                self.0.store(BUSY_AND_PENDING, Ordering::Release);
+                self.state.store(BUSY_AND_PENDING, Ordering::Release);
                 None
             }
         }
@@ -133,21 +185,21 @@ impl InFlight {
 
     /// A stalled chain's restart takes the bus, whatever the state was (the watermark interrupt
     /// then only notes a pending status read).
-    fn take_over(&self) {
-        self.0.store(BUSY, Ordering::Release);
+    pub(crate) fn take_over(&self) {
+        self.state.store(BUSY, Ordering::Release);
     }
 
     /// The chain has nothing more to read: it ends, or goes on with a status read if a watermark
     /// came meanwhile.
-    fn end(&self) -> Option<Burst> {
+    pub(crate) fn end(&self) -> Option<Burst> {
         match self
-            .0
+            .state
             .compare_exchange(BUSY, IDLE, Ordering::AcqRel, Ordering::Acquire)
         {
             Ok(_) => None,
             Err(_) => {
-                self.0.store(BUSY, Ordering::Release);
-                Some(Burst { tx: &STATUS_CMD })
+                self.state.store(BUSY, Ordering::Release);
+                Some(Burst { tx: self.cmd })
             }
         }
     }
@@ -159,6 +211,17 @@ impl Default for InFlight {
     }
 }
 
+/// A register the check found changed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mismatch {
+    /// The register (bank 0).
+    pub reg: u8,
+    /// The value the configuration wrote.
+    pub expected: u8,
+    /// What it read.
+    pub read: u8,
+}
+
 /// What one completed burst gave.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Completed {
@@ -168,6 +231,9 @@ pub struct Completed {
     pub next: Option<Burst>,
     /// The FIFO read back out of step (this header); a flush burst follows.
     pub corrupt_header: Option<u8>,
+    /// The register check found this register changed: the part must be started again, then
+    /// [`BurstReader::resume_after_heal`] (the chain keeps the bus meanwhile; `next` is `None`).
+    pub mismatch: Option<Mismatch>,
 }
 
 /// The completion side of the chain: owns the driver's [`Core`].
@@ -178,18 +244,25 @@ pub struct BurstReader {
     quiet_ms: u32,
     /// [`STALL_TIMEOUT_MS`], or four watermark intervals if longer.
     stall_after_ms: u32,
+    /// The configured registers, one read back per check.
+    check: RegisterCheck,
+    /// Time since the last register check, ms (in [`STALL_TICK_MS`] steps); a check is due at
+    /// [`CHECK_PERIOD_MS`].
+    since_check_ms: u32,
 }
 
 impl BurstReader {
     /// Around a configured driver's state (the part already configured over the blocking bus).
     pub fn new(core: Core) -> Self {
-        let cfg = core.config();
+        let cfg = *core.config();
         let watermark_ms = u32::from(cfg.watermark_packets) * u32::from(cfg.odr.period_us()) / 1000;
         BurstReader {
             core,
             phase: Phase::Status,
             quiet_ms: 0,
             stall_after_ms: STALL_TIMEOUT_MS.max(4 * watermark_ms),
+            check: RegisterCheck::new(&cfg),
+            since_check_ms: 0,
         }
     }
 
@@ -204,6 +277,7 @@ impl BurstReader {
             Phase::Status => STATUS_CMD.len(),
             Phase::Fifo { bytes, .. } => 1 + bytes,
             Phase::Flush | Phase::Restart => FLUSH_CMD.len(),
+            Phase::Check { .. } | Phase::Heal => 2,
         }
     }
 
@@ -211,7 +285,10 @@ impl BurstReader {
     /// (or four watermark intervals) without a completed burst, the restart burst to put on the wire at once, in place of
     /// whatever the stalled chain left there (the FIFO flush; its completion goes on with a status
     /// read). The next sample is flagged as following lost data.
+    ///
+    /// It also times the register check: one is due [`CHECK_PERIOD_MS`] after the last.
     pub fn on_tick(&mut self, in_flight: &InFlight) -> Option<Burst> {
+        self.since_check_ms = self.since_check_ms.saturating_add(STALL_TICK_MS);
         self.quiet_ms = self.quiet_ms.saturating_add(STALL_TICK_MS);
         if self.quiet_ms <= self.stall_after_ms {
             return None;
@@ -233,14 +310,46 @@ impl BurstReader {
 
     /// The burst failed on the bus: the chain ends, and since packets may have been lost with it,
     /// the next sample is flagged as following lost data.
+    /// A register check is due at the next chain's end (PX4: "immediately following any failure").
     pub fn abandon(&mut self, in_flight: &InFlight) -> Completed {
         self.core.corrupted();
         self.phase = Phase::Status;
+        self.since_check_ms = CHECK_PERIOD_MS;
         Completed {
             samples: 0,
             next: in_flight.end(),
             corrupt_header: None,
+            mismatch: None,
         }
+    }
+
+    /// After [`Completed::mismatch`]: the board started the part again (`Some`: its fresh state;
+    /// `None`: the start failed, and the next check, 100 ms on, finds the register changed again
+    /// and tries again). The next sample is flagged as following lost data; the chain ends (or
+    /// reads the status of a watermark that came meanwhile), freeing the bus.
+    pub fn resume_after_heal(&mut self, core: Option<Core>, in_flight: &InFlight) -> Option<Burst> {
+        if let Some(core) = core {
+            self.core = core;
+        }
+        self.core.corrupted();
+        self.quiet_ms = 0;
+        self.phase = Phase::Status;
+        in_flight.end()
+    }
+
+    /// The chain has nothing more to read: the register check's read if one is due, else the end
+    /// (or the status read of a watermark that came meanwhile).
+    fn chain_end(&mut self, in_flight: &InFlight) -> Option<Burst> {
+        if self.since_check_ms >= CHECK_PERIOD_MS {
+            if let Some((reg, expected)) = self.check.current() {
+                self.phase = Phase::Check { reg, expected };
+                return Some(Burst {
+                    tx: &REG_READ_CMD[usize::from(reg & 0x7F)],
+                });
+            }
+        }
+        self.phase = Phase::Status;
+        in_flight.end()
     }
 
     /// A burst finished; `rx` holds the bytes that came back (as many as were sent). Decoded samples
@@ -255,6 +364,7 @@ impl BurstReader {
             samples: 0,
             next: None,
             corrupt_header: None,
+            mismatch: None,
         };
         self.quiet_ms = 0;
         let next = match self.phase {
@@ -280,23 +390,38 @@ impl BurstReader {
                     }
                     Err(header) => {
                         done.corrupt_header = Some(header);
+                        // PX4 checks the registers right after a failure: at this chain's end.
+                        self.since_check_ms = CHECK_PERIOD_MS;
                         self.phase = Phase::Flush;
                         Some(Burst { tx: &FLUSH_CMD })
                     }
                 }
             }
-            Phase::Flush => None,
+            Phase::Flush | Phase::Heal => None,
             Phase::Restart => {
                 self.phase = Phase::Status;
                 Some(Burst { tx: &STATUS_CMD })
             }
+            Phase::Check { reg, expected } => {
+                self.since_check_ms = 0;
+                let read = byte(rx, 1);
+                if read != expected {
+                    // The chain keeps the bus while the board starts the part again.
+                    self.phase = Phase::Heal;
+                    done.mismatch = Some(Mismatch {
+                        reg,
+                        expected,
+                        read,
+                    });
+                    return done;
+                }
+                self.check.advance();
+                None
+            }
         };
         done.next = match next {
             Some(b) => Some(b),
-            None => {
-                self.phase = Phase::Status;
-                in_flight.end()
-            }
+            None => self.chain_end(in_flight),
         };
         done
     }
@@ -309,6 +434,7 @@ fn byte(rx: &[u8], i: usize) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::imu::icm42688::check::checked_registers;
     use crate::imu::icm42688::regs::{HEADER_PACKET3, INT_FIFO_FULL, INT_FIFO_THS, PACKET3_LEN};
     use crate::imu::icm42688::Config;
 
@@ -458,8 +584,12 @@ mod tests {
         assert_eq!(done.corrupt_header, Some(0x12));
         assert_eq!(done.next.map(|b| b.tx), Some(&FLUSH_CMD[..]));
         assert_eq!(r.expected_len(), 2);
+        // After a failure the register check runs at once (PX4), its first register's read.
+        let (reg, value) = checked_registers(r.core.config())[0];
         let done = r.on_complete(&[0xFF, 0xFF], &mut out, &busy);
-        assert_eq!(done.next, None, "the flush ends the chain");
+        assert_eq!(done.next.map(|b| b.tx), Some(&[reg | READ, 0][..]));
+        let done = r.on_complete(&[0xFF, value], &mut out, &busy);
+        assert_eq!(done.next, None, "the register held: the chain ends");
         busy.on_watermark();
         r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
         let done = r.on_complete(
@@ -472,6 +602,83 @@ mod tests {
             out[0].flags.has(ImuFlags::DATA_LOST),
             "what follows a flush follows a gap"
         );
+    }
+
+    /// Ticks the reader for `ms` (no stall: a burst completes between the ticks).
+    fn tick_ms(r: &mut BurstReader, busy: &InFlight, ms: u32) {
+        for _ in 0..ms / STALL_TICK_MS {
+            assert_eq!(r.on_tick(busy), None);
+            r.quiet_ms = 0;
+        }
+    }
+
+    /// One chain: a watermark, a status read finding one packet, the packet (time stamp `ts`).
+    fn chain(r: &mut BurstReader, busy: &InFlight, ts: u16) -> Completed {
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        assert!(busy.on_watermark().is_some());
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, busy);
+        r.on_complete(&fifo_rx(&[packet([0; 3], [0; 3], 0, ts)]), &mut out, busy)
+    }
+
+    #[test]
+    fn every_100_ms_a_chain_ends_with_one_register_read_round_robin() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let regs = checked_registers(r.core.config());
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        assert_eq!(chain(&mut r, &busy, 1000).next, None, "no check yet");
+        let mut ts = 1000;
+        for &(reg, value) in regs.iter().chain(&regs[..2]) {
+            tick_ms(&mut r, &busy, CHECK_PERIOD_MS - STALL_TICK_MS);
+            ts += 1000;
+            assert_eq!(chain(&mut r, &busy, ts).next, None, "99 ms: not yet");
+            tick_ms(&mut r, &busy, STALL_TICK_MS);
+            ts += 1000;
+            let done = chain(&mut r, &busy, ts);
+            assert_eq!(done.next.map(|b| b.tx), Some(&[reg | READ, 0][..]));
+            assert_eq!(busy.on_watermark(), None, "the check holds the bus");
+            let done = r.on_complete(&[0xFF, value], &mut out, &busy);
+            assert_eq!(done.mismatch, None);
+            // The watermark that came during the check: its status read.
+            assert_eq!(done.next.map(|b| b.tx), Some(&STATUS_CMD[..]));
+            assert_eq!(r.on_complete(&[0xFF, 0, 0, 0], &mut out, &busy).next, None);
+        }
+    }
+
+    #[test]
+    fn a_changed_register_keeps_the_bus_until_the_part_is_started_again() {
+        let busy = InFlight::new();
+        let mut r = reader();
+        let (reg, value) = checked_registers(r.core.config())[0];
+        let mut out = [NO_SAMPLE; BATCH_PACKETS];
+        tick_ms(&mut r, &busy, CHECK_PERIOD_MS);
+        assert!(chain(&mut r, &busy, 1000).next.is_some());
+        let done = r.on_complete(&[0xFF, value ^ 0x40], &mut out, &busy);
+        assert_eq!(
+            done.mismatch,
+            Some(Mismatch {
+                reg,
+                expected: value,
+                read: value ^ 0x40
+            })
+        );
+        assert_eq!(done.next, None);
+        assert_eq!(busy.on_watermark(), None, "the bus stays taken");
+        let fresh = Core::new(*r.core.config()).unwrap();
+        // The watermark during the heal is read; the first sample follows a gap.
+        let next = r.resume_after_heal(Some(fresh), &busy);
+        assert_eq!(next.map(|b| b.tx), Some(&STATUS_CMD[..]));
+        r.on_complete(&[0xFF, INT_FIFO_THS, 0, 1], &mut out, &busy);
+        r.on_complete(
+            &fifo_rx(&[packet([0; 3], [0; 3], 0, 9000)]),
+            &mut out,
+            &busy,
+        );
+        assert!(out[0].flags.has(ImuFlags::DATA_LOST));
+        // The same register is read again at the next check.
+        tick_ms(&mut r, &busy, CHECK_PERIOD_MS);
+        let done = chain(&mut r, &busy, 10_000);
+        assert_eq!(done.next.map(|b| b.tx), Some(&[reg | READ, 0][..]));
     }
 
     #[test]

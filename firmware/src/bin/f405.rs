@@ -7,7 +7,7 @@
 //! | task | binds | priority | does |
 //! |---|---|---|---|
 //! | `imu_int` | EXTI4 (INT1 on PC4) | 3 | FIFO watermark: CS low, starts the SPI1 TX DMA (the RX stream is armed) |
-//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, rotates them into the board's axes, runs the pipeline on each |
+//! | `burst_done` | DMA2_STREAM2 (SPI1 RX) | 2 | CS high, re-arms RX, decodes the packets, rotates them into the board's axes, runs the pipeline on each; every 100 ms one configured register read back in the chain, the part started again if it changed |
 //! | `stall_tick` | SysTick (every 10 ms) | 2 | restarts a burst chain that stalled (an interrupt lost): FIFO flushed, status read |
 //! | `usb` | OTG_FS | 1 | USB device, link service (requests, frames out); a calibration write's store only queued |
 //! | `idle` | — | 0 | the calibration store (sector erase and programming), stack high-water mark, LED blink when the IMU is missing, `wfi` |
@@ -44,11 +44,13 @@ mod app {
     use firmware::board::stm32_common::{spi1, Store};
     use firmware::boards::ImuPart;
     use firmware::health::{Counter, HealthCounters};
-    use firmware::imu::icm42688::check::{check_and_heal, Checked};
+    use firmware::imu::icm42688::check::{check_and_heal, restart, Checked};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
     use firmware::imu::ImuFlags;
     use firmware::imu::{ImuSample, PipelineFeed};
-    use firmware::imu_bursts::{Burst, BurstReader, InFlight, BURST_MAX, NO_SAMPLE, STALL_TICK_MS};
+    use firmware::imu_bursts::{
+        Burst, BurstReader, InFlight, Mismatch, BURST_MAX, NO_SAMPLE, STALL_TICK_MS,
+    };
     use firmware::pipeline::PipelineCommand;
     use firmware::protocol::StoreMailbox;
     use firmware::{LinkService, Pipeline};
@@ -303,6 +305,20 @@ mod app {
         if let Some(next) = done.next {
             cx.shared.bus.lock(|bus| start(bus, next, rx));
         }
+        if let Some(m) = done.mismatch {
+            // The periodic register check found the part's configuration changed: started again
+            // over the polled bus (the chain still holds it), then the chain goes on.
+            let core = cx.shared.bus.lock(|bus| heal(&mut bus.1, m));
+            let next = cx.shared.reader.lock(|reader| {
+                reader
+                    .as_mut()
+                    .and_then(|r| r.resume_after_heal(core, &IN_FLIGHT))
+            });
+            if let Some(next) = next {
+                cx.shared.bus.lock(|bus| start(bus, next, rx));
+            }
+            return;
+        }
         if let Some(h) = done.corrupt_header {
             HEALTH.add(Counter::FifoResync, 1);
             defmt::warn!("IMU FIFO out of step (header {=u8:#x}): flushed", h);
@@ -327,6 +343,27 @@ mod app {
                 rtic::pend(pac::Interrupt::OTG_FS);
             }
         });
+    }
+
+    /// The part started again after the periodic register check found `m` (PX4's `Reset()` on a
+    /// failed `RegisterCheck`), over the polled bus, counted as a re-init for `Health`; its fresh
+    /// state, or `None` when the start failed (the next check, 100 ms on, tries again).
+    fn heal(cs: &mut PA4<Output<PushPull>>, m: Mismatch) -> Option<Core> {
+        HEALTH.add(Counter::Reinit, 1);
+        defmt::warn!(
+            "ICM-42688-P register {=u8:#x} read {=u8:#x}, not {=u8:#x}: started again",
+            m.reg,
+            m.read,
+            m.expected
+        );
+        let dev = ExclusiveDevice::new(PolledSpi1, cs, CycleDelay).ok()?;
+        match restart(dev, board::IMU_CONFIG) {
+            Ok(core) => Some(core),
+            Err(e) => {
+                defmt::error!("ICM-42688-P start failed: {}", defmt::Debug2Format(&e));
+                None
+            }
+        }
     }
 
     /// The register check after a stall over the polled bus: the part's fresh state where it had

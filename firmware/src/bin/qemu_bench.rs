@@ -8,7 +8,10 @@
 //!
 //! The per-sample budgets are CPU shares at the boards' real rates, with the instruction count as
 //! the proxy for cycles: the F405's IMU path at 8 kHz ≤ 2 % of 168 MHz (420 instructions per
-//! sample), the Nucleo's ADC path at 1 kHz ≤ 0.5 % of 180 MHz (900). The bench prints each whole
+//! sample) for each IMU — the ICM-42688-P (its FIFO packets in 16-packet transfers), the BMI270
+//! (one data-ready frame per transfer, as the V3 reads it by DMA) and the LSM6DSO (tagged FIFO
+//! words in 48-word transfers), each at 8 kHz whatever its own top rate, so that the three compare
+//! —, the Nucleo's ADC path at 1 kHz ≤ 0.5 % of 180 MHz (900). The bench prints each whole
 //! path's share and exits with a failure when one is over its budget.
 #![no_std]
 #![no_main]
@@ -35,6 +38,10 @@ use shared::omega_dot::OmegaDotEstimator;
 use shared::units::{BodyAngularAccel, BodyRate, SensorOutputs};
 use shared::wire::{StreamKind, StreamRequest};
 use shared::{Compensator, LeverMode};
+
+#[path = "qemu_bench/other_imus.rs"]
+mod other_imus;
+use other_imus::bench_other_imus;
 
 const N: u32 = 4096;
 const INSTR_PER_TICK: u32 = 40;
@@ -83,6 +90,22 @@ impl Budget {
 /// The F405's ICM-42688-P path: 8 kHz ODR, 168 MHz, at most 2 % of the CPU.
 const F405_IMU: Budget = Budget {
     path: "F405 IMU path (its costliest route)",
+    rate_hz: 8000,
+    clock_hz: 168_000_000,
+    share_permille: 20,
+};
+
+/// The BMI270's path (the F405 V3), held to the ICM's budget: 8 kHz, 168 MHz, at most 2 %.
+const F405_BMI270: Budget = Budget {
+    path: "F405 BMI270 path (one frame per transfer)",
+    rate_hz: 8000,
+    clock_hz: 168_000_000,
+    share_permille: 20,
+};
+
+/// The LSM6DSO's path, held to the same budget.
+const F405_LSM6DSO: Budget = Budget {
+    path: "F405 LSM6DSO path (tagged FIFO words)",
     rate_hz: 8000,
     clock_hz: 168_000_000,
     share_permille: 20,
@@ -540,10 +563,13 @@ fn main() -> ! {
     if imu.is_none() {
         hprintln!("bench: FAILED to read the virtual IMU's FIFO or build its driver");
     }
+    let (bmi, lsm) = bench_other_imus(&cal);
     bench_occasional(&cal, &mut sensor);
     let imu_ok = imu.is_some_and(|x10| F405_IMU.check(x10));
+    let bmi_ok = bmi.is_some_and(|x10| F405_BMI270.check(x10));
+    let lsm_ok = lsm.is_some_and(|x10| F405_LSM6DSO.check(x10));
     let adc_ok = NUCLEO_ADC.check(adc);
-    debug::exit(if imu_ok && adc_ok {
+    debug::exit(if imu_ok && bmi_ok && lsm_ok && adc_ok {
         debug::EXIT_SUCCESS
     } else {
         debug::EXIT_FAILURE

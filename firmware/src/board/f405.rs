@@ -306,7 +306,8 @@ pub fn enter_bootloader_if_requested() {
 }
 
 /// SPI1 driven by the CPU between the DMA's bursts: the register check after a stall and the
-/// part's start again (`imu::icm42688::check`). Each byte is written to the data register once
+/// part's start again (`imu::icm42688::check`), after a stall or when the periodic check's burst
+/// found a register changed (the chain still holds the bus then). Each byte is written to the data register once
 /// the transmit buffer is empty and read back once received, with 8-bit access, as the HAL's own
 /// blocking transfer does (stm32f4xx-hal 0.23 `src/spi.rs`, `check_send`, `check_read`,
 /// `FrameSize for u8`: `dr8`); the DMA requests SPI1 raises meanwhile go to streams that are
@@ -339,7 +340,8 @@ fn poll_until(mut ready: impl FnMut() -> bool) -> Result<(), SpiTimeout> {
 impl PolledSpi1 {
     fn exchange(&mut self, out: u8) -> Result<u8, SpiTimeout> {
         // SAFETY: SPI1's registers, used only by the task that holds the bus while no DMA burst
-        // runs (the stall task, after the chain was taken over).
+        // runs (the stall task, after the chain was taken over; the completion task, after the
+        // check's burst, while the chain holds the bus).
         let spi = unsafe { &*stm32f4xx_hal::pac::SPI1::ptr() };
         poll_until(|| spi.sr().read().txe().bit_is_set())?;
         spi.dr8().write(|w| w.dr().set(out));

@@ -31,11 +31,12 @@
 //!
 //! **Data path**: data ready, not the FIFO. Both sensors run at one rate (≤ 1.6 kHz, the
 //! accelerometer's highest), so each data-ready gives one time-aligned pair; a drain reads STATUS
-//! through SENSORTIME in one 24-byte burst (STATUS 0x03 … SENSORTIME_2 0x1A: the accelerometer,
-//! the gyro, and the 24-bit time stamp of 39.0625 µs), and the 16-bit temperature (0x22, 1/512 K
-//! per LSB, 0 = 23 °C; 0x8000 invalid). A read without both DRDY bits yields nothing (no sample
-//! is read twice); a time stamp more than 1.5 periods after the previous one flags the sample
-//! `DATA_LOST` with the count (a data ready missed).
+//! through TEMPERATURE_1 in one 33-byte burst ([`dma::FRAME_LEN`]: STATUS 0x03, the
+//! accelerometer, the gyro, the 24-bit time stamp of 39.0625 µs, …, the 16-bit temperature at
+//! 0x22, 1/512 K per LSB, 0 = 23 °C; 0x8000 invalid) — the frame the F405 V3 moves by DMA
+//! ([`dma`]), decoded by the same [`dma::Decoder`]. A read without both DRDY bits yields nothing
+//! (no sample is read twice); a time stamp more than 1.5 periods after the previous one flags the
+//! sample `DATA_LOST` with the count (a data ready missed).
 //!
 //! **Register check** ([`Bmi270::check_next_register`]): PX4's `RegisterCheck` pattern
 //! (`src/drivers/imu/bosch/bmi088/BMI088_Accelerometer.cpp`, `RegisterCheck`, one register per
@@ -45,11 +46,13 @@
 //!
 //! Not implemented: the part's self-test (ACC_SELF_TEST / GYR_SELF_TEST_AXES).
 
+pub mod dma;
 pub mod regs;
 
 use embedded_hal::spi::{Operation, SpiDevice};
 
-use crate::imu::{lost_between, Drained, ImuFlags, ImuSample, ImuSource};
+use crate::imu::{Drained, ImuSample, ImuSource};
+use dma::{Decoder, FRAME_LEN};
 use regs::*;
 
 /// Bosch's BMI270 configuration file (`bmi270_config_file[]` of `bmi270.c` in Bosch's
@@ -168,15 +171,12 @@ pub enum Error<E> {
     },
 }
 
-/// The gyro's scale: ±2000 °/s over 32768 counts, in rad/s per count.
-const GYRO_RAD_S_PER_LSB: f32 = 2000.0 / 32768.0 * (core::f32::consts::PI / 180.0);
-
 /// BMI270 on a blocking SPI device (mode 0 or 3, up to 10 MHz).
 pub struct Bmi270<SPI> {
     spi: SPI,
     cfg: Config,
-    /// The previous sample's SENSORTIME, low 16 bits (`None` before the first).
-    last_time: Option<u16>,
+    /// The frame's decode and the gap check.
+    decoder: Decoder,
     /// The next register the check reads.
     check_index: usize,
     /// CHIP_ID's last value read.
@@ -189,7 +189,7 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
         let mut imu = Bmi270 {
             spi,
             cfg,
-            last_time: None,
+            decoder: Decoder::new(&cfg),
             check_index: 0,
             chip_id: 0,
         };
@@ -202,6 +202,11 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
         &mut self.spi
     }
 
+    /// The SPI device back (a board that reads the part by DMA after starting it).
+    pub fn release(self) -> SPI {
+        self.spi
+    }
+
     /// CHIP_ID's last value read (for the device's health report).
     pub fn chip_id(&self) -> u8 {
         self.chip_id
@@ -209,7 +214,7 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
 
     /// The whole start again (after a register check found the configuration lost).
     pub fn reinit(&mut self) -> Result<(), Error<SPI::Error>> {
-        self.last_time = None;
+        self.decoder = Decoder::new(&self.cfg);
         self.check_index = 0;
         self.read_reg(CHIP_ID)?; // to SPI mode
         self.write(CMD, CMD_SOFT_RESET)?;
@@ -299,49 +304,11 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
         Ok(b[0])
     }
 
-    /// One sample if both sensors have new data.
+    /// One sample if both sensors have new data: the frame in one burst, decoded.
     fn read_sample(&mut self) -> Result<Option<ImuSample>, Error<SPI::Error>> {
-        let mut b = [0u8; (SENSORTIME_2 - STATUS + 1) as usize];
-        self.read(STATUS, &mut b)?;
-        if b[0] & (STATUS_DRDY_ACC | STATUS_DRDY_GYR) != STATUS_DRDY_ACC | STATUS_DRDY_GYR {
-            return Ok(None);
-        }
-        let word = |reg: u8| {
-            let i = (reg - STATUS) as usize;
-            i16::from_le_bytes([b[i], b[i + 1]])
-        };
-        let acc = [word(ACC_X), word(ACC_X + 2), word(ACC_X + 4)];
-        let gyr = [word(GYR_X), word(GYR_X + 2), word(GYR_X + 4)];
-        let t = (SENSORTIME_0 - STATUS) as usize;
-        let time = u16::from_le_bytes([b[t], b[t + 1]]);
-        let mut tb = [0u8; 2];
-        self.read(TEMPERATURE_0, &mut tb)?;
-        let temp = i16::from_le_bytes(tb);
-        let mut flags = 0;
-        // Full scale: the part clips at ±32767 (and −32768).
-        if acc.iter().chain(&gyr).any(|&v| v.unsigned_abs() >= 32767) {
-            flags |= ImuFlags::SATURATED;
-        }
-        let lost = match self.last_time {
-            Some(prev) => lost_between(prev, time, self.cfg.odr.ticks()),
-            None => 0,
-        };
-        if lost > 0 {
-            flags |= ImuFlags::DATA_LOST;
-        }
-        self.last_time = Some(time);
-        Ok(Some(ImuSample {
-            accel_out: acc.map(f32::from),
-            gyro_rad_s: gyr.map(|v| f32::from(v) * GYRO_RAD_S_PER_LSB),
-            temp_c: if temp == TEMPERATURE_INVALID {
-                f32::NAN
-            } else {
-                23.0 + f32::from(temp) / 512.0
-            },
-            timestamp: time,
-            lost_before: lost,
-            flags: ImuFlags(flags),
-        }))
+        let mut frame = [0u8; FRAME_LEN];
+        self.read(STATUS, &mut frame)?;
+        Ok(self.decoder.decode(&frame))
     }
 }
 

@@ -6,6 +6,17 @@
 //! flush its empty FIFO every 100 ms forever. After a stall, the board reads back the bank-0
 //! registers the configuration wrote ([`checked_registers`]); where one differs, the part is
 //! started again as at boot ([`check_and_heal`]).
+//!
+//! **Periodically**, as PX4 does it (`ICM42688P.cpp`, `RunImpl`, state FIFO_READ: "check
+//! configuration registers periodically or immediately following any failure", `if (!success ||
+//! hrt_elapsed_time(&_last_config_check_timestamp) > 100_ms)`, one register of each bank per check,
+//! `_checked_register_bank0 = (_checked_register_bank0 + 1) % size_register_bank0_cfg`, `Reset()`
+//! on a mismatch): [`RegisterCheck`] names one register at a time, round robin, and the burst chain
+//! reads it between its FIFO reads every 100 ms (`crate::imu_bursts`, "The register check"). A
+//! register changed while the FIFO keeps flowing — a flipped bit, a range changed by a glitch — is
+//! invisible to the data path (the samples decode, only at the wrong scale); the stall check alone
+//! never finds it. With the periodic check it is found within one round of the list, 100 ms per
+//! register, and the part is started again ([`restart`]).
 
 use embedded_hal::spi::{Operation, SpiDevice};
 
@@ -43,6 +54,53 @@ pub fn checked_registers(cfg: &Config) -> heapless::Vec<(u8, u8), MAX_CHECKED> {
     out
 }
 
+/// One configured register at a time, round robin: PX4's `_checked_register_bank0` (module
+/// documentation). The board reads [`Self::current`] when the bus is free and calls
+/// [`Self::advance`] when it held its value; on a mismatch the part is started again and the same
+/// register is read at the next check.
+#[derive(Clone, Debug)]
+pub struct RegisterCheck {
+    regs: heapless::Vec<(u8, u8), MAX_CHECKED>,
+    next: usize,
+}
+
+impl RegisterCheck {
+    /// Over `cfg`'s [`checked_registers`], from the first.
+    pub fn new(cfg: &Config) -> Self {
+        RegisterCheck {
+            regs: checked_registers(cfg),
+            next: 0,
+        }
+    }
+
+    /// The register to read next and the value it must hold (`None`: nothing to check).
+    pub fn current(&self) -> Option<(u8, u8)> {
+        self.regs.get(self.next).copied()
+    }
+
+    /// The current register held its value: the next one at the next check.
+    pub fn advance(&mut self) {
+        self.next = (self.next + 1) % self.regs.len().max(1);
+    }
+
+    /// Registers in one round.
+    pub fn len(&self) -> usize {
+        self.regs.len()
+    }
+
+    /// Nothing to check (a configuration that writes no bank-0 register; never the driver's).
+    pub fn is_empty(&self) -> bool {
+        self.regs.is_empty()
+    }
+}
+
+/// Starts the part again as at boot (`Icm42688::new`: power-up wait, reset, identity,
+/// configuration, FIFO flushed) and gives the burst reader's fresh state for it.
+pub fn restart<SPI: SpiDevice>(spi: SPI, cfg: Config) -> Result<Core, Error<SPI::Error>> {
+    Icm42688::new(spi, cfg)?;
+    Core::new(cfg).map_err(Error::Config)
+}
+
 /// What the check found.
 pub enum Checked {
     /// Every checked register holds its configured value.
@@ -72,8 +130,7 @@ pub fn check_and_heal<SPI: SpiDevice>(
         spi.transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(&mut b)])
             .map_err(Error::Spi)?;
         if b[0] != expected {
-            Icm42688::new(&mut spi, cfg)?;
-            let core = Core::new(cfg).map_err(Error::Config)?;
+            let core = restart(&mut spi, cfg)?;
             return Ok(Checked::Restarted {
                 reg,
                 expected,
@@ -104,5 +161,19 @@ mod tests {
         assert_eq!(value(REG_BANK_SEL), None);
         assert_eq!(value(SIGNAL_PATH_RESET), None);
         assert!(regs.len() >= 10, "{}", regs.len());
+    }
+
+    #[test]
+    fn the_round_robin_visits_every_checked_register_in_turn() {
+        let regs = checked_registers(&Config::DEFAULT);
+        let mut check = RegisterCheck::new(&Config::DEFAULT);
+        assert_eq!(check.len(), regs.len());
+        let mut seen = Vec::new();
+        for _ in 0..2 * regs.len() {
+            seen.push(check.current().expect("a register"));
+            check.advance();
+        }
+        assert_eq!(&seen[..regs.len()], &regs[..]);
+        assert_eq!(&seen[regs.len()..], &regs[..], "and again from the first");
     }
 }

@@ -5,13 +5,16 @@
 //! 100 ms of the loss, the gap flagged on the first sample after it. And a part that resets under
 //! the board (a brown-out): the stall restart alone never reads it again; with the register check
 //! the board runs after each stall (`imu::icm42688::check`), it is started again and read.
+//! And a register changed while the FIFO keeps flowing (a flipped bit: the samples decode, at the
+//! wrong scale): no stall ever comes, and only the periodic check (one register per 100 ms in the
+//! chain, `imu_bursts`, "The register check") finds it and starts the part again.
 
 use super::*;
-use crate::imu::icm42688::check::{check_and_heal, Checked};
-use crate::imu::icm42688::regs::READ;
+use crate::imu::icm42688::check::{check_and_heal, checked_registers, restart, Checked};
+use crate::imu::icm42688::regs::{ACCEL_CONFIG0, READ};
 use crate::imu::icm42688::{AccelRange, Core, Odr, BATCH_PACKETS};
 use crate::imu::ImuFlags;
-use crate::imu_bursts::{Burst, BurstReader, InFlight, NO_SAMPLE, STALL_TICK_MS};
+use crate::imu_bursts::{Burst, BurstReader, InFlight, CHECK_PERIOD_MS, NO_SAMPLE, STALL_TICK_MS};
 use embedded_hal::spi::{Operation, SpiDevice};
 
 /// The F405's configuration (`board::f405::IMU_CONFIG`): 8 kHz, watermark 8 packets.
@@ -50,10 +53,15 @@ struct Board {
     lose: Option<Loss>,
     lost_at_ns: Option<u64>,
     restarts: u32,
-    /// After each stall, the register check and, on a mismatch, the part started again.
+    /// After each stall, the register check and, on a mismatch, the part started again; and the
+    /// periodic check's mismatch acted on (off: ignored).
     checking: bool,
-    /// Parts started again.
+    /// Parts started again (after a stall or by the periodic check).
     heals: u32,
+    /// When each was started again.
+    heal_times: Vec<u64>,
+    /// Of those, by the periodic check, with the time.
+    periodic_heals: Vec<u64>,
 }
 
 impl Board {
@@ -78,6 +86,8 @@ impl Board {
             restarts: 0,
             checking: true,
             heals: 0,
+            heal_times: Vec::new(),
+            periodic_heals: Vec::new(),
         }
     }
 
@@ -117,6 +127,7 @@ impl Board {
                         Checked::Intact => {}
                         Checked::Restarted { core, .. } => {
                             self.heals += 1;
+                            self.heal_times.push(self.now_ns);
                             self.reader.replace_core(core);
                         }
                     }
@@ -146,6 +157,19 @@ impl Board {
                 self.got.push((self.now_ns, *s));
             }
             self.wire = done.next;
+            if done.mismatch.is_some() {
+                // As `burst_done` does: the part started again over the blocking bus (or, with
+                // the checks off, reading goes on as if nothing were wrong).
+                if !self.checking {
+                    self.wire = self.reader.resume_after_heal(None, &self.in_flight);
+                    continue;
+                }
+                let core = restart(&mut self.part, CFG).ok();
+                self.heals += 1;
+                self.heal_times.push(self.now_ns);
+                self.periodic_heals.push(self.now_ns);
+                self.wire = self.reader.resume_after_heal(core, &self.in_flight);
+            }
         }
         self.int1_was = self.part.int1();
     }
@@ -271,4 +295,106 @@ fn an_intact_part_is_not_started_again_after_a_lost_interrupt() {
         lose_at_200_ms(&mut b, loss);
         assert_eq!((b.restarts, b.heals), (1, 0));
     }
+}
+
+/// One configured register written with another value at 200 ms, while the part runs on; 3 s
+/// more. The samples after the write.
+fn flip_at_200_ms(b: &mut Board, reg: u8, value: u8) -> Vec<(u64, ImuSample)> {
+    b.run_ms(200);
+    let at = b.now_ns;
+    b.part
+        .transaction(&mut [Operation::Write(&[reg, value])])
+        .expect("the model's bus");
+    b.run_ms(3000);
+    b.after(at)
+}
+
+/// A round of the check: every checked register once, 100 ms apart, plus a tick and a watermark
+/// interval for the chain that carries the read.
+fn check_round_ns() -> u64 {
+    let n = checked_registers(&CFG).len() as u64;
+    (n * u64::from(CHECK_PERIOD_MS) + u64::from(STALL_TICK_MS) + 1) * 1_000_000
+}
+
+#[test]
+fn a_range_changed_under_a_flowing_fifo_is_found_by_the_periodic_check() {
+    let mut b = Board::new(true);
+    // ±4 g (FS_SEL 2) at 8 kHz becomes ±16 g (FS_SEL 0): the FIFO flows on, its counts a quarter.
+    let expected = b.part.register(0, ACCEL_CONFIG0);
+    assert_eq!(expected >> 5, 2, "±4 g configured");
+    let after = flip_at_200_ms(&mut b, ACCEL_CONFIG0, expected & 0x1F);
+    // The data path never noticed: no stall, no gap until the part was started again.
+    assert_eq!(b.restarts, 0, "no stall");
+    assert_eq!(b.periodic_heals.len(), 1, "found and healed once");
+    let healed = b.periodic_heals[0];
+    let z = |s: &ImuSample| s.accel_out[2];
+    // Between the change (and the packets already in the FIFO) and the heal: 1 g in ±16 g counts.
+    let wrong: Vec<_> = after
+        .iter()
+        .filter(|(t, _)| *t > 202_000_000 && *t < healed)
+        .collect();
+    assert!(!wrong.is_empty());
+    assert!(
+        wrong
+            .iter()
+            .all(|(_, s)| (z(s) - 2048.0).abs() < 2.0 && !s.flags.has(ImuFlags::DATA_LOST)),
+        "1 g read as 2048 counts, unflagged"
+    );
+    assert!(
+        healed - 200_000_000 <= check_round_ns(),
+        "healed {} ms after the change (a round: {} ms)",
+        (healed - 200_000_000) / 1_000_000,
+        check_round_ns() / 1_000_000
+    );
+    assert_eq!(
+        b.part.register(0, ACCEL_CONFIG0),
+        expected,
+        "configured again"
+    );
+    // After the heal: the gap flagged once, then 1 g at ±4 g (8192 counts) again.
+    let resumed: Vec<_> = after.iter().filter(|(t, _)| *t > healed).collect();
+    assert!(resumed[0].1.flags.has(ImuFlags::DATA_LOST));
+    assert!(resumed[1..]
+        .iter()
+        .all(|(_, s)| !s.flags.has(ImuFlags::DATA_LOST) && (z(s) - 8192.0).abs() < 2.0));
+    let span_ms = (b.now_ns - resumed[0].0) / 1_000_000;
+    assert!(
+        resumed.len() as u64 >= 8 * span_ms,
+        "{} in {span_ms} ms",
+        resumed.len()
+    );
+}
+
+#[test]
+fn every_checked_register_changed_is_healed_within_a_round() {
+    for (reg, value) in checked_registers(&CFG) {
+        let mut b = Board::new(true);
+        let after = flip_at_200_ms(&mut b, reg, value ^ 0x01);
+        assert_eq!(b.heals, 1, "register {reg:#x}: healed once");
+        let healed = b.heal_times[0];
+        assert!(
+            healed - 200_000_000 <= check_round_ns(),
+            "register {reg:#x}: healed {} ms after the change",
+            (healed - 200_000_000) / 1_000_000
+        );
+        assert_eq!(b.part.register(0, reg), value, "register {reg:#x} again");
+        // Reading goes on at 8 samples per millisecond after the heal.
+        let last_s = after
+            .iter()
+            .filter(|(t, _)| *t > b.now_ns - 1_000_000_000)
+            .count();
+        assert!(
+            last_s >= 7990,
+            "register {reg:#x}: {last_s} samples in the last second"
+        );
+    }
+}
+
+#[test]
+fn an_intact_part_is_checked_but_never_started_again() {
+    let mut b = Board::new(true);
+    b.run_ms(3000);
+    assert_eq!((b.restarts, b.heals), (0, 0));
+    assert!(b.got.len() >= 23_990, "{}", b.got.len());
+    assert!(b.got.iter().all(|(_, s)| !s.flags.has(ImuFlags::DATA_LOST)));
 }

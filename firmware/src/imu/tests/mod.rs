@@ -4,6 +4,7 @@
 
 mod alignment;
 mod bmi270;
+mod bmi270_dma;
 mod bursts_stall;
 mod icm_afsr;
 mod icm_configure;
