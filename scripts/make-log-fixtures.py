@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""Writes the binary log fixtures of host/tests/fixtures/logs/ from a simulated hand-held session,
+"""Writes the binary log fixtures of recording/tests/fixtures/logs/ from a simulated hand-held session,
 each with its format's reference tool, and checks that the tool reads its file back.
 
     python3 -m venv /tmp/venv && /tmp/venv/bin/pip install pyulog==1.3.0 pymavlink==2.4.50 \
         mcap==1.6.0 mcap-ros2-support==0.6.0 numpy==2.4.6
     cargo run -p host -- simulate-hand --out /tmp/hand.csv --rate-hz 100 --gyro-unit rad/s --seed 1
-    /tmp/venv/bin/python scripts/make-log-fixtures.py /tmp/hand.csv host/tests/fixtures/logs
+    /tmp/venv/bin/python scripts/make-log-fixtures.py /tmp/hand.csv recording/tests/fixtures/logs
 
 The session is cut to its first ROWS rows (60 s, ten still positions and the turns between them) to
 keep the files small. Each format gets the accelerometer in m/s², the gyro in rad/s and a slow

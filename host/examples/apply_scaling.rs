@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = std::env::args()
         .nth(1)
         .map_or(Ok(1_000_000), |s| s.parse())?;
-    let truth = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/logs/hand.truth.toml");
+    let truth = recording::testkit::log_fixture("hand.truth.toml");
     let cal = UnitFile::load(&truth)?.to_calibration()?;
     let dir = tempfile::tempdir()?;
     let setting = Setting {

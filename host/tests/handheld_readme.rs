@@ -90,7 +90,8 @@ fn readme_hand_held_commands_work_as_written() {
 fn readme_counts_and_six_face_commands_work_as_written() {
     let section = section();
     // The binary-log examples name the user's own logs (flight.ulg, bench.mcap); the log readers
-    // are run on the reference tools' files in `cli::log_fixture_tests`.
+    // are run on the reference tools' files in `cli::log_fixture_tests` and in `recording`'s
+    // `tests/reference_tools.rs`.
     let commands: Vec<&str> = section
         .lines()
         .filter_map(|l| l.strip_prefix("host "))

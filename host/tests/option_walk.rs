@@ -590,7 +590,7 @@ fn fixtures() -> Fixtures {
 }
 
 fn expand(f: &Fixtures, arg: &str) -> String {
-    let ulog = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/logs/hand.ulg");
+    let ulog = recording::testkit::log_fixture("hand.ulg");
     arg.replace("{session}", &s(&f.session))
         .replace("{cal}", &s(&f.session.join("calibration.toml")))
         .replace("{bin}", &s(&f.session.join("calibration.bin")))

@@ -149,7 +149,8 @@ fn imu_tks_xsens_recording_segments_and_calibrates() {
 #[test]
 fn rosbag2s_test_bags_are_read_and_refused_for_holding_no_imu() {
     let tmp = tempfile::tempdir().unwrap();
-    let fixtures = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/logs");
+    let fixtures = recording::testkit::log_fixture("");
+    let fixtures = fixtures.display();
     for (bag, types) in [
         (
             "rosbag2-talker.mcap",
@@ -240,10 +241,8 @@ fn walk_dataflash(bytes: &[u8], names: &[&str]) -> (BTreeMap<String, Vec<u64>>, 
 /// 1 s, let alone minutes). An instance the log does not have is refused with the two it has.
 #[test]
 fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_session() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/logs/pymavlink-test.bin"
-    );
+    let path = recording::testkit::log_fixture("pymavlink-test.bin");
+    let path = path.to_str().unwrap();
     let bytes = std::fs::read(path).unwrap();
     assert_eq!(bytes[..3], [0xA3, 0x95, 0x80]);
     let (stamps, cut) = walk_dataflash(&bytes, &["IMU", "IMU2"]);
@@ -399,11 +398,8 @@ fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_sessio
 fn pymavlinks_test_log_is_undone_with_its_own_parameters() {
     use recording::session::logs::vehicle::{read_vehicle_params, SensorKind};
     use recording::session::logs::{read_log, LogSource};
-    let path = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/logs/pymavlink-test.bin"
-    ));
-    let (_, params) = read_vehicle_params(path).unwrap().unwrap();
+    let path = recording::testkit::log_fixture("pymavlink-test.bin");
+    let (_, params) = read_vehicle_params(&path).unwrap().unwrap();
     let offs = [
         -0.03169693425297737,
         2.4852089881896973,
@@ -435,7 +431,7 @@ fn pymavlinks_test_log_is_undone_with_its_own_parameters() {
         spelling: Default::default(),
         rate_hz: None,
     };
-    let undone = read_log(path, &source).unwrap();
+    let undone = read_log(&path, &source).unwrap();
     assert!(
         undone.warnings.iter().any(|w| w.contains("undone")),
         "{:?}",

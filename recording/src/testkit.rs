@@ -4,7 +4,88 @@
 //! test states the samples it logs and reads them back; and the checks a long log's windows are
 //! held to. The fuzz targets' corpora and the long-log benchmarks log their samples with them too.
 
-use crate::session::logs::ulog;
+use crate::session::import::{GyroUnit, ImportOptions, Recording, TimeSource};
+use crate::session::logs::{read_log_windows, ulog, LogRead, LogSource};
+use shared::OutputUnit;
+use std::path::{Path, PathBuf};
+
+/// A file of the readers' fixtures (`recording/tests/fixtures/logs/`: logs written by each
+/// format's reference tool, and other projects' public logs with their licences).
+pub fn log_fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/logs")
+        .join(name)
+}
+
+/// The hand-held session of the fixtures (`hand.ulg`: 6000 samples at 100 Hz, a temperature ramp)
+/// as samples to log again.
+pub fn hand_session() -> Vec<LogSample> {
+    let log = crate::session::logs::read_log(&log_fixture("hand.ulg"), &LogSource::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    samples_of(&log.recording)
+}
+
+/// A recording's samples as a logger would log them again (f32 values, its temperature or NaN).
+pub fn samples_of(rec: &Recording) -> Vec<LogSample> {
+    (0..rec.len())
+        .map(|i| LogSample {
+            t_s: rec.t_s[i],
+            acc: rec.acc[i].map(|x| x as f32),
+            gyro: rec.gyro_rad_s[i].map(|x| x as f32),
+            temp_c: rec.temp_c.as_ref().map_or(f32::NAN, |t| t[i] as f32),
+        })
+        .collect()
+}
+
+/// A logger's CSV of `samples`: `t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp`, the time to the
+/// microsecond, m/s² and rad/s ([`csv_source`] reads it).
+pub fn write_csv(samples: &[LogSample]) -> Vec<u8> {
+    let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp\n");
+    for s in samples {
+        let [ax, ay, az] = s.acc;
+        let [gx, gy, gz] = s.gyro;
+        text.push_str(&format!(
+            "{:.6},{ax},{ay},{az},{gx},{gy},{gz},{}\n",
+            s.t_s, s.temp_c
+        ));
+    }
+    text.into_bytes()
+}
+
+/// How [`write_csv`]'s files are read.
+pub fn csv_source() -> LogSource {
+    let mut options = ImportOptions::new(
+        TimeSource::Column("t".into()),
+        OutputUnit::MetresPerSecondSquared,
+        GyroUnit::RadPerS,
+    );
+    options.temp_column = Some("temp".into());
+    LogSource {
+        text: Some(options),
+        ..LogSource::default()
+    }
+}
+
+/// A long log's windows read from the survey's marks (each its own stretches of the file) are the
+/// windows a pass over the whole file reads: samples, places in the file and what is said, compared
+/// as their `Debug` text. Panics naming `case` and the window otherwise, or when `max_samples` does
+/// not make the read window by window with marks.
+pub fn assert_windows_from_marks(path: &Path, source: &LogSource, max_samples: usize, case: &str) {
+    let read =
+        || read_log_windows(path, source, max_samples).unwrap_or_else(|e| panic!("{case}: {e}"));
+    let LogRead::Windows(marked) = read() else {
+        panic!("{case}: read whole");
+    };
+    assert!(marked.marked(), "{case}: no marks");
+    let LogRead::Windows(whole) = read() else {
+        panic!("{case}: read whole");
+    };
+    let whole = whole.without_marks();
+    for k in 0..marked.len() {
+        let (a, b) = (marked.read(k), whole.read(k));
+        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{case}: window {k}");
+    }
+}
 
 /// One sample as a logger writes it: time s, acc m/s², gyro rad/s, temperature °C.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,5 +1,5 @@
 //! Logs as real loggers damage them, through `host segment` → `host calibrate` → `host apply`: the
-//! reference-tool fixtures (`host/tests/fixtures/logs/`) and simulated sessions with one damaged
+//! reference-tool fixtures (`recording/tests/fixtures/logs/`) and simulated sessions with one damaged
 //! stamp, repeated or reversed rows, jitter or simulated time. Each must calibrate as its clean self
 //! does (within the clean calibration's 1σ) and say what was repaired.
 

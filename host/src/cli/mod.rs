@@ -40,8 +40,6 @@ pub mod export;
 mod export_log;
 pub mod flash;
 #[cfg(test)]
-mod joined_log_tests;
-#[cfg(test)]
 mod log_fixture_tests;
 pub mod log_input;
 #[cfg(test)]

@@ -8,54 +8,18 @@
 //! `WINDOW_SEEDS=40 cargo test -p host --lib window_property -- --nocapture` runs more seeds (the
 //! suite runs 6) and prints every case.
 
-use super::log_fixture_tests::{fixture, truth};
+use super::log_fixture_tests::truth;
 use outputs::apply::{apply_log_within, Setting};
-use recording::session::import::{GyroUnit, ImportOptions, TimeSource, MAX_ROWS};
-use recording::session::logs::{read_log, read_log_windows, LogRead, LogSource};
+use recording::session::import::MAX_ROWS;
+use recording::session::logs::{read_log_windows, LogRead, LogSource};
 use recording::testkit::{
-    write_dataflash, write_mcap, write_mcap_unstamped, write_ulog, LogSample,
+    assert_windows_from_marks, csv_source, hand_session, write_csv, write_dataflash, write_mcap,
+    write_mcap_unstamped, write_ulog, LogSample,
 };
 use shared::compensator::LeverMode;
 use shared::rng::Rng;
-use shared::{Calibration, OutputUnit};
+use shared::Calibration;
 use std::path::Path;
-
-pub(super) fn binary() -> LogSource {
-    LogSource {
-        text: None,
-        instance: None,
-        topic: None,
-        spelling: Default::default(),
-        rate_hz: None,
-    }
-}
-
-pub(super) fn csv_source() -> LogSource {
-    let mut options = ImportOptions::new(
-        TimeSource::Column("t".into()),
-        OutputUnit::MetresPerSecondSquared,
-        GyroUnit::RadPerS,
-    );
-    options.temp_column = Some("temp".into());
-    LogSource {
-        text: Some(options),
-        ..binary()
-    }
-}
-
-/// The hand-held fixture session's samples.
-pub(super) fn session() -> Vec<LogSample> {
-    let hand = read_log(&fixture("hand.ulg"), &binary()).unwrap().recording;
-    let temps = hand.temp_c.clone().unwrap();
-    (0..hand.len())
-        .map(|i| LogSample {
-            t_s: hand.t_s[i],
-            acc: hand.acc[i].map(|x| x as f32),
-            gyro: hand.gyro_rad_s[i].map(|x| x as f32),
-            temp_c: temps[i] as f32,
-        })
-        .collect()
-}
 
 /// The damage drawn for one case, said for the case's line.
 fn damage(samples: &mut Vec<LogSample>, rng: &mut Rng) -> String {
@@ -93,19 +57,6 @@ fn damage(samples: &mut Vec<LogSample>, rng: &mut Rng) -> String {
     said.join(", ")
 }
 
-pub(super) fn write_csv(path: &Path, samples: &[LogSample]) {
-    let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z,temp\n");
-    for s in samples {
-        let [ax, ay, az] = s.acc;
-        let [gx, gy, gz] = s.gyro;
-        text.push_str(&format!(
-            "{:.6},{ax},{ay},{az},{gx},{gy},{gz},{}\n",
-            s.t_s, s.temp_c
-        ));
-    }
-    std::fs::write(path, text).unwrap();
-}
-
 /// `apply` of the truth to `path`, at most `max_samples` read at once: the CSV's lines and what
 /// was said.
 fn apply(
@@ -141,21 +92,6 @@ fn said_lost(warnings: &[String]) -> usize {
 
 /// Every window read from the survey's marks is the window read by a pass over the whole file:
 /// the same samples, places and words.
-pub(super) fn same_from_marks(path: &Path, source: &LogSource, max_samples: usize, case: &str) {
-    let LogRead::Windows(marked) = read_log_windows(path, source, max_samples).unwrap() else {
-        panic!("{case}: read whole");
-    };
-    assert!(marked.marked(), "{case}: no marks");
-    let LogRead::Windows(whole) = read_log_windows(path, source, max_samples).unwrap() else {
-        panic!("{case}: read whole");
-    };
-    let whole = whole.without_marks();
-    for k in 0..marked.len() {
-        let (a, b) = (marked.read(k), whole.read(k));
-        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{case}: window {k}");
-    }
-}
-
 /// One case: the windowed read against the whole read, as the module docs say. The number of
 /// windows read and of rows said left out by the window rule.
 fn check(path: &Path, source: &LogSource, max_samples: usize, case: &str) -> (usize, usize) {
@@ -170,7 +106,7 @@ fn check_with(
     max_samples: usize,
     case: &str,
 ) -> ((usize, usize), Vec<String>) {
-    same_from_marks(path, source, max_samples, case);
+    assert_windows_from_marks(path, source, max_samples, case);
     let (whole, whole_said) = apply(path, source, cal, MAX_ROWS);
     let (windowed, mut said) = apply(path, source, cal, max_samples);
     let note = said.remove(0);
@@ -234,7 +170,7 @@ fn a_window_by_window_apply_writes_and_says_what_a_whole_read_does() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(6);
     let tmp = tempfile::tempdir().unwrap();
-    let clean = session();
+    let clean = hand_session();
     let n = clean.len();
     let (mut cases, mut lost_rows) = (0, 0);
     for seed in 0..seeds {
@@ -244,11 +180,13 @@ fn a_window_by_window_apply_writes_and_says_what_a_whole_read_does() {
         let format = seed % 4;
         let path = tmp.path().join(format!("log{seed}"));
         let source = match format {
-            0 => std::fs::write(&path, write_ulog(&samples, None)).map(|_| binary()),
-            1 => std::fs::write(&path, write_dataflash(&samples)).map(|_| binary()),
-            2 => std::fs::write(&path, write_mcap(&samples, None, 0.0)).map(|_| binary()),
+            0 => std::fs::write(&path, write_ulog(&samples, None)).map(|_| LogSource::default()),
+            1 => std::fs::write(&path, write_dataflash(&samples)).map(|_| LogSource::default()),
+            2 => {
+                std::fs::write(&path, write_mcap(&samples, None, 0.0)).map(|_| LogSource::default())
+            }
             _ => {
-                write_csv(&path, &samples);
+                std::fs::write(&path, write_csv(&samples)).unwrap();
                 Ok(csv_source())
             }
         }
@@ -272,7 +210,7 @@ const BUDGET: usize = 1332;
 /// A DataFlash log of `samples` (its times those written) at `path`, and its windows' starts.
 fn dataflash_windows(path: &Path, samples: &[LogSample]) -> Vec<f64> {
     std::fs::write(path, write_dataflash(samples)).unwrap();
-    let LogRead::Windows(w) = read_log_windows(path, &binary(), BUDGET).unwrap() else {
+    let LogRead::Windows(w) = read_log_windows(path, &LogSource::default(), BUDGET).unwrap() else {
         panic!("read whole");
     };
     (1..w.len()).map(|k| w.span(k).0).collect()
@@ -289,7 +227,7 @@ fn at(samples: &[LogSample], t_s: f64) -> usize {
 fn gaps_are_said_with_their_rows_in_the_log_at_a_window_edge_too() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("gaps.bin");
-    let mut samples = session();
+    let mut samples = hand_session();
     let starts = dataflash_windows(&path, &samples);
     let edge = at(&samples, starts[3]);
     let inside = at(&samples, starts[5]) + 100;
@@ -298,7 +236,8 @@ fn gaps_are_said_with_their_rows_in_the_log_at_a_window_edge_too() {
     }
     let starts = dataflash_windows(&path, &samples);
     assert!(starts.contains(&samples[edge].t_s), "the gap is at an edge");
-    let ((windows, lost), whole) = check_with(&path, &binary(), &truth(), BUDGET, "two gaps");
+    let ((windows, lost), whole) =
+        check_with(&path, &LogSource::default(), &truth(), BUDGET, "two gaps");
     let jumps = whole
         .iter()
         .find(|w| w.contains("time stamps jump 2 time(s)"));
@@ -318,13 +257,13 @@ fn gaps_are_said_with_their_rows_in_the_log_at_a_window_edge_too() {
 fn a_stamp_damaged_before_a_window_edge_is_said_left_out_not_re_timed() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("stamp.bin");
-    let mut samples = session();
+    let mut samples = hand_session();
     let starts = dataflash_windows(&path, &samples);
     let damaged = at(&samples, starts[2]) - 4;
     samples[damaged].t_s += 2.5;
     dataflash_windows(&path, &samples);
-    let (whole, _) = apply(&path, &binary(), &truth(), MAX_ROWS);
-    let (windowed, said) = apply(&path, &binary(), &truth(), BUDGET);
+    let (whole, _) = apply(&path, &LogSource::default(), &truth(), MAX_ROWS);
+    let (windowed, said) = apply(&path, &LogSource::default(), &truth(), BUDGET);
     println!("{said:#?}");
     assert_eq!(windowed.len(), whole.len() - 1);
     assert_eq!(said_lost(&said), 1, "{said:?}");
@@ -332,7 +271,12 @@ fn a_stamp_damaged_before_a_window_edge_is_said_left_out_not_re_timed() {
         !said.iter().any(|w| w.contains("isolated stamp")),
         "{said:?}"
     );
-    check(&path, &binary(), BUDGET, "a stamp damaged before an edge");
+    check(
+        &path,
+        &LogSource::default(),
+        BUDGET,
+        "a stamp damaged before an edge",
+    );
 }
 
 /// A calibration with a temperature model (one that changes nothing: the truth's values at
@@ -358,14 +302,20 @@ fn thermal_truth() -> Calibration {
 fn a_temperature_dropout_covering_whole_windows_is_applied_as_a_whole_read_applies_it() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("temps.bin");
-    let mut samples = session();
+    let mut samples = hand_session();
     let starts = dataflash_windows(&path, &samples);
     let (from, to) = (at(&samples, starts[1]) - 50, at(&samples, starts[4]) + 50);
     samples[from..to]
         .iter_mut()
         .for_each(|s| s.temp_c = f32::NAN);
     dataflash_windows(&path, &samples);
-    let ((windows, _), whole) = check_with(&path, &binary(), &thermal_truth(), BUDGET, "a dropout");
+    let ((windows, _), whole) = check_with(
+        &path,
+        &LogSource::default(),
+        &thermal_truth(),
+        BUDGET,
+        "a dropout",
+    );
     let note = format!(
         "{} of {} samples have no temperature",
         to - from,
@@ -381,8 +331,9 @@ fn a_temperature_dropout_covering_whole_windows_is_applied_as_a_whole_read_appli
 fn a_bag_without_stamps_longer_than_the_budget_is_read_window_by_window() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("unstamped.mcap");
-    std::fs::write(&path, write_mcap_unstamped(&session())).unwrap();
-    let ((windows, lost), whole) = check_with(&path, &binary(), &truth(), BUDGET, "unstamped");
+    std::fs::write(&path, write_mcap_unstamped(&hand_session())).unwrap();
+    let ((windows, lost), whole) =
+        check_with(&path, &LogSource::default(), &truth(), BUDGET, "unstamped");
     assert!(
         whole.iter().any(|w| w.contains("no header stamp (all 0)")),
         "{whole:?}"

@@ -1,22 +1,16 @@
 //! Two logs joined one after the other, the second's time restarting: read as two logs, the second
 //! after the first, said so; not sorted into one that jumps between two attitudes every sample.
 
-use super::log_fixture_tests::fixture;
 use recording::session::import::{GyroUnit, ImportOptions, Places, TimeSource};
 use recording::session::logs::{read_log, LogSource};
 use recording::session::segment::{find_intervals, SegmentOptions};
+use recording::testkit::log_fixture;
 use shared::OutputUnit;
 
 #[test]
 fn two_logs_joined_with_their_time_restarting_are_read_one_after_the_other() {
-    let none = LogSource {
-        text: None,
-        instance: None,
-        topic: None,
-        spelling: Default::default(),
-        rate_hz: None,
-    };
-    let hand = read_log(&fixture("hand.ulg"), &none).unwrap().recording;
+    let none = LogSource::default();
+    let hand = read_log(&log_fixture("hand.ulg"), &none).unwrap().recording;
     let n = hand.len();
     let mut text = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
     // The second log: the same session, 1 mm/s² apart (another log, not a copy).
