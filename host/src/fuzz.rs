@@ -11,7 +11,7 @@
 //!   bytes, from the simulator's RNG, so a run is reproducible from its seed:
 //!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
-pub mod logs;
+pub(crate) mod logs;
 #[cfg(test)]
 mod torture_tests;
 
@@ -180,7 +180,7 @@ pub(crate) fn plan_toml(data: &[u8]) {
 }
 
 /// A unit file: one that parses and describes a calibration round-trips through its TOML.
-pub fn unit_file(data: &[u8]) {
+pub(crate) fn unit_file(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -197,7 +197,7 @@ pub fn unit_file(data: &[u8]) {
 /// A blob: one that decodes re-encodes to the same calibration and makes a compensator. The bytes are
 /// tried as they are and as a payload behind a valid header and CRC, so that mutations reach the
 /// payload's decoding and range checks rather than stopping at the CRC.
-pub fn blob(data: &[u8]) {
+pub(crate) fn blob(data: &[u8]) {
     check_blob(data);
     if let Ok(n) = u16::try_from(data.len()) {
         let mut sealed = Vec::with_capacity(data.len() + 12);
@@ -225,7 +225,7 @@ fn check_blob(bytes: &[u8]) {
 
 /// Wire frames: the device's receiver and request handler take any bytes (every request gets an
 /// answer, never a panic), and the host decodes any frame to a message or a typed error.
-pub fn wire(data: &[u8]) {
+pub(crate) fn wire(data: &[u8]) {
     use firmware::protocol::{FrameReceiver, Received};
     use firmware::{AbStore, Controller, DeviceInfo, RamNorFlash};
     use shared::wire::{decode_frame, Board, DeviceToHost, HostToDevice};

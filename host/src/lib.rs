@@ -11,7 +11,7 @@
 //! - `device`: the link to a device and the live procedure.
 //!
 //! The code names each of them by its crate name (`recording::session::Plan`); nothing is
-//! re-exported here. This crate's own modules: [`cli`]; [`limits`] and [`ui`], the command line's
+//! re-exported here. This crate's own modules: [`cli`]; `limits` and `ui`, the command line's
 //! bounds and stdout writes beside the recording's; `fuzz`, the parsers' fuzz targets (feature
 //! `fuzz`). The tests, examples and fuzz targets depend on the crates they use.
 #![deny(missing_docs)]
@@ -21,5 +21,5 @@ pub mod cli;
 /// crate and `--example fuzz` enable); the unit tests run their short seeded runs.
 #[cfg(any(test, feature = "fuzz"))]
 pub mod fuzz;
-pub mod limits;
-pub mod ui;
+pub(crate) mod limits;
+pub(crate) mod ui;

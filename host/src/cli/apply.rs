@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 /// `host apply`.
 #[derive(Debug, Args)]
-pub struct ApplyArgs {
+pub(crate) struct ApplyArgs {
     /// The calibration (calibration.toml or any unit file).
     #[arg(long, value_name = "FILE")]
     pub calibration: PathBuf,
@@ -52,7 +52,7 @@ pub struct ApplyArgs {
 
 /// The device's lever-arm modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum LeverArg {
+pub(crate) enum LeverArg {
     /// Static compensation only (paper eq. 6).
     Off,
     /// Centripetal and cross terms from ω, no ω̇ term.
@@ -72,7 +72,7 @@ impl From<LeverArg> for LeverMode {
 }
 
 /// Runs `host apply`; the CSV goes to `--out` (atomically) or stdout, the summary to stderr.
-pub fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &ApplyArgs, quiet: bool) -> Result<(), CliError> {
     let unit = UnitFile::load(&a.calibration)?;
     let invalid = |m| CliError::Unit(UnitFileError::Invalid(a.calibration.clone(), m));
     let cal = unit.to_calibration().map_err(invalid)?;

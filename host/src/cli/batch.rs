@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// `host batch`.
 #[derive(Debug, Args)]
 #[command(mut_args(outputs::summary::pass_fail_limits))]
-pub struct BatchArgs {
+pub(crate) struct BatchArgs {
     /// Directory whose subdirectories are sessions (plan.toml + samples.csv), one per unit.
     #[arg(long, value_name = "DIR_OF_SESSIONS")]
     pub input: PathBuf,
@@ -47,7 +47,7 @@ pub(crate) const SUMMARY_CSV: &str = "summary.csv";
 pub(crate) const SUMMARY_JSON: &str = "summary.json";
 
 /// Runs `host batch`; exits nonzero when any unit failed, is outside the limits or is an outlier.
-pub fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &BatchArgs, quiet: bool) -> Result<(), CliError> {
     // Checked before anything is read, created or started.
     a.estimator.refuse()?;
     let estimate = a.estimator.options()?;

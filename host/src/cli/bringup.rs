@@ -13,7 +13,7 @@ use std::time::Duration;
 
 /// `host bringup`.
 #[derive(Debug, Args)]
-pub struct BringupArgs {
+pub(crate) struct BringupArgs {
     /// How to reach the device.
     #[command(flatten)]
     pub port: PortArgs,
@@ -53,7 +53,7 @@ impl<T: Transport> Operator<T> for TerminalOperator {
 /// simulated device runs in real time here, so that its rate is measured as a board's; its
 /// virtual table takes the poses. On a board, a person at the terminal does (without a terminal
 /// the pose checks are skipped, each saying so).
-pub fn run(a: &BringupArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &BringupArgs, quiet: bool) -> Result<(), CliError> {
     let mut client = connect(&a.port)?;
     let measure = Duration::from_secs_f64(a.seconds);
     let report = if let AnyTransport::Sim(dev) = client.transport_mut() {

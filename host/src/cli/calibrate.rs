@@ -22,7 +22,7 @@ use std::time::Instant;
 /// `host calibrate`: from a recorded session (`--input`) or live from a device (`--port`).
 #[derive(Debug, Args)]
 #[command(mut_args(outputs::summary::pass_fail_limits))]
-pub struct CalibrateArgs {
+pub(crate) struct CalibrateArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR", conflicts_with = "port")]
     pub input: Option<PathBuf>,
@@ -103,7 +103,7 @@ pub struct CalibrateArgs {
 
 /// The estimator's flags, shared by `host calibrate` and `host batch`.
 #[derive(Clone, Debug, Args)]
-pub struct EstimatorArgs {
+pub(crate) struct EstimatorArgs {
     /// Estimator: joint (static and lever arms together, default) or paper (the paper's eq. 24).
     #[arg(long, value_enum, default_value_t = MethodArg::Joint)]
     pub method: MethodArg,
@@ -125,7 +125,7 @@ pub struct EstimatorArgs {
 /// and the gyro's, given (§11.6); shared by `host calibrate`, `host batch` and `host report` (whose
 /// session fit they weigh).
 #[derive(Clone, Debug, Default, Args)]
-pub struct BiasWalkArgs {
+pub(crate) struct BiasWalkArgs {
     /// The accelerometers' bias is a random walk of this strength, mg/√s (the Allan K of
     /// `host noise`, in mg): the segments are weighted with the walk's covariance across the
     /// session (docs/model.md §11). 0 keeps a constant bias. Without it (and without
@@ -260,7 +260,7 @@ impl EstimatorArgs {
 
 /// `--method`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum MethodArg {
+pub(crate) enum MethodArg {
     /// Static part and lever arms in one weighted least-squares fit.
     Joint,
     /// The paper's two steps: static fit, then eq. 24 per lever-arm component.
@@ -269,7 +269,7 @@ pub enum MethodArg {
 
 /// `--reference`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ReferenceArg {
+pub(crate) enum ReferenceArg {
     /// The point of the body on the table's spin axis (the paper's assumption).
     TableAxis,
     /// The centroid of the three sensing points.
@@ -277,7 +277,7 @@ pub enum ReferenceArg {
 }
 
 /// Runs `host calibrate`: live with `--port`, else from `--input`.
-pub fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &CalibrateArgs, quiet: bool) -> Result<(), CliError> {
     a.estimator.refuse()?;
     // `--bias-walk-from`'s file, read before a device is opened or a session read.
     a.estimator.options()?;
@@ -311,7 +311,7 @@ pub(crate) fn calibrate_options(a: &CalibrateArgs) -> Result<CalibrateOptions, C
 
 /// `host calibrate --input DIR`: read (with a progress bar), estimate, print the report, write
 /// `OUT/calibration.toml` and `OUT/calibration.bin`.
-pub fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, CliError> {
+pub(crate) fn calibrate(a: &CalibrateArgs, quiet: bool) -> Result<CalibrationOutcome, CliError> {
     let input = a.input.as_deref().ok_or_else(|| {
         CliError::Usage(
             "calibrate needs --input DIR (a recorded session: plan.toml + samples.csv) or \

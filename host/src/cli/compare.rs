@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 /// `host compare`.
 #[derive(Debug, Args)]
-pub struct CompareArgs {
+pub(crate) struct CompareArgs {
     /// First calibration.toml.
     pub a: PathBuf,
     /// Second calibration.toml.
@@ -24,7 +24,7 @@ pub struct CompareArgs {
 }
 
 /// Prints the comparison table (or its JSON) and checks the limit.
-pub fn run(a: &CompareArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &CompareArgs, quiet: bool) -> Result<(), CliError> {
     if let Some(m) = a.max_sigma {
         if !(m.is_finite() && m > 0.0) {
             return Err(CliError::Usage(format!(

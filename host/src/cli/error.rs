@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 /// Why a command failed.
 #[derive(Debug, thiserror::Error)]
-pub enum CliError {
+pub(crate) enum CliError {
     /// Reading or writing a session.
     #[error(transparent)]
     Recording(#[from] RecordingError),
@@ -152,8 +152,6 @@ fn estimate_text(e: &EstimateError) -> String {
     }
 }
 
-/// Exit status of a successful command.
-pub const EXIT_OK: i32 = 0;
 /// Exit status of a command that failed (bad input, I/O, a device, an estimate refused).
 pub(crate) const EXIT_ERROR: i32 = 1;
 /// Exit status of a command line that cannot be run as given (clap's own usage errors exit 2 too).

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 /// `host export`.
 #[derive(Debug, Args)]
-pub struct ExportArgs {
+pub(crate) struct ExportArgs {
     /// The calibration (a unit file, e.g. calibration.toml); with `--instance all`, none: each IMU
     /// is calibrated from the --log.
     #[arg(long, value_name = "FILE")]
@@ -126,7 +126,7 @@ impl ExportArgs {
 }
 
 /// Runs `host export`.
-pub fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
     a.refuse_options_not_for_format()?;
     if a.instance.is_some() && a.log.is_none() {
         return Err(CliError::Usage(
@@ -217,7 +217,7 @@ pub(super) fn write_text(a: &ExportArgs, text: &str, quiet: bool) -> Result<(), 
 
 /// `--instance`: one IMU, or each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InstanceChoice {
+pub(crate) enum InstanceChoice {
     /// The IMU of this instance.
     One(u8),
     /// Every IMU the log has.

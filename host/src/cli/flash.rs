@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 /// `host flash`.
 #[derive(Debug, Args)]
-pub struct FlashArgs {
+pub(crate) struct FlashArgs {
     /// How to reach the device.
     #[command(flatten)]
     pub port: PortArgs,
@@ -24,7 +24,7 @@ pub struct FlashArgs {
 
 /// `host flash --port P --calibration FILE`: writes `calibration.bin` (or a `calibration.toml`, encoded
 /// for the connected unit), resets the device and checks it applied it.
-pub fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(port: &PortArgs, calibration: &Path, quiet: bool) -> Result<(), CliError> {
     // The file is read (bounded: `/dev/zero` is refused at once) and checked before the device is
     // touched.
     let is_toml = calibration.extension().is_some_and(|e| e == "toml");

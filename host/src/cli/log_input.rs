@@ -11,7 +11,7 @@ use recording::spelling::Spelling;
 /// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
 /// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
 #[derive(Clone, Debug, Args)]
-pub struct LogInputArgs {
+pub(crate) struct LogInputArgs {
     /// Text files: the accelerometer x,y,z and gyro x,y,z column names, in that order, or their
     /// indices (0-based) in a file with or without a header.
     #[arg(

@@ -1,65 +1,66 @@
 //! The command line, one file per subcommand (its argument struct and its `run`), over the domain
-//! modules. `main.rs` only parses and prints the error; everything else is here, testable.
+//! modules. This is all the crate exports ([`Cli`], whose help the tests read, and [`main`], which
+//! `main.rs` calls); everything else is the crate's own, testable here.
 //!
 //! | subcommand | file | domain code |
 //! |---|---|---|
-//! | `simulate` | [`simulate`] | [`estimator::sim`] → [`recording::session::writer`] |
-//! | `calibrate --input` | [`calibrate`] | [`recording::session::reader`] → [`estimator::estimate`] → [`outputs::report::text`], [`estimator::calibration_files`] |
-//! | `calibrate --port` | [`calibrate`] | [`device::procedure`] over [`port`] |
-//! | `plan --check` | [`plan`] | [`estimator::estimate::predict`] |
-//! | `segment`, `simulate-hand` | [`segment`] | [`recording::session::import`] → [`recording::session::segment`] → [`recording::session::from_recording`], [`estimator::estimate::handheld_gyro`]; [`estimator::sim::handheld`] |
-//! | `report` | [`report`] | [`outputs::report::document`] over [`outputs::report::data`] |
-//! | `navigation-check` | [`navigation_check`] | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
-//! | `compare` | [`compare`] | [`outputs::report::compare`] |
-//! | `export` | [`export`] (`export_log`: the ids and slots of `--log`) | [`outputs::export`], [`app::autopilot`] |
-//! | `apply` | [`apply`] | [`outputs::apply`] over [`recording::session::reader`] |
-//! | `noise` | [`noise`] | [`outputs::noise`] |
-//! | `batch` | [`batch`] | [`app::batch`] (rayon) over [`estimator::estimate`] |
-//! | `flash`, `read`, `monitor` | [`flash`], [`read`], [`monitor`] | [`device`] over [`port`] |
-//! | `bringup` | [`bringup`] | [`device::bringup`] over [`port`] |
+//! | `simulate` | `simulate.rs` | [`estimator::sim`] → [`recording::session::writer`] |
+//! | `calibrate --input` | `calibrate.rs` | [`recording::session::reader`] → [`estimator::estimate`] → [`outputs::report::text`], [`estimator::calibration_files`] |
+//! | `calibrate --port` | `calibrate.rs` | [`device::procedure`] over `port.rs` |
+//! | `plan --check` | `plan.rs` | [`estimator::estimate::predict`] |
+//! | `segment`, `simulate-hand` | `segment.rs` | [`recording::session::import`] → [`recording::session::segment`] → [`recording::session::from_recording`], [`estimator::estimate::handheld_gyro`]; [`estimator::sim::handheld`] |
+//! | `report` | `report.rs` | [`outputs::report::document`] over [`outputs::report::data`] |
+//! | `navigation-check` | `navigation_check.rs` | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
+//! | `compare` | `compare.rs` | [`outputs::report::compare`] |
+//! | `export` | `export.rs` (`export_log`: the ids and slots of `--log`) | [`outputs::export`], [`app::autopilot`] |
+//! | `apply` | `apply.rs` | [`outputs::apply`] over [`recording::session::reader`] |
+//! | `noise` | `noise.rs` | [`outputs::noise`] |
+//! | `batch` | `batch.rs` | [`app::batch`] (rayon) over [`estimator::estimate`] |
+//! | `flash`, `read`, `monitor` | `flash.rs`, `read.rs`, `monitor.rs` | [`device`] over `port.rs` |
+//! | `bringup` | `bringup.rs` | [`device::bringup`] over `port.rs` |
 //!
 //! `segment`, `apply` and `noise` read a logger's file with the one set of input options,
-//! [`log_input`].
+//! `log_input.rs`.
 //!
-//! Every command fails with the one [`CliError`] ([`error`]); [`output`] decides where its output goes
+//! Every command fails with the one `CliError` (`error.rs`); `output.rs` decides where its output goes
 //! (`--json`, `--quiet`).
 
-pub mod apply;
+pub(crate) mod apply;
 #[cfg(test)]
 mod apply_offset_tests;
 #[cfg(test)]
 mod autopilot_tests;
-pub mod batch;
-pub mod bringup;
-pub mod calibrate;
-pub mod compare;
+pub(crate) mod batch;
+pub(crate) mod bringup;
+pub(crate) mod calibrate;
+pub(crate) mod compare;
 #[cfg(test)]
 mod damaged_log_tests;
-pub mod error;
-pub mod export;
+pub(crate) mod error;
+pub(crate) mod export;
 mod export_log;
-pub mod flash;
+pub(crate) mod flash;
 #[cfg(test)]
 mod log_fixture_tests;
-pub mod log_input;
+pub(crate) mod log_input;
 #[cfg(test)]
 mod long_log_tests;
-pub mod monitor;
-pub mod navigation_check;
-pub mod noise;
+pub(crate) mod monitor;
+pub(crate) mod navigation_check;
+pub(crate) mod noise;
 #[cfg(test)]
 mod nominal_scale_tests;
-pub mod output;
-pub mod plan;
-pub mod port;
-pub mod read;
+pub(crate) mod output;
+pub(crate) mod plan;
+pub(crate) mod port;
+pub(crate) mod read;
 #[cfg(test)]
 mod reference_fits_tests;
-pub mod report;
-pub mod segment;
+pub(crate) mod report;
+pub(crate) mod segment;
 #[cfg(test)]
 mod segment_tests;
-pub mod simulate;
+pub(crate) mod simulate;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
@@ -69,7 +70,7 @@ mod window_marks_tests;
 #[cfg(test)]
 mod window_property_tests;
 
-pub use error::CliError;
+pub(crate) use error::CliError;
 
 use clap::{Parser, Subcommand};
 use estimator::unit_file::UnitFile;
@@ -81,16 +82,16 @@ use std::path::Path;
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
-    pub command: Command,
+    pub(crate) command: Command,
     /// Quiet: no progress bars and no human-readable results (warnings and errors still go to
     /// stderr; --json documents still go to stdout).
     #[arg(long, short, global = true)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
 }
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Simulate a session: a virtual unit on a virtual rate table, written as a recording.
     Simulate(simulate::SimulateArgs),
     /// Estimate the calibration from a recorded session (--input), or live from a device (--port).
@@ -137,7 +138,7 @@ pub enum Command {
 
 impl Command {
     /// Whether the command line asked for one JSON document on stdout (`--json`).
-    pub fn json(&self) -> bool {
+    pub(crate) fn json(&self) -> bool {
         match self {
             Command::Calibrate(a) => a.json,
             Command::Batch(a) => a.json,
@@ -153,7 +154,7 @@ impl Command {
 /// The document `--json` gets on stdout when a command fails before its own document: the error
 /// and the exit status. A command that ran to the end and failed a check has printed its own
 /// document (with `passed: false`), and gets no second one (`None`).
-pub fn error_document(e: &CliError) -> Option<String> {
+pub(crate) fn error_document(e: &CliError) -> Option<String> {
     let code = e.exit_code();
     if code == error::EXIT_CHECK_FAILED {
         return None;
@@ -166,8 +167,33 @@ pub fn error_document(e: &CliError) -> Option<String> {
     Some(output::error_json(&e.to_string(), kind, code))
 }
 
+/// The command-line program: parses the arguments, runs the command and exits with its status.
+/// Under `--json` a refusal by the parser or a failed command also prints the error document on
+/// stdout (help and version print as usual).
+pub fn main() {
+    let cli = Cli::try_parse().unwrap_or_else(|e| {
+        if let Some(doc) = output::parse_error_document(&e, std::env::args_os()) {
+            use std::io::Write;
+            let _ = e.print();
+            let _ = writeln!(std::io::stdout(), "{doc}");
+            std::process::exit(e.exit_code());
+        }
+        e.exit()
+    });
+    let json = cli.command.json();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e}");
+        if let Some(doc) = error_document(&e).filter(|_| json) {
+            use std::io::Write;
+            // A closed stdout leaves the message above and the exit status.
+            let _ = writeln!(std::io::stdout(), "{doc}");
+        }
+        std::process::exit(e.exit_code());
+    }
+}
+
 /// Runs a parsed command line, printing to stdout (results) and stderr (warnings, progress).
-pub fn run(cli: Cli) -> Result<(), CliError> {
+pub(crate) fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Simulate(a) => simulate::run(&a, cli.quiet).map(|_| ()),
         Command::Calibrate(a) => calibrate::run(&a, cli.quiet),

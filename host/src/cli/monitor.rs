@@ -7,7 +7,7 @@ use shared::wire::{SampleFlags, StreamKind};
 
 /// `host monitor`.
 #[derive(Debug, Args)]
-pub struct MonitorArgs {
+pub(crate) struct MonitorArgs {
     /// How to reach the device.
     #[command(flatten)]
     pub port: PortArgs,
@@ -26,7 +26,7 @@ pub struct MonitorArgs {
 /// `host monitor --port P [--window N] [--count N]`: live compensated output with its flags. The
 /// simulated device runs at its real rate (one line per window's duration), as a board does, unless
 /// `--fast`; a board is paced by its own ADC.
-pub fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &MonitorArgs, quiet: bool) -> Result<(), CliError> {
     let (window, count) = (a.window, a.count);
     recording::limits::count_in("--window", window, crate::limits::MAX_WINDOW)?;
     let sim = a.port.port == super::port::SIM_PORT;

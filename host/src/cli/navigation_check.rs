@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 /// `host navigation-check`.
 #[derive(Debug, Args)]
-pub struct NavigationCheckCliArgs {
+pub(crate) struct NavigationCheckCliArgs {
     /// Seed of the simulated session's noise.
     #[arg(long, default_value_t = 1, value_parser = recording::limits::whole_u64(0, u64::MAX))]
     pub seed: u64,
@@ -28,7 +28,7 @@ pub struct NavigationCheckCliArgs {
 }
 
 /// `host navigation-check`.
-pub fn run(a: &NavigationCheckCliArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &NavigationCheckCliArgs, quiet: bool) -> Result<(), CliError> {
     super::report::navigation_duration(a.duration_s)?;
     let mut args = NavigationCheckArgs {
         seed: a.seed,

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 /// `host noise`.
 #[derive(Debug, Args)]
-pub struct NoiseArgs {
+pub(crate) struct NoiseArgs {
     /// A session directory (its longest static segment is used), a samples.csv, or a logger's file
     /// (any format `host segment` reads, with the same options; its longest still interval).
     #[arg(long, value_name = "SESSION_DIR|samples.csv|FILE")]
@@ -35,7 +35,7 @@ pub struct NoiseArgs {
 }
 
 /// Runs `host noise`.
-pub fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
     if a.log.temp_column.is_some() {
         return Err(CliError::Usage(
             "--temp-column: the noise analysis does not use the temperature (it measures the \

@@ -10,7 +10,7 @@ use std::io::Write;
 
 /// The output channels of one command.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Output {
+pub(crate) struct Output {
     /// `--json`: stdout carries only the JSON document.
     pub json: bool,
     /// `--quiet`.
@@ -65,14 +65,14 @@ impl Output {
 }
 
 /// The one JSON error document: the message, its kind ("usage" or "error") and the exit status.
-pub fn error_json(message: &str, kind: &str, exit_code: i32) -> String {
+pub(crate) fn error_json(message: &str, kind: &str, exit_code: i32) -> String {
     serde_json::json!({ "error": message, "kind": kind, "exit_code": exit_code }).to_string()
 }
 
 /// The argument parser's own refusal (a value below its bound, an unknown flag) as the document
 /// every other usage error gives under `--json`; `None` for help and version, which are no errors,
 /// or when `args` do not ask for JSON. The message is the parser's, without its "error: " prefix.
-pub fn parse_error_document(
+pub(crate) fn parse_error_document(
     e: &clap::Error,
     args: impl IntoIterator<Item = std::ffi::OsString>,
 ) -> Option<String> {

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 
 /// `host plan`.
 #[derive(Debug, Args)]
-pub struct PlanArgs {
+pub(crate) struct PlanArgs {
     /// Plan file (or built-in plan name) to check.
     #[arg(long, value_name = "FILE|NAME")]
     pub check: String,
@@ -51,7 +51,7 @@ pub struct PlanArgs {
 }
 
 /// `host plan --check`: the plan's segments and the predicted 1σ of every parameter.
-pub fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
+pub(crate) fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
     let out = Output {
         json: a.json,
         quiet,

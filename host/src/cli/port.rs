@@ -20,7 +20,7 @@ pub(crate) const SIM_HAND_PORT: &str = "sim-hand";
 
 /// How to reach the device.
 #[derive(clap::Args, Clone, Debug)]
-pub struct PortArgs {
+pub(crate) struct PortArgs {
     /// Serial port of the device (e.g. /dev/ttyACM0, or the pty QEMU prints), `sim` for the built-in
     /// simulated device on its virtual table, or `sim-hand` for it held in a simulated hand (the
     /// hand-held procedure, as with a board and no table).
@@ -100,7 +100,7 @@ pub(crate) fn refuse_for_port(
 }
 
 /// Opens the device named by `--port`.
-pub fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> {
+pub(crate) fn connect(args: &PortArgs) -> Result<DeviceClient<AnyTransport>, CliError> {
     args.validate()?;
     let transport = if args.port == SIM_PORT || args.port == SIM_HAND_PORT {
         let (unit, name) = match &args.sim_unit {

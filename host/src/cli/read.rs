@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 /// `host read`.
 #[derive(Debug, Args)]
-pub struct ReadArgs {
+pub(crate) struct ReadArgs {
     /// How to reach the device.
     #[command(flatten)]
     pub port: PortArgs,
@@ -26,7 +26,7 @@ pub struct ReadArgs {
 /// `host read --port P [--out FILE [--force]]`: the calibration on the device, as
 /// `calibration.toml`. An existing FILE is refused before the device is asked (a calibration is
 /// never replaced without `--force`), and the file appears whole or not at all.
-pub fn run(a: &ReadArgs) -> Result<(), CliError> {
+pub(crate) fn run(a: &ReadArgs) -> Result<(), CliError> {
     let file = a
         .out
         .as_deref()

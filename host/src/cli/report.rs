@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 /// `host report`.
 #[derive(Debug, Args)]
-pub struct ReportArgs {
+pub(crate) struct ReportArgs {
     /// Session directory (plan.toml + samples.csv).
     #[arg(long, value_name = "DIR")]
     pub input: PathBuf,
@@ -38,7 +38,7 @@ pub struct ReportArgs {
 }
 
 /// `host report`.
-pub fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
     navigation_duration(a.duration_s)?;
     let calibration = match &a.calibration {
         Some(c) => c.clone(),

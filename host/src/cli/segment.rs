@@ -24,14 +24,14 @@ use shared::linalg;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-pub use app::handheld::gyro::GYRO_FILE;
+pub(crate) use app::handheld::gyro::GYRO_FILE;
 
 mod present;
 use present::{document, figure, Written};
 
 /// `host segment`.
 #[derive(Debug, Args)]
-pub struct SegmentArgs {
+pub(crate) struct SegmentArgs {
     /// The logger's file: text (CSV, tab- or white-space separated, a header line naming the
     /// columns), PX4 ULog, ArduPilot DataFlash (.bin) or ROS 2 MCAP, told by its content.
     #[arg(long, value_name = "FILE")]
@@ -93,7 +93,7 @@ pub struct SegmentArgs {
 
 /// `host simulate-hand`.
 #[derive(Debug, Args)]
-pub struct SimulateHandArgs {
+pub(crate) struct SimulateHandArgs {
     /// The CSV to write (a `.truth.toml` with the simulated unit and gyro is written next to it).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -171,7 +171,7 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
 }
 
 /// What `host segment` found and wrote.
-pub struct SegmentOutcome {
+pub(crate) struct SegmentOutcome {
     /// The recording.
     pub recording: Recording,
     /// The intervals.
@@ -185,7 +185,7 @@ pub struct SegmentOutcome {
 }
 
 /// Runs `host segment` from the command line (`--quiet` silences the human text).
-pub fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
+pub(crate) fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
     let out = Output {
         json: a.json,
         quiet,
@@ -193,8 +193,10 @@ pub fn run(a: &SegmentArgs, quiet: bool) -> Result<(), CliError> {
     segment_to(a, &out).map(|_| ())
 }
 
-/// Runs `host segment`, printing the table and the gyro result (to stdout, or stderr with `--json`).
-pub fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
+/// Runs `host segment`, printing the table and the gyro result (to stdout, or stderr with `--json`);
+/// the tests' entry, which look at what it found.
+#[cfg(test)]
+pub(crate) fn segment(a: &SegmentArgs) -> Result<SegmentOutcome, CliError> {
     segment_to(
         a,
         &Output {
@@ -445,7 +447,7 @@ fn warn(out: &Output, warnings: &mut Vec<String>, text: String) {
 }
 
 /// The table of intervals.
-pub fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
+pub(crate) fn table(rec: &Recording, seg: &Segmentation, cov: &Coverage) -> String {
     let unit = rec.acc_unit.map_or("", |u| u.symbol());
     let mut s = format!(
         "{} still interval(s), {} spin(s), {} short quiet run(s) dropped; thresholds: accelerometer \

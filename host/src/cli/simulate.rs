@@ -14,7 +14,7 @@ use std::path::PathBuf;
 
 /// `host simulate`.
 #[derive(Debug, Args)]
-pub struct SimulateArgs {
+pub(crate) struct SimulateArgs {
     /// Session directory to write (plan.toml, samples.csv, truth.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -130,7 +130,7 @@ pub(crate) fn noise_from_args(a: &SimulateArgs, unit: &UnitFile) -> Result<Noise
 }
 
 /// `host simulate`.
-pub fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError> {
+pub(crate) fn run(a: &SimulateArgs, quiet: bool) -> Result<SimulationSummary, CliError> {
     let simulation = Simulation {
         out: a.out.clone(),
         unit: a.unit.clone(),

@@ -24,7 +24,7 @@ fn check(rec: &Recording) {
 }
 
 /// A PX4 ULog: instance 0 and 1.
-pub fn ulog(data: &[u8]) {
+pub(crate) fn ulog(data: &[u8]) {
     for instance in [0, 1] {
         if let Ok((rec, _)) = ulog::read(data, instance) {
             check(&rec);
@@ -33,7 +33,7 @@ pub fn ulog(data: &[u8]) {
 }
 
 /// An ArduPilot DataFlash log: instance 0 and 1.
-pub fn dataflash(data: &[u8]) {
+pub(crate) fn dataflash(data: &[u8]) {
     for instance in [0, 1] {
         if let Ok((rec, _)) = dataflash::read(data, instance) {
             check(&rec);
@@ -42,7 +42,7 @@ pub fn dataflash(data: &[u8]) {
 }
 
 /// An MCAP file: the only Imu topic, and a topic by name.
-pub fn mcap(data: &[u8]) {
+pub(crate) fn mcap(data: &[u8]) {
     for topic in [None, Some("/imu")] {
         if let Ok((rec, _)) = mcap::read(data, topic) {
             check(&rec);
