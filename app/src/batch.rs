@@ -380,7 +380,7 @@ pub fn run_batch(
         if let Some(Err(e)) = u
             .summary
             .as_mut()
-            .map(|d| crate::mark_failed(d, &dir, false))
+            .map(|d| crate::calibrate::mark_failed(d, &dir, false))
         {
             u.error = Some(e.to_string());
         }

@@ -162,7 +162,7 @@ pub fn settle_files(
 /// Renames the pair in `dir` to `calibration.FAILED.*` (an existing failed pair replaced only with
 /// `force`) and names the new files in `document`: for a result that failed its checks, or (in
 /// `host batch`) a unit that is an outlier of its lot.
-pub fn mark_failed(
+pub(crate) fn mark_failed(
     document: &mut CalibrationDocument,
     dir: &Path,
     force: bool,

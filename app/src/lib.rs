@@ -47,8 +47,8 @@ pub mod simulate_hand;
 pub mod walk_source;
 
 pub use calibrate::{
-    calibrate_recording, calibrate_session_dir, mark_failed, settle_files, write_result,
-    CalibrateOptions, Calibrated, Recording,
+    calibrate_recording, calibrate_session_dir, settle_files, write_result, CalibrateOptions,
+    Calibrated, Recording,
 };
 pub use document::{CalibrationDocument, ResultFiles, VerificationSummary};
 pub use error::CalibrateError;

@@ -1,5 +1,5 @@
 //! A live hand-held session's recording, whole: every raw window is logged
-//! ([`crate::window_log`], `stream.csv`) while the operator is guided, and at the end the log goes
+//! (`window_log`, `stream.csv`) while the operator is guided, and at the end the log goes
 //! through `host segment`'s use case (`app::handheld::segment_recording`) into a session directory
 //! (`segmented/`) that `host calibrate --input` reads. The accelerometer fit and the gyro fit from
 //! the hand's turns (docs/model.md §8) are then those of the offline path on the same samples:

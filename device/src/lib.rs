@@ -3,7 +3,7 @@
 //! [`sim_hand`]), and the live calibration procedure
 //! ([`procedure`]) with its operator prompts ([`operator`]), the instruction and live checks of each
 //! segment (`live_check`), the verification of the stored calibration ([`verify`]), hand-held
-//! mode ([`handheld`]; its every window logged by [`window_log`] and calibrated as `host segment`
+//! mode ([`handheld`]; its every window logged by `window_log` and calibrated as `host segment`
 //! would by [`hand_session`]), the first checks of a freshly flashed board ([`bringup`], with the device's health report in
 //! `bringup_health` and the poses and waving of `bringup_motion`), and the operator's live page
 //! ([`view`]).
@@ -24,7 +24,7 @@ pub mod sim;
 pub mod sim_hand;
 pub mod verify;
 pub mod view;
-pub mod window_log;
+pub(crate) mod window_log;
 
 pub use client::{DeviceClient, LinkError, Transport};
 
