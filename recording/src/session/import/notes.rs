@@ -2,7 +2,8 @@
 //! (`segment`, `apply`) and every format: rows left out, damaged or cut-short lines, the time
 //! stamps repaired (`crate::session::repair`) and the jumps left in them.
 
-use super::{Recording, MAX_LINE_BYTES};
+use super::Recording;
+use crate::session::note::Note;
 
 /// Where a repair's places are counted from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -17,35 +18,25 @@ pub enum Places {
 impl Recording {
     /// The reader's warnings about this recording: rows left out, damaged or cut-short lines, the
     /// time stamps repaired, time jumps.
-    pub fn reader_warnings(&self, places: Places) -> Vec<String> {
+    pub fn reader_warnings(&self, places: Places) -> Vec<Note> {
         let mut warnings = self.read_notes.clone();
         if self.skipped_rows > 0 {
-            warnings.push(format!(
-                "{} row(s) with NaN or infinite values left out",
-                self.skipped_rows
-            ));
+            warnings.push(Note::SkippedRows {
+                count: self.skipped_rows,
+            });
         }
-        if let Some(first) = self.overlong_lines.first() {
-            warnings.push(format!(
-                "{} line(s) longer than {} bytes left out as damaged (line {first}{})",
-                self.overlong_lines.len(),
-                MAX_LINE_BYTES,
-                if self.overlong_lines.len() > 1 {
-                    ", …"
-                } else {
-                    ""
-                }
-            ));
+        if let Some(&first) = self.overlong_lines.first() {
+            warnings.push(Note::OverlongLines {
+                count: self.overlong_lines.len(),
+                first,
+            });
         }
         if let Some(line) = self.unterminated_line {
-            warnings.push(format!(
-                "line {line}, the last, has no line end: the file was cut short; that line is left \
-                 out"
-            ));
+            warnings.push(Note::Unterminated { line });
         }
         if places == Places::InFile {
             for (what, repairs) in &self.time_repairs {
-                warnings.extend(repairs.describe(what));
+                warnings.extend(Note::time_repairs(Some(what), repairs));
             }
             warnings.extend(self.time_jumps());
         }
