@@ -1,7 +1,8 @@
 //! What a reader tells the user about a recording it read besides its samples: the rows and bytes it
 //! left out, the stamps it repaired, the corrections it undid. Each is a [`Note`] carrying its
 //! figures, not its text, so that a caller can tell one from another (its [`Note::code`]) without
-//! matching words; its `Display` is the one wording every caller prints.
+//! matching words; its `Display` is the one wording every caller prints (a text file's notes are
+//! worded beside their reader, in `import::notes`).
 
 use super::import::time::{jumps_text, TimeJump};
 use super::repair::TimeRepairs;
@@ -640,75 +641,6 @@ impl Note {
                 "at most {max_rows} can be kept ({}), about 200 bytes of memory each",
                 spelling.given(*o, max_rows)
             ),
-        }
-    }
-
-    /// The notes of a text file's reader.
-    fn fmt_text(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Note::SkippedRows { count } => {
-                write!(f, "{count} row(s) with NaN or infinite values left out")
-            }
-            Note::OverlongLines { count, first } => write!(
-                f,
-                "{count} line(s) longer than {} bytes left out as damaged (line {first}{})",
-                super::import::MAX_LINE_BYTES,
-                if *count > 1 { ", …" } else { "" }
-            ),
-            Note::Unterminated { line } => write!(
-                f,
-                "line {line}, the last, has no line end: the file was cut short; that line is left \
-                 out"
-            ),
-            Note::Preamble {
-                lines,
-                header_line,
-                spelling,
-            } => write!(
-                f,
-                "{lines} line(s) before the header on line {header_line} skipped (a logger's \
-                 preamble; {} to say how many)",
-                spelling.given(UserOption::SkipLines, "N")
-            ),
-            Note::NoHeader { line } => write!(
-                f,
-                "no header: line {line} is data, its columns taken by index"
-            ),
-            Note::GyroFilled {
-                no_gyro,
-                no_acc,
-                unfilled,
-                fill_rows,
-            } => {
-                write!(
-                    f,
-                    "{no_gyro} row(s) without gyro values and {no_acc} with the gyro's alone (a \
-                     logger writing each sensor's packets in rows of their own, or cells left \
-                     empty): the accelerometer's rows take the gyro's rate interpolated from the \
-                     nearest rows that have one"
-                )?;
-                if *unfilled > 0 {
-                    write!(
-                        f,
-                        " ({unfilled} with none within {fill_rows} rows left out)"
-                    )?;
-                }
-                Ok(())
-            }
-            Note::GyroMidScale {
-                mid,
-                bits,
-                bias_dps,
-                offset,
-                spelling,
-            } => write!(
-                f,
-                "every gyro count sits near {mid} on all three axes, the mid-scale of a {bits}-bit \
-                 unsigned output: read as a bias of {bias_dps:.0} °/s, more than a calibration \
-                 can hold; if that is the gyro's zero rate, give {}",
-                spelling.given(UserOption::GyroOffset, offset)
-            ),
-            _ => Ok(()),
         }
     }
 }

@@ -4,6 +4,8 @@
 
 use super::Recording;
 use crate::session::note::Note;
+use crate::spelling::UserOption;
+use std::fmt;
 
 /// Where a repair's places are counted from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,5 +43,76 @@ impl Recording {
             warnings.extend(self.time_jumps());
         }
         warnings
+    }
+}
+
+impl Note {
+    /// The notes of a text file's reader.
+    pub(in crate::session) fn fmt_text(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Note::SkippedRows { count } => {
+                write!(f, "{count} row(s) with NaN or infinite values left out")
+            }
+            Note::OverlongLines { count, first } => write!(
+                f,
+                "{count} line(s) longer than {} bytes left out as damaged (line {first}{})",
+                super::MAX_LINE_BYTES,
+                if *count > 1 { ", …" } else { "" }
+            ),
+            Note::Unterminated { line } => write!(
+                f,
+                "line {line}, the last, has no line end: the file was cut short; that line is left \
+                 out"
+            ),
+            Note::Preamble {
+                lines,
+                header_line,
+                spelling,
+            } => write!(
+                f,
+                "{lines} line(s) before the header on line {header_line} skipped (a logger's \
+                 preamble; {} to say how many)",
+                spelling.given(UserOption::SkipLines, "N")
+            ),
+            Note::NoHeader { line } => write!(
+                f,
+                "no header: line {line} is data, its columns taken by index"
+            ),
+            Note::GyroFilled {
+                no_gyro,
+                no_acc,
+                unfilled,
+                fill_rows,
+            } => {
+                write!(
+                    f,
+                    "{no_gyro} row(s) without gyro values and {no_acc} with the gyro's alone (a \
+                     logger writing each sensor's packets in rows of their own, or cells left \
+                     empty): the accelerometer's rows take the gyro's rate interpolated from the \
+                     nearest rows that have one"
+                )?;
+                if *unfilled > 0 {
+                    write!(
+                        f,
+                        " ({unfilled} with none within {fill_rows} rows left out)"
+                    )?;
+                }
+                Ok(())
+            }
+            Note::GyroMidScale {
+                mid,
+                bits,
+                bias_dps,
+                offset,
+                spelling,
+            } => write!(
+                f,
+                "every gyro count sits near {mid} on all three axes, the mid-scale of a {bits}-bit \
+                 unsigned output: read as a bias of {bias_dps:.0} °/s, more than a calibration \
+                 can hold; if that is the gyro's zero rate, give {}",
+                spelling.given(UserOption::GyroOffset, offset)
+            ),
+            _ => Ok(()),
+        }
     }
 }
