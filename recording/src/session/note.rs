@@ -341,7 +341,7 @@ impl Note {
 
     /// `repairs` said, `what` naming a sample where the places are the file's; none when nothing
     /// was repaired.
-    pub fn time_repairs(what: Option<&'static str>, repairs: &TimeRepairs) -> Option<Note> {
+    pub(crate) fn time_repairs(what: Option<&'static str>, repairs: &TimeRepairs) -> Option<Note> {
         (!repairs.is_empty()).then(|| Note::TimeRepairs {
             what,
             repairs: repairs.clone(),
