@@ -501,37 +501,45 @@ impl Note {
                 "the {count} Imu messages have no header stamp (all 0): timed by the bag's log \
                  time, when the recorder received them"
             ),
-            Note::ArduPilotUndone {
-                instance,
-                offs,
-                scal,
-                acc_offset,
-                acc_scale,
-                orientation,
-                tcal,
-                no_temp,
-            } => {
-                write!(
-                    f,
-                    "IMU instance {instance} is logged after ArduPilot's own calibration: undone \
-                     sample by sample ({offs}_* = {acc_offset:?} m/s², {scal}_* = {acc_scale:?}, \
-                     AHRS_ORIENTATION = {orientation}"
-                )?;
-                if *tcal {
-                    write!(f, ", INS_TCAL{}_*", instance + 1)?;
-                }
-                f.write_str("), so that what is read is the sensor's own output")?;
-                if *no_temp > 0 {
-                    write!(
-                        f,
-                        "; {no_temp} sample(s) without a temperature took the one before for \
-                         INS_TCAL"
-                    )?;
-                }
-                Ok(())
-            }
+            Note::ArduPilotUndone { .. } => self.fmt_ardupilot(f),
             _ => Ok(()),
         }
+    }
+
+    /// [`Note::ArduPilotUndone`]'s text: the parameters undone, and the samples that had no
+    /// temperature for INS_TCAL.
+    fn fmt_ardupilot(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Note::ArduPilotUndone {
+            instance,
+            offs,
+            scal,
+            acc_offset,
+            acc_scale,
+            orientation,
+            tcal,
+            no_temp,
+        } = self
+        else {
+            return Ok(());
+        };
+        write!(
+            f,
+            "IMU instance {instance} is logged after ArduPilot's own calibration: undone \
+             sample by sample ({offs}_* = {acc_offset:?} m/s², {scal}_* = {acc_scale:?}, \
+             AHRS_ORIENTATION = {orientation}"
+        )?;
+        if *tcal {
+            write!(f, ", INS_TCAL{}_*", instance + 1)?;
+        }
+        f.write_str("), so that what is read is the sensor's own output")?;
+        if *no_temp > 0 {
+            write!(
+                f,
+                "; {no_temp} sample(s) without a temperature took the one before for \
+                 INS_TCAL"
+            )?;
+        }
+        Ok(())
     }
 
     /// The notes of a recording's streams, the same for every format.
