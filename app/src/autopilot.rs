@@ -14,6 +14,7 @@ use recording::session::logs::vehicle::{
     read_vehicle_params, SensorKind, SensorSlot, SlotError, VehicleParams,
 };
 use recording::session::logs::{read_log_keeping, LogError, LogFormat, LogSource};
+use recording::session::note::Note;
 use std::path::{Path, PathBuf};
 
 /// Why a log gives no ids, slots or calibrations; each says what to do.
@@ -169,7 +170,7 @@ pub fn calibrate_each_imu(
         let hand_gyro = session
             .gyro_estimate()
             .map_err(|source| AutopilotError::HandGyro { instance, source })?;
-        let mut warnings = read.warnings;
+        let mut warnings = Note::texts(&read.warnings);
         warnings.extend(session.warnings.iter().cloned());
         let stats = session.stats();
         let calibrated = calibrate_recording(

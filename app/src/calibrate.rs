@@ -10,6 +10,7 @@ use estimator::estimate::{
     calibrate_with_hand_gyro, CalibrationOutcome, EstimateError, EstimateOptions,
 };
 use outputs::summary::{CalibrationSummary, Limits};
+use recording::session::note::Note;
 use recording::session::{self, Plan, ReadOptions, SegmentStats, Session};
 use shared::UnitId;
 use std::path::{Path, PathBuf};
@@ -99,12 +100,13 @@ pub fn calibrate_session_dir(
 ) -> Result<(Session, Calibrated), CalibrateError> {
     let session = session::read_session(dir, read)?;
     let hand_gyro = crate::handheld::gyro::read(dir)?;
+    let reader_warnings = Note::texts(&session.report.warnings);
     let calibrated = calibrate_recording(
         Recording {
             plan: &session.plan,
             stats: &session.stats,
             hand_gyro: hand_gyro.as_ref(),
-            reader_warnings: &session.report.warnings,
+            reader_warnings: &reader_warnings,
         },
         options,
     )?;

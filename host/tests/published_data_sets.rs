@@ -312,7 +312,10 @@ fn pymavlinks_test_log_reads_as_pymavlink_reads_it_and_is_too_short_for_a_sessio
         .unwrap();
         assert_eq!(rec.len(), walked.len(), "{name}");
         let cut_at = format!("(at byte {}) is cut short", bytes.len() - cut);
-        assert!(warnings.iter().any(|w| w.contains(&cut_at)), "{warnings:?}");
+        assert!(
+            warnings.iter().any(|w| w.to_string().contains(&cut_at)),
+            "{warnings:?}"
+        );
         // 20 ms steps with a few missed (the median step, 20 ms; 44 steps of 49 periods in 0.975 s):
         // the rate is the mean over the steps, each counted in whole periods.
         let periods: f64 = walked
@@ -433,7 +436,10 @@ fn pymavlinks_test_log_is_undone_with_its_own_parameters() {
     };
     let undone = read_log(&path, &source).unwrap();
     assert!(
-        undone.warnings.iter().any(|w| w.contains("undone")),
+        undone
+            .warnings
+            .iter()
+            .any(|w| w.to_string().contains("undone")),
         "{:?}",
         undone.warnings
     );

@@ -32,6 +32,7 @@ use crate::calibration_guard::{
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
 use recording::output_file::OutputFileError;
 use recording::session::logs::LogError;
+use recording::session::note::Note;
 use recording::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
 use recording::session::{PLAN_FILE, SAMPLES_FILE};
 use shared::compensator::{Compensator, CompensatorError, LeverMode};
@@ -447,7 +448,7 @@ pub fn apply_session(
             out.write_all(line.as_bytes()).map_err(write_err)
         },
     )?;
-    summary.warnings = report.warnings;
+    summary.warnings = Note::texts(&report.warnings);
     summary.notes.extend(id_note);
     check_stills(&plan, &stills, cal.gyro.is_some())?;
     if applier.flagged_rows > 0 {

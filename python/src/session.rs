@@ -16,6 +16,7 @@ use recording::session::from_recording::{normal_gravity_m_s2, SIX_FACE_PRIOR_DEG
 use recording::session::import::MAX_ROWS;
 use recording::session::import::{read_logger, ImportError, Recording, DEFAULT_COLUMNS};
 use recording::session::logs::{read_log_keeping, text_notes, DEFAULT_MAX_SAMPLES};
+use recording::session::note::Note;
 use recording::session::segment::{IntervalKind, SegmentOptions, StillThreshold};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
 use recording::spelling::Spelling;
@@ -435,14 +436,14 @@ impl SessionOptions {
 /// messages), then the intervals, plan and gyro; the GIL released meanwhile.
 fn segmented<F, E>(py: Python<'_>, site: &SessionOptions, read: F) -> PyResult<Session>
 where
-    F: FnOnce() -> Result<(Recording, Vec<String>), E> + Send,
+    F: FnOnce() -> Result<(Recording, Vec<Note>), E> + Send,
     E: Into<PyAccelErr> + Send,
 {
     let choices = site.choices()?;
     let (rec, reader_warnings) = py.detach(read).py_err()?;
     let s = py.detach(|| segment_recording(rec, &choices));
     let mut s = s.py_err()?;
-    s.warnings.splice(0..0, reader_warnings);
+    s.warnings.splice(0..0, Note::texts(&reader_warnings));
     Ok(Session {
         inner: Inner::Memory(Box::new(s)),
     })
@@ -621,7 +622,7 @@ pub fn load_session(py: Python<'_>, dir: PathBuf) -> PyResult<Session> {
                 plan: s.plan,
                 stats: s.stats,
                 gyro,
-                reader_warnings: s.report.warnings,
+                reader_warnings: Note::texts(&s.report.warnings),
             }),
         },
     })

@@ -102,7 +102,7 @@ fn many_oversized_ulog_format_definitions_cost_bounded_memory() {
         assert!(
             warnings
                 .iter()
-                .any(|w| w.contains("format definition(s) beyond")),
+                .any(|w| w.to_string().contains("format definition(s) beyond")),
             "{warnings:?}"
         );
         assert!(peak < 10 << 20, "peak heap {peak} bytes");

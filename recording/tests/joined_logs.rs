@@ -50,9 +50,11 @@ fn two_logs_joined_with_their_time_restarting_are_read_one_after_the_other() {
     }
     let restart = said
         .iter()
-        .find(|w| w.contains("the stamps restart 1 time(s)"));
+        .find(|w| w.to_string().contains("the stamps restart 1 time(s)"));
     assert!(
-        restart.is_some_and(|w| w.contains(&format!("data row {} stamped 0.000000 s", n + 1))),
+        restart.is_some_and(|w| w
+            .to_string()
+            .contains(&format!("data row {} stamped 0.000000 s", n + 1))),
         "{said:?}"
     );
     let once = find_intervals(&hand, &SegmentOptions::default()).unwrap();

@@ -74,15 +74,21 @@ fn with_stamps_out_of_order(mut s: Vec<LogSample>) -> Vec<LogSample> {
 
 #[test]
 fn ulog() {
-    check_ulog(&write_ulog(&still(), Some(150)), expect![[r#"
+    check_ulog(
+        &write_ulog(&still(), Some(150)),
+        expect![[r#"
         300 rows at 100.000 Hz
         - the logger dropped data 1 time(s), 20 ms in all; the first at byte 15299 (t = 2.500 s), 20 ms: no still interval or turn should span a dropout
-    "#]]);
-    check_ulog(&write_ulog(&with_nan(still()), None), expect![[r#"
+    "#]],
+    );
+    check_ulog(
+        &write_ulog(&with_nan(still()), None),
+        expect![[r#"
         298 rows at 100.000 Hz
         - 1 gyro sample(s) with NaN or infinite values left out (the rate interpolated between their neighbours)
         - 2 row(s) with NaN or infinite values left out
-    "#]]);
+    "#]],
+    );
     check_ulog(
         &write_ulog(&with_stamps_out_of_order(still()), None),
         expect![[r#"
@@ -91,14 +97,20 @@ fn ulog() {
         "#]],
     );
     let bytes = write_ulog(&still(), None);
-    check_ulog(&bytes[..bytes.len() - 30], expect![[r#"
+    check_ulog(
+        &bytes[..bytes.len() - 30],
+        expect![[r#"
         299 rows at 100.000 Hz
         - the log's last message (at byte 29852) is cut short: it is left out
         - 1 accelerometer sample(s) with no gyro sample within 50 ms left out
-    "#]]);
-    check_ulog(&bytes[..200], expect![[r#"
+    "#]],
+    );
+    check_ulog(
+        &bytes[..200],
+        expect![[r#"
         refused: log.ulg: no IMU samples for instance 0: the log has no sensor_accel, sensor_gyro or sensor_combined topic; log sensor_accel and sensor_gyro (or sensor_combined) and choose the IMU with --instance N
-    "#]]);
+    "#]],
+    );
 }
 
 #[test]
@@ -106,15 +118,21 @@ fn dataflash() {
     let mut bytes = write_dataflash(&still());
     let at = bytes.len() / 2;
     bytes.splice(at..at, [0x11, 0xA3, 0x00, 0x42, 0x95, 0x07, 0x00]);
-    check_dataflash(&bytes, expect![[r#"
+    check_dataflash(
+        &bytes,
+        expect![[r#"
         299 rows at 100.000 Hz
         - 7 byte(s) that start no known message were skipped, the first at byte 8469 (damage or padding in the log, as pymavlink skips them)
-    "#]]);
-    check_dataflash(&write_dataflash(&with_nan(still())), expect![[r#"
+    "#]],
+    );
+    check_dataflash(
+        &write_dataflash(&with_nan(still())),
+        expect![[r#"
         298 rows at 100.000 Hz
         - 1 gyro sample(s) with NaN or infinite values left out (the rate interpolated between their neighbours)
         - 2 row(s) with NaN or infinite values left out
-    "#]]);
+    "#]],
+    );
     check_dataflash(
         &write_dataflash(&with_stamps_out_of_order(still())),
         expect![[r#"
@@ -123,33 +141,45 @@ fn dataflash() {
         "#]],
     );
     let bytes = write_dataflash(&still());
-    check_dataflash(&bytes[..bytes.len() - 20], expect![[r#"
+    check_dataflash(
+        &bytes[..bytes.len() - 20],
+        expect![[r#"
         299 rows at 100.000 Hz
         - the log's last message (at byte 16785) is cut short: it is left out
-    "#]]);
+    "#]],
+    );
 }
 
 #[test]
 fn mcap() {
-    check_mcap(&write_mcap_unstamped(&still()), expect![[r#"
+    check_mcap(
+        &write_mcap_unstamped(&still()),
+        expect![[r#"
         300 rows at 100.000 Hz
         - the 300 Imu messages have no header stamp (all 0): timed by the bag's log time, when the recorder received them
-    "#]]);
+    "#]],
+    );
     check_mcap(
         &write_mcap_with(&still(), None, 0.0, Some(120)),
         expect![[r#"
             300 rows at 100.000 Hz
         "#]],
     );
-    check_mcap(&write_mcap(&with_nan(still()), None, 0.0), expect![[r#"
+    check_mcap(
+        &write_mcap(&with_nan(still()), None, 0.0),
+        expect![[r#"
         298 rows at 100.000 Hz
         - 1 gyro sample(s) with NaN or infinite values left out (the rate interpolated between their neighbours)
         - 2 row(s) with NaN or infinite values left out
-    "#]]);
+    "#]],
+    );
     let bytes = write_mcap(&still(), None, 0.0);
-    check_mcap(&bytes[..bytes.len() / 2], expect![[r#"
+    check_mcap(
+        &bytes[..bytes.len() / 2],
+        expect![[r#"
         refused: log.mcap: not a readable MCAP file (after byte 54734): MCAP file ended in the middle of a record; check it with `mcap doctor`
-    "#]]);
+    "#]],
+    );
 }
 
 #[test]
@@ -169,17 +199,23 @@ fn text() {
     lines.insert(200, repeated);
     let mut text = lines.join("\n");
     text.truncate(text.len() - 3);
-    check_text(text.as_bytes(), expect![[r#"
+    check_text(
+        text.as_bytes(),
+        expect![[r#"
         298 rows at 100.000 Hz
         - 1 row(s) with NaN or infinite values left out
         - 1 line(s) longer than 65536 bytes left out as damaged (line 121)
         - line 303, the last, has no line end: the file was cut short; that line is left out
         - time stamps repaired: 1 exact repeat(s) (same stamp, same values) left out (data row 199)
-    "#]]);
-    check_text(&write_csv(&with_nan(still())), expect![[r#"
+    "#]],
+    );
+    check_text(
+        &write_csv(&with_nan(still())),
+        expect![[r#"
         298 rows at 100.000 Hz
         - 1 row(s) without gyro values and 2 with the gyro's alone (a logger writing each sensor's packets in rows of their own, or cells left empty): the accelerometer's rows take the gyro's rate interpolated from the nearest rows that have one
-    "#]]);
+    "#]],
+    );
     check_text(
         &write_csv(&with_stamps_out_of_order(still())),
         expect![[r#"

@@ -66,7 +66,7 @@ fn each_reader_reads_what_the_formats_reference_tool_reads() {
         let dropout = log
             .warnings
             .iter()
-            .any(|w| w.contains("dropped data 1 time(s), 20 ms"));
+            .any(|w| w.to_string().contains("dropped data 1 time(s), 20 ms"));
         assert_eq!(
             dropout,
             format == LogFormat::Ulog,
@@ -89,9 +89,9 @@ fn a_message_cut_by_appended_data_is_dropped_as_pyulog_drops_it() {
     assert_eq!(log.recording.len(), 2372);
     assert!((log.recording.t_s[2371] - 21.876472).abs() < 1e-9);
     assert!(
-        log.warnings
-            .iter()
-            .any(|w| w.contains("byte 434292 runs into the data appended at byte 434369")),
+        log.warnings.iter().any(|w| w
+            .to_string()
+            .contains("byte 434292 runs into the data appended at byte 434369")),
         "{:?}",
         log.warnings
     );

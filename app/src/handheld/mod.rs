@@ -27,6 +27,7 @@ use recording::session::from_recording::{
     join_table_turn_mounts, plan_for, plan_for_faces, stats_for, write_session,
 };
 use recording::session::import::{Places, Recording};
+use recording::session::note::Note;
 use recording::session::segment::{
     find_intervals, PositionSet, SegmentError, SegmentOptions, Segmentation,
 };
@@ -124,7 +125,7 @@ pub fn find(recording: Recording, choices: &SegmentChoices) -> Result<Found, Seg
     if let Some(stream) = recording.corrected_by {
         return Err(SegmentError::AlreadyCorrected(stream));
     }
-    let warnings = recording.reader_warnings(Places::InFile);
+    let warnings = Note::texts(&recording.reader_warnings(Places::InFile));
     let segmentation = find_intervals(&recording, &choices.segment)?;
     let coverage = coverage(&segmentation.stills, choices.segment.same_position_deg);
     Ok(Found {

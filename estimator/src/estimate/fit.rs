@@ -7,6 +7,7 @@
 
 use super::fit_checks::{chi2_scale, lever_arm_observability, residual_warning, ChiSquare};
 use super::model::{self, SegModel};
+use super::note::Note;
 use super::package::{self, PackageTest};
 use super::paper_angles::{self, Converted};
 use super::solve::{self, Problem};
@@ -68,7 +69,7 @@ pub fn calibrate_with_hand_gyro(
             plausibility::check(plan, &referred, fit_session(plan, &referred, options))?
         }
     };
-    outcome.warnings.extend(notes);
+    outcome.warnings.extend(Note::texts(&notes));
     outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
     let rests = thermal_gyro::bias_from_rests(&outcome, fit.as_ref(), options);
     let from_hand = thermal_gyro::settle_gyro(&mut outcome, rests, hand);
@@ -382,7 +383,7 @@ fn main_fit(
         Method::Paper => {
             let e = paper::eq24(plan, &p.segs, &p.problem.models, &p.static_fit)?;
             let (chi2, dof) = chi2_of(&p.problem.models, &e.theta, 12 + 9);
-            p.warnings.extend(e.notes);
+            p.warnings.extend(Note::texts(&e.notes));
             Ok(MainFit {
                 theta: e.theta,
                 cov: e.cov,

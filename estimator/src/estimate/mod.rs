@@ -14,7 +14,7 @@
 //! - `crate::sim::synth`: noise-free statistics of a plan run on a known unit (the input of [`predict`], and the tests').
 //!
 //! The estimator's types: [`options`] (its settings), [`outcome`] (what it returns), [`error`] (why
-//! it made no calibration). The modules, in the order a fit runs through them: `fit` (the fit's
+//! it made no calibration), [`note`] (how a fit chose its model, as values with one wording each). The modules, in the order a fit runs through them: `fit` (the fit's
 //! stages, from plan and statistics to the outcome), `fit_checks` (the χ² check, the lever arms'
 //! observability, the residual warning), `screen` (plan ↔ data, screening, the static least
 //! squares; `screen_motion` for the static segments that moved), `segment` (segment kind, pooled
@@ -52,6 +52,7 @@ mod gyro_walk_axes_tests;
 pub mod handheld_gyro;
 mod joint;
 pub mod model;
+pub mod note;
 pub mod options;
 pub mod outcome;
 pub mod package;

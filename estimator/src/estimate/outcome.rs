@@ -1,6 +1,7 @@
 //! What the estimator returns: the calibration with its uncertainty, the fit's summary, each segment's
 //! diagnostic, the segments left out and why, and what the plan could not determine.
 
+use super::note::Note;
 use super::{thermal, GyroEstimate, Method, MountTilt, SegmentKind, StaticSplit, Uncertainty};
 use shared::linalg::RowMajor3;
 use shared::params::axis_name;
@@ -310,7 +311,7 @@ pub struct MethodComparison {
     /// Their 1σ, m.
     pub lever_arm_sigma_m: RowMajor3,
     /// Notes (pitfalls, what was used).
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
 }
 
 /// Everything `host calibrate` needs.

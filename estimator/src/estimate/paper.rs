@@ -23,6 +23,7 @@
 //!   says "mean values"); only +x, +y, +z-up constant-rate segments are used.
 
 use super::model::{self, idx_r, SegModel, NI as NP};
+use super::note::Note;
 use super::{solve, EstimateError, SegmentKind, SessionSeg};
 use nalgebra::DMatrix;
 use recording::session::Plan;
@@ -32,7 +33,7 @@ use std::collections::BTreeMap;
 pub(crate) struct PaperResult {
     pub theta: Vec<f64>,
     pub cov: DMatrix<f64>,
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
 }
 
 /// Eq. 24 for the static parameters in `t` (its lever arms ignored): the inverse-variance weighted
@@ -99,13 +100,10 @@ pub(crate) fn eq24(
     let jac = static_jacobian(&static_fit.theta, &k, g, &trios, models);
     let (theta, cov) = with_lever_arms(static_fit, &r, &var_noise, &jac);
     let worst_cos = smallest_cross_cosine(&a);
-    let notes = vec![format!(
-        "paper eq. 24 at {:?} °/s (nominal rates, p = 0): the across-axis components are divided by \
-         cos θ_ij as small as {:.4}, amplifying their noise up to {:.0}×",
-        rates_used,
+    let notes = vec![Note::PaperEq24 {
+        rates_dps: rates_used,
         worst_cos,
-        1.0 / worst_cos
-    )];
+    }];
     Ok(PaperResult { theta, cov, notes })
 }
 

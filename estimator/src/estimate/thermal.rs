@@ -23,6 +23,7 @@
 //! the misalignment held constant is tested across the soak temperatures
 //! (`thermal_misalignment`): a significant change is a warning, not a model term.
 
+use super::note::Note;
 use super::solve::invert_spd;
 use nalgebra::{DMatrix, DVector};
 use recording::session::thermal::{binomial, ThermalStats, ORIGIN_C, SCALE_C, TERMS};
@@ -85,7 +86,7 @@ pub struct ThermalFit {
     /// whole gyro from (docs/model.md §8, §9).
     pub gyro_bias_ref_rad_s: Option<([f64; 3], [f64; 3])>,
     /// How each degree was chosen, for the report.
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
 }
 
 /// A static segment as the fit sees it.
@@ -123,7 +124,7 @@ pub enum ThermalError {
 pub(crate) fn fit_session(
     plan: &Plan,
     stats: &[SegmentStats],
-) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
+) -> Result<(Option<ThermalFit>, Vec<Note>), ThermalError> {
     fit_with(plan, stats, None)
 }
 
@@ -133,7 +134,7 @@ pub(crate) fn fit_session_at_degrees(
     plan: &Plan,
     stats: &[SegmentStats],
     degrees: [(usize, usize); 3],
-) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
+) -> Result<(Option<ThermalFit>, Vec<Note>), ThermalError> {
     fit_with(plan, stats, Some(degrees))
 }
 
@@ -141,7 +142,7 @@ fn fit_with(
     plan: &Plan,
     stats: &[SegmentStats],
     degrees: Option<[(usize, usize); 3]>,
-) -> Result<(Option<ThermalFit>, Vec<String>), ThermalError> {
+) -> Result<(Option<ThermalFit>, Vec<Note>), ThermalError> {
     let statics: Vec<(Obs, &SegmentPlan)> = stats
         .iter()
         .filter_map(|st| {
@@ -163,13 +164,7 @@ fn fit_with(
     }
     let (lo, hi) = span(statics.iter().map(|(o, _)| o));
     if hi - lo < MIN_SPAN_C {
-        return Ok((
-            None,
-            vec![format!(
-                "the static segments span {lo:.1}..{hi:.1} °C, less than {MIN_SPAN_C} °C: no \
-                 temperature model (record soak steps or a ramp to calibrate over temperature)"
-            )],
-        ));
+        return Ok((None, vec![Note::ThermalSpanShort { lo, hi }]));
     }
     let obs = match determining(statics, (lo, hi)) {
         Ok(obs) => obs,
@@ -226,7 +221,7 @@ fn span<'a>(obs: impl IntoIterator<Item = &'a Obs<'a>>) -> (f64, f64) {
 fn determining<'a>(
     statics: Vec<(Obs<'a>, &SegmentPlan)>,
     (lo, hi): (f64, f64),
-) -> Result<Vec<Obs<'a>>, String> {
+) -> Result<Vec<Obs<'a>>, Note> {
     // Each known attitude's temperatures: (mount, lowest, highest).
     let mut mounts: Vec<(String, f64, f64)> = Vec::new();
     for (o, seg) in statics.iter().filter(|(_, seg)| !seg.is_free()) {
@@ -257,28 +252,15 @@ fn determining<'a>(
     let widest = mounts
         .iter()
         .max_by(|a, b| (a.2 - a.1).total_cmp(&(b.2 - b.1)))
-        .map_or(String::new(), |(name, a, b)| {
-            format!(
-                "; the widest span at one known attitude is {:.2} °C ({name})",
-                b - a
-            )
-        });
-    let why = if attitudes == 0 {
-        format!("no known attitude is seen over {MIN_SPAN_C} °C or more")
-    } else {
-        format!(
-            "the {attitudes} known attitude(s) seen over {MIN_SPAN_C} °C or more are not four \
-             attitudes out of one plane, which each axis's bias and scale need"
-        )
-    };
-    Err(format!(
-        "no temperature model: the static segments span {lo:.1}..{hi:.1} °C, but {why} \
-         ({free} of {total} static segments have a free attitude{widest}); a temperature change \
-         seen only between different attitudes cannot be told from the attitudes' own difference \
-         (docs/model.md §9), so the calibration is made without a temperature model, its values \
-         the session's average over {lo:.1}..{hi:.1} °C; to calibrate over temperature, repeat \
-         the positions at several temperatures (soak steps) or hold them through a ramp"
-    ))
+        .map(|(name, a, b)| (b - a, name.clone()));
+    Err(Note::ThermalNotDetermined {
+        lo,
+        hi,
+        attitudes,
+        free,
+        total,
+        widest,
+    })
 }
 
 /// Whether the segments' ups hold four attitudes out of one plane: `Σ [f 1][f 1]ᵀ` of full rank.
@@ -463,17 +445,13 @@ fn fit_axis(
         .min_by(|a, b| bic(&a.1).total_cmp(&bic(&b.1)))
         .ok_or(ThermalError::NoModel)?;
     let scale2 = (best.chi2 / best.dof.max(1) as f64).max(1.0);
-    let name = shared::params::axis_name(axis);
-    fit.notes.push(format!(
-        "accelerometer {name}: zero bias degree {db}, scale degree {ds} (least BIC of 16 pairs; \
-         χ²/dof {:.2}{})",
-        best.chi2 / best.dof.max(1) as f64,
-        if scale2 > 1.0 {
-            ", 1σ scaled by √(χ²/dof)"
-        } else {
-            ""
-        }
-    ));
+    fit.notes.push(Note::ThermalAccDegrees {
+        axis,
+        zero_bias_degree: db,
+        scale_degree: ds,
+        chi2_per_dof: best.chi2 / best.dof.max(1) as f64,
+        scaled: scale2 > 1.0,
+    });
     fit.zero_bias_degree[axis] = db;
     fit.scale_degree[axis] = ds;
     fit.zero_bias_ref_out[axis] = best.theta[3];

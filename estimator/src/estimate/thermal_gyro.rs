@@ -8,6 +8,7 @@
 //! is the segment's scatter over √count. The degree (0..=3) is chosen by the same Bayesian
 //! information criterion as the accelerometers' ([`super::thermal`]).
 
+use super::note::Note;
 use super::solve::invert_spd;
 use super::{CalibrationOutcome, EstimateOptions, GyroEstimate, GyroModel};
 use nalgebra::{DMatrix, DVector};
@@ -32,7 +33,7 @@ pub(crate) struct GyroBiasFit {
     /// Its 1σ, rad/s (scaled by the chosen degree's χ²/dof when above 1).
     pub bias_ref_sigma_rad_s: [f64; 3],
     /// How each degree was chosen.
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
 }
 
 /// Fits the gyro bias over temperature from the static segments `statics` (with their temperature
@@ -95,12 +96,12 @@ pub fn fit(statics: &[(&SegmentStats, &ThermalStats)], reference_c: f64) -> Opti
             out.per_c[axis][k] = beta[k + 1] / per_c;
             out.sigma[axis][k] = (cov[(k + 1, k + 1)] * scale2).sqrt() / per_c;
         }
-        out.notes.push(format!(
-            "gyro {}: bias degree {d} over temperature (least BIC of {} degrees; χ²/dof {:.2})",
-            shared::params::axis_name(axis),
-            max_degree + 1,
-            chi2 / dof(d)
-        ));
+        out.notes.push(Note::ThermalGyroDegree {
+            axis,
+            degree: d,
+            compared: max_degree + 1,
+            chi2_per_dof: chi2 / dof(d),
+        });
     }
     Some(out)
 }

@@ -4,6 +4,7 @@
 //! off-diagonal ratio `m_ij/m_ii` (the misalignment angle of axis `i` towards `j`, rad) is compared
 //! across the temperatures by a χ² test at 99.9 %.
 
+use super::note::Note;
 use super::solve::invert_spd;
 use nalgebra::{DMatrix, DVector};
 use recording::session::thermal::ThermalStats;
@@ -23,7 +24,7 @@ struct Group {
 
 /// Warnings naming each axis pair whose misalignment changes significantly with temperature, with
 /// its slope, µrad/°C. `soaks` are the static soak segments with their attitudes (`up_b`).
-pub fn check(soaks: &[(&SegmentStats, &ThermalStats, [f64; 3])]) -> Vec<String> {
+pub fn check(soaks: &[(&SegmentStats, &ThermalStats, [f64; 3])]) -> Vec<Note> {
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (k, (_, ts, _)) in soaks.iter().enumerate() {
         let t = ts.mean_c();
@@ -86,16 +87,16 @@ pub fn check(soaks: &[(&SegmentStats, &ThermalStats, [f64; 3])]) -> Vec<String> 
             } else {
                 (0.0, f64::INFINITY)
             };
-            warnings.push(format!(
-                "the misalignment of accelerometer {} towards {} changes with temperature: \
-                 {:.1} ± {:.1} µrad/°C (χ² {chi2:.1} on {dof} dof across {} soak temperatures, \
-                 above the 99.9 % bound {bound:.1}); the model keeps it constant",
-                shared::params::axis_name(i),
-                shared::params::axis_name(j),
-                slope * 1e6,
-                sd * 1e6,
-                fitted.len()
-            ));
+            warnings.push(Note::MisalignmentDrift {
+                axis: i,
+                towards: j,
+                slope_urad_per_c: slope * 1e6,
+                sigma_urad_per_c: sd * 1e6,
+                chi2,
+                dof,
+                soaks: fitted.len(),
+                bound,
+            });
         }
     }
     warnings

@@ -11,6 +11,7 @@
 
 use super::sensor_noise::SensorNoise;
 use super::thermal::{ThermalSim, ThermalState};
+use crate::estimate::note::Note;
 use crate::unit_file::UnitFile;
 use recording::session::{Plan, PlanError, SegmentPlan};
 use recording::session::{RecordingError, SessionWriter};
@@ -228,7 +229,7 @@ pub struct SimulationSummary {
     pub mount_tilt_deg: BTreeMap<String, f64>,
     /// Notes for the user (e.g. the plan's output unit was changed to the unit's).
     #[serde(skip)]
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
 }
 
 // The random streams, one per noise source (the module docs); the sensors' are drawn from in
@@ -504,11 +505,9 @@ pub fn simulate_to_dir_with_progress(
     let noise = &simulated_noise(unit, noise);
     let (fitted, normalisation) = cal.statics.to_fitted().map_err(SimulateError::Params)?;
     if normalisation.needs_warning() {
-        notes.push(format!(
-            "the unit's installation angles are inconsistent (row norms {:.7?}); simulated with each \
-             sensing direction normalised (docs/model.md §4.2), as written to truth.toml",
-            normalisation.row_norms
-        ));
+        notes.push(Note::SimNormalised {
+            row_norms: normalisation.row_norms,
+        });
     }
     let plan = session_plan(plan, unit, cal.statics.output_unit, &mut notes);
     let writer = SessionWriter::create(dir, &plan, overwrite)?;
@@ -537,15 +536,14 @@ fn session_plan(
     plan: &Plan,
     unit: &UnitFile,
     output_unit: shared::OutputUnit,
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Note>,
 ) -> Plan {
     let mut plan = plan.clone();
     if plan.output_unit != output_unit {
-        notes.push(format!(
-            "the plan's output_unit {} was changed to the unit's, {}",
-            plan.output_unit.symbol(),
-            output_unit.symbol()
-        ));
+        notes.push(Note::SimOutputUnit {
+            plan: plan.output_unit,
+            unit: output_unit,
+        });
         plan.output_unit = output_unit;
     }
     if plan.unit_id.is_none() {

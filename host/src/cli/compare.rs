@@ -64,7 +64,7 @@ pub(crate) fn run(a: &CompareArgs, quiet: bool) -> Result<(), CliError> {
         "worst": worst.as_ref().map(|(n, d)| json!({"name": n, "diff_sigma": d})),
         "max_sigma": a.max_sigma,
         "passed": passed,
-        "notes": t.notes,
+        "notes": outputs::report::compare::Note::texts(&t.notes),
     }))?;
     match (a.max_sigma, worst) {
         (Some(limit), Some((name, d))) if d.abs() > limit => Err(CliError::ChecksFailed(format!(

@@ -40,7 +40,8 @@ fn run(dir: &Path, input: &Path, flags: &str) -> Run {
     let notes: Vec<String> = out
         .recording
         .reader_warnings(recording::session::import::Places::InFile)
-        .into_iter()
+        .iter()
+        .map(ToString::to_string)
         .filter(|w| w.contains("repaired"))
         .collect();
     Run {

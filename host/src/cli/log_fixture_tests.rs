@@ -355,16 +355,17 @@ fn a_rate_given_for_a_binary_log_re_times_it_and_says_what_the_stamps_imply() {
         let note = log
             .warnings
             .iter()
-            .find(|w| w.contains("re-timed at 99.3 Hz"))
+            .find(|w| w.to_string().contains("re-timed at 99.3 Hz"))
             .unwrap_or_else(|| panic!("{name}: {:?}", log.warnings));
         let implied: f64 = note
+            .to_string()
             .split("the stamps imply ")
             .nth(1)
             .and_then(|s| s.split(' ').next())
             .and_then(|s| s.parse().ok())
             .unwrap_or_else(|| panic!("{note}"));
         assert!((implied - 100.0).abs() < 0.3, "{name}: {note}");
-        assert!(note.contains("+0.7"), "{note}");
+        assert!(note.to_string().contains("+0.7"), "{note}");
         // Without the rate, the stamps are the log's own.
         let own = read_log(
             &path,
@@ -374,7 +375,10 @@ fn a_rate_given_for_a_binary_log_re_times_it_and_says_what_the_stamps_imply() {
             },
         )
         .unwrap();
-        assert!(own.warnings.iter().all(|w| !w.contains("re-timed at")));
+        assert!(own
+            .warnings
+            .iter()
+            .all(|w| !w.to_string().contains("re-timed at")));
         // The rate with a text file's option on a binary log: refused, naming what was given.
         let Command::Noise(b) = command(&format!(
             "host noise --input {} --rate-hz 99.3 --acc-unit g",

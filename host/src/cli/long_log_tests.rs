@@ -268,14 +268,19 @@ fn a_long_log_keeps_its_session_within_the_budget_and_calibrates_as_the_session(
     assert!(rec.len() >= session, "{} of {session}", rec.len());
     assert!(rec.len() <= session + 2 * 300, "{}", rec.len());
     assert!(rec.t_s[0] > MOTION_S - 3.0, "{}", rec.t_s[0]);
-    let note = log.warnings.iter().find(|w| w.contains("are left out"));
+    let note = log
+        .warnings
+        .iter()
+        .find(|w| w.to_string().contains("are left out"));
     assert!(
-        note.is_some_and(|w| w.contains("moves longer than 60 s")),
+        note.is_some_and(|w| w.to_string().contains("moves longer than 60 s")),
         "{:?}",
         log.warnings
     );
     assert!(
-        !log.warnings.iter().any(|w| w.contains("--max-samples")),
+        !log.warnings
+            .iter()
+            .any(|w| w.to_string().contains("--max-samples")),
         "the session fits the budget: {:?}",
         log.warnings
     );
@@ -295,10 +300,11 @@ fn a_session_larger_than_the_budget_is_cut_and_said_so() {
     let cut = log
         .warnings
         .iter()
-        .find(|w| w.contains("--max-samples"))
+        .find(|w| w.to_string().contains("--max-samples"))
         .unwrap_or_else(|| panic!("{:?}", log.warnings));
     let t_last = log.recording.t_s.last().unwrap();
     let from: f64 = cut
+        .to_string()
         .split("from t = ")
         .nth(1)
         .unwrap()
@@ -329,7 +335,7 @@ fn a_long_text_log_keeps_its_session_too() {
     assert!(
         log.warnings
             .iter()
-            .any(|w| w.contains("moves longer than 60 s")),
+            .any(|w| w.to_string().contains("moves longer than 60 s")),
         "{:?}",
         log.warnings
     );

@@ -30,7 +30,8 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
     let fit = out.gyro.unwrap_or_else(|e| panic!("{line}: gyro {e}"));
     // The session's warnings are not kept in the outcome: rebuild the note from the fit.
     let note = app::handheld::gyro::common_scale_note(&fit, &out.recording, Default::default());
-    (fit, warnings.into_iter().chain(note).collect())
+    let warnings = warnings.iter().map(ToString::to_string);
+    (fit, warnings.chain(note).collect())
 }
 
 type Rows = Vec<(f64, [f64; 3], [f64; 3])>;

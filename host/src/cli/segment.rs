@@ -17,6 +17,7 @@ use recording::session::from_recording::normal_gravity_m_s2;
 use recording::session::import::MAX_ROWS;
 use recording::session::import::{six_digits, Recording};
 use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
+use recording::session::note::Note;
 use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use recording::session::Plan;
 use recording::spelling::Spelling;
@@ -220,8 +221,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     step.finish_and_clear();
     let reader_warnings = found.warnings.len();
     let mut warnings = Vec::new();
-    for w in log
-        .warnings
+    for w in Note::texts(&log.warnings)
         .into_iter()
         .chain(found.warnings.iter().cloned())
     {

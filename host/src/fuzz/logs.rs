@@ -88,7 +88,7 @@ mod tests {
         assert_eq!(rec.len(), SAMPLES);
         assert!(
             w.iter()
-                .any(|w| w.contains("dropped data 1 time(s), 20 ms")),
+                .any(|w| w.to_string().contains("dropped data 1 time(s), 20 ms")),
             "{w:?}"
         );
         assert_eq!(rec.temp_c.as_ref().map(Vec::len), Some(SAMPLES));

@@ -310,7 +310,10 @@ fn a_damaged_sample_costs_at_most_two_rows_in_every_format() {
                     );
                     assert!(
                         format == Format::Text
-                            || log.warnings.iter().any(|w| w.contains("cut short")),
+                            || log
+                                .warnings
+                                .iter()
+                                .any(|w| w.to_string().contains("cut short")),
                         "{case}: {:?}",
                         log.warnings
                     );
@@ -337,7 +340,7 @@ fn a_damaged_sample_costs_at_most_two_rows_in_every_format() {
                         None => assert!(
                             log.warnings
                                 .iter()
-                                .any(|w| w.contains("NaN in every sample")),
+                                .any(|w| w.to_string().contains("NaN in every sample")),
                             "{case}: {:?}",
                             log.warnings
                         ),

@@ -4,6 +4,7 @@ use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSu
 use crate::calibration_guard::{meet, Meeting, Other};
 use recording::session::import::{Places, Recording};
 use recording::session::logs::{read_log_windows, LogError, LogRead, LogSource, LogWindows};
+use recording::session::note::Note;
 use recording::session::segment::{
     find_intervals_by, gyro_unit_suspect, rest_floors, Interval, RestFloors, SegmentError,
     SegmentOptions,
@@ -78,7 +79,7 @@ pub fn apply_log_within(
             let mut summary = prepared.run(rec, cal, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
             let mut notes = log.warnings;
             notes.extend(rec.reader_warnings(Places::InFile));
-            summary.warnings.splice(0..0, notes);
+            summary.warnings.splice(0..0, Note::texts(&notes));
             return Ok(summary);
         }
         LogRead::Windows(w) => w,
@@ -97,7 +98,7 @@ pub fn apply_log_within(
         let rec = &log.recording;
         let mut said = log.warnings;
         said.extend(rec.reader_warnings(Places::InWindow));
-        notes.add(windows.span(k), said);
+        notes.add(windows.span(k), Note::texts(&said));
         if rec.is_empty() {
             continue;
         }
@@ -128,7 +129,7 @@ pub fn apply_log_within(
         windows.len()
     )];
     warnings.extend(notes.into_warnings(windows.len()));
-    warnings.extend(scale.notes());
+    warnings.extend(Note::texts(&scale.notes()));
     summary.warnings.splice(0..0, warnings);
     Ok(summary)
 }

@@ -5,6 +5,7 @@ use super::{analyse_signals, NoiseError, NoiseReport, Signals, MAX_SAMPLES};
 use crate::calibration_guard::Meeting;
 use crate::export::PlainMatrices;
 use recording::session::logs::{read_log_within, LogSource};
+use recording::session::note::Note;
 use recording::session::segment::{find_intervals, SegmentOptions};
 use recording::session::SAMPLES_HEADER;
 use shared::OutputUnit;
@@ -82,7 +83,7 @@ pub fn analyse_log(
         calibration.map(|c| c.0),
         quiet,
     )?;
-    let mut warnings = log.warnings;
+    let mut warnings = Note::texts(&log.warnings);
     warnings.append(&mut report.warnings);
     report.warnings = warnings;
     Ok(report)

@@ -46,7 +46,119 @@ pub struct ComparisonTable {
     /// model's values both files have.
     pub rows: Vec<ComparisonRow>,
     /// Things to know (reference points, missing σ, …).
-    pub notes: Vec<String>,
+    pub notes: Vec<Note>,
+}
+
+/// One thing to know about a comparison, with the figures its message states: a value, so that a
+/// caller can tell one from another ([`Note::code`]) without matching words; its `Display` is the
+/// one wording the table and the JSON document print.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Note {
+    /// Neither file has σ: differences are not in units of σ.
+    NoSigma,
+    /// Only one file has σ (`in_a`: A's).
+    SigmaOfOne {
+        /// A has it (else B).
+        in_a: bool,
+    },
+    /// The lever arms are relative to different reference points.
+    ReferencePoints {
+        /// A's.
+        a: shared::ReferencePoint,
+        /// B's.
+        b: shared::ReferencePoint,
+    },
+    /// Different local gravity, m/s².
+    Gravity {
+        /// A's.
+        a: f64,
+        /// B's.
+        b: f64,
+    },
+    /// A lever-arm component one calibration did not determine (n.d.).
+    LeverArmUndetermined,
+    /// A section only one file has.
+    SectionOfOne {
+        /// The section (`[gyro]`, `[temperature]`).
+        section: &'static str,
+        /// A has it (else B).
+        in_a: bool,
+    },
+    /// Temperature models about different reference temperatures, °C.
+    ReferenceTemperatures {
+        /// A's.
+        a: f64,
+        /// B's.
+        b: f64,
+    },
+    /// A gyro entry one calibration did not determine (n.d.).
+    GyroUndetermined,
+}
+
+impl Note {
+    /// A stable name of the note's kind, for a program reading the notes, independent of its
+    /// wording.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Note::NoSigma => "no_sigma",
+            Note::SigmaOfOne { .. } => "sigma_of_one",
+            Note::ReferencePoints { .. } => "reference_points",
+            Note::Gravity { .. } => "gravity",
+            Note::LeverArmUndetermined => "lever_arm_undetermined",
+            Note::SectionOfOne { .. } => "section_of_one",
+            Note::ReferenceTemperatures { .. } => "reference_temperatures",
+            Note::GyroUndetermined => "gyro_undetermined",
+        }
+    }
+
+    /// The notes said as text, in order (the JSON document's `notes`).
+    pub fn texts(notes: &[Note]) -> Vec<String> {
+        notes.iter().map(ToString::to_string).collect()
+    }
+}
+
+impl std::fmt::Display for Note {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let which = |in_a: bool| if in_a { "A" } else { "B" };
+        match self {
+            Note::NoSigma => f.write_str(
+                "neither file has an [uncertainty] table: differences are not in units of σ",
+            ),
+            Note::SigmaOfOne { in_a } => write!(
+                f,
+                "only {} has an [uncertainty] table: σ is that file's alone",
+                which(*in_a)
+            ),
+            Note::ReferencePoints { a, b } => write!(
+                f,
+                "the lever arms are relative to different reference points ({} vs {}): only their \
+                 differences r_i − r_j compare",
+                super::format::reference_point(a),
+                super::format::reference_point(b)
+            ),
+            Note::Gravity { a, b } => write!(
+                f,
+                "different local gravity: {a} vs {b} m/s² (scale factors per g differ by that ratio)"
+            ),
+            Note::LeverArmUndetermined => f.write_str(
+                "n.d.: a lever-arm component one of the calibrations did not determine (its value is \
+                 not a measurement)",
+            ),
+            Note::SectionOfOne { section, in_a } => write!(
+                f,
+                "only {} has a {section} section: it is not compared",
+                which(*in_a)
+            ),
+            Note::ReferenceTemperatures { a, b } => write!(
+                f,
+                "the temperature models are about different reference temperatures ({a} vs {b} \
+                 °C): their coefficients are not compared (n.d.)"
+            ),
+            Note::GyroUndetermined => f.write_str(
+                "n.d. on a gyro entry: one of the calibrations did not determine it (1σ above 1e-3)",
+            ),
+        }
+    }
 }
 
 impl ComparisonTable {
@@ -240,7 +352,7 @@ fn section_rows(
     a: &UnitFile,
     b: &UnitFile,
     sym: &str,
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Note>,
 ) -> Vec<ComparisonRow> {
     for (what, in_a, in_b) in [
         ("[gyro]", a.gyro.is_some(), b.gyro.is_some()),
@@ -251,19 +363,18 @@ fn section_rows(
         ),
     ] {
         if in_a != in_b {
-            notes.push(format!(
-                "only {} has a {what} section: it is not compared",
-                if in_a { "A" } else { "B" }
-            ));
+            notes.push(Note::SectionOfOne {
+                section: what,
+                in_a,
+            });
         }
     }
     let refs_differ = match (&a.temperature, &b.temperature) {
         (Some(x), Some(y)) if x.reference_c != y.reference_c => {
-            notes.push(format!(
-                "the temperature models are about different reference temperatures ({} vs {} °C): \
-                 their coefficients are not compared (n.d.)",
-                x.reference_c, y.reference_c
-            ));
+            notes.push(Note::ReferenceTemperatures {
+                a: x.reference_c,
+                b: y.reference_c,
+            });
             true
         }
         _ => false,
@@ -296,10 +407,7 @@ fn section_rows(
         .iter()
         .any(|r| r.undetermined && r.label.starts_with("gyro_"))
     {
-        notes.push(
-            "n.d. on a gyro entry: one of the calibrations did not determine it (1σ above 1e-3)"
-                .into(),
-        );
+        notes.push(Note::GyroUndetermined);
     }
     rows
 }
@@ -361,38 +469,27 @@ fn comparison_notes(
     ca: &Calibration,
     cb: &Calibration,
     rows: &[ComparisonRow],
-) -> Vec<String> {
+) -> Vec<Note> {
     let mut notes = Vec::new();
     match (a_has_sigma, b_has_sigma) {
-        (false, false) => notes.push(
-            "neither file has an [uncertainty] table: differences are not in units of σ".into(),
-        ),
-        (true, false) | (false, true) => notes.push(format!(
-            "only {} has an [uncertainty] table: σ is that file's alone",
-            if a_has_sigma { "A" } else { "B" }
-        )),
+        (false, false) => notes.push(Note::NoSigma),
+        (true, false) | (false, true) => notes.push(Note::SigmaOfOne { in_a: a_has_sigma }),
         _ => {}
     }
     if ca.reference != cb.reference {
-        notes.push(format!(
-            "the lever arms are relative to different reference points ({} vs {}): only their \
-             differences r_i − r_j compare",
-            super::format::reference_point(&ca.reference),
-            super::format::reference_point(&cb.reference)
-        ));
+        notes.push(Note::ReferencePoints {
+            a: ca.reference,
+            b: cb.reference,
+        });
     }
     if (ca.gravity_m_s2 - cb.gravity_m_s2).abs() > 1e-9 {
-        notes.push(format!(
-            "different local gravity: {} vs {} m/s² (scale factors per g differ by that ratio)",
-            ca.gravity_m_s2, cb.gravity_m_s2
-        ));
+        notes.push(Note::Gravity {
+            a: ca.gravity_m_s2,
+            b: cb.gravity_m_s2,
+        });
     }
     if rows.iter().any(|r| r.undetermined) {
-        notes.push(
-            "n.d.: a lever-arm component one of the calibrations did not determine (its value is \
-             not a measurement)"
-                .into(),
-        );
+        notes.push(Note::LeverArmUndetermined);
     }
     notes
 }
@@ -449,7 +546,7 @@ mod tests {
         let t = compare_units(&a, "a", &a, "b").unwrap();
         assert!(t.rows.iter().all(|r| r.diff_sigma.is_none()));
         assert!(t.render().contains("no σ"));
-        assert!(t.notes[0].contains("neither file"));
+        assert!(t.notes[0].to_string().contains("neither file"));
     }
 
     /// A with a gyro and a temperature model, each value with a 1σ (hand-set, so that a shift of a
@@ -517,12 +614,17 @@ mod tests {
             .iter()
             .filter(|r| r.label.starts_with("temp_"))
             .all(|r| r.undetermined));
-        assert!(t.notes.iter().any(|n| n.contains("reference temperatures")));
+        assert!(t
+            .notes
+            .iter()
+            .any(|n| n.to_string().contains("reference temperatures")));
         // A section only one file has is named in a note.
         let t = compare_units(&a, "a", &with_sigma(), "b").unwrap();
         assert_eq!(t.rows.len(), 24);
         assert!(
-            t.notes.iter().any(|n| n.contains("only A has a [gyro]")),
+            t.notes
+                .iter()
+                .any(|n| n.to_string().contains("only A has a [gyro]")),
             "{:?}",
             t.notes
         );

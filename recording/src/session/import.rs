@@ -8,6 +8,7 @@
 //! they are bounded as the caller's keeper says (`super::logs`; at most [`MAX_ROWS`]), and every
 //! line is bounded ([`MAX_LINE_BYTES`]). The header and the rows are read by `rows`.
 
+use super::note::Note;
 use crate::limits::short_number;
 use crate::spelling::{Spelling, UserOption};
 use shared::OutputUnit;
@@ -234,7 +235,7 @@ pub struct Recording {
     pub gyro_lsb_per_dps: Option<f64>,
     /// What reading a text file found and did beyond the rows themselves: a preamble skipped, a
     /// header-less file, rows with one stream missing.
-    pub read_notes: Vec<String>,
+    pub read_notes: Vec<Note>,
 }
 
 /// Why a logger's file cannot be imported; each says what to do.
@@ -559,17 +560,14 @@ fn read_logger_by<R: BufRead>(
     let header_line = header.line;
     let mut read_notes = Vec::new();
     if header.preamble > 0 {
-        read_notes.push(format!(
-            "{} line(s) before the header on line {header_line} skipped (a logger's preamble; \
-             {} to say how many)",
-            header.preamble,
-            options.spelling.given(UserOption::SkipLines, "N")
-        ));
+        read_notes.push(Note::Preamble {
+            lines: header.preamble,
+            header_line,
+            spelling: options.spelling,
+        });
     }
     if header.first_row.is_some() {
-        read_notes.push(format!(
-            "no header: line {header_line} is data, its columns taken by index"
-        ));
+        read_notes.push(Note::NoHeader { line: header_line });
     }
     if header.first_row.is_none() && rows::all_numbers(&header.names) {
         return Err(ImportError::NoHeader {
@@ -642,7 +640,7 @@ fn read_logger_by<R: BufRead>(
 /// A note when a gyro in counts sits at an unsigned output's mid-scale on every axis and no offset
 /// was given: its zero rate, read as a bias of hundreds of °/s, which no device accepts in a
 /// calibration. The fit still takes it as a bias (the turns are right); the note names the offset.
-pub(crate) fn gyro_mid_scale_note(rec: &Recording, options: &ImportOptions) -> Option<String> {
+pub(crate) fn gyro_mid_scale_note(rec: &Recording, options: &ImportOptions) -> Option<Note> {
     let lsb = options.gyro_lsb_per_dps?;
     if options.gyro_offset != [0.0; 3] || rec.is_empty() {
         return None;
@@ -654,15 +652,13 @@ pub(crate) fn gyro_mid_scale_note(rec: &Recording, options: &ImportOptions) -> O
         .map(|w| w.map(|x| x / per_count))
         .collect();
     let (m, bits) = mid_scale(&counts)?;
-    Some(format!(
-        "every gyro count sits near {m} on all three axes, the mid-scale of a {bits}-bit \
-         unsigned output: read as a bias of {:.0} °/s, more than a calibration can hold; if that \
-         is the gyro's zero rate, give {}",
-        m / lsb,
-        options
-            .spelling
-            .given(UserOption::GyroOffset, short_number(m))
-    ))
+    Some(Note::GyroMidScale {
+        mid: m,
+        bits,
+        bias_dps: m / lsb,
+        offset: short_number(m),
+        spelling: options.spelling,
+    })
 }
 
 /// The mid-scale value (and bits) of an unsigned output that every sample's axes sit near: all
@@ -1044,7 +1040,10 @@ mod tests {
         let rows: Vec<usize> = rec.jumps().iter().map(|j| j.row).collect();
         assert_eq!(rows, [199]);
         let w = rec.time_jumps().unwrap();
-        assert!(w.contains("gap of +3.010 s after data row 200"), "{w}");
+        assert!(
+            w.to_string().contains("gap of +3.010 s after data row 200"),
+            "{w}"
+        );
         let (what, r) = &rec.time_repairs[0];
         assert_eq!(*what, "data row");
         assert_eq!(r.spread, [100]);

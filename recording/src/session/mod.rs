@@ -16,7 +16,8 @@
 //!   from text by their first bytes; [`repair`] mends the damaged time stamps of every reader's
 //!   samples by one set of rules, with `bursts` (a host's bursts of stamps, re-timed from the fitted
 //!   rate) and `restart` (logs joined with their time restarting); `rest` judges stillness against
-//!   each stream's own noise floor for [`segment`].
+//!   each stream's own noise floor for [`segment`]; [`note`]: what every reader tells the user
+//!   besides the samples (rows left out, stamps repaired), as values with one wording each.
 //! - [`toml_check`]: the arrays of a TOML file that serde would silently cut short.
 
 pub mod builtin;
@@ -26,6 +27,7 @@ pub mod error;
 pub mod from_recording;
 pub mod import;
 pub mod logs;
+pub mod note;
 pub mod plan;
 pub mod reader;
 pub mod repair;

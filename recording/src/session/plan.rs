@@ -268,9 +268,16 @@ pub enum PlanError {
     /// The file could not be read.
     #[error("cannot read plan {}: {}", .0.display(), .1)]
     Io(std::path::PathBuf, #[source] std::io::Error),
-    /// The TOML does not parse or has wrong fields (the message names line and column).
+    /// The TOML does not parse or has wrong fields (the message names line and column). The cause
+    /// is kept as a value (not its text) and said in the message, so it is not also a `source`.
     #[error("plan {} is not valid: {}", .0.display(), .1)]
-    Syntax(std::path::PathBuf, String),
+    Syntax(std::path::PathBuf, Box<toml::de::Error>),
+    /// An array in the plan longer than the field that reads it, which serde would cut short.
+    #[error("plan {} is not valid: {}", .0.display(), .1)]
+    Surplus(std::path::PathBuf, super::toml_check::SurplusValues),
+    /// A number out of its range (the rate); said in the message, so not also a `source`.
+    #[error("plan is not usable: {0}")]
+    Range(crate::limits::RangeError),
     /// A format version this build does not read.
     #[error(
         "plan format_version {} is not supported (this build reads {} to {}); upgrade \
@@ -292,6 +299,7 @@ impl Plan {
             .map_err(|e| PlanError::Io(path.to_path_buf(), e))?;
         Plan::parse(&text).map_err(|e| match e {
             PlanError::Syntax(_, m) => PlanError::Syntax(path.to_path_buf(), m),
+            PlanError::Surplus(_, m) => PlanError::Surplus(path.to_path_buf(), m),
             other => other,
         })
     }
@@ -299,9 +307,9 @@ impl Plan {
     /// Parses and validates plan text.
     pub fn parse(text: &str) -> Result<Plan, PlanError> {
         let plan: Plan =
-            toml::from_str(text).map_err(|e| PlanError::Syntax("<text>".into(), e.to_string()))?;
+            toml::from_str(text).map_err(|e| PlanError::Syntax("<text>".into(), Box::new(e)))?;
         if let Some(e) = super::toml_check::surplus_values(text, &plan) {
-            return Err(PlanError::Syntax("<text>".into(), e.to_string()));
+            return Err(PlanError::Surplus("<text>".into(), e));
         }
         plan.validate()?;
         Ok(plan)
@@ -316,7 +324,7 @@ impl Plan {
             self.sample_rate_hz,
             crate::limits::MAX_SAMPLE_RATE_HZ,
         )
-        .map_err(|e| PlanError::Invalid(e.to_string()))?;
+        .map_err(PlanError::Range)?;
         if !(9.7..=9.9).contains(&self.gravity_m_s2) {
             return Err(PlanError::Invalid(format!(
                 "gravity_m_s2 = {} is not a local gravity (9.7..9.9 m/s²)",

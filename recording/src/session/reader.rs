@@ -11,9 +11,10 @@
 //! to `/dev/zero` is refused after 4 KiB).
 
 use super::error::shorten;
+use super::note::Note;
 use super::plan::{Plan, RecordingVersion};
 use super::stats::{SegmentAccumulator, SegmentStats};
-use super::thermal::{is_glitch, MAX_TEMP_RATE_C_PER_S};
+use super::thermal::is_glitch;
 use super::{RecordingError, PLAN_FILE, SAMPLES_FILE};
 use crate::limits::MAX_LINE_BYTES;
 use std::fs::File;
@@ -38,8 +39,8 @@ pub struct ReadReport {
     pub rejected_rows: u64,
     /// Plan segments with no usable row (they are absent from the statistics).
     pub segments_without_rows: Vec<String>,
-    /// Human-readable warnings, one per problem.
-    pub warnings: Vec<String>,
+    /// What the reader noticed, one note per problem (said with `Display`).
+    pub warnings: Vec<Note>,
     /// Per plan segment, the steps between its consecutive rows' time stamps.
     pub steps: Vec<StepCount>,
 }
@@ -591,56 +592,54 @@ fn collect_stats<S>(
     let mut stats = Vec::with_capacity(red.accs.len());
     for (seg, (n, first)) in plan.segments.iter().zip(&red.time_jumps) {
         if let Some((line, dt)) = first {
-            report.warnings.push(format!(
-                "segment '{}': the time stamps jump {n} time(s) between consecutive rows (a gap, a \
-                 repeat or a step back; first at line {line}: {dt:+.6} s, the period is {:.6} s)",
-                seg.name,
-                1.0 / plan.sample_rate_hz
-            ));
+            report.warnings.push(Note::SegmentTimeJumps {
+                segment: seg.name.clone(),
+                count: *n,
+                line: *line,
+                step_s: *dt,
+                period_s: 1.0 / plan.sample_rate_hz,
+            });
         }
     }
     for (seg, (n, first)) in plan.segments.iter().zip(&red.temp_glitches) {
         if let Some((line, c)) = first {
-            report.warnings.push(format!(
-                "segment '{}': {n} row(s) whose temperature jumps faster than \
-                 {MAX_TEMP_RATE_C_PER_S} °C/s from the readings around it left out as glitches \
-                 (first at line {line}: {c} °C)",
-                seg.name
-            ));
+            report.warnings.push(Note::SegmentTempGlitches {
+                segment: seg.name.clone(),
+                count: *n,
+                line: *line,
+                temp_c: *c,
+            });
         }
     }
     for ((acc, seg), first_bad) in red.accs.iter().zip(&plan.segments).zip(&red.first_rejected) {
         let st = acc.finish();
         if let Some(line) = first_bad {
             let rejected = st.as_ref().map_or(0, |s| s.rejected_rows);
-            report.warnings.push(format!(
-                "segment '{}': rows with NaN or infinite values left out (first at line {line}{})",
-                seg.name,
-                if rejected > 0 {
-                    format!(", {rejected} in all")
-                } else {
-                    String::new()
-                }
-            ));
+            report.warnings.push(Note::SegmentNonFinite {
+                segment: seg.name.clone(),
+                line: *line,
+                rejected,
+            });
         }
         match st {
             None => {
                 report.segments_without_rows.push(seg.name.clone());
-                report.warnings.push(format!(
-                    "segment '{}' of the plan has no usable rows in {}: it is left out",
-                    seg.name,
-                    path.display()
-                ));
+                report.warnings.push(Note::SegmentWithoutRows {
+                    segment: seg.name.clone(),
+                    path: path.to_path_buf(),
+                });
             }
             Some(s) => {
                 if let Some(d) = seg.duration_s {
                     let expected = d * plan.sample_rate_hz;
                     if (s.count as f64) < 0.5 * expected {
-                        report.warnings.push(format!(
-                            "segment '{}' has {} usable rows; the plan expects about {:.0} \
-                             ({d} s at {} Hz): was it cut short?",
-                            seg.name, s.count, expected, plan.sample_rate_hz
-                        ));
+                        report.warnings.push(Note::SegmentShort {
+                            segment: seg.name.clone(),
+                            rows: s.count,
+                            expected,
+                            duration_s: d,
+                            rate_hz: plan.sample_rate_hz,
+                        });
                     }
                 }
                 stats.push(s);
@@ -854,7 +853,12 @@ up_b = [0, 0, -1]
         let (stats, report) = read_text(text).unwrap();
         assert_eq!((stats[0].count, stats[0].rejected_rows), (2, 2));
         assert_eq!((report.rows, report.rejected_rows), (4, 2));
-        let w = report.warnings.join("\n");
+        let w = report
+            .warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("\n");
         assert!(w.contains("'x+'") && w.contains("first at line 3"), "{w}");
         assert!((stats[0].mean_u[0] - 2.5).abs() < 1e-12);
     }
@@ -954,7 +958,12 @@ up_b = [0, 0, -1]
         let (stats, report) = read_text(text).unwrap();
         assert_eq!(stats.len(), 2);
         assert_eq!(report.segments_without_rows, vec!["x+ 200".to_string()]);
-        let w = report.warnings.join("\n");
+        let w = report
+            .warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("\n");
         assert!(
             w.contains("'x+ 200'") && w.contains("no usable rows"),
             "{w}"

@@ -74,7 +74,7 @@ impl TimeRepairs {
     }
 
     /// [`TimeRepairs::describe`], the places of each kind only where `what` names the samples.
-    fn said(&self, what: Option<&str>) -> Option<String> {
+    pub(crate) fn said(&self, what: Option<&str>) -> Option<String> {
         if self.is_empty() {
             return None;
         }

@@ -37,7 +37,9 @@ fn a_header_less_file_is_read_by_column_index_and_named_as_such_when_read_by_nam
     assert_eq!(rec.acc[0], [0.01, -0.02, 9.81]);
     assert!((rec.rate_hz - 100.0).abs() < 1e-6, "{}", rec.rate_hz);
     assert!(
-        rec.read_notes.iter().any(|n| n.contains("no header")),
+        rec.read_notes
+            .iter()
+            .any(|n| n.to_string().contains("no header")),
         "{:?}",
         rec.read_notes
     );
@@ -72,10 +74,9 @@ fn a_preamble_before_the_header_is_found_or_skipped_as_told() {
     let found = read(&text, &o).unwrap();
     assert_eq!(found.len(), 300);
     assert!(
-        found
-            .read_notes
-            .iter()
-            .any(|n| n.contains("3 line(s) before the header on line 4")),
+        found.read_notes.iter().any(|n| n
+            .to_string()
+            .contains("3 line(s) before the header on line 4")),
         "{:?}",
         found.read_notes
     );
@@ -126,7 +127,12 @@ fn empty_cells_cost_that_rows_stream_never_the_file() {
         let want = 0.001 * (t / 0.005);
         assert!((g[0] - want).abs() < 1e-9, "at {t}: {g:?}, want {want}");
     }
-    let said = rec.reader_warnings(Places::InFile).join("\n");
+    let said = rec
+        .reader_warnings(Places::InFile)
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("\n");
     assert!(said.contains("200 row(s) without gyro values"), "{said}");
     assert!(!said.contains("NaN"), "{said}");
     // A single empty cell: that row's gyro comes from its neighbours, the file is read.
@@ -159,7 +165,12 @@ fn host_stamped_bursts_are_re_timed_at_the_rate_the_stamps_fit() {
     );
     let rec = read(&text, &o).unwrap();
     assert!((rec.rate_hz - 99.3).abs() < 0.01, "{}", rec.rate_hz);
-    let said = rec.reader_warnings(Places::InFile).join("\n");
+    let said = rec
+        .reader_warnings(Places::InFile)
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("\n");
     assert!(
         said.contains("bursts") && said.contains("99.300 Hz"),
         "{said}"

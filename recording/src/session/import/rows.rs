@@ -6,6 +6,7 @@ use super::time::detect_time_unit;
 use super::{ImportError, ImportOptions, Recording, TimeSource, MAX_OVERLONG_LINES};
 use crate::session::logs::keep::{Admit, Keeper};
 use crate::session::logs::resume::Marker;
+use crate::session::note::Note;
 use crate::spelling::UserOption;
 use std::io::BufRead;
 use std::path::Path;
@@ -465,7 +466,7 @@ fn take_row(
 /// between the nearest rows before and after it that have one (within [`FILL_ROWS`] rows; else the
 /// row is left out), and rows with the gyro alone are left out once they have served for that.
 /// Returns what was done, for the user.
-pub(super) fn fill_streams(rec: &mut Recording) -> Option<String> {
+pub(super) fn fill_streams(rec: &mut Recording) -> Option<Note> {
     let gyro_ok = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
     let acc_ok = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
     let no_gyro = rec.gyro_rad_s.iter().filter(|g| !gyro_ok(g)).count();
@@ -517,16 +518,12 @@ pub(super) fn fill_streams(rec: &mut Recording) -> Option<String> {
         k = 0;
         t.retain(|_| (keep[k], k += 1).0);
     }
-    Some(format!(
-        "{no_gyro} row(s) without gyro values and {no_acc} with the gyro's alone (a logger writing \
-         each sensor's packets in rows of their own, or cells left empty): the accelerometer's rows \
-         take the gyro's rate interpolated from the nearest rows that have one{}",
-        if unfilled > 0 {
-            format!(" ({unfilled} with none within {FILL_ROWS} rows left out)")
-        } else {
-            String::new()
-        }
-    ))
+    Some(Note::GyroFilled {
+        no_gyro,
+        no_acc,
+        unfilled,
+        fill_rows: FILL_ROWS,
+    })
 }
 
 /// A row without its gyro takes it from rows at most this many rows away.

@@ -4,6 +4,7 @@
 
 use super::{ImportError, Recording};
 use crate::limits::short_number;
+use crate::session::note::Note;
 use crate::spelling::{Spelling, UserOption};
 
 /// The unit of a time column: detected from the median step and the span, or given
@@ -125,7 +126,7 @@ impl Recording {
 
     /// The time jumps said with their places (the first five), or `None`: no still interval spans
     /// one and no turn is integrated across one.
-    pub fn time_jumps(&self) -> Option<String> {
+    pub fn time_jumps(&self) -> Option<Note> {
         let jumps = self.jumps();
         say_time_jumps(&jumps[..jumps.len().min(5)], jumps.len(), self.rate_hz)
     }
@@ -144,10 +145,16 @@ impl Recording {
 /// `count` time jumps of a recording at `rate_hz` said, `named` the first of them (five are named),
 /// or `None` when there are none ([`Recording::time_jumps`]; a long log read window by window
 /// counts them across its windows, `crate::session::logs`).
-pub fn say_time_jumps(named: &[TimeJump], count: usize, rate_hz: f64) -> Option<String> {
-    if count == 0 {
-        return None;
-    }
+pub fn say_time_jumps(named: &[TimeJump], count: usize, rate_hz: f64) -> Option<Note> {
+    (count > 0).then(|| Note::TimeJumps {
+        named: named.iter().take(5).copied().collect(),
+        count,
+        rate_hz,
+    })
+}
+
+/// The text of [`Note::TimeJumps`]: `count` jumps at `rate_hz`, `named` the first of them.
+pub(crate) fn jumps_text(named: &[TimeJump], count: usize, rate_hz: f64) -> String {
     let kind = |j: &TimeJump| match j.step_s {
         0.0 => "repeat",
         s if s < 0.0 => "step back",
@@ -166,14 +173,14 @@ pub fn say_time_jumps(named: &[TimeJump], count: usize, rate_hz: f64) -> Option<
             )
         })
         .collect();
-    Some(format!(
+    format!(
         "the time stamps jump {count} time(s) (a gap of more than {GAP_PERIODS} periods of {:.4} \
          s, a repeat or a step back): {}{}; no still interval spans one and no turn is integrated \
          across one",
         1.0 / rate_hz,
         places.join("; "),
         if count > 5 { "; …" } else { "" }
-    ))
+    )
 }
 
 /// Shortest recording a time unit may make of the time column, s: a hand-held session is minutes

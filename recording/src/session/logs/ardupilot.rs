@@ -19,6 +19,7 @@
 
 use super::vehicle::{ardupilot_name, VehicleParams, ARDUPILOT_SLOTS};
 use crate::session::import::Recording;
+use crate::session::note::Note;
 
 /// ArduPilot's thermal reference, °C (`TEMP_REFERENCE`).
 const TCAL_REFERENCE_C: f64 = 35.0;
@@ -314,7 +315,7 @@ pub(crate) fn undo(
     rec: &mut Recording,
     p: &VehicleParams,
     instance: u8,
-) -> Result<Option<String>, UndoError> {
+) -> Result<Option<Note>, UndoError> {
     let c = correction(p, instance)?;
     if c.is_identity() {
         return Ok(None);
@@ -353,27 +354,16 @@ pub(crate) fn undo(
         *a = acc;
         *w = gyro;
     }
-    let offs = ardupilot_name("INS_ACC", instance, "OFFS");
-    let scal = ardupilot_name("INS_ACC", instance, "SCAL");
-    let mut note = format!(
-        "IMU instance {instance} is logged after ArduPilot's own calibration: undone sample by \
-         sample ({offs}_* = {:?} m/s², {scal}_* = {:?}, AHRS_ORIENTATION = {}{}), so that what is \
-         read is the sensor's own output",
-        c.acc_offset,
-        c.acc_inv_scale.map(|s| 1.0 / s),
-        p.get("AHRS_ORIENTATION").unwrap_or(0.0),
-        if c.tcal.is_some() {
-            format!(", INS_TCAL{}_*", instance + 1)
-        } else {
-            String::new()
-        }
-    );
-    if no_temp > 0 {
-        note.push_str(&format!(
-            "; {no_temp} sample(s) without a temperature took the one before for INS_TCAL"
-        ));
-    }
-    Ok(Some(note))
+    Ok(Some(Note::ArduPilotUndone {
+        instance,
+        offs: ardupilot_name("INS_ACC", instance, "OFFS"),
+        scal: ardupilot_name("INS_ACC", instance, "SCAL"),
+        acc_offset: c.acc_offset,
+        acc_scale: c.acc_inv_scale.map(|s| 1.0 / s),
+        orientation: p.get("AHRS_ORIENTATION").unwrap_or(0.0),
+        tcal: c.tcal.is_some(),
+        no_temp,
+    }))
 }
 
 impl Correction {

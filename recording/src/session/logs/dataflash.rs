@@ -18,6 +18,7 @@ use super::{
     list_instances, pair_streams, ImuError, Keep, Stream, StreamAt, StreamSample, TooMany,
 };
 use crate::session::import::Recording;
+use crate::session::note::Note;
 use crate::spelling::Spelling;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
@@ -304,7 +305,7 @@ pub(crate) struct Resume {
     skipped: u64,
     first_skip: Option<u64>,
     params: VehicleParams,
-    warnings: Vec<String>,
+    warnings: Vec<Note>,
 }
 
 impl DataFlashError {
@@ -318,7 +319,7 @@ impl DataFlashError {
 }
 
 /// Reads the IMU samples of `instance` from a DataFlash log.
-pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), DataFlashError> {
+pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<Note>), DataFlashError> {
     read_keeping(r, instance, &Keep::default())
 }
 
@@ -327,7 +328,7 @@ pub(crate) fn read_keeping<R: Read>(
     r: R,
     instance: u8,
     keep: &Keep,
-) -> Result<(Recording, Vec<String>), DataFlashError> {
+) -> Result<(Recording, Vec<Note>), DataFlashError> {
     read_with_params(r, instance, keep, None).map(|(rec, w, _)| (rec, w))
 }
 
@@ -337,18 +338,17 @@ pub(crate) fn read_with_params<R: Read>(
     instance: u8,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
+) -> Result<(Recording, Vec<Note>, VehicleParams), DataFlashError> {
     let mut w = Window::at(r, 0);
     let mut st = State::new(keep, rate_hz);
     let mut warnings = Vec::new();
     let mut marker = Marker::for_keep(keep);
     st.messages(&mut w, instance, None, marker.as_mut(), &mut warnings)?;
     if let Some(first) = st.first_skip {
-        warnings.push(format!(
-            "{} byte(s) that start no known message were skipped, the first at byte {first} (damage \
-             or padding in the log, as pymavlink skips them)",
-            st.skipped
-        ));
+        warnings.push(Note::DataFlashSkipped {
+            count: st.skipped,
+            first,
+        });
     }
     if let (Some(marker), Keep::Survey(report)) = (marker, keep) {
         let resume = Resume {
@@ -378,7 +378,7 @@ pub(crate) fn read_window(
     instance: u8,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>, VehicleParams), DataFlashError> {
+) -> Result<(Recording, Vec<Note>, VehicleParams), DataFlashError> {
     let mut st = State::new(keep, rate_hz);
     let (lo, hi) = keep.reach();
     for (i, end) in stretches(&resume.marks, lo, hi) {
@@ -468,7 +468,7 @@ impl State {
         instance: u8,
         end: Option<u64>,
         mut marker: Option<&mut Marker<At>>,
-        warnings: &mut Vec<String>,
+        warnings: &mut Vec<Note>,
     ) -> Result<(), DataFlashError> {
         loop {
             if end.is_some_and(|e| w.offset >= e) {
@@ -500,10 +500,7 @@ impl State {
                 continue;
             };
             if w.fill(length)? < length {
-                warnings.push(format!(
-                    "the log's last message (at byte {}) is cut short: it is left out",
-                    w.offset
-                ));
+                warnings.push(Note::LastMessageCutShort { offset: w.offset });
                 break;
             }
             let offset = w.offset;
@@ -610,8 +607,8 @@ impl State {
     fn finish(
         self,
         instance: u8,
-        mut warnings: Vec<String>,
-    ) -> Result<(Recording, Vec<String>), DataFlashError> {
+        mut warnings: Vec<Note>,
+    ) -> Result<(Recording, Vec<Note>), DataFlashError> {
         let (acc, gyro) = if self.imu_acc.count() > 0 {
             (self.imu_acc, self.imu_gyro)
         } else if self.acc.count() > 0 && self.gyro.count() > 0 {

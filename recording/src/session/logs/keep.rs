@@ -18,6 +18,7 @@
 //! the same rules as on a short log (`super::super::segment`).
 
 use crate::session::import::MAX_ROWS;
+use crate::session::note::Note;
 use crate::spelling::{Spelling, UserOption};
 use std::sync::{Arc, Mutex};
 
@@ -359,32 +360,23 @@ pub(crate) fn left_out_note(
     regions: usize,
     option: Option<UserOption>,
     spelling: Spelling,
-) -> Vec<String> {
-    let kept = l.read - l.outside - l.over_budget;
-    let mut notes = vec![format!(
-        "the log holds {} accelerometer samples, more than the {max} kept in memory at once: \
-         {kept} are kept, those of its {regions} stretch(es) of still positions and turns, and \
-         the {} of moves longer than {MAX_MOVE_S:.0} s between them (flights, walks) are left out",
-        l.read, l.outside
-    )];
-    if let Some(t) = l.first_over_s {
-        let needed = l.read - l.outside;
-        let advice = match option {
-            None => "the most one analysis takes".to_string(),
-            Some(o) if needed <= MAX_ROWS => {
-                format!("give {} to keep them", spelling.given(o, needed))
-            }
-            Some(o) => format!(
-                "at most {} can be kept ({}), about 200 bytes of memory each",
-                MAX_ROWS,
-                spelling.given(o, MAX_ROWS)
-            ),
-        };
-        notes.push(format!(
-            "the still positions and turns hold more than {max} samples: the {} from t = {t:.3} s \
-             on are left out; {advice}",
-            l.over_budget,
-        ));
+) -> Vec<Note> {
+    let mut notes = vec![Note::LongLogKept {
+        read: l.read,
+        max,
+        kept: l.read - l.outside - l.over_budget,
+        regions,
+        outside: l.outside,
+    }];
+    if let Some(from_s) = l.first_over_s {
+        notes.push(Note::LongLogOverBudget {
+            max,
+            over_budget: l.over_budget,
+            from_s,
+            needed: l.read - l.outside,
+            option,
+            spelling,
+        });
     }
     notes
 }

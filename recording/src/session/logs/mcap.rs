@@ -16,6 +16,7 @@ use super::resume::{join, stretches, Mark, Marker, NO_TIMES};
 use super::StreamAt;
 use super::{Keep, Stream, StreamSample, TooMany};
 use crate::session::import::Recording;
+use crate::session::note::Note;
 use crate::spelling::{Spelling, UserOption};
 use ::mcap::records::Record;
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
@@ -184,7 +185,7 @@ impl McapError {
 }
 
 /// Reads the Imu messages of `topic` (default: the bag's only Imu topic) from an MCAP file.
-pub fn read<R: Read>(r: R, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+pub fn read<R: Read>(r: R, topic: Option<&str>) -> Result<(Recording, Vec<Note>), McapError> {
     read_keeping(r, topic, &Keep::default(), None)
 }
 
@@ -194,7 +195,7 @@ pub(crate) fn read_keeping<R: Read>(
     topic: Option<&str>,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>), McapError> {
+) -> Result<(Recording, Vec<Note>), McapError> {
     let mut reader = linear_reader(false);
     let mut st = State::new(keep, rate_hz);
     let mut marker = Marker::for_keep(keep);
@@ -236,11 +237,8 @@ fn linear_reader(resumed: bool) -> LinearReader {
 }
 
 /// A file cut short at byte `offset`, said.
-fn cut_note(offset: u64) -> String {
-    format!(
-        "the file is cut short: it ends at byte {offset} inside a record; the messages before \
-         that record are read, those in it (a whole chunk, if the bag is chunked) are lost"
-    )
+fn cut_note(offset: u64) -> Note {
+    Note::McapCutShort { offset }
 }
 
 /// The reader's state at a mark, or at the end of the survey (`super::resume`).
@@ -272,7 +270,7 @@ pub(crate) fn read_window(
     topic: Option<&str>,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>), McapError> {
+) -> Result<(Recording, Vec<Note>), McapError> {
     let mut st = State::new(keep, rate_hz);
     let (lo, hi) = keep.reach();
     for (i, end) in stretches(&resume.marks, lo, hi) {
@@ -540,7 +538,7 @@ impl State {
         Ok(())
     }
 
-    fn finish(mut self, topic: Option<&str>) -> Result<(Recording, Vec<String>), McapError> {
+    fn finish(mut self, topic: Option<&str>) -> Result<(Recording, Vec<Note>), McapError> {
         let imu: Vec<&str> = self
             .channels
             .values()
@@ -595,11 +593,9 @@ impl State {
         if unstamped {
             warnings.insert(
                 0,
-                format!(
-                    "the {} Imu messages have no header stamp (all 0): timed by the bag's log \
-                     time, when the recorder received them",
-                    self.unstamped
-                ),
+                Note::McapUnstamped {
+                    count: self.unstamped,
+                },
             );
         }
         Ok((rec, warnings))

@@ -27,12 +27,14 @@ pub use error::{ForeignFormat, ImuError, LogError};
 use keep::{Keep, Keeper, PassReport};
 pub use keep::{DEFAULT_MAX_SAMPLES, MAX_BLOCKS, MAX_MOVE_S};
 pub(crate) use stream::{pair, pair_streams, Stream, StreamAt, StreamSample, TooMany};
+pub(crate) use windows::MARGIN_PERIODS;
 pub use windows::{read_log_windows, LogRead, LogScale, LogWindows, Window};
 
 use super::import::{
     gyro_mid_scale_note, read_logger_keeping, read_logger_window, ImportError, ImportOptions,
     Recording, TimeOrigin, MIN_SESSION_ROWS,
 };
+use super::note::Note;
 use super::repair::repair_rows_saying;
 use crate::spelling::{Spelling, UserOption};
 use std::fs::File;
@@ -106,8 +108,8 @@ pub struct LogFile {
     pub recording: Recording,
     /// The file's format.
     pub format: LogFormat,
-    /// What to tell the user.
-    pub warnings: Vec<String>,
+    /// What to tell the user, said with `Display`.
+    pub warnings: Vec<Note>,
 }
 
 /// Reads the whole log at `path` in whatever format its first bytes say (see the module docs), up
@@ -350,11 +352,11 @@ fn read_keeping<R: BufRead>(
 
 /// A DataFlash log's samples and notes read, the vehicle's own corrections undone.
 fn dataflash_undone(
-    read: Result<(Recording, Vec<String>, vehicle::VehicleParams), dataflash::DataFlashError>,
+    read: Result<(Recording, Vec<Note>, vehicle::VehicleParams), dataflash::DataFlashError>,
     instance: u8,
     path: &Path,
     sp: Spelling,
-) -> Result<(Recording, Vec<String>), LogError> {
+) -> Result<(Recording, Vec<Note>), LogError> {
     let p = || path.to_path_buf();
     let (mut rec, mut notes, params) = read.map_err(|e| LogError::DataFlash {
         path: p(),
@@ -370,7 +372,7 @@ fn dataflash_undone(
 /// than two samples.
 fn log_file(
     mut recording: Recording,
-    warnings: Vec<String>,
+    warnings: Vec<Note>,
     format: LogFormat,
     keep: &Keep,
     path: &Path,
@@ -448,19 +450,17 @@ fn resume_pass(
 }
 
 /// The accelerometer samples left out for want of a gyro sample within `max_gap_s`, said.
-pub(crate) fn unpaired_note(unpaired: usize, max_gap_s: f64) -> Option<String> {
-    (unpaired > 0).then(|| {
-        format!(
-            "{unpaired} accelerometer sample(s) with no gyro sample within {:.0} ms left out",
-            max_gap_s * 1e3
-        )
+pub(crate) fn unpaired_note(unpaired: usize, max_gap_s: f64) -> Option<Note> {
+    (unpaired > 0).then_some(Note::Unpaired {
+        count: unpaired,
+        max_gap_s,
     })
 }
 
 /// What the user is told of a text recording read with `options` (a file's or arrays'): its
 /// temperature readings (`temperature_notes`) and a gyro in counts at an unsigned output's
 /// mid-scale with no offset given.
-pub fn text_notes(rec: &mut Recording, options: &ImportOptions) -> Vec<String> {
+pub fn text_notes(rec: &mut Recording, options: &ImportOptions) -> Vec<Note> {
     let mut notes = temperature_notes(rec);
     notes.extend(gyro_mid_scale_note(rec, options));
     notes
@@ -470,7 +470,7 @@ pub fn text_notes(rec: &mut Recording, options: &ImportOptions) -> Vec<String> {
 /// all (a driver without a temperature sensor: the recording is then read as one without
 /// temperature), or some missing (those rows are kept; only the readings enter the temperature
 /// statistics, docs/model.md §9).
-pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
+pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<Note> {
     let Some(temps) = &rec.temp_c else {
         return Vec::new();
     };
@@ -482,20 +482,13 @@ pub(crate) fn temperature_notes(rec: &mut Recording) -> Vec<String> {
 }
 
 /// [`temperature_notes`] of `readings` temperature readings in `rows` rows.
-pub(crate) fn temperature_note(readings: usize, rows: usize) -> Option<String> {
+pub(crate) fn temperature_note(readings: usize, rows: usize) -> Option<Note> {
     if readings == 0 {
-        return Some(
-            "the temperature is NaN in every sample (a driver without a temperature \
-                     reading): read as a log without temperature"
-                .to_string(),
-        );
+        return Some(Note::NoTemperature);
     }
-    (readings < rows).then(|| {
-        format!(
-            "{} of {rows} samples have no temperature reading (NaN): those rows are kept, and only \
-             the readings enter the temperature statistics",
-            rows - readings,
-        )
+    (readings < rows).then_some(Note::SomeWithoutTemperature {
+        missing: rows - readings,
+        rows,
     })
 }
 

@@ -2,6 +2,8 @@
 //! host's (a ROS driver's bursts) rather than the sensor's: each stream's n-th sample at its first
 //! stamp plus n periods, and the rate the stamps themselves imply said beside it.
 
+use crate::session::note::Note;
+
 /// A stream re-timed at a given rate: the n-th sample (every sample read, kept or not, in file
 /// order) at `t0 + n/rate`, `t0` from the first finite stamp; the stamps themselves are sampled
 /// (at most [`Retime::KEPT`] of them, evenly) for the rate they imply.
@@ -90,16 +92,9 @@ impl Retime {
 }
 
 /// What a log re-timed at a given rate says: that rate beside the one its stamps imply.
-pub(super) fn retime_note((given, implied): (f64, Option<f64>)) -> String {
-    match implied {
-        Some(hz) => format!(
-            "every sample re-timed at {given} Hz as given, not at its stamp; the stamps imply \
-             {hz:.4} Hz ({:+.2} % from the rate given)",
-            (hz / given - 1.0) * 100.0
-        ),
-        None => format!(
-            "every sample re-timed at {given} Hz as given; too few stamps to say what rate they \
-             imply"
-        ),
+pub(super) fn retime_note((given_hz, implied_hz): (f64, Option<f64>)) -> Note {
+    Note::Retimed {
+        given_hz,
+        implied_hz,
     }
 }

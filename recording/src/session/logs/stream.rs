@@ -6,6 +6,7 @@ use super::keep::{Admit, Keep, Keeper};
 use super::retime::{retime_note, Retime};
 use super::{temperature_notes, unpaired_note, windows};
 use crate::session::import::{Recording, GAP_PERIODS};
+use crate::session::note::Note;
 use crate::session::repair::{median_step, repair_times, run_rate_hz, TimeRepairs};
 use shared::OutputUnit;
 
@@ -119,7 +120,7 @@ pub(crate) struct StreamAt {
 /// [`repair`](crate::session::repair)'s rules, so that a damaged stamp costs at most its sample.
 /// The streams are consumed, each dropped once mended, so that no more than one copy of a
 /// stream is held at a time (`keep`).
-pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Recording, Vec<String>) {
+pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Recording, Vec<Note>) {
     if acc.keeper.report() {
         return (Recording::default(), Vec::new());
     }
@@ -187,11 +188,9 @@ pub(crate) fn pair(mut acc: Stream, mut gyro: Stream, max_gap_s: f64) -> (Record
         warnings.extend(acc.rates_hz().map(retime_note));
     }
     if gyro.non_finite > 0 {
-        warnings.push(format!(
-            "{} gyro sample(s) with NaN or infinite values left out (the rate interpolated \
-             between their neighbours)",
-            gyro.non_finite
-        ));
+        warnings.push(Note::GyroNonFinite {
+            count: gyro.non_finite,
+        });
     }
     (rec, warnings)
 }
@@ -222,7 +221,7 @@ fn repaired(samples: Vec<StreamSample>, keeper: &Keeper) -> (Vec<StreamSample>, 
 }
 
 /// [`pair`] with the gap allowed between two gyro samples set to five of the gyro's median periods.
-pub(crate) fn pair_streams(acc: Stream, gyro: Stream) -> (Recording, Vec<String>) {
+pub(crate) fn pair_streams(acc: Stream, gyro: Stream) -> (Recording, Vec<Note>) {
     let gyro_ts: Vec<f64> = gyro.samples.iter().map(|s| s.t_s).collect();
     let rate_hz = 1.0 / median_step(&gyro_ts).unwrap_or(1.0);
     pair(acc, gyro, GAP_PERIODS / rate_hz.max(1.0))

@@ -60,7 +60,9 @@ fn the_gyro_is_interpolated_to_the_accelerometers_times_and_gaps_are_not_bridged
     assert_eq!(rec.time_repairs.len(), 1, "{:?}", rec.time_repairs);
     assert_eq!(rec.time_repairs[0].1.repeats, [11]);
     assert!(
-        warnings.iter().any(|w| w.contains("no gyro sample")),
+        warnings
+            .iter()
+            .any(|w| w.to_string().contains("no gyro sample")),
         "{warnings:?}"
     );
     // The last accelerometer sample lies after the last gyro sample: left out too.
@@ -175,9 +177,9 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
     assert!(temp[10].is_nan() && temp[20].is_nan() && temp[30].is_nan());
     assert_eq!(temp.iter().filter(|t| t.is_finite()).count(), 297);
     assert!(
-        log.warnings
-            .iter()
-            .any(|w| w.contains("3 of 300 samples have no temperature reading")),
+        log.warnings.iter().any(|w| w
+            .to_string()
+            .contains("3 of 300 samples have no temperature reading")),
         "{:?}",
         log.warnings
     );
@@ -195,7 +197,7 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
     assert!(
         log.warnings
             .iter()
-            .any(|w| w.contains("NaN in every sample")),
+            .any(|w| w.to_string().contains("NaN in every sample")),
         "{:?}",
         log.warnings
     );

@@ -17,6 +17,7 @@ use super::{
     list_instances, pair_streams, read_exact_or_end, ImuError, Keep, Stream, StreamSample, TooMany,
 };
 use crate::session::import::Recording;
+use crate::session::note::Note;
 use crate::spelling::Spelling;
 use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
@@ -37,10 +38,10 @@ const MAX_FORMATS: usize = 4096;
 /// A field costs about 100 bytes parsed (its type and name), so that a log of oversized
 /// definitions (each up to 65 535 bytes, some 16 000 fields) costs no more than about 6 MB
 /// however many it has; the definitions beyond it are left out (an IMU topic's own is kept).
-const MAX_FIELDS: usize = 1 << 16;
+pub(crate) const MAX_FIELDS: usize = 1 << 16;
 /// Most bytes of field types and names kept over all format definitions (PX4's: some 60 KB), so
 /// that a few fields of very long names cost no more.
-const MAX_FIELD_BYTES: usize = 4 << 20;
+pub(crate) const MAX_FIELD_BYTES: usize = 4 << 20;
 /// `accelerometer_timestamp_relative` when the accelerometer sample is missing (PX4's
 /// `sensor_combined_s::RELATIVE_TIMESTAMP_INVALID`).
 const RELATIVE_TIMESTAMP_INVALID: i32 = 0x7fff_ffff;
@@ -180,7 +181,7 @@ impl UlogError {
 }
 
 /// Reads the IMU samples of `instance` (the topics' `multi_id`) from a ULog.
-pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<String>), UlogError> {
+pub fn read<R: Read>(r: R, instance: u8) -> Result<(Recording, Vec<Note>), UlogError> {
     read_keeping(r, instance, &Keep::default(), None)
 }
 
@@ -190,7 +191,7 @@ pub(crate) fn read_keeping<R: Read>(
     instance: u8,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>), UlogError> {
+) -> Result<(Recording, Vec<Note>), UlogError> {
     let mut header = [0u8; 16];
     match read_exact_or_end(&mut r, &mut header) {
         Ok(true) => {}
@@ -213,17 +214,10 @@ pub(crate) fn read_keeping<R: Read>(
         &mut warnings,
     )?;
     if let (count @ 1.., first) = st.bad_formats {
-        warnings.push(format!(
-            "{count} format definition(s) that do not parse left out (the first at byte {first}); \
-             they define no IMU topic, and the topics they define are not read"
-        ));
+        warnings.push(Note::UlogBadFormats { count, first });
     }
     if let (count @ 1.., first) = st.over_formats {
-        warnings.push(format!(
-            "{count} format definition(s) beyond the {MAX_FIELDS} fields or {MAX_FIELD_BYTES} bytes \
-             of fields kept left out (the first at byte {first}); they define no IMU topic, and \
-             the topics they define are not read"
-        ));
+        warnings.push(Note::UlogOverFormats { count, first });
     }
     if let (Some(marker), Keep::Survey(report)) = (marker, keep) {
         let resume = Resume {
@@ -245,7 +239,7 @@ fn skip_to<R: Read>(
     r: &mut R,
     offset: &mut u64,
     to: u64,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Result<bool, UlogError> {
     let want = to - *offset;
     let got =
@@ -255,9 +249,10 @@ fn skip_to<R: Read>(
         })?;
     *offset += got;
     if got < want {
-        warnings.push(format!(
-            "the log ends at byte {offset} before its appended data at byte {to}"
-        ));
+        warnings.push(Note::UlogEndsBeforeAppended {
+            offset: *offset,
+            appended: to,
+        });
     }
     Ok(got == want)
 }
@@ -268,8 +263,8 @@ fn size(fields: &[Field]) -> (usize, usize) {
     (fields.len(), bytes)
 }
 
-fn cut_short(offset: u64) -> String {
-    format!("the log's last message (at byte {offset}) is cut short: it is left out")
+fn cut_short(offset: u64) -> Note {
+    Note::LastMessageCutShort { offset }
 }
 
 impl State {
@@ -330,7 +325,7 @@ impl State {
         instance: u8,
         end: Option<u64>,
         mut marker: Option<&mut Marker<At>>,
-        warnings: &mut Vec<String>,
+        warnings: &mut Vec<Note>,
     ) -> Result<(), UlogError> {
         let mut payload = vec![0u8; u16::MAX as usize];
         loop {
@@ -363,7 +358,7 @@ impl State {
         offset: &mut u64,
         payload: &mut [u8],
         instance: u8,
-        warnings: &mut Vec<String>,
+        warnings: &mut Vec<Note>,
     ) -> Result<bool, UlogError> {
         if let Some(o) = self.appended.first().copied() {
             if o <= *offset || o - *offset < 3 {
@@ -372,10 +367,10 @@ impl State {
                 if o > *offset {
                     return skip_to(r, offset, o, warnings);
                 } else if o < *offset {
-                    warnings.push(format!(
-                        "the log's appended data at byte {o} lies before byte {offset}, where \
-                         reading is: ignored"
-                    ));
+                    warnings.push(Note::UlogAppendedBehind {
+                        appended: o,
+                        offset: *offset,
+                    });
                 }
                 return Ok(true);
             }
@@ -398,10 +393,10 @@ impl State {
             // message running into it was cut when the logger stopped; it is dropped, and reading
             // goes on where the appended data starts.
             self.appended.remove(0);
-            warnings.push(format!(
-                "the message at byte {offset} runs into the data appended at byte {o} (the \
-                 logger stopped while writing it): left out"
-            ));
+            warnings.push(Note::UlogRunsIntoAppended {
+                offset: *offset,
+                appended: o,
+            });
             *offset += 3;
             return skip_to(r, offset, o, warnings);
         }
@@ -580,8 +575,8 @@ impl State {
     fn finish(
         mut self,
         instance: u8,
-        mut warnings: Vec<String>,
-    ) -> Result<(Recording, Vec<String>), UlogError> {
+        mut warnings: Vec<Note>,
+    ) -> Result<(Recording, Vec<Note>), UlogError> {
         let raw = self.accel.count().min(self.gyro.count());
         let combined = self.combined_gyro.count();
         // The sensors' own topics are preferred (raw, with temperature), but a log often keeps them
@@ -589,13 +584,7 @@ impl State {
         // estimator's rate: then the richer topic is the one a calibration can use.
         let raw_is_sparse = raw > 0 && combined > 0 && raw < combined / 2;
         if raw_is_sparse {
-            warnings.push(format!(
-                "sensor_accel/sensor_gyro hold only {raw} samples against sensor_combined's \
-                 {combined}: reading sensor_combined (already corrected by PX4's calibration, no \
-                 temperature), which a calibration cannot be made from; to calibrate the sensor \
-                 itself, log sensor_accel and sensor_gyro at the sensor's rate (PX4's \
-                 logger_topics.txt or SDLOG_PROFILE)"
-            ));
+            warnings.push(Note::UlogSparseRawTopics { raw, combined });
         }
         let take = std::mem::take;
         let (acc, gyro, from_combined) = if raw > 0 && !raw_is_sparse {
@@ -633,11 +622,13 @@ impl State {
         }
         if let Some(&(offset, t_s, ms)) = self.dropouts.first() {
             let total: u64 = self.dropouts.iter().map(|d| u64::from(d.2)).sum();
-            warnings.push(format!(
-                "the logger dropped data {} time(s), {total} ms in all; the first at byte {offset} \
-                 (t = {t_s:.3} s), {ms} ms: no still interval or turn should span a dropout",
-                self.dropouts.len()
-            ));
+            warnings.push(Note::UlogDropouts {
+                count: self.dropouts.len(),
+                total_ms: total,
+                offset,
+                t_s,
+                ms,
+            });
         }
         warnings.append(&mut paired);
         Ok((rec, warnings))
@@ -690,7 +681,8 @@ mod tests {
         let (rec, w) = one_rate.finish(0, Vec::new()).unwrap();
         assert!((rec.t_s[799] - rec.t_s[0] - 799.0 / 500.0).abs() < 1e-12);
         assert!(
-            w.iter().any(|w| w.contains("the stamps imply 400.0000 Hz")),
+            w.iter()
+                .any(|w| w.to_string().contains("the stamps imply 400.0000 Hz")),
             "{w:?}"
         );
     }
@@ -719,7 +711,10 @@ mod tests {
         };
         let (rec, w) = sparse.finish(0, Vec::new()).unwrap();
         assert!(rec.len() > 900 && rec.temp_c.is_none(), "{}", rec.len());
-        assert!(w.iter().any(|w| w.contains("only 6 samples")), "{w:?}");
+        assert!(
+            w.iter().any(|w| w.to_string().contains("only 6 samples")),
+            "{w:?}"
+        );
         let full = State {
             accel: fill(800, Some(40.0)),
             gyro: fill(800, Some(40.0)),
@@ -729,6 +724,9 @@ mod tests {
         };
         let (rec, w) = full.finish(0, Vec::new()).unwrap();
         assert!(rec.len() == 800 && rec.temp_c.is_some(), "{}", rec.len());
-        assert!(!w.iter().any(|w| w.contains("sensor_combined")), "{w:?}");
+        assert!(
+            !w.iter().any(|w| w.to_string().contains("sensor_combined")),
+            "{w:?}"
+        );
     }
 }

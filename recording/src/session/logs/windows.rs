@@ -37,6 +37,7 @@ use super::{
     LogFile, LogSource,
 };
 use crate::session::import::{say_time_jumps, Recording, TimeJump, GAP_PERIODS};
+use crate::session::note::Note;
 use crate::session::repair::{Restart, TimeRepairs};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -44,7 +45,7 @@ use std::sync::{Arc, Mutex};
 
 /// Periods read on either side of a window: more than the repair's neighbours and its gap, and
 /// the gyro samples either side of the window's first and last accelerometer sample.
-const MARGIN_PERIODS: f64 = 64.0;
+pub(crate) const MARGIN_PERIODS: f64 = 64.0;
 
 /// The margin when the survey shows no period, s.
 const MARGIN_FALLBACK_S: f64 = 1.0;
@@ -234,7 +235,7 @@ impl LogScale {
 
     /// What the whole log says: its temperatures, the samples left unpaired, the time repairs
     /// with their places in the file, the samples the window rule left out, and the gaps.
-    pub fn notes(mut self) -> Vec<String> {
+    pub fn notes(mut self) -> Vec<Note> {
         let mut notes = Vec::new();
         if self.no_readings {
             notes.extend(temperature_note(0, self.rows));
@@ -253,17 +254,12 @@ impl LogScale {
             if *what != "gyro sample" {
                 lost_by_repair += rep.lost();
             }
-            notes.extend(rep.describe(what));
+            notes.extend(Note::time_repairs(Some(what), rep));
         }
         let accounted = self.rows + lost_by_repair + self.unpaired.0;
         let lost = self.surveyed.saturating_sub(accounted);
         if lost > 0 {
-            notes.push(format!(
-                "{lost} sample(s) left out by the window rule: a stamp damaged so far that it \
-                 lies outside its own window's reach (its times and {MARGIN_PERIODS:.0} periods \
-                 either side) is not re-timed from its neighbours, as a whole read does, but \
-                 left out"
-            ));
+            notes.push(Note::WindowRule { lost });
         }
         notes.extend(say_time_jumps(&self.jumps, self.jump_count, self.rate_hz));
         notes

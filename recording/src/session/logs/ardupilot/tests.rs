@@ -155,7 +155,7 @@ fn ardupilots_correction_is_undone_sample_by_sample() {
                     logged.gyro_rad_s[k] = w;
                 }
                 let note = undo(&mut logged, &p, instance).unwrap().unwrap();
-                assert!(note.contains("undone"), "{note}");
+                assert!(note.to_string().contains("undone"), "{note}");
                 for k in 0..raw.len() {
                     for i in 0..3 {
                         let (da, dw) = (

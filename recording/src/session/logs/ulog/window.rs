@@ -7,6 +7,7 @@ use super::layout::{Field, Layout, Topic};
 use super::{Keep, Recording, State, UlogError};
 use crate::session::logs::resume::{stretches, Mark};
 use crate::session::logs::StreamAt;
+use crate::session::note::Note;
 use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
 use std::io::{BufReader, Seek, SeekFrom};
@@ -31,7 +32,7 @@ pub(crate) struct Resume {
     pub(super) streams: [StreamAt; 4],
     pub(super) seen: BTreeSet<(Topic, u8)>,
     pub(super) dropouts: Vec<(u64, f64, u16)>,
-    pub(super) warnings: Vec<String>,
+    pub(super) warnings: Vec<Note>,
 }
 
 /// One window of a long log (`keep`, a [`Keep::Span`]) read from the stretches of `file` its
@@ -43,7 +44,7 @@ pub(crate) fn read_window(
     instance: u8,
     keep: &Keep,
     rate_hz: Option<f64>,
-) -> Result<(Recording, Vec<String>), UlogError> {
+) -> Result<(Recording, Vec<Note>), UlogError> {
     let mut st = State::new(keep, rate_hz);
     let (lo, hi) = keep.reach();
     for (i, end) in stretches(&resume.marks, lo, hi) {
