@@ -483,7 +483,17 @@ impl State {
                 let times = self.take_times();
                 m.set(w.offset, at, times, self.read());
             }
-            if w.fill(3)? < 3 {
+            let have = w.fill(3)?;
+            if have < 3 {
+                // One or two bytes left: a message cut short within its header when they begin
+                // as one, else bytes that start no message.
+                let h = w.peek();
+                if have > 0 && h[0] == HEAD1 && (have == 1 || h[1] == HEAD2) {
+                    warnings.push(Note::LastMessageCutShort { offset: w.offset });
+                } else if have > 0 {
+                    self.skipped += have as u64;
+                    self.first_skip.get_or_insert(w.offset);
+                }
                 break;
             }
             let h = w.peek();
