@@ -12,8 +12,6 @@
 //!   `cargo run --release -p host --features fuzz --example fuzz -- all 1000000` (a short run is a unit test).
 
 pub(crate) mod logs;
-#[cfg(test)]
-mod torture_tests;
 
 use estimator::unit_file::UnitFile;
 use recording::session::import::{read_logger, GyroUnit, ImportOptions, TimeSource, MAX_ROWS};

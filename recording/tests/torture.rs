@@ -6,14 +6,16 @@
 //! damage is kept, at its own time and with its own values; at most 2 rows are lost per damaged
 //! sample.
 //!
-//! `TORTURE_SEEDS=N cargo test -p host --lib torture -- --nocapture` runs N seeds per case (default
-//! 3) and prints the cases run and the rows lost per damaged sample, per format and mutation.
+//! `TORTURE_SEEDS=N cargo test -p recording --test torture -- --nocapture` runs N seeds per case
+//! (default 3) and prints the cases run and the rows lost per damaged sample, per format and
+//! mutation.
 
-use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
 use recording::session::import::GyroUnit;
 use recording::session::import::{ImportOptions, TimeSource};
 use recording::session::logs::{read_log_from, LogSource};
-use recording::testkit::{write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample};
+use recording::testkit::{
+    hand_session, write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample,
+};
 use shared::rng::Rng;
 use shared::OutputUnit;
 use std::collections::{BTreeMap, HashMap};
@@ -58,21 +60,17 @@ const MUTATIONS: [Mutation; 12] = [
     Mutation::MalformedFormat,
 ];
 
-/// The clean session: the first 12 000 rows (60 s) of the standard hand session at 200 Hz.
+/// The clean session: the fixtures' hand session (6 000 rows, 60 s at 100 Hz), its clock started
+/// 1000 s before, its temperature a ramp.
 fn clean() -> Vec<LogSample> {
-    let sim = simulate_hand(
-        &logger_unit(OutputUnit::MetresPerSecondSquared),
-        &HandSpec::standard(3),
-    );
-    sim.rows
-        .iter()
-        .take(12_000)
+    let hand = hand_session();
+    let t0 = hand[0].t_s;
+    hand.iter()
         .enumerate()
-        .map(|(k, (t, a, g))| LogSample {
-            t_s: 1000.0 + t,
-            acc: a.map(|x| x as f32),
-            gyro: g.map(|x| x as f32),
+        .map(|(k, s)| LogSample {
+            t_s: 1000.0 + s.t_s - t0,
             temp_c: 30.0 + 1e-4 * k as f32,
+            ..*s
         })
         .collect()
 }
@@ -161,7 +159,12 @@ fn mutate(format: Format, m: Mutation, clean: &[LogSample], rng: &mut Rng) -> Da
     let mut bytes = write(format, &s, offset);
     if m == Mutation::Truncate {
         let cut = rng.range(0.5, 0.95);
-        let keep = (bytes.len() as f64 * cut) as usize;
+        let mut keep = (bytes.len() as f64 * cut) as usize;
+        // A cut exactly between two messages leaves a shorter whole log, which no reader can tell
+        // from one the logger closed there: the mutation cuts through a message.
+        if message_starts(format, &bytes).contains(&keep) {
+            keep -= 1;
+        }
         bytes.truncate(keep);
         // About the samples after the cut are removed; the one the cut runs through is damaged.
         removed = match format {
@@ -175,6 +178,31 @@ fn mutate(format: Format, m: Mutation, clean: &[LogSample], rng: &mut Rng) -> Da
         bytes,
         damaged,
         removed,
+    }
+}
+
+/// Where each message (a binary log's record) of a file from [`write`] begins: ULog's after the
+/// 16-byte header (`u16` size, `u8` type, the body), DataFlash's at each `A3 95` its writer puts
+/// before a message, MCAP's records after the 8-byte magic (`u8` opcode, `u64` length, the body).
+/// None for a text file, whose cut is a line's.
+fn message_starts(format: Format, file: &[u8]) -> Vec<usize> {
+    let walk = |mut at: usize, header: usize, len: &dyn Fn(&[u8]) -> usize| {
+        let mut starts = Vec::new();
+        while at + header <= file.len() {
+            starts.push(at);
+            at += header + len(&file[at..]);
+        }
+        starts
+    };
+    match format {
+        Format::Text => Vec::new(),
+        Format::Ulog => walk(16, 3, &|m| usize::from(u16::from_le_bytes([m[0], m[1]]))),
+        Format::DataFlash => (0..file.len().saturating_sub(1))
+            .filter(|&i| file[i] == 0xA3 && file[i + 1] == 0x95)
+            .collect(),
+        Format::Mcap => walk(8, 9, &|m| {
+            u64::from_le_bytes(m[1..9].try_into().unwrap()) as usize
+        }),
     }
 }
 
