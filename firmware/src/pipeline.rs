@@ -310,7 +310,7 @@ impl<const Q: usize> Pipeline<Q> {
             Some(c) if c.mode() == LeverMode::Off => {
                 c.compensate_static(&SensorOutputs { raw: *raw }).m_s2
             }
-            Some(c) => c.compensate_in_place(raw, rate, omega_dot),
+            Some(c) => c.compensate_raw(raw, rate, omega_dot),
             None => *raw,
         }
     }
@@ -320,7 +320,7 @@ impl<const Q: usize> Pipeline<Q> {
     #[inline(always)]
     fn body_rate_into(&self, gyro_rad_s: &[f32; 3], out: &mut [f32; 3]) {
         match &self.compensator {
-            Some(c) => c.correct_rate_into(gyro_rad_s, out),
+            Some(c) => *out = c.correct_rate(gyro_rad_s).rad_s,
             None => *out = *gyro_rad_s,
         }
     }

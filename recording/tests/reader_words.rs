@@ -143,10 +143,13 @@ fn dataflash() {
     let bytes = write_dataflash(&still());
     // Cut one byte into the last message: its sync byte alone is left.
     let last = bytes.windows(2).rposition(|w| w == [0xA3, 0x95]).unwrap();
-    check_dataflash(&bytes[..last + 1], expect![[r#"
+    check_dataflash(
+        &bytes[..last + 1],
+        expect![[r#"
         299 rows at 100.000 Hz
         - the log's last message (at byte 16785) is cut short: it is left out
-    "#]]);
+    "#]],
+    );
     check_dataflash(
         &bytes[..bytes.len() - 20],
         expect![[r#"

@@ -412,19 +412,8 @@ impl Compensator {
     }
 
     /// The body rate from the gyro's output, `ω = G⁻¹(w − b)` (docs/model.md §8), evaluated as
-    /// `c + G⁻¹ w` with `c = −G⁻¹ b(T)` precomputed, written to `out` (rad/s): 9 multiply-adds,
-    /// skipped for a perfect gyro (a configuration branch, not a data branch), which therefore
-    /// passes `w` through bit for bit.
-    #[inline(always)]
-    pub fn correct_rate_into(&self, w_rad_s: &[f32; 3], out: &mut [f32; 3]) {
-        if !self.gyro_corrected {
-            *out = *w_rad_s;
-            return;
-        }
-        self.gyro.correct_into(w_rad_s, out);
-    }
-
-    /// [`Compensator::correct_rate_into`] returning the body rate.
+    /// `c + G⁻¹ w` with `c = −G⁻¹ b(T)` precomputed: 9 multiply-adds, skipped for a perfect gyro (a
+    /// configuration branch, not a data branch), which therefore passes `w` through bit for bit.
     #[inline(always)]
     pub fn correct_rate(&self, w_rad_s: &[f32; 3]) -> BodyRate {
         if !self.gyro_corrected {
@@ -449,25 +438,18 @@ impl Compensator {
         omega_dot: &BodyAngularAccel,
     ) -> BodySpecificForce {
         BodySpecificForce {
-            m_s2: self.compensate_in_place(&u.raw, &omega.rad_s, &omega_dot.rad_s2),
+            m_s2: self.compensate_raw(&u.raw, &omega.rad_s, &omega_dot.rad_s2),
         }
     }
 
     /// [`Compensator::compensate`] on the values where they lie (outputs in the output unit, rate
-    /// rad/s, angular acceleration rad/s²), the specific force (m/s²) written to `out`: a per-sample
-    /// caller that holds them in memory already (a decoded sample, the ω̇ estimator's state) passes
-    /// them without a copy, and gets the result where it wants it (a window's sample).
-    #[inline(always)]
-    pub fn compensate_into(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3], out: &mut [f32; 3]) {
-        *out = self.compensate_in_place(u, w, wd);
-    }
-
-    /// [`Compensator::compensate_into`] returning the specific force (m/s²). Each sum runs left to
-    /// right, each product rounded before its addition (Rust never fuses `a * b + c`; the
+    /// rad/s, angular acceleration rad/s²), returning the specific force (m/s²): the device's
+    /// per-sample path passes its decoded sample and the ω̇ estimator's state without building the
+    /// typed values. Each sum runs left to right, each product rounded before its addition (Rust never fuses `a * b + c`; the
     /// Cortex-M4F's `vmla.f32`/`vmls.f32` are not fused either): the same bits on the PC and on the
     /// device, which the QEMU test vectors check (`compensation_*_matches_pc`).
     #[inline(always)]
-    pub fn compensate_in_place(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
+    pub fn compensate_raw(&self, u: &[f32; 3], w: &[f32; 3], wd: &[f32; 3]) -> [f32; 3] {
         let w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
         let v = [
             self.lever_corrected(0, u, w, wd, w2),
@@ -554,12 +536,6 @@ impl GyroInverse {
             c[1] + m[1][0] * w[0] + m[1][1] * w[1] + m[1][2] * w[2],
             c[2] + m[2][0] * w[0] + m[2][1] * w[1] + m[2][2] * w[2],
         ]
-    }
-
-    /// [`GyroInverse::correct`] into `out`.
-    #[inline(always)]
-    fn correct_into(&self, w: &[f32; 3], out: &mut [f32; 3]) {
-        *out = self.correct(w);
     }
 }
 

@@ -92,7 +92,7 @@ impl<const Q: usize> Pipeline<Q> {
                     *f = c.compensate_static(&SensorOutputs { raw: *raw }).m_s2;
                 }
                 (FULL_WINDOW, Some(c)) => {
-                    c.compensate_into(raw, rate, self.omega_dot.estimate(), f);
+                    *f = c.compensate_raw(raw, rate, self.omega_dot.estimate());
                 }
                 _ => *f = *raw,
             }
