@@ -157,8 +157,8 @@ enum Phase {
     Heal,
 }
 
-/// Samples a board gathers before it runs the pipeline on them ([`crate::imu::PipelineFeed`]'s
-/// runs): 8, 5 ms at 1.6 kHz. One sample per run would cost the pipeline's per-run set-up at every
+/// Samples a board gathers before it runs the pipeline on them (the pipeline feed's
+/// runs, `PipelineFeed::push_all`): 8, 5 ms at 1.6 kHz. One sample per run would cost the pipeline's per-run set-up at every
 /// sample (the bench's whole BMI270 path: 455.7 instructions a sample in runs of one, over the
 /// 420 the budget allows at 8 kHz); the latency is nothing to windows of samples.
 pub const BATCH: usize = 8;
