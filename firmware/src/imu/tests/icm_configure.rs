@@ -149,8 +149,11 @@ fn time_stamp_resolution_is_set_by_configure() {
     run_samples(&mut imu, 3);
     assert_eq!(drain_all(&mut imu).len(), 3);
     let m = imu.device_mut();
-    m.transaction(&mut [embedded_hal::spi::Operation::Write(&[TMST_CONFIG, 0x29])])
-        .unwrap();
+    m.transaction(&mut [embedded_hal::spi::Operation::Write(&[
+        TMST_CONFIG as u8,
+        0x29,
+    ])])
+    .unwrap();
     run_samples(&mut imu, 5);
     let got = drain_all(&mut imu);
     assert!(got.iter().any(|s| s.flags.has(ImuFlags::DATA_LOST)));
