@@ -76,7 +76,7 @@ fn bmi270_frames(cal: &shared::Calibration, buf: &mut [u8]) -> Option<usize> {
         m.advance_ns(m.until_next_sample_ns().max(1));
         let mut dummy = [0u8; 1];
         m.transaction(&mut [
-            Operation::Write(&[bmi270::regs::STATUS | bmi270::regs::READ]),
+            Operation::Write(&[bmi270::regs::STATUS as u8 | bmi270::regs::READ]),
             Operation::Read(&mut dummy),
             Operation::Read(frame),
         ])
