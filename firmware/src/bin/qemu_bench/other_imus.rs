@@ -159,14 +159,14 @@ fn lsm6dso_words(cal: &shared::Calibration, buf: &mut [u8]) -> Option<usize> {
         m.advance_ns(5_000_000);
         let mut status = [0u8; 2];
         m.transaction(&mut [
-            Operation::Write(&[lsm6dso::regs::FIFO_STATUS1 | lsm6dso::regs::READ]),
+            Operation::Write(&[lsm6dso::regs::FIFO_STATUS1 as u8 | lsm6dso::regs::READ]),
             Operation::Read(&mut status),
         ])
         .ok()?;
         let count = usize::from(u16::from_le_bytes([status[0], status[1] & 0x03]));
         let words = count.min((buf.len() - filled) / WORD_LEN);
         m.transaction(&mut [
-            Operation::Write(&[lsm6dso::regs::FIFO_DATA_OUT_TAG | lsm6dso::regs::READ]),
+            Operation::Write(&[lsm6dso::regs::FIFO_DATA_OUT_TAG as u8 | lsm6dso::regs::READ]),
             Operation::Read(&mut buf[filled..filled + words * WORD_LEN]),
         ])
         .ok()?;
