@@ -53,15 +53,15 @@ use crate::imu::{ImuFlags, ImuSample};
 pub const BURST_MAX: usize = 1 + BATCH_PACKETS * PACKET4_LEN;
 
 /// Status burst: the address, then INT_STATUS, FIFO_COUNTH, FIFO_COUNTL come back.
-pub static STATUS_CMD: [u8; 4] = [INT_STATUS | READ, 0, 0, 0];
+pub static STATUS_CMD: [u8; 4] = [INT_STATUS as u8 | READ, 0, 0, 0];
 /// FIFO burst (sent as its first 1 + n bytes): the address, then dummy bytes while packets come back.
 pub static FIFO_CMD: [u8; BURST_MAX] = {
     let mut c = [0u8; BURST_MAX];
-    c[0] = FIFO_DATA | READ;
+    c[0] = FIFO_DATA as u8 | READ;
     c
 };
 /// FIFO flush: a register write.
-pub static FLUSH_CMD: [u8; 2] = [SIGNAL_PATH_RESET, FIFO_FLUSH];
+pub static FLUSH_CMD: [u8; 2] = [SIGNAL_PATH_RESET as u8, FIFO_FLUSH];
 /// The register check's one-register reads, by address: the address with the read bit, then a
 /// dummy byte while the value comes back (the ICM-42688-P sends no dummy byte before it).
 pub static REG_READ_CMD: [[u8; 2]; 128] = {
@@ -475,7 +475,7 @@ mod tests {
         let mut r = reader();
         let mut out = [NO_SAMPLE; BATCH_PACKETS];
         let first = busy.on_watermark().expect("idle bus: a burst starts");
-        assert_eq!(first.tx, &[INT_STATUS | READ, 0, 0, 0]);
+        assert_eq!(first.tx, &[INT_STATUS as u8 | READ, 0, 0, 0]);
         assert_eq!(busy.on_watermark(), None, "one chain at a time");
         assert_eq!(r.expected_len(), 4);
         // INT_STATUS: watermark; FIFO_COUNT = 3 records (big-endian).
@@ -483,7 +483,7 @@ mod tests {
         assert_eq!(done.samples, 0);
         let fifo = done.next.expect("a FIFO read of the counted packets");
         assert_eq!(fifo.len(), 1 + 3 * PACKET3_LEN);
-        assert_eq!(fifo.tx[0], FIFO_DATA | READ);
+        assert_eq!(fifo.tx[0], FIFO_DATA as u8 | READ);
         assert_eq!(r.expected_len(), fifo.len());
         // 1 kHz: time stamps 1000 µs apart.
         let pk = [

@@ -26,9 +26,14 @@ use shared::wire::{
 
 use crate::stats::WindowAccumulator;
 
+mod feed;
+#[cfg(test)]
+mod feed_tests;
 mod run;
 #[cfg(test)]
 mod run_tests;
+
+pub use feed::PipelineFeed;
 
 /// Corner frequency of the ω̇ filter as a fraction of the sample rate (20 Hz at 1 kHz, `docs/model.md` §4.6).
 pub const OMEGA_DOT_CORNER_FRACTION: f32 = 0.02;

@@ -1,5 +1,5 @@
 //! Board-independent pieces of the sampling tasks: the temperature decimator (which the digital
-//! IMU's [`crate::imu::PipelineFeed`] and the Nucleo's ADC task both use) and the layout of the
+//! IMU's [`crate::pipeline::PipelineFeed`] and the Nucleo's ADC task both use) and the layout of the
 //! Nucleo's ADC scan.
 //!
 //! Both STM32 boards get a temperature with every sample (the ICM-42688-P puts its die temperature in

@@ -47,11 +47,12 @@ mod app {
     use firmware::imu::icm42688::check::{check_and_heal, restart, Checked};
     use firmware::imu::icm42688::{Core, Error as IcmError, Icm42688, BATCH_PACKETS};
     use firmware::imu::ImuFlags;
-    use firmware::imu::{ImuSample, PipelineFeed};
+    use firmware::imu::ImuSample;
     use firmware::imu_bursts::{
         Burst, BurstReader, InFlight, Mismatch, BURST_MAX, NO_SAMPLE, STALL_TICK_MS,
     };
     use firmware::pipeline::PipelineCommand;
+    use firmware::pipeline::PipelineFeed;
     use firmware::protocol::StoreMailbox;
     use firmware::{LinkService, Pipeline};
     use shared::wire::ImuStatus;

@@ -51,10 +51,11 @@ mod app {
     use firmware::health::{Counter, HealthCounters};
     use firmware::imu::bmi270::dma::{Bmi270Bursts, Completed, BATCH, BURST_LEN, SAMPLE_CMD};
     use firmware::imu::bmi270::Bmi270;
-    use firmware::imu::{ImuFlags, ImuSample, PipelineFeed};
+    use firmware::imu::{ImuFlags, ImuSample};
     use firmware::imu_bursts::NO_SAMPLE;
     use firmware::imu_bursts::{Burst, InFlight, Mismatch, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
+    use firmware::pipeline::PipelineFeed;
     use firmware::protocol::StoreMailbox;
     use firmware::{LinkService, Pipeline};
 

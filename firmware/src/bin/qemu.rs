@@ -16,8 +16,8 @@ use defmt_semihosting as _;
 use firmware::board::cmsdk_uart::{CmsdkUart, UART0_BASE};
 use firmware::board::qemu::{self, OUTPUT_QUEUE, SAMPLE_RATE_HZ};
 use firmware::board::{PipelineHandle, SharedPipeline};
-use firmware::imu::PipelineFeed;
 use firmware::pipeline::PipelineCommand;
+use firmware::pipeline::PipelineFeed;
 use firmware::virtual_sensor::VirtualSensor;
 use firmware::{paper_unit, BoardEvent, Controller, EioLink, LinkService, Pipeline};
 

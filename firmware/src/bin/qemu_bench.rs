@@ -28,8 +28,9 @@ use embedded_hal::spi::{Operation, SpiDevice};
 use firmware::board::qemu;
 use firmware::conversion::{gyro_word, Scaling, ADC_SR_AWD};
 use firmware::imu::icm42688::{regs, Core};
-use firmware::imu::{ImuSample, PipelineFeed};
+use firmware::imu::ImuSample;
 use firmware::paper_unit;
+use firmware::pipeline::PipelineFeed;
 use firmware::pipeline::{PipelineCommand, Sample};
 use firmware::stats::WindowAccumulator;
 use firmware::virtual_sensor::{VirtualSensor, IMU_CONFIG};
@@ -403,7 +404,7 @@ fn imu_stream(cal: &shared::Calibration) -> Option<&'static mut [u8; IMU_SAMPLES
         m.advance_ns(50_000_000);
         let mut status = [0u8; 3];
         m.transaction(&mut [
-            Operation::Write(&[regs::INT_STATUS | regs::READ]),
+            Operation::Write(&[regs::INT_STATUS as u8 | regs::READ]),
             Operation::Read(&mut status),
         ])
         .ok()?;
@@ -411,7 +412,7 @@ fn imu_stream(cal: &shared::Calibration) -> Option<&'static mut [u8; IMU_SAMPLES
         while bytes > 0 {
             let mut chunk = [0u8; PACKET];
             m.transaction(&mut [
-                Operation::Write(&[regs::FIFO_DATA | regs::READ]),
+                Operation::Write(&[regs::FIFO_DATA as u8 | regs::READ]),
                 Operation::Read(&mut chunk),
             ])
             .ok()?;

@@ -24,8 +24,8 @@ use cortex_m_semihosting::{debug, hprintln};
 use defmt_semihosting as _;
 
 use firmware::board::{self, qemu};
-use firmware::imu::PipelineFeed;
 use firmware::pipeline::PipelineCommand;
+use firmware::pipeline::PipelineFeed;
 use firmware::protocol::{DeviceInfo, PipelineAccess};
 use firmware::storage::{AbStore, RamNorFlash};
 use firmware::testvectors::{self, Check};

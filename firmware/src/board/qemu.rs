@@ -20,9 +20,10 @@ use shared::OutputUnit;
 
 use crate::imu::icm42688::Icm42688;
 use crate::imu::sim::Icm42688Model;
-use crate::imu::{ImuSample, ImuSource, PipelineFeed};
+use crate::imu::{ImuSample, ImuSource};
 use crate::paper_unit::QEMU_UNIT_ID;
 use crate::pipeline::Pipeline;
+use crate::pipeline::PipelineFeed;
 use crate::protocol::DeviceInfo;
 use crate::storage::{AbStore, RamNorFlash};
 use crate::virtual_sensor::{VirtualSensor, IMU_CONFIG};

@@ -11,10 +11,28 @@ use embedded_hal::spi::{Operation, SpiDevice};
 use crate::conversion::gyro_word_from_le;
 use crate::Gyro;
 
-const WHO_AM_I: u8 = 0x0F;
-const CTRL1: u8 = 0x20;
-const CTRL4: u8 = 0x23;
-const OUT_X_L: u8 = 0x28;
+/// A register of the gyro (both parts' register map), which knows its address: the driver's reads
+/// and writes take one, never a bare address.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Reg {
+    /// WHO_AM_I: the part's identity ([`WHO_AM_I_VALUES`]).
+    WhoAmI = 0x0F,
+    /// CTRL1: output data rate, bandwidth, power mode, axis enables.
+    Ctrl1 = 0x20,
+    /// CTRL4: block data update, full scale.
+    Ctrl4 = 0x23,
+    /// OUT_X_L, first of the six output registers (X, Y, Z; low byte first).
+    OutXL = 0x28,
+}
+
+impl Reg {
+    /// The register's address (SPI address byte, bits 7 and 6 clear).
+    pub const fn addr(self) -> u8 {
+        self as u8
+    }
+}
+
 const READ: u8 = 0x80;
 const AUTO_INC: u8 = 0x40;
 /// CTRL4: BDU (bit 7), block data update: the output registers are not updated between the reads
@@ -53,25 +71,28 @@ impl<SPI: SpiDevice> L3gd20<SPI> {
     /// update.
     pub fn new(spi: SPI) -> Result<Self, Error<SPI::Error>> {
         let mut g = L3gd20 { spi };
-        let id = g.read_reg(WHO_AM_I)?;
+        let id = g.read_reg(Reg::WhoAmI)?;
         if !WHO_AM_I_VALUES.contains(&id) {
             return Err(Error::WrongDevice(id));
         }
-        g.write_reg(CTRL4, CTRL4_BDU | CTRL4_FS_2000DPS)?;
-        g.write_reg(CTRL1, CTRL1_800HZ_ALL_AXES)?;
+        g.write_reg(Reg::Ctrl4, CTRL4_BDU | CTRL4_FS_2000DPS)?;
+        g.write_reg(Reg::Ctrl1, CTRL1_800HZ_ALL_AXES)?;
         Ok(g)
     }
 
-    fn read_reg(&mut self, reg: u8) -> Result<u8, Error<SPI::Error>> {
+    fn read_reg(&mut self, reg: Reg) -> Result<u8, Error<SPI::Error>> {
         let mut v = [0u8];
         self.spi
-            .transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(&mut v)])
+            .transaction(&mut [
+                Operation::Write(&[reg.addr() | READ]),
+                Operation::Read(&mut v),
+            ])
             .map_err(Error::Comm)?;
         Ok(v[0])
     }
 
-    fn write_reg(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
-        self.spi.write(&[reg, v]).map_err(Error::Comm)
+    fn write_reg(&mut self, reg: Reg, v: u8) -> Result<(), Error<SPI::Error>> {
+        self.spi.write(&[reg.addr(), v]).map_err(Error::Comm)
     }
 
     /// Gives the SPI device back.
@@ -87,7 +108,7 @@ impl<SPI: SpiDevice> Gyro for L3gd20<SPI> {
         let mut b = [0u8; 6];
         self.spi
             .transaction(&mut [
-                Operation::Write(&[OUT_X_L | READ | AUTO_INC]),
+                Operation::Write(&[Reg::OutXL.addr() | READ | AUTO_INC]),
                 Operation::Read(&mut b),
             ])
             .map_err(Error::Comm)?;
@@ -153,7 +174,7 @@ mod tests {
             regs: [0; 0x40],
             fail: false,
         };
-        m.regs[WHO_AM_I as usize] = 0xD7;
+        m.regs[Reg::WhoAmI as usize] = 0xD7;
         let raw: [i16; 3] = [1000, -2000, i16::MAX];
         for (i, v) in raw.iter().enumerate() {
             m.regs[0x28 + 2 * i..0x2A + 2 * i].copy_from_slice(&v.to_le_bytes());
@@ -172,10 +193,10 @@ mod tests {
         assert!((s.rate_rad_s[1] + 140f32.to_radians()).abs() < 1e-4);
         let m = g.release();
         // CTRL1: DR 11, BW 11 (800 Hz with LOW_ODR 0, the datasheet's ODR table), PD 1, Z/Y/X on.
-        assert_eq!(m.regs[CTRL1 as usize], 0b1111_1111);
+        assert_eq!(m.regs[Reg::Ctrl1 as usize], 0b1111_1111);
         assert_eq!(ODR_HZ, 800);
         // CTRL4: BDU (bit 7) set, FS 10 (±2000 °/s).
-        assert_eq!(m.regs[CTRL4 as usize], 0b1010_0000);
+        assert_eq!(m.regs[Reg::Ctrl4 as usize], 0b1010_0000);
     }
 
     #[test]

@@ -7,8 +7,9 @@ use proptest::prelude::*;
 use shared::compensator::{Compensator, LeverMode};
 use shared::wire::{StreamKind, StreamRequest};
 
+use super::PipelineFeed;
 use super::{Pipeline, PipelineCommand};
-use crate::imu::{ImuFlags, ImuSample, PipelineFeed};
+use crate::imu::{ImuFlags, ImuSample};
 use crate::paper_unit;
 
 /// One generated sample: values, temperature, and what is odd about it (0: clean).

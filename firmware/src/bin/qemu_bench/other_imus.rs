@@ -10,9 +10,10 @@ use firmware::imu::bmi270::dma::{Decoder, BATCH, FRAME_LEN};
 use firmware::imu::bmi270::{self, Bmi270};
 use firmware::imu::lsm6dso::{self, regs::WORD_LEN, Lsm6dso, Pairing};
 use firmware::imu::sim::{Bmi270Model, Generator, Lsm6dsoModel, Truth};
-use firmware::imu::{ImuSample, PipelineFeed};
+use firmware::imu::ImuSample;
 use firmware::paper_unit;
 use firmware::pipeline::PipelineCommand;
+use firmware::pipeline::PipelineFeed;
 use firmware::virtual_sensor::VirtualSensor;
 use firmware::Pipeline;
 use shared::wire::{StreamKind, StreamRequest};
@@ -75,7 +76,7 @@ fn bmi270_frames(cal: &shared::Calibration, buf: &mut [u8]) -> Option<usize> {
         m.advance_ns(m.until_next_sample_ns().max(1));
         let mut dummy = [0u8; 1];
         m.transaction(&mut [
-            Operation::Write(&[bmi270::regs::STATUS | bmi270::regs::READ]),
+            Operation::Write(&[bmi270::regs::STATUS as u8 | bmi270::regs::READ]),
             Operation::Read(&mut dummy),
             Operation::Read(frame),
         ])
@@ -158,14 +159,14 @@ fn lsm6dso_words(cal: &shared::Calibration, buf: &mut [u8]) -> Option<usize> {
         m.advance_ns(5_000_000);
         let mut status = [0u8; 2];
         m.transaction(&mut [
-            Operation::Write(&[lsm6dso::regs::FIFO_STATUS1 | lsm6dso::regs::READ]),
+            Operation::Write(&[lsm6dso::regs::FIFO_STATUS1 as u8 | lsm6dso::regs::READ]),
             Operation::Read(&mut status),
         ])
         .ok()?;
         let count = usize::from(u16::from_le_bytes([status[0], status[1] & 0x03]));
         let words = count.min((buf.len() - filled) / WORD_LEN);
         m.transaction(&mut [
-            Operation::Write(&[lsm6dso::regs::FIFO_DATA_OUT_TAG | lsm6dso::regs::READ]),
+            Operation::Write(&[lsm6dso::regs::FIFO_DATA_OUT_TAG as u8 | lsm6dso::regs::READ]),
             Operation::Read(&mut buf[filled..filled + words * WORD_LEN]),
         ])
         .ok()?;

@@ -30,7 +30,7 @@
 //! completed burst, and the check follows it.
 
 use super::regs::{
-    ACC_X, GYR_X, READ, SENSORTIME_0, STATUS, STATUS_DRDY_ACC, STATUS_DRDY_GYR, TEMPERATURE_0,
+    Reg, ACC_X, GYR_X, READ, SENSORTIME_0, STATUS, STATUS_DRDY_ACC, STATUS_DRDY_GYR, TEMPERATURE_0,
     TEMPERATURE_INVALID,
 };
 use super::Config;
@@ -38,13 +38,13 @@ use crate::imu::{lost_between, ImuFlags, ImuSample};
 use crate::imu_bursts::{Burst, InFlight, Mismatch, STALL_TICK_MS, STALL_TIMEOUT_MS};
 
 /// Registers of one sample's frame: STATUS through TEMPERATURE_1.
-pub const FRAME_LEN: usize = (TEMPERATURE_0 + 2 - STATUS) as usize;
+pub const FRAME_LEN: usize = (TEMPERATURE_0 as u8 + 2 - STATUS as u8) as usize;
 /// A sample burst on the wire: the address, the dummy byte, the frame.
 pub const BURST_LEN: usize = 2 + FRAME_LEN;
 /// The sample burst: the address with the read bit, then dummy bytes.
 pub static SAMPLE_CMD: [u8; BURST_LEN] = {
     let mut c = [0u8; BURST_LEN];
-    c[0] = STATUS | READ;
+    c[0] = STATUS as u8 | READ;
     c
 };
 /// The register check's reads, by address: the address, the dummy byte, the value.
@@ -107,10 +107,10 @@ impl Decoder {
     #[inline(always)]
     pub fn decode_into(&mut self, f: &[u8; FRAME_LEN], out: &mut ImuSample) -> bool {
         const DRDY: u8 = STATUS_DRDY_ACC | STATUS_DRDY_GYR;
-        const A: usize = (ACC_X - STATUS) as usize;
-        const G: usize = (GYR_X - STATUS) as usize;
-        const T: usize = (SENSORTIME_0 - STATUS) as usize;
-        const C: usize = (TEMPERATURE_0 - STATUS) as usize;
+        const A: usize = (ACC_X as u8 - STATUS as u8) as usize;
+        const G: usize = (GYR_X as u8 - STATUS as u8) as usize;
+        const T: usize = (SENSORTIME_0 as u8 - STATUS as u8) as usize;
+        const C: usize = (TEMPERATURE_0 as u8 - STATUS as u8) as usize;
         if f[0] & DRDY != DRDY {
             return false;
         }
@@ -152,13 +152,13 @@ enum Phase {
     /// A sample burst (data ready, or the stall timer's).
     Sample,
     /// The register check's read of `reg`, which must hold `expected`.
-    Check { reg: u8, expected: u8 },
+    Check { reg: Reg, expected: u8 },
     /// A register differed: the board starts the part again; the bus stays taken.
     Heal,
 }
 
-/// Samples a board gathers before it runs the pipeline on them ([`crate::imu::PipelineFeed`]'s
-/// runs): 8, 5 ms at 1.6 kHz. One sample per run would cost the pipeline's per-run set-up at every
+/// Samples a board gathers before it runs the pipeline on them (the pipeline feed's
+/// runs, `PipelineFeed::push_all`): 8, 5 ms at 1.6 kHz. One sample per run would cost the pipeline's per-run set-up at every
 /// sample (the bench's whole BMI270 path: 455.7 instructions a sample in runs of one, over the
 /// 420 the budget allows at 8 kHz); the latency is nothing to windows of samples.
 pub const BATCH: usize = 8;
@@ -181,7 +181,7 @@ pub struct Completed {
 /// [`SAMPLE_CMD`] (`InFlight::with_command`).
 pub struct Bmi270Bursts {
     decoder: Decoder,
-    registers: [(u8, u8); 8],
+    registers: [(Reg, u8); 8],
     check_next: usize,
     phase: Phase,
     /// Time since the last completed burst, ms.
@@ -237,7 +237,7 @@ impl Bmi270Bursts {
                 if read != expected {
                     self.phase = Phase::Heal;
                     done.mismatch = Some(Mismatch {
-                        reg,
+                        reg: reg.addr(),
                         expected,
                         read,
                     });
@@ -258,7 +258,7 @@ impl Bmi270Bursts {
             let (reg, expected) = self.registers[self.check_next];
             self.phase = Phase::Check { reg, expected };
             return Some(Burst {
-                tx: &CHECK_CMD[usize::from(reg & 0x7F)],
+                tx: &CHECK_CMD[usize::from(reg.addr() & 0x7F)],
             });
         }
         self.phase = Phase::Sample;

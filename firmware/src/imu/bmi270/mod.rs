@@ -134,7 +134,7 @@ impl Config {
 
     /// The registers the start writes after the configuration upload, in order, with their
     /// values (what the register check reads back).
-    pub const fn registers(&self) -> [(u8, u8); 8] {
+    pub const fn registers(&self) -> [(Reg, u8); 8] {
         [
             // acc_filter_perf (7) | acc_bwp normal (2 << 4) | odr.
             (ACC_CONF, 0x80 | (0x02 << 4) | self.odr.code()),
@@ -163,7 +163,7 @@ pub enum Error<E> {
     /// A configured register reads another value: the part lost its configuration.
     RegisterMismatch {
         /// The register.
-        reg: u8,
+        reg: Reg,
         /// Written.
         expected: u8,
         /// Read back.
@@ -231,7 +231,7 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
         self.write(INIT_ADDR_1, 0x00)?;
         self.spi
             .transaction(&mut [
-                Operation::Write(&[INIT_DATA]),
+                Operation::Write(&[INIT_DATA.addr()]),
                 Operation::Write(CONFIG_FILE),
             ])
             .map_err(Error::Spi)?;
@@ -282,23 +282,23 @@ impl<SPI: SpiDevice> Bmi270<SPI> {
             .map_err(Error::Spi)
     }
 
-    fn write(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
-        self.spi.write(&[reg, v]).map_err(Error::Spi)
+    fn write(&mut self, reg: Reg, v: u8) -> Result<(), Error<SPI::Error>> {
+        self.spi.write(&[reg.addr(), v]).map_err(Error::Spi)
     }
 
     /// `buf.len()` registers from `reg`, the dummy byte skipped.
-    fn read(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+    fn read(&mut self, reg: Reg, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
         let mut dummy = [0u8; 1];
         self.spi
             .transaction(&mut [
-                Operation::Write(&[reg | READ]),
+                Operation::Write(&[reg.addr() | READ]),
                 Operation::Read(&mut dummy),
                 Operation::Read(buf),
             ])
             .map_err(Error::Spi)
     }
 
-    fn read_reg(&mut self, reg: u8) -> Result<u8, Error<SPI::Error>> {
+    fn read_reg(&mut self, reg: Reg) -> Result<u8, Error<SPI::Error>> {
         let mut b = [0u8; 1];
         self.read(reg, &mut b)?;
         Ok(b[0])

@@ -20,7 +20,7 @@
 
 use embedded_hal::spi::{Operation, SpiDevice};
 
-use super::regs::{READ, REG_BANK_SEL, SIGNAL_PATH_RESET};
+use super::regs::{Register, READ, SIGNAL_PATH_RESET};
 use super::{configure_steps, Config, Core, Error, Icm42688, Step};
 
 /// Registers the check reads back at most.
@@ -31,18 +31,14 @@ pub const MAX_CHECKED: usize = 24;
 /// bits clear themselves, and the read-modify-write steps, whose other bits are the part's.
 pub fn checked_registers(cfg: &Config) -> heapless::Vec<(u8, u8), MAX_CHECKED> {
     let mut out: heapless::Vec<(u8, u8), MAX_CHECKED> = heapless::Vec::new();
-    let mut bank = 0u8;
     for step in configure_steps(cfg) {
-        let Step::Write(reg, value) = step else {
+        let Step::Write(Register::Bank0(reg), value) = step else {
             continue;
         };
-        if reg == REG_BANK_SEL {
-            bank = value;
+        if reg == SIGNAL_PATH_RESET {
             continue;
         }
-        if bank != 0 || reg == SIGNAL_PATH_RESET {
-            continue;
-        }
+        let reg = reg.addr();
         match out.iter_mut().find(|(r, _)| *r == reg) {
             Some(entry) => entry.1 = value,
             // At most one entry per register of the list: the list holds fewer than MAX_CHECKED.
@@ -147,6 +143,7 @@ mod tests {
     use super::*;
     use crate::imu::icm42688::regs::{
         FIFO_CONFIG, FIFO_MODE_STOP_ON_FULL, GYRO_CONFIG_STATIC2, PWR_LOW_NOISE, PWR_MGMT0,
+        REG_BANK_SEL,
     };
 
     #[test]
@@ -154,12 +151,12 @@ mod tests {
         let regs = checked_registers(&Config::DEFAULT);
         let value = |reg: u8| regs.iter().find(|(r, _)| *r == reg).map(|e| e.1);
         // Written twice (off, then low-noise; bypass, then stop-on-full): the last value counts.
-        assert_eq!(value(PWR_MGMT0), Some(PWR_LOW_NOISE));
-        assert_eq!(value(FIFO_CONFIG), Some(FIFO_MODE_STOP_ON_FULL));
+        assert_eq!(value(PWR_MGMT0.addr()), Some(PWR_LOW_NOISE));
+        assert_eq!(value(FIFO_CONFIG.addr()), Some(FIFO_MODE_STOP_ON_FULL));
         // A bank-1 register, the bank select and the self-clearing reset are not read back.
-        assert_eq!(value(GYRO_CONFIG_STATIC2), None);
+        assert_eq!(value(GYRO_CONFIG_STATIC2.addr()), None);
         assert_eq!(value(REG_BANK_SEL), None);
-        assert_eq!(value(SIGNAL_PATH_RESET), None);
+        assert_eq!(value(SIGNAL_PATH_RESET.addr()), None);
         assert!(regs.len() >= 10, "{}", regs.len());
     }
 

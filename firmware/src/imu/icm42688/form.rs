@@ -42,7 +42,7 @@ macro_rules! driver {
                     core,
                     buf: [0; BATCH_PACKETS * PACKET4_LEN],
                 };
-                $wait!(imu.run(&POWER_UP_STEPS))?;
+                $wait!(imu.run(&POWER_UP_STEPS, None))?;
                 $wait!(imu.reset())?;
                 $wait!(imu.identify())?;
                 $wait!(imu.configure(cfg))?;
@@ -57,7 +57,7 @@ macro_rules! driver {
                     if id == WHO_AM_I_VALUE {
                         break;
                     }
-                    $wait!(self.run(&[Step::WaitUs(IDENTIFY_RETRY_US)]))?;
+                    $wait!(self.run(&[Step::WaitUs(IDENTIFY_RETRY_US)], None))?;
                     id = $wait!(self.who_am_i())?;
                 }
                 check_identity(id)
@@ -65,7 +65,8 @@ macro_rules! driver {
 
             /// Soft reset (every register to its reset value, the FIFO emptied), 1 ms.
             pub $($async)? fn reset(&mut self) -> Result<(), Error<SPI::Error>> {
-                $wait!(self.run(&RESET_STEPS))
+                $wait!(self.run(&RESET_STEPS, None))?;
+                Ok(())
             }
 
             /// WHO_AM_I (0x47 for this part).
@@ -79,7 +80,8 @@ macro_rules! driver {
             /// flagged as following lost data).
             pub $($async)? fn configure(&mut self, cfg: Config) -> Result<(), Error<SPI::Error>> {
                 self.core = Core::new(cfg).map_err(Error::Config)?;
-                $wait!(self.run(&configure_steps(&cfg)))
+                $wait!(self.run(&configure_steps(&cfg), None))?;
+                Ok(())
             }
 
             /// The configuration in force.
@@ -94,22 +96,19 @@ macro_rules! driver {
             pub $($async)? fn self_test(&mut self) -> Result<SelfTestReport, Error<SPI::Error>> {
                 let saved = *self.core.config();
                 let mut filters = [0u8; 3];
-                $wait!(self.write(REG_BANK_SEL, 0))?;
-                $wait!(self.read(self_test::SAVED_FILTERS[0], &mut filters))?;
+                $wait!(self.read_banked(self_test::SAVED_FILTERS[0].reg(), &mut filters))?;
                 let mut report = SelfTestReport::default();
                 for sensor in [SensorUnderTest::Gyro, SensorUnderTest::Accel] {
-                    $wait!(self.run(&self_test::enter_steps(sensor)))?;
+                    let bank = $wait!(self.run(&self_test::enter_steps(sensor), None))?;
                     let off = $wait!(self.average(sensor))?;
-                    $wait!(self.run(&self_test::enable_steps(sensor)))?;
+                    // The averaging only reads: the bank the entry left is still selected.
+                    $wait!(self.run(&self_test::enable_steps(sensor), bank))?;
                     let on = $wait!(self.average(sensor))?;
                     let mut codes = [0u8; 3];
-                    $wait!(self.write(REG_BANK_SEL, sensor.code_bank()))?;
-                    let read = $wait!(self.read(sensor.code_register(), &mut codes));
-                    $wait!(self.write(REG_BANK_SEL, 0))?;
-                    read?;
+                    $wait!(self.read_banked(sensor.code_register(), &mut codes))?;
                     report.set(sensor, off, on, codes);
                 }
-                $wait!(self.run(&self_test::restore_steps(filters)))?;
+                $wait!(self.run(&self_test::restore_steps(filters), None))?;
                 $wait!(self.configure(saved))?;
                 self.core.corrupted();
                 Ok(report)
@@ -131,7 +130,7 @@ macro_rules! driver {
                     let mut status = [0u8; 1];
                     $wait!(self.spi.transaction(&mut [
                         Operation::DelayNs(self_test::POLL_WAIT_NS),
-                        Operation::Write(&[INT_STATUS | READ]),
+                        Operation::Write(&[INT_STATUS as u8 | READ]),
                         Operation::Read(&mut status),
                     ]))
                     .map_err(Error::Spi)?;
@@ -144,14 +143,26 @@ macro_rules! driver {
                 Ok(acc.mean())
             }
 
-            $($async)? fn run(&mut self, steps: &[Step]) -> Result<(), Error<SPI::Error>> {
+            /// Runs `steps` with `bank` selected (`None`: not known), writing REG_BANK_SEL before
+            /// each register of another bank (§14.51); gives the bank it leaves selected.
+            $($async)? fn run(
+                &mut self,
+                steps: &[Step],
+                mut bank: Option<u8>,
+            ) -> Result<Option<u8>, Error<SPI::Error>> {
                 for s in steps {
+                    if let Some(reg) = s.register() {
+                        if bank != Some(reg.bank()) {
+                            $wait!(self.write_addr(REG_BANK_SEL, reg.bank()))?;
+                            bank = Some(reg.bank());
+                        }
+                    }
                     match *s {
-                        Step::Write(reg, v) => $wait!(self.write(reg, v))?,
+                        Step::Write(reg, v) => $wait!(self.write_addr(reg.addr(), v))?,
                         Step::Update { reg, mask, value } => {
                             let mut v = [0u8; 1];
-                            $wait!(self.read(reg, &mut v))?;
-                            $wait!(self.write(reg, (v[0] & !mask) | (value & mask)))?
+                            $wait!(self.read_addr(reg.addr(), &mut v))?;
+                            $wait!(self.write_addr(reg.addr(), (v[0] & !mask) | (value & mask)))?
                         }
                         Step::WaitUs(0) => {}
                         Step::WaitUs(us) => $wait!(self
@@ -160,17 +171,48 @@ macro_rules! driver {
                         .map_err(Error::Spi)?,
                     }
                 }
-                Ok(())
+                Ok(bank)
             }
 
-            $($async)? fn write(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
-                $wait!(self.spi.write(&[reg & !READ, v])).map_err(Error::Spi)
+            /// Reads `buf.len()` registers from `reg` on in its bank: REG_BANK_SEL set to it, and
+            /// back to bank 0 (the data path's) after a register of another bank, even when the
+            /// read failed.
+            $($async)? fn read_banked(
+                &mut self,
+                reg: Register,
+                buf: &mut [u8],
+            ) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.write_addr(REG_BANK_SEL, reg.bank()))?;
+                let read = $wait!(self.read_addr(reg.addr(), buf));
+                if reg.bank() != 0 {
+                    $wait!(self.write_addr(REG_BANK_SEL, 0))?;
+                }
+                read
             }
 
-            $($async)? fn read(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+            /// Writes a bank-0 register, bank 0 being selected (after a reset, a step list, and
+            /// while the FIFO is read).
+            $($async)? fn write(&mut self, reg: Bank0, v: u8) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.write_addr(reg.addr(), v))
+            }
+
+            /// Reads bank-0 registers from `reg` on, bank 0 being selected.
+            $($async)? fn read(&mut self, reg: Bank0, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.read_addr(reg.addr(), buf))
+            }
+
+            $($async)? fn write_addr(&mut self, addr: u8, v: u8) -> Result<(), Error<SPI::Error>> {
+                $wait!(self.spi.write(&[addr & !READ, v])).map_err(Error::Spi)
+            }
+
+            $($async)? fn read_addr(
+                &mut self,
+                addr: u8,
+                buf: &mut [u8],
+            ) -> Result<(), Error<SPI::Error>> {
                 $wait!(self
                     .spi
-                    .transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(buf)]))
+                    .transaction(&mut [Operation::Write(&[addr | READ]), Operation::Read(buf)]))
                 .map_err(Error::Spi)
             }
 
@@ -199,7 +241,7 @@ macro_rules! driver {
                 }
                 let spi = &mut self.spi;
                 $wait!(spi.transaction(&mut [
-                    Operation::Write(&[FIFO_DATA | READ]),
+                    Operation::Write(&[FIFO_DATA as u8 | READ]),
                     Operation::Read(&mut self.buf[..bytes]),
                 ]))
                 .map_err(Error::Spi)?;

@@ -308,16 +308,19 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
     }
 }
 
-/// One step of a register sequence.
+/// One step of a register sequence. A step names its register with its bank ([`Register`]): the
+/// driver writes REG_BANK_SEL (§14.51) before a step whose bank differs from the one the list
+/// selected last, and before the first register step of a list, whose bank it does not assume
+/// (a list stands alone: it may follow a reset, another list or a bank-1 read).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Step {
-    /// Write `value` to register `reg` of the bank currently selected.
-    Write(u8, u8),
-    /// Read register `reg` of the bank selected, clear the bits of `mask`, set those of `value`,
-    /// write it back (for a register whose other bits the driver leaves as they are).
+    /// Write `value` to register `reg`.
+    Write(Register, u8),
+    /// Read register `reg`, clear the bits of `mask`, set those of `value`, write it back (for a
+    /// register whose other bits the driver leaves as they are).
     Update {
         /// The register.
-        reg: u8,
+        reg: Register,
         /// The bits replaced.
         mask: u8,
         /// Their new value (within `mask`).
@@ -325,6 +328,16 @@ pub enum Step {
     },
     /// Wait this many microseconds.
     WaitUs(u32),
+}
+
+impl Step {
+    /// The register the step reaches, if any.
+    pub const fn register(&self) -> Option<Register> {
+        match *self {
+            Step::Write(reg, _) | Step::Update { reg, .. } => Some(reg),
+            Step::WaitUs(_) => None,
+        }
+    }
 }
 
 /// After power-on, 1 ms before the first access: Betaflight's `icm426xxSpiDetect`
@@ -341,14 +354,13 @@ pub const IDENTIFY_READS: u32 = 21;
 pub const IDENTIFY_RETRY_US: u32 = 1000;
 
 /// Soft reset: DEVICE_CONFIG.SOFT_RESET_CONFIG, then 1 ms before any access (§14.1).
-pub const RESET_STEPS: [Step; 3] = [
-    Step::Write(REG_BANK_SEL, 0),
-    Step::Write(DEVICE_CONFIG, SOFT_RESET),
+pub const RESET_STEPS: [Step; 2] = [
+    Step::Write(DEVICE_CONFIG.reg(), SOFT_RESET),
     Step::WaitUs(1000),
 ];
 
 /// Steps in [`configure_steps`].
-pub const CONFIGURE_STEPS: usize = 30;
+pub const CONFIGURE_STEPS: usize = 26;
 
 /// INT_CONFIG1 for `odr` (DS-000347 §14.43): INT_ASYNC_RESET (bit 4) cleared "for proper INT1
 /// and INT2 pin operation"; at 4 kHz and above INT_TPULSE_DURATION (bit 6) = 1, the 8 µs pulse,
@@ -380,34 +392,33 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
     };
     let wm = cfg.watermark_packets;
     [
-        Step::Write(REG_BANK_SEL, 0),
-        Step::Write(PWR_MGMT0, 0),
+        Step::Write(PWR_MGMT0.reg(), 0),
         Step::Write(
-            INTF_CONFIG0,
+            INTF_CONFIG0.reg(),
             FIFO_COUNT_REC | FIFO_COUNT_ENDIAN | SENSOR_DATA_ENDIAN | UI_SIFS_DISABLE_I2C,
         ),
         // The adaptive full-scale switch off: it holds the gyro output for 1–2 ms whenever the rate
         // crosses about ±100 °/s, which a rate table does on every turn. Read-modify-write as
         // Betaflight does it (`accgyro_spi_icm426xx.c` 416-420, see `regs::AFSR_DISABLE`).
         Step::Update {
-            reg: INTF_CONFIG1,
+            reg: INTF_CONFIG1.reg(),
             mask: AFSR_MASK,
             value: AFSR_DISABLE,
         },
-        Step::Write(REG_BANK_SEL, 1),
         // Reset value 0xA0 with GYRO_AAF_DIS (bit 1) as configured, the notch filter left on.
-        Step::Write(GYRO_CONFIG_STATIC2, 0xA0 | ((gyro_off as u8) << 1)),
-        Step::Write(GYRO_CONFIG_STATIC3, gd),
-        Step::Write(GYRO_CONFIG_STATIC4, (gsq & 0xFF) as u8),
-        Step::Write(GYRO_CONFIG_STATIC5, (gsh << 4) | (gsq >> 8) as u8),
-        Step::Write(REG_BANK_SEL, 2),
-        Step::Write(ACCEL_CONFIG_STATIC2, (ad << 1) | accel_off as u8),
-        Step::Write(ACCEL_CONFIG_STATIC3, (asq & 0xFF) as u8),
-        Step::Write(ACCEL_CONFIG_STATIC4, (ash << 4) | (asq >> 8) as u8),
-        Step::Write(REG_BANK_SEL, 0),
-        Step::Write(GYRO_CONFIG0, ((cfg.gyro_range as u8) << 5) | cfg.odr as u8),
+        Step::Write(GYRO_CONFIG_STATIC2.reg(), 0xA0 | ((gyro_off as u8) << 1)),
+        Step::Write(GYRO_CONFIG_STATIC3.reg(), gd),
+        Step::Write(GYRO_CONFIG_STATIC4.reg(), (gsq & 0xFF) as u8),
+        Step::Write(GYRO_CONFIG_STATIC5.reg(), (gsh << 4) | (gsq >> 8) as u8),
+        Step::Write(ACCEL_CONFIG_STATIC2.reg(), (ad << 1) | accel_off as u8),
+        Step::Write(ACCEL_CONFIG_STATIC3.reg(), (asq & 0xFF) as u8),
+        Step::Write(ACCEL_CONFIG_STATIC4.reg(), (ash << 4) | (asq >> 8) as u8),
         Step::Write(
-            ACCEL_CONFIG0,
+            GYRO_CONFIG0.reg(),
+            ((cfg.gyro_range as u8) << 5) | cfg.odr as u8,
+        ),
+        Step::Write(
+            ACCEL_CONFIG0.reg(),
             ((cfg.accel_range as u8) << 5) | cfg.odr as u8,
         ),
         // Time stamps as the decoder reads them, every field set by name rather than left at its
@@ -417,27 +428,27 @@ pub fn configure_steps(cfg: &Config) -> [Step; CONFIGURE_STEPS] {
         // inv_icm426xx_init, lines 1913-1923: "Deactivate FSYNC by default", then the time-stamp
         // resolution set explicitly; it picks 16 µs, this driver 1 µs).
         Step::Update {
-            reg: TMST_CONFIG,
+            reg: TMST_CONFIG.reg(),
             mask: TMST_FIELDS,
             value: TMST_EN,
         },
         Step::Update {
-            reg: FSYNC_CONFIG,
+            reg: FSYNC_CONFIG.reg(),
             mask: FSYNC_UI_SEL_MASK,
             value: 0,
         },
-        Step::Write(FIFO_CONFIG, 0), // bypass while the FIFO is set up
-        Step::Write(FIFO_CONFIG1, FIFO_WM_GT_TH | hires | FIFO_PACKET3_EN),
-        Step::Write(FIFO_CONFIG2, (wm & 0xFF) as u8),
-        Step::Write(FIFO_CONFIG3, (wm >> 8) as u8),
+        Step::Write(FIFO_CONFIG.reg(), 0), // bypass while the FIFO is set up
+        Step::Write(FIFO_CONFIG1.reg(), FIFO_WM_GT_TH | hires | FIFO_PACKET3_EN),
+        Step::Write(FIFO_CONFIG2.reg(), (wm & 0xFF) as u8),
+        Step::Write(FIFO_CONFIG3.reg(), (wm >> 8) as u8),
         // INT1 latched until INT_STATUS is read, push-pull, active high.
-        Step::Write(INT_CONFIG, 0b111),
-        Step::Write(INT_CONFIG1, int_config1(cfg.odr)),
-        Step::Write(INT_SOURCE0, INT1_FIFO_THS_FULL),
-        Step::Write(SELF_TEST_CONFIG, 0),
-        Step::Write(FIFO_CONFIG, FIFO_MODE_STOP_ON_FULL),
-        Step::Write(SIGNAL_PATH_RESET, FIFO_FLUSH),
-        Step::Write(PWR_MGMT0, PWR_LOW_NOISE),
+        Step::Write(INT_CONFIG.reg(), 0b111),
+        Step::Write(INT_CONFIG1.reg(), int_config1(cfg.odr)),
+        Step::Write(INT_SOURCE0.reg(), INT1_FIFO_THS_FULL),
+        Step::Write(SELF_TEST_CONFIG.reg(), 0),
+        Step::Write(FIFO_CONFIG.reg(), FIFO_MODE_STOP_ON_FULL),
+        Step::Write(SIGNAL_PATH_RESET.reg(), FIFO_FLUSH),
+        Step::Write(PWR_MGMT0.reg(), PWR_LOW_NOISE),
         Step::WaitUs(200),
     ]
 }

@@ -53,24 +53,18 @@ pub enum SensorUnderTest {
 
 impl SensorUnderTest {
     /// First of its six data registers.
-    pub fn data_register(self) -> u8 {
+    pub fn data_register(self) -> Bank0 {
         match self {
-            SensorUnderTest::Gyro => ACCEL_DATA_X1 + 6,
+            SensorUnderTest::Gyro => GYRO_DATA_X1,
             SensorUnderTest::Accel => ACCEL_DATA_X1,
         }
     }
-    /// Bank of its self-test codes.
-    pub fn code_bank(self) -> u8 {
+    /// First of its three self-test code registers, with their bank (gyro: bank 1, §15;
+    /// accelerometer: bank 2, §16).
+    pub fn code_register(self) -> Register {
         match self {
-            SensorUnderTest::Gyro => 1,
-            SensorUnderTest::Accel => 2,
-        }
-    }
-    /// First of its three self-test code registers.
-    pub fn code_register(self) -> u8 {
-        match self {
-            SensorUnderTest::Gyro => XG_ST_DATA,
-            SensorUnderTest::Accel => XA_ST_DATA,
+            SensorUnderTest::Gyro => XG_ST_DATA.reg(),
+            SensorUnderTest::Accel => XA_ST_DATA.reg(),
         }
     }
 }
@@ -78,7 +72,7 @@ impl SensorUnderTest {
 /// Configure for the measurement (TDK's setting, see the module doc): FIFO off, self-test off,
 /// the sensor's range and 1 kHz, its UI filter 3rd order at ODR/10, the sensor under test alone
 /// in low-noise mode, and its settling time (gyro 60 ms, accelerometer 25 ms).
-pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 10] {
+pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 9] {
     let (config0, fs_odr, config1, ord_mask, ord, bw_mask, power, settle) = match sensor {
         // GYRO_FS_SEL 011 (±250 °/s), GYRO_ODR 0110 (1 kHz).
         SensorUnderTest::Gyro => (
@@ -104,57 +98,60 @@ pub fn enter_steps(sensor: SensorUnderTest) -> [Step; 10] {
         ),
     };
     [
-        Step::Write(REG_BANK_SEL, 0),
-        Step::Write(FIFO_CONFIG, 0),
-        Step::Write(SELF_TEST_CONFIG, 0),
+        Step::Write(FIFO_CONFIG.reg(), 0),
+        Step::Write(SELF_TEST_CONFIG.reg(), 0),
         // FS_SEL 7:5 and ODR 3:0; bit 4 is reserved.
         Step::Update {
-            reg: config0,
+            reg: config0.reg(),
             mask: 0xEF,
             value: fs_odr,
         },
         Step::Update {
-            reg: config1,
+            reg: config1.reg(),
             mask: ord_mask,
             value: ord,
         },
         Step::Update {
-            reg: GYRO_ACCEL_CONFIG0,
+            reg: GYRO_ACCEL_CONFIG0.reg(),
             mask: bw_mask,
             value: UI_FILT_BW_ODR_10 & bw_mask,
         },
-        Step::Write(PWR_MGMT0, 0),
-        Step::Write(PWR_MGMT0, power),
+        Step::Write(PWR_MGMT0.reg(), 0),
+        Step::Write(PWR_MGMT0.reg(), power),
         Step::WaitUs(200),
         Step::WaitUs(settle),
     ]
 }
 
 /// The UI filter registers the self-test changes, in address order (one burst saves them).
-pub const SAVED_FILTERS: [u8; 3] = [GYRO_CONFIG1, GYRO_ACCEL_CONFIG0, ACCEL_CONFIG1];
-const _: () = assert!(GYRO_ACCEL_CONFIG0 == GYRO_CONFIG1 + 1 && ACCEL_CONFIG1 == GYRO_CONFIG1 + 2);
+pub const SAVED_FILTERS: [Bank0; 3] = [GYRO_CONFIG1, GYRO_ACCEL_CONFIG0, ACCEL_CONFIG1];
+const _: () = assert!(
+    GYRO_ACCEL_CONFIG0 as u8 == GYRO_CONFIG1 as u8 + 1
+        && ACCEL_CONFIG1 as u8 == GYRO_CONFIG1 as u8 + 2
+);
+const _: () = assert!(GYRO_DATA_X1 as u8 == ACCEL_DATA_X1 as u8 + 6);
 
 /// Sensors off, then the saved UI filter registers written back (before the configuration is
 /// applied again).
-pub fn restore_steps(saved: [u8; 3]) -> [Step; 5] {
+pub fn restore_steps(saved: [u8; 3]) -> [Step; 4] {
     [
-        Step::Write(REG_BANK_SEL, 0),
-        Step::Write(PWR_MGMT0, 0),
-        Step::Write(SAVED_FILTERS[0], saved[0]),
-        Step::Write(SAVED_FILTERS[1], saved[1]),
-        Step::Write(SAVED_FILTERS[2], saved[2]),
+        Step::Write(PWR_MGMT0.reg(), 0),
+        Step::Write(SAVED_FILTERS[0].reg(), saved[0]),
+        Step::Write(SAVED_FILTERS[1].reg(), saved[1]),
+        Step::Write(SAVED_FILTERS[2].reg(), saved[2]),
     ]
 }
 
 /// Turn the sensor's self-test on and wait for it to settle (gyro 200 ms, accelerometer 25 ms).
+/// Run in the bank [`enter_steps`] left selected (bank 0), without selecting it again.
 pub fn enable_steps(sensor: SensorUnderTest) -> [Step; 2] {
     match sensor {
         SensorUnderTest::Gyro => [
-            Step::Write(SELF_TEST_CONFIG, ST_GYRO_ALL),
+            Step::Write(SELF_TEST_CONFIG.reg(), ST_GYRO_ALL),
             Step::WaitUs(200_000),
         ],
         SensorUnderTest::Accel => [
-            Step::Write(SELF_TEST_CONFIG, ST_ACCEL_ALL),
+            Step::Write(SELF_TEST_CONFIG.reg(), ST_ACCEL_ALL),
             Step::WaitUs(25_000),
         ],
     }

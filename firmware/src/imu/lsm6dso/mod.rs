@@ -24,43 +24,70 @@ use embedded_hal::spi::{Operation, SpiDevice};
 
 use crate::imu::{lost_between, Drained, ImuFlags, ImuSample, ImuSource};
 
-/// Register addresses and fields (DS12140 §8–§9).
+/// Registers and fields (DS12140 §8–§9). A register is a variant of [`regs::Reg`], which knows its
+/// address; the driver's reads and writes take a `Reg`. The variants are re-exported under the
+/// datasheet's names (`regs::CTRL3_C`); fields and values stay plain consts.
 pub mod regs {
+    /// An LSM6DSO register (§8 register map; one flat address space as the driver uses it: the
+    /// embedded-function and sensor-hub pages behind FUNC_CFG_ACCESS are never opened). Variants
+    /// are the datasheet's names, so that a register is found by the name its tables give it.
+    #[allow(non_camel_case_types)]
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    #[repr(u8)]
+    pub enum Reg {
+        /// FIFO_CTRL1: watermark \[7:0\] in words.
+        FIFO_CTRL1 = 0x07,
+        /// FIFO_CTRL2: WTM8 (bit 0).
+        FIFO_CTRL2 = 0x08,
+        /// FIFO_CTRL3: BDR_GY \[7:4\], BDR_XL \[3:0\].
+        FIFO_CTRL3 = 0x09,
+        /// FIFO_CTRL4: DEC_TS_BATCH \[7:6\], ODR_T_BATCH \[5:4\], FIFO_MODE \[2:0\].
+        FIFO_CTRL4 = 0x0A,
+        /// INT1_CTRL: INT1_FIFO_OVR (4), INT1_FIFO_TH (3).
+        INT1_CTRL = 0x0D,
+        /// WHO_AM_I.
+        WHO_AM_I = 0x0F,
+        /// CTRL1_XL: ODR_XL \[7:4\], FS_XL \[3:2\].
+        CTRL1_XL = 0x10,
+        /// CTRL2_G: ODR_G \[7:4\], FS_G \[3:2\].
+        CTRL2_G = 0x11,
+        /// CTRL3_C: BDU (6), IF_INC (2), SW_RESET (0); reset value 0x04.
+        CTRL3_C = 0x12,
+        /// CTRL4_C: I2C_disable (2).
+        CTRL4_C = 0x13,
+        /// CTRL10_C: TIMESTAMP_EN (5).
+        CTRL10_C = 0x19,
+        /// FIFO_STATUS1: DIFF_FIFO \[7:0\]; FIFO_STATUS2 follows.
+        FIFO_STATUS1 = 0x3A,
+        /// FIFO_STATUS2: FIFO_WTM_IA (7), FIFO_OVR_IA (6), FIFO_FULL_IA (5), FIFO_OVR_LATCHED (3,
+        /// cleared by reading), DIFF_FIFO \[9:8\] (1:0).
+        FIFO_STATUS2 = 0x3B,
+        /// FIFO_DATA_OUT_TAG, then X_L .. Z_H (0x79–0x7E); a burst rolls back to 0x78.
+        FIFO_DATA_OUT_TAG = 0x78,
+    }
+
+    pub use Reg::*;
+
+    impl Reg {
+        /// The register's address (SPI address byte, bit 7 clear).
+        pub const fn addr(self) -> u8 {
+            self as u8
+        }
+    }
+
+    /// The address, for the register-level model's tables.
+    impl From<Reg> for u8 {
+        fn from(r: Reg) -> u8 {
+            r as u8
+        }
+    }
+
     /// SPI read bit.
     pub const READ: u8 = 0x80;
-    /// FIFO_CTRL1: watermark \[7:0\] in words.
-    pub const FIFO_CTRL1: u8 = 0x07;
-    /// FIFO_CTRL2: WTM8 (bit 0).
-    pub const FIFO_CTRL2: u8 = 0x08;
-    /// FIFO_CTRL3: BDR_GY \[7:4\], BDR_XL \[3:0\].
-    pub const FIFO_CTRL3: u8 = 0x09;
-    /// FIFO_CTRL4: DEC_TS_BATCH \[7:6\], ODR_T_BATCH \[5:4\], FIFO_MODE \[2:0\].
-    pub const FIFO_CTRL4: u8 = 0x0A;
-    /// INT1_CTRL: INT1_FIFO_OVR (4), INT1_FIFO_TH (3).
-    pub const INT1_CTRL: u8 = 0x0D;
-    /// WHO_AM_I.
-    pub const WHO_AM_I: u8 = 0x0F;
     /// The LSM6DSO's WHO_AM_I.
     pub const WHO_AM_I_VALUE: u8 = 0x6C;
-    /// CTRL1_XL: ODR_XL \[7:4\], FS_XL \[3:2\].
-    pub const CTRL1_XL: u8 = 0x10;
-    /// CTRL2_G: ODR_G \[7:4\], FS_G \[3:2\].
-    pub const CTRL2_G: u8 = 0x11;
-    /// CTRL3_C: BDU (6), IF_INC (2), SW_RESET (0); reset value 0x04.
-    pub const CTRL3_C: u8 = 0x12;
-    /// CTRL4_C: I2C_disable (2).
-    pub const CTRL4_C: u8 = 0x13;
-    /// CTRL10_C: TIMESTAMP_EN (5).
-    pub const CTRL10_C: u8 = 0x19;
-    /// FIFO_STATUS1: DIFF_FIFO \[7:0\]; FIFO_STATUS2 follows.
-    pub const FIFO_STATUS1: u8 = 0x3A;
-    /// FIFO_STATUS2: FIFO_WTM_IA (7), FIFO_OVR_IA (6), FIFO_FULL_IA (5), FIFO_OVR_LATCHED (3,
-    /// cleared by reading), DIFF_FIFO \[9:8\] (1:0).
-    pub const FIFO_STATUS2: u8 = 0x3B;
     /// FIFO_STATUS2: FIFO_OVR_LATCHED.
     pub const FIFO_OVR_LATCHED: u8 = 1 << 3;
-    /// FIFO_DATA_OUT_TAG, then X_L .. Z_H (0x79–0x7E); a burst rolls back to 0x78.
-    pub const FIFO_DATA_OUT_TAG: u8 = 0x78;
     /// Tag: gyro, not compressed.
     pub const TAG_GYRO: u8 = 0x01;
     /// Tag: accelerometer, not compressed.
@@ -200,7 +227,7 @@ impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
 }
 
 /// The configuration's register writes, in order (sensors last, so the FIFO starts clean).
-pub fn configure_writes(cfg: &Config) -> [(u8, u8); 9] {
+pub fn configure_writes(cfg: &Config) -> [(Reg, u8); 9] {
     let odr = cfg.odr as u8;
     [
         (CTRL3_C, 0x44), // BDU, IF_INC
@@ -459,13 +486,13 @@ impl<SPI: SpiDevice> Lsm6dso<SPI> {
         &mut self.spi
     }
 
-    fn write(&mut self, reg: u8, v: u8) -> Result<(), Error<SPI::Error>> {
-        self.spi.write(&[reg & !READ, v]).map_err(Error::Spi)
+    fn write(&mut self, reg: Reg, v: u8) -> Result<(), Error<SPI::Error>> {
+        self.spi.write(&[reg.addr(), v]).map_err(Error::Spi)
     }
 
-    fn read(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+    fn read(&mut self, reg: Reg, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
         self.spi
-            .transaction(&mut [Operation::Write(&[reg | READ]), Operation::Read(buf)])
+            .transaction(&mut [Operation::Write(&[reg.addr() | READ]), Operation::Read(buf)])
             .map_err(Error::Spi)
     }
 }
@@ -486,7 +513,7 @@ impl<SPI: SpiDevice> ImuSource for Lsm6dso<SPI> {
         if bytes > 0 {
             let spi = &mut self.spi;
             spi.transaction(&mut [
-                Operation::Write(&[FIFO_DATA_OUT_TAG | READ]),
+                Operation::Write(&[FIFO_DATA_OUT_TAG.addr() | READ]),
                 Operation::Read(&mut self.buf[..bytes]),
             ])
             .map_err(Error::Spi)?;

@@ -46,6 +46,21 @@ pub struct Bmi270Model<G> {
     resets: u32,
 }
 
+/// The driver's register addresses as `u8` constants, for the model's `match`es on the address
+/// byte it receives (a pattern must be a constant, not `Reg::X as u8`).
+mod addr {
+    use crate::imu::bmi270::regs::Reg;
+    pub const CHIP_ID: u8 = Reg::CHIP_ID as u8;
+    pub const INTERNAL_STATUS: u8 = Reg::INTERNAL_STATUS as u8;
+    pub const ACC_X: u8 = Reg::ACC_X as u8;
+    pub const GYR_X: u8 = Reg::GYR_X as u8;
+    pub const CMD: u8 = Reg::CMD as u8;
+    pub const INIT_DATA: u8 = Reg::INIT_DATA as u8;
+    pub const INIT_CTRL: u8 = Reg::INIT_CTRL as u8;
+    pub const PWR_CONF: u8 = Reg::PWR_CONF as u8;
+    pub const TEMPERATURE_0: u8 = Reg::TEMPERATURE_0 as u8;
+}
+
 impl<G: Generator> Bmi270Model<G> {
     /// A part just powered on.
     pub fn new(gen: G) -> Self {
@@ -94,8 +109,8 @@ impl<G: Generator> Bmi270Model<G> {
     }
 
     /// A register's value.
-    pub fn register(&self, reg: u8) -> u8 {
-        self.regs[reg as usize & 0x7F]
+    pub fn register(&self, reg: impl Into<u8>) -> u8 {
+        self.regs[reg.into() as usize & 0x7F]
     }
 
     /// The part holds a running program (the upload succeeded and its status is out).
@@ -186,13 +201,13 @@ impl<G: Generator> Bmi270Model<G> {
 
     fn read_register(&mut self, reg: u8) -> u8 {
         match reg {
-            CHIP_ID => self.chip_id,
-            INTERNAL_STATUS => self.internal_status(),
+            addr::CHIP_ID => self.chip_id,
+            addr::INTERNAL_STATUS => self.internal_status(),
             r => {
                 // A read of the accelerometer's (gyro's) last byte clears its DRDY bit.
-                if r == ACC_X + 5 {
+                if r == addr::ACC_X + 5 {
                     self.regs[STATUS as usize] &= !STATUS_DRDY_ACC;
-                } else if r == GYR_X + 5 {
+                } else if r == addr::GYR_X + 5 {
                     self.regs[STATUS as usize] &= !STATUS_DRDY_GYR;
                 }
                 self.regs[r as usize & 0x7F]
@@ -202,8 +217,8 @@ impl<G: Generator> Bmi270Model<G> {
 
     fn write_register(&mut self, reg: u8, v: u8, data_index: &mut usize) {
         match reg {
-            CMD if v == CMD_SOFT_RESET => self.reset(),
-            INIT_DATA => {
+            addr::CMD if v == CMD_SOFT_RESET => self.reset(),
+            addr::INIT_DATA => {
                 let addr = 2
                     * (usize::from(self.regs[INIT_ADDR_0 as usize] & 0x0F)
                         | usize::from(self.regs[INIT_ADDR_1 as usize]) << 4);
@@ -222,18 +237,18 @@ impl<G: Generator> Bmi270Model<G> {
                     self.program[i] = v ^ flip;
                 }
             }
-            INIT_CTRL => {
+            addr::INIT_CTRL => {
                 self.regs[INIT_CTRL as usize] = v;
                 self.init_at_ns = (v & 1 != 0).then_some(self.time_ns);
             }
-            PWR_CONF => {
+            addr::PWR_CONF => {
                 if v & 1 == 0 && self.regs[PWR_CONF as usize] & 1 != 0 {
                     self.aps_off_at_ns = Some(self.time_ns);
                 }
                 self.regs[PWR_CONF as usize] = v;
             }
             // Read-only: CHIP_ID through INTERNAL_STATUS and the data.
-            r if r <= TEMPERATURE_0 + 1 => {}
+            r if r <= addr::TEMPERATURE_0 + 1 => {}
             r => self.regs[r as usize & 0x7F] = v,
         }
     }
@@ -266,7 +281,11 @@ impl<G: Generator> SpiDevice for Bmi270Model<G> {
                                 if was_spi {
                                     self.write_register(a, b, &mut data_index);
                                 }
-                                let next = if a == INIT_DATA { a } else { (a + 1) & 0x7F };
+                                let next = if a == addr::INIT_DATA {
+                                    a
+                                } else {
+                                    (a + 1) & 0x7F
+                                };
                                 addr = Some((next, false, false));
                             }
                             Some((_, true, _)) => {}

@@ -98,11 +98,31 @@ pub struct Icm42688Model<G> {
     fresh: [bool; 2],
 }
 
+/// The driver's register addresses as `u8` constants, for the model's `match`es on the address
+/// byte it receives (a pattern must be a constant, not `Bank0::X as u8`).
+mod addr {
+    use crate::imu::icm42688::regs::{Bank0, Bank1, Bank2};
+    pub const TEMP_DATA1: u8 = Bank0::TEMP_DATA1 as u8;
+    #[cfg(test)]
+    pub const ACCEL_DATA_X1: u8 = Bank0::ACCEL_DATA_X1 as u8;
+    #[cfg(test)]
+    pub const GYRO_DATA_X1: u8 = Bank0::GYRO_DATA_X1 as u8;
+    pub const DEVICE_CONFIG: u8 = Bank0::DEVICE_CONFIG as u8;
+    pub const INT_STATUS: u8 = Bank0::INT_STATUS as u8;
+    pub const FIFO_COUNTH: u8 = Bank0::FIFO_COUNTH as u8;
+    pub const FIFO_DATA: u8 = Bank0::FIFO_DATA as u8;
+    pub const SIGNAL_PATH_RESET: u8 = Bank0::SIGNAL_PATH_RESET as u8;
+    pub const PWR_MGMT0: u8 = Bank0::PWR_MGMT0 as u8;
+    pub const WHO_AM_I: u8 = Bank0::WHO_AM_I as u8;
+    pub const XG_ST_DATA: u8 = Bank1::XG_ST_DATA as u8;
+    pub const XA_ST_DATA: u8 = Bank2::XA_ST_DATA as u8;
+}
+
 fn reset_banks() -> [[u8; 128]; 4] {
     let mut b = [[0u8; 128]; 4];
     // Reset values of the registers the driver touches (§13, §15, §16 register maps).
     for (reg, v) in [
-        (0x13, 0x05), // DRIVE_CONFIG
+        (DRIVE_CONFIG, 0x05),
         (INTF_CONFIG0, 0x30),
         (INTF_CONFIG1, 0x91),
         (GYRO_CONFIG0, 0x06),
@@ -169,8 +189,8 @@ impl<G: Generator> Icm42688Model<G> {
     }
 
     /// A register's value (bank, address), as the tests read the configuration.
-    pub fn register(&self, bank: usize, reg: u8) -> u8 {
-        self.banks[bank & 3][reg as usize & 0x7F]
+    pub fn register(&self, bank: usize, reg: impl Into<u8>) -> u8 {
+        self.banks[bank & 3][reg.into() as usize & 0x7F]
     }
 
     /// The part's time since power-on, ns.
@@ -458,23 +478,25 @@ impl<G: Generator> Icm42688Model<G> {
 
     fn read_register(&mut self, reg: u8) -> u8 {
         match (self.bank, reg) {
-            (1, XG_ST_DATA..=0x61) => return self.self_test_codes[usize::from(reg - XG_ST_DATA)],
-            (2, XA_ST_DATA..=0x3D) => {
-                return self.self_test_codes[3 + usize::from(reg - XA_ST_DATA)]
+            (1, addr::XG_ST_DATA..=0x61) => {
+                return self.self_test_codes[usize::from(reg - addr::XG_ST_DATA)]
+            }
+            (2, addr::XA_ST_DATA..=0x3D) => {
+                return self.self_test_codes[3 + usize::from(reg - addr::XA_ST_DATA)]
             }
             (0, _) => {}
             (b, r) => return self.banks[b][r as usize & 0x7F],
         }
         #[cfg(test)]
-        if reg == ACCEL_DATA_X1 + 6 {
+        if reg == addr::GYRO_DATA_X1 {
             self.note_data_read(0);
-        } else if reg == ACCEL_DATA_X1 {
+        } else if reg == addr::ACCEL_DATA_X1 {
             self.note_data_read(1);
         }
         let big = self.banks[0][INTF_CONFIG0 as usize] & FIFO_COUNT_ENDIAN != 0;
         match reg {
-            INT_STATUS => core::mem::take(&mut self.status),
-            FIFO_COUNTH => {
+            addr::INT_STATUS => core::mem::take(&mut self.status),
+            addr::FIFO_COUNTH => {
                 self.latched_count = self.count();
                 let b = self.latched_count.to_be_bytes();
                 if big {
@@ -491,8 +513,8 @@ impl<G: Generator> Icm42688Model<G> {
                     b[0]
                 }
             }
-            FIFO_DATA => self.fifo.pop_front().unwrap_or(0xFF),
-            WHO_AM_I => {
+            addr::FIFO_DATA => self.fifo.pop_front().unwrap_or(0xFF),
+            addr::WHO_AM_I => {
                 self.who_am_i_reads += 1;
                 if self.who_am_i_reads <= self.who_am_i_wrong_reads {
                     0x00
@@ -517,19 +539,20 @@ impl<G: Generator> Icm42688Model<G> {
             self.banks[self.bank][reg as usize & 0x7F] = v;
             return;
         }
-        let read_only = (TEMP_DATA1..=FIFO_DATA).contains(&reg) || reg == WHO_AM_I;
+        let read_only =
+            (addr::TEMP_DATA1..=addr::FIFO_DATA).contains(&reg) || reg == addr::WHO_AM_I;
         if read_only {
             self.violations += 1;
             return;
         }
         match reg {
-            DEVICE_CONFIG if v & SOFT_RESET != 0 => self.soft_reset(),
-            SIGNAL_PATH_RESET => {
+            addr::DEVICE_CONFIG if v & SOFT_RESET != 0 => self.soft_reset(),
+            addr::SIGNAL_PATH_RESET => {
                 if v & FIFO_FLUSH != 0 {
                     self.fifo.clear();
                 }
             }
-            PWR_MGMT0 => {
+            addr::PWR_MGMT0 => {
                 let gyro_was_off = self.banks[0][PWR_MGMT0 as usize] & 0b1100 == 0;
                 let starting = !self.sampling();
                 self.banks[0][PWR_MGMT0 as usize] = v;
@@ -635,7 +658,7 @@ fn ticks_u16(t: u64, d: u32) -> u16 {
 
 /// Burst accesses step through the registers, except FIFO_DATA, which a burst keeps popping.
 fn next_address(a: u8) -> u8 {
-    if a == FIFO_DATA {
+    if a == addr::FIFO_DATA {
         a
     } else {
         (a + 1) & 0x7F

@@ -35,6 +35,17 @@ pub struct Lsm6dsoModel<G> {
     pub dropped: heapless::Vec<u32, 64>,
 }
 
+/// The driver's register addresses as `u8` constants, for the model's `match`es on the address
+/// byte it receives (a pattern must be a constant, not `Reg::X as u8`).
+mod addr {
+    use crate::imu::lsm6dso::regs::Reg;
+    pub const WHO_AM_I: u8 = Reg::WHO_AM_I as u8;
+    pub const FIFO_STATUS1: u8 = Reg::FIFO_STATUS1 as u8;
+    pub const FIFO_STATUS2: u8 = Reg::FIFO_STATUS2 as u8;
+    pub const FIFO_DATA_OUT_TAG: u8 = Reg::FIFO_DATA_OUT_TAG as u8;
+    pub const CTRL3_C: u8 = Reg::CTRL3_C as u8;
+}
+
 impl<G: Generator> Lsm6dsoModel<G> {
     /// A part just powered on.
     pub fn new(gen: G) -> Self {
@@ -56,8 +67,8 @@ impl<G: Generator> Lsm6dsoModel<G> {
     }
 
     /// A register's value.
-    pub fn register(&self, reg: u8) -> u8 {
-        self.regs[reg as usize & 0x7F]
+    pub fn register(&self, reg: impl Into<u8>) -> u8 {
+        self.regs[reg.into() as usize & 0x7F]
     }
 
     /// Words in the FIFO.
@@ -160,9 +171,9 @@ impl<G: Generator> Lsm6dsoModel<G> {
 
     fn read_register(&mut self, reg: u8, word_byte: &mut usize) -> u8 {
         match reg {
-            WHO_AM_I => self.who_am_i,
-            FIFO_STATUS1 => (self.fifo.len() & 0xFF) as u8,
-            FIFO_STATUS2 => {
+            addr::WHO_AM_I => self.who_am_i,
+            addr::FIFO_STATUS1 => (self.fifo.len() & 0xFF) as u8,
+            addr::FIFO_STATUS2 => {
                 let n = self.fifo.len();
                 let v = ((n >> 8) & 3) as u8
                     | if self.overrun_latched {
@@ -174,7 +185,7 @@ impl<G: Generator> Lsm6dsoModel<G> {
                 self.overrun_latched = false;
                 v
             }
-            FIFO_DATA_OUT_TAG..=0x7E => {
+            addr::FIFO_DATA_OUT_TAG..=0x7E => {
                 let i = *word_byte;
                 let b = self.fifo.front().map_or(0, |w| w[i]);
                 *word_byte += 1;
@@ -189,7 +200,7 @@ impl<G: Generator> Lsm6dsoModel<G> {
     }
 
     fn write_register(&mut self, reg: u8, v: u8) {
-        if reg == CTRL3_C && v & 1 != 0 {
+        if reg == addr::CTRL3_C && v & 1 != 0 {
             // SW_RESET: registers to their reset values, FIFO emptied, sampling stopped.
             self.regs = [0; 128];
             self.regs[CTRL3_C as usize] = 0x04;
@@ -264,7 +275,7 @@ impl<G: Generator> SpiDevice for Lsm6dsoModel<G> {
 /// Auto-increment (IF_INC), rolling from the last FIFO output byte back to its tag.
 fn next_address(a: u8) -> u8 {
     if a == 0x7E {
-        FIFO_DATA_OUT_TAG
+        addr::FIFO_DATA_OUT_TAG
     } else {
         (a + 1) & 0x7F
     }

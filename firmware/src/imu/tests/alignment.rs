@@ -2,9 +2,6 @@
 //! board file's alignment, Betaflight's mapping, before the pipeline.
 
 use crate::imu::alignment::{Alignment, SPEEDYBEE_F405_V4};
-use crate::imu::{ImuFlags, ImuSample, PipelineFeed};
-use crate::pipeline::{Pipeline, PipelineCommand};
-use shared::wire::{DeviceToHost, StreamKind, StreamRequest};
 
 const ALL: [Alignment; 4] = [
     Alignment::Cw0,
@@ -74,38 +71,4 @@ fn the_f405_board_rotates_by_its_betaflight_alignment() {
         .find("push_all(&samples[..done.samples]")
         .expect("the feed");
     assert!(rotate < feed, "rotated after the pipeline saw the samples");
-}
-
-/// Through the feed and the pipeline as `burst_done` does it: a window's means are in the board's
-/// axes; a NaN (invalid) sample stays left out; the values are exact (a signed permutation).
-#[test]
-fn windows_are_in_the_board_frame() {
-    let sample = |accel_out, gyro_rad_s| ImuSample {
-        accel_out,
-        gyro_rad_s,
-        temp_c: 25.0,
-        timestamp: 0,
-        lost_before: 0,
-        flags: ImuFlags::default(),
-    };
-    let mut samples = [sample([100.0, 200.0, 4096.0], [0.25, -0.5, 0.125]); 8];
-    samples[3] = ImuSample {
-        flags: ImuFlags(ImuFlags::INVALID),
-        ..sample([f32::NAN; 3], [f32::NAN; 3])
-    };
-    SPEEDYBEE_F405_V4.apply(&mut samples);
-    let mut p = Pipeline::<4>::new(8000);
-    p.apply(PipelineCommand::Stream(StreamRequest {
-        kind: StreamKind::RawWindows,
-        window_samples: 8,
-    }));
-    PipelineFeed::new(8000).push_all(&samples, &mut p);
-    match p.pop_output() {
-        Some(DeviceToHost::RawWindow(w)) => {
-            assert_eq!(w.count, 7);
-            assert_eq!(w.mean_raw, [200.0, -100.0, 4096.0]);
-            assert_eq!(w.mean_rate_rad_s, [-0.5, -0.25, 0.125]);
-        }
-        other => panic!("{other:?}"),
-    }
 }

@@ -234,7 +234,7 @@ fn a_range_changed_while_data_flows_is_found_by_the_periodic_check() {
     b.run_ms(205);
     // ±4 g becomes ±16 g: data ready goes on, 1 g reads 2048 counts.
     b.part
-        .transaction(&mut [Operation::Write(&[ACC_RANGE, 0x03])])
+        .transaction(&mut [Operation::Write(&[ACC_RANGE as u8, 0x03])])
         .expect("the model's bus");
     let at = b.now_ns;
     b.run_ms(1500);

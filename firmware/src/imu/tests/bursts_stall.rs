@@ -322,7 +322,7 @@ fn a_range_changed_under_a_flowing_fifo_is_found_by_the_periodic_check() {
     // ±4 g (FS_SEL 2) at 8 kHz becomes ±16 g (FS_SEL 0): the FIFO flows on, its counts a quarter.
     let expected = b.part.register(0, ACCEL_CONFIG0);
     assert_eq!(expected >> 5, 2, "±4 g configured");
-    let after = flip_at_200_ms(&mut b, ACCEL_CONFIG0, expected & 0x1F);
+    let after = flip_at_200_ms(&mut b, ACCEL_CONFIG0 as u8, expected & 0x1F);
     // The data path never noticed: no stall, no gap until the part was started again.
     assert_eq!(b.restarts, 0, "no stall");
     assert_eq!(b.periodic_heals.len(), 1, "found and healed once");

@@ -75,7 +75,7 @@ fn afsr_left_on_stalls_the_gyro_for_1_to_2_ms_at_100_dps() {
     let mut imu = Icm42688::new(Icm42688Model::new(Ramp { k: 0 }), CFG).expect("starts");
     // Back to the reset value, as a driver that never touches INTF_CONFIG1 leaves it.
     imu.device_mut()
-        .transaction(&mut [Operation::Write(&[INTF_CONFIG1 & !READ, 0x91])])
+        .transaction(&mut [Operation::Write(&[INTF_CONFIG1 as u8 & !READ, 0x91])])
         .unwrap();
     let codes = ramp_codes(&mut imu);
     let n = repeats(&codes);

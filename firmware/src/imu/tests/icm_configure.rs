@@ -149,8 +149,11 @@ fn time_stamp_resolution_is_set_by_configure() {
     run_samples(&mut imu, 3);
     assert_eq!(drain_all(&mut imu).len(), 3);
     let m = imu.device_mut();
-    m.transaction(&mut [embedded_hal::spi::Operation::Write(&[TMST_CONFIG, 0x29])])
-        .unwrap();
+    m.transaction(&mut [embedded_hal::spi::Operation::Write(&[
+        TMST_CONFIG as u8,
+        0x29,
+    ])])
+    .unwrap();
     run_samples(&mut imu, 5);
     let got = drain_all(&mut imu);
     assert!(got.iter().any(|s| s.flags.has(ImuFlags::DATA_LOST)));
@@ -162,4 +165,38 @@ fn time_stamp_resolution_is_set_by_configure() {
     assert_eq!(got.len(), 10);
     // The first follows the flush of the reconfiguration; none after it.
     assert!(got[1..].iter().all(|s| !s.flags.has(ImuFlags::DATA_LOST)));
+}
+
+/// Every step list leaves bank 0 selected (its last register is a bank-0 one), which the data
+/// path's plain bank-0 reads and the self-test's enable list, run without a select, rely on
+/// (`regs`' module doc; REG_BANK_SEL, §14.51). The enable lists name bank-0 registers only.
+#[test]
+fn step_lists_leave_bank_0_selected() {
+    use crate::imu::icm42688::self_test::{
+        enable_steps, enter_steps, restore_steps, SensorUnderTest,
+    };
+    use crate::imu::icm42688::{configure_steps, Step, RESET_STEPS};
+    let last_bank = |steps: &[Step]| {
+        steps
+            .iter()
+            .rev()
+            .find_map(Step::register)
+            .map(|r| r.bank())
+    };
+    let hires = Config {
+        fifo: FifoFormat::Packet4HighRes,
+        accel_aaf: AntiAlias::Off,
+        ..Config::DEFAULT
+    };
+    assert_eq!(last_bank(&RESET_STEPS), Some(0));
+    assert_eq!(last_bank(&configure_steps(&Config::DEFAULT)), Some(0));
+    assert_eq!(last_bank(&configure_steps(&hires)), Some(0));
+    assert_eq!(last_bank(&restore_steps([0; 3])), Some(0));
+    for sensor in [SensorUnderTest::Gyro, SensorUnderTest::Accel] {
+        assert_eq!(last_bank(&enter_steps(sensor)), Some(0));
+        assert!(enable_steps(sensor)
+            .iter()
+            .filter_map(Step::register)
+            .all(|r| r.bank() == 0));
+    }
 }

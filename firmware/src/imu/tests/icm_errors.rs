@@ -34,7 +34,7 @@ fn fifo_out_of_step_is_flushed_and_flagged() {
     let mut junk = [0u8; 3];
     imu.device_mut()
         .transaction(&mut [
-            Operation::Write(&[regs::FIFO_DATA | regs::READ]),
+            Operation::Write(&[regs::FIFO_DATA as u8 | regs::READ]),
             Operation::Read(&mut junk),
         ])
         .unwrap();

@@ -1,12 +1,10 @@
 //! Overflow: in stop-on-full mode the model drops the packets that do not fit; the driver flags the
-//! first sample after them — exactly there, with the count from the time stamps — and no other,
-//! and the pipeline counts them as lost, keeping its sample index as the time base.
+//! first sample after them — exactly there, with the count from the time stamps — and no other
+//! (the pipeline's count of them is tested on the pipeline side, in its `feed_tests`).
 
 use super::*;
 use crate::imu::icm42688::FifoFormat;
-use crate::imu::{ImuFlags, PipelineFeed};
-use crate::pipeline::{Pipeline, PipelineCommand};
-use shared::wire::{DeviceToHost, SampleFlags, StreamKind, StreamRequest};
+use crate::imu::ImuFlags;
 
 fn overflow_case(format: FifoFormat, capacity: u32) {
     let cfg = Config {
@@ -52,50 +50,4 @@ fn overflow_flagged_exactly_where_packets_were_dropped_packet3() {
 #[test]
 fn overflow_flagged_exactly_where_packets_were_dropped_packet4() {
     overflow_case(FifoFormat::Packet4HighRes, 2048 / 20);
-}
-
-#[test]
-fn the_pipeline_counts_the_lost_samples() {
-    let cfg = Config {
-        watermark_packets: 16,
-        ..Config::DEFAULT
-    };
-    let mut imu = started(cfg);
-    let mut p = Pipeline::<8>::new(1000);
-    p.apply(PipelineCommand::Stream(StreamRequest {
-        kind: StreamKind::RawWindows,
-        window_samples: 200,
-    }));
-    run_samples(&mut imu, 150); // 128 kept, 22 dropped
-    let mut feed = PipelineFeed::new(1000);
-    for s in drain_all(&mut imu) {
-        feed.push(&s, &mut p);
-    }
-    run_samples(&mut imu, 60);
-    for s in drain_all(&mut imu) {
-        feed.push(&s, &mut p);
-    }
-    // 128 + 22 lost + 60 = 210 samples of time: one 200-sample window closed.
-    assert_eq!(p.samples(), 210);
-    let Some(DeviceToHost::RawWindow(w)) = p.pop_output() else {
-        panic!("a window");
-    };
-    assert!(w.flags.has(SampleFlags::SAMPLES_LOST));
-    // Rejected: the invalid first sample, the 22 lost and the saturated ones in the window
-    // (samples 1..128 and 150..200).
-    let t = truths(200);
-    let saturated = (1..128)
-        .chain(150..200)
-        .filter(|&k| {
-            t[k].accel_g
-                .iter()
-                .any(|g| code(g * 2048.0, 32767).abs() == 32767)
-                || t[k]
-                    .gyro_dps
-                    .iter()
-                    .any(|d| code(d * 16.4, 32767).abs() == 32767)
-        })
-        .count() as u32;
-    assert_eq!(w.rejected, 1 + 22 + saturated);
-    assert_eq!(w.count + w.rejected, 200);
 }
