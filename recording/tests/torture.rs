@@ -10,14 +10,12 @@
 //! (default 3) and prints the cases run and the rows lost per damaged sample, per format and
 //! mutation.
 
-use recording::session::import::GyroUnit;
-use recording::session::import::{ImportOptions, TimeSource};
 use recording::session::logs::{read_log_from, LogSource};
 use recording::testkit::{
-    hand_session, write_dataflash, write_mcap, write_mcap_with, write_ulog, LogSample,
+    csv_source, hand_session, write_csv, write_dataflash, write_mcap, write_mcap_with, write_ulog,
+    LogSample,
 };
 use shared::rng::Rng;
-use shared::OutputUnit;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -75,19 +73,9 @@ fn clean() -> Vec<LogSample> {
         .collect()
 }
 
-fn write_text(samples: &[LogSample]) -> Vec<u8> {
-    let mut out = String::from("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
-    for s in samples {
-        let [ax, ay, az] = s.acc;
-        let [gx, gy, gz] = s.gyro;
-        out.push_str(&format!("{:.6},{ax},{ay},{az},{gx},{gy},{gz}\n", s.t_s));
-    }
-    out.into_bytes()
-}
-
 fn write(format: Format, samples: &[LogSample], recorder_offset_s: f64) -> Vec<u8> {
     match format {
-        Format::Text => write_text(samples),
+        Format::Text => write_csv(samples),
         Format::Ulog => write_ulog(samples, None),
         Format::DataFlash => write_dataflash(samples),
         Format::Mcap => write_mcap(samples, None, recorder_offset_s),
@@ -252,18 +240,9 @@ fn malformed_format_record(mut file: Vec<u8>, format: Format, tail: usize) -> Ve
 }
 
 fn source(format: Format) -> LogSource {
-    LogSource {
-        text: (format == Format::Text).then(|| {
-            ImportOptions::new(
-                TimeSource::Column("t".into()),
-                OutputUnit::MetresPerSecondSquared,
-                GyroUnit::RadPerS,
-            )
-        }),
-        instance: None,
-        topic: None,
-        spelling: Default::default(),
-        rate_hz: None,
+    match format {
+        Format::Text => csv_source(),
+        _ => LogSource::default(),
     }
 }
 

@@ -49,7 +49,7 @@ mod app {
     use firmware::imu::ImuFlags;
     use firmware::imu::ImuSample;
     use firmware::imu_bursts::{
-        Burst, BurstReader, InFlight, Mismatch, BURST_MAX, NO_SAMPLE, STALL_TICK_MS,
+        BurstReader, InFlight, Mismatch, BURST_MAX, NO_SAMPLE, STALL_TICK_MS,
     };
     use firmware::pipeline::PipelineCommand;
     use firmware::pipeline::PipelineFeed;
@@ -72,7 +72,7 @@ mod app {
     struct Shared {
         pipeline: &'static mut Pipeline<OUTPUT_QUEUE>,
         /// The SPI bus during bursts: its DMA streams and the chip select.
-        bus: (SpiDma, PA4<Output<PushPull>>),
+        bus: board::ImuBus,
         /// The chain's decisions (`None`: no IMU answered at boot); the completion task and the
         /// stall timer share it at the same priority.
         reader: Option<BurstReader>,
@@ -230,15 +230,7 @@ mod app {
                 None
             }
         };
-        // Drop whatever the configuration left in the receiver (and its overrun flag), so the first
-        // byte the RX stream moves is the first of a burst.
-        // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
-        unsafe {
-            let regs = &*SPI1::ptr();
-            let _ = regs.dr().read();
-            let _ = regs.sr().read();
-        }
-        let _ = spi.use_dma().txrx();
+        board::spi1_to_dma(spi);
         (reader, status)
     }
 
@@ -257,17 +249,8 @@ mod app {
         cx.local.int1.clear_interrupt_pending_bit();
         if let Some(burst) = IN_FLIGHT.on_watermark() {
             let rx = *cx.local.rx_for_int;
-            cx.shared.bus.lock(|bus| start(bus, burst, rx));
+            cx.shared.bus.lock(|bus| board::start_burst(bus, burst, rx));
         }
-    }
-
-    /// CS low and both streams started.
-    fn start(bus: &mut (SpiDma, PA4<Output<PushPull>>), b: Burst, rx: RxBuf) {
-        let (dma, cs) = bus;
-        cs.set_low();
-        // SAFETY: bursts are at most the buffer's size; `rx` is read only by `burst_done` after
-        // this burst ends, and the commands are statics.
-        unsafe { dma.start(&b.tx[..b.len().min(rx.capacity())], rx.ptr()) };
     }
 
     /// A burst ended: CS high, the driver's decision on the received bytes (next burst of the
@@ -304,7 +287,7 @@ mod app {
             return;
         };
         if let Some(next) = done.next {
-            cx.shared.bus.lock(|bus| start(bus, next, rx));
+            cx.shared.bus.lock(|bus| board::start_burst(bus, next, rx));
         }
         if let Some(m) = done.mismatch {
             // The periodic register check found the part's configuration changed: started again
@@ -316,7 +299,7 @@ mod app {
                     .and_then(|r| r.resume_after_heal(core, &IN_FLIGHT))
             });
             if let Some(next) = next {
-                cx.shared.bus.lock(|bus| start(bus, next, rx));
+                cx.shared.bus.lock(|bus| board::start_burst(bus, next, rx));
             }
             return;
         }
@@ -438,7 +421,7 @@ mod app {
                 let _ = regs.dr().read();
                 let _ = regs.sr().read();
             }
-            start(bus, burst, rx);
+            board::start_burst(bus, burst, rx);
         });
     }
 

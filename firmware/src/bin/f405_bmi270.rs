@@ -53,7 +53,7 @@ mod app {
     use firmware::imu::bmi270::Bmi270;
     use firmware::imu::{ImuFlags, ImuSample};
     use firmware::imu_bursts::NO_SAMPLE;
-    use firmware::imu_bursts::{Burst, InFlight, Mismatch, STALL_TICK_MS};
+    use firmware::imu_bursts::{InFlight, Mismatch, STALL_TICK_MS};
     use firmware::pipeline::PipelineCommand;
     use firmware::pipeline::PipelineFeed;
     use firmware::protocol::StoreMailbox;
@@ -75,7 +75,7 @@ mod app {
     struct Shared {
         pipeline: &'static mut Pipeline<OUTPUT_QUEUE>,
         /// The SPI bus during bursts: its DMA streams and the chip select.
-        bus: (SpiDma, PA4<Output<PushPull>>),
+        bus: board::ImuBus,
         /// The bursts' decisions (`None`: the part did not answer at boot); the completion task
         /// and the stall timer share it at the same priority.
         reader: Option<Bmi270Bursts>,
@@ -219,15 +219,7 @@ mod app {
                 None
             }
         };
-        // Drop whatever the start left in the receiver (and its overrun flag), so the first byte
-        // the RX stream moves is the first of a burst.
-        // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
-        unsafe {
-            let regs = &*SPI1::ptr();
-            let _ = regs.dr().read();
-            let _ = regs.sr().read();
-        }
-        let _ = spi.use_dma().txrx();
+        board::spi1_to_dma(spi);
         (reader, status)
     }
 
@@ -246,17 +238,8 @@ mod app {
         cx.local.int1.clear_interrupt_pending_bit();
         if let Some(burst) = IN_FLIGHT.on_watermark() {
             let rx = *cx.local.rx_for_int;
-            cx.shared.bus.lock(|bus| start(bus, burst, rx));
+            cx.shared.bus.lock(|bus| board::start_burst(bus, burst, rx));
         }
-    }
-
-    /// CS low and both streams started.
-    fn start(bus: &mut (SpiDma, PA4<Output<PushPull>>), b: Burst, rx: RxBuf) {
-        let (dma, cs) = bus;
-        cs.set_low();
-        // SAFETY: bursts are at most the buffer's size; `rx` is read only by `burst_done` after
-        // this burst ends, and the commands are statics.
-        unsafe { dma.start(&b.tx[..b.len().min(rx.capacity())], rx.ptr()) };
     }
 
     /// A burst ended: CS high, the reader's decision on the bytes (the sample into the batch,
@@ -307,7 +290,7 @@ mod app {
             });
         }
         if let Some(next) = next {
-            cx.shared.bus.lock(|bus| start(bus, next, rx));
+            cx.shared.bus.lock(|bus| board::start_burst(bus, next, rx));
         }
         if !done.sample {
             return;
@@ -378,7 +361,7 @@ mod app {
                 let _ = regs.dr().read();
                 let _ = regs.sr().read();
             }
-            start(bus, burst, rx);
+            board::start_burst(bus, burst, rx);
         });
     }
 

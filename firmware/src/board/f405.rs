@@ -418,6 +418,36 @@ const CR_EN: u32 = 1;
 const CR_PL_HIGH: u32 = 0b10 << 16;
 const CR_PL_MEDIUM: u32 = 0b01 << 16;
 
+/// SPI1's DMA and the IMU's chip select (PA4 on every SpeedyBee F405), which a burst holds low.
+pub type ImuBus = (
+    SpiDma,
+    stm32f4xx_hal::gpio::PA4<stm32f4xx_hal::gpio::Output<stm32f4xx_hal::gpio::PushPull>>,
+);
+
+/// Starts burst `b` on the bus: CS low and both streams started, `rx` its receive buffer. Both
+/// F405 binaries' interrupts start their bursts through this (the ICM-42688-P's chain, the
+/// BMI270's data-ready frames).
+pub fn start_burst(bus: &mut ImuBus, b: crate::imu_bursts::Burst, rx: RxBuf) {
+    let (dma, cs) = bus;
+    cs.set_low();
+    // SAFETY: bursts are at most the buffer's size; `rx` is read only by the completion task after
+    // this burst ends, and the commands are statics.
+    unsafe { dma.start(&b.tx[..b.len().min(rx.capacity())], rx.ptr()) };
+}
+
+/// Hands SPI1 to its DMA streams once the part is started: whatever the start left in the
+/// receiver (and its overrun flag) is dropped first, so that the first byte the RX stream moves is
+/// the first of a burst. Then SPI1's DMA requests are enabled (`Spi::use_dma().txrx()`).
+pub fn spi1_to_dma(spi: stm32f4xx_hal::spi::Spi<stm32f4xx_hal::pac::SPI1>) {
+    // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
+    unsafe {
+        let regs = &*stm32f4xx_hal::pac::SPI1::ptr();
+        let _ = regs.dr().read();
+        let _ = regs.sr().read();
+    }
+    let _ = spi.use_dma().txrx();
+}
+
 /// How a burst ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BurstEnd {
