@@ -1,7 +1,7 @@
 //! The virtual unit: a known calibration on a virtual rate table, sampled through the shared forward
 //! model with a seeded noise model ([`session`], `host simulate`), and its noise-free segment
-//! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), and the one
-//! random number generator ([`rng`]).
+//! statistics ([`synth`], which backs the Cramér–Rao prediction and the estimator's tests), drawn
+//! from the one random number generator (`shared::rng`).
 //!
 //! - [`session`]: the virtual unit on a virtual table, row by row, with the table's and the gyro's
 //!   errors, drift and quantisation, with `sensor_noise` (each sample's accelerometer and gyro noise);

@@ -4,25 +4,25 @@
 //!
 //! | subcommand | file | domain code |
 //! |---|---|---|
-//! | `simulate` | `simulate.rs` | [`estimator::sim`] → [`recording::session::writer`] |
-//! | `calibrate --input` | `calibrate.rs` | [`recording::session::reader`] → [`estimator::estimate`] → [`outputs::report::text`], [`estimator::calibration_files`] |
-//! | `calibrate --port` | `calibrate.rs` | [`device::procedure`] over `port.rs` |
-//! | `plan --check` | `plan.rs` | [`estimator::estimate::predict`] |
-//! | `segment`, `simulate-hand` | `segment.rs` | [`recording::session::import`] → [`recording::session::segment`] → [`recording::session::from_recording`], [`estimator::estimate::handheld_gyro`]; [`estimator::sim::handheld`] |
-//! | `report` | `report.rs` | [`outputs::report::document`] over [`outputs::report::data`] |
-//! | `navigation-check` | `navigation_check.rs` | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
-//! | `compare` | `compare.rs` | [`outputs::report::compare`] |
-//! | `export` | `export.rs` (`export_log`: the ids and slots of `--log`) | [`outputs::export`], [`app::autopilot`] |
-//! | `apply` | `apply.rs` | [`outputs::apply`] over [`recording::session::reader`] |
-//! | `noise` | `noise.rs` | [`outputs::noise`] |
-//! | `batch` | `batch.rs` | [`app::batch`] (rayon) over [`estimator::estimate`] |
-//! | `flash`, `read`, `monitor` | `flash.rs`, `read.rs`, `monitor.rs` | [`device`] over `port.rs` |
-//! | `bringup` | `bringup.rs` | [`device::bringup`] over `port.rs` |
+//! | `simulate` | `simulate` | [`estimator::sim`] → [`recording::session::writer`] |
+//! | `calibrate --input` | `calibrate` | [`recording::session::reader`] → [`estimator::estimate`] → [`outputs::report::text`], [`estimator::calibration_files`] |
+//! | `calibrate --port` | `calibrate` | [`device::procedure`] over `port` |
+//! | `plan --check` | `plan` | [`estimator::estimate::predict`] |
+//! | `segment`, `simulate-hand` | `segment` | [`recording::session::import`] → [`recording::session::segment`] → [`recording::session::from_recording`], [`estimator::estimate::handheld_gyro`]; [`estimator::sim::handheld`] |
+//! | `report` | `report` | [`outputs::report::document`] over [`outputs::report::data`] |
+//! | `navigation-check` | `navigation_check` | [`mod@outputs::report::navigation_check`] on [`estimator::sim`] |
+//! | `compare` | `compare` | [`outputs::report::compare`] |
+//! | `export` | `export` (`export_log`: the ids and slots of `--log`) | [`outputs::export`], [`app::autopilot`] |
+//! | `apply` | `apply` | [`outputs::apply`] over [`recording::session::reader`] |
+//! | `noise` | `noise` | [`outputs::noise`] |
+//! | `batch` | `batch` | [`app::batch`] (rayon) over [`estimator::estimate`] |
+//! | `flash`, `read`, `monitor` | `flash`, `read`, `monitor` | [`device`] over `port` |
+//! | `bringup` | `bringup` | [`device::bringup`] over `port` |
 //!
 //! `segment`, `apply` and `noise` read a logger's file with the one set of input options,
-//! `log_input.rs`.
+//! `log_input`.
 //!
-//! Every command fails with the one `CliError` (`error.rs`); `output.rs` decides where its output goes
+//! Every command fails with the one `CliError` (`error`); `output` decides where its output goes
 //! (`--json`, `--quiet`).
 
 pub(crate) mod apply;
