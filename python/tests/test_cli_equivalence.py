@@ -245,7 +245,7 @@ def test_allan_gives_host_noises_curves_and_terms(hand, host_bin):
 def test_segment_file_reads_every_log_format_as_host_segment(host_bin, tmp_path, name):
     """A PX4 ULog, an ArduPilot DataFlash log and a ROS 2 bag (the reference tools' files of the
     host's log tests) cut into the session `host segment` writes, byte for byte."""
-    log = ROOT / "host" / "tests" / "fixtures" / "logs" / name
+    log = ROOT / "recording" / "tests" / "fixtures" / "logs" / name
     run(host_bin, "-q", "segment", "--input", str(log), "--out", str(tmp_path / "cli"))
     session = accelcal.segment_file(log)
     session.write(tmp_path / "py")

@@ -116,7 +116,7 @@ def test_errors_name_the_keyword_arguments(hand, py_cal_of_hand):
     messages.append(str(e.value))
     assert 'use method="joint" with single_package=True' in messages[-1]
     # The IMU of a binary log: a missing instance, a topic the bag does not have.
-    logs = ROOT / "host" / "tests" / "fixtures" / "logs"
+    logs = ROOT / "recording" / "tests" / "fixtures" / "logs"
     with pytest.raises(accelcal.InputError) as e:
         accelcal.segment_file(logs / "hand.ulg", instance=1)
     messages.append(str(e.value))
