@@ -13,18 +13,8 @@ use std::path::{Path, PathBuf};
 
 /// A file of `fixtures/corpus/`, unpacked into `dir` when it is zstd-compressed.
 fn unpack(dir: &Path, name: &str) -> PathBuf {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/corpus")
-        .join(name);
-    match name.strip_suffix(".zst") {
-        Some(plain) => {
-            let bytes = zstd::decode_all(&std::fs::read(&src).unwrap()[..]).unwrap();
-            let out = dir.join(plain);
-            std::fs::write(&out, bytes).unwrap();
-            out
-        }
-        None => src,
-    }
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/corpus");
+    recording::testkit::unpacked(&corpus.join(name), dir)
 }
 
 /// MPU-6050 logs of tomisuarez2/ImuCalibration: a preamble of four lines (rate, logging type,

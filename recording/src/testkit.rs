@@ -17,6 +17,23 @@ pub fn log_fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The file at `src`, unpacked into `dir` when it is zstd-compressed (`.zst`, as the corpora of real
+/// recordings are stored), else `src` itself.
+pub fn unpacked(src: &Path, dir: &Path) -> PathBuf {
+    let name = src.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    match name.strip_suffix(".zst") {
+        Some(plain) => {
+            let packed = std::fs::read(src).unwrap_or_else(|e| panic!("{}: {e}", src.display()));
+            let bytes =
+                zstd::decode_all(&packed[..]).unwrap_or_else(|e| panic!("{}: {e}", src.display()));
+            let out = dir.join(plain);
+            std::fs::write(&out, bytes).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
+            out
+        }
+        None => src.to_path_buf(),
+    }
+}
+
 /// The hand-held session of the fixtures (`hand.ulg`: 6000 samples at 100 Hz, a temperature ramp)
 /// as samples to log again.
 pub fn hand_session() -> Vec<LogSample> {

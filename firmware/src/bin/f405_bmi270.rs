@@ -354,13 +354,7 @@ mod app {
         let rx = *cx.local.rx_for_tick;
         cx.shared.bus.lock(|bus| {
             bus.1.set_high();
-            // Whatever a stalled burst left in SPI1's receiver (and its overrun flag).
-            // SAFETY: two reads of SPI1's data and status registers, as at boot.
-            unsafe {
-                let regs = &*SPI1::ptr();
-                let _ = regs.dr().read();
-                let _ = regs.sr().read();
-            }
+            board::drain_spi1_receiver();
             board::start_burst(bus, burst, rx);
         });
     }

@@ -439,13 +439,20 @@ pub fn start_burst(bus: &mut ImuBus, b: crate::imu_bursts::Burst, rx: RxBuf) {
 /// receiver (and its overrun flag) is dropped first, so that the first byte the RX stream moves is
 /// the first of a burst. Then SPI1's DMA requests are enabled (`Spi::use_dma().txrx()`).
 pub fn spi1_to_dma(spi: stm32f4xx_hal::spi::Spi<stm32f4xx_hal::pac::SPI1>) {
+    drain_spi1_receiver();
+    let _ = spi.use_dma().txrx();
+}
+
+/// Drops whatever is in SPI1's receiver and its overrun flag (RM0090 §28.4.8: OVR clears on a read
+/// of DR then SR): at the hand-over to DMA, and before a stalled chain starts again, so that the
+/// RX stream's first byte is the burst's first. Only while the bus is idle (CS high).
+pub fn drain_spi1_receiver() {
     // SAFETY: two reads of SPI1's data and status registers; the bus is idle.
     unsafe {
         let regs = &*stm32f4xx_hal::pac::SPI1::ptr();
         let _ = regs.dr().read();
         let _ = regs.sr().read();
     }
-    let _ = spi.use_dma().txrx();
 }
 
 /// How a burst ended.

@@ -10,18 +10,8 @@ use std::path::Path;
 
 /// A file of the corpus of real recordings, unpacked into `dir` when it is zstd-compressed.
 fn corpus_file(dir: &Path, name: &str) -> std::path::PathBuf {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/corpus")
-        .join(name);
-    match name.strip_suffix(".zst") {
-        Some(plain) => {
-            let bytes = zstd::decode_all(&std::fs::read(&src).unwrap()[..]).unwrap();
-            let out = dir.join(plain);
-            std::fs::write(&out, bytes).unwrap();
-            out
-        }
-        None => src,
-    }
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/corpus");
+    recording::testkit::unpacked(&corpus.join(name), dir)
 }
 
 /// The real recordings other people's loggers made, read window by window with a budget that
