@@ -153,7 +153,8 @@ fn a_warm_up_leaves_the_gyro_and_the_accuracy_as_at_one_temperature() {
         cal.outcome
             .warnings
             .iter()
-            .any(|w| w.contains("no temperature model") && w.contains("..37.0 °C")),
+            .any(|w| w.to_string().contains("no temperature model")
+                && w.to_string().contains("..37.0 °C")),
         "{:?}",
         cal.outcome.warnings
     );
@@ -337,7 +338,8 @@ fn a_soak_beside_hand_turns_keeps_the_hand_turns_gyro() {
         cal.outcome
             .warnings
             .iter()
-            .any(|w| w.contains("from the hand turns") && w.contains("from the rests")),
+            .any(|w| w.to_string().contains("from the hand turns")
+                && w.to_string().contains("from the rests")),
         "{:?}",
         cal.outcome.warnings
     );

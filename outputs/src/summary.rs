@@ -602,7 +602,7 @@ impl CalibrationSummary {
             thermal_fit,
             checks,
             passed,
-            warnings: outcome.warnings.clone(),
+            warnings: estimator::estimate::note::Note::texts(&outcome.warnings),
             in_package_size_effect: outcome
                 .single_package
                 .then(|| estimator::estimate::IN_PACKAGE_NOT_OBSERVABLE.to_string()),

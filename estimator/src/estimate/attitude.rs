@@ -374,28 +374,12 @@ pub(crate) fn mount_tilts(
         .collect()
 }
 
-/// Warnings for mounts tilted more than 3× their declared prior.
-pub(crate) fn tilt_warnings(tilts: &[MountTilt]) -> Vec<String> {
-    let bad: Vec<String> = tilts
+/// A warning for mounts tilted more than 3× their declared prior.
+pub(crate) fn tilt_warning(tilts: &[MountTilt]) -> Option<super::note::Note> {
+    let mounts: Vec<MountTilt> = tilts
         .iter()
         .filter(|t| t.estimated && t.prior_deg.is_some_and(|p| p > 0.0 && t.tilt_deg > 3.0 * p))
-        .map(|t| {
-            format!(
-                "{} {:.3}° ± {:.3}° (prior {:.3}°)",
-                t.name,
-                t.tilt_deg,
-                t.sigma_deg,
-                t.prior_deg.unwrap_or(0.0)
-            )
-        })
+        .cloned()
         .collect();
-    if bad.is_empty() {
-        return Vec::new();
-    }
-    vec![format!(
-        "mount(s) tilted more than 3× the plan's attitude_sigma_deg: {}; the fixture is worse than the \
-         plan says, or the unit was mounted wrongly: check the fixture and set attitude_sigma_deg to its \
-         real accuracy (docs/model.md §7)",
-        bad.join(", ")
-    )]
+    (!mounts.is_empty()).then_some(super::note::Note::MountsTilted { mounts })
 }

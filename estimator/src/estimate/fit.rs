@@ -69,7 +69,7 @@ pub fn calibrate_with_hand_gyro(
             plausibility::check(plan, &referred, fit_session(plan, &referred, options))?
         }
     };
-    outcome.warnings.extend(Note::texts(&notes));
+    outcome.warnings.extend(notes);
     outcome.calibration.temperature = fit.as_ref().map(|f| f.model);
     let rests = thermal_gyro::bias_from_rests(&outcome, fit.as_ref(), options);
     let from_hand = thermal_gyro::settle_gyro(&mut outcome, rests, hand);
@@ -163,7 +163,7 @@ fn fit_session(
 /// static fit (or, without enough known attitudes, the fit with every attitude free) done.
 struct Prepared {
     /// Warnings so far, in the order the user reads them.
-    warnings: Vec<String>,
+    warnings: Vec<Note>,
     /// Segments left out so far, with the reason.
     excluded: Vec<Exclusion>,
     segs: Vec<SessionSeg>,
@@ -258,9 +258,7 @@ fn settle_gyro_walk(
     if !options.gyro_bias_walk_from_unit {
         return Err(EstimateError::GyroBiasWalkUnused { why });
     }
-    prepared.warnings.push(format!(
-        "gyro: the unit's gyro bias random walk is left out: {why} (docs/model.md §11.6)"
-    ));
+    prepared.warnings.push(Note::GyroWalkUnused { why });
     Ok(())
 }
 
@@ -383,7 +381,7 @@ fn main_fit(
         Method::Paper => {
             let e = paper::eq24(plan, &p.segs, &p.problem.models, &p.static_fit)?;
             let (chi2, dof) = chi2_of(&p.problem.models, &e.theta, 12 + 9);
-            p.warnings.extend(Note::texts(&e.notes));
+            p.warnings.extend(e.notes);
             Ok(MainFit {
                 theta: e.theta,
                 cov: e.cov,
@@ -465,9 +463,9 @@ fn outcome(
     );
     let scaled_cov = &main.cov * s.chi2.scale2;
     let mount_tilts = attitude::mount_tilts(&problem, &main.theta, &scaled_cov, &main.free);
-    warnings.extend(attitude::tilt_warnings(&mount_tilts));
+    warnings.extend(attitude::tilt_warning(&mount_tilts));
     if s.frame == BodyFrame::Convention {
-        warnings.push(format!("{}", s.frame));
+        warnings.push(Note::BodyFrame(s.frame));
     }
     let static_split = attitude::static_split(&main.theta, &scaled_cov, s.frame);
     let parameters = parameter_table(&problem, &main.theta, &scaled_cov);

@@ -4,6 +4,7 @@
 //! plan's kind.
 
 use super::fit::rotates;
+use super::note::{MisfitSources, Note};
 use super::paper_angles::Converted;
 use super::{
     ChiSquareScaling, EstimateError, EstimateOptions, Method, Observability, SegmentDiagnostic,
@@ -25,7 +26,7 @@ pub(super) fn chi2_scale(
     (fit_chi2, fit_dof): (f64, i64),
     plan: &Plan,
     options: &EstimateOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> ChiSquare {
     let reduced = if fit_dof > 0 {
         fit_chi2 / fit_dof as f64
@@ -43,24 +44,21 @@ pub(super) fn chi2_scale(
         _ => 1.0,
     };
     if fit_dof <= 0 {
-        warnings.push(
-            "no residual degrees of freedom: the χ² check and scaling are not possible; \
-             add segments (repeat attitudes or rates)"
-                .into(),
-        );
+        warnings.push(Note::NoResidualDof);
     } else if scale2 > 1.0 {
         let sources = if !rotates(plan) && plan.segments.iter().all(|s| s.is_free()) {
-            "movement while held still, bias drift, a temperature change"
+            MisfitSources::HeldStill
         } else if !rotates(plan) {
-            "a mount tilted beyond its attitude prior, bias drift, a temperature change"
+            MisfitSources::Fixture
         } else {
-            "table attitude or rate error, bias drift, a table centre off the spin axis"
+            MisfitSources::Table
         };
-        warnings.push(format!(
-            "χ²/dof = {reduced:.1} (dof {fit_dof}): the residuals exceed the segments' own noise, so the \
-             model misses an error source it cannot see ({sources}); the 1σ values are scaled by {:.2}",
-            scale2.sqrt()
-        ));
+        warnings.push(Note::ChiSquareScaled {
+            reduced,
+            dof: fit_dof,
+            sources,
+            sigma_scale: scale2.sqrt(),
+        });
     }
     ChiSquare { reduced, scale2 }
 }
@@ -71,7 +69,7 @@ pub(super) fn lever_arm_observability(
     conv: &Converted,
     plan: &Plan,
     options: &EstimateOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Result<Observability, EstimateError> {
     let mut observability = conv.observability(options);
     if options.method == Method::Paper {
@@ -93,20 +91,11 @@ pub(super) fn lever_arm_observability(
         }
         return Ok(observability);
     }
-    warnings.push(format!(
-        "the plan does not determine lever-arm component(s) {} to {:.0} µm{}; add rotations about \
-         oblique axes (tilted mounts) and/or spin-up segments (docs/model.md §4.4)",
-        undetermined.join(", "),
-        options.lever_arm_threshold_m * 1e6,
-        if fixed_names.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " ({} not observable at all: fixed at 0)",
-                fixed_names.join(", ")
-            )
-        }
-    ));
+    warnings.push(Note::LeverArmsUndetermined {
+        components: undetermined.clone(),
+        threshold_m: options.lever_arm_threshold_m,
+        fixed_at_zero: fixed_names,
+    });
     if options.require_lever_arms {
         return Err(EstimateError::PlanCannotObserve {
             parameters: undetermined,
@@ -118,7 +107,7 @@ pub(super) fn lever_arm_observability(
 
 /// The warning for segments whose residuals are well above their own noise, naming the error
 /// sources their kind points to.
-pub(super) fn residual_warning(plan: &Plan, segments: &[SegmentDiagnostic]) -> Option<String> {
+pub(super) fn residual_warning(plan: &Plan, segments: &[SegmentDiagnostic]) -> Option<Note> {
     let flagged: Vec<&SegmentDiagnostic> = segments.iter().filter(|d| d.chi2_flagged).collect();
     if flagged.is_empty() {
         return None;
@@ -129,20 +118,10 @@ pub(super) fn residual_warning(plan: &Plan, segments: &[SegmentDiagnostic]) -> O
         .iter()
         .any(|d| d.kind == SegmentKind::Static && !is_free(&d));
     let rotating = flagged.iter().any(|d| d.kind != SegmentKind::Static);
-    let names: Vec<&str> = flagged.iter().map(|d| d.name.as_str()).collect();
-    let mut sources = Vec::new();
-    if free {
-        sources.push("movement while held still or bias drift (the attitude is fitted, the bias taken as constant)");
-    }
-    if statics {
-        sources.push("a mount tilted beyond its attitude prior, or bias drift (the bias is taken as constant)");
-    }
-    if rotating {
-        sources.push("rate-dependent effects outside the model (table wobble, a table centre off the spin axis, gyro scale or misalignment)");
-    }
-    Some(format!(
-        "segment(s) {} have residuals well above their own noise: {}",
-        names.join(", "),
-        sources.join("; ")
-    ))
+    Some(Note::SegmentResidualsHigh {
+        segments: flagged.iter().map(|d| d.name.clone()).collect(),
+        free,
+        statics,
+        rotating,
+    })
 }

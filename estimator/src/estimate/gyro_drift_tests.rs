@@ -6,6 +6,7 @@
 //! runs N seeds per walk strength (default 12, the documented run, about 20 s) and prints every
 //! figure.
 
+use super::note::Note;
 use super::*;
 use crate::sim::montecarlo::{rms, static_errors};
 use crate::sim::session::gyro_matrix;
@@ -399,7 +400,11 @@ fn a_gyro_walk_without_spins_is_said_to_have_no_effect() {
         },
     )
     .unwrap();
-    let said = |o: &CalibrationOutcome| o.warnings.iter().any(|w| w.contains("§11.6"));
+    let said = |o: &CalibrationOutcome| {
+        o.warnings
+            .iter()
+            .any(|w| matches!(w, Note::GyroWalkUnused { .. }))
+    };
     assert!(said(&with) && !said(&without), "{:?}", with.warnings);
     assert!(with.gyro.is_none() && with.gyro_bias_walk_deg_s_sqrt_s.is_none());
     assert_eq!(with.calibration, without.calibration);

@@ -14,7 +14,8 @@
 //! - `crate::sim::synth`: noise-free statistics of a plan run on a known unit (the input of [`predict`], and the tests').
 //!
 //! The estimator's types: [`options`] (its settings), [`outcome`] (what it returns), [`error`] (why
-//! it made no calibration), [`note`] (how a fit chose its model, as values with one wording each). The modules, in the order a fit runs through them: `fit` (the fit's
+//! it made no calibration), [`note`] (how a fit chose its model and what it warns of, as values with one wording each;
+//! `note_text` words the warnings). The modules, in the order a fit runs through them: `fit` (the fit's
 //! stages, from plan and statistics to the outcome), `fit_checks` (the χ² check, the lever arms'
 //! observability, the residual warning), `screen` (plan ↔ data, screening, the static least
 //! squares; `screen_motion` for the static segments that moved), `segment` (segment kind, pooled
@@ -53,6 +54,7 @@ pub mod handheld_gyro;
 mod joint;
 pub mod model;
 pub mod note;
+mod note_text;
 pub mod options;
 pub mod outcome;
 pub mod package;

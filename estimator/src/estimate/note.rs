@@ -1,6 +1,7 @@
 //! What a fit says about how it chose its model, beside its numbers: each a [`Note`] carrying its
 //! figures, not its text, so that a caller can tell one from another (its [`Note::code`]) without
-//! matching words; its `Display` is the one wording every caller prints.
+//! matching words; its `Display` is the one wording every caller prints. The wording of the
+//! warnings about the session and the fit is in `note_text.rs`.
 
 use std::fmt;
 
@@ -92,6 +93,128 @@ pub enum Note {
         /// The unit's.
         unit: shared::OutputUnit,
     },
+    /// A segment of the data the plan does not name: ignored.
+    SegmentNotInPlan {
+        /// The segment's name.
+        segment: String,
+    },
+    /// A segment of the plan with no rows in the data: left out.
+    SegmentMissingFromData {
+        /// The segment's name.
+        segment: String,
+    },
+    /// A session that turns without a table centre in its plan: the lever arms are relative to
+    /// the spin axis (docs/model.md §4.5).
+    NoTableCentre {
+        /// One lever arm for the three accelerometers (§4.7).
+        single_package: bool,
+    },
+    /// The table centre differs between segments or is missing for some: the lever arms are
+    /// relative to the plan's body origin (docs/model.md §4.5).
+    TableCentreDiffers,
+    /// No residual degree of freedom: χ² cannot be checked or scaled by.
+    NoResidualDof,
+    /// χ²/dof well above 1: the 1σ values scaled by √(χ²/dof).
+    ChiSquareScaled {
+        /// χ²/dof.
+        reduced: f64,
+        /// Its degrees of freedom.
+        dof: i64,
+        /// What the session's kind points to.
+        sources: MisfitSources,
+        /// √(χ²/dof), the factor on every 1σ.
+        sigma_scale: f64,
+    },
+    /// Lever-arm components the plan does not determine (docs/model.md §4.4).
+    LeverArmsUndetermined {
+        /// Their names.
+        components: Vec<String>,
+        /// The 1σ above which a component is undetermined, m.
+        threshold_m: f64,
+        /// Those not observable at all, fixed at 0.
+        fixed_at_zero: Vec<String>,
+    },
+    /// Segments whose residuals are well above their own noise.
+    SegmentResidualsHigh {
+        /// Their names.
+        segments: Vec<String>,
+        /// Some have a free attitude.
+        free: bool,
+        /// Some are static at a known attitude.
+        statics: bool,
+        /// Some rotate.
+        rotating: bool,
+    },
+    /// The unit's gyro bias random walk is left out of the fit (docs/model.md §11.6).
+    GyroWalkUnused {
+        /// Why the session has no gyro model to use it in.
+        why: &'static str,
+    },
+    /// Mounts tilted more than 3× the plan's attitude prior (docs/model.md §7).
+    MountsTilted {
+        /// Each such mount.
+        mounts: Vec<super::attitude::MountTilt>,
+    },
+    /// What fixes the body frame, when nothing known does (docs/model.md §7.1).
+    BodyFrame(super::attitude::BodyFrame),
+    /// The gyro's bias from the rests alone; `G` taken as perfect (docs/model.md §8, §9).
+    GyroFromRests {
+        /// The bias at the reference temperature, rad/s.
+        bias_rad_s: [f64; 3],
+        /// Its 1σ, rad/s.
+        sigma_rad_s: [f64; 3],
+    },
+    /// The gyro's `G` from the hand turns, its bias from the rests (docs/model.md §8, §9).
+    GyroTurnsAndRests {
+        /// The bias at the reference temperature, rad/s.
+        bias_rad_s: [f64; 3],
+    },
+    /// A static segment's data point nowhere near its label's up.
+    LabelNotRecorded {
+        /// The segment.
+        segment: String,
+        /// The measured up, normalised, body axes.
+        up_b: [f64; 3],
+        /// Its angle from the label's `up_b`, degrees.
+        angle_deg: f64,
+    },
+    /// A static segment's data point where other labels' do.
+    LabelLooksLike {
+        /// The segment.
+        segment: String,
+        /// The labels it looks like.
+        alike: Vec<String>,
+    },
+    /// A gyro reading `k`× the table's rates on all three axes: its nominal scale is off.
+    GyroCommonScale {
+        /// The common factor.
+        k: f64,
+    },
+    /// One lever arm asked for, but the session cannot test it against three (docs/model.md
+    /// §4.7).
+    PackageUntested,
+    /// Three lever arms that do not differ significantly: one package's would do (§4.7).
+    LeverArmsAlike {
+        /// χ² added by one point for the three.
+        delta_chi2: f64,
+        /// Its degrees of freedom.
+        dof: i64,
+        /// The 95 % point of χ² with `dof`.
+        limit: f64,
+        /// How the caller names its options.
+        spelling: recording::spelling::Spelling,
+    },
+}
+
+/// The error sources a χ²/dof well above 1 points to, by the session's kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisfitSources {
+    /// Every segment held still at a free attitude.
+    HeldStill,
+    /// Static at known attitudes.
+    Fixture,
+    /// The session turns on a table.
+    Table,
 }
 
 impl Note {
@@ -107,6 +230,24 @@ impl Note {
             Note::ThermalNotDetermined { .. } => "thermal_not_determined",
             Note::SimNormalised { .. } => "sim_normalised",
             Note::SimOutputUnit { .. } => "sim_output_unit",
+            Note::SegmentNotInPlan { .. } => "segment_not_in_plan",
+            Note::SegmentMissingFromData { .. } => "segment_missing_from_data",
+            Note::NoTableCentre { .. } => "no_table_centre",
+            Note::TableCentreDiffers => "table_centre_differs",
+            Note::NoResidualDof => "no_residual_dof",
+            Note::ChiSquareScaled { .. } => "chi_square_scaled",
+            Note::LeverArmsUndetermined { .. } => "lever_arms_undetermined",
+            Note::SegmentResidualsHigh { .. } => "segment_residuals_high",
+            Note::GyroWalkUnused { .. } => "gyro_walk_unused",
+            Note::MountsTilted { .. } => "mounts_tilted",
+            Note::BodyFrame(_) => "body_frame",
+            Note::GyroFromRests { .. } => "gyro_from_rests",
+            Note::GyroTurnsAndRests { .. } => "gyro_turns_and_rests",
+            Note::LabelNotRecorded { .. } => "label_not_recorded",
+            Note::LabelLooksLike { .. } => "label_looks_like",
+            Note::GyroCommonScale { .. } => "gyro_common_scale",
+            Note::PackageUntested => "package_untested",
+            Note::LeverArmsAlike { .. } => "lever_arms_alike",
         }
     }
 
@@ -243,6 +384,7 @@ impl fmt::Display for Note {
                 plan.symbol(),
                 unit.symbol()
             ),
+            _ => self.fmt_warning(f),
         }
     }
 }

@@ -336,8 +336,8 @@ pub struct CalibrationOutcome {
     pub observability: Observability,
     /// The other method, when run.
     pub comparison: Option<MethodComparison>,
-    /// Warnings for the user.
-    pub warnings: Vec<String>,
+    /// Warnings for the user, and what the fit chose beside its numbers.
+    pub warnings: Vec<super::note::Note>,
     /// The fitted form and lever arms in the fit's frame (before re-referencing).
     pub fitted: FittedStatic,
     /// Each mount's estimated attitude (docs/model.md §7).

@@ -9,6 +9,7 @@
 //! 95 % point means the nine components fitted noise, and a warning names the option.
 
 use super::model::{idx_r, r_of};
+use super::note::Note;
 use super::solve::{self, Problem};
 use super::{EstimateOptions, Method, ReferenceChoice};
 use recording::spelling::{Spelling, UserOption};
@@ -96,16 +97,11 @@ pub(crate) fn check(
     problem: &Problem,
     main: &Fitted<'_>,
     options: &EstimateOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Result<Option<PackageTest>, PackageRefusal> {
     let Some(t) = test(problem, main, options) else {
         if options.single_package {
-            warnings.push(
-                "the session cannot test whether the three accelerometers share one lever arm \
-                 (their separate lever arms are not all estimable from its rotations): the one-point \
-                 model is taken as given"
-                    .into(),
-            );
+            warnings.push(Note::PackageUntested);
         }
         return Ok(None);
     };
@@ -188,7 +184,7 @@ pub(crate) fn verdict(
     test: &PackageTest,
     single_package: bool,
     sp: Spelling,
-) -> Result<Option<String>, PackageRefusal> {
+) -> Result<Option<Note>, PackageRefusal> {
     if single_package {
         let limit = chi2_quantile(test.dof, Z_999);
         if test.delta_chi2 > limit {
@@ -203,17 +199,11 @@ pub(crate) fn verdict(
         return Ok(None);
     }
     let limit = chi2_quantile(test.dof, Z_95);
-    Ok((test.delta_chi2 < limit).then(|| {
-        format!(
-            "the three accelerometers' lever arms do not differ significantly (one point for the \
-             three raises χ² by only {:.1} for {} degrees of freedom, below its 95 % point {limit:.1}): \
-             the per-accelerometer values fit noise; if the accelerometers share one package (a MEMS \
-             IMU), calibrate with {} (or package = \"single\" in plan.toml) to fit the \
-             package's one lever arm with a smaller 1σ",
-            test.delta_chi2,
-            test.dof,
-            sp.switch(UserOption::SinglePackage)
-        )
+    Ok((test.delta_chi2 < limit).then_some(Note::LeverArmsAlike {
+        delta_chi2: test.delta_chi2,
+        dof: test.dof,
+        limit,
+        spelling: sp,
     }))
 }
 

@@ -14,6 +14,7 @@
 //! - the gyro, when the session has one: its spins agree with the table and its `G` is a real gyro's
 //!   ([`super::gyro_check`]).
 
+use super::note::Note;
 use super::{gyro_check, CalibrationOutcome, EstimateError};
 use recording::session::{Plan, SegmentStats};
 use shared::linalg;
@@ -39,7 +40,7 @@ pub(crate) fn check(
         Err(e) if labels.is_empty() => return Err(e),
         Err(e) => {
             let mut problems = vec![e.to_string()];
-            problems.extend(labels);
+            problems.extend(Note::texts(&labels));
             return Err(EstimateError::Implausible { problems });
         }
     };
@@ -64,7 +65,7 @@ pub(crate) fn check(
         outcome.warnings.extend(common_scale_note(&outcome));
         return Ok(outcome);
     }
-    problems.extend(labels);
+    problems.extend(Note::texts(&labels));
     Err(EstimateError::Implausible { problems })
 }
 
@@ -93,14 +94,10 @@ fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
 /// A gyro that reads `k`× the table's rates on every axis ([`gyro_check::common_scale`]): no
 /// contradiction, since a spin's rate does not depend on the time base: the gyro's nominal scale is
 /// off (which the calibration corrects), or the plan's rates are.
-fn common_scale_note(outcome: &CalibrationOutcome) -> Option<String> {
+fn common_scale_note(outcome: &CalibrationOutcome) -> Option<Note> {
     let g = outcome.gyro.as_ref()?;
     let k = gyro_check::common_scale(&g.matrix)?;
-    Some(format!(
-        "the gyro reads {k:.4}× the table's rates on all three axes: its nominal scale is off by \
-         {:+.1} %, which this calibration corrects, or the plan's rate_deg_s are off by as much",
-        (k - 1.0) * 100.0
-    ))
+    Some(Note::GyroCommonScale { k })
 }
 
 /// A scale factor that contradicts the plan's `output_unit`: an output declared in g must measure
@@ -166,7 +163,7 @@ fn triad_problems(m: &linalg::RowMajor3) -> Vec<String> {
 /// Independent of the fit: the bias and scale of each output are taken from the extremes of the
 /// static means (`u0 ≈ (max + min)/2`, `k ≈ (max − min)/2`), valid when the plan has `±1 g` on every
 /// body axis; with another plan the check is skipped (the fit's own checks remain).
-pub(crate) fn label_contradictions(plan: &Plan, stats: &[SegmentStats]) -> Vec<String> {
+pub(crate) fn label_contradictions(plan: &Plan, stats: &[SegmentStats]) -> Vec<Note> {
     let near = |a: &[f64; 3], b: &[f64; 3]| angle_deg(a, b) < 10.0;
     let statics: Vec<(&str, [f64; 3], [f64; 3])> = stats
         .iter()
@@ -209,25 +206,20 @@ pub(crate) fn label_contradictions(plan: &Plan, stats: &[SegmentStats]) -> Vec<S
             .filter(|(other, o_up, _)| {
                 other != name && angle_deg(&measured, o_up) < LABEL_MATCH_DEG
             })
-            .map(|(other, _, _)| format!("'{other}'"))
+            .map(|(other, _, _)| other.to_string())
             .collect();
         let n = linalg::norm(&measured);
-        let m = measured.map(|v| v / n);
         if alike.is_empty() {
-            out.push(format!(
-                "segment '{name}' measures up ≈ [{:+.2}, {:+.2}, {:+.2}], {:.0}° from its up_b: it was \
-                 not recorded in the planned attitude",
-                m[0],
-                m[1],
-                m[2],
-                angle_deg(&measured, up)
-            ));
+            out.push(Note::LabelNotRecorded {
+                segment: name.to_string(),
+                up_b: measured.map(|v| v / n),
+                angle_deg: angle_deg(&measured, up),
+            });
         } else {
-            out.push(format!(
-                "segment '{name}' looks like {} (its data point where that label's up_b does): \
-                 the labels are swapped, or the unit was mounted wrongly",
-                alike.join(" or ")
-            ));
+            out.push(Note::LabelLooksLike {
+                segment: name.to_string(),
+                alike,
+            });
         }
     }
     out

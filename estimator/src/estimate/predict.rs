@@ -58,7 +58,7 @@ pub struct Prediction {
     /// The threshold, m.
     pub threshold_m: f64,
     /// Warnings from the estimator (e.g. what the plan does not determine).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<super::note::Note>,
     /// One lever arm for the three accelerometers (docs/model.md §4.7): `r1` is the package's.
     pub single_package: bool,
     /// The static 1σ split into intrinsic and body-frame parts (docs/model.md §7).

@@ -2,6 +2,7 @@
 //! building the segment models and the static least squares.
 
 use super::model::{self, idx_m, idx_u0, Mount, SegModel};
+use super::note::Note;
 use super::outcome::{RATE_TOLERANCE_DEG_S, RATE_TOLERANCE_FRACTION};
 use super::solve::Problem;
 use super::{
@@ -19,7 +20,7 @@ pub(crate) fn match_plan(
     stats: &[SegmentStats],
     options: &EstimateOptions,
     excluded: &mut Vec<Exclusion>,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Result<Vec<SessionSeg>, EstimateError> {
     let mut by_name: HashMap<&str, &SegmentStats> = HashMap::new();
     for s in stats {
@@ -37,10 +38,9 @@ pub(crate) fn match_plan(
                     name: s.name.clone(),
                 });
             }
-            warnings.push(format!(
-                "segment '{}' is in the data but not in the plan: ignored (add it to plan.toml to use it)",
-                s.name
-            ));
+            warnings.push(Note::SegmentNotInPlan {
+                segment: s.name.clone(),
+            });
             excluded.push(Exclusion {
                 name: s.name.clone(),
                 reason: ExclusionReason::NotInPlan,
@@ -62,11 +62,9 @@ pub(crate) fn match_plan(
                         name: sp.name.clone(),
                     });
                 }
-                warnings.push(format!(
-                    "segment '{}' is in the plan but has no rows in the data: left out (record it, or \
-                     remove it from plan.toml)",
-                    sp.name
-                ));
+                warnings.push(Note::SegmentMissingFromData {
+                    segment: sp.name.clone(),
+                });
                 excluded.push(Exclusion {
                     name: sp.name.clone(),
                     reason: ExclusionReason::MissingFromData,
@@ -504,7 +502,7 @@ pub(crate) struct Frame {
 pub(crate) fn reference_frame(
     plan: &Plan,
     options: &EstimateOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Frame {
     let centres: Vec<[f64; 3]> = plan
         .segments
@@ -515,23 +513,12 @@ pub(crate) fn reference_frame(
     if centres.is_empty() {
         // Without rotation no lever arm is calibrated, so their reference point says nothing.
         if options.reference == ReferenceChoice::TableAxis && super::fit::rotates(plan) {
-            warnings.push(if options.single_package {
-                // One lever arm: it is the package's distance from the table's axis (docs/model.md §4.7).
-                "the plan gives no table centre: the package's lever arm is relative to the point on \
-                 the table's spin axis (p = 0), i.e. where the package sat on the table"
-                    .into()
-            } else {
-                "the plan gives no table centre: the lever arms are relative to the point on the table's \
-                 spin axis (the paper's assumption p = 0); only differences r_i − r_j are free of it"
-                    .into()
+            warnings.push(Note::NoTableCentre {
+                single_package: options.single_package,
             });
         }
     } else if centres.iter().any(|c| Some(*c) != common) || centres.len() < plan.segments.len() {
-        warnings.push(
-            "the table centre differs between segments (or is missing for some): the lever arms are \
-             relative to the plan's body origin"
-                .into(),
-        );
+        warnings.push(Note::TableCentreDiffers);
     }
     let p = common.unwrap_or([0.0; 3]);
     let neg = |o: [f64; 3]| -> [f64; 3] { core::array::from_fn(|j| o[j] - p[j]) };

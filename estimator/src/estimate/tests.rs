@@ -1,5 +1,6 @@
 //! Estimator tests against the generator's known truth (`testkit`).
 
+use super::note::{MisfitSources, Note};
 use super::*;
 use crate::sim::montecarlo::{percentile, rms};
 use crate::sim::testkit::{self, clean_session, paper_noise, TableErrors};
@@ -353,7 +354,11 @@ fn table_errors_are_covered_by_the_scaled_sigma_or_named() {
     let named = mc
         .outcomes
         .iter()
-        .filter(|o| o.warnings.iter().any(|w| w.contains("table attitude")))
+        .filter(|o| {
+            o.warnings.iter().any(|w| {
+                matches!(w, Note::ChiSquareScaled { sources, .. } if *sources == MisfitSources::Table)
+            })
+        })
         .count();
     eprintln!(
         "   {named} of {} sessions name the table attitude error",

@@ -122,34 +122,6 @@ pub(crate) fn bias_from_rests(
     Some(GyroEstimate::bias_only(bias, sigma))
 }
 
-/// The warning for the rests' bias alone: `G` taken as perfect and said to be undetermined
-/// (docs/model.md §8, §9).
-fn rests_warning(g: &GyroEstimate) -> String {
-    let (b, s) = (g.bias_rad_s, g.bias_rad_s_1sigma);
-    format!(
-        "gyro: bias at the reference temperature from the rests, ({:+.4}, {:+.4}, {:+.4}) ± ({:.4}, {:.4}, {:.4}) °/s; \
-         its scale factors and axis alignment (G) are not determined (the session has no spins) and are taken as perfect",
-        b[0].to_degrees(),
-        b[1].to_degrees(),
-        b[2].to_degrees(),
-        s[0].to_degrees(),
-        s[1].to_degrees(),
-        s[2].to_degrees()
-    )
-}
-
-/// The warning for the hand turns' `G` beside a bias of `bias`'s.
-fn combined_warning(bias: &GyroEstimate) -> String {
-    let b = bias.bias_rad_s.map(f64::to_degrees);
-    format!(
-        "gyro: scale factors and axis alignment (G) from the hand turns (gyro.toml); the bias \
-         at the reference temperature, ({:+.4}, {:+.4}, {:+.4}) °/s, and its change with \
-         temperature from the rests (docs/model.md §8, §9), not the hand turns' bias, which is \
-         the still positions' average over their temperatures",
-        b[0], b[1], b[2]
-    )
-}
-
 /// The calibration's gyro, decided once from what the session gives: its own fit's where that
 /// determines `G`; else the gyro a hand-held session's turns determined (`gyro.toml`, §8), whole
 /// when the session gives no gyro, and beside a temperature model its `G` (scale factors and axis
@@ -173,7 +145,9 @@ pub(crate) fn settle_gyro(
             return false;
         }
         (Some(bias), _, Some(hand)) | (None, Some(bias), Some(hand)) => {
-            let warning = combined_warning(&bias);
+            let warning = Note::GyroTurnsAndRests {
+                bias_rad_s: bias.bias_rad_s,
+            };
             let gyro = GyroEstimate {
                 bias_rad_s: bias.bias_rad_s,
                 bias_rad_s_1sigma: bias.bias_rad_s_1sigma,
@@ -182,7 +156,10 @@ pub(crate) fn settle_gyro(
             (gyro, true, Some(warning))
         }
         (None, Some(rests), None) => {
-            let warning = rests_warning(&rests);
+            let warning = Note::GyroFromRests {
+                bias_rad_s: rests.bias_rad_s,
+                sigma_rad_s: rests.bias_rad_s_1sigma,
+            };
             (rests, false, Some(warning))
         }
         (None, None, Some(hand)) => (hand.clone(), true, None),

@@ -19,7 +19,7 @@ fn a_session_at_one_temperature_gets_no_model() {
     assert!(
         out.warnings
             .iter()
-            .any(|w| w.contains("no temperature model")),
+            .any(|w| w.to_string().contains("no temperature model")),
         "{:?}",
         out.warnings
     );
@@ -150,7 +150,9 @@ fn soak_steps_calibrate_the_gyro_bias_over_temperature() {
         }
     }
     assert!(
-        !out.warnings.iter().any(|w| w.contains("misalignment")),
+        !out.warnings
+            .iter()
+            .any(|w| w.to_string().contains("misalignment")),
         "{:?}",
         out.warnings
     );
@@ -180,7 +182,9 @@ fn a_gyro_without_tempco_gets_no_gyro_bias_model() {
         .is_none());
     // A constant misalignment raises no warning.
     assert!(
-        !out.warnings.iter().any(|w| w.contains("misalignment")),
+        !out.warnings
+            .iter()
+            .any(|w| w.to_string().contains("misalignment")),
         "{:?}",
         out.warnings
     );
@@ -208,9 +212,10 @@ fn a_misalignment_drifting_with_temperature_is_flagged() {
         plan.segments.extend(part.segments);
     }
     let out = calibrate_session_stats(&plan, &stats, &EstimateOptions::default()).unwrap();
-    let flagged: Vec<&String> = out
+    let flagged: Vec<String> = out
         .warnings
         .iter()
+        .map(ToString::to_string)
         .filter(|w| w.contains("misalignment"))
         .collect();
     println!("{flagged:?}");
@@ -282,6 +287,7 @@ fn temperatures_seen_only_between_free_attitudes_give_no_model() {
     let note = out
         .warnings
         .iter()
+        .map(ToString::to_string)
         .find(|w| w.contains("no temperature model"))
         .unwrap_or_else(|| panic!("{:?}", out.warnings));
     assert!(

@@ -349,7 +349,7 @@ fn seed_result(case: &Case, truth: &Calibration, seed: u64) -> SeedResult {
         tilt_warning: out
             .warnings
             .iter()
-            .any(|w| w.contains("3× the plan's attitude_sigma_deg")),
+            .any(|w| matches!(w, crate::estimate::note::Note::MountsTilted { .. })),
         norm_only_static_ug,
         gyro_err,
         gyro_err_rotated,

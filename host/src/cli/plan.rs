@@ -137,7 +137,7 @@ pub(crate) fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
         "parameters": parameters,
         "lever_arms_observable": prediction.lever_arms_observable,
         "lever_arms_fixed": prediction.lever_arms_fixed,
-        "warnings": prediction.warnings,
+        "warnings": estimator::estimate::note::Note::texts(&prediction.warnings),
         "single_package": prediction.single_package,
         "in_package_size_effect": prediction
             .single_package
