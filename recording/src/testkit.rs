@@ -69,6 +69,53 @@ pub fn write_csv(samples: &[LogSample]) -> Vec<u8> {
     text.into_bytes()
 }
 
+/// A logger's CSV of `samples` with its time in milliseconds and no temperature:
+/// `t_ms,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z`, a time unit the reader tells from the rows.
+pub fn write_csv_ms(samples: &[LogSample]) -> Vec<u8> {
+    let mut text = String::from("t_ms,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n");
+    for s in samples {
+        let [ax, ay, az] = s.acc;
+        let [gx, gy, gz] = s.gyro;
+        text.push_str(&format!(
+            "{:.3},{ax},{ay},{az},{gx},{gy},{gz}\n",
+            s.t_s * 1e3
+        ));
+    }
+    text.into_bytes()
+}
+
+/// A vehicle in flight at `t_s`: 1 g of vibration on each axis about gravity and 1 rad/s of
+/// rotation, at 24 °C.
+pub fn flying(t_s: f64, rng: &mut shared::rng::Rng) -> LogSample {
+    let mut n = || rng.normal() as f32;
+    LogSample {
+        t_s,
+        acc: [9.81 * n(), 9.81 * n(), -9.81 + 9.81 * n()],
+        gyro: [n(), n(), n()],
+        temp_c: 24.0,
+    }
+}
+
+/// The fixtures' hand-held session ([`hand_session`]) between two stretches of flight
+/// ([`flying`], seed 3) of `motion_s` seconds each at `rate_hz`, as one long log's samples; and
+/// the number of the session's samples.
+pub fn session_in_flight(motion_s: f64, rate_hz: f64) -> (Vec<LogSample>, usize) {
+    let hand = hand_session();
+    let mut rng = shared::rng::Rng::new(3, 0);
+    let before = (motion_s * rate_hz) as usize;
+    let mut samples: Vec<LogSample> = (0..before)
+        .map(|k| flying(k as f64 / rate_hz, &mut rng))
+        .collect();
+    let start = motion_s + 1.0 / rate_hz - hand[0].t_s;
+    samples.extend(hand.iter().map(|s| LogSample {
+        t_s: s.t_s + start,
+        ..*s
+    }));
+    let end = samples.last().map_or(0.0, |s| s.t_s);
+    samples.extend((1..=before).map(|k| flying(end + k as f64 / rate_hz, &mut rng)));
+    (samples, hand.len())
+}
+
 /// How [`write_csv`]'s files are read.
 pub fn csv_source() -> LogSource {
     let mut options = ImportOptions::new(

@@ -67,8 +67,6 @@ mod tests;
 mod text_temperature_tests;
 #[cfg(test)]
 mod window_marks_tests;
-#[cfg(test)]
-mod window_property_tests;
 
 pub(crate) use error::CliError;
 

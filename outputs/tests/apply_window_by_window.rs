@@ -5,21 +5,29 @@
 //! formats, each log with damage drawn from the seed: a 3 s gap, a temperature dropout (some
 //! covering whole windows), a damaged stamp, an exact repeat, two samples swapped.
 //!
-//! `WINDOW_SEEDS=40 cargo test -p host --lib window_property -- --nocapture` runs more seeds (the
-//! suite runs 6) and prints every case.
+//! `WINDOW_SEEDS=40 cargo test -p outputs --test apply_window_by_window -- --nocapture` runs more
+//! seeds (the suite runs 6) and prints every case.
 
-use super::log_fixture_tests::truth;
+use estimator::unit_file::UnitFile;
 use outputs::apply::{apply_log_within, Setting};
 use recording::session::import::MAX_ROWS;
 use recording::session::logs::{read_log_windows, LogRead, LogSource};
 use recording::testkit::{
-    assert_windows_from_marks, csv_source, hand_session, write_csv, write_dataflash, write_mcap,
-    write_mcap_unstamped, write_ulog, LogSample,
+    assert_windows_from_marks, csv_source, hand_session, log_fixture, write_csv, write_dataflash,
+    write_mcap, write_mcap_unstamped, write_ulog, LogSample,
 };
 use shared::compensator::LeverMode;
 use shared::rng::Rng;
 use shared::Calibration;
 use std::path::Path;
+
+/// The simulated unit the log fixtures' session was recorded with.
+fn truth() -> Calibration {
+    UnitFile::load(&log_fixture("hand.truth.toml"))
+        .unwrap()
+        .to_calibration()
+        .unwrap()
+}
 
 /// The damage drawn for one case, said for the case's line.
 fn damage(samples: &mut Vec<LogSample>, rng: &mut Rng) -> String {
