@@ -16,9 +16,8 @@
 //! statistics; a non-finite gyro sample also restarts the ω̇ estimator so NaN never enters its state.
 
 use heapless::Deque;
-use shared::compensator::{Compensator, LeverMode};
+use shared::compensator::Compensator;
 use shared::omega_dot::OmegaDotEstimator;
-use shared::units::SensorOutputs;
 use shared::wire::{
     CompensatedSample, CompensatedWindow, DeviceToHost, RawSample, RawWindow, SampleFlags,
     StreamKind, StreamRequest,
@@ -32,6 +31,7 @@ mod feed_tests;
 mod run;
 #[cfg(test)]
 mod run_tests;
+mod step;
 
 pub use feed::PipelineFeed;
 
@@ -305,21 +305,6 @@ impl<const Q: usize> Pipeline<Q> {
         self.out.len()
     }
 
-    /// The compensated specific force (m/s²) of a finite sample, or the raw outputs passed through
-    /// when uncalibrated. Out of line: `on_sample` needs it twice, and the run loops (`run.rs`),
-    /// the digital IMU's per-sample path, have their own copies in line (0.4 KiB of the QEMU image;
-    /// the ADC path's call costs about 40 instructions per sample of its 0.5 % budget's 900).
-    #[inline(never)]
-    fn compensate(&self, raw: &[f32; 3], rate: &[f32; 3], omega_dot: &[f32; 3]) -> [f32; 3] {
-        match &self.compensator {
-            Some(c) if c.mode() == LeverMode::Off => {
-                c.compensate_static(&SensorOutputs { raw: *raw }).m_s2
-            }
-            Some(c) => c.compensate_raw(raw, rate, omega_dot),
-            None => *raw,
-        }
-    }
-
     /// The body rate into `out`: the gyro's output corrected by the calibration (raw when
     /// uncalibrated). `on_sample` and the runs (`run.rs`) both take it from here.
     #[inline(always)]
@@ -364,22 +349,20 @@ impl<const Q: usize> Pipeline<Q> {
     }
 
     /// Processes one sample. Cost: ω̇ update, at most one compensation, one accumulation; a frame is
-    /// built only when a window closes.
+    /// built only when a window closes. The steps a clean sample shares with the runs (`run.rs`)
+    /// are `step.rs`'s; what is here is the rejected samples' and the decimated streams'.
     #[inline]
     pub fn on_sample<S: SampleView + ?Sized>(&mut self, s: &S) {
         let (raw, gyro, saturated) = (s.raw(), s.rate_rad_s(), s.saturated());
         let index = self.index;
         self.index += 1;
         let finite = s.finite();
-        let mut rate = [0.0; 3];
-        self.body_rate_into_outlined(gyro, &mut rate);
-        // The estimate stays where the estimator keeps it (0 after a reset).
-        if finite {
-            omega_dot_update(&mut self.omega_dot, &rate);
-        } else {
-            self.omega_dot.reset();
-        }
-        let omega_dot = self.omega_dot.estimate();
+        // The window's sample, built in place as in a run: the rate in its second half.
+        let mut x = [0.0; 6];
+        let Some((_, rate)) = step::halves(&mut x) else {
+            return;
+        };
+        self.rate_step::<{ step::PER_SAMPLE }>(gyro, finite, rate);
         let Some(req) = self.stream else {
             return;
         };
@@ -395,23 +378,25 @@ impl<const Q: usize> Pipeline<Q> {
             }
             f
         };
+        let next = self.index;
         match req.kind {
             StreamKind::RawWindows | StreamKind::CompensatedWindows => {
+                let mut in_window = self.in_window;
                 if good {
-                    let (v, r) = if req.kind == StreamKind::RawWindows {
-                        (*raw, *gyro)
-                    } else {
-                        (self.compensate(raw, &rate, omega_dot), rate)
-                    };
-                    window_add(&mut self.acc, &[v[0], v[1], v[2], r[0], r[1], r[2]]);
+                    self.window_step::<{ step::PER_SAMPLE }>(
+                        raw,
+                        gyro,
+                        &mut x,
+                        req,
+                        || next,
+                        &mut in_window,
+                    );
                 } else {
                     self.rejected += 1;
                     self.window_flags |= sample_flags();
+                    self.count_in_window(req, || next, &mut in_window);
                 }
-                self.in_window += 1;
-                if self.in_window >= req.window_samples {
-                    self.close_window(req.kind);
-                }
+                self.in_window = in_window;
             }
             StreamKind::RawDecimated | StreamKind::CompensatedDecimated => {
                 if self.in_window == 0 {
@@ -426,8 +411,9 @@ impl<const Q: usize> Pipeline<Q> {
                             flags,
                         })
                     } else {
+                        let rate = [x[3], x[4], x[5]];
                         let f = if finite {
-                            self.compensate(raw, &rate, omega_dot)
+                            self.compensate(raw, &rate, self.omega_dot.estimate())
                         } else {
                             *raw
                         };
@@ -503,7 +489,8 @@ fn unreachable() -> ! {
 mod tests {
     use super::*;
     use crate::paper_unit;
-    use shared::compensator::TemperatureState;
+    use shared::compensator::{LeverMode, TemperatureState};
+    use shared::units::SensorOutputs;
     use shared::units::{BodyAngularAccel, BodyRate};
 
     fn calibrated(mode: LeverMode) -> Pipeline<8> {
