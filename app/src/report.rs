@@ -9,7 +9,6 @@ use outputs::calibration_guard::{meet, Meeting};
 use outputs::report::{
     build_report, session_fit_options, write_report, ReportError, ReportOptions, ReportSummary,
 };
-use recording::session::note::Note;
 use recording::session::{read_session, Package, ReadOptions};
 use std::path::Path;
 
@@ -40,7 +39,8 @@ pub fn report(
     let fit = calibrate_session_stats(plan, stats, &session_fit_options(&cal, options));
     let uncertainty = unit.uncertainty.as_ref();
     let mut data = build_report(plan, stats, &cal, uncertainty, fit, options)?;
-    data.warnings.extend(Note::texts(&session.report.warnings));
+    data.warnings
+        .extend((session.report.warnings.iter().cloned()).map(outputs::note::Note::Reader));
     // The calibration file says so itself (its rows are then equal, checked when it was read).
     data.single_package |= unit.package() == Package::Single;
     write_report(

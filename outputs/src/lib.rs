@@ -19,5 +19,6 @@ pub mod apply;
 pub mod calibration_guard;
 pub mod export;
 pub mod noise;
+pub mod note;
 pub mod report;
 pub mod summary;

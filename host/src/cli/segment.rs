@@ -309,7 +309,10 @@ fn draw_and_commit(
     let step = recording::ui::step("drawing the segments' figure", out.quiet);
     let fig = figure(&s.recording, &s.segmentation);
     match plot::render(&fig, dir.path(), Formats::default()) {
-        Ok(o) => o.warnings.into_iter().for_each(|w| warn(out, warnings, w)),
+        Ok(o) => o
+            .warnings
+            .into_iter()
+            .for_each(|w| warn(out, warnings, w.to_string())),
         Err(e) => warn(out, warnings, e.to_string()),
     }
     dir.commit()?;

@@ -25,6 +25,7 @@
 
 use super::navigation::{replay, NavigationRun};
 use super::plot::{self, Formats};
+use crate::note::Note;
 use estimator::estimate::{
     CalibrationOutcome, EstimateError, EstimateOptions, Noise, SegmentKind, Uncertainty,
 };
@@ -115,8 +116,8 @@ pub enum ReportError {
         examples: Vec<String>,
     },
     /// The navigation check has no segment to replay (the reasons, one per replay).
-    #[error("nothing to replay: {}", .0.join("; "))]
-    NothingToReplay(Vec<String>),
+    #[error("nothing to replay: {}", Note::texts(.0).join("; "))]
+    NothingToReplay(Vec<Note>),
     /// A figure could not be drawn.
     #[error(transparent)]
     Figure(#[from] plot::FigureError),
@@ -269,7 +270,7 @@ pub struct ReportData {
     /// The static and the rotating replay (either may be absent when the plan has none).
     pub navigation: Vec<NavigationRun>,
     /// Why a replay is left out, one line each (also among the warnings).
-    pub navigation_left_out: Vec<String>,
+    pub navigation_left_out: Vec<Note>,
     /// The session's own fit (χ², excluded segments, observability), or why it failed.
     pub session_fit: Result<CalibrationOutcome, estimator::estimate::EstimateError>,
     /// The session's segments through the session fit's own calibration (empty when it failed or its
@@ -281,7 +282,7 @@ pub struct ReportData {
     /// walk (docs/model.md §11.4).
     pub bias_walk_figure: Option<super::plot::Figure>,
     /// Warnings for the reader.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Note>,
     /// The calibration's three lever arms are one package's (docs/model.md §4.7): Table 3 shows the
     /// one lever arm and says the in-package size effect is not observable.
     pub single_package: bool,
@@ -454,10 +455,7 @@ pub fn build_report(
     let mut warnings = Vec::new();
     match &session_fit {
         Ok(o) => refer_to_fit(&mut segments, o),
-        Err(e) => warnings.push(format!(
-            "the session alone does not calibrate ({e}): the theoretical values are the plan's \
-             nominal attitudes, and free (hand-held) positions are not compared"
-        )),
+        Err(e) => warnings.push(Note::SessionDoesNotCalibrate(e.clone())),
     }
     let (mut chi2, mut terms) = (0.0, 0usize);
     for r in &segments {
@@ -551,7 +549,7 @@ fn navigation_runs(
     segments: &[SegmentRow],
     g: f64,
     options: &ReportOptions,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Note>,
 ) -> Result<Vec<NavigationRun>, ReportError> {
     let find = |name: &str| {
         segments
@@ -599,21 +597,13 @@ fn navigation_runs(
     let free = segments.iter().any(|r| r.free);
     if static_row.is_none() {
         warnings.push(if free {
-            "the navigation replay is left out: every position was held by hand, so its attitude is \
-             fitted from the very outputs the replay would judge (it would show the fit's own \
-             residual, not a navigator's drift); the before/after table against the fitted \
-             attitudes is the check"
-                .into()
+            Note::ReplayHandHeld
         } else {
-            "no static segment with a known attitude: the static navigation replay is left out".into()
+            Note::NoStaticReplay
         });
     }
     if rate_row.is_none() && !free {
-        warnings.push(
-            "no constant-rate segment with a known attitude: the rotating navigation replay is left \
-             out"
-            .into(),
-        );
+        warnings.push(Note::NoRateReplay);
     }
     Ok([static_row, rate_row]
         .into_iter()

@@ -28,7 +28,7 @@ pub struct ReportSummary {
     /// The HTML page: the one file to open.
     pub page: PathBuf,
     /// Warnings (no font, missing runs, …).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::note::Note>,
 }
 
 impl ReportSummary {

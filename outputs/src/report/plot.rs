@@ -9,6 +9,7 @@
 //! in `outputs/assets/fonts/`): every machine draws the same PNG and SVG, and nothing is looked up on the
 //! file system or in the environment.
 
+use crate::note::Note;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -104,7 +105,7 @@ pub struct RenderOutcome {
     /// Files written.
     pub files: Vec<PathBuf>,
     /// Why something was not written or not drawn (e.g. no font: no PNG, no text).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::note::Note>,
 }
 
 /// Why a figure could not be drawn.
@@ -186,10 +187,9 @@ pub(crate) fn render_with(
         draw_in_place(fig, &path, text, FileKind::Svg)?;
         out.files.push(path);
         if !text {
-            out.warnings.push(format!(
-                "the embedded font could not be registered: {}.svg has no text",
-                fig.stem
-            ));
+            out.warnings.push(Note::SvgWithoutText {
+                stem: fig.stem.clone(),
+            });
         }
     }
     if formats.png {
@@ -198,10 +198,7 @@ pub(crate) fn render_with(
             draw_in_place(fig, &path, text, FileKind::Png)?;
             out.files.push(path);
         } else {
-            out.warnings.push(format!(
-                "the embedded font could not be registered: {} not written",
-                path.display()
-            ));
+            out.warnings.push(Note::PngNotWritten { path });
         }
     }
     Ok(out)

@@ -1,0 +1,89 @@
+//! What a report says beside its tables and figures: each a [`Note`] carrying what it is about,
+//! not its text, so that a caller can tell one from another (its [`Note::code`]) without matching
+//! words; its `Display` is the one wording the terminal, `report.md` and `report.html` print. The
+//! reader's notes on the session's files are carried whole.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// One thing a report tells its reader besides its numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Note {
+    /// What the reader repaired or noticed in the session's files.
+    Reader(recording::session::note::Note),
+    /// The session alone does not calibrate: the theoretical values are the plan's.
+    SessionDoesNotCalibrate(estimator::estimate::error::EstimateError),
+    /// Every position was held by hand: no navigation replay (its attitude is fitted from the
+    /// outputs the replay would judge).
+    ReplayHandHeld,
+    /// No static segment with a known attitude: no static replay.
+    NoStaticReplay,
+    /// No constant-rate segment with a known attitude: no rotating replay.
+    NoRateReplay,
+    /// The embedded font could not be registered: an SVG without text.
+    SvgWithoutText {
+        /// The figure's file stem.
+        stem: String,
+    },
+    /// The embedded font could not be registered: a PNG not written.
+    PngNotWritten {
+        /// The file it would have been.
+        path: PathBuf,
+    },
+}
+
+impl Note {
+    /// A stable name of the note's kind, for a program reading the notes, independent of its
+    /// wording (a reader's note has its own).
+    pub fn code(&self) -> &'static str {
+        match self {
+            Note::Reader(n) => n.code(),
+            Note::SessionDoesNotCalibrate(_) => "session_does_not_calibrate",
+            Note::ReplayHandHeld => "replay_hand_held",
+            Note::NoStaticReplay => "no_static_replay",
+            Note::NoRateReplay => "no_rate_replay",
+            Note::SvgWithoutText { .. } => "svg_without_text",
+            Note::PngNotWritten { .. } => "png_not_written",
+        }
+    }
+
+    /// The notes said as text, in order.
+    pub fn texts(notes: &[Note]) -> Vec<String> {
+        notes.iter().map(ToString::to_string).collect()
+    }
+}
+
+impl fmt::Display for Note {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Note::Reader(n) => write!(f, "{n}"),
+            Note::SessionDoesNotCalibrate(e) => write!(
+                f,
+                "the session alone does not calibrate ({e}): the theoretical values are the plan's \
+                 nominal attitudes, and free (hand-held) positions are not compared"
+            ),
+            Note::ReplayHandHeld => f.write_str(
+                "the navigation replay is left out: every position was held by hand, so its \
+                 attitude is fitted from the very outputs the replay would judge (it would show the \
+                 fit's own residual, not a navigator's drift); the before/after table against the \
+                 fitted attitudes is the check",
+            ),
+            Note::NoStaticReplay => f.write_str(
+                "no static segment with a known attitude: the static navigation replay is left out",
+            ),
+            Note::NoRateReplay => f.write_str(
+                "no constant-rate segment with a known attitude: the rotating navigation replay is \
+                 left out",
+            ),
+            Note::SvgWithoutText { stem } => write!(
+                f,
+                "the embedded font could not be registered: {stem}.svg has no text"
+            ),
+            Note::PngNotWritten { path } => write!(
+                f,
+                "the embedded font could not be registered: {} not written",
+                path.display()
+            ),
+        }
+    }
+}
