@@ -13,6 +13,7 @@
 //! - [`export`]: a calibration in other tools' formats (Kalibr YAML, Fusion and plain C headers with a
 //!   C blob decoder, JSON, PX4, ArduPilot, the TOML conversions).
 //! - [`noise`]: Allan deviation and noise terms (`host noise`).
+//! - [`note`]: what a report tells its reader besides its numbers, as values.
 #![deny(missing_docs)]
 
 pub mod apply;
