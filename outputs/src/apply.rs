@@ -32,7 +32,6 @@ use crate::calibration_guard::{
 use firmware::pipeline::OMEGA_DOT_CORNER_FRACTION;
 use recording::output_file::OutputFileError;
 use recording::session::logs::LogError;
-use recording::session::note::Note;
 use recording::session::{read_samples_each, Plan, PlanError, RecordingError, Row};
 use recording::session::{PLAN_FILE, SAMPLES_FILE};
 use shared::compensator::{Compensator, CompensatorError, LeverMode};
@@ -241,7 +240,7 @@ pub struct ApplySummary {
     pub non_finite_rows: u64,
     /// Warnings of the reader (cut-short last line, empty segments, …), and rows outside the
     /// calibration's temperature range.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::note::Note>,
     /// Notes: an explicit choice the data already satisfied (`--ignore-unit-id` where no ids
     /// differ).
     pub notes: Vec<String>,
@@ -348,15 +347,6 @@ fn check_still(name: &str, s: &StillSums, gyro: bool) -> Result<(), ApplyError> 
     Ok(())
 }
 
-/// The warning for rows compensated outside the calibration's temperature range.
-fn flagged_warning(rows: u64) -> String {
-    format!(
-        "{rows} rows were recorded outside the calibration's valid temperature range (or without a \
-         temperature reading): their compensation uses the nearest end of the range, and the device \
-         flags such outputs"
-    )
-}
-
 /// One output row: segment, time, the specific force in g and the corrected rate (`NaN` for a row
 /// with a non-finite value).
 fn output_line(
@@ -448,11 +438,19 @@ pub fn apply_session(
             out.write_all(line.as_bytes()).map_err(write_err)
         },
     )?;
-    summary.warnings = Note::texts(&report.warnings);
+    summary.warnings = report
+        .warnings
+        .into_iter()
+        .map(crate::note::Note::Reader)
+        .collect();
     summary.notes.extend(id_note);
     check_stills(&plan, &stills, cal.gyro.is_some())?;
     if applier.flagged_rows > 0 {
-        summary.warnings.push(flagged_warning(applier.flagged_rows));
+        summary
+            .warnings
+            .push(crate::note::Note::RowsOutsideTemperatureRange {
+                rows: applier.flagged_rows,
+            });
     }
     Ok(summary)
 }

@@ -1,5 +1,5 @@
-//! What a report says beside its tables and figures: each a [`Note`] carrying what it is about,
-//! not its text, so that a caller can tell one from another (its [`Note::code`]) without matching
+//! What a report or a compensated recording says beside its numbers: each a [`Note`] carrying
+//! what it is about, not its text, so that a caller can tell one from another (its [`Note::code`]) without matching
 //! words; its `Display` is the one wording the terminal, `report.md` and `report.html` print. The
 //! reader's notes on the session's files are carried whole.
 
@@ -30,6 +30,28 @@ pub enum Note {
         /// The file it would have been.
         path: PathBuf,
     },
+    /// Rows outside the calibration's valid temperature range (or without a reading),
+    /// compensated at the range's nearest end.
+    RowsOutsideTemperatureRange {
+        /// How many.
+        rows: u64,
+    },
+    /// A long log compensated window by window.
+    ReadInWindows {
+        /// The most samples per stream read into memory at once.
+        max_samples: usize,
+        /// The windows read.
+        windows: usize,
+    },
+    /// What the reader said of some of a long log's windows.
+    InWindows {
+        /// What it said.
+        note: Box<Note>,
+        /// The windows' spans, s (open ends infinite).
+        spans: Vec<(f64, f64)>,
+        /// The log's windows in all.
+        windows: usize,
+    },
 }
 
 impl Note {
@@ -44,6 +66,9 @@ impl Note {
             Note::NoRateReplay => "no_rate_replay",
             Note::SvgWithoutText { .. } => "svg_without_text",
             Note::PngNotWritten { .. } => "png_not_written",
+            Note::RowsOutsideTemperatureRange { .. } => "rows_outside_temperature_range",
+            Note::ReadInWindows { .. } => "read_in_windows",
+            Note::InWindows { note, .. } => note.code(),
         }
     }
 
@@ -84,6 +109,45 @@ impl fmt::Display for Note {
                 "the embedded font could not be registered: {} not written",
                 path.display()
             ),
+            Note::RowsOutsideTemperatureRange { rows } => write!(
+                f,
+                "{rows} rows were recorded outside the calibration's valid temperature range (or \
+                 without a temperature reading): their compensation uses the nearest end of the \
+                 range, and the device flags such outputs"
+            ),
+            Note::ReadInWindows {
+                max_samples,
+                windows,
+            } => write!(
+                f,
+                "the log holds more than {max_samples} samples per stream, the most read into \
+                 memory at once: it was read and compensated in {windows} time windows, the \
+                 device's state carried from each to the next"
+            ),
+            Note::InWindows {
+                note,
+                spans,
+                windows,
+            } => match spans.as_slice() {
+                _ if spans.len() == *windows => write!(f, "{note}"),
+                [(lo, hi)] => write!(f, "in the window {}: {note}", SpanText(*lo, *hi)),
+                _ => write!(f, "in {} of the {windows} windows: {note}", spans.len()),
+            },
+        }
+    }
+}
+
+/// A window's times for the user: "t = 120.000 s to 245.500 s", its open ends said as such.
+struct SpanText(f64, f64);
+
+impl fmt::Display for SpanText {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let SpanText(lo, hi) = *self;
+        match (lo.is_finite(), hi.is_finite()) {
+            (true, true) => write!(f, "t = {lo:.3} s to {hi:.3} s"),
+            (false, true) => write!(f, "up to t = {hi:.3} s"),
+            (true, false) => write!(f, "from t = {lo:.3} s on"),
+            (false, false) => f.write_str("of the whole log"),
         }
     }
 }

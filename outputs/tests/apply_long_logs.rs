@@ -5,6 +5,7 @@
 
 use estimator::unit_file::UnitFile;
 use outputs::apply::{apply_log_within, ApplySummary, Setting};
+use outputs::note::Note;
 use recording::session::import::MAX_ROWS;
 use recording::session::import::{GyroUnit, ImportOptions, TimeSource};
 use recording::session::logs::LogSource;
@@ -107,16 +108,16 @@ fn a_long_log_applied_window_by_window_is_the_log_applied_whole() {
             path.display(),
             whole_summary.rows
         );
-        let windows: usize = note
-            .split(" in ")
-            .nth(1)
-            .and_then(|w| w.split(' ').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("{:?}", summary.warnings));
+        let Note::ReadInWindows { windows, .. } = *note else {
+            panic!("{:?}", summary.warnings)
+        };
         // About 66 000 samples in windows of about 5 000.
         assert!((10..=16).contains(&windows), "{note}");
         assert!(
-            !whole_summary.warnings.iter().any(|w| w.contains("windows")),
+            !whole_summary
+                .warnings
+                .iter()
+                .any(|w| w.to_string().contains("windows")),
             "{:?}",
             whole_summary.warnings
         );
@@ -147,11 +148,8 @@ fn a_far_damaged_stamp_costs_its_row_in_a_windowed_apply() {
     let (windowed, summary) = apply_within(&path, &none(), 10_000);
     // Each repair is said with the samples' places in the file, read whole or window by window.
     let repairs = |s: &ApplySummary| -> Vec<String> {
-        let w = s
-            .warnings
-            .iter()
-            .filter(|w| w.contains("time stamps repaired"));
-        w.cloned().collect()
+        let w = s.warnings.iter().map(ToString::to_string);
+        w.filter(|w| w.contains("time stamps repaired")).collect()
     };
     let said = repairs(&whole_summary).join(" | ");
     println!("read whole: {said}");
@@ -176,10 +174,9 @@ fn a_far_damaged_stamp_costs_its_row_in_a_windowed_apply() {
     }
     assert!(!said.contains("re-timed"), "{said}");
     assert!(
-        summary
-            .warnings
-            .iter()
-            .any(|w| w.starts_with("1 sample(s) left out by the window rule")),
+        summary.warnings.iter().any(|w| w
+            .to_string()
+            .starts_with("1 sample(s) left out by the window rule")),
         "{:?}",
         summary.warnings
     );
@@ -248,7 +245,7 @@ fn a_window_without_a_rest_judges_rest_by_the_whole_logs_noise() {
     let (whole, whole_summary) = apply_within(&path, &none(), MAX_ROWS);
     let (windowed, summary) = apply_within(&path, &none(), 10_000);
     assert!(
-        summary.warnings[0].contains("time windows"),
+        summary.warnings[0].to_string().contains("time windows"),
         "{:?}",
         summary.warnings
     );

@@ -81,7 +81,10 @@ fn apply(
     let summary = apply_log_within(path, source, cal, &setting, max_samples, &mut out)
         .unwrap_or_else(|e| panic!("{} within {max_samples}: {e}", path.display()));
     let text = String::from_utf8(out).unwrap();
-    (text.lines().map(str::to_string).collect(), summary.warnings)
+    (
+        text.lines().map(str::to_string).collect(),
+        outputs::note::Note::texts(&summary.warnings),
+    )
 }
 
 /// The time column of an output line.

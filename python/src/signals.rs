@@ -110,7 +110,7 @@ pub fn apply<'py>(
     });
     let (out, rate, warnings) = done.py_err()?;
     for w in warnings {
-        let text = std::ffi::CString::new(w).unwrap_or_default();
+        let text = std::ffi::CString::new(w.to_string()).unwrap_or_default();
         PyErr::warn(
             py,
             &py.get_type::<pyo3::exceptions::PyUserWarning>(),

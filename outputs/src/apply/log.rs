@@ -2,6 +2,7 @@
 
 use super::{check_still, output_line, Applier, ApplyError, ApplySummary, StillSums};
 use crate::calibration_guard::{meet, Meeting, Other};
+use crate::note::Note as OutputNote;
 use recording::session::import::{Places, Recording};
 use recording::session::logs::{read_log_windows, LogError, LogRead, LogSource, LogWindows};
 use recording::session::note::Note;
@@ -79,7 +80,9 @@ pub fn apply_log_within(
             let mut summary = prepared.run(rec, cal, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
             let mut notes = log.warnings;
             notes.extend(rec.reader_warnings(Places::InFile));
-            summary.warnings.splice(0..0, Note::texts(&notes));
+            summary
+                .warnings
+                .splice(0..0, notes.into_iter().map(OutputNote::Reader));
             return Ok(summary);
         }
         LogRead::Windows(w) => w,
@@ -98,7 +101,7 @@ pub fn apply_log_within(
         let rec = &log.recording;
         let mut said = log.warnings;
         said.extend(rec.reader_warnings(Places::InWindow));
-        notes.add(windows.span(k), Note::texts(&said));
+        notes.add(windows.span(k), said);
         if rec.is_empty() {
             continue;
         }
@@ -122,14 +125,12 @@ pub fn apply_log_within(
         }));
     };
     let mut summary = run.finish();
-    let mut warnings = vec![format!(
-        "the log holds more than {max_samples} samples per stream, the most read into memory at \
-         once: it was read and compensated in {} time windows, the device's state carried from \
-         each to the next",
-        windows.len()
-    )];
+    let mut warnings = vec![OutputNote::ReadInWindows {
+        max_samples,
+        windows: windows.len(),
+    }];
     warnings.extend(notes.into_warnings(windows.len()));
-    warnings.extend(Note::texts(&scale.notes()));
+    warnings.extend(scale.notes().into_iter().map(OutputNote::Reader));
     summary.warnings.splice(0..0, warnings);
     Ok(summary)
 }
@@ -359,47 +360,41 @@ impl<'c> Run<'c> {
         if self.applier.flagged_rows > 0 {
             summary
                 .warnings
-                .push(super::flagged_warning(self.applier.flagged_rows));
+                .push(OutputNote::RowsOutsideTemperatureRange {
+                    rows: self.applier.flagged_rows,
+                });
         }
         summary
     }
 }
 
-/// What the reader said of each window of a long log, each thing said once: with the window's
-/// times where it was said of one window, with the number of windows where of several.
+/// What the reader said of each window of a long log, each thing said once (two notes that read
+/// the same are one): with the window's times where it was said of one window, with the number of
+/// windows where of several.
 #[derive(Debug, Default)]
 struct WindowNotes {
-    notes: Vec<(String, Vec<(f64, f64)>)>,
+    notes: Vec<(String, Note, Vec<(f64, f64)>)>,
 }
 
 impl WindowNotes {
-    fn add(&mut self, span: (f64, f64), warnings: Vec<String>) {
-        for w in warnings {
-            match self.notes.iter_mut().find(|(n, _)| *n == w) {
-                Some((_, spans)) => spans.push(span),
-                None => self.notes.push((w, vec![span])),
+    fn add(&mut self, span: (f64, f64), said: Vec<Note>) {
+        for n in said {
+            let text = n.to_string();
+            match self.notes.iter_mut().find(|(t, _, _)| *t == text) {
+                Some((_, _, spans)) => spans.push(span),
+                None => self.notes.push((text, n, vec![span])),
             }
         }
     }
 
-    fn into_warnings(self, windows: usize) -> Vec<String> {
+    fn into_warnings(self, windows: usize) -> Vec<OutputNote> {
         self.notes
             .into_iter()
-            .map(|(w, spans)| match spans.as_slice() {
-                _ if spans.len() == windows => w,
-                [(lo, hi)] => format!("in the window {}: {w}", span_text(*lo, *hi)),
-                _ => format!("in {} of the {windows} windows: {w}", spans.len()),
+            .map(|(_, note, spans)| OutputNote::InWindows {
+                note: Box::new(OutputNote::Reader(note)),
+                spans,
+                windows,
             })
             .collect()
-    }
-}
-
-/// A window's times for the user: "t = 120.000 s to 245.500 s", its open ends said as such.
-fn span_text(lo: f64, hi: f64) -> String {
-    match (lo.is_finite(), hi.is_finite()) {
-        (true, true) => format!("t = {lo:.3} s to {hi:.3} s"),
-        (false, true) => format!("up to t = {hi:.3} s"),
-        (true, false) => format!("from t = {lo:.3} s on"),
-        (false, false) => "of the whole log".to_string(),
     }
 }
