@@ -100,22 +100,30 @@ pub struct ProcedureOutcome {
 /// Why the procedure stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
-    /// The link failed; what was recorded so far is saved at `recording` (if anything was).
+    /// The link failed; what was recorded so far is saved at `recording` (if anything was). The
+    /// link's error leads the message and the advice follows it, so it is shown there (with its
+    /// causes) and not also returned as `source()`.
     #[error(fmt = link_message)]
     Link {
         /// The link error.
-        source: LinkError,
+        cause: LinkError,
         /// The saved recording and its row count.
         recording: Option<(PathBuf, u64)>,
     },
     /// The recording could not be written or read back.
     #[error(transparent)]
     Recording(#[from] RecordingError),
-    /// No calibration could be estimated from the recording.
-    #[error("{source}\n(the recording is saved in {})", .recording.display())]
+    /// No calibration could be estimated from the recording. The reason leads the message and where
+    /// the recording is follows it, so it is shown there (with its causes) and not also returned as
+    /// `source()`.
+    #[error(
+        "{}\n(the recording is saved in {})",
+        shared::chain::Chain(.cause),
+        .recording.display()
+    )]
     Estimate {
         /// Why.
-        source: CalibrateError,
+        cause: CalibrateError,
         /// The saved recording.
         recording: PathBuf,
     },
@@ -137,17 +145,23 @@ pub enum ProcedureError {
     #[error("stopped by the operator ({0})")]
     Aborted(String),
     /// The terminal failed.
-    #[error("terminal error: {0}")]
+    #[error("terminal error")]
     Terminal(#[source] std::io::Error),
     /// A hand-held session's window log could not be opened.
     #[error(transparent)]
     WindowLog(window_log::WindowLogError),
-    /// A hand-held session's window log could not be kept or gave no session.
-    #[error("{source}\n(every window of the session is in {}: `{}` tells more)", .stream.display(), .command)]
+    /// A hand-held session's window log could not be kept or gave no session. The reason leads the
+    /// message and where the windows are follows it, so it is shown there (with its causes) and not
+    /// also returned as `source()`.
+    #[error(
+        "{}\n(every window of the session is in {}: `{}` tells more)",
+        shared::chain::Chain(.cause.as_ref()),
+        .stream.display(),
+        .command
+    )]
     HandSession {
         /// Why.
-        #[source]
-        source: Box<crate::hand_session::HandSessionError>,
+        cause: Box<crate::hand_session::HandSessionError>,
         /// The window log.
         stream: PathBuf,
         /// The `host segment` command that reads it as the procedure did.
@@ -157,19 +171,20 @@ pub enum ProcedureError {
 
 /// [`ProcedureError::Link`]'s message: the link's, and where the recording so far is kept.
 fn link_message(
-    source: &LinkError,
+    cause: &LinkError,
     recording: &Option<(PathBuf, u64)>,
     f: &mut std::fmt::Formatter<'_>,
 ) -> std::fmt::Result {
     match recording {
         Some((dir, rows)) => write!(
             f,
-            "{source}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
+            "{}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
              can be estimated with `host calibrate --input {}`",
+            shared::chain::Chain(cause),
             dir.display(),
             dir.display()
         ),
-        None => write!(f, "{source}"),
+        None => write!(f, "{}", shared::chain::Chain(cause)),
     }
 }
 
@@ -201,7 +216,7 @@ pub fn run<T: Transport>(
     op: &mut dyn Operator,
 ) -> Result<ProcedureOutcome, ProcedureError> {
     let link = |source| ProcedureError::Link {
-        source,
+        cause: source,
         recording: None,
     };
     // Nothing is recorded over, and no run is wasted on a refusal at its end.
@@ -258,7 +273,7 @@ pub fn run<T: Transport>(
         &session::ReadOptions { quiet: opts.quiet },
     )
     .map_err(|source| ProcedureError::Estimate {
-        source,
+        cause: source,
         recording: session_dir.clone(),
     })?;
     // The result table is the caller's to print (on stdout, with the other results).
@@ -339,7 +354,7 @@ fn hand_error(
 ) -> ProcedureError {
     let segmented = opts.out_dir.join(hand_session::SEGMENTED_DIR);
     ProcedureError::HandSession {
-        source: Box::new(source),
+        cause: Box::new(source),
         stream: stream.to_path_buf(),
         command: hand_session::segment_command(stream, plan, &segmented),
     }
@@ -416,7 +431,7 @@ fn record_plan<T: Transport>(
                 &seg.name,
             )
             .map_err(|source| ProcedureError::Link {
-                source,
+                cause: source,
                 recording: saved(&writer),
             })?;
         }
@@ -464,7 +479,7 @@ fn record_plan<T: Transport>(
                 // Whatever was recorded reaches the disk before the error is reported.
                 writer.end_segment()?;
                 return Err(ProcedureError::Link {
-                    source,
+                    cause: source,
                     recording: saved(&writer),
                 });
             }
@@ -516,7 +531,7 @@ fn store_on_device<T: Transport>(
     created: u64,
 ) -> Result<Identity, ProcedureError> {
     let link = |source| ProcedureError::Link {
-        source,
+        cause: source,
         recording: None,
     };
     client.write_calibration(&written.blob).map_err(link)?;
@@ -572,7 +587,7 @@ fn record_segment<T: Transport>(
         op.wait_ready(&instruction(seg))
             .map_err(|e| LinkError::Unexpected {
                 waiting_for: "the operator",
-                got: e.to_string(),
+                got: shared::chain::Chain(&e).to_string(),
             })?;
     }
     let duration = seg.duration_s.unwrap_or(60.0);
@@ -618,7 +633,7 @@ fn record_segment<T: Transport>(
             };
             written.map_err(|e| LinkError::Unexpected {
                 waiting_for: "a writable recording",
-                got: e.to_string(),
+                got: shared::chain::Chain(&e).to_string(),
             })?;
         }
         bar.inc(1);

@@ -76,13 +76,13 @@ pub enum ReportError {
     #[error(transparent)]
     Unit(UnitFileError),
     /// The calibration file's values are not a calibration (the unit file says why).
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Calibration(#[source] estimator::unit_file::UnitFileInvalid),
     /// The calibration cannot compensate.
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Compensator(#[source] shared::compensator::CompensatorError),
     /// The calibration's gyro correction cannot be inverted.
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Gyro(#[source] shared::sensor_models::GyroError),
     /// The calibration cannot meet this recording ([`crate::calibration_guard`]).
     #[error(transparent)]
@@ -121,7 +121,7 @@ pub enum ReportError {
     #[error(transparent)]
     Figure(#[from] plot::FigureError),
     /// A file could not be written.
-    #[error("cannot write {}: {}", .0.display(), .1)]
+    #[error("cannot write {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// A page of the report could not be written.
     #[error(transparent)]
@@ -455,8 +455,9 @@ pub fn build_report(
     match &session_fit {
         Ok(o) => refer_to_fit(&mut segments, o),
         Err(e) => warnings.push(format!(
-            "the session alone does not calibrate ({e}): the theoretical values are the plan's \
-             nominal attitudes, and free (hand-held) positions are not compared"
+            "the session alone does not calibrate ({}): the theoretical values are the plan's \
+             nominal attitudes, and free (hand-held) positions are not compared",
+            shared::chain::Chain(e)
         )),
     }
     let (mut chi2, mut terms) = (0.0, 0usize);
