@@ -18,6 +18,7 @@ use crate::{hand_session, handheld, window_log, DeviceClient, LinkError, Transpo
 use app::{CalibrateError, CalibrateOptions, Calibrated};
 use estimator::calibration_files::{self, OutputError, WrittenCalibration};
 use recording::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use shared::chain::Chain;
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
 
@@ -97,12 +98,11 @@ pub struct ProcedureOutcome {
     pub passed: bool,
 }
 
-/// Why the procedure stopped.
+/// Why the procedure stopped. `Link`, `Estimate` and `HandSession` lead with their reason and say
+/// after it where the data are kept: they show the reason (and its causes) and do not return it.
 #[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
-    /// The link failed; what was recorded so far is saved at `recording` (if anything was). The
-    /// link's error leads the message and the advice follows it, so it is shown there (with its
-    /// causes) and not also returned as `source()`.
+    /// The link failed; what was recorded so far is saved at `recording` (if anything was).
     #[error(fmt = link_message)]
     Link {
         /// The link error.
@@ -113,14 +113,8 @@ pub enum ProcedureError {
     /// The recording could not be written or read back.
     #[error(transparent)]
     Recording(#[from] RecordingError),
-    /// No calibration could be estimated from the recording. The reason leads the message and where
-    /// the recording is follows it, so it is shown there (with its causes) and not also returned as
-    /// `source()`.
-    #[error(
-        "{}\n(the recording is saved in {})",
-        shared::chain::Chain(.cause),
-        .recording.display()
-    )]
+    /// No calibration could be estimated from the recording.
+    #[error("{}\n(the recording is saved in {})", Chain(.cause), .recording.display())]
     Estimate {
         /// Why.
         cause: CalibrateError,
@@ -150,14 +144,10 @@ pub enum ProcedureError {
     /// A hand-held session's window log could not be opened.
     #[error(transparent)]
     WindowLog(window_log::WindowLogError),
-    /// A hand-held session's window log could not be kept or gave no session. The reason leads the
-    /// message and where the windows are follows it, so it is shown there (with its causes) and not
-    /// also returned as `source()`.
+    /// A hand-held session's window log could not be kept or gave no session.
     #[error(
         "{}\n(every window of the session is in {}: `{}` tells more)",
-        shared::chain::Chain(.cause.as_ref()),
-        .stream.display(),
-        .command
+        Chain(.cause.as_ref()), .stream.display(), .command
     )]
     HandSession {
         /// Why.
@@ -180,11 +170,11 @@ fn link_message(
             f,
             "{}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
              can be estimated with `host calibrate --input {}`",
-            shared::chain::Chain(cause),
+            Chain(cause),
             dir.display(),
             dir.display()
         ),
-        None => write!(f, "{}", shared::chain::Chain(cause)),
+        None => write!(f, "{}", Chain(cause)),
     }
 }
 
@@ -587,7 +577,7 @@ fn record_segment<T: Transport>(
         op.wait_ready(&instruction(seg))
             .map_err(|e| LinkError::Unexpected {
                 waiting_for: "the operator",
-                got: shared::chain::Chain(&e).to_string(),
+                got: Chain(&e).to_string(),
             })?;
     }
     let duration = seg.duration_s.unwrap_or(60.0);
@@ -633,7 +623,7 @@ fn record_segment<T: Transport>(
             };
             written.map_err(|e| LinkError::Unexpected {
                 waiting_for: "a writable recording",
-                got: shared::chain::Chain(&e).to_string(),
+                got: Chain(&e).to_string(),
             })?;
         }
         bar.inc(1);
