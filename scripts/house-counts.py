@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Counts that show whether the crates' paths and public surfaces tell the truth (ARCHITECTURE.md,
 "Code map"): root aliases of other crates' modules, `crate::` paths that lead into another crate,
-`pub` items no other crate names, notes and errors kept as plain text, command-line flag names below
-the command line, and test lines against code lines per crate. It reads the sources as text, so a
+`pub` items no other crate names, notes and errors kept as plain text, errors that print their cause
+and also return it, command-line flag names below the command line, and test lines against code
+lines per crate. It reads the sources as text, so a
 count is a place to look, not a verdict.
 
     python3 scripts/house-counts.py
@@ -64,6 +65,63 @@ def root_aliases(crate):
     return aliases
 
 
+def error_fields(body):
+    """The fields of a variant's body split at its top-level commas."""
+    parts, depth, cur = [], 0, ""
+    for ch in body:
+        if ch in "([{<":
+            depth += 1
+        elif ch in ")]}>":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return parts + ([cur] if cur.strip() else [])
+
+
+def error_says(message, field):
+    """Whether an `#[error(...)]` message prints `field` (a name, or a tuple index as text): in the
+    format string as `{field}` / `{field:…}`, or among the arguments after it as `.field`."""
+    lit = re.match(r'\s*"((?:[^"\\]|\\.)*)"(.*)', message, re.S)
+    fmt, args = (lit.group(1), lit.group(2)) if lit else (message, "")
+    return (re.search(r"\{%s(:[^}]*)?\}" % field, fmt) is not None
+            or re.search(r"\.%s\b" % field, args) is not None)
+
+
+def printed_and_exposed(text):
+    """Line numbers of thiserror variants whose `#[error(...)]` prints the field that is also their
+    `source()`: a field marked `#[source]` or `#[from]`, or named `source`. `transparent` is not
+    counted (it is the cause, said once), nor a message built by a function (`fmt = ...`)."""
+    found = []
+    variant = re.compile(r"#\[error\((.*?)\)\]\s*(?:#\[[^\]]*\]\s*)*(\w+)\s*([({])", re.S)
+    for m in variant.finditer(text):
+        message, opener = m.group(1), m.group(3)
+        if message.strip() == "transparent" or message.strip().startswith("fmt"):
+            continue
+        depth, i = 1, m.end()
+        while depth and i < len(text):
+            depth += text[i] in "([{<"
+            depth -= text[i] in ")]}>"
+            i += 1
+        fields = error_fields(text[m.end():i - 1])
+        for index, field in enumerate(fields):
+            marked = re.search(r"#\[(source|from)\]", field) is not None
+            if opener == "(":
+                name = str(index)
+            else:
+                named = re.search(r"(\w+)\s*:", re.sub(r"#\[[^\]]*\]|///[^\n]*", "", field))
+                if not named:
+                    continue
+                name = named.group(1)
+                marked = marked or name == "source"
+            if marked and error_says(message, name):
+                found.append(text[:m.start()].count("\n") + 1)
+                break
+    return found
+
+
 def main():
     os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
     code = {c: [] for c in CRATES}
@@ -110,6 +168,13 @@ def main():
                 variants += len(re.findall(r"^\s*\w+\((?:pub )?String\),?$|^\s*\w+\s*\{\s*\w+:\s*String\s*\},?$", text, re.M))
         print(f"  {c:10} {pushes:4} String notes pushed, {variants:3} String-only error variants, "
               f"{result_string:3} Result<_, String>")
+
+    print("\nerrors that print and expose their source (a thiserror variant whose message prints the")
+    print("field that is its `#[source]`/`#[from]`/`source`; non-test code; `python/` too):")
+    for c in CRATES + ["python"]:
+        n = sum(len(printed_and_exposed(text)) for p in rust_files(c) for text in ["\n".join(split_code(p)[0])]
+                if text)
+        print(f"  {c:10} {n:4}")
 
     print("\ncommand-line flag names in strings below the command line (non-test code):")
     for c in BELOW_EDGE:

@@ -30,7 +30,7 @@ pub enum AutopilotError {
     )]
     NotAVehicleLog(PathBuf),
     /// The log's parameters give no id or slot.
-    #[error("{path}, IMU instance {instance}: {source}")]
+    #[error("{path}, IMU instance {instance}")]
     Slot {
         /// The log.
         path: PathBuf,
@@ -46,7 +46,7 @@ pub enum AutopilotError {
     )]
     NoImu(PathBuf),
     /// One IMU's recording gives no session.
-    #[error("IMU instance {instance}: {source}")]
+    #[error("IMU instance {instance}")]
     Segment {
         /// The IMU instance.
         instance: u8,
@@ -54,7 +54,7 @@ pub enum AutopilotError {
         source: InMemoryError,
     },
     /// One IMU's hand-turn gyro does not read back.
-    #[error("IMU instance {instance}: {source}")]
+    #[error("IMU instance {instance}")]
     HandGyro {
         /// The IMU instance.
         instance: u8,
@@ -62,7 +62,7 @@ pub enum AutopilotError {
         source: HandGyroFileError,
     },
     /// One IMU's estimate failed.
-    #[error("IMU instance {instance}: {source}")]
+    #[error("IMU instance {instance}")]
     Estimate {
         /// The IMU instance.
         instance: u8,

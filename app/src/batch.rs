@@ -140,7 +140,7 @@ impl LotSummary {
 #[derive(Debug, thiserror::Error)]
 pub enum BatchError {
     /// The input directory cannot be listed.
-    #[error("cannot list {}: {}", .0.display(), .1)]
+    #[error("cannot list {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// It holds no session.
     #[error(
@@ -149,7 +149,7 @@ pub enum BatchError {
     )]
     NoSessions(PathBuf),
     /// The thread pool could not start.
-    #[error("cannot start the worker threads: {0}")]
+    #[error("cannot start the worker threads")]
     Threads(#[source] rayon::ThreadPoolBuildError),
 }
 
@@ -191,12 +191,12 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
     // The one calibrate use case, as `host calibrate --input`; the unit's error is kept as its
     // message in the lot's summary (a row of summary.csv and summary.json).
     match crate::calibrate_session_dir(dir, &options, &ReadOptions { quiet: true }) {
-        Err(e) => r.error = Some(e.to_string()),
+        Err(e) => r.error = Some(shared::chain::Chain(&e).to_string()),
         Ok((s, mut calibrated)) => {
             r.rows = s.report.rows;
             match crate::write_result(&out_dir, &mut calibrated, now_unix_s(), false) {
                 Ok(_) => r.summary = Some(calibrated.document),
-                Err(e) => r.error = Some(e.to_string()),
+                Err(e) => r.error = Some(shared::chain::Chain(&e).to_string()),
             }
         }
     }
@@ -382,7 +382,7 @@ pub fn run_batch(
             .as_mut()
             .map(|d| crate::calibrate::mark_failed(d, &dir, false))
         {
-            u.error = Some(e.to_string());
+            u.error = Some(shared::chain::Chain(&e).to_string());
         }
     }
     Ok(LotSummary {

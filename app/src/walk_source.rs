@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum WalkSourceError {
     /// The file could not be read.
-    #[error("--bias-walk-from {}: {source}", .path.display())]
+    #[error("--bias-walk-from {}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -31,23 +31,24 @@ pub enum WalkSourceError {
         #[source]
         source: std::io::Error,
     },
-    /// A `.json` file that is not `host noise`'s `noise.json`.
+    /// A `.json` file that is not `host noise`'s `noise.json`. serde_json's reason is said in
+    /// parentheses inside the message, so it is shown there and not also returned as `source()`.
     #[error(
-        "--bias-walk-from {}: not a noise.json of `host noise` ({source})",
-        .path.display()
+        "--bias-walk-from {}: not a noise.json of `host noise` ({})",
+        .path.display(),
+        shared::chain::Chain(.cause)
     )]
     Json {
         /// The file.
         path: PathBuf,
         /// Why.
-        #[source]
-        source: serde_json::Error,
+        cause: serde_json::Error,
     },
     /// A unit file that cannot be read.
     #[error(transparent)]
     Unit(#[from] UnitFileError),
     /// A unit file whose `[noise]` table is not the simulator's noise model.
-    #[error("--bias-walk-from {}: {source}", .path.display())]
+    #[error("--bias-walk-from {}", .path.display())]
     Noise {
         /// The file.
         path: PathBuf,
@@ -114,7 +115,7 @@ pub fn walk_from_file(path: &Path) -> Result<FileWalks, WalkSourceError> {
         let report: NoiseReport =
             serde_json::from_str(&text).map_err(|source| WalkSourceError::Json {
                 path: path.into(),
-                source,
+                cause: source,
             })?;
         return Ok(FileWalks {
             accel: walk_from_noise(&report, path)?,

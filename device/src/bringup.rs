@@ -208,7 +208,7 @@ pub fn bringup_with<T: Transport, O: Operator<T>>(
         Ok(w) if w.len() >= 2 => w,
         other => {
             let why = match other {
-                Err(e) => e.to_string(),
+                Err(e) => shared::chain::Chain(&e).to_string(),
                 Ok(w) => format!("{} window(s) in {:.1} s", w.len(), measure.as_secs_f64()),
             };
             checks.push(Check::new(

@@ -23,7 +23,7 @@ pub trait Transport {
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
     /// The port could not be opened or failed.
-    #[error("{0}: {1}")]
+    #[error("{0}")]
     Io(String, #[source] std::io::Error),
     /// Nothing valid arrived in time.
     #[error(
@@ -38,7 +38,7 @@ pub enum LinkError {
         after: Duration,
     },
     /// The device answered with a typed error.
-    #[error("the device refused: {0}")]
+    #[error("the device refused")]
     Device(#[source] shared::wire::DeviceError),
     /// The device answered something that does not fit the request.
     #[error("protocol error: expected {waiting_for}, the device sent {got}")]

@@ -18,6 +18,7 @@ use crate::{hand_session, handheld, window_log, DeviceClient, LinkError, Transpo
 use app::{CalibrateError, CalibrateOptions, Calibrated};
 use estimator::calibration_files::{self, OutputError, WrittenCalibration};
 use recording::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use shared::chain::Chain;
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
 
@@ -97,14 +98,15 @@ pub struct ProcedureOutcome {
     pub passed: bool,
 }
 
-/// Why the procedure stopped.
+/// Why the procedure stopped. `Link`, `Estimate` and `HandSession` lead with their reason and say
+/// after it where the data are kept: they show the reason (and its causes) and do not return it.
 #[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
     /// The link failed; what was recorded so far is saved at `recording` (if anything was).
     #[error(fmt = link_message)]
     Link {
         /// The link error.
-        source: LinkError,
+        cause: LinkError,
         /// The saved recording and its row count.
         recording: Option<(PathBuf, u64)>,
     },
@@ -112,10 +114,10 @@ pub enum ProcedureError {
     #[error(transparent)]
     Recording(#[from] RecordingError),
     /// No calibration could be estimated from the recording.
-    #[error("{source}\n(the recording is saved in {})", .recording.display())]
+    #[error("{}\n(the recording is saved in {})", Chain(.cause), .recording.display())]
     Estimate {
         /// Why.
-        source: CalibrateError,
+        cause: CalibrateError,
         /// The saved recording.
         recording: PathBuf,
     },
@@ -137,17 +139,19 @@ pub enum ProcedureError {
     #[error("stopped by the operator ({0})")]
     Aborted(String),
     /// The terminal failed.
-    #[error("terminal error: {0}")]
+    #[error("terminal error")]
     Terminal(#[source] std::io::Error),
     /// A hand-held session's window log could not be opened.
     #[error(transparent)]
     WindowLog(window_log::WindowLogError),
     /// A hand-held session's window log could not be kept or gave no session.
-    #[error("{source}\n(every window of the session is in {}: `{}` tells more)", .stream.display(), .command)]
+    #[error(
+        "{}\n(every window of the session is in {}: `{}` tells more)",
+        Chain(.cause.as_ref()), .stream.display(), .command
+    )]
     HandSession {
         /// Why.
-        #[source]
-        source: Box<crate::hand_session::HandSessionError>,
+        cause: Box<crate::hand_session::HandSessionError>,
         /// The window log.
         stream: PathBuf,
         /// The `host segment` command that reads it as the procedure did.
@@ -157,19 +161,20 @@ pub enum ProcedureError {
 
 /// [`ProcedureError::Link`]'s message: the link's, and where the recording so far is kept.
 fn link_message(
-    source: &LinkError,
+    cause: &LinkError,
     recording: &Option<(PathBuf, u64)>,
     f: &mut std::fmt::Formatter<'_>,
 ) -> std::fmt::Result {
     match recording {
         Some((dir, rows)) => write!(
             f,
-            "{source}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
+            "{}\nthe recording so far ({rows} windows) is saved in {}: the segments completed \
              can be estimated with `host calibrate --input {}`",
+            Chain(cause),
             dir.display(),
             dir.display()
         ),
-        None => write!(f, "{source}"),
+        None => write!(f, "{}", Chain(cause)),
     }
 }
 
@@ -201,7 +206,7 @@ pub fn run<T: Transport>(
     op: &mut dyn Operator,
 ) -> Result<ProcedureOutcome, ProcedureError> {
     let link = |source| ProcedureError::Link {
-        source,
+        cause: source,
         recording: None,
     };
     // Nothing is recorded over, and no run is wasted on a refusal at its end.
@@ -258,7 +263,7 @@ pub fn run<T: Transport>(
         &session::ReadOptions { quiet: opts.quiet },
     )
     .map_err(|source| ProcedureError::Estimate {
-        source,
+        cause: source,
         recording: session_dir.clone(),
     })?;
     // The result table is the caller's to print (on stdout, with the other results).
@@ -339,7 +344,7 @@ fn hand_error(
 ) -> ProcedureError {
     let segmented = opts.out_dir.join(hand_session::SEGMENTED_DIR);
     ProcedureError::HandSession {
-        source: Box::new(source),
+        cause: Box::new(source),
         stream: stream.to_path_buf(),
         command: hand_session::segment_command(stream, plan, &segmented),
     }
@@ -416,7 +421,7 @@ fn record_plan<T: Transport>(
                 &seg.name,
             )
             .map_err(|source| ProcedureError::Link {
-                source,
+                cause: source,
                 recording: saved(&writer),
             })?;
         }
@@ -464,7 +469,7 @@ fn record_plan<T: Transport>(
                 // Whatever was recorded reaches the disk before the error is reported.
                 writer.end_segment()?;
                 return Err(ProcedureError::Link {
-                    source,
+                    cause: source,
                     recording: saved(&writer),
                 });
             }
@@ -516,7 +521,7 @@ fn store_on_device<T: Transport>(
     created: u64,
 ) -> Result<Identity, ProcedureError> {
     let link = |source| ProcedureError::Link {
-        source,
+        cause: source,
         recording: None,
     };
     client.write_calibration(&written.blob).map_err(link)?;
@@ -572,7 +577,7 @@ fn record_segment<T: Transport>(
         op.wait_ready(&instruction(seg))
             .map_err(|e| LinkError::Unexpected {
                 waiting_for: "the operator",
-                got: e.to_string(),
+                got: Chain(&e).to_string(),
             })?;
     }
     let duration = seg.duration_s.unwrap_or(60.0);
@@ -618,7 +623,7 @@ fn record_segment<T: Transport>(
             };
             written.map_err(|e| LinkError::Unexpected {
                 waiting_for: "a writable recording",
-                got: e.to_string(),
+                got: Chain(&e).to_string(),
             })?;
         }
         bar.inc(1);

@@ -154,7 +154,7 @@ pub(crate) fn verify<T: Transport>(
             ))
             .map_err(|e| LinkError::Unexpected {
                 waiting_for: "the operator",
-                got: e.to_string(),
+                got: shared::chain::Chain(&e).to_string(),
             })?;
         }
         for (label, up, _) in positions.iter().filter(|p| p.2 == 0.0) {
@@ -290,7 +290,7 @@ fn verify_position<T: Transport>(
         op.wait_ready(&format!("verification: {}", instruction(&seg)))
             .map_err(|e| LinkError::Unexpected {
                 waiting_for: "the operator",
-                got: e.to_string(),
+                got: shared::chain::Chain(&e).to_string(),
             })?;
     }
     let window = ((sample_rate_hz / 10.0).round() as u32).max(1);

@@ -30,7 +30,7 @@ pub enum WindowLogError {
         path: PathBuf,
     },
     /// The log could not be written.
-    #[error("cannot write {}: {source}", .path.display())]
+    #[error("cannot write {}", .path.display())]
     Io {
         /// The log.
         path: PathBuf,

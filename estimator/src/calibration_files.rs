@@ -32,10 +32,10 @@ pub struct WrittenCalibration {
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The calibration does not encode (it fails the device's own validation).
-    #[error("the estimated calibration cannot be stored on a device: {0}")]
+    #[error("the estimated calibration cannot be stored on a device")]
     Blob(#[source] BlobError),
     /// A file could not be written.
-    #[error("cannot write {}: {}", .0.display(), .1)]
+    #[error("cannot write {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// A calibration is already there and `--force` was not given.
     #[error(

@@ -304,13 +304,13 @@ impl TemperatureSection {
 #[derive(Debug, thiserror::Error)]
 pub enum UnitFileError {
     /// Not readable.
-    #[error("cannot read unit file {}: {}", .0.display(), .1)]
+    #[error("cannot read unit file {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// Not valid TOML or wrong fields (the message names line and column).
     #[error("unit file {} is not valid: {}", .0.display(), .1)]
     Syntax(PathBuf, UnitFileSyntax),
     /// Semantically wrong (names the field and the fix).
-    #[error("unit file {}: {}", .0.display(), .1)]
+    #[error("unit file {}", .0.display())]
     Invalid(PathBuf, #[source] UnitFileInvalid),
 }
 
@@ -742,13 +742,13 @@ mod tests {
             PAPER_UNIT_TOML.replace("scale_v_per_g", "scale_lsb_per_g"),
         )
         .unwrap();
-        let e = UnitFile::load(&p).unwrap_err().to_string();
+        let e = shared::chain::Chain(&UnitFile::load(&p).unwrap_err()).to_string();
         assert!(
             e.contains("mixes units") || e.contains("needs scale_v_per_g"),
             "{e}"
         );
         std::fs::write(&p, "g_m_s2 = 9.8\n[static]\nzero_bias_v = [1, 2]\n").unwrap();
-        let e = UnitFile::load(&p).unwrap_err().to_string();
+        let e = shared::chain::Chain(&UnitFile::load(&p).unwrap_err()).to_string();
         assert!(e.contains("line"), "{e}");
         let e = UnitFile::load(&dir.path().join("missing.toml"))
             .unwrap_err()

@@ -60,13 +60,13 @@ pub enum ApplyError {
     )]
     AlreadyCorrected(&'static str),
     /// The calibration does not give a compensator.
-    #[error("the calibration cannot be applied: {0}")]
+    #[error("the calibration cannot be applied")]
     Compensator(#[source] CompensatorError),
     /// The calibration cannot meet the recording ([`crate::calibration_guard`]).
     #[error(transparent)]
     Guard(#[from] GuardError),
     /// The recording's sample rate does not give an ω̇ estimator.
-    #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate: {1}")]
+    #[error("the recording's sample_rate_hz = {0} cannot be used for the ω̇ estimate")]
     SampleRate(f64, #[source] OmegaDotError),
     /// A still segment's compensated specific force is not 1 g: the calibration does not fit.
     #[error(

@@ -297,7 +297,7 @@ pub struct Other<'a> {
 #[derive(Debug, thiserror::Error)]
 pub enum GuardError {
     /// A scale factor is zero or negative.
-    #[error("{mine} cannot meet {other}: {source}")]
+    #[error("{mine} cannot meet {other}")]
     Scale {
         /// The calibration's side.
         mine: String,

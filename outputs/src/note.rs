@@ -84,8 +84,9 @@ impl fmt::Display for Note {
             Note::Reader(n) => write!(f, "{n}"),
             Note::SessionDoesNotCalibrate(e) => write!(
                 f,
-                "the session alone does not calibrate ({e}): the theoretical values are the plan's \
-                 nominal attitudes, and free (hand-held) positions are not compared"
+                "the session alone does not calibrate ({}): the theoretical values are the plan's \
+                 nominal attitudes, and free (hand-held) positions are not compared",
+                shared::chain::Chain(e)
             ),
             Note::ReplayHandHeld => f.write_str(
                 "the navigation replay is left out: every position was held by hand, so its \

@@ -17,6 +17,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use recording::spelling::Spelling;
 use shared::blob::ParameterBlob;
+use shared::chain::Chain;
 use shared::UnitId;
 use std::path::PathBuf;
 
@@ -95,7 +96,7 @@ fn export_format(given: &str) -> PyResult<ExportFormat> {
 
 fn json_to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value)
-        .map_err(|e| usage(format!("cannot write the JSON result: {e}")))?;
+        .map_err(|e| usage(format!("cannot write the JSON result: {}", Chain(&e))))?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -137,7 +138,7 @@ pub fn calibrate(
     let limits: Limits = match limits {
         Some(d) => {
             let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
-            serde_json::from_str(&text).map_err(|e| usage(format!("limits: {e}")))?
+            serde_json::from_str(&text).map_err(|e| usage(format!("limits: {}", Chain(&e))))?
         }
         None => Limits::default(),
     };
@@ -508,5 +509,5 @@ impl Calibration {
 
 fn rows<'py>(py: Python<'py>, m: &[[f64; 3]; 3]) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let v: Vec<Vec<f64>> = m.iter().map(|r| r.to_vec()).collect();
-    PyArray2::from_vec2(py, &v).map_err(|e| usage(e.to_string()))
+    PyArray2::from_vec2(py, &v).map_err(|e| usage(Chain(&e).to_string()))
 }

@@ -27,6 +27,7 @@ use recording::session::import::ImportError;
 use recording::session::logs::LogError;
 use recording::session::segment::SegmentError;
 use recording::session::RecordingError;
+use shared::chain::Chain;
 use std::path::PathBuf;
 
 pyo3::create_exception!(
@@ -116,7 +117,7 @@ pub enum PyAccelErr {
     #[error(transparent)]
     Simulation(#[from] SimulationError),
     /// A file.
-    #[error("{}: {source}", .path.display())]
+    #[error("{}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -124,7 +125,7 @@ pub enum PyAccelErr {
         source: std::io::Error,
     },
     /// A `calibration.bin`.
-    #[error("{}: {source}", .path.display())]
+    #[error("{}", .path.display())]
     Blob {
         /// The file.
         path: PathBuf,
@@ -193,7 +194,10 @@ impl PyAccelErr {
                 e @ (ApplyError::Guard(GuardError::RestRate { .. })
                 | ApplyError::GyroNeverAtRest { .. }),
             ) => {
-                format!("{e}; give the gyro's unit with gyro_unit=\"deg/s\" or gyro_unit=\"rad/s\"")
+                format!(
+                    "{}; give the gyro's unit with gyro_unit=\"deg/s\" or gyro_unit=\"rad/s\"",
+                    Chain(e)
+                )
             }
             PyAccelErr::Output(OutputError::Exists(path))
             | PyAccelErr::Recording(RecordingError::Exists(path))
@@ -202,7 +206,7 @@ impl PyAccelErr {
                 "{} already exists: choose another directory or replace it (force=True)",
                 path.display()
             ),
-            e => e.to_string(),
+            e => Chain(e).to_string(),
         }
     }
 }
@@ -211,8 +215,8 @@ impl PyAccelErr {
 /// error, else [`Error`].
 fn cause_to_py(e: &(dyn std::error::Error + 'static)) -> PyErr {
     match e.downcast_ref::<std::io::Error>() {
-        Some(io) => PyErr::from(std::io::Error::new(io.kind(), io.to_string())),
-        None => Error::new_err(e.to_string()),
+        Some(io) => PyErr::from(std::io::Error::new(io.kind(), Chain(io).to_string())),
+        None => Error::new_err(Chain(e).to_string()),
     }
 }
 

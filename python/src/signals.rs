@@ -251,7 +251,7 @@ pub fn simulate_hand<'py>(
     };
     let sim = py
         .detach(|| request.run())
-        .map_err(|e| usage(e.to_string()))?;
+        .map_err(|e| usage(shared::chain::Chain(&e).to_string()))?;
     let rows = &sim.session.rows;
     let written: Vec<([f64; 3], [f64; 3])> = rows.iter().map(|r| sim.layout.written(r)).collect();
     let n = rows.len();

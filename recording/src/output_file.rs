@@ -24,7 +24,7 @@ pub enum OutputFileError {
     )]
     Exists(PathBuf),
     /// A file system operation failed.
-    #[error("cannot write {}: {}", .0.display(), .1)]
+    #[error("cannot write {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// A directory to replace holds files that are not an earlier result of this command (it lacks
     /// the named marker file): `--force` never replaces such a directory.

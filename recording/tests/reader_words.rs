@@ -22,7 +22,7 @@ fn still() -> Vec<LogSample> {
 /// What a user is told of `bytes` read as the file `name` (its extension names a text file).
 fn said(bytes: &[u8], name: &str, source: &LogSource) -> String {
     match read_log_from(bytes, bytes, Path::new(name), source) {
-        Err(e) => format!("refused: {e}\n"),
+        Err(e) => format!("refused: {}\n", shared::chain::Chain(&e)),
         Ok(log) => {
             let rec = &log.recording;
             let mut out = format!("{} rows at {:.3} Hz\n", rec.len(), rec.rate_hz);

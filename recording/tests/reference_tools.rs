@@ -136,8 +136,7 @@ fn dataflash_acc_and_gyr_messages_read_per_instance_as_pymavlink_reads_them() {
         spelling: Default::default(),
         rate_hz: None,
     };
-    let e = read_log(&log_fixture("hand-accgyr.bin"), &source)
-        .unwrap_err()
+    let e = shared::chain::Chain(&read_log(&log_fixture("hand-accgyr.bin"), &source).unwrap_err())
         .to_string();
     assert!(e.contains("ACC") && e.contains('1'), "{e}");
 }

@@ -14,11 +14,15 @@
 //! - [`omega_dot`]: the filtered angular-acceleration estimator of `docs/model.md` §4.6;
 //! - `trig`: `libm::cos` bit for bit without the large-argument reduction (installation angles);
 //! - [`blob`]: the versioned, CRC-protected parameter blob written to the device;
-//! - [`wire`]: the host↔device messages and their COBS framing.
+//! - [`wire`]: the host↔device messages and their COBS framing;
+//! - [`chain`] (with `std` only, as it allocates): an error and its causes as one line, how every
+//!   crate above renders an error for a person.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![deny(missing_docs)]
 
 pub mod blob;
+#[cfg(feature = "std")]
+pub mod chain;
 pub mod compensator;
 pub mod forward;
 pub mod linalg;

@@ -170,11 +170,11 @@ fn a_unit_nobody_turns_stops_the_procedure_with_what_it_waited_for() {
     let mut client = hand_client();
     let mut op = quiet();
     let e = procedure::run(&mut client, &options(out.path()), &mut op).unwrap_err();
-    let ProcedureError::Link { source, recording } = &e else {
+    let ProcedureError::Link { cause, recording } = &e else {
         panic!("{e}");
     };
     assert!(
-        matches!(source, LinkError::Unexpected { waiting_for, .. } if waiting_for.contains("still at a new position")),
+        matches!(cause, LinkError::Unexpected { waiting_for, .. } if waiting_for.contains("still at a new position")),
         "{e}"
     );
     assert!(e.to_string().contains("no new still position"), "{e}");

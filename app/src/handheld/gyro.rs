@@ -34,7 +34,7 @@ pub enum HandGyroFileError {
     #[error(transparent)]
     Unit(HandGyroError),
     /// `gyro.toml` cannot be read.
-    #[error("cannot read {}: {source}", .path.display())]
+    #[error("cannot read {}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -23,7 +23,7 @@ const PAGE: &str = include_str!("page.html");
 #[derive(Debug, thiserror::Error)]
 pub enum ViewError {
     /// No port on the loopback could be bound, or no thread started to serve it.
-    #[error("cannot serve the live page on 127.0.0.1: {0}")]
+    #[error("cannot serve the live page on 127.0.0.1")]
     Bind(#[source] Box<dyn std::error::Error + Send + Sync>),
 }
 

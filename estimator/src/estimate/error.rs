@@ -72,7 +72,7 @@ pub enum EstimateError {
         name: String,
     },
     /// The estimate is not a valid calibration.
-    #[error("the estimate is not a valid calibration: {0}")]
+    #[error("the estimate is not a valid calibration")]
     Params(#[from] ParamsError),
     /// The fit ran but its result is not a plausible unit (see [`super::plausibility`]).
     #[error(

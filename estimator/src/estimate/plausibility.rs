@@ -39,7 +39,7 @@ pub(crate) fn check(
         Ok(o) => o,
         Err(e) if labels.is_empty() => return Err(e),
         Err(e) => {
-            let mut problems = vec![e.to_string()];
+            let mut problems = vec![shared::chain::Chain(&e).to_string()];
             problems.extend(Note::texts(&labels));
             return Err(EstimateError::Implausible { problems });
         }

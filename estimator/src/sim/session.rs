@@ -188,10 +188,10 @@ impl NoiseModel {
 #[derive(Debug, thiserror::Error)]
 pub enum SimulateError {
     /// The unit's parameters are unusable.
-    #[error("the unit to simulate is not usable: {0}")]
+    #[error("the unit to simulate is not usable")]
     Unit(#[source] crate::unit_file::UnitFileInvalid),
     /// The unit file's `[thermal]` table is not a thermal model.
-    #[error("the unit to simulate is not usable: [thermal]: {0}")]
+    #[error("the unit to simulate is not usable: [thermal]")]
     ThermalTable(#[source] Box<toml::de::Error>),
     /// The thermal model's values are not finite and non-negative.
     #[error(
@@ -200,10 +200,10 @@ pub enum SimulateError {
     )]
     ThermalValues,
     /// The unit's parameters do not make a forward model.
-    #[error("the unit to simulate is not usable: {0}")]
+    #[error("the unit to simulate is not usable")]
     Params(#[source] shared::params::ParamsError),
     /// The unit file's `[noise]` table is not a noise model.
-    #[error("noise model: [noise] in the unit file: {0}")]
+    #[error("noise model: [noise] in the unit file")]
     NoiseTable(#[source] Box<toml::de::Error>),
     /// The plan is unusable for simulation.
     #[error(transparent)]
@@ -953,7 +953,7 @@ mod tests {
             "noise".into(),
             toml::Value::Table(toml::from_str("accel_white_mgg = 2").unwrap()),
         );
-        let e = NoiseModel::from_unit_file(&unit).unwrap_err().to_string();
+        let e = shared::chain::Chain(&NoiseModel::from_unit_file(&unit).unwrap_err()).to_string();
         assert!(e.contains("accel_white_mgg"), "{e}");
     }
 }

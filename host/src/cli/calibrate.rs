@@ -619,7 +619,7 @@ fn run_watched(
         live: v.live.clone(),
     };
     procedure::run(client, opts, &mut shown).map_err(|e| {
-        v.live.failed(&e.to_string());
+        v.live.failed(&shared::chain::Chain(&e).to_string());
         v.linger();
         e.into()
     })

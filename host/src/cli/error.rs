@@ -29,9 +29,18 @@ pub(crate) enum CliError {
     /// The simulator.
     #[error(transparent)]
     Simulate(#[from] SimulateError),
-    /// The estimator (an option it refuses named by its flag).
-    #[error("{}", estimate_text(.0))]
-    Estimate(#[from] EstimateError),
+    /// The estimator.
+    #[error(transparent)]
+    Estimate(EstimateError),
+    /// An option the estimator refuses, named by its flag (the estimator names no caller's
+    /// options): the flag, then the estimator's reason as the cause.
+    #[error("{flag}")]
+    EstimateOption {
+        /// The flag.
+        flag: &'static str,
+        /// The estimator's reason.
+        source: EstimateError,
+    },
     /// Writing the result.
     #[error(transparent)]
     Output(#[from] OutputError),
@@ -54,7 +63,7 @@ pub(crate) enum CliError {
     #[error(transparent)]
     Procedure(#[from] ProcedureError),
     /// A blob file.
-    #[error("{}: {}", .0.display(), .1)]
+    #[error("{}", .0.display())]
     Blob(PathBuf, #[source] BlobError),
     /// A calibration that cannot meet what it meets ([`outputs::calibration_guard`]).
     #[error(transparent)]
@@ -63,7 +72,7 @@ pub(crate) enum CliError {
     #[error(transparent)]
     Scale(#[from] outputs::calibration_guard::ScaleError),
     /// A file.
-    #[error("{}: {}", .0.display(), .1)]
+    #[error("{}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// The live procedure ran but the verification failed.
     #[error(
@@ -123,7 +132,7 @@ pub(crate) enum CliError {
     #[error(transparent)]
     SimDevice(#[from] device::sim::SimError),
     /// A result could not be written as JSON (`what` names it).
-    #[error("cannot write {what} as JSON: {source}")]
+    #[error("cannot write {what} as JSON")]
     Json {
         /// The result.
         what: &'static str,
@@ -132,23 +141,33 @@ pub(crate) enum CliError {
         source: serde_json::Error,
     },
     /// A file could not be written.
-    #[error("cannot write {}: {}", .0.display(), .1)]
+    #[error("cannot write {}", .0.display())]
     Write(PathBuf, #[source] std::io::Error),
     /// Standard output is closed or full (`| head`, `> /dev/full`); files and devices were written
-    /// before it.
+    /// before it. The I/O error is said in parentheses inside the message, so it is shown there and
+    /// not also returned as `source()`.
     #[error(
-        "cannot write to standard output ({0}); any files (and a device) were written before this"
+        "cannot write to standard output ({}); any files (and a device) were written before this",
+        shared::chain::Chain(.0)
     )]
-    Stdout(#[from] std::io::Error),
+    Stdout(std::io::Error),
 }
 
-/// The estimator's message, led by the flag it refuses where one is refused (the estimator names
-/// no caller's options).
-fn estimate_text(e: &EstimateError) -> String {
-    match e {
-        EstimateError::GyroBiasWalkUnused { .. } => format!("--gyro-bias-walk: {e}"),
-        EstimateError::BiasWalkUnit { .. } => format!("--bias-walk-from: {e}"),
-        _ => e.to_string(),
+/// The estimator's refusal, led by the flag it refuses where one is refused.
+impl From<EstimateError> for CliError {
+    fn from(e: EstimateError) -> Self {
+        let flag = match e {
+            EstimateError::GyroBiasWalkUnused { .. } => "--gyro-bias-walk",
+            EstimateError::BiasWalkUnit { .. } => "--bias-walk-from",
+            _ => return CliError::Estimate(e),
+        };
+        CliError::EstimateOption { flag, source: e }
+    }
+}
+
+impl From<std::io::Error> for CliError {
+    fn from(e: std::io::Error) -> Self {
+        CliError::Stdout(e)
     }
 }
 
@@ -192,9 +211,7 @@ impl CliError {
                 | CliError::Log(
                     LogError::OptionNotForFormat { .. } | LogError::TextOptionOnBinary { .. }
                 )
-                | CliError::Estimate(
-                    EstimateError::BiasWalkUnit { .. } | EstimateError::GyroBiasWalkUnused { .. }
-                )
+                | CliError::EstimateOption { .. }
         )
     }
 }
@@ -247,6 +264,7 @@ mod tests {
     use super::*;
     use device::procedure::ProcedureError;
     use recording::session::{builtin::paper_plan, read_session, ReadOptions, PLAN_FILE};
+    use shared::chain::Chain;
     use shared::params::ParamsError;
     use std::error::Error;
 
@@ -277,7 +295,11 @@ mod tests {
             .unwrap();
         assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
         let samples = dir.path().join("samples.csv");
-        assert_eq!(e.to_string(), format!("{}: {io}", samples.display()));
+        assert_eq!(e.to_string(), samples.display().to_string());
+        assert_eq!(
+            Chain(&e).to_string(),
+            format!("{}: {io}", samples.display())
+        );
     }
 
     /// A missing plan: three layers (command, recording, plan) down to the I/O error.
@@ -294,26 +316,27 @@ mod tests {
         );
     }
 
-    /// A nested chain of two: the procedure's estimate failed because the parameters are invalid.
+    /// The procedure's estimate failure leads with its reason and says where the recording is
+    /// after it: the reason, with its own cause, is said in the message once and not returned as
+    /// `source()`.
     #[test]
-    fn a_procedure_failure_walks_to_the_parameters_error() {
+    fn a_procedure_failure_says_its_reason_and_the_reasons_cause_once() {
         let e = CliError::from(ProcedureError::Estimate {
-            source: EstimateError::Params(ParamsError::NonFinite).into(),
+            cause: EstimateError::Params(ParamsError::NonFinite).into(),
             recording: PathBuf::from("rec"),
         });
-        let below = chain(&e);
+        assert!(chain(&e).is_empty(), "{:?}", chain(&e));
+        let reason = EstimateError::Params(ParamsError::NonFinite);
         assert_eq!(
-            below,
-            [
-                EstimateError::Params(ParamsError::NonFinite).to_string(),
-                ParamsError::NonFinite.to_string()
-            ]
+            chain(&reason),
+            [ParamsError::NonFinite.to_string()],
+            "the estimator's error exposes its cause"
         );
         assert_eq!(
-            e.to_string(),
+            Chain(&e).to_string(),
             format!(
-                "{}\n(the recording is saved in rec)",
-                EstimateError::Params(ParamsError::NonFinite)
+                "the estimate is not a valid calibration: {}\n(the recording is saved in rec)",
+                ParamsError::NonFinite
             )
         );
     }

@@ -196,7 +196,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
             spelling: Default::default(),
             rate_hz: None,
         };
-        read_log(&fixture(name), &source).unwrap_err().to_string()
+        shared::chain::Chain(&read_log(&fixture(name), &source).unwrap_err()).to_string()
     };
     let e = read("hand.ulg", Some(1), None);
     assert!(

@@ -72,6 +72,7 @@ pub(crate) use error::CliError;
 
 use clap::{Parser, Subcommand};
 use estimator::unit_file::UnitFile;
+use shared::chain::Chain;
 use std::path::Path;
 
 /// Calibrate a strap-down tri-axis accelerometer unit (static + dynamic, with lever arms).
@@ -162,7 +163,7 @@ pub(crate) fn error_document(e: &CliError) -> Option<String> {
     } else {
         "error"
     };
-    Some(output::error_json(&e.to_string(), kind, code))
+    Some(output::error_json(&Chain(e).to_string(), kind, code))
 }
 
 /// The command-line program: parses the arguments, runs the command and exits with its status.
@@ -180,7 +181,7 @@ pub fn main() {
     });
     let json = cli.command.json();
     if let Err(e) = run(cli) {
-        eprintln!("error: {e}");
+        eprintln!("error: {}", Chain(&e));
         if let Some(doc) = error_document(&e).filter(|_| json) {
             use std::io::Write;
             // A closed stdout leaves the message above and the exit status.

@@ -21,6 +21,7 @@ use recording::session::note::Note;
 use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use recording::session::Plan;
 use recording::spelling::Spelling;
+use shared::chain::Chain;
 use shared::linalg;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -149,7 +150,9 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
         table_turns: a.table_turns,
         spelling: Spelling::Flags,
     };
-    let sim = request.run().map_err(|e| CliError::Usage(e.to_string()))?;
+    let sim = request
+        .run()
+        .map_err(|e| CliError::Usage(Chain(&e).to_string()))?;
     let truth_path = sim.write(&a.out, a.force).map_err(|e| match e {
         HandWriteError::Exists(p) => CliError::Usage(format!(
             "{} exists: choose another --out or add --force to replace it",
@@ -265,7 +268,7 @@ fn segment_to(a: &SegmentArgs, out: &Output) -> Result<SegmentOutcome, CliError>
     let rows = s.write(dir.path(), false)?;
     step.finish_and_clear();
     if let Err(e) = &s.gyro {
-        out.line(format_args!("gyro: not calibrated: {e}"))?;
+        out.line(format_args!("gyro: not calibrated: {}", Chain(e)))?;
     }
     let stem = draw_and_commit(&s, dir, out, &mut warnings)?;
     out.line(format_args!(
@@ -313,7 +316,7 @@ fn draw_and_commit(
             .warnings
             .into_iter()
             .for_each(|w| warn(out, warnings, w.to_string())),
-        Err(e) => warn(out, warnings, e.to_string()),
+        Err(e) => warn(out, warnings, Chain(&e).to_string()),
     }
     dir.commit()?;
     step.finish_and_clear();

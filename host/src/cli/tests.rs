@@ -251,8 +251,7 @@ fn plan_check_predicts_what_the_oblique_plan_adds() {
     let Command::Plan(a) = parse(&["plan", "--check", "nope.toml"]).command else {
         panic!()
     };
-    assert!(plan::run(&a, true)
-        .unwrap_err()
+    assert!(shared::chain::Chain(&plan::run(&a, true).unwrap_err())
         .to_string()
         .contains("built-in"));
 }

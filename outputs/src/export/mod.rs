@@ -126,16 +126,16 @@ pub enum ExportFormat {
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// The parameters do not convert (degenerate axis, singular matrix…).
-    #[error("cannot export the calibration: {0}")]
+    #[error("cannot export the calibration")]
     Params(#[from] ParamsError),
     /// The compensator refuses the parameters.
-    #[error("cannot export the calibration: {0}")]
+    #[error("cannot export the calibration")]
     Compensator(#[source] shared::compensator::CompensatorError),
     /// The blob cannot be encoded.
-    #[error("cannot export the calibration's blob: {0}")]
+    #[error("cannot export the calibration's blob")]
     Blob(#[source] shared::blob::BlobError),
     /// The calibration file's unit id is not one.
-    #[error("cannot export the calibration's blob: {0}")]
+    #[error("cannot export the calibration's blob")]
     UnitId(#[source] estimator::unit_file::UnitFileInvalid),
     /// The calibration file has no unit id, which the blob needs.
     #[error(
@@ -147,14 +147,14 @@ pub enum ExportError {
     #[error(transparent)]
     Written(#[from] recording::output_file::OutputFileError),
     /// Writing TOML failed.
-    #[error("cannot export the calibration: {0}")]
+    #[error("cannot export the calibration")]
     Toml(#[source] toml::ser::Error),
     /// Writing JSON failed.
-    #[error("cannot export the calibration: {0}")]
+    #[error("cannot export the calibration")]
     Json(#[source] serde_json::Error),
     /// A scale factor is negative or zero: the convention (and every target's model) has positive
     /// ones.
-    #[error("cannot export the calibration: {0}")]
+    #[error("cannot export the calibration")]
     NegativeScale(#[from] crate::calibration_guard::ScaleError),
     /// The target reads m/s² from its driver, and the output unit does not say how to get there.
     #[error(

@@ -838,7 +838,8 @@ mod tests {
                 "{format:?}: {e}"
             );
             assert!(
-                e.to_string()
+                shared::chain::Chain(&e)
+                    .to_string()
                     .contains("negative scale factor (-0.398 V per g)"),
                 "{e}"
             );

@@ -59,13 +59,13 @@ pub enum NoiseError {
     #[error(transparent)]
     Log(#[from] recording::session::logs::LogError),
     /// The logger's file has no still interval to analyse.
-    #[error("no noise analysis possible: {0}")]
+    #[error("no noise analysis possible")]
     NoStill(#[source] recording::session::segment::SegmentError),
     /// A noise file could not be read.
-    #[error("cannot use noise file {}: {}", .0.display(), .1)]
+    #[error("cannot use noise file {}", .0.display())]
     File(PathBuf, #[source] std::io::Error),
     /// A noise file is not `host noise`'s `noise.json`.
-    #[error("cannot use noise file {}: not a noise.json of host noise: {}", .0.display(), .1)]
+    #[error("cannot use noise file {}: not a noise.json of host noise", .0.display())]
     NotNoiseJson(PathBuf, #[source] serde_json::Error),
     /// The Allan figure could not be drawn.
     #[error(transparent)]

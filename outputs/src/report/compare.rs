@@ -230,11 +230,11 @@ pub enum CompareError {
     #[error(transparent)]
     Unit(UnitFileError),
     /// A file's values are not a calibration.
-    #[error("{0}")]
-    Invalid(#[source] estimator::unit_file::UnitFileInvalid),
+    #[error(transparent)]
+    Invalid(estimator::unit_file::UnitFileInvalid),
     /// A calibration's values have no paper form.
-    #[error("{0}")]
-    Params(#[source] shared::params::ParamsError),
+    #[error(transparent)]
+    Params(shared::params::ParamsError),
     /// One cannot meet the other ([`crate::calibration_guard`]).
     #[error(transparent)]
     Guard(#[from] crate::calibration_guard::GuardError),

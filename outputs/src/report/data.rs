@@ -77,13 +77,13 @@ pub enum ReportError {
     #[error(transparent)]
     Unit(UnitFileError),
     /// The calibration file's values are not a calibration (the unit file says why).
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Calibration(#[source] estimator::unit_file::UnitFileInvalid),
     /// The calibration cannot compensate.
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Compensator(#[source] shared::compensator::CompensatorError),
     /// The calibration's gyro correction cannot be inverted.
-    #[error("the calibration cannot compensate: {0}")]
+    #[error("the calibration cannot compensate")]
     Gyro(#[source] shared::sensor_models::GyroError),
     /// The calibration cannot meet this recording ([`crate::calibration_guard`]).
     #[error(transparent)]
@@ -122,7 +122,7 @@ pub enum ReportError {
     #[error(transparent)]
     Figure(#[from] plot::FigureError),
     /// A file could not be written.
-    #[error("cannot write {}: {}", .0.display(), .1)]
+    #[error("cannot write {}", .0.display())]
     Io(PathBuf, #[source] std::io::Error),
     /// A page of the report could not be written.
     #[error(transparent)]

@@ -385,7 +385,8 @@ fn session_fit_section(b: &mut Vec<Block>, data: &ReportData) {
             )));
         }
         Err(e) => b.push(Block::Para(format!(
-            "The session alone does not calibrate: {e}"
+            "The session alone does not calibrate: {}",
+            shared::chain::Chain(e)
         ))),
     }
 }

@@ -112,7 +112,7 @@ pub struct RenderOutcome {
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {
     /// plotters could not draw it (its backend's error, boxed: each backend has its own type).
-    #[error("cannot draw {}: {source}", .path.display())]
+    #[error("cannot draw {}", .path.display())]
     Draw {
         /// The file.
         path: PathBuf,
@@ -121,7 +121,7 @@ pub enum FigureError {
         source: DrawError,
     },
     /// The drawn file could not be put in place.
-    #[error("cannot draw {}: {source}", .path.display())]
+    #[error("cannot draw {}", .path.display())]
     Write {
         /// The file.
         path: PathBuf,

@@ -348,8 +348,9 @@ pub fn render_session(o: &CalibrationOutcome, plan: &Plan, stats: &[SegmentStats
     match super::segment_rows(plan, stats, &o.calibration) {
         Ok(rows) => render(o, &rows),
         Err(e) => format!(
-            "{}(the outputs after compensation cannot be shown: {e})\n",
-            render(o, &[])
+            "{}(the outputs after compensation cannot be shown: {})\n",
+            render(o, &[]),
+            shared::chain::Chain(&e)
         ),
     }
 }

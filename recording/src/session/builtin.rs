@@ -97,9 +97,10 @@ mod tests {
         assert!(soak.has_temperature() && soak.segments.len() == 30);
         let ramp = builtin_plan("thermal-ramp").unwrap().unwrap();
         assert!(ramp.segments.iter().all(|s| s.temp_end_c.is_some()));
-        assert!(load_plan("no-such-plan")
-            .unwrap_err()
-            .to_string()
-            .contains("built-in: paper"));
+        assert!(
+            shared::chain::Chain(&load_plan("no-such-plan").unwrap_err())
+                .to_string()
+                .contains("built-in: paper")
+        );
     }
 }

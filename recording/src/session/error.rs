@@ -11,7 +11,7 @@ pub enum RecordingError {
     #[error(transparent)]
     Plan(#[from] PlanError),
     /// An I/O failure on `path`.
-    #[error("{}: {source}", .path.display())]
+    #[error("{}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,

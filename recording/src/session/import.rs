@@ -242,7 +242,7 @@ pub struct Recording {
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
     /// Not readable.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         /// The file.
         path: PathBuf,

@@ -266,7 +266,7 @@ impl SegmentPlan {
 #[derive(Debug, thiserror::Error)]
 pub enum PlanError {
     /// The file could not be read.
-    #[error("cannot read plan {}: {}", .0.display(), .1)]
+    #[error("cannot read plan {}", .0.display())]
     Io(std::path::PathBuf, #[source] std::io::Error),
     /// The TOML does not parse or has wrong fields (the message names line and column). The cause
     /// is kept as a value (not its text) and said in the message, so it is not also a `source`.

@@ -9,6 +9,7 @@ use recording::session::import::Recording;
 use recording::session::plan::Attitude;
 use recording::session::segment::{IntervalKind, Segmentation};
 use serde::Serialize;
+use shared::chain::Chain;
 use shared::linalg;
 
 /// What was written and said besides the intervals and the fit, for the JSON document.
@@ -168,7 +169,7 @@ pub(super) fn document(
             bias_rad_s_1sigma: f.bias_1sigma_rad_s,
             undetermined: f.undetermined(),
         }),
-        gyro_not_calibrated: o.gyro.as_ref().err().map(|e| e.to_string()),
+        gyro_not_calibrated: o.gyro.as_ref().err().map(|e| Chain(e).to_string()),
         advice: w.advice.clone(),
         warnings: w.warnings.clone(),
         out_dir: a.out.display().to_string(),

@@ -38,7 +38,7 @@ mod parm;
 #[derive(Debug, thiserror::Error)]
 pub enum DataFlashError {
     /// Reading failed.
-    #[error("read error at byte {offset}: {source}")]
+    #[error("read error at byte {offset}")]
     Io {
         /// Where.
         offset: u64,

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
     /// Not readable.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         /// The file.
         path: PathBuf,
@@ -57,7 +57,7 @@ pub enum LogError {
         option: String,
     },
     /// A ULog's problem.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Ulog {
         /// The file.
         path: PathBuf,
@@ -65,7 +65,7 @@ pub enum LogError {
         source: ulog::UlogError,
     },
     /// A DataFlash log's problem.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     DataFlash {
         /// The file.
         path: PathBuf,
@@ -73,7 +73,7 @@ pub enum LogError {
         source: dataflash::DataFlashError,
     },
     /// An MCAP file's problem.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Mcap {
         /// The file.
         path: PathBuf,
@@ -81,7 +81,7 @@ pub enum LogError {
         source: mcap::McapError,
     },
     /// A stream the vehicle corrected before logging it, whose correction cannot be undone.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     NotUndone {
         /// The file.
         path: PathBuf,

@@ -46,22 +46,24 @@ const MAX_NAME: usize = 4096;
 #[derive(Debug, thiserror::Error)]
 pub enum McapError {
     /// Reading failed.
-    #[error("read error after byte {offset}: {source}")]
+    #[error("read error after byte {offset}")]
     Io {
         /// Bytes read so far.
         offset: u64,
         /// The cause.
         source: std::io::Error,
     },
-    /// The container is damaged or not MCAP.
+    /// The container is damaged or not MCAP. The mcap crate's error is said in the middle of the
+    /// message (the advice follows it), so it is shown there and not also returned as `source()`.
     #[error(
-        "not a readable MCAP file (after byte {offset}): {source}; check it with `mcap doctor`"
+        "not a readable MCAP file (after byte {offset}): {}; check it with `mcap doctor`",
+        shared::chain::Chain(.cause)
     )]
     Container {
         /// Bytes read so far.
         offset: u64,
         /// The mcap crate's error.
-        source: ::mcap::McapError,
+        cause: ::mcap::McapError,
     },
     /// No Imu topic.
     #[error(
@@ -367,7 +369,7 @@ impl State {
                 }
                 other => other.map_err(|source| McapError::Container {
                     offset: *offset,
-                    source,
+                    cause: source,
                 })?,
             };
             match event {
@@ -384,7 +386,7 @@ impl State {
                     let record = ::mcap::parse_record(opcode, data).map_err(|source| {
                         McapError::Container {
                             offset: *offset,
-                            source,
+                            cause: source,
                         }
                     })?;
                     match record {
@@ -426,16 +428,18 @@ impl State {
         let body: &[u8] = match header.compression.as_str() {
             "" => data,
             "zstd" => {
-                owned = zstd::bulk::decompress(data, size).map_err(|e| bad(e.to_string()))?;
+                owned = zstd::bulk::decompress(data, size)
+                    .map_err(|e| bad(shared::chain::Chain(&e).to_string()))?;
                 &owned
             }
             "lz4" => {
                 let mut out = Vec::new();
-                let decoder = lz4::Decoder::new(data).map_err(|e| bad(e.to_string()))?;
+                let decoder = lz4::Decoder::new(data)
+                    .map_err(|e| bad(shared::chain::Chain(&e).to_string()))?;
                 decoder
                     .take(size as u64 + 1)
                     .read_to_end(&mut out)
-                    .map_err(|e| bad(e.to_string()))?;
+                    .map_err(|e| bad(shared::chain::Chain(&e).to_string()))?;
                 owned = out;
                 &owned
             }
@@ -458,8 +462,12 @@ impl State {
                 .and_then(|n| (pos + 9).checked_add(n))
                 .filter(|&e| e <= body.len())
                 .ok_or_else(|| bad(format!("a record of {len} bytes overruns it")))?;
-            let record = ::mcap::parse_record(head[0], &body[pos + 9..end])
-                .map_err(|source| McapError::Container { offset, source })?;
+            let record = ::mcap::parse_record(head[0], &body[pos + 9..end]).map_err(|source| {
+                McapError::Container {
+                    offset,
+                    cause: source,
+                }
+            })?;
             self.record(record, topic)?;
             pos = end;
         }

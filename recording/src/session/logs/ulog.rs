@@ -50,7 +50,7 @@ const RELATIVE_TIMESTAMP_INVALID: i32 = 0x7fff_ffff;
 #[derive(Debug, thiserror::Error)]
 pub enum UlogError {
     /// Reading failed.
-    #[error("read error at byte {offset}: {source}")]
+    #[error("read error at byte {offset}")]
     Io {
         /// Where.
         offset: u64,
