@@ -8,6 +8,7 @@ mod errors;
 mod noise_arg;
 mod session;
 mod signals;
+mod spelling;
 
 use pyo3::prelude::*;
 

@@ -70,13 +70,13 @@ fn single_package_unit_gets_one_lever_arm_within_3_sigma() {
     let test = nine.package_test.expect("the χ² test ran");
     assert_eq!(test.dof, 6);
     assert!(
-        nine.warnings.iter().any(|w| w.contains("--single-package")
+        nine.warnings.iter().any(|w| w.contains("<SinglePackage>")
             && w.contains("package = \"single\"")
             && w.contains("do not differ significantly")),
         "{:#?}",
         nine.warnings
     );
-    assert!(!one.warnings.iter().any(|w| w.contains("--single-package")));
+    assert!(!one.warnings.iter().any(|w| w.contains("<SinglePackage>")));
 }
 
 #[test]
@@ -103,13 +103,13 @@ fn separate_lever_arms_fitted_as_one_point_are_refused() {
     };
     assert!(*delta_chi2 > *limit && *spread_mm > 3.0, "{e}");
     assert!(
-        e.to_string().contains("calibrate without --single-package"),
+        e.to_string().contains("calibrate without <SinglePackage>"),
         "{e}"
     );
     // Without the option the same session calibrates, and no warning suggests the option.
     p.package = Package::Separate;
     let o = calibrate_session_stats(&p, &stats, &EstimateOptions::default()).unwrap();
-    assert!(!o.warnings.iter().any(|w| w.contains("--single-package")));
+    assert!(!o.warnings.iter().any(|w| w.contains("<SinglePackage>")));
 }
 
 #[test]
@@ -172,7 +172,7 @@ fn single_package_many_seeds() {
                 sig9[i][j] += nine.uncertainty.lever_arms_m_1sigma[i][j].powi(2);
             }
         }
-        warned += nine.warnings.iter().any(|w| w.contains("--single-package")) as usize;
+        warned += nine.warnings.iter().any(|w| w.contains("<SinglePackage>")) as usize;
         static_worst = static_worst.max(static_z(&one, &truth));
     }
     let rms = |v: f64| (v / seeds as f64).sqrt() * 1e6;

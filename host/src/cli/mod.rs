@@ -61,6 +61,7 @@ pub(crate) mod segment;
 #[cfg(test)]
 mod segment_tests;
 pub(crate) mod simulate;
+pub(crate) mod spelling;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -20,7 +20,6 @@ use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
 use recording::session::note::Note;
 use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use recording::session::Plan;
-use recording::spelling::Spelling;
 use shared::linalg;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -147,7 +146,7 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
         gyro_lsb_per_dps: a.gyro_lsb_per_dps,
         six_face_rounds: a.six_faces.then_some(a.rounds),
         table_turns: a.table_turns,
-        spelling: Spelling::Flags,
+        spelling: super::spelling::FLAGS,
     };
     let sim = request.run().map_err(|e| CliError::Usage(e.to_string()))?;
     let truth_path = sim.write(&a.out, a.force).map_err(|e| match e {
@@ -339,7 +338,7 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
             min_still_s: a.min_still_s,
             still_threshold: a.still_threshold,
             offer_still_threshold: true,
-            ..SegmentOptions::default()
+            ..SegmentOptions::new(super::spelling::FLAGS)
         },
         unit_id: unit_and_site(a)?,
         gravity_m_s2: site_gravity_m_s2(a),

@@ -176,8 +176,11 @@ pub fn render_px4_slots(inputs: &[ExportInput<'_>]) -> Result<String, ExportErro
         values.extend(v);
     }
     px4_after_loading(&mut s, &values);
-    let o = inputs.first().map(|i| i.options).unwrap_or_default();
-    px4_table(&mut s, o, values)?;
+    match inputs.first() {
+        Some(i) => px4_table(&mut s, i.options, values)?,
+        // No calibration: the table's header alone, for the default vehicle id.
+        None => px4_header(&mut s, 1),
+    }
     Ok(s)
 }
 
@@ -266,11 +269,7 @@ fn px4_after_loading(s: &mut String, values: &Values) {
 
 /// QGroundControl's table of `values`.
 fn px4_table(s: &mut String, o: super::ExportOptions, values: Values) -> Result<(), ExportError> {
-    let _ = writeln!(
-        s,
-        "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
-        o.sysid
-    );
+    px4_header(s, o.sysid);
     for (name, v, int) in values {
         let (text, ty) = if int {
             (format!("{}", v as i64), 6)
@@ -280,6 +279,14 @@ fn px4_table(s: &mut String, o: super::ExportOptions, values: Values) -> Result<
         let _ = writeln!(s, "{}\t{}\t{name}\t{text}\t{ty}", o.sysid, o.compid);
     }
     Ok(())
+}
+
+/// The header of QGroundControl's parameter table for vehicle `sysid`.
+fn px4_header(s: &mut String, sysid: u8) {
+    let _ = writeln!(
+        s,
+        "#\n# Onboard parameters for Vehicle {sysid}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType"
+    );
 }
 
 /// What a temperature model becomes in the autopilots' thermal offsets, in the driver's units.
@@ -743,11 +750,10 @@ mod tests {
     /// outside a quoted `host` command (the command line's own words are checked above).
     #[test]
     fn refusals_name_the_callers_keywords() {
-        use recording::spelling::Spelling;
         let unit = UnitFile::paper_unit();
         let cal = unit.to_calibration().unwrap();
         let mut input = ExportInput::for_tests(&unit, cal);
-        input.options.spelling = Spelling::Keywords;
+        input.options.spelling = recording::testkit::KEYWORD_SPELLING;
         input.driver_scale_m_s2_per_out = Some(cal.gravity_m_s2 / 0.4);
         let mut seen = vec![(
             render(

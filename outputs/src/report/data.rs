@@ -31,6 +31,7 @@ use estimator::estimate::{
 use estimator::sim::SimulateError;
 use estimator::unit_file::UnitFileError;
 use recording::session::{Package, Plan, RecordingError, SegmentStats};
+use recording::spelling::Spelling;
 use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
@@ -53,16 +54,25 @@ pub struct ReportOptions {
     pub formats: Formats,
 }
 
-impl Default for ReportOptions {
-    fn default() -> Self {
+impl ReportOptions {
+    /// The report's defaults, the fit's messages spelled as the caller spells its options.
+    pub fn new(spelling: Spelling) -> ReportOptions {
         ReportOptions {
-            estimate: EstimateOptions::default(),
+            estimate: EstimateOptions::new(spelling),
             navigation_duration_s: 60.0,
             navigation_step_s: 0.1,
             static_run: None,
             rate_run: None,
             formats: Formats::default(),
         }
+    }
+}
+
+/// The tests' report options: [`ReportOptions::new`] with the neutral test spelling.
+#[cfg(test)]
+impl Default for ReportOptions {
+    fn default() -> Self {
+        ReportOptions::new(Spelling::default())
     }
 }
 

@@ -170,8 +170,14 @@ pub struct ImportOptions {
 }
 
 impl ImportOptions {
-    /// The default column names with the given time source and units.
-    pub fn new(time: TimeSource, acc_unit: OutputUnit, gyro_unit: GyroUnit) -> ImportOptions {
+    /// The default column names with the given time source and units, the messages spelled as the
+    /// caller spells its options.
+    pub fn new(
+        time: TimeSource,
+        acc_unit: OutputUnit,
+        gyro_unit: GyroUnit,
+        spelling: Spelling,
+    ) -> ImportOptions {
         ImportOptions {
             columns: DEFAULT_COLUMNS.map(String::from),
             time,
@@ -183,7 +189,7 @@ impl ImportOptions {
             gyro_offset: [0.0; 3],
             temp_column: None,
             skip_lines: 0,
-            spelling: Spelling::Flags,
+            spelling,
         }
     }
 
@@ -709,6 +715,7 @@ mod tests {
             TimeSource::Column("time".into()),
             OutputUnit::StandardGravity,
             GyroUnit::RadPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&text, &o).unwrap();
         assert_eq!(rec.len(), 200);
@@ -727,6 +734,7 @@ mod tests {
             TimeSource::RateHz(102.4),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&text, &o).unwrap();
         assert_eq!(rec.t_s[102], 102.0 / 102.4);
@@ -752,6 +760,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let csv = read(
             &format!("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}", body(",")),
@@ -779,7 +788,14 @@ mod tests {
                 rows(300, |i| format!("{},0,0,{g},0,0,0", i as f64 * dt))
             )
         };
-        let o = |unit| ImportOptions::new(TimeSource::Column("t".into()), unit, GyroUnit::DegPerS);
+        let o = |unit| {
+            ImportOptions::new(
+                TimeSource::Column("t".into()),
+                unit,
+                GyroUnit::DegPerS,
+                crate::testkit::SPELLING,
+            )
+        };
         // Steps of 300 over 300 rows: 3.3 mHz in s, 3.3 Hz in ms, 0.09 s long in µs: nothing fits.
         let e = read(&text(300.0, 9.81), &o(OutputUnit::MetresPerSecondSquared)).unwrap_err();
         assert!(e.to_string().contains("in no unit"), "{e}");
@@ -805,6 +821,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let text = format!(
             "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
@@ -838,9 +855,12 @@ mod tests {
                 TimeSource::RateHz(100.0),
                 OutputUnit::MetresPerSecondSquared,
                 GyroUnit::DegPerS,
+                crate::testkit::SPELLING,
             )
         };
-        let m = read(&text, &o(Spelling::Flags)).unwrap_err().to_string();
+        let m = read(&text, &o(crate::testkit::SPELLING))
+            .unwrap_err()
+            .to_string();
         assert!(
             m.contains("'tmep_c'") && m.contains("--temp-column NAME"),
             "{m}"
@@ -849,7 +869,9 @@ mod tests {
             !m.contains("--columns") && !m.contains("--time-column"),
             "{m}"
         );
-        let m = read(&text, &o(Spelling::Keywords)).unwrap_err().to_string();
+        let m = read(&text, &o(crate::testkit::KEYWORD_SPELLING))
+            .unwrap_err()
+            .to_string();
         assert!(
             m.contains("temp_column=\"NAME\"") && !m.contains("--"),
             "{m}"
@@ -862,6 +884,7 @@ mod tests {
             TimeSource::RateHz(100.0),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let missing = read("acc_x,acc_y,gyr_x,gyr_y,gyr_z\n1,2,3,4,5\n", &ms2).unwrap_err();
         let m = missing.to_string();
@@ -929,6 +952,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&rows_around(1), &timed).unwrap();
         assert_eq!(
@@ -951,7 +975,12 @@ mod tests {
     }
 
     fn timed(unit: OutputUnit) -> ImportOptions {
-        ImportOptions::new(TimeSource::Column("t".into()), unit, GyroUnit::DegPerS)
+        ImportOptions::new(
+            TimeSource::Column("t".into()),
+            unit,
+            GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
+        )
     }
 
     #[test]

@@ -147,13 +147,14 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         crate::session::import::GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     options.temp_column = Some("temp".into());
     let source = LogSource {
         text: Some(options),
         instance: None,
         topic: None,
-        spelling: Spelling::Flags,
+        spelling: crate::testkit::SPELLING,
         rate_hz: None,
     };
     let some = text(&|i| match i {
