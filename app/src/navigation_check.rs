@@ -10,7 +10,7 @@ use outputs::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
 use outputs::report::{build_report, write_report, NavigationCheck, ReportError, ReportOptions};
 use recording::session::builtin::paper_plan;
 use recording::session::Plan;
-use recording::spelling::Spelling;
+use recording::spelling::{Spelling, UserOption};
 use std::path::PathBuf;
 
 /// Settings of [`navigation_check`]: the paper's unit and plan, 1 mg white noise, a fixed seed.
@@ -72,10 +72,14 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
         .to_calibration()
         .map_err(ReportError::Calibration)?;
     // Only the scales can fail here: the session is simulated from this unit (the guard's table).
+    let name = format!(
+        "the {} file",
+        args.report.estimate.spelling.name(UserOption::Unit)
+    );
     meet(
         Meeting::NavigationCheck,
         &Mine {
-            name: "the --unit file",
+            name: &name,
             cal: &truth,
             unit_id: None,
         },

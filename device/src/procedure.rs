@@ -252,7 +252,8 @@ pub fn run<T: Transport>(
         Some(log) => segment_window_log(log, &plan, op, opts)?,
         None => recording_dir,
     };
-    // Estimate from the saved recording: the one calibrate use case, as `host calibrate --input`.
+    // Estimate from the saved recording: the one calibrate use case, as `host calibrate` on a
+    // recording.
     let (session, mut calibrated) = app::calibrate_session_dir(
         &session_dir,
         &opts.calibrate,

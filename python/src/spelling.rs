@@ -36,6 +36,16 @@ fn keyword(option: UserOption) -> &'static str {
         UserOption::GyroOffset => "gyro_offset",
         UserOption::StillThreshold => "still_threshold",
         UserOption::SkipLines => "skip_lines",
+        UserOption::StaticRun => "static_run",
+        UserOption::RateRun => "rate_run",
+        UserOption::Calibration => "calibration",
+        UserOption::BiasWalkFrom => "bias_walk_from",
+        UserOption::BiasWalk => "bias_walk",
+        UserOption::Unit => "unit",
+        UserOption::IgnoreUnitId => "ignore_unit_id",
+        UserOption::Input => "input",
+        UserOption::Out => "out",
+        UserOption::Force => "force",
     }
 }
 

@@ -62,12 +62,32 @@ pub enum UserOption {
     StillThreshold,
     /// Lines before a text file's header.
     SkipLines,
+    /// A report: the segment the static replay runs on.
+    StaticRun,
+    /// A report: the segment the rotating replay runs on.
+    RateRun,
+    /// Noise figures from a recording in m/s²: the calibration that converts its outputs.
+    Calibration,
+    /// The unit's bias random walks from its noise figures (`noise.json` or a unit file).
+    BiasWalkFrom,
+    /// The accelerometers' bias random walk, given as a number.
+    BiasWalk,
+    /// A unit file to simulate.
+    Unit,
+    /// Accept a calibration whose unit id differs from the recording's.
+    IgnoreUnitId,
+    /// The recording to read.
+    Input,
+    /// Where the results go.
+    Out,
+    /// Replace earlier results.
+    Force,
 }
 
 impl UserOption {
     /// Every option, for the edges' tests (each has a name at every edge) and for comparing two
     /// spellings.
-    pub const ALL: [UserOption; 26] = [
+    pub const ALL: [UserOption; 36] = [
         UserOption::Columns,
         UserOption::TimeColumn,
         UserOption::TimeUnit,
@@ -94,6 +114,16 @@ impl UserOption {
         UserOption::GyroOffset,
         UserOption::StillThreshold,
         UserOption::SkipLines,
+        UserOption::StaticRun,
+        UserOption::RateRun,
+        UserOption::Calibration,
+        UserOption::BiasWalkFrom,
+        UserOption::BiasWalk,
+        UserOption::Unit,
+        UserOption::IgnoreUnitId,
+        UserOption::Input,
+        UserOption::Out,
+        UserOption::Force,
     ];
 
     /// Its value is text (a keyword argument then quotes it).

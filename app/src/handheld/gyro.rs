@@ -85,7 +85,7 @@ pub fn fit(
     let stats = stats_for(rec, seg, plan);
     let options = EstimateOptions {
         compare_methods: false,
-        ..EstimateOptions::default()
+        ..EstimateOptions::new(spelling)
     };
     let outcome = calibrate_session_stats(plan, &stats, &options)?;
     let m = outcome.fitted.m_out_per_g;

@@ -184,7 +184,7 @@ impl BiasWalkArgs {
     /// here; `--gyro-bias-walk` takes the place of its gyro figure.
     pub(crate) fn walks(&self) -> Result<(BiasWalk, f64, bool), CliError> {
         if let Some(path) = &self.bias_walk_from {
-            let from_file = app::walk_source::walk_from_file(path)?;
+            let from_file = app::walk_source::walk_from_file(path, super::spelling::FLAGS)?;
             let gyro = self.gyro_bias_walk.or(from_file.gyro_deg_s_sqrt_s);
             let accel = BiasWalk::FromUnit(from_file.accel);
             return Ok((accel, gyro.unwrap_or(0.0), gyro.is_none()));

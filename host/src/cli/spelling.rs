@@ -36,6 +36,16 @@ fn flag(option: UserOption) -> &'static str {
         UserOption::GyroOffset => "--gyro-offset",
         UserOption::StillThreshold => "--still-threshold",
         UserOption::SkipLines => "--skip-lines",
+        UserOption::StaticRun => "--static-run",
+        UserOption::RateRun => "--rate-run",
+        UserOption::Calibration => "--calibration",
+        UserOption::BiasWalkFrom => "--bias-walk-from",
+        UserOption::BiasWalk => "--bias-walk",
+        UserOption::Unit => "--unit",
+        UserOption::IgnoreUnitId => "--ignore-unit-id",
+        UserOption::Input => "--input",
+        UserOption::Out => "--out",
+        UserOption::Force => "--force",
     }
 }
 

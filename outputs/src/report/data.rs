@@ -31,7 +31,7 @@ use estimator::estimate::{
 use estimator::sim::SimulateError;
 use estimator::unit_file::UnitFileError;
 use recording::session::{Package, Plan, RecordingError, SegmentStats};
-use recording::spelling::Spelling;
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
@@ -100,7 +100,8 @@ pub enum ReportError {
     /// The session has no segment of its plan with data.
     #[error("the session has no segment of its plan with data: nothing to report")]
     NothingToReport,
-    /// A segment named for a replay (`--static-run`, `--rate-run`) is not in the session.
+    /// A segment named for a replay ([`ReportOptions::static_run`], [`ReportOptions::rate_run`]) is
+    /// not in the session.
     #[error("segment '{name}' is not in the session")]
     RunNotInSession {
         /// The name given.
@@ -110,7 +111,7 @@ pub enum ReportError {
     #[error(
         "segment '{name}' is not {}: {} needs one ({})",
         .run.wanted(),
-        .run.flag(),
+        .spelling.name(.run.option()),
         match .examples.is_empty() {
             true => "this session has none".to_string(),
             false => format!("e.g. '{}'", .examples.join("', '")),
@@ -123,6 +124,8 @@ pub enum ReportError {
         run: NamedRun,
         /// Up to three segments of the replay's kind.
         examples: Vec<String>,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The navigation check has no segment to replay (the reasons, one per replay).
     #[error("nothing to replay: {}", .0.join("; "))]
@@ -411,7 +414,7 @@ fn planned_theoretical(
     )
 }
 
-/// The replay a segment is named for (`--static-run`, `--rate-run`).
+/// The replay a segment is named for ([`ReportOptions::static_run`], [`ReportOptions::rate_run`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NamedRun {
     /// The static replay.
@@ -438,10 +441,10 @@ impl NamedRun {
     }
 
     /// The option that names it.
-    fn flag(self) -> &'static str {
+    fn option(self) -> UserOption {
         match self {
-            NamedRun::Static => "--static-run",
-            NamedRun::Rate => "--rate-run",
+            NamedRun::Static => UserOption::StaticRun,
+            NamedRun::Rate => UserOption::RateRun,
         }
     }
 }
@@ -584,6 +587,7 @@ fn navigation_runs(
                 name: name.into(),
                 run,
                 examples,
+                spelling: options.estimate.spelling,
             });
         }
         Ok(row)

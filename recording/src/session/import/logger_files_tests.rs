@@ -60,7 +60,7 @@ fn a_header_less_file_is_read_by_column_index_and_named_as_such_when_read_by_nam
     );
     let e = read(&text, &named).unwrap_err().to_string();
     assert!(
-        e.contains("no header") && e.contains("--columns 0,1,2,3,4,5"),
+        e.contains("no header") && e.contains("<Columns> 0,1,2,3,4,5"),
         "{e}"
     );
 }

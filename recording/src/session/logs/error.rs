@@ -88,7 +88,7 @@ pub enum LogError {
         /// Why.
         source: super::ardupilot::UndoError,
     },
-    /// `--instance` or `--topic` on a format that has no such thing.
+    /// An IMU instance or an MCAP topic asked of a format that has no such thing.
     #[error("{path} is a {} log: {option} does not apply to it; leave it out", format.name())]
     OptionNotForFormat {
         /// The file.

@@ -72,7 +72,7 @@ pub enum McapError {
         /// The topics found, with their types.
         topics: String,
     },
-    /// Several Imu topics and no `--topic`.
+    /// Several Imu topics and none chosen ([`UserOption::Topic`]).
     #[error(
         "the bag has several {IMU_SCHEMA} topics ({topics}): choose one with {}",
         crate::spelling::given_by(*.spelling, UserOption::Topic, "NAME")

@@ -84,7 +84,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         matches!(
             e,
             LogError::OptionNotForFormat {
-                option: "--instance",
+                option: "<Instance>",
                 ..
             }
         ),
@@ -95,7 +95,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         ..source
     };
     let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
-    assert!(e.to_string().contains("--acc-unit"), "{e}");
+    assert!(e.to_string().contains("<AccUnit>"), "{e}");
 }
 
 #[test]
