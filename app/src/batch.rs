@@ -188,7 +188,7 @@ fn calibrate_one(dir: &Path, out: &Path, opts: &BatchOptions) -> UnitResult {
         estimate: opts.estimate.clone(),
         limits: opts.limits,
     };
-    // The one calibrate use case, as `host calibrate --input`; the unit's error is kept as its
+    // The one calibrate use case, as `host calibrate` on a recording; the unit's error is kept as its
     // message in the lot's summary (a row of summary.csv and summary.json).
     match crate::calibrate_session_dir(dir, &options, &ReadOptions { quiet: true }) {
         Err(e) => r.error = Some(shared::chain::Chain(&e).to_string()),

@@ -12,16 +12,30 @@ use estimator::estimate::{
 use outputs::summary::{CalibrationSummary, Limits};
 use recording::session::note::Note;
 use recording::session::{self, Plan, ReadOptions, SegmentStats, Session};
+use recording::spelling::Spelling;
 use shared::UnitId;
 use std::path::{Path, PathBuf};
 
-/// What a calibration is asked for: the estimator's settings and the pass/fail limits.
-#[derive(Clone, Debug, Default)]
+/// What a calibration is asked for: the estimator's settings and the pass/fail limits. Its default
+/// is the tests' (feature `testkit`, the neutral test spelling): a caller builds its own.
+#[derive(Clone, Debug)]
+#[cfg_attr(any(test, feature = "testkit"), derive(Default))]
 pub struct CalibrateOptions {
     /// The estimator's settings (`--method`, `--reference`, `--single-package`).
     pub estimate: EstimateOptions,
     /// The limits the result is checked against.
     pub limits: Limits,
+}
+
+impl CalibrateOptions {
+    /// The estimator's defaults and the default limits, the messages spelled as the caller
+    /// spells its options.
+    pub fn new(spelling: Spelling) -> CalibrateOptions {
+        CalibrateOptions {
+            estimate: EstimateOptions::new(spelling),
+            limits: Limits::default(),
+        }
+    }
 }
 
 /// A recording as the estimator takes it: its plan, its per-segment statistics, the gyro its hand

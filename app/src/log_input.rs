@@ -45,8 +45,10 @@ pub struct LogInput {
     pub spelling: Spelling,
 }
 
-impl Default for LogInput {
-    fn default() -> Self {
+impl LogInput {
+    /// Nothing given (the default columns, a binary log's own units), the messages spelled as the
+    /// caller spells its options.
+    pub fn new(spelling: Spelling) -> LogInput {
         LogInput {
             columns: DEFAULT_COLUMNS.map(String::from).to_vec(),
             time_column: None,
@@ -61,7 +63,7 @@ impl Default for LogInput {
             skip_lines: None,
             instance: None,
             topic: None,
-            spelling: Spelling::Flags,
+            spelling,
         }
     }
 }
@@ -366,6 +368,7 @@ fn per_axis(v: &[f64]) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use recording::testkit::{KEYWORD_SPELLING, SPELLING};
 
     fn text(spelling: Spelling) -> LogInput {
         LogInput {
@@ -373,7 +376,7 @@ mod tests {
             acc_unit: Some("g".into()),
             gyro_unit: Some("deg/s".into()),
             spelling,
-            ..LogInput::default()
+            ..LogInput::new(SPELLING)
         }
     }
 
@@ -386,62 +389,62 @@ mod tests {
             ..text(sp)
         };
         assert_eq!(
-            e(bad_unit(Spelling::Flags)),
-            "--acc-unit 'furlong': a text file needs its accelerometer unit, m/s2, g, LSB or V"
+            e(bad_unit(SPELLING)),
+            "<AccUnit> 'furlong': a text file needs its accelerometer unit, m/s2, g, LSB or V"
         );
         assert_eq!(
-            e(bad_unit(Spelling::Keywords)),
-            "acc_unit=\"furlong\": a text file needs its accelerometer unit, m/s2, g, LSB or V"
+            e(bad_unit(KEYWORD_SPELLING)),
+            "<AccUnit>=\"furlong\": a text file needs its accelerometer unit, m/s2, g, LSB or V"
         );
         let counts = |sp| LogInput {
             gyro_unit: Some("LSB".into()),
             ..text(sp)
         };
-        let m = e(counts(Spelling::Keywords));
-        assert!(m.starts_with("gyro_unit=\"LSB\" needs") && m.contains("gyro_lsb_per_dps=X"));
+        let m = e(counts(KEYWORD_SPELLING));
+        assert!(m.starts_with("<GyroUnit>=\"LSB\" needs") && m.contains("<GyroLsbPerDps>=X"));
         assert!(!m.contains("--"), "{m}");
         let offset = |sp| LogInput {
             acc_unit: Some("LSB".into()),
             acc_offset: Some(vec![1.0, 2.0]),
             ..text(sp)
         };
-        assert!(e(offset(Spelling::Keywords)).starts_with("acc_offset=[1.0, 2.0]: give"));
+        assert!(e(offset(KEYWORD_SPELLING)).starts_with("<AccOffset>=[1.0, 2.0]: give"));
         let both = LogInput {
             time_column: Some("t".into()),
-            ..text(Spelling::Keywords)
+            ..text(KEYWORD_SPELLING)
         };
         assert_eq!(
             e(both),
-            "a text file needs exactly one of time_column=\"NAME\" or rate_hz=HZ"
+            "a text file needs exactly one of <TimeColumn>=\"NAME\" or <RateHz>=HZ"
         );
     }
 
     /// With the flags' spelling every refusal is word for word the command line's message from
     /// before the options became typed (the texts below are those messages).
     #[test]
-    fn the_flags_spelling_keeps_the_command_lines_words() {
-        let base = || text(Spelling::Flags);
+    fn each_refusal_names_its_options_by_the_callers_spelling() {
+        let base = || text(SPELLING);
         let cases: Vec<(LogInput, &str)> = vec![
             (
                 LogInput {
                     columns: vec!["a".into(), "b".into()],
                     ..base()
                 },
-                "--columns needs six names: acc x,y,z then gyro x,y,z",
+                "<Columns> needs six names: acc x,y,z then gyro x,y,z",
             ),
             (
                 LogInput {
                     columns: ["a", "b", "", "d", "e", "f"].map(String::from).to_vec(),
                     ..base()
                 },
-                "--columns has an empty name: give six names, acc x,y,z then gyro x,y,z",
+                "<Columns> has an empty name: give six names, acc x,y,z then gyro x,y,z",
             ),
             (
                 LogInput {
                     columns: ["a", "b", "c", "d", "e", "A"].map(String::from).to_vec(),
                     ..base()
                 },
-                "column 'a' is named twice in --columns/--time-column: each of acc x,y,z, gyro \
+                "column 'a' is named twice in <Columns>/<TimeColumn>: each of acc x,y,z, gyro \
                  x,y,z and the time must be its own column",
             ),
             (
@@ -449,7 +452,7 @@ mod tests {
                     rate_hz: None,
                     ..base()
                 },
-                "a text file needs exactly one of --time-column NAME or --rate-hz HZ",
+                "a text file needs exactly one of <TimeColumn> NAME or <RateHz> HZ",
             ),
             (
                 LogInput {
@@ -458,21 +461,21 @@ mod tests {
                     time_unit: Some("h".into()),
                     ..base()
                 },
-                "--time-unit h: use s, ms, us or ns",
+                "<TimeUnit> h: use s, ms, us or ns",
             ),
             (
                 LogInput {
                     time_unit: Some("s".into()),
                     ..base()
                 },
-                "--time-unit applies to --time-column, not to --rate-hz",
+                "<TimeUnit> applies to <TimeColumn>, not to <RateHz>",
             ),
             (
                 LogInput {
                     acc_offset: Some(vec![1.0]),
                     ..base()
                 },
-                "--acc-offset is for raw counts: give --acc-unit LSB, or drop --acc-offset (the \
+                "<AccOffset> is for raw counts: give <AccUnit> LSB, or drop <AccOffset> (the \
                  unit is g)",
             ),
             (
@@ -480,7 +483,7 @@ mod tests {
                     gyro_unit: Some("LSB".into()),
                     ..base()
                 },
-                "--gyro-unit LSB needs the gyro's nominal scale: add --gyro-lsb-per-dps X (counts \
+                "<GyroUnit> LSB needs the gyro's nominal scale: add <GyroLsbPerDps> X (counts \
                  per °/s from its data sheet, e.g. 16.4 at ±2000 °/s, 131 at ±250 °/s); the turns \
                  then fit the true scale",
             ),
@@ -489,15 +492,15 @@ mod tests {
                     gyro_lsb_per_dps: Some(16.4),
                     ..base()
                 },
-                "--gyro-lsb-per-dps is for a gyro in counts: give --gyro-unit LSB (not 'deg/s')",
+                "<GyroLsbPerDps> is for a gyro in counts: give <GyroUnit> LSB (not 'deg/s')",
             ),
             (
                 LogInput {
                     gyro_unit: Some("x".into()),
                     ..base()
                 },
-                "--gyro-unit 'x': a text file needs its gyro unit, deg/s, rad/s or LSB (with \
-                 --gyro-lsb-per-dps)",
+                "<GyroUnit> 'x': a text file needs its gyro unit, deg/s, rad/s or LSB (with \
+                 <GyroLsbPerDps>)",
             ),
         ];
         for (input, want) in cases {
@@ -511,7 +514,7 @@ mod tests {
             LogInput {
                 acc_unit: Some("LSB".into()),
                 acc_offset: Some(v),
-                ..text(Spelling::Flags)
+                ..text(SPELLING)
             }
             .import_options()
             .map(|o| o.acc_offset)
@@ -536,23 +539,20 @@ mod tests {
             .import_options()
             .map(|o| o.gyro_offset)
         };
+        assert_eq!(with("LSB", vec![32768.0], SPELLING).unwrap(), [32768.0; 3]);
         assert_eq!(
-            with("LSB", vec![32768.0], Spelling::Flags).unwrap(),
-            [32768.0; 3]
-        );
-        assert_eq!(
-            with("LSB", vec![1.0, 2.0, 3.0], Spelling::Flags).unwrap(),
+            with("LSB", vec![1.0, 2.0, 3.0], SPELLING).unwrap(),
             [1.0, 2.0, 3.0]
         );
-        let e = with("LSB", vec![1.0, 2.0], Spelling::Keywords).unwrap_err();
+        let e = with("LSB", vec![1.0, 2.0], KEYWORD_SPELLING).unwrap_err();
         assert!(
-            e.to_string().starts_with("gyro_offset=[1.0, 2.0]: give"),
+            e.to_string().starts_with("<GyroOffset>=[1.0, 2.0]: give"),
             "{e}"
         );
-        let e = with("deg/s", vec![32768.0], Spelling::Flags).unwrap_err();
+        let e = with("deg/s", vec![32768.0], SPELLING).unwrap_err();
         assert!(
             e.to_string()
-                .starts_with("--gyro-offset is for raw counts: give --gyro-unit LSB"),
+                .starts_with("<GyroOffset> is for raw counts: give <GyroUnit> LSB"),
             "{e}"
         );
     }

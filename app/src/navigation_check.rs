@@ -10,6 +10,7 @@ use outputs::calibration_guard::{meet, Meeting, Mine, Other, Temperatures};
 use outputs::report::{build_report, write_report, NavigationCheck, ReportError, ReportOptions};
 use recording::session::builtin::paper_plan;
 use recording::session::Plan;
+use recording::spelling::{Spelling, UserOption};
 use std::path::PathBuf;
 
 /// Settings of [`navigation_check`]: the paper's unit and plan, 1 mg white noise, a fixed seed.
@@ -29,14 +30,16 @@ pub struct NavigationCheckArgs {
     pub out_dir: Option<PathBuf>,
 }
 
-impl Default for NavigationCheckArgs {
-    fn default() -> Self {
+impl NavigationCheckArgs {
+    /// The paper's unit and plan, the default noise and report, the fit's messages spelled as the
+    /// caller spells its options.
+    pub fn new(spelling: Spelling) -> NavigationCheckArgs {
         NavigationCheckArgs {
             unit: UnitFile::paper_unit(),
             plan: paper_plan(),
             noise: NoiseModel::default(),
             seed: 1,
-            report: ReportOptions::default(),
+            report: ReportOptions::new(spelling),
             out_dir: None,
         }
     }
@@ -69,10 +72,14 @@ pub fn navigation_check(args: &NavigationCheckArgs) -> Result<NavigationCheck, R
         .to_calibration()
         .map_err(ReportError::Calibration)?;
     // Only the scales can fail here: the session is simulated from this unit (the guard's table).
+    let name = format!(
+        "the {} file",
+        args.report.estimate.spelling.name(UserOption::Unit)
+    );
     meet(
         Meeting::NavigationCheck,
         &Mine {
-            name: "the --unit file",
+            name: &name,
             cal: &truth,
             unit_id: None,
         },
@@ -139,7 +146,7 @@ mod tests {
         let check = navigation_check(&NavigationCheckArgs {
             plan: builtin_plan("short").unwrap().unwrap(),
             out_dir: Some(dir.path().to_path_buf()),
-            ..NavigationCheckArgs::default()
+            ..NavigationCheckArgs::new(recording::testkit::SPELLING)
         })
         .unwrap();
         let text = check.render();

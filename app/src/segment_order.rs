@@ -230,7 +230,7 @@ mod tests {
             noise_out_per_sample_1sigma: truth.statics.scale_out_per_g.map(|k| 1e-3 * k.abs()),
             gyro_noise_rad_s: 0.05f64.to_radians(),
             options: EstimateOptions::default().with_bias_walk(BiasWalk::Given(walk)),
-            ..PredictSettings::white(0.0)
+            ..PredictSettings::white(0.0, recording::testkit::SPELLING)
         }
     }
 

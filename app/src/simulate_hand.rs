@@ -208,6 +208,7 @@ impl SimulatedHand {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use recording::testkit::{KEYWORD_SPELLING, SPELLING};
 
     fn request() -> HandSimulation {
         HandSimulation {
@@ -219,7 +220,7 @@ mod tests {
             gyro_lsb_per_dps: None,
             six_face_rounds: None,
             table_turns: false,
-            spelling: Spelling::Flags,
+            spelling: SPELLING,
         }
     }
 
@@ -236,27 +237,27 @@ mod tests {
         let rate = |r: &mut HandSimulation| r.rate_hz = 5.0;
         let (lo, hi) = SIMULATED_HAND_RATE_HZ;
         assert_eq!(
-            refused(&rate, Spelling::Flags),
-            format!("--rate-hz 5: use {lo} to {hi}")
+            refused(&rate, SPELLING),
+            format!("<RateHz> 5: use {lo} to {hi}")
         );
         assert_eq!(
-            refused(&rate, Spelling::Keywords),
-            format!("rate_hz=5: use {lo} to {hi}")
+            refused(&rate, KEYWORD_SPELLING),
+            format!("<RateHz>=5: use {lo} to {hi}")
         );
         let volts = |r: &mut HandSimulation| r.acc_unit = "V".into();
         assert_eq!(
-            refused(&volts, Spelling::Keywords),
-            "acc_unit=\"V\": use m/s2, g or LSB"
+            refused(&volts, KEYWORD_SPELLING),
+            "<AccUnit>=\"V\": use m/s2, g or LSB"
         );
         let counts = |r: &mut HandSimulation| r.gyro_unit = "LSB".into();
         assert_eq!(
-            refused(&counts, Spelling::Flags),
-            "--gyro-unit LSB and --gyro-lsb-per-dps X go together"
+            refused(&counts, SPELLING),
+            "<GyroUnit> LSB and <GyroLsbPerDps> X go together"
         );
         let offset = |r: &mut HandSimulation| r.acc_offset = Some(32768.0);
         assert_eq!(
-            refused(&offset, Spelling::Keywords),
-            "acc_offset needs acc_unit=\"LSB\""
+            refused(&offset, KEYWORD_SPELLING),
+            "<AccOffset> needs <AccUnit>=\"LSB\""
         );
     }
 

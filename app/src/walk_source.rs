@@ -1,4 +1,4 @@
-//! The bias random walks taken from the unit's own noise figures (`--bias-walk-from FILE`,
+//! The bias random walks taken from the unit's own noise figures ([`UserOption::BiasWalkFrom`],
 //! docs/model.md §11.3): the Allan K of `host noise`'s `noise.json`, or a unit file's `[noise]`
 //! `accel_bias_walk_mg_sqrt_s`. The accelerometers' walk must be there; the gyro's is taken too
 //! where the file holds it (the gyro axes' K, or `gyro_bias_walk_deg_s_sqrt_s` or
@@ -8,7 +8,7 @@
 //! Units: the fit wants the walk per axis either in mg/√s (turned into output units with the fitted
 //! scale factors) or in output unit/√s as it is. A unit file's `[noise]` is mg/√s already. A
 //! `noise.json` holds K in its axes' `unit` per √s: `m/s^2` (a recording in m/s² or g, or one analysed
-//! with `--calibration`) becomes mg/√s as `K / g₀ · 10³` with g₀ the standard gravity (a local g
+//! with a calibration) becomes mg/√s as `K / g₀ · 10³` with g₀ the standard gravity (a local g
 //! differs by at most 0.3 %, far inside K's own uncertainty); `output unit` (V or LSB, no
 //! calibration) is taken as it is, with the output unit the file records (`output_unit`), which
 //! the fit checks against the session's; a file that records none is refused.
@@ -17,16 +17,19 @@ use estimator::estimate::UnitWalk;
 use estimator::sim::{NoiseModel, SimulateError};
 use estimator::unit_file::{UnitFile, UnitFileError};
 use outputs::noise::{NoiseReport, AXES};
+use recording::spelling::{Spelling, UserOption};
 use std::path::{Path, PathBuf};
 
 /// Why the walk could not be taken from the file.
 #[derive(Debug, thiserror::Error)]
 pub enum WalkSourceError {
     /// The file could not be read.
-    #[error("--bias-walk-from {}", .path.display())]
+    #[error("{} {}", .spelling.name(UserOption::BiasWalkFrom), .path.display())]
     Io {
         /// The file.
         path: PathBuf,
+        /// The caller's names of the options.
+        spelling: Spelling,
         /// Why.
         #[source]
         source: std::io::Error,
@@ -34,13 +37,16 @@ pub enum WalkSourceError {
     /// A `.json` file that is not `host noise`'s `noise.json`. serde_json's reason is said in
     /// parentheses inside the message, so it is shown there and not also returned as `source()`.
     #[error(
-        "--bias-walk-from {}: not a noise.json of `host noise` ({})",
+        "{} {}: not a noise.json of `host noise` ({})",
+        .spelling.name(UserOption::BiasWalkFrom),
         .path.display(),
         shared::chain::Chain(.cause)
     )]
     Json {
         /// The file.
         path: PathBuf,
+        /// The caller's names of the options.
+        spelling: Spelling,
         /// Why.
         cause: serde_json::Error,
     },
@@ -48,38 +54,50 @@ pub enum WalkSourceError {
     #[error(transparent)]
     Unit(#[from] UnitFileError),
     /// A unit file whose `[noise]` table is not the simulator's noise model.
-    #[error("--bias-walk-from {}", .path.display())]
+    #[error("{} {}", .spelling.name(UserOption::BiasWalkFrom), .path.display())]
     Noise {
         /// The file.
         path: PathBuf,
+        /// The caller's names of the options.
+        spelling: Spelling,
         /// Why.
         #[source]
         source: SimulateError,
     },
     /// The file holds no accelerometer bias random walk.
     #[error(
-        "--bias-walk-from {}: the file holds no accelerometer bias random walk ({what}); measure \
-         it with `host noise --input STILL --out DIR` on a still recording (hours long for a walk \
-         to show) and give DIR/noise.json, or give the walk in mg/√s with --bias-walk",
-        .path.display()
+        "{} {}: the file holds no accelerometer bias random walk ({what}); measure it with `host \
+         noise {} {}` on a still recording (hours long for a walk to show) and give \
+         DIR/noise.json, or give the walk in mg/√s with {}",
+        .spelling.name(UserOption::BiasWalkFrom),
+        .path.display(),
+        .spelling.given(UserOption::Input, "STILL"),
+        .spelling.given(UserOption::Out, "DIR"),
+        .spelling.name(UserOption::BiasWalk)
     )]
     NoWalk {
         /// The file.
         path: PathBuf,
+        /// The caller's names of the options.
+        spelling: Spelling,
         /// What is missing.
         what: String,
     },
     /// A walk in raw outputs whose output unit the file does not record.
     #[error(
-        "--bias-walk-from {}: its accelerometer figures are in the output unit of the recording \
-         analysed, and the file does not say which (V, LSB, …; a bare samples.csv states none, and \
-         an older `host noise` did not record it): run `host noise` again on the session \
-         directory or the logger's file (or with --calibration, for figures in m/s²)",
-        .path.display()
+        "{} {}: its accelerometer figures are in the output unit of the recording analysed, and \
+         the file does not say which (V, LSB, …; a bare samples.csv states none, and an older \
+         `host noise` did not record it): run `host noise` again on the session directory or the \
+         logger's file (or with {}, for figures in m/s²)",
+        .spelling.name(UserOption::BiasWalkFrom),
+        .path.display(),
+        .spelling.name(UserOption::Calibration)
     )]
     UnknownUnit {
         /// The file.
         path: PathBuf,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
 }
 
@@ -102,29 +120,33 @@ pub struct FileWalks {
     pub gyro_deg_s_sqrt_s: Option<f64>,
 }
 
-/// The walks from `path`: a `noise.json` (by its `.json` name) or a unit file.
-pub fn walk_from_file(path: &Path) -> Result<FileWalks, WalkSourceError> {
+/// The walks from `path`: a `noise.json` (by its `.json` name) or a unit file; a refusal names the
+/// options as `spelling` does.
+pub fn walk_from_file(path: &Path, spelling: Spelling) -> Result<FileWalks, WalkSourceError> {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
     {
         let text = std::fs::read_to_string(path).map_err(|source| WalkSourceError::Io {
             path: path.into(),
+            spelling,
             source,
         })?;
         let report: NoiseReport =
             serde_json::from_str(&text).map_err(|source| WalkSourceError::Json {
                 path: path.into(),
+                spelling,
                 cause: source,
             })?;
         return Ok(FileWalks {
-            accel: walk_from_noise(&report, path)?,
+            accel: walk_from_noise(&report, path, spelling)?,
             gyro_deg_s_sqrt_s: gyro_walk_from_noise(&report),
         });
     }
     let unit = UnitFile::load(path)?;
     let noise = NoiseModel::from_unit_file(&unit).map_err(|source| WalkSourceError::Noise {
         path: path.into(),
+        spelling,
         source,
     })?;
     match noise {
@@ -134,10 +156,12 @@ pub fn walk_from_file(path: &Path) -> Result<FileWalks, WalkSourceError> {
         }),
         Some(_) => Err(WalkSourceError::NoWalk {
             path: path.into(),
+            spelling,
             what: "its [noise] table has no accel_bias_walk_mg_sqrt_s above 0".into(),
         }),
         None => Err(WalkSourceError::NoWalk {
             path: path.into(),
+            spelling,
             what: "it has no [noise] table".into(),
         }),
     }
@@ -162,9 +186,14 @@ fn gyro_walk_from_noise(r: &NoiseReport) -> Option<f64> {
 }
 
 /// The accelerometer axes' Allan K of `host noise`, in the unit the fit takes (module docs).
-pub(crate) fn walk_from_noise(r: &NoiseReport, path: &Path) -> Result<UnitWalk, WalkSourceError> {
+pub(crate) fn walk_from_noise(
+    r: &NoiseReport,
+    path: &Path,
+    spelling: Spelling,
+) -> Result<UnitWalk, WalkSourceError> {
     let no_walk = |what: String| WalkSourceError::NoWalk {
         path: path.into(),
+        spelling,
         what,
     };
     let mut k = [0.0; 3];
@@ -201,7 +230,10 @@ pub(crate) fn walk_from_noise(r: &NoiseReport, path: &Path) -> Result<UnitWalk, 
         )),
         Some("output unit") => match r.output_unit {
             Some(u) => Ok(UnitWalk::OutputPerSqrtS(k, u)),
-            None => Err(WalkSourceError::UnknownUnit { path: path.into() }),
+            None => Err(WalkSourceError::UnknownUnit {
+                path: path.into(),
+                spelling,
+            }),
         },
         other => Err(no_walk(format!(
             "its accelerometer unit {other:?} is neither m/s^2 nor the output unit"
@@ -214,6 +246,7 @@ mod tests {
     use super::*;
     use outputs::noise::allan::{NoiseTerms, TermFit};
     use outputs::noise::AxisNoise;
+    use recording::testkit::SPELLING;
 
     fn report(unit: &str, k: [Option<f64>; 3]) -> NoiseReport {
         with_gyro(unit, k, [None; 3])
@@ -265,7 +298,7 @@ mod tests {
             "m/s^2",
             [Some(9.80665e-5), Some(1.96133e-5), Some(9.80665e-6)],
         );
-        let UnitWalk::MgSqrtS(mg) = walk_from_noise(&r, p).unwrap() else {
+        let UnitWalk::MgSqrtS(mg) = walk_from_noise(&r, p, SPELLING).unwrap() else {
             panic!("not in mg")
         };
         for (got, want) in mg.iter().zip([0.01, 0.002, 0.001]) {
@@ -273,7 +306,7 @@ mod tests {
         }
         let raw = report("output unit", [Some(4e-6), Some(5e-6), Some(6e-6)]);
         assert_eq!(
-            walk_from_noise(&raw, p).unwrap(),
+            walk_from_noise(&raw, p, SPELLING).unwrap(),
             UnitWalk::OutputPerSqrtS([4e-6, 5e-6, 6e-6], shared::OutputUnit::Volts)
         );
     }
@@ -286,11 +319,11 @@ mod tests {
         let mut raw = report("output unit", [Some(8.2); 3]);
         raw.output_unit = Some(shared::OutputUnit::Lsb);
         assert_eq!(
-            walk_from_noise(&raw, p).unwrap(),
+            walk_from_noise(&raw, p, SPELLING).unwrap(),
             UnitWalk::OutputPerSqrtS([8.2; 3], shared::OutputUnit::Lsb)
         );
         raw.output_unit = None;
-        let e = walk_from_noise(&raw, p).unwrap_err();
+        let e = walk_from_noise(&raw, p, SPELLING).unwrap_err();
         assert!(e.is_usage() && e.to_string().contains("noise.json"), "{e}");
         // A noise.json without the field reads as one that records none.
         let mut v = serde_json::to_value(report("output unit", [Some(8.2); 3])).unwrap();
@@ -304,7 +337,7 @@ mod tests {
     #[test]
     fn an_undetermined_k_is_refused() {
         let r = report("m/s^2", [Some(1e-5), None, Some(1e-5)]);
-        let e = walk_from_noise(&r, Path::new("noise.json")).unwrap_err();
+        let e = walk_from_noise(&r, Path::new("noise.json"), SPELLING).unwrap_err();
         assert!(e.is_usage());
         let m = e.to_string();
         assert!(
@@ -320,7 +353,7 @@ mod tests {
         let json = dir.path().join("noise.json");
         let r = report("m/s^2", [Some(9.80665e-5); 3]);
         std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
-        let walks = walk_from_file(&json).unwrap();
+        let walks = walk_from_file(&json, SPELLING).unwrap();
         assert_eq!(walks.accel, UnitWalk::MgSqrtS([0.01; 3]));
         assert_eq!(walks.gyro_deg_s_sqrt_s, None);
         let unit = dir.path().join("unit.toml");
@@ -329,7 +362,7 @@ mod tests {
             estimator::unit_file::PAPER_UNIT_TOML
         );
         std::fs::write(&unit, text).unwrap();
-        let walks = walk_from_file(&unit).unwrap();
+        let walks = walk_from_file(&unit, SPELLING).unwrap();
         assert_eq!(walks.accel, UnitWalk::MgSqrtS([0.003; 3]));
         assert_eq!(walks.gyro_deg_s_sqrt_s, None);
         // A unit file's gyro walk comes with it.
@@ -339,7 +372,7 @@ mod tests {
         );
         std::fs::write(&unit, text).unwrap();
         assert_eq!(
-            walk_from_file(&unit).unwrap().gyro_deg_s_sqrt_s,
+            walk_from_file(&unit, SPELLING).unwrap().gyro_deg_s_sqrt_s,
             Some(0.0004)
         );
         // Per axis, their rms: 1, 2 and 2 ·10⁻⁴ give √3·10⁻⁴ (by hand).
@@ -349,7 +382,10 @@ mod tests {
             estimator::unit_file::PAPER_UNIT_TOML
         );
         std::fs::write(&unit, text).unwrap();
-        let got = walk_from_file(&unit).unwrap().gyro_deg_s_sqrt_s.unwrap();
+        let got = walk_from_file(&unit, SPELLING)
+            .unwrap()
+            .gyro_deg_s_sqrt_s
+            .unwrap();
         assert!((got - 1.7320508e-4).abs() < 1e-11, "{got}");
     }
 
@@ -366,7 +402,10 @@ mod tests {
             [Some(1e-5), Some(2e-5), Some(2e-5)],
         );
         std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
-        let got = walk_from_file(&json).unwrap().gyro_deg_s_sqrt_s.unwrap();
+        let got = walk_from_file(&json, SPELLING)
+            .unwrap()
+            .gyro_deg_s_sqrt_s
+            .unwrap();
         assert!((got - 9.9240e-4).abs() < 1e-7, "{got}");
         let r = with_gyro(
             "m/s^2",
@@ -374,7 +413,7 @@ mod tests {
             [Some(1e-5), None, Some(2e-5)],
         );
         std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
-        let walks = walk_from_file(&json).unwrap();
+        let walks = walk_from_file(&json, SPELLING).unwrap();
         assert_eq!(
             (walks.accel, walks.gyro_deg_s_sqrt_s),
             (UnitWalk::MgSqrtS([0.01; 3]), None)

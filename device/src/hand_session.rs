@@ -12,6 +12,7 @@ use recording::session::from_recording::SIX_FACE_PRIOR_DEG;
 use recording::session::logs::{read_log_keeping, LogError, DEFAULT_MAX_SAMPLES};
 use recording::session::segment::SegmentOptions;
 use recording::session::Plan;
+use recording::spelling::Spelling;
 use std::path::{Path, PathBuf};
 
 /// The session directory segmented from the window log, in the output directory.
@@ -81,18 +82,19 @@ pub(crate) fn segment_log(
     plan: &Plan,
     out_dir: &Path,
     force: bool,
+    spelling: Spelling,
 ) -> Result<PathBuf, HandSessionError> {
     let input = LogInput {
         time_column: Some(LOG_TIME_COLUMN.into()),
         acc_unit: Some(plan.output_unit.symbol().into()),
         gyro_unit: Some(LOG_GYRO_UNIT.into()),
-        ..LogInput::default()
+        ..LogInput::new(spelling)
     };
     let source = input.source()?;
     let log = read_log_keeping(stream, &source, DEFAULT_MAX_SAMPLES)?;
     let choices = SegmentChoices {
         // `host segment`'s defaults; no --still-threshold to offer here.
-        segment: SegmentOptions::default(),
+        segment: SegmentOptions::new(spelling),
         unit_id: plan.unit_id.clone(),
         gravity_m_s2: plan.gravity_m_s2,
         fit_gyro: true,

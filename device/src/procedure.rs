@@ -18,6 +18,7 @@ use crate::{hand_session, handheld, window_log, DeviceClient, LinkError, Transpo
 use app::{CalibrateError, CalibrateOptions, Calibrated};
 use estimator::calibration_files::{self, OutputError, WrittenCalibration};
 use recording::session::{self, Plan, RecordingError, SegmentPlan, SessionWriter};
+use recording::spelling::Spelling;
 use shared::chain::Chain;
 use shared::wire::{Board, CalibrationState, Identity, StreamKind, VirtualTable};
 use std::path::{Path, PathBuf};
@@ -52,14 +53,14 @@ impl ProcedureOptions {
     /// Largest compensated error accepted at a verification position unless told otherwise, mg.
     pub const DEFAULT_VERIFY_TOLERANCE_MG: f64 = 1.0;
 
-    /// Defaults for `plan` into `out_dir`.
-    pub fn new(plan: Plan, out_dir: PathBuf) -> Self {
+    /// Defaults for `plan` into `out_dir`, the messages spelled as the caller spells its options.
+    pub fn new(plan: Plan, out_dir: PathBuf, spelling: Spelling) -> Self {
         ProcedureOptions {
             plan,
             out_dir,
             window_samples: None,
             settle_s: 0.5,
-            calibrate: CalibrateOptions::default(),
+            calibrate: CalibrateOptions::new(spelling),
             verify_tolerance_mg: Self::DEFAULT_VERIFY_TOLERANCE_MG,
             verify_seconds: 2.0,
             verify_temp_c: None,
@@ -229,7 +230,7 @@ pub fn run<T: Transport>(
             &plan,
             hand,
             window_rate,
-            recording::session::segment::SegmentOptions::default().same_position_deg,
+            recording::session::segment::SAME_POSITION_DEG,
         );
     }
     let recording_dir = opts.out_dir.join("recording");
@@ -256,7 +257,8 @@ pub fn run<T: Transport>(
         Some(log) => segment_window_log(log, &plan, op, opts)?,
         None => recording_dir,
     };
-    // Estimate from the saved recording: the one calibrate use case, as `host calibrate --input`.
+    // Estimate from the saved recording: the one calibrate use case, as `host calibrate` on a
+    // recording.
     let (session, mut calibrated) = app::calibrate_session_dir(
         &session_dir,
         &opts.calibrate,
@@ -331,8 +333,14 @@ fn segment_window_log(
         stream.display(),
         hand_session::segment_command(&stream, plan, &segmented)
     ));
-    hand_session::segment_log(&stream, plan, &opts.out_dir, opts.force)
-        .map_err(|e| hand_error(e, &stream, plan, opts))
+    hand_session::segment_log(
+        &stream,
+        plan,
+        &opts.out_dir,
+        opts.force,
+        opts.calibrate.estimate.spelling,
+    )
+    .map_err(|e| hand_error(e, &stream, plan, opts))
 }
 
 /// [`ProcedureError::HandSession`] for the window log at `stream`.
@@ -492,7 +500,7 @@ fn watcher_for(plan: &Plan, window_rate: f64) -> handheld::PositionWatcher {
     let mut watcher = handheld::PositionWatcher::new(
         plan.output_unit,
         window_rate,
-        recording::session::segment::SegmentOptions::default().same_position_deg,
+        recording::session::segment::SAME_POSITION_DEG,
     );
     watcher.set_aims(&plan.segments.iter().map(|s| s.up_b).collect::<Vec<_>>());
     watcher

@@ -38,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let given = |walk, gyro_walk| EstimateOptions {
         bias_walk: walk,
         gyro_bias_walk_deg_s_sqrt_s: gyro_walk,
-        ..EstimateOptions::default()
+        ..EstimateOptions::new(recording::testkit::SPELLING)
     };
     for (name, options) in [
         ("constant bias", given(BiasWalk::Off, 0.0)),
@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         (
             "both walks estimated",
-            EstimateOptions::default().drift_aware(),
+            EstimateOptions::new(recording::testkit::SPELLING).drift_aware(),
         ),
     ] {
         let mut times = Vec::with_capacity(RUNS);

@@ -43,6 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            recording::testkit::SPELLING,
         )),
         ..binary.clone()
     };

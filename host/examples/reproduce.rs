@@ -77,7 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &session,
         &joint_files.toml_path,
         &report_dir,
-        &ReportOptions::default(),
+        &ReportOptions::new(recording::testkit::SPELLING),
     )?;
     println!("{}", summary.render());
     println!("{}", render_position_targets(&summary.data.navigation));

@@ -274,11 +274,13 @@ fn logger_options() -> &'static [ImportOptions; 2] {
                 TimeSource::Column("t".into()),
                 shared::OutputUnit::MetresPerSecondSquared,
                 GyroUnit::DegPerS,
+                crate::cli::spelling::FLAGS,
             ),
             ImportOptions::new(
                 TimeSource::RateHz(100.0),
                 shared::OutputUnit::StandardGravity,
                 GyroUnit::RadPerS,
+                crate::cli::spelling::FLAGS,
             ),
         ]
     })

@@ -241,7 +241,7 @@ pub struct ApplySummary {
     /// Warnings of the reader (cut-short last line, empty segments, …), and rows outside the
     /// calibration's temperature range.
     pub warnings: Vec<crate::note::Note>,
-    /// Notes: an explicit choice the data already satisfied (`--ignore-unit-id` where no ids
+    /// Notes: an explicit choice the data already satisfied (the unit id ignored where no ids
     /// differ).
     pub notes: Vec<String>,
 }
@@ -251,7 +251,8 @@ pub struct ApplySummary {
 pub enum UnitBinding {
     /// The calibration's id (`None`: it has none), checked against the recording's.
     Bound(Option<UnitId>),
-    /// The calibration's id, not checked (`--ignore-unit-id`): a note where the ids do not differ.
+    /// The calibration's id, not checked (the user's choice, [`UserOption::IgnoreUnitId`](recording::spelling::UserOption::IgnoreUnitId)): a note
+    /// where the ids do not differ.
     Ignored(Option<UnitId>),
 }
 

@@ -11,7 +11,7 @@ use recording::session::import::{GyroUnit, ImportOptions, TimeSource};
 use recording::session::logs::LogSource;
 use recording::testkit::{
     flying, hand_session, log_fixture, session_in_flight, write_csv_ms, write_dataflash,
-    write_mcap, write_ulog, LogSample,
+    write_mcap, write_ulog, LogSample, SPELLING,
 };
 use shared::compensator::LeverMode;
 use shared::rng::Rng;
@@ -26,7 +26,7 @@ fn none() -> LogSource {
         text: None,
         instance: None,
         topic: None,
-        spelling: Default::default(),
+        spelling: SPELLING,
         rate_hz: None,
     }
 }
@@ -74,6 +74,7 @@ fn csv_source() -> LogSource {
             TimeSource::Column("t_ms".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            SPELLING,
         )),
         ..none()
     }

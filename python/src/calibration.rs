@@ -15,7 +15,6 @@ use outputs::export::{render, ExportError, ExportFormat, ExportInput, ExportOpti
 use outputs::summary::{file_parameters, CalibrationSummary, Limits, Parameter};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use recording::spelling::Spelling;
 use shared::blob::ParameterBlob;
 use shared::chain::Chain;
 use shared::UnitId;
@@ -131,8 +130,7 @@ pub fn calibrate(
             ],
         )?,
         single_package,
-        spelling: Spelling::Keywords,
-        ..EstimateOptions::default()
+        ..EstimateOptions::new(crate::spelling::KEYWORDS)
     }
     .drift_aware();
     let limits: Limits = match limits {
@@ -309,7 +307,7 @@ impl Calibration {
                 gyro_slot: None,
                 sysid,
                 compid,
-                spelling: Spelling::Keywords,
+                spelling: crate::spelling::KEYWORDS,
             },
         };
         if format == ExportFormat::C {

@@ -5,7 +5,7 @@
 //! Python's own `OSError` subclass, e.g. `FileNotFoundError`).
 //!
 //! Messages name Python's keyword arguments: the readers' and the export's checks are given the
-//! keyword spelling ([`recording::spelling::Spelling::Keywords`]); the few refusals whose text is
+//! keyword spelling (`crate::spelling::KEYWORDS`); the few refusals whose text is
 //! the command line's own are said here in Python's words ([`PyAccelErr::python_message`]).
 
 use app::handheld::gyro::HandGyroFileError;

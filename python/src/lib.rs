@@ -1,13 +1,15 @@
 //! `accelcal._accelcal`: the Python package's compiled half. Every function calls `host`'s
 //! application layer and domain modules, as the command line does (no second implementation, and
 //! nothing of the command line itself: typed options, not flags); the Python half
-//! (`accelcal/__init__.py`) adds pandas DataFrames and keyword conveniences.
+//! (`accelcal/__init__.py`) adds pandas DataFrames and keyword conveniences. `spelling` holds the
+//! keyword arguments' names, handed to the crates below so that a refusal names Python's argument.
 
 mod calibration;
 mod errors;
 mod noise_arg;
 mod session;
 mod signals;
+mod spelling;
 
 use pyo3::prelude::*;
 

@@ -19,7 +19,6 @@ use recording::session::logs::{read_log_keeping, text_notes, DEFAULT_MAX_SAMPLES
 use recording::session::note::Note;
 use recording::session::segment::{IntervalKind, SegmentOptions, StillThreshold};
 use recording::session::{read_session, Plan, ReadOptions, SegmentStats};
-use recording::spelling::Spelling;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
@@ -290,7 +289,7 @@ impl LogOptions {
             skip_lines: self.skip_lines,
             instance: self.instance,
             topic: self.topic.clone(),
-            spelling: Spelling::Keywords,
+            spelling: crate::spelling::KEYWORDS,
         }
     }
 }
@@ -420,8 +419,7 @@ impl SessionOptions {
                 min_still_s: self.min_still_s,
                 still_threshold,
                 offer_still_threshold: true,
-                spelling: Spelling::Keywords,
-                ..SegmentOptions::default()
+                ..SegmentOptions::new(crate::spelling::KEYWORDS)
             },
             unit_id,
             gravity_m_s2,

@@ -14,7 +14,6 @@ use outputs::noise::confidence::relative_sigma;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use recording::session::import::{GyroUnit, Recording};
-use recording::spelling::Spelling;
 use shared::compensator::LeverMode;
 use std::path::PathBuf;
 
@@ -95,7 +94,7 @@ pub fn apply<'py>(
     let done = py.detach(|| {
         let mut out = Array2::<f64>::from_elem((n, 3), f64::NAN);
         let mut rate = Array2::<f64>::from_elem((n, 3), f64::NAN);
-        let prepared = Prepared::new(&rec, cal, mode, None)?;
+        let prepared = Prepared::new(&rec, cal, mode, None, crate::spelling::KEYWORDS)?;
         let summary = prepared.run(&rec, cal, &mut |i, f, applier| {
             if let Some(f) = f {
                 let w = applier.rate_rad_s();
@@ -247,7 +246,7 @@ pub fn simulate_hand<'py>(
         gyro_lsb_per_dps,
         six_face_rounds: None,
         table_turns: false,
-        spelling: Spelling::Keywords,
+        spelling: crate::spelling::KEYWORDS,
     };
     let sim = py
         .detach(|| request.run())

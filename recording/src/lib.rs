@@ -10,9 +10,12 @@
 //!   and the range parsers of the command line's numbers.
 //! - [`output_file`]: result files written atomically, never over an existing one unless asked.
 //! - [`ui`]: progress bars on a terminal.
-//! - [`spelling`]: how a caller names the input options in messages (flags or keyword arguments).
+//! - [`spelling`]: the options a message may ask for, by their meaning, and the caller's way of
+//!   writing them; the names themselves are the edges' (the command line's flags, Python's
+//!   keywords).
 //! - `testkit` (feature `testkit`): the loggers' formats written from samples and the checks the
-//!   readers' tests share, for the tests, fuzz corpora and long-log benchmarks of every crate.
+//!   readers' tests share, for the tests, fuzz corpora and long-log benchmarks of every crate; the
+//!   neutral spelling of the tests below the edges.
 #![deny(missing_docs)]
 
 pub mod limits;

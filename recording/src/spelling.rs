@@ -1,9 +1,11 @@
-//! How the caller names the input options in its messages: the command line's flags
-//! (`--acc-unit g`) or a library's keyword arguments (`acc_unit="g"`). An error that tells the user
-//! which option to give carries the caller's [`Spelling`], so that one message serves both callers
-//! and neither sees the other's names.
+//! The options a message may ask the user to give, by their meaning ([`UserOption`]), and the
+//! caller's way of writing them ([`Spelling`]). The names themselves live at the edge that parses
+//! them: the command line's flags (`--acc-unit g`) in the `host` crate, Python's keyword arguments
+//! (`acc_unit="g"`) in the Python package. A crate below the edge never spells an option: a
+//! message that tells the user which option to give carries the caller's [`Spelling`] and names a
+//! [`UserOption`], so that one message serves both callers and neither sees the other's names.
 
-use core::fmt::Display;
+use core::fmt::{self, Debug, Display};
 
 /// An option that a message may ask the user to give or change.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,75 +62,72 @@ pub enum UserOption {
     StillThreshold,
     /// Lines before a text file's header.
     SkipLines,
+    /// A report: the segment the static replay runs on.
+    StaticRun,
+    /// A report: the segment the rotating replay runs on.
+    RateRun,
+    /// Noise figures from a recording in m/s²: the calibration that converts its outputs.
+    Calibration,
+    /// The unit's bias random walks from its noise figures (`noise.json` or a unit file).
+    BiasWalkFrom,
+    /// The accelerometers' bias random walk, given as a number.
+    BiasWalk,
+    /// A unit file to simulate.
+    Unit,
+    /// Accept a calibration whose unit id differs from the recording's.
+    IgnoreUnitId,
+    /// The recording to read.
+    Input,
+    /// Where the results go.
+    Out,
+    /// Replace earlier results.
+    Force,
 }
 
 impl UserOption {
-    /// The option's name as a keyword argument (`acc_unit`).
-    fn keyword(self) -> &'static str {
-        match self {
-            UserOption::Columns => "columns",
-            UserOption::TimeColumn => "time_column",
-            UserOption::TimeUnit => "time_unit",
-            UserOption::RateHz => "rate_hz",
-            UserOption::AccUnit => "acc_unit",
-            UserOption::AccOffset => "acc_offset",
-            UserOption::GyroUnit => "gyro_unit",
-            UserOption::GyroLsbPerDps => "gyro_lsb_per_dps",
-            UserOption::Instance => "instance",
-            UserOption::Topic => "topic",
-            UserOption::NoGyro => "no_gyro",
-            UserOption::TemperatureC => "temp_c",
-            UserOption::DeviceId => "device_id",
-            UserOption::GyroDeviceId => "gyro_device_id",
-            UserOption::DriverScale => "driver_scale",
-            UserOption::AllowUndetermined => "allow_undetermined",
-            UserOption::AllowOutOfRange => "allow_out_of_range",
-            UserOption::Noise => "noise",
-            UserOption::Method => "method",
-            UserOption::Reference => "reference",
-            UserOption::SinglePackage => "single_package",
-            UserOption::MaxSamples => "max_samples",
-            UserOption::TempColumn => "temp_column",
-            UserOption::GyroOffset => "gyro_offset",
-            UserOption::StillThreshold => "still_threshold",
-            UserOption::SkipLines => "skip_lines",
-        }
-    }
-
-    /// The option's command-line flag (`--acc-unit`).
-    fn flag(self) -> &'static str {
-        match self {
-            UserOption::Columns => "--columns",
-            UserOption::TimeColumn => "--time-column",
-            UserOption::TimeUnit => "--time-unit",
-            UserOption::RateHz => "--rate-hz",
-            UserOption::AccUnit => "--acc-unit",
-            UserOption::AccOffset => "--acc-offset",
-            UserOption::GyroUnit => "--gyro-unit",
-            UserOption::GyroLsbPerDps => "--gyro-lsb-per-dps",
-            UserOption::Instance => "--instance",
-            UserOption::Topic => "--topic",
-            UserOption::NoGyro => "--no-gyro",
-            UserOption::TemperatureC => "--temperature-c",
-            UserOption::DeviceId => "--device-id",
-            UserOption::GyroDeviceId => "--gyro-device-id",
-            UserOption::DriverScale => "--driver-scale",
-            UserOption::AllowUndetermined => "--allow-undetermined",
-            UserOption::AllowOutOfRange => "--allow-out-of-range",
-            UserOption::Noise => "--noise",
-            UserOption::Method => "--method",
-            UserOption::Reference => "--reference",
-            UserOption::SinglePackage => "--single-package",
-            UserOption::MaxSamples => "--max-samples",
-            UserOption::TempColumn => "--temp-column",
-            UserOption::GyroOffset => "--gyro-offset",
-            UserOption::StillThreshold => "--still-threshold",
-            UserOption::SkipLines => "--skip-lines",
-        }
-    }
+    /// Every option, for the edges' tests (each has a name at every edge) and for comparing two
+    /// spellings.
+    pub const ALL: [UserOption; 36] = [
+        UserOption::Columns,
+        UserOption::TimeColumn,
+        UserOption::TimeUnit,
+        UserOption::RateHz,
+        UserOption::AccUnit,
+        UserOption::AccOffset,
+        UserOption::GyroUnit,
+        UserOption::GyroLsbPerDps,
+        UserOption::Instance,
+        UserOption::Topic,
+        UserOption::NoGyro,
+        UserOption::TemperatureC,
+        UserOption::DeviceId,
+        UserOption::GyroDeviceId,
+        UserOption::DriverScale,
+        UserOption::AllowUndetermined,
+        UserOption::AllowOutOfRange,
+        UserOption::Noise,
+        UserOption::Method,
+        UserOption::Reference,
+        UserOption::SinglePackage,
+        UserOption::MaxSamples,
+        UserOption::TempColumn,
+        UserOption::GyroOffset,
+        UserOption::StillThreshold,
+        UserOption::SkipLines,
+        UserOption::StaticRun,
+        UserOption::RateRun,
+        UserOption::Calibration,
+        UserOption::BiasWalkFrom,
+        UserOption::BiasWalk,
+        UserOption::Unit,
+        UserOption::IgnoreUnitId,
+        UserOption::Input,
+        UserOption::Out,
+        UserOption::Force,
+    ];
 
     /// Its value is text (a keyword argument then quotes it).
-    fn is_text(self) -> bool {
+    pub fn is_text(self) -> bool {
         matches!(
             self,
             UserOption::TimeColumn
@@ -144,66 +143,110 @@ impl UserOption {
     }
 }
 
-/// How the caller spells its options (default: the command line's flags).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Spelling {
-    /// `--acc-unit g`.
-    #[default]
+/// How an edge writes an option with its value: the syntax, apart from the names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Syntax {
+    /// A command line's: `--acc-unit g`, `--acc-unit 'furlong'`, a bare switch `--no-gyro`, a
+    /// pair of values `MG,DEG_S`.
     Flags,
-    /// `acc_unit="g"`.
+    /// A keyword call's: `acc_unit="g"` (text quoted, numbers not), `no_gyro=True`, a pair of
+    /// values `(MG, DEG_S)`.
     Keywords,
 }
 
+/// How the caller spells its options: its names (the edge's table) and its [`Syntax`]. Only an
+/// edge builds one; the crates below it receive it from their caller and never choose one, so a
+/// message cannot name the other caller's option.
+#[derive(Clone, Copy)]
+pub struct Spelling {
+    names: fn(UserOption) -> &'static str,
+    syntax: Syntax,
+}
+
 impl Spelling {
+    /// The caller's spelling: `names` gives each option's name (`--acc-unit`, `acc_unit`).
+    pub const fn new(names: fn(UserOption) -> &'static str, syntax: Syntax) -> Spelling {
+        Spelling { names, syntax }
+    }
+
+    /// How the caller writes an option with its value.
+    pub fn syntax(self) -> Syntax {
+        self.syntax
+    }
+
     /// The option's name: `--acc-unit` or `acc_unit`.
     pub fn name(self, option: UserOption) -> &'static str {
-        match self {
-            Spelling::Flags => option.flag(),
-            Spelling::Keywords => option.keyword(),
-        }
+        (self.names)(option)
     }
 
     /// The option with a value: `--acc-unit g` or `acc_unit="g"` (a number or placeholder
     /// unquoted: `rate_hz=HZ`).
     pub fn given(self, option: UserOption, value: impl Display) -> String {
-        match self {
-            Spelling::Flags => format!("{} {value}", option.flag()),
-            Spelling::Keywords if option.is_text() => format!("{}=\"{value}\"", option.keyword()),
-            Spelling::Keywords => format!("{}={value}", option.keyword()),
+        let name = self.name(option);
+        match self.syntax {
+            Syntax::Flags => format!("{name} {value}"),
+            Syntax::Keywords if option.is_text() => format!("{name}=\"{value}\""),
+            Syntax::Keywords => format!("{name}={value}"),
         }
     }
 
     /// The option with a value the user gave, quoted: `--acc-unit 'furlong'` or
     /// `acc_unit="furlong"`.
     pub fn quoted(self, option: UserOption, value: impl Display) -> String {
-        match self {
-            Spelling::Flags => format!("{} '{value}'", option.flag()),
-            Spelling::Keywords => format!("{}=\"{value}\"", option.keyword()),
+        let name = self.name(option);
+        match self.syntax {
+            Syntax::Flags => format!("{name} '{value}'"),
+            Syntax::Keywords => format!("{name}=\"{value}\""),
         }
     }
 
-    /// The switch that turns something off: `--no-gyro` or `no_gyro=True`.
+    /// The switch that turns something on or off: `--no-gyro` or `no_gyro=True`.
     pub fn switch(self, option: UserOption) -> String {
-        match self {
-            Spelling::Flags => option.flag().to_string(),
-            Spelling::Keywords => format!("{}=True", option.keyword()),
+        let name = self.name(option);
+        match self.syntax {
+            Syntax::Flags => name.to_string(),
+            Syntax::Keywords => format!("{name}=True"),
         }
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// The option with a value as `spelling` writes it, or by its meaning where no caller has spelled it
+/// yet (`the Instance option (N)`): a reader called on its own makes its error before the caller's
+/// spelling reaches it, and the caller names its options with the error's `spelled`.
+pub fn given_by(spelling: Option<Spelling>, option: UserOption, value: impl Display) -> String {
+    match spelling {
+        Some(s) => s.given(option, value),
+        None => format!("the {option:?} option ({value})"),
+    }
+}
 
-    #[test]
-    fn each_caller_reads_its_own_names() {
-        let (f, k) = (Spelling::Flags, Spelling::Keywords);
-        assert_eq!(f.given(UserOption::AccUnit, "g"), "--acc-unit g");
-        assert_eq!(k.given(UserOption::AccUnit, "g"), "acc_unit=\"g\"");
-        assert_eq!(k.given(UserOption::RateHz, "HZ"), "rate_hz=HZ");
-        assert_eq!(f.quoted(UserOption::GyroUnit, "x"), "--gyro-unit 'x'");
-        assert_eq!(k.quoted(UserOption::GyroUnit, "x"), "gyro_unit=\"x\"");
-        assert_eq!(k.switch(UserOption::NoGyro), "no_gyro=True");
-        assert_eq!(f.name(UserOption::GyroLsbPerDps), "--gyro-lsb-per-dps");
+/// Two spellings are the same when they write every option alike (a function's address is no
+/// identity: the same table may sit at two addresses).
+impl PartialEq for Spelling {
+    fn eq(&self, other: &Spelling) -> bool {
+        self.syntax == other.syntax
+            && UserOption::ALL
+                .iter()
+                .all(|&o| self.name(o) == other.name(o))
+    }
+}
+
+impl Eq for Spelling {}
+
+/// Only for tests (feature `testkit`): the neutral test spelling
+/// ([`SPELLING`](crate::testkit::SPELLING)), so that a test's options can be built with
+/// `..Default::default()`. A build without the feature has no default: the caller spells.
+#[cfg(any(test, feature = "testkit"))]
+impl Default for Spelling {
+    fn default() -> Spelling {
+        crate::testkit::SPELLING
+    }
+}
+
+impl Debug for Spelling {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Spelling")
+            .field("syntax", &self.syntax)
+            .finish_non_exhaustive()
     }
 }

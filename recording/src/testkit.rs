@@ -6,6 +6,7 @@
 
 use crate::session::import::{GyroUnit, ImportOptions, Recording, TimeSource};
 use crate::session::logs::{read_log_windows, ulog, LogRead, LogSource};
+use crate::spelling::{Spelling, Syntax, UserOption};
 use shared::OutputUnit;
 use std::path::{Path, PathBuf};
 
@@ -122,6 +123,7 @@ pub fn csv_source() -> LogSource {
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     options.temp_column = Some("temp".into());
     LogSource {
@@ -444,4 +446,21 @@ fn write_mcap_stamped(
         Ok(cursor.into_inner())
     };
     write().unwrap_or_default()
+}
+
+/// The spelling of the tests below the edges: each option by its neutral name, `<AccUnit>`, with
+/// the command line's syntax. The flags and the keywords are the edges' (`host`, the Python
+/// package), whose tests pin the real words; a lower crate's test checks that a message names the
+/// right option, not how an edge spells it.
+pub const SPELLING: Spelling = Spelling::new(neutral_name, Syntax::Flags);
+
+/// [`SPELLING`]'s names with a keyword call's syntax: `<AccUnit>="g"`, `<NoGyro>=True`.
+pub const KEYWORD_SPELLING: Spelling = Spelling::new(neutral_name, Syntax::Keywords);
+
+/// The option's neutral name: its variant in angle brackets.
+fn neutral_name(option: UserOption) -> &'static str {
+    static NAMES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    let names = NAMES.get_or_init(|| UserOption::ALL.iter().map(|o| format!("<{o:?}>")).collect());
+    let i = UserOption::ALL.iter().position(|&o| o == option);
+    &names[i.expect("UserOption::ALL holds every option")]
 }

@@ -31,6 +31,7 @@ fn two_logs_joined_with_their_time_restarting_are_read_one_after_the_other() {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            recording::testkit::SPELLING,
         )),
         ..none
     };

@@ -108,7 +108,7 @@ fn ulog() {
     check_ulog(
         &bytes[..200],
         expect![[r#"
-        refused: log.ulg: no IMU samples for instance 0: the log has no sensor_accel, sensor_gyro or sensor_combined topic; log sensor_accel and sensor_gyro (or sensor_combined) and choose the IMU with --instance N
+        refused: log.ulg: no IMU samples for instance 0: the log has no sensor_accel, sensor_gyro or sensor_combined topic; log sensor_accel and sensor_gyro (or sensor_combined) and choose the IMU with <Instance> N
     "#]],
     );
 }

@@ -32,6 +32,7 @@ fn a_device_that_stops_answering_mid_segment_leaves_the_recording_saved() {
     let mut opts = ProcedureOptions::new(
         load_plan("short-oblique").unwrap(),
         out.path().to_path_buf(),
+        recording::testkit::SPELLING,
     );
     opts.quiet = true;
     let mut op = AutomaticOperator {

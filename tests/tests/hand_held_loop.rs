@@ -19,7 +19,11 @@ fn hand_client() -> DeviceClient<SimDevice> {
 }
 
 fn options(out: &std::path::Path) -> ProcedureOptions {
-    let mut opts = ProcedureOptions::new(load_plan("hand").unwrap(), out.to_path_buf());
+    let mut opts = ProcedureOptions::new(
+        load_plan("hand").unwrap(),
+        out.to_path_buf(),
+        recording::testkit::SPELLING,
+    );
     opts.quiet = true;
     opts.verify_tolerance_mg = 0.1;
     opts

@@ -31,6 +31,7 @@ fn calibrate_the_emulated_board_over_its_pty_and_survive_a_reset() {
     let mut opts = ProcedureOptions::new(
         load_plan("quick-oblique").unwrap(),
         out.path().to_path_buf(),
+        recording::testkit::SPELLING,
     );
     opts.quiet = true;
     opts.verify_tolerance_mg = 0.1;

@@ -34,7 +34,13 @@ fn report_and_compare_from_files() {
     let a = write_calibration_files(&tmp.path().join("joint"), &joint, id, 0, false).unwrap();
 
     let out = tmp.path().join("report");
-    let summary = report(&session, &a.toml_path, &out, &ReportOptions::default()).unwrap();
+    let summary = report(
+        &session,
+        &a.toml_path,
+        &out,
+        &ReportOptions::new(recording::testkit::SPELLING),
+    )
+    .unwrap();
     // Every figure as PNG and SVG, and the two pages.
     assert_eq!(summary.files.len(), 4 * 2 + 2, "{:?}", summary.files);
     for f in &summary.files {

@@ -14,6 +14,7 @@ fn calibrate_flash_verify_against_the_simulated_device() {
     let mut opts = ProcedureOptions::new(
         load_plan("short-oblique").unwrap(),
         out.path().to_path_buf(),
+        recording::testkit::SPELLING,
     );
     opts.quiet = true;
     opts.verify_tolerance_mg = 0.1;

@@ -30,7 +30,8 @@ fn run_plan(
         s.duration_s = Some(seconds);
     }
     let out = tempfile::tempdir().unwrap();
-    let mut opts = ProcedureOptions::new(plan, out.path().to_path_buf());
+    let mut opts =
+        ProcedureOptions::new(plan, out.path().to_path_buf(), recording::testkit::SPELLING);
     opts.quiet = true;
     let mut op = AutomaticOperator {
         verbose: false,

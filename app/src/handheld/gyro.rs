@@ -85,7 +85,7 @@ pub fn fit(
     let stats = stats_for(rec, seg, plan);
     let options = EstimateOptions {
         compare_methods: false,
-        ..EstimateOptions::default()
+        ..EstimateOptions::new(spelling)
     };
     let outcome = calibrate_session_stats(plan, &stats, &options)?;
     let m = outcome.fitted.m_out_per_g;
@@ -290,8 +290,12 @@ pub fn problems(fit: &HandGyroFit, max_misfit_deg: f64, sp: Spelling) -> Vec<Str
 /// the gyro is then absent, saying why ([`HandGyroError::NotDetermined`]). `max_misfit_deg` is
 /// `plausible_misfit_deg`. A misfit of the turns
 /// is evidence whatever `G`'s 1σ, and a `G` implausible beyond its 3σ too: both stay refusals.
-pub fn undetermined(fit: HandGyroFit, max_misfit_deg: f64) -> Result<HandGyroFit, HandGyroError> {
-    let sp = Spelling::default();
+/// (`sp` only spells the problems counted here, which are not shown.)
+pub fn undetermined(
+    fit: HandGyroFit,
+    max_misfit_deg: f64,
+    sp: Spelling,
+) -> Result<HandGyroFit, HandGyroError> {
     let worst = fit
         .matrix_1sigma
         .iter()
@@ -476,6 +480,7 @@ mod tests {
     use estimator::sim::handheld::{logger_unit, simulate_hand, HandSpec};
     use recording::session::from_recording::plan_for;
     use recording::session::segment::{find_intervals, SegmentOptions};
+    use recording::testkit::SPELLING;
     use shared::OutputUnit;
 
     /// One face round of a six-face session (1° placement) with a whole table turn on each face: the
@@ -493,15 +498,9 @@ mod tests {
         assert_eq!(seg.stills.len(), 12);
         let faces = recording::session::coverage::six_face_labels(&seg.stills).unwrap();
         let plan = recording::session::from_recording::plan_for_faces(&rec, &seg, &faces, 2.0);
-        let fit = fit(
-            &rec,
-            &seg,
-            &plan,
-            &dropped_turns(&rec, &seg),
-            Spelling::Flags,
-        )
-        .unwrap()
-        .unwrap();
+        let fit = fit(&rec, &seg, &plan, &dropped_turns(&rec, &seg), SPELLING)
+            .unwrap()
+            .unwrap();
         assert_eq!((fit.turns, fit.table_turns), (5, 6));
         let truth = spec.gyro.matrix;
         for i in 0..3 {
@@ -531,9 +530,9 @@ mod tests {
         assert_eq!(plausible_misfit_deg(PositionSet::SixFaces, &plan), 2.0);
         assert_eq!(plausible_misfit_deg(PositionSet::Spread, &plan), 1.0);
         assert!(
-            problems(&fit, 2.0, Spelling::Flags).is_empty(),
+            problems(&fit, 2.0, SPELLING).is_empty(),
             "{:?}",
-            problems(&fit, 2.0, Spelling::Flags)
+            problems(&fit, 2.0, SPELLING)
         );
     }
 
@@ -564,7 +563,7 @@ mod tests {
             panic!("{text}")
         };
         assert!((0.5..0.52).contains(&jump.step_s), "{text}");
-        let fit = fit(&rec, &seg, &plan_for(&rec, &seg), &dropped, Spelling::Flags)
+        let fit = fit(&rec, &seg, &plan_for(&rec, &seg), &dropped, SPELLING)
             .unwrap()
             .unwrap();
         assert_eq!(fit.turns, 22);

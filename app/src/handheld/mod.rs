@@ -188,7 +188,7 @@ impl Found {
             let fit = gyro::fit(&recording, &segmentation, &plan, &dropped, spelling)?;
             let max_misfit_deg = gyro::plausible_misfit_deg(position_set, &plan);
             (
-                fit.and_then(|f| gyro::undetermined(f, max_misfit_deg)),
+                fit.and_then(|f| gyro::undetermined(f, max_misfit_deg, spelling)),
                 table_turns,
             )
         } else {

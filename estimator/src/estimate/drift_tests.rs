@@ -414,7 +414,7 @@ fn the_prediction_with_a_walk_is_what_a_session_reports() {
         noise_out_per_sample_1sigma: truth.statics.scale_out_per_g.map(|k| 1e-3 * k),
         gyro_noise_rad_s: 0.05f64.to_radians(),
         options: EstimateOptions::default().with_bias_walk(w),
-        ..PredictSettings::white(0.0)
+        ..PredictSettings::white(0.0, recording::testkit::SPELLING)
     };
     let predicted = |w: BiasWalk| {
         let s = settings(w);

@@ -61,12 +61,13 @@ pub fn calibrate_with_hand_gyro(
         single_package: options.single_package || plan.package == Package::Single,
         ..options.clone()
     };
+    let sp = options.spelling;
     let (fit, notes) = thermal::fit_session(plan, stats).map_err(EstimateError::Temperature)?;
     let mut outcome = match &fit {
-        None => plausibility::check(plan, stats, fit_session(plan, stats, options))?,
+        None => plausibility::check(plan, stats, fit_session(plan, stats, options), sp)?,
         Some(fit) => {
             let referred = fit.refer_to_reference(stats);
-            plausibility::check(plan, &referred, fit_session(plan, &referred, options))?
+            plausibility::check(plan, &referred, fit_session(plan, &referred, options), sp)?
         }
     };
     outcome.warnings.extend(notes);

@@ -63,12 +63,7 @@ pub fn common_scale(matrix: &RowMajor3) -> Option<f64> {
 }
 
 /// The likely causes of an implausible `G`, one line each (empty: `G` is plausible), the options
-/// named as the command line's flags.
-pub(crate) fn matrix_problems(matrix: &RowMajor3) -> Vec<String> {
-    matrix_problems_spelled(matrix, Spelling::Flags)
-}
-
-/// `matrix_problems`, the options named as `sp` spells them.
+/// named as `sp` spells them.
 pub fn matrix_problems_spelled(matrix: &RowMajor3, sp: Spelling) -> Vec<String> {
     let ax = shared::params::axis_name;
     let mut problems = Vec::new();
@@ -338,6 +333,7 @@ fn mixup_cause(p: &RowMajor3) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use recording::testkit::SPELLING;
 
     const I: RowMajor3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
@@ -348,15 +344,15 @@ mod tests {
             [0.009, 0.995, 0.008],
             [0.008, 0.004, 1.004],
         ];
-        assert!(matrix_problems(&g).is_empty());
-        assert!(matrix_problems(&I).is_empty());
+        assert!(matrix_problems_spelled(&g, SPELLING).is_empty());
+        assert!(matrix_problems_spelled(&I, SPELLING).is_empty());
     }
 
     #[test]
     fn a_reversed_axis_is_named() {
         let mut g = I;
         g[2][2] = -1.0;
-        let p = matrix_problems(&g);
+        let p = matrix_problems_spelled(&g, SPELLING);
         assert_eq!(p.len(), 1, "{p:?}");
         assert!(p[0].contains("gyro axis z turns the wrong way"), "{p:?}");
     }
@@ -364,7 +360,7 @@ mod tests {
     #[test]
     fn swapped_axes_are_named() {
         let g = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
-        let p = matrix_problems(&g);
+        let p = matrix_problems_spelled(&g, SPELLING);
         assert!(p[0].contains("swapped"), "{p:?}");
     }
 
@@ -376,18 +372,22 @@ mod tests {
             [0.0, 0.668, 0.0],
             [0.0, 0.0, 0.665],
         ];
-        assert!(matrix_problems(&g).is_empty(), "{:?}", matrix_problems(&g));
+        assert!(
+            matrix_problems_spelled(&g, SPELLING).is_empty(),
+            "{:?}",
+            matrix_problems_spelled(&g, SPELLING)
+        );
         let k = common_scale(&g).unwrap();
         assert!((k - 0.6667).abs() < 1e-3, "{k}");
         assert_eq!(common_scale(&I), None);
         let g = I.map(|r| r.map(|v| v * 57.3));
-        assert!(matrix_problems(&g)[0].contains("--gyro-unit deg/s"));
+        assert!(matrix_problems_spelled(&g, SPELLING)[0].contains("<GyroUnit> deg/s"));
         assert_eq!(common_scale(&g), None);
         let g = I.map(|r| r.map(|v| v * 6.0));
-        assert!(matrix_problems(&g)[0].contains("beyond any nominal scale"));
+        assert!(matrix_problems_spelled(&g, SPELLING)[0].contains("beyond any nominal scale"));
         // Different errors per axis: no common factor, refused as a scale error.
         let g = [[1.3, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        let p = matrix_problems(&g);
+        let p = matrix_problems_spelled(&g, SPELLING);
         assert!(p[0].contains("at most 20 % is plausible"), "{p:?}");
         assert_eq!(common_scale(&g), None);
     }

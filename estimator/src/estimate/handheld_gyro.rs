@@ -161,7 +161,7 @@ pub enum HandGyroError {
         /// The largest 1σ of an entry of `G`, %.
         worst_1sigma_pct: f64,
     },
-    /// The user asked for no gyro fit (`host segment --no-gyro`).
+    /// The user asked for no gyro fit ([`UserOption::NoGyro`]).
     #[error("not fitted (the gyro was left out); the accelerometer's axes are unchecked for a mirror image")]
     NotAsked,
     /// The fit did not give a usable `G`.

@@ -92,6 +92,7 @@ pub use gyro::GyroEstimate;
 pub use gyro_drift::{GyroWalkAxes, GyroWalkEstimate, LR_AXES};
 pub use options::{
     BiasWalk, ChiSquareScaling, EstimateOptions, GyroModel, Method, ReferenceChoice, UnitWalk,
+    LEVER_ARM_THRESHOLD_M,
 };
 pub use outcome::{
     CalibrationOutcome, Exclusion, ExclusionReason, FitSummary, MethodComparison, Observability,

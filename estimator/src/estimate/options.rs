@@ -181,15 +181,21 @@ pub enum GyroModel {
     Estimate,
 }
 
-impl Default for EstimateOptions {
-    fn default() -> Self {
+/// The default of [`EstimateOptions::lever_arm_threshold_m`]: a lever-arm component below it,
+/// m, is not determined (the full table's rule, which the summary uses too).
+pub const LEVER_ARM_THRESHOLD_M: f64 = 2e-4;
+
+impl EstimateOptions {
+    /// The library's defaults (the constant-bias joint fit; the tools add
+    /// [`EstimateOptions::drift_aware`]), the messages spelled as the caller spells its options.
+    pub fn new(spelling: Spelling) -> EstimateOptions {
         EstimateOptions {
             method: Method::Joint,
             compare_methods: true,
             reference: ReferenceChoice::TableAxis,
             use_omega_dot: true,
             chi2_scaling: ChiSquareScaling::WhenSignificant,
-            lever_arm_threshold_m: 2e-4,
+            lever_arm_threshold_m: LEVER_ARM_THRESHOLD_M,
             lever_arm_structural_limit_m: 0.05,
             output_range: None,
             attitude_tolerance_deg: 3.0,
@@ -209,7 +215,16 @@ impl Default for EstimateOptions {
             gyro_bias_walk_axes_deg_s_sqrt_s: None,
             gyro_bias_walk_from_unit: false,
             gyro_bias_walk_estimate: false,
-            spelling: Spelling::Flags,
+            spelling,
         }
+    }
+}
+
+/// Only for tests (feature `testkit`): [`EstimateOptions::new`] with the neutral test spelling. A
+/// caller spells its own options.
+#[cfg(any(test, feature = "testkit"))]
+impl Default for EstimateOptions {
+    fn default() -> Self {
+        EstimateOptions::new(Spelling::default())
     }
 }

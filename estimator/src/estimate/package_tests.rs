@@ -74,7 +74,7 @@ fn single_package_unit_gets_one_lever_arm_within_3_sigma() {
         nine.warnings
             .iter()
             .map(ToString::to_string)
-            .any(|w| w.contains("--single-package")
+            .any(|w| w.contains("<SinglePackage>")
                 && w.contains("package = \"single\"")
                 && w.contains("do not differ significantly")),
         "{:#?}",
@@ -110,7 +110,7 @@ fn separate_lever_arms_fitted_as_one_point_are_refused() {
     };
     assert!(*delta_chi2 > *limit && *spread_mm > 3.0, "{e}");
     assert!(
-        e.to_string().contains("calibrate without --single-package"),
+        e.to_string().contains("calibrate without <SinglePackage>"),
         "{e}"
     );
     // Without the option the same session calibrates, and no warning suggests the option.

@@ -17,6 +17,7 @@
 use super::note::Note;
 use super::{gyro_check, CalibrationOutcome, EstimateError};
 use recording::session::{Plan, SegmentStats};
+use recording::spelling::Spelling;
 use shared::linalg;
 
 /// Largest angle between a fitted sensing axis and its nominal body axis, degrees. Real units are
@@ -33,6 +34,7 @@ pub(crate) fn check(
     plan: &Plan,
     stats: &[SegmentStats],
     result: Result<CalibrationOutcome, EstimateError>,
+    sp: Spelling,
 ) -> Result<CalibrationOutcome, EstimateError> {
     let labels = label_contradictions(plan, stats);
     let mut outcome = match result {
@@ -45,7 +47,7 @@ pub(crate) fn check(
         }
     };
     let mut problems = triad_problems(&outcome.fitted.m_out_per_g);
-    problems.extend(gyro_problems(plan, &outcome));
+    problems.extend(gyro_problems(plan, &outcome, sp));
     problems.extend(scale_unit_problem(plan, &outcome));
     if outcome.fit.dof < 1 {
         let excluded: Vec<String> = outcome.excluded.iter().map(|e| e.to_string()).collect();
@@ -72,7 +74,7 @@ pub(crate) fn check(
 /// The gyro's refusals (`gyro_check`): spins whose gyro contradicts the table systematically, or an
 /// implausible `G`. A calibration with such a gyro is not written: its numbers would be loaded as if
 /// calibrated. (`G` entries that the plan does not determine are marked by their 1σ and listed.)
-fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
+fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome, sp: Spelling) -> Vec<String> {
     let spins: Vec<gyro_check::Spin> = plan
         .segments
         .iter()
@@ -86,7 +88,7 @@ fn gyro_problems(plan: &Plan, outcome: &CalibrationOutcome) -> Vec<String> {
         .into_iter()
         .collect();
     if let Some(g) = &outcome.gyro {
-        problems.extend(gyro_check::matrix_problems(&g.matrix));
+        problems.extend(gyro_check::matrix_problems_spelled(&g.matrix, sp));
     }
     problems
 }

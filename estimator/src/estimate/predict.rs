@@ -10,6 +10,7 @@ use super::{
     EstimateOptions, ReferenceChoice, PAPER_LEN,
 };
 use recording::session::{Plan, SegmentStats};
+use recording::spelling::Spelling;
 use shared::{Calibration, OutputUnit};
 
 /// Noise level and durations for [`predict`].
@@ -28,14 +29,15 @@ pub struct PredictSettings {
 }
 
 impl PredictSettings {
-    /// The reference case: 1σ per sample `noise` (output unit) on each axis, 60 s segments.
-    pub fn white(noise: f64) -> PredictSettings {
+    /// The reference case: 1σ per sample `noise` (output unit) on each axis, 60 s segments, the
+    /// estimator's messages spelled as the caller spells its options.
+    pub fn white(noise: f64, spelling: Spelling) -> PredictSettings {
         PredictSettings {
             noise_out_per_sample_1sigma: [noise; 3],
             gyro_noise_rad_s: 0.0,
             sample_rate_hz: None,
             default_duration_s: 60.0,
-            options: EstimateOptions::default(),
+            options: EstimateOptions::new(spelling),
         }
     }
 }
@@ -195,7 +197,7 @@ mod tests {
                 .statics
                 .scale_out_per_g
                 .map(|k| noise.accel_white_mg * 1e-3 * k.abs()),
-            ..PredictSettings::white(0.0)
+            ..PredictSettings::white(0.0, recording::testkit::SPELLING)
         };
         let synth = crate::sim::synth::prediction_stats(&plan, &truth, &settings).unwrap();
         let predicted = predict(&plan, &truth, &synth, &settings)

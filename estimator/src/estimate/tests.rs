@@ -409,7 +409,7 @@ fn attitudes_that_do_not_span_3d_say_which_directions_are_missing() {
 #[test]
 fn cramer_rao_prediction_matches_model_md_and_the_fit() {
     let truth = testkit::paper_unit();
-    let settings = PredictSettings::white(paper_noise(&truth));
+    let settings = PredictSettings::white(paper_noise(&truth), recording::testkit::SPELLING);
     let run = |plan: &recording::session::Plan| {
         let stats = crate::sim::synth::prediction_stats(plan, &truth, &settings).unwrap();
         predict(plan, &truth, &stats, &settings).unwrap()

@@ -129,7 +129,7 @@ pub(crate) fn fit_session(
 }
 
 /// `fit_session` at given degrees `(zero bias, scale)` per axis instead of the BIC's choice: on
-/// noise-free statistics its 1σ are the Cramér–Rao bound of a plan (`host plan --check`).
+/// noise-free statistics its 1σ are the Cramér–Rao bound of a plan (the prediction `host plan` checks a plan with).
 pub(crate) fn fit_session_at_degrees(
     plan: &Plan,
     stats: &[SegmentStats],

@@ -184,7 +184,7 @@ impl BiasWalkArgs {
     /// here; `--gyro-bias-walk` takes the place of its gyro figure.
     pub(crate) fn walks(&self) -> Result<(BiasWalk, f64, bool), CliError> {
         if let Some(path) = &self.bias_walk_from {
-            let from_file = app::walk_source::walk_from_file(path)?;
+            let from_file = app::walk_source::walk_from_file(path, super::spelling::FLAGS)?;
             let gyro = self.gyro_bias_walk.or(from_file.gyro_deg_s_sqrt_s);
             let accel = BiasWalk::FromUnit(from_file.accel);
             return Ok((accel, gyro.unwrap_or(0.0), gyro.is_none()));
@@ -251,7 +251,7 @@ impl EstimatorArgs {
                 ReferenceArg::Centroid => ReferenceChoice::Centroid,
             },
             single_package: self.single_package,
-            ..EstimateOptions::default()
+            ..EstimateOptions::new(super::spelling::FLAGS)
         };
         self.walk.set(&mut options)?;
         Ok(options)
@@ -465,7 +465,7 @@ pub(crate) fn calibrate_live(a: &CalibrateArgs, quiet: bool) -> Result<(), CliEr
     }?;
     refuse_verify_temp_in_hand(a, &identity, &plan)?;
     let out_dir = procedure::default_out_dir(a.out_dir.as_deref(), &identity);
-    let mut opts = ProcedureOptions::new(plan, out_dir);
+    let mut opts = ProcedureOptions::new(plan, out_dir, super::spelling::FLAGS);
     opts.window_samples = a.window;
     opts.calibrate = calibrate_options(a)?;
     opts.verify_tolerance_mg = verify_tolerance_mg;

@@ -7,7 +7,6 @@ use estimator::unit_file::{UnitFile, UnitFileError};
 use outputs::export::kalibr::KalibrNoise;
 use outputs::export::{render, ExportFormat, ExportInput, ExportOptions};
 use recording::output_file::write_atomic;
-use recording::spelling::Spelling;
 use std::path::PathBuf;
 
 /// `host export`.
@@ -183,7 +182,7 @@ pub(crate) fn run(a: &ExportArgs, quiet: bool) -> Result<(), CliError> {
             // Within 1..=255 by their parsers.
             sysid: u8::try_from(a.sysid.unwrap_or(1)).unwrap_or(u8::MAX),
             compid: u8::try_from(a.compid.unwrap_or(1)).unwrap_or(u8::MAX),
-            spelling: Spelling::Flags,
+            spelling: super::spelling::FLAGS,
         },
     };
     if a.format == ExportFormat::C {

@@ -73,7 +73,7 @@ pub(super) fn run_all(a: &ExportArgs, v: &VehicleLog, quiet: bool) -> Result<(),
     }
     let instances = v.instances()?;
     let choices = SegmentChoices {
-        segment: SegmentOptions::default(),
+        segment: SegmentOptions::new(super::spelling::FLAGS),
         unit_id: None,
         gravity_m_s2: shared::STANDARD_GRAVITY_M_S2,
         fit_gyro: true,
@@ -84,7 +84,7 @@ pub(super) fn run_all(a: &ExportArgs, v: &VehicleLog, quiet: bool) -> Result<(),
         v,
         &instances,
         &choices,
-        &CalibrateOptions::default(),
+        &CalibrateOptions::new(super::spelling::FLAGS),
         DEFAULT_MAX_SAMPLES,
     )?;
     let out = Output { json: false, quiet };
@@ -111,7 +111,7 @@ pub(super) fn run_all(a: &ExportArgs, v: &VehicleLog, quiet: bool) -> Result<(),
                 allow_undetermined: a.allow_undetermined,
                 sysid: u8::try_from(a.sysid.unwrap_or(1)).unwrap_or(u8::MAX),
                 compid: u8::try_from(a.compid.unwrap_or(1)).unwrap_or(u8::MAX),
-                ..Default::default()
+                ..outputs::export::ExportOptions::new(super::spelling::FLAGS)
             },
         };
         input.options.device_id = Some(imu.ids.accel.device_id);

@@ -193,7 +193,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
             text: None,
             instance,
             topic: topic.map(String::from),
-            spelling: Default::default(),
+            spelling: super::spelling::FLAGS,
             rate_hz: None,
         };
         shared::chain::Chain(&read_log(&fixture(name), &source).unwrap_err()).to_string()
@@ -219,7 +219,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
         text: None,
         instance: None,
         topic: Some("/imu/data".into()),
-        spelling: Default::default(),
+        spelling: super::spelling::FLAGS,
         rate_hz: None,
     };
     assert_eq!(
@@ -233,6 +233,7 @@ fn a_missing_instance_or_topic_names_what_the_log_has() {
         recording::session::import::TimeSource::RateHz(100.0),
         OutputUnit::StandardGravity,
         recording::session::import::GyroUnit::DegPerS,
+        crate::cli::spelling::FLAGS,
     ));
     let e = read_log(&fixture("hand.mcap"), &source)
         .unwrap_err()

@@ -6,7 +6,6 @@ use app::log_input::{LogInput, LogInputError};
 use clap::Args;
 use recording::session::import::GyroUnit;
 use recording::session::logs::{LogFormat, LogSource};
-use recording::spelling::Spelling;
 
 /// How to read a logger's file. A text file needs its units and its time; a PX4 ULog, an ArduPilot
 /// DataFlash log or a ROS 2 bag (MCAP) states them, and is told by its content.
@@ -101,7 +100,7 @@ impl LogInputArgs {
             // Within 0..=255 by its value parser (ULog's multi_id and DataFlash's I are bytes).
             instance: self.instance.map(|i| u8::try_from(i).unwrap_or(u8::MAX)),
             topic: self.topic.clone(),
-            spelling: Spelling::Flags,
+            spelling: super::spelling::FLAGS,
         }
     }
 

@@ -18,7 +18,7 @@ fn none() -> LogSource {
         text: None,
         instance: None,
         topic: None,
-        spelling: Default::default(),
+        spelling: super::spelling::FLAGS,
         rate_hz: None,
     }
 }
@@ -38,6 +38,7 @@ fn csv_source() -> LogSource {
             TimeSource::Column("t_ms".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            crate::cli::spelling::FLAGS,
         )),
         ..none()
     }

@@ -23,7 +23,8 @@
 //! `log_input`.
 //!
 //! Every command fails with the one `CliError` (`error`); `output` decides where its output goes
-//! (`--json`, `--quiet`).
+//! (`--json`, `--quiet`). `spelling` holds the flags' names: the crates below name an option by its
+//! meaning and are handed `spelling::FLAGS`.
 
 pub(crate) mod apply;
 #[cfg(test)]
@@ -61,6 +62,7 @@ pub(crate) mod segment;
 #[cfg(test)]
 mod segment_tests;
 pub(crate) mod simulate;
+pub(crate) mod spelling;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

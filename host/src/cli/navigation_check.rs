@@ -33,7 +33,7 @@ pub(crate) fn run(a: &NavigationCheckCliArgs, quiet: bool) -> Result<(), CliErro
     let mut args = NavigationCheckArgs {
         seed: a.seed,
         out_dir: a.out_dir.clone(),
-        ..NavigationCheckArgs::default()
+        ..NavigationCheckArgs::new(super::spelling::FLAGS)
     };
     args.report.navigation_duration_s = a.duration_s;
     if let Some(p) = &a.unit {

@@ -29,7 +29,7 @@ fn segment_line(line: &str) -> (HandGyroFit, Vec<String>) {
         .reader_warnings(recording::session::import::Places::InFile);
     let fit = out.gyro.unwrap_or_else(|e| panic!("{line}: gyro {e}"));
     // The session's warnings are not kept in the outcome: rebuild the note from the fit.
-    let note = app::handheld::gyro::common_scale_note(&fit, &out.recording, Default::default());
+    let note = app::handheld::gyro::common_scale_note(&fit, &out.recording, super::spelling::FLAGS);
     let warnings = warnings.iter().map(ToString::to_string);
     (fit, warnings.chain(note).collect())
 }

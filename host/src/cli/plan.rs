@@ -91,9 +91,9 @@ pub(crate) fn run(a: &PlanArgs, quiet: bool) -> Result<Prediction, CliError> {
                 estimator::estimate::BiasWalk::Off
             },
             gyro_bias_walk_deg_s_sqrt_s: walks.gyro_deg_s_sqrt_s,
-            ..estimator::estimate::EstimateOptions::default()
+            ..estimator::estimate::EstimateOptions::new(crate::cli::spelling::FLAGS)
         },
-        ..PredictSettings::white(0.0)
+        ..PredictSettings::white(0.0, crate::cli::spelling::FLAGS)
     };
     let stats = estimator::sim::synth::prediction_stats(&plan, &truth, &settings)
         .map_err(estimator::estimate::EstimateError::from)?;

@@ -49,7 +49,7 @@ pub(crate) fn run(a: &ReportArgs, quiet: bool) -> Result<(), CliError> {
         navigation_duration_s: a.duration_s,
         static_run: a.static_run.clone(),
         rate_run: a.rate_run.clone(),
-        ..ReportOptions::default()
+        ..ReportOptions::new(super::spelling::FLAGS)
     };
     a.walk.set(&mut options.estimate)?;
     options.formats.png = !a.no_png;

@@ -20,7 +20,6 @@ use recording::session::logs::{read_log_keeping, DEFAULT_MAX_SAMPLES};
 use recording::session::note::Note;
 use recording::session::segment::{PositionSet, SegmentOptions, Segmentation};
 use recording::session::Plan;
-use recording::spelling::Spelling;
 use shared::chain::Chain;
 use shared::linalg;
 use std::fmt::Write as _;
@@ -148,7 +147,7 @@ pub(crate) fn simulate_hand_command(a: &SimulateHandArgs) -> Result<usize, CliEr
         gyro_lsb_per_dps: a.gyro_lsb_per_dps,
         six_face_rounds: a.six_faces.then_some(a.rounds),
         table_turns: a.table_turns,
-        spelling: Spelling::Flags,
+        spelling: super::spelling::FLAGS,
     };
     let sim = request
         .run()
@@ -345,7 +344,7 @@ fn choices(a: &SegmentArgs) -> Result<SegmentChoices, CliError> {
             min_still_s: a.min_still_s,
             still_threshold: a.still_threshold,
             offer_still_threshold: true,
-            ..SegmentOptions::default()
+            ..SegmentOptions::new(super::spelling::FLAGS)
         },
         unit_id: unit_and_site(a)?,
         gravity_m_s2: site_gravity_m_s2(a),

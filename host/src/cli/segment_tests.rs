@@ -350,7 +350,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         rate_hz: spec.rate_hz,
         ..Recording::default()
     };
-    let seg = find_intervals(&rec, &SegmentOptions::default()).unwrap();
+    let seg = find_intervals(&rec, &SegmentOptions::new(super::spelling::FLAGS)).unwrap();
     let found_all = seg.stills.len() == sim.holds.len()
         && seg
             .stills
@@ -360,7 +360,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
     let plan = plan_for(&rec, &seg);
     let options = EstimateOptions {
         compare_methods: false,
-        ..EstimateOptions::default()
+        ..EstimateOptions::new(super::spelling::FLAGS)
     };
     let cal = calibrate_session_stats(&plan, &stats_for(&rec, &seg, &plan), &options).unwrap();
     let e = static_errors(
@@ -369,7 +369,7 @@ fn hand_case(spec: &HandSpec) -> (bool, f64, f64, f64, f64) {
         &mut shared::rng::Rng::new(spec.seed, 0),
     );
     let dropped = app::handheld::gyro::dropped_turns(&rec, &seg);
-    let fit = app::handheld::gyro::fit(&rec, &seg, &plan, &dropped, Default::default())
+    let fit = app::handheld::gyro::fit(&rec, &seg, &plan, &dropped, super::spelling::FLAGS)
         .unwrap()
         .unwrap();
     let want = gyro_in_convention(&truth, &spec.gyro.matrix);

@@ -25,6 +25,7 @@ fn real_recordings_read_from_the_marks_are_the_windows_a_whole_pass_reads() {
         TimeSource::Column("Time (s)".into()),
         OutputUnit::StandardGravity,
         GyroUnit::DegPerS,
+        crate::cli::spelling::FLAGS,
     );
     xio.columns = [
         "Accelerometer X (g)",
@@ -39,6 +40,7 @@ fn real_recordings_read_from_the_marks_are_the_windows_a_whole_pass_reads() {
         TimeSource::RateHz(102.4),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::DegPerS,
+        crate::cli::spelling::FLAGS,
     );
     imucal.columns = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"].map(String::from);
     let text = |options: ImportOptions| LogSource {

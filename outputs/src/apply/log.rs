@@ -11,6 +11,7 @@ use recording::session::segment::{
     SegmentOptions,
 };
 use recording::session::Row;
+use recording::spelling::Spelling;
 use shared::compensator::LeverMode;
 use shared::{Calibration, OutputUnit};
 use std::io::Write;
@@ -75,7 +76,13 @@ pub fn apply_log_within(
         LogRead::Whole(log) => {
             let rec = &log.recording;
             meet_log(rec, cal, setting.assume_temp_c)?;
-            let prepared = Prepared::new(rec, cal, setting.mode, setting.assume_temp_c)?;
+            let prepared = Prepared::new(
+                rec,
+                cal,
+                setting.mode,
+                setting.assume_temp_c,
+                source.spelling,
+            )?;
             csv.header()?;
             let mut summary = prepared.run(rec, cal, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
             let mut notes = log.warnings;
@@ -87,7 +94,7 @@ pub fn apply_log_within(
         }
         LogRead::Windows(w) => w,
     };
-    let floors = log_floors(&windows)?;
+    let floors = log_floors(&windows, source.spelling)?;
     csv.header()?;
     let mut run: Option<Run> = None;
     let mut notes = WindowNotes::default();
@@ -115,7 +122,7 @@ pub fn apply_log_within(
             )),
         };
         run.assume_temperature(rec, setting.assume_temp_c);
-        let stills = stills_of(rec, floors.as_ref())?;
+        let stills = stills_of(rec, floors.as_ref(), source.spelling)?;
         run.rows(rec, &stills, &mut |i, f, a| csv.row(rec.t_s[i], f, a))?;
     }
     let Some(run) = run else {
@@ -181,6 +188,7 @@ impl Prepared {
         cal: &Calibration,
         mode: LeverMode,
         assume_temp_c: Option<f64>,
+        spelling: Spelling,
     ) -> Result<Prepared, ApplyError> {
         let other = Other {
             name: "the recording",
@@ -194,7 +202,7 @@ impl Prepared {
         if let (Some(t), None) = (assume_temp_c, &rec.temp_c) {
             applier.compensator.refresh(t as f32);
         }
-        let stills = stills_of(rec, None)?;
+        let stills = stills_of(rec, None, spelling)?;
         Ok(Prepared { applier, stills })
     }
 
@@ -237,8 +245,12 @@ fn meet_log(
 /// The still intervals of `rec`, each of which must compensate to 1 g. No still interval at all is
 /// a flight log, unless the accelerometer is still and only the gyro moves: then the rest check
 /// cannot be skipped, it has failed.
-fn stills_of(rec: &Recording, floors: Option<&RestFloors>) -> Result<Vec<Interval>, ApplyError> {
-    match find_intervals_by(rec, &SegmentOptions::default(), floors) {
+fn stills_of(
+    rec: &Recording,
+    floors: Option<&RestFloors>,
+    spelling: Spelling,
+) -> Result<Vec<Interval>, ApplyError> {
+    match find_intervals_by(rec, &SegmentOptions::new(spelling), floors) {
         Ok(s) => Ok(s.stills),
         Err(SegmentError::NoStill {
             acc_mg, gyro_deg_s, ..
@@ -252,13 +264,13 @@ fn stills_of(rec: &Recording, floors: Option<&RestFloors>) -> Result<Vec<Interva
 /// The noise floors every window of a long log is judged by: each stream's quietest window's, as a
 /// whole read takes the quietest stretch of the whole log (a first pass over the windows, holding
 /// one window at a time).
-fn log_floors(windows: &LogWindows) -> Result<Option<RestFloors>, ApplyError> {
+fn log_floors(windows: &LogWindows, spelling: Spelling) -> Result<Option<RestFloors>, ApplyError> {
     let mut floors: Option<RestFloors> = None;
     for k in 0..windows.len() {
         let Some(window) = windows.read(k).map_err(ApplyError::Log)? else {
             continue;
         };
-        if let Some(f) = rest_floors(&window.log.recording, &SegmentOptions::default()) {
+        if let Some(f) = rest_floors(&window.log.recording, &SegmentOptions::new(spelling)) {
             floors = Some(floors.map_or(f, |g| g.quieter(f)));
         }
     }

@@ -71,7 +71,8 @@ pub fn log_offset(
     })
 }
 
-/// An offset as `--acc-offset` takes it: one number when the three are equal, else X,Y,Z.
+/// An offset as the option takes it ([`UserOption::AccOffset`](recording::spelling::UserOption::AccOffset)): one number when the three are
+/// equal, else X,Y,Z.
 pub(crate) fn counts(v: [f64; 3]) -> String {
     if v[0] == v[1] && v[1] == v[2] {
         format!("{}", v[0])

@@ -284,7 +284,7 @@ fn ardupilot_file_passes_the_accelerometer_pre_arm_check_of_its_accelerometer() 
     let mut input = ExportInput::for_tests(&unit, cal);
     let e = params::render_ardupilot(&input).unwrap_err();
     assert!(
-        e.to_string().contains("--device-id") && e.to_string().contains("INS_ACC_ID"),
+        e.to_string().contains("<DeviceId>") && e.to_string().contains("INS_ACC_ID"),
         "{e}"
     );
     // An ICM-42688-P on SPI bus 1 as ArduPilot numbers it (bus type, bus, address, device type).

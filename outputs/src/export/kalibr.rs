@@ -331,7 +331,7 @@ mod tests {
         let mut input = ExportInput::for_tests(&unit, cal);
         input.driver_scale_m_s2_per_out = Some(24.8);
         let e = render_intrinsics(&input).unwrap_err().to_string();
-        assert!(e.contains("--allow-undetermined"), "{e}");
+        assert!(e.contains("<AllowUndetermined>"), "{e}");
         input.options.allow_undetermined = true;
         assert!(render_intrinsics(&input)
             .unwrap()
@@ -392,7 +392,7 @@ mod tests {
         let unit = UnitFile::from_calibration(&cal, None, None);
         let e = render(&ExportInput::for_tests(&unit, cal)).unwrap_err();
         assert!(
-            e.to_string().contains("host noise") && e.to_string().contains("--noise"),
+            e.to_string().contains("host noise") && e.to_string().contains("<Noise>"),
             "{e}"
         );
         let noise = KalibrNoise {

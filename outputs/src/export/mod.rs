@@ -398,8 +398,10 @@ pub struct ExportOptions {
     pub spelling: Spelling,
 }
 
-impl Default for ExportOptions {
-    fn default() -> Self {
+impl ExportOptions {
+    /// Nothing allowed, no ids, vehicle and component 1, the messages spelled as the caller spells
+    /// its options.
+    pub fn new(spelling: Spelling) -> ExportOptions {
         ExportOptions {
             allow_out_of_range: false,
             allow_undetermined: false,
@@ -409,8 +411,16 @@ impl Default for ExportOptions {
             gyro_slot: None,
             sysid: 1,
             compid: 1,
-            spelling: Spelling::Flags,
+            spelling,
         }
+    }
+}
+
+/// The tests' options: [`ExportOptions::new`] with the neutral test spelling.
+#[cfg(test)]
+impl Default for ExportOptions {
+    fn default() -> Self {
+        ExportOptions::new(Spelling::default())
     }
 }
 

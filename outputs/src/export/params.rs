@@ -176,8 +176,11 @@ pub fn render_px4_slots(inputs: &[ExportInput<'_>]) -> Result<String, ExportErro
         values.extend(v);
     }
     px4_after_loading(&mut s, &values);
-    let o = inputs.first().map(|i| i.options).unwrap_or_default();
-    px4_table(&mut s, o, values)?;
+    match inputs.first() {
+        Some(i) => px4_table(&mut s, i.options, values)?,
+        // No calibration: the table's header alone, for the default vehicle id.
+        None => px4_header(&mut s, 1),
+    }
     Ok(s)
 }
 
@@ -266,11 +269,7 @@ fn px4_after_loading(s: &mut String, values: &Values) {
 
 /// QGroundControl's table of `values`.
 fn px4_table(s: &mut String, o: super::ExportOptions, values: Values) -> Result<(), ExportError> {
-    let _ = writeln!(
-        s,
-        "#\n# Onboard parameters for Vehicle {}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType",
-        o.sysid
-    );
+    px4_header(s, o.sysid);
     for (name, v, int) in values {
         let (text, ty) = if int {
             (format!("{}", v as i64), 6)
@@ -280,6 +279,14 @@ fn px4_table(s: &mut String, o: super::ExportOptions, values: Values) -> Result<
         let _ = writeln!(s, "{}\t{}\t{name}\t{text}\t{ty}", o.sysid, o.compid);
     }
     Ok(())
+}
+
+/// The header of QGroundControl's parameter table for vehicle `sysid`.
+fn px4_header(s: &mut String, sysid: u8) {
+    let _ = writeln!(
+        s,
+        "#\n# Onboard parameters for Vehicle {sysid}\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType"
+    );
 }
 
 /// What a temperature model becomes in the autopilots' thermal offsets, in the driver's units.
@@ -613,7 +620,7 @@ fn ardupilot_slot(input: &ExportInput<'_>) -> Result<(String, String, bool), Exp
     Ok((s, lines, gyro_written))
 }
 
-/// A value outside ArduPilot's documented range: refused, or with `--allow-out-of-range` written
+/// A value outside ArduPilot's documented range: refused, or, allowed ([`UserOption::AllowOutOfRange`]), written
 /// with a `# WARNING:` line.
 fn check_range(
     input: &ExportInput<'_>,
@@ -667,7 +674,7 @@ mod tests {
     use shared::OutputUnit;
 
     /// The driver scale comes from the output unit, the same in every format: 1 for m/s², standard
-    /// gravity for g, refused without --driver-scale for V and LSB (only the driver knows it).
+    /// gravity for g, refused without <DriverScale> for V and LSB (only the driver knows it).
     #[test]
     fn driver_scale_follows_the_output_unit_in_every_format() {
         let cal = handheld_unit();
@@ -703,7 +710,7 @@ mod tests {
                 let e = render(&input, format).unwrap_err();
                 assert!(matches!(e, ExportError::DriverScaleRequired { .. }), "{e}");
                 let m = e.to_string();
-                assert!(m.contains("--driver-scale") && m.contains(symbol), "{m}");
+                assert!(m.contains("<DriverScale>") && m.contains(symbol), "{m}");
             }
         }
     }
@@ -743,11 +750,10 @@ mod tests {
     /// outside a quoted `host` command (the command line's own words are checked above).
     #[test]
     fn refusals_name_the_callers_keywords() {
-        use recording::spelling::Spelling;
         let unit = UnitFile::paper_unit();
         let cal = unit.to_calibration().unwrap();
         let mut input = ExportInput::for_tests(&unit, cal);
-        input.options.spelling = Spelling::Keywords;
+        input.options.spelling = recording::testkit::KEYWORD_SPELLING;
         input.driver_scale_m_s2_per_out = Some(cal.gravity_m_s2 / 0.4);
         let mut seen = vec![(
             render(
@@ -758,24 +764,24 @@ mod tests {
                 ExportFormat::Px4,
             )
             .unwrap_err(),
-            "driver_scale=M_S2_PER_UNIT",
+            "<DriverScale>=M_S2_PER_UNIT",
         )];
         for format in [ExportFormat::Px4, ExportFormat::Ardupilot] {
-            seen.push((render(&input, format).unwrap_err(), "device_id=ID"));
+            seen.push((render(&input, format).unwrap_err(), "<DeviceId>=ID"));
         }
         seen.push((
             render(&input, ExportFormat::Kalibr).unwrap_err(),
-            "noise=\"DIR/noise.json\"",
+            "<Noise>=\"DIR/noise.json\"",
         ));
         input.options.device_id = Some(1);
         seen.push((
             render(&input, ExportFormat::Ardupilot).unwrap_err(),
-            "allow_out_of_range=True",
+            "<AllowOutOfRange>=True",
         ));
         input.driver_scale_m_s2_per_out = Some(1e300);
         seen.push((
             render(&input, ExportFormat::Px4).unwrap_err(),
-            "driver_scale",
+            "<DriverScale>",
         ));
         for (e, keyword) in seen {
             let m = e.to_string();
@@ -854,7 +860,7 @@ mod tests {
         let unit = UnitFile::from_calibration(&cal, None, None);
         let mut input = ExportInput::for_tests(&unit, cal);
         let e = render_px4(&input).unwrap_err();
-        assert!(e.to_string().contains("--device-id"), "{e}");
+        assert!(e.to_string().contains("<DeviceId>"), "{e}");
         input.options.device_id = Some(3_000_000_000);
         input.options.sysid = 42;
         input.options.compid = 1;
@@ -864,7 +870,7 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("\tCAL_GYRO0"), "{text}");
-        assert!(text.contains("--gyro-device-id"), "{text}");
+        assert!(text.contains("<GyroDeviceId>"), "{text}");
         input.options.gyro_device_id = Some(2_359_306);
         let text = render_px4(&input).unwrap();
         assert!(text.contains("42\t1\tCAL_GYRO0_ID\t2359306\t6"), "{text}");

@@ -50,7 +50,8 @@ pub fn analyse_log(
             unit,
         )?;
     }
-    let seg = find_intervals(rec, &SegmentOptions::default()).map_err(NoiseError::NoStill)?;
+    let seg =
+        find_intervals(rec, &SegmentOptions::new(source.spelling)).map_err(NoiseError::NoStill)?;
     let best = seg
         .stills
         .iter()

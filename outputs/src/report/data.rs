@@ -32,6 +32,7 @@ use estimator::estimate::{
 use estimator::sim::SimulateError;
 use estimator::unit_file::UnitFileError;
 use recording::session::{Package, Plan, RecordingError, SegmentStats};
+use recording::spelling::{Spelling, UserOption};
 use shared::linalg;
 use shared::{BodyAngularAccel, BodyRate, Calibration, Compensator, LeverMode, SensorOutputs};
 use std::path::PathBuf;
@@ -54,16 +55,25 @@ pub struct ReportOptions {
     pub formats: Formats,
 }
 
-impl Default for ReportOptions {
-    fn default() -> Self {
+impl ReportOptions {
+    /// The report's defaults, the fit's messages spelled as the caller spells its options.
+    pub fn new(spelling: Spelling) -> ReportOptions {
         ReportOptions {
-            estimate: EstimateOptions::default(),
+            estimate: EstimateOptions::new(spelling),
             navigation_duration_s: 60.0,
             navigation_step_s: 0.1,
             static_run: None,
             rate_run: None,
             formats: Formats::default(),
         }
+    }
+}
+
+/// The tests' report options: [`ReportOptions::new`] with the neutral test spelling.
+#[cfg(test)]
+impl Default for ReportOptions {
+    fn default() -> Self {
+        ReportOptions::new(Spelling::default())
     }
 }
 
@@ -91,7 +101,8 @@ pub enum ReportError {
     /// The session has no segment of its plan with data.
     #[error("the session has no segment of its plan with data: nothing to report")]
     NothingToReport,
-    /// A segment named for a replay (`--static-run`, `--rate-run`) is not in the session.
+    /// A segment named for a replay ([`ReportOptions::static_run`], [`ReportOptions::rate_run`]) is
+    /// not in the session.
     #[error("segment '{name}' is not in the session")]
     RunNotInSession {
         /// The name given.
@@ -101,7 +112,7 @@ pub enum ReportError {
     #[error(
         "segment '{name}' is not {}: {} needs one ({})",
         .run.wanted(),
-        .run.flag(),
+        .spelling.name(.run.option()),
         match .examples.is_empty() {
             true => "this session has none".to_string(),
             false => format!("e.g. '{}'", .examples.join("', '")),
@@ -114,6 +125,8 @@ pub enum ReportError {
         run: NamedRun,
         /// Up to three segments of the replay's kind.
         examples: Vec<String>,
+        /// The caller's names of the options.
+        spelling: Spelling,
     },
     /// The navigation check has no segment to replay (the reasons, one per replay).
     #[error("nothing to replay: {}", Note::texts(.0).join("; "))]
@@ -402,7 +415,7 @@ fn planned_theoretical(
     )
 }
 
-/// The replay a segment is named for (`--static-run`, `--rate-run`).
+/// The replay a segment is named for ([`ReportOptions::static_run`], [`ReportOptions::rate_run`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NamedRun {
     /// The static replay.
@@ -429,10 +442,10 @@ impl NamedRun {
     }
 
     /// The option that names it.
-    fn flag(self) -> &'static str {
+    fn option(self) -> UserOption {
         match self {
-            NamedRun::Static => "--static-run",
-            NamedRun::Rate => "--rate-run",
+            NamedRun::Static => UserOption::StaticRun,
+            NamedRun::Rate => UserOption::RateRun,
         }
     }
 }
@@ -572,6 +585,7 @@ fn navigation_runs(
                 name: name.into(),
                 run,
                 examples,
+                spelling: options.estimate.spelling,
             });
         }
         Ok(row)

@@ -18,7 +18,7 @@ use shared::{Compensator, LeverMode, OutputUnit};
 #[test]
 fn the_paper_plans_prediction_says_what_it_cannot_determine() {
     let truth = testkit::paper_unit();
-    let settings = PredictSettings::white(paper_noise(&truth));
+    let settings = PredictSettings::white(paper_noise(&truth), recording::testkit::SPELLING);
     let plan = testkit::paper_plan(OutputUnit::Volts);
     let stats = synth::prediction_stats(&plan, &truth, &settings).unwrap();
     let prediction = predict(&plan, &truth, &stats, &settings).unwrap();
@@ -435,7 +435,7 @@ fn plan_check_says_the_common_lever_arm_is_observable() {
     let settings = PredictSettings {
         noise_out_per_sample_1sigma: k.map(|k| 1e-3 * k.abs()),
         gyro_noise_rad_s: 0.05f64.to_radians(),
-        ..PredictSettings::white(0.0)
+        ..PredictSettings::white(0.0, recording::testkit::SPELLING)
     };
     let stats = synth::prediction_stats(&p, &truth, &settings).unwrap();
     let prediction = predict(&p, &truth, &stats, &settings).unwrap();

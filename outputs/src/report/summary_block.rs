@@ -11,7 +11,7 @@ pub fn render_summary_block(s: &CalibrationSummary) -> String {
     let p = |name: &str| s.parameters.iter().find(|p| p.name == name);
     let axes = AXES;
     // A lever-arm component is determined to the estimator's own threshold (the full table's rule).
-    let lever_determined_m = estimator::estimate::EstimateOptions::default().lever_arm_threshold_m;
+    let lever_determined_m = estimator::estimate::LEVER_ARM_THRESHOLD_M;
     let mut out = String::from("Result (± 1σ):\n");
     // Biases: in mg where the output has a physical zero (m/s², g); else the zero-g output in its
     // own unit with its 1σ in that unit, and the 1σ in mg on a row of its own (one unit a figure).

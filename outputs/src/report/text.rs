@@ -541,7 +541,7 @@ fn render_package_prediction(s: &mut String, p: &Prediction) {
     let _ = writeln!(s, "{IN_PACKAGE_NOT_OBSERVABLE}");
 }
 
-/// The Cramér–Rao prediction of a plan (`host plan --check`).
+/// The Cramér–Rao prediction of a plan (the check of `host plan`).
 pub fn render_prediction(p: &Prediction) -> String {
     let mut s = String::new();
     let sym = p.output_unit.symbol();

@@ -170,8 +170,14 @@ pub struct ImportOptions {
 }
 
 impl ImportOptions {
-    /// The default column names with the given time source and units.
-    pub fn new(time: TimeSource, acc_unit: OutputUnit, gyro_unit: GyroUnit) -> ImportOptions {
+    /// The default column names with the given time source and units, the messages spelled as the
+    /// caller spells its options.
+    pub fn new(
+        time: TimeSource,
+        acc_unit: OutputUnit,
+        gyro_unit: GyroUnit,
+        spelling: Spelling,
+    ) -> ImportOptions {
         ImportOptions {
             columns: DEFAULT_COLUMNS.map(String::from),
             time,
@@ -183,7 +189,7 @@ impl ImportOptions {
             gyro_offset: [0.0; 3],
             temp_column: None,
             skip_lines: 0,
-            spelling: Spelling::Flags,
+            spelling,
         }
     }
 
@@ -359,12 +365,12 @@ pub enum ImportError {
         step: f64,
         /// Last minus first time stamp, in the column's unit.
         span: f64,
-        /// " (--time-unit X gives … Hz)", or empty.
+        /// What the time unit the user gave ([`UserOption::TimeUnit`]) reads the rate as, or empty.
         given: String,
         /// The caller's names of the options.
         spelling: Spelling,
     },
-    /// The `--time-unit` given makes no logger's rate of the time column, and another unit does.
+    /// The time unit given ([`UserOption::TimeUnit`]) makes no logger's rate of the time column, and another unit does.
     #[error(
         "the time column steps by a median {} and spans {} of its unit: {} reads \
          that as {given_reading}, no logger's; in {fits} it reads as {fits_reading}: give \
@@ -709,6 +715,7 @@ mod tests {
             TimeSource::Column("time".into()),
             OutputUnit::StandardGravity,
             GyroUnit::RadPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&text, &o).unwrap();
         assert_eq!(rec.len(), 200);
@@ -727,6 +734,7 @@ mod tests {
             TimeSource::RateHz(102.4),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&text, &o).unwrap();
         assert_eq!(rec.t_s[102], 102.0 / 102.4);
@@ -752,6 +760,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let csv = read(
             &format!("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}", body(",")),
@@ -779,7 +788,14 @@ mod tests {
                 rows(300, |i| format!("{},0,0,{g},0,0,0", i as f64 * dt))
             )
         };
-        let o = |unit| ImportOptions::new(TimeSource::Column("t".into()), unit, GyroUnit::DegPerS);
+        let o = |unit| {
+            ImportOptions::new(
+                TimeSource::Column("t".into()),
+                unit,
+                GyroUnit::DegPerS,
+                crate::testkit::SPELLING,
+            )
+        };
         // Steps of 300 over 300 rows: 3.3 mHz in s, 3.3 Hz in ms, 0.09 s long in µs: nothing fits.
         let e = read(&text(300.0, 9.81), &o(OutputUnit::MetresPerSecondSquared)).unwrap_err();
         assert!(e.to_string().contains("in no unit"), "{e}");
@@ -788,13 +804,13 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("--acc-unit m/s2") && e.contains("9.81 LSB:"),
+            e.contains("<AccUnit> m/s2") && e.contains("9.81 LSB:"),
             "{e}"
         );
         let e = read(&text(0.005, 1.0), &o(OutputUnit::Volts))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("--acc-unit g"), "{e}");
+        assert!(e.contains("<AccUnit> g"), "{e}");
         // Counts as counts: 4096 per g.
         read(&text(0.005, 4096.0), &o(OutputUnit::Lsb)).unwrap();
     }
@@ -805,6 +821,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let text = format!(
             "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
@@ -838,20 +855,25 @@ mod tests {
                 TimeSource::RateHz(100.0),
                 OutputUnit::MetresPerSecondSquared,
                 GyroUnit::DegPerS,
+                crate::testkit::SPELLING,
             )
         };
-        let m = read(&text, &o(Spelling::Flags)).unwrap_err().to_string();
+        let m = read(&text, &o(crate::testkit::SPELLING))
+            .unwrap_err()
+            .to_string();
         assert!(
-            m.contains("'tmep_c'") && m.contains("--temp-column NAME"),
+            m.contains("'tmep_c'") && m.contains("<TempColumn> NAME"),
             "{m}"
         );
         assert!(
-            !m.contains("--columns") && !m.contains("--time-column"),
+            !m.contains("<Columns>") && !m.contains("<TimeColumn>"),
             "{m}"
         );
-        let m = read(&text, &o(Spelling::Keywords)).unwrap_err().to_string();
+        let m = read(&text, &o(crate::testkit::KEYWORD_SPELLING))
+            .unwrap_err()
+            .to_string();
         assert!(
-            m.contains("temp_column=\"NAME\"") && !m.contains("--"),
+            m.contains("<TempColumn>=\"NAME\"") && !m.contains("--"),
             "{m}"
         );
     }
@@ -862,17 +884,18 @@ mod tests {
             TimeSource::RateHz(100.0),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
         );
         let missing = read("acc_x,acc_y,gyr_x,gyr_y,gyr_z\n1,2,3,4,5\n", &ms2).unwrap_err();
         let m = missing.to_string();
-        assert!(m.contains("'acc_z'") && m.contains("--columns"), "{m}");
+        assert!(m.contains("'acc_z'") && m.contains("<Columns>"), "{m}");
 
         let g_values = format!(
             "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
             rows(200, |_| "0,0,1.0,0,0,0".into())
         );
         let m = read(&g_values, &ms2).unwrap_err().to_string();
-        assert!(m.contains("--acc-unit g"), "{m}");
+        assert!(m.contains("<AccUnit> g"), "{m}");
         let as_g = ImportOptions {
             acc_unit: OutputUnit::StandardGravity,
             ..ms2.clone()
@@ -882,7 +905,7 @@ mod tests {
             rows(200, |_| "0,0,9.8,0,0,0".into())
         );
         let m = read(&ms2_values, &as_g).unwrap_err().to_string();
-        assert!(m.contains("--acc-unit m/s2"), "{m}");
+        assert!(m.contains("<AccUnit> m/s2"), "{m}");
         let tiny = format!(
             "acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
             rows(200, |_| "0,0,0.1,0,0,0".into())
@@ -929,6 +952,7 @@ mod tests {
             TimeSource::Column("t".into()),
             OutputUnit::MetresPerSecondSquared,
             GyroUnit::RadPerS,
+            crate::testkit::SPELLING,
         );
         let rec = read(&rows_around(1), &timed).unwrap();
         assert_eq!(
@@ -951,7 +975,12 @@ mod tests {
     }
 
     fn timed(unit: OutputUnit) -> ImportOptions {
-        ImportOptions::new(TimeSource::Column("t".into()), unit, GyroUnit::DegPerS)
+        ImportOptions::new(
+            TimeSource::Column("t".into()),
+            unit,
+            GyroUnit::DegPerS,
+            crate::testkit::SPELLING,
+        )
     }
 
     #[test]
@@ -992,16 +1021,16 @@ mod tests {
             read(&text(1e3), &given).unwrap().time_unit,
             Some((TimeUnit::Ms, false))
         );
-        // A unit given that fits no logger, where another does: that one named, not --rate-hz.
+        // A unit given that fits no logger, where another does: that one named, not <RateHz>.
         let e = read(&text(1.0), &given).unwrap_err().to_string();
         assert!(
-            e.contains("--time-unit ms reads that as 100000 Hz")
-                && e.contains("in s it reads as 100 Hz over 19.99 s: give --time-unit s")
-                && !e.contains("--rate-hz"),
+            e.contains("<TimeUnit> ms reads that as 100000 Hz")
+                && e.contains("in s it reads as 100 Hz over 19.99 s: give <TimeUnit> s")
+                && !e.contains("<RateHz>"),
             "{e}"
         );
         let e = read(&text(1e6), &given).unwrap_err().to_string();
-        assert!(e.contains("give --time-unit us"), "{e}");
+        assert!(e.contains("give <TimeUnit> us"), "{e}");
         // Steps of 0.1 over 200 000 rows: 10 Hz for 5.6 h in s, or 10 kHz for 20 s in ms.
         let long = format!(
             "t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n{}",
@@ -1009,7 +1038,7 @@ mod tests {
         );
         let e = read(&long, &o).unwrap_err().to_string();
         assert!(
-            e.contains("in s or 10000 Hz") && e.contains("--time-unit"),
+            e.contains("in s or 10000 Hz") && e.contains("<TimeUnit>"),
             "{e}"
         );
         let as_ms = ImportOptions {
@@ -1079,7 +1108,7 @@ mod tests {
         assert!(
             e.contains("near 32768 counts")
                 && e.contains("16-bit")
-                && e.contains("--acc-offset 32768"),
+                && e.contains("<AccOffset> 32768"),
             "{e}"
         );
         let counts = ImportOptions {

@@ -12,7 +12,7 @@
 
 use super::import::{Recording, TimeJump, TimeOrigin};
 use super::rest::{self, Floor, Judge, Rest, Stream};
-use crate::spelling::{Spelling, UserOption};
+use crate::spelling::{Spelling, Syntax, UserOption};
 use shared::linalg;
 use shared::OutputUnit;
 
@@ -39,8 +39,13 @@ pub struct SegmentOptions {
     pub spelling: Spelling,
 }
 
-impl Default for SegmentOptions {
-    fn default() -> Self {
+/// Two positions closer than this are the same position by default, degrees
+/// ([`SegmentOptions::same_position_deg`]).
+pub const SAME_POSITION_DEG: f64 = 10.0;
+
+impl SegmentOptions {
+    /// The default detection, its messages spelled as the caller spells its options.
+    pub fn new(spelling: Spelling) -> SegmentOptions {
         SegmentOptions {
             window_s: 0.4,
             min_still_s: 1.0,
@@ -48,9 +53,17 @@ impl Default for SegmentOptions {
             still_threshold: None,
             offer_still_threshold: false,
             spin_min_rate_deg_s: 10.0,
-            same_position_deg: 10.0,
-            spelling: Spelling::Flags,
+            same_position_deg: SAME_POSITION_DEG,
+            spelling,
         }
+    }
+}
+
+/// Only for tests (feature `testkit`): [`SegmentOptions::new`] with the neutral test spelling.
+#[cfg(any(test, feature = "testkit"))]
+impl Default for SegmentOptions {
+    fn default() -> Self {
+        SegmentOptions::new(Spelling::default())
     }
 }
 
@@ -299,9 +312,9 @@ fn still_threshold_advice(options: &SegmentOptions) -> String {
     if !options.offer_still_threshold {
         return String::new();
     }
-    let value = match options.spelling {
-        Spelling::Flags => "MG,DEG_S",
-        Spelling::Keywords => "(MG, DEG_S)",
+    let value = match options.spelling.syntax() {
+        Syntax::Flags => "MG,DEG_S",
+        Syntax::Keywords => "(MG, DEG_S)",
     };
     format!(
         ", or give {} (mg, °/s) if a rest moves more than that",

@@ -294,7 +294,7 @@ fn fusion_header_in_both_fusion_versions_corrects_like_host_apply_within_what_it
 }
 
 /// A gyro entry the plan did not determine (the z spins left out: G's z column) is refused, or
-/// written marked with --allow-undetermined.
+/// written marked with <AllowUndetermined>.
 #[test]
 fn fusion_header_refuses_or_marks_undetermined_gyro_entries() {
     let mut cal = UnitFile::paper_unit().to_calibration().unwrap();
@@ -313,7 +313,7 @@ fn fusion_header_refuses_or_marks_undetermined_gyro_entries() {
     assert!(
         m.contains(
             "gyroscopeMisalignment[0][2], gyroscopeMisalignment[1][2], gyroscopeMisalignment[2][2]"
-        ) && m.contains("--allow-undetermined"),
+        ) && m.contains("<AllowUndetermined>"),
         "{m}"
     );
     input.options.allow_undetermined = true;

@@ -117,7 +117,7 @@ mod tests {
             .iter()
             .all(|m| *m > 1.4 * shared::STANDARD_GRAVITY_M_S2));
         assert!((median_magnitude(&rec) - shared::STANDARD_GRAVITY_M_S2).abs() < 1e-9);
-        let sp = Spelling::default();
+        let sp = crate::testkit::SPELLING;
         assert!(check_gravity(&rec, OutputUnit::MetresPerSecondSquared, sp).is_ok());
         // The same numbers said to be in g are still refused, and the hint names m/s².
         let e = check_gravity(&rec, OutputUnit::StandardGravity, sp).unwrap_err();

@@ -24,7 +24,12 @@ fn body(n: usize) -> String {
 fn by_index(time: TimeSource) -> ImportOptions {
     ImportOptions {
         columns: ["1", "2", "3", "4", "5", "6"].map(String::from),
-        ..ImportOptions::new(time, OutputUnit::MetresPerSecondSquared, GyroUnit::RadPerS)
+        ..ImportOptions::new(
+            time,
+            OutputUnit::MetresPerSecondSquared,
+            GyroUnit::RadPerS,
+            crate::testkit::SPELLING,
+        )
     }
 }
 
@@ -51,10 +56,11 @@ fn a_header_less_file_is_read_by_column_index_and_named_as_such_when_read_by_nam
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     let e = read(&text, &named).unwrap_err().to_string();
     assert!(
-        e.contains("no header") && e.contains("--columns 0,1,2,3,4,5"),
+        e.contains("no header") && e.contains("<Columns> 0,1,2,3,4,5"),
         "{e}"
     );
 }
@@ -70,6 +76,7 @@ fn a_preamble_before_the_header_is_found_or_skipped_as_told() {
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     let found = read(&text, &o).unwrap();
     assert_eq!(found.len(), 300);
@@ -117,6 +124,7 @@ fn empty_cells_cost_that_rows_stream_never_the_file() {
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     let rec = read(&text, &o).unwrap();
     // The accelerometer's rows, each with the gyro between its neighbours (the first has none
@@ -162,6 +170,7 @@ fn host_stamped_bursts_are_re_timed_at_the_rate_the_stamps_fit() {
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     let rec = read(&text, &o).unwrap();
     assert!((rec.rate_hz - 99.3).abs() < 0.01, "{}", rec.rate_hz);

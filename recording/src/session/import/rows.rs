@@ -70,7 +70,7 @@ pub(super) fn all_numbers(names: &[String]) -> bool {
     !names.is_empty() && names.iter().all(|x| x.parse::<f64>().is_ok())
 }
 
-/// Whether `names` are all column indices (`--columns 0,1,2,3,4,5`).
+/// Whether `names` are all column indices (the columns given as `0,1,2,3,4,5`).
 fn by_index(options: &ImportOptions) -> bool {
     options.columns.iter().all(|c| c.parse::<usize>().is_ok())
 }

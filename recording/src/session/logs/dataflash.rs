@@ -630,7 +630,7 @@ impl State {
                 instance,
                 found,
                 hint: "log IMU (LOG_BITMASK's IMU bit)",
-                spelling: Spelling::Flags,
+                spelling: None,
             }
             .into());
         };

@@ -88,7 +88,7 @@ pub enum LogError {
         /// Why.
         source: super::ardupilot::UndoError,
     },
-    /// `--instance` or `--topic` on a format that has no such thing.
+    /// An IMU instance or an MCAP topic asked of a format that has no such thing.
     #[error("{path} is a {} log: {option} does not apply to it; leave it out", format.name())]
     OptionNotForFormat {
         /// The file.
@@ -126,7 +126,7 @@ pub enum ImuError {
     #[error(
         "no IMU samples for instance {instance}: the log has {found}; {hint} and choose the IMU \
          with {}",
-        .spelling.given(UserOption::Instance, "N")
+        crate::spelling::given_by(*.spelling, UserOption::Instance, "N")
     )]
     NoImu {
         /// The instance asked for.
@@ -135,9 +135,9 @@ pub enum ImuError {
         found: String,
         /// What to log.
         hint: &'static str,
-        /// The caller's names of the options (the readers say flags; [`read_log_from`](super::read_log_from) gives the
-        /// caller's).
-        spelling: Spelling,
+        /// The caller's names of the options: none from a reader, the caller's once
+        /// [`read_log_from`](super::read_log_from) has [`spelled`](ImuError::spelled) it.
+        spelling: Option<Spelling>,
     },
     /// More samples than are kept at once, from a reader that cannot be read again (a file is read
     /// again: [`read_log_keeping`](super::read_log_keeping)).
@@ -188,7 +188,7 @@ impl ImuError {
                 instance,
                 found,
                 hint,
-                spelling,
+                spelling: Some(spelling),
             },
             e => e,
         }

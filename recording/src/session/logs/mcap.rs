@@ -74,29 +74,29 @@ pub enum McapError {
         /// The topics found, with their types.
         topics: String,
     },
-    /// Several Imu topics and no `--topic`.
+    /// Several Imu topics and none chosen ([`UserOption::Topic`]).
     #[error(
         "the bag has several {IMU_SCHEMA} topics ({topics}): choose one with {}",
-        .spelling.given(UserOption::Topic, "NAME")
+        crate::spelling::given_by(*.spelling, UserOption::Topic, "NAME")
     )]
     SeveralImuTopics {
         /// The Imu topics.
         topics: String,
-        /// The caller's names of the options.
-        spelling: Spelling,
+        /// The caller's names of the options: none from the reader, the caller's once spelled.
+        spelling: Option<Spelling>,
     },
     /// The topic asked for is not an Imu topic of the bag.
     #[error(
         "{}: not a {IMU_SCHEMA} topic of the bag; its Imu topics: {imu_topics}",
-        .spelling.given(UserOption::Topic, .topic)
+        crate::spelling::given_by(*.spelling, UserOption::Topic, .topic)
     )]
     NoSuchTopic {
         /// The topic asked for.
         topic: String,
         /// The Imu topics there are.
         imu_topics: String,
-        /// The caller's names of the options.
-        spelling: Spelling,
+        /// The caller's names of the options: none from the reader, the caller's once spelled.
+        spelling: Option<Spelling>,
     },
     /// Not CDR.
     #[error(
@@ -168,18 +168,19 @@ struct State {
 }
 
 impl McapError {
-    /// The error with the options named as `spelling` does (the reader says flags).
+    /// The error with the options named as `spelling` does (the reader names none).
     pub fn spelled(self, spelling: Spelling) -> McapError {
         match self {
-            McapError::SeveralImuTopics { topics, .. } => {
-                McapError::SeveralImuTopics { topics, spelling }
-            }
+            McapError::SeveralImuTopics { topics, .. } => McapError::SeveralImuTopics {
+                topics,
+                spelling: Some(spelling),
+            },
             McapError::NoSuchTopic {
                 topic, imu_topics, ..
             } => McapError::NoSuchTopic {
                 topic,
                 imu_topics,
-                spelling,
+                spelling: Some(spelling),
             },
             e => e,
         }
@@ -565,7 +566,7 @@ impl State {
                 return Err(McapError::NoSuchTopic {
                     topic: t.to_string(),
                     imu_topics: list(&imu),
-                    spelling: Spelling::Flags,
+                    spelling: None,
                 })
             }
             (None, None) => {
@@ -580,7 +581,7 @@ impl State {
             (None, Some(_)) if imu.len() > 1 => {
                 return Err(McapError::SeveralImuTopics {
                     topics: list(&imu),
-                    spelling: Spelling::Flags,
+                    spelling: None,
                 })
             }
             _ => {}

@@ -44,8 +44,10 @@ use std::sync::{Arc, Mutex};
 
 /// What to take from a log: the text reader's columns, time and units (text files only), the IMU
 /// instance (ULog's `multi_id`, DataFlash's `I`) and the MCAP topic. The default reads a binary log
-/// as it states itself: its first IMU, its only Imu topic, its own stamps.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// as it states itself: its first IMU, its only Imu topic, its own stamps. It has a default only in
+/// tests (feature `testkit`, with the neutral test spelling): a caller gives its own spelling.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(any(test, feature = "testkit"), derive(Default))]
 pub struct LogSource {
     /// How to read a text file; `None`: the log must be a binary format that states its units.
     pub text: Option<ImportOptions>,

@@ -84,7 +84,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         matches!(
             e,
             LogError::OptionNotForFormat {
-                option: "--instance",
+                option: "<Instance>",
                 ..
             }
         ),
@@ -95,7 +95,7 @@ fn options_that_do_not_fit_the_format_are_refused() {
         ..source
     };
     let e = read_log_from(&text[..], text, Path::new("x.csv"), &source).unwrap_err();
-    assert!(e.to_string().contains("--acc-unit"), "{e}");
+    assert!(e.to_string().contains("<AccUnit>"), "{e}");
 }
 
 #[test]
@@ -147,13 +147,14 @@ fn a_text_files_temperature_column_is_read_and_a_missing_reading_keeps_its_row()
         TimeSource::Column("t".into()),
         OutputUnit::MetresPerSecondSquared,
         crate::session::import::GyroUnit::RadPerS,
+        crate::testkit::SPELLING,
     );
     options.temp_column = Some("temp".into());
     let source = LogSource {
         text: Some(options),
         instance: None,
         topic: None,
-        spelling: Spelling::Flags,
+        spelling: crate::testkit::SPELLING,
         rate_hz: None,
     };
     let some = text(&|i| match i {

@@ -605,7 +605,7 @@ impl State {
                 instance,
                 found,
                 hint: "log sensor_accel and sensor_gyro (or sensor_combined)",
-                spelling: Spelling::Flags,
+                spelling: None,
             }
             .into());
         };
