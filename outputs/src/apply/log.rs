@@ -385,16 +385,29 @@ impl<'c> Run<'c> {
 /// windows where of several.
 #[derive(Debug, Default)]
 struct WindowNotes {
-    notes: Vec<(String, Note, Vec<(f64, f64)>)>,
+    notes: Vec<WindowNote>,
+}
+
+/// One thing the reader said, its text (what tells two notes apart) and the windows it was said
+/// of.
+#[derive(Debug)]
+struct WindowNote {
+    text: String,
+    note: Note,
+    spans: Vec<(f64, f64)>,
 }
 
 impl WindowNotes {
     fn add(&mut self, span: (f64, f64), said: Vec<Note>) {
         for n in said {
             let text = n.to_string();
-            match self.notes.iter_mut().find(|(t, _, _)| *t == text) {
-                Some((_, _, spans)) => spans.push(span),
-                None => self.notes.push((text, n, vec![span])),
+            match self.notes.iter_mut().find(|w| w.text == text) {
+                Some(w) => w.spans.push(span),
+                None => self.notes.push(WindowNote {
+                    text,
+                    note: n,
+                    spans: vec![span],
+                }),
             }
         }
     }
@@ -402,9 +415,9 @@ impl WindowNotes {
     fn into_warnings(self, windows: usize) -> Vec<OutputNote> {
         self.notes
             .into_iter()
-            .map(|(_, note, spans)| OutputNote::InWindows {
-                note: Box::new(OutputNote::Reader(note)),
-                spans,
+            .map(|w| OutputNote::InWindows {
+                note: Box::new(OutputNote::Reader(w.note)),
+                spans: w.spans,
                 windows,
             })
             .collect()
