@@ -318,7 +318,7 @@ pub(crate) fn logger_csv(data: &[u8]) {
 /// and a ninth of the record).
 pub(crate) fn noise_csv(data: &[u8]) {
     use outputs::noise::{allan::curve_sizes, MAX_SAMPLES, MIN_SAMPLES};
-    if let Ok(r) = outputs::noise::analyse_csv_bytes(data, None) {
+    if let Ok(r) = outputs::noise::analyse_csv_bytes(data, None, crate::cli::spelling::FLAGS) {
         let n = usize::try_from(r.samples).unwrap_or(usize::MAX);
         assert!((MIN_SAMPLES..=MAX_SAMPLES).contains(&n), "{n} rows");
         assert!(r.sample_rate_hz.is_finite() && r.sample_rate_hz > 0.0);
@@ -559,7 +559,9 @@ mod tests {
             assert_eq!(rec.len(), 150);
             assert!((rec.rate_hz - 100.0).abs() < 1e-6, "{}", rec.rate_hz);
         }
-        let r = outputs::noise::analyse_csv_bytes(&noise_corpus(), None).unwrap();
+        let r =
+            outputs::noise::analyse_csv_bytes(&noise_corpus(), None, crate::cli::spelling::FLAGS)
+                .unwrap();
         assert_eq!((r.segment.as_str(), r.samples), ("z+", 100));
         assert!(
             (r.sample_rate_hz - 100.0).abs() < 1e-9,

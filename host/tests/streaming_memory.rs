@@ -122,7 +122,9 @@ fn noise_refuses_an_endless_line_with_bounded_memory() {
         .unwrap();
     for input in [flat.as_path(), Path::new("/dev/zero")] {
         let read_before = bytes_read_by_this_process();
-        let (result, peak) = peak_during(|| outputs::noise::analyse(input, None, true));
+        let (result, peak) = peak_during(|| {
+            outputs::noise::analyse(input, None, recording::testkit::SPELLING, true)
+        });
         let read = bytes_read_by_this_process() - read_before;
         let e = result.unwrap_err().to_string();
         eprintln!(

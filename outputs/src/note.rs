@@ -43,6 +43,18 @@ pub enum Note {
         /// The windows read.
         windows: usize,
     },
+    /// A still segment longer than the noise analysis takes: only its first samples analysed.
+    NoiseSegmentCut {
+        /// The segment.
+        segment: String,
+        /// The samples analysed.
+        max_samples: usize,
+    },
+    /// No calibration for the noise analysis: the accelerometer's figures in its output unit.
+    NoiseUncalibrated {
+        /// How the caller names its options.
+        spelling: recording::spelling::Spelling,
+    },
     /// What the reader said of some of a long log's windows.
     InWindows {
         /// What it said.
@@ -68,6 +80,8 @@ impl Note {
             Note::PngNotWritten { .. } => "png_not_written",
             Note::RowsOutsideTemperatureRange { .. } => "rows_outside_temperature_range",
             Note::ReadInWindows { .. } => "read_in_windows",
+            Note::NoiseSegmentCut { .. } => "noise_segment_cut",
+            Note::NoiseUncalibrated { .. } => "noise_uncalibrated",
             Note::InWindows { note, .. } => note.code(),
         }
     }
@@ -124,6 +138,20 @@ impl fmt::Display for Note {
                 "the log holds more than {max_samples} samples per stream, the most read into \
                  memory at once: it was read and compensated in {windows} time windows, the \
                  device's state carried from each to the next"
+            ),
+            Note::NoiseSegmentCut {
+                segment,
+                max_samples,
+            } => write!(
+                f,
+                "segment '{segment}' is longer than {max_samples} rows; only its first \
+                 {max_samples} are analysed"
+            ),
+            Note::NoiseUncalibrated { spelling } => write!(
+                f,
+                "no {}: accelerometer figures are in the output unit, and Kalibr's accelerometer \
+                 figures are undetermined",
+                spelling.name(recording::spelling::UserOption::Calibration)
             ),
             Note::InWindows {
                 note,

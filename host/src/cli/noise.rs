@@ -80,7 +80,7 @@ pub(crate) fn run(a: &NoiseArgs, quiet: bool) -> Result<(), CliError> {
     let plain = cal.as_ref().map(|c| &c.0);
     let report = if a.input.is_dir() || is_samples_csv(&a.input) {
         a.log.refuse_for_session(&a.input)?;
-        analyse(&a.input, plain, quiet)
+        analyse(&a.input, plain, super::spelling::FLAGS, quiet)
     } else {
         let with_unit = cal.as_ref().map(|(p, u)| (p, *u));
         analyse_log(&a.input, &a.log.source(&a.input)?, with_unit, quiet)

@@ -82,6 +82,7 @@ pub fn analyse_log(
         s,
         path.display().to_string(),
         calibration.map(|c| c.0),
+        source.spelling,
         quiet,
     )?;
     let mut warnings = Note::texts(&log.warnings);

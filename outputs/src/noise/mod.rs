@@ -25,11 +25,13 @@ pub use log::{analyse_log, is_samples_csv};
 
 use crate::export::kalibr::KalibrNoise;
 use crate::export::PlainMatrices;
+use crate::note::Note;
 use crate::report::plot::{Figure, Panel, Series, SeriesStyle};
 use allan::{curve_and_fit, AllanPoint, NoiseTerms};
 use recording::limits::{MAX_LINE_BYTES, MAX_SEGMENTS};
 use recording::session::{read_samples_each, read_session, Plan, ReadOptions, RecordingError};
 use recording::session::{PLAN_FILE, SAMPLES_FILE};
+use recording::spelling::Spelling;
 use serde::{Deserialize, Serialize};
 use shared::OutputUnit;
 use std::collections::HashSet;
@@ -113,7 +115,8 @@ pub struct NoiseReport {
     pub axes: Vec<AxisNoise>,
     /// The figures for Kalibr (worst axis of each sensor).
     pub kalibr: KalibrNoise,
-    /// Warnings (segment cut, accelerometer not in m/s², …).
+    /// Warnings (segment cut, accelerometer not in m/s², …), as `noise.json` keeps them: the
+    /// analysis's notes ([`Note`]) and the reader's, said.
     pub warnings: Vec<String>,
     /// The recording's accelerometer output unit (`V`, `LSB`, `m/s2`, `g`): what the accelerometer
     /// axes' figures are in where their unit is `output unit`, so that a consumer can check it
@@ -337,7 +340,8 @@ fn segment_names<R: std::io::BufRead>(
 fn accel_to_m_s2(
     s: &mut Signals,
     calibration: Option<&PlainMatrices>,
-    warnings: &mut Vec<String>,
+    spelling: Spelling,
+    warnings: &mut Vec<Note>,
 ) -> Result<&'static str, NoiseError> {
     let n = s.data[0].len();
     Ok(match calibration {
@@ -369,11 +373,7 @@ fn accel_to_m_s2(
                 "m/s^2"
             }
             None => {
-                warnings.push(
-                    "no --calibration: accelerometer figures are in the output unit, and Kalibr's \
-                     accelerometer figures are undetermined"
-                        .into(),
-                );
+                warnings.push(Note::NoiseUncalibrated { spelling });
                 "output unit"
             }
         },
@@ -390,10 +390,11 @@ fn metres_per_second_squared_per(unit: OutputUnit) -> Option<f64> {
 }
 
 /// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
-/// outputs into m/s².
+/// outputs into m/s²; `spelling` names the options its warnings ask for.
 pub fn analyse(
     input: &Path,
     calibration: Option<&PlainMatrices>,
+    spelling: Spelling,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let s = if input.is_dir() {
@@ -407,7 +408,7 @@ pub fn analyse(
     } else {
         collect_csv(input)?
     };
-    analyse_signals(s, input.display().to_string(), calibration, quiet)
+    analyse_signals(s, input.display().to_string(), calibration, spelling, quiet)
 }
 
 /// [`analyse`] of a bare samples.csv held in memory (`host::fuzz`'s `noise_csv` target).
@@ -415,9 +416,10 @@ pub fn analyse(
 pub fn analyse_csv_bytes(
     data: &[u8],
     calibration: Option<&PlainMatrices>,
+    spelling: Spelling,
 ) -> Result<NoiseReport, NoiseError> {
     let s = collect_csv_from(data, data, Path::new(SAMPLES_FILE))?;
-    analyse_signals(s, SAMPLES_FILE.into(), calibration, true)
+    analyse_signals(s, SAMPLES_FILE.into(), calibration, spelling, true)
 }
 
 /// The Allan curves, fitted terms and Kalibr figures of one segment's signals.
@@ -425,6 +427,7 @@ fn analyse_signals(
     mut s: Signals,
     source: String,
     calibration: Option<&PlainMatrices>,
+    spelling: Spelling,
     quiet: bool,
 ) -> Result<NoiseReport, NoiseError> {
     let n = s.data[0].len();
@@ -437,12 +440,12 @@ fn analyse_signals(
     }
     let mut warnings = Vec::new();
     if s.cut {
-        warnings.push(format!(
-            "segment '{}' is longer than {MAX_SAMPLES} rows; only its first {MAX_SAMPLES} are analysed",
-            s.segment
-        ));
+        warnings.push(Note::NoiseSegmentCut {
+            segment: s.segment.clone(),
+            max_samples: MAX_SAMPLES,
+        });
     }
-    let accel_unit = accel_to_m_s2(&mut s, calibration, &mut warnings)?;
+    let accel_unit = accel_to_m_s2(&mut s, calibration, spelling, &mut warnings)?;
     // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
     let bar = recording::ui::progress_bar(
         AXES.len() as u64,
@@ -480,7 +483,7 @@ fn analyse_signals(
         samples: n as u64,
         axes,
         kalibr,
-        warnings,
+        warnings: Note::texts(&warnings),
         output_unit: s.acc_unit,
     })
 }

@@ -6,6 +6,7 @@ use allan::overlapping_adev;
 use estimator::sim::{simulate_to_dir, NoiseModel};
 use estimator::unit_file::UnitFile;
 use recording::session::SegmentPlan;
+use recording::testkit::SPELLING;
 use std::process::Command;
 
 fn still_plan(rate_hz: f64, duration_s: f64) -> Plan {
@@ -67,7 +68,7 @@ fn simulated(dir: &Path) -> (UnitFile, NoiseReport) {
     simulate_to_dir(dir, &unit, &still_plan(100.0, 2000.0), &noise(), 7, false).unwrap();
     let cal = unit.to_calibration().unwrap();
     let pm = convert(&cal).unwrap().plain;
-    let r = analyse(dir, Some(&pm), true).unwrap();
+    let r = analyse(dir, Some(&pm), SPELLING, true).unwrap();
     (unit, r)
 }
 
@@ -161,7 +162,7 @@ fn matches_allantools_oadev_within_2_percent() {
     .unwrap();
     let cal = unit.to_calibration().unwrap();
     let pm = convert(&cal).unwrap().plain;
-    let r = analyse(dir.path(), Some(&pm), true).unwrap();
+    let r = analyse(dir.path(), Some(&pm), SPELLING, true).unwrap();
     // The same signals, recomputed here and written as text for python.
     let s = collect_session(dir.path(), true).unwrap();
     let mut fmt = ryu::Buffer::new();
@@ -244,7 +245,7 @@ fn a_bare_samples_csv_and_a_missing_still_segment() {
         false,
     )
     .unwrap();
-    let r = analyse(&dir.path().join(SAMPLES_FILE), None, true).unwrap();
+    let r = analyse(&dir.path().join(SAMPLES_FILE), None, SPELLING, true).unwrap();
     assert_eq!(r.segment, "long");
     assert!(
         (r.sample_rate_hz - 200.0).abs() < 1e-6,
@@ -267,7 +268,7 @@ fn a_bare_samples_csv_and_a_missing_still_segment() {
     }
     let d2 = tempfile::tempdir().unwrap();
     simulate_to_dir(d2.path(), &unit, &plan, &NoiseModel::none(), 1, false).unwrap();
-    let e = analyse(d2.path(), None, true).unwrap_err();
+    let e = analyse(d2.path(), None, SPELLING, true).unwrap_err();
     assert!(e.to_string().contains("no static segment"), "{e}");
 }
 
@@ -280,7 +281,9 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
         text += &format!("s{k},{k},0,0,0,0,0,0\n");
     }
     std::fs::write(&path, &text).unwrap();
-    let e = analyse(&path, None, true).unwrap_err().to_string();
+    let e = analyse(&path, None, SPELLING, true)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("more than 10000 segments") && e.contains(&format!("line {}", 10_002)),
         "{e}"
@@ -292,7 +295,9 @@ fn a_bare_csv_with_endless_segment_names_is_refused_naming_the_limit() {
         .map(|l| format!("{l}\n"))
         .collect();
     std::fs::write(&path, fewer).unwrap();
-    let e = analyse(&path, None, true).unwrap_err().to_string();
+    let e = analyse(&path, None, SPELLING, true)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("usable rows"), "{e}");
 }
 
@@ -353,14 +358,22 @@ fn the_report_records_the_recordings_output_unit() {
         false,
     )
     .unwrap();
-    let r = analyse(dir.path(), None, true).unwrap();
+    let r = analyse(dir.path(), None, SPELLING, true).unwrap();
     assert_eq!(r.axes[0].unit, "output unit");
+    // Volts need a calibration for Kalibr's figures, and the warning names the option.
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.starts_with("no <Calibration>: ")),
+        "{:?}",
+        r.warnings
+    );
     assert_eq!(r.output_unit, Some(OutputUnit::Volts));
     let json = serde_json::to_value(&r).unwrap();
     assert_eq!(json["output_unit"], "V");
     let back: NoiseReport = serde_json::from_value(json).unwrap();
     assert_eq!(back.output_unit, Some(OutputUnit::Volts));
-    let bare = analyse(&dir.path().join(SAMPLES_FILE), None, true).unwrap();
+    let bare = analyse(&dir.path().join(SAMPLES_FILE), None, SPELLING, true).unwrap();
     assert_eq!(bare.output_unit, None);
 }
 
@@ -383,7 +396,7 @@ fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {
             ..NoiseModel::none()
         };
         simulate_to_dir(dir.path(), &file, &plan, &white, 5, false).unwrap();
-        let r = analyse(dir.path(), None, true).unwrap();
+        let r = analyse(dir.path(), None, SPELLING, true).unwrap();
         let n = r.kalibr.accelerometer_noise_density.unwrap();
         assert!(
             (n / want - 1.0).abs() < 0.05,
@@ -391,7 +404,7 @@ fn a_recording_in_metres_per_second_squared_needs_no_calibration_for_kalibr() {
         );
         assert_eq!(r.axes[0].unit, "m/s^2");
         assert!(
-            r.warnings.iter().all(|w| !w.contains("--calibration")),
+            r.warnings.iter().all(|w| !w.contains("<Calibration>")),
             "{:?}",
             r.warnings
         );
@@ -414,7 +427,7 @@ fn the_allan_figure_has_error_bars_and_a_line_per_term() {
         false,
     )
     .unwrap();
-    let r = analyse(dir.path(), None, true).unwrap();
+    let r = analyse(dir.path(), None, SPELLING, true).unwrap();
     let f = r.figure();
     assert_eq!(f.panels.len(), 6);
     for (panel, axis) in f.panels.iter().zip(&r.axes) {
