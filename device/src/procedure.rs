@@ -692,13 +692,10 @@ pub fn default_out_dir(out: Option<&Path>, identity: &Identity) -> PathBuf {
         identity.unit_id,
         calibration_files::utc_stamp(calibration_files::now_unix_s())
     );
-    let mut dir = PathBuf::from(&base);
-    let mut n = 2;
-    while dir.exists() {
-        dir = PathBuf::from(format!("{base}-{n}"));
-        n += 1;
-    }
-    dir
+    std::iter::once(PathBuf::from(&base))
+        .chain((2..).map(|n| PathBuf::from(format!("{base}-{n}"))))
+        .find(|dir| !dir.exists())
+        .unwrap_or_default()
 }
 
 #[cfg(test)]

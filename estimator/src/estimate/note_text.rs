@@ -82,6 +82,14 @@ impl Note {
                 )
             }
             Note::BodyFrame(frame) => write!(f, "{frame}"),
+            _ => self.fmt_gyro_and_labels(f),
+        }
+    }
+
+    /// The warnings about the gyro's sources, the static segments' labels and the lever arms'
+    /// one package.
+    fn fmt_gyro_and_labels(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
             Note::GyroFromRests {
                 bias_rad_s: b,
                 sigma_rad_s: s,
