@@ -57,7 +57,10 @@ mod tests {
     fn each_caller_reads_its_own_names() {
         assert_eq!(KEYWORDS.given(UserOption::AccUnit, "g"), "acc_unit=\"g\"");
         assert_eq!(KEYWORDS.given(UserOption::RateHz, "HZ"), "rate_hz=HZ");
-        assert_eq!(KEYWORDS.quoted(UserOption::GyroUnit, "x"), "gyro_unit=\"x\"");
+        assert_eq!(
+            KEYWORDS.quoted(UserOption::GyroUnit, "x"),
+            "gyro_unit=\"x\""
+        );
         assert_eq!(KEYWORDS.switch(UserOption::NoGyro), "no_gyro=True");
         assert_eq!(KEYWORDS.name(UserOption::GyroLsbPerDps), "gyro_lsb_per_dps");
     }
@@ -67,7 +70,11 @@ mod tests {
         let names: Vec<&str> = UserOption::ALL.iter().map(|&o| KEYWORDS.name(o)).collect();
         for name in &names {
             assert!(!name.contains('-') && !name.is_empty(), "{name}");
-            assert_eq!(names.iter().filter(|n| *n == name).count(), 1, "{name} twice");
+            assert_eq!(
+                names.iter().filter(|n| *n == name).count(),
+                1,
+                "{name} twice"
+            );
         }
     }
 }
