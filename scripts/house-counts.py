@@ -176,13 +176,18 @@ def main():
                 if text)
         print(f"  {c:10} {n:4}")
 
-    print("\ncommand-line flag names in strings below the command line (non-test code):")
+    print("\ncommand-line flag names in string literals below the command line (non-test code; a")
+    print("literal may run over lines; comments and char literals are left out before reading):")
     for c in BELOW_EDGE:
         flags = set()
         for p, text in code[c]:
-            for s in re.findall(r"\"(?:[^\"\\]|\\.)*\"", text):
+            # Comments first (a doc comment's quotes would pair with a literal's), then char
+            # literals such as '"'.
+            bare = re.sub(r"^\s*//.*$", "", text, flags=re.M)
+            bare = re.sub(r"'(?:\\.|[^'\\])'", "''", bare)
+            for s in re.findall(r"\"(?:[^\"\\]|\\.)*\"", bare, re.S):
                 flags.update(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]+", s))
-        print(f"  {c:10} {len(flags):4} distinct flags")
+        print(f"  {c:10} {len(flags):4} distinct flags{': ' + ' '.join(sorted(flags)) if flags else ''}")
 
     print("\nlines of code and of tests per crate:")
     for c in CRATES:
