@@ -2,7 +2,8 @@
 //! gyro axis over the longest still segment of a recording, the fitted white noise density, bias
 //! instability and random walk ([`allan`]), a table, a log-log figure, and the figures Kalibr needs.
 //! Each point's 1σ, for error bars, is [`confidence`]'s (the Python package's `allan`); `kalibr`
-//! turns the fitted terms into Kalibr's figures.
+//! turns the fitted terms into Kalibr's figures; `accel` turns the accelerometer's outputs into
+//! m/s².
 //!
 //! Input: a session directory (the longest static segment of its plan is used), a bare
 //! `samples.csv` (its longest run of rows of one segment is used, assumed still), or a logger's file
@@ -15,6 +16,7 @@
 //! second only the rows of the segment being read and of the longest so far, at most [`MAX_SAMPLES`]
 //! of each (6 × 8 bytes a row, ≤ 2 × 100 MB) — a longer segment is cut, with a warning.
 
+mod accel;
 pub mod allan;
 pub mod confidence;
 mod kalibr;
@@ -335,60 +337,6 @@ fn segment_names<R: std::io::BufRead>(
     Ok(names)
 }
 
-/// Turns the accelerometer signals of `s` into m/s² where they can be (a calibration, or an input
-/// already in m/s² or g); the unit they end in.
-fn accel_to_m_s2(
-    s: &mut Signals,
-    calibration: Option<&PlainMatrices>,
-    spelling: Spelling,
-    warnings: &mut Vec<Note>,
-) -> Result<&'static str, NoiseError> {
-    let n = s.data[0].len();
-    Ok(match calibration {
-        Some(pm) => {
-            let g = pm.gravity_m_s2;
-            let mut sum = [0.0; 3];
-            for k in 0..n {
-                let u = [s.data[0][k], s.data[1][k], s.data[2][k]];
-                let f = shared::linalg::mat_vec(&pm.k_a_g_per_out, &u);
-                for j in 0..3 {
-                    s.data[j][k] = (f[j] - pm.nabla_b_g[j]) * g;
-                    sum[j] += s.data[j][k];
-                }
-            }
-            // The physical check: a still recording is at 1 g (docs/robustness.md).
-            let f_g = shared::linalg::norm(&sum.map(|v| v / n as f64)) / g;
-            if f_g.is_nan() || (f_g - 1.0).abs() > crate::apply::MAX_STILL_G_ERROR {
-                return Err(NoiseError::NotOneG { f_g });
-            }
-            "m/s^2"
-        }
-        // An input already in m/s² (or g) needs no calibration for Kalibr's figures: they are
-        // its own noise, and a calibration's scale errors change them by parts per thousand.
-        None => match s.acc_unit.and_then(metres_per_second_squared_per) {
-            Some(k) => {
-                for axis in s.data.iter_mut().take(3) {
-                    axis.iter_mut().for_each(|v| *v *= k);
-                }
-                "m/s^2"
-            }
-            None => {
-                warnings.push(Note::NoiseUncalibrated { spelling });
-                "output unit"
-            }
-        },
-    })
-}
-
-/// m/s² per unit of an output that has a physical unit (m/s², g); `None` for volts and counts.
-fn metres_per_second_squared_per(unit: OutputUnit) -> Option<f64> {
-    match unit {
-        OutputUnit::MetresPerSecondSquared => Some(1.0),
-        OutputUnit::StandardGravity => Some(shared::STANDARD_GRAVITY_M_S2),
-        _ => None,
-    }
-}
-
 /// Analyses `input` (session directory or samples.csv); `calibration` turns the accelerometer
 /// outputs into m/s²; `spelling` names the options its warnings ask for.
 pub fn analyse(
@@ -445,7 +393,7 @@ fn analyse_signals(
             max_samples: MAX_SAMPLES,
         });
     }
-    let accel_unit = accel_to_m_s2(&mut s, calibration, spelling, &mut warnings)?;
+    let accel_unit = accel::accel_to_m_s2(&mut s, calibration, spelling, &mut warnings)?;
     // The Allan curve and the fit's bootstrap take seconds per axis on a long recording.
     let bar = recording::ui::progress_bar(
         AXES.len() as u64,
