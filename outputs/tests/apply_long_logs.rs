@@ -22,13 +22,7 @@ const MOTION_S: f64 = 300.0;
 const RATE_HZ: f64 = 100.0;
 
 fn none() -> LogSource {
-    LogSource {
-        text: None,
-        instance: None,
-        topic: None,
-        spelling: SPELLING,
-        rate_hz: None,
-    }
+    LogSource::new(SPELLING)
 }
 
 /// The simulated unit the log fixtures' session was recorded with.

@@ -14,13 +14,7 @@ const MOTION_S: f64 = 300.0;
 const RATE_HZ: f64 = 100.0;
 
 fn none() -> LogSource {
-    LogSource {
-        text: None,
-        instance: None,
-        topic: None,
-        spelling: super::spelling::FLAGS,
-        rate_hz: None,
-    }
+    LogSource::new(super::spelling::FLAGS)
 }
 
 /// The fixture session with `MOTION_S` of flight before and after it, as one ULog; the number of

@@ -853,12 +853,10 @@ up_b = [0, 0, -1]
         let (stats, report) = read_text(text).unwrap();
         assert_eq!((stats[0].count, stats[0].rejected_rows), (2, 2));
         assert_eq!((report.rows, report.rejected_rows), (4, 2));
-        let w = report
-            .warnings
-            .iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join("\n");
+        let w = crate::session::note::Note::texts(&report.warnings).join(
+            "
+",
+        );
         assert!(w.contains("'x+'") && w.contains("first at line 3"), "{w}");
         assert!((stats[0].mean_u[0] - 2.5).abs() < 1e-12);
     }
@@ -958,12 +956,10 @@ up_b = [0, 0, -1]
         let (stats, report) = read_text(text).unwrap();
         assert_eq!(stats.len(), 2);
         assert_eq!(report.segments_without_rows, vec!["x+ 200".to_string()]);
-        let w = report
-            .warnings
-            .iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join("\n");
+        let w = crate::session::note::Note::texts(&report.warnings).join(
+            "
+",
+        );
         assert!(
             w.contains("'x+ 200'") && w.contains("no usable rows"),
             "{w}"

@@ -63,6 +63,20 @@ pub struct LogSource {
     pub rate_hz: Option<f64>,
 }
 
+impl LogSource {
+    /// A binary log read as its format states it (its first IMU, its only topic, its own stamps),
+    /// its options named in the caller's `spelling`.
+    pub fn new(spelling: Spelling) -> LogSource {
+        LogSource {
+            text: None,
+            instance: None,
+            topic: None,
+            spelling,
+            rate_hz: None,
+        }
+    }
+}
+
 /// The formats read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogFormat {
